@@ -1,0 +1,101 @@
+"""Shared plumbing of CLI handlers: JSON output, error reporting, argument parsers.
+
+A handler takes the parsed ``argparse.Namespace`` and returns a JSON-able ``dict`` (or ``None`` when it
+printed what it had to). Text output is the same dict, one ``key: value`` line each, so a person and a
+script read the same numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from station.errors import InputError, StationError
+
+Handler = Callable[[argparse.Namespace], "dict[str, Any] | None"]
+
+EXIT_OK = 0
+EXIT_INPUT = 2
+EXIT_FAILURE = 1
+
+
+def add_json_flag(parser: argparse.ArgumentParser) -> None:
+    """Add the ``--json`` flag every command carries."""
+    parser.add_argument("--json", action="store_true", help="print machine-readable JSON")
+
+
+def to_jsonable(value: Any) -> Any:
+    """Convert numpy scalars/arrays, tuples and paths into plain JSON types (NaN is refused)."""
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return to_jsonable(value.item())
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise StationError(f"refusing to print a non-finite number ({value})")
+        return value
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def emit(result: dict[str, Any], as_json: bool) -> None:
+    """Print *result* as JSON or as ``key: value`` lines."""
+    data = to_jsonable(result)
+    if as_json:
+        print(json.dumps(data))
+        return
+    for key, val in data.items():
+        if isinstance(val, float):
+            val = f"{val:.4g}"
+        elif isinstance(val, list):
+            val = json.dumps(val)
+        print(f"{key}: {val}")
+
+
+def run_handler(handler: Handler, args: argparse.Namespace) -> int:
+    """Run *handler*, print its result, and map errors to exit statuses (2 for bad input)."""
+    try:
+        result = handler(args)
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except StationError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_FAILURE
+    if result is not None:
+        emit(result, getattr(args, "json", False))
+    return EXIT_OK
+
+
+def parse_floats(text: str, field: str, count: int | None = None) -> list[float]:
+    """Parse ``"1,2,3"`` into floats; raise :class:`InputError` naming *field* on failure."""
+    try:
+        values = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
+    except ValueError as exc:
+        raise InputError(field, "comma-separated numbers", text) from exc
+    if count is not None and len(values) != count:
+        raise InputError(field, f"{count} comma-separated numbers", text)
+    for v in values:
+        if not math.isfinite(v):
+            raise InputError(field, "finite numbers", text)
+    return values
+
+
+def parse_lab_list(text: str, field: str = "lab") -> list[list[float]]:
+    """Parse ``"L,a,b;L,a,b;…"`` into a list of Lab triples."""
+    parts = [p for p in text.split(";") if p.strip()]
+    if not parts:
+        raise InputError(field, '"L,a,b;L,a,b;..." with one triple per angle', text)
+    return [parse_floats(p, f"{field}[{i}]", 3) for i, p in enumerate(parts)]

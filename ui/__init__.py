@@ -1,0 +1,1 @@
+"""PySide6 workstation viewer (a client of the station core)."""
