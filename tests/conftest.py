@@ -1,0 +1,35 @@
+"""Root test configuration shared by every suite.
+
+Suites keep their own fixtures in ``tests/<area>/conftest.py``. Qt runs on the offscreen platform
+unless a suite (the viewer's GL tests under Xvfb) sets another.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = REPO.parent / "shared"
+
+
+@pytest.fixture(scope="session")
+def shared_dir() -> Path:
+    """The ../shared folder beside the checkout (skips when absent)."""
+    if not SHARED.is_dir():
+        pytest.skip(f"../shared not found at {SHARED}")
+    return SHARED
+
+
+@pytest.fixture(scope="session")
+def hdri_files(shared_dir: Path) -> list[Path]:
+    """Every photographed HDR environment in ../shared/data/hdri (skips when there are none)."""
+    folder = shared_dir / "data" / "hdri"
+    files = sorted(folder.glob("*.hdr")) + sorted(folder.glob("*.exr")) if folder.is_dir() else []
+    if not files:
+        pytest.skip(f"no HDR environments in {folder}")
+    return files
