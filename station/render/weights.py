@@ -1,14 +1,24 @@
-"""Per-design lobe weights: the interface between the lobe fitter and the renderers.
+"""Per-design lobe weights: the hand-off between the fitter and the renderers (thesis eqs 2.3.1–2.3.3).
 
-The designed BRDF is approximated as a sum of cosine lobes with a fixed, shared set of Phong
-exponents ``E_i`` (thesis eqs 2.3.1–2.3.3), written for one light direction L and view V as
+The fitted reflectance, written as BRDF × cosine (units: sr⁻¹, linear sRGB per channel), is
 
-    f_r(L, V) · (L·N) ≈ K_D (L·N) + Σ_i K_G,i (R·V)^E_i + (L·N) Σ_i K_DD,i (R·V)^E_i,
+    f(L, V)·(L·N) ≈ K_D (L·N)                                   (eq 2.3.1, diffuse)
+                  + Σ_i K_G,i (R·V)^E_i                        (eq 2.3.2, gloss, grey)
+                  + (L·N) Σ_i K_DD,i (R·V)^E_i                 (eq 2.3.3, directionally diffuse, RGB)
 
-with R the mirror direction of L about N, every dot product clamped at zero, and the weights in
-BRDF units (sr⁻¹): a Lambertian surface of albedo ρ has K_D = ρ/π, and the lobes are *not*
-normalised (the peak of lobe i is 1 before weighting). The renderers convert to their normalised
-prefiltered maps themselves (see ``station.render.numpy_renderer``).
+with R the mirror direction of L about N, negative dot products clamped to zero, and the Phong
+exponents E_i shared by every design (the basis). The weights multiply the *raw* cosine lobes
+(R·V)^E, not normalised ones. A white Lambertian surface is K_D = 1/π, K_DD = K_G = 0.
+
+Renderers that look up *normalised* prefiltered environment maps (each lobe divided by its integral
+over the sphere, so a constant environment of radiance 1 prefilters to 1) use
+:meth:`LobeWeights.map_weights`, which folds the normalisation in:
+
+    diffuse map   D(N) = (1/π) ∫ L(ω) max(N·ω, 0) dω          → weight π·K_D
+    lobe map      C_E(R) = (E+1)/(2π) ∫ L(ω) max(R·ω, 0)^E dω  → weight 2π/(E+1)·K
+
+so that, following eqs 2.5.1–2.5.3, radiance = π K_D D(N) + (R·N) Σ w_DD,i C_i(R) + Σ w_G,i C_i(R).
+(The renderers may equally do this conversion themselves, see ``station.render.numpy_renderer``.)
 """
 
 from __future__ import annotations
@@ -20,9 +30,55 @@ import numpy as np
 
 @dataclass(frozen=True)
 class LobeWeights:
-    """Non-negative weights of one design over a shared lobe basis (eqs 2.3.1–2.3.3, 2.4.1–2.4.2)."""
+    """Non-negative weights of the lobe-blend BRDF for one design (eqs 2.3.1–2.3.3, 2.4.1).
 
-    exponents: tuple[float, ...]      # Phong exponents E_i (shared basis)
-    k_d: np.ndarray                   # (3,) linear-RGB diffuse weight K_D
-    k_dd: np.ndarray                  # (m, 3) directionally-diffuse weights K_DD,i (RGB), >= 0
-    k_g: np.ndarray                   # (m,) gloss weights K_G,i (grey), >= 0
+    Attributes
+    ----------
+    exponents
+        Phong exponents E_i of the shared basis (dimensionless, > 0), length m.
+    k_d
+        (3,) diffuse weight K_D, linear sRGB, sr⁻¹.
+    k_dd
+        (m, 3) directionally diffuse weights K_DD,i, linear sRGB, sr⁻¹, ≥ 0.
+    k_g
+        (m,) grey gloss weights K_G,i, sr⁻¹, ≥ 0.
+    """
+
+    exponents: tuple[float, ...]
+    k_d: np.ndarray
+    k_dd: np.ndarray
+    k_g: np.ndarray
+
+    def __post_init__(self) -> None:
+        m = len(self.exponents)
+        k_d = np.asarray(self.k_d, dtype=float).reshape(3)
+        k_dd = np.asarray(self.k_dd, dtype=float).reshape(m, 3)
+        k_g = np.asarray(self.k_g, dtype=float).reshape(m)
+        for name, arr in (("k_d", k_d), ("k_dd", k_dd), ("k_g", k_g)):
+            if not np.all(np.isfinite(arr)) or np.any(arr < 0.0):
+                raise ValueError(f"LobeWeights.{name}: expected finite values >= 0, got {arr!r}")
+        for arr in (k_d, k_dd, k_g):
+            arr.setflags(write=False)
+        object.__setattr__(self, "exponents", tuple(float(e) for e in self.exponents))
+        object.__setattr__(self, "k_d", k_d)
+        object.__setattr__(self, "k_dd", k_dd)
+        object.__setattr__(self, "k_g", k_g)
+
+    @property
+    def lobe_count(self) -> int:
+        """Number m of basis lobes."""
+        return len(self.exponents)
+
+    def map_weights(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return (w_d (3,), w_dd (m,3), w_g (m,)) for normalised prefiltered maps (see module doc)."""
+        scale = 2.0 * np.pi / (np.asarray(self.exponents) + 1.0)
+        return np.pi * self.k_d, self.k_dd * scale[:, None], self.k_g * scale
+
+    def brdf_cos(self, n_dot_l: np.ndarray, r_dot_v: np.ndarray) -> np.ndarray:
+        """Evaluate BRDF·cos (sr⁻¹, linear sRGB, shape (..., 3)) from N·L and R·V (eqs 2.3.1–2.3.3)."""
+        nl = np.maximum(np.asarray(n_dot_l, dtype=float), 0.0)[..., None]
+        rv = np.maximum(np.asarray(r_dot_v, dtype=float), 0.0)[..., None]
+        lobes = rv ** np.asarray(self.exponents)  # (..., m)
+        colour = nl * (self.k_d + lobes @ self.k_dd)
+        gloss = (lobes @ self.k_g)[..., None]
+        return colour + gloss * (nl > 0.0)
