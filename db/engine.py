@@ -1,0 +1,86 @@
+"""Engines and sessions for the embedded SQLite file or a shared PostgreSQL server.
+
+SQLite runs in WAL mode with ``synchronous=FULL`` (a committed reading survives power loss), with
+foreign keys enforced, a busy timeout, and ``BEGIN IMMEDIATE`` transactions so concurrent writers
+queue on the lock instead of failing on a stale snapshot. PostgreSQL URLs use psycopg 3.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import Engine, create_engine, event
+from sqlalchemy.engine import make_url
+from sqlalchemy.orm import Session, sessionmaker
+
+from station.errors import InputError
+
+DEFAULT_DB_FILE = "station.sqlite3"
+SQLITE_BUSY_TIMEOUT_MS = 30_000
+
+
+def data_dir() -> Path:
+    """The workstation's data folder: ``$CACAD_DATA_DIR`` or ``./var``."""
+    return Path(os.environ.get("CACAD_DATA_DIR") or "var").resolve()
+
+
+def default_database_url(folder: Path | None = None) -> str:
+    """The embedded SQLite database inside *folder* (default :func:`data_dir`)."""
+    folder = folder or data_dir()
+    return f"sqlite:///{(folder / DEFAULT_DB_FILE).as_posix()}"
+
+
+def normalise_url(url: str) -> str:
+    """Accept ``postgres://``/``postgresql://`` and pin the psycopg 3 driver; refuse other backends."""
+    try:
+        parsed = make_url(url)
+    except Exception as exc:
+        raise InputError("database", "an SQLAlchemy URL (sqlite:///PATH or postgresql://…)", url) from exc
+    backend = parsed.get_backend_name()
+    if backend in ("postgres", "postgresql"):
+        return parsed.set(drivername="postgresql+psycopg").render_as_string(hide_password=False)
+    if backend == "sqlite":
+        return url
+    raise InputError("database", "sqlite:///PATH or postgresql://USER@HOST/DB", url)
+
+
+def make_engine(url: str, *, foreign_keys: bool = True, **kwargs: Any) -> Engine:
+    """Create an engine for *url* with the workstation's durability settings.
+
+    For SQLite the parent folder is created. ``foreign_keys=False`` is only for batch migrations,
+    which recreate tables that others reference.
+    """
+    url = normalise_url(url)
+    parsed = make_url(url)
+    if parsed.get_backend_name() != "sqlite":
+        kwargs.setdefault("pool_pre_ping", True)
+        return create_engine(url, **kwargs)
+    if parsed.database and parsed.database != ":memory:":
+        Path(parsed.database).parent.mkdir(parents=True, exist_ok=True)
+    connect_args = kwargs.pop("connect_args", {})
+    connect_args.setdefault("check_same_thread", False)
+    connect_args.setdefault("timeout", SQLITE_BUSY_TIMEOUT_MS / 1000)
+    engine = create_engine(url, connect_args=connect_args, **kwargs)
+
+    @event.listens_for(engine, "connect")
+    def _on_connect(dbapi_conn: Any, _record: Any) -> None:
+        dbapi_conn.isolation_level = None  # we issue BEGIN ourselves (below)
+        cur = dbapi_conn.cursor()
+        cur.execute("PRAGMA journal_mode=WAL")
+        cur.execute("PRAGMA synchronous=FULL")
+        cur.execute(f"PRAGMA foreign_keys={'ON' if foreign_keys else 'OFF'}")
+        cur.execute(f"PRAGMA busy_timeout={SQLITE_BUSY_TIMEOUT_MS}")
+        cur.close()
+
+    @event.listens_for(engine, "begin")
+    def _on_begin(conn: Any) -> None:
+        conn.exec_driver_sql("BEGIN IMMEDIATE")
+
+    return engine
+
+
+def make_sessionmaker(engine: Engine) -> sessionmaker[Session]:
+    """A session factory bound to *engine* (objects stay readable after commit)."""
+    return sessionmaker(engine, expire_on_commit=False)

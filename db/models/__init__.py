@@ -1,0 +1,12 @@
+"""Every table of the measurement database (import this module to register them on ``Base``)."""
+
+from db.models.designs import Design, DesignVersion
+from db.models.instruments import CalibrationRecord, Instrument
+from db.models.library import JOB_STATES, AnalysisResult, FormulationJob, LibraryPaint
+from db.models.measurements import PARTS, Measurement, Panel
+from db.models.users import ApiToken, AuditEvent, Role, User
+
+__all__ = [
+    "JOB_STATES", "PARTS", "AnalysisResult", "ApiToken", "AuditEvent", "CalibrationRecord", "Design",
+    "DesignVersion", "FormulationJob", "Instrument", "LibraryPaint", "Measurement", "Panel", "Role", "User",
+]
