@@ -1,0 +1,97 @@
+"""The design file format: JSON, schema ``cacad.design/1`` (documented in docs/model.md).
+
+A design file is a JSON object::
+
+    {
+      "schema": "cacad.design/1",          # optional on input; always written
+      "name": "Red metallic",               # optional
+      "face": [L, a, b],                    # Lab (D65/10°) at 15°
+      "flop": [L, a, b],                    # Lab at the travel angle
+      "travel_deg": 62.0,                   # θ_clamp in degrees; null for a solid
+      "gloss_gu": 85.0                      # 60° gloss units; null = not measured (default used)
+    }
+
+Any other keys are kept by the caller and ignored here, so the JSON printed by
+``station model from-angles`` (which adds ``residual_de`` and more) is itself a valid design file.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from station.model.errors import ModelInputError
+from station.model.representations import DEFAULT_GLOSS_GU, FaceFlopTravelGloss
+
+SCHEMA = "cacad.design/1"
+#: Largest design file accepted, bytes.
+MAX_DESIGN_BYTES = 1_000_000
+
+
+def design_to_dict(design: FaceFlopTravelGloss, **extra: Any) -> dict[str, Any]:
+    """Serialise a design to the ``cacad.design/1`` JSON object (plus *extra* keys)."""
+    out: dict[str, Any] = {
+        "schema": SCHEMA,
+        "name": design.name,
+        "face": list(design.face),
+        "flop": list(design.flop),
+        "travel_deg": design.travel_deg,
+        "gloss_gu": design.gloss_gu,
+    }
+    out.update(extra)
+    return out
+
+
+def design_from_dict(data: Any) -> FaceFlopTravelGloss:
+    """Parse a ``cacad.design/1`` JSON object; unknown keys are ignored.
+
+    Raises
+    ------
+    ModelInputError
+        Naming the missing or invalid field and the accepted range.
+    """
+    if not isinstance(data, dict):
+        raise ModelInputError("design", "a JSON object with face, flop, travel_deg, gloss_gu", type(data).__name__)
+    schema = data.get("schema", SCHEMA)
+    if schema != SCHEMA:
+        raise ModelInputError("schema", f'"{SCHEMA}"', schema)
+    for key in ("face", "flop"):
+        if key not in data:
+            raise ModelInputError(key, "[L, a, b] (required)", None)
+    if "travel_deg" not in data:
+        raise ModelInputError("travel_deg", "degrees (15 < travel <= 180) or null for a solid (required)", None)
+    gloss = data.get("gloss_gu")
+    name = data.get("name") or ""
+    if not isinstance(name, str):
+        raise ModelInputError("name", "a string", name)
+    return FaceFlopTravelGloss(
+        face=data["face"],
+        flop=data["flop"],
+        travel_deg=data["travel_deg"],
+        gloss_gu=DEFAULT_GLOSS_GU if gloss is None else gloss,
+        name=name,
+    )
+
+
+def load_design(path: str | Path) -> FaceFlopTravelGloss:
+    """Read a design file (``cacad.design/1`` JSON); errors name the file and the field."""
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise ModelInputError("design", "a readable design file", str(p)) from exc
+    if size > MAX_DESIGN_BYTES:
+        raise ModelInputError("design", f"a file of at most {MAX_DESIGN_BYTES} bytes", size)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ModelInputError("design", f"a JSON design file ({SCHEMA})", f"{p}: {exc}") from exc
+    return design_from_dict(data)
+
+
+def save_design(design: FaceFlopTravelGloss, path: str | Path, **extra: Any) -> Path:
+    """Write a design file; returns the path."""
+    p = Path(path)
+    p.write_text(json.dumps(design_to_dict(design, **extra), indent=2) + "\n", encoding="utf-8")
+    return p

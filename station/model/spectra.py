@@ -1,0 +1,172 @@
+"""Reflectance spectra ⇄ Lab, spectral recovery and a metamerism index.
+
+Tristimulus integration follows ASTM E308 through colour-science: the tristimulus weighting factors
+for 400–700 nm at 10 nm (ASTM E2022 / E308 table method, range-adjusted) are computed once per
+illuminant and observer, so XYZ = R · W for any number of spectra. White (R = 1) gives Y = 1.
+
+Spectral recovery (Lab → plausible reflectance) minimises the roughness Σ(R_{i+1} − R_i)² subject to
+reproducing the XYZ exactly with 0 <= R <= 1 — the same weights, so the recovered spectrum maps back
+to the asked Lab to numerical precision.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import colour
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import minimize
+
+from station.model.colorimetry import OBSERVER_10, xyz_to_lab
+from station.model.errors import FitError, ModelInputError
+
+#: Wavelength grid of every reflectance spectrum in the product, nm (31 values).
+WAVELENGTHS: NDArray[np.float64] = np.arange(400.0, 701.0, 10.0)
+_SHAPE = colour.SpectralShape(400, 700, 10)
+#: Illuminants offered for colorimetry and the metamerism index.
+ILLUMINANTS = ("D65", "A", "F11", "D50")
+
+
+@cache
+def weighting_factors(illuminant: str = "D65", observer: str = OBSERVER_10) -> NDArray[np.float64]:
+    """ASTM E308 tristimulus weighting factors, shape (31, 3), normalised so white has Y = 1."""
+    if illuminant not in colour.SDS_ILLUMINANTS:
+        raise ModelInputError("illuminant", f"one of {', '.join(ILLUMINANTS)}", illuminant)
+    if observer not in colour.MSDS_CMFS:
+        raise ModelInputError("observer", f"a CIE observer name, e.g. {OBSERVER_10!r}", observer)
+    cmfs = colour.MSDS_CMFS[observer]
+    sd_illuminant = colour.SDS_ILLUMINANTS[illuminant]
+    w = np.empty((WAVELENGTHS.size, 3))
+    for i in range(WAVELENGTHS.size):  # XYZ is linear in R: integrate unit impulses once
+        values = np.zeros(WAVELENGTHS.size)
+        values[i] = 1.0
+        sd = colour.SpectralDistribution(dict(zip(WAVELENGTHS, values, strict=True)))
+        w[i] = colour.sd_to_XYZ(sd, cmfs, sd_illuminant, method="ASTM E308", shape=_SHAPE) / 100.0
+    w /= w[:, 1].sum()  # white → Y = 1 exactly
+    w.setflags(write=False)
+    return w
+
+
+def whitepoint_xyz(illuminant: str = "D65", observer: str = OBSERVER_10) -> NDArray[np.float64]:
+    """XYZ of the perfect white under *illuminant* with the product's weights (Y = 1)."""
+    return weighting_factors(illuminant, observer).sum(axis=0)
+
+
+def _check_reflectance(reflectance: ArrayLike) -> NDArray[np.float64]:
+    r = np.asarray(reflectance, dtype=float)
+    if r.shape[-1:] != (WAVELENGTHS.size,):
+        raise ModelInputError("reflectance", f"shape (..., {WAVELENGTHS.size}) for 400–700 nm at 10 nm", r.shape)
+    if not np.all(np.isfinite(r)) or np.any(r < 0.0) or np.any(r > 2.0):
+        raise ModelInputError("reflectance", "finite reflectance factors 0 <= R <= 2", "out-of-range values")
+    return r
+
+
+def reflectance_to_xyz(
+    reflectance: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10
+) -> NDArray[np.float64]:
+    """XYZ (white Y = 1) of reflectance spectra (..., 31) under *illuminant* (ASTM E308)."""
+    return _check_reflectance(reflectance) @ weighting_factors(illuminant, observer)
+
+
+def reflectance_to_lab(
+    reflectance: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10
+) -> NDArray[np.float64]:
+    """CIE L*a*b* of reflectance spectra (..., 31) relative to *illuminant*'s white for *observer*.
+
+    Parameters
+    ----------
+    reflectance
+        Reflectance factors at :data:`WAVELENGTHS` (400–700 nm, 10 nm), shape (..., 31).
+    illuminant
+        ``"D65"`` (default), ``"A"``, ``"F11"`` or another colour-science illuminant name.
+    observer
+        CIE observer; default the 1964 10° observer.
+    """
+    xyz = reflectance_to_xyz(reflectance, illuminant, observer)
+    white = whitepoint_xyz(illuminant, observer)
+    return xyz_to_lab(xyz, colour.XYZ_to_xy(white))
+
+
+def _difference_operator(n: int) -> NDArray[np.float64]:
+    d = np.zeros((n - 1, n))
+    d[np.arange(n - 1), np.arange(n - 1)] = -1.0
+    d[np.arange(n - 1), np.arange(1, n)] = 1.0
+    return d
+
+
+def reflectance_from_lab(lab: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10) -> NDArray[np.float64]:
+    """Recover smooth reflectance spectra (..., 31) in [0, 1] that reproduce Lab exactly.
+
+    Raises
+    ------
+    ModelInputError
+        When a Lab lies outside the object-colour solid (no reflectance in [0, 1] reproduces it).
+    """
+    lab_arr = np.asarray(lab, dtype=float)
+    if lab_arr.shape[-1:] != (3,) or not np.all(np.isfinite(lab_arr)):
+        raise ModelInputError("lab", "finite L*, a*, b* triples", lab_arr.shape)
+    w = weighting_factors(illuminant, observer)
+    white = whitepoint_xyz(illuminant, observer)
+    flat = lab_arr.reshape(-1, 3)
+    targets = colour.Lab_to_XYZ(flat, colour.XYZ_to_xy(white)) * white[1]
+    n = WAVELENGTHS.size
+    d = _difference_operator(n)
+    q = d.T @ d + 1e-6 * np.eye(n)  # roughness, regularised so Q is invertible
+    q_inv_w = np.linalg.solve(q, w)
+    gram = w.T @ q_inv_w
+    out = np.empty((flat.shape[0], n))
+    for k, xyz in enumerate(targets):
+        r = q_inv_w @ np.linalg.solve(gram, xyz)  # closed form without bounds
+        if np.any(r < -1e-12) or np.any(r > 1 + 1e-12):
+            res = minimize(
+                lambda x: 0.5 * x @ q @ x,
+                np.clip(r, 0.0, 1.0),
+                jac=lambda x: q @ x,
+                bounds=[(0.0, 1.0)] * n,
+                constraints=[{"type": "eq", "fun": lambda x, t=xyz: x @ w - t, "jac": lambda x: w.T}],
+                method="SLSQP",
+                options={"ftol": 1e-14, "maxiter": 500},
+            )
+            r = res.x
+            if not res.success or np.max(np.abs(r @ w - xyz)) > 1e-7:
+                raise ModelInputError(
+                    f"lab[{k}]", "a colour inside the object-colour solid (reachable with 0 <= R <= 1)",
+                    [round(float(v), 3) for v in flat[k]],
+                )
+        out[k] = np.clip(r, 0.0, 1.0)
+    return out.reshape((*lab_arr.shape[:-1], n))
+
+
+def metamerism_index(
+    reflectance_ref: ArrayLike,
+    reflectance_sample: ArrayLike,
+    reference_illuminant: str = "D65",
+    test_illuminants: tuple[str, ...] = ("A", "F11"),
+    method: str = "cie2000",
+) -> dict[str, NDArray[np.float64]]:
+    """Special metamerism index (change in illuminant) between two samples, per geometry.
+
+    The sample is first corrected additively in Lab for its mismatch under the reference illuminant
+    (CIE 15 / ISO 105-J02 practice), then the difference under each test illuminant is the index.
+
+    Returns
+    -------
+    dict
+        ``{illuminant: ΔE per spectrum}`` for each test illuminant, plus ``"reference"`` with the
+        uncorrected difference under the reference illuminant.
+    """
+    from station.model.difference import delta_e
+
+    ref = np.asarray(reflectance_ref, dtype=float)
+    smp = np.asarray(reflectance_sample, dtype=float)
+    if ref.shape != smp.shape:
+        raise FitError(f"reflectance_sample: shape {smp.shape} differs from reflectance_ref {ref.shape}")
+    lab_r0 = reflectance_to_lab(ref, reference_illuminant)
+    lab_s0 = reflectance_to_lab(smp, reference_illuminant)
+    out: dict[str, NDArray[np.float64]] = {"reference": delta_e(lab_r0, lab_s0, method)}
+    for ill in test_illuminants:
+        lab_r = reflectance_to_lab(ref, ill)
+        lab_s = reflectance_to_lab(smp, ill) - (lab_s0 - lab_r0)
+        out[ill] = delta_e(lab_r, lab_s, method)
+    return out
