@@ -1,0 +1,134 @@
+"""The reading a station sends to ingest: validated, canonically serialised and hashed.
+
+Units: aspecular angles in degrees; Lab is CIE L*a*b* (D65 / CIE 1964 10° unless ``illuminant`` and
+``observer`` say otherwise); reflectance factors are unitless (metallic faces exceed 1 at 15°);
+wavelengths in nanometres; gloss in gloss units at ``gloss_geometry_deg`` (ISO 2813: 20°, 60°, 85°).
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import hashlib
+import json
+import uuid
+from typing import Annotated, Literal
+
+from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, model_validator
+
+Angle = Annotated[float, Field(gt=-90.0, lt=180.0, allow_inf_nan=False, description="aspecular angle, degrees")]
+LabTriple = Annotated[
+    list[Annotated[float, Field(ge=-200.0, le=200.0, allow_inf_nan=False)]],
+    Field(min_length=3, max_length=3, description="[L*, a*, b*]"),
+]
+Reflectance = Annotated[float, Field(ge=0.0, le=10.0, allow_inf_nan=False)]
+Illuminant = Literal["D65", "D50", "A", "C", "F2", "F7", "F11"]
+Observer = Literal["CIE 1931 2 Degree Standard Observer", "CIE 1964 10 Degree Standard Observer"]
+Text64 = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f]+$")]
+
+MAX_GEOMETRIES = 12
+MAX_WAVELENGTHS = 81
+MAX_RAW_BYTES = 65_536
+
+
+class InstrumentRef(BaseModel):
+    """The instrument that took the reading (created on first sight, keyed by serial)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    serial: Text64
+    model: Text64
+    kind: Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[a-z0-9_-]+$")] = "multiangle"
+    firmware: Annotated[str, Field(max_length=32)] | None = None
+
+
+class CalibrationRef(BaseModel):
+    """The calibration in force when the reading was taken (keyed by its client id)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    client_id: uuid.UUID
+    performed_at: AwareDatetime
+    reference: Annotated[str, Field(max_length=64)] = ""
+    passed: bool = True
+
+
+class Reading(BaseModel):
+    """One instrument reading as sent by a station; ``client_id`` makes re-sending idempotent."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [{
+                "client_id": "5b0c8a54-3f7e-4f56-9a53-0d1f4c1f7a10",
+                "instrument": {"serial": "SIM-MA-0001", "model": "MA-98 simulator", "kind": "multiangle"},
+                "panel_id": None,
+                "operator": "ana",
+                "measured_at": "2026-11-23T08:30:00Z",
+                "geometries_deg": [15.0, 45.0, 110.0],
+                "lab": [[82.1, -1.2, -18.5], [55.3, -0.4, -12.0], [31.9, 0.8, -6.2]],
+                "gloss_gu": 88.0,
+                "gloss_geometry_deg": 60,
+            }]
+        },
+    )
+
+    client_id: uuid.UUID
+    instrument: InstrumentRef
+    calibration: CalibrationRef | None = None
+    panel_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
+    operator: Text64
+    measured_at: AwareDatetime
+    illuminant: Illuminant = "D65"
+    observer: Observer = "CIE 1964 10 Degree Standard Observer"
+    geometries_deg: Annotated[list[Angle], Field(min_length=1, max_length=MAX_GEOMETRIES)]
+    lab: Annotated[list[LabTriple], Field(min_length=1, max_length=MAX_GEOMETRIES)]
+    wavelengths_nm: (
+        Annotated[list[Annotated[float, Field(ge=300.0, le=1100.0)]], Field(min_length=2, max_length=MAX_WAVELENGTHS)]
+        | None
+    ) = None
+    spectra: (
+        Annotated[list[Annotated[list[Reflectance], Field(max_length=MAX_WAVELENGTHS)]],
+                  Field(max_length=MAX_GEOMETRIES)]
+        | None
+    ) = None
+    gloss_gu: Annotated[float, Field(ge=0.0, le=2000.0, allow_inf_nan=False)] | None = None
+    gloss_geometry_deg: Literal[20, 60, 85] | None = None
+    raw_payload_b64: Annotated[str, Field(max_length=(MAX_RAW_BYTES * 4) // 3 + 4)] | None = None
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Reading:
+        if len(self.lab) != len(self.geometries_deg):
+            raise ValueError(f"lab: expected one [L*, a*, b*] per geometry ({len(self.geometries_deg)}), "
+                             f"got {len(self.lab)}")
+        if len(set(self.geometries_deg)) != len(self.geometries_deg):
+            raise ValueError("geometries_deg: expected distinct angles")
+        if (self.spectra is None) != (self.wavelengths_nm is None):
+            raise ValueError("spectra and wavelengths_nm: expected both or neither")
+        if self.spectra is not None and self.wavelengths_nm is not None:
+            if len(self.spectra) != len(self.geometries_deg):
+                raise ValueError("spectra: expected one curve per geometry")
+            if any(len(curve) != len(self.wavelengths_nm) for curve in self.spectra):
+                raise ValueError("spectra: expected each curve to have one value per wavelength")
+            if any(b <= a for a, b in zip(self.wavelengths_nm, self.wavelengths_nm[1:], strict=False)):
+                raise ValueError("wavelengths_nm: expected strictly increasing values")
+        if self.gloss_gu is not None and self.gloss_geometry_deg is None:
+            self.gloss_geometry_deg = 60
+        if self.raw_payload_b64 is not None:
+            try:
+                raw = base64.b64decode(self.raw_payload_b64, validate=True)
+            except binascii.Error as exc:
+                raise ValueError("raw_payload_b64: expected base64") from exc
+            if len(raw) > MAX_RAW_BYTES:
+                raise ValueError(f"raw_payload_b64: expected at most {MAX_RAW_BYTES} bytes")
+        return self
+
+    def canonical_json(self) -> str:
+        """The reading as compact JSON with sorted keys (what the outbox stores)."""
+        return json.dumps(self.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+
+    def payload_sha256(self) -> str:
+        """SHA-256 of the raw instrument payload when given, else of :meth:`canonical_json`."""
+        if self.raw_payload_b64 is not None:
+            return hashlib.sha256(base64.b64decode(self.raw_payload_b64)).hexdigest()
+        return hashlib.sha256(self.canonical_json().encode()).hexdigest()

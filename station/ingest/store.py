@@ -1,0 +1,117 @@
+"""Write one reading exactly once: instrument and calibration upserted, measurement inserted by client id.
+
+All three statements run in one transaction with ``INSERT … ON CONFLICT DO NOTHING`` on the unique
+keys (instrument serial, calibration client id, measurement client id), so a reading sent twice, or
+replayed after a crash that hit between the database commit and the outbox acknowledgement, is stored
+once. A second reading under a stored client id but with a different payload hash is refused.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from sqlalchemy import Table, select
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from db.base import utcnow
+from db.models import CalibrationRecord, Instrument, Measurement, Panel
+from station.ingest.errors import ClientIdConflictError, ReferenceNotFoundError
+from station.ingest.schema import Reading
+
+
+@dataclass(frozen=True)
+class StoreResult:
+    """Outcome of :func:`store_reading`: the row id and whether this call created it."""
+
+    measurement_id: int
+    created: bool
+
+def _insert(session: Session, table: Table) -> Any:
+    dialect = session.get_bind().dialect.name
+    if dialect == "postgresql":
+        return postgresql.insert(table)
+    if dialect == "sqlite":
+        return sqlite.insert(table)
+    raise NotImplementedError(f"ingest supports sqlite and postgresql, not {dialect}")
+
+def _instrument_id(session: Session, reading: Reading) -> int:
+    ref = reading.instrument
+    table = Instrument.__table__
+    session.execute(
+        _insert(session, table)
+        .values(serial=ref.serial, model=ref.model, kind=ref.kind, firmware=ref.firmware,
+                created_at=reading.measured_at)
+        .on_conflict_do_nothing(index_elements=["serial"])
+    )
+    return session.scalars(select(Instrument.id).where(Instrument.serial == ref.serial)).one()
+
+def _calibration_id(session: Session, reading: Reading, instrument_id: int) -> int | None:
+    cal = reading.calibration
+    if cal is None:
+        return None
+    session.execute(
+        _insert(session, CalibrationRecord.__table__)
+        .values(client_id=cal.client_id, instrument_id=instrument_id, performed_at=cal.performed_at,
+                operator=reading.operator, reference=cal.reference, passed=cal.passed, result={})
+        .on_conflict_do_nothing(index_elements=["client_id"])
+    )
+    return session.scalars(
+        select(CalibrationRecord.id).where(CalibrationRecord.client_id == cal.client_id)
+    ).one()
+
+def store_reading(
+    session: Session,
+    reading: Reading,
+    *,
+    created_by_id: int | None = None,
+    supersedes_id: int | None = None,
+    correction_reason: str | None = None,
+) -> StoreResult:
+    """Store *reading* once inside the caller's transaction (the caller commits).
+
+    Raises :class:`ClientIdConflictError` when the client id is taken by a different payload and
+    :class:`ReferenceNotFoundError` when ``panel_id`` names no panel.
+    """
+    sha = reading.payload_sha256()
+    existing = session.execute(
+        select(Measurement.id, Measurement.payload_sha256).where(Measurement.client_id == reading.client_id)
+    ).first()
+    if existing is not None:
+        if existing.payload_sha256 != sha:
+            raise ClientIdConflictError(str(reading.client_id), existing.payload_sha256, sha)
+        return StoreResult(existing.id, created=False)
+    if reading.panel_id is not None and session.get(Panel, reading.panel_id) is None:
+        raise ReferenceNotFoundError(f"panel_id {reading.panel_id} does not exist")
+    instrument_id = _instrument_id(session, reading)
+    calibration_id = _calibration_id(session, reading, instrument_id)
+    values = dict(
+        client_id=reading.client_id, panel_id=reading.panel_id, instrument_id=instrument_id,
+        calibration_id=calibration_id, operator=reading.operator, measured_at=reading.measured_at,
+        illuminant=reading.illuminant, observer=reading.observer,
+        geometries_deg=list(reading.geometries_deg), lab=[list(v) for v in reading.lab],
+        wavelengths_nm=reading.wavelengths_nm, spectra=reading.spectra, gloss_gu=reading.gloss_gu,
+        gloss_geometry_deg=reading.gloss_geometry_deg, payload_sha256=sha, supersedes_id=supersedes_id,
+        correction_reason=correction_reason, created_by_id=created_by_id,
+    )
+
+    values["received_at"] = utcnow()
+    try:
+        new_id = session.execute(
+            _insert(session, Measurement.__table__)
+            .values(**values)
+            .on_conflict_do_nothing(index_elements=["client_id"])
+            .returning(Measurement.id)
+        ).scalar()
+    except IntegrityError as exc:  # e.g. supersedes_id already superseded, or a vanished reference
+        raise ReferenceNotFoundError(f"reading refused by a database constraint: {exc.orig}") from exc
+    if new_id is None:  # a concurrent writer stored the same client id first
+        row = session.execute(
+            select(Measurement.id, Measurement.payload_sha256).where(Measurement.client_id == reading.client_id)
+        ).one()
+        if row.payload_sha256 != sha:
+            raise ClientIdConflictError(str(reading.client_id), row.payload_sha256, sha)
+        return StoreResult(row.id, created=False)
+    return StoreResult(new_id, created=True)
