@@ -1,0 +1,81 @@
+"""Command line shared by ``python -m simulators.{ma6,ma3,gloss}``.
+
+Prints one line ``ADDRESS <family>@<where>`` on stdout as soon as the device is ready, then serves
+until stdin reaches end of file (the parent died or closed the pipe) or SIGTERM/SIGINT.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from pathlib import Path
+
+from simulators.faults import FAULTS, FaultPlan, FaultSpecError
+from simulators.physics import InstrumentCharacter, SpectroPhysics
+
+__all__ = ["build_parser", "main"]
+
+
+def build_parser(kind: str) -> argparse.ArgumentParser:
+    """Arguments common to the simulators."""
+    p = argparse.ArgumentParser(prog=f"python -m simulators.{kind}", description=f"simulated {kind} instrument")
+    p.add_argument("--design", type=Path, help="design file (cacad.design/1 JSON) of the virtual panel")
+    p.add_argument("--fault", action="append", default=[], metavar="SPEC",
+                   help="NAME[@COMMAND][:N]; known: " + ", ".join(FAULTS))
+    p.add_argument("--serial", default=None, help="instrument serial number")
+    p.add_argument("--bias", type=float, default=0.0, help="inter-instrument bias scale (0 = none, 1 = typical)")
+    p.add_argument("--noise", type=float, default=1.0, help="noise scale (1 = published repeatability)")
+    p.add_argument("--measure-time", type=float, default=0.3, help="seconds per measurement")
+    p.add_argument("--cold", action="store_true", help="start cold (warm-up drift and temperature rise)")
+    p.add_argument("--seed", type=int, default=None, help="noise seed")
+    p.add_argument("--rfc2217", action="store_true", help="also serve the pty behind an RFC 2217 server")
+    p.add_argument("--twelve", action="store_true", help="ma6 only: add the 15° illumination block")
+    return p
+
+
+def make_physics(args: argparse.Namespace, default_serial: str) -> SpectroPhysics:
+    """Physics from the common arguments."""
+    from simulators.physics import DEFAULT_DESIGN
+    from station.model.design_io import load_design
+
+    ch = InstrumentCharacter(serial=args.serial or default_serial, bias_scale=args.bias)
+    ch.noise_band *= args.noise
+    ch.noise_scale *= args.noise
+    design = load_design(args.design) if args.design else DEFAULT_DESIGN
+    return SpectroPhysics(design=design, character=ch, warm=not args.cold, seed=args.seed)
+
+
+def main(kind: str, argv: list[str] | None = None) -> int:
+    """Run simulator *kind* until told to stop; return the exit status."""
+    args = build_parser(kind).parse_args(argv)
+    try:
+        faults = FaultPlan(args.fault)
+    except FaultSpecError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    from simulators import serve
+
+    try:
+        server = serve.start(kind, args, faults)
+    except Exception as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    print(f"ADDRESS {server.address}", flush=True)
+    stop = threading.Event()
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, lambda *_: stop.set())
+
+    def watch_stdin() -> None:
+        try:
+            while sys.stdin.buffer.read(1):
+                pass
+        except (OSError, ValueError):
+            pass
+        stop.set()
+
+    threading.Thread(target=watch_stdin, daemon=True).start()
+    stop.wait()
+    server.close()
+    return 0

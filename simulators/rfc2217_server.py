@@ -1,0 +1,108 @@
+"""Expose a pty-served simulator behind an RFC 2217 server (pyserial's ``PortManager``), for the
+``rfc2217://host:port`` form of the serial transport (serial-over-LAN converters).
+
+One client at a time; baud-rate changes requested by the client are applied to the pty, so the
+simulator's baud negotiation works through the network too.
+"""
+
+from __future__ import annotations
+
+import socket
+import threading
+
+import serial
+import serial.rfc2217
+
+__all__ = ["Rfc2217Server"]
+
+
+class Rfc2217Server:
+    """Listen on 127.0.0.1:*port* (0 = any free port) and bridge clients to the pty at *path*."""
+
+    def __init__(self, path: str, port: int = 0) -> None:
+        self.path = path
+        self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self._sock.bind(("127.0.0.1", port))
+        self._sock.listen(1)
+        self.port = self._sock.getsockname()[1]
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._serve, name="rfc2217", daemon=True)
+
+    @property
+    def url(self) -> str:
+        """The ``rfc2217://`` URL clients connect to."""
+        return f"rfc2217://127.0.0.1:{self.port}"
+
+    def start(self) -> Rfc2217Server:
+        """Start accepting clients."""
+        self._thread.start()
+        return self
+
+    def close(self) -> None:
+        """Stop accepting and close the listening socket."""
+        self._stop.set()
+        try:
+            self._sock.shutdown(socket.SHUT_RDWR)
+        except OSError:
+            pass
+        self._sock.close()
+
+    def _serve(self) -> None:
+        while not self._stop.is_set():
+            try:
+                conn, _ = self._sock.accept()
+            except OSError:
+                return
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            try:
+                self._bridge(conn)
+            finally:
+                conn.close()
+
+    def _bridge(self, conn: socket.socket) -> None:
+        ser = serial.Serial(self.path, timeout=0.05)
+        manager = serial.rfc2217.PortManager(ser, _Writer(conn))
+        done = threading.Event()
+
+        def serial_to_net() -> None:
+            while not done.is_set():
+                try:
+                    data = ser.read(ser.in_waiting or 1)
+                except serial.SerialException:
+                    break
+                if data:
+                    try:
+                        conn.sendall(b"".join(manager.escape(data)))
+                    except OSError:
+                        break
+            done.set()
+
+        reader = threading.Thread(target=serial_to_net, daemon=True)
+        reader.start()
+        try:
+            while not done.is_set():
+                try:
+                    data = conn.recv(4096)
+                except OSError:
+                    break
+                if not data:
+                    break
+                ser.write(b"".join(manager.filter(data)))
+        finally:
+            done.set()
+            reader.join(1.0)
+            ser.close()
+
+
+class _Writer:
+    """The ``write`` half PortManager needs for its telnet negotiation replies."""
+
+    def __init__(self, conn: socket.socket) -> None:
+        self._conn = conn
+
+    def write(self, data: bytes) -> None:
+        try:
+            self._conn.sendall(data)
+        except OSError:
+            pass

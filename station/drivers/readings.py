@@ -1,0 +1,161 @@
+"""Typed results of the instrument layer: identity, calibration, spectral and gloss readings.
+
+Reflectance is a factor in [0, ~1.5] (not %), on ``WAVELENGTHS_NM`` = 400, 410, …, 700 nm (31 bands),
+one row per geometry. Geometries are named as instruments export them: ``"45as15"`` = illumination at
+45° from the normal, aspecular angle 15° (viewing angle measured from the specular direction, positive
+towards the normal; thesis §3.3). Lab is *not* computed here: use
+``station.model.spectra.reflectance_to_lab(reading.reflectance)``.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from station.drivers.errors import DriverInputError
+
+__all__ = [
+    "WAVELENGTHS_NM",
+    "CalibrationResult",
+    "CalibrationStatus",
+    "GlossReading",
+    "InstrumentInfo",
+    "SpectralReading",
+    "geometry_name",
+    "parse_geometry",
+]
+
+WAVELENGTHS_NM: tuple[int, ...] = tuple(range(400, 701, 10))
+
+_GEOM = re.compile(r"^(-?\d+)as(-?\d+)$")
+
+
+def geometry_name(illumination_deg: int, aspecular_deg: int) -> str:
+    """Return the export name of a geometry, e.g. ``geometry_name(45, -15) == "45as-15"``."""
+    return f"{int(illumination_deg)}as{int(aspecular_deg)}"
+
+
+def parse_geometry(name: str) -> tuple[int, int]:
+    """Return ``(illumination_deg, aspecular_deg)`` of a name like ``"45as110"``."""
+    m = _GEOM.match(name)
+    if m is None:
+        raise DriverInputError("geometry", 'a name like "45as15" (illumination "as" aspecular)', name)
+    return int(m.group(1)), int(m.group(2))
+
+
+@dataclass(frozen=True)
+class InstrumentInfo:
+    """Identity of an instrument: model, serial number, firmware version, geometries it measures."""
+
+    model: str
+    serial: str
+    firmware: str
+    geometries: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class CalibrationStatus:
+    """What the instrument needs: ``needed`` is ``None`` when it can measure, else the next step."""
+
+    needed: str | None
+    calibration_id: str
+    expires: dt.datetime | None
+    temperature_c: float | None = None
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Outcome of a full calibration: steps done, verification-tile ΔE00 and pass/fail, expiry."""
+
+    calibration_id: str
+    steps: tuple[str, ...]
+    verification_de: float | None
+    passed: bool
+    expires: dt.datetime | None
+
+
+@dataclass(frozen=True)
+class SpectralReading:
+    """One measurement of a multi-angle spectrophotometer.
+
+    ``reflectance`` has shape ``(len(geometries), 31)``; ``warnings`` and ``diagnosis`` are the
+    instrument's bitmasks (CM-MISDK meanings, docs/protocols/); ``time`` is the instrument's UTC clock.
+    """
+
+    geometries: tuple[str, ...]
+    reflectance: np.ndarray
+    temperature_c: float
+    serial: str
+    calibration_id: str
+    time: dt.datetime
+    warnings: int = 0
+    diagnosis: int = 0
+    wavelengths_nm: tuple[int, ...] = WAVELENGTHS_NM
+    model: str = ""
+
+    @property
+    def aspecular_deg(self) -> tuple[int, ...]:
+        """Aspecular angle of each geometry (°)."""
+        return tuple(parse_geometry(g)[1] for g in self.geometries)
+
+    def block(self, illumination_deg: int) -> tuple[tuple[int, ...], np.ndarray]:
+        """Return ``(aspecular angles, reflectance rows)`` for one illumination direction."""
+        rows = [i for i, g in enumerate(self.geometries) if parse_geometry(g)[0] == illumination_deg]
+        return tuple(self.aspecular_deg[i] for i in rows), self.reflectance[rows]
+
+    def to_dict(self) -> dict[str, object]:
+        """Return a JSON-able dict (no Lab: that is the model's job)."""
+        return {
+            "model": self.model,
+            "geometries": list(self.geometries),
+            "wavelengths_nm": list(self.wavelengths_nm),
+            "spectra": self.reflectance.tolist(),
+            "temperature_c": self.temperature_c,
+            "serial": self.serial,
+            "calibration_id": self.calibration_id,
+            "time": self.time.isoformat(),
+            "warnings": self.warnings,
+            "diagnosis": self.diagnosis,
+        }
+
+
+@dataclass(frozen=True)
+class GlossReading:
+    """One reading of a 20/60/85° gloss meter with haze, DOI and Rspec.
+
+    ``gloss_gu`` maps geometry (°) to gloss units (GU, ISO 2813: polished black glass n = 1.567 is
+    100 GU); ``haze_hu`` is haze units (ASTM E430 method B, 20° ± 1.9°), ``log_haze`` its log form;
+    ``doi`` is distinctness of image (0–100) and ``rspec`` the narrow-aperture 20° peak (GU).
+    """
+
+    gloss_gu: dict[int, float]
+    haze_hu: float
+    log_haze: float
+    doi: float
+    rspec: float
+    serial: str
+    calibration_id: str
+    time: dt.datetime
+    temperature_c: float
+    warnings: int = 0
+    model: str = ""
+    extra: dict[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, object]:
+        """Return a JSON-able dict."""
+        return {
+            "model": self.model,
+            "gloss_gu": {str(k): v for k, v in sorted(self.gloss_gu.items())},
+            "haze_hu": self.haze_hu,
+            "log_haze": self.log_haze,
+            "doi": self.doi,
+            "rspec": self.rspec,
+            "serial": self.serial,
+            "calibration_id": self.calibration_id,
+            "time": self.time.isoformat(),
+            "temperature_c": self.temperature_c,
+            "warnings": self.warnings,
+        }
