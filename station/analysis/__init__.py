@@ -1,1 +1,37 @@
-"""station.analysis"""
+"""Misalignment analysis (thesis ch. 4): goniogeometric index, seam sweeps, inverse trompe l'oeil, QA.
+
+Plain functions returning dataclasses; the CLI (``station analysis …``) and the service call them.
+This package builds on :mod:`station.model` only (it never imports :mod:`station.render`): environment
+lighting arrives as plain samples (:class:`Environment`), converted by the caller.
+"""
+
+from station.analysis.errors import AnalysisError, AnalysisInputError
+from station.analysis.geometry import SeamGeometry, aspecular_deg, direction, rotated_normals
+from station.analysis.index import (
+    DE_METHODS,
+    JND_CIE76,
+    GeometryIndex,
+    IndexResult,
+    SeamModel,
+    goniogeometric_index,
+)
+from station.analysis.shading import Environment, environment_colour, point_colour, shade_lab
+
+__all__ = [
+    "DE_METHODS",
+    "JND_CIE76",
+    "AnalysisError",
+    "AnalysisInputError",
+    "Environment",
+    "GeometryIndex",
+    "IndexResult",
+    "SeamGeometry",
+    "SeamModel",
+    "aspecular_deg",
+    "direction",
+    "environment_colour",
+    "goniogeometric_index",
+    "point_colour",
+    "rotated_normals",
+    "shade_lab",
+]
