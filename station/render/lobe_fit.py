@@ -1,0 +1,520 @@
+"""The designed BRDF and its real-time non-negative fit to the lobe basis (thesis §2.4, eqs 2.4.1–2.4.2).
+
+Designed BRDF (what is fitted; docs/render-fit.md). For light L, view V, normal N, mirror direction
+R = 2(N·L)N − L and aspecular angle α = ∠(R, V):
+
+    f(L, V)·(N·L) = (N·L) ρ(α)/π + ρ_s (n + 1)/(2π) · max(R·V, 0)^n       (N·L, N·V > 0)
+
+* ρ(α) (linear sRGB, per channel) is the reflectance factor of the clamped-quadratic colour at α:
+  Lab from :meth:`FaceFlopTravelGloss.lab_at` → :func:`station.model.colorimetry.lab_to_linear_srgb`.
+  Below the model's face angle (15°) the colour is held at the face: the quadratic's extrapolation
+  towards specular grows without bound as θ_clamp approaches 15° (s(0)² = (θ_c/(θ_c − 15))², 256 at
+  θ_c = 16°), and near specular the gloss lobe dominates anyway.
+  A reflectance factor compares the sample with the perfect white diffuser (BRDF 1/π) under the same
+  geometry, so the colour part of the BRDF is ρ(α)/π (the thesis's I·f = C, eq 4.3.3–4.3.4).
+* the gloss lobe is the energy-conserving Phong lobe of :func:`station.model.gloss.lobe_from_gloss`:
+  exponent n, specular albedo ρ_s (grey, the coat's Fresnel reflectance at 60°). The model defines it
+  as the distribution (n + 1)/(2π) cosⁿψ of the reflected flux about the mirror direction, so the
+  reflected radiance is ρ_s times the normalised-lobe average of the incident radiance about R (a
+  constant environment L gives ρ_s L): exactly the K_G form of eq 2.3.2 with K_G = ρ_s (n+1)/(2π).
+  GU → (n, ρ_s) is read from a table of that function (station/render/data/gloss_lobes.json, 1 GU
+  steps, log n interpolated), because one call simulates the gloss meter and takes ~0.4 s.
+
+The lobe model (eqs 2.3.1–2.3.3, :mod:`station.render.weights`) splits the same way, so the fit solves
+two fixed-matrix problems per design, each over the sample geometries of :mod:`station.render.lobes`
+weighted by √(solid angle):
+
+* colour rows, per RGB channel:   (N·L)[K_D + Σ K_DD,i cos^E_i α] ≈ (N·L) ρ(α)/π   (m + 1 unknowns)
+* gloss rows, grey:                Σ K_G,i cos^E_i α ≈ ρ_s (n+1)/(2π) cos^n α         (m unknowns)
+
+(``gloss_form="cosine"`` instead folds the gloss into grey K_DD over all rows; kept for comparison.)
+
+Methods (all return weights ≥ 0; compare them with ``python -m bench.lobe_fit``):
+
+* ``enum`` (default): exact NNLS by enumerating the passive sets. For a fixed matrix the solution on
+  each subset P of columns is a precomputed linear map of the right-hand side, so one batched matrix
+  product gives every candidate; the optimum is the non-negative candidate with the largest projection
+  (residual = ‖b‖² − bᵀA x_P). Branch-free, vectorised over designs, bounded time.
+* ``nnls``: Lawson–Hanson (:func:`scipy.optimize.nnls`) on the QR-reduced problem, one call per RHS.
+* ``lp-l1``: the thesis's linear programme, L1 objective, HiGHS with a time limit (falls back to
+  ``enum`` and says so when the limit is hit).
+* ``clamped-lsq``: least squares, negative weights clamped to zero (the thesis's rejected baseline).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.render.errors import RenderError, RenderInputError
+from station.render.lobes import (
+    COLOUR_ALPHAS_DEG,
+    GLOSS_ALPHAS_DEG,
+    LobeBasis,
+    SampleGeometries,
+    default_basis,
+    sample_geometries,
+)
+from station.render.weights import LobeWeights
+
+if TYPE_CHECKING:
+    from station.model import FaceFlopTravelGloss
+
+__all__ = [
+    "METHODS",
+    "DesignedBRDF",
+    "FitProblem",
+    "FitReport",
+    "LobeFitError",
+    "default_basis",
+    "designed_brdf",
+    "fit_design",
+    "fit_designs",
+    "fit_error_de",
+    "fit_problem",
+]
+
+#: Fit methods by name; the first is the default (chosen from docs/render-fit.png).
+METHODS = ("enum", "nnls", "lp-l1", "clamped-lsq")
+#: Time limit (s) of one HiGHS solve (thesis §2.4: "a time limit for finding a solution must be set").
+LP_TIME_LIMIT_S = 0.05
+#: Aspecular angle (degrees) of the model's face; the designed colour is held at the face below it.
+FACE_ANGLE_DEG = 15.0
+#: Grid (degrees) of the tabulated reflectance factor ρ(α) of a designed BRDF.
+ALPHA_GRID_DEG = np.linspace(0.0, 180.0, 721)
+#: Aspecular angles (degrees) at which targets sample ρ(α): every angle of the sample geometries.
+TARGET_ALPHAS_DEG = tuple(sorted(set(COLOUR_ALPHAS_DEG) | set(GLOSS_ALPHAS_DEG)))
+#: Where the gloss lobe goes: "thesis" fits it with the K_G lobes of eq 2.3.2 (the designed lobe's own
+#: form); "cosine" folds it into (N·L)-weighted grey K_DD lobes (eq 2.3.3 form), kept for comparison.
+GLOSS_FORMS = ("thesis", "cosine")
+#: Relative singular-value cut-off of every pseudo-inverse (columns scaled to unit norm first): near-
+#: duplicate exponents are solved in their well-determined span instead of blowing up.
+PINV_RCOND = 1e-7
+#: Largest lobe count fitted by enumeration (2^(m+1) passive sets); larger bases use Lawson–Hanson.
+ENUM_MAX_UNKNOWNS = 10
+
+
+class LobeFitError(RenderError):
+    """A fit could not be produced (a solver failed in a way no fallback covers)."""
+
+
+@dataclass(frozen=True)
+class DesignedBRDF:
+    """A designed BRDF in the form the fitter and ground truth evaluate (module docstring).
+
+    Attributes
+    ----------
+    reflectance
+        (721, 3) reflectance factor ρ(α), linear sRGB, on ALPHA_GRID_DEG (0–180° by 0.25°).
+    phong_exponent
+        Gloss lobe exponent n (dimensionless).
+    specular_albedo
+        Gloss lobe albedo ρ_s (dimensionless, grey).
+    name
+        Label for reports.
+    out_of_gamut
+        True when some ρ(α) channel is negative (outside the sRGB gamut; weights ≥ 0 cannot reach it).
+        Values above 1 are real near specular (bright metallics) and are kept.
+    """
+
+    reflectance: NDArray[np.float64] = field(repr=False)
+    phong_exponent: float
+    specular_albedo: float
+    name: str = ""
+    out_of_gamut: bool = False
+
+    def rho(self, alpha_deg: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Reflectance factor ρ(α) (linear sRGB, shape (..., 3)) by linear interpolation in α (degrees)."""
+        a = np.clip(np.asarray(alpha_deg, dtype=float), 0.0, 180.0) * 4.0
+        i = np.minimum(a.astype(np.int64), 719)
+        t = (a - i)[..., None]
+        return self.reflectance[i] * (1.0 - t) + self.reflectance[i + 1] * t
+
+    def gloss_cos(self, cos_alpha: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Gloss term of BRDF·cos, ρ_s (n+1)/(2π) max(cos α, 0)^n, sr⁻¹, same shape as *cos_alpha*."""
+        c = np.clip(np.asarray(cos_alpha, dtype=float), 0.0, 1.0)
+        n = self.phong_exponent
+        return self.specular_albedo * (n + 1.0) / (2.0 * np.pi) * c**n
+
+    def brdf_cos(self, n_dot_l: NDArray[np.float64], cos_alpha: NDArray[np.float64]) -> NDArray[np.float64]:
+        """BRDF × (N·L) in sr⁻¹, linear sRGB, shape (..., 3); zero for light below the horizon."""
+        nl = np.maximum(np.asarray(n_dot_l, dtype=float), 0.0)
+        alpha = np.degrees(np.arccos(np.clip(cos_alpha, -1.0, 1.0)))
+        total = nl[..., None] * self.rho(alpha) / np.pi + self.gloss_cos(cos_alpha)[..., None]
+        return np.where((nl > 0.0)[..., None], total, 0.0)
+
+
+def _rgb_table(lab: NDArray[np.float64]) -> NDArray[np.float64]:
+    from station.model.colorimetry import lab_to_linear_srgb
+
+    return np.asarray(lab_to_linear_srgb(lab), dtype=float)
+
+
+@lru_cache(maxsize=1)
+def _gloss_table() -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    import json
+    from importlib import resources
+
+    data = json.loads(resources.files("station.render").joinpath("data/gloss_lobes.json").read_text())
+    rows = np.asarray(data["rows"], dtype=float)
+    return rows[:, 0], np.log(rows[:, 1]), rows[:, 2]
+
+
+def gloss_lobe(gloss_gu: float | NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Phong exponent n and specular albedo ρ_s of 60° gloss (GU, 0–100), from the shipped table.
+
+    The table holds :func:`station.model.gloss.lobe_from_gloss` at every whole GU; log n and ρ_s are
+    interpolated linearly between them.
+    """
+    gu, log_n, albedo = _gloss_table()
+    g = np.asarray(gloss_gu, dtype=float)
+    if not np.all(np.isfinite(g)) or np.any(g < gu[0]) or np.any(g > gu[-1]):
+        raise RenderInputError("gloss_gu", f"{gu[0]:g} <= gloss_gu <= {gu[-1]:g}", gloss_gu)
+    return np.exp(np.interp(g, gu, log_n)), np.interp(g, gu, albedo)
+
+
+def _lobe(gloss_gu: float) -> tuple[float, float]:
+    n, rho_s = gloss_lobe(gloss_gu)
+    return float(n), float(rho_s)
+
+
+def designed_brdf(design: FaceFlopTravelGloss) -> DesignedBRDF:
+    """Tabulate the designed BRDF of *design* (clamped-quadratic colour + Phong gloss lobe)."""
+    rgb = _rgb_table(design.lab_at(np.maximum(ALPHA_GRID_DEG, FACE_ANGLE_DEG)))
+    n, rho_s = _lobe(float(design.gloss_gu))
+    oog = bool(np.any(rgb < 0.0))
+    return DesignedBRDF(rgb, n, rho_s, getattr(design, "name", ""), oog)
+
+
+@dataclass(frozen=True)
+class Targets:
+    """Sampled designed BRDFs of a batch of designs, the right-hand sides of eq 2.4.2.
+
+    Attributes
+    ----------
+    rho
+        (d, a, 3) reflectance factor at TARGET_ALPHAS_DEG.
+    phong_exponent, specular_albedo
+        (d,) gloss lobe parameters.
+    """
+
+    rho: NDArray[np.float64]
+    phong_exponent: NDArray[np.float64]
+    specular_albedo: NDArray[np.float64]
+
+    def __len__(self) -> int:
+        return int(self.rho.shape[0])
+
+
+def sample_targets(designs: Sequence[FaceFlopTravelGloss]) -> Targets:
+    """Sample each design's colour at TARGET_ALPHAS_DEG and its gloss lobe (one colour conversion)."""
+    alphas = np.asarray(TARGET_ALPHAS_DEG)
+    lab = np.stack([d.lab_at(np.maximum(alphas, FACE_ANGLE_DEG)) for d in designs]) if designs else np.zeros((0, alphas.size, 3))
+    n, rho_s = gloss_lobe(np.array([float(d.gloss_gu) for d in designs]))
+    return Targets(_rgb_table(lab), np.atleast_1d(n), np.atleast_1d(rho_s))
+
+
+def targets_from_brdfs(brdfs: Sequence[DesignedBRDF]) -> Targets:
+    """Targets of already tabulated designed BRDFs."""
+    alphas = np.asarray(TARGET_ALPHAS_DEG)
+    rho = np.stack([b.rho(alphas) for b in brdfs]) if brdfs else np.zeros((0, alphas.size, 3))
+    return Targets(rho, np.array([b.phong_exponent for b in brdfs], dtype=float),
+                   np.array([b.specular_albedo for b in brdfs], dtype=float))
+
+
+# ----------------------------------------------------------------------------------------------------
+# Fixed-matrix problems
+
+
+def _subset_maps(r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """For the reduced k×k matrix R, stack pinv(R[:, P]) (padded to k×k) for every column subset P."""
+    k = r.shape[1]
+    n_sub = 1 << k
+    masks = ((np.arange(n_sub)[:, None] >> np.arange(k)[None, :]) & 1).astype(bool)
+    maps = np.zeros((n_sub, k, k))
+    scale = np.linalg.norm(r, axis=0)
+    scale = np.where(scale > 0.0, scale, 1.0)
+    for s in range(1, n_sub):
+        cols = np.flatnonzero(masks[s])
+        sub = r[:, cols] / scale[cols]
+        # rcond guards near-duplicate exponents: the subset is solved in its well-determined span only.
+        maps[s][cols] = np.linalg.pinv(sub, rcond=PINV_RCOND) / scale[cols][:, None]
+    return maps, masks
+
+
+@dataclass(frozen=True)
+class _Part:
+    """One fixed-matrix part of the fit: A = Q R over weighted rows, plus the passive-set maps."""
+
+    a: NDArray[np.float64]  # (rows, k) weighted design matrix
+    q: NDArray[np.float64]  # (rows, k)
+    r: NDArray[np.float64]  # (k, k)
+    pinv: NDArray[np.float64]  # (k, rows) least-squares solution map
+    maps: NDArray[np.float64] | None  # (2^k, k, k) passive-set maps on the reduced RHS, or None
+    masks: NDArray[np.bool_] | None
+
+    @classmethod
+    def build(cls, a: NDArray[np.float64]) -> _Part:
+        q, r = np.linalg.qr(a)
+        scale = np.linalg.norm(a, axis=0)
+        scale = np.where(scale > 0.0, scale, 1.0)
+        pinv = np.linalg.pinv(a / scale, rcond=PINV_RCOND) / scale[:, None]
+        if a.shape[1] <= ENUM_MAX_UNKNOWNS:
+            maps, masks = _subset_maps(r)
+        else:
+            maps, masks = None, None
+        return cls(a, q, r, pinv, maps, masks)
+
+
+@dataclass(frozen=True)
+class FitProblem:
+    """The precomputed fit of one basis over the sample geometries (eq 2.4.2).
+
+    Attributes
+    ----------
+    basis, geometry, gloss_form
+        The lobe basis, the sample geometries and where the gloss lobe goes (GLOSS_FORMS).
+    colour
+        Part with columns w·(N·L)·[1, cos^E_i α] (K_D, K_DD,i) over its rows.
+    gloss
+        ``thesis`` form only: part with columns w·cos^E_i α (K_G,i) over the gloss rows.
+    colour_rows, gloss_rows
+        Indices into the geometry of each part's rows.
+    """
+
+    basis: LobeBasis
+    geometry: SampleGeometries
+    gloss_form: str
+    colour: _Part
+    gloss: _Part | None
+    colour_rows: NDArray[np.intp]
+    gloss_rows: NDArray[np.intp]
+    alpha_index: NDArray[np.intp]  # (rows,) index of each geometry row's α in TARGET_ALPHAS_DEG
+
+    def _gloss_values(self, t: Targets, rows: NDArray[np.intp]) -> NDArray[np.float64]:
+        """Gloss term of BRDF·cos, ρ_s (n+1)/(2π) cos^n α, at *rows*, shape (d, len(rows))."""
+        n = t.phong_exponent[:, None]
+        peak = t.specular_albedo[:, None] * (n + 1.0) / (2.0 * np.pi)
+        return peak * np.clip(self.geometry.cos_alpha[rows], 0.0, 1.0)[None, :] ** n
+
+    def colour_b(self, t: Targets) -> NDArray[np.float64]:
+        """Weighted RHS of the colour part, shape (d, rows_c, 3)."""
+        rows = self.colour_rows
+        g = self.geometry
+        f = t.rho[:, self.alpha_index[rows], :] * (g.n_dot_l[rows] / np.pi)[None, :, None]
+        if self.gloss_form == "cosine":
+            f = f + self._gloss_values(t, rows)[:, :, None]
+        return f * g.weight[rows][None, :, None]
+
+    def gloss_b(self, t: Targets) -> NDArray[np.float64]:
+        """Weighted RHS of the ``thesis`` gloss part, shape (d, rows_g, 1)."""
+        rows = self.gloss_rows
+        g = self.geometry
+        return (self._gloss_values(t, rows) * g.weight[rows][None, :])[:, :, None]
+
+
+@lru_cache(maxsize=64)
+def fit_problem(basis: LobeBasis, gloss_form: str = "thesis") -> FitProblem:
+    """Build (and cache) the fixed matrices of eq 2.4.2 for *basis* over :func:`sample_geometries`."""
+    if gloss_form not in GLOSS_FORMS:
+        raise RenderInputError("gloss_form", " | ".join(GLOSS_FORMS), gloss_form)
+    g = sample_geometries()
+    all_rows = np.arange(len(g))
+    colour_rows = all_rows if gloss_form == "cosine" else all_rows[~g.gloss]
+    gloss_rows = all_rows[g.gloss]
+    alphas = np.asarray(TARGET_ALPHAS_DEG)
+    alpha_index = np.abs(g.alpha_deg[:, None] - alphas[None, :]).argmin(axis=1)
+    w_c = g.weight[colour_rows] * g.n_dot_l[colour_rows]
+    lobes_c = basis.lobes(g.cos_alpha[colour_rows])
+    a_c = w_c[:, None] * np.concatenate([np.ones((lobes_c.shape[0], 1)), lobes_c], axis=1)
+    gloss = None
+    if gloss_form == "thesis":
+        gloss = _Part.build(g.weight[gloss_rows][:, None] * basis.lobes(g.cos_alpha[gloss_rows]))
+    return FitProblem(basis, g, gloss_form, _Part.build(a_c), gloss, colour_rows, gloss_rows, alpha_index)
+
+
+# ----------------------------------------------------------------------------------------------------
+# Solvers: each maps weighted RHS (d, rows, c) of one part to weights (d, k, c) >= 0
+
+
+def _solve_enum(part: _Part, b: NDArray[np.float64], chunk: int = 256) -> NDArray[np.float64]:
+    if part.maps is None:
+        return _solve_nnls(part, b)
+    d_all = np.einsum("rk,drc->dkc", part.q, b)  # reduced RHS Qᵀb
+    rtr = part.r
+    n_sub, k, _ = part.maps.shape
+    flat = part.maps.reshape(n_sub * k, k)
+    out = np.empty_like(d_all)
+    for start in range(0, d_all.shape[0], chunk):
+        dd = d_all[start:start + chunk]  # (d, k, c)
+        nd, _, nc = dd.shape
+        y = (flat @ dd.transpose(1, 0, 2).reshape(k, nd * nc)).reshape(n_sub, k, nd * nc)
+        c = rtr.T @ dd.transpose(1, 0, 2).reshape(k, nd * nc)  # Aᵀb = Rᵀ Qᵀ b, (k, nd·nc)
+        score = np.einsum("skn,kn->sn", y, c)
+        feasible = (y >= 0.0).all(axis=1)
+        score = np.where(feasible, score, -np.inf)
+        best = score.argmax(axis=0)
+        x = y[best, :, np.arange(nd * nc)]  # (nd·nc, k)
+        out[start:start + nd] = x.reshape(nd, nc, k).transpose(0, 2, 1)
+    return out
+
+
+def _solve_nnls(part: _Part, b: NDArray[np.float64]) -> NDArray[np.float64]:
+    from scipy.optimize import nnls
+
+    d_all = np.einsum("rk,drc->dkc", part.q, b)
+    out = np.zeros_like(d_all)
+    for i in range(d_all.shape[0]):
+        for c in range(d_all.shape[2]):
+            out[i, :, c] = nnls(part.r, d_all[i, :, c], maxiter=50 * part.r.shape[1])[0]
+    return out
+
+
+def _solve_clamped(part: _Part, b: NDArray[np.float64]) -> NDArray[np.float64]:
+    x = np.einsum("kr,drc->dkc", part.pinv, b)
+    return np.maximum(x, 0.0)
+
+
+def _solve_lp(part: _Part, b: NDArray[np.float64]) -> tuple[NDArray[np.float64], int]:
+    """L1 fit min Σ|A x − b| s.t. x ≥ 0 by HiGHS (eq 2.4.2, thesis §2.4); returns (x, fallbacks)."""
+    from scipy.optimize import linprog
+    from scipy.sparse import eye, hstack
+
+    rows, k = part.a.shape
+    a_eq = hstack([part.a, -eye(rows), eye(rows)]).tocsc()
+    cost = np.concatenate([np.zeros(k), np.ones(2 * rows)])
+    out = np.zeros((b.shape[0], k, b.shape[2]))
+    fallbacks = 0
+    for i in range(b.shape[0]):
+        for c in range(b.shape[2]):
+            res = linprog(cost, A_eq=a_eq, b_eq=b[i, :, c], bounds=(0, None), method="highs",
+                          options={"time_limit": LP_TIME_LIMIT_S, "presolve": True})
+            if res.status == 0 and res.x is not None:
+                out[i, :, c] = np.maximum(res.x[:k], 0.0)
+            else:
+                fallbacks += 1
+                out[i, :, c] = _solve_enum(part, b[i:i + 1, :, c:c + 1])[0, :, 0]
+    return out, fallbacks
+
+
+@dataclass(frozen=True)
+class FitReport:
+    """Weights of a batch plus what the fit did.
+
+    Attributes
+    ----------
+    k_d, k_dd, k_g
+        (d, 3), (d, m, 3), (d, m) weights (sr⁻¹).
+    method
+        Solver used.
+    seconds
+        Wall time of the solve (excluding the sampling of the designs).
+    fallbacks
+        LP solves that hit the time limit or failed and were replaced by ``enum``.
+    """
+
+    basis: LobeBasis
+    k_d: NDArray[np.float64]
+    k_dd: NDArray[np.float64]
+    k_g: NDArray[np.float64]
+    method: str
+    seconds: float
+    fallbacks: int = 0
+
+    def weights(self, i: int) -> LobeWeights:
+        """The LobeWeights of design *i*."""
+        return LobeWeights(self.basis.exponents, self.k_d[i], self.k_dd[i], self.k_g[i])
+
+
+def fit_targets(targets: Targets, basis: LobeBasis | None = None, method: str = "enum",
+                gloss_form: str = "thesis") -> FitReport:
+    """Fit a batch of sampled designs to *basis* (default: the shipped one) with *method*."""
+    if method not in METHODS:
+        raise RenderInputError("method", " | ".join(METHODS), method)
+    basis = default_basis() if basis is None else basis
+    prob = fit_problem(basis, gloss_form)
+    solve = {"enum": _solve_enum, "nnls": _solve_nnls, "clamped-lsq": _solve_clamped}.get(method)
+    t0 = time.perf_counter()
+    fallbacks = 0
+    b_c = prob.colour_b(targets)
+    if solve is not None:
+        x_c = solve(prob.colour, b_c)
+    else:
+        x_c, fallbacks = _solve_lp(prob.colour, b_c)
+    if prob.gloss is not None:
+        b_g = prob.gloss_b(targets)
+        if solve is not None:
+            x_g = solve(prob.gloss, b_g)[:, :, 0]
+        else:
+            x_g3, f_g = _solve_lp(prob.gloss, b_g)
+            x_g, fallbacks = x_g3[:, :, 0], fallbacks + f_g
+    else:
+        x_g = np.zeros((len(targets), basis.size))
+    seconds = time.perf_counter() - t0
+    if not (np.all(np.isfinite(x_c)) and np.all(np.isfinite(x_g))):
+        raise LobeFitError(f"lobe fit ({method}) produced non-finite weights")
+    return FitReport(basis, x_c[:, 0, :], x_c[:, 1:, :], x_g, method, seconds, fallbacks)
+
+
+def fit_designs(designs: Sequence[FaceFlopTravelGloss], basis: LobeBasis | None = None,
+                method: str = "enum", gloss_form: str = "thesis") -> FitReport:
+    """Fit every design of a batch (vectorised for ``enum`` and ``clamped-lsq``)."""
+    return fit_targets(sample_targets(designs), basis, method, gloss_form)
+
+
+def fit_design(design: FaceFlopTravelGloss, basis: LobeBasis | None = None, method: str = "default") -> LobeWeights:
+    """Fit one design's lobe weights K_D, K_DD,i, K_G,i ≥ 0 (eqs 2.4.1–2.4.2).
+
+    Parameters
+    ----------
+    design
+        The face/flop/travel/gloss design.
+    basis
+        Lobe basis; default: the shipped optimal basis (:func:`default_basis`).
+    method
+        ``"default"`` (= ``enum``) or one of METHODS.
+    """
+    method = METHODS[0] if method == "default" else method
+    return fit_designs([design], basis, method).weights(0)
+
+
+# ----------------------------------------------------------------------------------------------------
+# Fit error (eq 2.3.4's Error(E, B))
+
+
+def fitted_reflectance(report: FitReport, geometry: SampleGeometries | None = None) -> NDArray[np.float64]:
+    """Reflectance factor π·BRDF·cos/(N·L) of the fitted lobes at every sample geometry, (d, rows, 3)."""
+    g = sample_geometries() if geometry is None else geometry
+    lobes = report.basis.lobes(g.cos_alpha)  # (rows, m)
+    colour = report.k_d[:, None, :] + np.einsum("rm,dmc->drc", lobes, report.k_dd)
+    gloss = np.einsum("rm,dm->dr", lobes, report.k_g) / np.maximum(g.n_dot_l, 1e-9)[None, :]
+    return np.pi * (colour + gloss[:, :, None])
+
+
+def designed_reflectance(brdfs: Sequence[DesignedBRDF], geometry: SampleGeometries | None = None
+                         ) -> NDArray[np.float64]:
+    """Reflectance factor π·f of the designed BRDFs at every sample geometry, (d, rows, 3)."""
+    g = sample_geometries() if geometry is None else geometry
+    inv_nl = 1.0 / np.maximum(g.n_dot_l, 1e-9)
+    return np.stack([b.rho(g.alpha_deg) + (np.pi * b.gloss_cos(g.cos_alpha) * inv_nl)[:, None] for b in brdfs])
+
+
+def fit_error_de(brdfs: Sequence[DesignedBRDF], report: FitReport) -> NDArray[np.float64]:
+    """RMS CIEDE2000 over the sample geometries between designed and fitted reflectance factor, (d,).
+
+    This is Error(E, B_i) of eq 2.3.4: what a multi-angle instrument would read at each geometry
+    (colour and gloss together), compared as CIE Lab (D65/10°).
+    """
+    from station.model.colorimetry import linear_srgb_to_lab
+    from station.model.difference import delta_e
+
+    ref = designed_reflectance(brdfs)
+    fit = fitted_reflectance(report)
+    de = delta_e(linear_srgb_to_lab(ref), linear_srgb_to_lab(fit), "cie2000")
+    return np.sqrt(np.mean(de**2, axis=-1))
