@@ -1,0 +1,119 @@
+"""Safe loading of mood-board and artwork images (PNG / JPEG) as sRGB arrays.
+
+Guards, in order: the file exists and is at most :data:`MAX_FILE_BYTES`; Pillow identifies it as PNG
+or JPEG; its declared size is at most :data:`MAX_PIXELS` *before* any pixel is decoded; Pillow's own
+decompression-bomb check (``Image.MAX_IMAGE_PIXELS``, raised as ``DecompressionBombError`` or warned
+as ``DecompressionBombWarning``) is turned into :class:`~station.design.errors.ImageLoadError`.
+
+Colour: an embedded ICC profile is honoured — pixels are converted to sRGB with Pillow's ImageCms
+(perceptual intent) and the result states it; an image without a profile is *assumed* sRGB and the
+result says so. CMYK, greyscale, palette and alpha images are converted to RGB (alpha dropped).
+"""
+
+from __future__ import annotations
+
+import io
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from PIL import Image, ImageCms, UnidentifiedImageError
+
+from station.design.errors import ImageLoadError
+
+#: Largest accepted file (bytes).
+MAX_FILE_BYTES = 64 * 1024 * 1024
+#: Largest accepted image (pixels, width × height): 40 megapixels.
+MAX_PIXELS = 40_000_000
+FORMATS = ("PNG", "JPEG")
+
+
+@dataclass(frozen=True, eq=False)
+class LoadedImage:
+    """An image as sRGB-encoded floats in [0, 1], ``(H, W, 3)``, and how its colour was interpreted."""
+
+    pixels: NDArray[np.float64]
+    source_format: str
+    colour_note: str
+    profile_converted: bool
+
+
+def _to_srgb(im: Image.Image) -> tuple[Image.Image, str, bool]:
+    icc = im.info.get("icc_profile")
+    if icc:
+        try:
+            src = ImageCms.ImageCmsProfile(io.BytesIO(icc))
+            desc = ImageCms.getProfileDescription(src).strip() or "embedded profile"
+            mode = "RGB"
+            if im.mode not in ("RGB", "CMYK", "L"):
+                im = im.convert("RGB")
+            out = ImageCms.profileToProfile(
+                im, src, ImageCms.createProfile("sRGB"), renderingIntent=ImageCms.Intent.PERCEPTUAL,
+                outputMode=mode,
+            )
+            if out is None:  # pragma: no cover - only when inPlace=True
+                raise ImageLoadError("image", "a convertible colour profile", desc)
+            return out, f"converted from ICC profile '{desc}' to sRGB", True
+        except (ImageCms.PyCMSError, OSError) as exc:
+            raise ImageLoadError("image", "a valid embedded ICC profile", None, str(exc)) from exc
+    return im.convert("RGB"), "no embedded profile: assumed sRGB", False
+
+
+def load_image(path: str | Path, max_pixels: int = MAX_PIXELS, max_bytes: int = MAX_FILE_BYTES) -> LoadedImage:
+    """Load a PNG or JPEG file safely as sRGB (module docstring lists the guards).
+
+    Returns
+    -------
+    LoadedImage
+        ``pixels`` in [0, 1] (8-bit images divided by 255; 16-bit PNG by 65535).
+
+    Raises
+    ------
+    ImageLoadError
+        Missing file, too many bytes, not PNG/JPEG, more than *max_pixels* pixels, a decompression
+        bomb, a truncated/corrupt file, or an unusable colour profile.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ImageLoadError("image", "an existing PNG or JPEG file", str(p))
+    size = p.stat().st_size
+    if size > max_bytes:
+        raise ImageLoadError("image", f"a file of at most {max_bytes} bytes", size)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            with Image.open(p) as im:
+                if im.format not in FORMATS:
+                    raise ImageLoadError("image", "PNG or JPEG", im.format)
+                w, h = im.size
+                if w * h > max_pixels:
+                    raise ImageLoadError("image", f"at most {max_pixels} pixels", f"{w}x{h}")
+                im.load()
+                fmt = str(im.format)
+                if im.mode in ("I;16", "I;16B", "I;16L", "I") and not im.info.get("icc_profile"):
+                    arr16 = np.asarray(im, dtype=np.float64) / 65535.0
+                    rgb = np.repeat(arr16[..., None], 3, axis=-1)
+                    return LoadedImage(np.clip(rgb, 0, 1), fmt, "16-bit greyscale, no profile: assumed sRGB",
+                                       False)
+                converted, note, did = _to_srgb(im)
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
+        raise ImageLoadError("image", "not a decompression bomb", None, str(exc)) from exc
+    except UnidentifiedImageError as exc:
+        raise ImageLoadError("image", "PNG or JPEG", p.suffix, str(exc)) from exc
+    except OSError as exc:
+        raise ImageLoadError("image", "a complete, readable image file", None, str(exc)) from exc
+    pixels = np.asarray(converted, dtype=np.float64) / 255.0
+    return LoadedImage(pixels, fmt, note, did)
+
+
+def save_png(path: str | Path, encoded: NDArray) -> Path:
+    """Write sRGB-encoded values in [0, 1] (or uint8) to a PNG with an sRGB ICC profile."""
+    arr = np.asarray(encoded)
+    if arr.dtype != np.uint8:
+        arr = np.floor(np.clip(arr.astype(float), 0, 1) * 255.0 + 0.5).astype(np.uint8)
+    icc = ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
+    p = Path(path)
+    Image.fromarray(arr, "RGB").save(p, format="PNG", icc_profile=icc)
+    return p

@@ -1,0 +1,62 @@
+"""Colour palette entries (thesis §3.4.6): the gradient swatch and the shaded booklet thumbnail.
+
+Both return sRGB-encoded ``uint8`` arrays ``(H, W, 3)``; :func:`station.design.images.save_png` writes
+them (Pillow, with an sRGB profile). Out-of-gamut colours are clipped *for display only*; the swatch
+result reports how many columns were out of gamut so the clip is not hidden.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.design.errors import DesignInputError
+from station.design.scene import design_rgb_at, panel_scene, shade, srgb_encode, to_uint8
+from station.model import FaceFlopTravelGloss
+
+#: Aspecular range of the gradient bar, degrees (the standard angles 15° … 110°).
+SWATCH_ANGLES = (15.0, 110.0)
+#: Border brightness (sRGB-encoded grey) at 0 GU and at 100 GU.
+BORDER_GREY = (0.15, 1.0)
+
+
+@dataclass(frozen=True, eq=False)
+class Swatch:
+    """A palette swatch: pixels, the angle of each bar column and the out-of-gamut column count."""
+
+    pixels: NDArray[np.uint8]
+    angles_deg: NDArray[np.float64]
+    out_of_gamut_columns: int
+
+
+def border_grey(gloss_gu: float) -> float:
+    """sRGB-encoded border grey for *gloss_gu*: linear from :data:`BORDER_GREY` [0] at 0 GU to [1] at 100 GU."""
+    lo, hi = BORDER_GREY
+    return lo + (hi - lo) * float(gloss_gu) / 100.0
+
+
+def swatch(design: FaceFlopTravelGloss, width: int = 160, height: int = 32, border: int = 4) -> Swatch:
+    """Gradient bar of *design* across aspecular angles 15° → 110° (left → right), framed by a border
+    whose brightness shows the gloss (thesis §3.4.6)."""
+    for name, v, lo in (("width", width, 8), ("height", height, 4), ("border", border, 1)):
+        if not isinstance(v, (int, np.integer)) or not lo <= v <= 4096:
+            raise DesignInputError(name, f"integer {lo}..4096 pixels", v)
+    if 2 * border >= min(width, height):
+        raise DesignInputError("border", f"< {min(width, height) // 2} pixels for this size", border)
+    inner = width - 2 * border
+    angles = np.linspace(*SWATCH_ANGLES, inner)
+    rgb = design_rgb_at(design, angles)
+    oog = int(np.sum(np.any((rgb < -1e-6) | (rgb > 1 + 1e-6), axis=-1)))
+    img = np.empty((height, width, 3))
+    img[:] = border_grey(design.gloss_gu)
+    img[border:height - border, border:width - border] = srgb_encode(rgb)[None, :, :]
+    return Swatch(to_uint8(img), angles, oog)
+
+
+def booklet(design: FaceFlopTravelGloss, size: int = 96) -> NDArray[np.uint8]:
+    """Shaded booklet thumbnail (thesis Fig. 3.11): *design* on a bent panel under the default point light
+    (:func:`station.design.scene.panel_scene`), on a mid-grey background, gloss highlight included."""
+    scene = panel_scene(size)
+    return to_uint8(srgb_encode(shade(scene, design, specular=True, background=(0.18, 0.18, 0.18))))

@@ -1,0 +1,346 @@
+"""Self-contained NumPy scenes: the per-pixel buffers the styling tools take, and a reference shader.
+
+The renderer (``station.render``) produces the same buffers on the GPU; :mod:`station.design` may not
+import it, so every tool takes plain arrays, and this module makes them for tests, benchmarks and the
+CLI's built-in scenes.
+
+Geometry and conventions (thesis §3.6.2, §3.7.1)
+-------------------------------------------------
+* Orthographic camera on the +z axis; the view vector ``V = (0, 0, 1)`` points from the surface to the
+  eye. Image row 0 is the top (world +y).
+* ``L`` is the unit vector from the surface towards a directional ("point at infinity") light.
+* Aspecular angle θ (degrees) = angle between the mirror direction of the light ``R = 2(N·L)N − L``
+  and ``V`` (the thesis's "angle between the reflected light and view vectors").
+* Lambert term ϕ = max(N·L, 0) (erratum 2: Lambert's cosine is L·N).
+* Light-direction buffer: the light that would centre the highlight on the pixel, ``2(N·V)N − V``
+  (thesis §3.6.2 "Move light").
+* Shading of a design (the clamped-quadratic model, eq 3.3.2) under irradiance ``E``::
+
+      c = E · ϕ · rgb(θ)  +  E · ρ_s (n + 1) / 2 · cos(θ)^n        (lit pixels, θ < 90°)
+
+  where ``rgb(θ)`` is the linear-sRGB colour of ``Lab(min(θ, θ_clamp))`` (reflectance factor 1 = white)
+  and ``(n, ρ_s)`` is the Phong lobe of the design's gloss (``station.model.gloss.lobe_from_gloss``,
+  the model's normalised lobe ``(n + 1)/(2π) cosⁿψ``; ``(n + 1)/2`` is π times it). The first term is
+  eq 3.7.1 read forwards.
+
+Buffers are float64 with background pixels set to 0 (θ, ϕ) and ``mask`` False, never NaN.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from station.design.errors import DesignInputError
+from station.model import FaceFlopTravelGloss
+from station.model.colorimetry import lab_to_linear_srgb
+from station.model.gloss import SpecularLobe, lobe_from_gloss
+
+VIEW = np.array([0.0, 0.0, 1.0])
+#: Default light of the built-in point-light scenes: 45° off the view axis, up and to the left.
+DEFAULT_LIGHT = (-0.5, 0.5, float(np.sqrt(0.5)))
+MIN_SIZE, MAX_SIZE = 8, 2048
+
+
+def _unit(v: ArrayLike, field_name: str) -> NDArray[np.float64]:
+    a = np.asarray(v, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or np.linalg.norm(a) == 0:
+        raise DesignInputError(field_name, "a finite non-zero 3-vector", v)
+    return a / np.linalg.norm(a)
+
+
+def _check_size(size: int) -> int:
+    if not isinstance(size, (int, np.integer)) or not MIN_SIZE <= size <= MAX_SIZE:
+        raise DesignInputError("size", f"integer {MIN_SIZE}..{MAX_SIZE} pixels", size)
+    return int(size)
+
+
+def _reflect(d: NDArray, n: NDArray) -> NDArray:
+    """Mirror *d* (…,3) about *n* (…,3): ``2(n·d)n − d``."""
+    return 2.0 * np.sum(n * d, axis=-1, keepdims=True) * n - d
+
+
+def aspecular_and_lambert(
+    normals: NDArray, mask: NDArray, light: NDArray
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Per-pixel aspecular angle θ (degrees, 0–180) and Lambert term ϕ = max(N·L, 0) (thesis §3.7.1)."""
+    r = _reflect(light, normals)
+    cos_t = np.clip(r @ VIEW, -1.0, 1.0)
+    theta = np.where(mask, np.degrees(np.arccos(cos_t)), 0.0)
+    phi = np.where(mask, np.maximum(normals @ light, 0.0), 0.0)
+    return theta, phi
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """Per-pixel buffers of one point-lit view (all ``(H, W)`` or ``(H, W, 3)``, float64).
+
+    Attributes
+    ----------
+    name : str
+    normals : (H, W, 3) unit surface normals (zero in the background)
+    mask : (H, W) bool foreground (the material being designed)
+    light_dir : (3,) unit vector towards the light
+    aspecular_deg : (H, W) θ in degrees
+    lambert : (H, W) ϕ = max(N·L, 0)
+    light_dirs : (H, W, 3) the light that would centre the highlight on each pixel
+    irradiance : E, linear units (1 = a white diffuser facing the light reads 1)
+    """
+
+    name: str
+    normals: NDArray[np.float64]
+    mask: NDArray[np.bool_]
+    light_dir: NDArray[np.float64]
+    aspecular_deg: NDArray[np.float64]
+    lambert: NDArray[np.float64]
+    light_dirs: NDArray[np.float64]
+    irradiance: float = 1.0
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Image size ``(H, W)`` in pixels."""
+        return self.mask.shape  # type: ignore[return-value]
+
+    def with_light(self, light_dir: ArrayLike) -> Scene:
+        """Return the same geometry under a new light direction (recomputes θ and ϕ)."""
+        return scene_from_normals(self.name, self.normals, self.mask, light_dir, self.irradiance)
+
+
+def scene_from_normals(
+    name: str, normals: ArrayLike, mask: ArrayLike, light_dir: ArrayLike, irradiance: float = 1.0
+) -> Scene:
+    """Build a :class:`Scene` from a normal buffer, a foreground mask and a light direction."""
+    n = np.asarray(normals, dtype=float)
+    m = np.asarray(mask, dtype=bool)
+    if n.ndim != 3 or n.shape[-1] != 3 or m.shape != n.shape[:2]:
+        raise DesignInputError("normals/mask", "(H, W, 3) normals and an (H, W) mask", (n.shape, m.shape))
+    if not np.isfinite(irradiance) or irradiance <= 0:
+        raise DesignInputError("irradiance", "finite > 0", irradiance)
+    light = _unit(light_dir, "light_dir")
+    theta, phi = aspecular_and_lambert(n, m, light)
+    ldirs = np.where(m[..., None], _reflect(VIEW, n), 0.0)
+    return Scene(name, n, m, light, theta, phi, ldirs, float(irradiance))
+
+
+def _grid(size: int) -> tuple[NDArray, NDArray]:
+    c = (np.arange(size) + 0.5) / size * 2.0 - 1.0
+    x, y = np.meshgrid(c, -c)  # row 0 = top = +y
+    return x, y
+
+
+def sphere_scene(size: int = 96, light_dir: ArrayLike = DEFAULT_LIGHT, irradiance: float = 1.0) -> Scene:
+    """A unit sphere filling the frame (orthographic view along −z), lit by a directional light.
+
+    With the default light (45° off the view axis) θ spans 0° (highlight) to about 135° (terminator).
+    """
+    size = _check_size(size)
+    x, y = _grid(size)
+    r2 = x * x + y * y
+    mask = r2 < 0.98
+    z = np.sqrt(np.clip(1.0 - r2, 0.0, None))
+    n = np.where(mask[..., None], np.stack([x, y, z], axis=-1), 0.0)
+    return scene_from_normals("sphere-point", n, mask, light_dir, irradiance)
+
+
+def panel_scene(
+    size: int = 96, bend_radius: float = 1.2, light_dir: ArrayLike = DEFAULT_LIGHT, irradiance: float = 1.0
+) -> Scene:
+    """A panel bent about the vertical axis (a cylinder section of radius *bend_radius*) — a booklet page.
+
+    The panel fills the middle 80 % of the frame; its normal turns from ``−asin(0.8/R)`` to ``+asin(0.8/R)``
+    about the y axis across it, and it also tilts ±15° top to bottom, so θ covers a useful band.
+    """
+    size = _check_size(size)
+    if not np.isfinite(bend_radius) or bend_radius <= 0.8:
+        raise DesignInputError("bend_radius", "> 0.8 (panel half-width)", bend_radius)
+    x, y = _grid(size)
+    mask = (np.abs(x) < 0.8) & (np.abs(y) < 0.8)
+    yaw = np.arcsin(np.clip(x / bend_radius, -1, 1))
+    pitch = np.radians(15.0) * y / 0.8
+    n = np.stack([np.sin(yaw) * np.cos(pitch), np.sin(pitch), np.cos(yaw) * np.cos(pitch)], axis=-1)
+    n = np.where(mask[..., None], n, 0.0)
+    return scene_from_normals("panel-point", n, mask, light_dir, irradiance)
+
+
+BUILTIN_SCENES = {"sphere-point": sphere_scene, "panel-point": panel_scene}
+
+
+def builtin_scene(name: str, size: int = 96) -> Scene:
+    """Return the built-in scene *name* (``sphere-point`` or ``panel-point``) at *size* pixels."""
+    if name not in BUILTIN_SCENES:
+        raise DesignInputError("scene", " | ".join(BUILTIN_SCENES), name)
+    return BUILTIN_SCENES[name](size)
+
+
+# --------------------------------------------------------------------------------------------- shading
+
+
+def design_rgb_at(design: FaceFlopTravelGloss, theta_deg: ArrayLike) -> NDArray[np.float64]:
+    """Linear-sRGB reflectance factor of *design* at aspecular angles *theta_deg* (eq 3.3.2 → sRGB)."""
+    return np.asarray(lab_to_linear_srgb(design.lab_at(np.asarray(theta_deg, dtype=float))), dtype=float)
+
+
+@lru_cache(maxsize=512)
+def gloss_lobe(gloss_gu: float) -> SpecularLobe:
+    """``station.model.gloss.lobe_from_gloss`` memoised (the mapping simulates the gloss meter: ~0.5 s)."""
+    return lobe_from_gloss(float(gloss_gu))
+
+
+def specular_term(gloss_gu: float, theta_deg: ArrayLike) -> NDArray[np.float64]:
+    """First-surface reflection of *gloss_gu* per unit irradiance, as a reflectance factor:
+    ``π · ρ_s (n + 1)/(2π) cos(θ)^n = ρ_s (n + 1)/2 · cos(θ)^n`` (0 beyond 90°), with the model's
+    normalised Phong lobe ``(n, ρ_s)`` of the gloss."""
+    lobe = gloss_lobe(float(gloss_gu))
+    n = float(lobe.phong_exponent)
+    c = np.cos(np.radians(np.asarray(theta_deg, dtype=float)))
+    return float(lobe.specular_albedo) * (n + 1.0) / 2.0 * np.where(c > 0, np.abs(c) ** n, 0.0)
+
+
+def shade(
+    scene: Scene, design: FaceFlopTravelGloss, specular: bool = True, background: ArrayLike = (0.0, 0.0, 0.0)
+) -> NDArray[np.float64]:
+    """Render *design* in *scene*: ``(H, W, 3)`` linear sRGB (module docstring; eq 3.7.1 forwards).
+
+    Only foreground pixels are evaluated (at 128² this is well under 10 ms).
+    """
+    out = np.empty((*scene.shape, 3))
+    out[:] = np.asarray(background, dtype=float)
+    m = scene.mask
+    theta, phi = scene.aspecular_deg[m], scene.lambert[m]
+    c = scene.irradiance * phi[:, None] * design_rgb_at(design, theta)
+    if specular:
+        c = c + (scene.irradiance * np.where(phi > 0, specular_term(design.gloss_gu, theta), 0.0))[:, None]
+    out[m] = c
+    return out
+
+
+# ------------------------------------------------------------------------------------------ transfer
+
+
+def srgb_encode(linear: ArrayLike) -> NDArray[np.float64]:
+    """IEC 61966-2-1 sRGB encoding of linear values, clipped to [0, 1] (display only; the clip is the
+    display's, the linear data is never clipped)."""
+    x = np.clip(np.asarray(linear, dtype=float), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def srgb_decode(encoded: ArrayLike) -> NDArray[np.float64]:
+    """Inverse sRGB transfer ("inverse gamma", thesis §3.7.3) of display values in [0, 1]."""
+    v = np.asarray(encoded, dtype=float)
+    return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4))
+
+
+def to_uint8(encoded: ArrayLike) -> NDArray[np.uint8]:
+    """Quantise display values in [0, 1] to 8 bits (round half up)."""
+    return np.floor(np.clip(np.asarray(encoded, dtype=float), 0, 1) * 255.0 + 0.5).astype(np.uint8)
+
+
+# ---------------------------------------------------------------------------------- environment light
+
+
+@dataclass(frozen=True, eq=False)
+class EnvironmentScene:
+    """A sphere lit by a small set of directional lights (a discretised environment map).
+
+    ``aspecular_deg`` and ``lambert`` are ``(K, H, W)``: one layer per light ``k`` with direction
+    ``light_dirs[k]`` and linear RGB radiance ``light_rgb[k]``. Image = Σ_k radiance_k × point-light image_k.
+    """
+
+    name: str
+    mask: NDArray[np.bool_]
+    light_dirs: NDArray[np.float64]
+    light_rgb: NDArray[np.float64]
+    aspecular_deg: NDArray[np.float64]
+    lambert: NDArray[np.float64]
+    normals: NDArray[np.float64] = field(repr=False)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Image size ``(H, W)`` in pixels."""
+        return self.mask.shape  # type: ignore[return-value]
+
+
+def studio_lights(count: int = 16) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A deterministic studio environment: one warm key light and *count − 1* dim bluish fills
+    spread over the front hemisphere (Fibonacci spiral). Returns ``(directions (K,3), rgb (K,3))``."""
+    if count < 1:
+        raise DesignInputError("count", ">= 1 lights", count)
+    dirs = [np.array(DEFAULT_LIGHT)]
+    rgb = [np.array([0.80, 0.76, 0.70])]
+    golden = np.pi * (3.0 - np.sqrt(5.0))
+    for i in range(count - 1):
+        z = 1.0 - (i + 0.5) / (count - 1)  # front hemisphere, z in (0, 1)
+        r = np.sqrt(1.0 - z * z)
+        dirs.append(np.array([r * np.cos(golden * i), r * np.sin(golden * i), z]))
+        rgb.append(np.array([0.18, 0.21, 0.26]) * 2.0 / max(count - 1, 1))
+    return np.array(dirs), np.array(rgb)
+
+
+def environment_sphere_scene(size: int = 64, lights: int = 16) -> EnvironmentScene:
+    """The unit sphere of :func:`sphere_scene` under :func:`studio_lights`."""
+    base = sphere_scene(size)
+    dirs, rgb = studio_lights(lights)
+    thetas, phis = zip(*(aspecular_and_lambert(base.normals, base.mask, d) for d in dirs), strict=True)
+    return EnvironmentScene(
+        "sphere-environment", base.mask, dirs, rgb, np.stack(thetas), np.stack(phis), base.normals
+    )
+
+
+def shade_environment(
+    scene: EnvironmentScene, design: FaceFlopTravelGloss, specular: bool = True
+) -> NDArray[np.float64]:
+    """Render *design* under the environment: Σ_k radiance_k · (ϕ_k rgb(θ_k) + specular_k), linear sRGB."""
+    out = np.zeros((*scene.shape, 3))
+    m = scene.mask
+    acc = np.zeros((int(m.sum()), 3))
+    for k in range(len(scene.light_dirs)):
+        theta, phi = scene.aspecular_deg[k][m], scene.lambert[k][m]
+        c = phi[:, None] * design_rgb_at(design, theta)
+        if specular:
+            c = c + np.where(phi > 0, specular_term(design.gloss_gu, theta), 0.0)[:, None]
+        acc += scene.light_rgb[k] * c
+    out[m] = acc
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class LobeBasis:
+    """Per-lobe basis images of one fixed view: the image is linear in the lobe weights (DESIGN §4).
+
+    ``images[j]`` (``(J, H, W, 3)``, linear RGB) is the image of lobe *j* with unit weight in every
+    channel. ``exponents[j]`` is the lobe's exponent ``E_j`` in ``(R·V)^E_j``; ``None`` marks the
+    Lambertian diffuse lobe ``K_D (L·N)``. Directional-diffuse lobes carry the Lambert factor
+    (``(L·N)(R·V)^E``), as in eqs 2.3.1–2.3.3.
+    """
+
+    images: NDArray[np.float64]
+    exponents: tuple[float | None, ...]
+    mask: NDArray[np.bool_]
+
+    def lobe_values(self, theta_deg: ArrayLike) -> NDArray[np.float64]:
+        """Each lobe's BRDF factor (without L·N) at aspecular angles: ``(..., J)``; cos^E clipped at 90°."""
+        c = np.cos(np.radians(np.asarray(theta_deg, dtype=float)))[..., None]
+        cols = [np.ones_like(c) if e is None else np.where(c > 0, np.abs(c) ** e, 0.0) for e in self.exponents]
+        return np.concatenate(cols, axis=-1)
+
+
+DEFAULT_EXPONENTS: tuple[float | None, ...] = (None, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
+
+
+def lobe_basis(
+    scene: EnvironmentScene, exponents: tuple[float | None, ...] = DEFAULT_EXPONENTS
+) -> LobeBasis:
+    """Compute the diffuse and directional-diffuse basis images of *scene* (the renderer's cache, in NumPy)."""
+    if not exponents:
+        raise DesignInputError("exponents", "at least one lobe", exponents)
+    images = np.zeros((len(exponents), *scene.shape, 3))
+    m = scene.mask
+    probe = LobeBasis(images, tuple(exponents), m)
+    for k in range(len(scene.light_dirs)):
+        vals = probe.lobe_values(scene.aspecular_deg[k][m]) * scene.lambert[k][m][:, None]  # (n, J)
+        images[:, m, :] += vals.T[:, :, None] * scene.light_rgb[k][None, None, :]
+    return LobeBasis(images, tuple(exponents), m)
+
