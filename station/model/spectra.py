@@ -11,6 +11,7 @@ to the asked Lab to numerical precision.
 
 from __future__ import annotations
 
+import warnings
 from functools import cache
 
 import colour
@@ -26,11 +27,14 @@ WAVELENGTHS: NDArray[np.float64] = np.arange(400.0, 701.0, 10.0)
 _SHAPE = colour.SpectralShape(400, 700, 10)
 #: Illuminants offered for colorimetry and the metamerism index.
 ILLUMINANTS = ("D65", "A", "F11", "D50")
+#: Our names → colour-science's (the F-series are "FL" there).
+_ILLUMINANT_ALIASES = {"F2": "FL2", "F7": "FL7", "F11": "FL11"}
 
 
 @cache
 def weighting_factors(illuminant: str = "D65", observer: str = OBSERVER_10) -> NDArray[np.float64]:
     """ASTM E308 tristimulus weighting factors, shape (31, 3), normalised so white has Y = 1."""
+    illuminant = _ILLUMINANT_ALIASES.get(illuminant, illuminant)
     if illuminant not in colour.SDS_ILLUMINANTS:
         raise ModelInputError("illuminant", f"one of {', '.join(ILLUMINANTS)}", illuminant)
     if observer not in colour.MSDS_CMFS:
@@ -42,7 +46,9 @@ def weighting_factors(illuminant: str = "D65", observer: str = OBSERVER_10) -> N
         values = np.zeros(WAVELENGTHS.size)
         values[i] = 1.0
         sd = colour.SpectralDistribution(dict(zip(WAVELENGTHS, values, strict=True)))
-        w[i] = colour.sd_to_XYZ(sd, cmfs, sd_illuminant, method="ASTM E308", shape=_SHAPE) / 100.0
+        with warnings.catch_warnings():  # colour warns that it trims the CMFs to our 400–700 nm range
+            warnings.simplefilter("ignore")
+            w[i] = colour.sd_to_XYZ(sd, cmfs, sd_illuminant, method="ASTM E308", shape=_SHAPE) / 100.0
     w /= w[:, 1].sum()  # white → Y = 1 exactly
     w.setflags(write=False)
     return w

@@ -1,0 +1,179 @@
+"""``station model …``: the appearance model from the command line (issue contract).
+
+* ``from-angles`` — aspecular Lab (+ gloss) → face/flop/travel/gloss with the residual per angle;
+  its JSON is a valid design file.
+* ``eval`` — a design (``--design FILE`` or ``--face/--flop/--travel``) → Lab at aspecular angles.
+* ``indices`` — Flop, Chroma and Hue Shift Index with failure warnings.
+* ``gloss`` — GU → Phong exponent, specular albedo, Ward α and the simulated meter reading.
+* ``de`` — colour difference per angle and aggregated between two Lab lists.
+* ``plot`` — PNG of L*, a*, b* against aspecular angle for one or more designs.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+import numpy as np
+
+from station.cli._common import add_json_flag, parse_floats, parse_lab_list
+from station.errors import InputError
+from station.model import ANGLES_3, AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
+from station.model.design_io import design_to_dict, load_design
+from station.model.difference import DELTA_E_METHODS, delta_e
+from station.model.gloss import lobe_from_gloss, simulate_gloss_meter
+from station.model.indices import library_indices
+
+STANDARD_EVAL_ANGLES = "15,25,45,75,110"
+
+
+def _angles(text: str) -> list[float]:
+    return parse_floats(text, "angles")
+
+
+def _design_from_args(args: argparse.Namespace) -> FaceFlopTravelGloss:
+    if getattr(args, "design", None):
+        return load_design(args.design)
+    if args.face is None:
+        raise InputError("face", "--face L,a,b (or --design FILE)")
+    face = parse_floats(args.face, "face", 3)
+    flop = parse_floats(args.flop, "flop", 3) if args.flop else face
+    travel = args.travel
+    if travel is None and flop != face:
+        raise InputError("travel", "--travel DEG (15 < travel <= 180) when face != flop")
+    return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, args.gloss)
+
+
+def _from_angles(args: argparse.Namespace) -> dict[str, Any]:
+    angles = _angles(args.angles)
+    lab = parse_lab_list(args.lab)
+    if len(lab) != len(angles):
+        raise InputError("lab", f"{len(angles)} triples (one per angle in --angles)", len(lab))
+    result = fit_fftg(AspecularMeasurements(tuple(angles), np.asarray(lab), args.gloss))
+    d = result.design
+    return design_to_dict(
+        d,
+        gloss_gu=args.gloss,
+        residual_de=list(result.residual_de),
+        exact=result.exact,
+        method=result.method,
+        warnings=list(result.warnings),
+        angles=angles,
+    )
+
+
+def _eval(args: argparse.Namespace) -> dict[str, Any]:
+    design = _design_from_args(args)
+    angles = _angles(args.angles)
+    return {"angles": angles, "lab": design.lab_at(np.asarray(angles)).tolist()}
+
+
+def _indices(args: argparse.Namespace) -> dict[str, Any]:
+    angles = _angles(args.angles)
+    warnings: list[str] = []
+    if args.design:
+        lab3 = load_design(args.design).lab_at(np.asarray(ANGLES_3))
+    else:
+        if args.lab is None:
+            raise InputError("lab", '"L,a,b;L,a,b;L,a,b" (or --design FILE)')
+        lab = np.asarray(parse_lab_list(args.lab))
+        if len(lab) != len(angles):
+            raise InputError("lab", f"{len(angles)} triples (one per angle in --angles)", len(lab))
+        if all(a in angles for a in ANGLES_3):
+            lab3 = lab[[angles.index(a) for a in ANGLES_3]]
+        else:
+            fit = fit_fftg(AspecularMeasurements(tuple(angles), lab))
+            lab3 = fit.design.lab_at(np.asarray(ANGLES_3))
+            warnings.append("15/45/110 not all measured: indices computed from the fitted model")
+    res = library_indices(*lab3)
+    return {
+        "flop_index": res.flop_index,
+        "chroma_index": res.chroma_index,
+        "hue_shift_index": res.hue_shift_index,
+        "warnings": warnings + list(res.warnings),
+    }
+
+
+def _gloss(args: argparse.Namespace) -> dict[str, Any]:
+    lobe = lobe_from_gloss(args.gu, args.coat_index)
+    return {
+        "gloss_gu": args.gu,
+        "phong_exponent": lobe.phong_exponent,
+        "specular_albedo": lobe.specular_albedo,
+        "ward_alpha": lobe.ward_alpha,
+        "simulated_gu": simulate_gloss_meter(lobe, 60, "phong"),
+        "simulated_gu_ward": simulate_gloss_meter(lobe, 60, "ward"),
+        "simulated_gu_20": simulate_gloss_meter(lobe, 20, "phong"),
+        "simulated_gu_85": simulate_gloss_meter(lobe, 85, "phong"),
+    }
+
+
+def _de(args: argparse.Namespace) -> dict[str, Any]:
+    ref = np.asarray(parse_lab_list(args.reference, "reference"))
+    smp = np.asarray(parse_lab_list(args.sample, "sample"))
+    if ref.shape != smp.shape:
+        raise InputError("sample", f"{len(ref)} triples (as many as --reference)", len(smp))
+    per = delta_e(ref, smp, args.de)
+    return {"method": args.de, "de_per_angle": per.tolist(), "mean": float(per.mean()), "max": float(per.max()),
+            "rms": float(np.sqrt(np.mean(per**2)))}
+
+
+def _plot(args: argparse.Namespace) -> dict[str, Any]:
+    from station.model.plots import plot_designs
+
+    designs = [load_design(p) for p in args.designs]
+    out = plot_designs(designs, args.out)
+    return {"out": str(out), "designs": [d.name for d in designs]}
+
+
+def _add_design_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--design", help="design file (cacad.design/1 JSON)")
+    p.add_argument("--face", help="face Lab at 15°: L,a,b")
+    p.add_argument("--flop", help="flop Lab at the travel angle: L,a,b (omit for a solid)")
+    p.add_argument("--travel", type=float, help="travel θ_clamp in degrees (15 < θ <= 180)")
+    p.add_argument("--gloss", type=float, default=50.0, help="60° gloss in GU (0–100), default 50")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``station model`` and its subcommands."""
+    model = subparsers.add_parser("model", help="appearance model: fits, evaluation, indices, gloss")
+    sub = model.add_subparsers(dest="model_command", required=True, metavar="SUBCOMMAND")
+
+    p = sub.add_parser("from-angles", help="aspecular Lab → face/flop/travel/gloss (a design file)")
+    p.add_argument("--angles", required=True, help="aspecular angles, e.g. 15,45,110")
+    p.add_argument("--lab", required=True, help='Lab per angle: "L,a,b;L,a,b;L,a,b"')
+    p.add_argument("--gloss", type=float, help="60° gloss in GU (0–100)")
+    add_json_flag(p)
+    p.set_defaults(handler=_from_angles)
+
+    p = sub.add_parser("eval", help="design → Lab at aspecular angles")
+    _add_design_args(p)
+    p.add_argument("--angles", default=STANDARD_EVAL_ANGLES, help=f"default {STANDARD_EVAL_ANGLES}")
+    add_json_flag(p)
+    p.set_defaults(handler=_eval)
+
+    p = sub.add_parser("indices", help="Flop, Chroma and Hue Shift Index (thesis eqs 5.3.1–5.3.3)")
+    p.add_argument("--angles", default="15,45,110")
+    p.add_argument("--lab", help='Lab per angle: "L,a,b;L,a,b;L,a,b"')
+    p.add_argument("--design", help="design file instead of --lab")
+    add_json_flag(p)
+    p.set_defaults(handler=_indices)
+
+    p = sub.add_parser("gloss", help="60° gloss (GU) → specular lobe parameters via the simulated meter")
+    p.add_argument("--gu", type=float, required=True, help="60° gloss in GU (0–100)")
+    p.add_argument("--coat-index", type=float, default=1.567, help="clear-coat refractive index (default 1.567)")
+    add_json_flag(p)
+    p.set_defaults(handler=_gloss)
+
+    p = sub.add_parser("de", help="colour difference per angle between two Lab lists")
+    p.add_argument("--reference", required=True, help='"L,a,b;L,a,b;…"')
+    p.add_argument("--sample", required=True, help='"L,a,b;L,a,b;…"')
+    p.add_argument("--de", default="cie2000", choices=sorted(DELTA_E_METHODS))
+    add_json_flag(p)
+    p.set_defaults(handler=_de)
+
+    p = sub.add_parser("plot", help="PNG of L*, a*, b* against aspecular angle for design files")
+    p.add_argument("designs", nargs="+", help="design files")
+    p.add_argument("--out", required=True, help="output PNG")
+    add_json_flag(p)
+    p.set_defaults(handler=_plot)
