@@ -17,8 +17,9 @@ and panel B differs by the shading ratio. ``"absolute"`` uses ``k = max(L·N, 0)
 lit at normal incidence). A surface turned away from the light (``L·N ≤ 0``) is black, ``k = 0``.
 
 Gloss is excluded as in the thesis (§4.3.2 note: highlights need not line up across a seam). With
-``gloss=True`` a neutral normalised-Phong lobe from :func:`station.model.gloss.lobe_from_gloss` adds
-``ρ_s (n+2)/2 · cos^n(α)`` to the reflectance factor before shading (α = aspecular angle).
+``gloss=True`` the neutral normalised-Phong lobe of :func:`station.model.gloss.lobe_from_gloss`
+(``ρ_s (n+1)/(2π) cosⁿψ`` of the reflected flux) adds ``ρ_s (n+1)/2 · cosⁿ(α)`` to the reflectance
+factor before shading (α = aspecular angle; the 1/cos θ_view foreshortening is left out).
 
 Environment lighting: an :class:`Environment` is a plain list of sample directions (panel-A frame,
 +z = normal) and linear-RGB radiance per sample (solid angle folded in). Each sample is a point light;
@@ -164,7 +165,7 @@ def gloss_reflectance(paint: object, aspec_deg: NDArray[np.float64]) -> NDArray[
     lobe = lobe_from_gloss(float(gloss_gu))
     n = float(lobe.phong_exponent)
     cos = np.cos(np.radians(np.minimum(aspec_deg, 90.0)))
-    return float(lobe.specular_albedo) * (n + 2.0) / 2.0 * np.maximum(cos, 0.0) ** n
+    return float(lobe.specular_albedo) * (n + 1.0) / 2.0 * np.maximum(cos, 0.0) ** n
 
 
 def paint_lab(paint: object, aspec_deg: ArrayLike) -> NDArray[np.float64]:

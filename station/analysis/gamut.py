@@ -1,0 +1,122 @@
+"""What a paint can be: the "paintable" bound used by the inverse trompe l'oeil.
+
+Documented bound (not a pigment database): a colour is paintable when
+
+* its chromaticity lies inside the sRGB gamut: linear sRGB ≥ 0 on every channel (a conservative subset
+  of real surface colours; Pointer's gamut of real surface colours is also reported, via colour-science,
+  for colours at or below L* = 100);
+* its reflectance factor is bounded: every linear-sRGB channel ≤ 1 for a flop or a solid (no surface
+  reflects more than a white diffuser far from specular), ≤ :data:`FACE_RGB_MAX` for an effect paint's
+  face at 15° (flake reflection near specular exceeds a white diffuser: bright silvers read L*15 of
+  120–140, linear channel values up to about 2.2);
+* the face is not darker than the flop (L*face ≥ L*flop) unless a retroreflective design is allowed.
+
+A paint already outside these bounds (a measured panel) relaxes each bound to its own value, so a
+corrected paint is never required to be more paintable than the original.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from station.analysis.shading import lab_to_relative_xyz, relative_xyz_to_lab
+
+#: Upper bound of a face's linear-sRGB channels (reflectance factor at 15°).
+FACE_RGB_MAX = 2.5
+#: Upper bound of a flop's / solid's linear-sRGB channels.
+FLOP_RGB_MAX = 1.0
+
+
+def _relative_xyz_to_rgb_matrix() -> NDArray[np.float64]:
+    """Linear map white-relative XYZ → linear sRGB, read off the model's conversion (it is linear)."""
+    from station.model.colorimetry import lab_to_linear_srgb
+
+    basis = relative_xyz_to_lab(np.eye(3))
+    return np.asarray(lab_to_linear_srgb(basis), dtype=float).T
+
+
+_M: NDArray[np.float64] | None = None
+
+
+def lab_to_rgb(lab: ArrayLike) -> NDArray[np.float64]:
+    """Linear sRGB of Lab (same numbers as ``station.model.colorimetry.lab_to_linear_srgb``, faster)."""
+    global _M
+    if _M is None:
+        _M = _relative_xyz_to_rgb_matrix()
+    return lab_to_relative_xyz(lab) @ _M.T
+
+
+@dataclass(frozen=True)
+class GamutReport:
+    """Paintability of a design.
+
+    Attributes
+    ----------
+    paintable
+        True when every check passes.
+    problems
+        One sentence per failed check.
+    pointer_gamut
+        Whether the flop (and a face at L* ≤ 100) lies in Pointer's gamut of real surface colours;
+        ``None`` when colour-science could not decide.
+    """
+
+    paintable: bool
+    problems: tuple[str, ...]
+    pointer_gamut: bool | None
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-able form."""
+        return {"paintable": self.paintable, "problems": list(self.problems), "pointer_gamut": self.pointer_gamut}
+
+
+def rgb_bounds(face: ArrayLike, flop: ArrayLike, solid: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(lower, upper) channel bounds for face and flop, shape (2, 3) each (rows face, flop)."""
+    lo = np.zeros((2, 3))
+    hi = np.array([[FLOP_RGB_MAX if solid else FACE_RGB_MAX] * 3, [FLOP_RGB_MAX] * 3])
+    return lo, hi
+
+
+def check_paintable(paint: object, *, allow_face_darker: bool = False, tol: float = 1e-6,
+                    relax_to: object | None = None) -> GamutReport:
+    """Check a ``FaceFlopTravelGloss`` against the documented bound (see module docstring).
+
+    *relax_to*: a reference paint (the original); bounds it already violates are relaxed to its values.
+    """
+    face = np.asarray(paint.face, dtype=float)  # type: ignore[attr-defined]
+    flop = np.asarray(paint.flop, dtype=float)  # type: ignore[attr-defined]
+    solid = bool(paint.is_solid)  # type: ignore[attr-defined]
+    rgb = lab_to_rgb(np.stack([face, flop]))
+    lo, hi = rgb_bounds(face, flop, solid)
+    if relax_to is not None:
+        ref = lab_to_rgb(np.stack([np.asarray(relax_to.face), np.asarray(relax_to.flop)]))  # type: ignore[attr-defined]
+        lo, hi = np.minimum(lo, ref), np.maximum(hi, ref)
+    problems = []
+    for i, name in enumerate(("face", "flop")):
+        if solid and i == 1:
+            break
+        if np.any(rgb[i] < lo[i] - tol):
+            problems.append(f"{name} chromaticity outside the sRGB gamut (linear RGB {np.round(rgb[i], 3).tolist()})")
+        if np.any(rgb[i] > hi[i] + tol):
+            problems.append(f"{name} reflects more than a real surface can (linear RGB max {rgb[i].max():.3g} > "
+                            f"{hi[i].max():g})")
+    if not allow_face_darker and not solid and face[0] < flop[0] - tol:
+        ref_ok = relax_to is not None and relax_to.face[0] < relax_to.flop[0]  # type: ignore[attr-defined]
+        if not ref_ok:
+            problems.append(f"face darker than flop (L* {face[0]:.2f} < {flop[0]:.2f})")
+    return GamutReport(not problems, tuple(problems), _pointer(face, flop))
+
+
+def _pointer(face: NDArray[np.float64], flop: NDArray[np.float64]) -> bool | None:
+    import colour
+
+    from station.model.colorimetry import lab_to_xyz
+
+    labs = [flop] + ([face] if face[0] <= 100.0 else [])
+    try:
+        return bool(np.all(colour.is_within_pointer_gamut(lab_to_xyz(np.stack(labs)))))
+    except (ValueError, ArithmeticError):  # pragma: no cover - hull test failed; the sRGB bound still holds
+        return None
