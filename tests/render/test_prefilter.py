@@ -1,0 +1,118 @@
+"""Prefiltered lobe maps against closed forms and brute-force quadrature; SH irradiance; disk cache."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from station.render import cubemap, prefilter, procedural
+from station.render.envcache import PrefilterCache
+from station.render.environment import Environment, load_environment
+from station.render.errors import RenderInputError
+from station.render.sh import sh_diffuse, sh_project
+
+G = np.array([0.3, 0.5, -0.2])
+
+
+def _linear_env(h: int = 64) -> np.ndarray:
+    """Equirect of L(ω) = 1 + G·ω (positive everywhere)."""
+    return (1.0 + cubemap.equirect_directions(h, 2 * h) @ G)[..., None].repeat(3, -1).astype(np.float32)
+
+
+def _linear_expect(n: float, size: int) -> np.ndarray:
+    # Mean of ω under the normalised lobe about R is (n+1)/(n+2)·R (E[cos θ] for pdf ∝ cos^n θ).
+    return 1.0 + (n + 1) / (n + 2) * (cubemap.face_directions(size) @ G)
+
+
+@pytest.mark.parametrize("n", [1.0, 8.0, 64.0])
+def test_brute_force_constant_and_linear_closed_forms(n):
+    const = prefilter.prefilter_brute(np.full((6, 32, 32, 3), 2.0), n, 4)
+    assert const == pytest.approx(2.0, rel=2e-3)
+    src = cubemap.equirect_to_cube(_linear_env(128), 32)
+    out = prefilter.prefilter_brute(src, n, 8)
+    assert out[..., 0] == pytest.approx(_linear_expect(n, 8), abs=4e-3)
+
+
+@pytest.mark.parametrize("n", [16.0, 200.0])
+def test_numpy_grid_quadrature_closed_form(n):
+    src = cubemap.equirect_to_cube(_linear_env(128), 32)
+    out = prefilter.prefilter_grid_numpy(src, n, 8, 12)
+    assert out[..., 0] == pytest.approx(_linear_expect(n, 8), abs=0.01)
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("n", [16.0, 200.0, 2000.0])
+def test_gl_grid_quadrature_closed_form(gl_ctx, n):
+    src = cubemap.equirect_to_cube(_linear_env(256), 64)
+    with prefilter.GLPrefilter(src, gl_ctx) as gl:
+        out = gl.run(n, 16, 16)
+    assert out[..., 0] == pytest.approx(_linear_expect(n, 16), abs=0.015)
+
+
+@pytest.mark.gl
+def test_gl_matches_brute_force_on_a_real_environment(gl_ctx, hdri_files):
+    # Studio softboxes on a dark background: the hard case for any sampled prefilter.
+    env = load_environment(hdri_files[0]).downsampled(512)
+    src = env.to_cube(64)
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    with prefilter.GLPrefilter(src, gl_ctx) as gl:
+        for n, size, bound_med, bound_p95 in ((32.0, 16, 0.01, 0.10), (300.0, 16, 0.005, 0.05)):
+            ref = prefilter.prefilter_brute(src, n, size) @ lum
+            got = gl.run(n, size, prefilter.sample_count(size)) @ lum
+            rel = np.abs(got - ref) / ref
+            assert np.median(rel) < bound_med
+            assert np.percentile(rel, 95) < bound_p95
+
+
+def test_sh_irradiance_exact_for_linear_and_close_to_exponent_one():
+    eq = _linear_env(64)
+    coeffs = sh_project(eq)
+    normals = cubemap.face_directions(4).reshape(-1, 3)
+    # Irradiance/π of 1 + G·ω is 1 + (2/3) G·n (band 0 and 1 are exact in 9 coefficients).
+    assert sh_diffuse(coeffs, normals)[:, 0] == pytest.approx(1 + 2 / 3 * normals @ G, abs=2e-3)
+    # Ramamoorthi & Hanrahan: ~1–3 % average error; a small bright sun is the worst case for 9 terms.
+    for env, mean_bound, max_bound in ((procedural.overcast_sky(128), 0.01, 0.03),
+                                       (procedural.light_booth(128), 0.04, 0.1),
+                                       (procedural.sunny_sky(128), 0.1, 0.3)):
+        p1 = prefilter.prefilter_brute(env.to_cube(32), 1.0, 8).reshape(-1, 3)
+        d = sh_diffuse(sh_project(env.equirect), cubemap.face_directions(8).reshape(-1, 3))
+        err = np.abs(d - p1) / p1.mean()
+        assert err.mean() < mean_bound and err.max() < max_bound, env.name
+
+
+def test_basis_constant_environment_gives_radiance_everywhere(tmp_path):
+    env = Environment("const", np.full((32, 64, 3), 0.7, np.float32))
+    basis = prefilter.prefilter_basis(env, [1, 30, 300], engine="numpy")
+    for cube in basis.cubes:
+        assert cube == pytest.approx(0.7, rel=0.01)
+    assert sh_diffuse(basis.sh, np.array([[0.0, 1.0, 0.0]]))[0] == pytest.approx([0.7] * 3, rel=1e-3)
+
+
+def test_cache_hits_and_survives_corruption(tmp_path):
+    env = procedural.overcast_sky(64)
+    cache = PrefilterCache(tmp_path)
+    first = prefilter.prefilter_basis(env, [2, 20], engine="numpy", cache=cache)
+    assert first.timings["cache_hits"] == 0
+    again = prefilter.prefilter_basis(env, [2, 20], engine="numpy", cache=cache)
+    assert again.timings["cache_hits"] == 2
+    assert np.allclose(again.cubes[1], first.cubes[1], rtol=1e-3)
+    files = sorted((tmp_path / "prefilter").glob("*.npy"))
+    assert len(files) == 2 and all("-n2-" in f.name or "-n20-" in f.name for f in files)
+    files[0].write_bytes(b"garbage")
+    third = prefilter.prefilter_basis(env, [2, 20], engine="numpy", cache=cache)
+    assert third.timings["cache_hits"] == 1
+
+
+def test_cache_dir_from_environment_variable(tmp_path, monkeypatch):
+    monkeypatch.setenv("CACAD_CACHE_DIR", str(tmp_path / "c"))
+    assert PrefilterCache().root == tmp_path / "c" / "prefilter"
+
+
+def test_bad_exponents_and_engine_rejected():
+    env = procedural.overcast_sky(32)
+    with pytest.raises(RenderInputError):
+        prefilter.prefilter_basis(env, [0.5])
+    with pytest.raises(RenderInputError):
+        prefilter.prefilter_basis(env, [float("nan")])
+    with pytest.raises(RenderInputError):
+        prefilter.prefilter_basis(env, [10], engine="cuda")
