@@ -11,9 +11,12 @@ import signal
 import sys
 import threading
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from simulators.faults import FAULTS, FaultPlan, FaultSpecError
-from simulators.physics import InstrumentCharacter, SpectroPhysics
+
+if TYPE_CHECKING:
+    from simulators.physics import SpectroPhysics
 
 __all__ = ["build_parser", "main"]
 
@@ -31,13 +34,14 @@ def build_parser(kind: str) -> argparse.ArgumentParser:
     p.add_argument("--cold", action="store_true", help="start cold (warm-up drift and temperature rise)")
     p.add_argument("--seed", type=int, default=None, help="noise seed")
     p.add_argument("--rfc2217", action="store_true", help="also serve the pty behind an RFC 2217 server")
+    p.add_argument("--tcp", action="store_true", help="also serve the pty on raw TCP (socket:// URL)")
     p.add_argument("--twelve", action="store_true", help="ma6 only: add the 15° illumination block")
     return p
 
 
 def make_physics(args: argparse.Namespace, default_serial: str) -> SpectroPhysics:
     """Physics from the common arguments."""
-    from simulators.physics import DEFAULT_DESIGN
+    from simulators.physics import DEFAULT_DESIGN, InstrumentCharacter, SpectroPhysics
     from station.model.design_io import load_design
 
     ch = InstrumentCharacter(serial=args.serial or default_serial, bias_scale=args.bias)

@@ -11,10 +11,13 @@ import datetime as dt
 import re
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from simulators.faults import FaultPlan
-from simulators.physics import SpectroPhysics
-from simulators.pty_host import PtyHost
+
+if TYPE_CHECKING:
+    from simulators.physics import SpectroPhysics
+    from simulators.pty_host import PtyHost
 
 __all__ = ["ASPECULAR_15", "ASPECULAR_45", "BAUD_RATES", "Ma6Device"]
 
@@ -57,7 +60,11 @@ class Ma6Device:
         twelve: bool = False,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
-        self.physics = physics or SpectroPhysics()
+        if physics is None:
+            from simulators.physics import SpectroPhysics
+
+            physics = SpectroPhysics()
+        self.physics = physics
         self.faults = faults or FaultPlan()
         self.measure_time_s = measure_time_s
         self.calibrate_time_s = calibrate_time_s

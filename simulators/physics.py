@@ -5,7 +5,7 @@ temperature and calibration state.
   (``FaceFlopTravelGloss.lab_at``); spectral recovery (``reflectance_from_lab``, colour-science)
   turns it into reflectance factors at 400–700 nm / 10 nm.
 * Noise: a common-mode relative scale term plus independent per-band relative noise, both Gaussian.
-  The defaults (σ = 1.5e-4 and 4e-4) give a per-reading mean CIEDE2000 from the noise-free value of
+  The defaults (σ = 3e-4 and 8e-4) give a per-reading mean CIEDE2000 from the noise-free value of
   about 0.01–0.03, the 0.02–0.05 repeatability quoted for multi-angle instruments
   (research note instruments.md §1, UNCONFIRMED vendor figures).
 * Inter-instrument bias: a fixed per-geometry, slowly varying spectral gain seeded by the serial
@@ -55,8 +55,8 @@ class InstrumentCharacter:
     """Per-instrument constants: noise (relative, 1σ), bias, warm-up drift and temperatures (°C, s)."""
 
     serial: str = "600123"
-    noise_band: float = 4e-4
-    noise_scale: float = 1.5e-4
+    noise_band: float = 8e-4
+    noise_scale: float = 3e-4
     bias_scale: float = 0.0
     drift: float = 0.004
     warmup_tau_s: float = 120.0
@@ -155,7 +155,7 @@ class SpectroPhysics:
         """Fixed spectral gain of this instrument per geometry, shape ``(n, 31)`` (1 = no bias)."""
         rng = np.random.default_rng(self._bias_rng_seed)
         lam = np.linspace(-1.0, 1.0, 31)
-        a, b, c = (rng.normal(0.0, s, (n_geometries, 1)) for s in (0.003, 0.002, 0.0015))
+        a, b, c = (rng.normal(0.0, s, (n_geometries, 1)) for s in (0.012, 0.008, 0.006))
         return 1.0 + self.character.bias_scale * (a + b * lam + c * lam**2)
 
     def measure(self, aspecular_deg: Sequence[float]) -> np.ndarray:

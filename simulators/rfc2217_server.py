@@ -1,4 +1,4 @@
-"""Expose a pty-served simulator behind an RFC 2217 server (pyserial's ``PortManager``), for the
+"""Expose a pty-served simulator behind an RFC 2217 server (or a raw TCP one for ``socket://``) (pyserial's ``PortManager``), for the
 ``rfc2217://host:port`` form of the serial transport (serial-over-LAN converters).
 
 One client at a time; baud-rate changes requested by the client are applied to the pty, so the
@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import socket
 import threading
+from typing import Any
 
 import serial
 import serial.rfc2217
@@ -19,8 +20,9 @@ __all__ = ["Rfc2217Server"]
 class Rfc2217Server:
     """Listen on 127.0.0.1:*port* (0 = any free port) and bridge clients to the pty at *path*."""
 
-    def __init__(self, path: str, port: int = 0) -> None:
+    def __init__(self, path: str, port: int = 0, raw: bool = False) -> None:
         self.path = path
+        self.raw = raw
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self._sock.bind(("127.0.0.1", port))
@@ -32,7 +34,7 @@ class Rfc2217Server:
     @property
     def url(self) -> str:
         """The ``rfc2217://`` URL clients connect to."""
-        return f"rfc2217://127.0.0.1:{self.port}"
+        return f"{'socket' if self.raw else 'rfc2217'}://127.0.0.1:{self.port}"
 
     def start(self) -> Rfc2217Server:
         """Start accepting clients."""
@@ -61,8 +63,8 @@ class Rfc2217Server:
                 conn.close()
 
     def _bridge(self, conn: socket.socket) -> None:
-        ser = serial.Serial(self.path, timeout=0.05)
-        manager = serial.rfc2217.PortManager(ser, _Writer(conn))
+        ser = _PtySerial(self.path, timeout=0.05)
+        manager: Any = _Plain() if self.raw else serial.rfc2217.PortManager(ser, _Writer(conn))
         done = threading.Event()
 
         def serial_to_net() -> None:
@@ -93,6 +95,45 @@ class Rfc2217Server:
             done.set()
             reader.join(1.0)
             ser.close()
+
+
+class _PtySerial(serial.Serial):
+    """A pty has no modem lines (TIOCMGET fails): report CTS/DSR/CD up, RI down, ignore RTS/DTR."""
+
+    @property
+    def cts(self) -> bool:
+        return True
+
+    @property
+    def dsr(self) -> bool:
+        return True
+
+    @property
+    def ri(self) -> bool:
+        return False
+
+    @property
+    def cd(self) -> bool:
+        return True
+
+    def _update_rts_state(self) -> None:
+        return None
+
+    def _update_dtr_state(self) -> None:
+        return None
+
+    def _update_break_state(self) -> None:
+        return None
+
+
+class _Plain:
+    """Raw TCP (``socket://``): bytes pass unchanged, no telnet negotiation."""
+
+    def escape(self, data: bytes) -> list[bytes]:
+        return [data]
+
+    def filter(self, data: bytes) -> list[bytes]:
+        return [data]
 
 
 class _Writer:

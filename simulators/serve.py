@@ -51,10 +51,10 @@ def start(kind: str, args: argparse.Namespace, faults: FaultPlan) -> Served:
     served = Served(f"{kind}@{host.path}", device, host)
     if faults.active("port-held"):
         host.hold_port()
-    if getattr(args, "rfc2217", False):
+    if getattr(args, "rfc2217", False) or getattr(args, "tcp", False):
         from simulators.rfc2217_server import Rfc2217Server
 
-        srv = Rfc2217Server(host.path).start()
+        srv = Rfc2217Server(host.path, raw=not args.rfc2217).start()
         served.extra.append(srv)
         served.address = f"{kind}@{srv.url}"
     return served

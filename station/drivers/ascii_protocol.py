@@ -33,6 +33,7 @@ from station.drivers.transport import SerialTransport, StreamTransport
 __all__ = ["BAUD_RATES", "PROMPT", "AsciiPromptProtocol", "AsciiReply", "checksum16"]
 
 PROMPT = b"\r\n>"
+OK_PROMPT = b"<000>\r\n>"
 BAUD_RATES = (9600, 19200, 38400, 57600, 115200)
 _REPLY = re.compile(rb"^((?:[^\r\n<>]*\r\n)*)<(\d{3})>\r\n>$")
 
@@ -87,8 +88,10 @@ class AsciiPromptProtocol:
         retries: int = 2,
         resync_timeout_s: float = 0.2,
         baudrate: int = 115200,
+        quiet_s: float = 0.05,
     ) -> None:
         self.transport = transport
+        self.quiet_s = quiet_s
         self.timeout_s = timeout_s
         self.retries = retries
         self.resync_timeout_s = resync_timeout_s
@@ -119,6 +122,7 @@ class AsciiPromptProtocol:
         return self.baudrate
 
     def _ping(self, timeout_s: float) -> bool:
+        """Send a bare CR; true if exactly an OK prompt comes back."""
         t = self.transport
         t.flush_input()
         t.write(b"\r")
@@ -126,17 +130,23 @@ class AsciiPromptProtocol:
             raw = t.read_until(PROMPT, timeout_s)
         except DeviceTimeout:
             return False
-        try:
-            parse_reply(raw[raw.rfind(b"<") :] if b"<" in raw else raw)
-        except ProtocolError:
-            return False
-        return True
+        return raw.endswith(OK_PROMPT)
+
+    def _drain(self, quiet_s: float) -> bool:
+        """Discard input until the line has been quiet for *quiet_s*; true if nothing came at all."""
+        silent = True
+        while self.transport.read(4096, quiet_s):
+            silent = False
+        return silent
 
     def resync(self) -> bool:
-        """Flush, then send bare CRs until a well-formed prompt returns (twice at most)."""
-        for _ in range(2):
-            if self._ping(self.resync_timeout_s):
-                self.transport.flush_input()
+        """Drain, then ping until one OK prompt comes back and the line stays quiet (3 rounds at most).
+
+        The quiet check catches a late reply to an earlier command being taken for the ping's reply.
+        """
+        for _ in range(3):
+            self._drain(self.quiet_s)
+            if self._ping(self.resync_timeout_s) and self._drain(self.quiet_s):
                 return True
         return False
 

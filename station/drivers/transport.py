@@ -225,7 +225,7 @@ class SerialTransport(StreamTransport):
     def write(self, data: bytes, timeout_s: float = 1.0) -> None:
         ser = self._port()
         try:
-            if ser.write_timeout != timeout_s:
+            if hasattr(ser, "fd") and ser.write_timeout != timeout_s:
                 ser.write_timeout = timeout_s
             ser.write(data)
             ser.flush()
