@@ -1,0 +1,101 @@
+"""Colour-difference kernels for ColorSnap's hot loop, bit-identical to :func:`station.model.difference.delta_e`.
+
+:func:`station.model.difference.delta_e` validates and dispatches on every call (about 150 µs for
+CIEDE2000 through colour-science), which would dominate a sub-millisecond search. These kernels
+repeat the same floating-point operations in the same order, without the checks:
+
+* ``cie76``   — ``np.linalg.norm(lab2 - lab1, axis=-1)``, as colour's ``euclidean_distance``.
+* ``cie2000`` — the arithmetic of colour's ``intermediate_attributes_CIE2000`` / ``delta_E_CIE2000``
+  (Sharma, Wu & Dalal 2005), kL = kC = kH = 1.
+* ``din6175`` — :func:`station.model.difference.delta_e_din6175` itself (already plain NumPy).
+
+tests/formulate/test_de_kernels.py asserts exact equality (``==``, not a tolerance) against
+:func:`~station.model.difference.delta_e` on random and edge-case inputs, which is what makes the
+ColorSnap ranking identical to a brute-force scan through the public function.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.model.difference import delta_e_din6175
+
+Kernel = Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]
+
+
+def cie76(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.float64]:
+    """ΔE*ab (CIE 1976), shape (...)."""
+    return np.linalg.norm(lab1 - lab2, axis=-1)
+
+
+def cie2000(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.float64]:
+    """CIEDE2000 with kL = kC = kH = 1, shape (...); *lab1* is the reference."""
+    lab1, lab2 = np.broadcast_arrays(lab1, lab2)
+    L_1, a_1, b_1 = lab1[..., 0], lab1[..., 1], lab1[..., 2]
+    L_2, a_2, b_2 = lab2[..., 0], lab2[..., 1], lab2[..., 2]
+    C_1_ab = np.hypot(a_1, b_1)
+    C_2_ab = np.hypot(a_2, b_2)
+    C_bar_ab = (C_1_ab + C_2_ab) / 2
+    C_bar_ab_7 = C_bar_ab**7
+    G = 0.5 * (1 - np.sqrt(C_bar_ab_7 / (C_bar_ab_7 + 25**7)))
+    a_p_1 = (1 + G) * a_1
+    a_p_2 = (1 + G) * a_2
+    C_p_1 = np.hypot(a_p_1, b_1)
+    C_p_2 = np.hypot(a_p_2, b_2)
+    h_p_1 = np.where(np.logical_and(b_1 == 0, a_p_1 == 0), 0, np.degrees(np.arctan2(b_1, a_p_1)) % 360)
+    h_p_2 = np.where(np.logical_and(b_2 == 0, a_p_2 == 0), 0, np.degrees(np.arctan2(b_2, a_p_2)) % 360)
+    delta_L_p = L_2 - L_1
+    delta_C_p = C_p_2 - C_p_1
+    h_p_2_s_1 = h_p_2 - h_p_1
+    C_p_1_m_2 = C_p_1 * C_p_2
+    delta_h_p = np.select(
+        [C_p_1_m_2 == 0, np.fabs(h_p_2_s_1) <= 180, h_p_2_s_1 > 180, h_p_2_s_1 < -180],
+        [0, h_p_2_s_1, h_p_2_s_1 - 360, h_p_2_s_1 + 360],
+    )
+    delta_H_p = 2 * np.sqrt(C_p_1_m_2) * np.sin(np.deg2rad(delta_h_p / 2))
+    L_bar_p = (L_1 + L_2) / 2
+    C_bar_p = (C_p_1 + C_p_2) / 2
+    a_h_p_1_s_2 = np.fabs(h_p_1 - h_p_2)
+    h_p_1_a_2 = h_p_1 + h_p_2
+    h_bar_p = np.select(
+        [
+            C_p_1_m_2 == 0,
+            a_h_p_1_s_2 <= 180,
+            np.logical_and(a_h_p_1_s_2 > 180, h_p_1_a_2 < 360),
+            np.logical_and(a_h_p_1_s_2 > 180, h_p_1_a_2 >= 360),
+        ],
+        [h_p_1_a_2, h_p_1_a_2 / 2, (h_p_1_a_2 + 360) / 2, (h_p_1_a_2 - 360) / 2],
+    )
+    T = (
+        1
+        - 0.17 * np.cos(np.deg2rad(h_bar_p - 30))
+        + 0.24 * np.cos(np.deg2rad(2 * h_bar_p))
+        + 0.32 * np.cos(np.deg2rad(3 * h_bar_p + 6))
+        - 0.20 * np.cos(np.deg2rad(4 * h_bar_p - 63))
+    )
+    delta_theta = 30 * np.exp(-(((h_bar_p - 275) / 25) ** 2))
+    C_bar_p_7 = C_bar_p**7
+    R_C = 2 * np.sqrt(C_bar_p_7 / (C_bar_p_7 + 25**7))
+    L_bar_p_2 = (L_bar_p - 50) ** 2
+    S_L = 1 + ((0.015 * L_bar_p_2) / np.sqrt(20 + L_bar_p_2))
+    S_C = 1 + 0.045 * C_bar_p
+    S_H = 1 + 0.015 * C_bar_p * T
+    R_T = -np.sin(np.deg2rad(2 * delta_theta)) * R_C
+    k_L = k_C = k_H = 1
+    return np.sqrt(
+        (delta_L_p / (k_L * S_L)) ** 2
+        + (delta_C_p / (k_C * S_C)) ** 2
+        + (delta_H_p / (k_H * S_H)) ** 2
+        + R_T * (delta_C_p / (k_C * S_C)) * (delta_H_p / (k_H * S_H))
+    )
+
+
+def din6175(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.float64]:
+    """DIN 6175-2 form (the model's provisional weights), *lab1* the reference."""
+    return delta_e_din6175(lab1, lab2)
+
+
+KERNELS: dict[str, Kernel] = {"cie76": cie76, "cie2000": cie2000, "din6175": din6175}

@@ -1,0 +1,178 @@
+"""Library CSV import / export.
+
+Format (one header row, then one paint per row)::
+
+    code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110[,L<angle>,a<angle>,b<angle> ...]
+
+``type`` is ``solid``, ``metallic`` or ``pearl``; angles are aspecular degrees (illumination at 45°,
+D65 / CIE 1964 10°); more angle triples may follow, named the same way (``L-15,a-15,b-15``, ``L25,…``).
+Validation is strict: each fault raises :class:`LibraryFormatError` naming the 1-based row (header =
+row 1), the column and the accepted range. Accepted ranges: 0 ≤ L* ≤ 150 (a metallic face may exceed 100), −200 ≤ a*, b* ≤ 200,
+0 ≤ gloss ≤ 200 GU, codes unique, non-empty, at most 64 characters.
+
+Stated precision of the export: 4 decimals for Lab and gloss (round trip import(export(x)) equals x
+rounded to 1e-4, and export(import(export(x))) is byte-identical).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from station.formulate.errors import LibraryFormatError
+from station.formulate.library import PAINT_TYPES, STANDARD_ANGLES, Library
+
+PRECISION_DECIMALS = 4
+LAB_RANGES = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
+GLOSS_RANGE = (0.0, 200.0)
+MAX_CODE_LENGTH = 64
+MAX_ROWS = 2_000_000
+_ANGLE_COL = re.compile(r"^([Lab])(-?\d+(?:\.\d+)?)$")
+
+
+def _angle_name(a: float) -> str:
+    return str(int(a)) if float(a).is_integer() else repr(float(a))
+
+
+def header_for(angles_deg: tuple[float, ...]) -> list[str]:
+    """Return the CSV header for *angles_deg*: the 3 standard angles first, then the others in order."""
+    ordered = list(STANDARD_ANGLES) + [a for a in angles_deg if a not in STANDARD_ANGLES]
+    cols = ["code", "type", "gloss_gu"]
+    for a in ordered:
+        n = _angle_name(a)
+        cols += [f"L{n}", f"a{n}", f"b{n}"]
+    return cols
+
+
+def _parse_header(header: list[str]) -> tuple[float, ...]:
+    if header[:3] != ["code", "type", "gloss_gu"]:
+        raise LibraryFormatError(1, None, "header starting code,type,gloss_gu", ",".join(header[:3]))
+    rest = header[3:]
+    if len(rest) % 3 or not rest:
+        raise LibraryFormatError(1, None, "Lab columns in complete L<angle>,a<angle>,b<angle> triples", len(rest))
+    angles: list[float] = []
+    for k in range(0, len(rest), 3):
+        triple = rest[k : k + 3]
+        ms = [_ANGLE_COL.match(c.strip()) for c in triple]
+        if not all(ms) or [m.group(1) for m in ms] != ["L", "a", "b"]:  # type: ignore[union-attr]
+            raise LibraryFormatError(1, triple[0], "a triple named L<angle>,a<angle>,b<angle>", ",".join(triple))
+        names = {m.group(2) for m in ms}  # type: ignore[union-attr]
+        if len(names) != 1:
+            raise LibraryFormatError(1, triple[0], "the same angle in L, a and b of one triple", ",".join(triple))
+        ang = float(names.pop())
+        if not -90.0 < ang < 180.0:
+            raise LibraryFormatError(1, triple[0], "aspecular angle in (-90, 180) degrees", ang)
+        if ang in angles:
+            raise LibraryFormatError(1, triple[0], "each angle once", ang)
+        angles.append(ang)
+    if tuple(angles[:3]) != STANDARD_ANGLES:
+        raise LibraryFormatError(1, None, "the first triples at 15, 45, 110 degrees", angles[:3])
+    return tuple(angles)
+
+
+def _number(text: str, row: int, col: str, lo: float, hi: float) -> float:
+    try:
+        v = float(text)
+    except ValueError as exc:
+        raise LibraryFormatError(row, col, f"a number in [{lo:g}, {hi:g}]", text) from exc
+    if not math.isfinite(v) or not lo <= v <= hi:
+        raise LibraryFormatError(row, col, f"a number in [{lo:g}, {hi:g}]", text)
+    return v
+
+
+def read_library_csv(source: str | Path | io.TextIOBase, name: str | None = None) -> Library:
+    """Read a library CSV (see module docstring) from a path or text stream.
+
+    Raises :class:`LibraryFormatError` naming row and column for every fault; never clamps.
+    """
+    if isinstance(source, (str, Path)):
+        path = Path(source)
+        try:
+            text = path.read_text(encoding="utf-8-sig")
+        except FileNotFoundError as exc:
+            raise LibraryFormatError(None, None, "an existing CSV file", str(path)) from exc
+        except UnicodeDecodeError as exc:
+            raise LibraryFormatError(None, None, "UTF-8 text", str(path)) from exc
+        stream: io.TextIOBase = io.StringIO(text)
+        name = name or path.stem
+    else:
+        stream = source
+    reader = csv.reader(stream)
+    try:
+        header = next(reader)
+    except StopIteration as exc:
+        raise LibraryFormatError(1, None, "a header row", "empty file") from exc
+    header = [h.strip() for h in header]
+    angles = _parse_header(header)
+    ncol = len(header)
+    codes: list[str] = []
+    types: list[str] = []
+    gloss: list[float] = []
+    labs: list[list[float]] = []
+    seen: dict[str, int] = {}
+    for rowno, row in enumerate(reader, start=2):
+        if not row or all(not c.strip() for c in row):
+            continue
+        if len(row) != ncol:
+            raise LibraryFormatError(rowno, None, f"{ncol} fields", len(row))
+        if rowno > MAX_ROWS:
+            raise LibraryFormatError(rowno, None, f"at most {MAX_ROWS} rows", rowno)
+        code = row[0].strip()
+        if not code or len(code) > MAX_CODE_LENGTH:
+            raise LibraryFormatError(rowno, "code", f"a non-empty code of at most {MAX_CODE_LENGTH} characters", code)
+        if code in seen:
+            raise LibraryFormatError(rowno, "code", f"a unique code (first seen on row {seen[code]})", code)
+        seen[code] = rowno
+        kind = row[1].strip().lower()
+        if kind not in PAINT_TYPES:
+            raise LibraryFormatError(rowno, "type", " | ".join(PAINT_TYPES), row[1])
+        g = _number(row[2], rowno, "gloss_gu", *GLOSS_RANGE)
+        values = []
+        for col, text in zip(header[3:], row[3:], strict=True):
+            values.append(_number(text, rowno, col, *LAB_RANGES[col[0]]))
+        codes.append(code)
+        types.append(kind)
+        gloss.append(g)
+        labs.append(values)
+    if not codes:
+        raise LibraryFormatError(2, None, "at least one paint row", "none")
+    lab = np.asarray(labs, dtype=np.float64).reshape(len(codes), len(angles), 3)
+    return Library(
+        name=name or "library",
+        codes=np.asarray(codes),
+        types=np.asarray(types),
+        gloss_gu=np.asarray(gloss),
+        angles_deg=angles,
+        lab=lab,
+        source="csv",
+    )
+
+
+def write_library_csv(library: Library, target: str | Path | io.TextIOBase) -> None:
+    """Write *library* as CSV (standard angles first), Lab and gloss to :data:`PRECISION_DECIMALS` decimals.
+
+    A synthetic library is written as such: its codes carry the ``SYN-`` prefix the generator gave them,
+    and the export has no place for a comment (the format is a bare table).
+    """
+    header = header_for(library.angles_deg)
+    order = [library.angles_deg.index(float(h[1:])) for h in header[3::3]]
+    fmt = f"{{:.{PRECISION_DECIMALS}f}}"
+    own = isinstance(target, (str, Path))
+    fh = open(target, "w", newline="", encoding="utf-8") if own else target
+    try:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(header)
+        lab = library.lab[:, order, :].reshape(len(library), -1)
+        for i in range(len(library)):
+            w.writerow(
+                [library.codes[i], library.types[i], fmt.format(library.gloss_gu[i])]
+                + [fmt.format(v) for v in lab[i]]
+            )
+    finally:
+        if own:
+            fh.close()

@@ -1,0 +1,491 @@
+"""ColorSnap: the nearest library paints to a design by summed ΔE over the standard angles (thesis §5.3.5).
+
+Ranking: paints are ordered by S = Σ_θ ΔE(design_θ, paint_θ) over the angles (15°, 45°, 110° by
+default), ties broken by library row, exactly as a brute-force scan would order them
+(:func:`brute_force`). The metric is ΔE*ab (the thesis's), CIEDE2000 or the DIN 6175-2 form, all through
+kernels bit-identical to :func:`station.model.difference.delta_e` (:mod:`station.formulate.de_kernels`).
+
+Search (exact branch and bound). The library is split once, by recursive median cuts of the
+concatenated 9-D Lab vector, into buckets of equal size; each bucket keeps, per angle, its box
+[L_min, L_max] × [a_min, a_max] × [b_min, b_max] and its largest chroma C_max. For a query, a lower
+bound of S over every paint in a bucket is the sum over angles of a lower bound of ΔE between the
+design and the box:
+
+* ΔE*ab:    the Euclidean distance from the design to the box (d_L, d_ab: per-axis distances).
+* DIN 6175: weights are computed on the reference (the design), so ΔE ≥ √((d_L/S_L)² + d_ab²/S_C²),
+  using ΔC*² + ΔH*² = Δa*² + Δb*² and S_H ≤ S_C.
+* CIEDE2000: ΔE00² ≥ (ΔL'/S_L)² + (1 − |R_T|/2) (ΔC'² + ΔH'²)/S_C² (|xy| ≤ (x²+y²)/2, S_H < S_C since
+  T ≤ 1.93), ΔC'² + ΔH'² = Δa'² + Δb² ≥ Δa² + Δb² (a' = (1+G)a, one G per pair), with S_L, S_C and
+  R_C replaced by their largest values over the box: S_L is increasing in |L̄ − 50|, C̄' ≤ (1+G(C̄))C̄
+  is increasing in C̄ (checked numerically: slope ≥ 0.52 on 0–1000) and |R_T| ≤ R_C(C̄'_max)·sin 60°.
+
+Buckets are visited in order of their bound; the search stops when the next bound exceeds the k-th
+best exact S found so far. Every paint whose S could tie or beat the k-th is evaluated exactly, so
+the top-k equals brute force (tests/formulate/test_snap.py proves it with hypothesis).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from station.formulate.de_kernels import KERNELS
+from station.formulate.errors import FormulateInputError
+from station.formulate.library import STANDARD_ANGLES, Library
+
+METHODS = ("cie76", "cie2000", "din6175")
+#: Mean ΔE per angle of the best match above which the design is "far outside the library".
+FAR_THRESHOLD = {"cie76": 5.0, "cie2000": 3.0, "din6175": 3.0}
+#: Hue Shift Index difference (ΔE*ab units) above which the match does not capture the design's travel.
+HUE_SHIFT_THRESHOLD = 5.0
+#: Angle between design and match a*b* travel vectors (degrees) above which travel is "not captured".
+TRAVEL_ANGLE_THRESHOLD_DEG = 45.0
+_SIN60 = math.sin(math.pi / 3) + 1e-12
+_SAFETY = 1.0 - 1e-9
+_SENTINEL = 1.0e6
+LAB_QUERY_RANGE = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
+_Q_LO = np.array([v[0] for v in LAB_QUERY_RANGE.values()])
+_Q_HI = np.array([v[1] for v in LAB_QUERY_RANGE.values()])
+
+
+@dataclass(frozen=True)
+class SnapMatch:
+    """One ColorSnap match: library row, code, summed ΔE and ΔE per angle (same order as the angles)."""
+
+    index: int
+    code: str
+    sum_de: float
+    de_per_angle: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class SnapResult:
+    """Top-k matches (best first), the metric, the angles and the Fig. 5.10 warnings."""
+
+    matches: tuple[SnapMatch, ...]
+    method: str
+    angles_deg: tuple[float, ...]
+    design_lab: tuple[tuple[float, float, float], ...]
+    warnings: tuple[str, ...] = ()
+    stats: dict[str, int] = field(default_factory=dict, compare=False)
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-able form used by the CLI and the service."""
+        return {
+            "matches": [
+                {"code": m.code, "sum_de": m.sum_de, "de_per_angle": list(m.de_per_angle), "index": m.index}
+                for m in self.matches
+            ],
+            "warnings": list(self.warnings),
+            "method": self.method,
+            "angles_deg": list(self.angles_deg),
+        }
+
+
+def validate_design_lab(lab: ArrayLike, n_angles: int = 3, field_name: str = "lab") -> NDArray[np.float64]:
+    """Return *lab* as an (n_angles, 3) float array, or raise :class:`FormulateInputError`."""
+    try:
+        q = np.asarray(lab, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise FormulateInputError(field_name, f"{n_angles} Lab triples", lab) from exc
+    if q.shape != (n_angles, 3):
+        raise FormulateInputError(field_name, f"{n_angles} Lab triples (one per angle)", q.shape)
+    if bool(((q >= _Q_LO) & (q <= _Q_HI)).all()):  # fast path; NaN fails both comparisons
+        return q
+    for j, (name, (lo, hi)) in enumerate(LAB_QUERY_RANGE.items()):
+        col = q[:, j]
+        if not np.all(np.isfinite(col)) or np.any(col < lo) or np.any(col > hi):
+            raise FormulateInputError(f"{field_name}.{name}", f"finite {name}* in [{lo:g}, {hi:g}]", col.tolist())
+    return q
+
+
+def _partition(x: NDArray[np.float64], leaf: int) -> tuple[NDArray[np.intp], list[tuple[int, int]]]:
+    """Recursive median split of the rows of *x* (largest-spread coordinate); returns (perm, buckets)."""
+    perm = np.arange(x.shape[0])
+    buckets: list[tuple[int, int]] = []
+    stack = [(0, x.shape[0])]
+    while stack:
+        lo, hi = stack.pop()
+        n = hi - lo
+        if n <= leaf:
+            buckets.append((lo, hi))
+            continue
+        sub = x[perm[lo:hi]]
+        dim = int(np.argmax(sub.max(0) - sub.min(0)))
+        half = n // 2
+        part = np.argpartition(sub[:, dim], half)
+        perm[lo:hi] = perm[lo:hi][part]
+        stack.append((lo + half, hi))
+        stack.append((lo, lo + half))
+    buckets.sort()
+    return perm, buckets
+
+
+def _box_bounds(
+    q: NDArray[np.float64], lo: NDArray, hi: NDArray, cmax: NDArray, method: str
+) -> NDArray[np.float64]:
+    """Lower bound of Σ_θ ΔE(q_θ, x_θ) over every x in the boxes [lo, hi] (…, A, 3) with chroma ≤ cmax (…, A).
+
+    A box of one point (lo = hi = x, cmax = C*(x)) gives the point-level bound used as a prefilter.
+    """
+    d = np.maximum(np.maximum(lo - q, q - hi), 0.0)
+    d2 = d * d
+    dl2 = d2[..., 0]
+    dab2 = d2[..., 1] + d2[..., 2]
+    if method == "cie76":
+        per = np.sqrt(dl2 + dab2)
+    elif method == "din6175":
+        cq = np.hypot(q[:, 1], q[:, 2])
+        dl50 = (q[:, 0] - 50.0) ** 2
+        s_l = 1.0 + 0.015 * dl50 / np.sqrt(20.0 + dl50)
+        s_c = 1.0 + 0.045 * cq
+        per = np.sqrt(dl2 / s_l**2 + dab2 / s_c**2)
+    elif method == "cie2000":
+        x = np.maximum(np.abs((q[:, 0] + lo[..., 0]) / 2 - 50.0), np.abs((q[:, 0] + hi[..., 0]) / 2 - 50.0))
+        s_l = 1.0 + 0.015 * x * x / np.sqrt(20.0 + x * x)
+        cbar = (np.hypot(q[:, 1], q[:, 2]) + cmax) / 2
+        c7 = cbar**7
+        cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * cbar * (1 + 1e-12) + 1e-12
+        cp7 = cpbar**7
+        r_c = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7))
+        kappa = 1.0 - r_c * _SIN60 / 2.0
+        s_c = 1.0 + 0.045 * cpbar
+        per = np.sqrt(dl2 / s_l**2 + kappa * dab2 / s_c**2)
+    else:
+        raise FormulateInputError("de", f"one of {', '.join(METHODS)}", method)
+    return per.sum(-1) * _SAFETY - 1e-12
+
+
+_T_MIN, _T_MAX = 0.36, 1.58  # range of CIEDE2000's T(h) (0.3621 … 1.5725 on a 1e-4° grid)
+
+
+def _point_bounds_cie2000(q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per-paint lower bound of Σ_θ ΔE00(q_θ, p_θ), shape (n,), without trigonometry.
+
+    Follows the CIEDE2000 arithmetic exactly up to the hue terms: ΔL', ΔC', S_L, S_C and R_C are exact;
+    ΔH'² = |Δ(a', b)|² − ΔC'²; only S_H (T ∈ [0.36, 1.58]) and R_T (|R_T| ≤ R_C sin 60°) are bounded, and
+    the cross term is minimised over the admissible z = |ΔH'|/S_H.
+    """
+    c1 = np.hypot(q[:, 1], q[:, 2])
+    c2 = np.hypot(p[..., 1], p[..., 2])
+    cbar = (c1 + c2) / 2
+    c7 = cbar**7
+    g1 = 1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))
+    a1 = g1 * q[:, 1]
+    a2 = g1 * p[..., 1]
+    cp1 = np.hypot(a1, q[:, 2])
+    cp2 = np.hypot(a2, p[..., 2])
+    dc = np.abs(cp2 - cp1)
+    dh2 = np.maximum((a2 - a1) ** 2 + (p[..., 2] - q[:, 2]) ** 2 - dc * dc, 0.0)
+    dh = np.sqrt(dh2)
+    cpbar = (cp1 + cp2) / 2
+    cp7 = cpbar**7
+    r = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7)) * _SIN60
+    lbar2 = ((q[:, 0] + p[..., 0]) / 2 - 50.0) ** 2
+    s_l = 1.0 + 0.015 * lbar2 / np.sqrt(20.0 + lbar2)
+    y = dc / (1.0 + 0.045 * cpbar)
+    z_lo = dh / (1.0 + 0.015 * cpbar * _T_MAX)
+    z_hi = dh / (1.0 + 0.015 * cpbar * _T_MIN)
+    z = np.clip(r * y / 2.0, z_lo, z_hi)
+    f = ((p[..., 0] - q[:, 0]) / s_l) ** 2 + y * y + z * z - r * y * z
+    return np.sqrt(np.maximum(f, 0.0)).sum(-1) * _SAFETY - 1e-12
+
+
+class SnapIndex:
+    """Exact top-k ColorSnap index over a library (or a raw ``(N, n_angles, 3)`` Lab array).
+
+    Two tiers of boxes: leaves of ``leaf_size`` paints and groups of ``group`` consecutive leaves
+    (consecutive in the median-split order, so spatially coherent). A query bounds the groups, opens
+    the best group to get a first k-th best, then evaluates every leaf of every group whose bound does
+    not exceed it. For CIEDE2000 a per-paint bound (the box bound of a single point, a fraction of the
+    cost of the full formula) filters the gathered paints before the exact kernel runs.
+
+    Parameters
+    ----------
+    library
+        A :class:`Library` (its Lab at *angles_deg* is indexed) or an array ``(N, len(angles_deg), 3)``.
+    angles_deg
+        The angles summed over (degrees); default the standard 15/45/110.
+    leaf_size, group
+        Paints per leaf and leaves per group; defaults grow with N.
+    """
+
+    def __init__(
+        self,
+        library: Library | ArrayLike,
+        angles_deg: tuple[float, ...] = STANDARD_ANGLES,
+        leaf_size: int | None = None,
+        group: int | None = None,
+    ) -> None:
+        if isinstance(library, Library):
+            lab = library.angle_columns(angles_deg)
+            self.codes: NDArray[np.str_] | None = library.codes
+        else:
+            lab = np.asarray(library, dtype=np.float64)
+            self.codes = None
+        if lab.ndim != 3 or lab.shape[1:] != (len(angles_deg), 3) or lab.shape[0] == 0:
+            raise FormulateInputError("library", f"(N >= 1, {len(angles_deg)}, 3) Lab", lab.shape)
+        self.angles_deg = tuple(float(a) for a in angles_deg)
+        self.lab = np.ascontiguousarray(lab)
+        n, na = lab.shape[0], lab.shape[1]
+        self.size = n
+        if leaf_size is None:
+            leaf_size = 32 if n <= 20_000 else 64
+        perm, buckets = _partition(lab.reshape(n, -1), leaf_size)
+        if group is None:
+            group = 1 if len(buckets) <= 512 else 64
+        nb = -(-len(buckets) // group) * group
+        width = max(hi - lo for lo, hi in buckets)
+        rows = np.full((nb, width), n, dtype=np.intp)
+        for b, (lo, hi) in enumerate(buckets):
+            rows[b, : hi - lo] = perm[lo:hi]
+        self._rows = rows  # (nb, width) original row; n marks padding
+        padded = np.concatenate([lab, np.full((1, na, 3), _SENTINEL)], axis=0)
+        self._blab = padded[rows]  # (nb, width, A, 3)
+        chroma = np.hypot(self._blab[..., 1], self._blab[..., 2])
+        real = (rows < n)[..., None, None]
+        self._lo = np.where(real, self._blab, np.inf).min(axis=1)  # (nb, A, 3)
+        self._hi = np.where(real, self._blab, -np.inf).max(axis=1)
+        self._cmax = np.where(real[..., 0], chroma, -np.inf).max(axis=1)  # (nb, A)
+        empty = ~(rows < n).any(axis=1)
+        self._lo[empty] = self._hi[empty] = _SENTINEL
+        self._cmax[empty] = _SENTINEL
+        self.group = group
+        ng = nb // group
+        self._glo = self._lo.reshape(ng, group, na, 3).min(axis=1)
+        self._ghi = self._hi.reshape(ng, group, na, 3).max(axis=1)
+        self._gcmax = self._cmax.reshape(ng, group, na).max(axis=1)
+        self.n_buckets = nb
+        self.n_groups = ng
+        self.last_visited = 0
+
+    def bucket_bounds(self, q: NDArray[np.float64], method: str) -> NDArray[np.float64]:
+        """Lower bound of the summed ΔE over each leaf, shape (n_buckets,) (see module docstring)."""
+        return _box_bounds(q, self._lo, self._hi, self._cmax, method)
+
+    # -- search -------------------------------------------------------------------------------------
+    def query(self, lab: ArrayLike, k: int = 5, method: str = "cie76") -> tuple[NDArray[np.intp], NDArray, NDArray]:
+        """Return (rows, summed ΔE, ΔE per angle) of the *k* best paints, best first (exact).
+
+        Ties in the sum are broken by the lower library row, as :func:`brute_force` does.
+        """
+        if method not in METHODS:
+            raise FormulateInputError("de", f"one of {', '.join(METHODS)}", method)
+        if not isinstance(k, (int, np.integer)) or isinstance(k, bool) or k < 1:
+            raise FormulateInputError("k", "an integer >= 1", k)
+        k = min(int(k), self.size)
+        q = validate_design_lab(lab, len(self.angles_deg))
+        kernel = KERNELS[method]
+        g = self.group
+        first = max(1, -(-k // self._rows.shape[1])) + 1
+        if self.n_groups == 1 or g == 1:
+            lb = self.bucket_bounds(q, method)
+            leaves = np.arange(lb.size)
+        else:  # open the best group(s) first: enough leaves for a k-th best
+            glb = _box_bounds(q, self._glo, self._ghi, self._gcmax, method)
+            ng_first = min(self.n_groups, -(-first // g))
+            gsel = np.argpartition(glb, ng_first - 1)[:ng_first] if ng_first < self.n_groups else np.arange(
+                self.n_groups)
+            leaves = (gsel[:, None] * g + np.arange(g)).ravel()
+            lb = _box_bounds(q, self._lo[leaves], self._hi[leaves], self._cmax[leaves], method)
+        first = min(first, lb.size)
+        pick = np.argpartition(lb, first - 1)[:first] if first < lb.size else np.arange(lb.size)
+        sel = leaves[pick]
+        rows, s, per = self._evaluate(kernel, q, sel, math.inf, k, method)
+        kth = np.partition(s, k - 1)[k - 1] if s.size >= k else math.inf
+        if self.n_groups == 1 or g == 1:
+            rest = lb <= kth
+            rest[pick] = False
+            more = leaves[rest]
+        else:
+            gmore = np.flatnonzero(glb <= kth)
+            cand = (gmore[:, None] * g + np.arange(g)).ravel()
+            clb = _box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method)
+            keep = clb <= kth
+            keep &= ~np.isin(cand, sel)
+            more = cand[keep]
+        visited = sel.size + more.size
+        if more.size:
+            rows2, s2, per2 = self._evaluate(kernel, q, more, float(kth), k, method)
+            rows = np.concatenate([rows, rows2])
+            s = np.concatenate([s, s2])
+            per = np.concatenate([per, per2])
+        if s.size > k:
+            keep_k = s <= np.partition(s, k - 1)[k - 1]
+            rows, s, per = rows[keep_k], s[keep_k], per[keep_k]
+        top = np.lexsort((rows, s))[:k]
+        self.last_visited = int(visited)
+        return rows[top], s[top], per[top]
+
+    def _evaluate(
+        self, kernel: object, q: NDArray[np.float64], buckets: NDArray[np.intp], kth: float, k: int, method: str
+    ) -> tuple[NDArray, NDArray, NDArray]:
+        """Exact ΔE of the real paints in *buckets* that could be within *kth*: (rows, sums, per-angle)."""
+        rows = self._rows[buckets].ravel()
+        pts = self._blab[buckets].reshape(-1, *q.shape)
+        real = rows < self.size
+        if not real.all():
+            rows, pts = rows[real], pts[real]
+        if method == "cie2000" and rows.size > 8 * k:
+            plb = _point_bounds_cie2000(q, pts)
+            if kth == math.inf:  # the best few by bound give a k-th best to filter the rest with
+                m = 4 * k
+                head = np.argpartition(plb, m - 1)[:m]
+                per_h = kernel(q, pts[head])  # type: ignore[operator]
+                kth = float(np.partition(per_h.sum(-1), k - 1)[k - 1])
+            keep = plb <= kth
+            rows, pts = rows[keep], pts[keep]
+        per = kernel(q, pts)  # type: ignore[operator]
+        return rows, per.sum(-1), per
+
+    def snap(self, lab: ArrayLike, k: int = 5, method: str = "cie76") -> SnapResult:
+        """Run :meth:`query` and wrap it with codes (when built from a library); no warnings."""
+        rows, s, per = self.query(lab, k, method)
+        matches = tuple(
+            SnapMatch(
+                int(r),
+                str(self.codes[r]) if self.codes is not None else str(int(r)),
+                float(v),
+                tuple(float(x) for x in p),
+            )
+            for r, v, p in zip(rows, s, per, strict=True)
+        )
+        q = np.asarray(lab, dtype=np.float64)
+        return SnapResult(
+            matches, method, self.angles_deg, tuple(tuple(float(v) for v in row) for row in q),
+            stats={"leaves_visited": self.last_visited, "leaves": self.n_buckets},
+        )
+
+
+def brute_force(
+    lib_lab: ArrayLike, lab: ArrayLike, k: int = 5, method: str = "cie76"
+) -> tuple[NDArray[np.intp], NDArray, NDArray]:
+    """Reference scan through :func:`station.model.difference.delta_e`: (rows, sums, per-angle), best first."""
+    from station.model.difference import delta_e
+
+    lib_lab = np.asarray(lib_lab, dtype=np.float64)
+    per = delta_e(np.asarray(lab, dtype=np.float64)[None], lib_lab, method)
+    s = per.sum(-1)
+    top = np.lexsort((np.arange(s.size), s))[: min(k, s.size)]
+    return top, s[top], per[top]
+
+
+def snap_warnings(
+    library: Library,
+    result: SnapResult,
+    far_threshold: float | None = None,
+    hue_shift_threshold: float = HUE_SHIFT_THRESHOLD,
+    travel_angle_threshold_deg: float = TRAVEL_ANGLE_THRESHOLD_DEG,
+) -> tuple[str, ...]:
+    """The two problems ColorSnap's view exposes (thesis Fig. 5.10), as sentences.
+
+    1. *Far outside the library*: the best match's mean ΔE per angle exceeds *far_threshold*
+       (default :data:`FAR_THRESHOLD` for the metric); says whether the design is more chromatic than
+       every library paint of similar hue (the "too deep in saturation" case).
+    2. *Travel not captured*: the design's a*b* travel (110° − 15°) points in a direction more than
+       *travel_angle_threshold_deg* away from the match's, or their Hue Shift Indices (eq 5.3.3)
+       differ by more than *hue_shift_threshold* (the "off-radial travel" case).
+    """
+    from station.model.indices import library_indices
+
+    out: list[str] = []
+    if not result.matches:
+        return ()
+    best = result.matches[0]
+    threshold = FAR_THRESHOLD[result.method] if far_threshold is None else far_threshold
+    design = np.asarray(result.design_lab)
+    mean_de = best.sum_de / len(result.angles_deg)
+    if mean_de > threshold:
+        msg = (
+            f"design lies far outside the library: nearest paint {best.code} differs by mean "
+            f"{mean_de:.2f} {result.method} per angle (threshold {threshold:g})"
+        )
+        c_design = float(np.hypot(design[:, 1], design[:, 2]).max())
+        std = library.angle_columns(result.angles_deg)
+        c_lib = np.hypot(std[..., 1], std[..., 2]).max(1)
+        h_design = math.degrees(math.atan2(design[0, 2], design[0, 1])) % 360
+        h_lib = np.degrees(np.arctan2(std[:, 0, 2], std[:, 0, 1])) % 360
+        near = np.abs((h_lib - h_design + 180) % 360 - 180) < 20
+        if c_design > 10 and near.any() and c_design > float(c_lib[near].max()):
+            msg += (
+                f"; the design is more chromatic (C* {c_design:.1f}) than every library paint of its hue "
+                f"(max C* {float(c_lib[near].max()):.1f})"
+            )
+        out.append(msg)
+    try:
+        i15, i110 = result.angles_deg.index(15.0), result.angles_deg.index(110.0)
+        i45 = result.angles_deg.index(45.0)
+    except ValueError:
+        return tuple(out)
+    match = library.angle_columns(result.angles_deg)[best.index]
+    t_design = design[i110, 1:] - design[i15, 1:]
+    t_match = match[i110, 1:] - match[i15, 1:]
+    n_d, n_m = float(np.hypot(*t_design)), float(np.hypot(*t_match))
+    if n_d > 3.0:
+        cosang = float(t_design @ t_match) / (n_d * n_m) if n_m > 1e-9 else -1.0
+        ang = math.degrees(math.acos(max(-1.0, min(1.0, cosang))))
+        hsi_d = library_indices(design[i15], design[i45], design[i110]).hue_shift_index
+        hsi_m = library_indices(match[i15], match[i45], match[i110]).hue_shift_index
+        hsi_gap = abs(hsi_d - hsi_m) if hsi_d is not None and hsi_m is not None else 0.0
+        if ang > travel_angle_threshold_deg or hsi_gap > hue_shift_threshold:
+            out.append(
+                f"the match {best.code} does not capture the design's travel direction: a*b* travel "
+                f"15°→110° differs by {ang:.0f}° (threshold {travel_angle_threshold_deg:g}°)"
+                + (f", Hue Shift Index differs by {hsi_gap:.1f}" if hsi_gap else "")
+            )
+    return tuple(out)
+
+
+def color_snap(
+    library: Library,
+    lab: ArrayLike,
+    k: int = 5,
+    method: str = "cie76",
+    index: SnapIndex | None = None,
+) -> SnapResult:
+    """ColorSnap: top-*k* library paints nearest to the design Lab (15/45/110), with warnings.
+
+    Parameters
+    ----------
+    library
+        The library to search.
+    lab
+        Design L*a*b* at the standard angles, shape (3, 3).
+    k
+        Number of matches.
+    method
+        ``"cie76"`` (ΔE*ab, the thesis's), ``"cie2000"`` or ``"din6175"``.
+    index
+        A prebuilt :class:`SnapIndex` of *library* (building one costs ~10 ms for 6000 paints).
+    """
+    index = index or SnapIndex(library)
+    result = index.snap(lab, k, method)
+    return SnapResult(
+        result.matches, result.method, result.angles_deg, result.design_lab,
+        snap_warnings(library, result), result.stats,
+    )
+
+
+def view_data(
+    library: Library, result: SnapResult, max_cloud: int = 3000, seed: int = 0
+) -> dict[str, object]:
+    """Data of the 3D Lab-space view (thesis Figs 5.9–5.11): design, matches and a library cloud.
+
+    Returns ``{"angles_deg", "design": [[L,a,b] per angle], "matches": [{"code", "lab"}],
+    "cloud": {"lab": [[L,a,b]] at 45°, "codes": [...], "sampled": bool}, "synthetic": bool}``.
+    """
+    std = library.angle_columns(result.angles_deg)
+    rng = np.random.default_rng(seed)
+    n = len(library)
+    rows = np.sort(rng.choice(n, size=max_cloud, replace=False)) if n > max_cloud else np.arange(n)
+    i45 = result.angles_deg.index(45.0) if 45.0 in result.angles_deg else 0
+    return {
+        "angles_deg": list(result.angles_deg),
+        "design": [list(r) for r in result.design_lab],
+        "matches": [{"code": m.code, "lab": std[m.index].tolist()} for m in result.matches],
+        "cloud": {"lab": std[rows, i45].tolist(), "codes": library.codes[rows].tolist(), "sampled": n > max_cloud},
+        "synthetic": library.synthetic,
+    }

@@ -1,0 +1,153 @@
+"""ColorSnap: exactness against a brute-force scan through station.model.difference.delta_e, bound
+validity, the Fig. 5.10 warnings, view data and input errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from station.formulate.de_kernels import KERNELS
+from station.formulate.errors import FormulateInputError
+from station.formulate.library import Library
+from station.formulate.snap import (
+    METHODS,
+    SnapIndex,
+    _box_bounds,
+    _point_bounds_cie2000,
+    brute_force,
+    color_snap,
+    view_data,
+)
+from station.model.difference import delta_e
+
+lab_el = st.floats(-120, 120, allow_nan=False, width=32)
+
+
+def _labs(n: int) -> st.SearchStrategy[np.ndarray]:
+    return arrays(np.float64, (n, 3, 3), elements=lab_el).map(_fix_l)
+
+
+def _fix_l(a: np.ndarray) -> np.ndarray:
+    a = a.copy()
+    a[..., 0] = np.abs(a[..., 0]) % 100.0
+    return a
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    n=st.integers(1, 300),
+    data=st.data(),
+    k=st.integers(1, 12),
+    method=st.sampled_from(METHODS),
+    leaf=st.sampled_from([None, 2, 5]),
+    group=st.sampled_from([None, 1, 3]),
+)
+def test_top_k_is_identical_to_brute_force(n, data, k, method, leaf, group) -> None:
+    lib = data.draw(_labs(n))
+    if n > 3 and data.draw(st.booleans()):  # duplicates make exact ties: broken by row, as brute force
+        lib[n // 2] = lib[0]
+        lib[n - 1] = lib[0]
+    q = data.draw(_labs(1))[0]
+    if data.draw(st.booleans()):
+        q = lib[data.draw(st.integers(0, n - 1))].copy()
+    index = SnapIndex(lib, leaf_size=leaf, group=group)
+    rows, sums, per = index.query(q, k, method)
+    b_rows, b_sums, b_per = brute_force(lib, q, k, method)
+    assert rows.tolist() == b_rows.tolist()
+    assert np.array_equal(sums, b_sums)
+    assert np.array_equal(per, b_per)
+
+
+def test_exact_on_a_clustered_library_with_groups(small_library: Library) -> None:
+    std = small_library.angle_columns()
+    rng = np.random.default_rng(3)
+    big = np.repeat(std, 20, axis=0) + rng.normal(0, 1.0, (len(std) * 20, 3, 3))
+    big[..., 0] = np.clip(big[..., 0], 0, 100)
+    index = SnapIndex(big, leaf_size=8, group=16)
+    assert index.n_groups > 1
+    for q in std[:25] + rng.normal(0, 2.0, (25, 3, 3)):
+        q[:, 0] = np.clip(q[:, 0], 0, 100)
+        for method in METHODS:
+            rows, sums, _ = index.query(q, 7, method)
+            b_rows, b_sums, _ = brute_force(big, q, 7, method)
+            assert rows.tolist() == b_rows.tolist()
+            assert np.array_equal(sums, b_sums)
+
+
+@settings(max_examples=80, deadline=None)
+@given(pts=_labs(40), q=_labs(1), method=st.sampled_from(METHODS))
+def test_box_and_point_bounds_never_exceed_the_exact_sum(pts, q, method) -> None:
+    q = q[0]
+    exact = delta_e(q[None], pts, method).sum(-1)
+    chroma = np.hypot(pts[..., 1], pts[..., 2])
+    box = _box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method)
+    assert box <= exact.min() + 1e-12
+    point = _box_bounds(q, pts, pts, chroma, method)
+    assert np.all(point <= exact + 1e-12)
+    if method == "cie2000":
+        assert np.all(_point_bounds_cie2000(q, pts) <= exact + 1e-12)
+
+
+@settings(max_examples=100, deadline=None)
+@given(a=arrays(np.float64, (50, 3), elements=lab_el), b=arrays(np.float64, (50, 3), elements=lab_el))
+def test_kernels_are_bit_identical_to_the_model(a, b) -> None:
+    b[::5] = a[::5]  # identical pairs
+    b[1::7, 1:] = 0.0  # achromatic samples
+    for method, kernel in KERNELS.items():
+        assert np.array_equal(kernel(a, b), delta_e(a, b, method)), method
+
+
+def test_match_of_a_library_paint_is_itself(small_library: Library) -> None:
+    std = small_library.angle_columns()
+    result = color_snap(small_library, std[17], k=3)
+    assert result.matches[0].code == small_library.codes[17]
+    assert result.matches[0].sum_de == 0.0
+    assert result.warnings == ()
+    d = result.to_dict()
+    assert set(d["matches"][0]) >= {"code", "sum_de", "de_per_angle"}
+    assert len(d["matches"]) == 3
+
+
+def test_far_outside_warning_for_a_too_saturated_design(small_library: Library) -> None:
+    design = np.array([[45.0, 95.0, 60.0], [35.0, 90.0, 55.0], [20.0, 70.0, 40.0]])
+    result = color_snap(small_library, design, k=1, method="cie2000")
+    assert any("far outside the library" in w and "more chromatic" in w for w in result.warnings)
+
+
+def test_off_radial_travel_warning() -> None:
+    # a library of radial metallics (hue constant from face to flop) and a design whose hue turns 90°
+    lab = np.array([[[70.0, 30.0, 0.0], [50.0, 25.0, 0.0], [30.0, 20.0, 0.0]]])
+    lib = Library("radial", ["R1"], ["metallic"], [80.0], (15.0, 45.0, 110.0), lab)
+    design = np.array([[70.0, 30.0, 0.0], [50.0, 22.0, 8.0], [30.0, 22.0, 14.0]])
+    result = color_snap(lib, design, k=1)
+    assert any("travel direction" in w for w in result.warnings)
+    radial = color_snap(lib, lab[0] + [0.5, 0.5, 0.0], k=1)
+    assert not any("travel" in w for w in radial.warnings)
+
+
+def test_view_data_has_design_matches_and_cloud(small_library: Library) -> None:
+    result = color_snap(small_library, small_library.angle_columns()[3], k=2)
+    data = view_data(small_library, result, max_cloud=100)
+    assert len(data["design"]) == 3 and len(data["matches"]) == 2
+    assert len(data["cloud"]["lab"]) == 100 and data["cloud"]["sampled"] is True
+    assert data["synthetic"] is True
+
+
+@pytest.mark.parametrize(
+    ("lab", "k", "method", "field"),
+    [
+        ([[50, 0, 0]] * 2, 5, "cie76", "lab"),
+        ([[50, 0, 0], [50, 0, 0], [float("nan"), 0, 0]], 5, "cie76", "lab.L"),
+        ([[50, 0, 0], [50, 0, 0], [50, 0, 900]], 5, "cie76", "lab.b"),
+        ([[50, 0, 0]] * 3, 0, "cie76", "k"),
+        ([[50, 0, 0]] * 3, 5, "cie94x", "de"),
+    ],
+)
+def test_bad_queries_raise_typed_errors(small_library: Library, lab, k, method, field) -> None:
+    index = SnapIndex(small_library)
+    with pytest.raises(FormulateInputError) as err:
+        index.query(lab, k, method)
+    assert err.value.field == field
