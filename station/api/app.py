@@ -1,0 +1,97 @@
+"""The application factory: everything (engine, sessions, instruments) is built here, nothing at import.
+
+``create_app(settings)`` returns a FastAPI app whose lifespan migrates the database (when
+``settings.auto_migrate``), loads the demo library (when asked and the table is empty), and attaches
+the configured simulators. Tests build one app per database and override ``get_session`` as needed.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+
+from db.engine import make_engine, make_sessionmaker
+from station import __version__
+from station.api.errors import install_error_handlers
+from station.api.middleware import BodySizeLimit
+from station.api.settings import Settings
+
+log = logging.getLogger(__name__)
+
+API_PREFIX = "/api/v1"
+
+DESCRIPTION = """
+CACAD Station workstation service: instruments, panels and measurements, versioned designs, the paint
+library. Every route but `/health` needs `Authorization: Bearer <token>`; the first token is printed
+once by `station serve` on first start. Angles are in degrees; Lab is CIE L*a*b* (D65, CIE 1964 10°)
+unless a field says otherwise; gloss is in gloss units (60° unless stated).
+"""
+
+TAGS = [
+    {"name": "health", "description": "liveness (no token)"},
+    {"name": "instruments", "description": "attached instruments: connect, calibrate, measure"},
+    {"name": "panels", "description": "painted samples (job, part, substrate)"},
+    {"name": "measurements", "description": "immutable readings; corrections supersede; CSV export"},
+    {"name": "designs", "description": "versioned cacad.design/1 designs"},
+    {"name": "library", "description": "library paints"},
+    {"name": "users", "description": "users and tokens (admin)"},
+    {"name": "audit", "description": "who wrote what, when"},
+]
+
+
+def _startup(app: FastAPI, settings: Settings) -> None:
+    from db.migrate import ensure_at_head
+    from station.api.instruments import InstrumentHub
+    from station.api.services.library import load_demo_library
+
+    url = settings.effective_database_url
+    if settings.auto_migrate:
+        ensure_at_head(url)
+    engine = make_engine(url)
+    app.state.engine = engine
+    app.state.sessions = make_sessionmaker(engine)
+    if settings.load_demo_library:
+        with app.state.sessions() as session:
+            added = load_demo_library(session=session)
+            if added:
+                log.info("library: %d demo paints loaded", added)
+    hub = InstrumentHub(settings=settings, sessions=app.state.sessions)
+    app.state.instruments = hub
+    hub.attach_simulators(settings.simulators)
+
+
+def _shutdown(app: FastAPI) -> None:
+    hub = getattr(app.state, "instruments", None)
+    if hub is not None:
+        hub.close()
+    engine = getattr(app.state, "engine", None)
+    if engine is not None:
+        engine.dispose()
+
+
+def create_app(settings: Settings) -> FastAPI:
+    """Build the service for *settings*."""
+    from station.api.routes import ROUTERS, health
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        import asyncio
+
+        await asyncio.to_thread(_startup, app, settings)
+        try:
+            yield
+        finally:
+            await asyncio.to_thread(_shutdown, app)
+
+    app = FastAPI(title="CACAD Station", version=__version__, description=DESCRIPTION, openapi_tags=TAGS,
+                  lifespan=lifespan)
+    app.state.settings = settings
+    install_error_handlers(app)
+    app.include_router(health.router)
+    for router in ROUTERS:
+        app.include_router(router, prefix=API_PREFIX)
+    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    return app

@@ -1,0 +1,7 @@
+"""Routers, one per domain; ``ROUTERS`` are mounted under ``/api/v1``."""
+
+from station.api.routes import designs, health, instruments, library, measurements, panels, users
+
+ROUTERS = [instruments.router, panels.router, measurements.router, designs.router, library.router, users.router]
+
+__all__ = ["ROUTERS", "health"]

@@ -1,0 +1,65 @@
+"""Instruments: ``/api/v1/instruments`` (list, connect, calibrate, measure); driver calls off the event loop."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Annotated
+
+from fastapi import APIRouter, Path, Query, Request, status
+
+from db.models import User
+from station.api.deps import scoped
+from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND, UNAVAILABLE
+from station.api.instruments import InstrumentHub
+from station.api.schemas.instruments import (
+    CalibrateRequest,
+    CalibrationPublic,
+    ConnectRequest,
+    InstrumentPublic,
+    MeasureRequest,
+    MeasureResult,
+)
+from station.api.security import Scope
+
+router = APIRouter(prefix="/instruments", tags=["instruments"], responses={**ERROR_RESPONSES, **UNAVAILABLE})
+Reader = Annotated[User, scoped(Scope.INSTRUMENTS_READ)]
+Operator = Annotated[User, scoped(Scope.INSTRUMENTS_OPERATE)]
+InstrumentId = Annotated[str, Path(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$",
+                                   description="handle from the instrument list, e.g. ma6-sim00001")]
+
+
+def _hub(request: Request) -> InstrumentHub:
+    return request.app.state.instruments
+
+
+@router.get("", response_model=list[InstrumentPublic])
+async def list_instruments(request: Request, _user: Reader) -> list[InstrumentPublic]:
+    """Attached instruments (simulators included) with their calibration state."""
+    return await asyncio.to_thread(_hub(request).list)
+
+
+@router.post("/connect", status_code=status.HTTP_201_CREATED, response_model=InstrumentPublic,
+             responses=CONFLICT)
+async def connect(request: Request, user: Operator, body: ConnectRequest) -> InstrumentPublic:
+    """Open the instrument at a driver address and attach it."""
+    return await asyncio.to_thread(_hub(request).connect, address=body.address, actor=user)
+
+
+@router.post("/{instrument_id}/calibrate", response_model=CalibrationPublic, responses={**NOT_FOUND, **CONFLICT})
+async def calibrate(request: Request, user: Operator, instrument_id: InstrumentId,
+                    body: CalibrateRequest) -> CalibrationPublic:
+    """Run the calibration sequence (zero, white, verification) and store the record."""
+    return await asyncio.to_thread(_hub(request).calibrate, instrument_id=instrument_id,
+                                   reference=body.reference, actor=user)
+
+
+@router.post("/{instrument_id}/measure", status_code=status.HTTP_201_CREATED, response_model=MeasureResult,
+             responses={**NOT_FOUND, **CONFLICT})
+async def measure(
+    request: Request, user: Operator, instrument_id: InstrumentId, body: MeasureRequest,
+    gloss_instrument_id: Annotated[str | None, Query(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$",
+                                                     description="gloss meter to read 60° gloss from")] = None,
+) -> MeasureResult:
+    """Measure the panel once and store the reading (Lab computed from the spectra, D65/10°)."""
+    return await asyncio.to_thread(_hub(request).measure, instrument_id=instrument_id, req=body,
+                                   gloss_instrument_id=gloss_instrument_id, actor=user)

@@ -1,0 +1,65 @@
+"""Users, tokens and the audit log: ``/api/v1/users``, ``/api/v1/me``, ``/api/v1/audit`` (admin / qa)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Query, status
+
+from db.models import User
+from station.api.deps import AnyUser, SessionDep, scoped
+from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
+from station.api.schemas.common import Id, Limit, Offset, Page
+from station.api.schemas.users import AuditEventPublic, TokenCreate, TokenIssued, UserCreate, UserPublic
+from station.api.security import Scope
+from station.api.services import audit
+from station.api.services import users as service
+
+router = APIRouter(tags=["users"], responses=ERROR_RESPONSES)
+Admin = Annotated[User, scoped(Scope.USERS_MANAGE)]
+Auditor = Annotated[User, scoped(Scope.AUDIT_READ)]
+
+
+@router.get("/me", response_model=UserPublic)
+def me(user: AnyUser) -> UserPublic:
+    """The caller."""
+    return UserPublic.model_validate(user)
+
+
+@router.get("/users", response_model=list[UserPublic])
+def list_users(session: SessionDep, _user: Admin) -> list[UserPublic]:
+    """Every user."""
+    return [UserPublic.model_validate(u) for u in service.list_users(session=session)]
+
+
+@router.post("/users", status_code=status.HTTP_201_CREATED, response_model=TokenIssued, responses=CONFLICT)
+def create_user(session: SessionDep, admin: Admin, user_in: UserCreate) -> TokenIssued:
+    """Create a user and its first token (the secret is shown only in this response)."""
+    user, token, secret = service.create_user(session=session, actor=admin, name=user_in.name, role=user_in.role)
+    return TokenIssued(user=UserPublic.model_validate(user), token_id=token.id, token=secret)
+
+
+@router.post("/users/{user_id}/tokens", status_code=status.HTTP_201_CREATED, response_model=TokenIssued,
+             responses={**NOT_FOUND, **CONFLICT})
+def issue_token(session: SessionDep, admin: Admin, user_id: Id, token_in: TokenCreate) -> TokenIssued:
+    """Issue another token for a user."""
+    user = service.get_user(session=session, user_id=user_id)
+    token, secret = service.issue_token(session=session, actor=admin, user=user, label=token_in.label)
+    return TokenIssued(user=UserPublic.model_validate(user), token_id=token.id, token=secret)
+
+
+@router.delete("/users/{user_id}", response_model=UserPublic, responses={**NOT_FOUND, **CONFLICT})
+def deactivate_user(session: SessionDep, admin: Admin, user_id: Id) -> UserPublic:
+    """Deactivate a user and revoke its tokens (the row and its audit trail stay)."""
+    user = service.get_user(session=session, user_id=user_id)
+    return UserPublic.model_validate(service.deactivate(session=session, actor=admin, user=user))
+
+
+@router.get("/audit", response_model=Page[AuditEventPublic])
+def list_audit(session: SessionDep, _user: Auditor,
+               entity: Annotated[str | None, Query(max_length=32)] = None,
+               actor_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+               limit: Limit = 100, offset: Offset = 0) -> Page[AuditEventPublic]:
+    """Audit events, newest first."""
+    rows, total = audit.list_events(session=session, entity=entity, actor_id=actor_id, limit=limit, offset=offset)
+    return Page[AuditEventPublic](data=[AuditEventPublic.model_validate(r) for r in rows], count=total)

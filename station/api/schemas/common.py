@@ -1,0 +1,20 @@
+"""Pieces shared by the resource schemas."""
+
+from __future__ import annotations
+
+from typing import Annotated, Generic, TypeVar
+
+from pydantic import BaseModel, Field
+
+T = TypeVar("T")
+
+Id = Annotated[int, Field(ge=1, le=2**31 - 1)]
+Limit = Annotated[int, Field(ge=1, le=1000, description="page size")]
+Offset = Annotated[int, Field(ge=0, le=10_000_000, description="rows to skip")]
+
+
+class Page(BaseModel, Generic[T]):
+    """A page of rows and the total count matching the query."""
+
+    data: list[T]
+    count: int

@@ -1,0 +1,72 @@
+"""Designs: versioned face/flop/travel/gloss bodies in the ``cacad.design/1`` schema."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+LabValue = Annotated[float, Field(ge=-200.0, le=200.0, allow_inf_nan=False)]
+Lab = Annotated[list[LabValue], Field(min_length=3, max_length=3, description="[L*, a*, b*], D65/10°")]
+Name = Annotated[str, Field(min_length=1, max_length=128, pattern=r"^[^\x00-\x1f]+$")]
+
+_EXAMPLE = {"schema": "cacad.design/1", "name": "Blue metallic", "face": [62.0, -4.0, -38.0],
+            "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0, "gloss_gu": 88.0}
+
+
+class DesignBody(BaseModel):
+    """A ``cacad.design/1`` design (thesis §3.3: face at 15°, flop at the travel angle θ_clamp)."""
+
+    model_config = ConfigDict(extra="ignore", populate_by_name=True, json_schema_extra={"examples": [_EXAMPLE]})
+
+    schema_: Literal["cacad.design/1"] = Field("cacad.design/1", alias="schema")
+    name: Annotated[str, Field(max_length=128)] = ""
+    face: Lab
+    flop: Lab
+    travel_deg: Annotated[float, Field(gt=15.0, le=180.0, description="θ_clamp, degrees")] | None
+    gloss_gu: Annotated[float, Field(ge=0.0, le=2000.0, description="60° gloss units")] | None = None
+
+
+class DesignCreate(BaseModel):
+    """Properties to receive on creation (becomes version 1)."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={
+        "examples": [{"name": "Blue metallic", "design": _EXAMPLE, "note": "first proposal"}]})
+
+    name: Name
+    design: DesignBody
+    note: Annotated[str, Field(max_length=1000)] = ""
+
+
+class DesignUpdate(BaseModel):
+    """A new version of an existing design."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={
+        "examples": [{"design": _EXAMPLE, "note": "less travel"}]})
+
+    design: DesignBody
+    note: Annotated[str, Field(max_length=1000)] = ""
+
+
+class DesignVersionPublic(BaseModel):
+    """One stored version."""
+
+    design_id: int
+    version: int
+    design: dict[str, object]
+    note: str
+    created_at: dt.datetime
+    created_by_id: int | None
+
+
+class DesignPublic(BaseModel):
+    """A design with its latest version's body."""
+
+    id: int
+    name: str
+    latest_version: int
+    archived: bool
+    created_at: dt.datetime
+    created_by_id: int | None
+    design: dict[str, object]

@@ -1,0 +1,68 @@
+"""Instruments attached to the service: connect, calibrate, measure."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from station.api.schemas.measurements import MeasurementPublic
+
+
+class InstrumentPublic(BaseModel):
+    """An attached instrument (``id`` is the service's handle, stable while it runs)."""
+
+    id: str
+    address: str
+    model: str
+    serial: str
+    firmware: str
+    kind: str
+    simulated: bool
+    geometries: list[str]
+    calibration_needed: str | None
+    calibration_id: str | None
+
+
+class ConnectRequest(BaseModel):
+    """The driver address of an instrument to attach (``family@where``, e.g. ``ma6@/dev/ttyUSB0``)."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"address": "ma6@/dev/ttyUSB0"}]})
+
+    address: Annotated[str, Field(min_length=3, max_length=255, pattern=r"^[a-z0-9_]+@[^\x00-\x1f]+$")]
+
+
+class CalibrateRequest(BaseModel):
+    """Who calibrates, with which reference tile."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    reference: Annotated[str, Field(max_length=64, examples=["white tile W-17"])] = ""
+
+
+class CalibrationPublic(BaseModel):
+    """Outcome of a calibration (stored as a calibration record)."""
+
+    record_id: int
+    calibration_id: str
+    steps: list[str]
+    verification_de: float | None
+    passed: bool
+    expires: dt.datetime | None
+
+
+class MeasureRequest(BaseModel):
+    """Which panel the reading belongs to (optional) and the illumination block to store."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"panel_id": 1}]})
+
+    panel_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
+    illumination_deg: Annotated[int, Field(ge=0, le=90, description="illumination angle of the stored block")] = 45
+
+
+class MeasureResult(BaseModel):
+    """The stored measurement, or ``queued`` when the database was away (it is in the outbox)."""
+
+    status: str
+    measurement: MeasurementPublic | None

@@ -1,0 +1,61 @@
+"""Measurements: what is stored per reading, queries, corrections."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from station.ingest import Reading
+
+
+class MeasurementPublic(BaseModel):
+    """A stored, immutable measurement (angles in degrees, Lab D65/10° unless stated, gloss in GU)."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    client_id: uuid.UUID
+    panel_id: int | None
+    instrument_id: int
+    instrument_serial: str
+    calibration_id: int | None
+    operator: str
+    measured_at: dt.datetime
+    received_at: dt.datetime
+    illuminant: str
+    observer: str
+    geometries_deg: list[float]
+    lab: list[list[float]]
+    wavelengths_nm: list[float] | None
+    spectra: list[list[float]] | None
+    gloss_gu: float | None
+    gloss_geometry_deg: float | None
+    payload_sha256: str
+    supersedes_id: int | None
+    superseded_by_id: int | None = None
+    correction_reason: str | None
+    created_by_id: int | None
+
+
+class CorrectionCreate(BaseModel):
+    """A corrected reading for a stored measurement, and why (the original stays, superseded)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    reason: Annotated[str, Field(min_length=3, max_length=1000, examples=["wrong panel scanned; re-measured"])]
+    reading: Reading
+
+
+class MeasurementQuery(BaseModel):
+    """Filters of ``GET /measurements`` and its CSV export (all optional, combined with AND)."""
+
+    job: str | None = None
+    part: str | None = None
+    panel_id: int | None = None
+    instrument: str | None = None
+    since: dt.datetime | None = None
+    until: dt.datetime | None = None
+    include_superseded: bool = False

@@ -1,0 +1,88 @@
+"""Users and tokens: create, issue, revoke, bootstrap the first admin."""
+
+from __future__ import annotations
+
+from sqlalchemy import func, select, update
+from sqlalchemy.orm import Session
+
+from db.base import utcnow
+from db.models import ApiToken, Role, User
+from station.api.errors import ConflictError, NotFoundError
+from station.api.security import hash_token, new_token
+from station.api.services import audit
+
+
+def _issue(session: Session, user: User, label: str) -> tuple[ApiToken, str]:
+    secret = new_token()
+    token = ApiToken(user_id=user.id, token_hash=hash_token(secret), label=label)
+    session.add(token)
+    session.flush()
+    return token, secret
+
+
+def create_user(*, session: Session, actor: User | None, name: str, role: Role,
+                label: str = "") -> tuple[User, ApiToken, str]:
+    """Create a user with a first token; returns the secret (shown once)."""
+    if session.scalar(select(User.id).where(User.name == name)) is not None:
+        raise ConflictError(f"user {name!r} exists")
+    user = User(name=name, role=role)
+    session.add(user)
+    session.flush()
+    token, secret = _issue(session, user, label)
+    audit.record(session=session, actor=actor, action="user.create", entity="user", entity_id=user.id,
+                 name=name, role=role.value)
+    session.commit()
+    return user, token, secret
+
+
+def get_user(*, session: Session, user_id: int) -> User:
+    """The user *user_id* or :class:`NotFoundError`."""
+    user = session.get(User, user_id)
+    if user is None:
+        raise NotFoundError(f"user {user_id} not found")
+    return user
+
+
+def find_user(*, session: Session, name: str) -> User:
+    """The user called *name* or :class:`NotFoundError`."""
+    user = session.scalar(select(User).where(User.name == name))
+    if user is None:
+        raise NotFoundError(f"user {name!r} not found")
+    return user
+
+
+def issue_token(*, session: Session, actor: User | None, user: User, label: str = "") -> tuple[ApiToken, str]:
+    """A new token for *user* (an inactive user gets none)."""
+    if not user.active:
+        raise ConflictError(f"user {user.name!r} is deactivated")
+    token, secret = _issue(session, user, label)
+    audit.record(session=session, actor=actor, action="token.issue", entity="user", entity_id=user.id,
+                 token_id=token.id, label=label)
+    session.commit()
+    return token, secret
+
+
+def deactivate(*, session: Session, actor: User | None, user: User) -> User:
+    """Deactivate *user* and revoke every token it holds."""
+    if actor is not None and actor.id == user.id:
+        raise ConflictError("an admin cannot deactivate themself")
+    user.active = False
+    session.execute(update(ApiToken).where(ApiToken.user_id == user.id, ApiToken.revoked_at.is_(None))
+                    .values(revoked_at=utcnow()))
+    audit.record(session=session, actor=actor, action="user.deactivate", entity="user", entity_id=user.id)
+    session.commit()
+    return user
+
+
+def list_users(*, session: Session) -> list[User]:
+    """Every user, oldest first."""
+    return list(session.scalars(select(User).order_by(User.id)))
+
+
+def bootstrap_admin(*, session: Session, name: str = "admin") -> str | None:
+    """On an empty user table: create the first admin and return its token; else ``None``."""
+    if (session.scalar(select(func.count()).select_from(User)) or 0) > 0:
+        return None
+    _user, _token, secret = create_user(session=session, actor=None, name=name, role=Role.ADMIN,
+                                        label="bootstrap")
+    return secret
