@@ -13,6 +13,8 @@ from station.model.design_io import save_design
 from station.model.difference import delta_e
 from station.model.spectra import reflectance_to_lab
 
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
 
 @pytest.mark.parametrize("net", ["", "--rfc2217", "--tcp"])
 def test_ma6_subprocess_measures_design(tmp_path, net):

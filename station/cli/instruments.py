@@ -1,0 +1,97 @@
+"""``station instruments list``, ``station calibrate DEVICE``, ``station measure DEVICE``.
+
+DEVICE is ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss`` (a simulator subprocess started for the command;
+``--design FILE`` sets its panel) or an address accepted by :func:`station.drivers.open_instrument`
+(``/dev/ttyACM0``, ``ma3@usb:1209:ca03``, ``gloss@hid:PATH`` …). Lab comes from
+``station.model.spectra.reflectance_to_lab`` (D65, CIE 1964 10°), never from the driver.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Iterator
+from contextlib import ExitStack, contextmanager
+from pathlib import Path
+from typing import Any
+
+from station.cli._common import add_json_flag
+from station.errors import InputError
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``instruments``, ``calibrate`` and ``measure``."""
+    p = subparsers.add_parser("instruments", help="list instruments")
+    sub = p.add_subparsers(dest="instruments_command", required=True, metavar="ACTION")
+    lp = sub.add_parser("list", help="serial ports, USB and HID candidates, simulators")
+    add_json_flag(lp)
+    lp.set_defaults(handler=cmd_list)
+
+    for name, fn, text in (("calibrate", cmd_calibrate, "zero, white and verification calibration"),
+                           ("measure", cmd_measure, "measure once and print spectra, Lab and gloss")):
+        cp = subparsers.add_parser(name, help=text)
+        cp.add_argument("device", help="sim:ma6 | sim:ma3 | sim:gloss | an address (see docs/protocols)")
+        cp.add_argument("--design", type=Path, help="design file of the simulated panel (sim:* only)")
+        cp.add_argument("--fault", action="append", default=[], help="simulator fault spec (sim:* only)")
+        cp.add_argument("--timeout", type=float, default=1.5, help="reply timeout, seconds")
+        if name == "measure":
+            cp.add_argument("--panel", help="panel id recorded with the reading")
+        add_json_flag(cp)
+        cp.set_defaults(handler=fn)
+
+
+def cmd_list(args: argparse.Namespace) -> dict[str, Any]:
+    """List candidate devices."""
+    from station.drivers.discovery import list_devices
+
+    found, notes = list_devices()
+    return {"devices": [d.to_dict() for d in found], "notes": notes}
+
+
+@contextmanager
+def _instrument(args: argparse.Namespace) -> Iterator[Any]:
+    from station.drivers import open_instrument
+    from station.drivers.simproc import SIM_KINDS, spawn_simulator
+
+    if not (0.05 <= args.timeout <= 60):
+        raise InputError("--timeout", "0.05 <= seconds <= 60", args.timeout)
+    with ExitStack() as stack:
+        address = args.device
+        if args.device.startswith("sim:"):
+            kind = args.device[4:]
+            if kind not in SIM_KINDS:
+                raise InputError("device", "sim:ma6 | sim:ma3 | sim:gloss or an address", args.device)
+            sim = stack.enter_context(spawn_simulator(kind, args.design, args.fault))
+            address = sim.address
+        elif args.design is not None or args.fault:
+            raise InputError("--design/--fault", "only with a sim:* device", args.device)
+        inst = stack.enter_context(open_instrument(address, timeout_s=args.timeout))
+        yield inst
+
+
+def cmd_calibrate(args: argparse.Namespace) -> dict[str, Any]:
+    """Run the calibration sequence and report it."""
+    with _instrument(args) as inst:
+        r = inst.calibrate()
+        return {"device": args.device, "address": f"{inst.family}@{inst.address}", "calibration_id": r.calibration_id,
+                "steps": list(r.steps), "verification_de": r.verification_de, "passed": r.passed,
+                "expires": r.expires.isoformat() if r.expires else None}
+
+
+def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
+    """Measure once; spectra per geometry and Lab from the model, or gloss/haze/DOI."""
+    from station.drivers import GlossReading
+
+    with _instrument(args) as inst:
+        reading = inst.measure()
+        out: dict[str, Any] = {"device": args.device, "address": f"{inst.family}@{inst.address}", "panel": args.panel}
+        if isinstance(reading, GlossReading):
+            data = reading.to_dict()
+            out.update({"geometries": [], "lab": [], "spectra": [], **data})
+            return out
+        from station.model.spectra import reflectance_to_lab
+
+        data = reading.to_dict()
+        out.update(data)
+        out["lab"] = reflectance_to_lab(reading.reflectance).round(4).tolist()
+        out["gloss_gu"] = None
+        return out
