@@ -1,0 +1,186 @@
+"""``station analysis …``: misalignment QA from the command line (thesis ch. 4).
+
+* ``gg-index`` — goniogeometric index β_min (eq 4.3.1) of a paint for a point light and view(s).
+* ``trompe-loeil`` — inverse trompe l'oeil: paint B for a misaligned panel (§4.4).
+* ``seam`` — QA of two panels (design or measurement JSON): seam ΔE, index, pass/fail, §4.5 advice,
+  corrected paint; ``--png`` writes the report picture.
+* ``sweep`` — seam ΔE over view × light × β (Fig. 4.3), optionally as a PNG.
+
+Environment lighting is available from Python and the service (``station.analysis.Environment``, built
+from a ``station.render`` environment by the caller); the CLI takes point lights.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from station.analysis import goniogeometric_index
+from station.analysis.index import DE_METHODS, JND_CIE76
+from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, seam_qa
+from station.analysis.trompe import OBJECTIVES, inverse_trompe_loeil
+from station.cli._common import add_json_flag, parse_floats
+from station.errors import InputError
+
+
+def _hinge(text: str) -> str | float:
+    if text in ("in-plane", "out-of-plane"):
+        return text
+    return parse_floats(text, "hinge", 1)[0]
+
+
+def _paint(args: argparse.Namespace) -> Any:
+    from station.model import FaceFlopTravelGloss
+    from station.model.design_io import load_design
+
+    if getattr(args, "design", None):
+        return load_design(args.design)
+    if args.face is None:
+        raise InputError("face", "--face L,a,b (or --design FILE)")
+    face = parse_floats(args.face, "face", 3)
+    flop = parse_floats(args.flop, "flop", 3) if args.flop else face
+    travel = args.travel
+    if face == flop:
+        travel = None
+    elif travel is None:
+        raise InputError("travel", "--travel DEG when face != flop (15 < travel <= 180)")
+    return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, **({"gloss_gu": args.gloss}
+                                                                      if args.gloss is not None else {}))
+
+
+def _add_paint_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--design", help="design JSON file (cacad.design/1) instead of --face/--flop/--travel")
+    p.add_argument("--face", help="face Lab at 15°: L,a,b")
+    p.add_argument("--flop", help="flop Lab: L,a,b (default = face: a solid)")
+    p.add_argument("--travel", type=float, help="travel θ_clamp in degrees (effect paints)")
+    p.add_argument("--gloss", type=float, help="gloss in GU (used only with --include-gloss)")
+
+
+def _add_common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--epsilon", type=float, default=JND_CIE76, help="ΔE threshold (default 2.3 = 1 JND ΔE*ab)")
+    p.add_argument("--de", choices=DE_METHODS, default="cie76", help="colour-difference formula")
+    p.add_argument("--hinge", default="in-plane", help="in-plane | out-of-plane | hinge azimuth in degrees")
+
+
+def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
+    paint = _paint(args)
+    lights = parse_floats(args.light, "light")
+    views = parse_floats(args.view, "view") if args.view is not None else None
+    r = goniogeometric_index(paint, lights if len(lights) > 1 else lights[0], views, epsilon=args.epsilon,
+                             method=args.de, hinge=_hinge(args.hinge), direction=args.direction,
+                             beta_max_deg=args.beta_max, gloss=args.include_gloss)
+    return r.to_dict(per_geometry=args.per_geometry)
+
+
+def _trompe(args: argparse.Namespace) -> dict[str, Any]:
+    paint = _paint(args)
+    lights = parse_floats(args.lights, "lights")
+    views = parse_floats(args.views, "views") if args.views is not None else None
+    r = inverse_trompe_loeil(paint, lights, views, beta_deg=args.beta, objective=args.objective, at=args.at,
+                             subset=args.subset, hinge=_hinge(args.hinge), method=args.de,
+                             epsilon=args.epsilon, allow_face_darker=args.allow_face_darker)
+    return r.to_dict()
+
+
+def load_panel(path: str) -> Any:
+    """A panel from a design JSON (``cacad.design/1``) or a measurement JSON.
+
+    Measurement JSON: ``{"angles_deg": [...], "lab": [[L, a, b], ...], "gloss_gu": g}`` (Lab D65/10°,
+    illumination at 45°); it is fitted to face/flop/travel (eqs 3.3.1–3.3.10).
+    """
+    from station.model import AspecularMeasurements
+    from station.model.design_io import design_from_dict
+
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise InputError("panel", "a readable JSON file (design or measurement)", path) from exc
+    if not isinstance(data, dict):
+        raise InputError("panel", "a JSON object", path)
+    if "angles_deg" in data and "lab" in data:
+        return AspecularMeasurements(tuple(data["angles_deg"]), data["lab"], data.get("gloss_gu"))
+    return design_from_dict(data)
+
+
+def _seam(args: argparse.Namespace) -> dict[str, Any]:
+    a = load_panel(args.panel_a)
+    b = load_panel(args.panel_b)
+    r = seam_qa(a, b, args.beta, lights_deg=parse_floats(args.lights, "lights"),
+                aspecular_deg=parse_floats(args.aspecular, "aspecular"), tolerance=args.epsilon,
+                method=args.de, hinge=_hinge(args.hinge), objective=args.objective)
+    out = r.to_dict()
+    if args.png:
+        from station.analysis.picture import plot_seam_report
+
+        out["png"] = str(plot_seam_report(r, args.png))
+    return out
+
+
+def _sweep(args: argparse.Namespace) -> dict[str, Any]:
+    from station.analysis.sweep import plot_sweep, seam_sweep
+
+    paint = _paint(args)
+    r = seam_sweep(paint, parse_floats(args.betas, "betas"), parse_floats(args.lights, "lights"),
+                   parse_floats(args.views, "views") if args.views else None, hinge=_hinge(args.hinge),
+                   method=args.de, epsilon=args.epsilon)
+    out = {"index_estimate_deg": r.index_estimate(), "shape": list(r.delta_e.shape)}
+    if args.png:
+        out["png"] = str(plot_sweep(r, args.png))
+    else:
+        out.update(r.to_dict())
+    return out
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``station analysis …``."""
+    top = subparsers.add_parser("analysis", help="misalignment QA: goniogeometric index, inverse trompe l'oeil")
+    sub = top.add_subparsers(dest="analysis_command", required=True, metavar="SUBCOMMAND")
+
+    p = sub.add_parser("gg-index", help="goniogeometric index β_min (eq 4.3.1)")
+    _add_paint_args(p)
+    p.add_argument("--light", required=True, help="light polar angle(s) in degrees, comma-separated")
+    p.add_argument("--view", help="view polar angle(s) in degrees (signed; default: aspecular 15–110° scan)")
+    p.add_argument("--direction", choices=("+", "-", "either"), default="either")
+    p.add_argument("--beta-max", type=float, default=30.0, help="largest β searched, degrees")
+    p.add_argument("--include-gloss", action="store_true", help="add the gloss lobe (excluded in the thesis)")
+    p.add_argument("--per-geometry", action="store_true", help="list β_min for every geometry")
+    _add_common(p)
+    add_json_flag(p)
+    p.set_defaults(handler=_gg_index)
+
+    p = sub.add_parser("trompe-loeil", help="inverse trompe l'oeil: paint for the misaligned panel (§4.4)")
+    _add_paint_args(p)
+    p.add_argument("--beta", type=float, required=True, help="signed misalignment of panel B, degrees")
+    p.add_argument("--lights", required=True, help="light polar angles, degrees, comma-separated")
+    p.add_argument("--views", help="view polar angles, one per light (default: the normal)")
+    p.add_argument("--objective", choices=OBJECTIVES, default="rms")
+    p.add_argument("--at", type=int, default=0, help="geometry index for --objective single")
+    p.add_argument("--subset", help="solid | face_L | face_L+travel | face | face+travel | full | names joined by +")
+    p.add_argument("--allow-face-darker", action="store_true")
+    _add_common(p)
+    add_json_flag(p)
+    p.set_defaults(handler=_trompe)
+
+    p = sub.add_parser("seam", help="QA of a seam between two panels (design or measurement JSON)")
+    p.add_argument("panel_a", metavar="PANEL_A")
+    p.add_argument("panel_b", metavar="PANEL_B")
+    p.add_argument("--beta", type=float, required=True, help="signed misalignment of panel B, degrees")
+    p.add_argument("--lights", default=",".join(f"{x:g}" for x in DEFAULT_LIGHTS_DEG))
+    p.add_argument("--aspecular", default=",".join(f"{x:g}" for x in DEFAULT_ASPECULAR_DEG))
+    p.add_argument("--objective", choices=("rms", "minimax"), default="minimax")
+    p.add_argument("--png", help="write the report picture here")
+    _add_common(p)
+    add_json_flag(p)
+    p.set_defaults(handler=_seam)
+
+    p = sub.add_parser("sweep", help="seam ΔE over view × light × β (thesis Fig. 4.3)")
+    _add_paint_args(p)
+    p.add_argument("--betas", default="0.5,1,2,3,5,8")
+    p.add_argument("--lights", default="15,30,45,60")
+    p.add_argument("--views", help="view polar angles (default −80…80 step 2)")
+    p.add_argument("--png", help="write the figure here")
+    _add_common(p)
+    add_json_flag(p)
+    p.set_defaults(handler=_sweep)
