@@ -16,7 +16,8 @@ face/flop/travel design that best matches the whole curve in Lab (variable proje
 
 Failure ("the colour gradations do not match the lighting", §3.7.4) is detected when the RGB curve
 leaves the physical range over 15°…θ_clamp, the model refuses the result, or the design re-rendered
-in the scene misses the art by more than ``max_rms_de`` (RMS ΔE*ab over the fitted pixels). The fit
+in the scene misses the art systematically by more than ``max_shading_de`` (RMS ΔE*ab of cell means in
+(θ, ϕ) cells, :func:`shading_delta_e`: pixel noise averages out, inconsistent gradations do not). The fit
 then returns the average diffuse colour of the changed pixels (albedo = linear colour / (E ϕ)) as a
 solid, with ``failed=True`` and the reason.
 
@@ -54,6 +55,11 @@ MIN_PIXELS = 30
 TRAVEL_SWEEP = tuple(float(t) for t in range(16, 181))
 #: Below this ΔE*ab between face and flop the result is a solid.
 SOLID_DE = 0.5
+#: Rec. 709 luminance weights of linear sRGB.
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+HIGHLIGHT_SIGMAS = 3.0
+#: Cells of the shading-consistency check: aspecular angle (degrees) × Lambert term.
+CELL_THETA_DEG, CELL_LAMBERT = 5.0, 0.1
 
 
 @dataclass(frozen=True)
@@ -64,8 +70,10 @@ class SketchFit:
     ----------
     design : the fitted design (or the fallback solid when ``failed``)
     lab_standard : Lab of the fitted RGB curve at 15°, 45°, 110° (thesis §3.7.3)
-    rms_de : RMS ΔE*ab (CIE 1976) between the art and the design re-rendered, over the fitted pixels
-        (environment fit: between the art and the lobe-weight reconstruction)
+    rms_de : RMS ΔE*ab (CIE 1976, the thesis's figure) between the art and the design re-rendered, over
+        the fitted pixels (environment fit: between the art and the lobe-weight reconstruction)
+    shading_de : systematic part of the misfit (:func:`shading_delta_e`; environment fit: ``rms_de`` of
+        the cell means over pixels grouped by reconstructed colour is not defined, so = ``rms_de``)
     failed, reason : failure flag and why (empty when it succeeded)
     theta_clamp_deg : the θ_clamp of the sweep kept (point fit) or of the projection (environment fit)
     pixels : number of pixels fitted
@@ -76,6 +84,7 @@ class SketchFit:
     design: FaceFlopTravelGloss
     lab_standard: tuple[tuple[float, float, float], ...]
     rms_de: float
+    shading_de: float
     failed: bool
     reason: str
     theta_clamp_deg: float
@@ -98,6 +107,24 @@ def changed_pixels(art: NDArray, initial: NDArray | None, mask: NDArray) -> NDAr
     if initial is None:
         return mask.copy()
     return mask & (np.max(np.abs(art - initial), axis=-1) > CHANGE_TOLERANCE)
+
+
+def shading_delta_e(theta: NDArray, phi: NDArray, art_linear: NDArray, fit_linear: NDArray) -> float:
+    """Systematic misfit of a shading model: RMS ΔE*ab between the art's and the fit's mean colours in
+    cells of (aspecular angle, Lambert term) (5° × 0.1), weighted by pixel count.
+
+    Within a cell the model predicts nearly one colour, so pixel noise averages out of the cell means
+    and what remains is the part of the art the lighting cannot explain (flat fills, shading ramps,
+    misregistration): the failure criterion of the point-light fit.
+    """
+    cell = np.floor(theta / CELL_THETA_DEG) * 1000 + np.floor(phi / CELL_LAMBERT)
+    _, inv, counts = np.unique(cell, return_inverse=True, return_counts=True)
+    mean_a = np.stack([np.bincount(inv, art_linear[:, c]) for c in range(3)], axis=1) / counts[:, None]
+    mean_f = np.stack([np.bincount(inv, fit_linear[:, c]) for c in range(3)], axis=1) / counts[:, None]
+    lab_a = linear_srgb_to_lab(np.clip(mean_a, 1e-6, None))
+    lab_f = linear_srgb_to_lab(np.clip(mean_f, 1e-6, None))
+    d2 = np.sum((lab_a - lab_f) ** 2, axis=1)
+    return float(np.sqrt(np.sum(counts * d2) / counts.sum()))
 
 
 def rms_delta_e(lab1: NDArray, lab2: NDArray) -> float:
@@ -147,18 +174,41 @@ def _design_from_curve(angles: NDArray, lab: NDArray, gloss: float) -> tuple[Fac
 
 def _sweep_quadratic(theta: NDArray, phi: NDArray, y: NDArray, sweep: tuple[float, ...]
                      ) -> tuple[NDArray, float, float]:
+    """Least squares of eq 3.7.2 for every θ_clamp of *sweep*; return (coefficients, θ_clamp, SSE).
+
+    Normal equations from prefix sums over the pixels sorted by θ: below θ_clamp a pixel contributes
+    its own θ'^k, above it θ_clamp^k, so each θ_clamp costs O(1) after an O(n log n) sort.
+    Coefficients are per (100°)^k for conditioning.
+    """
+    order = np.argsort(theta)
+    ts, p, yy = theta[order] / 100.0, phi[order], y[order]
+    p2 = p * p
+    # prefix sums (with a leading zero) of ϕ² θ^k (k = 0..4) and ϕ θ^k y (k = 0..2)
+    pw = np.stack([p2 * ts**k for k in range(5)], axis=1)
+    py = np.stack([(p * ts**k)[:, None] * yy for k in range(3)], axis=1)  # (n, 3, channels)
+    cpw = np.vstack([np.zeros((1, 5)), np.cumsum(pw, axis=0)])
+    cpy = np.concatenate([np.zeros((1, 3, yy.shape[1])), np.cumsum(py, axis=0)])
+    tot_p2, tot_py = cpw[-1, 0], cpy[-1, 0]
+    yty = float(np.sum(yy * yy))
     best: tuple[float, NDArray, float] | None = None
-    ts = theta / 100.0  # conditioning: coefficients per (100°)^k
     for tc in sweep:
-        tp = np.minimum(ts, tc / 100.0)
-        A = np.stack([tp * tp * phi, tp * phi, phi], axis=1)  # eq 3.7.2
-        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-        sse = float(np.sum((A @ coef - y) ** 2))
+        c = tc / 100.0
+        m = int(np.searchsorted(ts, c, side="left"))  # pixels [0, m) have θ < θ_clamp
+        above_p2 = tot_p2 - cpw[m, 0]
+        above_py = tot_py - cpy[m, 0]
+        s = [cpw[m, k] + above_p2 * c**k for k in range(5)]  # Σ ϕ² θ'^k
+        ata = np.array([[s[4], s[3], s[2]], [s[3], s[2], s[1]], [s[2], s[1], s[0]]])
+        aty = np.stack([cpy[m, 2] + above_py * c * c, cpy[m, 1] + above_py * c, cpy[m, 0] + above_py])
+        try:
+            coef = np.linalg.solve(ata, aty)
+        except np.linalg.LinAlgError:
+            continue
+        sse = yty - 2.0 * float(np.sum(coef * aty)) + float(np.sum(coef * (ata @ coef)))
         if best is None or sse < best[0] - 1e-12:
             best = (sse, coef, tc)
     if best is None:
-        raise DesignInputError("travel_sweep", "at least one θ_clamp", sweep)
-    return best[1], best[2], best[0]
+        raise SketchFitError("eq 3.7.2 is singular for every θ_clamp of the sweep (too few distinct angles)")
+    return best[1], best[2], max(best[0], 0.0)
 
 
 def _curve(coef: NDArray, tc: float, angles: NDArray) -> NDArray:
@@ -174,7 +224,7 @@ def fit_point_light(
     min_aspecular_deg: float = 10.0,
     min_lambert: float = 0.05,
     gloss: str = "contrast",
-    max_rms_de: float = 8.0,
+    max_shading_de: float = 4.0,
     travel_sweep: tuple[float, ...] = TRAVEL_SWEEP,
 ) -> SketchFit:
     """Fit a design to point-lit concept art (thesis §3.7.3; module docstring for the method).
@@ -191,8 +241,9 @@ def fit_point_light(
     gloss
         ``"contrast"`` (contrast gloss of the foreground pixels with θ < 15°, default 50 GU when fewer
         than 10 such pixels) or ``"default"`` (50 GU).
-    max_rms_de
-        RMS ΔE*ab above which the fit is declared failed (inconsistent shading).
+    max_shading_de
+        Systematic misfit (:func:`shading_delta_e`, ΔE*ab) above which the fit is declared failed
+        (inconsistent shading).
 
     Raises
     ------
@@ -232,27 +283,29 @@ def fit_point_light(
     angles = np.arange(15.0, hi + 1.0, 1.0)
     rgb = _curve(coef, tc, angles)
     design: FaceFlopTravelGloss | None = None
-    rms = math.inf
+    rms = shading_de = math.inf
     if np.any(rgb < -0.01) or np.any(rgb > 2.0):
         reason = f"non-physical colour curve (RGB {rgb.min():.3g}..{rgb.max():.3g}): shading inconsistent"
     else:
         try:
             design, tc_design = _design_from_curve(angles, linear_srgb_to_lab(np.clip(rgb, 1e-6, None)), gloss_gu)
             tc = tc_design if not design.is_solid else tc
-            fit_lab = linear_srgb_to_lab(np.clip(shade(scene, design)[use], 1e-6, None))
-            rms = rms_delta_e(fit_lab, art_lab)
-            if rms > max_rms_de:
-                reason = f"RMS ΔE*ab {rms:.3g} > {max_rms_de:g}: shading inconsistent with the scene's lighting"
+            fit_lin = shade(scene, design)[use]
+            rms = rms_delta_e(linear_srgb_to_lab(np.clip(fit_lin, 1e-6, None)), art_lab)
+            shading_de = shading_delta_e(theta, phi, y * scene.irradiance, fit_lin)
+            if shading_de > max_shading_de:
+                reason = (f"systematic ΔE*ab {shading_de:.3g} > {max_shading_de:g}: "
+                          "shading inconsistent with the scene's lighting")
         except ValueError as exc:  # the model refused the colours
             reason = f"model refused the fitted colours: {exc}"
     if reason:
-        design, rms = _diffuse_fallback(scene, art_a, changed, gloss_gu, use, art_lab)
-    return SketchFit(design, lab_std, rms, bool(reason), reason, float(tc), n, gloss_source,  # type: ignore[arg-type]
-                     time.perf_counter() - t0)
+        design, rms, shading_de = _diffuse_fallback(scene, art_a, changed, gloss_gu, use, art_lab)
+    return SketchFit(design, lab_std, rms, shading_de, bool(reason), reason, float(tc), n,  # type: ignore[arg-type]
+                     gloss_source, time.perf_counter() - t0)
 
 
 def _diffuse_fallback(scene: Scene, art: NDArray, changed: NDArray, gloss_gu: float, use: NDArray,
-                      art_lab: NDArray) -> tuple[FaceFlopTravelGloss, float]:
+                      art_lab: NDArray) -> tuple[FaceFlopTravelGloss, float, float]:
     """Average diffuse colour of the changed pixels (albedo = linear / (E ϕ), ϕ > 0.2) as a solid."""
     sel = changed & (scene.lambert > 0.2) & (np.min(art, axis=-1) <= NEAR_WHITE)
     if not sel.any():
@@ -261,8 +314,10 @@ def _diffuse_fallback(scene: Scene, art: NDArray, changed: NDArray, gloss_gu: fl
     lab = np.asarray(linear_srgb_to_lab(np.clip(albedo.mean(axis=0), 1e-6, None)), dtype=float)
     colour = tuple(float(v) for v in lab)
     design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)  # type: ignore[arg-type]
-    fit_lab = linear_srgb_to_lab(np.clip(shade(scene, design)[use], 1e-6, None))
-    return design, rms_delta_e(fit_lab, art_lab)
+    fit_lin = shade(scene, design)[use]
+    art_lin = srgb_decode(art[use])
+    return (design, rms_delta_e(linear_srgb_to_lab(np.clip(fit_lin, 1e-6, None)), art_lab),
+            shading_delta_e(scene.aspecular_deg[use], scene.lambert[use], art_lin, fit_lin))
 
 
 # ----------------------------------------------------------------------------- environment-lit fit
@@ -274,14 +329,17 @@ def fit_environment(
     initial: ArrayLike | None = None,
     *,
     gloss_gu: float = DEFAULT_GLOSS_GU,
-    max_rms_de: float = 8.0,
+    max_rms_de: float = 5.0,
     curve_angles: tuple[float, float] = (15.0, 110.0),
+    highlight_rounds: int = 3,
 ) -> SketchFit:
     """Fit a design to environment-lit concept art through per-lobe basis images (§3.7.5, interactive).
 
     Per channel X: ``w_X = argmin_{w >= 0} ‖B_X w − X_art‖`` over the changed, non-near-white
     foreground pixels (``scipy.optimize.nnls``), where column *j* of ``B_X`` is channel X of basis
-    image *j*. The colour curve at aspecular θ (light at the measurement geometry) is
+    image *j*. The gloss lobe is not in the basis, so its highlights are discounted robustly: up to
+    *highlight_rounds* times, pixels whose luminance exceeds the fit by more than 3 robust standard
+    deviations (1.4826 × MAD) are dropped and the weights refitted. The colour curve at aspecular θ (light at the measurement geometry) is
     ``Σ_j w_j f_j(θ)`` with ``f_j`` the lobe's BRDF factor (1 for the diffuse lobe, cos(θ)^E_j for a
     directional-diffuse lobe); it is projected to face/flop/travel over *curve_angles* (degrees) by
     :func:`fftg_from_curve`. Gloss is not in the basis: it is *gloss_gu* (default 50 GU, thesis §3.7.3).
@@ -301,11 +359,23 @@ def fit_environment(
     n = int(use.sum())
     if n < MIN_PIXELS:
         raise SketchFitError(f"only {n} usable changed foreground pixels (need {MIN_PIXELS})")
-    y = srgb_decode(art_a[use])  # (n, 3)
-    B = basis.images[:, use, :]  # (J, n, 3)
-    w = np.zeros((B.shape[0], 3))
-    for c in range(3):
-        w[:, c], _ = nnls(B[:, :, c].T, y[:, c], maxiter=50 * B.shape[0])
+    y_all = srgb_decode(art_a[use])  # (n, 3)
+    B_all = basis.images[:, use, :]  # (J, n, 3)
+    keep = np.ones(n, dtype=bool)
+    for _ in range(highlight_rounds + 1):
+        y, B = y_all[keep], B_all[:, keep, :]
+        w = np.zeros((B.shape[0], 3))
+        for c in range(3):
+            w[:, c], _ = nnls(B[:, :, c].T, y[:, c], maxiter=50 * B.shape[0])
+        # highlights of the unmodelled gloss lobe are positive outliers of the luminance residual
+        excess = (y_all - np.einsum("jnc,jc->nc", B_all, w)) @ LUMINANCE
+        sigma = 1.4826 * float(np.median(np.abs(excess[keep] - np.median(excess[keep])))) + 1e-6
+        new_keep = excess < HIGHLIGHT_SIGMAS * sigma
+        if np.array_equal(new_keep, keep) or new_keep.sum() < MIN_PIXELS:
+            break
+        keep = new_keep
+    y, B = y_all[keep], B_all[:, keep, :]
+    n = int(keep.sum())
     recon = np.einsum("jnc,jc->nc", B, w)
     art_lab = linear_srgb_to_lab(np.clip(y, 1e-6, None))
     rms = rms_delta_e(linear_srgb_to_lab(np.clip(recon, 1e-6, None)), art_lab)
@@ -329,12 +399,12 @@ def fit_environment(
         diffuse = [j for j, e in enumerate(basis.exponents) if e is None]
         if not diffuse:
             raise SketchFitError("fit failed and the basis has no diffuse lobe for the fallback colour")
-        denom = np.clip(basis.images[diffuse[0], use, :].sum(axis=0), 1e-12, None)
+        denom = np.clip(B[diffuse[0]].sum(axis=0), 1e-12, None)
         albedo = y.sum(axis=0) / denom
         lab = np.asarray(linear_srgb_to_lab(np.clip(albedo, 1e-6, None)), dtype=float)
         colour = tuple(float(v) for v in lab)
         design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)  # type: ignore[arg-type]
-        recon = basis.images[diffuse[0], use, :] * albedo
+        recon = B[diffuse[0]] * albedo
         rms = rms_delta_e(linear_srgb_to_lab(np.clip(recon, 1e-6, None)), art_lab)
-    return SketchFit(design, lab_std, rms, bool(reason), reason, float(tc), n, "default",  # type: ignore[arg-type]
+    return SketchFit(design, lab_std, rms, rms, bool(reason), reason, float(tc), n, "default",  # type: ignore[arg-type]
                      time.perf_counter() - t0)

@@ -104,3 +104,17 @@ def test_environment_image_is_linear_in_the_basis() -> None:
     solid = FaceFlopTravelGloss((100.0, 0.0, 0.0), (100.0, 0.0, 0.0), None, 0.0)
     # a white Lambertian solid renders exactly as the diffuse basis image
     assert shade_environment(env, solid, specular=False)[m] == pytest.approx(basis.images[0][m], abs=1e-9)
+
+
+def test_gloss_lobe_table_matches_the_model_mapping() -> None:
+    from station.design.scene import phong_of_gloss
+    from station.model.gloss import lobe_from_gloss
+
+    for g in (10.0, 60.0):
+        lobe = lobe_from_gloss(g)
+        n, rho = phong_of_gloss(g)
+        assert n == pytest.approx(lobe.phong_exponent, rel=5e-3)
+        assert rho == pytest.approx(lobe.specular_albedo, rel=1e-9)
+    assert phong_of_gloss(0.0) == (1.0, 0.0)
+    with pytest.raises(DesignInputError, match="gloss_gu"):
+        phong_of_gloss(100.5)
