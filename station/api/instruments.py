@@ -28,7 +28,7 @@ from station.api.schemas.instruments import (
 from station.api.services import audit
 from station.api.services import measurements as measurement_service
 from station.api.settings import Settings
-from station.drivers import GlossReading, SpectralReading, open_instrument, split_address
+from station.drivers import CommunicationError, GlossReading, SpectralReading, open_instrument, split_address
 from station.drivers import Instrument as Driver
 from station.drivers.readings import InstrumentInfo
 from station.drivers.simproc import SimulatorProcess, spawn_simulator
@@ -145,7 +145,10 @@ class InstrumentHub:
         with self._lock:
             if any(a.driver.address == address for a in self._attached.values()):
                 raise ConflictError(f"{address} is already attached")
-        attached = self._attach(address, None)
+        try:
+            attached = self._attach(address, None)
+        except CommunicationError as exc:
+            raise NotFoundError(f"no instrument answers at {address}: {exc}") from exc
         with self.sessions() as session:
             audit.record(session=session, actor=actor, action="instrument.connect", entity="instrument",
                          entity_id=attached.id, address=address)

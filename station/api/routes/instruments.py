@@ -39,7 +39,7 @@ async def list_instruments(request: Request, _user: Reader) -> list[InstrumentPu
 
 
 @router.post("/connect", status_code=status.HTTP_201_CREATED, response_model=InstrumentPublic,
-             responses=CONFLICT)
+             responses={**NOT_FOUND, **CONFLICT})
 async def connect(request: Request, user: Operator, body: ConnectRequest) -> InstrumentPublic:
     """Open the instrument at a driver address and attach it."""
     return await asyncio.to_thread(_hub(request).connect, address=body.address, actor=user)
