@@ -64,3 +64,132 @@ def build_program(ctx, vertex: str, fragment: str, defines: dict[str, object] | 
                            fragment_shader=load_shader(fragment, defines))
     except Exception as exc:
         raise RenderError(f"shader {vertex}+{fragment} failed to build: {exc}") from exc
+
+
+class GLRenderer:
+    """Renders scenes with one prefiltered basis on a GL context; a context manager.
+
+    The lobe maps are uploaded once as half-float (``half_float=True``) or float cube textures. One
+    program is built per (shape, output kind) on first use. :meth:`render` returns the 8-bit sRGB
+    frame (tone mapped in the shader), :meth:`render_linear` float radiance; both row 0 at the top.
+    """
+
+    def __init__(self, basis, width: int, height: int, ctx=None, diffuse: str = "cube",
+                 half_float: bool = True) -> None:
+        import moderngl
+        import numpy as np
+
+        from station.render.errors import RenderInputError
+        from station.render.numpy_renderer import check_size
+        from station.render.sh import sh_diffuse_matrix
+
+        check_size(width, height)
+        if diffuse not in ("cube", "sh"):
+            raise RenderInputError("diffuse", "cube | sh", diffuse)
+        self._np = np
+        self.basis = basis
+        self.width, self.height = int(width), int(height)
+        self.diffuse = diffuse
+        self._own_ctx = ctx is None
+        self.ctx = create_gl_context() if ctx is None else ctx
+        dtype, np_dtype = ("f2", np.float16) if half_float else ("f4", np.float32)
+
+        def cube_texture(cube):
+            s = cube.shape[1]
+            tex = self.ctx.texture_cube((s, s), 3, np.ascontiguousarray(cube, dtype=np_dtype).tobytes(),
+                                        dtype=dtype)
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            return tex
+
+        self._lobes = [cube_texture(c) for c in basis.cubes]
+        self._diffuse_tex = cube_texture(basis.diffuse)
+        self._sh = sh_diffuse_matrix(basis.sh)
+        self._programs: dict[tuple[str, bool], tuple] = {}
+        self._targets: dict[bool, tuple] = {}
+
+    def _program(self, shape: str, linear: bool):
+        from station.render.shapes import SHAPE_INDEX
+
+        key = (shape, linear)
+        if key not in self._programs:
+            defines = {"SHAPE": SHAPE_INDEX[shape], "N_LOBES": len(self._lobes),
+                       "OUTPUT_LINEAR": int(linear), "DIFFUSE_SH": int(self.diffuse == "sh")}
+            prog = build_program(self.ctx, "fullscreen.vert.glsl", "render.frag.glsl", defines)
+            self._programs[key] = (prog, self.ctx.vertex_array(prog, []))
+        return self._programs[key]
+
+    def _target(self, linear: bool):
+        if linear not in self._targets:
+            tex = self.ctx.texture((self.width, self.height), 4, dtype="f4" if linear else "f1")
+            self._targets[linear] = (tex, self.ctx.framebuffer(color_attachments=[tex]))
+        return self._targets[linear]
+
+    def _draw(self, scene, paints, linear: bool, exposure_ev: float, curve: str):
+        from station.render.numpy_renderer import BACKGROUND, check_paints
+        from station.render.tonemap import CURVES, check_curve
+
+        np = self._np
+        pair = check_paints(self.basis, paints)
+        prog, vao = self._program(scene.shape, linear)
+        _, fbo = self._target(linear)
+        fbo.use()
+        m = len(self._lobes)
+        for unit, tex in enumerate(self._lobes):
+            tex.use(unit)
+        self._diffuse_tex.use(m)
+        uniforms = {**scene.camera.uniforms(self.width, self.height),
+                    "u_size": (float(self.width), float(self.height)),
+                    "u_misalign": float(np.radians(scene.misalignment_deg)),
+                    "u_background": (BACKGROUND,) * 3,
+                    "u_diffuse": m}
+        if not linear:
+            check_curve(curve)
+            uniforms["u_exposure"] = float(2.0**exposure_ev)
+            uniforms["u_curve"] = CURVES.index(curve)
+        for name, value in uniforms.items():
+            if name in prog:
+                prog[name].value = value
+        prog["u_lobes"].value = list(range(m))
+        mw = [w.map_weights() for w in pair]
+        prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
+        prog["u_wdd"].write(np.concatenate([w[1] for w in mw]).astype(np.float32).tobytes())
+        prog["u_wg"].write(np.concatenate([w[2] for w in mw]).astype(np.float32).tobytes())
+        if "u_sh" in prog:
+            prog["u_sh"].write(self._sh.tobytes())
+        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+        return fbo
+
+    def render(self, scene, paints, exposure_ev: float = 0.0, curve: str = "aces"):
+        """8-bit sRGB frame (H, W, 3) uint8."""
+        np = self._np
+        fbo = self._draw(scene, paints, False, exposure_ev, curve)
+        data = np.frombuffer(fbo.read(components=3, alignment=1), np.uint8)
+        return data.reshape(self.height, self.width, 3)[::-1]
+
+    def render_linear(self, scene, paints):
+        """Linear sRGB radiance (H, W, 3) float32."""
+        np = self._np
+        fbo = self._draw(scene, paints, True, 0.0, "clip")
+        data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
+        return data.reshape(self.height, self.width, 3)[::-1].copy()
+
+    def release(self) -> None:
+        """Free textures, programs, targets (and the context if this object created it)."""
+        for prog, vao in self._programs.values():
+            vao.release()
+            prog.release()
+        for tex, fbo in self._targets.values():
+            fbo.release()
+            tex.release()
+        for tex in [*self._lobes, self._diffuse_tex]:
+            tex.release()
+        self._programs.clear()
+        self._targets.clear()
+        if self._own_ctx:
+            self.ctx.release()
+
+    def __enter__(self) -> GLRenderer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()

@@ -42,6 +42,7 @@ from station.render.sh import sh_project
 
 MAX_EXPONENT = 1.0e6
 BRUTE_MAX_SIZE = 16
+DIFFUSE_SIZE = 16
 
 
 def check_exponent(exponent: float) -> float:
@@ -78,15 +79,21 @@ def lobe_weights(dirs_out: np.ndarray, dirs_src: np.ndarray, exponent: float) ->
 
 
 def prefilter_brute(src_cube: np.ndarray, exponent: float, out_size: int) -> np.ndarray:
-    """Reference prefilter by exact quadrature over all source texels, (6, out, out, 3) float64."""
+    """Reference prefilter by quadrature over all source texels, (6, out, out, 3) float64.
+
+    Each texel counts with its exact solid angle; the sum is divided by the quadrature of the lobe
+    itself (ideally 1), so a constant environment is reproduced exactly even when the lobe is
+    narrower than a source texel.
+    """
     s = src_cube.shape[1]
     src_dirs = cubemap.face_directions(s).reshape(-1, 3)
     sa = np.tile(cubemap.texel_solid_angles(s).reshape(-1), 6)
-    rad = (src_cube.reshape(-1, 3).astype(np.float64) * sa[:, None]).astype(np.float32)
+    rad = np.concatenate([src_cube.reshape(-1, 3) * sa[:, None], sa[:, None]], axis=1).astype(np.float32)
     out_dirs = cubemap.face_directions(out_size).reshape(-1, 3)
     out = np.empty((out_dirs.shape[0], 3))
     for i in range(0, out_dirs.shape[0], 256):
-        out[i:i + 256] = lobe_weights(out_dirs[i:i + 256], src_dirs, exponent) @ rad
+        acc = lobe_weights(out_dirs[i:i + 256], src_dirs, exponent) @ rad
+        out[i:i + 256] = acc[:, :3] / acc[:, 3:]
     return out.reshape(6, out_size, out_size, 3)
 
 
@@ -233,6 +240,7 @@ class PrefilteredBasis:
     exponents: tuple[float, ...]
     cubes: tuple[np.ndarray, ...] = field(repr=False)   # one (6, S_i, S_i, 3) float32 per exponent
     sh: np.ndarray = field(repr=False)                  # (9, 3) radiance SH coefficients
+    diffuse: np.ndarray = field(repr=False, default=None)  # (6, 16, 16, 3) exponent-1 map = E/π
     engine: str = "gl"
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -294,4 +302,8 @@ def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str
             for i in todo:
                 cache.put(keys[i], cubes[i])
     timings["cache_hits"] = float(len(exps) - len(todo))
-    return PrefilteredBasis(env.name, env.content_hash, exps, tuple(cubes), coeffs, engine, timings)
+    t0 = time.perf_counter()
+    diffuse = prefilter_brute(cubemap.equirect_to_cube(env.equirect, 32), 1.0, DIFFUSE_SIZE).astype(np.float32)
+    timings["diffuse"] = time.perf_counter() - t0
+    return PrefilteredBasis(env_name=env.name, env_hash=env.content_hash, exponents=exps, cubes=tuple(cubes),
+                            sh=coeffs, diffuse=diffuse, engine=engine, timings=timings)

@@ -1,0 +1,57 @@
+"""Pinhole camera: primary rays for the NumPy renderer and the same numbers as GL uniforms.
+
+Right-handed, +Y up. Image row 0 is the top row; pixel (row j, column i) looks through
+x = (2(i + ½)/W − 1)·tan(fov/2)·W/H, y = (1 − 2(j + ½)/H)·tan(fov/2) on the image plane one unit in
+front of the eye. ``fov_deg`` is the vertical field of view.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from station.render.errors import RenderInputError
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Eye position, look-at target, up hint and vertical field of view (degrees)."""
+
+    eye: tuple[float, float, float] = (0.0, 0.8, 4.5)
+    target: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    up: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    fov_deg: float = 30.0
+
+    def __post_init__(self) -> None:
+        if not 1.0 <= self.fov_deg <= 120.0:
+            raise RenderInputError("fov_deg", "1 <= fov_deg <= 120", self.fov_deg)
+        if np.linalg.norm(np.subtract(self.target, self.eye)) < 1e-9:
+            raise RenderInputError("camera.target", "a point different from the eye", self.target)
+
+    def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(forward, right, up) unit vectors."""
+        f = np.subtract(self.target, self.eye).astype(np.float64)
+        f /= np.linalg.norm(f)
+        r = np.cross(f, self.up)
+        if np.linalg.norm(r) < 1e-9:
+            raise RenderInputError("camera.up", "not parallel to the view direction", self.up)
+        r /= np.linalg.norm(r)
+        return f, r, np.cross(r, f)
+
+    def rays(self, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+        """Ray origin (3,) and unit directions (H, W, 3) float64, row 0 at the top."""
+        f, r, u = self.basis()
+        t = np.tan(np.radians(self.fov_deg) / 2.0)
+        x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * t * width / height
+        y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * t
+        d = f + x[None, :, None] * r + y[:, None, None] * u
+        return np.asarray(self.eye, dtype=np.float64), d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def uniforms(self, width: int, height: int) -> dict[str, object]:
+        """The GLSL uniforms of the ray generator (see shaders/render.frag.glsl)."""
+        f, r, u = self.basis()
+        return {"u_eye": tuple(map(float, self.eye)), "u_forward": tuple(map(float, f)),
+                "u_right": tuple(map(float, r)), "u_up": tuple(map(float, u)),
+                "u_tan_half_fov": float(np.tan(np.radians(self.fov_deg) / 2.0)),
+                "u_aspect": width / height}

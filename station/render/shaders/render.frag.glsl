@@ -1,0 +1,54 @@
+#version 430
+// Lobe-blend shading (thesis eqs 2.5.1-2.5.3), the same equation as station/render/numpy_renderer.py:
+//   radiance = wd * D(N) + sum_i (wg_i + (R.N) wdd_i) * C_i(R)
+// with the weights already converted to normalised maps (LobeWeights.map_weights). Two paints:
+// index 0/1 from the shape. Defines: SHAPE, N_LOBES, OUTPUT_LINEAR (1: float radiance out),
+// DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube).
+//#include shapes.glsl
+//#include tonemap.glsl
+uniform vec3 u_eye, u_forward, u_right, u_up;
+uniform float u_tan_half_fov, u_aspect;
+uniform vec2 u_size;
+uniform samplerCube u_lobes[N_LOBES];
+uniform samplerCube u_diffuse;
+uniform vec3 u_sh[9];
+uniform vec3 u_wd[2];
+uniform vec3 u_wdd[2 * N_LOBES];
+uniform float u_wg[2 * N_LOBES];
+uniform vec3 u_background;
+out vec4 f_color;
+
+vec3 sh_eval(vec3 n) {
+    return u_sh[0] * 0.282095 + u_sh[1] * (0.488603 * n.y) + u_sh[2] * (0.488603 * n.z)
+         + u_sh[3] * (0.488603 * n.x) + u_sh[4] * (1.092548 * n.x * n.y) + u_sh[5] * (1.092548 * n.y * n.z)
+         + u_sh[6] * (0.315392 * (3.0 * n.z * n.z - 1.0)) + u_sh[7] * (1.092548 * n.x * n.z)
+         + u_sh[8] * (0.546274 * (n.x * n.x - n.y * n.y));
+}
+
+void main() {
+    vec2 ndc = 2.0 * gl_FragCoord.xy / u_size - 1.0;
+    vec3 d = normalize(u_forward + ndc.x * u_tan_half_fov * u_aspect * u_right + ndc.y * u_tan_half_fov * u_up);
+    float t;
+    vec3 n;
+    int paint;
+    vec3 rgb = u_background;
+    if (hit(u_eye, d, t, n, paint)) {
+        vec3 v = -d;
+        float ndv = clamp(dot(n, v), 0.0, 1.0);
+        vec3 r = 2.0 * dot(n, v) * n - v;
+#if DIFFUSE_SH
+        rgb = u_wd[paint] * sh_eval(n);
+#else
+        rgb = u_wd[paint] * texture(u_diffuse, n).rgb;
+#endif
+        for (int i = 0; i < N_LOBES; ++i) {
+            int k = paint * N_LOBES + i;
+            rgb += (u_wg[k] + ndv * u_wdd[k]) * texture(u_lobes[i], r).rgb;
+        }
+    }
+#if OUTPUT_LINEAR
+    f_color = vec4(rgb, 1.0);
+#else
+    f_color = vec4(display(rgb), 1.0);
+#endif
+}

@@ -1,0 +1,22 @@
+// Display transform, the same formulas as station/render/tonemap.py.
+// u_curve: 0 = ACES fit (Narkowicz 2015), 1 = Reinhard x/(1+x), 2 = clip.
+uniform float u_exposure;  // 2^EV
+uniform int u_curve;
+
+vec3 tone_curve(vec3 x) {
+    x = max(x, vec3(0.0));
+    vec3 y;
+    if (u_curve == 0) y = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
+    else if (u_curve == 1) y = x / (1.0 + x);
+    else y = x;
+    return clamp(y, 0.0, 1.0);
+}
+
+vec3 srgb_encode(vec3 x) {
+    x = clamp(x, 0.0, 1.0);
+    return mix(1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, 12.92 * x, lessThanEqual(x, vec3(0.0031308)));
+}
+
+vec3 display(vec3 linear_rgb) {
+    return srgb_encode(tone_curve(linear_rgb * u_exposure));
+}

@@ -1,0 +1,74 @@
+"""Display transform: exposure, tone curve, sRGB encoding (the same formulas as ``tonemap.glsl``).
+
+1. Exposure: linear sRGB radiance × 2^EV.
+2. Tone curve, per channel (the thesis's "simple characteristic curve", §2.5.2):
+   * ``aces`` (default) — Narkowicz's 2015 fit of the ACES filmic reference rendering transform,
+     f(x) = x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14), clipped to [0, 1]; an S-shaped film curve
+     that rolls off specular highlights instead of clipping them;
+   * ``reinhard`` — x / (1 + x) (Reinhard et al. 2002, eq 3);
+   * ``clip`` — no curve, values clipped to [0, 1] (for colorimetric views where nothing exceeds 1).
+3. Encoding: the exact piecewise sRGB OETF (IEC 61966-2-1), 12.92x for x ≤ 0.0031308, else
+   1.055x^(1/2.4) − 0.055, then 8 bits by rounding.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from station.render.errors import RenderInputError
+
+CURVES = ("aces", "reinhard", "clip")
+
+
+def check_curve(curve: str) -> str:
+    """Validate a tone-curve name."""
+    if curve not in CURVES:
+        raise RenderInputError("tone_curve", " | ".join(CURVES), curve)
+    return curve
+
+
+def tone_curve(x: np.ndarray, curve: str = "aces") -> np.ndarray:
+    """Apply the tone curve to exposed linear values (any shape); result in [0, 1]."""
+    check_curve(curve)
+    x = np.maximum(x, 0.0)
+    if curve == "aces":
+        y = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)
+    elif curve == "reinhard":
+        y = x / (1.0 + x)
+    else:
+        y = x
+    return np.clip(y, 0.0, 1.0)
+
+
+def srgb_encode(x: np.ndarray) -> np.ndarray:
+    """Exact piecewise sRGB OETF of display-linear values in [0, 1]."""
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
+
+
+def srgb_decode(v: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`srgb_encode`."""
+    v = np.asarray(v, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def to_display(linear: np.ndarray, exposure_ev: float = 0.0, curve: str = "aces") -> np.ndarray:
+    """Linear radiance (..., 3) → 8-bit sRGB (..., 3) uint8: exposure, tone curve, OETF, rounding."""
+    if not np.isfinite(exposure_ev) or abs(exposure_ev) > 30:
+        raise RenderInputError("exposure_ev", "-30 <= exposure_ev <= 30", exposure_ev)
+    y = srgb_encode(tone_curve(np.asarray(linear, dtype=np.float64) * 2.0**exposure_ev, curve))
+    return np.round(y * 255.0).astype(np.uint8)
+
+
+def display_lut(exposure_ev: float, curve: str, size: int = 65536, top: float = 16.0) -> tuple[np.ndarray, float]:
+    """(LUT uint8 of `size` entries over exposed values [0, top], index scale) for fast encoding."""
+    x = np.linspace(0.0, top, size)
+    lut = np.round(srgb_encode(tone_curve(x, curve)) * 255.0).astype(np.uint8)
+    return lut, (size - 1) / top * 2.0**exposure_ev
+
+
+def save_png(path, image8: np.ndarray) -> None:
+    """Write an (H, W, 3) uint8 image as PNG (Pillow)."""
+    from PIL import Image
+
+    Image.fromarray(np.ascontiguousarray(image8)).save(path)
