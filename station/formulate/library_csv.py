@@ -8,7 +8,7 @@ Format (one header row, then one paint per row)::
 D65 / CIE 1964 10°); more angle triples may follow, named the same way (``L-15,a-15,b-15``, ``L25,…``).
 Validation is strict: each fault raises :class:`LibraryFormatError` naming the 1-based row (header =
 row 1), the column and the accepted range. Accepted ranges: 0 ≤ L* ≤ 150 (a metallic face may exceed 100), −200 ≤ a*, b* ≤ 200,
-0 ≤ gloss ≤ 200 GU, codes unique, non-empty, at most 64 characters.
+0 ≤ gloss ≤ 100 GU (the model's range), codes unique, non-empty, at most 64 characters.
 
 Stated precision of the export: 4 decimals for Lab and gloss (round trip import(export(x)) equals x
 rounded to 1e-4, and export(import(export(x))) is byte-identical).
@@ -29,7 +29,7 @@ from station.formulate.library import PAINT_TYPES, STANDARD_ANGLES, Library
 
 PRECISION_DECIMALS = 4
 LAB_RANGES = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
-GLOSS_RANGE = (0.0, 200.0)
+GLOSS_RANGE = (0.0, 100.0)
 MAX_CODE_LENGTH = 64
 MAX_ROWS = 2_000_000
 _ANGLE_COL = re.compile(r"^([Lab])(-?\d+(?:\.\d+)?)$")
