@@ -69,3 +69,39 @@ class ScriptedDevice:
 
     def tick(self, link: PtyHost) -> None:
         """Nothing to do."""
+
+
+class ScriptedFirmware:
+    """:class:`ScriptedDevice` behind the pyusb simulator backend (``receive`` / ``pop_ready``)."""
+
+    def __init__(self, pairs: Sequence[tuple[bytes, bytes | None]],
+                 frame_len: Callable[[bytes], int | None]) -> None:
+        self.device = ScriptedDevice(pairs, frame_len=frame_len)
+        self.out = bytearray()
+        self.unplugged = False
+
+    def send(self, data: bytes) -> None:
+        """The scripted reply (the device calls this as its link)."""
+        self.out += data
+
+    def receive(self, data: bytes) -> None:
+        """Bytes from a bulk OUT transfer."""
+        self.device.feed(data, self)  # type: ignore[arg-type]
+
+    def wait_ready(self, timeout_s: float) -> bool:
+        """Whether reply bytes are waiting (sleeps out the timeout when none will come)."""
+        if not self.out:
+            import time
+
+            time.sleep(timeout_s)
+        return bool(self.out)
+
+    def pop_ready(self, max_bytes: int) -> bytes:
+        """Up to *max_bytes* reply bytes."""
+        data = bytes(self.out[:max_bytes])
+        del self.out[:max_bytes]
+        return data
+
+    def on_hangup(self) -> None:
+        """Count reconnects."""
+        self.device.on_hangup()
