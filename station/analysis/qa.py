@@ -139,7 +139,11 @@ def seam_qa(
     if not ls:
         raise AnalysisInputError("aspecular_deg", "aspecular angles reachable from the lights (|view| <= 89°)",
                                  list(aspecular_deg))
-    if not (np.isfinite(beta_deg) and 0.0 < abs(beta_deg) <= 45.0):
+    try:
+        beta_ok = bool(np.isfinite(float(beta_deg)) and 0.0 < abs(float(beta_deg)) <= 45.0)
+    except (TypeError, ValueError):
+        beta_ok = False
+    if not beta_ok:
         raise AnalysisInputError("beta_deg", "0 < |β| <= 45 degrees", beta_deg)
     model = SeamModel(ls, vs, hinge=hinge, method=method)
     beta = np.array([float(beta_deg)])

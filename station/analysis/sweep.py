@@ -33,8 +33,8 @@ class SweepResult:
     betas_deg, lights_deg, views_deg
         Grid axes in degrees (signed β: the rotation direction).
     delta_e
-        Seam ΔE, shape (len(betas), len(lights), len(views)); NaN-free. Where panel B turns away from the
-        viewer the entry is ``inf`` is never produced: such views are excluded by ``visible``.
+        Seam ΔE, shape (len(betas), len(lights), len(views)); finite everywhere. Entries where panel B
+        turns away from the viewer are flagged False in ``visible`` and ignored by the index estimate.
     visible
         Same shape: whether panel B faces the viewer.
     epsilon, method, hinge

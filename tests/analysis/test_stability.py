@@ -82,3 +82,35 @@ def test_trompe_loeil_stays_finite(name):
                              subset="face_L+travel")
     assert np.all(np.isfinite(r.seam_de_after))
     assert r.rms_after <= r.rms_before + 1e-9
+
+
+try:
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+except ImportError:  # pragma: no cover - hypothesis is a dev dependency
+    given = None
+
+if given is not None:
+
+    @settings(max_examples=25, deadline=None)
+    @given(
+        face_l=st.floats(20.0, 140.0),
+        drop=st.floats(0.0, 80.0),
+        travel=st.floats(15.5, 180.0),
+        light=st.floats(-85.0, 85.0),
+        view=st.floats(-85.0, 85.0),
+        sign=st.sampled_from([1.0, -1.0]),
+        hinge=st.sampled_from(["in-plane", "out-of-plane"]),
+    )
+    def test_random_paints_match_plain_scan(face_l, drop, travel, light, view, sign, hinge):
+        """Random effect paints and geometries: the index equals the plain-scan first crossing."""
+        flop_l = max(0.0, face_l - drop)
+        paint = FaceFlopTravelGloss((face_l, 5.0, -10.0), (flop_l, 2.0, -6.0), travel)
+        r = goniogeometric_index(paint, light, view, direction="+" if sign > 0 else "-", hinge=hinge,
+                                 beta_max_deg=15.0)
+        bf = brute_force_first_crossing(paint, light, view, sign, 2.3, beta_max=15.0, hinge=hinge)
+        assert np.isfinite(r.max_delta_e)
+        if bf is None:
+            assert not r.reached
+        else:
+            assert r.reached and r.beta_min_deg == pytest.approx(bf, abs=1.5e-3)
