@@ -1,0 +1,171 @@
+"""Cached basis images: for a fixed view the rendered image is linear in the weights.
+
+For a fixed scene and camera, every object pixel p (paint k) is (numpy_renderer's equation)
+
+    rgb_p = w_D ⊙ D_p + Σ_i (w_G,i + c_p w_DD,i) ⊙ C_i,p,    c_p = N·V,
+
+so caching the per-pixel images D (diffuse map at N) and C_i (lobe map i at R), plus c, turns a paint
+edit into a small weighted sum: per channel, a (2 × K) · (K × P) matrix product (K = m + 1 images,
+P object pixels, BLAS), then tone mapping and sRGB encoding by a 64 k-entry lookup table, then a
+scatter into the cached frame (background pre-encoded). Pixels are stored grouped by paint, so each
+paint's pixels are one contiguous slice. Images are float32 (NumPy BLAS has no float16 GEMM; half
+storage would halve the bytes read but convert on the fly at a higher cost here).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from station.render import tonemap
+from station.render.cubemap import sample_cube
+from station.render.numpy_renderer import BACKGROUND, check_paints, gbuffer
+from station.render.prefilter import PrefilteredBasis
+from station.render.shapes import Scene
+from station.render.weights import LobeWeights
+
+
+@dataclass(eq=False)
+class BasisImages:
+    """Per-pixel basis images of one view (see module doc)."""
+
+    basis: PrefilteredBasis
+    width: int
+    height: int
+    pixels: np.ndarray        # (P,) flat indices of object pixels, paint 0 first
+    split: int                # pixels[:split] carry paint 0, pixels[split:] paint 1
+    images: np.ndarray        # (3, K, P) float32: channel, [D, C_1..C_m], pixel
+    n_dot_v: np.ndarray       # (P,) float32
+    _lut_key: tuple = field(default=(), repr=False)
+    _lut: np.ndarray | None = field(default=None, repr=False)
+    _scale: float = field(default=1.0, repr=False)
+    _work: tuple | None = field(default=None, repr=False)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes read by one paint edit (the images and N·V)."""
+        return int(self.images.nbytes + self.n_dot_v.nbytes)
+
+    def _weight_rows(self, paint: LobeWeights) -> np.ndarray:
+        """(3, 2, K): per channel, row 0 = constant weights [w_D, w_G], row 1 = weights × c [0, w_DD]."""
+        w_d, w_dd, w_g = paint.map_weights()
+        k = len(self.basis.cubes) + 1
+        rows = np.zeros((3, 2, k), np.float32)
+        rows[:, 0, 0] = w_d
+        rows[:, 0, 1:] = w_g[None, :]
+        rows[:, 1, 1:] = w_dd.T
+        return rows
+
+    def linear(self, paints: Sequence[LobeWeights]) -> np.ndarray:
+        """Radiance of the object pixels, (3, P) float32, for one or two paints."""
+        pair = check_paints(self.basis, paints)
+        out = np.empty((3, self.pixels.size), np.float32)
+        for k, sl in ((0, slice(0, self.split)), (1, slice(self.split, None))):
+            rows = self._weight_rows(pair[k])
+            ndv = self.n_dot_v[sl]
+            for c in range(3):
+                ab = rows[c] @ self.images[c, :, sl]          # (2, P_k), one BLAS call
+                out[c, sl] = ab[0] + ndv * ab[1]
+        return out
+
+    def linear_image(self, paints: Sequence[LobeWeights]) -> np.ndarray:
+        """Full linear frame (H, W, 3) float32 with the background."""
+        img = np.full((self.height * self.width, 3), BACKGROUND, np.float32)
+        img[self.pixels] = self.linear(paints).T
+        return img.reshape(self.height, self.width, 3)
+
+    def _prepare(self, exposure_ev: float, curve: str) -> None:
+        key = (float(exposure_ev), curve)
+        if key == self._lut_key:
+            return
+        lut, self._scale = tonemap.display_lut(exposure_ev, curve)
+        lut32 = lut.astype(np.uint32)
+        # One table per channel, already shifted into its byte of an RGBA8 word (little-endian), alpha set.
+        self._lut = np.stack([lut32, lut32 << 8, (lut32 << 16) | np.uint32(0xFF000000)])
+        bg = tonemap.to_display(np.array([BACKGROUND] * 3), exposure_ev, curve).astype(np.uint32)
+        self._bg32 = np.uint32(bg[0] | (bg[1] << 8) | (bg[2] << 16) | 0xFF000000)
+        self._lut_key = key
+
+    def edit_rgba(self, paints: Sequence[LobeWeights], exposure_ev: float = 0.0, curve: str = "aces",
+                  out: np.ndarray | None = None) -> np.ndarray:
+        """Tone-mapped 8-bit sRGB frame (H, W, 4) RGBA for new weights: the fast path of a paint edit.
+
+        The exposure and LUT scale are folded into the weights, so the BLAS product yields LUT indices
+        directly; the per-channel tables return pre-shifted bytes OR-ed into one 32-bit word per pixel,
+        which is scattered into the frame once. Pass *out* (H, W, 4) uint8 to reuse a frame buffer
+        (its background must come from an earlier call with the same exposure and curve).
+        """
+        self._prepare(exposure_ev, curve)
+        pair = check_paints(self.basis, paints)
+        if out is None:
+            out = np.empty((self.height, self.width, 4), np.uint8)
+            out.reshape(-1).view(np.uint32)[:] = self._bg32
+        frame = out.reshape(-1).view(np.uint32)
+        if self._work is None:  # scratch buffers, reused: fresh large arrays cost page faults each edit
+            n = self.pixels.size
+            self._work = ([np.empty((2, self.split), np.float32), np.empty((2, n - self.split), np.float32)],
+                          np.empty(n, np.int32), np.empty(n, np.uint32), np.empty(n, np.uint32))
+            from threadpoolctl import ThreadpoolController
+
+            self._blas = ThreadpoolController()
+        ab_pair, idx_all, code_all, packed = self._work
+        scale = np.float32(self._scale)
+        # K is tiny (m + 1): the product is memory-bound, and BLAS threads only add spin-wait jitter.
+        with self._blas.limit(limits=1, user_api="blas"):
+            self._combine(pair, scale, ab_pair, idx_all, code_all, packed)
+        frame[self.pixels] = packed
+        return out
+
+    def _combine(self, pair, scale, ab_pair, idx_all, code_all, packed) -> None:
+        for k, sl in ((0, slice(0, self.split)), (1, slice(self.split, None))):
+            rows = self._weight_rows(pair[k]) * scale
+            ndv = self.n_dot_v[sl]
+            ab, idx, code, dest = ab_pair[k], idx_all[sl], code_all[sl], packed[sl]
+            for c in range(3):
+                np.matmul(rows[c], self.images[c, :, sl], out=ab)
+                np.multiply(ab[1], ndv, out=ab[1])
+                np.add(ab[0], ab[1], out=ab[0])
+                idx[:] = ab[0]
+                self._lut[c].take(idx, mode="clip", out=code)
+                if c == 0:
+                    dest[:] = code
+                else:
+                    np.bitwise_or(dest, code, out=dest)
+
+    def edit(self, paints: Sequence[LobeWeights], exposure_ev: float = 0.0, curve: str = "aces") -> np.ndarray:
+        """Tone-mapped 8-bit sRGB frame (H, W, 3) for new weights (a view of :meth:`edit_rgba`)."""
+        return self.edit_rgba(paints, exposure_ev, curve)[..., :3]
+
+
+def build_basis_images(scene: Scene, basis: PrefilteredBasis, width: int, height: int,
+                       gl_renderer=None) -> BasisImages:
+    """Render the per-lobe images of one view (NumPy lookups, or GL when a GLRenderer is given)."""
+    g = gbuffer(scene, width, height)
+    mask = g.mask.reshape(-1)
+    paint = g.paint.reshape(-1)
+    pixels = np.concatenate([np.flatnonzero(mask & (paint == 0)), np.flatnonzero(mask & (paint == 1))])
+    split = int(np.count_nonzero(mask & (paint == 0)))
+    k = len(basis.cubes) + 1
+    images = np.empty((3, k, pixels.size), np.float32)
+    if gl_renderer is None:
+        normals = g.normal.reshape(-1, 3)[pixels]
+        refl = g.reflect.reshape(-1, 3)[pixels]
+        images[:, 0] = sample_cube(basis.diffuse, normals).T
+        for i, cube in enumerate(basis.cubes):
+            images[:, i + 1] = sample_cube(cube, refl).T
+    else:
+        m = len(basis.exponents)
+        for j in range(k):
+            e = np.array(basis.exponents)
+            k_g = np.zeros(m)
+            k_d = np.zeros(3)
+            if j == 0:
+                k_d[:] = 1.0 / np.pi
+            else:
+                k_g[j - 1] = (e[j - 1] + 1.0) / (2.0 * np.pi)
+            unit = LobeWeights(basis.exponents, k_d, np.zeros((m, 3)), k_g)
+            images[:, j] = gl_renderer.render_linear(scene, [unit]).reshape(-1, 3)[pixels].T
+    ndv = g.n_dot_v.reshape(-1)[pixels].astype(np.float32)
+    return BasisImages(basis, width, height, pixels, split, np.ascontiguousarray(images), ndv)
