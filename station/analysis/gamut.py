@@ -17,7 +17,9 @@ corrected paint is never required to be more paintable than the original.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -110,13 +112,31 @@ def check_paintable(paint: object, *, allow_face_darker: bool = False, tol: floa
     return GamutReport(not problems, tuple(problems), _pointer(face, flop))
 
 
-def _pointer(face: NDArray[np.float64], flop: NDArray[np.float64]) -> bool | None:
-    import colour
+@functools.cache
+def _pointer_hull() -> Any:
+    """Delaunay triangulation of Pointer's gamut in XYZ, built once (as ``colour.is_within_pointer_gamut``
+    does on every call: same data, same test, without rebuilding the hull)."""
+    from colour.volume.pointer_gamut import (
+        CCS_ILLUMINANT_POINTER_GAMUT,
+        DATA_POINTER_GAMUT_VOLUME,
+        Lab_to_XYZ,
+        LCHab_to_Lab,
+    )
+    from scipy.spatial import Delaunay
 
+    return Delaunay(Lab_to_XYZ(LCHab_to_Lab(DATA_POINTER_GAMUT_VOLUME), CCS_ILLUMINANT_POINTER_GAMUT))
+
+
+def in_pointer_gamut(lab: ArrayLike) -> NDArray[np.bool_]:
+    """Whether Lab colour(s) lie in Pointer's gamut of real surface colours (colour-science's data)."""
     from station.model.colorimetry import lab_to_xyz
 
+    return _pointer_hull().find_simplex(lab_to_xyz(np.asarray(lab, dtype=float))) >= 0
+
+
+def _pointer(face: NDArray[np.float64], flop: NDArray[np.float64]) -> bool | None:
     labs = [flop] + ([face] if face[0] <= 100.0 else [])
     try:
-        return bool(np.all(colour.is_within_pointer_gamut(lab_to_xyz(np.stack(labs)))))
+        return bool(np.all(in_pointer_gamut(np.stack(labs))))
     except (ValueError, ArithmeticError):  # pragma: no cover - hull test failed; the sRGB bound still holds
         return None

@@ -153,3 +153,13 @@ def test_bad_input(blue_metallic, kwargs, field):
 def test_solid_with_travel_subset_is_refused(grey):
     with pytest.raises(AnalysisInputError):
         inverse_trompe_loeil(grey, [45.0], beta_deg=2.0, subset="face_L+travel")
+
+
+def test_pointer_gamut_matches_colour_science():
+    import colour
+
+    from station.analysis.gamut import in_pointer_gamut
+    from station.model.colorimetry import lab_to_xyz
+
+    labs = np.array([[50.0, 0.0, 0.0], [50.0, 80.0, -100.0], [90.0, -5.0, 90.0], [30.0, 10.0, -40.0]])
+    np.testing.assert_array_equal(in_pointer_gamut(labs), colour.is_within_pointer_gamut(lab_to_xyz(labs)))
