@@ -56,6 +56,7 @@ def authorize(
     if token is None or token.revoked_at is not None or not token.user.active:
         raise _unauthorised("unknown or revoked token")
     user = token.user
+    session.commit()  # end the read transaction: SQLite holds its write lock per transaction (BEGIN IMMEDIATE)
     missing = [s for s in security_scopes.scopes if not allows(user.role, Scope(s))]
     if missing:
         raise HTTPException(status.HTTP_403_FORBIDDEN, f"role {user.role.value} lacks scope {missing[0]}")

@@ -12,6 +12,7 @@ from typing import Any
 from fastapi import FastAPI, Request
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel
+from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError
 
 from db.errors import DatabaseUnavailableError, ImmutableRowError
 from station.drivers.errors import CalibrationNeeded, DriverError
@@ -86,6 +87,12 @@ def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(InputError)
     async def _input(_req: Request, exc: InputError) -> JSONResponse:
         return JSONResponse(_input_error_body(exc), status_code=422)
+
+    @app.exception_handler(OperationalError)
+    @app.exception_handler(InterfaceError)
+    async def _db_away(_req: Request, exc: DBAPIError) -> JSONResponse:
+        log.error("database unavailable: %s", exc.orig)
+        return JSONResponse({"detail": "database unavailable; retry later"}, status_code=503)
 
     @app.exception_handler(StationError)
     async def _station(_req: Request, exc: StationError) -> JSONResponse:

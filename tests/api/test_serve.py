@@ -1,0 +1,99 @@
+"""``station serve`` as a real process over real HTTP (uvicorn on a free loopback port).
+
+First start: migrations applied, the bootstrap admin token printed once, a simulated MA6 attached,
+calibrated and measured through the API, the measurement queryable; second start on the same data
+folder: no new token, the old one still works.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import httpx
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextmanager
+def _serve(data_dir: Path, *extra: str) -> Iterator[tuple[str, str]]:
+    port = _free_port()
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "station.cli", "serve", "--data-dir", str(data_dir), "--port", str(port),
+         "--no-demo-library", *extra],
+        cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )
+    base = f"http://127.0.0.1:{port}"
+    out: list[str] = []
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            line = proc.stdout.readline() if proc.stdout else ""
+            if not line and proc.poll() is not None:
+                pytest.fail("station serve exited:\n" + "".join(out))
+            out.append(line)
+            if "Uvicorn running" in line or "Application startup complete" in line:
+                break
+        token = next((m.group(0) for m in map(re.compile(r"cst_[\w-]+").search, out) if m), "")
+        yield base, token
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def test_serve_first_start_real_http(tmp_path: Path) -> None:
+    with _serve(tmp_path, "--simulators", "ma6") as (base, token):
+        assert token, "bootstrap admin token not printed on first start"
+        auth = {"Authorization": f"Bearer {token}"}
+        with httpx.Client(base_url=base, timeout=30) as http:
+            assert http.get("/health").json()["database"] == "ok"
+            assert http.get("/api/v1/instruments").status_code == 401
+            instruments = http.get("/api/v1/instruments", headers=auth).json()
+            assert [i["model"] for i in instruments] == ["MA6"] and instruments[0]["simulated"]
+            inst = instruments[0]["id"]
+            cal = http.post(f"/api/v1/instruments/{inst}/calibrate", json={"reference": "W-17"}, headers=auth)
+            assert cal.status_code == 200 and cal.json()["passed"] is True
+            panel = http.post("/api/v1/panels", json={"job": "J-9", "part": "fender"}, headers=auth).json()
+            r = http.post(f"/api/v1/instruments/{inst}/measure", json={"panel_id": panel["id"]}, headers=auth)
+            assert r.status_code == 201, r.text
+            m = r.json()["measurement"]
+            assert r.json()["status"] == "stored"
+            assert m["geometries_deg"] == [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0]
+            assert m["calibration_id"] is not None and len(m["spectra"][0]) == 31
+            L = [lab[0] for lab in m["lab"]]
+            assert all(0 < v < 200 for v in L)
+            listed = http.get("/api/v1/measurements", params={"job": "J-9"}, headers=auth).json()
+            assert listed["count"] == 1 and listed["data"][0]["id"] == m["id"]
+            assert http.post("/api/v1/instruments/ma6-nothing/measure", json={}, headers=auth).status_code == 404
+    assert (tmp_path / "station.sqlite3").exists()
+    with _serve(tmp_path, "--simulators", "") as (base, second_token):
+        assert second_token == "", "a second start must not print a new admin token"
+        with httpx.Client(base_url=base, timeout=30) as http:
+            me = http.get("/api/v1/me", headers={"Authorization": f"Bearer {token}"})
+            assert me.json()["role"] == "admin"
+
+
+def test_serve_refuses_a_bad_port(tmp_path: Path) -> None:
+    r = subprocess.run([sys.executable, "-m", "station.cli", "serve", "--data-dir", str(tmp_path), "--port", "0"],
+                       cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "--port" in r.stderr
