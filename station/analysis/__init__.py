@@ -15,11 +15,16 @@ from station.analysis.index import (
     SeamModel,
     goniogeometric_index,
 )
+from station.analysis.qa import SeamReport, as_paint, seam_qa
 from station.analysis.shading import Environment, environment_colour, point_colour, shade_lab
+from station.analysis.sweep import SweepResult, plot_sweep, seam_sweep
+from station.analysis.trompe import OBJECTIVES, SUBSETS, TrompeResult, inverse_trompe_loeil
 
 __all__ = [
     "DE_METHODS",
     "JND_CIE76",
+    "OBJECTIVES",
+    "SUBSETS",
     "AnalysisError",
     "AnalysisInputError",
     "Environment",
@@ -27,11 +32,19 @@ __all__ = [
     "IndexResult",
     "SeamGeometry",
     "SeamModel",
+    "SeamReport",
+    "SweepResult",
+    "TrompeResult",
+    "as_paint",
     "aspecular_deg",
     "direction",
     "environment_colour",
     "goniogeometric_index",
+    "inverse_trompe_loeil",
+    "plot_sweep",
     "point_colour",
     "rotated_normals",
+    "seam_qa",
+    "seam_sweep",
     "shade_lab",
 ]

@@ -391,6 +391,7 @@ def _search(model: SeamModel, paint: object, eps: float, bmax: float, step: floa
         best_hi = min(b[1] for b in brackets)
     best: tuple[float, int, int] | None = None
     approx: dict[tuple[int, int], float] = {}
+    rest = []
     for lo, hi, g, si in brackets:
         if lo <= best_hi:
             root = _brent(model, paint, eps, signs[si], g, lo, hi)
@@ -398,9 +399,12 @@ def _search(model: SeamModel, paint: object, eps: float, bmax: float, step: floa
             if best is None or root < best[0]:
                 best = (root, g, si)
         else:
-            flo = _de_at(model, paint, signs[si] * lo, g) - eps
-            fhi = _de_at(model, paint, signs[si] * hi, g) - eps
-            approx[(g, si)] = lo + (hi - lo) * (-flo) / (fhi - flo) if fhi > flo else hi
+            rest.append((lo, hi, g, si))
+    if rest:  # the other rows: linear interpolation inside their bracket, one vectorised evaluation
+        ends = np.array([[signs[si] * lo, signs[si] * hi] for lo, hi, _, si in rest])
+        F = model.delta_e_rows(paint, paint, ends, np.array([g for _, _, g, _ in rest])) - eps
+        for (lo, hi, g, si), (flo, fhi) in zip(rest, F, strict=True):
+            approx[(g, si)] = float(lo + (hi - lo) * (-flo) / (fhi - flo)) if fhi > flo else hi
     assert best is not None  # noqa: S101 - brackets is non-empty
     beta, g, si = best
     per = tuple(
@@ -423,10 +427,6 @@ def _geometry_dict(model: SeamModel, g: int) -> dict[str, Any]:
         return {"light": "environment", "view_deg": float(model.view_deg[g]),
                 "hinge": model.hinge if isinstance(model.hinge, str) else float(model.hinge)}
     return SeamGeometry(float(model.light_deg[g]), float(model.view_deg[g]), model.hinge).to_dict()
-
-
-def _de_at(model: SeamModel, paint: object, beta: float, g: int) -> float:
-    return float(model.delta_e(paint, paint, np.array([beta]), rows=np.array([g]))[0, 0])
 
 
 def _curvature(row: NDArray[np.float64], h: float) -> NDArray[np.float64]:
