@@ -6,7 +6,7 @@ designed." Ours holds 40 face/flop/travel/gloss designs, deterministic (no rando
 * 8 solids (white, black, greys, saturated red/blue/yellow/green), gloss 5–95 GU;
 * 8 silvers and greys with travel (bright aluminium flakes: L*15 up to 135, flop L* 25–60);
 * 12 coloured metallics, including high travel (θ_clamp 120–170°) and dark flops;
-* 8 hue-shifting pearls and interference colours (face and flop hues 60–180° apart);
+* 8 hue-shifting pearls and interference colours (face and flop hues 40–170° apart);
 * 4 extremes used by the stability tests: near-black metallic, very high gloss, extreme travel (180°),
   travel just above the face angle (16°).
 

@@ -168,8 +168,12 @@ def sample_geometries() -> SampleGeometries:
 
 def basis_table() -> dict[str, object]:
     """Return the shipped basis-selection result (station/render/data/lobe_basis.json) as a dict."""
-    text = resources.files("station.render").joinpath("data/lobe_basis.json").read_text()
-    return json.loads(text)
+    return json.loads(_basis_text())
+
+
+@lru_cache(maxsize=1)
+def _basis_text() -> str:
+    return resources.files("station.render").joinpath("data/lobe_basis.json").read_text()
 
 
 def basis_for_count(m: int) -> LobeBasis:
@@ -181,6 +185,7 @@ def basis_for_count(m: int) -> LobeBasis:
     return LobeBasis(tuple(rows[m]["exponents"]))
 
 
+@lru_cache(maxsize=1)
 def default_basis() -> LobeBasis:
     """Return the shipped default basis (its lobe count is the table's ``default_lobes``)."""
     return basis_for_count(int(basis_table()["default_lobes"]))  # type: ignore[arg-type]

@@ -1,0 +1,142 @@
+"""Choosing the shared Phong exponents: minimise max + mean fit error over the design database (eq 2.3.4).
+
+    f(E) = max_i Error(E, B_i) + (1/n) Σ_i Error(E, B_i)
+
+Error(E, B_i) is :func:`station.render.lobe_fit.fit_error_de`: the RMS CIEDE2000 over the sample
+geometries between design i and its non-negative fit with exponents E. As in thesis §2.3.2, lobes are
+added one at a time from 1 to 11 and the optimum for m lobes starts the search for m + 1: the new
+exponent is tried at every point of a log-spaced grid, and the best few starts are polished by
+Nelder–Mead over all log-exponents (the thesis used Levenberg–Marquardt; f has a max in it, so a
+derivative-free search is the safer choice). Deterministic: no random numbers.
+
+Run ``python -m station.render.basis_selection`` to regenerate station/render/data/lobe_basis.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.render import lobe_fit as lf
+from station.render.lobes import EXPONENT_RANGE, MAX_LOBES, LobeBasis
+
+#: Search range of a basis exponent (log-spaced grid for each new lobe).
+SEARCH_RANGE = (1.0, 2.0e4)
+#: Candidate positions tried for each new lobe.
+CANDIDATES = 16
+
+
+@dataclass(frozen=True)
+class BasisRow:
+    """The optimum for one lobe count: exponents and the errors of eq 2.3.4 (CIEDE2000, RMS per design)."""
+
+    lobes: int
+    exponents: tuple[float, ...]
+    max_error: float
+    mean_error: float
+    evaluations: int
+    seconds: float
+
+    @property
+    def objective(self) -> float:
+        """f(E) = max + mean (eq 2.3.4)."""
+        return self.max_error + self.mean_error
+
+
+def make_objective(brdfs: Sequence[lf.DesignedBRDF], method: str = "nnls"
+                   ) -> Callable[[NDArray[np.float64]], tuple[float, float]]:
+    """Return E ↦ (max, mean) of Error(E, B_i) over *brdfs* (exponents as an array, any order)."""
+    targets = lf.targets_from_brdfs(brdfs)
+    reference = lf.designed_reflectance(brdfs)
+    from station.model.colorimetry import linear_srgb_to_lab
+
+    ref_lab = linear_srgb_to_lab(reference)
+
+    def errors(exponents: NDArray[np.float64]) -> tuple[float, float]:
+        basis = LobeBasis(tuple(np.clip(exponents, *EXPONENT_RANGE)))
+        rep = lf.fit_targets(targets, basis, method)
+        err = lf.fit_error_de_lab(ref_lab, rep)
+        lf.fit_problem.cache_clear()
+        return float(err.max()), float(err.mean())
+
+    return errors
+
+
+def select_bases(brdfs: Sequence[lf.DesignedBRDF], max_lobes: int = MAX_LOBES, max_evals: int = 400,
+                 log: Callable[[str], None] | None = None) -> list[BasisRow]:
+    """Greedy forward selection of 1..max_lobes exponents minimising eq 2.3.4 (module docstring)."""
+    from scipy.optimize import minimize
+
+    errors = make_objective(brdfs)
+    lo, hi = np.log(SEARCH_RANGE[0]), np.log(SEARCH_RANGE[1])
+    grid = np.linspace(lo, hi, CANDIDATES)
+    rows: list[BasisRow] = []
+    current = np.zeros(0)
+    for m in range(1, max_lobes + 1):
+        t0 = time.perf_counter()
+        evals = 0
+
+        def f(log_e: NDArray[np.float64]) -> float:
+            nonlocal evals
+            evals += 1
+            penalty = np.sum(np.maximum(log_e - hi, 0) + np.maximum(lo - log_e, 0)) * 100.0
+            mx, mean = errors(np.exp(np.clip(log_e, lo, hi)))
+            return mx + mean + penalty
+
+        starts = sorted(((f(np.sort(np.append(current, g))), tuple(np.sort(np.append(current, g))))
+                         for g in grid), key=lambda t: t[0])[:2]
+        best_x, best_f = np.asarray(starts[0][1]), starts[0][0]
+        for _, x0 in starts:
+            res = minimize(f, np.asarray(x0), method="Nelder-Mead",
+                           options={"maxfev": max_evals, "xatol": 1e-3, "fatol": 1e-4, "adaptive": True})
+            if res.fun < best_f:
+                best_x, best_f = res.x, float(res.fun)
+        current = np.sort(np.clip(best_x, lo, hi))
+        mx, mean = errors(np.exp(current))
+        row = BasisRow(m, tuple(float(x) for x in np.round(np.exp(current), 4)), mx, mean, evals,
+                       time.perf_counter() - t0)
+        rows.append(row)
+        if log is not None:
+            log(f"{m:2d} lobes  max {mx:7.3f}  mean {mean:7.3f}  f {mx + mean:7.3f}  "
+                f"E = {', '.join(f'{e:.4g}' for e in row.exponents)}  ({evals} evals, {row.seconds:.1f} s)")
+    return rows
+
+
+def table_json(rows: Sequence[BasisRow], default_lobes: int, note: str) -> dict[str, object]:
+    """The shipped JSON document (schema ``cacad.lobe-basis/1``)."""
+    return {
+        "schema": "cacad.lobe-basis/1",
+        "default_lobes": default_lobes,
+        "objective": "eq 2.3.4: max + mean over the design database of RMS CIEDE2000 at the sample geometries",
+        "note": note,
+        "bases": [{"lobes": r.lobes, "exponents": list(r.exponents), "max_error_de": round(r.max_error, 4),
+                   "mean_error_de": round(r.mean_error, 4), "objective": round(r.objective, 4)} for r in rows],
+    }
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Regenerate the shipped basis table (slow: minutes)."""
+    from station.render.design_db import design_database
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--max-lobes", type=int, default=MAX_LOBES)
+    ap.add_argument("--max-evals", type=int, default=400)
+    ap.add_argument("--default-lobes", type=int, default=6)
+    ap.add_argument("--out", type=Path, default=Path(__file__).parent / "data" / "lobe_basis.json")
+    args = ap.parse_args(argv)
+    brdfs = [lf.designed_brdf(d) for d in design_database()]
+    rows = select_bases(brdfs, args.max_lobes, args.max_evals, log=print)
+    doc = table_json(rows, args.default_lobes, f"{len(brdfs)} designs of station.render.design_db; "
+                     "regenerate with python -m station.render.basis_selection")
+    args.out.write_text(json.dumps(doc, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,363 @@
+"""Ground truth: the designed BRDF itself integrated against an environment, per pixel (issue 3).
+
+For a pixel with unit normal N and unit view direction V (surface → eye), the reflected radiance is
+
+    L_o = ∫ L_env(ω) · f(ω, V)(N·ω) dω
+        = ∫ L_env(ω) [ (N·ω)₊ ρ(ψ)/π + 1[N·ω > 0] ρ_s (n+1)/(2π) cosⁿψ ] dω,     cos ψ = ω·R_V,
+
+R_V = 2(N·V)N − V (the aspecular angle of light ω seen from V is ψ, by the symmetry of the mirror),
+with the designed BRDF of :mod:`station.render.lobe_fit` (clamped-quadratic colour, Phong gloss):
+no lobe approximation. The same integrator evaluates the lobe model (eqs 2.3.1–2.3.3), exactly or as
+the prefiltered renderer does (eqs 2.5.1–2.5.3: DD weighted by (R·N), lobes not clipped at the
+horizon), so differences measure the approximation and not the integration.
+
+Integration (units: radiance in the environment's units, linear sRGB):
+
+* bright compact sources (pixels brighter than POINT_THRESHOLD × the mean luminance, e.g. a sun disc)
+  are taken out of the map as point lights (direction, radiance × solid angle), evaluated exactly;
+* kernels that are broad in ψ (the colour term; lobes with exponent < SHARP_EXPONENT) use the rest of
+  the map box-filtered to a quadrature of QUADRATURE_WIDTH × QUADRATURE_WIDTH/2 directions;
+* sharp lobes (exponent ≥ SHARP_EXPONENT) are importance sampled about R_V with a fixed stratified set
+  of LOBE_SAMPLES directions from the pdf (E+1)/(2π) cos^E ψ, looking up the full-resolution map
+  bilinearly.
+
+Per pixel the quadrature and point lights are first binned by ψ on the 0.25° grid of the designed
+BRDF's table (linear hat weights, the same interpolation :meth:`DesignedBRDF.rho` uses), so each further
+design or lobe costs one dot product per pixel.
+
+Environments: anything with an ``equirect`` array (H, 2H, 3) (``station.render.environment.
+Environment``) or the array itself, in the equirectangular convention of ``station.render.cubemap``
+(+Y up, θ from +Y down the rows, φ = 2π(u − ½), direction (sin θ sin φ, cos θ, −sin θ cos φ)).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from station.render.errors import RenderInputError
+from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf
+from station.render.weights import LobeWeights
+
+if TYPE_CHECKING:
+    from station.model import FaceFlopTravelGloss
+
+#: Pixels brighter than this multiple of the map's mean luminance become point lights.
+POINT_THRESHOLD = 50.0
+#: Most point lights extracted (the threshold rises until they fit).
+MAX_POINT_LIGHTS = 4096
+#: Width of the box-filtered quadrature map for broad kernels.
+QUADRATURE_WIDTH = 256
+#: Exponent from which a lobe is importance sampled instead of using the quadrature.
+SHARP_EXPONENT = 64.0
+#: Importance samples per pixel and sharp lobe.
+LOBE_SAMPLES = 256
+_BINS = ALPHA_GRID_DEG.size  # 721 bins of 0.25°
+_PIXEL_CHUNK = 48
+
+
+def _as_equirect(environment: Any) -> NDArray[np.float64]:
+    img = np.asarray(getattr(environment, "equirect", environment), dtype=np.float64)
+    if img.ndim != 3 or img.shape[2] != 3 or img.shape[1] != 2 * img.shape[0] or img.shape[0] < 2:
+        raise RenderInputError("environment", "an equirectangular radiance map (H, 2H, 3)", getattr(img, "shape", None))
+    if not np.all(np.isfinite(img)) or np.any(img < 0.0):
+        raise RenderInputError("environment", "finite radiance >= 0", "non-finite or negative pixels")
+    return img
+
+
+def equirect_directions(height: int, width: int) -> NDArray[np.float64]:
+    """Unit direction of each pixel centre, (H, W, 3) (convention in the module docstring)."""
+    theta = np.pi * (np.arange(height) + 0.5) / height
+    phi = 2.0 * np.pi * ((np.arange(width) + 0.5) / width - 0.5)
+    st = np.sin(theta)[:, None]
+    return np.stack([st * np.sin(phi)[None, :], np.repeat(np.cos(theta)[:, None], width, 1),
+                     -st * np.cos(phi)[None, :]], axis=-1)
+
+
+def equirect_solid_angles(height: int, width: int) -> NDArray[np.float64]:
+    """Solid angle (sr) of each pixel, (H, W); they sum to 4π."""
+    edges = np.pi * np.arange(height + 1) / height
+    band = 2.0 * np.pi * (np.cos(edges[:-1]) - np.cos(edges[1:])) / width
+    return np.repeat(band[:, None], width, axis=1)
+
+
+def sample_equirect(img: NDArray[np.float64], dirs: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Bilinear lookup of an equirect map along unit directions (..., 3) → (..., 3), wrapping in φ."""
+    h, w = img.shape[:2]
+    theta = np.arccos(np.clip(dirs[..., 1], -1.0, 1.0))
+    phi = np.arctan2(dirs[..., 0], -dirs[..., 2])
+    x = (phi / (2.0 * np.pi) + 0.5) * w - 0.5
+    y = np.clip(theta / np.pi * h - 0.5, 0.0, h - 1.0)
+    x0 = np.floor(x).astype(np.int64)
+    y0 = np.minimum(np.floor(y).astype(np.int64), h - 2)
+    tx = (x - x0)[..., None]
+    ty = (y - y0)[..., None]
+    x0 %= w
+    x1 = (x0 + 1) % w
+    top = img[y0, x0] * (1 - tx) + img[y0, x1] * tx
+    bottom = img[y0 + 1, x0] * (1 - tx) + img[y0 + 1, x1] * tx
+    return top * (1 - ty) + bottom * ty
+
+
+def _box_downsample(img: NDArray[np.float64], weights: NDArray[np.float64], width: int
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Solid-angle-weighted box filter to (width/2, width); returns (radiance, solid angles)."""
+    h, w = img.shape[:2]
+    if w <= width:
+        return img, weights
+    f = w // width
+    if w % width:
+        raise RenderInputError("quadrature_width", f"a divisor of the map width {w}", width)
+    flux = (img * weights[..., None]).reshape(h // f, f, width, f, 3).sum(axis=(1, 3))
+    om = weights.reshape(h // f, f, width, f).sum(axis=(1, 3))
+    return flux / om[..., None], om
+
+
+@dataclass(frozen=True)
+class Lighting:
+    """An environment split for integration (module docstring).
+
+    Attributes
+    ----------
+    residual
+        (H, W, 3) the map with point-light pixels removed (set to their neighbours' median level).
+    quad_dirs, quad_flux
+        (M, 3) directions and (M, 3) radiance × solid angle of the box-filtered residual.
+    point_dirs, point_flux
+        (P, 3) directions and (P, 3) radiance × solid angle of the extracted point lights.
+    """
+
+    residual: NDArray[np.float64]
+    quad_dirs: NDArray[np.float64]
+    quad_flux: NDArray[np.float64]
+    point_dirs: NDArray[np.float64]
+    point_flux: NDArray[np.float64]
+
+
+def prepare_lighting(environment: Any, quadrature_width: int = QUADRATURE_WIDTH,
+                     point_threshold: float = POINT_THRESHOLD) -> Lighting:
+    """Split *environment* into point lights, a quadrature and a residual map (module docstring)."""
+    img = _as_equirect(environment)
+    h, w = img.shape[:2]
+    dirs = equirect_directions(h, w)
+    om = equirect_solid_angles(h, w)
+    lum = img @ np.array([0.2126, 0.7152, 0.0722])
+    mean_lum = float((lum * om).sum() / (4.0 * np.pi))
+    threshold = point_threshold * max(mean_lum, 1e-30)
+    bright = lum > threshold
+    while bright.sum() > MAX_POINT_LIGHTS:
+        threshold *= 2.0
+        bright = lum > threshold
+    residual = img.copy()
+    if bright.any():
+        fill = np.median(img[~bright], axis=0) if (~bright).any() else np.zeros(3)
+        residual[bright] = np.minimum(img[bright], fill)
+    point_flux = (img[bright] - residual[bright]) * om[bright][:, None]
+    q_img, q_om = _box_downsample(residual, om, quadrature_width)
+    q_dirs = equirect_directions(*q_img.shape[:2])
+    return Lighting(residual, q_dirs.reshape(-1, 3), (q_img * q_om[..., None]).reshape(-1, 3),
+                    dirs[bright], point_flux)
+
+
+def _frames(axis: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Two unit vectors completing an orthonormal frame about each unit *axis* (P, 3)."""
+    helper = np.where(np.abs(axis[:, 1:2]) < 0.9, np.array([[0.0, 1.0, 0.0]]), np.array([[1.0, 0.0, 0.0]]))
+    t = np.cross(helper, axis)
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    return t, np.cross(axis, t)
+
+
+def _lobe_samples(exponent: float, count: int) -> NDArray[np.float64]:
+    """Stratified directions about +z with pdf (E+1)/(2π) cos^E ψ (golden-angle spiral), (count, 3)."""
+    u = (np.arange(count) + 0.5) / count
+    cos_psi = u ** (1.0 / (exponent + 1.0))
+    sin_psi = np.sqrt(np.maximum(0.0, 1.0 - cos_psi**2))
+    phi = np.arange(count) * np.pi * (3.0 - np.sqrt(5.0))
+    return np.stack([sin_psi * np.cos(phi), sin_psi * np.sin(phi), cos_psi], axis=-1)
+
+
+class TruthScene:
+    """Per-pixel integrals of one environment for a set of normals and views (reused across designs).
+
+    Parameters
+    ----------
+    environment
+        Equirect map or an object with ``equirect`` (module docstring).
+    normals, views
+        (..., 3) unit normals N and unit directions to the eye V, same shape; N·V must be > 0.
+    samples
+        Importance samples per pixel and sharp lobe.
+    quadrature_width
+        Width of the quadrature map for broad kernels.
+    """
+
+    def __init__(self, environment: Any, normals: ArrayLike, views: ArrayLike, samples: int = LOBE_SAMPLES,
+                 quadrature_width: int = QUADRATURE_WIDTH) -> None:
+        n = np.asarray(normals, dtype=float)
+        v = np.asarray(views, dtype=float)
+        if n.shape != v.shape or n.shape[-1:] != (3,):
+            raise RenderInputError("normals/views", "two arrays of unit vectors (..., 3) of one shape",
+                                   (n.shape, v.shape))
+        if not (np.all(np.isfinite(n)) and np.all(np.isfinite(v))):
+            raise RenderInputError("normals/views", "finite unit vectors", "non-finite values")
+        if samples < 16:
+            raise RenderInputError("samples", "at least 16 importance samples", samples)
+        self.shape = n.shape[:-1]
+        n = n.reshape(-1, 3) / np.linalg.norm(n.reshape(-1, 3), axis=1, keepdims=True)
+        v = v.reshape(-1, 3) / np.linalg.norm(v.reshape(-1, 3), axis=1, keepdims=True)
+        n_dot_v = np.einsum("ij,ij->i", n, v)
+        if np.any(n_dot_v <= 0.0):
+            raise RenderInputError("views", "directions on the normal's side (N·V > 0)", "back-facing pixels")
+        self.normals, self.views = n, v
+        self.reflect = 2.0 * n_dot_v[:, None] * n - v
+        self.samples = int(samples)
+        self.lighting = prepare_lighting(environment, quadrature_width)
+        self._tangents = _frames(self.reflect)
+        self._cache: dict[tuple[str, float], NDArray[np.float64]] = {}
+        self._hist = self._histograms()
+
+    # -- binned broad kernels -------------------------------------------------------------------------
+
+    def _histograms(self) -> dict[str, NDArray[np.float64]]:
+        """Per pixel, flux binned by ψ: keys q_cos, q_mask, q_open (quadrature), p_* (point lights)."""
+        out = {}
+        for prefix, dirs, flux in (("q", self.lighting.quad_dirs, self.lighting.quad_flux),
+                                   ("p", self.lighting.point_dirs, self.lighting.point_flux)):
+            px = self.normals.shape[0]
+            hist = {k: np.zeros((px, _BINS, 3)) for k in ("cos", "mask", "open")}
+            if dirs.shape[0]:
+                for s in range(0, px, _PIXEL_CHUNK):
+                    sl = slice(s, min(px, s + _PIXEL_CHUNK))
+                    cos_psi = np.clip(self.reflect[sl] @ dirs.T, -1.0, 1.0)
+                    n_dot = self.normals[sl] @ dirs.T
+                    a = np.degrees(np.arccos(cos_psi)) * 4.0
+                    i0 = np.minimum(a.astype(np.int64), _BINS - 2)
+                    t = a - i0
+                    rows = np.arange(sl.stop - sl.start)[:, None] * _BINS
+                    for name, wgt in (("cos", np.maximum(n_dot, 0.0)), ("mask", (n_dot > 0.0) * 1.0),
+                                      ("open", np.ones_like(n_dot))):
+                        for c in range(3):
+                            f = wgt * flux[None, :, c]
+                            acc = np.bincount((rows + i0).ravel(), (f * (1 - t)).ravel(), len(rows) * _BINS)
+                            acc += np.bincount((rows + i0 + 1).ravel(), (f * t).ravel(), len(rows) * _BINS)
+                            hist[name][sl, :, c] = acc.reshape(-1, _BINS)
+            for k, arr in hist.items():
+                out[f"{prefix}_{k}"] = arr
+        return out
+
+    def _binned(self, kind: str, kernel: NDArray[np.float64], points_only: bool) -> NDArray[np.float64]:
+        """Σ_bins hist · kernel(ψ_bin), (P, 3); kernel (721,) or (721, 3)."""
+        k = kernel if kernel.ndim == 2 else kernel[:, None]
+        total = np.einsum("pbc,bc->pc", self._hist[f"p_{kind}"], np.broadcast_to(k, (_BINS, 3)))
+        if not points_only:
+            total = total + np.einsum("pbc,bc->pc", self._hist[f"q_{kind}"], np.broadcast_to(k, (_BINS, 3)))
+        return total
+
+    # -- lobe integrals ------------------------------------------------------------------------------
+
+    def lobe(self, exponent: float, kind: str) -> NDArray[np.float64]:
+        """∫ L(ω) cos^E ψ · w(ω) dω per pixel, (P, 3); w = (N·ω)₊ ("cos"), 1[N·ω>0] ("mask"), 1 ("open")."""
+        key = (kind, float(exponent))
+        if key in self._cache:
+            return self._cache[key]
+        cos_grid = np.cos(np.radians(ALPHA_GRID_DEG))
+        kernel = np.clip(cos_grid, 0.0, 1.0) ** exponent
+        if exponent < SHARP_EXPONENT:
+            value = self._binned(kind, kernel, points_only=False)
+        else:
+            value = self._binned(kind, kernel, points_only=True) + self._sampled(exponent, kind)
+        self._cache[key] = value
+        return value
+
+    def _sampled(self, exponent: float, kind: str) -> NDArray[np.float64]:
+        local = _lobe_samples(exponent, self.samples)
+        t, b = self._tangents
+        out = np.empty((self.normals.shape[0], 3))
+        for s in range(0, out.shape[0], _PIXEL_CHUNK):
+            sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
+            dirs = (local[None, :, 0:1] * t[sl, None, :] + local[None, :, 1:2] * b[sl, None, :]
+                    + local[None, :, 2:3] * self.reflect[sl, None, :])
+            rad = sample_equirect(self.lighting.residual, dirs)
+            n_dot = np.einsum("pkc,pc->pk", dirs, self.normals[sl])
+            w = {"cos": np.maximum(n_dot, 0.0), "mask": (n_dot > 0.0) * 1.0, "open": np.ones_like(n_dot)}[kind]
+            out[sl] = (rad * w[..., None]).mean(axis=1) * (2.0 * np.pi / (exponent + 1.0))
+        return out
+
+    def irradiance(self) -> NDArray[np.float64]:
+        """E(N) = ∫ L (N·ω)₊ dω per pixel, (P, 3)."""
+        return self.lobe(0.0, "cos")
+
+    # -- shading -------------------------------------------------------------------------------------
+
+    def truth(self, brdf: DesignedBRDF) -> NDArray[np.float64]:
+        """Radiance of the designed BRDF, (..., 3) (module docstring)."""
+        colour = self._binned("cos", brdf.reflectance / np.pi, points_only=False)
+        gloss = brdf.specular_albedo * (brdf.phong_exponent + 1.0) / (2.0 * np.pi) * self.lobe(
+            brdf.phong_exponent, "mask")
+        return (colour + gloss).reshape(*self.shape, 3)
+
+    def lobes(self, weights: LobeWeights, mode: str = "exact") -> NDArray[np.float64]:
+        """Radiance of the lobe model, (..., 3).
+
+        ``exact``: eqs 2.3.1–2.3.3 integrated like the truth. ``prefiltered``: as the renderers evaluate
+        it (eqs 2.5.1–2.5.3): K_D E(N) + (R·N)₊ Σ K_DD,i I_i + Σ K_G,i I_i with I_i the unclipped lobe
+        integral about R (what a normalised prefiltered map times 2π/(E+1) holds).
+        """
+        if mode not in ("exact", "prefiltered"):
+            raise RenderInputError("mode", "exact | prefiltered", mode)
+        out = weights.k_d[None, :] * self.irradiance()
+        r_dot_n = np.maximum(np.einsum("ij,ij->i", self.reflect, self.normals), 0.0)[:, None]
+        for i, e in enumerate(weights.exponents):
+            if mode == "exact":
+                out = out + weights.k_dd[i][None, :] * self.lobe(e, "cos") + weights.k_g[i] * self.lobe(e, "mask")
+            else:
+                lobe = self.lobe(e, "open")
+                out = out + (weights.k_dd[i][None, :] * r_dot_n + weights.k_g[i]) * lobe
+        return out.reshape(*self.shape, 3)
+
+    def white(self) -> NDArray[np.float64]:
+        """Radiance of a white Lambertian surface (reflectance 1) at each pixel, (..., 3)."""
+        return (self.irradiance() / np.pi).reshape(*self.shape, 3)
+
+
+def render_truth(design: FaceFlopTravelGloss | DesignedBRDF, environment: Any, normals: ArrayLike,
+                 views: ArrayLike, *, samples: int = LOBE_SAMPLES,
+                 quadrature_width: int = QUADRATURE_WIDTH) -> NDArray[np.float64]:
+    """Ground-truth radiance of *design* in *environment* per pixel (for ``station render --engine truth``).
+
+    Parameters
+    ----------
+    design
+        A FaceFlopTravelGloss design (or an already tabulated DesignedBRDF).
+    environment
+        ``station.render.environment.Environment`` or an equirect array (H, 2H, 3), linear sRGB radiance.
+    normals, views
+        (..., 3) unit surface normals and unit directions from the surface to the eye (world space, the
+        environment's frame); pixels with N·V <= 0 are refused — mask them out before calling.
+    samples, quadrature_width
+        Accuracy controls (module docstring).
+
+    Returns
+    -------
+    ndarray
+        (..., 3) scene-linear sRGB radiance in the environment's units (no tone mapping).
+    """
+    brdf = design if isinstance(design, DesignedBRDF) else designed_brdf(design)
+    return TruthScene(environment, normals, views, samples, quadrature_width).truth(brdf)
+
+
+def sphere_pixels(size: int, radius: float = 0.98) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Normals and views of an orthographic sphere seen along −Z (the cubemap default camera), (P, 3) each.
+
+    Pixels whose normal lies within *radius* of the silhouette centre (excluding the grazing rim).
+    """
+    c = (np.arange(size) + 0.5) / size * 2.0 - 1.0
+    x, y = np.meshgrid(c, -c)
+    inside = x**2 + y**2 <= radius**2
+    nz = np.sqrt(np.maximum(0.0, 1.0 - x**2 - y**2))
+    normals = np.stack([x[inside], y[inside], nz[inside]], axis=-1)
+    views = np.broadcast_to(np.array([0.0, 0.0, 1.0]), normals.shape).copy()
+    return normals, views
