@@ -31,6 +31,7 @@ radiance and ``max(L·N, 0)``, summed, divided per channel by the same sum for a
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -160,12 +161,19 @@ def gloss_reflectance(paint: object, aspec_deg: NDArray[np.float64]) -> NDArray[
     gloss_gu = getattr(paint, "gloss_gu", None)
     if not gloss_gu:
         return 0.0
+    n, albedo = _phong_lobe(float(gloss_gu))
+    cos = np.cos(np.radians(np.minimum(aspec_deg, 90.0)))
+    return albedo * (n + 1.0) / 2.0 * np.maximum(cos, 0.0) ** n
+
+
+@functools.lru_cache(maxsize=256)
+def _phong_lobe(gloss_gu: float) -> tuple[float, float]:
+    """(Phong exponent, specular albedo) of :func:`station.model.gloss.lobe_from_gloss`, cached (it
+    simulates the gloss meter, milliseconds per call)."""
     from station.model.gloss import lobe_from_gloss
 
-    lobe = lobe_from_gloss(float(gloss_gu))
-    n = float(lobe.phong_exponent)
-    cos = np.cos(np.radians(np.minimum(aspec_deg, 90.0)))
-    return float(lobe.specular_albedo) * (n + 1.0) / 2.0 * np.maximum(cos, 0.0) ** n
+    lobe = lobe_from_gloss(gloss_gu)
+    return float(lobe.phong_exponent), float(lobe.specular_albedo)
 
 
 def paint_lab(paint: object, aspec_deg: ArrayLike) -> NDArray[np.float64]:

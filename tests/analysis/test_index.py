@@ -165,3 +165,16 @@ def test_light_at_grazing_limit_is_refused(grey):
     with pytest.raises(AnalysisInputError) as exc:
         goniogeometric_index(grey, 90.0, 0.0)
     assert exc.value.field.startswith("light_deg")
+
+
+def test_gloss_included_near_specular_lowers_the_index():
+    """Optional gloss (excluded in the thesis): near the specular direction the highlight moves with β."""
+    p = FaceFlopTravelGloss((50.0, 0.0, -10.0), (20.0, 0.0, -8.0), 60.0, gloss_gu=40.0)
+    without = goniogeometric_index(p, 45.0, -40.0, direction="+")
+    with_gloss = goniogeometric_index(p, 45.0, -40.0, direction="+", gloss=True)
+    assert with_gloss.reached and with_gloss.beta_min_deg < without.beta_min_deg
+    far = goniogeometric_index(p, 45.0, 60.0, direction="+", gloss=True)
+    far_no = goniogeometric_index(p, 45.0, 60.0, direction="+")
+    assert far.reached == far_no.reached
+    if far.reached:
+        assert far.beta_min_deg == pytest.approx(far_no.beta_min_deg, abs=1e-3)
