@@ -1,0 +1,176 @@
+"""Closed-loop prototyping: recipe → spray-out → measurement → ΔE → correction (beyond the thesis).
+
+Labs iterate: they spray the formulated recipe, measure the panel, and correct the recipe by the
+difference between what the model predicted and what the panel shows. :func:`closed_loop` does that
+with the measuring injected as a callable ``measure(recipe) -> AspecularMeasurements`` (this package
+may not import the drivers): a simulated spectrophotometer through
+:func:`station.drivers.simproc.spawn_simulator`, the in-process :class:`~station.formulate.sprayout.SprayOutModel`,
+or a person typing in readings.
+
+Correction (additive offset per angle, the usual "batch correction"): with recipe r_n, prediction
+P(r_n) and measurement M_n, the next recipe is formulated against the shifted target
+T_{n+1} = design − (M_n − P(r_n)), starting from r_n. The model's systematic error is thus cancelled
+to first order; it converges when that error varies slowly with the recipe.
+
+Each step is a :class:`LoopStep` in a :class:`FormulationJob` (plain dataclasses: the database layer
+stores them). Status: ``converged`` (mean measured ΔE00 ≤ tolerance), ``not_formulable`` (the model
+cannot reach the design, nothing sprayed), or ``not_converged`` after ``max_corrections``.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from station.formulate.colorants import ColorantDatabase, default_database, predict_lab
+from station.formulate.de_kernels import cie2000
+from station.formulate.errors import FormulateInputError
+from station.formulate.formulation import DEFAULT_TOLERANCE, FormulationResult, formulate
+from station.formulate.library import STANDARD_ANGLES
+from station.formulate.snap import validate_design_lab
+from station.model import AspecularMeasurements
+
+Measure = Callable[[dict[str, float]], AspecularMeasurements]
+MAX_CORRECTIONS = 3
+
+
+@dataclass(frozen=True)
+class LoopStep:
+    """One spray-and-measure step.
+
+    ``kind`` is ``"initial"`` or ``"correction"``; Lab arrays are (A, 3) at the job's angles;
+    ``de_per_angle`` is the measured CIEDE2000 to the design.
+    """
+
+    number: int
+    kind: str
+    recipe: dict[str, float]
+    target_lab: tuple[tuple[float, float, float], ...]
+    predicted_lab: tuple[tuple[float, float, float], ...]
+    measured_lab: tuple[tuple[float, float, float], ...]
+    measured_gloss_gu: float | None
+    de_per_angle: tuple[float, ...]
+    mean_de: float
+    predicted_mean_de: float
+    time: str
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-able form."""
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+
+
+@dataclass(frozen=True)
+class FormulationJob:
+    """A formulation job and its history, in order (what the database stores)."""
+
+    design_lab: tuple[tuple[float, float, float], ...]
+    angles_deg: tuple[float, ...]
+    gloss_gu: float | None
+    tolerance: float
+    status: str
+    message: str
+    steps: tuple[LoopStep, ...] = ()
+    start: str = ""
+    synthetic: bool = True
+    initial: FormulationResult | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def final_recipe(self) -> dict[str, float] | None:
+        """Recipe of the last sprayed step (None when nothing was sprayed)."""
+        return self.steps[-1].recipe if self.steps else None
+
+    @property
+    def corrections(self) -> int:
+        """Number of correction steps taken."""
+        return sum(1 for s in self.steps if s.kind == "correction")
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-able form."""
+        return {
+            "design_lab": [list(r) for r in self.design_lab],
+            "angles_deg": list(self.angles_deg),
+            "gloss_gu": self.gloss_gu,
+            "tolerance": self.tolerance,
+            "status": self.status,
+            "message": self.message,
+            "start": self.start,
+            "corrections": self.corrections,
+            "final_recipe": self.final_recipe,
+            "steps": [s.to_dict() for s in self.steps],
+            "synthetic_colorants": self.synthetic,
+        }
+
+
+def _tup(a: NDArray) -> tuple[tuple[float, float, float], ...]:
+    return tuple((float(r[0]), float(r[1]), float(r[2])) for r in np.asarray(a))
+
+
+def closed_loop(
+    design_lab: ArrayLike,
+    measure: Measure,
+    angles_deg: tuple[float, ...] = STANDARD_ANGLES,
+    starts: list[tuple[str, ArrayLike | dict[str, float]]] | None = None,
+    gloss_gu: float | None = None,
+    tolerance: float = DEFAULT_TOLERANCE,
+    max_corrections: int = MAX_CORRECTIONS,
+    db: ColorantDatabase | None = None,
+) -> FormulationJob:
+    """Formulate, spray, measure and correct until the panel is within *tolerance* (mean ΔE00).
+
+    Parameters
+    ----------
+    design_lab
+        Design Lab per angle, shape (A, 3) at *angles_deg*.
+    measure
+        ``measure(recipe) -> AspecularMeasurements`` at (a superset of) *angles_deg*.
+    starts
+        Starting recipes (e.g. ColorSnap matches' recipes), see :func:`formulate`.
+    max_corrections
+        Correction steps after the initial spray (0–10).
+    """
+    db = db or default_database()
+    angles = tuple(float(a) for a in angles_deg)
+    design = validate_design_lab(design_lab, len(angles), "design_lab")
+    if not isinstance(max_corrections, int) or not 0 <= max_corrections <= 10:
+        raise FormulateInputError("max_corrections", "an integer in [0, 10]", max_corrections)
+    first = formulate(design, angles, starts, gloss_gu, tolerance, db)
+    base = {
+        "design_lab": _tup(design), "angles_deg": angles, "gloss_gu": gloss_gu, "tolerance": float(tolerance),
+        "start": first.start, "synthetic": db.synthetic, "initial": first,
+    }
+    if not first.formulable:
+        return FormulationJob(status="not_formulable", message=first.message, **base)  # type: ignore[arg-type]
+    steps: list[LoopStep] = []
+    result = first
+    target = design
+    for n in range(max_corrections + 1):
+        m = measure(dict(result.recipe))
+        try:
+            idx = [m.angles_deg.index(a) for a in angles]
+        except ValueError as exc:
+            raise FormulateInputError("measurement.angles_deg", f"a superset of {angles}", m.angles_deg) from exc
+        measured = np.asarray(m.lab)[idx]
+        de = cie2000(design, measured)
+        predicted = predict_lab(result.concentrations, angles, db)
+        steps.append(
+            LoopStep(
+                number=n, kind="initial" if n == 0 else "correction", recipe=dict(result.recipe),
+                target_lab=_tup(target), predicted_lab=_tup(predicted), measured_lab=_tup(measured),
+                measured_gloss_gu=m.gloss_gu, de_per_angle=tuple(float(v) for v in de), mean_de=float(de.mean()),
+                predicted_mean_de=result.mean_de, time=dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+            )
+        )
+        if de.mean() <= tolerance:
+            msg = f"converged: mean ΔE00 {de.mean():.2f} after {n} correction(s)"
+            return FormulationJob(status="converged", message=msg, steps=tuple(steps), **base)  # type: ignore[arg-type]
+        if n == max_corrections:
+            break
+        target = design - (measured - predicted)
+        target[:, 0] = np.clip(target[:, 0], 0.0, 150.0)  # a corrected target stays a valid Lab (L* >= 0)
+        result = formulate(target, angles, [("previous", result.concentrations)], gloss_gu, 1e9, db)
+    msg = f"not converged: mean ΔE00 {steps[-1].mean_de:.2f} after {max_corrections} correction(s)"
+    return FormulationJob(status="not_converged", message=msg, steps=tuple(steps), **base)  # type: ignore[arg-type]

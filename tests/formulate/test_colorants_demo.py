@@ -1,0 +1,80 @@
+"""Colorant model (Kubelka–Munk + Saunderson) against closed forms, and the demo library."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from station.formulate import colorants as C
+from station.formulate.demo import DEMO_NAME, demo_library, generate_library
+from station.formulate.errors import FormulateInputError
+from station.model.spectra import reflectance_to_lab
+
+DB = C.default_database()
+A3 = (15.0, 45.0, 110.0)
+
+
+def test_single_pigment_reflectance_matches_closed_form() -> None:
+    c = DB.vector({"white_tio2": 0.3})
+    white = DB.colorants[DB.names.index("white_tio2")]
+    k = C.K_BINDER + 0.3 * white.k
+    s = C.S_BINDER + 0.3 * white.s
+    r_inf = 1 + k / s - np.sqrt((k / s) ** 2 + 2 * k / s)  # Kubelka–Munk, opaque layer
+    assert np.allclose((1 - r_inf) ** 2 / (2 * r_inf), k / s)  # the K/S inversion holds
+    want = 0.96 * 0.4 * r_inf / (1 - 0.6 * r_inf)  # Saunderson, specular excluded
+    got = C.predict_reflectance(c, A3)
+    assert np.allclose(got, want[None, :], rtol=1e-12)
+
+
+def test_fast_lab_equals_the_model_conversion() -> None:
+    rng = np.random.default_rng(0)
+    r = rng.uniform(0.0, 1.0, (50, 31))
+    assert np.allclose(C.lab_from_reflectance(r), reflectance_to_lab(r), atol=1e-9)
+
+
+def test_solids_are_angle_independent_and_metallics_flop() -> None:
+    solid = C.predict_lab(DB.vector({"white_tio2": 0.1, "red_pr": 0.03}), A3)
+    assert np.array_equal(solid[0], solid[1]) and np.array_equal(solid[1], solid[2])
+    met = C.predict_lab(DB.vector({"alu_coarse": 0.1, "blue_pb": 0.02}), A3)
+    assert met[0, 0] > met[1, 0] + 10 > met[2, 0] + 20
+    fine = C.predict_lab(DB.vector({"alu_fine": 0.1}), A3)
+    coarse = C.predict_lab(DB.vector({"alu_coarse": 0.1}), A3)
+    assert coarse[0, 0] - coarse[2, 0] > fine[0, 0] - fine[2, 0]  # coarse flakes: stronger flop
+
+
+def test_interference_pigment_shifts_hue_with_angle() -> None:
+    lab = C.predict_lab(DB.vector({"interference_gold": 0.1, "black_carbon": 0.01}), (15.0, 45.0, 75.0))
+    hue = np.degrees(np.arctan2(lab[:, 2], lab[:, 1])) % 360
+    assert abs((hue[0] - hue[2] + 180) % 360 - 180) > 30
+
+
+@pytest.mark.parametrize(
+    "recipe",
+    [{"white_tio2": -0.1}, {"black_carbon": 0.5}, {"alu_coarse": 0.2, "pearl_white": 0.1}, {"unobtainium": 0.1}],
+)
+def test_infeasible_recipes_are_refused(recipe: dict) -> None:
+    with pytest.raises(FormulateInputError):
+        DB.check(DB.vector(recipe))
+
+
+def test_demo_library_is_reproducible_labelled_and_cached() -> None:
+    t0 = time.perf_counter()
+    lib = demo_library()
+    first = time.perf_counter() - t0
+    assert len(lib) == 6000 and int(np.sum(lib.types == "solid")) == 3000
+    assert lib.synthetic and "SYNTHETIC" in lib.name and lib.name == DEMO_NAME
+    assert all(code.startswith("SYN-") for code in lib.codes) and len(set(lib.codes)) == 6000
+    assert lib.recipes is not None and lib.recipes.shape == (6000, len(DB.names))
+    DB.check(lib.recipes)
+    again = generate_library(300, 200, 100)  # same seed, smaller: the first rows differ, so compare itself
+    assert np.array_equal(again.lab, generate_library(300, 200, 100).lab)
+    demo_library.cache_clear()
+    t1 = time.perf_counter()
+    cached = demo_library()  # from the .npz written by the first call
+    load = time.perf_counter() - t1
+    assert np.array_equal(cached.lab, lib.lab) and cached.codes.tolist() == lib.codes.tolist()
+    assert load < max(0.5, first)
+    recomputed = C.predict_lab(lib.recipes[:50], lib.angles_deg)
+    assert np.allclose(recomputed, lib.lab[:50])  # every paint's colour is its recipe's prediction
