@@ -149,7 +149,7 @@ class GLRenderer:
         for name, value in uniforms.items():
             if name in prog:
                 prog[name].value = value
-        prog["u_lobes"].value = list(range(m))
+        prog["u_lobes"].value = list(range(m)) if m > 1 else 0
         mw = [w.map_weights() for w in pair]
         prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
         prog["u_wdd"].write(np.concatenate([w[1] for w in mw]).astype(np.float32).tobytes())

@@ -8,7 +8,8 @@ panels (left panel 0, right panel 1) and the seam (fender 0, bumper 1).
 * ``cylinder`` — the colour-proposal cylinder: vertical axis, radius 0.8, y ∈ [−1, 1], top cap.
 * ``speedshape`` — a procedural automotive "speed shape": the tapered ellipsoid
   (x/a)² + ((y/h)² + (z/w)²)/s(x)² = 1, s(x) = 1 − k·x/a, a = 1.4, h = 0.45, w = 0.6, k = 0.3
-  (thick nose at −x, thin tail at +x), found by 64 bracketing steps and 16 bisections.
+  (thick nose at −x, thin tail at +x), found by 24 bracketing steps and 14 bisections (it is
+  convex, so a ray enters it once; only grazing rays at the silhouette can step over it).
 * ``panels`` — two 1 × 1.4 flat panels facing +z, hinged 0.04 apart at x = 0; the right panel is
   turned about its hinge (vertical axis) by ``misalignment_deg`` (thesis ch. 4 misalignment).
 * ``seam`` — a flat fender (y ∈ [0.01, 0.9]) above a bumper curving away below (cylinder of radius
@@ -136,7 +137,7 @@ def _box(o, d, lo, hi):
     return np.maximum(tn, 0.0), tf
 
 
-def _speedshape(o, d, steps: int = 64, bisections: int = 16):
+def _speedshape(o, d, steps: int = 24, bisections: int = 14):
     ext = np.array([SPEED_A, SPEED_H * (1 + SPEED_K), SPEED_W * (1 + SPEED_K)])
     tn, tf = _box(o, d, -ext, ext)
     valid = tf > tn

@@ -39,11 +39,11 @@ void main() {
 #if DIFFUSE_SH
         rgb = u_wd[paint] * sh_eval(n);
 #else
-        rgb = u_wd[paint] * texture(u_diffuse, n).rgb;
+        rgb = u_wd[paint] * textureLod(u_diffuse, n, 0.0).rgb;
 #endif
         for (int i = 0; i < N_LOBES; ++i) {
             int k = paint * N_LOBES + i;
-            rgb += (u_wg[k] + ndv * u_wdd[k]) * texture(u_lobes[i], r).rgb;
+            rgb += (u_wg[k] + ndv * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
         }
     }
 #if OUTPUT_LINEAR

@@ -3,6 +3,7 @@
 const float INF = 1e30;
 const float SPEED_A = 1.4, SPEED_H = 0.45, SPEED_W = 0.6, SPEED_K = 0.3;
 const float CYL_R = 0.8;
+const int SPEED_STEPS = 24, SPEED_BISECTIONS = 14;
 const float SEAM_R = 0.6;
 uniform float u_misalign;  // radians, panels only
 
@@ -56,15 +57,15 @@ bool hit(vec3 o, vec3 d, out float t_hit, out vec3 n_hit, out int paint) {
     float tn = max(max(max(tmin.x, tmin.y), tmin.z), 0.0);
     float tf = min(min(tmax.x, tmax.y), tmax.z);
     if (tf > tn) {
-        float dt = (tf - tn) / 64.0;
+        float dt = (tf - tn) / float(SPEED_STEPS);
         float lo = tn, hi = tn;
         bool found = false;
-        for (int k = 1; k <= 64; ++k) {
+        for (int k = 1; k <= SPEED_STEPS; ++k) {
             float t = tn + float(k) * dt;
             if (speed_f(o + t * d) < 0.0) { lo = t - dt; hi = t; found = true; break; }
         }
         if (found) {
-            for (int k = 0; k < 16; ++k) {
+            for (int k = 0; k < SPEED_BISECTIONS; ++k) {
                 float mid = 0.5 * (lo + hi);
                 if (speed_f(o + mid * d) < 0.0) hi = mid; else lo = mid;
             }
