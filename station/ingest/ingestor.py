@@ -53,6 +53,7 @@ class Ingestor:
         self.engine = make_engine(engine) if isinstance(engine, str) else engine
         self._sessions: sessionmaker[Session] = make_sessionmaker(self.engine)
         self.outbox = Outbox(outbox_path)
+        self._instrument_ids: dict[str, int] = {}
 
     def close(self) -> None:
         """Close the outbox (and the engine when this object created it)."""
@@ -68,7 +69,7 @@ class Ingestor:
 
     def _store(self, reading: Reading) -> Receipt:
         with self._sessions.begin() as session:
-            result = store_reading(session, reading)
+            result = store_reading(session, reading, instrument_cache=self._instrument_ids)
         status: Literal["stored", "duplicate"] = "stored" if result.created else "duplicate"
         return Receipt(str(reading.client_id), status, result.measurement_id)
 

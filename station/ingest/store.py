@@ -37,8 +37,10 @@ def _insert(session: Session, table: Table) -> Any:
         return sqlite.insert(table)
     raise NotImplementedError(f"ingest supports sqlite and postgresql, not {dialect}")
 
-def _instrument_id(session: Session, reading: Reading) -> int:
+def _instrument_id(session: Session, reading: Reading, cache: dict[str, int] | None) -> int:
     ref = reading.instrument
+    if cache is not None and ref.serial in cache:
+        return cache[ref.serial]
     table = Instrument.__table__
     session.execute(
         _insert(session, table)
@@ -46,7 +48,11 @@ def _instrument_id(session: Session, reading: Reading) -> int:
                 created_at=reading.measured_at)
         .on_conflict_do_nothing(index_elements=["serial"])
     )
-    return session.scalars(select(Instrument.id).where(Instrument.serial == ref.serial)).one()
+    instrument_id = session.scalars(select(Instrument.id).where(Instrument.serial == ref.serial)).one()
+    if cache is not None:
+        cache[ref.serial] = instrument_id
+    return instrument_id
+
 
 def _calibration_id(session: Session, reading: Reading, instrument_id: int) -> int | None:
     cal = reading.calibration
@@ -69,23 +75,19 @@ def store_reading(
     created_by_id: int | None = None,
     supersedes_id: int | None = None,
     correction_reason: str | None = None,
+    instrument_cache: dict[str, int] | None = None,
 ) -> StoreResult:
     """Store *reading* once inside the caller's transaction (the caller commits).
 
     Raises :class:`ClientIdConflictError` when the client id is taken by a different payload and
-    :class:`ReferenceNotFoundError` when ``panel_id`` names no panel.
+    :class:`ReferenceNotFoundError` when ``panel_id`` names no panel. *instrument_cache* (serial → id,
+    owned by the caller) saves the instrument upsert for instruments already seen; instrument rows are
+    never deleted, so an entry cannot go stale. The common case is then one ``INSERT … RETURNING``.
     """
     sha = reading.payload_sha256()
-    existing = session.execute(
-        select(Measurement.id, Measurement.payload_sha256).where(Measurement.client_id == reading.client_id)
-    ).first()
-    if existing is not None:
-        if existing.payload_sha256 != sha:
-            raise ClientIdConflictError(str(reading.client_id), existing.payload_sha256, sha)
-        return StoreResult(existing.id, created=False)
     if reading.panel_id is not None and session.get(Panel, reading.panel_id) is None:
         raise ReferenceNotFoundError(f"panel_id {reading.panel_id} does not exist")
-    instrument_id = _instrument_id(session, reading)
+    instrument_id = _instrument_id(session, reading, instrument_cache)
     calibration_id = _calibration_id(session, reading, instrument_id)
     values = dict(
         client_id=reading.client_id, panel_id=reading.panel_id, instrument_id=instrument_id,
@@ -107,7 +109,7 @@ def store_reading(
         ).scalar()
     except IntegrityError as exc:  # e.g. supersedes_id already superseded, or a vanished reference
         raise ReferenceNotFoundError(f"reading refused by a database constraint: {exc.orig}") from exc
-    if new_id is None:  # a concurrent writer stored the same client id first
+    if new_id is None:  # stored before (a re-send, a replay, or a concurrent writer)
         row = session.execute(
             select(Measurement.id, Measurement.payload_sha256).where(Measurement.client_id == reading.client_id)
         ).one()
