@@ -3,7 +3,8 @@
 Run: ``.venv/bin/python -m bench.analysis``. Bars: one index evaluation ≤ 1 ms; the Fig. 4.3 sweep ≤ 1 s;
 one inverse trompe l'oeil solve ≤ 1 s. Baseline in the same run: a plain 1e-3° scan for the first
 crossing (what the bracket + Brent replaces). Writes docs/misalignment-index.png (Fig. 4.3),
-docs/misalignment-fig44.png (Fig. 4.4 grid) and docs/misalignment-qa.png (QA report example).
+docs/misalignment-fig44.png (Fig. 4.4 grid), docs/misalignment-fig45.png (Fig. 4.5 contour) and
+docs/misalignment-qa.png (QA report example).
 """
 
 from __future__ import annotations
@@ -85,6 +86,44 @@ def fig44_grid(path: Path) -> Path:
     return path
 
 
+def fig45_contour(path: Path) -> Path:
+    """Fig. 4.5 style: RMS seam ΔE against Δ face L* and Δ travel for the silver, minimum marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from station.analysis.scenarios import INSTRUMENT_ASPECULAR, SILVER_BETA_DEG, silver_black_flop
+
+    ls, vs = [45.0] * len(INSTRUMENT_ASPECULAR), [a - 45.0 for a in INSTRUMENT_ASPECULAR]
+    m = SeamModel(ls, vs)
+    dls = np.linspace(-5.0, 30.0, 57)
+    dts = np.linspace(-3.0, 8.0, 45)
+    z = np.empty((len(dts), len(dls)))
+    for i, dt in enumerate(dts):
+        for j, dl in enumerate(dls):
+            p = SILVER_PAINT.replace(face=(SILVER_PAINT.face[0] + dl, 0.0, 0.0),
+                                     travel_deg=SILVER_PAINT.travel_deg + dt)
+            z[i, j] = np.sqrt(np.mean(m.delta_e(SILVER_PAINT, p, np.array([SILVER_BETA_DEG]))[:, 0] ** 2))
+    r = silver_black_flop()
+    fig, ax = plt.subplots(figsize=(6.5, 4.8))
+    cs = ax.contourf(dls, dts, z, levels=np.linspace(0.0, z.max(), 25), cmap="viridis")
+    fig.colorbar(cs, label="RMS seam ΔE*ab")
+    ax.plot([0.0], [0.0], "wo", label=f"A: identical paint, ΔE {r.rms_before:.2f}")
+    ax.plot([r.changes["face_L"]], [r.changes["travel_deg"]], "r*", ms=12,
+            label=f"B: Δface L {r.changes['face_L']:+.1f}, Δtravel {r.changes['travel_deg']:+.1f}°, "
+                  f"ΔE {r.rms_after:.2f}")
+    ax.plot([3.4], [2.0], "w^", label="thesis minimum: +3.4, +2.0°")
+    ax.set_xlabel("Δ face L*")
+    ax.set_ylabel("Δ travel (degrees)")
+    ax.set_title("Fig. 4.5 reproduced: silver, black flop, 2° in-plane misalignment", fontsize=10)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
 def main() -> None:
     grey = FaceFlopTravelGloss((60.0, 0.0, 0.0), (60.0, 0.0, 0.0), None)
     cases: list[Case] = []
@@ -137,8 +176,10 @@ def main() -> None:
     report = seam_qa(BUMPER_PAINT, BUMPER_PAINT.replace(face=(61.0, -4.0, -41.0)), -3.0)
     plot_seam_report(report, DOCS / "misalignment-qa.png")
     fig44_grid(DOCS / "misalignment-fig44.png")
+    fig45_contour(DOCS / "misalignment-fig45.png")
     write_section("analysis", "Misalignment analysis (goniogeometric index, inverse trompe l'oeil)", cases,
-                  "Figures: docs/misalignment-index.png, docs/misalignment-fig44.png, docs/misalignment-qa.png.")
+                  "Figures: docs/misalignment-index.png, docs/misalignment-fig44.png, docs/misalignment-fig45.png, "
+                  "docs/misalignment-qa.png.")
 
 
 if __name__ == "__main__":
