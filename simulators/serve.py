@@ -42,9 +42,9 @@ def start(kind: str, args: argparse.Namespace, faults: FaultPlan) -> Served:
 
         device = Ma3Device(make_physics(args, "300456"), faults, measure_time_s=args.measure_time)
     elif kind == "gloss":
-        from simulators.gloss import GlossDevice, HidBridgeDevice
+        from simulators.gloss import GlossDevice, HidBridgeServer
 
-        device = HidBridgeDevice(GlossDevice.from_args(args, faults))
+        device = HidBridgeServer(GlossDevice.from_args(args, faults))
     else:
         raise ValueError(f"unknown simulator kind {kind!r}")
     host = PtyHost(device).start()

@@ -1,0 +1,56 @@
+"""``station instruments list`` / ``calibrate`` / ``measure`` end to end (simulators as subprocesses)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from station.cli import main
+from station.model import FaceFlopTravelGloss
+from station.model.design_io import save_design
+from station.model.difference import delta_e
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    rc = main(list(argv))
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+def test_list_json(capsys):
+    rc, out, _ = run(capsys, "instruments", "list", "--json")
+    assert rc == 0
+    data = json.loads(out)
+    assert {"sim:ma6", "sim:ma3", "sim:gloss"} <= {d["address"] for d in data["devices"]}
+
+
+def test_measure_sim_ma6_json_with_design(capsys, tmp_path):
+    design = FaceFlopTravelGloss(face=(60.0, -20.0, -30.0), flop=(30.0, -10.0, -35.0), travel_deg=60.0, gloss_gu=90.0)
+    path = save_design(design, tmp_path / "blue.json")
+    rc, out, err = run(capsys, "measure", "sim:ma6", "--design", str(path), "--panel", "P-17", "--json")
+    assert rc == 0, err
+    data = json.loads(out)
+    assert data["panel"] == "P-17"
+    assert data["geometries"] == ["45as-15", "45as15", "45as25", "45as45", "45as75", "45as110"]
+    assert np.asarray(data["spectra"]).shape == (6, 31)
+    de = delta_e(np.asarray(data["lab"]), design.lab_at(np.asarray([-15, 15, 25, 45, 75, 110])), method="cie2000")
+    assert float(de.max()) < 0.15
+    assert data["gloss_gu"] is None and data["serial"] == "600123"
+
+
+def test_measure_sim_gloss_json(capsys):
+    rc, out, err = run(capsys, "measure", "sim:gloss", "--json")
+    assert rc == 0, err
+    data = json.loads(out)
+    assert set(data["gloss_gu"]) == {"20", "60", "85"}
+    assert data["geometries"] == [] and data["lab"] == []
+
+
+def test_measure_typed_error_and_bad_input(capsys):
+    rc, _, err = run(capsys, "measure", "sim:ma9")
+    assert rc == 2 and "sim:ma6" in err
+    rc, _, err = run(capsys, "calibrate", "/dev/ttyACM0", "--design", "x.json")
+    assert rc == 2
+    rc, _, err = run(capsys, "measure", "/dev/does-not-exist")
+    assert rc == 1 and "does-not-exist" in err
