@@ -381,11 +381,12 @@ def _search(model: SeamModel, paint: object, eps: float, bmax: float, step: floa
                            per_geometry=per)
 
     best_hi = min(b[1] for b in brackets)
+    known: dict[tuple[int, int], dict[float, float]] = {}
     # Shrink the brackets that can hold the minimum (vectorised, 32-fold per pass, two passes), then
     # run Brent only where the shrunken bracket still can.
     for _ in range(2):
         cand = [i for i, b in enumerate(brackets) if b[0] <= best_hi]
-        shrunk = _shrink(model, paint, eps, signs, [brackets[i] for i in cand])
+        shrunk = _shrink(model, paint, eps, signs, [brackets[i] for i in cand], known)
         for i, lohi in zip(cand, shrunk, strict=True):
             brackets[i] = (*lohi, brackets[i][2], brackets[i][3])
         best_hi = min(b[1] for b in brackets)
@@ -394,7 +395,7 @@ def _search(model: SeamModel, paint: object, eps: float, bmax: float, step: floa
     rest = []
     for lo, hi, g, si in brackets:
         if lo <= best_hi:
-            root = _brent(model, paint, eps, signs[si], g, lo, hi)
+            root = _brent(model, paint, eps, signs[si], g, lo, hi, known.get((g, si)))
             approx[(g, si)] = root
             if best is None or root < best[0]:
                 best = (root, g, si)
@@ -481,27 +482,38 @@ def _refine(model: SeamModel, paint: object, eps: float, sign: float, g: int, lo
 
 
 def _shrink(model: SeamModel, paint: object, eps: float, signs: tuple[float, ...],
-            brackets: list[tuple[float, float, int, int]]) -> list[tuple[float, float]]:
-    """Shrink each bracket 32-fold with one vectorised evaluation for all (keeps the first crossing)."""
+            brackets: list[tuple[float, float, int, int]],
+            known: dict[tuple[int, int], dict[float, float]] | None = None) -> list[tuple[float, float]]:
+    """Shrink each bracket 32-fold with one vectorised evaluation for all (keeps the first crossing).
+
+    The values at the new bracket ends are stored in *known* (per (row, direction)) so Brent does not
+    evaluate them again.
+    """
     subs = np.array([np.linspace(lo, hi, 33) for lo, hi, _, _ in brackets])
     sign = np.array([signs[si] for _, _, _, si in brackets])[:, None]
     rows = np.array([g for _, _, g, _ in brackets])
     F = model.delta_e_rows(paint, paint, sign * subs, rows) - eps
     out = []
-    for (lo, hi, _, _), sub, row in zip(brackets, subs, F, strict=True):
+    for (lo, hi, g, si), sub, row in zip(brackets, subs, F, strict=True):
         j = int(np.argmax(row >= 0.0))
         if j > 0 and row[j] >= 0.0 and np.all(row[:j] < 0.0):
             out.append((float(sub[j - 1]), float(sub[j])))
+            if known is not None:
+                known.setdefault((int(g), int(si)), {}).update(
+                    {float(sub[j - 1]): float(row[j - 1]), float(sub[j]): float(row[j])})
         else:
             out.append((lo, hi))
     return out
 
 
-def _brent(model: SeamModel, paint: object, eps: float, sign: float, g: int, lo: float, hi: float
-           ) -> float:
+def _brent(model: SeamModel, paint: object, eps: float, sign: float, g: int, lo: float, hi: float,
+           known: dict[float, float] | None = None) -> float:
     rows = np.array([g])
+    known = known or {}
 
     def f(b: float) -> float:
+        if b in known:  # bracket ends already evaluated by the shrink step
+            return known[b]
         return float(model.delta_e(paint, paint, np.array([sign * b]), rows=rows)[0, 0]) - eps
 
     return float(brentq(f, lo, hi, xtol=BRENT_XTOL_DEG, rtol=4 * np.finfo(float).eps))
