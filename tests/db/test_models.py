@@ -6,12 +6,12 @@ import datetime as dt
 import uuid
 
 import pytest
-from sqlalchemy import select, text
+from sqlalchemy import func, select, text
 from sqlalchemy.exc import IntegrityError
 
 from db.engine import make_engine, make_sessionmaker, normalise_url
 from db.errors import ImmutableRowError
-from db.models import Instrument, Measurement, Role, User
+from db.models import AuditEvent, Instrument, Measurement, Role, User
 from station.errors import InputError
 
 T0 = dt.datetime(2026, 11, 23, 8, 30, tzinfo=dt.timezone(dt.timedelta(hours=2)))
@@ -118,3 +118,20 @@ def test_enum_check_constraints(session_factory) -> None:
             s.execute(text("INSERT INTO panels (job, part, substrate, notes, created_at) "
                            "VALUES ('J1', 'wing', '', '', CURRENT_TIMESTAMP)"))
             s.commit()
+
+
+def test_database_refuses_update_and_delete_of_measurements(session_factory) -> None:
+    """The triggers of revision 0002 hold for raw SQL too, not only through the ORM."""
+    with session_factory() as s:
+        inst = Instrument(serial="SN5", model="sim", kind="multiangle")
+        s.add(inst)
+        s.flush()
+        s.add(_measurement(inst.id))
+        s.add(AuditEvent(action="measurement.create", entity="measurement", entity_id="1"))
+        s.commit()
+        for sql in ("UPDATE measurements SET operator = 'x'", "DELETE FROM measurements",
+                    "DELETE FROM audit_events"):
+            with pytest.raises(Exception, match="append-only"):
+                s.execute(text(sql))
+            s.rollback()
+        assert s.scalar(select(func.count()).select_from(Measurement)) == 1

@@ -1,0 +1,1 @@
+"""Alembic environment shipped with the package (see db.migrate)."""

@@ -1,0 +1,1 @@
+"""Alembic revisions (dated file names; batch mode for SQLite)."""
