@@ -1,0 +1,113 @@
+"""Viewer test configuration: one Qt platform for the whole session, warnings fail, nothing leaks.
+
+Qt reads ``QT_QPA_PLATFORM`` once, when the QApplication is created, so the platform is chosen here at
+import time, before pytest-qt's ``qapp`` exists: an Xvfb server is started on a free display
+(``-displayfd``) and every viewer test runs on ``xcb`` with Mesa's llvmpipe serving GL. If Xvfb is
+missing or fails, the session stays on ``offscreen`` and the GL tests skip with the reason.
+
+* Qt messages of level WARNING or above fail the test (``qt_log_level_fail`` marker on every item).
+* Autouse fixture: after each test no top-level widget is left open and no QThread is still running.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import shutil
+import subprocess
+import tempfile
+
+import pytest
+
+XVFB_ERROR = ""
+
+
+def _start_xvfb() -> subprocess.Popen | None:
+    global XVFB_ERROR
+    if shutil.which("Xvfb") is None:
+        XVFB_ERROR = "Xvfb is not installed (scripts/setup.sh installs it)"
+        return None
+    r, w = os.pipe()
+    try:
+        proc = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-screen", "0", "1600x1200x24", "-nolisten", "tcp",
+                                 "+extension", "GLX"], pass_fds=(w,), stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+    except OSError as exc:
+        XVFB_ERROR = f"Xvfb failed to start: {exc}"
+        return None
+    finally:
+        os.close(w)
+    with os.fdopen(r) as fh:
+        display = fh.readline().strip()
+    if not display:
+        proc.kill()
+        XVFB_ERROR = "Xvfb did not report a display number"
+        return None
+    os.environ["DISPLAY"] = f":{display}"
+    atexit.register(lambda: (proc.terminate(), proc.wait(5)))
+    return proc
+
+
+XVFB = _start_xvfb()
+os.environ["QT_QPA_PLATFORM"] = "xcb" if XVFB is not None else "offscreen"
+os.environ.setdefault("CACAD_CACHE_DIR", os.path.join(tempfile.gettempdir(), "cacad-ui-test-cache"))
+
+from ui.widgets.render_view import configure_default_format  # noqa: E402  (after the platform is set)
+
+configure_default_format()
+GL = XVFB is not None
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    """Every viewer test fails on Qt warnings; GL tests skip when there is no Xvfb."""
+    here = os.path.dirname(__file__)
+    skip_gl = pytest.mark.skip(reason=f"no GL-capable Qt platform: {XVFB_ERROR}")
+    for item in items:
+        if str(item.fspath).startswith(here):
+            item.add_marker(pytest.mark.qt_log_level_fail("WARNING"))
+            if "gl" in item.keywords and not GL:
+                item.add_marker(skip_gl)
+
+
+@pytest.fixture(autouse=True)
+def _no_leftovers(request):
+    """No top-level widget left visible and no QThread running after a test."""
+    from PySide6.QtCore import QThread
+
+    started: list[QThread] = []
+    original = QThread.start
+
+    def start(self, *args):
+        started.append(self)
+        return original(self, *args)
+
+    QThread.start = start
+    try:
+        yield
+    finally:
+        QThread.start = original
+    if "qapp" not in request.fixturenames and "qtbot" not in request.fixturenames:
+        return
+    from PySide6.QtWidgets import QApplication
+
+    QApplication.processEvents()
+    running = [t for t in started if t.isRunning()]
+    visible = [w for w in QApplication.topLevelWidgets() if w.isVisible()]
+    for w in visible:
+        w.close()
+    assert not running, f"QThreads still running: {running}"
+    assert not visible, f"top-level widgets left open: {[type(w).__name__ for w in visible]}"
+
+
+@pytest.fixture
+def document():
+    """A fresh design document with the default design."""
+    from ui.models.document import DesignDocument
+
+    return DesignDocument()
+
+
+def close_widget(qtbot, widget) -> None:
+    """Close a widget the way the user would and let its threads finish."""
+    widget.close()
+    qtbot.wait(1)

@@ -1,0 +1,116 @@
+"""Qt-free view models: undo/redo exactness, merging, refusal, view settings, basis composite."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from station.errors import InputError
+from station.model import FaceFlopTravelGloss
+from station.render.numpy_renderer import render_linear
+from ui.models.designer import DesignerModel
+from ui.models.document import DEFAULT_DESIGN, DesignDocument
+from ui.models.events import EventGroup
+from ui.models.view import BasisImages, ViewInputError, ViewSettings, environment_basis, paint_weights
+
+
+def test_undo_restores_the_exact_design_object():
+    doc = DesignDocument()
+    model = DesignerModel(doc)
+    start = doc.design
+    assert model.set_gloss(30.0)
+    after_gloss = doc.design
+    assert model.move_face(20.0, -10.0)
+    assert doc.design.face[1:] == (20.0, -10.0)
+    assert doc.undo()
+    assert doc.design is after_gloss
+    assert doc.undo()
+    assert doc.design is start and doc.design == DEFAULT_DESIGN
+    assert not doc.undo()
+    assert doc.redo() and doc.design is after_gloss
+
+
+def test_drag_merges_into_one_undo_step_until_release():
+    doc = DesignDocument()
+    model = DesignerModel(doc)
+    for g in (80.0, 70.0, 60.0):
+        model.set_gloss(g)
+    model.end_drag()
+    model.set_gloss(10.0)
+    assert doc.design.gloss_gu == 10.0
+    doc.undo()
+    assert doc.design.gloss_gu == 60.0
+    doc.undo()
+    assert doc.design == DEFAULT_DESIGN and not doc.can_undo
+
+
+def test_refused_edit_leaves_design_and_reports_the_field():
+    doc = DesignDocument()
+    errors: list[str] = []
+    doc.events.error.connect(errors.append)
+    assert not DesignerModel(doc).set_gloss(150.0)
+    assert doc.design == DEFAULT_DESIGN and not doc.can_undo
+    assert len(errors) == 1 and "gloss_gu" in errors[0]
+
+
+def test_hsb_is_relative_to_the_drag_start():
+    doc = DesignDocument()
+    model = DesignerModel(doc)
+    model.set_hsb(90.0, 1.0, 0.0)
+    model.set_hsb(180.0, 1.0, 0.0)  # not 270: relative to the base
+    a, b = DEFAULT_DESIGN.face[1:]
+    np.testing.assert_allclose(doc.design.face[1:], (-a, -b), atol=1e-9)
+    model.end_drag()
+    doc.undo()
+    assert doc.design == DEFAULT_DESIGN
+
+
+def test_point_drag_refits_through_the_model():
+    doc = DesignDocument()
+    model = DesignerModel(doc)
+    assert model.move_point("L", 15.0, 70.0)
+    # the 5-point least-squares refit moves the 15° value towards the dragged point
+    assert doc.design.lab_at(15.0)[0] > DEFAULT_DESIGN.lab_at(15.0)[0] + 3.0
+
+
+def test_events_disconnect_by_owner():
+    class Owner:
+        def __init__(self):
+            self.calls = 0
+
+        def cb(self, *a):
+            self.calls += 1
+
+    g = EventGroup("x")
+    o = Owner()
+    g.x.connect(o.cb)
+    g.x.emit()
+    with g.x.blocker():
+        g.x.emit()
+    g.disconnect_all(o)
+    g.x.emit()
+    assert o.calls == 1
+
+
+def test_view_settings_validate_and_orbit_keeps_distance():
+    with pytest.raises(ViewInputError) as e:
+        ViewSettings(exposure_ev=20.0)
+    assert isinstance(e.value, InputError) and "exposure_ev" in str(e.value)
+    with pytest.raises(ViewInputError):
+        ViewSettings(shape="teapot")
+    base = ViewSettings()
+    np.testing.assert_allclose(base.camera().eye, (0.0, 0.8, 4.5), atol=1e-12)
+    turned = base.replace(yaw_deg=90.0).camera()
+    assert np.linalg.norm(turned.eye) == pytest.approx(np.linalg.norm((0.0, 0.8, 4.5)))
+    assert turned.eye[0] == pytest.approx(4.5, rel=1e-9) and turned.eye[2] == pytest.approx(0.0, abs=1e-9)
+    assert np.linalg.norm(base.replace(zoom=2.0).camera().eye) == pytest.approx(np.hypot(0.8, 4.5) / 2)
+
+
+def test_basis_composite_equals_the_core_numpy_renderer():
+    """Re-weighting cached basis images is the same sum as station.render's reference renderer."""
+    s = ViewSettings(shape="cylinder")
+    basis = BasisImages.compute(s, 48, 40)
+    a, b = paint_weights(DEFAULT_DESIGN), paint_weights(FaceFlopTravelGloss((40, 50, 20), (20, 30, 10), 60, 20))
+    ours = basis.composite_linear((a, b))
+    ref = render_linear(s.scene(), environment_basis("booth"), [a, b], 48, 40)
+    np.testing.assert_allclose(ours, ref, rtol=1e-5, atol=1e-6)

@@ -1,0 +1,27 @@
+"""Small Qt helpers shared by the widgets: NumPy images to pixmaps, Lab to display colours."""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtGui import QColor, QImage, QPixmap
+
+from station.model.colorimetry import lab_to_linear_srgb
+from station.render.tonemap import srgb_encode
+
+
+def pixmap_from_array(img: np.ndarray) -> QPixmap:
+    """(H, W, 3) uint8 → QPixmap (copied)."""
+    a = np.ascontiguousarray(img, dtype=np.uint8)
+    h, w = a.shape[:2]
+    return QPixmap.fromImage(QImage(a.data, w, h, 3 * w, QImage.Format.Format_RGB888).copy())
+
+
+def lab_colour(lab) -> QColor:
+    """Display colour of one Lab triple (D65/10°; out-of-gamut values clipped for display only)."""
+    rgb = np.round(srgb_encode(np.asarray(lab_to_linear_srgb(np.asarray(lab, float)))) * 255).astype(int)
+    return QColor(*(int(v) for v in rgb))
+
+
+def lab_colours(lab: np.ndarray) -> np.ndarray:
+    """Display sRGB uint8 (..., 3) of Lab values (..., 3)."""
+    return np.round(srgb_encode(np.asarray(lab_to_linear_srgb(np.asarray(lab, float)))) * 255).astype(np.uint8)

@@ -1,0 +1,220 @@
+"""Designer panel: L/a/b plots, the a–b arrow plot, HSB and gloss sliders, variations grid, palette."""
+
+from __future__ import annotations
+
+from PySide6.QtCore import QSize, Qt
+from PySide6.QtGui import QIcon
+from PySide6.QtWidgets import (
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QGridLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QListWidget,
+    QListWidgetItem,
+    QPushButton,
+    QSlider,
+    QToolButton,
+    QVBoxLayout,
+    QWidget,
+)
+
+from station.design.palette import swatch
+from station.design.variations import CATEGORIES
+from station.model import FaceFlopTravelGloss
+from ui.models.designer import DesignerModel
+from ui.widgets.common import pixmap_from_array
+from ui.widgets.plots import ABPlot, CurvePlot
+
+HUE_RANGE, SAT_RANGE, BRIGHT_RANGE = 180, (0, 200), 50
+
+
+def _slider(lo: int, hi: int, value: int) -> QSlider:
+    s = QSlider(Qt.Orientation.Horizontal)
+    s.setRange(lo, hi)
+    s.setValue(value)
+    return s
+
+
+class VariationsGrid(QWidget):
+    """3 × 3 grid: the current design in the centre, its ring of variations around (click to accept)."""
+
+    # Cell of each ring label in the grid (row, column), thesis Fig. 3.8 layout.
+    def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        self.category = QComboBox()
+        self.category.addItems(list(CATEGORIES))
+        self.degree = QDoubleSpinBox()
+        self.degree.setRange(0.5, 50.0)
+        self.degree.setValue(5.0)
+        top = QHBoxLayout()
+        top.addWidget(self.category)
+        top.addWidget(QLabel("step"))
+        top.addWidget(self.degree)
+        grid = QGridLayout()
+        self.buttons: list[QToolButton] = []
+        for i in range(9):
+            b = QToolButton()
+            b.setIconSize(QSize(72, 20))
+            b.setFixedSize(80, 40)
+            b.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextUnderIcon)
+            b.clicked.connect(lambda _=False, k=i: self._on_click(k))
+            grid.addWidget(b, i // 3, i % 3)
+            self.buttons.append(b)
+        lay = QVBoxLayout(self)
+        lay.addLayout(top)
+        lay.addLayout(grid)
+        self.cells: list[FaceFlopTravelGloss | None] = [None] * 9
+        self.category.currentTextChanged.connect(lambda _t: self.refresh())
+        self.degree.valueChanged.connect(lambda _v: self.refresh())
+        model.document.events.changed.connect(self._on_changed)
+        self.refresh()
+
+    def _on_changed(self, design: FaceFlopTravelGloss) -> None:
+        self.refresh()
+
+    def refresh(self) -> None:
+        """Recompute the ring around the current design."""
+        ring = self.model.variations(self.category.currentText(), self.degree.value())
+        order = [0, 1, 2, 3, None, 4, 5, 6, 7]  # ring of 8 around the centre cell
+        for cell, idx in enumerate(order):
+            b = self.buttons[cell]
+            if idx is None or idx >= len(ring.variations):
+                design, label, reason = (ring.centre, "current", "") if idx is None else (None, "", "")
+            else:
+                v = ring.variations[idx]
+                design, label, reason = v.design, v.label, v.reason
+            self.cells[cell] = design
+            b.setText(label)
+            b.setEnabled(design is not None)
+            b.setToolTip(reason or label)
+            b.setIcon(QIcon(pixmap_from_array(swatch(design, 72, 20, 2).pixels)) if design is not None else QIcon())
+
+    def _on_click(self, cell: int) -> None:
+        d = self.cells[cell]
+        if d is not None and cell != 4:
+            self.model.accept(d, f"variation {self.buttons[cell].text()}")
+
+    def closeEvent(self, event) -> None:
+        self.model.document.events.changed.disconnect(self._on_changed)
+        super().closeEvent(event)
+
+
+class PaletteList(QListWidget):
+    """Kept designs as gradient swatches with gloss borders (thesis §3.4.6); click to use one."""
+
+    def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        self.setIconSize(QSize(160, 32))
+        self.setMaximumHeight(130)
+        model.events.palette.connect(self._on_palette)
+        self.itemClicked.connect(self._on_item)
+
+    def _on_palette(self) -> None:
+        self.clear()
+        for name, design in self.model.palette:
+            item = QListWidgetItem(QIcon(pixmap_from_array(swatch(design).pixels)), name)
+            self.addItem(item)
+
+    def _on_item(self, item: QListWidgetItem) -> None:
+        name, design = self.model.palette[self.row(item)]
+        self.model.accept(design, f"palette {name}")
+
+    def closeEvent(self, event) -> None:
+        self.model.events.palette.disconnect(self._on_palette)
+        super().closeEvent(event)
+
+
+class DesignerPanel(QWidget):
+    """Everything that edits the design; every edit is one undoable step of the document."""
+
+    def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        self.plots = {c: CurvePlot(model, c) for c in "Lab"}
+        self.ab = ABPlot(model)
+        plots = QGridLayout()
+        plots.addWidget(self.plots["L"], 0, 0)
+        plots.addWidget(self.ab, 0, 1)
+        plots.addWidget(self.plots["a"], 1, 0)
+        plots.addWidget(self.plots["b"], 1, 1)
+
+        self.hue = _slider(-HUE_RANGE, HUE_RANGE, 0)
+        self.sat = _slider(*SAT_RANGE, 100)
+        self.bright = _slider(-BRIGHT_RANGE, BRIGHT_RANGE, 0)
+        self.gloss = _slider(0, 100, round(model.design.gloss_gu))
+        self.travel = _slider(16, 180, round(model.design.travel_deg or 75))
+        form = QFormLayout()
+        form.addRow("hue (°)", self.hue)
+        form.addRow("saturation (%)", self.sat)
+        form.addRow("brightness (ΔL*)", self.bright)
+        form.addRow("gloss (GU)", self.gloss)
+        form.addRow("travel θ_clamp (°)", self.travel)
+        self.status = QLabel("")
+        self.status.setWordWrap(True)
+        hsb_box = QGroupBox("Colour")
+        hsb_box.setLayout(form)
+
+        for s in (self.hue, self.sat, self.bright):
+            s.valueChanged.connect(self._on_hsb)
+            s.sliderReleased.connect(self._on_hsb_released)
+        self.gloss.valueChanged.connect(lambda v: self.model.set_gloss(float(v)))
+        self.gloss.sliderReleased.connect(self.model.end_drag)
+        self.travel.valueChanged.connect(self._on_travel)
+        self.travel.sliderReleased.connect(self.model.end_drag)
+
+        self.variations = VariationsGrid(model)
+        var_box = QGroupBox("Variations (click to accept)")
+        QVBoxLayout(var_box).addWidget(self.variations)
+        self.palette = PaletteList(model)
+        keep = QPushButton("Keep in palette")
+        keep.clicked.connect(lambda: self.model.keep())
+        pal_box = QGroupBox("Palette")
+        pl = QVBoxLayout(pal_box)
+        pl.addWidget(keep)
+        pl.addWidget(self.palette)
+
+        lay = QVBoxLayout(self)
+        lay.addLayout(plots, 3)
+        lay.addWidget(hsb_box)
+        lay.addWidget(self.status)
+        lay.addWidget(var_box)
+        lay.addWidget(pal_box)
+        model.document.events.changed.connect(self._on_changed)
+        model.document.events.error.connect(self._on_error)
+
+    def _on_hsb(self, _v: int) -> None:
+        self.model.set_hsb(float(self.hue.value()), self.sat.value() / 100.0, float(self.bright.value()))
+
+    def _on_hsb_released(self) -> None:
+        self.model.end_drag()
+        for s, v in ((self.hue, 0), (self.sat, 100), (self.bright, 0)):
+            s.blockSignals(True)
+            s.setValue(v)
+            s.blockSignals(False)
+
+    def _on_travel(self, v: int) -> None:
+        if not self.model.design.is_solid:
+            self.model.set_travel(float(v))
+
+    def _on_changed(self, design: FaceFlopTravelGloss) -> None:
+        self.status.setText("")
+        for s, v in ((self.gloss, round(design.gloss_gu)), (self.travel, round(design.travel_deg or 75))):
+            if s.value() != v and not s.isSliderDown():
+                s.blockSignals(True)
+                s.setValue(v)
+                s.blockSignals(False)
+
+    def _on_error(self, message: str) -> None:
+        self.status.setText(f"Refused: {message}")
+
+    def closeEvent(self, event) -> None:
+        self.model.document.events.changed.disconnect(self._on_changed)
+        self.model.document.events.error.disconnect(self._on_error)
+        for w in (*self.plots.values(), self.ab, self.variations, self.palette):
+            w.close()
+        super().closeEvent(event)

@@ -1,0 +1,215 @@
+"""QPainter plots of the designer: L, a, b against aspecular angle, and the a–b plane with the
+face→flop arrow over a hue wheel (thesis Figs. 3.5–3.7). Dragging edits the design through
+:class:`ui.models.designer.DesignerModel`; the plots redraw from the document's ``changed`` event.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QPointF, QRectF, Qt, Signal
+from PySide6.QtGui import QColor, QImage, QMouseEvent, QPainter, QPainterPath, QPen, QPolygonF
+from PySide6.QtWidgets import QSizePolicy, QWidget
+
+from station.model import FaceFlopTravelGloss
+from ui.models.designer import DesignerModel
+from ui.widgets.common import lab_colour, lab_colours
+
+CURVE_ANGLES = np.linspace(0.0, 120.0, 121)
+RANGES = {"L": (0.0, 100.0), "a": (-80.0, 80.0), "b": (-80.0, 80.0)}
+MARGIN = 26
+HANDLE_PX = 8
+
+
+class _PlotBase(QWidget):
+    """Mapping between data and pixels, binding to the designer model."""
+
+    edited = Signal()
+
+    def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        self._drag: object | None = None
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
+        self.setMinimumSize(160, 120)
+        model.document.events.changed.connect(self._on_changed)
+
+    def _on_changed(self, design: FaceFlopTravelGloss) -> None:
+        self.update()
+
+    def plot_rect(self) -> QRectF:
+        """The data area in widget pixels."""
+        return QRectF(MARGIN, 8, max(1, self.width() - MARGIN - 8), max(1, self.height() - MARGIN - 8))
+
+    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
+        if self._drag is not None:
+            self._drag = None
+            self.model.end_drag()
+
+    def closeEvent(self, event) -> None:
+        self.model.document.events.changed.disconnect(self._on_changed)
+        super().closeEvent(event)
+
+
+class CurvePlot(_PlotBase):
+    """One channel (``L``, ``a`` or ``b``) against aspecular angle 0–120°, points at the 5 angles."""
+
+    def __init__(self, model: DesignerModel, channel: str, parent: QWidget | None = None) -> None:
+        super().__init__(model, parent)
+        self.channel = channel
+        self.k = "Lab".index(channel)
+        self.setToolTip(f"{channel}* against aspecular angle: drag a point to edit")
+
+    def to_px(self, angle: float, value: float) -> QPointF:
+        """Data (degrees, value) → pixels."""
+        r = self.plot_rect()
+        lo, hi = RANGES[self.channel]
+        return QPointF(r.left() + angle / 120.0 * r.width(), r.bottom() - (value - lo) / (hi - lo) * r.height())
+
+    def from_px(self, p: QPointF) -> tuple[float, float]:
+        """Pixels → data (degrees, value)."""
+        r = self.plot_rect()
+        lo, hi = RANGES[self.channel]
+        return ((p.x() - r.left()) / r.width() * 120.0, lo + (r.bottom() - p.y()) / r.height() * (hi - lo))
+
+    def point_positions(self) -> list[tuple[float, QPointF]]:
+        """(angle, pixel position) of each editable point."""
+        angles, lab = self.model.points()
+        return [(a, self.to_px(a, row[self.k])) for a, row in zip(angles, lab, strict=True)]
+
+    def paintEvent(self, event) -> None:
+        p = QPainter(self)
+        p.setRenderHint(QPainter.RenderHint.Antialiasing)
+        p.fillRect(self.rect(), QColor(250, 250, 250))
+        r = self.plot_rect()
+        p.setPen(QPen(QColor(200, 200, 200), 1))
+        for a in (15, 45, 75, 110):
+            p.drawLine(self.to_px(a, RANGES[self.channel][0]), self.to_px(a, RANGES[self.channel][1]))
+        p.setPen(QPen(QColor(90, 90, 90), 1))
+        p.drawRect(r)
+        p.drawText(QRectF(2, r.top(), MARGIN - 4, 16), Qt.AlignmentFlag.AlignRight, f"{self.channel}*")
+        p.drawText(QRectF(r.left(), r.bottom() + 2, r.width(), 16), Qt.AlignmentFlag.AlignCenter,
+                   "aspecular angle 0–120°")
+        design = self.model.design
+        vals = design.lab_at(CURVE_ANGLES)[:, self.k]
+        path = QPainterPath(self.to_px(CURVE_ANGLES[0], vals[0]))
+        for a, v in zip(CURVE_ANGLES[1:], vals[1:], strict=True):
+            path.lineTo(self.to_px(a, v))
+        p.setPen(QPen(QColor(30, 60, 160), 2))
+        p.drawPath(path)
+        if design.travel_deg is not None:
+            p.setPen(QPen(QColor(200, 80, 40), 1, Qt.PenStyle.DashLine))
+            p.drawLine(self.to_px(design.travel_deg, RANGES[self.channel][0]),
+                       self.to_px(design.travel_deg, RANGES[self.channel][1]))
+        p.setPen(QPen(QColor(20, 20, 20), 1))
+        p.setBrush(QColor(255, 200, 60))
+        for _a, pt in self.point_positions():
+            p.drawEllipse(pt, HANDLE_PX / 2 + 1, HANDLE_PX / 2 + 1)
+        p.end()
+
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        pos = event.position()
+        for a, pt in self.point_positions():
+            if abs(pt.x() - pos.x()) <= HANDLE_PX and abs(pt.y() - pos.y()) <= HANDLE_PX:
+                self._drag = a
+                return
+
+    def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        if self._drag is None:
+            return
+        _, value = self.from_px(event.position())
+        lo, hi = RANGES[self.channel]
+        self.model.move_point(self.channel, float(self._drag), float(min(max(value, lo), hi)))
+        self.edited.emit()
+
+
+class ABPlot(_PlotBase):
+    """The a–b plane (±80) over a hue wheel at the face's L*, the curve and the flop→face arrow.
+
+    Drag the arrowhead (face) or the base (flop); the dashed circle is the chroma of the face.
+    """
+
+    def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
+        super().__init__(model, parent)
+        self._wheel: tuple[float, int, int, QImage] | None = None
+        self.setToolTip("a*–b*: drag the arrowhead (face) or its base (flop)")
+
+    def plot_rect(self) -> QRectF:
+        """Square data area."""
+        s = max(1, min(self.width(), self.height()) - 16)
+        return QRectF((self.width() - s) / 2, (self.height() - s) / 2, s, s)
+
+    def to_px(self, a: float, b: float) -> QPointF:
+        """(a*, b*) → pixels."""
+        r = self.plot_rect()
+        return QPointF(r.center().x() + a / 160.0 * r.width(), r.center().y() - b / 160.0 * r.height())
+
+    def from_px(self, p: QPointF) -> tuple[float, float]:
+        """Pixels → (a*, b*)."""
+        r = self.plot_rect()
+        return ((p.x() - r.center().x()) / r.width() * 160.0, (r.center().y() - p.y()) / r.height() * 160.0)
+
+    def _wheel_image(self, L: float, size: int) -> QImage:
+        key = (round(L, 1), size)
+        if self._wheel is None or self._wheel[:2] != key:
+            c = (np.arange(size) + 0.5) / size * 160.0 - 80.0
+            a, b = np.meshgrid(c, -c)
+            lab = np.stack([np.full_like(a, key[0]), a, b], axis=-1)
+            rgb = lab_colours(lab)
+            rgb = (0.55 * rgb + 0.45 * 235).astype(np.uint8)  # washed out so the arrow reads
+            self._wheel_buf = np.ascontiguousarray(rgb)
+            img = QImage(self._wheel_buf.data, size, size, 3 * size, QImage.Format.Format_RGB888).copy()
+            self._wheel = (*key, img)
+        return self._wheel[2]
+
+    def handles(self) -> dict[str, QPointF]:
+        """Pixel positions of the face and flop handles."""
+        d = self.model.design
+        return {"face": self.to_px(d.face[1], d.face[2]), "flop": self.to_px(d.flop[1], d.flop[2])}
+
+    def paintEvent(self, event) -> None:
+        p = QPainter(self)
+        p.setRenderHint(QPainter.RenderHint.Antialiasing)
+        p.fillRect(self.rect(), QColor(250, 250, 250))
+        r = self.plot_rect()
+        d = self.model.design
+        p.drawImage(r, self._wheel_image(d.face[0], 96))
+        p.setPen(QPen(QColor(150, 150, 150), 1))
+        p.drawLine(self.to_px(-80, 0), self.to_px(80, 0))
+        p.drawLine(self.to_px(0, -80), self.to_px(0, 80))
+        p.drawText(self.to_px(70, 2), "a*")
+        p.drawText(self.to_px(2, 72), "b*")
+        lab = d.lab_at(CURVE_ANGLES)
+        path = QPainterPath(self.to_px(lab[0, 1], lab[0, 2]))
+        for row in lab[1:]:
+            path.lineTo(self.to_px(row[1], row[2]))
+        p.setPen(QPen(QColor(60, 60, 60), 1, Qt.PenStyle.DotLine))
+        p.drawPath(path)
+        h = self.handles()
+        p.setPen(QPen(QColor(20, 20, 20), 2))
+        p.drawLine(h["flop"], h["face"])
+        v = h["face"] - h["flop"]
+        n = max(1e-6, (v.x() ** 2 + v.y() ** 2) ** 0.5)
+        u = QPointF(v.x() / n, v.y() / n)
+        w = QPointF(-u.y(), u.x())
+        tip = h["face"]
+        p.setBrush(QColor(20, 20, 20))
+        p.drawPolygon(QPolygonF([tip, tip - 12 * u + 5 * w, tip - 12 * u - 5 * w]))
+        for name, pt in h.items():
+            p.setBrush(lab_colour(d.face if name == "face" else d.flop))
+            p.drawEllipse(pt, HANDLE_PX, HANDLE_PX)
+        p.end()
+
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        pos = event.position()
+        for name, pt in self.handles().items():
+            if abs(pt.x() - pos.x()) <= HANDLE_PX + 2 and abs(pt.y() - pos.y()) <= HANDLE_PX + 2:
+                self._drag = name
+                return
+
+    def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        if self._drag is None:
+            return
+        a, b = self.from_px(event.position())
+        a, b = float(np.clip(a, -80, 80)), float(np.clip(b, -80, 80))
+        (self.model.move_face if self._drag == "face" else self.model.move_flop)(a, b)
+        self.edited.emit()

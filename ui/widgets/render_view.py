@@ -1,0 +1,347 @@
+"""The 3D view: cached basis images re-weighted by the paint, on the GPU (QOpenGLWidget + moderngl).
+
+A camera, shape, environment or size change recomputes the basis images (NumPy, the core's ray
+caster and prefiltered maps): first a quarter-resolution preview in the GUI thread, then full
+resolution in a worker QThread (joined on close). A paint edit only uploads new weights, so the
+picture follows the mouse. :class:`ImageRenderView` is the same view without GL (the NumPy
+composite drawn as a QImage) for platforms that have no OpenGL (Qt's offscreen QPA).
+
+Mouse: left drag orbits (yaw/pitch), the wheel zooms.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QPointF, QThread, Signal
+from PySide6.QtGui import QImage, QMouseEvent, QPainter, QSurfaceFormat, QWheelEvent
+from PySide6.QtOpenGLWidgets import QOpenGLWidget
+from PySide6.QtWidgets import QWidget
+
+from station.render.numpy_renderer import BACKGROUND
+from ui.models.view import BasisImages, ViewModel, ViewSettings
+
+SHADER_DIR = Path(__file__).resolve().parents[1] / "shaders"
+PREVIEW_DIVISOR = 4
+ORBIT_DEG_PER_PIXEL = 0.4
+GL_RGB9_E5 = 0x8C3D
+
+
+def configure_default_format() -> None:
+    """Ask for an OpenGL 3.3 core context for every GL widget (call before the QApplication exists)."""
+    fmt = QSurfaceFormat()
+    fmt.setVersion(3, 3)
+    fmt.setProfile(QSurfaceFormat.OpenGLContextProfile.CoreProfile)
+    fmt.setSwapInterval(0)
+    QSurfaceFormat.setDefaultFormat(fmt)
+
+
+def composite_program(ctx, lobes: int):
+    """Compile ``shaders/composite.*.glsl`` for a basis of *lobes* lobes."""
+    frag = (SHADER_DIR / "composite.frag.glsl").read_text().replace(
+        "#version 330", f"#version 330\n#define MAX_LOBES {lobes}", 1)
+    return ctx.program(vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(), fragment_shader=frag)
+
+
+def set_composite_uniforms(prog, weights, exposure_ev: float, viewport: tuple[int, int],
+                           size: tuple[int, int]) -> None:
+    """Write the two paints' normalised-map weights (``LobeWeights.map_weights``) and display settings."""
+    (wd0, wdd0, wg0), (wd1, wdd1, wg1) = (w.map_weights() for w in weights)
+    m = len(wg0)
+    active = [i for i in range(m) if wdd0[i].any() or wdd1[i].any() or wg0[i] or wg1[i]]
+    pad = m - len(active)
+    prog["u_wd0"].value = tuple(map(float, wd0))
+    prog["u_wd1"].value = tuple(map(float, wd1))
+    prog["u_n_active"].value = len(active)
+    prog["u_layer"].write(np.array([i + 1 for i in active] + [0] * pad, "i4").tobytes())
+    for name, arr in (("u_wdd0", wdd0), ("u_wdd1", wdd1)):
+        prog[name].write(np.concatenate([arr[active], np.zeros((pad, 3))]).astype("f4").tobytes())
+    wg = np.stack([wg0[active], wg1[active]], axis=-1)
+    prog["u_wg"].write(np.concatenate([wg, np.zeros((pad, 2))]).astype("f4").tobytes())
+    prog["u_exposure"].value = float(2.0 ** exposure_ev)
+    prog["u_background"].value = (BACKGROUND,) * 3
+    prog["u_viewport"].value = tuple(map(float, viewport))
+    prog["u_size"].value = tuple(size)
+
+
+class BasisWorker(QThread):
+    """Computes full-resolution basis images off the GUI thread."""
+
+    done = Signal(object, object)  # (ViewSettings, BasisImages)
+
+    def __init__(self, settings: ViewSettings, width: int, height: int, parent=None) -> None:
+        super().__init__(parent)
+        self.settings, self.width_px, self.height_px = settings, width, height
+
+    def run(self) -> None:
+        """Compute and report."""
+        self.done.emit(self.settings, BasisImages.compute(self.settings, self.width_px, self.height_px))
+
+
+class _ViewLogic:
+    """Shared state handling of both views (mouse orbit, basis refresh, worker); a plain mixin."""
+
+    def _init_logic(self, model: ViewModel) -> None:
+        self.model = model
+        self.basis: BasisImages | None = None
+        self._basis_key: tuple | None = None
+        self._worker: BasisWorker | None = None
+        self._pending: tuple | None = None
+        self._drag: QPointF | None = None
+        self.frames = 0
+        self.last_frame_s = 0.0
+        self.setMinimumSize(160, 120)
+        model.events.settings.connect(self._on_settings)
+        model.events.paints.connect(self._on_paints)
+
+    # ---------------------------------------------------------------- basis images
+    def _pixel_size(self) -> tuple[int, int]:
+        r = self.devicePixelRatioF()
+        return max(8, round(self.width() * r)), max(8, round(self.height() * r))
+
+    def _refresh_basis(self) -> None:
+        """Preview now (quarter size), full size in the worker."""
+        w, h = self._pixel_size()
+        key = (self.model.settings, w, h)
+        if key == self._basis_key:
+            return
+        self._basis_key = key
+        pw, ph = max(8, w // PREVIEW_DIVISOR), max(8, h // PREVIEW_DIVISOR)
+        self._set_basis(BasisImages.compute(self.model.settings, pw, ph))
+        self._start_worker(key)
+
+    def _start_worker(self, key: tuple) -> None:
+        if self._worker is not None and self._worker.isRunning():
+            self._pending = key
+            return
+        settings, w, h = key
+        self._worker = BasisWorker(settings, w, h)
+        self._worker.done.connect(self._on_worker_done)
+        self._worker.start()
+
+    def _on_worker_done(self, settings: ViewSettings, basis: BasisImages) -> None:
+        if self._basis_key is not None and self._basis_key[0] == settings and basis.size == self._basis_key[1:]:
+            self._set_basis(basis)
+        if self._worker is not None:
+            self._worker.wait()
+        if self._pending is not None:
+            key, self._pending = self._pending, None
+            self._start_worker(key)
+
+    def wait_idle(self, timeout_ms: int = 30000) -> None:
+        """Block until no basis computation is running (tests, screenshots)."""
+        from PySide6.QtCore import QCoreApplication
+
+        deadline = time.perf_counter() + timeout_ms / 1000
+        while time.perf_counter() < deadline:
+            QCoreApplication.processEvents()
+            if (self._worker is None or self._worker.isFinished()) and self._pending is None:
+                QCoreApplication.processEvents()
+                return
+            time.sleep(0.005)
+
+    def _shutdown(self) -> None:
+        self.model.events.disconnect_all(self)
+        self._pending = None
+        if self._worker is not None:
+            self._worker.wait()
+            self._worker = None
+
+    def _on_settings(self, settings: ViewSettings) -> None:
+        self._refresh_basis()
+        self.update()
+
+    def _on_paints(self, pair) -> None:
+        self.update()
+
+    # ---------------------------------------------------------------- mouse
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        self._drag = event.position()
+
+    def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        if self._drag is None:
+            return
+        d = event.position() - self._drag
+        self._drag = event.position()
+        s = self.model.settings
+        pitch = max(-80.0, min(80.0, s.pitch_deg + d.y() * ORBIT_DEG_PER_PIXEL))
+        self.model.update(yaw_deg=(s.yaw_deg - d.x() * ORBIT_DEG_PER_PIXEL) % 360.0, pitch_deg=pitch)
+
+    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
+        self._drag = None
+
+    def wheelEvent(self, event: QWheelEvent) -> None:
+        s = self.model.settings
+        z = s.zoom * (1.1 ** (event.angleDelta().y() / 120.0))
+        self.model.update(zoom=max(0.5, min(4.0, z)))
+
+
+class GLRenderView(_ViewLogic, QOpenGLWidget):
+    """The GPU view (moderngl on Qt's context; framebuffer = ``defaultFramebufferObject()``)."""
+
+    frame_rendered = Signal()
+
+    def __init__(self, model: ViewModel, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._init_logic(model)
+        self.ctx = None
+        self._prog = self._vao = self._vbo = self._tex_basis = self._tex_geom = None
+        self._uploaded: BasisImages | None = None
+        self.gl_renderer = ""
+
+    def _set_basis(self, basis: BasisImages) -> None:
+        self.basis = basis
+        self.update()
+
+    def resizeGL(self, w: int, h: int) -> None:
+        self._refresh_basis()
+
+    def _build(self) -> None:
+        import moderngl
+
+        self.ctx = moderngl.create_context()
+        self.gl_renderer = self.ctx.info["GL_RENDERER"]
+        m = len(self.basis.exponents) if self.basis is not None else 6
+        self._prog = composite_program(self.ctx, m)
+        quad = np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4")
+        self._vbo = self.ctx.buffer(quad.tobytes())
+        self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
+
+    def _upload(self, basis: BasisImages) -> None:
+        import moderngl
+
+        for t in (self._tex_basis, self._tex_geom):
+            if t is not None:
+                t.release()
+        w, h = basis.size
+        layers = np.concatenate([basis.diffuse[None], basis.lobes], axis=0).astype("f4")
+        self._tex_basis = self.ctx.texture((w, h * layers.shape[0]), 3, layers.tobytes(), dtype="f4",
+                                           internal_format=GL_RGB9_E5)
+        geom = np.stack([basis.n_dot_v, basis.paint.astype(np.float32)], axis=-1).astype("f2")
+        self._tex_geom = self.ctx.texture((w, h), 2, geom.tobytes(), dtype="f2")
+        for t in (self._tex_basis, self._tex_geom):
+            t.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            t.repeat_x = t.repeat_y = False
+        self._uploaded = basis
+
+    def paintGL(self) -> None:
+        t0 = time.perf_counter()
+        if self.basis is None:
+            self._refresh_basis()
+        if self.ctx is None:
+            self._build()
+        screen = self.ctx.detect_framebuffer(self.defaultFramebufferObject())
+        screen.use()
+        w, h = self._pixel_size()
+        self.ctx.viewport = (0, 0, w, h)
+        weights = self.model.weights()
+        if weights is None or self.basis is None:
+            self.ctx.clear(BACKGROUND, BACKGROUND, BACKGROUND)
+            return
+        if self._uploaded is not self.basis:
+            self._upload(self.basis)
+        set_composite_uniforms(self._prog, weights, self.model.settings.exposure_ev, (w, h), self.basis.size)
+        self._tex_basis.use(0)
+        self._tex_geom.use(1)
+        self._prog["u_basis"].value = 0
+        self._prog["u_geom"].value = 1
+        self._vao.render(mode=self.ctx.TRIANGLE_STRIP)
+        self.ctx.finish()
+        self.frames += 1
+        self.last_frame_s = time.perf_counter() - t0
+        self.frame_rendered.emit()
+
+    def grab_image(self) -> np.ndarray:
+        """The current frame as (H, W, 3) uint8 (renders it)."""
+        img = self.grabFramebuffer().convertToFormat(QImage.Format.Format_RGB888)
+        w, h = img.width(), img.height()
+        return np.frombuffer(img.constBits(), np.uint8).reshape(h, img.bytesPerLine())[:, : 3 * w].reshape(h, w, 3).copy()
+
+    def close_view(self) -> None:
+        """Join the worker and release GPU objects."""
+        self._shutdown()
+        if self.ctx is not None:
+            self.makeCurrent()
+            for obj in (self._vao, self._vbo, self._prog, self._tex_basis, self._tex_geom):
+                if obj is not None:
+                    obj.release()
+            self.ctx = None
+            self.doneCurrent()
+
+    def closeEvent(self, event) -> None:
+        self.close_view()
+        super().closeEvent(event)
+
+
+class ImageRenderView(_ViewLogic, QWidget):
+    """The same view drawn from the NumPy composite (no GL); used where Qt has no OpenGL."""
+
+    frame_rendered = Signal()
+
+    def __init__(self, model: ViewModel, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._init_logic(model)
+        self.gl_renderer = "none (NumPy composite)"
+        self._image: np.ndarray | None = None
+
+    def _set_basis(self, basis: BasisImages) -> None:
+        self.basis = basis
+        self.update()
+
+    def resizeEvent(self, event) -> None:
+        self._refresh_basis()
+        super().resizeEvent(event)
+
+    def render_image(self) -> np.ndarray | None:
+        """The current frame (H, W, 3) uint8 at basis resolution, or None before the first design."""
+        weights = self.model.weights()
+        if self.basis is None:
+            self._refresh_basis()
+        if weights is None or self.basis is None:
+            return None
+        return self.basis.composite_display(weights, self.model.settings.exposure_ev)
+
+    def paintEvent(self, event) -> None:
+        t0 = time.perf_counter()
+        painter = QPainter(self)
+        img = self.render_image()
+        if img is None:
+            g = round(255 * BACKGROUND)
+            painter.fillRect(self.rect(), _grey(g))
+        else:
+            self._image = np.ascontiguousarray(img)
+            h, w = img.shape[:2]
+            qimg = QImage(self._image.data, w, h, 3 * w, QImage.Format.Format_RGB888)
+            painter.drawImage(self.rect(), qimg)
+        painter.end()
+        self.frames += 1
+        self.last_frame_s = time.perf_counter() - t0
+        self.frame_rendered.emit()
+
+    def close_view(self) -> None:
+        """Join the worker."""
+        self._shutdown()
+
+    def closeEvent(self, event) -> None:
+        self.close_view()
+        super().closeEvent(event)
+
+
+def _grey(v: int):
+    from PySide6.QtGui import QColor
+
+    return QColor(v, v, v)
+
+
+def gl_supported() -> bool:
+    """Whether the running Qt platform can give widgets an OpenGL context."""
+    from PySide6.QtGui import QGuiApplication
+
+    return QGuiApplication.platformName() not in ("offscreen", "minimal", "vnc")
+
+
+def make_render_view(model: ViewModel, parent: QWidget | None = None) -> GLRenderView | ImageRenderView:
+    """The GL view where the platform has OpenGL, else the NumPy image view."""
+    return GLRenderView(model, parent) if gl_supported() else ImageRenderView(model, parent)
