@@ -167,7 +167,7 @@ def main() -> None:
                 for goal in goals:
                     art = perturb(kind, level, goal, scene_mask, rng)
                     if fit_name == "point":
-                        fit = fit_point_light(point, art, init)
+                        fit = fit_point_light(point, art, init, gloss="default")
                     else:
                         fit = fit_environment(basis, art, init)
                         env_s.append(fit.seconds)
@@ -223,7 +223,9 @@ def main() -> None:
     _chart(results)
     extra = (
         "Stability chart: `docs/sketch-stability.png` (success rate solid, median RMS ΔE*ab against the "
-        "unperturbed goal dashed; point-light fit blue, environment fit orange). Failure is flagged when "
+        "unperturbed goal dashed; point-light fit blue, environment fit orange; gloss fixed at 50 GU in "
+        "both, so the figure measures colour, not the contrast-gloss guess). A fit is also failed when it "
+        "comes out retroreflective (face darker than flop), which is what flat fills produce. Failure is flagged when "
         "the systematic misfit exceeds 6.9 ΔE*ab = 3 JND (RMS of cell means: aspecular-angle × Lambert cells for the "
         "point fit, 4×4-pixel tiles for the environment fit) or more than 25 % of the pixels are outliers; "
         "the fallback is the average diffuse colour. Art styles are random stand-ins (hue rotation; + ramp "

@@ -14,8 +14,9 @@ face/flop/travel design that best matches the whole curve in Lab (variable proje
 :func:`fftg_from_curve`). Gloss: the contrast-gloss rule (§3.5.3) on the foreground pixels with
 θ < 15°, or the default 50 GU.
 
-Failure ("the colour gradations do not match the lighting", §3.7.4) is detected when the RGB curve
-leaves the physical range over 15°…θ_clamp, the model refuses the result, or the design re-rendered
+Failure ("the colour gradations do not match the lighting", §3.7.4) is detected when more than 25 % of
+the pixels are outliers, the RGB curve leaves the physical range over 15°…θ_clamp, the model refuses the
+result, the fit is retroreflective (face darker than flop: what flat fills produce), or the design re-rendered
 in the scene misses the art systematically by more than ``max_shading_de`` (RMS ΔE*ab of cell means in
 (θ, ϕ) cells, :func:`shading_delta_e`: pixel noise averages out, inconsistent gradations do not). The fit
 then returns the average diffuse colour of the changed pixels (albedo = linear colour / (E ϕ)) as a
@@ -68,6 +69,8 @@ BLOCK_PX = 4
 #: Default failure threshold of the systematic misfit: 3 JND of ΔE*ab (JND = 2.3, thesis §4.3) — a
 #: rendering that departs from the art by several just-noticeable differences on average.
 MAX_SHADING_DE = 3 * 2.3
+#: A fitted face darker than the flop by more than this (L*) is retroreflective: a failure unless allowed.
+RETRO_TOLERANCE_L = 1.0
 #: Cells of the shading-consistency check: aspecular angle (degrees) × Lambert term.
 CELL_THETA_DEG, CELL_LAMBERT = 5.0, 0.1
 
@@ -259,6 +262,7 @@ def fit_point_light(
     edge_px: int = 1,
     outlier_rounds: int = 2,
     refine: bool = False,
+    allow_retroreflective: bool = False,
 ) -> SketchFit:
     """Fit a design to point-lit concept art (thesis §3.7.3; module docstring for the method).
 
@@ -286,8 +290,12 @@ def fit_point_light(
         rerun. More than 25 % trimmed → failed.
     refine
         Polish face, flop and travel by nonlinear least squares in Lab (:func:`_refine`) after the
-        linear fit (about 0.4 s more; the benchmark found no gain on hue-rotated art, so it is off by
-        default and the thesis's linear method is used alone).
+        linear fit (about 0.25 s more at 64²; on hue-rotated art it lowers the median RMS from about
+        0.4 to 0.2 ΔE*ab). Off by default: the thesis's linear method alone.
+    allow_retroreflective
+        Accept a fit whose face is darker than its flop. Off by default: flat fills (the shading of a
+        marker drawing) fit best as "brighter away from specular", which the thesis's system treats as
+        rare (§3.5.2) — here it is reported as a failure.
 
     Raises
     ------
@@ -356,7 +364,10 @@ def fit_point_light(
             fit_lin = shade(scene, design)[use]
             rms = rms_delta_e(linear_srgb_to_lab(np.clip(fit_lin, 1e-6, None)), art_lab)
             shading_de = shading_delta_e(theta, phi, y * scene.irradiance, fit_lin)
-            if shading_de > max_shading_de:
+            if not allow_retroreflective and design.face[0] < design.flop[0] - RETRO_TOLERANCE_L:
+                reason = (f"retroreflective fit (face L* {design.face[0]:.3g} < flop L* {design.flop[0]:.3g}): "
+                          "flat or inconsistent shading")
+            elif shading_de > max_shading_de:
                 reason = (f"systematic ΔE*ab {shading_de:.3g} > {max_shading_de:g}: "
                           "shading inconsistent with the scene's lighting")
         except ValueError as exc:  # the model refused the colours
@@ -421,6 +432,7 @@ def fit_environment(
     curve_angles: tuple[float, float] = (15.0, 110.0),
     highlight_rounds: int = 3,
     edge_px: int = 1,
+    allow_retroreflective: bool = False,
 ) -> SketchFit:
     """Fit a design to environment-lit concept art through per-lobe basis images (§3.7.5, interactive).
 
@@ -436,7 +448,8 @@ def fit_environment(
     ``rms_de`` is between the art and the basis reconstruction ``B w`` (what the viewer shows with these
     weights). A systematic misfit (:func:`block_delta_e`, 4 × 4 pixel tiles) above *max_shading_de*, or
     all weights zero, fails and returns the average diffuse colour (``Σ art / Σ B_diffuse``) as a solid.
-    Pixels within *edge_px* of the silhouette are not fitted.
+    Pixels within *edge_px* of the silhouette are not fitted. A curve darker at 15° than at the far end
+    is a failure unless *allow_retroreflective*.
     """
     t0 = time.perf_counter()
     if basis.images.ndim != 4 or basis.images.shape[-1] != 3:
@@ -480,8 +493,11 @@ def fit_environment(
     reason = ""
     tc = 0.0
     design: FaceFlopTravelGloss | None = None
+    lum = rgb @ LUMINANCE
     if not np.any(w > 0):
         reason = "all lobe weights are zero"
+    elif not allow_retroreflective and lum[0] < lum[-1] * (1.0 - 1e-3):
+        reason = "retroreflective fit (darker near specular than far from it): flat or inconsistent shading"
     elif shading_de > max_shading_de:
         reason = (f"systematic ΔE*ab {shading_de:.3g} > {max_shading_de:g}: "
                   "shading inconsistent with the scene's lighting")

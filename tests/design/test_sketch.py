@@ -128,3 +128,27 @@ def test_environment_fit_fails_on_inconsistent_art(environment, silver) -> None:
     art[env.mask] = np.stack([stripes, stripes * 0.5, stripes * 0.2], axis=-1)[env.mask]
     fit = fit_environment(basis, art, initial)
     assert fit.failed and fit.design.is_solid
+
+
+def test_flat_fill_of_the_goal_reads_as_retroreflective_and_fails(sphere, initial, red_metallic) -> None:
+    art = artwork.flatten_shading(_render(sphere, red_metallic), 1.0, sphere.mask)
+    fit = fit_point_light(sphere, art, initial)
+    assert fit.failed and "retroreflective" in fit.reason and fit.design.is_solid
+    allowed = fit_point_light(sphere, art, initial, allow_retroreflective=True, max_shading_de=np.inf)
+    assert not allowed.failed and allowed.design.face[0] < allowed.design.flop[0]
+
+
+def test_misregistered_art_is_fitted_robustly(sphere, initial, red_metallic) -> None:
+    art = artwork.misregister(_render(sphere, red_metallic), 1.0, -1.0)
+    fit = fit_point_light(sphere, art, initial, gloss="default")
+    assert not fit.failed
+    assert np.linalg.norm(np.subtract(fit.design.flop, red_metallic.flop)) < 3.0
+    with pytest.raises(DesignInputError, match="edge_px"):
+        fit_point_light(sphere, art, initial, edge_px=-1)
+
+
+def test_lab_polish_does_not_worsen_the_fit(sphere, initial, red_metallic) -> None:
+    art = artwork.rotate_hue(_render(sphere, red_metallic), 120.0, sphere.mask)
+    plain = fit_point_light(sphere, art, initial, gloss="default")
+    polished = fit_point_light(sphere, art, initial, gloss="default", refine=True)
+    assert polished.rms_de <= plain.rms_de + 1e-9
