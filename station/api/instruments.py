@@ -260,7 +260,11 @@ class InstrumentHub:
         for entry in box.entries():
             try:
                 with self.sessions.begin() as session:
-                    store_reading(session, Reading.model_validate_json(entry.body))
+                    reading = Reading.model_validate_json(entry.body)
+                    result = store_reading(session, reading)
+                    if result.created:
+                        audit.record(session=session, actor=None, action="measurement.replay", entity="measurement",
+                                     entity_id=result.measurement_id, client_id=str(reading.client_id))
             except Exception as exc:
                 if is_unreachable(exc):
                     break

@@ -19,6 +19,7 @@ from sqlalchemy.exc import DBAPIError, DisconnectionError, InterfaceError, Opera
 from sqlalchemy.orm import Session, sessionmaker
 
 from db.engine import make_engine, make_sessionmaker
+from db.models import AuditEvent
 from station.ingest.errors import IngestError
 from station.ingest.outbox import Outbox
 from station.ingest.schema import Reading
@@ -70,6 +71,10 @@ class Ingestor:
     def _store(self, reading: Reading) -> Receipt:
         with self._sessions.begin() as session:
             result = store_reading(session, reading, instrument_cache=self._instrument_ids)
+            if result.created:  # the audit row commits with the reading (station account: no user)
+                session.add(AuditEvent(actor_id=None, action="measurement.ingest", entity="measurement",
+                                       entity_id=str(result.measurement_id),
+                                       detail={"client_id": str(reading.client_id), "operator": reading.operator}))
         status: Literal["stored", "duplicate"] = "stored" if result.created else "duplicate"
         return Receipt(str(reading.client_id), status, result.measurement_id)
 

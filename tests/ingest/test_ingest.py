@@ -165,3 +165,15 @@ def test_non_connection_errors_are_not_swallowed(database_url: str, tmp_path: Pa
         ing.submit(make_reading(5, 0, panel_id=12345))
     with Outbox(tmp_path / "o.sqlite3") as box:
         assert len(box) == 0
+
+
+def test_ingested_readings_are_audited(database_url: str, tmp_path: Path) -> None:
+    from db.models import AuditEvent
+
+    with Ingestor(database_url, tmp_path / "o.sqlite3") as ing:
+        ing.submit(make_reading(6, 0))
+        ing.submit(make_reading(6, 0))  # duplicate: no second audit row
+        with ing.engine.connect() as conn:
+            events = conn.execute(select(AuditEvent.action, AuditEvent.detail)).all()
+    assert [e.action for e in events] == ["measurement.ingest"]
+    assert events[0].detail["client_id"] == str(make_reading(6, 0).client_id)
