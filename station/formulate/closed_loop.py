@@ -173,4 +173,9 @@ def closed_loop(
         target[:, 0] = np.clip(target[:, 0], 0.0, 150.0)  # a corrected target stays a valid Lab (L* >= 0)
         result = formulate(target, angles, [("previous", result.concentrations)], gloss_gu, 1e9, db)
     msg = f"not converged: mean ΔE00 {steps[-1].mean_de:.2f} after {max_corrections} correction(s)"
+    if len(steps) > 1 and steps[-1].predicted_mean_de > tolerance:
+        msg += (
+            f"; the corrected target is out of the model's reach (predicted ΔE00 {steps[-1].predicted_mean_de:.2f}):"
+            " the design is likely outside the gamut of the colorants actually sprayed"
+        )
     return FormulationJob(status="not_converged", message=msg, steps=tuple(steps), **base)  # type: ignore[arg-type]

@@ -25,7 +25,7 @@ from station.formulate.library import Library, classify
 
 DEMO_SEED = 20090601
 DEMO_ANGLES: tuple[float, ...] = (15.0, 45.0, 110.0, 25.0, 75.0)
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2
 DEMO_NAME = "demo (SYNTHETIC: generated from the synthetic colorant model)"
 _TINTS = ("yellow_py", "orange_po", "red_pr", "magenta_pv", "blue_pb", "green_pg")
 

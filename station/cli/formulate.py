@@ -1,0 +1,299 @@
+"""``station library|snap|formulate|export``: the formulation bridge (thesis §5.3; DESIGN.md §6).
+
+* ``station library import FILE [--out FILE]`` — read and validate a CSV or CxF3 library, optionally
+  convert it; ``station library export demo|FILE --format csv|cxf --out FILE``; ``station library
+  browse [--library demo|FILE] --filter type=metallic,pearl --filter flop=3:10 …``.
+* ``station snap --library FILE|demo --lab "L,a,b;L,a,b;L,a,b" [--k 5] [--de cie76|cie2000|din6175]
+  [--png OUT]`` → ``{"matches": [{"code", "sum_de", "de_per_angle"}], "warnings": [...]}``.
+* ``station formulate DESIGN [--closed-loop]`` — recipe from the ColorSnap match's recipe.
+* ``station export DESIGN --format xml|cxf --out FILE`` — the design (both angle sets) and its match.
+
+DESIGN is a ``cacad.design/1`` JSON file or ``"L,a,b;L,a,b;L,a,b"`` at 15/45/110°. The demo
+library and the colorants are SYNTHETIC; every output that uses them says so.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from station.cli._common import add_json_flag, parse_lab_list
+from station.errors import InputError
+
+_FILTER_KEYS = ("type", "flop", "chroma", "hue_shift", "set", "kind", "group")
+
+
+def _load_library(spec: str) -> Any:
+    from station.formulate.cxf import read_library_cxf
+    from station.formulate.demo import demo_library
+    from station.formulate.library_csv import read_library_csv
+
+    if spec == "demo":
+        return demo_library()
+    path = Path(spec)
+    if path.suffix.lower() == ".csv":
+        return read_library_csv(path)
+    if path.suffix.lower() in (".cxf", ".xml"):
+        return read_library_cxf(path)
+    raise InputError("library", "demo, or a .csv / .cxf library file", spec)
+
+
+def _design_lab(text: str) -> tuple[np.ndarray, float | None, str]:
+    """Return (Lab at 15/45/110, gloss or None, name) from a design file or a Lab list."""
+    from station.model.design_io import load_design
+
+    if ";" in text or ("," in text and not Path(text).exists()):
+        lab = np.asarray(parse_lab_list(text, "design"))
+        if lab.shape != (3, 3):
+            raise InputError("design", '3 Lab triples at 15/45/110: "L,a,b;L,a,b;L,a,b"', text)
+        return lab, None, "design"
+    design = load_design(text)
+    return design.lab_at(np.array([15.0, 45.0, 110.0])), design.gloss_gu, design.name or Path(text).stem
+
+
+def _library_summary(lib: Any) -> dict[str, Any]:
+    from station.formulate.library import hierarchy_counts
+
+    return {
+        "library": lib.name,
+        "synthetic": lib.synthetic,
+        "paints": len(lib),
+        "angles_deg": list(lib.angles_deg),
+        "types": {t: int(np.sum(lib.types == t)) for t in ("solid", "metallic", "pearl")},
+        "hierarchy": hierarchy_counts(lib),
+    }
+
+
+def _write_library(lib: Any, out: Path, fmt: str | None) -> str:
+    from station.formulate.cxf import write_library_cxf
+    from station.formulate.library_csv import write_library_csv
+
+    fmt = fmt or ("cxf" if out.suffix.lower() in (".cxf", ".xml") else "csv")
+    if fmt == "csv":
+        write_library_csv(lib, out)
+    elif fmt == "cxf":
+        write_library_cxf(lib, out)
+    else:
+        raise InputError("format", "csv | cxf", fmt)
+    return fmt
+
+
+def cmd_library_import(args: argparse.Namespace) -> dict[str, Any]:
+    """Validate a library file; convert it with ``--out``."""
+    lib = _load_library(str(args.file))
+    out = _library_summary(lib)
+    if args.out:
+        out["written"] = str(args.out)
+        out["format"] = _write_library(lib, Path(args.out), args.format)
+    return out
+
+
+def cmd_library_export(args: argparse.Namespace) -> dict[str, Any]:
+    """Write a library (``demo`` or a file) as CSV or CxF3."""
+    lib = _load_library(args.library)
+    fmt = _write_library(lib, Path(args.out), args.format)
+    return {"library": lib.name, "synthetic": lib.synthetic, "paints": len(lib), "format": fmt, "out": str(args.out)}
+
+
+def _bounds(text: str, key: str) -> tuple[float | None, float | None]:
+    lo, sep, hi = text.partition(":")
+    if not sep:
+        raise InputError(f"filter.{key}", f"{key}=MIN:MAX (either side may be empty)", text)
+    try:
+        return (float(lo) if lo.strip() else None, float(hi) if hi.strip() else None)
+    except ValueError as exc:
+        raise InputError(f"filter.{key}", f"{key}=MIN:MAX with numbers", text) from exc
+
+
+def parse_filters(items: list[str]) -> Any:
+    """``["type=metallic,pearl", "flop=3:10", "group=red"]`` → :class:`LibraryFilter`."""
+    from station.formulate.library import PAINT_TYPES, LibraryFilter
+
+    kw: dict[str, Any] = {}
+    for item in items:
+        for part in item.split(";"):
+            if not part.strip():
+                continue
+            key, sep, value = part.partition("=")
+            key = key.strip().replace("-", "_")
+            if not sep or key not in _FILTER_KEYS:
+                raise InputError("filter", f"KEY=VALUE with KEY in {', '.join(_FILTER_KEYS)}", part)
+            if key == "type":
+                kw["types"] = frozenset(v.strip() for v in value.split(",") if v.strip())
+                if not kw["types"] <= set(PAINT_TYPES):
+                    raise InputError("filter.type", " , ".join(PAINT_TYPES), value)
+            elif key in ("flop", "chroma", "hue_shift"):
+                kw[key] = _bounds(value, key)
+            else:
+                kw["set_name" if key == "set" else key] = value.strip()
+    return LibraryFilter(**kw)
+
+
+def cmd_library_browse(args: argparse.Namespace) -> dict[str, Any]:
+    """Filter a library (type check boxes, index bounds, hierarchy) and list the first paints."""
+    lib = _load_library(args.library)
+    flt = parse_filters(args.filter)
+    mask = flt.mask(lib)
+    rows = np.flatnonzero(mask)
+    idx = lib.indices() if any(b != (None, None) for b in (flt.flop, flt.chroma, flt.hue_shift)) else None
+    top, kind, group = lib.groups()
+    std = lib.angle_columns()
+    paints = []
+    for r in rows[: args.limit]:
+        item: dict[str, Any] = {
+            "code": str(lib.codes[r]), "type": str(lib.types[r]), "gloss_gu": float(lib.gloss_gu[r]),
+            "group": [str(top[r]), str(kind[r]), str(group[r])], "lab_15_45_110": std[r].tolist(),
+        }
+        if idx is not None:
+            item["indices"] = {k: (None if np.isnan(v[r]) else float(v[r])) for k, v in idx.items()}
+        paints.append(item)
+    return {"library": lib.name, "synthetic": lib.synthetic, "matched": int(rows.size), "shown": len(paints),
+            "paints": paints}
+
+
+def cmd_snap(args: argparse.Namespace) -> dict[str, Any]:
+    """ColorSnap: nearest library paints by summed ΔE over 15/45/110°."""
+    from station.formulate.snap import color_snap, view_data
+
+    if args.lab is None and args.design is None:
+        raise InputError("lab", '--lab "L,a,b;L,a,b;L,a,b" or --design FILE', None)
+    lab, _, name = _design_lab(args.lab if args.lab is not None else str(args.design))
+    lib = _load_library(args.library)
+    result = color_snap(lib, lab, k=args.k, method=args.de)
+    out: dict[str, Any] = result.to_dict()
+    out.update({"library": lib.name, "synthetic": lib.synthetic})
+    if args.png or args.view:
+        view = view_data(lib, result)
+        if args.view:
+            out["view"] = view
+        if args.png:
+            from station.formulate.snap_plot import plot_snap_view
+
+            out["png"] = str(plot_snap_view(view, args.png, f"ColorSnap: {name} in {lib.name}"))
+    return out
+
+
+def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
+    """Formulate a recipe from the ColorSnap match's recipe; optionally run the simulated closed loop."""
+    from station.formulate.formulation import formulate_from_library
+
+    lab, gloss, name = _design_lab(args.design)
+    if args.gloss is not None:
+        gloss = args.gloss
+    lib = _load_library(args.library)
+    result, snap = formulate_from_library(lab, lib, gloss_gu=gloss, tolerance=args.tolerance)
+    out: dict[str, Any] = {"design": name, **result.to_dict(), "matches": snap.to_dict()["matches"],
+                           "snap_warnings": list(snap.warnings), "library": lib.name}
+    if args.closed_loop:
+        from station.formulate.closed_loop import closed_loop
+        from station.formulate.sprayout import SprayOutModel
+
+        spray = SprayOutModel(seed=args.seed)
+        starts = [(m.code, lib.recipes[m.index]) for m in snap.matches]
+        job = closed_loop(lab, spray.measure, starts=starts, gloss_gu=gloss, tolerance=args.tolerance,
+                          max_corrections=args.corrections)
+        out["closed_loop"] = job.to_dict()
+        out["closed_loop"]["measurement"] = f"simulated spray-out panel model (SYNTHETIC), seed {args.seed}"
+    return out
+
+
+def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
+    """Export a design (both 3-angle sets, optionally 5 angles) and its ColorSnap match."""
+    from station.formulate.color_xml import spec_from_design, spec_from_lab, write_color_xml
+    from station.formulate.cxf import specs_to_cxf
+    from station.formulate.snap import color_snap
+    from station.model import FaceFlopTravelGloss, fit_fftg
+    from station.model.design_io import load_design
+
+    if ";" in args.design:
+        lab, _, _ = _design_lab(args.design)
+        from station.model import AspecularMeasurements
+
+        fit = fit_fftg(AspecularMeasurements((15.0, 45.0, 110.0), lab, args.gloss if args.gloss is not None else 90.0))
+        design: FaceFlopTravelGloss = fit.design
+    else:
+        design = load_design(args.design)
+    specs = [spec_from_design(design, name=design.name or "design", five_angles=args.five_angles)]
+    match_code = None
+    if not args.no_match:
+        lib = _load_library(args.library)
+        result = color_snap(lib, design.lab_at(np.array([15.0, 45.0, 110.0])), k=1, method=args.de)
+        m = result.matches[0]
+        row = lib.lab[m.index]
+        specs.append(
+            spec_from_lab(m.code, {a: tuple(row[j]) for j, a in enumerate(lib.angles_deg)}, float(lib.gloss_gu[m.index]),
+                          role="match", paint_type=str(lib.types[m.index]), code=m.code, synthetic=lib.synthetic,
+                          five_angles=args.five_angles)
+        )
+        match_code = m.code
+    out_path = Path(args.out)
+    if args.format == "xml":
+        write_color_xml(specs, out_path)
+    else:
+        out_path.write_bytes(specs_to_cxf(specs))
+    return {"out": str(out_path), "format": args.format, "colors": [s.name for s in specs], "match": match_code,
+            "angle_sets": [list(s.angles_deg) for s in specs[0].sets]}
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``station library``, ``snap``, ``formulate`` and ``export``."""
+    lib = subparsers.add_parser("library", help="colour libraries: import, export, browse (thesis §5.3.3)")
+    sub = lib.add_subparsers(dest="library_command", required=True, metavar="SUBCOMMAND")
+    p = sub.add_parser("import", help="read and validate a CSV / CxF3 library; convert with --out")
+    p.add_argument("file", type=Path)
+    p.add_argument("--out", type=Path, help="write the library again (.csv or .cxf)")
+    p.add_argument("--format", choices=("csv", "cxf"), help="format of --out (default: from its suffix)")
+    add_json_flag(p)
+    p.set_defaults(handler=cmd_library_import)
+    p = sub.add_parser("export", help="write a library (demo or a file) as CSV or CxF3")
+    p.add_argument("library", help="demo (SYNTHETIC) or a library file")
+    p.add_argument("--format", choices=("csv", "cxf"), help="default: from the suffix of --out")
+    p.add_argument("--out", required=True, type=Path)
+    add_json_flag(p)
+    p.set_defaults(handler=cmd_library_export)
+    p = sub.add_parser("browse", help="filter by type, Flop/Chroma/Hue Shift Index bounds and hierarchy")
+    p.add_argument("--library", default="demo", help="demo (SYNTHETIC, default) or a library file")
+    p.add_argument("--filter", action="append", default=[],
+                   help="type=solid,metallic,pearl | flop=MIN:MAX | chroma=MIN:MAX | hue_shift=MIN:MAX | "
+                        "set=solids|metallics+pearls | kind=chromatic|neutral | group=red|…|dark (repeatable)")
+    p.add_argument("--limit", type=int, default=20, help="paints listed (default 20)")
+    add_json_flag(p)
+    p.set_defaults(handler=cmd_library_browse)
+
+    p = subparsers.add_parser("snap", help="ColorSnap: nearest library paints (thesis §5.3.5)")
+    p.add_argument("--library", default="demo", help="demo (SYNTHETIC, default) or a library file")
+    p.add_argument("--lab", help='design Lab at 15/45/110: "L,a,b;L,a,b;L,a,b"')
+    p.add_argument("--design", type=Path, help="design file instead of --lab")
+    p.add_argument("--k", type=int, default=5, help="matches (default 5)")
+    p.add_argument("--de", choices=("cie76", "cie2000", "din6175"), default="cie76",
+                   help="ΔE summed over angles (default cie76 = ΔE*ab, the thesis's)")
+    p.add_argument("--png", type=Path, help="write the 3D Lab view as PNG")
+    p.add_argument("--view", action="store_true", help="include the 3D view data in the output")
+    add_json_flag(p)
+    p.set_defaults(handler=cmd_snap)
+
+    p = subparsers.add_parser("formulate", help="recipe for a design from the synthetic colorants")
+    p.add_argument("design", help='design file, or "L,a,b;L,a,b;L,a,b" at 15/45/110')
+    p.add_argument("--library", default="demo", help="library with recipes (default demo, SYNTHETIC)")
+    p.add_argument("--gloss", type=float, help="60° gloss target in GU (default: the design's)")
+    p.add_argument("--tolerance", type=float, default=1.0, help="mean ΔE00 for 'formulable' (default 1.0)")
+    p.add_argument("--closed-loop", action="store_true", help="spray, measure and correct (simulated panel)")
+    p.add_argument("--corrections", type=int, default=3, help="closed-loop corrections (default 3)")
+    p.add_argument("--seed", type=int, default=7, help="seed of the simulated spray-out panel")
+    add_json_flag(p)
+    p.set_defaults(handler=cmd_formulate)
+
+    p = subparsers.add_parser("export", help="design + ColorSnap match as thesis XML or CxF3")
+    p.add_argument("design", help='design file, or "L,a,b;L,a,b;L,a,b" at 15/45/110 (fitted)')
+    p.add_argument("--format", choices=("xml", "cxf"), required=True)
+    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("--library", default="demo", help="library for the match (default demo, SYNTHETIC)")
+    p.add_argument("--de", choices=("cie76", "cie2000", "din6175"), default="cie76")
+    p.add_argument("--five-angles", action="store_true", help="also export the 15/25/45/75/110 set")
+    p.add_argument("--no-match", action="store_true", help="export the design alone")
+    p.add_argument("--gloss", type=float, help="gloss (GU) when DESIGN is a Lab list (default 90)")
+    add_json_flag(p)
+    p.set_defaults(handler=cmd_export)

@@ -1,0 +1,89 @@
+"""CLI: station library|snap|formulate|export, JSON output and exit statuses."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from station.cli import main
+from station.formulate.color_xml import read_color_xml
+from station.formulate.cxf import read_cxf_specs
+from station.formulate.demo import demo_library
+from station.formulate.library import Library
+from station.formulate.library_csv import read_library_csv, write_library_csv
+from station.formulate.snap import brute_force
+
+LAB = "60,30,10;40,28,12;20,20,10"
+
+
+def _run(capsys, *argv: str) -> dict:
+    assert main([*argv, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_snap_json_matches_brute_force_and_writes_png(capsys, tmp_path) -> None:
+    png = tmp_path / "view.png"
+    out = _run(capsys, "snap", "--library", "demo", "--lab", LAB, "--k", "4", "--de", "din6175", "--png", str(png))
+    lib = demo_library()
+    rows, sums, _ = brute_force(lib.angle_columns(), np.array([[60, 30, 10], [40, 28, 12], [20, 20, 10.0]]), 4,
+                                "din6175")
+    assert [m["code"] for m in out["matches"]] == lib.codes[rows].tolist()
+    assert [m["sum_de"] for m in out["matches"]] == sums.tolist()
+    assert all(len(m["de_per_angle"]) == 3 for m in out["matches"])
+    assert isinstance(out["warnings"], list) and out["synthetic"] is True
+    assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_library_import_export_browse(capsys, tmp_path, small_library: Library) -> None:
+    src = tmp_path / "lib.csv"
+    write_library_csv(small_library, src)
+    out = _run(capsys, "library", "import", str(src), "--out", str(tmp_path / "lib.cxf"))
+    assert out["paints"] == len(small_library) and out["format"] == "cxf"
+    out = _run(capsys, "library", "import", str(tmp_path / "lib.cxf"), "--out", str(tmp_path / "back.csv"))
+    assert read_library_csv(tmp_path / "back.csv").codes.tolist() == small_library.codes.tolist()
+    out = _run(capsys, "library", "browse", "--library", str(src), "--filter", "type=metallic,pearl",
+               "--filter", "flop=5:;group=red", "--limit", "3")
+    assert out["shown"] <= 3 and out["matched"] >= out["shown"]
+    for p in out["paints"]:
+        assert p["type"] in ("metallic", "pearl") and p["indices"]["flop"] >= 5 and p["group"][2] == "red"
+    out = _run(capsys, "library", "export", "demo", "--out", str(tmp_path / "demo.csv"))
+    assert out["paints"] == 6000 and out["synthetic"]
+
+
+def test_formulate_and_closed_loop(capsys) -> None:
+    lib = demo_library()
+    lab = lib.angle_columns()[4321] + 0.8
+    text = ";".join(",".join(f"{v:.4f}" for v in row) for row in lab)
+    out = _run(capsys, "formulate", text, "--closed-loop")
+    assert out["formulable"] and out["mean_de"] <= 1.0 and len(out["de_per_angle"]) == 3
+    assert out["synthetic_colorants"] is True
+    assert out["closed_loop"]["status"] == "converged" and out["closed_loop"]["corrections"] <= 3
+
+
+@pytest.mark.parametrize("fmt", ["xml", "cxf"])
+def test_export_design_and_match(capsys, tmp_path, fmt: str) -> None:
+    path = tmp_path / f"out.{fmt}"
+    out = _run(capsys, "export", LAB, "--format", fmt, "--out", str(path), "--five-angles")
+    specs = read_color_xml(path) if fmt == "xml" else read_cxf_specs(path)
+    assert [s.role for s in specs] == ["design", "match"]
+    assert specs[1].code == out["match"] and specs[1].synthetic
+    assert [s.angles_deg for s in specs[0].sets][:2] == [(15.0, 45.0, 110.0), (25.0, 45.0, 75.0)]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["snap", "--lab", "60,30,10;40,28,12"],
+        ["snap", "--lab", "60,30,10;40,28,12;20,20,x"],
+        ["snap", "--lab", LAB, "--k", "0"],
+        ["snap", "--lab", LAB, "--library", "nope.txt"],
+        ["library", "browse", "--filter", "flop=abc"],
+        ["library", "browse", "--filter", "colour=red"],
+    ],
+)
+def test_bad_input_exits_2_with_one_line(capsys, argv: list[str]) -> None:
+    assert main([*argv, "--json"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1
