@@ -131,6 +131,49 @@ def scene_from_normals(
     return Scene(name, n, m, light, theta, phi, ldirs, float(irradiance))
 
 
+def scene_from_buffers(
+    aspecular_deg: ArrayLike,
+    mask: ArrayLike,
+    *,
+    lambert: ArrayLike | None = None,
+    incidence_deg: ArrayLike | None = None,
+    light_dirs: ArrayLike | None = None,
+    normals: ArrayLike | None = None,
+    light_dir: ArrayLike = DEFAULT_LIGHT,
+    irradiance: float = 1.0,
+    name: str = "buffers",
+) -> Scene:
+    """Wrap buffers made elsewhere (e.g. ``station.render.buffers.angle_buffers`` on the GPU path) as a
+    :class:`Scene`. Give the Lambert term either as ϕ = cos(incidence) (*lambert*) or as the incidence
+    angle in degrees (*incidence_deg*, clipped at 90° → ϕ = 0). Missing light-direction or normal
+    buffers are zero (the tools that need them then refuse with a typed error)."""
+    theta = np.asarray(aspecular_deg, dtype=float)
+    m = np.asarray(mask, dtype=bool)
+    if theta.ndim != 2 or m.shape != theta.shape:
+        raise DesignInputError("aspecular_deg/mask", "two (H, W) buffers of one shape", (theta.shape, m.shape))
+    if (lambert is None) == (incidence_deg is None):
+        raise DesignInputError("lambert", "exactly one of lambert or incidence_deg", None)
+    if lambert is not None:
+        phi = np.asarray(lambert, dtype=float)
+    else:
+        phi = np.maximum(np.cos(np.radians(np.asarray(incidence_deg, dtype=float))), 0.0)
+    if phi.shape != theta.shape:
+        raise DesignInputError("lambert", f"an (H, W) buffer of shape {theta.shape}", phi.shape)
+    buffers = (theta, phi)
+    if not all(np.all(np.isfinite(b[m])) for b in buffers):
+        raise DesignInputError("aspecular_deg", "finite values on the foreground", "non-finite")
+    zeros3 = np.zeros((*theta.shape, 3))
+    ld = zeros3 if light_dirs is None else np.asarray(light_dirs, dtype=float)
+    nm = zeros3 if normals is None else np.asarray(normals, dtype=float)
+    if ld.shape != zeros3.shape or nm.shape != zeros3.shape:
+        raise DesignInputError("light_dirs/normals", f"(H, W, 3) buffers of shape {zeros3.shape}",
+                               (ld.shape, nm.shape))
+    if not np.isfinite(irradiance) or irradiance <= 0:
+        raise DesignInputError("irradiance", "finite > 0", irradiance)
+    return Scene(name, nm, m, _unit(light_dir, "light_dir"), np.where(m, theta, 0.0), np.where(m, phi, 0.0),
+                 ld, float(irradiance))
+
+
 def _grid(size: int) -> tuple[NDArray, NDArray]:
     c = (np.arange(size) + 0.5) / size * 2.0 - 1.0
     x, y = np.meshgrid(c, -c)  # row 0 = top = +y
@@ -349,12 +392,16 @@ class LobeBasis:
     images: NDArray[np.float64]
     exponents: tuple[float | None, ...]
     mask: NDArray[np.bool_]
+    scales: tuple[float, ...] | None = None
 
     def lobe_values(self, theta_deg: ArrayLike) -> NDArray[np.float64]:
-        """Each lobe's BRDF factor (without L·N) at aspecular angles: ``(..., J)``; cos^E clipped at 90°."""
+        """Each lobe's reflectance factor at aspecular angles in the measurement geometry, ``(..., J)``:
+        ``scale_j`` × (1 for the diffuse lobe, cos(θ)^E_j clipped at 90° otherwise). *scales* (default 1)
+        lets a renderer whose lobes are normalised differently state its constants."""
         c = np.cos(np.radians(np.asarray(theta_deg, dtype=float)))[..., None]
         cols = [np.ones_like(c) if e is None else np.where(c > 0, np.abs(c) ** e, 0.0) for e in self.exponents]
-        return np.concatenate(cols, axis=-1)
+        out = np.concatenate(cols, axis=-1)
+        return out if self.scales is None else out * np.asarray(self.scales, dtype=float)
 
 
 DEFAULT_EXPONENTS: tuple[float | None, ...] = (None, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
