@@ -1,0 +1,64 @@
+"""``station render`` end to end on a small environment file (NumPy engine), and its input errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from station.cli import main
+from station.model import FaceFlopTravelGloss
+from station.model.design_io import save_design
+from station.render import procedural
+from station.render.hdr_io import write_hdr
+
+
+@pytest.fixture()
+def files(tmp_path):
+    d1, d2 = tmp_path / "a.json", tmp_path / "b.json"
+    save_design(FaceFlopTravelGloss((60.0, 10.0, -40.0), (30.0, 5.0, -30.0), 60.0, 85.0), d1)
+    save_design(FaceFlopTravelGloss((55.0, 30.0, 20.0), (35.0, 20.0, 10.0), 50.0, 40.0), d2)
+    env = tmp_path / "sky.hdr"
+    write_hdr(env, procedural.sunny_sky(64).equirect)
+    return d1, d2, env
+
+
+def test_render_numpy_to_png_and_json(files, tmp_path, capsys):
+    d1, d2, env = files
+    out = tmp_path / "o.png"
+    lin = tmp_path / "o.npy"
+    rc = main(["render", "--design", str(d1), "--design2", str(d2), "--env", str(env), "--shape", "panels",
+               "--misalignment", "4", "--size", "24", "--engine", "numpy", "--out", str(out),
+               "--linear-out", str(lin), "--cache-dir", str(tmp_path / "cache"), "--json"])
+    assert rc == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["engine"] == "numpy" and len(result["lobes"]) >= 1
+    assert {"fit", "prefilter", "render", "encode"} <= set(result["timings"])
+    img = np.asarray(Image.open(out))
+    assert img.shape == (24, 24, 3)
+    linear = np.load(lin)
+    assert np.isfinite(linear).all() and linear.shape == (24, 24, 3)
+    # the two panels carry different designs: their mean colours differ
+    assert np.abs(img[8:16, 4:10].mean((0, 1)) - img[8:16, 14:20].mean((0, 1))).max() > 5
+    assert list((tmp_path / "cache" / "prefilter").glob("*.npy"))
+
+
+@pytest.mark.parametrize(("extra", "field"), [
+    (["--env", "moon"], "env"), (["--size", "2"], "size"), (["--out", "x.jpg"], "out")])
+def test_render_input_errors_exit_2(files, tmp_path, capsys, extra, field):
+    d1, _, _ = files
+    args = ["render", "--design", str(d1), "--env", "booth", "--size", "16", "--out", str(tmp_path / "x.png")]
+    rc = main(args + extra)
+    assert rc == 2
+    assert capsys.readouterr().err.startswith(f"error: {field}")
+
+
+def test_render_rejects_bad_hdr(files, tmp_path, capsys):
+    d1, _, _ = files
+    bad = tmp_path / "bad.hdr"
+    bad.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n\x02\x02")
+    rc = main(["render", "--design", str(d1), "--env", str(bad), "--size", "16", "--out", str(tmp_path / "x.png")])
+    assert rc == 2
+    assert "truncated" in capsys.readouterr().err
