@@ -139,3 +139,31 @@ def test_inter_instrument_bias_is_reported_size():
         bench.close()
     bias = delta_e(labs.mean(axis=0), DEFAULT_DESIGN.lab_at(np.asarray(ANGLES)), method="cie2000")
     assert 0.1 <= float(bias.mean()) <= 0.6
+
+
+def test_port_held_by_another_process():
+    """A real second process takes the exclusive flock pyserial uses; our open gets DeviceInUse."""
+    import subprocess
+    import sys
+
+    bench = Ma6Bench()
+    holder = subprocess.Popen(
+        [sys.executable, "-c",
+         "import fcntl, os, sys; fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY);"
+         "fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB); print('held', flush=True); sys.stdin.read()",
+         bench.host.path], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    try:
+        assert holder.stdout.readline().strip() == b"held"
+        with pytest.raises(DeviceInUse):
+            bench.inst.open()
+    finally:
+        holder.stdin.close()
+        holder.wait(5)
+        holder.stdout.close()
+        bench.close()
+    bench2 = Ma6Bench()  # once the other process is gone the port opens
+    try:
+        bench2.inst.open()
+        assert_true_reading(bench2.inst.measure(), bench2)
+    finally:
+        bench2.close()

@@ -97,3 +97,21 @@ def test_open_failure_is_fast():
     with pytest.raises(CommunicationError):
         open_instrument("/dev/ttyNOPE0")
     assert time.monotonic() - t0 < 1.0
+
+
+def test_runtime_code_never_imports_simulators():
+    """The import-linter contract, checked here too: no module under station/ or db/ imports simulators."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    offenders = []
+    for pkg in ("station", "db"):
+        for path in (root / pkg).rglob("*.py"):
+            tree = ast.parse(path.read_text(), str(path))
+            for node in ast.walk(tree):
+                names = [a.name for a in node.names] if isinstance(node, ast.Import) else (
+                    [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+                if any(n == "simulators" or n.startswith("simulators.") for n in names):
+                    offenders.append(str(path.relative_to(root)))
+    assert offenders == []
