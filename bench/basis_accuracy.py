@@ -8,6 +8,8 @@ Run: ``.venv/bin/python -m bench.basis_accuracy``. For the shipped bases with 1.
 * "exact": the lobe model of eqs 2.3.1–2.3.3 integrated the same way (the cost of the lobe fit);
 * "prefiltered": the lobe model as the renderers evaluate it (eqs 2.5.1–2.5.3: (R·N) for (L·N),
   lobes not clipped at the horizon), i.e. what a perfect GL/NumPy renderer shows;
+* "prefiltered-lut": the same single lookups per lobe, (R·N) replaced by the horizon factors
+  g(E, R·N), h(E, R·N) of :func:`station.render.lobes.horizon_factors` (exact for constant light);
 * ΔE: CIEDE2000 per pixel, Lab relative to one white per scene: the brightest white-Lambertian pixel
   (a viewer adapts to the scene, not pixel by pixel);
 * frame-time proxy: blending cached per-lobe basis images at 1024×1024 (2m + 1 RGB float32 images;
@@ -33,6 +35,7 @@ from station.render.lobes import LobeBasis, basis_table, default_basis
 SPHERE = 32
 ENVIRONMENTS = ("booth", "sky")
 MEAN_BAR, P95_BAR = 1.0, 2.3
+MODES = tr.LOBE_MODES
 
 
 def environment(name: str):
@@ -47,7 +50,7 @@ def scene_errors(scene: tr.TruthScene, brdfs: list[lf.DesignedBRDF], basis: Lobe
     """ΔE00 per design and pixel, (d, P), for the exact and prefiltered lobe models against truth."""
     white = float(scene.white()[..., 1].max())
     rep = lf.fit_targets(lf.targets_from_brdfs(brdfs), basis)
-    out: dict[str, list[np.ndarray]] = {"exact": [], "prefiltered": []}
+    out: dict[str, list[np.ndarray]] = {mode: [] for mode in MODES}
     for i, brdf in enumerate(brdfs):
         ref = linear_srgb_to_lab(scene.truth(brdf) / white)
         w = rep.weights(i)
@@ -79,7 +82,7 @@ def chart(rows: list[dict[str, float]], path) -> None:
     m = [r["lobes"] for r in rows]
     ms = [r["frame_ms"] for r in rows]
     for env, colour in zip(ENVIRONMENTS, ("tab:blue", "tab:orange"), strict=True):
-        for mode, ls in (("exact", "-"), ("prefiltered", "--")):
+        for mode, ls in zip(MODES, ("-", "--", ":"), strict=True):
             mean = [r[f"{env}/{mode}/mean"] for r in rows]
             p95 = [r[f"{env}/{mode}/p95"] for r in rows]
             axes[0].plot(m, mean, ls, color=colour, marker="o", ms=3, label=f"{env} {mode} mean")
@@ -129,7 +132,7 @@ def main() -> None:
         if row["lobes"] != default_m:
             continue
         for env in ENVIRONMENTS:
-            for mode in ("exact", "prefiltered"):
+            for mode in MODES:
                 mean, p95 = row[f"{env}/{mode}/mean"], row[f"{env}/{mode}/p95"]
                 ok = "meets" if mean <= MEAN_BAR and p95 <= P95_BAR else "MISSES"
                 cases += [
@@ -140,15 +143,16 @@ def main() -> None:
     png = ROOT / "docs" / "render-basis-accuracy.png"
     chart(rows, png)
     header = "| lobes | frame proxy ms | " + " | ".join(
-        f"{env} {mode} mean / p95" for env in ENVIRONMENTS for mode in ("exact", "prefiltered")) + " |"
-    lines = [header, "|" + "---|" * (2 + 2 * len(ENVIRONMENTS))]
+        f"{env} {mode} mean / p95" for env in ENVIRONMENTS for mode in MODES) + " |"
+    lines = [header, "|" + "---|" * (2 + len(MODES) * len(ENVIRONMENTS))]
     for r in rows:
         cells = " | ".join(f"{r[f'{env}/{mode}/mean']:.2f} / {r[f'{env}/{mode}/p95']:.2f}"
-                           for env in ENVIRONMENTS for mode in ("exact", "prefiltered"))
+                           for env in ENVIRONMENTS for mode in MODES)
         lines.append(f"| {r['lobes']} | {r['frame_ms']:.2f} | {cells} |")
     extra = ("Error against lobe count and frame time: `docs/render-basis-accuracy.png`.\n\n" + "\n".join(lines)
              + "\n\n*exact*: lobe model integrated like the truth (cost of the fit alone); *prefiltered*: the "
-               "renderers' evaluation (eqs 2.5.1–2.5.3).")
+               "renderers' evaluation (eqs 2.5.1–2.5.3); *prefiltered-lut*: the same lookups with the "
+               "per-lobe horizon factors of `station.render.lobes.horizon_factors` instead of R·N.")
     write_section("basis_accuracy", "Lobe basis against ground truth (booth, sky)", cases, extra)
 
 

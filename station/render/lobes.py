@@ -189,3 +189,32 @@ def basis_for_count(m: int) -> LobeBasis:
 def default_basis() -> LobeBasis:
     """Return the shipped default basis (its lobe count is the table's ``default_lobes``)."""
     return basis_for_count(int(basis_table()["default_lobes"]))  # type: ignore[arg-type]
+
+
+def horizon_factors(exponent: float, r_dot_n: ArrayLike, nodes: int = 1024
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Cosine and horizon factors of a normalised lobe about R at angle β from N (cos β = R·N).
+
+    Returns (g, h), each shaped like *r_dot_n*, with p(ω) = (E+1)/(2π) max(R·ω, 0)^E:
+
+        g = ∫ p(ω) max(N·ω, 0) dω     (what the directionally diffuse term needs, eq 2.3.3)
+        h = ∫ p(ω) 1[N·ω > 0] dω       (the part of a gloss lobe above the horizon, eq 2.3.2)
+
+    A renderer that looks up one prefiltered map C_E(R) per lobe (eqs 2.5.1–2.5.2) is exact in a
+    constant environment when it weights K_DD by g instead of R·N and K_G by h. For E → ∞, g → R·N and
+    h → 1. The azimuthal integral about R is closed-form; the polar one uses *nodes* midpoints in
+    u = cos^(E+1) ψ (equal lobe mass each).
+    """
+    c = np.clip(np.asarray(r_dot_n, dtype=float), -1.0, 1.0)
+    u = (np.arange(nodes) + 0.5) / nodes
+    cos_psi = u ** (1.0 / (exponent + 1.0))
+    sin_psi = np.sqrt(np.maximum(0.0, 1.0 - cos_psi**2))
+    sin_b = np.sqrt(np.maximum(0.0, 1.0 - c**2))[..., None]
+    a = c[..., None] * cos_psi  # N·ω = a + b cos φ
+    b = sin_b * sin_psi
+    with np.errstate(divide="ignore", invalid="ignore"):
+        phi0 = np.where(b > 1e-15, np.arccos(np.clip(-a / np.where(b > 1e-15, b, 1.0), -1.0, 1.0)),
+                        np.where(a > 0, np.pi, 0.0))
+    g = (2.0 * (a * phi0 + b * np.sin(phi0)) / (2.0 * np.pi)).mean(axis=-1)
+    h = (phi0 / np.pi).mean(axis=-1)
+    return g, h

@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.render.errors import RenderInputError
 from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf
+from station.render.lobes import horizon_factors
 from station.render.weights import LobeWeights
 
 if TYPE_CHECKING:
@@ -55,6 +56,8 @@ QUADRATURE_WIDTH = 256
 SHARP_EXPONENT = 64.0
 #: Importance samples per pixel and sharp lobe.
 LOBE_SAMPLES = 256
+#: How :meth:`TruthScene.lobes` evaluates the lobe model.
+LOBE_MODES = ("exact", "prefiltered", "prefiltered-lut")
 _BINS = ALPHA_GRID_DEG.size  # 721 bins of 0.25°
 _PIXEL_CHUNK = 48
 
@@ -304,18 +307,24 @@ class TruthScene:
 
         ``exact``: eqs 2.3.1–2.3.3 integrated like the truth. ``prefiltered``: as the renderers evaluate
         it (eqs 2.5.1–2.5.3): K_D E(N) + (R·N)₊ Σ K_DD,i I_i + Σ K_G,i I_i with I_i the unclipped lobe
-        integral about R (what a normalised prefiltered map times 2π/(E+1) holds).
+        integral about R (what a normalised prefiltered map times 2π/(E+1) holds). ``prefiltered-lut``:
+        the same lookups with (R·N) replaced by g(E_i, R·N) and the gloss weighted by h(E_i, R·N) from
+        :func:`station.render.lobes.horizon_factors` (a small per-lobe table a shader can hold).
         """
-        if mode not in ("exact", "prefiltered"):
-            raise RenderInputError("mode", "exact | prefiltered", mode)
+        if mode not in LOBE_MODES:
+            raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
         out = weights.k_d[None, :] * self.irradiance()
-        r_dot_n = np.maximum(np.einsum("ij,ij->i", self.reflect, self.normals), 0.0)[:, None]
+        r_dot_n = np.einsum("ij,ij->i", self.reflect, self.normals)
         for i, e in enumerate(weights.exponents):
             if mode == "exact":
                 out = out + weights.k_dd[i][None, :] * self.lobe(e, "cos") + weights.k_g[i] * self.lobe(e, "mask")
+                continue
+            lobe = self.lobe(e, "open")
+            if mode == "prefiltered":
+                g, h = np.maximum(r_dot_n, 0.0), np.ones_like(r_dot_n)
             else:
-                lobe = self.lobe(e, "open")
-                out = out + (weights.k_dd[i][None, :] * r_dot_n + weights.k_g[i]) * lobe
+                g, h = horizon_factors(e, r_dot_n)
+            out = out + (weights.k_dd[i][None, :] * g[:, None] + weights.k_g[i] * h[:, None]) * lobe
         return out.reshape(*self.shape, 3)
 
     def white(self) -> NDArray[np.float64]:

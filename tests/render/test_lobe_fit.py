@@ -74,17 +74,21 @@ def test_enumeration_equals_lawson_hanson_and_is_optimal() -> None:
             assert r_enum <= r_ref * (1 + 1e-9) + 1e-12
             assert x_enum[i, :, c] == pytest.approx(ref, abs=1e-7)
     assert np.all(x_enum >= 0.0)
+    d_all = np.einsum("rk,drc->kdc", part.q, b).reshape(part.q.shape[1], -1)
+    assert lf._solve_kkt(part, d_all) == pytest.approx(lf._solve_enum(part, d_all), abs=1e-9)
+    assert lf._solve_kkt(part, d_all, rounds=0) == pytest.approx(lf._solve_enum(part, d_all), abs=1e-9)
 
 
 def test_database_fits_are_non_negative_and_nnls_beats_clamped(design_db) -> None:
     brdfs = [lf.designed_brdf(d) for d in design_db]
     targets = lf.targets_from_brdfs(brdfs)
     errors = {}
-    for method in ("enum", "nnls", "clamped-lsq"):
+    for method in ("auto", "kkt", "enum", "nnls", "clamped-lsq"):
         rep = lf.fit_targets(targets, BASIS, method)
         assert np.all(rep.k_d >= 0) and np.all(rep.k_dd >= 0) and np.all(rep.k_g >= 0)
         errors[method] = lf.fit_error_de(brdfs, rep)
-    assert np.allclose(errors["enum"], errors["nnls"], atol=1e-6)
+    for method in ("auto", "kkt", "enum"):
+        assert np.allclose(errors[method], errors["nnls"], atol=1e-6)
     # The thesis's reason for linear programming: clamping least squares accumulates error.
     assert errors["clamped-lsq"].mean() > errors["nnls"].mean()
     assert np.all(errors["clamped-lsq"] >= errors["nnls"] - 1e-6)
@@ -168,3 +172,32 @@ def design_db():
     from station.render.design_db import design_database
 
     return design_database()
+
+
+def test_vectorised_sampling_equals_the_model(design_db) -> None:
+    targets = lf.sample_targets(design_db)
+    ref = lf.targets_from_brdfs([lf.designed_brdf(d) for d in design_db])
+    assert targets.rho == pytest.approx(ref.rho, rel=1e-9, abs=1e-12)
+    assert targets.phong_exponent == pytest.approx(ref.phong_exponent)
+
+
+def test_horizon_factors_closed_forms() -> None:
+    from station.render.lobes import horizon_factors
+
+    for e in (1.0, 2.0, 10.0, 300.0):
+        g, h = horizon_factors(e, np.array([1.0, 0.0, -1.0]))
+        assert g[0] == pytest.approx((e + 1) / (e + 2), rel=1e-4)  # lobe about N: ∫p cos = (E+1)/(E+2)
+        assert h == pytest.approx([1.0, 0.5, 0.0], abs=1e-9)  # half the lobe above a grazing horizon
+        assert g[2] == pytest.approx(0.0, abs=1e-12)
+    # brute force on the sphere for one oblique case
+    e, c = 5.0, 0.4
+    rng = np.random.default_rng(1)
+    w = rng.normal(size=(400000, 3))
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    r = np.array([np.sqrt(1 - c * c), 0.0, c])
+    p = (e + 1) / (2 * np.pi) * np.maximum(w @ r, 0) ** e
+    g_mc = np.mean(p * np.maximum(w[:, 2], 0)) * 4 * np.pi
+    h_mc = np.mean(p * (w[:, 2] > 0)) * 4 * np.pi
+    g, h = horizon_factors(e, c)
+    assert float(g) == pytest.approx(g_mc, rel=0.02)
+    assert float(h) == pytest.approx(h_mc, rel=0.02)

@@ -1,0 +1,170 @@
+"""Level of detail: the least model a scene needs for a colour-difference tolerance (DESIGN.md §4).
+
+Given the designs on screen, the environment and the pixels (normals, views), :func:`choose_lod` picks
+
+1. the fewest lobes m (shipped optimal bases, eq 2.3.4) whose lobe model stays within the tolerance of
+   the ground truth (:mod:`station.render.truth`, the designed BRDF itself);
+2. the smallest environment resolution (equirect width; a cube face is width/4) whose images stay
+   within the tolerance of the full-resolution images, with m lobes;
+3. the fewest anisotropic off-specular samples (eqs 2.5.4–2.5.7) whose images stay within the
+   tolerance of the most-sampled image, when the caller renders anisotropy (an isotropic scene needs 1).
+
+Each factor gets a share tolerance/√3 of the budget (errors of independent approximations add roughly
+in quadrature), measured as the given percentile of CIEDE2000 over pixels and designs, Lab relative to
+the scene's brightest white-Lambertian pixel. When even the richest setting misses its share the
+richest is chosen and the choice says so: LOD never hides a miss.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from station.render import lobe_fit as lf
+from station.render import truth as tr
+from station.render.errors import RenderInputError
+from station.render.lobes import MAX_LOBES, basis_for_count
+
+#: Environment widths tried (equirect pixels; powers of two).
+ENV_WIDTHS = (16, 32, 64, 128, 256, 512, 1024, 2048)
+#: Anisotropic sample counts tried (odd, symmetric about the specular direction).
+SAMPLE_COUNTS = (1, 3, 5, 9, 15, 25, 35, 49, 81)
+
+
+@dataclass(frozen=True)
+class LodChoice:
+    """What :func:`choose_lod` chose, with the error of each factor (CIEDE2000 at the percentile)."""
+
+    lobes: int
+    exponents: tuple[float, ...]
+    environment_width: int
+    anisotropic_samples: int
+    tolerance_de: float
+    errors: dict[str, float] = field(default_factory=dict)
+    met: bool = True
+    notes: tuple[str, ...] = ()
+
+    def describe(self) -> str:
+        """One paragraph saying what was chosen and why."""
+        share = self.tolerance_de / np.sqrt(3.0)
+        parts = [
+            f"{self.lobes} lobes (E = {', '.join(f'{e:.4g}' for e in self.exponents)}): "
+            f"ΔE {self.errors.get('lobes', float('nan')):.2f} against ground truth",
+            f"environment {self.environment_width}×{self.environment_width // 2} "
+            f"(cube face {self.environment_width // 4}): ΔE {self.errors.get('environment', float('nan')):.2f} "
+            "against full resolution",
+            f"{self.anisotropic_samples} anisotropic sample(s): "
+            f"ΔE {self.errors.get('anisotropy', 0.0):.2f} against the most-sampled image",
+        ]
+        verdict = "meets" if self.met else "MISSES"
+        text = f"Tolerance ΔE {self.tolerance_de:g} ({verdict}; share {share:.2f} each): " + "; ".join(parts) + "."
+        return text + ("" if not self.notes else " " + " ".join(self.notes))
+
+
+def downsample_equirect(img: NDArray[np.float64], width: int) -> NDArray[np.float64]:
+    """Solid-angle-weighted box filter of an equirect map to (width/2, width) (width divides the map's)."""
+    h, w = img.shape[:2]
+    return tr._box_downsample(img, tr.equirect_solid_angles(h, w), width)[0]
+
+
+def _de(scene_white: float, ref: NDArray[np.float64], img: NDArray[np.float64], percentile: float) -> float:
+    from station.model.colorimetry import linear_srgb_to_lab
+    from station.model.difference import delta_e
+
+    d = delta_e(linear_srgb_to_lab(ref / scene_white), linear_srgb_to_lab(img / scene_white), "cie2000")
+    return float(np.percentile(d, percentile))
+
+
+def choose_lod(designs: Sequence[Any], environment: Any, normals: ArrayLike, views: ArrayLike,
+               tolerance_de: float = 1.0, *, percentile: float = 95.0, mode: str = "prefiltered",
+               lobe_counts: Sequence[int] = tuple(range(1, MAX_LOBES + 1)), widths: Sequence[int] = ENV_WIDTHS,
+               anisotropic: Callable[[int], NDArray[np.float64]] | None = None,
+               sample_counts: Sequence[int] = SAMPLE_COUNTS, samples: int = 128,
+               quadrature_width: int = 128) -> LodChoice:
+    """Choose lobes, environment resolution and anisotropic samples for a scene (module docstring).
+
+    Parameters
+    ----------
+    designs
+        FaceFlopTravelGloss designs (or DesignedBRDFs) shown in the scene.
+    environment
+        Equirect map (H, 2H, 3) or an object with ``equirect``.
+    normals, views
+        (P, 3) unit normals and view directions of the scene's pixels (N·V > 0).
+    tolerance_de
+        Total CIEDE2000 budget (> 0).
+    percentile
+        Percentile of the per-pixel ΔE that must stay within each share (0–100).
+    mode
+        How the lobe model is evaluated (:data:`station.render.truth.LOBE_MODES`): ``prefiltered`` (as
+        the renderers do today), ``prefiltered-lut`` (with the horizon-factor table) or ``exact``.
+    anisotropic
+        Optional ``samples -> image (P, 3)`` renderer of the anisotropic scene; None for isotropic.
+    """
+    if not (np.isfinite(tolerance_de) and tolerance_de > 0):
+        raise RenderInputError("tolerance_de", "a CIEDE2000 tolerance > 0", tolerance_de)
+    if not 0.0 < percentile <= 100.0:
+        raise RenderInputError("percentile", "0 < percentile <= 100", percentile)
+    if not designs:
+        raise RenderInputError("designs", "at least one design", len(designs))
+    img = tr._as_equirect(environment)
+    full_width = img.shape[1]
+    widths = sorted(w for w in widths if w <= full_width and full_width % w == 0) or [full_width]
+    share = tolerance_de / np.sqrt(3.0)
+    brdfs = [d if isinstance(d, lf.DesignedBRDF) else lf.designed_brdf(d) for d in designs]
+    targets = lf.targets_from_brdfs(brdfs)
+    scene = tr.TruthScene(img, normals, views, samples, min(quadrature_width, full_width))
+    white = float(scene.white()[..., 1].max())
+    truth = np.concatenate([scene.truth(b) for b in brdfs])
+    notes: list[str] = []
+
+    def lobe_images(sc: tr.TruthScene, m: int) -> NDArray[np.float64]:
+        rep = lf.fit_targets(targets, basis_for_count(m))
+        return np.concatenate([sc.lobes(rep.weights(i), mode) for i in range(len(brdfs))])
+
+    # 1. lobes against ground truth
+    lobe_err = {}
+    chosen_m = None
+    for m in sorted(lobe_counts):
+        lobe_err[m] = _de(white, truth, lobe_images(scene, m), percentile)
+        if lobe_err[m] <= share:
+            chosen_m = m
+            break
+    met = chosen_m is not None
+    if chosen_m is None:
+        chosen_m = min(lobe_err, key=lobe_err.__getitem__)
+        notes.append(f"No lobe count reaches ΔE {share:.2f} against ground truth in {mode} mode; "
+                     f"the most accurate ({chosen_m}) is used.")
+    # 2. environment resolution against full resolution, chosen lobes
+    ref = lobe_images(scene, chosen_m)
+    chosen_w, env_err = full_width, 0.0
+    for w in widths:
+        if w == full_width:
+            break
+        # The low-resolution map, held piecewise constant at full size, goes through the same integrator,
+        # so only the lost environment detail differs (not the quadrature).
+        f = full_width // w
+        blocky = np.repeat(np.repeat(downsample_equirect(img, w), f, axis=0), f, axis=1)
+        small = tr.TruthScene(blocky, normals, views, samples, min(quadrature_width, full_width))
+        err = _de(white, ref, lobe_images(small, chosen_m), percentile)
+        if err <= share:
+            chosen_w, env_err = w, err
+            break
+    # 3. anisotropic samples against the most-sampled image
+    chosen_s, aniso_err = 1, 0.0
+    if anisotropic is not None:
+        counts = sorted(sample_counts)
+        best = np.asarray(anisotropic(counts[-1]), dtype=float)
+        chosen_s = counts[-1]
+        for s in counts[:-1]:
+            err = _de(white, best, np.asarray(anisotropic(s), dtype=float), percentile)
+            if err <= share:
+                chosen_s, aniso_err = s, err
+                break
+    return LodChoice(chosen_m, basis_for_count(chosen_m).exponents, chosen_w, chosen_s, float(tolerance_de),
+                     {"lobes": lobe_err[chosen_m], "environment": env_err, "anisotropy": aniso_err}, met,
+                     tuple(notes))
