@@ -169,6 +169,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--scene", choices=tuple(BUILTIN_SCENES), default="sphere-point")
     p.add_argument("--art", required=True, help="the artist's image (PNG/JPEG, the scene's size)")
     p.add_argument("--initial", help="the image the artist started from (default: the scene in silver)")
-    p.add_argument("--gloss-mode", choices=("contrast", "default"), default="contrast")
+    p.add_argument("--gloss-mode", choices=("contrast", "default", "fit"), default="contrast",
+                   help="contrast gloss (thesis), 50 GU, or fitted with the colour (extension)")
     add_json_flag(p)
     p.set_defaults(handler=_sketch_fit)

@@ -43,7 +43,7 @@ from scipy.optimize import least_squares, nnls
 
 from station.design.errors import DesignInputError, SketchFitError
 from station.design.moodboard import contrast_gloss
-from station.design.scene import LobeBasis, Scene, shade, srgb_decode
+from station.design.scene import LobeBasis, Scene, shade, specular_term, srgb_decode
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
 from station.model.representations import shape_factor
@@ -57,6 +57,8 @@ MIN_PIXELS = 30
 TRAVEL_SWEEP = tuple(float(t) for t in range(16, 181))
 #: Below this ΔE*ab between face and flop the result is a solid.
 SOLID_DE = 0.5
+#: Gloss values (GU) tried by ``gloss="fit"``.
+GLOSS_CANDIDATES: tuple[float, ...] = (0.0, 2.0, 5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0)
 #: Rec. 709 luminance weights of linear sRGB.
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 HIGHLIGHT_SIGMAS = 3.0
@@ -277,7 +279,11 @@ def fit_point_light(
         Pixels below this aspecular angle are the highlight and are not fitted (degrees).
     gloss
         ``"contrast"`` (contrast gloss of the foreground pixels with θ < 15°, default 50 GU when fewer
-        than 10 such pixels) or ``"default"`` (50 GU).
+        than 10 such pixels; the thesis's rule), ``"default"`` (50 GU), or ``"fit"``: the highlight of
+        each gloss in :data:`GLOSS_CANDIDATES` (rendered with the scene shader's specular term) is
+        subtracted before eq 3.7.2 and the gloss of least error is kept — an extension of the thesis,
+        which did not solve for gloss; it also stops a broad low-gloss highlight from being read as a
+        bright face.
     max_shading_de
         Systematic misfit (:func:`shading_delta_e`, ΔE*ab) above which the fit is declared failed
         (inconsistent shading); default 6.9 = 3 JND.
@@ -305,8 +311,8 @@ def fit_point_light(
         Fewer than 30 usable pixels.
     """
     t0 = time.perf_counter()
-    if gloss not in ("contrast", "default"):
-        raise DesignInputError("gloss", "contrast | default", gloss)
+    if gloss not in ("contrast", "default", "fit"):
+        raise DesignInputError("gloss", "contrast | default | fit", gloss)
     art_a = _check_art(art, scene.shape, "art")
     init_a = None if initial is None else _check_art(initial, scene.shape, "initial")
     changed = changed_pixels(art_a, init_a, scene.mask)
@@ -319,9 +325,18 @@ def fit_point_light(
     theta_all, phi_all = scene.aspecular_deg[use], scene.lambert[use]
     y_all = srgb_decode(art_a[use]) / scene.irradiance  # inverse gamma
     keep = np.ones(n_all, dtype=bool)
+    candidates: tuple[float | None, ...] = GLOSS_CANDIDATES if gloss == "fit" else (None,)
+    spec_all = {g: (np.zeros(n_all) if g is None else specular_term(g, theta_all)) for g in candidates}
+    g_fit: float | None = None
     for _ in range(outlier_rounds + 1):  # robust least squares: trim outliers, refit
-        coef, tc, _ = _sweep_quadratic(theta_all[keep], phi_all[keep], y_all[keep], travel_sweep)
-        resid = (y_all - phi_all[:, None] * _curve(coef, tc, theta_all)) @ LUMINANCE
+        best_g: tuple[float, NDArray, float, float | None] | None = None
+        for g in candidates:  # gloss="fit": subtract each candidate's highlight, keep the least error
+            yg = y_all[keep] - spec_all[g][keep][:, None]
+            coef_g, tc_g, sse_g = _sweep_quadratic(theta_all[keep], phi_all[keep], yg, travel_sweep)
+            if best_g is None or sse_g < best_g[0]:
+                best_g = (sse_g, coef_g, tc_g, g)
+        _, coef, tc, g_fit = best_g  # type: ignore[misc]
+        resid = (y_all - spec_all[g_fit][:, None] - phi_all[:, None] * _curve(coef, tc, theta_all)) @ LUMINANCE
         med = float(np.median(resid[keep]))
         sigma = 1.4826 * float(np.median(np.abs(resid[keep] - med)))
         new_keep = np.abs(resid - med) <= max(HIGHLIGHT_SIGMAS * sigma, OUTLIER_FLOOR)
@@ -336,7 +351,9 @@ def fit_point_light(
     trimmed = 1.0 - n / n_all
 
     gloss_gu, gloss_source = DEFAULT_GLOSS_GU, "default"
-    if gloss == "contrast":
+    if gloss == "fit" and g_fit is not None:
+        gloss_gu, gloss_source = float(g_fit), "fit"
+    elif gloss == "contrast":
         low = scene.mask & (scene.aspecular_deg < 15.0)
         if int(low.sum()) >= 10:
             gloss_gu, gloss_source = contrast_gloss(art_a[low]).gloss_gu, "contrast"
