@@ -34,7 +34,7 @@ from station.analysis.errors import AnalysisError, AnalysisInputError
 from station.analysis.gamut import GamutReport, check_paintable, lab_to_rgb, rgb_bounds
 from station.analysis.geometry import Hinge, SeamGeometry, check_polar
 from station.analysis.index import JND_CIE76, SeamModel
-from station.analysis.shading import Exposure
+from station.analysis.shading import Environment, Exposure
 
 Objective = Literal["single", "rms", "minimax", "per_geometry"]
 OBJECTIVES = ("single", "rms", "minimax", "per_geometry")
@@ -92,7 +92,7 @@ class TrompeResult:
     subset: str
     paint: Any
     paints: tuple[Any, ...]
-    geometries: tuple[SeamGeometry, ...]
+    geometries: tuple[SeamGeometry | EnvironmentGeometry, ...]
     beta_deg: float
     method: str
     epsilon: float
@@ -150,6 +150,19 @@ class TrompeResult:
             "solve_ms": self.solve_ms,
             "message": self.message,
         }
+
+
+@dataclass(frozen=True)
+class EnvironmentGeometry:
+    """A view under environment lighting (the light is the whole environment)."""
+
+    view_deg: float
+    hinge: Hinge = "in-plane"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able form."""
+        return {"light": "environment", "view_deg": self.view_deg,
+                "hinge": self.hinge if isinstance(self.hinge, str) else float(self.hinge)}
 
 
 def paint_to_dict(paint: Any) -> dict[str, Any]:
@@ -252,7 +265,7 @@ def _geometries(lights: Sequence[float], views: Sequence[float] | None) -> tuple
 
 def inverse_trompe_loeil(
     paint_a: Any,
-    lights_deg: Sequence[float],
+    lights_deg: Sequence[float] | Environment,
     views_deg: Sequence[float] | None = None,
     *,
     beta_deg: float,
@@ -274,7 +287,8 @@ def inverse_trompe_loeil(
         Paint of the reference panel (``FaceFlopTravelGloss``).
     lights_deg, views_deg
         Geometries as parallel lists of signed polar angles in degrees (one view per light; ``None``
-        views the panels from the normal, enough for solids).
+        views the panels from the normal, enough for solids). *lights_deg* may instead be an
+        :class:`~station.analysis.shading.Environment`; the geometries are then the views under it.
     beta_deg
         Signed misalignment of panel B in degrees (sign = rotation direction, see
         :mod:`station.analysis.geometry`), ``0 < |β| ≤ 45``.
@@ -304,10 +318,18 @@ def inverse_trompe_loeil(
     if not (np.isfinite(epsilon) and epsilon > 0):
         raise AnalysisInputError("epsilon", "epsilon > 0", epsilon)
     names = _subset(paint_a, subset)
-    ls, vs = _geometries(lights_deg, views_deg)
+    env = lights_deg if isinstance(lights_deg, Environment) else None
+    if env is not None:
+        vs = [0.0] if views_deg is None else [check_polar(v, f"views_deg[{i}]") for i, v in enumerate(views_deg)]
+        if not vs:
+            raise AnalysisInputError("views_deg", "at least one view angle in degrees", list(views_deg or []))
+        ls = [float("nan")] * len(vs)
+    else:
+        ls, vs = _geometries(lights_deg, views_deg)
     if objective == "single" and not (0 <= at < len(ls)):
         raise AnalysisInputError("at", f"0 <= at < {len(ls)}", at)
-    model = SeamModel(ls, vs, hinge=hinge, method=method, exposure=exposure, gloss=gloss)
+    model = SeamModel(env if env is not None else ls, vs, hinge=hinge, method=method, exposure=exposure,
+                      gloss=gloss)
     prob = _Problem(paint_a, model, beta, names, allow_face_darker)
     before = prob.de(prob.x0)
     converged = True
@@ -347,7 +369,8 @@ def inverse_trompe_loeil(
         msg += "; the optimiser stopped before convergence (best point returned)"
     return TrompeResult(
         objective=objective, subset=_subset_name(subset, paint_a), paint=paints[0], paints=paints,
-        geometries=tuple(SeamGeometry(lt, v, hinge) for lt, v in zip(ls, vs, strict=True)), beta_deg=beta,
+        geometries=tuple(EnvironmentGeometry(v, hinge) if env is not None else SeamGeometry(lt, v, hinge)
+                         for lt, v in zip(ls, vs, strict=True)), beta_deg=beta,
         method=method, epsilon=float(epsilon), seam_de_before=tuple(float(v) for v in before),
         seam_de_after=tuple(float(v) for v in after_arr), meets_epsilon=meets, gamut=gamut,
         changes=_changes(prob, x_main), solve_ms=(time.perf_counter() - t0) * 1e3, message=msg,

@@ -163,3 +163,15 @@ def test_pointer_gamut_matches_colour_science():
 
     labs = np.array([[50.0, 0.0, 0.0], [50.0, 80.0, -100.0], [90.0, -5.0, 90.0], [30.0, 10.0, -40.0]])
     np.testing.assert_array_equal(in_pointer_gamut(labs), colour.is_within_pointer_gamut(lab_to_xyz(labs)))
+
+
+def test_environment_lighting_single_sample_equals_point_light(blue_metallic):
+    from station.analysis import Environment
+
+    t = math.radians(45.0)
+    env = Environment.from_samples([((math.sin(t), 0.0, math.cos(t)), (1.0, 1.0, 1.0))])
+    r_env = inverse_trompe_loeil(blue_metallic, env, [-30.0, 0.0], beta_deg=-2.0, subset="face_L+travel")
+    r_pt = inverse_trompe_loeil(blue_metallic, [45.0, 45.0], [-30.0, 0.0], beta_deg=-2.0, subset="face_L+travel")
+    np.testing.assert_allclose(r_env.seam_de_before, r_pt.seam_de_before, atol=1e-6)
+    assert r_env.changes["face_L"] == pytest.approx(r_pt.changes["face_L"], abs=0.05)
+    assert r_env.to_dict()["geometries"][0]["light"] == "environment"
