@@ -6,6 +6,9 @@
   corrected paint; ``--png`` writes the report picture.
 * ``sweep`` — seam ΔE over view × light × β (Fig. 4.3), optionally as a PNG.
 
+Lists that start with a minus sign need the ``=`` form: ``--views=-30,0`` (argparse would read
+``-30,0`` as an option).
+
 Environment lighting is available from Python and the service (``station.analysis.Environment``, built
 from a ``station.render`` environment by the caller); the CLI takes point lights.
 """
@@ -141,7 +144,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = sub.add_parser("gg-index", help="goniogeometric index β_min (eq 4.3.1)")
     _add_paint_args(p)
     p.add_argument("--light", required=True, help="light polar angle(s) in degrees, comma-separated")
-    p.add_argument("--view", help="view polar angle(s) in degrees (signed; default: aspecular 15–110° scan)")
+    p.add_argument("--view", help="view polar angle(s) in degrees (signed; default: aspecular 15–110° scan); "
+                   "write --view=-30,0 when the list starts with a minus")
     p.add_argument("--direction", choices=("+", "-", "either"), default="either")
     p.add_argument("--beta-max", type=float, default=30.0, help="largest β searched, degrees")
     p.add_argument("--include-gloss", action="store_true", help="add the gloss lobe (excluded in the thesis)")
@@ -154,7 +158,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     _add_paint_args(p)
     p.add_argument("--beta", type=float, required=True, help="signed misalignment of panel B, degrees")
     p.add_argument("--lights", required=True, help="light polar angles, degrees, comma-separated")
-    p.add_argument("--views", help="view polar angles, one per light (default: the normal)")
+    p.add_argument("--views", help="view polar angles, one per light (default: the normal); --views=-30,0 form for negatives")
     p.add_argument("--objective", choices=OBJECTIVES, default="rms")
     p.add_argument("--at", type=int, default=0, help="geometry index for --objective single")
     p.add_argument("--subset", help="solid | face_L | face_L+travel | face | face+travel | full | names joined by +")

@@ -120,3 +120,10 @@ def test_cli_seam_with_design_and_measurement_files(tmp_path, capsys, blue_metal
     out = json.loads(capsys.readouterr().out)
     assert out["passed"] is False and png.exists()
     assert main(["analysis", "seam", str(tmp_path / "missing.json"), str(b), "--beta", "2"]) == 2
+
+
+def test_cli_negative_view_list_with_equals_form(capsys):
+    rc = main(["analysis", "gg-index", "--face", "90,-2,-10", "--flop", "30,-1,-12", "--travel", "70",
+               "--light", "45", "--view=-30,0", "--json"])
+    assert rc == 0
+    assert json.loads(capsys.readouterr().out)["geometry"]["view_deg"] == -30.0
