@@ -115,10 +115,14 @@ def test_designs_crud_with_versions(api: Api) -> None:
     assert [(v["version"], v["design"]["travel_deg"]) for v in versions] == [(1, 70.0), (2, 55.0)]
     assert api.client.get(f"{V1}/designs/{d['id']}/versions/1", headers=api.auth("qa")).json()["note"] == "v1"
     assert api.client.get(f"{V1}/designs/{d['id']}/versions/3", headers=api.auth("qa")).status_code == 404
-    # the appearance model refuses what the schema alone allows: a flop brighter than its face is fitted,
-    # but a travel at or below 15 degrees is refused by both
-    bad = DESIGN | {"travel_deg": 10.0}
+    bad = DESIGN | {"travel_deg": 10.0}  # refused by the schema (15 < travel_deg <= 180)
     assert api.client.put(f"{V1}/designs/{d['id']}", json={"design": bad}, headers=api.auth("stylist")).status_code == 422
+    # refused by the appearance model (design_from_dict), not the schema: no travel, yet face != flop
+    r = api.client.put(f"{V1}/designs/{d['id']}", json={"design": DESIGN | {"travel_deg": None}},
+                       headers=api.auth("stylist"))
+    assert r.status_code == 422
+    detail = r.json()["detail"][0]
+    assert detail["loc"] == ["body", "travel_deg"] and "travel_deg" in detail["ctx"]["accepted"]
     assert api.client.delete(f"{V1}/designs/{d['id']}", headers=api.auth("stylist")).json()["archived"] is True
     assert api.client.get(f"{V1}/designs", headers=api.auth("stylist")).json()["count"] == 0
     listed = api.client.get(f"{V1}/designs", params={"include_archived": True}, headers=api.auth("stylist")).json()

@@ -29,8 +29,8 @@ from station.ingest import Outbox
 from tests.ingest._readings import make_reading
 
 REPO = Path(__file__).resolve().parents[2]
-COUNT = 1500
-ROUNDS = 6
+COUNT = 900
+ROUNDS = 5
 SEED = 7
 
 

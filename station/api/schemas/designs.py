@@ -7,8 +7,13 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-LabValue = Annotated[float, Field(ge=-200.0, le=200.0, allow_inf_nan=False)]
-Lab = Annotated[list[LabValue], Field(min_length=3, max_length=3, description="[L*, a*, b*], D65/10°")]
+# Ranges are the appearance model's (station.model.representations): 0 <= L* <= 200, |a*|, |b*| <= 150.
+Lab = Annotated[
+    tuple[Annotated[float, Field(ge=0.0, le=200.0, allow_inf_nan=False)],
+          Annotated[float, Field(ge=-150.0, le=150.0, allow_inf_nan=False)],
+          Annotated[float, Field(ge=-150.0, le=150.0, allow_inf_nan=False)]],
+    Field(description="[L*, a*, b*], D65/10°"),
+]
 Name = Annotated[str, Field(min_length=1, max_length=128, pattern=r"^[^\x00-\x1f]+$")]
 
 _EXAMPLE = {"schema": "cacad.design/1", "name": "Blue metallic", "face": [62.0, -4.0, -38.0],
@@ -24,8 +29,8 @@ class DesignBody(BaseModel):
     name: Annotated[str, Field(max_length=128)] = ""
     face: Lab
     flop: Lab
-    travel_deg: Annotated[float, Field(gt=15.0, le=180.0, description="θ_clamp, degrees")] | None
-    gloss_gu: Annotated[float, Field(ge=0.0, le=2000.0, description="60° gloss units")] | None = None
+    travel_deg: Annotated[float, Field(gt=15.0, le=180.0, description="θ_clamp, degrees; null for a solid")] | None
+    gloss_gu: Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss units")] | None = None
 
 
 class DesignCreate(BaseModel):
