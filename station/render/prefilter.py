@@ -22,7 +22,7 @@ Estimators of the same integral:
   same cost (measured figures in docs/render.md).
 
 Output resolution follows the lobe width: the half-maximum angle θ½ = acos(2^(−1/n)) should span at
-least ~2 texels, giving a face size of the next power of two ≥ 2.7·√n, clamped to [8, source size].
+least ~1.6 texels, giving a face size of the next power of two ≥ 2.2·√n, clamped to [8, source size].
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ from station.render.sh import sh_project
 
 MAX_EXPONENT = 1.0e6
 BRUTE_MAX_SIZE = 16
+OUTPUT_FACTOR = 2.2
 DIFFUSE_SIZE = 16
 
 
@@ -54,8 +55,8 @@ def check_exponent(exponent: float) -> float:
 
 
 def output_size(exponent: float, src_size: int) -> int:
-    """Face size of the prefiltered map for exponent n: pow2 ≥ 2.7√n, within [8, src_size]."""
-    want = 2.7 * math.sqrt(exponent)
+    """Face size of the prefiltered map for exponent n: pow2 ≥ 2.2√n, within [8, src_size]."""
+    want = OUTPUT_FACTOR * math.sqrt(exponent)
     size = 8
     while size < want and size < src_size:
         size *= 2
@@ -64,7 +65,7 @@ def output_size(exponent: float, src_size: int) -> int:
 
 def sample_count(out_size: int) -> int:
     """Quadrature grid side G (G² samples per texel): smaller for the large maps of narrow lobes."""
-    return 24 if out_size <= 32 else 16 if out_size <= 64 else 12 if out_size <= 128 else 8
+    return 24 if out_size <= 32 else 16 if out_size <= 64 else 10 if out_size <= 128 else 8
 
 
 def source_size(env: Environment) -> int:
@@ -163,7 +164,7 @@ class GLPrefilter:
 
     @classmethod
     def from_equirect(cls, equirect: np.ndarray, size: int, ctx=None) -> GLPrefilter:
-        """Build the source cube on the GPU from an equirect image (4×4 supersampled per texel)."""
+        """Build the source cube on the GPU from an equirect image (2×2 supersampled per texel)."""
         from station.render.gl_renderer import build_program, create_gl_context
 
         own = ctx is None
@@ -274,11 +275,11 @@ def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str
     keys = [PrefilterCache.key(env.content_hash, e, s, src, n, engine) for e, s, n in plan]
     cubes: list[np.ndarray | None] = [cache.get(k) if cache else None for k in keys]
     todo = [i for i, c in enumerate(cubes) if c is None]
+    small: dict[int, np.ndarray] = {}
     if todo:
         t0 = time.perf_counter()
         wide = [i for i in todo if plan[i][1] <= BRUTE_MAX_SIZE]
         narrow = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
-        small: dict[int, np.ndarray] = {}
         for i in wide:
             e, size, _ = plan[i]
             s_src = max(32, 2 * size)
@@ -303,7 +304,9 @@ def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str
                 cache.put(keys[i], cubes[i])
     timings["cache_hits"] = float(len(exps) - len(todo))
     t0 = time.perf_counter()
-    diffuse = prefilter_brute(cubemap.equirect_to_cube(env.equirect, 32), 1.0, DIFFUSE_SIZE).astype(np.float32)
+    if 32 not in small:
+        small[32] = cubemap.equirect_to_cube(env.equirect, 32)
+    diffuse = prefilter_brute(small[32], 1.0, DIFFUSE_SIZE).astype(np.float32)
     timings["diffuse"] = time.perf_counter() - t0
     return PrefilteredBasis(env_name=env.name, env_hash=env.content_hash, exponents=exps, cubes=tuple(cubes),
                             sh=coeffs, diffuse=diffuse, engine=engine, timings=timings)

@@ -1,12 +1,13 @@
 #version 430
 // Equirectangular -> cube faces stacked vertically in an (S, 6S) target, each texel the mean of
-// SUB x SUB bilinear samples (area integration; keeps the energy of small bright sources).
+// SUB x SUB bilinear samples at half-texel spacing (with S = W/4 that is half-pixel spacing in the
+// source: every source pixel gets its share, so small bright sources keep their energy).
 //#include cubeface.glsl
 uniform sampler2D u_equirect;
 uniform int u_size;
 out vec4 f_color;
 const float PI = 3.14159265358979;
-const int SUB = 4;
+const int SUB = 2;
 
 vec2 equirect_uv(vec3 d) {
     return vec2(atan(d.x, -d.z) / (2.0 * PI) + 0.5, acos(clamp(d.y, -1.0, 1.0)) / PI);
