@@ -154,6 +154,7 @@ class AsciiPromptProtocol:
     def exchange(self, command: str, timeout_s: float | None = None) -> AsciiReply:
         """Send one command and read one reply, no retry; raise the device's typed error if any."""
         data = command.encode("ascii") + b"\r"
+        self.transport.flush_input()  # a stale (late) reply already here must not answer this command
         self.transport.write(data)
         raw = self.transport.read_until(PROMPT, self.timeout_s if timeout_s is None else timeout_s)
         self.log.append((data, raw))
