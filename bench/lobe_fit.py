@@ -84,16 +84,21 @@ def chart(points: list[tuple[str, float, float, float]], path) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7.0, 4.2), dpi=110)
-    for name, t_us, mean_de, max_de in points:
-        ax.scatter([t_us], [mean_de], s=40, zorder=3)
-        ax.scatter([t_us], [max_de], s=40, facecolors="none", edgecolors="grey", zorder=3)
-        ax.plot([t_us, t_us], [mean_de, max_de], color="lightgrey", zorder=1)
-        ax.annotate(name, (t_us, mean_de), textcoords="offset points", xytext=(6, -4), fontsize=8)
+    markers = "osD^v<>pX*"
+    for i, (name, t_us, mean_de, max_de) in enumerate(points):
+        colour = f"C{i % 10}"
+        ax.scatter([t_us], [mean_de], s=42, marker=markers[i % len(markers)], color=colour, zorder=3,
+                   label=f"{name}: {t_us:.3g} µs, {mean_de:.2f} / {max_de:.2f}")
+        ax.scatter([t_us], [max_de], s=42, marker=markers[i % len(markers)], facecolors="none",
+                   edgecolors=colour, zorder=3)
+        ax.plot([t_us, t_us], [mean_de, max_de], color=colour, alpha=0.3, zorder=1)
+    ax.legend(fontsize=6.5, loc="upper center", title="method: time, mean / max ΔE", title_fontsize=7)
     ax.axvline(50.0, color="tab:red", lw=0.8, ls="--")
     ax.text(52.0, ax.get_ylim()[1] * 0.95, "50 µs bar", color="tab:red", fontsize=8, va="top")
     ax.set_xscale("log")
     ax.set_xlabel("median time per whole-design fit (µs, log)")
-    ax.set_ylabel("fit error, RMS CIEDE2000 (● mean, ○ max)")
+    ax.set_ylabel("fit error, RMS CIEDE2000 (filled mean, hollow max)")
+    ax.set_yscale("log")
     ax.set_title(f"Lobe-weight fit methods, {len(design_database())} designs, {default_basis().size} lobes")
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()

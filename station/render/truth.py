@@ -57,7 +57,7 @@ SHARP_EXPONENT = 64.0
 #: Importance samples per pixel and sharp lobe.
 LOBE_SAMPLES = 256
 #: How :meth:`TruthScene.lobes` evaluates the lobe model.
-LOBE_MODES = ("exact", "prefiltered", "prefiltered-lut")
+LOBE_MODES = ("exact", "prefiltered", "prefiltered-lut", "prefiltered-lut+lights")
 _BINS = ALPHA_GRID_DEG.size  # 721 bins of 0.25°
 _PIXEL_CHUNK = 48
 
@@ -220,6 +220,7 @@ class TruthScene:
         self.lighting = prepare_lighting(environment, quadrature_width)
         self._tangents = _frames(self.reflect)
         self._cache: dict[tuple[str, float], NDArray[np.float64]] = {}
+        self._horizon: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
         self._hist = self._histograms()
 
     # -- binned broad kernels -------------------------------------------------------------------------
@@ -310,6 +311,8 @@ class TruthScene:
         integral about R (what a normalised prefiltered map times 2π/(E+1) holds). ``prefiltered-lut``:
         the same lookups with (R·N) replaced by g(E_i, R·N) and the gloss weighted by h(E_i, R·N) from
         :func:`station.render.lobes.horizon_factors` (a small per-lobe table a shader can hold).
+        ``prefiltered-lut+lights``: as ``prefiltered-lut`` for the map without its extracted point lights
+        (the sun), which are shaded exactly as directional lights.
         """
         if mode not in LOBE_MODES:
             raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
@@ -323,7 +326,16 @@ class TruthScene:
             if mode == "prefiltered":
                 g, h = np.maximum(r_dot_n, 0.0), np.ones_like(r_dot_n)
             else:
-                g, h = horizon_factors(e, r_dot_n)
+                if e not in self._horizon:
+                    self._horizon[e] = horizon_factors(e, r_dot_n)
+                g, h = self._horizon[e]
+            if mode == "prefiltered-lut+lights":
+                # Point lights shaded exactly (as a renderer shades a few directional lights), the rest of
+                # the map through the prefiltered lookups.
+                kernel = np.clip(np.cos(np.radians(ALPHA_GRID_DEG)), 0.0, 1.0) ** e
+                lobe = lobe - self._binned("open", kernel, points_only=True)
+                out = out + (weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
+                             + weights.k_g[i] * self._binned("mask", kernel, points_only=True))
             out = out + (weights.k_dd[i][None, :] * g[:, None] + weights.k_g[i] * h[:, None]) * lobe
         return out.reshape(*self.shape, 3)
 
