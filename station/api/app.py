@@ -72,6 +72,15 @@ def _shutdown(app: FastAPI) -> None:
         engine.dispose()
 
 
+def _roles_markdown() -> str:
+    from station.api.security import ROLE_SCOPES
+
+    rows = "\n".join(f"| {role.value} | {', '.join(sorted(s.value for s in scopes))} |"
+                     for role, scopes in ROLE_SCOPES.items())
+    return ("\nEach operation lists the scope it needs under its security requirement. Roles hold these "
+            f"scopes:\n\n| role | scopes |\n|---|---|\n{rows}\n")
+
+
 def create_app(settings: Settings) -> FastAPI:
     """Build the service for *settings*."""
     from station.api.routes import ROUTERS, health
@@ -86,8 +95,8 @@ def create_app(settings: Settings) -> FastAPI:
         finally:
             await asyncio.to_thread(_shutdown, app)
 
-    app = FastAPI(title="CACAD Station", version=__version__, description=DESCRIPTION, openapi_tags=TAGS,
-                  lifespan=lifespan)
+    app = FastAPI(title="CACAD Station", version=__version__, description=DESCRIPTION + _roles_markdown(),
+                  openapi_tags=TAGS, lifespan=lifespan)
     app.state.settings = settings
     install_error_handlers(app)
     app.include_router(health.router)
