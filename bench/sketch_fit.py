@@ -11,6 +11,8 @@ section of docs/benchmarks.md and the chart docs/sketch-stability.png.
   of the design re-rendered against the *unperturbed* goal.
 * Art styles: random combinations standing in for "colour correction", "airbrushed" and "traced and
   scanned" art, for the first-try failure rate the thesis reports (about 20 % and 35 %).
+* Gloss: art rendered at 5–80 GU fitted with gloss 50 GU (thesis default), contrast gloss (thesis
+  §3.5.3 rule) and ``gloss="fit"`` (extension): face error and gloss error.
 * Timing: the environment fit through basis images against the thesis's approach, a nonlinear search
   over face, flop and travel that re-renders the scene per guess (Nelder–Mead, same run, same scene).
 """
@@ -151,6 +153,18 @@ def main() -> None:
             Case(f"point-light fit time, {label} (median)", f"{SIZE_POINT}² px", float(np.median(fit_s)) * 1e3,
                  "ms"),
         ]
+
+    # --- gloss: the thesis's rules against fitting it with the colour ------------------------------
+    for gloss_gu in (5.0, 10.0, 20.0, 30.0, 50.0, 80.0):
+        for mode in ("default", "contrast", "fit"):
+            face_err, gloss_err = [], []
+            for d in designs[:6]:
+                art = srgb_encode(shade(point, d.replace(gloss_gu=gloss_gu)))
+                fit = fit_point_light(point, art, init_p, gloss=mode)
+                face_err.append(float(np.linalg.norm(np.subtract(fit.design.face, d.face))))
+                gloss_err.append(abs(fit.design.gloss_gu - gloss_gu))
+            cases.append(Case(f"gloss {gloss_gu:g} GU art, gloss={mode}: face ΔE*ab (median)", "6 designs",
+                              float(np.median(face_err)), "ΔE*ab", f"|gloss error| median {np.median(gloss_err):.0f} GU"))
 
     # --- stability --------------------------------------------------------------------------------
     results: dict[str, dict[str, list[tuple[float, float]]]] = {}

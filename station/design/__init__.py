@@ -11,6 +11,7 @@ Modules
 - :mod:`.moodboard` — boards, face/flop/gloss eyedroppers (§3.5).
 - :mod:`.tweaker` — the image-based BRDF tweaker (§3.6, erratum 1).
 - :mod:`.sketch` — sketch fits under a point light and under environment lighting (§3.7).
+- :mod:`.artwork` — synthetic concept-art edits and perturbations (tests, benchmarks).
 
 Every operation takes plain NumPy buffers and immutable designs
 (:class:`station.model.FaceFlopTravelGloss`) and returns a new design; nothing imports the renderer.

@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from station.design.designer import (
     data_points,
@@ -133,3 +135,12 @@ def test_picker_and_gloss_reject_out_of_range(red_metallic, fn, args, field) -> 
     with pytest.raises(DesignInputError) as err:
         fn(red_metallic, *args)
     assert err.value.field == field
+
+
+@settings(max_examples=40, deadline=None)
+@given(hue=st.floats(-180, 180), sat=st.floats(0.2, 1.8), bright=st.floats(-10, 10))
+def test_hsb_edit_is_undone_by_its_inverse(hue, sat, bright) -> None:
+    d = FaceFlopTravelGloss((60.0, 30.0, 10.0), (25.0, 20.0, 15.0), 70.0, 50.0)
+    there = hsb_edit(d, hue, sat, bright)
+    back = hsb_edit(hsb_edit(there, -hue, 1.0, -bright), 0.0, 1.0 / sat, 0.0)
+    assert back.face == pytest.approx(d.face, abs=1e-9) and back.flop == pytest.approx(d.flop, abs=1e-9)
