@@ -33,7 +33,6 @@ def cie76(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.fl
 
 def cie2000(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.float64]:
     """CIEDE2000 with kL = kC = kH = 1, shape (...); *lab1* is the reference."""
-    lab1, lab2 = np.broadcast_arrays(lab1, lab2)
     L_1, a_1, b_1 = lab1[..., 0], lab1[..., 1], lab1[..., 2]
     L_2, a_2, b_2 = lab2[..., 0], lab2[..., 1], lab2[..., 2]
     C_1_ab = np.hypot(a_1, b_1)
@@ -51,23 +50,22 @@ def cie2000(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.
     delta_C_p = C_p_2 - C_p_1
     h_p_2_s_1 = h_p_2 - h_p_1
     C_p_1_m_2 = C_p_1 * C_p_2
-    delta_h_p = np.select(
-        [C_p_1_m_2 == 0, np.fabs(h_p_2_s_1) <= 180, h_p_2_s_1 > 180, h_p_2_s_1 < -180],
-        [0, h_p_2_s_1, h_p_2_s_1 - 360, h_p_2_s_1 + 360],
+    # colour uses np.select (first true condition wins); nested np.where picks the same values, faster
+    delta_h_p = np.where(
+        C_p_1_m_2 == 0, 0,
+        np.where(np.fabs(h_p_2_s_1) <= 180, h_p_2_s_1,
+                 np.where(h_p_2_s_1 > 180, h_p_2_s_1 - 360, np.where(h_p_2_s_1 < -180, h_p_2_s_1 + 360, 0))),
     )
     delta_H_p = 2 * np.sqrt(C_p_1_m_2) * np.sin(np.deg2rad(delta_h_p / 2))
     L_bar_p = (L_1 + L_2) / 2
     C_bar_p = (C_p_1 + C_p_2) / 2
     a_h_p_1_s_2 = np.fabs(h_p_1 - h_p_2)
     h_p_1_a_2 = h_p_1 + h_p_2
-    h_bar_p = np.select(
-        [
-            C_p_1_m_2 == 0,
-            a_h_p_1_s_2 <= 180,
-            np.logical_and(a_h_p_1_s_2 > 180, h_p_1_a_2 < 360),
-            np.logical_and(a_h_p_1_s_2 > 180, h_p_1_a_2 >= 360),
-        ],
-        [h_p_1_a_2, h_p_1_a_2 / 2, (h_p_1_a_2 + 360) / 2, (h_p_1_a_2 - 360) / 2],
+    h_bar_p = np.where(
+        C_p_1_m_2 == 0, h_p_1_a_2,
+        np.where(a_h_p_1_s_2 <= 180, h_p_1_a_2 / 2,
+                 np.where(h_p_1_a_2 < 360, (h_p_1_a_2 + 360) / 2,
+                          np.where(h_p_1_a_2 >= 360, (h_p_1_a_2 - 360) / 2, 0))),
     )
     T = (
         1

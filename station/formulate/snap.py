@@ -17,7 +17,10 @@ design and the box:
 * CIEDE2000: ΔE00² ≥ (ΔL'/S_L)² + (1 − |R_T|/2) (ΔC'² + ΔH'²)/S_C² (|xy| ≤ (x²+y²)/2, S_H < S_C since
   T ≤ 1.93), ΔC'² + ΔH'² = Δa'² + Δb² ≥ Δa² + Δb² (a' = (1+G)a, one G per pair), with S_L, S_C and
   R_C replaced by their largest values over the box: S_L is increasing in |L̄ − 50|, C̄' ≤ (1+G(C̄))C̄
-  is increasing in C̄ (checked numerically: slope ≥ 0.52 on 0–1000) and |R_T| ≤ R_C(C̄'_max)·sin 60°.
+  is increasing in C̄ (checked numerically: slope ≥ 0.52 on 0–1000) and |R_T| ≤ R_C(C̄'_max)·sin 2Δθ_max,
+  where Δθ_max comes from the arc of hues the pair's mean hue can take (:func:`_max_sin_2dtheta`; the
+  global sin 60° where the box holds the neutral axis). Per paint, a trigonometry-free bound
+  (:func:`_point_bounds_cie2000`) filters the gathered paints before the exact formula runs.
 
 Buckets are visited in order of their bound; the search stops when the next bound exceeds the k-th
 best exact S found so far. Every paint whose S could tie or beat the k-th is evaluated exactly, so
@@ -124,6 +127,45 @@ def _partition(x: NDArray[np.float64], leaf: int) -> tuple[NDArray[np.intp], lis
     return perm, buckets
 
 
+def _wrap(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Angle difference wrapped to [-180, 180) degrees."""
+    return (x + 180.0) % 360.0 - 180.0
+
+
+def _max_sin_2dtheta(q: NDArray[np.float64], lo: NDArray, hi: NDArray) -> NDArray[np.float64]:
+    """Upper bound of sin(2Δθ) in CIEDE2000's R_T for the design q and any paint in the boxes [lo, hi].
+
+    Δθ = 30° exp(−((h̄' − 275°)/25°)²) depends on the mean hue h̄' of the pair, the midpoint of the
+    shorter arc between h'_1 and h'_2 (h' = hue of ((1+G)a*, b*), G ∈ [0, 0.5]). Each hue set is an arc:
+    the query's over G, the box's over the (stretched) box when it does not contain the neutral axis;
+    when both arcs plus their separation stay under 180°, h̄' lies in the arc of half-width (w₁+w₂)/2
+    around the midpoint of their centres, and |h̄' − 275°| is at least its circular distance to 275°.
+    Otherwise the global bound sin 60° is returned.
+    """
+    qa, qb = q[:, 1], q[:, 2]
+    h_q0 = np.degrees(np.arctan2(qb, qa))
+    h_q1 = np.degrees(np.arctan2(qb, 1.5 * qa))
+    half_q = np.abs(_wrap(h_q1 - h_q0)) / 2
+    c_q = h_q0 + _wrap(h_q1 - h_q0) / 2
+    a_lo = np.minimum(lo[..., 1], 1.5 * lo[..., 1])
+    a_hi = np.maximum(hi[..., 1], 1.5 * hi[..., 1])
+    b_lo, b_hi = lo[..., 2], hi[..., 2]
+    holds_axis = (a_lo <= 0) & (a_hi >= 0) & (b_lo <= 0) & (b_hi >= 0)
+    h_mid = np.degrees(np.arctan2((b_lo + b_hi) / 2, (a_lo + a_hi) / 2))
+    rel = np.stack([_wrap(np.degrees(np.arctan2(b, a)) - h_mid) for a in (a_lo, a_hi) for b in (b_lo, b_hi)])
+    r_lo, r_hi = rel.min(0), rel.max(0)
+    c_b = h_mid + (r_lo + r_hi) / 2
+    half_b = (r_hi - r_lo) / 2
+    d = _wrap(c_b - c_q)
+    half = (half_q + half_b) / 2 + 1e-6
+    ok = ~holds_axis & (np.abs(d) + 2 * half < 179.0)
+    dist = np.maximum(np.abs(_wrap(275.0 - (c_q + d / 2))) - half, 0.0)
+    dtheta = 30.0 * np.exp(-((dist / 25.0) ** 2))
+    bound = np.where(ok, np.sin(np.deg2rad(2.0 * dtheta)) + 1e-12, _SIN60)
+    achromatic_query = (qa == 0) & (qb == 0)  # C'1 = 0 makes ΔH' = 0: the cross term vanishes
+    return np.where(achromatic_query, 0.0, np.minimum(bound, _SIN60))
+
+
 def _box_bounds(
     q: NDArray[np.float64], lo: NDArray, hi: NDArray, cmax: NDArray, method: str
 ) -> NDArray[np.float64]:
@@ -151,7 +193,7 @@ def _box_bounds(
         cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * cbar * (1 + 1e-12) + 1e-12
         cp7 = cpbar**7
         r_c = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7))
-        kappa = 1.0 - r_c * _SIN60 / 2.0
+        kappa = 1.0 - r_c * _max_sin_2dtheta(q, lo, hi) / 2.0
         s_c = 1.0 + 0.045 * cpbar
         per = np.sqrt(dl2 / s_l**2 + kappa * dab2 / s_c**2)
     else:
@@ -165,32 +207,37 @@ _T_MIN, _T_MAX = 0.36, 1.58  # range of CIEDE2000's T(h) (0.3621 … 1.5725 on a
 def _point_bounds_cie2000(q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
     """Per-paint lower bound of Σ_θ ΔE00(q_θ, p_θ), shape (n,), without trigonometry.
 
-    Follows the CIEDE2000 arithmetic exactly up to the hue terms: ΔL', ΔC', S_L, S_C and R_C are exact;
-    ΔH'² = |Δ(a', b)|² − ΔC'²; only S_H (T ∈ [0.36, 1.58]) and R_T (|R_T| ≤ R_C sin 60°) are bounded, and
-    the cross term is minimised over the admissible z = |ΔH'|/S_H.
+    Follows the CIEDE2000 arithmetic up to the hue terms: ΔL', ΔC', S_L, S_C and R_C are computed as in
+    the formula; ΔH'² = |Δ(a', b)|² − ΔC'²; only S_H (T ∈ [0.36, 1.58]) and R_T (|R_T| ≤ R_C sin 60°) are
+    bounded, and the cross term is minimised over the admissible z = |ΔH'|/S_H. (x⁷ is computed by
+    multiplication here; the 1e-9 safety margin absorbs the last-bit differences.)
     """
-    c1 = np.hypot(q[:, 1], q[:, 2])
-    c2 = np.hypot(p[..., 1], p[..., 2])
-    cbar = (c1 + c2) / 2
-    c7 = cbar**7
-    g1 = 1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))
-    a1 = g1 * q[:, 1]
-    a2 = g1 * p[..., 1]
-    cp1 = np.hypot(a1, q[:, 2])
-    cp2 = np.hypot(a2, p[..., 2])
+    qa, qb = q[:, 1], q[:, 2]
+    pa, pb = p[..., 1], p[..., 2]
+    c1 = np.hypot(qa, qb)
+    cbar = (c1 + np.hypot(pa, pb)) * 0.5
+    c2_ = cbar * cbar
+    c7 = c2_ * c2_ * c2_ * cbar
+    g1 = 1.5 - 0.5 * np.sqrt(c7 / (c7 + 25.0**7))
+    a1 = g1 * qa
+    a2 = g1 * pa
+    cp1 = np.hypot(a1, qb)
+    cp2 = np.hypot(a2, pb)
     dc = np.abs(cp2 - cp1)
-    dh2 = np.maximum((a2 - a1) ** 2 + (p[..., 2] - q[:, 2]) ** 2 - dc * dc, 0.0)
-    dh = np.sqrt(dh2)
-    cpbar = (cp1 + cp2) / 2
-    cp7 = cpbar**7
-    r = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7)) * _SIN60
-    lbar2 = ((q[:, 0] + p[..., 0]) / 2 - 50.0) ** 2
+    da = a2 - a1
+    db = pb - qb
+    dh = np.sqrt(np.maximum(da * da + db * db - dc * dc, 0.0))
+    cpbar = (cp1 + cp2) * 0.5
+    cp2_ = cpbar * cpbar
+    cp7 = cp2_ * cp2_ * cp2_ * cpbar
+    r = (2.0 * _SIN60) * np.sqrt(cp7 / (cp7 + 25.0**7))
+    lbar = (q[:, 0] + p[..., 0]) * 0.5 - 50.0
+    lbar2 = lbar * lbar
     s_l = 1.0 + 0.015 * lbar2 / np.sqrt(20.0 + lbar2)
     y = dc / (1.0 + 0.045 * cpbar)
-    z_lo = dh / (1.0 + 0.015 * cpbar * _T_MAX)
-    z_hi = dh / (1.0 + 0.015 * cpbar * _T_MIN)
-    z = np.clip(r * y / 2.0, z_lo, z_hi)
-    f = ((p[..., 0] - q[:, 0]) / s_l) ** 2 + y * y + z * z - r * y * z
+    z = np.minimum(np.maximum(r * y * 0.5, dh / (1.0 + (0.015 * _T_MAX) * cpbar)), dh / (1.0 + (0.015 * _T_MIN) * cpbar))
+    dl = (p[..., 0] - q[:, 0]) / s_l
+    f = dl * dl + y * y + z * (z - r * y)
     return np.sqrt(np.maximum(f, 0.0)).sum(-1) * _SAFETY - 1e-12
 
 
@@ -335,7 +382,13 @@ class SnapIndex:
                 m = 4 * k
                 head = np.argpartition(plb, m - 1)[:m]
                 per_h = kernel(q, pts[head])  # type: ignore[operator]
-                kth = float(np.partition(per_h.sum(-1), k - 1)[k - 1])
+                s_h = per_h.sum(-1)
+                kth = float(np.partition(s_h, k - 1)[k - 1])
+                keep = plb <= kth
+                keep[head] = False
+                per_r = kernel(q, pts[keep])  # type: ignore[operator]
+                per = np.concatenate([per_h, per_r])
+                return np.concatenate([rows[head], rows[keep]]), per.sum(-1), per
             keep = plb <= kth
             rows, pts = rows[keep], pts[keep]
         per = kernel(q, pts)  # type: ignore[operator]

@@ -151,3 +151,23 @@ def test_bad_queries_raise_typed_errors(small_library: Library, lab, k, method, 
     with pytest.raises(FormulateInputError) as err:
         index.query(lab, k, method)
     assert err.value.field == field
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    centre=arrays(np.float64, (3, 3), elements=st.floats(-90, 90, width=32)),
+    spread=st.floats(0.01, 8.0),
+    q=arrays(np.float64, (3, 3), elements=st.floats(-90, 90, width=32)),
+    seed=st.integers(0, 2**31),
+)
+def test_cie2000_hue_aware_bound_on_small_chromatic_boxes(centre, spread, q, seed) -> None:
+    # small boxes away from the neutral axis are where the hue-dependent R_T bound is used
+    rng = np.random.default_rng(seed)
+    centre[:, 0] = np.abs(centre[:, 0]) % 100
+    q[:, 0] = np.abs(q[:, 0]) % 100
+    pts = centre + rng.uniform(-spread, spread, (20, 3, 3))
+    exact = delta_e(q[None], pts, "cie2000").sum(-1)
+    chroma = np.hypot(pts[..., 1], pts[..., 2])
+    box = _box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), "cie2000")
+    assert box <= exact.min() + 1e-12
+    assert np.all(_point_bounds_cie2000(q, pts) <= exact + 1e-12)
