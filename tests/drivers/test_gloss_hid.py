@@ -239,3 +239,14 @@ def test_discovery_and_open_by_vid_pid_with_simulated_enumerate():
     with open_instrument("gloss@hid:1209:ca60", device_factory=b.dev, enumerate_fn=b.dev.enumerate,
                          timeout_s=0.2) as inst:
         assert abs(inst.measure().gloss_gu[60] - 88.0) < 0.6
+
+
+def test_calibrate_and_clear_bytes():
+    cal = struct.pack("<I3fI", 6, 99.8, 100.1, 99.9, 1795442400)
+    pairs = [(out_report(0x20, 1), [in_report(1, 0x20, 0, 0, cal)])]
+    inst, hid = scripted(pairs)
+    with inst.open():
+        r = inst.calibrate()
+    assert hid.unexpected == [] and hid.pairs == []
+    assert (r.calibration_id, r.steps, r.passed, r.expires.timestamp()) == (
+        "CAL-GM0815-0006", ("standard",), True, 1795442400)
