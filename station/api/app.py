@@ -37,6 +37,7 @@ TAGS = [
     {"name": "measurements", "description": "immutable readings; corrections supersede; CSV export"},
     {"name": "designs", "description": "versioned cacad.design/1 designs"},
     {"name": "library", "description": "library paints"},
+    {"name": "recipes", "description": "formulation jobs: ColorSnap a design to the library (chemist)"},
     {"name": "users", "description": "users and tokens (admin)"},
     {"name": "audit", "description": "who wrote what, when"},
 ]
