@@ -122,7 +122,7 @@ def test_designs_crud_with_versions(api: Api) -> None:
                        headers=api.auth("stylist"))
     assert r.status_code == 422
     detail = r.json()["detail"][0]
-    assert detail["loc"] == ["body", "travel_deg"] and "travel_deg" in detail["ctx"]["accepted"]
+    assert detail["loc"] == ["body", "design", "travel_deg"] and "travel_deg" in detail["ctx"]["accepted"]
     assert api.client.delete(f"{V1}/designs/{d['id']}", headers=api.auth("stylist")).json()["archived"] is True
     assert api.client.get(f"{V1}/designs", headers=api.auth("stylist")).json()["count"] == 0
     listed = api.client.get(f"{V1}/designs", params={"include_archived": True}, headers=api.auth("stylist")).json()

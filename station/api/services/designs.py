@@ -11,13 +11,17 @@ from db.models import Design, DesignVersion, User
 from station.api.errors import ConflictError, NotFoundError
 from station.api.schemas.designs import DesignBody, DesignPublic, DesignVersionPublic
 from station.api.services import audit
+from station.errors import InputError
 from station.model.design_io import design_from_dict, design_to_dict
 
 
 def canonical_body(body: DesignBody) -> dict[str, Any]:
     """Validate *body* through the model (``design_from_dict``) and return its canonical dict."""
     data = body.model_dump(by_alias=True)
-    return design_to_dict(design_from_dict(data))
+    try:
+        return design_to_dict(design_from_dict(data))
+    except InputError as exc:  # name the field as the request does: design.<field>
+        raise InputError(f"design.{exc.field}", exc.accepted, exc.got) from exc
 
 
 def _public(design: Design, body: dict[str, Any]) -> DesignPublic:
