@@ -11,12 +11,12 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from station.model.angles import ANGLES_6  # noqa: E402
-from station.model.colorimetry import lab_to_linear_srgb, srgb_encode  # noqa: E402
-from station.model.representations import FaceFlopTravelGloss  # noqa: E402
+from station.model.angles import ANGLES_6
+from station.model.colorimetry import lab_to_linear_srgb, srgb_encode
+from station.model.representations import FaceFlopTravelGloss
 
 
 def _swatch_rgb(design: FaceFlopTravelGloss) -> np.ndarray:

@@ -103,3 +103,11 @@ def test_bad_gloss(bad) -> None:
 def test_bad_geometry() -> None:
     with pytest.raises(ModelInputError, match="geometry_deg"):
         simulate_gloss_meter(lobe_from_gloss(50), 45)
+
+
+@pytest.mark.parametrize("alpha", [0.005, 0.03, 0.2, 0.6])
+def test_thinned_ward_rule_matches_full(alpha: float) -> None:
+    from station.model.gloss import _ward_fraction
+
+    full = _ward_fraction(alpha, 60, n_rad=64, phi_step=1)
+    assert 100 * _ward_fraction(alpha, 60) == pytest.approx(100 * full, abs=0.01)  # in GU per unit albedo ratio
