@@ -18,8 +18,9 @@ design and the box:
   T ≤ 1.93), ΔC'² + ΔH'² = Δa'² + Δb² ≥ Δa² + Δb² (a' = (1+G)a, one G per pair), with S_L, S_C and
   R_C replaced by their largest values over the box: S_L is increasing in |L̄ − 50|, C̄' ≤ (1+G(C̄))C̄
   is increasing in C̄ (checked numerically: slope ≥ 0.52 on 0–1000) and |R_T| ≤ R_C(C̄'_max)·sin 2Δθ_max,
-  where Δθ_max comes from the arc of hues the pair's mean hue can take (:func:`_max_sin_2dtheta`; the
-  global sin 60° where the box holds the neutral axis). Per paint, a trigonometry-free bound
+  where Δθ_max comes from the arc of hues the pair's mean hue can take (:func:`_hue_geometry`; the
+  global sin 60° where the box holds the neutral axis); the part of the a*b* distance that must be a hue
+  difference (the gap between the hue arcs) is weighted by 1/S_H,max instead of 1/S_C,max. Per paint, a trigonometry-free bound
   (:func:`_point_bounds_cie2000`) filters the gathered paints before the exact formula runs.
 
 Buckets are visited in order of their bound; the search stops when the next bound exceeds the k-th
@@ -49,6 +50,8 @@ TRAVEL_ANGLE_THRESHOLD_DEG = 45.0
 _SIN60 = math.sin(math.pi / 3) + 1e-12
 _SAFETY = 1.0 - 1e-9
 _SENTINEL = 1.0e6
+#: Leaves evaluated per batch once a k-th best is known (each batch tightens it for the rest).
+_BATCH_LEAVES = 24
 LAB_QUERY_RANGE = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
 _Q_LO = np.array([v[0] for v in LAB_QUERY_RANGE.values()])
 _Q_HI = np.array([v[1] for v in LAB_QUERY_RANGE.values()])
@@ -132,15 +135,20 @@ def _wrap(x: NDArray[np.float64]) -> NDArray[np.float64]:
     return (x + 180.0) % 360.0 - 180.0
 
 
-def _max_sin_2dtheta(q: NDArray[np.float64], lo: NDArray, hi: NDArray) -> NDArray[np.float64]:
-    """Upper bound of sin(2Δθ) in CIEDE2000's R_T for the design q and any paint in the boxes [lo, hi].
+def _hue_geometry(
+    q: NDArray[np.float64], lo: NDArray, hi: NDArray
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Bounds from the primed hues h' = hue((1+G)a*, b*), G ∈ [0, 0.5], of the design and of a box.
 
-    Δθ = 30° exp(−((h̄' − 275°)/25°)²) depends on the mean hue h̄' of the pair, the midpoint of the
-    shorter arc between h'_1 and h'_2 (h' = hue of ((1+G)a*, b*), G ∈ [0, 0.5]). Each hue set is an arc:
-    the query's over G, the box's over the (stretched) box when it does not contain the neutral axis;
-    when both arcs plus their separation stay under 180°, h̄' lies in the arc of half-width (w₁+w₂)/2
-    around the midpoint of their centres, and |h̄' − 275°| is at least its circular distance to 275°.
-    Otherwise the global bound sin 60° is returned.
+    Returns ``(max_sin_2dtheta, min_hue_gap_deg)``:
+
+    * an upper bound of sin(2Δθ) in CIEDE2000's R_T, Δθ = 30° exp(−((h̄' − 275°)/25°)²), h̄' being the
+      midpoint of the shorter arc between h'_1 and h'_2. Each hue set is an arc (the design's over G,
+      the box's over the stretched box when it does not hold the neutral axis); when both arcs plus
+      their separation stay under 180°, h̄' lies within (w₁+w₂)/2 of the midpoint of their centres and
+      |h̄' − 275°| is at least its circular distance to 275°. Otherwise sin 60°.
+    * a lower bound of the hue difference |Δh'| (degrees): the gap between the two arcs, 0 where the
+      box holds the neutral axis.
     """
     qa, qb = q[:, 1], q[:, 2]
     h_q0 = np.degrees(np.arctan2(qb, qa))
@@ -163,7 +171,9 @@ def _max_sin_2dtheta(q: NDArray[np.float64], lo: NDArray, hi: NDArray) -> NDArra
     dtheta = 30.0 * np.exp(-((dist / 25.0) ** 2))
     bound = np.where(ok, np.sin(np.deg2rad(2.0 * dtheta)) + 1e-12, _SIN60)
     achromatic_query = (qa == 0) & (qb == 0)  # C'1 = 0 makes ΔH' = 0: the cross term vanishes
-    return np.where(achromatic_query, 0.0, np.minimum(bound, _SIN60))
+    sin_bound = np.where(achromatic_query, 0.0, np.minimum(bound, _SIN60))
+    gap = np.where(holds_axis, 0.0, np.maximum(np.abs(d) - half_q - half_b - 1e-6, 0.0))
+    return sin_bound, np.minimum(gap, 180.0)
 
 
 def _box_bounds(
@@ -193,9 +203,17 @@ def _box_bounds(
         cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * cbar * (1 + 1e-12) + 1e-12
         cp7 = cpbar**7
         r_c = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7))
-        kappa = 1.0 - r_c * _max_sin_2dtheta(q, lo, hi) / 2.0
+        sin_2dt, gap = _hue_geometry(q, lo, hi)
+        kappa = 1.0 - r_c * sin_2dt / 2.0
         s_c = 1.0 + 0.045 * cpbar
-        per = np.sqrt(dl2 / s_l**2 + kappa * dab2 / s_c**2)
+        s_h = 1.0 + (0.015 * _T_MAX) * cpbar
+        # |ΔH'| = 2 √(C'1 C'2) |sin(Δh'/2)| ≥ 2 √(C*1 C*2,min) sin(gap/2)  (C' ≥ C*)
+        c_min = np.hypot(np.maximum(np.maximum(lo[..., 1], -hi[..., 1]), 0.0),
+                         np.maximum(np.maximum(lo[..., 2], -hi[..., 2]), 0.0))
+        h_min = 2.0 * np.sqrt(np.hypot(q[:, 1], q[:, 2]) * c_min) * np.sin(np.deg2rad(gap / 2.0))
+        h2 = h_min * h_min
+        chroma_hue = np.maximum(dab2 - h2, 0.0) / s_c**2 + h2 / s_h**2
+        per = np.sqrt(dl2 / s_l**2 + kappa * chroma_hue)
     else:
         raise FormulateInputError("de", f"one of {', '.join(METHODS)}", method)
     return per.sum(-1) * _SAFETY - 1e-12
@@ -346,20 +364,30 @@ class SnapIndex:
         if self.n_groups == 1 or g == 1:
             rest = lb <= kth
             rest[pick] = False
-            more = leaves[rest]
+            more, more_lb = leaves[rest], lb[rest]
         else:
             gmore = np.flatnonzero(glb <= kth)
             cand = (gmore[:, None] * g + np.arange(g)).ravel()
             clb = _box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method)
             keep = clb <= kth
             keep &= ~np.isin(cand, sel)
-            more = cand[keep]
-        visited = sel.size + more.size
-        if more.size:
-            rows2, s2, per2 = self._evaluate(kernel, q, more, float(kth), k, method)
+            more, more_lb = cand[keep], clb[keep]
+        visited = sel.size
+        while more.size:  # best-bounded leaves first: each batch tightens the k-th best for the rest
+            if more.size > 2 * _BATCH_LEAVES:
+                part = np.argpartition(more_lb, _BATCH_LEAVES)
+                now, later = part[:_BATCH_LEAVES], part[_BATCH_LEAVES:]
+            else:
+                now, later = np.arange(more.size), np.empty(0, dtype=np.intp)
+            visited += now.size
+            rows2, s2, per2 = self._evaluate(kernel, q, more[now], float(kth), k, method)
             rows = np.concatenate([rows, rows2])
             s = np.concatenate([s, s2])
             per = np.concatenate([per, per2])
+            if s.size >= k:
+                kth = np.partition(s, k - 1)[k - 1]
+            still = more_lb[later] <= kth
+            more, more_lb = more[later][still], more_lb[later][still]
         if s.size > k:
             keep_k = s <= np.partition(s, k - 1)[k - 1]
             rows, s, per = rows[keep_k], s[keep_k], per[keep_k]
