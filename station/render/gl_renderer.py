@@ -72,10 +72,15 @@ class GLRenderer:
     The lobe maps are uploaded once as half-float (``half_float=True``) or float cube textures. One
     program is built per (shape, output kind) on first use. :meth:`render` returns the 8-bit sRGB
     frame (tone mapped in the shader), :meth:`render_linear` float radiance; both row 0 at the top.
+
+    With ``combined=True`` (default) the lobes of each paint are pre-summed, whenever the weights
+    change, into a gloss cube Σ w_G,i C_i and a directionally diffuse cube Σ w_DD,i C_i at the largest
+    lobe resolution (``shaders/combine.frag.glsl``), so a frame costs three cube lookups per pixel
+    whatever the lobe count; ``combined=False`` looks every lobe up per pixel.
     """
 
     def __init__(self, basis, width: int, height: int, ctx=None, diffuse: str = "cube",
-                 half_float: bool = True) -> None:
+                 half_float: bool = True, combined: bool = True) -> None:
         import moderngl
         import numpy as np
 
@@ -101,6 +106,9 @@ class GLRenderer:
             tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
             return tex
 
+        self._cube_texture = cube_texture
+        self.combined = combined
+        self._combined: tuple[bytes, list] | None = None
         self._lobes = [cube_texture(c) for c in basis.cubes]
         self._diffuse_tex = cube_texture(basis.diffuse)
         self._sh = sh_diffuse_matrix(basis.sh)
@@ -113,7 +121,8 @@ class GLRenderer:
         key = (shape, linear)
         if key not in self._programs:
             defines = {"SHAPE": SHAPE_INDEX[shape], "N_LOBES": len(self._lobes),
-                       "OUTPUT_LINEAR": int(linear), "DIFFUSE_SH": int(self.diffuse == "sh")}
+                       "OUTPUT_LINEAR": int(linear), "DIFFUSE_SH": int(self.diffuse == "sh"),
+                       "COMBINED": int(self.combined)}
             prog = build_program(self.ctx, "fullscreen.vert.glsl", "render.frag.glsl", defines)
             self._programs[key] = (prog, self.ctx.vertex_array(prog, []))
         return self._programs[key]
@@ -124,6 +133,45 @@ class GLRenderer:
             self._targets[linear] = (tex, self.ctx.framebuffer(color_attachments=[tex]))
         return self._targets[linear]
 
+    def _combined_cubes(self, pair) -> list:
+        """[gloss0, dd0, gloss1, dd1] cube textures for these paints (rebuilt when weights change)."""
+        np = self._np
+        mw = [w.map_weights() for w in pair]
+        key = b"".join(np.concatenate([w[1].ravel(), w[2]]).astype(np.float32).tobytes() for w in mw)
+        if self._combined is not None and self._combined[0] == key:
+            return self._combined[1]
+        if self._combined is not None:
+            for tex in self._combined[1]:
+                tex.release()
+        m = len(self._lobes)
+        size = max(c.shape[1] for c in self.basis.cubes)
+        prog = build_program(self.ctx, "fullscreen.vert.glsl", "combine.frag.glsl", {"N_LOBES": m})
+        vao = self.ctx.vertex_array(prog, [])
+        targets = [self.ctx.texture((size, 6 * size), 4, dtype="f4") for _ in range(2)]
+        fbo = self.ctx.framebuffer(color_attachments=targets)
+        cubes = []
+        try:
+            fbo.use()
+            for unit, tex in enumerate(self._lobes):
+                tex.use(unit)
+            prog["u_lobes"].value = list(range(m)) if m > 1 else 0
+            prog["u_size"].value = size
+            for w in mw:
+                prog["u_wg"].write(w[2].astype(np.float32).tobytes())
+                prog["u_wdd"].write(w[1].astype(np.float32).tobytes())
+                vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+                for att in range(2):
+                    data = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=att), np.float32)
+                    cubes.append(self._cube_texture(data.reshape(6, size, size, 4)[..., :3]))
+        finally:
+            fbo.release()
+            for t in targets:
+                t.release()
+            vao.release()
+            prog.release()
+        self._combined = (key, cubes)
+        return cubes
+
     def _draw(self, scene, paints, linear: bool, exposure_ev: float, curve: str):
         from station.render.numpy_renderer import BACKGROUND, check_paints
         from station.render.tonemap import CURVES, check_curve
@@ -133,9 +181,16 @@ class GLRenderer:
         prog, vao = self._program(scene.shape, linear)
         _, fbo = self._target(linear)
         fbo.use()
-        m = len(self._lobes)
-        for unit, tex in enumerate(self._lobes):
-            tex.use(unit)
+        if self.combined:
+            cubes = self._combined_cubes(pair)
+            fbo.use()
+            for unit, tex in enumerate(cubes):
+                tex.use(unit)
+            m = len(cubes)
+        else:
+            m = len(self._lobes)
+            for unit, tex in enumerate(self._lobes):
+                tex.use(unit)
         self._diffuse_tex.use(m)
         uniforms = {**scene.camera.uniforms(self.width, self.height),
                     "u_size": (float(self.width), float(self.height)),
@@ -149,11 +204,15 @@ class GLRenderer:
         for name, value in uniforms.items():
             if name in prog:
                 prog[name].value = value
-        prog["u_lobes"].value = list(range(m)) if m > 1 else 0
         mw = [w.map_weights() for w in pair]
         prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
-        prog["u_wdd"].write(np.concatenate([w[1] for w in mw]).astype(np.float32).tobytes())
-        prog["u_wg"].write(np.concatenate([w[2] for w in mw]).astype(np.float32).tobytes())
+        if self.combined:
+            for unit, name in enumerate(("u_gloss0", "u_dd0", "u_gloss1", "u_dd1")):
+                prog[name].value = unit
+        else:
+            prog["u_lobes"].value = list(range(m)) if m > 1 else 0
+            prog["u_wdd"].write(np.concatenate([w[1] for w in mw]).astype(np.float32).tobytes())
+            prog["u_wg"].write(np.concatenate([w[2] for w in mw]).astype(np.float32).tobytes())
         if "u_sh" in prog:
             prog["u_sh"].write(self._sh.tobytes())
         vao.render(mode=self.ctx.TRIANGLES, vertices=3)
@@ -181,8 +240,9 @@ class GLRenderer:
         for tex, fbo in self._targets.values():
             fbo.release()
             tex.release()
-        for tex in [*self._lobes, self._diffuse_tex]:
+        for tex in [*self._lobes, self._diffuse_tex, *(self._combined[1] if self._combined else [])]:
             tex.release()
+        self._combined = None
         self._programs.clear()
         self._targets.clear()
         if self._own_ctx:

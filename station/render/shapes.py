@@ -6,10 +6,10 @@ panels (left panel 0, right panel 1) and the seam (fender 0, bumper 1).
 
 * ``sphere`` — unit sphere at the origin.
 * ``cylinder`` — the colour-proposal cylinder: vertical axis, radius 0.8, y ∈ [−1, 1], top cap.
-* ``speedshape`` — a procedural automotive "speed shape": the tapered ellipsoid
-  (x/a)² + ((y/h)² + (z/w)²)/s(x)² = 1, s(x) = 1 − k·x/a, a = 1.4, h = 0.45, w = 0.6, k = 0.3
-  (thick nose at −x, thin tail at +x), found by 24 bracketing steps and 14 bisections (it is
-  convex, so a ray enters it once; only grazing rays at the silhouette can step over it).
+* ``speedshape`` — a procedural automotive "speed shape", a teardrop of two half-ellipsoids joined
+  at x = 0 with a common cross-section (height 0.42, width 0.55): a blunt nose (semi-axis 0.7) at
+  −x and a long tail (1.7) at +x. The join is C¹ (both normals are (0, y/h², z/w²) there), and
+  each half is intersected in closed form. Nose = paint 0, tail = paint 1.
 * ``panels`` — two 1 × 1.4 flat panels facing +z, hinged 0.04 apart at x = 0; the right panel is
   turned about its hinge (vertical axis) by ``misalignment_deg`` (thesis ch. 4 misalignment).
 * ``seam`` — a flat fender (y ∈ [0.01, 0.9]) above a bumper curving away below (cylinder of radius
@@ -27,14 +27,14 @@ from station.render.errors import RenderInputError
 
 SHAPES = ("sphere", "cylinder", "speedshape", "panels", "seam")
 SHAPE_INDEX = {name: i for i, name in enumerate(SHAPES)}
-SPEED_A, SPEED_H, SPEED_W, SPEED_K = 1.4, 0.45, 0.6, 0.3
+SPEED_NOSE, SPEED_TAIL, SPEED_H, SPEED_W = 0.7, 1.7, 0.42, 0.55
 CYL_R = 0.8
 SEAM_R = 0.6
 
 DEFAULT_CAMERAS = {
     "sphere": Camera((0.0, 0.8, 4.5), (0.0, 0.0, 0.0), fov_deg=30.0),
     "cylinder": Camera((0.0, 1.2, 4.5), (0.0, 0.0, 0.0), fov_deg=32.0),
-    "speedshape": Camera((1.0, 1.2, 3.6), (0.1, 0.0, 0.0), fov_deg=30.0),
+    "speedshape": Camera((1.5, 1.1, 3.8), (0.45, 0.0, 0.0), fov_deg=32.0),
     "panels": Camera((0.0, 0.4, 3.6), (0.0, 0.0, 0.0), fov_deg=36.0),
     "seam": Camera((0.9, 0.5, 3.4), (0.0, 0.0, 0.0), fov_deg=36.0),
 }
@@ -110,57 +110,29 @@ def _cylinder(o, d):
             [(p[..., 0] >= 0).astype(np.int8), (pc[..., 0] >= 0).astype(np.int8)])
 
 
-def speed_f(p: np.ndarray) -> np.ndarray:
-    """Implicit function of the speed shape (negative inside)."""
-    s = 1.0 - SPEED_K * p[..., 0] / SPEED_A
-    q = (p[..., 1] / SPEED_H) ** 2 + (p[..., 2] / SPEED_W) ** 2
-    return (p[..., 0] / SPEED_A) ** 2 + q / (s * s) - 1.0
+def _ellipsoid_roots(o, d, axes) -> tuple[np.ndarray, np.ndarray]:
+    """Both ray parameters of the hits with the origin-centred ellipsoid of semi-axes *axes* (inf: miss)."""
+    oo, dd = o / axes, d / axes
+    a = np.sum(dd * dd, axis=-1)
+    b = np.sum(dd * oo, axis=-1)
+    c = np.sum(oo * oo, axis=-1) - 1.0
+    disc = b * b - a * c
+    root = np.sqrt(np.maximum(disc, 0.0))
+    hit = disc >= 0
+    return np.where(hit, (-b - root) / a, np.inf), np.where(hit, (-b + root) / a, np.inf)
 
 
-def speed_grad(p: np.ndarray) -> np.ndarray:
-    """Gradient of :func:`speed_f` (outward normal direction)."""
-    s = 1.0 - SPEED_K * p[..., 0] / SPEED_A
-    q = (p[..., 1] / SPEED_H) ** 2 + (p[..., 2] / SPEED_W) ** 2
-    gx = 2.0 * p[..., 0] / SPEED_A**2 + 2.0 * q * SPEED_K / (SPEED_A * s**3)
-    gy = 2.0 * p[..., 1] / (SPEED_H**2 * s * s)
-    gz = 2.0 * p[..., 2] / (SPEED_W**2 * s * s)
-    return np.stack([gx, gy, gz], axis=-1)
-
-
-def _box(o, d, lo, hi):
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / d
-        t0 = (lo - o) * inv
-        t1 = (hi - o) * inv
-    tn = np.nanmax(np.minimum(t0, t1), axis=-1)
-    tf = np.nanmin(np.maximum(t0, t1), axis=-1)
-    return np.maximum(tn, 0.0), tf
-
-
-def _speedshape(o, d, steps: int = 24, bisections: int = 14):
-    ext = np.array([SPEED_A, SPEED_H * (1 + SPEED_K), SPEED_W * (1 + SPEED_K)])
-    tn, tf = _box(o, d, -ext, ext)
-    valid = tf > tn
-    dt = np.where(valid, (tf - tn) / steps, 0.0)
-    t_prev = tn
-    found = np.zeros(tn.shape, bool)
-    lo, hi = tn.copy(), tn.copy()
-    for k in range(1, steps + 1):
-        t = tn + k * dt
-        inside = speed_f(o + t[..., None] * d) < 0
-        new = inside & ~found & valid
-        lo = np.where(new, t_prev, lo)
-        hi = np.where(new, t, hi)
-        found |= new
-        t_prev = t
-    for _ in range(bisections):
-        mid = 0.5 * (lo + hi)
-        inside = speed_f(o + mid[..., None] * d) < 0
-        hi = np.where(inside, mid, hi)
-        lo = np.where(inside, lo, mid)
-    t = np.where(found, 0.5 * (lo + hi), np.inf)
-    p = o + np.where(found, t, 0)[..., None] * d
-    return [t], [speed_grad(p)], [(p[..., 0] >= 0).astype(np.int8)]
+def _speedshape(o, d):
+    ts, ns, ps = [], [], []
+    halves = ((np.array([SPEED_NOSE, SPEED_H, SPEED_W]), -1.0), (np.array([SPEED_TAIL, SPEED_H, SPEED_W]), 1.0))
+    for axes, side in halves:
+        for t in _ellipsoid_roots(o, d, axes):
+            p = o + np.where(np.isfinite(t), t, 0.0)[..., None] * d
+            ok = (t > 0) & (side * p[..., 0] >= 0)
+            ts.append(np.where(ok, t, np.inf))
+            ns.append(p / (axes * axes))
+            ps.append(np.full(t.shape, 0 if side < 0 else 1, np.int8))
+    return ts, ns, ps
 
 
 def panel_frames(misalignment_deg: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:

@@ -3,18 +3,25 @@
 //   radiance = wd * D(N) + sum_i (wg_i + (R.N) wdd_i) * C_i(R)
 // with the weights already converted to normalised maps (LobeWeights.map_weights). Two paints:
 // index 0/1 from the shape. Defines: SHAPE, N_LOBES, OUTPUT_LINEAR (1: float radiance out),
-// DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube).
+// DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube), COMBINED (1: the lobes of each
+// paint pre-summed into a gloss and a directionally-diffuse cube, shaders/combine.frag.glsl).
 //#include shapes.glsl
 //#include tonemap.glsl
 uniform vec3 u_eye, u_forward, u_right, u_up;
 uniform float u_tan_half_fov, u_aspect;
 uniform vec2 u_size;
+#if COMBINED
+uniform samplerCube u_gloss0, u_gloss1, u_dd0, u_dd1;
+#else
 uniform samplerCube u_lobes[N_LOBES];
+#endif
 uniform samplerCube u_diffuse;
 uniform vec3 u_sh[9];
 uniform vec3 u_wd[2];
+#if !COMBINED
 uniform vec3 u_wdd[2 * N_LOBES];
 uniform float u_wg[2 * N_LOBES];
+#endif
 uniform vec3 u_background;
 out vec4 f_color;
 
@@ -41,10 +48,15 @@ void main() {
 #else
         rgb = u_wd[paint] * textureLod(u_diffuse, n, 0.0).rgb;
 #endif
+#if COMBINED
+        if (paint == 0) rgb += textureLod(u_gloss0, r, 0.0).rgb + ndv * textureLod(u_dd0, r, 0.0).rgb;
+        else rgb += textureLod(u_gloss1, r, 0.0).rgb + ndv * textureLod(u_dd1, r, 0.0).rgb;
+#else
         for (int i = 0; i < N_LOBES; ++i) {
             int k = paint * N_LOBES + i;
             rgb += (u_wg[k] + ndv * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
         }
+#endif
     }
 #if OUTPUT_LINEAR
     f_color = vec4(rgb, 1.0);

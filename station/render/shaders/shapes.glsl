@@ -1,9 +1,8 @@
 // Analytic shapes, the same maths as station/render/shapes.py. SHAPE: 0 sphere, 1 cylinder,
 // 2 speedshape, 3 panels, 4 seam. hit() returns t (or -1), the unit normal facing the ray, paint id.
 const float INF = 1e30;
-const float SPEED_A = 1.4, SPEED_H = 0.45, SPEED_W = 0.6, SPEED_K = 0.3;
+const float SPEED_NOSE = 0.7, SPEED_TAIL = 1.7, SPEED_H = 0.42, SPEED_W = 0.55;
 const float CYL_R = 0.8;
-const int SPEED_STEPS = 24, SPEED_BISECTIONS = 14;
 const float SEAM_R = 0.6;
 uniform float u_misalign;  // radians, panels only
 
@@ -11,18 +10,18 @@ void take(float t, vec3 n, int paint, inout float best, inout vec3 bn, inout int
     if (t > 0.0 && t < best) { best = t; bn = n; bp = paint; }
 }
 
-float speed_f(vec3 p) {
-    float s = 1.0 - SPEED_K * p.x / SPEED_A;
-    float q = (p.y / SPEED_H) * (p.y / SPEED_H) + (p.z / SPEED_W) * (p.z / SPEED_W);
-    return (p.x / SPEED_A) * (p.x / SPEED_A) + q / (s * s) - 1.0;
-}
-
-vec3 speed_grad(vec3 p) {
-    float s = 1.0 - SPEED_K * p.x / SPEED_A;
-    float q = (p.y / SPEED_H) * (p.y / SPEED_H) + (p.z / SPEED_W) * (p.z / SPEED_W);
-    return vec3(2.0 * p.x / (SPEED_A * SPEED_A) + 2.0 * q * SPEED_K / (SPEED_A * s * s * s),
-                2.0 * p.y / (SPEED_H * SPEED_H * s * s),
-                2.0 * p.z / (SPEED_W * SPEED_W * s * s));
+void ellipsoid_hits(vec3 o, vec3 d, vec3 axes, float side, int paint, inout float best, inout vec3 bn,
+                    inout int bp) {
+    vec3 oo = o / axes, dd = d / axes;
+    float a = dot(dd, dd), b = dot(dd, oo), c = dot(oo, oo) - 1.0;
+    float disc = b * b - a * c;
+    if (disc < 0.0) return;
+    float root = sqrt(disc);
+    for (int k = 0; k < 2; ++k) {
+        float t = (-b + (k == 0 ? -root : root)) / a;
+        vec3 p = o + t * d;
+        if (side * p.x >= 0.0) take(t, p / (axes * axes), paint, best, bn, bp);
+    }
 }
 
 bool hit(vec3 o, vec3 d, out float t_hit, out vec3 n_hit, out int paint) {
@@ -50,30 +49,8 @@ bool hit(vec3 o, vec3 d, out float t_hit, out vec3 n_hit, out int paint) {
     vec3 pc = o + tc * d;
     if (pc.x * pc.x + pc.z * pc.z <= CYL_R * CYL_R) take(tc, vec3(0.0, 1.0, 0.0), pc.x >= 0.0 ? 1 : 0, best, bn, bp);
 #elif SHAPE == 2
-    vec3 ext = vec3(SPEED_A, SPEED_H * (1.0 + SPEED_K), SPEED_W * (1.0 + SPEED_K));
-    vec3 inv = 1.0 / d;
-    vec3 t0 = (-ext - o) * inv, t1 = (ext - o) * inv;
-    vec3 tmin = min(t0, t1), tmax = max(t0, t1);
-    float tn = max(max(max(tmin.x, tmin.y), tmin.z), 0.0);
-    float tf = min(min(tmax.x, tmax.y), tmax.z);
-    if (tf > tn) {
-        float dt = (tf - tn) / float(SPEED_STEPS);
-        float lo = tn, hi = tn;
-        bool found = false;
-        for (int k = 1; k <= SPEED_STEPS; ++k) {
-            float t = tn + float(k) * dt;
-            if (speed_f(o + t * d) < 0.0) { lo = t - dt; hi = t; found = true; break; }
-        }
-        if (found) {
-            for (int k = 0; k < SPEED_BISECTIONS; ++k) {
-                float mid = 0.5 * (lo + hi);
-                if (speed_f(o + mid * d) < 0.0) hi = mid; else lo = mid;
-            }
-            float t = 0.5 * (lo + hi);
-            vec3 p = o + t * d;
-            take(t, speed_grad(p), p.x >= 0.0 ? 1 : 0, best, bn, bp);
-        }
-    }
+    ellipsoid_hits(o, d, vec3(SPEED_NOSE, SPEED_H, SPEED_W), -1.0, 0, best, bn, bp);
+    ellipsoid_hits(o, d, vec3(SPEED_TAIL, SPEED_H, SPEED_W), 1.0, 1, best, bn, bp);
 #elif SHAPE == 3
     vec3 ur = vec3(cos(u_misalign), 0.0, -sin(u_misalign));
     vec3 nr = vec3(sin(u_misalign), 0.0, cos(u_misalign));
