@@ -9,6 +9,7 @@ counts the bytes read; the copy also writes as many, so this floor is generous t
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -70,7 +71,8 @@ def main() -> None:
     ]
     write_section("paint_edit", "Paint edit from cached basis images (station.render.basis_images)", cases,
                   "Machine shared with other jobs: the median includes their interference; the best "
-                  "run is the unloaded figure.")
+                  f"run is the unloaded figure. Load average at the end: {os.getloadavg()[0]:.1f} on "
+                  f"{os.cpu_count()} CPUs.")
 
 
 if __name__ == "__main__":

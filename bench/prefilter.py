@@ -10,6 +10,7 @@ over a 64² source cube (relative error of luminance per texel, at exponents 32 
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
@@ -42,15 +43,16 @@ def main() -> None:
     envs.append(procedural.sunny_sky(1024))
     cases: list[Case] = []
     for env in envs:
-        times = []
+        times, cpu = [], []
         for _ in range(3):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             basis = prefilter.prefilter_basis(env, exps, engine="gl")
             times.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
         cases.append(Case(f"whole basis, GL, {env.name}", f"{env.equirect.shape[1]}x{env.height}",
                           float(np.median(times)), "s",
                           f"bar <= 1.5 s; {len(exps)} lobes + diffuse; best {min(times):.2f} s; "
-                          f"faces {[c.shape[1] for c in basis.cubes]}"))
+                          f"process CPU {np.median(cpu):.2f} s; faces {[c.shape[1] for c in basis.cubes]}"))
     t0 = time.perf_counter()
     prefilter.prefilter_basis(envs[0], exps, engine="numpy")
     t_np = time.perf_counter() - t0
@@ -58,7 +60,8 @@ def main() -> None:
     cases.append(Case("NumPy / GL time", "", t_np / cases[0].figure, "ratio"))
     _accuracy(envs[0], cases)
     write_section("prefilter", "Environment prefiltering (station.render.prefilter)", cases,
-                  f"Exponents: {', '.join(f'{e:g}' for e in exps)}.")
+                  f"Exponents: {', '.join(f'{e:g}' for e in exps)}. Load average at the end: "
+                  f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs (the machine is shared).")
 
 
 if __name__ == "__main__":
