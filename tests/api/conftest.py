@@ -12,7 +12,14 @@ from fastapi.testclient import TestClient
 from db.models import Role
 from station.api import Settings, create_app
 from station.api.services import users
-from tests.db._fixtures import database_url, empty_database_url, pg_server, pg_url  # noqa: F401
+from tests.db._fixtures import (  # noqa: F401
+    _migrated_pg,
+    _migrated_sqlite,
+    database_url,
+    empty_database_url,
+    pg_server,
+    pg_url,
+)
 
 
 @dataclass

@@ -11,6 +11,7 @@ from __future__ import annotations
 import itertools
 import os
 import secrets
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -34,10 +35,11 @@ class PgServer:
         self._conn = psycopg.connect(PG_ADMIN_URL, autocommit=True, connect_timeout=3)
         self.created: list[str] = []
 
-    def create(self) -> str:
-        """Create an empty database and return its SQLAlchemy URL."""
+    def create(self, template: str | None = None) -> str:
+        """Create a database (empty, or a copy of *template*'s URL) and return its SQLAlchemy URL."""
         name = f"cacad_test_{_SESSION_TAG}_{next(_counter)}"
-        self._conn.execute(f'CREATE DATABASE "{name}"')
+        clause = f' TEMPLATE "{template.rsplit("/", 1)[1]}"' if template else ""
+        self._conn.execute(f'CREATE DATABASE "{name}"{clause}')
         self.created.append(name)
         return _pg_url(name)
 
@@ -84,10 +86,37 @@ def empty_database_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
     return request.getfixturevalue("pg_url")
 
 
-@pytest.fixture
-def database_url(empty_database_url: str) -> str:
-    """A fresh database migrated to head, on both backends."""
+@pytest.fixture(scope="session")
+def _migrated_sqlite(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from db.migrate import upgrade
 
-    upgrade(empty_database_url)
-    return empty_database_url
+    path = tmp_path_factory.mktemp("template") / "station.sqlite3"
+    upgrade(f"sqlite:///{path}")
+    return path
+
+
+@pytest.fixture(scope="session")
+def _migrated_pg(pg_server: PgServer) -> str:
+    from sqlalchemy.pool import NullPool
+
+    from db.engine import make_engine
+    from db.migrate import upgrade
+
+    url = pg_server.create()
+    upgrade(url)
+    make_engine(url, poolclass=NullPool).dispose()
+    return url
+
+
+@pytest.fixture(params=["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])
+def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
+    """A fresh database migrated to head, on both backends (a copy of a once-migrated template)."""
+    if request.param == "sqlite":
+        target = tmp_path / "station.sqlite3"
+        shutil.copyfile(request.getfixturevalue("_migrated_sqlite"), target)
+        yield f"sqlite:///{target}"
+        return
+    server: PgServer = request.getfixturevalue("pg_server")
+    url = server.create(template=request.getfixturevalue("_migrated_pg"))
+    yield url
+    server.drop(url)

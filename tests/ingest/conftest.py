@@ -1,1 +1,8 @@
-from tests.db._fixtures import database_url, empty_database_url, pg_server, pg_url  # noqa: F401
+from tests.db._fixtures import (  # noqa: F401
+    _migrated_pg,
+    _migrated_sqlite,
+    database_url,
+    empty_database_url,
+    pg_server,
+    pg_url,
+)
