@@ -33,12 +33,16 @@ def _load_library(spec: str) -> Any:
 
     if spec == "demo":
         return demo_library()
+    if spec == "munsell":
+        from station.formulate.munsell import munsell_library
+
+        return munsell_library()
     path = Path(spec)
     if path.suffix.lower() == ".csv":
         return read_library_csv(path)
     if path.suffix.lower() in (".cxf", ".xml"):
         return read_library_cxf(path)
-    raise InputError("library", "demo, or a .csv / .cxf library file", spec)
+    raise InputError("library", "demo, munsell, or a .csv / .cxf library file", spec)
 
 
 def _design_lab(text: str) -> tuple[np.ndarray, float | None, str]:
@@ -264,7 +268,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=cmd_library_browse)
 
     p = subparsers.add_parser("snap", help="ColorSnap: nearest library paints (thesis §5.3.5)")
-    p.add_argument("--library", default="demo", help="demo (SYNTHETIC, default) or a library file")
+    p.add_argument("--library", default="demo", help="demo (SYNTHETIC, default), munsell (real solids) or a library file")
     p.add_argument("--lab", help='design Lab at 15/45/110: "L,a,b;L,a,b;L,a,b"')
     p.add_argument("--design", type=Path, help="design file instead of --lab")
     p.add_argument("--k", type=int, default=5, help="matches (default 5)")

@@ -78,3 +78,22 @@ def test_demo_library_is_reproducible_labelled_and_cached() -> None:
     assert load < max(0.5, first)
     recomputed = C.predict_lab(lib.recipes[:50], lib.angles_deg)
     assert np.allclose(recomputed, lib.lab[:50])  # every paint's colour is its recipe's prediction
+
+
+def test_munsell_library_is_real_and_ordered() -> None:
+    from station.formulate.munsell import munsell_library
+    from station.formulate.snap import color_snap
+
+    lib = munsell_library()
+    assert len(lib) == 2734 and set(lib.types) == {"solid"} and not lib.synthetic
+    assert len(set(lib.codes)) == len(lib)
+    value = np.array([float(c.split()[2].split("/")[0]) for c in lib.codes])
+    lab = lib.angle_columns()
+    assert np.array_equal(lab[:, 0], lab[:, 2])
+    five = lab[value == 5.0, 0, 0]
+    assert 47.0 < five.min() and five.max() < 54.0  # Munsell value 5 is mid-grey lightness (L* ≈ 51)
+    hue = np.degrees(np.arctan2(lab[:, 0, 2], lab[:, 0, 1])) % 360
+    red = np.array([c.split()[1] == "5R" for c in lib.codes]) & (value == 5.0)
+    assert np.all((hue[red] < 40) | (hue[red] > 340))
+    result = color_snap(lib, lab[100], k=1)
+    assert result.matches[0].code == lib.codes[100]
