@@ -1,0 +1,65 @@
+"""Instruments through the service with real simulator subprocesses (MA6 spectro + gloss meter on ptys)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import colour
+import numpy as np
+import pytest
+
+from tests.api.conftest import Api, make_api
+
+V1 = "/api/v1"
+
+
+@pytest.fixture(scope="module")
+def sim_api(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Api]:
+    tmp = tmp_path_factory.mktemp("sim")
+    yield from make_api(f"sqlite:///{tmp / 'station.sqlite3'}", Path(tmp), simulators=("ma6", "gloss"))
+
+
+def _ids(api: Api) -> dict[str, str]:
+    insts = api.client.get(f"{V1}/instruments", headers=api.auth("technician")).json()
+    return {i["kind"]: i["id"] for i in insts}
+
+
+def test_simulators_are_attached(sim_api: Api) -> None:
+    insts = sim_api.client.get(f"{V1}/instruments", headers=sim_api.auth("qa")).json()
+    assert {i["kind"] for i in insts} == {"spectro", "gloss"}
+    assert all(i["simulated"] for i in insts)
+
+
+def test_measure_with_gloss_stores_lab_from_spectra(sim_api: Api) -> None:
+    ids = _ids(sim_api)
+    r = sim_api.client.post(f"{V1}/instruments/{ids['spectro']}/measure", params={"gloss_instrument_id": ids["gloss"]},
+                            json={}, headers=sim_api.auth("technician"))
+    assert r.status_code == 201, r.text
+    m = r.json()["measurement"]
+    assert 0 < m["gloss_gu"] <= 100 and m["gloss_geometry_deg"] == 60
+    # Lab recomputed independently with colour-science: D65, CIE 1964 10°, 400-700 nm / 10 nm
+    shape = colour.SpectralShape(400, 700, 10)
+    cmfs = colour.MSDS_CMFS["CIE 1964 10 Degree Standard Observer"].copy().align(shape)
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape)
+    for curve, lab in zip(m["spectra"], m["lab"], strict=True):
+        sd = colour.SpectralDistribution(dict(zip(m["wavelengths_nm"], curve, strict=True)))
+        xyz = colour.sd_to_XYZ(sd, cmfs, d65) / 100.0
+        white = colour.sd_to_XYZ(colour.sd_ones(shape), cmfs, d65) / 100.0
+        expected = colour.XYZ_to_Lab(xyz, colour.XYZ_to_xy(white))
+        np.testing.assert_allclose(lab, expected, atol=0.05)
+
+
+def test_instrument_errors(sim_api: Api) -> None:
+    ids = _ids(sim_api)
+    c, tech = sim_api.client, sim_api.auth("technician")
+    r = c.post(f"{V1}/instruments/{ids['spectro']}/measure", json={"illumination_deg": 15}, headers=tech)
+    assert r.status_code == 422 and "one of [45]" in r.json()["detail"][0]["ctx"]["accepted"]
+    assert c.post(f"{V1}/instruments/{ids['gloss']}/measure", json={}, headers=tech).status_code == 422
+    assert c.post(f"{V1}/instruments/{ids['spectro']}/measure", json={"panel_id": 777}, headers=tech).status_code == 404
+    assert c.post(f"{V1}/instruments/connect", json={"address": "ma6@/dev/does-not-exist"},
+                  headers=tech).status_code == 404
+    cal = c.post(f"{V1}/instruments/{ids['gloss']}/calibrate", json={"reference": "black glass"}, headers=tech)
+    assert cal.status_code == 200 and cal.json()["passed"] is True
+    events = c.get(f"{V1}/audit", params={"entity": "calibration"}, headers=sim_api.auth("admin")).json()
+    assert events["data"][0]["action"] == "instrument.calibrate"
