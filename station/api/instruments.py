@@ -14,6 +14,7 @@ import uuid
 from dataclasses import dataclass
 
 import numpy as np
+from sqlalchemy import select
 from sqlalchemy.orm import Session, sessionmaker
 
 from db.base import utcnow
@@ -156,7 +157,7 @@ class InstrumentHub:
         return self._public(attached)
 
     def _instrument_row(self, session: Session, a: Attached) -> Instrument:
-        row = session.query(Instrument).filter_by(serial=a.info.serial).one_or_none()
+        row = session.scalar(select(Instrument).where(Instrument.serial == a.info.serial))
         if row is None:
             row = Instrument(serial=a.info.serial, model=a.info.model, kind="multiangle" if a.driver.kind ==
                              "spectro" else a.driver.kind, firmware=a.info.firmware, address=a.driver.address)
@@ -171,7 +172,7 @@ class InstrumentHub:
         with self.sessions() as session:
             inst = self._instrument_row(session, a)
             client_id = calibration_uuid(a.info.serial, result.calibration_id)
-            record = session.query(CalibrationRecord).filter_by(client_id=client_id).one_or_none()
+            record = session.scalar(select(CalibrationRecord).where(CalibrationRecord.client_id == client_id))
             if record is None:
                 record = CalibrationRecord(
                     client_id=client_id, instrument_id=inst.id, performed_at=utcnow(), operator=actor.name,
