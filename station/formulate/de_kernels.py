@@ -7,7 +7,7 @@ repeat the same floating-point operations in the same order, without the checks:
 * ``cie76``   — ``np.linalg.norm(lab2 - lab1, axis=-1)``, as colour's ``euclidean_distance``.
 * ``cie2000`` — the arithmetic of colour's ``intermediate_attributes_CIE2000`` / ``delta_E_CIE2000``
   (Sharma, Wu & Dalal 2005), kL = kC = kH = 1.
-* ``din6175`` — :func:`station.model.difference.delta_e_din6175` itself (already plain NumPy).
+* ``din6175`` — the arithmetic of :func:`station.model.difference.delta_e_din6175`.
 
 tests/formulate/test_de_kernels.py asserts exact equality (``==``, not a tolerance) against
 :func:`~station.model.difference.delta_e` on random and edge-case inputs, which is what makes the
@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from station.model.difference import delta_e_din6175
+from station.model.difference import DIN6175_WEIGHTS
 
 Kernel = Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]
 
@@ -92,8 +92,24 @@ def cie2000(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.
 
 
 def din6175(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.float64]:
-    """DIN 6175-2 form (the model's provisional weights), *lab1* the reference."""
-    return delta_e_din6175(lab1, lab2)
+    """DIN 6175-2 form (the model's provisional weights), *lab1* the reference.
+
+    The arithmetic of :func:`station.model.difference.delta_e_din6175` without its input checks (a
+    test asserts bit-identity, so a change of the model's weights or form shows up at once).
+    """
+    ref, smp = lab1, lab2
+    c_ref = np.hypot(ref[..., 1], ref[..., 2])
+    c_smp = np.hypot(smp[..., 1], smp[..., 2])
+    d_l = smp[..., 0] - ref[..., 0]
+    d_c = c_smp - c_ref
+    d_ab2 = (smp[..., 1] - ref[..., 1]) ** 2 + (smp[..., 2] - ref[..., 2]) ** 2
+    d_h2 = np.maximum(d_ab2 - d_c**2, 0.0)
+    w = DIN6175_WEIGHTS
+    dl50 = (ref[..., 0] - 50.0) ** 2
+    s_l = 1.0 + w["k_L"] * dl50 / np.sqrt(20.0 + dl50)
+    s_c = 1.0 + w["k_C"] * c_ref
+    s_h = 1.0 + w["k_H"] * c_ref
+    return np.sqrt((d_l / s_l) ** 2 + (d_c / s_c) ** 2 + d_h2 / s_h**2)
 
 
 KERNELS: dict[str, Kernel] = {"cie76": cie76, "cie2000": cie2000, "din6175": din6175}
