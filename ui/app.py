@@ -43,6 +43,7 @@ class MainWindow(QMainWindow):
         self._add_screens()
 
         self.designer_panel = DesignerPanel(self.designer)
+        self.designer_panel.setMinimumWidth(440)
         dock = QDockWidget("Designer", self)
         dock.setObjectName("designer-dock")
         dock.setWidget(self.designer_panel)

@@ -1,14 +1,10 @@
 """View state (environment, shape, exposure, orbit camera) and the cached per-pixel basis images.
 
 The picture is linear in the paint's lobe weights (thesis eqs 2.5.1–2.5.3, as in
-``station.render.numpy_renderer``)::
-
-    radiance = w_D · D(N) + Σ_i (w_G,i + (N·V) w_DD,i) · C_i(R)
-
-so for a fixed camera, shape and environment the per-pixel maps D(N) and C_i(R) (the *basis
-images*) are computed once (:class:`BasisImages`, NumPy, using the core's ray caster and cube-map
-lookups) and a paint edit only re-weights them: on the GPU in ``ui/shaders/composite.frag.glsl``,
-or with :meth:`BasisImages.composite_linear` here. Nothing in this module imports Qt.
+``station.render.numpy_renderer``), so for a fixed camera, shape and environment the per-pixel
+*basis images* are computed once by the core (:mod:`station.render.basis_images`) and a paint edit only
+re-weights them: on the GPU in ``ui/shaders/composite.frag.glsl``, or with the core's NumPy path
+(:meth:`BasisImages.composite_linear`). Nothing in this module imports Qt.
 """
 
 from __future__ import annotations
@@ -21,11 +17,11 @@ import numpy as np
 
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
+from station.render.basis_images import BasisImages as CoreBasisImages
+from station.render.basis_images import build_basis_images
 from station.render.camera import Camera
-from station.render.cubemap import sample_cube
 from station.render.envcache import PrefilterCache
 from station.render.lobe_fit import fit_design
-from station.render.numpy_renderer import BACKGROUND, gbuffer
 from station.render.prefilter import PrefilteredBasis, prefilter_basis
 from station.render.procedural import procedural_environment
 from station.render.shapes import DEFAULT_CAMERAS, SHAPES, Scene
@@ -70,7 +66,8 @@ class ViewSettings:
     """What the 3D view shows: environment, shape, exposure (EV) and the orbit around the shape.
 
     ``yaw_deg``/``pitch_deg`` rotate the shape's default camera about the target (degrees),
-    ``zoom`` divides the eye distance (1 = the default framing).
+    ``zoom`` divides the eye distance (1 = the default framing). ``misalignment_deg`` turns the right
+    panel of the ``panels`` shape about its hinge (thesis ch. 4).
     """
 
     environment: str = "booth"
@@ -79,6 +76,7 @@ class ViewSettings:
     yaw_deg: float = 0.0
     pitch_deg: float = 0.0
     zoom: float = 1.0
+    misalignment_deg: float = 0.0
 
     def __post_init__(self) -> None:
         if self.environment not in ENVIRONMENTS:
@@ -91,6 +89,8 @@ class ViewSettings:
             raise ViewInputError("pitch_deg", "-80 <= pitch <= 80", self.pitch_deg)
         if not (math.isfinite(self.zoom) and 0.5 <= self.zoom <= 4.0):
             raise ViewInputError("zoom", "0.5 <= zoom <= 4", self.zoom)
+        if not (math.isfinite(self.misalignment_deg) and -45.0 <= self.misalignment_deg <= 45.0):
+            raise ViewInputError("misalignment_deg", "-45 <= misalignment <= 45", self.misalignment_deg)
         if not math.isfinite(self.yaw_deg):
             raise ViewInputError("yaw_deg", "a finite angle", self.yaw_deg)
 
@@ -111,25 +111,56 @@ class ViewSettings:
 
     def scene(self) -> Scene:
         """The core scene (shape + orbit camera)."""
-        return Scene(self.shape, camera=self.camera())
+        return Scene(self.shape, self.misalignment_deg, camera=self.camera())
 
     def replace(self, **kw: object) -> ViewSettings:
         """A copy with fields replaced (validated)."""
         return replace(self, **kw)  # type: ignore[arg-type]
 
 
+def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tuple[np.ndarray, np.ndarray]:
+    """Per cached image j: (constant weight (K, 3), weight × c (K, 3)) of *paint*.
+
+    The layout is ``station.render.basis_images``'s: ``("D", -1)`` diffuse map → w_D; ``("Gh", i)``
+    h_i·C_i → w_G,i; ``("Dg", i)`` g_i·C_i → w_DD,i; ``("C", i)`` C_i of a narrow lobe → w_G,i
+    constant and w_DD,i times c = N·V (weights from :meth:`LobeWeights.map_weights`).
+    """
+    w_d, w_dd, w_g = paint.map_weights()
+    const = np.zeros((len(layout), 3))
+    times_c = np.zeros((len(layout), 3))
+    for j, (kind, i) in enumerate(layout):
+        if kind == "D":
+            const[j] = w_d
+        elif kind in ("Gh", "C"):
+            const[j] = w_g[i]
+            if kind == "C":
+                times_c[j] = w_dd[i]
+        else:
+            const[j] = w_dd[i]
+    return const, times_c
+
+
 @dataclass(frozen=True, eq=False)
 class BasisImages:
-    """Per-pixel maps of one view (row 0 at the top): D(N) (H, W, 3), C_i(R) (m, H, W, 3), N·V and paint id.
-
-    ``paint`` is −1 off the object, 0 or 1 on the two paint halves of the shape.
+    """The core's cached basis images of one view (:func:`station.render.basis_images.build_basis_images`)
+    as dense frames for the GPU: ``layers`` (K, H, W, 3) (zero off the object), N·V (H, W) and the paint id
+    (H, W), −1 off the object, 0 or 1 on the two paint halves of the shape.
     """
 
-    exponents: tuple[float, ...]
-    diffuse: np.ndarray = field(repr=False)
-    lobes: np.ndarray = field(repr=False)
+    core: CoreBasisImages = field(repr=False)
+    layers: np.ndarray = field(repr=False)
     n_dot_v: np.ndarray = field(repr=False)
     paint: np.ndarray = field(repr=False)
+
+    @property
+    def exponents(self) -> tuple[float, ...]:
+        """Phong exponents of the basis."""
+        return self.core.basis.exponents
+
+    @property
+    def layout(self) -> tuple[tuple[str, int], ...]:
+        """What each layer holds (see :func:`layer_weights`)."""
+        return self.core.layout
 
     @property
     def size(self) -> tuple[int, int]:
@@ -139,32 +170,20 @@ class BasisImages:
     @classmethod
     def compute(cls, settings: ViewSettings, width: int, height: int) -> BasisImages:
         """Ray-cast the view and look up every prefiltered map once (the slow part, done per camera)."""
-        basis = environment_basis(settings.environment)
-        g = gbuffer(settings.scene(), width, height)
-        m = g.mask
-        diffuse = np.zeros((height, width, 3), np.float32)
-        lobes = np.zeros((len(basis.cubes), height, width, 3), np.float32)
-        if m.any():
-            diffuse[m] = sample_cube(basis.diffuse, g.normal[m])
-            r = g.reflect[m]
-            for i, cube in enumerate(basis.cubes):
-                lobes[i][m] = sample_cube(cube, r)
-        return cls(basis.exponents, diffuse, lobes, g.n_dot_v.astype(np.float32), g.paint.copy())
+        core = build_basis_images(settings.scene(), environment_basis(settings.environment), width, height)
+        k = core.images.shape[1]
+        layers = np.zeros((k, height * width, 3), np.float32)
+        layers[:, core.pixels] = core.images.transpose(1, 2, 0)
+        ndv = np.zeros(height * width, np.float32)
+        ndv[core.pixels] = core.n_dot_v
+        paint = np.full(height * width, -1, np.int8)
+        paint[core.pixels[: core.split]] = 0
+        paint[core.pixels[core.split:]] = 1
+        return cls(core, layers.reshape(k, height, width, 3), ndv.reshape(height, width), paint.reshape(height, width))
 
     def composite_linear(self, paints: tuple[LobeWeights, LobeWeights]) -> np.ndarray:
-        """Linear sRGB radiance (H, W, 3) float32 of two paints (module equation)."""
-        out = np.full((*self.paint.shape, 3), BACKGROUND, np.float32)
-        for k, w in enumerate(paints):
-            m = self.paint == k
-            if not m.any():
-                continue
-            w_d, w_dd, w_g = w.map_weights()
-            acc = w_d * self.diffuse[m]
-            ndv = self.n_dot_v[m][:, None]
-            for i in range(len(self.exponents)):
-                acc = acc + (w_g[i] + ndv * w_dd[i]) * self.lobes[i][m]
-            out[m] = acc
-        return out
+        """Linear sRGB radiance (H, W, 3) float32 of two paints (the core's re-weighting)."""
+        return self.core.linear_image(list(paints))
 
     def composite_display(self, paints: tuple[LobeWeights, LobeWeights], exposure_ev: float) -> np.ndarray:
         """8-bit sRGB (H, W, 3) of :meth:`composite_linear` (``station.render.tonemap.to_display``)."""

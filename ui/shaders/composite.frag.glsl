@@ -1,22 +1,20 @@
 #version 330
-// Re-weighting of cached basis images (thesis eqs 2.5.1-2.5.3, same equation as
-// station/render/numpy_renderer.py and ui/models/view.py BasisImages.composite_linear):
-//   radiance = wd * D(N) + sum_i (wg_i + (N.V) wdd_i) * C_i(R)
-// u_basis is an atlas of layers stacked in y, u_size texels each (RGB9_E5 shared-exponent HDR, 4 bytes
-// a texel: llvmpipe is bandwidth-bound): layer 0 is D(N), layer i + 1 is C_i(R). u_geom = (N.V, paint
-// id), paint -1 off the object. Weights are LobeWeights.map_weights() of paint 0 and paint 1, compacted
-// to the N_ACTIVE lobes with a non-zero weight in either paint (zero terms skipped: same sum, fewer
-// fetches); every array index is uniform across pixels. Display transform: the formulas of
-// station/render/tonemap.py (exposure, ACES fit, exact sRGB OETF).
+// Re-weighting of cached basis images (thesis eqs 2.5.1-2.5.3; station/render/basis_images.py):
+//   rgb = sum_j (a_j + c * b_j) * I_j,   c = N.V,
+// where I_j are the core's cached images (diffuse map, horizon-weighted lobe lookups, narrow-lobe
+// lookups) and (a_j, b_j) the paint's weights for image j (ui/models/view.py layer_weights).
+// u_basis is an atlas of the images stacked in y, u_size texels each (RGB9_E5 shared-exponent HDR,
+// 4 bytes a texel: llvmpipe is bandwidth-bound). u_geom = (N.V, paint id), paint -1 off the object.
+// Only images with a non-zero weight in either paint are listed (N_ACTIVE; same sum, fewer fetches);
+// every array index is uniform across pixels. Display transform: station/render/tonemap.py's formulas
+// (exposure, ACES fit, exact sRGB OETF).
 uniform sampler2D u_basis;
 uniform sampler2D u_geom;
 uniform vec2 u_viewport;
 uniform ivec2 u_size;
-uniform vec3 u_wd0, u_wd1;
 uniform int u_n_active;
-uniform int u_layer[MAX_LOBES];
-uniform vec3 u_wdd0[MAX_LOBES], u_wdd1[MAX_LOBES];
-uniform vec2 u_wg[MAX_LOBES];   // (paint 0, paint 1)
+uniform int u_layer[MAX_LAYERS];
+uniform vec3 u_a0[MAX_LAYERS], u_b0[MAX_LAYERS], u_a1[MAX_LAYERS], u_b1[MAX_LAYERS];
 uniform float u_exposure;       // 2^EV
 uniform vec3 u_background;
 out vec4 f_color;
@@ -40,9 +38,9 @@ void main() {
     vec3 rgb = u_background;
     if (geom.g > -0.5) {
         bool right = geom.g > 0.5;
-        rgb = (right ? u_wd1 : u_wd0) * texelFetch(u_basis, px, 0).rgb;
+        rgb = vec3(0.0);
         for (int j = 0; j < u_n_active; ++j) {
-            vec3 w = (right ? u_wg[j].y : u_wg[j].x) + geom.r * (right ? u_wdd1[j] : u_wdd0[j]);
+            vec3 w = right ? u_a1[j] + geom.r * u_b1[j] : u_a0[j] + geom.r * u_b0[j];
             rgb += w * texelFetch(u_basis, px + ivec2(0, u_layer[j] * u_size.y), 0).rgb;
         }
     }

@@ -88,7 +88,7 @@ class CurvePlot(_PlotBase):
         p.drawRect(r)
         p.drawText(QRectF(2, r.top(), MARGIN - 4, 16), Qt.AlignmentFlag.AlignRight, f"{self.channel}*")
         p.drawText(QRectF(r.left(), r.bottom() + 2, r.width(), 16), Qt.AlignmentFlag.AlignCenter,
-                   "aspecular angle 0–120°")
+                   "aspecular θ, 0–120°")
         design = self.model.design
         vals = design.lab_at(CURVE_ANGLES)[:, self.k]
         path = QPainterPath(self.to_px(CURVE_ANGLES[0], vals[0]))

@@ -21,7 +21,7 @@ from PySide6.QtOpenGLWidgets import QOpenGLWidget
 from PySide6.QtWidgets import QWidget
 
 from station.render.numpy_renderer import BACKGROUND
-from ui.models.view import BasisImages, ViewModel, ViewSettings
+from ui.models.view import BasisImages, ViewModel, ViewSettings, layer_weights
 
 SHADER_DIR = Path(__file__).resolve().parents[1] / "shaders"
 PREVIEW_DIVISOR = 4
@@ -38,32 +38,28 @@ def configure_default_format() -> None:
     QSurfaceFormat.setDefaultFormat(fmt)
 
 
-def composite_program(ctx, lobes: int):
-    """Compile ``shaders/composite.*.glsl`` for a basis of *lobes* lobes."""
+def composite_program(ctx, layers: int):
+    """Compile ``shaders/composite.*.glsl`` for a basis of *layers* cached images."""
     frag = (SHADER_DIR / "composite.frag.glsl").read_text().replace(
-        "#version 330", f"#version 330\n#define MAX_LOBES {lobes}", 1)
+        "#version 330", f"#version 330\n#define MAX_LAYERS {layers}", 1)
     return ctx.program(vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(), fragment_shader=frag)
 
 
-def set_composite_uniforms(prog, weights, exposure_ev: float, viewport: tuple[int, int],
-                           size: tuple[int, int]) -> None:
-    """Write the two paints' normalised-map weights (``LobeWeights.map_weights``) and display settings."""
-    (wd0, wdd0, wg0), (wd1, wdd1, wg1) = (w.map_weights() for w in weights)
-    m = len(wg0)
-    active = [i for i in range(m) if wdd0[i].any() or wdd1[i].any() or wg0[i] or wg1[i]]
-    pad = m - len(active)
-    prog["u_wd0"].value = tuple(map(float, wd0))
-    prog["u_wd1"].value = tuple(map(float, wd1))
+def set_composite_uniforms(prog, basis: BasisImages, weights, exposure_ev: float,
+                           viewport: tuple[int, int]) -> None:
+    """Write both paints' per-image weights (:func:`ui.models.view.layer_weights`) and display settings."""
+    (a0, b0), (a1, b1) = (layer_weights(basis.layout, w) for w in weights)
+    k = len(basis.layout)
+    active = [j for j in range(k) if a0[j].any() or b0[j].any() or a1[j].any() or b1[j].any()]
+    pad = np.zeros((k - len(active), 3))
     prog["u_n_active"].value = len(active)
-    prog["u_layer"].write(np.array([i + 1 for i in active] + [0] * pad, "i4").tobytes())
-    for name, arr in (("u_wdd0", wdd0), ("u_wdd1", wdd1)):
-        prog[name].write(np.concatenate([arr[active], np.zeros((pad, 3))]).astype("f4").tobytes())
-    wg = np.stack([wg0[active], wg1[active]], axis=-1)
-    prog["u_wg"].write(np.concatenate([wg, np.zeros((pad, 2))]).astype("f4").tobytes())
+    prog["u_layer"].write(np.array(active + [0] * (k - len(active)), "i4").tobytes())
+    for name, arr in (("u_a0", a0), ("u_b0", b0), ("u_a1", a1), ("u_b1", b1)):
+        prog[name].write(np.concatenate([arr[active], pad]).astype("f4").tobytes())
     prog["u_exposure"].value = float(2.0 ** exposure_ev)
     prog["u_background"].value = (BACKGROUND,) * 3
     prog["u_viewport"].value = tuple(map(float, viewport))
-    prog["u_size"].value = tuple(size)
+    prog["u_size"].value = basis.size
 
 
 class BasisWorker(QThread):
@@ -189,6 +185,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self.ctx = None
         self._prog = self._vao = self._vbo = self._tex_basis = self._tex_geom = None
         self._uploaded: BasisImages | None = None
+        self._layers = 0
         self.gl_renderer = ""
 
     def _set_basis(self, basis: BasisImages) -> None:
@@ -203,8 +200,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
 
         self.ctx = moderngl.create_context()
         self.gl_renderer = self.ctx.info["GL_RENDERER"]
-        m = len(self.basis.exponents) if self.basis is not None else 6
-        self._prog = composite_program(self.ctx, m)
+        self._prog = composite_program(self.ctx, len(self.basis.layout))
         quad = np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4")
         self._vbo = self.ctx.buffer(quad.tobytes())
         self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
@@ -216,7 +212,13 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
             if t is not None:
                 t.release()
         w, h = basis.size
-        layers = np.concatenate([basis.diffuse[None], basis.lobes], axis=0).astype("f4")
+        if self._prog is not None and self._layers != len(basis.layout):
+            self._prog.release()
+            self._vao.release()
+            self._prog = composite_program(self.ctx, len(basis.layout))
+            self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
+        self._layers = len(basis.layout)
+        layers = basis.layers
         self._tex_basis = self.ctx.texture((w, h * layers.shape[0]), 3, layers.tobytes(), dtype="f4",
                                            internal_format=GL_RGB9_E5)
         geom = np.stack([basis.n_dot_v, basis.paint.astype(np.float32)], axis=-1).astype("f2")
@@ -242,7 +244,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
             return
         if self._uploaded is not self.basis:
             self._upload(self.basis)
-        set_composite_uniforms(self._prog, weights, self.model.settings.exposure_ev, (w, h), self.basis.size)
+        set_composite_uniforms(self._prog, self.basis, weights, self.model.settings.exposure_ev, (w, h))
         self._tex_basis.use(0)
         self._tex_geom.use(1)
         self._prog["u_basis"].value = 0

@@ -1,0 +1,118 @@
+"""Regenerate the screenshots of every screen (``station viewer screenshots --out docs/screens``).
+
+Runs the real main window on whatever Qt platform is current (under Xvfb/xcb the 3D views are GL on
+llvmpipe), puts demo content on each screen — a design edit, the demo mood-board photo with the three
+eyedroppers, a ColorSnap of the design in the synthetic demo library, a scan of the MA6 simulator, a seam
+QA — and saves one PNG per screen. Returns the written paths.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+from PySide6.QtCore import QCoreApplication
+from PySide6.QtWidgets import QApplication
+
+from ui.demo import demo_photo
+from ui.widgets.render_view import GLRenderView, ImageRenderView
+
+SIZE = (1500, 950)
+
+
+def _settle(win, seconds: float = 0.3) -> None:
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        QCoreApplication.processEvents()
+        time.sleep(0.01)
+    for v in (*win.findChildren(GLRenderView), *win.findChildren(ImageRenderView)):
+        v.wait_idle()
+        v.update()
+    QCoreApplication.processEvents()
+
+
+def _wait(pred, timeout_s: float) -> bool:
+    end = time.perf_counter() + timeout_s
+    while time.perf_counter() < end:
+        QCoreApplication.processEvents()
+        if pred():
+            return True
+        time.sleep(0.02)
+    return False
+
+
+def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
+    """Write ``design.png``, ``moodboard.png``, ``library.png``, ``instruments.png``, ``qa.png`` to *out*."""
+    from ui.app import MainWindow
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    app = QApplication.instance()
+    if app is None:
+        raise RuntimeError("create the QApplication before taking screenshots")
+    win = MainWindow()
+    win.resize(*SIZE)
+    win.show()
+    written: list[Path] = []
+
+    def shot(name: str) -> None:
+        _settle(win)
+        path = out / f"{name}.png"
+        win.grab().save(str(path))
+        written.append(path)
+
+    try:
+        d = win.designer
+        d.keep("as designed")
+        d.move_face(18.0, -44.0)
+        d.end_drag()
+        d.set_gloss(70.0)
+        d.end_drag()
+        d.keep("bluer face, 70 GU")
+        win.view_panel.shape.setCurrentText("speedshape")
+        win.view_panel.model.update(yaw_deg=-15.0, pitch_deg=5.0)
+        shot("design")
+
+        with tempfile.TemporaryDirectory() as tmp:
+            photo = demo_photo(Path(tmp) / "demo-photo.png")
+            mb = win.moodboard
+            mb.add_image(str(photo), 20.0, 20.0, 2.0)
+            win.tabs.setCurrentWidget(win.screens["Mood board"])
+            mb.drop("face", 20 + 2 * 70, 20 + 2 * 60)
+            mb.drop("flop", 20 + 2 * 125, 20 + 2 * 118)
+            mb.drop("gloss", 20 + 2 * 58, 20 + 2 * 52)
+            mb.end_drop()
+            shot("moodboard")
+
+        win.tabs.setCurrentWidget(win.screens["Library"])
+        lib = win.screens["Library"].content()
+        lib.snap()
+        shot("library")
+
+        inst = win.screens["Instruments"]
+        win.tabs.setCurrentWidget(inst)
+        if scan:
+            inst.device.setCurrentText("sim:ma6")
+            inst.connect_device()
+            _wait(lambda: inst.session.connected and not inst.task.isRunning(), 60)
+            inst.calibrate()
+            _wait(lambda: not inst.task.isRunning(), 60)
+            inst.panel.setText("door-front-left")
+            inst.scan()
+            _wait(lambda: bool(win.store.items) and not inst.task.isRunning(), 60)
+        shot("instruments")
+
+        qa = win.screens["QA"]
+        win.tabs.setCurrentWidget(qa)
+        qa.panel_a.setCurrentText("palette: as designed")
+        qa.panel_b.setCurrentText("palette: bluer face, 70 GU")
+        qa.beta.setValue(4)
+        qa.run()
+        _wait(lambda: qa.report is not None and not qa.task.isRunning(), 120)
+        shot("qa")
+    finally:
+        win.close()
+        win.deleteLater()
+        QCoreApplication.processEvents()
+    return written

@@ -1,0 +1,193 @@
+"""Instruments screen: connect (simulators offered), calibrate, scan a panel with progress, see the
+reading (L*, a*, b* per angle with the fitted curve, and a rendering), store it with the panel id.
+
+Every blocking call runs in a :class:`~ui.widgets.tasks.TaskThread`; the thread is joined and the
+instrument (and simulator) closed when the screen closes. Errors are shown in the log as they are.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtWidgets import (
+    QComboBox,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QListWidget,
+    QPlainTextEdit,
+    QProgressBar,
+    QPushButton,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
+)
+
+from station.design.palette import booklet
+from ui.models.document import DesignDocument
+from ui.models.instruments import SIM_DEVICES, STEPS, InstrumentSession, Measurement, MeasurementStore
+from ui.widgets.common import lab_colour, pixmap_from_array
+from ui.widgets.tasks import TaskThread
+
+
+class InstrumentsScreen(QWidget):
+    """Device picker, actions, progress, the last reading and the stored list."""
+
+    def __init__(self, store: MeasurementStore, document: DesignDocument | None = None,
+                 parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.store = store
+        self.document = document
+        self.session = InstrumentSession()
+        self.task: TaskThread | None = None
+        self.last: Measurement | None = None
+
+        self.device = QComboBox()
+        self.device.setEditable(True)
+        self.device.addItems(list(SIM_DEVICES))
+        self.panel = QLineEdit("panel-001")
+        self.connect_btn = QPushButton("Connect")
+        self.calibrate_btn = QPushButton("Calibrate")
+        self.scan_btn = QPushButton("Scan panel")
+        self.use_btn = QPushButton("Use as design")
+        self.progress = QProgressBar()
+        self.progress.setRange(0, STEPS)
+        self.state = QLabel("not connected")
+        self.log = QPlainTextEdit()
+        self.log.setReadOnly(True)
+        self.log.setMaximumBlockCount(500)
+        self.table = QTableWidget(0, 5)
+        self.table.setHorizontalHeaderLabels(["geometry", "L*", "a*", "b*", "colour"])
+        self.render = QLabel()
+        self.render.setMinimumSize(160, 160)
+        self.stored = QListWidget()
+
+        form = QFormLayout()
+        form.addRow("device", self.device)
+        form.addRow("panel id", self.panel)
+        buttons = QHBoxLayout()
+        for b in (self.connect_btn, self.calibrate_btn, self.scan_btn, self.use_btn):
+            buttons.addWidget(b)
+        left = QVBoxLayout()
+        left.addLayout(form)
+        left.addLayout(buttons)
+        left.addWidget(self.progress)
+        left.addWidget(self.state)
+        left.addWidget(QLabel("log"))
+        left.addWidget(self.log)
+        right = QVBoxLayout()
+        right.addWidget(QLabel("last reading"))
+        row = QHBoxLayout()
+        row.addWidget(self.table, 2)
+        row.addWidget(self.render, 1)
+        right.addLayout(row)
+        right.addWidget(QLabel("stored measurements"))
+        right.addWidget(self.stored)
+        lay = QHBoxLayout(self)
+        lay.addLayout(left, 1)
+        lay.addLayout(right, 2)
+
+        self.connect_btn.clicked.connect(self.connect_device)
+        self.calibrate_btn.clicked.connect(self.calibrate)
+        self.scan_btn.clicked.connect(self.scan)
+        self.use_btn.clicked.connect(self.use_as_design)
+        self.store.events.added.connect(self._on_added)
+        self._sync_buttons()
+
+    # ------------------------------------------------------------------ actions
+    def _run(self, fn, done, label: str) -> None:
+        if self.task is not None and self.task.isRunning():
+            self._say("busy: wait for the running task")
+            return
+        self.progress.setValue(0)
+        self.state.setText(label)
+        self.task = TaskThread(fn)
+        self.task.progress.connect(self._on_progress)
+        self.task.succeeded.connect(done)
+        self.task.failed.connect(self._on_failed)
+        self.task.finished.connect(self._sync_buttons)
+        self._sync_buttons(busy=True)
+        self.task.start()
+
+    def connect_device(self) -> None:
+        """Open the chosen device (a simulator is started for ``sim:*``)."""
+        device = self.device.currentText()
+        self._run(lambda p: (p(1, "starting"), self.session.connect(device))[1], self._on_connected,
+                  f"connecting {device}…")
+
+    def calibrate(self) -> None:
+        """Run the calibration sequence."""
+        self._run(lambda p: (p(1, "calibrating"), self.session.calibrate())[1], self._on_calibrated, "calibrating…")
+
+    def scan(self) -> None:
+        """Measure the panel; the reading is stored and shown."""
+        panel = self.panel.text()
+        self._run(lambda p: self.session.scan(panel, p), self._on_scanned, f"scanning {panel}…")
+
+    def use_as_design(self) -> None:
+        """Make the last reading's fitted design the current design (undoable)."""
+        if self.document is not None and self.last is not None and self.last.design is not None:
+            self.document.set_design(self.last.design, f"measured {self.last.panel}")
+
+    # ------------------------------------------------------------------ results
+    def _say(self, text: str) -> None:
+        self.log.appendPlainText(text)
+
+    def _on_progress(self, step: int, text: str) -> None:
+        self.progress.setValue(step)
+        self.state.setText(text)
+
+    def _on_failed(self, message: str) -> None:
+        self.progress.setValue(0)
+        self.state.setText("failed")
+        self._say(f"ERROR {message}")
+
+    def _on_connected(self, address: str) -> None:
+        self.progress.setValue(STEPS)
+        self.state.setText(f"connected: {address}")
+        self._say(f"connected {self.session.device} at {address}")
+
+    def _on_calibrated(self, result) -> None:
+        self.progress.setValue(STEPS)
+        verdict = "passed" if result.passed else "FAILED"
+        self.state.setText(f"calibration {verdict}")
+        self._say(f"calibration {result.calibration_id} {verdict}: steps {', '.join(result.steps)}, "
+                  f"verification ΔE00 {result.verification_de}")
+
+    def _on_scanned(self, m: Measurement) -> None:
+        self.progress.setValue(STEPS)
+        self.store.add(m)
+        self._say(f"stored {m.panel} ({len(m.geometries)} geometries) {m.note}")
+
+    def _on_added(self, m: Measurement) -> None:
+        self.last = m
+        self.stored.addItem(f"{m.time}  {m.panel}  {m.device}  {m.note}")
+        self.table.setRowCount(len(m.geometries))
+        for i, (g, lab) in enumerate(zip(m.geometries, m.lab, strict=True)):
+            for j, text in enumerate((g, *(f"{v:.2f}" for v in lab))):
+                self.table.setItem(i, j, QTableWidgetItem(text))
+            sw = QTableWidgetItem("")
+            sw.setBackground(lab_colour(lab))
+            self.table.setItem(i, 4, sw)
+        if m.design is not None:
+            self.render.setPixmap(pixmap_from_array(booklet(m.design, 160)))
+        self._sync_buttons()
+
+    def _sync_buttons(self, busy: bool = False) -> None:
+        busy = busy or (self.task is not None and self.task.isRunning())
+        self.connect_btn.setEnabled(not busy)
+        self.calibrate_btn.setEnabled(not busy and self.session.connected)
+        self.scan_btn.setEnabled(not busy and self.session.connected)
+        self.use_btn.setEnabled(self.last is not None and self.last.design is not None and self.document is not None)
+
+    def lab_table(self) -> np.ndarray:
+        """The Lab values shown in the table (rows × 3)."""
+        return np.array([[float(self.table.item(i, j).text()) for j in (1, 2, 3)] for i in range(self.table.rowCount())])
+
+    def closeEvent(self, event) -> None:
+        if self.task is not None:
+            self.task.wait()
+        self.session.close()
+        self.store.events.added.disconnect(self._on_added)
+        super().closeEvent(event)

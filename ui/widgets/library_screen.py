@@ -1,0 +1,283 @@
+"""Library browser (thesis §5.3.3, Figs. 5.3, 5.9–5.11): hierarchy tree, thumbnails, index filter sliders,
+type check boxes, and the ColorSnap view — matches, the library cloud in Lab space (3D, drag to turn)
+and the design beside its match on the two halves of a cylinder."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from PySide6.QtCore import QPointF, QSize, Qt
+from PySide6.QtGui import QColor, QIcon, QMouseEvent, QPainter, QPen
+from PySide6.QtWidgets import (
+    QCheckBox,
+    QFormLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QListWidget,
+    QListWidgetItem,
+    QPushButton,
+    QSlider,
+    QTreeWidget,
+    QTreeWidgetItem,
+    QVBoxLayout,
+    QWidget,
+)
+
+from station.formulate.library import PAINT_TYPES
+from station.formulate.snap import view_data
+from station.model import FaceFlopTravelGloss
+from ui.models.document import DesignDocument
+from ui.models.library import LibraryModel, bar_images
+from ui.models.view import ViewModel, ViewSettings
+from ui.widgets.common import lab_colours, pixmap_from_array
+from ui.widgets.render_view import make_render_view
+
+MAX_THUMBS = 120
+SLIDER_STEPS = 100
+INDICES = ("flop", "chroma", "hue_shift")
+
+
+class LabCloud(QWidget):
+    """Library paints at 45° as points in Lab space (orthographic, drag to turn), the design's three
+    angles joined by a line, and the matches ringed."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.data: dict | None = None
+        self.yaw, self.pitch = 30.0, 20.0
+        self._drag: QPointF | None = None
+        self.setMinimumSize(240, 200)
+
+    def set_data(self, data: dict | None) -> None:
+        """View data from :func:`station.formulate.snap.view_data`."""
+        self.data = data
+        if data is not None:
+            self._cloud = np.asarray(data["cloud"]["lab"], float)
+            self._cloud_rgb = lab_colours(self._cloud)
+        self.update()
+
+    def project(self, lab: np.ndarray) -> np.ndarray:
+        """Lab (..., 3) → widget pixels (..., 2): a* right, L* up, b* into the screen, then turned."""
+        lab = np.asarray(lab, float)
+        x, y, z = lab[..., 1], lab[..., 0] - 50.0, -lab[..., 2]
+        cy, sy = math.cos(math.radians(self.yaw)), math.sin(math.radians(self.yaw))
+        cp, sp = math.cos(math.radians(self.pitch)), math.sin(math.radians(self.pitch))
+        x, z = cy * x + sy * z, -sy * x + cy * z
+        y = cp * y - sp * z
+        s = min(self.width(), self.height()) / 220.0
+        return np.stack([self.width() / 2 + s * x, self.height() / 2 - s * y], -1)
+
+    def paintEvent(self, event) -> None:
+        p = QPainter(self)
+        p.fillRect(self.rect(), QColor(40, 40, 44))
+        p.setPen(QPen(QColor(120, 120, 120), 1))
+        for a, b in (((50, -80, 0), (50, 80, 0)), ((50, 0, -80), (50, 0, 80)), ((0, 0, 0), (100, 0, 0))):
+            pa, pb = self.project(np.array(a)), self.project(np.array(b))
+            p.drawLine(QPointF(*pa), QPointF(*pb))
+        if self.data is not None:
+            pts = self.project(self._cloud)
+            for (x, y), c in zip(pts, self._cloud_rgb, strict=True):
+                p.fillRect(int(x), int(y), 2, 2, QColor(int(c[0]), int(c[1]), int(c[2])))
+            p.setPen(QPen(QColor(255, 255, 255), 1))
+            for m in self.data["matches"]:
+                x, y = self.project(np.asarray(m["lab"][1]))
+                p.drawEllipse(QPointF(x, y), 5, 5)
+            d = self.project(np.asarray(self.data["design"]))
+            p.setPen(QPen(QColor(255, 220, 0), 2))
+            for i in range(len(d) - 1):
+                p.drawLine(QPointF(*d[i]), QPointF(*d[i + 1]))
+            p.drawEllipse(QPointF(*d[0]), 4, 4)
+        p.setPen(QColor(200, 200, 200))
+        p.drawText(6, 14, "Lab space: library at 45°, design 15→45→110° (yellow), matches (rings)")
+        p.end()
+
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        self._drag = event.position()
+
+    def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        if self._drag is not None:
+            d = event.position() - self._drag
+            self._drag = event.position()
+            self.yaw += d.x() * 0.5
+            self.pitch = max(-89.0, min(89.0, self.pitch + d.y() * 0.5))
+            self.update()
+
+    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
+        self._drag = None
+
+
+class LibraryScreen(QWidget):
+    """Browser on the left, ColorSnap on the right."""
+
+    def __init__(self, model: LibraryModel, document: DesignDocument, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        self.document = document
+        lib = model.library
+        self.title = QLabel(f"{lib.name}: {len(lib)} paints" + (" — SYNTHETIC demo data" if lib.synthetic else ""))
+        self.tree = QTreeWidget()
+        self.tree.setHeaderLabels(["hierarchy", "paints"])
+        root = QTreeWidgetItem(["all", str(len(lib))])
+        self.tree.addTopLevelItem(root)
+        for set_name, kinds in model.counts().items():
+            s_item = QTreeWidgetItem([set_name, str(sum(sum(g.values()) for g in kinds.values()))])
+            root.addChild(s_item)
+            for kind, groups in kinds.items():
+                k_item = QTreeWidgetItem([kind, str(sum(groups.values()))])
+                s_item.addChild(k_item)
+                for g, n in groups.items():
+                    k_item.addChild(QTreeWidgetItem([g, str(n)]))
+        self.tree.expandToDepth(1)
+        self.tree.itemClicked.connect(self._on_tree)
+
+        self.type_boxes = {t: QCheckBox(t) for t in PAINT_TYPES}
+        types = QHBoxLayout()
+        for b in self.type_boxes.values():
+            b.setChecked(True)
+            b.toggled.connect(self._on_filter)
+            types.addWidget(b)
+        self.sliders: dict[str, tuple[QSlider, QSlider, tuple[float, float], QLabel]] = {}
+        form = QFormLayout()
+        for name in INDICES:
+            lo_s, hi_s = QSlider(Qt.Orientation.Horizontal), QSlider(Qt.Orientation.Horizontal)
+            for s, v in ((lo_s, 0), (hi_s, SLIDER_STEPS)):
+                s.setRange(0, SLIDER_STEPS)
+                s.setValue(v)
+                s.valueChanged.connect(self._on_filter)
+            label = QLabel()
+            self.sliders[name] = (lo_s, hi_s, model.index_range(name), label)
+            row = QHBoxLayout()
+            row.addWidget(lo_s)
+            row.addWidget(hi_s)
+            row.addWidget(label)
+            form.addRow(f"{name.replace('_', ' ')} index", row)
+        self.count = QLabel()
+        self.thumbs = QListWidget()
+        self.thumbs.setIconSize(QSize(64, 14))
+        self.thumbs.itemDoubleClicked.connect(self._on_thumb)
+
+        browse = QVBoxLayout()
+        browse.addWidget(self.title)
+        browse.addWidget(self.tree, 1)
+        browse.addLayout(types)
+        browse.addLayout(form)
+        browse.addWidget(self.count)
+        browse.addWidget(self.thumbs, 2)
+
+        self.snap_btn = QPushButton("ColorSnap current design")
+        self._snap_design = document.design
+        self.snap_btn.clicked.connect(lambda: self.snap())
+        self.matches = QListWidget()
+        self.matches.setIconSize(QSize(64, 14))
+        self.matches.currentRowChanged.connect(self._on_match)
+        self.use_btn = QPushButton("Use selected match as design")
+        self.use_btn.clicked.connect(self.use_match)
+        self.warnings = QLabel()
+        self.warnings.setWordWrap(True)
+        self.cloud = LabCloud()
+        self.compare_model = ViewModel(ViewSettings(shape="cylinder"))
+        self.compare = make_render_view(self.compare_model)
+        self.compare.setMinimumSize(200, 180)
+        snap_box = QGroupBox("ColorSnap")
+        sl = QVBoxLayout(snap_box)
+        sl.addWidget(self.snap_btn)
+        sl.addWidget(self.matches)
+        sl.addWidget(self.use_btn)
+        sl.addWidget(self.warnings)
+        views = QHBoxLayout()
+        views.addWidget(self.cloud, 1)
+        col = QVBoxLayout()
+        col.addWidget(QLabel("design (left) | match (right)"))
+        col.addWidget(self.compare, 1)
+        views.addLayout(col, 1)
+        sl.addLayout(views, 2)
+
+        lay = QHBoxLayout(self)
+        lay.addLayout(browse, 2)
+        lay.addWidget(snap_box, 3)
+        model.events.filtered.connect(self._on_filtered)
+        model.events.snapped.connect(self._on_snapped)
+        self._on_filter()
+
+    # ---------------------------------------------------------------- filter
+    def _slider_bounds(self, name: str) -> tuple[float | None, float | None]:
+        lo_s, hi_s, (vmin, vmax), label = self.sliders[name]
+        lo = vmin + (vmax - vmin) * lo_s.value() / SLIDER_STEPS
+        hi = vmin + (vmax - vmin) * hi_s.value() / SLIDER_STEPS
+        label.setText(f"{lo:.2f} – {hi:.2f}")
+        return (None if lo_s.value() == 0 else lo, None if hi_s.value() == SLIDER_STEPS else hi)
+
+    def _on_filter(self, *_args) -> None:
+        kw: dict[str, object] = {"types": frozenset(t for t, b in self.type_boxes.items() if b.isChecked())}
+        for name in INDICES:
+            lo, hi = self._slider_bounds(name)
+            if lo is not None and hi is not None and lo > hi:
+                lo, hi = hi, lo
+            kw[name] = (lo, hi)
+        self.model.set_filter(**kw)
+
+    def _on_tree(self, item: QTreeWidgetItem, _col: int) -> None:
+        path = []
+        while item is not None and item.parent() is not None:
+            path.insert(0, item.text(0))
+            item = item.parent()
+        keys = ("set_name", "kind", "group")
+        self.model.set_filter(**{k: (path[i] if i < len(path) else None) for i, k in enumerate(keys)})
+
+    def _on_filtered(self) -> None:
+        rows = self.model.rows
+        self.count.setText(f"{rows.size} paints match" + (f" (first {MAX_THUMBS} shown)" if rows.size > MAX_THUMBS else ""))
+        self.thumbs.clear()
+        shown = rows[:MAX_THUMBS]
+        if shown.size:
+            bars = bar_images(self.model.library, shown)
+            for r, img in zip(shown, bars, strict=True):
+                it = QListWidgetItem(QIcon(pixmap_from_array(img)), f"{self.model.library.codes[r]}  "
+                                     f"{self.model.library.types[r]}  {self.model.library.gloss_gu[r]:.0f} GU")
+                it.setData(Qt.ItemDataRole.UserRole, int(r))
+                self.thumbs.addItem(it)
+
+    def _on_thumb(self, item: QListWidgetItem) -> None:
+        r = int(item.data(Qt.ItemDataRole.UserRole))
+        self.document.set_design(self.model.design_of(r), f"library {self.model.library.codes[r]}")
+
+    # ---------------------------------------------------------------- ColorSnap
+    def snap(self, design: FaceFlopTravelGloss | None = None) -> None:
+        """ColorSnap *design* (default: the current design)."""
+        self._snap_design = design if design is not None else self.document.design
+        self.model.snap(self._snap_design)
+
+    def _on_snapped(self, result) -> None:
+        self.matches.clear()
+        rows = np.array([m.index for m in result.matches])
+        bars = bar_images(self.model.library, rows) if rows.size else []
+        for m, img in zip(result.matches, bars, strict=True):
+            de = " / ".join(f"{v:.1f}" for v in m.de_per_angle)
+            self.matches.addItem(QListWidgetItem(QIcon(pixmap_from_array(img)),
+                                                 f"{m.code}  ΣΔE {m.sum_de:.2f} ({de} at 15/45/110°)"))
+        self.warnings.setText("\n".join(result.warnings))
+        self.cloud.set_data(view_data(self.model.library, result, max_cloud=1500))
+        if result.matches:
+            self.matches.setCurrentRow(0)
+
+    def _on_match(self, row: int) -> None:
+        res = self.model.snap_result
+        if res is None or not 0 <= row < len(res.matches):
+            return
+        self.compare_model.show(self._snap_design, self.model.design_of(res.matches[row].index))
+
+    def use_match(self) -> None:
+        """Make the selected match's design current (undoable)."""
+        res = self.model.snap_result
+        row = self.matches.currentRow()
+        if res is not None and 0 <= row < len(res.matches):
+            m = res.matches[row]
+            self.document.set_design(self.model.design_of(m.index), f"ColorSnap {m.code}")
+
+    def closeEvent(self, event) -> None:
+        self.model.events.filtered.disconnect(self._on_filtered)
+        self.model.events.snapped.disconnect(self._on_snapped)
+        self.compare.close()
+        super().closeEvent(event)
