@@ -1,7 +1,7 @@
 """Paint edit at 1024×1024 from cached basis images, against the memory-bandwidth floor.
 
 Run: ``.venv/bin/python -m bench.paint_edit``. Scene: the sphere (two paints) in the sunny sky with a
-7-lobe basis. A paint edit = new weights for both paints → weighted sum of the cached images (BLAS),
+default-basis basis. A paint edit = new weights for both paints → weighted sum of the cached images (BLAS),
 tone map + sRGB encode (LUT), scatter into the RGBA frame. The floor is the time to read the cached
 images once at the bandwidth of a large ``numpy.copyto`` measured in the same run (copy bandwidth
 counts the bytes read; the copy also writes as many, so this floor is generous to the benchmark).
@@ -17,9 +17,10 @@ import numpy as np
 from bench._report import Case, write_section
 from station.render import basis_images, prefilter, procedural, shapes
 from station.render.gl_renderer import GLRenderer
+from station.render.lobes import default_basis
 from station.render.weights import LobeWeights
 
-EXPONENTS = (1.0, 4.0, 16.0, 64.0, 256.0, 1024.0, 4096.0)
+EXPONENTS = default_basis().exponents
 SIZE = 1024
 
 

@@ -1,7 +1,7 @@
 """Full GL re-render (new view every frame) at 1024×1024, frames per second.
 
 Run: ``.venv/bin/python -m bench.render_gl``. Each frame moves the camera (orbit), ray-casts the shape,
-shades 7 lobes + diffuse for two paints, tone maps and encodes in the shader, and reads the 8-bit
+shades default basis + diffuse for two paints, tone maps and encodes in the shader, and reads the 8-bit
 frame back (``ctx.finish`` implied by the read). The default path pre-sums each paint's lobes into a
 gloss and a directionally diffuse cube (rebuilt only when weights change), so a frame does three cube
 lookups per pixel. Baseline in the same run: the per-lobe path (``combined=False``, 7 + 1 lookups per
@@ -19,9 +19,10 @@ from bench._report import Case, write_section
 from station.render import prefilter, procedural, shapes
 from station.render.camera import Camera
 from station.render.gl_renderer import GLRenderer, create_gl_context
+from station.render.lobes import default_basis
 from station.render.weights import LobeWeights
 
-EXPONENTS = (1.0, 4.0, 16.0, 64.0, 256.0, 1024.0, 4096.0)
+EXPONENTS = default_basis().exponents
 
 
 def _paints(exps) -> list[LobeWeights]:
@@ -56,7 +57,7 @@ def main() -> None:
         with GLRenderer(basis, w, h, ctx=ctx) as gl:
             for shape in ("sphere", "speedshape"):
                 wall, cpu = _fps(gl, shape, EXPONENTS)
-                cases.append(Case(f"GL re-render {shape}, 7 lobes", f"{w}x{h}", wall, "fps",
+                cases.append(Case(f"GL re-render {shape}, default basis", f"{w}x{h}", wall, "fps",
                                   "bar >= 20 fps (1024x1024, llvmpipe)"))
                 cases.append(Case("  same, per CPU-second of this process", f"{w}x{h}", cpu, "fps",
                                   "llvmpipe threads included: a lower bound for an idle machine"))

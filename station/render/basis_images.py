@@ -2,11 +2,12 @@
 
 For a fixed scene and camera, every object pixel p (paint k) is (numpy_renderer's equation)
 
-    rgb_p = w_D ⊙ D_p + Σ_i (w_G,i + c_p w_DD,i) ⊙ C_i,p,    c_p = N·V,
+    rgb_p = w_D ⊙ D_p + Σ_i (h_i(c_p) w_G,i + g_i(c_p) w_DD,i) ⊙ C_i,p,    c_p = N·V,
 
-so caching the per-pixel images D (diffuse map at N) and C_i (lobe map i at R), plus c, turns a paint
-edit into a small weighted sum: per channel, a (2 × K) · (K × P) matrix product (K = m + 1 images,
-P object pixels, BLAS), then tone mapping and sRGB encoding by a 64 k-entry lookup table, then a
+so caching per-pixel images turns a paint edit into a small weighted sum. The images are D (diffuse
+map at N); for each wide lobe (horizon table) h_i·C_i and g_i·C_i; for each narrow lobe
+(g = c, h = 1) C_i alone, its directionally diffuse part weighted by the cached c. Per channel that is
+a (2 × K) · (K × P) matrix product (K images, P object pixels, BLAS), then tone mapping and sRGB encoding by a 64 k-entry lookup table, then a
 scatter into the cached frame (background pre-encoded). Pixels are stored grouped by paint, so each
 paint's pixels are one contiguous slice. Images are float32 (NumPy BLAS has no float16 GEMM; half
 storage would halve the bytes read but convert on the fly at a higher cost here).
@@ -21,7 +22,7 @@ import numpy as np
 
 from station.render import tonemap
 from station.render.cubemap import sample_cube
-from station.render.numpy_renderer import BACKGROUND, check_paints, gbuffer
+from station.render.numpy_renderer import BACKGROUND, check_paints, gbuffer, horizon_table, lobe_factors
 from station.render.prefilter import PrefilteredBasis
 from station.render.shapes import Scene
 from station.render.weights import LobeWeights
@@ -36,8 +37,9 @@ class BasisImages:
     height: int
     pixels: np.ndarray        # (P,) flat indices of object pixels, paint 0 first
     split: int                # pixels[:split] carry paint 0, pixels[split:] paint 1
-    images: np.ndarray        # (3, K, P) float32: channel, [D, C_1..C_m], pixel
+    images: np.ndarray        # (3, K, P) float32: channel, image (see layout), pixel
     n_dot_v: np.ndarray       # (P,) float32
+    layout: tuple[tuple[str, int], ...] = ()  # ("D", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image
     _lut_key: tuple = field(default=(), repr=False)
     _lut: np.ndarray | None = field(default=None, repr=False)
     _scale: float = field(default=1.0, repr=False)
@@ -51,11 +53,17 @@ class BasisImages:
     def _weight_rows(self, paint: LobeWeights) -> np.ndarray:
         """(3, 2, K): per channel, row 0 = constant weights [w_D, w_G], row 1 = weights × c [0, w_DD]."""
         w_d, w_dd, w_g = paint.map_weights()
-        k = len(self.basis.cubes) + 1
-        rows = np.zeros((3, 2, k), np.float32)
-        rows[:, 0, 0] = w_d
-        rows[:, 0, 1:] = w_g[None, :]
-        rows[:, 1, 1:] = w_dd.T
+        rows = np.zeros((3, 2, len(self.layout)), np.float32)
+        for j, (kind, i) in enumerate(self.layout):
+            if kind == "D":
+                rows[:, 0, j] = w_d
+            elif kind == "Gh":
+                rows[:, 0, j] = w_g[i]
+            elif kind == "Dg":
+                rows[:, 0, j] = w_dd[i]
+            else:
+                rows[:, 0, j] = w_g[i]
+                rows[:, 1, j] = w_dd[i]
         return rows
 
     def linear(self, paints: Sequence[LobeWeights]) -> np.ndarray:
@@ -139,33 +147,55 @@ class BasisImages:
         return self.edit_rgba(paints, exposure_ev, curve)[..., :3]
 
 
+def image_layout(exponents, horizon: str = "lut") -> tuple[tuple[str, int], ...]:
+    """The cached images of a basis: D, then per lobe (Gh, Dg) when wide, (C,) when narrow."""
+    table = horizon_table(exponents, horizon)
+    c = np.linspace(0.0, 1.0, table.shape[1])
+    layout: list[tuple[str, int]] = [("D", -1)]
+    for i in range(len(exponents)):
+        exact = np.allclose(table[i, :, 0], c) and np.allclose(table[i, :, 1], 1.0)
+        layout += [("C", i)] if exact else [("Gh", i), ("Dg", i)]
+    return tuple(layout)
+
+
 def build_basis_images(scene: Scene, basis: PrefilteredBasis, width: int, height: int,
-                       gl_renderer=None) -> BasisImages:
-    """Render the per-lobe images of one view (NumPy lookups, or GL when a GLRenderer is given)."""
+                       gl_renderer=None, horizon: str = "lut") -> BasisImages:
+    """Render the basis images of one view (NumPy lookups, or GL when a GLRenderer is given).
+
+    A GL renderer must have been made with the same *horizon* setting.
+    """
     g = gbuffer(scene, width, height)
     mask = g.mask.reshape(-1)
     paint = g.paint.reshape(-1)
     pixels = np.concatenate([np.flatnonzero(mask & (paint == 0)), np.flatnonzero(mask & (paint == 1))])
     split = int(np.count_nonzero(mask & (paint == 0)))
-    k = len(basis.cubes) + 1
-    images = np.empty((3, k, pixels.size), np.float32)
+    layout = image_layout(basis.exponents, horizon)
+    images = np.empty((3, len(layout), pixels.size), np.float32)
+    ndv = g.n_dot_v.reshape(-1)[pixels].astype(np.float32)
+    m = len(basis.exponents)
+    e = np.array(basis.exponents)
     if gl_renderer is None:
         normals = g.normal.reshape(-1, 3)[pixels]
         refl = g.reflect.reshape(-1, 3)[pixels]
-        images[:, 0] = sample_cube(basis.diffuse, normals).T
-        for i, cube in enumerate(basis.cubes):
-            images[:, i + 1] = sample_cube(cube, refl).T
+        gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
+        lookups: dict[int, np.ndarray] = {}
+        for j, (kind, i) in enumerate(layout):
+            if kind == "D":
+                images[:, j] = sample_cube(basis.diffuse, normals).T
+                continue
+            if i not in lookups:
+                lookups[i] = sample_cube(basis.cubes[i], refl).T
+            factor = hf[:, i] if kind == "Gh" else gf[:, i] if kind == "Dg" else 1.0
+            images[:, j] = lookups[i] * factor
     else:
-        m = len(basis.exponents)
-        for j in range(k):
-            e = np.array(basis.exponents)
-            k_g = np.zeros(m)
-            k_d = np.zeros(3)
-            if j == 0:
+        for j, (kind, i) in enumerate(layout):
+            k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)
+            if kind == "D":
                 k_d[:] = 1.0 / np.pi
+            elif kind == "Dg":
+                k_dd[i] = (e[i] + 1.0) / (2.0 * np.pi)
             else:
-                k_g[j - 1] = (e[j - 1] + 1.0) / (2.0 * np.pi)
-            unit = LobeWeights(basis.exponents, k_d, np.zeros((m, 3)), k_g)
+                k_g[i] = (e[i] + 1.0) / (2.0 * np.pi)
+            unit = LobeWeights(basis.exponents, k_d, k_dd, k_g)
             images[:, j] = gl_renderer.render_linear(scene, [unit]).reshape(-1, 3)[pixels].T
-    ndv = g.n_dot_v.reshape(-1)[pixels].astype(np.float32)
-    return BasisImages(basis, width, height, pixels, split, np.ascontiguousarray(images), ndv)
+    return BasisImages(basis, width, height, pixels, split, np.ascontiguousarray(images), ndv, layout)

@@ -80,12 +80,12 @@ class GLRenderer:
     """
 
     def __init__(self, basis, width: int, height: int, ctx=None, diffuse: str = "cube",
-                 half_float: bool = True, combined: bool = True) -> None:
+                 half_float: bool = True, combined: bool = True, horizon: str = "lut") -> None:
         import moderngl
         import numpy as np
 
         from station.render.errors import RenderInputError
-        from station.render.numpy_renderer import check_size
+        from station.render.numpy_renderer import HORIZON_MAX_EXPONENT, check_size, horizon_table
         from station.render.sh import sh_diffuse_matrix
 
         check_size(width, height)
@@ -109,8 +109,19 @@ class GLRenderer:
         self._cube_texture = cube_texture
         self.combined = combined
         self._combined: tuple[bytes, list] | None = None
-        self._lobes = [cube_texture(c) for c in basis.cubes]
+        # Lobes in binding order: the wide ones (horizon table) first, so the shader loops over a prefix.
+        wide = [int(horizon == "lut" and e < HORIZON_MAX_EXPONENT) for e in basis.exponents]
+        self._order = np.array([i for i in range(len(wide)) if wide[i]] + [i for i in range(len(wide)) if not wide[i]])
+        self._n_wide = int(sum(wide))
+        self._wide = np.array(wide, np.int32)
+        self._lobes = [cube_texture(basis.cubes[i]) for i in self._order]
         self._diffuse_tex = cube_texture(basis.diffuse)
+        table = horizon_table(basis.exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
+        self._horizon_n = table.shape[1]
+        self._horizon_tex = self.ctx.texture((table.shape[1], table.shape[0]), 2,
+                                             np.ascontiguousarray(table).tobytes(), dtype="f4")
+        self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
         self._programs: dict[tuple[str, bool], tuple] = {}
         self._targets: dict[bool, tuple] = {}
@@ -122,7 +133,7 @@ class GLRenderer:
         if key not in self._programs:
             defines = {"SHAPE": SHAPE_INDEX[shape], "N_LOBES": len(self._lobes),
                        "OUTPUT_LINEAR": int(linear), "DIFFUSE_SH": int(self.diffuse == "sh"),
-                       "COMBINED": int(self.combined)}
+                       "COMBINED": int(self.combined), "HORIZON_N": self._horizon_n, "N_WIDE": self._n_wide}
             prog = build_program(self.ctx, "fullscreen.vert.glsl", "render.frag.glsl", defines)
             self._programs[key] = (prog, self.ctx.vertex_array(prog, []))
         return self._programs[key]
@@ -136,7 +147,7 @@ class GLRenderer:
     def _combined_cubes(self, pair) -> list:
         """[gloss0, dd0, gloss1, dd1] cube textures for these paints (rebuilt when weights change)."""
         np = self._np
-        mw = [w.map_weights() for w in pair]
+        mw = [self._bound_weights(w) for w in pair]
         key = b"".join(np.concatenate([w[1].ravel(), w[2]]).astype(np.float32).tobytes() for w in mw)
         if self._combined is not None and self._combined[0] == key:
             return self._combined[1]
@@ -156,9 +167,10 @@ class GLRenderer:
                 tex.use(unit)
             prog["u_lobes"].value = list(range(m)) if m > 1 else 0
             prog["u_size"].value = size
-            for w in mw:
-                prog["u_wg"].write(w[2].astype(np.float32).tobytes())
-                prog["u_wdd"].write(w[1].astype(np.float32).tobytes())
+            narrow = (self._wide[self._order] == 0).astype(np.float32)
+            for w in mw:  # wide lobes are looked up per pixel with their horizon factors
+                prog["u_wg"].write((w[2] * narrow).astype(np.float32).tobytes())
+                prog["u_wdd"].write((w[1] * narrow[:, None]).astype(np.float32).tobytes())
                 vao.render(mode=self.ctx.TRIANGLES, vertices=3)
                 for att in range(2):
                     data = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=att), np.float32)
@@ -172,6 +184,11 @@ class GLRenderer:
         self._combined = (key, cubes)
         return cubes
 
+    def _bound_weights(self, w):
+        """map_weights() of *w* with the lobes in binding order."""
+        w_d, w_dd, w_g = w.map_weights()
+        return w_d, w_dd[self._order], w_g[self._order]
+
     def _draw(self, scene, paints, linear: bool, exposure_ev: float, curve: str):
         from station.render.numpy_renderer import BACKGROUND, check_paints
         from station.render.tonemap import CURVES, check_curve
@@ -181,22 +198,21 @@ class GLRenderer:
         prog, vao = self._program(scene.shape, linear)
         _, fbo = self._target(linear)
         fbo.use()
+        m = len(self._lobes)
         if self.combined:
             cubes = self._combined_cubes(pair)
             fbo.use()
             for unit, tex in enumerate(cubes):
-                tex.use(unit)
-            m = len(cubes)
-        else:
-            m = len(self._lobes)
-            for unit, tex in enumerate(self._lobes):
-                tex.use(unit)
-        self._diffuse_tex.use(m)
+                tex.use(m + unit)
+        for unit, tex in enumerate(self._lobes):
+            tex.use(unit)
+        self._diffuse_tex.use(m + 4)
+        self._horizon_tex.use(m + 5)
         uniforms = {**scene.camera.uniforms(self.width, self.height),
                     "u_size": (float(self.width), float(self.height)),
                     "u_misalign": float(np.radians(scene.misalignment_deg)),
                     "u_background": (BACKGROUND,) * 3,
-                    "u_diffuse": m}
+                    "u_diffuse": m + 4, "u_horizon": m + 5}
         if not linear:
             check_curve(curve)
             uniforms["u_exposure"] = float(2.0**exposure_ev)
@@ -204,26 +220,30 @@ class GLRenderer:
         for name, value in uniforms.items():
             if name in prog:
                 prog[name].value = value
-        mw = [w.map_weights() for w in pair]
+        mw = [self._bound_weights(w) for w in pair]
         prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
         if self.combined:
             for unit, name in enumerate(("u_gloss0", "u_dd0", "u_gloss1", "u_dd1")):
-                prog[name].value = unit
-        else:
-            prog["u_lobes"].value = list(range(m)) if m > 1 else 0
-            prog["u_wdd"].write(np.concatenate([w[1] for w in mw]).astype(np.float32).tobytes())
-            prog["u_wg"].write(np.concatenate([w[2] for w in mw]).astype(np.float32).tobytes())
+                prog[name].value = m + unit
+        # The compiler trims uniform arrays to the entries the shader can reach (N_WIDE when combined).
+        if "u_lobes" in prog:
+            n = prog["u_lobes"].array_length
+            prog["u_lobes"].value = list(range(n)) if n > 1 else 0
+        for name, part in (("u_wdd", 1), ("u_wg", 2)):
+            if name in prog:
+                n = prog[name].array_length
+                prog[name].write(np.concatenate([w[part] for w in mw]).astype(np.float32)[:n].tobytes())
         if "u_sh" in prog:
             prog["u_sh"].write(self._sh.tobytes())
         vao.render(mode=self.ctx.TRIANGLES, vertices=3)
         return fbo
 
     def render(self, scene, paints, exposure_ev: float = 0.0, curve: str = "aces"):
-        """8-bit sRGB frame (H, W, 3) uint8."""
+        """8-bit sRGB frame (H, W, 3) uint8 (a view of the RGBA read-back, the driver's fast path)."""
         np = self._np
         fbo = self._draw(scene, paints, False, exposure_ev, curve)
-        data = np.frombuffer(fbo.read(components=3, alignment=1), np.uint8)
-        return data.reshape(self.height, self.width, 3)[::-1]
+        data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
+        return data.reshape(self.height, self.width, 4)[::-1, :, :3]
 
     def render_linear(self, scene, paints):
         """Linear sRGB radiance (H, W, 3) float32."""
@@ -240,7 +260,8 @@ class GLRenderer:
         for tex, fbo in self._targets.values():
             fbo.release()
             tex.release()
-        for tex in [*self._lobes, self._diffuse_tex, *(self._combined[1] if self._combined else [])]:
+        for tex in [*self._lobes, self._diffuse_tex, self._horizon_tex,
+                    *(self._combined[1] if self._combined else [])]:
             tex.release()
         self._combined = None
         self._programs.clear()

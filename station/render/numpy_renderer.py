@@ -2,7 +2,7 @@
 
 Per pixel, with N the normal, V the unit vector to the eye and R = 2(N·V)N − V the reflected view:
 
-    radiance = π K_D · D(N) + Σ_i (2π/(E_i+1)) · (K_G,i + (R·N) K_DD,i) · C_i(R)
+    radiance = π K_D · D(N) + Σ_i (2π/(E_i+1)) · (h_i(R·N) K_G,i + g_i(R·N) K_DD,i) · C_i(R)
 
 where C_i is the environment prefiltered with the normalised lobe of exponent E_i and D the diffuse
 map E(N)/π (:mod:`station.render.prefilter`), and the factors π and 2π/(E+1) convert the sr⁻¹
@@ -10,6 +10,15 @@ weights of unnormalised lobes (:mod:`station.render.weights`) to these normalise
 (:meth:`LobeWeights.map_weights`). The directionally diffuse sum is scaled by R·N (= N·V), the
 thesis's stand-in for L·N under environment lighting (§2.5.2: "R in this case is an approximation of
 the light source direction"); it is exact for narrow lobes and errs for wide ones, as the thesis notes.
+With ``horizon="none"`` g_i(c) = c and h_i(c) = 1: the thesis's equations as printed. The default
+``horizon="lut"`` uses, for the wide lobes (E_i < HORIZON_MAX_EXPONENT), the horizon factors of
+:func:`station.render.lobes.horizon_factors`: g_i = ∫ p_i(ω)(N·ω)₊ dω and h_i = ∫ p_i(ω) 1[N·ω > 0] dω
+for the normalised lobe p_i about R, tabulated at HORIZON_TABLE_SIZE values of c = R·N and
+interpolated linearly (the same table is a texture in GL). They make a constant environment exact:
+a wide lobe about R spills below the surface, which the cube lookup C_i(R) cannot know. Against the
+ground truth (:mod:`station.render.truth`, booth, default basis) this halves the mean ΔE00. Narrow
+lobes keep (c, 1): within 0.004 of the tables except at grazing pixels, and it lets the GL renderer
+pre-sum them (``gl_renderer``).
 The diffuse map is either the exponent-1 cube (``diffuse="cube"``, default — exact up to resolution)
 or the 9-coefficient SH irradiance (``diffuse="sh"``, thesis §2.5.3; up to ~10 % off beside a sun).
 
@@ -32,6 +41,37 @@ from station.render.shapes import Scene, intersect
 from station.render.weights import LobeWeights
 
 BACKGROUND = 0.18
+HORIZON_MAX_EXPONENT = 200.0
+HORIZON_TABLE_SIZE = 128
+
+
+def horizon_table(exponents: Sequence[float], horizon: str = "lut") -> np.ndarray:
+    """(m, HORIZON_TABLE_SIZE, 2) float32 table of (g_i, h_i) at c = k/(N−1) (module doc)."""
+    if horizon not in ("lut", "none"):
+        raise RenderInputError("horizon", "lut | none", horizon)
+    from station.render.lobes import horizon_factors
+
+    c = np.linspace(0.0, 1.0, HORIZON_TABLE_SIZE)
+    table = np.empty((len(exponents), c.size, 2), np.float32)
+    for i, e in enumerate(exponents):
+        if horizon == "lut" and e < HORIZON_MAX_EXPONENT:
+            g, h = horizon_factors(float(e), c)
+            table[i, :, 0], table[i, :, 1] = g, h
+        else:
+            table[i, :, 0], table[i, :, 1] = c, 1.0
+    return table
+
+
+def lobe_factors(table: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(g, h), each (P, m), by linear interpolation of *table* at c = R·N (P,) in [0, 1]."""
+    n = table.shape[1]
+    x = np.clip(c, 0.0, 1.0) * (n - 1)
+    i0 = np.minimum(x.astype(np.int64), n - 2)
+    f = (x - i0)[:, None]
+    lo = table[:, i0].transpose(1, 0, 2)
+    hi = table[:, i0 + 1].transpose(1, 0, 2)
+    v = lo * (1 - f[..., None]) + hi * f[..., None]
+    return v[..., 0], v[..., 1]
 
 
 @dataclass(frozen=True)
@@ -82,18 +122,19 @@ def check_paints(basis: PrefilteredBasis, paints: Sequence[LobeWeights]) -> list
 
 
 def shade_pixels(basis: PrefilteredBasis, weights: LobeWeights, normal: np.ndarray, reflect: np.ndarray,
-                 n_dot_v: np.ndarray, diffuse: str = "cube") -> np.ndarray:
+                 n_dot_v: np.ndarray, diffuse: str = "cube", horizon: str = "lut") -> np.ndarray:
     """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation)."""
     w_d, w_dd, w_g = weights.map_weights()
     d = sample_cube(basis.diffuse, normal) if diffuse == "cube" else sh_diffuse(basis.sh, normal)
+    g, h = lobe_factors(horizon_table(basis.exponents, horizon), n_dot_v)
     out = w_d * d
     for i, cube in enumerate(basis.cubes):
-        out = out + (w_g[i] + n_dot_v[:, None] * w_dd[i]) * sample_cube(cube, reflect)
+        out = out + (h[:, i:i + 1] * w_g[i] + g[:, i:i + 1] * w_dd[i]) * sample_cube(cube, reflect)
     return out
 
 
 def render_linear(scene: Scene, basis: PrefilteredBasis, paints: Sequence[LobeWeights], width: int,
-                  height: int, diffuse: str = "cube") -> np.ndarray:
+                  height: int, diffuse: str = "cube", horizon: str = "lut") -> np.ndarray:
     """Linear sRGB radiance image (H, W, 3) float32 of the scene lit by the prefiltered basis."""
     if diffuse not in ("cube", "sh"):
         raise RenderInputError("diffuse", "cube | sh", diffuse)
@@ -104,5 +145,5 @@ def render_linear(scene: Scene, basis: PrefilteredBasis, paints: Sequence[LobeWe
     for k in (0, 1):
         m = g.mask & (g.paint == k)
         if m.any():
-            img[m] = shade_pixels(basis, pair[k], g.normal[m], g.reflect[m], ndv[m], diffuse)
+            img[m] = shade_pixels(basis, pair[k], g.normal[m], g.reflect[m], ndv[m], diffuse, horizon)
     return img.astype(np.float32)

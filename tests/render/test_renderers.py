@@ -53,11 +53,25 @@ def test_constant_environment_closed_forms(const_basis):
     s, e = 0.04, EXPS[3]
     gloss = nr.render_linear(scene, const_basis, [_weights(k_g=[0, 0, 0, s * (e + 1) / (2 * np.pi)])], 48, 48)
     assert gloss[g.mask] == pytest.approx(2.0 * s, rel=2e-3)
-    # Directionally diffuse: scaled by R·N = N·V (eq 2.5.1).
+    # Directionally diffuse, thesis form (horizon="none"): scaled by R·N = N·V (eq 2.5.1).
     e = EXPS[1]
-    dd = nr.render_linear(scene, const_basis, [_weights(k_dd=[[0, 0, 0], [(e + 1) / (2 * np.pi)] * 3,
-                                                                [0, 0, 0], [0, 0, 0]])], 48, 48)
+    unit_dd = _weights(k_dd=[[0, 0, 0], [(e + 1) / (2 * np.pi)] * 3, [0, 0, 0], [0, 0, 0]])
+    dd = nr.render_linear(scene, const_basis, [unit_dd], 48, 48, horizon="none")
     assert dd[g.mask][:, 0] == pytest.approx(2.0 * g.n_dot_v[g.mask], rel=2e-3, abs=1e-4)
+    # Default horizon tables: exact in a constant environment, i.e. 2 × ∫ p(ω)(N·ω)₊ dω over the sphere,
+    # integrated here independently on a fine equirect grid for a few pixels.
+    dd_lut = nr.render_linear(scene, const_basis, [unit_dd], 48, 48)
+    dirs = equirect_directions(400, 800).reshape(-1, 3)
+    from station.render.cubemap import equirect_solid_angles
+
+    sa = np.broadcast_to(equirect_solid_angles(400, 800), (400, 800)).reshape(-1)
+    for j, i in ((24, 24), (24, 8), (10, 30), (40, 20)):
+        if not g.mask[j, i]:
+            continue
+        n_, r_ = g.normal[j, i], g.reflect[j, i]
+        lobe = (e + 1) / (2 * np.pi) * np.clip(dirs @ r_, 0, None) ** e
+        expect = 2.0 * np.sum(lobe * np.clip(dirs @ n_, 0, None) * sa)
+        assert dd_lut[j, i, 0] == pytest.approx(expect, rel=0.01)
     assert (lam[~g.mask] == np.float32(nr.BACKGROUND)).all()
 
 

@@ -1,6 +1,9 @@
 #version 430
 // Lobe-blend shading (thesis eqs 2.5.1-2.5.3), the same equation as station/render/numpy_renderer.py:
-//   radiance = wd * D(N) + sum_i (wg_i + (R.N) wdd_i) * C_i(R)
+//   radiance = wd * D(N) + sum_i (h_i(R.N) wg_i + g_i(R.N) wdd_i) * C_i(R)
+// with (g_i, h_i) read from the horizon table u_horizon (HORIZON_N x N_LOBES, RG). The lobes are
+// bound with the N_WIDE wide ones (horizon table) first; the narrow ones have (g, h) = (R.N, 1)
+// exactly and, when COMBINED, are pre-summed per paint, so only the wide ones are looked up here.
 // with the weights already converted to normalised maps (LobeWeights.map_weights). Two paints:
 // index 0/1 from the shape. Defines: SHAPE, N_LOBES, OUTPUT_LINEAR (1: float radiance out),
 // DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube), COMBINED (1: the lobes of each
@@ -10,20 +13,23 @@
 uniform vec3 u_eye, u_forward, u_right, u_up;
 uniform float u_tan_half_fov, u_aspect;
 uniform vec2 u_size;
+uniform samplerCube u_lobes[N_LOBES];
+uniform sampler2D u_horizon;
 #if COMBINED
 uniform samplerCube u_gloss0, u_gloss1, u_dd0, u_dd1;
-#else
-uniform samplerCube u_lobes[N_LOBES];
 #endif
 uniform samplerCube u_diffuse;
 uniform vec3 u_sh[9];
 uniform vec3 u_wd[2];
-#if !COMBINED
 uniform vec3 u_wdd[2 * N_LOBES];
 uniform float u_wg[2 * N_LOBES];
-#endif
 uniform vec3 u_background;
 out vec4 f_color;
+
+vec2 horizon(int i, float c) {
+    return texture(u_horizon, vec2((c * float(HORIZON_N - 1) + 0.5) / float(HORIZON_N),
+                                   (float(i) + 0.5) / float(N_LOBES))).rg;
+}
 
 vec3 sh_eval(vec3 n) {
     return u_sh[0] * 0.282095 + u_sh[1] * (0.488603 * n.y) + u_sh[2] * (0.488603 * n.z)
@@ -51,12 +57,16 @@ void main() {
 #if COMBINED
         if (paint == 0) rgb += textureLod(u_gloss0, r, 0.0).rgb + ndv * textureLod(u_dd0, r, 0.0).rgb;
         else rgb += textureLod(u_gloss1, r, 0.0).rgb + ndv * textureLod(u_dd1, r, 0.0).rgb;
+#endif
+#if COMBINED
+        for (int i = 0; i < N_WIDE; ++i) {
 #else
         for (int i = 0; i < N_LOBES; ++i) {
-            int k = paint * N_LOBES + i;
-            rgb += (u_wg[k] + ndv * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
-        }
 #endif
+            int k = paint * N_LOBES + i;
+            vec2 gh = horizon(i, ndv);
+            rgb += (gh.y * u_wg[k] + gh.x * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
+        }
     }
 #if OUTPUT_LINEAR
     f_color = vec4(rgb, 1.0);
