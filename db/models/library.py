@@ -22,7 +22,7 @@ class LibraryPaint(Base):
     code: Mapped[str] = mapped_column(String(64), unique=True)
     name: Mapped[str] = mapped_column(String(128), default="")
     category: Mapped[str] = mapped_column(String(32), default="", index=True)
-    family: Mapped[str] = mapped_column(String(32), default="")
+    family: Mapped[str] = mapped_column(String(64), default="")
     angles_deg: Mapped[list[float]] = mapped_column(JSONType)
     lab: Mapped[list[list[float]]] = mapped_column(JSONType)
     gloss_gu: Mapped[float | None]
