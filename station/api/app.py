@@ -56,9 +56,11 @@ def _startup(app: FastAPI, settings: Settings) -> None:
     app.state.sessions = make_sessionmaker(engine)
     if settings.load_demo_library:
         with app.state.sessions() as session:
-            added = load_demo_library(session=session)
-            if added:
-                log.info("library: %d demo paints loaded", added)
+            try:
+                load_demo_library(session=session)
+            except Exception:  # the service still runs; the library routes then list nothing
+                session.rollback()
+                log.exception("demo library not loaded")
     hub = InstrumentHub(settings=settings, sessions=app.state.sessions)
     app.state.instruments = hub
     hub.attach_simulators(settings.simulators)

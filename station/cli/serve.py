@@ -77,7 +77,13 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
         with sessions() as session:
             token = bootstrap_admin(session=session)
             if settings.load_demo_library:
-                added = load_demo_library(session=session)
+                try:
+                    added = load_demo_library(session=session)
+                except Exception as exc:  # the service still runs; the library routes then list nothing
+                    session.rollback()
+                    print(f"warning: demo library not loaded: {type(exc).__name__}: {exc}"[:500],
+                          file=sys.stderr, flush=True)
+                    added = 0
                 if added:
                     print(f"library: {added} synthetic demo paints loaded", flush=True)
     finally:
