@@ -66,6 +66,20 @@ def _startup(app: FastAPI, settings: Settings) -> None:
     hub.attach_simulators(settings.simulators)
 
 
+async def _replay_outbox_periodically(app: FastAPI, period_s: float) -> None:
+    """Drain the service outbox every *period_s* seconds, so queued readings land without a new measure."""
+    import asyncio
+
+    while True:
+        await asyncio.sleep(period_s)
+        try:
+            done = await asyncio.to_thread(app.state.instruments.replay_outbox)
+            if done:
+                log.info("outbox: %d queued readings replayed", done)
+        except Exception:
+            log.exception("outbox replay failed; will retry")
+
+
 def _shutdown(app: FastAPI) -> None:
     hub = getattr(app.state, "instruments", None)
     if hub is not None:
@@ -93,9 +107,11 @@ def create_app(settings: Settings) -> FastAPI:
         import asyncio
 
         await asyncio.to_thread(_startup, app, settings)
+        replayer = asyncio.create_task(_replay_outbox_periodically(app, settings.outbox_replay_s))
         try:
             yield
         finally:
+            replayer.cancel()
             await asyncio.to_thread(_shutdown, app)
 
     app = FastAPI(title="CACAD Station", version=__version__, description=DESCRIPTION + _roles_markdown(),

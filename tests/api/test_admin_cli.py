@@ -39,6 +39,27 @@ def test_db_and_users_commands(tmp_path: Path, capsys) -> None:
     assert [u["name"] for u in _json(capsys)["users"]] == ["ana"]
 
 
+def test_service_drains_its_outbox_in_the_background(tmp_path: Path) -> None:
+    import time
+
+    from tests.api.conftest import make_api
+
+    reading = make_reading(22, 0)
+    with Outbox(tmp_path / "outbox.sqlite3") as box:
+        box.put(str(reading.client_id), reading.canonical_json())
+    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, outbox_replay_s=0.2)
+    api = next(gen)
+    try:
+        deadline = time.monotonic() + 20
+        count = 0
+        while time.monotonic() < deadline and count == 0:
+            time.sleep(0.2)
+            count = api.client.get("/api/v1/measurements", headers=api.auth("qa")).json()["count"]
+        assert count == 1
+    finally:
+        gen.close()
+
+
 def test_service_outbox_is_replayed_in_order_and_audited(sqlite_api: Api) -> None:
     app = sqlite_api.client.app
     hub = app.state.instruments  # type: ignore[attr-defined]

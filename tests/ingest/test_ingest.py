@@ -177,3 +177,35 @@ def test_ingested_readings_are_audited(database_url: str, tmp_path: Path) -> Non
             events = conn.execute(select(AuditEvent.action, AuditEvent.detail)).all()
     assert [e.action for e in events] == ["measurement.ingest"]
     assert events[0].detail["client_id"] == str(make_reading(6, 0).client_id)
+
+
+def test_concurrent_writers_of_one_reading_store_it_once(database_url: str) -> None:
+    """Eight threads, each with its own connection, store the same reading at once: one row, one creator."""
+    import threading
+
+    engine = make_engine(database_url, pool_size=8) if database_url.startswith("postgres") else make_engine(database_url)
+    sessions = make_sessionmaker(engine)
+    reading = make_reading(9, 0)
+    barrier = threading.Barrier(8)
+    results: list[bool] = []
+    errors: list[BaseException] = []
+
+    def worker() -> None:
+        try:
+            barrier.wait()
+            with sessions.begin() as s:
+                results.append(store_reading(s, reading).created)
+        except BaseException as exc:  # collected and asserted below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=worker) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(60)
+    try:
+        assert not errors, errors
+        assert sorted(results) == [False] * 7 + [True]
+        assert _count(engine, Measurement) == 1
+    finally:
+        engine.dispose()
