@@ -51,7 +51,7 @@ _SIN60 = math.sin(math.pi / 3) + 1e-12
 _SAFETY = 1.0 - 1e-9
 _SENTINEL = 1.0e6
 #: Leaves evaluated per batch once a k-th best is known (each batch tightens it for the rest).
-_BATCH_LEAVES = 24
+_BATCH_LEAVES = 40
 LAB_QUERY_RANGE = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
 _Q_LO = np.array([v[0] for v in LAB_QUERY_RANGE.values()])
 _Q_HI = np.array([v[1] for v in LAB_QUERY_RANGE.values()])
@@ -177,7 +177,7 @@ def _hue_geometry(
 
 
 def _box_bounds(
-    q: NDArray[np.float64], lo: NDArray, hi: NDArray, cmax: NDArray, method: str
+    q: NDArray[np.float64], lo: NDArray, hi: NDArray, cmax: NDArray, method: str, hue: bool = True
 ) -> NDArray[np.float64]:
     """Lower bound of Σ_θ ΔE(q_θ, x_θ) over every x in the boxes [lo, hi] (…, A, 3) with chroma ≤ cmax (…, A).
 
@@ -203,9 +203,12 @@ def _box_bounds(
         cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * cbar * (1 + 1e-12) + 1e-12
         cp7 = cpbar**7
         r_c = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7))
+        s_c = 1.0 + 0.045 * cpbar
+        if not hue:  # the cheaper, looser form: global R_T bound, no hue-gap term
+            per = np.sqrt(dl2 / s_l**2 + (1.0 - r_c * _SIN60 / 2.0) * dab2 / s_c**2)
+            return per.sum(-1) * _SAFETY - 1e-12
         sin_2dt, gap = _hue_geometry(q, lo, hi)
         kappa = 1.0 - r_c * sin_2dt / 2.0
-        s_c = 1.0 + 0.045 * cpbar
         s_h = 1.0 + (0.015 * _T_MAX) * cpbar
         # |ΔH'| = 2 √(C'1 C'2) |sin(Δh'/2)| ≥ 2 √(C*1 C*2,min) sin(gap/2)  (C' ≥ C*)
         c_min = np.hypot(np.maximum(np.maximum(lo[..., 1], -hi[..., 1]), 0.0),
@@ -368,9 +371,13 @@ class SnapIndex:
         else:
             gmore = np.flatnonzero(glb <= kth)
             cand = (gmore[:, None] * g + np.arange(g)).ravel()
+            keep = ~np.isin(cand, sel)
+            if method == "cie2000":  # cheap bound first, the hue-aware one on the survivors
+                cand = cand[keep]
+                keep = _box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method, hue=False) <= kth
+            cand = cand[keep]
             clb = _box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method)
             keep = clb <= kth
-            keep &= ~np.isin(cand, sel)
             more, more_lb = cand[keep], clb[keep]
         visited = sel.size
         while more.size:  # best-bounded leaves first: each batch tightens the k-th best for the rest

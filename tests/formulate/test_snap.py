@@ -85,6 +85,7 @@ def test_box_and_point_bounds_never_exceed_the_exact_sum(pts, q, method) -> None
     chroma = np.hypot(pts[..., 1], pts[..., 2])
     box = _box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method)
     assert box <= exact.min() + 1e-12
+    assert _box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, hue=False) <= box + 1e-12
     point = _box_bounds(q, pts, pts, chroma, method)
     assert np.all(point <= exact + 1e-12)
     if method == "cie2000":
