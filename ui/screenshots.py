@@ -90,8 +90,8 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         lib.snap()
         shot("library")
 
-        inst = win.screens["Instruments"]
-        win.tabs.setCurrentWidget(inst)
+        win.tabs.setCurrentWidget(win.screens["Instruments"])
+        inst = win.screens["Instruments"].content()
         if scan:
             inst.device.setCurrentText("sim:ma6")
             inst.connect_device()
@@ -103,8 +103,8 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
             _wait(lambda: bool(win.store.items) and not inst.task.isRunning(), 60)
         shot("instruments")
 
-        qa = win.screens["QA"]
-        win.tabs.setCurrentWidget(qa)
+        win.tabs.setCurrentWidget(win.screens["QA"])
+        qa = win.screens["QA"].content()
         qa.panel_a.setCurrentText("palette: as designed")
         qa.panel_b.setCurrentText("palette: bluer face, 70 GU")
         qa.beta.setValue(4)

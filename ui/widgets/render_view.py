@@ -175,12 +175,28 @@ class _ViewLogic:
 
 
 class GLRenderView(_ViewLogic, QOpenGLWidget):
-    """The GPU view (moderngl on Qt's context; framebuffer = ``defaultFramebufferObject()``)."""
+    """The GL view (moderngl on Qt's context; framebuffer = ``defaultFramebufferObject()``).
+
+    Two ways to re-weight the cached basis images on a paint edit (``mode``):
+
+    * ``"cpu"`` (default): the core's NumPy edit (BLAS weighted sum + tone-map LUT,
+      ``station.render.basis_images.BasisImages.edit_rgba``) makes the 8-bit frame, which is uploaded
+      as one texture and drawn; on llvmpipe this is the faster path (bench/viewer.py).
+    * ``"gpu"``: the basis images live in GPU memory and ``shaders/composite.frag.glsl`` does the sum
+      and the display transform per fragment (the path for a real GPU).
+    """
 
     frame_rendered = Signal()
+    MODES = ("cpu", "gpu")
 
-    def __init__(self, model: ViewModel, parent: QWidget | None = None) -> None:
+    def __init__(self, model: ViewModel, parent: QWidget | None = None, mode: str = "cpu") -> None:
         super().__init__(parent)
+        if mode not in self.MODES:
+            raise ValueError(f"mode: expected one of {self.MODES}, got {mode!r}")
+        self.mode = mode
+        self._frame_prog = self._frame_vao = self._tex_frame = None
+        self._frame: np.ndarray | None = None
+        self._frame_key: tuple | None = None
         self._init_logic(model)
         self.ctx = None
         self._prog = self._vao = self._vbo = self._tex_basis = self._tex_geom = None
@@ -204,6 +220,9 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         quad = np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4")
         self._vbo = self.ctx.buffer(quad.tobytes())
         self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
+        self._frame_prog = self.ctx.program(vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(),
+                                            fragment_shader=(SHADER_DIR / "frame.frag.glsl").read_text())
+        self._frame_vao = self.ctx.vertex_array(self._frame_prog, [(self._vbo, "2f", "in_pos")])
 
     def _upload(self, basis: BasisImages) -> None:
         import moderngl
@@ -242,6 +261,38 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         if weights is None or self.basis is None:
             self.ctx.clear(BACKGROUND, BACKGROUND, BACKGROUND)
             return
+        if self.mode == "cpu":
+            self._draw_cpu_frame(weights, w, h)
+        else:
+            self._draw_gpu(weights, w, h)
+        self.ctx.finish()
+        self.frames += 1
+        self.last_frame_s = time.perf_counter() - t0
+        self.frame_rendered.emit()
+
+    def _draw_cpu_frame(self, weights, w: int, h: int) -> None:
+        import moderngl
+
+        basis, ev = self.basis, self.model.settings.exposure_ev
+        key = (id(basis), ev)
+        reuse = self._frame if key == self._frame_key else None
+        self._frame = basis.core.edit_rgba(list(weights), ev, out=reuse)
+        self._frame_key = key
+        bw, bh = basis.size
+        if self._tex_frame is None or self._tex_frame.size != (bw, bh):
+            if self._tex_frame is not None:
+                self._tex_frame.release()
+            self._tex_frame = self.ctx.texture((bw, bh), 4)
+            self._tex_frame.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self._tex_frame.write(self._frame)
+        self._tex_frame.use(0)
+        p = self._frame_prog
+        p["u_frame"].value = 0
+        p["u_viewport"].value = (float(w), float(h))
+        p["u_size"].value = (bw, bh)
+        self._frame_vao.render(mode=self.ctx.TRIANGLE_STRIP)
+
+    def _draw_gpu(self, weights, w: int, h: int) -> None:
         if self._uploaded is not self.basis:
             self._upload(self.basis)
         set_composite_uniforms(self._prog, self.basis, weights, self.model.settings.exposure_ev, (w, h))
@@ -250,10 +301,6 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self._prog["u_basis"].value = 0
         self._prog["u_geom"].value = 1
         self._vao.render(mode=self.ctx.TRIANGLE_STRIP)
-        self.ctx.finish()
-        self.frames += 1
-        self.last_frame_s = time.perf_counter() - t0
-        self.frame_rendered.emit()
 
     def grab_image(self) -> np.ndarray:
         """The current frame as (H, W, 3) uint8 (renders it)."""
@@ -266,7 +313,8 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self._shutdown()
         if self.ctx is not None:
             self.makeCurrent()
-            for obj in (self._vao, self._vbo, self._prog, self._tex_basis, self._tex_geom):
+            for obj in (self._vao, self._vbo, self._prog, self._tex_basis, self._tex_geom, self._frame_vao,
+                        self._frame_prog, self._tex_frame):
                 if obj is not None:
                     obj.release()
             self.ctx = None
@@ -303,7 +351,7 @@ class ImageRenderView(_ViewLogic, QWidget):
             self._refresh_basis()
         if weights is None or self.basis is None:
             return None
-        return self.basis.composite_display(weights, self.model.settings.exposure_ev)
+        return self.basis.core.edit(list(weights), self.model.settings.exposure_ev)
 
     def paintEvent(self, event) -> None:
         t0 = time.perf_counter()
@@ -344,6 +392,7 @@ def gl_supported() -> bool:
     return QGuiApplication.platformName() not in ("offscreen", "minimal", "vnc")
 
 
-def make_render_view(model: ViewModel, parent: QWidget | None = None) -> GLRenderView | ImageRenderView:
+def make_render_view(model: ViewModel, parent: QWidget | None = None, mode: str = "cpu"
+                     ) -> GLRenderView | ImageRenderView:
     """The GL view where the platform has OpenGL, else the NumPy image view."""
-    return GLRenderView(model, parent) if gl_supported() else ImageRenderView(model, parent)
+    return GLRenderView(model, parent, mode) if gl_supported() else ImageRenderView(model, parent)

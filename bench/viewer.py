@@ -1,0 +1,179 @@
+"""Viewer benchmark: a paint edit reaching the screen at 1024×1024 on llvmpipe, and start-up to first frame.
+
+Run: ``.venv/bin/python -m bench.viewer`` (starts its own Xvfb; Qt on xcb, GL on Mesa llvmpipe).
+
+* Paint edit → screen: a top-level :class:`ui.widgets.render_view.GLRenderView` of 1024×1024 device
+  pixels shows the default design on the sphere (booth). One edit = ``DesignerModel.set_gloss`` (the
+  lobe fit of the new design included) → the view's ``paintGL`` re-weights the cached basis images and
+  ``glFinish`` returns → Qt composites the widget into the window; the clock stops when the event loop
+  has delivered the frame (``frame_rendered`` + the compositing pass). Both view modes are measured:
+  ``cpu`` (the core's NumPy edit + one texture upload, the default) and ``gpu`` (per-fragment sum).
+  Baseline in the same run: the core's NumPy edit alone (no Qt, no GL), so ratio = overhead of the view.
+* Start-up → first frame: a fresh interpreter imports the viewer, builds the main window, shows it and
+  stops at the 3D view's first ``paintGL`` (warm prefilter cache; the cold figure is also reported).
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+
+SIZE = 1024
+EDITS = 30
+BAR_EDIT_MS = 33.0
+BAR_START_S = 3.0
+
+STARTUP = textwrap.dedent("""
+    import time
+    t0 = time.perf_counter()
+    import sys
+    from ui.widgets.render_view import configure_default_format
+    configure_default_format()
+    from PySide6.QtWidgets import QApplication
+    app = QApplication([])
+    from ui.app import MainWindow
+    win = MainWindow()
+    win.resize(1500, 950)
+    view = win.view_panel.view
+    win.show()
+    while view.frames == 0:
+        app.processEvents()
+    print(f"FIRST_FRAME {time.perf_counter() - t0:.4f} {type(view).__name__}", flush=True)
+    win.close()
+    app.shutdown()
+""")
+
+
+def _pct(xs: list[float], q: float) -> float:
+    s = sorted(xs)
+    return s[min(len(s) - 1, int(round(q * (len(s) - 1))))]
+
+
+def measure_edits(mode: str) -> tuple[list[float], list[float], str]:
+    """Edit→frame-delivered and edit→paintGL-finished latencies (s) for *mode*."""
+    from PySide6.QtCore import QCoreApplication
+
+    from ui.models.designer import DesignerModel
+    from ui.models.document import DesignDocument
+    from ui.models.view import ViewModel
+    from ui.widgets.render_view import GLRenderView
+
+    doc = DesignDocument()
+    designer = DesignerModel(doc)
+    vm = ViewModel()
+    vm.show(doc.design)
+    doc.events.changed.connect(vm.show)
+    view = GLRenderView(vm, mode=mode)
+    view.resize(SIZE, SIZE)
+    view.show()
+    view.wait_idle(120000)
+    view.grab_image()
+    assert view.basis.size == (SIZE, SIZE), view.basis.size
+    done: list[float] = []
+    view.frame_rendered.connect(lambda: done.append(time.perf_counter()))
+    total, paint = [], []
+    for i in range(EDITS + 2):
+        gloss = 40.0 + (i % 20) * 2.5  # a new design every edit: the lobe fit runs each time
+        n = view.frames
+        t0 = time.perf_counter()
+        designer.set_gloss(gloss)
+        designer.end_drag()
+        while view.frames == n:
+            QCoreApplication.processEvents()
+        QCoreApplication.processEvents()  # the compositing pass of this frame
+        t1 = time.perf_counter()
+        if i >= 2:  # warm-up
+            total.append(t1 - t0)
+            paint.append(done[-1] - t0)
+    renderer = view.gl_renderer
+    view.close()
+    return total, paint, renderer
+
+
+def numpy_edit_baseline() -> list[float]:
+    """The core's NumPy paint edit alone at SIZE² (same scene, no Qt)."""
+    from ui.models.document import DEFAULT_DESIGN
+    from ui.models.view import BasisImages, ViewSettings, paint_weights
+
+    basis = BasisImages.compute(ViewSettings(), SIZE, SIZE)
+    out = None
+    ts = []
+    for i in range(EDITS + 2):
+        w = paint_weights(DEFAULT_DESIGN.replace(gloss_gu=40.0 + (i % 20) * 2.5 + 0.1))
+        t0 = time.perf_counter()
+        out = basis.core.edit_rgba([w, w], 0.0, out=out)
+        ts.append(time.perf_counter() - t0)
+    return ts[2:]
+
+
+def startup(cache_dir: str | None) -> float:
+    """Seconds from interpreter start of the script to the first frame (fresh process)."""
+    env = dict(os.environ, QT_QPA_PLATFORM="xcb")
+    if cache_dir is not None:
+        env["CACAD_CACHE_DIR"] = cache_dir
+    t0 = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", STARTUP], env=env, capture_output=True, text=True, timeout=300,
+                         cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    wall = time.perf_counter() - t0
+    for line in out.stdout.splitlines():
+        if line.startswith("FIRST_FRAME"):
+            return float(line.split()[1]), wall
+    raise RuntimeError(f"no first frame: {out.stderr[-2000:]}")
+
+
+def main() -> None:
+    from bench._report import Case, write_section
+    from ui.xvfb import start_xvfb
+
+    xvfb = start_xvfb("2048x1536x24")
+    os.environ["QT_QPA_PLATFORM"] = "xcb"
+    try:
+        from PySide6.QtWidgets import QApplication
+
+        from ui.widgets.render_view import configure_default_format
+
+        configure_default_format()
+        app = QApplication([])
+        cases: list[Case] = []
+        base = numpy_edit_baseline()
+        base_med = statistics.median(base)
+        cases.append(Case("core NumPy edit alone (baseline)", f"{SIZE}x{SIZE}", base_med * 1e3, "ms", "median"))
+        renderer = ""
+        for mode in ("cpu", "gpu"):
+            total, paint, renderer = measure_edits(mode)
+            med = statistics.median(total)
+            note = f"bar <= {BAR_EDIT_MS:g} ms" + (" (default mode)" if mode == "cpu" else "")
+            cases += [
+                Case(f"paint edit -> screen, {mode} mode, median", f"{SIZE}x{SIZE}", med * 1e3, "ms", note),
+                Case(f"paint edit -> screen, {mode} mode, best", f"{SIZE}x{SIZE}", min(total) * 1e3, "ms"),
+                Case(f"paint edit -> screen, {mode} mode, p90", f"{SIZE}x{SIZE}", _pct(total, 0.9) * 1e3, "ms"),
+                Case("  of which edit -> paintGL done, median", f"{SIZE}x{SIZE}",
+                     statistics.median(paint) * 1e3, "ms", "fit + re-weight + glFinish"),
+                Case(f"  median / NumPy edit alone ({mode})", "", med / base_med, "ratio"),
+            ]
+        app.shutdown()
+        warm, warm_wall = min(startup(None) for _ in range(2))
+        with tempfile.TemporaryDirectory() as cold_dir:
+            cold, _ = startup(cold_dir)
+        cases += [
+            Case("start-up -> first frame, warm cache", "1500x950 window", warm, "s", f"bar <= {BAR_START_S:g} s"),
+            Case("  process wall time incl. interpreter start", "", warm_wall, "s", "until exit"),
+            Case("start-up -> first frame, cold prefilter cache", "1500x950 window", cold, "s",
+                 "first run on a machine: environment prefiltered"),
+        ]
+        load = os.getloadavg()[0]
+        write_section("viewer", "Viewer: paint edit to screen, start-up to first frame (ui/)", cases,
+                      f"GL renderer: {renderer} under Xvfb (xcb). Machine shared with other jobs: load average "
+                      f"{load:.1f} on {os.cpu_count()} CPUs at the end; the best runs are the least disturbed.")
+    finally:
+        xvfb.terminate()
+        xvfb.wait(5)
+
+
+if __name__ == "__main__":
+    main()
