@@ -349,8 +349,9 @@ class SnapIndex:
         kernel = KERNELS[method]
         g = self.group
         first = max(1, -(-k // self._rows.shape[1])) + 1
-        if self.n_groups == 1 or g == 1:
-            lb = self.bucket_bounds(q, method)
+        flat = self.n_groups == 1 or g == 1
+        if flat:  # (for CIEDE2000 the cheap bound first; the hue-aware one on the survivors below)
+            lb = _box_bounds(q, self._lo, self._hi, self._cmax, method, hue=method != "cie2000")
             leaves = np.arange(lb.size)
         else:  # open the best group(s) first: enough leaves for a k-th best
             glb = _box_bounds(q, self._glo, self._ghi, self._gcmax, method)
@@ -364,10 +365,14 @@ class SnapIndex:
         sel = leaves[pick]
         rows, s, per = self._evaluate(kernel, q, sel, math.inf, k, method)
         kth = np.partition(s, k - 1)[k - 1] if s.size >= k else math.inf
-        if self.n_groups == 1 or g == 1:
+        if flat:
             rest = lb <= kth
             rest[pick] = False
             more, more_lb = leaves[rest], lb[rest]
+            if method == "cie2000" and more.size:
+                more_lb = _box_bounds(q, self._lo[more], self._hi[more], self._cmax[more], method)
+                keep = more_lb <= kth
+                more, more_lb = more[keep], more_lb[keep]
         else:
             gmore = np.flatnonzero(glb <= kth)
             cand = (gmore[:, None] * g + np.arange(g)).ravel()
