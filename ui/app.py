@@ -32,6 +32,7 @@ class MainWindow(QMainWindow):
         self.designer = DesignerModel(self.document)
         self.view_model = ViewModel()
         self.service_url = service_url
+        self.service = None
         self.view_model.show(self.document.design)
         self.document.events.changed.connect(self._on_design)
 
@@ -71,6 +72,40 @@ class MainWindow(QMainWindow):
         edit.addAction(self.redo_action)
         self.document.events.history.connect(self._on_history)
         self._on_history()
+        if self.service_url:
+            from ui.models.service import ServiceClient
+
+            self.service = ServiceClient(self.service_url)
+            svc = self.menuBar().addMenu("&Service")
+            svc.addAction("Load designs into palette", self.load_from_service)
+            svc.addAction("Save current design", self.save_to_service)
+
+    def load_from_service(self) -> int:
+        """Add every service design to the palette; returns how many (errors go to the status bar)."""
+        from ui.models.service import ServiceError
+
+        try:
+            rows = self.service.list_designs()
+        except ServiceError as exc:
+            self.statusBar().showMessage(str(exc))
+            return 0
+        for _id, name, design in rows:
+            self.designer.palette.append((name, design))
+        self.designer.events.palette.emit()
+        self.statusBar().showMessage(f"{len(rows)} designs loaded from {self.service_url}")
+        return len(rows)
+
+    def save_to_service(self) -> int | None:
+        """Save the current design to the service as a new design."""
+        from ui.models.service import ServiceError
+
+        try:
+            new_id = self.service.save_design(self.document.name, self.document.design)
+        except ServiceError as exc:
+            self.statusBar().showMessage(str(exc))
+            return None
+        self.statusBar().showMessage(f"saved as design {new_id} on {self.service_url}")
+        return new_id
 
     def _on_history(self) -> None:
         self.undo_action.setEnabled(self.document.can_undo)
@@ -95,6 +130,8 @@ class MainWindow(QMainWindow):
         self.designer_panel.close()
         for w in self.screens.values():
             w.close()
+        if self.service is not None:
+            self.service.close()
         super().closeEvent(event)
 
 

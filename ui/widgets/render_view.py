@@ -202,6 +202,8 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self._prog = self._vao = self._vbo = self._tex_basis = self._tex_geom = None
         self._uploaded: BasisImages | None = None
         self._layers = 0
+        self._screen = None
+        self._screen_id = -1
         self.gl_renderer = ""
 
     def _set_basis(self, basis: BasisImages) -> None:
@@ -209,6 +211,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self.update()
 
     def resizeGL(self, w: int, h: int) -> None:
+        self._screen = None
         self._refresh_basis()
 
     def _build(self) -> None:
@@ -253,8 +256,10 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
             self._refresh_basis()
         if self.ctx is None:
             self._build()
-        screen = self.ctx.detect_framebuffer(self.defaultFramebufferObject())
-        screen.use()
+        fbo = self.defaultFramebufferObject()
+        if self._screen is None or self._screen_id != fbo:  # Qt may recreate its FBO (resize, re-parent)
+            self._screen, self._screen_id = self.ctx.detect_framebuffer(fbo), fbo
+        self._screen.use()
         w, h = self._pixel_size()
         self.ctx.viewport = (0, 0, w, h)
         weights = self.model.weights()
@@ -265,8 +270,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
             self._draw_cpu_frame(weights, w, h)
         else:
             self._draw_gpu(weights, w, h)
-        self.ctx.finish()
-        self.frames += 1
+        self.frames += 1  # no glFinish: Qt flushes when it composites the widget (bench/viewer.py times that)
         self.last_frame_s = time.perf_counter() - t0
         self.frame_rendered.emit()
 
@@ -318,6 +322,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
                 if obj is not None:
                     obj.release()
             self.ctx = None
+            self._screen = None
             self.doneCurrent()
 
     def closeEvent(self, event) -> None:
