@@ -43,7 +43,7 @@ def _wait(pred, timeout_s: float) -> bool:
 
 
 def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
-    """Write ``design.png``, ``moodboard.png``, ``library.png``, ``instruments.png``, ``qa.png`` to *out*."""
+    """Write ``design.png``, ``tweaker.png``, ``moodboard.png``, ``library.png``, ``instruments.png``, ``qa.png`` to *out*."""
     from ui.app import MainWindow
 
     out = Path(out)
@@ -73,6 +73,12 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         win.view_panel.shape.setCurrentText("speedshape")
         win.view_panel.model.update(yaw_deg=-15.0, pitch_deg=5.0)
         shot("design")
+
+        win.tabs.setCurrentWidget(win.screens["Tweaker"])
+        tw = win.screens["Tweaker"].content().canvas
+        tw.press((150, 160))
+        tw.adjust("H", 10.0)
+        shot("tweaker")
 
         with tempfile.TemporaryDirectory() as tmp:
             photo = demo_photo(Path(tmp) / "demo-photo.png")

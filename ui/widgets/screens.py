@@ -71,7 +71,13 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
 
         return QAScreen(window.designer, window.store, send_to_formulation)
 
+    def tweaker() -> QWidget:
+        from ui.widgets.tweaker_screen import TweakerScreen
+
+        return TweakerScreen(window.document)
+
     return [
+        ("Tweaker", LazyScreen(tweaker)),
         ("Mood board", LazyScreen(moodboard)),
         ("Library", library),
         ("Instruments", LazyScreen(instruments)),
