@@ -52,7 +52,7 @@ def _station(args: tuple[str, str, float, int, str, int]) -> dict[str, Any]:
     from station.ingest import Ingestor
 
     rng = random.Random(seed)
-    engine = make_engine(url, pool_size=2)
+    engine = make_engine(url, pool_size=2, pool_pre_ping=False)  # as Ingestor(url) builds it
     latencies: list[float] = []
     sent: list[str] = []
     resent = queued = 0

@@ -14,10 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from sqlalchemy import Engine
+from sqlalchemy import Engine, insert
 from sqlalchemy.exc import DBAPIError, DisconnectionError, InterfaceError, OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
+from db.base import utcnow
 from db.engine import make_engine, make_sessionmaker
 from db.models import AuditEvent
 from station.ingest.errors import IngestError
@@ -27,6 +28,7 @@ from station.ingest.store import store_reading
 
 log = logging.getLogger(__name__)
 
+_AUDIT_INSERT = insert(AuditEvent.__table__)
 _UNREACHABLE = (OperationalError, InterfaceError, DisconnectionError, ConnectionError, TimeoutError)
 
 
@@ -51,7 +53,9 @@ class Ingestor:
 
     def __init__(self, engine: Engine | str, outbox_path: Path | str) -> None:
         self._own_engine = isinstance(engine, str)
-        self.engine = make_engine(engine) if isinstance(engine, str) else engine
+        # no pre-ping: a dead pooled connection fails one submit, which then goes to the outbox and is
+        # replayed on the next one (the pool drops invalidated connections), saving a round trip per reading
+        self.engine = make_engine(engine, pool_pre_ping=False) if isinstance(engine, str) else engine
         self._sessions: sessionmaker[Session] = make_sessionmaker(self.engine)
         self.outbox = Outbox(outbox_path)
         self._instrument_ids: dict[str, int] = {}
@@ -72,9 +76,10 @@ class Ingestor:
         with self._sessions.begin() as session:
             result = store_reading(session, reading, instrument_cache=self._instrument_ids)
             if result.created:  # the audit row commits with the reading (station account: no user)
-                session.add(AuditEvent(actor_id=None, action="measurement.ingest", entity="measurement",
-                                       entity_id=str(result.measurement_id),
-                                       detail={"client_id": str(reading.client_id), "operator": reading.operator}))
+                session.execute(_AUDIT_INSERT, {
+                    "at": utcnow(), "actor_id": None, "action": "measurement.ingest", "entity": "measurement",
+                    "entity_id": str(result.measurement_id),
+                    "detail": {"client_id": str(reading.client_id), "operator": reading.operator}})
         status: Literal["stored", "duplicate"] = "stored" if result.created else "duplicate"
         return Receipt(str(reading.client_id), status, result.measurement_id)
 

@@ -8,6 +8,7 @@ once. A second reading under a stored client id but with a different payload has
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -68,6 +69,15 @@ def _calibration_id(session: Session, reading: Reading, instrument_id: int) -> i
         select(CalibrationRecord.id).where(CalibrationRecord.client_id == cal.client_id)
     ).one()
 
+
+@functools.cache
+def _measurement_insert(dialect: str) -> Any:
+    """``INSERT … ON CONFLICT (client_id) DO NOTHING RETURNING id``, built once per dialect (parameters bound per call)."""
+    table = Measurement.__table__
+    stmt = postgresql.insert(table) if dialect == "postgresql" else sqlite.insert(table)
+    return stmt.on_conflict_do_nothing(index_elements=["client_id"]).returning(Measurement.id)
+
+
 def store_reading(
     session: Session,
     reading: Reading,
@@ -101,12 +111,7 @@ def store_reading(
 
     values["received_at"] = utcnow()
     try:
-        new_id = session.execute(
-            _insert(session, Measurement.__table__)
-            .values(**values)
-            .on_conflict_do_nothing(index_elements=["client_id"])
-            .returning(Measurement.id)
-        ).scalar()
+        new_id = session.execute(_measurement_insert(session.get_bind().dialect.name), values).scalar()
     except IntegrityError as exc:  # e.g. supersedes_id already superseded, or a vanished reference
         raise ReferenceNotFoundError(f"reading refused by a database constraint: {exc.orig}") from exc
     if new_id is None:  # stored before (a re-send, a replay, or a concurrent writer)
