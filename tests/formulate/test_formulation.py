@@ -110,3 +110,10 @@ def test_closed_loop_refuses_out_of_gamut_without_spraying() -> None:
     job = closed_loop(OUT_OF_GAMUT, measure)
     assert job.status == "not_formulable" and job.steps == () and job.final_recipe is None
     assert "not formulable" in job.message
+
+
+def test_generic_starts_alone_reach_in_gamut_designs(designs) -> None:
+    for c in designs[1]:
+        result = formulate(predict_lab(c, A3))  # no library recipe to start from
+        assert result.formulable, result.message
+        DB.check(result.concentrations)
