@@ -22,8 +22,15 @@ import numpy as np
 
 from station.render import tonemap
 from station.render.cubemap import sample_cube
-from station.render.numpy_renderer import BACKGROUND, check_paints, gbuffer, horizon_table, lobe_factors
-from station.render.prefilter import PrefilteredBasis
+from station.render.numpy_renderer import (
+    BACKGROUND,
+    check_paints,
+    gbuffer,
+    horizon_table,
+    light_terms,
+    lobe_factors,
+)
+from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
 from station.render.shapes import Scene
 from station.render.weights import LobeWeights
 
@@ -152,9 +159,9 @@ def image_layout(exponents, horizon: str = "lut") -> tuple[tuple[str, int], ...]
     table = horizon_table(exponents, horizon)
     c = np.linspace(0.0, 1.0, table.shape[1])
     layout: list[tuple[str, int]] = [("D", -1)]
-    for i in range(len(exponents)):
+    for i, e in enumerate(exponents):
         exact = np.allclose(table[i, :, 0], c) and np.allclose(table[i, :, 1], 1.0)
-        layout += [("C", i)] if exact else [("Gh", i), ("Dg", i)]
+        layout += [("C", i)] if exact and e >= WIDE_EXPONENT else [("Gh", i), ("Dg", i)]
     return tuple(layout)
 
 
@@ -187,6 +194,9 @@ def build_basis_images(scene: Scene, basis: PrefilteredBasis, width: int, height
                 lookups[i] = sample_cube(basis.cubes[i], refl).T
             factor = hf[:, i] if kind == "Gh" else gf[:, i] if kind == "Dg" else 1.0
             images[:, j] = lookups[i] * factor
+            lights = light_terms(basis, i, normals, refl) if kind != "C" else None
+            if lights is not None:
+                images[:, j] += (lights[0] if kind == "Gh" else lights[1]).T
     else:
         for j, (kind, i) in enumerate(layout):
             k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)

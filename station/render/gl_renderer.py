@@ -86,6 +86,7 @@ class GLRenderer:
 
         from station.render.errors import RenderInputError
         from station.render.numpy_renderer import HORIZON_MAX_EXPONENT, check_size, horizon_table
+        from station.render.prefilter import WIDE_EXPONENT
         from station.render.sh import sh_diffuse_matrix
 
         check_size(width, height)
@@ -110,7 +111,11 @@ class GLRenderer:
         self.combined = combined
         self._combined: tuple[bytes, list] | None = None
         # Lobes in binding order: the wide ones (horizon table) first, so the shader loops over a prefix.
-        wide = [int(horizon == "lut" and e < HORIZON_MAX_EXPONENT) for e in basis.exponents]
+        has_lights = basis.lights is not None and any(basis.wide)
+        wide = [int((horizon == "lut" and e < HORIZON_MAX_EXPONENT) or (has_lights and basis.wide[i]))
+                for i, e in enumerate(basis.exponents)]
+        self._wide_exponent = WIDE_EXPONENT
+        self._lights = basis.lights if has_lights else None
         self._order = np.array([i for i in range(len(wide)) if wide[i]] + [i for i in range(len(wide)) if not wide[i]])
         self._n_wide = int(sum(wide))
         self._wide = np.array(wide, np.int32)
@@ -133,7 +138,9 @@ class GLRenderer:
         if key not in self._programs:
             defines = {"SHAPE": SHAPE_INDEX[shape], "N_LOBES": len(self._lobes),
                        "OUTPUT_LINEAR": int(linear), "DIFFUSE_SH": int(self.diffuse == "sh"),
-                       "COMBINED": int(self.combined), "HORIZON_N": self._horizon_n, "N_WIDE": self._n_wide}
+                       "COMBINED": int(self.combined), "HORIZON_N": self._horizon_n, "N_WIDE": self._n_wide,
+                       "MAX_LIGHTS": max(1, self._lights.count if self._lights is not None else 1),
+                       "WIDE_EXPONENT": f"{self._wide_exponent:.1f}"}
             prog = build_program(self.ctx, "fullscreen.vert.glsl", "render.frag.glsl", defines)
             self._programs[key] = (prog, self.ctx.vertex_array(prog, []))
         return self._programs[key]
@@ -229,6 +236,15 @@ class GLRenderer:
         if "u_lobes" in prog:
             n = prog["u_lobes"].array_length
             prog["u_lobes"].value = list(range(n)) if n > 1 else 0
+        if "u_exponent" in prog:
+            e = np.asarray(self.basis.exponents, np.float32)[self._order]
+            prog["u_exponent"].write(e[:prog["u_exponent"].array_length].tobytes())
+        if "u_n_lights" in prog:
+            n_lights = self._lights.count if self._lights is not None else 0
+            prog["u_n_lights"].value = n_lights
+            if n_lights:
+                prog["u_light_dir"].write(self._lights.directions.astype(np.float32).tobytes())
+                prog["u_light_flux"].write(self._lights.flux.astype(np.float32).tobytes())
         for name, part in (("u_wdd", 1), ("u_wg", 2)):
             if name in prog:
                 n = prog[name].array_length

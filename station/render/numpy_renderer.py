@@ -19,6 +19,11 @@ a wide lobe about R spills below the surface, which the cube lookup C_i(R) canno
 ground truth (:mod:`station.render.truth`, booth, default basis) this halves the mean ΔE00. Narrow
 lobes keep (c, 1): within 0.004 of the tables except at grazing pixels, and it lets the GL renderer
 pre-sum them (``gl_renderer``).
+Lights: when :func:`~station.render.prefilter.prefilter_basis` took compact bright sources (the
+sun) out of the environment, the wide lobes' maps hold the rest and each light (direction l, flux Φ)
+is added exactly per wide lobe: w_G,i 1[N·l>0] p_i(l) Φ + w_DD,i (N·l)₊ p_i(l) Φ, with
+p_i(l) = (E_i+1)/(2π)(R·l)₊^E_i — the exact eqs 2.3.1–2.3.3 for a directional light. Narrow lobes
+and the diffuse map keep the lights in their maps (exact there already).
 The diffuse map is either the exponent-1 cube (``diffuse="cube"``, default — exact up to resolution)
 or the 9-coefficient SH irradiance (``diffuse="sh"``, thesis §2.5.3; up to ~10 % off beside a sun).
 
@@ -35,13 +40,13 @@ import numpy as np
 
 from station.render.cubemap import sample_cube
 from station.render.errors import RenderInputError
-from station.render.prefilter import PrefilteredBasis
+from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
 from station.render.sh import sh_diffuse
 from station.render.shapes import Scene, intersect
 from station.render.weights import LobeWeights
 
 BACKGROUND = 0.18
-HORIZON_MAX_EXPONENT = 200.0
+HORIZON_MAX_EXPONENT = WIDE_EXPONENT
 HORIZON_TABLE_SIZE = 128
 
 
@@ -121,6 +126,23 @@ def check_paints(basis: PrefilteredBasis, paints: Sequence[LobeWeights]) -> list
     return paints if len(paints) == 2 else paints * 2
 
 
+def light_terms(basis: PrefilteredBasis, i: int, normal: np.ndarray, reflect: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Exact (gloss, directionally diffuse) radiance per unit map weight of lobe i from the lights.
+
+    For each light (direction l, flux Φ): gloss Σ_l 1[N·l > 0] p_i(l) Φ_l, DD Σ_l (N·l)₊ p_i(l) Φ_l,
+    with p_i(l) = (E_i+1)/(2π) (R·l)₊^E_i; each (P, 3). None when lobe i keeps the lights in its map.
+    """
+    if basis.lights is None or not basis.wide or not basis.wide[i]:
+        return None
+    e = basis.exponents[i]
+    nl = normal @ basis.lights.directions.T                       # (P, k)
+    p = (e + 1.0) / (2.0 * np.pi) * np.clip(reflect @ basis.lights.directions.T, 0.0, None) ** e
+    gloss = ((nl > 0) * p) @ basis.lights.flux
+    dd = (np.clip(nl, 0.0, None) * p) @ basis.lights.flux
+    return gloss, dd
+
+
 def shade_pixels(basis: PrefilteredBasis, weights: LobeWeights, normal: np.ndarray, reflect: np.ndarray,
                  n_dot_v: np.ndarray, diffuse: str = "cube", horizon: str = "lut") -> np.ndarray:
     """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation)."""
@@ -130,6 +152,9 @@ def shade_pixels(basis: PrefilteredBasis, weights: LobeWeights, normal: np.ndarr
     out = w_d * d
     for i, cube in enumerate(basis.cubes):
         out = out + (h[:, i:i + 1] * w_g[i] + g[:, i:i + 1] * w_dd[i]) * sample_cube(cube, reflect)
+        lights = light_terms(basis, i, normal, reflect)
+        if lights is not None:
+            out = out + w_g[i] * lights[0] + w_dd[i] * lights[1]
     return out
 
 

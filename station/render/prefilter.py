@@ -36,12 +36,13 @@ import numpy as np
 
 from station.render import cubemap
 from station.render.envcache import PrefilterCache
-from station.render.environment import Environment
+from station.render.environment import Environment, Lights, extract_lights
 from station.render.errors import RenderInputError
 from station.render.sh import sh_project
 
 MAX_EXPONENT = 1.0e6
 BRUTE_MAX_SIZE = 16
+WIDE_EXPONENT = 200.0   # lobes below: horizon tables and lights shaded exactly (numpy_renderer)
 OUTPUT_FACTOR = 2.2
 DIFFUSE_SIZE = 16
 
@@ -244,16 +245,21 @@ class PrefilteredBasis:
     diffuse: np.ndarray = field(repr=False, default=None)  # (6, 16, 16, 3) exponent-1 map = E/π
     engine: str = "gl"
     timings: dict[str, float] = field(default_factory=dict)
+    lights: Lights | None = None                         # taken out of the wide lobes' maps
+    wide: tuple[bool, ...] = ()                          # lobe i prefiltered from the residual map
 
 
 def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str = "auto",
                     cache: PrefilterCache | None = None, ctx=None,
-                    max_size: int | None = None) -> PrefilteredBasis:
+                    max_size: int | None = None, lights: bool = True) -> PrefilteredBasis:
     """Prefilter *env* for every exponent, plus its SH coefficients (timings in seconds).
 
     engine: ``gl`` (filtered IS on the GL context), ``numpy`` (same estimator, slower; output faces
     capped at 64) or ``auto`` (GL when a context can be made). *cache* (optional) stores and reuses
-    maps on disk. *max_size* caps the output face size (level of detail).
+    maps on disk. *max_size* caps the output face size (level of detail). With *lights* (default)
+    compact bright sources are taken out of the environment (:func:`extract_lights`): lobes with
+    E < WIDE_EXPONENT are prefiltered from the residual and the renderers shade the lights exactly
+    for them; narrow lobes and the diffuse map keep the full environment.
     """
     exps = tuple(check_exponent(e) for e in exponents)
     if engine not in ("auto", "gl", "numpy"):
@@ -272,41 +278,57 @@ def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str
     for e in exps:
         size = min(output_size(e, src), cap)
         plan.append((e, size, sample_count(size)))
-    keys = [PrefilterCache.key(env.content_hash, e, s, src, n, engine) for e, s, n in plan]
+    residual, found = extract_lights(env) if lights else (env, None)
+    wide = tuple(bool(found is not None and found.count and e < WIDE_EXPONENT) for e in exps)
+    sources = [residual if w else env for w in wide]
+    keys = [PrefilterCache.key(sources[i].content_hash, e, s, src, n, engine) for i, (e, s, n) in enumerate(plan)]
     cubes: list[np.ndarray | None] = [cache.get(k) if cache else None for k in keys]
     todo = [i for i, c in enumerate(cubes) if c is None]
-    small: dict[int, np.ndarray] = {}
+    small: dict[tuple[int, int], np.ndarray] = {}
+
+    def small_cube(k: int, size: int) -> np.ndarray:
+        if (k, size) not in small:
+            small[(k, size)] = cubemap.equirect_to_cube((residual if k else env).equirect, size)
+        return small[(k, size)]
+
     if todo:
         t0 = time.perf_counter()
-        wide = [i for i in todo if plan[i][1] <= BRUTE_MAX_SIZE]
-        narrow = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
-        for i in wide:
+        brute = [i for i in todo if plan[i][1] <= BRUTE_MAX_SIZE]
+        sampled = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
+        for i in brute:
             e, size, _ = plan[i]
-            s_src = max(32, 2 * size)
-            if s_src not in small:
-                small[s_src] = cubemap.equirect_to_cube(env.equirect, s_src)
-            cubes[i] = prefilter_brute(small[s_src], e, size).astype(np.float32)
+            cubes[i] = prefilter_brute(small_cube(int(wide[i]), max(32, 2 * size)), e, size).astype(np.float32)
         timings["brute"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        if engine == "gl" and narrow:
-            with GLPrefilter.from_equirect(env.equirect, src, ctx) as gl:
-                timings["to_cube"] = time.perf_counter() - t0
-                for i in narrow:
-                    cubes[i] = gl.run(*plan[i])
-        elif narrow:
-            src_cube = env.to_cube(src)
-            timings["to_cube"] = time.perf_counter() - t0
-            for i in narrow:
-                cubes[i] = prefilter_grid_numpy(src_cube, *plan[i]).astype(np.float32)
+        for k in (0, 1):
+            group = [i for i in sampled if int(wide[i]) == k]
+            if not group:
+                continue
+            source = residual if k else env
+            if engine == "gl":
+                from station.render.gl_renderer import create_gl_context
+
+                own = ctx is None
+                gl_ctx = create_gl_context() if own else ctx
+                try:
+                    with GLPrefilter.from_equirect(source.equirect, src, gl_ctx) as gl:
+                        for i in group:
+                            cubes[i] = gl.run(*plan[i])
+                finally:
+                    if own:
+                        gl_ctx.release()
+            else:
+                src_cube = source.to_cube(src)
+                for i in group:
+                    cubes[i] = prefilter_grid_numpy(src_cube, *plan[i]).astype(np.float32)
         timings["lobes"] = time.perf_counter() - t0
         if cache:
             for i in todo:
                 cache.put(keys[i], cubes[i])
     timings["cache_hits"] = float(len(exps) - len(todo))
     t0 = time.perf_counter()
-    if 32 not in small:
-        small[32] = cubemap.equirect_to_cube(env.equirect, 32)
-    diffuse = prefilter_brute(small[32], 1.0, DIFFUSE_SIZE).astype(np.float32)
+    diffuse = prefilter_brute(small_cube(0, 32), 1.0, DIFFUSE_SIZE).astype(np.float32)
     timings["diffuse"] = time.perf_counter() - t0
     return PrefilteredBasis(env_name=env.name, env_hash=env.content_hash, exponents=exps, cubes=tuple(cubes),
-                            sh=coeffs, diffuse=diffuse, engine=engine, timings=timings)
+                            sh=coeffs, diffuse=diffuse, engine=engine, timings=timings,
+                            lights=found if any(wide) else None, wide=wide)

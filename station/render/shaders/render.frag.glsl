@@ -15,6 +15,11 @@ uniform float u_tan_half_fov, u_aspect;
 uniform vec2 u_size;
 uniform samplerCube u_lobes[N_LOBES];
 uniform sampler2D u_horizon;
+uniform float u_exponent[N_LOBES];       // bound order
+uniform int u_n_lights;                   // lights taken out of the wide lobes' maps
+uniform vec3 u_light_dir[MAX_LIGHTS];
+uniform vec3 u_light_flux[MAX_LIGHTS];
+const float PI = 3.14159265358979;
 #if COMBINED
 uniform samplerCube u_gloss0, u_gloss1, u_dd0, u_dd1;
 #endif
@@ -66,6 +71,16 @@ void main() {
             int k = paint * N_LOBES + i;
             vec2 gh = horizon(i, ndv);
             rgb += (gh.y * u_wg[k] + gh.x * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
+            if (u_exponent[i] < WIDE_EXPONENT) {
+                // exact directional lights: wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux
+                float e = u_exponent[i];
+                for (int l = 0; l < u_n_lights; ++l) {
+                    float nl = dot(n, u_light_dir[l]);
+                    if (nl <= 0.0) continue;
+                    float p = (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e);
+                    rgb += (u_wg[k] + nl * u_wdd[k]) * p * u_light_flux[l];
+                }
+            }
         }
     }
 #if OUTPUT_LINEAR
