@@ -20,6 +20,7 @@ Bars: default basis, mean ΔE ≤ 1.0 and 95th percentile ≤ 2.3 in both enviro
 
 from __future__ import annotations
 
+import json
 import time
 
 import numpy as np
@@ -59,8 +60,12 @@ def scene_errors(scene: tr.TruthScene, brdfs: list[lf.DesignedBRDF], basis: Lobe
     return {k: np.stack(v) for k, v in out.items()}
 
 
-def blend_seconds(m: int, size: int = 1024, repeats: int = 5) -> float:
-    """Median time to blend 2m + 1 cached RGB float32 basis images at size² (paint-edit proxy)."""
+def blend_seconds(m: int, size: int = 1024, repeats: int = 9) -> float:
+    """Fastest of *repeats* blends of 2m + 1 cached RGB float32 basis images at size² (paint-edit proxy).
+
+    The minimum, not the median: the machine is shared and the blend is memory-bound, so the fastest
+    run is the one least disturbed by other jobs.
+    """
     rng = np.random.default_rng(0)
     imgs = rng.random((2 * m + 1, size * size * 3), dtype=np.float32)
     w = rng.random(2 * m + 1).astype(np.float32)
@@ -69,7 +74,24 @@ def blend_seconds(m: int, size: int = 1024, repeats: int = 5) -> float:
         t0 = time.perf_counter()
         w @ imgs
         times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+    return float(np.min(times))
+
+
+def blend_table(counts: list[int], size: int = 1024, rounds: int = 15) -> dict[int, float]:
+    """Blend seconds per lobe count, rounds interleaved over the counts, fastest round of each.
+
+    Interleaving spreads other jobs' memory traffic over every count alike, so the trend survives it.
+    """
+    rng = np.random.default_rng(0)
+    imgs = rng.random((2 * max(counts) + 1, size * size * 3), dtype=np.float32)
+    best = {m: np.inf for m in counts}
+    for _ in range(rounds):
+        for m in counts:
+            w = np.ones(2 * m + 1, dtype=np.float32)
+            t0 = time.perf_counter()
+            w @ imgs[: 2 * m + 1]
+            best[m] = min(best[m], time.perf_counter() - t0)
+    return best
 
 
 def chart(rows: list[dict[str, float]], path) -> None:
@@ -82,7 +104,7 @@ def chart(rows: list[dict[str, float]], path) -> None:
     m = [r["lobes"] for r in rows]
     ms = [r["frame_ms"] for r in rows]
     for env, colour in zip(ENVIRONMENTS, ("tab:blue", "tab:orange"), strict=True):
-        for mode, ls in zip(MODES, ("-", "--", ":"), strict=True):
+        for mode, ls in zip(MODES, ("-", "--", ":", "-."), strict=True):
             mean = [r[f"{env}/{mode}/mean"] for r in rows]
             p95 = [r[f"{env}/{mode}/p95"] for r in rows]
             axes[0].plot(m, mean, ls, color=colour, marker="o", ms=3, label=f"{env} {mode} mean")
@@ -104,7 +126,24 @@ def chart(rows: list[dict[str, float]], path) -> None:
     plt.close(fig)
 
 
+def replot() -> None:
+    """Re-measure the frame proxy and redraw the chart from docs/render-basis-accuracy.json (no truth)."""
+    path = ROOT / "docs" / "render-basis-accuracy.json"
+    rows = json.loads(path.read_text())
+    frames = blend_table([int(r["lobes"]) for r in rows])
+    for r in rows:
+        r["frame_ms"] = frames[int(r["lobes"])] * 1e3
+    path.write_text(json.dumps(rows, indent=1) + "\n")
+    chart(rows, ROOT / "docs" / "render-basis-accuracy.png")
+    print("\n".join(f"{int(r['lobes']):2d} lobes  frame proxy {r['frame_ms']:.2f} ms" for r in rows))
+
+
 def main() -> None:
+    import sys
+
+    if "--replot" in sys.argv:
+        replot()
+        return
     designs = design_database()
     brdfs = [lf.designed_brdf(d) for d in designs]
     normals, views = tr.sphere_pixels(SPHERE)
@@ -118,8 +157,9 @@ def main() -> None:
         cases.append(Case(f"truth scene {env}: integrals", f"{normals.shape[0]} px", time.perf_counter() - t0, "s"))
     rows: list[dict[str, float]] = []
     default_m = default_basis().size
+    frames = blend_table([m for m, _ in bases])
     for m, basis in bases:
-        row: dict[str, float] = {"lobes": m, "frame_ms": blend_seconds(m) * 1e3}
+        row: dict[str, float] = {"lobes": m, "frame_ms": frames[m] * 1e3}
         for env, scene in scenes.items():
             errs = scene_errors(scene, brdfs, basis)
             for mode, e in errs.items():
@@ -140,6 +180,7 @@ def main() -> None:
                          f"{ok} bar (≤ {MEAN_BAR}, p95 ≤ {P95_BAR})"),
                     Case(f"default {m_str(default_m)} {env} {mode}: p95", f"{normals.shape[0]} px", p95, "ΔE00"),
                 ]
+    (ROOT / "docs" / "render-basis-accuracy.json").write_text(json.dumps(rows, indent=1) + "\n")
     png = ROOT / "docs" / "render-basis-accuracy.png"
     chart(rows, png)
     header = "| lobes | frame proxy ms | " + " | ".join(

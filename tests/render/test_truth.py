@@ -124,3 +124,25 @@ def test_horizon_table_makes_prefiltered_exact_in_a_constant_environment() -> No
     exact = scene.lobes(w, "exact")
     assert scene.lobes(w, "prefiltered-lut") == pytest.approx(exact, rel=5e-3)
     assert np.abs(scene.lobes(w, "prefiltered") / exact - 1).max() > 0.05  # eq 2.5.1 as written is not
+
+
+def test_silhouette_pixels_are_bent_or_refused() -> None:
+    n = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.8, 0.0, -0.6]])  # head-on, grazing, back-facing
+    v = np.broadcast_to([0.0, 0.0, 1.0], n.shape)
+    out = tr.render_truth(solid(50.0, 40.0), np.ones((16, 32, 3)), n, v, samples=32, quadrature_width=32)
+    assert tr.render_truth.last_bent == 2
+    assert np.all(np.isfinite(out)) and np.all(out >= 0)
+    with pytest.raises(InputError):
+        tr.render_truth(solid(50.0, 40.0), np.ones((16, 32, 3)), n, v, backfacing="error")
+    with pytest.raises(InputError):
+        tr.render_truth(solid(50.0, 40.0), np.ones((16, 32, 3)), n, v, backfacing="flip")
+
+
+def test_direct_and_binned_truth_agree() -> None:
+    from station.model import FaceFlopTravelGloss
+
+    n, v = tr.sphere_pixels(10)
+    scene = tr.TruthScene(analytic_env(), n, v, samples=64, quadrature_width=64)
+    for gloss in (10.0, 85.0):  # broad gloss lobe (quadrature) and sharp one (importance sampled)
+        brdf = lf.designed_brdf(FaceFlopTravelGloss((90.0, 2.0, 20.0), (35.0, 5.0, 15.0), 100.0, gloss))
+        assert scene.truth_direct(brdf) == pytest.approx(scene.truth(brdf), rel=5e-3, abs=1e-5)
