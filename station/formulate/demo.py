@@ -9,7 +9,8 @@ tints or black), plus a matting fraction setting the gloss. Lab is predicted at 
 Codes read ``SYN-<hue><type><serial>`` (hue letter R/Y/G/B, or N for neutral; type S/M/P), in the
 style of the thesis's SpectraMaster codes (RM209, BM304) and marked SYN- so no one mistakes them for
 real paints. Generation is vectorised (well under a second); the result is also cached to
-``$STATION_CACHE_DIR`` (default ``~/.cache/cacad-station``) as .npz, keyed by the generator version.
+``$STATION_CACHE_DIR`` (default ``~/.cache/cacad-station``) as .npz, keyed by the generator version, the
+seed and a hash of the colorant database.
 """
 
 from __future__ import annotations
@@ -124,6 +125,19 @@ def generate_library(
     )
 
 
+def _model_key() -> str:
+    """Short hash of the colorant database, so a changed model never loads a stale cached library."""
+    import hashlib
+
+    h = hashlib.sha1(usedforsecurity=False)
+    for c in default_database().colorants:
+        h.update(repr((c.name, c.family, c.lobe_width_deg, c.lobe_power, c.lobe_floor, c.peak_nm, c.band_nm,
+                       c.max_fraction)).encode())
+        h.update(np.ascontiguousarray(c.k).tobytes())
+        h.update(np.ascontiguousarray(c.s).tobytes())
+    return h.hexdigest()[:10]
+
+
 def cache_dir() -> Path:
     """Return the cache folder: ``$STATION_CACHE_DIR`` or ``~/.cache/cacad-station``."""
     return Path(os.environ.get("STATION_CACHE_DIR", Path.home() / ".cache" / "cacad-station"))
@@ -132,7 +146,7 @@ def cache_dir() -> Path:
 @functools.lru_cache(maxsize=1)
 def demo_library() -> Library:
     """Return the 6000-paint SYNTHETIC demo library (cached in memory and on disk)."""
-    path = cache_dir() / f"demo_library_v{GENERATOR_VERSION}_{DEMO_SEED}.npz"
+    path = cache_dir() / f"demo_library_v{GENERATOR_VERSION}_{DEMO_SEED}_{_model_key()}.npz"
     if path.exists():
         try:
             z = np.load(path, allow_pickle=False)
