@@ -153,7 +153,7 @@ def main() -> None:
                 Case(f"paint edit -> screen, {mode} mode, best", f"{SIZE}x{SIZE}", min(total) * 1e3, "ms"),
                 Case(f"paint edit -> screen, {mode} mode, p90", f"{SIZE}x{SIZE}", _pct(total, 0.9) * 1e3, "ms"),
                 Case("  of which edit -> paintGL done, median", f"{SIZE}x{SIZE}",
-                     statistics.median(paint) * 1e3, "ms", "fit + re-weight + glFinish"),
+                     statistics.median(paint) * 1e3, "ms", "fit + re-weight + draw (before compositing)"),
                 Case(f"  median / NumPy edit alone ({mode})", "", med / base_med, "ratio"),
             ]
         app.shutdown()

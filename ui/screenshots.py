@@ -76,7 +76,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
 
         win.tabs.setCurrentWidget(win.screens["Tweaker"])
         tw = win.screens["Tweaker"].content().canvas
-        tw.press((150, 160))
+        tw.press((230, 250))
         tw.adjust("H", 10.0)
         shot("tweaker")
 

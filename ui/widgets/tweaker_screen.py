@@ -28,7 +28,7 @@ from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from ui.models.document import DesignDocument
 
-SIZE = 256
+SIZE = 400
 STEPS = {"L": 3.0, "C": 0.1, "H": 5.0}
 BUTTONS = (("lighter", "L", +1, (0, -34)), ("darker", "L", -1, (0, 34)), ("chroma +", "C", +1, (44, -12)),
            ("chroma −", "C", -1, (-44, -12)), ("hue +", "H", +1, (44, 14)), ("hue −", "H", -1, (-44, 14)))
