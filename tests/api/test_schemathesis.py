@@ -35,9 +35,10 @@ def test_openapi_schema_is_complete(sqlite_api: Api) -> None:
             if path != "/health":
                 assert {"401", "403"} <= set(op["responses"]), (method, path)
                 assert op.get("security") == [{"HTTPBearer": []}] or op.get("security"), (method, path)
-    schemas = spec["components"]["schemas"]
-    for name in ("Reading", "PanelCreate", "DesignCreate", "UserCreate", "ConnectRequest"):
-        assert schemas[name].get("examples"), name
+            body = op.get("requestBody")
+            if body:  # every request body documents an example
+                name = body["content"]["application/json"]["schema"]["$ref"].rsplit("/", 1)[1]
+                assert spec["components"]["schemas"][name].get("examples"), (method, path, name)
 
 
 @pytest.mark.slow
@@ -67,3 +68,21 @@ def test_schemathesis_conformance(sqlite_api: Api) -> None:
         except Exception as exc:
             failures.append(f"{operation.method.upper()} {operation.path}: {str(exc)[:600]}")
     assert not failures, "\n\n".join(failures)
+
+
+def test_documented_examples_validate() -> None:
+    from station.api.schemas.designs import DesignCreate, DesignUpdate
+    from station.api.schemas.instruments import CalibrateRequest, ConnectRequest, MeasureRequest
+    from station.api.schemas.measurements import CorrectionCreate
+    from station.api.schemas.panels import PanelCreate
+    from station.api.schemas.recipes import RecipeCreate
+    from station.api.schemas.users import TokenCreate, UserCreate
+    from station.ingest import Reading
+
+    models = (Reading, PanelCreate, DesignCreate, DesignUpdate, UserCreate, TokenCreate, ConnectRequest,
+              CalibrateRequest, MeasureRequest, CorrectionCreate, RecipeCreate)
+    for model in models:
+        examples = model.model_json_schema().get("examples")
+        assert examples, model.__name__
+        for example in examples:
+            model.model_validate(example)

@@ -34,9 +34,9 @@ class ConnectRequest(BaseModel):
 
 
 class CalibrateRequest(BaseModel):
-    """Who calibrates, with which reference tile."""
+    """Which reference tile (or gloss standard) the calibration used."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"reference": "white tile W-17"}]})
 
     reference: Annotated[str, Field(max_length=64, examples=["white tile W-17"])] = ""
 

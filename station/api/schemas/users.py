@@ -24,7 +24,7 @@ class UserCreate(BaseModel):
 class TokenCreate(BaseModel):
     """A label for a new token (which device or script holds it)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"label": "booth-2 station"}]})
 
     label: Annotated[str, Field(max_length=64, examples=["booth-2 station"])] = ""
 
