@@ -116,24 +116,36 @@ def extract_lights(env: Environment, threshold: float = LIGHT_THRESHOLD,
     bright = lum > threshold * mean
     if not bright.any():
         return env, Lights(np.zeros((0, 3)), np.zeros((0, 3)))
-    labels, _ = ndimage.label(bright, structure=np.ones((3, 3), bool))
-    # join components split by the azimuth seam
-    for j in range(h):
-        a, b = labels[j, 0], labels[j, -1]
-        if a and b and a != b:
-            labels[labels == b] = a
-    dirs = cubemap.equirect_directions(h, w)
-    ids = [i for i in np.unique(labels) if i]
-    flux_lum = {i: float((lum * sa)[labels == i].sum()) for i in ids}
-    keep = sorted(ids, key=lambda i: -flux_lum[i])[:max_lights]
+    labels, n = ndimage.label(bright, structure=np.ones((3, 3), bool))
+    # join components split by the azimuth seam (union-find over the labels met across it)
+    parent = np.arange(n + 1)
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in zip(labels[:, 0], labels[:, -1], strict=True):
+        if a and b:
+            ra, rb = root(int(a)), root(int(b))
+            if ra != rb:
+                parent[rb] = ra
+    labels = np.array([root(i) for i in range(n + 1)])[labels]
+    flat = labels.ravel()
+    weight = (lum * sa).ravel()
+    size = n + 1
+    flux_lum = np.bincount(flat, weights=weight, minlength=size)
+    flux_lum[0] = 0.0
+    keep = [int(i) for i in np.argsort(-flux_lum) if flux_lum[i] > 0][:max_lights]
+    dirs = cubemap.equirect_directions(h, w).reshape(-1, 3)
+    rad_sa = (img * sa[..., None]).reshape(-1, 3)
+    vec = np.stack([np.bincount(flat, weights=weight * dirs[:, c], minlength=size) for c in range(3)], -1)
+    flux = np.stack([np.bincount(flat, weights=rad_sa[:, c], minlength=size) for c in range(3)], -1)
+    kept = np.zeros(size, bool)
+    kept[keep] = True
     residual = img.copy()
-    out_dirs, out_flux = [], []
-    for i in keep:
-        m = labels == i
-        weight = (lum * sa)[m]
-        d = (dirs[m] * weight[:, None]).sum(axis=0)
-        out_dirs.append(d / np.linalg.norm(d))
-        out_flux.append((img[m] * np.broadcast_to(sa, (h, w))[m][:, None]).sum(axis=0))
-        residual[m] = 0.0
-    return (Environment(f"{env.name}-lights", residual),
-            Lights(np.array(out_dirs, np.float64), np.array(out_flux, np.float64)))
+    residual[kept[labels]] = 0.0
+    out_dirs = vec[keep] / np.linalg.norm(vec[keep], axis=1, keepdims=True)
+    out_flux = flux[keep]
+    return Environment(f"{env.name}-lights", residual), Lights(out_dirs, out_flux)
