@@ -114,8 +114,10 @@ def create_app(settings: Settings) -> FastAPI:
             replayer.cancel()
             await asyncio.to_thread(_shutdown, app)
 
+    docs: dict[str, str | None] = {} if settings.public_docs else {"docs_url": None, "redoc_url": None,
+                                                                     "openapi_url": None}
     app = FastAPI(title="CACAD Station", version=__version__, description=DESCRIPTION + _roles_markdown(),
-                  openapi_tags=TAGS, lifespan=lifespan)
+                  openapi_tags=TAGS, lifespan=lifespan, **docs)
     app.state.settings = settings
     install_error_handlers(app)
     app.include_router(health.router)

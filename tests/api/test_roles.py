@@ -85,3 +85,16 @@ def test_each_role_is_refused_what_it_must_not_do(sqlite_api: Api, role: Role) -
             assert r.status_code not in (401, 403), (role, method, path, r.status_code, r.text)
         else:
             assert r.status_code == 403, (role, method, path, r.status_code, r.text)
+
+
+def test_docs_can_be_closed(tmp_path) -> None:
+    from tests.api.conftest import make_api
+
+    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, public_docs=False)
+    api = next(gen)
+    try:
+        for path in ("/docs", "/redoc", "/openapi.json"):
+            assert api.client.get(path).status_code == 404
+        assert api.client.get("/health").status_code == 200
+    finally:
+        gen.close()
