@@ -34,7 +34,7 @@ SEAM_R = 0.6
 DEFAULT_CAMERAS = {
     "sphere": Camera((0.0, 0.8, 4.5), (0.0, 0.0, 0.0), fov_deg=30.0),
     "cylinder": Camera((0.0, 1.2, 4.5), (0.0, 0.0, 0.0), fov_deg=32.0),
-    "speedshape": Camera((1.5, 1.1, 3.8), (0.45, 0.0, 0.0), fov_deg=32.0),
+    "speedshape": Camera((1.4, 1.3, 4.8), (0.5, 0.0, 0.0), fov_deg=34.0),
     "panels": Camera((0.0, 0.4, 3.6), (0.0, 0.0, 0.0), fov_deg=36.0),
     "seam": Camera((0.9, 0.5, 3.4), (0.0, 0.0, 0.0), fov_deg=36.0),
 }
