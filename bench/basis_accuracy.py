@@ -104,12 +104,12 @@ def chart(rows: list[dict[str, float]], path) -> None:
     m = [r["lobes"] for r in rows]
     ms = [r["frame_ms"] for r in rows]
     for env, colour in zip(ENVIRONMENTS, ("tab:blue", "tab:orange"), strict=True):
-        for mode, ls in zip(MODES, ("-", "--", ":", "-."), strict=True):
+        for mode, ls in zip(MODES, ("-", "--", ":", "-.", (0, (1, 1))), strict=True):
             mean = [r[f"{env}/{mode}/mean"] for r in rows]
             p95 = [r[f"{env}/{mode}/p95"] for r in rows]
-            axes[0].plot(m, mean, ls, color=colour, marker="o", ms=3, label=f"{env} {mode} mean")
-            axes[0].plot(m, p95, ls, color=colour, marker="^", ms=3, alpha=0.5, label=f"{env} {mode} p95")
-            axes[1].plot(ms, mean, ls, color=colour, marker="o", ms=3)
+            axes[0].plot(m, mean, linestyle=ls, color=colour, marker="o", ms=3, label=f"{env} {mode} mean")
+            axes[0].plot(m, p95, linestyle=ls, color=colour, marker="^", ms=3, alpha=0.5, label=f"{env} {mode} p95")
+            axes[1].plot(ms, mean, linestyle=ls, color=colour, marker="o", ms=3)
     for ax in axes:
         ax.axhline(MEAN_BAR, color="grey", lw=0.8)
         ax.axhline(P95_BAR, color="grey", lw=0.8, ls=":")

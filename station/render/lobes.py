@@ -218,3 +218,19 @@ def horizon_factors(exponent: float, r_dot_n: ArrayLike, nodes: int = 1024
     g = (2.0 * (a * phi0 + b * np.sin(phi0)) / (2.0 * np.pi)).mean(axis=-1)
     h = (phi0 / np.pi).mean(axis=-1)
     return g, h
+
+
+#: Sharpness of the spherical Gaussian that best matches the clamped cosine (N·ω)₊ (amplitude 1.17):
+#: the product rule of spherical Gaussians bends a lobe cos^E(R·ω) times (N·ω) towards N.
+COSINE_SG_SHARPNESS = 2.133
+
+
+def bent_direction(exponent: float, reflect: ArrayLike, normal: ArrayLike) -> NDArray[np.float64]:
+    """Lookup direction B = normalize(E·R + 2.133·N) for a directionally diffuse lobe (eq 2.5.1).
+
+    (N·ω)(R·ω)^E is, as a product of spherical Gaussians, a lobe about B; looking the prefiltered map up
+    at B (weighted by g of :func:`horizon_factors`) instead of at R fixes most of eq 2.5.1's error for
+    wide lobes under uneven light (docs/render-fit.md §7). Shapes (..., 3) → (..., 3).
+    """
+    b = exponent * np.asarray(reflect, dtype=float) + COSINE_SG_SHARPNESS * np.asarray(normal, dtype=float)
+    return b / np.linalg.norm(b, axis=-1, keepdims=True)

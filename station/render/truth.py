@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.render.errors import RenderInputError
 from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf
-from station.render.lobes import horizon_factors
+from station.render.lobes import bent_direction, horizon_factors
 from station.render.weights import LobeWeights
 
 if TYPE_CHECKING:
@@ -59,7 +59,7 @@ LOBE_SAMPLES = 256
 #: N·V given to silhouette pixels by ``render_truth(backfacing="bend")``.
 BEND_COS = 1e-3
 #: How :meth:`TruthScene.lobes` evaluates the lobe model.
-LOBE_MODES = ("exact", "prefiltered", "prefiltered-lut", "prefiltered-lut+lights")
+LOBE_MODES = ("exact", "prefiltered", "prefiltered-lut", "prefiltered-lut+lights", "prefiltered-bent+lights")
 _BINS = ALPHA_GRID_DEG.size  # 721 bins of 0.25°
 _PIXEL_CHUNK = 48
 
@@ -200,7 +200,7 @@ class TruthScene:
     """
 
     def __init__(self, environment: Any, normals: ArrayLike, views: ArrayLike, samples: int = LOBE_SAMPLES,
-                 quadrature_width: int = QUADRATURE_WIDTH) -> None:
+                 quadrature_width: int = QUADRATURE_WIDTH, lighting: Lighting | None = None) -> None:
         n = np.asarray(normals, dtype=float)
         v = np.asarray(views, dtype=float)
         if n.shape != v.shape or n.shape[-1:] != (3,):
@@ -219,7 +219,8 @@ class TruthScene:
         self.normals, self.views = n, v
         self.reflect = 2.0 * n_dot_v[:, None] * n - v
         self.samples = int(samples)
-        self.lighting = prepare_lighting(environment, quadrature_width)
+        self.lighting = prepare_lighting(environment, quadrature_width) if lighting is None else lighting
+        self._bent: dict[float, NDArray[np.float64]] = {}
         self._tangents = _frames(self.reflect)
         self._cache: dict[tuple[str, float], NDArray[np.float64]] = {}
         self._horizon: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
@@ -340,7 +341,9 @@ class TruthScene:
         the same lookups with (R·N) replaced by g(E_i, R·N) and the gloss weighted by h(E_i, R·N) from
         :func:`station.render.lobes.horizon_factors` (a small per-lobe table a shader can hold).
         ``prefiltered-lut+lights``: as ``prefiltered-lut`` for the map without its extracted point lights
-        (the sun), which are shaded exactly as directional lights.
+        (the sun), which are shaded exactly as directional lights. ``prefiltered-bent+lights``: as that,
+        with the directionally diffuse lookup of each wide lobe (E < SHARP_EXPONENT) at
+        :func:`station.render.lobes.bent_direction` instead of R.
         """
         if mode not in LOBE_MODES:
             raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
@@ -357,15 +360,27 @@ class TruthScene:
                 if e not in self._horizon:
                     self._horizon[e] = horizon_factors(e, r_dot_n)
                 g, h = self._horizon[e]
-            if mode == "prefiltered-lut+lights":
+            dd_lobe = lobe
+            if mode in ("prefiltered-lut+lights", "prefiltered-bent+lights"):
                 # Point lights shaded exactly (as a renderer shades a few directional lights), the rest of
                 # the map through the prefiltered lookups.
                 kernel = np.clip(np.cos(np.radians(ALPHA_GRID_DEG)), 0.0, 1.0) ** e
                 lobe = lobe - self._binned("open", kernel, points_only=True)
+                dd_lobe = self._bent_lobe(e) if mode == "prefiltered-bent+lights" and e < SHARP_EXPONENT else lobe
                 out = out + (weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
                              + weights.k_g[i] * self._binned("mask", kernel, points_only=True))
-            out = out + (weights.k_dd[i][None, :] * g[:, None] + weights.k_g[i] * h[:, None]) * lobe
+            out = out + weights.k_dd[i][None, :] * g[:, None] * dd_lobe + weights.k_g[i] * h[:, None] * lobe
         return out.reshape(*self.shape, 3)
+
+    def _bent_lobe(self, exponent: float) -> NDArray[np.float64]:
+        """Open lobe integral of the map without point lights about B = bent_direction(E, R, N), (P, 3)."""
+        if exponent not in self._bent:
+            b = bent_direction(exponent, self.reflect, self.normals)
+            views = 2.0 * np.einsum("ij,ij->i", self.normals, b)[:, None] * self.normals - b  # mirror of B
+            aux = TruthScene(self.lighting.residual, self.normals, views, self.samples, lighting=self.lighting)
+            kernel = np.clip(np.cos(np.radians(ALPHA_GRID_DEG)), 0.0, 1.0) ** exponent
+            self._bent[exponent] = aux.lobe(exponent, "open") - aux._binned("open", kernel, points_only=True)
+        return self._bent[exponent]
 
     def white(self) -> NDArray[np.float64]:
         """Radiance of a white Lambertian surface (reflectance 1) at each pixel, (..., 3)."""

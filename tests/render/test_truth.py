@@ -123,6 +123,7 @@ def test_horizon_table_makes_prefiltered_exact_in_a_constant_environment() -> No
                     [0.0, 0.2, 10.0])
     exact = scene.lobes(w, "exact")
     assert scene.lobes(w, "prefiltered-lut") == pytest.approx(exact, rel=5e-3)
+    assert scene.lobes(w, "prefiltered-bent+lights") == pytest.approx(exact, rel=5e-3)
     assert np.abs(scene.lobes(w, "prefiltered") / exact - 1).max() > 0.05  # eq 2.5.1 as written is not
 
 
@@ -146,3 +147,15 @@ def test_direct_and_binned_truth_agree() -> None:
     for gloss in (10.0, 85.0):  # broad gloss lobe (quadrature) and sharp one (importance sampled)
         brdf = lf.designed_brdf(FaceFlopTravelGloss((90.0, 2.0, 20.0), (35.0, 5.0, 15.0), 100.0, gloss))
         assert scene.truth_direct(brdf) == pytest.approx(scene.truth(brdf), rel=5e-3, abs=1e-5)
+
+
+def test_bent_direction_limits() -> None:
+    from station.render.lobes import bent_direction
+
+    r = np.array([[0.0, 0.6, 0.8]])
+    nrm = np.array([[0.0, 0.0, 1.0]])
+    assert bent_direction(1e9, r, nrm) == pytest.approx(r)  # narrow lobes: the mirror direction
+    assert bent_direction(0.0, r, nrm) == pytest.approx(nrm)  # the cosine alone: the normal
+    b = bent_direction(2.0, r, nrm)[0]
+    assert np.linalg.norm(b) == pytest.approx(1.0)
+    assert r[0] @ nrm[0] < b @ nrm[0] < 1.0  # between R and N
