@@ -35,6 +35,7 @@ TAGS = [
     {"name": "instruments", "description": "attached instruments: connect, calibrate, measure"},
     {"name": "panels", "description": "painted samples (job, part, substrate)"},
     {"name": "measurements", "description": "immutable readings; corrections supersede; CSV export"},
+    {"name": "analyses", "description": "seam QA of measured panels (misalignment, thesis ch. 4)"},
     {"name": "designs", "description": "versioned cacad.design/1 designs"},
     {"name": "library", "description": "library paints"},
     {"name": "recipes", "description": "formulation jobs: ColorSnap a design to the library (chemist)"},

@@ -15,9 +15,11 @@ from pydantic import BaseModel
 from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError
 
 from db.errors import DatabaseUnavailableError, ImmutableRowError
+from station.analysis.errors import AnalysisError
 from station.drivers.errors import CalibrationNeeded, DriverError
 from station.errors import InputError, StationError
 from station.ingest import ClientIdConflictError, ReferenceNotFoundError
+from station.model.errors import ModelError
 
 log = logging.getLogger(__name__)
 
@@ -53,6 +55,8 @@ class ErrorOut(BaseModel):
 
 
 _STATUS: list[tuple[type[BaseException], int]] = [
+    (AnalysisError, 422),  # the panels cannot be analysed as given (e.g. a fit the model refuses)
+    (ModelError, 422),
     (ReferenceNotFoundError, 404),
     (ClientIdConflictError, 409),
     (ImmutableRowError, 409),
@@ -97,6 +101,8 @@ def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(StationError)
     async def _station(_req: Request, exc: StationError) -> JSONResponse:
         status = status_for(exc)
+        if status == 422:  # same shape as request validation errors
+            return JSONResponse({"detail": [{"loc": ["body"], "msg": str(exc), "type": "value_error"}]}, 422)
         if status >= 500:
             log.error("%s: %s", type(exc).__name__, exc)
         return JSONResponse({"detail": str(exc)}, status_code=status)

@@ -22,6 +22,7 @@ from schemathesis.specs.openapi.checks import (
 
 from db.models import Role
 from tests.api.conftest import Api
+from tests.ingest._readings import make_reading
 
 MAX_EXAMPLES = int(os.environ.get("SCHEMATHESIS_EXAMPLES", "10"))
 CHECKS = [not_a_server_error, status_code_conformance, content_type_conformance, response_schema_conformance]
@@ -51,6 +52,8 @@ def test_schemathesis_conformance(sqlite_api: Api) -> None:
     c.post("/api/v1/panels", json={"job": "J", "part": "door"}, headers=headers)
     c.post("/api/v1/designs", json={"name": "d", "design": {"face": [50, 1, 1], "flop": [30, 1, 1],
                                                              "travel_deg": 60}}, headers=headers)
+    for i in range(2):
+        c.post("/api/v1/measurements", json=make_reading(51, i).model_dump(mode="json"), headers=headers)
     failures: list[str] = []
     for result in schema.get_all_operations():
         operation = result.ok()

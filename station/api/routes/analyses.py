@@ -1,0 +1,41 @@
+"""Analyses: ``/api/v1/analyses`` (QA runs seam analyses of measured panels; everyone who reads measurements reads them)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Query, status
+
+from db.models import User
+from station.api.deps import SessionDep, scoped
+from station.api.errors import ERROR_RESPONSES, NOT_FOUND
+from station.api.schemas.analyses import AnalysisPublic, SeamQaCreate
+from station.api.schemas.common import Id, Limit, Offset, Page
+from station.api.security import Scope
+from station.api.services import analyses as service
+
+router = APIRouter(prefix="/analyses", tags=["analyses"], responses=ERROR_RESPONSES)
+Reader = Annotated[User, scoped(Scope.MEASUREMENTS_READ)]
+Analyst = Annotated[User, scoped(Scope.ANALYSIS_WRITE)]
+
+
+@router.post("/seam", status_code=status.HTTP_201_CREATED, response_model=AnalysisPublic, responses=NOT_FOUND)
+def seam_qa(session: SessionDep, user: Analyst, request: SeamQaCreate) -> AnalysisPublic:
+    """Judge the seam between two measured panels at a misalignment β (thesis ch. 4) and store the report:
+    seam ΔE, geometric vs formulation share, goniogeometric index, advice and a corrected paint for B."""
+    return AnalysisPublic.model_validate(service.seam_qa(session=session, actor=user, request=request))
+
+
+@router.get("", response_model=Page[AnalysisPublic])
+def list_analyses(session: SessionDep, _user: Reader,
+                  kind: Annotated[str | None, Query(max_length=32)] = None,
+                  limit: Limit = 100, offset: Offset = 0) -> Page[AnalysisPublic]:
+    """Stored analyses, newest first."""
+    rows, total = service.list_analyses(session=session, kind=kind, limit=limit, offset=offset)
+    return Page[AnalysisPublic](data=[AnalysisPublic.model_validate(r) for r in rows], count=total)
+
+
+@router.get("/{analysis_id}", response_model=AnalysisPublic, responses=NOT_FOUND)
+def get_analysis(session: SessionDep, _user: Reader, analysis_id: Id) -> AnalysisPublic:
+    """One stored analysis."""
+    return AnalysisPublic.model_validate(service.get_analysis(session=session, analysis_id=analysis_id))
