@@ -101,12 +101,12 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         if scan:
             inst.device.setCurrentText("sim:ma6")
             inst.connect_device()
-            _wait(lambda: inst.session.connected and not inst.task.isRunning(), 60)
+            _wait(lambda: inst.idle, 60)
             inst.calibrate()
-            _wait(lambda: not inst.task.isRunning(), 60)
+            _wait(lambda: inst.idle, 60)
             inst.panel.setText("door-front-left")
             inst.scan()
-            _wait(lambda: bool(win.store.items) and not inst.task.isRunning(), 60)
+            _wait(lambda: inst.idle, 60)
         shot("instruments")
 
         win.tabs.setCurrentWidget(win.screens["QA"])

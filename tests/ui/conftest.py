@@ -50,7 +50,6 @@ def _start_xvfb() -> subprocess.Popen | None:
 
 XVFB = _start_xvfb()
 os.environ["QT_QPA_PLATFORM"] = "xcb" if XVFB is not None else "offscreen"
-os.environ.setdefault("CACAD_CACHE_DIR", os.path.join(tempfile.gettempdir(), "cacad-ui-test-cache"))
 
 from ui.widgets.render_view import configure_default_format  # noqa: E402  (after the platform is set)
 
@@ -67,6 +66,18 @@ def pytest_collection_modifyitems(config, items) -> None:
             item.add_marker(pytest.mark.qt_log_level_fail("WARNING"))
             if "gl" in item.keywords and not GL:
                 item.add_marker(skip_gl)
+
+
+@pytest.fixture(scope="package", autouse=True)
+def _prefilter_cache_dir():
+    """Prefiltered environments of the viewer tests go to a temporary cache shared by this package only."""
+    old = os.environ.get("CACAD_CACHE_DIR")
+    os.environ["CACAD_CACHE_DIR"] = os.path.join(tempfile.gettempdir(), "cacad-ui-test-cache")
+    yield
+    if old is None:
+        os.environ.pop("CACAD_CACHE_DIR", None)
+    else:
+        os.environ["CACAD_CACHE_DIR"] = old
 
 
 @pytest.fixture(autouse=True)

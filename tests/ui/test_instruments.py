@@ -24,16 +24,18 @@ def test_scan_with_simulator_stores_and_shows_measurement(qtbot, tmp_path):
     screen.show()
     screen.device.setCurrentText("sim:ma6")
     screen.connect_btn.click()
-    qtbot.waitUntil(lambda: screen.session.connected and not screen.task.isRunning(), timeout=30000)
+    qtbot.waitUntil(lambda: screen.idle, timeout=90000)
+    assert screen.session.connected, screen.log.toPlainText()
     assert screen.scan_btn.isEnabled()
     screen.calibrate_btn.click()
-    qtbot.waitUntil(lambda: not screen.task.isRunning(), timeout=30000)
-    assert "calibration" in screen.log.toPlainText() and "passed" in screen.state.text()
+    qtbot.waitUntil(lambda: screen.idle, timeout=90000)
+    assert "calibration" in screen.log.toPlainText() and "passed" in screen.state.text(), screen.log.toPlainText()
     screen.panel.setText("door-7")
     steps: list[int] = []
     screen.scan_btn.click()
     screen.task.progress.connect(lambda s, _t: steps.append(s))
-    qtbot.waitUntil(lambda: len(store.items) == 1, timeout=30000)
+    qtbot.waitUntil(lambda: screen.idle, timeout=90000)
+    assert len(store.items) == 1, screen.log.toPlainText()
     m = store.items[0]
     assert screen.progress.value() == screen.progress.maximum()
     assert m.panel == "door-7" and m.device == "sim:ma6"
@@ -41,6 +43,7 @@ def test_scan_with_simulator_stores_and_shows_measurement(qtbot, tmp_path):
     # shown: the table holds the stored Lab, the list one entry, the file one JSON line
     np.testing.assert_allclose(screen.lab_table(), np.round(m.lab, 2), atol=0.006)
     assert screen.stored.count() == 1
+    assert screen.plot.design == m.design and screen.plot.points[1].shape == (6, 3)
     rec = json.loads((tmp_path / "m.jsonl").read_text().splitlines()[0])
     assert rec["panel"] == "door-7" and len(rec["lab"]) == 6
     # Lab comes from the spectra through the model, independently recomputed here
@@ -68,7 +71,7 @@ def test_connect_failure_is_shown(qtbot, tmp_path):
     qtbot.addWidget(screen)
     screen.device.setCurrentText(str(tmp_path / "no-such-port"))
     screen.connect_btn.click()
-    qtbot.waitUntil(lambda: not screen.task.isRunning(), timeout=15000)
+    qtbot.waitUntil(lambda: screen.idle, timeout=90000)
     assert "ERROR" in screen.log.toPlainText() and screen.state.text() == "failed"
     assert not screen.scan_btn.isEnabled()
     screen.close()

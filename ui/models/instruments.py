@@ -108,7 +108,7 @@ class InstrumentSession:
         """Whether an instrument is open."""
         return self.instrument is not None
 
-    def connect(self, device: str, design_file: Path | None = None, timeout_s: float = 2.0) -> str:
+    def connect(self, device: str, design_file: Path | None = None, timeout_s: float = 5.0) -> str:
         """Open *device* (``sim:KIND`` starts a simulator); returns the instrument's address."""
         self.close()
         device = device.strip()

@@ -12,6 +12,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from station.design.palette import booklet
 from station.formulate.library import Library, LibraryFilter, hierarchy_counts
 from station.formulate.snap import SnapIndex, SnapResult, color_snap
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
@@ -79,7 +80,13 @@ class LibraryModel:
         self.events.snapped.emit(self.snap_result)
         return self.snap_result
 
-    @lru_cache(maxsize=64)  # noqa: B019 (one model per window; the cache dies with it)
+    @lru_cache(maxsize=1024)  # noqa: B019 (one model per window; the cache dies with it)
     def design_of(self, i: int) -> FaceFlopTravelGloss:
         """Design of library row *i*."""
         return paint_design(self.library, i)
+
+    @lru_cache(maxsize=1024)  # noqa: B019
+    def thumbnail(self, i: int, size: int = 40) -> np.ndarray:
+        """Rendered thumbnail of row *i*: its design on the bent booklet panel
+        (``station.design.palette.booklet``), (size, size, 3) uint8."""
+        return booklet(self.design_of(i), size)

@@ -28,6 +28,7 @@ from station.design.palette import booklet
 from ui.models.document import DesignDocument
 from ui.models.instruments import SIM_DEVICES, STEPS, InstrumentSession, Measurement, MeasurementStore
 from ui.widgets.common import lab_colour, pixmap_from_array
+from ui.widgets.reading_plot import ReadingPlot
 from ui.widgets.tasks import TaskThread
 
 
@@ -42,6 +43,7 @@ class InstrumentsScreen(QWidget):
         self.session = InstrumentSession()
         self.task: TaskThread | None = None
         self.last: Measurement | None = None
+        self.idle = True  # no task running and its result handled
 
         self.device = QComboBox()
         self.device.setEditable(True)
@@ -61,6 +63,7 @@ class InstrumentsScreen(QWidget):
         self.table.setHorizontalHeaderLabels(["geometry", "L*", "a*", "b*", "colour"])
         self.render = QLabel()
         self.render.setMinimumSize(160, 160)
+        self.plot = ReadingPlot()
         self.stored = QListWidget()
 
         form = QFormLayout()
@@ -82,6 +85,7 @@ class InstrumentsScreen(QWidget):
         row.addWidget(self.table, 2)
         row.addWidget(self.render, 1)
         right.addLayout(row)
+        right.addWidget(self.plot, 1)
         right.addWidget(QLabel("stored measurements"))
         right.addWidget(self.stored)
         lay = QHBoxLayout(self)
@@ -104,8 +108,11 @@ class InstrumentsScreen(QWidget):
         self.state.setText(label)
         self.task = TaskThread(fn)
         self.task.progress.connect(self._on_progress)
+        self.idle = False
         self.task.succeeded.connect(done)
         self.task.failed.connect(self._on_failed)
+        self.task.succeeded.connect(self._on_task_done)  # after the result handler: the result is shown
+        self.task.failed.connect(self._on_task_done)
         self.task.finished.connect(self._sync_buttons)
         self._sync_buttons(busy=True)
         self.task.start()
@@ -131,6 +138,9 @@ class InstrumentsScreen(QWidget):
             self.document.set_design(self.last.design, f"measured {self.last.panel}")
 
     # ------------------------------------------------------------------ results
+    def _on_task_done(self, *_args) -> None:
+        self.idle = True
+
     def _say(self, text: str) -> None:
         self.log.appendPlainText(text)
 
@@ -172,6 +182,7 @@ class InstrumentsScreen(QWidget):
             self.table.setItem(i, 4, sw)
         if m.design is not None:
             self.render.setPixmap(pixmap_from_array(booklet(m.design, 160)))
+        self.plot.set_reading(m.aspecular_deg, m.lab, m.design)
         self._sync_buttons()
 
     def _sync_buttons(self, busy: bool = False) -> None:

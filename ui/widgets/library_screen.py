@@ -155,7 +155,7 @@ class LibraryScreen(QWidget):
             form.addRow(f"{name.replace('_', ' ')} index", row)
         self.count = QLabel()
         self.thumbs = QListWidget()
-        self.thumbs.setIconSize(QSize(64, 14))
+        self.thumbs.setIconSize(QSize(40, 40))
         self.thumbs.itemDoubleClicked.connect(self._on_thumb)
 
         browse = QVBoxLayout()
@@ -232,10 +232,10 @@ class LibraryScreen(QWidget):
         self.thumbs.clear()
         shown = rows[:MAX_THUMBS]
         if shown.size:
-            bars = bar_images(self.model.library, shown)
-            for r, img in zip(shown, bars, strict=True):
-                it = QListWidgetItem(QIcon(pixmap_from_array(img)), f"{self.model.library.codes[r]}  "
-                                     f"{self.model.library.types[r]}  {self.model.library.gloss_gu[r]:.0f} GU")
+            for r in shown:
+                it = QListWidgetItem(QIcon(pixmap_from_array(self.model.thumbnail(int(r)))),
+                                     f"{self.model.library.codes[r]}  {self.model.library.types[r]}  "
+                                     f"{self.model.library.gloss_gu[r]:.0f} GU")
                 it.setData(Qt.ItemDataRole.UserRole, int(r))
                 self.thumbs.addItem(it)
 
