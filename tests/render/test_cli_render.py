@@ -62,3 +62,14 @@ def test_render_rejects_bad_hdr(files, tmp_path, capsys):
     rc = main(["render", "--design", str(d1), "--env", str(bad), "--size", "16", "--out", str(tmp_path / "x.png")])
     assert rc == 2
     assert "truncated" in capsys.readouterr().err
+
+
+@pytest.mark.gl
+def test_render_gl_engine(files, tmp_path, capsys, gl_ctx):
+    d1, _, env = files
+    out = tmp_path / "g.png"
+    rc = main(["render", "--design", str(d1), "--env", str(env), "--shape", "speedshape", "--size", "32",
+               "--engine", "gl", "--out", str(out), "--cache-dir", str(tmp_path / "c"), "--json"])
+    assert rc == 0
+    assert json.loads(capsys.readouterr().out)["engine"] == "gl"
+    assert np.asarray(Image.open(out)).shape == (32, 32, 3)
