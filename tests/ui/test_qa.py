@@ -38,4 +38,12 @@ def test_qa_report_verdict_and_send(qtbot):
     assert screen.fixed_model.designs[1] == expected.correction.paint
     screen.send_btn.click()
     assert sent == [expected.correction.paint]
+    # a range the user typed reaches the core; bad text is refused with the field named
+    screen.aspecular.setText("15, 45")
+    screen.run_btn.click()
+    qtbot.waitUntil(lambda: len(screen.report.geometries) == 6, timeout=60000)
+    screen.task.wait()
+    screen.lights.setText("30, abc")
+    screen.run_btn.click()
+    assert screen.verdict.text() == "error" and "lights" in screen.details.text()
     screen.close()

@@ -14,6 +14,7 @@ from PySide6.QtWidgets import (
     QFormLayout,
     QHBoxLayout,
     QLabel,
+    QLineEdit,
     QPushButton,
     QSlider,
     QTableWidget,
@@ -22,7 +23,8 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from station.analysis.qa import SeamReport, seam_qa
+from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, SeamReport, seam_qa
+from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from ui.models.designer import DesignerModel
 from ui.models.instruments import MeasurementStore
@@ -31,6 +33,17 @@ from ui.widgets.render_view import make_render_view
 from ui.widgets.tasks import TaskThread
 
 METHODS = ("cie76", "cie2000", "din6175")
+
+
+def _floats(text: str, field: str) -> tuple[float, ...]:
+    """Comma-separated angles in degrees; InputError naming *field* otherwise (the core checks ranges)."""
+    try:
+        vals = tuple(float(t) for t in text.replace(";", ",").split(",") if t.strip())
+    except ValueError as exc:
+        raise InputError(field, "comma-separated angles in degrees", text) from exc
+    if not vals:
+        raise InputError(field, "at least one angle in degrees", text)
+    return vals
 
 
 class QAScreen(QWidget):
@@ -55,6 +68,8 @@ class QAScreen(QWidget):
         self.tolerance.setValue(2.3)
         self.method = QComboBox()
         self.method.addItems(list(METHODS))
+        self.lights = QLineEdit(", ".join(f"{v:g}" for v in DEFAULT_LIGHTS_DEG))
+        self.aspecular = QLineEdit(", ".join(f"{v:g}" for v in DEFAULT_ASPECULAR_DEG))
         self.run_btn = QPushButton("Run QA")
         self.send_btn = QPushButton("Send corrected paint to formulation")
         self.send_btn.setEnabled(False)
@@ -79,6 +94,8 @@ class QAScreen(QWidget):
         form.addRow("misalignment β", row)
         form.addRow("tolerance ΔE", self.tolerance)
         form.addRow("ΔE formula", self.method)
+        form.addRow("lights (°)", self.lights)
+        form.addRow("aspecular range (°)", self.aspecular)
         left = QVBoxLayout()
         left.addLayout(form)
         left.addWidget(self.run_btn)
@@ -155,10 +172,17 @@ class QAScreen(QWidget):
             return
         a, b = self.picked()
         beta, tol, method = float(self.beta.value()), self.tolerance.value(), self.method.currentText()
+        try:
+            lights = _floats(self.lights.text(), "lights")
+            asp = _floats(self.aspecular.text(), "aspecular range")
+        except InputError as exc:
+            self._on_failed(str(exc))
+            return
         self.as_is_model.show(a, b)
         self.verdict.setText("running…")
         self.run_btn.setEnabled(False)
-        self.task = TaskThread(lambda _p: seam_qa(a, b, beta, tolerance=tol, method=method))
+        self.task = TaskThread(lambda _p: seam_qa(a, b, beta, lights_deg=lights, aspecular_deg=asp,
+                                                  tolerance=tol, method=method))
         self.task.succeeded.connect(self._on_report)
         self.task.failed.connect(self._on_failed)
         self.task.finished.connect(lambda: self.run_btn.setEnabled(True))
