@@ -64,6 +64,8 @@ def pytest_collection_modifyitems(config, items) -> None:
     for item in items:
         if str(item.fspath).startswith(here):
             item.add_marker(pytest.mark.qt_log_level_fail("WARNING"))
+            # the offscreen platform plugin's own limitation (QMainWindow docks), not a viewer fault
+            item.add_marker(pytest.mark.qt_log_ignore("This plugin does not support propagateSizeHints"))
             if "gl" in item.keywords and not GL:
                 item.add_marker(skip_gl)
 
