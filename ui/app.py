@@ -7,8 +7,10 @@ any design edit.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
+from pathlib import Path
 
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QAction, QKeySequence
@@ -21,12 +23,23 @@ from ui.widgets.designer_panel import DesignerPanel
 from ui.widgets.view_panel import ViewPanel
 
 
+def default_measurements_path() -> Path:
+    """``$CACAD_DATA_DIR/measurements.jsonl`` or ``~/.local/share/cacad/measurements.jsonl`` (folder created)."""
+    root = Path(os.environ.get("CACAD_DATA_DIR", Path.home() / ".local" / "share" / "cacad"))
+    root.mkdir(parents=True, exist_ok=True)
+    return root / "measurements.jsonl"
+
+
 class MainWindow(QMainWindow):
     """Docks and tabs around one design document and one view model."""
 
     def __init__(self, document: DesignDocument | None = None, service_url: str | None = None,
-                 parent: QWidget | None = None) -> None:
+                 measurements: str | Path | None = None, parent: QWidget | None = None) -> None:
         super().__init__(parent)
+        from ui.models.instruments import MeasurementStore
+
+        # every scan is appended to a JSON-lines file before it is shown: nothing is lost on a crash
+        self.store = MeasurementStore(measurements if measurements is not None else default_measurements_path())
         self.setWindowTitle("CACAD Station")
         self.document = document or DesignDocument()
         self.designer = DesignerModel(self.document)

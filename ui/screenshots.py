@@ -51,7 +51,8 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     app = QApplication.instance()
     if app is None:
         raise RuntimeError("create the QApplication before taking screenshots")
-    win = MainWindow()
+    scratch = tempfile.TemporaryDirectory()
+    win = MainWindow(measurements=Path(scratch.name) / "measurements.jsonl")
     win.resize(*SIZE)
     win.show()
     written: list[Path] = []
@@ -121,4 +122,5 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         win.close()
         win.deleteLater()
         QCoreApplication.processEvents()
+        scratch.cleanup()
     return written

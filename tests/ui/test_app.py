@@ -12,8 +12,9 @@ from ui.models.document import DEFAULT_DESIGN
 pytestmark = [pytest.mark.qt]
 
 
-def test_main_window_undo_redo_from_menu(qtbot):
-    win = MainWindow()
+def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
+    win = MainWindow(measurements=tmp_path / "m.jsonl")
+    assert win.store.path == tmp_path / "m.jsonl"
     qtbot.addWidget(win)
     win.resize(1200, 800)
     win.show()

@@ -19,13 +19,13 @@ def api(tmp_path):
     yield from make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path)
 
 
-def test_viewer_loads_and_saves_designs(qtbot, api):
+def test_viewer_loads_and_saves_designs(qtbot, api, tmp_path):
     token = api.tokens[next(r for r in api.tokens if r.value in ("designer", "admin"))]
     other = DEFAULT_DESIGN.replace(face=(60.0, 30.0, 10.0), name="service red")
     r = api.client.post("/api/v1/designs", json={"name": "service red", "design": design_to_dict(other)},
                         headers={"Authorization": f"Bearer {token}"})
     assert r.status_code == 201, r.text
-    win = MainWindow(service_url="http://testserver")
+    win = MainWindow(service_url="http://testserver", measurements=tmp_path / "m.jsonl")
     win.service.close()
     win.service = ServiceClient("http://testserver", token, client=api.client)
     qtbot.addWidget(win)
@@ -39,8 +39,8 @@ def test_viewer_loads_and_saves_designs(qtbot, api):
     win.close()
 
 
-def test_refused_token_is_reported_not_raised(qtbot, api):
-    win = MainWindow(service_url="http://testserver")
+def test_refused_token_is_reported_not_raised(qtbot, api, tmp_path):
+    win = MainWindow(service_url="http://testserver", measurements=tmp_path / "m.jsonl")
     win.service.close()
     win.service = ServiceClient("http://testserver", "wrong-token", client=api.client)
     qtbot.addWidget(win)
