@@ -37,13 +37,14 @@ STARTUP = textwrap.dedent("""
     from PySide6.QtWidgets import QApplication
     app = QApplication([])
     from ui.app import MainWindow
+    t_imp = time.perf_counter() - t0
     win = MainWindow()
     win.resize(1500, 950)
     view = win.view_panel.view
     win.show()
     while view.frames == 0:
         app.processEvents()
-    print(f"FIRST_FRAME {time.perf_counter() - t0:.4f} {type(view).__name__}", flush=True)
+    print(f"FIRST_FRAME {time.perf_counter() - t0:.4f} {t_imp:.4f} {type(view).__name__}", flush=True)
     win.close()
     app.shutdown()
 """)
@@ -111,8 +112,8 @@ def numpy_edit_baseline() -> list[float]:
     return ts[2:]
 
 
-def startup(cache_dir: str | None) -> float:
-    """Seconds from interpreter start of the script to the first frame (fresh process)."""
+def startup(cache_dir: str | None) -> tuple[float, float, float]:
+    """(first frame, of which imports, process wall) in seconds, for a fresh process."""
     env = dict(os.environ, QT_QPA_PLATFORM="xcb")
     if cache_dir is not None:
         env["CACAD_CACHE_DIR"] = cache_dir
@@ -122,7 +123,7 @@ def startup(cache_dir: str | None) -> float:
     wall = time.perf_counter() - t0
     for line in out.stdout.splitlines():
         if line.startswith("FIRST_FRAME"):
-            return float(line.split()[1]), wall
+            return float(line.split()[1]), float(line.split()[2]), wall
     raise RuntimeError(f"no first frame: {out.stderr[-2000:]}")
 
 
@@ -157,11 +158,13 @@ def main() -> None:
                 Case(f"  median / NumPy edit alone ({mode})", "", med / base_med, "ratio"),
             ]
         app.shutdown()
-        warm, warm_wall = min(startup(None) for _ in range(2))
+        warm, imports, warm_wall = min(startup(None) for _ in range(2))
         with tempfile.TemporaryDirectory() as cold_dir:
-            cold, _ = startup(cold_dir)
+            cold, _, _ = startup(cold_dir)
         cases += [
             Case("start-up -> first frame, warm cache", "1500x950 window", warm, "s", f"bar <= {BAR_START_S:g} s"),
+            Case("  of which Python imports (PySide6, station core)", "", imports, "s",
+                 "station.model imports colour, which imports matplotlib.pyplot"),
             Case("  process wall time incl. interpreter start", "", warm_wall, "s", "until exit"),
             Case("start-up -> first frame, cold prefilter cache", "1500x950 window", cold, "s",
                  "first run on a machine: environment prefiltered"),
