@@ -114,3 +114,38 @@ def test_designer_gloss_edit_reaches_view_model(qtbot):
     designer.set_gloss(20.0)
     w1 = model.weights()[0]
     assert not np.allclose(w0.k_g, w1.k_g)
+
+
+def test_image_view_paints_the_core_frame(qtbot):
+    """The no-GL fallback shows the core's 8-bit frame of the same cached basis images."""
+    from ui.widgets.render_view import ImageRenderView
+
+    model = ViewModel()
+    model.show(DEFAULT_DESIGN)
+    view = ImageRenderView(model)
+    qtbot.addWidget(view)
+    view.resize(160, 120)
+    view.show()
+    qtbot.waitExposed(view)
+    view.wait_idle()
+    img = view.render_image()
+    assert img.shape == (120, 160, 3)
+    ref = view.basis.composite_display(model.weights(), 0.0)
+    assert np.abs(img.astype(int) - ref.astype(int)).max() <= 1
+    view.close()
+
+
+def test_closing_during_a_basis_computation_joins_the_worker(qtbot):
+    model = ViewModel()
+    model.show(DEFAULT_DESIGN)
+    from ui.widgets.render_view import make_render_view
+
+    view = make_render_view(model)
+    qtbot.addWidget(view)
+    view.resize(400, 300)
+    view.show()
+    model.update(shape="speedshape")  # starts a full-resolution worker
+    assert view._worker is not None
+    view.close()  # the autouse fixture fails the test if a QThread is still running
+    assert view._worker is None
+
