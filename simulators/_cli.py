@@ -2,11 +2,18 @@
 
 Prints one line ``ADDRESS <family>@<where>`` on stdout as soon as the device is ready, then serves
 until stdin reaches end of file (the parent died or closed the pipe) or SIGTERM/SIGINT.
+
+The panel is ``--design FILE`` (face/flop/travel/gloss) or ``--recipe FILE`` (a recipe of the
+synthetic colorants, :mod:`simulators.recipe`). A recipe file that cannot define a panel ends the
+process with status 2 after one line ``INPUT-ERROR {"field": …, "accepted": …, "got": …}`` on stdout
+(and the message on stderr), which :func:`station.drivers.simproc.spawn_simulator` turns back into a
+typed :class:`~station.drivers.errors.DriverInputError`.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import signal
 import sys
 import threading
@@ -14,9 +21,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from simulators.faults import FAULTS, FaultPlan, FaultSpecError
+from station.errors import InputError
 
 if TYPE_CHECKING:
     from simulators.physics import SpectroPhysics
+    from simulators.recipe import RecipePanel
 
 __all__ = ["build_parser", "main"]
 
@@ -24,7 +33,10 @@ __all__ = ["build_parser", "main"]
 def build_parser(kind: str) -> argparse.ArgumentParser:
     """Arguments common to the simulators."""
     p = argparse.ArgumentParser(prog=f"python -m simulators.{kind}", description=f"simulated {kind} instrument")
-    p.add_argument("--design", type=Path, help="design file (cacad.design/1 JSON) of the virtual panel")
+    panel = p.add_mutually_exclusive_group()
+    panel.add_argument("--design", type=Path, help="design file (cacad.design/1 JSON) of the virtual panel")
+    panel.add_argument("--recipe", type=Path,
+                       help="recipe file of the virtual panel (`station formulate --json` output or its recipe object)")
     p.add_argument("--fault", action="append", default=[], metavar="SPEC",
                    help="NAME[@COMMAND][:N]; known: " + ", ".join(FAULTS))
     p.add_argument("--serial", default=None, help="instrument serial number")
@@ -48,7 +60,18 @@ def make_physics(args: argparse.Namespace, default_serial: str) -> SpectroPhysic
     ch.noise_band *= args.noise
     ch.noise_scale *= args.noise
     design = load_design(args.design) if args.design else DEFAULT_DESIGN
-    return SpectroPhysics(design=design, character=ch, warm=not args.cold, seed=args.seed)
+    return SpectroPhysics(design=design, character=ch, warm=not args.cold, seed=args.seed, recipe=recipe_panel(args))
+
+
+def recipe_panel(args: argparse.Namespace) -> RecipePanel | None:
+    """The ``--recipe`` panel (loaded once per process), or ``None``."""
+    if getattr(args, "recipe", None) is None:
+        return None
+    if getattr(args, "recipe_panel", None) is None:
+        from simulators.recipe import load_recipe
+
+        args.recipe_panel = load_recipe(args.recipe)
+    return args.recipe_panel
 
 
 def main(kind: str, argv: list[str] | None = None) -> int:
@@ -61,6 +84,13 @@ def main(kind: str, argv: list[str] | None = None) -> int:
         return 2
     from simulators import serve
 
+    try:
+        recipe_panel(args)
+    except InputError as exc:
+        print("INPUT-ERROR " + json.dumps({"field": exc.field, "accepted": exc.accepted, "got": exc.got}, default=str),
+              flush=True)
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     try:
         server = serve.start(kind, args, faults)
     except Exception as exc:

@@ -182,9 +182,15 @@ class GlossDevice:
 
     @classmethod
     def from_args(cls, args: argparse.Namespace, faults: FaultPlan) -> GlossDevice:
-        """Build from the simulator command line (``--design`` sets the panel's 60° gloss)."""
+        """Build from the simulator command line (``--design`` sets the panel's 60° gloss; ``--recipe``
+        sets the 60° gloss the colorant model predicts from its matting fraction)."""
+        from simulators._cli import recipe_panel
+
         gloss = 88.0
-        if args.design:
+        recipe = recipe_panel(args)
+        if recipe is not None:
+            gloss = recipe.gloss_gu
+        elif args.design:
             from station.model.design_io import load_design
 
             gloss = load_design(args.design).gloss_gu

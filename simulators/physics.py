@@ -3,7 +3,8 @@ temperature and calibration state.
 
 * Panel: a design (face/flop/travel/gloss, thesis §3.3) gives Lab at each aspecular angle
   (``FaceFlopTravelGloss.lab_at``); spectral recovery (``reflectance_from_lab``, colour-science)
-  turns it into reflectance factors at 400–700 nm / 10 nm.
+  turns it into reflectance factors at 400–700 nm / 10 nm. Or a recipe (:mod:`simulators.recipe`):
+  the colorant model of :mod:`station.formulate` gives the reflectance at each aspecular angle directly.
 * Noise: a common-mode relative scale term plus independent per-band relative noise, both Gaussian.
   The defaults (σ = 3e-4 and 8e-4) give a per-reading mean CIEDE2000 from the noise-free value of
   about 0.01–0.03, the 0.02–0.05 repeatability quoted for multi-angle instruments
@@ -24,12 +25,16 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from station.model import FaceFlopTravelGloss
 from station.model.difference import delta_e
 from station.model.spectra import reflectance_from_lab, reflectance_to_lab
+
+if TYPE_CHECKING:
+    from simulators.recipe import RecipePanel
 
 __all__ = [
     "DEFAULT_DESIGN",
@@ -104,7 +109,8 @@ class CalibrationState:
 class SpectroPhysics:
     """A simulated multi-angle spectrophotometer looking at one virtual panel.
 
-    ``measure(aspecular_deg)`` returns reflectance factors, shape ``(n, 31)``.
+    ``measure(aspecular_deg)`` returns reflectance factors, shape ``(n, 31)``. The panel is *recipe*
+    when one is given (its colorant-model reflectance), else *design*.
     """
 
     design: FaceFlopTravelGloss = DEFAULT_DESIGN
@@ -112,6 +118,7 @@ class SpectroPhysics:
     warm: bool = True
     clock: Callable[[], float] = time.monotonic
     seed: int | None = None
+    recipe: RecipePanel | None = None
 
     def __post_init__(self) -> None:
         self._rng = np.random.default_rng(self.seed if self.seed is not None else seed_for(self.character.serial))
@@ -126,6 +133,13 @@ class SpectroPhysics:
         """Put another panel under the instrument."""
         with self._lock:
             self.design = design
+            self.recipe = None
+            self._cache.clear()
+
+    def set_recipe(self, recipe: RecipePanel) -> None:
+        """Put a panel painted with *recipe* under the instrument."""
+        with self._lock:
+            self.recipe = recipe
             self._cache.clear()
 
     def uptime_s(self) -> float:
@@ -147,8 +161,11 @@ class SpectroPhysics:
         key = tuple(float(a) for a in aspecular_deg)
         with self._lock:
             if key not in self._cache:
-                lab = self.design.lab_at(np.asarray(key))
-                self._cache[key] = np.asarray(reflectance_from_lab(lab), dtype=float)
+                if self.recipe is not None:
+                    self._cache[key] = np.asarray(self.recipe.reflectance(key), dtype=float)
+                else:
+                    lab = self.design.lab_at(np.asarray(key))
+                    self._cache[key] = np.asarray(reflectance_from_lab(lab), dtype=float)
             return self._cache[key]
 
     def bias_gain(self, n_geometries: int) -> np.ndarray:

@@ -1,7 +1,7 @@
 """``station instruments list``, ``station calibrate DEVICE``, ``station measure DEVICE``.
 
 DEVICE is ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss`` (a simulator subprocess started for the command;
-``--design FILE`` sets its panel) or an address accepted by :func:`station.drivers.open_instrument`
+``--design FILE`` or ``--recipe FILE`` — ``station formulate --json`` output — sets its panel) or an address accepted by :func:`station.drivers.open_instrument`
 (``/dev/ttyACM0``, ``ma3@usb:1209:ca03``, ``gloss@hid:PATH`` …). Lab comes from
 ``station.model.spectra.reflectance_to_lab`` (D65, CIE 1964 10°), never from the driver.
 """
@@ -31,6 +31,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         cp = subparsers.add_parser(name, help=text)
         cp.add_argument("device", help="sim:ma6 | sim:ma3 | sim:gloss | an address (see docs/protocols)")
         cp.add_argument("--design", type=Path, help="design file of the simulated panel (sim:* only)")
+        cp.add_argument("--recipe", type=Path,
+                        help="recipe file of the simulated panel: `station formulate --json` output (sim:* only)")
         cp.add_argument("--fault", action="append", default=[], help="simulator fault spec (sim:* only)")
         cp.add_argument("--timeout", type=float, default=1.5, help="reply timeout, seconds")
         if name == "measure":
@@ -60,10 +62,12 @@ def _instrument(args: argparse.Namespace) -> Iterator[Any]:
             kind = args.device[4:]
             if kind not in SIM_KINDS:
                 raise InputError("device", "sim:ma6 | sim:ma3 | sim:gloss or an address", args.device)
-            sim = stack.enter_context(spawn_simulator(kind, args.design, args.fault))
+            if args.design is not None and args.recipe is not None:
+                raise InputError("--recipe", "either --design or --recipe, not both", str(args.recipe))
+            sim = stack.enter_context(spawn_simulator(kind, args.design, args.fault, recipe_file=args.recipe))
             address = sim.address
-        elif args.design is not None or args.fault:
-            raise InputError("--design/--fault", "only with a sim:* device", args.device)
+        elif args.design is not None or args.recipe is not None or args.fault:
+            raise InputError("--design/--recipe/--fault", "only with a sim:* device", args.device)
         inst = stack.enter_context(open_instrument(address, timeout_s=args.timeout))
         yield inst
 

@@ -6,6 +6,10 @@ child prints ``ADDRESS <family>@<where>`` once it serves; :func:`spawn_simulator
 :func:`station.drivers.open_instrument`. The child exits when its stdin closes, so it never outlives
 the parent.
 
+The virtual panel is a design file or a recipe file (``station formulate --json`` output); a recipe
+file the simulator refuses comes back as a typed :class:`DriverInputError` naming the field (the child
+reports it on one ``INPUT-ERROR {json}`` line instead of its address).
+
 Kinds: ``ma6`` (ASCII prompt protocol on a pty), ``ma3`` (the binary framed protocol; across a
 process boundary it is served on a pty instead of a pyusb backend, see docs/protocols/ma3-binary.md),
 ``gloss`` (HID reports through the HID-over-pty bridge, docs/protocols/gloss-hid.md).
@@ -13,6 +17,7 @@ process boundary it is served on a pty instead of a pyusb backend, see docs/prot
 
 from __future__ import annotations
 
+import json
 import os
 import selectors
 import subprocess
@@ -70,22 +75,32 @@ def spawn_simulator(
     kind: str,
     design_file: Path | None = None,
     faults: Sequence[str] = (),
+    recipe_file: Path | None = None,
     extra_args: Sequence[str] = (),
     startup_timeout_s: float = 20.0,
 ) -> SimulatorProcess:
     """Start simulator *kind* (``ma6``, ``ma3``, ``gloss``) and return once it serves.
 
-    *design_file* is a ``cacad.design/1`` JSON file for the virtual panel; *faults* are fault specs
-    (``NAME[@COMMAND][:N]``, list in docs/protocols/faults.md). Raises :class:`DriverInputError` for
-    an unknown kind or a missing design file, :class:`CommunicationError` if the child fails to start.
+    *design_file* is a ``cacad.design/1`` JSON file for the virtual panel, or *recipe_file* a recipe
+    (``station formulate --json`` output or its ``"recipe"`` object; the panel's spectra and gloss then
+    come from the colorant model); *faults* are fault specs (``NAME[@COMMAND][:N]``, list in
+    docs/protocols/faults.md). Raises :class:`DriverInputError` for an unknown kind, a missing design
+    or recipe file, both at once, or a recipe the simulator refuses (field and accepted range named),
+    :class:`CommunicationError` if the child fails to start.
     """
     if kind not in SIM_KINDS:
         raise DriverInputError("kind", " | ".join(SIM_KINDS), kind)
     cmd = [sys.executable, "-m", f"simulators.{kind}"]
+    if design_file is not None and recipe_file is not None:
+        raise DriverInputError("recipe_file", "either design_file or recipe_file, not both", str(recipe_file))
     if design_file is not None:
         if not Path(design_file).is_file():
             raise DriverInputError("design_file", "an existing design JSON file", str(design_file))
         cmd += ["--design", str(design_file)]
+    if recipe_file is not None:
+        if not Path(recipe_file).is_file():
+            raise DriverInputError("recipe_file", "an existing recipe JSON file", str(recipe_file))
+        cmd += ["--recipe", str(recipe_file)]
     for spec in faults:
         cmd += ["--fault", spec]
     cmd += list(extra_args)
@@ -117,6 +132,15 @@ def _read_address(proc: subprocess.Popen[bytes], timeout_s: float) -> str:
     finally:
         sel.close()
     line = buf.split(b"\n", 1)[0].decode(errors="replace").strip()
+    if line.startswith("INPUT-ERROR "):
+        proc.kill()
+        proc.communicate(timeout=5)
+        try:
+            info = json.loads(line.split(" ", 1)[1])
+            field, accepted, got = str(info["field"]), str(info["accepted"]), info.get("got")
+        except (ValueError, KeyError, TypeError) as exc:
+            raise CommunicationError(f"simulator refused its input: {line[:400]}") from exc
+        raise DriverInputError(field, accepted, got)
     if not line.startswith("ADDRESS "):
         proc.kill()
         _, err = proc.communicate(timeout=5)
