@@ -52,6 +52,8 @@ _SAFETY = 1.0 - 1e-9
 _SENTINEL = 1.0e6
 #: Leaves evaluated per batch once a k-th best is known (each batch tightens it for the rest).
 _BATCH_LEAVES = 40
+#: Leaves whose paints give the first k-th smallest upper bound (CIEDE2000, flat index).
+_FIRST_LEAVES = 12
 LAB_QUERY_RANGE = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
 _Q_LO = np.array([v[0] for v in LAB_QUERY_RANGE.values()])
 _Q_HI = np.array([v[1] for v in LAB_QUERY_RANGE.values()])
@@ -225,13 +227,28 @@ def _box_bounds(
 _T_MIN, _T_MAX = 0.36, 1.58  # range of CIEDE2000's T(h) (0.3621 … 1.5725 on a 1e-4° grid)
 
 
-def _point_bounds_cie2000(q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Per-paint lower bound of Σ_θ ΔE00(q_θ, p_θ), shape (n,), without trigonometry.
+def _point_bounds_cie2000(
+    q: NDArray[np.float64], p: NDArray[np.float64], upper: bool = False
+) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Per-paint lower (and with *upper* also upper) bound of Σ_θ ΔE00(q_θ, p_θ), shape (n,), trig-free.
 
     Follows the CIEDE2000 arithmetic up to the hue terms: ΔL', ΔC', S_L, S_C and R_C are computed as in
-    the formula; ΔH'² = |Δ(a', b)|² − ΔC'²; only S_H (T ∈ [0.36, 1.58]) and R_T (|R_T| ≤ R_C sin 60°) are
-    bounded, and the cross term is minimised over the admissible z = |ΔH'|/S_H. (x⁷ is computed by
-    multiplication here; the 1e-9 safety margin absorbs the last-bit differences.)
+    the formula; ΔH'² = |Δ(a', b)|² − ΔC'² (ΔC'² + ΔH'² = C'₁² + C'₂² − 2C'₁C'₂ cos Δh' = |Δ(a', b)|²);
+    only S_H and R_T are bounded. With y = |ΔC'|/S_C, z = |ΔH'|/S_H and r = R_C sin 60°:
+
+    * S_H = 1 + 0.015 C̄' T with T(h̄') ∈ [0.36, 1.58] puts z in [z_lo, z_hi] = |ΔH'|/(1 + 0.015 C̄' T_max …
+      T_min);
+    * R_T = −R_C sin 2Δθ, Δθ ∈ [0°, 30°], so R_T ∈ [−r, 0] and the cross term R_T (ΔC'/S_C)(ΔH'/S_H)
+      lies in [−r y z, r y z] whatever the signs of ΔC' and ΔH';
+    * ΔE00² = (ΔL'/S_L)² + y² + z² + R_T(…) ≥ (ΔL'/S_L)² + y² + min_{z ∈ [z_lo, z_hi]} z (z − r y), the
+      minimum at z = clip(r y / 2, z_lo, z_hi) (a parabola in z);
+    * ΔE00² ≤ (ΔL'/S_L)² + y² + z_hi (z_hi + r y) (increasing in z ≥ 0).
+
+    Rounding: ΔH'² = |Δ(a', b)|² − ΔC'² cancels when ΔH' ≈ 0, so the interval of |ΔH'| is widened by
+    ±1e-12 |Δ(a', b)|² under the root (covering the kernel's own sin/atan2 rounding as well); x⁷ is computed
+    by multiplication and the order of operations differs from the kernel's, a few ulps that the final
+    factor 1 ∓ 1e-9 and the ∓ 1e-10 absorb (tests check both bounds
+    against the exact kernel with hypothesis, near-neutral and blue-region colours included).
     """
     qa, qb = q[:, 1], q[:, 2]
     pa, pb = p[..., 1], p[..., 2]
@@ -247,7 +264,11 @@ def _point_bounds_cie2000(q: NDArray[np.float64], p: NDArray[np.float64]) -> NDA
     dc = np.abs(cp2 - cp1)
     da = a2 - a1
     db = pb - qb
-    dh = np.sqrt(np.maximum(da * da + db * db - dc * dc, 0.0))
+    dab2 = da * da + db * db
+    dh2 = dab2 - dc * dc  # cancels when ΔH' ≈ 0: widened by ±1e-12 |Δ(a', b)|² (rounding, both sides)
+    eta = 1e-12 * dab2 + 1e-30
+    dh_lo = np.sqrt(np.maximum(dh2 - eta, 0.0))
+    dh_hi = np.sqrt(np.maximum(dh2, 0.0) + eta)
     cpbar = (cp1 + cp2) * 0.5
     cp2_ = cpbar * cpbar
     cp7 = cp2_ * cp2_ * cp2_ * cpbar
@@ -256,10 +277,14 @@ def _point_bounds_cie2000(q: NDArray[np.float64], p: NDArray[np.float64]) -> NDA
     lbar2 = lbar * lbar
     s_l = 1.0 + 0.015 * lbar2 / np.sqrt(20.0 + lbar2)
     y = dc / (1.0 + 0.045 * cpbar)
-    z = np.minimum(np.maximum(r * y * 0.5, dh / (1.0 + (0.015 * _T_MAX) * cpbar)), dh / (1.0 + (0.015 * _T_MIN) * cpbar))
+    z_hi = dh_hi / (1.0 + (0.015 * _T_MIN) * cpbar)
+    z = np.minimum(np.maximum(r * y * 0.5, dh_lo / (1.0 + (0.015 * _T_MAX) * cpbar)), z_hi)
     dl = (p[..., 0] - q[:, 0]) / s_l
-    f = dl * dl + y * y + z * (z - r * y)
-    return np.sqrt(np.maximum(f, 0.0)).sum(-1) * _SAFETY - 1e-12
+    base = dl * dl + y * y
+    lower = np.sqrt(np.maximum(base + z * (z - r * y), 0.0)).sum(-1) * _SAFETY - 1e-10
+    if not upper:
+        return lower
+    return lower, np.sqrt(base + z_hi * (z_hi + r * y)).sum(-1) * (2.0 - _SAFETY) + 1e-10
 
 
 class SnapIndex:
@@ -350,6 +375,8 @@ class SnapIndex:
         g = self.group
         first = max(1, -(-k // self._rows.shape[1])) + 1
         flat = self.n_groups == 1 or g == 1
+        if flat and method == "cie2000":
+            return self._query_cie2000_flat(q, k, kernel)
         if flat:  # (for CIEDE2000 the cheap bound first; the hue-aware one on the survivors below)
             lb = _box_bounds(q, self._lo, self._hi, self._cmax, method, hue=method != "cie2000")
             leaves = np.arange(lb.size)
@@ -405,6 +432,54 @@ class SnapIndex:
             rows, s, per = rows[keep_k], s[keep_k], per[keep_k]
         top = np.lexsort((rows, s))[:k]
         self.last_visited = int(visited)
+        return rows[top], s[top], per[top]
+
+    def _gather(self, q: NDArray[np.float64], leaves: NDArray[np.intp]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Real paints of *leaves*: (rows, Lab, per-paint CIEDE2000 lower and upper bounds of the sum)."""
+        rows = self._rows[leaves].ravel()
+        pts = self._blab[leaves].reshape(-1, *q.shape)
+        real = rows < self.size
+        if not real.all():
+            rows, pts = rows[real], pts[real]
+        lower, upper = _point_bounds_cie2000(q, pts, upper=True)
+        return rows, pts, lower, upper
+
+    def _query_cie2000_flat(
+        self, q: NDArray[np.float64], k: int, kernel: object
+    ) -> tuple[NDArray[np.intp], NDArray, NDArray]:
+        """Exact CIEDE2000 top-k with one call of the exact kernel (libraries of a few thousand paints).
+
+        1. Box bound of every leaf (the cheap form of :func:`_box_bounds`).
+        2. The :data:`_FIRST_LEAVES` best leaves: per-paint lower and upper bounds; u = k-th smallest upper
+           bound. u ≥ S_k (the true k-th best sum): k real paints have sums ≤ their upper bounds.
+        3. Every other leaf whose bound is ≤ u: the same per-paint bounds; u shrinks to the k-th smallest of
+           all upper bounds (only leaves with bound ≤ the old u can hold a paint under the new one).
+        4. The exact kernel on the paints whose lower bound is ≤ u, then (sum, row) order. A paint with
+           S ≤ S_k has lower bound ≤ S ≤ u and its leaf's bound ≤ S ≤ u, so it is among them: the top-k,
+           ties included, is the brute-force one.
+        """
+        lb = _box_bounds(q, self._lo, self._hi, self._cmax, "cie2000", hue=False)
+        width = self._rows.shape[1]
+        first = min(lb.size, max(_FIRST_LEAVES, -(-k // width) + 1))
+        sel = np.argpartition(lb, first - 1)[:first] if first < lb.size else np.arange(lb.size)
+        rows, pts, plb, pub = self._gather(q, sel)
+        u = np.partition(pub, k - 1)[k - 1] if pub.size >= k else math.inf
+        rest = lb <= u
+        rest[sel] = False
+        more = np.flatnonzero(rest)
+        if more.size:
+            rows2, pts2, plb2, pub2 = self._gather(q, more)
+            rows = np.concatenate([rows, rows2])
+            pts = np.concatenate([pts, pts2])
+            plb = np.concatenate([plb, plb2])
+            pub = np.concatenate([pub, pub2])
+            u = np.partition(pub, k - 1)[k - 1]
+        cand = plb <= u
+        per = kernel(q, pts[cand])  # type: ignore[operator]
+        rows = rows[cand]
+        s = per.sum(-1)
+        top = np.lexsort((rows, s))[:k]
+        self.last_visited = int(sel.size + more.size)
         return rows[top], s[top], per[top]
 
     def _evaluate(

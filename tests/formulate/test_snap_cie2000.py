@@ -1,0 +1,108 @@
+"""CIEDE2000 ColorSnap: the per-paint lower/upper bounds hold against the exact kernel (hypothesis over
+random, near-neutral, blue-region (h' ≈ 275°, where R_T peaks) and near-identical pairs), and the
+one-kernel-call flat search equals a brute-force scan through station.model.difference.delta_e, ties
+included."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from station.formulate.de_kernels import KERNELS
+from station.formulate.snap import SnapIndex, _point_bounds_cie2000, brute_force
+
+_l = st.floats(0.0, 100.0, allow_nan=False)
+
+
+@st.composite
+def _lab(draw: st.DrawFn, region: str) -> tuple[float, float, float]:
+    """One Lab colour of a region: anywhere, near-neutral (C* < 1.5) or blue (hue 250–300°)."""
+    if region == "any":
+        return draw(_l), draw(st.floats(-128, 128)), draw(st.floats(-128, 128))
+    c = draw(st.floats(0.0, 1.5)) if region == "neutral" else draw(st.floats(0.0, 120.0))
+    h = draw(st.floats(0.0, 360.0)) if region == "neutral" else draw(st.floats(250.0, 300.0))
+    a, b = c * math.cos(math.radians(h)), c * math.sin(math.radians(h))
+    if draw(st.booleans()):
+        a = 0.0 if draw(st.booleans()) else -0.0
+    return draw(_l), a, b
+
+
+@st.composite
+def _pairs(draw: st.DrawFn, n: int = 24) -> tuple[np.ndarray, np.ndarray]:
+    regions = st.sampled_from(["any", "neutral", "blue"])
+    q = np.array([draw(_lab(draw(regions))) for _ in range(3)])
+    p = np.array([[draw(_lab(draw(regions))) for _ in range(3)] for _ in range(n)])
+    tiny = draw(st.floats(0.0, 1e-3))
+    p[: n // 4] = q + tiny * np.sign(p[: n // 4] - 50.0)  # near-identical pairs (ΔH' ≈ 0, cancellation)
+    p[n // 4] = q  # identical
+    p[..., 0] = np.clip(p[..., 0], 0.0, 100.0)
+    return q, p
+
+
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(pair=_pairs())
+def test_point_bounds_bracket_the_exact_sum(pair) -> None:
+    q, p = pair
+    exact = KERNELS["cie2000"](q[None], p).sum(-1)
+    lower, upper = _point_bounds_cie2000(q, p, upper=True)
+    assert np.all(lower <= exact), (lower - exact).max()
+    assert np.all(upper >= exact), (exact - upper).max()
+    assert np.array_equal(lower, _point_bounds_cie2000(q, p))
+
+
+def test_bounds_are_tight_enough_to_prune() -> None:
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-60, 60, (3, 3))
+    q[:, 0] = 50.0
+    p = q + rng.normal(0, 3.0, (2000, 3, 3))
+    exact = KERNELS["cie2000"](q[None], p).sum(-1)
+    lower, upper = _point_bounds_cie2000(q, p, upper=True)
+    assert np.median(lower / exact) > 0.6 and np.median(upper / exact) < 1.6
+
+
+def _fix_l(a: np.ndarray) -> np.ndarray:
+    a = a.copy()
+    a[..., 0] = np.abs(a[..., 0]) % 100.0
+    return a
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    lib=arrays(np.float64, st.tuples(st.integers(1, 400), st.just(3), st.just(3)),
+               elements=st.floats(-120, 120, width=32)).map(_fix_l),
+    data=st.data(),
+    k=st.integers(1, 40),
+    leaf=st.sampled_from([None, 1, 3, 16]),
+)
+def test_flat_cie2000_search_equals_brute_force_with_ties(lib, data, k, leaf) -> None:
+    n = lib.shape[0]
+    if n > 4:  # exact ties (duplicates) and near ties
+        lib[n // 3] = lib[1]
+        lib[n - 1] = lib[1]
+        lib[n // 2] = lib[0] + 1e-9
+    q = lib[data.draw(st.integers(0, n - 1))].copy() if data.draw(st.booleans()) else _fix_l(
+        data.draw(arrays(np.float64, (3, 3), elements=st.floats(-120, 120, width=32))))
+    index = SnapIndex(lib, leaf_size=leaf, group=1)
+    rows, sums, per = index.query(q, k, "cie2000")
+    b_rows, b_sums, b_per = brute_force(lib, q, k, "cie2000")
+    assert rows.tolist() == b_rows.tolist()
+    assert np.array_equal(sums, b_sums) and np.array_equal(per, b_per)
+
+
+def test_flat_cie2000_on_the_demo_sized_clustered_library(small_library) -> None:
+    std = small_library.angle_columns()
+    rng = np.random.default_rng(9)
+    lib = np.repeat(std, 25, axis=0) + rng.normal(0, 1.5, (len(std) * 25, 3, 3))
+    lib[..., 0] = np.clip(lib[..., 0], 0, 100)
+    index = SnapIndex(lib)
+    assert index.n_groups == 1 or index.group == 1
+    for q in std[:40] + rng.normal(0, 3.0, (40, 3, 3)):
+        q[:, 0] = np.clip(q[:, 0], 0, 100)
+        for k in (1, 5, 30):
+            rows, sums, _ = index.query(q, k, "cie2000")
+            b_rows, b_sums, _ = brute_force(lib, q, k, "cie2000")
+            assert rows.tolist() == b_rows.tolist() and np.array_equal(sums, b_sums)
