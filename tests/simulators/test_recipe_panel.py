@@ -54,9 +54,17 @@ def _round_trip(address: str) -> tuple[tuple[str, ...], tuple[int, ...], np.ndar
     return readings[0].geometries, readings[0].aspecular_deg, lab
 
 
-def test_ma6_formulated_recipe_round_trip(formulated):
-    """6 angles: mean ΔE00 over 10 readings to the formulate prediction within the repeatability."""
+SILVER = {"alu_coarse": 0.1, "alu_fine": 0.05, "white_tio2": 0.02, "blue_pb": 0.005}
+
+
+@pytest.mark.parametrize("panel", ["formulated", "silver"])
+def test_ma6_recipe_round_trip(formulated, tmp_path, panel):
+    """6 angles: mean ΔE00 over 10 readings to the formulate prediction within the repeatability
+    (a dark red effect colour from `station formulate`, and a light silver given as a bare recipe object)."""
     data, path = formulated
+    if panel == "silver":
+        data, path = {"recipe": SILVER}, tmp_path / "silver.json"
+        path.write_text(json.dumps(SILVER))
     with spawn_simulator("ma6", recipe_file=path, extra_args=FAST) as sim:
         geoms, aspec, lab = _round_trip(sim.address)
     assert geoms == ("45as-15", "45as15", "45as25", "45as45", "45as75", "45as110")
@@ -77,6 +85,29 @@ def test_ma3_matches_lab_printed_by_formulate(formulated):
     assert geoms == ("45as15", "45as45", "45as110")
     de = delta_e(lab, np.asarray(data["predicted_lab"])[None], method="cie2000")
     assert float(de.mean()) <= 0.05, de.mean()
+
+
+def test_ma3_pyusb_route_and_panel_swap(formulated):
+    """In process, the MA3 behind the pyusb backend (the USB driver's real code) reads the recipe panel;
+    set_design puts a design panel back under it."""
+    from simulators.ma3 import Ma3Firmware
+    from simulators.physics import DEFAULT_DESIGN, InstrumentCharacter, SpectroPhysics
+    from simulators.recipe import load_recipe
+    from simulators.usb_backend import SimUsbBackend, SimUsbDevice
+    from station.drivers.ma3 import MA3Spectro
+    from station.drivers.transport import UsbTransport
+
+    data, path = formulated
+    physics = SpectroPhysics(character=InstrumentCharacter(serial="300456"), recipe=load_recipe(path))
+    backend = SimUsbBackend([SimUsbDevice(Ma3Firmware(physics, measure_time_s=0.01))])
+    inst = MA3Spectro(UsbTransport(0x1209, 0xCA03, "300456", backend=backend), timeout_s=0.5, retries=1)
+    with inst.open():
+        lab = np.stack([reflectance_to_lab(inst.measure().reflectance) for _ in range(READINGS)])
+        physics.set_design(DEFAULT_DESIGN)
+        back = reflectance_to_lab(inst.measure().reflectance)
+    de = delta_e(lab, np.asarray(data["predicted_lab"])[None], method="cie2000")
+    assert float(de.mean()) <= 0.05, de.mean()
+    assert float(delta_e(back, DEFAULT_DESIGN.lab_at(np.asarray([15.0, 45.0, 110.0])), method="cie2000").max()) < 0.2
 
 
 def test_ma12_second_block_and_recipe_object(tmp_path):
