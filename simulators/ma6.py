@@ -1,6 +1,6 @@
 """Simulated 6-angle spectrophotometer (family 1) speaking the ASCII prompt protocol on a pty.
 
-``python -m simulators.ma6 [--design FILE] [--fault SPEC ...] [--rfc2217]`` prints
+``python -m simulators.ma6 [--design FILE | --recipe FILE] [--fault SPEC ...] [--rfc2217]`` prints
 ``ADDRESS ma6@/dev/pts/N`` (or ``ma6@rfc2217://127.0.0.1:PORT``) and serves until stdin closes or
 SIGTERM. Protocol: docs/protocols/ma6-ascii.md; physics: :mod:`simulators.physics`.
 """
