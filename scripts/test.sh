@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
-# The whole test suite on a fresh machine: set-up, lint, layering contracts, then pytest
-# (slow suites included). Extra arguments go to pytest.
+# The whole test suite on a fresh machine: set-up, lint, layering contracts, then pytest (slow suites
+# included). Extra arguments go to both pytest runs.
+#
+# The viewer's tests run in a pytest process of their own: Qt draws through GLX under Xvfb, the core's
+# renderer through moderngl's standalone EGL contexts, and Mesa cannot make a Qt GLX context current in
+# a process that has already used EGL device contexts ("QOpenGLWidget: Failed to make context current").
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -11,5 +15,20 @@ echo "== ruff"
 ruff check .
 echo "== import contracts"
 lint-imports
-echo "== pytest"
-exec python -m pytest "$@"
+reports="$root/.test-results"
+rm -rf "$reports" && mkdir -p "$reports"
+set +e
+echo "== pytest: core, service, drivers, tools"
+python -m pytest --ignore=tests/ui --junitxml="$reports/core.xml" "$@"
+core=$?
+echo "== pytest: viewer (own process, Qt on Xvfb)"
+python -m pytest tests/ui --junitxml="$reports/ui.xml" "$@"
+ui=$?
+set -e
+echo "== all tests"
+python scripts/junit_summary.py "$reports/core.xml" "$reports/ui.xml"
+summary=$?
+if [ "$core" -ne 0 ] || [ "$ui" -ne 0 ] || [ "$summary" -ne 0 ]; then
+  echo "FAILED (core pytest exit $core, viewer pytest exit $ui)" >&2
+  exit 1
+fi
