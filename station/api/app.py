@@ -35,10 +35,15 @@ TAGS = [
     {"name": "instruments", "description": "attached instruments: connect, calibrate, measure"},
     {"name": "panels", "description": "painted samples (job, part, substrate)"},
     {"name": "measurements", "description": "immutable readings; corrections supersede; CSV export"},
-    {"name": "analyses", "description": "seam QA of measured panels (misalignment, thesis ch. 4)"},
+    {"name": "analyses", "description": "misalignment QA (thesis ch. 4): seam QA of measured panels or designs, "
+                                        "goniogeometric index, inverse trompe l'oeil, seam sweep"},
     {"name": "designs", "description": "versioned cacad.design/1 designs"},
-    {"name": "library", "description": "library paints"},
+    {"name": "styling", "description": "colour styling tools (thesis §3.4–§3.7): variations, eyedroppers, "
+                                       "palette swatch, sketch fit (stylist)"},
+    {"name": "library", "description": "library paints; CSV import (chemist) and export"},
     {"name": "recipes", "description": "formulation jobs: ColorSnap a design to the library (chemist)"},
+    {"name": "formulation", "description": "ColorSnap top-k, recipe formulation (SYNTHETIC colorants), XML / "
+                                           "CxF3 export (chemist, thesis §5.3)"},
     {"name": "users", "description": "users and tokens (admin)"},
     {"name": "audit", "description": "who wrote what, when"},
 ]
@@ -99,6 +104,30 @@ def _roles_markdown() -> str:
             f"scopes:\n\n| role | scopes |\n|---|---|\n{rows}\n")
 
 
+def _protected_docs(app: FastAPI) -> None:
+    """``/openapi.json``, ``/docs`` and ``/redoc`` behind the bearer token (any role), as every route but
+    ``/health`` (issue 5). The HTML pages need the token too; fetch the schema with it (``curl -H``)."""
+    from fastapi import Depends
+    from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
+    from fastapi.responses import HTMLResponse, JSONResponse
+
+    from station.api.deps import authorize
+
+    guard = [Depends(authorize)]
+
+    @app.get("/openapi.json", include_in_schema=False, dependencies=guard)
+    def openapi() -> JSONResponse:
+        return JSONResponse(app.openapi())
+
+    @app.get("/docs", include_in_schema=False, dependencies=guard)
+    def docs() -> HTMLResponse:
+        return get_swagger_ui_html(openapi_url="/openapi.json", title=f"{app.title} - docs")
+
+    @app.get("/redoc", include_in_schema=False, dependencies=guard)
+    def redoc() -> HTMLResponse:
+        return get_redoc_html(openapi_url="/openapi.json", title=f"{app.title} - ReDoc")
+
+
 def create_app(settings: Settings) -> FastAPI:
     """Build the service for *settings*."""
     from station.api.routes import ROUTERS, health
@@ -122,6 +151,8 @@ def create_app(settings: Settings) -> FastAPI:
     app.state.settings = settings
     install_error_handlers(app)
     app.include_router(health.router)
+    if not settings.public_docs:
+        _protected_docs(app)
     for router in ROUTERS:
         app.include_router(router, prefix=API_PREFIX)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)

@@ -16,8 +16,10 @@ from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError
 
 from db.errors import DatabaseUnavailableError, ImmutableRowError
 from station.analysis.errors import AnalysisError
+from station.design.errors import DesignError
 from station.drivers.errors import CalibrationNeeded, DriverError
 from station.errors import InputError, StationError
+from station.formulate.errors import FormulateError
 from station.ingest import ClientIdConflictError, ReferenceNotFoundError
 from station.model.errors import ModelError
 
@@ -57,6 +59,8 @@ class ErrorOut(BaseModel):
 _STATUS: list[tuple[type[BaseException], int]] = [
     (AnalysisError, 422),  # the panels cannot be analysed as given (e.g. a fit the model refuses)
     (ModelError, 422),
+    (DesignError, 422),  # e.g. a sketch the fit cannot use
+    (FormulateError, 422),  # e.g. a library without recipes
     (ReferenceNotFoundError, 404),
     (ClientIdConflictError, 409),
     (ImmutableRowError, 409),

@@ -27,6 +27,7 @@ class Scope(enum.StrEnum):
     DESIGNS_READ = "designs:read"
     DESIGNS_WRITE = "designs:write"
     LIBRARY_READ = "library:read"
+    LIBRARY_WRITE = "library:write"
     RECIPES_WRITE = "recipes:write"
     ANALYSIS_WRITE = "analysis:write"
     AUDIT_READ = "audit:read"
@@ -40,7 +41,7 @@ ROLE_SCOPES: dict[Role, frozenset[Scope]] = {
     Role.QA: frozenset({S.INSTRUMENTS_READ, S.MEASUREMENTS_READ, S.MEASUREMENTS_CORRECT, S.DESIGNS_READ,
                         S.LIBRARY_READ, S.ANALYSIS_WRITE, S.AUDIT_READ}),
     Role.STYLIST: frozenset({S.MEASUREMENTS_READ, S.DESIGNS_READ, S.DESIGNS_WRITE, S.LIBRARY_READ}),
-    Role.CHEMIST: frozenset({S.MEASUREMENTS_READ, S.DESIGNS_READ, S.LIBRARY_READ, S.RECIPES_WRITE}),
+    Role.CHEMIST: frozenset({S.MEASUREMENTS_READ, S.DESIGNS_READ, S.LIBRARY_READ, S.LIBRARY_WRITE, S.RECIPES_WRITE}),
     Role.ADMIN: frozenset(Scope),
 }
 

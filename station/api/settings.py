@@ -25,7 +25,8 @@ class Settings(BaseSettings):
     simulators: tuple[str, ...] = Field(("ma6",), description="simulators to spawn and attach on start")
     load_demo_library: bool = Field(True, description="load station.formulate's demo library when the table is empty")
     max_body_bytes: int = Field(1_048_576, ge=1024, le=64 * 1_048_576, description="request body cap (uploads)")
-    public_docs: bool = Field(True, description="serve /docs, /redoc and /openapi.json without a token")
+    public_docs: bool = Field(False, description="serve /docs, /redoc and /openapi.json without a token "
+                              "(default: they need a bearer token like every route but /health)")
     outbox_replay_s: float = Field(10.0, gt=0, le=3600, description="seconds between outbox replay attempts")
 
     @computed_field  # type: ignore[prop-decorator]

@@ -32,6 +32,9 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("GET", f"{V1}/measurements/{{measurement_id}}"): ALL,
     ("POST", f"{V1}/measurements/{{measurement_id}}/corrections"): frozenset({T, Q, A}),
     ("POST", f"{V1}/analyses/seam"): frozenset({Q, A}),
+    ("POST", f"{V1}/analyses/gg-index"): frozenset({Q, A}),
+    ("POST", f"{V1}/analyses/trompe-loeil"): frozenset({Q, A}),
+    ("POST", f"{V1}/analyses/sweep"): frozenset({Q, A}),
     ("GET", f"{V1}/analyses"): ALL,
     ("GET", f"{V1}/analyses/{{analysis_id}}"): ALL,
     ("POST", f"{V1}/designs"): frozenset({S, A}),
@@ -43,6 +46,15 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("GET", f"{V1}/designs/{{design_id}}/versions/{{version}}"): frozenset({Q, S, C, A}),
     ("GET", f"{V1}/library"): frozenset({Q, S, C, A}),
     ("GET", f"{V1}/library/{{code}}"): frozenset({Q, S, C, A}),
+    ("GET", f"{V1}/library/export.csv"): frozenset({Q, S, C, A}),
+    ("POST", f"{V1}/library/import"): frozenset({C, A}),
+    ("POST", f"{V1}/styling/variations"): frozenset({S, A}),
+    ("POST", f"{V1}/styling/swatch"): frozenset({S, A}),
+    ("POST", f"{V1}/styling/eyedrop"): frozenset({S, A}),
+    ("POST", f"{V1}/styling/sketch-fit"): frozenset({S, A}),
+    ("POST", f"{V1}/formulation/snap"): frozenset({C, A}),
+    ("POST", f"{V1}/formulation/formulate"): frozenset({C, A}),
+    ("POST", f"{V1}/formulation/export"): frozenset({C, A}),
     ("POST", f"{V1}/recipes"): frozenset({C, A}),
     ("GET", f"{V1}/recipes"): frozenset({Q, S, C, A}),
     ("GET", f"{V1}/recipes/{{recipe_id}}"): frozenset({Q, S, C, A}),
@@ -90,14 +102,22 @@ def test_each_role_is_refused_what_it_must_not_do(sqlite_api: Api, role: Role) -
             assert r.status_code == 403, (role, method, path, r.status_code, r.text)
 
 
-def test_docs_can_be_closed(tmp_path) -> None:
+@pytest.mark.parametrize("path", ["/docs", "/redoc", "/openapi.json"])
+def test_docs_need_a_token_by_default(sqlite_api: Api, path: str) -> None:
+    assert sqlite_api.client.get(path).status_code == 401
+    assert sqlite_api.client.get(path, headers={"Authorization": "Bearer cst_wrong"}).status_code == 401
+    r = sqlite_api.client.get(path, headers=sqlite_api.auth(T))  # any role may read the schema
+    assert r.status_code == 200
+    assert sqlite_api.client.get("/health").status_code == 200
+
+
+def test_docs_can_be_opened(tmp_path) -> None:
     from tests.api.conftest import make_api
 
-    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, public_docs=False)
+    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, public_docs=True)
     api = next(gen)
     try:
         for path in ("/docs", "/redoc", "/openapi.json"):
-            assert api.client.get(path).status_code == 404
-        assert api.client.get("/health").status_code == 200
+            assert api.client.get(path).status_code == 200
     finally:
         gen.close()

@@ -3,18 +3,20 @@
 from station.api.routes import (
     analyses,
     designs,
+    formulation,
     health,
     instruments,
     library,
     measurements,
     panels,
     recipes,
+    styling,
     users,
 )
 
 ROUTERS = [
     instruments.router, panels.router, measurements.router, analyses.router, designs.router, library.router,
-    recipes.router, users.router,
+    styling.router, recipes.router, formulation.router, users.router,
 ]
 
 __all__ = ["ROUTERS", "health"]

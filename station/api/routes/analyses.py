@@ -2,14 +2,23 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Query, status
 
 from db.models import User
 from station.api.deps import SessionDep, scoped
 from station.api.errors import ERROR_RESPONSES, NOT_FOUND
-from station.api.schemas.analyses import AnalysisPublic, SeamQaCreate
+from station.api.schemas.analyses import (
+    AnalysisPublic,
+    GgIndexOut,
+    GgIndexRequest,
+    SeamQaCreate,
+    SweepOut,
+    SweepRequest,
+    TrompeOut,
+    TrompeRequest,
+)
 from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.security import Scope
 from station.api.services import analyses as service
@@ -21,9 +30,31 @@ Analyst = Annotated[User, scoped(Scope.ANALYSIS_WRITE)]
 
 @router.post("/seam", status_code=status.HTTP_201_CREATED, response_model=AnalysisPublic, responses=NOT_FOUND)
 def seam_qa(session: SessionDep, user: Analyst, request: SeamQaCreate) -> AnalysisPublic:
-    """Judge the seam between two measured panels at a misalignment β (thesis ch. 4) and store the report:
-    seam ΔE, geometric vs formulation share, goniogeometric index, advice and a corrected paint for B."""
+    """Judge the seam between two panels (measured or designed) at a misalignment β (thesis ch. 4) and store
+    the report: seam ΔE, geometric vs formulation share, goniogeometric index, advice and a corrected paint
+    for B."""
     return AnalysisPublic.model_validate(service.seam_qa(session=session, actor=user, request=request))
+
+
+# The computations below are CPU work: plain ``def`` routes, so FastAPI runs them in its thread pool.
+@router.post("/gg-index", response_model=GgIndexOut)
+def gg_index(_user: Analyst, request: GgIndexRequest) -> dict[str, Any]:
+    """Goniogeometric index β_min (eq 4.3.1): the smallest misalignment whose seam ΔE reaches ε over the
+    given geometries, the direction and the geometry attaining it (resolution 1e-6°). Nothing is stored."""
+    return service.gg_index(request=request)
+
+
+@router.post("/trompe-loeil", response_model=TrompeOut)
+def trompe_loeil(_user: Analyst, request: TrompeRequest) -> dict[str, Any]:
+    """Inverse trompe l'oeil (§4.4): the paint for the misaligned panel that minimises the seam ΔE (one
+    geometry, RMS, minimax or per geometry), kept paintable. Nothing is stored."""
+    return service.trompe_loeil(request=request)
+
+
+@router.post("/sweep", response_model=SweepOut)
+def sweep(_user: Analyst, request: SweepRequest) -> dict[str, Any]:
+    """Seam ΔE of one paint on both panels over β × light × view (thesis Fig. 4.3). Nothing is stored."""
+    return service.sweep(request=request)
 
 
 @router.get("", response_model=Page[AnalysisPublic])

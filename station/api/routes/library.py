@@ -1,21 +1,26 @@
-"""Library paints: ``/api/v1/library``."""
+"""Library paints: ``/api/v1/library`` (browse; CSV export for readers, CSV import for chemists)."""
 
 from __future__ import annotations
 
+import asyncio
 from typing import Annotated, Literal
 
-from fastapi import APIRouter, Path, Query
+from fastapi import APIRouter, Path, Query, Request, Response, status
 
 from db.models import User
 from station.api.deps import SessionDep, scoped
-from station.api.errors import ERROR_RESPONSES, NOT_FOUND
+from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.common import Limit, Offset, Page
+from station.api.schemas.formulation import LibraryImportOut
 from station.api.schemas.library import LibraryPaintPublic
 from station.api.security import Scope
+from station.api.services import formulation
 from station.api.services import library as service
+from station.errors import InputError
 
 router = APIRouter(prefix="/library", tags=["library"], responses=ERROR_RESPONSES)
 Reader = Annotated[User, scoped(Scope.LIBRARY_READ)]
+Importer = Annotated[User, scoped(Scope.LIBRARY_WRITE)]
 
 
 @router.get("", response_model=Page[LibraryPaintPublic])
@@ -26,6 +31,40 @@ def list_paints(session: SessionDep, _user: Reader, category: Literal["solid", "
     rows, total = service.list_paints(session=session, category=category, code_prefix=code_prefix, limit=limit,
                                       offset=offset)
     return Page[LibraryPaintPublic](data=[LibraryPaintPublic.model_validate(r) for r in rows], count=total)
+
+
+@router.get("/export.csv", response_class=Response, responses={**CONFLICT, 200: {
+    "description": "library CSV: code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110[,more angles]",
+    "content": {"text/csv": {"schema": {"type": "string"}}}}})
+def export_csv(request: Request, session: SessionDep, _user: Reader,
+               category: Literal["solid", "metallic", "pearl"] | None = None) -> Response:
+    """The library (or one category) as library CSV (Lab and gloss to 4 decimals)."""
+    text = formulation.export_csv(session=session, cache=formulation.app_cache(request.app.state), category=category)
+    return Response(text, media_type="text/csv", headers={"Content-Disposition": 'attachment; filename="library.csv"'})
+
+
+@router.post("/import", status_code=status.HTTP_201_CREATED, response_model=LibraryImportOut,
+             responses={**CONFLICT, 413: {"description": "request body over the service's limit"}},
+             openapi_extra={"requestBody": {"required": True, "description": "library CSV (UTF-8)", "content": {
+                 "text/csv": {"schema": {"type": "string"}, "example":
+                              "code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110\n"
+                              "R-1,solid,90,40,50,30,40,50,30,40,50,30\n"}}}})
+async def import_csv(request: Request, user: Importer,
+                     name: Annotated[str, Query(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f]+$",
+                                                description="library name stored with each paint")] = "imported",
+                     ) -> LibraryImportOut:
+    """Validate a library CSV (header ``code,type,gloss_gu,L15,a15,b15,…``; faults name row and column) and
+    add its paints in one transaction: a code already stored is a 409 and nothing is added. Audited."""
+    try:
+        text = (await request.body()).decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError("body", "UTF-8 CSV text") from exc
+
+    def run() -> dict[str, object]:
+        with request.app.state.sessions() as session:
+            return formulation.import_csv(session=session, actor=user, text=text, name=name)
+
+    return LibraryImportOut.model_validate(await asyncio.to_thread(run))
 
 
 @router.get("/{code}", response_model=LibraryPaintPublic, responses=NOT_FOUND)

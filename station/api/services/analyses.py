@@ -1,6 +1,9 @@
-"""Analyses: seam QA of two stored measurements (``station.analysis.seam_qa``), stored and audited."""
+"""Analyses: seam QA of two panels (stored measurements or designs; stored and audited) and the stateless
+misalignment computations (goniogeometric index, inverse trompe l'oeil, sweep) of ``station.analysis``."""
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from sqlalchemy import func, select
@@ -8,8 +11,11 @@ from sqlalchemy.orm import Session
 
 from db.models import AnalysisResult, Measurement, User
 from station.api.errors import NotFoundError
-from station.api.schemas.analyses import SeamQaCreate
+from station.api.schemas.analyses import GgIndexRequest, SeamQaCreate, SweepRequest, TrompeRequest
+from station.api.schemas.designs import DesignBody
 from station.api.services import audit
+from station.api.services.designs import to_design
+from station.errors import InputError
 from station.model import AspecularMeasurements
 
 
@@ -23,15 +29,29 @@ def _aspecular(session: Session, measurement_id: int) -> AspecularMeasurements:
                                  illuminant=m.illuminant, observer=m.observer)
 
 
+def _panel(session: Session, measurement_id: int | None, body: DesignBody | None, side: str) -> Any:
+    if measurement_id is not None:
+        return _aspecular(session, measurement_id)
+    if body is None:  # the schema asks for exactly one source per panel
+        raise InputError(f"design_{side}", f"measurement_{side} or design_{side}")
+    return to_design(body, f"design_{side}")
+
+
+def _hinge(hinge: str | float) -> str | float:
+    return hinge if isinstance(hinge, str) else float(hinge)
+
+
 def seam_qa(*, session: Session, actor: User, request: SeamQaCreate) -> AnalysisResult:
-    """Fit both measurements (eqs 3.3.x), judge the seam at β and store the report."""
+    """Fit measured panels (eqs 3.3.x) or take the designs, judge the seam at β and store the report."""
     from station.analysis import seam_qa as run_seam_qa
 
-    a = _aspecular(session, request.measurement_a)
-    b = _aspecular(session, request.measurement_b)
-    report = run_seam_qa(a, b, request.beta_deg, tolerance=request.tolerance, method=request.method)
-    row = AnalysisResult(kind="seam_qa", inputs=request.model_dump(), result=report.to_dict(),
-                         created_by_id=actor.id)
+    a = _panel(session, request.measurement_a, request.design_a, "a")
+    b = _panel(session, request.measurement_b, request.design_b, "b")
+    report = run_seam_qa(a, b, request.beta_deg, lights_deg=request.lights_deg, aspecular_deg=request.aspecular_deg,
+                         tolerance=request.tolerance, method=request.method, hinge=_hinge(request.hinge),
+                         objective=request.objective)
+    row = AnalysisResult(kind="seam_qa", inputs=request.model_dump(mode="json", by_alias=True, exclude_none=True),
+                         result=report.to_dict(), created_by_id=actor.id)
     session.add(row)
     session.flush()
     audit.record(session=session, actor=actor, action="analysis.seam_qa", entity="analysis", entity_id=row.id,
@@ -39,6 +59,37 @@ def seam_qa(*, session: Session, actor: User, request: SeamQaCreate) -> Analysis
                  passed=report.passed)
     session.commit()
     return row
+
+
+def gg_index(*, request: GgIndexRequest) -> dict[str, Any]:
+    """Goniogeometric index (eq 4.3.1) as ``IndexResult.to_dict()``; nothing is stored."""
+    from station.analysis import goniogeometric_index
+
+    lights = request.lights_deg if len(request.lights_deg) > 1 else request.lights_deg[0]
+    r = goniogeometric_index(to_design(request.paint, "paint"), lights, request.views_deg, epsilon=request.epsilon,
+                             method=request.method, hinge=_hinge(request.hinge), direction=request.direction,
+                             beta_max_deg=request.beta_max_deg, gloss=request.include_gloss)
+    return r.to_dict(per_geometry=request.per_geometry)
+
+
+def trompe_loeil(*, request: TrompeRequest) -> dict[str, Any]:
+    """Inverse trompe l'oeil (§4.4) as ``TrompeResult.to_dict()``; nothing is stored."""
+    from station.analysis.trompe import inverse_trompe_loeil
+
+    r = inverse_trompe_loeil(to_design(request.paint, "paint"), request.lights_deg, request.views_deg,
+                             beta_deg=request.beta_deg, objective=request.objective, at=request.at,
+                             subset=request.subset, hinge=_hinge(request.hinge), method=request.method,
+                             epsilon=request.epsilon, allow_face_darker=request.allow_face_darker)
+    return r.to_dict()
+
+
+def sweep(*, request: SweepRequest) -> dict[str, Any]:
+    """Seam ΔE over β × light × view (Fig. 4.3) as ``SweepResult.to_dict()``; nothing is stored."""
+    from station.analysis.sweep import seam_sweep
+
+    r = seam_sweep(to_design(request.paint, "paint"), request.betas_deg, request.lights_deg, request.views_deg,
+                   hinge=_hinge(request.hinge), method=request.method, epsilon=request.epsilon)
+    return r.to_dict()
 
 
 def get_analysis(*, session: Session, analysis_id: int) -> AnalysisResult:

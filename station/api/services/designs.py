@@ -12,6 +12,7 @@ from station.api.errors import ConflictError, NotFoundError
 from station.api.schemas.designs import DesignBody, DesignPublic, DesignVersionPublic
 from station.api.services import audit
 from station.errors import InputError
+from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_from_dict, design_to_dict
 
 
@@ -22,6 +23,15 @@ def canonical_body(body: DesignBody) -> dict[str, Any]:
         return design_to_dict(design_from_dict(data))
     except InputError as exc:  # name the field as the request does: design.<field>
         raise InputError(f"design.{exc.field}", exc.accepted, exc.got) from exc
+
+
+def to_design(body: DesignBody, field: str = "design") -> FaceFlopTravelGloss:
+    """The appearance-model design of *body*; a refusal names the request field (``<field>.<name>``)."""
+    data = body.model_dump(by_alias=True)
+    try:
+        return design_from_dict(data)
+    except InputError as exc:
+        raise InputError(f"{field}.{exc.field}", exc.accepted, exc.got) from exc
 
 
 def _public(design: Design, body: dict[str, Any]) -> DesignPublic:

@@ -1,0 +1,55 @@
+"""Formulation: ``/api/v1/formulation`` (chemists): ColorSnap, recipe formulation, XML / CxF3 export.
+
+The library is the one in the database; its ColorSnap index is built once per app and library
+(``app.state.library_cache``). CPU work runs in the thread pool (plain ``def`` routes).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Request, Response
+
+from db.models import User
+from station.api.deps import SessionDep, scoped
+from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
+from station.api.schemas.formulation import (
+    ExportRequest,
+    FormulateOut,
+    FormulateRequest,
+    SnapOut,
+    SnapRequest,
+)
+from station.api.security import Scope
+from station.api.services import formulation as service
+
+router = APIRouter(prefix="/formulation", tags=["formulation"], responses={**ERROR_RESPONSES, **NOT_FOUND, **CONFLICT})
+Chemist = Annotated[User, scoped(Scope.RECIPES_WRITE)]
+_FILE = {200: {"description": "the thesis's XML (§5.3.1) or CxF3 (ISO 17972) file; header X-Match-Code",
+               "content": {"application/xml": {"schema": {"type": "string"}}}}}
+
+
+@router.post("/snap", response_model=SnapOut)
+def snap(request: Request, session: SessionDep, _user: Chemist, body: SnapRequest) -> dict[str, Any]:
+    """ColorSnap: the k library paints nearest to the target by ΔE summed over 15°/45°/110° (cie76 = ΔE*ab as
+    in the thesis, cie2000, din6175), exact, with the Fig. 5.10 warnings. Nothing is stored (a stored
+    formulation job is ``POST /recipes``)."""
+    return service.snap(session=session, cache=service.app_cache(request.app.state), request=body)
+
+
+@router.post("/formulate", response_model=FormulateOut)
+def formulate(request: Request, session: SessionDep, _user: Chemist, body: FormulateRequest) -> dict[str, Any]:
+    """A recipe for the target from the SYNTHETIC colorant database, started from the ColorSnap matches'
+    recipes: predicted Lab and CIEDE2000 per angle, and whether it is formulable within the tolerance."""
+    return service.formulate(session=session, cache=service.app_cache(request.app.state), request=body)
+
+
+@router.post("/export", response_class=Response, responses=_FILE)
+def export(request: Request, session: SessionDep, _user: Chemist, body: ExportRequest) -> Response:
+    """The design at both 3-angle sets (15/45/110 and 25/45/75; 5 angles on request) and its ColorSnap
+    match, as the thesis's XML or CxF3, as a file."""
+    data, filename, code = service.export(session=session, cache=service.app_cache(request.app.state), request=body)
+    headers = {"Content-Disposition": f'attachment; filename="{filename}"'}
+    if code is not None:
+        headers["X-Match-Code"] = code
+    return Response(data, media_type="application/xml", headers=headers)

@@ -1,0 +1,79 @@
+"""Styling tools: ``/api/v1/styling`` (stylists; nothing stored, results are proposals to save as designs).
+
+Image uploads are the raw PNG/JPEG request body (capped by the service's body limit); the CPU work runs
+off the event loop (``asyncio.to_thread``; the JSON routes are plain ``def``, run in the thread pool).
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Query, Request, Response
+
+from db.models import User
+from station.api.deps import SettingsDep, scoped
+from station.api.errors import ERROR_RESPONSES
+from station.api.schemas.styling import (
+    IMAGE_BODY,
+    PNG_RESPONSE,
+    EyedropOut,
+    SketchFitOut,
+    SwatchRequest,
+    VariationsOut,
+    VariationsRequest,
+)
+from station.api.security import Scope
+from station.api.services import styling as service
+
+router = APIRouter(prefix="/styling", tags=["styling"], responses=ERROR_RESPONSES)
+Stylist = Annotated[User, scoped(Scope.DESIGNS_WRITE)]
+Pixel = Annotated[float, Query(ge=0.0, le=100_000.0, allow_inf_nan=False)]
+_TOO_LARGE: dict[int | str, dict[str, Any]] = {413: {"description": "request body over the service's limit"}}
+
+
+@router.post("/variations", response_model=VariationsOut)
+def variations(_user: Stylist, request: VariationsRequest) -> dict[str, Any]:
+    """The ring of variations of a design (lighter/darker, more/less chroma, hue ±; or travel and gloss),
+    deterministic (thesis §3.4.4)."""
+    return service.variations(request=request)
+
+
+@router.post("/swatch", response_class=Response, responses=PNG_RESPONSE)
+def swatch(_user: Stylist, request: SwatchRequest) -> Response:
+    """The palette swatch PNG (gradient bar across aspecular angles 15°→110°, gloss shown by the border's
+    brightness) or the shaded booklet thumbnail (thesis §3.4.6). Header ``X-Out-Of-Gamut-Columns``."""
+    png, out_of_gamut = service.swatch_png(request=request)
+    return Response(png, media_type="image/png", headers={"X-Out-Of-Gamut-Columns": str(out_of_gamut)})
+
+
+@router.post("/eyedrop", response_model=EyedropOut, openapi_extra=IMAGE_BODY, responses=_TOO_LARGE)
+async def eyedrop(
+    request: Request, settings: SettingsDep, _user: Stylist,
+    face_x: Pixel, face_y: Pixel, flop_x: Pixel, flop_y: Pixel,
+    gloss_x: Pixel | None = None, gloss_y: Pixel | None = None,
+    gloss_gu: Annotated[float, Query(ge=0.0, le=100.0, description="gloss without the gloss eyedropper")] = 50.0,
+    travel_deg: Annotated[float, Query(gt=15.0, le=180.0, description="travel slider, degrees")] = 75.0,
+    radius: Annotated[int, Query(ge=0, le=64, description="eyedropper radius, pixels")] = 3,
+    auto_swap: Annotated[bool, Query(description="swap when the face is darker than the flop")] = True,
+) -> dict[str, Any]:
+    """Face and flop eyedroppers (robust average over a small region → Lab) and, with ``gloss_x``/``gloss_y``,
+    the contrast-gloss eyedropper on an uploaded mood-board image (thesis §3.5). Pixel = (column, row)."""
+    data = await request.body()
+    gloss = (gloss_x, gloss_y) if gloss_x is not None and gloss_y is not None else None
+    return await asyncio.to_thread(service.eyedrop, data=data, max_bytes=settings.max_body_bytes,
+                                   face=(face_x, face_y), flop=(flop_x, flop_y), gloss=gloss, gloss_gu=gloss_gu,
+                                   travel_deg=travel_deg, radius=radius, auto_swap=auto_swap)
+
+
+@router.post("/sketch-fit", response_model=SketchFitOut, openapi_extra=IMAGE_BODY, responses=_TOO_LARGE)
+async def sketch_fit(
+    request: Request, settings: SettingsDep, _user: Stylist,
+    scene: Annotated[Literal["sphere-point", "panel-point"], Query(description="built-in point-light scene")] = "sphere-point",
+    gloss_mode: Annotated[Literal["contrast", "default", "fit"], Query()] = "contrast",
+) -> dict[str, Any]:
+    """Fit a design to concept art painted over a built-in point-light scene (thesis §3.7, eq 3.7.2): the
+    art is the upload, a square image the scene's size, painted over the scene rendered in silver."""
+    data = await request.body()
+    return await asyncio.to_thread(service.sketch_fit, data=data, max_bytes=settings.max_body_bytes,
+                                   scene_name=scene, gloss_mode=gloss_mode)

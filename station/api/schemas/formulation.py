@@ -1,0 +1,124 @@
+"""Formulation (thesis §5.3): ColorSnap top-k, recipe formulation, XML / CxF3 export, library import."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from station.api.schemas.designs import DesignBody, Lab
+
+SnapMetric = Literal["cie76", "cie2000", "din6175"]
+_DESIGN = {"name": "Blue metallic", "face": [62.0, -4.0, -38.0], "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0,
+           "gloss_gu": 88.0}
+_LAB = [[62.0, -4.0, -38.0], [40.0, -1.5, -29.0], [24.0, 1.0, -20.0]]
+
+
+class DesignSource(BaseModel):
+    """The target: exactly one of ``lab`` (at 15°/45°/110°), an inline ``design``, or a stored ``design_id``
+    (``version``: default the latest)."""
+
+    lab: Annotated[list[Lab], Field(min_length=3, max_length=3, description="Lab at 15°, 45°, 110°")] | None = None
+    design: DesignBody | None = None
+    design_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
+    version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> DesignSource:
+        given = [n for n in ("lab", "design", "design_id") if getattr(self, n) is not None]
+        if len(given) != 1:
+            raise ValueError(f"give exactly one of lab, design, design_id (got {', '.join(given) or 'none'})")
+        return self
+
+
+class SnapRequest(DesignSource):
+    """ColorSnap: the k nearest library paints by ΔE summed over 15°/45°/110°."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"lab": _LAB, "k": 5, "metric": "cie76"}, {"design_id": 1, "k": 3, "metric": "cie2000"}]})
+
+    k: Annotated[int, Field(ge=1, le=50, description="matches returned, best first")] = 5
+    metric: Annotated[SnapMetric, Field(description="ΔE summed over the angles (cie76 = ΔE*ab, the thesis's)")] = "cie76"
+
+
+class SnapMatchOut(BaseModel):
+    """One library paint: summed ΔE, ΔE per angle, its recipe when the library has one."""
+
+    code: str
+    library_paint_id: int
+    sum_de: float
+    de_per_angle: list[float]
+    recipe: dict[str, float] | None
+
+
+class SnapOut(BaseModel):
+    """Matches (best first) and the Fig. 5.10 warnings (far from the library, travel not captured)."""
+
+    matches: list[SnapMatchOut]
+    warnings: list[str]
+    method: str
+    angles_deg: list[float]
+    design_lab: list[list[float]]
+    library_paints: int
+    synthetic: bool
+
+
+class FormulateRequest(DesignSource):
+    """Formulate a recipe from the ColorSnap (CIEDE2000) matches' recipes (SYNTHETIC colorants)."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"lab": _LAB, "gloss_gu": 88.0, "tolerance": 1.0}, {"design": _DESIGN}]})
+
+    gloss_gu: Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss target; default the design's")] | None = None
+    tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 for 'formulable'")] = 1.0
+    k: Annotated[int, Field(ge=1, le=10, description="library matches tried as starting recipes")] = 3
+
+
+class FormulateOut(BaseModel):
+    """``FormulationResult.to_dict()``: recipe, predicted Lab and ΔE00 per angle, formulable flag, plus the
+    ColorSnap matches it started from."""
+
+    model_config = ConfigDict(extra="allow")
+
+    recipe: dict[str, float]
+    angles_deg: list[float]
+    design_lab: list[list[float]]
+    predicted_lab: list[list[float]]
+    de_per_angle: list[float]
+    mean_de: float
+    max_de: float
+    formulable: bool
+    message: str
+    synthetic_colorants: bool
+    matches: list[dict[str, Any]]
+    snap_warnings: list[str]
+
+
+class ExportRequest(BaseModel):
+    """A design (inline or stored) exported with its ColorSnap match as the thesis's XML or CxF3."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"design": _DESIGN, "format": "xml", "match": True}, {"design_id": 1, "format": "cxf", "five_angles": True}]})
+
+    design: DesignBody | None = None
+    design_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
+    version: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
+    format: Literal["xml", "cxf"] = "xml"
+    five_angles: Annotated[bool, Field(description="also export 15/25/45/75/110")] = False
+    match: Annotated[bool, Field(description="add the ColorSnap match (needs a loaded library)")] = True
+    metric: SnapMetric = "cie76"
+
+    @model_validator(mode="after")
+    def _one_source(self) -> ExportRequest:
+        if (self.design is None) == (self.design_id is None):
+            raise ValueError("give exactly one of design, design_id")
+        return self
+
+
+class LibraryImportOut(BaseModel):
+    """What an import stored."""
+
+    library: str
+    paints: int
+    angles_deg: list[float]
+    types: dict[str, int]

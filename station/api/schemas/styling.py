@@ -1,0 +1,105 @@
+"""Colour styling tools (thesis §3.4–§3.7): variations, palette swatch, eyedroppers, sketch fit."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from station.api.schemas.designs import DesignBody
+
+_EXAMPLE = {"name": "Blue metallic", "face": [62.0, -4.0, -38.0], "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0,
+            "gloss_gu": 88.0}
+
+#: Image uploads (eyedropper, sketch fit) are the raw PNG/JPEG request body, capped by the service's body
+#: limit (``CACAD_MAX_BODY_BYTES``) and by ``station.design.images.load_image``'s guards.
+IMAGE_BODY: dict[str, Any] = {"requestBody": {"required": True, "description": "the image file (PNG or JPEG)",
+                                              "content": {"image/png": {"schema": {"type": "string", "format": "binary"}},
+                                                          "image/jpeg": {"schema": {"type": "string", "format": "binary"}}}}}
+PNG_RESPONSE: dict[int | str, dict[str, Any]] = {200: {
+    "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}}, "description": "a PNG image"}}
+
+
+class VariationsRequest(BaseModel):
+    """The centre design, a step and a category (thesis §3.4.4)."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"design": _EXAMPLE, "degree": 5.0, "category": "face"}]})
+
+    design: DesignBody
+    degree: Annotated[float, Field(gt=0.0, le=50.0, allow_inf_nan=False,
+                                   description="step: ΔE*ab for colours, degrees for travel, GU for gloss")] = 5.0
+    category: Literal["face", "flop", "travel-gloss"] = "face"
+
+
+class Variation(BaseModel):
+    """One variation: its label, the design (null when it would leave the model's range) and why."""
+
+    label: str
+    design: dict[str, Any] | None
+    reason: str
+
+
+class VariationsOut(BaseModel):
+    """The ring of variations around the centre, deterministic."""
+
+    centre: dict[str, Any]
+    category: str
+    degree: float
+    variations: list[Variation]
+
+
+class SwatchRequest(BaseModel):
+    """A palette swatch (gradient bar 15°→110°, gloss as the border's brightness) or a booklet thumbnail."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"design": _EXAMPLE, "kind": "swatch", "width": 160, "height": 32, "border": 4}]})
+
+    design: DesignBody
+    kind: Literal["swatch", "booklet"] = "swatch"
+    width: Annotated[int, Field(ge=8, le=1024, description="swatch width, pixels")] = 160
+    height: Annotated[int, Field(ge=4, le=256, description="swatch height, pixels")] = 32
+    border: Annotated[int, Field(ge=1, le=32, description="swatch border, pixels (< half the smaller side)")] = 4
+    size: Annotated[int, Field(ge=16, le=512, description="booklet thumbnail size, pixels")] = 96
+
+
+class GlossOut(BaseModel):
+    """The gloss eyedropper's contrast gloss (§3.5.3)."""
+
+    gloss_gu: float
+    contrast: float
+    clipped: bool
+
+
+class EyedropOut(BaseModel):
+    """A design seeded by the eyedroppers, the sampled Labs, whether face and flop were swapped, and how the
+    image's colour was interpreted."""
+
+    design: dict[str, Any]
+    face_lab: list[float]
+    flop_lab: list[float]
+    swapped: bool
+    colour: str
+    gloss: GlossOut | None = None
+
+
+class LabStandard(BaseModel):
+    """Lab of the fitted curve at the standard angles."""
+
+    angles_deg: list[float]
+    lab: list[list[float]]
+
+
+class SketchFitOut(BaseModel):
+    """The point-light sketch fit (§3.7): design, RMS ΔE*ab, failure flag and reason, wall time."""
+
+    design: dict[str, Any]
+    rms_de: float | None
+    failed: bool
+    seconds: float
+    reason: str
+    shading_de: float | None
+    lab_standard: LabStandard
+    theta_clamp_deg: float | None
+    pixels: int
+    gloss_source: str

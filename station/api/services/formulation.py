@@ -1,0 +1,220 @@
+"""Formulation over the library in the database: ColorSnap, recipes, export, CSV import and export.
+
+The library rows are turned into one ``station.formulate.library.Library`` and its exact ColorSnap index
+(``SnapIndex``) once per library per app: :class:`LibraryCache` lives on ``app.state`` and rebuilds only
+when the rows change (count or newest id). Paints with a recipe in the colorant database's names form a
+second library (with its own index) that formulation starts from. The demo library and the colorants
+are SYNTHETIC; every result says so.
+"""
+
+from __future__ import annotations
+
+import io
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from sqlalchemy import func, insert, select
+from sqlalchemy.orm import Session
+
+from db.models import LibraryPaint, User
+from station.api.errors import ConflictError
+from station.api.schemas.formulation import DesignSource, ExportRequest, FormulateRequest, SnapRequest
+from station.api.services import audit
+from station.api.services.designs import to_design
+from station.api.services.library import library_rows
+from station.api.services.recipes import _design_version
+from station.model import FaceFlopTravelGloss
+from station.model.design_io import design_from_dict
+
+STANDARD = (15.0, 45.0, 110.0)
+
+
+@dataclass(frozen=True)
+class CachedLibrary:
+    """The database library as a core ``Library`` with its snap index, and the recipe-bearing subset."""
+
+    key: tuple[int, int]
+    library: Any
+    index: Any
+    ids: np.ndarray
+    recipes: list[dict[str, float] | None]
+    with_recipes: Any | None
+    with_recipes_index: Any | None
+    with_recipes_rows: np.ndarray
+
+
+class LibraryCache:
+    """One :class:`CachedLibrary` per app, rebuilt when the ``library_paints`` rows change."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._cached: CachedLibrary | None = None
+        self.builds = 0
+
+    def get(self, session: Session) -> CachedLibrary:
+        """The cached library, (re)built from the rows when needed; 409 when the table is empty."""
+        count, newest = session.execute(select(func.count(LibraryPaint.id), func.max(LibraryPaint.id))).one()
+        key = (int(count or 0), int(newest or 0))
+        with self._lock:
+            if self._cached is not None and self._cached.key == key:
+                return self._cached
+            if key[0] == 0:
+                raise ConflictError("the paint library is empty: load one (station serve loads the demo library)")
+            self._cached = _build(session, key)
+            self.builds += 1
+            return self._cached
+
+
+def _build(session: Session, key: tuple[int, int]) -> CachedLibrary:
+    from station.formulate.colorants import default_database
+    from station.formulate.library import Library
+    from station.formulate.snap import SnapIndex
+
+    rows = session.execute(select(LibraryPaint).order_by(LibraryPaint.id)).scalars().all()
+    common = set.intersection(*({float(a) for a in r.angles_deg} for r in rows))
+    if not set(STANDARD) <= common:
+        raise ConflictError("the library's paints do not share Lab at 15°, 45° and 110°")
+    angles = tuple(sorted(common))
+    lab = np.empty((len(rows), len(angles), 3))
+    for i, r in enumerate(rows):
+        where = {float(a): j for j, a in enumerate(r.angles_deg)}
+        lab[i] = [r.lab[where[a]] for a in angles]
+    extras = [r.extra or {} for r in rows]
+    recipes = [x.get("recipe") for x in extras]
+    names = sorted({str(x.get("library", "database")) for x in extras})
+    lib = Library(name=" + ".join(names), codes=np.array([r.code for r in rows]),
+                  types=np.array([r.category for r in rows]),
+                  gloss_gu=np.array([np.nan if r.gloss_gu is None else r.gloss_gu for r in rows], dtype=float),
+                  angles_deg=angles, lab=lab, synthetic=all(bool(x.get("synthetic")) for x in extras),
+                  source="database")
+    colorants = default_database().names
+    has = np.array([isinstance(rc, dict) and set(rc) <= set(colorants) for rc in recipes], dtype=bool)
+    with_recipes = with_index = None
+    rows_with = np.flatnonzero(has)
+    if rows_with.size:
+        conc = np.array([[float(recipes[i].get(n, 0.0)) for n in colorants] for i in rows_with])  # type: ignore[union-attr]
+        with_recipes = Library(name=lib.name, codes=lib.codes[rows_with], types=lib.types[rows_with],
+                               gloss_gu=lib.gloss_gu[rows_with], angles_deg=angles, lab=lab[rows_with],
+                               synthetic=lib.synthetic, recipes=conc, colorant_names=colorants, source="database")
+        with_index = SnapIndex(with_recipes)
+    return CachedLibrary(key, lib, SnapIndex(lib), np.array([r.id for r in rows]), recipes, with_recipes,
+                         with_index, rows_with)
+
+
+def _target(session: Session, source: DesignSource) -> tuple[np.ndarray, FaceFlopTravelGloss | None]:
+    """Lab at 15/45/110 (and the design, when there is one) of the request's source."""
+    if source.lab is not None:
+        return np.asarray(source.lab, dtype=float), None
+    if source.design is not None:
+        design = to_design(source.design)
+    else:
+        design = design_from_dict(_design_version(session, source.design_id or 0, source.version).body)
+    return np.asarray(design.lab_at(np.asarray(STANDARD)), dtype=float), design
+
+
+def snap(*, session: Session, cache: LibraryCache, request: SnapRequest) -> dict[str, Any]:
+    """ColorSnap top-k against the database library (``station.formulate.snap.color_snap``)."""
+    from station.formulate.snap import color_snap
+
+    lab, _ = _target(session, request)
+    cached = cache.get(session)
+    result = color_snap(cached.library, lab, k=min(request.k, len(cached.library)), method=request.metric,
+                        index=cached.index)
+    out = result.to_dict()
+    out["matches"] = [{"code": m["code"], "library_paint_id": int(cached.ids[m["index"]]), "sum_de": m["sum_de"],
+                       "de_per_angle": m["de_per_angle"], "recipe": cached.recipes[m["index"]]}
+                      for m in out["matches"]]
+    out.update(design_lab=np.asarray(result.design_lab, dtype=float).tolist(), library_paints=len(cached.library),
+               synthetic=bool(cached.library.synthetic))
+    return out
+
+
+def formulate(*, session: Session, cache: LibraryCache, request: FormulateRequest) -> dict[str, Any]:
+    """Recipe for the target from the matches' recipes (``formulate_from_library``); nothing is stored."""
+    from station.formulate.formulation import formulate_from_library
+
+    lab, design = _target(session, request)
+    gloss = request.gloss_gu if request.gloss_gu is not None else (design.gloss_gu if design is not None else None)
+    cached = cache.get(session)
+    if cached.with_recipes is None:
+        raise ConflictError("no library paint has a recipe in the colorant database: load the demo library")
+    result, matches = formulate_from_library(lab, cached.with_recipes, index=cached.with_recipes_index,
+                                             k=min(request.k, len(cached.with_recipes)), gloss_gu=gloss,
+                                             tolerance=request.tolerance)
+    out = result.to_dict()
+    out["matches"] = [{"code": m.code, "sum_de": m.sum_de, "de_per_angle": list(m.de_per_angle),
+                       "library_paint_id": int(cached.ids[cached.with_recipes_rows[m.index]])}
+                      for m in matches.matches]
+    out["snap_warnings"] = list(matches.warnings)
+    out["library"] = cached.library.name
+    return out
+
+
+def export(*, session: Session, cache: LibraryCache, request: ExportRequest) -> tuple[bytes, str, str | None]:
+    """The design (both 3-angle sets, optionally 5) and its ColorSnap match as XML or CxF3 bytes; returns
+    (bytes, file name, match code)."""
+    from station.formulate.color_xml import colors_to_xml, spec_from_design, spec_from_lab
+    from station.formulate.cxf import specs_to_cxf
+    from station.formulate.snap import color_snap
+
+    if request.design is not None:
+        design = to_design(request.design)
+    else:
+        design = design_from_dict(_design_version(session, request.design_id or 0, request.version).body)
+    specs = [spec_from_design(design, name=design.name or "design", five_angles=request.five_angles)]
+    code = None
+    if request.match:
+        cached = cache.get(session)
+        lib = cached.library
+        m = color_snap(lib, design.lab_at(np.asarray(STANDARD)), k=1, method=request.metric,
+                       index=cached.index).matches[0]
+        row = lib.lab[m.index]
+        specs.append(spec_from_lab(m.code, {a: tuple(row[j]) for j, a in enumerate(lib.angles_deg)},
+                                   float(lib.gloss_gu[m.index]), role="match", paint_type=str(lib.types[m.index]),
+                                   code=m.code, synthetic=lib.synthetic, five_angles=request.five_angles))
+        code = m.code
+    data = colors_to_xml(specs) if request.format == "xml" else specs_to_cxf(specs)
+    stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in (design.name or "design"))[:64] or "design"
+    return data, f"{stem}.{'xml' if request.format == 'xml' else 'cxf'}", code
+
+
+def import_csv(*, session: Session, actor: User, text: str, name: str) -> dict[str, Any]:
+    """Validate a library CSV (``read_library_csv``) and add its paints; a code already stored is a 409 and
+    nothing is added (one transaction)."""
+    from station.formulate.library_csv import read_library_csv
+
+    lib = read_library_csv(io.StringIO(text), name=name)
+    codes = [str(c) for c in lib.codes]
+    taken = session.scalars(select(LibraryPaint.code).where(LibraryPaint.code.in_(codes))).all() if codes else []
+    if taken:
+        raise ConflictError(f"{len(taken)} code(s) already in the library, e.g. {sorted(taken)[0]!r}")
+    rows = library_rows(lib)
+    for start in range(0, len(rows), 1000):
+        session.execute(insert(LibraryPaint), rows[start:start + 1000])
+    audit.record(session=session, actor=actor, action="library.import", entity="library", entity_id=name,
+                 paints=len(rows))
+    session.commit()
+    return {"library": lib.name, "paints": len(rows), "angles_deg": list(lib.angles_deg),
+            "types": {t: int(np.sum(lib.types == t)) for t in ("solid", "metallic", "pearl")}}
+
+
+def export_csv(*, session: Session, cache: LibraryCache, category: str | None) -> str:
+    """The database library (optionally one category) as library CSV text (``write_library_csv``)."""
+    from station.formulate.library_csv import write_library_csv
+
+    lib = cache.get(session).library
+    if category:
+        lib = lib.subset(lib.types == category)
+    buf = io.StringIO()
+    write_library_csv(lib, buf)
+    return buf.getvalue()
+
+
+def app_cache(state: Any) -> LibraryCache:
+    """The app's :class:`LibraryCache` (``app.state.library_cache``), created on first use."""
+    cache = getattr(state, "library_cache", None)
+    if cache is None:
+        cache = state.library_cache = LibraryCache()
+    return cache

@@ -1,0 +1,112 @@
+"""Styling tools over ``station.design``: variations, swatch PNGs, eyedroppers and the sketch fit.
+
+Nothing here is stored: the results are proposals a stylist saves as a design version when wanted.
+Uploaded images go to a private temporary file and through ``station.design.images.load_image`` (size
+cap, decompression-bomb guard, colour profile honoured or stated).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from station.api.schemas.styling import SwatchRequest, VariationsRequest
+from station.api.services.designs import to_design
+from station.errors import InputError
+from station.model.design_io import design_to_dict
+
+#: Sketch-fit art is a square image the size of the built-in scene; this bounds the CPU a request may take.
+SKETCH_MAX_SIDE = 512
+
+
+def variations(*, request: VariationsRequest) -> dict[str, Any]:
+    """The ring of variations (``station.design.variations.variations``)."""
+    from station.design.variations import variations as ring_of
+
+    ring = ring_of(to_design(request.design), request.degree, request.category)
+    return {
+        "centre": design_to_dict(ring.centre), "category": ring.category, "degree": ring.degree,
+        "variations": [{"label": v.label, "design": None if v.design is None else design_to_dict(v.design),
+                        "reason": v.reason} for v in ring.variations],
+    }
+
+
+def png_bytes(pixels: Any) -> bytes:
+    """Encode an ``(H, W, 3)`` uint8 array as PNG."""
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(pixels).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def swatch_png(*, request: SwatchRequest) -> tuple[bytes, int]:
+    """The swatch (or booklet thumbnail) as PNG bytes and the number of out-of-gamut swatch columns."""
+    from station.design.palette import booklet, swatch
+
+    design = to_design(request.design)
+    if request.kind == "booklet":
+        return png_bytes(booklet(design, request.size)), 0
+    sw = swatch(design, request.width, request.height, request.border)
+    return png_bytes(sw.pixels), int(sw.out_of_gamut_columns)
+
+
+def load_upload(data: bytes, *, max_bytes: int, max_pixels: int) -> Any:
+    """``load_image`` on uploaded bytes (written to a private temporary file first)."""
+    from station.design.images import load_image
+
+    if not data:
+        raise InputError("image", "a PNG or JPEG file as the request body", "an empty body")
+    with tempfile.TemporaryDirectory(prefix="cacad-upload-") as tmp:
+        path = Path(tmp) / "upload"
+        path.write_bytes(data)
+        return load_image(path, max_pixels=max_pixels, max_bytes=max_bytes)
+
+
+def _finite(x: Any) -> float | None:
+    return float(x) if x is not None and math.isfinite(float(x)) else None
+
+
+def eyedrop(*, data: bytes, max_bytes: int, face: tuple[float, float], flop: tuple[float, float],
+            gloss: tuple[float, float] | None, gloss_gu: float, travel_deg: float, radius: int,
+            auto_swap: bool) -> dict[str, Any]:
+    """Face/flop(/gloss) eyedroppers on an uploaded image → a design (thesis §3.5)."""
+    from station.design.images import MAX_PIXELS
+    from station.design.moodboard import eyedrop_design
+
+    img = load_upload(data, max_bytes=max_bytes, max_pixels=MAX_PIXELS)
+    h, w = img.pixels.shape[:2]
+    for name, (x, y) in (("face", face), ("flop", flop), *((("gloss", gloss),) if gloss else ())):
+        if not (0 <= x < w and 0 <= y < h):
+            raise InputError(f"{name}_x", f"a pixel inside the {w}x{h} image", (x, y))
+    r = eyedrop_design(img.pixels, face, flop, travel_deg=travel_deg, gloss_gu=gloss_gu, radius=radius,
+                       auto_swap=auto_swap, gloss_xy=gloss)
+    out: dict[str, Any] = {"design": design_to_dict(r.design), "face_lab": list(r.face_lab),
+                           "flop_lab": list(r.flop_lab), "swapped": r.swapped, "colour": img.colour_note}
+    if r.gloss is not None:
+        out["gloss"] = {"gloss_gu": r.gloss.gloss_gu, "contrast": r.gloss.contrast, "clipped": r.gloss.clipped}
+    return out
+
+
+def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str) -> dict[str, Any]:
+    """Point-light sketch fit of uploaded art over a built-in scene, started from the scene in silver (§3.7)."""
+    from station.design.scene import builtin_scene, shade, srgb_encode
+    from station.design.sketch import fit_point_light
+    from station.model import FaceFlopTravelGloss
+
+    art = load_upload(data, max_bytes=max_bytes, max_pixels=SKETCH_MAX_SIDE**2).pixels
+    h, w = art.shape[:2]
+    if h != w or not 16 <= h <= SKETCH_MAX_SIDE:
+        raise InputError("art", f"a square image of 16..{SKETCH_MAX_SIDE} pixels, the scene's size", f"{w}x{h}")
+    scene = builtin_scene(scene_name, h)
+    silver = FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")  # thesis §3.7.1
+    fit = fit_point_light(scene, art, srgb_encode(shade(scene, silver)), gloss=gloss_mode)
+    return {
+        "design": design_to_dict(fit.design), "rms_de": _finite(fit.rms_de), "failed": bool(fit.failed),
+        "seconds": float(fit.seconds), "reason": fit.reason, "shading_de": _finite(fit.shading_de),
+        "lab_standard": {"angles_deg": [15.0, 45.0, 110.0], "lab": [[float(x) for x in v] for v in fit.lab_standard]},
+        "theta_clamp_deg": _finite(fit.theta_clamp_deg), "pixels": int(fit.pixels), "gloss_source": fit.gloss_source,
+    }
