@@ -1,0 +1,191 @@
+"""Formulation routes (chemist): ColorSnap top-k, formulation, XML / CxF3 export, library CSV import/export.
+
+ColorSnap is checked against a brute-force NumPy scan of the rows as stored, the formulation's predicted
+ΔE per angle against the colorant model's own prediction of the returned recipe, the exports by reading
+them back with the formulation package's readers.
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+from sqlalchemy import insert
+
+from db.models import LibraryPaint
+from station.api.services.library import library_rows
+from station.formulate.color_xml import read_color_xml
+from station.formulate.colorants import default_database, predict_lab
+from station.formulate.cxf import read_cxf_specs
+from station.formulate.demo import generate_library
+from station.formulate.library_csv import read_library_csv
+from station.model.design_io import design_from_dict
+from station.model.difference import delta_e
+from tests.api.conftest import Api
+
+V1 = "/api/v1"
+ANGLES = (15.0, 45.0, 110.0)
+DESIGN = {"name": "Blue metallic", "face": [62.0, -4.0, -38.0], "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0,
+          "gloss_gu": 88.0}
+CSV = ("code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110\n"
+       "R-1,solid,90,40,50,30,40,50,30,40,50,30\n"
+       "M-1,metallic,85,90,-2,-30,60,-1,-25,30,0,-15\n")
+
+
+@pytest.fixture
+def lib_api(sqlite_api: Api) -> tuple[Api, list[dict]]:
+    """The service with a small SYNTHETIC library (with recipes) in its database."""
+    rows = library_rows(generate_library(n_solid=60, n_metallic=40, n_pearl=20, seed=3))
+    with sqlite_api.client.app.state.sessions() as session:  # type: ignore[attr-defined]
+        session.execute(insert(LibraryPaint), rows)
+        session.commit()
+    return sqlite_api, rows
+
+
+def _stored_lab(rows: list[dict]) -> np.ndarray:
+    return np.array([[r["lab"][[float(a) for a in r["angles_deg"]].index(a)] for a in ANGLES] for r in rows])
+
+
+def _counts(api: Api) -> tuple[int, int]:
+    get = lambda p: api.client.get(f"{V1}/{p}", headers=api.auth("admin")).json()["count"]  # noqa: E731
+    return get("library"), get("audit")
+
+
+@pytest.mark.parametrize("metric", ["cie76", "cie2000", "din6175"])
+def test_snap_is_the_brute_force_top_k(lib_api: tuple[Api, list[dict]], metric: str) -> None:
+    api, rows = lib_api
+    target = design_from_dict(DESIGN).lab_at(np.array(ANGLES))
+    r = api.client.post(f"{V1}/formulation/snap", json={"design": DESIGN, "k": 4, "metric": metric},
+                        headers=api.auth("chemist"))
+    assert r.status_code == 200, r.text
+    got = r.json()
+    lab = _stored_lab(rows)  # the design is the reference (DIN 6175-2 is not symmetric)
+    per_angle = delta_e(np.broadcast_to(target, lab.shape), lab, method=metric)
+    sums = per_angle.sum(axis=1)
+    order = np.argsort(sums, kind="stable")[:4]
+    assert [m["code"] for m in got["matches"]] == [rows[i]["code"] for i in order]
+    np.testing.assert_allclose([m["sum_de"] for m in got["matches"]], sums[order], rtol=1e-9)
+    np.testing.assert_allclose([m["de_per_angle"] for m in got["matches"]], per_angle[order], rtol=1e-9)
+    assert got["matches"][0]["recipe"] == rows[int(order[0])]["extra"]["recipe"]
+    assert got["library_paints"] == len(rows) and got["synthetic"] is True
+    # the same target as Lab triples gives the same answer
+    by_lab = api.client.post(f"{V1}/formulation/snap", json={"lab": target.tolist(), "k": 4, "metric": metric},
+                             headers=api.auth("admin")).json()
+    assert [m["code"] for m in by_lab["matches"]] == [m["code"] for m in got["matches"]]
+
+
+def test_snap_index_is_built_once_per_library(lib_api: tuple[Api, list[dict]]) -> None:
+    api, _ = lib_api
+    for k in (1, 2, 3):
+        assert api.client.post(f"{V1}/formulation/snap", json={"design": DESIGN, "k": k},
+                               headers=api.auth("chemist")).status_code == 200
+    cache = api.client.app.state.library_cache  # type: ignore[attr-defined]
+    assert cache.builds == 1
+    assert api.client.post(f"{V1}/library/import", content=CSV, headers=api.auth("chemist")).status_code == 201
+    assert api.client.post(f"{V1}/formulation/snap", json={"lab": [[40, 50, 30]] * 3, "k": 1},
+                           headers=api.auth("chemist")).json()["matches"][0]["code"] == "R-1"
+    assert cache.builds == 2  # rebuilt once for the changed library
+
+
+def test_snap_refusals(sqlite_api: Api) -> None:
+    c, chem = sqlite_api.client, sqlite_api.auth("chemist")
+    assert c.post(f"{V1}/formulation/snap", json={"design": DESIGN}, headers=chem).status_code == 409  # empty
+    r = c.post(f"{V1}/formulation/snap", json={"design": DESIGN, "lab": [[50, 0, 0]] * 3}, headers=chem)
+    assert r.status_code == 422 and "exactly one" in r.json()["detail"][0]["msg"]
+    r = c.post(f"{V1}/formulation/snap", json={"lab": [[50, 0, 0]] * 2}, headers=chem)
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][:2] == ["body", "lab"]
+    r = c.post(f"{V1}/formulation/snap", json={"design": DESIGN, "metric": "cie94"}, headers=chem)
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][:2] == ["body", "metric"]
+    assert c.post(f"{V1}/formulation/snap", json={"design_id": 99}, headers=chem).status_code == 404
+
+
+def test_formulate_predicted_de_is_the_colorant_models(lib_api: tuple[Api, list[dict]]) -> None:
+    api, _ = lib_api
+    target = design_from_dict(DESIGN).lab_at(np.array(ANGLES))
+    r = api.client.post(f"{V1}/formulation/formulate", json={"design": DESIGN, "tolerance": 1.0},
+                        headers=api.auth("chemist"))
+    assert r.status_code == 200, r.text
+    got = r.json()
+    names = default_database().names
+    c = np.array([got["recipe"].get(n, 0.0) for n in names])
+    predicted = predict_lab(c, ANGLES)
+    np.testing.assert_allclose(got["predicted_lab"], predicted, atol=1e-3)  # fractions < 1e-6 are omitted
+    np.testing.assert_allclose(got["de_per_angle"], delta_e(predicted, target, method="cie2000"), atol=1e-3)
+    assert got["mean_de"] == pytest.approx(np.mean(got["de_per_angle"]))
+    assert got["formulable"] is (got["mean_de"] <= 1.0)
+    assert got["synthetic_colorants"] is True and got["matches"]
+    r = api.client.post(f"{V1}/formulation/formulate", json={"design": DESIGN, "tolerance": 0.0},
+                        headers=api.auth("chemist"))
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][:2] == ["body", "tolerance"]
+
+
+def test_formulate_a_stored_design_version(lib_api: tuple[Api, list[dict]]) -> None:
+    api, _ = lib_api
+    d = api.client.post(f"{V1}/designs", json={"name": "Blue", "design": DESIGN}, headers=api.auth("stylist")).json()
+    r = api.client.post(f"{V1}/formulation/formulate", json={"design_id": d["id"], "version": 1},
+                        headers=api.auth("chemist"))
+    assert r.status_code == 200, r.text
+    np.testing.assert_allclose(r.json()["design_lab"], design_from_dict(DESIGN).lab_at(np.array(ANGLES)), atol=1e-9)
+    assert api.client.post(f"{V1}/formulation/formulate", json={"design_id": d["id"], "version": 2},
+                           headers=api.auth("chemist")).status_code == 404
+
+
+@pytest.mark.parametrize("fmt", ["xml", "cxf"])
+def test_export_reads_back_with_the_match(lib_api: tuple[Api, list[dict]], fmt: str) -> None:
+    api, _ = lib_api
+    r = api.client.post(f"{V1}/formulation/export", json={"design": DESIGN, "format": fmt, "five_angles": True},
+                        headers=api.auth("chemist"))
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"].startswith("application/xml")
+    assert f'filename="Blue_metallic.{fmt}"' in r.headers["content-disposition"]
+    specs = read_color_xml(r.content) if fmt == "xml" else read_cxf_specs(r.content)
+    assert [s.role for s in specs] == ["design", "match"]
+    design = design_from_dict(DESIGN)
+    for s in specs[0].sets:
+        np.testing.assert_allclose(s.lab, design.lab_at(np.asarray(s.angles_deg)), atol=1e-4)
+    assert {tuple(s.angles_deg) for s in specs[0].sets} >= {(15.0, 45.0, 110.0), (25.0, 45.0, 75.0)}
+    snap = api.client.post(f"{V1}/formulation/snap", json={"design": DESIGN, "k": 1},
+                           headers=api.auth("chemist")).json()
+    assert specs[1].code == r.headers["x-match-code"] == snap["matches"][0]["code"]
+    alone = api.client.post(f"{V1}/formulation/export", json={"design": DESIGN, "match": False},
+                            headers=api.auth("chemist"))
+    assert [s.role for s in read_color_xml(alone.content)] == ["design"]
+
+
+def test_library_import_and_export_round_trip(sqlite_api: Api) -> None:
+    c, chem = sqlite_api.client, sqlite_api.auth("chemist")
+    r = c.post(f"{V1}/library/import", params={"name": "lab paints"}, content=CSV,
+               headers=chem | {"Content-Type": "text/csv"})
+    assert r.status_code == 201, r.text
+    assert r.json() == {"library": "lab paints", "paints": 2, "angles_deg": [15.0, 45.0, 110.0],
+                        "types": {"solid": 1, "metallic": 1, "pearl": 0}}
+    paint = c.get(f"{V1}/library/M-1", headers=sqlite_api.auth("stylist")).json()
+    assert paint["lab"][0] == [90.0, -2.0, -30.0] and paint["extra"]["library"] == "lab paints"
+    exported = c.get(f"{V1}/library/export.csv", headers=sqlite_api.auth("qa"))
+    assert exported.status_code == 200 and exported.headers["content-type"].startswith("text/csv")
+    back = read_library_csv(io.StringIO(exported.text))
+    original = read_library_csv(io.StringIO(CSV))
+    assert list(back.codes) == list(original.codes)
+    np.testing.assert_allclose(back.lab, original.lab, atol=1e-4)
+    solids = c.get(f"{V1}/library/export.csv", params={"category": "solid"}, headers=chem)
+    assert list(read_library_csv(io.StringIO(solids.text)).codes) == ["R-1"]
+    events = c.get(f"{V1}/audit", params={"entity": "library"}, headers=sqlite_api.auth("admin")).json()
+    assert events["data"][0]["action"] == "library.import" and events["data"][0]["detail"]["paints"] == 2
+
+
+def test_failed_imports_store_nothing(sqlite_api: Api) -> None:
+    c, chem = sqlite_api.client, sqlite_api.auth("chemist")
+    assert c.post(f"{V1}/library/import", content=CSV, headers=chem).status_code == 201
+    before = _counts(sqlite_api)
+    again = CSV.replace("M-1", "M-2")  # R-1 is already stored: nothing of this file is added
+    assert c.post(f"{V1}/library/import", content=again, headers=chem).status_code == 409
+    bad = CSV.replace("40,50,30,40", "400,50,30,40", 1)  # L15 out of range on row 2
+    r = c.post(f"{V1}/library/import", content=bad.replace("R-1", "R-9"), headers=chem)
+    assert r.status_code == 422
+    loc = r.json()["detail"][0]["loc"]
+    assert loc[0] == "body" and "row 2" in loc[1] and "L15" in loc[1]
+    assert c.post(f"{V1}/library/import", content=b"\xff\xfe", headers=chem).status_code == 422
+    assert c.post(f"{V1}/library/import", params={"name": ""}, content=CSV, headers=chem).status_code == 422
+    assert c.post(f"{V1}/library/import", content="x" * 1_100_000, headers=chem).status_code == 413
+    assert _counts(sqlite_api) == before
