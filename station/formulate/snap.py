@@ -53,7 +53,7 @@ _SENTINEL = 1.0e6
 #: Leaves evaluated per batch once a k-th best is known (each batch tightens it for the rest).
 _BATCH_LEAVES = 40
 #: Leaves whose paints give the first k-th smallest upper bound (CIEDE2000, flat index).
-_FIRST_LEAVES = 12
+_FIRST_LEAVES = 24
 LAB_QUERY_RANGE = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
 _Q_LO = np.array([v[0] for v in LAB_QUERY_RANGE.values()])
 _Q_HI = np.array([v[1] for v in LAB_QUERY_RANGE.values()])
@@ -250,41 +250,53 @@ def _point_bounds_cie2000(
     factor 1 ∓ 1e-9 and the ∓ 1e-10 absorb (tests check both bounds
     against the exact kernel with hypothesis, near-neutral and blue-region colours included).
     """
-    qa, qb = q[:, 1], q[:, 2]
-    pa, pb = p[..., 1], p[..., 2]
-    c1 = np.hypot(qa, qb)
-    cbar = (c1 + np.hypot(pa, pb)) * 0.5
-    c2_ = cbar * cbar
-    c7 = c2_ * c2_ * c2_ * cbar
+    lower2, upper2 = _pair_bounds_cie2000(
+        q[:, 0], q[:, 1], q[:, 2], np.hypot(q[:, 1], q[:, 2]), p[..., 0], p[..., 1], p[..., 2],
+        np.hypot(p[..., 1], p[..., 2]), upper,
+    )
+    lower = np.sqrt(lower2).sum(-1) * _SAFETY - 1e-10
+    if not upper:
+        return lower
+    return lower, np.sqrt(upper2).sum(-1) * (2.0 - _SAFETY) + 1e-10
+
+
+def _pair_bounds_cie2000(
+    ql: NDArray, qa: NDArray, qb: NDArray, qc: NDArray, pl: NDArray, pa: NDArray, pb: NDArray, pc: NDArray,
+    upper: bool = True,
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """Lower and upper bounds of ΔE00² per pair (see :func:`_point_bounds_cie2000`), from the columns L*,
+    a*, b*, C*_ab of the reference (q…) and the sample (p…), which broadcast. No margin applied here."""
+    cbar = (qc + pc) * 0.5
+    c7 = cbar * cbar
+    c7 = c7 * c7 * c7 * cbar
     g1 = 1.5 - 0.5 * np.sqrt(c7 / (c7 + 25.0**7))
     a1 = g1 * qa
     a2 = g1 * pa
-    cp1 = np.hypot(a1, qb)
-    cp2 = np.hypot(a2, pb)
-    dc = np.abs(cp2 - cp1)
+    cp1 = np.sqrt(a1 * a1 + qb * qb)
+    cp2 = np.sqrt(a2 * a2 + pb * pb)
+    dc = cp2 - cp1
     da = a2 - a1
     db = pb - qb
     dab2 = da * da + db * db
-    dh2 = dab2 - dc * dc  # cancels when ΔH' ≈ 0: widened by ±1e-12 |Δ(a', b)|² (rounding, both sides)
+    dc2 = dc * dc
+    dh2 = dab2 - dc2  # cancels when ΔH' ≈ 0: widened by ±1e-12 |Δ(a', b)|² (rounding, both sides)
     eta = 1e-12 * dab2 + 1e-30
     dh_lo = np.sqrt(np.maximum(dh2 - eta, 0.0))
-    dh_hi = np.sqrt(np.maximum(dh2, 0.0) + eta)
     cpbar = (cp1 + cp2) * 0.5
-    cp2_ = cpbar * cpbar
-    cp7 = cp2_ * cp2_ * cp2_ * cpbar
+    cp7 = cpbar * cpbar
+    cp7 = cp7 * cp7 * cp7 * cpbar
     r = (2.0 * _SIN60) * np.sqrt(cp7 / (cp7 + 25.0**7))
-    lbar = (q[:, 0] + p[..., 0]) * 0.5 - 50.0
-    lbar2 = lbar * lbar
+    lbar2 = (ql + pl) * 0.5 - 50.0
+    lbar2 *= lbar2
     s_l = 1.0 + 0.015 * lbar2 / np.sqrt(20.0 + lbar2)
-    y = dc / (1.0 + 0.045 * cpbar)
-    z_hi = dh_hi / (1.0 + (0.015 * _T_MIN) * cpbar)
-    z = np.minimum(np.maximum(r * y * 0.5, dh_lo / (1.0 + (0.015 * _T_MAX) * cpbar)), z_hi)
-    dl = (p[..., 0] - q[:, 0]) / s_l
+    y = np.abs(dc) / (1.0 + 0.045 * cpbar)
+    ry = r * y
+    dl = (pl - ql) / s_l
     base = dl * dl + y * y
-    lower = np.sqrt(np.maximum(base + z * (z - r * y), 0.0)).sum(-1) * _SAFETY - 1e-10
-    if not upper:
-        return lower
-    return lower, np.sqrt(base + z_hi * (z_hi + r * y)).sum(-1) * (2.0 - _SAFETY) + 1e-10
+    z_hi = np.sqrt(np.maximum(dh2, 0.0) + eta) / (1.0 + (0.015 * _T_MIN) * cpbar)
+    z = np.minimum(np.maximum(ry * 0.5, dh_lo / (1.0 + (0.015 * _T_MAX) * cpbar)), z_hi)
+    lower2 = np.maximum(base + z * (z - ry), 0.0)
+    return lower2, (base + z_hi * (z_hi + ry) if upper else None)
 
 
 class SnapIndex:
@@ -339,6 +351,10 @@ class SnapIndex:
         padded = np.concatenate([lab, np.full((1, na, 3), _SENTINEL)], axis=0)
         self._blab = padded[rows]  # (nb, width, A, 3)
         chroma = np.hypot(self._blab[..., 1], self._blab[..., 2])
+        # columns L*, a*, b*, C*_ab per leaf, (nb, 4, width·A) contiguous: the per-paint bounds' layout
+        self._cols = np.ascontiguousarray(
+            np.stack([self._blab[..., 0], self._blab[..., 1], self._blab[..., 2], chroma], axis=1).reshape(
+                len(rows), 4, -1))
         real = (rows < n)[..., None, None]
         self._lo = np.where(real, self._blab, np.inf).min(axis=1)  # (nb, A, 3)
         self._hi = np.where(real, self._blab, -np.inf).max(axis=1)
@@ -434,15 +450,27 @@ class SnapIndex:
         self.last_visited = int(visited)
         return rows[top], s[top], per[top]
 
-    def _gather(self, q: NDArray[np.float64], leaves: NDArray[np.intp]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-        """Real paints of *leaves*: (rows, Lab, per-paint CIEDE2000 lower and upper bounds of the sum)."""
+    def _tile(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The query's L*, a*, b*, C*_ab in the layout of a leaf's columns: (4, width·A)."""
+        qcols = np.concatenate([q.T, np.hypot(q[:, 1], q[:, 2])[None]])
+        return np.broadcast_to(qcols[:, None, :], (4, self._rows.shape[1], q.shape[0])).reshape(4, -1)
+
+    def _gather(
+        self, q: NDArray[np.float64], qt: NDArray[np.float64], leaves: NDArray[np.intp]
+    ) -> tuple[NDArray, NDArray, NDArray]:
+        """Real paints of *leaves*: (rows, per-paint CIEDE2000 lower and upper bounds of the summed ΔE00);
+        *qt* is :meth:`_tile` of *q*."""
         rows = self._rows[leaves].ravel()
-        pts = self._blab[leaves].reshape(-1, *q.shape)
+        cols = self._cols[leaves]
+        lower2, upper2 = _pair_bounds_cie2000(qt[0], qt[1], qt[2], qt[3], cols[:, 0], cols[:, 1], cols[:, 2],
+                                              cols[:, 3])
+        na = q.shape[0]
+        lower = np.sqrt(lower2).reshape(-1, na).sum(-1) * _SAFETY - 1e-10
+        upper = np.sqrt(upper2).reshape(-1, na).sum(-1) * (2.0 - _SAFETY) + 1e-10  # type: ignore[arg-type]
         real = rows < self.size
         if not real.all():
-            rows, pts = rows[real], pts[real]
-        lower, upper = _point_bounds_cie2000(q, pts, upper=True)
-        return rows, pts, lower, upper
+            rows, lower, upper = rows[real], lower[real], upper[real]
+        return rows, lower, upper
 
     def _query_cie2000_flat(
         self, q: NDArray[np.float64], k: int, kernel: object
@@ -462,21 +490,20 @@ class SnapIndex:
         width = self._rows.shape[1]
         first = min(lb.size, max(_FIRST_LEAVES, -(-k // width) + 1))
         sel = np.argpartition(lb, first - 1)[:first] if first < lb.size else np.arange(lb.size)
-        rows, pts, plb, pub = self._gather(q, sel)
+        qt = self._tile(q)
+        rows, plb, pub = self._gather(q, qt, sel)
         u = np.partition(pub, k - 1)[k - 1] if pub.size >= k else math.inf
         rest = lb <= u
         rest[sel] = False
         more = np.flatnonzero(rest)
         if more.size:
-            rows2, pts2, plb2, pub2 = self._gather(q, more)
+            rows2, plb2, pub2 = self._gather(q, qt, more)
             rows = np.concatenate([rows, rows2])
-            pts = np.concatenate([pts, pts2])
             plb = np.concatenate([plb, plb2])
             pub = np.concatenate([pub, pub2])
             u = np.partition(pub, k - 1)[k - 1]
-        cand = plb <= u
-        per = kernel(q, pts[cand])  # type: ignore[operator]
-        rows = rows[cand]
+        rows = rows[plb <= u]
+        per = kernel(q, self.lab[rows])  # type: ignore[operator]
         s = per.sum(-1)
         top = np.lexsort((rows, s))[:k]
         self.last_visited = int(sel.size + more.size)
