@@ -13,24 +13,18 @@ from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.schemas.recipes import RecipeCreate, RecipePublic
 from station.api.security import Scope
 from station.api.services import recipes as service
+from station.api.services.formulation import app_cache
 
 router = APIRouter(prefix="/recipes", tags=["recipes"], responses=ERROR_RESPONSES)
 Reader = Annotated[User, scoped(Scope.LIBRARY_READ)]
 Chemist = Annotated[User, scoped(Scope.RECIPES_WRITE)]
 
 
-def _cache(request: Request) -> service.SnapCache:
-    cache = getattr(request.app.state, "snap_cache", None)
-    if cache is None:
-        cache = request.app.state.snap_cache = service.SnapCache()
-    return cache
-
-
 @router.post("", status_code=status.HTTP_201_CREATED, response_model=RecipePublic,
              responses={**NOT_FOUND, **CONFLICT})
 def create_recipe(request: Request, session: SessionDep, user: Chemist, recipe_in: RecipeCreate) -> RecipePublic:
     """Snap a design version to its k nearest library paints (summed ΔE at 15°/45°/110°) and store the job."""
-    return service.create_recipe(session=session, actor=user, cache=_cache(request), recipe_in=recipe_in)
+    return service.create_recipe(session=session, actor=user, cache=app_cache(request.app.state), recipe_in=recipe_in)
 
 
 @router.get("", response_model=Page[RecipePublic])

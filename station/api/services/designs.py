@@ -34,6 +34,12 @@ def to_design(body: DesignBody, field: str = "design") -> FaceFlopTravelGloss:
         raise InputError(f"{field}.{exc.field}", exc.accepted, exc.got) from exc
 
 
+def design_version(*, session: Session, design_id: int, version: int | None) -> DesignVersion:
+    """Version *version* (default: the latest) of design *design_id*, or :class:`NotFoundError`."""
+    design = _design(session, design_id)
+    return _version(session, design_id, version or design.latest_version)
+
+
 def _public(design: Design, body: dict[str, Any]) -> DesignPublic:
     return DesignPublic(id=design.id, name=design.name, latest_version=design.latest_version,
                         archived=design.archived, created_at=design.created_at,

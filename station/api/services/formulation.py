@@ -22,9 +22,8 @@ from db.models import LibraryPaint, User
 from station.api.errors import ConflictError
 from station.api.schemas.formulation import DesignSource, ExportRequest, FormulateRequest, SnapRequest
 from station.api.services import audit
-from station.api.services.designs import to_design
+from station.api.services.designs import design_version, to_design
 from station.api.services.library import library_rows
-from station.api.services.recipes import _design_version
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_from_dict
 
@@ -110,7 +109,7 @@ def _target(session: Session, source: DesignSource) -> tuple[np.ndarray, FaceFlo
     if source.design is not None:
         design = to_design(source.design)
     else:
-        design = design_from_dict(_design_version(session, source.design_id or 0, source.version).body)
+        design = design_from_dict(design_version(session=session, design_id=source.design_id or 0, version=source.version).body)
     return np.asarray(design.lab_at(np.asarray(STANDARD)), dtype=float), design
 
 
@@ -162,7 +161,7 @@ def export(*, session: Session, cache: LibraryCache, request: ExportRequest) -> 
     if request.design is not None:
         design = to_design(request.design)
     else:
-        design = design_from_dict(_design_version(session, request.design_id or 0, request.version).body)
+        design = design_from_dict(design_version(session=session, design_id=request.design_id or 0, version=request.version).body)
     specs = [spec_from_design(design, name=design.name or "design", five_angles=request.five_angles)]
     code = None
     if request.match:
