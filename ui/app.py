@@ -7,10 +7,9 @@ any design edit.
 
 from __future__ import annotations
 
-import os
 import sys
 import time
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QAction, QKeySequence
@@ -22,30 +21,37 @@ from ui.models.view import ViewModel
 from ui.widgets.designer_panel import DesignerPanel
 from ui.widgets.view_panel import ViewPanel
 
-
-def default_measurements_path() -> Path:
-    """``$CACAD_DATA_DIR/measurements.jsonl`` or ``~/.local/share/cacad/measurements.jsonl`` (folder created)."""
-    root = Path(os.environ.get("CACAD_DATA_DIR", Path.home() / ".local" / "share" / "cacad"))
-    root.mkdir(parents=True, exist_ok=True)
-    return root / "measurements.jsonl"
+if TYPE_CHECKING:
+    from ui.models.measure_db import MeasurementSink
+    from ui.models.service import ServiceClient
 
 
 class MainWindow(QMainWindow):
     """Docks and tabs around one design document and one view model."""
 
     def __init__(self, document: DesignDocument | None = None, service_url: str | None = None,
-                 measurements: str | Path | None = None, parent: QWidget | None = None) -> None:
+                 sink: MeasurementSink | None = None, service: ServiceClient | None = None,
+                 parent: QWidget | None = None) -> None:
+        """*service* (a client) or *service_url* puts the viewer in service mode; *sink* is where scans
+        are stored (default: the service's measurements, or the workstation's database)."""
         super().__init__(parent)
         from ui.models.instruments import MeasurementStore
+        from ui.models.measure_db import LocalSink, ServiceSink
 
-        # every scan is appended to a JSON-lines file before it is shown: nothing is lost on a crash
-        self.store = MeasurementStore(measurements if measurements is not None else default_measurements_path())
         self.setWindowTitle("CACAD Station")
         self.document = document or DesignDocument()
         self.designer = DesignerModel(self.document)
         self.view_model = ViewModel()
-        self.service_url = service_url
-        self.service = None
+        self.service = service
+        if service is None and service_url:
+            from ui.models.service import ServiceClient
+
+            self.service = ServiceClient(service_url)
+        self.service_url = self.service.url if self.service is not None else None
+        # every scan is queued on disk, then stored in the database (or on the service): nothing is lost
+        if sink is None:
+            sink = ServiceSink(self.service) if self.service is not None else LocalSink()
+        self.store = MeasurementStore(sink)
         self.view_model.show(self.document.design)
         self.document.events.changed.connect(self._on_design)
 
@@ -85,10 +91,7 @@ class MainWindow(QMainWindow):
         edit.addAction(self.redo_action)
         self.document.events.history.connect(self._on_history)
         self._on_history()
-        if self.service_url:
-            from ui.models.service import ServiceClient
-
-            self.service = ServiceClient(self.service_url)
+        if self.service is not None:
             svc = self.menuBar().addMenu("&Service")
             svc.addAction("Load designs into palette", self.load_from_service)
             svc.addAction("Save current design", self.save_to_service)
@@ -143,6 +146,8 @@ class MainWindow(QMainWindow):
         self.designer_panel.close()
         for w in self.screens.values():
             w.close()
+        if self.store.sink is not None:
+            self.store.sink.close()
         if self.service is not None:
             self.service.close()
         super().closeEvent(event)

@@ -52,7 +52,10 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     if app is None:
         raise RuntimeError("create the QApplication before taking screenshots")
     scratch = tempfile.TemporaryDirectory()
-    win = MainWindow(measurements=Path(scratch.name) / "measurements.jsonl")
+    from ui.models.measure_db import LocalSink
+
+    sink = LocalSink(f"sqlite:///{Path(scratch.name) / 'station.sqlite3'}", Path(scratch.name) / "outbox.sqlite3")
+    win = MainWindow(sink=sink)
     win.resize(*SIZE)
     win.show()
     written: list[Path] = []
@@ -105,13 +108,18 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
             _wait(lambda: inst.idle, 60)
             inst.calibrate()
             _wait(lambda: inst.idle, 60)
-            inst.panel.setText("door-front-left")
+            inst.job.setText("J-2026-0113")
+            inst.part.setCurrentText("door")
+            inst.substrate.setText("steel, e-coat")
+            inst.notes.setPlainText("front left door, centre")
             inst.scan()
             _wait(lambda: inst.idle, 60)
         shot("instruments")
 
         win.tabs.setCurrentWidget(win.screens["QA"])
         qa = win.screens["QA"].content()
+        if scan:
+            qa.load_stored()
         qa.panel_a.setCurrentText("palette: as designed")
         qa.panel_b.setCurrentText("palette: bluer face, 70 GU")
         qa.beta.setValue(4)

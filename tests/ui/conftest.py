@@ -83,6 +83,12 @@ def _prefilter_cache_dir():
 
 
 @pytest.fixture(autouse=True)
+def _data_dir(tmp_path, monkeypatch):
+    """``$CACAD_DATA_DIR`` in the test's temporary folder: a default sink never writes to ./var."""
+    monkeypatch.setenv("CACAD_DATA_DIR", str(tmp_path / "data"))
+
+
+@pytest.fixture(autouse=True)
 def _no_leftovers(request):
     """No top-level widget left visible and no QThread running after a test."""
     from PySide6.QtCore import QThread

@@ -8,13 +8,15 @@ from PIL import Image
 
 from ui.app import MainWindow
 from ui.models.document import DEFAULT_DESIGN
+from ui.models.measure_db import LocalSink
 
 pytestmark = [pytest.mark.qt]
 
 
 def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
-    win = MainWindow(measurements=tmp_path / "m.jsonl")
-    assert win.store.path == tmp_path / "m.jsonl"
+    sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
+    win = MainWindow(sink=sink)
+    assert win.store.sink is sink
     qtbot.addWidget(win)
     win.resize(1200, 800)
     win.show()

@@ -1,23 +1,41 @@
 """Instruments screen against the MA6 simulator subprocess (real pty, real driver): connect, calibrate,
-scan with progress in a worker thread, the measurement is stored, shown and usable as the design."""
+scan with progress in a worker thread; the reading is stored once in a real (temporary) SQLite measurement
+database through the ingest layer, with its panel metadata, shown and usable as the design."""
 
 from __future__ import annotations
 
-import json
+import datetime as dt
 
 import numpy as np
 import pytest
+from sqlalchemy import create_engine, select
+from sqlalchemy.orm import Session
 
+from db.models import Measurement as MeasurementRow
+from db.models import Panel
+from station.drivers.readings import SpectralReading
 from station.errors import InputError
+from station.model.spectra import reflectance_to_lab
 from ui.models.document import DesignDocument
-from ui.models.instruments import InstrumentSession, MeasurementStore
+from ui.models.instruments import InstrumentSession, MeasurementStore, measurement_from_reading
+from ui.models.measure_db import LocalSink, PanelInfo
 from ui.widgets.instruments_screen import InstrumentsScreen
 
 pytestmark = [pytest.mark.qt, pytest.mark.slow]
 
 
-def test_scan_with_simulator_stores_and_shows_measurement(qtbot, tmp_path):
-    store = MeasurementStore(tmp_path / "m.jsonl")
+def _rows(url: str) -> list[tuple[MeasurementRow, Panel]]:
+    engine = create_engine(url)
+    try:
+        with Session(engine) as s:
+            return [tuple(r) for r in s.execute(select(MeasurementRow, Panel).join(Panel)).all()]
+    finally:
+        engine.dispose()
+
+
+def test_scan_with_simulator_stores_one_row_with_panel_metadata(qtbot, tmp_path):
+    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    store = MeasurementStore(LocalSink(url, tmp_path / "outbox.sqlite3"))
     doc = DesignDocument()
     screen = InstrumentsScreen(store, doc)
     qtbot.addWidget(screen)
@@ -30,7 +48,10 @@ def test_scan_with_simulator_stores_and_shows_measurement(qtbot, tmp_path):
     screen.calibrate_btn.click()
     qtbot.waitUntil(lambda: screen.idle, timeout=90000)
     assert "calibration" in screen.log.toPlainText() and "passed" in screen.state.text(), screen.log.toPlainText()
-    screen.panel.setText("door-7")
+    screen.job.setText("J-2026-0113")
+    screen.part.setCurrentText("bumper")
+    screen.substrate.setText("PP/EPDM")
+    screen.notes.setPlainText("rear bumper, left of the plate")
     steps: list[int] = []
     screen.scan_btn.click()
     screen.task.progress.connect(lambda s, _t: steps.append(s))
@@ -38,18 +59,30 @@ def test_scan_with_simulator_stores_and_shows_measurement(qtbot, tmp_path):
     assert len(store.items) == 1, screen.log.toPlainText()
     m = store.items[0]
     assert screen.progress.value() == screen.progress.maximum()
-    assert m.panel == "door-7" and m.device == "sim:ma6"
-    assert len(m.geometries) == 6 and m.lab.shape == (6, 3)
-    # shown: the table holds the stored Lab, the list one entry, the file one JSON line
+    assert m.panel == PanelInfo("J-2026-0113", "bumper", "PP/EPDM", "rear bumper, left of the plate")
+    assert m.device == "sim:ma6" and len(m.geometries) == 6 and m.lab.shape == (6, 3)
+    assert m.receipt is not None and m.receipt.status == "stored", m.receipt
+    assert f"stored as measurement {m.receipt.measurement_id}" == screen.state.text()
+    # the database holds exactly this reading, once, on a panel with the typed metadata
+    rows = _rows(url)
+    assert len(rows) == 1
+    row, panel = rows[0]
+    assert row.id == m.receipt.measurement_id and str(row.client_id) == str(m.reading.client_id)
+    assert (panel.job, panel.part, panel.substrate, panel.notes) == (
+        "J-2026-0113", "bumper", "PP/EPDM", "rear bumper, left of the plate")
+    # the stored Lab is the 45° block's, recomputed here from the stored spectra through the model
+    np.testing.assert_allclose(row.lab, reflectance_to_lab(np.asarray(row.spectra)), atol=1e-3)
+    assert row.geometries_deg == [float(a) for a in m.aspecular_deg]  # the MA6's six are all 45° illumination
+    np.testing.assert_allclose(row.lab, m.lab, atol=1e-3)
+    # shown: the table holds the Lab, the list one entry with the row id
     np.testing.assert_allclose(screen.lab_table(), np.round(m.lab, 2), atol=0.006)
-    assert screen.stored.count() == 1
+    assert screen.stored.count() == 1 and f"#{row.id}" in screen.stored.item(0).text()
     assert screen.plot.design == m.design and screen.plot.points[1].shape == (6, 3)
-    rec = json.loads((tmp_path / "m.jsonl").read_text().splitlines()[0])
-    assert rec["panel"] == "door-7" and len(rec["lab"]) == 6
-    # Lab comes from the spectra through the model, independently recomputed here
-    from station.model.spectra import reflectance_to_lab
-
     np.testing.assert_allclose(m.lab, reflectance_to_lab(m.spectra), atol=1e-9)
+    # re-sending the same reading (a retry) stores nothing new
+    again = store.persist(m)
+    assert again.receipt.status == "duplicate" and again.receipt.measurement_id == row.id
+    assert len(_rows(url)) == 1
     assert m.design is not None
     screen.use_btn.click()
     assert doc.design == m.design and doc.can_undo
@@ -57,12 +90,55 @@ def test_scan_with_simulator_stores_and_shows_measurement(qtbot, tmp_path):
     assert not screen.session.connected
 
 
+def _spectral(serial: str = "SIM-T-1") -> SpectralReading:
+    """A reading built here (no device): a flat grey 0.3 at three 45° geometries."""
+    refl = np.full((3, 31), 0.3)
+    refl[0] *= 1.5
+    return SpectralReading(("45as15", "45as45", "45as110"), refl, 23.0, serial, "CAL-1",
+                           dt.datetime(2026, 11, 23, 7, 0, tzinfo=dt.UTC), model="test")
+
+
+def test_unreachable_database_keeps_the_reading_then_stores_it_once(tmp_path):
+    blocker = tmp_path / "db"
+    blocker.write_text("a file where the database folder should be")
+    url = f"sqlite:///{blocker / 'station.sqlite3'}"
+    sink = LocalSink(url, tmp_path / "outbox.sqlite3")
+    store = MeasurementStore(sink)
+    m = measurement_from_reading(_spectral(), PanelInfo("J-1", "fender"), "test")
+    r = store.persist(m).receipt
+    assert r.status == "queued" and "unreachable" in r.message and str(tmp_path / "outbox.sqlite3") in r.message
+    assert sink.pending() == 1
+    blocker.unlink()  # the database comes back
+    got = sink.flush()
+    assert [x.status for x in got.values()] == ["stored"] and sink.pending() == 0
+    assert store.persist(m).receipt.status == "duplicate"
+    rows = _rows(url)
+    assert len(rows) == 1 and rows[0][1].part == "fender"
+    # the same client id with other panel metadata is a different payload: refused, kept in the dead letters
+    moved = store.persist(m.__class__(**{**m.__dict__, "panel": PanelInfo("J-1", "door")}))
+    assert moved.receipt.status == "refused" and "already stored" in moved.receipt.message
+    assert [cid for cid, _e in sink.outbox.dead_letters()] == [str(m.reading.client_id)]
+    assert len(_rows(url)) == 1
+    sink.close()
+
+
+def test_bad_panel_metadata_is_refused_with_the_field(qtbot, tmp_path):
+    screen = InstrumentsScreen(MeasurementStore(LocalSink(f"sqlite:///{tmp_path / 's.sqlite3'}", tmp_path / "o")))
+    qtbot.addWidget(screen)
+    screen.job.setText("  ")
+    screen.scan()
+    assert "job" in screen.log.toPlainText() and screen.state.text() == "failed"
+    with pytest.raises(InputError, match="part"):
+        PanelInfo("J-1", "wheel").validated()
+    screen.close()
+
+
 def test_session_refuses_bad_input_without_starting_anything():
     s = InstrumentSession()
     with pytest.raises(InputError, match="device"):
         s.connect("sim:nope")
     with pytest.raises(InputError, match="instrument"):
-        s.scan("p1")
+        s.scan(PanelInfo("J-1", "door"))
     assert not s.connected
 
 

@@ -4,15 +4,18 @@ A session connects to a device address or to a simulator (``sim:ma6`` / ``sim:ma
 started as a subprocess by :func:`station.drivers.simproc.spawn_simulator`), calibrates and measures.
 Lab comes from ``station.model.spectra.reflectance_to_lab`` (D65/10°) and the design from
 ``station.model.fit_fftg`` on the in-plane 45° illumination block; each measurement is kept with its
-panel metadata in a :class:`MeasurementStore` (appended to a JSON-lines file when one is given).
+panel metadata (job, part, substrate, notes) through a :class:`MeasurementStore`, whose sink writes it to
+the measurement database via the ingest layer (``ui.models.measure_db``).
 """
 
 from __future__ import annotations
 
 import datetime as dt
-import json
+import getpass
+import os
+import uuid
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -22,21 +25,25 @@ from station.drivers import GlossReading, open_instrument
 from station.drivers.readings import SpectralReading
 from station.drivers.simproc import SIM_KINDS, spawn_simulator
 from station.errors import InputError
+from station.ingest import CalibrationRef, InstrumentRef, Reading
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.design_io import design_to_dict
 from station.model.spectra import reflectance_to_lab
 from ui.models.events import EventGroup
+from ui.models.measure_db import MeasurementSink, PanelInfo, StoreReceipt
 
 SIM_DEVICES = tuple(f"sim:{k}" for k in SIM_KINDS)
 Progress = Callable[[int, str], None]
 STEPS = 4
+_CAL_NAMESPACE = uuid.UUID("0b9e8c1e-5d0c-4c7b-8f5e-2b7c3f1d9a11")  # = station.api.instruments' (same record ids)
 
 
 @dataclass(frozen=True)
 class Measurement:
-    """One stored reading: panel metadata, geometries, Lab per geometry, optional gloss and fitted design."""
+    """One scan: panel metadata, geometries, Lab per geometry, optional gloss and fitted design, and the
+    ingest :class:`~station.ingest.Reading` (the 45° block; its client id keeps a re-sent scan single)."""
 
-    panel: str
+    panel: PanelInfo
     device: str
     time: str
     geometries: tuple[str, ...]
@@ -46,22 +53,59 @@ class Measurement:
     gloss_gu: float | None = None
     design: FaceFlopTravelGloss | None = None
     note: str = ""
+    reading: Reading | None = field(default=None, repr=False)
+    receipt: StoreReceipt | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able record."""
-        return {"panel": self.panel, "device": self.device, "time": self.time, "geometries": list(self.geometries),
-                "lab": np.round(self.lab, 4).tolist(), "spectra": np.round(self.spectra, 5).tolist(),
-                "gloss_gu": self.gloss_gu, "note": self.note,
-                "design": design_to_dict(self.design) if self.design is not None else None}
+        return {"panel": asdict(self.panel), "device": self.device, "time": self.time,
+                "geometries": list(self.geometries), "lab": np.round(self.lab, 4).tolist(),
+                "spectra": np.round(self.spectra, 5).tolist(), "gloss_gu": self.gloss_gu, "note": self.note,
+                "design": design_to_dict(self.design) if self.design is not None else None,
+                "client_id": None if self.reading is None else str(self.reading.client_id)}
 
 
-def measurement_from_reading(reading: SpectralReading | GlossReading, panel: str, device: str) -> Measurement:
+def operator_name() -> str:
+    """The operator recorded with a reading: ``$CACAD_OPERATOR``, the login name, or ``viewer``."""
+    name = os.environ.get("CACAD_OPERATOR", "")
+    if not name:
+        try:
+            name = getpass.getuser()
+        except (OSError, KeyError):  # no login name in some containers
+            name = ""
+    name = "".join(c for c in name if c.isprintable()).strip()[:64]
+    return name or "viewer"
+
+
+def ingest_reading(reading: SpectralReading, operator: str | None = None) -> Reading:
+    """The ingest reading of the in-plane 45° illumination block: Lab from the spectra (model, D65/10°),
+    a fresh client id, the instrument and its calibration (keyed like ``station.api``'s)."""
+    angles, refl = reading.block(45)
+    if not angles:
+        angles, refl = reading.aspecular_deg, reading.reflectance
+    refl = np.asarray(refl, float)
+    lab = np.asarray(reflectance_to_lab(refl), float)
+    cal = None
+    if reading.calibration_id:
+        cal = CalibrationRef(client_id=uuid.uuid5(_CAL_NAMESPACE, f"{reading.serial}/{reading.calibration_id}"),
+                             performed_at=reading.time)
+    return Reading(
+        client_id=uuid.uuid4(),
+        instrument=InstrumentRef(serial=reading.serial or "unknown", model=reading.model or "unknown",
+                                 kind="multiangle"),
+        calibration=cal, operator=operator or operator_name(), measured_at=reading.time,
+        geometries_deg=[float(a) for a in angles], lab=lab.round(4).tolist(),
+        wavelengths_nm=[float(w) for w in reading.wavelengths_nm], spectra=refl.round(6).tolist())
+
+
+def measurement_from_reading(reading: SpectralReading | GlossReading, panel: PanelInfo, device: str) -> Measurement:
     """Lab (model), and the FFTG fit of the 45° block's positive aspecular angles (eqs 3.3.1–3.3.10)."""
     now = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
     if isinstance(reading, GlossReading):
         g60 = reading.gloss_gu.get(60)
         return Measurement(panel, device, now, (), (), np.zeros((0, 3)), np.zeros((0, 31)),
-                           None if g60 is None else float(g60), None, "gloss meter reading")
+                           None if g60 is None else float(g60), None,
+                           "gloss meter reading (not stored: a measurement needs Lab per geometry)")
     lab = np.asarray(reflectance_to_lab(reading.reflectance), float)
     angles, _rows = reading.block(45)
     keep = [i for i, a in enumerate(angles) if a > 0]
@@ -75,22 +119,30 @@ def measurement_from_reading(reading: SpectralReading | GlossReading, panel: str
         except InputError as exc:
             note = f"no design fit: {exc}"
     return Measurement(panel, device, now, tuple(reading.geometries), tuple(reading.aspecular_deg), lab,
-                       np.asarray(reading.reflectance, float), None, design, note)
+                       np.asarray(reading.reflectance, float), None, design, note, ingest_reading(reading))
 
 
 class MeasurementStore:
-    """Measurements in memory, appended to *path* (JSON lines) when given. Event: ``added(measurement)``."""
+    """The session's scans in memory (the database is the record). Event: ``added(measurement)``.
 
-    def __init__(self, path: str | Path | None = None) -> None:
-        self.path = Path(path) if path is not None else None
+    *sink* (a :class:`~ui.models.measure_db.MeasurementSink`) stores each scan; the screen calls
+    :meth:`persist` in its worker thread and :meth:`add` in the GUI thread."""
+
+    def __init__(self, sink: MeasurementSink | None = None) -> None:
+        self.sink = sink
         self.items: list[Measurement] = []
         self.events = EventGroup("added")
 
+    def persist(self, m: Measurement) -> Measurement:
+        """Store *m* through the sink (queued on disk first); *m* with its receipt. Blocking."""
+        if self.sink is None:
+            return m
+        if m.reading is None:
+            return replace(m, receipt=StoreReceipt("", "refused", None, m.note))
+        return replace(m, receipt=self.sink.submit(m.panel, m.reading))
+
     def add(self, m: Measurement) -> None:
-        """Store *m* (written before the event fires: nothing is lost if a listener fails)."""
-        if self.path is not None:
-            with self.path.open("a", encoding="utf-8") as fh:
-                fh.write(json.dumps(m.to_dict()) + "\n")
+        """Keep *m* and tell the listeners."""
         self.items.append(m)
         self.events.added.emit(m)
 
@@ -135,18 +187,20 @@ class InstrumentSession:
             raise InputError("instrument", "a connected instrument", None)
         return self.instrument.calibrate()
 
-    def scan(self, panel: str, progress: Progress | None = None) -> Measurement:
-        """Measure one panel: progress (step, text) for measure → Lab → fit → done."""
+    def scan(self, panel: PanelInfo, progress: Progress | None = None,
+             store: MeasurementStore | None = None) -> Measurement:
+        """Measure one panel: progress (step, text) for measure → Lab and fit → store → done."""
         if self.instrument is None:
             raise InputError("instrument", "a connected instrument", None)
-        if not panel.strip():
-            raise InputError("panel", "a non-empty panel id", panel)
+        panel = panel.validated()
         say = progress or (lambda _s, _t: None)
         say(1, "measuring")
         reading = self.instrument.measure()
         say(2, "computing Lab and fitting the design")
-        m = measurement_from_reading(reading, panel.strip(), self.device)
-        say(3, "done")
+        m = measurement_from_reading(reading, panel, self.device)
+        if store is not None:
+            say(3, "storing")
+            m = store.persist(m)
         return m
 
     def close(self) -> None:

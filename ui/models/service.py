@@ -1,8 +1,9 @@
-"""Client of the station service (``station viewer --service URL``): designs in and out over HTTP.
+"""Client of the station service (``station viewer --service URL``): designs, the library and measurements.
 
-The viewer computes everything with the local core; the service is where designs are shared. The token
-is the bearer token printed by ``station serve`` / ``station users add`` (``$STATION_TOKEN``).
-Routes: ``GET /api/v1/designs`` (a page ``{"data": [...], "count"}``), ``POST /api/v1/designs``.
+The viewer computes everything with the local core; the service is where designs, the paint library and
+measurements are shared. The token is the bearer token printed by ``station serve`` / ``station users add``
+(``$STATION_TOKEN``). Routes: ``GET/POST /api/v1/designs`` (pages ``{"data": [...], "count"}``),
+``GET /api/v1/library``; measurements go through :class:`ui.models.measure_db.ServiceSink`.
 """
 
 from __future__ import annotations
@@ -11,8 +12,10 @@ import os
 from typing import Any
 
 import httpx
+import numpy as np
 
 from station.errors import StationError
+from station.formulate.library import Library
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_from_dict, design_to_dict
 
@@ -21,6 +24,10 @@ API = "/api/v1"
 
 class ServiceError(StationError):
     """The service refused a request or could not be reached (the message says which and why)."""
+
+
+class ServiceUnreachable(ServiceError):
+    """No HTTP answer at all (connection refused, timeout)."""
 
 
 class ServiceClient:
@@ -34,11 +41,15 @@ class ServiceClient:
         self._client = client or httpx.Client(base_url=self.url, timeout=timeout_s)
         self._own = client is None
 
-    def _call(self, method: str, path: str, **kw: Any) -> Any:
+    def request(self, method: str, path: str, **kw: Any) -> httpx.Response:
+        """One request under ``/api/v1`` with the token; :class:`ServiceUnreachable` when nothing answers."""
         try:
-            r = self._client.request(method, f"{API}{path}", headers=self._headers, **kw)
+            return self._client.request(method, f"{API}{path}", headers=self._headers, **kw)
         except httpx.HTTPError as exc:
-            raise ServiceError(f"service {self.url} unreachable: {exc}") from exc
+            raise ServiceUnreachable(f"service {self.url} unreachable: {exc}") from exc
+
+    def _call(self, method: str, path: str, **kw: Any) -> Any:
+        r = self.request(method, path, **kw)
         if r.status_code >= 400:
             raise ServiceError(f"service {method} {path}: HTTP {r.status_code} {r.text[:300]}")
         return r.json()
@@ -52,6 +63,28 @@ class ServiceClient:
         """Store *design* as a new service design; returns its id."""
         body = {"name": name, "design": design_to_dict(design), "note": note}
         return int(self._call("POST", "/designs", json=body)["id"])
+
+    def library(self, page: int = 1000) -> Library:
+        """The service's paint library as a ``station.formulate.library.Library`` (every page).
+
+        Paints whose angle set differs from the first paint's, or without gloss, are left out; the
+        library's ``source`` says how many."""
+        rows: list[dict[str, Any]] = []
+        while True:
+            got = self._call("GET", "/library", params={"limit": page, "offset": len(rows)})
+            rows += got["data"]
+            if not got["data"] or len(rows) >= int(got["count"]):
+                break
+        if not rows:
+            raise ServiceError(f"service {self.url}: the library is empty")
+        angles = tuple(float(a) for a in rows[0]["angles_deg"])
+        keep = [r for r in rows if tuple(float(a) for a in r["angles_deg"]) == angles and r["gloss_gu"] is not None]
+        return Library(
+            f"service {self.url}", np.array([r["code"] for r in keep]), np.array([r["category"] for r in keep]),
+            np.array([float(r["gloss_gu"]) for r in keep]), angles,
+            np.array([r["lab"] for r in keep], float).reshape(len(keep), len(angles), 3),
+            source=f"{self.url}{API}/library ({len(rows) - len(keep)} of {len(rows)} paints left out: "
+                   "other angle set or no gloss)")
 
     def close(self) -> None:
         """Close the HTTP client if this object made it."""

@@ -1,8 +1,10 @@
 """Instruments screen: connect (simulators offered), calibrate, scan a panel with progress, see the
-reading (L*, a*, b* per angle with the fitted curve, and a rendering), store it with the panel id.
+reading (L*, a*, b* per angle with the fitted curve, and a rendering), store it in the measurement database
+with the panel metadata (job, part, substrate, notes).
 
-Every blocking call runs in a :class:`~ui.widgets.tasks.TaskThread`; the thread is joined and the
-instrument (and simulator) closed when the screen closes. Errors are shown in the log as they are.
+Every blocking call (the scan and its store included) runs in a :class:`~ui.widgets.tasks.TaskThread`; the
+thread is joined and the instrument (and simulator) closed when the screen closes. Errors are shown in the
+log as they are; a reading the database or service could not take stays in the on-disk outbox.
 """
 
 from __future__ import annotations
@@ -18,15 +20,19 @@ from PySide6.QtWidgets import (
     QPlainTextEdit,
     QProgressBar,
     QPushButton,
+    QSizePolicy,
     QTableWidget,
     QTableWidgetItem,
     QVBoxLayout,
     QWidget,
 )
 
+from db.models import PARTS
 from station.design.palette import booklet
+from station.errors import InputError
 from ui.models.document import DesignDocument
 from ui.models.instruments import SIM_DEVICES, STEPS, InstrumentSession, Measurement, MeasurementStore
+from ui.models.measure_db import PanelInfo
 from ui.widgets.common import lab_colour, pixmap_from_array
 from ui.widgets.reading_plot import ReadingPlot
 from ui.widgets.tasks import TaskThread
@@ -48,7 +54,19 @@ class InstrumentsScreen(QWidget):
         self.device = QComboBox()
         self.device.setEditable(True)
         self.device.addItems(list(SIM_DEVICES))
-        self.panel = QLineEdit("panel-001")
+        self.job = QLineEdit("J-0001")
+        self.part = QComboBox()
+        self.part.addItems(list(PARTS))
+        self.part.setCurrentText("test_panel")
+        self.substrate = QLineEdit()
+        self.substrate.setPlaceholderText("e.g. PP/EPDM, steel")
+        self.notes = QPlainTextEdit()
+        self.notes.setPlaceholderText("notes stored with the panel")
+        self.notes.setMaximumHeight(54)
+        self.notes.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
+        self.retry_btn = QPushButton("Retry queued")
+        self.where = QLabel(self._where_text())
+        self.where.setWordWrap(True)
         self.connect_btn = QPushButton("Connect")
         self.calibrate_btn = QPushButton("Calibrate")
         self.scan_btn = QPushButton("Scan panel")
@@ -68,15 +86,19 @@ class InstrumentsScreen(QWidget):
 
         form = QFormLayout()
         form.addRow("device", self.device)
-        form.addRow("panel id", self.panel)
+        form.addRow("job", self.job)
+        form.addRow("part", self.part)
+        form.addRow("substrate", self.substrate)
+        form.addRow("notes", self.notes)
         buttons = QHBoxLayout()
-        for b in (self.connect_btn, self.calibrate_btn, self.scan_btn, self.use_btn):
+        for b in (self.connect_btn, self.calibrate_btn, self.scan_btn, self.use_btn, self.retry_btn):
             buttons.addWidget(b)
         left = QVBoxLayout()
         left.addLayout(form)
         left.addLayout(buttons)
         left.addWidget(self.progress)
         left.addWidget(self.state)
+        left.addWidget(self.where)
         left.addWidget(QLabel("log"))
         left.addWidget(self.log)
         right = QVBoxLayout()
@@ -96,6 +118,7 @@ class InstrumentsScreen(QWidget):
         self.calibrate_btn.clicked.connect(self.calibrate)
         self.scan_btn.clicked.connect(self.scan)
         self.use_btn.clicked.connect(self.use_as_design)
+        self.retry_btn.clicked.connect(self.retry)
         self.store.events.added.connect(self._on_added)
         self._sync_buttons()
 
@@ -127,15 +150,37 @@ class InstrumentsScreen(QWidget):
         """Run the calibration sequence."""
         self._run(lambda p: (p(1, "calibrating"), self.session.calibrate())[1], self._on_calibrated, "calibrating…")
 
+    def panel_info(self) -> PanelInfo:
+        """The panel metadata as typed (validated: :class:`InputError` names the field)."""
+        return PanelInfo(self.job.text(), self.part.currentText(), self.substrate.text(),
+                         self.notes.toPlainText()).validated()
+
     def scan(self) -> None:
-        """Measure the panel; the reading is stored and shown."""
-        panel = self.panel.text()
-        self._run(lambda p: self.session.scan(panel, p), self._on_scanned, f"scanning {panel}…")
+        """Measure the panel; the reading is stored (or queued on disk) in the worker, then shown."""
+        try:
+            panel = self.panel_info()
+        except InputError as exc:
+            self._on_failed(str(exc))
+            return
+        self._run(lambda p: self.session.scan(panel, p, self.store), self._on_scanned, f"scanning {panel.label}…")
+
+    def retry(self) -> None:
+        """Send the readings waiting in the outbox."""
+        sink = self.store.sink
+        if sink is None:
+            return
+        self._run(lambda p: (p(1, "sending queued readings"), sink.flush())[1], self._on_retried, "retrying…")
+
+    def _where_text(self) -> str:
+        sink = self.store.sink
+        if sink is None:
+            return "storage: none (scans kept in this session only)"
+        return f"storage: {sink.where}; outbox {sink.outbox_path}"
 
     def use_as_design(self) -> None:
         """Make the last reading's fitted design the current design (undoable)."""
         if self.document is not None and self.last is not None and self.last.design is not None:
-            self.document.set_design(self.last.design, f"measured {self.last.panel}")
+            self.document.set_design(self.last.design, f"measured {self.last.panel.label}")
 
     # ------------------------------------------------------------------ results
     def _on_task_done(self, *_args) -> None:
@@ -168,11 +213,32 @@ class InstrumentsScreen(QWidget):
     def _on_scanned(self, m: Measurement) -> None:
         self.progress.setValue(STEPS)
         self.store.add(m)
-        self._say(f"stored {m.panel} ({len(m.geometries)} geometries) {m.note}")
+        r = m.receipt
+        if r is None:
+            self._say(f"scanned {m.panel.label} ({len(m.geometries)} geometries) {m.note}; not stored (no database)")
+        elif r.status in ("stored", "duplicate"):
+            self.state.setText(f"stored as measurement {r.measurement_id}")
+            self._say(f"{r.status} {m.panel.label} as measurement {r.measurement_id} "
+                      f"({len(m.geometries)} geometries) {m.note}")
+        else:
+            self.state.setText("NOT STORED — kept in the outbox" if r.status == "queued" else "REFUSED")
+            self._say(f"ERROR {r.message}")
+
+    def _on_retried(self, receipts: dict) -> None:
+        self.progress.setValue(STEPS)
+        done = [r for r in receipts.values() if r.status in ("stored", "duplicate")]
+        left = self.store.sink.pending() if self.store.sink is not None else 0
+        self.state.setText(f"{len(done)} sent, {left} still queued")
+        self._say(f"retry: {len(done)} sent, {left} still queued")
+        for r in receipts.values():
+            if r.message:
+                self._say(f"ERROR {r.message}")
 
     def _on_added(self, m: Measurement) -> None:
         self.last = m
-        self.stored.addItem(f"{m.time}  {m.panel}  {m.device}  {m.note}")
+        status = "session only" if m.receipt is None else (
+            f"#{m.receipt.measurement_id}" if m.receipt.measurement_id is not None else m.receipt.status.upper())
+        self.stored.addItem(f"{m.time}  {m.panel.label}  {status}  {m.device}  {m.note}")
         self.table.setRowCount(len(m.geometries))
         for i, (g, lab) in enumerate(zip(m.geometries, m.lab, strict=True)):
             for j, text in enumerate((g, *(f"{v:.2f}" for v in lab))):
@@ -190,6 +256,7 @@ class InstrumentsScreen(QWidget):
         self.connect_btn.setEnabled(not busy)
         self.calibrate_btn.setEnabled(not busy and self.session.connected)
         self.scan_btn.setEnabled(not busy and self.session.connected)
+        self.retry_btn.setEnabled(not busy and self.store.sink is not None)
         self.use_btn.setEnabled(self.last is not None and self.last.design is not None and self.document is not None)
 
     def lab_table(self) -> np.ndarray:

@@ -1,4 +1,5 @@
-"""QA screen: two panels (designs, palette entries or stored measurements), a misalignment and the
+"""QA screen: two panels (designs, palette entries, this session's scans or measurements stored in the
+database or on the service — "Load stored measurements"), a misalignment and the
 geometry range → seam ΔE per geometry, the goniogeometric index, pass/fail, advice, and the seam rendered
 as is and with the corrected paint for panel B (``station.analysis.qa.seam_qa``). The corrected paint
 can be sent to formulation (ColorSnap in the library tab)."""
@@ -24,7 +25,7 @@ from PySide6.QtWidgets import (
 )
 
 from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, SeamReport, seam_qa
-from station.errors import InputError
+from station.errors import InputError, StationError
 from station.model import FaceFlopTravelGloss
 from ui.models.designer import DesignerModel
 from ui.models.instruments import MeasurementStore
@@ -71,6 +72,10 @@ class QAScreen(QWidget):
         self.lights = QLineEdit(", ".join(f"{v:g}" for v in DEFAULT_LIGHTS_DEG))
         self.aspecular = QLineEdit(", ".join(f"{v:g}" for v in DEFAULT_ASPECULAR_DEG))
         self.run_btn = QPushButton("Run QA")
+        self.load_btn = QPushButton("Load stored measurements")
+        self.load_btn.setEnabled(store.sink is not None)
+        self.load_btn.setToolTip("the newest measurements of the database (or the service in service mode)")
+        self.stored: list[tuple[str, FaceFlopTravelGloss]] = []
         self.send_btn = QPushButton("Send corrected paint to formulation")
         self.send_btn.setEnabled(False)
         self.verdict = QLabel("—")
@@ -98,6 +103,7 @@ class QAScreen(QWidget):
         form.addRow("aspecular range (°)", self.aspecular)
         left = QVBoxLayout()
         left.addLayout(form)
+        left.addWidget(self.load_btn)
         left.addWidget(self.run_btn)
         left.addWidget(self.verdict)
         left.addWidget(self.details, 1)
@@ -117,6 +123,7 @@ class QAScreen(QWidget):
 
         self.beta.valueChanged.connect(self._on_beta)
         self.run_btn.clicked.connect(self.run)
+        self.load_btn.clicked.connect(self.load_stored)
         self.send_btn.clicked.connect(self._send)
         designer.events.palette.connect(self.refresh_sources)
         designer.document.events.changed.connect(self._on_design)
@@ -136,8 +143,22 @@ class QAScreen(QWidget):
         """(label, design) of every panel that can be picked."""
         out = [("current design", self.designer.design)]
         out += [(f"palette: {n}", d) for n, d in self.designer.palette]
-        out += [(f"measured: {m.panel} {m.time}", m.design) for m in self.store.items if m.design is not None]
-        return out
+        out += [(f"measured: {m.panel.label} {m.time}", m.design) for m in self.store.items if m.design is not None]
+        return out + self.stored
+
+    def load_stored(self, limit: int = 50) -> int:
+        """Offer the newest stored measurements (their FFTG fits) as panels; returns how many."""
+        try:
+            rows = self.store.sink.recent(limit)
+        except StationError as exc:
+            self._on_failed(f"stored measurements: {exc}")
+            return 0
+        self.stored = [(f"stored #{r.id}: {r.label} {r.measured_at}", d) for r in rows
+                       if (d := r.design()) is not None]
+        self.refresh_sources()
+        self.details.setText(f"{len(self.stored)} stored measurements offered as panels "
+                             f"({len(rows) - len(self.stored)} without a design fit) from {self.store.sink.where}")
+        return len(self.stored)
 
     def refresh_sources(self) -> None:
         """Rebuild both pickers, keeping the selections where possible."""

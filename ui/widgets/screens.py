@@ -38,11 +38,21 @@ class LazyScreen(QWidget):
 
 
 def _library_screen(window) -> QWidget:
+    """The service's library in service mode (the demo library, said so, when the service cannot give one)."""
     from station.formulate.demo import demo_library
     from ui.models.library import LibraryModel
     from ui.widgets.library_screen import LibraryScreen
 
-    return LibraryScreen(LibraryModel(demo_library()), window.document)
+    library = None
+    if window.service is not None:
+        from ui.models.service import ServiceError
+
+        try:
+            library = window.service.library()
+            window.statusBar().showMessage(f"library: {len(library)} paints from {window.service_url}")
+        except ServiceError as exc:
+            window.statusBar().showMessage(f"library from the service failed ({exc}); showing the demo library")
+    return LibraryScreen(LibraryModel(library if library is not None else demo_library()), window.document)
 
 
 def build_screens(window) -> list[tuple[str, QWidget]]:
