@@ -19,8 +19,11 @@ from schemathesis.specs.openapi.checks import (
     response_schema_conformance,
     status_code_conformance,
 )
+from sqlalchemy import insert
 
-from db.models import Role
+from db.models import LibraryPaint, Role
+from station.api.services.library import library_rows
+from station.formulate.demo import generate_library
 from tests.api.conftest import Api
 from tests.ingest._readings import make_reading
 
@@ -56,6 +59,10 @@ def test_schemathesis_conformance(sqlite_api: Api) -> None:
                                                              "travel_deg": 60}}, headers=headers)
     for i in range(2):
         c.post("/api/v1/measurements", json=make_reading(51, i).model_dump(mode="json"), headers=headers)
+    with app.state.sessions() as session:  # a small SYNTHETIC library: snap, formulate and export reach their work
+        session.execute(insert(LibraryPaint), library_rows(generate_library(n_solid=30, n_metallic=20, n_pearl=10,
+                                                                            seed=5)))
+        session.commit()
     failures: list[str] = []
     for result in schema.get_all_operations():
         operation = result.ok()
