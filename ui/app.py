@@ -153,14 +153,19 @@ class MainWindow(QMainWindow):
         super().closeEvent(event)
 
 
-def main(argv: list[str] | None = None, service_url: str | None = None) -> int:
+def main(argv: list[str] | None = None, service_url: str | None = None, token: str | None = None) -> int:
     """Run the viewer; prints the start-up-to-first-frame time on stderr."""
     from ui.widgets.render_view import configure_default_format
 
     t0 = time.perf_counter()
     configure_default_format()
     app = QApplication.instance() or QApplication(argv if argv is not None else sys.argv)
-    win = MainWindow(service_url=service_url)
+    service = None
+    if service_url:
+        from ui.models.service import ServiceClient
+
+        service = ServiceClient(service_url, token)
+    win = MainWindow(service=service)
     win.resize(1500, 950)
     view = win.view_panel.view
     view.frame_rendered.connect(

@@ -1,4 +1,5 @@
-"""``station viewer [--service URL]`` starts the Qt workstation viewer; ``station viewer screenshots --out DIR``
+"""``station viewer [--service URL [--token T]]`` starts the Qt workstation viewer (scans go to the
+workstation's database in ``$CACAD_DATA_DIR`` or ``./var``, or to the service's measurements); ``station viewer screenshots --out DIR``
 regenerates the screenshots of every screen (docs/screens). The viewer lives in the ``ui`` package; it is
 imported only when these commands run (the core never imports Qt)."""
 
@@ -17,6 +18,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``viewer`` and ``viewer screenshots``."""
     p = subparsers.add_parser("viewer", help="the Qt workstation viewer")
     p.add_argument("--service", metavar="URL", help="station service to use as a client (default: local core)")
+    p.add_argument("--token", metavar="TOKEN", default=None,
+                   help="bearer token for --service (default: $STATION_TOKEN)")
     p.set_defaults(handler=cmd_viewer)
     sub = p.add_subparsers(dest="viewer_command", metavar="ACTION")
     s = sub.add_parser("screenshots", help="regenerate screenshots of every screen")
@@ -34,9 +37,11 @@ def _check_service(url: str | None) -> None:
 def cmd_viewer(args: argparse.Namespace) -> dict[str, Any] | None:
     """Run the viewer until its window closes."""
     _check_service(args.service)
+    if args.token is not None and args.service is None:
+        raise InputError("--token", "only together with --service URL", "a token without a service")
     from ui.app import main
 
-    code = main([], service_url=args.service)
+    code = main([], service_url=args.service, token=args.token)
     return None if code == 0 else {"exit_code": code}
 
 

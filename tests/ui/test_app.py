@@ -64,3 +64,11 @@ def test_cli_viewer_refuses_bad_service_url(capsys):
     assert main(["viewer", "--service", "ftp://nope"]) == 2
     err = capsys.readouterr().err
     assert "--service" in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_viewer_refuses_a_token_without_a_service(capsys):
+    from station.cli import main
+
+    assert main(["viewer", "--token", "secret"]) == 2
+    err = capsys.readouterr().err
+    assert "--token" in err and len(err.strip().splitlines()) == 1

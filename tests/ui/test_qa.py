@@ -53,3 +53,40 @@ def test_qa_report_verdict_and_send(qtbot):
     screen.run_btn.click()
     assert screen.verdict.text() == "error" and "lights" in screen.details.text()
     screen.close()
+
+
+def test_stored_measurements_from_the_local_database_are_panels(qtbot, tmp_path):
+    from tests.ui.test_instruments import _spectral
+    from ui.models.instruments import measurement_from_reading
+    from ui.models.measure_db import LocalSink, PanelInfo
+
+    sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
+    store = MeasurementStore(sink)
+    m = store.persist(measurement_from_reading(_spectral(), PanelInfo("J-3", "door", "steel"), "test"))
+    assert m.receipt.status == "stored"
+    screen = QAScreen(DesignerModel(DesignDocument()), store)
+    qtbot.addWidget(screen)
+    assert screen.load_stored() == 1
+    label = f"stored #{m.receipt.measurement_id}: J-3 door"
+    picked = [lbl for lbl, _d in screen.sources() if lbl.startswith(label)]
+    assert len(picked) == 1 and screen.panel_a.findText(picked[0]) >= 0
+    screen.panel_a.setCurrentText(picked[0])
+    got = screen.picked()[0]
+    for f in ("face", "flop", "travel_deg"):
+        assert getattr(got, f) == pytest.approx(getattr(m.design, f), abs=1e-3)
+    assert screen.as_is_model.designs[0] is got
+    screen.close()
+    sink.close()
+
+
+def test_stored_measurements_failure_is_shown(qtbot, tmp_path):
+    from ui.models.measure_db import LocalSink
+
+    blocker = tmp_path / "f"
+    blocker.write_text("not a folder")
+    screen = QAScreen(DesignerModel(DesignDocument()),
+                      MeasurementStore(LocalSink(f"sqlite:///{blocker / 'x.sqlite3'}", tmp_path / "o.sqlite3")))
+    qtbot.addWidget(screen)
+    assert screen.load_stored() == 0
+    assert screen.verdict.text() == "error" and "unreachable" in screen.details.text()
+    screen.close()
