@@ -105,6 +105,10 @@ def test_eyedrop_refusals_store_nothing(sqlite_api: Api) -> None:
     assert empty.status_code == 422
     missing = sqlite_api.client.post(f"{V1}/styling/eyedrop", params={"face_x": 5}, content=img, headers=auth)
     assert missing.status_code == 422 and missing.json()["detail"][0]["loc"][:2] == ["query", "face_y"]
+    bomb = _png(np.zeros((2000, 2001, 3), np.uint8))  # a few kB of PNG, just over 4 megapixels decoded
+    assert len(bomb) < 100_000
+    r = sqlite_api.client.post(f"{V1}/styling/eyedrop", params=params, content=bomb, headers=auth)
+    assert r.status_code == 422 and "4000000 pixels" in r.json()["detail"][0]["msg"]
     huge = sqlite_api.client.post(f"{V1}/styling/eyedrop", params=params, content=b"\0" * 1_100_000, headers=auth)
     assert huge.status_code == 413  # the service's body cap (1 MiB by default)
     assert _audit_count(sqlite_api) == before

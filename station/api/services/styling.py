@@ -18,6 +18,9 @@ from station.api.services.designs import to_design
 from station.errors import InputError
 from station.model.design_io import design_to_dict
 
+#: Mood-board uploads decode to float64 (24 bytes a pixel): a 1 MiB PNG can hold a 36-megapixel flat image,
+#: so the service accepts at most 4 megapixels (about 100 MB decoded) per eyedropper request.
+EYEDROP_MAX_PIXELS = 4_000_000
 #: Sketch-fit art is a square image the size of the built-in scene; this bounds the CPU a request may take.
 SKETCH_MAX_SIDE = 512
 
@@ -74,10 +77,9 @@ def eyedrop(*, data: bytes, max_bytes: int, face: tuple[float, float], flop: tup
             gloss: tuple[float, float] | None, gloss_gu: float, travel_deg: float, radius: int,
             auto_swap: bool) -> dict[str, Any]:
     """Face/flop(/gloss) eyedroppers on an uploaded image → a design (thesis §3.5)."""
-    from station.design.images import MAX_PIXELS
     from station.design.moodboard import eyedrop_design
 
-    img = load_upload(data, max_bytes=max_bytes, max_pixels=MAX_PIXELS)
+    img = load_upload(data, max_bytes=max_bytes, max_pixels=EYEDROP_MAX_PIXELS)
     h, w = img.pixels.shape[:2]
     for name, (x, y) in (("face", face), ("flop", flop), *((("gloss", gloss),) if gloss else ())):
         if not (0 <= x < w and 0 <= y < h):
