@@ -99,3 +99,26 @@ def parse_lab_list(text: str, field: str = "lab") -> list[list[float]]:
     if not parts:
         raise InputError(field, '"L,a,b;L,a,b;..." with one triple per angle', text)
     return [parse_floats(p, f"{field}[{i}]", 3) for i, p in enumerate(parts)]
+
+
+def design_from_args(args: argparse.Namespace) -> Any:
+    """A design from ``--design FILE`` or from ``--face/--flop/--travel[/--gloss]``.
+
+    ``--flop`` defaults to the face, and face = flop is a solid (no travel needed); an effect paint
+    needs ``--travel``. ``--gloss`` absent or None keeps the model's default gloss.
+    """
+    from station.model import FaceFlopTravelGloss
+    from station.model.design_io import load_design
+
+    if getattr(args, "design", None):
+        return load_design(args.design)
+    if getattr(args, "face", None) is None:
+        raise InputError("face", "--face L,a,b (or --design FILE)")
+    face = parse_floats(args.face, "face", 3)
+    flop = parse_floats(args.flop, "flop", 3) if getattr(args, "flop", None) else face
+    travel = None if face == flop else getattr(args, "travel", None)
+    if face != flop and travel is None:
+        raise InputError("travel", "--travel DEG (15 < travel <= 180) when face != flop")
+    gloss = getattr(args, "gloss", None)
+    extra = {} if gloss is None else {"gloss_gu": gloss}
+    return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, **extra)

@@ -24,7 +24,7 @@ from station.analysis import goniogeometric_index
 from station.analysis.index import DE_METHODS, JND_CIE76
 from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, seam_qa
 from station.analysis.trompe import OBJECTIVES, inverse_trompe_loeil
-from station.cli._common import add_json_flag, parse_floats
+from station.cli._common import add_json_flag, design_from_args, parse_floats
 from station.errors import InputError
 
 
@@ -32,25 +32,6 @@ def _hinge(text: str) -> str | float:
     if text in ("in-plane", "out-of-plane"):
         return text
     return parse_floats(text, "hinge", 1)[0]
-
-
-def _paint(args: argparse.Namespace) -> Any:
-    from station.model import FaceFlopTravelGloss
-    from station.model.design_io import load_design
-
-    if getattr(args, "design", None):
-        return load_design(args.design)
-    if args.face is None:
-        raise InputError("face", "--face L,a,b (or --design FILE)")
-    face = parse_floats(args.face, "face", 3)
-    flop = parse_floats(args.flop, "flop", 3) if args.flop else face
-    travel = args.travel
-    if face == flop:
-        travel = None
-    elif travel is None:
-        raise InputError("travel", "--travel DEG when face != flop (15 < travel <= 180)")
-    return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, **({"gloss_gu": args.gloss}
-                                                                      if args.gloss is not None else {}))
 
 
 def _add_paint_args(p: argparse.ArgumentParser) -> None:
@@ -68,7 +49,7 @@ def _add_common(p: argparse.ArgumentParser) -> None:
 
 
 def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
-    paint = _paint(args)
+    paint = design_from_args(args)
     lights = parse_floats(args.light, "light")
     views = parse_floats(args.view, "view") if args.view is not None else None
     r = goniogeometric_index(paint, lights if len(lights) > 1 else lights[0], views, epsilon=args.epsilon,
@@ -78,7 +59,7 @@ def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _trompe(args: argparse.Namespace) -> dict[str, Any]:
-    paint = _paint(args)
+    paint = design_from_args(args)
     lights = parse_floats(args.lights, "lights")
     views = parse_floats(args.views, "views") if args.views is not None else None
     r = inverse_trompe_loeil(paint, lights, views, beta_deg=args.beta, objective=args.objective, at=args.at,
@@ -124,7 +105,7 @@ def _seam(args: argparse.Namespace) -> dict[str, Any]:
 def _sweep(args: argparse.Namespace) -> dict[str, Any]:
     from station.analysis.sweep import plot_sweep, seam_sweep
 
-    paint = _paint(args)
+    paint = design_from_args(args)
     r = seam_sweep(paint, parse_floats(args.betas, "betas"), parse_floats(args.lights, "lights"),
                    parse_floats(args.views, "views") if args.views else None, hinge=_hinge(args.hinge),
                    method=args.de, epsilon=args.epsilon)

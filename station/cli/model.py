@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from station.cli._common import add_json_flag, parse_floats, parse_lab_list
+from station.cli._common import add_json_flag, design_from_args, parse_floats, parse_lab_list
 from station.errors import InputError
-from station.model import ANGLES_3, AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
+from station.model import ANGLES_3, AspecularMeasurements, fit_fftg
 from station.model.design_io import design_to_dict, load_design
 from station.model.difference import DELTA_E_METHODS, delta_e
 from station.model.gloss import lobe_from_gloss, simulate_gloss_meter
@@ -29,19 +29,6 @@ STANDARD_EVAL_ANGLES = "15,25,45,75,110"
 
 def _angles(text: str) -> list[float]:
     return parse_floats(text, "angles")
-
-
-def _design_from_args(args: argparse.Namespace) -> FaceFlopTravelGloss:
-    if getattr(args, "design", None):
-        return load_design(args.design)
-    if args.face is None:
-        raise InputError("face", "--face L,a,b (or --design FILE)")
-    face = parse_floats(args.face, "face", 3)
-    flop = parse_floats(args.flop, "flop", 3) if args.flop else face
-    travel = args.travel
-    if travel is None and flop != face:
-        raise InputError("travel", "--travel DEG (15 < travel <= 180) when face != flop")
-    return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, args.gloss)
 
 
 def _from_angles(args: argparse.Namespace) -> dict[str, Any]:
@@ -63,7 +50,7 @@ def _from_angles(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _eval(args: argparse.Namespace) -> dict[str, Any]:
-    design = _design_from_args(args)
+    design = design_from_args(args)
     angles = _angles(args.angles)
     return {"angles": angles, "lab": design.lab_at(np.asarray(angles)).tolist()}
 
