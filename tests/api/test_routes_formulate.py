@@ -189,3 +189,28 @@ def test_failed_imports_store_nothing(sqlite_api: Api) -> None:
     assert c.post(f"{V1}/library/import", params={"name": ""}, content=CSV, headers=chem).status_code == 422
     assert c.post(f"{V1}/library/import", content="x" * 1_100_000, headers=chem).status_code == 413
     assert _counts(sqlite_api) == before
+
+
+def test_browse_filters_like_the_thesis_browser(lib_api: tuple[Api, list[dict]]) -> None:
+    from station.model.indices import library_indices
+
+    api, rows = lib_api
+    lab = _stored_lab(rows)
+    flop = [library_indices(*lab[i]).flop_index for i in range(len(rows))]
+    expected = [r["code"] for r, f in zip(rows, flop, strict=True)
+                if r["category"] in ("metallic", "pearl") and f is not None and 3.0 <= f <= 12.0]
+    params = {"types": ["metallic", "pearl"], "flop_min": 3.0, "flop_max": 12.0, "limit": 1000}
+    r = api.client.get(f"{V1}/library/browse", params=params, headers=api.auth("stylist"))
+    assert r.status_code == 200, r.text
+    got = r.json()
+    assert [p["code"] for p in got["paints"]] == expected and got["matched"] == len(expected) > 0
+    for p in got["paints"]:
+        assert p["indices"]["flop"] == pytest.approx(flop[[x["code"] for x in rows].index(p["code"])], rel=1e-9)
+    reds = api.client.get(f"{V1}/library/browse", params={"set": "solids", "group": "red"},
+                          headers=api.auth("qa")).json()
+    assert all(p["group"] == ["solids", "chromatic", "red"] for p in reds["paints"])
+    assert reds["matched"] == got["hierarchy"]["solids"]["chromatic"].get("red", 0)
+    bad = api.client.get(f"{V1}/library/browse", params={"chroma_min": 5, "chroma_max": 1}, headers=api.auth("qa"))
+    assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][:2] == ["body", "chroma"]
+    bad = api.client.get(f"{V1}/library/browse", params={"group": "purple"}, headers=api.auth("qa"))
+    assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][:2] == ["query", "group"]

@@ -11,7 +11,7 @@ from db.models import User
 from station.api.deps import SessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.common import Limit, Offset, Page
-from station.api.schemas.formulation import LibraryImportOut
+from station.api.schemas.formulation import BrowseOut, LibraryImportOut
 from station.api.schemas.library import LibraryPaintPublic
 from station.api.security import Scope
 from station.api.services import formulation
@@ -31,6 +31,31 @@ def list_paints(session: SessionDep, _user: Reader, category: Literal["solid", "
     rows, total = service.list_paints(session=session, category=category, code_prefix=code_prefix, limit=limit,
                                       offset=offset)
     return Page[LibraryPaintPublic](data=[LibraryPaintPublic.model_validate(r) for r in rows], count=total)
+
+
+IndexBound = Annotated[float | None, Query(ge=-1000.0, le=1000.0, allow_inf_nan=False)]
+
+
+@router.get("/browse", response_model=BrowseOut, responses=CONFLICT)
+def browse(request: Request, session: SessionDep, _user: Reader,
+           types: Annotated[list[Literal["solid", "metallic", "pearl"]] | None, Query(
+               max_length=3, description="type check boxes (repeat the parameter); default all")] = None,
+           flop_min: IndexBound = None, flop_max: IndexBound = None,
+           chroma_min: IndexBound = None, chroma_max: IndexBound = None,
+           hue_shift_min: IndexBound = None, hue_shift_max: IndexBound = None,
+           set_name: Annotated[Literal["solids", "metallics+pearls"] | None, Query(alias="set")] = None,
+           kind: Literal["chromatic", "neutral"] | None = None,
+           group: Literal["blue", "green", "yellow", "red", "light", "medium", "dark"] | None = None,
+           limit: Limit = 100, offset: Offset = 0) -> dict[str, object]:
+    """The thesis's library browser (§5.3.3): type check boxes, lower/upper bounds on the Flop, Chroma and Hue
+    Shift Index (eqs 5.3.1–5.3.3) and the hierarchy solids | metallics+pearls → chromatic (blue, green,
+    yellow, red) | neutral (light, medium, dark)."""
+    from station.formulate.library import PAINT_TYPES, LibraryFilter
+
+    flt = LibraryFilter(types=frozenset(types or PAINT_TYPES), flop=(flop_min, flop_max), chroma=(chroma_min, chroma_max),
+                        hue_shift=(hue_shift_min, hue_shift_max), set_name=set_name, kind=kind, group=group)
+    return formulation.browse(session=session, cache=formulation.app_cache(request.app.state), flt=flt, limit=limit,
+                              offset=offset)
 
 
 @router.get("/export.csv", response_class=Response, responses={**CONFLICT, 200: {

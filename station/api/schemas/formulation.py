@@ -122,3 +122,26 @@ class LibraryImportOut(BaseModel):
     paints: int
     angles_deg: list[float]
     types: dict[str, int]
+
+
+class BrowsePaint(BaseModel):
+    """A library paint in the browser: type, gloss, place in the hierarchy, Lab at 15/45/110 and the indices
+    (eqs 5.3.1–5.3.3; null where undefined: a dark colour's Flop Index, an achromatic face's Hue Shift)."""
+
+    code: str
+    library_paint_id: int
+    type: str
+    gloss_gu: float | None
+    group: list[str]
+    lab_15_45_110: list[list[float]]
+    indices: dict[str, float | None]
+
+
+class BrowseOut(BaseModel):
+    """The paints the filter keeps (a page of them), how many matched, and the hierarchy of the library."""
+
+    library: str
+    synthetic: bool
+    matched: int
+    paints: list[BrowsePaint]
+    hierarchy: dict[str, dict[str, dict[str, int]]]

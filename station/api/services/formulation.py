@@ -217,3 +217,23 @@ def app_cache(state: Any) -> LibraryCache:
     if cache is None:
         cache = state.library_cache = LibraryCache()
     return cache
+
+
+def browse(*, session: Session, cache: LibraryCache, flt: Any, limit: int, offset: int) -> dict[str, Any]:
+    """The thesis's browser (§5.3.3): ``LibraryFilter`` (types, index bounds, hierarchy) over the library."""
+    from station.formulate.library import hierarchy_counts
+
+    cached = cache.get(session)
+    lib = cached.library
+    rows = np.flatnonzero(flt.mask(lib))
+    idx = lib.indices()  # computed once per cached library
+    top, kind, group = lib.groups()
+    std = lib.angle_columns()
+    paints = [{
+        "code": str(lib.codes[r]), "library_paint_id": int(cached.ids[r]), "type": str(lib.types[r]),
+        "gloss_gu": None if np.isnan(lib.gloss_gu[r]) else float(lib.gloss_gu[r]),
+        "group": [str(top[r]), str(kind[r]), str(group[r])], "lab_15_45_110": std[r].tolist(),
+        "indices": {k: (None if np.isnan(v[r]) else float(v[r])) for k, v in idx.items()},
+    } for r in rows[offset:offset + limit]]
+    return {"library": lib.name, "synthetic": bool(lib.synthetic), "matched": int(rows.size), "paints": paints,
+            "hierarchy": hierarchy_counts(lib)}
