@@ -37,6 +37,7 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("POST", f"{V1}/analyses/sweep"): frozenset({Q, A}),
     ("GET", f"{V1}/analyses"): ALL,
     ("GET", f"{V1}/analyses/{{analysis_id}}"): ALL,
+    ("GET", f"{V1}/analyses/{{analysis_id}}/report.png"): ALL,
     ("POST", f"{V1}/designs"): frozenset({S, A}),
     ("GET", f"{V1}/designs"): frozenset({Q, S, C, A}),
     ("GET", f"{V1}/designs/{{design_id}}"): frozenset({Q, S, C, A}),

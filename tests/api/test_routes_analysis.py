@@ -6,11 +6,13 @@ the closed form of issue 6: with the light at θ_i, k = cos(θ_i + β) / cos θ_
 
 from __future__ import annotations
 
+import io
 import json
 import math
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from station.analysis import goniogeometric_index, seam_qa
 from station.analysis.scenarios import SOLID_LIGHTS_DEG
@@ -121,6 +123,10 @@ def test_seam_qa_of_two_designs_is_stored_and_audited(sqlite_api: Api) -> None:
     assert stored["inputs"]["design_b"]["face"] == [57.0, -4.0, -42.0]
     events = c.get(f"{V1}/audit", params={"entity": "analysis"}, headers=sqlite_api.auth("admin")).json()
     assert events["data"][0]["action"] == "analysis.seam_qa"
+    png = c.get(f"{V1}/analyses/{stored['id']}/report.png", headers=sqlite_api.auth("stylist"))
+    assert png.status_code == 200 and png.headers["content-type"] == "image/png"
+    assert png.content.startswith(b"\x89PNG") and Image.open(io.BytesIO(png.content)).size[0] > 400
+    assert c.get(f"{V1}/analyses/999/report.png", headers=sqlite_api.auth("qa")).status_code == 404
 
 
 def test_failed_seam_requests_store_nothing(sqlite_api: Api) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query, status
+from fastapi import APIRouter, Query, Response, status
 
 from db.models import User
 from station.api.deps import SessionDep, scoped
@@ -64,6 +64,15 @@ def list_analyses(session: SessionDep, _user: Reader,
     """Stored analyses, newest first."""
     rows, total = service.list_analyses(session=session, kind=kind, limit=limit, offset=offset)
     return Page[AnalysisPublic](data=[AnalysisPublic.model_validate(r) for r in rows], count=total)
+
+
+@router.get("/{analysis_id}/report.png", response_class=Response, responses={**NOT_FOUND, 200: {
+    "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}},
+    "description": "the seam QA report picture"}})
+def report_png(session: SessionDep, _user: Reader, analysis_id: Id) -> Response:
+    """The seam QA report as a PNG: both panels rendered side by side as painted and with the corrected
+    paint, and the BRDF curves of paint A, paint B and the correction compared (thesis Fig. 4.7)."""
+    return Response(service.report_png(session=session, analysis_id=analysis_id), media_type="image/png")
 
 
 @router.get("/{analysis_id}", response_model=AnalysisPublic, responses=NOT_FOUND)

@@ -3,6 +3,9 @@ misalignment computations (goniogeometric index, inverse trompe l'oeil, sweep) o
 
 from __future__ import annotations
 
+import tempfile
+import threading
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -59,6 +62,28 @@ def seam_qa(*, session: Session, actor: User, request: SeamQaCreate) -> Analysis
                  passed=report.passed)
     session.commit()
     return row
+
+
+_PLOT_LOCK = threading.Lock()  # matplotlib's pyplot state is process-wide: one report picture at a time
+
+
+def report_png(*, session: Session, analysis_id: int) -> bytes:
+    """The QA report picture of stored seam analysis *analysis_id* (panels as painted / corrected, and the
+    Fig. 4.7 BRDF curves): the analysis is re-run from its stored inputs (deterministic) and plotted."""
+    from station.analysis import seam_qa as run_seam_qa
+    from station.analysis.picture import plot_seam_report
+
+    row = get_analysis(session=session, analysis_id=analysis_id)
+    if row.kind != "seam_qa":
+        raise NotFoundError(f"analysis {analysis_id} is a {row.kind}, not a seam QA report")
+    request = SeamQaCreate.model_validate(row.inputs)
+    a = _panel(session, request.measurement_a, request.design_a, "a")
+    b = _panel(session, request.measurement_b, request.design_b, "b")
+    report = run_seam_qa(a, b, request.beta_deg, lights_deg=request.lights_deg, aspecular_deg=request.aspecular_deg,
+                         tolerance=request.tolerance, method=request.method, hinge=_hinge(request.hinge),
+                         objective=request.objective)
+    with tempfile.TemporaryDirectory(prefix="cacad-report-") as tmp, _PLOT_LOCK:
+        return plot_seam_report(report, Path(tmp) / "report.png").read_bytes()
 
 
 def gg_index(*, request: GgIndexRequest) -> dict[str, Any]:
