@@ -151,3 +151,26 @@ def test_connect_failure_is_shown(qtbot, tmp_path):
     assert "ERROR" in screen.log.toPlainText() and screen.state.text() == "failed"
     assert not screen.scan_btn.isEnabled()
     screen.close()
+
+
+def test_a_reading_queued_in_an_earlier_session_is_sent_by_retry(qtbot, tmp_path):
+    blocker = tmp_path / "db"
+    blocker.write_text("not a folder")
+    url = f"sqlite:///{blocker / 'station.sqlite3'}"
+    first = LocalSink(url, tmp_path / "outbox.sqlite3")
+    m = MeasurementStore(first).persist(measurement_from_reading(_spectral(), PanelInfo("J-2", "roof"), "test"))
+    assert m.receipt.status == "queued"
+    first.close()  # the viewer quits with the reading on disk
+    blocker.unlink()
+    store = MeasurementStore(LocalSink(url, tmp_path / "outbox.sqlite3"))  # the next session
+    screen = InstrumentsScreen(store)
+    qtbot.addWidget(screen)
+    assert "1 readings waiting" in screen.where.text()
+    screen.retry_btn.click()
+    qtbot.waitUntil(lambda: screen.idle, timeout=30000)
+    assert screen.state.text() == "1 sent, 0 still queued", screen.log.toPlainText()
+    assert "waiting" not in screen.where.text()
+    rows = _rows(url)
+    assert len(rows) == 1 and str(rows[0][0].client_id) == str(m.reading.client_id) and rows[0][1].part == "roof"
+    screen.close()
+    store.sink.close()

@@ -17,7 +17,7 @@ import uuid
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,12 +25,14 @@ from station.drivers import GlossReading, open_instrument
 from station.drivers.readings import SpectralReading
 from station.drivers.simproc import SIM_KINDS, spawn_simulator
 from station.errors import InputError
-from station.ingest import CalibrationRef, InstrumentRef, Reading
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.design_io import design_to_dict
 from station.model.spectra import reflectance_to_lab
 from ui.models.events import EventGroup
 from ui.models.measure_db import MeasurementSink, PanelInfo, StoreReceipt
+
+if TYPE_CHECKING:
+    from station.ingest import Reading
 
 SIM_DEVICES = tuple(f"sim:{k}" for k in SIM_KINDS)
 Progress = Callable[[int, str], None]
@@ -80,6 +82,8 @@ def operator_name() -> str:
 def ingest_reading(reading: SpectralReading, operator: str | None = None) -> Reading:
     """The ingest reading of the in-plane 45° illumination block: Lab from the spectra (model, D65/10°),
     a fresh client id, the instrument and its calibration (keyed like ``station.api``'s)."""
+    from station.ingest import CalibrationRef, InstrumentRef, Reading
+
     angles, refl = reading.block(45)
     if not angles:
         angles, refl = reading.aspecular_deg, reading.reflectance

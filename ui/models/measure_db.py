@@ -20,15 +20,15 @@ import json
 import re
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from db.engine import data_dir, default_database_url
-from db.models import PARTS
 from station.errors import InputError, StationError
-from station.ingest import Outbox, Reading, is_unreachable
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
+
+if TYPE_CHECKING:  # SQLAlchemy, pydantic and the ORM load on first use (≈0.5 s off the viewer's start-up)
+    from station.ingest import Outbox, Reading
 
 OUTBOX_FILE = "viewer-outbox.sqlite3"
 SERVICE_OUTBOX_FILE = "viewer-service-outbox.sqlite3"
@@ -47,6 +47,8 @@ class PanelInfo:
 
     def validated(self) -> PanelInfo:
         """The same metadata stripped, or :class:`InputError` naming the field (the database's limits)."""
+        from db.models import PARTS
+
         p = PanelInfo(self.job.strip(), self.part.strip(), self.substrate.strip(), self.notes.strip())
         if not p.job or len(p.job) > 64 or not _TEXT.match(p.job):
             raise InputError("job", "1–64 printable characters", self.job)
@@ -109,16 +111,32 @@ class _Refused(Exception):
 class MeasurementSink:
     """The outbox and its drain; subclasses send one queued reading (``_send``) and list stored ones."""
 
-    where = ""
+    default_outbox = OUTBOX_FILE
 
-    def __init__(self, outbox_path: Path | str) -> None:
-        self.outbox_path = Path(outbox_path)
+    def __init__(self, outbox_path: Path | str | None = None) -> None:
+        self._outbox_path = Path(outbox_path) if outbox_path is not None else None
         self._outbox: Outbox | None = None
+
+    @property
+    def where(self) -> str:
+        """Plain name of the store (for messages)."""
+        return ""
+
+    @property
+    def outbox_path(self) -> Path:
+        """The outbox file (default: in :func:`db.engine.data_dir`)."""
+        if self._outbox_path is None:
+            from db.engine import data_dir
+
+            self._outbox_path = data_dir() / self.default_outbox
+        return self._outbox_path
 
     @property
     def outbox(self) -> Outbox:
         """The on-disk queue (opened on first use)."""
         if self._outbox is None:
+            from station.ingest import Outbox
+
             self._outbox = Outbox(self.outbox_path)
         return self._outbox
 
@@ -132,6 +150,8 @@ class MeasurementSink:
 
     def flush(self) -> dict[str, StoreReceipt]:
         """Send queued readings oldest first; stop at the first "unreachable". Receipts by client id."""
+        from station.ingest import Reading
+
         out: dict[str, StoreReceipt] = {}
         for entry in self.outbox.entries():
             try:
@@ -179,11 +199,23 @@ class LocalSink(MeasurementSink):
     """The workstation's database (default: SQLite in :func:`db.engine.data_dir`, migrated on first use)."""
 
     def __init__(self, url: str | None = None, outbox_path: Path | str | None = None) -> None:
-        super().__init__(outbox_path if outbox_path is not None else data_dir() / OUTBOX_FILE)
-        self.url = url or default_database_url()
-        self.where = f"database {self.url}"
+        super().__init__(outbox_path)
+        self._url = url
         self._engine: Any = None
         self._sessions: Any = None
+
+    @property
+    def url(self) -> str:
+        """The database URL (default: ``station.sqlite3`` in :func:`db.engine.data_dir`)."""
+        if self._url is None:
+            from db.engine import default_database_url
+
+            self._url = default_database_url()
+        return self._url
+
+    @property
+    def where(self) -> str:
+        return f"database {self.url}"
 
     def _ready(self) -> None:
         if self._engine is not None:
@@ -203,7 +235,7 @@ class LocalSink(MeasurementSink):
 
         from db.base import utcnow
         from db.models import AuditEvent, Panel
-        from station.ingest import IngestError, store_reading
+        from station.ingest import IngestError, is_unreachable, store_reading
 
         self._ready()
         try:
@@ -268,10 +300,15 @@ class ServiceSink(MeasurementSink):
 
     RETRY_LATER = frozenset({401, 403, 408, 425, 429})  # a token or load problem: keep the reading queued
 
+    default_outbox = SERVICE_OUTBOX_FILE
+
     def __init__(self, client: Any, outbox_path: Path | str | None = None) -> None:
-        super().__init__(outbox_path if outbox_path is not None else data_dir() / SERVICE_OUTBOX_FILE)
+        super().__init__(outbox_path)
         self.client = client  # ui.models.service.ServiceClient
-        self.where = f"service {client.url}"
+
+    @property
+    def where(self) -> str:
+        return f"service {self.client.url}"
 
     def _request(self, method: str, path: str, **kw: Any) -> Any:
         from ui.models.service import ServiceUnreachable

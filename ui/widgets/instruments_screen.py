@@ -175,7 +175,9 @@ class InstrumentsScreen(QWidget):
         sink = self.store.sink
         if sink is None:
             return "storage: none (scans kept in this session only)"
-        return f"storage: {sink.where}; outbox {sink.outbox_path}"
+        waiting = sink.pending()
+        queued = f" ({waiting} readings waiting: Retry queued)" if waiting else ""
+        return f"storage: {sink.where}; outbox {sink.outbox_path}{queued}"
 
     def use_as_design(self) -> None:
         """Make the last reading's fitted design the current design (undoable)."""
@@ -213,6 +215,7 @@ class InstrumentsScreen(QWidget):
     def _on_scanned(self, m: Measurement) -> None:
         self.progress.setValue(STEPS)
         self.store.add(m)
+        self.where.setText(self._where_text())
         r = m.receipt
         if r is None:
             self._say(f"scanned {m.panel.label} ({len(m.geometries)} geometries) {m.note}; not stored (no database)")
@@ -226,6 +229,7 @@ class InstrumentsScreen(QWidget):
 
     def _on_retried(self, receipts: dict) -> None:
         self.progress.setValue(STEPS)
+        self.where.setText(self._where_text())
         done = [r for r in receipts.values() if r.status in ("stored", "duplicate")]
         left = self.store.sink.pending() if self.store.sink is not None else 0
         self.state.setText(f"{len(done)} sent, {left} still queued")
