@@ -2,10 +2,10 @@
 
 Every reading is written to an on-disk :class:`station.ingest.Outbox` *before* anything is sent, then
 the queue is drained oldest first: :class:`LocalSink` stores each queued reading with
-:func:`station.ingest.store_reading` in the workstation's SQLite database (``$CACAD_DATA_DIR`` or
-``./var``, as ``station serve``; Alembic migrations applied on first use), :class:`ServiceSink` posts it to
-``POST /api/v1/measurements`` of a station service. The panel (job, part, substrate, notes) is found by
-its metadata or created in the same transaction (local) or just before the reading (service), so a
+:func:`station.ingest.store_reading` in the workstation's database (as ``station serve``:
+``$CACAD_DATABASE_URL``, else SQLite in ``$CACAD_DATA_DIR`` or ``./var``; Alembic migrations applied on
+first use), :class:`ServiceSink` posts it to ``POST /api/v1/measurements`` of a station service. The panel
+(job, part, substrate, notes) is found by its metadata or created in the same transaction (local) or just before the reading (service), so a
 retried reading names the same panel and, keyed by its client id, is stored once.
 
 An unreachable database or service leaves the reading queued (retried on the next scan or on
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import os
 import re
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -206,11 +207,12 @@ class LocalSink(MeasurementSink):
 
     @property
     def url(self) -> str:
-        """The database URL (default: ``station.sqlite3`` in :func:`db.engine.data_dir`)."""
+        """The database URL: as ``station serve``, ``$CACAD_DATABASE_URL`` or ``station.sqlite3`` in
+        :func:`db.engine.data_dir` (``$CACAD_DATA_DIR`` or ``./var``)."""
         if self._url is None:
             from db.engine import default_database_url
 
-            self._url = default_database_url()
+            self._url = os.environ.get("CACAD_DATABASE_URL") or default_database_url()
         return self._url
 
     @property
