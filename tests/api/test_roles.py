@@ -57,6 +57,7 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("POST", f"{V1}/formulation/snap"): frozenset({C, A}),
     ("POST", f"{V1}/formulation/formulate"): frozenset({C, A}),
     ("POST", f"{V1}/formulation/export"): frozenset({C, A}),
+    ("POST", f"{V1}/formulation/closed-loop"): frozenset({C, A}),
     ("POST", f"{V1}/recipes"): frozenset({C, A}),
     ("GET", f"{V1}/recipes"): frozenset({Q, S, C, A}),
     ("GET", f"{V1}/recipes/{{recipe_id}}"): frozenset({Q, S, C, A}),

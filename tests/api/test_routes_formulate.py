@@ -214,3 +214,36 @@ def test_browse_filters_like_the_thesis_browser(lib_api: tuple[Api, list[dict]])
     assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][:2] == ["body", "chroma"]
     bad = api.client.get(f"{V1}/library/browse", params={"group": "purple"}, headers=api.auth("qa"))
     assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][:2] == ["query", "group"]
+
+
+def test_closed_loop_is_stored_with_its_history(lib_api: tuple[Api, list[dict]]) -> None:
+    api, rows = lib_api
+    # a design inside the colorant gamut: a library paint's own colour (its recipe reproduces it)
+    lab = _stored_lab(rows)[5]
+    face, flop = [round(float(x), 4) for x in lab[0]], [round(float(x), 4) for x in lab[2]]
+    body = {"name": "in gamut", "face": face, "flop": flop, "travel_deg": None if face == flop else 60.0,
+            "gloss_gu": 80.0}
+    d = api.client.post(f"{V1}/designs", json={"name": "in gamut", "design": body}, headers=api.auth("stylist"))
+    assert d.status_code == 201, d.text
+    before = _counts(api)
+    r = api.client.post(f"{V1}/formulation/closed-loop", json={"design_id": d.json()["id"], "corrections": 3},
+                        headers=api.auth("chemist"))
+    assert r.status_code == 201, r.text
+    job = r.json()
+    assert job["steps"] and job["steps"][0]["kind"] == "initial" and "SYNTHETIC" in job["measurement"]
+    assert job["corrections"] == len(job["steps"]) - 1 <= 3
+    # each step's ΔE is the measured Lab against the design (CIEDE2000), recomputed here
+    design_lab = np.asarray(job["design_lab"])
+    for step in job["steps"]:
+        de = delta_e(design_lab, np.asarray(step["measured_lab"]), method="cie2000")
+        np.testing.assert_allclose(step["de_per_angle"], de, atol=1e-6)
+        assert step["mean_de"] == pytest.approx(float(np.mean(de)), abs=1e-6)
+    assert (job["status"] == "converged") is (job["steps"][-1]["mean_de"] <= 1.0)
+    stored = api.client.get(f"{V1}/recipes/{job['recipe_id']}", headers=api.auth("qa")).json()
+    assert stored["recipe"] == job["final_recipe"] and stored["state"] in ("done", "failed")
+    events = api.client.get(f"{V1}/audit", params={"entity": "recipe"}, headers=api.auth("admin")).json()["data"]
+    assert events[0]["action"] == "recipe.closed_loop" and events[0]["detail"]["status"] == job["status"]
+    assert _counts(api)[1] == before[1] + 1
+    refused = api.client.post(f"{V1}/formulation/closed-loop", json={"design_id": d.json()["id"], "corrections": 9},
+                              headers=api.auth("chemist"))
+    assert refused.status_code == 422 and refused.json()["detail"][0]["loc"][:2] == ["body", "corrections"]

@@ -85,7 +85,12 @@ def test_schemathesis_conformance(sqlite_api: Api) -> None:
 def test_documented_examples_validate() -> None:
     from station.api.schemas.analyses import GgIndexRequest, SeamQaCreate, SweepRequest, TrompeRequest
     from station.api.schemas.designs import DesignCreate, DesignUpdate
-    from station.api.schemas.formulation import ExportRequest, FormulateRequest, SnapRequest
+    from station.api.schemas.formulation import (
+        ClosedLoopRequest,
+        ExportRequest,
+        FormulateRequest,
+        SnapRequest,
+    )
     from station.api.schemas.instruments import CalibrateRequest, ConnectRequest, MeasureRequest
     from station.api.schemas.measurements import CorrectionCreate
     from station.api.schemas.panels import PanelCreate
@@ -97,7 +102,7 @@ def test_documented_examples_validate() -> None:
     models = (Reading, PanelCreate, DesignCreate, DesignUpdate, UserCreate, TokenCreate, ConnectRequest,
               CalibrateRequest, MeasureRequest, CorrectionCreate, RecipeCreate, SeamQaCreate, GgIndexRequest,
               TrompeRequest, SweepRequest, VariationsRequest, SwatchRequest, SnapRequest, FormulateRequest,
-              ExportRequest)
+              ExportRequest, ClosedLoopRequest)
     for model in models:
         examples = model.model_json_schema().get("examples")
         assert examples, model.__name__

@@ -8,12 +8,14 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Request, Response
+from fastapi import APIRouter, Request, Response, status
 
 from db.models import User
 from station.api.deps import SessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.formulation import (
+    ClosedLoopOut,
+    ClosedLoopRequest,
     ExportRequest,
     FormulateOut,
     FormulateRequest,
@@ -42,6 +44,14 @@ def formulate(request: Request, session: SessionDep, _user: Chemist, body: Formu
     """A recipe for the target from the SYNTHETIC colorant database, started from the ColorSnap matches'
     recipes: predicted Lab and CIEDE2000 per angle, and whether it is formulable within the tolerance."""
     return service.formulate(session=session, cache=service.app_cache(request.app.state), request=body)
+
+
+@router.post("/closed-loop", status_code=status.HTTP_201_CREATED, response_model=ClosedLoopOut)
+def closed_loop(request: Request, session: SessionDep, user: Chemist, body: ClosedLoopRequest) -> dict[str, Any]:
+    """Closed-loop prototyping (beyond the thesis): recipe → simulated spray-out panel → simulated
+    spectrophotometer and gloss meter → ΔE00 to the design → correction, as labs iterate; stored as one
+    formulation job with every step (readable at ``GET /recipes/{id}``) and audited. SYNTHETIC."""
+    return service.closed_loop(session=session, actor=user, cache=service.app_cache(request.app.state), request=body)
 
 
 @router.post("/export", response_class=Response, responses=_FILE)

@@ -145,3 +145,32 @@ class BrowseOut(BaseModel):
     matched: int
     paints: list[BrowsePaint]
     hierarchy: dict[str, dict[str, dict[str, int]]]
+
+
+class ClosedLoopRequest(BaseModel):
+    """Closed-loop prototyping of a stored design version: formulate, spray a simulated panel, measure it
+    with the simulated spectrophotometer and gloss meter, correct; every step stored (SYNTHETIC)."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"design_id": 1, "corrections": 3, "tolerance": 1.0, "seed": 7}]})
+
+    design_id: Annotated[int, Field(ge=1, le=2**31 - 1)]
+    version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
+    gloss_gu: Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss target; default the design's")] | None = None
+    tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 accepted")] = 1.0
+    corrections: Annotated[int, Field(ge=0, le=5, description="correction steps after the first spray")] = 3
+    seed: Annotated[int, Field(ge=0, le=2**31 - 1, description="seed of the simulated spray-out panel")] = 7
+
+
+class ClosedLoopOut(BaseModel):
+    """The stored job (``recipe_id`` reads back at ``GET /recipes/{id}``) and ``FormulationJob.to_dict()``."""
+
+    model_config = ConfigDict(extra="allow")
+
+    recipe_id: int
+    status: str
+    message: str
+    corrections: int
+    final_recipe: dict[str, float] | None
+    steps: list[dict[str, Any]]
+    measurement: str

@@ -237,3 +237,41 @@ def browse(*, session: Session, cache: LibraryCache, flt: Any, limit: int, offse
     } for r in rows[offset:offset + limit]]
     return {"library": lib.name, "synthetic": bool(lib.synthetic), "matched": int(rows.size), "paints": paints,
             "hierarchy": hierarchy_counts(lib)}
+
+
+def closed_loop(*, session: Session, actor: User, cache: LibraryCache, request: Any) -> dict[str, Any]:
+    """Formulate → simulated spray-out → simulated measurement → correct (``station.formulate.closed_loop``),
+    stored as one formulation job with its history and audited."""
+    from db.models import FormulationJob
+    from station.formulate.closed_loop import closed_loop as run_closed_loop
+    from station.formulate.snap import color_snap
+    from station.formulate.sprayout import SprayOutModel
+
+    dv = design_version(session=session, design_id=request.design_id, version=request.version)
+    design = design_from_dict(dv.body)
+    lab = np.asarray(design.lab_at(np.asarray(STANDARD)), dtype=float)
+    gloss = request.gloss_gu if request.gloss_gu is not None else design.gloss_gu
+    cached = cache.get(session)
+    if cached.with_recipes is None:
+        raise ConflictError("no library paint has a recipe in the colorant database: load the demo library")
+    lib = cached.with_recipes
+    snapped = color_snap(lib, lab, k=min(3, len(lib)), method="cie2000", index=cached.with_recipes_index)
+    starts = [(m.code, lib.recipes[m.index]) for m in snapped.matches]
+    job = run_closed_loop(lab, SprayOutModel(seed=request.seed).measure, starts=starts, gloss_gu=gloss,
+                          tolerance=request.tolerance, max_corrections=request.corrections)
+    out = job.to_dict()
+    out["measurement"] = f"simulated spray-out panel model (SYNTHETIC), seed {request.seed}"
+    best = snapped.matches[0]
+    row = FormulationJob(
+        design_version_id=dv.id, library_paint_id=int(cached.ids[cached.with_recipes_rows[best.index]]),
+        state="done" if job.status == "converged" else "failed",
+        target={"metric": "cie2000", "angles_deg": list(STANDARD), "lab": lab.round(4).tolist(), "gloss_gu": gloss},
+        recipe={"candidates": [], "recipe": job.final_recipe, "warnings": list(snapped.warnings), "closed_loop": out},
+        created_by_id=actor.id,
+    )
+    session.add(row)
+    session.flush()
+    audit.record(session=session, actor=actor, action="recipe.closed_loop", entity="recipe", entity_id=row.id,
+                 design_id=request.design_id, version=dv.version, status=job.status, corrections=job.corrections)
+    session.commit()
+    return {"recipe_id": row.id, **out}
