@@ -174,3 +174,15 @@ def test_a_reading_queued_in_an_earlier_session_is_sent_by_retry(qtbot, tmp_path
     assert len(rows) == 1 and str(rows[0][0].client_id) == str(m.reading.client_id) and rows[0][1].part == "roof"
     screen.close()
     store.sink.close()
+
+
+def test_default_store_is_the_station_serve_database(tmp_path, monkeypatch):
+    from db.engine import default_database_url
+
+    monkeypatch.setenv("CACAD_DATA_DIR", str(tmp_path / "data"))
+    sink = LocalSink()
+    assert sink.url == default_database_url(tmp_path / "data") and sink.url.endswith("/data/station.sqlite3")
+    assert sink.outbox_path == (tmp_path / "data" / "viewer-outbox.sqlite3").resolve()
+    assert not (tmp_path / "data").exists()  # nothing is created before the first scan
+    monkeypatch.setenv("CACAD_DATABASE_URL", "postgresql://postgres@127.0.0.1/test")
+    assert LocalSink().url == "postgresql://postgres@127.0.0.1/test"
