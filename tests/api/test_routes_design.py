@@ -118,6 +118,10 @@ def test_eyedrop_refusals_store_nothing(sqlite_api: Api) -> None:
 def test_sketch_fit_equals_the_core(sqlite_api: Api, scene: str) -> None:
     s = builtin_scene(scene, 48)
     art = to_uint8(srgb_encode(shade(s, BLUE_DESIGN)))  # the design itself, painted over the scene
+    rendered = sqlite_api.client.post(f"{V1}/styling/render", json={"design": BLUE, "scene": scene, "size": 48},
+                                      headers=sqlite_api.auth("stylist"))
+    assert rendered.status_code == 200 and rendered.headers["content-type"] == "image/png"
+    np.testing.assert_array_equal(np.asarray(Image.open(io.BytesIO(rendered.content))), art)
     r = sqlite_api.client.post(f"{V1}/styling/sketch-fit", params={"scene": scene}, content=_png(art),
                                headers=sqlite_api.auth("stylist") | PNG)
     assert r.status_code == 200, r.text

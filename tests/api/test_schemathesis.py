@@ -95,14 +95,14 @@ def test_documented_examples_validate() -> None:
     from station.api.schemas.measurements import CorrectionCreate
     from station.api.schemas.panels import PanelCreate
     from station.api.schemas.recipes import RecipeCreate
-    from station.api.schemas.styling import SwatchRequest, VariationsRequest
+    from station.api.schemas.styling import RenderRequest, SwatchRequest, VariationsRequest
     from station.api.schemas.users import TokenCreate, UserCreate
     from station.ingest import Reading
 
     models = (Reading, PanelCreate, DesignCreate, DesignUpdate, UserCreate, TokenCreate, ConnectRequest,
               CalibrateRequest, MeasureRequest, CorrectionCreate, RecipeCreate, SeamQaCreate, GgIndexRequest,
               TrompeRequest, SweepRequest, VariationsRequest, SwatchRequest, SnapRequest, FormulateRequest,
-              ExportRequest, ClosedLoopRequest)
+              ExportRequest, ClosedLoopRequest, RenderRequest)
     for model in models:
         examples = model.model_json_schema().get("examples")
         assert examples, model.__name__

@@ -18,6 +18,7 @@ from station.api.schemas.styling import (
     IMAGE_BODY,
     PNG_RESPONSE,
     EyedropOut,
+    RenderRequest,
     SketchFitOut,
     SwatchRequest,
     VariationsOut,
@@ -45,6 +46,13 @@ def swatch(_user: Stylist, request: SwatchRequest) -> Response:
     brightness) or the shaded booklet thumbnail (thesis §3.4.6). Header ``X-Out-Of-Gamut-Columns``."""
     png, out_of_gamut = service.swatch_png(request=request)
     return Response(png, media_type="image/png", headers={"X-Out-Of-Gamut-Columns": str(out_of_gamut)})
+
+
+@router.post("/render", response_class=Response, responses=PNG_RESPONSE)
+def render(_user: Stylist, request: RenderRequest) -> Response:
+    """A design (default silver) rendered in a built-in point-light scene as PNG: the picture an artist
+    paints over before the sketch fit (thesis §3.7.1)."""
+    return Response(service.render_png(request=request), media_type="image/png")
 
 
 @router.post("/eyedrop", response_model=EyedropOut, openapi_extra=IMAGE_BODY, responses=_TOO_LARGE)

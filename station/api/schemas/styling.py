@@ -103,3 +103,15 @@ class SketchFitOut(BaseModel):
     theta_clamp_deg: float | None
     pixels: int
     gloss_source: str
+
+
+class RenderRequest(BaseModel):
+    """A design (default: the thesis's silver) in a built-in point-light scene: the picture an artist paints
+    over before ``/styling/sketch-fit`` (§3.7.1)."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"design": _EXAMPLE, "scene": "sphere-point", "size": 128}, {"scene": "panel-point", "size": 96}]})
+
+    design: DesignBody | None = None
+    scene: Literal["sphere-point", "panel-point"] = "sphere-point"
+    size: Annotated[int, Field(ge=16, le=512, description="square image side, pixels")] = 128

@@ -13,7 +13,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from station.api.schemas.styling import SwatchRequest, VariationsRequest
+from station.api.schemas.styling import RenderRequest, SwatchRequest, VariationsRequest
 from station.api.services.designs import to_design
 from station.errors import InputError
 from station.model.design_io import design_to_dict
@@ -57,6 +57,20 @@ def swatch_png(*, request: SwatchRequest) -> tuple[bytes, int]:
     return png_bytes(sw.pixels), int(sw.out_of_gamut_columns)
 
 
+def _silver() -> Any:
+    from station.model import FaceFlopTravelGloss
+
+    return FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")  # thesis §3.7.1
+
+
+def render_png(*, request: RenderRequest) -> bytes:
+    """The design (default silver) shaded in the built-in scene, sRGB-encoded PNG."""
+    from station.design.scene import builtin_scene, shade, srgb_encode, to_uint8
+
+    design = to_design(request.design) if request.design is not None else _silver()
+    return png_bytes(to_uint8(srgb_encode(shade(builtin_scene(request.scene, request.size), design))))
+
+
 def load_upload(data: bytes, *, max_bytes: int, max_pixels: int) -> Any:
     """``load_image`` on uploaded bytes (written to a private temporary file first)."""
     from station.design.images import load_image
@@ -97,15 +111,12 @@ def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str)
     """Point-light sketch fit of uploaded art over a built-in scene, started from the scene in silver (§3.7)."""
     from station.design.scene import builtin_scene, shade, srgb_encode
     from station.design.sketch import fit_point_light
-    from station.model import FaceFlopTravelGloss
-
     art = load_upload(data, max_bytes=max_bytes, max_pixels=SKETCH_MAX_SIDE**2).pixels
     h, w = art.shape[:2]
     if h != w or not 16 <= h <= SKETCH_MAX_SIDE:
         raise InputError("art", f"a square image of 16..{SKETCH_MAX_SIDE} pixels, the scene's size", f"{w}x{h}")
     scene = builtin_scene(scene_name, h)
-    silver = FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")  # thesis §3.7.1
-    fit = fit_point_light(scene, art, srgb_encode(shade(scene, silver)), gloss=gloss_mode)
+    fit = fit_point_light(scene, art, srgb_encode(shade(scene, _silver())), gloss=gloss_mode)
     return {
         "design": design_to_dict(fit.design), "rms_de": _finite(fit.rms_de), "failed": bool(fit.failed),
         "seconds": float(fit.seconds), "reason": fit.reason, "shading_de": _finite(fit.shading_de),
