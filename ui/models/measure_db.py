@@ -19,6 +19,7 @@ import datetime as dt
 import json
 import os
 import re
+import threading
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
@@ -202,6 +203,7 @@ class LocalSink(MeasurementSink):
     def __init__(self, url: str | None = None, outbox_path: Path | str | None = None) -> None:
         super().__init__(outbox_path)
         self._url = url
+        self._lock = threading.Lock()  # the scan worker and the QA screen may both be first
         self._engine: Any = None
         self._sessions: Any = None
 
@@ -220,6 +222,10 @@ class LocalSink(MeasurementSink):
         return f"database {self.url}"
 
     def _ready(self) -> None:
+        with self._lock:
+            self._ready_locked()
+
+    def _ready_locked(self) -> None:
         if self._engine is not None:
             return
         from db.engine import make_engine, make_sessionmaker
