@@ -435,7 +435,8 @@ def _curvature(row: NDArray[np.float64], h: float) -> NDArray[np.float64]:
     n = len(row)
     d2 = np.zeros(n)
     if n >= 3:
-        inner = np.abs(row[:-2] - 2.0 * row[1:-1] + row[2:]) / (h * h)
+        with np.errstate(invalid="ignore"):  # −inf marks hidden geometries; masked just below
+            inner = np.abs(row[:-2] - 2.0 * row[1:-1] + row[2:]) / (h * h)
         d2[1:-1] = np.where(np.isfinite(inner), inner, 0.0)
         d2[0], d2[-1] = d2[1], d2[-2]
     # interval j spans points j, j+1: neighbours j-1 … j+2
