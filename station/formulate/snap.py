@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.formulate.de_kernels import KERNELS
+from station.formulate.de_kernels import KERNELS, cie2000_columns
 from station.formulate.errors import FormulateInputError
 from station.formulate.library import STANDARD_ANGLES, Library
 
@@ -52,8 +52,12 @@ _SAFETY = 1.0 - 1e-9
 _SENTINEL = 1.0e6
 #: Leaves evaluated per batch once a k-th best is known (each batch tightens it for the rest).
 _BATCH_LEAVES = 40
+#: Use the numba-compiled CIEDE2000 search where numba is installed (tests switch it off for the NumPy path).
+_USE_COMPILED = True
 #: Leaves whose paints give the first k-th smallest upper bound (CIEDE2000, flat index).
-_FIRST_LEAVES = 24
+_FIRST_LEAVES = 8
+#: Above this many candidates the sharper per-paint CIEDE2000 bound filters them before the exact kernel.
+_REFINE_ABOVE = 64
 LAB_QUERY_RANGE = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
 _Q_LO = np.array([v[0] for v in LAB_QUERY_RANGE.values()])
 _Q_HI = np.array([v[1] for v in LAB_QUERY_RANGE.values()])
@@ -224,7 +228,92 @@ def _box_bounds(
     return per.sum(-1) * _SAFETY - 1e-12
 
 
+_TABLE_STEP = 0.1
+
+
+def _cie2000_weight_tables() -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Tables of the two weights of the cheap CIEDE2000 box bound (:func:`_box_bounds_cie2000_fast`).
+
+    * w_L(x) = 1/S_L² with x = 2|L̄' − 50| (decreasing in x);
+    * w_ab(c) = (1 − R_C(c̄') sin 60°/2)/S_C(c̄')² with c = 2C̄*_ab and c̄' = (1 + G(C̄))C̄ the largest C̄'
+      (C̄' ≤ (1+G)C̄ by the triangle inequality; (1+G(C̄))C̄ increasing, R_C and S_C increasing in C̄', so
+      w_ab is decreasing in c).
+
+    Grids x_i = i h from 0 (h = 0.1); entry i holds the weight at x_{i+1} and the last entry is 0: for a
+    decreasing w, entry ⌊x/h⌋ (clamped to the last) is ≤ w(x) for every x ≥ 0, a valid lower bound.
+    """
+    xl = np.arange(3001) * _TABLE_STEP
+    lb2 = (xl / 2.0) ** 2
+    w_l = 1.0 / (1.0 + 0.015 * lb2 / np.sqrt(20.0 + lb2)) ** 2
+    xc = np.arange(12001) * _TABLE_STEP
+    cbar = xc / 2.0
+    c7 = cbar**7
+    cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * cbar
+    cp7 = cpbar**7
+    r_c = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7))
+    w_ab = (1.0 - r_c * _SIN60 / 2.0) / (1.0 + 0.045 * cpbar) ** 2
+    shift = lambda w: np.append(w[1:], 0.0)  # noqa: E731
+    return xl, shift(w_l), xc, shift(w_ab)
+
+
+_XL, _WL, _XC, _WAB = _cie2000_weight_tables()
+
+
+def _cie2000_upper_tables() -> tuple[NDArray, NDArray]:
+    """Tables of the cheap CIEDE2000 upper bound ΔE00² ≤ ΔL*² v_L + (Δa*² + Δb*²) v_ab (per pair).
+
+    ΔE00² = (ΔL'/S_L)² + x² + y² + R_T x y with x = ΔC'/S_C, y = ΔH'/S_H; |R_T x y| ≤ |R_T|(x² + y²)/2,
+    |R_T| ≤ R_C(C̄') sin 60°; x² + y² ≤ (ΔC'² + ΔH'²)/S_H² (S_H ≤ S_C) = (Δa'² + Δb²)/S_H² ≤
+    (1+G)²(Δa*² + Δb*²)/S_H², S_H ≥ 1 + 0.015 T_min C̄' ≥ 1 + 0.015 T_min C̄* (C'ᵢ ≥ Cᵢ); ΔL' = ΔL*.
+    So v_L = 1/S_L² (decreasing in x = 2|L̄ − 50|: its value at the cell's left end) and, on the cell
+    [c_i, c_{i+1}] of c = 2C̄*, v_ab = (1 + G(c_i/2))² (1 + R_C((1+G)C̄ at c_{i+1}) sin 60°/2) /
+    (1 + 0.015 T_min c_i/2)² (G decreasing, (1+G)C̄ and R_C increasing); past the last cell R_C = 2.
+    Entry ⌊x/h⌋ (clamped to the last) is an upper bound for every x ≥ 0.
+    """
+    xl = np.arange(3001) * _TABLE_STEP
+    lb2 = (xl / 2.0) ** 2
+    v_l = 1.0 / (1.0 + 0.015 * lb2 / np.sqrt(20.0 + lb2)) ** 2
+    cbar = np.arange(12002) * _TABLE_STEP / 2.0
+    c7 = cbar**7
+    one_g = 1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))
+    cp7 = (one_g * cbar) ** 7
+    r_c = np.append((2.0 * np.sqrt(cp7 / (cp7 + 25.0**7)))[1:], 2.0)
+    v_ab = one_g**2 * (1.0 + r_c * _SIN60 / 2.0) / (1.0 + 0.015 * _T_MIN * cbar) ** 2
+    return v_l, v_ab[:-1]
+
+
+_VL, _VAB = None, None  # set below, once _T_MIN exists
+
+
+def _box_bounds_cie2000_fast(
+    q: NDArray[np.float64], lo: NDArray, hi: NDArray, lo_l: NDArray, hi_l: NDArray, cmax: NDArray
+) -> NDArray[np.float64]:
+    """The cheap CIEDE2000 box bound of :func:`_box_bounds` (``hue=False``) with its weights from tables.
+
+    ΔE00² ≥ (ΔL'/S_L)² + (1 − |R_T|/2)(ΔC'² + ΔH'²)/S_C² (|xy| ≤ (x² + y²)/2, S_H ≤ S_C), ΔC'² + ΔH'² =
+    Δa'² + Δb² ≥ d_a² + d_b² (the box distances), |R_T| ≤ R_C sin 60°; S_L, S_C and R_C are taken at their
+    largest over the box (L̄' at the end of the box's L range farther from 50, C̄* ≤ (C*_q + C*_max)/2),
+    through :func:`_cie2000_weight_tables`. *lo_l*, *hi_l* are the boxes' L ranges (…, A) contiguous.
+    """
+    d = np.maximum(lo - q, q - hi)
+    np.maximum(d, 0.0, out=d)
+    d *= d
+    ql = q[:, 0] - 100.0
+    x = np.maximum(np.abs(lo_l + ql), np.abs(hi_l + ql))
+    x *= 1.0 / _TABLE_STEP
+    np.minimum(x, _WL.size - 1, out=x)
+    w_l = _WL[x.astype(np.intp)]
+    c = cmax + np.hypot(q[:, 1], q[:, 2])
+    c *= 1.0 / _TABLE_STEP
+    np.minimum(c, _WAB.size - 1, out=c)
+    w_ab = _WAB[c.astype(np.intp)]
+    per = d[..., 0] * w_l
+    per += (d[..., 1] + d[..., 2]) * w_ab
+    return np.sqrt(per).sum(-1) * _SAFETY - 1e-12
+
+
 _T_MIN, _T_MAX = 0.36, 1.58  # range of CIEDE2000's T(h) (0.3621 … 1.5725 on a 1e-4° grid)
+_VL, _VAB = _cie2000_upper_tables()
 
 
 def _point_bounds_cie2000(
@@ -299,6 +388,148 @@ def _pair_bounds_cie2000(
     return lower2, (base + z_hi * (z_hi + ry) if upper else None)
 
 
+def _box_bound_one(q: NDArray, cq: NDArray, lo: NDArray, hi: NDArray, cmax: NDArray, i: int) -> float:
+    """The ``hue=False`` CIEDE2000 box bound of :func:`_box_bounds` for box *i* (scalar form, compiled)."""
+    k7 = 25.0**7
+    total = 0.0
+    for t in range(q.shape[0]):
+        d0 = max(lo[i, t, 0] - q[t, 0], q[t, 0] - hi[i, t, 0], 0.0)
+        d1 = max(lo[i, t, 1] - q[t, 1], q[t, 1] - hi[i, t, 1], 0.0)
+        d2 = max(lo[i, t, 2] - q[t, 2], q[t, 2] - hi[i, t, 2], 0.0)
+        x = max(abs((q[t, 0] + lo[i, t, 0]) / 2 - 50.0), abs((q[t, 0] + hi[i, t, 0]) / 2 - 50.0))
+        s_l = 1.0 + 0.015 * x * x / math.sqrt(20.0 + x * x)
+        cbar = (cq[t] + cmax[i, t]) / 2
+        c7 = cbar**7
+        cpbar = (1.0 + 0.5 * (1.0 - math.sqrt(c7 / (c7 + k7)))) * cbar * (1 + 1e-12) + 1e-12
+        cp7 = cpbar**7
+        r_c = 2.0 * math.sqrt(cp7 / (cp7 + k7))
+        s_c = 1.0 + 0.045 * cpbar
+        total += math.sqrt(d0 * d0 / (s_l * s_l) + (1.0 - r_c * _SIN60 / 2.0) * (d1 * d1 + d2 * d2) / (s_c * s_c))
+    return total * _SAFETY - 1e-12
+
+
+def _best_first_cie2000(
+    q: NDArray[np.float64], glo: NDArray, ghi: NDArray, gcmax: NDArray, lo: NDArray, hi: NDArray, cmax: NDArray,
+    group: int, rows: NDArray, blab: NDArray, size: int, k: int,
+) -> tuple[NDArray[np.intp], int]:
+    """Candidates of the exact CIEDE2000 top-k: every paint whose summed ΔE00 could be ≤ the k-th best.
+
+    Compiled with numba where it is installed (:func:`_compiled_search`); plain Python otherwise (tests).
+    Leaves are visited in order of their box bound (the ``hue=False`` form of :func:`_box_bounds`); in
+    each, every paint gets the lower and upper bounds of :func:`_point_bounds_cie2000` (the same
+    arithmetic, per element, with the same margins); u is the k-th smallest upper bound so far (≥ S_k,
+    the true k-th best sum). The walk stops at the first leaf whose bound exceeds u: every later leaf's
+    bound is larger. A paint with S ≤ S_k has lower bound ≤ S ≤ S_k ≤ u and its leaf's bound ≤ S_k ≤ u
+    at every moment, so it was visited and kept; the result is the paints with lower bound ≤ the final u.
+    Returns (candidate rows, leaves visited). Only +, −, ×, ÷ and √ (all correctly rounded IEEE
+    operations, as in NumPy) are used.
+    """
+    nb, width, na = rows.shape[0], rows.shape[1], q.shape[0]
+    k7 = 25.0**7
+    cq = np.empty(na)
+    for t in range(na):
+        cq[t] = math.sqrt(q[t, 1] * q[t, 1] + q[t, 2] * q[t, 2])
+    ng = glo.shape[0]
+    glb = np.empty(ng)
+    for g in range(ng):
+        glb[g] = _box_bound_one(q, cq, glo, ghi, gcmax, g)
+    gorder = np.argsort(glb)
+    best = np.full(k, np.inf)  # the k smallest upper bounds, ascending
+    cand = np.empty(nb * width, dtype=np.intp)
+    cand_lb = np.empty(nb * width)
+    lb = np.empty(group)
+    nc = 0
+    visited = 0
+    for gj in range(ng):
+        g = gorder[gj]
+        if glb[g] > best[k - 1]:
+            break
+        if group == 1:
+            lb[0] = glb[g]
+        else:
+            for m in range(group):
+                lb[m] = _box_bound_one(q, cq, lo, hi, cmax, g * group + m)
+        order = np.argsort(lb)
+        for j in range(group):
+            i = g * group + order[j]
+            if lb[order[j]] > best[k - 1]:
+                break
+            visited += 1
+            for w in range(width):
+                row = rows[i, w]
+                if row >= size:
+                    continue
+                lower = 0.0
+                upper = 0.0
+                for t in range(na):
+                    pl, pa, pb = blab[i, w, t, 0], blab[i, w, t, 1], blab[i, w, t, 2]
+                    ql, qa, qb = q[t, 0], q[t, 1], q[t, 2]
+                    cbar = (cq[t] + math.sqrt(pa * pa + pb * pb)) * 0.5
+                    c7 = cbar * cbar
+                    c7 = c7 * c7 * c7 * cbar
+                    g1 = 1.5 - 0.5 * math.sqrt(c7 / (c7 + k7))
+                    a1 = g1 * qa
+                    a2 = g1 * pa
+                    cp1 = math.sqrt(a1 * a1 + qb * qb)
+                    cp2 = math.sqrt(a2 * a2 + pb * pb)
+                    dc = cp2 - cp1
+                    da = a2 - a1
+                    db = pb - qb
+                    dab2 = da * da + db * db
+                    dh2 = dab2 - dc * dc
+                    eta = 1e-12 * dab2 + 1e-30
+                    dh_lo = math.sqrt(max(dh2 - eta, 0.0))
+                    dh_hi = math.sqrt(max(dh2, 0.0) + eta)
+                    cpbar = (cp1 + cp2) * 0.5
+                    cp7 = cpbar * cpbar
+                    cp7 = cp7 * cp7 * cp7 * cpbar
+                    r = (2.0 * _SIN60) * math.sqrt(cp7 / (cp7 + k7))
+                    lbar2 = (ql + pl) * 0.5 - 50.0
+                    lbar2 = lbar2 * lbar2
+                    s_l = 1.0 + 0.015 * lbar2 / math.sqrt(20.0 + lbar2)
+                    y = abs(dc) / (1.0 + 0.045 * cpbar)
+                    ry = r * y
+                    dl = (pl - ql) / s_l
+                    base = dl * dl + y * y
+                    z_hi = dh_hi / (1.0 + (0.015 * _T_MIN) * cpbar)
+                    z = min(max(ry * 0.5, dh_lo / (1.0 + (0.015 * _T_MAX) * cpbar)), z_hi)
+                    lower += math.sqrt(max(base + z * (z - ry), 0.0))
+                    upper += math.sqrt(base + z_hi * (z_hi + ry))
+                lower = lower * _SAFETY - 1e-10
+                upper = upper * (2.0 - _SAFETY) + 1e-10
+                if lower <= best[k - 1]:
+                    cand[nc] = row
+                    cand_lb[nc] = lower
+                    nc += 1
+                if upper < best[k - 1]:
+                    m = k - 1
+                    while m > 0 and best[m - 1] > upper:
+                        best[m] = best[m - 1]
+                        m -= 1
+                    best[m] = upper
+    u = best[k - 1]
+    keep = cand_lb[:nc] <= u
+    return cand[:nc][keep], visited
+
+
+_COMPILED: dict[str, object] = {}
+
+
+def _compiled_search() -> object | None:
+    """:func:`_best_first_cie2000` compiled by numba (cached on disk), or None where numba is missing."""
+    if "search" not in _COMPILED:
+        try:
+            import numba
+        except ImportError:  # pragma: no cover - numba is a declared dependency; the NumPy path remains
+            _COMPILED["search"] = None
+        else:
+            global _box_bound_one
+            if not hasattr(_box_bound_one, "py_func"):  # the walk calls the compiled bound
+                _box_bound_one = numba.njit(cache=True, nogil=True)(_box_bound_one)
+            _COMPILED["search"] = numba.njit(cache=True, nogil=True)(_best_first_cie2000)
+    return _COMPILED["search"]
+
+
 class SnapIndex:
     """Exact top-k ColorSnap index over a library (or a raw ``(N, n_angles, 3)`` Lab array).
 
@@ -362,6 +593,9 @@ class SnapIndex:
         empty = ~(rows < n).any(axis=1)
         self._lo[empty] = self._hi[empty] = _SENTINEL
         self._cmax[empty] = _SENTINEL
+        self._lab_t = np.ascontiguousarray(np.moveaxis(self.lab, -1, 0))  # (3, N, A): exact-kernel columns
+        self._lo_l = np.ascontiguousarray(self._lo[..., 0])
+        self._hi_l = np.ascontiguousarray(self._hi[..., 0])
         self.group = group
         ng = nb // group
         self._glo = self._lo.reshape(ng, group, na, 3).min(axis=1)
@@ -391,6 +625,8 @@ class SnapIndex:
         g = self.group
         first = max(1, -(-k // self._rows.shape[1])) + 1
         flat = self.n_groups == 1 or g == 1
+        if method == "cie2000" and _USE_COMPILED and (search := _compiled_search()) is not None:
+            return self._query_cie2000_compiled(q, k, search)
         if flat and method == "cie2000":
             return self._query_cie2000_flat(q, k, kernel)
         if flat:  # (for CIEDE2000 the cheap bound first; the hue-aware one on the survivors below)
@@ -472,6 +708,61 @@ class SnapIndex:
             rows, lower, upper = rows[real], lower[real], upper[real]
         return rows, lower, upper
 
+    def _query_cie2000_compiled(
+        self, q: NDArray[np.float64], k: int, search: object
+    ) -> tuple[NDArray[np.intp], NDArray, NDArray]:
+        """Exact CIEDE2000 top-k: candidates from the compiled best-first walk (:func:`_best_first_cie2000`),
+        then the exact kernel on them and the (sum, row) order of a brute-force scan."""
+        rows, visited = search(  # type: ignore[operator]
+            q, self._glo, self._ghi, self._gcmax, self._lo, self._hi, self._cmax, self.group, self._rows,
+            self._blab, self.size, k,
+        )
+        n, na = rows.size, q.shape[0]
+        pc = self._lab_t[:, rows].reshape(3, -1)
+        qc = np.broadcast_to(q.T[:, None, :], (3, n, na)).reshape(3, -1)
+        per = cie2000_columns(qc[0], qc[1], qc[2], pc[0], pc[1], pc[2]).reshape(n, na)
+        s = per.sum(-1)
+        top = np.lexsort((rows, s))[:k]
+        self.last_visited = int(visited)
+        return rows[top], s[top], per[top]
+
+    def _cheap_bounds(
+        self, q: NDArray[np.float64], qt: NDArray[np.float64], leaves: NDArray[np.intp], upper: bool = False
+    ) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64] | None]:
+        """Real paints of *leaves*: (rows, table lower bound, table upper bound or None) of the summed ΔE00.
+
+        Lower: :func:`_box_bounds_cie2000_fast` of single points; upper: :func:`_cie2000_upper_tables`.
+        *qt* is :meth:`_tile` of *q*.
+        """
+        cols = self._cols[leaves]
+        ql = qt[0]
+        dl = cols[:, 0] - ql
+        x = np.abs(cols[:, 0] + (ql - 100.0))
+        x *= 1.0 / _TABLE_STEP
+        np.minimum(x, _WL.size - 1, out=x)
+        xi = x.astype(np.intp)
+        da = cols[:, 1] - qt[1]
+        db = cols[:, 2] - qt[2]
+        c = cols[:, 3] + qt[3]
+        c *= 1.0 / _TABLE_STEP
+        np.minimum(c, _WAB.size - 1, out=c)
+        ci = c.astype(np.intp)
+        dl *= dl
+        da *= da
+        db *= db
+        da += db
+        na = q.shape[0]
+        lower = np.sqrt(dl * _WL[xi] + da * _WAB[ci]).reshape(-1, na).sum(-1) * _SAFETY - 1e-12
+        ub = None
+        if upper:
+            ub = np.sqrt(dl * _VL[xi] + da * _VAB[ci]).reshape(-1, na).sum(-1) * (2.0 - _SAFETY) + 1e-10
+        rows = self._rows[leaves].ravel()
+        real = rows < self.size
+        if not real.all():
+            rows, lower = rows[real], lower[real]
+            ub = ub[real] if ub is not None else None
+        return rows, lower, ub
+
     def _query_cie2000_flat(
         self, q: NDArray[np.float64], k: int, kernel: object
     ) -> tuple[NDArray[np.intp], NDArray, NDArray]:
@@ -486,7 +777,7 @@ class SnapIndex:
            S ≤ S_k has lower bound ≤ S ≤ u and its leaf's bound ≤ S ≤ u, so it is among them: the top-k,
            ties included, is the brute-force one.
         """
-        lb = _box_bounds(q, self._lo, self._hi, self._cmax, "cie2000", hue=False)
+        lb = _box_bounds_cie2000_fast(q, self._lo, self._hi, self._lo_l, self._hi_l, self._cmax)
         width = self._rows.shape[1]
         first = min(lb.size, max(_FIRST_LEAVES, -(-k // width) + 1))
         sel = np.argpartition(lb, first - 1)[:first] if first < lb.size else np.arange(lb.size)
@@ -496,14 +787,20 @@ class SnapIndex:
         rest = lb <= u
         rest[sel] = False
         more = np.flatnonzero(rest)
-        if more.size:
-            rows2, plb2, pub2 = self._gather(q, qt, more)
-            rows = np.concatenate([rows, rows2])
-            plb = np.concatenate([plb, plb2])
-            pub = np.concatenate([pub, pub2])
-            u = np.partition(pub, k - 1)[k - 1]
         rows = rows[plb <= u]
-        per = kernel(q, self.lab[rows])  # type: ignore[operator]
+        if more.size:
+            rows2, plb2, _ = self._cheap_bounds(q, qt, more)
+            rows = np.concatenate([rows, rows2[plb2 <= u]])
+        if rows.size > _REFINE_ABOVE:  # the sharper per-paint bound first when the cheap one left many
+            pc = self._lab_t[:, rows]
+            chroma = np.hypot(pc[1], pc[2])
+            lower2, _ = _pair_bounds_cie2000(q[:, 0], q[:, 1], q[:, 2], np.hypot(q[:, 1], q[:, 2]), pc[0], pc[1],
+                                             pc[2], chroma, upper=False)
+            rows = rows[np.sqrt(lower2).sum(-1) * _SAFETY - 1e-10 <= u]
+        n, na = rows.size, q.shape[0]
+        pc = self._lab_t[:, rows].reshape(3, -1)
+        qc = np.broadcast_to(q.T[:, None, :], (3, n, na)).reshape(3, -1)
+        per = cie2000_columns(qc[0], qc[1], qc[2], pc[0], pc[1], pc[2]).reshape(n, na)
         s = per.sum(-1)
         top = np.lexsort((rows, s))[:k]
         self.last_visited = int(sel.size + more.size)

@@ -8,10 +8,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from station.formulate import snap
 from station.formulate.de_kernels import KERNELS
 from station.formulate.snap import SnapIndex, _point_bounds_cie2000, brute_force
 
@@ -70,7 +72,8 @@ def _fix_l(a: np.ndarray) -> np.ndarray:
     return a
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(
     lib=arrays(np.float64, st.tuples(st.integers(1, 400), st.just(3), st.just(3)),
                elements=st.floats(-120, 120, width=32)).map(_fix_l),
@@ -78,7 +81,9 @@ def _fix_l(a: np.ndarray) -> np.ndarray:
     k=st.integers(1, 40),
     leaf=st.sampled_from([None, 1, 3, 16]),
 )
-def test_flat_cie2000_search_equals_brute_force_with_ties(lib, data, k, leaf) -> None:
+@pytest.mark.parametrize("compiled", [True, False], ids=["numba", "numpy"])
+def test_flat_cie2000_search_equals_brute_force_with_ties(lib, data, k, leaf, compiled, monkeypatch) -> None:
+    monkeypatch.setattr(snap, "_USE_COMPILED", compiled)
     n = lib.shape[0]
     if n > 4:  # exact ties (duplicates) and near ties
         lib[n // 3] = lib[1]
@@ -93,7 +98,9 @@ def test_flat_cie2000_search_equals_brute_force_with_ties(lib, data, k, leaf) ->
     assert np.array_equal(sums, b_sums) and np.array_equal(per, b_per)
 
 
-def test_flat_cie2000_on_the_demo_sized_clustered_library(small_library) -> None:
+@pytest.mark.parametrize("compiled", [True, False], ids=["numba", "numpy"])
+def test_cie2000_on_a_clustered_library(small_library, compiled, monkeypatch) -> None:
+    monkeypatch.setattr(snap, "_USE_COMPILED", compiled)
     std = small_library.angle_columns()
     rng = np.random.default_rng(9)
     lib = np.repeat(std, 25, axis=0) + rng.normal(0, 1.5, (len(std) * 25, 3, 3))
@@ -106,3 +113,22 @@ def test_flat_cie2000_on_the_demo_sized_clustered_library(small_library) -> None
             rows, sums, _ = index.query(q, k, "cie2000")
             b_rows, b_sums, _ = brute_force(lib, q, k, "cie2000")
             assert rows.tolist() == b_rows.tolist() and np.array_equal(sums, b_sums)
+
+
+def test_compiled_walk_equals_its_python_form_and_visits_few_leaves(small_library) -> None:
+    # the same function run as plain Python (no numba) returns the same candidates as the compiled one
+    std = small_library.angle_columns()
+    index = SnapIndex(std, leaf_size=8, group=4)
+    args = (index._glo, index._ghi, index._gcmax, index._lo, index._hi, index._cmax, index.group, index._rows,
+            index._blab, index.size)
+    compiled = snap._compiled_search()
+    assert compiled is not None
+    rng = np.random.default_rng(2)
+    for q in std[:6] + rng.normal(0, 2.0, (6, 3, 3)):
+        q[:, 0] = np.clip(q[:, 0], 0, 100)
+        py_rows, py_visited = snap._best_first_cie2000(q, *args, 5)
+        c_rows, c_visited = compiled(q, *args, 5)
+        assert sorted(py_rows.tolist()) == sorted(c_rows.tolist()) and py_visited == c_visited
+        assert c_visited < index.n_buckets
+        top = brute_force(std, q, 5, "cie2000")[0]
+        assert set(top.tolist()) <= set(c_rows.tolist())
