@@ -26,6 +26,14 @@ design and the box:
 Buckets are visited in order of their bound; the search stops when the next bound exceeds the k-th
 best exact S found so far. Every paint whose S could tie or beat the k-th is evaluated exactly, so
 the top-k equals brute force (tests/formulate/test_snap.py proves it with hypothesis).
+
+CIEDE2000 (:meth:`SnapIndex._query_cie2000_compiled`): a numba-compiled best-first walk
+(:func:`_best_first_cie2000`) bounds every visited paint from below and above
+(:func:`_point_bounds_cie2000`), keeps u = the k-th smallest upper bound, stops at the first box whose
+bound exceeds u, and returns the paints whose lower bound is ≤ u; the exact kernel runs once, on those
+(:func:`station.formulate.de_kernels.cie2000_columns`). Without numba, :meth:`SnapIndex._query_cie2000_flat`
+(NumPy) does the same with table bounds. tests/formulate/test_snap_cie2000.py checks the bounds and both
+paths against brute force.
 """
 
 from __future__ import annotations
@@ -261,30 +269,6 @@ def _cie2000_weight_tables() -> tuple[NDArray, NDArray, NDArray, NDArray]:
 _XL, _WL, _XC, _WAB = _cie2000_weight_tables()
 
 
-def _cie2000_upper_tables() -> tuple[NDArray, NDArray]:
-    """Tables of the cheap CIEDE2000 upper bound ΔE00² ≤ ΔL*² v_L + (Δa*² + Δb*²) v_ab (per pair).
-
-    ΔE00² = (ΔL'/S_L)² + x² + y² + R_T x y with x = ΔC'/S_C, y = ΔH'/S_H; |R_T x y| ≤ |R_T|(x² + y²)/2,
-    |R_T| ≤ R_C(C̄') sin 60°; x² + y² ≤ (ΔC'² + ΔH'²)/S_H² (S_H ≤ S_C) = (Δa'² + Δb²)/S_H² ≤
-    (1+G)²(Δa*² + Δb*²)/S_H², S_H ≥ 1 + 0.015 T_min C̄' ≥ 1 + 0.015 T_min C̄* (C'ᵢ ≥ Cᵢ); ΔL' = ΔL*.
-    So v_L = 1/S_L² (decreasing in x = 2|L̄ − 50|: its value at the cell's left end) and, on the cell
-    [c_i, c_{i+1}] of c = 2C̄*, v_ab = (1 + G(c_i/2))² (1 + R_C((1+G)C̄ at c_{i+1}) sin 60°/2) /
-    (1 + 0.015 T_min c_i/2)² (G decreasing, (1+G)C̄ and R_C increasing); past the last cell R_C = 2.
-    Entry ⌊x/h⌋ (clamped to the last) is an upper bound for every x ≥ 0.
-    """
-    xl = np.arange(3001) * _TABLE_STEP
-    lb2 = (xl / 2.0) ** 2
-    v_l = 1.0 / (1.0 + 0.015 * lb2 / np.sqrt(20.0 + lb2)) ** 2
-    cbar = np.arange(12002) * _TABLE_STEP / 2.0
-    c7 = cbar**7
-    one_g = 1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))
-    cp7 = (one_g * cbar) ** 7
-    r_c = np.append((2.0 * np.sqrt(cp7 / (cp7 + 25.0**7)))[1:], 2.0)
-    v_ab = one_g**2 * (1.0 + r_c * _SIN60 / 2.0) / (1.0 + 0.015 * _T_MIN * cbar) ** 2
-    return v_l, v_ab[:-1]
-
-
-_VL, _VAB = None, None  # set below, once _T_MIN exists
 
 
 def _box_bounds_cie2000_fast(
@@ -315,7 +299,6 @@ def _box_bounds_cie2000_fast(
 
 
 _T_MIN, _T_MAX = 0.36, 1.58  # range of CIEDE2000's T(h) (0.3621 … 1.5725 on a 1e-4° grid)
-_VL, _VAB = _cie2000_upper_tables()
 
 
 def _point_bounds_cie2000(
@@ -423,8 +406,8 @@ def _best_first_cie2000(
     the true k-th best sum). The walk stops at the first leaf whose bound exceeds u: every later leaf's
     bound is larger. A paint with S ≤ S_k has lower bound ≤ S ≤ S_k ≤ u and its leaf's bound ≤ S_k ≤ u
     at every moment, so it was visited and kept; the result is the paints with lower bound ≤ the final u.
-    Returns (candidate rows, leaves visited). Only +, −, ×, ÷ and √ (all correctly rounded IEEE
-    operations, as in NumPy) are used.
+    Returns (candidate rows, leaves visited). Only +, −, ×, ÷, √, min, max and abs (correctly rounded or
+    exact IEEE operations, as in NumPy) are used, so the margins of :func:`_point_bounds_cie2000` hold.
     """
     nb, width, na = rows.shape[0], rows.shape[1], q.shape[0]
     k7 = 25.0**7
@@ -743,13 +726,10 @@ class SnapIndex:
         return rows[top], s[top], per[top]
 
     def _cheap_bounds(
-        self, q: NDArray[np.float64], qt: NDArray[np.float64], leaves: NDArray[np.intp], upper: bool = False
-    ) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64] | None]:
-        """Real paints of *leaves*: (rows, table lower bound, table upper bound or None) of the summed ΔE00.
-
-        Lower: :func:`_box_bounds_cie2000_fast` of single points; upper: :func:`_cie2000_upper_tables`.
-        *qt* is :meth:`_tile` of *q*.
-        """
+        self, q: NDArray[np.float64], qt: NDArray[np.float64], leaves: NDArray[np.intp]
+    ) -> tuple[NDArray[np.intp], NDArray[np.float64]]:
+        """Real paints of *leaves*: (rows, lower bound of the summed ΔE00), the bound of
+        :func:`_box_bounds_cie2000_fast` for single points (boxes of one paint); *qt* is :meth:`_tile` of *q*."""
         cols = self._cols[leaves]
         ql = qt[0]
         dl = cols[:, 0] - ql
@@ -769,29 +749,28 @@ class SnapIndex:
         da += db
         na = q.shape[0]
         lower = np.sqrt(dl * _WL[xi] + da * _WAB[ci]).reshape(-1, na).sum(-1) * _SAFETY - 1e-12
-        ub = None
-        if upper:
-            ub = np.sqrt(dl * _VL[xi] + da * _VAB[ci]).reshape(-1, na).sum(-1) * (2.0 - _SAFETY) + 1e-10
         rows = self._rows[leaves].ravel()
         real = rows < self.size
         if not real.all():
             rows, lower = rows[real], lower[real]
-            ub = ub[real] if ub is not None else None
-        return rows, lower, ub
+        return rows, lower
 
     def _query_cie2000_flat(
         self, q: NDArray[np.float64], k: int, kernel: object
     ) -> tuple[NDArray[np.intp], NDArray, NDArray]:
         """Exact CIEDE2000 top-k with one call of the exact kernel (libraries of a few thousand paints).
 
-        1. Box bound of every leaf (the cheap form of :func:`_box_bounds`).
-        2. The :data:`_FIRST_LEAVES` best leaves: per-paint lower and upper bounds; u = k-th smallest upper
-           bound. u ≥ S_k (the true k-th best sum): k real paints have sums ≤ their upper bounds.
-        3. Every other leaf whose bound is ≤ u: the same per-paint bounds; u shrinks to the k-th smallest of
-           all upper bounds (only leaves with bound ≤ the old u can hold a paint under the new one).
+        The NumPy path (no numba):
+
+        1. Box bound of every leaf (:func:`_box_bounds_cie2000_fast`).
+        2. The :data:`_FIRST_LEAVES` best leaves: per-paint lower and upper bounds
+           (:func:`_pair_bounds_cie2000`); u = k-th smallest upper bound ≥ S_k (the true k-th best sum),
+           since k real paints have sums ≤ their upper bounds.
+        3. Every other leaf whose bound is ≤ u: the table per-paint lower bound (:meth:`_cheap_bounds`);
+           above :data:`_REFINE_ABOVE` candidates the sharp per-paint lower bound filters them again.
         4. The exact kernel on the paints whose lower bound is ≤ u, then (sum, row) order. A paint with
-           S ≤ S_k has lower bound ≤ S ≤ u and its leaf's bound ≤ S ≤ u, so it is among them: the top-k,
-           ties included, is the brute-force one.
+           S ≤ S_k has every lower bound ≤ S ≤ u and its leaf's bound ≤ S ≤ u, so it is among them: the
+           top-k, ties included, is the brute-force one.
         """
         lb = _box_bounds_cie2000_fast(q, self._lo, self._hi, self._lo_l, self._hi_l, self._cmax)
         width = self._rows.shape[1]
@@ -805,7 +784,7 @@ class SnapIndex:
         more = np.flatnonzero(rest)
         rows = rows[plb <= u]
         if more.size:
-            rows2, plb2, _ = self._cheap_bounds(q, qt, more)
+            rows2, plb2 = self._cheap_bounds(q, qt, more)
             rows = np.concatenate([rows, rows2[plb2 <= u]])
         if rows.size > _REFINE_ABOVE:  # the sharper per-paint bound first when the cheap one left many
             pc = self._lab_t[:, rows]

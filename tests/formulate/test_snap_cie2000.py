@@ -132,3 +132,29 @@ def test_compiled_walk_equals_its_python_form_and_visits_few_leaves(small_librar
         assert c_visited < index.n_buckets
         top = brute_force(std, q, 5, "cie2000")[0]
         assert set(top.tolist()) <= set(c_rows.tolist())
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(pair=_pairs(n=20))
+def test_table_box_bound_and_table_point_bound_never_exceed_the_exact_sum(pair) -> None:
+    q, p = pair
+    exact = KERNELS["cie2000"](q[None], p).sum(-1)
+    chroma = np.hypot(p[..., 1], p[..., 2])
+    lo, hi = p.min(0), p.max(0)
+    box = snap._box_bounds_cie2000_fast(q, lo[None], hi[None], lo[None, :, 0], hi[None, :, 0], chroma.max(0)[None])
+    assert box[0] <= exact.min()
+    points = snap._box_bounds_cie2000_fast(q, p, p, np.ascontiguousarray(p[..., 0]), np.ascontiguousarray(p[..., 0]),
+                                           chroma)
+    assert np.all(points <= exact)
+    index = SnapIndex(p, leaf_size=4, group=1)
+    rows, lower = index._cheap_bounds(q, index._tile(q), np.arange(index.n_buckets))
+    assert np.all(lower <= exact[rows])
+
+
+def test_weight_tables_rest_on_monotone_functions() -> None:
+    # the tables assume (1 + G(C̄)) C̄ increasing and both weights decreasing (docstring of the tables)
+    c = np.linspace(0.0, 600.0, 600_001)
+    c7 = c**7
+    f = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * c
+    assert np.all(np.diff(f) > 0)
+    assert np.all(np.diff(snap._WL) <= 0) and np.all(np.diff(snap._WAB) <= 0)
