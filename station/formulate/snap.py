@@ -509,9 +509,16 @@ def _compiled_search() -> object | None:
             _COMPILED["search"] = None
         else:
             global _box_bound_one
-            if not hasattr(_box_bound_one, "py_func"):  # the walk calls the compiled bound
-                _box_bound_one = numba.njit(cache=True, nogil=True)(_box_bound_one)
-            _COMPILED["search"] = numba.njit(cache=True, nogil=True)(_best_first_cie2000)
+            try:
+                if not hasattr(_box_bound_one, "py_func"):  # the walk calls the compiled bound
+                    _box_bound_one = numba.njit(cache=True, nogil=True)(_box_bound_one)
+                search = numba.njit(cache=True, nogil=True)(_best_first_cie2000)
+                box, one = np.zeros((1, 1, 3)), np.zeros((1, 1))
+                search(np.zeros((1, 3)), box, box, one, box, box, one, 1, np.zeros((1, 1), dtype=np.intp),
+                       np.zeros((1, 1, 1, 3)), 1, 1)  # compile (or load from the cache) now, not mid-query
+            except Exception:  # pragma: no cover - a numba that cannot compile here: the NumPy path runs
+                search = None
+            _COMPILED["search"] = search
     return _COMPILED["search"]
 
 
@@ -713,7 +720,7 @@ class SnapIndex:
         """Exact CIEDE2000 top-k: candidates from the compiled best-first walk (:func:`_best_first_cie2000`),
         then the exact kernel on them and the (sum, row) order of a brute-force scan."""
         rows, visited = search(  # type: ignore[operator]
-            q, self._glo, self._ghi, self._gcmax, self._lo, self._hi, self._cmax, self.group, self._rows,
+            np.ascontiguousarray(q), self._glo, self._ghi, self._gcmax, self._lo, self._hi, self._cmax, self.group, self._rows,
             self._blab, self.size, k,
         )
         n, na = rows.size, q.shape[0]
