@@ -127,6 +127,8 @@ class InstrumentsScreen(QWidget):
         if self.task is not None and self.task.isRunning():
             self._say("busy: wait for the running task")
             return
+        if self.store.sink is not None:
+            self.store.sink.prepare()  # first open + migration on the GUI thread, never in the worker
         self.progress.setValue(0)
         self.state.setText(label)
         self.task = TaskThread(fn)
