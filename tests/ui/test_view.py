@@ -149,3 +149,51 @@ def test_closing_during_a_basis_computation_joins_the_worker(qtbot):
     view.close()  # the autouse fixture fails the test if a QThread is still running
     assert view._worker is None
 
+
+
+@pytest.fixture
+def cold_prefilter_cache(tmp_path, monkeypatch):
+    """An empty ``$CACAD_CACHE_DIR`` and no prefiltered environment in memory (the first start ever)."""
+    from ui.models import view as view_models
+
+    monkeypatch.setenv("CACAD_CACHE_DIR", str(tmp_path / "cold"))
+    view_models._READY.clear()
+    view_models._environment_basis.cache_clear()
+    yield tmp_path / "cold" / "prefilter"
+    view_models._READY.clear()
+    view_models._environment_basis.cache_clear()
+
+
+@pytest.mark.gl
+def test_cold_cache_first_frame_from_coarse_prefilter_then_full_quality(qtbot, cold_prefilter_cache):
+    from ui.models.view import PREFILTER_MAX_SIZE, PREVIEW_PREFILTER_SIZE, environment_ready
+
+    model = ViewModel()
+    model.show(DEFAULT_DESIGN)
+    view = GLRenderView(model)
+    qtbot.addWidget(view)
+    first: list = []
+    view.frame_rendered.connect(
+        lambda: first or first.append((view.basis, view.full_quality, environment_ready("booth"),
+                                       view._frame.copy())))
+    view.resize(160, 120)
+    view.show()
+    qtbot.waitUntil(lambda: view.frames > 0, timeout=20000)
+    basis0, full0, ready0, frame0 = first[0]
+    # the first frame is drawn before the full prefilter exists, from the coarse one of the same environment
+    assert not full0 and not ready0
+    assert basis0.prefilter_size == PREVIEW_PREFILTER_SIZE and basis0.size == (40, 30)
+    obj0 = basis0.paint >= 0
+    assert obj0.mean() > 0.2  # the sphere is on screen, lit
+    assert frame0[..., :3][obj0].mean() > 20
+    qtbot.waitUntil(lambda: view.full_quality, timeout=60000)
+    view.wait_idle()
+    assert environment_ready("booth") and view.basis.prefilter_size == PREFILTER_MAX_SIZE
+    assert view.basis.size == (160, 120)
+    assert any(cold_prefilter_cache.glob("*-o64-*.npy"))  # the full maps were made and cached now
+    img = view.grab_image()
+    np.testing.assert_array_equal(img, view.basis.core.edit(list(model.weights()), 0.0))
+    # the preview is the same picture at lower quality: mean object colour within a few levels
+    full_small = img[1::4, 1::4][obj0].astype(float).mean(axis=0)
+    assert np.abs(full_small - frame0[..., :3][obj0].astype(float).mean(axis=0)).max() < 8
+    view.close()

@@ -2,7 +2,10 @@
 
 A camera, shape, environment or size change recomputes the basis images (NumPy, the core's ray
 caster and prefiltered maps): first a quarter-resolution preview in the GUI thread, then full
-resolution in a worker QThread (joined on close). A paint edit only uploads new weights, so the
+resolution in a worker QThread (joined on close). On a cold prefilter cache (first start) the preview
+is also rendered from a coarse prefilter of the same environment (``PREVIEW_PREFILTER_SIZE`` faces,
+~0.1 s) and the worker makes the full prefilter and the full-resolution basis, so the first frame
+does not wait for the ~3 s prefilter (docs/viewer.md). A paint edit only uploads new weights, so the
 picture follows the mouse. :class:`ImageRenderView` is the same view without GL (the NumPy
 composite drawn as a QImage) for platforms that have no OpenGL (Qt's offscreen QPA).
 
@@ -21,7 +24,15 @@ from PySide6.QtOpenGLWidgets import QOpenGLWidget
 from PySide6.QtWidgets import QWidget
 
 from station.render.numpy_renderer import BACKGROUND
-from ui.models.view import BasisImages, ViewModel, ViewSettings, layer_weights
+from ui.models.view import (
+    PREFILTER_MAX_SIZE,
+    PREVIEW_PREFILTER_SIZE,
+    BasisImages,
+    ViewModel,
+    ViewSettings,
+    environment_ready,
+    layer_weights,
+)
 
 SHADER_DIR = Path(__file__).resolve().parents[1] / "shaders"
 PREVIEW_DIVISOR = 4
@@ -98,15 +109,24 @@ class _ViewLogic:
         return max(8, round(self.width() * r)), max(8, round(self.height() * r))
 
     def _refresh_basis(self) -> None:
-        """Preview now (quarter size), full size in the worker."""
+        """Preview now (quarter size; coarse prefilter until the full one is in memory), full in the worker."""
         w, h = self._pixel_size()
         key = (self.model.settings, w, h)
         if key == self._basis_key:
             return
         self._basis_key = key
         pw, ph = max(8, w // PREVIEW_DIVISOR), max(8, h // PREVIEW_DIVISOR)
-        self._set_basis(BasisImages.compute(self.model.settings, pw, ph))
+        env = self.model.settings.environment
+        size = PREFILTER_MAX_SIZE if environment_ready(env) else PREVIEW_PREFILTER_SIZE
+        self._set_basis(BasisImages.compute(self.model.settings, pw, ph, size))
         self._start_worker(key)
+
+    @property
+    def full_quality(self) -> bool:
+        """Whether the shown basis is the final one (full resolution, full prefilter) for the current view."""
+        b = self.basis
+        return (b is not None and self._basis_key is not None and b.prefilter_size == PREFILTER_MAX_SIZE
+                and b.size == self._basis_key[1:])
 
     def _start_worker(self, key: tuple) -> None:
         if self._worker is not None and self._worker.isRunning():
