@@ -49,9 +49,7 @@ def write_section(name: str, title: str, cases: list[Case], extra_markdown: str 
     """Print *cases* and replace the ``bench:NAME`` section of docs/benchmarks.md with them."""
     for case in cases:
         print(case.line())
-    rows = "\n".join(
-        f"| {c.name} | {c.size} | {c.figure:.4g} | {c.unit} | {c.note} |" for c in cases
-    )
+    rows = "\n".join(f"| {c.name} | {c.size} | {c.figure:.4g} | {c.unit} | {c.note} |" for c in cases)
     stamp = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     body = (
         f"<!-- bench:{name} -->\n## {title}\n\n_{stamp}; {machine()}_\n\n"

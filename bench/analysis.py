@@ -58,8 +58,12 @@ def fig44_grid(path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     s = solid_panels()
-    cols = [("identical", None), ("optimised at 45°", s["single_45"]), ("RMS over all", s["rms"]),
-            ("per row", s["per_geometry"])]
+    cols = [
+        ("identical", None),
+        ("optimised at 45°", s["single_45"]),
+        ("RMS over all", s["rms"]),
+        ("per row", s["per_geometry"]),
+    ]
     fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), 4, figsize=(9, 9))
     for i, light in enumerate(SOLID_LIGHTS_DEG):
         for j, (name, res) in enumerate(cols):
@@ -102,17 +106,23 @@ def fig45_contour(path: Path) -> Path:
     z = np.empty((len(dts), len(dls)))
     for i, dt in enumerate(dts):
         for j, dl in enumerate(dls):
-            p = SILVER_PAINT.replace(face=(SILVER_PAINT.face[0] + dl, 0.0, 0.0),
-                                     travel_deg=SILVER_PAINT.travel_deg + dt)
+            p = SILVER_PAINT.replace(
+                face=(SILVER_PAINT.face[0] + dl, 0.0, 0.0), travel_deg=SILVER_PAINT.travel_deg + dt
+            )
             z[i, j] = np.sqrt(np.mean(m.delta_e(SILVER_PAINT, p, np.array([SILVER_BETA_DEG]))[:, 0] ** 2))
     r = silver_black_flop()
     fig, ax = plt.subplots(figsize=(6.5, 4.8))
     cs = ax.contourf(dls, dts, z, levels=np.linspace(0.0, z.max(), 25), cmap="viridis")
     fig.colorbar(cs, label="RMS seam ΔE*ab")
     ax.plot([0.0], [0.0], "wo", label=f"A: identical paint, ΔE {r.rms_before:.2f}")
-    ax.plot([r.changes["face_L"]], [r.changes["travel_deg"]], "r*", ms=12,
-            label=f"B: Δface L {r.changes['face_L']:+.1f}, Δtravel {r.changes['travel_deg']:+.1f}°, "
-                  f"ΔE {r.rms_after:.2f}")
+    ax.plot(
+        [r.changes["face_L"]],
+        [r.changes["travel_deg"]],
+        "r*",
+        ms=12,
+        label=f"B: Δface L {r.changes['face_L']:+.1f}, Δtravel {r.changes['travel_deg']:+.1f}°, "
+        f"ΔE {r.rms_after:.2f}",
+    )
     ax.plot([3.4], [2.0], "w^", label="thesis minimum: +3.4, +2.0°")
     ax.set_xlabel("Δ face L*")
     ax.set_ylabel("Δ travel (degrees)")
@@ -131,8 +141,15 @@ def main() -> None:
     base = timeit(lambda: plain_scan(grey, 45.0, 0.0, 1.0), repeat=10)
     cases.append(Case("baseline: plain 1e-3° scan, solid", "30001 β", base * 1e3, "ms"))
     t = timeit(lambda: goniogeometric_index(grey, 45.0, 0.0, direction="+"))
-    cases.append(Case("index: solid, point light, one direction", "1 geometry", t * 1e3, "ms",
-                      f"bar ≤ 1 ms; {base / t:.0f}× faster than the scan"))
+    cases.append(
+        Case(
+            "index: solid, point light, one direction",
+            "1 geometry",
+            t * 1e3,
+            "ms",
+            f"bar ≤ 1 ms; {base / t:.0f}× faster than the scan",
+        )
+    )
     t = timeit(lambda: goniogeometric_index(BUMPER_PAINT, 45.0, -30.0))
     cases.append(Case("index: effect paint, either direction", "1 geometry", t * 1e3, "ms", "bar ≤ 1 ms"))
     t = timeit(lambda: goniogeometric_index(BUMPER_PAINT, 45.0, -30.0, method="cie2000"), repeat=10)
@@ -145,31 +162,58 @@ def main() -> None:
     t = timeit(lambda: goniogeometric_index(BUMPER_PAINT, env, -10.0), repeat=5)
     cases.append(Case("index: environment (16×32 equirect)", "512 samples", t * 1e3, "ms"))
 
-    sweep_args = dict(betas_deg=(0.25, 0.5, 1.0, 2.0, 3.0, 5.0), lights_deg=tuple(range(15, 86, 5)),
-                      views_deg=tuple(np.arange(-30.0, 66.0, 1.0)))
+    sweep_args = dict(
+        betas_deg=(0.25, 0.5, 1.0, 2.0, 3.0, 5.0),
+        lights_deg=tuple(range(15, 86, 5)),
+        views_deg=tuple(np.arange(-30.0, 66.0, 1.0)),
+    )
     t = timeit(lambda: seam_sweep(BUMPER_PAINT, **sweep_args), repeat=10)
     cases.append(Case("Fig. 4.3 sweep", "6 β × 15 lights × 96 views", t * 1e3, "ms", "bar ≤ 1 s"))
-    plot_sweep(seam_sweep(BUMPER_PAINT, **sweep_args), DOCS / "misalignment-index.png", view_for_lights=0.0,
-               title="Seam ΔE*ab against view, light and misalignment, blue metallic (thesis Fig. 4.3)")
+    plot_sweep(
+        seam_sweep(BUMPER_PAINT, **sweep_args),
+        DOCS / "misalignment-index.png",
+        view_for_lights=0.0,
+        title="Seam ΔE*ab against view, light and misalignment, blue metallic (thesis Fig. 4.3)",
+    )
 
     lights = list(SOLID_LIGHTS_DEG)
     t = timeit(lambda: inverse_trompe_loeil(SOLID_PAINT, lights, beta_deg=-3.0, objective="rms"), repeat=5)
     cases.append(Case("trompe l'oeil: solid, RMS", "6 geometries, 3 params", t * 1e3, "ms", "bar ≤ 1 s"))
-    t = timeit(lambda: inverse_trompe_loeil(SOLID_PAINT, lights, beta_deg=-3.0, objective="minimax"), repeat=5)
+    t = timeit(
+        lambda: inverse_trompe_loeil(SOLID_PAINT, lights, beta_deg=-3.0, objective="minimax"), repeat=5
+    )
     cases.append(Case("trompe l'oeil: solid, minimax", "6 geometries, 3 params", t * 1e3, "ms", "bar ≤ 1 s"))
     asp = (15.0, 25.0, 45.0, 75.0, 110.0)
     ls, vs = [45.0] * 5, [a - 45.0 for a in asp]
-    t = timeit(lambda: inverse_trompe_loeil(SILVER_PAINT, ls, vs, beta_deg=-2.0, subset="face_L+travel"),
-               repeat=5)
-    cases.append(Case("trompe l'oeil: silver, face L + travel, RMS", "5 geometries, 2 params", t * 1e3, "ms",
-                      "bar ≤ 1 s"))
+    t = timeit(
+        lambda: inverse_trompe_loeil(SILVER_PAINT, ls, vs, beta_deg=-2.0, subset="face_L+travel"), repeat=5
+    )
+    cases.append(
+        Case(
+            "trompe l'oeil: silver, face L + travel, RMS",
+            "5 geometries, 2 params",
+            t * 1e3,
+            "ms",
+            "bar ≤ 1 s",
+        )
+    )
     t = timeit(lambda: inverse_trompe_loeil(BUMPER_PAINT, ls, vs, beta_deg=-8.0, subset="full"), repeat=5)
-    cases.append(Case("trompe l'oeil: metallic, full FFTG, RMS", "5 geometries, 7 params", t * 1e3, "ms",
-                      "bar ≤ 1 s"))
-    t = timeit(lambda: inverse_trompe_loeil(BUMPER_PAINT, ls, vs, beta_deg=-8.0, subset="full",
-                                            objective="minimax"), repeat=5)
-    cases.append(Case("trompe l'oeil: metallic, full FFTG, minimax", "5 geometries, 7 params", t * 1e3, "ms",
-                      "bar ≤ 1 s"))
+    cases.append(
+        Case("trompe l'oeil: metallic, full FFTG, RMS", "5 geometries, 7 params", t * 1e3, "ms", "bar ≤ 1 s")
+    )
+    t = timeit(
+        lambda: inverse_trompe_loeil(BUMPER_PAINT, ls, vs, beta_deg=-8.0, subset="full", objective="minimax"),
+        repeat=5,
+    )
+    cases.append(
+        Case(
+            "trompe l'oeil: metallic, full FFTG, minimax",
+            "5 geometries, 7 params",
+            t * 1e3,
+            "ms",
+            "bar ≤ 1 s",
+        )
+    )
     t = timeit(lambda: seam_qa(BUMPER_PAINT, BUMPER_PAINT.replace(face=(61.0, -4.0, -41.0)), -3.0), repeat=3)
     cases.append(Case("QA workflow (seam_qa, no PNG)", "3 lights × 4 aspecular", t * 1e3, "ms"))
 
@@ -177,9 +221,13 @@ def main() -> None:
     plot_seam_report(report, DOCS / "misalignment-qa.png")
     fig44_grid(DOCS / "misalignment-fig44.png")
     fig45_contour(DOCS / "misalignment-fig45.png")
-    write_section("analysis", "Misalignment analysis (goniogeometric index, inverse trompe l'oeil)", cases,
-                  "Figures: docs/misalignment-index.png, docs/misalignment-fig44.png, docs/misalignment-fig45.png, "
-                  "docs/misalignment-qa.png.")
+    write_section(
+        "analysis",
+        "Misalignment analysis (goniogeometric index, inverse trompe l'oeil)",
+        cases,
+        "Figures: docs/misalignment-index.png, docs/misalignment-fig44.png, docs/misalignment-fig45.png, "
+        "docs/misalignment-qa.png.",
+    )
 
 
 if __name__ == "__main__":

@@ -46,8 +46,9 @@ def environment(name: str):
     return procedural_environment(name, 512)
 
 
-def scene_errors(scene: tr.TruthScene, brdfs: list[lf.DesignedBRDF], basis: LobeBasis
-                 ) -> dict[str, np.ndarray]:
+def scene_errors(
+    scene: tr.TruthScene, brdfs: list[lf.DesignedBRDF], basis: LobeBasis
+) -> dict[str, np.ndarray]:
     """ΔE00 per design and pixel, (d, P), for the exact and prefiltered lobe models against truth."""
     white = float(scene.white()[..., 1].max())
     rep = lf.fit_targets(lf.targets_from_brdfs(brdfs), basis)
@@ -108,7 +109,9 @@ def chart(rows: list[dict[str, float]], path) -> None:
             mean = [r[f"{env}/{mode}/mean"] for r in rows]
             p95 = [r[f"{env}/{mode}/p95"] for r in rows]
             axes[0].plot(m, mean, linestyle=ls, color=colour, marker="o", ms=3, label=f"{env} {mode} mean")
-            axes[0].plot(m, p95, linestyle=ls, color=colour, marker="^", ms=3, alpha=0.5, label=f"{env} {mode} p95")
+            axes[0].plot(
+                m, p95, linestyle=ls, color=colour, marker="^", ms=3, alpha=0.5, label=f"{env} {mode} p95"
+            )
             axes[1].plot(ms, mean, linestyle=ls, color=colour, marker="o", ms=3)
     for ax in axes:
         ax.axhline(MEAN_BAR, color="grey", lw=0.8)
@@ -154,7 +157,9 @@ def main() -> None:
     for env in ENVIRONMENTS:
         t0 = time.perf_counter()
         scenes[env] = tr.TruthScene(environment(env), normals, views)
-        cases.append(Case(f"truth scene {env}: integrals", f"{normals.shape[0]} px", time.perf_counter() - t0, "s"))
+        cases.append(
+            Case(f"truth scene {env}: integrals", f"{normals.shape[0]} px", time.perf_counter() - t0, "s")
+        )
     rows: list[dict[str, float]] = []
     default_m = default_basis().size
     frames = blend_table([m for m, _ in bases])
@@ -167,7 +172,10 @@ def main() -> None:
                 row[f"{env}/{mode}/p95"] = float(np.percentile(e, 95))
                 row[f"{env}/{mode}/worst_design"] = float(e.mean(axis=1).max())
         rows.append(row)
-        print(f"{m:2d} lobes  " + "  ".join(f"{k} {v:.3f}" for k, v in row.items() if k.endswith(("mean", "p95"))))
+        print(
+            f"{m:2d} lobes  "
+            + "  ".join(f"{k} {v:.3f}" for k, v in row.items() if k.endswith(("mean", "p95")))
+        )
     for row in rows:
         if row["lobes"] != default_m:
             continue
@@ -176,24 +184,40 @@ def main() -> None:
                 mean, p95 = row[f"{env}/{mode}/mean"], row[f"{env}/{mode}/p95"]
                 ok = "meets" if mean <= MEAN_BAR and p95 <= P95_BAR else "MISSES"
                 cases += [
-                    Case(f"default {m_str(default_m)} {env} {mode}: mean", f"{len(designs)} designs", mean, "ΔE00",
-                         f"{ok} bar (≤ {MEAN_BAR}, p95 ≤ {P95_BAR})"),
-                    Case(f"default {m_str(default_m)} {env} {mode}: p95", f"{normals.shape[0]} px", p95, "ΔE00"),
+                    Case(
+                        f"default {m_str(default_m)} {env} {mode}: mean",
+                        f"{len(designs)} designs",
+                        mean,
+                        "ΔE00",
+                        f"{ok} bar (≤ {MEAN_BAR}, p95 ≤ {P95_BAR})",
+                    ),
+                    Case(
+                        f"default {m_str(default_m)} {env} {mode}: p95", f"{normals.shape[0]} px", p95, "ΔE00"
+                    ),
                 ]
     (ROOT / "docs" / "render-basis-accuracy.json").write_text(json.dumps(rows, indent=1) + "\n")
     png = ROOT / "docs" / "render-basis-accuracy.png"
     chart(rows, png)
-    header = "| lobes | frame proxy ms | " + " | ".join(
-        f"{env} {mode} mean / p95" for env in ENVIRONMENTS for mode in MODES) + " |"
+    header = (
+        "| lobes | frame proxy ms | "
+        + " | ".join(f"{env} {mode} mean / p95" for env in ENVIRONMENTS for mode in MODES)
+        + " |"
+    )
     lines = [header, "|" + "---|" * (2 + len(MODES) * len(ENVIRONMENTS))]
     for r in rows:
-        cells = " | ".join(f"{r[f'{env}/{mode}/mean']:.2f} / {r[f'{env}/{mode}/p95']:.2f}"
-                           for env in ENVIRONMENTS for mode in MODES)
+        cells = " | ".join(
+            f"{r[f'{env}/{mode}/mean']:.2f} / {r[f'{env}/{mode}/p95']:.2f}"
+            for env in ENVIRONMENTS
+            for mode in MODES
+        )
         lines.append(f"| {r['lobes']} | {r['frame_ms']:.2f} | {cells} |")
-    extra = ("Error against lobe count and frame time: `docs/render-basis-accuracy.png`.\n\n" + "\n".join(lines)
-             + "\n\n*exact*: lobe model integrated like the truth (cost of the fit alone); *prefiltered*: the "
-               "renderers' evaluation (eqs 2.5.1–2.5.3); *prefiltered-lut*: the same lookups with the "
-               "per-lobe horizon factors of `station.render.lobes.horizon_factors` instead of R·N.")
+    extra = (
+        "Error against lobe count and frame time: `docs/render-basis-accuracy.png`.\n\n"
+        + "\n".join(lines)
+        + "\n\n*exact*: lobe model integrated like the truth (cost of the fit alone); *prefiltered*: the "
+        "renderers' evaluation (eqs 2.5.1–2.5.3); *prefiltered-lut*: the same lookups with the "
+        "per-lobe horizon factors of `station.render.lobes.horizon_factors` instead of R·N."
+    )
     write_section("basis_accuracy", "Lobe basis against ground truth (booth, sky)", cases, extra)
 
 

@@ -54,7 +54,9 @@ def _time_index(index: SnapIndex, qs: np.ndarray, method: str) -> tuple[np.ndarr
     return times, results
 
 
-def _numpy_path(index: SnapIndex, lab: np.ndarray, qs: np.ndarray, n_check: int, size: str, cases: list) -> None:
+def _numpy_path(
+    index: SnapIndex, lab: np.ndarray, qs: np.ndarray, n_check: int, size: str, cases: list
+) -> None:
     """Time the NumPy-only CIEDE2000 path (no numba) on the same queries; check exactness on *n_check*."""
     snap._USE_COMPILED = False
     try:
@@ -65,8 +67,15 @@ def _numpy_path(index: SnapIndex, lab: np.ndarray, qs: np.ndarray, n_check: int,
     for q, r in zip(qs[:n_check], results[:n_check], strict=True):
         b = _fast_brute(lab, q, "cie2000")
         assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"
-    cases.append(Case("ColorSnap cie2000 NumPy-only path median", size, float(np.median(times)) * 1e3, "ms",
-                      f"p95 {np.percentile(times, 95) * 1e3:.3f} ms; without numba"))
+    cases.append(
+        Case(
+            "ColorSnap cie2000 NumPy-only path median",
+            size,
+            float(np.median(times)) * 1e3,
+            "ms",
+            f"p95 {np.percentile(times, 95) * 1e3:.3f} ms; without numba",
+        )
+    )
 
 
 def run() -> None:
@@ -93,7 +102,15 @@ def run() -> None:
         med, bmed = float(np.median(times)) * 1e3, float(np.median(bt)) * 1e3
         if method == "cie2000":
             _numpy_path(index, std, qs, 60, "6000", cases)
-        cases.append(Case(f"ColorSnap {method} median", "6000", med, "ms", f"p95 {np.percentile(times, 95) * 1e3:.3f} ms"))
+        cases.append(
+            Case(
+                f"ColorSnap {method} median",
+                "6000",
+                med,
+                "ms",
+                f"p95 {np.percentile(times, 95) * 1e3:.3f} ms",
+            )
+        )
         cases.append(Case(f"brute force {method} median", "6000", bmed, "ms"))
         cases.append(Case(f"speed-up vs brute force {method}", "6000", bmed / med, "x", "600 queries exact"))
         rows_md.append((method, "6000", med, bmed))
@@ -121,9 +138,15 @@ def run() -> None:
         med, bmed = float(np.median(times)) * 1e3, float(np.median(bt)) * 1e3
         if method == "cie2000":
             _numpy_path(bindex, big, qs, 5, "1e6", cases)
-        cases.append(Case(f"ColorSnap {method} median", "1e6", med, "ms", f"p95 {np.percentile(times, 95) * 1e3:.2f} ms"))
+        cases.append(
+            Case(
+                f"ColorSnap {method} median", "1e6", med, "ms", f"p95 {np.percentile(times, 95) * 1e3:.2f} ms"
+            )
+        )
         cases.append(Case(f"brute force {method} median", "1e6", bmed, "ms"))
-        cases.append(Case(f"speed-up vs brute force {method}", "1e6", bmed / med, "x", "200 timed, 20 checked exact"))
+        cases.append(
+            Case(f"speed-up vs brute force {method}", "1e6", bmed / med, "x", "200 timed, 20 checked exact")
+        )
         rows_md.append((method, "1e6", med, bmed))
 
     chart = ROOT / "docs" / "bench-colorsnap.png"

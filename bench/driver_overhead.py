@@ -166,17 +166,29 @@ def main(argv: list[str] | None = None) -> None:
     args = p.parse_args(argv)
     cases: list[Case] = []
     rows = []
-    for name, fn in (("ma6 ASCII / pty", bench_ma6), ("ma3 binary / pyusb", bench_ma3),
-                     ("gloss HID / hidapi boundary", bench_gloss)):
+    for name, fn in (
+        ("ma6 ASCII / pty", bench_ma6),
+        ("ma3 binary / pyusb", bench_ma3),
+        ("gloss HID / hidapi boundary", bench_gloss),
+    ):
         driver, base = fn(args.n)
         over = float(np.median(driver) - np.median(base))
         cases += [
-            Case(f"{name}: driver measure()", f"n={args.n}", float(np.median(driver)), "ms",
-                 f"simulated measurement {MEASURE_S * 1000:.0f} ms"),
+            Case(
+                f"{name}: driver measure()",
+                f"n={args.n}",
+                float(np.median(driver)),
+                "ms",
+                f"simulated measurement {MEASURE_S * 1000:.0f} ms",
+            ),
             Case(f"{name}: raw exchange baseline", f"n={args.n}", float(np.median(base)), "ms"),
             Case(f"{name}: overhead (median)", f"n={args.n}", over, "ms", "bar ≤ 5 ms"),
-            Case(f"{name}: overhead (p90)", f"n={args.n}", float(np.percentile(driver, 90) - np.percentile(base, 90)),
-                 "ms"),
+            Case(
+                f"{name}: overhead (p90)",
+                f"n={args.n}",
+                float(np.percentile(driver, 90) - np.percentile(base, 90)),
+                "ms",
+            ),
         ]
         rows.append((name, over, float(np.median(driver)) - MEASURE_S * 1000))
     _chart(rows)
@@ -185,7 +197,8 @@ def main(argv: list[str] | None = None) -> None:
         "Overhead = median(driver) − median(raw exchange), same simulator, same run; the raw exchange polls at\n"
         f"the driver's period ({POLL_S * 1000:.0f} ms). Second column: driver time beyond the simulated "
         f"{MEASURE_S * 1000:.0f} ms measurement (includes polling granularity and simulator work).\n\n"
-        "| family | driver − raw (ms) | driver − simulated time (ms) |\n|---|---|---|\n" + table
+        "| family | driver − raw (ms) | driver − simulated time (ms) |\n|---|---|---|\n"
+        + table
         + "\n\n![driver overhead](driver-overhead.png)"
     )
     write_section("driver_overhead", "Driver-stack overhead per measurement", cases, extra)

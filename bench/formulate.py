@@ -56,20 +56,42 @@ def run() -> None:
         Case("formulate (ColorSnap start) median", "120 designs", float(np.median(t_lib_a)), "s"),
         Case("formulate (ColorSnap start) p95", "120 designs", float(np.percentile(t_lib_a, 95)), "s"),
         Case("formulate (ColorSnap start) max", "120 designs", float(t_lib_a.max()), "s", "bar ≤ 1 s"),
-        Case("formulated within tolerance", "120 designs", 100.0 * float(np.mean(ok_lib)), "%",
-             f"mean ΔE00 median {np.median(de_lib):.3f}"),
-        Case("baseline: generic start median", "120 designs", float(np.median(t_gen_a)), "s",
-             f"{100 * np.mean(np.array(de_gen) <= 1.0):.0f}% within tolerance"),
-        Case("time ratio generic / ColorSnap start", "120 designs", float(np.median(t_gen_a) / np.median(t_lib_a)), "x"),
+        Case(
+            "formulated within tolerance",
+            "120 designs",
+            100.0 * float(np.mean(ok_lib)),
+            "%",
+            f"mean ΔE00 median {np.median(de_lib):.3f}",
+        ),
+        Case(
+            "baseline: generic start median",
+            "120 designs",
+            float(np.median(t_gen_a)),
+            "s",
+            f"{100 * np.mean(np.array(de_gen) <= 1.0):.0f}% within tolerance",
+        ),
+        Case(
+            "time ratio generic / ColorSnap start",
+            "120 designs",
+            float(np.median(t_gen_a) / np.median(t_lib_a)),
+            "x",
+        ),
     ]
 
     rng = np.random.default_rng(5)
     hues = rng.uniform(0, 2 * np.pi, 40)
     chroma = rng.uniform(95, 130, 40)
-    bad = np.stack([np.stack([np.full(40, L), chroma * np.cos(hues), chroma * np.sin(hues)], -1)
-                    for L in (70.0, 60.0, 50.0)], 1)
+    bad = np.stack(
+        [
+            np.stack([np.full(40, L), chroma * np.cos(hues), chroma * np.sin(hues)], -1)
+            for L in (70.0, 60.0, 50.0)
+        ],
+        1,
+    )
     verdicts = [formulate(b).formulable for b in bad]
-    cases.append(Case("out-of-gamut said not formulable", "40 designs", 100.0 * (1 - float(np.mean(verdicts))), "%"))
+    cases.append(
+        Case("out-of-gamut said not formulable", "40 designs", 100.0 * (1 - float(np.mean(verdicts))), "%")
+    )
 
     inside, conv, corr, all_conv = 0, 0, [], 0
     loop_t = []
@@ -89,8 +111,13 @@ def run() -> None:
                 corr.append(job.corrections)
     hist = np.bincount(corr, minlength=4)
     cases += [
-        Case("closed loop converged, inside true gamut", f"{inside} designs", 100.0 * conv / max(inside, 1), "%",
-             "corrections 0/1/2/3: " + "/".join(str(int(v)) for v in hist[:4])),
+        Case(
+            "closed loop converged, inside true gamut",
+            f"{inside} designs",
+            100.0 * conv / max(inside, 1),
+            "%",
+            "corrections 0/1/2/3: " + "/".join(str(int(v)) for v in hist[:4]),
+        ),
         Case("closed loop converged, all designs", "120 designs", 100.0 * all_conv / len(designs), "%"),
         Case("closed loop time median", "120 designs", float(np.median(loop_t)), "s"),
     ]

@@ -36,10 +36,16 @@ def _reading(rng: random.Random, serial: str, index: int) -> Any:
 
     face = [rng.uniform(40, 110), rng.uniform(-20, 20), rng.uniform(-30, 30)]
     return Reading(
-        client_id=uuid.uuid4(), instrument=InstrumentRef(serial=serial, model="MA-98 simulator"),
-        operator=f"bench-{serial}", measured_at=dt.datetime.now(dt.UTC),
+        client_id=uuid.uuid4(),
+        instrument=InstrumentRef(serial=serial, model="MA-98 simulator"),
+        operator=f"bench-{serial}",
+        measured_at=dt.datetime.now(dt.UTC),
         geometries_deg=[15.0, 45.0, 110.0],
-        lab=[face, [face[0] * 0.6, face[1] * 0.8, face[2] * 0.8], [face[0] * 0.3, face[1] * 0.5, face[2] * 0.5]],
+        lab=[
+            face,
+            [face[0] * 0.6, face[1] * 0.8, face[2] * 0.8],
+            [face[0] * 0.3, face[1] * 0.5, face[2] * 0.5],
+        ],
         wavelengths_nm=[400.0 + 10 * k for k in range(31)],
         spectra=[[round(rng.uniform(0, 1.5), 5) for _ in range(31)] for _ in range(3)],
         gloss_gu=rng.uniform(60, 95),
@@ -60,7 +66,12 @@ def _station(args: tuple[str, str, float, int, str, int]) -> dict[str, Any]:
         deadline = time.perf_counter() + duration
         last = None
         while time.perf_counter() < deadline:
-            if last is not None and resend_every and len(sent) % resend_every == 0 and resent * resend_every < len(sent):
+            if (
+                last is not None
+                and resend_every
+                and len(sent) % resend_every == 0
+                and resent * resend_every < len(sent)
+            ):
                 reading, resent = last, resent + 1
             else:
                 reading = _reading(rng, serial, len(sent))
@@ -73,8 +84,14 @@ def _station(args: tuple[str, str, float, int, str, int]) -> dict[str, Any]:
         ingestor.replay()
         left = len(ingestor.outbox)
     engine.dispose()
-    return {"serial": serial, "sent": sent, "resent": resent, "queued": queued, "left_in_outbox": left,
-            "latencies": latencies}
+    return {
+        "serial": serial,
+        "sent": sent,
+        "resent": resent,
+        "queued": queued,
+        "left_in_outbox": left,
+        "latencies": latencies,
+    }
 
 
 def run(url: str, stations: int, duration: float, resend_every: int, tag: str) -> dict[str, Any]:
@@ -88,11 +105,18 @@ def run(url: str, stations: int, duration: float, resend_every: int, tag: str) -
     lat = np.concatenate([np.asarray(r["latencies"]) for r in results]) * 1000.0
     sent = [cid for r in results for cid in r["sent"]]
     return {
-        "stations": stations, "duration": duration, "wall": wall, "sent": sent,
-        "submits": int(lat.size), "resent": sum(r["resent"] for r in results),
-        "queued": sum(r["queued"] for r in results), "left": sum(r["left_in_outbox"] for r in results),
-        "throughput": len(sent) / duration, "p50": float(np.percentile(lat, 50)),
-        "p99": float(np.percentile(lat, 99)), "latencies_ms": lat,
+        "stations": stations,
+        "duration": duration,
+        "wall": wall,
+        "sent": sent,
+        "submits": int(lat.size),
+        "resent": sum(r["resent"] for r in results),
+        "queued": sum(r["queued"] for r in results),
+        "left": sum(r["left_in_outbox"] for r in results),
+        "throughput": len(sent) / duration,
+        "p50": float(np.percentile(lat, 50)),
+        "p99": float(np.percentile(lat, 99)),
+        "latencies_ms": lat,
     }
 
 
@@ -105,13 +129,20 @@ def count_check(url: str, sent: list[str], serial_prefix: str) -> dict[str, int]
 
     engine = make_engine(url)
     with engine.connect() as conn:
-        q = (select(Measurement.client_id).join(Instrument, Instrument.id == Measurement.instrument_id)
-             .where(Instrument.serial.startswith(serial_prefix)))
+        q = (
+            select(Measurement.client_id)
+            .join(Instrument, Instrument.id == Measurement.instrument_id)
+            .where(Instrument.serial.startswith(serial_prefix))
+        )
         stored = [str(c) for c in conn.execute(q).scalars()]
         rows = conn.execute(select(func.count()).select_from(q.subquery())).scalar_one()
     engine.dispose()
-    return {"rows": int(rows), "distinct": len(set(stored)), "missing": len(set(sent) - set(stored)),
-            "unexpected": len(set(stored) - set(sent))}
+    return {
+        "rows": int(rows),
+        "distinct": len(set(stored)),
+        "missing": len(set(sent) - set(stored)),
+        "unexpected": len(set(stored) - set(sent)),
+    }
 
 
 def _chart(base: dict[str, Any], load: dict[str, Any], path: Path) -> None:
@@ -140,7 +171,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=60.0, help="seconds of the loaded run (default 60)")
     parser.add_argument("--baseline-duration", type=float, default=15.0, help="seconds of the 1-station run")
     parser.add_argument("--resend-every", type=int, default=20, help="re-send every Nth reading (0: never)")
-    parser.add_argument("--pg-admin", default=PG_ADMIN, help="maintenance database URL (a throwaway DB is made)")
+    parser.add_argument(
+        "--pg-admin", default=PG_ADMIN, help="maintenance database URL (a throwaway DB is made)"
+    )
     parser.add_argument("--no-report", action="store_true", help="print only; leave docs/ alone")
     args = parser.parse_args(argv)
 
@@ -163,37 +196,58 @@ def main(argv: list[str] | None = None) -> int:
         admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
         admin.close()
     load_after = os.getloadavg()[0]
-    exactly_once = all(c["rows"] == c["distinct"] == len(set(r["sent"])) and c["missing"] == c["unexpected"] == 0
-                       for c, r in ((base_check, base), (load_check, load)))
+    exactly_once = all(
+        c["rows"] == c["distinct"] == len(set(r["sent"])) and c["missing"] == c["unexpected"] == 0
+        for c, r in ((base_check, base), (load_check, load))
+    )
     n = args.stations
     cases = [
-        Case("throughput, 1 station (baseline)", f"{args.baseline_duration:g} s", base["throughput"], "readings/s"),
+        Case(
+            "throughput, 1 station (baseline)",
+            f"{args.baseline_duration:g} s",
+            base["throughput"],
+            "readings/s",
+        ),
         Case(f"throughput, {n} stations", f"{args.duration:g} s", load["throughput"], "readings/s"),
         Case(f"throughput ratio {n} : 1", "", load["throughput"] / base["throughput"], "x"),
         Case("latency p50, 1 station", "", base["p50"], "ms"),
         Case("latency p99, 1 station", "", base["p99"], "ms"),
         Case(f"latency p50, {n} stations", "", load["p50"], "ms"),
         Case(f"latency p99, {n} stations", "", load["p99"], "ms"),
-        Case("distinct readings sent (loaded run)", "", len(load["sent"]), "readings",
-             f"+{load['resent']} re-sent duplicates"),
-        Case("rows stored (loaded run)", "", load_check["rows"], "rows",
-             f"distinct {load_check['distinct']}, missing {load_check['missing']}, "
-             f"unexpected {load_check['unexpected']}"),
-        Case("queued in outbox during run", "", load["queued"], "readings", f"left after drain: {load['left']}"),
+        Case(
+            "distinct readings sent (loaded run)",
+            "",
+            len(load["sent"]),
+            "readings",
+            f"+{load['resent']} re-sent duplicates",
+        ),
+        Case(
+            "rows stored (loaded run)",
+            "",
+            load_check["rows"],
+            "rows",
+            f"distinct {load_check['distinct']}, missing {load_check['missing']}, "
+            f"unexpected {load_check['unexpected']}",
+        ),
+        Case(
+            "queued in outbox during run", "", load["queued"], "readings", f"left after drain: {load['left']}"
+        ),
     ]
     verdict = "PASS: every reading sent is stored exactly once" if exactly_once else "FAIL: count check"
     print(verdict)
     if not args.no_report:
         chart = ROOT / "docs" / "bench-ingest-load.png"
         _chart(base, load, chart)
-        extra = (f"Count check: {verdict}. Stations are processes with their own engine and outbox; readings are "
-                 f"synthetic (3 geometries, 31-band spectra). Every {args.resend_every}th submit re-sends the "
-                 f"previous reading (idempotent path). Baseline: one station alone, same run. Each stored reading "
-                 f"commits two rows (measurement + audit event) with PostgreSQL's synchronous commit. Machine load "
-                 f"average {load_before:.1f} before, {load_after:.1f} after ({os.cpu_count()} CPUs shared with "
-                 f"other jobs): with {n} station processes plus their PostgreSQL backends the run is CPU-bound, so "
-                 f"the {n}:1 ratio measures contention for the cores, not a database limit.\n\n"
-                 f"![latency](bench-ingest-load.png)")
+        extra = (
+            f"Count check: {verdict}. Stations are processes with their own engine and outbox; readings are "
+            f"synthetic (3 geometries, 31-band spectra). Every {args.resend_every}th submit re-sends the "
+            f"previous reading (idempotent path). Baseline: one station alone, same run. Each stored reading "
+            f"commits two rows (measurement + audit event) with PostgreSQL's synchronous commit. Machine load "
+            f"average {load_before:.1f} before, {load_after:.1f} after ({os.cpu_count()} CPUs shared with "
+            f"other jobs): with {n} station processes plus their PostgreSQL backends the run is CPU-bound, so "
+            f"the {n}:1 ratio measures contention for the cores, not a database limit.\n\n"
+            f"![latency](bench-ingest-load.png)"
+        )
         write_section("ingest_load", f"Ingest load: {n} stations into PostgreSQL", cases, extra)
     else:
         for c in cases:

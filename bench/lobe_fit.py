@@ -26,10 +26,15 @@ N_PAINTS = 6000
 
 
 def _single_targets(t: lf.Targets) -> list[lf.Targets]:
-    return [lf.Targets(t.rho[i:i + 1], t.phong_exponent[i:i + 1], t.specular_albedo[i:i + 1]) for i in range(len(t))]
+    return [
+        lf.Targets(t.rho[i : i + 1], t.phong_exponent[i : i + 1], t.specular_albedo[i : i + 1])
+        for i in range(len(t))
+    ]
 
 
-def time_single(targets: lf.Targets, method: str, gloss_form: str = "thesis", repeats: int = REPEATS) -> np.ndarray:
+def time_single(
+    targets: lf.Targets, method: str, gloss_form: str = "thesis", repeats: int = REPEATS
+) -> np.ndarray:
     """Seconds per whole-design fit, one call per design, every design × repeats."""
     singles = _single_targets(targets)
     basis = default_basis()
@@ -54,10 +59,15 @@ def jittered_paints(n: int):
         d = base[i % len(base)]
         j = rng.normal(0.0, 1.5, 3)
         face = np.clip(np.asarray(d.face) + j, [0, -150, -150], [200, 150, 150])
-        flop = np.clip(np.asarray(d.flop) + (j if d.travel_deg is None else rng.normal(0.0, 1.5, 3)),
-                       [0, -150, -150], [200, 150, 150])
+        flop = np.clip(
+            np.asarray(d.flop) + (j if d.travel_deg is None else rng.normal(0.0, 1.5, 3)),
+            [0, -150, -150],
+            [200, 150, 150],
+        )
         gloss = float(np.clip(d.gloss_gu + rng.normal(0.0, 3.0), 0.0, 99.0))
-        travel = None if d.travel_deg is None else float(np.clip(d.travel_deg + rng.normal(0, 5), 16.0, 180.0))
+        travel = (
+            None if d.travel_deg is None else float(np.clip(d.travel_deg + rng.normal(0, 5), 16.0, 180.0))
+        )
         out.append(FaceFlopTravelGloss(tuple(face), tuple(face if travel is None else flop), travel, gloss))
     return out
 
@@ -87,10 +97,24 @@ def chart(points: list[tuple[str, float, float, float]], path) -> None:
     markers = "osD^v<>pX*"
     for i, (name, t_us, mean_de, max_de) in enumerate(points):
         colour = f"C{i % 10}"
-        ax.scatter([t_us], [mean_de], s=42, marker=markers[i % len(markers)], color=colour, zorder=3,
-                   label=f"{name}: {t_us:.3g} µs, {mean_de:.2f} / {max_de:.2f}")
-        ax.scatter([t_us], [max_de], s=42, marker=markers[i % len(markers)], facecolors="none",
-                   edgecolors=colour, zorder=3)
+        ax.scatter(
+            [t_us],
+            [mean_de],
+            s=42,
+            marker=markers[i % len(markers)],
+            color=colour,
+            zorder=3,
+            label=f"{name}: {t_us:.3g} µs, {mean_de:.2f} / {max_de:.2f}",
+        )
+        ax.scatter(
+            [t_us],
+            [max_de],
+            s=42,
+            marker=markers[i % len(markers)],
+            facecolors="none",
+            edgecolors=colour,
+            zorder=3,
+        )
         ax.plot([t_us, t_us], [mean_de, max_de], color=colour, alpha=0.3, zorder=1)
     ax.legend(fontsize=6.5, loc="upper center", title="method: time, mean / max ΔE", title_fontsize=7)
     ax.axvline(50.0, color="tab:red", lw=0.8, ls="--")
@@ -112,8 +136,14 @@ def main() -> None:
     targets = lf.targets_from_brdfs(brdfs)
     basis = default_basis()
     base_s = baseline_nnls_seconds()
-    cases: list[Case] = [Case("baseline: one scipy NNLS solve (colour size)", f"{lf.fit_problem(basis).colour.a.shape}",
-                              base_s * 1e6, "µs")]
+    cases: list[Case] = [
+        Case(
+            "baseline: one scipy NNLS solve (colour size)",
+            f"{lf.fit_problem(basis).colour.a.shape}",
+            base_s * 1e6,
+            "µs",
+        )
+    ]
     points = []
     variants = [(m, "thesis") for m in lf.METHODS] + [("enum", "cosine")]
     for method, form in variants:
@@ -124,11 +154,21 @@ def main() -> None:
         med = float(np.median(times))
         points.append((label, med * 1e6, float(err.mean()), float(err.max())))
         cases += [
-            Case(f"fit {label}: median per design", f"{len(designs)} designs", med * 1e6, "µs",
-                 f"min {times.min() * 1e6:.1f} µs; ×{med / base_s:.1f} one NNLS"),
+            Case(
+                f"fit {label}: median per design",
+                f"{len(designs)} designs",
+                med * 1e6,
+                "µs",
+                f"min {times.min() * 1e6:.1f} µs; ×{med / base_s:.1f} one NNLS",
+            ),
             Case(f"fit {label}: error mean", f"{basis.size} lobes", float(err.mean()), "ΔE00 RMS"),
-            Case(f"fit {label}: error max", f"{basis.size} lobes", float(err.max()), "ΔE00 RMS",
-                 f"LP fallbacks {rep.fallbacks}" if method == "lp-l1" else ""),
+            Case(
+                f"fit {label}: error max",
+                f"{basis.size} lobes",
+                float(err.max()),
+                "ΔE00 RMS",
+                f"LP fallbacks {rep.fallbacks}" if method == "lp-l1" else "",
+            ),
         ]
     paints = jittered_paints(N_PAINTS)
     t0 = time.perf_counter()
@@ -140,20 +180,32 @@ def main() -> None:
         rep = lf.fit_targets(big, basis, method)
         t_fit = time.perf_counter() - t0
         assert np.all(rep.k_dd >= 0) and np.all(rep.k_g >= 0) and np.all(rep.k_d >= 0)
-        cases.append(Case(f"6000 paints: fit {method} (batched)", f"{N_PAINTS}", t_fit, "s",
-                          f"{t_fit / N_PAINTS * 1e6:.1f} µs per design"))
+        cases.append(
+            Case(
+                f"6000 paints: fit {method} (batched)",
+                f"{N_PAINTS}",
+                t_fit,
+                "s",
+                f"{t_fit / N_PAINTS * 1e6:.1f} µs per design",
+            )
+        )
         if method in ("auto", "enum"):
             points.append((f"{method}, batched 6000", t_fit / N_PAINTS * 1e6, points[0][2], points[0][3]))
         if method == "auto":
-            cases.append(Case("6000 paints: sample + fit (default)", f"{N_PAINTS}", t_sample + t_fit, "s",
-                              "bar ≤ 0.5 s"))
+            cases.append(
+                Case(
+                    "6000 paints: sample + fit (default)", f"{N_PAINTS}", t_sample + t_fit, "s", "bar ≤ 0.5 s"
+                )
+            )
     png = ROOT / "docs" / "render-fit.png"
     chart(points, png)
-    extra = ("Chart: `docs/render-fit.png` (time per fit against fit error). Default method: `auto` "
-             "(exact NNLS: Lawson–Hanson on the QR-reduced problem for one design, KKT-verified passive-set "
-             "guesses for batches): same error as every exact NNLS, lower than clamped least squares and "
-             "than the L1 programme in this RMS metric, a fraction of the LP's time. Timings on a shared "
-             "2-core machine; other agents' jobs run concurrently, so minima are reported beside medians.")
+    extra = (
+        "Chart: `docs/render-fit.png` (time per fit against fit error). Default method: `auto` "
+        "(exact NNLS: Lawson–Hanson on the QR-reduced problem for one design, KKT-verified passive-set "
+        "guesses for batches): same error as every exact NNLS, lower than clamped least squares and "
+        "than the L1 programme in this RMS metric, a fraction of the LP's time. Timings on a shared "
+        "2-core machine; other agents' jobs run concurrently, so minima are reported beside medians."
+    )
     write_section("lobe_fit", "Lobe-weight fit methods (thesis §2.4)", cases, extra)
 
 

@@ -60,20 +60,35 @@ def main() -> None:
     floor_ms = cache.nbytes / bw * 1e3
     med = float(np.median(times_ms))
     cases = [
-        Case("paint edit, median", f"{SIZE}x{SIZE}", med, "ms", f"bar <= 16 ms; {len(EXPONENTS)} lobes, 2 paints"),
+        Case(
+            "paint edit, median",
+            f"{SIZE}x{SIZE}",
+            med,
+            "ms",
+            f"bar <= 16 ms; {len(EXPONENTS)} lobes, 2 paints",
+        ),
         Case("paint edit, best", f"{SIZE}x{SIZE}", float(times_ms.min()), "ms"),
         Case("paint edit, 90th percentile", f"{SIZE}x{SIZE}", float(np.percentile(times_ms, 90)), "ms"),
-        Case("basis images read per edit", f"{cache.pixels.size} px", cache.nbytes / 1e6, "MB",
-             f"float32, {len(EXPONENTS) + 1} images x RGB + N.V"),
+        Case(
+            "basis images read per edit",
+            f"{cache.pixels.size} px",
+            cache.nbytes / 1e6,
+            "MB",
+            f"float32, {len(EXPONENTS) + 1} images x RGB + N.V",
+        ),
         Case("numpy copy bandwidth", "256 MiB", bw / 1e9, "GB/s", "bytes read per second"),
         Case("bandwidth floor", "", floor_ms, "ms", "images read once at copy bandwidth"),
         Case("median / floor", "", med / floor_ms, "ratio"),
         Case("build basis images (GL)", f"{SIZE}x{SIZE}", t_build, "s", "once per view"),
     ]
-    write_section("paint_edit", "Paint edit from cached basis images (station.render.basis_images)", cases,
-                  "Machine shared with other jobs: the median includes their interference; the best "
-                  f"run is the unloaded figure. Load average at the end: {os.getloadavg()[0]:.1f} on "
-                  f"{os.cpu_count()} CPUs.")
+    write_section(
+        "paint_edit",
+        "Paint edit from cached basis images (station.render.basis_images)",
+        cases,
+        "Machine shared with other jobs: the median includes their interference; the best "
+        f"run is the unloaded figure. Load average at the end: {os.getloadavg()[0]:.1f} on "
+        f"{os.cpu_count()} CPUs.",
+    )
 
 
 if __name__ == "__main__":

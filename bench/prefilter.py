@@ -33,8 +33,15 @@ def _accuracy(env, cases: list[Case]) -> None:
             ref = prefilter.prefilter_brute(src, n, size) @ LUM
             got = gl.run(n, size, prefilter.sample_count(size)) @ LUM
             rel = np.abs(got - ref) / ref
-            cases.append(Case(f"GL vs brute force, n={n:g}, {env.name}", "6x16x16", float(np.median(rel)),
-                              "median rel", f"95th pct {np.percentile(rel, 95):.3f}"))
+            cases.append(
+                Case(
+                    f"GL vs brute force, n={n:g}, {env.name}",
+                    "6x16x16",
+                    float(np.median(rel)),
+                    "median rel",
+                    f"95th pct {np.percentile(rel, 95):.3f}",
+                )
+            )
 
 
 def main() -> None:
@@ -49,19 +56,29 @@ def main() -> None:
             basis = prefilter.prefilter_basis(env, exps, engine="gl")
             times.append(time.perf_counter() - t0)
             cpu.append(time.process_time() - c0)
-        cases.append(Case(f"whole basis, GL, {env.name}", f"{env.equirect.shape[1]}x{env.height}",
-                          float(np.median(times)), "s",
-                          f"bar <= 1.5 s; {len(exps)} lobes + diffuse; best {min(times):.2f} s; "
-                          f"process CPU {np.median(cpu):.2f} s; faces {[c.shape[1] for c in basis.cubes]}"))
+        cases.append(
+            Case(
+                f"whole basis, GL, {env.name}",
+                f"{env.equirect.shape[1]}x{env.height}",
+                float(np.median(times)),
+                "s",
+                f"bar <= 1.5 s; {len(exps)} lobes + diffuse; best {min(times):.2f} s; "
+                f"process CPU {np.median(cpu):.2f} s; faces {[c.shape[1] for c in basis.cubes]}",
+            )
+        )
     t0 = time.perf_counter()
     prefilter.prefilter_basis(envs[0], exps, engine="numpy")
     t_np = time.perf_counter() - t0
     cases.append(Case(f"whole basis, NumPy fallback, {envs[0].name}", "", t_np, "s", "faces capped at 64"))
     cases.append(Case("NumPy / GL time", "", t_np / cases[0].figure, "ratio"))
     _accuracy(envs[0], cases)
-    write_section("prefilter", "Environment prefiltering (station.render.prefilter)", cases,
-                  f"Exponents: {', '.join(f'{e:g}' for e in exps)}. Load average at the end: "
-                  f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs (the machine is shared).")
+    write_section(
+        "prefilter",
+        "Environment prefiltering (station.render.prefilter)",
+        cases,
+        f"Exponents: {', '.join(f'{e:g}' for e in exps)}. Load average at the end: "
+        f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs (the machine is shared).",
+    )
 
 
 if __name__ == "__main__":

@@ -57,18 +57,36 @@ def main() -> None:
         with GLRenderer(basis, w, h, ctx=ctx) as gl:
             for shape in ("sphere", "speedshape"):
                 wall, cpu = _fps(gl, shape, EXPONENTS)
-                cases.append(Case(f"GL re-render {shape}, default basis", f"{w}x{h}", wall, "fps",
-                                  "bar >= 20 fps (1024x1024, llvmpipe)"))
-                cases.append(Case("  same, per CPU-second of this process", f"{w}x{h}", cpu, "fps",
-                                  "llvmpipe threads included: a lower bound for an idle machine"))
+                cases.append(
+                    Case(
+                        f"GL re-render {shape}, default basis",
+                        f"{w}x{h}",
+                        wall,
+                        "fps",
+                        "bar >= 20 fps (1024x1024, llvmpipe)",
+                    )
+                )
+                cases.append(
+                    Case(
+                        "  same, per CPU-second of this process",
+                        f"{w}x{h}",
+                        cpu,
+                        "fps",
+                        "llvmpipe threads included: a lower bound for an idle machine",
+                    )
+                )
         with GLRenderer(basis, w, h, ctx=ctx, combined=False) as gl:
             base, _ = _fps(gl, "sphere", EXPONENTS)
         cases.append(Case("baseline: sphere, per-lobe lookups", f"{w}x{h}", base, "fps", "combined=False"))
         cases.append(Case("combined / per-lobe speed-up", f"{w}x{h}", cases[-5].figure / base, "ratio"))
     ctx.release()
-    write_section("render_gl", "Full GL re-render (station.render.gl_renderer)", cases,
-                  f"Renderer: `{renderer}`. Each frame: new camera, ray cast, shading, tone map, 8-bit read-back. "
-                  f"Load average at the end: {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs.")
+    write_section(
+        "render_gl",
+        "Full GL re-render (station.render.gl_renderer)",
+        cases,
+        f"Renderer: `{renderer}`. Each frame: new camera, ray cast, shading, tone map, 8-bit read-back. "
+        f"Load average at the end: {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs.",
+    )
 
 
 if __name__ == "__main__":

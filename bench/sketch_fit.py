@@ -87,7 +87,9 @@ PERTURBATIONS: dict[str, tuple[str, tuple[float, ...]]] = {
 }
 
 
-def perturb(kind: str, level: float, art: np.ndarray, mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def perturb(
+    kind: str, level: float, art: np.ndarray, mask: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
     """Apply one perturbation of the stability chart."""
     if kind == "noise":
         return artwork.add_noise(art, level, rng)
@@ -134,8 +136,11 @@ def main() -> None:
         return shade_environment(env, d)
 
     # --- Fig. 3.20 --------------------------------------------------------------------------------
-    for refine, gloss, label in ((False, "default", "gloss 50 GU"), (False, "contrast", "contrast gloss"),
-                                 (True, "default", "gloss 50 GU + Lab polish")):
+    for refine, gloss, label in (
+        (False, "default", "gloss 50 GU"),
+        (False, "contrast", "contrast gloss"),
+        (True, "default", "gloss 50 GU + Lab polish"),
+    ):
         fig320, fit_s = [], []
         for goal in goals_p:
             for hue in (30.0, 90.0, 180.0):
@@ -145,13 +150,26 @@ def main() -> None:
                 fit_s.append(fit.seconds)
         fig320_a = np.array(fig320)
         cases += [
-            Case(f"Fig 3.20, {label}: RMS ΔE*ab median", f"{len(fig320)} fits", float(np.median(fig320_a)),
-                 "ΔE*ab", "thesis: 2"),
+            Case(
+                f"Fig 3.20, {label}: RMS ΔE*ab median",
+                f"{len(fig320)} fits",
+                float(np.median(fig320_a)),
+                "ΔE*ab",
+                "thesis: 2",
+            ),
             Case(f"Fig 3.20, {label}: RMS ΔE*ab max", f"{len(fig320)} fits", float(fig320_a.max()), "ΔE*ab"),
-            Case(f"Fig 3.20, {label}: share <= 2 ΔE", f"{len(fig320)} fits", float(np.mean(fig320_a <= 2.0)),
-                 "ratio"),
-            Case(f"point-light fit time, {label} (median)", f"{SIZE_POINT}² px", float(np.median(fit_s)) * 1e3,
-                 "ms"),
+            Case(
+                f"Fig 3.20, {label}: share <= 2 ΔE",
+                f"{len(fig320)} fits",
+                float(np.mean(fig320_a <= 2.0)),
+                "ratio",
+            ),
+            Case(
+                f"point-light fit time, {label} (median)",
+                f"{SIZE_POINT}² px",
+                float(np.median(fit_s)) * 1e3,
+                "ms",
+            ),
         ]
 
     # --- gloss: the thesis's rules against fitting it with the colour ------------------------------
@@ -163,8 +181,15 @@ def main() -> None:
                 fit = fit_point_light(point, art, init_p, gloss=mode)
                 face_err.append(float(np.linalg.norm(np.subtract(fit.design.face, d.face))))
                 gloss_err.append(abs(fit.design.gloss_gu - gloss_gu))
-            cases.append(Case(f"gloss {gloss_gu:g} GU art, gloss={mode}: face ΔE*ab (median)", "6 designs",
-                              float(np.median(face_err)), "ΔE*ab", f"|gloss error| median {np.median(gloss_err):.0f} GU"))
+            cases.append(
+                Case(
+                    f"gloss {gloss_gu:g} GU art, gloss={mode}: face ΔE*ab (median)",
+                    "6 designs",
+                    float(np.median(face_err)),
+                    "ΔE*ab",
+                    f"|gloss error| median {np.median(gloss_err):.0f} GU",
+                )
+            )
 
     # --- stability --------------------------------------------------------------------------------
     results: dict[str, dict[str, list[tuple[float, float]]]] = {}
@@ -191,19 +216,40 @@ def main() -> None:
     for kind, (unit, levels) in PERTURBATIONS.items():
         for fit_name in ("point", "environment"):
             rate, med = results[kind][fit_name][2]
-            cases.append(Case(f"{fit_name} fit, {kind} at {levels[2]:g}: success", unit, rate, "ratio",
-                              f"median RMS {med:.2f} ΔE"))
+            cases.append(
+                Case(
+                    f"{fit_name} fit, {kind} at {levels[2]:g}: success",
+                    unit,
+                    rate,
+                    "ratio",
+                    f"median RMS {med:.2f} ΔE",
+                )
+            )
 
     # --- art styles: first-try failure -------------------------------------------------------------
     for kind in ("correction", "airbrushed", "traced"):
         # fit once with the misfit test off, then apply each threshold to the fit's own misfit
-        fits = [fit_point_light(point, style(kind, goal, point.mask, rng), init_p, max_shading_de=np.inf)
-                for _rep in range(3) for goal in goals_p]
-        thesis = {"correction": "thesis: almost never", "airbrushed": "thesis: ~20 %", "traced": "thesis: ~35 %"}[kind]
+        fits = [
+            fit_point_light(point, style(kind, goal, point.mask, rng), init_p, max_shading_de=np.inf)
+            for _rep in range(3)
+            for goal in goals_p
+        ]
+        thesis = {
+            "correction": "thesis: almost never",
+            "airbrushed": "thesis: ~20 %",
+            "traced": "thesis: ~35 %",
+        }[kind]
         for threshold in (4.6, MAX_SHADING_DE, 9.2):
             fails = [f.failed or f.shading_de > threshold for f in fits]
-            cases.append(Case(f"first-try failure, {kind} art, threshold {threshold:.1f} ΔE", f"{len(fits)} artworks",
-                              float(np.mean(fails)), "ratio", thesis if threshold == MAX_SHADING_DE else ""))
+            cases.append(
+                Case(
+                    f"first-try failure, {kind} art, threshold {threshold:.1f} ΔE",
+                    f"{len(fits)} artworks",
+                    float(np.mean(fails)),
+                    "ratio",
+                    thesis if threshold == MAX_SHADING_DE else "",
+                )
+            )
 
     # --- timing: basis-image fit vs nonlinear search -----------------------------------------------
     goal = goals_e[0]
@@ -222,15 +268,27 @@ def main() -> None:
 
     x0 = np.array([*SILVER.face, *SILVER.flop, SILVER.travel_deg])
     t0 = time.perf_counter()
-    res = minimize(objective, x0, method="Nelder-Mead", options={"maxfev": 3000, "xatol": 0.05, "fatol": 0.01})
+    res = minimize(
+        objective, x0, method="Nelder-Mead", options={"maxfev": 3000, "xatol": 0.05, "fatol": 0.01}
+    )
     nl_s = time.perf_counter() - t0
     cases += [
-        Case("environment fit via basis images", f"{SIZE_ENV}² px, {len(basis.exponents)} lobes", basis_fit_s * 1e3,
-             "ms", f"RMS {goal_rms(goal, fit.design, render_e, env.mask):.2f} ΔE"),
+        Case(
+            "environment fit via basis images",
+            f"{SIZE_ENV}² px, {len(basis.exponents)} lobes",
+            basis_fit_s * 1e3,
+            "ms",
+            f"RMS {goal_rms(goal, fit.design, render_e, env.mask):.2f} ΔE",
+        ),
         Case("environment fit: median over stability runs", "", float(np.median(env_s)) * 1e3, "ms"),
         Case("basis images (once per view)", f"{len(env.light_dirs)} lights", basis_s * 1e3, "ms"),
-        Case("nonlinear search (thesis §3.7.5 method)", f"{res.nfev} renders", nl_s, "s",
-             f"RMS {res.fun:.2f} ΔE"),
+        Case(
+            "nonlinear search (thesis §3.7.5 method)",
+            f"{res.nfev} renders",
+            nl_s,
+            "s",
+            f"RMS {res.fun:.2f} ΔE",
+        ),
         Case("speed-up of the basis fit", "same scene", nl_s / basis_fit_s, "x"),
     ]
 
@@ -259,7 +317,9 @@ def _chart(results: dict[str, dict[str, list[tuple[float, float]]]]) -> None:
             rate = [r for r, _ in series]
             med = [e for _, e in series]
             ax.plot(levels, rate, "-o", color=colours[fit_name], label=f"{fit_name}: success")
-            ax2.plot(levels, med, "--s", color=colours[fit_name], alpha=0.7, label=f"{fit_name}: median RMS ΔE")
+            ax2.plot(
+                levels, med, "--s", color=colours[fit_name], alpha=0.7, label=f"{fit_name}: median RMS ΔE"
+            )
         ax.set_ylim(-0.05, 1.05)
         ax.set_xlabel(unit)
         ax.set_ylabel("success rate")

@@ -126,8 +126,14 @@ def startup(cache_dir: str | None) -> tuple[float, float, float, float]:
     if cache_dir is not None:
         env["CACAD_CACHE_DIR"] = cache_dir
     t0 = time.perf_counter()
-    out = subprocess.run([sys.executable, "-c", STARTUP], env=env, capture_output=True, text=True, timeout=300,
-                         cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    out = subprocess.run(
+        [sys.executable, "-c", STARTUP],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+    )
     wall = time.perf_counter() - t0
     for line in out.stdout.splitlines():
         if line.startswith("FIRST_FRAME"):
@@ -152,7 +158,9 @@ def main() -> None:
         cases: list[Case] = []
         base = numpy_edit_baseline()
         base_med = statistics.median(base)
-        cases.append(Case("core NumPy edit alone (baseline)", f"{SIZE}x{SIZE}", base_med * 1e3, "ms", "median"))
+        cases.append(
+            Case("core NumPy edit alone (baseline)", f"{SIZE}x{SIZE}", base_med * 1e3, "ms", "median")
+        )
         renderer = ""
         for mode in ("cpu", "gpu"):
             total, paint, renderer = measure_edits(mode)
@@ -161,9 +169,16 @@ def main() -> None:
             cases += [
                 Case(f"paint edit -> screen, {mode} mode, median", f"{SIZE}x{SIZE}", med * 1e3, "ms", note),
                 Case(f"paint edit -> screen, {mode} mode, best", f"{SIZE}x{SIZE}", min(total) * 1e3, "ms"),
-                Case(f"paint edit -> screen, {mode} mode, p90", f"{SIZE}x{SIZE}", _pct(total, 0.9) * 1e3, "ms"),
-                Case("  of which edit -> paintGL done, median", f"{SIZE}x{SIZE}",
-                     statistics.median(paint) * 1e3, "ms", "fit + re-weight + draw (before compositing)"),
+                Case(
+                    f"paint edit -> screen, {mode} mode, p90", f"{SIZE}x{SIZE}", _pct(total, 0.9) * 1e3, "ms"
+                ),
+                Case(
+                    "  of which edit -> paintGL done, median",
+                    f"{SIZE}x{SIZE}",
+                    statistics.median(paint) * 1e3,
+                    "ms",
+                    "fit + re-weight + draw (before compositing)",
+                ),
                 Case(f"  median / NumPy edit alone ({mode})", "", med / base_med, "ratio"),
             ]
         app.shutdown()
@@ -171,21 +186,51 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as cold_dir:
             cold, _, _, cold_full = startup(cold_dir)
         cases += [
-            Case("start-up -> first frame, warm cache", "1500x950 window", warm, "s", f"bar <= {BAR_START_S:g} s"),
-            Case("  of which Python imports (PySide6, station core)", "", imports, "s",
-                 "station.model imports colour, which imports matplotlib.pyplot"),
+            Case(
+                "start-up -> first frame, warm cache",
+                "1500x950 window",
+                warm,
+                "s",
+                f"bar <= {BAR_START_S:g} s",
+            ),
+            Case(
+                "  of which Python imports (PySide6, station core)",
+                "",
+                imports,
+                "s",
+                "station.model imports colour, which imports matplotlib.pyplot",
+            ),
             Case("  process wall time incl. interpreter start", "", warm_wall, "s", "until exit"),
-            Case("  start-up -> full-quality frame, warm cache", "", warm_full, "s",
-                 "full-resolution basis from the worker"),
-            Case("start-up -> first frame, cold prefilter cache", "1500x950 window", cold, "s",
-                 f"bar <= {BAR_START_S:g} s; first run on a machine: coarse prefilter (16² faces) first"),
-            Case("  start-up -> full-quality frame, cold cache", "", cold_full, "s",
-                 "full prefilter (64² faces) + full-resolution basis in the worker, then swapped in"),
+            Case(
+                "  start-up -> full-quality frame, warm cache",
+                "",
+                warm_full,
+                "s",
+                "full-resolution basis from the worker",
+            ),
+            Case(
+                "start-up -> first frame, cold prefilter cache",
+                "1500x950 window",
+                cold,
+                "s",
+                f"bar <= {BAR_START_S:g} s; first run on a machine: coarse prefilter (16² faces) first",
+            ),
+            Case(
+                "  start-up -> full-quality frame, cold cache",
+                "",
+                cold_full,
+                "s",
+                "full prefilter (64² faces) + full-resolution basis in the worker, then swapped in",
+            ),
         ]
         load = os.getloadavg()[0]
-        write_section("viewer", "Viewer: paint edit to screen, start-up to first frame (ui/)", cases,
-                      f"GL renderer: {renderer} under Xvfb (xcb). Machine shared with other jobs: load average "
-                      f"{load:.1f} on {os.cpu_count()} CPUs at the end; the best runs are the least disturbed.")
+        write_section(
+            "viewer",
+            "Viewer: paint edit to screen, start-up to first frame (ui/)",
+            cases,
+            f"GL renderer: {renderer} under Xvfb (xcb). Machine shared with other jobs: load average "
+            f"{load:.1f} on {os.cpu_count()} CPUs at the end; the best runs are the least disturbed.",
+        )
     finally:
         xvfb.terminate()
         xvfb.wait(5)

@@ -32,15 +32,27 @@ __all__ = ["build_parser", "main"]
 
 def build_parser(kind: str) -> argparse.ArgumentParser:
     """Arguments common to the simulators."""
-    p = argparse.ArgumentParser(prog=f"python -m simulators.{kind}", description=f"simulated {kind} instrument")
+    p = argparse.ArgumentParser(
+        prog=f"python -m simulators.{kind}", description=f"simulated {kind} instrument"
+    )
     panel = p.add_mutually_exclusive_group()
     panel.add_argument("--design", type=Path, help="design file (cacad.design/1 JSON) of the virtual panel")
-    panel.add_argument("--recipe", type=Path,
-                       help="recipe file of the virtual panel (`station formulate --json` output or its recipe object)")
-    p.add_argument("--fault", action="append", default=[], metavar="SPEC",
-                   help="NAME[@COMMAND][:N]; known: " + ", ".join(FAULTS))
+    panel.add_argument(
+        "--recipe",
+        type=Path,
+        help="recipe file of the virtual panel (`station formulate --json` output or its recipe object)",
+    )
+    p.add_argument(
+        "--fault",
+        action="append",
+        default=[],
+        metavar="SPEC",
+        help="NAME[@COMMAND][:N]; known: " + ", ".join(FAULTS),
+    )
     p.add_argument("--serial", default=None, help="instrument serial number")
-    p.add_argument("--bias", type=float, default=0.0, help="inter-instrument bias scale (0 = none, 1 = typical)")
+    p.add_argument(
+        "--bias", type=float, default=0.0, help="inter-instrument bias scale (0 = none, 1 = typical)"
+    )
     p.add_argument("--noise", type=float, default=1.0, help="noise scale (1 = published repeatability)")
     p.add_argument("--measure-time", type=float, default=0.3, help="seconds per measurement")
     p.add_argument("--cold", action="store_true", help="start cold (warm-up drift and temperature rise)")
@@ -60,7 +72,9 @@ def make_physics(args: argparse.Namespace, default_serial: str) -> SpectroPhysic
     ch.noise_band *= args.noise
     ch.noise_scale *= args.noise
     design = load_design(args.design) if args.design else DEFAULT_DESIGN
-    return SpectroPhysics(design=design, character=ch, warm=not args.cold, seed=args.seed, recipe=recipe_panel(args))
+    return SpectroPhysics(
+        design=design, character=ch, warm=not args.cold, seed=args.seed, recipe=recipe_panel(args)
+    )
 
 
 def recipe_panel(args: argparse.Namespace) -> RecipePanel | None:
@@ -87,8 +101,11 @@ def main(kind: str, argv: list[str] | None = None) -> int:
     try:
         recipe_panel(args)
     except InputError as exc:
-        print("INPUT-ERROR " + json.dumps({"field": exc.field, "accepted": exc.accepted, "got": exc.got}, default=str),
-              flush=True)
+        print(
+            "INPUT-ERROR "
+            + json.dumps({"field": exc.field, "accepted": exc.accepted, "got": exc.got}, default=str),
+            flush=True,
+        )
         print(f"error: {exc}", file=sys.stderr)
         return 2
     try:

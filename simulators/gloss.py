@@ -89,7 +89,9 @@ def reference_lobe(gloss_gu: float, geometry_deg: int) -> Any:
     def lobe(log_n: float) -> Any:
         return SpecularLobe(math.exp(log_n), albedo, 0.01, STANDARD_INDEX)
 
-    log_n = brentq(lambda x: simulate_gloss_meter(lobe(x), geometry_deg) - gloss_gu, 0.0, math.log(1e7), xtol=1e-12)
+    log_n = brentq(
+        lambda x: simulate_gloss_meter(lobe(x), geometry_deg) - gloss_gu, 0.0, math.log(1e7), xtol=1e-12
+    )
     return lobe(log_n)
 
 
@@ -125,8 +127,10 @@ class GlossPhysics:
 
     def raw(self, values: list[float]) -> list[float]:
         """What the detector reports for true *values*: linearity error and noise."""
-        return [v * (1 + e) + self._rng.normal(0.0, self.noise_gu) for v, e in zip(values, self.linearity,
-                                                                                  strict=True)]
+        return [
+            v * (1 + e) + self._rng.normal(0.0, self.noise_gu)
+            for v, e in zip(values, self.linearity, strict=True)
+        ]
 
     def calibrate(self) -> list[float]:
         """Read the standard (black glass, certified ``standard_gu``) and set the gain; returns raw readings."""
@@ -153,7 +157,11 @@ class GlossPhysics:
 
         haze = 100.0 * rel20 * HAZE_OMEGA_SR * p(1.9)
         return {
-            "g20": g[0], "g60": g[1], "g85": g[2], "haze": haze, "log_haze": 1285.0 * math.log10(haze / 20 + 1),
+            "g20": g[0],
+            "g60": g[1],
+            "g85": g[2],
+            "haze": haze,
+            "log_haze": 1285.0 * math.log10(haze / 20 + 1),
             "doi": 100.0 * (1 - math.cos(math.radians(0.3)) ** n),
             "rspec": 100.0 * rel20 * (1 - math.cos(math.radians(0.0991)) ** (n + 1)),
         }
@@ -164,8 +172,14 @@ class GlossDevice:
 
     model, firmware = "GLS3", "3.1.0"
 
-    def __init__(self, physics: GlossPhysics | None = None, faults: FaultPlan | None = None,
-                 measure_time_s: float = 0.2, slow_s: float = 0.4, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self,
+        physics: GlossPhysics | None = None,
+        faults: FaultPlan | None = None,
+        measure_time_s: float = 0.2,
+        slow_s: float = 0.4,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         self.physics = physics or GlossPhysics()
         self.faults = faults or FaultPlan()
         self.measure_time_s = measure_time_s
@@ -194,17 +208,31 @@ class GlossDevice:
             from station.model.design_io import load_design
 
             gloss = load_design(args.design).gloss_gu
-        return cls(GlossPhysics(gloss_60_gu=gloss, serial=args.serial or "GM0815",
-                                noise_gu=0.1 * args.noise), faults, measure_time_s=args.measure_time)
+        return cls(
+            GlossPhysics(gloss_60_gu=gloss, serial=args.serial or "GM0815", noise_gu=0.1 * args.noise),
+            faults,
+            measure_time_s=args.measure_time,
+        )
 
     # -- hid.enumerate / hid.device surface ----------------------------------------------------------
     def enumerate(self, vid: int = 0, pid: int = 0) -> list[dict[str, Any]]:
         """``hid.enumerate`` dicts for this device (none once unplugged)."""
         if self.unplugged or (vid and vid != VID) or (pid and pid != PID):
             return []
-        return [{"path": PATH, "vendor_id": VID, "product_id": PID, "serial_number": self.physics.serial,
-                 "release_number": 0x0310, "manufacturer_string": "CACAD Sim", "product_string": "GLS3 gloss meter",
-                 "usage_page": 0xFF00, "usage": 1, "interface_number": 0}]
+        return [
+            {
+                "path": PATH,
+                "vendor_id": VID,
+                "product_id": PID,
+                "serial_number": self.physics.serial,
+                "release_number": 0x0310,
+                "manufacturer_string": "CACAD Sim",
+                "product_string": "GLS3 gloss meter",
+                "usage_page": 0xFF00,
+                "usage": 1,
+                "interface_number": 0,
+            }
+        ]
 
     def __call__(self) -> GlossDevice:
         """Act as the ``device_factory`` (``hid.device`` is called the same way)."""
@@ -257,9 +285,16 @@ class GlossDevice:
             raise OSError("get_feature_report: no such report")
         p = self.physics
         exp = int(time.time() + p.calibration_life_s - (time.monotonic() - (p.calibrated_at or 0)))
-        body = struct.pack("<8s8s8sBI3fI", self.model.encode(), p.serial.encode(), self.firmware.encode(),
-                           int(p.needs_calibration()), p.counter, *p.standard_gu,
-                           0 if p.calibrated_at is None else exp).ljust(REPORT - 1, b"\0")
+        body = struct.pack(
+            "<8s8s8sBI3fI",
+            self.model.encode(),
+            p.serial.encode(),
+            self.firmware.encode(),
+            int(p.needs_calibration()),
+            p.counter,
+            *p.standard_gu,
+            0 if p.calibrated_at is None else exp,
+        ).ljust(REPORT - 1, b"\0")
         return list((bytes([0x03]) + body + bytes([_xor(body)]))[:max_length])
 
     def send_feature_report(self, buff: Any) -> int:
@@ -271,8 +306,9 @@ class GlossDevice:
         return len(data)
 
     # -- firmware ------------------------------------------------------------------------------------
-    def _emit(self, seq: int, cmd: int, status: int, state: int, body: bytes, delay_s: float = 0.0,
-              label: str = "") -> None:
+    def _emit(
+        self, seq: int, cmd: int, status: int, state: int, body: bytes, delay_s: float = 0.0, label: str = ""
+    ) -> None:
         payload = bytes([seq, status & 0xFF, status >> 8, cmd, state]) + body
         payload = payload.ljust(REPORT - 1, b"\0")
         report = bytes([0x02]) + payload + bytes([_xor(payload)])
@@ -311,7 +347,12 @@ class GlossDevice:
             exp = int(time.time() + p.calibration_life_s)
             self._emit(seq, cmd, 0, 0, struct.pack("<I3fI", p.counter, *raw, exp), label="WC")
         elif cmd == 0x10:
-            for fault, code in (("lamp-failure", 111), ("tilt", 140), ("battery-low", 180), ("device-busy", 170)):
+            for fault, code in (
+                ("lamp-failure", 111),
+                ("tilt", 140),
+                ("battery-low", 180),
+                ("device-busy", 170),
+            ):
                 if f.fire(fault, "MS"):
                     self._emit(seq, cmd, code, 0, b"")
                     return
@@ -326,8 +367,20 @@ class GlossDevice:
             if f.fire("out-of-range", "RD"):
                 warn |= 0x20
                 m["g20"] = m["g60"] = m["g85"] = 9999.0
-            body = struct.pack("<7ffHII", m["g20"], m["g60"], m["g85"], m["haze"], m["log_haze"], m["doi"],
-                               m["rspec"], 24.0, warn, p.counter, int(time.time()))
+            body = struct.pack(
+                "<7ffHII",
+                m["g20"],
+                m["g60"],
+                m["g85"],
+                m["haze"],
+                m["log_haze"],
+                m["doi"],
+                m["rspec"],
+                24.0,
+                warn,
+                p.counter,
+                int(time.time()),
+            )
             self._emit(seq, cmd, 0, 0, body, delay_s=self.measure_time_s, label="MS")
         else:
             self._emit(seq, cmd, 30, 0, b"")
@@ -347,7 +400,7 @@ class HidBridgeServer:
             (n,) = struct.unpack_from("<H", self.buf, 1)
             if len(self.buf) < 3 + n:
                 return
-            op, payload = bytes(self.buf[:1]), bytes(self.buf[3: 3 + n])
+            op, payload = bytes(self.buf[:1]), bytes(self.buf[3 : 3 + n])
             del self.buf[: 3 + n]
             if self.device.unplugged and op != b"C":
                 link.unplug()

@@ -34,8 +34,17 @@ ASPECULAR = (15, 45, 110)
 START, END, VERSION = b"\xc1\xc0", b"\xc5\xc4\xc3\xc2", 0x1000
 HEAD = struct.Struct("<2sHHHIIII")
 REPLY, ACK, NACK = 0x01, 0x04, 0x08
-LABELS = {0x0001: "ID", 0x0002: "ST", 0x0010: "ZC", 0x0011: "WC", 0x0012: "VC", 0x0020: "MS", 0x0021: "PO",
-          0x0022: "RD", 0x0030: "CE"}
+LABELS = {
+    0x0001: "ID",
+    0x0002: "ST",
+    0x0010: "ZC",
+    0x0011: "WC",
+    0x0012: "VC",
+    0x0020: "MS",
+    0x0021: "PO",
+    0x0022: "RD",
+    0x0030: "CE",
+}
 
 
 def frame(msg: int, rid: int, payload: bytes = b"", flags: int = REPLY | ACK, error: int = 0) -> bytes:
@@ -49,9 +58,14 @@ class Ma3Firmware:
 
     model, firmware = "MA3", "2.0.7"
 
-    def __init__(self, physics: SpectroPhysics | None = None, faults: FaultPlan | None = None,
-                 measure_time_s: float = 0.3, slow_s: float = 0.4,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self,
+        physics: SpectroPhysics | None = None,
+        faults: FaultPlan | None = None,
+        measure_time_s: float = 0.3,
+        slow_s: float = 0.4,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         if physics is None:
             from simulators.physics import InstrumentCharacter, SpectroPhysics
 
@@ -94,7 +108,7 @@ class Ma3Firmware:
             raw = bytes(self.buf[:total])
             del self.buf[:total]
             self.received.append(raw)
-            head, payload = raw[: HEAD.size], raw[HEAD.size: HEAD.size + length]
+            head, payload = raw[: HEAD.size], raw[HEAD.size : HEAD.size + length]
             digest = hashlib.md5(head + payload, usedforsecurity=False).digest()
             if raw[-20:-4] != digest or raw[-4:] != END:
                 self._queue(frame(msg, rid, flags=REPLY | NACK, error=3))
@@ -113,7 +127,7 @@ class Ma3Firmware:
                 if len(take) == len(data):
                     self._out.pop(0)
                 else:
-                    self._out[0] = (t, data[len(take):])
+                    self._out[0] = (t, data[len(take) :])
             return bytes(out)
 
     def wait_ready(self, timeout_s: float) -> bool:
@@ -177,14 +191,20 @@ class Ma3Firmware:
         if label in ("CE",):
             return 0, b""
         if label == "ID":
-            body = struct.pack("<8s8s8sB", self.model.encode(), p.character.serial.encode(),
-                               self.firmware.encode(), len(ASPECULAR))
+            body = struct.pack(
+                "<8s8s8sB",
+                self.model.encode(),
+                p.character.serial.encode(),
+                self.firmware.encode(),
+                len(ASPECULAR),
+            )
             return 0, body + b"".join(struct.pack("<bb", 45, a) for a in ASPECULAR)
         if label == "ST":
             needed = {None: 0, "zero": 1, "white": 2, "verify": 3}[p.cal.needed(now)]
             exp = p.cal.expires(now, dt.datetime.now(dt.UTC))
-            return 0, struct.pack("<BIIf", needed, p.cal.counter, int(exp.timestamp()) if exp else 0,
-                                  p.temperature_c())
+            return 0, struct.pack(
+                "<BIIf", needed, p.cal.counter, int(exp.timestamp()) if exp else 0, p.temperature_c()
+            )
         if label == "ZC":
             p.calibrate_zero()
             return 0, b""
@@ -223,8 +243,16 @@ class Ma3Firmware:
         if self.faults.fire("out-of-range", "RD"):
             warn |= 0x10
             refl = refl * 0 + 9.99
-        body = struct.pack("<8sIIfHHB", p.character.serial.encode(), p.cal.counter,
-                           int(dt.datetime.now(dt.UTC).timestamp()), p.temperature_c(), warn, 0, len(ASPECULAR))
+        body = struct.pack(
+            "<8sIIfHHB",
+            p.character.serial.encode(),
+            p.cal.counter,
+            int(dt.datetime.now(dt.UTC).timestamp()),
+            p.temperature_c(),
+            warn,
+            0,
+            len(ASPECULAR),
+        )
         for a, row in zip(ASPECULAR, refl, strict=True):
             body += struct.pack("<bb31f", 45, a, *row)
         self.data, self.has_data, self.state = body, True, 0
@@ -233,8 +261,12 @@ class Ma3Firmware:
 class Ma3Device:
     """The firmware behind a pty (subprocess route): same frames on a serial line."""
 
-    def __init__(self, physics: SpectroPhysics | None = None, faults: FaultPlan | None = None,
-                 measure_time_s: float = 0.3) -> None:
+    def __init__(
+        self,
+        physics: SpectroPhysics | None = None,
+        faults: FaultPlan | None = None,
+        measure_time_s: float = 0.3,
+    ) -> None:
         self.firmware = Ma3Firmware(physics, faults, measure_time_s)
         self._link: PtyHost | None = None
         self.firmware.on_unplug = self._unplug

@@ -146,17 +146,26 @@ class Ma6Device:
         if cmd in ("", "CE"):
             return status(0)
         if cmd == "ID":
-            return (_line("MODEL", self.model) + _line("SERIAL", p.character.serial)
-                    + _line("FW", self.firmware) + _line("GEOM", ",".join(self.geometries)) + status(0))
+            return (
+                _line("MODEL", self.model)
+                + _line("SERIAL", p.character.serial)
+                + _line("FW", self.firmware)
+                + _line("GEOM", ",".join(self.geometries))
+                + status(0)
+            )
         if label == "BR":
             m = re.fullmatch(r"(\d+)BR", cmd)
             return status(0) if m and int(m.group(1)) in BAUD_RATES else status(25)
         if cmd == "ST":
             needed = p.cal.needed(now)
             exp = p.cal.expires(now, dt.datetime.now(dt.UTC))
-            return (_line("CAL", (needed or "ok").upper()) + _line("CALID", p.cal.calibration_id)
-                    + _line("EXPIRES", _stamp(exp) if exp else "NONE")
-                    + _line("TEMP", f"{p.temperature_c():.1f}") + status(0))
+            return (
+                _line("CAL", (needed or "ok").upper())
+                + _line("CALID", p.cal.calibration_id)
+                + _line("EXPIRES", _stamp(exp) if exp else "NONE")
+                + _line("TEMP", f"{p.temperature_c():.1f}")
+                + status(0)
+            )
         if cmd == "ZC":
             time.sleep(self.calibrate_time_s)
             p.calibrate_zero()
@@ -172,8 +181,12 @@ class Ma6Device:
             time.sleep(self.calibrate_time_s)
             de, ok = p.verify()
             exp = p.cal.expires(now, dt.datetime.now(dt.UTC))
-            return (_line("DE", f"{de:.3f}") + _line("PASS", int(ok))
-                    + _line("EXPIRES", _stamp(exp) if exp else "NONE") + status(0 if ok else 120))
+            return (
+                _line("DE", f"{de:.3f}")
+                + _line("PASS", int(ok))
+                + _line("EXPIRES", _stamp(exp) if exp else "NONE")
+                + status(0 if ok else 120)
+            )
         if cmd == "MS":
             return self._start(now)
         if cmd == "PO":
@@ -202,8 +215,12 @@ class Ma6Device:
         age = self.clock() - (p.cal.white_at or 0.0)
         if age > 0.8 * p.cal.life_s:
             warn |= 0x02  # calibration recommended
-        body = (_line("SN", p.character.serial) + _line("CALID", p.cal.calibration_id)
-                + _line("TIME", _stamp(dt.datetime.now(dt.UTC))) + _line("TEMP", f"{p.temperature_c():.1f}"))
+        body = (
+            _line("SN", p.character.serial)
+            + _line("CALID", p.cal.calibration_id)
+            + _line("TIME", _stamp(dt.datetime.now(dt.UTC)))
+            + _line("TEMP", f"{p.temperature_c():.1f}")
+        )
         values = [r for block in rows for r in block]
         if self.faults.fire("out-of-range", "RD"):
             warn |= 0x10

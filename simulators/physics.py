@@ -44,8 +44,9 @@ __all__ = [
     "seed_for",
 ]
 
-DEFAULT_DESIGN = FaceFlopTravelGloss(face=(78.0, -0.8, -1.5), flop=(32.0, -0.4, -4.5), travel_deg=80.0,
-                                     gloss_gu=88.0)
+DEFAULT_DESIGN = FaceFlopTravelGloss(
+    face=(78.0, -0.8, -1.5), flop=(32.0, -0.4, -4.5), travel_deg=80.0, gloss_gu=88.0
+)
 # Certified Lab of the simulated verification tile (a mid-grey ceramic)
 VERIFY_TILE_LAB = (52.0, -0.3, 1.2)
 
@@ -121,13 +122,19 @@ class SpectroPhysics:
     recipe: RecipePanel | None = None
 
     def __post_init__(self) -> None:
-        self._rng = np.random.default_rng(self.seed if self.seed is not None else seed_for(self.character.serial))
+        self._rng = np.random.default_rng(
+            self.seed if self.seed is not None else seed_for(self.character.serial)
+        )
         self._bias_rng_seed = seed_for(self.character.serial + "/bias")
         self._t0 = self.clock() - (1e6 if self.warm else 0.0)
         self._cache: dict[tuple[float, ...], np.ndarray] = {}
         self._lock = threading.Lock()
-        self.cal = CalibrationState(self.character.serial, self.character.calibration_life_s,
-                                    white_at=self.clock(), lamp_gain_at_white=self.lamp_gain())
+        self.cal = CalibrationState(
+            self.character.serial,
+            self.character.calibration_life_s,
+            white_at=self.clock(),
+            lamp_gain_at_white=self.lamp_gain(),
+        )
 
     def set_design(self, design: FaceFlopTravelGloss) -> None:
         """Put another panel under the instrument."""
@@ -149,7 +156,9 @@ class SpectroPhysics:
     def temperature_c(self) -> float:
         """Optics temperature (°C) after the warm-up exponential."""
         c = self.character
-        return c.t_ambient_c + (c.t_warm_c - c.t_ambient_c) * (1.0 - math.exp(-self.uptime_s() / c.warmup_tau_s))
+        return c.t_ambient_c + (c.t_warm_c - c.t_ambient_c) * (
+            1.0 - math.exp(-self.uptime_s() / c.warmup_tau_s)
+        )
 
     def lamp_gain(self) -> float:
         """Relative lamp output, ``1 + drift · exp(−t/τ)``."""

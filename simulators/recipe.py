@@ -82,8 +82,11 @@ def recipe_from_json(data: object, db: ColorantDatabase | None = None, name: str
     """
     db = db or default_database()
     if not isinstance(data, dict):
-        raise RecipeInputError("recipe", 'a JSON object: {"recipe": {colorant: fraction}, ...} or {colorant: fraction}',
-                               type(data).__name__)
+        raise RecipeInputError(
+            "recipe",
+            'a JSON object: {"recipe": {colorant: fraction}, ...} or {colorant: fraction}',
+            type(data).__name__,
+        )
     rec = data["recipe"] if "recipe" in data else data
     if not isinstance(rec, dict):
         raise RecipeInputError("recipe", "an object {colorant: mass fraction}", type(rec).__name__)
@@ -105,8 +108,9 @@ def recipe_from_json(data: object, db: ColorantDatabase | None = None, name: str
         raise RecipeInputError("recipe", f"total mass fraction <= {db.max_total:g}", round(float(c.sum()), 6))
     effect = float(c[db.effect_mask].sum())
     if effect > db.max_effect + _TOL:
-        raise RecipeInputError("recipe", f"aluminium + pearl + interference fraction <= {db.max_effect:g}",
-                               round(effect, 6))
+        raise RecipeInputError(
+            "recipe", f"aluminium + pearl + interference fraction <= {db.max_effect:g}", round(effect, 6)
+        )
     return RecipePanel(db.recipe(c, threshold=0.0), c, db, name)
 
 
@@ -116,11 +120,17 @@ def load_recipe(path: str | Path, db: ColorantDatabase | None = None) -> RecipeP
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise RecipeInputError("recipe_file", "a readable UTF-8 JSON file", str(path), detail=str(exc)) from exc
+        raise RecipeInputError(
+            "recipe_file", "a readable UTF-8 JSON file", str(path), detail=str(exc)
+        ) from exc
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise RecipeInputError("recipe_file", "JSON (the output of `station formulate --json` or its recipe object)",
-                               str(path), detail=str(exc)) from exc
+        raise RecipeInputError(
+            "recipe_file",
+            "JSON (the output of `station formulate --json` or its recipe object)",
+            str(path),
+            detail=str(exc),
+        ) from exc
     design = data.get("design") if isinstance(data, dict) else None
     return recipe_from_json(data, db, name=design if isinstance(design, str) else path.stem)

@@ -74,8 +74,9 @@ class ScriptedDevice:
 class ScriptedFirmware:
     """:class:`ScriptedDevice` behind the pyusb simulator backend (``receive`` / ``pop_ready``)."""
 
-    def __init__(self, pairs: Sequence[tuple[bytes, bytes | None]],
-                 frame_len: Callable[[bytes], int | None]) -> None:
+    def __init__(
+        self, pairs: Sequence[tuple[bytes, bytes | None]], frame_len: Callable[[bytes], int | None]
+    ) -> None:
         self.device = ScriptedDevice(pairs, frame_len=frame_len)
         self.out = bytearray()
         self.unplugged = False

@@ -35,8 +35,9 @@ def start(kind: str, args: argparse.Namespace, faults: FaultPlan) -> Served:
     if kind == "ma6":
         from simulators.ma6 import Ma6Device
 
-        device: Any = Ma6Device(make_physics(args, "600123"), faults, measure_time_s=args.measure_time,
-                                twelve=args.twelve)
+        device: Any = Ma6Device(
+            make_physics(args, "600123"), faults, measure_time_s=args.measure_time, twelve=args.twelve
+        )
     elif kind == "ma3":
         from simulators.ma3 import Ma3Device
 

@@ -59,30 +59,74 @@ class SimUsbBackend(usb.backend.IBackend):
 
     def get_device_descriptor(self, dev: SimUsbDevice) -> SimpleNamespace:
         return SimpleNamespace(
-            bLength=18, bDescriptorType=1, bcdUSB=0x0200, bDeviceClass=0xFF, bDeviceSubClass=0,
-            bDeviceProtocol=0, bMaxPacketSize0=64, idVendor=dev.vid, idProduct=dev.pid, bcdDevice=0x0207,
-            iManufacturer=1, iProduct=2, iSerialNumber=3, bNumConfigurations=1, address=dev.address,
-            bus=dev.bus, port_number=1, port_numbers=(1,), speed=3,
+            bLength=18,
+            bDescriptorType=1,
+            bcdUSB=0x0200,
+            bDeviceClass=0xFF,
+            bDeviceSubClass=0,
+            bDeviceProtocol=0,
+            bMaxPacketSize0=64,
+            idVendor=dev.vid,
+            idProduct=dev.pid,
+            bcdDevice=0x0207,
+            iManufacturer=1,
+            iProduct=2,
+            iSerialNumber=3,
+            bNumConfigurations=1,
+            address=dev.address,
+            bus=dev.bus,
+            port_number=1,
+            port_numbers=(1,),
+            speed=3,
         )
 
     def get_configuration_descriptor(self, dev: SimUsbDevice, config: int) -> SimpleNamespace:
-        return SimpleNamespace(bLength=9, bDescriptorType=2, wTotalLength=32, bNumInterfaces=1,
-                               bConfigurationValue=1, iConfiguration=0, bmAttributes=0x80, bMaxPower=50,
-                               extra_descriptors=[])
+        return SimpleNamespace(
+            bLength=9,
+            bDescriptorType=2,
+            wTotalLength=32,
+            bNumInterfaces=1,
+            bConfigurationValue=1,
+            iConfiguration=0,
+            bmAttributes=0x80,
+            bMaxPower=50,
+            extra_descriptors=[],
+        )
 
-    def get_interface_descriptor(self, dev: SimUsbDevice, intf: int, alt: int, config: int) -> SimpleNamespace:
+    def get_interface_descriptor(
+        self, dev: SimUsbDevice, intf: int, alt: int, config: int
+    ) -> SimpleNamespace:
         if intf != 0 or alt != 0:
             raise IndexError("no such interface")
-        return SimpleNamespace(bLength=9, bDescriptorType=4, bInterfaceNumber=0, bAlternateSetting=0,
-                               bNumEndpoints=2, bInterfaceClass=0xFF, bInterfaceSubClass=0,
-                               bInterfaceProtocol=0, iInterface=0, extra_descriptors=[])
+        return SimpleNamespace(
+            bLength=9,
+            bDescriptorType=4,
+            bInterfaceNumber=0,
+            bAlternateSetting=0,
+            bNumEndpoints=2,
+            bInterfaceClass=0xFF,
+            bInterfaceSubClass=0,
+            bInterfaceProtocol=0,
+            iInterface=0,
+            extra_descriptors=[],
+        )
 
-    def get_endpoint_descriptor(self, dev: SimUsbDevice, ep: int, intf: int, alt: int, config: int) -> SimpleNamespace:
+    def get_endpoint_descriptor(
+        self, dev: SimUsbDevice, ep: int, intf: int, alt: int, config: int
+    ) -> SimpleNamespace:
         if ep > 1:
             raise IndexError("no such endpoint")
-        return SimpleNamespace(bLength=7, bDescriptorType=5, bEndpointAddress=(0x01, 0x81)[ep],
-                               bmAttributes=0x02, wMaxPacketSize=PACKET, bInterval=0, bRefresh=0,
-                               bSynchAddress=0, extra_descriptors=[])
+        return SimpleNamespace(
+            bLength=7,
+            bDescriptorType=5,
+            bEndpointAddress=(0x01, 0x81)[ep],
+            bmAttributes=0x02,
+            wMaxPacketSize=PACKET,
+            bInterval=0,
+            bRefresh=0,
+            bSynchAddress=0,
+            extra_descriptors=[],
+        )
 
     def open_device(self, dev: SimUsbDevice) -> SimpleNamespace:
         if dev.unplugged:
@@ -131,7 +175,9 @@ class SimUsbBackend(usb.backend.IBackend):
         dev.firmware.receive(bytes(data))
         return len(data)
 
-    def bulk_read(self, dev_handle: SimpleNamespace, ep: int, intf: int, buff: array.array, timeout: int) -> int:
+    def bulk_read(
+        self, dev_handle: SimpleNamespace, ep: int, intf: int, buff: array.array, timeout: int
+    ) -> int:
         dev = self._alive(dev_handle)
         fw = dev.firmware
         if not fw.wait_ready(timeout / 1000.0):
@@ -142,8 +188,16 @@ class SimUsbBackend(usb.backend.IBackend):
         buff[: len(data)] = array.array("B", data)
         return len(data)
 
-    def ctrl_transfer(self, dev_handle: SimpleNamespace, bmRequestType: int, bRequest: int, wValue: int,
-                      wIndex: int, data_or_wLength: Any, timeout: int) -> int:
+    def ctrl_transfer(
+        self,
+        dev_handle: SimpleNamespace,
+        bmRequestType: int,
+        bRequest: int,
+        wValue: int,
+        wIndex: int,
+        data_or_wLength: Any,
+        timeout: int,
+    ) -> int:
         dev = self._alive(dev_handle)
         if bmRequestType == 0x80 and bRequest == 0x06 and wValue >> 8 == 3:  # GET_DESCRIPTOR string
             index = wValue & 0xFF

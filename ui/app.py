@@ -29,9 +29,14 @@ if TYPE_CHECKING:
 class MainWindow(QMainWindow):
     """Docks and tabs around one design document and one view model."""
 
-    def __init__(self, document: DesignDocument | None = None, service_url: str | None = None,
-                 sink: MeasurementSink | None = None, service: ServiceClient | None = None,
-                 parent: QWidget | None = None) -> None:
+    def __init__(
+        self,
+        document: DesignDocument | None = None,
+        service_url: str | None = None,
+        sink: MeasurementSink | None = None,
+        service: ServiceClient | None = None,
+        parent: QWidget | None = None,
+    ) -> None:
         """*service* (a client) or *service_url* puts the viewer in service mode; *sink* is where scans
         are stored (default: the service's measurements, or the workstation's database)."""
         super().__init__(parent)
@@ -67,8 +72,10 @@ class MainWindow(QMainWindow):
         dock = QDockWidget("Designer", self)
         dock.setObjectName("designer-dock")
         dock.setWidget(self.designer_panel)
-        dock.setFeatures(QDockWidget.DockWidgetFeature.DockWidgetMovable
-                         | QDockWidget.DockWidgetFeature.DockWidgetFloatable)
+        dock.setFeatures(
+            QDockWidget.DockWidgetFeature.DockWidgetMovable
+            | QDockWidget.DockWidgetFeature.DockWidgetFloatable
+        )
         self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, dock)
         self._make_menu()
         self.statusBar().showMessage(self._status_text())
@@ -169,8 +176,12 @@ def main(argv: list[str] | None = None, service_url: str | None = None, token: s
     win.resize(1500, 950)
     view = win.view_panel.view
     view.frame_rendered.connect(
-        lambda: print(f"first frame after {time.perf_counter() - t0:.2f} s ({view.gl_renderer})", file=sys.stderr)
-        if view.frames == 1 else None)
+        lambda: (
+            print(f"first frame after {time.perf_counter() - t0:.2f} s ({view.gl_renderer})", file=sys.stderr)
+            if view.frames == 1
+            else None
+        )
+    )
     win.show()
     return app.exec()
 

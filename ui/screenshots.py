@@ -54,7 +54,9 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     scratch = tempfile.TemporaryDirectory()
     from ui.models.measure_db import LocalSink
 
-    sink = LocalSink(f"sqlite:///{Path(scratch.name) / 'station.sqlite3'}", Path(scratch.name) / "outbox.sqlite3")
+    sink = LocalSink(
+        f"sqlite:///{Path(scratch.name) / 'station.sqlite3'}", Path(scratch.name) / "outbox.sqlite3"
+    )
     win = MainWindow(sink=sink)
     win.resize(*SIZE)
     win.show()

@@ -17,9 +17,12 @@ def start_xvfb(screen: str = "1600x1200x24") -> subprocess.Popen:
         raise XvfbError("Xvfb is not installed (scripts/setup.sh installs it)")
     r, w = os.pipe()
     try:
-        proc = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-screen", "0", screen, "-nolisten", "tcp",
-                                 "+extension", "GLX"], pass_fds=(w,), stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            ["Xvfb", "-displayfd", str(w), "-screen", "0", screen, "-nolisten", "tcp", "+extension", "GLX"],
+            pass_fds=(w,),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
     finally:
         os.close(w)
     with os.fdopen(r) as fh:

@@ -7,6 +7,19 @@ from db.models.measurements import PARTS, Measurement, Panel
 from db.models.users import ApiToken, AuditEvent, Role, User
 
 __all__ = [
-    "JOB_STATES", "PARTS", "AnalysisResult", "ApiToken", "AuditEvent", "CalibrationRecord", "Design",
-    "DesignVersion", "FormulationJob", "Instrument", "LibraryPaint", "Measurement", "Panel", "Role", "User",
+    "JOB_STATES",
+    "PARTS",
+    "AnalysisResult",
+    "ApiToken",
+    "AuditEvent",
+    "CalibrationRecord",
+    "Design",
+    "DesignVersion",
+    "FormulationJob",
+    "Instrument",
+    "LibraryPaint",
+    "Measurement",
+    "Panel",
+    "Role",
+    "User",
 ]

@@ -18,7 +18,16 @@ from db.base import Base, JSONType, utcnow
 from db.errors import ImmutableRowError
 
 PARTS: tuple[str, ...] = (
-    "bumper", "fender", "door", "hood", "trunk", "mirror", "roof", "quarter_panel", "test_panel", "other",
+    "bumper",
+    "fender",
+    "door",
+    "hood",
+    "trunk",
+    "mirror",
+    "roof",
+    "quarter_panel",
+    "test_panel",
+    "other",
 )
 
 
@@ -80,5 +89,3 @@ def _refuse_update(_mapper: Any, _conn: Any, target: Measurement) -> None:
 @event.listens_for(Measurement, "before_delete")
 def _refuse_delete(_mapper: Any, _conn: Any, target: Measurement) -> None:
     raise ImmutableRowError(f"measurement {target.id} is immutable; it cannot be deleted")
-
-

@@ -72,18 +72,25 @@ class GamutReport:
 
     def to_dict(self) -> dict[str, object]:
         """JSON-able form."""
-        return {"paintable": self.paintable, "problems": list(self.problems), "pointer_gamut": self.pointer_gamut}
+        return {
+            "paintable": self.paintable,
+            "problems": list(self.problems),
+            "pointer_gamut": self.pointer_gamut,
+        }
 
 
-def rgb_bounds(face: ArrayLike, flop: ArrayLike, solid: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def rgb_bounds(
+    face: ArrayLike, flop: ArrayLike, solid: bool
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(lower, upper) channel bounds for face and flop, shape (2, 3) each (rows face, flop)."""
     lo = np.zeros((2, 3))
     hi = np.array([[FLOP_RGB_MAX if solid else FACE_RGB_MAX] * 3, [FLOP_RGB_MAX] * 3])
     return lo, hi
 
 
-def check_paintable(paint: object, *, allow_face_darker: bool = False, tol: float = 1e-6,
-                    relax_to: object | None = None) -> GamutReport:
+def check_paintable(
+    paint: object, *, allow_face_darker: bool = False, tol: float = 1e-6, relax_to: object | None = None
+) -> GamutReport:
     """Check a ``FaceFlopTravelGloss`` against the documented bound (see module docstring).
 
     *relax_to*: a reference paint (the original); bounds it already violates are relaxed to its values.
@@ -101,10 +108,14 @@ def check_paintable(paint: object, *, allow_face_darker: bool = False, tol: floa
         if solid and i == 1:
             break
         if np.any(rgb[i] < lo[i] - tol):
-            problems.append(f"{name} chromaticity outside the sRGB gamut (linear RGB {np.round(rgb[i], 3).tolist()})")
+            problems.append(
+                f"{name} chromaticity outside the sRGB gamut (linear RGB {np.round(rgb[i], 3).tolist()})"
+            )
         if np.any(rgb[i] > hi[i] + tol):
-            problems.append(f"{name} reflects more than a real surface can (linear RGB max {rgb[i].max():.3g} > "
-                            f"{hi[i].max():g})")
+            problems.append(
+                f"{name} reflects more than a real surface can (linear RGB max {rgb[i].max():.3g} > "
+                f"{hi[i].max():g})"
+            )
     if not allow_face_darker and not solid and face[0] < flop[0] - tol:
         ref_ok = relax_to is not None and relax_to.face[0] < relax_to.flop[0]  # type: ignore[attr-defined]
         if not ref_ok:

@@ -62,7 +62,9 @@ class SeamGeometry:
     @property
     def aspecular_deg(self) -> float:
         """Aspecular angle on panel A in degrees (thesis §3.3.3)."""
-        return float(aspecular_deg(direction(self.light_deg), direction(self.view_deg), np.array([0, 0, 1.0])))
+        return float(
+            aspecular_deg(direction(self.light_deg), direction(self.view_deg), np.array([0, 0, 1.0]))
+        )
 
     def to_dict(self) -> dict[str, float | str]:
         """JSON-able form (angles in degrees)."""
@@ -79,10 +81,13 @@ def check_polar(value: float, field: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError) as exc:
-        raise AnalysisInputError(field, f"a number of degrees in [-{POLAR_MAX_DEG:g}, {POLAR_MAX_DEG:g}]",
-                                 value) from exc
+        raise AnalysisInputError(
+            field, f"a number of degrees in [-{POLAR_MAX_DEG:g}, {POLAR_MAX_DEG:g}]", value
+        ) from exc
     if not math.isfinite(v) or abs(v) > POLAR_MAX_DEG:
-        raise AnalysisInputError(field, f"a number of degrees in [-{POLAR_MAX_DEG:g}, {POLAR_MAX_DEG:g}]", value)
+        raise AnalysisInputError(
+            field, f"a number of degrees in [-{POLAR_MAX_DEG:g}, {POLAR_MAX_DEG:g}]", value
+        )
     return v
 
 
@@ -97,7 +102,9 @@ def hinge_azimuth_deg(hinge: Hinge) -> float:
     try:
         v = float(hinge)
     except (TypeError, ValueError) as exc:
-        raise AnalysisInputError("hinge", '"in-plane", "out-of-plane" or an azimuth in degrees', hinge) from exc
+        raise AnalysisInputError(
+            "hinge", '"in-plane", "out-of-plane" or an azimuth in degrees', hinge
+        ) from exc
     if not math.isfinite(v):
         raise AnalysisInputError("hinge", "a finite azimuth in degrees", hinge)
     return v
@@ -131,5 +138,6 @@ def aspecular_deg(light: ArrayLike, view: ArrayLike, normal: ArrayLike) -> NDArr
     N = np.asarray(normal, dtype=float)
     # R·V = 2(L·N)(N·V) − L·V, without forming R.
     cos = 2.0 * np.einsum("...i,...i->...", L, N) * np.einsum("...i,...i->...", N, V) - np.einsum(
-        "...i,...i->...", L, V)
+        "...i,...i->...", L, V
+    )
     return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))

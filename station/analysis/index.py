@@ -70,8 +70,12 @@ class GeometryIndex:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
-        return {"light_deg": self.light_deg, "view_deg": self.view_deg, "direction": self.direction,
-                "beta_min_deg": self.beta_min_deg}
+        return {
+            "light_deg": self.light_deg,
+            "view_deg": self.view_deg,
+            "direction": self.direction,
+            "beta_min_deg": self.beta_min_deg,
+        }
 
 
 @dataclass(frozen=True)
@@ -203,14 +207,16 @@ class SeamModel:
         """Number of geometries (rows)."""
         return len(self.view_deg)
 
-    def colour(self, paint: object, normals: NDArray[np.float64], rows: NDArray[np.intp] | None = None
-               ) -> NDArray[np.float64]:
+    def colour(
+        self, paint: object, normals: NDArray[np.float64], rows: NDArray[np.intp] | None = None
+    ) -> NDArray[np.float64]:
         """Lab of *paint* on panels with *normals* (B, 3) for each geometry row → (G, B, 3)."""
         rows = np.arange(self.size) if rows is None else rows
         V = self.V[rows]
         if self.env is None:
-            return point_colour(paint, self.L[rows], V, normals[None, :, :], exposure=self.exposure,
-                                gloss=self.gloss)
+            return point_colour(
+                paint, self.L[rows], V, normals[None, :, :], exposure=self.exposure, gloss=self.gloss
+            )
         out = np.empty((len(rows), len(normals), 3))
         for i, r in enumerate(rows):
             out[i] = environment_colour(paint, self.env, self.V[r, 0], normals, gloss=self.gloss)
@@ -220,8 +226,13 @@ class SeamModel:
         """Lab of *paint* on panel A for each geometry row → (G, 1, 3)."""
         return self.colour(paint, np.array([[0.0, 0.0, 1.0]]), rows)
 
-    def delta_e(self, paint_a: object, paint_b: object, beta_deg: NDArray[np.float64],
-                rows: NDArray[np.intp] | None = None) -> NDArray[np.float64]:
+    def delta_e(
+        self,
+        paint_a: object,
+        paint_b: object,
+        beta_deg: NDArray[np.float64],
+        rows: NDArray[np.intp] | None = None,
+    ) -> NDArray[np.float64]:
         """Seam ΔE (G, B): paint A on panel A against paint B on panel B rotated by each β (degrees)."""
         normals = rotated_normals(np.asarray(beta_deg, dtype=float).reshape(-1), self.hinge)
         ca = self._reference_cached(paint_a, rows)
@@ -245,17 +256,23 @@ class SeamModel:
         ref = cache[2]
         return ref if rows is None else ref[rows]
 
-    def delta_e_rows(self, paint_a: object, paint_b: object, beta_deg: NDArray[np.float64],
-                     rows: NDArray[np.intp]) -> NDArray[np.float64]:
+    def delta_e_rows(
+        self, paint_a: object, paint_b: object, beta_deg: NDArray[np.float64], rows: NDArray[np.intp]
+    ) -> NDArray[np.float64]:
         """Seam ΔE (C, B) for candidate rows (C,) each with its own β values (C, B), degrees."""
         normals = rotated_normals(beta_deg, self.hinge)  # (C, B, 3)
         ca = self._reference_cached(paint_a, rows)  # (C, 1, 3)
         if self.env is None:
-            cb = point_colour(paint_b, self.L[rows], self.V[rows], normals, exposure=self.exposure,
-                              gloss=self.gloss)
+            cb = point_colour(
+                paint_b, self.L[rows], self.V[rows], normals, exposure=self.exposure, gloss=self.gloss
+            )
         else:
-            cb = np.stack([environment_colour(paint_b, self.env, self.V[r, 0], normals[i], gloss=self.gloss)
-                           for i, r in enumerate(rows)])
+            cb = np.stack(
+                [
+                    environment_colour(paint_b, self.env, self.V[r, 0], normals[i], gloss=self.gloss)
+                    for i, r in enumerate(rows)
+                ]
+            )
         return self.difference(ca, cb)
 
     def visible(self, beta_deg: NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -348,8 +365,9 @@ def goniogeometric_index(
     return _search(model, paint, eps, bmax, step, signs)
 
 
-def _search(model: SeamModel, paint: object, eps: float, bmax: float, step: float,
-            signs: tuple[float, ...]) -> IndexResult:
+def _search(
+    model: SeamModel, paint: object, eps: float, bmax: float, step: float, signs: tuple[float, ...]
+) -> IndexResult:
     n = max(3, math.ceil(bmax / step) + 1)
     grid = np.linspace(0.0, bmax, n)
     signed = np.concatenate([s * grid for s in signs])  # (S·n,)
@@ -373,12 +391,23 @@ def _search(model: SeamModel, paint: object, eps: float, bmax: float, step: floa
     per = []
     if not brackets:
         geom = _geometry_dict(model, 0)
-        per = tuple(GeometryIndex(_light(model, g), float(model.view_deg[g]), "+" if s > 0 else "-", None)
-                    for g in range(G) for s in signs)
-        return IndexResult(None, False, None, geom, eps, model.method, bmax, max_de,
-                           message=(f"ε = {eps:g} is never reached up to β = {bmax:g}° "
-                                    f"(largest ΔE seen {max_de:.3g})"),
-                           per_geometry=per)
+        per = tuple(
+            GeometryIndex(_light(model, g), float(model.view_deg[g]), "+" if s > 0 else "-", None)
+            for g in range(G)
+            for s in signs
+        )
+        return IndexResult(
+            None,
+            False,
+            None,
+            geom,
+            eps,
+            model.method,
+            bmax,
+            max_de,
+            message=(f"ε = {eps:g} is never reached up to β = {bmax:g}° (largest ΔE seen {max_de:.3g})"),
+            per_geometry=per,
+        )
 
     best_hi = min(b[1] for b in brackets)
     known: dict[tuple[int, int], dict[float, float]] = {}
@@ -409,14 +438,26 @@ def _search(model: SeamModel, paint: object, eps: float, bmax: float, step: floa
     assert best is not None  # noqa: S101 - brackets is non-empty
     beta, g, si = best
     per = tuple(
-        GeometryIndex(_light(model, gg), float(model.view_deg[gg]), "+" if signs[ss] > 0 else "-",
-                      approx.get((gg, ss)))
-        for gg in range(G) for ss in range(S)
+        GeometryIndex(
+            _light(model, gg), float(model.view_deg[gg]), "+" if signs[ss] > 0 else "-", approx.get((gg, ss))
+        )
+        for gg in range(G)
+        for ss in range(S)
     )
     geom = _geometry_dict(model, g)
     d = "+" if signs[si] > 0 else "-"
-    return IndexResult(beta, True, d, geom, eps, model.method, bmax, max_de,
-                       message=f"ΔE reaches {eps:g} at β = {beta:.4f}° (direction {d})", per_geometry=per)
+    return IndexResult(
+        beta,
+        True,
+        d,
+        geom,
+        eps,
+        model.method,
+        bmax,
+        max_de,
+        message=f"ΔE reaches {eps:g} at β = {beta:.4f}° (direction {d})",
+        per_geometry=per,
+    )
 
 
 def _light(model: SeamModel, g: int) -> float | None:
@@ -425,8 +466,11 @@ def _light(model: SeamModel, g: int) -> float | None:
 
 def _geometry_dict(model: SeamModel, g: int) -> dict[str, Any]:
     if model.env is not None:
-        return {"light": "environment", "view_deg": float(model.view_deg[g]),
-                "hinge": model.hinge if isinstance(model.hinge, str) else float(model.hinge)}
+        return {
+            "light": "environment",
+            "view_deg": float(model.view_deg[g]),
+            "hinge": model.hinge if isinstance(model.hinge, str) else float(model.hinge),
+        }
     return SeamGeometry(float(model.light_deg[g]), float(model.view_deg[g]), model.hinge).to_dict()
 
 
@@ -441,12 +485,19 @@ def _curvature(row: NDArray[np.float64], h: float) -> NDArray[np.float64]:
         d2[0], d2[-1] = d2[1], d2[-2]
     # interval j spans points j, j+1: neighbours j-1 … j+2
     padded = np.concatenate([[d2[0]], d2, [d2[-1]]])
-    win = np.maximum.reduce([padded[0:n - 1], padded[1:n], padded[2:n + 1], padded[3:n + 2]])
+    win = np.maximum.reduce([padded[0 : n - 1], padded[1:n], padded[2 : n + 1], padded[3 : n + 2]])
     return 2.0 * win
 
 
-def _first_bracket(model: SeamModel, paint: object, eps: float, sign: float, g: int,
-                   grid: NDArray[np.float64], row: NDArray[np.float64]) -> tuple[float, float] | None:
+def _first_bracket(
+    model: SeamModel,
+    paint: object,
+    eps: float,
+    sign: float,
+    g: int,
+    grid: NDArray[np.float64],
+    row: NDArray[np.float64],
+) -> tuple[float, float] | None:
     """First interval [lo, hi] of *grid* with F(lo) < 0 ≤ F(hi).
 
     Before accepting it, every earlier interval whose curvature bound
@@ -460,7 +511,7 @@ def _first_bracket(model: SeamModel, paint: object, eps: float, sign: float, g: 
     last = min(end, int(np.sum(np.cumprod(finite)))) - 1  # last index before a hit or the invisible tail
     if last >= 1:
         K = _curvature(np.where(finite, row, np.nan), h)
-        bound = np.maximum(row[:last], row[1:last + 1]) + K[:last] * h * h / 8.0
+        bound = np.maximum(row[:last], row[1 : last + 1]) + K[:last] * h * h / 8.0
         for j in np.nonzero(bound >= 0.0)[0]:
             sub = _refine(model, paint, eps, sign, g, float(grid[j]), float(grid[j + 1]))
             if sub is not None:
@@ -470,8 +521,9 @@ def _first_bracket(model: SeamModel, paint: object, eps: float, sign: float, g: 
     return None
 
 
-def _refine(model: SeamModel, paint: object, eps: float, sign: float, g: int, lo: float, hi: float
-            ) -> tuple[float, float] | None:
+def _refine(
+    model: SeamModel, paint: object, eps: float, sign: float, g: int, lo: float, hi: float
+) -> tuple[float, float] | None:
     """Look for a crossing hidden inside [lo, hi] on a finer grid (recursive down to 1e-3°)."""
     if hi - lo < _GUARD_MIN_WIDTH_DEG:
         return None
@@ -482,9 +534,14 @@ def _refine(model: SeamModel, paint: object, eps: float, sign: float, g: int, lo
     return _first_bracket(model, paint, eps, sign, g, sub, F)
 
 
-def _shrink(model: SeamModel, paint: object, eps: float, signs: tuple[float, ...],
-            brackets: list[tuple[float, float, int, int]],
-            known: dict[tuple[int, int], dict[float, float]] | None = None) -> list[tuple[float, float]]:
+def _shrink(
+    model: SeamModel,
+    paint: object,
+    eps: float,
+    signs: tuple[float, ...],
+    brackets: list[tuple[float, float, int, int]],
+    known: dict[tuple[int, int], dict[float, float]] | None = None,
+) -> list[tuple[float, float]]:
     """Shrink each bracket 32-fold with one vectorised evaluation for all (keeps the first crossing).
 
     The values at the new bracket ends are stored in *known* (per (row, direction)) so Brent does not
@@ -501,14 +558,23 @@ def _shrink(model: SeamModel, paint: object, eps: float, signs: tuple[float, ...
             out.append((float(sub[j - 1]), float(sub[j])))
             if known is not None:
                 known.setdefault((int(g), int(si)), {}).update(
-                    {float(sub[j - 1]): float(row[j - 1]), float(sub[j]): float(row[j])})
+                    {float(sub[j - 1]): float(row[j - 1]), float(sub[j]): float(row[j])}
+                )
         else:
             out.append((lo, hi))
     return out
 
 
-def _brent(model: SeamModel, paint: object, eps: float, sign: float, g: int, lo: float, hi: float,
-           known: dict[float, float] | None = None) -> float:
+def _brent(
+    model: SeamModel,
+    paint: object,
+    eps: float,
+    sign: float,
+    g: int,
+    lo: float,
+    hi: float,
+    known: dict[float, float] | None = None,
+) -> float:
     rows = np.array([g])
     known = known or {}
 

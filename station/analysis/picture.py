@@ -23,8 +23,15 @@ from station.analysis.shading import point_colour
 LIGHT_DISTANCE = 6.0
 
 
-def shade_pair(paint_a: Any, paint_b: Any, beta_deg: float, light_deg: float, view_deg: float,
-               hinge: Hinge = "in-plane", size: tuple[int, int] = (96, 192)) -> NDArray[np.float64]:
+def shade_pair(
+    paint_a: Any,
+    paint_b: Any,
+    beta_deg: float,
+    light_deg: float,
+    view_deg: float,
+    hinge: Hinge = "in-plane",
+    size: tuple[int, int] = (96, 192),
+) -> NDArray[np.float64]:
     """sRGB picture (h, w, 3) in [0, 1] of panel A (left) and panel B (right, turned by β about the seam).
 
     Pixels are laid out in panel coordinates (u across the seam, w along it), u ∈ [−1, 1], w ∈ [−½, ½].
@@ -49,17 +56,20 @@ def shade_pair(paint_a: Any, paint_b: Any, beta_deg: float, light_deg: float, vi
     L = light_pos - pts
     L /= np.linalg.norm(L, axis=-1, keepdims=True)
     V = np.broadcast_to(direction(view_deg), L.shape)
-    lab = np.where(on_b[..., None],
-                   point_colour(paint_b, L, V, normals, exposure="absolute"),
-                   point_colour(paint_a, L, V, normals, exposure="absolute"))
+    lab = np.where(
+        on_b[..., None],
+        point_colour(paint_b, L, V, normals, exposure="absolute"),
+        point_colour(paint_a, L, V, normals, exposure="absolute"),
+    )
     # expose so that a white diffuser at panel A's centre reads white
     k0 = float(np.dot(direction(light_deg), z))
     rgb = lab_to_linear_srgb(lab) / k0
     return np.clip(srgb_encode(np.clip(rgb, 0.0, 1.0)), 0.0, 1.0)
 
 
-def plot_seam_report(report: Any, path: str | Path, *, light_deg: float | None = None,
-                     view_deg: float | None = None) -> Path:
+def plot_seam_report(
+    report: Any, path: str | Path, *, light_deg: float | None = None, view_deg: float | None = None
+) -> Path:
     """Write the QA report PNG (panels as painted / corrected, and the Fig. 4.7 BRDF comparison)."""
     import matplotlib
 
@@ -84,18 +94,23 @@ def plot_seam_report(report: Any, path: str | Path, *, light_deg: float | None =
     ax3 = fig.add_subplot(gs[2, 0])
     ax3.axis("off")
     d = report.to_dict()
-    lines = [f"{'PASS' if report.passed else 'FAIL'}: seam ΔE max {d['seam_de_max']:.2f} "
-             f"(tolerance {report.tolerance:g}, {report.method})",
-             report.diagnosis,
-             f"index β_min = {report.index.beta_min_deg:.3g}°" if report.index.reached else report.index.message,
-             f"corrected: worst seam ΔE {report.correction.max_after:.2f}"]
+    lines = [
+        f"{'PASS' if report.passed else 'FAIL'}: seam ΔE max {d['seam_de_max']:.2f} "
+        f"(tolerance {report.tolerance:g}, {report.method})",
+        report.diagnosis,
+        f"index β_min = {report.index.beta_min_deg:.3g}°" if report.index.reached else report.index.message,
+        f"corrected: worst seam ΔE {report.correction.max_after:.2f}",
+    ]
     ax3.text(0.0, 1.0, "\n".join(_wrap(x) for x in lines), va="top", fontsize=8, family="monospace")
     angles = np.linspace(0.0, 110.0, 221)
     labels = ("L*", "a*", "b*")
     for i in range(3):
         ax = fig.add_subplot(gs[i, 1])
-        for paint, style, name in ((report.paint_a, "-", "A"), (report.paint_b, "--", "B"),
-                                   (corrected, ":", "B corrected")):
+        for paint, style, name in (
+            (report.paint_a, "-", "A"),
+            (report.paint_b, "--", "B"),
+            (corrected, ":", "B corrected"),
+        ):
             ax.plot(angles, paint.lab_at(angles)[:, i], style, label=name)
         ax.set_ylabel(labels[i])
         ax.grid(alpha=0.3)

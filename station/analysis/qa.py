@@ -35,7 +35,9 @@ def as_paint(panel: Any, field: str = "panel") -> Any:
         return panel
     if isinstance(panel, AspecularMeasurements):
         return fit_fftg(panel).design
-    raise AnalysisInputError(field, "a FaceFlopTravelGloss design or AspecularMeasurements", type(panel).__name__)
+    raise AnalysisInputError(
+        field, "a FaceFlopTravelGloss design or AspecularMeasurements", type(panel).__name__
+    )
 
 
 @dataclass(frozen=True)
@@ -87,8 +89,9 @@ class SeamReport:
             "correction_message": self.correction.message,
             "geometries": [
                 {**g.to_dict(), "seam_de": s, "geometric_de": gd, "formulation_de": fd}
-                for g, s, gd, fd in zip(self.geometries, self.seam_de, self.geometric_de, self.formulation_de,
-                                        strict=True)
+                for g, s, gd, fd in zip(
+                    self.geometries, self.seam_de, self.geometric_de, self.formulation_de, strict=True
+                )
             ],
         }
 
@@ -137,8 +140,9 @@ def seam_qa(
                 ls.append(float(lt))
                 vs.append(v)
     if not ls:
-        raise AnalysisInputError("aspecular_deg", "aspecular angles reachable from the lights (|view| <= 89°)",
-                                 list(aspecular_deg))
+        raise AnalysisInputError(
+            "aspecular_deg", "aspecular angles reachable from the lights (|view| <= 89°)", list(aspecular_deg)
+        )
     try:
         beta_ok = bool(np.isfinite(float(beta_deg)) and 0.0 < abs(float(beta_deg)) <= 45.0)
     except (TypeError, ValueError):
@@ -150,24 +154,55 @@ def seam_qa(
     seam = model.delta_e(a, b, beta)[:, 0]
     geometric = model.delta_e(a, a, beta)[:, 0]
     formulation = model.difference(model.reference(a), model.reference(b))[:, 0]
-    index = goniogeometric_index(a, ls, vs, epsilon=tolerance, method=method, hinge=hinge) if len(ls) == 1 \
+    index = (
+        goniogeometric_index(a, ls, vs, epsilon=tolerance, method=method, hinge=hinge)
+        if len(ls) == 1
         else _index_over(a, ls, vs, tolerance, method, hinge)
+    )
     passed = bool(np.max(seam) <= tolerance)
     diagnosis = _diagnosis(seam, geometric, formulation, tolerance)
     subset = "solid" if a.is_solid else "full"
-    correction = inverse_trompe_loeil(a, ls, vs, beta_deg=float(beta_deg), objective=objective, subset=subset,
-                                      hinge=hinge, method=method, epsilon=tolerance)
+    correction = inverse_trompe_loeil(
+        a,
+        ls,
+        vs,
+        beta_deg=float(beta_deg),
+        objective=objective,
+        subset=subset,
+        hinge=hinge,
+        method=method,
+        epsilon=tolerance,
+    )
     name = f"{a.name or 'panel A paint'}, corrected for panel B ({beta_deg:+g}°)"
-    correction = replace(correction, paint=correction.paint.replace(name=name),
-                         paints=tuple(p.replace(name=name) for p in correction.paints))
+    correction = replace(
+        correction,
+        paint=correction.paint.replace(name=name),
+        paints=tuple(p.replace(name=name) for p in correction.paints),
+    )
     geoms = tuple(SeamGeometry(lt, v, hinge) for lt, v in zip(ls, vs, strict=True))
     advice = _advice(a, float(beta_deg), index, seam, geoms, correction, tolerance, hinge, method)
-    return SeamReport(a, b, float(beta_deg), hinge, method, float(tolerance), geoms,
-                      tuple(float(x) for x in seam), tuple(float(x) for x in geometric),
-                      tuple(float(x) for x in formulation), index, passed, diagnosis, advice, correction)
+    return SeamReport(
+        a,
+        b,
+        float(beta_deg),
+        hinge,
+        method,
+        float(tolerance),
+        geoms,
+        tuple(float(x) for x in seam),
+        tuple(float(x) for x in geometric),
+        tuple(float(x) for x in formulation),
+        index,
+        passed,
+        diagnosis,
+        advice,
+        correction,
+    )
 
 
-def _index_over(a: Any, ls: list[float], vs: list[float], eps: float, method: str, hinge: Hinge) -> IndexResult:
+def _index_over(
+    a: Any, ls: list[float], vs: list[float], eps: float, method: str, hinge: Hinge
+) -> IndexResult:
     """Index over paired geometries (lights[i], views[i]): the minimum over per-light calls."""
     best: IndexResult | None = None
     for lt in sorted(set(ls)):
@@ -184,24 +219,39 @@ def _diagnosis(seam: np.ndarray, geometric: np.ndarray, formulation: np.ndarray,
     if s <= tol:
         return f"seam within tolerance (worst ΔE {s:.2f} ≤ {tol:g})"
     if f <= tol / 2 and g > tol / 2:
-        return (f"geometric mismatch: the paints agree on aligned panels (ΔE ≤ {f:.2f}) but the misalignment "
-                f"alone gives ΔE up to {g:.2f}; repainting will not fix it")
+        return (
+            f"geometric mismatch: the paints agree on aligned panels (ΔE ≤ {f:.2f}) but the misalignment "
+            f"alone gives ΔE up to {g:.2f}; repainting will not fix it"
+        )
     if g <= tol / 2 and f > tol / 2:
-        return (f"formulation mismatch: the paints differ by ΔE up to {f:.2f} on aligned panels; the "
-                f"misalignment alone gives only {g:.2f}")
+        return (
+            f"formulation mismatch: the paints differ by ΔE up to {f:.2f} on aligned panels; the "
+            f"misalignment alone gives only {g:.2f}"
+        )
     return f"both: formulation ΔE up to {f:.2f} and geometric ΔE up to {g:.2f} (seam ΔE up to {s:.2f})"
 
 
-def _advice(a: Any, beta: float, index: IndexResult, seam: np.ndarray, geoms: tuple[SeamGeometry, ...],
-            correction: TrompeResult, tol: float, hinge: Hinge, method: str) -> tuple[str, ...]:
+def _advice(
+    a: Any,
+    beta: float,
+    index: IndexResult,
+    seam: np.ndarray,
+    geoms: tuple[SeamGeometry, ...],
+    correction: TrompeResult,
+    tol: float,
+    hinge: Hinge,
+    method: str,
+) -> tuple[str, ...]:
     """The thesis's §4.5 guidelines, applied to this paint and seam."""
     out: list[str] = []
     high_travel = (not a.is_solid) and (a.face[0] - a.flop[0]) >= HIGH_TRAVEL_DELTA_L
     bmin = index.beta_min_deg
     if high_travel:
-        out.append(f"1) High-travel paint (L* {a.face[0]:.0f} → {a.flop[0]:.0f} over {a.travel_deg:.0f}°): use it "
-                   "only where seams of flush panels come together precisely parallel"
-                   + (f" (this paint tolerates {bmin:.2f}°, the seam is {abs(beta):.2f}°)." if bmin else "."))
+        out.append(
+            f"1) High-travel paint (L* {a.face[0]:.0f} → {a.flop[0]:.0f} over {a.travel_deg:.0f}°): use it "
+            "only where seams of flush panels come together precisely parallel"
+            + (f" (this paint tolerates {bmin:.2f}°, the seam is {abs(beta):.2f}°)." if bmin else ".")
+        )
     if not a.is_solid and bmin is not None and abs(beta) >= bmin:
         from station.model import FaceFlopTravelGloss
 
@@ -210,23 +260,35 @@ def _advice(a: Any, beta: float, index: IndexResult, seam: np.ndarray, geoms: tu
         ls = sorted({g.light_deg for g in geoms})
         rs = goniogeometric_index(solid, ls, 0.0, epsilon=tol, method=method, hinge=hinge, beta_max_deg=45.0)
         tol_s = f"{rs.beta_min_deg:.2f}°" if rs.reached else "more than 45°"
-        out.append(f"2) The seam is not flush: a solid or low-travel paint suits it better (a solid of this "
-                   f"paint's 45° colour tolerates {tol_s}).")
+        out.append(
+            f"2) The seam is not flush: a solid or low-travel paint suits it better (a solid of this "
+            f"paint's 45° colour tolerates {tol_s})."
+        )
     worst = geoms[int(np.argmax(seam))]
     if worst.aspecular_deg <= 30.0 and float(np.max(seam)) > tol:
-        out.append(f"3) The worst seam is seen at a low aspecular angle ({worst.aspecular_deg:.0f}°, light "
-                   f"{worst.light_deg:g}°): avoid seam orientations commonly viewed near the specular direction.")
+        out.append(
+            f"3) The worst seam is seen at a low aspecular angle ({worst.aspecular_deg:.0f}°, light "
+            f"{worst.light_deg:g}°): avoid seam orientations commonly viewed near the specular direction."
+        )
     if bmin is not None:
-        out.append(f"4) Manufacturing tolerance for this paint: keep the seam angle below {bmin:.2f}° "
-                   f"(ΔE {tol:g}, worst geometry light {index.geometry.get('light_deg')}°, aspecular "
-                   f"{index.geometry.get('aspecular_deg', float('nan')):.0f}°).")
+        out.append(
+            f"4) Manufacturing tolerance for this paint: keep the seam angle below {bmin:.2f}° "
+            f"(ΔE {tol:g}, worst geometry light {index.geometry.get('light_deg')}°, aspecular "
+            f"{index.geometry.get('aspecular_deg', float('nan')):.0f}°)."
+        )
     else:
-        out.append(f"4) This paint stays within ΔE {tol:g} up to {index.beta_max_deg:g}° of misalignment over "
-                   "these geometries; the tolerance can be set by other criteria.")
+        out.append(
+            f"4) This paint stays within ΔE {tol:g} up to {index.beta_max_deg:g}° of misalignment over "
+            "these geometries; the tolerance can be set by other criteria."
+        )
     if correction.meets_epsilon:
-        out.append(f"5) Over this limited range of views, an inverse trompe l'oeil paint for panel B brings the "
-                   f"worst seam from {correction.max_before:.2f} to {correction.max_after:.2f} ΔE.")
+        out.append(
+            f"5) Over this limited range of views, an inverse trompe l'oeil paint for panel B brings the "
+            f"worst seam from {correction.max_before:.2f} to {correction.max_after:.2f} ΔE."
+        )
     else:
-        out.append(f"5) No single second paint hides this seam over the whole range (best worst-case ΔE "
-                   f"{correction.max_after:.2f}); choose seam placements that limit the range of viewing angles.")
+        out.append(
+            f"5) No single second paint hides this seam over the whole range (best worst-case ΔE "
+            f"{correction.max_after:.2f}); choose seam placements that limit the range of viewing angles."
+        )
     return tuple(out)

@@ -117,8 +117,9 @@ class Environment:
         d = np.asarray(self.directions, dtype=float)
         r = np.asarray(self.radiance, dtype=float)
         if d.ndim != 2 or d.shape[1] != 3 or d.shape[0] == 0:
-            raise AnalysisInputError("environment.directions", "an (n, 3) array of unit vectors, n ≥ 1",
-                                     getattr(d, "shape", None))
+            raise AnalysisInputError(
+                "environment.directions", "an (n, 3) array of unit vectors, n ≥ 1", getattr(d, "shape", None)
+            )
         if r.shape != d.shape:
             raise AnalysisInputError("environment.radiance", f"an array of shape {d.shape}", r.shape)
         if not (np.all(np.isfinite(d)) and np.all(np.isfinite(r))) or np.any(r < 0):
@@ -134,7 +135,9 @@ class Environment:
         """Build from ``[(direction (3,), rgb (3,)), ...]``."""
         if not samples:
             raise AnalysisInputError("environment", "at least one (direction, rgb) sample", samples)
-        return cls(np.array([s[0] for s in samples], dtype=float), np.array([s[1] for s in samples], dtype=float))
+        return cls(
+            np.array([s[0] for s in samples], dtype=float), np.array([s[1] for s in samples], dtype=float)
+        )
 
     @classmethod
     def from_equirect(cls, image: ArrayLike) -> Environment:
@@ -204,7 +207,9 @@ def point_colour(
         n_ref = _Z if reference_normal is None else reference_normal
         k_ref = np.einsum("...i,...i->...", light, n_ref)
         if np.any(k_ref <= 0.0):
-            raise AnalysisInputError("light", "a light above panel A (L·N_A > 0)", "light at or behind panel A")
+            raise AnalysisInputError(
+                "light", "a light above panel A (L·N_A > 0)", "light at or behind panel A"
+            )
         k = k / k_ref
     elif exposure != "absolute":
         raise AnalysisInputError("exposure", '"reference" or "absolute"', exposure)

@@ -52,18 +52,25 @@ class SweepResult:
 
     def index_estimate(self) -> float | None:
         """Graphical index (thesis §4.3.3): the largest β in the sweep whose ΔE stays < ε everywhere."""
-        ok = [b for i, b in enumerate(self.betas_deg)
-              if np.all(np.where(self.visible[i], self.delta_e[i], 0.0) < self.epsilon)]
+        ok = [
+            b
+            for i, b in enumerate(self.betas_deg)
+            if np.all(np.where(self.visible[i], self.delta_e[i], 0.0) < self.epsilon)
+        ]
         return float(max(np.abs(ok))) if ok else None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
-        return {"betas_deg": self.betas_deg.tolist(), "lights_deg": self.lights_deg.tolist(),
-                "views_deg": self.views_deg.tolist(),
-                "delta_e": np.where(self.visible, self.delta_e, -1.0).tolist(),
-                "epsilon": self.epsilon, "method": self.method,
-                "hinge": self.hinge if isinstance(self.hinge, str) else float(self.hinge),
-                "index_estimate_deg": self.index_estimate()}
+        return {
+            "betas_deg": self.betas_deg.tolist(),
+            "lights_deg": self.lights_deg.tolist(),
+            "views_deg": self.views_deg.tolist(),
+            "delta_e": np.where(self.visible, self.delta_e, -1.0).tolist(),
+            "epsilon": self.epsilon,
+            "method": self.method,
+            "hinge": self.hinge if isinstance(self.hinge, str) else float(self.hinge),
+            "index_estimate_deg": self.index_estimate(),
+        }
 
 
 def seam_sweep(
@@ -92,8 +99,11 @@ def seam_sweep(
     if b.size == 0 or not np.all(np.isfinite(b)) or np.any(np.abs(b) > 45.0):
         raise AnalysisInputError("betas_deg", "one or more finite angles with |β| <= 45", list(betas_deg))
     lights = [check_polar(v, f"lights_deg[{i}]") for i, v in enumerate(lights_deg)]
-    views = (list(np.arange(-80.0, 80.001, 2.0)) if views_deg is None
-             else [check_polar(v, f"views_deg[{i}]") for i, v in enumerate(views_deg)])
+    views = (
+        list(np.arange(-80.0, 80.001, 2.0))
+        if views_deg is None
+        else [check_polar(v, f"views_deg[{i}]") for i, v in enumerate(views_deg)]
+    )
     if not lights or not views:
         raise AnalysisInputError("lights_deg", "at least one light and one view", None)
     ls = [lt for lt in lights for _ in views]
@@ -104,11 +114,19 @@ def seam_sweep(
     shape = (len(lights), len(views), len(b))
     de = np.moveaxis(de.reshape(shape), -1, 0)
     vis = np.moveaxis(vis.reshape(shape), -1, 0)
-    return SweepResult(b, np.asarray(lights), np.asarray(views, dtype=float), de, vis, float(epsilon), method, hinge)
+    return SweepResult(
+        b, np.asarray(lights), np.asarray(views, dtype=float), de, vis, float(epsilon), method, hinge
+    )
 
 
-def plot_sweep(result: SweepResult, path: str | Path, *, light_for_views: float | None = None,
-               view_for_lights: float | None = None, title: str = "") -> Path:
+def plot_sweep(
+    result: SweepResult,
+    path: str | Path,
+    *,
+    light_for_views: float | None = None,
+    view_for_lights: float | None = None,
+    title: str = "",
+) -> Path:
     """Draw Fig. 4.3: ΔE against view (one light) and against light (one view), one curve per β.
 
     A dashed line marks ε; the legend names each β. Returns the PNG path.
@@ -130,14 +148,22 @@ def plot_sweep(result: SweepResult, path: str | Path, *, light_for_views: float 
     for ax in axes:
         ax.axhline(result.epsilon, ls="--", color="k", lw=1)
         ax.grid(alpha=0.3)
-    axes[0].set_xlabel(f"view direction (degrees from normal), light at {result.lights_deg[li]:g}° "
-                       "(aspecular on panel A = view + light)")
+    axes[0].set_xlabel(
+        f"view direction (degrees from normal), light at {result.lights_deg[li]:g}° "
+        "(aspecular on panel A = view + light)"
+    )
     axes[1].set_xlabel(f"light direction (degrees from normal), view at {result.views_deg[vi]:g}°")
     axes[0].set_ylabel(f"seam ΔE ({result.method})")
     axes[0].legend(fontsize=8)
     est = result.index_estimate()
-    axes[0].text(0.02, 0.95, f"ε = {result.epsilon:g}; largest β under ε everywhere: "
-                 f"{'none' if est is None else f'{est:g}°'}", transform=axes[0].transAxes, fontsize=8, va="top")
+    axes[0].text(
+        0.02,
+        0.95,
+        f"ε = {result.epsilon:g}; largest β under ε everywhere: {'none' if est is None else f'{est:g}°'}",
+        transform=axes[0].transAxes,
+        fontsize=8,
+        va="top",
+    )
     fig.suptitle(title or "Seam colour difference against view, light and misalignment (thesis Fig. 4.3)")
     fig.tight_layout()
     path = Path(path)

@@ -161,8 +161,11 @@ class EnvironmentGeometry:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
-        return {"light": "environment", "view_deg": self.view_deg,
-                "hinge": self.hinge if isinstance(self.hinge, str) else float(self.hinge)}
+        return {
+            "light": "environment",
+            "view_deg": self.view_deg,
+            "hinge": self.hinge if isinstance(self.hinge, str) else float(self.hinge),
+        }
 
 
 def paint_to_dict(paint: Any) -> dict[str, Any]:
@@ -172,24 +175,39 @@ def paint_to_dict(paint: Any) -> dict[str, Any]:
 
         return dict(design_to_dict(paint))
     except ImportError:  # pragma: no cover - design_io is part of the model API
-        return {"schema": "cacad.design/1", "name": paint.name, "face": list(paint.face),
-                "flop": list(paint.flop), "travel_deg": paint.travel_deg, "gloss_gu": paint.gloss_gu}
+        return {
+            "schema": "cacad.design/1",
+            "name": paint.name,
+            "face": list(paint.face),
+            "flop": list(paint.flop),
+            "travel_deg": paint.travel_deg,
+            "gloss_gu": paint.gloss_gu,
+        }
 
 
 class _Problem:
     """Parameter vector ⇄ paint B, seam ΔE per geometry, constraints."""
 
-    def __init__(self, paint_a: Any, model: SeamModel, beta: float, names: tuple[str, ...],
-                 allow_face_darker: bool) -> None:
+    def __init__(
+        self, paint_a: Any, model: SeamModel, beta: float, names: tuple[str, ...], allow_face_darker: bool
+    ) -> None:
         self.a = paint_a
         self.model = model
         self.beta = np.array([beta])
         self.names = names
         self.solid = names == SUBSETS["solid"]
-        base = {"face_L": paint_a.face[0], "face_a": paint_a.face[1], "face_b": paint_a.face[2],
-                "flop_L": paint_a.flop[0], "flop_a": paint_a.flop[1], "flop_b": paint_a.flop[2],
-                "travel_deg": paint_a.travel_deg, "L": paint_a.face[0], "a": paint_a.face[1],
-                "b": paint_a.face[2]}
+        base = {
+            "face_L": paint_a.face[0],
+            "face_a": paint_a.face[1],
+            "face_b": paint_a.face[2],
+            "flop_L": paint_a.flop[0],
+            "flop_a": paint_a.flop[1],
+            "flop_b": paint_a.flop[2],
+            "travel_deg": paint_a.travel_deg,
+            "L": paint_a.face[0],
+            "a": paint_a.face[1],
+            "b": paint_a.face[2],
+        }
         self.base = base
         self.x0 = np.array([float(base[n]) for n in names])
         self.bounds = [_bound(n) for n in names]
@@ -215,8 +233,11 @@ class _Problem:
             return self.a.replace(face=lab, flop=lab, travel_deg=None)
         face = (v["face_L"], v["face_a"], v["face_b"])
         flop = (v["flop_L"], v["flop_a"], v["flop_b"])
-        return self.a.replace(face=face, flop=flop, travel_deg=v["travel_deg"] if face != flop or
-                              self.a.travel_deg is not None else None)
+        return self.a.replace(
+            face=face,
+            flop=flop,
+            travel_deg=v["travel_deg"] if face != flop or self.a.travel_deg is not None else None,
+        )
 
     def de(self, x: NDArray[np.float64], rows: NDArray[np.intp] | None = None) -> NDArray[np.float64]:
         return self.model.delta_e(self.a, self.paint(x), self.beta, rows=rows)[:, 0]
@@ -233,7 +254,9 @@ class _Problem:
             if self.solid:
                 rgb = lab_to_rgb(np.array([v["L"], v["a"], v["b"]]))
                 return np.concatenate([rgb - self.lo[0], self.hi[0] - rgb])
-            labs = np.array([[v["face_L"], v["face_a"], v["face_b"]], [v["flop_L"], v["flop_a"], v["flop_b"]]])
+            labs = np.array(
+                [[v["face_L"], v["face_a"], v["face_b"]], [v["flop_L"], v["flop_a"], v["flop_b"]]]
+            )
             rgb = lab_to_rgb(labs)
             parts = []
             for i, free in enumerate((self.face_free, self.flop_free)):
@@ -243,10 +266,18 @@ class _Problem:
 
         if self.face_free or self.flop_free:
             cons.append({"type": "ineq", "fun": gam})
-        if (not self.solid and not self.allow_face_darker and not self.face_darker_a
-                and ("face_L" in self.names or "flop_L" in self.names)):
-            cons.append({"type": "ineq", "fun": lambda z: np.array([self.values(z[:k])["face_L"]
-                                                                    - self.values(z[:k])["flop_L"]])})
+        if (
+            not self.solid
+            and not self.allow_face_darker
+            and not self.face_darker_a
+            and ("face_L" in self.names or "flop_L" in self.names)
+        ):
+            cons.append(
+                {
+                    "type": "ineq",
+                    "fun": lambda z: np.array([self.values(z[:k])["face_L"] - self.values(z[:k])["flop_L"]]),
+                }
+            )
         return cons
 
 
@@ -320,7 +351,11 @@ def inverse_trompe_loeil(
     names = _subset(paint_a, subset)
     env = lights_deg if isinstance(lights_deg, Environment) else None
     if env is not None:
-        vs = [0.0] if views_deg is None else [check_polar(v, f"views_deg[{i}]") for i, v in enumerate(views_deg)]
+        vs = (
+            [0.0]
+            if views_deg is None
+            else [check_polar(v, f"views_deg[{i}]") for i, v in enumerate(views_deg)]
+        )
         if not vs:
             raise AnalysisInputError("views_deg", "at least one view angle in degrees", list(views_deg or []))
         ls = [float("nan")] * len(vs)
@@ -328,8 +363,9 @@ def inverse_trompe_loeil(
         ls, vs = _geometries(lights_deg, views_deg)
     if objective == "single" and not (0 <= at < len(ls)):
         raise AnalysisInputError("at", f"0 <= at < {len(ls)}", at)
-    model = SeamModel(env if env is not None else ls, vs, hinge=hinge, method=method, exposure=exposure,
-                      gloss=gloss)
+    model = SeamModel(
+        env if env is not None else ls, vs, hinge=hinge, method=method, exposure=exposure, gloss=gloss
+    )
     prob = _Problem(paint_a, model, beta, names, allow_face_darker)
     before = prob.de(prob.x0)
     converged = True
@@ -346,9 +382,11 @@ def inverse_trompe_loeil(
         per_changes = tuple(_changes(prob, x) for x in xs)
         x_main = xs[0]
         reports = [check_paintable(p, allow_face_darker=allow_face_darker, relax_to=paint_a) for p in paints]
-        gamut = GamutReport(all(r.paintable for r in reports), tuple(q for r in reports for q in r.problems),
-                            None if any(r.pointer_gamut is None for r in reports)
-                            else all(r.pointer_gamut for r in reports))
+        gamut = GamutReport(
+            all(r.paintable for r in reports),
+            tuple(q for r in reports for q in r.problems),
+            None if any(r.pointer_gamut is None for r in reports) else all(r.pointer_gamut for r in reports),
+        )
     else:
         rows = np.array([at]) if objective == "single" else None
         x_main, converged = _solve(prob, objective, rows)
@@ -361,20 +399,35 @@ def inverse_trompe_loeil(
     if meets:
         msg = f"seam ΔE ≤ {epsilon:g} on every {'target ' if objective == 'single' else ''}geometry (worst {worst:.3g})"
     else:
-        msg = (f"no paint in subset '{_subset_name(subset, paint_a)}' brings every seam under ε = {epsilon:g}: "
-               f"worst ΔE {worst:.3g} after, {float(np.max(before)):.3g} before")
+        msg = (
+            f"no paint in subset '{_subset_name(subset, paint_a)}' brings every seam under ε = {epsilon:g}: "
+            f"worst ΔE {worst:.3g} after, {float(np.max(before)):.3g} before"
+        )
     if not gamut.paintable:
         msg += "; solution outside the paintable bound: " + "; ".join(gamut.problems)
     if not converged:
         msg += "; the optimiser stopped before convergence (best point returned)"
     return TrompeResult(
-        objective=objective, subset=_subset_name(subset, paint_a), paint=paints[0], paints=paints,
-        geometries=tuple(EnvironmentGeometry(v, hinge) if env is not None else SeamGeometry(lt, v, hinge)
-                         for lt, v in zip(ls, vs, strict=True)), beta_deg=beta,
-        method=method, epsilon=float(epsilon), seam_de_before=tuple(float(v) for v in before),
-        seam_de_after=tuple(float(v) for v in after_arr), meets_epsilon=meets, gamut=gamut,
-        changes=_changes(prob, x_main), solve_ms=(time.perf_counter() - t0) * 1e3, message=msg,
-        converged=converged, per_geometry_changes=per_changes,
+        objective=objective,
+        subset=_subset_name(subset, paint_a),
+        paint=paints[0],
+        paints=paints,
+        geometries=tuple(
+            EnvironmentGeometry(v, hinge) if env is not None else SeamGeometry(lt, v, hinge)
+            for lt, v in zip(ls, vs, strict=True)
+        ),
+        beta_deg=beta,
+        method=method,
+        epsilon=float(epsilon),
+        seam_de_before=tuple(float(v) for v in before),
+        seam_de_after=tuple(float(v) for v in after_arr),
+        meets_epsilon=meets,
+        gamut=gamut,
+        changes=_changes(prob, x_main),
+        solve_ms=(time.perf_counter() - t0) * 1e3,
+        message=msg,
+        converged=converged,
+        per_geometry_changes=per_changes,
     )
 
 
@@ -392,8 +445,9 @@ def _subset(paint_a: Any, subset: str | None) -> tuple[str, ...]:
         names = tuple(p.strip() for p in name.split("+") if p.strip())
         bad = [n for n in names if n not in PARAMS]
         if bad or not names or len(set(names)) != len(names):
-            raise AnalysisInputError("subset", f"one of {sorted(SUBSETS)} or '+'-joined names from {PARAMS}",
-                                     subset)
+            raise AnalysisInputError(
+                "subset", f"one of {sorted(SUBSETS)} or '+'-joined names from {PARAMS}", subset
+            )
     if paint_a.is_solid and names != SUBSETS["solid"]:
         raise AnalysisInputError("subset", '"solid" for a solid paint A (it has no travel)', subset)
     if not paint_a.is_solid and names == SUBSETS["solid"]:
@@ -410,19 +464,26 @@ def _solve(prob: _Problem, objective: str, rows: NDArray[np.intp] | None) -> tup
     k = len(prob.names)
     opts = {"maxiter": 200, "ftol": 1e-9}
     if objective in ("single", "rms"):
+
         def fun(x: NDArray[np.float64]) -> float:
             return float(np.mean(prob.de(x, rows) ** 2)) + prob.reg(x)
 
-        res = minimize(fun, prob.x0, method="SLSQP", bounds=prob.bounds, constraints=prob.constraints(),
-                       options=opts)
+        res = minimize(
+            fun, prob.x0, method="SLSQP", bounds=prob.bounds, constraints=prob.constraints(), options=opts
+        )
         x = np.asarray(res.x, dtype=float)
     elif objective == "minimax":
         d0 = prob.de(prob.x0) ** 2
         z0 = np.concatenate([prob.x0, [float(np.max(d0))]])
-        cons = [*prob.constraints(1),
-                {"type": "ineq", "fun": lambda z: z[k] - prob.de(z[:k]) ** 2}]
-        res = minimize(lambda z: float(z[k]) + prob.reg(z[:k]), z0, method="SLSQP",
-                       bounds=[*prob.bounds, (0.0, None)], constraints=cons, options=opts)
+        cons = [*prob.constraints(1), {"type": "ineq", "fun": lambda z: z[k] - prob.de(z[:k]) ** 2}]
+        res = minimize(
+            lambda z: float(z[k]) + prob.reg(z[:k]),
+            z0,
+            method="SLSQP",
+            bounds=[*prob.bounds, (0.0, None)],
+            constraints=cons,
+            options=opts,
+        )
         x = np.asarray(res.x[:k], dtype=float)
     else:  # pragma: no cover - validated by the caller
         raise AnalysisError(f"unknown objective {objective!r}")
@@ -433,7 +494,8 @@ def _solve(prob: _Problem, objective: str, rows: NDArray[np.intp] | None) -> tup
     return x, bool(res.success)
 
 
-def _objective_value(prob: _Problem, objective: str, x: NDArray[np.float64], rows: NDArray[np.intp] | None
-                     ) -> float:
+def _objective_value(
+    prob: _Problem, objective: str, x: NDArray[np.float64], rows: NDArray[np.intp] | None
+) -> float:
     de = prob.de(x, rows)
     return float(np.max(de)) if objective == "minimax" else float(np.mean(de**2))

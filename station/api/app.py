@@ -35,15 +35,24 @@ TAGS = [
     {"name": "instruments", "description": "attached instruments: connect, calibrate, measure"},
     {"name": "panels", "description": "painted samples (job, part, substrate)"},
     {"name": "measurements", "description": "immutable readings; corrections supersede; CSV export"},
-    {"name": "analyses", "description": "misalignment QA (thesis ch. 4): seam QA of measured panels or designs, "
-                                        "goniogeometric index, inverse trompe l'oeil, seam sweep"},
+    {
+        "name": "analyses",
+        "description": "misalignment QA (thesis ch. 4): seam QA of measured panels or designs, "
+        "goniogeometric index, inverse trompe l'oeil, seam sweep",
+    },
     {"name": "designs", "description": "versioned cacad.design/1 designs"},
-    {"name": "styling", "description": "colour styling tools (thesis §3.4–§3.7): variations, eyedroppers, "
-                                       "palette swatch, sketch fit (stylist)"},
+    {
+        "name": "styling",
+        "description": "colour styling tools (thesis §3.4–§3.7): variations, eyedroppers, "
+        "palette swatch, sketch fit (stylist)",
+    },
     {"name": "library", "description": "library paints; CSV import (chemist) and export"},
     {"name": "recipes", "description": "formulation jobs: ColorSnap a design to the library (chemist)"},
-    {"name": "formulation", "description": "ColorSnap top-k, recipe formulation (SYNTHETIC colorants), XML / "
-                                           "CxF3 export (chemist, thesis §5.3)"},
+    {
+        "name": "formulation",
+        "description": "ColorSnap top-k, recipe formulation (SYNTHETIC colorants), XML / "
+        "CxF3 export (chemist, thesis §5.3)",
+    },
     {"name": "users", "description": "users and tokens (admin)"},
     {"name": "audit", "description": "who wrote what, when"},
 ]
@@ -98,10 +107,14 @@ def _shutdown(app: FastAPI) -> None:
 def _roles_markdown() -> str:
     from station.api.security import ROLE_SCOPES
 
-    rows = "\n".join(f"| {role.value} | {', '.join(sorted(s.value for s in scopes))} |"
-                     for role, scopes in ROLE_SCOPES.items())
-    return ("\nEach operation lists the scope it needs under its security requirement. Roles hold these "
-            f"scopes:\n\n| role | scopes |\n|---|---|\n{rows}\n")
+    rows = "\n".join(
+        f"| {role.value} | {', '.join(sorted(s.value for s in scopes))} |"
+        for role, scopes in ROLE_SCOPES.items()
+    )
+    return (
+        "\nEach operation lists the scope it needs under its security requirement. Roles hold these "
+        f"scopes:\n\n| role | scopes |\n|---|---|\n{rows}\n"
+    )
 
 
 def _protected_docs(app: FastAPI) -> None:
@@ -144,10 +157,17 @@ def create_app(settings: Settings) -> FastAPI:
             replayer.cancel()
             await asyncio.to_thread(_shutdown, app)
 
-    docs: dict[str, str | None] = {} if settings.public_docs else {"docs_url": None, "redoc_url": None,
-                                                                     "openapi_url": None}
-    app = FastAPI(title="CACAD Station", version=__version__, description=DESCRIPTION + _roles_markdown(),
-                  openapi_tags=TAGS, lifespan=lifespan, **docs)
+    docs: dict[str, str | None] = (
+        {} if settings.public_docs else {"docs_url": None, "redoc_url": None, "openapi_url": None}
+    )
+    app = FastAPI(
+        title="CACAD Station",
+        version=__version__,
+        description=DESCRIPTION + _roles_markdown(),
+        openapi_tags=TAGS,
+        lifespan=lifespan,
+        **docs,
+    )
     app.state.settings = settings
     install_error_handlers(app)
     app.include_router(health.router)

@@ -83,10 +83,16 @@ def status_for(exc: StationError) -> int:
 
 
 def _input_error_body(exc: InputError) -> dict[str, Any]:
-    return {"detail": [{
-        "loc": ["body", *exc.field.split(".")], "msg": str(exc), "type": "value_error",
-        "ctx": {"accepted": exc.accepted},
-    }]}
+    return {
+        "detail": [
+            {
+                "loc": ["body", *exc.field.split(".")],
+                "msg": str(exc),
+                "type": "value_error",
+                "ctx": {"accepted": exc.accepted},
+            }
+        ]
+    }
 
 
 def install_error_handlers(app: FastAPI) -> None:
@@ -118,7 +124,9 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     403: {"model": ErrorOut, "description": "the token's role lacks the scope this route needs"},
 }
 NOT_FOUND: dict[int | str, dict[str, Any]] = {404: {"model": ErrorOut, "description": "no such resource"}}
-CONFLICT: dict[int | str, dict[str, Any]] = {409: {"model": ErrorOut, "description": "conflicts with stored state"}}
+CONFLICT: dict[int | str, dict[str, Any]] = {
+    409: {"model": ErrorOut, "description": "conflicts with stored state"}
+}
 UNAVAILABLE: dict[int | str, dict[str, Any]] = {
     503: {"model": ErrorOut, "description": "instrument or database unreachable"},
 }

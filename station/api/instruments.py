@@ -129,10 +129,18 @@ class InstrumentHub:
             needed, cal_id = st.needed, st.calibration_id or None
         except Exception as exc:  # a device that does not answer still lists
             needed = f"unknown ({type(exc).__name__})"
-        return InstrumentPublic(id=a.id, address=a.driver.address, model=a.info.model, serial=a.info.serial,
-                                firmware=a.info.firmware, kind=a.driver.kind, simulated=a.simulator is not None,
-                                geometries=list(a.info.geometries), calibration_needed=needed,
-                                calibration_id=cal_id)
+        return InstrumentPublic(
+            id=a.id,
+            address=a.driver.address,
+            model=a.info.model,
+            serial=a.info.serial,
+            firmware=a.info.firmware,
+            kind=a.driver.kind,
+            simulated=a.simulator is not None,
+            geometries=list(a.info.geometries),
+            calibration_needed=needed,
+            calibration_id=cal_id,
+        )
 
     def list(self) -> list[InstrumentPublic]:
         """Every attached instrument with its calibration state."""
@@ -151,16 +159,27 @@ class InstrumentHub:
         except CommunicationError as exc:
             raise NotFoundError(f"no instrument answers at {address}: {exc}") from exc
         with self.sessions() as session:
-            audit.record(session=session, actor=actor, action="instrument.connect", entity="instrument",
-                         entity_id=attached.id, address=address)
+            audit.record(
+                session=session,
+                actor=actor,
+                action="instrument.connect",
+                entity="instrument",
+                entity_id=attached.id,
+                address=address,
+            )
             session.commit()
         return self._public(attached)
 
     def _instrument_row(self, session: Session, a: Attached) -> Instrument:
         row = session.scalar(select(Instrument).where(Instrument.serial == a.info.serial))
         if row is None:
-            row = Instrument(serial=a.info.serial, model=a.info.model, kind="multiangle" if a.driver.kind ==
-                             "spectro" else a.driver.kind, firmware=a.info.firmware, address=a.driver.address)
+            row = Instrument(
+                serial=a.info.serial,
+                model=a.info.model,
+                kind="multiangle" if a.driver.kind == "spectro" else a.driver.kind,
+                firmware=a.info.firmware,
+                address=a.driver.address,
+            )
             session.add(row)
             session.flush()
         return row
@@ -175,19 +194,39 @@ class InstrumentHub:
             record = session.scalar(select(CalibrationRecord).where(CalibrationRecord.client_id == client_id))
             if record is None:
                 record = CalibrationRecord(
-                    client_id=client_id, instrument_id=inst.id, performed_at=utcnow(), operator=actor.name,
-                    reference=reference, passed=result.passed,
-                    result={"calibration_id": result.calibration_id, "steps": list(result.steps),
-                            "verification_de": result.verification_de,
-                            "expires": result.expires.isoformat() if result.expires else None})
+                    client_id=client_id,
+                    instrument_id=inst.id,
+                    performed_at=utcnow(),
+                    operator=actor.name,
+                    reference=reference,
+                    passed=result.passed,
+                    result={
+                        "calibration_id": result.calibration_id,
+                        "steps": list(result.steps),
+                        "verification_de": result.verification_de,
+                        "expires": result.expires.isoformat() if result.expires else None,
+                    },
+                )
                 session.add(record)
                 session.flush()
-            audit.record(session=session, actor=actor, action="instrument.calibrate", entity="calibration",
-                         entity_id=record.id, instrument=instrument_id, passed=result.passed)
+            audit.record(
+                session=session,
+                actor=actor,
+                action="instrument.calibrate",
+                entity="calibration",
+                entity_id=record.id,
+                instrument=instrument_id,
+                passed=result.passed,
+            )
             session.commit()
-            return CalibrationPublic(record_id=record.id, calibration_id=result.calibration_id,
-                                     steps=list(result.steps), verification_de=result.verification_de,
-                                     passed=result.passed, expires=result.expires)
+            return CalibrationPublic(
+                record_id=record.id,
+                calibration_id=result.calibration_id,
+                steps=list(result.steps),
+                verification_de=result.verification_de,
+                passed=result.passed,
+                expires=result.expires,
+            )
 
     def _gloss(self, gloss_id: str | None) -> tuple[float | None, int | None]:
         if gloss_id is None:
@@ -197,8 +236,14 @@ class InstrumentHub:
             raise InputError("gloss_instrument_id", "an attached gloss meter with a 60° geometry", gloss_id)
         return float(reading.gloss_gu[60]), 60
 
-    def reading_from(self, a: Attached, spectral: SpectralReading, req: MeasureRequest, operator: str,
-                     gloss: tuple[float | None, int | None]) -> Reading:
+    def reading_from(
+        self,
+        a: Attached,
+        spectral: SpectralReading,
+        req: MeasureRequest,
+        operator: str,
+        gloss: tuple[float | None, int | None],
+    ) -> Reading:
         """The ingest reading for one illumination block of a spectral reading (Lab from the spectra)."""
         angles, refl = spectral.block(req.illumination_deg)
         if not angles:
@@ -207,26 +252,42 @@ class InstrumentHub:
         lab = np.asarray(reflectance_to_lab(np.asarray(refl, dtype=float)))
         cal = None
         if spectral.calibration_id:
-            cal = CalibrationRef(client_id=calibration_uuid(spectral.serial, spectral.calibration_id),
-                                 performed_at=spectral.time, reference="")
+            cal = CalibrationRef(
+                client_id=calibration_uuid(spectral.serial, spectral.calibration_id),
+                performed_at=spectral.time,
+                reference="",
+            )
         return Reading(
             client_id=uuid.uuid4(),
-            instrument=InstrumentRef(serial=spectral.serial or a.info.serial, model=a.info.model,
-                                     kind="multiangle", firmware=a.info.firmware or None),
-            calibration=cal, panel_id=req.panel_id, operator=operator, measured_at=spectral.time,
-            geometries_deg=[float(x) for x in angles], lab=lab.round(4).tolist(),
+            instrument=InstrumentRef(
+                serial=spectral.serial or a.info.serial,
+                model=a.info.model,
+                kind="multiangle",
+                firmware=a.info.firmware or None,
+            ),
+            calibration=cal,
+            panel_id=req.panel_id,
+            operator=operator,
+            measured_at=spectral.time,
+            geometries_deg=[float(x) for x in angles],
+            lab=lab.round(4).tolist(),
             wavelengths_nm=[float(w) for w in spectral.wavelengths_nm],
             spectra=np.asarray(refl, dtype=float).round(6).tolist(),
-            gloss_gu=gloss[0], gloss_geometry_deg=gloss[1],
+            gloss_gu=gloss[0],
+            gloss_geometry_deg=gloss[1],
         )
 
-    def measure(self, *, instrument_id: str, req: MeasureRequest, gloss_instrument_id: str | None,
-                actor: User) -> MeasureResult:
+    def measure(
+        self, *, instrument_id: str, req: MeasureRequest, gloss_instrument_id: str | None, actor: User
+    ) -> MeasureResult:
         """Measure once, store it exactly once (or queue it on disk when the database is away)."""
         a = self.get(instrument_id)
         if a.driver.kind != "spectro":
-            raise InputError("instrument_id", "a spectrophotometer (gloss meters join via gloss_instrument_id)",
-                             instrument_id)
+            raise InputError(
+                "instrument_id",
+                "a spectrophotometer (gloss meters join via gloss_instrument_id)",
+                instrument_id,
+            )
         gloss = self._gloss(gloss_instrument_id)
         spectral = a.driver.measure()
         reading = self.reading_from(a, spectral, req, actor.name, gloss)
@@ -239,7 +300,9 @@ class InstrumentHub:
                 raise
             with self._outbox_lock:
                 self.outbox().put(str(reading.client_id), reading.canonical_json())
-            log.warning("database unreachable; reading %s queued in %s", reading.client_id, self.outbox().path)
+            log.warning(
+                "database unreachable; reading %s queued in %s", reading.client_id, self.outbox().path
+            )
             return MeasureResult(status="queued", measurement=None)
         return MeasureResult(status="stored", measurement=stored)
 
@@ -264,8 +327,14 @@ class InstrumentHub:
                     reading = Reading.model_validate_json(entry.body)
                     result = store_reading(session, reading)
                     if result.created:
-                        audit.record(session=session, actor=None, action="measurement.replay", entity="measurement",
-                                     entity_id=result.measurement_id, client_id=str(reading.client_id))
+                        audit.record(
+                            session=session,
+                            actor=None,
+                            action="measurement.replay",
+                            entity="measurement",
+                            entity_id=result.measurement_id,
+                            client_id=str(reading.client_id),
+                        )
             except Exception as exc:
                 if is_unreachable(exc):
                     break

@@ -36,12 +36,30 @@ class Scope(enum.StrEnum):
 
 S = Scope
 ROLE_SCOPES: dict[Role, frozenset[Scope]] = {
-    Role.TECHNICIAN: frozenset({S.INSTRUMENTS_READ, S.INSTRUMENTS_OPERATE, S.MEASUREMENTS_READ,
-                                S.MEASUREMENTS_WRITE, S.MEASUREMENTS_CORRECT}),
-    Role.QA: frozenset({S.INSTRUMENTS_READ, S.MEASUREMENTS_READ, S.MEASUREMENTS_CORRECT, S.DESIGNS_READ,
-                        S.LIBRARY_READ, S.ANALYSIS_WRITE, S.AUDIT_READ}),
+    Role.TECHNICIAN: frozenset(
+        {
+            S.INSTRUMENTS_READ,
+            S.INSTRUMENTS_OPERATE,
+            S.MEASUREMENTS_READ,
+            S.MEASUREMENTS_WRITE,
+            S.MEASUREMENTS_CORRECT,
+        }
+    ),
+    Role.QA: frozenset(
+        {
+            S.INSTRUMENTS_READ,
+            S.MEASUREMENTS_READ,
+            S.MEASUREMENTS_CORRECT,
+            S.DESIGNS_READ,
+            S.LIBRARY_READ,
+            S.ANALYSIS_WRITE,
+            S.AUDIT_READ,
+        }
+    ),
     Role.STYLIST: frozenset({S.MEASUREMENTS_READ, S.DESIGNS_READ, S.DESIGNS_WRITE, S.LIBRARY_READ}),
-    Role.CHEMIST: frozenset({S.MEASUREMENTS_READ, S.DESIGNS_READ, S.LIBRARY_READ, S.LIBRARY_WRITE, S.RECIPES_WRITE}),
+    Role.CHEMIST: frozenset(
+        {S.MEASUREMENTS_READ, S.DESIGNS_READ, S.LIBRARY_READ, S.LIBRARY_WRITE, S.RECIPES_WRITE}
+    ),
     Role.ADMIN: frozenset(Scope),
 }
 

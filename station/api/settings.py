@@ -15,7 +15,9 @@ SIM_KINDS = ("ma6", "ma3", "gloss")
 class Settings(BaseSettings):
     """Everything the service needs to start; ``create_app(Settings(...))`` uses only this."""
 
-    model_config = SettingsConfigDict(env_prefix="CACAD_", env_file=".env", env_ignore_empty=True, extra="ignore")
+    model_config = SettingsConfigDict(
+        env_prefix="CACAD_", env_file=".env", env_ignore_empty=True, extra="ignore"
+    )
 
     data_dir: Path = Field(default_factory=data_dir, description="workstation data folder")
     database_url: str | None = Field(None, description="SQLAlchemy URL; default: SQLite in data_dir")
@@ -23,10 +25,17 @@ class Settings(BaseSettings):
     port: int = Field(8000, ge=1, le=65535)
     auto_migrate: bool = Field(True, description="apply Alembic migrations on start")
     simulators: tuple[str, ...] = Field(("ma6",), description="simulators to spawn and attach on start")
-    load_demo_library: bool = Field(True, description="load station.formulate's demo library when the table is empty")
-    max_body_bytes: int = Field(1_048_576, ge=1024, le=64 * 1_048_576, description="request body cap (uploads)")
-    public_docs: bool = Field(False, description="serve /docs, /redoc and /openapi.json without a token "
-                              "(default: they need a bearer token like every route but /health)")
+    load_demo_library: bool = Field(
+        True, description="load station.formulate's demo library when the table is empty"
+    )
+    max_body_bytes: int = Field(
+        1_048_576, ge=1024, le=64 * 1_048_576, description="request body cap (uploads)"
+    )
+    public_docs: bool = Field(
+        False,
+        description="serve /docs, /redoc and /openapi.json without a token "
+        "(default: they need a bearer token like every route but /health)",
+    )
     outbox_replay_s: float = Field(10.0, gt=0, le=3600, description="seconds between outbox replay attempts")
 
     @computed_field  # type: ignore[prop-decorator]

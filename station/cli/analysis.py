@@ -43,7 +43,9 @@ def _add_paint_args(p: argparse.ArgumentParser) -> None:
 
 
 def _add_common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--epsilon", type=float, default=JND_CIE76, help="ΔE threshold (default 2.3 = 1 JND ΔE*ab)")
+    p.add_argument(
+        "--epsilon", type=float, default=JND_CIE76, help="ΔE threshold (default 2.3 = 1 JND ΔE*ab)"
+    )
     p.add_argument("--de", choices=DE_METHODS, default="cie76", help="colour-difference formula")
     p.add_argument("--hinge", default="in-plane", help="in-plane | out-of-plane | hinge azimuth in degrees")
 
@@ -52,9 +54,17 @@ def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
     paint = design_from_args(args)
     lights = parse_floats(args.light, "light")
     views = parse_floats(args.view, "view") if args.view is not None else None
-    r = goniogeometric_index(paint, lights if len(lights) > 1 else lights[0], views, epsilon=args.epsilon,
-                             method=args.de, hinge=_hinge(args.hinge), direction=args.direction,
-                             beta_max_deg=args.beta_max, gloss=args.include_gloss)
+    r = goniogeometric_index(
+        paint,
+        lights if len(lights) > 1 else lights[0],
+        views,
+        epsilon=args.epsilon,
+        method=args.de,
+        hinge=_hinge(args.hinge),
+        direction=args.direction,
+        beta_max_deg=args.beta_max,
+        gloss=args.include_gloss,
+    )
     return r.to_dict(per_geometry=args.per_geometry)
 
 
@@ -62,9 +72,19 @@ def _trompe(args: argparse.Namespace) -> dict[str, Any]:
     paint = design_from_args(args)
     lights = parse_floats(args.lights, "lights")
     views = parse_floats(args.views, "views") if args.views is not None else None
-    r = inverse_trompe_loeil(paint, lights, views, beta_deg=args.beta, objective=args.objective, at=args.at,
-                             subset=args.subset, hinge=_hinge(args.hinge), method=args.de,
-                             epsilon=args.epsilon, allow_face_darker=args.allow_face_darker)
+    r = inverse_trompe_loeil(
+        paint,
+        lights,
+        views,
+        beta_deg=args.beta,
+        objective=args.objective,
+        at=args.at,
+        subset=args.subset,
+        hinge=_hinge(args.hinge),
+        method=args.de,
+        epsilon=args.epsilon,
+        allow_face_darker=args.allow_face_darker,
+    )
     return r.to_dict()
 
 
@@ -91,9 +111,17 @@ def load_panel(path: str) -> Any:
 def _seam(args: argparse.Namespace) -> dict[str, Any]:
     a = load_panel(args.panel_a)
     b = load_panel(args.panel_b)
-    r = seam_qa(a, b, args.beta, lights_deg=parse_floats(args.lights, "lights"),
-                aspecular_deg=parse_floats(args.aspecular, "aspecular"), tolerance=args.epsilon,
-                method=args.de, hinge=_hinge(args.hinge), objective=args.objective)
+    r = seam_qa(
+        a,
+        b,
+        args.beta,
+        lights_deg=parse_floats(args.lights, "lights"),
+        aspecular_deg=parse_floats(args.aspecular, "aspecular"),
+        tolerance=args.epsilon,
+        method=args.de,
+        hinge=_hinge(args.hinge),
+        objective=args.objective,
+    )
     out = r.to_dict()
     if args.png:
         from station.analysis.picture import plot_seam_report
@@ -106,9 +134,15 @@ def _sweep(args: argparse.Namespace) -> dict[str, Any]:
     from station.analysis.sweep import plot_sweep, seam_sweep
 
     paint = design_from_args(args)
-    r = seam_sweep(paint, parse_floats(args.betas, "betas"), parse_floats(args.lights, "lights"),
-                   parse_floats(args.views, "views") if args.views else None, hinge=_hinge(args.hinge),
-                   method=args.de, epsilon=args.epsilon)
+    r = seam_sweep(
+        paint,
+        parse_floats(args.betas, "betas"),
+        parse_floats(args.lights, "lights"),
+        parse_floats(args.views, "views") if args.views else None,
+        hinge=_hinge(args.hinge),
+        method=args.de,
+        epsilon=args.epsilon,
+    )
     out = {"index_estimate_deg": r.index_estimate(), "shape": list(r.delta_e.shape)}
     if args.png:
         out["png"] = str(plot_sweep(r, args.png))
@@ -119,14 +153,19 @@ def _sweep(args: argparse.Namespace) -> dict[str, Any]:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``station analysis …``."""
-    top = subparsers.add_parser("analysis", help="misalignment QA: goniogeometric index, inverse trompe l'oeil")
+    top = subparsers.add_parser(
+        "analysis", help="misalignment QA: goniogeometric index, inverse trompe l'oeil"
+    )
     sub = top.add_subparsers(dest="analysis_command", required=True, metavar="SUBCOMMAND")
 
     p = sub.add_parser("gg-index", help="goniogeometric index β_min (eq 4.3.1)")
     _add_paint_args(p)
     p.add_argument("--light", required=True, help="light polar angle(s) in degrees, comma-separated")
-    p.add_argument("--view", help="view polar angle(s) in degrees (signed; default: aspecular 15–110° scan); "
-                   "write --view=-30,0 when the list starts with a minus")
+    p.add_argument(
+        "--view",
+        help="view polar angle(s) in degrees (signed; default: aspecular 15–110° scan); "
+        "write --view=-30,0 when the list starts with a minus",
+    )
     p.add_argument("--direction", choices=("+", "-", "either"), default="either")
     p.add_argument("--beta-max", type=float, default=30.0, help="largest β searched, degrees")
     p.add_argument("--include-gloss", action="store_true", help="add the gloss lobe (excluded in the thesis)")
@@ -139,10 +178,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     _add_paint_args(p)
     p.add_argument("--beta", type=float, required=True, help="signed misalignment of panel B, degrees")
     p.add_argument("--lights", required=True, help="light polar angles, degrees, comma-separated")
-    p.add_argument("--views", help="view polar angles, one per light (default: the normal); --views=-30,0 form for negatives")
+    p.add_argument(
+        "--views",
+        help="view polar angles, one per light (default: the normal); --views=-30,0 form for negatives",
+    )
     p.add_argument("--objective", choices=OBJECTIVES, default="rms")
     p.add_argument("--at", type=int, default=0, help="geometry index for --objective single")
-    p.add_argument("--subset", help="solid | face_L | face_L+travel | face | face+travel | full | names joined by +")
+    p.add_argument(
+        "--subset", help="solid | face_L | face_L+travel | face | face+travel | full | names joined by +"
+    )
     p.add_argument("--allow-face-darker", action="store_true")
     _add_common(p)
     add_json_flag(p)

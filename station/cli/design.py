@@ -64,7 +64,11 @@ def _variations(args: argparse.Namespace) -> dict[str, Any]:
         "category": ring.category,
         "degree": ring.degree,
         "variations": [
-            {"label": v.label, "design": None if v.design is None else design_to_dict(v.design), "reason": v.reason}
+            {
+                "label": v.label,
+                "design": None if v.design is None else design_to_dict(v.design),
+                "reason": v.reason,
+            }
             for v in ring.variations
         ],
     }
@@ -73,8 +77,16 @@ def _variations(args: argparse.Namespace) -> dict[str, Any]:
 def _eyedrop(args: argparse.Namespace) -> dict[str, Any]:
     img = load_image(args.image)
     face, flop = _xy(args.face, "face"), _xy(args.flop, "flop")
-    r = eyedrop_design(img.pixels, face, flop, travel_deg=args.travel, gloss_gu=args.gloss_gu,  # type: ignore[arg-type]
-                       radius=args.radius, auto_swap=not args.no_swap, gloss_xy=_xy(args.gloss, "gloss"))
+    r = eyedrop_design(
+        img.pixels,
+        face,
+        flop,
+        travel_deg=args.travel,
+        gloss_gu=args.gloss_gu,  # type: ignore[arg-type]
+        radius=args.radius,
+        auto_swap=not args.no_swap,
+        gloss_xy=_xy(args.gloss, "gloss"),
+    )
     out: dict[str, Any] = {
         "design": design_to_dict(r.design),
         "face_lab": list(r.face_lab),
@@ -83,7 +95,11 @@ def _eyedrop(args: argparse.Namespace) -> dict[str, Any]:
         "colour": img.colour_note,
     }
     if r.gloss is not None:
-        out["gloss"] = {"gloss_gu": r.gloss.gloss_gu, "contrast": r.gloss.contrast, "clipped": r.gloss.clipped}
+        out["gloss"] = {
+            "gloss_gu": r.gloss.gloss_gu,
+            "contrast": r.gloss.contrast,
+            "clipped": r.gloss.clipped,
+        }
     return out
 
 
@@ -107,8 +123,11 @@ def _sketch_fit(args: argparse.Namespace) -> dict[str, Any]:
     art = load_image(args.art).pixels
     h, w = art.shape[:2]
     if h != w:
-        raise InputError("art", "a square image the size of the scene (render one with `station design render`)",
-                         f"{w}x{h}")
+        raise InputError(
+            "art",
+            "a square image the size of the scene (render one with `station design render`)",
+            f"{w}x{h}",
+        )
     scene = builtin_scene(args.scene, h)
     initial = load_image(args.initial).pixels if args.initial else srgb_encode(shade(scene, DEFAULT_SILVER))
     fit = fit_point_light(scene, art, initial, gloss=args.gloss_mode)
@@ -133,8 +152,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("variations", help="ring of variations of a design (thesis §3.4.4)")
     _add_design_args(p)
-    p.add_argument("--degree", type=float, default=5.0,
-                   help="step: ΔE*ab for colours, degrees for travel, GU for gloss (0 < d <= 50; default 5)")
+    p.add_argument(
+        "--degree",
+        type=float,
+        default=5.0,
+        help="step: ΔE*ab for colours, degrees for travel, GU for gloss (0 < d <= 50; default 5)",
+    )
     p.add_argument("--category", choices=CATEGORIES, default="face")
     add_json_flag(p)
     p.set_defaults(handler=_variations)
@@ -147,7 +170,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--gloss-gu", type=float, default=50.0, help="gloss without the gloss eyedropper (GU)")
     p.add_argument("--travel", type=float, default=75.0, help="travel slider, degrees (default 75)")
     p.add_argument("--radius", type=int, default=3, help="eyedropper radius in pixels (default 3)")
-    p.add_argument("--no-swap", action="store_true", help="keep a face darker than the flop (retroreflective)")
+    p.add_argument(
+        "--no-swap", action="store_true", help="keep a face darker than the flop (retroreflective)"
+    )
     add_json_flag(p)
     p.set_defaults(handler=_eyedrop)
 
@@ -169,7 +194,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--scene", choices=tuple(BUILTIN_SCENES), default="sphere-point")
     p.add_argument("--art", required=True, help="the artist's image (PNG/JPEG, the scene's size)")
     p.add_argument("--initial", help="the image the artist started from (default: the scene in silver)")
-    p.add_argument("--gloss-mode", choices=("contrast", "default", "fit"), default="contrast",
-                   help="contrast gloss (thesis), 50 GU, or fitted with the colour (extension)")
+    p.add_argument(
+        "--gloss-mode",
+        choices=("contrast", "default", "fit"),
+        default="contrast",
+        help="contrast gloss (thesis), 50 GU, or fitted with the colour (extension)",
+    )
     add_json_flag(p)
     p.set_defaults(handler=_sketch_fit)

@@ -99,7 +99,13 @@ def cmd_library_export(args: argparse.Namespace) -> dict[str, Any]:
     """Write a library (``demo`` or a file) as CSV or CxF3."""
     lib = _load_library(args.library)
     fmt = _write_library(lib, Path(args.out), args.format)
-    return {"library": lib.name, "synthetic": lib.synthetic, "paints": len(lib), "format": fmt, "out": str(args.out)}
+    return {
+        "library": lib.name,
+        "synthetic": lib.synthetic,
+        "paints": len(lib),
+        "format": fmt,
+        "out": str(args.out),
+    }
 
 
 def _bounds(text: str, key: str) -> tuple[float | None, float | None]:
@@ -148,14 +154,22 @@ def cmd_library_browse(args: argparse.Namespace) -> dict[str, Any]:
     paints = []
     for r in rows[: args.limit]:
         item: dict[str, Any] = {
-            "code": str(lib.codes[r]), "type": str(lib.types[r]), "gloss_gu": float(lib.gloss_gu[r]),
-            "group": [str(top[r]), str(kind[r]), str(group[r])], "lab_15_45_110": std[r].tolist(),
+            "code": str(lib.codes[r]),
+            "type": str(lib.types[r]),
+            "gloss_gu": float(lib.gloss_gu[r]),
+            "group": [str(top[r]), str(kind[r]), str(group[r])],
+            "lab_15_45_110": std[r].tolist(),
         }
         if idx is not None:
             item["indices"] = {k: (None if np.isnan(v[r]) else float(v[r])) for k, v in idx.items()}
         paints.append(item)
-    return {"library": lib.name, "synthetic": lib.synthetic, "matched": int(rows.size), "shown": len(paints),
-            "paints": paints}
+    return {
+        "library": lib.name,
+        "synthetic": lib.synthetic,
+        "matched": int(rows.size),
+        "shown": len(paints),
+        "paints": paints,
+    }
 
 
 def cmd_snap(args: argparse.Namespace) -> dict[str, Any]:
@@ -189,16 +203,27 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
         gloss = args.gloss
     lib = _load_library(args.library)
     result, snap = formulate_from_library(lab, lib, gloss_gu=gloss, tolerance=args.tolerance)
-    out: dict[str, Any] = {"design": name, **result.to_dict(), "matches": snap.to_dict()["matches"],
-                           "snap_warnings": list(snap.warnings), "library": lib.name}
+    out: dict[str, Any] = {
+        "design": name,
+        **result.to_dict(),
+        "matches": snap.to_dict()["matches"],
+        "snap_warnings": list(snap.warnings),
+        "library": lib.name,
+    }
     if args.closed_loop:
         from station.formulate.closed_loop import closed_loop
         from station.formulate.sprayout import SprayOutModel
 
         spray = SprayOutModel(seed=args.seed)
         starts = [(m.code, lib.recipes[m.index]) for m in snap.matches]
-        job = closed_loop(lab, spray.measure, starts=starts, gloss_gu=gloss, tolerance=args.tolerance,
-                          max_corrections=args.corrections)
+        job = closed_loop(
+            lab,
+            spray.measure,
+            starts=starts,
+            gloss_gu=gloss,
+            tolerance=args.tolerance,
+            max_corrections=args.corrections,
+        )
         out["closed_loop"] = job.to_dict()
         out["closed_loop"]["measurement"] = f"simulated spray-out panel model (SYNTHETIC), seed {args.seed}"
     return out
@@ -216,7 +241,9 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
         lab, _, _ = _design_lab(args.design)
         from station.model import AspecularMeasurements
 
-        fit = fit_fftg(AspecularMeasurements((15.0, 45.0, 110.0), lab, args.gloss if args.gloss is not None else 90.0))
+        fit = fit_fftg(
+            AspecularMeasurements((15.0, 45.0, 110.0), lab, args.gloss if args.gloss is not None else 90.0)
+        )
         design: FaceFlopTravelGloss = fit.design
     else:
         design = load_design(args.design)
@@ -228,9 +255,16 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
         m = result.matches[0]
         row = lib.lab[m.index]
         specs.append(
-            spec_from_lab(m.code, {a: tuple(row[j]) for j, a in enumerate(lib.angles_deg)}, float(lib.gloss_gu[m.index]),
-                          role="match", paint_type=str(lib.types[m.index]), code=m.code, synthetic=lib.synthetic,
-                          five_angles=args.five_angles)
+            spec_from_lab(
+                m.code,
+                {a: tuple(row[j]) for j, a in enumerate(lib.angles_deg)},
+                float(lib.gloss_gu[m.index]),
+                role="match",
+                paint_type=str(lib.types[m.index]),
+                code=m.code,
+                synthetic=lib.synthetic,
+                five_angles=args.five_angles,
+            )
         )
         match_code = m.code
     out_path = Path(args.out)
@@ -238,8 +272,13 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
         write_color_xml(specs, out_path)
     else:
         out_path.write_bytes(specs_to_cxf(specs))
-    return {"out": str(out_path), "format": args.format, "colors": [s.name for s in specs], "match": match_code,
-            "angle_sets": [list(s.angles_deg) for s in specs[0].sets]}
+    return {
+        "out": str(out_path),
+        "format": args.format,
+        "colors": [s.name for s in specs],
+        "match": match_code,
+        "angle_sets": [list(s.angles_deg) for s in specs[0].sets],
+    }
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -260,20 +299,30 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=cmd_library_export)
     p = sub.add_parser("browse", help="filter by type, Flop/Chroma/Hue Shift Index bounds and hierarchy")
     p.add_argument("--library", default="demo", help="demo (SYNTHETIC, default) or a library file")
-    p.add_argument("--filter", action="append", default=[],
-                   help="type=solid,metallic,pearl | flop=MIN:MAX | chroma=MIN:MAX | hue_shift=MIN:MAX | "
-                        "set=solids|metallics+pearls | kind=chromatic|neutral | group=red|…|dark (repeatable)")
+    p.add_argument(
+        "--filter",
+        action="append",
+        default=[],
+        help="type=solid,metallic,pearl | flop=MIN:MAX | chroma=MIN:MAX | hue_shift=MIN:MAX | "
+        "set=solids|metallics+pearls | kind=chromatic|neutral | group=red|…|dark (repeatable)",
+    )
     p.add_argument("--limit", type=int, default=20, help="paints listed (default 20)")
     add_json_flag(p)
     p.set_defaults(handler=cmd_library_browse)
 
     p = subparsers.add_parser("snap", help="ColorSnap: nearest library paints (thesis §5.3.5)")
-    p.add_argument("--library", default="demo", help="demo (SYNTHETIC, default), munsell (real solids) or a library file")
+    p.add_argument(
+        "--library", default="demo", help="demo (SYNTHETIC, default), munsell (real solids) or a library file"
+    )
     p.add_argument("--lab", help='design Lab at 15/45/110: "L,a,b;L,a,b;L,a,b"')
     p.add_argument("--design", type=Path, help="design file instead of --lab")
     p.add_argument("--k", type=int, default=5, help="matches (default 5)")
-    p.add_argument("--de", choices=("cie76", "cie2000", "din6175"), default="cie76",
-                   help="ΔE summed over angles (default cie76 = ΔE*ab, the thesis's)")
+    p.add_argument(
+        "--de",
+        choices=("cie76", "cie2000", "din6175"),
+        default="cie76",
+        help="ΔE summed over angles (default cie76 = ΔE*ab, the thesis's)",
+    )
     p.add_argument("--png", type=Path, help="write the 3D Lab view as PNG")
     p.add_argument("--view", action="store_true", help="include the 3D view data in the output")
     add_json_flag(p)

@@ -26,13 +26,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_json_flag(lp)
     lp.set_defaults(handler=cmd_list)
 
-    for name, fn, text in (("calibrate", cmd_calibrate, "zero, white and verification calibration"),
-                           ("measure", cmd_measure, "measure once and print spectra, Lab and gloss")):
+    for name, fn, text in (
+        ("calibrate", cmd_calibrate, "zero, white and verification calibration"),
+        ("measure", cmd_measure, "measure once and print spectra, Lab and gloss"),
+    ):
         cp = subparsers.add_parser(name, help=text)
         cp.add_argument("device", help="sim:ma6 | sim:ma3 | sim:gloss | an address (see docs/protocols)")
         cp.add_argument("--design", type=Path, help="design file of the simulated panel (sim:* only)")
-        cp.add_argument("--recipe", type=Path,
-                        help="recipe file of the simulated panel: `station formulate --json` output (sim:* only)")
+        cp.add_argument(
+            "--recipe",
+            type=Path,
+            help="recipe file of the simulated panel: `station formulate --json` output (sim:* only)",
+        )
         cp.add_argument("--fault", action="append", default=[], help="simulator fault spec (sim:* only)")
         cp.add_argument("--timeout", type=float, default=1.5, help="reply timeout, seconds")
         if name == "measure":
@@ -76,9 +81,15 @@ def cmd_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     """Run the calibration sequence and report it."""
     with _instrument(args) as inst:
         r = inst.calibrate()
-        return {"device": args.device, "address": f"{inst.family}@{inst.address}", "calibration_id": r.calibration_id,
-                "steps": list(r.steps), "verification_de": r.verification_de, "passed": r.passed,
-                "expires": r.expires.isoformat() if r.expires else None}
+        return {
+            "device": args.device,
+            "address": f"{inst.family}@{inst.address}",
+            "calibration_id": r.calibration_id,
+            "steps": list(r.steps),
+            "verification_de": r.verification_de,
+            "passed": r.passed,
+            "expires": r.expires.isoformat() if r.expires else None,
+        }
 
 
 def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
@@ -87,7 +98,11 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
 
     with _instrument(args) as inst:
         reading = inst.measure()
-        out: dict[str, Any] = {"device": args.device, "address": f"{inst.family}@{inst.address}", "panel": args.panel}
+        out: dict[str, Any] = {
+            "device": args.device,
+            "address": f"{inst.family}@{inst.address}",
+            "panel": args.panel,
+        }
         if isinstance(reading, GlossReading):
             data = reading.to_dict()
             out.update({"geometries": [], "lab": [], "spectra": [], **data})

@@ -101,8 +101,13 @@ def _de(args: argparse.Namespace) -> dict[str, Any]:
     if ref.shape != smp.shape:
         raise InputError("sample", f"{len(ref)} triples (as many as --reference)", len(smp))
     per = delta_e(ref, smp, args.de)
-    return {"method": args.de, "de_per_angle": per.tolist(), "mean": float(per.mean()), "max": float(per.max()),
-            "rms": float(np.sqrt(np.mean(per**2)))}
+    return {
+        "method": args.de,
+        "de_per_angle": per.tolist(),
+        "mean": float(per.mean()),
+        "max": float(per.max()),
+        "rms": float(np.sqrt(np.mean(per**2))),
+    }
 
 
 def _plot(args: argparse.Namespace) -> dict[str, Any]:
@@ -148,7 +153,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("gloss", help="60° gloss (GU) → specular lobe parameters via the simulated meter")
     p.add_argument("--gu", type=float, required=True, help="60° gloss in GU (0–100)")
-    p.add_argument("--coat-index", type=float, default=1.567, help="clear-coat refractive index (default 1.567)")
+    p.add_argument(
+        "--coat-index", type=float, default=1.567, help="clear-coat refractive index (default 1.567)"
+    )
     add_json_flag(p)
     p.set_defaults(handler=_gloss)
 

@@ -29,8 +29,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     from station.render.shapes import SHAPES
     from station.render.tonemap import CURVES
 
-    p = subparsers.add_parser("render", help="render a design in an environment to a PNG",
-                              description=__doc__.split("\n\n")[1])
+    p = subparsers.add_parser(
+        "render", help="render a design in an environment to a PNG", description=__doc__.split("\n\n")[1]
+    )
     p.add_argument("--design", required=True, help="design JSON (cacad.design/1)")
     p.add_argument("--design2", help="second design for the other half / right panel / bumper")
     p.add_argument("--env", default="booth", help="booth | sky | overcast | PATH to .hdr/.exr")

@@ -69,8 +69,13 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
         raise InputError("--port", "1..65535", args.port)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     logging.getLogger("alembic").setLevel(logging.WARNING)
-    settings = _settings(args, host=args.host, port=args.port, simulators=_parse_sims(args.simulators),
-                         load_demo_library=not args.no_demo_library)
+    settings = _settings(
+        args,
+        host=args.host,
+        port=args.port,
+        simulators=_parse_sims(args.simulators),
+        load_demo_library=not args.no_demo_library,
+    )
     url = settings.effective_database_url
     engine, sessions = _sessions(url)
     try:
@@ -81,8 +86,11 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
                     added = load_demo_library(session=session)
                 except Exception as exc:  # the service still runs; the library routes then list nothing
                     session.rollback()
-                    print(f"warning: demo library not loaded: {type(exc).__name__}: {exc}"[:500],
-                          file=sys.stderr, flush=True)
+                    print(
+                        f"warning: demo library not loaded: {type(exc).__name__}: {exc}"[:500],
+                        file=sys.stderr,
+                        flush=True,
+                    )
                     added = 0
                 if added:
                     print(f"library: {added} synthetic demo paints loaded", flush=True)
@@ -93,8 +101,11 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
         print("bootstrap admin token (shown once, store it now; it is kept only hashed):", flush=True)
         print(f"  {token}", flush=True)
     if not _is_loopback(args.host):
-        print(f"warning: binding {args.host}, which is not loopback: the service is reachable from the network",
-              file=sys.stderr, flush=True)
+        print(
+            f"warning: binding {args.host}, which is not loopback: the service is reachable from the network",
+            file=sys.stderr,
+            flush=True,
+        )
     uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level=args.log_level)
     return None
 
@@ -114,8 +125,11 @@ def db_command(args: argparse.Namespace) -> dict[str, Any]:
         current = migrate.current_revision(engine)
     finally:
         engine.dispose()
-    return {"database": engine.url.render_as_string(hide_password=True), "revision": current,
-            "head": migrate.head_revision()}
+    return {
+        "database": engine.url.render_as_string(hide_password=True),
+        "revision": current,
+        "head": migrate.head_revision(),
+    }
 
 
 def users_command(args: argparse.Namespace) -> dict[str, Any]:
@@ -127,37 +141,52 @@ def users_command(args: argparse.Namespace) -> dict[str, Any]:
     try:
         with sessions() as session:
             if args.users_action == "add":
-                user, token, secret = users.create_user(session=session, actor=None, name=args.name,
-                                                        role=Role(args.role), label="cli")
+                user, token, secret = users.create_user(
+                    session=session, actor=None, name=args.name, role=Role(args.role), label="cli"
+                )
                 return {"user": user.name, "role": user.role.value, "token_id": token.id, "token": secret}
             if args.users_action == "token":
                 user = users.find_user(session=session, name=args.name)
                 token, secret = users.issue_token(session=session, actor=None, user=user, label=args.label)
                 return {"user": user.name, "token_id": token.id, "token": secret}
             if args.users_action == "deactivate":
-                user = users.deactivate(session=session, actor=None,
-                                        user=users.find_user(session=session, name=args.name))
+                user = users.deactivate(
+                    session=session, actor=None, user=users.find_user(session=session, name=args.name)
+                )
                 return {"user": user.name, "active": user.active}
-            return {"users": [{"id": u.id, "name": u.name, "role": u.role.value, "active": u.active}
-                              for u in users.list_users(session=session)]}
+            return {
+                "users": [
+                    {"id": u.id, "name": u.name, "role": u.role.value, "active": u.active}
+                    for u in users.list_users(session=session)
+                ]
+            }
     finally:
         engine.dispose()
 
 
 def _db_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--database", metavar="URL", help="sqlite:///PATH or postgresql://USER@HOST/DB "
-                   "(default: $CACAD_DATABASE_URL or SQLite in the data folder)")
+    p.add_argument(
+        "--database",
+        metavar="URL",
+        help="sqlite:///PATH or postgresql://USER@HOST/DB "
+        "(default: $CACAD_DATABASE_URL or SQLite in the data folder)",
+    )
     p.add_argument("--data-dir", metavar="DIR", help="data folder (default: $CACAD_DATA_DIR or ./var)")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``serve``, ``db`` and ``users``."""
-    p = subparsers.add_parser("serve", help="run the workstation service (FastAPI) with simulated instruments")
+    p = subparsers.add_parser(
+        "serve", help="run the workstation service (FastAPI) with simulated instruments"
+    )
     _db_args(p)
     p.add_argument("--host", default="127.0.0.1", help="bind address (default: loopback 127.0.0.1)")
     p.add_argument("--port", type=int, default=8000)
-    p.add_argument("--simulators", default=",".join(SIM_CHOICES),
-                   help="simulators to attach, comma-separated (default: all; '' for none)")
+    p.add_argument(
+        "--simulators",
+        default=",".join(SIM_CHOICES),
+        help="simulators to attach, comma-separated (default: all; '' for none)",
+    )
     p.add_argument("--no-demo-library", action="store_true", help="do not load the demo paint library")
     p.add_argument("--log-level", default="info", choices=("critical", "error", "warning", "info", "debug"))
     p.set_defaults(handler=serve)
@@ -172,7 +201,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("users", help="users and bearer tokens (admin, on this workstation)")
     p.add_argument("users_action", choices=("list", "add", "token", "deactivate"))
     p.add_argument("name", nargs="?", help="user name (add, token, deactivate)")
-    p.add_argument("--role", choices=("technician", "qa", "stylist", "chemist", "admin"), default="technician")
+    p.add_argument(
+        "--role", choices=("technician", "qa", "stylist", "chemist", "admin"), default="technician"
+    )
     p.add_argument("--label", default="cli", help="token label")
     _db_args(p)
     add_json_flag(p)

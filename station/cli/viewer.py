@@ -17,13 +17,18 @@ from station.errors import InputError
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``viewer`` and ``viewer screenshots``."""
     p = subparsers.add_parser("viewer", help="the Qt workstation viewer")
-    p.add_argument("--service", metavar="URL", help="station service to use as a client (default: local core)")
-    p.add_argument("--token", metavar="TOKEN", default=None,
-                   help="bearer token for --service (default: $STATION_TOKEN)")
+    p.add_argument(
+        "--service", metavar="URL", help="station service to use as a client (default: local core)"
+    )
+    p.add_argument(
+        "--token", metavar="TOKEN", default=None, help="bearer token for --service (default: $STATION_TOKEN)"
+    )
     p.set_defaults(handler=cmd_viewer)
     sub = p.add_subparsers(dest="viewer_command", metavar="ACTION")
     s = sub.add_parser("screenshots", help="regenerate screenshots of every screen")
-    s.add_argument("--out", type=Path, default=Path("docs/screens"), help="output folder (default docs/screens)")
+    s.add_argument(
+        "--out", type=Path, default=Path("docs/screens"), help="output folder (default docs/screens)"
+    )
     s.add_argument("--no-scan", action="store_true", help="skip the simulator scan on the instruments screen")
     add_json_flag(s)
     s.set_defaults(handler=cmd_screenshots)

@@ -28,8 +28,14 @@ def rgb_to_hsv(rgb: ArrayLike) -> NDArray[np.float64]:
     d = mx - mn
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     safe = np.where(d > 0, d, 1.0)
-    h = np.select([d == 0, mx == r, mx == g], [0.0, ((g - b) / safe) % 6.0, (b - r) / safe + 2.0],
-                  (r - g) / safe + 4.0) / 6.0
+    h = (
+        np.select(
+            [d == 0, mx == r, mx == g],
+            [0.0, ((g - b) / safe) % 6.0, (b - r) / safe + 2.0],
+            (r - g) / safe + 4.0,
+        )
+        / 6.0
+    )
     s = np.where(mx > 0, d / np.where(mx > 0, mx, 1.0), 0.0)
     return np.stack([h % 1.0, s, mx], axis=-1)
 

@@ -152,8 +152,9 @@ def _check_hsb(hue_deg: float, saturation: float, brightness: float) -> tuple[fl
     return h, s, _finite(brightness, "brightness")
 
 
-def hsb_edit_points(points: DataPoints, hue_deg: float = 0.0, saturation: float = 1.0,
-                    brightness: float = 0.0) -> PointEdit:
+def hsb_edit_points(
+    points: DataPoints, hue_deg: float = 0.0, saturation: float = 1.0, brightness: float = 0.0
+) -> PointEdit:
     """Group edit of every data point (thesis §3.4.2) and refit.
 
     The a–b points are rotated by *hue_deg* about the origin and scaled by *saturation*; *brightness*
@@ -168,8 +169,9 @@ def hsb_edit_points(points: DataPoints, hue_deg: float = 0.0, saturation: float 
     return PointEdit(new, new.fit())
 
 
-def hsb_edit(design: FaceFlopTravelGloss, hue_deg: float = 0.0, saturation: float = 1.0,
-             brightness: float = 0.0) -> FaceFlopTravelGloss:
+def hsb_edit(
+    design: FaceFlopTravelGloss, hue_deg: float = 0.0, saturation: float = 1.0, brightness: float = 0.0
+) -> FaceFlopTravelGloss:
     """Hue/saturation/brightness group edit of a design (thesis §3.4.2), exact.
 
     Applies the rotation/scale of :func:`hsb_edit_points` to face and flop. The clamped quadratic is
@@ -195,8 +197,9 @@ def _lab(value: ArrayLike, name: str) -> tuple[float, float, float]:
     return (float(arr[0]), float(arr[1]), float(arr[2]))
 
 
-def _solid_safe(design: FaceFlopTravelGloss, face: tuple, flop: tuple, travel: float | None,
-                default_travel: float) -> FaceFlopTravelGloss:
+def _solid_safe(
+    design: FaceFlopTravelGloss, face: tuple, flop: tuple, travel: float | None, default_travel: float
+) -> FaceFlopTravelGloss:
     """Build the edited design; a solid that stops being solid gets *default_travel*; equal → solid."""
     if face == flop:
         travel = None
@@ -211,8 +214,13 @@ def _solid_safe(design: FaceFlopTravelGloss, face: tuple, flop: tuple, travel: f
 DEFAULT_TRAVEL_DEG = 75.0
 
 
-def move_face(design: FaceFlopTravelGloss, a: float, b: float, L: float | None = None,
-              default_travel: float = DEFAULT_TRAVEL_DEG) -> FaceFlopTravelGloss:
+def move_face(
+    design: FaceFlopTravelGloss,
+    a: float,
+    b: float,
+    L: float | None = None,
+    default_travel: float = DEFAULT_TRAVEL_DEG,
+) -> FaceFlopTravelGloss:
     """Move the arrowhead (face, Lab at 15°) to (*a*, *b*) and optionally to *L* (thesis §3.4.3).
 
     A solid that gains a distinct face gets travel *default_travel* (degrees).
@@ -221,8 +229,13 @@ def move_face(design: FaceFlopTravelGloss, a: float, b: float, L: float | None =
     return _solid_safe(design, face, design.flop, design.travel_deg, default_travel)
 
 
-def move_flop(design: FaceFlopTravelGloss, a: float, b: float, L: float | None = None,
-              default_travel: float = DEFAULT_TRAVEL_DEG) -> FaceFlopTravelGloss:
+def move_flop(
+    design: FaceFlopTravelGloss,
+    a: float,
+    b: float,
+    L: float | None = None,
+    default_travel: float = DEFAULT_TRAVEL_DEG,
+) -> FaceFlopTravelGloss:
     """Move the arrow's base (flop, Lab at θ_clamp) to (*a*, *b*) and optionally to *L* (thesis §3.4.3)."""
     flop = _lab((design.flop[0] if L is None else L, a, b), "flop")
     return _solid_safe(design, design.face, flop, design.travel_deg, default_travel)

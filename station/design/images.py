@@ -50,7 +50,10 @@ def _to_srgb(im: Image.Image) -> tuple[Image.Image, str, bool]:
             if im.mode not in ("RGB", "CMYK", "L"):
                 im = im.convert("RGB")
             out = ImageCms.profileToProfile(
-                im, src, ImageCms.createProfile("sRGB"), renderingIntent=ImageCms.Intent.PERCEPTUAL,
+                im,
+                src,
+                ImageCms.createProfile("sRGB"),
+                renderingIntent=ImageCms.Intent.PERCEPTUAL,
                 outputMode=mode,
             )
             if out is None:  # pragma: no cover - only when inPlace=True
@@ -61,7 +64,9 @@ def _to_srgb(im: Image.Image) -> tuple[Image.Image, str, bool]:
     return im.convert("RGB"), "no embedded profile: assumed sRGB", False
 
 
-def load_image(path: str | Path, max_pixels: int = MAX_PIXELS, max_bytes: int = MAX_FILE_BYTES) -> LoadedImage:
+def load_image(
+    path: str | Path, max_pixels: int = MAX_PIXELS, max_bytes: int = MAX_FILE_BYTES
+) -> LoadedImage:
     """Load a PNG or JPEG file safely as sRGB (module docstring lists the guards).
 
     Returns
@@ -95,8 +100,9 @@ def load_image(path: str | Path, max_pixels: int = MAX_PIXELS, max_bytes: int = 
                 if im.mode in ("I;16", "I;16B", "I;16L", "I") and not im.info.get("icc_profile"):
                     arr16 = np.asarray(im, dtype=np.float64) / 65535.0
                     rgb = np.repeat(arr16[..., None], 3, axis=-1)
-                    return LoadedImage(np.clip(rgb, 0, 1), fmt, "16-bit greyscale, no profile: assumed sRGB",
-                                       False)
+                    return LoadedImage(
+                        np.clip(rgb, 0, 1), fmt, "16-bit greyscale, no profile: assumed sRGB", False
+                    )
                 converted, note, did = _to_srgb(im)
     except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
         raise ImageLoadError("image", "not a decompression bomb", None, str(exc)) from exc

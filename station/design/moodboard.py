@@ -112,14 +112,21 @@ class MoodBoard:
     def from_dict(cls, data: dict[str, Any]) -> MoodBoard:
         """Rebuild from :meth:`to_dict` output (validates every field)."""
         if not isinstance(data, dict) or data.get("schema") != "cacad.moodboard/1":
-            raise DesignInputError("schema", "cacad.moodboard/1", data.get("schema") if isinstance(data, dict) else data)
+            raise DesignInputError(
+                "schema", "cacad.moodboard/1", data.get("schema") if isinstance(data, dict) else data
+            )
         try:
             boards = tuple(
-                Board(str(b["name"]), tuple(BoardImage(str(i["path"]), i["x"], i["y"], i["zoom"]) for i in b["images"]))
+                Board(
+                    str(b["name"]),
+                    tuple(BoardImage(str(i["path"]), i["x"], i["y"], i["zoom"]) for i in b["images"]),
+                )
                 for b in data["boards"]
             )
         except (KeyError, TypeError) as exc:
-            raise DesignInputError("boards", "a list of {name, images: [{path, x, y, zoom}]}", None, str(exc)) from exc
+            raise DesignInputError(
+                "boards", "a list of {name, images: [{path, x, y, zoom}]}", None, str(exc)
+            ) from exc
         return cls(boards)
 
     @classmethod
@@ -148,7 +155,9 @@ def _check_image(image: ArrayLike) -> NDArray[np.float64]:
     if img.ndim != 3 or img.shape[-1] != 3:
         raise DesignInputError("image", "an (H, W, 3) sRGB image", img.shape)
     if not np.all(np.isfinite(img)) or img.min() < 0 or img.max() > 1:
-        raise DesignInputError("image", "sRGB-encoded values in [0, 1]", (float(np.nanmin(img)), float(np.nanmax(img))))
+        raise DesignInputError(
+            "image", "sRGB-encoded values in [0, 1]", (float(np.nanmin(img)), float(np.nanmax(img)))
+        )
     return img
 
 

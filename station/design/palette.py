@@ -51,7 +51,7 @@ def swatch(design: FaceFlopTravelGloss, width: int = 160, height: int = 32, bord
     oog = int(np.sum(np.any((rgb < -1e-6) | (rgb > 1 + 1e-6), axis=-1)))
     img = np.empty((height, width, 3))
     img[:] = border_grey(design.gloss_gu)
-    img[border:height - border, border:width - border] = srgb_encode(rgb)[None, :, :]
+    img[border : height - border, border : width - border] = srgb_encode(rgb)[None, :, :]
     return Swatch(to_uint8(img), angles, oog)
 
 

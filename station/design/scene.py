@@ -150,7 +150,9 @@ def scene_from_buffers(
     theta = np.asarray(aspecular_deg, dtype=float)
     m = np.asarray(mask, dtype=bool)
     if theta.ndim != 2 or m.shape != theta.shape:
-        raise DesignInputError("aspecular_deg/mask", "two (H, W) buffers of one shape", (theta.shape, m.shape))
+        raise DesignInputError(
+            "aspecular_deg/mask", "two (H, W) buffers of one shape", (theta.shape, m.shape)
+        )
     if (lambert is None) == (incidence_deg is None):
         raise DesignInputError("lambert", "exactly one of lambert or incidence_deg", None)
     if lambert is not None:
@@ -166,12 +168,21 @@ def scene_from_buffers(
     ld = zeros3 if light_dirs is None else np.asarray(light_dirs, dtype=float)
     nm = zeros3 if normals is None else np.asarray(normals, dtype=float)
     if ld.shape != zeros3.shape or nm.shape != zeros3.shape:
-        raise DesignInputError("light_dirs/normals", f"(H, W, 3) buffers of shape {zeros3.shape}",
-                               (ld.shape, nm.shape))
+        raise DesignInputError(
+            "light_dirs/normals", f"(H, W, 3) buffers of shape {zeros3.shape}", (ld.shape, nm.shape)
+        )
     if not np.isfinite(irradiance) or irradiance <= 0:
         raise DesignInputError("irradiance", "finite > 0", irradiance)
-    return Scene(name, nm, m, _unit(light_dir, "light_dir"), np.where(m, theta, 0.0), np.where(m, phi, 0.0),
-                 ld, float(irradiance))
+    return Scene(
+        name,
+        nm,
+        m,
+        _unit(light_dir, "light_dir"),
+        np.where(m, theta, 0.0),
+        np.where(m, phi, 0.0),
+        ld,
+        float(irradiance),
+    )
 
 
 def _grid(size: int) -> tuple[NDArray, NDArray]:
@@ -399,7 +410,9 @@ class LobeBasis:
         ``scale_j`` × (1 for the diffuse lobe, cos(θ)^E_j clipped at 90° otherwise). *scales* (default 1)
         lets a renderer whose lobes are normalised differently state its constants."""
         c = np.cos(np.radians(np.asarray(theta_deg, dtype=float)))[..., None]
-        cols = [np.ones_like(c) if e is None else np.where(c > 0, np.abs(c) ** e, 0.0) for e in self.exponents]
+        cols = [
+            np.ones_like(c) if e is None else np.where(c > 0, np.abs(c) ** e, 0.0) for e in self.exponents
+        ]
         out = np.concatenate(cols, axis=-1)
         return out if self.scales is None else out * np.asarray(self.scales, dtype=float)
 
@@ -407,9 +420,7 @@ class LobeBasis:
 DEFAULT_EXPONENTS: tuple[float | None, ...] = (None, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
 
 
-def lobe_basis(
-    scene: EnvironmentScene, exponents: tuple[float | None, ...] = DEFAULT_EXPONENTS
-) -> LobeBasis:
+def lobe_basis(scene: EnvironmentScene, exponents: tuple[float | None, ...] = DEFAULT_EXPONENTS) -> LobeBasis:
     """Compute the diffuse and directional-diffuse basis images of *scene* (the renderer's cache, in NumPy)."""
     if not exponents:
         raise DesignInputError("exponents", "at least one lobe", exponents)
@@ -420,4 +431,3 @@ def lobe_basis(
         vals = probe.lobe_values(scene.aspecular_deg[k][m]) * scene.lambert[k][m][:, None]  # (n, J)
         images[:, m, :] += vals.T[:, :, None] * scene.light_rgb[k][None, None, :]
     return LobeBasis(images, tuple(exponents), m)
-

@@ -58,7 +58,22 @@ TRAVEL_SWEEP = tuple(float(t) for t in range(16, 181))
 #: Below this ΔE*ab between face and flop the result is a solid.
 SOLID_DE = 0.5
 #: Gloss values (GU) tried by ``gloss="fit"``.
-GLOSS_CANDIDATES: tuple[float, ...] = (0.0, 2.0, 5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0)
+GLOSS_CANDIDATES: tuple[float, ...] = (
+    0.0,
+    2.0,
+    5.0,
+    10.0,
+    15.0,
+    20.0,
+    30.0,
+    40.0,
+    50.0,
+    60.0,
+    70.0,
+    80.0,
+    90.0,
+    100.0,
+)
 #: Rec. 709 luminance weights of linear sRGB.
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 HIGHLIGHT_SIGMAS = 3.0
@@ -151,8 +166,11 @@ def block_delta_e(use: NDArray, art_linear: NDArray, fit_linear: NDArray, block:
     _, inv, counts = np.unique(cell, return_inverse=True, return_counts=True)
     mean_a = np.stack([np.bincount(inv, art_linear[:, c]) for c in range(3)], axis=1) / counts[:, None]
     mean_f = np.stack([np.bincount(inv, fit_linear[:, c]) for c in range(3)], axis=1) / counts[:, None]
-    d2 = np.sum((linear_srgb_to_lab(np.clip(mean_a, 1e-6, None))
-                 - linear_srgb_to_lab(np.clip(mean_f, 1e-6, None))) ** 2, axis=1)
+    d2 = np.sum(
+        (linear_srgb_to_lab(np.clip(mean_a, 1e-6, None)) - linear_srgb_to_lab(np.clip(mean_f, 1e-6, None)))
+        ** 2,
+        axis=1,
+    )
     return float(np.sqrt(np.sum(counts * d2) / counts.sum()))
 
 
@@ -207,8 +225,9 @@ def _design_from_curve(angles: NDArray, lab: NDArray, gloss: float) -> tuple[Fac
 # --------------------------------------------------------------------------------- point-light fit
 
 
-def _sweep_quadratic(theta: NDArray, phi: NDArray, y: NDArray, sweep: tuple[float, ...]
-                     ) -> tuple[NDArray, float, float]:
+def _sweep_quadratic(
+    theta: NDArray, phi: NDArray, y: NDArray, sweep: tuple[float, ...]
+) -> tuple[NDArray, float, float]:
     """Least squares of eq 3.7.2 for every θ_clamp of *sweep*; return (coefficients, θ_clamp, SSE).
 
     Normal equations from prefix sums over the pixels sorted by θ: below θ_clamp a pixel contributes
@@ -317,8 +336,13 @@ def fit_point_light(
     init_a = None if initial is None else _check_art(initial, scene.shape, "initial")
     changed = changed_pixels(art_a, init_a, scene.mask)
     near_white = np.min(art_a, axis=-1) > NEAR_WHITE
-    use = (changed & ~near_white & (scene.lambert > min_lambert) & _eroded(scene.mask, edge_px)
-           & (scene.aspecular_deg >= min_aspecular_deg))
+    use = (
+        changed
+        & ~near_white
+        & (scene.lambert > min_lambert)
+        & _eroded(scene.mask, edge_px)
+        & (scene.aspecular_deg >= min_aspecular_deg)
+    )
     n_all = int(use.sum())
     if n_all < MIN_PIXELS:
         raise SketchFitError(f"only {n_all} usable changed foreground pixels (need {MIN_PIXELS})")
@@ -336,7 +360,9 @@ def fit_point_light(
             if best_g is None or sse_g < best_g[0]:
                 best_g = (sse_g, coef_g, tc_g, g)
         _, coef, tc, g_fit = best_g  # type: ignore[misc]
-        resid = (y_all - spec_all[g_fit][:, None] - phi_all[:, None] * _curve(coef, tc, theta_all)) @ LUMINANCE
+        resid = (
+            y_all - spec_all[g_fit][:, None] - phi_all[:, None] * _curve(coef, tc, theta_all)
+        ) @ LUMINANCE
         med = float(np.median(resid[keep]))
         sigma = 1.4826 * float(np.median(np.abs(resid[keep] - med)))
         new_keep = np.abs(resid - med) <= max(HIGHLIGHT_SIGMAS * sigma, OUTLIER_FLOOR)
@@ -358,8 +384,10 @@ def fit_point_light(
         if int(low.sum()) >= 10:
             gloss_gu, gloss_source = contrast_gloss(art_a[low]).gloss_gu, "contrast"
 
-    lab_std = tuple(tuple(float(v) for v in row)
-                    for row in linear_srgb_to_lab(np.clip(_curve(coef, tc, np.array(ANGLES_3)), 1e-6, None)))
+    lab_std = tuple(
+        tuple(float(v) for v in row)
+        for row in linear_srgb_to_lab(np.clip(_curve(coef, tc, np.array(ANGLES_3)), 1e-6, None))
+    )
     art_lab = linear_srgb_to_lab(np.clip(y * scene.irradiance, 1e-6, None))
 
     reason = ""
@@ -374,7 +402,9 @@ def fit_point_light(
         reason = f"non-physical colour curve (RGB {rgb.min():.3g}..{rgb.max():.3g}): shading inconsistent"
     else:
         try:
-            design, _tc_design = _design_from_curve(angles, linear_srgb_to_lab(np.clip(rgb, 1e-6, None)), gloss_gu)
+            design, _tc_design = _design_from_curve(
+                angles, linear_srgb_to_lab(np.clip(rgb, 1e-6, None)), gloss_gu
+            )
             if refine and not design.is_solid:
                 design = _refine(design, theta, phi, art_lab, scene.irradiance)
             tc = design.travel_deg if design.travel_deg is not None else tc
@@ -382,21 +412,36 @@ def fit_point_light(
             rms = rms_delta_e(linear_srgb_to_lab(np.clip(fit_lin, 1e-6, None)), art_lab)
             shading_de = shading_delta_e(theta, phi, y * scene.irradiance, fit_lin)
             if not allow_retroreflective and design.face[0] < design.flop[0] - RETRO_TOLERANCE_L:
-                reason = (f"retroreflective fit (face L* {design.face[0]:.3g} < flop L* {design.flop[0]:.3g}): "
-                          "flat or inconsistent shading")
+                reason = (
+                    f"retroreflective fit (face L* {design.face[0]:.3g} < flop L* {design.flop[0]:.3g}): "
+                    "flat or inconsistent shading"
+                )
             elif shading_de > max_shading_de:
-                reason = (f"systematic ΔE*ab {shading_de:.3g} > {max_shading_de:g}: "
-                          "shading inconsistent with the scene's lighting")
+                reason = (
+                    f"systematic ΔE*ab {shading_de:.3g} > {max_shading_de:g}: "
+                    "shading inconsistent with the scene's lighting"
+                )
         except ValueError as exc:  # the model refused the colours
             reason = f"model refused the fitted colours: {exc}"
     if reason:
         design, rms, shading_de = _diffuse_fallback(scene, art_a, changed, gloss_gu, use, art_lab)
-    return SketchFit(design, lab_std, rms, shading_de, bool(reason), reason, float(tc), n,  # type: ignore[arg-type]
-                     gloss_source, time.perf_counter() - t0)
+    return SketchFit(
+        design,
+        lab_std,
+        rms,
+        shading_de,
+        bool(reason),
+        reason,
+        float(tc),
+        n,  # type: ignore[arg-type]
+        gloss_source,
+        time.perf_counter() - t0,
+    )
 
 
-def _refine(design: FaceFlopTravelGloss, theta: NDArray, phi: NDArray, art_lab: NDArray,
-            irradiance: float) -> FaceFlopTravelGloss:
+def _refine(
+    design: FaceFlopTravelGloss, theta: NDArray, phi: NDArray, art_lab: NDArray, irradiance: float
+) -> FaceFlopTravelGloss:
     """Polish face, flop and travel by nonlinear least squares of the per-pixel Lab residual
     ``Lab(E ϕ rgb(θ)) − Lab(art)`` (scipy ``least_squares``), started from the linear fit."""
     from station.model.colorimetry import lab_to_linear_srgb
@@ -412,16 +457,22 @@ def _refine(design: FaceFlopTravelGloss, theta: NDArray, phi: NDArray, art_lab: 
     x0 = np.array([*design.face, *design.flop, design.travel_deg], dtype=float)
     lo = np.array([0, -150, -150, 0, -150, -150, 15.5])
     hi = np.array([200, 150, 150, 200, 150, 150, 180.0])
-    res = least_squares(residual, np.clip(x0, lo + 1e-9, hi - 1e-9), bounds=(lo, hi), max_nfev=60, x_scale="jac")
+    res = least_squares(
+        residual, np.clip(x0, lo + 1e-9, hi - 1e-9), bounds=(lo, hi), max_nfev=60, x_scale="jac"
+    )
     before = float(np.sum(residual(x0) ** 2)) if np.all((x0 >= lo) & (x0 <= hi)) else math.inf
     if not res.success or 2.0 * res.cost >= before:
         return design
-    return design.replace(face=tuple(float(v) for v in res.x[:3]), flop=tuple(float(v) for v in res.x[3:6]),
-                          travel_deg=float(res.x[6]))
+    return design.replace(
+        face=tuple(float(v) for v in res.x[:3]),
+        flop=tuple(float(v) for v in res.x[3:6]),
+        travel_deg=float(res.x[6]),
+    )
 
 
-def _diffuse_fallback(scene: Scene, art: NDArray, changed: NDArray, gloss_gu: float, use: NDArray,
-                      art_lab: NDArray) -> tuple[FaceFlopTravelGloss, float, float]:
+def _diffuse_fallback(
+    scene: Scene, art: NDArray, changed: NDArray, gloss_gu: float, use: NDArray, art_lab: NDArray
+) -> tuple[FaceFlopTravelGloss, float, float]:
     """Average diffuse colour of the changed pixels (albedo = linear / (E ϕ), ϕ > 0.2) as a solid."""
     sel = changed & (scene.lambert > 0.2) & (np.min(art, axis=-1) <= NEAR_WHITE)
     if not sel.any():
@@ -432,8 +483,11 @@ def _diffuse_fallback(scene: Scene, art: NDArray, changed: NDArray, gloss_gu: fl
     design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)  # type: ignore[arg-type]
     fit_lin = shade(scene, design)[use]
     art_lin = srgb_decode(art[use])
-    return (design, rms_delta_e(linear_srgb_to_lab(np.clip(fit_lin, 1e-6, None)), art_lab),
-            shading_delta_e(scene.aspecular_deg[use], scene.lambert[use], art_lin, fit_lin))
+    return (
+        design,
+        rms_delta_e(linear_srgb_to_lab(np.clip(fit_lin, 1e-6, None)), art_lab),
+        shading_delta_e(scene.aspecular_deg[use], scene.lambert[use], art_lin, fit_lin),
+    )
 
 
 # ----------------------------------------------------------------------------- environment-lit fit
@@ -505,8 +559,10 @@ def fit_environment(
     shading_de = block_delta_e(use, y, recon)
     angles = np.arange(curve_angles[0], curve_angles[1] + 1.0, 1.0)
     rgb = basis.lobe_values(angles) @ w
-    lab_std = tuple(tuple(float(v) for v in row)
-                    for row in linear_srgb_to_lab(np.clip(basis.lobe_values(np.array(ANGLES_3)) @ w, 1e-6, None)))
+    lab_std = tuple(
+        tuple(float(v) for v in row)
+        for row in linear_srgb_to_lab(np.clip(basis.lobe_values(np.array(ANGLES_3)) @ w, 1e-6, None))
+    )
     reason = ""
     tc = 0.0
     design: FaceFlopTravelGloss | None = None
@@ -516,8 +572,10 @@ def fit_environment(
     elif not allow_retroreflective and lum[0] < lum[-1] * (1.0 - 1e-3):
         reason = "retroreflective fit (darker near specular than far from it): flat or inconsistent shading"
     elif shading_de > max_shading_de:
-        reason = (f"systematic ΔE*ab {shading_de:.3g} > {max_shading_de:g}: "
-                  "shading inconsistent with the scene's lighting")
+        reason = (
+            f"systematic ΔE*ab {shading_de:.3g} > {max_shading_de:g}: "
+            "shading inconsistent with the scene's lighting"
+        )
     else:
         try:
             design, tc = _design_from_curve(angles, linear_srgb_to_lab(np.clip(rgb, 1e-6, None)), gloss_gu)
@@ -535,5 +593,15 @@ def fit_environment(
         recon = B[diffuse[0]] * albedo
         rms = rms_delta_e(linear_srgb_to_lab(np.clip(recon, 1e-6, None)), art_lab)
         shading_de = block_delta_e(use, y, recon)
-    return SketchFit(design, lab_std, rms, shading_de, bool(reason), reason, float(tc), n, "default",  # type: ignore[arg-type]
-                     time.perf_counter() - t0)
+    return SketchFit(
+        design,
+        lab_std,
+        rms,
+        shading_de,
+        bool(reason),
+        reason,
+        float(tc),
+        n,
+        "default",  # type: ignore[arg-type]
+        time.perf_counter() - t0,
+    )

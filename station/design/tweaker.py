@@ -115,14 +115,18 @@ def adjust_at(
         if design.is_solid or design.travel_deg is None:
             lab = tuple(float(v) for v in _temporary(design.face, kind, delta))
             if not L_EDIT_RANGE[0] <= lab[0] <= L_EDIT_RANGE[1]:
-                raise DesignInputError("delta", "an adjustment keeping L* in 0..100", delta, f"L* {lab[0]:.4g}")
+                raise DesignInputError(
+                    "delta", "an adjustment keeping L* in 0..100", delta, f"L* {lab[0]:.4g}"
+                )
             return Tweak(design.replace(face=lab, flop=lab), theta, 1.0)
         r = float(ratio_r(theta, design.travel_deg))
         face2 = (1.0 - r) * face + r * _temporary(design.face, kind, delta)  # eq 3.6.5
         flop2 = r * flop + (1.0 - r) * _temporary(design.flop, kind, delta)  # eq 3.6.6
         for name, lab in (("face", face2), ("flop", flop2)):
             if not L_EDIT_RANGE[0] <= lab[0] <= L_EDIT_RANGE[1]:
-                raise DesignInputError("delta", f"an adjustment keeping {name} L* in 0..100", delta, f"L* {lab[0]:.4g}")
+                raise DesignInputError(
+                    "delta", f"an adjustment keeping {name} L* in 0..100", delta, f"L* {lab[0]:.4g}"
+                )
         new = design.replace(face=tuple(float(v) for v in face2), flop=tuple(float(v) for v in flop2))
     except DesignInputError:
         raise

@@ -36,7 +36,11 @@ Category = Literal["face", "flop", "travel-gloss"]
 CATEGORIES: tuple[str, ...] = ("face", "flop", "travel-gloss")
 COLOUR_RING: tuple[str, ...] = ("lighter", "darker", "more chroma", "less chroma", "hue +", "hue -")
 TRAVEL_GLOSS_RING: tuple[str, ...] = ("more travel", "less travel", "more gloss", "less gloss")
-RING: dict[str, tuple[str, ...]] = {"face": COLOUR_RING, "flop": COLOUR_RING, "travel-gloss": TRAVEL_GLOSS_RING}
+RING: dict[str, tuple[str, ...]] = {
+    "face": COLOUR_RING,
+    "flop": COLOUR_RING,
+    "travel-gloss": TRAVEL_GLOSS_RING,
+}
 #: Accepted step size (CIELAB units, degrees or GU): 0 < degree <= DEGREE_MAX.
 DEGREE_MAX = 50.0
 

@@ -116,11 +116,18 @@ def make_instrument(address: str, **options: Any) -> Instrument:
     from station.drivers.gloss import GlossMeter, HidBridgeDevice, hid_path_for
 
     if where.startswith("hid:"):
-        transport = HidTransport(hid_path_for(where[4:], options.pop("enumerate_fn", None)),
-                                 options.pop("device_factory", None), address=where)
+        transport = HidTransport(
+            hid_path_for(where[4:], options.pop("enumerate_fn", None)),
+            options.pop("device_factory", None),
+            address=where,
+        )
     else:
-        transport = HidTransport(where.encode(), lambda: HidBridgeDevice(), lambda v, p: [{"path": where.encode()}],
-                                 address=f"gloss@{where}")
+        transport = HidTransport(
+            where.encode(),
+            lambda: HidBridgeDevice(),
+            lambda v, p: [{"path": where.encode()}],
+            address=f"gloss@{where}",
+        )
     return GlossMeter(transport, **options)
 
 

@@ -38,8 +38,11 @@ def _serial() -> list[DeviceCandidate]:
     out = []
     for port in list_ports.comports():
         if any(h in port.device for h in SERIAL_HINTS):
-            out.append(DeviceCandidate(f"ma6@{port.device}", "ma6", "serial",
-                                       port.description or port.hwid or "serial port"))
+            out.append(
+                DeviceCandidate(
+                    f"ma6@{port.device}", "ma6", "serial", port.description or port.hwid or "serial port"
+                )
+            )
     return out
 
 
@@ -47,8 +50,12 @@ def _usb(backend: Any = None) -> list[DeviceCandidate]:
     import usb.core
 
     devs = usb.core.find(find_all=True, idVendor=MA3_USB_ID[0], idProduct=MA3_USB_ID[1], backend=backend)
-    return [DeviceCandidate(f"ma3@usb:{d.idVendor:04x}:{d.idProduct:04x}", "ma3", "usb",
-                            f"bus {d.bus} address {d.address}") for d in devs]
+    return [
+        DeviceCandidate(
+            f"ma3@usb:{d.idVendor:04x}:{d.idProduct:04x}", "ma3", "usb", f"bus {d.bus} address {d.address}"
+        )
+        for d in devs
+    ]
 
 
 def _hid(enumerate_fn: Callable[[int, int], Sequence[dict[str, Any]]] | None = None) -> list[DeviceCandidate]:
@@ -59,8 +66,14 @@ def _hid(enumerate_fn: Callable[[int, int], Sequence[dict[str, Any]]] | None = N
     out = []
     for d in enumerate_fn(*GLOSS_USB_ID):
         path = d["path"].decode() if isinstance(d["path"], bytes) else str(d["path"])
-        out.append(DeviceCandidate(f"gloss@hid:{path}", "gloss", "hid",
-                                   f"{d.get('manufacturer_string') or ''} {d.get('product_string') or ''}".strip()))
+        out.append(
+            DeviceCandidate(
+                f"gloss@hid:{path}",
+                "gloss",
+                "hid",
+                f"{d.get('manufacturer_string') or ''} {d.get('product_string') or ''}".strip(),
+            )
+        )
     return out
 
 
@@ -71,14 +84,19 @@ def list_devices(
     """Return ``(candidates, notes)``; notes say which lookups could not run and why."""
     found: list[DeviceCandidate] = []
     notes: list[str] = []
-    for name, fn in (("serial", _serial), ("usb", lambda: _usb(usb_backend)),
-                     ("hid", lambda: _hid(hid_enumerate))):
+    for name, fn in (
+        ("serial", _serial),
+        ("usb", lambda: _usb(usb_backend)),
+        ("hid", lambda: _hid(hid_enumerate)),
+    ):
         try:
             found += fn()
         except Exception as exc:  # a missing libusb/hidraw must not hide the other buses
             notes.append(f"{name}: {type(exc).__name__}: {exc}")
-    for kind, what in (("ma6", "simulated 6-angle spectro (ASCII serial)"),
-                       ("ma3", "simulated 3-angle spectro (binary frames)"),
-                       ("gloss", "simulated 20/60/85 gloss meter (HID reports)")):
+    for kind, what in (
+        ("ma6", "simulated 6-angle spectro (ASCII serial)"),
+        ("ma3", "simulated 3-angle spectro (binary frames)"),
+        ("gloss", "simulated 20/60/85 gloss meter (HID reports)"),
+    ):
         found.append(DeviceCandidate(f"sim:{kind}", kind, "simulator", what))
     return found, notes

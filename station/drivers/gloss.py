@@ -59,7 +59,9 @@ def xor8(data: bytes) -> int:
     return x
 
 
-def hid_path_for(text: str, enumerate_fn: Callable[[int, int], Sequence[dict[str, Any]]] | None = None) -> bytes:
+def hid_path_for(
+    text: str, enumerate_fn: Callable[[int, int], Sequence[dict[str, Any]]] | None = None
+) -> bytes:
     """Resolve ``VID:PID`` (hex) to the first enumerated hidapi path, or take *text* as a path."""
     parts = text.split(":")
     if len(parts) == 2 and all(len(p) == 4 for p in parts):
@@ -86,8 +88,13 @@ class GlossMeter(Instrument):
     family = "gloss"
     kind = "gloss"
 
-    def __init__(self, transport: ReportTransport, timeout_s: float = 1.0, retries: int = 2,
-                 measure_limit_s: float = 5.0) -> None:
+    def __init__(
+        self,
+        transport: ReportTransport,
+        timeout_s: float = 1.0,
+        retries: int = 2,
+        measure_limit_s: float = 5.0,
+    ) -> None:
         super().__init__(transport)
         self.transport: ReportTransport = transport
         self.timeout_s = timeout_s
@@ -120,15 +127,21 @@ class GlossMeter(Instrument):
         with self._lock:
             _, serial, _, needed, counter, *_std, expires = self._feature()
         sn = serial.rstrip(b"\0").decode()
-        return CalibrationStatus("gloss" if needed else None, f"CAL-{sn}-{counter:04d}",
-                                 dt.datetime.fromtimestamp(expires, dt.UTC) if expires else None)
+        return CalibrationStatus(
+            "gloss" if needed else None,
+            f"CAL-{sn}-{counter:04d}",
+            dt.datetime.fromtimestamp(expires, dt.UTC) if expires else None,
+        )
 
     def set_standard(self, gloss_gu: Sequence[float]) -> None:
         """Load the certified 20/60/85° values of the calibration standard (feature report 0x04)."""
         vals = [float(v) for v in gloss_gu]
-        if len(vals) != 3 or not all(math.isfinite(v) and 0 < v <= GU_MAX[g] for v, g in zip(vals, GEOMETRIES,
-                                                                                              strict=True)):
-            raise DriverInputError("standard_gu", "three finite values 0 < GU <= range at 20/60/85°", gloss_gu)
+        if len(vals) != 3 or not all(
+            math.isfinite(v) and 0 < v <= GU_MAX[g] for v, g in zip(vals, GEOMETRIES, strict=True)
+        ):
+            raise DriverInputError(
+                "standard_gu", "three finite values 0 < GU <= range at 20/60/85°", gloss_gu
+            )
         body = struct.pack("<3f", *vals).ljust(REPORT - 1, b"\0")
         with self._lock:
             self.transport.send_feature(bytes([STD_ID]) + body + bytes([xor8(body)]))
@@ -165,7 +178,8 @@ class GlossMeter(Instrument):
             left = deadline - time.monotonic()
             if left <= 0:
                 raise (StuckBusy if busy else DeviceTimeout)(
-                    f"{self.address}: no final report for command {cmd:#04x} in {limit_s:g} s")
+                    f"{self.address}: no final report for command {cmd:#04x} in {limit_s:g} s"
+                )
             raw = self.transport.read_report(REPORT + 1, min(left, self.timeout_s))
             if not raw:  # hidapi 0: timeout
                 if busy:
@@ -201,8 +215,13 @@ class GlossMeter(Instrument):
             body = self._request(CMD_CALIBRATE, self.timeout_s * 4)
         counter, *_standard_raw, expires = _CAL.unpack_from(body)
         sn = self.info.serial if self.info else "?"
-        return CalibrationResult(f"CAL-{sn}-{counter:04d}", ("standard",), None, True,
-                                 dt.datetime.fromtimestamp(expires, dt.UTC) if expires else None)
+        return CalibrationResult(
+            f"CAL-{sn}-{counter:04d}",
+            ("standard",),
+            None,
+            True,
+            dt.datetime.fromtimestamp(expires, dt.UTC) if expires else None,
+        )
 
     def measure(self) -> GlossReading:
         """Measure 20/60/85° gloss, haze, log haze, DOI and Rspec."""
@@ -217,10 +236,17 @@ class GlossMeter(Instrument):
             raise Misread(f"gloss outside the meter's range: {gloss}")
         sn = self.info.serial if self.info else "?"
         return GlossReading(
-            gloss_gu={g: round(v, 3) for g, v in gloss.items()}, haze_hu=round(haze, 3),
-            log_haze=round(log_haze, 2), doi=round(doi, 3), rspec=round(rspec, 3), serial=sn,
-            calibration_id=f"CAL-{sn}-{counter:04d}", time=dt.datetime.fromtimestamp(stamp, dt.UTC),
-            temperature_c=round(temp, 2), warnings=warn, model=self.info.model if self.info else "",
+            gloss_gu={g: round(v, 3) for g, v in gloss.items()},
+            haze_hu=round(haze, 3),
+            log_haze=round(log_haze, 2),
+            doi=round(doi, 3),
+            rspec=round(rspec, 3),
+            serial=sn,
+            calibration_id=f"CAL-{sn}-{counter:04d}",
+            time=dt.datetime.fromtimestamp(stamp, dt.UTC),
+            temperature_c=round(temp, 2),
+            warnings=warn,
+            model=self.info.model if self.info else "",
         )
 
 

@@ -101,8 +101,9 @@ class Frame:
     payload: bytes
 
 
-def encode_frame(msg: int, request_id: int, payload: bytes = b"", flags: int = Flags.ACK_REQUESTED,
-                 error: int = 0) -> bytes:
+def encode_frame(
+    msg: int, request_id: int, payload: bytes = b"", flags: int = Flags.ACK_REQUESTED, error: int = 0
+) -> bytes:
     """Build one frame: header, payload, MD5 footer."""
     head = HEADER.pack(START, VERSION, flags, error, msg, request_id, len(payload), 0)
     return head + payload + hashlib.md5(head + payload, usedforsecurity=False).digest() + END
@@ -129,8 +130,15 @@ class MA3Spectro(Instrument):
 
     family = "ma3"
 
-    def __init__(self, transport: StreamTransport, timeout_s: float = 1.0, retries: int = 2,
-                 measure_limit_s: float = 10.0, poll_period_s: float = 0.005, quiet_s: float = 0.03) -> None:
+    def __init__(
+        self,
+        transport: StreamTransport,
+        timeout_s: float = 1.0,
+        retries: int = 2,
+        measure_limit_s: float = 10.0,
+        poll_period_s: float = 0.005,
+        quiet_s: float = 0.03,
+    ) -> None:
         super().__init__(transport)
         self.timeout_s = timeout_s
         self.retries = retries
@@ -162,7 +170,7 @@ class MA3Spectro(Instrument):
         if version != VERSION or length > MAX_PAYLOAD:
             raise ProtocolError(f"bad header (version {version:#06x}, length {length})")
         body = t.read_exact(length + FOOTER_LEN, max(0.0, deadline - time.monotonic()))
-        payload, digest, end = body[:length], body[length:length + 16], body[length + 16:]
+        payload, digest, end = body[:length], body[length : length + 16], body[length + 16 :]
         if end != END:
             raise ProtocolError("bad footer")
         if hashlib.md5(head + payload, usedforsecurity=False).digest() != digest:
@@ -256,8 +264,9 @@ class MA3Spectro(Instrument):
                 de, passed, expires = _VERIFY.unpack(self.transact(Msg.CAL_VERIFY, timeout_s=slow))
             except struct.error as exc:
                 raise UnexpectedReply("CAL_VERIFY payload") from exc
-        return CalibrationResult(self._cal_id(counter), ("zero", "white", "verify"), round(de, 4),
-                                 bool(passed), _epoch(expires))
+        return CalibrationResult(
+            self._cal_id(counter), ("zero", "white", "verify"), round(de, 4), bool(passed), _epoch(expires)
+        )
 
     def measure(self) -> SpectralReading:
         """MEASURE, POLL until idle, READ_DATA (a frame with a bad checksum is read again)."""
@@ -285,11 +294,22 @@ class MA3Spectro(Instrument):
         refl = np.asarray([b[2:] for b in blocks], dtype=float)
         if warn & WARN_OUT_OF_RANGE:
             raise Misread("instrument flags the reflectance as out of range")
-        if refl.shape[1] != len(WAVELENGTHS_NM) or not np.all(np.isfinite(refl)) or refl.min() < 0 \
-                or refl.max() > R_MAX or not math.isfinite(temp):
+        if (
+            refl.shape[1] != len(WAVELENGTHS_NM)
+            or not np.all(np.isfinite(refl))
+            or refl.min() < 0
+            or refl.max() > R_MAX
+            or not math.isfinite(temp)
+        ):
             raise Misread(f"reflectance outside [0, {R_MAX}] or non-finite")
         return SpectralReading(
-            geometries=geoms, reflectance=refl, temperature_c=round(temp, 2), serial=_text(serial),
-            calibration_id=f"CAL-{_text(serial)}-{counter:04d}", time=dt.datetime.fromtimestamp(stamp, dt.UTC),
-            warnings=warn, diagnosis=diag, model=self.info.model if self.info else "",
+            geometries=geoms,
+            reflectance=refl,
+            temperature_c=round(temp, 2),
+            serial=_text(serial),
+            calibration_id=f"CAL-{_text(serial)}-{counter:04d}",
+            time=dt.datetime.fromtimestamp(stamp, dt.UTC),
+            warnings=warn,
+            diagnosis=diag,
+            model=self.info.model if self.info else "",
         )

@@ -308,8 +308,9 @@ class UsbTransport(StreamTransport):
         try:
             dev.set_configuration()
             usb.util.claim_interface(dev, self.interface)
-            ep = usb.util.find_descriptor(dev.get_active_configuration()[(self.interface, 0)],
-                                          bEndpointAddress=self.ep_in)
+            ep = usb.util.find_descriptor(
+                dev.get_active_configuration()[(self.interface, 0)], bEndpointAddress=self.ep_in
+            )
             self._packet = int(ep.wMaxPacketSize) if ep is not None else 64
         except usb.core.USBError as exc:
             usb.util.dispose_resources(dev)

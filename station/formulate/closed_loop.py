@@ -139,8 +139,13 @@ def closed_loop(
         raise FormulateInputError("max_corrections", "an integer in [0, 10]", max_corrections)
     first = formulate(design, angles, starts, gloss_gu, tolerance, db)
     base = {
-        "design_lab": _tup(design), "angles_deg": angles, "gloss_gu": gloss_gu, "tolerance": float(tolerance),
-        "start": first.start, "synthetic": db.synthetic, "initial": first,
+        "design_lab": _tup(design),
+        "angles_deg": angles,
+        "gloss_gu": gloss_gu,
+        "tolerance": float(tolerance),
+        "start": first.start,
+        "synthetic": db.synthetic,
+        "initial": first,
     }
     if not first.formulable:
         return FormulationJob(status="not_formulable", message=first.message, **base)  # type: ignore[arg-type]
@@ -152,16 +157,25 @@ def closed_loop(
         try:
             idx = [m.angles_deg.index(a) for a in angles]
         except ValueError as exc:
-            raise FormulateInputError("measurement.angles_deg", f"a superset of {angles}", m.angles_deg) from exc
+            raise FormulateInputError(
+                "measurement.angles_deg", f"a superset of {angles}", m.angles_deg
+            ) from exc
         measured = np.asarray(m.lab)[idx]
         de = cie2000(design, measured)
         predicted = predict_lab(result.concentrations, angles, db)
         steps.append(
             LoopStep(
-                number=n, kind="initial" if n == 0 else "correction", recipe=dict(result.recipe),
-                target_lab=_tup(target), predicted_lab=_tup(predicted), measured_lab=_tup(measured),
-                measured_gloss_gu=m.gloss_gu, de_per_angle=tuple(float(v) for v in de), mean_de=float(de.mean()),
-                predicted_mean_de=result.mean_de, time=dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+                number=n,
+                kind="initial" if n == 0 else "correction",
+                recipe=dict(result.recipe),
+                target_lab=_tup(target),
+                predicted_lab=_tup(predicted),
+                measured_lab=_tup(measured),
+                measured_gloss_gu=m.gloss_gu,
+                de_per_angle=tuple(float(v) for v in de),
+                mean_de=float(de.mean()),
+                predicted_mean_de=result.mean_de,
+                time=dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
             )
         )
         if de.mean() <= tolerance:

@@ -138,15 +138,20 @@ def colors_to_xml(specs: list[ColorSpec] | tuple[ColorSpec, ...]) -> bytes:
             attrs["synthetic"] = "true"
         color = ET.SubElement(root, f"{_NS}color", attrs)
         ET.SubElement(
-            color, f"{_NS}conditions",
+            color,
+            f"{_NS}conditions",
             {"illuminant": "D65", "observer": OBSERVER, "illuminationAngleDeg": "45"},
         )
         gloss = ET.SubElement(color, f"{_NS}gloss", {"geometryDeg": "60", "unit": "GU"})
         gloss.text = _fmt(spec.gloss_gu)
         for s in spec.sets:
-            ms = ET.SubElement(color, f"{_NS}measurementSet", {"angles": " ".join(_angle(a) for a in s.angles_deg)})
+            ms = ET.SubElement(
+                color, f"{_NS}measurementSet", {"angles": " ".join(_angle(a) for a in s.angles_deg)}
+            )
             for a, (L, A, B) in zip(s.angles_deg, np.asarray(s.lab), strict=True):
-                ET.SubElement(ms, f"{_NS}lab", {"aspecularDeg": _angle(a), "L": _fmt(L), "a": _fmt(A), "b": _fmt(B)})
+                ET.SubElement(
+                    ms, f"{_NS}lab", {"aspecularDeg": _angle(a), "L": _fmt(L), "a": _fmt(A), "b": _fmt(B)}
+                )
     ET.indent(root, "  ")
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True) + b"\n"
 
@@ -202,9 +207,13 @@ def read_color_xml(source: str | Path | bytes) -> list[ColorSpec]:
         if cond is None:
             raise XMLFormatError(f"{where}/conditions", "a <conditions> element", None)
         if cond.get("illuminant") != "D65" or cond.get("observer") != OBSERVER:
-            raise XMLFormatError(f"{where}/conditions", f"illuminant D65, observer {OBSERVER}", dict(cond.attrib))
+            raise XMLFormatError(
+                f"{where}/conditions", f"illuminant D65, observer {OBSERVER}", dict(cond.attrib)
+            )
         if cond.get("illuminationAngleDeg") not in ("45", "45.0"):
-            raise XMLFormatError(f"{where}/conditions@illuminationAngleDeg", "45", cond.get("illuminationAngleDeg"))
+            raise XMLFormatError(
+                f"{where}/conditions@illuminationAngleDeg", "45", cond.get("illuminationAngleDeg")
+            )
         gloss_el = color.find(f"{_NS}gloss")
         if gloss_el is None:
             raise XMLFormatError(f"{where}/gloss", "one <gloss> element (60°, GU)", None)
@@ -238,7 +247,9 @@ def read_color_xml(source: str | Path | bytes) -> list[ColorSpec]:
             try:
                 sets.append(AspecularMeasurements(angles, lab, gloss))
             except ValueError as exc:
-                raise XMLFormatError(swhere, "strictly increasing aspecular angles", angles, str(exc)) from exc
+                raise XMLFormatError(
+                    swhere, "strictly increasing aspecular angles", angles, str(exc)
+                ) from exc
         if not sets:
             raise XMLFormatError(f"{where}/measurementSet", "at least one set", 0)
         specs.append(

@@ -179,7 +179,9 @@ def write_library_cxf(library: Library, path: str | Path) -> Path:
 def read_library_cxf(source: str | Path | bytes, name: str | None = None) -> Library:
     """Read a CxF3 library: every object needs Lab at 15/45/110 and the same angle set as the others."""
     recs = read_cxf_records(source)
-    description = (parse_xml(source, MAX_CXF_BYTES).findtext(f"{_NS}FileInformation/{_NS}Description") or "").strip()
+    description = (
+        parse_xml(source, MAX_CXF_BYTES).findtext(f"{_NS}FileInformation/{_NS}Description") or ""
+    ).strip()
     angles0 = sorted(recs[0][1])
     order = list(STANDARD_ANGLES) + [a for a in angles0 if a not in STANDARD_ANGLES]
     codes, types, gloss, labs = [], [], [], []
@@ -200,8 +202,13 @@ def read_library_cxf(source: str | Path | bytes, name: str | None = None) -> Lib
     synthetic = all(tags.get("cacad.synthetic") == "true" for _, _, tags in recs)
     return Library(
         name=name or description or ("cxf library (SYNTHETIC)" if synthetic else "cxf library"),
-        codes=np.asarray(codes), types=np.asarray(types), gloss_gu=np.asarray(gloss),
-        angles_deg=tuple(order), lab=np.asarray(labs), synthetic=synthetic, source="cxf3",
+        codes=np.asarray(codes),
+        types=np.asarray(types),
+        gloss_gu=np.asarray(gloss),
+        angles_deg=tuple(order),
+        lab=np.asarray(labs),
+        synthetic=synthetic,
+        source="cxf3",
     )
 
 
@@ -252,7 +259,14 @@ def read_cxf_specs(source: str | Path | bytes) -> list[ColorSpec]:
         if kind is not None and kind not in PAINT_TYPES:
             raise XMLFormatError(f"Object[{name}]/Tag cacad.type", " | ".join(PAINT_TYPES), kind)
         out.append(
-            ColorSpec(name, tags.get("cacad.role", "measured"), gloss, tuple(sets), kind,
-                      tags.get("cacad.code"), tags.get("cacad.synthetic") == "true")
+            ColorSpec(
+                name,
+                tags.get("cacad.role", "measured"),
+                gloss,
+                tuple(sets),
+                kind,
+                tags.get("cacad.code"),
+                tags.get("cacad.synthetic") == "true",
+            )
         )
     return out

@@ -37,8 +37,12 @@ def cie2000(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.
 
 
 def cie2000_columns(
-    L_1: NDArray[np.float64], a_1: NDArray[np.float64], b_1: NDArray[np.float64],
-    L_2: NDArray[np.float64], a_2: NDArray[np.float64], b_2: NDArray[np.float64],
+    L_1: NDArray[np.float64],
+    a_1: NDArray[np.float64],
+    b_1: NDArray[np.float64],
+    L_2: NDArray[np.float64],
+    a_2: NDArray[np.float64],
+    b_2: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """:func:`cie2000` from the L*, a*, b* columns (which broadcast); contiguous columns are fastest.
 
@@ -76,7 +80,8 @@ def cie2000_columns(
     # colour: np.select([C=0, |Δ| ≤ 180, Δ > 180, Δ < −180], [0, Δ, Δ − 360, Δ + 360]); for a non-NaN Δ
     # in (−360, 360) the last two conditions are exclusive, and NaN gives NaN either way
     delta_h_p = np.where(
-        zero, 0,
+        zero,
+        0,
         np.where(a_h_p_1_s_2 <= 180, h_p_2_s_1, np.where(h_p_2_s_1 > 180, h_p_2_s_1 - 360, h_p_2_s_1 + 360)),
     )
     delta_H_p = 2 * np.sqrt(C_p_1_m_2) * np.sin(np.deg2rad(delta_h_p / 2))
@@ -84,9 +89,13 @@ def cie2000_columns(
     C_bar_p = (C_p_1 + C_p_2) / 2
     h_p_1_a_2 = h_p_1 + h_p_2
     h_bar_p = np.where(
-        zero, h_p_1_a_2,
-        np.where(a_h_p_1_s_2 <= 180, h_p_1_a_2 / 2,
-                 np.where(h_p_1_a_2 < 360, (h_p_1_a_2 + 360) / 2, (h_p_1_a_2 - 360) / 2)),
+        zero,
+        h_p_1_a_2,
+        np.where(
+            a_h_p_1_s_2 <= 180,
+            h_p_1_a_2 / 2,
+            np.where(h_p_1_a_2 < 360, (h_p_1_a_2 + 360) / 2, (h_p_1_a_2 - 360) / 2),
+        ),
     )
     T = (
         1

@@ -53,7 +53,9 @@ def generate_recipes(
 
     solid = np.arange(n_solid)
     add_tints(solid, 2, 0.12, min_count=1)
-    c[solid, col["white_tio2"]] = np.where(rng.random(solid.size) < 0.85, rng.uniform(0.0, 0.35, solid.size), 0)
+    c[solid, col["white_tio2"]] = np.where(
+        rng.random(solid.size) < 0.85, rng.uniform(0.0, 0.35, solid.size), 0
+    )
     blk = rng.random(solid.size) < 0.3
     c[solid[blk], col["black_carbon"]] = rng.uniform(0.0, 0.02, blk.sum()) ** 1.5 * 5
     neutral = rng.random(solid.size) < 0.12
@@ -67,7 +69,9 @@ def generate_recipes(
     c[met[blk], col["black_carbon"]] = rng.uniform(0.0, 0.01, blk.sum())
 
     prl = np.arange(n_solid + n_metallic, n)
-    effects = [col[e] for e in ("pearl_white", "interference_blue", "interference_green", "interference_gold")]
+    effects = [
+        col[e] for e in ("pearl_white", "interference_blue", "interference_green", "interference_gold")
+    ]
     eff = np.asarray(effects)[rng.integers(0, 4, size=prl.size)]
     c[prl, eff] = rng.uniform(0.03, 0.15, prl.size)
     add_tints(prl, 1, 0.06)
@@ -111,8 +115,9 @@ def generate_library(
     gloss = predict_gloss(c, db)
     codes = _codes(types, lab[:, angles_deg.index(45.0)])
     return Library(
-        name=DEMO_NAME if (n_solid, n_metallic, n_pearl, seed) == (3000, 2000, 1000, DEMO_SEED) else
-        f"synthetic (seed {seed}, {len(types)} paints)",
+        name=DEMO_NAME
+        if (n_solid, n_metallic, n_pearl, seed) == (3000, 2000, 1000, DEMO_SEED)
+        else f"synthetic (seed {seed}, {len(types)} paints)",
         codes=codes,
         types=types,
         gloss_gu=gloss,
@@ -131,8 +136,20 @@ def _model_key() -> str:
 
     h = hashlib.sha1(usedforsecurity=False)
     for c in default_database().colorants:
-        h.update(repr((c.name, c.family, c.lobe_width_deg, c.lobe_power, c.lobe_floor, c.peak_nm, c.band_nm,
-                       c.max_fraction)).encode())
+        h.update(
+            repr(
+                (
+                    c.name,
+                    c.family,
+                    c.lobe_width_deg,
+                    c.lobe_power,
+                    c.lobe_floor,
+                    c.peak_nm,
+                    c.band_nm,
+                    c.max_fraction,
+                )
+            ).encode()
+        )
         h.update(np.ascontiguousarray(c.k).tobytes())
         h.update(np.ascontiguousarray(c.s).tobytes())
     return h.hexdigest()[:10]
@@ -151,9 +168,15 @@ def demo_library() -> Library:
         try:
             z = np.load(path, allow_pickle=False)
             return Library(
-                name=DEMO_NAME, codes=z["codes"], types=z["types"], gloss_gu=z["gloss_gu"],
-                angles_deg=tuple(z["angles_deg"].tolist()), lab=z["lab"], synthetic=True,
-                recipes=z["recipes"], colorant_names=tuple(z["colorant_names"].tolist()),
+                name=DEMO_NAME,
+                codes=z["codes"],
+                types=z["types"],
+                gloss_gu=z["gloss_gu"],
+                angles_deg=tuple(z["angles_deg"].tolist()),
+                lab=z["lab"],
+                synthetic=True,
+                recipes=z["recipes"],
+                colorant_names=tuple(z["colorant_names"].tolist()),
                 source=str(z["source"]),
             )
         except (OSError, KeyError, ValueError):
@@ -162,9 +185,17 @@ def demo_library() -> Library:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".tmp.npz")
-        np.savez(tmp, codes=lib.codes, types=lib.types, gloss_gu=lib.gloss_gu,
-                 angles_deg=np.asarray(lib.angles_deg), lab=lib.lab, recipes=lib.recipes,
-                 colorant_names=np.asarray(lib.colorant_names), source=np.asarray(lib.source))
+        np.savez(
+            tmp,
+            codes=lib.codes,
+            types=lib.types,
+            gloss_gu=lib.gloss_gu,
+            angles_deg=np.asarray(lib.angles_deg),
+            lab=lib.lab,
+            recipes=lib.recipes,
+            colorant_names=np.asarray(lib.colorant_names),
+            source=np.asarray(lib.source),
+        )
         os.replace(tmp, path)
     except OSError:
         pass  # a read-only home only costs the regeneration time next run

@@ -113,14 +113,18 @@ def matting_for_gloss(gloss_gu: float, db: ColorantDatabase) -> tuple[float, str
         return 0.0, f"gloss {gloss_gu:g} GU is above the clear coat's {GLOSS_CLEAR_GU:g} GU; using full gloss"
     if c > ub:
         g_min = GLOSS_CLEAR_GU - GLOSS_PER_MATTING * ub
-        return float(ub), f"gloss {gloss_gu:g} GU is below the reachable {g_min:.1f} GU; using the most matting"
+        return float(
+            ub
+        ), f"gloss {gloss_gu:g} GU is below the reachable {g_min:.1f} GU; using the most matting"
     return float(c), None
 
 
 class _Objective:
     """Σ ΔE00² to the design, with the batched forward-difference gradient; counts evaluations."""
 
-    def __init__(self, design: NDArray, angles: tuple[float, ...], db: ColorantDatabase, free: NDArray, fixed: NDArray):
+    def __init__(
+        self, design: NDArray, angles: tuple[float, ...], db: ColorantDatabase, free: NDArray, fixed: NDArray
+    ):
         self.design = design
         self.angles = angles
         self.db = db
@@ -179,9 +183,14 @@ def _generic_starts(db: ColorantDatabase, design: NDArray, angles: tuple[float, 
     names = db.names
     idx = {n: i for i, n in enumerate(names)}
     tints = [c.name for c in db.colorants if c.family == "tint"]
-    bases: list[dict[str, float]] = [{"white_tio2": 0.05}, {"white_tio2": 0.15}, {"alu_coarse": 0.08},
-                                     {"alu_fine": 0.08}, {"alu_coarse": 0.04, "alu_fine": 0.04},
-                                     {"pearl_white": 0.08}]
+    bases: list[dict[str, float]] = [
+        {"white_tio2": 0.05},
+        {"white_tio2": 0.15},
+        {"alu_coarse": 0.08},
+        {"alu_fine": 0.08},
+        {"alu_coarse": 0.04, "alu_fine": 0.04},
+        {"pearl_white": 0.08},
+    ]
     bases += [{c.name: 0.08} for c in db.colorants if c.family == "interference"]
     mixes = [[t] for t in tints] + [[tints[k], tints[(k + 1) % len(tints)]] for k in range(len(tints))] + [[]]
     pool = []
@@ -261,18 +270,28 @@ def formulate(
     deadline = t0 + max(time_budget_s, 0.05) * 1.15
 
     def stop(intermediate_result: object) -> None:  # SciPy's new-style callback: this exact parameter name
-        if objective.value(np.asarray(intermediate_result.x)) <= good_enough or time.perf_counter() > deadline:  # type: ignore[attr-defined]
+        if (
+            objective.value(np.asarray(intermediate_result.x)) <= good_enough
+            or time.perf_counter() > deadline
+        ):  # type: ignore[attr-defined]
             raise StopIteration
 
     for label, x0 in candidates:
-        if best is not None and (time.perf_counter() - t0 > time_budget_s or best[0] <= (0.2 * tolerance) ** 2):
+        if best is not None and (
+            time.perf_counter() - t0 > time_budget_s or best[0] <= (0.2 * tolerance) ** 2
+        ):
             break
         x0 = np.clip(x0, 0.0, ub)
 
         res = minimize(
-            objective.value, x0, jac=objective.grad, method="SLSQP",
-            bounds=list(zip(np.zeros_like(ub), ub, strict=True)), constraints=constraints,
-            options={"maxiter": 150, "ftol": 1e-9}, callback=stop,
+            objective.value,
+            x0,
+            jac=objective.grad,
+            method="SLSQP",
+            bounds=list(zip(np.zeros_like(ub), ub, strict=True)),
+            constraints=constraints,
+            options={"maxiter": 150, "ftol": 1e-9},
+            callback=stop,
         )
         x = _project(res.x, ub, effect.astype(bool), db.max_effect, db.max_total - c_mat)
         f = objective.value(x)
@@ -328,7 +347,9 @@ def formulate_from_library(
         raise FormulateInputError("library", "a library with recipes (the demo library)", library.name)
     db = db or default_database()
     if tuple(library.colorant_names) != db.names:
-        raise FormulateInputError("library.colorant_names", f"the colorants {db.names}", library.colorant_names)
+        raise FormulateInputError(
+            "library.colorant_names", f"the colorants {db.names}", library.colorant_names
+        )
     design = validate_design_lab(design_lab, 3, "design_lab")
     snap = color_snap(library, design, k=k, method="cie2000", index=index)
     starts = [(m.code, library.recipes[m.index]) for m in snap.matches]

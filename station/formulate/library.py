@@ -108,7 +108,9 @@ class Library:
                 "lab", f"shape (N={n}, {len(self.angles_deg)} angles, 3)", self.lab.shape
             )
         if self.types.shape != (n,) or self.gloss_gu.shape != (n,):
-            raise FormulateInputError("types/gloss_gu", f"shape ({n},)", (self.types.shape, self.gloss_gu.shape))
+            raise FormulateInputError(
+                "types/gloss_gu", f"shape ({n},)", (self.types.shape, self.gloss_gu.shape)
+            )
         for a in STANDARD_ANGLES:
             if a not in self.angles_deg:
                 raise FormulateInputError("angles_deg", "a set containing 15, 45 and 110", self.angles_deg)

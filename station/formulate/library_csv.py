@@ -54,16 +54,22 @@ def _parse_header(header: list[str]) -> tuple[float, ...]:
         raise LibraryFormatError(1, None, "header starting code,type,gloss_gu", ",".join(header[:3]))
     rest = header[3:]
     if len(rest) % 3 or not rest:
-        raise LibraryFormatError(1, None, "Lab columns in complete L<angle>,a<angle>,b<angle> triples", len(rest))
+        raise LibraryFormatError(
+            1, None, "Lab columns in complete L<angle>,a<angle>,b<angle> triples", len(rest)
+        )
     angles: list[float] = []
     for k in range(0, len(rest), 3):
         triple = rest[k : k + 3]
         ms = [_ANGLE_COL.match(c.strip()) for c in triple]
         if not all(ms) or [m.group(1) for m in ms] != ["L", "a", "b"]:  # type: ignore[union-attr]
-            raise LibraryFormatError(1, triple[0], "a triple named L<angle>,a<angle>,b<angle>", ",".join(triple))
+            raise LibraryFormatError(
+                1, triple[0], "a triple named L<angle>,a<angle>,b<angle>", ",".join(triple)
+            )
         names = {m.group(2) for m in ms}  # type: ignore[union-attr]
         if len(names) != 1:
-            raise LibraryFormatError(1, triple[0], "the same angle in L, a and b of one triple", ",".join(triple))
+            raise LibraryFormatError(
+                1, triple[0], "the same angle in L, a and b of one triple", ",".join(triple)
+            )
         ang = float(names.pop())
         if not -90.0 < ang < 180.0:
             raise LibraryFormatError(1, triple[0], "aspecular angle in (-90, 180) degrees", ang)
@@ -124,7 +130,9 @@ def read_library_csv(source: str | Path | io.TextIOBase, name: str | None = None
             raise LibraryFormatError(rowno, None, f"at most {MAX_ROWS} rows", rowno)
         code = row[0].strip()
         if not code or len(code) > MAX_CODE_LENGTH:
-            raise LibraryFormatError(rowno, "code", f"a non-empty code of at most {MAX_CODE_LENGTH} characters", code)
+            raise LibraryFormatError(
+                rowno, "code", f"a non-empty code of at most {MAX_CODE_LENGTH} characters", code
+            )
         if code in seen:
             raise LibraryFormatError(rowno, "code", f"a unique code (first seen on row {seen[code]})", code)
         seen[code] = rowno

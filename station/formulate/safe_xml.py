@@ -61,7 +61,9 @@ def parse_xml(source: str | Path | bytes, max_bytes: int, field: str = "file") -
     try:
         root = DET.fromstring(data, forbid_dtd=True, forbid_entities=True, forbid_external=True)
     except DefusedXmlException as exc:
-        raise HostileXMLError(field, "XML without DTDs, entities or external references", type(exc).__name__) from exc
+        raise HostileXMLError(
+            field, "XML without DTDs, entities or external references", type(exc).__name__
+        ) from exc
     except ET.ParseError as exc:
         raise XMLFormatError(field, "well-formed XML", str(exc)) from exc
     count = sum(1 for _ in root.iter())

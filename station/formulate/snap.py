@@ -120,7 +120,9 @@ def validate_design_lab(lab: ArrayLike, n_angles: int = 3, field_name: str = "la
     for j, (name, (lo, hi)) in enumerate(LAB_QUERY_RANGE.items()):
         col = q[:, j]
         if not np.all(np.isfinite(col)) or np.any(col < lo) or np.any(col > hi):
-            raise FormulateInputError(f"{field_name}.{name}", f"finite {name}* in [{lo:g}, {hi:g}]", col.tolist())
+            raise FormulateInputError(
+                f"{field_name}.{name}", f"finite {name}* in [{lo:g}, {hi:g}]", col.tolist()
+            )
     return q
 
 
@@ -227,8 +229,10 @@ def _box_bounds(
         kappa = 1.0 - r_c * sin_2dt / 2.0
         s_h = 1.0 + (0.015 * _T_MAX) * cpbar
         # |ΔH'| = 2 √(C'1 C'2) |sin(Δh'/2)| ≥ 2 √(C*1 C*2,min) sin(gap/2)  (C' ≥ C*)
-        c_min = np.hypot(np.maximum(np.maximum(lo[..., 1], -hi[..., 1]), 0.0),
-                         np.maximum(np.maximum(lo[..., 2], -hi[..., 2]), 0.0))
+        c_min = np.hypot(
+            np.maximum(np.maximum(lo[..., 1], -hi[..., 1]), 0.0),
+            np.maximum(np.maximum(lo[..., 2], -hi[..., 2]), 0.0),
+        )
         h_min = 2.0 * np.sqrt(np.hypot(q[:, 1], q[:, 2]) * c_min) * np.sin(np.deg2rad(gap / 2.0))
         h2 = h_min * h_min
         chroma_hue = np.maximum(dab2 - h2, 0.0) / s_c**2 + h2 / s_h**2
@@ -267,8 +271,6 @@ def _cie2000_weight_tables() -> tuple[NDArray, NDArray, NDArray, NDArray]:
 
 
 _XL, _WL, _XC, _WAB = _cie2000_weight_tables()
-
-
 
 
 def _box_bounds_cie2000_fast(
@@ -325,8 +327,15 @@ def _point_bounds_cie2000(
     against the exact kernel with hypothesis, near-neutral and blue-region colours included).
     """
     lower2, upper2 = _pair_bounds_cie2000(
-        q[:, 0], q[:, 1], q[:, 2], np.hypot(q[:, 1], q[:, 2]), p[..., 0], p[..., 1], p[..., 2],
-        np.hypot(p[..., 1], p[..., 2]), upper,
+        q[:, 0],
+        q[:, 1],
+        q[:, 2],
+        np.hypot(q[:, 1], q[:, 2]),
+        p[..., 0],
+        p[..., 1],
+        p[..., 2],
+        np.hypot(p[..., 1], p[..., 2]),
+        upper,
     )
     lower = np.sqrt(lower2).sum(-1) * _SAFETY - 1e-10
     if not upper:
@@ -335,7 +344,14 @@ def _point_bounds_cie2000(
 
 
 def _pair_bounds_cie2000(
-    ql: NDArray, qa: NDArray, qb: NDArray, qc: NDArray, pl: NDArray, pa: NDArray, pb: NDArray, pc: NDArray,
+    ql: NDArray,
+    qa: NDArray,
+    qb: NDArray,
+    qc: NDArray,
+    pl: NDArray,
+    pa: NDArray,
+    pb: NDArray,
+    pc: NDArray,
     upper: bool = True,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
     """Lower and upper bounds of ΔE00² per pair (see :func:`_point_bounds_cie2000`), from the columns L*,
@@ -389,13 +405,25 @@ def _box_bound_one(q: NDArray, cq: NDArray, lo: NDArray, hi: NDArray, cmax: NDAr
         cp7 = cpbar**7
         r_c = 2.0 * math.sqrt(cp7 / (cp7 + k7))
         s_c = 1.0 + 0.045 * cpbar
-        total += math.sqrt(d0 * d0 / (s_l * s_l) + (1.0 - r_c * _SIN60 / 2.0) * (d1 * d1 + d2 * d2) / (s_c * s_c))
+        total += math.sqrt(
+            d0 * d0 / (s_l * s_l) + (1.0 - r_c * _SIN60 / 2.0) * (d1 * d1 + d2 * d2) / (s_c * s_c)
+        )
     return total * _SAFETY - 1e-12
 
 
 def _best_first_cie2000(
-    q: NDArray[np.float64], glo: NDArray, ghi: NDArray, gcmax: NDArray, lo: NDArray, hi: NDArray, cmax: NDArray,
-    group: int, rows: NDArray, blab: NDArray, size: int, k: int,
+    q: NDArray[np.float64],
+    glo: NDArray,
+    ghi: NDArray,
+    gcmax: NDArray,
+    lo: NDArray,
+    hi: NDArray,
+    cmax: NDArray,
+    group: int,
+    rows: NDArray,
+    blab: NDArray,
+    size: int,
+    k: int,
 ) -> tuple[NDArray[np.intp], int]:
     """Candidates of the exact CIEDE2000 top-k: every paint whose summed ΔE00 could be ≤ the k-th best.
 
@@ -514,8 +542,20 @@ def _compiled_search() -> object | None:
                     _box_bound_one = numba.njit(cache=True, nogil=True)(_box_bound_one)
                 search = numba.njit(cache=True, nogil=True)(_best_first_cie2000)
                 box, one = np.zeros((1, 1, 3)), np.zeros((1, 1))
-                search(np.zeros((1, 3)), box, box, one, box, box, one, 1, np.zeros((1, 1), dtype=np.intp),
-                       np.zeros((1, 1, 1, 3)), 1, 1)  # compile (or load from the cache) now, not mid-query
+                search(
+                    np.zeros((1, 3)),
+                    box,
+                    box,
+                    one,
+                    box,
+                    box,
+                    one,
+                    1,
+                    np.zeros((1, 1), dtype=np.intp),
+                    np.zeros((1, 1, 1, 3)),
+                    1,
+                    1,
+                )  # compile (or load from the cache) now, not mid-query
             except Exception:  # pragma: no cover - a numba that cannot compile here: the NumPy path runs
                 search = None
             _COMPILED["search"] = search
@@ -577,7 +617,9 @@ class SnapIndex:
         # columns L*, a*, b*, C*_ab per leaf, (nb, 4, width·A) contiguous: the per-paint bounds' layout
         self._cols = np.ascontiguousarray(
             np.stack([self._blab[..., 0], self._blab[..., 1], self._blab[..., 2], chroma], axis=1).reshape(
-                len(rows), 4, -1))
+                len(rows), 4, -1
+            )
+        )
         real = (rows < n)[..., None, None]
         self._lo = np.where(real, self._blab, np.inf).min(axis=1)  # (nb, A, 3)
         self._hi = np.where(real, self._blab, -np.inf).max(axis=1)
@@ -603,7 +645,9 @@ class SnapIndex:
         return _box_bounds(q, self._lo, self._hi, self._cmax, method)
 
     # -- search -------------------------------------------------------------------------------------
-    def query(self, lab: ArrayLike, k: int = 5, method: str = "cie76") -> tuple[NDArray[np.intp], NDArray, NDArray]:
+    def query(
+        self, lab: ArrayLike, k: int = 5, method: str = "cie76"
+    ) -> tuple[NDArray[np.intp], NDArray, NDArray]:
         """Return (rows, summed ΔE, ΔE per angle) of the *k* best paints, best first (exact).
 
         Ties in the sum are broken by the lower library row, as :func:`brute_force` does.
@@ -631,8 +675,11 @@ class SnapIndex:
         else:  # open the best group(s) first: enough leaves for a k-th best
             glb = _box_bounds(q, self._glo, self._ghi, self._gcmax, method)
             ng_first = min(self.n_groups, -(-first // g))
-            gsel = np.argpartition(glb, ng_first - 1)[:ng_first] if ng_first < self.n_groups else np.arange(
-                self.n_groups)
+            gsel = (
+                np.argpartition(glb, ng_first - 1)[:ng_first]
+                if ng_first < self.n_groups
+                else np.arange(self.n_groups)
+            )
             leaves = (gsel[:, None] * g + np.arange(g)).ravel()
             lb = _box_bounds(q, self._lo[leaves], self._hi[leaves], self._cmax[leaves], method)
         first = min(first, lb.size)
@@ -654,7 +701,9 @@ class SnapIndex:
             keep = ~np.isin(cand, sel)
             if method == "cie2000":  # cheap bound first, the hue-aware one on the survivors
                 cand = cand[keep]
-                keep = _box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method, hue=False) <= kth
+                keep = (
+                    _box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method, hue=False) <= kth
+                )
             cand = cand[keep]
             clb = _box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method)
             keep = clb <= kth
@@ -694,8 +743,9 @@ class SnapIndex:
         *qt* is :meth:`_tile` of *q*."""
         rows = self._rows[leaves].ravel()
         cols = self._cols[leaves]
-        lower2, upper2 = _pair_bounds_cie2000(qt[0], qt[1], qt[2], qt[3], cols[:, 0], cols[:, 1], cols[:, 2],
-                                              cols[:, 3])
+        lower2, upper2 = _pair_bounds_cie2000(
+            qt[0], qt[1], qt[2], qt[3], cols[:, 0], cols[:, 1], cols[:, 2], cols[:, 3]
+        )
         na = q.shape[0]
         lower = np.sqrt(lower2).reshape(-1, na).sum(-1) * _SAFETY - 1e-10
         upper = np.sqrt(upper2).reshape(-1, na).sum(-1) * (2.0 - _SAFETY) + 1e-10  # type: ignore[arg-type]
@@ -720,8 +770,18 @@ class SnapIndex:
         """Exact CIEDE2000 top-k: candidates from the compiled best-first walk (:func:`_best_first_cie2000`),
         then the exact kernel on them and the (sum, row) order of a brute-force scan."""
         rows, visited = search(  # type: ignore[operator]
-            np.ascontiguousarray(q), self._glo, self._ghi, self._gcmax, self._lo, self._hi, self._cmax, self.group, self._rows,
-            self._blab, self.size, k,
+            np.ascontiguousarray(q),
+            self._glo,
+            self._ghi,
+            self._gcmax,
+            self._lo,
+            self._hi,
+            self._cmax,
+            self.group,
+            self._rows,
+            self._blab,
+            self.size,
+            k,
         )
         n, na = rows.size, q.shape[0]
         pc = self._lab_t[:, rows].reshape(3, -1)
@@ -796,8 +856,17 @@ class SnapIndex:
         if rows.size > _REFINE_ABOVE:  # the sharper per-paint bound first when the cheap one left many
             pc = self._lab_t[:, rows]
             chroma = np.hypot(pc[1], pc[2])
-            lower2, _ = _pair_bounds_cie2000(q[:, 0], q[:, 1], q[:, 2], np.hypot(q[:, 1], q[:, 2]), pc[0], pc[1],
-                                             pc[2], chroma, upper=False)
+            lower2, _ = _pair_bounds_cie2000(
+                q[:, 0],
+                q[:, 1],
+                q[:, 2],
+                np.hypot(q[:, 1], q[:, 2]),
+                pc[0],
+                pc[1],
+                pc[2],
+                chroma,
+                upper=False,
+            )
             rows = rows[np.sqrt(lower2).sum(-1) * _SAFETY - 1e-10 <= u]
         n, na = rows.size, q.shape[0]
         pc = self._lab_t[:, rows].reshape(3, -1)
@@ -809,7 +878,13 @@ class SnapIndex:
         return rows[top], s[top], per[top]
 
     def _evaluate(
-        self, kernel: object, q: NDArray[np.float64], buckets: NDArray[np.intp], kth: float, k: int, method: str
+        self,
+        kernel: object,
+        q: NDArray[np.float64],
+        buckets: NDArray[np.intp],
+        kth: float,
+        k: int,
+        method: str,
     ) -> tuple[NDArray, NDArray, NDArray]:
         """Exact ΔE of the real paints in *buckets* that could be within *kth*: (rows, sums, per-angle)."""
         rows = self._rows[buckets].ravel()
@@ -849,7 +924,10 @@ class SnapIndex:
         )
         q = np.asarray(lab, dtype=np.float64)
         return SnapResult(
-            matches, method, self.angles_deg, tuple(tuple(float(v) for v in row) for row in q),
+            matches,
+            method,
+            self.angles_deg,
+            tuple(tuple(float(v) for v in row) for row in q),
             stats={"leaves_visited": self.last_visited, "leaves": self.n_buckets},
         )
 
@@ -958,8 +1036,12 @@ def color_snap(
     index = index or SnapIndex(library)
     result = index.snap(lab, k, method)
     return SnapResult(
-        result.matches, result.method, result.angles_deg, result.design_lab,
-        snap_warnings(library, result), result.stats,
+        result.matches,
+        result.method,
+        result.angles_deg,
+        result.design_lab,
+        snap_warnings(library, result),
+        result.stats,
     )
 
 
@@ -980,6 +1062,10 @@ def view_data(
         "angles_deg": list(result.angles_deg),
         "design": [list(r) for r in result.design_lab],
         "matches": [{"code": m.code, "lab": std[m.index].tolist()} for m in result.matches],
-        "cloud": {"lab": std[rows, i45].tolist(), "codes": library.codes[rows].tolist(), "sampled": n > max_cloud},
+        "cloud": {
+            "lab": std[rows, i45].tolist(),
+            "codes": library.codes[rows].tolist(),
+            "sampled": n > max_cloud,
+        },
         "synthetic": library.synthetic,
     }

@@ -26,14 +26,30 @@ def plot_snap_view(view: dict, out: str | Path, title: str = "") -> Path:
     ax = fig.add_subplot(projection="3d")
     if cloud.size:
         rgb = np.clip(srgb_encode(np.clip(lab_to_linear_srgb(cloud), 0.0, 1.0)), 0.0, 1.0)
-        ax.scatter(cloud[:, 1], cloud[:, 2], cloud[:, 0], c=rgb, s=4, alpha=0.35, depthshade=False,
-                   label="library (45°)" + (" — SYNTHETIC" if view.get("synthetic") else ""))
+        ax.scatter(
+            cloud[:, 1],
+            cloud[:, 2],
+            cloud[:, 0],
+            c=rgb,
+            s=4,
+            alpha=0.35,
+            depthshade=False,
+            label="library (45°)" + (" — SYNTHETIC" if view.get("synthetic") else ""),
+        )
     design = np.asarray(view["design"], dtype=float)
     ax.plot(design[:, 1], design[:, 2], design[:, 0], "-o", color="black", lw=2, ms=6, label="design 15→110°")
     for i, m in enumerate(view["matches"][:3]):
         lab = np.asarray(m["lab"], dtype=float)
-        ax.plot(lab[:, 1], lab[:, 2], lab[:, 0], "--s", lw=1.5 if i else 2, ms=4 if i else 5,
-                color=("tab:red", "tab:orange", "tab:olive")[i], label=f"match {i + 1}: {m['code']}")
+        ax.plot(
+            lab[:, 1],
+            lab[:, 2],
+            lab[:, 0],
+            "--s",
+            lw=1.5 if i else 2,
+            ms=4 if i else 5,
+            color=("tab:red", "tab:orange", "tab:olive")[i],
+            label=f"match {i + 1}: {m['code']}",
+        )
     ax.set_xlabel("a*")
     ax.set_ylabel("b*")
     ax.set_zlabel("L*")

@@ -89,5 +89,7 @@ class SprayOutModel:
         self.panels += 1
         lab = self.true_lab(c) + self._rng.normal(0.0, self.lab_noise, (len(self.angles_deg), 3))
         lab[:, 0] = np.clip(lab[:, 0], 0.0, None)
-        gloss = float(np.clip(predict_gloss(c, self.true_db) + self._rng.normal(0.0, self.gloss_noise), 0, 100))
+        gloss = float(
+            np.clip(predict_gloss(c, self.true_db) + self._rng.normal(0.0, self.gloss_noise), 0, 100)
+        )
         return AspecularMeasurements(self.angles_deg, lab, gloss)

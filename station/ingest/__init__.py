@@ -11,7 +11,17 @@ from station.ingest.schema import CalibrationRef, InstrumentRef, Reading
 from station.ingest.store import StoreResult, store_reading
 
 __all__ = [
-    "CalibrationRef", "ClientIdConflictError", "IngestError", "Ingestor", "InstrumentRef", "Outbox",
-    "OutboxEntry", "Reading", "Receipt", "ReferenceNotFoundError", "StoreResult", "is_unreachable",
+    "CalibrationRef",
+    "ClientIdConflictError",
+    "IngestError",
+    "Ingestor",
+    "InstrumentRef",
+    "Outbox",
+    "OutboxEntry",
+    "Reading",
+    "Receipt",
+    "ReferenceNotFoundError",
+    "StoreResult",
+    "is_unreachable",
     "store_reading",
 ]

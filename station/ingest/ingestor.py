@@ -76,10 +76,17 @@ class Ingestor:
         with self._sessions.begin() as session:
             result = store_reading(session, reading, instrument_cache=self._instrument_ids)
             if result.created:  # the audit row commits with the reading (station account: no user)
-                session.execute(_AUDIT_INSERT, {
-                    "at": utcnow(), "actor_id": None, "action": "measurement.ingest", "entity": "measurement",
-                    "entity_id": str(result.measurement_id),
-                    "detail": {"client_id": str(reading.client_id), "operator": reading.operator}})
+                session.execute(
+                    _AUDIT_INSERT,
+                    {
+                        "at": utcnow(),
+                        "actor_id": None,
+                        "action": "measurement.ingest",
+                        "entity": "measurement",
+                        "entity_id": str(result.measurement_id),
+                        "detail": {"client_id": str(reading.client_id), "operator": reading.operator},
+                    },
+                )
         status: Literal["stored", "duplicate"] = "stored" if result.created else "duplicate"
         return Receipt(str(reading.client_id), status, result.measurement_id)
 

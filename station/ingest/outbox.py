@@ -65,7 +65,8 @@ class Outbox:
         """Append a reading (durable on return); a client id already queued is left as it is."""
         now = dt.datetime.now(dt.UTC).isoformat()
         self._conn.execute(
-            "INSERT OR IGNORE INTO outbox (client_id, body, queued_at) VALUES (?, ?, ?)", (client_id, body, now)
+            "INSERT OR IGNORE INTO outbox (client_id, body, queued_at) VALUES (?, ?, ?)",
+            (client_id, body, now),
         )
 
     def entries(self) -> Iterator[OutboxEntry]:

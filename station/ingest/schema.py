@@ -16,7 +16,9 @@ from typing import Annotated, Literal
 
 from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, model_validator
 
-Angle = Annotated[float, Field(gt=-90.0, lt=180.0, allow_inf_nan=False, description="aspecular angle, degrees")]
+Angle = Annotated[
+    float, Field(gt=-90.0, lt=180.0, allow_inf_nan=False, description="aspecular angle, degrees")
+]
 LabTriple = Annotated[
     list[Annotated[float, Field(ge=-200.0, le=200.0, allow_inf_nan=False)]],
     Field(min_length=3, max_length=3, description="[L*, a*, b*]"),
@@ -59,17 +61,19 @@ class Reading(BaseModel):
     model_config = ConfigDict(
         extra="forbid",
         json_schema_extra={
-            "examples": [{
-                "client_id": "5b0c8a54-3f7e-4f56-9a53-0d1f4c1f7a10",
-                "instrument": {"serial": "SIM-MA-0001", "model": "MA-98 simulator", "kind": "multiangle"},
-                "panel_id": None,
-                "operator": "ana",
-                "measured_at": "2026-11-23T08:30:00Z",
-                "geometries_deg": [15.0, 45.0, 110.0],
-                "lab": [[82.1, -1.2, -18.5], [55.3, -0.4, -12.0], [31.9, 0.8, -6.2]],
-                "gloss_gu": 88.0,
-                "gloss_geometry_deg": 60,
-            }]
+            "examples": [
+                {
+                    "client_id": "5b0c8a54-3f7e-4f56-9a53-0d1f4c1f7a10",
+                    "instrument": {"serial": "SIM-MA-0001", "model": "MA-98 simulator", "kind": "multiangle"},
+                    "panel_id": None,
+                    "operator": "ana",
+                    "measured_at": "2026-11-23T08:30:00Z",
+                    "geometries_deg": [15.0, 45.0, 110.0],
+                    "lab": [[82.1, -1.2, -18.5], [55.3, -0.4, -12.0], [31.9, 0.8, -6.2]],
+                    "gloss_gu": 88.0,
+                    "gloss_geometry_deg": 60,
+                }
+            ]
         },
     )
 
@@ -84,12 +88,17 @@ class Reading(BaseModel):
     geometries_deg: Annotated[list[Angle], Field(min_length=1, max_length=MAX_GEOMETRIES)]
     lab: Annotated[list[LabTriple], Field(min_length=1, max_length=MAX_GEOMETRIES)]
     wavelengths_nm: (
-        Annotated[list[Annotated[float, Field(ge=300.0, le=1100.0)]], Field(min_length=2, max_length=MAX_WAVELENGTHS)]
+        Annotated[
+            list[Annotated[float, Field(ge=300.0, le=1100.0)]],
+            Field(min_length=2, max_length=MAX_WAVELENGTHS),
+        ]
         | None
     ) = None
     spectra: (
-        Annotated[list[Annotated[list[Reflectance], Field(max_length=MAX_WAVELENGTHS)]],
-                  Field(max_length=MAX_GEOMETRIES)]
+        Annotated[
+            list[Annotated[list[Reflectance], Field(max_length=MAX_WAVELENGTHS)]],
+            Field(max_length=MAX_GEOMETRIES),
+        ]
         | None
     ) = None
     gloss_gu: Annotated[float, Field(ge=0.0, le=2000.0, allow_inf_nan=False)] | None = None
@@ -99,8 +108,10 @@ class Reading(BaseModel):
     @model_validator(mode="after")
     def _consistent(self) -> Reading:
         if len(self.lab) != len(self.geometries_deg):
-            raise ValueError(f"lab: expected one [L*, a*, b*] per geometry ({len(self.geometries_deg)}), "
-                             f"got {len(self.lab)}")
+            raise ValueError(
+                f"lab: expected one [L*, a*, b*] per geometry ({len(self.geometries_deg)}), "
+                f"got {len(self.lab)}"
+            )
         if len(set(self.geometries_deg)) != len(self.geometries_deg):
             raise ValueError("geometries_deg: expected distinct angles")
         if (self.spectra is None) != (self.wavelengths_nm is None):

@@ -30,6 +30,7 @@ class StoreResult:
     measurement_id: int
     created: bool
 
+
 def _insert(session: Session, table: Table) -> Any:
     dialect = session.get_bind().dialect.name
     if dialect == "postgresql":
@@ -38,6 +39,7 @@ def _insert(session: Session, table: Table) -> Any:
         return sqlite.insert(table)
     raise NotImplementedError(f"ingest supports sqlite and postgresql, not {dialect}")
 
+
 def _instrument_id(session: Session, reading: Reading, cache: dict[str, int] | None) -> int:
     ref = reading.instrument
     if cache is not None and ref.serial in cache:
@@ -45,8 +47,13 @@ def _instrument_id(session: Session, reading: Reading, cache: dict[str, int] | N
     table = Instrument.__table__
     session.execute(
         _insert(session, table)
-        .values(serial=ref.serial, model=ref.model, kind=ref.kind, firmware=ref.firmware,
-                created_at=reading.measured_at)
+        .values(
+            serial=ref.serial,
+            model=ref.model,
+            kind=ref.kind,
+            firmware=ref.firmware,
+            created_at=reading.measured_at,
+        )
         .on_conflict_do_nothing(index_elements=["serial"])
     )
     instrument_id = session.scalars(select(Instrument.id).where(Instrument.serial == ref.serial)).one()
@@ -61,8 +68,15 @@ def _calibration_id(session: Session, reading: Reading, instrument_id: int) -> i
         return None
     session.execute(
         _insert(session, CalibrationRecord.__table__)
-        .values(client_id=cal.client_id, instrument_id=instrument_id, performed_at=cal.performed_at,
-                operator=reading.operator, reference=cal.reference, passed=cal.passed, result={})
+        .values(
+            client_id=cal.client_id,
+            instrument_id=instrument_id,
+            performed_at=cal.performed_at,
+            operator=reading.operator,
+            reference=cal.reference,
+            passed=cal.passed,
+            result={},
+        )
         .on_conflict_do_nothing(index_elements=["client_id"])
     )
     return session.scalars(
@@ -100,13 +114,24 @@ def store_reading(
     instrument_id = _instrument_id(session, reading, instrument_cache)
     calibration_id = _calibration_id(session, reading, instrument_id)
     values = dict(
-        client_id=reading.client_id, panel_id=reading.panel_id, instrument_id=instrument_id,
-        calibration_id=calibration_id, operator=reading.operator, measured_at=reading.measured_at,
-        illuminant=reading.illuminant, observer=reading.observer,
-        geometries_deg=list(reading.geometries_deg), lab=[list(v) for v in reading.lab],
-        wavelengths_nm=reading.wavelengths_nm, spectra=reading.spectra, gloss_gu=reading.gloss_gu,
-        gloss_geometry_deg=reading.gloss_geometry_deg, payload_sha256=sha, supersedes_id=supersedes_id,
-        correction_reason=correction_reason, created_by_id=created_by_id,
+        client_id=reading.client_id,
+        panel_id=reading.panel_id,
+        instrument_id=instrument_id,
+        calibration_id=calibration_id,
+        operator=reading.operator,
+        measured_at=reading.measured_at,
+        illuminant=reading.illuminant,
+        observer=reading.observer,
+        geometries_deg=list(reading.geometries_deg),
+        lab=[list(v) for v in reading.lab],
+        wavelengths_nm=reading.wavelengths_nm,
+        spectra=reading.spectra,
+        gloss_gu=reading.gloss_gu,
+        gloss_geometry_deg=reading.gloss_geometry_deg,
+        payload_sha256=sha,
+        supersedes_id=supersedes_id,
+        correction_reason=correction_reason,
+        created_by_id=created_by_id,
     )
 
     values["received_at"] = utcnow()
@@ -116,7 +141,9 @@ def store_reading(
         raise ReferenceNotFoundError(f"reading refused by a database constraint: {exc.orig}") from exc
     if new_id is None:  # stored before (a re-send, a replay, or a concurrent writer)
         row = session.execute(
-            select(Measurement.id, Measurement.payload_sha256).where(Measurement.client_id == reading.client_id)
+            select(Measurement.id, Measurement.payload_sha256).where(
+                Measurement.client_id == reading.client_id
+            )
         ).one()
         if row.payload_sha256 != sha:
             raise ClientIdConflictError(str(reading.client_id), row.payload_sha256, sha)

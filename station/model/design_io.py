@@ -52,7 +52,9 @@ def design_from_dict(data: Any) -> FaceFlopTravelGloss:
         Naming the missing or invalid field and the accepted range.
     """
     if not isinstance(data, dict):
-        raise ModelInputError("design", "a JSON object with face, flop, travel_deg, gloss_gu", type(data).__name__)
+        raise ModelInputError(
+            "design", "a JSON object with face, flop, travel_deg, gloss_gu", type(data).__name__
+        )
     schema = data.get("schema", SCHEMA)
     if schema != SCHEMA:
         raise ModelInputError("schema", f'"{SCHEMA}"', schema)
@@ -60,7 +62,9 @@ def design_from_dict(data: Any) -> FaceFlopTravelGloss:
         if key not in data:
             raise ModelInputError(key, "[L, a, b] (required)", None)
     if "travel_deg" not in data:
-        raise ModelInputError("travel_deg", "degrees (15 < travel <= 180) or null for a solid (required)", None)
+        raise ModelInputError(
+            "travel_deg", "degrees (15 < travel <= 180) or null for a solid (required)", None
+        )
     gloss = data.get("gloss_gu")
     name = data.get("name") or ""
     if not isinstance(name, str):

@@ -96,8 +96,16 @@ DELTA_E_METHODS: dict[str, Callable[[NDArray, NDArray], NDArray]] = {
 def validate_method(method: str) -> str:
     """Return the canonical method name or raise :class:`ModelInputError` listing the valid ones."""
     key = str(method).lower().replace(" ", "").replace("-", "").replace("_", "")
-    aliases = {"cie1976": "cie76", "deltaeab": "cie76", "ab": "cie76", "cie1994": "cie94", "de2000": "cie2000",
-               "ciede2000": "cie2000", "de00": "cie2000", "din61752": "din6175"}
+    aliases = {
+        "cie1976": "cie76",
+        "deltaeab": "cie76",
+        "ab": "cie76",
+        "cie1994": "cie94",
+        "de2000": "cie2000",
+        "ciede2000": "cie2000",
+        "de00": "cie2000",
+        "din61752": "din6175",
+    }
     key = aliases.get(key, key)
     if key not in DELTA_E_METHODS:
         raise ModelInputError("de", f"one of {', '.join(DELTA_E_METHODS)}", method)

@@ -11,7 +11,9 @@ from station.model.representations import FaceFlopTravelGloss
 SOLID_WHITE = FaceFlopTravelGloss((92.0, -0.8, 2.5), (92.0, -0.8, 2.5), None, 88.0, "Solid white")
 SILVER = FaceFlopTravelGloss((118.0, -0.9, -1.5), (28.0, -0.3, -2.8), 95.0, 90.0, "Silver metallic")
 RED_METALLIC = FaceFlopTravelGloss((52.0, 48.0, 30.0), (12.0, 22.0, 9.0), 80.0, 88.0, "Red metallic")
-HUE_SHIFT_PEARL = FaceFlopTravelGloss((70.0, -22.0, -18.0), (38.0, 14.0, -34.0), 70.0, 86.0, "Blue-violet pearl")
+HUE_SHIFT_PEARL = FaceFlopTravelGloss(
+    (70.0, -22.0, -18.0), (38.0, 14.0, -34.0), 70.0, 86.0, "Blue-violet pearl"
+)
 
 EXAMPLES: dict[str, FaceFlopTravelGloss] = {
     "solid": SOLID_WHITE,

@@ -105,7 +105,9 @@ def _least_squares_travel(angles: NDArray, lab: NDArray) -> float:
     def residual(p: NDArray) -> NDArray:
         return (_solve_for_travel(angles, lab, float(p[0]))[2] - lab).ravel()
 
-    sol = least_squares(residual, [tc0], bounds=([_TC_LOW], [TRAVEL_MAX_DEG]), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    sol = least_squares(
+        residual, [tc0], bounds=([_TC_LOW], [TRAVEL_MAX_DEG]), xtol=1e-15, ftol=1e-15, gtol=1e-15
+    )
     tc = float(sol.x[0])
     if np.sum(residual(sol.x) ** 2) > cost.min():
         tc = tc0
@@ -167,7 +169,9 @@ def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
         elif np.ptp(lab[:, 0]) == 0.0:
             warnings.append("L* identical at every angle: travel fitted from a*, b* alone")
         else:
-            warnings.append("no monotone clamped quadratic passes through L*: least-squares fit, see residual")
+            warnings.append(
+                "no monotone clamped quadratic passes through L*: least-squares fit, see residual"
+            )
     if tc is None:
         tc = _least_squares_travel(angles, lab)
     distinct = np.unique(np.abs(angles))  # the model sees the unsigned angle from specular
@@ -190,7 +194,9 @@ def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
         warnings.append("flop brighter than face (L*): retroreflective or inverted travel")
     residual = np.linalg.norm(model - lab, axis=1)
     lo, hi = np.array([0.0, -150.0, -150.0]), np.array([200.0, 150.0, 150.0])
-    if np.any(np.concatenate([face, flop]) < np.tile(lo, 2)) or np.any(np.concatenate([face, flop]) > np.tile(hi, 2)):
+    if np.any(np.concatenate([face, flop]) < np.tile(lo, 2)) or np.any(
+        np.concatenate([face, flop]) > np.tile(hi, 2)
+    ):
         raise FitError(
             "lab: the fitted face or flop falls outside L* 0–200, |a*|, |b*| <= 150; "
             f"face={np.round(face, 3).tolist()}, flop={np.round(flop, 3).tolist()}"

@@ -115,7 +115,9 @@ def _direction(theta: NDArray, u: NDArray, v: NDArray) -> NDArray:
 
 
 @cache
-def _geometry_nodes(geometry_deg: int, n_phi: int = 192, n_src: tuple[int, int] = (3, 5)) -> dict[str, NDArray]:
+def _geometry_nodes(
+    geometry_deg: int, n_phi: int = 192, n_src: tuple[int, int] = (3, 5)
+) -> dict[str, NDArray]:
     """Polar boundary distances ψ_b(φ) about each source point's mirror image, plus quadrature weights."""
     su, sv, ru, rv = (math.radians(x) / 2.0 for x in APERTURES_DEG[geometry_deg])
     theta = math.radians(geometry_deg)
@@ -250,7 +252,9 @@ def lobe_from_gloss(gloss_gu: float, coat_index: float = STANDARD_INDEX) -> Spec
     except (TypeError, ValueError) as exc:
         raise ModelInputError("gloss_gu", f"0 <= gloss_gu <= {top:.4g}", gloss_gu) from exc
     if not math.isfinite(g) or not (0.0 <= g <= top + 1e-9):
-        raise ModelInputError("gloss_gu", f"0 <= gloss_gu <= {top:.4g} (60° gloss of coat n={coat_index:g})", g)
+        raise ModelInputError(
+            "gloss_gu", f"0 <= gloss_gu <= {top:.4g} (60° gloss of coat n={coat_index:g})", g
+        )
     albedo = fresnel_unpolarised(60.0, coat_index)
 
     def gu_phong(log_n: float) -> float:

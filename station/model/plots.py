@@ -34,7 +34,11 @@ def plot_designs(designs: Sequence[FaceFlopTravelGloss], out: str | Path) -> Pat
     for i, d in enumerate(designs):
         lab = d.lab_at(theta)
         pts = d.lab_at(np.asarray(ANGLES_6))
-        colour = _swatch_rgb(d) if np.ptp(_swatch_rgb(d)) > 0.05 or _swatch_rgb(d).mean() < 0.85 else (0.4, 0.4, 0.4)
+        colour = (
+            _swatch_rgb(d)
+            if np.ptp(_swatch_rgb(d)) > 0.05 or _swatch_rgb(d).mean() < 0.85
+            else (0.4, 0.4, 0.4)
+        )
         label = d.name or f"design {i + 1}"
         for ch in range(3):
             axes[ch].plot(theta, lab[:, ch], color=colour, lw=2, label=label)
@@ -42,7 +46,9 @@ def plot_designs(designs: Sequence[FaceFlopTravelGloss], out: str | Path) -> Pat
         if d.travel_deg is not None:
             axes[0].axvline(d.travel_deg, color=colour, ls=":", lw=1)
         axes[3].plot(lab[:, 1], lab[:, 2], color=colour, lw=2)
-        axes[3].annotate("", xy=d.face[1:], xytext=d.flop[1:], arrowprops={"arrowstyle": "->", "color": colour})
+        axes[3].annotate(
+            "", xy=d.face[1:], xytext=d.flop[1:], arrowprops={"arrowstyle": "->", "color": colour}
+        )
     for ax, name in zip(axes[:3], ("L*", "a*", "b*"), strict=True):
         ax.set_xlabel("aspecular angle (°)")
         ax.set_ylabel(name)
@@ -66,4 +72,8 @@ def plot_designs(designs: Sequence[FaceFlopTravelGloss], out: str | Path) -> Pat
 if __name__ == "__main__":
     from station.model.examples import EXAMPLES
 
-    print(plot_designs(list(EXAMPLES.values()), Path(__file__).resolve().parents[2] / "docs" / "model-curves.png"))
+    print(
+        plot_designs(
+            list(EXAMPLES.values()), Path(__file__).resolve().parents[2] / "docs" / "model-curves.png"
+        )
+    )

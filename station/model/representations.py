@@ -93,7 +93,9 @@ def check_travel(value: float | None, field_name: str = "travel_deg") -> float |
         raise ModelInputError(field_name, "a number of degrees", value) from exc
     if not math.isfinite(t) or not (FACE_ANGLE_DEG < t <= TRAVEL_MAX_DEG):
         raise ModelInputError(
-            field_name, f"{FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g} (vertex above the face angle)", t
+            field_name,
+            f"{FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g} (vertex above the face angle)",
+            t,
         )
     return t
 
@@ -234,7 +236,9 @@ class ClampedQuadratic:
     def __post_init__(self) -> None:
         c = np.asarray(self.coefficients, dtype=float)
         if c.shape != (3, 3) or not np.all(np.isfinite(c)):
-            raise ModelInputError("coefficients", "a finite 3x3 array (rows L, a, b; columns a, b, c)", c.shape)
+            raise ModelInputError(
+                "coefficients", "a finite 3x3 array (rows L, a, b; columns a, b, c)", c.shape
+            )
         object.__setattr__(self, "coefficients", _freeze(c))
         object.__setattr__(self, "theta_clamp_deg", check_travel(self.theta_clamp_deg, "theta_clamp_deg"))
         object.__setattr__(self, "gloss_gu", check_gloss(self.gloss_gu))
@@ -244,7 +248,8 @@ class ClampedQuadratic:
             if tc is None:
                 if xa != 0.0 or xb != 0.0:
                     raise ModelInputError(
-                        f"coefficients[{ch}]", "constant channels (X_a = X_b = 0) when theta_clamp_deg is None"
+                        f"coefficients[{ch}]",
+                        "constant channels (X_a = X_b = 0) when theta_clamp_deg is None",
                     )
                 continue
             # eq 3.3.3: the derivative vanishes at θ_clamp for every channel.
@@ -258,7 +263,9 @@ class ClampedQuadratic:
                 )
 
     @classmethod
-    def from_coefficients(cls, coefficients: ArrayLike, gloss_gu: float = DEFAULT_GLOSS_GU) -> ClampedQuadratic:
+    def from_coefficients(
+        cls, coefficients: ArrayLike, gloss_gu: float = DEFAULT_GLOSS_GU
+    ) -> ClampedQuadratic:
         """Build from coefficients alone, deriving θ_clamp with eq 3.3.4 (from L, or a/b if L is flat)."""
         c = np.asarray(coefficients, dtype=float)
         if c.shape != (3, 3):
@@ -327,9 +334,7 @@ class AspecularMeasurements:
         object.__setattr__(self, "gloss_gu", check_gloss(self.gloss_gu, allow_none=True))
 
     @classmethod
-    def from_design(
-        cls, design: FaceFlopTravelGloss, angles_deg: Sequence[float]
-    ) -> AspecularMeasurements:
+    def from_design(cls, design: FaceFlopTravelGloss, angles_deg: Sequence[float]) -> AspecularMeasurements:
         """Evaluate a design at *angles_deg* (thesis §3.3.3: the model → industry standard values)."""
         angles = validate_angle_set(angles_deg)
         return cls(angles, design.lab_at(np.asarray(angles)), design.gloss_gu)

@@ -62,7 +62,9 @@ def whitepoint_xyz(illuminant: str = "D65", observer: str = OBSERVER_10) -> NDAr
 def _check_reflectance(reflectance: ArrayLike) -> NDArray[np.float64]:
     r = np.asarray(reflectance, dtype=float)
     if r.shape[-1:] != (WAVELENGTHS.size,):
-        raise ModelInputError("reflectance", f"shape (..., {WAVELENGTHS.size}) for 400–700 nm at 10 nm", r.shape)
+        raise ModelInputError(
+            "reflectance", f"shape (..., {WAVELENGTHS.size}) for 400–700 nm at 10 nm", r.shape
+        )
     if not np.all(np.isfinite(r)) or np.any(r < 0.0) or np.any(r > 2.0):
         raise ModelInputError("reflectance", "finite reflectance factors 0 <= R <= 2", "out-of-range values")
     return r
@@ -101,7 +103,9 @@ def _difference_operator(n: int) -> NDArray[np.float64]:
     return d
 
 
-def reflectance_from_lab(lab: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10) -> NDArray[np.float64]:
+def reflectance_from_lab(
+    lab: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10
+) -> NDArray[np.float64]:
     """Recover smooth reflectance spectra (..., 31) in [0, 1] that reproduce Lab exactly.
 
     Raises
@@ -137,7 +141,8 @@ def reflectance_from_lab(lab: ArrayLike, illuminant: str = "D65", observer: str 
             r = res.x
             if not res.success or np.max(np.abs(r @ w - xyz)) > 1e-7:
                 raise ModelInputError(
-                    f"lab[{k}]", "a colour inside the object-colour solid (reachable with 0 <= R <= 1)",
+                    f"lab[{k}]",
+                    "a colour inside the object-colour solid (reachable with 0 <= R <= 1)",
                     [round(float(v), 3) for v in flat[k]],
                 )
         out[k] = np.clip(r, 0.0, 1.0)

@@ -57,8 +57,9 @@ class WardLobe:
             raise RenderInputError("p_s", "non-negative RGB", self.p_s)
 
 
-def ward_cos(lobe: WardLobe, light: np.ndarray, normal: np.ndarray, view: np.ndarray, x: np.ndarray,
-             y: np.ndarray) -> np.ndarray:
+def ward_cos(
+    lobe: WardLobe, light: np.ndarray, normal: np.ndarray, view: np.ndarray, x: np.ndarray, y: np.ndarray
+) -> np.ndarray:
     """Grey Ward BRDF × (L·N) with P_s = 1 (eq 2.5.4), broadcasting over leading axes; 0 below horizon."""
     ln = np.sum(light * normal, axis=-1)
     vn = np.sum(view * normal, axis=-1)
@@ -68,8 +69,12 @@ def ward_cos(lobe: WardLobe, light: np.ndarray, normal: np.ndarray, view: np.nda
     hx = np.sum(h * x, axis=-1) / lobe.alpha_x
     hy = np.sum(h * y, axis=-1) / lobe.alpha_y
     hn = np.sum(h * normal, axis=-1)
-    val = (np.where(ok, ln, 0.0) / np.sqrt(np.where(ok, ln * vn, 1.0)) / (4 * np.pi * lobe.alpha_x * lobe.alpha_y)
-           * np.exp(-2.0 * (hx * hx + hy * hy) / (1.0 + hn)))
+    val = (
+        np.where(ok, ln, 0.0)
+        / np.sqrt(np.where(ok, ln * vn, 1.0))
+        / (4 * np.pi * lobe.alpha_x * lobe.alpha_y)
+        * np.exp(-2.0 * (hx * hx + hy * hy) / (1.0 + hn))
+    )
     return np.where(ok, val, 0.0)
 
 
@@ -85,7 +90,7 @@ def fit_isotropic(exponents: tuple[float, ...], alpha: float) -> np.ndarray:
     iso = WardLobe((1.0, 1.0, 1.0), alpha, alpha)
     target = ward_cos(iso, light, n, views, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
     e = np.asarray(exponents)
-    a = np.cos(asp)[:, None] ** e[None, :] * ((e + 1) / (2 * np.pi))[None, :]   # normalised lobes
+    a = np.cos(asp)[:, None] ** e[None, :] * ((e + 1) / (2 * np.pi))[None, :]  # normalised lobes
     w, _ = nnls(a * np.sin(asp + 1e-3)[:, None] ** 0.5, target * np.sin(asp + 1e-3) ** 0.5)
     if w.sum() <= 0:
         raise RenderInputError("alpha", "a slope some basis lobe can represent", alpha)
@@ -101,8 +106,9 @@ def _frames(normal: np.ndarray, hint: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return x, np.cross(normal, x)
 
 
-def render_anisotropic(scene: Scene, basis: PrefilteredBasis, lobe: WardLobe, samples: int, width: int,
-                       height: int) -> np.ndarray:
+def render_anisotropic(
+    scene: Scene, basis: PrefilteredBasis, lobe: WardLobe, samples: int, width: int, height: int
+) -> np.ndarray:
     """Linear radiance (H, W, 3) of the anisotropic gloss alone (eq 2.5.7, normalised), J = *samples*."""
     if not (isinstance(samples, int) and 1 <= samples <= 1024):
         raise RenderInputError("samples", "integer 1..1024", samples)
@@ -127,8 +133,9 @@ def render_anisotropic(scene: Scene, basis: PrefilteredBasis, lobe: WardLobe, sa
     return img.astype(np.float32)
 
 
-def ward_albedo(lobe: WardLobe, n: np.ndarray, v: np.ndarray, x: np.ndarray, y: np.ndarray,
-                grid: int = 16) -> np.ndarray:
+def ward_albedo(
+    lobe: WardLobe, n: np.ndarray, v: np.ndarray, x: np.ndarray, y: np.ndarray, grid: int = 16
+) -> np.ndarray:
     """Directional albedo ∫ f(ω, V)(N·ω) dω (P_s = 1) per row of n, v, x, y (see module doc)."""
     ps = (np.arange(grid) + 0.5) / grid * 6.0 - 3.0
     total = np.zeros(n.shape[0])

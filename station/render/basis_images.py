@@ -42,10 +42,10 @@ class BasisImages:
     basis: PrefilteredBasis
     width: int
     height: int
-    pixels: np.ndarray        # (P,) flat indices of object pixels, paint 0 first
-    split: int                # pixels[:split] carry paint 0, pixels[split:] paint 1
-    images: np.ndarray        # (3, K, P) float32: channel, image (see layout), pixel
-    n_dot_v: np.ndarray       # (P,) float32
+    pixels: np.ndarray  # (P,) flat indices of object pixels, paint 0 first
+    split: int  # pixels[:split] carry paint 0, pixels[split:] paint 1
+    images: np.ndarray  # (3, K, P) float32: channel, image (see layout), pixel
+    n_dot_v: np.ndarray  # (P,) float32
     layout: tuple[tuple[str, int], ...] = ()  # ("D", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image
     _lut_key: tuple = field(default=(), repr=False)
     _lut: np.ndarray | None = field(default=None, repr=False)
@@ -81,7 +81,7 @@ class BasisImages:
             rows = self._weight_rows(pair[k])
             ndv = self.n_dot_v[sl]
             for c in range(3):
-                ab = rows[c] @ self.images[c, :, sl]          # (2, P_k), one BLAS call
+                ab = rows[c] @ self.images[c, :, sl]  # (2, P_k), one BLAS call
                 out[c, sl] = ab[0] + ndv * ab[1]
         return out
 
@@ -103,8 +103,13 @@ class BasisImages:
         self._bg32 = np.uint32(bg[0] | (bg[1] << 8) | (bg[2] << 16) | 0xFF000000)
         self._lut_key = key
 
-    def edit_rgba(self, paints: Sequence[LobeWeights], exposure_ev: float = 0.0, curve: str = "aces",
-                  out: np.ndarray | None = None) -> np.ndarray:
+    def edit_rgba(
+        self,
+        paints: Sequence[LobeWeights],
+        exposure_ev: float = 0.0,
+        curve: str = "aces",
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Tone-mapped 8-bit sRGB frame (H, W, 4) RGBA for new weights: the fast path of a paint edit.
 
         The exposure and LUT scale are folded into the weights, so the BLAS product yields LUT indices
@@ -120,8 +125,12 @@ class BasisImages:
         frame = out.reshape(-1).view(np.uint32)
         if self._work is None:  # scratch buffers, reused: fresh large arrays cost page faults each edit
             n = self.pixels.size
-            self._work = ([np.empty((2, self.split), np.float32), np.empty((2, n - self.split), np.float32)],
-                          np.empty(n, np.int32), np.empty(n, np.uint32), np.empty(n, np.uint32))
+            self._work = (
+                [np.empty((2, self.split), np.float32), np.empty((2, n - self.split), np.float32)],
+                np.empty(n, np.int32),
+                np.empty(n, np.uint32),
+                np.empty(n, np.uint32),
+            )
             from threadpoolctl import ThreadpoolController
 
             self._blas = ThreadpoolController()
@@ -149,7 +158,9 @@ class BasisImages:
                 else:
                     np.bitwise_or(dest, code, out=dest)
 
-    def edit(self, paints: Sequence[LobeWeights], exposure_ev: float = 0.0, curve: str = "aces") -> np.ndarray:
+    def edit(
+        self, paints: Sequence[LobeWeights], exposure_ev: float = 0.0, curve: str = "aces"
+    ) -> np.ndarray:
         """Tone-mapped 8-bit sRGB frame (H, W, 3) for new weights (a view of :meth:`edit_rgba`)."""
         return self.edit_rgba(paints, exposure_ev, curve)[..., :3]
 
@@ -165,8 +176,9 @@ def image_layout(exponents, horizon: str = "lut") -> tuple[tuple[str, int], ...]
     return tuple(layout)
 
 
-def build_basis_images(scene: Scene, basis: PrefilteredBasis, width: int, height: int,
-                       gl_renderer=None, horizon: str = "lut") -> BasisImages:
+def build_basis_images(
+    scene: Scene, basis: PrefilteredBasis, width: int, height: int, gl_renderer=None, horizon: str = "lut"
+) -> BasisImages:
     """Render the basis images of one view (NumPy lookups, or GL when a GLRenderer is given).
 
     A GL renderer must have been made with the same *horizon* setting.

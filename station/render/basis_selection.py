@@ -50,8 +50,9 @@ class BasisRow:
         return self.max_error + self.mean_error
 
 
-def make_objective(brdfs: Sequence[lf.DesignedBRDF], method: str = "nnls"
-                   ) -> Callable[[NDArray[np.float64]], tuple[float, float]]:
+def make_objective(
+    brdfs: Sequence[lf.DesignedBRDF], method: str = "nnls"
+) -> Callable[[NDArray[np.float64]], tuple[float, float]]:
     """Return E ↦ (max, mean) of Error(E, B_i) over *brdfs* (exponents as an array, any order)."""
     targets = lf.targets_from_brdfs(brdfs)
     reference = lf.designed_reflectance(brdfs)
@@ -69,8 +70,12 @@ def make_objective(brdfs: Sequence[lf.DesignedBRDF], method: str = "nnls"
     return errors
 
 
-def select_bases(brdfs: Sequence[lf.DesignedBRDF], max_lobes: int = MAX_LOBES, max_evals: int = 400,
-                 log: Callable[[str], None] | None = None) -> list[BasisRow]:
+def select_bases(
+    brdfs: Sequence[lf.DesignedBRDF],
+    max_lobes: int = MAX_LOBES,
+    max_evals: int = 400,
+    log: Callable[[str], None] | None = None,
+) -> list[BasisRow]:
     """Greedy forward selection of 1..max_lobes exponents minimising eq 2.3.4 (module docstring)."""
     from scipy.optimize import minimize
 
@@ -90,22 +95,36 @@ def select_bases(brdfs: Sequence[lf.DesignedBRDF], max_lobes: int = MAX_LOBES, m
             mx, mean = errors(np.exp(np.clip(log_e, lo, hi)))
             return mx + mean + penalty
 
-        starts = sorted(((f(np.sort(np.append(current, g))), tuple(np.sort(np.append(current, g))))
-                         for g in grid), key=lambda t: t[0])[:2]
+        starts = sorted(
+            ((f(np.sort(np.append(current, g))), tuple(np.sort(np.append(current, g)))) for g in grid),
+            key=lambda t: t[0],
+        )[:2]
         best_x, best_f = np.asarray(starts[0][1]), starts[0][0]
         for _, x0 in starts:
-            res = minimize(f, np.asarray(x0), method="Nelder-Mead",
-                           options={"maxfev": max_evals, "xatol": 1e-3, "fatol": 1e-4, "adaptive": True})
+            res = minimize(
+                f,
+                np.asarray(x0),
+                method="Nelder-Mead",
+                options={"maxfev": max_evals, "xatol": 1e-3, "fatol": 1e-4, "adaptive": True},
+            )
             if res.fun < best_f:
                 best_x, best_f = res.x, float(res.fun)
         current = np.sort(np.clip(best_x, lo, hi))
         mx, mean = errors(np.exp(current))
-        row = BasisRow(m, tuple(float(x) for x in np.round(np.exp(current), 4)), mx, mean, evals,
-                       time.perf_counter() - t0)
+        row = BasisRow(
+            m,
+            tuple(float(x) for x in np.round(np.exp(current), 4)),
+            mx,
+            mean,
+            evals,
+            time.perf_counter() - t0,
+        )
         rows.append(row)
         if log is not None:
-            log(f"{m:2d} lobes  max {mx:7.3f}  mean {mean:7.3f}  f {mx + mean:7.3f}  "
-                f"E = {', '.join(f'{e:.4g}' for e in row.exponents)}  ({evals} evals, {row.seconds:.1f} s)")
+            log(
+                f"{m:2d} lobes  max {mx:7.3f}  mean {mean:7.3f}  f {mx + mean:7.3f}  "
+                f"E = {', '.join(f'{e:.4g}' for e in row.exponents)}  ({evals} evals, {row.seconds:.1f} s)"
+            )
     return rows
 
 
@@ -116,8 +135,16 @@ def table_json(rows: Sequence[BasisRow], default_lobes: int, note: str) -> dict[
         "default_lobes": default_lobes,
         "objective": "eq 2.3.4: max + mean over the design database of RMS CIEDE2000 at the sample geometries",
         "note": note,
-        "bases": [{"lobes": r.lobes, "exponents": list(r.exponents), "max_error_de": round(r.max_error, 4),
-                   "mean_error_de": round(r.mean_error, 4), "objective": round(r.objective, 4)} for r in rows],
+        "bases": [
+            {
+                "lobes": r.lobes,
+                "exponents": list(r.exponents),
+                "max_error_de": round(r.max_error, 4),
+                "mean_error_de": round(r.mean_error, 4),
+                "objective": round(r.objective, 4),
+            }
+            for r in rows
+        ],
     }
 
 
@@ -133,8 +160,12 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = ap.parse_args(argv)
     brdfs = [lf.designed_brdf(d) for d in design_database()]
     rows = select_bases(brdfs, args.max_lobes, args.max_evals, log=print)
-    doc = table_json(rows, args.default_lobes, f"{len(brdfs)} designs of station.render.design_db; "
-                     "regenerate with python -m station.render.basis_selection")
+    doc = table_json(
+        rows,
+        args.default_lobes,
+        f"{len(brdfs)} designs of station.render.design_db; "
+        "regenerate with python -m station.render.basis_selection",
+    )
     args.out.write_text(json.dumps(doc, indent=1) + "\n")
 
 

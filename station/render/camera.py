@@ -51,7 +51,11 @@ class Camera:
     def uniforms(self, width: int, height: int) -> dict[str, object]:
         """The GLSL uniforms of the ray generator (see shaders/render.frag.glsl)."""
         f, r, u = self.basis()
-        return {"u_eye": tuple(map(float, self.eye)), "u_forward": tuple(map(float, f)),
-                "u_right": tuple(map(float, r)), "u_up": tuple(map(float, u)),
-                "u_tan_half_fov": float(np.tan(np.radians(self.fov_deg) / 2.0)),
-                "u_aspect": width / height}
+        return {
+            "u_eye": tuple(map(float, self.eye)),
+            "u_forward": tuple(map(float, f)),
+            "u_right": tuple(map(float, r)),
+            "u_up": tuple(map(float, u)),
+            "u_tan_half_fov": float(np.tan(np.radians(self.fov_deg) / 2.0)),
+            "u_aspect": width / height,
+        }

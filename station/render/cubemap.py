@@ -35,14 +35,16 @@ def face_directions(size: int) -> np.ndarray:
     c = face_coords(size)
     a, b = np.meshgrid(c, c)  # a along columns, b along rows
     one = np.ones_like(a)
-    dirs = np.stack([
-        np.stack([one, -b, -a], -1),
-        np.stack([-one, -b, a], -1),
-        np.stack([a, one, b], -1),
-        np.stack([a, -one, -b], -1),
-        np.stack([a, -b, one], -1),
-        np.stack([-a, -b, -one], -1),
-    ])
+    dirs = np.stack(
+        [
+            np.stack([one, -b, -a], -1),
+            np.stack([-one, -b, a], -1),
+            np.stack([a, one, b], -1),
+            np.stack([a, -one, -b], -1),
+            np.stack([a, -b, one], -1),
+            np.stack([-a, -b, -one], -1),
+        ]
+    )
     return _normalize(dirs)
 
 
@@ -58,8 +60,11 @@ def direction_to_face(dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     """Map directions (..., 3) to (face index, a, b) with a, b in [−1, 1] (inverse of face_directions)."""
     x, y, z = dirs[..., 0], dirs[..., 1], dirs[..., 2]
     ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
-    face = np.where((ax >= ay) & (ax >= az), np.where(x > 0, 0, 1),
-                    np.where(ay >= az, np.where(y > 0, 2, 3), np.where(z > 0, 4, 5)))
+    face = np.where(
+        (ax >= ay) & (ax >= az),
+        np.where(x > 0, 0, 1),
+        np.where(ay >= az, np.where(y > 0, 2, 3), np.where(z > 0, 4, 5)),
+    )
     # (sc, tc, ma) per face, OpenGL table 8.19
     sc = np.choose(face, [-z, z, x, x, x, -x])
     tc = np.choose(face, [-y, -y, z, -z, -y, -y])

@@ -80,8 +80,9 @@ def design_database() -> tuple[FaceFlopTravelGloss, ...]:
     from station.model import FaceFlopTravelGloss
     from station.model.colorimetry import lab_to_linear_srgb
 
-    designs = tuple(FaceFlopTravelGloss(face, flop, travel, gloss, name)
-                    for name, face, flop, travel, gloss in _ROWS)
+    designs = tuple(
+        FaceFlopTravelGloss(face, flop, travel, gloss, name) for name, face, flop, travel, gloss in _ROWS
+    )
     angles = np.linspace(0.0, 180.0, 181)
     for d in designs:
         rgb = lab_to_linear_srgb(d.lab_at(angles))

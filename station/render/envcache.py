@@ -33,8 +33,7 @@ class PrefilterCache:
     @staticmethod
     def key(env_hash: str, exponent: float, out_size: int, src_size: int, samples: int, engine: str) -> str:
         """File stem for one prefiltered map."""
-        return (f"{env_hash[:40]}-n{exponent:.6g}-o{out_size}-s{src_size}-N{samples}-{engine}"
-                f"-v{CACHE_VERSION}")
+        return f"{env_hash[:40]}-n{exponent:.6g}-o{out_size}-s{src_size}-N{samples}-{engine}-v{CACHE_VERSION}"
 
     def get(self, key: str) -> np.ndarray | None:
         """The cached cube (6, S, S, 3) float32, or None on a miss or an unreadable entry."""

@@ -33,8 +33,9 @@ class Environment:
         validate_image(img, self.name)
         h, w = img.shape[:2]
         if w != 2 * h:
-            raise EnvironmentFileError(self.name, ACCEPTED + " in equirectangular layout (width = 2 × height)",
-                                       f"got {w}x{h}")
+            raise EnvironmentFileError(
+                self.name, ACCEPTED + " in equirectangular layout (width = 2 × height)", f"got {w}x{h}"
+            )
         img.setflags(write=False)
         object.__setattr__(self, "equirect", img)
 
@@ -75,7 +76,7 @@ def load_environment(path: str | Path) -> Environment:
     return Environment(path.stem, read_hdr_image(path))
 
 
-LIGHT_THRESHOLD = 5.0    # × the mean luminance
+LIGHT_THRESHOLD = 5.0  # × the mean luminance
 MAX_LIGHTS = 8
 
 
@@ -96,8 +97,9 @@ class Lights:
         return int(self.directions.shape[0])
 
 
-def extract_lights(env: Environment, threshold: float = LIGHT_THRESHOLD,
-                   max_lights: int = MAX_LIGHTS) -> tuple[Environment, Lights]:
+def extract_lights(
+    env: Environment, threshold: float = LIGHT_THRESHOLD, max_lights: int = MAX_LIGHTS
+) -> tuple[Environment, Lights]:
     """Split *env* into a residual map and up to *max_lights* compact bright sources (the sun).
 
     Pixels brighter than *threshold* × the mean luminance are grouped into 8-connected components

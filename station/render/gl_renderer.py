@@ -60,8 +60,9 @@ def load_shader(name: str, defines: dict[str, object] | None = None) -> str:
 def build_program(ctx, vertex: str, fragment: str, defines: dict[str, object] | None = None):
     """Compile and link a program from shader files; RenderError with the compiler log on failure."""
     try:
-        return ctx.program(vertex_shader=load_shader(vertex, defines),
-                           fragment_shader=load_shader(fragment, defines))
+        return ctx.program(
+            vertex_shader=load_shader(vertex, defines), fragment_shader=load_shader(fragment, defines)
+        )
     except Exception as exc:
         raise RenderError(f"shader {vertex}+{fragment} failed to build: {exc}") from exc
 
@@ -79,8 +80,17 @@ class GLRenderer:
     whatever the lobe count; ``combined=False`` looks every lobe up per pixel.
     """
 
-    def __init__(self, basis, width: int, height: int, ctx=None, diffuse: str = "cube",
-                 half_float: bool = True, combined: bool = True, horizon: str = "lut") -> None:
+    def __init__(
+        self,
+        basis,
+        width: int,
+        height: int,
+        ctx=None,
+        diffuse: str = "cube",
+        half_float: bool = True,
+        combined: bool = True,
+        horizon: str = "lut",
+    ) -> None:
         import moderngl
         import numpy as np
 
@@ -102,8 +112,9 @@ class GLRenderer:
 
         def cube_texture(cube):
             s = cube.shape[1]
-            tex = self.ctx.texture_cube((s, s), 3, np.ascontiguousarray(cube, dtype=np_dtype).tobytes(),
-                                        dtype=dtype)
+            tex = self.ctx.texture_cube(
+                (s, s), 3, np.ascontiguousarray(cube, dtype=np_dtype).tobytes(), dtype=dtype
+            )
             tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
             return tex
 
@@ -112,19 +123,24 @@ class GLRenderer:
         self._combined: tuple[bytes, list] | None = None
         # Lobes in binding order: the wide ones (horizon table) first, so the shader loops over a prefix.
         has_lights = basis.lights is not None and any(basis.wide)
-        wide = [int((horizon == "lut" and e < HORIZON_MAX_EXPONENT) or (has_lights and basis.wide[i]))
-                for i, e in enumerate(basis.exponents)]
+        wide = [
+            int((horizon == "lut" and e < HORIZON_MAX_EXPONENT) or (has_lights and basis.wide[i]))
+            for i, e in enumerate(basis.exponents)
+        ]
         self._wide_exponent = WIDE_EXPONENT
         self._lights = basis.lights if has_lights else None
-        self._order = np.array([i for i in range(len(wide)) if wide[i]] + [i for i in range(len(wide)) if not wide[i]])
+        self._order = np.array(
+            [i for i in range(len(wide)) if wide[i]] + [i for i in range(len(wide)) if not wide[i]]
+        )
         self._n_wide = int(sum(wide))
         self._wide = np.array(wide, np.int32)
         self._lobes = [cube_texture(basis.cubes[i]) for i in self._order]
         self._diffuse_tex = cube_texture(basis.diffuse)
         table = horizon_table(basis.exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
         self._horizon_n = table.shape[1]
-        self._horizon_tex = self.ctx.texture((table.shape[1], table.shape[0]), 2,
-                                             np.ascontiguousarray(table).tobytes(), dtype="f4")
+        self._horizon_tex = self.ctx.texture(
+            (table.shape[1], table.shape[0]), 2, np.ascontiguousarray(table).tobytes(), dtype="f4"
+        )
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
@@ -136,11 +152,17 @@ class GLRenderer:
 
         key = (shape, linear)
         if key not in self._programs:
-            defines = {"SHAPE": SHAPE_INDEX[shape], "N_LOBES": len(self._lobes),
-                       "OUTPUT_LINEAR": int(linear), "DIFFUSE_SH": int(self.diffuse == "sh"),
-                       "COMBINED": int(self.combined), "HORIZON_N": self._horizon_n, "N_WIDE": self._n_wide,
-                       "MAX_LIGHTS": max(1, self._lights.count if self._lights is not None else 1),
-                       "WIDE_EXPONENT": f"{self._wide_exponent:.1f}"}
+            defines = {
+                "SHAPE": SHAPE_INDEX[shape],
+                "N_LOBES": len(self._lobes),
+                "OUTPUT_LINEAR": int(linear),
+                "DIFFUSE_SH": int(self.diffuse == "sh"),
+                "COMBINED": int(self.combined),
+                "HORIZON_N": self._horizon_n,
+                "N_WIDE": self._n_wide,
+                "MAX_LIGHTS": max(1, self._lights.count if self._lights is not None else 1),
+                "WIDE_EXPONENT": f"{self._wide_exponent:.1f}",
+            }
             prog = build_program(self.ctx, "fullscreen.vert.glsl", "render.frag.glsl", defines)
             self._programs[key] = (prog, self.ctx.vertex_array(prog, []))
         return self._programs[key]
@@ -215,11 +237,14 @@ class GLRenderer:
             tex.use(unit)
         self._diffuse_tex.use(m + 4)
         self._horizon_tex.use(m + 5)
-        uniforms = {**scene.camera.uniforms(self.width, self.height),
-                    "u_size": (float(self.width), float(self.height)),
-                    "u_misalign": float(np.radians(scene.misalignment_deg)),
-                    "u_background": (BACKGROUND,) * 3,
-                    "u_diffuse": m + 4, "u_horizon": m + 5}
+        uniforms = {
+            **scene.camera.uniforms(self.width, self.height),
+            "u_size": (float(self.width), float(self.height)),
+            "u_misalign": float(np.radians(scene.misalignment_deg)),
+            "u_background": (BACKGROUND,) * 3,
+            "u_diffuse": m + 4,
+            "u_horizon": m + 5,
+        }
         if not linear:
             check_curve(curve)
             uniforms["u_exposure"] = float(2.0**exposure_ev)
@@ -238,7 +263,7 @@ class GLRenderer:
             prog["u_lobes"].value = list(range(n)) if n > 1 else 0
         if "u_exponent" in prog:
             e = np.asarray(self.basis.exponents, np.float32)[self._order]
-            prog["u_exponent"].write(e[:prog["u_exponent"].array_length].tobytes())
+            prog["u_exponent"].write(e[: prog["u_exponent"].array_length].tobytes())
         if "u_n_lights" in prog:
             n_lights = self._lights.count if self._lights is not None else 0
             prog["u_n_lights"].value = n_lights
@@ -276,8 +301,12 @@ class GLRenderer:
         for tex, fbo in self._targets.values():
             fbo.release()
             tex.release()
-        for tex in [*self._lobes, self._diffuse_tex, self._horizon_tex,
-                    *(self._combined[1] if self._combined else [])]:
+        for tex in [
+            *self._lobes,
+            self._diffuse_tex,
+            self._horizon_tex,
+            *(self._combined[1] if self._combined else []),
+        ]:
             tex.release()
         self._combined = None
         self._programs.clear()

@@ -25,7 +25,7 @@ from station.render.errors import EnvironmentFileError
 MAX_WIDTH = 32768
 MAX_HEIGHT = 16384
 MAX_PIXELS = 1 << 27
-MAX_VALUE = 1.0e8          # larger radiance than this (relative units) is treated as corrupt
+MAX_VALUE = 1.0e8  # larger radiance than this (relative units) is treated as corrupt
 ACCEPTED = "a Radiance .hdr (32-bit_rle_rgbe) or OpenEXR .exr HDR image with finite non-negative RGB"
 
 _LDR_MAGIC = {
@@ -129,7 +129,7 @@ def _read_radiance(path: Path) -> np.ndarray:
     if not (exposure > 0.0 and np.isfinite(exposure)):
         raise EnvironmentFileError(path, ACCEPTED, f"absurd EXPOSURE {exposure}")
     end = data.find(b"\n", pos)
-    parts = data[pos:end if end >= 0 else len(data)].split()
+    parts = data[pos : end if end >= 0 else len(data)].split()
     if len(parts) != 4 or parts[0] not in (b"-Y", b"+Y") or parts[2] != b"+X":
         raise EnvironmentFileError(path, ACCEPTED, f"unsupported resolution line {data[pos:end][:60]!r}")
     try:
@@ -167,7 +167,7 @@ def _decode_scanlines(path: Path, data: bytes, pos: int, w: int, h: int) -> np.n
                     else:
                         if count == 0 or pos + 1 + count > n:
                             raise EnvironmentFileError(path, ACCEPTED, f"bad run-length data at scanline {y}")
-                        plane += data[pos + 1:pos + 1 + count]
+                        plane += data[pos + 1 : pos + 1 + count]
                         pos += 1 + count
                 if len(plane) != w:
                     raise EnvironmentFileError(path, ACCEPTED, f"run overflows scanline {y}")
@@ -228,7 +228,11 @@ def _rle_plane(plane: bytes) -> bytes:
             i = j
             continue
         j = i
-        while j < n and j - i < 128 and not (j + 3 < n and plane[j] == plane[j + 1] == plane[j + 2] == plane[j + 3]):
+        while (
+            j < n
+            and j - i < 128
+            and not (j + 3 < n and plane[j] == plane[j + 1] == plane[j + 2] == plane[j + 3])
+        ):
             j += 1
         j = max(j, i + 1)
         out += bytes((j - i,)) + plane[i:j]

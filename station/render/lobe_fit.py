@@ -243,8 +243,11 @@ def targets_from_brdfs(brdfs: Sequence[DesignedBRDF]) -> Targets:
     """Targets of already tabulated designed BRDFs."""
     alphas = np.asarray(TARGET_ALPHAS_DEG)
     rho = np.stack([b.rho(alphas) for b in brdfs]) if brdfs else np.zeros((0, alphas.size, 3))
-    return Targets(rho, np.array([b.phong_exponent for b in brdfs], dtype=float),
-                   np.array([b.specular_albedo for b in brdfs], dtype=float))
+    return Targets(
+        rho,
+        np.array([b.phong_exponent for b in brdfs], dtype=float),
+        np.array([b.specular_albedo for b in brdfs], dtype=float),
+    )
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -350,8 +353,10 @@ class FitProblem:
     def colour_d(self, t: Targets) -> NDArray[np.float64]:
         """Reduced colour RHS Qᵀb, shape (k, d·3) (design-major, channel-minor)."""
         if self.gloss_form == "cosine":
-            return np.einsum("rk,drc->kdc", self.colour.q, self.colour_b(t)).reshape(self.colour.q.shape[1], -1)
-        return (self.colour_map @ t.rho.transpose(1, 0, 2).reshape(t.rho.shape[1], -1))
+            return np.einsum("rk,drc->kdc", self.colour.q, self.colour_b(t)).reshape(
+                self.colour.q.shape[1], -1
+            )
+        return self.colour_map @ t.rho.transpose(1, 0, 2).reshape(t.rho.shape[1], -1)
 
     @cached_property
     def _gloss_map(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -413,12 +418,12 @@ def _solve_enum(part: _Part, d: NDArray[np.float64], chunk: int = 768) -> NDArra
     n_sub = flat.shape[0] // k
     out = np.empty_like(d)
     for start in range(0, d.shape[1], chunk):
-        dd = d[:, start:start + chunk]
+        dd = d[:, start : start + chunk]
         y = (flat @ dd).reshape(n_sub, k, -1)  # every passive-set solution
         score = np.einsum("skn,kn->sn", y, part.r.T @ dd)  # bᵀA x_P = ‖A x_P‖² (projection)
         score[(y < 0.0).any(axis=1)] = -np.inf
         best = score.argmax(axis=0)
-        out[:, start:start + chunk] = y[best, :, np.arange(dd.shape[1])].T
+        out[:, start : start + chunk] = y[best, :, np.arange(dd.shape[1])].T
     return out
 
 
@@ -481,13 +486,19 @@ def _solve_lp(part: _Part, b: NDArray[np.float64]) -> tuple[NDArray[np.float64],
     fallbacks = 0
     for i in range(b.shape[0]):
         for c in range(b.shape[2]):
-            res = linprog(cost, A_eq=a_eq, b_eq=b[i, :, c], bounds=(0, None), method="highs",
-                          options={"time_limit": LP_TIME_LIMIT_S, "presolve": True})
+            res = linprog(
+                cost,
+                A_eq=a_eq,
+                b_eq=b[i, :, c],
+                bounds=(0, None),
+                method="highs",
+                options={"time_limit": LP_TIME_LIMIT_S, "presolve": True},
+            )
             if res.status == 0 and res.x is not None:
                 out[i, :, c] = np.maximum(res.x[:k], 0.0)
             else:
                 fallbacks += 1
-                out[i, :, c] = _solve_enum(part, part.q.T @ b[i, :, c:c + 1])[:, 0]
+                out[i, :, c] = _solve_enum(part, part.q.T @ b[i, :, c : c + 1])[:, 0]
     return out, fallbacks
 
 
@@ -521,8 +532,13 @@ class FitReport:
         return LobeWeights(self.basis.exponents, self.k_d[i], self.k_dd[i], self.k_g[i])
 
 
-def fit_targets(targets: Targets, basis: LobeBasis | None = None, method: str = "auto",
-                gloss_form: str = "thesis", target: str = "brdf") -> FitReport:
+def fit_targets(
+    targets: Targets,
+    basis: LobeBasis | None = None,
+    method: str = "auto",
+    gloss_form: str = "thesis",
+    target: str = "brdf",
+) -> FitReport:
     """Fit a batch of sampled designs to *basis* (default: the shipped one) with *method*."""
     if method not in METHODS:
         raise RenderInputError("method", " | ".join(METHODS), method)
@@ -537,7 +553,9 @@ def fit_targets(targets: Targets, basis: LobeBasis | None = None, method: str = 
     else:
         if method == "auto":
             method = "kkt" if n >= AUTO_BATCH else "nnls"
-        solve = {"kkt": _solve_kkt, "enum": _solve_enum, "nnls": _solve_nnls, "clamped-lsq": _solve_clamped}[method]
+        solve = {"kkt": _solve_kkt, "enum": _solve_enum, "nnls": _solve_nnls, "clamped-lsq": _solve_clamped}[
+            method
+        ]
         x_c = solve(prob.colour, prob.colour_d(targets)).reshape(m + 1, n, 3)
     if prob.gloss is None:
         x_g = np.zeros((n, m))
@@ -552,13 +570,20 @@ def fit_targets(targets: Targets, basis: LobeBasis | None = None, method: str = 
     return FitReport(basis, x_c[0], x_c[1:].transpose(1, 0, 2), x_g, method, seconds, fallbacks, target)
 
 
-def fit_designs(designs: Sequence[FaceFlopTravelGloss], basis: LobeBasis | None = None,
-                method: str = "auto", gloss_form: str = "thesis", target: str = "brdf") -> FitReport:
+def fit_designs(
+    designs: Sequence[FaceFlopTravelGloss],
+    basis: LobeBasis | None = None,
+    method: str = "auto",
+    gloss_form: str = "thesis",
+    target: str = "brdf",
+) -> FitReport:
     """Fit every design of a batch (vectorised for ``kkt``, ``enum`` and ``clamped-lsq``)."""
     return fit_targets(sample_targets(designs), basis, method, gloss_form, target)
 
 
-def fit_design(design: FaceFlopTravelGloss, basis: LobeBasis | None = None, method: str = "default") -> LobeWeights:
+def fit_design(
+    design: FaceFlopTravelGloss, basis: LobeBasis | None = None, method: str = "default"
+) -> LobeWeights:
     """Fit one design's lobe weights K_D, K_DD,i, K_G,i ≥ 0 (eqs 2.4.1–2.4.2).
 
     Parameters
@@ -591,12 +616,15 @@ def fitted_reflectance(report: FitReport, geometry: SampleGeometries | None = No
     return np.pi * (colour + gloss[:, :, None])
 
 
-def designed_reflectance(brdfs: Sequence[DesignedBRDF], geometry: SampleGeometries | None = None
-                         ) -> NDArray[np.float64]:
+def designed_reflectance(
+    brdfs: Sequence[DesignedBRDF], geometry: SampleGeometries | None = None
+) -> NDArray[np.float64]:
     """Reflectance factor π·f of the designed BRDFs at every sample geometry, (d, rows, 3)."""
     g = sample_geometries() if geometry is None else geometry
     inv_nl = 1.0 / np.maximum(g.n_dot_l, 1e-9)
-    return np.stack([b.rho(g.alpha_deg) + (np.pi * b.gloss_cos(g.cos_alpha) * inv_nl)[:, None] for b in brdfs])
+    return np.stack(
+        [b.rho(g.alpha_deg) + (np.pi * b.gloss_cos(g.cos_alpha) * inv_nl)[:, None] for b in brdfs]
+    )
 
 
 def fit_error_de(brdfs: Sequence[DesignedBRDF], report: FitReport) -> NDArray[np.float64]:

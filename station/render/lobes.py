@@ -34,13 +34,58 @@ from numpy.typing import ArrayLike, NDArray
 from station.errors import InputError
 
 #: Aspecular angles (degrees) of the colour rows (the clamped quadratic spans 0–110°+).
-COLOUR_ALPHAS_DEG = (0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0, 55.0, 60.0, 65.0,
-                     70.0, 75.0, 80.0, 90.0, 100.0, 110.0, 120.0)
+COLOUR_ALPHAS_DEG = (
+    0.0,
+    5.0,
+    10.0,
+    15.0,
+    20.0,
+    25.0,
+    30.0,
+    35.0,
+    40.0,
+    45.0,
+    50.0,
+    55.0,
+    60.0,
+    65.0,
+    70.0,
+    75.0,
+    80.0,
+    90.0,
+    100.0,
+    110.0,
+    120.0,
+)
 COLOUR_INCIDENCES_DEG = (15.0, 45.0, 65.0)
 COLOUR_AZIMUTHS_DEG = (0.0, 60.0, 120.0, 180.0, 240.0, 300.0)
 #: Aspecular angles (degrees) of the gloss rows: dense near specular to resolve lobes up to E ~ 10⁴.
-GLOSS_ALPHAS_DEG = (0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0, 6.0, 7.0, 8.0,
-                    10.0, 12.0, 14.0, 17.0, 20.0, 25.0, 30.0, 40.0)
+GLOSS_ALPHAS_DEG = (
+    0.0,
+    0.25,
+    0.5,
+    0.75,
+    1.0,
+    1.25,
+    1.5,
+    2.0,
+    2.5,
+    3.0,
+    3.5,
+    4.0,
+    5.0,
+    6.0,
+    7.0,
+    8.0,
+    10.0,
+    12.0,
+    14.0,
+    17.0,
+    20.0,
+    25.0,
+    30.0,
+    40.0,
+)
 GLOSS_INCIDENCES_DEG = (20.0, 45.0, 60.0)
 GLOSS_AZIMUTHS_DEG = (0.0, 90.0, 180.0, 270.0)
 #: Lowest view elevation kept (degrees above the tangent plane).
@@ -126,8 +171,9 @@ def _cell_solid_angles(alphas_deg: tuple[float, ...], n_azimuths: int) -> NDArra
     return ring / n_azimuths
 
 
-def _geometry_block(incidences: tuple[float, ...], alphas: tuple[float, ...], azimuths: tuple[float, ...],
-                    gloss: bool) -> dict[str, NDArray[np.float64]]:
+def _geometry_block(
+    incidences: tuple[float, ...], alphas: tuple[float, ...], azimuths: tuple[float, ...], gloss: bool
+) -> dict[str, NDArray[np.float64]]:
     ti, al, ph = np.meshgrid(np.radians(incidences), np.radians(alphas), np.radians(azimuths), indexing="ij")
     cell = np.broadcast_to(_cell_solid_angles(alphas, len(azimuths))[None, :, None], ti.shape)
     ti, al, ph, cell = (x.reshape(-1) for x in (ti, al, ph, cell))
@@ -135,15 +181,22 @@ def _geometry_block(incidences: tuple[float, ...], alphas: tuple[float, ...], az
     mirror = np.stack([-np.sin(ti), np.zeros_like(ti), np.cos(ti)], axis=-1)
     e1 = np.stack([np.cos(ti), np.zeros_like(ti), np.sin(ti)], axis=-1)
     e2 = np.stack([np.zeros_like(ti), np.ones_like(ti), np.zeros_like(ti)], axis=-1)
-    view = np.cos(al)[:, None] * mirror + np.sin(al)[:, None] * (np.cos(ph)[:, None] * e1 + np.sin(ph)[:, None] * e2)
+    view = np.cos(al)[:, None] * mirror + np.sin(al)[:, None] * (
+        np.cos(ph)[:, None] * e1 + np.sin(ph)[:, None] * e2
+    )
     keep = view[:, 2] >= np.sin(np.radians(MIN_VIEW_ELEVATION_DEG))
     # α = 0 rows repeat for every azimuth: keep one, with the whole polar cap.
     first_az = np.isclose(ph, ph.min())
     cap = al == 0.0
     keep &= ~cap | first_az
     cell = np.where(cap, cell * len(azimuths), cell)
-    return {"light": light[keep], "view": view[keep], "alpha": al[keep], "cell": cell[keep],
-            "gloss": np.full(int(keep.sum()), gloss)}
+    return {
+        "light": light[keep],
+        "view": view[keep],
+        "alpha": al[keep],
+        "cell": cell[keep],
+        "gloss": np.full(int(keep.sum()), gloss),
+    }
 
 
 @lru_cache(maxsize=1)
@@ -158,10 +211,25 @@ def sample_geometries() -> SampleGeometries:
     mirror = light * np.array([-1.0, -1.0, 1.0])
     cos_alpha = np.clip(np.einsum("ij,ij->i", mirror, view), -1.0, 1.0)
     geo = SampleGeometries(
-        light=light, view=view, n_dot_l=light[:, 2].copy(), n_dot_v=view[:, 2].copy(), cos_alpha=cos_alpha,
-        alpha_deg=np.degrees(np.arccos(cos_alpha)), weight=np.sqrt(cat["cell"]), gloss=cat["gloss"].astype(bool),
+        light=light,
+        view=view,
+        n_dot_l=light[:, 2].copy(),
+        n_dot_v=view[:, 2].copy(),
+        cos_alpha=cos_alpha,
+        alpha_deg=np.degrees(np.arccos(cos_alpha)),
+        weight=np.sqrt(cat["cell"]),
+        gloss=cat["gloss"].astype(bool),
     )
-    for arr in (geo.light, geo.view, geo.n_dot_l, geo.n_dot_v, geo.cos_alpha, geo.alpha_deg, geo.weight, geo.gloss):
+    for arr in (
+        geo.light,
+        geo.view,
+        geo.n_dot_l,
+        geo.n_dot_v,
+        geo.cos_alpha,
+        geo.alpha_deg,
+        geo.weight,
+        geo.gloss,
+    ):
         arr.setflags(write=False)
     return geo
 
@@ -191,8 +259,9 @@ def default_basis() -> LobeBasis:
     return basis_for_count(int(basis_table()["default_lobes"]))  # type: ignore[arg-type]
 
 
-def horizon_factors(exponent: float, r_dot_n: ArrayLike, nodes: int = 1024
-                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def horizon_factors(
+    exponent: float, r_dot_n: ArrayLike, nodes: int = 1024
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Cosine and horizon factors of a normalised lobe about R at angle β from N (cos β = R·N).
 
     Returns (g, h), each shaped like *r_dot_n*, with p(ω) = (E+1)/(2π) max(R·ω, 0)^E:
@@ -213,8 +282,11 @@ def horizon_factors(exponent: float, r_dot_n: ArrayLike, nodes: int = 1024
     a = c[..., None] * cos_psi  # N·ω = a + b cos φ
     b = sin_b * sin_psi
     with np.errstate(divide="ignore", invalid="ignore"):
-        phi0 = np.where(b > 1e-15, np.arccos(np.clip(-a / np.where(b > 1e-15, b, 1.0), -1.0, 1.0)),
-                        np.where(a > 0, np.pi, 0.0))
+        phi0 = np.where(
+            b > 1e-15,
+            np.arccos(np.clip(-a / np.where(b > 1e-15, b, 1.0), -1.0, 1.0)),
+            np.where(a > 0, np.pi, 0.0),
+        )
     g = (2.0 * (a * phi0 + b * np.sin(phi0)) / (2.0 * np.pi)).mean(axis=-1)
     h = (phi0 / np.pi).mean(axis=-1)
     return g, h

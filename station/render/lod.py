@@ -61,7 +61,11 @@ class LodChoice:
             f"ΔE {self.errors.get('anisotropy', 0.0):.2f} against the most-sampled image",
         ]
         verdict = "meets" if self.met else "MISSES"
-        text = f"Tolerance ΔE {self.tolerance_de:g} ({verdict}; share {share:.2f} each): " + "; ".join(parts) + "."
+        text = (
+            f"Tolerance ΔE {self.tolerance_de:g} ({verdict}; share {share:.2f} each): "
+            + "; ".join(parts)
+            + "."
+        )
         return text + ("" if not self.notes else " " + " ".join(self.notes))
 
 
@@ -79,12 +83,22 @@ def _de(scene_white: float, ref: NDArray[np.float64], img: NDArray[np.float64], 
     return float(np.percentile(d, percentile))
 
 
-def choose_lod(designs: Sequence[Any], environment: Any, normals: ArrayLike, views: ArrayLike,
-               tolerance_de: float = 1.0, *, percentile: float = 95.0, mode: str = "prefiltered",
-               lobe_counts: Sequence[int] = tuple(range(1, MAX_LOBES + 1)), widths: Sequence[int] = ENV_WIDTHS,
-               anisotropic: Callable[[int], NDArray[np.float64]] | None = None,
-               sample_counts: Sequence[int] = SAMPLE_COUNTS, samples: int = 128,
-               quadrature_width: int = 128) -> LodChoice:
+def choose_lod(
+    designs: Sequence[Any],
+    environment: Any,
+    normals: ArrayLike,
+    views: ArrayLike,
+    tolerance_de: float = 1.0,
+    *,
+    percentile: float = 95.0,
+    mode: str = "prefiltered",
+    lobe_counts: Sequence[int] = tuple(range(1, MAX_LOBES + 1)),
+    widths: Sequence[int] = ENV_WIDTHS,
+    anisotropic: Callable[[int], NDArray[np.float64]] | None = None,
+    sample_counts: Sequence[int] = SAMPLE_COUNTS,
+    samples: int = 128,
+    quadrature_width: int = 128,
+) -> LodChoice:
     """Choose lobes, environment resolution and anisotropic samples for a scene (module docstring).
 
     Parameters
@@ -137,8 +151,10 @@ def choose_lod(designs: Sequence[Any], environment: Any, normals: ArrayLike, vie
     met = chosen_m is not None
     if chosen_m is None:
         chosen_m = min(lobe_err, key=lobe_err.__getitem__)
-        notes.append(f"No lobe count reaches ΔE {share:.2f} against ground truth in {mode} mode; "
-                     f"the most accurate ({chosen_m}) is used.")
+        notes.append(
+            f"No lobe count reaches ΔE {share:.2f} against ground truth in {mode} mode; "
+            f"the most accurate ({chosen_m}) is used."
+        )
     # 2. environment resolution against full resolution, chosen lobes
     ref = lobe_images(scene, chosen_m)
     chosen_w, env_err = full_width, 0.0
@@ -165,6 +181,13 @@ def choose_lod(designs: Sequence[Any], environment: Any, normals: ArrayLike, vie
             if err <= share:
                 chosen_s, aniso_err = s, err
                 break
-    return LodChoice(chosen_m, basis_for_count(chosen_m).exponents, chosen_w, chosen_s, float(tolerance_de),
-                     {"lobes": lobe_err[chosen_m], "environment": env_err, "anisotropy": aniso_err}, met,
-                     tuple(notes))
+    return LodChoice(
+        chosen_m,
+        basis_for_count(chosen_m).exponents,
+        chosen_w,
+        chosen_s,
+        float(tolerance_de),
+        {"lobes": lobe_err[chosen_m], "environment": env_err, "anisotropy": aniso_err},
+        met,
+        tuple(notes),
+    )

@@ -83,11 +83,11 @@ def lobe_factors(table: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarr
 class GBuffer:
     """Per-pixel geometry of one view: mask, unit normal, unit view (to eye), reflected view, paint id."""
 
-    mask: np.ndarray      # (H, W) bool
-    normal: np.ndarray    # (H, W, 3)
-    view: np.ndarray      # (H, W, 3)
-    reflect: np.ndarray   # (H, W, 3)
-    paint: np.ndarray     # (H, W) int8, −1 off the object
+    mask: np.ndarray  # (H, W) bool
+    normal: np.ndarray  # (H, W, 3)
+    view: np.ndarray  # (H, W, 3)
+    reflect: np.ndarray  # (H, W, 3)
+    paint: np.ndarray  # (H, W) int8, −1 off the object
     position: np.ndarray  # (H, W, 3)
 
     @property
@@ -121,13 +121,15 @@ def check_paints(basis: PrefilteredBasis, paints: Sequence[LobeWeights]) -> list
         raise RenderInputError("paints", "one or two LobeWeights", len(paints))
     for i, w in enumerate(paints):
         if len(w.exponents) != len(basis.exponents) or not np.allclose(w.exponents, basis.exponents):
-            raise RenderInputError(f"paints[{i}].exponents", f"the basis exponents {basis.exponents}",
-                                   w.exponents)
+            raise RenderInputError(
+                f"paints[{i}].exponents", f"the basis exponents {basis.exponents}", w.exponents
+            )
     return paints if len(paints) == 2 else paints * 2
 
 
-def light_terms(basis: PrefilteredBasis, i: int, normal: np.ndarray, reflect: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray] | None:
+def light_terms(
+    basis: PrefilteredBasis, i: int, normal: np.ndarray, reflect: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
     """Exact (gloss, directionally diffuse) radiance per unit map weight of lobe i from the lights.
 
     For each light (direction l, flux Φ): gloss Σ_l 1[N·l > 0] p_i(l) Φ_l, DD Σ_l (N·l)₊ p_i(l) Φ_l,
@@ -136,30 +138,44 @@ def light_terms(basis: PrefilteredBasis, i: int, normal: np.ndarray, reflect: np
     if basis.lights is None or not basis.wide or not basis.wide[i]:
         return None
     e = basis.exponents[i]
-    nl = normal @ basis.lights.directions.T                       # (P, k)
+    nl = normal @ basis.lights.directions.T  # (P, k)
     p = (e + 1.0) / (2.0 * np.pi) * np.clip(reflect @ basis.lights.directions.T, 0.0, None) ** e
     gloss = ((nl > 0) * p) @ basis.lights.flux
     dd = (np.clip(nl, 0.0, None) * p) @ basis.lights.flux
     return gloss, dd
 
 
-def shade_pixels(basis: PrefilteredBasis, weights: LobeWeights, normal: np.ndarray, reflect: np.ndarray,
-                 n_dot_v: np.ndarray, diffuse: str = "cube", horizon: str = "lut") -> np.ndarray:
+def shade_pixels(
+    basis: PrefilteredBasis,
+    weights: LobeWeights,
+    normal: np.ndarray,
+    reflect: np.ndarray,
+    n_dot_v: np.ndarray,
+    diffuse: str = "cube",
+    horizon: str = "lut",
+) -> np.ndarray:
     """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation)."""
     w_d, w_dd, w_g = weights.map_weights()
     d = sample_cube(basis.diffuse, normal) if diffuse == "cube" else sh_diffuse(basis.sh, normal)
     g, h = lobe_factors(horizon_table(basis.exponents, horizon), n_dot_v)
     out = w_d * d
     for i, cube in enumerate(basis.cubes):
-        out = out + (h[:, i:i + 1] * w_g[i] + g[:, i:i + 1] * w_dd[i]) * sample_cube(cube, reflect)
+        out = out + (h[:, i : i + 1] * w_g[i] + g[:, i : i + 1] * w_dd[i]) * sample_cube(cube, reflect)
         lights = light_terms(basis, i, normal, reflect)
         if lights is not None:
             out = out + w_g[i] * lights[0] + w_dd[i] * lights[1]
     return out
 
 
-def render_linear(scene: Scene, basis: PrefilteredBasis, paints: Sequence[LobeWeights], width: int,
-                  height: int, diffuse: str = "cube", horizon: str = "lut") -> np.ndarray:
+def render_linear(
+    scene: Scene,
+    basis: PrefilteredBasis,
+    paints: Sequence[LobeWeights],
+    width: int,
+    height: int,
+    diffuse: str = "cube",
+    horizon: str = "lut",
+) -> np.ndarray:
     """Linear sRGB radiance image (H, W, 3) float32 of the scene lit by the prefiltered basis."""
     if diffuse not in ("cube", "sh"):
         raise RenderInputError("diffuse", "cube | sh", diffuse)

@@ -42,7 +42,7 @@ from station.render.sh import sh_project
 
 MAX_EXPONENT = 1.0e6
 BRUTE_MAX_SIZE = 16
-WIDE_EXPONENT = 200.0   # lobes below: horizon tables and lights shaded exactly (numpy_renderer)
+WIDE_EXPONENT = 200.0  # lobes below: horizon tables and lights shaded exactly (numpy_renderer)
 OUTPUT_FACTOR = 2.2
 DIFFUSE_SIZE = 16
 
@@ -94,8 +94,8 @@ def prefilter_brute(src_cube: np.ndarray, exponent: float, out_size: int) -> np.
     out_dirs = cubemap.face_directions(out_size).reshape(-1, 3)
     out = np.empty((out_dirs.shape[0], 3))
     for i in range(0, out_dirs.shape[0], 256):
-        acc = lobe_weights(out_dirs[i:i + 256], src_dirs, exponent) @ rad
-        out[i:i + 256] = acc[:, :3] / acc[:, 3:]
+        acc = lobe_weights(out_dirs[i : i + 256], src_dirs, exponent) @ rad
+        out[i : i + 256] = acc[:, :3] / acc[:, 3:]
     return out.reshape(6, out_size, out_size, 3)
 
 
@@ -192,9 +192,12 @@ class GLPrefilter:
         return self
 
     def _upload(self, src_cube: np.ndarray) -> None:
-        self.tex = self.ctx.texture_cube((self.src_size, self.src_size), 3,
-                                         np.ascontiguousarray(src_cube, dtype=np.float32).tobytes(),
-                                         dtype="f4")
+        self.tex = self.ctx.texture_cube(
+            (self.src_size, self.src_size),
+            3,
+            np.ascontiguousarray(src_cube, dtype=np.float32).tobytes(),
+            dtype="f4",
+        )
         self.tex.build_mipmaps()
         self.max_lod = float(math.log2(self.src_size))
 
@@ -240,18 +243,25 @@ class PrefilteredBasis:
     env_name: str
     env_hash: str
     exponents: tuple[float, ...]
-    cubes: tuple[np.ndarray, ...] = field(repr=False)   # one (6, S_i, S_i, 3) float32 per exponent
-    sh: np.ndarray = field(repr=False)                  # (9, 3) radiance SH coefficients
+    cubes: tuple[np.ndarray, ...] = field(repr=False)  # one (6, S_i, S_i, 3) float32 per exponent
+    sh: np.ndarray = field(repr=False)  # (9, 3) radiance SH coefficients
     diffuse: np.ndarray = field(repr=False, default=None)  # (6, 16, 16, 3) exponent-1 map = E/π
     engine: str = "gl"
     timings: dict[str, float] = field(default_factory=dict)
-    lights: Lights | None = None                         # taken out of the wide lobes' maps
-    wide: tuple[bool, ...] = ()                          # lobe i prefiltered from the residual map
+    lights: Lights | None = None  # taken out of the wide lobes' maps
+    wide: tuple[bool, ...] = ()  # lobe i prefiltered from the residual map
 
 
-def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str = "auto",
-                    cache: PrefilterCache | None = None, ctx=None,
-                    max_size: int | None = None, lights: bool = True) -> PrefilteredBasis:
+def prefilter_basis(
+    env: Environment,
+    exponents: Sequence[float],
+    *,
+    engine: str = "auto",
+    cache: PrefilterCache | None = None,
+    ctx=None,
+    max_size: int | None = None,
+    lights: bool = True,
+) -> PrefilteredBasis:
     """Prefilter *env* for every exponent, plus its SH coefficients (timings in seconds).
 
     engine: ``gl`` (filtered IS on the GL context), ``numpy`` (same estimator, slower; output faces
@@ -281,7 +291,9 @@ def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str
     residual, found = extract_lights(env) if lights else (env, None)
     wide = tuple(bool(found is not None and found.count and e < WIDE_EXPONENT) for e in exps)
     sources = [residual if w else env for w in wide]
-    keys = [PrefilterCache.key(sources[i].content_hash, e, s, src, n, engine) for i, (e, s, n) in enumerate(plan)]
+    keys = [
+        PrefilterCache.key(sources[i].content_hash, e, s, src, n, engine) for i, (e, s, n) in enumerate(plan)
+    ]
     cubes: list[np.ndarray | None] = [cache.get(k) if cache else None for k in keys]
     todo = [i for i, c in enumerate(cubes) if c is None]
     small: dict[tuple[int, int], np.ndarray] = {}
@@ -297,7 +309,9 @@ def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str
         sampled = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
         for i in brute:
             e, size, _ = plan[i]
-            cubes[i] = prefilter_brute(small_cube(int(wide[i]), max(32, 2 * size)), e, size).astype(np.float32)
+            cubes[i] = prefilter_brute(small_cube(int(wide[i]), max(32, 2 * size)), e, size).astype(
+                np.float32
+            )
         timings["brute"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         for k in (0, 1):
@@ -329,6 +343,15 @@ def prefilter_basis(env: Environment, exponents: Sequence[float], *, engine: str
     t0 = time.perf_counter()
     diffuse = prefilter_brute(small_cube(0, 32), 1.0, DIFFUSE_SIZE).astype(np.float32)
     timings["diffuse"] = time.perf_counter() - t0
-    return PrefilteredBasis(env_name=env.name, env_hash=env.content_hash, exponents=exps, cubes=tuple(cubes),
-                            sh=coeffs, diffuse=diffuse, engine=engine, timings=timings,
-                            lights=found if any(wide) else None, wide=wide)
+    return PrefilteredBasis(
+        env_name=env.name,
+        env_hash=env.content_hash,
+        exponents=exps,
+        cubes=tuple(cubes),
+        sh=coeffs,
+        diffuse=diffuse,
+        engine=engine,
+        timings=timings,
+        lights=found if any(wide) else None,
+        wide=wide,
+    )

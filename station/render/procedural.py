@@ -25,13 +25,17 @@ from station.render.environment import Environment
 from station.render.errors import RenderInputError
 
 GROUND_ALBEDO = 0.2
-SUN_RADIUS_DEG = 1.5          # enlarged from the true 0.27° so a 512-pixel map resolves it
-SUN_TO_SKY = 5.0              # horizontal illuminance of the sun / of the sky (clear day, mid elevation)
-SUN_XY = (0.3324, 0.3474)     # CIE D55 chromaticity for the direct sun
+SUN_RADIUS_DEG = 1.5  # enlarged from the true 0.27° so a 512-pixel map resolves it
+SUN_TO_SKY = 5.0  # horizontal illuminance of the sun / of the sky (clear day, mid elevation)
+SUN_XY = (0.3324, 0.3474)  # CIE D55 chromaticity for the direct sun
 
-_XYZ_TO_SRGB = np.array([[3.2404542, -1.5371385, -0.4985314],
-                         [-0.9692660, 1.8760108, 0.0415560],
-                         [0.0556434, -0.2040259, 1.0572252]])
+_XYZ_TO_SRGB = np.array(
+    [
+        [3.2404542, -1.5371385, -0.4985314],
+        [-0.9692660, 1.8760108, 0.0415560],
+        [0.0556434, -0.2040259, 1.0572252],
+    ]
+)
 
 
 def _check_width(width: int) -> None:
@@ -78,8 +82,11 @@ def light_booth(width: int = 512) -> Environment:
     rad = np.where(p[..., 1] <= lo[1] + 1e-9, floor, rad)
     rad = np.where(p[..., 2] <= lo[2] + 1e-9, back, rad)
     on_ceiling = p[..., 1] >= hi[1] - 1e-9
-    panel = on_ceiling & (np.abs(p[..., 2] + 0.2) <= 0.45) & (
-        (np.abs(p[..., 0] - 0.5) <= 0.3) | (np.abs(p[..., 0] + 0.5) <= 0.3))
+    panel = (
+        on_ceiling
+        & (np.abs(p[..., 2] + 0.2) <= 0.45)
+        & ((np.abs(p[..., 0] - 0.5) <= 0.3) | (np.abs(p[..., 0] + 0.5) <= 0.3))
+    )
     rad = np.where(on_ceiling & ~panel, 0.3, rad)
     rad = np.where(panel, 1.0, rad)  # scaled below
     img = np.repeat(rad.mean(axis=(1, 3))[..., None], 3, axis=-1)
@@ -96,12 +103,33 @@ def preetham_coefficients(turbidity: float) -> dict[str, np.ndarray]:
     """Perez coefficients A..E for Y, x, y (Preetham et al. 1999, Appendix A.2), each shape (5,)."""
     t = turbidity
     return {
-        "Y": np.array([0.1787 * t - 1.4630, -0.3554 * t + 0.4275, -0.0227 * t + 5.3251,
-                       0.1206 * t - 2.5771, -0.0670 * t + 0.3703]),
-        "x": np.array([-0.0193 * t - 0.2592, -0.0665 * t + 0.0008, -0.0004 * t + 0.2125,
-                       -0.0641 * t - 0.8989, -0.0033 * t + 0.0452]),
-        "y": np.array([-0.0167 * t - 0.2608, -0.0950 * t + 0.0092, -0.0079 * t + 0.2102,
-                       -0.0441 * t - 1.6537, -0.0109 * t + 0.0529]),
+        "Y": np.array(
+            [
+                0.1787 * t - 1.4630,
+                -0.3554 * t + 0.4275,
+                -0.0227 * t + 5.3251,
+                0.1206 * t - 2.5771,
+                -0.0670 * t + 0.3703,
+            ]
+        ),
+        "x": np.array(
+            [
+                -0.0193 * t - 0.2592,
+                -0.0665 * t + 0.0008,
+                -0.0004 * t + 0.2125,
+                -0.0641 * t - 0.8989,
+                -0.0033 * t + 0.0452,
+            ]
+        ),
+        "y": np.array(
+            [
+                -0.0167 * t - 0.2608,
+                -0.0950 * t + 0.0092,
+                -0.0079 * t + 0.2102,
+                -0.0441 * t - 1.6537,
+                -0.0109 * t + 0.0529,
+            ]
+        ),
     }
 
 
@@ -112,17 +140,29 @@ def preetham_zenith(turbidity: float, sun_zenith: float) -> tuple[float, float, 
     big_y = (4.0453 * t - 4.9710) * np.tan(chi) - 0.2155 * t + 2.4192
     tv = np.array([t * t, t, 1.0])
     sv = np.array([ts**3, ts**2, ts, 1.0])
-    mx = np.array([[0.00166, -0.00375, 0.00209, 0.0], [-0.02903, 0.06377, -0.03202, 0.00394],
-                   [0.11693, -0.21196, 0.06052, 0.25886]])
-    my = np.array([[0.00275, -0.00610, 0.00317, 0.0], [-0.04214, 0.08970, -0.04153, 0.00516],
-                   [0.15346, -0.26756, 0.06670, 0.26688]])
+    mx = np.array(
+        [
+            [0.00166, -0.00375, 0.00209, 0.0],
+            [-0.02903, 0.06377, -0.03202, 0.00394],
+            [0.11693, -0.21196, 0.06052, 0.25886],
+        ]
+    )
+    my = np.array(
+        [
+            [0.00275, -0.00610, 0.00317, 0.0],
+            [-0.04214, 0.08970, -0.04153, 0.00516],
+            [0.15346, -0.26756, 0.06670, 0.26688],
+        ]
+    )
     return float(big_y), float(tv @ mx @ sv), float(tv @ my @ sv)
 
 
 def perez(theta: np.ndarray, gamma: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Perez distribution F(θ, γ) = (1 + A e^{B/cos θ})(1 + C e^{Dγ} + E cos²γ)."""
     cos_t = np.maximum(np.cos(theta), 0.01)
-    return (1.0 + c[0] * np.exp(c[1] / cos_t)) * (1.0 + c[2] * np.exp(c[3] * gamma) + c[4] * np.cos(gamma) ** 2)
+    return (1.0 + c[0] * np.exp(c[1] / cos_t)) * (
+        1.0 + c[2] * np.exp(c[3] * gamma) + c[4] * np.cos(gamma) ** 2
+    )
 
 
 def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
@@ -131,8 +171,9 @@ def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
     return np.array([np.cos(el) * np.sin(az), np.sin(el), -np.cos(el) * np.cos(az)])
 
 
-def sunny_sky(width: int = 512, turbidity: float = 3.0, sun_elevation_deg: float = 35.0,
-              sun_azimuth_deg: float = 150.0) -> Environment:
+def sunny_sky(
+    width: int = 512, turbidity: float = 3.0, sun_elevation_deg: float = 35.0, sun_azimuth_deg: float = 150.0
+) -> Environment:
     """Clear sky from the Preetham model with a sun disc and a grey ground (see module doc).
 
     The default sun stands behind the camera's right shoulder at 35° elevation, so a sphere in front
@@ -163,8 +204,9 @@ def sunny_sky(width: int = 512, turbidity: float = 3.0, sun_elevation_deg: float
     disc = ((d @ sun) >= cos_r).mean(axis=(1, 3))
     sun_rgb = _xyY_to_srgb(np.array(SUN_XY[0]), np.array(SUN_XY[1]), np.array(1.0))
     h = width // 2
-    e_disc = (disc * np.clip(equirect_directions(h, width)[..., 1], 0, None)
-              * equirect_solid_angles(h, width)).sum()
+    e_disc = (
+        disc * np.clip(equirect_directions(h, width)[..., 1], 0, None) * equirect_solid_angles(h, width)
+    ).sum()
     sun_lum = SUN_TO_SKY * np.pi / (1.0 + SUN_TO_SKY) / e_disc
     img = sky + disc[..., None] * sun_lum * sun_rgb / sun_rgb[1]
     e_total = _horizontal_irradiance(img)

@@ -13,19 +13,38 @@ import numpy as np
 
 from station.render.cubemap import equirect_directions, equirect_solid_angles
 
-SH_BAND_GAIN = np.array([np.pi, 2 * np.pi / 3, 2 * np.pi / 3, 2 * np.pi / 3,
-                         np.pi / 4, np.pi / 4, np.pi / 4, np.pi / 4, np.pi / 4])
+SH_BAND_GAIN = np.array(
+    [
+        np.pi,
+        2 * np.pi / 3,
+        2 * np.pi / 3,
+        2 * np.pi / 3,
+        np.pi / 4,
+        np.pi / 4,
+        np.pi / 4,
+        np.pi / 4,
+        np.pi / 4,
+    ]
+)
 
 
 def sh_basis(dirs: np.ndarray) -> np.ndarray:
     """Real SH basis Y_00, Y_1−1, Y_10, Y_11, Y_2−2, Y_2−1, Y_20, Y_21, Y_22 at unit dirs (..., 3) → (..., 9)."""
     x, y, z = dirs[..., 0], dirs[..., 1], dirs[..., 2]
-    return np.stack([
-        np.full_like(x, 0.282095),
-        0.488603 * y, 0.488603 * z, 0.488603 * x,
-        1.092548 * x * y, 1.092548 * y * z, 0.315392 * (3 * z * z - 1),
-        1.092548 * x * z, 0.546274 * (x * x - y * y),
-    ], axis=-1)
+    return np.stack(
+        [
+            np.full_like(x, 0.282095),
+            0.488603 * y,
+            0.488603 * z,
+            0.488603 * x,
+            1.092548 * x * y,
+            1.092548 * y * z,
+            0.315392 * (3 * z * z - 1),
+            1.092548 * x * z,
+            0.546274 * (x * x - y * y),
+        ],
+        axis=-1,
+    )
 
 
 def sh_project(equirect: np.ndarray) -> np.ndarray:

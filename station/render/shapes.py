@@ -96,7 +96,9 @@ def _cylinder(o, d):
     b = o[0] * d[..., 0] + o[2] * d[..., 2]
     c = o[0] ** 2 + o[2] ** 2 - CYL_R**2
     disc = b * b - a * c
-    t = np.where((disc >= 0) & (a > 1e-12), (-b - np.sqrt(np.maximum(disc, 0))) / np.maximum(a, 1e-12), np.inf)
+    t = np.where(
+        (disc >= 0) & (a > 1e-12), (-b - np.sqrt(np.maximum(disc, 0))) / np.maximum(a, 1e-12), np.inf
+    )
     y = o[1] + t * d[..., 1]
     t_side = np.where((t > 0) & (np.abs(y) <= 1.0), t, np.inf)
     p = o + np.where(np.isfinite(t_side), t_side, 0)[..., None] * d
@@ -106,8 +108,11 @@ def _cylinder(o, d):
     pc = o + np.where(np.isfinite(tc), tc, 0)[..., None] * d
     t_cap = np.where((tc > 0) & (pc[..., 0] ** 2 + pc[..., 2] ** 2 <= CYL_R**2), tc, np.inf)
     n_cap = np.broadcast_to(np.array([0.0, 1.0, 0.0]), p.shape)
-    return ([t_side, t_cap], [n_side, n_cap],
-            [(p[..., 0] >= 0).astype(np.int8), (pc[..., 0] >= 0).astype(np.int8)])
+    return (
+        [t_side, t_cap],
+        [n_side, n_cap],
+        [(p[..., 0] >= 0).astype(np.int8), (pc[..., 0] >= 0).astype(np.int8)],
+    )
 
 
 def _ellipsoid_roots(o, d, axes) -> tuple[np.ndarray, np.ndarray]:
@@ -124,7 +129,10 @@ def _ellipsoid_roots(o, d, axes) -> tuple[np.ndarray, np.ndarray]:
 
 def _speedshape(o, d):
     ts, ns, ps = [], [], []
-    halves = ((np.array([SPEED_NOSE, SPEED_H, SPEED_W]), -1.0), (np.array([SPEED_TAIL, SPEED_H, SPEED_W]), 1.0))
+    halves = (
+        (np.array([SPEED_NOSE, SPEED_H, SPEED_W]), -1.0),
+        (np.array([SPEED_TAIL, SPEED_H, SPEED_W]), 1.0),
+    )
     for axes, side in halves:
         for t in _ellipsoid_roots(o, d, axes):
             p = o + np.where(np.isfinite(t), t, 0.0)[..., None] * d
@@ -140,8 +148,10 @@ def panel_frames(misalignment_deg: float) -> list[tuple[np.ndarray, np.ndarray, 
     a = np.radians(misalignment_deg)
     u_r = np.array([np.cos(a), 0.0, -np.sin(a)])
     n_r = np.array([np.sin(a), 0.0, np.cos(a)])
-    return [(np.array([-0.52, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])),
-            (np.array([0.02, 0.0, 0.0]) + 0.5 * u_r, u_r, n_r)]
+    return [
+        (np.array([-0.52, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])),
+        (np.array([0.02, 0.0, 0.0]) + 0.5 * u_r, u_r, n_r),
+    ]
 
 
 def _panels(o, d, misalignment_deg: float):
@@ -171,10 +181,17 @@ def _seam(o, d):
     b = o[1] * d[..., 1] + oz * d[..., 2]
     c = o[1] ** 2 + oz**2 - SEAM_R**2
     disc = b * b - a * c
-    tb = np.where((disc >= 0) & (a > 1e-12), (-b - np.sqrt(np.maximum(disc, 0))) / np.maximum(a, 1e-12), np.inf)
+    tb = np.where(
+        (disc >= 0) & (a > 1e-12), (-b - np.sqrt(np.maximum(disc, 0))) / np.maximum(a, 1e-12), np.inf
+    )
     pb = o + np.where(np.isfinite(tb), tb, 0)[..., None] * d
-    ok = ((tb > 0) & (np.abs(pb[..., 0]) <= 1.2) & (pb[..., 1] <= -0.01)
-          & (pb[..., 1] >= -0.9 * SEAM_R) & (pb[..., 2] >= -SEAM_R))
+    ok = (
+        (tb > 0)
+        & (np.abs(pb[..., 0]) <= 1.2)
+        & (pb[..., 1] <= -0.01)
+        & (pb[..., 1] >= -0.9 * SEAM_R)
+        & (pb[..., 2] >= -SEAM_R)
+    )
     t_b = np.where(ok, tb, np.inf)
     n_b = (pb - np.array([0.0, 0.0, -SEAM_R])) * np.array([0.0, 1.0, 1.0])
     return [t_f, t_b], [n_f, n_b], [np.zeros(tf.shape, np.int8), np.ones(tb.shape, np.int8)]

@@ -60,7 +60,9 @@ def to_display(linear: np.ndarray, exposure_ev: float = 0.0, curve: str = "aces"
     return np.round(y * 255.0).astype(np.uint8)
 
 
-def display_lut(exposure_ev: float, curve: str, size: int = 65536, top: float = 16.0) -> tuple[np.ndarray, float]:
+def display_lut(
+    exposure_ev: float, curve: str, size: int = 65536, top: float = 16.0
+) -> tuple[np.ndarray, float]:
     """(LUT uint8 of `size` entries over exposed values [0, top], index scale) for fast encoding."""
     x = np.linspace(0.0, top, size)
     lut = np.round(srgb_encode(tone_curve(x, curve)) * 255.0).astype(np.uint8)

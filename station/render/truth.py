@@ -67,7 +67,9 @@ _PIXEL_CHUNK = 48
 def _as_equirect(environment: Any) -> NDArray[np.float64]:
     img = np.asarray(getattr(environment, "equirect", environment), dtype=np.float64)
     if img.ndim != 3 or img.shape[2] != 3 or img.shape[1] != 2 * img.shape[0] or img.shape[0] < 2:
-        raise RenderInputError("environment", "an equirectangular radiance map (H, 2H, 3)", getattr(img, "shape", None))
+        raise RenderInputError(
+            "environment", "an equirectangular radiance map (H, 2H, 3)", getattr(img, "shape", None)
+        )
     if not np.all(np.isfinite(img)) or np.any(img < 0.0):
         raise RenderInputError("environment", "finite radiance >= 0", "non-finite or negative pixels")
     return img
@@ -78,8 +80,10 @@ def equirect_directions(height: int, width: int) -> NDArray[np.float64]:
     theta = np.pi * (np.arange(height) + 0.5) / height
     phi = 2.0 * np.pi * ((np.arange(width) + 0.5) / width - 0.5)
     st = np.sin(theta)[:, None]
-    return np.stack([st * np.sin(phi)[None, :], np.repeat(np.cos(theta)[:, None], width, 1),
-                     -st * np.cos(phi)[None, :]], axis=-1)
+    return np.stack(
+        [st * np.sin(phi)[None, :], np.repeat(np.cos(theta)[:, None], width, 1), -st * np.cos(phi)[None, :]],
+        axis=-1,
+    )
 
 
 def equirect_solid_angles(height: int, width: int) -> NDArray[np.float64]:
@@ -107,8 +111,9 @@ def sample_equirect(img: NDArray[np.float64], dirs: NDArray[np.float64]) -> NDAr
     return top * (1 - ty) + bottom * ty
 
 
-def _box_downsample(img: NDArray[np.float64], weights: NDArray[np.float64], width: int
-                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _box_downsample(
+    img: NDArray[np.float64], weights: NDArray[np.float64], width: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Solid-angle-weighted box filter to (width/2, width); returns (radiance, solid angles)."""
     h, w = img.shape[:2]
     if w <= width:
@@ -142,8 +147,9 @@ class Lighting:
     point_flux: NDArray[np.float64]
 
 
-def prepare_lighting(environment: Any, quadrature_width: int = QUADRATURE_WIDTH,
-                     point_threshold: float = POINT_THRESHOLD) -> Lighting:
+def prepare_lighting(
+    environment: Any, quadrature_width: int = QUADRATURE_WIDTH, point_threshold: float = POINT_THRESHOLD
+) -> Lighting:
     """Split *environment* into point lights, a quadrature and a residual map (module docstring)."""
     img = _as_equirect(environment)
     h, w = img.shape[:2]
@@ -163,8 +169,9 @@ def prepare_lighting(environment: Any, quadrature_width: int = QUADRATURE_WIDTH,
     point_flux = (img[bright] - residual[bright]) * om[bright][:, None]
     q_img, q_om = _box_downsample(residual, om, quadrature_width)
     q_dirs = equirect_directions(*q_img.shape[:2])
-    return Lighting(residual, q_dirs.reshape(-1, 3), (q_img * q_om[..., None]).reshape(-1, 3),
-                    dirs[bright], point_flux)
+    return Lighting(
+        residual, q_dirs.reshape(-1, 3), (q_img * q_om[..., None]).reshape(-1, 3), dirs[bright], point_flux
+    )
 
 
 def _frames(axis: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -199,13 +206,21 @@ class TruthScene:
         Width of the quadrature map for broad kernels.
     """
 
-    def __init__(self, environment: Any, normals: ArrayLike, views: ArrayLike, samples: int = LOBE_SAMPLES,
-                 quadrature_width: int = QUADRATURE_WIDTH, lighting: Lighting | None = None) -> None:
+    def __init__(
+        self,
+        environment: Any,
+        normals: ArrayLike,
+        views: ArrayLike,
+        samples: int = LOBE_SAMPLES,
+        quadrature_width: int = QUADRATURE_WIDTH,
+        lighting: Lighting | None = None,
+    ) -> None:
         n = np.asarray(normals, dtype=float)
         v = np.asarray(views, dtype=float)
         if n.shape != v.shape or n.shape[-1:] != (3,):
-            raise RenderInputError("normals/views", "two arrays of unit vectors (..., 3) of one shape",
-                                   (n.shape, v.shape))
+            raise RenderInputError(
+                "normals/views", "two arrays of unit vectors (..., 3) of one shape", (n.shape, v.shape)
+            )
         if not (np.all(np.isfinite(n)) and np.all(np.isfinite(v))):
             raise RenderInputError("normals/views", "finite unit vectors", "non-finite values")
         if samples < 16:
@@ -234,8 +249,11 @@ class TruthScene:
         key = f"{prefix}_{kind}"
         if key in self._hist:
             return self._hist[key]
-        dirs, flux = ((self.lighting.quad_dirs, self.lighting.quad_flux) if prefix == "q"
-                      else (self.lighting.point_dirs, self.lighting.point_flux))
+        dirs, flux = (
+            (self.lighting.quad_dirs, self.lighting.quad_flux)
+            if prefix == "q"
+            else (self.lighting.point_dirs, self.lighting.point_flux)
+        )
         px = self.normals.shape[0]
         hist = np.zeros((px, _BINS, 3))
         if dirs.shape[0]:
@@ -248,7 +266,7 @@ class TruthScene:
                 t = (a - i0)[..., None]
                 wgt = {"cos": np.maximum(n_dot, 0.0), "mask": (n_dot > 0.0) * 1.0, "open": None}[kind]
                 f = flux[None, :, :] if wgt is None else wgt[..., None] * flux[None, :, :]
-                idx = ((np.arange(sl.stop - sl.start)[:, None] * _BINS + i0)[..., None] * 3 + np.arange(3))
+                idx = (np.arange(sl.stop - sl.start)[:, None] * _BINS + i0)[..., None] * 3 + np.arange(3)
                 size = (sl.stop - sl.start) * _BINS * 3
                 acc = np.bincount(idx.ravel(), np.broadcast_to(f * (1 - t), idx.shape).ravel(), size)
                 acc += np.bincount((idx + 3).ravel(), np.broadcast_to(f * t, idx.shape).ravel(), size)
@@ -286,11 +304,16 @@ class TruthScene:
         out = np.empty((self.normals.shape[0], 3))
         for s in range(0, out.shape[0], _PIXEL_CHUNK):
             sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
-            dirs = (local[None, :, 0:1] * t[sl, None, :] + local[None, :, 1:2] * b[sl, None, :]
-                    + local[None, :, 2:3] * self.reflect[sl, None, :])
+            dirs = (
+                local[None, :, 0:1] * t[sl, None, :]
+                + local[None, :, 1:2] * b[sl, None, :]
+                + local[None, :, 2:3] * self.reflect[sl, None, :]
+            )
             rad = sample_equirect(self.lighting.residual, dirs)
             n_dot = np.einsum("pkc,pc->pk", dirs, self.normals[sl])
-            w = {"cos": np.maximum(n_dot, 0.0), "mask": (n_dot > 0.0) * 1.0, "open": np.ones_like(n_dot)}[kind]
+            w = {"cos": np.maximum(n_dot, 0.0), "mask": (n_dot > 0.0) * 1.0, "open": np.ones_like(n_dot)}[
+                kind
+            ]
             out[sl] = (rad * w[..., None]).mean(axis=1) * (2.0 * np.pi / (exponent + 1.0))
         return out
 
@@ -303,8 +326,12 @@ class TruthScene:
     def truth(self, brdf: DesignedBRDF) -> NDArray[np.float64]:
         """Radiance of the designed BRDF, (..., 3) (module docstring)."""
         colour = self._binned("cos", brdf.reflectance / np.pi, points_only=False)
-        gloss = brdf.specular_albedo * (brdf.phong_exponent + 1.0) / (2.0 * np.pi) * self.lobe(
-            brdf.phong_exponent, "mask")
+        gloss = (
+            brdf.specular_albedo
+            * (brdf.phong_exponent + 1.0)
+            / (2.0 * np.pi)
+            * self.lobe(brdf.phong_exponent, "mask")
+        )
         return (colour + gloss).reshape(*self.shape, 3)
 
     def truth_direct(self, brdf: DesignedBRDF) -> NDArray[np.float64]:
@@ -322,8 +349,12 @@ class TruthScene:
             sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
             cos_psi = np.clip(self.reflect[sl] @ dirs.T, -1.0, 1.0)
             n_dot = self.normals[sl] @ dirs.T
-            colour = np.einsum("pm,pmc,mc->pc", np.maximum(n_dot, 0.0),
-                               brdf.rho(np.degrees(np.arccos(cos_psi))), flux) / np.pi
+            colour = (
+                np.einsum(
+                    "pm,pmc,mc->pc", np.maximum(n_dot, 0.0), brdf.rho(np.degrees(np.arccos(cos_psi))), flux
+                )
+                / np.pi
+            )
             lobe = (n_dot > 0.0) * np.clip(cos_psi, 0.0, 1.0) ** n_exp
             if sharp:  # residual map by importance sampling below; only the point lights here
                 lobe[:, : self.lighting.quad_dirs.shape[0]] = 0.0
@@ -351,7 +382,11 @@ class TruthScene:
         r_dot_n = np.einsum("ij,ij->i", self.reflect, self.normals)
         for i, e in enumerate(weights.exponents):
             if mode == "exact":
-                out = out + weights.k_dd[i][None, :] * self.lobe(e, "cos") + weights.k_g[i] * self.lobe(e, "mask")
+                out = (
+                    out
+                    + weights.k_dd[i][None, :] * self.lobe(e, "cos")
+                    + weights.k_g[i] * self.lobe(e, "mask")
+                )
                 continue
             lobe = self.lobe(e, "open")
             if mode == "prefiltered":
@@ -366,9 +401,13 @@ class TruthScene:
                 # the map through the prefiltered lookups.
                 kernel = np.clip(np.cos(np.radians(ALPHA_GRID_DEG)), 0.0, 1.0) ** e
                 lobe = lobe - self._binned("open", kernel, points_only=True)
-                dd_lobe = self._bent_lobe(e) if mode == "prefiltered-bent+lights" and e < SHARP_EXPONENT else lobe
-                out = out + (weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
-                             + weights.k_g[i] * self._binned("mask", kernel, points_only=True))
+                dd_lobe = (
+                    self._bent_lobe(e) if mode == "prefiltered-bent+lights" and e < SHARP_EXPONENT else lobe
+                )
+                out = out + (
+                    weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
+                    + weights.k_g[i] * self._binned("mask", kernel, points_only=True)
+                )
             out = out + weights.k_dd[i][None, :] * g[:, None] * dd_lobe + weights.k_g[i] * h[:, None] * lobe
         return out.reshape(*self.shape, 3)
 
@@ -377,7 +416,9 @@ class TruthScene:
         if exponent not in self._bent:
             b = bent_direction(exponent, self.reflect, self.normals)
             views = 2.0 * np.einsum("ij,ij->i", self.normals, b)[:, None] * self.normals - b  # mirror of B
-            aux = TruthScene(self.lighting.residual, self.normals, views, self.samples, lighting=self.lighting)
+            aux = TruthScene(
+                self.lighting.residual, self.normals, views, self.samples, lighting=self.lighting
+            )
             kernel = np.clip(np.cos(np.radians(ALPHA_GRID_DEG)), 0.0, 1.0) ** exponent
             self._bent[exponent] = aux.lobe(exponent, "open") - aux._binned("open", kernel, points_only=True)
         return self._bent[exponent]
@@ -387,9 +428,16 @@ class TruthScene:
         return (self.irradiance() / np.pi).reshape(*self.shape, 3)
 
 
-def render_truth(design: FaceFlopTravelGloss | DesignedBRDF, environment: Any, normals: ArrayLike,
-                 views: ArrayLike, *, samples: int = LOBE_SAMPLES, quadrature_width: int = 64,
-                 backfacing: str = "bend") -> NDArray[np.float64]:
+def render_truth(
+    design: FaceFlopTravelGloss | DesignedBRDF,
+    environment: Any,
+    normals: ArrayLike,
+    views: ArrayLike,
+    *,
+    samples: int = LOBE_SAMPLES,
+    quadrature_width: int = 64,
+    backfacing: str = "bend",
+) -> NDArray[np.float64]:
     """Ground-truth radiance of *design* in *environment* per pixel (for ``station render --engine truth``).
 
     Parameters

@@ -21,8 +21,9 @@ def blue_metallic() -> FaceFlopTravelGloss:
     return FaceFlopTravelGloss((90.0, -2.0, -10.0), (30.0, -1.0, -12.0), 70.0)
 
 
-def brute_force_first_crossing(paint, light, view, sign, eps, beta_max=30.0, step=1e-3,
-                               hinge="in-plane", method="cie76") -> float | None:
+def brute_force_first_crossing(
+    paint, light, view, sign, eps, beta_max=30.0, step=1e-3, hinge="in-plane", method="cie76"
+) -> float | None:
     """First β on a fine grid where ΔE ≥ ε (independent of the bracketing code: plain scan)."""
     model = SeamModel([light], [view], hinge=hinge, method=method)
     betas = np.arange(0.0, beta_max + step / 2, step)

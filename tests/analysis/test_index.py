@@ -17,9 +17,9 @@ from station.model.difference import delta_e
 from .conftest import brute_force_first_crossing
 
 
-def closed_form_root(L: float, theta_i: float, sign: float, eps: float = 2.3,
-                     k_of=None) -> float | None:
+def closed_form_root(L: float, theta_i: float, sign: float, eps: float = 2.3, k_of=None) -> float | None:
     """Root of (L+16)|k^(1/3) − 1| = ε with k = cos(θ_i − sβ)/cos θ_i (independent of the code)."""
+
     def k(b: float) -> float:
         if k_of is not None:
             return k_of(b)

@@ -21,7 +21,9 @@ def test_sweep_matches_seam_model(blue_metallic):
     r = seam_sweep(blue_metallic, (1.0, -2.0), (30.0, 45.0), (-10.0, 0.0, 20.0))
     assert r.delta_e.shape == (2, 2, 3)
     m = SeamModel([45.0], [20.0])
-    assert r.delta_e[1, 1, 2] == pytest.approx(m.delta_e(blue_metallic, blue_metallic, np.array([-2.0]))[0, 0])
+    assert r.delta_e[1, 1, 2] == pytest.approx(
+        m.delta_e(blue_metallic, blue_metallic, np.array([-2.0]))[0, 0]
+    )
 
 
 def test_sweep_graphical_index_brackets_the_computed_index(blue_metallic):
@@ -87,8 +89,25 @@ def test_cli_gg_index_matches_function(capsys):
 
 
 def test_cli_gg_index_effect_paint_and_de(capsys):
-    rc = main(["analysis", "gg-index", "--face", "90,-2,-10", "--flop", "30,-1,-12", "--travel", "70",
-               "--light", "45", "--de", "cie2000", "--epsilon", "1", "--json"])
+    rc = main(
+        [
+            "analysis",
+            "gg-index",
+            "--face",
+            "90,-2,-10",
+            "--flop",
+            "30,-1,-12",
+            "--travel",
+            "70",
+            "--light",
+            "45",
+            "--de",
+            "cie2000",
+            "--epsilon",
+            "1",
+            "--json",
+        ]
+    )
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["method"] == "cie2000" and out["reached"]
@@ -101,8 +120,21 @@ def test_cli_bad_input_exit_2(capsys):
 
 
 def test_cli_trompe_loeil(capsys):
-    rc = main(["analysis", "trompe-loeil", "--face", "75,-5,-20", "--beta", "-3",
-               "--lights", "0,15.5,29.1,39.8,45,52", "--objective", "rms", "--json"])
+    rc = main(
+        [
+            "analysis",
+            "trompe-loeil",
+            "--face",
+            "75,-5,-20",
+            "--beta",
+            "-3",
+            "--lights",
+            "0,15.5,29.1,39.8,45,52",
+            "--objective",
+            "rms",
+            "--json",
+        ]
+    )
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert 0.5 < out["max_after"] < 1.5
@@ -112,10 +144,15 @@ def test_cli_seam_with_design_and_measurement_files(tmp_path, capsys, blue_metal
     a = tmp_path / "a.json"
     b = tmp_path / "b.json"
     a.write_text(json.dumps(design_to_dict(blue_metallic)))
-    b.write_text(json.dumps({"angles_deg": [15, 45, 110],
-                             "lab": blue_metallic.lab_at(np.array([15.0, 45.0, 110.0])).tolist()}))
+    b.write_text(
+        json.dumps(
+            {"angles_deg": [15, 45, 110], "lab": blue_metallic.lab_at(np.array([15.0, 45.0, 110.0])).tolist()}
+        )
+    )
     png = tmp_path / "r.png"
-    rc = main(["analysis", "seam", str(a), str(b), "--beta", "-2", "--lights", "45", "--png", str(png), "--json"])
+    rc = main(
+        ["analysis", "seam", str(a), str(b), "--beta", "-2", "--lights", "45", "--png", str(png), "--json"]
+    )
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["passed"] is False and png.exists()
@@ -123,7 +160,21 @@ def test_cli_seam_with_design_and_measurement_files(tmp_path, capsys, blue_metal
 
 
 def test_cli_negative_view_list_with_equals_form(capsys):
-    rc = main(["analysis", "gg-index", "--face", "90,-2,-10", "--flop", "30,-1,-12", "--travel", "70",
-               "--light", "45", "--view=-30,0", "--json"])
+    rc = main(
+        [
+            "analysis",
+            "gg-index",
+            "--face",
+            "90,-2,-10",
+            "--flop",
+            "30,-1,-12",
+            "--travel",
+            "70",
+            "--light",
+            "45",
+            "--view=-30,0",
+            "--json",
+        ]
+    )
     assert rc == 0
     assert json.loads(capsys.readouterr().out)["geometry"]["view_deg"] == -30.0

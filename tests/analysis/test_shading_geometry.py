@@ -35,7 +35,9 @@ def test_grey_closed_form_lightness():
 def test_aspecular_in_plane_is_view_plus_light():
     z = np.array([0.0, 0.0, 1.0])
     for light, view in [(45, -30), (45, 0), (45, 65), (20, -20), (60, -50)]:
-        assert aspecular_deg(direction(light), direction(view), z) == pytest.approx(abs(view + light), abs=1e-9)
+        assert aspecular_deg(direction(light), direction(view), z) == pytest.approx(
+            abs(view + light), abs=1e-9
+        )
 
 
 def test_in_plane_rotation_shifts_aspecular_by_two_beta():
@@ -50,8 +52,9 @@ def test_out_of_plane_rotation_is_second_order():
     np.testing.assert_allclose(n[0], [0.0, math.sin(math.radians(2)), math.cos(math.radians(2))], atol=1e-12)
     a = aspecular_deg(direction(45.0), direction(0.0), n)[0]
     # R·V = 2 cos θl cos θv cos²β − cos(θl − θv) = cos 45° cos 4° here: a second-order change
-    assert a == pytest.approx(math.degrees(math.acos(math.cos(math.radians(45)) * math.cos(math.radians(4)))),
-                              abs=1e-9)
+    assert a == pytest.approx(
+        math.degrees(math.acos(math.cos(math.radians(45)) * math.cos(math.radians(4)))), abs=1e-9
+    )
     assert abs(a - 45.0) < 0.2  # vs 4° in-plane
 
 
@@ -74,10 +77,14 @@ def test_panel_turned_away_from_light_is_black():
 def test_gloss_option_brightens_near_specular_only():
     p = FaceFlopTravelGloss((50.0, 0.0, 0.0), (20.0, 0.0, 0.0), 60.0, gloss_gu=60.0)
     z = np.array([0.0, 0.0, 1.0])
-    near = point_colour(p, direction(45.0), direction(-44.0), z, gloss=True)[0] - point_colour(
-        p, direction(45.0), direction(-44.0), z)[0]
-    far = point_colour(p, direction(45.0), direction(40.0), z, gloss=True)[0] - point_colour(
-        p, direction(45.0), direction(40.0), z)[0]
+    near = (
+        point_colour(p, direction(45.0), direction(-44.0), z, gloss=True)[0]
+        - point_colour(p, direction(45.0), direction(-44.0), z)[0]
+    )
+    far = (
+        point_colour(p, direction(45.0), direction(40.0), z, gloss=True)[0]
+        - point_colour(p, direction(45.0), direction(40.0), z)[0]
+    )
     assert near > 1.0
     assert far == pytest.approx(0.0, abs=1e-6)
 

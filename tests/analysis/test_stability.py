@@ -24,7 +24,15 @@ PAINTS = {
     "black": FaceFlopTravelGloss((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), None),
     "silver_bright": FaceFlopTravelGloss((140.0, 0.0, 0.0), (10.0, 0.0, 0.0), 50.0),
 }
-GEOMETRIES = [(45.0, -30.0), (89.0, 0.0), (-89.0, 10.0), (0.0, 0.0), (60.0, 89.0), (45.0, -45.0), (10.0, 80.0)]
+GEOMETRIES = [
+    (45.0, -30.0),
+    (89.0, 0.0),
+    (-89.0, 10.0),
+    (0.0, 0.0),
+    (60.0, 89.0),
+    (45.0, -45.0),
+    (10.0, 80.0),
+]
 
 
 @pytest.mark.parametrize("name", list(PAINTS))
@@ -78,8 +86,9 @@ def test_narrow_excursion_between_grid_points_is_found():
 
 @pytest.mark.parametrize("name", ["near_solid", "travel_min", "travel_max", "silver_bright"])
 def test_trompe_loeil_stays_finite(name):
-    r = inverse_trompe_loeil(PAINTS[name], [45.0, 45.0], [-30.0, 30.0], beta_deg=2.0, objective="rms",
-                             subset="face_L+travel")
+    r = inverse_trompe_loeil(
+        PAINTS[name], [45.0, 45.0], [-30.0, 30.0], beta_deg=2.0, objective="rms", subset="face_L+travel"
+    )
     assert np.all(np.isfinite(r.seam_de_after))
     assert r.rms_after <= r.rms_before + 1e-9
 
@@ -106,8 +115,9 @@ if given is not None:
         """Random effect paints and geometries: the index equals the plain-scan first crossing."""
         flop_l = max(0.0, face_l - drop)
         paint = FaceFlopTravelGloss((face_l, 5.0, -10.0), (flop_l, 2.0, -6.0), travel)
-        r = goniogeometric_index(paint, light, view, direction="+" if sign > 0 else "-", hinge=hinge,
-                                 beta_max_deg=15.0)
+        r = goniogeometric_index(
+            paint, light, view, direction="+" if sign > 0 else "-", hinge=hinge, beta_max_deg=15.0
+        )
         bf = brute_force_first_crossing(paint, light, view, sign, 2.3, beta_max=15.0, hinge=hinge)
         assert np.isfinite(r.max_delta_e)
         if bf is None:

@@ -91,13 +91,17 @@ def test_rms_solution_is_a_local_minimum_by_brute_force(blue_metallic):
     best = np.mean(np.square(r.seam_de_after))
     for dl in (-0.2, 0.0, 0.2):
         for dt in (-0.2, 0.0, 0.2):
-            p = r.paint.replace(face=(r.paint.face[0] + dl, *r.paint.face[1:]), travel_deg=r.paint.travel_deg + dt)
+            p = r.paint.replace(
+                face=(r.paint.face[0] + dl, *r.paint.face[1:]), travel_deg=r.paint.travel_deg + dt
+            )
             val = np.mean(m.delta_e(blue_metallic, p, np.array([-2.0]))[:, 0] ** 2)
             assert val >= best - 1e-6
 
 
 def test_subset_leaves_other_parameters_fixed(blue_metallic):
-    r = inverse_trompe_loeil(blue_metallic, [45.0], [-30.0], beta_deg=-2.0, objective="single", subset="face_L")
+    r = inverse_trompe_loeil(
+        blue_metallic, [45.0], [-30.0], beta_deg=-2.0, objective="single", subset="face_L"
+    )
     assert r.paint.flop == blue_metallic.flop
     assert r.paint.travel_deg == blue_metallic.travel_deg
     assert r.paint.face[1:] == blue_metallic.face[1:]
@@ -117,7 +121,9 @@ def test_reports_when_no_paint_meets_epsilon():
 def test_face_not_darker_than_flop_constraint():
     """Bright-flop correction: without permission the face stays at least as light as the flop."""
     a = FaceFlopTravelGloss((50.0, 0.0, 0.0), (48.0, 0.0, 0.0), 40.0)
-    r = inverse_trompe_loeil(a, [45.0, 45.0], [-30.0, 40.0], beta_deg=6.0, objective="rms", subset="lightness")
+    r = inverse_trompe_loeil(
+        a, [45.0, 45.0], [-30.0, 40.0], beta_deg=6.0, objective="rms", subset="lightness"
+    )
     assert r.paint.face[0] >= r.paint.flop[0] - 1e-6
     assert r.gamut.paintable
 
@@ -171,7 +177,9 @@ def test_environment_lighting_single_sample_equals_point_light(blue_metallic):
     t = math.radians(45.0)
     env = Environment.from_samples([((math.sin(t), 0.0, math.cos(t)), (1.0, 1.0, 1.0))])
     r_env = inverse_trompe_loeil(blue_metallic, env, [-30.0, 0.0], beta_deg=-2.0, subset="face_L+travel")
-    r_pt = inverse_trompe_loeil(blue_metallic, [45.0, 45.0], [-30.0, 0.0], beta_deg=-2.0, subset="face_L+travel")
+    r_pt = inverse_trompe_loeil(
+        blue_metallic, [45.0, 45.0], [-30.0, 0.0], beta_deg=-2.0, subset="face_L+travel"
+    )
     np.testing.assert_allclose(r_env.seam_de_before, r_pt.seam_de_before, atol=1e-6)
     assert r_env.changes["face_L"] == pytest.approx(r_pt.changes["face_L"], abs=0.05)
     assert r_env.to_dict()["geometries"][0]["light"] == "environment"

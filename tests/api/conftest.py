@@ -34,7 +34,9 @@ class Api:
 
 
 def make_api(url: str, tmp_path: Path, **settings: object) -> Iterator[Api]:
-    opts: dict[str, object] = dict(database_url=url, data_dir=tmp_path, simulators=(), load_demo_library=False)
+    opts: dict[str, object] = dict(
+        database_url=url, data_dir=tmp_path, simulators=(), load_demo_library=False
+    )
     opts.update(settings)
     app = create_app(Settings(**opts))
     with TestClient(app) as client:
@@ -43,8 +45,9 @@ def make_api(url: str, tmp_path: Path, **settings: object) -> Iterator[Api]:
             tokens[Role.ADMIN] = users.bootstrap_admin(session=session) or ""
             for role in Role:
                 if role is not Role.ADMIN:
-                    _u, _t, secret = users.create_user(session=session, actor=None, name=f"{role.value}-1",
-                                                       role=role)
+                    _u, _t, secret = users.create_user(
+                        session=session, actor=None, name=f"{role.value}-1", role=role
+                    )
                     tokens[role] = secret
         yield Api(client, tokens)
 

@@ -69,10 +69,13 @@ def test_service_outbox_is_replayed_in_order_and_audited(sqlite_api: Api) -> Non
             box.put(str(r.client_id), r.canonical_json())
     assert hub.replay_outbox() == 4
     assert len(hub.outbox()) == 0
-    data = sqlite_api.client.get("/api/v1/measurements", params={"limit": 10},
-                                 headers=sqlite_api.auth("qa")).json()["data"]
+    data = sqlite_api.client.get(
+        "/api/v1/measurements", params={"limit": 10}, headers=sqlite_api.auth("qa")
+    ).json()["data"]
     assert sorted((m["id"], m["client_id"]) for m in data) == [
-        (i + 1, str(r.client_id)) for i, r in enumerate(readings)]
-    events = sqlite_api.client.get("/api/v1/audit", params={"entity": "measurement"},
-                                   headers=sqlite_api.auth("admin")).json()
+        (i + 1, str(r.client_id)) for i, r in enumerate(readings)
+    ]
+    events = sqlite_api.client.get(
+        "/api/v1/audit", params={"entity": "measurement"}, headers=sqlite_api.auth("admin")
+    ).json()
     assert events["count"] == 4 and {e["action"] for e in events["data"]} == {"measurement.replay"}

@@ -17,9 +17,15 @@ BUMPER = [[63.5, -4.2, -37.0], [38.8, -1.1, -27.5], [22.4, 1.0, -17.6]]
 
 
 def _measure(api: Api, i: int, lab: list[list[float]], part: str) -> int:
-    panel = api.client.post(f"{V1}/panels", json={"job": "J-S", "part": part}, headers=api.auth("technician")).json()
+    panel = api.client.post(
+        f"{V1}/panels", json={"job": "J-S", "part": part}, headers=api.auth("technician")
+    ).json()
     body = make_reading(41, i, panel_id=panel["id"]).model_dump(mode="json") | {
-        "lab": lab, "spectra": None, "wavelengths_nm": None, "gloss_gu": 90.0}
+        "lab": lab,
+        "spectra": None,
+        "wavelengths_nm": None,
+        "gloss_gu": 90.0,
+    }
     r = api.client.post(f"{V1}/measurements", json=body, headers=api.auth("technician"))
     assert r.status_code == 201, r.text
     return r.json()["id"]
@@ -31,27 +37,37 @@ def test_seam_qa_of_two_measured_panels(sqlite_api: Api) -> None:
     r = sqlite_api.client.post(f"{V1}/analyses/seam", json=req, headers=sqlite_api.auth("qa"))
     assert r.status_code == 201, r.text
     stored = r.json()
-    direct = seam_qa(AspecularMeasurements((15.0, 45.0, 110.0), np.array(FENDER), 90.0),
-                     AspecularMeasurements((15.0, 45.0, 110.0), np.array(BUMPER), 90.0), 6.0, tolerance=2.3)
+    direct = seam_qa(
+        AspecularMeasurements((15.0, 45.0, 110.0), np.array(FENDER), 90.0),
+        AspecularMeasurements((15.0, 45.0, 110.0), np.array(BUMPER), 90.0),
+        6.0,
+        tolerance=2.3,
+    )
     assert stored["kind"] == "seam_qa" and stored["inputs"].items() >= req.items()
     assert stored["result"]["passed"] is direct.passed
     assert stored["result"]["seam_de_max"] == pytest.approx(max(direct.seam_de), rel=1e-9)
     assert stored["result"]["corrected_paint"]["face"] == pytest.approx(list(direct.correction.paint.face))
     got = sqlite_api.client.get(f"{V1}/analyses/{stored['id']}", headers=sqlite_api.auth("stylist")).json()
     assert got == stored
-    listed = sqlite_api.client.get(f"{V1}/analyses", params={"kind": "seam_qa"}, headers=sqlite_api.auth("chemist"))
+    listed = sqlite_api.client.get(
+        f"{V1}/analyses", params={"kind": "seam_qa"}, headers=sqlite_api.auth("chemist")
+    )
     assert listed.json()["count"] == 1
-    events = sqlite_api.client.get(f"{V1}/audit", params={"entity": "analysis"}, headers=sqlite_api.auth("admin"))
+    events = sqlite_api.client.get(
+        f"{V1}/audit", params={"entity": "analysis"}, headers=sqlite_api.auth("admin")
+    )
     assert events.json()["data"][0]["action"] == "analysis.seam_qa"
 
 
 def test_seam_qa_refusals(sqlite_api: Api) -> None:
     a = _measure(sqlite_api, 0, FENDER, "fender")
     qa = sqlite_api.auth("qa")
-    r = sqlite_api.client.post(f"{V1}/analyses/seam", json={"measurement_a": a, "measurement_b": 999,
-                                                            "beta_deg": 5.0}, headers=qa)
+    r = sqlite_api.client.post(
+        f"{V1}/analyses/seam", json={"measurement_a": a, "measurement_b": 999, "beta_deg": 5.0}, headers=qa
+    )
     assert r.status_code == 404
-    r = sqlite_api.client.post(f"{V1}/analyses/seam", json={"measurement_a": a, "measurement_b": a,
-                                                            "beta_deg": 0.0}, headers=qa)
+    r = sqlite_api.client.post(
+        f"{V1}/analyses/seam", json={"measurement_a": a, "measurement_b": a, "beta_deg": 0.0}, headers=qa
+    )
     assert r.status_code == 422
     assert r.json()["detail"][0]["ctx"]["accepted"] == "0 < |β| <= 45 degrees"

@@ -13,14 +13,21 @@ DESIGN = {"face": [62.0, -4.0, -38.0], "flop": [24.0, 1.0, -20.0], "travel_deg":
 
 def test_every_write_is_audited_with_actor_and_time(sqlite_api: Api) -> None:
     c = sqlite_api.client
-    ids = {role: c.get(f"{V1}/me", headers=sqlite_api.auth(role)).json()["id"]
-           for role in ("admin", "technician", "qa", "stylist")}
+    ids = {
+        role: c.get(f"{V1}/me", headers=sqlite_api.auth(role)).json()["id"]
+        for role in ("admin", "technician", "qa", "stylist")
+    }
     reading = make_reading(31, 0).model_dump(mode="json")
     writes: list[tuple[str, str, str, dict | None, str]] = [
         ("technician", "POST", f"{V1}/panels", {"job": "J-1", "part": "hood"}, "panel.create"),
         ("technician", "POST", f"{V1}/measurements", reading, "measurement.create"),
-        ("qa", "POST", f"{V1}/measurements/1/corrections",
-         {"reason": "re-measured", "reading": make_reading(31, 1).model_dump(mode="json")}, "measurement.correct"),
+        (
+            "qa",
+            "POST",
+            f"{V1}/measurements/1/corrections",
+            {"reason": "re-measured", "reading": make_reading(31, 1).model_dump(mode="json")},
+            "measurement.correct",
+        ),
         ("stylist", "POST", f"{V1}/designs", {"name": "d", "design": DESIGN}, "design.create"),
         ("stylist", "PUT", f"{V1}/designs/1", {"design": DESIGN | {"travel_deg": 50.0}}, "design.version"),
         ("stylist", "DELETE", f"{V1}/designs/1", None, "design.archive"),
@@ -41,7 +48,9 @@ def test_every_write_is_audited_with_actor_and_time(sqlite_api: Api) -> None:
     # 4 users created by the fixture outside the API + the bootstrap admin, then one per write above
     assert total == 5 + len(writes)
     # a re-sent reading is not a write: no audit event
-    assert c.post(f"{V1}/measurements", json=reading, headers=sqlite_api.auth("technician")).status_code == 200
+    assert (
+        c.post(f"{V1}/measurements", json=reading, headers=sqlite_api.auth("technician")).status_code == 200
+    )
     assert c.get(f"{V1}/audit", headers=sqlite_api.auth("admin")).json()["count"] == total
     # reads leave nothing either; and the audit log itself is not writable through the API
     assert c.post(f"{V1}/audit", json={}, headers=sqlite_api.auth("admin")).status_code == 405

@@ -33,8 +33,12 @@ def test_simulators_are_attached(sim_api: Api) -> None:
 
 def test_measure_with_gloss_stores_lab_from_spectra(sim_api: Api) -> None:
     ids = _ids(sim_api)
-    r = sim_api.client.post(f"{V1}/instruments/{ids['spectro']}/measure", params={"gloss_instrument_id": ids["gloss"]},
-                            json={}, headers=sim_api.auth("technician"))
+    r = sim_api.client.post(
+        f"{V1}/instruments/{ids['spectro']}/measure",
+        params={"gloss_instrument_id": ids["gloss"]},
+        json={},
+        headers=sim_api.auth("technician"),
+    )
     assert r.status_code == 201, r.text
     m = r.json()["measurement"]
     assert 0 < m["gloss_gu"] <= 100 and m["gloss_geometry_deg"] == 60
@@ -56,10 +60,19 @@ def test_instrument_errors(sim_api: Api) -> None:
     r = c.post(f"{V1}/instruments/{ids['spectro']}/measure", json={"illumination_deg": 15}, headers=tech)
     assert r.status_code == 422 and "one of [45]" in r.json()["detail"][0]["ctx"]["accepted"]
     assert c.post(f"{V1}/instruments/{ids['gloss']}/measure", json={}, headers=tech).status_code == 422
-    assert c.post(f"{V1}/instruments/{ids['spectro']}/measure", json={"panel_id": 777}, headers=tech).status_code == 404
-    assert c.post(f"{V1}/instruments/connect", json={"address": "ma6@/dev/does-not-exist"},
-                  headers=tech).status_code == 404
-    cal = c.post(f"{V1}/instruments/{ids['gloss']}/calibrate", json={"reference": "black glass"}, headers=tech)
+    assert (
+        c.post(f"{V1}/instruments/{ids['spectro']}/measure", json={"panel_id": 777}, headers=tech).status_code
+        == 404
+    )
+    assert (
+        c.post(
+            f"{V1}/instruments/connect", json={"address": "ma6@/dev/does-not-exist"}, headers=tech
+        ).status_code
+        == 404
+    )
+    cal = c.post(
+        f"{V1}/instruments/{ids['gloss']}/calibrate", json={"reference": "black glass"}, headers=tech
+    )
     assert cal.status_code == 200 and cal.json()["passed"] is True
     events = c.get(f"{V1}/audit", params={"entity": "calibration"}, headers=sim_api.auth("admin")).json()
     assert events["data"][0]["action"] == "instrument.calibrate"

@@ -73,8 +73,15 @@ PUBLIC = {("GET", "/health")}
 
 
 def _concrete(path: str) -> str:
-    return re.sub(r"\{[a-z_]+\}", lambda m: "ma6-nothing" if m.group() == "{instrument_id}" else
-                  ("NOPE" if m.group() == "{code}" else "424242"), path)
+    return re.sub(
+        r"\{[a-z_]+\}",
+        lambda m: (
+            "ma6-nothing"
+            if m.group() == "{instrument_id}"
+            else ("NOPE" if m.group() == "{code}" else "424242")
+        ),
+        path,
+    )
 
 
 def _routes(api: Api) -> set[tuple[str, str]]:
@@ -89,8 +96,12 @@ def test_table_covers_every_route(sqlite_api: Api) -> None:
 def test_every_route_refuses_missing_and_wrong_tokens(sqlite_api: Api) -> None:
     for method, path in EXPECTED:
         url = _concrete(path)
-        for headers in ({}, {"Authorization": "Bearer cst_not-a-real-token"}, {"Authorization": "Basic Zm9vOmJhcg=="},
-                        {"Authorization": f"Bearer {sqlite_api.tokens[A]}x"}):
+        for headers in (
+            {},
+            {"Authorization": "Bearer cst_not-a-real-token"},
+            {"Authorization": "Basic Zm9vOmJhcg=="},
+            {"Authorization": f"Bearer {sqlite_api.tokens[A]}x"},
+        ):
             r = sqlite_api.client.request(method, url, headers=headers, json={})
             assert r.status_code == 401, (method, path, headers, r.status_code, r.text)
             assert r.headers.get("www-authenticate") == "Bearer"

@@ -10,8 +10,14 @@ from tests.api.conftest import Api
 from tests.ingest._readings import make_reading
 
 V1 = "/api/v1"
-DESIGN = {"schema": "cacad.design/1", "name": "Blue metallic", "face": [62.0, -4.0, -38.0],
-          "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0, "gloss_gu": 88.0}
+DESIGN = {
+    "schema": "cacad.design/1",
+    "name": "Blue metallic",
+    "face": [62.0, -4.0, -38.0],
+    "flop": [24.0, 1.0, -20.0],
+    "travel_deg": 70.0,
+    "gloss_gu": 88.0,
+}
 
 
 def _reading(i: int, panel_id: int | None = None, serial: str = "SIM-MA-0001") -> dict:
@@ -19,7 +25,9 @@ def _reading(i: int, panel_id: int | None = None, serial: str = "SIM-MA-0001") -
 
 
 def _panel(api: Api, job: str = "J-1", part: str = "bumper") -> int:
-    r = api.client.post(f"{V1}/panels", json={"job": job, "part": part, "substrate": "PP"}, headers=api.auth("technician"))
+    r = api.client.post(
+        f"{V1}/panels", json={"job": job, "part": part, "substrate": "PP"}, headers=api.auth("technician")
+    )
     assert r.status_code == 201, r.text
     return r.json()["id"]
 
@@ -40,9 +48,14 @@ def test_measurement_create_is_idempotent_and_audited(api: Api) -> None:
     assert first.json()["instrument_serial"] == "SIM-MA-0001"
     assert first.json()["lab"] == body["lab"]
     forged = _reading(1, panel) | {"client_id": body["client_id"]}
-    assert api.client.post(f"{V1}/measurements", json=forged, headers=api.auth("technician")).status_code == 409
+    assert (
+        api.client.post(f"{V1}/measurements", json=forged, headers=api.auth("technician")).status_code == 409
+    )
     missing_panel = _reading(2, 9999)
-    assert api.client.post(f"{V1}/measurements", json=missing_panel, headers=api.auth("technician")).status_code == 404
+    assert (
+        api.client.post(f"{V1}/measurements", json=missing_panel, headers=api.auth("technician")).status_code
+        == 404
+    )
     events = api.client.get(f"{V1}/audit", params={"entity": "measurement"}, headers=api.auth("admin")).json()
     assert events["count"] == 1
     assert events["data"][0]["action"] == "measurement.create"
@@ -61,11 +74,17 @@ def test_correction_supersedes_and_keeps_the_original(api: Api) -> None:
     old = api.client.get(f"{V1}/measurements/{m['id']}", headers=api.auth("qa")).json()
     assert old["superseded_by_id"] == new["id"] and old["lab"] == m["lab"]
     again = {"reason": "second try", "reading": _reading(2)}
-    assert api.client.post(f"{V1}/measurements/{m['id']}/corrections", json=again,
-                           headers=api.auth("qa")).status_code == 409
+    assert (
+        api.client.post(
+            f"{V1}/measurements/{m['id']}/corrections", json=again, headers=api.auth("qa")
+        ).status_code
+        == 409
+    )
     heads = api.client.get(f"{V1}/measurements", headers=api.auth("qa")).json()
     assert [x["id"] for x in heads["data"]] == [new["id"]]
-    everything = api.client.get(f"{V1}/measurements", params={"include_superseded": True}, headers=api.auth("qa"))
+    everything = api.client.get(
+        f"{V1}/measurements", params={"include_superseded": True}, headers=api.auth("qa")
+    )
     assert everything.json()["count"] == 2
 
 
@@ -73,8 +92,12 @@ def test_query_filters_and_csv_export(api: Api) -> None:
     bumper, fender = _panel(api, "J-7", "bumper"), _panel(api, "J-7", "fender")
     other = _panel(api, "J-8", "door")
     for i, (panel, serial) in enumerate([(bumper, "A"), (bumper, "B"), (fender, "A"), (other, "A")]):
-        assert api.client.post(f"{V1}/measurements", json=_reading(i, panel, serial),
-                               headers=api.auth("technician")).status_code == 201
+        assert (
+            api.client.post(
+                f"{V1}/measurements", json=_reading(i, panel, serial), headers=api.auth("technician")
+            ).status_code
+            == 201
+        )
     get = lambda **p: api.client.get(f"{V1}/measurements", params=p, headers=api.auth("chemist")).json()  # noqa: E731
     assert get(job="J-7")["count"] == 3
     assert get(job="J-7", part="fender")["count"] == 1
@@ -103,33 +126,55 @@ def test_validation_is_422_with_field(api: Api) -> None:
 
 
 def test_designs_crud_with_versions(api: Api) -> None:
-    r = api.client.post(f"{V1}/designs", json={"name": "Blue", "design": DESIGN, "note": "v1"},
-                        headers=api.auth("stylist"))
+    r = api.client.post(
+        f"{V1}/designs", json={"name": "Blue", "design": DESIGN, "note": "v1"}, headers=api.auth("stylist")
+    )
     assert r.status_code == 201, r.text
     d = r.json()
     assert d["latest_version"] == 1 and d["design"]["face"] == DESIGN["face"]
     v2 = DESIGN | {"travel_deg": 55.0}
-    r = api.client.put(f"{V1}/designs/{d['id']}", json={"design": v2, "note": "less travel"}, headers=api.auth("stylist"))
+    r = api.client.put(
+        f"{V1}/designs/{d['id']}", json={"design": v2, "note": "less travel"}, headers=api.auth("stylist")
+    )
     assert r.json()["latest_version"] == 2 and r.json()["design"]["travel_deg"] == 55.0
     versions = api.client.get(f"{V1}/designs/{d['id']}/versions", headers=api.auth("chemist")).json()
     assert [(v["version"], v["design"]["travel_deg"]) for v in versions] == [(1, 70.0), (2, 55.0)]
     assert api.client.get(f"{V1}/designs/{d['id']}/versions/1", headers=api.auth("qa")).json()["note"] == "v1"
     assert api.client.get(f"{V1}/designs/{d['id']}/versions/3", headers=api.auth("qa")).status_code == 404
     bad = DESIGN | {"travel_deg": 10.0}  # refused by the schema (15 < travel_deg <= 180)
-    assert api.client.put(f"{V1}/designs/{d['id']}", json={"design": bad}, headers=api.auth("stylist")).status_code == 422
+    assert (
+        api.client.put(
+            f"{V1}/designs/{d['id']}", json={"design": bad}, headers=api.auth("stylist")
+        ).status_code
+        == 422
+    )
     # refused by the appearance model (design_from_dict), not the schema: no travel, yet face != flop
-    r = api.client.put(f"{V1}/designs/{d['id']}", json={"design": DESIGN | {"travel_deg": None}},
-                       headers=api.auth("stylist"))
+    r = api.client.put(
+        f"{V1}/designs/{d['id']}", json={"design": DESIGN | {"travel_deg": None}}, headers=api.auth("stylist")
+    )
     assert r.status_code == 422
     detail = r.json()["detail"][0]
     assert detail["loc"] == ["body", "design", "travel_deg"] and "travel_deg" in detail["ctx"]["accepted"]
-    assert api.client.delete(f"{V1}/designs/{d['id']}", headers=api.auth("stylist")).json()["archived"] is True
+    assert (
+        api.client.delete(f"{V1}/designs/{d['id']}", headers=api.auth("stylist")).json()["archived"] is True
+    )
     assert api.client.get(f"{V1}/designs", headers=api.auth("stylist")).json()["count"] == 0
-    listed = api.client.get(f"{V1}/designs", params={"include_archived": True}, headers=api.auth("stylist")).json()
+    listed = api.client.get(
+        f"{V1}/designs", params={"include_archived": True}, headers=api.auth("stylist")
+    ).json()
     assert listed["count"] == 1
-    assert api.client.put(f"{V1}/designs/{d['id']}", json={"design": v2}, headers=api.auth("stylist")).status_code == 409
-    actions = [e["action"] for e in api.client.get(f"{V1}/audit", params={"entity": "design"},
-                                                   headers=api.auth("admin")).json()["data"]]
+    assert (
+        api.client.put(
+            f"{V1}/designs/{d['id']}", json={"design": v2}, headers=api.auth("stylist")
+        ).status_code
+        == 409
+    )
+    actions = [
+        e["action"]
+        for e in api.client.get(f"{V1}/audit", params={"entity": "design"}, headers=api.auth("admin")).json()[
+            "data"
+        ]
+    ]
     assert actions == ["design.archive", "design.version", "design.create"]
 
 
@@ -139,11 +184,20 @@ def test_users_tokens_and_revocation(api: Api) -> None:
     issued = r.json()
     bob = {"Authorization": f"Bearer {issued['token']}"}
     assert api.client.get(f"{V1}/me", headers=bob).json()["name"] == "bob"
-    assert api.client.post(f"{V1}/users", json={"name": "bob", "role": "qa"}, headers=api.auth("admin")).status_code == 409
-    second = api.client.post(f"{V1}/users/{issued['user']['id']}/tokens", json={"label": "tablet"},
-                             headers=api.auth("admin")).json()["token"]
+    assert (
+        api.client.post(
+            f"{V1}/users", json={"name": "bob", "role": "qa"}, headers=api.auth("admin")
+        ).status_code
+        == 409
+    )
+    second = api.client.post(
+        f"{V1}/users/{issued['user']['id']}/tokens", json={"label": "tablet"}, headers=api.auth("admin")
+    ).json()["token"]
     assert api.client.get(f"{V1}/me", headers={"Authorization": f"Bearer {second}"}).status_code == 200
-    assert api.client.delete(f"{V1}/users/{issued['user']['id']}", headers=api.auth("admin")).json()["active"] is False
+    assert (
+        api.client.delete(f"{V1}/users/{issued['user']['id']}", headers=api.auth("admin")).json()["active"]
+        is False
+    )
     assert api.client.get(f"{V1}/me", headers=bob).status_code == 401
     assert api.client.get(f"{V1}/me", headers={"Authorization": f"Bearer {second}"}).status_code == 401
     stored = api.client.get(f"{V1}/users", headers=api.auth("admin")).json()

@@ -23,8 +23,13 @@ from tests.api.conftest import Api
 
 V1 = "/api/v1"
 GREY = {"face": [50.0, 0.0, 0.0], "flop": [50.0, 0.0, 0.0], "travel_deg": None}
-BLUE = {"name": "blue metallic", "face": [60.0, -4.0, -42.0], "flop": [18.0, 2.0, -22.0], "travel_deg": 55.0,
-        "gloss_gu": 88.0}
+BLUE = {
+    "name": "blue metallic",
+    "face": [60.0, -4.0, -42.0],
+    "flop": [18.0, 2.0, -22.0],
+    "travel_deg": 55.0,
+    "gloss_gu": 88.0,
+}
 BLUE_PAINT = FaceFlopTravelGloss((60.0, -4.0, -42.0), (18.0, 2.0, -22.0), 55.0, 88.0, "blue metallic")
 
 
@@ -33,7 +38,9 @@ def _beta_closed_form(lightness: float, eps: float, light_deg: float, brighter: 
     ti = math.radians(light_deg)
     k = (1.0 + (eps if brighter else -eps) / (lightness + 16.0)) ** 3
     c = k * math.cos(ti)
-    return math.inf if c > 1.0 else abs(math.degrees(math.acos(c) - ti))  # light at the normal cannot brighten
+    return (
+        math.inf if c > 1.0 else abs(math.degrees(math.acos(c) - ti))
+    )  # light at the normal cannot brighten
 
 
 def _count(api: Api, path: str) -> int:
@@ -53,27 +60,47 @@ def test_gg_index_equals_the_core_and_the_lambertian_closed_form(sqlite_api: Api
         assert got["reached"] is True
         assert got["beta_min_deg"] == pytest.approx(expected, abs=0.01)
     # effect paint, several lights, per geometry: same as the core
-    body = {"paint": BLUE, "lights_deg": [30.0, 45.0], "method": "cie2000", "epsilon": 1.0, "per_geometry": True,
-            "direction": "+", "hinge": "out-of-plane"}
+    body = {
+        "paint": BLUE,
+        "lights_deg": [30.0, 45.0],
+        "method": "cie2000",
+        "epsilon": 1.0,
+        "per_geometry": True,
+        "direction": "+",
+        "hinge": "out-of-plane",
+    }
     got = c.post(f"{V1}/analyses/gg-index", json=body, headers=qa).json()
-    direct = goniogeometric_index(BLUE_PAINT, [30.0, 45.0], None, epsilon=1.0, method="cie2000", direction="+",
-                                  hinge="out-of-plane").to_dict(per_geometry=True)
+    direct = goniogeometric_index(
+        BLUE_PAINT, [30.0, 45.0], None, epsilon=1.0, method="cie2000", direction="+", hinge="out-of-plane"
+    ).to_dict(per_geometry=True)
     assert got["beta_min_deg"] == pytest.approx(direct["beta_min_deg"])
     assert len(got["per_geometry"]) == len(direct["per_geometry"])
 
 
 def test_gg_index_never_reached_says_so(sqlite_api: Api) -> None:
     body = {"paint": GREY, "lights_deg": [30.0], "views_deg": [0.0], "epsilon": 50.0, "beta_max_deg": 1.0}
-    got = sqlite_api.client.post(f"{V1}/analyses/gg-index", json=body, headers=sqlite_api.auth("admin")).json()
+    got = sqlite_api.client.post(
+        f"{V1}/analyses/gg-index", json=body, headers=sqlite_api.auth("admin")
+    ).json()
     assert got["reached"] is False and got["beta_min_deg"] is None and got["message"]
 
 
-@pytest.mark.parametrize(("change", "field"), [
-    ({"lights_deg": [95.0]}, "lights_deg"), ({"lights_deg": []}, "lights_deg"), ({"epsilon": 0.0}, "epsilon"),
-    ({"method": "cie1900"}, "method"), ({"direction": "up"}, "direction"), ({"beta_max_deg": 90.0}, "beta_max_deg"),
-    ({"paint": GREY | {"face": [50.0, 0.0, 999.0]}}, "paint"),
-    ({"paint": GREY | {"flop": [20.0, 0.0, 0.0]}}, "paint"),  # refused by the model: no travel, face != flop
-])
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        ({"lights_deg": [95.0]}, "lights_deg"),
+        ({"lights_deg": []}, "lights_deg"),
+        ({"epsilon": 0.0}, "epsilon"),
+        ({"method": "cie1900"}, "method"),
+        ({"direction": "up"}, "direction"),
+        ({"beta_max_deg": 90.0}, "beta_max_deg"),
+        ({"paint": GREY | {"face": [50.0, 0.0, 999.0]}}, "paint"),
+        (
+            {"paint": GREY | {"flop": [20.0, 0.0, 0.0]}},
+            "paint",
+        ),  # refused by the model: no travel, face != flop
+    ],
+)
 def test_gg_index_bad_input_is_422_naming_the_field(sqlite_api: Api, change: dict, field: str) -> None:
     body = {"paint": GREY, "lights_deg": [30.0]} | change
     r = sqlite_api.client.post(f"{V1}/analyses/gg-index", json=body, headers=sqlite_api.auth("qa"))
@@ -97,7 +124,12 @@ def test_trompe_loeil_equals_the_core(sqlite_api: Api) -> None:
 
 
 def test_sweep_equals_the_core(sqlite_api: Api) -> None:
-    body = {"paint": BLUE, "betas_deg": [1.0, 3.0, 8.0], "lights_deg": [15.0, 45.0], "views_deg": [-30.0, 0.0, 30.0]}
+    body = {
+        "paint": BLUE,
+        "betas_deg": [1.0, 3.0, 8.0],
+        "lights_deg": [15.0, 45.0],
+        "views_deg": [-30.0, 0.0, 30.0],
+    }
     r = sqlite_api.client.post(f"{V1}/analyses/sweep", json=body, headers=sqlite_api.auth("qa"))
     assert r.status_code == 200, r.text
     direct = seam_sweep(BLUE_PAINT, [1.0, 3.0, 8.0], [15.0, 45.0], [-30.0, 0.0, 30.0]).to_dict()
@@ -141,6 +173,10 @@ def test_failed_seam_requests_store_nothing(sqlite_api: Api) -> None:
     ):
         r = c.post(f"{V1}/analyses/seam", json=bad, headers=qa)
         assert r.status_code == 422, (bad, r.text)
-    assert c.post(f"{V1}/analyses/seam", json={"measurement_a": 7, "design_b": BLUE, "beta_deg": 3.0},
-                  headers=qa).status_code == 404
+    assert (
+        c.post(
+            f"{V1}/analyses/seam", json={"measurement_a": 7, "design_b": BLUE, "beta_deg": 3.0}, headers=qa
+        ).status_code
+        == 404
+    )
     assert (_count(sqlite_api, "analyses"), _count(sqlite_api, "audit")) == before

@@ -26,11 +26,18 @@ from tests.api.conftest import Api
 
 V1 = "/api/v1"
 ANGLES = (15.0, 45.0, 110.0)
-DESIGN = {"name": "Blue metallic", "face": [62.0, -4.0, -38.0], "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0,
-          "gloss_gu": 88.0}
-CSV = ("code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110\n"
-       "R-1,solid,90,40,50,30,40,50,30,40,50,30\n"
-       "M-1,metallic,85,90,-2,-30,60,-1,-25,30,0,-15\n")
+DESIGN = {
+    "name": "Blue metallic",
+    "face": [62.0, -4.0, -38.0],
+    "flop": [24.0, 1.0, -20.0],
+    "travel_deg": 70.0,
+    "gloss_gu": 88.0,
+}
+CSV = (
+    "code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110\n"
+    "R-1,solid,90,40,50,30,40,50,30,40,50,30\n"
+    "M-1,metallic,85,90,-2,-30,60,-1,-25,30,0,-15\n"
+)
 
 
 @pytest.fixture
@@ -56,8 +63,11 @@ def _counts(api: Api) -> tuple[int, int]:
 def test_snap_is_the_brute_force_top_k(lib_api: tuple[Api, list[dict]], metric: str) -> None:
     api, rows = lib_api
     target = design_from_dict(DESIGN).lab_at(np.array(ANGLES))
-    r = api.client.post(f"{V1}/formulation/snap", json={"design": DESIGN, "k": 4, "metric": metric},
-                        headers=api.auth("chemist"))
+    r = api.client.post(
+        f"{V1}/formulation/snap",
+        json={"design": DESIGN, "k": 4, "metric": metric},
+        headers=api.auth("chemist"),
+    )
     assert r.status_code == 200, r.text
     got = r.json()
     lab = _stored_lab(rows)  # the design is the reference (DIN 6175-2 is not symmetric)
@@ -70,21 +80,34 @@ def test_snap_is_the_brute_force_top_k(lib_api: tuple[Api, list[dict]], metric: 
     assert got["matches"][0]["recipe"] == rows[int(order[0])]["extra"]["recipe"]
     assert got["library_paints"] == len(rows) and got["synthetic"] is True
     # the same target as Lab triples gives the same answer
-    by_lab = api.client.post(f"{V1}/formulation/snap", json={"lab": target.tolist(), "k": 4, "metric": metric},
-                             headers=api.auth("admin")).json()
+    by_lab = api.client.post(
+        f"{V1}/formulation/snap",
+        json={"lab": target.tolist(), "k": 4, "metric": metric},
+        headers=api.auth("admin"),
+    ).json()
     assert [m["code"] for m in by_lab["matches"]] == [m["code"] for m in got["matches"]]
 
 
 def test_snap_index_is_built_once_per_library(lib_api: tuple[Api, list[dict]]) -> None:
     api, _ = lib_api
     for k in (1, 2, 3):
-        assert api.client.post(f"{V1}/formulation/snap", json={"design": DESIGN, "k": k},
-                               headers=api.auth("chemist")).status_code == 200
+        assert (
+            api.client.post(
+                f"{V1}/formulation/snap", json={"design": DESIGN, "k": k}, headers=api.auth("chemist")
+            ).status_code
+            == 200
+        )
     cache = api.client.app.state.library_cache  # type: ignore[attr-defined]
     assert cache.builds == 1
-    assert api.client.post(f"{V1}/library/import", content=CSV, headers=api.auth("chemist")).status_code == 201
-    assert api.client.post(f"{V1}/formulation/snap", json={"lab": [[40, 50, 30]] * 3, "k": 1},
-                           headers=api.auth("chemist")).json()["matches"][0]["code"] == "R-1"
+    assert (
+        api.client.post(f"{V1}/library/import", content=CSV, headers=api.auth("chemist")).status_code == 201
+    )
+    assert (
+        api.client.post(
+            f"{V1}/formulation/snap", json={"lab": [[40, 50, 30]] * 3, "k": 1}, headers=api.auth("chemist")
+        ).json()["matches"][0]["code"]
+        == "R-1"
+    )
     assert cache.builds == 2  # rebuilt once for the changed library
 
 
@@ -103,8 +126,9 @@ def test_snap_refusals(sqlite_api: Api) -> None:
 def test_formulate_predicted_de_is_the_colorant_models(lib_api: tuple[Api, list[dict]]) -> None:
     api, _ = lib_api
     target = design_from_dict(DESIGN).lab_at(np.array(ANGLES))
-    r = api.client.post(f"{V1}/formulation/formulate", json={"design": DESIGN, "tolerance": 1.0},
-                        headers=api.auth("chemist"))
+    r = api.client.post(
+        f"{V1}/formulation/formulate", json={"design": DESIGN, "tolerance": 1.0}, headers=api.auth("chemist")
+    )
     assert r.status_code == 200, r.text
     got = r.json()
     names = default_database().names
@@ -115,27 +139,42 @@ def test_formulate_predicted_de_is_the_colorant_models(lib_api: tuple[Api, list[
     assert got["mean_de"] == pytest.approx(np.mean(got["de_per_angle"]))
     assert got["formulable"] is (got["mean_de"] <= 1.0)
     assert got["synthetic_colorants"] is True and got["matches"]
-    r = api.client.post(f"{V1}/formulation/formulate", json={"design": DESIGN, "tolerance": 0.0},
-                        headers=api.auth("chemist"))
+    r = api.client.post(
+        f"{V1}/formulation/formulate", json={"design": DESIGN, "tolerance": 0.0}, headers=api.auth("chemist")
+    )
     assert r.status_code == 422 and r.json()["detail"][0]["loc"][:2] == ["body", "tolerance"]
 
 
 def test_formulate_a_stored_design_version(lib_api: tuple[Api, list[dict]]) -> None:
     api, _ = lib_api
-    d = api.client.post(f"{V1}/designs", json={"name": "Blue", "design": DESIGN}, headers=api.auth("stylist")).json()
-    r = api.client.post(f"{V1}/formulation/formulate", json={"design_id": d["id"], "version": 1},
-                        headers=api.auth("chemist"))
+    d = api.client.post(
+        f"{V1}/designs", json={"name": "Blue", "design": DESIGN}, headers=api.auth("stylist")
+    ).json()
+    r = api.client.post(
+        f"{V1}/formulation/formulate", json={"design_id": d["id"], "version": 1}, headers=api.auth("chemist")
+    )
     assert r.status_code == 200, r.text
-    np.testing.assert_allclose(r.json()["design_lab"], design_from_dict(DESIGN).lab_at(np.array(ANGLES)), atol=1e-9)
-    assert api.client.post(f"{V1}/formulation/formulate", json={"design_id": d["id"], "version": 2},
-                           headers=api.auth("chemist")).status_code == 404
+    np.testing.assert_allclose(
+        r.json()["design_lab"], design_from_dict(DESIGN).lab_at(np.array(ANGLES)), atol=1e-9
+    )
+    assert (
+        api.client.post(
+            f"{V1}/formulation/formulate",
+            json={"design_id": d["id"], "version": 2},
+            headers=api.auth("chemist"),
+        ).status_code
+        == 404
+    )
 
 
 @pytest.mark.parametrize("fmt", ["xml", "cxf"])
 def test_export_reads_back_with_the_match(lib_api: tuple[Api, list[dict]], fmt: str) -> None:
     api, _ = lib_api
-    r = api.client.post(f"{V1}/formulation/export", json={"design": DESIGN, "format": fmt, "five_angles": True},
-                        headers=api.auth("chemist"))
+    r = api.client.post(
+        f"{V1}/formulation/export",
+        json={"design": DESIGN, "format": fmt, "five_angles": True},
+        headers=api.auth("chemist"),
+    )
     assert r.status_code == 200, r.text
     assert r.headers["content-type"].startswith("application/xml")
     assert f'filename="Blue_metallic.{fmt}"' in r.headers["content-disposition"]
@@ -145,21 +184,31 @@ def test_export_reads_back_with_the_match(lib_api: tuple[Api, list[dict]], fmt: 
     for s in specs[0].sets:
         np.testing.assert_allclose(s.lab, design.lab_at(np.asarray(s.angles_deg)), atol=1e-4)
     assert {tuple(s.angles_deg) for s in specs[0].sets} >= {(15.0, 45.0, 110.0), (25.0, 45.0, 75.0)}
-    snap = api.client.post(f"{V1}/formulation/snap", json={"design": DESIGN, "k": 1},
-                           headers=api.auth("chemist")).json()
+    snap = api.client.post(
+        f"{V1}/formulation/snap", json={"design": DESIGN, "k": 1}, headers=api.auth("chemist")
+    ).json()
     assert specs[1].code == r.headers["x-match-code"] == snap["matches"][0]["code"]
-    alone = api.client.post(f"{V1}/formulation/export", json={"design": DESIGN, "match": False},
-                            headers=api.auth("chemist"))
+    alone = api.client.post(
+        f"{V1}/formulation/export", json={"design": DESIGN, "match": False}, headers=api.auth("chemist")
+    )
     assert [s.role for s in read_color_xml(alone.content)] == ["design"]
 
 
 def test_library_import_and_export_round_trip(sqlite_api: Api) -> None:
     c, chem = sqlite_api.client, sqlite_api.auth("chemist")
-    r = c.post(f"{V1}/library/import", params={"name": "lab paints"}, content=CSV,
-               headers=chem | {"Content-Type": "text/csv"})
+    r = c.post(
+        f"{V1}/library/import",
+        params={"name": "lab paints"},
+        content=CSV,
+        headers=chem | {"Content-Type": "text/csv"},
+    )
     assert r.status_code == 201, r.text
-    assert r.json() == {"library": "lab paints", "paints": 2, "angles_deg": [15.0, 45.0, 110.0],
-                        "types": {"solid": 1, "metallic": 1, "pearl": 0}}
+    assert r.json() == {
+        "library": "lab paints",
+        "paints": 2,
+        "angles_deg": [15.0, 45.0, 110.0],
+        "types": {"solid": 1, "metallic": 1, "pearl": 0},
+    }
     paint = c.get(f"{V1}/library/M-1", headers=sqlite_api.auth("stylist")).json()
     assert paint["lab"][0] == [90.0, -2.0, -30.0] and paint["extra"]["library"] == "lab paints"
     exported = c.get(f"{V1}/library/export.csv", headers=sqlite_api.auth("qa"))
@@ -197,20 +246,28 @@ def test_browse_filters_like_the_thesis_browser(lib_api: tuple[Api, list[dict]])
     api, rows = lib_api
     lab = _stored_lab(rows)
     flop = [library_indices(*lab[i]).flop_index for i in range(len(rows))]
-    expected = [r["code"] for r, f in zip(rows, flop, strict=True)
-                if r["category"] in ("metallic", "pearl") and f is not None and 3.0 <= f <= 12.0]
+    expected = [
+        r["code"]
+        for r, f in zip(rows, flop, strict=True)
+        if r["category"] in ("metallic", "pearl") and f is not None and 3.0 <= f <= 12.0
+    ]
     params = {"types": ["metallic", "pearl"], "flop_min": 3.0, "flop_max": 12.0, "limit": 1000}
     r = api.client.get(f"{V1}/library/browse", params=params, headers=api.auth("stylist"))
     assert r.status_code == 200, r.text
     got = r.json()
     assert [p["code"] for p in got["paints"]] == expected and got["matched"] == len(expected) > 0
     for p in got["paints"]:
-        assert p["indices"]["flop"] == pytest.approx(flop[[x["code"] for x in rows].index(p["code"])], rel=1e-9)
-    reds = api.client.get(f"{V1}/library/browse", params={"set": "solids", "group": "red"},
-                          headers=api.auth("qa")).json()
+        assert p["indices"]["flop"] == pytest.approx(
+            flop[[x["code"] for x in rows].index(p["code"])], rel=1e-9
+        )
+    reds = api.client.get(
+        f"{V1}/library/browse", params={"set": "solids", "group": "red"}, headers=api.auth("qa")
+    ).json()
     assert all(p["group"] == ["solids", "chromatic", "red"] for p in reds["paints"])
     assert reds["matched"] == got["hierarchy"]["solids"]["chromatic"].get("red", 0)
-    bad = api.client.get(f"{V1}/library/browse", params={"chroma_min": 5, "chroma_max": 1}, headers=api.auth("qa"))
+    bad = api.client.get(
+        f"{V1}/library/browse", params={"chroma_min": 5, "chroma_max": 1}, headers=api.auth("qa")
+    )
     assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][:2] == ["body", "chroma"]
     bad = api.client.get(f"{V1}/library/browse", params={"group": "purple"}, headers=api.auth("qa"))
     assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][:2] == ["query", "group"]
@@ -221,13 +278,23 @@ def test_closed_loop_is_stored_with_its_history(lib_api: tuple[Api, list[dict]])
     # a design inside the colorant gamut: a library paint's own colour (its recipe reproduces it)
     lab = _stored_lab(rows)[5]
     face, flop = [round(float(x), 4) for x in lab[0]], [round(float(x), 4) for x in lab[2]]
-    body = {"name": "in gamut", "face": face, "flop": flop, "travel_deg": None if face == flop else 60.0,
-            "gloss_gu": 80.0}
-    d = api.client.post(f"{V1}/designs", json={"name": "in gamut", "design": body}, headers=api.auth("stylist"))
+    body = {
+        "name": "in gamut",
+        "face": face,
+        "flop": flop,
+        "travel_deg": None if face == flop else 60.0,
+        "gloss_gu": 80.0,
+    }
+    d = api.client.post(
+        f"{V1}/designs", json={"name": "in gamut", "design": body}, headers=api.auth("stylist")
+    )
     assert d.status_code == 201, d.text
     before = _counts(api)
-    r = api.client.post(f"{V1}/formulation/closed-loop", json={"design_id": d.json()["id"], "corrections": 3},
-                        headers=api.auth("chemist"))
+    r = api.client.post(
+        f"{V1}/formulation/closed-loop",
+        json={"design_id": d.json()["id"], "corrections": 3},
+        headers=api.auth("chemist"),
+    )
     assert r.status_code == 201, r.text
     job = r.json()
     assert job["steps"] and job["steps"][0]["kind"] == "initial" and "SYNTHETIC" in job["measurement"]
@@ -241,9 +308,14 @@ def test_closed_loop_is_stored_with_its_history(lib_api: tuple[Api, list[dict]])
     assert (job["status"] == "converged") is (job["steps"][-1]["mean_de"] <= 1.0)
     stored = api.client.get(f"{V1}/recipes/{job['recipe_id']}", headers=api.auth("qa")).json()
     assert stored["recipe"] == job["final_recipe"] and stored["state"] in ("done", "failed")
-    events = api.client.get(f"{V1}/audit", params={"entity": "recipe"}, headers=api.auth("admin")).json()["data"]
+    events = api.client.get(f"{V1}/audit", params={"entity": "recipe"}, headers=api.auth("admin")).json()[
+        "data"
+    ]
     assert events[0]["action"] == "recipe.closed_loop" and events[0]["detail"]["status"] == job["status"]
     assert _counts(api)[1] == before[1] + 1
-    refused = api.client.post(f"{V1}/formulation/closed-loop", json={"design_id": d.json()["id"], "corrections": 9},
-                              headers=api.auth("chemist"))
+    refused = api.client.post(
+        f"{V1}/formulation/closed-loop",
+        json={"design_id": d.json()["id"], "corrections": 9},
+        headers=api.auth("chemist"),
+    )
     assert refused.status_code == 422 and refused.json()["detail"][0]["loc"][:2] == ["body", "corrections"]

@@ -40,7 +40,9 @@ def test_openapi_schema_is_complete(sqlite_api: Api) -> None:
                 assert {"401", "403"} <= set(op["responses"]), (method, path)
                 assert op.get("security") == [{"HTTPBearer": []}] or op.get("security"), (method, path)
             body = op.get("requestBody")
-            if body and "application/json" not in body["content"]:  # a raw upload (image, CSV) says what it is
+            if (
+                body and "application/json" not in body["content"]
+            ):  # a raw upload (image, CSV) says what it is
                 assert body.get("description"), (method, path)
             elif body:  # every JSON request body documents an example
                 name = body["content"]["application/json"]["schema"]["$ref"].rsplit("/", 1)[1]
@@ -55,13 +57,20 @@ def test_schemathesis_conformance(sqlite_api: Api) -> None:
     # seed rows so that id-addressed operations reach their happy paths too
     c = sqlite_api.client
     c.post("/api/v1/panels", json={"job": "J", "part": "door"}, headers=headers)
-    c.post("/api/v1/designs", json={"name": "d", "design": {"face": [50, 1, 1], "flop": [30, 1, 1],
-                                                             "travel_deg": 60}}, headers=headers)
+    c.post(
+        "/api/v1/designs",
+        json={"name": "d", "design": {"face": [50, 1, 1], "flop": [30, 1, 1], "travel_deg": 60}},
+        headers=headers,
+    )
     for i in range(2):
         c.post("/api/v1/measurements", json=make_reading(51, i).model_dump(mode="json"), headers=headers)
-    with app.state.sessions() as session:  # a small SYNTHETIC library: snap, formulate and export reach their work
-        session.execute(insert(LibraryPaint), library_rows(generate_library(n_solid=30, n_metallic=20, n_pearl=10,
-                                                                            seed=5)))
+    with (
+        app.state.sessions() as session
+    ):  # a small SYNTHETIC library: snap, formulate and export reach their work
+        session.execute(
+            insert(LibraryPaint),
+            library_rows(generate_library(n_solid=30, n_metallic=20, n_pearl=10, seed=5)),
+        )
         session.commit()
     failures: list[str] = []
     for result in schema.get_all_operations():
@@ -69,8 +78,13 @@ def test_schemathesis_conformance(sqlite_api: Api) -> None:
         if operation.path.endswith("/users/{user_id}"):  # deactivating user 1 would revoke our own token
             continue
 
-        @settings(max_examples=MAX_EXAMPLES, deadline=None, database=None, derandomize=True,
-                  suppress_health_check=list(HealthCheck))
+        @settings(
+            max_examples=MAX_EXAMPLES,
+            deadline=None,
+            database=None,
+            derandomize=True,
+            suppress_health_check=list(HealthCheck),
+        )
         @given(case=operation.as_strategy())
         def run(case: schemathesis.Case) -> None:
             case.call_and_validate(headers=headers, checks=CHECKS)
@@ -99,10 +113,30 @@ def test_documented_examples_validate() -> None:
     from station.api.schemas.users import TokenCreate, UserCreate
     from station.ingest import Reading
 
-    models = (Reading, PanelCreate, DesignCreate, DesignUpdate, UserCreate, TokenCreate, ConnectRequest,
-              CalibrateRequest, MeasureRequest, CorrectionCreate, RecipeCreate, SeamQaCreate, GgIndexRequest,
-              TrompeRequest, SweepRequest, VariationsRequest, SwatchRequest, SnapRequest, FormulateRequest,
-              ExportRequest, ClosedLoopRequest, RenderRequest)
+    models = (
+        Reading,
+        PanelCreate,
+        DesignCreate,
+        DesignUpdate,
+        UserCreate,
+        TokenCreate,
+        ConnectRequest,
+        CalibrateRequest,
+        MeasureRequest,
+        CorrectionCreate,
+        RecipeCreate,
+        SeamQaCreate,
+        GgIndexRequest,
+        TrompeRequest,
+        SweepRequest,
+        VariationsRequest,
+        SwatchRequest,
+        SnapRequest,
+        FormulateRequest,
+        ExportRequest,
+        ClosedLoopRequest,
+        RenderRequest,
+    )
     for model in models:
         examples = model.model_json_schema().get("examples")
         assert examples, model.__name__

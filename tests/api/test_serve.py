@@ -35,9 +35,23 @@ def _serve(data_dir: Path, *extra: str) -> Iterator[tuple[str, str]]:
     port = _free_port()
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "station.cli", "serve", "--data-dir", str(data_dir), "--port", str(port),
-         "--no-demo-library", *extra],
-        cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        [
+            sys.executable,
+            "-m",
+            "station.cli",
+            "serve",
+            "--data-dir",
+            str(data_dir),
+            "--port",
+            str(port),
+            "--no-demo-library",
+            *extra,
+        ],
+        cwd=REPO,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
     )
     base = f"http://127.0.0.1:{port}"
     out: list[str] = []
@@ -84,7 +98,9 @@ def test_serve_first_start_real_http(tmp_path: Path) -> None:
             assert all(0 < v < 200 for v in L)
             listed = http.get("/api/v1/measurements", params={"job": "J-9"}, headers=auth).json()
             assert listed["count"] == 1 and listed["data"][0]["id"] == m["id"]
-            assert http.post("/api/v1/instruments/ma6-nothing/measure", json={}, headers=auth).status_code == 404
+            assert (
+                http.post("/api/v1/instruments/ma6-nothing/measure", json={}, headers=auth).status_code == 404
+            )
     assert (tmp_path / "station.sqlite3").exists()
 
 

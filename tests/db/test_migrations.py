@@ -13,8 +13,18 @@ from db.base import Base
 from db.engine import make_engine
 
 TABLES = {
-    "instruments", "calibration_records", "panels", "measurements", "designs", "design_versions",
-    "library_paints", "formulation_jobs", "analysis_results", "users", "api_tokens", "audit_events",
+    "instruments",
+    "calibration_records",
+    "panels",
+    "measurements",
+    "designs",
+    "design_versions",
+    "library_paints",
+    "formulation_jobs",
+    "analysis_results",
+    "users",
+    "api_tokens",
+    "audit_events",
 }
 
 
@@ -46,8 +56,9 @@ def test_head_matches_the_models(database_url: str) -> None:
     engine = make_engine(database_url)
     try:
         with engine.connect() as conn:
-            diff = compare_metadata(MigrationContext.configure(conn, opts={"compare_type": True}),
-                                    Base.metadata)
+            diff = compare_metadata(
+                MigrationContext.configure(conn, opts={"compare_type": True}), Base.metadata
+            )
         assert diff == []
         assert migrate.current_revision(engine) == migrate.head_revision()
     finally:

@@ -19,8 +19,12 @@ T0 = dt.datetime(2026, 11, 23, 8, 30, tzinfo=dt.timezone(dt.timedelta(hours=2)))
 
 def _measurement(instrument_id: int, **kw: object) -> Measurement:
     fields: dict[str, object] = dict(
-        client_id=uuid.uuid4(), instrument_id=instrument_id, operator="ana", measured_at=T0,
-        geometries_deg=[15.0, 45.0, 110.0], lab=[[60.0, 1.0, 2.0], [40.0, 1.0, 1.0], [20.0, 0.5, 0.5]],
+        client_id=uuid.uuid4(),
+        instrument_id=instrument_id,
+        operator="ana",
+        measured_at=T0,
+        geometries_deg=[15.0, 45.0, 110.0],
+        lab=[[60.0, 1.0, 2.0], [40.0, 1.0, 1.0], [20.0, 0.5, 0.5]],
         payload_sha256="0" * 64,
     )
     fields.update(kw)
@@ -115,8 +119,12 @@ def test_enum_check_constraints(session_factory) -> None:
         s.add(User(name="root", role=Role.ADMIN))
         s.commit()
         with pytest.raises(IntegrityError):
-            s.execute(text("INSERT INTO panels (job, part, substrate, notes, created_at) "
-                           "VALUES ('J1', 'wing', '', '', CURRENT_TIMESTAMP)"))
+            s.execute(
+                text(
+                    "INSERT INTO panels (job, part, substrate, notes, created_at) "
+                    "VALUES ('J1', 'wing', '', '', CURRENT_TIMESTAMP)"
+                )
+            )
             s.commit()
 
 
@@ -129,8 +137,11 @@ def test_database_refuses_update_and_delete_of_measurements(session_factory) -> 
         s.add(_measurement(inst.id))
         s.add(AuditEvent(action="measurement.create", entity="measurement", entity_id="1"))
         s.commit()
-        for sql in ("UPDATE measurements SET operator = 'x'", "DELETE FROM measurements",
-                    "DELETE FROM audit_events"):
+        for sql in (
+            "UPDATE measurements SET operator = 'x'",
+            "DELETE FROM measurements",
+            "DELETE FROM audit_events",
+        ):
             with pytest.raises(Exception, match="append-only"):
                 s.execute(text(sql))
             s.rollback()

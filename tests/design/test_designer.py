@@ -39,7 +39,9 @@ def test_moving_a_point_refits_live_and_passes_through_three_points(red_metallic
     assert edit.points.lab[1][0] == 35.0
     assert edit.points.lab[0] == pts.lab[0]  # the other points did not move
     # three angles: L passes exactly through the points (closed form, eq 3.3.8–3.3.10)
-    assert edit.design.lab_at(np.array(ANGLES_3))[:, 0] == pytest.approx([p[0] for p in edit.points.lab], abs=1e-6)
+    assert edit.design.lab_at(np.array(ANGLES_3))[:, 0] == pytest.approx(
+        [p[0] for p in edit.points.lab], abs=1e-6
+    )
     assert edit.design.face[0] == pytest.approx(60.0, abs=1e-6)
     assert len(edit.fit.residual_de) == 3
     assert pts.lab[1][0] != 35.0  # immutable input
@@ -59,8 +61,13 @@ def test_moving_a_point_on_a_and_b_refits(red_metallic) -> None:
 
 @pytest.mark.parametrize(
     ("channel", "angle", "value", "field"),
-    [("X", 15.0, 1.0, "channel"), ("L", 30.0, 1.0, "angle_deg"), ("L", 15.0, 120.0, "value"),
-     ("a", 15.0, 200.0, "value"), ("L", 15.0, float("nan"), "value")],
+    [
+        ("X", 15.0, 1.0, "channel"),
+        ("L", 30.0, 1.0, "angle_deg"),
+        ("L", 15.0, 120.0, "value"),
+        ("a", 15.0, 200.0, "value"),
+        ("L", 15.0, float("nan"), "value"),
+    ],
 )
 def test_move_point_rejects_bad_requests(red_metallic, channel, angle, value, field) -> None:
     with pytest.raises(DesignInputError) as err:
@@ -89,8 +96,14 @@ def test_hsb_edit_of_a_design_equals_editing_every_point(red_metallic) -> None:
     angles = np.linspace(0, 150, 31)
     old = red_metallic.lab_at(angles)
     h = math.radians(-75.0)
-    expect = np.stack([old[:, 0] + 8.0, 0.6 * (math.cos(h) * old[:, 1] - math.sin(h) * old[:, 2]),
-                       0.6 * (math.sin(h) * old[:, 1] + math.cos(h) * old[:, 2])], axis=1)
+    expect = np.stack(
+        [
+            old[:, 0] + 8.0,
+            0.6 * (math.cos(h) * old[:, 1] - math.sin(h) * old[:, 2]),
+            0.6 * (math.sin(h) * old[:, 1] + math.cos(h) * old[:, 2]),
+        ],
+        axis=1,
+    )
     assert new.lab_at(angles) == pytest.approx(expect, abs=1e-9)
     assert new.travel_deg == red_metallic.travel_deg
 
@@ -126,11 +139,17 @@ def test_picker_on_a_solid_gains_and_loses_travel() -> None:
         set_travel(solid, 60.0)
 
 
-@pytest.mark.parametrize(("fn", "args", "field"), [
-    (set_travel, (15.0,), "travel_deg"), (set_travel, (181.0,), "travel_deg"),
-    (set_gloss, (101.0,), "gloss_gu"), (set_gloss, (-0.1,), "gloss_gu"),
-    (move_face, (0.0, 0.0, 101.0), "face.L"), (move_arrow, (float("inf"), 0.0), "da"),
-])
+@pytest.mark.parametrize(
+    ("fn", "args", "field"),
+    [
+        (set_travel, (15.0,), "travel_deg"),
+        (set_travel, (181.0,), "travel_deg"),
+        (set_gloss, (101.0,), "gloss_gu"),
+        (set_gloss, (-0.1,), "gloss_gu"),
+        (move_face, (0.0, 0.0, 101.0), "face.L"),
+        (move_arrow, (float("inf"), 0.0), "da"),
+    ],
+)
 def test_picker_and_gloss_reject_out_of_range(red_metallic, fn, args, field) -> None:
     with pytest.raises(DesignInputError) as err:
         fn(red_metallic, *args)

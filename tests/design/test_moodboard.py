@@ -36,8 +36,13 @@ def test_boards_round_trip_through_json(tmp_path) -> None:
     back = MoodBoard.load(tmp_path / "mb.json")
     assert back == mb
     assert back.board("Hydrogen Blue").images[1] == BoardImage("b.jpg", 300.0, 40.0, 1.0)
-    assert back.with_board(Board("Orange Ball of Paris", (BoardImage("c.png"),))).board(
-        "Orange Ball of Paris").images[0].path == "c.png"
+    assert (
+        back.with_board(Board("Orange Ball of Paris", (BoardImage("c.png"),)))
+        .board("Orange Ball of Paris")
+        .images[0]
+        .path
+        == "c.png"
+    )
 
 
 def test_board_validation() -> None:

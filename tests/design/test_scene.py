@@ -124,8 +124,14 @@ def test_scene_from_external_buffers_matches_the_generator(sphere) -> None:
     from station.design.scene import scene_from_buffers
 
     inc = np.degrees(np.arccos(np.clip(sphere.normals @ sphere.light_dir, -1, 1)))
-    wrapped = scene_from_buffers(sphere.aspecular_deg, sphere.mask, incidence_deg=inc,
-                                 light_dirs=sphere.light_dirs, normals=sphere.normals, light_dir=sphere.light_dir)
+    wrapped = scene_from_buffers(
+        sphere.aspecular_deg,
+        sphere.mask,
+        incidence_deg=inc,
+        light_dirs=sphere.light_dirs,
+        normals=sphere.normals,
+        light_dir=sphere.light_dir,
+    )
     assert wrapped.lambert == pytest.approx(sphere.lambert, abs=1e-12)
     with pytest.raises(DesignInputError, match="lambert"):
         scene_from_buffers(sphere.aspecular_deg, sphere.mask)

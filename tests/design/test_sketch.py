@@ -38,7 +38,9 @@ def test_fit_recovers_a_rendered_design(sphere, initial, red_metallic) -> None:
     assert fit.design.gloss_gu == 50.0 and fit.gloss_source == "default"
     assert len(fit.lab_standard) == 3
     # the RGB curve at the standard angles (thesis §3.7.3) matches the design there
-    assert np.max(np.linalg.norm(np.array(fit.lab_standard) - red_metallic.lab_at([15, 45, 110]), axis=1)) < 2.5
+    assert (
+        np.max(np.linalg.norm(np.array(fit.lab_standard) - red_metallic.lab_at([15, 45, 110]), axis=1)) < 2.5
+    )
 
 
 @pytest.mark.parametrize("hue", [60.0, 180.0])

@@ -56,8 +56,9 @@ def test_in_between_adjusts_both_by_the_ratio(sphere, red_metallic) -> None:
     h = math.radians(30.0)
 
     def rot(lab):
-        return np.array([lab[0], lab[1] * math.cos(h) - lab[2] * math.sin(h),
-                         lab[1] * math.sin(h) + lab[2] * math.cos(h)])
+        return np.array(
+            [lab[0], lab[1] * math.cos(h) - lab[2] * math.sin(h), lab[1] * math.sin(h) + lab[2] * math.cos(h)]
+        )
 
     face, flop = np.array(red_metallic.face), np.array(red_metallic.flop)
     assert t.design.face == pytest.approx((1 - r) * face + r * rot(face))  # eq 3.6.5

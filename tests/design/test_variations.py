@@ -71,10 +71,15 @@ def test_solid_varies_as_one_colour() -> None:
     assert variations(solid, 5.0, "travel-gloss").variations[0].design is None
 
 
-@pytest.mark.parametrize(("degree", "category", "field"), [
-    (0.0, "face", "degree"), (51.0, "face", "degree"), (float("nan"), "face", "degree"),
-    (1.0, "gloss", "category"),
-])
+@pytest.mark.parametrize(
+    ("degree", "category", "field"),
+    [
+        (0.0, "face", "degree"),
+        (51.0, "face", "degree"),
+        (float("nan"), "face", "degree"),
+        (1.0, "gloss", "category"),
+    ],
+)
 def test_bad_requests_raise(red_metallic, degree, category, field) -> None:
     with pytest.raises(DesignInputError) as err:
         variations(red_metallic, degree, category)

@@ -34,8 +34,9 @@ class Ma6Bench:
     def __init__(self, measure_time_s: float = 0.01, **character) -> None:
         self.faults = FaultPlan()
         self.physics = SpectroPhysics(character=InstrumentCharacter(**character))
-        self.device = Ma6Device(self.physics, self.faults, measure_time_s=measure_time_s,
-                                calibrate_time_s=0.0, slow_s=0.4)
+        self.device = Ma6Device(
+            self.physics, self.faults, measure_time_s=measure_time_s, calibrate_time_s=0.0, slow_s=0.4
+        )
         self.host = PtyHost(self.device).start()
         self.inst = MA6Spectro(SerialTransport(self.host.path), **FAST)
 

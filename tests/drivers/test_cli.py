@@ -26,7 +26,9 @@ def test_list_json(capsys):
 
 
 def test_measure_sim_ma6_json_with_design(capsys, tmp_path):
-    design = FaceFlopTravelGloss(face=(60.0, -20.0, -30.0), flop=(30.0, -10.0, -35.0), travel_deg=60.0, gloss_gu=90.0)
+    design = FaceFlopTravelGloss(
+        face=(60.0, -20.0, -30.0), flop=(30.0, -10.0, -35.0), travel_deg=60.0, gloss_gu=90.0
+    )
     path = save_design(design, tmp_path / "blue.json")
     rc, out, err = run(capsys, "measure", "sim:ma6", "--design", str(path), "--panel", "P-17", "--json")
     assert rc == 0, err
@@ -34,7 +36,9 @@ def test_measure_sim_ma6_json_with_design(capsys, tmp_path):
     assert data["panel"] == "P-17"
     assert data["geometries"] == ["45as-15", "45as15", "45as25", "45as45", "45as75", "45as110"]
     assert np.asarray(data["spectra"]).shape == (6, 31)
-    de = delta_e(np.asarray(data["lab"]), design.lab_at(np.asarray([-15, 15, 25, 45, 75, 110])), method="cie2000")
+    de = delta_e(
+        np.asarray(data["lab"]), design.lab_at(np.asarray([-15, 15, 25, 45, 75, 110])), method="cie2000"
+    )
     assert float(de.max()) < 0.15
     assert data["gloss_gu"] is None and data["serial"] == "600123"
 

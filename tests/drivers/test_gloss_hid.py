@@ -78,7 +78,9 @@ class ScriptedHid:
 
 
 def feature_03(needed: int = 0) -> bytes:
-    body = struct.pack("<8s8s8sBI3fI", b"GLS3", b"GM0815", b"3.1.0", needed, 5, 100.0, 100.0, 100.0, 1795442400)
+    body = struct.pack(
+        "<8s8s8sBI3fI", b"GLS3", b"GM0815", b"3.1.0", needed, 5, 100.0, 100.0, 100.0, 1795442400
+    )
     body = body.ljust(63, b"\0")
     return b"\x03" + body + bytes([x8(body)])
 
@@ -114,14 +116,22 @@ def test_measure_bytes():
         r = inst.measure()
     assert hid.unexpected == [] and hid.pairs == []
     assert r.gloss_gu == {20: 34.5, 60: 88.0, 85: 78.5}
-    assert (r.haze_hu, r.log_haze, r.doi, r.rspec, r.calibration_id) == (9.25, 213.5, 2.25, 0.25, "CAL-GM0815-0005")
+    assert (r.haze_hu, r.log_haze, r.doi, r.rspec, r.calibration_id) == (
+        9.25,
+        213.5,
+        2.25,
+        0.25,
+        "CAL-GM0815-0005",
+    )
 
 
 def test_stale_and_corrupt_reports():
     bad = bytearray(in_report(2, 0x10, 0, 0, DATA))
     bad[-1] ^= 0xFF
-    pairs = [(out_report(0x10, 1), [in_report(7, 0x10, 0, 0, DATA), bytes(bad)]),  # stale seq, then bad xor
-             (out_report(0x10, 2), [in_report(2, 0x10, 0, 0, DATA)])]
+    pairs = [
+        (out_report(0x10, 1), [in_report(7, 0x10, 0, 0, DATA), bytes(bad)]),  # stale seq, then bad xor
+        (out_report(0x10, 2), [in_report(2, 0x10, 0, 0, DATA)]),
+    ]
     inst, hid = scripted(pairs)
     with inst.open():
         assert inst.measure().gloss_gu[60] == 88.0
@@ -129,7 +139,10 @@ def test_stale_and_corrupt_reports():
 
 
 def test_error_status_clears_then_raises():
-    pairs = [(out_report(0x10, 1), [in_report(1, 0x10, 140, 0)]), (out_report(0x30, 2), [in_report(2, 0x30, 0, 0)])]
+    pairs = [
+        (out_report(0x10, 1), [in_report(1, 0x10, 140, 0)]),
+        (out_report(0x30, 2), [in_report(2, 0x30, 0, 0)]),
+    ]
     inst, hid = scripted(pairs)
     with inst.open(), pytest.raises(TiltDetected):
         inst.measure()
@@ -179,8 +192,9 @@ def test_reading_physics(gm):
     assert 0 < r.haze_hu < 50 and 0 <= r.doi <= 100 and r.rspec >= 0
 
 
-@pytest.mark.parametrize("spec", ["no-reply@MS", "slow-reply@MS", "corrupt-checksum@MS", "partial-frame@MS",
-                                  "hang-after:1"])
+@pytest.mark.parametrize(
+    "spec", ["no-reply@MS", "slow-reply@MS", "corrupt-checksum@MS", "partial-frame@MS", "hang-after:1"]
+)
 def test_transient_faults_recover(gm, spec):
     gm.faults.add(spec)
     gm.dev.commands = 0
@@ -189,10 +203,19 @@ def test_transient_faults_recover(gm, spec):
     assert time.monotonic() - t0 < 3.0
 
 
-@pytest.mark.parametrize(("spec", "error"), [
-    ("lamp-failure", HardwareFailure), ("tilt", TiltDetected), ("battery-low", BatteryLow),
-    ("out-of-range", Misread), ("stuck-busy", DeviceTimeout), ("corrupt-checksum@MS:9", ProtocolError),
-    ("device-busy", DeviceInUse), ("cal-expired", CalibrationNeeded)])
+@pytest.mark.parametrize(
+    ("spec", "error"),
+    [
+        ("lamp-failure", HardwareFailure),
+        ("tilt", TiltDetected),
+        ("battery-low", BatteryLow),
+        ("out-of-range", Misread),
+        ("stuck-busy", DeviceTimeout),
+        ("corrupt-checksum@MS:9", ProtocolError),
+        ("device-busy", DeviceInUse),
+        ("cal-expired", CalibrationNeeded),
+    ],
+)
 def test_persistent_faults_typed(gm, spec, error):
     gm.faults.add(spec)
     t0 = time.monotonic()
@@ -236,8 +259,9 @@ def test_discovery_and_open_by_vid_pid_with_simulated_enumerate():
     b = GlossBench()
     found, _ = list_devices(hid_enumerate=b.dev.enumerate)
     assert "gloss@hid:/sim/hidraw0" in {d.address for d in found}
-    with open_instrument("gloss@hid:1209:ca60", device_factory=b.dev, enumerate_fn=b.dev.enumerate,
-                         timeout_s=0.2) as inst:
+    with open_instrument(
+        "gloss@hid:1209:ca60", device_factory=b.dev, enumerate_fn=b.dev.enumerate, timeout_s=0.2
+    ) as inst:
         assert abs(inst.measure().gloss_gu[60] - 88.0) < 0.6
 
 
@@ -249,4 +273,8 @@ def test_calibrate_and_clear_bytes():
         r = inst.calibrate()
     assert hid.unexpected == [] and hid.pairs == []
     assert (r.calibration_id, r.steps, r.passed, r.expires.timestamp()) == (
-        "CAL-GM0815-0006", ("standard",), True, 1795442400)
+        "CAL-GM0815-0006",
+        ("standard",),
+        True,
+        1795442400,
+    )

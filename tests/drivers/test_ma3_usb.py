@@ -50,7 +50,13 @@ def frame_len(buf: bytes) -> int | None:
     return None if len(buf) < 24 else 24 + struct.unpack_from("<I", buf, 16)[0] + 20
 
 
-ID_PAYLOAD = b"MA3\0\0\0\0\0" + b"300456\0\0" + b"2.0.7\0\0\0" + bytes([3]) + struct.pack("<6b", 45, 15, 45, 45, 45, 110)
+ID_PAYLOAD = (
+    b"MA3\0\0\0\0\0"
+    + b"300456\0\0"
+    + b"2.0.7\0\0\0"
+    + bytes([3])
+    + struct.pack("<6b", 45, 15, 45, 45, 45, 110)
+)
 CONNECT = [(raw_frame(0x0001, 1), reply(0x0001, 1, ID_PAYLOAD))]
 VALUES = np.linspace(0.05, 0.6, 93).reshape(3, 31)
 
@@ -82,11 +88,13 @@ def test_identify_bytes():
 
 
 def test_measure_bytes():
-    pairs = [*CONNECT,
-             (raw_frame(0x20, 2), reply(0x20, 2)),
-             (raw_frame(0x21, 3), reply(0x21, 3, b"\x01")),
-             (raw_frame(0x21, 4), reply(0x21, 4, b"\x00")),
-             (raw_frame(0x22, 5), reply(0x22, 5, data_payload()))]
+    pairs = [
+        *CONNECT,
+        (raw_frame(0x20, 2), reply(0x20, 2)),
+        (raw_frame(0x21, 3), reply(0x21, 3, b"\x01")),
+        (raw_frame(0x21, 4), reply(0x21, 4, b"\x00")),
+        (raw_frame(0x22, 5), reply(0x22, 5, data_payload())),
+    ]
     inst, fw = scripted(pairs)
     with inst.open():
         r = inst.measure()
@@ -97,17 +105,24 @@ def test_measure_bytes():
 
 
 def test_status_and_calibrate_bytes():
-    pairs = [*CONNECT,
-             (raw_frame(0x02, 2), reply(0x02, 2, struct.pack("<BIIf", 2, 7, 0, 24.5))),
-             (raw_frame(0x10, 3), reply(0x10, 3)),
-             (raw_frame(0x11, 4), reply(0x11, 4, struct.pack("<I", 8))),
-             (raw_frame(0x12, 5), reply(0x12, 5, struct.pack("<fBI", 0.125, 1, 1795442400)))]
+    pairs = [
+        *CONNECT,
+        (raw_frame(0x02, 2), reply(0x02, 2, struct.pack("<BIIf", 2, 7, 0, 24.5))),
+        (raw_frame(0x10, 3), reply(0x10, 3)),
+        (raw_frame(0x11, 4), reply(0x11, 4, struct.pack("<I", 8))),
+        (raw_frame(0x12, 5), reply(0x12, 5, struct.pack("<fBI", 0.125, 1, 1795442400))),
+    ]
     inst, fw = scripted(pairs)
     with inst.open():
         s = inst.status()
         c = inst.calibrate()
     finish(fw)
-    assert (s.needed, s.calibration_id, s.expires, s.temperature_c) == ("white", "CAL-300456-0007", None, 24.5)
+    assert (s.needed, s.calibration_id, s.expires, s.temperature_c) == (
+        "white",
+        "CAL-300456-0007",
+        None,
+        24.5,
+    )
     assert (c.calibration_id, c.verification_de, c.passed) == ("CAL-300456-0008", 0.125, True)
     assert c.expires.timestamp() == 1795442400
 
@@ -115,8 +130,13 @@ def test_status_and_calibrate_bytes():
 def test_bad_checksum_rejects_reading_and_reads_again():
     good = reply(0x22, 5, data_payload())
     bad = good[:-20] + bytes(16) + good[-4:]
-    pairs = [*CONNECT, (raw_frame(0x20, 2), reply(0x20, 2)), (raw_frame(0x21, 3), reply(0x21, 3, b"\x00")),
-             (raw_frame(0x22, 4), bad), (raw_frame(0x22, 5), reply(0x22, 5, data_payload()))]
+    pairs = [
+        *CONNECT,
+        (raw_frame(0x20, 2), reply(0x20, 2)),
+        (raw_frame(0x21, 3), reply(0x21, 3, b"\x00")),
+        (raw_frame(0x22, 4), bad),
+        (raw_frame(0x22, 5), reply(0x22, 5, data_payload())),
+    ]
     inst, fw = scripted(pairs)
     with inst.open():
         r = inst.measure()
@@ -135,10 +155,13 @@ def test_nack_sends_clear_then_typed_error():
 
 def test_late_reply_dropped_by_request_id():
     # MEASURE #2 gets no reply in time; the retry #3 is answered after the stale reply to #2
-    pairs = [*CONNECT, (raw_frame(0x20, 2), None),
-             (raw_frame(0x20, 3), reply(0x20, 2) + reply(0x20, 3)),
-             (raw_frame(0x21, 4), reply(0x21, 4, b"\x00")),
-             (raw_frame(0x22, 5), reply(0x22, 5, data_payload()))]
+    pairs = [
+        *CONNECT,
+        (raw_frame(0x20, 2), None),
+        (raw_frame(0x20, 3), reply(0x20, 2) + reply(0x20, 3)),
+        (raw_frame(0x21, 4), reply(0x21, 4, b"\x00")),
+        (raw_frame(0x22, 5), reply(0x22, 5, data_payload())),
+    ]
     inst, fw = scripted(pairs)
     with inst.open():
         inst.measure()
@@ -173,12 +196,25 @@ def ma3():
 
 def true_reading(r, bench) -> None:
     assert r.reflectance.shape == (3, 31)
-    de = delta_e(reflectance_to_lab(r.reflectance), bench.physics.design.lab_at(np.asarray(ANGLES)), method="cie2000")
+    de = delta_e(
+        reflectance_to_lab(r.reflectance), bench.physics.design.lab_at(np.asarray(ANGLES)), method="cie2000"
+    )
     assert float(de.max()) < 0.15
 
 
-@pytest.mark.parametrize("spec", ["no-reply@MS", "no-reply@RD", "slow-reply@MS", "slow-reply@RD", "corrupt-checksum",
-                                  "partial-frame", "garbage@PO", "hang-after:3"])
+@pytest.mark.parametrize(
+    "spec",
+    [
+        "no-reply@MS",
+        "no-reply@RD",
+        "slow-reply@MS",
+        "slow-reply@RD",
+        "corrupt-checksum",
+        "partial-frame",
+        "garbage@PO",
+        "hang-after:3",
+    ],
+)
 def test_transient_faults_recover(ma3, spec):
     ma3.faults.add(spec)
     ma3.fw.frames = 0
@@ -187,10 +223,19 @@ def test_transient_faults_recover(ma3, spec):
     assert time.monotonic() - t0 < 3.0
 
 
-@pytest.mark.parametrize(("spec", "error"), [
-    ("lamp-failure", HardwareFailure), ("tilt", TiltDetected), ("battery-low", BatteryLow),
-    ("out-of-range", Misread), ("stuck-busy", DeviceTimeout), ("corrupt-checksum:9", ProtocolError),
-    ("device-busy", DeviceInUse), ("cal-expired", CalibrationNeeded)])
+@pytest.mark.parametrize(
+    ("spec", "error"),
+    [
+        ("lamp-failure", HardwareFailure),
+        ("tilt", TiltDetected),
+        ("battery-low", BatteryLow),
+        ("out-of-range", Misread),
+        ("stuck-busy", DeviceTimeout),
+        ("corrupt-checksum:9", ProtocolError),
+        ("device-busy", DeviceInUse),
+        ("cal-expired", CalibrationNeeded),
+    ],
+)
 def test_persistent_faults_typed(ma3, spec, error):
     ma3.faults.add(spec)
     t0 = time.monotonic()

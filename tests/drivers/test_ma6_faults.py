@@ -39,8 +39,19 @@ def assert_true_reading(r: SpectralReading, bench: Ma6Bench, tol_de: float = 0.1
     assert float(np.max(de)) < tol_de
 
 
-@pytest.mark.parametrize("spec", ["no-reply@MS", "no-reply@RD", "slow-reply@MS", "slow-reply@RD",
-                                  "corrupt-checksum", "partial-frame", "partial-frame@PO", "garbage@MS"])
+@pytest.mark.parametrize(
+    "spec",
+    [
+        "no-reply@MS",
+        "no-reply@RD",
+        "slow-reply@MS",
+        "slow-reply@RD",
+        "corrupt-checksum",
+        "partial-frame",
+        "partial-frame@PO",
+        "garbage@MS",
+    ],
+)
 def test_transient_fault_recovers(ma6, spec):
     ma6.faults.add(spec)
     t0 = time.monotonic()
@@ -52,9 +63,15 @@ def test_transient_fault_recovers(ma6, spec):
 
 @pytest.mark.parametrize(
     ("spec", "error"),
-    [("lamp-failure", HardwareFailure), ("tilt", TiltDetected), ("battery-low", BatteryLow),
-     ("out-of-range", Misread), ("stuck-busy", DeviceTimeout), ("corrupt-checksum:9", ProtocolError),
-     ("device-busy", DeviceInUse)],
+    [
+        ("lamp-failure", HardwareFailure),
+        ("tilt", TiltDetected),
+        ("battery-low", BatteryLow),
+        ("out-of-range", Misread),
+        ("stuck-busy", DeviceTimeout),
+        ("corrupt-checksum:9", ProtocolError),
+        ("device-busy", DeviceInUse),
+    ],
 )
 def test_persistent_fault_is_typed_error(ma6, spec, error):
     ma6.faults.add(spec)
@@ -148,10 +165,16 @@ def test_port_held_by_another_process():
 
     bench = Ma6Bench()
     holder = subprocess.Popen(
-        [sys.executable, "-c",
-         "import fcntl, os, sys; fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY);"
-         "fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB); print('held', flush=True); sys.stdin.read()",
-         bench.host.path], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+        [
+            sys.executable,
+            "-c",
+            "import fcntl, os, sys; fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY);"
+            "fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB); print('held', flush=True); sys.stdin.read()",
+            bench.host.path,
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+    )
     try:
         assert holder.stdout.readline().strip() == b"held"
         with pytest.raises(DeviceInUse):

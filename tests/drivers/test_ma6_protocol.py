@@ -79,7 +79,11 @@ def test_calibrate_bytes():
     with scripted_pty(pairs) as (path, _), driver(path).open() as inst:
         r = inst.calibrate()
     assert (r.calibration_id, r.steps, r.verification_de, r.passed) == (
-        "CAL-600123-0008", ("zero", "white", "verify"), 0.12, True)
+        "CAL-600123-0008",
+        ("zero", "white", "verify"),
+        0.12,
+        True,
+    )
 
 
 def test_measure_bytes_and_values():
@@ -159,7 +163,12 @@ def test_garbage_before_reply_is_protocol_error_then_retry():
 def test_reflectance_out_of_range_is_misread():
     values = [row[:] for row in VALUES]
     values[2][5] = 3.5
-    pairs = [*CONNECT, (b"MS\r", OK), (b"PO\r", b"STATE=IDLE\r\n" + OK), (b"RD\r", with_cs(data_body(values)))]
+    pairs = [
+        *CONNECT,
+        (b"MS\r", OK),
+        (b"PO\r", b"STATE=IDLE\r\n" + OK),
+        (b"RD\r", with_cs(data_body(values))),
+    ]
     with scripted_pty(pairs) as (path, _), driver(path).open() as inst, pytest.raises(Misread):
         inst.measure()
 
@@ -173,7 +182,9 @@ def test_missing_geometry_is_unexpected_reply():
 
 def test_stuck_busy_times_out_bounded():
     busy = b"STATE=MEASURING\r\n" + OK
-    with scripted_pty([*CONNECT, (b"MS\r", OK)] + [(b"PO\r", busy)] * 200, ) as (path, dev):
+    with scripted_pty(
+        [*CONNECT, (b"MS\r", OK)] + [(b"PO\r", busy)] * 200,
+    ) as (path, dev):
         inst = driver(path).open()
         t0 = time.monotonic()
         with pytest.raises(DeviceTimeout):

@@ -69,17 +69,26 @@ def test_twelve_geometry_instrument():
 def test_temperature_rises_on_a_cold_instrument():
     clock_t = [0.0]
     phys = SpectroPhysics(warm=False, clock=lambda: clock_t[0])
-    with PtyHost(Ma6Device(phys, measure_time_s=0.0, clock=lambda: clock_t[0])) as host, \
-            MA6Spectro(SerialTransport(host.path), **FAST).open() as inst:
+    with (
+        PtyHost(Ma6Device(phys, measure_time_s=0.0, clock=lambda: clock_t[0])) as host,
+        MA6Spectro(SerialTransport(host.path), **FAST).open() as inst,
+    ):
         cold = inst.measure().temperature_c
         clock_t[0] = 600.0
         warm = inst.measure().temperature_c
     assert cold == pytest.approx(23.0, abs=0.05) and warm > 29.0
 
 
-@pytest.mark.parametrize(("address", "family"), [("/dev/ttyACM0", "ma6"), ("usb:1209:ca03", "ma3"),
-                                                 ("hid:1209:ca60", "gloss"), ("ma3@/dev/pts/3", "ma3"),
-                                                 ("rfc2217://h:1", "ma6")])
+@pytest.mark.parametrize(
+    ("address", "family"),
+    [
+        ("/dev/ttyACM0", "ma6"),
+        ("usb:1209:ca03", "ma3"),
+        ("hid:1209:ca60", "gloss"),
+        ("ma3@/dev/pts/3", "ma3"),
+        ("rfc2217://h:1", "ma6"),
+    ],
+)
 def test_split_address(address, family):
     assert split_address(address)[0] == family
 
@@ -113,8 +122,11 @@ def test_runtime_code_never_imports_simulators():
                 continue
             tree = ast.parse(text, str(path))
             for node in ast.walk(tree):
-                names = [a.name for a in node.names] if isinstance(node, ast.Import) else (
-                    [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+                names = (
+                    [a.name for a in node.names]
+                    if isinstance(node, ast.Import)
+                    else ([node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+                )
                 if any(n == "simulators" or n.startswith("simulators.") for n in names):
                     offenders.append(str(path.relative_to(root)))
     assert offenders == []

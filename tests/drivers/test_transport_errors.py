@@ -12,15 +12,27 @@ from station.drivers import CommunicationError, DeviceInUse, Disconnected
 from station.drivers.transport import _serial_error, _usb_error, parse_usb_id
 
 
-@pytest.mark.parametrize(("exc", "cls"), [
-    (serial.SerialException("device reports readiness to read but returned no data "
-                            "(device disconnected or multiple access on port?)"), Disconnected),
-    (serial.SerialException("read failed: [Errno 5] Input/output error"), Disconnected),
-    (serial.SerialException("Could not exclusively lock port /dev/ttyACM0: [Errno 11] Resource temporarily "
-                            "unavailable"), DeviceInUse),
-    (OSError(errno.EACCES, "Permission denied"), CommunicationError),
-    (serial.SerialException("[Errno 2] could not open port /dev/ttyX: No such file"), Disconnected),
-])
+@pytest.mark.parametrize(
+    ("exc", "cls"),
+    [
+        (
+            serial.SerialException(
+                "device reports readiness to read but returned no data "
+                "(device disconnected or multiple access on port?)"
+            ),
+            Disconnected,
+        ),
+        (serial.SerialException("read failed: [Errno 5] Input/output error"), Disconnected),
+        (
+            serial.SerialException(
+                "Could not exclusively lock port /dev/ttyACM0: [Errno 11] Resource temporarily unavailable"
+            ),
+            DeviceInUse,
+        ),
+        (OSError(errno.EACCES, "Permission denied"), CommunicationError),
+        (serial.SerialException("[Errno 2] could not open port /dev/ttyX: No such file"), Disconnected),
+    ],
+)
 def test_serial_errors(exc, cls):
     err = _serial_error("/dev/ttyACM0", exc)
     assert type(err) is cls
@@ -28,8 +40,15 @@ def test_serial_errors(exc, cls):
         assert "udev" in str(err)
 
 
-@pytest.mark.parametrize(("eno", "cls"), [(errno.EBUSY, DeviceInUse), (errno.ENODEV, Disconnected),
-                                          (errno.EPIPE, Disconnected), (errno.EACCES, CommunicationError)])
+@pytest.mark.parametrize(
+    ("eno", "cls"),
+    [
+        (errno.EBUSY, DeviceInUse),
+        (errno.ENODEV, Disconnected),
+        (errno.EPIPE, Disconnected),
+        (errno.EACCES, CommunicationError),
+    ],
+)
 def test_usb_errors(eno, cls):
     assert type(_usb_error("usb:1209:ca03", usb.core.USBError("x", -1, eno))) is cls
 

@@ -25,10 +25,13 @@ def _run(capsys, *argv: str) -> dict:
 
 def test_snap_json_matches_brute_force_and_writes_png(capsys, tmp_path) -> None:
     png = tmp_path / "view.png"
-    out = _run(capsys, "snap", "--library", "demo", "--lab", LAB, "--k", "4", "--de", "din6175", "--png", str(png))
+    out = _run(
+        capsys, "snap", "--library", "demo", "--lab", LAB, "--k", "4", "--de", "din6175", "--png", str(png)
+    )
     lib = demo_library()
-    rows, sums, _ = brute_force(lib.angle_columns(), np.array([[60, 30, 10], [40, 28, 12], [20, 20, 10.0]]), 4,
-                                "din6175")
+    rows, sums, _ = brute_force(
+        lib.angle_columns(), np.array([[60, 30, 10], [40, 28, 12], [20, 20, 10.0]]), 4, "din6175"
+    )
     assert [m["code"] for m in out["matches"]] == lib.codes[rows].tolist()
     assert [m["sum_de"] for m in out["matches"]] == sums.tolist()
     assert all(len(m["de_per_angle"]) == 3 for m in out["matches"])
@@ -43,8 +46,19 @@ def test_library_import_export_browse(capsys, tmp_path, small_library: Library) 
     assert out["paints"] == len(small_library) and out["format"] == "cxf"
     out = _run(capsys, "library", "import", str(tmp_path / "lib.cxf"), "--out", str(tmp_path / "back.csv"))
     assert read_library_csv(tmp_path / "back.csv").codes.tolist() == small_library.codes.tolist()
-    out = _run(capsys, "library", "browse", "--library", str(src), "--filter", "type=metallic,pearl",
-               "--filter", "flop=5:;group=red", "--limit", "3")
+    out = _run(
+        capsys,
+        "library",
+        "browse",
+        "--library",
+        str(src),
+        "--filter",
+        "type=metallic,pearl",
+        "--filter",
+        "flop=5:;group=red",
+        "--limit",
+        "3",
+    )
     assert out["shown"] <= 3 and out["matched"] >= out["shown"]
     for p in out["paints"]:
         assert p["type"] in ("metallic", "pearl") and p["indices"]["flop"] >= 5 and p["group"][2] == "red"

@@ -57,8 +57,9 @@ def test_closed_loop_through_simulator_subprocesses(tmp_path: Path) -> None:
     _, conc = generate_recipes(0, 1, 0, seed=77)
     design = fit_fftg(AspecularMeasurements(A3, predict_lab(conc[0], A3), 88.0)).design
     save_design(design, tmp_path / "design.json")
-    with simproc.spawn_simulator("gloss", design_file=tmp_path / "design.json",
-                                 extra_args=["--measure-time", "0.02"]) as sim:
+    with simproc.spawn_simulator(
+        "gloss", design_file=tmp_path / "design.json", extra_args=["--measure-time", "0.02"]
+    ) as sim:
         with drivers.open_instrument(sim.address, timeout_s=2.0) as inst:
             assert abs(inst.measure().gloss_gu[60] - 88.0) < 1.0  # the gloss meter reads the design's gloss
     design_lab = design.lab_at(np.array(A3))

@@ -52,7 +52,12 @@ def test_interference_pigment_shifts_hue_with_angle() -> None:
 
 @pytest.mark.parametrize(
     "recipe",
-    [{"white_tio2": -0.1}, {"black_carbon": 0.5}, {"alu_coarse": 0.2, "pearl_white": 0.1}, {"unobtainium": 0.1}],
+    [
+        {"white_tio2": -0.1},
+        {"black_carbon": 0.5},
+        {"alu_coarse": 0.2, "pearl_white": 0.1},
+        {"unobtainium": 0.1},
+    ],
 )
 def test_infeasible_recipes_are_refused(recipe: dict) -> None:
     with pytest.raises(FormulateInputError):

@@ -97,7 +97,9 @@ def test_additive_instrument_bias_is_cancelled_in_one_correction(designs) -> Non
     assert job.status == "converged"
     assert job.corrections == 1
     first, second = job.steps
-    assert first.mean_de > 1.0 and first.predicted_mean_de < 0.05  # the model was right; the instrument biased
+    assert (
+        first.mean_de > 1.0 and first.predicted_mean_de < 0.05
+    )  # the model was right; the instrument biased
     # after the offset correction the panel misses the design by what the model misses the shifted target
     # (exactly so for ΔE*ab, where ΔE(design, P + bias) = ΔE(design − bias, P); to 0.1 for CIEDE2000)
     assert second.mean_de <= 1.0 and abs(second.mean_de - second.predicted_mean_de) < 0.1

@@ -91,14 +91,40 @@ def test_missing_file_is_a_typed_error(tmp_path) -> None:
 
 def test_hierarchy_groups_follow_hue_and_value() -> None:
     lab45 = np.array(
-        [[50, 40, 0], [50, 0, 40], [50, -40, 0], [50, 0, -40], [80, 1, 1], [50, 0, 0], [20, 0, 0], [50, 30, -30]]
+        [
+            [50, 40, 0],
+            [50, 0, 40],
+            [50, -40, 0],
+            [50, 0, -40],
+            [80, 1, 1],
+            [50, 0, 0],
+            [20, 0, 0],
+            [50, 30, -30],
+        ]
     )
     types = np.array(["solid", "metallic", "pearl", "solid", "solid", "metallic", "pearl", "solid"])
     top, kind, group = classify(types, lab45)
-    assert top.tolist() == ["solids", "metallics+pearls", "metallics+pearls", "solids", "solids",
-                            "metallics+pearls", "metallics+pearls", "solids"]
+    assert top.tolist() == [
+        "solids",
+        "metallics+pearls",
+        "metallics+pearls",
+        "solids",
+        "solids",
+        "metallics+pearls",
+        "metallics+pearls",
+        "solids",
+    ]
     assert kind.tolist() == ["chromatic"] * 4 + ["neutral"] * 3 + ["chromatic"]
-    assert group.tolist() == ["red", "yellow", "green", "blue", "light", "medium", "dark", "red"]  # 315° is red
+    assert group.tolist() == [
+        "red",
+        "yellow",
+        "green",
+        "blue",
+        "light",
+        "medium",
+        "dark",
+        "red",
+    ]  # 315° is red
 
 
 def test_hierarchy_counts_cover_every_paint(small_library: Library) -> None:

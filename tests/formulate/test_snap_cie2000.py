@@ -72,11 +72,17 @@ def _fix_l(a: np.ndarray) -> np.ndarray:
     return a
 
 
-@settings(max_examples=60, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=60,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(
-    lib=arrays(np.float64, st.tuples(st.integers(1, 400), st.just(3), st.just(3)),
-               elements=st.floats(-120, 120, width=32)).map(_fix_l),
+    lib=arrays(
+        np.float64,
+        st.tuples(st.integers(1, 400), st.just(3), st.just(3)),
+        elements=st.floats(-120, 120, width=32),
+    ).map(_fix_l),
     data=st.data(),
     k=st.integers(1, 40),
     leaf=st.sampled_from([None, 1, 3, 16]),
@@ -89,8 +95,11 @@ def test_flat_cie2000_search_equals_brute_force_with_ties(lib, data, k, leaf, co
         lib[n // 3] = lib[1]
         lib[n - 1] = lib[1]
         lib[n // 2] = lib[0] + 1e-9
-    q = lib[data.draw(st.integers(0, n - 1))].copy() if data.draw(st.booleans()) else _fix_l(
-        data.draw(arrays(np.float64, (3, 3), elements=st.floats(-120, 120, width=32))))
+    q = (
+        lib[data.draw(st.integers(0, n - 1))].copy()
+        if data.draw(st.booleans())
+        else _fix_l(data.draw(arrays(np.float64, (3, 3), elements=st.floats(-120, 120, width=32))))
+    )
     index = SnapIndex(lib, leaf_size=leaf, group=1)
     rows, sums, per = index.query(q, k, "cie2000")
     b_rows, b_sums, b_per = brute_force(lib, q, k, "cie2000")
@@ -119,8 +128,18 @@ def test_compiled_walk_equals_its_python_form_and_visits_few_leaves(small_librar
     # the same function run as plain Python (no numba) returns the same candidates as the compiled one
     std = small_library.angle_columns()
     index = SnapIndex(std, leaf_size=8, group=4)
-    args = (index._glo, index._ghi, index._gcmax, index._lo, index._hi, index._cmax, index.group, index._rows,
-            index._blab, index.size)
+    args = (
+        index._glo,
+        index._ghi,
+        index._gcmax,
+        index._lo,
+        index._hi,
+        index._cmax,
+        index.group,
+        index._rows,
+        index._blab,
+        index.size,
+    )
     compiled = snap._compiled_search()
     assert compiled is not None
     rng = np.random.default_rng(2)
@@ -141,10 +160,13 @@ def test_table_box_bound_and_table_point_bound_never_exceed_the_exact_sum(pair) 
     exact = KERNELS["cie2000"](q[None], p).sum(-1)
     chroma = np.hypot(p[..., 1], p[..., 2])
     lo, hi = p.min(0), p.max(0)
-    box = snap._box_bounds_cie2000_fast(q, lo[None], hi[None], lo[None, :, 0], hi[None, :, 0], chroma.max(0)[None])
+    box = snap._box_bounds_cie2000_fast(
+        q, lo[None], hi[None], lo[None, :, 0], hi[None, :, 0], chroma.max(0)[None]
+    )
     assert box[0] <= exact.min()
-    points = snap._box_bounds_cie2000_fast(q, p, p, np.ascontiguousarray(p[..., 0]), np.ascontiguousarray(p[..., 0]),
-                                           chroma)
+    points = snap._box_bounds_cie2000_fast(
+        q, p, p, np.ascontiguousarray(p[..., 0]), np.ascontiguousarray(p[..., 0]), chroma
+    )
     assert np.all(points <= exact)
     index = SnapIndex(p, leaf_size=4, group=1)
     rows, lower = index._cheap_bounds(q, index._tile(q), np.arange(index.n_buckets))

@@ -30,8 +30,14 @@ def _specs(small_library: Library):
     design = spec_from_design(DESIGN, five_angles=True)
     i = 130  # a metallic of the small library
     lab = {a: tuple(small_library.lab[i, j]) for j, a in enumerate(small_library.angles_deg)}
-    match = spec_from_lab(str(small_library.codes[i]), lab, float(small_library.gloss_gu[i]),
-                          paint_type=str(small_library.types[i]), code=str(small_library.codes[i]), synthetic=True)
+    match = spec_from_lab(
+        str(small_library.codes[i]),
+        lab,
+        float(small_library.gloss_gu[i]),
+        paint_type=str(small_library.types[i]),
+        code=str(small_library.codes[i]),
+        synthetic=True,
+    )
     return [design, match]
 
 
@@ -39,8 +45,11 @@ def test_design_exports_both_angle_sets_at_d65_45(small_library: Library) -> Non
     data = colors_to_xml(_specs(small_library))
     specs = read_color_xml(data)
     design = specs[0]
-    assert [s.angles_deg for s in design.sets] == [(15.0, 45.0, 110.0), (25.0, 45.0, 75.0),
-                                                   (15.0, 25.0, 45.0, 75.0, 110.0)]
+    assert [s.angles_deg for s in design.sets] == [
+        (15.0, 45.0, 110.0),
+        (25.0, 45.0, 75.0),
+        (15.0, 25.0, 45.0, 75.0, 110.0),
+    ]
     assert np.allclose(design.lab((15.0, 45.0, 110.0)), DESIGN.lab_at([15, 45, 110]), atol=0.5e-4)
     assert np.allclose(design.lab((25.0, 45.0, 75.0)), DESIGN.lab_at([25, 45, 75]), atol=0.5e-4)
     assert design.gloss_gu == 85.0
@@ -90,7 +99,8 @@ def test_cxf_library_round_trip_and_colour_cxf_reads_it(small_library: Library) 
     assert len(objects) == len(small_library)
     specs = cxf.resources.color_specification_collection.color_specification
     assert {s.measurement_spec.geometry_choice.choice.brdfangle[0].aspecular for s in specs} == set(
-        small_library.angles_deg)
+        small_library.angles_deg
+    )
 
 
 BILLION_LAUGHS = b"""<?xml version="1.0"?>

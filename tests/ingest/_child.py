@@ -30,8 +30,11 @@ def _resume_from(acks: str) -> int:
 def main(argv: list[str]) -> int:
     url, outbox, acks, seed, count = argv[:5]
     busy_ms = int(argv[5]) if len(argv) > 5 else 30_000
-    engine = make_engine(url, busy_timeout_ms=busy_ms, connect_args={"connect_timeout": 2}
-                         if url.startswith("postgres") else {})
+    engine = make_engine(
+        url,
+        busy_timeout_ms=busy_ms,
+        connect_args={"connect_timeout": 2} if url.startswith("postgres") else {},
+    )
     with Ingestor(engine, outbox) as ingestor, open(acks, "a", encoding="utf-8") as ack:
         ingestor.replay()
         for i in range(_resume_from(acks), int(count)):

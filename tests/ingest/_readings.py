@@ -23,7 +23,11 @@ def make_reading(seed: int, index: int, serial: str = "SIM-MA-0001", panel_id: i
         operator="kill-test",
         measured_at=T0 + dt.timedelta(seconds=index),
         geometries_deg=[15.0, 45.0, 110.0],
-        lab=[face, [face[0] * 0.6, face[1] * 0.8, face[2] * 0.8], [face[0] * 0.3, face[1] * 0.5, face[2] * 0.5]],
+        lab=[
+            face,
+            [face[0] * 0.6, face[1] * 0.8, face[2] * 0.8],
+            [face[0] * 0.3, face[1] * 0.5, face[2] * 0.5],
+        ],
         wavelengths_nm=[400.0 + 10 * k for k in range(31)],
         spectra=[[rng.uniform(0, 1.5) for _ in range(31)] for _ in range(3)],
         gloss_gu=rng.uniform(60, 95),

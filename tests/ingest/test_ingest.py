@@ -183,7 +183,11 @@ def test_concurrent_writers_of_one_reading_store_it_once(database_url: str) -> N
     """Eight threads, each with its own connection, store the same reading at once: one row, one creator."""
     import threading
 
-    engine = make_engine(database_url, pool_size=8) if database_url.startswith("postgres") else make_engine(database_url)
+    engine = (
+        make_engine(database_url, pool_size=8)
+        if database_url.startswith("postgres")
+        else make_engine(database_url)
+    )
     sessions = make_sessionmaker(engine)
     reading = make_reading(9, 0)
     barrier = threading.Barrier(8)

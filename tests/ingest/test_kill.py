@@ -36,9 +36,20 @@ SEED = 7
 
 def _spawn(url: str, outbox: Path, acks: Path, busy_ms: int) -> subprocess.Popen[bytes]:
     return subprocess.Popen(
-        [sys.executable, "-m", "tests.ingest._child", url, str(outbox), str(acks), str(SEED), str(COUNT),
-         str(busy_ms)],
-        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        [
+            sys.executable,
+            "-m",
+            "tests.ingest._child",
+            url,
+            str(outbox),
+            str(acks),
+            str(SEED),
+            str(COUNT),
+            str(busy_ms),
+        ],
+        cwd=REPO,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
     )
 
 
@@ -49,12 +60,15 @@ def _acked(acks: Path) -> set[str]:
 
 
 def _check(url: str, outbox_path: Path, acks: Path) -> int:
-    expected = {str(make_reading(SEED, i).client_id): (i, make_reading(SEED, i).payload_sha256())
-                for i in range(COUNT)}
+    expected = {
+        str(make_reading(SEED, i).client_id): (i, make_reading(SEED, i).payload_sha256())
+        for i in range(COUNT)
+    }
     engine = make_engine(url)
     with engine.connect() as conn:
-        rows = conn.execute(select(Measurement.id, Measurement.client_id, Measurement.payload_sha256)
-                            .order_by(Measurement.id)).all()
+        rows = conn.execute(
+            select(Measurement.id, Measurement.client_id, Measurement.payload_sha256).order_by(Measurement.id)
+        ).all()
         total = conn.execute(select(func.count()).select_from(Measurement)).scalar_one()
     engine.dispose()
     stored = [str(r.client_id) for r in rows]
@@ -84,7 +98,9 @@ def _run_rounds(url: str, tmp_path: Path, hold_lock: object) -> None:
             assert proc.returncode in (-signal.SIGKILL, 0), proc.stderr.read().decode() if proc.stderr else ""
         stored = _check(url, outbox, acks)
         with Outbox(outbox) as box:
-            print(f"round {round_no} down={down}: stored {stored}, queued {len(box)}, acked {len(_acked(acks))}")
+            print(
+                f"round {round_no} down={down}: stored {stored}, queued {len(box)}, acked {len(_acked(acks))}"
+            )
     proc = _spawn(url, outbox, acks, 30_000)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err.decode()

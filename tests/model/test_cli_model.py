@@ -13,14 +13,18 @@ from station.model import FaceFlopTravelGloss
 
 
 def station(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "station.cli", *args], capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "station.cli", *args], capture_output=True, text=True, timeout=120
+    )
 
 
 def test_from_angles_contract_and_design_file(tmp_path) -> None:
     d = FaceFlopTravelGloss((90, 2, -5), (30, 1, -2), 75.0, 85.0)
     lab = d.lab_at(np.array([15.0, 45.0, 110.0]))
     lab_arg = ";".join(",".join(f"{v:.12f}" for v in row) for row in lab)
-    res = station("model", "from-angles", "--angles", "15,45,110", "--lab", lab_arg, "--gloss", "85", "--json")
+    res = station(
+        "model", "from-angles", "--angles", "15,45,110", "--lab", lab_arg, "--gloss", "85", "--json"
+    )
     assert res.returncode == 0, res.stderr
     out = json.loads(res.stdout)
     assert set(out) >= {"face", "flop", "travel_deg", "gloss_gu", "residual_de"}
@@ -36,8 +40,19 @@ def test_from_angles_contract_and_design_file(tmp_path) -> None:
 
 
 def test_eval_contract() -> None:
-    res = station("model", "eval", "--face", "90,2,-5", "--flop", "30,0,-1", "--travel", "75", "--angles",
-                  "15,25,45,75,110", "--json")
+    res = station(
+        "model",
+        "eval",
+        "--face",
+        "90,2,-5",
+        "--flop",
+        "30,0,-1",
+        "--travel",
+        "75",
+        "--angles",
+        "15,25,45,75,110",
+        "--json",
+    )
     out = json.loads(res.stdout)
     assert out["angles"] == [15, 25, 45, 75, 110]
     # by hand: L(45) = 30 + 60·((75 − 45)/60)² = 45; L(110) = flop

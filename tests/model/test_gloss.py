@@ -64,9 +64,9 @@ def test_monotone_in_exponent() -> None:
 
 
 def test_mirror_reads_100() -> None:
-    assert simulate_gloss_meter(SpecularLobe(1e9, fresnel_unpolarised(60, STANDARD_INDEX), 1e-4)) == pytest.approx(
-        100.0, abs=1e-3
-    )
+    assert simulate_gloss_meter(
+        SpecularLobe(1e9, fresnel_unpolarised(60, STANDARD_INDEX), 1e-4)
+    ) == pytest.approx(100.0, abs=1e-3)
 
 
 def test_fresnel_black_glass() -> None:
@@ -110,4 +110,6 @@ def test_thinned_ward_rule_matches_full(alpha: float) -> None:
     from station.model.gloss import _ward_fraction
 
     full = _ward_fraction(alpha, 60, n_rad=64, phi_step=1)
-    assert 100 * _ward_fraction(alpha, 60) == pytest.approx(100 * full, abs=0.01)  # in GU per unit albedo ratio
+    assert 100 * _ward_fraction(alpha, 60) == pytest.approx(
+        100 * full, abs=0.01
+    )  # in GU per unit albedo ratio

@@ -190,8 +190,12 @@ class TestDegenerate:
 
     @pytest.mark.parametrize(
         ("angles", "field"),
-        [((15, 45, 45), "angles_deg"), ((45, 15, 110), "angles_deg"), ((15, 45, float("nan")), "angles_deg[2]"),
-         ((15, 45, 200), "angles_deg[2]")],
+        [
+            ((15, 45, 45), "angles_deg"),
+            ((45, 15, 110), "angles_deg"),
+            ((15, 45, float("nan")), "angles_deg[2]"),
+            ((15, 45, 200), "angles_deg[2]"),
+        ],
     )
     def test_bad_angles(self, angles, field) -> None:
         with pytest.raises(ModelInputError) as err:
@@ -200,8 +204,12 @@ class TestDegenerate:
 
     @pytest.mark.parametrize(
         ("lab", "field"),
-        [([[50, 0, 0], [50, 0, 0], [-1, 0, 0]], "lab[2].L"), ([[50, 0, 0], [50, 200, 0], [50, 0, 0]], "lab[1].a"),
-         ([[50, 0, 0], [50, 0, float("nan")], [50, 0, 0]], "lab[1].b"), ([[50, 0, 0]] * 2, "lab")],
+        [
+            ([[50, 0, 0], [50, 0, 0], [-1, 0, 0]], "lab[2].L"),
+            ([[50, 0, 0], [50, 200, 0], [50, 0, 0]], "lab[1].a"),
+            ([[50, 0, 0], [50, 0, float("nan")], [50, 0, 0]], "lab[1].b"),
+            ([[50, 0, 0]] * 2, "lab"),
+        ],
     )
     def test_bad_lab(self, lab, field) -> None:
         with pytest.raises(ModelInputError) as err:

@@ -83,9 +83,13 @@ def test_design_round_trip(tmp_path) -> None:
 
 @pytest.mark.parametrize(
     ("data", "field"),
-    [({"flop": [1, 0, 0], "travel_deg": 50}, "face"), ({"face": [1, 0, 0], "flop": [1, 0, 0]}, "travel_deg"),
-     ({"schema": "other/9", "face": [1, 0, 0], "flop": [1, 0, 0], "travel_deg": None}, "schema"),
-     ({"face": [1, 0], "flop": [1, 0, 0], "travel_deg": None}, "face"), ([], "design")],
+    [
+        ({"flop": [1, 0, 0], "travel_deg": 50}, "face"),
+        ({"face": [1, 0, 0], "flop": [1, 0, 0]}, "travel_deg"),
+        ({"schema": "other/9", "face": [1, 0, 0], "flop": [1, 0, 0], "travel_deg": None}, "schema"),
+        ({"face": [1, 0], "flop": [1, 0, 0], "travel_deg": None}, "face"),
+        ([], "design"),
+    ],
 )
 def test_bad_design(data, field) -> None:
     with pytest.raises(ModelInputError) as err:

@@ -38,8 +38,10 @@ def test_quality_improves_with_off_specular_samples():
     def lab(x):
         return linear_srgb_to_lab(tonemap.srgb_decode(tonemap.to_display(x) / 255.0))
 
-    err = {j: delta_e(lab(an.render_anisotropic(SCENE, basis, LOBE, j, w, w)[m]), lab(truth)).mean()
-           for j in (1, 9)}
+    err = {
+        j: delta_e(lab(an.render_anisotropic(SCENE, basis, LOBE, j, w, w)[m]), lab(truth)).mean()
+        for j in (1, 9)
+    }
     assert err[9] < 0.6 * err[1]
     assert err[9] < 1.5
 

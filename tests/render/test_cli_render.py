@@ -29,9 +29,32 @@ def test_render_numpy_to_png_and_json(files, tmp_path, capsys):
     d1, d2, env = files
     out = tmp_path / "o.png"
     lin = tmp_path / "o.npy"
-    rc = main(["render", "--design", str(d1), "--design2", str(d2), "--env", str(env), "--shape", "panels",
-               "--misalignment", "4", "--size", "24", "--engine", "numpy", "--out", str(out),
-               "--linear-out", str(lin), "--cache-dir", str(tmp_path / "cache"), "--json"])
+    rc = main(
+        [
+            "render",
+            "--design",
+            str(d1),
+            "--design2",
+            str(d2),
+            "--env",
+            str(env),
+            "--shape",
+            "panels",
+            "--misalignment",
+            "4",
+            "--size",
+            "24",
+            "--engine",
+            "numpy",
+            "--out",
+            str(out),
+            "--linear-out",
+            str(lin),
+            "--cache-dir",
+            str(tmp_path / "cache"),
+            "--json",
+        ]
+    )
     assert rc == 0
     result = json.loads(capsys.readouterr().out)
     assert result["engine"] == "numpy" and len(result["lobes"]) >= 1
@@ -45,8 +68,9 @@ def test_render_numpy_to_png_and_json(files, tmp_path, capsys):
     assert list((tmp_path / "cache" / "prefilter").glob("*.npy"))
 
 
-@pytest.mark.parametrize(("extra", "field"), [
-    (["--env", "moon"], "env"), (["--size", "2"], "size"), (["--out", "x.jpg"], "out")])
+@pytest.mark.parametrize(
+    ("extra", "field"), [(["--env", "moon"], "env"), (["--size", "2"], "size"), (["--out", "x.jpg"], "out")]
+)
 def test_render_input_errors_exit_2(files, tmp_path, capsys, extra, field):
     d1, _, _ = files
     args = ["render", "--design", str(d1), "--env", "booth", "--size", "16", "--out", str(tmp_path / "x.png")]
@@ -59,7 +83,9 @@ def test_render_rejects_bad_hdr(files, tmp_path, capsys):
     d1, _, _ = files
     bad = tmp_path / "bad.hdr"
     bad.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n\x02\x02")
-    rc = main(["render", "--design", str(d1), "--env", str(bad), "--size", "16", "--out", str(tmp_path / "x.png")])
+    rc = main(
+        ["render", "--design", str(d1), "--env", str(bad), "--size", "16", "--out", str(tmp_path / "x.png")]
+    )
     assert rc == 2
     assert "truncated" in capsys.readouterr().err
 
@@ -68,8 +94,26 @@ def test_render_rejects_bad_hdr(files, tmp_path, capsys):
 def test_render_gl_engine(files, tmp_path, capsys, gl_ctx):
     d1, _, env = files
     out = tmp_path / "g.png"
-    rc = main(["render", "--design", str(d1), "--env", str(env), "--shape", "speedshape", "--size", "32",
-               "--engine", "gl", "--out", str(out), "--cache-dir", str(tmp_path / "c"), "--json"])
+    rc = main(
+        [
+            "render",
+            "--design",
+            str(d1),
+            "--env",
+            str(env),
+            "--shape",
+            "speedshape",
+            "--size",
+            "32",
+            "--engine",
+            "gl",
+            "--out",
+            str(out),
+            "--cache-dir",
+            str(tmp_path / "c"),
+            "--json",
+        ]
+    )
     assert rc == 0
     assert json.loads(capsys.readouterr().out)["engine"] == "gl"
     assert np.asarray(Image.open(out)).shape == (32, 32, 3)

@@ -73,7 +73,9 @@ def test_sunny_sky_sun_position_and_colour():
 def test_preetham_zenith_published_value():
     # Preetham et al. (1999) Fig. 9 range: T = 2, θs = 30° → Y_z ≈ 5.2 kcd/m² (formula A.2)
     yz, xz, yzc = procedural.preetham_zenith(2.0, np.radians(60.0))
-    expect = (4.0453 * 2 - 4.9710) * np.tan((4 / 9 - 2 / 120) * (np.pi - 2 * np.radians(60))) - 0.2155 * 2 + 2.4192
+    expect = (
+        (4.0453 * 2 - 4.9710) * np.tan((4 / 9 - 2 / 120) * (np.pi - 2 * np.radians(60))) - 0.2155 * 2 + 2.4192
+    )
     assert yz == pytest.approx(expect)
     assert 0.2 < xz < 0.35 and 0.2 < yzc < 0.37
 

@@ -44,8 +44,9 @@ def test_rgbe_decoding_matches_definition():
     out = rgbe_to_float(rgbe)
     assert out[0] == pytest.approx([128.5 / 128, 64.5 / 128, 0.5 / 128])  # 2^(129-136) = 1/128
     assert (out[1] == 0).all()
-    assert (rgbe_to_float(float_to_rgbe(np.array([1.0, 0.5, 0.25]))) == pytest.approx(
-        [1.0, 0.5, 0.25], abs=1 / 128))
+    assert rgbe_to_float(float_to_rgbe(np.array([1.0, 0.5, 0.25]))) == pytest.approx(
+        [1.0, 0.5, 0.25], abs=1 / 128
+    )
 
 
 def test_exposure_header_is_divided_out(tmp_path):

@@ -26,8 +26,11 @@ def test_design_database_spans_the_required_range() -> None:
     assert any(d.travel_deg >= 150 for d in metallic)  # high travel
     # hue-shifting pearls: face and flop hue angles differ by more than 40°
     hue = lambda lab: np.degrees(np.arctan2(lab[2], lab[1]))  # noqa: E731
-    shifts = [abs((hue(d.face) - hue(d.flop) + 180) % 360 - 180) for d in metallic
-              if np.hypot(*d.face[1:]) > 10 and np.hypot(*d.flop[1:]) > 10]
+    shifts = [
+        abs((hue(d.face) - hue(d.flop) + 180) % 360 - 180)
+        for d in metallic
+        if np.hypot(*d.face[1:]) > 10 and np.hypot(*d.flop[1:]) > 10
+    ]
     assert sum(s > 40 for s in shifts) >= 5
     assert design_database() is db  # deterministic, built once
 

@@ -65,7 +65,11 @@ def test_enumeration_equals_lawson_hanson_and_is_optimal() -> None:
     rng = np.random.default_rng(7)
     part = lf.fit_problem(BASIS).colour
     b = rng.normal(size=(40, part.a.shape[0], 3)) * 0.2 + part.a @ rng.random(6)[:, None]
-    x_enum = lf._solve_enum(part, np.einsum("rk,drc->kdc", part.q, b).reshape(part.q.shape[1], -1)).reshape(part.q.shape[1], b.shape[0], 3).transpose(1, 0, 2)
+    x_enum = (
+        lf._solve_enum(part, np.einsum("rk,drc->kdc", part.q, b).reshape(part.q.shape[1], -1))
+        .reshape(part.q.shape[1], b.shape[0], 3)
+        .transpose(1, 0, 2)
+    )
     for i in range(b.shape[0]):
         for c in range(3):
             ref = nnls(part.a, b[i, :, c])[0]

@@ -32,8 +32,15 @@ def pixels():
 
 
 def test_constant_environment_needs_the_least(metallic, pixels) -> None:
-    choice = lod.choose_lod([metallic], np.ones((32, 64, 3)), *pixels, tolerance_de=2.0, samples=32,
-                            quadrature_width=64, mode="prefiltered-lut")
+    choice = lod.choose_lod(
+        [metallic],
+        np.ones((32, 64, 3)),
+        *pixels,
+        tolerance_de=2.0,
+        samples=32,
+        quadrature_width=64,
+        mode="prefiltered-lut",
+    )
     assert choice.environment_width == 16  # a constant map survives any box filter
     assert choice.errors["environment"] == pytest.approx(0.0, abs=1e-6)
     assert choice.anisotropic_samples == 1
@@ -41,17 +48,27 @@ def test_constant_environment_needs_the_least(metallic, pixels) -> None:
 
 
 def test_tighter_tolerance_never_chooses_less(metallic, pixels) -> None:
-    loose = lod.choose_lod([metallic], sky(), *pixels, tolerance_de=6.0, samples=32, quadrature_width=64,
-                           mode="exact")
-    tight = lod.choose_lod([metallic], sky(), *pixels, tolerance_de=1.0, samples=32, quadrature_width=64,
-                           mode="exact")
+    loose = lod.choose_lod(
+        [metallic], sky(), *pixels, tolerance_de=6.0, samples=32, quadrature_width=64, mode="exact"
+    )
+    tight = lod.choose_lod(
+        [metallic], sky(), *pixels, tolerance_de=1.0, samples=32, quadrature_width=64, mode="exact"
+    )
     assert tight.lobes >= loose.lobes
     assert tight.environment_width >= loose.environment_width
     share = 1.0 / np.sqrt(3.0)
     assert tight.errors["lobes"] <= share or not tight.met
     if tight.lobes > 1:  # the next smaller basis really misses the share (it was tried first)
-        smaller = lod.choose_lod([metallic], sky(), *pixels, tolerance_de=1.0, samples=32, quadrature_width=64,
-                                 mode="exact", lobe_counts=[tight.lobes - 1])
+        smaller = lod.choose_lod(
+            [metallic],
+            sky(),
+            *pixels,
+            tolerance_de=1.0,
+            samples=32,
+            quadrature_width=64,
+            mode="exact",
+            lobe_counts=[tight.lobes - 1],
+        )
         assert smaller.errors["lobes"] > share
 
 
@@ -63,8 +80,15 @@ def test_anisotropic_samples_smallest_meeting_share(metallic, pixels) -> None:
     def render(samples: int) -> np.ndarray:
         return base * (1.0 + 0.3 / samples)
 
-    choice = lod.choose_lod([metallic], np.ones((32, 64, 3)), *pixels, tolerance_de=3.0, samples=32,
-                            quadrature_width=64, anisotropic=render)
+    choice = lod.choose_lod(
+        [metallic],
+        np.ones((32, 64, 3)),
+        *pixels,
+        tolerance_de=3.0,
+        samples=32,
+        quadrature_width=64,
+        anisotropic=render,
+    )
     share = 3.0 / np.sqrt(3.0)
     white = 1.0  # constant radiance 1: the white Lambertian pixel has Y = 1
     errs = {s: lod._de(white, render(81), render(s), 95.0) for s in lod.SAMPLE_COUNTS}
@@ -74,8 +98,9 @@ def test_anisotropic_samples_smallest_meeting_share(metallic, pixels) -> None:
 
 
 def test_unreachable_tolerance_is_reported(metallic, pixels) -> None:
-    choice = lod.choose_lod([metallic], sky(), *pixels, tolerance_de=1e-4, samples=32, quadrature_width=64,
-                            lobe_counts=[1, 2, 3])
+    choice = lod.choose_lod(
+        [metallic], sky(), *pixels, tolerance_de=1e-4, samples=32, quadrature_width=64, lobe_counts=[1, 2, 3]
+    )
     assert not choice.met
     assert "MISSES" in choice.describe() and choice.notes
 

@@ -71,9 +71,11 @@ def test_sh_irradiance_exact_for_linear_and_close_to_exponent_one():
     # Irradiance/π of 1 + G·ω is 1 + (2/3) G·n (band 0 and 1 are exact in 9 coefficients).
     assert sh_diffuse(coeffs, normals)[:, 0] == pytest.approx(1 + 2 / 3 * normals @ G, abs=2e-3)
     # Ramamoorthi & Hanrahan: ~1–3 % average error; a small bright sun is the worst case for 9 terms.
-    for env, mean_bound, max_bound in ((procedural.overcast_sky(128), 0.01, 0.03),
-                                       (procedural.light_booth(128), 0.04, 0.1),
-                                       (procedural.sunny_sky(128), 0.1, 0.3)):
+    for env, mean_bound, max_bound in (
+        (procedural.overcast_sky(128), 0.01, 0.03),
+        (procedural.light_booth(128), 0.04, 0.1),
+        (procedural.sunny_sky(128), 0.1, 0.3),
+    ):
         p1 = prefilter.prefilter_brute(env.to_cube(32), 1.0, 8).reshape(-1, 3)
         d = sh_diffuse(sh_project(env.equirect), cubemap.face_directions(8).reshape(-1, 3))
         err = np.abs(d - p1) / p1.mean()

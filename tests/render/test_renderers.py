@@ -20,14 +20,19 @@ G = np.array([0.3, 0.5, -0.2])
 
 def _weights(k_d=(0.0, 0.0, 0.0), k_dd=None, k_g=None) -> LobeWeights:
     m = len(EXPS)
-    return LobeWeights(EXPS, np.array(k_d, float), np.zeros((m, 3)) if k_dd is None else np.array(k_dd, float),
-                       np.zeros(m) if k_g is None else np.array(k_g, float))
+    return LobeWeights(
+        EXPS,
+        np.array(k_d, float),
+        np.zeros((m, 3)) if k_dd is None else np.array(k_dd, float),
+        np.zeros(m) if k_g is None else np.array(k_g, float),
+    )
 
 
 @pytest.fixture(scope="module")
 def const_basis():
-    return prefilter.prefilter_basis(Environment("c", np.full((32, 64, 3), 2.0, np.float32)), EXPS,
-                                     engine="numpy")
+    return prefilter.prefilter_basis(
+        Environment("c", np.full((32, 64, 3), 2.0, np.float32)), EXPS, engine="numpy"
+    )
 
 
 @pytest.fixture(scope="module")
@@ -36,10 +41,12 @@ def sky_basis():
 
 
 def _paint_pair():
-    a = _weights((0.1, 0.03, 0.02), [[0.2, 0.05, 0.03], [0.5, 0.1, 0.05], [1, 0.3, 0.1], [0, 0, 0]],
-                 [0, 0, 0.2, 4.0])
-    b = _weights((0.02, 0.03, 0.1), [[0.02, 0.05, 0.2], [0.1, 0.1, 0.3], [0.1, 0.3, 1], [0, 0, 0]],
-                 [0, 0, 0.5, 2.0])
+    a = _weights(
+        (0.1, 0.03, 0.02), [[0.2, 0.05, 0.03], [0.5, 0.1, 0.05], [1, 0.3, 0.1], [0, 0, 0]], [0, 0, 0.2, 4.0]
+    )
+    b = _weights(
+        (0.02, 0.03, 0.1), [[0.02, 0.05, 0.2], [0.1, 0.1, 0.3], [0.1, 0.3, 1], [0, 0, 0]], [0, 0, 0.5, 2.0]
+    )
     return a, b
 
 
@@ -95,7 +102,10 @@ def test_tone_mapping_formulas():
     assert tonemap.tone_curve(np.array([1.0]), "aces")[0] == pytest.approx(2.54 / 3.16)
     assert tonemap.tone_curve(np.array([1.0]), "reinhard")[0] == pytest.approx(0.5)
     assert tonemap.to_display(np.array([[0.25, 0.5, 4.0]]), exposure_ev=1.0, curve="clip")[0].tolist() == [
-        188, 255, 255]
+        188,
+        255,
+        255,
+    ]
     lut, scale = tonemap.display_lut(0.0, "aces")
     v = np.array([0.01, 0.2, 0.9, 3.0])
     assert np.abs(lut[(v * scale).astype(int)].astype(int) - tonemap.to_display(v).astype(int)).max() <= 1
@@ -159,11 +169,15 @@ def test_gl_per_lobe_path_matches_combined_path(gl_ctx, sky_basis):
 
     scene = shapes.Scene("sphere")
     pair = _paint_pair()
-    with GLRenderer(sky_basis, 48, 48, ctx=gl_ctx, combined=True) as a, \
-            GLRenderer(sky_basis, 48, 48, ctx=gl_ctx, combined=False) as b:
+    with (
+        GLRenderer(sky_basis, 48, 48, ctx=gl_ctx, combined=True) as a,
+        GLRenderer(sky_basis, 48, 48, ctx=gl_ctx, combined=False) as b,
+    ):
         lin_a, lin_b = a.render_linear(scene, pair), b.render_linear(scene, pair)
         # a second paint pair rebuilds the combined cubes
         other = list(reversed(pair))
-        assert a.render_linear(scene, other) == pytest.approx(b.render_linear(scene, other), rel=0.02, abs=2e-3)
+        assert a.render_linear(scene, other) == pytest.approx(
+            b.render_linear(scene, other), rel=0.02, abs=2e-3
+        )
     # combined cubes resample the smaller lobe maps at the largest size: bilinear of bilinear
     assert lin_a == pytest.approx(lin_b, rel=0.02, abs=2e-3)

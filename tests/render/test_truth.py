@@ -40,7 +40,9 @@ def test_constant_environment_closed_forms() -> None:
     brdf = lf.designed_brdf(solid(60.0, 60.0))
     head_on = n[:, 2] > 0.97
     expected = brdf.reflectance[0] + brdf.specular_albedo
-    assert scene.truth(brdf)[head_on] == pytest.approx(np.broadcast_to(expected, (head_on.sum(), 3)), rel=5e-3)
+    assert scene.truth(brdf)[head_on] == pytest.approx(
+        np.broadcast_to(expected, (head_on.sum(), 3)), rel=5e-3
+    )
 
 
 def test_point_light_matches_the_brdf() -> None:
@@ -112,15 +114,21 @@ def test_render_truth_keeps_pixel_shape() -> None:
     n, v = tr.sphere_pixels(6)
     grid_n = np.broadcast_to(n[:4], (2, 4, 3))
     grid_v = np.broadcast_to(v[:4], (2, 4, 3))
-    out = tr.render_truth(solid(50.0, 40.0), np.ones((16, 32, 3)), grid_n, grid_v, samples=32, quadrature_width=32)
+    out = tr.render_truth(
+        solid(50.0, 40.0), np.ones((16, 32, 3)), grid_n, grid_v, samples=32, quadrature_width=32
+    )
     assert out.shape == (2, 4, 3) and np.all(np.isfinite(out)) and np.all(out > 0)
 
 
 def test_horizon_table_makes_prefiltered_exact_in_a_constant_environment() -> None:
     n, v = tr.sphere_pixels(10)
     scene = tr.TruthScene(np.ones((64, 128, 3)), n, v, samples=128, quadrature_width=128)
-    w = LobeWeights((2.0, 30.0, 800.0), [0.02, 0.03, 0.04], [[0.1, 0.05, 0.0], [0.0, 0.1, 0.0], [0.05, 0.05, 0.05]],
-                    [0.0, 0.2, 10.0])
+    w = LobeWeights(
+        (2.0, 30.0, 800.0),
+        [0.02, 0.03, 0.04],
+        [[0.1, 0.05, 0.0], [0.0, 0.1, 0.0], [0.05, 0.05, 0.05]],
+        [0.0, 0.2, 10.0],
+    )
     exact = scene.lobes(w, "exact")
     assert scene.lobes(w, "prefiltered-lut") == pytest.approx(exact, rel=5e-3)
     assert scene.lobes(w, "prefiltered-bent+lights") == pytest.approx(exact, rel=5e-3)

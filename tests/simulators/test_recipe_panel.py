@@ -24,9 +24,17 @@ pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 FAST = ["--measure-time", "0.02"]
 READINGS = 10
 # A red metallic with pearl and interference (angle-dependent) at 40 GU, as a recipe object
-RED_METALLIC = {"white_tio2": 0.03, "black_carbon": 0.004, "orange_po": 0.19, "magenta_pv": 0.033,
-                "alu_fine": 0.0087, "pearl_white": 0.066, "interference_blue": 0.08,
-                "interference_gold": 0.09, "matting_silica": 50.0 / 650.0}
+RED_METALLIC = {
+    "white_tio2": 0.03,
+    "black_carbon": 0.004,
+    "orange_po": 0.19,
+    "magenta_pv": 0.033,
+    "alu_fine": 0.0087,
+    "pearl_white": 0.066,
+    "interference_blue": 0.08,
+    "interference_gold": 0.09,
+    "matting_silica": 50.0 / 650.0,
+}
 
 
 @pytest.fixture(scope="module")
@@ -107,7 +115,10 @@ def test_ma3_pyusb_route_and_panel_swap(formulated):
         back = reflectance_to_lab(inst.measure().reflectance)
     de = delta_e(lab, np.asarray(data["predicted_lab"])[None], method="cie2000")
     assert float(de.mean()) <= 0.05, de.mean()
-    assert float(delta_e(back, DEFAULT_DESIGN.lab_at(np.asarray([15.0, 45.0, 110.0])), method="cie2000").max()) < 0.2
+    assert (
+        float(delta_e(back, DEFAULT_DESIGN.lab_at(np.asarray([15.0, 45.0, 110.0])), method="cie2000").max())
+        < 0.2
+    )
 
 
 def test_ma12_second_block_and_recipe_object(tmp_path):
@@ -118,7 +129,9 @@ def test_ma12_second_block_and_recipe_object(tmp_path):
         with open_instrument(sim.address, timeout_s=1.0) as inst:
             r = inst.measure()
     assert r.geometries[6:] == ("15as-45", "15as-15", "15as15", "15as25", "15as45", "15as60")
-    de = delta_e(reflectance_to_lab(r.reflectance), _predicted(RED_METALLIC, r.aspecular_deg), method="cie2000")
+    de = delta_e(
+        reflectance_to_lab(r.reflectance), _predicted(RED_METALLIC, r.aspecular_deg), method="cie2000"
+    )
     assert de.shape == (12,) and float(de.max()) < 0.2
     # the flop really differs from the face (an effect recipe, not a flat panel)
     lab = reflectance_to_lab(r.reflectance)
@@ -145,7 +158,9 @@ def test_cli_measure_recipe_json(capsys, formulated):
     assert rc == 0, out.err
     got = json.loads(out.out)
     assert got["panel"] == "R-1" and np.asarray(got["spectra"]).shape == (6, 31)
-    de = delta_e(np.asarray(got["lab"]), _predicted(data["recipe"], (-15, 15, 25, 45, 75, 110)), method="cie2000")
+    de = delta_e(
+        np.asarray(got["lab"]), _predicted(data["recipe"], (-15, 15, 25, 45, 75, 110)), method="cie2000"
+    )
     assert float(de.max()) < 0.2
 
 
@@ -160,7 +175,11 @@ def test_cli_measure_recipe_json(capsys, formulated):
         ('{"recipe": [0.1, 0.2]}', "recipe", "an object {colorant: mass fraction}"),
         ("[1, 2]", "recipe", "a JSON object"),
         ('{"white_tio2": 0.45, "yellow_py": 0.3}', "recipe", "total mass fraction <= 0.6"),
-        ('{"alu_coarse": 0.2, "pearl_white": 0.1}', "recipe", "aluminium + pearl + interference fraction <= 0.25"),
+        (
+            '{"alu_coarse": 0.2, "pearl_white": 0.1}',
+            "recipe",
+            "aluminium + pearl + interference fraction <= 0.25",
+        ),
         ('{"recipe": ', "recipe_file", "JSON"),
     ],
 )

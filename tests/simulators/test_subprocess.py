@@ -23,7 +23,9 @@ def test_ma6_behind_network_server(scheme):
     from simulators.pty_host import PtyHost
     from simulators.rfc2217_server import Rfc2217Server
 
-    design = FaceFlopTravelGloss(face=(45.0, 38.0, 22.0), flop=(25.0, 30.0, 12.0), travel_deg=70.0, gloss_gu=85.0)
+    design = FaceFlopTravelGloss(
+        face=(45.0, 38.0, 22.0), flop=(25.0, 30.0, 12.0), travel_deg=70.0, gloss_gu=85.0
+    )
     dev = Ma6Device(SpectroPhysics(design=design), measure_time_s=0.01)
     with PtyHost(dev) as host:
         srv = Rfc2217Server(host.path, raw=scheme == "socket").start()

@@ -29,9 +29,23 @@ def _start_xvfb() -> subprocess.Popen | None:
         return None
     r, w = os.pipe()
     try:
-        proc = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-screen", "0", "1600x1200x24", "-nolisten", "tcp",
-                                 "+extension", "GLX"], pass_fds=(w,), stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            [
+                "Xvfb",
+                "-displayfd",
+                str(w),
+                "-screen",
+                "0",
+                "1600x1200x24",
+                "-nolisten",
+                "tcp",
+                "+extension",
+                "GLX",
+            ],
+            pass_fds=(w,),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
     except OSError as exc:
         XVFB_ERROR = f"Xvfb failed to start: {exc}"
         return None

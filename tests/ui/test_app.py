@@ -21,8 +21,14 @@ def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
     win.resize(1200, 800)
     win.show()
     qtbot.waitExposed(win)
-    assert [win.tabs.tabText(i) for i in range(win.tabs.count())] == \
-        ["Design", "Tweaker", "Mood board", "Library", "Instruments", "QA"]
+    assert [win.tabs.tabText(i) for i in range(win.tabs.count())] == [
+        "Design",
+        "Tweaker",
+        "Mood board",
+        "Library",
+        "Instruments",
+        "QA",
+    ]
     assert not win.undo_action.isEnabled()
     panel = win.designer_panel
     panel.gloss.setValue(30)
@@ -50,7 +56,14 @@ def test_screenshots_of_every_screen(qtbot, tmp_path):
     from ui.screenshots import SIZE, take_screenshots
 
     paths = take_screenshots(tmp_path, scan=False)
-    assert [p.name for p in paths] == ["design.png", "tweaker.png", "moodboard.png", "library.png", "instruments.png", "qa.png"]
+    assert [p.name for p in paths] == [
+        "design.png",
+        "tweaker.png",
+        "moodboard.png",
+        "library.png",
+        "instruments.png",
+        "qa.png",
+    ]
     for p in paths:
         with Image.open(p) as im:
             assert im.size[0] >= SIZE[0] and im.size[1] >= SIZE[1]

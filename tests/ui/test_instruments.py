@@ -47,7 +47,9 @@ def test_scan_with_simulator_stores_one_row_with_panel_metadata(qtbot, tmp_path)
     assert screen.scan_btn.isEnabled()
     screen.calibrate_btn.click()
     qtbot.waitUntil(lambda: screen.idle, timeout=90000)
-    assert "calibration" in screen.log.toPlainText() and "passed" in screen.state.text(), screen.log.toPlainText()
+    assert "calibration" in screen.log.toPlainText() and "passed" in screen.state.text(), (
+        screen.log.toPlainText()
+    )
     screen.job.setText("J-2026-0113")
     screen.part.setCurrentText("bumper")
     screen.substrate.setText("PP/EPDM")
@@ -69,7 +71,11 @@ def test_scan_with_simulator_stores_one_row_with_panel_metadata(qtbot, tmp_path)
     row, panel = rows[0]
     assert row.id == m.receipt.measurement_id and str(row.client_id) == str(m.reading.client_id)
     assert (panel.job, panel.part, panel.substrate, panel.notes) == (
-        "J-2026-0113", "bumper", "PP/EPDM", "rear bumper, left of the plate")
+        "J-2026-0113",
+        "bumper",
+        "PP/EPDM",
+        "rear bumper, left of the plate",
+    )
     # the stored Lab is the 45° block's, recomputed here from the stored spectra through the model
     np.testing.assert_allclose(row.lab, reflectance_to_lab(np.asarray(row.spectra)), atol=1e-3)
     assert row.geometries_deg == [float(a) for a in m.aspecular_deg]  # the MA6's six are all 45° illumination
@@ -94,8 +100,15 @@ def _spectral(serial: str = "SIM-T-1") -> SpectralReading:
     """A reading built here (no device): a flat grey 0.3 at three 45° geometries."""
     refl = np.full((3, 31), 0.3)
     refl[0] *= 1.5
-    return SpectralReading(("45as15", "45as45", "45as110"), refl, 23.0, serial, "CAL-1",
-                           dt.datetime(2026, 11, 23, 7, 0, tzinfo=dt.UTC), model="test")
+    return SpectralReading(
+        ("45as15", "45as45", "45as110"),
+        refl,
+        23.0,
+        serial,
+        "CAL-1",
+        dt.datetime(2026, 11, 23, 7, 0, tzinfo=dt.UTC),
+        model="test",
+    )
 
 
 def test_unreachable_database_keeps_the_reading_then_stores_it_once(tmp_path):
@@ -106,7 +119,9 @@ def test_unreachable_database_keeps_the_reading_then_stores_it_once(tmp_path):
     store = MeasurementStore(sink)
     m = measurement_from_reading(_spectral(), PanelInfo("J-1", "fender"), "test")
     r = store.persist(m).receipt
-    assert r.status == "queued" and "unreachable" in r.message and str(tmp_path / "outbox.sqlite3") in r.message
+    assert (
+        r.status == "queued" and "unreachable" in r.message and str(tmp_path / "outbox.sqlite3") in r.message
+    )
     assert sink.pending() == 1
     blocker.unlink()  # the database comes back
     got = sink.flush()
@@ -123,7 +138,9 @@ def test_unreachable_database_keeps_the_reading_then_stores_it_once(tmp_path):
 
 
 def test_bad_panel_metadata_is_refused_with_the_field(qtbot, tmp_path):
-    screen = InstrumentsScreen(MeasurementStore(LocalSink(f"sqlite:///{tmp_path / 's.sqlite3'}", tmp_path / "o")))
+    screen = InstrumentsScreen(
+        MeasurementStore(LocalSink(f"sqlite:///{tmp_path / 's.sqlite3'}", tmp_path / "o"))
+    )
     qtbot.addWidget(screen)
     screen.job.setText("  ")
     screen.scan()
@@ -158,7 +175,9 @@ def test_a_reading_queued_in_an_earlier_session_is_sent_by_retry(qtbot, tmp_path
     blocker.write_text("not a folder")
     url = f"sqlite:///{blocker / 'station.sqlite3'}"
     first = LocalSink(url, tmp_path / "outbox.sqlite3")
-    m = MeasurementStore(first).persist(measurement_from_reading(_spectral(), PanelInfo("J-2", "roof"), "test"))
+    m = MeasurementStore(first).persist(
+        measurement_from_reading(_spectral(), PanelInfo("J-2", "roof"), "test")
+    )
     assert m.receipt.status == "queued"
     first.close()  # the viewer quits with the reading on disk
     blocker.unlink()
@@ -171,7 +190,9 @@ def test_a_reading_queued_in_an_earlier_session_is_sent_by_retry(qtbot, tmp_path
     assert screen.state.text() == "1 sent, 0 still queued", screen.log.toPlainText()
     assert "waiting" not in screen.where.text()
     rows = _rows(url)
-    assert len(rows) == 1 and str(rows[0][0].client_id) == str(m.reading.client_id) and rows[0][1].part == "roof"
+    assert (
+        len(rows) == 1 and str(rows[0][0].client_id) == str(m.reading.client_id) and rows[0][1].part == "roof"
+    )
     screen.close()
     store.sink.close()
 

@@ -18,11 +18,23 @@ def _library(n: int = 60) -> Library:
     rng = np.random.default_rng(7)
     L45 = rng.uniform(25, 75, n)
     a, b = rng.uniform(-50, 50, n), rng.uniform(-50, 50, n)
-    lab = np.stack([np.stack([L45 + 12, a * 1.1, b * 1.1], -1), np.stack([L45, a, b], -1),
-                    np.stack([L45 - 15, a * 0.8, b * 0.8], -1)], axis=1)
+    lab = np.stack(
+        [
+            np.stack([L45 + 12, a * 1.1, b * 1.1], -1),
+            np.stack([L45, a, b], -1),
+            np.stack([L45 - 15, a * 0.8, b * 0.8], -1),
+        ],
+        axis=1,
+    )
     types = np.array(["solid", "metallic", "pearl"])[np.arange(n) % 3]
-    return Library("test", np.array([f"P{i:03d}" for i in range(n)]), types, rng.uniform(20, 95, n),
-                   (15.0, 45.0, 110.0), lab)
+    return Library(
+        "test",
+        np.array([f"P{i:03d}" for i in range(n)]),
+        types,
+        rng.uniform(20, 95, n),
+        (15.0, 45.0, 110.0),
+        lab,
+    )
 
 
 def test_filters_and_colorsnap(qtbot):
@@ -36,9 +48,12 @@ def test_filters_and_colorsnap(qtbot):
     screen.type_boxes["pearl"].setChecked(False)
     assert screen.thumbs.count() == 40 and "40 paints" in screen.count.text()
     # hierarchy: click the "solids" node → only solids (and not pearls) remain
-    solids = screen.tree.topLevelItem(0).child([screen.tree.topLevelItem(0).child(i).text(0)
-                                                for i in range(screen.tree.topLevelItem(0).childCount())]
-                                               .index("solids"))
+    solids = screen.tree.topLevelItem(0).child(
+        [
+            screen.tree.topLevelItem(0).child(i).text(0)
+            for i in range(screen.tree.topLevelItem(0).childCount())
+        ].index("solids")
+    )
     screen._on_tree(solids, 0)
     assert screen.thumbs.count() == int(np.sum(lib.types == "solid")) == int(solids.text(1))
 

@@ -110,7 +110,10 @@ def test_basis_composite_equals_the_core_numpy_renderer():
     """Re-weighting cached basis images is the same sum as station.render's reference renderer."""
     s = ViewSettings(shape="cylinder")
     basis = BasisImages.compute(s, 48, 40)
-    a, b = paint_weights(DEFAULT_DESIGN), paint_weights(FaceFlopTravelGloss((40, 50, 20), (20, 30, 10), 60, 20))
+    a, b = (
+        paint_weights(DEFAULT_DESIGN),
+        paint_weights(FaceFlopTravelGloss((40, 50, 20), (20, 30, 10), 60, 20)),
+    )
     ours = basis.composite_linear((a, b))
     ref = render_linear(s.scene(), environment_basis("booth"), [a, b], 48, 40)
     np.testing.assert_allclose(ours, ref, rtol=1e-5, atol=1e-6)

@@ -47,20 +47,20 @@ def test_face_eyedropper_changes_design_and_picture(qtbot, board):
     before = view.grab_image().astype(int)
     screen.set_tool("face")
     canvas = screen.canvas
-    qtbot.mousePress(canvas, Qt.MouseButton.LeftButton, pos=QPoint(20, 40))   # red patch
+    qtbot.mousePress(canvas, Qt.MouseButton.LeftButton, pos=QPoint(20, 40))  # red patch
     qtbot.mouseMove(canvas, QPoint(40, 40))
     red_lab = eyedrop_lab(model.pixels[path], (20, 20), 3)
     assert doc.design.face == pytest.approx(tuple(red_lab), abs=1e-9)
     assert doc.design.flop == DEFAULT_DESIGN.flop
     mid = view.grab_image().astype(int)
-    qtbot.mouseMove(canvas, QPoint(120, 40))                                   # drag onto green
+    qtbot.mouseMove(canvas, QPoint(120, 40))  # drag onto green
     qtbot.mouseRelease(canvas, Qt.MouseButton.LeftButton, pos=QPoint(120, 40))
     green_lab = eyedrop_lab(model.pixels[path], (60, 20), 3)
     assert doc.design.face == pytest.approx(tuple(green_lab), abs=1e-9)
     after = view.grab_image().astype(int)
     obj = view.basis.paint >= 0
-    assert (mid[obj][:, 0] - before[obj][:, 0]).mean() > 5      # the sphere turned redder
-    assert (after[obj][:, 1] - mid[obj][:, 1]).mean() > 5       # then greener
+    assert (mid[obj][:, 0] - before[obj][:, 0]).mean() > 5  # the sphere turned redder
+    assert (after[obj][:, 1] - mid[obj][:, 1]).mean() > 5  # then greener
     assert model.eyedroppers["face"] == (120.0, 40.0)
     # the whole drag is one undo step back to the exact starting design
     doc.undo()

@@ -84,8 +84,10 @@ def test_stored_measurements_failure_is_shown(qtbot, tmp_path):
 
     blocker = tmp_path / "f"
     blocker.write_text("not a folder")
-    screen = QAScreen(DesignerModel(DesignDocument()),
-                      MeasurementStore(LocalSink(f"sqlite:///{blocker / 'x.sqlite3'}", tmp_path / "o.sqlite3")))
+    screen = QAScreen(
+        DesignerModel(DesignDocument()),
+        MeasurementStore(LocalSink(f"sqlite:///{blocker / 'x.sqlite3'}", tmp_path / "o.sqlite3")),
+    )
     qtbot.addWidget(screen)
     assert screen.load_stored() == 0
     assert screen.verdict.text() == "error" and "unreachable" in screen.details.text()

@@ -17,9 +17,11 @@ from ui.models.service import ServiceClient, ServiceError
 
 pytestmark = [pytest.mark.qt]
 
-LIBRARY_CSV = ("code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110\n"
-               "R-1,solid,90,40,50,30,39,49,29,38,48,28\n"
-               "M-1,metallic,85,95,-2,-20,60,-1,-14,30,0,-8\n")
+LIBRARY_CSV = (
+    "code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110\n"
+    "R-1,solid,90,40,50,30,39,49,29,38,48,28\n"
+    "M-1,metallic,85,95,-2,-20,60,-1,-14,30,0,-8\n"
+)
 
 
 @pytest.fixture
@@ -39,8 +41,11 @@ def _window(api, token: str, tmp_path) -> MainWindow:
 def test_viewer_loads_and_saves_designs(qtbot, api, tmp_path):
     token = _token(api, "designer", "admin")
     other = DEFAULT_DESIGN.replace(face=(60.0, 30.0, 10.0), name="service red")
-    r = api.client.post("/api/v1/designs", json={"name": "service red", "design": design_to_dict(other)},
-                        headers={"Authorization": f"Bearer {token}"})
+    r = api.client.post(
+        "/api/v1/designs",
+        json={"name": "service red", "design": design_to_dict(other)},
+        headers={"Authorization": f"Bearer {token}"},
+    )
     assert r.status_code == 201, r.text
     win = _window(api, token, tmp_path)
     qtbot.addWidget(win)
@@ -55,8 +60,12 @@ def test_viewer_loads_and_saves_designs(qtbot, api, tmp_path):
 
 
 def test_library_browser_shows_the_service_library(qtbot, api, tmp_path):
-    r = api.client.post("/api/v1/library/import", content=LIBRARY_CSV.encode(), params={"name": "shop"},
-                        headers={**api.auth("admin"), "Content-Type": "text/csv"})
+    r = api.client.post(
+        "/api/v1/library/import",
+        content=LIBRARY_CSV.encode(),
+        params={"name": "shop"},
+        headers={**api.auth("admin"), "Content-Type": "text/csv"},
+    )
     assert r.status_code == 201, r.text
     win = _window(api, _token(api, "admin"), tmp_path)
     qtbot.addWidget(win)

@@ -150,7 +150,6 @@ def test_closing_during_a_basis_computation_joins_the_worker(qtbot):
     assert view._worker is None
 
 
-
 @pytest.fixture
 def cold_prefilter_cache(tmp_path, monkeypatch):
     """An empty ``$CACAD_CACHE_DIR`` and no prefiltered environment in memory (the first start ever)."""
@@ -174,8 +173,11 @@ def test_cold_cache_first_frame_from_coarse_prefilter_then_full_quality(qtbot, c
     qtbot.addWidget(view)
     first: list = []
     view.frame_rendered.connect(
-        lambda: first or first.append((view.basis, view.full_quality, environment_ready("booth"),
-                                       view._frame.copy())))
+        lambda: (
+            first
+            or first.append((view.basis, view.full_quality, environment_ready("booth"), view._frame.copy()))
+        )
+    )
     view.resize(160, 120)
     view.show()
     qtbot.waitUntil(lambda: view.frames > 0, timeout=20000)

@@ -44,7 +44,9 @@ class DesignerModel:
         """Drag the *channel* point at *angle_deg* to *value* and refit (thesis §3.4.1)."""
         return self.document.apply(
             lambda d: move_point(data_points(d, ANGLES_5), channel, angle_deg, value).design,  # type: ignore[arg-type]
-            f"move {channel} at {angle_deg:g}°", merge_key=f"point:{channel}:{angle_deg:g}")
+            f"move {channel} at {angle_deg:g}°",
+            merge_key=f"point:{channel}:{angle_deg:g}",
+        )
 
     def move_face(self, a: float, b: float) -> bool:
         """Drag the arrowhead (face) in the a–b plane (thesis §3.4.3)."""
@@ -67,8 +69,9 @@ class DesignerModel:
         if self._hsb_base is None:
             self._hsb_base = self.design
         base = self._hsb_base
-        return self.document.apply(lambda _d: hsb_edit(base, hue_deg, saturation, brightness), "hue/sat/bright",
-                                   merge_key="hsb")
+        return self.document.apply(
+            lambda _d: hsb_edit(base, hue_deg, saturation, brightness), "hue/sat/bright", merge_key="hsb"
+        )
 
     def end_drag(self) -> None:
         """Mouse released: close the merged undo step and forget the HSB base."""

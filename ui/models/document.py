@@ -64,7 +64,9 @@ class DesignDocument:
         """Label of the step :meth:`undo` would revert."""
         return self._undo[-1].label if self._undo else None
 
-    def set_design(self, design: FaceFlopTravelGloss, label: str = "edit", merge_key: str | None = None) -> None:
+    def set_design(
+        self, design: FaceFlopTravelGloss, label: str = "edit", merge_key: str | None = None
+    ) -> None:
         """Make *design* current as one undoable edit (no-op when equal to the current one)."""
         if not isinstance(design, FaceFlopTravelGloss):
             raise TypeError(f"expected FaceFlopTravelGloss, got {type(design).__name__}")
@@ -81,8 +83,12 @@ class DesignDocument:
         self.events.changed.emit(design)
         self.events.history.emit()
 
-    def apply(self, op: Callable[[FaceFlopTravelGloss], FaceFlopTravelGloss], label: str,
-              merge_key: str | None = None) -> bool:
+    def apply(
+        self,
+        op: Callable[[FaceFlopTravelGloss], FaceFlopTravelGloss],
+        label: str,
+        merge_key: str | None = None,
+    ) -> bool:
         """Run a core operation on the current design and keep the result; False (and an ``error``
         event with the core's message) when the core refuses the input."""
         try:

@@ -37,7 +37,9 @@ if TYPE_CHECKING:
 SIM_DEVICES = tuple(f"sim:{k}" for k in SIM_KINDS)
 Progress = Callable[[int, str], None]
 STEPS = 4
-_CAL_NAMESPACE = uuid.UUID("0b9e8c1e-5d0c-4c7b-8f5e-2b7c3f1d9a11")  # = station.api.instruments' (same record ids)
+_CAL_NAMESPACE = uuid.UUID(
+    "0b9e8c1e-5d0c-4c7b-8f5e-2b7c3f1d9a11"
+)  # = station.api.instruments' (same record ids)
 
 
 @dataclass(frozen=True)
@@ -60,11 +62,18 @@ class Measurement:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able record."""
-        return {"panel": asdict(self.panel), "device": self.device, "time": self.time,
-                "geometries": list(self.geometries), "lab": np.round(self.lab, 4).tolist(),
-                "spectra": np.round(self.spectra, 5).tolist(), "gloss_gu": self.gloss_gu, "note": self.note,
-                "design": design_to_dict(self.design) if self.design is not None else None,
-                "client_id": None if self.reading is None else str(self.reading.client_id)}
+        return {
+            "panel": asdict(self.panel),
+            "device": self.device,
+            "time": self.time,
+            "geometries": list(self.geometries),
+            "lab": np.round(self.lab, 4).tolist(),
+            "spectra": np.round(self.spectra, 5).tolist(),
+            "gloss_gu": self.gloss_gu,
+            "note": self.note,
+            "design": design_to_dict(self.design) if self.design is not None else None,
+            "client_id": None if self.reading is None else str(self.reading.client_id),
+        }
 
 
 def operator_name() -> str:
@@ -91,25 +100,44 @@ def ingest_reading(reading: SpectralReading, operator: str | None = None) -> Rea
     lab = np.asarray(reflectance_to_lab(refl), float)
     cal = None
     if reading.calibration_id:
-        cal = CalibrationRef(client_id=uuid.uuid5(_CAL_NAMESPACE, f"{reading.serial}/{reading.calibration_id}"),
-                             performed_at=reading.time)
+        cal = CalibrationRef(
+            client_id=uuid.uuid5(_CAL_NAMESPACE, f"{reading.serial}/{reading.calibration_id}"),
+            performed_at=reading.time,
+        )
     return Reading(
         client_id=uuid.uuid4(),
-        instrument=InstrumentRef(serial=reading.serial or "unknown", model=reading.model or "unknown",
-                                 kind="multiangle"),
-        calibration=cal, operator=operator or operator_name(), measured_at=reading.time,
-        geometries_deg=[float(a) for a in angles], lab=lab.round(4).tolist(),
-        wavelengths_nm=[float(w) for w in reading.wavelengths_nm], spectra=refl.round(6).tolist())
+        instrument=InstrumentRef(
+            serial=reading.serial or "unknown", model=reading.model or "unknown", kind="multiangle"
+        ),
+        calibration=cal,
+        operator=operator or operator_name(),
+        measured_at=reading.time,
+        geometries_deg=[float(a) for a in angles],
+        lab=lab.round(4).tolist(),
+        wavelengths_nm=[float(w) for w in reading.wavelengths_nm],
+        spectra=refl.round(6).tolist(),
+    )
 
 
-def measurement_from_reading(reading: SpectralReading | GlossReading, panel: PanelInfo, device: str) -> Measurement:
+def measurement_from_reading(
+    reading: SpectralReading | GlossReading, panel: PanelInfo, device: str
+) -> Measurement:
     """Lab (model), and the FFTG fit of the 45° block's positive aspecular angles (eqs 3.3.1–3.3.10)."""
     now = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
     if isinstance(reading, GlossReading):
         g60 = reading.gloss_gu.get(60)
-        return Measurement(panel, device, now, (), (), np.zeros((0, 3)), np.zeros((0, 31)),
-                           None if g60 is None else float(g60), None,
-                           "gloss meter reading (not stored: a measurement needs Lab per geometry)")
+        return Measurement(
+            panel,
+            device,
+            now,
+            (),
+            (),
+            np.zeros((0, 3)),
+            np.zeros((0, 31)),
+            None if g60 is None else float(g60),
+            None,
+            "gloss meter reading (not stored: a measurement needs Lab per geometry)",
+        )
     lab = np.asarray(reflectance_to_lab(reading.reflectance), float)
     angles, _rows = reading.block(45)
     keep = [i for i, a in enumerate(angles) if a > 0]
@@ -122,8 +150,19 @@ def measurement_from_reading(reading: SpectralReading | GlossReading, panel: Pan
             note = f"fit residual ΔE max {max(fit.residual_de):.2f}"
         except InputError as exc:
             note = f"no design fit: {exc}"
-    return Measurement(panel, device, now, tuple(reading.geometries), tuple(reading.aspecular_deg), lab,
-                       np.asarray(reading.reflectance, float), None, design, note, ingest_reading(reading))
+    return Measurement(
+        panel,
+        device,
+        now,
+        tuple(reading.geometries),
+        tuple(reading.aspecular_deg),
+        lab,
+        np.asarray(reading.reflectance, float),
+        None,
+        design,
+        note,
+        ingest_reading(reading),
+    )
 
 
 class MeasurementStore:
@@ -191,8 +230,9 @@ class InstrumentSession:
             raise InputError("instrument", "a connected instrument", None)
         return self.instrument.calibrate()
 
-    def scan(self, panel: PanelInfo, progress: Progress | None = None,
-             store: MeasurementStore | None = None) -> Measurement:
+    def scan(
+        self, panel: PanelInfo, progress: Progress | None = None, store: MeasurementStore | None = None
+    ) -> Measurement:
         """Measure one panel: progress (step, text) for measure → Lab and fit → store → done."""
         if self.instrument is None:
             raise InputError("instrument", "a connected instrument", None)

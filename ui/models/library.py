@@ -36,7 +36,9 @@ def bar_images(library: Library, rows: np.ndarray, width: int = 64, height: int 
     angles = np.asarray(library.angles_deg)[order]
     lab = library.lab[rows][:, order]  # (n, k, 3)
     t = np.linspace(15.0, 110.0, width)
-    cols = np.stack([np.stack([np.interp(t, angles, lab[n, :, c]) for c in range(3)], -1) for n in range(len(rows))])
+    cols = np.stack(
+        [np.stack([np.interp(t, angles, lab[n, :, c]) for c in range(3)], -1) for n in range(len(rows))]
+    )
     rgb = np.round(srgb_encode(np.asarray(lab_to_linear_srgb(cols))) * 255).astype(np.uint8)
     return np.repeat(rgb[:, None], height, axis=1)
 

@@ -145,7 +145,9 @@ class MeasurementSink:
     def submit(self, panel: PanelInfo, reading: Reading) -> StoreReceipt:
         """Queue *reading* on disk, then drain the queue; the receipt of *reading*. Blocking."""
         panel = panel.validated()
-        body = json.dumps({"panel": asdict(panel), "reading": reading.model_dump(mode="json")}, sort_keys=True)
+        body = json.dumps(
+            {"panel": asdict(panel), "reading": reading.model_dump(mode="json")}, sort_keys=True
+        )
         cid = str(reading.client_id)
         self.outbox.put(cid, body)
         return self.flush().get(cid) or StoreReceipt(cid, "queued", None, self._queued_message(""))
@@ -162,22 +164,30 @@ class MeasurementSink:
                 reading = Reading.model_validate(doc["reading"])
                 measurement_id, created = self._send(panel, reading)
             except _Unreachable as exc:
-                out[entry.client_id] = StoreReceipt(entry.client_id, "queued", None, self._queued_message(str(exc)))
+                out[entry.client_id] = StoreReceipt(
+                    entry.client_id, "queued", None, self._queued_message(str(exc))
+                )
                 break
             except (_Refused, InputError, ValueError, KeyError, TypeError) as exc:
                 self.outbox.bury(entry, str(exc))
                 out[entry.client_id] = StoreReceipt(
-                    entry.client_id, "refused", None,
-                    f"{self.where} refused the reading: {exc} (kept in the dead-letter table of {self.outbox_path})")
+                    entry.client_id,
+                    "refused",
+                    None,
+                    f"{self.where} refused the reading: {exc} (kept in the dead-letter table of {self.outbox_path})",
+                )
             else:
                 self.outbox.remove(entry.seq)
-                out[entry.client_id] = StoreReceipt(entry.client_id, "stored" if created else "duplicate",
-                                                    measurement_id)
+                out[entry.client_id] = StoreReceipt(
+                    entry.client_id, "stored" if created else "duplicate", measurement_id
+                )
         return out
 
     def _queued_message(self, why: str) -> str:
-        return (f"{self.where} unreachable{': ' + why if why else ''} — the reading is kept in "
-                f"{self.outbox_path} ({len(self.outbox)} queued) and sent on the next scan or retry")
+        return (
+            f"{self.where} unreachable{': ' + why if why else ''} — the reading is kept in "
+            f"{self.outbox_path} ({len(self.outbox)} queued) and sent on the next scan or retry"
+        )
 
     def prepare(self) -> None:
         """Open the store on the calling (GUI) thread before a worker sends to it; no-op by default."""
@@ -265,9 +275,17 @@ class LocalSink(MeasurementSink):
         self._ready()
         try:
             with self._sessions.begin() as session:
-                panel_id = session.scalar(select(Panel.id).where(
-                    Panel.job == panel.job, Panel.part == panel.part, Panel.substrate == panel.substrate,
-                    Panel.notes == panel.notes).order_by(Panel.id).limit(1))
+                panel_id = session.scalar(
+                    select(Panel.id)
+                    .where(
+                        Panel.job == panel.job,
+                        Panel.part == panel.part,
+                        Panel.substrate == panel.substrate,
+                        Panel.notes == panel.notes,
+                    )
+                    .order_by(Panel.id)
+                    .limit(1)
+                )
                 if panel_id is None:
                     row = Panel(**asdict(panel))
                     session.add(row)
@@ -275,11 +293,21 @@ class LocalSink(MeasurementSink):
                     panel_id = row.id
                 result = store_reading(session, reading.model_copy(update={"panel_id": panel_id}))
                 if result.created:  # audited like the ingest loop's own writes (station account: no user)
-                    session.execute(insert(AuditEvent.__table__), {
-                        "at": utcnow(), "actor_id": None, "action": "measurement.ingest", "entity": "measurement",
-                        "entity_id": str(result.measurement_id),
-                        "detail": {"client_id": str(reading.client_id), "operator": reading.operator,
-                                   "source": "viewer"}})
+                    session.execute(
+                        insert(AuditEvent.__table__),
+                        {
+                            "at": utcnow(),
+                            "actor_id": None,
+                            "action": "measurement.ingest",
+                            "entity": "measurement",
+                            "entity_id": str(result.measurement_id),
+                            "detail": {
+                                "client_id": str(reading.client_id),
+                                "operator": reading.operator,
+                                "source": "viewer",
+                            },
+                        },
+                    )
         except IngestError as exc:
             raise _Refused(str(exc)) from exc
         except Exception as exc:
@@ -297,14 +325,26 @@ class LocalSink(MeasurementSink):
             self._ready()
             with self._sessions() as session:
                 rows = session.execute(
-                    select(Measurement, Panel).outerjoin(Panel, Panel.id == Measurement.panel_id)
-                    .order_by(Measurement.id.desc()).limit(limit)).all()
+                    select(Measurement, Panel)
+                    .outerjoin(Panel, Panel.id == Measurement.panel_id)
+                    .order_by(Measurement.id.desc())
+                    .limit(limit)
+                ).all()
         except _Unreachable as exc:
             raise StationError(f"{self.where} unreachable: {exc}") from exc
         except Exception as exc:
             raise StationError(f"{self.where}: {type(exc).__name__}: {exc}") from exc
-        return [_stored(m.id, f"{p.job} {p.part}" if p is not None else "no panel", m.measured_at,
-                        m.geometries_deg, m.lab, m.gloss_gu) for m, p in rows]
+        return [
+            _stored(
+                m.id,
+                f"{p.job} {p.part}" if p is not None else "no panel",
+                m.measured_at,
+                m.geometries_deg,
+                m.lab,
+                m.gloss_gu,
+            )
+            for m, p in rows
+        ]
 
     def close(self) -> None:
         super().close()
@@ -313,11 +353,23 @@ class LocalSink(MeasurementSink):
             self._engine = None
 
 
-def _stored(mid: int, label: str, when: dt.datetime | str, geometries: list[float], lab: list[list[float]],
-            gloss: float | None) -> StoredMeasurement:
+def _stored(
+    mid: int,
+    label: str,
+    when: dt.datetime | str,
+    geometries: list[float],
+    lab: list[list[float]],
+    gloss: float | None,
+) -> StoredMeasurement:
     when_s = when if isinstance(when, str) else when.isoformat(timespec="seconds")
-    return StoredMeasurement(int(mid), label, when_s, tuple(float(a) for a in geometries),
-                             np.asarray(lab, float).reshape(-1, 3), None if gloss is None else float(gloss))
+    return StoredMeasurement(
+        int(mid),
+        label,
+        when_s,
+        tuple(float(a) for a in geometries),
+        np.asarray(lab, float).reshape(-1, 3),
+        None if gloss is None else float(gloss),
+    )
 
 
 class ServiceSink(MeasurementSink):
@@ -349,8 +401,14 @@ class ServiceSink(MeasurementSink):
         return r
 
     def _send(self, panel: PanelInfo, reading: Reading) -> tuple[int, bool]:
-        page = self._request("GET", "/panels", params={"job": panel.job, "part": panel.part, "limit": 1000}).json()
-        same = [p for p in page["data"] if p.get("substrate", "") == panel.substrate and p.get("notes", "") == panel.notes]
+        page = self._request(
+            "GET", "/panels", params={"job": panel.job, "part": panel.part, "limit": 1000}
+        ).json()
+        same = [
+            p
+            for p in page["data"]
+            if p.get("substrate", "") == panel.substrate and p.get("notes", "") == panel.notes
+        ]
         if same:
             panel_id = min(int(p["id"]) for p in same)
         else:
@@ -362,13 +420,21 @@ class ServiceSink(MeasurementSink):
     def recent(self, limit: int = 50) -> list[StoredMeasurement]:
         try:
             rows = self._request("GET", "/measurements", params={"limit": limit}).json()["data"]
-            panels = {int(p["id"]): p for p in
-                      self._request("GET", "/panels", params={"limit": 1000}).json()["data"]}
+            panels = {
+                int(p["id"]): p
+                for p in self._request("GET", "/panels", params={"limit": 1000}).json()["data"]
+            }
         except (_Unreachable, _Refused) as exc:
             raise StationError(f"{self.where}: {exc}") from exc
         out = []
         for m in rows:
             p = panels.get(m.get("panel_id") or -1)
-            label = f"{p['job']} {p['part']}" if p else ("panel " + str(m["panel_id"]) if m.get("panel_id") else "no panel")
-            out.append(_stored(m["id"], label, m["measured_at"], m["geometries_deg"], m["lab"], m.get("gloss_gu")))
+            label = (
+                f"{p['job']} {p['part']}"
+                if p
+                else ("panel " + str(m["panel_id"]) if m.get("panel_id") else "no panel")
+            )
+            out.append(
+                _stored(m["id"], label, m["measured_at"], m["geometries_deg"], m["lab"], m.get("gloss_gu"))
+            )
         return out

@@ -33,8 +33,9 @@ class ServiceUnreachable(ServiceError):
 class ServiceClient:
     """Thin HTTP client; pass *client* (an ``httpx.Client``, e.g. FastAPI's TestClient) to reuse one."""
 
-    def __init__(self, url: str, token: str | None = None, client: httpx.Client | None = None,
-                 timeout_s: float = 10.0) -> None:
+    def __init__(
+        self, url: str, token: str | None = None, client: httpx.Client | None = None, timeout_s: float = 10.0
+    ) -> None:
         self.url = url.rstrip("/")
         token = token if token is not None else os.environ.get("STATION_TOKEN", "")
         self._headers = {"Authorization": f"Bearer {token}"} if token else {}
@@ -78,13 +79,21 @@ class ServiceClient:
         if not rows:
             raise ServiceError(f"service {self.url}: the library is empty")
         angles = tuple(float(a) for a in rows[0]["angles_deg"])
-        keep = [r for r in rows if tuple(float(a) for a in r["angles_deg"]) == angles and r["gloss_gu"] is not None]
+        keep = [
+            r
+            for r in rows
+            if tuple(float(a) for a in r["angles_deg"]) == angles and r["gloss_gu"] is not None
+        ]
         return Library(
-            f"service {self.url}", np.array([r["code"] for r in keep]), np.array([r["category"] for r in keep]),
-            np.array([float(r["gloss_gu"]) for r in keep]), angles,
+            f"service {self.url}",
+            np.array([r["code"] for r in keep]),
+            np.array([r["category"] for r in keep]),
+            np.array([float(r["gloss_gu"]) for r in keep]),
+            angles,
             np.array([r["lab"] for r in keep], float).reshape(len(keep), len(angles), 3),
             source=f"{self.url}{API}/library ({len(rows) - len(keep)} of {len(rows)} paints left out: "
-                   "other angle set or no gloss)")
+            "other angle set or no gloss)",
+        )
 
     def close(self) -> None:
         """Close the HTTP client if this object made it."""

@@ -124,8 +124,9 @@ class ViewSettings:
         pitch = math.radians(max(-85.0, min(85.0, pitch0 + self.pitch_deg)))
         yaw = math.radians(yaw0 + self.yaw_deg)
         d = dist / self.zoom
-        eye = target + d * np.array([math.cos(pitch) * math.sin(yaw), math.sin(pitch),
-                                     math.cos(pitch) * math.cos(yaw)])
+        eye = target + d * np.array(
+            [math.cos(pitch) * math.sin(yaw), math.sin(pitch), math.cos(pitch) * math.cos(yaw)]
+        )
         return Camera(tuple(map(float, eye)), base.target, base.up, base.fov_deg)
 
     def scene(self) -> Scene:
@@ -188,8 +189,9 @@ class BasisImages:
         return int(self.paint.shape[1]), int(self.paint.shape[0])
 
     @classmethod
-    def compute(cls, settings: ViewSettings, width: int, height: int,
-                prefilter_size: int = PREFILTER_MAX_SIZE) -> BasisImages:
+    def compute(
+        cls, settings: ViewSettings, width: int, height: int, prefilter_size: int = PREFILTER_MAX_SIZE
+    ) -> BasisImages:
         """Ray-cast the view and look up every prefiltered map once (the slow part, done per camera).
 
         *prefilter_size* caps the prefiltered cube faces (see :func:`environment_basis`).
@@ -203,9 +205,14 @@ class BasisImages:
         ndv[core.pixels] = core.n_dot_v
         paint = np.full(height * width, -1, np.int8)
         paint[core.pixels[: core.split]] = 0
-        paint[core.pixels[core.split:]] = 1
-        return cls(core, layers.reshape(k, height, width, 3), ndv.reshape(height, width), paint.reshape(height, width),
-                   int(prefilter_size))
+        paint[core.pixels[core.split :]] = 1
+        return cls(
+            core,
+            layers.reshape(k, height, width, 3),
+            ndv.reshape(height, width),
+            paint.reshape(height, width),
+            int(prefilter_size),
+        )
 
     def composite_linear(self, paints: tuple[LobeWeights, LobeWeights]) -> np.ndarray:
         """Linear sRGB radiance (H, W, 3) float32 of two paints (the core's re-weighting)."""

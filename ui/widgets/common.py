@@ -24,4 +24,6 @@ def lab_colour(lab) -> QColor:
 
 def lab_colours(lab: np.ndarray) -> np.ndarray:
     """Display sRGB uint8 (..., 3) of Lab values (..., 3)."""
-    return np.round(srgb_encode(np.asarray(lab_to_linear_srgb(np.asarray(lab, float)))) * 255).astype(np.uint8)
+    return np.round(srgb_encode(np.asarray(lab_to_linear_srgb(np.asarray(lab, float)))) * 255).astype(
+        np.uint8
+    )

@@ -91,7 +91,9 @@ class VariationsGrid(QWidget):
             b.setText(label)
             b.setEnabled(design is not None)
             b.setToolTip(reason or label)
-            b.setIcon(QIcon(pixmap_from_array(swatch(design, 72, 20, 2).pixels)) if design is not None else QIcon())
+            b.setIcon(
+                QIcon(pixmap_from_array(swatch(design, 72, 20, 2).pixels)) if design is not None else QIcon()
+            )
 
     def _on_click(self, cell: int) -> None:
         d = self.cells[cell]

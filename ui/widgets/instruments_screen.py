@@ -41,8 +41,9 @@ from ui.widgets.tasks import TaskThread
 class InstrumentsScreen(QWidget):
     """Device picker, actions, progress, the last reading and the stored list."""
 
-    def __init__(self, store: MeasurementStore, document: DesignDocument | None = None,
-                 parent: QWidget | None = None) -> None:
+    def __init__(
+        self, store: MeasurementStore, document: DesignDocument | None = None, parent: QWidget | None = None
+    ) -> None:
         super().__init__(parent)
         self.store = store
         self.document = document
@@ -145,17 +146,23 @@ class InstrumentsScreen(QWidget):
     def connect_device(self) -> None:
         """Open the chosen device (a simulator is started for ``sim:*``)."""
         device = self.device.currentText()
-        self._run(lambda p: (p(1, "starting"), self.session.connect(device))[1], self._on_connected,
-                  f"connecting {device}…")
+        self._run(
+            lambda p: (p(1, "starting"), self.session.connect(device))[1],
+            self._on_connected,
+            f"connecting {device}…",
+        )
 
     def calibrate(self) -> None:
         """Run the calibration sequence."""
-        self._run(lambda p: (p(1, "calibrating"), self.session.calibrate())[1], self._on_calibrated, "calibrating…")
+        self._run(
+            lambda p: (p(1, "calibrating"), self.session.calibrate())[1], self._on_calibrated, "calibrating…"
+        )
 
     def panel_info(self) -> PanelInfo:
         """The panel metadata as typed (validated: :class:`InputError` names the field)."""
-        return PanelInfo(self.job.text(), self.part.currentText(), self.substrate.text(),
-                         self.notes.toPlainText()).validated()
+        return PanelInfo(
+            self.job.text(), self.part.currentText(), self.substrate.text(), self.notes.toPlainText()
+        ).validated()
 
     def scan(self) -> None:
         """Measure the panel; the reading is stored (or queued on disk) in the worker, then shown."""
@@ -164,7 +171,9 @@ class InstrumentsScreen(QWidget):
         except InputError as exc:
             self._on_failed(str(exc))
             return
-        self._run(lambda p: self.session.scan(panel, p, self.store), self._on_scanned, f"scanning {panel.label}…")
+        self._run(
+            lambda p: self.session.scan(panel, p, self.store), self._on_scanned, f"scanning {panel.label}…"
+        )
 
     def retry(self) -> None:
         """Send the readings waiting in the outbox."""
@@ -211,8 +220,10 @@ class InstrumentsScreen(QWidget):
         self.progress.setValue(STEPS)
         verdict = "passed" if result.passed else "FAILED"
         self.state.setText(f"calibration {verdict}")
-        self._say(f"calibration {result.calibration_id} {verdict}: steps {', '.join(result.steps)}, "
-                  f"verification ΔE00 {result.verification_de}")
+        self._say(
+            f"calibration {result.calibration_id} {verdict}: steps {', '.join(result.steps)}, "
+            f"verification ΔE00 {result.verification_de}"
+        )
 
     def _on_scanned(self, m: Measurement) -> None:
         self.progress.setValue(STEPS)
@@ -220,11 +231,15 @@ class InstrumentsScreen(QWidget):
         self.where.setText(self._where_text())
         r = m.receipt
         if r is None:
-            self._say(f"scanned {m.panel.label} ({len(m.geometries)} geometries) {m.note}; not stored (no database)")
+            self._say(
+                f"scanned {m.panel.label} ({len(m.geometries)} geometries) {m.note}; not stored (no database)"
+            )
         elif r.status in ("stored", "duplicate"):
             self.state.setText(f"stored as measurement {r.measurement_id}")
-            self._say(f"{r.status} {m.panel.label} as measurement {r.measurement_id} "
-                      f"({len(m.geometries)} geometries) {m.note}")
+            self._say(
+                f"{r.status} {m.panel.label} as measurement {r.measurement_id} "
+                f"({len(m.geometries)} geometries) {m.note}"
+            )
         else:
             self.state.setText("NOT STORED — kept in the outbox" if r.status == "queued" else "REFUSED")
             self._say(f"ERROR {r.message}")
@@ -242,8 +257,15 @@ class InstrumentsScreen(QWidget):
 
     def _on_added(self, m: Measurement) -> None:
         self.last = m
-        status = "session only" if m.receipt is None else (
-            f"#{m.receipt.measurement_id}" if m.receipt.measurement_id is not None else m.receipt.status.upper())
+        status = (
+            "session only"
+            if m.receipt is None
+            else (
+                f"#{m.receipt.measurement_id}"
+                if m.receipt.measurement_id is not None
+                else m.receipt.status.upper()
+            )
+        )
         self.stored.addItem(f"{m.time}  {m.panel.label}  {status}  {m.device}  {m.note}")
         self.table.setRowCount(len(m.geometries))
         for i, (g, lab) in enumerate(zip(m.geometries, m.lab, strict=True)):
@@ -263,11 +285,15 @@ class InstrumentsScreen(QWidget):
         self.calibrate_btn.setEnabled(not busy and self.session.connected)
         self.scan_btn.setEnabled(not busy and self.session.connected)
         self.retry_btn.setEnabled(not busy and self.store.sink is not None)
-        self.use_btn.setEnabled(self.last is not None and self.last.design is not None and self.document is not None)
+        self.use_btn.setEnabled(
+            self.last is not None and self.last.design is not None and self.document is not None
+        )
 
     def lab_table(self) -> np.ndarray:
         """The Lab values shown in the table (rows × 3)."""
-        return np.array([[float(self.table.item(i, j).text()) for j in (1, 2, 3)] for i in range(self.table.rowCount())])
+        return np.array(
+            [[float(self.table.item(i, j).text()) for j in (1, 2, 3)] for i in range(self.table.rowCount())]
+        )
 
     def closeEvent(self, event) -> None:
         if self.task is not None:

@@ -116,7 +116,9 @@ class LibraryScreen(QWidget):
         self.model = model
         self.document = document
         lib = model.library
-        self.title = QLabel(f"{lib.name}: {len(lib)} paints" + (" — SYNTHETIC demo data" if lib.synthetic else ""))
+        self.title = QLabel(
+            f"{lib.name}: {len(lib)} paints" + (" — SYNTHETIC demo data" if lib.synthetic else "")
+        )
         self.tree = QTreeWidget()
         self.tree.setHeaderLabels(["hierarchy", "paints"])
         root = QTreeWidgetItem(["all", str(len(lib))])
@@ -228,14 +230,18 @@ class LibraryScreen(QWidget):
 
     def _on_filtered(self) -> None:
         rows = self.model.rows
-        self.count.setText(f"{rows.size} paints match" + (f" (first {MAX_THUMBS} shown)" if rows.size > MAX_THUMBS else ""))
+        self.count.setText(
+            f"{rows.size} paints match" + (f" (first {MAX_THUMBS} shown)" if rows.size > MAX_THUMBS else "")
+        )
         self.thumbs.clear()
         shown = rows[:MAX_THUMBS]
         if shown.size:
             for r in shown:
-                it = QListWidgetItem(QIcon(pixmap_from_array(self.model.thumbnail(int(r)))),
-                                     f"{self.model.library.codes[r]}  {self.model.library.types[r]}  "
-                                     f"{self.model.library.gloss_gu[r]:.0f} GU")
+                it = QListWidgetItem(
+                    QIcon(pixmap_from_array(self.model.thumbnail(int(r)))),
+                    f"{self.model.library.codes[r]}  {self.model.library.types[r]}  "
+                    f"{self.model.library.gloss_gu[r]:.0f} GU",
+                )
                 it.setData(Qt.ItemDataRole.UserRole, int(r))
                 self.thumbs.addItem(it)
 
@@ -255,8 +261,11 @@ class LibraryScreen(QWidget):
         bars = bar_images(self.model.library, rows) if rows.size else []
         for m, img in zip(result.matches, bars, strict=True):
             de = " / ".join(f"{v:.1f}" for v in m.de_per_angle)
-            self.matches.addItem(QListWidgetItem(QIcon(pixmap_from_array(img)),
-                                                 f"{m.code}  ΣΔE {m.sum_de:.2f} ({de} at 15/45/110°)"))
+            self.matches.addItem(
+                QListWidgetItem(
+                    QIcon(pixmap_from_array(img)), f"{m.code}  ΣΔE {m.sum_de:.2f} ({de} at 15/45/110°)"
+                )
+            )
         self.warnings.setText("\n".join(result.warnings))
         self.cloud.set_data(view_data(self.model.library, result, max_cloud=1500))
         if result.matches:

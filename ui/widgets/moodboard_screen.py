@@ -126,7 +126,9 @@ class MoodBoardScreen(QWidget):
         add = QPushButton("Add image…")
         add.clicked.connect(self._add_dialog)
         new_board = QPushButton("New board")
-        new_board.clicked.connect(lambda: self.model.add_board(f"board {len(self.model.moodboard.boards) + 1}"))
+        new_board.clicked.connect(
+            lambda: self.model.add_board(f"board {len(self.model.moodboard.boards) + 1}")
+        )
         bar.addWidget(add)
         bar.addWidget(new_board)
         bar.addStretch(1)
@@ -187,9 +189,13 @@ class MoodBoardScreen(QWidget):
     def _on_design(self, design) -> None:
         self.preview.setPixmap(pixmap_from_array(booklet(design, 160)))
         self.preview_swatch.setPixmap(pixmap_from_array(swatch(design).pixels))
-        self.readout.setText("face L*a*b* " + ", ".join(f"{v:.1f}" for v in design.face)
-                             + "\nflop L*a*b* " + ", ".join(f"{v:.1f}" for v in design.flop)
-                             + f"\ngloss {design.gloss_gu:.0f} GU")
+        self.readout.setText(
+            "face L*a*b* "
+            + ", ".join(f"{v:.1f}" for v in design.face)
+            + "\nflop L*a*b* "
+            + ", ".join(f"{v:.1f}" for v in design.flop)
+            + f"\ngloss {design.gloss_gu:.0f} GU"
+        )
 
     def closeEvent(self, event) -> None:
         self.model.events.board.disconnect(self._on_board)

@@ -63,7 +63,9 @@ class CurvePlot(_PlotBase):
         """Data (degrees, value) → pixels."""
         r = self.plot_rect()
         lo, hi = RANGES[self.channel]
-        return QPointF(r.left() + angle / 120.0 * r.width(), r.bottom() - (value - lo) / (hi - lo) * r.height())
+        return QPointF(
+            r.left() + angle / 120.0 * r.width(), r.bottom() - (value - lo) / (hi - lo) * r.height()
+        )
 
     def from_px(self, p: QPointF) -> tuple[float, float]:
         """Pixels → data (degrees, value)."""
@@ -87,8 +89,11 @@ class CurvePlot(_PlotBase):
         p.setPen(QPen(QColor(90, 90, 90), 1))
         p.drawRect(r)
         p.drawText(QRectF(2, r.top(), MARGIN - 4, 16), Qt.AlignmentFlag.AlignRight, f"{self.channel}*")
-        p.drawText(QRectF(r.left(), r.bottom() + 2, r.width(), 16), Qt.AlignmentFlag.AlignCenter,
-                   "aspecular θ, 0–120°")
+        p.drawText(
+            QRectF(r.left(), r.bottom() + 2, r.width(), 16),
+            Qt.AlignmentFlag.AlignCenter,
+            "aspecular θ, 0–120°",
+        )
         design = self.model.design
         vals = design.lab_at(CURVE_ANGLES)[:, self.k]
         path = QPainterPath(self.to_px(CURVE_ANGLES[0], vals[0]))
@@ -98,8 +103,10 @@ class CurvePlot(_PlotBase):
         p.drawPath(path)
         if design.travel_deg is not None:
             p.setPen(QPen(QColor(200, 80, 40), 1, Qt.PenStyle.DashLine))
-            p.drawLine(self.to_px(design.travel_deg, RANGES[self.channel][0]),
-                       self.to_px(design.travel_deg, RANGES[self.channel][1]))
+            p.drawLine(
+                self.to_px(design.travel_deg, RANGES[self.channel][0]),
+                self.to_px(design.travel_deg, RANGES[self.channel][1]),
+            )
         p.setPen(QPen(QColor(20, 20, 20), 1))
         p.setBrush(QColor(255, 200, 60))
         for _a, pt in self.point_positions():

@@ -50,9 +50,13 @@ def _floats(text: str, field: str) -> tuple[float, ...]:
 class QAScreen(QWidget):
     """Panel pickers, misalignment, tolerance; results table, verdict and the two seam renderings."""
 
-    def __init__(self, designer: DesignerModel, store: MeasurementStore,
-                 send_to_formulation: Callable[[FaceFlopTravelGloss], None] | None = None,
-                 parent: QWidget | None = None) -> None:
+    def __init__(
+        self,
+        designer: DesignerModel,
+        store: MeasurementStore,
+        send_to_formulation: Callable[[FaceFlopTravelGloss], None] | None = None,
+        parent: QWidget | None = None,
+    ) -> None:
         super().__init__(parent)
         self.designer = designer
         self.store = store
@@ -84,7 +88,9 @@ class QAScreen(QWidget):
         self.details.setWordWrap(True)
         self.details.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
         self.table = QTableWidget(0, 5)
-        self.table.setHorizontalHeaderLabels(["light °", "aspecular °", "seam ΔE", "geometric ΔE", "formulation ΔE"])
+        self.table.setHorizontalHeaderLabels(
+            ["light °", "aspecular °", "seam ΔE", "geometric ΔE", "formulation ΔE"]
+        )
         self.as_is_model = ViewModel(ViewSettings(shape="panels", misalignment_deg=5.0))
         self.fixed_model = ViewModel(ViewSettings(shape="panels", misalignment_deg=5.0))
         self.as_is = make_render_view(self.as_is_model)
@@ -143,7 +149,11 @@ class QAScreen(QWidget):
         """(label, design) of every panel that can be picked."""
         out = [("current design", self.designer.design)]
         out += [(f"palette: {n}", d) for n, d in self.designer.palette]
-        out += [(f"measured: {m.panel.label} {m.time}", m.design) for m in self.store.items if m.design is not None]
+        out += [
+            (f"measured: {m.panel.label} {m.time}", m.design)
+            for m in self.store.items
+            if m.design is not None
+        ]
         return out + self.stored
 
     def load_stored(self, limit: int = 50) -> int:
@@ -153,11 +163,14 @@ class QAScreen(QWidget):
         except StationError as exc:
             self._on_failed(f"stored measurements: {exc}")
             return 0
-        self.stored = [(f"stored #{r.id}: {r.label} {r.measured_at}", d) for r in rows
-                       if (d := r.design()) is not None]
+        self.stored = [
+            (f"stored #{r.id}: {r.label} {r.measured_at}", d) for r in rows if (d := r.design()) is not None
+        ]
         self.refresh_sources()
-        self.details.setText(f"{len(self.stored)} stored measurements offered as panels "
-                             f"({len(rows) - len(self.stored)} without a design fit) from {self.store.sink.where}")
+        self.details.setText(
+            f"{len(self.stored)} stored measurements offered as panels "
+            f"({len(rows) - len(self.stored)} without a design fit) from {self.store.sink.where}"
+        )
         return len(self.stored)
 
     def refresh_sources(self) -> None:
@@ -202,8 +215,9 @@ class QAScreen(QWidget):
         self.as_is_model.show(a, b)
         self.verdict.setText("running…")
         self.run_btn.setEnabled(False)
-        self.task = TaskThread(lambda _p: seam_qa(a, b, beta, lights_deg=lights, aspecular_deg=asp,
-                                                  tolerance=tol, method=method))
+        self.task = TaskThread(
+            lambda _p: seam_qa(a, b, beta, lights_deg=lights, aspecular_deg=asp, tolerance=tol, method=method)
+        )
         self.task.succeeded.connect(self._on_report)
         self.task.failed.connect(self._on_failed)
         self.task.finished.connect(lambda: self.run_btn.setEnabled(True))
@@ -216,17 +230,27 @@ class QAScreen(QWidget):
     def _on_report(self, r: SeamReport) -> None:
         self.report = r
         self.verdict.setText("PASS" if r.passed else "FAIL")
-        self.verdict.setStyleSheet(f"font-size: 18pt; font-weight: bold; color: {'#1a7f1a' if r.passed else '#b00020'}")
+        self.verdict.setStyleSheet(
+            f"font-size: 18pt; font-weight: bold; color: {'#1a7f1a' if r.passed else '#b00020'}"
+        )
         idx = r.index.to_dict()
         self.details.setText(
             f"seam ΔE max {max(r.seam_de):.2f} ({r.method}, tolerance {r.tolerance:g})\n{r.diagnosis}\n"
             f"goniogeometric index: {idx.get('message', '')}\n"
             f"corrected B′: seam ΔE max {r.correction.max_after:.2f} "
-            f"({'meets' if r.correction.meets_epsilon else 'does not meet'} tolerance)\n\n" + "\n".join(r.advice))
+            f"({'meets' if r.correction.meets_epsilon else 'does not meet'} tolerance)\n\n"
+            + "\n".join(r.advice)
+        )
         self.table.setRowCount(len(r.geometries))
         for i, g in enumerate(r.geometries):
             d = g.to_dict()
-            vals = (d.get("light_deg"), d.get("aspecular_deg"), r.seam_de[i], r.geometric_de[i], r.formulation_de[i])
+            vals = (
+                d.get("light_deg"),
+                d.get("aspecular_deg"),
+                r.seam_de[i],
+                r.geometric_de[i],
+                r.formulation_de[i],
+            )
             for j, v in enumerate(vals):
                 self.table.setItem(i, j, QTableWidgetItem(f"{float(v):.2f}"))
         self.fixed_model.show(r.paint_a, r.correction.paint)

@@ -9,8 +9,11 @@ from PySide6.QtWidgets import QWidget
 
 from station.model import FaceFlopTravelGloss
 
-CHANNELS = (("L*", QColor(40, 40, 40), (0.0, 100.0)), ("a*", QColor(200, 40, 60), (-60.0, 60.0)),
-            ("b*", QColor(40, 90, 200), (-60.0, 60.0)))
+CHANNELS = (
+    ("L*", QColor(40, 40, 40), (0.0, 100.0)),
+    ("a*", QColor(200, 40, 60), (-60.0, 60.0)),
+    ("b*", QColor(40, 90, 200), (-60.0, 60.0)),
+)
 ANGLES = np.linspace(-20.0, 120.0, 141)
 
 
@@ -42,8 +45,10 @@ class ReadingPlot(QWidget):
             p.drawText(QRectF(0, r.top(), 28, 14), Qt.AlignmentFlag.AlignRight, name)
 
             def px(a: float, v: float, r=r, lo=lo, hi=hi) -> QPointF:
-                return QPointF(r.left() + (a + 20.0) / 140.0 * r.width(),
-                               r.bottom() - (min(max(v, lo), hi) - lo) / (hi - lo) * r.height())
+                return QPointF(
+                    r.left() + (a + 20.0) / 140.0 * r.width(),
+                    r.bottom() - (min(max(v, lo), hi) - lo) / (hi - lo) * r.height(),
+                )
 
             if self.design is not None:
                 vals = self.design.lab_at(np.clip(ANGLES, 0.0, None))[:, k]
@@ -59,6 +64,9 @@ class ReadingPlot(QWidget):
                     p.drawEllipse(px(a, v), 4, 4)
                 p.setBrush(Qt.BrushStyle.NoBrush)
         p.setPen(QColor(90, 90, 90))
-        p.drawText(QRectF(30, self.height() - 14, self.width() - 36, 14), Qt.AlignmentFlag.AlignCenter,
-                   "aspecular angle −20…120° (points: measured, line: fitted design)")
+        p.drawText(
+            QRectF(30, self.height() - 14, self.width() - 36, 14),
+            Qt.AlignmentFlag.AlignCenter,
+            "aspecular angle −20…120° (points: measured, line: fitted design)",
+        )
         p.end()

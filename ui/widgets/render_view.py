@@ -51,13 +51,17 @@ def configure_default_format() -> None:
 
 def composite_program(ctx, layers: int):
     """Compile ``shaders/composite.*.glsl`` for a basis of *layers* cached images."""
-    frag = (SHADER_DIR / "composite.frag.glsl").read_text().replace(
-        "#version 330", f"#version 330\n#define MAX_LAYERS {layers}", 1)
+    frag = (
+        (SHADER_DIR / "composite.frag.glsl")
+        .read_text()
+        .replace("#version 330", f"#version 330\n#define MAX_LAYERS {layers}", 1)
+    )
     return ctx.program(vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(), fragment_shader=frag)
 
 
-def set_composite_uniforms(prog, basis: BasisImages, weights, exposure_ev: float,
-                           viewport: tuple[int, int]) -> None:
+def set_composite_uniforms(
+    prog, basis: BasisImages, weights, exposure_ev: float, viewport: tuple[int, int]
+) -> None:
     """Write both paints' per-image weights (:func:`ui.models.view.layer_weights`) and display settings."""
     (a0, b0), (a1, b1) = (layer_weights(basis.layout, w) for w in weights)
     k = len(basis.layout)
@@ -67,7 +71,7 @@ def set_composite_uniforms(prog, basis: BasisImages, weights, exposure_ev: float
     prog["u_layer"].write(np.array(active + [0] * (k - len(active)), "i4").tobytes())
     for name, arr in (("u_a0", a0), ("u_b0", b0), ("u_a1", a1), ("u_b1", b1)):
         prog[name].write(np.concatenate([arr[active], pad]).astype("f4").tobytes())
-    prog["u_exposure"].value = float(2.0 ** exposure_ev)
+    prog["u_exposure"].value = float(2.0**exposure_ev)
     prog["u_background"].value = (BACKGROUND,) * 3
     prog["u_viewport"].value = tuple(map(float, viewport))
     prog["u_size"].value = basis.size
@@ -125,8 +129,12 @@ class _ViewLogic:
     def full_quality(self) -> bool:
         """Whether the shown basis is the final one (full resolution, full prefilter) for the current view."""
         b = self.basis
-        return (b is not None and self._basis_key is not None and b.prefilter_size == PREFILTER_MAX_SIZE
-                and b.size == self._basis_key[1:])
+        return (
+            b is not None
+            and self._basis_key is not None
+            and b.prefilter_size == PREFILTER_MAX_SIZE
+            and b.size == self._basis_key[1:]
+        )
 
     def _start_worker(self, key: tuple) -> None:
         if self._worker is not None and self._worker.isRunning():
@@ -138,7 +146,11 @@ class _ViewLogic:
         self._worker.start()
 
     def _on_worker_done(self, settings: ViewSettings, basis: BasisImages) -> None:
-        if self._basis_key is not None and self._basis_key[0] == settings and basis.size == self._basis_key[1:]:
+        if (
+            self._basis_key is not None
+            and self._basis_key[0] == settings
+            and basis.size == self._basis_key[1:]
+        ):
             self._set_basis(basis)
         if self._worker is not None:
             self._worker.wait()
@@ -243,8 +255,10 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         quad = np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4")
         self._vbo = self.ctx.buffer(quad.tobytes())
         self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
-        self._frame_prog = self.ctx.program(vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(),
-                                            fragment_shader=(SHADER_DIR / "frame.frag.glsl").read_text())
+        self._frame_prog = self.ctx.program(
+            vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(),
+            fragment_shader=(SHADER_DIR / "frame.frag.glsl").read_text(),
+        )
         self._frame_vao = self.ctx.vertex_array(self._frame_prog, [(self._vbo, "2f", "in_pos")])
 
     def _upload(self, basis: BasisImages) -> None:
@@ -261,8 +275,9 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
             self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
         self._layers = len(basis.layout)
         layers = basis.layers
-        self._tex_basis = self.ctx.texture((w, h * layers.shape[0]), 3, layers.tobytes(), dtype="f4",
-                                           internal_format=GL_RGB9_E5)
+        self._tex_basis = self.ctx.texture(
+            (w, h * layers.shape[0]), 3, layers.tobytes(), dtype="f4", internal_format=GL_RGB9_E5
+        )
         geom = np.stack([basis.n_dot_v, basis.paint.astype(np.float32)], axis=-1).astype("f2")
         self._tex_geom = self.ctx.texture((w, h), 2, geom.tobytes(), dtype="f2")
         for t in (self._tex_basis, self._tex_geom):
@@ -330,15 +345,28 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         """The current frame as (H, W, 3) uint8 (renders it)."""
         img = self.grabFramebuffer().convertToFormat(QImage.Format.Format_RGB888)
         w, h = img.width(), img.height()
-        return np.frombuffer(img.constBits(), np.uint8).reshape(h, img.bytesPerLine())[:, : 3 * w].reshape(h, w, 3).copy()
+        return (
+            np.frombuffer(img.constBits(), np.uint8)
+            .reshape(h, img.bytesPerLine())[:, : 3 * w]
+            .reshape(h, w, 3)
+            .copy()
+        )
 
     def close_view(self) -> None:
         """Join the worker and release GPU objects."""
         self._shutdown()
         if self.ctx is not None:
             self.makeCurrent()
-            for obj in (self._vao, self._vbo, self._prog, self._tex_basis, self._tex_geom, self._frame_vao,
-                        self._frame_prog, self._tex_frame):
+            for obj in (
+                self._vao,
+                self._vbo,
+                self._prog,
+                self._tex_basis,
+                self._tex_geom,
+                self._frame_vao,
+                self._frame_prog,
+                self._tex_frame,
+            ):
                 if obj is not None:
                     obj.release()
             self.ctx = None
@@ -417,7 +445,8 @@ def gl_supported() -> bool:
     return QGuiApplication.platformName() not in ("offscreen", "minimal", "vnc")
 
 
-def make_render_view(model: ViewModel, parent: QWidget | None = None, mode: str = "cpu"
-                     ) -> GLRenderView | ImageRenderView:
+def make_render_view(
+    model: ViewModel, parent: QWidget | None = None, mode: str = "cpu"
+) -> GLRenderView | ImageRenderView:
     """The GL view where the platform has OpenGL, else the NumPy image view."""
     return GLRenderView(model, parent, mode) if gl_supported() else ImageRenderView(model, parent)

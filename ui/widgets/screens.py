@@ -51,7 +51,9 @@ def _library_screen(window) -> QWidget:
             library = window.service.library()
             window.statusBar().showMessage(f"library: {len(library)} paints from {window.service_url}")
         except ServiceError as exc:
-            window.statusBar().showMessage(f"library from the service failed ({exc}); showing the demo library")
+            window.statusBar().showMessage(
+                f"library from the service failed ({exc}); showing the demo library"
+            )
     return LibraryScreen(LibraryModel(library if library is not None else demo_library()), window.document)
 
 

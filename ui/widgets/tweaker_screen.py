@@ -30,10 +30,20 @@ from ui.models.document import DesignDocument
 
 SIZE = 400
 STEPS = {"L": 3.0, "C": 0.1, "H": 5.0}
-BUTTONS = (("lighter", "L", +1, (0, -34)), ("darker", "L", -1, (0, 34)), ("chroma +", "C", +1, (44, -12)),
-           ("chroma −", "C", -1, (-44, -12)), ("hue +", "H", +1, (44, 14)), ("hue −", "H", -1, (-44, 14)))
-RING_COLOURS = {"15°": QColor(255, 220, 0), "45°": QColor(255, 255, 255), "θ_clamp": QColor(0, 200, 255),
-                "highlight edge": QColor(255, 80, 80)}
+BUTTONS = (
+    ("lighter", "L", +1, (0, -34)),
+    ("darker", "L", -1, (0, 34)),
+    ("chroma +", "C", +1, (44, -12)),
+    ("chroma −", "C", -1, (-44, -12)),
+    ("hue +", "H", +1, (44, 14)),
+    ("hue −", "H", -1, (-44, 14)),
+)
+RING_COLOURS = {
+    "15°": QColor(255, 220, 0),
+    "45°": QColor(255, 255, 255),
+    "θ_clamp": QColor(0, 200, 255),
+    "highlight edge": QColor(255, 80, 80),
+}
 
 
 class TweakerCanvas(QWidget):
@@ -111,8 +121,12 @@ class TweakerCanvas(QWidget):
         for label, _k, _s, (dx, dy) in BUTTONS:
             b = self.buttons[label]
             b.adjustSize()
-            b.move(QPoint(int(min(max(x + dx - b.width() / 2, 0), SIZE - b.width())),
-                          int(min(max(y + dy - b.height() / 2, 0), SIZE - b.height()))))
+            b.move(
+                QPoint(
+                    int(min(max(x + dx - b.width() / 2, 0), SIZE - b.width())),
+                    int(min(max(y + dy - b.height() / 2, 0), SIZE - b.height())),
+                )
+            )
             b.show()
 
     # ------------------------------------------------------------------ editing
@@ -127,8 +141,19 @@ class TweakerCanvas(QWidget):
         if self.crosshair is None:
             return False
         xy = self.crosshair
-        return self.document.apply(lambda d: adjust_at(d, self.scene.aspecular_deg, xy, kind, delta,  # type: ignore[arg-type]
-                                                       self.scene.mask).design, f"tweak {kind}")
+        return self.document.apply(
+            lambda d: (
+                adjust_at(
+                    d,
+                    self.scene.aspecular_deg,
+                    xy,
+                    kind,
+                    delta,  # type: ignore[arg-type]
+                    self.scene.mask,
+                ).design
+            ),
+            f"tweak {kind}",
+        )
 
     def press(self, xy: tuple[int, int]) -> str:
         """Act on a press at pixel *xy* of the object; returns the hit target."""
@@ -150,8 +175,11 @@ class TweakerCanvas(QWidget):
             if self._drag == "travel-ring":
                 d.apply(lambda x: drag_travel(x, s.aspecular_deg, xy, s.mask), "drag travel ring", "tw:ring")
             elif self._drag == "highlight-edge":
-                d.apply(lambda x: drag_highlight_edge(x, s.aspecular_deg, xy, s.mask), "drag highlight edge",
-                        "tw:edge")
+                d.apply(
+                    lambda x: drag_highlight_edge(x, s.aspecular_deg, xy, s.mask),
+                    "drag highlight edge",
+                    "tw:edge",
+                )
             elif self._drag == "highlight-centre":
                 self.scene = s.with_light(drag_highlight_centre(s.light_dirs, xy, s.mask))
                 self._render()
@@ -187,9 +215,11 @@ class TweakerScreen(QWidget):
     def __init__(self, document: DesignDocument, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.canvas = TweakerCanvas(document)
-        help_text = QLabel("Click the object to place the crosshair, then use the buttons around it. Drag the "
-                           "θ_clamp ring (blue) to set travel, the highlight edge (red) to set gloss, the "
-                           "highlight centre to move the light.")
+        help_text = QLabel(
+            "Click the object to place the crosshair, then use the buttons around it. Drag the "
+            "θ_clamp ring (blue) to set travel, the highlight edge (red) to set gloss, the "
+            "highlight centre to move the light."
+        )
         help_text.setWordWrap(True)
         row = QHBoxLayout()
         row.addWidget(self.canvas)

@@ -31,8 +31,16 @@ class ViewPanel(QWidget):
         self.exposure_label = QLabel()
         reset = QPushButton("Reset camera")
         bar = QHBoxLayout()
-        for w in (QLabel("environment"), self.environment, QLabel("shape"), self.shape, QLabel("exposure"),
-                  self.exposure, self.exposure_label, reset):
+        for w in (
+            QLabel("environment"),
+            self.environment,
+            QLabel("shape"),
+            self.shape,
+            QLabel("exposure"),
+            self.exposure,
+            self.exposure_label,
+            reset,
+        ):
             bar.addWidget(w)
         self.view = make_render_view(model)
         lay = QVBoxLayout(self)
@@ -40,8 +48,9 @@ class ViewPanel(QWidget):
         lay.addLayout(bar)
         lay.addWidget(self.view, 1)
         self.environment.currentTextChanged.connect(lambda t: self.model.update(environment=t))
-        self.shape.currentTextChanged.connect(lambda t: self.model.update(shape=t, yaw_deg=0.0, pitch_deg=0.0,
-                                                                          zoom=1.0))
+        self.shape.currentTextChanged.connect(
+            lambda t: self.model.update(shape=t, yaw_deg=0.0, pitch_deg=0.0, zoom=1.0)
+        )
         self.exposure.valueChanged.connect(lambda v: self.model.update(exposure_ev=v / EXPOSURE_STEPS_PER_EV))
         reset.clicked.connect(lambda: self.model.update(yaw_deg=0.0, pitch_deg=0.0, zoom=1.0))
         model.events.settings.connect(self._on_settings)

@@ -31,13 +31,17 @@ def upgrade() -> None:
             "USING ERRCODE = 'restrict_violation'; END $$"
         )
         for table in TABLES:
-            op.execute(f"CREATE TRIGGER tr_{table}_append_only BEFORE UPDATE OR DELETE ON {table} "
-                       "FOR EACH ROW EXECUTE FUNCTION cacad_refuse_change()")
+            op.execute(
+                f"CREATE TRIGGER tr_{table}_append_only BEFORE UPDATE OR DELETE ON {table} "
+                "FOR EACH ROW EXECUTE FUNCTION cacad_refuse_change()"
+            )
         return
     for table in TABLES:
         for action in ("UPDATE", "DELETE"):
-            op.execute(f"CREATE TRIGGER tr_{table}_no_{action.lower()} BEFORE {action} ON {table} "
-                       f"BEGIN SELECT RAISE(ABORT, '{table} is append-only: {action} refused'); END")
+            op.execute(
+                f"CREATE TRIGGER tr_{table}_no_{action.lower()} BEFORE {action} ON {table} "
+                f"BEGIN SELECT RAISE(ABORT, '{table} is append-only: {action} refused'); END"
+            )
 
 
 def downgrade() -> None:

@@ -24,7 +24,9 @@ depends_on: str | Sequence[str] | None = None
 
 def upgrade() -> None:
     with op.batch_alter_table("library_paints") as batch:
-        batch.alter_column("family", existing_type=sa.String(32), type_=sa.String(64), existing_nullable=False)
+        batch.alter_column(
+            "family", existing_type=sa.String(32), type_=sa.String(64), existing_nullable=False
+        )
 
 
 def downgrade() -> None:
@@ -32,4 +34,6 @@ def downgrade() -> None:
     if longest is not None and longest > 32:
         raise RuntimeError(f"cannot downgrade: a library family is {longest} characters long (limit 32)")
     with op.batch_alter_table("library_paints") as batch:
-        batch.alter_column("family", existing_type=sa.String(64), type_=sa.String(32), existing_nullable=False)
+        batch.alter_column(
+            "family", existing_type=sa.String(64), type_=sa.String(32), existing_nullable=False
+        )

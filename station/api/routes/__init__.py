@@ -15,8 +15,16 @@ from station.api.routes import (
 )
 
 ROUTERS = [
-    instruments.router, panels.router, measurements.router, analyses.router, designs.router, library.router,
-    styling.router, recipes.router, formulation.router, users.router,
+    instruments.router,
+    panels.router,
+    measurements.router,
+    analyses.router,
+    designs.router,
+    library.router,
+    styling.router,
+    recipes.router,
+    formulation.router,
+    users.router,
 ]
 
 __all__ = ["ROUTERS", "health"]

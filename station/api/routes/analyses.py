@@ -58,17 +58,29 @@ def sweep(_user: Analyst, request: SweepRequest) -> dict[str, Any]:
 
 
 @router.get("", response_model=Page[AnalysisPublic])
-def list_analyses(session: SessionDep, _user: Reader,
-                  kind: Annotated[str | None, Query(max_length=32)] = None,
-                  limit: Limit = 100, offset: Offset = 0) -> Page[AnalysisPublic]:
+def list_analyses(
+    session: SessionDep,
+    _user: Reader,
+    kind: Annotated[str | None, Query(max_length=32)] = None,
+    limit: Limit = 100,
+    offset: Offset = 0,
+) -> Page[AnalysisPublic]:
     """Stored analyses, newest first."""
     rows, total = service.list_analyses(session=session, kind=kind, limit=limit, offset=offset)
     return Page[AnalysisPublic](data=[AnalysisPublic.model_validate(r) for r in rows], count=total)
 
 
-@router.get("/{analysis_id}/report.png", response_class=Response, responses={**NOT_FOUND, 200: {
-    "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}},
-    "description": "the seam QA report picture"}})
+@router.get(
+    "/{analysis_id}/report.png",
+    response_class=Response,
+    responses={
+        **NOT_FOUND,
+        200: {
+            "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}},
+            "description": "the seam QA report picture",
+        },
+    },
+)
 def report_png(session: SessionDep, _user: Reader, analysis_id: Id) -> Response:
     """The seam QA report as a PNG: both panels rendered side by side as painted and with the corrected
     paint, and the BRDF curves of paint A, paint B and the correction compared (thesis Fig. 4.7)."""

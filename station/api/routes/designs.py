@@ -22,17 +22,24 @@ Writer = Annotated[User, scoped(Scope.DESIGNS_WRITE)]
 @router.post("", status_code=status.HTTP_201_CREATED, response_model=DesignPublic)
 def create_design(session: SessionDep, user: Writer, design_in: DesignCreate) -> DesignPublic:
     """Create a design (version 1); the body is validated by the appearance model."""
-    return service.create_design(session=session, actor=user, name=design_in.name, body=design_in.design,
-                                 note=design_in.note)
+    return service.create_design(
+        session=session, actor=user, name=design_in.name, body=design_in.design, note=design_in.note
+    )
 
 
 @router.get("", response_model=Page[DesignPublic])
-def list_designs(session: SessionDep, _user: Reader,
-                 name: Annotated[str | None, Query(max_length=128, description="substring of the name")] = None,
-                 include_archived: bool = False, limit: Limit = 100, offset: Offset = 0) -> Page[DesignPublic]:
+def list_designs(
+    session: SessionDep,
+    _user: Reader,
+    name: Annotated[str | None, Query(max_length=128, description="substring of the name")] = None,
+    include_archived: bool = False,
+    limit: Limit = 100,
+    offset: Offset = 0,
+) -> Page[DesignPublic]:
     """Designs with their latest version, newest first."""
-    rows, total = service.list_designs(session=session, name=name, include_archived=include_archived,
-                                       limit=limit, offset=offset)
+    rows, total = service.list_designs(
+        session=session, name=name, include_archived=include_archived, limit=limit, offset=offset
+    )
     return Page[DesignPublic](data=rows, count=total)
 
 
@@ -45,8 +52,9 @@ def get_design(session: SessionDep, _user: Reader, design_id: Id) -> DesignPubli
 @router.put("/{design_id}", response_model=DesignPublic, responses={**NOT_FOUND, **CONFLICT})
 def update_design(session: SessionDep, user: Writer, design_id: Id, update: DesignUpdate) -> DesignPublic:
     """Save a new version (earlier versions stay readable)."""
-    return service.add_version(session=session, actor=user, design_id=design_id, body=update.design,
-                               note=update.note)
+    return service.add_version(
+        session=session, actor=user, design_id=design_id, body=update.design, note=update.note
+    )
 
 
 @router.delete("/{design_id}", response_model=DesignPublic, responses=NOT_FOUND)
@@ -62,7 +70,6 @@ def list_versions(session: SessionDep, _user: Reader, design_id: Id) -> list[Des
 
 
 @router.get("/{design_id}/versions/{version}", response_model=DesignVersionPublic, responses=NOT_FOUND)
-def get_version(session: SessionDep, _user: Reader, design_id: Id,
-                version: Id) -> DesignVersionPublic:
+def get_version(session: SessionDep, _user: Reader, design_id: Id, version: Id) -> DesignVersionPublic:
     """One version."""
     return service.get_version(session=session, design_id=design_id, version=version)

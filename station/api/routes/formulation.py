@@ -25,10 +25,16 @@ from station.api.schemas.formulation import (
 from station.api.security import Scope
 from station.api.services import formulation as service
 
-router = APIRouter(prefix="/formulation", tags=["formulation"], responses={**ERROR_RESPONSES, **NOT_FOUND, **CONFLICT})
+router = APIRouter(
+    prefix="/formulation", tags=["formulation"], responses={**ERROR_RESPONSES, **NOT_FOUND, **CONFLICT}
+)
 Chemist = Annotated[User, scoped(Scope.RECIPES_WRITE)]
-_FILE = {200: {"description": "the thesis's XML (§5.3.1) or CxF3 (ISO 17972) file; header X-Match-Code",
-               "content": {"application/xml": {"schema": {"type": "string"}}}}}
+_FILE = {
+    200: {
+        "description": "the thesis's XML (§5.3.1) or CxF3 (ISO 17972) file; header X-Match-Code",
+        "content": {"application/xml": {"schema": {"type": "string"}}},
+    }
+}
 
 
 @router.post("/snap", response_model=SnapOut)
@@ -40,25 +46,33 @@ def snap(request: Request, session: SessionDep, _user: Chemist, body: SnapReques
 
 
 @router.post("/formulate", response_model=FormulateOut)
-def formulate(request: Request, session: SessionDep, _user: Chemist, body: FormulateRequest) -> dict[str, Any]:
+def formulate(
+    request: Request, session: SessionDep, _user: Chemist, body: FormulateRequest
+) -> dict[str, Any]:
     """A recipe for the target from the SYNTHETIC colorant database, started from the ColorSnap matches'
     recipes: predicted Lab and CIEDE2000 per angle, and whether it is formulable within the tolerance."""
     return service.formulate(session=session, cache=service.app_cache(request.app.state), request=body)
 
 
 @router.post("/closed-loop", status_code=status.HTTP_201_CREATED, response_model=ClosedLoopOut)
-def closed_loop(request: Request, session: SessionDep, user: Chemist, body: ClosedLoopRequest) -> dict[str, Any]:
+def closed_loop(
+    request: Request, session: SessionDep, user: Chemist, body: ClosedLoopRequest
+) -> dict[str, Any]:
     """Closed-loop prototyping (beyond the thesis): recipe → simulated spray-out panel → simulated
     spectrophotometer and gloss meter → ΔE00 to the design → correction, as labs iterate; stored as one
     formulation job with every step (readable at ``GET /recipes/{id}``) and audited. SYNTHETIC."""
-    return service.closed_loop(session=session, actor=user, cache=service.app_cache(request.app.state), request=body)
+    return service.closed_loop(
+        session=session, actor=user, cache=service.app_cache(request.app.state), request=body
+    )
 
 
 @router.post("/export", response_class=Response, responses=_FILE)
 def export(request: Request, session: SessionDep, _user: Chemist, body: ExportRequest) -> Response:
     """The design at both 3-angle sets (15/45/110 and 25/45/75; 5 angles on request) and its ColorSnap
     match, as the thesis's XML or CxF3, as a file."""
-    data, filename, code = service.export(session=session, cache=service.app_cache(request.app.state), request=body)
+    data, filename, code = service.export(
+        session=session, cache=service.app_cache(request.app.state), request=body
+    )
     headers = {"Content-Disposition": f'attachment; filename="{filename}"'}
     if code is not None:
         headers["X-Match-Code"] = code

@@ -24,8 +24,15 @@ from station.api.security import Scope
 router = APIRouter(prefix="/instruments", tags=["instruments"], responses={**ERROR_RESPONSES, **UNAVAILABLE})
 Reader = Annotated[User, scoped(Scope.INSTRUMENTS_READ)]
 Operator = Annotated[User, scoped(Scope.INSTRUMENTS_OPERATE)]
-InstrumentId = Annotated[str, Path(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$",
-                                   description="handle from the instrument list, e.g. ma6-sim00001")]
+InstrumentId = Annotated[
+    str,
+    Path(
+        min_length=1,
+        max_length=80,
+        pattern=r"^[a-z0-9_.-]+$",
+        description="handle from the instrument list, e.g. ma6-sim00001",
+    ),
+]
 
 
 def _hub(request: Request) -> InstrumentHub:
@@ -38,28 +45,55 @@ async def list_instruments(request: Request, _user: Reader) -> list[InstrumentPu
     return await asyncio.to_thread(_hub(request).list)
 
 
-@router.post("/connect", status_code=status.HTTP_201_CREATED, response_model=InstrumentPublic,
-             responses={**NOT_FOUND, **CONFLICT})
+@router.post(
+    "/connect",
+    status_code=status.HTTP_201_CREATED,
+    response_model=InstrumentPublic,
+    responses={**NOT_FOUND, **CONFLICT},
+)
 async def connect(request: Request, user: Operator, body: ConnectRequest) -> InstrumentPublic:
     """Open the instrument at a driver address and attach it."""
     return await asyncio.to_thread(_hub(request).connect, address=body.address, actor=user)
 
 
-@router.post("/{instrument_id}/calibrate", response_model=CalibrationPublic, responses={**NOT_FOUND, **CONFLICT})
-async def calibrate(request: Request, user: Operator, instrument_id: InstrumentId,
-                    body: CalibrateRequest) -> CalibrationPublic:
+@router.post(
+    "/{instrument_id}/calibrate", response_model=CalibrationPublic, responses={**NOT_FOUND, **CONFLICT}
+)
+async def calibrate(
+    request: Request, user: Operator, instrument_id: InstrumentId, body: CalibrateRequest
+) -> CalibrationPublic:
     """Run the calibration sequence (zero, white, verification) and store the record."""
-    return await asyncio.to_thread(_hub(request).calibrate, instrument_id=instrument_id,
-                                   reference=body.reference, actor=user)
+    return await asyncio.to_thread(
+        _hub(request).calibrate, instrument_id=instrument_id, reference=body.reference, actor=user
+    )
 
 
-@router.post("/{instrument_id}/measure", status_code=status.HTTP_201_CREATED, response_model=MeasureResult,
-             responses={**NOT_FOUND, **CONFLICT})
+@router.post(
+    "/{instrument_id}/measure",
+    status_code=status.HTTP_201_CREATED,
+    response_model=MeasureResult,
+    responses={**NOT_FOUND, **CONFLICT},
+)
 async def measure(
-    request: Request, user: Operator, instrument_id: InstrumentId, body: MeasureRequest,
-    gloss_instrument_id: Annotated[str | None, Query(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$",
-                                                     description="gloss meter to read 60° gloss from")] = None,
+    request: Request,
+    user: Operator,
+    instrument_id: InstrumentId,
+    body: MeasureRequest,
+    gloss_instrument_id: Annotated[
+        str | None,
+        Query(
+            min_length=1,
+            max_length=80,
+            pattern=r"^[a-z0-9_.-]+$",
+            description="gloss meter to read 60° gloss from",
+        ),
+    ] = None,
 ) -> MeasureResult:
     """Measure the panel once and store the reading (Lab computed from the spectra, D65/10°)."""
-    return await asyncio.to_thread(_hub(request).measure, instrument_id=instrument_id, req=body,
-                                   gloss_instrument_id=gloss_instrument_id, actor=user)
+    return await asyncio.to_thread(
+        _hub(request).measure,
+        instrument_id=instrument_id,
+        req=body,
+        gloss_instrument_id=gloss_instrument_id,
+        actor=user,
+    )

@@ -26,16 +26,39 @@ Corrector = Annotated[User, scoped(Scope.MEASUREMENTS_CORRECT)]
 Serial = Annotated[str, Query(min_length=1, max_length=64, description="instrument serial number")]
 
 
-def _query(job: Job | None, part: Part | None, panel_id: int | None, instrument: str | None,
-           since: dt.datetime | None, until: dt.datetime | None, include_superseded: bool) -> MeasurementQuery:
-    return MeasurementQuery(job=job, part=part, panel_id=panel_id, instrument=instrument, since=since,
-                            until=until, include_superseded=include_superseded)
+def _query(
+    job: Job | None,
+    part: Part | None,
+    panel_id: int | None,
+    instrument: str | None,
+    since: dt.datetime | None,
+    until: dt.datetime | None,
+    include_superseded: bool,
+) -> MeasurementQuery:
+    return MeasurementQuery(
+        job=job,
+        part=part,
+        panel_id=panel_id,
+        instrument=instrument,
+        since=since,
+        until=until,
+        include_superseded=include_superseded,
+    )
 
 
-@router.post("", status_code=status.HTTP_201_CREATED, response_model=MeasurementPublic,
-             responses={200: {"model": MeasurementPublic, "description": "already stored (same client_id)"},
-                        **NOT_FOUND, **CONFLICT})
-def create_measurement(session: SessionDep, user: Writer, reading: Reading, response: Response) -> MeasurementPublic:
+@router.post(
+    "",
+    status_code=status.HTTP_201_CREATED,
+    response_model=MeasurementPublic,
+    responses={
+        200: {"model": MeasurementPublic, "description": "already stored (same client_id)"},
+        **NOT_FOUND,
+        **CONFLICT,
+    },
+)
+def create_measurement(
+    session: SessionDep, user: Writer, reading: Reading, response: Response
+) -> MeasurementPublic:
     """Store a reading once: re-sending the same ``client_id`` returns the stored row with 200."""
     measurement, created = service.ingest(session=session, actor=user, reading=reading)
     if not created:
@@ -45,12 +68,19 @@ def create_measurement(session: SessionDep, user: Writer, reading: Reading, resp
 
 @router.get("", response_model=Page[MeasurementPublic])
 def list_measurements(
-    session: SessionDep, _user: Reader,
-    job: Annotated[Job | None, Query()] = None, part: Part | None = None,
-    panel_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None, instrument: Serial | None = None,
-    since: Annotated[AwareDatetime | None, Query(description="measured at or after (ISO 8601 with zone)")] = None,
+    session: SessionDep,
+    _user: Reader,
+    job: Annotated[Job | None, Query()] = None,
+    part: Part | None = None,
+    panel_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+    instrument: Serial | None = None,
+    since: Annotated[
+        AwareDatetime | None, Query(description="measured at or after (ISO 8601 with zone)")
+    ] = None,
     until: Annotated[AwareDatetime | None, Query(description="measured before (ISO 8601 with zone)")] = None,
-    include_superseded: bool = False, limit: Limit = 100, offset: Offset = 0,
+    include_superseded: bool = False,
+    limit: Limit = 100,
+    offset: Offset = 0,
 ) -> Page[MeasurementPublic]:
     """Query by job, part, panel, instrument and time; newest first."""
     q = _query(job, part, panel_id, instrument, since, until, include_superseded)
@@ -58,21 +88,40 @@ def list_measurements(
     return Page[MeasurementPublic](data=rows, count=total)
 
 
-@router.get("/export.csv", response_class=StreamingResponse,
-            responses={200: {"content": {"text/csv": {"schema": {"type": "string"}, "example":
-                             "measurement_id,client_id,...\n1,5b0c…,...\n"}},
-                             "description": "one line per measurement and geometry"}})
+@router.get(
+    "/export.csv",
+    response_class=StreamingResponse,
+    responses={
+        200: {
+            "content": {
+                "text/csv": {
+                    "schema": {"type": "string"},
+                    "example": "measurement_id,client_id,...\n1,5b0c…,...\n",
+                }
+            },
+            "description": "one line per measurement and geometry",
+        }
+    },
+)
 def export_csv(
-    session: SessionDep, _user: Reader,
-    job: Annotated[Job | None, Query()] = None, part: Part | None = None,
-    panel_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None, instrument: Serial | None = None,
-    since: AwareDatetime | None = None, until: AwareDatetime | None = None, include_superseded: bool = False,
+    session: SessionDep,
+    _user: Reader,
+    job: Annotated[Job | None, Query()] = None,
+    part: Part | None = None,
+    panel_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+    instrument: Serial | None = None,
+    since: AwareDatetime | None = None,
+    until: AwareDatetime | None = None,
+    include_superseded: bool = False,
 ) -> StreamingResponse:
     """The same filters as the list, as CSV (long format: one row per geometry)."""
     q = _query(job, part, panel_id, instrument, since, until, include_superseded)
     lines = list(service.export_csv(session=session, q=q))
-    return StreamingResponse(iter(lines), media_type="text/csv",
-                             headers={"Content-Disposition": 'attachment; filename="measurements.csv"'})
+    return StreamingResponse(
+        iter(lines),
+        media_type="text/csv",
+        headers={"Content-Disposition": 'attachment; filename="measurements.csv"'},
+    )
 
 
 @router.get("/{measurement_id}", response_model=MeasurementPublic, responses=NOT_FOUND)
@@ -81,9 +130,14 @@ def get_measurement(session: SessionDep, _user: Reader, measurement_id: Id) -> M
     return service.get_measurement(session=session, measurement_id=measurement_id)
 
 
-@router.post("/{measurement_id}/corrections", status_code=status.HTTP_201_CREATED,
-             response_model=MeasurementPublic, responses={**NOT_FOUND, **CONFLICT})
-def correct_measurement(session: SessionDep, user: Corrector, measurement_id: Id,
-                        correction: CorrectionCreate) -> MeasurementPublic:
+@router.post(
+    "/{measurement_id}/corrections",
+    status_code=status.HTTP_201_CREATED,
+    response_model=MeasurementPublic,
+    responses={**NOT_FOUND, **CONFLICT},
+)
+def correct_measurement(
+    session: SessionDep, user: Corrector, measurement_id: Id, correction: CorrectionCreate
+) -> MeasurementPublic:
     """Store a corrected reading that supersedes this one (the original is kept), with the reason."""
     return service.correct(session=session, actor=user, measurement_id=measurement_id, correction=correction)

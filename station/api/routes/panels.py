@@ -26,8 +26,14 @@ def create_panel(session: SessionDep, user: Writer, panel_in: PanelCreate) -> Pa
 
 
 @router.get("", response_model=Page[PanelPublic])
-def list_panels(session: SessionDep, _user: Reader, job: Annotated[Job | None, Query()] = None,
-                part: Part | None = None, limit: Limit = 100, offset: Offset = 0) -> Page[PanelPublic]:
+def list_panels(
+    session: SessionDep,
+    _user: Reader,
+    job: Annotated[Job | None, Query()] = None,
+    part: Part | None = None,
+    limit: Limit = 100,
+    offset: Offset = 0,
+) -> Page[PanelPublic]:
     """Panels of a job and/or part, newest first."""
     rows, total = service.list_panels(session=session, job=job, part=part, limit=limit, offset=offset)
     return Page[PanelPublic](data=[PanelPublic.model_validate(r) for r in rows], count=total)

@@ -20,17 +20,26 @@ Reader = Annotated[User, scoped(Scope.LIBRARY_READ)]
 Chemist = Annotated[User, scoped(Scope.RECIPES_WRITE)]
 
 
-@router.post("", status_code=status.HTTP_201_CREATED, response_model=RecipePublic,
-             responses={**NOT_FOUND, **CONFLICT})
-def create_recipe(request: Request, session: SessionDep, user: Chemist, recipe_in: RecipeCreate) -> RecipePublic:
+@router.post(
+    "", status_code=status.HTTP_201_CREATED, response_model=RecipePublic, responses={**NOT_FOUND, **CONFLICT}
+)
+def create_recipe(
+    request: Request, session: SessionDep, user: Chemist, recipe_in: RecipeCreate
+) -> RecipePublic:
     """Snap a design version to its k nearest library paints (summed ΔE at 15°/45°/110°) and store the job."""
-    return service.create_recipe(session=session, actor=user, cache=app_cache(request.app.state), recipe_in=recipe_in)
+    return service.create_recipe(
+        session=session, actor=user, cache=app_cache(request.app.state), recipe_in=recipe_in
+    )
 
 
 @router.get("", response_model=Page[RecipePublic])
-def list_recipes(session: SessionDep, _user: Reader,
-                 design_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
-                 limit: Limit = 100, offset: Offset = 0) -> Page[RecipePublic]:
+def list_recipes(
+    session: SessionDep,
+    _user: Reader,
+    design_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+    limit: Limit = 100,
+    offset: Offset = 0,
+) -> Page[RecipePublic]:
     """Formulation jobs, newest first."""
     rows, total = service.list_recipes(session=session, design_id=design_id, limit=limit, offset=offset)
     return Page[RecipePublic](data=rows, count=total)

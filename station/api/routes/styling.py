@@ -57,10 +57,18 @@ def render(_user: Stylist, request: RenderRequest) -> Response:
 
 @router.post("/eyedrop", response_model=EyedropOut, openapi_extra=IMAGE_BODY, responses=_TOO_LARGE)
 async def eyedrop(
-    request: Request, settings: SettingsDep, _user: Stylist,
-    face_x: Pixel, face_y: Pixel, flop_x: Pixel, flop_y: Pixel,
-    gloss_x: Pixel | None = None, gloss_y: Pixel | None = None,
-    gloss_gu: Annotated[float, Query(ge=0.0, le=100.0, description="gloss without the gloss eyedropper")] = 50.0,
+    request: Request,
+    settings: SettingsDep,
+    _user: Stylist,
+    face_x: Pixel,
+    face_y: Pixel,
+    flop_x: Pixel,
+    flop_y: Pixel,
+    gloss_x: Pixel | None = None,
+    gloss_y: Pixel | None = None,
+    gloss_gu: Annotated[
+        float, Query(ge=0.0, le=100.0, description="gloss without the gloss eyedropper")
+    ] = 50.0,
     travel_deg: Annotated[float, Query(gt=15.0, le=180.0, description="travel slider, degrees")] = 75.0,
     radius: Annotated[int, Query(ge=0, le=64, description="eyedropper radius, pixels")] = 3,
     auto_swap: Annotated[bool, Query(description="swap when the face is darker than the flop")] = True,
@@ -69,19 +77,37 @@ async def eyedrop(
     the contrast-gloss eyedropper on an uploaded mood-board image (thesis §3.5). Pixel = (column, row)."""
     data = await request.body()
     gloss = (gloss_x, gloss_y) if gloss_x is not None and gloss_y is not None else None
-    return await asyncio.to_thread(service.eyedrop, data=data, max_bytes=settings.max_body_bytes,
-                                   face=(face_x, face_y), flop=(flop_x, flop_y), gloss=gloss, gloss_gu=gloss_gu,
-                                   travel_deg=travel_deg, radius=radius, auto_swap=auto_swap)
+    return await asyncio.to_thread(
+        service.eyedrop,
+        data=data,
+        max_bytes=settings.max_body_bytes,
+        face=(face_x, face_y),
+        flop=(flop_x, flop_y),
+        gloss=gloss,
+        gloss_gu=gloss_gu,
+        travel_deg=travel_deg,
+        radius=radius,
+        auto_swap=auto_swap,
+    )
 
 
 @router.post("/sketch-fit", response_model=SketchFitOut, openapi_extra=IMAGE_BODY, responses=_TOO_LARGE)
 async def sketch_fit(
-    request: Request, settings: SettingsDep, _user: Stylist,
-    scene: Annotated[Literal["sphere-point", "panel-point"], Query(description="built-in point-light scene")] = "sphere-point",
+    request: Request,
+    settings: SettingsDep,
+    _user: Stylist,
+    scene: Annotated[
+        Literal["sphere-point", "panel-point"], Query(description="built-in point-light scene")
+    ] = "sphere-point",
     gloss_mode: Annotated[Literal["contrast", "default", "fit"], Query()] = "contrast",
 ) -> dict[str, Any]:
     """Fit a design to concept art painted over a built-in point-light scene (thesis §3.7, eq 3.7.2): the
     art is the upload, a square image the scene's size, painted over the scene rendered in silver."""
     data = await request.body()
-    return await asyncio.to_thread(service.sketch_fit, data=data, max_bytes=settings.max_body_bytes,
-                                   scene_name=scene, gloss_mode=gloss_mode)
+    return await asyncio.to_thread(
+        service.sketch_fit,
+        data=data,
+        max_bytes=settings.max_body_bytes,
+        scene_name=scene,
+        gloss_mode=gloss_mode,
+    )

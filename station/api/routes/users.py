@@ -35,12 +35,18 @@ def list_users(session: SessionDep, _user: Admin) -> list[UserPublic]:
 @router.post("/users", status_code=status.HTTP_201_CREATED, response_model=TokenIssued, responses=CONFLICT)
 def create_user(session: SessionDep, admin: Admin, user_in: UserCreate) -> TokenIssued:
     """Create a user and its first token (the secret is shown only in this response)."""
-    user, token, secret = service.create_user(session=session, actor=admin, name=user_in.name, role=user_in.role)
+    user, token, secret = service.create_user(
+        session=session, actor=admin, name=user_in.name, role=user_in.role
+    )
     return TokenIssued(user=UserPublic.model_validate(user), token_id=token.id, token=secret)
 
 
-@router.post("/users/{user_id}/tokens", status_code=status.HTTP_201_CREATED, response_model=TokenIssued,
-             responses={**NOT_FOUND, **CONFLICT})
+@router.post(
+    "/users/{user_id}/tokens",
+    status_code=status.HTTP_201_CREATED,
+    response_model=TokenIssued,
+    responses={**NOT_FOUND, **CONFLICT},
+)
 def issue_token(session: SessionDep, admin: Admin, user_id: Id, token_in: TokenCreate) -> TokenIssued:
     """Issue another token for a user."""
     user = service.get_user(session=session, user_id=user_id)
@@ -56,10 +62,16 @@ def deactivate_user(session: SessionDep, admin: Admin, user_id: Id) -> UserPubli
 
 
 @router.get("/audit", response_model=Page[AuditEventPublic])
-def list_audit(session: SessionDep, _user: Auditor,
-               entity: Annotated[str | None, Query(max_length=32)] = None,
-               actor_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
-               limit: Limit = 100, offset: Offset = 0) -> Page[AuditEventPublic]:
+def list_audit(
+    session: SessionDep,
+    _user: Auditor,
+    entity: Annotated[str | None, Query(max_length=32)] = None,
+    actor_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+    limit: Limit = 100,
+    offset: Offset = 0,
+) -> Page[AuditEventPublic]:
     """Audit events, newest first."""
-    rows, total = audit.list_events(session=session, entity=entity, actor_id=actor_id, limit=limit, offset=offset)
+    rows, total = audit.list_events(
+        session=session, entity=entity, actor_id=actor_id, limit=limit, offset=offset
+    )
     return Page[AuditEventPublic](data=[AuditEventPublic.model_validate(r) for r in rows], count=total)

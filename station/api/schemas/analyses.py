@@ -11,12 +11,28 @@ from station.api.schemas.common import Polar
 from station.api.schemas.designs import DesignBody
 
 Method = Literal["cie76", "cie94", "cie2000", "din6175"]
-Hinge = Annotated[Literal["in-plane", "out-of-plane"] | Annotated[float, Field(ge=-180.0, le=180.0, allow_inf_nan=False)],
-                  Field(description="in-plane | out-of-plane | hinge azimuth in degrees")]
-Epsilon = Annotated[float, Field(gt=0.0, le=50.0, allow_inf_nan=False,
-                                 description="ΔE threshold ε in units of `method` (1 JND = 2.3 ΔE*ab)")]
-Beta = Annotated[float, Field(ge=-45.0, le=45.0, allow_inf_nan=False,
-                              description="signed misalignment of panel B, degrees (0 < |β| <= 45)")]
+Hinge = Annotated[
+    Literal["in-plane", "out-of-plane"] | Annotated[float, Field(ge=-180.0, le=180.0, allow_inf_nan=False)],
+    Field(description="in-plane | out-of-plane | hinge azimuth in degrees"),
+]
+Epsilon = Annotated[
+    float,
+    Field(
+        gt=0.0,
+        le=50.0,
+        allow_inf_nan=False,
+        description="ΔE threshold ε in units of `method` (1 JND = 2.3 ΔE*ab)",
+    ),
+]
+Beta = Annotated[
+    float,
+    Field(
+        ge=-45.0,
+        le=45.0,
+        allow_inf_nan=False,
+        description="signed misalignment of panel B, degrees (0 < |β| <= 45)",
+    ),
+]
 Lights = Annotated[list[Polar], Field(min_length=1, max_length=16, description="light polar angles, degrees")]
 
 _PAINT = {"face": [60.0, -4.0, -42.0], "flop": [18.0, 2.0, -22.0], "travel_deg": 55.0, "gloss_gu": 88.0}
@@ -27,22 +43,40 @@ class SeamQaCreate(BaseModel):
     """Two panels (A: reference, B: misaligned by β), each a stored measurement or a design, the geometries
     and the judging tolerance."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"measurement_a": 1, "measurement_b": 2, "beta_deg": 5.0, "tolerance": 2.3, "method": "cie76"},
-        {"design_a": _PAINT, "design_b": _PAINT, "beta_deg": 8.0, "lights_deg": [30.0, 45.0, 60.0]},
-    ]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "measurement_a": 1,
+                    "measurement_b": 2,
+                    "beta_deg": 5.0,
+                    "tolerance": 2.3,
+                    "method": "cie76",
+                },
+                {"design_a": _PAINT, "design_b": _PAINT, "beta_deg": 8.0, "lights_deg": [30.0, 45.0, 60.0]},
+            ]
+        },
+    )
 
     measurement_a: Annotated[int, Field(ge=1, le=2**31 - 1, description="e.g. the fender")] | None = None
     measurement_b: Annotated[int, Field(ge=1, le=2**31 - 1, description="e.g. the bumper")] | None = None
-    design_a: Annotated[DesignBody, Field(description="panel A as a design instead of a measurement")] | None = None
-    design_b: Annotated[DesignBody, Field(description="panel B as a design instead of a measurement")] | None = None
+    design_a: (
+        Annotated[DesignBody, Field(description="panel A as a design instead of a measurement")] | None
+    ) = None
+    design_b: (
+        Annotated[DesignBody, Field(description="panel B as a design instead of a measurement")] | None
+    ) = None
     beta_deg: Beta
-    tolerance: Annotated[float, Field(gt=0.0, le=50.0, description="seam ΔE accepted (1 JND = 2.3 ΔE*ab)")] = 2.3
+    tolerance: Annotated[
+        float, Field(gt=0.0, le=50.0, description="seam ΔE accepted (1 JND = 2.3 ΔE*ab)")
+    ] = 2.3
     method: Method = "cie76"
     lights_deg: Lights = [30.0, 45.0, 60.0]
-    aspecular_deg: Annotated[list[Annotated[float, Field(ge=-89.0, le=179.0, allow_inf_nan=False)]],
-                             Field(min_length=1, max_length=16, description="aspecular angles on panel A")] = [
-        15.0, 25.0, 45.0, 75.0]
+    aspecular_deg: Annotated[
+        list[Annotated[float, Field(ge=-89.0, le=179.0, allow_inf_nan=False)]],
+        Field(min_length=1, max_length=16, description="aspecular angles on panel A"),
+    ] = [15.0, 25.0, 45.0, 75.0]
     hinge: Hinge = "in-plane"
     objective: Literal["rms", "minimax"] = "minimax"
 
@@ -50,22 +84,34 @@ class SeamQaCreate(BaseModel):
     def _one_source_per_panel(self) -> SeamQaCreate:
         for side in ("a", "b"):
             if (getattr(self, f"measurement_{side}") is None) == (getattr(self, f"design_{side}") is None):
-                raise ValueError(f"panel {side.upper()}: give exactly one of measurement_{side} and design_{side}")
+                raise ValueError(
+                    f"panel {side.upper()}: give exactly one of measurement_{side} and design_{side}"
+                )
         return self
 
 
 class GgIndexRequest(BaseModel):
     """Goniogeometric index β_min (eq 4.3.1) of one paint on both panels, for point lights and views."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"paint": _GREY, "lights_deg": [30.0], "views_deg": [0.0], "epsilon": 2.3, "method": "cie76"},
-        {"paint": _PAINT, "lights_deg": [45.0], "direction": "either", "per_geometry": True},
-    ]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {"paint": _GREY, "lights_deg": [30.0], "views_deg": [0.0], "epsilon": 2.3, "method": "cie76"},
+                {"paint": _PAINT, "lights_deg": [45.0], "direction": "either", "per_geometry": True},
+            ]
+        },
+    )
 
     paint: DesignBody
     lights_deg: Lights
-    views_deg: Annotated[list[Polar], Field(min_length=1, max_length=64,
-                                            description="view polar angles; null: aspecular 15–110° scan")] | None = None
+    views_deg: (
+        Annotated[
+            list[Polar],
+            Field(min_length=1, max_length=64, description="view polar angles; null: aspecular 15–110° scan"),
+        ]
+        | None
+    ) = None
     epsilon: Epsilon = 2.3
     method: Method = "cie76"
     hinge: Hinge = "in-plane"
@@ -92,20 +138,44 @@ class GgIndexOut(BaseModel):
 class TrompeRequest(BaseModel):
     """Inverse trompe l'oeil (§4.4): paint B for the panel misaligned by β."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"paint": _GREY, "lights_deg": [0.0, 15.5, 29.1, 39.8, 45.0, 52.0], "beta_deg": -3.0, "objective": "rms"},
-    ]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "paint": _GREY,
+                    "lights_deg": [0.0, 15.5, 29.1, 39.8, 45.0, 52.0],
+                    "beta_deg": -3.0,
+                    "objective": "rms",
+                },
+            ]
+        },
+    )
 
     paint: DesignBody
     lights_deg: Annotated[list[Polar], Field(min_length=1, max_length=32, description="light polar angles")]
-    views_deg: Annotated[list[Polar], Field(min_length=1, max_length=32,
-                                            description="one view per light; null: the normal")] | None = None
+    views_deg: (
+        Annotated[
+            list[Polar],
+            Field(min_length=1, max_length=32, description="one view per light; null: the normal"),
+        ]
+        | None
+    ) = None
     beta_deg: Beta
     objective: Literal["single", "rms", "minimax", "per_geometry"] = "rms"
     at: Annotated[int, Field(ge=0, le=31, description="geometry index for objective single")] = 0
-    subset: Annotated[str, Field(max_length=80, pattern=r"^[A-Za-z_+]+$",
-                                 description="solid | face_L | face_L+travel | face | face+travel | full | "
-                                             "parameter names joined by +")] | None = None
+    subset: (
+        Annotated[
+            str,
+            Field(
+                max_length=80,
+                pattern=r"^[A-Za-z_+]+$",
+                description="solid | face_L | face_L+travel | face | face+travel | full | "
+                "parameter names joined by +",
+            ),
+        ]
+        | None
+    ) = None
     hinge: Hinge = "in-plane"
     method: Method = "cie76"
     epsilon: Epsilon = 2.3
@@ -129,15 +199,30 @@ class TrompeOut(BaseModel):
 class SweepRequest(BaseModel):
     """Seam ΔE of one paint over β × light × view (thesis Fig. 4.3)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"paint": _PAINT, "betas_deg": [1.0, 3.0, 8.0], "lights_deg": [15.0, 45.0], "views_deg": [-30.0, 0.0, 30.0]},
-    ]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "paint": _PAINT,
+                    "betas_deg": [1.0, 3.0, 8.0],
+                    "lights_deg": [15.0, 45.0],
+                    "views_deg": [-30.0, 0.0, 30.0],
+                },
+            ]
+        },
+    )
 
     paint: DesignBody
     betas_deg: Annotated[list[Beta], Field(min_length=1, max_length=16)] = [0.5, 1.0, 2.0, 3.0, 5.0, 8.0]
     lights_deg: Annotated[list[Polar], Field(min_length=1, max_length=8)] = [15.0, 30.0, 45.0, 60.0]
-    views_deg: Annotated[list[Polar], Field(min_length=1, max_length=91,
-                                            description="view polar angles; null: −80…80 step 2")] | None = None
+    views_deg: (
+        Annotated[
+            list[Polar],
+            Field(min_length=1, max_length=91, description="view polar angles; null: −80…80 step 2"),
+        ]
+        | None
+    ) = None
     hinge: Hinge = "in-plane"
     method: Method = "cie76"
     epsilon: Epsilon = 2.3

@@ -19,5 +19,6 @@ class Page(BaseModel, Generic[T]):
     data: list[T]
     count: int
 
+
 #: Signed polar angle of a light or viewer in degrees (station.analysis.geometry: |θ| <= 89).
 Polar = Annotated[float, Field(ge=-89.0, le=89.0, allow_inf_nan=False)]

@@ -9,35 +9,51 @@ from pydantic import BaseModel, ConfigDict, Field
 
 # Ranges are the appearance model's (station.model.representations): 0 <= L* <= 200, |a*|, |b*| <= 150.
 Lab = Annotated[
-    tuple[Annotated[float, Field(ge=0.0, le=200.0, allow_inf_nan=False)],
-          Annotated[float, Field(ge=-150.0, le=150.0, allow_inf_nan=False)],
-          Annotated[float, Field(ge=-150.0, le=150.0, allow_inf_nan=False)]],
+    tuple[
+        Annotated[float, Field(ge=0.0, le=200.0, allow_inf_nan=False)],
+        Annotated[float, Field(ge=-150.0, le=150.0, allow_inf_nan=False)],
+        Annotated[float, Field(ge=-150.0, le=150.0, allow_inf_nan=False)],
+    ],
     Field(description="[L*, a*, b*], D65/10°"),
 ]
 Name = Annotated[str, Field(min_length=1, max_length=128, pattern=r"^[^\x00-\x1f]+$")]
 
-_EXAMPLE = {"schema": "cacad.design/1", "name": "Blue metallic", "face": [62.0, -4.0, -38.0],
-            "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0, "gloss_gu": 88.0}
+_EXAMPLE = {
+    "schema": "cacad.design/1",
+    "name": "Blue metallic",
+    "face": [62.0, -4.0, -38.0],
+    "flop": [24.0, 1.0, -20.0],
+    "travel_deg": 70.0,
+    "gloss_gu": 88.0,
+}
 
 
 class DesignBody(BaseModel):
     """A ``cacad.design/1`` design (thesis §3.3: face at 15°, flop at the travel angle θ_clamp)."""
 
-    model_config = ConfigDict(extra="ignore", populate_by_name=True, json_schema_extra={"examples": [_EXAMPLE]})
+    model_config = ConfigDict(
+        extra="ignore", populate_by_name=True, json_schema_extra={"examples": [_EXAMPLE]}
+    )
 
     schema_: Literal["cacad.design/1"] = Field("cacad.design/1", alias="schema")
     name: Annotated[str, Field(max_length=128)] = ""
     face: Lab
     flop: Lab
-    travel_deg: Annotated[float, Field(gt=15.0, le=180.0, description="θ_clamp, degrees; null for a solid")] | None
+    travel_deg: (
+        Annotated[float, Field(gt=15.0, le=180.0, description="θ_clamp, degrees; null for a solid")] | None
+    )
     gloss_gu: Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss units")] | None = None
 
 
 class DesignCreate(BaseModel):
     """Properties to receive on creation (becomes version 1)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={
-        "examples": [{"name": "Blue metallic", "design": _EXAMPLE, "note": "first proposal"}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [{"name": "Blue metallic", "design": _EXAMPLE, "note": "first proposal"}]
+        },
+    )
 
     name: Name
     design: DesignBody
@@ -47,8 +63,9 @@ class DesignCreate(BaseModel):
 class DesignUpdate(BaseModel):
     """A new version of an existing design."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={
-        "examples": [{"design": _EXAMPLE, "note": "less travel"}]})
+    model_config = ConfigDict(
+        extra="forbid", json_schema_extra={"examples": [{"design": _EXAMPLE, "note": "less travel"}]}
+    )
 
     design: DesignBody
     note: Annotated[str, Field(max_length=1000)] = ""

@@ -9,8 +9,13 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from station.api.schemas.designs import DesignBody, Lab
 
 SnapMetric = Literal["cie76", "cie2000", "din6175"]
-_DESIGN = {"name": "Blue metallic", "face": [62.0, -4.0, -38.0], "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0,
-           "gloss_gu": 88.0}
+_DESIGN = {
+    "name": "Blue metallic",
+    "face": [62.0, -4.0, -38.0],
+    "flop": [24.0, 1.0, -20.0],
+    "travel_deg": 70.0,
+    "gloss_gu": 88.0,
+}
 _LAB = [[62.0, -4.0, -38.0], [40.0, -1.5, -29.0], [24.0, 1.0, -20.0]]
 
 
@@ -18,7 +23,9 @@ class DesignSource(BaseModel):
     """The target: exactly one of ``lab`` (at 15°/45°/110°), an inline ``design``, or a stored ``design_id``
     (``version``: default the latest)."""
 
-    lab: Annotated[list[Lab], Field(min_length=3, max_length=3, description="Lab at 15°, 45°, 110°")] | None = None
+    lab: (
+        Annotated[list[Lab], Field(min_length=3, max_length=3, description="Lab at 15°, 45°, 110°")] | None
+    ) = None
     design: DesignBody | None = None
     design_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
     version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
@@ -34,11 +41,20 @@ class DesignSource(BaseModel):
 class SnapRequest(DesignSource):
     """ColorSnap: the k nearest library paints by ΔE summed over 15°/45°/110°."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"lab": _LAB, "k": 5, "metric": "cie76"}, {"design_id": 1, "k": 3, "metric": "cie2000"}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {"lab": _LAB, "k": 5, "metric": "cie76"},
+                {"design_id": 1, "k": 3, "metric": "cie2000"},
+            ]
+        },
+    )
 
     k: Annotated[int, Field(ge=1, le=50, description="matches returned, best first")] = 5
-    metric: Annotated[SnapMetric, Field(description="ΔE summed over the angles (cie76 = ΔE*ab, the thesis's)")] = "cie76"
+    metric: Annotated[
+        SnapMetric, Field(description="ΔE summed over the angles (cie76 = ΔE*ab, the thesis's)")
+    ] = "cie76"
 
 
 class SnapMatchOut(BaseModel):
@@ -66,10 +82,16 @@ class SnapOut(BaseModel):
 class FormulateRequest(DesignSource):
     """Formulate a recipe from the ColorSnap (CIEDE2000) matches' recipes (SYNTHETIC colorants)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"lab": _LAB, "gloss_gu": 88.0, "tolerance": 1.0}, {"design": _DESIGN}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [{"lab": _LAB, "gloss_gu": 88.0, "tolerance": 1.0}, {"design": _DESIGN}]
+        },
+    )
 
-    gloss_gu: Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss target; default the design's")] | None = None
+    gloss_gu: (
+        Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss target; default the design's")] | None
+    ) = None
     tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 for 'formulable'")] = 1.0
     k: Annotated[int, Field(ge=1, le=10, description="library matches tried as starting recipes")] = 3
 
@@ -97,8 +119,15 @@ class FormulateOut(BaseModel):
 class ExportRequest(BaseModel):
     """A design (inline or stored) exported with its ColorSnap match as the thesis's XML or CxF3."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"design": _DESIGN, "format": "xml", "match": True}, {"design_id": 1, "format": "cxf", "five_angles": True}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {"design": _DESIGN, "format": "xml", "match": True},
+                {"design_id": 1, "format": "cxf", "five_angles": True},
+            ]
+        },
+    )
 
     design: DesignBody | None = None
     design_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
@@ -151,12 +180,16 @@ class ClosedLoopRequest(BaseModel):
     """Closed-loop prototyping of a stored design version: formulate, spray a simulated panel, measure it
     with the simulated spectrophotometer and gloss meter, correct; every step stored (SYNTHETIC)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"design_id": 1, "corrections": 3, "tolerance": 1.0, "seed": 7}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={"examples": [{"design_id": 1, "corrections": 3, "tolerance": 1.0, "seed": 7}]},
+    )
 
     design_id: Annotated[int, Field(ge=1, le=2**31 - 1)]
     version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
-    gloss_gu: Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss target; default the design's")] | None = None
+    gloss_gu: (
+        Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss target; default the design's")] | None
+    ) = None
     tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 accepted")] = 1.0
     corrections: Annotated[int, Field(ge=0, le=5, description="correction steps after the first spray")] = 3
     seed: Annotated[int, Field(ge=0, le=2**31 - 1, description="seed of the simulated spray-out panel")] = 7

@@ -28,7 +28,9 @@ class InstrumentPublic(BaseModel):
 class ConnectRequest(BaseModel):
     """The driver address of an instrument to attach (``family@where``, e.g. ``ma6@/dev/ttyUSB0``)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"address": "ma6@/dev/ttyUSB0"}]})
+    model_config = ConfigDict(
+        extra="forbid", json_schema_extra={"examples": [{"address": "ma6@/dev/ttyUSB0"}]}
+    )
 
     address: Annotated[str, Field(min_length=3, max_length=255, pattern=r"^[a-z0-9_]+@[^\x00-\x1f]+$")]
 
@@ -36,7 +38,9 @@ class ConnectRequest(BaseModel):
 class CalibrateRequest(BaseModel):
     """Which reference tile (or gloss standard) the calibration used."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"reference": "white tile W-17"}]})
+    model_config = ConfigDict(
+        extra="forbid", json_schema_extra={"examples": [{"reference": "white tile W-17"}]}
+    )
 
     reference: Annotated[str, Field(max_length=64, examples=["white tile W-17"])] = ""
 
@@ -58,7 +62,9 @@ class MeasureRequest(BaseModel):
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"panel_id": 1}]})
 
     panel_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
-    illumination_deg: Annotated[int, Field(ge=0, le=90, description="illumination angle of the stored block")] = 45
+    illumination_deg: Annotated[
+        int, Field(ge=0, le=90, description="illumination angle of the stored block")
+    ] = 45
 
 
 class MeasureResult(BaseModel):

@@ -43,13 +43,22 @@ class MeasurementPublic(BaseModel):
 class CorrectionCreate(BaseModel):
     """A corrected reading for a stored measurement, and why (the original stays, superseded)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{
-        "reason": "wrong panel scanned; re-measured",
-        "reading": Reading.model_config["json_schema_extra"]["examples"][0]  # type: ignore[index]
-        | {"client_id": "0e7f3a52-9c1d-4d8e-b7a4-3f6b2c9d1e22"},
-    }]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "reason": "wrong panel scanned; re-measured",
+                    "reading": Reading.model_config["json_schema_extra"]["examples"][0]  # type: ignore[index]
+                    | {"client_id": "0e7f3a52-9c1d-4d8e-b7a4-3f6b2c9d1e22"},
+                }
+            ]
+        },
+    )
 
-    reason: Annotated[str, Field(min_length=3, max_length=1000, examples=["wrong panel scanned; re-measured"])]
+    reason: Annotated[
+        str, Field(min_length=3, max_length=1000, examples=["wrong panel scanned; re-measured"])
+    ]
     reading: Reading
 
 

@@ -7,7 +7,9 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-Part = Literal["bumper", "fender", "door", "hood", "trunk", "mirror", "roof", "quarter_panel", "test_panel", "other"]
+Part = Literal[
+    "bumper", "fender", "door", "hood", "trunk", "mirror", "roof", "quarter_panel", "test_panel", "other"
+]
 Job = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f]+$", examples=["J-2026-0113"])]
 
 
@@ -16,8 +18,16 @@ class PanelCreate(BaseModel):
 
     model_config = ConfigDict(
         extra="forbid",
-        json_schema_extra={"examples": [{"job": "J-2026-0113", "part": "bumper", "substrate": "PP/EPDM",
-                                         "notes": "rear bumper, left of the plate"}]},
+        json_schema_extra={
+            "examples": [
+                {
+                    "job": "J-2026-0113",
+                    "part": "bumper",
+                    "substrate": "PP/EPDM",
+                    "notes": "rear bumper, left of the plate",
+                }
+            ]
+        },
     )
 
     job: Job

@@ -13,8 +13,10 @@ Metric = Literal["cie76", "cie2000", "din6175"]
 class RecipeCreate(BaseModel):
     """Which design version to formulate, how many candidates, which colour difference."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={
-        "examples": [{"design_id": 1, "version": None, "k": 5, "metric": "cie2000"}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={"examples": [{"design_id": 1, "version": None, "k": 5, "metric": "cie2000"}]},
+    )
 
     design_id: Annotated[int, Field(ge=1, le=2**31 - 1)]
     version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
@@ -51,8 +53,17 @@ class RecipePublic(BaseModel):
     @classmethod
     def from_job(cls, job: Any, design_id: int, version: int) -> RecipePublic:
         result = job.recipe or {}
-        return cls(id=job.id, state=job.state, design_id=design_id, design_version=version,
-                   metric=job.target.get("metric", ""), angles_deg=job.target.get("angles_deg", []),
-                   target_lab=job.target.get("lab", []), candidates=result.get("candidates", []),
-                   recipe=result.get("recipe"), warnings=result.get("warnings", []), created_at=job.created_at,
-                   created_by_id=job.created_by_id)
+        return cls(
+            id=job.id,
+            state=job.state,
+            design_id=design_id,
+            design_version=version,
+            metric=job.target.get("metric", ""),
+            angles_deg=job.target.get("angles_deg", []),
+            target_lab=job.target.get("lab", []),
+            candidates=result.get("candidates", []),
+            recipe=result.get("recipe"),
+            warnings=result.get("warnings", []),
+            created_at=job.created_at,
+            created_by_id=job.created_by_id,
+        )

@@ -8,27 +8,52 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from station.api.schemas.designs import DesignBody
 
-_EXAMPLE = {"name": "Blue metallic", "face": [62.0, -4.0, -38.0], "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0,
-            "gloss_gu": 88.0}
+_EXAMPLE = {
+    "name": "Blue metallic",
+    "face": [62.0, -4.0, -38.0],
+    "flop": [24.0, 1.0, -20.0],
+    "travel_deg": 70.0,
+    "gloss_gu": 88.0,
+}
 
 #: Image uploads (eyedropper, sketch fit) are the raw PNG/JPEG request body, capped by the service's body
 #: limit (``CACAD_MAX_BODY_BYTES``) and by ``station.design.images.load_image``'s guards.
-IMAGE_BODY: dict[str, Any] = {"requestBody": {"required": True, "description": "the image file (PNG or JPEG)",
-                                              "content": {"image/png": {"schema": {"type": "string", "format": "binary"}},
-                                                          "image/jpeg": {"schema": {"type": "string", "format": "binary"}}}}}
-PNG_RESPONSE: dict[int | str, dict[str, Any]] = {200: {
-    "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}}, "description": "a PNG image"}}
+IMAGE_BODY: dict[str, Any] = {
+    "requestBody": {
+        "required": True,
+        "description": "the image file (PNG or JPEG)",
+        "content": {
+            "image/png": {"schema": {"type": "string", "format": "binary"}},
+            "image/jpeg": {"schema": {"type": "string", "format": "binary"}},
+        },
+    }
+}
+PNG_RESPONSE: dict[int | str, dict[str, Any]] = {
+    200: {
+        "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}},
+        "description": "a PNG image",
+    }
+}
 
 
 class VariationsRequest(BaseModel):
     """The centre design, a step and a category (thesis §3.4.4)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"design": _EXAMPLE, "degree": 5.0, "category": "face"}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={"examples": [{"design": _EXAMPLE, "degree": 5.0, "category": "face"}]},
+    )
 
     design: DesignBody
-    degree: Annotated[float, Field(gt=0.0, le=50.0, allow_inf_nan=False,
-                                   description="step: ΔE*ab for colours, degrees for travel, GU for gloss")] = 5.0
+    degree: Annotated[
+        float,
+        Field(
+            gt=0.0,
+            le=50.0,
+            allow_inf_nan=False,
+            description="step: ΔE*ab for colours, degrees for travel, GU for gloss",
+        ),
+    ] = 5.0
     category: Literal["face", "flop", "travel-gloss"] = "face"
 
 
@@ -52,14 +77,20 @@ class VariationsOut(BaseModel):
 class SwatchRequest(BaseModel):
     """A palette swatch (gradient bar 15°→110°, gloss as the border's brightness) or a booklet thumbnail."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"design": _EXAMPLE, "kind": "swatch", "width": 160, "height": 32, "border": 4}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [{"design": _EXAMPLE, "kind": "swatch", "width": 160, "height": 32, "border": 4}]
+        },
+    )
 
     design: DesignBody
     kind: Literal["swatch", "booklet"] = "swatch"
     width: Annotated[int, Field(ge=8, le=1024, description="swatch width, pixels")] = 160
     height: Annotated[int, Field(ge=4, le=256, description="swatch height, pixels")] = 32
-    border: Annotated[int, Field(ge=1, le=32, description="swatch border, pixels (< half the smaller side)")] = 4
+    border: Annotated[
+        int, Field(ge=1, le=32, description="swatch border, pixels (< half the smaller side)")
+    ] = 4
     size: Annotated[int, Field(ge=16, le=512, description="booklet thumbnail size, pixels")] = 96
 
 
@@ -109,8 +140,15 @@ class RenderRequest(BaseModel):
     """A design (default: the thesis's silver) in a built-in point-light scene: the picture an artist paints
     over before ``/styling/sketch-fit`` (§3.7.1)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"design": _EXAMPLE, "scene": "sphere-point", "size": 128}, {"scene": "panel-point", "size": 96}]})
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {"design": _EXAMPLE, "scene": "sphere-point", "size": 128},
+                {"scene": "panel-point", "size": 96},
+            ]
+        },
+    )
 
     design: DesignBody | None = None
     scene: Literal["sphere-point", "panel-point"] = "sphere-point"

@@ -15,7 +15,9 @@ UserName = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0
 class UserCreate(BaseModel):
     """Properties to receive on creation."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"name": "ana", "role": "technician"}]})
+    model_config = ConfigDict(
+        extra="forbid", json_schema_extra={"examples": [{"name": "ana", "role": "technician"}]}
+    )
 
     name: UserName
     role: Role

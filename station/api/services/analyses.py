@@ -27,9 +27,13 @@ def _aspecular(session: Session, measurement_id: int) -> AspecularMeasurements:
     if m is None:
         raise NotFoundError(f"measurement {measurement_id} not found")
     order = np.argsort(m.geometries_deg)
-    return AspecularMeasurements(angles_deg=tuple(float(m.geometries_deg[i]) for i in order),
-                                 lab=np.asarray(m.lab, dtype=float)[order], gloss_gu=m.gloss_gu,
-                                 illuminant=m.illuminant, observer=m.observer)
+    return AspecularMeasurements(
+        angles_deg=tuple(float(m.geometries_deg[i]) for i in order),
+        lab=np.asarray(m.lab, dtype=float)[order],
+        gloss_gu=m.gloss_gu,
+        illuminant=m.illuminant,
+        observer=m.observer,
+    )
 
 
 def _panel(session: Session, measurement_id: int | None, body: DesignBody | None, side: str) -> Any:
@@ -50,16 +54,35 @@ def seam_qa(*, session: Session, actor: User, request: SeamQaCreate) -> Analysis
 
     a = _panel(session, request.measurement_a, request.design_a, "a")
     b = _panel(session, request.measurement_b, request.design_b, "b")
-    report = run_seam_qa(a, b, request.beta_deg, lights_deg=request.lights_deg, aspecular_deg=request.aspecular_deg,
-                         tolerance=request.tolerance, method=request.method, hinge=_hinge(request.hinge),
-                         objective=request.objective)
-    row = AnalysisResult(kind="seam_qa", inputs=request.model_dump(mode="json", by_alias=True, exclude_none=True),
-                         result=report.to_dict(), created_by_id=actor.id)
+    report = run_seam_qa(
+        a,
+        b,
+        request.beta_deg,
+        lights_deg=request.lights_deg,
+        aspecular_deg=request.aspecular_deg,
+        tolerance=request.tolerance,
+        method=request.method,
+        hinge=_hinge(request.hinge),
+        objective=request.objective,
+    )
+    row = AnalysisResult(
+        kind="seam_qa",
+        inputs=request.model_dump(mode="json", by_alias=True, exclude_none=True),
+        result=report.to_dict(),
+        created_by_id=actor.id,
+    )
     session.add(row)
     session.flush()
-    audit.record(session=session, actor=actor, action="analysis.seam_qa", entity="analysis", entity_id=row.id,
-                 measurement_a=request.measurement_a, measurement_b=request.measurement_b,
-                 passed=report.passed)
+    audit.record(
+        session=session,
+        actor=actor,
+        action="analysis.seam_qa",
+        entity="analysis",
+        entity_id=row.id,
+        measurement_a=request.measurement_a,
+        measurement_b=request.measurement_b,
+        passed=report.passed,
+    )
     session.commit()
     return row
 
@@ -79,9 +102,17 @@ def report_png(*, session: Session, analysis_id: int) -> bytes:
     request = SeamQaCreate.model_validate(row.inputs)
     a = _panel(session, request.measurement_a, request.design_a, "a")
     b = _panel(session, request.measurement_b, request.design_b, "b")
-    report = run_seam_qa(a, b, request.beta_deg, lights_deg=request.lights_deg, aspecular_deg=request.aspecular_deg,
-                         tolerance=request.tolerance, method=request.method, hinge=_hinge(request.hinge),
-                         objective=request.objective)
+    report = run_seam_qa(
+        a,
+        b,
+        request.beta_deg,
+        lights_deg=request.lights_deg,
+        aspecular_deg=request.aspecular_deg,
+        tolerance=request.tolerance,
+        method=request.method,
+        hinge=_hinge(request.hinge),
+        objective=request.objective,
+    )
     with tempfile.TemporaryDirectory(prefix="cacad-report-") as tmp, _PLOT_LOCK:
         return plot_seam_report(report, Path(tmp) / "report.png").read_bytes()
 
@@ -91,9 +122,17 @@ def gg_index(*, request: GgIndexRequest) -> dict[str, Any]:
     from station.analysis import goniogeometric_index
 
     lights = request.lights_deg if len(request.lights_deg) > 1 else request.lights_deg[0]
-    r = goniogeometric_index(to_design(request.paint, "paint"), lights, request.views_deg, epsilon=request.epsilon,
-                             method=request.method, hinge=_hinge(request.hinge), direction=request.direction,
-                             beta_max_deg=request.beta_max_deg, gloss=request.include_gloss)
+    r = goniogeometric_index(
+        to_design(request.paint, "paint"),
+        lights,
+        request.views_deg,
+        epsilon=request.epsilon,
+        method=request.method,
+        hinge=_hinge(request.hinge),
+        direction=request.direction,
+        beta_max_deg=request.beta_max_deg,
+        gloss=request.include_gloss,
+    )
     return r.to_dict(per_geometry=request.per_geometry)
 
 
@@ -101,10 +140,19 @@ def trompe_loeil(*, request: TrompeRequest) -> dict[str, Any]:
     """Inverse trompe l'oeil (§4.4) as ``TrompeResult.to_dict()``; nothing is stored."""
     from station.analysis.trompe import inverse_trompe_loeil
 
-    r = inverse_trompe_loeil(to_design(request.paint, "paint"), request.lights_deg, request.views_deg,
-                             beta_deg=request.beta_deg, objective=request.objective, at=request.at,
-                             subset=request.subset, hinge=_hinge(request.hinge), method=request.method,
-                             epsilon=request.epsilon, allow_face_darker=request.allow_face_darker)
+    r = inverse_trompe_loeil(
+        to_design(request.paint, "paint"),
+        request.lights_deg,
+        request.views_deg,
+        beta_deg=request.beta_deg,
+        objective=request.objective,
+        at=request.at,
+        subset=request.subset,
+        hinge=_hinge(request.hinge),
+        method=request.method,
+        epsilon=request.epsilon,
+        allow_face_darker=request.allow_face_darker,
+    )
     return r.to_dict()
 
 
@@ -112,8 +160,15 @@ def sweep(*, request: SweepRequest) -> dict[str, Any]:
     """Seam ΔE over β × light × view (Fig. 4.3) as ``SweepResult.to_dict()``; nothing is stored."""
     from station.analysis.sweep import seam_sweep
 
-    r = seam_sweep(to_design(request.paint, "paint"), request.betas_deg, request.lights_deg, request.views_deg,
-                   hinge=_hinge(request.hinge), method=request.method, epsilon=request.epsilon)
+    r = seam_sweep(
+        to_design(request.paint, "paint"),
+        request.betas_deg,
+        request.lights_deg,
+        request.views_deg,
+        hinge=_hinge(request.hinge),
+        method=request.method,
+        epsilon=request.epsilon,
+    )
     return r.to_dict()
 
 
@@ -125,7 +180,9 @@ def get_analysis(*, session: Session, analysis_id: int) -> AnalysisResult:
     return row
 
 
-def list_analyses(*, session: Session, kind: str | None, limit: int, offset: int) -> tuple[list[AnalysisResult], int]:
+def list_analyses(
+    *, session: Session, kind: str | None, limit: int, offset: int
+) -> tuple[list[AnalysisResult], int]:
     """Analyses, newest first."""
     query = select(AnalysisResult)
     if kind:

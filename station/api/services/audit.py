@@ -10,17 +10,24 @@ from sqlalchemy.orm import Session
 from db.models import AuditEvent, User
 
 
-def record(*, session: Session, actor: User | None, action: str, entity: str, entity_id: object,
-           **detail: Any) -> AuditEvent:
+def record(
+    *, session: Session, actor: User | None, action: str, entity: str, entity_id: object, **detail: Any
+) -> AuditEvent:
     """Add an audit event (committed with the caller's transaction)."""
-    event = AuditEvent(actor_id=actor.id if actor else None, action=action, entity=entity,
-                       entity_id=str(entity_id), detail=detail)
+    event = AuditEvent(
+        actor_id=actor.id if actor else None,
+        action=action,
+        entity=entity,
+        entity_id=str(entity_id),
+        detail=detail,
+    )
     session.add(event)
     return event
 
 
-def list_events(*, session: Session, entity: str | None, actor_id: int | None, limit: int,
-                offset: int) -> tuple[list[AuditEvent], int]:
+def list_events(
+    *, session: Session, entity: str | None, actor_id: int | None, limit: int, offset: int
+) -> tuple[list[AuditEvent], int]:
     """Audit events, newest first."""
     query = select(AuditEvent)
     if entity:

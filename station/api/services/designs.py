@@ -41,14 +41,21 @@ def design_version(*, session: Session, design_id: int, version: int | None) -> 
 
 
 def _public(design: Design, body: dict[str, Any]) -> DesignPublic:
-    return DesignPublic(id=design.id, name=design.name, latest_version=design.latest_version,
-                        archived=design.archived, created_at=design.created_at,
-                        created_by_id=design.created_by_id, design=body)
+    return DesignPublic(
+        id=design.id,
+        name=design.name,
+        latest_version=design.latest_version,
+        archived=design.archived,
+        created_at=design.created_at,
+        created_by_id=design.created_by_id,
+        design=body,
+    )
 
 
 def _version(session: Session, design_id: int, version: int) -> DesignVersion:
-    row = session.scalar(select(DesignVersion).where(DesignVersion.design_id == design_id,
-                                                     DesignVersion.version == version))
+    row = session.scalar(
+        select(DesignVersion).where(DesignVersion.design_id == design_id, DesignVersion.version == version)
+    )
     if row is None:
         raise NotFoundError(f"design {design_id} has no version {version}")
     return row
@@ -67,24 +74,42 @@ def create_design(*, session: Session, actor: User, name: str, body: DesignBody,
     design = Design(name=name, latest_version=1, created_by_id=actor.id)
     session.add(design)
     session.flush()
-    session.add(DesignVersion(design_id=design.id, version=1, body=canonical, note=note, created_by_id=actor.id))
-    audit.record(session=session, actor=actor, action="design.create", entity="design", entity_id=design.id,
-                 version=1)
+    session.add(
+        DesignVersion(design_id=design.id, version=1, body=canonical, note=note, created_by_id=actor.id)
+    )
+    audit.record(
+        session=session, actor=actor, action="design.create", entity="design", entity_id=design.id, version=1
+    )
     session.commit()
     return _public(design, canonical)
 
 
-def add_version(*, session: Session, actor: User, design_id: int, body: DesignBody, note: str) -> DesignPublic:
+def add_version(
+    *, session: Session, actor: User, design_id: int, body: DesignBody, note: str
+) -> DesignPublic:
     """Save *body* as the next version of *design_id* (earlier versions stay)."""
     design = _design(session, design_id)
     if design.archived:
         raise ConflictError(f"design {design_id} is archived")
     canonical = canonical_body(body)
     design.latest_version += 1
-    session.add(DesignVersion(design_id=design.id, version=design.latest_version, body=canonical, note=note,
-                              created_by_id=actor.id))
-    audit.record(session=session, actor=actor, action="design.version", entity="design", entity_id=design.id,
-                 version=design.latest_version)
+    session.add(
+        DesignVersion(
+            design_id=design.id,
+            version=design.latest_version,
+            body=canonical,
+            note=note,
+            created_by_id=actor.id,
+        )
+    )
+    audit.record(
+        session=session,
+        actor=actor,
+        action="design.version",
+        entity="design",
+        entity_id=design.id,
+        version=design.latest_version,
+    )
     session.commit()
     return _public(design, canonical)
 
@@ -108,24 +133,43 @@ def get_version(*, session: Session, design_id: int, version: int) -> DesignVers
     """Version *version* of *design_id*."""
     _design(session, design_id)
     row = _version(session, design_id, version)
-    return DesignVersionPublic(design_id=design_id, version=row.version, design=row.body, note=row.note,
-                               created_at=row.created_at, created_by_id=row.created_by_id)
+    return DesignVersionPublic(
+        design_id=design_id,
+        version=row.version,
+        design=row.body,
+        note=row.note,
+        created_at=row.created_at,
+        created_by_id=row.created_by_id,
+    )
 
 
 def list_versions(*, session: Session, design_id: int) -> list[DesignVersionPublic]:
     """Every version of *design_id*, oldest first."""
     _design(session, design_id)
-    rows = session.scalars(select(DesignVersion).where(DesignVersion.design_id == design_id)
-                           .order_by(DesignVersion.version))
-    return [DesignVersionPublic(design_id=design_id, version=r.version, design=r.body, note=r.note,
-                                created_at=r.created_at, created_by_id=r.created_by_id) for r in rows]
+    rows = session.scalars(
+        select(DesignVersion).where(DesignVersion.design_id == design_id).order_by(DesignVersion.version)
+    )
+    return [
+        DesignVersionPublic(
+            design_id=design_id,
+            version=r.version,
+            design=r.body,
+            note=r.note,
+            created_at=r.created_at,
+            created_by_id=r.created_by_id,
+        )
+        for r in rows
+    ]
 
 
-def list_designs(*, session: Session, name: str | None, include_archived: bool, limit: int,
-                 offset: int) -> tuple[list[DesignPublic], int]:
+def list_designs(
+    *, session: Session, name: str | None, include_archived: bool, limit: int, offset: int
+) -> tuple[list[DesignPublic], int]:
     """Designs (name substring filter), newest first, with their latest bodies."""
     query = select(Design, DesignVersion.body).join(
-        DesignVersion, (DesignVersion.design_id == Design.id) & (DesignVersion.version == Design.latest_version))
+        DesignVersion,
+        (DesignVersion.design_id == Design.id) & (DesignVersion.version == Design.latest_version),
+    )
     if name:
         query = query.where(Design.name.contains(name, autoescape=True))
     if not include_archived:

@@ -60,7 +60,9 @@ class LibraryCache:
             if self._cached is not None and self._cached.key == key:
                 return self._cached
             if key[0] == 0:
-                raise ConflictError("the paint library is empty: load one (station serve loads the demo library)")
+                raise ConflictError(
+                    "the paint library is empty: load one (station serve loads the demo library)"
+                )
             self._cached = _build(session, key)
             self.builds += 1
             return self._cached
@@ -83,23 +85,38 @@ def _build(session: Session, key: tuple[int, int]) -> CachedLibrary:
     extras = [r.extra or {} for r in rows]
     recipes = [x.get("recipe") for x in extras]
     names = sorted({str(x.get("library", "database")) for x in extras})
-    lib = Library(name=" + ".join(names), codes=np.array([r.code for r in rows]),
-                  types=np.array([r.category for r in rows]),
-                  gloss_gu=np.array([np.nan if r.gloss_gu is None else r.gloss_gu for r in rows], dtype=float),
-                  angles_deg=angles, lab=lab, synthetic=all(bool(x.get("synthetic")) for x in extras),
-                  source="database")
+    lib = Library(
+        name=" + ".join(names),
+        codes=np.array([r.code for r in rows]),
+        types=np.array([r.category for r in rows]),
+        gloss_gu=np.array([np.nan if r.gloss_gu is None else r.gloss_gu for r in rows], dtype=float),
+        angles_deg=angles,
+        lab=lab,
+        synthetic=all(bool(x.get("synthetic")) for x in extras),
+        source="database",
+    )
     colorants = default_database().names
     has = np.array([isinstance(rc, dict) and set(rc) <= set(colorants) for rc in recipes], dtype=bool)
     with_recipes = with_index = None
     rows_with = np.flatnonzero(has)
     if rows_with.size:
         conc = np.array([[float(recipes[i].get(n, 0.0)) for n in colorants] for i in rows_with])  # type: ignore[union-attr]
-        with_recipes = Library(name=lib.name, codes=lib.codes[rows_with], types=lib.types[rows_with],
-                               gloss_gu=lib.gloss_gu[rows_with], angles_deg=angles, lab=lab[rows_with],
-                               synthetic=lib.synthetic, recipes=conc, colorant_names=colorants, source="database")
+        with_recipes = Library(
+            name=lib.name,
+            codes=lib.codes[rows_with],
+            types=lib.types[rows_with],
+            gloss_gu=lib.gloss_gu[rows_with],
+            angles_deg=angles,
+            lab=lab[rows_with],
+            synthetic=lib.synthetic,
+            recipes=conc,
+            colorant_names=colorants,
+            source="database",
+        )
         with_index = SnapIndex(with_recipes)
-    return CachedLibrary(key, lib, SnapIndex(lib), np.array([r.id for r in rows]), recipes, with_recipes,
-                         with_index, rows_with)
+    return CachedLibrary(
+        key, lib, SnapIndex(lib), np.array([r.id for r in rows]), recipes, with_recipes, with_index, rows_with
+    )
 
 
 def _target(session: Session, source: DesignSource) -> tuple[np.ndarray, FaceFlopTravelGloss | None]:
@@ -109,7 +126,9 @@ def _target(session: Session, source: DesignSource) -> tuple[np.ndarray, FaceFlo
     if source.design is not None:
         design = to_design(source.design)
     else:
-        design = design_from_dict(design_version(session=session, design_id=source.design_id or 0, version=source.version).body)
+        design = design_from_dict(
+            design_version(session=session, design_id=source.design_id or 0, version=source.version).body
+        )
     return np.asarray(design.lab_at(np.asarray(STANDARD)), dtype=float), design
 
 
@@ -119,14 +138,25 @@ def snap(*, session: Session, cache: LibraryCache, request: SnapRequest) -> dict
 
     lab, _ = _target(session, request)
     cached = cache.get(session)
-    result = color_snap(cached.library, lab, k=min(request.k, len(cached.library)), method=request.metric,
-                        index=cached.index)
+    result = color_snap(
+        cached.library, lab, k=min(request.k, len(cached.library)), method=request.metric, index=cached.index
+    )
     out = result.to_dict()
-    out["matches"] = [{"code": m["code"], "library_paint_id": int(cached.ids[m["index"]]), "sum_de": m["sum_de"],
-                       "de_per_angle": m["de_per_angle"], "recipe": cached.recipes[m["index"]]}
-                      for m in out["matches"]]
-    out.update(design_lab=np.asarray(result.design_lab, dtype=float).tolist(), library_paints=len(cached.library),
-               synthetic=bool(cached.library.synthetic))
+    out["matches"] = [
+        {
+            "code": m["code"],
+            "library_paint_id": int(cached.ids[m["index"]]),
+            "sum_de": m["sum_de"],
+            "de_per_angle": m["de_per_angle"],
+            "recipe": cached.recipes[m["index"]],
+        }
+        for m in out["matches"]
+    ]
+    out.update(
+        design_lab=np.asarray(result.design_lab, dtype=float).tolist(),
+        library_paints=len(cached.library),
+        synthetic=bool(cached.library.synthetic),
+    )
     return out
 
 
@@ -135,17 +165,32 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
     from station.formulate.formulation import formulate_from_library
 
     lab, design = _target(session, request)
-    gloss = request.gloss_gu if request.gloss_gu is not None else (design.gloss_gu if design is not None else None)
+    gloss = (
+        request.gloss_gu
+        if request.gloss_gu is not None
+        else (design.gloss_gu if design is not None else None)
+    )
     cached = cache.get(session)
     if cached.with_recipes is None:
         raise ConflictError("no library paint has a recipe in the colorant database: load the demo library")
-    result, matches = formulate_from_library(lab, cached.with_recipes, index=cached.with_recipes_index,
-                                             k=min(request.k, len(cached.with_recipes)), gloss_gu=gloss,
-                                             tolerance=request.tolerance)
+    result, matches = formulate_from_library(
+        lab,
+        cached.with_recipes,
+        index=cached.with_recipes_index,
+        k=min(request.k, len(cached.with_recipes)),
+        gloss_gu=gloss,
+        tolerance=request.tolerance,
+    )
     out = result.to_dict()
-    out["matches"] = [{"code": m.code, "sum_de": m.sum_de, "de_per_angle": list(m.de_per_angle),
-                       "library_paint_id": int(cached.ids[cached.with_recipes_rows[m.index]])}
-                      for m in matches.matches]
+    out["matches"] = [
+        {
+            "code": m.code,
+            "sum_de": m.sum_de,
+            "de_per_angle": list(m.de_per_angle),
+            "library_paint_id": int(cached.ids[cached.with_recipes_rows[m.index]]),
+        }
+        for m in matches.matches
+    ]
     out["snap_warnings"] = list(matches.warnings)
     out["library"] = cached.library.name
     return out
@@ -161,21 +206,36 @@ def export(*, session: Session, cache: LibraryCache, request: ExportRequest) -> 
     if request.design is not None:
         design = to_design(request.design)
     else:
-        design = design_from_dict(design_version(session=session, design_id=request.design_id or 0, version=request.version).body)
+        design = design_from_dict(
+            design_version(session=session, design_id=request.design_id or 0, version=request.version).body
+        )
     specs = [spec_from_design(design, name=design.name or "design", five_angles=request.five_angles)]
     code = None
     if request.match:
         cached = cache.get(session)
         lib = cached.library
-        m = color_snap(lib, design.lab_at(np.asarray(STANDARD)), k=1, method=request.metric,
-                       index=cached.index).matches[0]
+        m = color_snap(
+            lib, design.lab_at(np.asarray(STANDARD)), k=1, method=request.metric, index=cached.index
+        ).matches[0]
         row = lib.lab[m.index]
-        specs.append(spec_from_lab(m.code, {a: tuple(row[j]) for j, a in enumerate(lib.angles_deg)},
-                                   float(lib.gloss_gu[m.index]), role="match", paint_type=str(lib.types[m.index]),
-                                   code=m.code, synthetic=lib.synthetic, five_angles=request.five_angles))
+        specs.append(
+            spec_from_lab(
+                m.code,
+                {a: tuple(row[j]) for j, a in enumerate(lib.angles_deg)},
+                float(lib.gloss_gu[m.index]),
+                role="match",
+                paint_type=str(lib.types[m.index]),
+                code=m.code,
+                synthetic=lib.synthetic,
+                five_angles=request.five_angles,
+            )
+        )
         code = m.code
     data = colors_to_xml(specs) if request.format == "xml" else specs_to_cxf(specs)
-    stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in (design.name or "design"))[:64] or "design"
+    stem = (
+        "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in (design.name or "design"))[:64]
+        or "design"
+    )
     return data, f"{stem}.{'xml' if request.format == 'xml' else 'cxf'}", code
 
 
@@ -186,17 +246,29 @@ def import_csv(*, session: Session, actor: User, text: str, name: str) -> dict[s
 
     lib = read_library_csv(io.StringIO(text), name=name)
     codes = [str(c) for c in lib.codes]
-    taken = session.scalars(select(LibraryPaint.code).where(LibraryPaint.code.in_(codes))).all() if codes else []
+    taken = (
+        session.scalars(select(LibraryPaint.code).where(LibraryPaint.code.in_(codes))).all() if codes else []
+    )
     if taken:
         raise ConflictError(f"{len(taken)} code(s) already in the library, e.g. {sorted(taken)[0]!r}")
     rows = library_rows(lib)
     for start in range(0, len(rows), 1000):
-        session.execute(insert(LibraryPaint), rows[start:start + 1000])
-    audit.record(session=session, actor=actor, action="library.import", entity="library", entity_id=name,
-                 paints=len(rows))
+        session.execute(insert(LibraryPaint), rows[start : start + 1000])
+    audit.record(
+        session=session,
+        actor=actor,
+        action="library.import",
+        entity="library",
+        entity_id=name,
+        paints=len(rows),
+    )
     session.commit()
-    return {"library": lib.name, "paints": len(rows), "angles_deg": list(lib.angles_deg),
-            "types": {t: int(np.sum(lib.types == t)) for t in ("solid", "metallic", "pearl")}}
+    return {
+        "library": lib.name,
+        "paints": len(rows),
+        "angles_deg": list(lib.angles_deg),
+        "types": {t: int(np.sum(lib.types == t)) for t in ("solid", "metallic", "pearl")},
+    }
 
 
 def export_csv(*, session: Session, cache: LibraryCache, category: str | None) -> str:
@@ -229,14 +301,25 @@ def browse(*, session: Session, cache: LibraryCache, flt: Any, limit: int, offse
     idx = lib.indices()  # computed once per cached library
     top, kind, group = lib.groups()
     std = lib.angle_columns()
-    paints = [{
-        "code": str(lib.codes[r]), "library_paint_id": int(cached.ids[r]), "type": str(lib.types[r]),
-        "gloss_gu": None if np.isnan(lib.gloss_gu[r]) else float(lib.gloss_gu[r]),
-        "group": [str(top[r]), str(kind[r]), str(group[r])], "lab_15_45_110": std[r].tolist(),
-        "indices": {k: (None if np.isnan(v[r]) else float(v[r])) for k, v in idx.items()},
-    } for r in rows[offset:offset + limit]]
-    return {"library": lib.name, "synthetic": bool(lib.synthetic), "matched": int(rows.size), "paints": paints,
-            "hierarchy": hierarchy_counts(lib)}
+    paints = [
+        {
+            "code": str(lib.codes[r]),
+            "library_paint_id": int(cached.ids[r]),
+            "type": str(lib.types[r]),
+            "gloss_gu": None if np.isnan(lib.gloss_gu[r]) else float(lib.gloss_gu[r]),
+            "group": [str(top[r]), str(kind[r]), str(group[r])],
+            "lab_15_45_110": std[r].tolist(),
+            "indices": {k: (None if np.isnan(v[r]) else float(v[r])) for k, v in idx.items()},
+        }
+        for r in rows[offset : offset + limit]
+    ]
+    return {
+        "library": lib.name,
+        "synthetic": bool(lib.synthetic),
+        "matched": int(rows.size),
+        "paints": paints,
+        "hierarchy": hierarchy_counts(lib),
+    }
 
 
 def closed_loop(*, session: Session, actor: User, cache: LibraryCache, request: Any) -> dict[str, Any]:
@@ -257,21 +340,47 @@ def closed_loop(*, session: Session, actor: User, cache: LibraryCache, request: 
     lib = cached.with_recipes
     snapped = color_snap(lib, lab, k=min(3, len(lib)), method="cie2000", index=cached.with_recipes_index)
     starts = [(m.code, lib.recipes[m.index]) for m in snapped.matches]
-    job = run_closed_loop(lab, SprayOutModel(seed=request.seed).measure, starts=starts, gloss_gu=gloss,
-                          tolerance=request.tolerance, max_corrections=request.corrections)
+    job = run_closed_loop(
+        lab,
+        SprayOutModel(seed=request.seed).measure,
+        starts=starts,
+        gloss_gu=gloss,
+        tolerance=request.tolerance,
+        max_corrections=request.corrections,
+    )
     out = job.to_dict()
     out["measurement"] = f"simulated spray-out panel model (SYNTHETIC), seed {request.seed}"
     best = snapped.matches[0]
     row = FormulationJob(
-        design_version_id=dv.id, library_paint_id=int(cached.ids[cached.with_recipes_rows[best.index]]),
+        design_version_id=dv.id,
+        library_paint_id=int(cached.ids[cached.with_recipes_rows[best.index]]),
         state="done" if job.status == "converged" else "failed",
-        target={"metric": "cie2000", "angles_deg": list(STANDARD), "lab": lab.round(4).tolist(), "gloss_gu": gloss},
-        recipe={"candidates": [], "recipe": job.final_recipe, "warnings": list(snapped.warnings), "closed_loop": out},
+        target={
+            "metric": "cie2000",
+            "angles_deg": list(STANDARD),
+            "lab": lab.round(4).tolist(),
+            "gloss_gu": gloss,
+        },
+        recipe={
+            "candidates": [],
+            "recipe": job.final_recipe,
+            "warnings": list(snapped.warnings),
+            "closed_loop": out,
+        },
         created_by_id=actor.id,
     )
     session.add(row)
     session.flush()
-    audit.record(session=session, actor=actor, action="recipe.closed_loop", entity="recipe", entity_id=row.id,
-                 design_id=request.design_id, version=dv.version, status=job.status, corrections=job.corrections)
+    audit.record(
+        session=session,
+        actor=actor,
+        action="recipe.closed_loop",
+        entity="recipe",
+        entity_id=row.id,
+        design_id=request.design_id,
+        version=dv.version,
+        status=job.status,
+        corrections=job.corrections,
+    )
     session.commit()
     return {"recipe_id": row.id, **out}

@@ -16,8 +16,9 @@ log = logging.getLogger(__name__)
 _CHUNK = 1000
 
 
-def list_paints(*, session: Session, category: str | None, code_prefix: str | None, limit: int,
-                offset: int) -> tuple[list[LibraryPaint], int]:
+def list_paints(
+    *, session: Session, category: str | None, code_prefix: str | None, limit: int, offset: int
+) -> tuple[list[LibraryPaint], int]:
     """Library paints by category (``solid``/``metallic``/``pearl``) and code prefix."""
     query = select(LibraryPaint)
     if category:
@@ -46,12 +47,18 @@ def library_rows(lib: Any) -> list[dict[str, Any]]:
         recipe = None
         if lib.recipes is not None:
             recipe = {n: float(x) for n, x in zip(names, lib.recipes[i], strict=True) if x > 0}
-        rows.append({
-            "code": str(lib.codes[i]), "name": str(lib.codes[i]), "category": str(lib.types[i]),
-            "family": f"{top[i]}/{kind[i]}/{group[i]}", "angles_deg": [float(a) for a in lib.angles_deg],
-            "lab": lib.lab[i].round(4).tolist(), "gloss_gu": float(lib.gloss_gu[i]),
-            "extra": {"recipe": recipe, "synthetic": bool(lib.synthetic), "library": lib.name},
-        })
+        rows.append(
+            {
+                "code": str(lib.codes[i]),
+                "name": str(lib.codes[i]),
+                "category": str(lib.types[i]),
+                "family": f"{top[i]}/{kind[i]}/{group[i]}",
+                "angles_deg": [float(a) for a in lib.angles_deg],
+                "lab": lib.lab[i].round(4).tolist(),
+                "gloss_gu": float(lib.gloss_gu[i]),
+                "extra": {"recipe": recipe, "synthetic": bool(lib.synthetic), "library": lib.name},
+            }
+        )
     return rows
 
 
@@ -69,7 +76,7 @@ def load_demo_library(*, session: Session) -> int:
         return 0
     rows = library_rows(demo.demo_library())
     for start in range(0, len(rows), _CHUNK):
-        session.execute(insert(LibraryPaint), rows[start:start + _CHUNK])
+        session.execute(insert(LibraryPaint), rows[start : start + _CHUNK])
     session.commit()
     log.info("demo library loaded: %d synthetic paints", len(rows))
     return len(rows)

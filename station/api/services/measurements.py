@@ -19,9 +19,24 @@ from station.ingest import Reading, store_reading
 _Successor = aliased(Measurement)
 
 CSV_COLUMNS = (
-    "measurement_id", "client_id", "panel_id", "job", "part", "instrument_serial", "operator", "measured_at",
-    "aspecular_deg", "L", "a", "b", "gloss_gu", "gloss_geometry_deg", "illuminant", "observer",
-    "supersedes_id", "payload_sha256",
+    "measurement_id",
+    "client_id",
+    "panel_id",
+    "job",
+    "part",
+    "instrument_serial",
+    "operator",
+    "measured_at",
+    "aspecular_deg",
+    "L",
+    "a",
+    "b",
+    "gloss_gu",
+    "gloss_geometry_deg",
+    "illuminant",
+    "observer",
+    "supersedes_id",
+    "payload_sha256",
 )
 
 
@@ -52,25 +67,50 @@ def ingest(*, session: Session, actor: User, reading: Reading) -> tuple[Measurem
     """Store *reading* once; ``(measurement, created)`` (a re-sent reading returns the stored row)."""
     result = store_reading(session, reading, created_by_id=actor.id)
     if result.created:
-        audit.record(session=session, actor=actor, action="measurement.create", entity="measurement",
-                     entity_id=result.measurement_id, client_id=str(reading.client_id))
+        audit.record(
+            session=session,
+            actor=actor,
+            action="measurement.create",
+            entity="measurement",
+            entity_id=result.measurement_id,
+            client_id=str(reading.client_id),
+        )
     session.commit()
     return get_measurement(session=session, measurement_id=result.measurement_id), result.created
 
 
-def correct(*, session: Session, actor: User, measurement_id: int,
-            correction: CorrectionCreate) -> MeasurementPublic:
+def correct(
+    *, session: Session, actor: User, measurement_id: int, correction: CorrectionCreate
+) -> MeasurementPublic:
     """Store a corrected reading that supersedes *measurement_id*, with who and why."""
     original = get_measurement(session=session, measurement_id=measurement_id)
     if original.superseded_by_id is not None:
-        raise ConflictError(f"measurement {measurement_id} is already superseded by {original.superseded_by_id}")
-    existing = session.scalar(select(Measurement.id).where(Measurement.client_id == correction.reading.client_id))
+        raise ConflictError(
+            f"measurement {measurement_id} is already superseded by {original.superseded_by_id}"
+        )
+    existing = session.scalar(
+        select(Measurement.id).where(Measurement.client_id == correction.reading.client_id)
+    )
     if existing is not None:
-        raise ConflictError(f"client_id {correction.reading.client_id} is already stored (measurement {existing})")
-    result = store_reading(session, correction.reading, created_by_id=actor.id, supersedes_id=measurement_id,
-                           correction_reason=correction.reason)
-    audit.record(session=session, actor=actor, action="measurement.correct", entity="measurement",
-                 entity_id=result.measurement_id, supersedes_id=measurement_id, reason=correction.reason)
+        raise ConflictError(
+            f"client_id {correction.reading.client_id} is already stored (measurement {existing})"
+        )
+    result = store_reading(
+        session,
+        correction.reading,
+        created_by_id=actor.id,
+        supersedes_id=measurement_id,
+        correction_reason=correction.reason,
+    )
+    audit.record(
+        session=session,
+        actor=actor,
+        action="measurement.correct",
+        entity="measurement",
+        entity_id=result.measurement_id,
+        supersedes_id=measurement_id,
+        reason=correction.reason,
+    )
     session.commit()
     return get_measurement(session=session, measurement_id=result.measurement_id)
 
@@ -94,12 +134,17 @@ def _filtered(q: MeasurementQuery) -> Select[Any]:
     return query
 
 
-def query(*, session: Session, q: MeasurementQuery, limit: int, offset: int) -> tuple[list[MeasurementPublic], int]:
+def query(
+    *, session: Session, q: MeasurementQuery, limit: int, offset: int
+) -> tuple[list[MeasurementPublic], int]:
     """Measurements matching *q*, newest first (corrected rows hidden unless asked for)."""
     base = _filtered(q)
-    total = session.scalar(select(func.count()).select_from(base.with_only_columns(Measurement.id).subquery()))
-    rows = session.execute(base.order_by(Measurement.measured_at.desc(), Measurement.id.desc())
-                           .limit(limit).offset(offset)).all()
+    total = session.scalar(
+        select(func.count()).select_from(base.with_only_columns(Measurement.id).subquery())
+    )
+    rows = session.execute(
+        base.order_by(Measurement.measured_at.desc(), Measurement.id.desc()).limit(limit).offset(offset)
+    ).all()
     return [_public(r) for r in rows], total or 0
 
 
@@ -109,14 +154,33 @@ def export_csv(*, session: Session, q: MeasurementQuery, max_rows: int = 100_000
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
     yield buf.getvalue()
-    rows = session.execute(_filtered(q).order_by(Measurement.measured_at, Measurement.id).limit(max_rows)).all()
+    rows = session.execute(
+        _filtered(q).order_by(Measurement.measured_at, Measurement.id).limit(max_rows)
+    ).all()
     for m, serial, _succ, job, part in rows:
         buf.seek(0)
         buf.truncate()
         for angle, (L, a, b) in zip(m.geometries_deg, m.lab, strict=True):
-            writer.writerow([m.id, m.client_id, m.panel_id or "", job or "", part or "", serial, m.operator,
-                             m.measured_at.isoformat(), angle, L, a, b,
-                             "" if m.gloss_gu is None else m.gloss_gu,
-                             "" if m.gloss_geometry_deg is None else m.gloss_geometry_deg,
-                             m.illuminant, m.observer, m.supersedes_id or "", m.payload_sha256])
+            writer.writerow(
+                [
+                    m.id,
+                    m.client_id,
+                    m.panel_id or "",
+                    job or "",
+                    part or "",
+                    serial,
+                    m.operator,
+                    m.measured_at.isoformat(),
+                    angle,
+                    L,
+                    a,
+                    b,
+                    "" if m.gloss_gu is None else m.gloss_gu,
+                    "" if m.gloss_geometry_deg is None else m.gloss_geometry_deg,
+                    m.illuminant,
+                    m.observer,
+                    m.supersedes_id or "",
+                    m.payload_sha256,
+                ]
+            )
         yield buf.getvalue()

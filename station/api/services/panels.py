@@ -16,8 +16,15 @@ def create_panel(*, session: Session, actor: User, panel_in: PanelCreate) -> Pan
     panel = Panel(**panel_in.model_dump(), created_by_id=actor.id)
     session.add(panel)
     session.flush()
-    audit.record(session=session, actor=actor, action="panel.create", entity="panel", entity_id=panel.id,
-                 job=panel.job, part=panel.part)
+    audit.record(
+        session=session,
+        actor=actor,
+        action="panel.create",
+        entity="panel",
+        entity_id=panel.id,
+        job=panel.job,
+        part=panel.part,
+    )
     session.commit()
     return panel
 
@@ -30,8 +37,9 @@ def get_panel(*, session: Session, panel_id: int) -> Panel:
     return panel
 
 
-def list_panels(*, session: Session, job: str | None, part: str | None, limit: int,
-                offset: int) -> tuple[list[Panel], int]:
+def list_panels(
+    *, session: Session, job: str | None, part: str | None, limit: int, offset: int
+) -> tuple[list[Panel], int]:
     """Panels matching *job* / *part*, newest first."""
     query = select(Panel)
     if job:

@@ -31,9 +31,17 @@ def variations(*, request: VariationsRequest) -> dict[str, Any]:
 
     ring = ring_of(to_design(request.design), request.degree, request.category)
     return {
-        "centre": design_to_dict(ring.centre), "category": ring.category, "degree": ring.degree,
-        "variations": [{"label": v.label, "design": None if v.design is None else design_to_dict(v.design),
-                        "reason": v.reason} for v in ring.variations],
+        "centre": design_to_dict(ring.centre),
+        "category": ring.category,
+        "degree": ring.degree,
+        "variations": [
+            {
+                "label": v.label,
+                "design": None if v.design is None else design_to_dict(v.design),
+                "reason": v.reason,
+            }
+            for v in ring.variations
+        ],
     }
 
 
@@ -87,9 +95,18 @@ def _finite(x: Any) -> float | None:
     return float(x) if x is not None and math.isfinite(float(x)) else None
 
 
-def eyedrop(*, data: bytes, max_bytes: int, face: tuple[float, float], flop: tuple[float, float],
-            gloss: tuple[float, float] | None, gloss_gu: float, travel_deg: float, radius: int,
-            auto_swap: bool) -> dict[str, Any]:
+def eyedrop(
+    *,
+    data: bytes,
+    max_bytes: int,
+    face: tuple[float, float],
+    flop: tuple[float, float],
+    gloss: tuple[float, float] | None,
+    gloss_gu: float,
+    travel_deg: float,
+    radius: int,
+    auto_swap: bool,
+) -> dict[str, Any]:
     """Face/flop(/gloss) eyedroppers on an uploaded image → a design (thesis §3.5)."""
     from station.design.moodboard import eyedrop_design
 
@@ -98,12 +115,29 @@ def eyedrop(*, data: bytes, max_bytes: int, face: tuple[float, float], flop: tup
     for name, (x, y) in (("face", face), ("flop", flop), *((("gloss", gloss),) if gloss else ())):
         if not (0 <= x < w and 0 <= y < h):
             raise InputError(f"{name}_x", f"a pixel inside the {w}x{h} image", (x, y))
-    r = eyedrop_design(img.pixels, face, flop, travel_deg=travel_deg, gloss_gu=gloss_gu, radius=radius,
-                       auto_swap=auto_swap, gloss_xy=gloss)
-    out: dict[str, Any] = {"design": design_to_dict(r.design), "face_lab": list(r.face_lab),
-                           "flop_lab": list(r.flop_lab), "swapped": r.swapped, "colour": img.colour_note}
+    r = eyedrop_design(
+        img.pixels,
+        face,
+        flop,
+        travel_deg=travel_deg,
+        gloss_gu=gloss_gu,
+        radius=radius,
+        auto_swap=auto_swap,
+        gloss_xy=gloss,
+    )
+    out: dict[str, Any] = {
+        "design": design_to_dict(r.design),
+        "face_lab": list(r.face_lab),
+        "flop_lab": list(r.flop_lab),
+        "swapped": r.swapped,
+        "colour": img.colour_note,
+    }
     if r.gloss is not None:
-        out["gloss"] = {"gloss_gu": r.gloss.gloss_gu, "contrast": r.gloss.contrast, "clipped": r.gloss.clipped}
+        out["gloss"] = {
+            "gloss_gu": r.gloss.gloss_gu,
+            "contrast": r.gloss.contrast,
+            "clipped": r.gloss.clipped,
+        }
     return out
 
 
@@ -111,15 +145,27 @@ def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str)
     """Point-light sketch fit of uploaded art over a built-in scene, started from the scene in silver (§3.7)."""
     from station.design.scene import builtin_scene, shade, srgb_encode
     from station.design.sketch import fit_point_light
+
     art = load_upload(data, max_bytes=max_bytes, max_pixels=SKETCH_MAX_SIDE**2).pixels
     h, w = art.shape[:2]
     if h != w or not 16 <= h <= SKETCH_MAX_SIDE:
-        raise InputError("art", f"a square image of 16..{SKETCH_MAX_SIDE} pixels, the scene's size", f"{w}x{h}")
+        raise InputError(
+            "art", f"a square image of 16..{SKETCH_MAX_SIDE} pixels, the scene's size", f"{w}x{h}"
+        )
     scene = builtin_scene(scene_name, h)
     fit = fit_point_light(scene, art, srgb_encode(shade(scene, _silver())), gloss=gloss_mode)
     return {
-        "design": design_to_dict(fit.design), "rms_de": _finite(fit.rms_de), "failed": bool(fit.failed),
-        "seconds": float(fit.seconds), "reason": fit.reason, "shading_de": _finite(fit.shading_de),
-        "lab_standard": {"angles_deg": [15.0, 45.0, 110.0], "lab": [[float(x) for x in v] for v in fit.lab_standard]},
-        "theta_clamp_deg": _finite(fit.theta_clamp_deg), "pixels": int(fit.pixels), "gloss_source": fit.gloss_source,
+        "design": design_to_dict(fit.design),
+        "rms_de": _finite(fit.rms_de),
+        "failed": bool(fit.failed),
+        "seconds": float(fit.seconds),
+        "reason": fit.reason,
+        "shading_de": _finite(fit.shading_de),
+        "lab_standard": {
+            "angles_deg": [15.0, 45.0, 110.0],
+            "lab": [[float(x) for x in v] for v in fit.lab_standard],
+        },
+        "theta_clamp_deg": _finite(fit.theta_clamp_deg),
+        "pixels": int(fit.pixels),
+        "gloss_source": fit.gloss_source,
     }

@@ -20,8 +20,9 @@ def _issue(session: Session, user: User, label: str) -> tuple[ApiToken, str]:
     return token, secret
 
 
-def create_user(*, session: Session, actor: User | None, name: str, role: Role,
-                label: str = "") -> tuple[User, ApiToken, str]:
+def create_user(
+    *, session: Session, actor: User | None, name: str, role: Role, label: str = ""
+) -> tuple[User, ApiToken, str]:
     """Create a user with a first token; returns the secret (shown once)."""
     if session.scalar(select(User.id).where(User.name == name)) is not None:
         raise ConflictError(f"user {name!r} exists")
@@ -29,8 +30,15 @@ def create_user(*, session: Session, actor: User | None, name: str, role: Role,
     session.add(user)
     session.flush()
     token, secret = _issue(session, user, label)
-    audit.record(session=session, actor=actor, action="user.create", entity="user", entity_id=user.id,
-                 name=name, role=role.value)
+    audit.record(
+        session=session,
+        actor=actor,
+        action="user.create",
+        entity="user",
+        entity_id=user.id,
+        name=name,
+        role=role.value,
+    )
     session.commit()
     return user, token, secret
 
@@ -56,8 +64,15 @@ def issue_token(*, session: Session, actor: User | None, user: User, label: str 
     if not user.active:
         raise ConflictError(f"user {user.name!r} is deactivated")
     token, secret = _issue(session, user, label)
-    audit.record(session=session, actor=actor, action="token.issue", entity="user", entity_id=user.id,
-                 token_id=token.id, label=label)
+    audit.record(
+        session=session,
+        actor=actor,
+        action="token.issue",
+        entity="user",
+        entity_id=user.id,
+        token_id=token.id,
+        label=label,
+    )
     session.commit()
     return token, secret
 
@@ -67,8 +82,11 @@ def deactivate(*, session: Session, actor: User | None, user: User) -> User:
     if actor is not None and actor.id == user.id:
         raise ConflictError("an admin cannot deactivate themself")
     user.active = False
-    session.execute(update(ApiToken).where(ApiToken.user_id == user.id, ApiToken.revoked_at.is_(None))
-                    .values(revoked_at=utcnow()))
+    session.execute(
+        update(ApiToken)
+        .where(ApiToken.user_id == user.id, ApiToken.revoked_at.is_(None))
+        .values(revoked_at=utcnow())
+    )
     audit.record(session=session, actor=actor, action="user.deactivate", entity="user", entity_id=user.id)
     session.commit()
     return user
@@ -83,6 +101,7 @@ def bootstrap_admin(*, session: Session, name: str = "admin") -> str | None:
     """On an empty user table: create the first admin and return its token; else ``None``."""
     if (session.scalar(select(func.count()).select_from(User)) or 0) > 0:
         return None
-    _user, _token, secret = create_user(session=session, actor=None, name=name, role=Role.ADMIN,
-                                        label="bootstrap")
+    _user, _token, secret = create_user(
+        session=session, actor=None, name=name, role=Role.ADMIN, label="bootstrap"
+    )
     return secret
