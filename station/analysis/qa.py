@@ -1,6 +1,6 @@
 """QA workflow for a seam: two panels (measured or designed), a misalignment, a range of geometries.
 
-:func:`seam_qa` answers the QA engineer's questions (DESIGN.md §1): how large is the predicted seam ΔE,
+:func:`seam_qa` answers the QA engineer's questions (docs/design.md §1): how large is the predicted seam ΔE,
 how much of it is geometric (identical paint, misaligned) and how much is formulation (the two paints
 differ on aligned panels), what seam angle this paint tolerates (the goniogeometric index, eq 4.3.1),
 pass or fail against a tolerance, the thesis's §4.5 styling guidelines applied to this case, and a

@@ -1,6 +1,6 @@
 """Panel colour ``c(f, Ω, Ψ)`` under a point light or an environment (thesis eqs 4.3.2–4.3.4).
 
-Definition used throughout (with DESIGN.md §7 errata 2 and 3 applied):
+Definition used throughout (with docs/design.md errata 2 and 3 applied):
 
 ``c = I · f(L, V) · (L·N)`` (eq 4.3.2; Lambert's term is ``L·N``, erratum 2). ``I·f`` is the paint's
 colour: constant for a solid (eq 4.3.3), the clamped-quadratic ``g`` evaluated at the aspecular angle

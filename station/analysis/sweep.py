@@ -3,7 +3,7 @@
 The thesis reads the goniogeometric index off such curves: the largest β whose curve stays under ε over
 the geometries of interest. :func:`seam_sweep` evaluates ΔE on the full grid (β × light × view) in one
 vectorised pass; :func:`plot_sweep` draws the figure (docs/misalignment-index.png). The thesis's caption
-swaps the light and view symbols (DESIGN.md §7 erratum 4); here the axes are labelled by what varies.
+swaps the light and view symbols (docs/design.md erratum 4); here the axes are labelled by what varies.
 """
 
 from __future__ import annotations

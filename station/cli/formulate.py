@@ -1,4 +1,4 @@
-"""``station library|snap|formulate|export``: the formulation bridge (thesis §5.3; DESIGN.md §6).
+"""``station library|snap|formulate|export``: the formulation bridge (thesis §5.3; docs/design.md §6).
 
 * ``station library import FILE [--out FILE]`` — read and validate a CSV or CxF3 library, optionally
   convert it; ``station library export demo|FILE --format csv|cxf --out FILE``; ``station library

@@ -9,7 +9,7 @@ Modules
 - :mod:`.palette` — palette swatch and booklet thumbnail (§3.4.6).
 - :mod:`.images` — safe PNG/JPEG loading with colour management.
 - :mod:`.moodboard` — boards, face/flop/gloss eyedroppers (§3.5).
-- :mod:`.tweaker` — the image-based BRDF tweaker (§3.6, erratum 1).
+- :mod:`.tweaker` — the image-based BRDF tweaker (§3.6, docs/design.md erratum 1).
 - :mod:`.sketch` — sketch fits under a point light and under environment lighting (§3.7).
 - :mod:`.artwork` — synthetic concept-art edits and perturbations (tests, benchmarks).
 

@@ -11,7 +11,7 @@ Geometry and conventions (thesis §3.6.2, §3.7.1)
 * ``L`` is the unit vector from the surface towards a directional ("point at infinity") light.
 * Aspecular angle θ (degrees) = angle between the mirror direction of the light ``R = 2(N·L)N − L``
   and ``V`` (the thesis's "angle between the reflected light and view vectors").
-* Lambert term ϕ = max(N·L, 0) (erratum 2: Lambert's cosine is L·N).
+* Lambert term ϕ = max(N·L, 0) (docs/design.md erratum 2: Lambert's cosine is L·N).
 * Light-direction buffer: the light that would centre the highlight on the pixel, ``2(N·V)N − V``
   (thesis §3.6.2 "Move light").
 * Shading of a design (the clamped-quadratic model, eq 3.3.2) under irradiance ``E``::

@@ -25,7 +25,7 @@ solid, with ``failed=True`` and the reason.
 Environment-lit fit (§3.7.5)
 ---------------------------
 The thesis searched face, flop, travel and gloss with a nonlinear optimiser that rendered the scene
-per guess ("several minutes"). The image is linear in the lobe weights (DESIGN.md §4), so with the
+per guess ("several minutes"). The image is linear in the lobe weights (docs/design.md §4), so with the
 renderer's per-lobe basis images ``B_j`` the fit is one non-negative least-squares problem per
 channel, ``min_w ‖Σ_j w_j B_j − art‖`` (milliseconds), followed by the same curve → design projection.
 """

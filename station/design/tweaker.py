@@ -5,7 +5,7 @@ light-direction buffer (``(H, W, 3)``: the light that would centre the highlight
 crosshair pixel ``(x, y)`` = (column, row). :mod:`station.design.scene` makes both; the renderer makes
 the same on the GPU.
 
-Colour adjustment (eqs 3.6.1–3.6.6 with DESIGN.md §7 erratum 1)
+Colour adjustment (eqs 3.6.1–3.6.6 with docs/design.md erratum 1)
 --------------------------------------------------------------
 Temporary colours ``Lab'`` of face and flop (3.6.1 lightness ``L + ΔL``; 3.6.2 chroma
 ``(a, b)·(1 + ΔC)``; 3.6.3 hue rotation by ΔH) are blended with the originals by the ratio
@@ -41,7 +41,7 @@ FACE_DEG = 15.0
 
 
 def ratio_r(theta_deg: ArrayLike, theta_clamp_deg: float) -> NDArray[np.float64]:
-    """Ratio R of the face adjustment at aspecular angle θ (eq 3.6.4 corrected, erratum 1); vectorised."""
+    """Ratio R of the face adjustment at aspecular angle θ (eq 3.6.4, docs/design.md erratum 1); vectorised."""
     t = np.asarray(theta_deg, dtype=float)
     tc = float(theta_clamp_deg)
     if not tc > FACE_DEG:
@@ -93,7 +93,7 @@ def adjust_at(
     mask: ArrayLike | None = None,
 ) -> Tweak:
     """Adjust lightness (``"L"``, ΔL in L* units), chroma (``"C"``, ΔC relative: 0.1 = +10 %) or hue
-    (``"H"``, ΔH in degrees) at the crosshair pixel *xy* (eqs 3.6.1–3.6.6, erratum 1).
+    (``"H"``, ΔH in degrees) at the crosshair pixel *xy* (eqs 3.6.1–3.6.6, docs/design.md erratum 1).
 
     A solid design has one colour, which is adjusted fully wherever the crosshair is.
 

@@ -1,4 +1,4 @@
-"""Formulation bridge (thesis §5.3; DESIGN.md §6): colour libraries, ColorSnap, recipe formulation,
+"""Formulation bridge (thesis §5.3; docs/design.md §6): colour libraries, ColorSnap, recipe formulation,
 the closed loop, and the thesis XML / CxF3 exchange. See docs/formulate.md.
 
 The colorant database, the demo library and the spray-out panels are SYNTHETIC and say so wherever

@@ -1,4 +1,4 @@
-"""Appearance model hierarchy (thesis §3.3, §5.3.3; DESIGN.md §3 and §7).
+"""Appearance model hierarchy (thesis §3.3, §5.3.3; docs/design.md §3 and §7).
 
 Aspecular measurements ⇄ face/flop/travel/gloss ⇄ clamped quadratic, plus gloss ⇄ specular lobe,
 library indices, colour differences, spectra and the design file format. Every other core package

@@ -1,7 +1,7 @@
 """Colorimetric conversions used across the product (thin wrappers over colour-science).
 
 Lab is CIE L*a*b* relative to D65 and the CIE 1964 10° observer unless a field says otherwise
-(DESIGN.md §8). "Linear sRGB" is scene-linear sRGB (IEC 61966-2-1 primaries, D65), no tone mapping
+(docs/design.md §8). "Linear sRGB" is scene-linear sRGB (IEC 61966-2-1 primaries, D65), no tone mapping
 and no transfer function: a reflectance factor of 1 on every channel is the perfect white.
 
 Chromatic adaptation: sRGB's white is D65 for the 2° observer; our Lab white is D65 for the 10°

@@ -1,4 +1,4 @@
-"""Colour differences per aspecular angle and aggregated over an angle set (DESIGN.md §3).
+"""Colour differences per aspecular angle and aggregated over an angle set (docs/design.md §3).
 
 Methods (dispatched from :data:`DELTA_E_METHODS`):
 

@@ -1,4 +1,4 @@
-"""Aspecular measurements → face/flop/travel/gloss (thesis §3.3.3–§3.3.4; DESIGN.md §7 erratum 5).
+"""Aspecular measurements → face/flop/travel/gloss (thesis §3.3.3–§3.3.4; docs/design.md erratum 5).
 
 Three-angle sets (15/45/110 and 25/45/75) are solved in closed form: L passes exactly through the
 three values wherever a monotone clamped quadratic does, and a*, b* are least-squares fits with the
@@ -115,7 +115,7 @@ def _least_squares_travel(angles: NDArray, lab: NDArray) -> float:
 
 
 def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
-    """Fit face/flop/travel/gloss to aspecular measurements (thesis §3.3.3, erratum 5).
+    """Fit face/flop/travel/gloss to aspecular measurements (thesis §3.3.3, docs/design.md erratum 5).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Library indices of a multi-angle colour (thesis §5.3.3, eqs 5.3.1–5.3.3; DESIGN.md §3).
+"""Library indices of a multi-angle colour (thesis §5.3.3, eqs 5.3.1–5.3.3; docs/design.md §3).
 
 Each index has a known failure region, detected and reported in :attr:`IndexResult.warnings`:
 

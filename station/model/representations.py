@@ -1,4 +1,4 @@
-"""The three representations of the appearance model hierarchy (thesis §3.3, DESIGN.md §3).
+"""The three representations of the appearance model hierarchy (thesis §3.3, docs/design.md §3).
 
 * :class:`FaceFlopTravelGloss` — what a designer edits: face = Lab at 15°, flop = Lab at θ_clamp,
   travel = θ_clamp in degrees, gloss in GU (60° geometry).
@@ -30,7 +30,7 @@ from station.model.angles import validate_angle_set
 from station.model.colorimetry import OBSERVER_10
 from station.model.errors import ModelInputError
 
-#: Face angle of the model in degrees (thesis §3.3.1; DESIGN.md §7 erratum 3).
+#: Face angle of the model in degrees (thesis §3.3.1; docs/design.md erratum 3).
 FACE_ANGLE_DEG = 15.0
 #: Accepted travel (θ_clamp) range: FACE_ANGLE_DEG < travel <= TRAVEL_MAX_DEG degrees.
 TRAVEL_MAX_DEG = 180.0

@@ -6,7 +6,7 @@ vector H:
     f(L, V)·(L·N) = P_s (L·N)/√((L·N)(V·N)) · 1/(4π α_x α_y) · exp(−2 [(H·X/α_x)² + (H·Y/α_y)²] / (1 + H·N))
 
 (the thesis prints the exponent without the α's; Ward's model divides each slope by its α, which is
-what makes α the slope spread, so that form is used here).
+what makes α the slope spread, so that form is used here; docs/design.md erratum 6).
 
 Rendering (eqs 2.5.5–2.5.7): the isotropic Ward lobe of width α_x is first fitted once with the cosine
 lobes (non-negative least squares over in-plane aspecular angles at 45° incidence, P_s = 1), giving

@@ -1,4 +1,4 @@
-"""Level of detail: the least model a scene needs for a colour-difference tolerance (DESIGN.md §4).
+"""Level of detail: the least model a scene needs for a colour-difference tolerance (docs/design.md §4).
 
 Given the designs on screen, the environment and the pixels (normals, views), :func:`choose_lod` picks
 

@@ -1,4 +1,4 @@
-"""Image-based BRDF tweaker (thesis §3.6, DESIGN.md §7 erratum 1)."""
+"""Image-based BRDF tweaker (thesis §3.6, docs/design.md erratum 1)."""
 
 from __future__ import annotations
 

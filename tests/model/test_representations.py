@@ -1,4 +1,4 @@
-"""FFTG ⇄ clamped quadratic ⇄ aspecular measurements (thesis eqs 3.3.1–3.3.10, erratum 5)."""
+"""FFTG ⇄ clamped quadratic ⇄ aspecular measurements (thesis eqs 3.3.1–3.3.10, docs/design.md erratum 5)."""
 
 from __future__ import annotations
 
@@ -75,7 +75,7 @@ class TestClosedForms:
         assert r.design.travel_deg == pytest.approx(130.0, abs=1e-10)
 
     def test_ab_least_squares_residual_reported(self) -> None:
-        # erratum 5: L is exact, a and b are least squares with the shared θc.
+        # docs/design.md erratum 5: L is exact, a and b are least squares with the shared θc.
         r = fit_fftg(AspecularMeasurements(ANGLES_3, [[90, 2, -5], [50, 1, -3], [30, 0.5, -1]]))
         assert r.method == "closed-form"
         model = r.design.lab_at(np.asarray(ANGLES_3))
