@@ -40,7 +40,7 @@ MODES = tr.LOBE_MODES
 
 
 def environment(name: str):
-    """The render helper's procedural environment at 512×256."""
+    """The renderer's procedural environment at 512×256."""
     from station.render.procedural import procedural_environment
 
     return procedural_environment(name, 512)

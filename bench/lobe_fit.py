@@ -204,7 +204,7 @@ def main() -> None:
         "(exact NNLS: Lawson–Hanson on the QR-reduced problem for one design, KKT-verified passive-set "
         "guesses for batches): same error as every exact NNLS, lower than clamped least squares and "
         "than the L1 programme in this RMS metric, a fraction of the LP's time. Timings on a shared "
-        "2-core machine; other agents' jobs run concurrently, so minima are reported beside medians."
+        "2-core machine; other jobs run concurrently, so minima are reported beside medians."
     )
     write_section("lobe_fit", "Lobe-weight fit methods (thesis §2.4)", cases, extra)
 
