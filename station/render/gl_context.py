@@ -33,7 +33,10 @@ def create_gl_context(require: int = 430) -> Any:
     except ImportError as exc:  # pragma: no cover - moderngl is a dependency
         raise GLUnavailableError("moderngl is not installed") from exc
     try:
-        ctx = moderngl.create_standalone_context(require=require, backend="egl")
+        ctx = moderngl.create_standalone_context(
+            require=require,
+            backend="egl",  # type: ignore[arg-type]  # moderngl's stub types **settings as dict values
+        )
     except Exception as exc:  # moderngl raises plain Exception for EGL failures
         raise GLUnavailableError(f"no headless OpenGL {require / 100:.1f} context via EGL: {exc}") from exc
     ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)

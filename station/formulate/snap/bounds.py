@@ -11,6 +11,7 @@ quantities are in CIELAB units (ΔE, L*, a*, b*, C*), hues in degrees.
 from __future__ import annotations
 
 import math
+from typing import Literal, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -198,6 +199,18 @@ def box_bounds_cie2000_fast(
     return np.sqrt(per).sum(-1) * SAFETY - 1e-12
 
 
+@overload
+def point_bounds_cie2000(
+    q: NDArray[np.float64], p: NDArray[np.float64], upper: Literal[False] = False
+) -> NDArray[np.float64]: ...
+
+
+@overload
+def point_bounds_cie2000(
+    q: NDArray[np.float64], p: NDArray[np.float64], upper: Literal[True]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+
+
 def point_bounds_cie2000(
     q: NDArray[np.float64], p: NDArray[np.float64], upper: bool = False
 ) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -233,7 +246,7 @@ def point_bounds_cie2000(
         upper,
     )
     lower = np.sqrt(lower2).sum(-1) * SAFETY - 1e-10
-    if not upper:
+    if upper2 is None:  # upper=False
         return lower
     return lower, np.sqrt(upper2).sum(-1) * (2.0 - SAFETY) + 1e-10
 

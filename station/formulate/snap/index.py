@@ -448,7 +448,7 @@ class SnapIndex:
             matches,
             method,
             self.angles_deg,
-            tuple(tuple(float(v) for v in row) for row in q),
+            tuple((float(row[0]), float(row[1]), float(row[2])) for row in q),
             stats=found.stats,
         )
 
