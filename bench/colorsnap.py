@@ -21,7 +21,6 @@ import time
 import numpy as np
 
 from bench._report import ROOT, Case, write_section
-from station.formulate import snap
 from station.formulate.de_kernels import KERNELS
 from station.formulate.demo import demo_library
 from station.formulate.snap import METHODS, SnapIndex, brute_force
@@ -43,12 +42,14 @@ def _fast_brute(lab: np.ndarray, q: np.ndarray, method: str) -> tuple[np.ndarray
     return top, s[top]
 
 
-def _time_index(index: SnapIndex, qs: np.ndarray, method: str) -> tuple[np.ndarray, list]:
+def _time_index(
+    index: SnapIndex, qs: np.ndarray, method: str, use_numba: bool = True
+) -> tuple[np.ndarray, list]:
     times = np.empty(len(qs))
     results = []
     for i, q in enumerate(qs):
         t = time.perf_counter()
-        r = index.query(q, K, method)
+        r = index.query(q, K, method, use_numba)
         times[i] = time.perf_counter() - t
         results.append(r)
     return times, results
@@ -58,12 +59,8 @@ def _numpy_path(
     index: SnapIndex, lab: np.ndarray, qs: np.ndarray, n_check: int, size: str, cases: list
 ) -> None:
     """Time the NumPy-only CIEDE2000 path (no numba) on the same queries; check exactness on *n_check*."""
-    snap._USE_COMPILED = False
-    try:
-        index.query(qs[0], K, "cie2000")
-        times, results = _time_index(index, qs, "cie2000")
-    finally:
-        snap._USE_COMPILED = True
+    index.query(qs[0], K, "cie2000", use_numba=False)
+    times, results = _time_index(index, qs, "cie2000", use_numba=False)
     for q, r in zip(qs[:n_check], results[:n_check], strict=True):
         b = _fast_brute(lab, q, "cie2000")
         assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"

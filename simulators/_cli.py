@@ -7,7 +7,8 @@ The panel is ``--design FILE`` (face/flop/travel/gloss) or ``--recipe FILE`` (a 
 synthetic colorants, :mod:`simulators.recipe`). A recipe file that cannot define a panel ends the
 process with status 2 after one line ``INPUT-ERROR {"field": …, "accepted": …, "got": …}`` on stdout
 (and the message on stderr), which :func:`station.drivers.simproc.spawn_simulator` turns back into a
-typed :class:`~station.drivers.errors.DriverInputError`.
+typed :class:`~station.drivers.errors.DriverInputError`; so does a setting outside its range (the
+arguments become a validated :class:`~simulators.config.SimulatorConfig`).
 """
 
 from __future__ import annotations
@@ -17,17 +18,22 @@ import json
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
+from simulators import serve
+from simulators.config import SimulatorConfig
 from simulators.faults import FAULTS, FaultPlan, FaultSpecError
 from station.errors import InputError
 
 if TYPE_CHECKING:
-    from simulators.physics import SpectroPhysics
     from simulators.recipe import RecipePanel
 
-__all__ = ["build_parser", "main"]
+__all__ = ["DeviceFactory", "build_parser", "config_from_args", "main"]
+
+DeviceFactory = Callable[[SimulatorConfig, FaultPlan, "RecipePanel | None"], Any]
+"""Builds the device a family serves: ``(config, faults, loaded recipe panel or None) -> device``."""
 
 
 def build_parser(kind: str) -> argparse.ArgumentParser:
@@ -63,53 +69,56 @@ def build_parser(kind: str) -> argparse.ArgumentParser:
     return p
 
 
-def make_physics(args: argparse.Namespace, default_serial: str) -> SpectroPhysics:
-    """Physics from the common arguments."""
-    from simulators.physics import DEFAULT_DESIGN, InstrumentCharacter, SpectroPhysics
-    from station.model.design_io import load_design
-
-    ch = InstrumentCharacter(serial=args.serial or default_serial, bias_scale=args.bias)
-    ch.noise_band *= args.noise
-    ch.noise_scale *= args.noise
-    design = load_design(args.design) if args.design else DEFAULT_DESIGN
-    return SpectroPhysics(
-        design=design, character=ch, warm=not args.cold, seed=args.seed, recipe=recipe_panel(args)
+def config_from_args(kind: str, args: argparse.Namespace) -> SimulatorConfig:
+    """The validated configuration of the parsed command line (SimulatorConfigError, FaultSpecError)."""
+    return SimulatorConfig(
+        kind=kind,
+        design=args.design,
+        recipe=args.recipe,
+        faults=tuple(args.fault),
+        serial=args.serial,
+        bias=args.bias,
+        noise=args.noise,
+        measure_time_s=args.measure_time,
+        cold=args.cold,
+        seed=args.seed,
+        rfc2217=args.rfc2217,
+        tcp=args.tcp,
+        twelve=args.twelve,
     )
 
 
-def recipe_panel(args: argparse.Namespace) -> RecipePanel | None:
-    """The ``--recipe`` panel (loaded once per process), or ``None``."""
-    if getattr(args, "recipe", None) is None:
-        return None
-    if getattr(args, "recipe_panel", None) is None:
-        from simulators.recipe import load_recipe
+def _input_error(exc: InputError) -> int:
+    print(
+        "INPUT-ERROR "
+        + json.dumps({"field": exc.field, "accepted": exc.accepted, "got": exc.got}, default=str),
+        flush=True,
+    )
+    print(f"error: {exc}", file=sys.stderr)
+    return 2
 
-        args.recipe_panel = load_recipe(args.recipe)
-    return args.recipe_panel
 
-
-def main(kind: str, argv: list[str] | None = None) -> int:
-    """Run simulator *kind* until told to stop; return the exit status."""
+def main(kind: str, build: DeviceFactory, argv: list[str] | None = None) -> int:
+    """Run simulator *kind*, its device made by *build*, until told to stop; return the exit status."""
     args = build_parser(kind).parse_args(argv)
     try:
-        faults = FaultPlan(args.fault)
+        config = config_from_args(kind, args)
     except FaultSpecError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    from simulators import serve
-
-    try:
-        recipe_panel(args)
     except InputError as exc:
-        print(
-            "INPUT-ERROR "
-            + json.dumps({"field": exc.field, "accepted": exc.accepted, "got": exc.got}, default=str),
-            flush=True,
-        )
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return _input_error(exc)
+    recipe: RecipePanel | None = None
+    if config.recipe is not None:
+        from simulators.recipe import load_recipe
+
+        try:
+            recipe = load_recipe(config.recipe)
+        except InputError as exc:
+            return _input_error(exc)
+    faults = config.fault_plan()
     try:
-        server = serve.start(kind, args, faults)
+        server = serve.start(config, build(config, faults, recipe), faults)
     except Exception as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1

@@ -40,11 +40,11 @@ import numpy as np
 from simulators.faults import FaultPlan
 
 if TYPE_CHECKING:
-    import argparse
-
+    from simulators.config import SimulatorConfig
     from simulators.pty_host import PtyHost
+    from simulators.recipe import RecipePanel
 
-__all__ = ["GlossDevice", "GlossPhysics", "HidBridgeServer", "reference_lobe"]
+__all__ = ["GlossDevice", "GlossPhysics", "HidBridgeServer", "build_device", "reference_lobe"]
 
 REPORT = 64
 GEOMETRIES = (20, 60, 85)
@@ -195,23 +195,23 @@ class GlossDevice:
         self.written: list[bytes] = []
 
     @classmethod
-    def from_args(cls, args: argparse.Namespace, faults: FaultPlan) -> GlossDevice:
-        """Build from the simulator command line (``--design`` sets the panel's 60° gloss; ``--recipe``
-        sets the 60° gloss the colorant model predicts from its matting fraction)."""
-        from simulators._cli import recipe_panel
-
+    def from_config(
+        cls, config: SimulatorConfig, faults: FaultPlan, recipe: RecipePanel | None = None
+    ) -> GlossDevice:
+        """Build from a simulator configuration (``design`` sets the panel's 60° gloss; *recipe*, the
+        loaded ``config.recipe`` panel, sets the 60° gloss the colorant model predicts from its
+        matting fraction)."""
         gloss = 88.0
-        recipe = recipe_panel(args)
         if recipe is not None:
             gloss = recipe.gloss_gu
-        elif args.design:
+        elif config.design:
             from station.model.design_io import load_design
 
-            gloss = load_design(args.design).gloss_gu
+            gloss = load_design(config.design).gloss_gu
         return cls(
-            GlossPhysics(gloss_60_gu=gloss, serial=args.serial or "GM0815", noise_gu=0.1 * args.noise),
+            GlossPhysics(gloss_60_gu=gloss, serial=config.serial or "GM0815", noise_gu=0.1 * config.noise),
             faults,
-            measure_time_s=args.measure_time,
+            measure_time_s=config.measure_time_s,
         )
 
     # -- hid.enumerate / hid.device surface ----------------------------------------------------------
@@ -444,7 +444,12 @@ class HidBridgeServer:
         """Nothing periodic."""
 
 
+def build_device(config: SimulatorConfig, faults: FaultPlan, recipe: RecipePanel | None) -> HidBridgeServer:
+    """The device ``python -m simulators.gloss`` serves for *config* (the gloss meter behind its bridge)."""
+    return HidBridgeServer(GlossDevice.from_config(config, faults, recipe))
+
+
 if __name__ == "__main__":
     from simulators._cli import main
 
-    raise SystemExit(main("gloss"))
+    raise SystemExit(main("gloss", build_device))

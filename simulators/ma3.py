@@ -25,10 +25,12 @@ from typing import TYPE_CHECKING
 from simulators.faults import FaultPlan
 
 if TYPE_CHECKING:
+    from simulators.config import SimulatorConfig
     from simulators.physics import SpectroPhysics
     from simulators.pty_host import PtyHost
+    from simulators.recipe import RecipePanel
 
-__all__ = ["ASPECULAR", "Ma3Device", "Ma3Firmware"]
+__all__ = ["ASPECULAR", "Ma3Device", "Ma3Firmware", "build_device"]
 
 ASPECULAR = (15, 45, 110)
 START, END, VERSION = b"\xc1\xc0", b"\xc5\xc4\xc3\xc2", 0x1000
@@ -292,7 +294,14 @@ class Ma3Device:
         self.firmware.on_hangup()
 
 
+def build_device(config: SimulatorConfig, faults: FaultPlan, recipe: RecipePanel | None) -> Ma3Device:
+    """The device ``python -m simulators.ma3`` serves for *config* (*recipe*: the loaded recipe panel)."""
+    from simulators.config import spectro_physics
+
+    return Ma3Device(spectro_physics(config, "300456", recipe), faults, measure_time_s=config.measure_time_s)
+
+
 if __name__ == "__main__":
     from simulators._cli import main
 
-    raise SystemExit(main("ma3"))
+    raise SystemExit(main("ma3", build_device))

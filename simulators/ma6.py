@@ -16,10 +16,12 @@ from typing import TYPE_CHECKING
 from simulators.faults import FaultPlan
 
 if TYPE_CHECKING:
+    from simulators.config import SimulatorConfig
     from simulators.physics import SpectroPhysics
     from simulators.pty_host import PtyHost
+    from simulators.recipe import RecipePanel
 
-__all__ = ["ASPECULAR_15", "ASPECULAR_45", "BAUD_RATES", "Ma6Device"]
+__all__ = ["ASPECULAR_15", "ASPECULAR_45", "BAUD_RATES", "Ma6Device", "build_device"]
 
 ASPECULAR_45 = (-15, 15, 25, 45, 75, 110)
 ASPECULAR_15 = (-45, -15, 15, 25, 45, 60)  # second block of 12-geometry instruments (our choice)
@@ -244,7 +246,19 @@ def _stamp(t: dt.datetime) -> str:
     return t.strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
+def build_device(config: SimulatorConfig, faults: FaultPlan, recipe: RecipePanel | None) -> Ma6Device:
+    """The device ``python -m simulators.ma6`` serves for *config* (*recipe*: the loaded recipe panel)."""
+    from simulators.config import spectro_physics
+
+    return Ma6Device(
+        spectro_physics(config, "600123", recipe),
+        faults,
+        measure_time_s=config.measure_time_s,
+        twelve=config.twelve,
+    )
+
+
 if __name__ == "__main__":
     from simulators._cli import main
 
-    raise SystemExit(main("ma6"))
+    raise SystemExit(main("ma6", build_device))

@@ -1,11 +1,17 @@
-"""Start a simulator of a given kind behind its wire (pty, RFC 2217), for the command line and tests."""
+"""Serve a built simulator device behind its wire (pty, optionally RFC 2217 or raw TCP).
+
+The device comes ready-made from its family's factory (``build_device`` in :mod:`simulators.ma6`,
+:mod:`simulators.ma3`, :mod:`simulators.gloss`); this module only puts it on a pty and reads the
+wire options of the :class:`~simulators.config.SimulatorConfig`. It imports neither the command
+line nor the device families.
+"""
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass, field
 from typing import Any
 
+from simulators.config import SimulatorConfig
 from simulators.faults import FaultPlan
 from simulators.pty_host import PtyHost
 
@@ -28,34 +34,20 @@ class Served:
         self.host.close()
 
 
-def start(kind: str, args: argparse.Namespace, faults: FaultPlan) -> Served:
-    """Build the device for *kind* (``ma6``, ``ma3``, ``gloss``) and serve it on a pty."""
-    from simulators._cli import make_physics
+def start(config: SimulatorConfig, device: Any, faults: FaultPlan) -> Served:
+    """Serve *device* (built for *config*, sharing the fault plan *faults*) on a pty.
 
-    if kind == "ma6":
-        from simulators.ma6 import Ma6Device
-
-        device: Any = Ma6Device(
-            make_physics(args, "600123"), faults, measure_time_s=args.measure_time, twelve=args.twelve
-        )
-    elif kind == "ma3":
-        from simulators.ma3 import Ma3Device
-
-        device = Ma3Device(make_physics(args, "300456"), faults, measure_time_s=args.measure_time)
-    elif kind == "gloss":
-        from simulators.gloss import GlossDevice, HidBridgeServer
-
-        device = HidBridgeServer(GlossDevice.from_args(args, faults))
-    else:
-        raise ValueError(f"unknown simulator kind {kind!r}")
+    The address is ``KIND@/dev/pts/N``, or ``KIND@rfc2217://…`` / ``KIND@socket://…`` when
+    ``config.rfc2217`` / ``config.tcp`` asks for a network server in front of the pty.
+    """
     host = PtyHost(device).start()
-    served = Served(f"{kind}@{host.path}", device, host)
+    served = Served(f"{config.kind}@{host.path}", device, host)
     if faults.active("port-held"):
         host.hold_port()
-    if getattr(args, "rfc2217", False) or getattr(args, "tcp", False):
+    if config.rfc2217 or config.tcp:
         from simulators.rfc2217_server import Rfc2217Server
 
-        srv = Rfc2217Server(host.path, raw=not args.rfc2217).start()
+        srv = Rfc2217Server(host.path, raw=not config.rfc2217).start()
         served.extra.append(srv)
-        served.address = f"{kind}@{srv.url}"
+        served.address = f"{config.kind}@{srv.url}"
     return served

@@ -97,7 +97,7 @@ def split_address(address: str) -> tuple[str, str]:
     return family, where
 
 
-def make_instrument(address: str, **options: Any) -> Instrument:
+def make_instrument(address: str, **options: Any) -> Instrument[Any]:
     """Build (not open) the instrument for *address*; *options* go to the instrument class."""
     from station.drivers.transport import HidTransport, SerialTransport, UsbTransport, parse_usb_id
 
@@ -131,7 +131,7 @@ def make_instrument(address: str, **options: Any) -> Instrument:
     return GlossMeter(transport, **options)
 
 
-def open_instrument(address: str, **options: Any) -> Instrument:
+def open_instrument(address: str, **options: Any) -> Instrument[Any]:
     """Open the instrument at *address* (see the module docstring) and return it connected.
 
     The caller owns it: close it (``with open_instrument(a) as inst:``). A second open of the same

@@ -82,7 +82,7 @@ def hid_path_for(
     return text.encode()
 
 
-class GlossMeter(Instrument):
+class GlossMeter(Instrument[ReportTransport]):
     """Gloss/haze/DOI meter over a :class:`ReportTransport`. Timeouts in seconds."""
 
     family = "gloss"
@@ -96,7 +96,6 @@ class GlossMeter(Instrument):
         measure_limit_s: float = 5.0,
     ) -> None:
         super().__init__(transport)
-        self.transport: ReportTransport = transport
         self.timeout_s = timeout_s
         self.retries = retries
         self.measure_limit_s = measure_limit_s

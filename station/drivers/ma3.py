@@ -125,7 +125,7 @@ def _epoch(value: int) -> dt.datetime | None:
     return None if value == 0 else dt.datetime.fromtimestamp(value, dt.UTC)
 
 
-class MA3Spectro(Instrument):
+class MA3Spectro(Instrument[StreamTransport]):
     """3-angle spectrophotometer on the binary framed protocol. Timeouts in seconds."""
 
     family = "ma3"

@@ -46,7 +46,7 @@ def _expiry(text: str) -> dt.datetime | None:
     return None if text in ("", "NONE") else parse_time(text)
 
 
-class MA6Spectro(Instrument):
+class MA6Spectro(Instrument[StreamTransport]):
     """Multi-angle spectrophotometer speaking the ASCII prompt protocol.
 
     Parameters

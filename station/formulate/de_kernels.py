@@ -16,7 +16,8 @@ ColorSnap ranking identical to a brute-force scan through the public function.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
 
 import numpy as np
 from numpy.typing import NDArray
@@ -138,4 +139,4 @@ def din6175(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.
     return np.sqrt((d_l / s_l) ** 2 + (d_c / s_c) ** 2 + d_h2 / s_h**2)
 
 
-KERNELS: dict[str, Kernel] = {"cie76": cie76, "cie2000": cie2000, "din6175": din6175}
+KERNELS: Mapping[str, Kernel] = MappingProxyType({"cie76": cie76, "cie2000": cie2000, "din6175": din6175})

@@ -17,7 +17,9 @@ Filters (thesis §5.3.3, "Search interface"): type check boxes and lower/upper b
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Literal
 
 import numpy as np
@@ -33,12 +35,14 @@ NEUTRAL_CHROMA = 10.0
 #: L* at 45° bounds of the neutral value groups: dark < 35 <= medium < 65 <= light.
 NEUTRAL_L_BOUNDS = (35.0, 65.0)
 #: Hue-angle sectors (degrees, h_ab at 45°) of the chromatic groups; red wraps through 0°.
-HUE_SECTORS: dict[str, tuple[float, float]] = {
-    "red": (315.0, 55.0),
-    "yellow": (55.0, 125.0),
-    "green": (125.0, 195.0),
-    "blue": (195.0, 315.0),
-}
+HUE_SECTORS: Mapping[str, tuple[float, float]] = MappingProxyType(
+    {
+        "red": (315.0, 55.0),
+        "yellow": (55.0, 125.0),
+        "green": (125.0, 195.0),
+        "blue": (195.0, 315.0),
+    }
+)
 
 
 @dataclass(frozen=True)

@@ -338,9 +338,3 @@ class AspecularMeasurements:
         """Evaluate a design at *angles_deg* (thesis §3.3.3: the model → industry standard values)."""
         angles = validate_angle_set(angles_deg)
         return cls(angles, design.lab_at(np.asarray(angles)), design.gloss_gu)
-
-    def fit(self) -> Any:
-        """Fit the face/flop/travel/gloss model; see :func:`station.model.fit.fit_fftg`."""
-        from station.model.fit import fit_fftg
-
-        return fit_fftg(self)

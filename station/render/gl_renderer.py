@@ -1,70 +1,46 @@
-"""OpenGL (moderngl) side of the renderer: the one context factory, shader loading, the GL renderer.
+"""OpenGL (moderngl) side of the renderer: the GL renderer.
 
-Every GL object is created from a context made by :func:`create_gl_context` (a headless EGL
-context: Mesa llvmpipe on CPU-only machines, the GPU driver where one exists) and released
-explicitly; :class:`GLRenderer` is a context manager. Shaders live in ``shaders/*.glsl``; a line
-``//#include NAME.glsl`` is replaced by that file, and ``#define`` lines may be injected after the
-``#version`` line.
+Every GL object is created from a context made by
+:func:`station.render.gl_context.create_gl_context` (a headless EGL context: Mesa llvmpipe on
+CPU-only machines, the GPU driver where one exists) and released explicitly; :class:`GLRenderer` is
+a context manager. The context factory and shader loader live in :mod:`station.render.gl_context`
+and are re-exported here for callers that import them from this module.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+import numpy as np
 
-from station.render.errors import GLUnavailableError, RenderError
+from station.render.errors import RenderInputError
+from station.render.gl_context import (
+    GL_TEXTURE_CUBE_MAP_SEAMLESS,
+    SHADER_DIR,
+    build_program,
+    create_gl_context,
+    gl_available,
+    load_shader,
+)
+from station.render.numpy_renderer import (
+    BACKGROUND,
+    HORIZON_MAX_EXPONENT,
+    check_paints,
+    check_size,
+    horizon_table,
+)
+from station.render.prefilter import WIDE_EXPONENT
+from station.render.sh import sh_diffuse_matrix
+from station.render.shapes import SHAPE_INDEX
+from station.render.tonemap import CURVES, check_curve
 
-SHADER_DIR = Path(__file__).resolve().parent / "shaders"
-GL_TEXTURE_CUBE_MAP_SEAMLESS = 0x884F
-
-
-def create_gl_context(require: int = 430):
-    """Create a standalone headless OpenGL ≥ 4.3 context (EGL backend); GLUnavailableError if none."""
-    try:
-        import moderngl
-    except ImportError as exc:  # pragma: no cover - moderngl is a dependency
-        raise GLUnavailableError("moderngl is not installed") from exc
-    try:
-        ctx = moderngl.create_standalone_context(require=require, backend="egl")
-    except Exception as exc:  # moderngl raises plain Exception for EGL failures
-        raise GLUnavailableError(f"no headless OpenGL {require / 100:.1f} context via EGL: {exc}") from exc
-    ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
-    return ctx
-
-
-def gl_available() -> bool:
-    """Whether a headless GL context can be created here (creates and releases one)."""
-    try:
-        ctx = create_gl_context()
-    except GLUnavailableError:
-        return False
-    ctx.release()
-    return True
-
-
-def load_shader(name: str, defines: dict[str, object] | None = None) -> str:
-    """Source of ``shaders/NAME`` with ``//#include`` lines expanded and *defines* injected."""
-    path = SHADER_DIR / name
-    if not path.is_file():
-        raise RenderError(f"shader {name} not found in {SHADER_DIR}")
-    lines = []
-    for line in path.read_text().splitlines():
-        if line.startswith("//#include "):
-            lines.append(load_shader(line.split(maxsplit=1)[1].strip()))
-        else:
-            lines.append(line)
-            if line.startswith("#version") and defines:
-                lines.extend(f"#define {k} {v}" for k, v in defines.items())
-    return "\n".join(lines)
-
-
-def build_program(ctx, vertex: str, fragment: str, defines: dict[str, object] | None = None):
-    """Compile and link a program from shader files; RenderError with the compiler log on failure."""
-    try:
-        return ctx.program(
-            vertex_shader=load_shader(vertex, defines), fragment_shader=load_shader(fragment, defines)
-        )
-    except Exception as exc:
-        raise RenderError(f"shader {vertex}+{fragment} failed to build: {exc}") from exc
+__all__ = [
+    "GL_TEXTURE_CUBE_MAP_SEAMLESS",
+    "SHADER_DIR",
+    "GLRenderer",
+    "build_program",
+    "create_gl_context",
+    "gl_available",
+    "load_shader",
+]
 
 
 class GLRenderer:
@@ -91,18 +67,11 @@ class GLRenderer:
         combined: bool = True,
         horizon: str = "lut",
     ) -> None:
-        import moderngl
-        import numpy as np
-
-        from station.render.errors import RenderInputError
-        from station.render.numpy_renderer import HORIZON_MAX_EXPONENT, check_size, horizon_table
-        from station.render.prefilter import WIDE_EXPONENT
-        from station.render.sh import sh_diffuse_matrix
+        import moderngl  # lazily: importing this module needs no GL stack
 
         check_size(width, height)
         if diffuse not in ("cube", "sh"):
             raise RenderInputError("diffuse", "cube | sh", diffuse)
-        self._np = np
         self.basis = basis
         self.width, self.height = int(width), int(height)
         self.diffuse = diffuse
@@ -148,8 +117,6 @@ class GLRenderer:
         self._targets: dict[bool, tuple] = {}
 
     def _program(self, shape: str, linear: bool):
-        from station.render.shapes import SHAPE_INDEX
-
         key = (shape, linear)
         if key not in self._programs:
             defines = {
@@ -175,7 +142,6 @@ class GLRenderer:
 
     def _combined_cubes(self, pair) -> list:
         """[gloss0, dd0, gloss1, dd1] cube textures for these paints (rebuilt when weights change)."""
-        np = self._np
         mw = [self._bound_weights(w) for w in pair]
         key = b"".join(np.concatenate([w[1].ravel(), w[2]]).astype(np.float32).tobytes() for w in mw)
         if self._combined is not None and self._combined[0] == key:
@@ -219,10 +185,6 @@ class GLRenderer:
         return w_d, w_dd[self._order], w_g[self._order]
 
     def _draw(self, scene, paints, linear: bool, exposure_ev: float, curve: str):
-        from station.render.numpy_renderer import BACKGROUND, check_paints
-        from station.render.tonemap import CURVES, check_curve
-
-        np = self._np
         pair = check_paints(self.basis, paints)
         prog, vao = self._program(scene.shape, linear)
         _, fbo = self._target(linear)
@@ -281,14 +243,12 @@ class GLRenderer:
 
     def render(self, scene, paints, exposure_ev: float = 0.0, curve: str = "aces"):
         """8-bit sRGB frame (H, W, 3) uint8 (a view of the RGBA read-back, the driver's fast path)."""
-        np = self._np
         fbo = self._draw(scene, paints, False, exposure_ev, curve)
         data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
         return data.reshape(self.height, self.width, 4)[::-1, :, :3]
 
     def render_linear(self, scene, paints):
         """Linear sRGB radiance (H, W, 3) float32."""
-        np = self._np
         fbo = self._draw(scene, paints, True, 0.0, "clip")
         data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
         return data.reshape(self.height, self.width, 3)[::-1].copy()

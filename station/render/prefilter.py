@@ -38,6 +38,7 @@ from station.render import cubemap
 from station.render.envcache import PrefilterCache
 from station.render.environment import Environment, Lights, extract_lights
 from station.render.errors import RenderInputError
+from station.render.gl_context import build_program, create_gl_context, gl_available
 from station.render.sh import sh_project
 
 MAX_EXPONENT = 1.0e6
@@ -154,8 +155,6 @@ class GLPrefilter:
     """
 
     def __init__(self, src_cube: np.ndarray, ctx=None) -> None:
-        from station.render.gl_renderer import build_program, create_gl_context
-
         self._own_ctx = ctx is None
         self.ctx = create_gl_context() if ctx is None else ctx
         self.src_size = int(src_cube.shape[1])
@@ -166,8 +165,6 @@ class GLPrefilter:
     @classmethod
     def from_equirect(cls, equirect: np.ndarray, size: int, ctx=None) -> GLPrefilter:
         """Build the source cube on the GPU from an equirect image (2×2 supersampled per texel)."""
-        from station.render.gl_renderer import build_program, create_gl_context
-
         own = ctx is None
         ctx = create_gl_context() if own else ctx
         h, w = equirect.shape[:2]
@@ -280,8 +277,6 @@ def prefilter_basis(
     timings["sh"] = time.perf_counter() - t0
     src = source_size(env)
     if engine == "auto":
-        from station.render.gl_renderer import gl_available
-
         engine = "gl" if ctx is not None or gl_available() else "numpy"
     cap = max_size or (src if engine == "gl" else min(src, 64))
     plan = []
@@ -320,8 +315,6 @@ def prefilter_basis(
                 continue
             source = residual if k else env
             if engine == "gl":
-                from station.render.gl_renderer import create_gl_context
-
                 own = ctx is None
                 gl_ctx = create_gl_context() if own else ctx
                 try:

@@ -15,12 +15,11 @@ from station.formulate.library import Library
 from station.formulate.snap import (
     METHODS,
     SnapIndex,
-    _box_bounds,
-    _point_bounds_cie2000,
     brute_force,
     color_snap,
     view_data,
 )
+from station.formulate.snap.bounds import box_bounds, point_bounds_cie2000
 from station.model.difference import delta_e
 
 lab_el = st.floats(-120, 120, allow_nan=False, width=32)
@@ -83,13 +82,13 @@ def test_box_and_point_bounds_never_exceed_the_exact_sum(pts, q, method) -> None
     q = q[0]
     exact = delta_e(q[None], pts, method).sum(-1)
     chroma = np.hypot(pts[..., 1], pts[..., 2])
-    box = _box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method)
+    box = box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method)
     assert box <= exact.min() + 1e-12
-    assert _box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, hue=False) <= box + 1e-12
-    point = _box_bounds(q, pts, pts, chroma, method)
+    assert box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, hue=False) <= box + 1e-12
+    point = box_bounds(q, pts, pts, chroma, method)
     assert np.all(point <= exact + 1e-12)
     if method == "cie2000":
-        assert np.all(_point_bounds_cie2000(q, pts) <= exact + 1e-12)
+        assert np.all(point_bounds_cie2000(q, pts) <= exact + 1e-12)
 
 
 @settings(max_examples=100, deadline=None)
@@ -169,6 +168,64 @@ def test_cie2000_hue_aware_bound_on_small_chromatic_boxes(centre, spread, q, see
     pts = centre + rng.uniform(-spread, spread, (20, 3, 3))
     exact = delta_e(q[None], pts, "cie2000").sum(-1)
     chroma = np.hypot(pts[..., 1], pts[..., 2])
-    box = _box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), "cie2000")
+    box = box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), "cie2000")
     assert box <= exact.min() + 1e-12
-    assert np.all(_point_bounds_cie2000(q, pts) <= exact + 1e-12)
+    assert np.all(point_bounds_cie2000(q, pts) <= exact + 1e-12)
+
+
+@pytest.mark.parametrize(
+    ("method", "use_numba", "path"),
+    [("cie76", True, "bounded"), ("cie2000", True, "compiled"), ("cie2000", False, "flat")],
+)
+def test_concurrent_queries_get_their_own_statistics(method: str, use_numba: bool, path: str) -> None:
+    """Two queries that open very different parts of one shared index, run together from many threads,
+    each report the statistics the same query reports when it runs alone."""
+    import sys
+    from concurrent.futures import ThreadPoolExecutor
+    from threading import Barrier
+
+    rng = np.random.default_rng(3)
+    lib = rng.uniform(-80, 80, (4000, 3, 3))
+    lib[..., 0] = rng.uniform(0, 100, (4000, 3))
+    index = SnapIndex(lib, group=1)
+    near = lib[17] + 0.01  # next to one paint: few leaves opened
+    far = np.array([[50.0, 0.0, 0.0]] * 3)  # the library's centre: the bounds prune little
+    alone = {name: index.snap(q, 5, method, use_numba).stats for name, q in (("near", near), ("far", far))}
+    assert alone["near"] != alone["far"] and {s.path for s in alone.values()} == {path}
+    for s in alone.values():  # counts within the index searched (the compiled walk uses a finer one)
+        assert 1 <= s.leaves_visited <= s.leaves and s.leaves >= index.n_buckets and s.candidates >= 5
+    rounds = 100
+    barrier = Barrier(2)
+
+    def run(name: str) -> list[object]:
+        q = near if name == "near" else far
+        out = []
+        for _ in range(rounds):
+            barrier.wait()
+            out.append(index.snap(q, 5, method, use_numba).stats)
+        return out
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)  # switch threads as often as possible: a shared counter would be caught
+    try:
+        with ThreadPoolExecutor(2) as pool:
+            got = dict(zip(("near", "far"), pool.map(run, ("near", "far")), strict=True))
+    finally:
+        sys.setswitchinterval(interval)
+    for name, stats in got.items():
+        assert stats == [alone[name]] * rounds, name
+    b_rows = brute_force(lib, near, 5, method)[0]  # and the shared index still answers exactly
+    assert index.query(near, 5, method, use_numba)[0].tolist() == b_rows.tolist()
+
+
+def test_a_query_writes_nothing_to_the_shared_index(small_library) -> None:
+    """Deterministic half of the concurrency guarantee: no query of any path rebinds an attribute of
+    the index (the finer CIEDE2000 index is built once, on first use, before the snapshot)."""
+    index = SnapIndex(small_library)
+    q = small_library.angle_columns()[5] + 0.2
+    index.query(q, 3, "cie2000")
+    before = {name: id(value) for name, value in vars(index).items()}
+    for method in METHODS:
+        for use_numba in (True, False):
+            index.snap(q, 3, method, use_numba)
+    assert {name: id(value) for name, value in vars(index).items()} == before

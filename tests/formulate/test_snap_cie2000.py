@@ -13,9 +13,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from station.formulate import snap
 from station.formulate.de_kernels import KERNELS
-from station.formulate.snap import SnapIndex, _point_bounds_cie2000, brute_force
+from station.formulate.snap import SnapIndex, brute_force
+from station.formulate.snap.bounds import W_AB, W_L, box_bounds_cie2000_fast, point_bounds_cie2000
+from station.formulate.snap.kernel import best_first_cie2000, compiled_search
 
 _l = st.floats(0.0, 100.0, allow_nan=False)
 
@@ -50,10 +51,10 @@ def _pairs(draw: st.DrawFn, n: int = 24) -> tuple[np.ndarray, np.ndarray]:
 def test_point_bounds_bracket_the_exact_sum(pair) -> None:
     q, p = pair
     exact = KERNELS["cie2000"](q[None], p).sum(-1)
-    lower, upper = _point_bounds_cie2000(q, p, upper=True)
+    lower, upper = point_bounds_cie2000(q, p, upper=True)
     assert np.all(lower <= exact), (lower - exact).max()
     assert np.all(upper >= exact), (exact - upper).max()
-    assert np.array_equal(lower, _point_bounds_cie2000(q, p))
+    assert np.array_equal(lower, point_bounds_cie2000(q, p))
 
 
 def test_bounds_are_tight_enough_to_prune() -> None:
@@ -62,7 +63,7 @@ def test_bounds_are_tight_enough_to_prune() -> None:
     q[:, 0] = 50.0
     p = q + rng.normal(0, 3.0, (2000, 3, 3))
     exact = KERNELS["cie2000"](q[None], p).sum(-1)
-    lower, upper = _point_bounds_cie2000(q, p, upper=True)
+    lower, upper = point_bounds_cie2000(q, p, upper=True)
     assert np.median(lower / exact) > 0.6 and np.median(upper / exact) < 1.6
 
 
@@ -88,8 +89,7 @@ def _fix_l(a: np.ndarray) -> np.ndarray:
     leaf=st.sampled_from([None, 1, 3, 16]),
 )
 @pytest.mark.parametrize("compiled", [True, False], ids=["numba", "numpy"])
-def test_flat_cie2000_search_equals_brute_force_with_ties(lib, data, k, leaf, compiled, monkeypatch) -> None:
-    monkeypatch.setattr(snap, "_USE_COMPILED", compiled)
+def test_flat_cie2000_search_equals_brute_force_with_ties(lib, data, k, leaf, compiled) -> None:
     n = lib.shape[0]
     if n > 4:  # exact ties (duplicates) and near ties
         lib[n // 3] = lib[1]
@@ -101,15 +101,14 @@ def test_flat_cie2000_search_equals_brute_force_with_ties(lib, data, k, leaf, co
         else _fix_l(data.draw(arrays(np.float64, (3, 3), elements=st.floats(-120, 120, width=32))))
     )
     index = SnapIndex(lib, leaf_size=leaf, group=1)
-    rows, sums, per = index.query(q, k, "cie2000")
+    rows, sums, per = index.query(q, k, "cie2000", use_numba=compiled)
     b_rows, b_sums, b_per = brute_force(lib, q, k, "cie2000")
     assert rows.tolist() == b_rows.tolist()
     assert np.array_equal(sums, b_sums) and np.array_equal(per, b_per)
 
 
 @pytest.mark.parametrize("compiled", [True, False], ids=["numba", "numpy"])
-def test_cie2000_on_a_clustered_library(small_library, compiled, monkeypatch) -> None:
-    monkeypatch.setattr(snap, "_USE_COMPILED", compiled)
+def test_cie2000_on_a_clustered_library(small_library, compiled) -> None:
     std = small_library.angle_columns()
     rng = np.random.default_rng(9)
     lib = np.repeat(std, 25, axis=0) + rng.normal(0, 1.5, (len(std) * 25, 3, 3))
@@ -119,7 +118,7 @@ def test_cie2000_on_a_clustered_library(small_library, compiled, monkeypatch) ->
     for q in std[:40] + rng.normal(0, 3.0, (40, 3, 3)):
         q[:, 0] = np.clip(q[:, 0], 0, 100)
         for k in (1, 5, 30):
-            rows, sums, _ = index.query(q, k, "cie2000")
+            rows, sums, _ = index.query(q, k, "cie2000", use_numba=compiled)
             b_rows, b_sums, _ = brute_force(lib, q, k, "cie2000")
             assert rows.tolist() == b_rows.tolist() and np.array_equal(sums, b_sums)
 
@@ -140,12 +139,12 @@ def test_compiled_walk_equals_its_python_form_and_visits_few_leaves(small_librar
         index._blab,
         index.size,
     )
-    compiled = snap._compiled_search()
+    compiled = compiled_search()
     assert compiled is not None
     rng = np.random.default_rng(2)
     for q in std[:6] + rng.normal(0, 2.0, (6, 3, 3)):
         q[:, 0] = np.clip(q[:, 0], 0, 100)
-        py_rows, py_visited = snap._best_first_cie2000(q, *args, 5)
+        py_rows, py_visited = best_first_cie2000(q, *args, 5)
         c_rows, c_visited = compiled(q, *args, 5)
         assert sorted(py_rows.tolist()) == sorted(c_rows.tolist()) and py_visited == c_visited
         assert c_visited < index.n_buckets
@@ -160,11 +159,9 @@ def test_table_box_bound_and_table_point_bound_never_exceed_the_exact_sum(pair) 
     exact = KERNELS["cie2000"](q[None], p).sum(-1)
     chroma = np.hypot(p[..., 1], p[..., 2])
     lo, hi = p.min(0), p.max(0)
-    box = snap._box_bounds_cie2000_fast(
-        q, lo[None], hi[None], lo[None, :, 0], hi[None, :, 0], chroma.max(0)[None]
-    )
+    box = box_bounds_cie2000_fast(q, lo[None], hi[None], lo[None, :, 0], hi[None, :, 0], chroma.max(0)[None])
     assert box[0] <= exact.min()
-    points = snap._box_bounds_cie2000_fast(
+    points = box_bounds_cie2000_fast(
         q, p, p, np.ascontiguousarray(p[..., 0]), np.ascontiguousarray(p[..., 0]), chroma
     )
     assert np.all(points <= exact)
@@ -179,4 +176,4 @@ def test_weight_tables_rest_on_monotone_functions() -> None:
     c7 = c**7
     f = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * c
     assert np.all(np.diff(f) > 0)
-    assert np.all(np.diff(snap._WL) <= 0) and np.all(np.diff(snap._WAB) <= 0)
+    assert np.all(np.diff(W_L) <= 0) and np.all(np.diff(W_AB) <= 0)

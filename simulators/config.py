@@ -1,0 +1,124 @@
+"""The configuration of one simulated instrument: a frozen, validated value built from the command line.
+
+:class:`SimulatorConfig` is what ``python -m simulators.{ma6,ma3,gloss}`` parses its arguments into
+and what :mod:`simulators.serve` and the device factories read; nothing downstream sees an
+``argparse.Namespace``. Construction checks every field and raises :class:`SimulatorConfigError`
+(an :class:`~station.errors.InputError`: field, accepted range, value) for a bad one, and
+:class:`~simulators.faults.FaultSpecError` for a fault spec that does not parse.
+
+This module sits at the bottom of the simulator command line: it imports neither the command line
+(:mod:`simulators._cli`) nor the server (:mod:`simulators.serve`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from simulators.faults import FaultPlan
+from station.errors import InputError
+
+if TYPE_CHECKING:
+    from simulators.physics import SpectroPhysics
+    from simulators.recipe import RecipePanel
+
+__all__ = ["KINDS", "SimulatorConfig", "SimulatorConfigError", "spectro_physics"]
+
+KINDS = ("ma6", "ma3", "gloss")
+MAX_BIAS_SCALE = 10.0
+MAX_NOISE_SCALE = 100.0
+MAX_MEASURE_TIME_S = 60.0
+
+
+class SimulatorConfigError(InputError):
+    """A simulator setting outside its accepted range (names the field and the range)."""
+
+
+def _check_scale(name: str, value: float, upper: float) -> float:
+    v = float(value)
+    if not math.isfinite(v) or not 0.0 <= v <= upper:
+        raise SimulatorConfigError(name, f"0 <= {name} <= {upper:g}", value)
+    return v
+
+
+@dataclass(frozen=True)
+class SimulatorConfig:
+    """Everything a simulator process is started with.
+
+    Attributes
+    ----------
+    kind
+        ``ma6``, ``ma3`` or ``gloss``.
+    design, recipe
+        The virtual panel: a ``cacad.design/1`` file or a recipe file of the synthetic colorants, at
+        most one of the two (neither: the built-in default panel).
+    faults
+        Fault specs ``NAME[@COMMAND][:N]`` armed at start (:mod:`simulators.faults`).
+    serial
+        Instrument serial number; ``None`` takes the family default.
+    bias
+        Inter-instrument bias scale, 0 (none) .. 10 (1 = typical), dimensionless.
+    noise
+        Noise scale, 0 .. 100 (1 = published repeatability), dimensionless.
+    measure_time_s
+        Seconds per measurement, 0 .. 60 s.
+    cold
+        Start cold (warm-up drift and temperature rise).
+    seed
+        Noise seed; ``None`` derives it from the serial.
+    rfc2217, tcp
+        Also serve the pty behind an RFC 2217 server, or on raw TCP (``socket://`` URL).
+    twelve
+        ma6 only: add the 15° illumination block.
+    """
+
+    kind: str
+    design: Path | None = None
+    recipe: Path | None = None
+    faults: tuple[str, ...] = ()
+    serial: str | None = None
+    bias: float = 0.0
+    noise: float = 1.0
+    measure_time_s: float = 0.3
+    cold: bool = False
+    seed: int | None = None
+    rfc2217: bool = False
+    tcp: bool = False
+    twelve: bool = False
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise SimulatorConfigError("kind", " | ".join(KINDS), self.kind)
+        if self.design is not None and self.recipe is not None:
+            raise SimulatorConfigError("recipe", "either design or recipe, not both", str(self.recipe))
+        if self.serial is not None and not self.serial.strip():
+            raise SimulatorConfigError("serial", "a non-empty serial number or none", self.serial)
+        object.__setattr__(self, "faults", tuple(self.faults))
+        FaultPlan(self.faults)  # raises FaultSpecError for an unknown name or a malformed spec
+        object.__setattr__(self, "bias", _check_scale("bias", self.bias, MAX_BIAS_SCALE))
+        object.__setattr__(self, "noise", _check_scale("noise", self.noise, MAX_NOISE_SCALE))
+        object.__setattr__(
+            self, "measure_time_s", _check_scale("measure_time_s", self.measure_time_s, MAX_MEASURE_TIME_S)
+        )
+        if self.twelve and self.kind != "ma6":
+            raise SimulatorConfigError("twelve", "only with kind ma6", self.kind)
+
+    def fault_plan(self) -> FaultPlan:
+        """A fresh plan with this configuration's faults armed (plans are consumed as faults fire)."""
+        return FaultPlan(self.faults)
+
+
+def spectro_physics(
+    config: SimulatorConfig, default_serial: str, recipe: RecipePanel | None = None
+) -> SpectroPhysics:
+    """The spectrophotometer physics of *config*; *recipe* is the loaded ``config.recipe`` panel."""
+    from simulators.physics import DEFAULT_DESIGN, InstrumentCharacter, SpectroPhysics
+    from station.model.design_io import load_design
+
+    ch = InstrumentCharacter(serial=config.serial or default_serial, bias_scale=config.bias)
+    ch.noise_band *= config.noise
+    ch.noise_scale *= config.noise
+    design = load_design(config.design) if config.design else DEFAULT_DESIGN
+    return SpectroPhysics(design=design, character=ch, warm=not config.cold, seed=config.seed, recipe=recipe)

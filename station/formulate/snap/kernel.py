@@ -1,0 +1,202 @@
+"""The numba-compiled CIEDE2000 best-first walk of ColorSnap (proof in :mod:`station.formulate.snap`).
+
+:func:`best_first_cie2000` and the scalar box bound it calls (:func:`box_bound_one`) are plain Python
+functions written in the subset numba compiles; :func:`compiled_search` returns the compiled walk
+(built once per process, cached on disk) or ``None`` where numba is missing or cannot compile, and
+the NumPy path of :class:`~station.formulate.snap.index.SnapIndex` runs instead. Nothing here is
+rebound: numba learns to compile calls to :func:`box_bound_one` by registration
+(``numba.extending.register_jitable``), so the plain functions stay what tests call.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import threading
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.formulate.snap.bounds import SAFETY, SIN60, T_MAX, T_MIN
+
+__all__ = ["CandidateSearch", "best_first_cie2000", "box_bound_one", "compiled_search"]
+
+#: The walk's signature: (q, group boxes lo/hi/cmax, leaf boxes lo/hi/cmax, group, rows, leaf Lab,
+#: library size, k) -> (candidate rows, leaves visited).
+CandidateSearch = Callable[..., tuple[NDArray[np.intp], int]]
+
+_COMPILE_LOCK = threading.Lock()
+
+
+def box_bound_one(q: NDArray, cq: NDArray, lo: NDArray, hi: NDArray, cmax: NDArray, i: int) -> float:
+    """The ``hue=False`` CIEDE2000 box bound of :func:`box_bounds` for box *i* (scalar form, compiled)."""
+    k7 = 25.0**7
+    total = 0.0
+    for t in range(q.shape[0]):
+        d0 = max(lo[i, t, 0] - q[t, 0], q[t, 0] - hi[i, t, 0], 0.0)
+        d1 = max(lo[i, t, 1] - q[t, 1], q[t, 1] - hi[i, t, 1], 0.0)
+        d2 = max(lo[i, t, 2] - q[t, 2], q[t, 2] - hi[i, t, 2], 0.0)
+        x = max(abs((q[t, 0] + lo[i, t, 0]) / 2 - 50.0), abs((q[t, 0] + hi[i, t, 0]) / 2 - 50.0))
+        s_l = 1.0 + 0.015 * x * x / math.sqrt(20.0 + x * x)
+        cbar = (cq[t] + cmax[i, t]) / 2
+        c7 = cbar**7
+        cpbar = (1.0 + 0.5 * (1.0 - math.sqrt(c7 / (c7 + k7)))) * cbar * (1 + 1e-12) + 1e-12
+        cp7 = cpbar**7
+        r_c = 2.0 * math.sqrt(cp7 / (cp7 + k7))
+        s_c = 1.0 + 0.045 * cpbar
+        total += math.sqrt(
+            d0 * d0 / (s_l * s_l) + (1.0 - r_c * SIN60 / 2.0) * (d1 * d1 + d2 * d2) / (s_c * s_c)
+        )
+    return total * SAFETY - 1e-12
+
+
+def best_first_cie2000(
+    q: NDArray[np.float64],
+    glo: NDArray,
+    ghi: NDArray,
+    gcmax: NDArray,
+    lo: NDArray,
+    hi: NDArray,
+    cmax: NDArray,
+    group: int,
+    rows: NDArray,
+    blab: NDArray,
+    size: int,
+    k: int,
+) -> tuple[NDArray[np.intp], int]:
+    """Candidates of the exact CIEDE2000 top-k: every paint whose summed ΔE00 could be ≤ the k-th best.
+
+    Compiled with numba where it is installed (:func:`compiled_search`); plain Python otherwise (tests).
+    Leaves are visited in order of their box bound (the ``hue=False`` form of :func:`box_bounds`); in
+    each, every paint gets the lower and upper bounds of :func:`point_bounds_cie2000` (the same
+    arithmetic, per element, with the same margins); u is the k-th smallest upper bound so far (≥ S_k,
+    the true k-th best sum). The walk stops at the first leaf whose bound exceeds u: every later leaf's
+    bound is larger. A paint with S ≤ S_k has lower bound ≤ S ≤ S_k ≤ u and its leaf's bound ≤ S_k ≤ u
+    at every moment, so it was visited and kept; the result is the paints with lower bound ≤ the final u.
+    Returns (candidate rows, leaves visited). Only +, −, ×, ÷, √, min, max and abs (correctly rounded or
+    exact IEEE operations, as in NumPy) are used, so the margins of :func:`point_bounds_cie2000` hold.
+    """
+    nb, width, na = rows.shape[0], rows.shape[1], q.shape[0]
+    k7 = 25.0**7
+    cq = np.empty(na)
+    for t in range(na):
+        cq[t] = math.sqrt(q[t, 1] * q[t, 1] + q[t, 2] * q[t, 2])
+    ng = glo.shape[0]
+    glb = np.empty(ng)
+    for g in range(ng):
+        glb[g] = box_bound_one(q, cq, glo, ghi, gcmax, g)
+    gorder = np.argsort(glb)
+    best = np.full(k, np.inf)  # the k smallest upper bounds, ascending
+    cand = np.empty(nb * width, dtype=np.intp)
+    cand_lb = np.empty(nb * width)
+    lb = np.empty(group)
+    nc = 0
+    visited = 0
+    for gj in range(ng):
+        g = gorder[gj]
+        if glb[g] > best[k - 1]:
+            break
+        if group == 1:
+            lb[0] = glb[g]
+        else:
+            for m in range(group):
+                lb[m] = box_bound_one(q, cq, lo, hi, cmax, g * group + m)
+        order = np.argsort(lb)
+        for j in range(group):
+            i = g * group + order[j]
+            if lb[order[j]] > best[k - 1]:
+                break
+            visited += 1
+            for w in range(width):
+                row = rows[i, w]
+                if row >= size:
+                    continue
+                lower = 0.0
+                upper = 0.0
+                for t in range(na):
+                    pl, pa, pb = blab[i, w, t, 0], blab[i, w, t, 1], blab[i, w, t, 2]
+                    ql, qa, qb = q[t, 0], q[t, 1], q[t, 2]
+                    cbar = (cq[t] + math.sqrt(pa * pa + pb * pb)) * 0.5
+                    c7 = cbar * cbar
+                    c7 = c7 * c7 * c7 * cbar
+                    g1 = 1.5 - 0.5 * math.sqrt(c7 / (c7 + k7))
+                    a1 = g1 * qa
+                    a2 = g1 * pa
+                    cp1 = math.sqrt(a1 * a1 + qb * qb)
+                    cp2 = math.sqrt(a2 * a2 + pb * pb)
+                    dc = cp2 - cp1
+                    da = a2 - a1
+                    db = pb - qb
+                    dab2 = da * da + db * db
+                    dh2 = dab2 - dc * dc
+                    eta = 1e-12 * dab2 + 1e-30
+                    dh_lo = math.sqrt(max(dh2 - eta, 0.0))
+                    dh_hi = math.sqrt(max(dh2, 0.0) + eta)
+                    cpbar = (cp1 + cp2) * 0.5
+                    cp7 = cpbar * cpbar
+                    cp7 = cp7 * cp7 * cp7 * cpbar
+                    r = (2.0 * SIN60) * math.sqrt(cp7 / (cp7 + k7))
+                    lbar2 = (ql + pl) * 0.5 - 50.0
+                    lbar2 = lbar2 * lbar2
+                    s_l = 1.0 + 0.015 * lbar2 / math.sqrt(20.0 + lbar2)
+                    y = abs(dc) / (1.0 + 0.045 * cpbar)
+                    ry = r * y
+                    dl = (pl - ql) / s_l
+                    base = dl * dl + y * y
+                    z_hi = dh_hi / (1.0 + (0.015 * T_MIN) * cpbar)
+                    z = min(max(ry * 0.5, dh_lo / (1.0 + (0.015 * T_MAX) * cpbar)), z_hi)
+                    lower += math.sqrt(max(base + z * (z - ry), 0.0))
+                    upper += math.sqrt(base + z_hi * (z_hi + ry))
+                lower = lower * SAFETY - 1e-10
+                upper = upper * (2.0 - SAFETY) + 1e-10
+                if lower <= best[k - 1]:
+                    cand[nc] = row
+                    cand_lb[nc] = lower
+                    nc += 1
+                if upper < best[k - 1]:
+                    m = k - 1
+                    while m > 0 and best[m - 1] > upper:
+                        best[m] = best[m - 1]
+                        m -= 1
+                    best[m] = upper
+    u = best[k - 1]
+    keep = cand_lb[:nc] <= u
+    return cand[:nc][keep], visited
+
+
+@functools.cache
+def _compile() -> CandidateSearch | None:
+    try:
+        import numba
+        from numba.extending import register_jitable
+    except ImportError:  # pragma: no cover - numba is a declared dependency; the NumPy path remains
+        return None
+    try:
+        register_jitable(box_bound_one)  # the walk calls the bound; compiled inline, not rebound
+        search = numba.njit(cache=True, nogil=True)(best_first_cie2000)
+        box, one = np.zeros((1, 1, 3)), np.zeros((1, 1))
+        search(
+            np.zeros((1, 3)),
+            box,
+            box,
+            one,
+            box,
+            box,
+            one,
+            1,
+            np.zeros((1, 1), dtype=np.intp),
+            np.zeros((1, 1, 1, 3)),
+            1,
+            1,
+        )  # compile (or load from the cache) now, not mid-query
+    except Exception:  # pragma: no cover - a numba that cannot compile here: the NumPy path runs
+        return None
+    return search  # type: ignore[no-any-return]
+
+
+def compiled_search() -> CandidateSearch | None:
+    """:func:`best_first_cie2000` compiled by numba (once per process, cached on disk), or None where
+    numba is missing or cannot compile here."""
+    with _COMPILE_LOCK:  # one compilation even when the first queries arrive together
+        return _compile()
