@@ -24,6 +24,7 @@ from station.design.variations import CATEGORIES, variations
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_to_dict, load_design
+from station.model.domain import ANGLES_3
 
 #: The thesis's default starting colour for a sketch (§3.7.1: "The system's default is silver").
 DEFAULT_SILVER = FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")
@@ -138,7 +139,7 @@ def _sketch_fit(args: argparse.Namespace) -> dict[str, Any]:
         "seconds": fit.seconds,
         "reason": fit.reason,
         "shading_de": fit.shading_de,
-        "lab_standard": {"angles_deg": [15.0, 45.0, 110.0], "lab": [list(v) for v in fit.lab_standard]},
+        "lab_standard": {"angles_deg": list(ANGLES_3), "lab": [list(v) for v in fit.lab_standard]},
         "theta_clamp_deg": fit.theta_clamp_deg,
         "pixels": fit.pixels,
         "gloss_source": fit.gloss_source,

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from station.formulate.de_kernels import KERNELS, cie2000_columns
 from station.formulate.errors import FormulateInputError
 from station.formulate.library import STANDARD_ANGLES, Library
+from station.model.domain import LAB_RANGES, lab_accepted
 
 METHODS = ("cie76", "cie2000", "din6175")
 #: Mean ΔE per angle of the best match above which the design is "far outside the library".
@@ -68,7 +69,8 @@ _FINE_MAX = 50_000
 _FIRST_LEAVES = 8
 #: Above this many candidates the sharper per-paint CIEDE2000 bound filters them before the exact kernel.
 _REFINE_ABOVE = 64
-LAB_QUERY_RANGE = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
+#: Accepted query Lab: the domain's effect-paint bound (station.model.domain.LAB_RANGES).
+LAB_QUERY_RANGE = LAB_RANGES
 _Q_LO = np.array([v[0] for v in LAB_QUERY_RANGE.values()])
 _Q_HI = np.array([v[1] for v in LAB_QUERY_RANGE.values()])
 
@@ -120,9 +122,7 @@ def validate_design_lab(lab: ArrayLike, n_angles: int = 3, field_name: str = "la
     for j, (name, (lo, hi)) in enumerate(LAB_QUERY_RANGE.items()):
         col = q[:, j]
         if not np.all(np.isfinite(col)) or np.any(col < lo) or np.any(col > hi):
-            raise FormulateInputError(
-                f"{field_name}.{name}", f"finite {name}* in [{lo:g}, {hi:g}]", col.tolist()
-            )
+            raise FormulateInputError(f"{field_name}.{name}", f"finite {lab_accepted(name)}", col.tolist())
     return q
 
 
