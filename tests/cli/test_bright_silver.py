@@ -90,6 +90,7 @@ def test_station_snap_against_the_demo_library(
         ("model", "eval", "--face", "250,0,0", "--flop", "38,0,0", "--travel", "65"),
         ("design", "variations", "--face", "250,0,0", "--flop", "38,0,0", "--travel", "65"),
         ("snap", "--library", "demo", "--lab", "250,0,0;50,0,0;38,0,0"),
+        ("formulate", "250,0,0;50,0,0;38,0,0"),
     ],
 )
 def test_out_of_range_exits_2_with_one_line(tmp_path: Path, args: tuple[str, ...]) -> None:
