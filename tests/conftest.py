@@ -18,6 +18,15 @@ SHARED = REPO.parent / "shared"
 
 
 @pytest.fixture(scope="session")
+def bright_silver():
+    """The shared bright aluminium silver (L*15 = 125, flop L* 38, travel 65°, 90 GU) of every package's
+    ``test_bright_silver.py``: ``station.model.examples.BRIGHT_SILVER``."""
+    from station.model.examples import BRIGHT_SILVER
+
+    return BRIGHT_SILVER
+
+
+@pytest.fixture(scope="session")
 def shared_dir() -> Path:
     """The ../shared folder beside the checkout (skips when absent)."""
     if not SHARED.is_dir():

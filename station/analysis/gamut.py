@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.analysis.shading import lab_to_relative_xyz, relative_xyz_to_lab
+from station.model.domain import DIFFUSE_WHITE_L
 
 #: Upper bound of a face's linear-sRGB channels (reflectance factor at 15°).
 FACE_RGB_MAX = 2.5
@@ -146,7 +147,7 @@ def in_pointer_gamut(lab: ArrayLike) -> NDArray[np.bool_]:
 
 
 def _pointer(face: NDArray[np.float64], flop: NDArray[np.float64]) -> bool | None:
-    labs = [flop] + ([face] if face[0] <= 100.0 else [])
+    labs = [flop] + ([face] if face[0] <= DIFFUSE_WHITE_L else [])  # Pointer's gamut ends at the white
     try:
         return bool(np.all(in_pointer_gamut(np.stack(labs))))
     except (ValueError, ArithmeticError):  # pragma: no cover - hull test failed; the sRGB bound still holds

@@ -43,9 +43,10 @@ from station.analysis.geometry import (
 )
 from station.analysis.shading import Environment, Exposure, environment_colour, point_colour
 from station.model.difference import delta_e
+from station.model.domain import JND_CIE76 as DOMAIN_JND_CIE76
 
 #: ε of the thesis: one JND, in ΔE*ab.
-JND_CIE76 = 2.3
+JND_CIE76 = DOMAIN_JND_CIE76
 #: ΔE formulas accepted (station.model.difference.delta_e).
 DE_METHODS = ("cie76", "cie94", "cie2000", "din6175")
 #: Brent's absolute tolerance on β (degrees); the stated resolution of β_min is 1e-6°.

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from station.analysis.trompe import TrompeResult, inverse_trompe_loeil
 from station.model import FaceFlopTravelGloss
+from station.model.domain import ANGLES_5
 
 #: Fig. 4.4 light directions, degrees from the normal.
 SOLID_LIGHTS_DEG = (0.0, 15.5, 29.1, 39.8, 45.0, 52.0)
@@ -22,7 +23,7 @@ SOLID_PAINT = FaceFlopTravelGloss(
 SILVER_PAINT = FaceFlopTravelGloss((100.0, 0.0, 0.0), (5.0, 0.0, 0.0), 60.0, name="silver, black flop")
 SILVER_BETA_DEG = -2.0
 #: 5-angle instrument geometries under a 45° light: aspecular 15, 25, 45, 75, 110°.
-INSTRUMENT_ASPECULAR = (15.0, 25.0, 45.0, 75.0, 110.0)
+INSTRUMENT_ASPECULAR = ANGLES_5
 #: Figs 4.6–4.7: bumper / fender, 8° misalignment, a blue metallic.
 BUMPER_PAINT = FaceFlopTravelGloss((60.0, -4.0, -42.0), (18.0, 2.0, -22.0), 55.0, name="blue metallic")
 BUMPER_BETA_DEG = 8.0

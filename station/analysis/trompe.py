@@ -35,6 +35,7 @@ from station.analysis.gamut import GamutReport, check_paintable, lab_to_rgb, rgb
 from station.analysis.geometry import Hinge, SeamGeometry, check_polar
 from station.analysis.index import JND_CIE76, SeamModel
 from station.analysis.shading import Environment, Exposure
+from station.model.domain import FACE_ANGLE_DEG, LAB_RANGES, TRAVEL_MAX_DEG
 
 Objective = Literal["single", "rms", "minimax", "per_geometry"]
 OBJECTIVES = ("single", "rms", "minimax", "per_geometry")
@@ -50,7 +51,8 @@ SUBSETS: dict[str, tuple[str, ...]] = {
     "face+travel": ("face_L", "face_a", "face_b", "travel_deg"),
     "full": PARAMS,
 }
-_BOUNDS = {"L": (0.0, 200.0), "a": (-150.0, 150.0), "b": (-150.0, 150.0), "travel_deg": (15.0 + 1e-3, 180.0)}
+#: Search bounds: the domain's Lab bound and travel range (station.model.domain).
+_BOUNDS = {**LAB_RANGES, "travel_deg": (FACE_ANGLE_DEG + 1e-3, TRAVEL_MAX_DEG)}
 _REG = 1e-8
 
 

@@ -24,6 +24,7 @@ from station.design.variations import CATEGORIES, variations
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_to_dict, load_design
+from station.model.domain import ANGLES_3, DEFAULT_GLOSS_GU
 
 #: The thesis's default starting colour for a sketch (§3.7.1: "The system's default is silver").
 DEFAULT_SILVER = FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")
@@ -34,7 +35,12 @@ def _add_design_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--face", help="face Lab L,a,b (instead of --design)")
     p.add_argument("--flop", help="flop Lab L,a,b (default: the face, a solid)")
     p.add_argument("--travel", type=float, help="travel θ_clamp in degrees (15 < travel <= 180)")
-    p.add_argument("--gloss", type=float, default=50.0, help="gloss in GU, 0-100 (default 50)")
+    p.add_argument(
+        "--gloss",
+        type=float,
+        default=DEFAULT_GLOSS_GU,
+        help=f"gloss in GU, 0-100 (default {DEFAULT_GLOSS_GU:g})",
+    )
 
 
 def _design(args: argparse.Namespace) -> FaceFlopTravelGloss:
@@ -138,7 +144,7 @@ def _sketch_fit(args: argparse.Namespace) -> dict[str, Any]:
         "seconds": fit.seconds,
         "reason": fit.reason,
         "shading_de": fit.shading_de,
-        "lab_standard": {"angles_deg": [15.0, 45.0, 110.0], "lab": [list(v) for v in fit.lab_standard]},
+        "lab_standard": {"angles_deg": list(ANGLES_3), "lab": [list(v) for v in fit.lab_standard]},
         "theta_clamp_deg": fit.theta_clamp_deg,
         "pixels": fit.pixels,
         "gloss_source": fit.gloss_source,

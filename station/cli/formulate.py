@@ -22,6 +22,7 @@ import numpy as np
 
 from station.cli._common import add_json_flag, parse_lab_list
 from station.errors import InputError
+from station.model.domain import ANGLES_3
 
 _FILTER_KEYS = ("type", "flop", "chroma", "hue_shift", "set", "kind", "group")
 
@@ -55,7 +56,7 @@ def _design_lab(text: str) -> tuple[np.ndarray, float | None, str]:
             raise InputError("design", '3 Lab triples at 15/45/110: "L,a,b;L,a,b;L,a,b"', text)
         return lab, None, "design"
     design = load_design(text)
-    return design.lab_at(np.array([15.0, 45.0, 110.0])), design.gloss_gu, design.name or Path(text).stem
+    return design.lab_at(np.array(ANGLES_3)), design.gloss_gu, design.name or Path(text).stem
 
 
 def _library_summary(lib: Any) -> dict[str, Any]:
@@ -241,9 +242,7 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
         lab, _, _ = _design_lab(args.design)
         from station.model import AspecularMeasurements
 
-        fit = fit_fftg(
-            AspecularMeasurements((15.0, 45.0, 110.0), lab, args.gloss if args.gloss is not None else 90.0)
-        )
+        fit = fit_fftg(AspecularMeasurements(ANGLES_3, lab, args.gloss if args.gloss is not None else 90.0))
         design: FaceFlopTravelGloss = fit.design
     else:
         design = load_design(args.design)
@@ -251,7 +250,7 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
     match_code = None
     if not args.no_match:
         lib = _load_library(args.library)
-        result = color_snap(lib, design.lab_at(np.array([15.0, 45.0, 110.0])), k=1, method=args.de)
+        result = color_snap(lib, design.lab_at(np.array(ANGLES_3)), k=1, method=args.de)
         m = result.matches[0]
         row = lib.lab[m.index]
         specs.append(

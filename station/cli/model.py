@@ -21,10 +21,11 @@ from station.errors import InputError
 from station.model import ANGLES_3, AspecularMeasurements, fit_fftg
 from station.model.design_io import design_to_dict, load_design
 from station.model.difference import DELTA_E_METHODS, delta_e
+from station.model.domain import ANGLES_5, DEFAULT_GLOSS_GU, format_angle
 from station.model.gloss import lobe_from_gloss, simulate_gloss_meter
 from station.model.indices import library_indices
 
-STANDARD_EVAL_ANGLES = "15,25,45,75,110"
+STANDARD_EVAL_ANGLES = ",".join(format_angle(a) for a in ANGLES_5)
 
 
 def _angles(text: str) -> list[float]:
@@ -123,7 +124,12 @@ def _add_design_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--face", help="face Lab at 15°: L,a,b")
     p.add_argument("--flop", help="flop Lab at the travel angle: L,a,b (omit for a solid)")
     p.add_argument("--travel", type=float, help="travel θ_clamp in degrees (15 < θ <= 180)")
-    p.add_argument("--gloss", type=float, default=50.0, help="60° gloss in GU (0–100), default 50")
+    p.add_argument(
+        "--gloss",
+        type=float,
+        default=DEFAULT_GLOSS_GU,
+        help=f"60° gloss in GU (0–100), default {DEFAULT_GLOSS_GU:g}",
+    )
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -145,7 +151,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_eval)
 
     p = sub.add_parser("indices", help="Flop, Chroma and Hue Shift Index (thesis eqs 5.3.1–5.3.3)")
-    p.add_argument("--angles", default="15,45,110")
+    p.add_argument("--angles", default=",".join(format_angle(a) for a in ANGLES_3))
     p.add_argument("--lab", help='Lab per angle: "L,a,b;L,a,b;L,a,b"')
     p.add_argument("--design", help="design file instead of --lab")
     add_json_flag(p)

@@ -22,18 +22,21 @@ from numpy.typing import ArrayLike, NDArray
 from station.design.errors import DesignInputError
 from station.model import (
     ANGLES_5,
+    FACE_ANGLE_DEG,
+    GLOSS_MAX_GU,
+    GLOSS_MIN_GU,
+    TRAVEL_MAX_DEG,
     AspecularMeasurements,
     FaceFlopTravelGloss,
     FitResult,
     ModelError,
+    ModelInputError,
     fit_fftg,
 )
+from station.model.domain import check_lab_channel
 
 Channel = Literal["L", "a", "b"]
 CHANNELS: tuple[str, ...] = ("L", "a", "b")
-#: Accepted L* range of the editing operations (the model accepts brighter values near specular,
-#: but a design edit that leaves 0–100 is refused here as a likely mistake).
-L_EDIT_RANGE = (0.0, 100.0)
 
 
 def _finite(value: float, name: str) -> float:
@@ -46,11 +49,19 @@ def _finite(value: float, name: str) -> float:
     return v
 
 
-def _check_L(value: float, name: str) -> float:
-    v = _finite(value, name)
-    if not L_EDIT_RANGE[0] <= v <= L_EDIT_RANGE[1]:
-        raise DesignInputError(name, f"{L_EDIT_RANGE[0]:g} <= L* <= {L_EDIT_RANGE[1]:g}", v)
-    return v
+def check_channel(channel: str, value: float, name: str) -> float:
+    """Check one Lab coordinate against the domain's effect-paint bound (``station.model.domain``).
+
+    Raises
+    ------
+    DesignInputError
+        With the field and the accepted range of :func:`station.model.domain.check_lab_channel`
+        (e.g. ``face.L: expected 0 <= L* <= 200``): the same message every front shows.
+    """
+    try:
+        return check_lab_channel(channel, _finite(value, name), name)
+    except ModelInputError as exc:
+        raise DesignInputError(exc.field, exc.accepted, exc.got) from exc
 
 
 # ------------------------------------------------------------------------------- data-point editor
@@ -110,7 +121,7 @@ def move_point(points: DataPoints, channel: Channel, angle_deg: float, value: fl
     ------
     DesignInputError
         Unknown channel, an angle that is not one of the points, or a value out of range
-        (L* 0–100, |a*|, |b*| <= 150).
+        (the domain's Lab bound, :data:`station.model.domain.LAB_RANGES`).
     station.model.FitError
         The model cannot be fitted through the moved points (e.g. a vertex below 15°).
     """
@@ -121,9 +132,7 @@ def move_point(points: DataPoints, channel: Channel, angle_deg: float, value: fl
     if not matches:
         raise DesignInputError("angle_deg", f"one of {points.angles_deg}", angle_deg)
     k = CHANNELS.index(channel)
-    v = _check_L(value, "value") if k == 0 else _finite(value, "value")
-    if k and abs(v) > 150.0:
-        raise DesignInputError("value", f"-150 <= {channel}* <= 150", v)
+    v = check_channel(channel, value, "value")
     lab = [list(row) for row in points.lab]
     lab[matches[0]][k] = v
     new = DataPoints(points.angles_deg, tuple(tuple(row) for row in lab), points.gloss_gu)  # type: ignore[misc]
@@ -164,7 +173,7 @@ def hsb_edit_points(
     h, s, b = _check_hsb(hue_deg, saturation, brightness)
     lab = _rotate_scale(points.as_array(), h, s, b)
     for i, row in enumerate(lab):
-        _check_L(row[0], f"lab[{i}].L")
+        _lab(row, f"lab[{i}]")
     new = DataPoints(points.angles_deg, tuple(tuple(float(v) for v in r) for r in lab), points.gloss_gu)
     return PointEdit(new, new.fit())
 
@@ -180,10 +189,7 @@ def hsb_edit(
     """
     h, s, b = _check_hsb(hue_deg, saturation, brightness)
     face, flop = _rotate_scale(np.array([design.face, design.flop]), h, s, b)
-    _check_L(face[0], "face.L")
-    _check_L(flop[0], "flop.L")
-    travel = design.travel_deg
-    return design.replace(face=tuple(face), flop=tuple(flop), travel_deg=travel)
+    return design.replace(face=_lab(face, "face"), flop=_lab(flop, "flop"), travel_deg=design.travel_deg)
 
 
 # --------------------------------------------------------------------- face/flop/travel picker
@@ -193,8 +199,8 @@ def _lab(value: ArrayLike, name: str) -> tuple[float, float, float]:
     arr = np.asarray(value, dtype=float).reshape(-1)
     if arr.size != 3 or not np.all(np.isfinite(arr)):
         raise DesignInputError(name, "three finite numbers L*, a*, b*", value)
-    _check_L(arr[0], f"{name}.L")
-    return (float(arr[0]), float(arr[1]), float(arr[2]))
+    L, a, b = (check_channel(ch, float(v), f"{name}.{ch}") for ch, v in zip("Lab", arr, strict=True))
+    return (L, a, b)
 
 
 def _solid_safe(
@@ -250,15 +256,16 @@ def move_arrow(design: FaceFlopTravelGloss, da: float, db: float) -> FaceFlopTra
 
 
 def set_travel(design: FaceFlopTravelGloss, travel_deg: float) -> FaceFlopTravelGloss:
-    """Drag the flop/travel control horizontally: set θ_clamp (degrees, 15 < travel <= 180).
+    """Drag the flop/travel control horizontally: set θ_clamp (degrees, FACE_ANGLE_DEG < travel <=
+    TRAVEL_MAX_DEG, i.e. 15 < travel <= 180).
 
     A solid has no travel; setting one on a solid is refused (move face or flop first).
     """
     t = _finite(travel_deg, "travel_deg")
     if design.is_solid:
         raise DesignInputError("travel_deg", "no travel on a solid design (face = flop)", t)
-    if not 15.0 < t <= 180.0:
-        raise DesignInputError("travel_deg", "15 < travel_deg <= 180", t)
+    if not FACE_ANGLE_DEG < t <= TRAVEL_MAX_DEG:
+        raise DesignInputError("travel_deg", f"{FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g}", t)
     return design.replace(travel_deg=t)
 
 
@@ -269,6 +276,6 @@ def set_gloss(design: FaceFlopTravelGloss, gloss_gu: float) -> FaceFlopTravelGlo
     """Gloss slider (thesis §3.4.5): 0–100 GU at 60°; the renderer maps it to a Phong lobe with
     ``station.model.gloss.lobe_from_gloss`` (Westlund & Meyer)."""
     g = _finite(gloss_gu, "gloss_gu")
-    if not 0.0 <= g <= 100.0:
-        raise DesignInputError("gloss_gu", "0 <= gloss_gu <= 100", g)
+    if not GLOSS_MIN_GU <= g <= GLOSS_MAX_GU:
+        raise DesignInputError("gloss_gu", f"{GLOSS_MIN_GU:g} <= gloss_gu <= {GLOSS_MAX_GU:g}", g)
     return design.replace(gloss_gu=g)

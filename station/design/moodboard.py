@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.design.errors import DesignInputError
-from station.model import FaceFlopTravelGloss
+from station.model import GLOSS_MAX_GU, GLOSS_MIN_GU, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab, srgb_decode
 
 #: Accepted eyedropper radius (pixels).
@@ -276,8 +276,8 @@ def contrast_gloss(pixels: ArrayLike) -> ContrastGloss:
     y = np.sort(brightness(p))
     k = max(1, math.ceil(TAIL_FRACTION * y.size))
     contrast = float(y[-k:].mean() - y[:k].mean())
-    raw = contrast / CONTRAST_FULL_SCALE * 100.0
-    return ContrastGloss(min(raw, 100.0), contrast, raw > 100.0, int(y.size))
+    raw = contrast / CONTRAST_FULL_SCALE * GLOSS_MAX_GU
+    return ContrastGloss(min(raw, GLOSS_MAX_GU), contrast, raw > GLOSS_MAX_GU, int(y.size))
 
 
 @dataclass(frozen=True)
@@ -295,7 +295,7 @@ class GlossBlend:
     def update(self, sample: ContrastGloss | float) -> GlossBlend:
         """Return the blend after one more sample: ``g ← (1 − w) g + w·sample`` (first sample taken as is)."""
         g = sample.gloss_gu if isinstance(sample, ContrastGloss) else float(sample)
-        if not math.isfinite(g) or not 0.0 <= g <= 100.0:
-            raise DesignInputError("sample", "0 <= gloss_gu <= 100", g)
+        if not math.isfinite(g) or not GLOSS_MIN_GU <= g <= GLOSS_MAX_GU:
+            raise DesignInputError("sample", f"{GLOSS_MIN_GU:g} <= gloss_gu <= {GLOSS_MAX_GU:g}", g)
         new = g if self.gloss_gu is None else (1.0 - self.weight) * self.gloss_gu + self.weight * g
         return GlossBlend(new, self.weight, self.samples + 1)

@@ -46,6 +46,7 @@ from station.design.moodboard import contrast_gloss
 from station.design.scene import LobeBasis, Scene, shade, specular_term, srgb_decode
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
+from station.model.domain import SHADING_MISFIT_DE
 from station.model.representations import shape_factor
 
 DEFAULT_GLOSS_GU = 50.0
@@ -85,7 +86,7 @@ MAX_TRIMMED = 0.25
 BLOCK_PX = 4
 #: Default failure threshold of the systematic misfit: 3 JND of ΔE*ab (JND = 2.3, thesis §4.3) — a
 #: rendering that departs from the art by several just-noticeable differences on average.
-MAX_SHADING_DE = 3 * 2.3
+MAX_SHADING_DE = SHADING_MISFIT_DE
 #: A fitted face darker than the flop by more than this (L*) is retroreflective: a failure unless allowed.
 RETRO_TOLERANCE_L = 1.0
 #: Cells of the shading-consistency check: aspecular angle (degrees) × Lambert term.

@@ -30,14 +30,14 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.design.designer import L_EDIT_RANGE
 from station.design.errors import DesignInputError
 from station.design.scene import phong_of_gloss
-from station.model import FaceFlopTravelGloss
+from station.model import FaceFlopTravelGloss, ModelInputError
+from station.model.domain import FACE_ANGLE_DEG, GLOSS_MAX_GU, TRAVEL_MAX_DEG, check_lab
 from station.model.gloss import PHONG_MAX, STANDARD_INDEX, SpecularLobe, fresnel_unpolarised, gloss_from_lobe
 
 Adjustment = Literal["L", "C", "H"]
-FACE_DEG = 15.0
+FACE_DEG = FACE_ANGLE_DEG
 
 
 def ratio_r(theta_deg: ArrayLike, theta_clamp_deg: float) -> NDArray[np.float64]:
@@ -63,6 +63,19 @@ def _pixel(buffer: NDArray, xy: tuple[int, int], mask: ArrayLike | None, name: s
     if not np.all(np.isfinite(value)):
         raise DesignInputError(name, "a pixel with a finite buffer value", (x, y))
     return value
+
+
+def _keep_in_bound(lab: ArrayLike, name: str, delta: float) -> tuple[float, float, float]:
+    """The adjusted *name* colour, checked against the domain's Lab bound (``station.model.domain``)."""
+    try:
+        return check_lab(lab, name)
+    except ModelInputError as exc:
+        raise DesignInputError(
+            "delta",
+            f"an adjustment keeping {exc.field} within {exc.accepted}",
+            delta,
+            f"{exc.field} {exc.got!r}",
+        ) from exc
 
 
 def _temporary(lab: tuple[float, float, float], kind: str, delta: float) -> NDArray[np.float64]:
@@ -113,21 +126,14 @@ def adjust_at(
     face, flop = np.asarray(design.face), np.asarray(design.flop)
     try:
         if design.is_solid or design.travel_deg is None:
-            lab = tuple(float(v) for v in _temporary(design.face, kind, delta))
-            if not L_EDIT_RANGE[0] <= lab[0] <= L_EDIT_RANGE[1]:
-                raise DesignInputError(
-                    "delta", "an adjustment keeping L* in 0..100", delta, f"L* {lab[0]:.4g}"
-                )
+            lab = _keep_in_bound(_temporary(design.face, kind, delta), "face", delta)
             return Tweak(design.replace(face=lab, flop=lab), theta, 1.0)
         r = float(ratio_r(theta, design.travel_deg))
         face2 = (1.0 - r) * face + r * _temporary(design.face, kind, delta)  # eq 3.6.5
         flop2 = r * flop + (1.0 - r) * _temporary(design.flop, kind, delta)  # eq 3.6.6
-        for name, lab in (("face", face2), ("flop", flop2)):
-            if not L_EDIT_RANGE[0] <= lab[0] <= L_EDIT_RANGE[1]:
-                raise DesignInputError(
-                    "delta", f"an adjustment keeping {name} L* in 0..100", delta, f"L* {lab[0]:.4g}"
-                )
-        new = design.replace(face=tuple(float(v) for v in face2), flop=tuple(float(v) for v in flop2))
+        new = design.replace(
+            face=_keep_in_bound(face2, "face", delta), flop=_keep_in_bound(flop2, "flop", delta)
+        )
     except DesignInputError:
         raise
     except ValueError as exc:  # the model's ModelInputError (an InputError and a ValueError)
@@ -148,8 +154,10 @@ def drag_travel(
     if design.is_solid:
         raise DesignInputError("design", "a design with travel (face != flop)", "solid")
     theta = float(_pixel(np.asarray(aspecular_deg, dtype=float), xy, mask, "xy"))
-    if not FACE_DEG < theta <= 180.0:
-        raise DesignInputError("xy", "a pixel whose aspecular angle is in (15°, 180°]", theta)
+    if not FACE_DEG < theta <= TRAVEL_MAX_DEG:
+        raise DesignInputError(
+            "xy", f"a pixel whose aspecular angle is in ({FACE_DEG:g}°, {TRAVEL_MAX_DEG:g}°]", theta
+        )
     return design.replace(travel_deg=theta)
 
 
@@ -186,7 +194,7 @@ def gloss_from_edge(theta_edge_deg: float) -> float:
     n = min(max(n, 1.0), PHONG_MAX)
     full = fresnel_unpolarised(60.0, STANDARD_INDEX)
     g = float(gloss_from_lobe(SpecularLobe(n, full, 0.0)))
-    return min(g, 100.0) if g <= 100.0 + 1e-6 else g  # only round-off above 100 is trimmed
+    return min(g, GLOSS_MAX_GU) if g <= GLOSS_MAX_GU + 1e-6 else g  # only round-off above 100 is trimmed
 
 
 def drag_highlight_edge(

@@ -14,10 +14,12 @@ more / less travel θ_clamp ± d degrees
 more / less gloss  gloss ± d GU
 =================  =====================================================================
 
-The ring is deterministic (fixed order, :data:`RING`). A variation the model cannot represent (L*
-leaving 0–100, chroma below 0, a hue step on a near-neutral colour with C*ab < d/2, travel leaving
-15–180°, gloss leaving 0–100 GU, a solid that has no travel) is still listed, with ``design=None`` and
-the reason, so the ring keeps its shape; nothing is clamped.
+The ring is deterministic (fixed order, :data:`RING`). A variation the model cannot represent (Lab
+leaving the domain's effect-paint bound 0 <= L* <= 200, |a*|, |b*| <= 150 of
+:mod:`station.model.domain` — a bright silver at L*15 = 125 gets lighter and darker like any colour —,
+chroma below 0, a hue step on a near-neutral colour with C*ab < d/2, travel leaving 15–180°, gloss
+leaving 0–100 GU, a solid that has no travel) is still listed, with ``design=None`` and the reason, so
+the ring keeps its shape; nothing is clamped.
 """
 
 from __future__ import annotations
@@ -30,6 +32,15 @@ import numpy as np
 
 from station.design.errors import DesignInputError
 from station.model import FaceFlopTravelGloss, ModelError
+from station.model.domain import (
+    FACE_ANGLE_DEG,
+    GLOSS_MAX_GU,
+    GLOSS_MIN_GU,
+    L_MAX,
+    L_MIN,
+    TRAVEL_MAX_DEG,
+    lab_accepted,
+)
 from station.model.errors import ModelInputError
 
 Category = Literal["face", "flop", "travel-gloss"]
@@ -73,8 +84,8 @@ def _vary_colour(lab: tuple[float, float, float], label: str, d: float) -> tuple
     c = math.hypot(a, b)
     if label in ("lighter", "darker"):
         L2 = L + (d if label == "lighter" else -d)
-        if not 0.0 <= L2 <= 100.0:
-            raise _Unreachable(f"L* would be {L2:.4g}, outside 0..100")
+        if not L_MIN <= L2 <= L_MAX:
+            raise _Unreachable(f"L* would be {L2:.4g}, outside {lab_accepted('L')}")
         return (L2, a, b)
     if label in ("more chroma", "less chroma"):
         c2 = c + (d if label == "more chroma" else -d)
@@ -97,12 +108,14 @@ def _make(design: FaceFlopTravelGloss, category: str, label: str, d: float) -> F
             if design.is_solid:
                 raise _Unreachable("a solid design has no travel")
             t = design.travel_deg + (d if label.startswith("more") else -d)  # type: ignore[operator]
-            if not 15.0 < t <= 180.0:
-                raise _Unreachable(f"travel would be {t:.4g}°, outside (15, 180]")
+            if not FACE_ANGLE_DEG < t <= TRAVEL_MAX_DEG:
+                raise _Unreachable(
+                    f"travel would be {t:.4g}°, outside ({FACE_ANGLE_DEG:g}, {TRAVEL_MAX_DEG:g}]"
+                )
             return design.replace(travel_deg=t)
         g = design.gloss_gu + (d if label.startswith("more") else -d)
-        if not 0.0 <= g <= 100.0:
-            raise _Unreachable(f"gloss would be {g:.4g} GU, outside 0..100")
+        if not GLOSS_MIN_GU <= g <= GLOSS_MAX_GU:
+            raise _Unreachable(f"gloss would be {g:.4g} GU, outside {GLOSS_MIN_GU:g}..{GLOSS_MAX_GU:g}")
         return design.replace(gloss_gu=g)
     if design.is_solid:
         # A solid is one colour: varying "face" or "flop" alone would invent travel; vary both.

@@ -10,12 +10,13 @@ towards the normal; thesis §3.3). Lab is *not* computed here: use
 from __future__ import annotations
 
 import datetime as dt
-import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from station.drivers.errors import DriverInputError
+from station.model import domain
+from station.model.errors import ModelInputError
 
 __all__ = [
     "WAVELENGTHS_NM",
@@ -30,20 +31,24 @@ __all__ = [
 
 WAVELENGTHS_NM: tuple[int, ...] = tuple(range(400, 701, 10))
 
-_GEOM = re.compile(r"^(-?\d+)as(-?\d+)$")
-
 
 def geometry_name(illumination_deg: int, aspecular_deg: int) -> str:
-    """Return the export name of a geometry, e.g. ``geometry_name(45, -15) == "45as-15"``."""
-    return f"{int(illumination_deg)}as{int(aspecular_deg)}"
+    """Return the export name of a geometry, e.g. ``geometry_name(45, -15) == "45as-15"``.
+
+    Instruments report whole degrees; the naming is :func:`station.model.domain.geometry_name`.
+    """
+    return domain.geometry_name(int(illumination_deg), int(aspecular_deg))
 
 
 def parse_geometry(name: str) -> tuple[int, int]:
-    """Return ``(illumination_deg, aspecular_deg)`` of a name like ``"45as110"``."""
-    m = _GEOM.match(name)
-    if m is None:
-        raise DriverInputError("geometry", 'a name like "45as15" (illumination "as" aspecular)', name)
-    return int(m.group(1)), int(m.group(2))
+    """Return ``(illumination_deg, aspecular_deg)`` of a name like ``"45as110"`` (whole degrees)."""
+    try:
+        ill, asp = domain.parse_geometry(name)
+    except ModelInputError as exc:
+        raise DriverInputError(exc.field, exc.accepted, exc.got) from exc
+    if not (ill.is_integer() and asp.is_integer()):
+        raise DriverInputError("geometry", 'whole degrees, like "45as15"', name)
+    return int(ill), int(asp)
 
 
 @dataclass(frozen=True)

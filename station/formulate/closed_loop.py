@@ -33,6 +33,7 @@ from station.formulate.formulation import DEFAULT_TOLERANCE, FormulationResult, 
 from station.formulate.library import STANDARD_ANGLES
 from station.formulate.snap import validate_design_lab
 from station.model import AspecularMeasurements
+from station.model.domain import LAB_HI, LAB_LO
 
 Measure = Callable[[dict[str, float]], AspecularMeasurements]
 MAX_CORRECTIONS = 3
@@ -184,7 +185,7 @@ def closed_loop(
         if n == max_corrections:
             break
         target = design - (measured - predicted)
-        target[:, 0] = np.clip(target[:, 0], 0.0, 150.0)  # a corrected target stays a valid Lab (L* >= 0)
+        target = np.clip(target, LAB_LO, LAB_HI)  # a corrected target stays inside the domain's Lab bound
         result = formulate(target, angles, [("previous", result.concentrations)], gloss_gu, 1e9, db)
     msg = f"not converged: mean ΔE00 {steps[-1].mean_de:.2f} after {max_corrections} correction(s)"
     if len(steps) > 1 and steps[-1].predicted_mean_de > tolerance:

@@ -33,6 +33,7 @@ from station.formulate.errors import XMLFormatError
 from station.formulate.library import PAINT_TYPES
 from station.formulate.safe_xml import parse_xml
 from station.model import ANGLES_3, ANGLES_3_ALT, ANGLES_5, AspecularMeasurements, FaceFlopTravelGloss
+from station.model.domain import LAB_CHANNELS, LAB_RANGES
 
 NAMESPACE = "urn:cacad-station:color:1"
 SCHEMA_PATH = Path(__file__).with_name("schemas") / "cacad_color.xsd"
@@ -235,14 +236,7 @@ def read_color_xml(source: str | Path | bytes) -> list[ColorSpec]:
             if declared_f != angles:
                 raise XMLFormatError(f"{swhere}@angles", f"the lab angles {angles}", ms.get("angles"))
             lab = np.array(
-                [
-                    [
-                        _num(e, "L", f"{swhere}/lab", 0.0, 150.0),
-                        _num(e, "a", f"{swhere}/lab", -200.0, 200.0),
-                        _num(e, "b", f"{swhere}/lab", -200.0, 200.0),
-                    ]
-                    for e in labs
-                ]
+                [[_num(e, ch, f"{swhere}/lab", *LAB_RANGES[ch]) for ch in LAB_CHANNELS] for e in labs]
             )
             try:
                 sets.append(AspecularMeasurements(angles, lab, gloss))

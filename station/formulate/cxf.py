@@ -29,6 +29,7 @@ from station.formulate.errors import XMLFormatError
 from station.formulate.library import PAINT_TYPES, STANDARD_ANGLES, Library
 from station.formulate.safe_xml import parse_xml
 from station.model import AspecularMeasurements
+from station.model.domain import ILLUMINATION_DEG, LAB_RANGES, aspecular_name, format_angle
 
 NAMESPACE = "http://colorexchangeformat.com/CxF3-core"
 MAX_CXF_BYTES = 64 << 20
@@ -41,8 +42,7 @@ CREATION_DATE = "2009-01-01T00:00:00Z"
 Record = tuple[str, dict[float, tuple[float, float, float]], dict[str, str]]
 
 
-def _angle(a: float) -> str:
-    return str(int(a)) if float(a).is_integer() else repr(float(a))
+_angle = format_angle
 
 
 def _sub(parent: ET.Element, tag: str, text: str | None = None, **attrs: str) -> ET.Element:
@@ -71,7 +71,7 @@ def records_to_cxf(records: list[Record], description: str) -> bytes:
         _sub(obj, "CreationDate", CREATION_DATE)
         values = _sub(obj, "ColorValues")
         for a in sorted(lab):
-            c = _sub(values, "ColorCIELab", ColorSpecification=f"CS45as{_angle(a)}")
+            c = _sub(values, "ColorCIELab", ColorSpecification=f"CS{aspecular_name(a)}")
             for tag, v in zip(("L", "A", "B"), lab[a], strict=True):
                 _sub(c, tag, fmt.format(v))
         if tags:
@@ -80,7 +80,7 @@ def records_to_cxf(records: list[Record], description: str) -> bytes:
                 _sub(tc, "Tag", Name=key, Value=tags[key])
     specs = _sub(res, "ColorSpecificationCollection")
     for a in angles:
-        cs = _sub(specs, "ColorSpecification", Id=f"CS45as{_angle(a)}")
+        cs = _sub(specs, "ColorSpecification", Id=f"CS{aspecular_name(a)}")
         ts = _sub(cs, "TristimulusSpec")
         _sub(ts, "Illuminant", "D65")
         _sub(ts, "Observer", "10_Degree")
@@ -89,7 +89,7 @@ def records_to_cxf(records: list[Record], description: str) -> bytes:
         _sub(ms, "MeasurementType", "Colorimetric_Reflectance")
         gc = _sub(ms, "GeometryChoice")
         ma = _sub(gc, "MultiAngle")
-        ba = _sub(ma, "BRDFAngle", Notation=f"45as{_angle(a)}")
+        ba = _sub(ma, "BRDFAngle", Notation=aspecular_name(a))
         _sub(ba, "IlluminationAngle", "45")
         _sub(ba, "Aspecular", _angle(a))
     ET.indent(root, "  ")
@@ -124,8 +124,8 @@ def read_cxf_records(source: str | Path | bytes) -> list[Record]:
         if ba is None or cid is None:
             continue
         ill_angle = _float(ba.findtext(f"{_NS}IlluminationAngle"), f"{cid}/IlluminationAngle", -90, 90)
-        if ill_angle != 45.0:
-            raise XMLFormatError(f"{cid}/IlluminationAngle", "45", ill_angle)
+        if ill_angle != ILLUMINATION_DEG:
+            raise XMLFormatError(f"{cid}/IlluminationAngle", f"{ILLUMINATION_DEG:g}", ill_angle)
         angle_of[cid] = _float(ba.findtext(f"{_NS}Aspecular"), f"{cid}/Aspecular", -89.999, 179.999)
     if not angle_of:
         raise XMLFormatError("ColorSpecificationCollection", "multi-angle (BRDFAngle) specifications", 0)
@@ -141,9 +141,9 @@ def read_cxf_records(source: str | Path | bytes) -> list[Record]:
                 raise XMLFormatError(f"Object[{name}]/ColorCIELab", "a multi-angle ColorSpecification", ref)
             where = f"Object[{name}]@{angle_of[ref]:g}"
             trip = (
-                _float(c.findtext(f"{_NS}L"), f"{where}/L", 0, 150),
-                _float(c.findtext(f"{_NS}A"), f"{where}/A", -200, 200),
-                _float(c.findtext(f"{_NS}B"), f"{where}/B", -200, 200),
+                _float(c.findtext(f"{_NS}L"), f"{where}/L", *LAB_RANGES["L"]),
+                _float(c.findtext(f"{_NS}A"), f"{where}/A", *LAB_RANGES["a"]),
+                _float(c.findtext(f"{_NS}B"), f"{where}/B", *LAB_RANGES["b"]),
             )
             if angle_of[ref] in lab:
                 raise XMLFormatError(where, "one Lab per angle", angle_of[ref])

@@ -36,8 +36,10 @@ from station.formulate.de_kernels import cie2000
 from station.formulate.errors import FormulateInputError, NotFormulableError
 from station.formulate.library import STANDARD_ANGLES, Library
 from station.formulate.snap import SnapIndex, SnapResult, color_snap, validate_design_lab
+from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS_MIN_GU
 
-DEFAULT_TOLERANCE = 1.0
+#: Mean CIEDE2000 over the angles accepted as "formulable" (station.model.domain).
+DEFAULT_TOLERANCE = FORMULATION_TOLERANCE_DE00
 _FD_STEP = 1e-7
 
 
@@ -105,8 +107,10 @@ class FormulationResult:
 
 def matting_for_gloss(gloss_gu: float, db: ColorantDatabase) -> tuple[float, str | None]:
     """Matting fraction giving *gloss_gu* (closed form), and a warning if the gloss is out of reach."""
-    if not np.isfinite(gloss_gu) or not 0.0 <= gloss_gu <= 100.0:
-        raise FormulateInputError("gloss_gu", "0 <= gloss_gu <= 100 GU", gloss_gu)
+    if not np.isfinite(gloss_gu) or not GLOSS_MIN_GU <= gloss_gu <= GLOSS_MAX_GU:
+        raise FormulateInputError(
+            "gloss_gu", f"{GLOSS_MIN_GU:g} <= gloss_gu <= {GLOSS_MAX_GU:g} GU", gloss_gu
+        )
     ub = db.upper_bounds[db.matting_index]
     c = (GLOSS_CLEAR_GU - gloss_gu) / GLOSS_PER_MATTING
     if c < 0:

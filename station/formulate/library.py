@@ -25,10 +25,12 @@ from typing import Literal
 import numpy as np
 
 from station.formulate.errors import FormulateInputError
+from station.model.domain import ANGLES_3
 
 PaintType = Literal["solid", "metallic", "pearl"]
 PAINT_TYPES: tuple[str, ...] = ("solid", "metallic", "pearl")
-STANDARD_ANGLES: tuple[float, float, float] = (15.0, 45.0, 110.0)
+#: The angles every library row holds: the standard 3-angle set of station.model.domain.
+STANDARD_ANGLES: tuple[float, ...] = ANGLES_3
 
 #: Chroma C*ab at 45° below which a paint is neutral (ΔE*ab units).
 NEUTRAL_CHROMA = 10.0

@@ -26,10 +26,13 @@ import numpy as np
 
 from station.formulate.errors import LibraryFormatError
 from station.formulate.library import PAINT_TYPES, STANDARD_ANGLES, Library
+from station.model.domain import GLOSS_MAX_GU, GLOSS_MIN_GU
+from station.model.domain import LAB_RANGES as DOMAIN_LAB_RANGES
 
 PRECISION_DECIMALS = 4
-LAB_RANGES = {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
-GLOSS_RANGE = (0.0, 100.0)
+#: Accepted Lab and gloss of a library row: the domain's bounds (station.model.domain).
+LAB_RANGES = DOMAIN_LAB_RANGES
+GLOSS_RANGE = (GLOSS_MIN_GU, GLOSS_MAX_GU)
 MAX_CODE_LENGTH = 64
 MAX_ROWS = 2_000_000
 _ANGLE_COL = re.compile(r"^([Lab])(-?\d+(?:\.\d+)?)$")

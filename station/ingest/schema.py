@@ -16,11 +16,14 @@ from typing import Annotated, Literal
 
 from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, model_validator
 
+from station.model.domain import LAB_HI, LAB_LO
+
 Angle = Annotated[
     float, Field(gt=-90.0, lt=180.0, allow_inf_nan=False, description="aspecular angle, degrees")
 ]
 LabTriple = Annotated[
-    list[Annotated[float, Field(ge=-200.0, le=200.0, allow_inf_nan=False)]],
+    # The envelope of the domain's Lab bound (station.model.domain); each channel is checked there.
+    list[Annotated[float, Field(ge=min(LAB_LO), le=max(LAB_HI), allow_inf_nan=False)]],
     Field(min_length=3, max_length=3, description="[L*, a*, b*]"),
 ]
 Reflectance = Annotated[float, Field(ge=0.0, le=10.0, allow_inf_nan=False)]

@@ -1,28 +1,53 @@
 """Appearance model hierarchy (thesis §3.3, §5.3.3; docs/design.md §3 and §7).
 
 Aspecular measurements ⇄ face/flop/travel/gloss ⇄ clamped quadratic, plus gloss ⇄ specular lobe,
-library indices, colour differences, spectra and the design file format. Every other core package
+library indices, colour differences, spectra and the design file format. The limits and vocabulary
+of the domain (Lab bound, geometry sets and names, gloss range, tolerances) are in
+:mod:`station.model.domain`. Every other core package
 builds on these names.
 """
 
-from station.model.angles import ANGLES_3, ANGLES_3_ALT, ANGLES_5, ANGLES_6, validate_angle_set
+from station.model.angles import validate_angle_set
+from station.model.domain import (
+    AB_MAX,
+    ANGLES_3,
+    ANGLES_3_ALT,
+    ANGLES_5,
+    ANGLES_6,
+    DEFAULT_GLOSS_GU,
+    FACE_ANGLE_DEG,
+    GLOSS_MAX_GU,
+    GLOSS_MIN_GU,
+    L_MAX,
+    L_MIN,
+    LAB_RANGES,
+    TRAVEL_MAX_DEG,
+    check_gloss,
+    check_lab,
+    check_travel,
+)
 from station.model.errors import FitError, ModelError, ModelInputError
 from station.model.fit import FitResult, fit_fftg
 from station.model.representations import (
-    DEFAULT_GLOSS_GU,
-    FACE_ANGLE_DEG,
     AspecularMeasurements,
     ClampedQuadratic,
     FaceFlopTravelGloss,
 )
 
 __all__ = [
+    "AB_MAX",
     "ANGLES_3",
     "ANGLES_3_ALT",
     "ANGLES_5",
     "ANGLES_6",
     "DEFAULT_GLOSS_GU",
     "FACE_ANGLE_DEG",
+    "GLOSS_MAX_GU",
+    "GLOSS_MIN_GU",
+    "LAB_RANGES",
+    "L_MAX",
+    "L_MIN",
+    "TRAVEL_MAX_DEG",
     "AspecularMeasurements",
     "ClampedQuadratic",
     "FaceFlopTravelGloss",
@@ -30,6 +55,9 @@ __all__ = [
     "FitResult",
     "ModelError",
     "ModelInputError",
+    "check_gloss",
+    "check_lab",
+    "check_travel",
     "fit_fftg",
     "validate_angle_set",
 ]

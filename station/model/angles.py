@@ -1,4 +1,7 @@
-"""Standard aspecular angle sets (degrees, illumination at 45°) and their validation.
+"""Validation of aspecular angle sets (degrees, illumination at 45°).
+
+The standard sets themselves (:data:`ANGLES_3` …) and the accepted range live in
+:mod:`station.model.domain`; they are re-exported here for existing imports.
 
 The aspecular angle is measured from the specular direction in the plane of illumination, positive
 towards the illumination (thesis §3.3.3; ASTM E2194; DIN 6175-2's "effect angle").
@@ -10,22 +13,18 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from station.model.domain import ANGLE_MAX_DEG, ANGLE_MIN_DEG, ANGLES_3, ANGLES_3_ALT, ANGLES_5, ANGLES_6
 from station.model.errors import ModelInputError
 
-#: The common 3-angle set (ASTM E2194), degrees.
-ANGLES_3: tuple[float, ...] = (15.0, 45.0, 110.0)
-#: The alternative 3-angle set, degrees.
-ANGLES_3_ALT: tuple[float, ...] = (25.0, 45.0, 75.0)
-#: The 5-angle set of 5-angle instruments, degrees.
-ANGLES_5: tuple[float, ...] = (15.0, 25.0, 45.0, 75.0, 110.0)
-#: The 6-angle set with the behind-gloss −15° angle, degrees.
-ANGLES_6: tuple[float, ...] = (-15.0, 15.0, 25.0, 45.0, 75.0, 110.0)
-
-#: Accepted aspecular angle range in degrees. At 45° illumination the in-plane aspecular angle
-#: runs from −45° (view at the normal's far side grazing… limited by the specular lobe) to 135°
-#: (view grazing on the light's side); we accept −90 … 180 so out-of-plane geometries fit too.
-ANGLE_MIN_DEG = -90.0
-ANGLE_MAX_DEG = 180.0
+__all__ = [
+    "ANGLES_3",
+    "ANGLES_3_ALT",
+    "ANGLES_5",
+    "ANGLES_6",
+    "ANGLE_MAX_DEG",
+    "ANGLE_MIN_DEG",
+    "validate_angle_set",
+]
 
 
 def validate_angle_set(angles_deg: Sequence[float], field: str = "angles_deg") -> tuple[float, ...]:

@@ -15,9 +15,14 @@ HUE_SHIFT_PEARL = FaceFlopTravelGloss(
     (70.0, -22.0, -18.0), (38.0, 14.0, -34.0), 70.0, 86.0, "Blue-violet pearl"
 )
 
+#: The bright aluminium silver every package is tested on: L*15 = 125 (effect paints read 110–140 at
+#: 15°, see station.model.domain), a dark flop L* 38, travel 65°, a glossy clear coat at 90 GU.
+BRIGHT_SILVER = FaceFlopTravelGloss((125.0, -0.6, -1.8), (38.0, -0.3, -3.2), 65.0, 90.0, "Bright silver")
+
 EXAMPLES: dict[str, FaceFlopTravelGloss] = {
     "solid": SOLID_WHITE,
     "silver": SILVER,
+    "bright-silver": BRIGHT_SILVER,
     "red-metallic": RED_METALLIC,
     "pearl": HUE_SHIFT_PEARL,
 }

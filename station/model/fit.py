@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
+from station.model.domain import lab_accepted, lab_within
 from station.model.errors import FitError
 from station.model.representations import (
     DEFAULT_GLOSS_GU,
@@ -193,12 +194,10 @@ def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
     if face[0] < flop[0]:
         warnings.append("flop brighter than face (L*): retroreflective or inverted travel")
     residual = np.linalg.norm(model - lab, axis=1)
-    lo, hi = np.array([0.0, -150.0, -150.0]), np.array([200.0, 150.0, 150.0])
-    if np.any(np.concatenate([face, flop]) < np.tile(lo, 2)) or np.any(
-        np.concatenate([face, flop]) > np.tile(hi, 2)
-    ):
+    if not lab_within(np.stack([face, flop])):
         raise FitError(
-            "lab: the fitted face or flop falls outside L* 0–200, |a*|, |b*| <= 150; "
+            f"lab: the fitted face or flop falls outside {lab_accepted('L')}, {lab_accepted('a')}, "
+            f"{lab_accepted('b')}; "
             f"face={np.round(face, 3).tolist()}, flop={np.round(flop, 3).tolist()}"
         )
     design = FaceFlopTravelGloss(tuple(face), tuple(flop), tc, gloss)

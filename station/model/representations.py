@@ -18,7 +18,6 @@ which is eqs 3.3.8–3.3.10 substituted into eq 3.3.1 (all three channels share 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -28,76 +27,30 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.model.angles import validate_angle_set
 from station.model.colorimetry import OBSERVER_10
+from station.model.domain import (
+    DEFAULT_GLOSS_GU,
+    FACE_ANGLE_DEG,
+    TRAVEL_MAX_DEG,
+    Lab,
+    check_gloss,
+    check_lab,
+    check_travel,
+)
 from station.model.errors import ModelInputError
 
-#: Face angle of the model in degrees (thesis §3.3.1; docs/design.md erratum 3).
-FACE_ANGLE_DEG = 15.0
-#: Accepted travel (θ_clamp) range: FACE_ANGLE_DEG < travel <= TRAVEL_MAX_DEG degrees.
-TRAVEL_MAX_DEG = 180.0
-#: Accepted gloss range of a design, gloss units at the 60° geometry.
-GLOSS_MIN_GU, GLOSS_MAX_GU = 0.0, 100.0
-#: Gloss used when a design does not state one (the thesis's sketch-fit default, §3.7).
-DEFAULT_GLOSS_GU = 50.0
-#: Accepted Lab ranges of stated colours. L* above 100 is real near specular: bright silvers read
-#: L*15 of 120–140 on multi-angle instruments; |a*|, |b*| up to 150 covers every real surface colour.
-L_RANGE = (0.0, 200.0)
-AB_LIMIT = 150.0
-
-Lab = tuple[float, float, float]
-
-
-def _check_lab(value: ArrayLike, field_name: str) -> Lab:
-    """Validate one Lab triple; return it as a tuple of floats."""
-    try:
-        arr = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError) as exc:
-        raise ModelInputError(field_name, "three numbers L*, a*, b*", value) from exc
-    if arr.size != 3:
-        raise ModelInputError(field_name, "three numbers L*, a*, b*", value)
-    names = ("L", "a", "b")
-    for i, v in enumerate(arr):
-        if not math.isfinite(v):
-            raise ModelInputError(f"{field_name}.{names[i]}", "a finite number", float(v))
-    if not (L_RANGE[0] <= arr[0] <= L_RANGE[1]):
-        raise ModelInputError(f"{field_name}.L", f"{L_RANGE[0]:g} <= L* <= {L_RANGE[1]:g}", float(arr[0]))
-    for i in (1, 2):
-        if abs(arr[i]) > AB_LIMIT:
-            raise ModelInputError(
-                f"{field_name}.{names[i]}", f"-{AB_LIMIT:g} <= {names[i]}* <= {AB_LIMIT:g}", float(arr[i])
-            )
-    return (float(arr[0]), float(arr[1]), float(arr[2]))
-
-
-def check_gloss(value: float | None, field_name: str = "gloss_gu", allow_none: bool = False) -> float | None:
-    """Validate a gloss value in GU (60°): finite, GLOSS_MIN_GU <= g <= GLOSS_MAX_GU."""
-    if value is None:
-        if allow_none:
-            return None
-        raise ModelInputError(field_name, f"{GLOSS_MIN_GU:g} <= gloss_gu <= {GLOSS_MAX_GU:g}", value)
-    try:
-        g = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ModelInputError(field_name, "a number of gloss units", value) from exc
-    if not math.isfinite(g) or not (GLOSS_MIN_GU <= g <= GLOSS_MAX_GU):
-        raise ModelInputError(field_name, f"{GLOSS_MIN_GU:g} <= gloss_gu <= {GLOSS_MAX_GU:g}", g)
-    return g
-
-
-def check_travel(value: float | None, field_name: str = "travel_deg") -> float | None:
-    """Validate θ_clamp in degrees: FACE_ANGLE_DEG < travel <= TRAVEL_MAX_DEG, or None (solid)."""
-    if value is None:
-        return None
-    try:
-        t = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ModelInputError(field_name, "a number of degrees", value) from exc
-    if not math.isfinite(t) or not (FACE_ANGLE_DEG < t <= TRAVEL_MAX_DEG):
-        raise ModelInputError(
-            field_name,
-            f"{FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g} (vertex above the face angle)",
-            t,
-        )
-    return t
+__all__ = [
+    "DEFAULT_GLOSS_GU",
+    "FACE_ANGLE_DEG",
+    "TRAVEL_MAX_DEG",
+    "AspecularMeasurements",
+    "ClampedQuadratic",
+    "FaceFlopTravelGloss",
+    "Lab",
+    "check_gloss",
+    "check_lab",
+    "check_travel",
+    "shape_factor",
+]
 
 
 def _as_angles(angles_deg: ArrayLike) -> NDArray[np.float64]:
@@ -159,8 +112,8 @@ class FaceFlopTravelGloss:
     name: str = ""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "face", _check_lab(self.face, "face"))
-        object.__setattr__(self, "flop", _check_lab(self.flop, "flop"))
+        object.__setattr__(self, "face", check_lab(self.face, "face"))
+        object.__setattr__(self, "flop", check_lab(self.flop, "flop"))
         object.__setattr__(self, "travel_deg", check_travel(self.travel_deg))
         object.__setattr__(self, "gloss_gu", check_gloss(self.gloss_gu))
         if self.travel_deg is None and self.face != self.flop:
@@ -329,7 +282,7 @@ class AspecularMeasurements:
         if lab.ndim != 2 or lab.shape[1] != 3 or lab.shape[0] != len(angles):
             raise ModelInputError("lab", f"{len(angles)} triples L*, a*, b* (one per angle)", lab.shape)
         for i, row in enumerate(lab):
-            _check_lab(row, f"lab[{i}]")
+            check_lab(row, f"lab[{i}]")
         object.__setattr__(self, "lab", _freeze(lab))
         object.__setattr__(self, "gloss_gu", check_gloss(self.gloss_gu, allow_none=True))
 

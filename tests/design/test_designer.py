@@ -64,7 +64,7 @@ def test_moving_a_point_on_a_and_b_refits(red_metallic) -> None:
     [
         ("X", 15.0, 1.0, "channel"),
         ("L", 30.0, 1.0, "angle_deg"),
-        ("L", 15.0, 120.0, "value"),
+        ("L", 15.0, 250.0, "value"),
         ("a", 15.0, 200.0, "value"),
         ("L", 15.0, float("nan"), "value"),
     ],
@@ -110,7 +110,7 @@ def test_hsb_edit_of_a_design_equals_editing_every_point(red_metallic) -> None:
 
 def test_hsb_edit_refuses_out_of_range(red_metallic) -> None:
     with pytest.raises(DesignInputError, match=r"face\.L"):
-        hsb_edit(red_metallic, brightness=50.0)
+        hsb_edit(red_metallic, brightness=150.0)
     with pytest.raises(DesignInputError, match="saturation"):
         hsb_edit(red_metallic, saturation=-1.0)
 
@@ -146,7 +146,8 @@ def test_picker_on_a_solid_gains_and_loses_travel() -> None:
         (set_travel, (181.0,), "travel_deg"),
         (set_gloss, (101.0,), "gloss_gu"),
         (set_gloss, (-0.1,), "gloss_gu"),
-        (move_face, (0.0, 0.0, 101.0), "face.L"),
+        (move_face, (0.0, 0.0, 201.0), "face.L"),
+        (move_flop, (151.0, 0.0), "flop.a"),
         (move_arrow, (float("inf"), 0.0), "da"),
     ],
 )

@@ -81,7 +81,7 @@ def test_adjust_rejects_bad_requests(sphere, red_metallic) -> None:
     with pytest.raises(DesignInputError, match="delta"):
         adjust_at(red_metallic, sphere.aspecular_deg, (32, 32), "C", -1.5)
     with pytest.raises(DesignInputError, match="delta"):
-        adjust_at(red_metallic, sphere.aspecular_deg, _pixel_at(sphere, 5.0), "L", 60.0)
+        adjust_at(red_metallic, sphere.aspecular_deg, _pixel_at(sphere, 5.0), "L", 160.0)
 
 
 def test_drag_travel_takes_the_angle_under_the_cursor(sphere, red_metallic) -> None:

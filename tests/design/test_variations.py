@@ -54,9 +54,11 @@ def test_ring_is_deterministic(red_metallic) -> None:
 
 
 def test_unreachable_variations_are_listed_with_the_reason() -> None:
-    d = FaceFlopTravelGloss((98.0, 1.0, 0.0), (60.0, 1.0, 0.0), 20.0, 95.0)
+    # Face L* 198 + 5 leaves the effect-paint bound 0 <= L* <= 200 of station.model.domain.
+    d = FaceFlopTravelGloss((198.0, 1.0, 0.0), (60.0, 1.0, 0.0), 20.0, 95.0)
     ring = {v.label: v for v in variations(d, 5.0, "face").variations}
-    assert ring["lighter"].design is None and "outside 0..100" in ring["lighter"].reason
+    assert ring["lighter"].design is None and "outside 0 <= L* <= 200" in ring["lighter"].reason
+    assert ring["darker"].design.face[0] == 193.0
     assert ring["less chroma"].design is None and "chroma" in ring["less chroma"].reason
     assert ring["hue +"].design is None and "impossible" in ring["hue +"].reason
     tg = {v.label: v for v in variations(d, 10.0, "travel-gloss").variations}

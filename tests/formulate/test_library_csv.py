@@ -46,7 +46,7 @@ def test_extra_angle_triples_are_read() -> None:
     ("text", "row", "column"),
     [
         (HEADER + "\nA,solid,50,101,0,0,50,0,0,50,0,0\n", None, None),  # L 101 is accepted (<= 150)
-        (HEADER + "\nA,solid,50,151,0,0,50,0,0,50,0,0\n", 2, "L15"),
+        (HEADER + "\nA,solid,50,201,0,0,50,0,0,50,0,0\n", 2, "L15"),
         (HEADER + "\nA,solid,50,50,0,0,50,0,0,50,0,0\nB,paint,50,50,0,0,50,0,0,50,0,0\n", 3, "type"),
         (HEADER + "\nA,solid,-1,50,0,0,50,0,0,50,0,0\n", 2, "gloss_gu"),
         (HEADER + "\nA,solid,50,50,0,0,50,x,0,50,0,0\n", 2, "a45"),

@@ -27,6 +27,7 @@ from station.drivers.simproc import SIM_KINDS, spawn_simulator
 from station.errors import InputError
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.design_io import design_to_dict
+from station.model.domain import ILLUMINATION_DEG, geometry_name
 from station.model.spectra import reflectance_to_lab
 from ui.models.events import EventGroup
 from ui.models.measure_db import MeasurementSink, PanelInfo, StoreReceipt
@@ -143,7 +144,7 @@ def measurement_from_reading(
     keep = [i for i, a in enumerate(angles) if a > 0]
     design, note = None, ""
     if len(keep) >= 3:
-        idx = [reading.geometries.index(f"45as{angles[i]}") for i in keep]
+        idx = [reading.geometries.index(geometry_name(ILLUMINATION_DEG, angles[i])) for i in keep]
         try:
             fit = fit_fftg(AspecularMeasurements(tuple(float(angles[i]) for i in keep), lab[idx], None))
             design = fit.design

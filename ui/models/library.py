@@ -17,10 +17,11 @@ from station.formulate.library import Library, LibraryFilter, hierarchy_counts
 from station.formulate.snap import SnapIndex, SnapResult, color_snap
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.colorimetry import lab_to_linear_srgb
+from station.model.domain import ANGLES_3
 from station.render.tonemap import srgb_encode
 from ui.models.events import EventGroup
 
-SNAP_ANGLES = (15.0, 45.0, 110.0)
+SNAP_ANGLES = ANGLES_3
 
 
 def paint_design(library: Library, i: int) -> FaceFlopTravelGloss:

@@ -11,11 +11,13 @@ from PySide6.QtGui import QColor, QImage, QMouseEvent, QPainter, QPainterPath, Q
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
 from station.model import FaceFlopTravelGloss
+from station.model.domain import LAB_PLOT_RANGES, LAB_RANGES, plot_range
 from ui.models.designer import DesignerModel
 from ui.widgets.common import lab_colour, lab_colours
 
 CURVE_ANGLES = np.linspace(0.0, 120.0, 121)
-RANGES = {"L": (0.0, 100.0), "a": (-80.0, 80.0), "b": (-80.0, 80.0)}
+#: Default axes (display only); :meth:`CurvePlot.axis` widens them to show a bright silver's L* > 100.
+RANGES = LAB_PLOT_RANGES
 MARGIN = 26
 HANDLE_PX = 8
 
@@ -57,12 +59,21 @@ class CurvePlot(_PlotBase):
         super().__init__(model, parent)
         self.channel = channel
         self.k = "Lab".index(channel)
+        self._axis: tuple[float, float] | None = None
         self.setToolTip(f"{channel}* against aspecular angle: drag a point to edit")
+
+    def axis(self) -> tuple[float, float]:
+        """Value axis: the default range widened to the design and its points (frozen while dragging)."""
+        if self._axis is not None:
+            return self._axis
+        _, lab = self.model.points()
+        vals = np.concatenate([self.model.design.lab_at(CURVE_ANGLES)[:, self.k], np.asarray(lab)[:, self.k]])
+        return plot_range(self.channel, vals)
 
     def to_px(self, angle: float, value: float) -> QPointF:
         """Data (degrees, value) → pixels."""
         r = self.plot_rect()
-        lo, hi = RANGES[self.channel]
+        lo, hi = self.axis()
         return QPointF(
             r.left() + angle / 120.0 * r.width(), r.bottom() - (value - lo) / (hi - lo) * r.height()
         )
@@ -70,7 +81,7 @@ class CurvePlot(_PlotBase):
     def from_px(self, p: QPointF) -> tuple[float, float]:
         """Pixels → data (degrees, value)."""
         r = self.plot_rect()
-        lo, hi = RANGES[self.channel]
+        lo, hi = self.axis()
         return ((p.x() - r.left()) / r.width() * 120.0, lo + (r.bottom() - p.y()) / r.height() * (hi - lo))
 
     def point_positions(self) -> list[tuple[float, QPointF]]:
@@ -84,8 +95,9 @@ class CurvePlot(_PlotBase):
         p.fillRect(self.rect(), QColor(250, 250, 250))
         r = self.plot_rect()
         p.setPen(QPen(QColor(200, 200, 200), 1))
+        lo, hi = self.axis()
         for a in (15, 45, 75, 110):
-            p.drawLine(self.to_px(a, RANGES[self.channel][0]), self.to_px(a, RANGES[self.channel][1]))
+            p.drawLine(self.to_px(a, lo), self.to_px(a, hi))
         p.setPen(QPen(QColor(90, 90, 90), 1))
         p.drawRect(r)
         p.drawText(QRectF(2, r.top(), MARGIN - 4, 16), Qt.AlignmentFlag.AlignRight, f"{self.channel}*")
@@ -104,8 +116,8 @@ class CurvePlot(_PlotBase):
         if design.travel_deg is not None:
             p.setPen(QPen(QColor(200, 80, 40), 1, Qt.PenStyle.DashLine))
             p.drawLine(
-                self.to_px(design.travel_deg, RANGES[self.channel][0]),
-                self.to_px(design.travel_deg, RANGES[self.channel][1]),
+                self.to_px(design.travel_deg, lo),
+                self.to_px(design.travel_deg, hi),
             )
         p.setPen(QPen(QColor(20, 20, 20), 1))
         p.setBrush(QColor(255, 200, 60))
@@ -117,14 +129,19 @@ class CurvePlot(_PlotBase):
         pos = event.position()
         for a, pt in self.point_positions():
             if abs(pt.x() - pos.x()) <= HANDLE_PX and abs(pt.y() - pos.y()) <= HANDLE_PX:
+                self._axis = self.axis()
                 self._drag = a
                 return
+
+    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
+        self._axis = None
+        super().mouseReleaseEvent(event)
 
     def mouseMoveEvent(self, event: QMouseEvent) -> None:
         if self._drag is None:
             return
         _, value = self.from_px(event.position())
-        lo, hi = RANGES[self.channel]
+        lo, hi = LAB_RANGES[self.channel]  # the domain's bound; the model refuses nothing inside it
         self.model.move_point(self.channel, float(self._drag), float(min(max(value, lo), hi)))
         self.edited.emit()
 

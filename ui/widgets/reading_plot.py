@@ -8,11 +8,13 @@ from PySide6.QtGui import QColor, QPainter, QPainterPath, QPen
 from PySide6.QtWidgets import QWidget
 
 from station.model import FaceFlopTravelGloss
+from station.model.domain import LAB_PLOT_RANGES, plot_range
 
+#: Channel label, colour and default axis (display only: widened to show every value, see paintEvent).
 CHANNELS = (
-    ("L*", QColor(40, 40, 40), (0.0, 100.0)),
-    ("a*", QColor(200, 40, 60), (-60.0, 60.0)),
-    ("b*", QColor(40, 90, 200), (-60.0, 60.0)),
+    ("L*", QColor(40, 40, 40), LAB_PLOT_RANGES["L"]),
+    ("a*", QColor(200, 40, 60), LAB_PLOT_RANGES["a"]),
+    ("b*", QColor(40, 90, 200), LAB_PLOT_RANGES["b"]),
 )
 ANGLES = np.linspace(-20.0, 120.0, 141)
 
@@ -32,12 +34,22 @@ class ReadingPlot(QWidget):
         self.design = design
         self.update()
 
+    def _values(self, k: int) -> np.ndarray:
+        """Every value of channel *k* on show (measured points and the fitted curve)."""
+        vals = [np.zeros(0)]
+        if self.points is not None:
+            vals.append(self.points[1][:, k])
+        if self.design is not None:
+            vals.append(self.design.lab_at(np.clip(ANGLES, 0.0, None))[:, k])
+        return np.concatenate(vals)
+
     def paintEvent(self, event) -> None:
         p = QPainter(self)
         p.setRenderHint(QPainter.RenderHint.Antialiasing)
         p.fillRect(self.rect(), QColor(250, 250, 250))
         h = (self.height() - 16) / 3
-        for k, (name, col, (lo, hi)) in enumerate(CHANNELS):
+        for k, (name, col, _default) in enumerate(CHANNELS):
+            lo, hi = plot_range(name[0], self._values(k))
             r = QRectF(30, 4 + k * h, self.width() - 36, h - 8)
             p.setPen(QPen(QColor(180, 180, 180), 1))
             p.drawRect(r)

@@ -9,6 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from station.api.schemas.common import Polar
 from station.api.schemas.designs import DesignBody
+from station.model.domain import JND_CIE76
 
 Method = Literal["cie76", "cie94", "cie2000", "din6175"]
 Hinge = Annotated[
@@ -70,7 +71,7 @@ class SeamQaCreate(BaseModel):
     beta_deg: Beta
     tolerance: Annotated[
         float, Field(gt=0.0, le=50.0, description="seam ΔE accepted (1 JND = 2.3 ΔE*ab)")
-    ] = 2.3
+    ] = JND_CIE76
     method: Method = "cie76"
     lights_deg: Lights = [30.0, 45.0, 60.0]
     aspecular_deg: Annotated[
@@ -112,7 +113,7 @@ class GgIndexRequest(BaseModel):
         ]
         | None
     ) = None
-    epsilon: Epsilon = 2.3
+    epsilon: Epsilon = JND_CIE76
     method: Method = "cie76"
     hinge: Hinge = "in-plane"
     direction: Literal["+", "-", "either"] = "either"
@@ -178,7 +179,7 @@ class TrompeRequest(BaseModel):
     ) = None
     hinge: Hinge = "in-plane"
     method: Method = "cie76"
-    epsilon: Epsilon = 2.3
+    epsilon: Epsilon = JND_CIE76
     allow_face_darker: bool = False
 
 
@@ -225,7 +226,7 @@ class SweepRequest(BaseModel):
     ) = None
     hinge: Hinge = "in-plane"
     method: Method = "cie76"
-    epsilon: Epsilon = 2.3
+    epsilon: Epsilon = JND_CIE76
 
 
 class SweepOut(BaseModel):

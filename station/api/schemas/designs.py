@@ -7,12 +7,14 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-# Ranges are the appearance model's (station.model.representations): 0 <= L* <= 200, |a*|, |b*| <= 150.
+from station.model.domain import FACE_ANGLE_DEG, GLOSS_MAX_GU, GLOSS_MIN_GU, LAB_RANGES, TRAVEL_MAX_DEG
+
+# Ranges are the domain's effect-paint bound (station.model.domain): 0 <= L* <= 200, |a*|, |b*| <= 150.
 Lab = Annotated[
     tuple[
-        Annotated[float, Field(ge=0.0, le=200.0, allow_inf_nan=False)],
-        Annotated[float, Field(ge=-150.0, le=150.0, allow_inf_nan=False)],
-        Annotated[float, Field(ge=-150.0, le=150.0, allow_inf_nan=False)],
+        Annotated[float, Field(ge=LAB_RANGES["L"][0], le=LAB_RANGES["L"][1], allow_inf_nan=False)],
+        Annotated[float, Field(ge=LAB_RANGES["a"][0], le=LAB_RANGES["a"][1], allow_inf_nan=False)],
+        Annotated[float, Field(ge=LAB_RANGES["b"][0], le=LAB_RANGES["b"][1], allow_inf_nan=False)],
     ],
     Field(description="[L*, a*, b*], D65/10°"),
 ]
@@ -40,9 +42,15 @@ class DesignBody(BaseModel):
     face: Lab
     flop: Lab
     travel_deg: (
-        Annotated[float, Field(gt=15.0, le=180.0, description="θ_clamp, degrees; null for a solid")] | None
+        Annotated[
+            float,
+            Field(gt=FACE_ANGLE_DEG, le=TRAVEL_MAX_DEG, description="θ_clamp, degrees; null for a solid"),
+        ]
+        | None
     )
-    gloss_gu: Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss units")] | None = None
+    gloss_gu: (
+        Annotated[float, Field(ge=GLOSS_MIN_GU, le=GLOSS_MAX_GU, description="60° gloss units")] | None
+    ) = None
 
 
 class DesignCreate(BaseModel):

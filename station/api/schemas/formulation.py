@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from station.api.schemas.designs import DesignBody, Lab
+from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS_MIN_GU
 
 SnapMetric = Literal["cie76", "cie2000", "din6175"]
 _DESIGN = {
@@ -90,9 +91,15 @@ class FormulateRequest(DesignSource):
     )
 
     gloss_gu: (
-        Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss target; default the design's")] | None
+        Annotated[
+            float,
+            Field(ge=GLOSS_MIN_GU, le=GLOSS_MAX_GU, description="60° gloss target; default the design's"),
+        ]
+        | None
     ) = None
-    tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 for 'formulable'")] = 1.0
+    tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 for 'formulable'")] = (
+        FORMULATION_TOLERANCE_DE00
+    )
     k: Annotated[int, Field(ge=1, le=10, description="library matches tried as starting recipes")] = 3
 
 
@@ -188,9 +195,15 @@ class ClosedLoopRequest(BaseModel):
     design_id: Annotated[int, Field(ge=1, le=2**31 - 1)]
     version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
     gloss_gu: (
-        Annotated[float, Field(ge=0.0, le=100.0, description="60° gloss target; default the design's")] | None
+        Annotated[
+            float,
+            Field(ge=GLOSS_MIN_GU, le=GLOSS_MAX_GU, description="60° gloss target; default the design's"),
+        ]
+        | None
     ) = None
-    tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 accepted")] = 1.0
+    tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 accepted")] = (
+        FORMULATION_TOLERANCE_DE00
+    )
     corrections: Annotated[int, Field(ge=0, le=5, description="correction steps after the first spray")] = 3
     seed: Annotated[int, Field(ge=0, le=2**31 - 1, description="seed of the simulated spray-out panel")] = 7
 

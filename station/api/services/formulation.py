@@ -26,8 +26,9 @@ from station.api.services.designs import design_version, to_design
 from station.api.services.library import library_rows
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_from_dict
+from station.model.domain import ANGLES_3
 
-STANDARD = (15.0, 45.0, 110.0)
+STANDARD = ANGLES_3
 
 
 @dataclass(frozen=True)

@@ -17,8 +17,9 @@ from station.api.services import audit
 from station.api.services.designs import design_version
 from station.api.services.formulation import LibraryCache
 from station.model.design_io import design_from_dict
+from station.model.domain import ANGLES_3
 
-ANGLES = (15.0, 45.0, 110.0)
+ANGLES = ANGLES_3
 
 
 def _design_version(session: Session, design_id: int, version: int | None) -> DesignVersion:

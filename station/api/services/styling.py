@@ -17,6 +17,7 @@ from station.api.schemas.styling import RenderRequest, SwatchRequest, Variations
 from station.api.services.designs import to_design
 from station.errors import InputError
 from station.model.design_io import design_to_dict
+from station.model.domain import ANGLES_3
 
 #: Mood-board uploads decode to float64 (24 bytes a pixel): a 1 MiB PNG can hold a 36-megapixel flat image,
 #: so the service accepts at most 4 megapixels (about 100 MB decoded) per eyedropper request.
@@ -162,7 +163,7 @@ def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str)
         "reason": fit.reason,
         "shading_de": _finite(fit.shading_de),
         "lab_standard": {
-            "angles_deg": [15.0, 45.0, 110.0],
+            "angles_deg": list(ANGLES_3),
             "lab": [[float(x) for x in v] for v in fit.lab_standard],
         },
         "theta_clamp_deg": _finite(fit.theta_clamp_deg),

@@ -8,18 +8,17 @@ finite, raises :class:`~station.formulate.errors.FormulateInputError` naming ``l
 from __future__ import annotations
 
 from collections.abc import Mapping
-from types import MappingProxyType
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.formulate.errors import FormulateInputError
+from station.model.domain import LAB_RANGES, lab_accepted
 
 __all__ = ["LAB_QUERY_RANGE", "validate_design_lab"]
 
-LAB_QUERY_RANGE: Mapping[str, tuple[float, float]] = MappingProxyType(
-    {"L": (0.0, 150.0), "a": (-200.0, 200.0), "b": (-200.0, 200.0)}
-)
+#: Accepted query Lab: the domain's effect-paint bound (station.model.domain.LAB_RANGES).
+LAB_QUERY_RANGE: Mapping[str, tuple[float, float]] = LAB_RANGES
 _Q_LO = np.array([v[0] for v in LAB_QUERY_RANGE.values()])
 _Q_HI = np.array([v[1] for v in LAB_QUERY_RANGE.values()])
 _Q_LO.flags.writeable = _Q_HI.flags.writeable = False
@@ -38,7 +37,5 @@ def validate_design_lab(lab: ArrayLike, n_angles: int = 3, field_name: str = "la
     for j, (name, (lo, hi)) in enumerate(LAB_QUERY_RANGE.items()):
         col = q[:, j]
         if not np.all(np.isfinite(col)) or np.any(col < lo) or np.any(col > hi):
-            raise FormulateInputError(
-                f"{field_name}.{name}", f"finite {name}* in [{lo:g}, {hi:g}]", col.tolist()
-            )
+            raise FormulateInputError(f"{field_name}.{name}", f"finite {lab_accepted(name)}", col.tolist())
     return q

@@ -1,0 +1,252 @@
+"""Limits and vocabulary of the domain: the one place where they are written.
+
+Every package (model, design, render, analysis, formulate, the service, the CLI and the viewer) imports
+its Lab bounds, face angle, travel and gloss ranges, standard geometry sets, geometry names and
+tolerance defaults from here, and every bad value gets the same :class:`ModelInputError` naming the
+field and the accepted range. ``tests/test_architecture.py`` fails when a numeric Lab bound or a
+standard geometry list is written anywhere else.
+
+Lab bound for effect paints
+---------------------------
+``0 <= L* <= 200`` and ``-150 <= a*, b* <= 150`` (D65/10°). L* above 100 is normal for effect paints
+near specular: aluminium (silver) paints read L*15 of 110–140 on a multi-angle instrument (Perales et
+al., "Evaluation of a multi-angle colour metric for effect coatings", 2011), and the near-specular
+−15° ASTM E2194 geometry reads higher still, so the upper bound leaves headroom to 200. |a*|, |b*| up
+to 150 covers every real surface colour (the most saturated pigments stay below 130).
+
+Geometries
+----------
+Angles are aspecular (degrees from the specular direction in the plane of illumination, positive
+towards the illumination; thesis §3.3.3, ASTM E2194) under 45° illumination. Instruments and CxF/X-Rite
+files name a geometry ``"<illumination>as<aspecular>"``: ``45as15``, ``45as-15``, ``15as-15``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from types import MappingProxyType
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from station.model.errors import ModelInputError
+
+Lab = tuple[float, float, float]
+
+# ------------------------------------------------------------------------------------------ Lab
+
+#: Lightness bound of a stated colour, L* (D65/10°). L* > 100 is real for effect paints (module doc).
+L_MIN, L_MAX = 0.0, 200.0
+#: Bound on |a*| and |b*| of a stated colour.
+AB_MAX = 150.0
+#: The Lab bound per channel, ``{"L": (lo, hi), "a": …, "b": …}`` (read-only).
+LAB_RANGES: Mapping[str, tuple[float, float]] = MappingProxyType(
+    {"L": (L_MIN, L_MAX), "a": (-AB_MAX, AB_MAX), "b": (-AB_MAX, AB_MAX)}
+)
+#: L* of the perfect diffuse white. Surface colours seen off specular stay at or below it (Pointer's
+#: gamut is defined up to it, and it is the usual top of an L* plot); effect paints exceed it near
+#: specular, which is why the bound is :data:`L_MAX`.
+DIFFUSE_WHITE_L = 100.0
+#: Default axes of Lab plots (display only; a plot extends them to show every value in the bound).
+LAB_PLOT_RANGES: Mapping[str, tuple[float, float]] = MappingProxyType(
+    {"L": (L_MIN, DIFFUSE_WHITE_L), "a": (-80.0, 80.0), "b": (-80.0, 80.0)}
+)
+
+
+def plot_range(channel: str, values: ArrayLike = ()) -> tuple[float, float]:
+    """Axis of a Lab plot: :data:`LAB_PLOT_RANGES` widened in steps of 20 to show every finite value
+    of *values*, never beyond the bound :data:`LAB_RANGES` (display only, not a validation)."""
+    lo, hi = LAB_PLOT_RANGES[channel]
+    v = np.asarray(values, dtype=float).reshape(-1)
+    v = v[np.isfinite(v)]
+    if v.size:
+        lo = min(lo, 20.0 * math.floor(float(v.min()) / 20.0))
+        hi = max(hi, 20.0 * math.ceil(float(v.max()) / 20.0))
+    b_lo, b_hi = LAB_RANGES[channel]
+    return max(lo, b_lo), min(hi, b_hi)
+
+
+#: Lower and upper Lab bounds as (L*, a*, b*) triples, for vectorised checks.
+LAB_LO: Lab = (L_MIN, -AB_MAX, -AB_MAX)
+LAB_HI: Lab = (L_MAX, AB_MAX, AB_MAX)
+LAB_CHANNELS: tuple[str, str, str] = ("L", "a", "b")
+
+
+def lab_accepted(channel: str) -> str:
+    """Return the accepted range of one Lab channel as text, e.g. ``"0 <= L* <= 200"``."""
+    lo, hi = LAB_RANGES[channel]
+    return f"{lo:g} <= {channel}* <= {hi:g}"
+
+
+def check_lab_channel(channel: str, value: float, field: str) -> float:
+    """Validate one Lab coordinate against :data:`LAB_RANGES`.
+
+    Parameters
+    ----------
+    channel
+        ``"L"``, ``"a"`` or ``"b"``.
+    value
+        The coordinate (CIELAB units).
+    field
+        Name used in the error, e.g. ``"face.L"``.
+
+    Raises
+    ------
+    ModelInputError
+        Naming *field* and the range (``"0 <= L* <= 200"``) when *value* is not a finite number in it.
+    """
+    if channel not in LAB_RANGES:
+        raise ModelInputError("channel", "L | a | b", channel)
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ModelInputError(field, f"a number, {lab_accepted(channel)}", value) from exc
+    lo, hi = LAB_RANGES[channel]
+    if not math.isfinite(v):
+        raise ModelInputError(field, "a finite number", v)
+    if not lo <= v <= hi:
+        raise ModelInputError(field, lab_accepted(channel), v)
+    return v
+
+
+def check_lab(value: ArrayLike, field: str) -> Lab:
+    """Validate one Lab triple against the effect-paint bound; return it as a tuple of floats.
+
+    The accepted range is ``0 <= L* <= 200``, ``-150 <= a*, b* <= 150`` (module docstring for the
+    source). The error names the channel, e.g. ``face.L: expected 0 <= L* <= 200, got 250.0``.
+
+    Raises
+    ------
+    ModelInputError
+        Not three numbers, a non-finite number, or a coordinate outside the bound.
+    """
+    try:
+        arr = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise ModelInputError(field, "three numbers L*, a*, b*", value) from exc
+    if arr.size != 3:
+        raise ModelInputError(field, "three numbers L*, a*, b*", value)
+    out = tuple(
+        check_lab_channel(ch, float(v), f"{field}.{ch}") for ch, v in zip(LAB_CHANNELS, arr, strict=True)
+    )
+    return (out[0], out[1], out[2])
+
+
+def lab_within(value: ArrayLike) -> bool:
+    """True when every Lab triple in *value* (shape ``(..., 3)``) is finite and inside the bound."""
+    arr = np.asarray(value, dtype=float)
+    return bool(((arr >= np.asarray(LAB_LO)) & (arr <= np.asarray(LAB_HI))).all())
+
+
+# ------------------------------------------------------------------------------ angles, travel
+
+#: Face angle of the model in degrees (thesis §3.3.1; docs/design.md erratum 3).
+FACE_ANGLE_DEG = 15.0
+#: Accepted travel (θ_clamp) range: FACE_ANGLE_DEG < travel <= TRAVEL_MAX_DEG degrees.
+TRAVEL_MAX_DEG = 180.0
+#: Illumination angle of the standard multi-angle geometries, degrees from the normal.
+ILLUMINATION_DEG = 45.0
+#: Accepted aspecular angle range in degrees. At 45° illumination the in-plane aspecular angle runs
+#: from −45° to 135°; −90 … 180 lets out-of-plane geometries fit too.
+ANGLE_MIN_DEG = -90.0
+ANGLE_MAX_DEG = 180.0
+
+
+def check_travel(value: float | None, field: str = "travel_deg") -> float | None:
+    """Validate θ_clamp in degrees: FACE_ANGLE_DEG < travel <= TRAVEL_MAX_DEG, or None (a solid)."""
+    if value is None:
+        return None
+    try:
+        t = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ModelInputError(field, "a number of degrees", value) from exc
+    if not math.isfinite(t) or not (FACE_ANGLE_DEG < t <= TRAVEL_MAX_DEG):
+        raise ModelInputError(
+            field,
+            f"{FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g} (vertex above the face angle)",
+            t,
+        )
+    return t
+
+
+# ---------------------------------------------------------------------------------------- gloss
+
+#: Accepted gloss range of a design, gloss units at the 60° geometry.
+GLOSS_MIN_GU, GLOSS_MAX_GU = 0.0, 100.0
+#: Gloss used when a design does not state one (the thesis's sketch-fit default, §3.7).
+DEFAULT_GLOSS_GU = 50.0
+
+
+def check_gloss(value: float | None, field: str = "gloss_gu", allow_none: bool = False) -> float | None:
+    """Validate a gloss value in GU (60°): finite, GLOSS_MIN_GU <= g <= GLOSS_MAX_GU."""
+    if value is None:
+        if allow_none:
+            return None
+        raise ModelInputError(field, f"{GLOSS_MIN_GU:g} <= gloss_gu <= {GLOSS_MAX_GU:g}", value)
+    try:
+        g = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ModelInputError(field, "a number of gloss units", value) from exc
+    if not math.isfinite(g) or not (GLOSS_MIN_GU <= g <= GLOSS_MAX_GU):
+        raise ModelInputError(field, f"{GLOSS_MIN_GU:g} <= gloss_gu <= {GLOSS_MAX_GU:g}", g)
+    return g
+
+
+# ----------------------------------------------------------------------------- geometry sets
+
+#: The common 3-angle set (ASTM E2194), aspecular degrees.
+ANGLES_3: tuple[float, ...] = (15.0, 45.0, 110.0)
+#: The alternative 3-angle set, degrees.
+ANGLES_3_ALT: tuple[float, ...] = (25.0, 45.0, 75.0)
+#: The 5-angle set of 5-angle instruments, degrees.
+ANGLES_5: tuple[float, ...] = (15.0, 25.0, 45.0, 75.0, 110.0)
+#: The ASTM E2194 6-angle set with the behind-gloss −15° angle, degrees.
+ANGLES_6: tuple[float, ...] = (-15.0, 15.0, 25.0, 45.0, 75.0, 110.0)
+#: Every standard set by name.
+STANDARD_ANGLE_SETS: Mapping[str, tuple[float, ...]] = MappingProxyType(
+    {"3": ANGLES_3, "3-alt": ANGLES_3_ALT, "5": ANGLES_5, "6": ANGLES_6}
+)
+
+_GEOMETRY = re.compile(r"^(-?\d+(?:\.\d+)?)as(-?\d+(?:\.\d+)?)$")
+
+
+def format_angle(angle_deg: float) -> str:
+    """Angle as geometry names write it: ``15.0`` → ``"15"``, ``-15`` → ``"-15"``, ``12.5`` → ``"12.5"``."""
+    a = float(angle_deg)
+    return str(int(a)) if a.is_integer() else repr(a)
+
+
+def geometry_name(illumination_deg: float, aspecular_deg: float) -> str:
+    """Return the CxF/X-Rite name of a geometry, e.g. ``geometry_name(45, -15) == "45as-15"``."""
+    return f"{format_angle(illumination_deg)}as{format_angle(aspecular_deg)}"
+
+
+def aspecular_name(aspecular_deg: float) -> str:
+    """Name of an aspecular angle under the standard 45° illumination, e.g. ``"45as110"``."""
+    return geometry_name(ILLUMINATION_DEG, aspecular_deg)
+
+
+def parse_geometry(name: str, field: str = "geometry") -> tuple[float, float]:
+    """Return ``(illumination_deg, aspecular_deg)`` of a name like ``"45as15"`` or ``"15as-15"``.
+
+    Raises
+    ------
+    ModelInputError
+        The name is not ``<illumination>as<aspecular>`` with numbers in degrees.
+    """
+    m = _GEOMETRY.match(str(name).strip())
+    if m is None:
+        raise ModelInputError(field, 'a name like "45as15" (illumination "as" aspecular)', name)
+    return float(m.group(1)), float(m.group(2))
+
+
+# ------------------------------------------------------------------------------ tolerances
+
+#: One just-noticeable difference in ΔE*ab (CIE76), the thesis's ε (§4.3).
+JND_CIE76 = 2.3
+#: Default formulation tolerance: mean CIEDE2000 over the angles for "formulable" (formulation-qc).
+FORMULATION_TOLERANCE_DE00 = 1.0
+#: Default threshold of a systematic sketch misfit: 3 JND of ΔE*ab.
+SHADING_MISFIT_DE = 3 * JND_CIE76

@@ -1,0 +1,220 @@
+"""Architecture: the domain's Lab bounds and standard geometry sets are written in one place only.
+
+Every ``.py`` file of ``station/``, ``ui/`` and ``db/`` (frozen migrations excepted) is parsed with
+:mod:`ast`; outside ``station/model/domain.py`` none may contain
+
+* a tuple or list of numbers equal to a standard geometry set (15/45/110, 25/45/75, the 5-angle set,
+  ASTM E2194 −15/15/25/45/75/110);
+* a comparison of an L*/a*/b*-named expression (``L``, ``lab``, ``face[0]``, ``abs(a)`` …) with a
+  numeric Lab bound (100, 150, 200, or their negatives);
+* a call with a Lab channel name (``"L"``, ``"a"``, ``"b"``) or a Lab-named first argument and such a
+  bound (``_num(e, "L", where, 0.0, 150.0)``, ``np.clip(lab, 0.0, 150.0)``);
+* a pydantic ``Field(ge=…, le=…)`` with a literal Lab bound (±150 or ±200);
+* a dict keyed by ``"L"``/``"a"``/``"b"`` holding literal ranges (a copied ``LAB_RANGES``);
+* a message (string constant outside docstrings) stating a Lab range, such as ``"0..100"`` beside
+  ``L*`` or ``"0 <= L* <= 200"``.
+
+The checker is fed synthetic sources with copied bounds to show it can fail.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+from station.model.domain import ANGLES_3, ANGLES_3_ALT, ANGLES_5, ANGLES_6
+
+REPO = Path(__file__).resolve().parents[1]
+DOMAIN = REPO / "station" / "model" / "domain.py"
+ROOTS = ("station", "ui", "db")
+FROZEN = ("db/migrations/versions",)
+
+GEOMETRY_SETS = {tuple(float(a) for a in s) for s in (ANGLES_3, ANGLES_3_ALT, ANGLES_5, ANGLES_6)}
+BOUND_VALUES = {100.0, 150.0, 200.0}
+CHANNEL_NAMES = {"L", "a", "b", "A", "B"}
+_L_NAME = re.compile(r"^(L\d*|L_.*|.*_L|l_star|lstar|a_star|b_star|lightness)$")
+_LAB_TOKEN = {"lab", "labs"}
+_RANGE_TEXT = re.compile(
+    r"(L\*[^\"']{0,30}?-?\d+(\.\d+)?\s*(\.\.|–|—|to)\s*-?\d+)"  # L* … 0..100, L* 0–150
+    r"|(-?\d+(\.\d+)?\s*<=?\s*[Lab]\*\s*<=?\s*-?\d+)"  # 0 <= L* <= 200
+    r"|(\|[ab]\*\|[^\"']{0,12}?(<=|≤)\s*\d+)",  # |a*| <= 200
+)
+
+
+def _number(node: ast.AST) -> float | None:
+    """The value of a numeric literal (with unary minus), else None."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        v = _number(node.operand)
+        return None if v is None else -v
+    if (
+        isinstance(node, ast.Constant)
+        and isinstance(node.value, (int, float))
+        and not isinstance(node.value, bool)
+    ):
+        return float(node.value)
+    return None
+
+
+def _is_bound(node: ast.AST) -> bool:
+    v = _number(node)
+    return v is not None and abs(v) in BOUND_VALUES
+
+
+def _identifier(node: ast.AST) -> str | None:
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Attribute):
+        return node.attr
+    return None
+
+
+def _lab_named(name: str | None) -> bool:
+    if not name:
+        return False
+    return bool(_L_NAME.match(name)) or bool(_LAB_TOKEN & set(name.lower().split("_")))
+
+
+def _lab_ish(node: ast.AST) -> bool:
+    """An expression naming a Lab quantity: ``L``, ``lab``, ``face_lab``, ``face[0]``, ``abs(L2)``."""
+    if isinstance(node, ast.Call) and _identifier(node.func) in {"abs", "float"} and node.args:
+        return _lab_ish(node.args[0])
+    if isinstance(node, ast.Subscript):
+        base = _identifier(node.value)
+        if base in {"face", "flop"} and _number(node.slice) == 0.0:
+            return True
+        return _lab_ish(node.value)
+    return _lab_named(_identifier(node))
+
+
+def _docstrings(tree: ast.AST) -> set[int]:
+    ids: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+            body = getattr(node, "body", [])
+            if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+                ids.add(id(body[0].value))
+    return ids
+
+
+def _schema_examples(tree: ast.AST) -> set[int]:
+    """Nodes inside ``json_schema_extra=``/``examples=`` arguments: documented sample data, not rules."""
+    ids: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.keyword) and node.arg in {"json_schema_extra", "examples"}:
+            ids.update(id(n) for n in ast.walk(node.value))
+    return ids
+
+
+def violations(source: str, filename: str = "<source>") -> list[str]:
+    """Every copied Lab bound or geometry list in *source*, as ``"file:line: what"``."""
+    tree = ast.parse(source, filename)
+    docs = _docstrings(tree) | _schema_examples(tree)
+    found: list[str] = []
+
+    def hit(node: ast.AST, what: str) -> None:
+        found.append(f"{filename}:{getattr(node, 'lineno', 0)}: {what}")
+
+    for node in ast.walk(tree):
+        if id(node) in docs:
+            continue
+        if isinstance(node, (ast.Tuple, ast.List)):
+            values = [_number(e) for e in node.elts]
+            if values and None not in values and tuple(values) in GEOMETRY_SETS:
+                hit(node, f"standard geometry set {tuple(values)} (use station.model.domain)")
+        elif isinstance(node, ast.Compare):
+            operands = [node.left, *node.comparators]
+            if any(_is_bound(o) for o in operands) and any(_lab_ish(o) for o in operands):
+                hit(node, "Lab bound compared with a literal (use station.model.domain.check_lab)")
+        elif isinstance(node, ast.Call):
+            name = _identifier(node.func)
+            keywords = {k.arg: k.value for k in node.keywords if k.arg}
+            if name == "Field":
+                if any(
+                    _number(keywords[k]) is not None and abs(_number(keywords[k])) in {150.0, 200.0}
+                    for k in ("ge", "le", "gt", "lt")
+                    if k in keywords
+                ):
+                    hit(node, "pydantic Field with a literal Lab bound (use station.model.domain.LAB_RANGES)")
+                continue
+            args = list(node.args)
+            channel_arg = any(isinstance(a, ast.Constant) and a.value in CHANNEL_NAMES for a in args)
+            lab_arg = bool(args) and _lab_ish(args[0])
+            if (channel_arg or lab_arg) and any(_is_bound(a) for a in args):
+                hit(node, "Lab bound passed as a literal (use station.model.domain.LAB_RANGES)")
+        elif isinstance(node, ast.Dict):
+            keys = {k.value for k in node.keys if isinstance(k, ast.Constant) and isinstance(k.value, str)}
+            if keys >= {"L"} and keys & {"a", "b"}:
+                for v in node.values:
+                    if (
+                        isinstance(v, (ast.Tuple, ast.List))
+                        and len(v.elts) == 2
+                        and all(_number(e) is not None for e in v.elts)
+                    ):
+                        hit(node, "Lab ranges written as literals (use station.model.domain.LAB_RANGES)")
+                        break
+        elif isinstance(node, ast.JoinedStr):
+            text = "".join(v.value if isinstance(v, ast.Constant) else "{…}" for v in node.values)
+            if _RANGE_TEXT.search(text):
+                hit(node, f"Lab range written in a message: {text!r} (use domain.lab_accepted)")
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs:
+            if _RANGE_TEXT.search(node.value):
+                hit(node, f"Lab range written in a message: {node.value!r} (use domain.lab_accepted)")
+    return found
+
+
+def _sources() -> list[Path]:
+    files = []
+    for root in ROOTS:
+        for path in sorted((REPO / root).rglob("*.py")):
+            rel = path.relative_to(REPO).as_posix()
+            if path == DOMAIN or any(rel.startswith(f) for f in FROZEN):
+                continue
+            files.append(path)
+    return files
+
+
+def test_lab_bounds_and_geometry_sets_live_only_in_the_domain_module() -> None:
+    files = _sources()
+    assert len(files) > 100  # the walk found the packages
+    found = [v for p in files for v in violations(p.read_text(), p.relative_to(REPO).as_posix())]
+    assert found == [], "\n".join(found)
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        "ANGLES = (15.0, 45.0, 110.0)\n",
+        "SETS = [[25, 45, 75]]\n",
+        "A6 = (-15, 15, 25, 45, 75, 110)\n",
+        "def f(L2):\n    if not 0.0 <= L2 <= 100.0:\n        raise ValueError('x')\n",
+        "def f(face):\n    return face[0] <= 100.0\n",
+        "def f(v):\n    return abs(lab[1]) > 150.0\n",
+        "def f(e):\n    return _num(e, 'L', 'w', 0.0, 150.0)\n",
+        "import numpy as np\nx = np.clip(target_lab, 0.0, 150.0)\n",
+        "T = Annotated[float, Field(ge=-200.0, le=200.0)]\n",
+        "R = {'L': (0.0, 150.0), 'a': (-200.0, 200.0), 'b': (-200.0, 200.0)}\n",
+        "msg = f'L* would be {x}, outside 0..100'\n",
+        "msg = '0 <= L* <= 200'\n",
+    ],
+)
+def test_the_checker_finds_a_copied_bound(source: str) -> None:
+    assert violations(source), source
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        "ANGLES = (15.0, 45.0)\n",  # not a standard set
+        "def f(label):\n    return label <= 100\n",  # 'label' is not Lab
+        "def f(g):\n    return 0.0 <= g <= 100.0\n",  # gloss, not Lab
+        "def f():\n    '''L* 0..100 in the thesis.'''\n",  # docstrings may explain ranges
+        "x = Field(ge=1, le=100)\n",  # a page size
+        "LAB = LAB_RANGES['L']\n",
+        "M = ConfigDict(json_schema_extra={'examples': [{'angles_deg': [15.0, 45.0, 110.0]}]})\n",
+    ],
+)
+def test_the_checker_leaves_other_numbers_alone(source: str) -> None:
+    assert violations(source) == [], source
