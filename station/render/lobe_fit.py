@@ -12,13 +12,14 @@ R = 2(N·L)N − L and aspecular angle α = ∠(R, V):
   θ_c = 16°), and near specular the gloss lobe dominates anyway.
   A reflectance factor compares the sample with the perfect white diffuser (BRDF 1/π) under the same
   geometry, so the colour part of the BRDF is ρ(α)/π (the thesis's I·f = C, eq 4.3.3–4.3.4).
-* the gloss lobe is the energy-conserving Phong lobe of :func:`station.model.gloss.lobe_from_gloss`:
+* the gloss lobe is the energy-conserving Phong lobe of :func:`station.model.gloss.lobe_from_gloss`
+  (:mod:`station.model.lobe`; the shading is :func:`station.model.shading.shade_reflectance`):
   exponent n, specular albedo ρ_s (grey, the coat's Fresnel reflectance at 60°). The model defines it
   as the distribution (n + 1)/(2π) cosⁿψ of the reflected flux about the mirror direction, so the
   reflected radiance is ρ_s times the normalised-lobe average of the incident radiance about R (a
   constant environment L gives ρ_s L): exactly the K_G form of eq 2.3.2 with K_G = ρ_s (n+1)/(2π).
-  GU → (n, ρ_s) is read from a table of that function (station/render/data/gloss_lobes.json, 1 GU
-  steps, log n interpolated), because one call simulates the gloss meter and takes ~0.4 s.
+  GU → (n, ρ_s) is :func:`station.model.lobe.phong_lobe` (a table of the forward gloss-meter
+  simulation, log n interpolated), because one call of the inverse takes ~0.1 s.
 
 The lobe model (eqs 2.3.1–2.3.3, :mod:`station.render.weights`) splits the same way, so the fit solves
 two fixed-matrix problems per design, each over the sample geometries of :mod:`station.render.lobes`
@@ -56,6 +57,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from station.model.colorimetry import lab_to_linear_srgb
+from station.model.lobe import lobe_brdf_cos, phong_lobe
+from station.model.shading import shade_reflectance
 from station.render.errors import RenderError, RenderInputError
 from station.render.lobes import (
     COLOUR_ALPHAS_DEG,
@@ -149,49 +153,21 @@ class DesignedBRDF:
 
     def gloss_cos(self, cos_alpha: NDArray[np.float64]) -> NDArray[np.float64]:
         """Gloss term of BRDF·cos, ρ_s (n+1)/(2π) max(cos α, 0)^n, sr⁻¹, same shape as *cos_alpha*."""
-        c = np.clip(np.asarray(cos_alpha, dtype=float), 0.0, 1.0)
-        n = self.phong_exponent
-        return self.specular_albedo * (n + 1.0) / (2.0 * np.pi) * c**n
+        return lobe_brdf_cos(self.phong_exponent, self.specular_albedo, cos_alpha)
 
     def brdf_cos(self, n_dot_l: NDArray[np.float64], cos_alpha: NDArray[np.float64]) -> NDArray[np.float64]:
         """BRDF × (N·L) in sr⁻¹, linear sRGB, shape (..., 3); zero for light below the horizon."""
-        nl = np.maximum(np.asarray(n_dot_l, dtype=float), 0.0)
         alpha = np.degrees(np.arccos(np.clip(cos_alpha, -1.0, 1.0)))
-        total = nl[..., None] * self.rho(alpha) / np.pi + self.gloss_cos(cos_alpha)[..., None]
-        return np.where((nl > 0.0)[..., None], total, 0.0)
+        # the model's reference point-light shading as a reflectance factor, ÷ π for sr⁻¹
+        return shade_reflectance(n_dot_l, self.rho(alpha), np.pi * self.gloss_cos(cos_alpha)) / np.pi
 
 
 def _rgb_table(lab: NDArray[np.float64]) -> NDArray[np.float64]:
-    from station.model.colorimetry import lab_to_linear_srgb
-
     return np.asarray(lab_to_linear_srgb(lab), dtype=float)
 
 
-@lru_cache(maxsize=1)
-def _gloss_table() -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    import json
-    from importlib import resources
-
-    data = json.loads(resources.files("station.render").joinpath("data/gloss_lobes.json").read_text())
-    rows = np.asarray(data["rows"], dtype=float)
-    return rows[:, 0], np.log(rows[:, 1]), rows[:, 2]
-
-
-def gloss_lobe(gloss_gu: float | NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Phong exponent n and specular albedo ρ_s of 60° gloss (GU, 0–100), from the shipped table.
-
-    The table holds :func:`station.model.gloss.lobe_from_gloss` at every whole GU; log n and ρ_s are
-    interpolated linearly between them.
-    """
-    gu, log_n, albedo = _gloss_table()
-    g = np.asarray(gloss_gu, dtype=float)
-    if not np.all(np.isfinite(g)) or np.any(g < gu[0]) or np.any(g > gu[-1]):
-        raise RenderInputError("gloss_gu", f"{gu[0]:g} <= gloss_gu <= {gu[-1]:g}", gloss_gu)
-    return np.exp(np.interp(g, gu, log_n)), np.interp(g, gu, albedo)
-
-
 def _lobe(gloss_gu: float) -> tuple[float, float]:
-    n, rho_s = gloss_lobe(gloss_gu)
+    n, rho_s = phong_lobe(gloss_gu)
     return float(n), float(rho_s)
 
 
@@ -235,7 +211,7 @@ def sample_targets(designs: Sequence[FaceFlopTravelGloss]) -> Targets:
     s = (tc - np.minimum(theta[None, :], tc)) / (tc - FACE_ANGLE_DEG)
     s2 = np.where(np.isnan(travel)[:, None], 1.0, s * s)
     lab = flop[:, None, :] + (face - flop)[:, None, :] * s2[:, :, None]
-    n, rho_s = gloss_lobe(np.array([float(d.gloss_gu) for d in designs]))
+    n, rho_s = phong_lobe(np.array([float(d.gloss_gu) for d in designs]))
     return Targets(_rgb_table(lab), np.atleast_1d(n), np.atleast_1d(rho_s))
 
 
@@ -328,9 +304,8 @@ class FitProblem:
 
     def _gloss_values(self, t: Targets, rows: NDArray[np.intp]) -> NDArray[np.float64]:
         """Gloss term of BRDF·cos, ρ_s (n+1)/(2π) cos^n α, at *rows*, shape (d, len(rows))."""
-        n = t.phong_exponent[:, None]
-        peak = t.specular_albedo[:, None] * (n + 1.0) / (2.0 * np.pi)
-        return peak * np.clip(self.geometry.cos_alpha[rows], 0.0, 1.0)[None, :] ** n
+        cos_alpha = self.geometry.cos_alpha[rows][None, :]
+        return lobe_brdf_cos(t.phong_exponent[:, None], t.specular_albedo[:, None], cos_alpha)
 
     def colour_b(self, t: Targets) -> NDArray[np.float64]:
         """Weighted RHS of the colour part, shape (d, rows_c, 3)."""
@@ -371,9 +346,7 @@ class FitProblem:
     def gloss_d(self, t: Targets) -> NDArray[np.float64]:
         """Reduced gloss RHS Qᵀb, shape (m, d)."""
         gmap, cos_u = self._gloss_map
-        n = t.phong_exponent
-        peak = t.specular_albedo * (n + 1.0) / (2.0 * np.pi)
-        return gmap @ (cos_u[:, None] ** n[None, :] * peak[None, :])
+        return gmap @ lobe_brdf_cos(t.phong_exponent[None, :], t.specular_albedo[None, :], cos_u[:, None])
 
     def gloss_b(self, t: Targets) -> NDArray[np.float64]:
         """Weighted RHS of the ``thesis`` gloss part, shape (d, rows_g, 1)."""
