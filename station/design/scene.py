@@ -40,7 +40,7 @@ from station.model import FaceFlopTravelGloss
 from station.model.display import decode_display as srgb_decode
 from station.model.display import encode_display as srgb_encode
 from station.model.display import to_uint8
-from station.model.shading import point_light_rgb
+from station.model.shading import aspecular_deg, point_light_rgb
 
 __all__ = [
     "BUILTIN_SCENES",
@@ -93,9 +93,7 @@ def aspecular_and_lambert(
     normals: NDArray, mask: NDArray, light: NDArray
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Per-pixel aspecular angle θ (degrees, 0–180) and Lambert term ϕ = max(N·L, 0) (thesis §3.7.1)."""
-    r = _reflect(light, normals)
-    cos_t = np.clip(r @ VIEW, -1.0, 1.0)
-    theta = np.where(mask, np.degrees(np.arccos(cos_t)), 0.0)
+    theta = np.where(mask, aspecular_deg(light, VIEW, normals), 0.0)
     phi = np.where(mask, np.maximum(normals @ light, 0.0), 0.0)
     return theta, phi
 

@@ -34,7 +34,14 @@ from numpy.typing import ArrayLike, NDArray
 from station.model.colorimetry import WHITEPOINT, lab_to_linear_srgb, lab_to_xyz, xyz_to_lab
 from station.model.lobe import lobe_reflectance
 
-__all__ = ["Design", "design_reflectance", "point_light_rgb", "shade_lab", "shade_reflectance"]
+__all__ = [
+    "Design",
+    "aspecular_deg",
+    "design_reflectance",
+    "point_light_rgb",
+    "shade_lab",
+    "shade_reflectance",
+]
 
 
 class Design(Protocol):
@@ -46,6 +53,21 @@ class Design(Protocol):
 
     def lab_at(self, angles_deg: ArrayLike) -> NDArray[np.float64]:
         """Lab at aspecular angles (degrees), shape ``angles.shape + (3,)``."""
+
+
+def aspecular_deg(light: ArrayLike, view: ArrayLike, normal: ArrayLike) -> NDArray[np.float64]:
+    """Aspecular angle α = arccos(R·V) in degrees (0–180), R = 2(L·N)N − L (thesis §3.7.1, §2.4).
+
+    *light*, *view*, *normal*: unit vectors, broadcast over leading axes (..., 3); L and V point away
+    from the surface. R·V is formed as 2(L·N)(N·V) − L·V, without building R.
+    """
+    L = np.asarray(light, dtype=float)
+    V = np.asarray(view, dtype=float)
+    N = np.asarray(normal, dtype=float)
+    cos = 2.0 * np.einsum("...i,...i->...", L, N) * np.einsum("...i,...i->...", N, V) - np.einsum(
+        "...i,...i->...", L, V
+    )
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def design_reflectance(design: Design, aspecular_deg: ArrayLike) -> NDArray[np.float64]:

@@ -64,3 +64,23 @@ def test_shade_lab_adds_a_neutral_lobe_before_shading() -> None:
     out = shade_lab(np.array([50.0, 0.0, 0.0]), 0.5, 0.2)
     assert out[0] == pytest.approx(116.0 * (0.5 * (_grey_y(50.0) + 0.2)) ** (1 / 3) - 16.0)
     assert out[1:] == pytest.approx([0.0, 0.0], abs=1e-9)
+
+
+def test_aspecular_angle_in_plane_and_by_the_mirror_vector() -> None:
+    from station.model.shading import aspecular_deg
+
+    def polar(deg: float) -> np.ndarray:
+        t = math.radians(deg)
+        return np.array([math.sin(t), 0.0, math.cos(t)])
+
+    z = np.array([0.0, 0.0, 1.0])
+    # in the plane of incidence the aspecular angle is |view + light| (thesis §3.3.3): 45as15 … 45as110
+    for view in (-30.0, 0.0, 30.0, 65.0):
+        assert aspecular_deg(polar(45.0), polar(view), z) == pytest.approx(abs(45.0 + view), abs=1e-9)
+    rng = np.random.default_rng(7)
+    v = rng.normal(size=(3, 200, 3))
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    light, view, normal = v
+    r = 2.0 * np.sum(light * normal, axis=-1, keepdims=True) * normal - light
+    expected = np.degrees(np.arccos(np.clip(np.sum(r * view, axis=-1), -1.0, 1.0)))
+    np.testing.assert_allclose(aspecular_deg(light, view, normal), expected, atol=1e-9)
