@@ -2,7 +2,9 @@
 
 Aspecular measurements ⇄ face/flop/travel/gloss ⇄ clamped quadratic, plus gloss ⇄ specular lobe,
 library indices, colour differences, spectra and the design file format. Every other core package
-builds on these names.
+builds on these names, and on the physics they share: the gloss lobe (:mod:`station.model.lobe`), the
+reference point-light shading of a design (:mod:`station.model.shading`) and Lab ⇄ display sRGB
+(:mod:`station.model.display`).
 """
 
 from station.model.angles import ANGLES_3, ANGLES_3_ALT, ANGLES_5, ANGLES_6, validate_angle_set

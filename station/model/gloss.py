@@ -156,7 +156,8 @@ def _phong_fractions(exponents: NDArray[np.float64], geometry_deg: int) -> NDArr
     """
     nodes = _geometry_nodes(geometry_deg)
     n = np.asarray(exponents, dtype=float).reshape(-1, 1, 1)
-    captured = 1.0 - np.cos(nodes["psi_b"])[None] ** (n + 1.0)  # exact radial integral, averaged over φ
+    log_cos = np.log(np.cos(nodes["psi_b"]))[None]
+    captured = -np.expm1((n + 1.0) * log_cos)  # 1 − cos^{n+1}ψ_b, the exact radial integral
     return np.asarray(captured.mean(axis=2) @ nodes["w_src"], dtype=float)
 
 

@@ -59,7 +59,8 @@ from numpy.typing import NDArray
 
 from station.model.colorimetry import lab_to_linear_srgb
 from station.model.lobe import lobe_brdf_cos, phong_lobe
-from station.model.shading import shade_reflectance
+from station.model.representations import shape_factor
+from station.model.shading import design_reflectance, shade_reflectance
 from station.render.errors import RenderError, RenderInputError
 from station.render.lobes import (
     COLOUR_ALPHAS_DEG,
@@ -173,7 +174,7 @@ def _lobe(gloss_gu: float) -> tuple[float, float]:
 
 def designed_brdf(design: FaceFlopTravelGloss) -> DesignedBRDF:
     """Tabulate the designed BRDF of *design* (clamped-quadratic colour + Phong gloss lobe)."""
-    rgb = _rgb_table(design.lab_at(np.maximum(ALPHA_GRID_DEG, FACE_ANGLE_DEG)))
+    rgb = design_reflectance(design, np.maximum(ALPHA_GRID_DEG, FACE_ANGLE_DEG))
     n, rho_s = _lobe(float(design.gloss_gu))
     oog = bool(np.any(rgb < 0.0))
     return DesignedBRDF(rgb, n, rho_s, getattr(design, "name", ""), oog)
@@ -205,11 +206,10 @@ def sample_targets(designs: Sequence[FaceFlopTravelGloss]) -> Targets:
     face = np.array([d.face for d in designs], dtype=float).reshape(-1, 3)
     flop = np.array([d.flop for d in designs], dtype=float).reshape(-1, 3)
     travel = np.array([np.nan if d.travel_deg is None else d.travel_deg for d in designs], dtype=float)
-    # The model's closed form X(θ) = flop + (face − flop)·s(θ)², s = (θ_c − min(θ, θ_c))/(θ_c − 15°)
-    # (station.model.representations), vectorised over designs; a solid (no travel) is its face.
+    # The model's X(θ) = flop + (face − flop)·s(θ)² (eq 3.3.2, station.model.representations.shape_factor),
+    # broadcast over designs; a solid (no travel) is its face.
     tc = np.where(np.isnan(travel), 2 * FACE_ANGLE_DEG, travel)[:, None]
-    s = (tc - np.minimum(theta[None, :], tc)) / (tc - FACE_ANGLE_DEG)
-    s2 = np.where(np.isnan(travel)[:, None], 1.0, s * s)
+    s2 = np.where(np.isnan(travel)[:, None], 1.0, shape_factor(theta[None, :], tc))  # type: ignore[arg-type]
     lab = flop[:, None, :] + (face - flop)[:, None, :] * s2[:, :, None]
     n, rho_s = phong_lobe(np.array([float(d.gloss_gu) for d in designs]))
     return Targets(_rgb_table(lab), np.atleast_1d(n), np.atleast_1d(rho_s))
