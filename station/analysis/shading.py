@@ -25,8 +25,9 @@ exposure like the rest of the picture.
 
 Environment lighting: an :class:`Environment` is a plain list of sample directions (panel-A frame,
 +z = normal) and linear-RGB radiance per sample (solid angle folded in). Each sample is a point light;
-the paint's point-light pixel (linear sRGB, gloss lobe optional) is weighted by radiance, summed, divided per channel by the same sum for a white diffuser on panel A
-(a von Kries white balance), and turned back into Lab. The service and the CLI convert
+the paint's point-light pixel (linear sRGB, gloss lobe optional) is weighted by radiance, summed,
+divided per channel by the same sum for a white diffuser on panel A (a von Kries white balance), and
+turned back into Lab. The service and the CLI convert
 ``station.render`` environments into this form; this package never imports the renderer.
 """
 
