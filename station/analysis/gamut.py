@@ -24,32 +24,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.analysis.shading import lab_to_relative_xyz, relative_xyz_to_lab
+from station.model.colorimetry import lab_to_linear_srgb, lab_to_xyz
 from station.model.domain import DIFFUSE_WHITE_L
 
 #: Upper bound of a face's linear-sRGB channels (reflectance factor at 15°).
 FACE_RGB_MAX = 2.5
 #: Upper bound of a flop's / solid's linear-sRGB channels.
 FLOP_RGB_MAX = 1.0
-
-
-def _relative_xyz_to_rgb_matrix() -> NDArray[np.float64]:
-    """Linear map white-relative XYZ → linear sRGB, read off the model's conversion (it is linear)."""
-    from station.model.colorimetry import lab_to_linear_srgb
-
-    basis = relative_xyz_to_lab(np.eye(3))
-    return np.asarray(lab_to_linear_srgb(basis), dtype=float).T
-
-
-_M: NDArray[np.float64] | None = None
-
-
-def lab_to_rgb(lab: ArrayLike) -> NDArray[np.float64]:
-    """Linear sRGB of Lab (same numbers as ``station.model.colorimetry.lab_to_linear_srgb``, faster)."""
-    global _M
-    if _M is None:
-        _M = _relative_xyz_to_rgb_matrix()
-    return lab_to_relative_xyz(lab) @ _M.T
 
 
 @dataclass(frozen=True)
@@ -99,10 +80,10 @@ def check_paintable(
     face = np.asarray(paint.face, dtype=float)  # type: ignore[attr-defined]
     flop = np.asarray(paint.flop, dtype=float)  # type: ignore[attr-defined]
     solid = bool(paint.is_solid)  # type: ignore[attr-defined]
-    rgb = lab_to_rgb(np.stack([face, flop]))
+    rgb = lab_to_linear_srgb(np.stack([face, flop]))
     lo, hi = rgb_bounds(face, flop, solid)
     if relax_to is not None:
-        ref = lab_to_rgb(np.stack([np.asarray(relax_to.face), np.asarray(relax_to.flop)]))  # type: ignore[attr-defined]
+        ref = lab_to_linear_srgb(np.stack([np.asarray(relax_to.face), np.asarray(relax_to.flop)]))  # type: ignore[attr-defined]
         lo, hi = np.minimum(lo, ref), np.maximum(hi, ref)
     problems = []
     for i, name in enumerate(("face", "flop")):
@@ -141,8 +122,6 @@ def _pointer_hull() -> Any:
 
 def in_pointer_gamut(lab: ArrayLike) -> NDArray[np.bool_]:
     """Whether Lab colour(s) lie in Pointer's gamut of real surface colours (colour-science's data)."""
-    from station.model.colorimetry import lab_to_xyz
-
     return _pointer_hull().find_simplex(lab_to_xyz(np.asarray(lab, dtype=float))) >= 0
 
 

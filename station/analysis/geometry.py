@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.analysis.errors import AnalysisInputError
+from station.model.shading import aspecular_deg
 
 Hinge = Literal["in-plane", "out-of-plane"] | float
 Direction = Literal["+", "-", "either"]
@@ -129,15 +130,3 @@ def rotated_normals(beta_deg: ArrayLike, hinge: Hinge = "in-plane") -> NDArray[n
     tilt = np.array([math.cos(az), math.sin(az), 0.0])
     s, c = np.sin(b)[..., None], np.cos(b)[..., None]
     return s * tilt + c * np.array([0.0, 0.0, 1.0])
-
-
-def aspecular_deg(light: ArrayLike, view: ArrayLike, normal: ArrayLike) -> NDArray[np.float64]:
-    """Aspecular angle(s) in degrees, ``arccos(R·V)`` with ``R = 2(L·N)N − L`` (unit vectors, (..., 3))."""
-    L = np.asarray(light, dtype=float)
-    V = np.asarray(view, dtype=float)
-    N = np.asarray(normal, dtype=float)
-    # R·V = 2(L·N)(N·V) − L·V, without forming R.
-    cos = 2.0 * np.einsum("...i,...i->...", L, N) * np.einsum("...i,...i->...", N, V) - np.einsum(
-        "...i,...i->...", L, V
-    )
-    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))

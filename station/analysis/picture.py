@@ -36,7 +36,8 @@ def shade_pair(
 
     Pixels are laid out in panel coordinates (u across the seam, w along it), u ∈ [−1, 1], w ∈ [−½, ½].
     """
-    from station.model.colorimetry import lab_to_linear_srgb, srgb_encode
+    from station.model.colorimetry import lab_to_linear_srgb
+    from station.model.display import encode_display
 
     h, w = size
     az = math.radians(hinge_azimuth_deg(hinge))
@@ -64,7 +65,7 @@ def shade_pair(
     # expose so that a white diffuser at panel A's centre reads white
     k0 = float(np.dot(direction(light_deg), z))
     rgb = lab_to_linear_srgb(lab) / k0
-    return np.clip(srgb_encode(np.clip(rgb, 0.0, 1.0)), 0.0, 1.0)
+    return encode_display(rgb)
 
 
 def plot_seam_report(

@@ -1,15 +1,15 @@
 """Panel colour ``c(f, Ω, Ψ)`` under a point light or an environment (thesis eqs 4.3.2–4.3.4).
 
-Definition used throughout (with docs/design.md errata 2 and 3 applied):
+Definition used throughout (with docs/design.md errata 2 and 3 applied): the model's reference
+point-light shading, :func:`station.model.shading.point_light_rgb`.
 
 ``c = I · f(L, V) · (L·N)`` (eq 4.3.2; Lambert's term is ``L·N``, erratum 2). ``I·f`` is the paint's
 colour: constant for a solid (eq 4.3.3), the clamped-quadratic ``g`` evaluated at the aspecular angle
 for an effect paint (eq 4.3.4, face at 15° as in §3.3, erratum 3). The product with the shading factor
-is taken in tristimulus space, not on Lab numbers: the paint's Lab is turned into ``XYZ / XYZ_white``,
-each component is multiplied by the shading factor ``k`` and the result is turned back into Lab with
-the CIE function ``f`` (cube root above (6/29)³, linear below). So ``Y' = k·Y`` and
-``L*' = 116 f(k·Y/Y_n) − 16``; for a neutral grey above the linear segment
-``ΔL* = (L* + 16)(k^{1/3} − 1)``. The white point cancels, so no illuminant enters.
+is taken in tristimulus space (linear sRGB, a linear map of XYZ), not on Lab numbers, and the result is
+turned back into Lab with colour-science. So ``Y' = k·Y`` and ``L*' = 116 f(k·Y/Y_n) − 16``; for a
+neutral grey above the linear segment ``ΔL* = (L* + 16)(k^{1/3} − 1)``. The white point cancels, so
+no illuminant enters (:func:`station.model.shading.shade_lab` does the same for a Lab colour).
 
 Exposure: ``"reference"`` (default) sets the scene white to a white diffuser on panel A,
 ``k = max(L·N, 0) / (L·N_A)``: panel A shows the paint's own Lab, the colour a QA engineer measured,
@@ -17,21 +17,22 @@ and panel B differs by the shading ratio. ``"absolute"`` uses ``k = max(L·N, 0)
 lit at normal incidence). A surface turned away from the light (``L·N ≤ 0``) is black, ``k = 0``.
 
 Gloss is excluded as in the thesis (§4.3.2 note: highlights need not line up across a seam). With
-``gloss=True`` the neutral normalised-Phong lobe of :func:`station.model.gloss.lobe_from_gloss`
-(``ρ_s (n+1)/(2π) cosⁿψ`` of the reflected flux) adds ``ρ_s (n+1)/2 · cosⁿ(α)`` to the reflectance
-factor before shading (α = aspecular angle; the 1/cos θ_view foreshortening is left out).
+``gloss=True`` the neutral normalised-Phong lobe of :mod:`station.model.lobe` adds the reflectance
+factor ``ρ_s (n+1)/2 · cosⁿ(α)`` on lit panels (α = aspecular angle), not scaled by ``L·N`` (the
+K_G lobe of eq 2.3.2; at the mirror direction the irradiance's ``L·N`` cancels the radiance's
+``1/cos θ_view``, so this is the peak the gloss meter reads), divided by ``L·N_A`` for the reference
+exposure like the rest of the picture.
 
 Environment lighting: an :class:`Environment` is a plain list of sample directions (panel-A frame,
 +z = normal) and linear-RGB radiance per sample (solid angle folded in). Each sample is a point light;
-the paint's Lab at each sample's aspecular angle is turned into linear sRGB reflectance, weighted by
-radiance and ``max(L·N, 0)``, summed, divided per channel by the same sum for a white diffuser on panel A
-(a von Kries white balance), and turned back into Lab. The service and the CLI convert
+the paint's point-light pixel (linear sRGB, gloss lobe optional) is weighted by radiance, summed,
+divided per channel by the same sum for a white diffuser on panel A (a von Kries white balance), and
+turned back into Lab. The service and the CLI convert
 ``station.render`` environments into this form; this package never imports the renderer.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -41,61 +42,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import aspecular_deg
+from station.model.colorimetry import linear_srgb_to_lab
+from station.model.shading import point_light_rgb, shade_lab
+
+__all__ = ["Environment", "Exposure", "environment_colour", "point_colour", "shade_lab"]
 
 Exposure = Literal["reference", "absolute"]
 
 _Z = np.array([0.0, 0.0, 1.0])
-_DELTA = 6.0 / 29.0
-_DELTA3 = _DELTA**3
-_3DELTA2 = 3.0 * _DELTA**2
-
-
-def cie_f(t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """CIE 1976 ``f``: cube root above (6/29)³, linear ``t/(3δ²) + 4/29`` below (defined for t ≤ 0 too)."""
-    return np.where(t > _DELTA3, np.cbrt(np.maximum(t, _DELTA3)), t / _3DELTA2 + 4.0 / 29.0)
-
-
-def cie_f_inverse(u: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Inverse of :func:`cie_f`."""
-    return np.where(u > _DELTA, u**3, _3DELTA2 * (u - 4.0 / 29.0))
-
-
-def lab_to_relative_xyz(lab: ArrayLike) -> NDArray[np.float64]:
-    """Lab → ``(X/X_n, Y/Y_n, Z/Z_n)`` (white-relative tristimulus), shape (..., 3)."""
-    lab = np.asarray(lab, dtype=float)
-    f = np.empty(lab.shape)
-    f[..., 1] = (lab[..., 0] + 16.0) / 116.0
-    f[..., 0] = f[..., 1] + lab[..., 1] / 500.0
-    f[..., 2] = f[..., 1] - lab[..., 2] / 200.0
-    return cie_f_inverse(f)
-
-
-def relative_xyz_to_lab(t: ArrayLike) -> NDArray[np.float64]:
-    """Inverse of :func:`lab_to_relative_xyz`."""
-    f = cie_f(np.asarray(t, dtype=float))
-    lab = np.empty(f.shape)
-    lab[..., 0] = 116.0 * f[..., 1] - 16.0
-    lab[..., 1] = 500.0 * (f[..., 0] - f[..., 1])
-    lab[..., 2] = 200.0 * (f[..., 1] - f[..., 2])
-    return lab
-
-
-def shade_lab(lab: ArrayLike, k: ArrayLike, add: ArrayLike = 0.0) -> NDArray[np.float64]:
-    """Scale a colour's tristimulus values by the shading factor *k* (eq 4.3.2), returning Lab.
-
-    Parameters
-    ----------
-    lab
-        Paint colour, CIE Lab, shape (..., 3).
-    k
-        Shading factor(s) ≥ 0, broadcast against ``lab[..., 0]``.
-    add
-        Neutral reflectance factor added to X/X_n, Y/Y_n, Z/Z_n before shading (the optional gloss lobe).
-    """
-    t = lab_to_relative_xyz(lab)
-    if not (np.isscalar(add) and add == 0.0):
-        t = t + np.asarray(add, dtype=float)[..., None]
-    return relative_xyz_to_lab(t * np.asarray(k, dtype=float)[..., None])
 
 
 @dataclass(frozen=True)
@@ -159,30 +113,9 @@ class Environment:
         return cls(dirs.reshape(-1, 3), (img * weight[..., None]).reshape(-1, 3))
 
 
-def gloss_reflectance(paint: object, aspec_deg: NDArray[np.float64]) -> NDArray[np.float64] | float:
-    """Neutral reflectance factor of the paint's gloss lobe at *aspec_deg* (normalised Phong), or 0."""
-    gloss_gu = getattr(paint, "gloss_gu", None)
-    if not gloss_gu:
-        return 0.0
-    n, albedo = _phong_lobe(float(gloss_gu))
-    cos = np.cos(np.radians(np.minimum(aspec_deg, 90.0)))
-    return albedo * (n + 1.0) / 2.0 * np.maximum(cos, 0.0) ** n
-
-
-@functools.lru_cache(maxsize=256)
-def _phong_lobe(gloss_gu: float) -> tuple[float, float]:
-    """(Phong exponent, specular albedo) of :func:`station.model.gloss.lobe_from_gloss`, cached (it
-    simulates the gloss meter, milliseconds per call)."""
-    from station.model.gloss import lobe_from_gloss
-
-    lobe = lobe_from_gloss(gloss_gu)
-    return float(lobe.phong_exponent), float(lobe.specular_albedo)
-
-
-def paint_lab(paint: object, aspec_deg: ArrayLike) -> NDArray[np.float64]:
-    """The paint's Lab at aspecular angle(s) in degrees (``FaceFlopTravelGloss.lab_at``), shape (..., 3)."""
-    a = np.asarray(aspec_deg, dtype=float)
-    return np.asarray(paint.lab_at(a), dtype=float).reshape(*a.shape, 3)  # type: ignore[attr-defined]
+def _has_gloss(paint: object) -> bool:
+    """Whether the paint carries a gloss (GU) for the optional gloss lobe."""
+    return bool(getattr(paint, "gloss_gu", None))
 
 
 def point_colour(
@@ -201,8 +134,7 @@ def point_colour(
     ``exposure="reference"`` the shading is divided by ``L·N_ref`` (*reference_normal*, default +z).
     """
     aspec = aspecular_deg(light, view, normal)
-    lab = paint_lab(paint, aspec)
-    k = np.maximum(np.einsum("...i,...i->...", light, normal), 0.0)
+    lambert = np.einsum("...i,...i->...", light, normal)
     if exposure == "reference":
         n_ref = _Z if reference_normal is None else reference_normal
         k_ref = np.einsum("...i,...i->...", light, n_ref)
@@ -210,11 +142,13 @@ def point_colour(
             raise AnalysisInputError(
                 "light", "a light above panel A (L·N_A > 0)", "light at or behind panel A"
             )
-        k = k / k_ref
-    elif exposure != "absolute":
+        white = np.asarray(k_ref, dtype=float)[..., None]
+    elif exposure == "absolute":
+        white = np.ones(1)
+    else:
         raise AnalysisInputError("exposure", '"reference" or "absolute"', exposure)
-    add = gloss_reflectance(paint, aspec) if gloss else 0.0
-    return shade_lab(lab, k, add)
+    rgb = point_light_rgb(paint, lambert, aspec, specular=gloss and _has_gloss(paint))  # type: ignore[arg-type]
+    return np.asarray(linear_srgb_to_lab(rgb / white), dtype=float)
 
 
 def environment_colour(
@@ -229,18 +163,13 @@ def environment_colour(
 
     Exposure is always "reference": divided per channel by a white diffuser on panel A (+z).
     """
-    from station.model.colorimetry import lab_to_linear_srgb, linear_srgb_to_lab
-
     N = np.asarray(normal, dtype=float)
     L = env.directions  # (S, 3)
     Nb = N[..., None, :]  # (..., 1, 3)
     aspec = aspecular_deg(L, view, Nb)  # (..., S)
-    lab = paint_lab(paint, aspec)
-    if gloss:
-        lab = shade_lab(lab, np.ones(aspec.shape), gloss_reflectance(paint, aspec))
-    rgb = lab_to_linear_srgb(lab)  # (..., S, 3)
-    cos = np.maximum(np.sum(L * Nb, axis=-1), 0.0)[..., None]  # (..., S, 1)
-    pixel = np.sum(rgb * env.radiance * cos, axis=-2)
+    lambert = np.sum(L * Nb, axis=-1)  # (..., S)
+    rgb = point_light_rgb(paint, lambert, aspec, specular=gloss and _has_gloss(paint))  # type: ignore[arg-type]
+    pixel = np.sum(rgb * env.radiance, axis=-2)
     white = np.sum(env.radiance * np.maximum(L[:, 2], 0.0)[:, None], axis=0)
     if np.any(white <= 0):
         raise AnalysisInputError("environment", "some light above panel A in every RGB channel")

@@ -31,10 +31,11 @@ from numpy.typing import NDArray
 from scipy.optimize import minimize
 
 from station.analysis.errors import AnalysisError, AnalysisInputError
-from station.analysis.gamut import GamutReport, check_paintable, lab_to_rgb, rgb_bounds
+from station.analysis.gamut import GamutReport, check_paintable, rgb_bounds
 from station.analysis.geometry import Hinge, SeamGeometry, check_polar
 from station.analysis.index import JND_CIE76, SeamModel
 from station.analysis.shading import Environment, Exposure
+from station.model.colorimetry import lab_to_linear_srgb
 from station.model.domain import FACE_ANGLE_DEG, LAB_RANGES, TRAVEL_MAX_DEG
 
 Objective = Literal["single", "rms", "minimax", "per_geometry"]
@@ -218,7 +219,7 @@ class _Problem:
         face_free = any(n.startswith("face") for n in names) or self.solid
         flop_free = any(n.startswith("flop") for n in names)
         self.face_free, self.flop_free = face_free, flop_free
-        ra = lab_to_rgb(np.stack([np.asarray(paint_a.face), np.asarray(paint_a.flop)]))
+        ra = lab_to_linear_srgb(np.stack([np.asarray(paint_a.face), np.asarray(paint_a.flop)]))
         lo, hi = rgb_bounds(paint_a.face, paint_a.flop, self.solid or paint_a.is_solid)
         self.lo, self.hi = np.minimum(lo, ra), np.maximum(hi, ra)
         self.face_darker_a = paint_a.face[0] < paint_a.flop[0]
@@ -254,12 +255,12 @@ class _Problem:
         def gam(z: NDArray[np.float64]) -> NDArray[np.float64]:
             v = self.values(z[:k])
             if self.solid:
-                rgb = lab_to_rgb(np.array([v["L"], v["a"], v["b"]]))
+                rgb = lab_to_linear_srgb(np.array([v["L"], v["a"], v["b"]]))
                 return np.concatenate([rgb - self.lo[0], self.hi[0] - rgb])
             labs = np.array(
                 [[v["face_L"], v["face_a"], v["face_b"]], [v["flop_L"], v["flop_a"], v["flop_b"]]]
             )
-            rgb = lab_to_rgb(labs)
+            rgb = lab_to_linear_srgb(labs)
             parts = []
             for i, free in enumerate((self.face_free, self.flop_free)):
                 if free:

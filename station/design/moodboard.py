@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.design.errors import DesignInputError
 from station.model import GLOSS_MAX_GU, GLOSS_MIN_GU, FaceFlopTravelGloss
-from station.model.colorimetry import linear_srgb_to_lab, srgb_decode
+from station.model.display import display_to_lab
 
 #: Accepted eyedropper radius (pixels).
 RADIUS_MAX = 64
@@ -189,7 +189,7 @@ def robust_colour(pixels: ArrayLike) -> NDArray[np.float64]:
 def eyedrop_lab(image: ArrayLike, xy: tuple[float, float], radius: int = 3) -> NDArray[np.float64]:
     """Sample Lab (D65/10°) at *xy*: median sRGB over a disc of *radius* px → linear sRGB → Lab."""
     rgb = robust_colour(region(image, xy, radius))
-    return np.asarray(linear_srgb_to_lab(srgb_decode(rgb)), dtype=float)
+    return np.asarray(display_to_lab(rgb), dtype=float)
 
 
 @dataclass(frozen=True)

@@ -13,8 +13,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from station.design.errors import DesignInputError
-from station.design.scene import design_rgb_at, panel_scene, shade, srgb_encode, to_uint8
+from station.design.scene import panel_scene, shade, srgb_encode, to_uint8
 from station.model import FaceFlopTravelGloss
+from station.model.shading import design_reflectance
 
 #: Aspecular range of the gradient bar, degrees (the standard angles 15° … 110°).
 SWATCH_ANGLES = (15.0, 110.0)
@@ -47,7 +48,7 @@ def swatch(design: FaceFlopTravelGloss, width: int = 160, height: int = 32, bord
         raise DesignInputError("border", f"< {min(width, height) // 2} pixels for this size", border)
     inner = width - 2 * border
     angles = np.linspace(*SWATCH_ANGLES, inner)
-    rgb = design_rgb_at(design, angles)
+    rgb = design_reflectance(design, angles)
     oog = int(np.sum(np.any((rgb < -1e-6) | (rgb > 1 + 1e-6), axis=-1)))
     img = np.empty((height, width, 3))
     img[:] = border_grey(design.gloss_gu)

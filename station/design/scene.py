@@ -14,14 +14,16 @@ Geometry and conventions (thesis §3.6.2, §3.7.1)
 * Lambert term ϕ = max(N·L, 0) (docs/design.md erratum 2: Lambert's cosine is L·N).
 * Light-direction buffer: the light that would centre the highlight on the pixel, ``2(N·V)N − V``
   (thesis §3.6.2 "Move light").
-* Shading of a design (the clamped-quadratic model, eq 3.3.2) under irradiance ``E``::
+* Shading of a design (the clamped-quadratic model, eq 3.3.2) under irradiance ``E`` is the model's
+  reference point-light shading (:func:`station.model.shading.point_light_rgb`)::
 
       c = E · ϕ · rgb(θ)  +  E · ρ_s (n + 1) / 2 · cos(θ)^n        (lit pixels, θ < 90°)
 
   where ``rgb(θ)`` is the linear-sRGB colour of ``Lab(min(θ, θ_clamp))`` (reflectance factor 1 = white)
-  and ``(n, ρ_s)`` is the Phong lobe of the design's gloss (``station.model.gloss``'s mapping,
-  :func:`phong_of_gloss`; the model's normalised lobe ``(n + 1)/(2π) cosⁿψ``; ``(n + 1)/2`` is π times it). The first term is
-  eq 3.7.1 read forwards.
+  and ``(n, ρ_s)`` is the Phong lobe of the design's gloss (:func:`station.model.lobe.phong_lobe`; the
+  model's normalised lobe ``(n + 1)/(2π) cosⁿψ``; ``(n + 1)/2`` is π times it). The first term is
+  eq 3.7.1 read forwards. Display encoding is :mod:`station.model.display` (re-exported here as
+  ``srgb_encode``, ``srgb_decode`` and ``to_uint8``).
 
 Buffers are float64 with background pixels set to 0 (θ, ϕ) and ``mask`` False, never NaN.
 """
@@ -29,21 +31,39 @@ Buffers are float64 with background pixels set to 0 (θ, ϕ) and ``mask`` False,
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.design.errors import DesignInputError
 from station.model import FaceFlopTravelGloss
-from station.model.colorimetry import lab_to_linear_srgb
-from station.model.gloss import (
-    PHONG_MAX,
-    STANDARD_INDEX,
-    SpecularLobe,
-    fresnel_unpolarised,
-    gloss_from_lobe,
-)
+from station.model.display import decode_display as srgb_decode
+from station.model.display import encode_display as srgb_encode
+from station.model.display import to_uint8
+from station.model.shading import aspecular_deg, point_light_rgb
+
+__all__ = [
+    "BUILTIN_SCENES",
+    "DEFAULT_LIGHT",
+    "VIEW",
+    "EnvironmentScene",
+    "LobeBasis",
+    "Scene",
+    "aspecular_and_lambert",
+    "builtin_scene",
+    "environment_sphere_scene",
+    "lobe_basis",
+    "panel_scene",
+    "scene_from_buffers",
+    "scene_from_normals",
+    "shade",
+    "shade_environment",
+    "sphere_scene",
+    "srgb_decode",
+    "srgb_encode",
+    "studio_lights",
+    "to_uint8",
+]
 
 VIEW = np.array([0.0, 0.0, 1.0])
 #: Default light of the built-in point-light scenes: 45° off the view axis, up and to the left.
@@ -73,9 +93,7 @@ def aspecular_and_lambert(
     normals: NDArray, mask: NDArray, light: NDArray
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Per-pixel aspecular angle θ (degrees, 0–180) and Lambert term ϕ = max(N·L, 0) (thesis §3.7.1)."""
-    r = _reflect(light, normals)
-    cos_t = np.clip(r @ VIEW, -1.0, 1.0)
-    theta = np.where(mask, np.degrees(np.arccos(cos_t)), 0.0)
+    theta = np.where(mask, aspecular_deg(light, VIEW, normals), 0.0)
     phi = np.where(mask, np.maximum(normals @ light, 0.0), 0.0)
     return theta, phi
 
@@ -238,88 +256,24 @@ def builtin_scene(name: str, size: int = 96) -> Scene:
 # --------------------------------------------------------------------------------------------- shading
 
 
-def design_rgb_at(design: FaceFlopTravelGloss, theta_deg: ArrayLike) -> NDArray[np.float64]:
-    """Linear-sRGB reflectance factor of *design* at aspecular angles *theta_deg* (eq 3.3.2 → sRGB)."""
-    return np.asarray(lab_to_linear_srgb(design.lab_at(np.asarray(theta_deg, dtype=float))), dtype=float)
-
-
-@lru_cache(maxsize=1)
-def _gloss_table() -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
-    """(GU, ln n) on 400 log-spaced Phong exponents 1…PHONG_MAX, read by the model's simulated meter."""
-    albedo = fresnel_unpolarised(60.0, STANDARD_INDEX)
-    ln_n = np.linspace(0.0, np.log(PHONG_MAX), 400)
-    gu = np.array([gloss_from_lobe(SpecularLobe(float(np.exp(x)), albedo, 0.0)) for x in ln_n])
-    keep = np.concatenate([[True], np.diff(gu) > 1e-9])  # the meter saturates at 100 GU near a mirror
-    keep = np.logical_and.accumulate(keep)
-    return gu[keep], ln_n[keep], albedo
-
-
-def phong_of_gloss(gloss_gu: float) -> tuple[float, float]:
-    """Phong exponent ``n`` and specular albedo ``ρ_s`` of *gloss_gu* (60° GU, 0–100).
-
-    Same mapping as ``station.model.gloss.lobe_from_gloss`` (the lobe whose simulated meter reading is the
-    gloss; coat index 1.567), obtained by interpolating the *forward* meter simulation on a table of
-    400 exponents in ln n, because the model's inverse solves for Ward α as well and takes about half a
-    second per call. Agreement with ``lobe_from_gloss``: within 0.5 % in n (tested). Below the widest
-    lobe's reading (n = 1, ≈ 0.5 GU) the albedo is scaled down, as in the model.
-    """
-    g = float(gloss_gu)
-    if not np.isfinite(g) or not 0.0 <= g <= 100.0:
-        raise DesignInputError("gloss_gu", "0 <= gloss_gu <= 100", gloss_gu)
-    gu, ln_n, albedo = _gloss_table()
-    if g <= gu[0]:
-        return 1.0, albedo * g / gu[0]
-    if g >= gu[-1]:
-        return float(PHONG_MAX), albedo
-    return float(np.exp(np.interp(g, gu, ln_n))), albedo
-
-
-def specular_term(gloss_gu: float, theta_deg: ArrayLike) -> NDArray[np.float64]:
-    """First-surface reflection of *gloss_gu* per unit irradiance, as a reflectance factor:
-    ``π · ρ_s (n + 1)/(2π) cos(θ)^n = ρ_s (n + 1)/2 · cos(θ)^n`` (0 beyond 90°), with the model's
-    normalised Phong lobe ``(n, ρ_s)`` of the gloss (:func:`phong_of_gloss`)."""
-    n, rho = phong_of_gloss(float(gloss_gu))
-    c = np.cos(np.radians(np.asarray(theta_deg, dtype=float)))
-    return rho * (n + 1.0) / 2.0 * np.where(c > 0, np.abs(c) ** n, 0.0)
-
-
 def shade(
     scene: Scene, design: FaceFlopTravelGloss, specular: bool = True, background: ArrayLike = (0.0, 0.0, 0.0)
 ) -> NDArray[np.float64]:
     """Render *design* in *scene*: ``(H, W, 3)`` linear sRGB (module docstring; eq 3.7.1 forwards).
 
-    Only foreground pixels are evaluated (at 128² this is well under 10 ms).
+    The pixel is :func:`station.model.shading.point_light_rgb`; only foreground pixels are evaluated
+    (at 128² this is well under 10 ms).
     """
     out = np.empty((*scene.shape, 3))
     out[:] = np.asarray(background, dtype=float)
     m = scene.mask
-    theta, phi = scene.aspecular_deg[m], scene.lambert[m]
-    c = scene.irradiance * phi[:, None] * design_rgb_at(design, theta)
-    if specular:
-        c = c + (scene.irradiance * np.where(phi > 0, specular_term(design.gloss_gu, theta), 0.0))[:, None]
-    out[m] = c
+    out[m] = point_light_rgb(
+        design, scene.lambert[m], scene.aspecular_deg[m], irradiance=scene.irradiance, specular=specular
+    )
     return out
 
 
 # ------------------------------------------------------------------------------------------ transfer
-
-
-def srgb_encode(linear: ArrayLike) -> NDArray[np.float64]:
-    """IEC 61966-2-1 sRGB encoding of linear values, clipped to [0, 1] (display only; the clip is the
-    display's, the linear data is never clipped)."""
-    x = np.clip(np.asarray(linear, dtype=float), 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-
-
-def srgb_decode(encoded: ArrayLike) -> NDArray[np.float64]:
-    """Inverse sRGB transfer ("inverse gamma", thesis §3.7.3) of display values in [0, 1]."""
-    v = np.asarray(encoded, dtype=float)
-    return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4))
-
-
-def to_uint8(encoded: ArrayLike) -> NDArray[np.uint8]:
-    """Quantise display values in [0, 1] to 8 bits (round half up)."""
-    return np.floor(np.clip(np.asarray(encoded, dtype=float), 0, 1) * 255.0 + 0.5).astype(np.uint8)
 
 
 # ---------------------------------------------------------------------------------- environment light
@@ -382,10 +336,7 @@ def shade_environment(
     acc = np.zeros((int(m.sum()), 3))
     for k in range(len(scene.light_dirs)):
         theta, phi = scene.aspecular_deg[k][m], scene.lambert[k][m]
-        c = phi[:, None] * design_rgb_at(design, theta)
-        if specular:
-            c = c + np.where(phi > 0, specular_term(design.gloss_gu, theta), 0.0)[:, None]
-        acc += scene.light_rgb[k] * c
+        acc += scene.light_rgb[k] * point_light_rgb(design, phi, theta, specular=specular)
     out[m] = acc
     return out
 

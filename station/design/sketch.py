@@ -43,10 +43,11 @@ from scipy.optimize import least_squares, nnls
 
 from station.design.errors import DesignInputError, SketchFitError
 from station.design.moodboard import contrast_gloss
-from station.design.scene import LobeBasis, Scene, shade, specular_term, srgb_decode
+from station.design.scene import LobeBasis, Scene, shade, srgb_decode
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
 from station.model.domain import SHADING_MISFIT_DE
+from station.model.lobe import lobe_reflectance
 from station.model.representations import shape_factor
 
 DEFAULT_GLOSS_GU = 50.0
@@ -351,7 +352,7 @@ def fit_point_light(
     y_all = srgb_decode(art_a[use]) / scene.irradiance  # inverse gamma
     keep = np.ones(n_all, dtype=bool)
     candidates: tuple[float | None, ...] = GLOSS_CANDIDATES if gloss == "fit" else (None,)
-    spec_all = {g: (np.zeros(n_all) if g is None else specular_term(g, theta_all)) for g in candidates}
+    spec_all = {g: (np.zeros(n_all) if g is None else lobe_reflectance(g, theta_all)) for g in candidates}
     g_fit: float | None = None
     for _ in range(outlier_rounds + 1):  # robust least squares: trim outliers, refit
         best_g: tuple[float, NDArray, float, float | None] | None = None

@@ -31,10 +31,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.design.errors import DesignInputError
-from station.design.scene import phong_of_gloss
 from station.model import FaceFlopTravelGloss, ModelInputError
 from station.model.domain import FACE_ANGLE_DEG, GLOSS_MAX_GU, TRAVEL_MAX_DEG, check_lab
 from station.model.gloss import PHONG_MAX, STANDARD_INDEX, SpecularLobe, fresnel_unpolarised, gloss_from_lobe
+from station.model.lobe import phong_lobe
 
 Adjustment = Literal["L", "C", "H"]
 FACE_DEG = FACE_ANGLE_DEG
@@ -166,15 +166,15 @@ def drag_travel(
 
 def highlight_edge_deg(gloss_gu: float) -> float:
     """Aspecular angle (degrees) of the highlight's edge for *gloss_gu*: where the Phong lobe of the
-    gloss (:func:`~station.design.scene.phong_of_gloss`) falls to half its peak, ``cos(θ_e)^n = 1/2`` → ``θ_e = acos(2^(−1/n))``.
+    gloss (:func:`station.model.lobe.phong_lobe`) falls to half its peak, ``cos(θ_e)^n = 1/2`` → ``θ_e = acos(2^(−1/n))``.
 
     This is the "mapping between gloss and aspecular angles" the thesis leaves to the implementation
     (§3.6.2 "Adjust gloss"); the half-maximum edge is the visible rim of the highlight. From 100 GU
     (a mirror, θ_e ≈ 0.02°) it widens to 60° at about 0.5 GU; below that the model keeps the widest
     lobe (n = 1) and dims it, so the edge no longer moves.
     """
-    n, _ = phong_of_gloss(gloss_gu)
-    return math.degrees(math.acos(0.5 ** (1.0 / n)))
+    n, _ = phong_lobe(gloss_gu)
+    return math.degrees(math.acos(0.5 ** (1.0 / float(n))))
 
 
 def gloss_from_edge(theta_edge_deg: float) -> float:

@@ -18,14 +18,14 @@ def plot_snap_view(view: dict, out: str | Path, title: str = "") -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from station.model.colorimetry import lab_to_linear_srgb, srgb_encode
+    from station.model.display import lab_to_display
 
     out = Path(out)
     cloud = np.asarray(view["cloud"]["lab"], dtype=float).reshape(-1, 3)
     fig = plt.figure(figsize=(7, 6), dpi=110)
     ax = fig.add_subplot(projection="3d")
     if cloud.size:
-        rgb = np.clip(srgb_encode(np.clip(lab_to_linear_srgb(cloud), 0.0, 1.0)), 0.0, 1.0)
+        rgb = lab_to_display(cloud)
         ax.scatter(
             cloud[:, 1],
             cloud[:, 2],

@@ -3,8 +3,9 @@
 Aspecular measurements ⇄ face/flop/travel/gloss ⇄ clamped quadratic, plus gloss ⇄ specular lobe,
 library indices, colour differences, spectra and the design file format. The limits and vocabulary
 of the domain (Lab bound, geometry sets and names, gloss range, tolerances) are in
-:mod:`station.model.domain`. Every other core package
-builds on these names.
+:mod:`station.model.domain`. Every other core package builds on these names, and on the physics they
+share: the gloss lobe (:mod:`station.model.lobe`), the reference point-light shading of a design
+(:mod:`station.model.shading`) and Lab ⇄ display sRGB (:mod:`station.model.display`).
 """
 
 from station.model.angles import validate_angle_set

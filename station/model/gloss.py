@@ -149,11 +149,36 @@ def _geometry_nodes(
     return {"psi_b": psi_b, "w_src": w_src, "centres": centres, "dirs": dirs, "theta": np.float64(theta)}
 
 
+def _phong_fractions(exponents: NDArray[np.float64], geometry_deg: int) -> NDArray[np.float64]:
+    """Mean fraction of normalised Phong lobes (about the mirror image) collected by the receptor.
+
+    *exponents*: Phong exponents n ≥ 1, shape (k,); returns the fractions, shape (k,).
+    """
+    nodes = _geometry_nodes(geometry_deg)
+    n = np.asarray(exponents, dtype=float).reshape(-1, 1, 1)
+    log_cos = np.log(np.cos(nodes["psi_b"]))[None]
+    captured = -np.expm1((n + 1.0) * log_cos)  # 1 − cos^{n+1}ψ_b, the exact radial integral
+    return np.asarray(captured.mean(axis=2) @ nodes["w_src"], dtype=float)
+
+
 def _phong_fraction(n: float, geometry_deg: int) -> float:
     """Mean fraction of a normalised Phong lobe (about the mirror image) collected by the receptor."""
     nodes = _geometry_nodes(geometry_deg)
     captured = 1.0 - np.cos(nodes["psi_b"]) ** (n + 1.0)  # exact radial integral, averaged over φ
     return float(nodes["w_src"] @ captured.mean(axis=1))
+
+
+def phong_gloss_readings(
+    exponents: NDArray[np.float64], coat_index: float = STANDARD_INDEX
+) -> NDArray[np.float64]:
+    """Simulated 60° gloss (GU) of Phong lobes with the coat's Fresnel albedo, for many exponents at once.
+
+    The same reading as :func:`gloss_from_lobe` of ``SpecularLobe(n, F(60°; n_coat), …)`` for each
+    exponent n (dimensionless, ≥ 1), vectorised: 100 × F(60°; n_coat) × collected fraction / F(60°; 1.567).
+    """
+    albedo = fresnel_unpolarised(60.0, coat_index)
+    frac = _phong_fractions(np.asarray(exponents, dtype=float), 60)
+    return 100.0 * albedo * frac / fresnel_unpolarised(60.0, STANDARD_INDEX)
 
 
 def _ward_fraction(alpha: float, geometry_deg: int, n_rad: int = 32, phi_step: int = 3) -> float:

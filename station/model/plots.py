@@ -15,13 +15,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from station.model.angles import ANGLES_6
-from station.model.colorimetry import lab_to_linear_srgb, srgb_encode
+from station.model.display import lab_to_display
 from station.model.representations import FaceFlopTravelGloss
 
 
 def _swatch_rgb(design: FaceFlopTravelGloss) -> np.ndarray:
     """Display colour of the design at 45° (sRGB-encoded, clipped for the legend only)."""
-    return np.clip(srgb_encode(np.clip(lab_to_linear_srgb(design.lab_at(45.0)), 0, 1)), 0, 1)
+    return lab_to_display(design.lab_at(45.0))
 
 
 def plot_designs(designs: Sequence[FaceFlopTravelGloss], out: str | Path) -> Path:

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from station.model.shading import aspecular_deg
 from station.render.errors import RenderInputError
 from station.render.numpy_renderer import GBuffer
 
@@ -49,9 +50,7 @@ def angle_buffers(g: GBuffer, light_dir) -> AngleBuffers:
     """Aspecular and incidence angles (degrees) per pixel for a distant light along *light_dir*."""
     lvec = _unit(light_dir)
     n_dot_l = g.normal @ lvec
-    spec = 2.0 * n_dot_l[..., None] * g.normal - lvec
-    cos_as = np.clip(np.sum(spec * g.view, axis=-1), -1.0, 1.0)
-    asp = np.where(g.mask, np.degrees(np.arccos(cos_as)), 0.0)
+    asp = np.where(g.mask, aspecular_deg(lvec, g.view, g.normal), 0.0)
     inc = np.where(g.mask, np.degrees(np.arccos(np.clip(n_dot_l, -1.0, 1.0))), 0.0)
     return AngleBuffers(asp.astype(np.float32), inc.astype(np.float32), g.mask.copy())
 

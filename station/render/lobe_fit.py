@@ -12,13 +12,14 @@ R = 2(N·L)N − L and aspecular angle α = ∠(R, V):
   θ_c = 16°), and near specular the gloss lobe dominates anyway.
   A reflectance factor compares the sample with the perfect white diffuser (BRDF 1/π) under the same
   geometry, so the colour part of the BRDF is ρ(α)/π (the thesis's I·f = C, eq 4.3.3–4.3.4).
-* the gloss lobe is the energy-conserving Phong lobe of :func:`station.model.gloss.lobe_from_gloss`:
+* the gloss lobe is the energy-conserving Phong lobe of :func:`station.model.gloss.lobe_from_gloss`
+  (:mod:`station.model.lobe`; the shading is :func:`station.model.shading.shade_reflectance`):
   exponent n, specular albedo ρ_s (grey, the coat's Fresnel reflectance at 60°). The model defines it
   as the distribution (n + 1)/(2π) cosⁿψ of the reflected flux about the mirror direction, so the
   reflected radiance is ρ_s times the normalised-lobe average of the incident radiance about R (a
   constant environment L gives ρ_s L): exactly the K_G form of eq 2.3.2 with K_G = ρ_s (n+1)/(2π).
-  GU → (n, ρ_s) is read from a table of that function (station/render/data/gloss_lobes.json, 1 GU
-  steps, log n interpolated), because one call simulates the gloss meter and takes ~0.4 s.
+  GU → (n, ρ_s) is :func:`station.model.lobe.phong_lobe` (a table of the forward gloss-meter
+  simulation, log n interpolated), because one call of the inverse takes ~0.1 s.
 
 The lobe model (eqs 2.3.1–2.3.3, :mod:`station.render.weights`) splits the same way, so the fit solves
 two fixed-matrix problems per design, each over the sample geometries of :mod:`station.render.lobes`
@@ -56,6 +57,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from station.model.colorimetry import lab_to_linear_srgb
+from station.model.domain import FACE_ANGLE_DEG
+from station.model.lobe import lobe_brdf_cos, phong_lobe
+from station.model.representations import shape_factor
+from station.model.shading import design_reflectance, shade_reflectance
 from station.render.errors import RenderError, RenderInputError
 from station.render.lobes import (
     COLOUR_ALPHAS_DEG,
@@ -90,8 +96,6 @@ METHODS = ("auto", "kkt", "enum", "nnls", "lp-l1", "clamped-lsq")
 AUTO_BATCH = 16
 #: Time limit (s) of one HiGHS solve (thesis §2.4: "a time limit for finding a solution must be set").
 LP_TIME_LIMIT_S = 0.05
-#: Aspecular angle (degrees) of the model's face; the designed colour is held at the face below it.
-FACE_ANGLE_DEG = 15.0
 #: Grid (degrees) of the tabulated reflectance factor ρ(α) of a designed BRDF.
 ALPHA_GRID_DEG = np.linspace(0.0, 180.0, 721)
 #: Aspecular angles (degrees) at which targets sample ρ(α): every angle of the sample geometries.
@@ -149,55 +153,27 @@ class DesignedBRDF:
 
     def gloss_cos(self, cos_alpha: NDArray[np.float64]) -> NDArray[np.float64]:
         """Gloss term of BRDF·cos, ρ_s (n+1)/(2π) max(cos α, 0)^n, sr⁻¹, same shape as *cos_alpha*."""
-        c = np.clip(np.asarray(cos_alpha, dtype=float), 0.0, 1.0)
-        n = self.phong_exponent
-        return self.specular_albedo * (n + 1.0) / (2.0 * np.pi) * c**n
+        return lobe_brdf_cos(self.phong_exponent, self.specular_albedo, cos_alpha)
 
     def brdf_cos(self, n_dot_l: NDArray[np.float64], cos_alpha: NDArray[np.float64]) -> NDArray[np.float64]:
         """BRDF × (N·L) in sr⁻¹, linear sRGB, shape (..., 3); zero for light below the horizon."""
-        nl = np.maximum(np.asarray(n_dot_l, dtype=float), 0.0)
         alpha = np.degrees(np.arccos(np.clip(cos_alpha, -1.0, 1.0)))
-        total = nl[..., None] * self.rho(alpha) / np.pi + self.gloss_cos(cos_alpha)[..., None]
-        return np.where((nl > 0.0)[..., None], total, 0.0)
+        # the model's reference point-light shading as a reflectance factor, ÷ π for sr⁻¹
+        return shade_reflectance(n_dot_l, self.rho(alpha), np.pi * self.gloss_cos(cos_alpha)) / np.pi
 
 
 def _rgb_table(lab: NDArray[np.float64]) -> NDArray[np.float64]:
-    from station.model.colorimetry import lab_to_linear_srgb
-
     return np.asarray(lab_to_linear_srgb(lab), dtype=float)
 
 
-@lru_cache(maxsize=1)
-def _gloss_table() -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    import json
-    from importlib import resources
-
-    data = json.loads(resources.files("station.render").joinpath("data/gloss_lobes.json").read_text())
-    rows = np.asarray(data["rows"], dtype=float)
-    return rows[:, 0], np.log(rows[:, 1]), rows[:, 2]
-
-
-def gloss_lobe(gloss_gu: float | NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Phong exponent n and specular albedo ρ_s of 60° gloss (GU, 0–100), from the shipped table.
-
-    The table holds :func:`station.model.gloss.lobe_from_gloss` at every whole GU; log n and ρ_s are
-    interpolated linearly between them.
-    """
-    gu, log_n, albedo = _gloss_table()
-    g = np.asarray(gloss_gu, dtype=float)
-    if not np.all(np.isfinite(g)) or np.any(g < gu[0]) or np.any(g > gu[-1]):
-        raise RenderInputError("gloss_gu", f"{gu[0]:g} <= gloss_gu <= {gu[-1]:g}", gloss_gu)
-    return np.exp(np.interp(g, gu, log_n)), np.interp(g, gu, albedo)
-
-
 def _lobe(gloss_gu: float) -> tuple[float, float]:
-    n, rho_s = gloss_lobe(gloss_gu)
+    n, rho_s = phong_lobe(gloss_gu)
     return float(n), float(rho_s)
 
 
 def designed_brdf(design: FaceFlopTravelGloss) -> DesignedBRDF:
     """Tabulate the designed BRDF of *design* (clamped-quadratic colour + Phong gloss lobe)."""
-    rgb = _rgb_table(design.lab_at(np.maximum(ALPHA_GRID_DEG, FACE_ANGLE_DEG)))
+    rgb = design_reflectance(design, np.maximum(ALPHA_GRID_DEG, FACE_ANGLE_DEG))
     n, rho_s = _lobe(float(design.gloss_gu))
     oog = bool(np.any(rgb < 0.0))
     return DesignedBRDF(rgb, n, rho_s, getattr(design, "name", ""), oog)
@@ -229,13 +205,12 @@ def sample_targets(designs: Sequence[FaceFlopTravelGloss]) -> Targets:
     face = np.array([d.face for d in designs], dtype=float).reshape(-1, 3)
     flop = np.array([d.flop for d in designs], dtype=float).reshape(-1, 3)
     travel = np.array([np.nan if d.travel_deg is None else d.travel_deg for d in designs], dtype=float)
-    # The model's closed form X(θ) = flop + (face − flop)·s(θ)², s = (θ_c − min(θ, θ_c))/(θ_c − 15°)
-    # (station.model.representations), vectorised over designs; a solid (no travel) is its face.
+    # The model's X(θ) = flop + (face − flop)·s(θ)² (eq 3.3.2, station.model.representations.shape_factor),
+    # broadcast over designs; a solid (no travel) is its face.
     tc = np.where(np.isnan(travel), 2 * FACE_ANGLE_DEG, travel)[:, None]
-    s = (tc - np.minimum(theta[None, :], tc)) / (tc - FACE_ANGLE_DEG)
-    s2 = np.where(np.isnan(travel)[:, None], 1.0, s * s)
+    s2 = np.where(np.isnan(travel)[:, None], 1.0, shape_factor(theta[None, :], tc))  # type: ignore[arg-type]
     lab = flop[:, None, :] + (face - flop)[:, None, :] * s2[:, :, None]
-    n, rho_s = gloss_lobe(np.array([float(d.gloss_gu) for d in designs]))
+    n, rho_s = phong_lobe(np.array([float(d.gloss_gu) for d in designs]))
     return Targets(_rgb_table(lab), np.atleast_1d(n), np.atleast_1d(rho_s))
 
 
@@ -328,9 +303,8 @@ class FitProblem:
 
     def _gloss_values(self, t: Targets, rows: NDArray[np.intp]) -> NDArray[np.float64]:
         """Gloss term of BRDF·cos, ρ_s (n+1)/(2π) cos^n α, at *rows*, shape (d, len(rows))."""
-        n = t.phong_exponent[:, None]
-        peak = t.specular_albedo[:, None] * (n + 1.0) / (2.0 * np.pi)
-        return peak * np.clip(self.geometry.cos_alpha[rows], 0.0, 1.0)[None, :] ** n
+        cos_alpha = self.geometry.cos_alpha[rows][None, :]
+        return lobe_brdf_cos(t.phong_exponent[:, None], t.specular_albedo[:, None], cos_alpha)
 
     def colour_b(self, t: Targets) -> NDArray[np.float64]:
         """Weighted RHS of the colour part, shape (d, rows_c, 3)."""
@@ -371,9 +345,7 @@ class FitProblem:
     def gloss_d(self, t: Targets) -> NDArray[np.float64]:
         """Reduced gloss RHS Qᵀb, shape (m, d)."""
         gmap, cos_u = self._gloss_map
-        n = t.phong_exponent
-        peak = t.specular_albedo * (n + 1.0) / (2.0 * np.pi)
-        return gmap @ (cos_u[:, None] ** n[None, :] * peak[None, :])
+        return gmap @ lobe_brdf_cos(t.phong_exponent[None, :], t.specular_albedo[None, :], cos_u[:, None])
 
     def gloss_b(self, t: Targets) -> NDArray[np.float64]:
         """Weighted RHS of the ``thesis`` gloss part, shape (d, rows_g, 1)."""

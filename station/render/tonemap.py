@@ -8,14 +8,28 @@
    * ``reinhard`` — x / (1 + x) (Reinhard et al. 2002, eq 3);
    * ``clip`` — no curve, values clipped to [0, 1] (for colorimetric views where nothing exceeds 1).
 3. Encoding: the exact piecewise sRGB OETF (IEC 61966-2-1), 12.92x for x ≤ 0.0031308, else
-   1.055x^(1/2.4) − 0.055, then 8 bits by rounding.
+   1.055x^(1/2.4) − 0.055 (:func:`station.model.display.encode_display`, re-exported here as
+   ``srgb_encode`` with its inverse ``srgb_decode``), then 8 bits by rounding.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from station.model.display import decode_display as srgb_decode
+from station.model.display import encode_display as srgb_encode
 from station.render.errors import RenderInputError
+
+__all__ = [
+    "CURVES",
+    "check_curve",
+    "display_lut",
+    "save_png",
+    "srgb_decode",
+    "srgb_encode",
+    "to_display",
+    "tone_curve",
+]
 
 CURVES = ("aces", "reinhard", "clip")
 
@@ -38,18 +52,6 @@ def tone_curve(x: np.ndarray, curve: str = "aces") -> np.ndarray:
     else:
         y = x
     return np.clip(y, 0.0, 1.0)
-
-
-def srgb_encode(x: np.ndarray) -> np.ndarray:
-    """Exact piecewise sRGB OETF of display-linear values in [0, 1]."""
-    x = np.clip(x, 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
-
-
-def srgb_decode(v: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`srgb_encode`."""
-    v = np.asarray(v, dtype=np.float64)
-    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
 
 
 def to_display(linear: np.ndarray, exposure_ev: float = 0.0, curve: str = "aces") -> np.ndarray:

@@ -89,6 +89,23 @@ def test_gloss_option_brightens_near_specular_only():
     assert far == pytest.approx(0.0, abs=1e-6)
 
 
+def test_gloss_lobe_at_the_mirror_matches_the_model_lobe():
+    """At the mirror geometry the lobe adds ρ_s (n+1)/2 (not scaled by L·N), ÷ L·N_A for the reference."""
+    from station.model.gloss import lobe_from_gloss
+
+    p = FaceFlopTravelGloss((50.0, 0.0, 0.0), (50.0, 0.0, 0.0), None, gloss_gu=60.0)
+    z = np.array([0.0, 0.0, 1.0])
+    lobe = lobe_from_gloss(60.0)
+    peak = lobe.specular_albedo * (lobe.phong_exponent + 1.0) / 2.0
+    y = ((50.0 + 16.0) / 116.0) ** 3
+    for light in (20.0, 45.0, 70.0):
+        k_a = math.cos(math.radians(light))
+        for exposure, white in (("reference", k_a), ("absolute", 1.0)):
+            c = point_colour(p, direction(light), direction(-light), z, exposure=exposure, gloss=True)
+            expected = 116.0 * ((k_a * y + peak) / white) ** (1 / 3) - 16.0
+            assert c[0] == pytest.approx(expected, rel=1e-4)
+
+
 def test_equirect_weights_sum_to_sphere():
     env = Environment.from_equirect(np.ones((32, 64, 3)))
     assert env.radiance[:, 0].sum() == pytest.approx(4 * math.pi, rel=1e-3)

@@ -132,10 +132,10 @@ def test_gamut_bound_respected():
     """A saturated red whose correction would leave sRGB is held on the bound."""
     a = FaceFlopTravelGloss((40.0, 62.0, 48.0), (40.0, 62.0, 48.0), None)
     r = inverse_trompe_loeil(a, [60.0], beta_deg=-8.0, objective="single")
-    from station.analysis.gamut import lab_to_rgb
+    from station.model.colorimetry import lab_to_linear_srgb as rgb
 
-    assert np.all(lab_to_rgb(np.array(r.paint.face)) >= np.minimum(0.0, lab_to_rgb(np.array(a.face))) - 1e-6)
-    assert np.all(lab_to_rgb(np.array(r.paint.face)) <= 1.0 + 1e-6)
+    assert np.all(rgb(np.array(r.paint.face)) >= np.minimum(0.0, rgb(np.array(a.face))) - 1e-6)
+    assert np.all(rgb(np.array(r.paint.face)) <= 1.0 + 1e-6)
 
 
 @pytest.mark.parametrize(

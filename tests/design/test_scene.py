@@ -106,18 +106,17 @@ def test_environment_image_is_linear_in_the_basis() -> None:
     assert shade_environment(env, solid, specular=False)[m] == pytest.approx(basis.images[0][m], abs=1e-9)
 
 
-def test_gloss_lobe_table_matches_the_model_mapping() -> None:
-    from station.design.scene import phong_of_gloss
-    from station.model.gloss import lobe_from_gloss
+def test_shade_is_the_model_reference_shading() -> None:
+    """The scene shader adds nothing of its own: a lit pixel is E·[ϕ·ρ(θ) + lobe(θ)] of the model."""
+    from station.model.lobe import lobe_reflectance
+    from station.model.shading import design_reflectance
 
-    for g in (10.0, 60.0):
-        lobe = lobe_from_gloss(g)
-        n, rho = phong_of_gloss(g)
-        assert n == pytest.approx(lobe.phong_exponent, rel=5e-3)
-        assert rho == pytest.approx(lobe.specular_albedo, rel=1e-9)
-    assert phong_of_gloss(0.0) == (1.0, 0.0)
-    with pytest.raises(DesignInputError, match="gloss_gu"):
-        phong_of_gloss(100.5)
+    sc = sphere_scene(32, irradiance=2.0)
+    d = FaceFlopTravelGloss((60.0, 10.0, -20.0), (30.0, 5.0, -10.0), 60.0, 60.0)
+    m = sc.mask & (sc.lambert > 0)
+    theta, phi = sc.aspecular_deg[m], sc.lambert[m]
+    expected = 2.0 * (phi[:, None] * design_reflectance(d, theta) + lobe_reflectance(60.0, theta)[:, None])
+    assert shade(sc, d)[m] == pytest.approx(expected, rel=1e-12, abs=1e-15)
 
 
 def test_scene_from_external_buffers_matches_the_generator(sphere) -> None:

@@ -95,9 +95,9 @@ def test_drag_travel_takes_the_angle_under_the_cursor(sphere, red_metallic) -> N
 def test_highlight_edge_and_gloss_invert_each_other(sphere, red_metallic) -> None:
     edge = highlight_edge_deg(50.0)
     # the 50 GU lobe: cos^n(edge) = 1/2 by definition of the edge
-    from station.design.scene import phong_of_gloss
+    from station.model.lobe import phong_lobe
 
-    assert math.cos(math.radians(edge)) ** phong_of_gloss(50.0)[0] == pytest.approx(0.5)
+    assert math.cos(math.radians(edge)) ** float(phong_lobe(50.0)[0]) == pytest.approx(0.5)
     # gloss_from_edge reads the edge's lobe with the model's simulated meter (exact forward direction)
     assert gloss_from_edge(edge) == pytest.approx(50.0, abs=0.05)
     assert gloss_from_edge(highlight_edge_deg(90.0)) == pytest.approx(90.0, abs=0.05)

@@ -145,16 +145,17 @@ def test_fit_design_default_basis_and_errors(design_db) -> None:
         lf.fit_targets(lf.sample_targets(design_db[:1]), BASIS, "enum", gloss_form="none")
 
 
-def test_gloss_table_matches_the_model() -> None:
+def test_designed_lobe_is_the_model_mapping() -> None:
+    from station.model import FaceFlopTravelGloss
     from station.model.gloss import lobe_from_gloss
 
-    for gu in (37.5, 93.3):
-        n, rho_s = lf.gloss_lobe(gu)
+    for gu in (37.5, 93.3, 99.5):
+        brdf = lf.designed_brdf(FaceFlopTravelGloss((60.0, 0.0, 0.0), (30.0, 0.0, 0.0), 60.0, gu))
         ref = lobe_from_gloss(gu)
-        assert float(n) == pytest.approx(ref.phong_exponent, rel=0.01)
-        assert float(rho_s) == pytest.approx(ref.specular_albedo, rel=1e-6)
-    with pytest.raises(InputError):
-        lf.gloss_lobe(101.0)
+        assert brdf.phong_exponent == pytest.approx(ref.phong_exponent, rel=1e-4)
+        assert brdf.specular_albedo == pytest.approx(ref.specular_albedo, rel=1e-9)
+        targets = lf.sample_targets([FaceFlopTravelGloss((60.0, 0.0, 0.0), (30.0, 0.0, 0.0), 60.0, gu)])
+        assert float(targets.phong_exponent[0]) == brdf.phong_exponent
 
 
 def test_designed_brdf_closed_forms(design_db) -> None:

@@ -16,9 +16,8 @@ from station.design.palette import booklet
 from station.formulate.library import Library, LibraryFilter, hierarchy_counts
 from station.formulate.snap import SnapIndex, SnapResult, color_snap
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
-from station.model.colorimetry import lab_to_linear_srgb
+from station.model.display import lab_to_display
 from station.model.domain import ANGLES_3
-from station.render.tonemap import srgb_encode
 from ui.models.events import EventGroup
 
 SNAP_ANGLES = ANGLES_3
@@ -40,7 +39,7 @@ def bar_images(library: Library, rows: np.ndarray, width: int = 64, height: int 
     cols = np.stack(
         [np.stack([np.interp(t, angles, lab[n, :, c]) for c in range(3)], -1) for n in range(len(rows))]
     )
-    rgb = np.round(srgb_encode(np.asarray(lab_to_linear_srgb(cols))) * 255).astype(np.uint8)
+    rgb = np.round(lab_to_display(cols) * 255).astype(np.uint8)
     return np.repeat(rgb[:, None], height, axis=1)
 
 

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 from PySide6.QtGui import QColor, QImage, QPixmap
 
-from station.model.colorimetry import lab_to_linear_srgb
-from station.render.tonemap import srgb_encode
+from station.model.display import lab_to_display
 
 
 def pixmap_from_array(img: np.ndarray) -> QPixmap:
@@ -18,12 +17,10 @@ def pixmap_from_array(img: np.ndarray) -> QPixmap:
 
 def lab_colour(lab) -> QColor:
     """Display colour of one Lab triple (D65/10°; out-of-gamut values clipped for display only)."""
-    rgb = np.round(srgb_encode(np.asarray(lab_to_linear_srgb(np.asarray(lab, float)))) * 255).astype(int)
+    rgb = np.round(lab_to_display(np.asarray(lab, float)) * 255).astype(int)
     return QColor(*(int(v) for v in rgb))
 
 
 def lab_colours(lab: np.ndarray) -> np.ndarray:
     """Display sRGB uint8 (..., 3) of Lab values (..., 3)."""
-    return np.round(srgb_encode(np.asarray(lab_to_linear_srgb(np.asarray(lab, float)))) * 255).astype(
-        np.uint8
-    )
+    return np.round(lab_to_display(np.asarray(lab, float)) * 255).astype(np.uint8)
