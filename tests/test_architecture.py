@@ -218,3 +218,65 @@ def test_the_checker_finds_a_copied_bound(source: str) -> None:
 )
 def test_the_checker_leaves_other_numbers_alone(source: str) -> None:
     assert violations(source) == [], source
+
+
+def _domain_constants() -> set[str]:
+    """Upper-case module-level names that station/model/domain.py assigns (its limits and vocabulary)."""
+    tree = ast.parse(DOMAIN.read_text())
+    names: set[str] = set()
+    for node in tree.body:
+        targets = (
+            node.targets
+            if isinstance(node, ast.Assign)
+            else [node.target]
+            if isinstance(node, ast.AnnAssign)
+            else []
+        )
+        for t in targets:
+            for n in ast.walk(t):
+                if isinstance(n, ast.Name) and n.id.isupper():
+                    names.add(n.id)
+    return names
+
+
+def redefinitions(source: str, constants: set[str], where: str = "<source>") -> list[str]:
+    """Module-level assignments in *source* that bind a name the domain module defines."""
+    found = []
+    for node in ast.parse(source).body:
+        targets = (
+            node.targets
+            if isinstance(node, ast.Assign)
+            else [node.target]
+            if isinstance(node, ast.AnnAssign)
+            else []
+        )
+        for t in targets:
+            for n in ast.walk(t):
+                if isinstance(n, ast.Name) and n.id in constants:
+                    # A plain alias of the domain's own name (X = domain.X) is an import, not a copy.
+                    value = getattr(node, "value", None)
+                    if isinstance(value, (ast.Name, ast.Attribute)):
+                        continue
+                    found.append(
+                        f"{where}:{node.lineno}: {n.id} redefined (import it from station.model.domain)"
+                    )
+    return found
+
+
+def test_no_module_redefines_a_domain_constant() -> None:
+    constants = _domain_constants()
+    assert {"FACE_ANGLE_DEG", "L_MAX", "AB_MAX", "TRAVEL_MAX_DEG"} <= constants
+    found = [
+        v for p in _sources() for v in redefinitions(p.read_text(), constants, p.relative_to(REPO).as_posix())
+    ]
+    assert found == [], "\n".join(found)
+
+
+def test_the_redefinition_check_can_fail() -> None:
+    constants = _domain_constants()
+    assert redefinitions("FACE_ANGLE_DEG = 15.0\n", constants)
+    assert redefinitions("GLOSS_MIN_GU, GLOSS_MAX_GU = 0.0, 100.0\n", constants)
+    assert (
+        redefinitions("from station.model.domain import FACE_ANGLE_DEG\nX = FACE_ANGLE_DEG\n", constants)
+        == []
+    )

@@ -46,11 +46,10 @@ from station.design.moodboard import contrast_gloss
 from station.design.scene import LobeBasis, Scene, shade, srgb_decode
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
-from station.model.domain import SHADING_MISFIT_DE
+from station.model.domain import DEFAULT_GLOSS_GU, SHADING_MISFIT_DE
 from station.model.lobe import lobe_reflectance
 from station.model.representations import shape_factor
 
-DEFAULT_GLOSS_GU = 50.0
 #: Art pixels whose every sRGB-encoded channel exceeds this are "near white" and ignored.
 NEAR_WHITE = 0.95
 #: Encoded difference above which an art pixel counts as changed (2 code values of 255).
