@@ -144,13 +144,13 @@ def snap(*, session: Session, cache: LibraryCache, request: SnapRequest) -> dict
     out = result.to_dict()
     out["matches"] = [
         {
-            "code": m["code"],
-            "library_paint_id": int(cached.ids[m["index"]]),
-            "sum_de": m["sum_de"],
-            "de_per_angle": m["de_per_angle"],
-            "recipe": cached.recipes[m["index"]],
+            "code": m.code,
+            "library_paint_id": int(cached.ids[m.index]),
+            "sum_de": m.sum_de,
+            "de_per_angle": list(m.de_per_angle),
+            "recipe": cached.recipes[m.index],
         }
-        for m in out["matches"]
+        for m in result.matches
     ]
     out.update(
         design_lab=np.asarray(result.design_lab, dtype=float).tolist(),
