@@ -50,9 +50,7 @@ def _design(args: argparse.Namespace) -> FaceFlopTravelGloss:
     return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, args.gloss)  # type: ignore[arg-type]
 
 
-def _xy(text: str | None, field: str) -> tuple[float, float] | None:
-    if text is None:
-        return None
+def _xy(text: str, field: str) -> tuple[float, float]:
     x, y = parse_floats(text, field, 2)
     return (x, y)
 
@@ -82,10 +80,10 @@ def _eyedrop(args: argparse.Namespace) -> dict[str, Any]:
         face,
         flop,
         travel_deg=args.travel,
-        gloss_gu=args.gloss_gu,  # type: ignore[arg-type]
+        gloss_gu=args.gloss_gu,
         radius=args.radius,
         auto_swap=not args.no_swap,
-        gloss_xy=_xy(args.gloss, "gloss"),
+        gloss_xy=None if args.gloss is None else _xy(args.gloss, "gloss"),
     )
     out: dict[str, Any] = {
         "design": design_to_dict(r.design),
