@@ -108,7 +108,7 @@ def _check_geometry(geometry_deg: float) -> int:
     return g
 
 
-def _direction(theta: NDArray, u: NDArray, v: NDArray) -> NDArray:
+def _direction(theta: float, u: NDArray, v: NDArray) -> NDArray:
     """Unit vector at in-plane offset *u* and perpendicular offset *v* from the mirror direction (radians)."""
     a = theta + u
     return np.stack([np.sin(a) * np.cos(v), np.sin(v), np.cos(a) * np.cos(v)], axis=-1)
@@ -125,7 +125,7 @@ def _geometry_nodes(
     xv, wv = np.polynomial.legendre.leggauss(n_src[1])
     us, vs = np.meshgrid(xu * su, xv * sv, indexing="ij")
     w_src = np.outer(wu, wv).ravel() / 4.0
-    centres = _direction(np.float64(theta), us.ravel(), vs.ravel())  # mirror images of the source points
+    centres = _direction(theta, us.ravel(), vs.ravel())  # mirror images of the source points
     phi = (np.arange(n_phi) + 0.5) * (2.0 * np.pi / n_phi)
     # orthonormal tangent frame at each centre: e1 along increasing u, e2 completes the frame
     e1 = np.stack([np.cos(theta + us.ravel()), np.zeros(us.size), -np.sin(theta + us.ravel())], axis=-1)
