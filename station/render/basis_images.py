@@ -22,6 +22,7 @@ import numpy as np
 
 from station.render import tonemap
 from station.render.cubemap import sample_cube
+from station.render.errors import RenderError
 from station.render.numpy_renderer import (
     BACKGROUND,
     check_paints,
@@ -143,6 +144,9 @@ class BasisImages:
         return out
 
     def _combine(self, pair, scale, ab_pair, idx_all, code_all, packed) -> None:
+        lut = self._lut
+        if lut is None:
+            raise RenderError("basis images: tone-mapping table used before _prepare built it")
         for k, sl in ((0, slice(0, self.split)), (1, slice(self.split, None))):
             rows = self._weight_rows(pair[k]) * scale
             ndv = self.n_dot_v[sl]
@@ -152,7 +156,7 @@ class BasisImages:
                 np.multiply(ab[1], ndv, out=ab[1])
                 np.add(ab[0], ab[1], out=ab[0])
                 idx[:] = ab[0]
-                self._lut[c].take(idx, mode="clip", out=code)
+                lut[c].take(idx, mode="clip", out=code)
                 if c == 0:
                     dest[:] = code
                 else:

@@ -24,7 +24,8 @@ def create_gl_context(require: int = 430):
     except ImportError as exc:  # pragma: no cover - moderngl is a dependency
         raise GLUnavailableError("moderngl is not installed") from exc
     try:
-        ctx = moderngl.create_standalone_context(require=require, backend="egl")
+        # moderngl's stubs type every **settings value as Dict[str, Any]; the backend is a string
+        ctx = moderngl.create_standalone_context(require=require, backend="egl")  # type: ignore[arg-type]
     except Exception as exc:  # moderngl raises plain Exception for EGL failures
         raise GLUnavailableError(f"no headless OpenGL {require / 100:.1f} context via EGL: {exc}") from exc
     ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
@@ -238,7 +239,7 @@ class GLRenderer:
         self._diffuse_tex.use(m + 4)
         self._horizon_tex.use(m + 5)
         uniforms = {
-            **scene.camera.uniforms(self.width, self.height),
+            **scene.view_camera.uniforms(self.width, self.height),
             "u_size": (float(self.width), float(self.height)),
             "u_misalign": float(np.radians(scene.misalignment_deg)),
             "u_background": (BACKGROUND,) * 3,
@@ -265,11 +266,12 @@ class GLRenderer:
             e = np.asarray(self.basis.exponents, np.float32)[self._order]
             prog["u_exponent"].write(e[: prog["u_exponent"].array_length].tobytes())
         if "u_n_lights" in prog:
-            n_lights = self._lights.count if self._lights is not None else 0
+            lights = self._lights
+            n_lights = lights.count if lights is not None else 0
             prog["u_n_lights"].value = n_lights
-            if n_lights:
-                prog["u_light_dir"].write(self._lights.directions.astype(np.float32).tobytes())
-                prog["u_light_flux"].write(self._lights.flux.astype(np.float32).tobytes())
+            if lights is not None and n_lights:
+                prog["u_light_dir"].write(lights.directions.astype(np.float32).tobytes())
+                prog["u_light_flux"].write(lights.flux.astype(np.float32).tobytes())
         for name, part in (("u_wdd", 1), ("u_wg", 2)):
             if name in prog:
                 n = prog[name].array_length

@@ -56,6 +56,11 @@ class Scene:
         if self.camera is None:
             object.__setattr__(self, "camera", DEFAULT_CAMERAS[self.shape])
 
+    @property
+    def view_camera(self) -> Camera:
+        """The camera in use: the one given, else the shape's default (never None)."""
+        return self.camera if self.camera is not None else DEFAULT_CAMERAS[self.shape]
+
 
 @dataclass(frozen=True)
 class Hits:
