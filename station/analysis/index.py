@@ -122,7 +122,7 @@ class IndexResult:
 
     def to_dict(self, per_geometry: bool = False) -> dict[str, Any]:
         """JSON-able form (the CLI's ``--json`` output)."""
-        out = {
+        out: dict[str, Any] = {
             "beta_min_deg": self.beta_min_deg,
             "reached": self.reached,
             "direction": self.direction,
@@ -191,7 +191,7 @@ class SeamModel:
             raise AnalysisInputError("exposure", '"reference" or "absolute"', exposure)
         self.gloss = gloss
         self.env = lights if isinstance(lights, Environment) else None
-        if self.env is None:
+        if not isinstance(lights, Environment):
             if len(lights) != len(views):
                 raise AnalysisInputError("views", f"{len(lights)} view angles (one per light)", len(views))
             self.light_deg = np.asarray(lights, dtype=float)
@@ -388,7 +388,7 @@ def _search(
             if br is not None:
                 brackets.append((br[0], br[1], g, si))
 
-    per = []
+    per: tuple[GeometryIndex, ...] = ()
     if not brackets:
         geom = _geometry_dict(model, 0)
         per = tuple(

@@ -82,7 +82,7 @@ def data_points(design: FaceFlopTravelGloss, angles_deg: tuple[float, ...] = ANG
     if len(angles) < 3 or any(b <= a for a, b in itertools.pairwise(angles)):
         raise DesignInputError("angles_deg", "at least 3 strictly increasing angles", angles_deg)
     lab = design.lab_at(np.array(angles))
-    return DataPoints(angles, tuple(tuple(float(v) for v in row) for row in lab), design.gloss_gu)
+    return DataPoints(angles, tuple((float(L), float(a), float(b)) for L, a, b in lab), design.gloss_gu)
 
 
 @dataclass(frozen=True)
@@ -165,7 +165,9 @@ def hsb_edit_points(
     lab = _rotate_scale(points.as_array(), h, s, b)
     for i, row in enumerate(lab):
         _check_L(row[0], f"lab[{i}].L")
-    new = DataPoints(points.angles_deg, tuple(tuple(float(v) for v in r) for r in lab), points.gloss_gu)
+    new = DataPoints(
+        points.angles_deg, tuple((float(L), float(a), float(b)) for L, a, b in lab), points.gloss_gu
+    )
     return PointEdit(new, new.fit())
 
 

@@ -122,10 +122,10 @@ def adjust_at(
         r = float(ratio_r(theta, design.travel_deg))
         face2 = (1.0 - r) * face + r * _temporary(design.face, kind, delta)  # eq 3.6.5
         flop2 = r * flop + (1.0 - r) * _temporary(design.flop, kind, delta)  # eq 3.6.6
-        for name, lab in (("face", face2), ("flop", flop2)):
-            if not L_EDIT_RANGE[0] <= lab[0] <= L_EDIT_RANGE[1]:
+        for name, edited in (("face", face2), ("flop", flop2)):
+            if not L_EDIT_RANGE[0] <= edited[0] <= L_EDIT_RANGE[1]:
                 raise DesignInputError(
-                    "delta", f"an adjustment keeping {name} L* in 0..100", delta, f"L* {lab[0]:.4g}"
+                    "delta", f"an adjustment keeping {name} L* in 0..100", delta, f"L* {edited[0]:.4g}"
                 )
         new = design.replace(face=tuple(float(v) for v in face2), flop=tuple(float(v) for v in flop2))
     except DesignInputError:

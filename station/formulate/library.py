@@ -151,7 +151,7 @@ class Library:
             type=str(self.types[i]),
             gloss_gu=float(self.gloss_gu[i]),
             angles_deg=self.angles_deg,
-            lab=tuple(tuple(float(v) for v in row) for row in self.lab[i]),
+            lab=tuple((float(L), float(a), float(b)) for L, a, b in self.lab[i]),
             recipe=recipe,
             group=tuple(str(g[0]) for g in groups),  # type: ignore[arg-type]
         )

@@ -171,7 +171,7 @@ def write_library_csv(library: Library, target: str | Path | io.TextIOBase) -> N
     order = [library.angles_deg.index(float(h[1:])) for h in header[3::3]]
     fmt = f"{{:.{PRECISION_DECIMALS}f}}"
     own = isinstance(target, (str, Path))
-    fh = open(target, "w", newline="", encoding="utf-8") if own else target
+    fh = open(target, "w", newline="", encoding="utf-8") if isinstance(target, (str, Path)) else target
     try:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(header)
