@@ -127,7 +127,8 @@ class ViewSettings:
         eye = target + d * np.array(
             [math.cos(pitch) * math.sin(yaw), math.sin(pitch), math.cos(pitch) * math.cos(yaw)]
         )
-        return Camera(tuple(map(float, eye)), base.target, base.up, base.fov_deg)
+        x, y, z = (float(v) for v in eye)
+        return Camera((x, y, z), base.target, base.up, base.fov_deg)
 
     def scene(self) -> Scene:
         """The core scene (shape + orbit camera)."""
