@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from station.cli._common import add_json_flag, parse_floats
+from station.cli._common import add_json_flag, parse_floats, parse_lab
 from station.design.images import load_image, save_png
 from station.design.moodboard import eyedrop_design
 from station.design.palette import booklet, swatch
@@ -42,12 +42,12 @@ def _design(args: argparse.Namespace) -> FaceFlopTravelGloss:
         return load_design(args.design)
     if args.face is None:
         raise InputError("face", "--face L,a,b (or --design FILE)")
-    face = parse_floats(args.face, "face", 3)
-    flop = parse_floats(args.flop, "flop", 3) if args.flop else face
+    face = parse_lab(args.face, "face")
+    flop = parse_lab(args.flop, "flop") if args.flop else face
     travel = args.travel if flop != face else None
     if travel is None and flop != face:
         raise InputError("travel", "--travel DEG (15 < travel <= 180) when face != flop")
-    return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, args.gloss)  # type: ignore[arg-type]
+    return FaceFlopTravelGloss(face, flop, travel, args.gloss)
 
 
 def _xy(text: str, field: str) -> tuple[float, float]:

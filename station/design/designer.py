@@ -126,7 +126,7 @@ def move_point(points: DataPoints, channel: Channel, angle_deg: float, value: fl
         raise DesignInputError("value", f"-150 <= {channel}* <= 150", v)
     lab = [list(row) for row in points.lab]
     lab[matches[0]][k] = v
-    new = DataPoints(points.angles_deg, tuple(tuple(row) for row in lab), points.gloss_gu)  # type: ignore[misc]
+    new = DataPoints(points.angles_deg, tuple((L, a, b) for L, a, b in lab), points.gloss_gu)
     return PointEdit(new, new.fit())
 
 

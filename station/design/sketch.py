@@ -364,7 +364,8 @@ def fit_point_light(
             coef_g, tc_g, sse_g = _sweep_quadratic(theta_all[keep], phi_all[keep], yg, travel_sweep)
             if best_g is None or sse_g < best_g[0]:
                 best_g = (sse_g, coef_g, tc_g, g)
-        _, coef, tc, g_fit = best_g  # type: ignore[misc]
+        assert best_g is not None  # noqa: S101 - candidates is never empty
+        _, coef, tc, g_fit = best_g
         resid = (
             y_all - spec_all[g_fit][:, None] - phi_all[:, None] * _curve(coef, tc, theta_all)
         ) @ LUMINANCE
@@ -483,8 +484,8 @@ def _diffuse_fallback(
         sel = changed & (scene.lambert > 0.0)
     albedo = srgb_decode(art[sel]) / (scene.irradiance * scene.lambert[sel][:, None])
     lab = np.asarray(linear_srgb_to_lab(np.clip(albedo.mean(axis=0), 1e-6, None)), dtype=float)
-    colour = tuple(float(v) for v in lab)
-    design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)  # type: ignore[arg-type]
+    colour = _lab3(lab)
+    design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)
     fit_lin = shade(scene, design)[use]
     art_lin = srgb_decode(art[use])
     return (

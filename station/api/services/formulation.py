@@ -84,6 +84,7 @@ def _build(session: Session, key: tuple[int, int]) -> CachedLibrary:
         lab[i] = [r.lab[where[a]] for a in angles]
     extras = [r.extra or {} for r in rows]
     recipes = [x.get("recipe") for x in extras]
+    given = {i: rc for i, rc in enumerate(recipes) if isinstance(rc, dict)}
     names = sorted({str(x.get("library", "database")) for x in extras})
     lib = Library(
         name=" + ".join(names),
@@ -100,7 +101,7 @@ def _build(session: Session, key: tuple[int, int]) -> CachedLibrary:
     with_recipes = with_index = None
     rows_with = np.flatnonzero(has)
     if rows_with.size:
-        conc = np.array([[float(recipes[i].get(n, 0.0)) for n in colorants] for i in rows_with])  # type: ignore[union-attr]
+        conc = np.array([[float(given[int(i)].get(n, 0.0)) for n in colorants] for i in rows_with])
         with_recipes = Library(
             name=lib.name,
             codes=lib.codes[rows_with],
