@@ -34,13 +34,16 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import aspecular_deg
+
+if TYPE_CHECKING:
+    from station.model import FaceFlopTravelGloss
 
 Exposure = Literal["reference", "absolute"]
 
@@ -159,7 +162,9 @@ class Environment:
         return cls(dirs.reshape(-1, 3), (img * weight[..., None]).reshape(-1, 3))
 
 
-def gloss_reflectance(paint: object, aspec_deg: NDArray[np.float64]) -> NDArray[np.float64] | float:
+def gloss_reflectance(
+    paint: FaceFlopTravelGloss, aspec_deg: NDArray[np.float64]
+) -> NDArray[np.float64] | float:
     """Neutral reflectance factor of the paint's gloss lobe at *aspec_deg* (normalised Phong), or 0."""
     gloss_gu = getattr(paint, "gloss_gu", None)
     if not gloss_gu:
@@ -179,14 +184,14 @@ def _phong_lobe(gloss_gu: float) -> tuple[float, float]:
     return float(lobe.phong_exponent), float(lobe.specular_albedo)
 
 
-def paint_lab(paint: object, aspec_deg: ArrayLike) -> NDArray[np.float64]:
+def paint_lab(paint: FaceFlopTravelGloss, aspec_deg: ArrayLike) -> NDArray[np.float64]:
     """The paint's Lab at aspecular angle(s) in degrees (``FaceFlopTravelGloss.lab_at``), shape (..., 3)."""
     a = np.asarray(aspec_deg, dtype=float)
-    return np.asarray(paint.lab_at(a), dtype=float).reshape(*a.shape, 3)  # type: ignore[attr-defined]
+    return np.asarray(paint.lab_at(a), dtype=float).reshape(*a.shape, 3)
 
 
 def point_colour(
-    paint: object,
+    paint: FaceFlopTravelGloss,
     light: NDArray[np.float64],
     view: NDArray[np.float64],
     normal: NDArray[np.float64],
@@ -218,7 +223,7 @@ def point_colour(
 
 
 def environment_colour(
-    paint: object,
+    paint: FaceFlopTravelGloss,
     env: Environment,
     view: NDArray[np.float64],
     normal: NDArray[np.float64],
