@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from station.drivers import GlossReading, Instrument, open_instrument
+from station.drivers import CalibrationResult, GlossReading, Instrument, open_instrument
 from station.drivers.readings import SpectralReading
 from station.drivers.simproc import SIM_KINDS, SimulatorProcess, spawn_simulator
 from station.errors import InputError
@@ -224,7 +224,7 @@ class InstrumentSession:
         self.device = device
         return address
 
-    def calibrate(self):
+    def calibrate(self) -> CalibrationResult:
         """Run the instrument's calibration sequence (CalibrationResult)."""
         if self.instrument is None:
             raise InputError("instrument", "a connected instrument", None)
