@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The whole test suite on a fresh machine: set-up, lint, layering contracts, then pytest (slow suites
-# included). Extra arguments go to both pytest runs.
+# The whole test suite on a fresh machine: set-up, lint and format check, type check (mypy, configured in
+# pyproject.toml), layering contracts, then pytest (slow suites included). Extra arguments go to both
+# pytest runs.
 #
 # The viewer's tests run in a pytest process of their own: Qt draws through GLX under Xvfb, the core's
 # renderer through moderngl's standalone EGL contexts, and Mesa cannot make a Qt GLX context current in
@@ -13,6 +14,9 @@ bash scripts/ensure-postgres.sh
 export PATH="$root/.venv/bin:$PATH"
 echo "== ruff"
 ruff check .
+ruff format --check .
+echo "== mypy"
+mypy
 echo "== import contracts"
 lint-imports
 reports="$root/.test-results"

@@ -19,13 +19,16 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.model.colorimetry import lab_to_linear_srgb, lab_to_xyz
 from station.model.domain import DIFFUSE_WHITE_L
+
+if TYPE_CHECKING:
+    from station.model import FaceFlopTravelGloss
 
 #: Upper bound of a face's linear-sRGB channels (reflectance factor at 15°).
 FACE_RGB_MAX = 2.5
@@ -71,19 +74,23 @@ def rgb_bounds(
 
 
 def check_paintable(
-    paint: object, *, allow_face_darker: bool = False, tol: float = 1e-6, relax_to: object | None = None
+    paint: FaceFlopTravelGloss,
+    *,
+    allow_face_darker: bool = False,
+    tol: float = 1e-6,
+    relax_to: FaceFlopTravelGloss | None = None,
 ) -> GamutReport:
     """Check a ``FaceFlopTravelGloss`` against the documented bound (see module docstring).
 
     *relax_to*: a reference paint (the original); bounds it already violates are relaxed to its values.
     """
-    face = np.asarray(paint.face, dtype=float)  # type: ignore[attr-defined]
-    flop = np.asarray(paint.flop, dtype=float)  # type: ignore[attr-defined]
-    solid = bool(paint.is_solid)  # type: ignore[attr-defined]
+    face = np.asarray(paint.face, dtype=float)
+    flop = np.asarray(paint.flop, dtype=float)
+    solid = bool(paint.is_solid)
     rgb = lab_to_linear_srgb(np.stack([face, flop]))
     lo, hi = rgb_bounds(face, flop, solid)
     if relax_to is not None:
-        ref = lab_to_linear_srgb(np.stack([np.asarray(relax_to.face), np.asarray(relax_to.flop)]))  # type: ignore[attr-defined]
+        ref = lab_to_linear_srgb(np.stack([np.asarray(relax_to.face), np.asarray(relax_to.flop)]))
         lo, hi = np.minimum(lo, ref), np.maximum(hi, ref)
     problems = []
     for i, name in enumerate(("face", "flop")):
@@ -99,7 +106,7 @@ def check_paintable(
                 f"{hi[i].max():g})"
             )
     if not allow_face_darker and not solid and face[0] < flop[0] - tol:
-        ref_ok = relax_to is not None and relax_to.face[0] < relax_to.flop[0]  # type: ignore[attr-defined]
+        ref_ok = relax_to is not None and relax_to.face[0] < relax_to.flop[0]
         if not ref_ok:
             problems.append(f"face darker than flop (L* {face[0]:.2f} < {flop[0]:.2f})")
     return GamutReport(not problems, tuple(problems), _pointer(face, flop))

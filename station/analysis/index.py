@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,6 +44,9 @@ from station.analysis.geometry import (
 from station.analysis.shading import Environment, Exposure, environment_colour, point_colour
 from station.model.difference import delta_e
 from station.model.domain import JND_CIE76 as DOMAIN_JND_CIE76
+
+if TYPE_CHECKING:
+    from station.model import FaceFlopTravelGloss
 
 #: ε of the thesis: one JND, in ΔE*ab.
 JND_CIE76 = DOMAIN_JND_CIE76
@@ -123,7 +126,7 @@ class IndexResult:
 
     def to_dict(self, per_geometry: bool = False) -> dict[str, Any]:
         """JSON-able form (the CLI's ``--json`` output)."""
-        out = {
+        out: dict[str, Any] = {
             "beta_min_deg": self.beta_min_deg,
             "reached": self.reached,
             "direction": self.direction,
@@ -192,7 +195,7 @@ class SeamModel:
             raise AnalysisInputError("exposure", '"reference" or "absolute"', exposure)
         self.gloss = gloss
         self.env = lights if isinstance(lights, Environment) else None
-        if self.env is None:
+        if not isinstance(lights, Environment):
             if len(lights) != len(views):
                 raise AnalysisInputError("views", f"{len(lights)} view angles (one per light)", len(views))
             self.light_deg = np.asarray(lights, dtype=float)
@@ -209,7 +212,7 @@ class SeamModel:
         return len(self.view_deg)
 
     def colour(
-        self, paint: object, normals: NDArray[np.float64], rows: NDArray[np.intp] | None = None
+        self, paint: FaceFlopTravelGloss, normals: NDArray[np.float64], rows: NDArray[np.intp] | None = None
     ) -> NDArray[np.float64]:
         """Lab of *paint* on panels with *normals* (B, 3) for each geometry row → (G, B, 3)."""
         rows = np.arange(self.size) if rows is None else rows
@@ -223,14 +226,16 @@ class SeamModel:
             out[i] = environment_colour(paint, self.env, self.V[r, 0], normals, gloss=self.gloss)
         return out
 
-    def reference(self, paint: object, rows: NDArray[np.intp] | None = None) -> NDArray[np.float64]:
+    def reference(
+        self, paint: FaceFlopTravelGloss, rows: NDArray[np.intp] | None = None
+    ) -> NDArray[np.float64]:
         """Lab of *paint* on panel A for each geometry row → (G, 1, 3)."""
         return self.colour(paint, np.array([[0.0, 0.0, 1.0]]), rows)
 
     def delta_e(
         self,
-        paint_a: object,
-        paint_b: object,
+        paint_a: FaceFlopTravelGloss,
+        paint_b: FaceFlopTravelGloss,
         beta_deg: NDArray[np.float64],
         rows: NDArray[np.intp] | None = None,
     ) -> NDArray[np.float64]:
@@ -248,7 +253,9 @@ class SeamModel:
             return np.sqrt(np.einsum("...i,...i->...", d, d))
         return np.asarray(delta_e(lab_a, lab_b, method=self.method), dtype=float)
 
-    def _reference_cached(self, paint: object, rows: NDArray[np.intp] | None) -> NDArray[np.float64]:
+    def _reference_cached(
+        self, paint: FaceFlopTravelGloss, rows: NDArray[np.intp] | None
+    ) -> NDArray[np.float64]:
         key = id(paint)
         cache = self._ref_cache
         if cache is None or cache[0] != key or cache[1] is not paint:
@@ -258,7 +265,11 @@ class SeamModel:
         return ref if rows is None else ref[rows]
 
     def delta_e_rows(
-        self, paint_a: object, paint_b: object, beta_deg: NDArray[np.float64], rows: NDArray[np.intp]
+        self,
+        paint_a: FaceFlopTravelGloss,
+        paint_b: FaceFlopTravelGloss,
+        beta_deg: NDArray[np.float64],
+        rows: NDArray[np.intp],
     ) -> NDArray[np.float64]:
         """Seam ΔE (C, B) for candidate rows (C,) each with its own β values (C, B), degrees."""
         normals = rotated_normals(beta_deg, self.hinge)  # (C, B, 3)
@@ -282,7 +293,7 @@ class SeamModel:
         return np.sum(self.V * normals[None, :, :], axis=-1) > 0.01
 
 
-def default_views(paint: object, lights: list[float]) -> tuple[list[float], list[float]]:
+def default_views(paint: FaceFlopTravelGloss, lights: list[float]) -> tuple[list[float], list[float]]:
     """Geometries scanned when no view is given: one view for a solid, aspecular 15–110° otherwise.
 
     Returns parallel lists (lights, views) in degrees; views whose polar angle exceeds 89° are dropped.
@@ -300,7 +311,7 @@ def default_views(paint: object, lights: list[float]) -> tuple[list[float], list
 
 
 def goniogeometric_index(
-    paint: object,
+    paint: FaceFlopTravelGloss,
     light: Light,
     view: float | Sequence[float] | None = None,
     *,
@@ -367,7 +378,12 @@ def goniogeometric_index(
 
 
 def _search(
-    model: SeamModel, paint: object, eps: float, bmax: float, step: float, signs: tuple[float, ...]
+    model: SeamModel,
+    paint: FaceFlopTravelGloss,
+    eps: float,
+    bmax: float,
+    step: float,
+    signs: tuple[float, ...],
 ) -> IndexResult:
     n = max(3, math.ceil(bmax / step) + 1)
     grid = np.linspace(0.0, bmax, n)
@@ -389,7 +405,7 @@ def _search(
             if br is not None:
                 brackets.append((br[0], br[1], g, si))
 
-    per = []
+    per: tuple[GeometryIndex, ...] = ()
     if not brackets:
         geom = _geometry_dict(model, 0)
         per = tuple(
@@ -492,7 +508,7 @@ def _curvature(row: NDArray[np.float64], h: float) -> NDArray[np.float64]:
 
 def _first_bracket(
     model: SeamModel,
-    paint: object,
+    paint: FaceFlopTravelGloss,
     eps: float,
     sign: float,
     g: int,
@@ -523,7 +539,7 @@ def _first_bracket(
 
 
 def _refine(
-    model: SeamModel, paint: object, eps: float, sign: float, g: int, lo: float, hi: float
+    model: SeamModel, paint: FaceFlopTravelGloss, eps: float, sign: float, g: int, lo: float, hi: float
 ) -> tuple[float, float] | None:
     """Look for a crossing hidden inside [lo, hi] on a finer grid (recursive down to 1e-3°)."""
     if hi - lo < _GUARD_MIN_WIDTH_DEG:
@@ -537,7 +553,7 @@ def _refine(
 
 def _shrink(
     model: SeamModel,
-    paint: object,
+    paint: FaceFlopTravelGloss,
     eps: float,
     signs: tuple[float, ...],
     brackets: list[tuple[float, float, int, int]],
@@ -568,7 +584,7 @@ def _shrink(
 
 def _brent(
     model: SeamModel,
-    paint: object,
+    paint: FaceFlopTravelGloss,
     eps: float,
     sign: float,
     g: int,

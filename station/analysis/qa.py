@@ -18,7 +18,7 @@ import numpy as np
 from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import Hinge, SeamGeometry
 from station.analysis.index import JND_CIE76, IndexResult, SeamModel, goniogeometric_index
-from station.analysis.trompe import TrompeResult, inverse_trompe_loeil, paint_to_dict
+from station.analysis.trompe import Objective, TrompeResult, inverse_trompe_loeil, paint_to_dict
 
 #: Default geometries: lights 30/45/60°, aspecular 15–75° (the range a seam is usually judged over).
 DEFAULT_LIGHTS_DEG = (30.0, 45.0, 60.0)
@@ -106,7 +106,7 @@ def seam_qa(
     tolerance: float = JND_CIE76,
     method: str = "cie76",
     hinge: Hinge = "in-plane",
-    objective: str = "minimax",
+    objective: Objective = "minimax",
 ) -> SeamReport:
     """Predict and judge a seam; propose a corrected paint for panel B.
 
@@ -208,7 +208,8 @@ def _index_over(
     for lt in sorted(set(ls)):
         views = [v for l2, v in zip(ls, vs, strict=True) if l2 == lt]
         r = goniogeometric_index(a, lt, views, epsilon=eps, method=method, hinge=hinge)
-        if best is None or (r.reached and (not best.reached or r.beta_min_deg < best.beta_min_deg)):
+        new, old = r.beta_min_deg, None if best is None else best.beta_min_deg  # None: ε not reached
+        if best is None or (new is not None and (old is None or new < old)):
             best = r
     assert best is not None  # noqa: S101 - ls is non-empty
     return best
@@ -255,7 +256,8 @@ def _advice(
     if not a.is_solid and bmin is not None and abs(beta) >= bmin:
         from station.model import FaceFlopTravelGloss
 
-        mid = tuple(float(x) for x in a.lab_at(np.array([45.0])).reshape(3))
+        mid_l, mid_a, mid_b = (float(x) for x in a.lab_at(np.array([45.0])).reshape(3))
+        mid = (mid_l, mid_a, mid_b)
         solid = FaceFlopTravelGloss(mid, mid, None)
         ls = sorted({g.light_deg for g in geoms})
         rs = goniogeometric_index(solid, ls, 0.0, epsilon=tol, method=method, hinge=hinge, beta_max_deg=45.0)

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -46,6 +46,9 @@ from station.model.colorimetry import linear_srgb_to_lab
 from station.model.shading import point_light_rgb, shade_lab
 
 __all__ = ["Environment", "Exposure", "environment_colour", "point_colour", "shade_lab"]
+
+if TYPE_CHECKING:
+    from station.model import FaceFlopTravelGloss
 
 Exposure = Literal["reference", "absolute"]
 
@@ -119,7 +122,7 @@ def _has_gloss(paint: object) -> bool:
 
 
 def point_colour(
-    paint: object,
+    paint: FaceFlopTravelGloss,
     light: NDArray[np.float64],
     view: NDArray[np.float64],
     normal: NDArray[np.float64],
@@ -147,12 +150,12 @@ def point_colour(
         white = np.ones(1)
     else:
         raise AnalysisInputError("exposure", '"reference" or "absolute"', exposure)
-    rgb = point_light_rgb(paint, lambert, aspec, specular=gloss and _has_gloss(paint))  # type: ignore[arg-type]
+    rgb = point_light_rgb(paint, lambert, aspec, specular=gloss and _has_gloss(paint))
     return np.asarray(linear_srgb_to_lab(rgb / white), dtype=float)
 
 
 def environment_colour(
-    paint: object,
+    paint: FaceFlopTravelGloss,
     env: Environment,
     view: NDArray[np.float64],
     normal: NDArray[np.float64],
@@ -168,7 +171,7 @@ def environment_colour(
     Nb = N[..., None, :]  # (..., 1, 3)
     aspec = aspecular_deg(L, view, Nb)  # (..., S)
     lambert = np.sum(L * Nb, axis=-1)  # (..., S)
-    rgb = point_light_rgb(paint, lambert, aspec, specular=gloss and _has_gloss(paint))  # type: ignore[arg-type]
+    rgb = point_light_rgb(paint, lambert, aspec, specular=gloss and _has_gloss(paint))
     pixel = np.sum(rgb * env.radiance, axis=-2)
     white = np.sum(env.radiance * np.maximum(L[:, 2], 0.0)[:, None], axis=0)
     if np.any(white <= 0):

@@ -353,7 +353,7 @@ def inverse_trompe_loeil(
         raise AnalysisInputError("epsilon", "epsilon > 0", epsilon)
     names = _subset(paint_a, subset)
     env = lights_deg if isinstance(lights_deg, Environment) else None
-    if env is not None:
+    if isinstance(lights_deg, Environment):
         vs = (
             [0.0]
             if views_deg is None
@@ -471,7 +471,8 @@ def _solve(prob: _Problem, objective: str, rows: NDArray[np.intp] | None) -> tup
         def fun(x: NDArray[np.float64]) -> float:
             return float(np.mean(prob.de(x, rows) ** 2)) + prob.reg(x)
 
-        res = minimize(
+        # scipy-stubs type a dict constraint's "fun" as scalar-valued; SLSQP also takes vector-valued ones
+        res = minimize(  # type: ignore[call-overload]
             fun, prob.x0, method="SLSQP", bounds=prob.bounds, constraints=prob.constraints(), options=opts
         )
         x = np.asarray(res.x, dtype=float)
@@ -479,7 +480,7 @@ def _solve(prob: _Problem, objective: str, rows: NDArray[np.intp] | None) -> tup
         d0 = prob.de(prob.x0) ** 2
         z0 = np.concatenate([prob.x0, [float(np.max(d0))]])
         cons = [*prob.constraints(1), {"type": "ineq", "fun": lambda z: z[k] - prob.de(z[:k]) ** 2}]
-        res = minimize(
+        res = minimize(  # type: ignore[call-overload]  # as above: vector-valued constraint functions
             lambda z: float(z[k]) + prob.reg(z[:k]),
             z0,
             method="SLSQP",

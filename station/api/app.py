@@ -157,16 +157,16 @@ def create_app(settings: Settings) -> FastAPI:
             replayer.cancel()
             await asyncio.to_thread(_shutdown, app)
 
-    docs: dict[str, str | None] = (
-        {} if settings.public_docs else {"docs_url": None, "redoc_url": None, "openapi_url": None}
-    )
+    public = settings.public_docs  # otherwise the docs are served behind authentication
     app = FastAPI(
         title="CACAD Station",
         version=__version__,
         description=DESCRIPTION + _roles_markdown(),
         openapi_tags=TAGS,
         lifespan=lifespan,
-        **docs,
+        docs_url="/docs" if public else None,
+        redoc_url="/redoc" if public else None,
+        openapi_url="/openapi.json" if public else None,
     )
     app.state.settings = settings
     install_error_handlers(app)

@@ -38,13 +38,13 @@ class Settings(BaseSettings):
     )
     outbox_replay_s: float = Field(10.0, gt=0, le=3600, description="seconds between outbox replay attempts")
 
-    @computed_field  # type: ignore[prop-decorator]
+    @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this
     @property
     def effective_database_url(self) -> str:
         """``database_url`` or the embedded SQLite file in ``data_dir``."""
         return self.database_url or default_database_url(self.data_dir)
 
-    @computed_field  # type: ignore[prop-decorator]
+    @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this
     @property
     def outbox_path(self) -> Path:
         """The ingest outbox of readings taken while the database is away."""

@@ -93,6 +93,12 @@ def parse_floats(text: str, field: str, count: int | None = None) -> list[float]
     return values
 
 
+def parse_lab(text: str, field: str) -> tuple[float, float, float]:
+    """Parse ``"L,a,b"`` into one Lab triple; raise :class:`InputError` naming *field* on failure."""
+    lightness, a, b = parse_floats(text, field, 3)
+    return (lightness, a, b)
+
+
 def parse_lab_list(text: str, field: str = "lab") -> list[list[float]]:
     """Parse ``"L,a,b;L,a,b;…"`` into a list of Lab triples."""
     parts = [p for p in text.split(";") if p.strip()]
@@ -114,11 +120,11 @@ def design_from_args(args: argparse.Namespace) -> Any:
         return load_design(args.design)
     if getattr(args, "face", None) is None:
         raise InputError("face", "--face L,a,b (or --design FILE)")
-    face = parse_floats(args.face, "face", 3)
-    flop = parse_floats(args.flop, "flop", 3) if getattr(args, "flop", None) else face
+    face = parse_lab(args.face, "face")
+    flop = parse_lab(args.flop, "flop") if getattr(args, "flop", None) else face
     travel = None if face == flop else getattr(args, "travel", None)
     if face != flop and travel is None:
         raise InputError("travel", "--travel DEG (15 < travel <= 180) when face != flop")
     gloss = getattr(args, "gloss", None)
     extra = {} if gloss is None else {"gloss_gu": gloss}
-    return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, **extra)
+    return FaceFlopTravelGloss(face, flop, travel, **extra)

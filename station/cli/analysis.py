@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from station.analysis import goniogeometric_index
+from station.analysis.geometry import Hinge
 from station.analysis.index import DE_METHODS, JND_CIE76
 from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, seam_qa
 from station.analysis.trompe import OBJECTIVES, inverse_trompe_loeil
@@ -28,9 +29,11 @@ from station.cli._common import add_json_flag, design_from_args, parse_floats
 from station.errors import InputError
 
 
-def _hinge(text: str) -> str | float:
-    if text in ("in-plane", "out-of-plane"):
-        return text
+def _hinge(text: str) -> Hinge:
+    if text == "in-plane":
+        return "in-plane"
+    if text == "out-of-plane":
+        return "out-of-plane"
     return parse_floats(text, "hinge", 1)[0]
 
 
@@ -143,7 +146,7 @@ def _sweep(args: argparse.Namespace) -> dict[str, Any]:
         method=args.de,
         epsilon=args.epsilon,
     )
-    out = {"index_estimate_deg": r.index_estimate(), "shape": list(r.delta_e.shape)}
+    out: dict[str, Any] = {"index_estimate_deg": r.index_estimate(), "shape": list(r.delta_e.shape)}
     if args.png:
         out["png"] = str(plot_sweep(r, args.png))
     else:

@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from station.cli._common import add_json_flag, parse_floats
+from station.cli._common import add_json_flag, parse_floats, parse_lab
 from station.design.images import load_image, save_png
 from station.design.moodboard import eyedrop_design
 from station.design.palette import booklet, swatch
@@ -48,17 +48,15 @@ def _design(args: argparse.Namespace) -> FaceFlopTravelGloss:
         return load_design(args.design)
     if args.face is None:
         raise InputError("face", "--face L,a,b (or --design FILE)")
-    face = parse_floats(args.face, "face", 3)
-    flop = parse_floats(args.flop, "flop", 3) if args.flop else face
+    face = parse_lab(args.face, "face")
+    flop = parse_lab(args.flop, "flop") if args.flop else face
     travel = args.travel if flop != face else None
     if travel is None and flop != face:
         raise InputError("travel", "--travel DEG (15 < travel <= 180) when face != flop")
-    return FaceFlopTravelGloss(tuple(face), tuple(flop), travel, args.gloss)  # type: ignore[arg-type]
+    return FaceFlopTravelGloss(face, flop, travel, args.gloss)
 
 
-def _xy(text: str | None, field: str) -> tuple[float, float] | None:
-    if text is None:
-        return None
+def _xy(text: str, field: str) -> tuple[float, float]:
     x, y = parse_floats(text, field, 2)
     return (x, y)
 
@@ -88,10 +86,10 @@ def _eyedrop(args: argparse.Namespace) -> dict[str, Any]:
         face,
         flop,
         travel_deg=args.travel,
-        gloss_gu=args.gloss_gu,  # type: ignore[arg-type]
+        gloss_gu=args.gloss_gu,
         radius=args.radius,
         auto_swap=not args.no_swap,
-        gloss_xy=_xy(args.gloss, "gloss"),
+        gloss_xy=None if args.gloss is None else _xy(args.gloss, "gloss"),
     )
     out: dict[str, Any] = {
         "design": design_to_dict(r.design),

@@ -14,12 +14,15 @@ from __future__ import annotations
 import argparse
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from station.cli._common import add_json_flag
 from station.errors import InputError
+
+if TYPE_CHECKING:
+    from station.render.environment import Environment
 
 ENVS = ("booth", "sky", "overcast")
 
@@ -48,7 +51,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_render)
 
 
-def _environment(name: str):
+def _environment(name: str) -> Environment:
     from station.render.environment import load_environment
     from station.render.procedural import procedural_environment
 

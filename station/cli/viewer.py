@@ -68,7 +68,7 @@ def cmd_screenshots(args: argparse.Namespace) -> dict[str, Any]:
         configure_default_format()
         app = QApplication.instance() or QApplication([])
         paths = take_screenshots(args.out, scan=not args.no_scan)
-        platform = app.platformName()
+        platform = QApplication.platformName()
         app.shutdown()  # tear Qt down while Python objects are alive (avoids a crash at interpreter exit)
     finally:
         if xvfb is not None:

@@ -93,7 +93,7 @@ def data_points(design: FaceFlopTravelGloss, angles_deg: tuple[float, ...] = ANG
     if len(angles) < 3 or any(b <= a for a, b in itertools.pairwise(angles)):
         raise DesignInputError("angles_deg", "at least 3 strictly increasing angles", angles_deg)
     lab = design.lab_at(np.array(angles))
-    return DataPoints(angles, tuple(tuple(float(v) for v in row) for row in lab), design.gloss_gu)
+    return DataPoints(angles, tuple((float(L), float(a), float(b)) for L, a, b in lab), design.gloss_gu)
 
 
 @dataclass(frozen=True)
@@ -135,7 +135,7 @@ def move_point(points: DataPoints, channel: Channel, angle_deg: float, value: fl
     v = check_channel(channel, value, "value")
     lab = [list(row) for row in points.lab]
     lab[matches[0]][k] = v
-    new = DataPoints(points.angles_deg, tuple(tuple(row) for row in lab), points.gloss_gu)  # type: ignore[misc]
+    new = DataPoints(points.angles_deg, tuple((L, a, b) for L, a, b in lab), points.gloss_gu)
     return PointEdit(new, new.fit())
 
 
@@ -174,7 +174,9 @@ def hsb_edit_points(
     lab = _rotate_scale(points.as_array(), h, s, b)
     for i, row in enumerate(lab):
         _lab(row, f"lab[{i}]")
-    new = DataPoints(points.angles_deg, tuple(tuple(float(v) for v in r) for r in lab), points.gloss_gu)
+    new = DataPoints(
+        points.angles_deg, tuple((float(L), float(a), float(b)) for L, a, b in lab), points.gloss_gu
+    )
     return PointEdit(new, new.fit())
 
 

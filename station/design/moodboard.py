@@ -220,8 +220,9 @@ def eyedrop_design(
     With *auto_swap* (the default) a face darker (L*) than the flop is swapped with it — retroreflective
     colours are rare; pass ``auto_swap=False`` to style one. Equal colours give a solid (no travel).
     """
-    face = tuple(float(v) for v in eyedrop_lab(image, face_xy, radius))
-    flop = tuple(float(v) for v in eyedrop_lab(image, flop_xy, radius))
+    face_l, face_a, face_b = (float(v) for v in eyedrop_lab(image, face_xy, radius))
+    flop_l, flop_a, flop_b = (float(v) for v in eyedrop_lab(image, flop_xy, radius))
+    face, flop = (face_l, face_a, face_b), (flop_l, flop_a, flop_b)
     swapped = bool(auto_swap and face[0] < flop[0])
     if swapped:
         face, flop = flop, face
@@ -231,10 +232,10 @@ def eyedrop_design(
         gloss_gu = gloss.gloss_gu
     travel = None if face == flop else travel_deg
     try:
-        design = FaceFlopTravelGloss(face, flop, travel, gloss_gu)  # type: ignore[arg-type]
+        design = FaceFlopTravelGloss(face, flop, travel, gloss_gu)
     except ValueError as exc:
         raise DesignInputError("eyedrop", "samples and travel the model accepts", None, str(exc)) from exc
-    return EyedropResult(design, face, flop, swapped, gloss)  # type: ignore[arg-type]
+    return EyedropResult(design, face, flop, swapped, gloss)
 
 
 # ---------------------------------------------------------------------------------- gloss eyedropper

@@ -30,6 +30,7 @@ Buffers are float64 with background pixels set to 0 (θ, ϕ) and ``mask`` False,
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -126,7 +127,7 @@ class Scene:
     @property
     def shape(self) -> tuple[int, int]:
         """Image size ``(H, W)`` in pixels."""
-        return self.mask.shape  # type: ignore[return-value]
+        return self.mask.shape
 
     def with_light(self, light_dir: ArrayLike) -> Scene:
         """Return the same geometry under a new light direction (recomputes θ and ϕ)."""
@@ -243,7 +244,7 @@ def panel_scene(
     return scene_from_normals("panel-point", n, mask, light_dir, irradiance)
 
 
-BUILTIN_SCENES = {"sphere-point": sphere_scene, "panel-point": panel_scene}
+BUILTIN_SCENES: dict[str, Callable[[int], Scene]] = {"sphere-point": sphere_scene, "panel-point": panel_scene}
 
 
 def builtin_scene(name: str, size: int = 96) -> Scene:
@@ -298,7 +299,7 @@ class EnvironmentScene:
     @property
     def shape(self) -> tuple[int, int]:
         """Image size ``(H, W)`` in pixels."""
-        return self.mask.shape  # type: ignore[return-value]
+        return self.mask.shape
 
 
 def studio_lights(count: int = 16) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -215,12 +215,17 @@ def fftg_from_curve(
     return coef[0], coef[1], tc, math.sqrt(sse / max(len(t), 1))
 
 
+def _lab3(lab: NDArray) -> tuple[float, float, float]:
+    L, a, b = (float(v) for v in lab)
+    return (L, a, b)
+
+
 def _design_from_curve(angles: NDArray, lab: NDArray, gloss: float) -> tuple[FaceFlopTravelGloss, float]:
     face, flop, tc, _ = fftg_from_curve(angles, lab)
     if np.linalg.norm(face - flop) < SOLID_DE:
-        mean = tuple(float(v) for v in np.mean(lab, axis=0))
+        mean = _lab3(np.mean(lab, axis=0))
         return FaceFlopTravelGloss(mean, mean, None, gloss), tc
-    return FaceFlopTravelGloss(tuple(face), tuple(flop), tc, gloss), tc  # type: ignore[arg-type]
+    return FaceFlopTravelGloss(_lab3(face), _lab3(flop), tc, gloss), tc
 
 
 # --------------------------------------------------------------------------------- point-light fit
@@ -360,7 +365,8 @@ def fit_point_light(
             coef_g, tc_g, sse_g = _sweep_quadratic(theta_all[keep], phi_all[keep], yg, travel_sweep)
             if best_g is None or sse_g < best_g[0]:
                 best_g = (sse_g, coef_g, tc_g, g)
-        _, coef, tc, g_fit = best_g  # type: ignore[misc]
+        assert best_g is not None  # noqa: S101 - candidates is never empty
+        _, coef, tc, g_fit = best_g
         resid = (
             y_all - spec_all[g_fit][:, None] - phi_all[:, None] * _curve(coef, tc, theta_all)
         ) @ LUMINANCE
@@ -386,8 +392,7 @@ def fit_point_light(
             gloss_gu, gloss_source = contrast_gloss(art_a[low]).gloss_gu, "contrast"
 
     lab_std = tuple(
-        tuple(float(v) for v in row)
-        for row in linear_srgb_to_lab(np.clip(_curve(coef, tc, np.array(ANGLES_3)), 1e-6, None))
+        _lab3(row) for row in linear_srgb_to_lab(np.clip(_curve(coef, tc, np.array(ANGLES_3)), 1e-6, None))
     )
     art_lab = linear_srgb_to_lab(np.clip(y * scene.irradiance, 1e-6, None))
 
@@ -424,7 +429,7 @@ def fit_point_light(
                 )
         except ValueError as exc:  # the model refused the colours
             reason = f"model refused the fitted colours: {exc}"
-    if reason:
+    if reason or design is None:
         design, rms, shading_de = _diffuse_fallback(scene, art_a, changed, gloss_gu, use, art_lab)
     return SketchFit(
         design,
@@ -434,7 +439,7 @@ def fit_point_light(
         bool(reason),
         reason,
         float(tc),
-        n,  # type: ignore[arg-type]
+        n,
         gloss_source,
         time.perf_counter() - t0,
     )
@@ -480,8 +485,8 @@ def _diffuse_fallback(
         sel = changed & (scene.lambert > 0.0)
     albedo = srgb_decode(art[sel]) / (scene.irradiance * scene.lambert[sel][:, None])
     lab = np.asarray(linear_srgb_to_lab(np.clip(albedo.mean(axis=0), 1e-6, None)), dtype=float)
-    colour = tuple(float(v) for v in lab)
-    design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)  # type: ignore[arg-type]
+    colour = _lab3(lab)
+    design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)
     fit_lin = shade(scene, design)[use]
     art_lin = srgb_decode(art[use])
     return (
@@ -561,7 +566,7 @@ def fit_environment(
     angles = np.arange(curve_angles[0], curve_angles[1] + 1.0, 1.0)
     rgb = basis.lobe_values(angles) @ w
     lab_std = tuple(
-        tuple(float(v) for v in row)
+        _lab3(row)
         for row in linear_srgb_to_lab(np.clip(basis.lobe_values(np.array(ANGLES_3)) @ w, 1e-6, None))
     )
     reason = ""
@@ -582,15 +587,15 @@ def fit_environment(
             design, tc = _design_from_curve(angles, linear_srgb_to_lab(np.clip(rgb, 1e-6, None)), gloss_gu)
         except ValueError as exc:
             reason = f"model refused the fitted colours: {exc}"
-    if reason:
+    if reason or design is None:
         diffuse = [j for j, e in enumerate(basis.exponents) if e is None]
         if not diffuse:
             raise SketchFitError("fit failed and the basis has no diffuse lobe for the fallback colour")
         denom = np.clip(B[diffuse[0]].sum(axis=0), 1e-12, None)
         albedo = y.sum(axis=0) / denom
         lab = np.asarray(linear_srgb_to_lab(np.clip(albedo, 1e-6, None)), dtype=float)
-        colour = tuple(float(v) for v in lab)
-        design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)  # type: ignore[arg-type]
+        colour = _lab3(lab)
+        design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)
         recon = B[diffuse[0]] * albedo
         rms = rms_delta_e(linear_srgb_to_lab(np.clip(recon, 1e-6, None)), art_lab)
         shading_de = block_delta_e(use, y, recon)
@@ -603,6 +608,6 @@ def fit_environment(
         reason,
         float(tc),
         n,
-        "default",  # type: ignore[arg-type]
+        "default",
         time.perf_counter() - t0,
     )

@@ -105,9 +105,9 @@ def _vary_colour(lab: tuple[float, float, float], label: str, d: float) -> tuple
 def _make(design: FaceFlopTravelGloss, category: str, label: str, d: float) -> FaceFlopTravelGloss:
     if category == "travel-gloss":
         if label.endswith("travel"):
-            if design.is_solid:
+            if design.is_solid or design.travel_deg is None:
                 raise _Unreachable("a solid design has no travel")
-            t = design.travel_deg + (d if label.startswith("more") else -d)  # type: ignore[operator]
+            t = design.travel_deg + (d if label.startswith("more") else -d)
             if not FACE_ANGLE_DEG < t <= TRAVEL_MAX_DEG:
                 raise _Unreachable(
                     f"travel would be {t:.4g}°, outside ({FACE_ANGLE_DEG:g}, {TRAVEL_MAX_DEG:g}]"

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import datetime as dt
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -139,17 +139,19 @@ def closed_loop(
     if not isinstance(max_corrections, int) or not 0 <= max_corrections <= 10:
         raise FormulateInputError("max_corrections", "an integer in [0, 10]", max_corrections)
     first = formulate(design, angles, starts, gloss_gu, tolerance, db)
-    base = {
-        "design_lab": _tup(design),
-        "angles_deg": angles,
-        "gloss_gu": gloss_gu,
-        "tolerance": float(tolerance),
-        "start": first.start,
-        "synthetic": db.synthetic,
-        "initial": first,
-    }
+    base = FormulationJob(
+        design_lab=_tup(design),
+        angles_deg=angles,
+        gloss_gu=gloss_gu,
+        tolerance=float(tolerance),
+        status="",
+        message="",
+        start=first.start,
+        synthetic=db.synthetic,
+        initial=first,
+    )
     if not first.formulable:
-        return FormulationJob(status="not_formulable", message=first.message, **base)  # type: ignore[arg-type]
+        return replace(base, status="not_formulable", message=first.message)
     steps: list[LoopStep] = []
     result = first
     target = design
@@ -181,7 +183,7 @@ def closed_loop(
         )
         if de.mean() <= tolerance:
             msg = f"converged: mean ΔE00 {de.mean():.2f} after {n} correction(s)"
-            return FormulationJob(status="converged", message=msg, steps=tuple(steps), **base)  # type: ignore[arg-type]
+            return replace(base, status="converged", message=msg, steps=tuple(steps))
         if n == max_corrections:
             break
         target = design - (measured - predicted)
@@ -193,4 +195,4 @@ def closed_loop(
             f"; the corrected target is out of the model's reach (predicted ΔE00 {steps[-1].predicted_mean_de:.2f}):"
             " the design is likely outside the gamut of the colorants actually sprayed"
         )
-    return FormulationJob(status="not_converged", message=msg, steps=tuple(steps), **base)  # type: ignore[arg-type]
+    return replace(base, status="not_converged", message=msg, steps=tuple(steps))

@@ -319,32 +319,14 @@ def _tristimulus() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     probing reflectance_to_lab with 32 spectra recovers its weights exactly (to round-off).
     """
     from station.model.colorimetry import lab_to_xyz
+    from station.model.spectra import reflectance_to_lab as _to_lab
 
-    try:
-        from station.model.spectra import reflectance_to_lab as _to_lab
-    except ImportError:  # pragma: no cover - until the lead lands station.model.spectra
-        _to_lab = _colour_reflectance_to_lab
     base = np.full(31, 0.5)
     probes = np.vstack([base, base + 0.25 * np.eye(31)])
     xyz = lab_to_xyz(_to_lab(probes))
     w = (xyz[1:] - xyz[0]) / 0.25
     offset = xyz[0] - base @ w
     return offset, w
-
-
-def _colour_reflectance_to_lab(r: NDArray[np.float64]) -> NDArray[np.float64]:  # pragma: no cover
-    import colour
-
-    from station.model.colorimetry import xyz_to_lab
-
-    shape = colour.SpectralShape(400, 700, 10)
-    cmfs = colour.MSDS_CMFS["CIE 1964 10 Degree Standard Observer"].copy().align(shape)
-    ill = colour.SDS_ILLUMINANTS["D65"].copy().align(shape)
-    out = []
-    for row in np.atleast_2d(r):
-        sd = colour.SpectralDistribution(dict(zip(WAVELENGTHS_NM, row, strict=True)))
-        out.append(colour.sd_to_XYZ(sd, cmfs, ill) / 100.0)
-    return xyz_to_lab(np.asarray(out))
 
 
 def lab_from_reflectance(r: ArrayLike) -> NDArray[np.float64]:

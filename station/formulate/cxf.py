@@ -161,11 +161,14 @@ def library_to_cxf(library: Library) -> bytes:
     fmt = f"{{:.{DECIMALS}f}}"
     recs: list[Record] = []
     for i in range(len(library)):
-        lab = {a: tuple(float(v) for v in library.lab[i, j]) for j, a in enumerate(library.angles_deg)}
+        lab = {
+            angle: (float(L), float(a), float(b))
+            for angle, (L, a, b) in zip(library.angles_deg, library.lab[i], strict=True)
+        }
         tags = {"cacad.type": str(library.types[i]), "cacad.gloss_gu_60": fmt.format(library.gloss_gu[i])}
         if library.synthetic:
             tags["cacad.synthetic"] = "true"
-        recs.append((str(library.codes[i]), lab, tags))  # type: ignore[arg-type]
+        recs.append((str(library.codes[i]), lab, tags))
     return records_to_cxf(recs, library.name)
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from station.formulate.colorants import ColorantDatabase, default_database, predict_gloss, predict_lab
+from station.formulate.errors import FormulateError
 from station.formulate.library import Library, classify
 
 DEMO_SEED = 20090601
@@ -182,6 +183,8 @@ def demo_library() -> Library:
         except (OSError, KeyError, ValueError):
             path.unlink(missing_ok=True)
     lib = generate_library()
+    if lib.recipes is None:  # generate_library draws a recipe for every paint
+        raise FormulateError("the demo library was generated without recipes")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".tmp.npz")

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import minimize
+from scipy.optimize import OptimizeResult, minimize
 
 from station.formulate.colorants import (
     GLOSS_CLEAR_GU,
@@ -259,10 +259,19 @@ def formulate(
     fixed[db.matting_index] = c_mat
     ub = db.upper_bounds[free]
     effect = db.effect_mask[free].astype(float)
-    constraints = [
-        {"type": "ineq", "fun": lambda x: db.max_total - c_mat - x.sum(), "jac": lambda x: -np.ones_like(x)},
-        {"type": "ineq", "fun": lambda x: db.max_effect - effect @ x, "jac": lambda x: -effect},
-    ]
+
+    def total_slack(x: NDArray[np.float64]) -> float:  # Σ c <= max_total - c_matting
+        return float(db.max_total - c_mat - x.sum())
+
+    def total_slack_grad(x: NDArray[np.float64]) -> NDArray[np.float64]:
+        return -np.ones_like(x)
+
+    def effect_slack(x: NDArray[np.float64]) -> float:  # Σ c_effect <= max_effect
+        return float(db.max_effect - effect @ x)
+
+    def effect_slack_grad(x: NDArray[np.float64]) -> NDArray[np.float64]:
+        return -effect
+
     objective = _Objective(design, angles, db, free, fixed)
     candidates: list[tuple[str, NDArray]] = []
     for label, rec in starts or []:
@@ -273,11 +282,11 @@ def formulate(
     good_enough = (0.02 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of ~0.02
     deadline = t0 + max(time_budget_s, 0.05) * 1.15
 
-    def stop(intermediate_result: object) -> None:  # SciPy's new-style callback: this exact parameter name
+    def stop(intermediate_result: OptimizeResult) -> None:  # SciPy's new-style callback: this exact name
         if (
             objective.value(np.asarray(intermediate_result.x)) <= good_enough
             or time.perf_counter() > deadline
-        ):  # type: ignore[attr-defined]
+        ):
             raise StopIteration
 
     for label, x0 in candidates:
@@ -293,7 +302,10 @@ def formulate(
             jac=objective.grad,
             method="SLSQP",
             bounds=list(zip(np.zeros_like(ub), ub, strict=True)),
-            constraints=constraints,
+            constraints=[
+                {"type": "ineq", "fun": total_slack, "jac": total_slack_grad},
+                {"type": "ineq", "fun": effect_slack, "jac": effect_slack_grad},
+            ],
             options={"maxiter": 150, "ftol": 1e-9},
             callback=stop,
         )

@@ -151,15 +151,17 @@ class Library:
         recipe = None
         if self.recipes is not None and self.colorant_names is not None:
             recipe = {n: float(c) for n, c in zip(self.colorant_names, self.recipes[i], strict=True) if c > 0}
-        groups = classify(self.types[i : i + 1], self.angle_columns((45.0,))[i : i + 1, 0])
+        paint_set, kind, group = (
+            str(g[0]) for g in classify(self.types[i : i + 1], self.angle_columns((45.0,))[i : i + 1, 0])
+        )
         return Paint(
             code=str(self.codes[i]),
             type=str(self.types[i]),
             gloss_gu=float(self.gloss_gu[i]),
             angles_deg=self.angles_deg,
-            lab=tuple(tuple(float(v) for v in row) for row in self.lab[i]),
+            lab=tuple((float(L), float(a), float(b)) for L, a, b in self.lab[i]),
             recipe=recipe,
-            group=tuple(str(g[0]) for g in groups),  # type: ignore[arg-type]
+            group=(paint_set, kind, group),
         )
 
     def subset(self, mask: np.ndarray, name: str | None = None) -> Library:

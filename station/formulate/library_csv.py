@@ -20,6 +20,7 @@ import csv
 import io
 import math
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -63,12 +64,12 @@ def _parse_header(header: list[str]) -> tuple[float, ...]:
     angles: list[float] = []
     for k in range(0, len(rest), 3):
         triple = rest[k : k + 3]
-        ms = [_ANGLE_COL.match(c.strip()) for c in triple]
-        if not all(ms) or [m.group(1) for m in ms] != ["L", "a", "b"]:  # type: ignore[union-attr]
+        ms = [m for m in (_ANGLE_COL.match(c.strip()) for c in triple) if m is not None]
+        if len(ms) != len(triple) or [m.group(1) for m in ms] != ["L", "a", "b"]:
             raise LibraryFormatError(
                 1, triple[0], "a triple named L<angle>,a<angle>,b<angle>", ",".join(triple)
             )
-        names = {m.group(2) for m in ms}  # type: ignore[union-attr]
+        names = {m.group(2) for m in ms}
         if len(names) != 1:
             raise LibraryFormatError(
                 1, triple[0], "the same angle in L, a and b of one triple", ",".join(triple)
@@ -94,6 +95,23 @@ def _number(text: str, row: int, col: str, lo: float, hi: float) -> float:
     return v
 
 
+def _records(stream: io.TextIOBase) -> Iterator[list[str]]:
+    """The CSV records of *stream*; a malformed one is a :class:`LibraryFormatError` naming its row."""
+    reader = csv.reader(stream)
+    row = 1
+    while True:
+        try:
+            record = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise LibraryFormatError(
+                row, None, "CSV fields (a line break only inside a quoted field)", detail=str(exc)
+            ) from exc
+        row += 1
+        yield record
+
+
 def read_library_csv(source: str | Path | io.TextIOBase, name: str | None = None) -> Library:
     """Read a library CSV (see module docstring) from a path or text stream.
 
@@ -111,7 +129,7 @@ def read_library_csv(source: str | Path | io.TextIOBase, name: str | None = None
         name = name or path.stem
     else:
         stream = source
-    reader = csv.reader(stream)
+    reader = _records(stream)
     try:
         header = next(reader)
     except StopIteration as exc:
@@ -174,7 +192,7 @@ def write_library_csv(library: Library, target: str | Path | io.TextIOBase) -> N
     order = [library.angles_deg.index(float(h[1:])) for h in header[3::3]]
     fmt = f"{{:.{PRECISION_DECIMALS}f}}"
     own = isinstance(target, (str, Path))
-    fh = open(target, "w", newline="", encoding="utf-8") if own else target
+    fh = open(target, "w", newline="", encoding="utf-8") if isinstance(target, (str, Path)) else target
     try:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(header)

@@ -42,10 +42,9 @@ def perturbed_database(
     for c in db.colorants:
         fk = (1.0 + rng.normal(0, strength_sd)) * (1.0 + rng.normal(0, tilt_sd) * tilt_axis)
         fs = (1.0 + rng.normal(0, strength_sd)) * (1.0 + rng.normal(0, tilt_sd) * tilt_axis)
-        changes: dict[str, object] = {"k": c.k * fk, "s": c.s * fs}
-        if c.lobe_width_deg is not None:
-            changes["lobe_width_deg"] = c.lobe_width_deg * (1.0 + rng.normal(0, flake_sd))
-        out.append(dataclasses.replace(c, **changes))  # type: ignore[arg-type]
+        lobe = c.lobe_width_deg
+        lobe = None if lobe is None else lobe * (1.0 + rng.normal(0, flake_sd))
+        out.append(dataclasses.replace(c, k=c.k * fk, s=c.s * fs, lobe_width_deg=lobe))
     return ColorantDatabase(tuple(out), db.max_total, db.max_effect, synthetic=True)
 
 

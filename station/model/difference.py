@@ -40,7 +40,8 @@ def _as_lab_pair(lab_ref: ArrayLike, lab_sample: ArrayLike) -> tuple[NDArray, ND
         raise ModelInputError("lab", "arrays of shape (..., 3)", (a.shape, b.shape))
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         raise ModelInputError("lab", "finite L*, a*, b* values", "non-finite values")
-    return np.broadcast_arrays(a, b)
+    a, b = np.broadcast_arrays(a, b)
+    return a, b
 
 
 def delta_e_din6175(lab_ref: ArrayLike, lab_sample: ArrayLike) -> NDArray[np.float64]:
@@ -137,7 +138,12 @@ def delta_e_aggregate(
 ) -> float:
     """ΔE aggregated over an angle set: ``mean``, ``max``, ``rms`` or ``sum`` of the per-angle values."""
     per_angle = delta_e(lab_ref, lab_sample, method).reshape(-1)
-    ops = {"mean": np.mean, "max": np.max, "sum": np.sum, "rms": lambda x: np.sqrt(np.mean(x * x))}
+    ops: dict[str, Callable[[NDArray], float | np.floating]] = {
+        "mean": np.mean,
+        "max": np.max,
+        "sum": np.sum,
+        "rms": lambda x: np.sqrt(np.mean(x * x)),
+    }
     if aggregate not in ops:
         raise ModelInputError("aggregate", f"one of {', '.join(ops)}", aggregate)
     return float(ops[aggregate](per_angle))

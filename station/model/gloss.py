@@ -36,6 +36,7 @@ or Gauss–Legendre (Ward); source points are averaged with Gauss–Legendre nod
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from typing import Literal
@@ -108,7 +109,7 @@ def _check_geometry(geometry_deg: float) -> int:
     return g
 
 
-def _direction(theta: NDArray, u: NDArray, v: NDArray) -> NDArray:
+def _direction(theta: float, u: NDArray, v: NDArray) -> NDArray:
     """Unit vector at in-plane offset *u* and perpendicular offset *v* from the mirror direction (radians)."""
     a = theta + u
     return np.stack([np.sin(a) * np.cos(v), np.sin(v), np.cos(a) * np.cos(v)], axis=-1)
@@ -125,7 +126,7 @@ def _geometry_nodes(
     xv, wv = np.polynomial.legendre.leggauss(n_src[1])
     us, vs = np.meshgrid(xu * su, xv * sv, indexing="ij")
     w_src = np.outer(wu, wv).ravel() / 4.0
-    centres = _direction(np.float64(theta), us.ravel(), vs.ravel())  # mirror images of the source points
+    centres = _direction(theta, us.ravel(), vs.ravel())  # mirror images of the source points
     phi = (np.arange(n_phi) + 0.5) * (2.0 * np.pi / n_phi)
     # orthonormal tangent frame at each centre: e1 along increasing u, e2 completes the frame
     e1 = np.stack([np.cos(theta + us.ravel()), np.zeros(us.size), -np.sin(theta + us.ravel())], axis=-1)
@@ -303,21 +304,21 @@ def lobe_from_gloss(gloss_gu: float, coat_index: float = STANDARD_INDEX) -> Spec
     return SpecularLobe(float(n), float(albedo * scale), float(alpha), float(coat_index))
 
 
-def _ward_alpha_for(target: float, phong_n: float, gu_ward: object) -> float:
+def _ward_alpha_for(target: float, phong_n: float, gu_ward: Callable[[float], float]) -> float:
     """Ward α reading *target* GU: bracket around the small-angle match α ≈ 1/√(2n), then Brent."""
     f = gu_ward  # log α → GU, decreasing
     lo_x, hi_x = math.log(WARD_MIN), math.log(WARD_MAX)
     guess = min(max(0.5 * math.log(1.0 / (2.0 * phong_n)), lo_x), hi_x)
     a, b = max(guess - 0.4, lo_x), min(guess + 0.4, hi_x)
-    fa, fb = f(a) - target, f(b) - target  # type: ignore[operator]
+    fa, fb = f(a) - target, f(b) - target
     if fa * fb > 0:  # outside the narrow bracket: widen to the whole range
         a, b = lo_x, hi_x
-        fa, fb = f(a) - target, f(b) - target  # type: ignore[operator]
+        fa, fb = f(a) - target, f(b) - target
         if fa < 0:  # even the sharpest lobe reads less: a mirror to the meter
             return WARD_MIN
         if fb > 0:
             return WARD_MAX
-    return math.exp(brentq(lambda x: f(x) - target, a, b, xtol=1e-9))  # type: ignore[operator]
+    return math.exp(brentq(lambda x: f(x) - target, a, b, xtol=1e-9))
 
 
 def gloss_from_lobe(lobe: SpecularLobe, model: LobeModel = "phong") -> float:

@@ -17,7 +17,7 @@ from functools import cache
 import colour
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import minimize
+from scipy.optimize import LinearConstraint, minimize
 
 from station.model.colorimetry import OBSERVER_10, xyz_to_lab
 from station.model.errors import FitError, ModelInputError
@@ -125,16 +125,23 @@ def reflectance_from_lab(
     q = d.T @ d + 1e-6 * np.eye(n)  # roughness, regularised so Q is invertible
     q_inv_w = np.linalg.solve(q, w)
     gram = w.T @ q_inv_w
+
+    def roughness(x: NDArray[np.float64]) -> float:
+        return float(0.5 * x @ q @ x)
+
+    def roughness_grad(x: NDArray[np.float64]) -> NDArray[np.float64]:
+        return q @ x
+
     out = np.empty((flat.shape[0], n))
     for k, xyz in enumerate(targets):
         r = q_inv_w @ np.linalg.solve(gram, xyz)  # closed form without bounds
         if np.any(r < -1e-12) or np.any(r > 1 + 1e-12):
             res = minimize(
-                lambda x: 0.5 * x @ q @ x,
+                roughness,
                 np.clip(r, 0.0, 1.0),
-                jac=lambda x: q @ x,
+                jac=roughness_grad,
                 bounds=[(0.0, 1.0)] * n,
-                constraints=[{"type": "eq", "fun": lambda x, t=xyz: x @ w - t, "jac": lambda x: w.T}],
+                constraints=LinearConstraint(w.T, xyz, xyz),  # W^T R = XYZ exactly
                 method="SLSQP",
                 options={"ftol": 1e-14, "maxiter": 500},
             )

@@ -17,11 +17,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from station.render import tonemap
 from station.render.cubemap import sample_cube
+from station.render.errors import RenderError
 from station.render.numpy_renderer import (
     BACKGROUND,
     check_paints,
@@ -33,6 +35,9 @@ from station.render.numpy_renderer import (
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
 from station.render.shapes import Scene
 from station.render.weights import LobeWeights
+
+if TYPE_CHECKING:
+    from station.render.gl_renderer import GLRenderer
 
 
 @dataclass(eq=False)
@@ -142,7 +147,18 @@ class BasisImages:
         frame[self.pixels] = packed
         return out
 
-    def _combine(self, pair, scale, ab_pair, idx_all, code_all, packed) -> None:
+    def _combine(
+        self,
+        pair: list[LobeWeights],
+        scale: np.float32,
+        ab_pair: list[np.ndarray],
+        idx_all: np.ndarray,
+        code_all: np.ndarray,
+        packed: np.ndarray,
+    ) -> None:
+        lut = self._lut
+        if lut is None:
+            raise RenderError("basis images: tone-mapping table used before _prepare built it")
         for k, sl in ((0, slice(0, self.split)), (1, slice(self.split, None))):
             rows = self._weight_rows(pair[k]) * scale
             ndv = self.n_dot_v[sl]
@@ -152,7 +168,7 @@ class BasisImages:
                 np.multiply(ab[1], ndv, out=ab[1])
                 np.add(ab[0], ab[1], out=ab[0])
                 idx[:] = ab[0]
-                self._lut[c].take(idx, mode="clip", out=code)
+                lut[c].take(idx, mode="clip", out=code)
                 if c == 0:
                     dest[:] = code
                 else:
@@ -165,7 +181,7 @@ class BasisImages:
         return self.edit_rgba(paints, exposure_ev, curve)[..., :3]
 
 
-def image_layout(exponents, horizon: str = "lut") -> tuple[tuple[str, int], ...]:
+def image_layout(exponents: Sequence[float], horizon: str = "lut") -> tuple[tuple[str, int], ...]:
     """The cached images of a basis: D, then per lobe (Gh, Dg) when wide, (C,) when narrow."""
     table = horizon_table(exponents, horizon)
     c = np.linspace(0.0, 1.0, table.shape[1])
@@ -177,7 +193,12 @@ def image_layout(exponents, horizon: str = "lut") -> tuple[tuple[str, int], ...]
 
 
 def build_basis_images(
-    scene: Scene, basis: PrefilteredBasis, width: int, height: int, gl_renderer=None, horizon: str = "lut"
+    scene: Scene,
+    basis: PrefilteredBasis,
+    width: int,
+    height: int,
+    gl_renderer: GLRenderer | None = None,
+    horizon: str = "lut",
 ) -> BasisImages:
     """Render the basis images of one view (NumPy lookups, or GL when a GLRenderer is given).
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from station.model.shading import aspecular_deg
 from station.render.errors import RenderInputError
@@ -31,7 +32,7 @@ class AngleBuffers:
     mask: np.ndarray
 
 
-def _unit(v) -> np.ndarray:
+def _unit(v: ArrayLike) -> np.ndarray:
     v = np.asarray(v, dtype=np.float64)
     n = np.linalg.norm(v)
     if v.shape != (3,) or not np.isfinite(n) or n < 1e-12:
@@ -39,14 +40,14 @@ def _unit(v) -> np.ndarray:
     return v / n
 
 
-def light_direction_buffer(g: GBuffer, light_dir=None) -> np.ndarray:
+def light_direction_buffer(g: GBuffer, light_dir: ArrayLike | None = None) -> np.ndarray:
     """Unit light direction per pixel (H, W, 3): *light_dir* everywhere, or R (thesis §2.5.2)."""
     if light_dir is None:
         return np.where(g.mask[..., None], g.reflect, 0.0)
     return np.where(g.mask[..., None], _unit(light_dir), 0.0)
 
 
-def angle_buffers(g: GBuffer, light_dir) -> AngleBuffers:
+def angle_buffers(g: GBuffer, light_dir: ArrayLike) -> AngleBuffers:
     """Aspecular and incidence angles (degrees) per pixel for a distant light along *light_dir*."""
     lvec = _unit(light_dir)
     n_dot_l = g.normal @ lvec

@@ -200,7 +200,7 @@ class GLRenderer:
         self._diffuse_tex.use(m + 4)
         self._horizon_tex.use(m + 5)
         uniforms = {
-            **scene.camera.uniforms(self.width, self.height),
+            **scene.view_camera.uniforms(self.width, self.height),
             "u_size": (float(self.width), float(self.height)),
             "u_misalign": float(np.radians(scene.misalignment_deg)),
             "u_background": (BACKGROUND,) * 3,
@@ -227,11 +227,12 @@ class GLRenderer:
             e = np.asarray(self.basis.exponents, np.float32)[self._order]
             prog["u_exponent"].write(e[: prog["u_exponent"].array_length].tobytes())
         if "u_n_lights" in prog:
-            n_lights = self._lights.count if self._lights is not None else 0
+            lights = self._lights
+            n_lights = lights.count if lights is not None else 0
             prog["u_n_lights"].value = n_lights
-            if n_lights:
-                prog["u_light_dir"].write(self._lights.directions.astype(np.float32).tobytes())
-                prog["u_light_flux"].write(self._lights.flux.astype(np.float32).tobytes())
+            if lights is not None and n_lights:
+                prog["u_light_dir"].write(lights.directions.astype(np.float32).tobytes())
+                prog["u_light_flux"].write(lights.flux.astype(np.float32).tobytes())
         for name, part in (("u_wdd", 1), ("u_wg", 2)):
             if name in prog:
                 n = prog[name].array_length

@@ -43,7 +43,8 @@ def read_hdr_image(path: str | Path) -> np.ndarray:
     """Read a .hdr or .exr file (format sniffed from its first bytes) as float32 (H, W, 3)."""
     path = Path(path)
     try:
-        head = path.open("rb").read(16)
+        with path.open("rb") as fh:
+            head = fh.read(16)
     except OSError as exc:
         raise EnvironmentFileError(path, ACCEPTED, f"cannot read: {exc.strerror}") from exc
     for magic, name in _LDR_MAGIC.items():

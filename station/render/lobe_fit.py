@@ -449,10 +449,10 @@ def _solve_clamped(part: _Part, d: NDArray[np.float64]) -> NDArray[np.float64]:
 def _solve_lp(part: _Part, b: NDArray[np.float64]) -> tuple[NDArray[np.float64], int]:
     """L1 fit min Σ|A x − b| s.t. x ≥ 0 by HiGHS (eq 2.4.2, thesis §2.4); returns (x, fallbacks)."""
     from scipy.optimize import linprog
-    from scipy.sparse import eye, hstack
+    from scipy.sparse import csc_array, eye_array, hstack
 
     rows, k = part.a.shape
-    a_eq = hstack([part.a, -eye(rows), eye(rows)]).tocsc()
+    a_eq = hstack([csc_array(part.a), -eye_array(rows), eye_array(rows)], format="csc")
     cost = np.concatenate([np.zeros(k), np.ones(2 * rows)])
     out = np.zeros((b.shape[0], k, b.shape[2]))
     fallbacks = 0

@@ -27,6 +27,7 @@ import json
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
+from typing import TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -174,9 +175,9 @@ def _cell_solid_angles(alphas_deg: tuple[float, ...], n_azimuths: int) -> NDArra
 def _geometry_block(
     incidences: tuple[float, ...], alphas: tuple[float, ...], azimuths: tuple[float, ...], gloss: bool
 ) -> dict[str, NDArray[np.float64]]:
-    ti, al, ph = np.meshgrid(np.radians(incidences), np.radians(alphas), np.radians(azimuths), indexing="ij")
-    cell = np.broadcast_to(_cell_solid_angles(alphas, len(azimuths))[None, :, None], ti.shape)
-    ti, al, ph, cell = (x.reshape(-1) for x in (ti, al, ph, cell))
+    grid = np.meshgrid(np.radians(incidences), np.radians(alphas), np.radians(azimuths), indexing="ij")
+    cell_grid = np.broadcast_to(_cell_solid_angles(alphas, len(azimuths))[None, :, None], grid[0].shape)
+    ti, al, ph, cell = (x.reshape(-1) for x in (*grid, cell_grid))
     light = np.stack([np.sin(ti), np.zeros_like(ti), np.cos(ti)], axis=-1)
     mirror = np.stack([-np.sin(ti), np.zeros_like(ti), np.cos(ti)], axis=-1)
     e1 = np.stack([np.cos(ti), np.zeros_like(ti), np.sin(ti)], axis=-1)
@@ -234,7 +235,27 @@ def sample_geometries() -> SampleGeometries:
     return geo
 
 
-def basis_table() -> dict[str, object]:
+class BasisRow(TypedDict):
+    """One row of the shipped basis table: the optimal exponents for a lobe count and their ΔE errors."""
+
+    lobes: int
+    exponents: list[float]
+    max_error_de: float
+    mean_error_de: float
+    objective: float
+
+
+class BasisTable(TypedDict):
+    """The shipped basis-selection result (``data/lobe_basis.json``)."""
+
+    schema: str
+    default_lobes: int
+    objective: str
+    note: str
+    bases: list[BasisRow]
+
+
+def basis_table() -> BasisTable:
     """Return the shipped basis-selection result (station/render/data/lobe_basis.json) as a dict."""
     return json.loads(_basis_text())
 
@@ -247,7 +268,7 @@ def _basis_text() -> str:
 def basis_for_count(m: int) -> LobeBasis:
     """Return the shipped optimal basis with *m* lobes (1 <= m <= MAX_LOBES), eq 2.3.4."""
     table = basis_table()
-    rows = {int(r["lobes"]): r for r in table["bases"]}  # type: ignore[index]
+    rows = {int(r["lobes"]): r for r in table["bases"]}
     if m not in rows:
         raise InputError("lobes", f"one of {sorted(rows)}", m)
     return LobeBasis(tuple(rows[m]["exponents"]))
@@ -256,7 +277,7 @@ def basis_for_count(m: int) -> LobeBasis:
 @lru_cache(maxsize=1)
 def default_basis() -> LobeBasis:
     """Return the shipped default basis (its lobe count is the table's ``default_lobes``)."""
-    return basis_for_count(int(basis_table()["default_lobes"]))  # type: ignore[arg-type]
+    return basis_for_count(int(basis_table()["default_lobes"]))
 
 
 def horizon_factors(

@@ -106,7 +106,7 @@ def check_size(width: int, height: int) -> None:
 def gbuffer(scene: Scene, width: int, height: int) -> GBuffer:
     """Ray-cast the scene from its camera: per-pixel geometry (row 0 at the top)."""
     check_size(width, height)
-    origin, dirs = scene.camera.rays(width, height)
+    origin, dirs = scene.view_camera.rays(width, height)
     hits = intersect(scene, origin, dirs)
     v = -dirs
     n = hits.normal

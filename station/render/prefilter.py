@@ -37,7 +37,7 @@ import numpy as np
 from station.render import cubemap
 from station.render.envcache import PrefilterCache
 from station.render.environment import Environment, Lights, extract_lights
-from station.render.errors import RenderInputError
+from station.render.errors import RenderError, RenderInputError
 from station.render.gl_context import build_program, create_gl_context, gl_available
 from station.render.sh import sh_project
 
@@ -242,7 +242,7 @@ class PrefilteredBasis:
     exponents: tuple[float, ...]
     cubes: tuple[np.ndarray, ...] = field(repr=False)  # one (6, S_i, S_i, 3) float32 per exponent
     sh: np.ndarray = field(repr=False)  # (9, 3) radiance SH coefficients
-    diffuse: np.ndarray = field(repr=False, default=None)  # (6, 16, 16, 3) exponent-1 map = E/π
+    diffuse: np.ndarray = field(repr=False)  # (6, 16, 16, 3) exponent-1 map = E/π
     engine: str = "gl"
     timings: dict[str, float] = field(default_factory=dict)
     lights: Lights | None = None  # taken out of the wide lobes' maps
@@ -329,9 +329,12 @@ def prefilter_basis(
                 for i in group:
                     cubes[i] = prefilter_grid_numpy(src_cube, *plan[i]).astype(np.float32)
         timings["lobes"] = time.perf_counter() - t0
-        if cache:
-            for i in todo:
-                cache.put(keys[i], cubes[i])
+    maps = [c for c in cubes if c is not None]
+    if len(maps) != len(cubes):
+        raise RenderError("prefilter: a lobe was neither cached nor computed")
+    if todo and cache:
+        for i in todo:
+            cache.put(keys[i], maps[i])
     timings["cache_hits"] = float(len(exps) - len(todo))
     t0 = time.perf_counter()
     diffuse = prefilter_brute(small_cube(0, 32), 1.0, DIFFUSE_SIZE).astype(np.float32)
@@ -340,7 +343,7 @@ def prefilter_basis(
         env_name=env.name,
         env_hash=env.content_hash,
         exponents=exps,
-        cubes=tuple(cubes),
+        cubes=tuple(maps),
         sh=coeffs,
         diffuse=diffuse,
         engine=engine,

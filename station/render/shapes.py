@@ -56,6 +56,11 @@ class Scene:
         if self.camera is None:
             object.__setattr__(self, "camera", DEFAULT_CAMERAS[self.shape])
 
+    @property
+    def view_camera(self) -> Camera:
+        """The camera in use: the one given, else the shape's default (never None)."""
+        return self.camera if self.camera is not None else DEFAULT_CAMERAS[self.shape]
+
 
 @dataclass(frozen=True)
 class Hits:
@@ -67,7 +72,9 @@ class Hits:
     paint: np.ndarray
 
 
-def _nearest(ts: list[np.ndarray], normals: list[np.ndarray], paints: list[np.ndarray], o, d) -> Hits:
+def _nearest(
+    ts: list[np.ndarray], normals: list[np.ndarray], paints: list[np.ndarray], o: np.ndarray, d: np.ndarray
+) -> Hits:
     t = np.stack(ts)
     k = np.argmin(t, axis=0)
     tmin = np.take_along_axis(t, k[None], 0)[0]
@@ -81,7 +88,11 @@ def _nearest(ts: list[np.ndarray], normals: list[np.ndarray], paints: list[np.nd
     return Hits(mask, pos, n, np.where(mask, p, -1).astype(np.int8))
 
 
-def _sphere(o, d):
+#: Per candidate surface: ray parameters t (inf: miss), unit normals, paint ids (what _nearest picks from).
+_Candidates = tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]
+
+
+def _sphere(o: np.ndarray, d: np.ndarray) -> _Candidates:
     b = d @ o
     c = o @ o - 1.0
     disc = b * b - c
@@ -91,7 +102,7 @@ def _sphere(o, d):
     return [t], [p], [(p[..., 0] >= 0).astype(np.int8)]
 
 
-def _cylinder(o, d):
+def _cylinder(o: np.ndarray, d: np.ndarray) -> _Candidates:
     a = d[..., 0] ** 2 + d[..., 2] ** 2
     b = o[0] * d[..., 0] + o[2] * d[..., 2]
     c = o[0] ** 2 + o[2] ** 2 - CYL_R**2
@@ -115,7 +126,7 @@ def _cylinder(o, d):
     )
 
 
-def _ellipsoid_roots(o, d, axes) -> tuple[np.ndarray, np.ndarray]:
+def _ellipsoid_roots(o: np.ndarray, d: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Both ray parameters of the hits with the origin-centred ellipsoid of semi-axes *axes* (inf: miss)."""
     oo, dd = o / axes, d / axes
     a = np.sum(dd * dd, axis=-1)
@@ -127,7 +138,7 @@ def _ellipsoid_roots(o, d, axes) -> tuple[np.ndarray, np.ndarray]:
     return np.where(hit, (-b - root) / a, np.inf), np.where(hit, (-b + root) / a, np.inf)
 
 
-def _speedshape(o, d):
+def _speedshape(o: np.ndarray, d: np.ndarray) -> _Candidates:
     ts, ns, ps = [], [], []
     halves = (
         (np.array([SPEED_NOSE, SPEED_H, SPEED_W]), -1.0),
@@ -154,7 +165,7 @@ def panel_frames(misalignment_deg: float) -> list[tuple[np.ndarray, np.ndarray, 
     ]
 
 
-def _panels(o, d, misalignment_deg: float):
+def _panels(o: np.ndarray, d: np.ndarray, misalignment_deg: float) -> _Candidates:
     ts, ns, ps = [], [], []
     for k, (c, u, n) in enumerate(panel_frames(misalignment_deg)):
         denom = d @ n
@@ -169,7 +180,7 @@ def _panels(o, d, misalignment_deg: float):
     return ts, ns, ps
 
 
-def _seam(o, d):
+def _seam(o: np.ndarray, d: np.ndarray) -> _Candidates:
     with np.errstate(divide="ignore", invalid="ignore"):
         tf = -o[2] / d[..., 2]
     pf = o + np.where(np.isfinite(tf), tf, 0)[..., None] * d

@@ -14,6 +14,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from station.model.display import decode_display as srgb_decode
@@ -71,7 +73,7 @@ def display_lut(
     return lut, (size - 1) / top * 2.0**exposure_ev
 
 
-def save_png(path, image8: np.ndarray) -> None:
+def save_png(path: str | Path, image8: np.ndarray) -> None:
     """Write an (H, W, 3) uint8 image as PNG (Pillow)."""
     from PIL import Image
 

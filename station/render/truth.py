@@ -428,6 +428,29 @@ class TruthScene:
         return (self.irradiance() / np.pi).reshape(*self.shape, 3)
 
 
+def bend_silhouettes(normals: ArrayLike, views: ArrayLike) -> tuple[NDArray[np.float64], int]:
+    """Silhouette fix: normals with N·V <= BEND_COS turned towards the view until N·V = BEND_COS.
+
+    *normals* and *views* are (..., 3) (views: unit directions from the surface to the eye). Returns the
+    corrected normals (a copy) and how many were turned; arrays of other shapes come back unchanged.
+    """
+    n = np.array(normals, dtype=float)
+    v = np.asarray(views, dtype=float)
+    if n.shape != v.shape or n.shape[-1:] != (3,):
+        return n, 0
+    vn = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    n_dot_v = np.einsum("...i,...i->...", n, vn) / np.linalg.norm(n, axis=-1)
+    low = n_dot_v <= BEND_COS
+    bent = int(low.sum())
+    if bent:
+        nl = n[low] / np.linalg.norm(n[low], axis=-1, keepdims=True)
+        tangent = nl - n_dot_v[low][:, None] * vn[low]
+        norm_t = np.linalg.norm(tangent, axis=-1, keepdims=True)
+        tangent = np.where(norm_t > 1e-12, tangent / np.where(norm_t > 1e-12, norm_t, 1.0), 0.0)
+        n[low] = BEND_COS * vn[low] + np.sqrt(1.0 - BEND_COS**2) * tangent
+    return n, bent
+
+
 def render_truth(
     design: FaceFlopTravelGloss | DesignedBRDF,
     environment: Any,
@@ -455,8 +478,8 @@ def render_truth(
         and sky and is 20× faster; ``bench.basis_accuracy`` uses 256.
     backfacing
         Pixels with N·V <= BEND_COS (silhouettes of shading normals): ``"bend"`` turns the normal towards
-        the view until N·V = BEND_COS (the usual silhouette fix; the count is in the function attribute
-        ``render_truth.last_bent``); ``"error"`` refuses them.
+        the view until N·V = BEND_COS (the usual silhouette fix, :func:`bend_silhouettes`); ``"error"``
+        refuses them.
 
     Returns
     -------
@@ -467,19 +490,8 @@ def render_truth(
         raise RenderInputError("backfacing", "bend | error", backfacing)
     n = np.array(normals, dtype=float)
     v = np.asarray(views, dtype=float)
-    bent = 0
-    if backfacing == "bend" and n.shape == v.shape and n.shape[-1:] == (3,):
-        vn = v / np.linalg.norm(v, axis=-1, keepdims=True)
-        n_dot_v = np.einsum("...i,...i->...", n, vn) / np.linalg.norm(n, axis=-1)
-        low = n_dot_v <= BEND_COS
-        bent = int(low.sum())
-        if bent:
-            nl = n[low] / np.linalg.norm(n[low], axis=-1, keepdims=True)
-            tangent = nl - n_dot_v[low][:, None] * vn[low]
-            norm_t = np.linalg.norm(tangent, axis=-1, keepdims=True)
-            tangent = np.where(norm_t > 1e-12, tangent / np.where(norm_t > 1e-12, norm_t, 1.0), 0.0)
-            n[low] = BEND_COS * vn[low] + np.sqrt(1.0 - BEND_COS**2) * tangent
-    render_truth.last_bent = bent  # type: ignore[attr-defined]
+    if backfacing == "bend":
+        n, _ = bend_silhouettes(n, v)
     brdf = design if isinstance(design, DesignedBRDF) else designed_brdf(design)
     return TruthScene(environment, n, v, samples, quadrature_width).truth_direct(brdf)
 

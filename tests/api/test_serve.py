@@ -73,6 +73,8 @@ def _serve(data_dir: Path, *extra: str) -> Iterator[tuple[str, str]]:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+        if proc.stdout:
+            proc.stdout.close()
 
 
 def test_serve_first_start_real_http(tmp_path: Path) -> None:

@@ -134,8 +134,9 @@ def test_palette_writes_pngs(tmp_path, capsys) -> None:
         "--json",
     )
     assert code == 0
-    assert Image.open(data["swatch"]).size == (160, 32)
-    assert Image.open(data["booklet"]).size == (96, 96)
+    with Image.open(data["swatch"]) as swatch, Image.open(data["booklet"]) as booklet:
+        assert swatch.size == (160, 32)
+        assert booklet.size == (96, 96)
 
 
 def test_sketch_fit_rejects_wrong_size_art(tmp_path, capsys) -> None:

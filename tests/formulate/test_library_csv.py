@@ -54,6 +54,8 @@ def test_extra_angle_triples_are_read() -> None:
         (HEADER + "\nA,solid,50,50,0,0,50,0,0,50,0,0\nA,solid,50,50,0,0,50,0,0,50,0,0\n", 3, "code"),
         (HEADER + "\nA,solid,50,50,0,0,50,0,0,50,0\n", 2, None),
         (HEADER + "\n,solid,50,50,0,0,50,0,0,50,0,0\n", 2, "code"),
+        # a bare carriage return inside an unquoted field is malformed CSV, not a crash
+        (HEADER + "\nA,solid,50,50,0,0,50,0,0,50,0,0\nB\rC,solid,50,50,0,0,50,0,0,50,0,0\n", 3, None),
     ],
 )
 def test_validation_names_row_and_column(text: str, row: int | None, column: str | None) -> None:

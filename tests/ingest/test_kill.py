@@ -96,6 +96,8 @@ def _run_rounds(url: str, tmp_path: Path, hold_lock: object) -> None:
             proc.send_signal(signal.SIGKILL)
             proc.wait(10)
             assert proc.returncode in (-signal.SIGKILL, 0), proc.stderr.read().decode() if proc.stderr else ""
+            if proc.stderr:
+                proc.stderr.close()
         stored = _check(url, outbox, acks)
         with Outbox(outbox) as box:
             print(

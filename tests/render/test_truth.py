@@ -139,7 +139,11 @@ def test_silhouette_pixels_are_bent_or_refused() -> None:
     n = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.8, 0.0, -0.6]])  # head-on, grazing, back-facing
     v = np.broadcast_to([0.0, 0.0, 1.0], n.shape)
     out = tr.render_truth(solid(50.0, 40.0), np.ones((16, 32, 3)), n, v, samples=32, quadrature_width=32)
-    assert tr.render_truth.last_bent == 2
+    bent, count = tr.bend_silhouettes(n, v)
+    assert count == 2  # the grazing and the back-facing normal
+    np.testing.assert_allclose(np.einsum("ij,ij->i", bent, v)[1:], tr.BEND_COS)  # turned to N·V = BEND_COS
+    np.testing.assert_allclose(np.linalg.norm(bent, axis=-1), 1.0)
+    np.testing.assert_array_equal(bent[0], n[0])  # the head-on normal is left alone
     assert np.all(np.isfinite(out)) and np.all(out >= 0)
     with pytest.raises(InputError):
         tr.render_truth(solid(50.0, 40.0), np.ones((16, 32, 3)), n, v, backfacing="error")

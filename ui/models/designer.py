@@ -7,6 +7,7 @@ Drags (a plot point, the HSB sliders) merge into one undo step until :meth:`end_
 from __future__ import annotations
 
 from station.design.designer import (
+    Channel,
     data_points,
     hsb_edit,
     move_face,
@@ -15,7 +16,7 @@ from station.design.designer import (
     set_gloss,
     set_travel,
 )
-from station.design.variations import VariationRing, variations
+from station.design.variations import Category, VariationRing, variations
 from station.model import ANGLES_5, FaceFlopTravelGloss
 from ui.models.document import DesignDocument
 from ui.models.events import EventGroup
@@ -40,10 +41,10 @@ class DesignerModel:
         p = data_points(self.design, ANGLES_5)
         return p.angles_deg, p.lab
 
-    def move_point(self, channel: str, angle_deg: float, value: float) -> bool:
+    def move_point(self, channel: Channel, angle_deg: float, value: float) -> bool:
         """Drag the *channel* point at *angle_deg* to *value* and refit (thesis §3.4.1)."""
         return self.document.apply(
-            lambda d: move_point(data_points(d, ANGLES_5), channel, angle_deg, value).design,  # type: ignore[arg-type]
+            lambda d: move_point(data_points(d, ANGLES_5), channel, angle_deg, value).design,
             f"move {channel} at {angle_deg:g}°",
             merge_key=f"point:{channel}:{angle_deg:g}",
         )
@@ -78,9 +79,9 @@ class DesignerModel:
         self._hsb_base = None
         self.document.end_merge()
 
-    def variations(self, category: str, degree: float) -> VariationRing:
+    def variations(self, category: Category, degree: float) -> VariationRing:
         """Ring of variations around the current design (thesis §3.4.4)."""
-        return variations(self.design, degree, category)  # type: ignore[arg-type]
+        return variations(self.design, degree, category)
 
     def accept(self, design: FaceFlopTravelGloss, label: str = "accept variation") -> None:
         """Make *design* current (variation click, palette click)."""

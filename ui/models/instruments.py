@@ -21,9 +21,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from station.drivers import GlossReading, open_instrument
+from station.drivers import CalibrationResult, GlossReading, Instrument, open_instrument
 from station.drivers.readings import SpectralReading
-from station.drivers.simproc import SIM_KINDS, spawn_simulator
+from station.drivers.simproc import SIM_KINDS, SimulatorProcess, spawn_simulator
 from station.errors import InputError
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.design_io import design_to_dict
@@ -196,8 +196,8 @@ class InstrumentSession:
 
     def __init__(self) -> None:
         self.device = ""
-        self._sim = None
-        self.instrument = None
+        self._sim: SimulatorProcess | None = None
+        self.instrument: Instrument | None = None
 
     @property
     def connected(self) -> bool:
@@ -225,7 +225,7 @@ class InstrumentSession:
         self.device = device
         return address
 
-    def calibrate(self):
+    def calibrate(self) -> CalibrationResult:
         """Run the instrument's calibration sequence (CalibrationResult)."""
         if self.instrument is None:
             raise InputError("instrument", "a connected instrument", None)

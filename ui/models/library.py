@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -64,9 +65,9 @@ class LibraryModel:
         v = v[np.isfinite(v)]
         return (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
 
-    def set_filter(self, **kw: object) -> None:
+    def set_filter(self, **kw: Any) -> None:
         """Replace filter fields (validated by LibraryFilter) and recompute the mask."""
-        self.filter = replace(self.filter, **kw)  # type: ignore[arg-type]
+        self.filter = replace(self.filter, **kw)
         self.mask = self.filter.mask(self.library)
         self.events.filtered.emit()
 

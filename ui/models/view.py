@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -127,15 +128,16 @@ class ViewSettings:
         eye = target + d * np.array(
             [math.cos(pitch) * math.sin(yaw), math.sin(pitch), math.cos(pitch) * math.cos(yaw)]
         )
-        return Camera(tuple(map(float, eye)), base.target, base.up, base.fov_deg)
+        x, y, z = (float(v) for v in eye)
+        return Camera((x, y, z), base.target, base.up, base.fov_deg)
 
     def scene(self) -> Scene:
         """The core scene (shape + orbit camera)."""
         return Scene(self.shape, self.misalignment_deg, camera=self.camera())
 
-    def replace(self, **kw: object) -> ViewSettings:
+    def replace(self, **kw: Any) -> ViewSettings:
         """A copy with fields replaced (validated)."""
-        return replace(self, **kw)  # type: ignore[arg-type]
+        return replace(self, **kw)
 
 
 def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tuple[np.ndarray, np.ndarray]:

@@ -29,7 +29,7 @@ router = APIRouter(
     prefix="/formulation", tags=["formulation"], responses={**ERROR_RESPONSES, **NOT_FOUND, **CONFLICT}
 )
 Chemist = Annotated[User, scoped(Scope.RECIPES_WRITE)]
-_FILE = {
+_FILE: dict[int | str, dict[str, Any]] = {
     200: {
         "description": "the thesis's XML (§5.3.1) or CxF3 (ISO 17972) file; header X-Match-Code",
         "content": {"application/xml": {"schema": {"type": "string"}}},

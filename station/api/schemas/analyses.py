@@ -6,6 +6,7 @@ import datetime as dt
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic.config import JsonDict
 
 from station.api.schemas.common import Polar
 from station.api.schemas.designs import DesignBody
@@ -36,8 +37,13 @@ Beta = Annotated[
 ]
 Lights = Annotated[list[Polar], Field(min_length=1, max_length=16, description="light polar angles, degrees")]
 
-_PAINT = {"face": [60.0, -4.0, -42.0], "flop": [18.0, 2.0, -22.0], "travel_deg": 55.0, "gloss_gu": 88.0}
-_GREY = {"face": [50.0, 0.0, 0.0], "flop": [50.0, 0.0, 0.0], "travel_deg": None}
+_PAINT: JsonDict = {
+    "face": [60.0, -4.0, -42.0],
+    "flop": [18.0, 2.0, -22.0],
+    "travel_deg": 55.0,
+    "gloss_gu": 88.0,
+}
+_GREY: JsonDict = {"face": [50.0, 0.0, 0.0], "flop": [50.0, 0.0, 0.0], "travel_deg": None}
 
 
 class SeamQaCreate(BaseModel):

@@ -6,6 +6,7 @@ import datetime as dt
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
+from pydantic.config import JsonDict
 
 from station.model.domain import FACE_ANGLE_DEG, GLOSS_MAX_GU, GLOSS_MIN_GU, LAB_RANGES, TRAVEL_MAX_DEG
 
@@ -20,7 +21,7 @@ Lab = Annotated[
 ]
 Name = Annotated[str, Field(min_length=1, max_length=128, pattern=r"^[^\x00-\x1f]+$")]
 
-_EXAMPLE = {
+_EXAMPLE: JsonDict = {
     "schema": "cacad.design/1",
     "name": "Blue metallic",
     "face": [62.0, -4.0, -38.0],

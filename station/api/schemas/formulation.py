@@ -5,19 +5,20 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic.config import JsonDict, JsonValue
 
 from station.api.schemas.designs import DesignBody, Lab
 from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS_MIN_GU
 
 SnapMetric = Literal["cie76", "cie2000", "din6175"]
-_DESIGN = {
+_DESIGN: JsonDict = {
     "name": "Blue metallic",
     "face": [62.0, -4.0, -38.0],
     "flop": [24.0, 1.0, -20.0],
     "travel_deg": 70.0,
     "gloss_gu": 88.0,
 }
-_LAB = [[62.0, -4.0, -38.0], [40.0, -1.5, -29.0], [24.0, 1.0, -20.0]]
+_LAB: JsonValue = [[62.0, -4.0, -38.0], [40.0, -1.5, -29.0], [24.0, 1.0, -20.0]]
 
 
 class DesignSource(BaseModel):

@@ -7,6 +7,7 @@ import uuid
 from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field
+from pydantic.config import JsonDict
 
 from station.ingest import Reading
 
@@ -40,6 +41,15 @@ class MeasurementPublic(BaseModel):
     created_by_id: int | None
 
 
+def _first_example(model: type[BaseModel]) -> JsonDict:
+    """The first ``examples`` entry of *model*'s JSON-schema extra, so an example is written once."""
+    extra = model.model_config.get("json_schema_extra")
+    examples = extra.get("examples") if isinstance(extra, dict) else None
+    if isinstance(examples, list) and examples and isinstance(examples[0], dict):
+        return examples[0]
+    raise TypeError(f"{model.__name__} declares no JSON-schema example")
+
+
 class CorrectionCreate(BaseModel):
     """A corrected reading for a stored measurement, and why (the original stays, superseded)."""
 
@@ -49,7 +59,7 @@ class CorrectionCreate(BaseModel):
             "examples": [
                 {
                     "reason": "wrong panel scanned; re-measured",
-                    "reading": Reading.model_config["json_schema_extra"]["examples"][0]  # type: ignore[index]
+                    "reading": _first_example(Reading)
                     | {"client_id": "0e7f3a52-9c1d-4d8e-b7a4-3f6b2c9d1e22"},
                 }
             ]

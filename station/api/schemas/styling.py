@@ -5,10 +5,11 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
+from pydantic.config import JsonDict
 
 from station.api.schemas.designs import DesignBody
 
-_EXAMPLE = {
+_EXAMPLE: JsonDict = {
     "name": "Blue metallic",
     "face": [62.0, -4.0, -38.0],
     "flop": [24.0, 1.0, -20.0],

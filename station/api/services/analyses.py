@@ -6,7 +6,7 @@ from __future__ import annotations
 import tempfile
 import threading
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from sqlalchemy import func, select
@@ -20,6 +20,9 @@ from station.api.services import audit
 from station.api.services.designs import to_design
 from station.errors import InputError
 from station.model import AspecularMeasurements
+
+if TYPE_CHECKING:
+    from station.analysis.geometry import Hinge
 
 
 def _aspecular(session: Session, measurement_id: int) -> AspecularMeasurements:
@@ -44,7 +47,7 @@ def _panel(session: Session, measurement_id: int | None, body: DesignBody | None
     return to_design(body, f"design_{side}")
 
 
-def _hinge(hinge: str | float) -> str | float:
+def _hinge(hinge: Hinge) -> Hinge:
     return hinge if isinstance(hinge, str) else float(hinge)
 
 

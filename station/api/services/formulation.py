@@ -85,6 +85,7 @@ def _build(session: Session, key: tuple[int, int]) -> CachedLibrary:
         lab[i] = [r.lab[where[a]] for a in angles]
     extras = [r.extra or {} for r in rows]
     recipes = [x.get("recipe") for x in extras]
+    given = {i: rc for i, rc in enumerate(recipes) if isinstance(rc, dict)}
     names = sorted({str(x.get("library", "database")) for x in extras})
     lib = Library(
         name=" + ".join(names),
@@ -101,7 +102,7 @@ def _build(session: Session, key: tuple[int, int]) -> CachedLibrary:
     with_recipes = with_index = None
     rows_with = np.flatnonzero(has)
     if rows_with.size:
-        conc = np.array([[float(recipes[i].get(n, 0.0)) for n in colorants] for i in rows_with])  # type: ignore[union-attr]
+        conc = np.array([[float(given[int(i)].get(n, 0.0)) for n in colorants] for i in rows_with])
         with_recipes = Library(
             name=lib.name,
             codes=lib.codes[rows_with],
@@ -145,13 +146,13 @@ def snap(*, session: Session, cache: LibraryCache, request: SnapRequest) -> dict
     out = result.to_dict()
     out["matches"] = [
         {
-            "code": m["code"],
-            "library_paint_id": int(cached.ids[m["index"]]),
-            "sum_de": m["sum_de"],
-            "de_per_angle": m["de_per_angle"],
-            "recipe": cached.recipes[m["index"]],
+            "code": m.code,
+            "library_paint_id": int(cached.ids[m.index]),
+            "sum_de": m.sum_de,
+            "de_per_angle": list(m.de_per_angle),
+            "recipe": cached.recipes[m.index],
         }
-        for m in out["matches"]
+        for m in result.matches
     ]
     out.update(
         design_lab=np.asarray(result.design_lab, dtype=float).tolist(),

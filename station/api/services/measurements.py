@@ -40,7 +40,7 @@ CSV_COLUMNS = (
 )
 
 
-def _base() -> Select[Any]:
+def _base() -> Select[Measurement, str, int, str, str]:
     return (
         select(Measurement, Instrument.serial, _Successor.id, Panel.job, Panel.part)
         .join(Instrument, Instrument.id == Measurement.instrument_id)
@@ -115,7 +115,7 @@ def correct(
     return get_measurement(session=session, measurement_id=result.measurement_id)
 
 
-def _filtered(q: MeasurementQuery) -> Select[Any]:
+def _filtered(q: MeasurementQuery) -> Select[Measurement, str, int, str, str]:
     query = _base()
     if q.job:
         query = query.where(Panel.job == q.job)

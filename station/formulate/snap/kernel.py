@@ -192,7 +192,7 @@ def _compile() -> CandidateSearch | None:
         )  # compile (or load from the cache) now, not mid-query
     except Exception:  # pragma: no cover - a numba that cannot compile here: the NumPy path runs
         return None
-    return search  # type: ignore[no-any-return]
+    return search
 
 
 def compiled_search() -> CandidateSearch | None:
