@@ -289,13 +289,16 @@ class InstrumentHub:
         return self._result(receipt)
 
     def _result(self, receipt: Receipt) -> MeasureResult:
+        client_id = uuid.UUID(receipt.client_id)
+        if receipt.status == "refused":  # only an outbox-first ingestor reports a refusal; this one raises
+            raise ConflictError(f"reading {receipt.client_id} refused: {receipt.message}")
         if receipt.measurement_id is None:
-            return MeasureResult(status=receipt.status, client_id=receipt.client_id, measurement=None)
+            return MeasureResult(status=receipt.status, client_id=client_id, measurement=None)
         with self.sessions() as session:
             stored = measurement_service.get_measurement(
                 session=session, measurement_id=receipt.measurement_id
             )
-        return MeasureResult(status=receipt.status, client_id=receipt.client_id, measurement=stored)
+        return MeasureResult(status=receipt.status, client_id=client_id, measurement=stored)
 
     def ingestor(self) -> Ingestor:
         """The service's ingest loop over its database and its outbox (opened on first use)."""

@@ -13,6 +13,7 @@ from __future__ import annotations
 import getpass
 import os
 import uuid
+from typing import Final, Literal
 
 import numpy as np
 
@@ -24,7 +25,7 @@ from station.model.spectra import reflectance_to_lab
 __all__ = ["calibration_client_id", "operator_name", "record_from_reading"]
 
 _CAL_NAMESPACE = uuid.UUID("0b9e8c1e-5d0c-4c7b-8f5e-2b7c3f1d9a11")
-GLOSS_GEOMETRY_DEG = 60
+GLOSS_GEOMETRY_DEG: Final = 60
 LAB_DECIMALS = 4
 SPECTRA_DECIMALS = 6
 
@@ -46,7 +47,7 @@ def operator_name(fallback: str = "station") -> str:
     return name or fallback
 
 
-def _gloss_60(gloss: GlossReading | None) -> tuple[float | None, int | None]:
+def _gloss_60(gloss: GlossReading | None) -> tuple[float | None, Literal[60] | None]:
     if gloss is None:
         return None, None
     if GLOSS_GEOMETRY_DEG not in gloss.gloss_gu:

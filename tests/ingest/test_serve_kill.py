@@ -161,7 +161,10 @@ def _drive(service: _Service, rng: random.Random) -> tuple[dict[str, int], dict[
                     statuses["in_flight" if not isinstance(exc, httpx.ConnectError) else "between"] += 1
                     if timer is not None:
                         timer.join()
-                    if service.proc is not None:
+                    if (
+                        service.proc is not None
+                    ):  # a transport error we did not cause (a timeout): same treatment
+                        service.kill(service.proc)
                         service.proc.wait(20)
                     timer = None
                     statuses["restarts"] += 1
@@ -214,6 +217,9 @@ def _run(tmp_path: Path, database_url: str | None) -> None:
     service = _Service(tmp_path, database_url)
     try:
         acked, statuses = _drive(service, random.Random(seed))
+    except BaseException:
+        print(f"seed {seed}; station serve output (tail):\n" + "".join(service.log[-60:]))
+        raise
     finally:
         service.stop()
     print(f"seed {seed}: {statuses}")
