@@ -1,6 +1,7 @@
 """Instrument reading → ingest record: the one conversion every front uses (service, viewer, CLI).
 
-A :class:`station.drivers.readings.SpectralReading` becomes a validated :class:`Reading`: the aspecular
+A :class:`station.drivers.readings.SpectralReading` (taken structurally, as :class:`SpectralLike`:
+ingest and drivers are peers and do not import each other) becomes a validated :class:`Reading`: the aspecular
 angles (degrees) of one illumination block, CIE L*a*b* per geometry computed from the spectra by
 ``station.model.spectra.reflectance_to_lab`` (D65, CIE 1964 10°; never the instrument's own Lab), the
 reflectance factors (unitless) at the instrument's wavelengths (nm), the instrument by serial, the
@@ -10,24 +11,70 @@ meter reading joins it.
 
 from __future__ import annotations
 
+import datetime as dt
 import getpass
 import os
 import uuid
-from typing import Final, Literal
+from collections.abc import Mapping, Sequence
+from typing import Final, Literal, Protocol
 
 import numpy as np
 
-from station.drivers.readings import GlossReading, InstrumentInfo, SpectralReading
 from station.errors import InputError
 from station.ingest.schema import CalibrationRef, InstrumentRef, PanelRef, Reading
 from station.model.spectra import reflectance_to_lab
 
-__all__ = ["calibration_client_id", "operator_name", "record_from_reading"]
+__all__ = [
+    "GlossLike",
+    "InstrumentLike",
+    "SpectralLike",
+    "calibration_client_id",
+    "operator_name",
+    "record_from_reading",
+]
 
 _CAL_NAMESPACE = uuid.UUID("0b9e8c1e-5d0c-4c7b-8f5e-2b7c3f1d9a11")
 GLOSS_GEOMETRY_DEG: Final = 60
 LAB_DECIMALS = 4
 SPECTRA_DECIMALS = 6
+
+
+class SpectralLike(Protocol):
+    """What the conversion reads of a spectral reading (``station.drivers.readings.SpectralReading``)."""
+
+    @property
+    def geometries(self) -> tuple[str, ...]: ...
+    @property
+    def serial(self) -> str: ...
+    @property
+    def calibration_id(self) -> str: ...
+    @property
+    def time(self) -> dt.datetime: ...
+    @property
+    def wavelengths_nm(self) -> Sequence[int]: ...
+    @property
+    def model(self) -> str: ...
+    def block(self, illumination_deg: int) -> tuple[tuple[int, ...], np.ndarray]:
+        """``(aspecular angles in degrees, reflectance rows)`` of one illumination direction."""
+        ...
+
+
+class GlossLike(Protocol):
+    """What the conversion reads of a gloss reading: gloss units (GU) by geometry in degrees."""
+
+    @property
+    def gloss_gu(self) -> Mapping[int, float]: ...
+
+
+class InstrumentLike(Protocol):
+    """What the conversion reads of an instrument's identity (``identify()``)."""
+
+    @property
+    def model(self) -> str: ...
+    @property
+    def serial(self) -> str: ...
+    @property
+    def firmware(self) -> str: ...
 
 
 def calibration_client_id(serial: str, calibration_id: str) -> uuid.UUID:
@@ -47,7 +94,7 @@ def operator_name(fallback: str = "station") -> str:
     return name or fallback
 
 
-def _gloss_60(gloss: GlossReading | None) -> tuple[float | None, Literal[60] | None]:
+def _gloss_60(gloss: GlossLike | None) -> tuple[float | None, Literal[60] | None]:
     if gloss is None:
         return None, None
     if GLOSS_GEOMETRY_DEG not in gloss.gloss_gu:
@@ -56,15 +103,15 @@ def _gloss_60(gloss: GlossReading | None) -> tuple[float | None, Literal[60] | N
 
 
 def record_from_reading(
-    reading: SpectralReading,
+    reading: SpectralLike,
     *,
     operator: str,
     illumination_deg: int = 45,
     client_id: uuid.UUID | None = None,
-    instrument: InstrumentInfo | None = None,
+    instrument: InstrumentLike | None = None,
     panel_id: int | None = None,
     panel: PanelRef | None = None,
-    gloss: GlossReading | None = None,
+    gloss: GlossLike | None = None,
 ) -> Reading:
     """The ingest record of the *illumination_deg* block of *reading* (validated by :class:`Reading`).
 
