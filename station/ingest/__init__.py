@@ -5,7 +5,13 @@
 :func:`record_from_reading` turns an instrument reading into a :class:`Reading` (the one conversion).
 """
 
-from station.ingest.destination import DatabaseDestination, Destination, Receipt, is_unreachable
+from station.ingest.destination import (
+    DatabaseDestination,
+    Destination,
+    Receipt,
+    is_unreachable,
+    store_audited,
+)
 from station.ingest.errors import (
     ClientIdConflictError,
     DestinationUnreachableError,
@@ -40,5 +46,6 @@ __all__ = [
     "is_unreachable",
     "operator_name",
     "record_from_reading",
+    "store_audited",
     "store_reading",
 ]

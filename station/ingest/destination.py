@@ -23,9 +23,9 @@ from db.engine import make_engine, make_sessionmaker
 from db.models import AuditEvent, Measurement
 from station.ingest.errors import DestinationUnreachableError
 from station.ingest.schema import Reading
-from station.ingest.store import store_reading
+from station.ingest.store import StoreResult, store_reading
 
-__all__ = ["DatabaseDestination", "Destination", "Receipt", "Status", "is_unreachable"]
+__all__ = ["DatabaseDestination", "Destination", "Receipt", "Status", "is_unreachable", "store_audited"]
 
 Status = Literal["stored", "duplicate", "queued", "refused"]
 _AUDIT_INSERT = insert(cast(Table, AuditEvent.__table__))
@@ -78,6 +78,39 @@ class Destination(Protocol):
     def close(self) -> None:
         """Release connections."""
         ...
+
+
+def store_audited(
+    session: Session,
+    reading: Reading,
+    *,
+    actor_id: int | None,
+    action: str,
+    source: str | None = None,
+    instrument_cache: dict[str, int] | None = None,
+) -> StoreResult:
+    """:func:`store_reading` plus, when the row is new, its audit event, in the caller's transaction.
+
+    The audit detail holds the client id, the operator and *source* (when given); *actor_id* is the
+    acting user (``None``: the station account).
+    """
+    result = store_reading(session, reading, created_by_id=actor_id, instrument_cache=instrument_cache)
+    if result.created:
+        detail: dict[str, str] = {"client_id": str(reading.client_id), "operator": reading.operator}
+        if source is not None:
+            detail["source"] = source
+        session.execute(
+            _AUDIT_INSERT,
+            {
+                "at": utcnow(),
+                "actor_id": actor_id,
+                "action": action,
+                "entity": "measurement",
+                "entity_id": str(result.measurement_id),
+                "detail": detail,
+            },
+        )
+    return result
 
 
 class DatabaseDestination:
@@ -148,25 +181,15 @@ class DatabaseDestination:
 
     def store(self, reading: Reading, *, actor_id: int | None = None, replayed: bool = False) -> Receipt:
         """Store *reading* and its audit row in one transaction (``ON CONFLICT (client_id) DO NOTHING``)."""
-        detail: dict[str, str] = {"client_id": str(reading.client_id), "operator": reading.operator}
-        if self.source is not None:
-            detail["source"] = self.source
         with self.sessions().begin() as session:
-            result = store_reading(
-                session, reading, created_by_id=actor_id, instrument_cache=self._instrument_ids
+            result = store_audited(
+                session,
+                reading,
+                actor_id=actor_id,
+                action=self.replay_action if replayed else self.action,
+                source=self.source,
+                instrument_cache=self._instrument_ids,
             )
-            if result.created:
-                session.execute(
-                    _AUDIT_INSERT,
-                    {
-                        "at": utcnow(),
-                        "actor_id": actor_id,
-                        "action": self.replay_action if replayed else self.action,
-                        "entity": "measurement",
-                        "entity_id": str(result.measurement_id),
-                        "detail": detail,
-                    },
-                )
         status: Status = "stored" if result.created else "duplicate"
         return Receipt(str(reading.client_id), status, result.measurement_id)
 
