@@ -20,6 +20,7 @@ from __future__ import annotations
 import logging
 import threading
 import uuid
+from collections.abc import Callable
 from pathlib import Path
 
 from sqlalchemy import Engine
@@ -41,7 +42,12 @@ class Ingestor:
     """
 
     def __init__(
-        self, destination: Destination | Engine | str, outbox_path: Path | str, *, queue_first: bool = False
+        self,
+        destination: Destination | Engine | str,
+        outbox_path: Path | str,
+        *,
+        queue_first: bool = False,
+        decode: Callable[[str], Reading] = Reading.model_validate_json,
     ) -> None:
         self._own_destination = isinstance(destination, str)
         if isinstance(destination, (Engine, str)):
@@ -49,6 +55,7 @@ class Ingestor:
         self.destination: Destination = destination
         self.outbox = Outbox(outbox_path)
         self.queue_first = queue_first
+        self._decode = decode  # outbox body → reading (a front may accept an older body layout)
         self._lock = threading.RLock()
 
     @property
@@ -80,7 +87,7 @@ class Ingestor:
         with self._lock:
             for entry in self.outbox.entries():
                 try:
-                    reading = Reading.model_validate_json(entry.body)
+                    reading = self._decode(entry.body)
                     receipt = self.destination.store(reading, replayed=True)
                 except Exception as exc:
                     if is_unreachable(exc):

@@ -18,6 +18,7 @@ table with the error. Either way the reading stays on disk: nothing is lost.
 from __future__ import annotations
 
 import datetime as dt
+import json
 import os
 import re
 import uuid
@@ -110,6 +111,17 @@ class StoredMeasurement:
             return None
 
 
+def _decode_entry(body: str) -> Reading:
+    """An outbox body: a record, or the earlier viewer layout ``{"panel": {...}, "reading": {...}}``
+    (queued by a viewer of the previous release), whose panel metadata moves into the record."""
+    from station.ingest import Reading
+
+    doc = json.loads(body)
+    if isinstance(doc, dict) and set(doc) == {"panel", "reading"}:
+        return Reading.model_validate({**doc["reading"], "panel_id": None, "panel": doc["panel"]})
+    return Reading.model_validate(doc)
+
+
 class MeasurementSink:
     """An :class:`~station.ingest.Ingestor` (outbox first) over a destination; subclasses name the destination.
 
@@ -145,7 +157,9 @@ class MeasurementSink:
         if self._ingestor is None:
             from station.ingest import Ingestor
 
-            self._ingestor = Ingestor(self._destination(), self.outbox_path, queue_first=True)
+            self._ingestor = Ingestor(
+                self._destination(), self.outbox_path, queue_first=True, decode=_decode_entry
+            )
         return self._ingestor
 
     @property
