@@ -76,7 +76,7 @@ def _startup(app: FastAPI, settings: Settings) -> None:
             except Exception:  # the service still runs; the library routes then list nothing
                 session.rollback()
                 log.exception("demo library not loaded")
-    hub = InstrumentHub(settings=settings, sessions=app.state.sessions)
+    hub = InstrumentHub(settings=settings, engine=engine, sessions=app.state.sessions)
     app.state.instruments = hub
     hub.attach_simulators(settings.simulators)
 

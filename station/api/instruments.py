@@ -1,9 +1,10 @@
 """Instruments attached to the service: simulators spawned at start, devices connected by address.
 
 Driver calls block (serial I/O, polling), so routes run the hub's methods in a worker thread
-(``asyncio.to_thread``); each instrument serialises its own calls with its lock. A measurement goes
-through the same exactly-once path as any station reading; when the database is away it is kept in
-the on-disk outbox and replayed before the next one.
+(``asyncio.to_thread``); each instrument serialises its own calls with its lock. A measurement becomes
+an ingest record through ``station.ingest.record_from_reading`` and is stored by the service's
+``station.ingest.Ingestor`` (exactly once by client id); when the database is away it is kept in the
+on-disk outbox and replayed before the next one and periodically.
 """
 
 from __future__ import annotations
@@ -13,8 +14,7 @@ import threading
 import uuid
 from dataclasses import dataclass
 
-import numpy as np
-from sqlalchemy import select
+from sqlalchemy import Engine, select
 from sqlalchemy.orm import Session, sessionmaker
 
 from db.base import utcnow
@@ -34,17 +34,17 @@ from station.drivers import Instrument as Driver
 from station.drivers.readings import InstrumentInfo
 from station.drivers.simproc import SimulatorProcess, spawn_simulator
 from station.errors import InputError
-from station.ingest import CalibrationRef, InstrumentRef, Outbox, Reading, is_unreachable, store_reading
-from station.model.spectra import reflectance_to_lab
+from station.ingest import (
+    ClientIdConflictError,
+    DatabaseDestination,
+    Ingestor,
+    Outbox,
+    Receipt,
+    calibration_client_id,
+    record_from_reading,
+)
 
 log = logging.getLogger(__name__)
-
-_CAL_NAMESPACE = uuid.UUID("0b9e8c1e-5d0c-4c7b-8f5e-2b7c3f1d9a11")
-
-
-def calibration_uuid(serial: str, calibration_id: str) -> uuid.UUID:
-    """A stable client id for an instrument's calibration (same device id → same record)."""
-    return uuid.uuid5(_CAL_NAMESPACE, f"{serial}/{calibration_id}")
 
 
 @dataclass
@@ -60,13 +60,14 @@ class Attached:
 class InstrumentHub:
     """The instruments this service holds open."""
 
-    def __init__(self, *, settings: Settings, sessions: sessionmaker[Session]) -> None:
+    def __init__(self, *, settings: Settings, engine: Engine, sessions: sessionmaker[Session]) -> None:
         self.settings = settings
+        self.engine = engine
         self.sessions = sessions
         self._attached: dict[str, Attached] = {}
         self._lock = threading.Lock()
-        self._outbox: Outbox | None = None
-        self._outbox_lock = threading.Lock()
+        self._ingestor: Ingestor | None = None
+        self._ingestor_lock = threading.Lock()
 
     # -- lifecycle ----------------------------------------------------------------------------------
     def attach_simulators(self, kinds: tuple[str, ...] | list[str]) -> None:
@@ -91,8 +92,8 @@ class InstrumentHub:
             finally:
                 if a.simulator is not None:
                     a.simulator.close()
-        if self._outbox is not None:
-            self._outbox.close()
+        if self._ingestor is not None:
+            self._ingestor.close()
 
     def _attach(self, address: str, simulator: SimulatorProcess | None) -> Attached:
         family, _ = split_address(address)
@@ -190,7 +191,7 @@ class InstrumentHub:
         result = a.driver.calibrate()
         with self.sessions() as session:
             inst = self._instrument_row(session, a)
-            client_id = calibration_uuid(a.info.serial, result.calibration_id)
+            client_id = calibration_client_id(a.info.serial, result.calibration_id)
             record = session.scalar(select(CalibrationRecord).where(CalibrationRecord.client_id == client_id))
             if record is None:
                 record = CalibrationRecord(
@@ -228,59 +229,29 @@ class InstrumentHub:
                 expires=result.expires,
             )
 
-    def _gloss(self, gloss_id: str | None) -> tuple[float | None, int | None]:
+    def _gloss(self, gloss_id: str | None) -> GlossReading | None:
         if gloss_id is None:
-            return None, None
+            return None
         reading = self.get(gloss_id).driver.measure()
         if not isinstance(reading, GlossReading) or 60 not in reading.gloss_gu:
             raise InputError("gloss_instrument_id", "an attached gloss meter with a 60° geometry", gloss_id)
-        return float(reading.gloss_gu[60]), 60
-
-    def reading_from(
-        self,
-        a: Attached,
-        spectral: SpectralReading,
-        req: MeasureRequest,
-        operator: str,
-        gloss: tuple[float | None, int | None],
-    ) -> Reading:
-        """The ingest reading for one illumination block of a spectral reading (Lab from the spectra)."""
-        angles, refl = spectral.block(req.illumination_deg)
-        if not angles:
-            illum = sorted({int(g.split("as")[0]) for g in spectral.geometries})
-            raise InputError("illumination_deg", f"one of {illum}", req.illumination_deg)
-        lab = np.asarray(reflectance_to_lab(np.asarray(refl, dtype=float)))
-        cal = None
-        if spectral.calibration_id:
-            cal = CalibrationRef(
-                client_id=calibration_uuid(spectral.serial, spectral.calibration_id),
-                performed_at=spectral.time,
-                reference="",
-            )
-        return Reading(
-            client_id=uuid.uuid4(),
-            instrument=InstrumentRef(
-                serial=spectral.serial or a.info.serial,
-                model=a.info.model,
-                kind="multiangle",
-                firmware=a.info.firmware or None,
-            ),
-            calibration=cal,
-            panel_id=req.panel_id,
-            operator=operator,
-            measured_at=spectral.time,
-            geometries_deg=[float(x) for x in angles],
-            lab=lab.round(4).tolist(),
-            wavelengths_nm=[float(w) for w in spectral.wavelengths_nm],
-            spectra=np.asarray(refl, dtype=float).round(6).tolist(),
-            gloss_gu=gloss[0],
-            gloss_geometry_deg=gloss[1],
-        )
+        return reading
 
     def measure(
-        self, *, instrument_id: str, req: MeasureRequest, gloss_instrument_id: str | None, actor: User
+        self,
+        *,
+        instrument_id: str,
+        req: MeasureRequest,
+        gloss_instrument_id: str | None,
+        actor: User,
+        client_id: uuid.UUID | None = None,
     ) -> MeasureResult:
-        """Measure once, store it exactly once (or queue it on disk when the database is away)."""
+        """Measure once and store it exactly once through the :class:`Ingestor` (queued on disk when the database is away).
+
+        With *client_id* (the request's, or its ``Idempotency-Key``) a retry is answered from what the
+        first attempt left: the stored measurement (``duplicate``) or the outbox entry (``queued``),
+        without measuring again.
+        """
         a = self.get(instrument_id)
         if a.driver.kind != "spectro":
             raise InputError(
@@ -288,58 +259,65 @@ class InstrumentHub:
                 "a spectrophotometer (gloss meters join via gloss_instrument_id)",
                 instrument_id,
             )
+        ingestor = self.ingestor()
+        if client_id is not None:
+            ingestor.replay()
+            prior = ingestor.find(client_id)
+            if prior is not None:
+                return self._result(prior)
         gloss = self._gloss(gloss_instrument_id)
         spectral = a.driver.measure()
-        reading = self.reading_from(a, spectral, req, actor.name, gloss)
-        self.replay_outbox()
+        if not isinstance(spectral, SpectralReading):
+            raise InputError("instrument_id", "a spectrophotometer", instrument_id)
+        reading = record_from_reading(
+            spectral,
+            operator=actor.name,
+            illumination_deg=req.illumination_deg,
+            client_id=client_id,
+            instrument=a.info,
+            panel_id=req.panel_id,
+            gloss=gloss,
+        )
         try:
-            with self.sessions() as session:
-                stored, _created = measurement_service.ingest(session=session, actor=actor, reading=reading)
-        except Exception as exc:
-            if not is_unreachable(exc):
-                raise
-            with self._outbox_lock:
-                self.outbox().put(str(reading.client_id), reading.canonical_json())
+            receipt = ingestor.submit(reading, actor_id=actor.id)
+        except ClientIdConflictError as exc:  # a concurrent request under the same key measured first
+            raise ConflictError(str(exc)) from exc
+        if receipt.status == "queued":
             log.warning(
-                "database unreachable; reading %s queued in %s", reading.client_id, self.outbox().path
+                "database unreachable; reading %s queued in %s", reading.client_id, ingestor.outbox.path
             )
-            return MeasureResult(status="queued", measurement=None)
-        return MeasureResult(status="stored", measurement=stored)
+        return self._result(receipt)
+
+    def _result(self, receipt: Receipt) -> MeasureResult:
+        client_id = uuid.UUID(receipt.client_id)
+        if receipt.status == "refused":  # only an outbox-first ingestor reports a refusal; this one raises
+            raise ConflictError(f"reading {receipt.client_id} refused: {receipt.message}")
+        if receipt.measurement_id is None:
+            return MeasureResult(status=receipt.status, client_id=client_id, measurement=None)
+        with self.sessions() as session:
+            stored = measurement_service.get_measurement(
+                session=session, measurement_id=receipt.measurement_id
+            )
+        return MeasureResult(status=receipt.status, client_id=client_id, measurement=stored)
+
+    def ingestor(self) -> Ingestor:
+        """The service's ingest loop over its database and its outbox (opened on first use)."""
+        with self._ingestor_lock:
+            if self._ingestor is None:
+                self._ingestor = Ingestor(
+                    DatabaseDestination(
+                        self.engine, action="measurement.create", replay_action="measurement.replay"
+                    ),
+                    self.settings.outbox_path,
+                )
+            return self._ingestor
 
     def outbox(self) -> Outbox:
         """The service's outbox (opened on first use)."""
-        if self._outbox is None:
-            self._outbox = Outbox(self.settings.outbox_path)
-        return self._outbox
+        return self.ingestor().outbox
 
     def replay_outbox(self) -> int:
         """Store queued readings in order; stop when the database is still away."""
-        if self._outbox is None and not self.settings.outbox_path.exists():
+        if self._ingestor is None and not self.settings.outbox_path.exists():
             return 0
-        with self._outbox_lock:
-            return self._replay(self.outbox())
-
-    def _replay(self, box: Outbox) -> int:
-        done = 0
-        for entry in box.entries():
-            try:
-                with self.sessions.begin() as session:
-                    reading = Reading.model_validate_json(entry.body)
-                    result = store_reading(session, reading)
-                    if result.created:
-                        audit.record(
-                            session=session,
-                            actor=None,
-                            action="measurement.replay",
-                            entity="measurement",
-                            entity_id=result.measurement_id,
-                            client_id=str(reading.client_id),
-                        )
-            except Exception as exc:
-                if is_unreachable(exc):
-                    break
-                box.bury(entry, str(exc))
-            else:
-                box.remove(entry.seq)
-            done += 1
-        return done
+        return self.ingestor().replay()

@@ -4,11 +4,19 @@ DEVICE is ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss`` (a simulator subprocess star
 ``--design FILE`` or ``--recipe FILE`` — ``station formulate --json`` output — sets its panel) or an address accepted by :func:`station.drivers.open_instrument`
 (``/dev/ttyACM0``, ``ma3@usb:1209:ca03``, ``gloss@hid:PATH`` …). Lab comes from
 ``station.model.spectra.reflectance_to_lab`` (D65, CIE 1964 10°), never from the driver.
+
+``station measure DEVICE --store [URL]`` also stores the reading: the record is
+``station.ingest.record_from_reading``'s and it goes through ``station.ingest.Ingestor`` (exactly once by
+client id; queued in ``--outbox`` when the database is away and sent by the next ``--store``) into URL,
+or by default the database ``station serve`` uses (``$CACAD_DATABASE_URL``, else ``station.sqlite3`` in
+``$CACAD_DATA_DIR`` or ``./var``), upgraded to the current schema on first use.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import uuid
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
@@ -41,7 +49,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         cp.add_argument("--fault", action="append", default=[], help="simulator fault spec (sim:* only)")
         cp.add_argument("--timeout", type=float, default=1.5, help="reply timeout, seconds")
         if name == "measure":
-            cp.add_argument("--panel", help="panel id recorded with the reading")
+            cp.add_argument("--panel", help="panel recorded with the reading (with --store: a panel id)")
+            cp.add_argument(
+                "--store",
+                nargs="?",
+                const="",
+                metavar="URL",
+                help="store the reading in database URL (default: the `station serve` database)",
+            )
+            cp.add_argument(
+                "--outbox", type=Path, help="outbox file (default: measure-outbox.sqlite3 in the data folder)"
+            )
+            cp.add_argument(
+                "--client-id",
+                type=uuid.UUID,
+                help="client id of the reading (a retry under it stores nothing new)",
+            )
+            cp.add_argument(
+                "--illumination", type=int, default=45, help="illumination angle of the stored block, degrees"
+            )
         add_json_flag(cp)
         cp.set_defaults(handler=fn)
 
@@ -92,11 +118,58 @@ def cmd_calibrate(args: argparse.Namespace) -> dict[str, Any]:
         }
 
 
+def _store_panel_id(panel: str | None) -> int | None:
+    if panel is None:
+        return None
+    try:
+        value = int(panel)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= 2**31 - 1:
+        raise InputError("--panel", "with --store, a panel id 1 <= id <= 2147483647", panel)
+    return value
+
+
+@contextmanager
+def _ingestor(args: argparse.Namespace) -> Iterator[Any]:
+    """The :class:`~station.ingest.Ingestor` into the ``--store`` database (``None`` without ``--store``)."""
+    if args.store is None:
+        yield None
+        return
+    from db.engine import data_dir, default_database_url
+    from station.ingest import DatabaseDestination, Ingestor
+
+    url = args.store or os.environ.get("CACAD_DATABASE_URL") or default_database_url()
+    destination = DatabaseDestination(url, migrate=True, source="cli")
+    try:
+        with Ingestor(destination, args.outbox or data_dir() / "measure-outbox.sqlite3") as ingestor:
+            yield ingestor
+    finally:
+        destination.close()
+
+
+def _receipt(ingestor: Any, receipt: Any) -> dict[str, Any]:
+    return {
+        "status": receipt.status,
+        "client_id": receipt.client_id,
+        "measurement_id": receipt.measurement_id,
+        "database": ingestor.destination.where,
+        "outbox": str(ingestor.outbox.path),
+        "message": receipt.message,
+    }
+
+
 def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
-    """Measure once; spectra per geometry and Lab from the model, or gloss/haze/DOI."""
+    """Measure once; spectra per geometry and Lab from the model, or gloss/haze/DOI; with ``--store``, store it."""
     from station.drivers import GlossReading
 
-    with _instrument(args) as inst:
+    panel_id = _store_panel_id(args.panel) if args.store is not None else None  # refused before starting
+    with _ingestor(args) as ingestor, _instrument(args) as inst:
+        if ingestor is not None and args.client_id is not None:
+            ingestor.replay()
+            prior = ingestor.find(args.client_id)
+            if prior is not None:  # a retry: answered from the first attempt, nothing measured again
+                return {"device": args.device, "panel": args.panel, "stored": _receipt(ingestor, prior)}
         reading = inst.measure()
         out: dict[str, Any] = {
             "device": args.device,
@@ -104,6 +177,8 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
             "panel": args.panel,
         }
         if isinstance(reading, GlossReading):
+            if ingestor is not None:
+                raise InputError("--store", "a spectrophotometer reading (Lab per geometry)", args.device)
             data = reading.to_dict()
             out.update({"geometries": [], "lab": [], "spectra": [], **data})
             return out
@@ -113,4 +188,16 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
         out.update(data)
         out["lab"] = reflectance_to_lab(reading.reflectance).round(4).tolist()
         out["gloss_gu"] = None
+        if ingestor is not None:
+            from station.ingest import operator_name, record_from_reading
+
+            record = record_from_reading(
+                reading,
+                operator=operator_name(),
+                illumination_deg=args.illumination,
+                client_id=args.client_id,
+                instrument=inst.identify(),
+                panel_id=panel_id,
+            )
+            out["stored"] = _receipt(ingestor, ingestor.submit(record))
         return out

@@ -1,27 +1,51 @@
 """Loss-free, exactly-once ingest of instrument readings into the measurement database.
 
 :class:`Reading` is what a station sends; :func:`store_reading` writes it once inside a transaction;
-:class:`Ingestor` adds the on-disk :class:`Outbox` used while the database is unreachable.
+:class:`Ingestor` adds the on-disk :class:`Outbox` used while the destination is unreachable;
+:func:`record_from_reading` turns an instrument reading into a :class:`Reading` (the one conversion).
 """
 
-from station.ingest.errors import ClientIdConflictError, IngestError, ReferenceNotFoundError
-from station.ingest.ingestor import Ingestor, Receipt, is_unreachable
+from station.ingest.destination import (
+    DatabaseDestination,
+    Destination,
+    Receipt,
+    is_unreachable,
+    store_audited,
+)
+from station.ingest.errors import (
+    ClientIdConflictError,
+    DestinationUnreachableError,
+    IngestError,
+    ReadingRefusedError,
+    ReferenceNotFoundError,
+)
+from station.ingest.ingestor import Ingestor
 from station.ingest.outbox import Outbox, OutboxEntry
-from station.ingest.schema import CalibrationRef, InstrumentRef, Reading
+from station.ingest.records import calibration_client_id, operator_name, record_from_reading
+from station.ingest.schema import CalibrationRef, InstrumentRef, PanelRef, Reading
 from station.ingest.store import StoreResult, store_reading
 
 __all__ = [
     "CalibrationRef",
     "ClientIdConflictError",
+    "DatabaseDestination",
+    "Destination",
+    "DestinationUnreachableError",
     "IngestError",
     "Ingestor",
     "InstrumentRef",
     "Outbox",
     "OutboxEntry",
+    "PanelRef",
     "Reading",
+    "ReadingRefusedError",
     "Receipt",
     "ReferenceNotFoundError",
     "StoreResult",
+    "calibration_client_id",
     "is_unreachable",
+    "operator_name",
+    "record_from_reading",
+    "store_audited",
     "store_reading",
 ]

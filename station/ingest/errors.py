@@ -22,3 +22,11 @@ class ClientIdConflictError(IngestError):
 
 class ReferenceNotFoundError(IngestError, LookupError):
     """A reading names a panel (or other row) that does not exist."""
+
+
+class DestinationUnreachableError(IngestError):
+    """The database or service that stores readings is away: the reading stays queued in the outbox."""
+
+
+class ReadingRefusedError(IngestError):
+    """The destination refused the reading (not unreachable: refused), e.g. HTTP 4xx from a service."""

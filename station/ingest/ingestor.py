@@ -1,70 +1,75 @@
-"""The station-side ingest loop: store once, or queue on disk and replay in order.
+"""The one ingest loop: store once, or queue on disk and replay in order.
 
-``submit`` first drains the outbox (so readings reach the database in the order they were taken),
-then stores the new reading. When the database is unreachable the reading goes to the outbox and
+``submit`` first drains the outbox (so readings reach the destination in the order they were taken),
+then stores the new reading. When the destination is unreachable the reading goes to the outbox and
 ``submit`` returns ``"queued"``: the reading is on disk either way when ``submit`` returns, so a
-process killed at any instant loses nothing it acknowledged. A crash between the database commit and
-the outbox acknowledgement replays a reading already stored; the client id makes that a no-op.
+process killed at any instant loses nothing it acknowledged. A crash between the destination's commit
+and the outbox acknowledgement replays a reading already stored; the client id makes that a no-op.
+
+With ``queue_first`` (the viewer) every reading is written to the outbox *before* it is sent, so a
+reading taken is on disk even if the process dies while sending, and a refused reading gets a
+``"refused"`` receipt (it moves to the dead-letter table) instead of an exception.
+
+The service's measure route, the viewer's scans and ``station measure --store`` all store through this
+class; the destination is a :class:`~station.ingest.destination.DatabaseDestination` or, for the
+viewer in service mode, an HTTP destination that posts to the service.
 """
 
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+import threading
+import uuid
+from collections.abc import Callable
 from pathlib import Path
-from typing import Literal
 
-from sqlalchemy import Engine, insert
-from sqlalchemy.exc import DBAPIError, DisconnectionError, InterfaceError, OperationalError
-from sqlalchemy.orm import Session, sessionmaker
+from sqlalchemy import Engine
 
-from db.base import utcnow
-from db.engine import make_engine, make_sessionmaker
-from db.models import AuditEvent
+from station.ingest.destination import DatabaseDestination, Destination, Receipt, is_unreachable
 from station.ingest.errors import IngestError
 from station.ingest.outbox import Outbox
 from station.ingest.schema import Reading
-from station.ingest.store import store_reading
 
 log = logging.getLogger(__name__)
 
-_AUDIT_INSERT = insert(AuditEvent.__table__)
-_UNREACHABLE = (OperationalError, InterfaceError, DisconnectionError, ConnectionError, TimeoutError)
-
-
-def is_unreachable(exc: BaseException) -> bool:
-    """Whether *exc* means "the database is away" (retry later) rather than "the reading is bad"."""
-    if isinstance(exc, DBAPIError) and exc.connection_invalidated:
-        return True
-    return isinstance(exc, _UNREACHABLE)
-
-
-@dataclass(frozen=True)
-class Receipt:
-    """What happened to a submitted reading: stored now, already stored, or queued on disk."""
-
-    client_id: str
-    status: Literal["stored", "duplicate", "queued"]
-    measurement_id: int | None = None
+__all__ = ["Ingestor", "Receipt", "is_unreachable"]
 
 
 class Ingestor:
-    """Store readings into the database behind *engine*, with an on-disk outbox at *outbox_path*."""
+    """Store readings into *destination* (a destination, an engine or a database URL), with an outbox at *outbox_path*.
 
-    def __init__(self, engine: Engine | str, outbox_path: Path | str) -> None:
-        self._own_engine = isinstance(engine, str)
-        # no pre-ping: a dead pooled connection fails one submit, which then goes to the outbox and is
-        # replayed on the next one (the pool drops invalidated connections), saving a round trip per reading
-        self.engine = make_engine(engine, pool_pre_ping=False) if isinstance(engine, str) else engine
-        self._sessions: sessionmaker[Session] = make_sessionmaker(self.engine)
+    Thread-safe: one lock serialises submits and replays, so readings keep their order.
+    """
+
+    def __init__(
+        self,
+        destination: Destination | Engine | str,
+        outbox_path: Path | str,
+        *,
+        queue_first: bool = False,
+        decode: Callable[[str], Reading] = Reading.model_validate_json,
+    ) -> None:
+        self._own_destination = isinstance(destination, str)
+        if isinstance(destination, (Engine, str)):
+            destination = DatabaseDestination(destination)
+        self.destination: Destination = destination
         self.outbox = Outbox(outbox_path)
-        self._instrument_ids: dict[str, int] = {}
+        self.queue_first = queue_first
+        self._decode = decode  # outbox body → reading (a front may accept an older body layout)
+        self._lock = threading.RLock()
+
+    @property
+    def engine(self) -> Engine:
+        """The database engine (a :class:`DatabaseDestination` only)."""
+        if not isinstance(self.destination, DatabaseDestination):
+            raise TypeError(f"{self.destination.where} is not a database")
+        return self.destination.engine
 
     def close(self) -> None:
-        """Close the outbox (and the engine when this object created it)."""
+        """Close the outbox (and the destination when this object created it from a URL)."""
         self.outbox.close()
-        if self._own_engine:
-            self.engine.dispose()
+        if self._own_destination:
+            self.destination.close()
 
     def __enter__(self) -> Ingestor:
         return self
@@ -72,56 +77,77 @@ class Ingestor:
     def __exit__(self, *_exc: object) -> None:
         self.close()
 
-    def _store(self, reading: Reading) -> Receipt:
-        with self._sessions.begin() as session:
-            result = store_reading(session, reading, instrument_cache=self._instrument_ids)
-            if result.created:  # the audit row commits with the reading (station account: no user)
-                session.execute(
-                    _AUDIT_INSERT,
-                    {
-                        "at": utcnow(),
-                        "actor_id": None,
-                        "action": "measurement.ingest",
-                        "entity": "measurement",
-                        "entity_id": str(result.measurement_id),
-                        "detail": {"client_id": str(reading.client_id), "operator": reading.operator},
-                    },
-                )
-        status: Literal["stored", "duplicate"] = "stored" if result.created else "duplicate"
-        return Receipt(str(reading.client_id), status, result.measurement_id)
+    def drain(self) -> list[Receipt]:
+        """Store queued readings oldest first; stop at the first unreachable error. One receipt per entry tried.
+
+        A reading the destination refuses moves to the dead-letter table (receipt ``"refused"`` with
+        the error); the one that met an unreachable destination stays queued (receipt ``"queued"``).
+        """
+        receipts: list[Receipt] = []
+        with self._lock:
+            for entry in self.outbox.entries():
+                try:
+                    reading = self._decode(entry.body)
+                    receipt = self.destination.store(reading, replayed=True)
+                except Exception as exc:
+                    if is_unreachable(exc):
+                        log.info(
+                            "%s unreachable; %d readings stay queued",
+                            self.destination.where,
+                            len(self.outbox),
+                        )
+                        receipts.append(Receipt(entry.client_id, "queued", None, str(exc)))
+                        return receipts
+                    if not isinstance(exc, (IngestError, ValueError)):
+                        raise
+                    log.error("outbox entry %s refused: %s", entry.client_id, exc)
+                    self.outbox.bury(entry, str(exc))
+                    receipts.append(Receipt(entry.client_id, "refused", None, str(exc)))
+                else:
+                    self.outbox.remove(entry.seq)
+                    receipts.append(receipt)
+        return receipts
 
     def replay(self) -> int:
         """Store queued readings oldest first; stop at the first unreachable error. Returns how many left the queue."""
-        done = 0
-        for entry in self.outbox.entries():
-            try:
-                reading = Reading.model_validate_json(entry.body)
-                self._store(reading)
-            except Exception as exc:
-                if is_unreachable(exc):
-                    log.info("database unreachable; %d readings stay queued", len(self.outbox))
-                    return done
-                if not isinstance(exc, (IngestError, ValueError)):
-                    raise
-                log.error("outbox entry %s refused: %s", entry.client_id, exc)
-                self.outbox.bury(entry, str(exc))
-            else:
-                self.outbox.remove(entry.seq)
-            done += 1
-        return done
+        return sum(1 for r in self.drain() if r.status != "queued")
 
-    def submit(self, reading: Reading) -> Receipt:
-        """Store *reading* (after draining the queue), or queue it when the database is away."""
-        if len(self.outbox):
-            self.replay()
-        if len(self.outbox):
-            self.outbox.put(str(reading.client_id), reading.canonical_json())
-            return Receipt(str(reading.client_id), "queued")
-        try:
-            return self._store(reading)
-        except Exception as exc:
-            if not is_unreachable(exc):
-                raise
-            log.info("database unreachable (%s); reading %s queued", type(exc).__name__, reading.client_id)
-            self.outbox.put(str(reading.client_id), reading.canonical_json())
-            return Receipt(str(reading.client_id), "queued")
+    def find(self, client_id: uuid.UUID) -> Receipt | None:
+        """What became of *client_id* so far: ``"queued"`` in the outbox, ``"duplicate"`` (stored), or ``None``.
+
+        Raises what the destination raises when it is unreachable and the reading is not queued.
+        """
+        cid = str(client_id)
+        with self._lock:
+            if any(e.client_id == cid for e in self.outbox.entries()):
+                return Receipt(cid, "queued", None, "kept in the outbox")
+            stored = self.destination.find(client_id)
+        return None if stored is None else Receipt(cid, "duplicate", stored)
+
+    def submit(self, reading: Reading, *, actor_id: int | None = None) -> Receipt:
+        """Store *reading* (after draining the queue), or queue it when the destination is away.
+
+        *actor_id* (the acting user) is recorded when the reading is stored now; a reading replayed
+        from the outbox is recorded without one. Without ``queue_first`` a refusal raises.
+        """
+        cid = str(reading.client_id)
+        with self._lock:
+            if self.queue_first:
+                self.outbox.put(cid, reading.canonical_json())
+                got = {r.client_id: r for r in self.drain()}
+                return got.get(cid) or Receipt(cid, "queued", None, "readings ahead of it are still queued")
+            if len(self.outbox):
+                self.replay()
+            if len(self.outbox):
+                self.outbox.put(cid, reading.canonical_json())
+                return Receipt(cid, "queued", None, "readings ahead of it are still queued")
+            try:
+                return self.destination.store(reading, actor_id=actor_id)
+            except Exception as exc:
+                if not is_unreachable(exc):
+                    raise
+                log.info(
+                    "%s unreachable (%s); reading %s queued", self.destination.where, type(exc).__name__, cid
+                )
+                self.outbox.put(cid, reading.canonical_json())
+                return Receipt(cid, "queued", None, str(exc))

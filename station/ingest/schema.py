@@ -14,7 +14,9 @@ import json
 import uuid
 from typing import Annotated, Literal
 
-from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, model_validator
+from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from db.models.measurements import PARTS
 
 from station.model.domain import LAB_HI, LAB_LO
 
@@ -58,6 +60,28 @@ class CalibrationRef(BaseModel):
     passed: bool = True
 
 
+class PanelRef(BaseModel):
+    """A panel named by its metadata: the lowest-id panel with the same four fields, else created with the reading.
+
+    ``part`` is one of ``db.models.PARTS``; the limits are the database columns' (job and substrate 64
+    characters, notes 4000).
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    job: Text64
+    part: str
+    substrate: Annotated[str, Field(max_length=64)] = ""
+    notes: Annotated[str, Field(max_length=4000)] = ""
+
+    @field_validator("part")
+    @classmethod
+    def _known_part(cls, value: str) -> str:
+        if value not in PARTS:
+            raise ValueError(f"part: expected one of {' | '.join(PARTS)}, got {value!r}")
+        return value
+
+
 class Reading(BaseModel):
     """One instrument reading as sent by a station; ``client_id`` makes re-sending idempotent."""
 
@@ -84,6 +108,7 @@ class Reading(BaseModel):
     instrument: InstrumentRef
     calibration: CalibrationRef | None = None
     panel_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
+    panel: PanelRef | None = None
     operator: Text64
     measured_at: AwareDatetime
     illuminant: Illuminant = "D65"
@@ -110,6 +135,8 @@ class Reading(BaseModel):
 
     @model_validator(mode="after")
     def _consistent(self) -> Reading:
+        if self.panel_id is not None and self.panel is not None:
+            raise ValueError("panel: expected panel_id or panel metadata, not both")
         if len(self.lab) != len(self.geometries_deg):
             raise ValueError(
                 f"lab: expected one [L*, a*, b*] per geometry ({len(self.geometries_deg)}), "
@@ -138,8 +165,12 @@ class Reading(BaseModel):
         return self
 
     def canonical_json(self) -> str:
-        """The reading as compact JSON with sorted keys (what the outbox stores)."""
-        return json.dumps(self.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+        """The reading as compact JSON with sorted keys (what the outbox stores).
+
+        ``panel`` is left out when absent, so a reading without panel metadata hashes as it always has.
+        """
+        body = self.model_dump(mode="json", exclude={"panel"} if self.panel is None else None)
+        return json.dumps(body, sort_keys=True, separators=(",", ":"))
 
     def payload_sha256(self) -> str:
         """SHA-256 of the raw instrument payload when given, else of :meth:`canonical_json`."""

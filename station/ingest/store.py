@@ -92,6 +92,34 @@ def _measurement_insert(dialect: str) -> Any:
     return stmt.on_conflict_do_nothing(index_elements=["client_id"]).returning(Measurement.id)
 
 
+def _panel_id(session: Session, reading: Reading, created_by_id: int | None) -> int | None:
+    """The panel of *reading*: ``panel_id`` (which must exist), or the panel its metadata names (found or created)."""
+    if reading.panel is None:
+        if reading.panel_id is not None and session.get(Panel, reading.panel_id) is None:
+            raise ReferenceNotFoundError(f"panel_id {reading.panel_id} does not exist")
+        return reading.panel_id
+    ref = reading.panel
+    found = session.scalar(
+        select(Panel.id)
+        .where(
+            Panel.job == ref.job,
+            Panel.part == ref.part,
+            Panel.substrate == ref.substrate,
+            Panel.notes == ref.notes,
+        )
+        .order_by(Panel.id)
+        .limit(1)
+    )
+    if found is not None:
+        return int(found)
+    row = Panel(
+        job=ref.job, part=ref.part, substrate=ref.substrate, notes=ref.notes, created_by_id=created_by_id
+    )
+    session.add(row)
+    session.flush()
+    return int(row.id)
+
+
 def store_reading(
     session: Session,
     reading: Reading,
@@ -104,18 +132,19 @@ def store_reading(
     """Store *reading* once inside the caller's transaction (the caller commits).
 
     Raises :class:`ClientIdConflictError` when the client id is taken by a different payload and
-    :class:`ReferenceNotFoundError` when ``panel_id`` names no panel. *instrument_cache* (serial → id,
+    :class:`ReferenceNotFoundError` when ``panel_id`` names no panel; a reading with panel metadata
+    (``panel``) names the lowest-id panel with the same job, part, substrate and notes, created in this
+    transaction when there is none. *instrument_cache* (serial → id,
     owned by the caller) saves the instrument upsert for instruments already seen; instrument rows are
     never deleted, so an entry cannot go stale. The common case is then one ``INSERT … RETURNING``.
     """
     sha = reading.payload_sha256()
-    if reading.panel_id is not None and session.get(Panel, reading.panel_id) is None:
-        raise ReferenceNotFoundError(f"panel_id {reading.panel_id} does not exist")
+    panel_id = _panel_id(session, reading, created_by_id)
     instrument_id = _instrument_id(session, reading, instrument_cache)
     calibration_id = _calibration_id(session, reading, instrument_id)
     values = dict(
         client_id=reading.client_id,
-        panel_id=reading.panel_id,
+        panel_id=panel_id,
         instrument_id=instrument_id,
         calibration_id=calibration_id,
         operator=reading.operator,

@@ -76,3 +76,31 @@ def test_instrument_errors(sim_api: Api) -> None:
     assert cal.status_code == 200 and cal.json()["passed"] is True
     events = c.get(f"{V1}/audit", params={"entity": "calibration"}, headers=sim_api.auth("admin")).json()
     assert events["data"][0]["action"] == "instrument.calibrate"
+
+
+def test_measure_with_a_client_id_is_idempotent(sim_api: Api) -> None:
+    import uuid
+
+    ids = _ids(sim_api)
+    c, tech = sim_api.client, sim_api.auth("technician")
+    url = f"{V1}/instruments/{ids['spectro']}/measure"
+
+    def count() -> int:
+        return c.get(f"{V1}/measurements", headers=sim_api.auth("qa")).json()["count"]
+
+    before = count()
+    cid = str(uuid.uuid4())
+    first = c.post(url, json={"client_id": cid}, headers=tech)
+    assert first.status_code == 201 and first.json()["status"] == "stored", first.text
+    again = c.post(url, json={"client_id": cid}, headers=tech)  # a retry: nothing measured, nothing stored
+    assert again.status_code == 200 and again.json()["status"] == "duplicate"
+    assert again.json()["measurement"] == first.json()["measurement"]
+    assert first.json()["measurement"]["client_id"] == cid == again.json()["client_id"]
+    assert count() == before + 1
+    # the Idempotency-Key header does the same (any key: a non-UUID key is hashed to one)
+    keyed = [c.post(url, json={}, headers={**tech, "Idempotency-Key": "scan-0042"}) for _ in range(2)]
+    assert [r.status_code for r in keyed] == [201, 200]
+    assert keyed[0].json()["client_id"] == keyed[1].json()["client_id"]
+    assert count() == before + 2
+    clash = c.post(url, json={"client_id": cid}, headers={**tech, "Idempotency-Key": str(uuid.uuid4())})
+    assert clash.status_code == 422 and "Idempotency-Key" in clash.text

@@ -58,3 +58,40 @@ def test_measure_typed_error_and_bad_input(capsys):
     assert rc == 2
     rc, _, err = run(capsys, "measure", "/dev/does-not-exist")
     assert rc == 1 and "does-not-exist" in err
+
+
+def test_measure_store_goes_through_the_ingestor_once(capsys, tmp_path, monkeypatch):
+    """``--store``: the reading lands once in the database (a retry under the same client id adds nothing);
+    the default database is the one ``station serve`` uses; a bad panel or a gloss reading is refused."""
+    import uuid
+
+    from sqlalchemy import create_engine, select
+    from sqlalchemy.orm import Session
+
+    from db.models import Measurement
+    from station.model.spectra import reflectance_to_lab
+
+    monkeypatch.setenv("CACAD_DATA_DIR", str(tmp_path / "data"))
+    monkeypatch.delenv("CACAD_DATABASE_URL", raising=False)
+    cid = str(uuid.uuid4())
+    for expected in ("stored", "duplicate"):
+        rc, out, err = run(capsys, "measure", "sim:ma6", "--store", "--client-id", cid, "--json")
+        assert rc == 0, err
+        stored = json.loads(out)["stored"]
+        assert stored["status"] == expected and stored["client_id"] == cid
+    url = f"sqlite:///{tmp_path / 'data' / 'station.sqlite3'}"
+    engine = create_engine(url)
+    with Session(engine) as s:
+        rows = s.scalars(select(Measurement)).all()
+    engine.dispose()
+    assert [str(r.client_id) for r in rows] == [cid] and rows[0].id == stored["measurement_id"]
+    # Lab recomputed here from the stored spectra (the record's Lab is the model's, not the driver's)
+    np.testing.assert_allclose(rows[0].lab, reflectance_to_lab(np.asarray(rows[0].spectra)), atol=1e-3)
+    assert (tmp_path / "data" / "measure-outbox.sqlite3").exists()
+    other = tmp_path / "other.sqlite3"
+    rc, out, err = run(capsys, "measure", "sim:ma6", "--store", f"sqlite:///{other}", "--json")
+    assert rc == 0 and json.loads(out)["stored"]["status"] == "stored", err
+    rc, _, err = run(capsys, "measure", "sim:ma6", "--store", "--panel", "P-17")
+    assert rc == 2 and "--panel" in err
+    rc, _, err = run(capsys, "measure", "sim:gloss", "--store")
+    assert rc == 2 and "--store" in err

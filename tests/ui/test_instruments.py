@@ -207,3 +207,24 @@ def test_default_store_is_the_station_serve_database(tmp_path, monkeypatch):
     assert not (tmp_path / "data").exists()  # nothing is created before the first scan
     monkeypatch.setenv("CACAD_DATABASE_URL", "postgresql://postgres@127.0.0.1/test")
     assert LocalSink().url == "postgresql://postgres@127.0.0.1/test"
+
+
+def test_a_reading_queued_by_the_previous_viewer_layout_is_still_sent(tmp_path):
+    """Outbox entries of the earlier layout (panel metadata beside the reading) are sent, not dead-lettered."""
+    import json
+    from dataclasses import asdict
+
+    from station.ingest import Outbox
+    from ui.models.instruments import ingest_record
+
+    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    reading = ingest_record(_spectral())
+    body = {"panel": asdict(PanelInfo("J-3", "hood")), "reading": reading.model_dump(mode="json")}
+    with Outbox(tmp_path / "outbox.sqlite3") as box:
+        box.put(str(reading.client_id), json.dumps(body, sort_keys=True))
+    sink = LocalSink(url, tmp_path / "outbox.sqlite3")
+    assert sink.pending() == 1
+    assert [r.status for r in sink.flush().values()] == ["stored"] and sink.pending() == 0
+    rows = _rows(url)
+    assert [(str(m.client_id), p.job, p.part) for m, p in rows] == [(str(reading.client_id), "J-3", "hood")]
+    sink.close()

@@ -3,17 +3,15 @@
 A session connects to a device address or to a simulator (``sim:ma6`` / ``sim:ma3`` / ``sim:gloss``,
 started as a subprocess by :func:`station.drivers.simproc.spawn_simulator`), calibrates and measures.
 Lab comes from ``station.model.spectra.reflectance_to_lab`` (D65/10°) and the design from
-``station.model.fit_fftg`` on the in-plane 45° illumination block; each measurement is kept with its
-panel metadata (job, part, substrate, notes) through a :class:`MeasurementStore`, whose sink writes it to
-the measurement database via the ingest layer (``ui.models.measure_db``).
+``station.model.fit_fftg`` on the in-plane 45° illumination block; the ingest record is the one
+conversion ``station.ingest.record_from_reading``; each measurement is kept with its panel metadata
+(job, part, substrate, notes) through a :class:`MeasurementStore`, whose sink stores it through
+``station.ingest.Ingestor`` (``ui.models.measure_db``).
 """
 
 from __future__ import annotations
 
 import datetime as dt
-import getpass
-import os
-import uuid
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -38,9 +36,6 @@ if TYPE_CHECKING:
 SIM_DEVICES = tuple(f"sim:{k}" for k in SIM_KINDS)
 Progress = Callable[[int, str], None]
 STEPS = 4
-_CAL_NAMESPACE = uuid.UUID(
-    "0b9e8c1e-5d0c-4c7b-8f5e-2b7c3f1d9a11"
-)  # = station.api.instruments' (same record ids)
 
 
 @dataclass(frozen=True)
@@ -77,47 +72,13 @@ class Measurement:
         }
 
 
-def operator_name() -> str:
-    """The operator recorded with a reading: ``$CACAD_OPERATOR``, the login name, or ``viewer``."""
-    name = os.environ.get("CACAD_OPERATOR", "")
-    if not name:
-        try:
-            name = getpass.getuser()
-        except (OSError, KeyError):  # no login name in some containers
-            name = ""
-    name = "".join(c for c in name if c.isprintable()).strip()[:64]
-    return name or "viewer"
+def ingest_record(reading: SpectralReading) -> Reading:
+    """The ingest record of the scan's in-plane 45° illumination block (``station.ingest.record_from_reading``:
+    Lab from the spectra through the model, D65/10°; a fresh client id; ``$CACAD_OPERATOR`` or the login
+    name as operator). Raises :class:`InputError` when the reading has no 45° illumination block."""
+    from station.ingest import operator_name, record_from_reading
 
-
-def ingest_reading(reading: SpectralReading, operator: str | None = None) -> Reading:
-    """The ingest reading of the in-plane 45° illumination block: Lab from the spectra (model, D65/10°),
-    a fresh client id, the instrument and its calibration (keyed like ``station.api``'s)."""
-    from station.ingest import CalibrationRef, InstrumentRef, Reading
-
-    angles, refl = reading.block(45)
-    if not angles:
-        angles, refl = reading.aspecular_deg, reading.reflectance
-    refl = np.asarray(refl, float)
-    lab = np.asarray(reflectance_to_lab(refl), float)
-    cal = None
-    if reading.calibration_id:
-        cal = CalibrationRef(
-            client_id=uuid.uuid5(_CAL_NAMESPACE, f"{reading.serial}/{reading.calibration_id}"),
-            performed_at=reading.time,
-        )
-    return Reading(
-        client_id=uuid.uuid4(),
-        instrument=InstrumentRef(
-            serial=reading.serial or "unknown", model=reading.model or "unknown", kind="multiangle"
-        ),
-        calibration=cal,
-        operator=operator or operator_name(),
-        measured_at=reading.time,
-        geometries_deg=[float(a) for a in angles],
-        lab=lab.round(4).tolist(),
-        wavelengths_nm=[float(w) for w in reading.wavelengths_nm],
-        spectra=refl.round(6).tolist(),
-    )
+    return record_from_reading(reading, operator=operator_name("viewer"), illumination_deg=45)
 
 
 def measurement_from_reading(
@@ -151,6 +112,11 @@ def measurement_from_reading(
             note = f"fit residual ΔE max {max(fit.residual_de):.2f}"
         except InputError as exc:
             note = f"no design fit: {exc}"
+    record: Reading | None = None
+    try:
+        record = ingest_record(reading)
+    except (InputError, ValueError) as exc:  # kept on screen; the store refuses it with this note
+        note = f"not stored: {exc}"
     return Measurement(
         panel,
         device,
@@ -162,7 +128,7 @@ def measurement_from_reading(
         None,
         design,
         note,
-        ingest_reading(reading),
+        record,
     )
 
 

@@ -1,12 +1,14 @@
-"""Where the viewer stores its scans: the measurement database, through the ingest layer (Qt-free).
+"""Where the viewer stores its scans: the measurement database or a service, through ``station.ingest.Ingestor`` (Qt-free).
 
-Every reading is written to an on-disk :class:`station.ingest.Outbox` *before* anything is sent, then
-the queue is drained oldest first: :class:`LocalSink` stores each queued reading with
-:func:`station.ingest.store_reading` in the workstation's database (as ``station serve``:
-``$CACAD_DATABASE_URL``, else SQLite in ``$CACAD_DATA_DIR`` or ``./var``; Alembic migrations applied on
-first use), :class:`ServiceSink` posts it to ``POST /api/v1/measurements`` of a station service. The panel
-(job, part, substrate, notes) is found by its metadata or created in the same transaction (local) or just before the reading (service), so a
-retried reading names the same panel and, keyed by its client id, is stored once.
+Each sink is a :class:`station.ingest.Ingestor` in ``queue_first`` mode: every reading is written to the
+on-disk outbox *before* anything is sent, then the queue is drained oldest first into the sink's
+destination. :class:`LocalSink`: a :class:`station.ingest.DatabaseDestination` on the workstation's
+database (as ``station serve``: ``$CACAD_DATABASE_URL``, else SQLite in ``$CACAD_DATA_DIR`` or
+``./var``; Alembic migrations applied on first use). :class:`ServiceSink`: ``POST /api/v1/measurements``
+of a station service. The panel metadata (job, part, substrate, notes) travels in the record
+(:class:`station.ingest.PanelRef`) and ``station.ingest.store_reading`` finds or creates the panel in
+the reading's transaction, so a retried reading names the same panel and, keyed by its client id, is
+stored once.
 
 An unreachable database or service leaves the reading queued (retried on the next scan or on
 "Retry queued"); a refusal (a bad reading, a client id conflict) moves it to the outbox's dead-letter
@@ -19,8 +21,8 @@ import datetime as dt
 import json
 import os
 import re
-import threading
-from dataclasses import asdict, dataclass
+import uuid
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -30,7 +32,7 @@ from station.errors import InputError, StationError
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 
 if TYPE_CHECKING:  # SQLAlchemy, pydantic and the ORM load on first use (≈0.5 s off the viewer's start-up)
-    from station.ingest import Outbox, Reading
+    from station.ingest import DatabaseDestination, Destination, Ingestor, Outbox, PanelRef, Reading, Receipt
 
 OUTBOX_FILE = "viewer-outbox.sqlite3"
 SERVICE_OUTBOX_FILE = "viewer-service-outbox.sqlite3"
@@ -61,6 +63,13 @@ class PanelInfo:
         if len(p.notes) > 4000:
             raise InputError("notes", "at most 4000 characters", f"{len(p.notes)} characters")
         return p
+
+    def ref(self) -> PanelRef:
+        """The validated metadata as the ingest record carries it."""
+        from station.ingest import PanelRef
+
+        p = self.validated()
+        return PanelRef(job=p.job, part=p.part, substrate=p.substrate, notes=p.notes)
 
     @property
     def label(self) -> str:
@@ -102,22 +111,28 @@ class StoredMeasurement:
             return None
 
 
-class _Unreachable(Exception):
-    """The database or service is away: keep the reading queued."""
+def _decode_entry(body: str) -> Reading:
+    """An outbox body: a record, or the earlier viewer layout ``{"panel": {...}, "reading": {...}}``
+    (queued by a viewer of the previous release), whose panel metadata moves into the record."""
+    from station.ingest import Reading
 
-
-class _Refused(Exception):
-    """The database or service refused the reading: move it to the dead-letter table."""
+    doc = json.loads(body)
+    if isinstance(doc, dict) and set(doc) == {"panel", "reading"}:
+        return Reading.model_validate({**doc["reading"], "panel_id": None, "panel": doc["panel"]})
+    return Reading.model_validate(doc)
 
 
 class MeasurementSink:
-    """The outbox and its drain; subclasses send one queued reading (``_send``) and list stored ones."""
+    """An :class:`~station.ingest.Ingestor` (outbox first) over a destination; subclasses name the destination.
+
+    Nothing is opened or created before the first scan, retry or :meth:`pending` of an existing outbox.
+    """
 
     default_outbox = OUTBOX_FILE
 
     def __init__(self, outbox_path: Path | str | None = None) -> None:
         self._outbox_path = Path(outbox_path) if outbox_path is not None else None
-        self._outbox: Outbox | None = None
+        self._ingestor: Ingestor | None = None
 
     @property
     def where(self) -> str:
@@ -133,81 +148,66 @@ class MeasurementSink:
             self._outbox_path = data_dir() / self.default_outbox
         return self._outbox_path
 
+    def _destination(self) -> Destination:
+        raise NotImplementedError
+
+    @property
+    def ingestor(self) -> Ingestor:
+        """The ingest loop (opened on first use)."""
+        if self._ingestor is None:
+            from station.ingest import Ingestor
+
+            self._ingestor = Ingestor(
+                self._destination(), self.outbox_path, queue_first=True, decode=_decode_entry
+            )
+        return self._ingestor
+
     @property
     def outbox(self) -> Outbox:
         """The on-disk queue (opened on first use)."""
-        if self._outbox is None:
-            from station.ingest import Outbox
-
-            self._outbox = Outbox(self.outbox_path)
-        return self._outbox
+        return self.ingestor.outbox
 
     def submit(self, panel: PanelInfo, reading: Reading) -> StoreReceipt:
-        """Queue *reading* on disk, then drain the queue; the receipt of *reading*. Blocking."""
-        panel = panel.validated()
-        body = json.dumps(
-            {"panel": asdict(panel), "reading": reading.model_dump(mode="json")}, sort_keys=True
-        )
-        cid = str(reading.client_id)
-        self.outbox.put(cid, body)
-        return self.flush().get(cid) or StoreReceipt(cid, "queued", None, self._queued_message(""))
+        """Queue *reading* with *panel*'s metadata on disk, then drain the queue; the receipt of *reading*. Blocking."""
+        record = reading.model_copy(update={"panel": panel.ref(), "panel_id": None})
+        return self._receipt(self.ingestor.submit(record))
 
     def flush(self) -> dict[str, StoreReceipt]:
         """Send queued readings oldest first; stop at the first "unreachable". Receipts by client id."""
-        from station.ingest import Reading
+        return {r.client_id: self._receipt(r) for r in self.ingestor.drain()}
 
-        out: dict[str, StoreReceipt] = {}
-        for entry in self.outbox.entries():
-            try:
-                doc = json.loads(entry.body)
-                panel = PanelInfo(**doc["panel"]).validated()
-                reading = Reading.model_validate(doc["reading"])
-                measurement_id, created = self._send(panel, reading)
-            except _Unreachable as exc:
-                out[entry.client_id] = StoreReceipt(
-                    entry.client_id, "queued", None, self._queued_message(str(exc))
-                )
-                break
-            except (_Refused, InputError, ValueError, KeyError, TypeError) as exc:
-                self.outbox.bury(entry, str(exc))
-                out[entry.client_id] = StoreReceipt(
-                    entry.client_id,
-                    "refused",
-                    None,
-                    f"{self.where} refused the reading: {exc} (kept in the dead-letter table of {self.outbox_path})",
-                )
-            else:
-                self.outbox.remove(entry.seq)
-                out[entry.client_id] = StoreReceipt(
-                    entry.client_id, "stored" if created else "duplicate", measurement_id
-                )
-        return out
-
-    def _queued_message(self, why: str) -> str:
-        return (
-            f"{self.where} unreachable{': ' + why if why else ''} — the reading is kept in "
-            f"{self.outbox_path} ({len(self.outbox)} queued) and sent on the next scan or retry"
-        )
+    def _receipt(self, r: Receipt) -> StoreReceipt:
+        if r.status == "queued":
+            message = (
+                f"{self.where} unreachable{': ' + r.message if r.message else ''} — the reading is kept in "
+                f"{self.outbox_path} ({len(self.outbox)} queued) and sent on the next scan or retry"
+            )
+        elif r.status == "refused":
+            message = (
+                f"{self.where} refused the reading: {r.message} "
+                f"(kept in the dead-letter table of {self.outbox_path})"
+            )
+        else:
+            message = ""
+        return StoreReceipt(r.client_id, r.status, r.measurement_id, message)
 
     def prepare(self) -> None:
         """Open the store on the calling (GUI) thread before a worker sends to it; no-op by default."""
 
     def pending(self) -> int:
         """Readings waiting in the outbox."""
-        return len(self.outbox) if self._outbox is not None or self.outbox_path.exists() else 0
-
-    def _send(self, panel: PanelInfo, reading: Reading) -> tuple[int, bool]:
-        raise NotImplementedError
+        return len(self.outbox) if self._ingestor is not None or self.outbox_path.exists() else 0
 
     def recent(self, limit: int = 50) -> list[StoredMeasurement]:
         """The newest stored measurements (raises :class:`StationError` with a plain message)."""
         raise NotImplementedError
 
     def close(self) -> None:
-        """Close the outbox."""
-        if self._outbox is not None:
-            self._outbox.close()
-            self._outbox = None
+        """Close the outbox and the destination."""
+        if self._ingestor is not None:
+            self._ingestor.close()
+            self._ingestor.destination.close()
+            self._ingestor = None
 
 
 class LocalSink(MeasurementSink):
@@ -216,9 +216,7 @@ class LocalSink(MeasurementSink):
     def __init__(self, url: str | None = None, outbox_path: Path | str | None = None) -> None:
         super().__init__(outbox_path)
         self._url = url
-        self._lock = threading.Lock()  # the scan worker and the QA screen may both be first
-        self._engine: Any = None
-        self._sessions: Any = None
+        self._db: DatabaseDestination | None = None
 
     @property
     def url(self) -> str:
@@ -234,6 +232,13 @@ class LocalSink(MeasurementSink):
     def where(self) -> str:
         return f"database {self.url}"
 
+    def _destination(self) -> DatabaseDestination:
+        if self._db is None:
+            from station.ingest import DatabaseDestination
+
+            self._db = DatabaseDestination(self.url, migrate=True, source="viewer")
+        return self._db
+
     def prepare(self) -> None:
         """Open and migrate the database now, on the calling thread; an unreachable one is left to the worker.
 
@@ -243,94 +248,28 @@ class LocalSink(MeasurementSink):
         4 of 6 runs of tests/ui/test_instruments.py); opening it here first made 0 of 14. The root cause
         is not identified.
         """
+        from station.ingest import DestinationUnreachableError
+
         try:
-            self._ready()
-        except _Unreachable:
+            self._destination().open()
+        except DestinationUnreachableError:
             pass  # the worker queues the reading and says why
-
-    def _ready(self) -> None:
-        with self._lock:
-            self._ready_locked()
-
-    def _ready_locked(self) -> None:
-        if self._engine is not None:
-            return
-        from db.engine import make_engine, make_sessionmaker
-        from db.migrate import ensure_at_head
-
-        try:
-            ensure_at_head(self.url)
-        except Exception as exc:  # a locked, unwritable or newer database: keep the reading, say why
-            raise _Unreachable(f"{type(exc).__name__}: {exc}") from exc
-        self._engine = make_engine(self.url)
-        self._sessions = make_sessionmaker(self._engine)
-
-    def _send(self, panel: PanelInfo, reading: Reading) -> tuple[int, bool]:
-        from sqlalchemy import insert, select
-
-        from db.base import utcnow
-        from db.models import AuditEvent, Panel
-        from station.ingest import IngestError, is_unreachable, store_reading
-
-        self._ready()
-        try:
-            with self._sessions.begin() as session:
-                panel_id = session.scalar(
-                    select(Panel.id)
-                    .where(
-                        Panel.job == panel.job,
-                        Panel.part == panel.part,
-                        Panel.substrate == panel.substrate,
-                        Panel.notes == panel.notes,
-                    )
-                    .order_by(Panel.id)
-                    .limit(1)
-                )
-                if panel_id is None:
-                    row = Panel(**asdict(panel))
-                    session.add(row)
-                    session.flush()
-                    panel_id = row.id
-                result = store_reading(session, reading.model_copy(update={"panel_id": panel_id}))
-                if result.created:  # audited like the ingest loop's own writes (station account: no user)
-                    session.execute(
-                        insert(AuditEvent.__table__),
-                        {
-                            "at": utcnow(),
-                            "actor_id": None,
-                            "action": "measurement.ingest",
-                            "entity": "measurement",
-                            "entity_id": str(result.measurement_id),
-                            "detail": {
-                                "client_id": str(reading.client_id),
-                                "operator": reading.operator,
-                                "source": "viewer",
-                            },
-                        },
-                    )
-        except IngestError as exc:
-            raise _Refused(str(exc)) from exc
-        except Exception as exc:
-            if is_unreachable(exc):
-                raise _Unreachable(f"{type(exc).__name__}: {exc}") from exc
-            raise
-        return result.measurement_id, result.created
 
     def recent(self, limit: int = 50) -> list[StoredMeasurement]:
         from sqlalchemy import select
 
         from db.models import Measurement, Panel
+        from station.ingest import DestinationUnreachableError
 
         try:
-            self._ready()
-            with self._sessions() as session:
+            with self._destination().sessions()() as session:
                 rows = session.execute(
                     select(Measurement, Panel)
                     .outerjoin(Panel, Panel.id == Measurement.panel_id)
                     .order_by(Measurement.id.desc())
                     .limit(limit)
                 ).all()
-        except _Unreachable as exc:
+        except DestinationUnreachableError as exc:
             raise StationError(f"{self.where} unreachable: {exc}") from exc
         except Exception as exc:
             raise StationError(f"{self.where}: {type(exc).__name__}: {exc}") from exc
@@ -348,9 +287,7 @@ class LocalSink(MeasurementSink):
 
     def close(self) -> None:
         super().close()
-        if self._engine is not None:
-            self._engine.dispose()
-            self._engine = None
+        self._db = None
 
 
 def _stored(
@@ -373,7 +310,7 @@ def _stored(
 
 
 class ServiceSink(MeasurementSink):
-    """A station service: ``POST /api/v1/panels`` (when no panel has this metadata) and ``POST /api/v1/measurements``."""
+    """A station service: ``POST /api/v1/measurements`` with the record (panel metadata included)."""
 
     RETRY_LATER = frozenset({401, 403, 408, 425, 429})  # a token or load problem: keep the reading queued
 
@@ -387,44 +324,33 @@ class ServiceSink(MeasurementSink):
     def where(self) -> str:
         return f"service {self.client.url}"
 
+    def _destination(self) -> Destination:
+        return _ServiceDestination(self)
+
     def _request(self, method: str, path: str, **kw: Any) -> Any:
+        from station.ingest import DestinationUnreachableError, ReadingRefusedError
         from ui.models.service import ServiceUnreachable
 
         try:
             r = self.client.request(method, path, **kw)
         except ServiceUnreachable as exc:
-            raise _Unreachable(str(exc)) from exc
+            raise DestinationUnreachableError(str(exc)) from exc
         if r.status_code >= 500 or r.status_code in self.RETRY_LATER:
-            raise _Unreachable(f"{method} {path}: HTTP {r.status_code} {r.text[:200]}")
+            raise DestinationUnreachableError(f"{method} {path}: HTTP {r.status_code} {r.text[:200]}")
         if r.status_code >= 400:
-            raise _Refused(f"{method} {path}: HTTP {r.status_code} {r.text[:300]}")
+            raise ReadingRefusedError(f"{method} {path}: HTTP {r.status_code} {r.text[:300]}")
         return r
 
-    def _send(self, panel: PanelInfo, reading: Reading) -> tuple[int, bool]:
-        page = self._request(
-            "GET", "/panels", params={"job": panel.job, "part": panel.part, "limit": 1000}
-        ).json()
-        same = [
-            p
-            for p in page["data"]
-            if p.get("substrate", "") == panel.substrate and p.get("notes", "") == panel.notes
-        ]
-        if same:
-            panel_id = min(int(p["id"]) for p in same)
-        else:
-            panel_id = int(self._request("POST", "/panels", json=asdict(panel)).json()["id"])
-        body = reading.model_copy(update={"panel_id": panel_id}).model_dump(mode="json")
-        r = self._request("POST", "/measurements", json=body)
-        return int(r.json()["id"]), r.status_code == 201
-
     def recent(self, limit: int = 50) -> list[StoredMeasurement]:
+        from station.ingest import IngestError
+
         try:
             rows = self._request("GET", "/measurements", params={"limit": limit}).json()["data"]
             panels = {
                 int(p["id"]): p
                 for p in self._request("GET", "/panels", params={"limit": 1000}).json()["data"]
             }
-        except (_Unreachable, _Refused) as exc:
+        except IngestError as exc:
             raise StationError(f"{self.where}: {exc}") from exc
         out = []
         for m in rows:
@@ -438,3 +364,30 @@ class ServiceSink(MeasurementSink):
                 _stored(m["id"], label, m["measured_at"], m["geometries_deg"], m["lab"], m.get("gloss_gu"))
             )
         return out
+
+
+class _ServiceDestination:
+    """The :class:`~station.ingest.Destination` of a :class:`ServiceSink` (its current client, looked up per call)."""
+
+    def __init__(self, sink: ServiceSink) -> None:
+        self._sink = sink
+
+    @property
+    def where(self) -> str:
+        return self._sink.where
+
+    def store(self, reading: Reading, *, actor_id: int | None = None, replayed: bool = False) -> Receipt:
+        """``POST /measurements``: 201 stored, 200 already stored (the service's token names the actor)."""
+        from station.ingest import Receipt
+
+        r = self._sink._request("POST", "/measurements", json=reading.model_dump(mode="json"))
+        return Receipt(
+            str(reading.client_id), "stored" if r.status_code == 201 else "duplicate", int(r.json()["id"])
+        )
+
+    def find(self, client_id: uuid.UUID) -> int | None:
+        """Not asked of a service: a re-sent reading is answered 200 with the stored row."""
+        return None
+
+    def close(self) -> None:
+        """Nothing to release (the client belongs to the viewer)."""

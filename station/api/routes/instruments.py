@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import asyncio
+import uuid
 from typing import Annotated
 
-from fastapi import APIRouter, Path, Query, Request, status
+from fastapi import APIRouter, Header, Path, Query, Request, Response, status
 
 from db.models import User
 from station.api.deps import scoped
@@ -20,6 +21,7 @@ from station.api.schemas.instruments import (
     MeasureResult,
 )
 from station.api.security import Scope
+from station.errors import InputError
 
 router = APIRouter(prefix="/instruments", tags=["instruments"], responses={**ERROR_RESPONSES, **UNAVAILABLE})
 Reader = Annotated[User, scoped(Scope.INSTRUMENTS_READ)]
@@ -35,8 +37,24 @@ InstrumentId = Annotated[
 ]
 
 
+_KEY_NAMESPACE = uuid.UUID("9d3f6b2a-4c1e-4f8a-b7d5-6e2a1c9f0b34")
+
+
 def _hub(request: Request) -> InstrumentHub:
     return request.app.state.instruments
+
+
+def client_id_of(body_id: uuid.UUID | None, key: str | None) -> uuid.UUID | None:
+    """The request's client id: ``client_id``, else the ``Idempotency-Key`` (a UUID as it is, any other key hashed)."""
+    if key is None:
+        return body_id
+    try:
+        from_key = uuid.UUID(key)
+    except ValueError:
+        from_key = uuid.uuid5(_KEY_NAMESPACE, key)
+    if body_id is not None and body_id != from_key:
+        raise InputError("Idempotency-Key", f"the body's client_id {body_id} or no header", key)
+    return from_key
 
 
 @router.get("", response_model=list[InstrumentPublic])
@@ -76,9 +94,19 @@ async def calibrate(
 )
 async def measure(
     request: Request,
+    response: Response,
     user: Operator,
     instrument_id: InstrumentId,
     body: MeasureRequest,
+    idempotency_key: Annotated[
+        str | None,
+        Header(
+            min_length=1,
+            max_length=255,
+            pattern=r"^[\x21-\x7e]+$",
+            description="client-chosen key making a retry store no second reading (alternative to client_id)",
+        ),
+    ] = None,
     gloss_instrument_id: Annotated[
         str | None,
         Query(
@@ -89,11 +117,19 @@ async def measure(
         ),
     ] = None,
 ) -> MeasureResult:
-    """Measure the panel once and store the reading (Lab computed from the spectra, D65/10°)."""
-    return await asyncio.to_thread(
+    """Measure the panel once and store the reading (Lab computed from the spectra, D65/10°).
+
+    201 ``stored`` or ``queued`` (database away: kept in the outbox); 200 ``duplicate`` when a retry
+    names a client id already stored (nothing is measured again).
+    """
+    result = await asyncio.to_thread(
         _hub(request).measure,
         instrument_id=instrument_id,
         req=body,
         gloss_instrument_id=gloss_instrument_id,
         actor=user,
+        client_id=client_id_of(body.client_id, idempotency_key),
     )
+    if result.status == "duplicate":
+        response.status_code = status.HTTP_200_OK
+    return result

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated
+import uuid
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -57,10 +58,20 @@ class CalibrationPublic(BaseModel):
 
 
 class MeasureRequest(BaseModel):
-    """Which panel the reading belongs to (optional) and the illumination block to store."""
+    """Which panel the reading belongs to (optional), the illumination block to store and the client id.
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"panel_id": 1}]})
+    ``client_id`` (or the ``Idempotency-Key`` header) makes the request idempotent: a retry under the
+    same id answers with what the first attempt stored or queued and measures nothing new.
+    """
 
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [{"panel_id": 1, "client_id": "0f6b7c1e-2a3d-4e5f-8a9b-0c1d2e3f4a5b"}]
+        },
+    )
+
+    client_id: uuid.UUID | None = Field(None, description="idempotency key chosen by the client (a UUID)")
     panel_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
     illumination_deg: Annotated[
         int, Field(ge=0, le=90, description="illumination angle of the stored block")
@@ -68,7 +79,8 @@ class MeasureRequest(BaseModel):
 
 
 class MeasureResult(BaseModel):
-    """The stored measurement, or ``queued`` when the database was away (it is in the outbox)."""
+    """The stored measurement (``stored``; ``duplicate`` for a retry), or ``queued`` when the database was away."""
 
-    status: str
+    status: Literal["stored", "duplicate", "queued"]
+    client_id: uuid.UUID
     measurement: MeasurementPublic | None

@@ -14,7 +14,7 @@ from db.models import Instrument, Measurement, Panel, User
 from station.api.errors import ConflictError, NotFoundError
 from station.api.schemas.measurements import CorrectionCreate, MeasurementPublic, MeasurementQuery
 from station.api.services import audit
-from station.ingest import Reading, store_reading
+from station.ingest import Reading, store_audited, store_reading
 
 _Successor = aliased(Measurement)
 
@@ -64,17 +64,9 @@ def get_measurement(*, session: Session, measurement_id: int) -> MeasurementPubl
 
 
 def ingest(*, session: Session, actor: User, reading: Reading) -> tuple[MeasurementPublic, bool]:
-    """Store *reading* once; ``(measurement, created)`` (a re-sent reading returns the stored row)."""
-    result = store_reading(session, reading, created_by_id=actor.id)
-    if result.created:
-        audit.record(
-            session=session,
-            actor=actor,
-            action="measurement.create",
-            entity="measurement",
-            entity_id=result.measurement_id,
-            client_id=str(reading.client_id),
-        )
+    """Store *reading* once with its audit row (``station.ingest.store_audited``, the writer the
+    :class:`~station.ingest.Ingestor` uses); ``(measurement, created)`` (a re-sent reading returns the stored row)."""
+    result = store_audited(session, reading, actor_id=actor.id, action="measurement.create")
     session.commit()
     return get_measurement(session=session, measurement_id=result.measurement_id), result.created
 
