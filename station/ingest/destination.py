@@ -12,9 +12,9 @@ from __future__ import annotations
 import threading
 import uuid
 from dataclasses import dataclass
-from typing import Literal, Protocol, cast
+from typing import Literal, Protocol
 
-from sqlalchemy import Engine, Table, insert, select
+from sqlalchemy import Engine, insert, select
 from sqlalchemy.exc import DBAPIError, DisconnectionError, InterfaceError, OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -28,7 +28,7 @@ from station.ingest.store import StoreResult, store_reading
 __all__ = ["DatabaseDestination", "Destination", "Receipt", "Status", "is_unreachable", "store_audited"]
 
 Status = Literal["stored", "duplicate", "queued", "refused"]
-_AUDIT_INSERT = insert(cast(Table, AuditEvent.__table__))
+_AUDIT_INSERT = insert(AuditEvent.__table__)
 _UNREACHABLE = (
     DestinationUnreachableError,
     OperationalError,

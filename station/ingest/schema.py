@@ -17,7 +17,6 @@ from typing import Annotated, Literal
 from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from db.models.measurements import PARTS
-
 from station.model.domain import LAB_HI, LAB_LO
 
 Angle = Annotated[
