@@ -87,9 +87,13 @@ class _Service:
         pytest.fail("station serve did not start in time:\n" + "".join(self.log[-40:]))
 
     def _drain(self, proc: subprocess.Popen[str]) -> None:
+        """Collect the service's log until it exits, then reap it and close the pipe (a killed service
+        must leave no open file behind: warnings are errors in the suite)."""
         if proc.stdout is not None:
-            for line in proc.stdout:
-                self.log.append(line)
+            with proc.stdout:
+                for line in proc.stdout:
+                    self.log.append(line)
+        proc.wait()
 
     def kill(self, proc: subprocess.Popen[str]) -> None:
         """SIGKILL *proc*'s process group (no-op once it is gone)."""
