@@ -149,6 +149,7 @@ def create_app(settings: Settings) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         import asyncio
 
+        app.state.image_slots = asyncio.Semaphore(settings.image_decode_concurrency)  # this loop's
         await asyncio.to_thread(_startup, app, settings)
         replayer = asyncio.create_task(_replay_outbox_periodically(app, settings.outbox_replay_s))
         try:
