@@ -16,7 +16,7 @@ from fastapi import FastAPI
 from db.engine import make_engine, make_sessionmaker
 from station import __version__
 from station.api.errors import install_error_handlers
-from station.api.middleware import BodySizeLimit
+from station.api.middleware import BodySizeLimit, SecurityHeaders
 from station.api.settings import Settings
 
 log = logging.getLogger(__name__)
@@ -177,4 +177,5 @@ def create_app(settings: Settings) -> FastAPI:
     for router in ROUTERS:
         app.include_router(router, prefix=API_PREFIX)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(SecurityHeaders)  # outermost: the 413 above gets the headers too
     return app
