@@ -130,14 +130,17 @@ def _protected_docs(app: FastAPI) -> None:
 
     @app.get("/openapi.json", include_in_schema=False, dependencies=guard)
     def openapi() -> JSONResponse:
+        """The OpenAPI schema of the service."""
         return JSONResponse(app.openapi())
 
     @app.get("/docs", include_in_schema=False, dependencies=guard)
     def docs() -> HTMLResponse:
+        """The Swagger UI page (fetches the schema with the token)."""
         return get_swagger_ui_html(openapi_url="/openapi.json", title=f"{app.title} - docs")
 
     @app.get("/redoc", include_in_schema=False, dependencies=guard)
     def redoc() -> HTMLResponse:
+        """The ReDoc page (fetches the schema with the token)."""
         return get_redoc_html(openapi_url="/openapi.json", title=f"{app.title} - ReDoc")
 
 
