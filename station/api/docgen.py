@@ -20,7 +20,6 @@ Where each column comes from:
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 import tempfile
 from collections.abc import Sequence
@@ -110,7 +109,7 @@ def collect(app: FastAPI) -> list[RouteDoc]:
             continue
         scopes = _authorize_scopes(route.dependant)
         for method in sorted(context.methods or (), key=_HTTP_METHODS.index):
-            op = schema.get("paths", {}).get(context.path_format, {}).get(method.lower())
+            op = schema.get("paths", {}).get(str(context.path_format), {}).get(method.lower())
             if op is not None:
                 codes = tuple(sorted(int(c) for c in op.get("responses", {}) if not str(c).startswith("2")))
                 section = (op.get("tags") or [_SECTIONS_OUTSIDE_SCHEMA])[0]
@@ -119,7 +118,8 @@ def collect(app: FastAPI) -> list[RouteDoc]:
                 codes = () if scopes is None else (401,)
                 section = _SECTIONS_OUTSIDE_SCHEMA
                 what = _first_sentence(route.endpoint.__doc__ or route.name.replace("_", " "))
-            docs.append(RouteDoc(method, context.path_format, section, scopes, codes, what))
+            path = str(context.path_format)
+            docs.append(RouteDoc(method, path, section, scopes, codes, what))
     order = {name: i for i, name in enumerate([*tag_order, _SECTIONS_OUTSIDE_SCHEMA])}
     return sorted(docs, key=lambda d: order.get(d.section, len(order)))  # stable: route order kept
 
@@ -158,8 +158,10 @@ def default_app() -> FastAPI:
     from station.api import Settings, create_app
 
     with tempfile.TemporaryDirectory(prefix="cacad-docgen-") as tmp:
-        settings = Settings(data_dir=Path(tmp), simulators=(), load_demo_library=False, public_docs=False)
-        return create_app(settings)
+        opts: dict[str, Any] = dict(
+            data_dir=Path(tmp), simulators=(), load_demo_library=False, public_docs=False
+        )
+        return create_app(Settings(**opts))
 
 
 def render(app: FastAPI, template: str) -> str:
