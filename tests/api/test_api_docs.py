@@ -26,7 +26,7 @@ def test_committed_api_docs_equal_the_generated_ones() -> None:
 def test_every_route_is_listed_once(sqlite_api: Api) -> None:
     app = sqlite_api.client.app
     served = {
-        (method, ctx.path_format)
+        (method, str(ctx.path_format))
         for ctx in routing.iter_route_contexts(app.routes)  # type: ignore[attr-defined]
         if isinstance(ctx.original_route, routing.APIRoute)
         for method in ctx.methods or ()
