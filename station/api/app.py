@@ -16,7 +16,7 @@ from fastapi import FastAPI
 from db.engine import make_engine, make_sessionmaker
 from station import __version__
 from station.api.errors import install_error_handlers
-from station.api.middleware import BodySizeLimit
+from station.api.middleware import BodySizeLimit, SecurityHeaders
 from station.api.settings import Settings
 
 log = logging.getLogger(__name__)
@@ -130,14 +130,17 @@ def _protected_docs(app: FastAPI) -> None:
 
     @app.get("/openapi.json", include_in_schema=False, dependencies=guard)
     def openapi() -> JSONResponse:
+        """The OpenAPI schema of the service."""
         return JSONResponse(app.openapi())
 
     @app.get("/docs", include_in_schema=False, dependencies=guard)
     def docs() -> HTMLResponse:
+        """The Swagger UI page (fetches the schema with the token)."""
         return get_swagger_ui_html(openapi_url="/openapi.json", title=f"{app.title} - docs")
 
     @app.get("/redoc", include_in_schema=False, dependencies=guard)
     def redoc() -> HTMLResponse:
+        """The ReDoc page (fetches the schema with the token)."""
         return get_redoc_html(openapi_url="/openapi.json", title=f"{app.title} - ReDoc")
 
 
@@ -149,6 +152,7 @@ def create_app(settings: Settings) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         import asyncio
 
+        app.state.image_slots = asyncio.Semaphore(settings.image_decode_concurrency)  # this loop's
         await asyncio.to_thread(_startup, app, settings)
         replayer = asyncio.create_task(_replay_outbox_periodically(app, settings.outbox_replay_s))
         try:
@@ -176,4 +180,5 @@ def create_app(settings: Settings) -> FastAPI:
     for router in ROUTERS:
         app.include_router(router, prefix=API_PREFIX)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(SecurityHeaders)  # outermost: the 413 above gets the headers too
     return app

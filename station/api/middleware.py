@@ -1,4 +1,5 @@
-"""A pure-ASGI cap on request bodies (uploads included): 413 beyond ``max_body_bytes``."""
+"""Pure-ASGI middleware: a cap on request bodies (uploads included), 413 beyond ``max_body_bytes``;
+security headers on every response."""
 
 from __future__ import annotations
 
@@ -68,3 +69,38 @@ class BodySizeLimit:
         except _TooLarge:
             if not started:
                 await self._refuse(send)
+
+
+#: Added to every response (a route's own value wins): no MIME sniffing of uploads echoed back or of
+#: JSON read as HTML, no framing, no referrer leaking ids in URLs.
+SECURITY_HEADERS: tuple[tuple[bytes, bytes], ...] = (
+    (b"x-content-type-options", b"nosniff"),
+    (b"x-frame-options", b"DENY"),
+    (b"referrer-policy", b"no-referrer"),
+)
+#: Every response of the service is either a secret (tokens), data behind a token, or liveness that
+#: must not be served stale: none may be stored by a browser or a proxy (OWASP REST cheat sheet).
+NO_STORE: tuple[bytes, bytes] = (b"cache-control", b"no-store")
+
+
+class SecurityHeaders:
+    """Add :data:`SECURITY_HEADERS` and ``Cache-Control: no-store`` to each HTTP response that lacks
+    them, error responses of the inner middleware (413) included; register it outermost."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+
+        async def with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                headers = list(message.get("headers", []))
+                present = {name.lower() for name, _ in headers}
+                headers += [(k, v) for k, v in (*SECURITY_HEADERS, NO_STORE) if k not in present]
+                message = {**message, "headers": headers}
+            await send(message)
+
+        await self.app(scope, receive, with_headers)

@@ -31,6 +31,12 @@ class Settings(BaseSettings):
     max_body_bytes: int = Field(
         1_048_576, ge=1024, le=64 * 1_048_576, description="request body cap (uploads)"
     )
+    image_decode_concurrency: int = Field(
+        2,
+        ge=1,
+        le=64,
+        description="uploads (eyedrop, sketch fit) decoded at once; others wait their turn",
+    )
     public_docs: bool = Field(
         False,
         description="serve /docs, /redoc and /openapi.json without a token "

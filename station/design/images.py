@@ -61,7 +61,88 @@ def _to_srgb(im: Image.Image) -> tuple[Image.Image, str, bool]:
             return out, f"converted from ICC profile '{desc}' to sRGB", True
         except (ImageCms.PyCMSError, OSError) as exc:
             raise ImageLoadError("image", "a valid embedded ICC profile", None, str(exc)) from exc
-    return im.convert("RGB"), "no embedded profile: assumed sRGB", False
+    out = im if im.mode == "RGB" else im.convert("RGB")  # read while *im* is open: no copy needed
+    return out, "no embedded profile: assumed sRGB", False
+
+
+@dataclass(frozen=True, eq=False)
+class EncodedImage:
+    """An image as its sRGB *encoding*, ``(H, W, 3)`` ``uint8`` (``uint16`` for 16-bit greyscale PNG).
+
+    3 bytes a pixel (6 for 16-bit), an eighth of :class:`LoadedImage`'s float64: the service keeps
+    uploads in this form and converts only the few pixels an eyedropper reads
+    (``station.design.moodboard`` reads integer images as ``value / full scale``).
+    """
+
+    pixels: NDArray[np.uint8] | NDArray[np.uint16]
+    source_format: str
+    colour_note: str
+    profile_converted: bool
+
+    @property
+    def full_scale(self) -> float:
+        """The code value of white: 255 for 8-bit, 65535 for 16-bit pixels."""
+        return float(np.iinfo(self.pixels.dtype).max)
+
+    def to_float(self) -> LoadedImage:
+        """The same image as float64 in [0, 1] (8 × the memory; for small images)."""
+        return LoadedImage(
+            self.pixels.astype(np.float64) / self.full_scale,
+            self.source_format,
+            self.colour_note,
+            self.profile_converted,
+        )
+
+
+def _decode(source: Path | io.BytesIO, suffix: str, max_pixels: int) -> EncodedImage:
+    """Identify, check the declared size (before decoding), decode and convert to sRGB."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            with Image.open(source) as im:
+                if im.format not in FORMATS:
+                    raise ImageLoadError("image", "PNG or JPEG", im.format)
+                w, h = im.size
+                if w * h > max_pixels:
+                    raise ImageLoadError("image", f"at most {max_pixels} pixels", f"{w}x{h}")
+                im.load()
+                fmt = str(im.format)
+                if im.mode in ("I;16", "I;16B", "I;16L", "I") and not im.info.get("icc_profile"):
+                    grey = np.clip(np.asarray(im), 0, 65535).astype(np.uint16)
+                    return EncodedImage(
+                        np.repeat(grey[..., None], 3, axis=-1),
+                        fmt,
+                        "16-bit greyscale, no profile: assumed sRGB",
+                        False,
+                    )
+                converted, note, did = _to_srgb(im)
+                pixels = np.asarray(converted, dtype=np.uint8)
+                converted.close()
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
+        raise ImageLoadError("image", "not a decompression bomb", None, str(exc)) from exc
+    except UnidentifiedImageError as exc:
+        raise ImageLoadError("image", "PNG or JPEG", suffix, str(exc)) from exc
+    except OSError as exc:
+        raise ImageLoadError("image", "a complete, readable image file", None, str(exc)) from exc
+    return EncodedImage(pixels, fmt, note, did)
+
+
+def decode_image(data: bytes, max_pixels: int = MAX_PIXELS, max_bytes: int = MAX_FILE_BYTES) -> EncodedImage:
+    """Decode an uploaded PNG or JPEG (bytes, never written to disk) as 8-bit sRGB, the guards of
+    :func:`load_image` included: the header's width × height is refused above *max_pixels* before a
+    pixel is decoded, so the memory a call may take is bounded by about 10 bytes × *max_pixels* at
+    the peak (Pillow's 4-byte RGB buffer, its 3-byte export and the 3-byte array), 3 bytes after.
+
+    Raises
+    ------
+    ImageLoadError
+        Empty or too many bytes, not PNG/JPEG, too many pixels, a bomb, a corrupt file or profile.
+    """
+    if not data:
+        raise ImageLoadError("image", "a PNG or JPEG file as the request body", "an empty body")
+    if len(data) > max_bytes:
+        raise ImageLoadError("image", f"a file of at most {max_bytes} bytes", len(data))
+    return _decode(io.BytesIO(data), "", max_pixels)
 
 
 def load_image(
@@ -86,32 +167,7 @@ def load_image(
     size = p.stat().st_size
     if size > max_bytes:
         raise ImageLoadError("image", f"a file of at most {max_bytes} bytes", size)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", Image.DecompressionBombWarning)
-            with Image.open(p) as im:
-                if im.format not in FORMATS:
-                    raise ImageLoadError("image", "PNG or JPEG", im.format)
-                w, h = im.size
-                if w * h > max_pixels:
-                    raise ImageLoadError("image", f"at most {max_pixels} pixels", f"{w}x{h}")
-                im.load()
-                fmt = str(im.format)
-                if im.mode in ("I;16", "I;16B", "I;16L", "I") and not im.info.get("icc_profile"):
-                    arr16 = np.asarray(im, dtype=np.float64) / 65535.0
-                    rgb = np.repeat(arr16[..., None], 3, axis=-1)
-                    return LoadedImage(
-                        np.clip(rgb, 0, 1), fmt, "16-bit greyscale, no profile: assumed sRGB", False
-                    )
-                converted, note, did = _to_srgb(im)
-    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
-        raise ImageLoadError("image", "not a decompression bomb", None, str(exc)) from exc
-    except UnidentifiedImageError as exc:
-        raise ImageLoadError("image", "PNG or JPEG", p.suffix, str(exc)) from exc
-    except OSError as exc:
-        raise ImageLoadError("image", "a complete, readable image file", None, str(exc)) from exc
-    pixels = np.asarray(converted, dtype=np.float64) / 255.0
-    return LoadedImage(pixels, fmt, note, did)
+    return _decode(p, p.suffix, max_pixels).to_float()
 
 
 def save_png(path: str | Path, encoded: NDArray) -> Path:

@@ -151,9 +151,14 @@ class MoodBoard:
 
 
 def _check_image(image: ArrayLike) -> NDArray[np.float64]:
-    img = np.asarray(image, dtype=float)
-    if img.ndim != 3 or img.shape[-1] != 3:
-        raise DesignInputError("image", "an (H, W, 3) sRGB image", img.shape)
+    """*image* as float64 sRGB in [0, 1]; an integer array (8- or 16-bit encoding) is divided by its
+    dtype's full scale (255, 65535), so callers may hand over uint8 images and convert only windows."""
+    raw = np.asarray(image)
+    if raw.ndim != 3 or raw.shape[-1] != 3:
+        raise DesignInputError("image", "an (H, W, 3) sRGB image", raw.shape)
+    if raw.dtype.kind in "ui":
+        return np.clip(raw.astype(np.float64) / float(np.iinfo(raw.dtype).max), 0.0, 1.0)
+    img = np.asarray(raw, dtype=float)
     if not np.all(np.isfinite(img)) or img.min() < 0 or img.max() > 1:
         raise DesignInputError(
             "image", "sRGB-encoded values in [0, 1]", (float(np.nanmin(img)), float(np.nanmax(img)))
@@ -162,20 +167,28 @@ def _check_image(image: ArrayLike) -> NDArray[np.float64]:
 
 
 def region(image: ArrayLike, xy: tuple[float, float], radius: int) -> NDArray[np.float64]:
-    """Pixels of *image* within *radius* pixels of *xy* (a disc, clipped to the image), ``(n, 3)``."""
-    img = _check_image(image)
+    """Pixels of *image* within *radius* pixels of *xy* (a disc, clipped to the image), ``(n, 3)``,
+    row-major. Only the disc's bounding window is read, converted and checked, so sampling a large
+    image costs ``(2 radius + 1)²`` pixels of memory, not the image's size."""
+    arr = np.asarray(image)
+    if arr.ndim != 3 or arr.shape[-1] != 3:
+        raise DesignInputError("image", "an (H, W, 3) sRGB image", arr.shape)
     if not isinstance(radius, (int, np.integer)) or not 0 <= radius <= RADIUS_MAX:
         raise DesignInputError("radius", f"integer 0..{RADIUS_MAX} pixels", radius)
-    h, w = img.shape[:2]
+    h, w = arr.shape[:2]
     try:
         x, y = float(xy[0]), float(xy[1])
     except (TypeError, ValueError, IndexError) as exc:
         raise DesignInputError("xy", "a pixel position (x, y)", xy) from exc
     if not (0 <= x < w and 0 <= y < h):
         raise DesignInputError("xy", f"0 <= x < {w}, 0 <= y < {h}", (x, y))
-    yy, xx = np.mgrid[0:h, 0:w]
-    sel = (xx - int(x)) ** 2 + (yy - int(y)) ** 2 <= radius * radius
-    return img[sel]
+    cx, cy = int(x), int(y)
+    x0, x1 = max(0, cx - radius), min(w, cx + radius + 1)
+    y0, y1 = max(0, cy - radius), min(h, cy + radius + 1)
+    window = _check_image(arr[y0:y1, x0:x1])
+    yy, xx = np.mgrid[y0:y1, x0:x1]
+    sel = (xx - cx) ** 2 + (yy - cy) ** 2 <= radius * radius
+    return window[sel]
 
 
 def robust_colour(pixels: ArrayLike) -> NDArray[np.float64]:

@@ -83,13 +83,24 @@ class Transport(ABC):
             _release(self.address)
 
     def reopen(self, settle_s: float = 0.05) -> None:
-        """Close, wait *settle_s* seconds for the device to notice, open again (claim kept)."""
+        """Close, wait *settle_s* seconds for the device to notice, open again.
+
+        The ownership claim is kept while the device reopens; when the open fails the claim is
+        released (the transport is then closed), so a later :meth:`open` — by this transport or by
+        another on the same address — starts afresh instead of meeting :class:`DeviceInUse`.
+        """
         try:
             self._close()
         except CommunicationError:
             pass
         time.sleep(settle_s)
-        self._open()
+        try:
+            self._open()
+        except BaseException:
+            if self._owned:
+                self._owned = False
+                _release(self.address)
+            raise
 
     @property
     def is_open(self) -> bool:
@@ -429,6 +440,10 @@ class HidTransport(ReportTransport):
         try:
             dev.open_path(self.path)
         except OSError as exc:
+            try:  # hidapi keeps the handle of a half-done open until closed
+                dev.close()
+            except OSError:
+                pass
             raise self._error("open", exc) from exc
         self._dev = dev
 

@@ -278,3 +278,42 @@ def test_calibrate_and_clear_bytes():
         True,
         1795442400,
     )
+
+
+def test_failed_open_releases_the_port_claim():
+    """An open refused by the device (EBUSY) leaves no claim behind: the next open of the same
+    transport, and an open by a second meter on the same address, both succeed."""
+    b = GlossBench()
+    b.dev.held = True
+    with pytest.raises(DeviceInUse):
+        b.inst.open()
+    assert not b.inst.transport.is_open
+    b.dev.held = False
+    with b.inst.open():
+        assert abs(b.inst.measure().gloss_gu[60] - 88.0) < 0.6
+    other = GlossMeter(HidTransport(PATH, b.dev, b.dev.enumerate), **FAST)
+    with other.open():
+        assert abs(other.measure().gloss_gu[60] - 88.0) < 0.6
+
+
+def test_failed_reconnect_releases_the_port_claim():
+    """A meter that stops answering is reopened once; when that reopen fails (the port was taken
+    meanwhile) the claim is released, so opening again after the port is free succeeds."""
+    b = GlossBench()
+    b.inst.open()
+    b.faults.add("hang-after:0")
+    real_open = b.dev.open_path
+
+    def taken(path: bytes) -> None:
+        b.dev.held = True
+        real_open(path)
+
+    b.dev.open_path = taken  # the reconnect finds the port held by another process
+    with pytest.raises(DeviceInUse):
+        b.inst.measure()
+    assert not b.inst.transport.is_open
+    b.dev.open_path = real_open
+    b.dev.held = False
+    b.faults.clear()
+    with b.inst.open():
+        assert abs(b.inst.measure().gloss_gu[60] - 88.0) < 0.6

@@ -1,7 +1,8 @@
 """Styling tools: ``/api/v1/styling`` (stylists; nothing stored, results are proposals to save as designs).
 
 Image uploads are the raw PNG/JPEG request body (capped by the service's body limit); the CPU work runs
-off the event loop (``asyncio.to_thread``; the JSON routes are plain ``def``, run in the thread pool).
+off the event loop (``asyncio.to_thread``; the JSON routes are plain ``def``, run in the thread pool), at
+most ``CACAD_IMAGE_DECODE_CONCURRENCY`` uploads at once (the others wait, holding only their body).
 """
 
 from __future__ import annotations
@@ -9,10 +10,10 @@ from __future__ import annotations
 import asyncio
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Query, Request, Response
+from fastapi import APIRouter, Depends, Query, Request, Response
 
 from db.models import User
-from station.api.deps import SettingsDep, scoped
+from station.api.deps import SettingsDep, get_settings, scoped
 from station.api.errors import ERROR_RESPONSES
 from station.api.schemas.styling import (
     IMAGE_BODY,
@@ -27,6 +28,18 @@ from station.api.schemas.styling import (
 from station.api.security import Scope
 from station.api.services import styling as service
 
+
+def image_slots(request: Request) -> asyncio.Semaphore:
+    """The app's bound on uploads decoded at once (``settings.image_decode_concurrency``), made in the
+    lifespan; an app driven without its lifespan gets one on first use."""
+    slots: asyncio.Semaphore | None = getattr(request.app.state, "image_slots", None)
+    if slots is None:
+        slots = asyncio.Semaphore(get_settings(request).image_decode_concurrency)
+        request.app.state.image_slots = slots
+    return slots
+
+
+ImageSlotsDep = Annotated[asyncio.Semaphore, Depends(image_slots)]
 router = APIRouter(prefix="/styling", tags=["styling"], responses=ERROR_RESPONSES)
 Stylist = Annotated[User, scoped(Scope.DESIGNS_WRITE)]
 Pixel = Annotated[float, Query(ge=0.0, le=100_000.0, allow_inf_nan=False)]
@@ -59,6 +72,7 @@ def render(_user: Stylist, request: RenderRequest) -> Response:
 async def eyedrop(
     request: Request,
     settings: SettingsDep,
+    slots: ImageSlotsDep,
     _user: Stylist,
     face_x: Pixel,
     face_y: Pixel,
@@ -77,24 +91,26 @@ async def eyedrop(
     the contrast-gloss eyedropper on an uploaded mood-board image (thesis §3.5). Pixel = (column, row)."""
     data = await request.body()
     gloss = (gloss_x, gloss_y) if gloss_x is not None and gloss_y is not None else None
-    return await asyncio.to_thread(
-        service.eyedrop,
-        data=data,
-        max_bytes=settings.max_body_bytes,
-        face=(face_x, face_y),
-        flop=(flop_x, flop_y),
-        gloss=gloss,
-        gloss_gu=gloss_gu,
-        travel_deg=travel_deg,
-        radius=radius,
-        auto_swap=auto_swap,
-    )
+    async with slots:
+        return await asyncio.to_thread(
+            service.eyedrop,
+            data=data,
+            max_bytes=settings.max_body_bytes,
+            face=(face_x, face_y),
+            flop=(flop_x, flop_y),
+            gloss=gloss,
+            gloss_gu=gloss_gu,
+            travel_deg=travel_deg,
+            radius=radius,
+            auto_swap=auto_swap,
+        )
 
 
 @router.post("/sketch-fit", response_model=SketchFitOut, openapi_extra=IMAGE_BODY, responses=_TOO_LARGE)
 async def sketch_fit(
     request: Request,
     settings: SettingsDep,
+    slots: ImageSlotsDep,
     _user: Stylist,
     scene: Annotated[
         Literal["sphere-point", "panel-point"], Query(description="built-in point-light scene")
@@ -104,10 +120,11 @@ async def sketch_fit(
     """Fit a design to concept art painted over a built-in point-light scene (thesis §3.7, eq 3.7.2): the
     art is the upload, a square image the scene's size, painted over the scene rendered in silver."""
     data = await request.body()
-    return await asyncio.to_thread(
-        service.sketch_fit,
-        data=data,
-        max_bytes=settings.max_body_bytes,
-        scene_name=scene,
-        gloss_mode=gloss_mode,
-    )
+    async with slots:
+        return await asyncio.to_thread(
+            service.sketch_fit,
+            data=data,
+            max_bytes=settings.max_body_bytes,
+            scene_name=scene,
+            gloss_mode=gloss_mode,
+        )

@@ -14,7 +14,7 @@ from db.models import Instrument, Measurement, Panel, User
 from station.api.errors import ConflictError, NotFoundError
 from station.api.schemas.measurements import CorrectionCreate, MeasurementPublic, MeasurementQuery
 from station.api.services import audit
-from station.ingest import Reading, store_audited, store_reading
+from station.ingest import Reading, ReferenceNotFoundError, store_audited, store_reading
 
 _Successor = aliased(Measurement)
 
@@ -63,6 +63,15 @@ def get_measurement(*, session: Session, measurement_id: int) -> MeasurementPubl
     return _public(row)
 
 
+def _refuse_if_superseded(session: Session, measurement_id: int) -> None:
+    """:class:`NotFoundError` for a missing measurement, :class:`ConflictError` for a corrected one."""
+    original = get_measurement(session=session, measurement_id=measurement_id)
+    if original.superseded_by_id is not None:
+        raise ConflictError(
+            f"measurement {measurement_id} is already superseded by {original.superseded_by_id}"
+        )
+
+
 def ingest(*, session: Session, actor: User, reading: Reading) -> tuple[MeasurementPublic, bool]:
     """Store *reading* once with its audit row (``station.ingest.store_audited``, the writer the
     :class:`~station.ingest.Ingestor` uses); ``(measurement, created)`` (a re-sent reading returns the stored row)."""
@@ -74,12 +83,13 @@ def ingest(*, session: Session, actor: User, reading: Reading) -> tuple[Measurem
 def correct(
     *, session: Session, actor: User, measurement_id: int, correction: CorrectionCreate
 ) -> MeasurementPublic:
-    """Store a corrected reading that supersedes *measurement_id*, with who and why."""
-    original = get_measurement(session=session, measurement_id=measurement_id)
-    if original.superseded_by_id is not None:
-        raise ConflictError(
-            f"measurement {measurement_id} is already superseded by {original.superseded_by_id}"
-        )
+    """Store a corrected reading that supersedes *measurement_id*, with who and why.
+
+    Optimistic: the "already superseded?" check runs first, and the unique ``supersedes_id`` decides a
+    race between two corrections. The loser's insert is refused by that constraint; it is then told
+    which correction won (:class:`ConflictError`, 409), not that the measurement is missing.
+    """
+    _refuse_if_superseded(session, measurement_id)
     existing = session.scalar(
         select(Measurement.id).where(Measurement.client_id == correction.reading.client_id)
     )
@@ -87,13 +97,18 @@ def correct(
         raise ConflictError(
             f"client_id {correction.reading.client_id} is already stored (measurement {existing})"
         )
-    result = store_reading(
-        session,
-        correction.reading,
-        created_by_id=actor.id,
-        supersedes_id=measurement_id,
-        correction_reason=correction.reason,
-    )
+    try:
+        result = store_reading(
+            session,
+            correction.reading,
+            created_by_id=actor.id,
+            supersedes_id=measurement_id,
+            correction_reason=correction.reason,
+        )
+    except ReferenceNotFoundError:
+        session.rollback()  # the refused insert aborted the transaction; look again in a fresh one
+        _refuse_if_superseded(session, measurement_id)
+        raise
     audit.record(
         session=session,
         actor=actor,

@@ -1,16 +1,16 @@
 """Styling tools over ``station.design``: variations, swatch PNGs, eyedroppers and the sketch fit.
 
 Nothing here is stored: the results are proposals a stylist saves as a design version when wanted.
-Uploaded images go to a private temporary file and through ``station.design.images.load_image`` (size
-cap, decompression-bomb guard, colour profile honoured or stated).
+Uploaded images are decoded from the request bytes by ``station.design.images.decode_image`` (size cap
+checked on the header before any pixel is decoded, decompression-bomb guard, colour profile honoured
+or stated) as 8-bit sRGB, 3 bytes a pixel; the eyedroppers convert only the discs they read to float.
+The routes bound how many uploads are decoded at once (``app.state.image_slots``).
 """
 
 from __future__ import annotations
 
 import io
 import math
-import tempfile
-from pathlib import Path
 from typing import Any
 
 from station.api.schemas.styling import RenderRequest, SwatchRequest, VariationsRequest
@@ -19,8 +19,8 @@ from station.errors import InputError
 from station.model.design_io import design_to_dict
 from station.model.domain import ANGLES_3
 
-#: Mood-board uploads decode to float64 (24 bytes a pixel): a 1 MiB PNG can hold a 36-megapixel flat image,
-#: so the service accepts at most 4 megapixels (about 100 MB decoded) per eyedropper request.
+#: Mood-board uploads stay 8-bit (3 bytes a pixel, about 10 while Pillow decodes): at most 4 megapixels,
+#: about 40 MB a request at the peak, whatever the compression ratio of the upload.
 EYEDROP_MAX_PIXELS = 4_000_000
 #: Sketch-fit art is a square image the size of the built-in scene; this bounds the CPU a request may take.
 SKETCH_MAX_SIDE = 512
@@ -81,15 +81,12 @@ def render_png(*, request: RenderRequest) -> bytes:
 
 
 def load_upload(data: bytes, *, max_bytes: int, max_pixels: int) -> Any:
-    """``load_image`` on uploaded bytes (written to a private temporary file first)."""
-    from station.design.images import load_image
+    """``decode_image`` on uploaded bytes: an :class:`~station.design.images.EncodedImage` (8-bit)."""
+    from station.design.images import decode_image
 
     if not data:
         raise InputError("image", "a PNG or JPEG file as the request body", "an empty body")
-    with tempfile.TemporaryDirectory(prefix="cacad-upload-") as tmp:
-        path = Path(tmp) / "upload"
-        path.write_bytes(data)
-        return load_image(path, max_pixels=max_pixels, max_bytes=max_bytes)
+    return decode_image(data, max_pixels=max_pixels, max_bytes=max_bytes)
 
 
 def _finite(x: Any) -> float | None:
@@ -147,7 +144,7 @@ def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str)
     from station.design.scene import builtin_scene, shade, srgb_encode
     from station.design.sketch import fit_point_light
 
-    art = load_upload(data, max_bytes=max_bytes, max_pixels=SKETCH_MAX_SIDE**2).pixels
+    art = load_upload(data, max_bytes=max_bytes, max_pixels=SKETCH_MAX_SIDE**2).to_float().pixels
     h, w = art.shape[:2]
     if h != w or not 16 <= h <= SKETCH_MAX_SIDE:
         raise InputError(
