@@ -1,4 +1,4 @@
-"""Colorimetric conversions used across the product (thin wrappers over colour-science).
+"""Colorimetric conversions used across the product (colour-science, and the CIE Lab formulae in NumPy).
 
 Lab is CIE L*a*b* relative to D65 and the CIE 1964 10° observer unless a field says otherwise
 (docs/design.md §8). "Linear sRGB" is scene-linear sRGB (IEC 61966-2-1 primaries, D65), no tone mapping
@@ -22,13 +22,39 @@ WHITEPOINT: NDArray[np.float64] = np.asarray(colour.CCS_ILLUMINANTS[OBSERVER_10]
 _SRGB = colour.RGB_COLOURSPACES["sRGB"]
 
 
+#: CIE 1976 constants (CIE 15:2004 §8.2.1, exact rationals): ε = (6/29)³, κ = (29/3)³.
+_CIE_EPSILON = 216.0 / 24389.0
+_CIE_KAPPA = 24389.0 / 27.0
+
+
+def _white_xyz(whitepoint: ArrayLike) -> NDArray[np.float64]:
+    """XYZ of a white of chromaticity (x, y) with Y = 1: (x / y, 1, (1 − x − y) / y)."""
+    if whitepoint is WHITEPOINT:
+        return _WHITE_XYZ10
+    xy = np.asarray(whitepoint, dtype=float)
+    x, y = xy[..., 0], xy[..., 1]
+    return np.stack([x / y, np.ones_like(x), (1.0 - x - y) / y], axis=-1)
+
+
+_WHITE_XYZ10 = np.array(
+    [WHITEPOINT[0] / WHITEPOINT[1], 1.0, (1.0 - WHITEPOINT[0] - WHITEPOINT[1]) / WHITEPOINT[1]]
+)
+_WHITE_XYZ10.flags.writeable = False
+
+
 def lab_to_xyz(lab: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np.float64]:
-    """Convert Lab (L* 0–100) to XYZ scaled so the white has Y = 1.
+    """Convert Lab to XYZ scaled so the white has Y = 1 (CIE 15:2004 eqs 8.5–8.7, inverted).
+
+    f_y = (L* + 16) / 116, f_x = f_y + a* / 500, f_z = f_y − b* / 200, and each tristimulus ratio is
+    f³ where f > 6/29, else (116 f − 16) / κ. Written in NumPy rather than calling
+    ``colour.Lab_to_XYZ`` because the analyses call it per geometry inside root searches, where
+    colour-science's per-call overhead (≈ 0.3 ms) dominated; ``tests/model/test_colorimetry.py`` holds
+    it to colour-science's result to 1e-12.
 
     Parameters
     ----------
     lab
-        CIE L*a*b*, shape (..., 3).
+        CIE L*a*b*, shape (..., 3); L* above 100 (effect paints near specular) is valid.
     whitepoint
         Reference white chromaticity (x, y); default D65 / 10°.
 
@@ -37,12 +63,24 @@ def lab_to_xyz(lab: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np
     ndarray
         XYZ, shape (..., 3), Y of the white = 1.
     """
-    return np.asarray(colour.Lab_to_XYZ(np.asarray(lab, dtype=float), whitepoint), dtype=float)
+    lab = np.asarray(lab, dtype=float)
+    fy = (lab[..., 0] + 16.0) / 116.0
+    f = np.stack([fy + lab[..., 1] / 500.0, fy, fy - lab[..., 2] / 200.0], axis=-1)
+    ratio = np.where(f > 6.0 / 29.0, f**3, (116.0 * f - 16.0) / _CIE_KAPPA)
+    return np.asarray(ratio * _white_xyz(whitepoint), dtype=float)
 
 
 def xyz_to_lab(xyz: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np.float64]:
-    """Convert XYZ (white Y = 1) to Lab relative to *whitepoint* (default D65 / 10°)."""
-    return np.asarray(colour.XYZ_to_Lab(np.asarray(xyz, dtype=float), whitepoint), dtype=float)
+    """Convert XYZ (white Y = 1) to Lab relative to *whitepoint* (CIE 15:2004 eqs 8.5–8.7).
+
+    With t = X / X_n etc., f(t) = t^(1/3) where t > ε, else (κ t + 16) / 116; L* = 116 f_y − 16,
+    a* = 500 (f_x − f_y), b* = 200 (f_y − f_z). NumPy for the reason given in :func:`lab_to_xyz`.
+    """
+    t = np.asarray(xyz, dtype=float) / _white_xyz(whitepoint)
+    f = np.where(t > _CIE_EPSILON, np.cbrt(t), (_CIE_KAPPA * t + 16.0) / 116.0)
+    return np.stack(
+        [116.0 * f[..., 1] - 16.0, 500.0 * (f[..., 0] - f[..., 1]), 200.0 * (f[..., 1] - f[..., 2])], axis=-1
+    )
 
 
 def _adaptation(source_xy: ArrayLike, target_xy: ArrayLike) -> NDArray[np.float64]:
