@@ -64,10 +64,16 @@ def lab_to_xyz(lab: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np
         XYZ, shape (..., 3), Y of the white = 1.
     """
     lab = np.asarray(lab, dtype=float)
-    fy = (lab[..., 0] + 16.0) / 116.0
-    f = np.stack([fy + lab[..., 1] / 500.0, fy, fy - lab[..., 2] / 200.0], axis=-1)
-    ratio = np.where(f > 6.0 / 29.0, f**3, (116.0 * f - 16.0) / _CIE_KAPPA)
-    return np.asarray(ratio * _white_xyz(whitepoint), dtype=float)
+    f = np.empty(lab.shape, dtype=float)
+    f[..., 1] = (lab[..., 0] + 16.0) / 116.0
+    f[..., 0] = f[..., 1] + lab[..., 1] / 500.0
+    f[..., 2] = f[..., 1] - lab[..., 2] / 200.0
+    ratio = f * f * f
+    linear = f <= 6.0 / 29.0
+    if linear.any():
+        ratio[linear] = (116.0 * f[linear] - 16.0) / _CIE_KAPPA
+    ratio *= _white_xyz(whitepoint)
+    return ratio
 
 
 def xyz_to_lab(xyz: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np.float64]:
