@@ -31,19 +31,7 @@ def variations(*, request: VariationsRequest) -> dict[str, Any]:
     from station.design.variations import variations as ring_of
 
     ring = ring_of(to_design(request.design), request.degree, request.category)
-    return {
-        "centre": design_to_dict(ring.centre),
-        "category": ring.category,
-        "degree": ring.degree,
-        "variations": [
-            {
-                "label": v.label,
-                "design": None if v.design is None else design_to_dict(v.design),
-                "reason": v.reason,
-            }
-            for v in ring.variations
-        ],
-    }
+    return ring.to_dict()
 
 
 def png_bytes(pixels: Any) -> bytes:
@@ -126,20 +114,7 @@ def eyedrop(
         auto_swap=auto_swap,
         gloss_xy=gloss,
     )
-    out: dict[str, Any] = {
-        "design": design_to_dict(r.design),
-        "face_lab": list(r.face_lab),
-        "flop_lab": list(r.flop_lab),
-        "swapped": r.swapped,
-        "colour": img.colour_note,
-    }
-    if r.gloss is not None:
-        out["gloss"] = {
-            "gloss_gu": r.gloss.gloss_gu,
-            "contrast": r.gloss.contrast,
-            "clipped": r.gloss.clipped,
-        }
-    return out
+    return r.to_dict(colour=img.colour_note)
 
 
 def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str) -> dict[str, Any]:
