@@ -58,10 +58,19 @@ def _common(args: argparse.Namespace) -> dict[str, Any]:
     return {"epsilon": args.epsilon, "method": args.de, "hinge": _hinge(args.hinge)}
 
 
-def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
+def _paint_and_geometry(
+    args: argparse.Namespace, light: str, view: str
+) -> tuple[Any, list[float], list[float] | None]:
+    """The paint, the light polar angles of option *light* and the view angles of option *view* (degrees;
+    ``None`` when not given)."""
     paint = design_from_args(args)
-    lights = parse_floats(args.light, "light")
-    views = parse_floats(args.view, "view") if args.view is not None else None
+    lights = parse_floats(getattr(args, light), light)
+    views = parse_floats(getattr(args, view), view) if getattr(args, view) is not None else None
+    return paint, lights, views
+
+
+def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
+    paint, lights, views = _paint_and_geometry(args, "light", "view")
     r = goniogeometric_index(
         paint,
         lights,
@@ -75,9 +84,7 @@ def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _trompe(args: argparse.Namespace) -> dict[str, Any]:
-    paint = design_from_args(args)
-    lights = parse_floats(args.lights, "lights")
-    views = parse_floats(args.views, "views") if args.views is not None else None
+    paint, lights, views = _paint_and_geometry(args, "lights", "views")
     r = inverse_trompe_loeil(
         paint,
         lights,
