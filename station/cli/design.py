@@ -24,7 +24,6 @@ from station.design.variations import CATEGORIES, variations
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_to_dict
-from station.model.domain import ANGLES_3
 
 #: The thesis's default starting colour for a sketch (§3.7.1: "The system's default is silver").
 DEFAULT_SILVER = FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")
@@ -84,18 +83,7 @@ def _sketch_fit(args: argparse.Namespace) -> dict[str, Any]:
     scene = builtin_scene(args.scene, h)
     initial = load_image(args.initial).pixels if args.initial else srgb_encode(shade(scene, DEFAULT_SILVER))
     fit = fit_point_light(scene, art, initial, gloss=args.gloss_mode)
-    return {
-        "design": design_to_dict(fit.design),
-        "rms_de": fit.rms_de,
-        "failed": fit.failed,
-        "seconds": fit.seconds,
-        "reason": fit.reason,
-        "shading_de": fit.shading_de,
-        "lab_standard": {"angles_deg": list(ANGLES_3), "lab": [list(v) for v in fit.lab_standard]},
-        "theta_clamp_deg": fit.theta_clamp_deg,
-        "pixels": fit.pixels,
-        "gloss_source": fit.gloss_source,
-    }
+    return fit.to_dict()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -16,8 +16,6 @@ from typing import Any
 from station.api.schemas.styling import RenderRequest, SwatchRequest, VariationsRequest
 from station.api.services.designs import to_design
 from station.errors import InputError
-from station.model.design_io import design_to_dict
-from station.model.domain import ANGLES_3
 
 #: Mood-board uploads decode to float64 (24 bytes a pixel): a 1 MiB PNG can hold a 36-megapixel flat image,
 #: so the service accepts at most 4 megapixels (about 100 MB decoded) per eyedropper request.
@@ -130,18 +128,7 @@ def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str)
         )
     scene = builtin_scene(scene_name, h)
     fit = fit_point_light(scene, art, srgb_encode(shade(scene, _silver())), gloss=gloss_mode)
-    return {
-        "design": design_to_dict(fit.design),
-        "rms_de": _finite(fit.rms_de),
-        "failed": bool(fit.failed),
-        "seconds": float(fit.seconds),
-        "reason": fit.reason,
-        "shading_de": _finite(fit.shading_de),
-        "lab_standard": {
-            "angles_deg": list(ANGLES_3),
-            "lab": [[float(x) for x in v] for v in fit.lab_standard],
-        },
-        "theta_clamp_deg": _finite(fit.theta_clamp_deg),
-        "pixels": int(fit.pixels),
-        "gloss_source": fit.gloss_source,
-    }
+    out = fit.to_dict()
+    for key in ("rms_de", "shading_de", "theta_clamp_deg"):  # JSON has no NaN: a failed fit reads null
+        out[key] = _finite(out[key])
+    return out
