@@ -107,6 +107,22 @@ def parse_lab_list(text: str, field: str = "lab") -> list[list[float]]:
     return [parse_floats(p, f"{field}[{i}]", 3) for i, p in enumerate(parts)]
 
 
+def add_design_args(p: argparse.ArgumentParser) -> None:
+    """Add ``--design FILE`` or ``--face/--flop/--travel/--gloss``, read by :func:`design_from_args`."""
+    from station.model.domain import DEFAULT_GLOSS_GU
+
+    p.add_argument("--design", help="design file (cacad.design/1 JSON)")
+    p.add_argument("--face", help="face Lab at 15°: L,a,b")
+    p.add_argument("--flop", help="flop Lab at the travel angle: L,a,b (omit for a solid)")
+    p.add_argument("--travel", type=float, help="travel θ_clamp in degrees (15 < θ <= 180)")
+    p.add_argument(
+        "--gloss",
+        type=float,
+        default=DEFAULT_GLOSS_GU,
+        help=f"60° gloss in GU (0–100), default {DEFAULT_GLOSS_GU:g}",
+    )
+
+
 def design_from_args(args: argparse.Namespace) -> Any:
     """A design from ``--design FILE`` or from ``--face/--flop/--travel[/--gloss]``.
 

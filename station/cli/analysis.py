@@ -53,28 +53,38 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--hinge", default="in-plane", help="in-plane | out-of-plane | hinge azimuth in degrees")
 
 
-def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
+def _common(args: argparse.Namespace) -> dict[str, Any]:
+    """The options of :func:`_add_common` as the ``station.analysis`` keywords (ε, ΔE formula, hinge)."""
+    return {"epsilon": args.epsilon, "method": args.de, "hinge": _hinge(args.hinge)}
+
+
+def _paint_and_geometry(
+    args: argparse.Namespace, light: str, view: str
+) -> tuple[Any, list[float], list[float] | None]:
+    """The paint, the light polar angles of option *light* and the view angles of option *view* (degrees;
+    ``None`` when not given)."""
     paint = design_from_args(args)
-    lights = parse_floats(args.light, "light")
-    views = parse_floats(args.view, "view") if args.view is not None else None
+    lights = parse_floats(getattr(args, light), light)
+    views = parse_floats(getattr(args, view), view) if getattr(args, view) is not None else None
+    return paint, lights, views
+
+
+def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
+    paint, lights, views = _paint_and_geometry(args, "light", "view")
     r = goniogeometric_index(
         paint,
-        lights if len(lights) > 1 else lights[0],
+        lights,
         views,
-        epsilon=args.epsilon,
-        method=args.de,
-        hinge=_hinge(args.hinge),
         direction=args.direction,
         beta_max_deg=args.beta_max,
         gloss=args.include_gloss,
+        **_common(args),
     )
     return r.to_dict(per_geometry=args.per_geometry)
 
 
 def _trompe(args: argparse.Namespace) -> dict[str, Any]:
-    paint = design_from_args(args)
-    lights = parse_floats(args.lights, "lights")
-    views = parse_floats(args.views, "views") if args.views is not None else None
+    paint, lights, views = _paint_and_geometry(args, "lights", "views")
     r = inverse_trompe_loeil(
         paint,
         lights,
@@ -83,10 +93,8 @@ def _trompe(args: argparse.Namespace) -> dict[str, Any]:
         objective=args.objective,
         at=args.at,
         subset=args.subset,
-        hinge=_hinge(args.hinge),
-        method=args.de,
-        epsilon=args.epsilon,
         allow_face_darker=args.allow_face_darker,
+        **_common(args),
     )
     return r.to_dict()
 
@@ -142,9 +150,7 @@ def _sweep(args: argparse.Namespace) -> dict[str, Any]:
         parse_floats(args.betas, "betas"),
         parse_floats(args.lights, "lights"),
         parse_floats(args.views, "views") if args.views else None,
-        hinge=_hinge(args.hinge),
-        method=args.de,
-        epsilon=args.epsilon,
+        **_common(args),
     )
     out: dict[str, Any] = {"index_estimate_deg": r.index_estimate(), "shape": list(r.delta_e.shape)}
     if args.png:

@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from station.cli._common import add_json_flag, parse_floats, parse_lab
+from station.cli._common import add_design_args, add_json_flag, design_from_args, parse_floats
 from station.design.images import load_image, save_png
 from station.design.moodboard import eyedrop_design
 from station.design.palette import booklet, swatch
@@ -23,37 +23,10 @@ from station.design.sketch import fit_point_light
 from station.design.variations import CATEGORIES, variations
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
-from station.model.design_io import design_to_dict, load_design
-from station.model.domain import ANGLES_3, DEFAULT_GLOSS_GU
+from station.model.design_io import design_to_dict
 
 #: The thesis's default starting colour for a sketch (§3.7.1: "The system's default is silver").
 DEFAULT_SILVER = FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")
-
-
-def _add_design_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--design", help="design file (cacad.design/1 JSON)")
-    p.add_argument("--face", help="face Lab L,a,b (instead of --design)")
-    p.add_argument("--flop", help="flop Lab L,a,b (default: the face, a solid)")
-    p.add_argument("--travel", type=float, help="travel θ_clamp in degrees (15 < travel <= 180)")
-    p.add_argument(
-        "--gloss",
-        type=float,
-        default=DEFAULT_GLOSS_GU,
-        help=f"gloss in GU, 0-100 (default {DEFAULT_GLOSS_GU:g})",
-    )
-
-
-def _design(args: argparse.Namespace) -> FaceFlopTravelGloss:
-    if args.design:
-        return load_design(args.design)
-    if args.face is None:
-        raise InputError("face", "--face L,a,b (or --design FILE)")
-    face = parse_lab(args.face, "face")
-    flop = parse_lab(args.flop, "flop") if args.flop else face
-    travel = args.travel if flop != face else None
-    if travel is None and flop != face:
-        raise InputError("travel", "--travel DEG (15 < travel <= 180) when face != flop")
-    return FaceFlopTravelGloss(face, flop, travel, args.gloss)
 
 
 def _xy(text: str, field: str) -> tuple[float, float]:
@@ -62,20 +35,8 @@ def _xy(text: str, field: str) -> tuple[float, float]:
 
 
 def _variations(args: argparse.Namespace) -> dict[str, Any]:
-    ring = variations(_design(args), args.degree, args.category)
-    return {
-        "centre": design_to_dict(ring.centre),
-        "category": ring.category,
-        "degree": ring.degree,
-        "variations": [
-            {
-                "label": v.label,
-                "design": None if v.design is None else design_to_dict(v.design),
-                "reason": v.reason,
-            }
-            for v in ring.variations
-        ],
-    }
+    ring = variations(design_from_args(args), args.degree, args.category)
+    return ring.to_dict()
 
 
 def _eyedrop(args: argparse.Namespace) -> dict[str, Any]:
@@ -91,31 +52,18 @@ def _eyedrop(args: argparse.Namespace) -> dict[str, Any]:
         auto_swap=not args.no_swap,
         gloss_xy=None if args.gloss is None else _xy(args.gloss, "gloss"),
     )
-    out: dict[str, Any] = {
-        "design": design_to_dict(r.design),
-        "face_lab": list(r.face_lab),
-        "flop_lab": list(r.flop_lab),
-        "swapped": r.swapped,
-        "colour": img.colour_note,
-    }
-    if r.gloss is not None:
-        out["gloss"] = {
-            "gloss_gu": r.gloss.gloss_gu,
-            "contrast": r.gloss.contrast,
-            "clipped": r.gloss.clipped,
-        }
-    return out
+    return r.to_dict(colour=img.colour_note)
 
 
 def _render(args: argparse.Namespace) -> dict[str, Any]:
-    design = _design(args) if (args.design or args.face) else DEFAULT_SILVER
+    design = design_from_args(args) if (args.design or args.face) else DEFAULT_SILVER
     scene = builtin_scene(args.scene, args.size)
     path = save_png(args.out, srgb_encode(shade(scene, design)))
     return {"path": str(path), "scene": args.scene, "size": args.size, "design": design_to_dict(design)}
 
 
 def _palette(args: argparse.Namespace) -> dict[str, Any]:
-    design = _design(args)
+    design = design_from_args(args)
     out = Path(args.out)
     sw = swatch(design)
     p1 = save_png(out.with_name(out.stem + "-swatch.png"), sw.pixels)
@@ -135,18 +83,7 @@ def _sketch_fit(args: argparse.Namespace) -> dict[str, Any]:
     scene = builtin_scene(args.scene, h)
     initial = load_image(args.initial).pixels if args.initial else srgb_encode(shade(scene, DEFAULT_SILVER))
     fit = fit_point_light(scene, art, initial, gloss=args.gloss_mode)
-    return {
-        "design": design_to_dict(fit.design),
-        "rms_de": fit.rms_de,
-        "failed": fit.failed,
-        "seconds": fit.seconds,
-        "reason": fit.reason,
-        "shading_de": fit.shading_de,
-        "lab_standard": {"angles_deg": list(ANGLES_3), "lab": [list(v) for v in fit.lab_standard]},
-        "theta_clamp_deg": fit.theta_clamp_deg,
-        "pixels": fit.pixels,
-        "gloss_source": fit.gloss_source,
-    }
+    return fit.to_dict()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -155,7 +92,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     sub = top.add_subparsers(dest="design_command", required=True, metavar="TOOL")
 
     p = sub.add_parser("variations", help="ring of variations of a design (thesis §3.4.4)")
-    _add_design_args(p)
+    add_design_args(p)
     p.add_argument(
         "--degree",
         type=float,
@@ -181,7 +118,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_eyedrop)
 
     p = sub.add_parser("render", help="render a design (default silver) in a built-in scene to PNG")
-    _add_design_args(p)
+    add_design_args(p)
     p.add_argument("--scene", choices=tuple(BUILTIN_SCENES), default="sphere-point")
     p.add_argument("--size", type=int, default=128, help="image size in pixels (square)")
     p.add_argument("--out", required=True, help="PNG to write")
@@ -189,7 +126,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_render)
 
     p = sub.add_parser("palette", help="palette swatch and booklet thumbnail PNGs (thesis §3.4.6)")
-    _add_design_args(p)
+    add_design_args(p)
     p.add_argument("--out", required=True, help="base path: writes BASE-swatch.png and BASE-booklet.png")
     add_json_flag(p)
     p.set_defaults(handler=_palette)

@@ -232,9 +232,9 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
     """Export a design (both 3-angle sets, optionally 5 angles) and its ColorSnap match."""
-    from station.formulate.color_xml import spec_from_design, spec_from_lab, write_color_xml
+    from station.formulate.color_xml import write_color_xml
     from station.formulate.cxf import specs_to_cxf
-    from station.formulate.snap import color_snap
+    from station.formulate.export import export_specs
     from station.model import FaceFlopTravelGloss, fit_fftg
     from station.model.design_io import load_design
 
@@ -246,26 +246,8 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
         design: FaceFlopTravelGloss = fit.design
     else:
         design = load_design(args.design)
-    specs = [spec_from_design(design, name=design.name or "design", five_angles=args.five_angles)]
-    match_code = None
-    if not args.no_match:
-        lib = _load_library(args.library)
-        result = color_snap(lib, design.lab_at(np.array(ANGLES_3)), k=1, method=args.de)
-        m = result.matches[0]
-        row = lib.lab[m.index]
-        specs.append(
-            spec_from_lab(
-                m.code,
-                {a: tuple(row[j]) for j, a in enumerate(lib.angles_deg)},
-                float(lib.gloss_gu[m.index]),
-                role="match",
-                paint_type=str(lib.types[m.index]),
-                code=m.code,
-                synthetic=lib.synthetic,
-                five_angles=args.five_angles,
-            )
-        )
-        match_code = m.code
+    library = None if args.no_match else _load_library(args.library)
+    specs, match_code = export_specs(design, library, method=args.de, five_angles=args.five_angles)
     out_path = Path(args.out)
     if args.format == "xml":
         write_color_xml(specs, out_path)

@@ -16,12 +16,12 @@ from typing import Any
 
 import numpy as np
 
-from station.cli._common import add_json_flag, design_from_args, parse_floats, parse_lab_list
+from station.cli._common import add_design_args, add_json_flag, design_from_args, parse_floats, parse_lab_list
 from station.errors import InputError
 from station.model import ANGLES_3, AspecularMeasurements, fit_fftg
 from station.model.design_io import design_to_dict, load_design
 from station.model.difference import DELTA_E_METHODS, delta_e
-from station.model.domain import ANGLES_5, DEFAULT_GLOSS_GU, format_angle
+from station.model.domain import ANGLES_5, format_angle
 from station.model.gloss import lobe_from_gloss, simulate_gloss_meter
 from station.model.indices import library_indices
 
@@ -119,19 +119,6 @@ def _plot(args: argparse.Namespace) -> dict[str, Any]:
     return {"out": str(out), "designs": [d.name for d in designs]}
 
 
-def _add_design_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--design", help="design file (cacad.design/1 JSON)")
-    p.add_argument("--face", help="face Lab at 15°: L,a,b")
-    p.add_argument("--flop", help="flop Lab at the travel angle: L,a,b (omit for a solid)")
-    p.add_argument("--travel", type=float, help="travel θ_clamp in degrees (15 < θ <= 180)")
-    p.add_argument(
-        "--gloss",
-        type=float,
-        default=DEFAULT_GLOSS_GU,
-        help=f"60° gloss in GU (0–100), default {DEFAULT_GLOSS_GU:g}",
-    )
-
-
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``station model`` and its subcommands."""
     model = subparsers.add_parser("model", help="appearance model: fits, evaluation, indices, gloss")
@@ -145,7 +132,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_from_angles)
 
     p = sub.add_parser("eval", help="design → Lab at aspecular angles")
-    _add_design_args(p)
+    add_design_args(p)
     p.add_argument("--angles", default=STANDARD_EVAL_ANGLES, help=f"default {STANDARD_EVAL_ANGLES}")
     add_json_flag(p)
     p.set_defaults(handler=_eval)

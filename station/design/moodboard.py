@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.design.errors import DesignInputError
 from station.model import GLOSS_MAX_GU, GLOSS_MIN_GU, FaceFlopTravelGloss
+from station.model.design_io import design_to_dict
 from station.model.display import display_to_lab
 
 #: Accepted eyedropper radius (pixels).
@@ -214,6 +215,24 @@ class EyedropResult:
     flop_lab: tuple[float, float, float]
     swapped: bool
     gloss: ContrastGloss | None = None
+
+    def to_dict(self, **extra: Any) -> dict[str, Any]:
+        """JSON-ready form shared by every front: design (``cacad.design/1``), sampled Labs (D65/10°),
+        *swapped*, then *extra* (e.g. the image's colour note), then the gloss reading when one was taken."""
+        out: dict[str, Any] = {
+            "design": design_to_dict(self.design),
+            "face_lab": list(self.face_lab),
+            "flop_lab": list(self.flop_lab),
+            "swapped": self.swapped,
+            **extra,
+        }
+        if self.gloss is not None:
+            out["gloss"] = {
+                "gloss_gu": self.gloss.gloss_gu,
+                "contrast": self.gloss.contrast,
+                "clipped": self.gloss.clipped,
+            }
+        return out
 
 
 def eyedrop_design(

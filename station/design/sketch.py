@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -46,6 +47,7 @@ from station.design.moodboard import contrast_gloss
 from station.design.scene import LobeBasis, Scene, shade, srgb_decode
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
+from station.model.design_io import design_to_dict
 from station.model.domain import DEFAULT_GLOSS_GU, SHADING_MISFIT_DE
 from station.model.lobe import lobe_reflectance
 from station.model.representations import shape_factor
@@ -122,6 +124,25 @@ class SketchFit:
     pixels: int
     gloss_source: str
     seconds: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form shared by every front (plain Python numbers; a failed fit may hold NaN, which
+        each front reports its own way)."""
+        return {
+            "design": design_to_dict(self.design),
+            "rms_de": float(self.rms_de),
+            "failed": bool(self.failed),
+            "seconds": float(self.seconds),
+            "reason": self.reason,
+            "shading_de": float(self.shading_de),
+            "lab_standard": {
+                "angles_deg": list(ANGLES_3),
+                "lab": [[float(x) for x in v] for v in self.lab_standard],
+            },
+            "theta_clamp_deg": float(self.theta_clamp_deg),
+            "pixels": int(self.pixels),
+            "gloss_source": self.gloss_source,
+        }
 
 
 def _check_art(art: ArrayLike, shape: tuple[int, int], name: str) -> NDArray[np.float64]:

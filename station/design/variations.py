@@ -26,12 +26,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from station.design.errors import DesignInputError
 from station.model import FaceFlopTravelGloss, ModelError
+from station.model.design_io import design_to_dict
 from station.model.domain import (
     FACE_ANGLE_DEG,
     GLOSS_MAX_GU,
@@ -73,6 +74,23 @@ class VariationRing:
     category: str
     degree: float
     variations: tuple[Variation, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form shared by every front: centre and cells as ``cacad.design/1`` (``None`` when a
+        cell is unreachable, with its reason), category and degree."""
+        return {
+            "centre": design_to_dict(self.centre),
+            "category": self.category,
+            "degree": self.degree,
+            "variations": [
+                {
+                    "label": v.label,
+                    "design": None if v.design is None else design_to_dict(v.design),
+                    "reason": v.reason,
+                }
+                for v in self.variations
+            ],
+        }
 
 
 class _Unreachable(Exception):

@@ -28,10 +28,10 @@ from station.model.design_io import design_to_dict
 from station.model.domain import ILLUMINATION_DEG, geometry_name
 from station.model.spectra import reflectance_to_lab
 from ui.models.events import EventGroup
-from ui.models.measure_db import MeasurementSink, PanelInfo, StoreReceipt
+from ui.models.measure_db import MeasurementSink, PanelInfo
 
 if TYPE_CHECKING:
-    from station.ingest import Reading
+    from station.ingest import Reading, Receipt
 
 SIM_DEVICES = tuple(f"sim:{k}" for k in SIM_KINDS)
 Progress = Callable[[int, str], None]
@@ -54,7 +54,7 @@ class Measurement:
     design: FaceFlopTravelGloss | None = None
     note: str = ""
     reading: Reading | None = field(default=None, repr=False)
-    receipt: StoreReceipt | None = None
+    receipt: Receipt | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able record."""
@@ -148,7 +148,9 @@ class MeasurementStore:
         if self.sink is None:
             return m
         if m.reading is None:
-            return replace(m, receipt=StoreReceipt("", "refused", None, m.note))
+            from station.ingest import Receipt
+
+            return replace(m, receipt=Receipt("", "refused", None, m.note))
         return replace(m, receipt=self.sink.submit(m.panel, m.reading))
 
     def add(self, m: Measurement) -> None:

@@ -22,9 +22,9 @@ import json
 import os
 import re
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,7 +37,6 @@ if TYPE_CHECKING:  # SQLAlchemy, pydantic and the ORM load on first use (≈0.5 
 OUTBOX_FILE = "viewer-outbox.sqlite3"
 SERVICE_OUTBOX_FILE = "viewer-service-outbox.sqlite3"
 _TEXT = re.compile(r"^[^\x00-\x1f]+$")
-Status = Literal["stored", "duplicate", "queued", "refused"]
 
 
 @dataclass(frozen=True)
@@ -75,16 +74,6 @@ class PanelInfo:
     def label(self) -> str:
         """``job part`` for lists."""
         return f"{self.job} {self.part}"
-
-
-@dataclass(frozen=True)
-class StoreReceipt:
-    """What became of one reading; *message* says it plainly when it is not (yet) in the database."""
-
-    client_id: str
-    status: Status
-    measurement_id: int | None = None
-    message: str = ""
 
 
 @dataclass(frozen=True)
@@ -167,16 +156,16 @@ class MeasurementSink:
         """The on-disk queue (opened on first use)."""
         return self.ingestor.outbox
 
-    def submit(self, panel: PanelInfo, reading: Reading) -> StoreReceipt:
+    def submit(self, panel: PanelInfo, reading: Reading) -> Receipt:
         """Queue *reading* with *panel*'s metadata on disk, then drain the queue; the receipt of *reading*. Blocking."""
         record = reading.model_copy(update={"panel": panel.ref(), "panel_id": None})
         return self._receipt(self.ingestor.submit(record))
 
-    def flush(self) -> dict[str, StoreReceipt]:
+    def flush(self) -> dict[str, Receipt]:
         """Send queued readings oldest first; stop at the first "unreachable". Receipts by client id."""
         return {r.client_id: self._receipt(r) for r in self.ingestor.drain()}
 
-    def _receipt(self, r: Receipt) -> StoreReceipt:
+    def _receipt(self, r: Receipt) -> Receipt:
         if r.status == "queued":
             message = (
                 f"{self.where} unreachable{': ' + r.message if r.message else ''} — the reading is kept in "
@@ -189,7 +178,7 @@ class MeasurementSink:
             )
         else:
             message = ""
-        return StoreReceipt(r.client_id, r.status, r.measurement_id, message)
+        return replace(r, message=message)
 
     def prepare(self) -> None:
         """Open the store on the calling (GUI) thread before a worker sends to it; no-op by default."""

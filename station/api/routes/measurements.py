@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import datetime as dt
 from typing import Annotated
 
-from fastapi import APIRouter, Query, Response, status
+from fastapi import APIRouter, Depends, Query, Response, status
 from fastapi.responses import StreamingResponse
 from pydantic import AwareDatetime
 
@@ -27,14 +26,17 @@ Serial = Annotated[str, Query(min_length=1, max_length=64, description="instrume
 
 
 def _query(
-    job: Job | None,
-    part: Part | None,
-    panel_id: int | None,
-    instrument: str | None,
-    since: dt.datetime | None,
-    until: dt.datetime | None,
-    include_superseded: bool,
+    job: Annotated[Job | None, Query()] = None,
+    part: Part | None = None,
+    panel_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+    instrument: Serial | None = None,
+    since: Annotated[
+        AwareDatetime | None, Query(description="measured at or after (ISO 8601 with zone)")
+    ] = None,
+    until: Annotated[AwareDatetime | None, Query(description="measured before (ISO 8601 with zone)")] = None,
+    include_superseded: bool = False,
 ) -> MeasurementQuery:
+    """The measurement filters of the query string (the list and the CSV export take the same)."""
     return MeasurementQuery(
         job=job,
         part=part,
@@ -44,6 +46,9 @@ def _query(
         until=until,
         include_superseded=include_superseded,
     )
+
+
+Filters = Annotated[MeasurementQuery, Depends(_query)]
 
 
 @router.post(
@@ -68,22 +73,9 @@ def create_measurement(
 
 @router.get("", response_model=Page[MeasurementPublic])
 def list_measurements(
-    session: SessionDep,
-    _user: Reader,
-    job: Annotated[Job | None, Query()] = None,
-    part: Part | None = None,
-    panel_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
-    instrument: Serial | None = None,
-    since: Annotated[
-        AwareDatetime | None, Query(description="measured at or after (ISO 8601 with zone)")
-    ] = None,
-    until: Annotated[AwareDatetime | None, Query(description="measured before (ISO 8601 with zone)")] = None,
-    include_superseded: bool = False,
-    limit: Limit = 100,
-    offset: Offset = 0,
+    session: SessionDep, _user: Reader, q: Filters, limit: Limit = 100, offset: Offset = 0
 ) -> Page[MeasurementPublic]:
     """Query by job, part, panel, instrument and time; newest first."""
-    q = _query(job, part, panel_id, instrument, since, until, include_superseded)
     rows, total = service.query(session=session, q=q, limit=limit, offset=offset)
     return Page[MeasurementPublic](data=rows, count=total)
 
@@ -103,19 +95,8 @@ def list_measurements(
         }
     },
 )
-def export_csv(
-    session: SessionDep,
-    _user: Reader,
-    job: Annotated[Job | None, Query()] = None,
-    part: Part | None = None,
-    panel_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
-    instrument: Serial | None = None,
-    since: AwareDatetime | None = None,
-    until: AwareDatetime | None = None,
-    include_superseded: bool = False,
-) -> StreamingResponse:
+def export_csv(session: SessionDep, _user: Reader, q: Filters) -> StreamingResponse:
     """The same filters as the list, as CSV (long format: one row per geometry)."""
-    q = _query(job, part, panel_id, instrument, since, until, include_superseded)
     lines = list(service.export_csv(session=session, q=q))
     return StreamingResponse(
         iter(lines),

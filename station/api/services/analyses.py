@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from pydantic import BaseModel
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
@@ -22,7 +23,7 @@ from station.errors import InputError
 from station.model import AspecularMeasurements
 
 if TYPE_CHECKING:
-    from station.analysis.geometry import Hinge
+    from station.analysis.qa import SeamReport
 
 
 def _aspecular(session: Session, measurement_id: int) -> AspecularMeasurements:
@@ -47,27 +48,33 @@ def _panel(session: Session, measurement_id: int | None, body: DesignBody | None
     return to_design(body, f"design_{side}")
 
 
-def _hinge(hinge: Hinge) -> Hinge:
-    return hinge if isinstance(hinge, str) else float(hinge)
+#: Request fields passed to the ``station.analysis`` function of the same parameter name, as validated.
+SEAM_OPTIONS = ("beta_deg", "lights_deg", "aspecular_deg", "tolerance", "method", "hinge", "objective")
+INDEX_OPTIONS = ("epsilon", "method", "hinge", "direction", "beta_max_deg")
+TROMPE_OPTIONS = ("beta_deg", "objective", "at", "subset", "hinge", "method", "epsilon", "allow_face_darker")
+SWEEP_OPTIONS = ("hinge", "method", "epsilon")
 
 
-def seam_qa(*, session: Session, actor: User, request: SeamQaCreate) -> AnalysisResult:
-    """Fit measured panels (eqs 3.3.x) or take the designs, judge the seam at β and store the report."""
+def _options(request: BaseModel, names: tuple[str, ...]) -> dict[str, Any]:
+    """The request's fields *names* by name, as validated (a numeric hinge azimuth as a float, degrees)."""
+    out = {name: getattr(request, name) for name in names}
+    if "hinge" in out and not isinstance(out["hinge"], str):
+        out["hinge"] = float(out["hinge"])
+    return out
+
+
+def _seam_report(session: Session, request: SeamQaCreate) -> SeamReport:
+    """Seam QA of the request's two panels (a stored measurement is fitted, eqs 3.3.x) at β."""
     from station.analysis import seam_qa as run_seam_qa
 
     a = _panel(session, request.measurement_a, request.design_a, "a")
     b = _panel(session, request.measurement_b, request.design_b, "b")
-    report = run_seam_qa(
-        a,
-        b,
-        request.beta_deg,
-        lights_deg=request.lights_deg,
-        aspecular_deg=request.aspecular_deg,
-        tolerance=request.tolerance,
-        method=request.method,
-        hinge=_hinge(request.hinge),
-        objective=request.objective,
-    )
+    return run_seam_qa(a, b, **_options(request, SEAM_OPTIONS))
+
+
+def seam_qa(*, session: Session, actor: User, request: SeamQaCreate) -> AnalysisResult:
+    """Fit measured panels (eqs 3.3.x) or take the designs, judge the seam at β and store the report."""
+    report = _seam_report(session, request)
     row = AnalysisResult(
         kind="seam_qa",
         inputs=request.model_dump(mode="json", by_alias=True, exclude_none=True),
@@ -96,26 +103,13 @@ _PLOT_LOCK = threading.Lock()  # matplotlib's pyplot state is process-wide: one 
 def report_png(*, session: Session, analysis_id: int) -> bytes:
     """The QA report picture of stored seam analysis *analysis_id* (panels as painted / corrected, and the
     Fig. 4.7 BRDF curves): the analysis is re-run from its stored inputs (deterministic) and plotted."""
-    from station.analysis import seam_qa as run_seam_qa
     from station.analysis.picture import plot_seam_report
 
     row = get_analysis(session=session, analysis_id=analysis_id)
     if row.kind != "seam_qa":
         raise NotFoundError(f"analysis {analysis_id} is a {row.kind}, not a seam QA report")
     request = SeamQaCreate.model_validate(row.inputs)
-    a = _panel(session, request.measurement_a, request.design_a, "a")
-    b = _panel(session, request.measurement_b, request.design_b, "b")
-    report = run_seam_qa(
-        a,
-        b,
-        request.beta_deg,
-        lights_deg=request.lights_deg,
-        aspecular_deg=request.aspecular_deg,
-        tolerance=request.tolerance,
-        method=request.method,
-        hinge=_hinge(request.hinge),
-        objective=request.objective,
-    )
+    report = _seam_report(session, request)
     with tempfile.TemporaryDirectory(prefix="cacad-report-") as tmp, _PLOT_LOCK:
         return plot_seam_report(report, Path(tmp) / "report.png").read_bytes()
 
@@ -124,17 +118,12 @@ def gg_index(*, request: GgIndexRequest) -> dict[str, Any]:
     """Goniogeometric index (eq 4.3.1) as ``IndexResult.to_dict()``; nothing is stored."""
     from station.analysis import goniogeometric_index
 
-    lights = request.lights_deg if len(request.lights_deg) > 1 else request.lights_deg[0]
     r = goniogeometric_index(
         to_design(request.paint, "paint"),
-        lights,
+        request.lights_deg,
         request.views_deg,
-        epsilon=request.epsilon,
-        method=request.method,
-        hinge=_hinge(request.hinge),
-        direction=request.direction,
-        beta_max_deg=request.beta_max_deg,
         gloss=request.include_gloss,
+        **_options(request, INDEX_OPTIONS),
     )
     return r.to_dict(per_geometry=request.per_geometry)
 
@@ -143,18 +132,9 @@ def trompe_loeil(*, request: TrompeRequest) -> dict[str, Any]:
     """Inverse trompe l'oeil (§4.4) as ``TrompeResult.to_dict()``; nothing is stored."""
     from station.analysis.trompe import inverse_trompe_loeil
 
+    paint = to_design(request.paint, "paint")
     r = inverse_trompe_loeil(
-        to_design(request.paint, "paint"),
-        request.lights_deg,
-        request.views_deg,
-        beta_deg=request.beta_deg,
-        objective=request.objective,
-        at=request.at,
-        subset=request.subset,
-        hinge=_hinge(request.hinge),
-        method=request.method,
-        epsilon=request.epsilon,
-        allow_face_darker=request.allow_face_darker,
+        paint, request.lights_deg, request.views_deg, **_options(request, TROMPE_OPTIONS)
     )
     return r.to_dict()
 
@@ -163,14 +143,9 @@ def sweep(*, request: SweepRequest) -> dict[str, Any]:
     """Seam ΔE over β × light × view (Fig. 4.3) as ``SweepResult.to_dict()``; nothing is stored."""
     from station.analysis.sweep import seam_sweep
 
+    paint = to_design(request.paint, "paint")
     r = seam_sweep(
-        to_design(request.paint, "paint"),
-        request.betas_deg,
-        request.lights_deg,
-        request.views_deg,
-        hinge=_hinge(request.hinge),
-        method=request.method,
-        epsilon=request.epsilon,
+        paint, request.betas_deg, request.lights_deg, request.views_deg, **_options(request, SWEEP_OPTIONS)
     )
     return r.to_dict()
 

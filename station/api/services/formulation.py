@@ -201,9 +201,9 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
 def export(*, session: Session, cache: LibraryCache, request: ExportRequest) -> tuple[bytes, str, str | None]:
     """The design (both 3-angle sets, optionally 5) and its ColorSnap match as XML or CxF3 bytes; returns
     (bytes, file name, match code)."""
-    from station.formulate.color_xml import colors_to_xml, spec_from_design, spec_from_lab
+    from station.formulate.color_xml import colors_to_xml
     from station.formulate.cxf import specs_to_cxf
-    from station.formulate.snap import color_snap
+    from station.formulate.export import export_specs
 
     if request.design is not None:
         design = to_design(request.design)
@@ -211,28 +211,13 @@ def export(*, session: Session, cache: LibraryCache, request: ExportRequest) -> 
         design = design_from_dict(
             design_version(session=session, design_id=request.design_id or 0, version=request.version).body
         )
-    specs = [spec_from_design(design, name=design.name or "design", five_angles=request.five_angles)]
-    code = None
     if request.match:
         cached = cache.get(session)
-        lib = cached.library
-        m = color_snap(
-            lib, design.lab_at(np.asarray(STANDARD)), k=1, method=request.metric, index=cached.index
-        ).matches[0]
-        row = lib.lab[m.index]
-        specs.append(
-            spec_from_lab(
-                m.code,
-                {a: tuple(row[j]) for j, a in enumerate(lib.angles_deg)},
-                float(lib.gloss_gu[m.index]),
-                role="match",
-                paint_type=str(lib.types[m.index]),
-                code=m.code,
-                synthetic=lib.synthetic,
-                five_angles=request.five_angles,
-            )
+        specs, code = export_specs(
+            design, cached.library, method=request.metric, five_angles=request.five_angles, index=cached.index
         )
-        code = m.code
+    else:
+        specs, code = export_specs(design, five_angles=request.five_angles)
     data = colors_to_xml(specs) if request.format == "xml" else specs_to_cxf(specs)
     stem = (
         "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in (design.name or "design"))[:64]

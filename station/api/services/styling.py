@@ -16,8 +16,6 @@ from typing import Any
 from station.api.schemas.styling import RenderRequest, SwatchRequest, VariationsRequest
 from station.api.services.designs import to_design
 from station.errors import InputError
-from station.model.design_io import design_to_dict
-from station.model.domain import ANGLES_3
 
 #: Mood-board uploads stay 8-bit (3 bytes a pixel, about 10 while Pillow decodes): at most 4 megapixels,
 #: about 40 MB a request at the peak, whatever the compression ratio of the upload.
@@ -31,19 +29,7 @@ def variations(*, request: VariationsRequest) -> dict[str, Any]:
     from station.design.variations import variations as ring_of
 
     ring = ring_of(to_design(request.design), request.degree, request.category)
-    return {
-        "centre": design_to_dict(ring.centre),
-        "category": ring.category,
-        "degree": ring.degree,
-        "variations": [
-            {
-                "label": v.label,
-                "design": None if v.design is None else design_to_dict(v.design),
-                "reason": v.reason,
-            }
-            for v in ring.variations
-        ],
-    }
+    return ring.to_dict()
 
 
 def png_bytes(pixels: Any) -> bytes:
@@ -123,20 +109,7 @@ def eyedrop(
         auto_swap=auto_swap,
         gloss_xy=gloss,
     )
-    out: dict[str, Any] = {
-        "design": design_to_dict(r.design),
-        "face_lab": list(r.face_lab),
-        "flop_lab": list(r.flop_lab),
-        "swapped": r.swapped,
-        "colour": img.colour_note,
-    }
-    if r.gloss is not None:
-        out["gloss"] = {
-            "gloss_gu": r.gloss.gloss_gu,
-            "contrast": r.gloss.contrast,
-            "clipped": r.gloss.clipped,
-        }
-    return out
+    return r.to_dict(colour=img.colour_note)
 
 
 def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str) -> dict[str, Any]:
@@ -152,18 +125,7 @@ def sketch_fit(*, data: bytes, max_bytes: int, scene_name: str, gloss_mode: str)
         )
     scene = builtin_scene(scene_name, h)
     fit = fit_point_light(scene, art, srgb_encode(shade(scene, _silver())), gloss=gloss_mode)
-    return {
-        "design": design_to_dict(fit.design),
-        "rms_de": _finite(fit.rms_de),
-        "failed": bool(fit.failed),
-        "seconds": float(fit.seconds),
-        "reason": fit.reason,
-        "shading_de": _finite(fit.shading_de),
-        "lab_standard": {
-            "angles_deg": list(ANGLES_3),
-            "lab": [[float(x) for x in v] for v in fit.lab_standard],
-        },
-        "theta_clamp_deg": _finite(fit.theta_clamp_deg),
-        "pixels": int(fit.pixels),
-        "gloss_source": fit.gloss_source,
-    }
+    out = fit.to_dict()
+    for key in ("rms_de", "shading_de", "theta_clamp_deg"):  # JSON has no NaN: a failed fit reads null
+        out[key] = _finite(out[key])
+    return out
