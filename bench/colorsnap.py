@@ -24,6 +24,7 @@ from bench._report import ROOT, Case, write_section
 from station.formulate.de_kernels import KERNELS
 from station.formulate.demo import demo_library
 from station.formulate.snap import METHODS, SnapIndex, brute_force
+from station.model.domain import ANGLES_3
 
 K = 5
 
@@ -37,7 +38,7 @@ def _queries(std: np.ndarray, n: int, seed: int) -> np.ndarray:
 
 def _fast_brute(lab: np.ndarray, q: np.ndarray, method: str) -> tuple[np.ndarray, np.ndarray]:
     """Brute force with the bit-identical kernel (for exactness checks on many queries)."""
-    s = KERNELS[method](q[None], lab).sum(-1)
+    s = KERNELS[method](q[None], lab, np.abs(np.asarray(ANGLES_3))).sum(-1)
     top = np.lexsort((np.arange(s.size), s))[:K]
     return top, s[top]
 

@@ -21,6 +21,10 @@ from station.formulate.snap import (
 )
 from station.formulate.snap.bounds import box_bounds, point_bounds_cie2000
 from station.model.difference import delta_e
+from station.model.domain import ANGLES_3
+
+#: |aspecular angle| of the three Lab columns (read by din6175).
+ALPHA = np.abs(np.asarray(ANGLES_3))
 
 lab_el = st.floats(-120, 120, allow_nan=False, width=32)
 
@@ -80,24 +84,30 @@ def test_exact_on_a_clustered_library_with_groups(small_library: Library) -> Non
 @given(pts=_labs(40), q=_labs(1), method=st.sampled_from(METHODS))
 def test_box_and_point_bounds_never_exceed_the_exact_sum(pts, q, method) -> None:
     q = q[0]
-    exact = delta_e(q[None], pts, method).sum(-1)
+    exact = delta_e(q[None], pts, method, aspecular_deg=ANGLES_3).sum(-1)
     chroma = np.hypot(pts[..., 1], pts[..., 2])
-    box = box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method)
+    box = box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, alpha=ALPHA)
     assert box <= exact.min() + 1e-12
-    assert box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, hue=False) <= box + 1e-12
-    point = box_bounds(q, pts, pts, chroma, method)
+    assert box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, hue=False, alpha=ALPHA) <= box + 1e-12
+    point = box_bounds(q, pts, pts, chroma, method, alpha=ALPHA)
     assert np.all(point <= exact + 1e-12)
     if method == "cie2000":
         assert np.all(point_bounds_cie2000(q, pts) <= exact + 1e-12)
 
 
 @settings(max_examples=100, deadline=None)
-@given(a=arrays(np.float64, (50, 3), elements=lab_el), b=arrays(np.float64, (50, 3), elements=lab_el))
-def test_kernels_are_bit_identical_to_the_model(a, b) -> None:
+@given(
+    a=arrays(np.float64, (50, 3), elements=lab_el),
+    b=arrays(np.float64, (50, 3), elements=lab_el),
+    angles=arrays(np.float64, (50,), elements=st.floats(-90, 180).filter(lambda x: abs(x) >= 1e-3)),
+)
+def test_kernels_are_bit_identical_to_the_model(a, b, angles) -> None:
     b[::5] = a[::5]  # identical pairs
     b[1::7, 1:] = 0.0  # achromatic samples
+    a[2::9, 0] = 0.0  # black standards (L̄ = 0)
+    alpha = np.abs(angles)
     for method, kernel in KERNELS.items():
-        assert np.array_equal(kernel(a, b), delta_e(a, b, method)), method
+        assert np.array_equal(kernel(a, b, alpha), delta_e(a, b, method, aspecular_deg=angles)), method
 
 
 def test_match_of_a_library_paint_is_itself(small_library: Library) -> None:
