@@ -348,13 +348,18 @@ def _din_method(a: NDArray, b: NDArray, aspecular_deg: NDArray | None, g: DinFac
     return delta_e_din6175(a, b, aspecular_deg, g)
 
 
-def _audi2000(a: NDArray, b: NDArray, _alpha: NDArray | None, _g: DinFactors) -> NDArray:
-    raise FormulaUnavailableError(
+def audi2000_unavailable() -> FormulaUnavailableError:
+    """The error every use of ``audi2000`` raises until the AUDI2000 coefficients are supplied."""
+    return FormulaUnavailableError(
         "de",
         "cie76, cie94, cie2000 or din6175: the AUDI2000 coefficients are not supplied to this build "
         "(audi2000 is reserved until they are)",
         "audi2000",
     )
+
+
+def _audi2000(a: NDArray, b: NDArray, _alpha: NDArray | None, _g: DinFactors) -> NDArray:
+    raise audi2000_unavailable()
 
 
 #: Formula name → ``fn(lab_ref, lab_sample, aspecular_deg, din_factors)`` (read-only).
