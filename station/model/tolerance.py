@@ -458,7 +458,8 @@ def judge(
     per: list[GeometryVerdict] = []
     component_verdicts: list[str] = []
     for i, lim in enumerate(limits):
-        verdicts, reasons = [], []
+        verdicts: list[str] = []
+        reasons: list[str] = []
         for j, c in enumerate(_COMPONENTS):
             limit = getattr(lim, c)
             if limit is not None:
@@ -471,11 +472,16 @@ def judge(
         verdicts.append(v)
         if why:
             reasons.append(why)
+        dl, da, db, dc, dh = (float(x) for x in comps[i])
         per.append(
             GeometryVerdict(
                 lim.geometry,
                 lim.aspecular_deg,
-                *(float(x) for x in comps[i]),
+                dl,
+                da,
+                db,
+                dc,
+                dh,
                 float(de[i]),
                 _worst(verdicts),
                 tuple(reasons),
