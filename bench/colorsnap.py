@@ -16,6 +16,7 @@ Run: ``.venv/bin/python -m bench.colorsnap`` (about 2–4 minutes).
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -77,6 +78,7 @@ def _numpy_path(
 
 
 def run() -> None:
+    load_start = os.getloadavg()[0]
     cases: list[Case] = []
     lib = demo_library()
     std = np.ascontiguousarray(lib.angle_columns())
@@ -154,7 +156,10 @@ def run() -> None:
         "bit-identical to `station.model.difference.delta_e`). Bars: 6000 paints ≤ 0.2 ms, 10⁶ paints ≤ 5 ms\n"
         "(median per query, k = 5). 10⁶ library = demo (SYNTHETIC) × 167 with σ = 2 Lab jitter.\n"
         "CIEDE2000: numba-compiled best-first walk (per-paint lower/upper bounds, exact kernel on the\n"
-        "candidates only); the NumPy-only path (no numba) is timed on the same queries.\n\n"
+        "candidates only); the NumPy-only path (no numba) is timed on the same queries.\n"
+        "DIN 6175-2 is the angle-dependent ΔE_eff (station.model.difference), its kernel costs about 4.5× the\n"
+        "ΔE*ab one per paint. Load average at the start / end: "
+        f"{load_start:.1f} / {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs (the machine is shared).\n\n"
         "![ColorSnap timings](bench-colorsnap.png)\n"
     )
     write_section("colorsnap", "ColorSnap: exact top-k vs brute force", cases, extra)
