@@ -239,3 +239,29 @@ def test_a_query_writes_nothing_to_the_shared_index(small_library) -> None:
         for use_numba in (True, False):
             index.snap(q, 3, method, use_numba)
     assert {name: id(value) for name, value in vars(index).items()} == before
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    centre=arrays(np.float64, (3, 3), elements=st.floats(-90, 90, allow_nan=False)),
+    spread=st.floats(0.01, 30.0),
+    q=_labs(1),
+    angles=arrays(np.float64, (3,), elements=st.floats(0.5, 180.0)),
+    seed=st.integers(0, 2**31 - 1),
+    scale=st.sampled_from([0.0, 0.05, 1.0]),
+)
+def test_din6175_box_bound_is_a_lower_bound_at_any_angle(centre, spread, q, angles, seed, scale) -> None:
+    """Grey and chromatic clusters, both blend branches, any aspecular angle: bound ≤ the exact sums."""
+    q = q[0].copy()
+    rng = np.random.default_rng(seed)
+    centre[:, 0] = np.abs(centre[:, 0])
+    centre[:, 1:] *= scale  # scale 0 / 0.05: grey clusters (σ → 1) around a grey or chromatic design
+    q[:, 1:] *= rng.choice([scale, 1.0])
+    pts = centre[None] + rng.normal(0.0, spread, (30, 3, 3))
+    pts[..., 0] = np.abs(pts[..., 0])
+    exact = delta_e(q[None], pts, "din6175", aspecular_deg=angles).sum(-1)
+    chroma = np.hypot(pts[..., 1], pts[..., 2])
+    assert (
+        box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), "din6175", alpha=angles) <= exact.min() + 1e-12
+    )
+    assert np.all(box_bounds(q, pts, pts, chroma, "din6175", alpha=angles) <= exact + 1e-12)
