@@ -160,20 +160,16 @@ def _din6175_box(
 ) -> NDArray[np.float64]:
     """Per-angle lower bound of DIN 6175-2 ΔE_eff (g = 1) between the standard *q* and a box (…, A).
 
-    Over the box, with d_L, d_a, d_b the distances from q to the box and C*_x ∈ [C_min, C_max]:
+    ΔE_eff = σ ΔE_ab,w + (1 − σ) ΔE_CH,w with σ ∈ (0, 1) is at least min(ΔE_ab,w, ΔE_CH,w). Over the box:
 
-    * S_L = 0.15 √L̄ + 31.5/α is increasing in L̄ = √|L*_q L*_x|, so S_L ≤ S_L,max at
-      L̄_max = √(|L*_q| max|L*_x|); S_C and S_H are increasing in C̄ = √(C*_q C*_x) and decreasing in L̄
-      (the 0.7 floors keep the order), so S_C ≤ S_C,max and S_H ≤ S_H,max at C̄_max = √(C*_q C_max) and
+    * |ΔL*| ≥ d_L, |Δa*| ≥ d_a, |Δb*| ≥ d_b (distances from q to the box), and ΔC*² + ΔH*² = Δa*² + Δb*²;
+    * S_L = 0.15 √L̄ + 31.5/α is increasing in L̄ = √|L*_q L*_x|, so S_L ≤ S_L(L̄_max) with
+      L̄_max = √(|L*_q| max|L*_x|);
+    * S_C and S_H are increasing in C̄ = √(C*_q C*_x) and decreasing in L̄ (then floored at 0.7, which
+      keeps the order), so S_C ≤ S_C(C̄_max, L̄_min), S_H ≤ S_H(C̄_max, L̄_min), C̄_max = √(C*_q C*_max),
       L̄_min = √(|L*_q| min|L*_x|) (0 where the box's L range holds 0);
-    * ΔE_ab,w² ≥ (d_L/S_L,max)² + (d_a² + d_b²)/0.7² =: ab²;
-    * ΔE_CH,w² ≥ (d_L/S_L,max)² + x/S_C,max² + y/S_H,max² with x = ΔC*², y = ΔH*², x + y = Δa*² + Δb*²
-      ≥ d_a² + d_b², and d_C² ≤ x ≤ D_C² (d_C, D_C the smallest and largest |C*_x − C*_q| over the box).
-      The minimum over these x, y puts as much as allowed on the smaller weight's term (x as large as
-      allowed when S_C,max ≥ S_H,max, as small as allowed otherwise) =: ch²;
-    * σ = 1/(1 + e^(C̄ − C₀(L̄))) decreases with C̄ and increases with L̄ (C₀ does), so σ ∈ [σ_lo, σ_hi]
-      with σ_lo at (C̄_max, L̄_min), σ_hi at (C̄_min, L̄_max); ΔE_eff = σ ΔE_ab,w + (1 − σ) ΔE_CH,w ≥
-      σ ab + (1 − σ) ch, linear in σ, so the bound is its smaller value at σ_lo and σ_hi.
+    * hence ΔE_ab,w² ≥ (d_L/S_L,max)² + (d_a² + d_b²)/0.7² and ΔE_CH,w² ≥ (d_L/S_L,max)² + (d_a² + d_b²)/W²
+      with W = max(S_C,max, S_H,max); the bound is the root of the smaller.
     """
     k = DIN6175_COEFFICIENTS
     lq = np.abs(q[:, 0])
@@ -181,19 +177,9 @@ def _din6175_box(
     l_abs_max = np.maximum(np.abs(lo[..., 0]), np.abs(hi[..., 0]))
     straddle = (lo[..., 0] <= 0) & (hi[..., 0] >= 0)
     l_abs_min = np.where(straddle, 0.0, np.minimum(np.abs(lo[..., 0]), np.abs(hi[..., 0])))
-    c_hi = np.maximum(cmax, 0.0)
-    c_lo = np.minimum(
-        np.hypot(
-            np.maximum(np.maximum(lo[..., 1], -hi[..., 1]), 0.0),
-            np.maximum(np.maximum(lo[..., 2], -hi[..., 2]), 0.0),
-        ),
-        c_hi,
-    )
-    l_m_max = np.sqrt(lq * l_abs_max)
-    l_m_min = np.sqrt(lq * l_abs_min)
-    c_m_max = np.sqrt(cq * c_hi)
-    c_m_min = np.sqrt(cq * c_lo)
-    sq_l_max, sq_l_min, sq_c_max = np.sqrt(l_m_max), np.sqrt(l_m_min), np.sqrt(c_m_max)
+    sq_l_max = np.sqrt(np.sqrt(lq * l_abs_max))
+    sq_l_min = np.sqrt(np.sqrt(lq * l_abs_min))
+    sq_c_max = np.sqrt(np.sqrt(cq * np.maximum(cmax, 0.0)))
     s_l = k["sl_sqrt_l"] * sq_l_max + k["sl_alpha"] / alpha
     s_c = np.maximum(
         k["s_floor"], k["sc_sqrt_c"] * sq_c_max - k["sc_sqrt_l"] * sq_l_min + k["sc_alpha"] / alpha
@@ -202,21 +188,9 @@ def _din6175_box(
         k["s_floor"],
         k["sh_sqrt_c"] * sq_c_max - k["sh_sqrt_l"] * sq_l_min + k["sh_alpha"] / alpha + k["sh_offset"],
     )
-    t_l2 = d2[..., 0] / (s_l * s_l)
+    w = np.maximum(np.maximum(s_c, s_h), k["s_ab"])  # W ≥ 0.7 also covers the a*b* form
     dab2 = d2[..., 1] + d2[..., 2]
-    ab = np.sqrt(t_l2 + dab2 / (k["s_ab"] * k["s_ab"]))
-    dc_lo = np.maximum(np.maximum(c_lo - cq, cq - c_hi), 0.0)
-    dc_hi = np.maximum(np.abs(c_hi - cq), np.abs(cq - c_lo))
-    x_big = np.maximum(np.minimum(dc_hi * dc_hi, dab2), dc_lo * dc_lo)  # S_C,max ≥ S_H,max: x large
-    x_small = dc_lo * dc_lo  # S_C,max < S_H,max: x small
-    x = np.where(s_c >= s_h, x_big, x_small)
-    y = np.maximum(dab2 - x, 0.0)
-    ch = np.sqrt(t_l2 + x / (s_c * s_c) + y / (s_h * s_h))
-    c0_lo = k["c0_base"] + k["c0_step"] / (1.0 + np.exp(k["c0_l_mid"] - l_m_min))
-    c0_hi = k["c0_base"] + k["c0_step"] / (1.0 + np.exp(k["c0_l_mid"] - l_m_max))
-    sig_lo = 1.0 / (1.0 + np.exp(np.minimum(c_m_max - c0_lo, 700.0)))
-    sig_hi = 1.0 / (1.0 + np.exp(np.minimum(c_m_min - c0_hi, 700.0)))
-    return np.minimum(sig_lo * ab + (1.0 - sig_lo) * ch, sig_hi * ab + (1.0 - sig_hi) * ch)
+    return np.sqrt(d2[..., 0] / (s_l * s_l) + dab2 / (w * w))
 
 
 def cie2000_weight_tables() -> tuple[NDArray, NDArray, NDArray, NDArray]:
