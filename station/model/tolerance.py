@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any, Literal
 
 import numpy as np
@@ -78,9 +79,11 @@ Verdict = Literal["pass", "warn", "fail"]
 FORMULAS = ("cie76", "cie94", "cie2000", "din6175")
 #: Aggregation rules over the geometries.
 AGGREGATIONS = ("max", "mean")
-_RANK: Mapping[str, int] = {"pass": 0, "warn": 1, "fail": 2}
+_RANK: Mapping[str, int] = MappingProxyType({"pass": 0, "warn": 1, "fail": 2})
 _COMPONENTS = ("dl", "da", "db", "dc", "dh")
-_SYMBOL: Mapping[str, str] = {"dl": "ΔL*", "da": "Δa*", "db": "Δb*", "dc": "ΔC*", "dh": "ΔH*"}
+_SYMBOL: Mapping[str, str] = MappingProxyType(
+    {"dl": "ΔL*", "da": "Δa*", "db": "Δb*", "dc": "ΔC*", "dh": "ΔH*"}
+)
 
 
 def _positive(value: Any, name: str, allow_none: bool = False) -> float | None:
