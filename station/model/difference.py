@@ -35,10 +35,11 @@ L̄ = √(L*_1 L*_2) and C̄ = √(C*_1 C*_2) the geometric means of standard an
 so near-achromatic pairs (C̄ ≪ C₀, σ → 1) are judged in the a*b* form and chromatic ones (σ → 0) in the
 C*H* form; every weight falls with α, so the far-from-specular angles are judged more strictly.
 mdE is the mean of ΔE_eff over the angles, maxdE the largest with its angle (:func:`din6175_summary`).
-The parametric factors g default to 1 (:class:`DinFactors`). Two guards of the Fortran are left out:
-it returns the one defined form when the other's weights vanish (impossible with the floors above),
-and it returns 0 instead of the blend when either form is below 1e-4 (a difference far under any
-tolerance); here the blend is evaluated everywhere, which keeps ΔE_eff continuous.
+The parametric factors g default to 1 (:class:`DinFactors`). One guard of the Fortran is left out: it
+blends only when both forms exceed 1e-4, otherwise it returns the larger-than-1e-4 form alone (or 0
+when neither is). That changes ΔE_eff only where one form is below 1e-4, far under any tolerance; here
+the blend is evaluated everywhere, which keeps ΔE_eff continuous. (Its other guard, a weight below
+1e-4, cannot occur with the 0.7 floors and S_L > 0.17.)
 """
 
 from __future__ import annotations
