@@ -44,6 +44,7 @@ from station.analysis.geometry import (
 from station.analysis.shading import Environment, Exposure, environment_colour, point_colour
 from station.model.difference import delta_e
 from station.model.domain import JND_CIE76 as DOMAIN_JND_CIE76
+from station.model.shading import aspecular_deg
 
 if TYPE_CHECKING:
     from station.model import FaceFlopTravelGloss
@@ -204,7 +205,25 @@ class SeamModel:
             self.light_deg = np.full(len(views), np.nan)
         self.view_deg = np.asarray(views, dtype=float)
         self.V = direction(self.view_deg)[:, None, :]  # (G, 1, 3)
+        self._alpha = self._din_angles() if self.method == "din6175" else None
         self._ref_cache: tuple[int, object, NDArray[np.float64]] | None = None
+
+    def _din_angles(self) -> NDArray[np.float64]:
+        """Aspecular angle of each geometry on panel A (degrees, (G,)): the angle DIN 6175-2 weighs by."""
+        if self.env is not None:
+            raise AnalysisInputError(
+                "method",
+                "cie76 | cie94 | cie2000 under an environment (din6175 weighs by the aspecular angle of a point light)",
+                self.method,
+            )
+        alpha = aspecular_deg(self.L[:, 0], self.V[:, 0], np.array([0.0, 0.0, 1.0]))
+        if np.any(alpha <= 0.0):
+            raise AnalysisInputError(
+                "views",
+                "geometries off the specular direction for din6175 (aspecular > 0)",
+                self.view_deg.tolist(),
+            )
+        return alpha
 
     @property
     def size(self) -> int:
@@ -243,15 +262,22 @@ class SeamModel:
         normals = rotated_normals(np.asarray(beta_deg, dtype=float).reshape(-1), self.hinge)
         ca = self._reference_cached(paint_a, rows)
         cb = self.colour(paint_b, normals, rows)
-        return self.difference(ca, cb)
+        return self.difference(ca, cb, rows)
 
-    def difference(self, lab_a: NDArray[np.float64], lab_b: NDArray[np.float64]) -> NDArray[np.float64]:
-        """ΔE with this model's formula (reference first); CIE76 is computed inline (same numbers)."""
+    def difference(
+        self, lab_a: NDArray[np.float64], lab_b: NDArray[np.float64], rows: NDArray[np.intp] | None = None
+    ) -> NDArray[np.float64]:
+        """ΔE with this model's formula (reference first), (G, B) for the geometry *rows* (all by default);
+        CIE76 is computed inline (same numbers). DIN 6175-2 weighs each row by its aspecular angle on panel A."""
         lab_a = np.broadcast_to(lab_a, lab_b.shape)
         if self.method == "cie76":
             d = lab_b - lab_a
             return np.sqrt(np.einsum("...i,...i->...", d, d))
-        return np.asarray(delta_e(lab_a, lab_b, method=self.method), dtype=float)
+        alpha = None
+        if self._alpha is not None:
+            per_row = self._alpha if rows is None else self._alpha[rows]
+            alpha = np.broadcast_to(per_row.reshape(-1, *([1] * (lab_b.ndim - 2))), lab_b.shape[:-1])
+        return np.asarray(delta_e(lab_a, lab_b, method=self.method, aspecular_deg=alpha), dtype=float)
 
     def _reference_cached(
         self, paint: FaceFlopTravelGloss, rows: NDArray[np.intp] | None
@@ -285,7 +311,7 @@ class SeamModel:
                     for i, r in enumerate(rows)
                 ]
             )
-        return self.difference(ca, cb)
+        return self.difference(ca, cb, rows)
 
     def visible(self, beta_deg: NDArray[np.float64]) -> NDArray[np.bool_]:
         """(G, B): whether panel B, rotated by β, still faces the viewer (V·N_B > 0.01)."""

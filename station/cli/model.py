@@ -101,7 +101,14 @@ def _de(args: argparse.Namespace) -> dict[str, Any]:
     smp = np.asarray(parse_lab_list(args.sample, "sample"))
     if ref.shape != smp.shape:
         raise InputError("sample", f"{len(ref)} triples (as many as --reference)", len(smp))
-    per = delta_e(ref, smp, args.de)
+    angles = None
+    if args.angles is not None:
+        angles = _angles(args.angles)
+        if len(angles) != len(ref):
+            raise InputError(
+                "angles", f"{len(ref)} aspecular angles (one per --reference triple)", len(angles)
+            )
+    per = delta_e(ref, smp, args.de, aspecular_deg=angles)
     return {
         "method": args.de,
         "de_per_angle": per.tolist(),
@@ -156,6 +163,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--reference", required=True, help='"L,a,b;L,a,b;…"')
     p.add_argument("--sample", required=True, help='"L,a,b;L,a,b;…"')
     p.add_argument("--de", default="cie2000", choices=sorted(DELTA_E_METHODS))
+    p.add_argument("--angles", help="aspecular angle of each triple, degrees (required by din6175)")
     add_json_flag(p)
     p.set_defaults(handler=_de)
 

@@ -7,7 +7,8 @@ repeat the same floating-point operations in the same order, without the checks:
 * ``cie76``   — ``np.linalg.norm(lab2 - lab1, axis=-1)``, as colour's ``euclidean_distance``.
 * ``cie2000`` — the arithmetic of colour's ``intermediate_attributes_CIE2000`` / ``delta_E_CIE2000``
   (Sharma, Wu & Dalal 2005), kL = kC = kH = 1.
-* ``din6175`` — the arithmetic of :func:`station.model.difference.delta_e_din6175`.
+* ``din6175`` — the arithmetic of :func:`station.model.difference.delta_e_din6175` (DIN 6175-2 as
+  published in a public implementation), which needs the aspecular angle of each pair.
 
 tests/formulate/test_de_kernels.py asserts exact equality (``==``, not a tolerance) against
 :func:`~station.model.difference.delta_e` on random and edge-case inputs, which is what makes the
@@ -22,18 +23,24 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import NDArray
 
-from station.model.difference import DIN6175_WEIGHTS
+from station.model.difference import DIN6175_COEFFICIENTS
 
-Kernel = Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]
+#: ``kernel(lab_standard, lab_sample, alpha)``: *alpha* the |aspecular angle| per pair (degrees), read by
+#: din6175 only.
+Kernel = Callable[[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]
 
 
-def cie76(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.float64]:
-    """ΔE*ab (CIE 1976), shape (...)."""
+def cie76(
+    lab1: NDArray[np.float64], lab2: NDArray[np.float64], alpha: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """ΔE*ab (CIE 1976), shape (...); *alpha* is not read."""
     return np.linalg.norm(lab1 - lab2, axis=-1)
 
 
-def cie2000(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.float64]:
-    """CIEDE2000 with kL = kC = kH = 1, shape (...); *lab1* is the reference."""
+def cie2000(
+    lab1: NDArray[np.float64], lab2: NDArray[np.float64], alpha: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """CIEDE2000 with kL = kC = kH = 1, shape (...); *lab1* is the reference; *alpha* is not read."""
     return cie2000_columns(lab1[..., 0], lab1[..., 1], lab1[..., 2], lab2[..., 0], lab2[..., 1], lab2[..., 2])
 
 
@@ -118,25 +125,45 @@ def cie2000_columns(
     return np.sqrt((delta_L_p / S_L) ** 2 + x**2 + y**2 + R_T * x * y)
 
 
-def din6175(lab1: NDArray[np.float64], lab2: NDArray[np.float64]) -> NDArray[np.float64]:
-    """DIN 6175-2 form (the model's provisional weights), *lab1* the reference.
+def din6175(
+    lab1: NDArray[np.float64], lab2: NDArray[np.float64], alpha: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """DIN 6175-2 ΔE_eff with g = 1, *lab1* the standard, *alpha* the |aspecular angle| (°) of each pair.
 
     The arithmetic of :func:`station.model.difference.delta_e_din6175` without its input checks (a
-    test asserts bit-identity, so a change of the model's weights or form shows up at once).
+    test asserts bit-identity, so a change of the model's coefficients or form shows up at once). The
+    g-factor products of the model are left out: with g = 1 they are exact (1·x = x). *alpha* must
+    broadcast to the pair shape and be > 0 (e.g. shape (n_angles,) for (…, n_angles, 3) Lab).
     """
-    ref, smp = lab1, lab2
-    c_ref = np.hypot(ref[..., 1], ref[..., 2])
-    c_smp = np.hypot(smp[..., 1], smp[..., 2])
-    d_l = smp[..., 0] - ref[..., 0]
-    d_c = c_smp - c_ref
-    d_ab2 = (smp[..., 1] - ref[..., 1]) ** 2 + (smp[..., 2] - ref[..., 2]) ** 2
-    d_h2 = np.maximum(d_ab2 - d_c**2, 0.0)
-    w = DIN6175_WEIGHTS
-    dl50 = (ref[..., 0] - 50.0) ** 2
-    s_l = 1.0 + w["k_L"] * dl50 / np.sqrt(20.0 + dl50)
-    s_c = 1.0 + w["k_C"] * c_ref
-    s_h = 1.0 + w["k_H"] * c_ref
-    return np.sqrt((d_l / s_l) ** 2 + (d_c / s_c) ** 2 + d_h2 / s_h**2)
+    k = DIN6175_COEFFICIENTS
+    l_1, a_1, b_1 = lab1[..., 0], lab1[..., 1], lab1[..., 2]
+    l_2, a_2, b_2 = lab2[..., 0], lab2[..., 1], lab2[..., 2]
+    c_1 = np.hypot(a_1, b_1)
+    c_2 = np.hypot(a_2, b_2)
+    d_l = l_2 - l_1
+    d_a = a_2 - a_1
+    d_b = b_2 - b_1
+    d_c = c_2 - c_1
+    d_h2 = np.maximum(d_a * d_a + d_b * d_b - d_c * d_c, 0.0)
+    l_m = np.sqrt(np.abs(l_1 * l_2))
+    c_m = np.sqrt(c_1 * c_2)
+    sq_l = np.sqrt(l_m)
+    sq_c = np.sqrt(c_m)
+    s_l = k["sl_sqrt_l"] * sq_l + k["sl_alpha"] / alpha
+    s_c = np.maximum(k["s_floor"], k["sc_sqrt_c"] * sq_c - k["sc_sqrt_l"] * sq_l + k["sc_alpha"] / alpha)
+    s_h = np.maximum(
+        k["s_floor"], k["sh_sqrt_c"] * sq_c - k["sh_sqrt_l"] * sq_l + k["sh_alpha"] / alpha + k["sh_offset"]
+    )
+    t_l = d_l / s_l
+    t_l2 = t_l * t_l
+    t_a = d_a / k["s_ab"]
+    t_b = d_b / k["s_ab"]
+    t_c = d_c / s_c
+    de_ab = np.sqrt(t_l2 + t_a * t_a + t_b * t_b)
+    de_ch = np.sqrt(t_l2 + t_c * t_c + d_h2 / (s_h * s_h))
+    c_0 = k["c0_base"] + k["c0_step"] / (1.0 + np.exp(k["c0_l_mid"] - l_m))
+    sigma = 1.0 / (1.0 + np.exp(c_m - c_0))
+    return sigma * de_ab + (1.0 - sigma) * de_ch
 
 
 KERNELS: Mapping[str, Kernel] = MappingProxyType({"cie76": cie76, "cie2000": cie2000, "din6175": din6175})

@@ -250,3 +250,15 @@ JND_CIE76 = 2.3
 FORMULATION_TOLERANCE_DE00 = 1.0
 #: Default threshold of a systematic sketch misfit: 3 JND of ΔE*ab.
 SHADING_MISFIT_DE = 3 * JND_CIE76
+#: Default QC limit on ΔE at each geometry (and on the mean under the "mean" rule), in the units of
+#: the tolerance set's formula. A product default, not a standard's value: customers' tolerance sets
+#: state their own (station.model.tolerance).
+QC_DE_LIMIT = 1.0
+#: Default warn band of QC verdicts: "warn" once a value exceeds this fraction of its limit.
+QC_WARN_FRACTION = 0.8
+#: Accepted range of a QC warn fraction (exclusive lower, inclusive upper bound: 1 turns the band off).
+QC_WARN_FRACTION_RANGE: tuple[float, float] = (0.0, 1.0)
+#: Default aggregation rule of a QC verdict over the geometries.
+QC_AGGREGATION = "max"
+#: Default colour-difference formula of a QC tolerance set.
+QC_FORMULA = "din6175"

@@ -162,8 +162,11 @@ def metamerism_index(
     reference_illuminant: str = "D65",
     test_illuminants: tuple[str, ...] = ("A", "F11"),
     method: str = "cie2000",
+    aspecular_deg: ArrayLike | None = None,
 ) -> dict[str, NDArray[np.float64]]:
     """Special metamerism index (change in illuminant) between two samples, per geometry.
+
+    *aspecular_deg* (degrees, one per spectrum) is required by ``method="din6175"``.
 
     The sample is first corrected additively in Lab for its mismatch under the reference illuminant
     (CIE 15 / ISO 105-J02 practice), then the difference under each test illuminant is the index.
@@ -182,9 +185,11 @@ def metamerism_index(
         raise FitError(f"reflectance_sample: shape {smp.shape} differs from reflectance_ref {ref.shape}")
     lab_r0 = reflectance_to_lab(ref, reference_illuminant)
     lab_s0 = reflectance_to_lab(smp, reference_illuminant)
-    out: dict[str, NDArray[np.float64]] = {"reference": delta_e(lab_r0, lab_s0, method)}
+    out: dict[str, NDArray[np.float64]] = {
+        "reference": delta_e(lab_r0, lab_s0, method, aspecular_deg=aspecular_deg)
+    }
     for ill in test_illuminants:
         lab_r = reflectance_to_lab(ref, ill)
         lab_s = reflectance_to_lab(smp, ill) - (lab_s0 - lab_r0)
-        out[ill] = delta_e(lab_r, lab_s, method)
+        out[ill] = delta_e(lab_r, lab_s, method, aspecular_deg=aspecular_deg)
     return out

@@ -9,6 +9,7 @@ import pytest
 from scipy.optimize import brentq
 
 from station.analysis import AnalysisInputError, Environment, goniogeometric_index
+from station.analysis.geometry import rotated_normals
 from station.analysis.index import SeamModel
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
@@ -178,3 +179,22 @@ def test_gloss_included_near_specular_lowers_the_index():
     assert far.reached == far_no.reached
     if far.reached:
         assert far.beta_min_deg == pytest.approx(far_no.beta_min_deg, abs=1e-3)
+
+
+def test_din6175_weighs_each_geometry_by_its_aspecular_angle(blue_metallic):
+    # light +45°, views −30° and 0°: in-plane aspecular angles 45 − 30 = 15° and 45° (view + light)
+    m = SeamModel([45.0, 45.0], [-30.0, 0.0], method="din6175")
+    betas = np.array([1.0, 3.0])
+    de = m.delta_e(blue_metallic, blue_metallic, betas)
+    ca = np.broadcast_to(m.reference(blue_metallic), (2, 2, 3))
+    cb = m.colour(blue_metallic, rotated_normals(betas, "in-plane"))
+    expected = np.stack(
+        [delta_e(ca[i], cb[i], "din6175", aspecular_deg=a) for i, a in enumerate((15.0, 45.0))]
+    )
+    np.testing.assert_allclose(de, expected, rtol=1e-12)
+
+
+def test_din6175_refuses_environment_lighting():
+    env = Environment.from_samples([((0.0, 0.5, 1.0), (1.0, 1.0, 1.0))])
+    with pytest.raises(AnalysisInputError, match="method"):
+        SeamModel(env, [0.0], method="din6175")

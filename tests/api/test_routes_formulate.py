@@ -70,8 +70,8 @@ def test_snap_is_the_brute_force_top_k(lib_api: tuple[Api, list[dict]], metric: 
     )
     assert r.status_code == 200, r.text
     got = r.json()
-    lab = _stored_lab(rows)  # the design is the reference (DIN 6175-2 is not symmetric)
-    per_angle = delta_e(np.broadcast_to(target, lab.shape), lab, method=metric)
+    lab = _stored_lab(rows)  # the design is the reference
+    per_angle = delta_e(np.broadcast_to(target, lab.shape), lab, method=metric, aspecular_deg=ANGLES)
     sums = per_angle.sum(axis=1)
     order = np.argsort(sums, kind="stable")[:4]
     assert [m["code"] for m in got["matches"]] == [rows[i]["code"] for i in order]

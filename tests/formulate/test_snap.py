@@ -21,6 +21,10 @@ from station.formulate.snap import (
 )
 from station.formulate.snap.bounds import box_bounds, point_bounds_cie2000
 from station.model.difference import delta_e
+from station.model.domain import ANGLES_3
+
+#: |aspecular angle| of the three Lab columns (read by din6175).
+ALPHA = np.abs(np.asarray(ANGLES_3))
 
 lab_el = st.floats(-120, 120, allow_nan=False, width=32)
 
@@ -80,24 +84,30 @@ def test_exact_on_a_clustered_library_with_groups(small_library: Library) -> Non
 @given(pts=_labs(40), q=_labs(1), method=st.sampled_from(METHODS))
 def test_box_and_point_bounds_never_exceed_the_exact_sum(pts, q, method) -> None:
     q = q[0]
-    exact = delta_e(q[None], pts, method).sum(-1)
+    exact = delta_e(q[None], pts, method, aspecular_deg=ANGLES_3).sum(-1)
     chroma = np.hypot(pts[..., 1], pts[..., 2])
-    box = box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method)
+    box = box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, alpha=ALPHA)
     assert box <= exact.min() + 1e-12
-    assert box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, hue=False) <= box + 1e-12
-    point = box_bounds(q, pts, pts, chroma, method)
+    assert box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), method, hue=False, alpha=ALPHA) <= box + 1e-12
+    point = box_bounds(q, pts, pts, chroma, method, alpha=ALPHA)
     assert np.all(point <= exact + 1e-12)
     if method == "cie2000":
         assert np.all(point_bounds_cie2000(q, pts) <= exact + 1e-12)
 
 
 @settings(max_examples=100, deadline=None)
-@given(a=arrays(np.float64, (50, 3), elements=lab_el), b=arrays(np.float64, (50, 3), elements=lab_el))
-def test_kernels_are_bit_identical_to_the_model(a, b) -> None:
+@given(
+    a=arrays(np.float64, (50, 3), elements=lab_el),
+    b=arrays(np.float64, (50, 3), elements=lab_el),
+    angles=arrays(np.float64, (50,), elements=st.floats(-90, 180).filter(lambda x: abs(x) >= 1e-3)),
+)
+def test_kernels_are_bit_identical_to_the_model(a, b, angles) -> None:
     b[::5] = a[::5]  # identical pairs
     b[1::7, 1:] = 0.0  # achromatic samples
+    a[2::9, 0] = 0.0  # black standards (L̄ = 0)
+    alpha = np.abs(angles)
     for method, kernel in KERNELS.items():
-        assert np.array_equal(kernel(a, b), delta_e(a, b, method)), method
+        assert np.array_equal(kernel(a, b, alpha), delta_e(a, b, method, aspecular_deg=angles)), method
 
 
 def test_match_of_a_library_paint_is_itself(small_library: Library) -> None:
@@ -229,3 +239,29 @@ def test_a_query_writes_nothing_to_the_shared_index(small_library) -> None:
         for use_numba in (True, False):
             index.snap(q, 3, method, use_numba)
     assert {name: id(value) for name, value in vars(index).items()} == before
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    centre=arrays(np.float64, (3, 3), elements=st.floats(-90, 90, allow_nan=False)),
+    spread=st.floats(0.01, 30.0),
+    q=_labs(1),
+    angles=arrays(np.float64, (3,), elements=st.floats(0.5, 180.0)),
+    seed=st.integers(0, 2**31 - 1),
+    scale=st.sampled_from([0.0, 0.05, 1.0]),
+)
+def test_din6175_box_bound_is_a_lower_bound_at_any_angle(centre, spread, q, angles, seed, scale) -> None:
+    """Grey and chromatic clusters, both blend branches, any aspecular angle: bound ≤ the exact sums."""
+    q = q[0].copy()
+    rng = np.random.default_rng(seed)
+    centre[:, 0] = np.abs(centre[:, 0])
+    centre[:, 1:] *= scale  # scale 0 / 0.05: grey clusters (σ → 1) around a grey or chromatic design
+    q[:, 1:] *= rng.choice([scale, 1.0])
+    pts = centre[None] + rng.normal(0.0, spread, (30, 3, 3))
+    pts[..., 0] = np.abs(pts[..., 0])
+    exact = delta_e(q[None], pts, "din6175", aspecular_deg=angles).sum(-1)
+    chroma = np.hypot(pts[..., 1], pts[..., 2])
+    assert (
+        box_bounds(q, pts.min(0), pts.max(0), chroma.max(0), "din6175", alpha=angles) <= exact.min() + 1e-12
+    )
+    assert np.all(box_bounds(q, pts, pts, chroma, "din6175", alpha=angles) <= exact + 1e-12)

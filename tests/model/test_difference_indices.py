@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from station.model.difference import delta_e, delta_e_aggregate, delta_e_din6175, validate_method
+from station.model.difference import delta_e, delta_e_aggregate, validate_method
 from station.model.errors import ModelInputError
 from station.model.indices import library_indices
 
@@ -36,17 +36,6 @@ def test_vectorised_per_angle_and_aggregates() -> None:
     assert delta_e_aggregate(ref, smp, "cie76", "rms") == pytest.approx(np.sqrt(26 / 3))
     tiled = delta_e(np.tile(ref, (2, 1, 1)), np.tile(smp, (2, 1, 1)), "cie2000")
     assert tiled.shape == (2, 3) and tiled[0] == pytest.approx(tiled[1])
-
-
-def test_din6175_reduces_to_cielab_at_mid_grey_achromatic() -> None:
-    # At L* = 50 and C* = 0 every weight is 1, so the formula is ΔE*ab there.
-    assert delta_e_din6175([50, 0, 0], [51, 1, 1]) == pytest.approx(np.sqrt(3))
-
-
-def test_din6175_tolerates_bright_lightness_more() -> None:
-    bright = delta_e_din6175([120, 0, 0], [122, 0, 0])
-    mid = delta_e_din6175([50, 0, 0], [52, 0, 0])
-    assert bright < mid
 
 
 def test_method_validation() -> None:

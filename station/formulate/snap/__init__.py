@@ -12,8 +12,11 @@ bound of S over every paint in a bucket is the sum over angles of a lower bound 
 design and the box:
 
 * ΔE*ab:    the Euclidean distance from the design to the box (d_L, d_ab: per-axis distances).
-* DIN 6175: weights are computed on the reference (the design), so ΔE ≥ √((d_L/S_L)² + d_ab²/S_C²),
-  using ΔC*² + ΔH*² = Δa*² + Δb*² and S_H ≤ S_C.
+* DIN 6175-2 (ΔE_eff = σ ΔE_ab,w + (1 − σ) ΔE_CH,w, weights on the geometric means L̄, C̄ of design and
+  paint at each angle α): ΔE_eff ≥ min(ΔE_ab,w, ΔE_CH,w) (σ ∈ (0, 1)), and both forms are
+  ≥ √((d_L/S_L,max)² + d_ab²/W²) with ΔC*² + ΔH*² = Δa*² + Δb*², S_L,max at the box's largest L̄,
+  W = max(0.7, S_C,max, S_H,max) at the largest C̄ and smallest L̄ (S_C, S_H rise with C̄ and fall with
+  L̄; :func:`.bounds._din6175_box`).
 * CIEDE2000: ΔE00² ≥ (ΔL'/S_L)² + (1 − |R_T|/2) (ΔC'² + ΔH'²)/S_C² (|xy| ≤ (x²+y²)/2, S_H < S_C since
   T ≤ 1.93), ΔC'² + ΔH'² = Δa'² + Δb² ≥ Δa² + Δb² (a' = (1+G)a, one G per pair), with S_L, S_C and
   R_C replaced by their largest values over the box: S_L is increasing in |L̄ − 50|, C̄' ≤ (1+G(C̄))C̄

@@ -2,7 +2,7 @@
 
 The arithmetic behind ColorSnap's exact search (proof in :mod:`station.formulate.snap`): a lower bound
 of Σ_θ ΔE(design_θ, x_θ) over every paint x of a box [lo, hi] (per angle L*, a*, b* ranges and the
-largest chroma), for ΔE*ab, DIN 6175-2 and CIEDE2000 (:func:`box_bounds`); the cheap CIEDE2000 form
+largest chroma), for ΔE*ab, DIN 6175-2 (:func:`_din6175_box`) and CIEDE2000 (:func:`box_bounds`); the cheap CIEDE2000 form
 with its weights from tables (:func:`box_bounds_cie2000_fast`); and trigonometry-free per-paint
 CIEDE2000 lower and upper bounds (:func:`point_bounds_cie2000`, :func:`pair_bounds_cie2000`). All
 quantities are in CIELAB units (ΔE, L*, a*, b*, C*), hues in degrees.
@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from station.formulate.errors import FormulateInputError
+from station.model.difference import DIN6175_COEFFICIENTS
 
 __all__ = [
     "METHODS",
@@ -94,11 +95,18 @@ def hue_geometry(
 
 
 def box_bounds(
-    q: NDArray[np.float64], lo: NDArray, hi: NDArray, cmax: NDArray, method: str, hue: bool = True
+    q: NDArray[np.float64],
+    lo: NDArray,
+    hi: NDArray,
+    cmax: NDArray,
+    method: str,
+    hue: bool = True,
+    alpha: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """Lower bound of Σ_θ ΔE(q_θ, x_θ) over every x in the boxes [lo, hi] (…, A, 3) with chroma ≤ cmax (…, A).
 
     A box of one point (lo = hi = x, cmax = C*(x)) gives the point-level bound used as a prefilter.
+    *alpha* (A,) is the |aspecular angle| of each column in degrees, required by ``din6175``.
     """
     d = np.maximum(np.maximum(lo - q, q - hi), 0.0)
     d2 = d * d
@@ -107,11 +115,7 @@ def box_bounds(
     if method == "cie76":
         per = np.sqrt(dl2 + dab2)
     elif method == "din6175":
-        cq = np.hypot(q[:, 1], q[:, 2])
-        dl50 = (q[:, 0] - 50.0) ** 2
-        s_l = 1.0 + 0.015 * dl50 / np.sqrt(20.0 + dl50)
-        s_c = 1.0 + 0.045 * cq
-        per = np.sqrt(dl2 / s_l**2 + dab2 / s_c**2)
+        per = _din6175_box(q, lo, hi, cmax, d2, _din_alpha(alpha, q.shape[0]))
     elif method == "cie2000":
         x = np.maximum(np.abs((q[:, 0] + lo[..., 0]) / 2 - 50.0), np.abs((q[:, 0] + hi[..., 0]) / 2 - 50.0))
         s_l = 1.0 + 0.015 * x * x / np.sqrt(20.0 + x * x)
@@ -139,6 +143,54 @@ def box_bounds(
     else:
         raise FormulateInputError("de", f"one of {', '.join(METHODS)}", method)
     return per.sum(-1) * SAFETY - 1e-12
+
+
+def _din_alpha(alpha: NDArray[np.float64] | None, n_angles: int) -> NDArray[np.float64]:
+    """The DIN 6175-2 angles of a query: |α| (n_angles,), each > 0; a typed error otherwise."""
+    a = None if alpha is None else np.abs(np.asarray(alpha, dtype=np.float64)).reshape(-1)
+    if a is None or a.shape != (n_angles,) or not np.all(np.isfinite(a)) or np.any(a <= 0):
+        raise FormulateInputError(
+            "angles_deg", f"{n_angles} non-zero aspecular angles (din6175 weights hold 1/angle)", alpha
+        )
+    return a
+
+
+def _din6175_box(
+    q: NDArray[np.float64], lo: NDArray, hi: NDArray, cmax: NDArray, d2: NDArray, alpha: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Per-angle lower bound of DIN 6175-2 ΔE_eff (g = 1) between the standard *q* and a box (…, A).
+
+    ΔE_eff = σ ΔE_ab,w + (1 − σ) ΔE_CH,w with σ ∈ (0, 1) is at least min(ΔE_ab,w, ΔE_CH,w). Over the box:
+
+    * |ΔL*| ≥ d_L, |Δa*| ≥ d_a, |Δb*| ≥ d_b (distances from q to the box), and ΔC*² + ΔH*² = Δa*² + Δb*²;
+    * S_L = 0.15 √L̄ + 31.5/α is increasing in L̄ = √|L*_q L*_x|, so S_L ≤ S_L(L̄_max) with
+      L̄_max = √(|L*_q| max|L*_x|);
+    * S_C and S_H are increasing in C̄ = √(C*_q C*_x) and decreasing in L̄ (then floored at 0.7, which
+      keeps the order), so S_C ≤ S_C(C̄_max, L̄_min), S_H ≤ S_H(C̄_max, L̄_min), C̄_max = √(C*_q C*_max),
+      L̄_min = √(|L*_q| min|L*_x|) (0 where the box's L range holds 0);
+    * hence ΔE_ab,w² ≥ (d_L/S_L,max)² + (d_a² + d_b²)/0.7² and ΔE_CH,w² ≥ (d_L/S_L,max)² + (d_a² + d_b²)/W²
+      with W = max(S_C,max, S_H,max); the bound is the root of the smaller.
+    """
+    k = DIN6175_COEFFICIENTS
+    lq = np.abs(q[:, 0])
+    cq = np.hypot(q[:, 1], q[:, 2])
+    l_abs_max = np.maximum(np.abs(lo[..., 0]), np.abs(hi[..., 0]))
+    straddle = (lo[..., 0] <= 0) & (hi[..., 0] >= 0)
+    l_abs_min = np.where(straddle, 0.0, np.minimum(np.abs(lo[..., 0]), np.abs(hi[..., 0])))
+    sq_l_max = np.sqrt(np.sqrt(lq * l_abs_max))
+    sq_l_min = np.sqrt(np.sqrt(lq * l_abs_min))
+    sq_c_max = np.sqrt(np.sqrt(cq * np.maximum(cmax, 0.0)))
+    s_l = k["sl_sqrt_l"] * sq_l_max + k["sl_alpha"] / alpha
+    s_c = np.maximum(
+        k["s_floor"], k["sc_sqrt_c"] * sq_c_max - k["sc_sqrt_l"] * sq_l_min + k["sc_alpha"] / alpha
+    )
+    s_h = np.maximum(
+        k["s_floor"],
+        k["sh_sqrt_c"] * sq_c_max - k["sh_sqrt_l"] * sq_l_min + k["sh_alpha"] / alpha + k["sh_offset"],
+    )
+    w = np.maximum(np.maximum(s_c, s_h), k["s_ab"])  # W ≥ 0.7 also covers the a*b* form
+    dab2 = d2[..., 1] + d2[..., 2]
+    return np.sqrt(d2[..., 0] / (s_l * s_l) + dab2 / (w * w))
 
 
 def cie2000_weight_tables() -> tuple[NDArray, NDArray, NDArray, NDArray]:

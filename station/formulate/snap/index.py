@@ -112,6 +112,8 @@ class SnapIndex:
         if lab.ndim != 3 or lab.shape[1:] != (len(angles_deg), 3) or lab.shape[0] == 0:
             raise FormulateInputError("library", f"(N >= 1, {len(angles_deg)}, 3) Lab", lab.shape)
         self.angles_deg = tuple(float(a) for a in angles_deg)
+        self._alpha = np.abs(np.asarray(self.angles_deg, dtype=np.float64))  # |α| of DIN 6175-2, (A,)
+        self._alpha.flags.writeable = False
         self.lab = np.ascontiguousarray(lab)
         n, na = lab.shape[0], lab.shape[1]
         self.size = n
@@ -157,7 +159,7 @@ class SnapIndex:
 
     def bucket_bounds(self, q: NDArray[np.float64], method: str) -> NDArray[np.float64]:
         """Lower bound of the summed ΔE over each leaf, shape (n_buckets,) (see module docstring)."""
-        return box_bounds(q, self._lo, self._hi, self._cmax, method)
+        return box_bounds(q, self._lo, self._hi, self._cmax, method, alpha=self._alpha)
 
     # -- search -------------------------------------------------------------------------------------
     def query(
@@ -190,10 +192,12 @@ class SnapIndex:
         if flat and method == "cie2000":
             return self._query_cie2000_flat(q, k)
         if flat:  # (for CIEDE2000 the cheap bound first; the hue-aware one on the survivors below)
-            lb = box_bounds(q, self._lo, self._hi, self._cmax, method, hue=method != "cie2000")
+            lb = box_bounds(
+                q, self._lo, self._hi, self._cmax, method, hue=method != "cie2000", alpha=self._alpha
+            )
             leaves = np.arange(lb.size)
         else:  # open the best group(s) first: enough leaves for a k-th best
-            glb = box_bounds(q, self._glo, self._ghi, self._gcmax, method)
+            glb = box_bounds(q, self._glo, self._ghi, self._gcmax, method, alpha=self._alpha)
             ng_first = min(self.n_groups, -(-first // g))
             gsel = (
                 np.argpartition(glb, ng_first - 1)[:ng_first]
@@ -201,7 +205,9 @@ class SnapIndex:
                 else np.arange(self.n_groups)
             )
             leaves = (gsel[:, None] * g + np.arange(g)).ravel()
-            lb = box_bounds(q, self._lo[leaves], self._hi[leaves], self._cmax[leaves], method)
+            lb = box_bounds(
+                q, self._lo[leaves], self._hi[leaves], self._cmax[leaves], method, alpha=self._alpha
+            )
         first = min(first, lb.size)
         pick = np.argpartition(lb, first - 1)[:first] if first < lb.size else np.arange(lb.size)
         sel = leaves[pick]
@@ -212,7 +218,9 @@ class SnapIndex:
             rest[pick] = False
             more, more_lb = leaves[rest], lb[rest]
             if method == "cie2000" and more.size:
-                more_lb = box_bounds(q, self._lo[more], self._hi[more], self._cmax[more], method)
+                more_lb = box_bounds(
+                    q, self._lo[more], self._hi[more], self._cmax[more], method, alpha=self._alpha
+                )
                 keep = more_lb <= kth
                 more, more_lb = more[keep], more_lb[keep]
         else:
@@ -222,10 +230,19 @@ class SnapIndex:
             if method == "cie2000":  # cheap bound first, the hue-aware one on the survivors
                 cand = cand[keep]
                 keep = (
-                    box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method, hue=False) <= kth
+                    box_bounds(
+                        q,
+                        self._lo[cand],
+                        self._hi[cand],
+                        self._cmax[cand],
+                        method,
+                        hue=False,
+                        alpha=self._alpha,
+                    )
+                    <= kth
                 )
             cand = cand[keep]
-            clb = box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method)
+            clb = box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method, alpha=self._alpha)
             keep = clb <= kth
             more, more_lb = cand[keep], clb[keep]
         visited = sel.size
@@ -416,17 +433,17 @@ class SnapIndex:
             if kth == math.inf:  # the best few by bound give a k-th best to filter the rest with
                 m = 4 * k
                 head = np.argpartition(plb, m - 1)[:m]
-                per_h = kernel(q, pts[head])  # type: ignore[operator]
+                per_h = kernel(q, pts[head], self._alpha)  # type: ignore[operator]
                 s_h = per_h.sum(-1)
                 kth = float(np.partition(s_h, k - 1)[k - 1])
                 keep = plb <= kth
                 keep[head] = False
-                per_r = kernel(q, pts[keep])  # type: ignore[operator]
+                per_r = kernel(q, pts[keep], self._alpha)  # type: ignore[operator]
                 per = np.concatenate([per_h, per_r])
                 return np.concatenate([rows[head], rows[keep]]), per.sum(-1), per
             keep = plb <= kth
             rows, pts = rows[keep], pts[keep]
-        per = kernel(q, pts)  # type: ignore[operator]
+        per = kernel(q, pts, self._alpha)  # type: ignore[operator]
         return rows, per.sum(-1), per
 
     def snap(self, lab: ArrayLike, k: int = 5, method: str = "cie76", use_numba: bool = True) -> SnapResult:
@@ -454,13 +471,19 @@ class SnapIndex:
 
 
 def brute_force(
-    lib_lab: ArrayLike, lab: ArrayLike, k: int = 5, method: str = "cie76"
+    lib_lab: ArrayLike,
+    lab: ArrayLike,
+    k: int = 5,
+    method: str = "cie76",
+    angles_deg: tuple[float, ...] = STANDARD_ANGLES,
 ) -> tuple[NDArray[np.intp], NDArray, NDArray]:
-    """Reference scan through :func:`station.model.difference.delta_e`: (rows, sums, per-angle), best first."""
+    """Reference scan through :func:`station.model.difference.delta_e`: (rows, sums, per-angle), best first.
+
+    *angles_deg* are the aspecular angles of the Lab columns (read by ``din6175``)."""
     from station.model.difference import delta_e
 
     lib_lab = np.asarray(lib_lab, dtype=np.float64)
-    per = delta_e(np.asarray(lab, dtype=np.float64)[None], lib_lab, method)
+    per = delta_e(np.asarray(lab, dtype=np.float64)[None], lib_lab, method, aspecular_deg=angles_deg)
     s = per.sum(-1)
     top = np.lexsort((np.arange(s.size), s))[: min(k, s.size)]
     return top, s[top], per[top]

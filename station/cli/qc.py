@@ -1,0 +1,145 @@
+"""``station qc …``: colour QC of a sample against its standard (station.model.tolerance).
+
+* ``verdict`` — pass / warn / fail per geometry and overall, with the reasons, from Lab lists:
+  ``station qc verdict --standard "L,a,b;…" --sample "L,a,b;…" --angles 15,45,110 --formula din6175
+  [--limit 1.0] [--warn 0.8] [--aggregate max|mean] [--mean-limit X] [--lc 2:1]
+  [--dl X --da X --db X | --dl X --dc X --dh X] [--tolerance FILE] [--json]``
+* ``tolerance`` — print a tolerance set built from the same options (``--json`` gives the file
+  ``--tolerance`` reads).
+
+The verdict is the result, not an error: the command exits 0 for pass, warn and fail alike and 2 for
+bad input (one line naming the field and the accepted range). Angle lists that start with a minus
+sign need the ``=`` form: ``--angles=-15,15,45``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from station.cli._common import add_json_flag, parse_floats, parse_lab_list
+from station.errors import InputError
+from station.model.domain import (
+    ANGLES_3,
+    QC_AGGREGATION,
+    QC_DE_LIMIT,
+    QC_FORMULA,
+    QC_WARN_FRACTION,
+    format_angle,
+)
+from station.model.tolerance import AGGREGATIONS, ToleranceSet, judge
+
+_COMPONENT_FLAGS = ("dl", "da", "db", "dc", "dh")
+_SET_FLAGS = ("formula", "limit", "warn", "aggregate", "mean_limit", "lc", *_COMPONENT_FLAGS)
+
+
+def _lc(text: str) -> tuple[float, float]:
+    parts = text.replace(",", ":").split(":")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError as exc:
+        raise InputError("lc", 'k_L:k_C as two numbers, e.g. "2:1"', text) from exc
+    if len(values) != 2:
+        raise InputError("lc", 'k_L:k_C as two numbers, e.g. "2:1"', text)
+    return values[0], values[1]
+
+
+def _tolerance(args: argparse.Namespace, angles: list[float]) -> ToleranceSet:
+    if args.tolerance:
+        given = [f for f in _SET_FLAGS if getattr(args, f) is not None]
+        if given:
+            raise InputError(
+                given[0].replace("_", "-"), "either --tolerance FILE or limit options, not both", "both"
+            )
+        path = Path(args.tolerance)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise InputError(
+                "tolerance", "a readable JSON tolerance file (station qc tolerance --json)", str(path)
+            ) from exc
+        return ToleranceSet.from_dict(data)
+    components = {c: getattr(args, c) for c in _COMPONENT_FLAGS if getattr(args, c) is not None}
+    kwargs: dict[str, Any] = {
+        "formula": args.formula or QC_FORMULA,
+        "aggregation": args.aggregate or QC_AGGREGATION,
+        "warn_fraction": QC_WARN_FRACTION if args.warn is None else args.warn,
+        "mean_limit": args.mean_limit if args.mean_limit is not None else (args.limit or QC_DE_LIMIT),
+    }
+    if args.lc:
+        kwargs["l_c"] = _lc(args.lc)
+    return ToleranceSet.uniform(
+        angles, QC_DE_LIMIT if args.limit is None else args.limit, components, **kwargs
+    )
+
+
+def _angles(args: argparse.Namespace) -> list[float]:
+    return parse_floats(args.angles, "angles")
+
+
+def _verdict(args: argparse.Namespace) -> dict[str, Any] | None:
+    std = parse_lab_list(args.standard, "standard")
+    smp = parse_lab_list(args.sample, "sample")
+    angles = _angles(args)
+    if len(std) != len(angles):
+        raise InputError("standard", f"{len(angles)} triples (one per angle in --angles)", len(std))
+    if len(smp) != len(std):
+        raise InputError("sample", f"{len(std)} triples (as many as --standard)", len(smp))
+    result = judge(std, smp, angles, _tolerance(args, angles)).to_dict()
+    if args.json:
+        return result
+    print(f"verdict: {result['verdict']}  ({result['formula']}, {result['aggregation']} rule)")
+    print(f"reason: {result['reason']}")
+    print(f"{'geometry':>9} {'dL':>7} {'da':>7} {'db':>7} {'dC':>7} {'dH':>7} {'dE':>7}  verdict")
+    for g in result["per_geometry"]:
+        nums = " ".join(f"{g[k]:7.2f}" for k in ("dL", "da", "db", "dC", "dH", "dE"))
+        why = f"  ({'; '.join(g['reasons'])})" if g["reasons"] else ""
+        print(f"{g['geometry']:>9} {nums}  {g['verdict']}{why}")
+    print(f"mean dE: {result['mean_de']:.3f}   max dE: {result['max_de']:.3f} at {result['worst_geometry']}")
+    return None
+
+
+def _show_tolerance(args: argparse.Namespace) -> dict[str, Any]:
+    return _tolerance(args, _angles(args)).to_dict()
+
+
+def _add_set_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--angles",
+        default=",".join(format_angle(a) for a in ANGLES_3),
+        help="aspecular angles of the triples, degrees (default 15,45,110; --angles=-15,… for a minus)",
+    )
+    p.add_argument("--formula", help=f"cie76 | cie94 | cie2000 | din6175 (default {QC_FORMULA})")
+    p.add_argument("--limit", type=float, help=f"ΔE limit at every geometry (default {QC_DE_LIMIT:g})")
+    p.add_argument(
+        "--warn", type=float, help=f"warn band as a fraction of each limit (default {QC_WARN_FRACTION:g})"
+    )
+    p.add_argument(
+        "--aggregate", choices=AGGREGATIONS, help=f"rule over the geometries (default {QC_AGGREGATION})"
+    )
+    p.add_argument(
+        "--mean-limit", type=float, help="limit on the mean ΔE under --aggregate mean (default --limit)"
+    )
+    p.add_argument("--lc", help='CIEDE2000 k_L:k_C, e.g. "2:1" (default 1:1)')
+    for c, sym in zip(_COMPONENT_FLAGS, ("ΔL*", "Δa*", "Δb*", "ΔC*", "ΔH*"), strict=True):
+        p.add_argument(f"--{c}", type=float, help=f"limit on |{sym}| at every geometry")
+    p.add_argument("--tolerance", help="tolerance set JSON file (instead of the limit options)")
+    add_json_flag(p)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``station qc …``."""
+    top = subparsers.add_parser("qc", help="colour QC: verdicts of a sample against its standard")
+    sub = top.add_subparsers(dest="qc_command", required=True, metavar="SUBCOMMAND")
+
+    p = sub.add_parser("verdict", help="pass / warn / fail per geometry and overall")
+    p.add_argument("--standard", required=True, help='standard Lab per angle: "L,a,b;L,a,b;…"')
+    p.add_argument("--sample", required=True, help='sample Lab per angle: "L,a,b;L,a,b;…"')
+    _add_set_args(p)
+    p.set_defaults(handler=_verdict)
+
+    p = sub.add_parser("tolerance", help="print the tolerance set the options describe")
+    _add_set_args(p)
+    p.set_defaults(handler=_show_tolerance)
