@@ -54,6 +54,7 @@ import colour
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from station.model.cie2000 import cie2000_columns
 from station.model.domain import ANGLE_MAX_DEG
 from station.model.errors import ModelInputError
 
@@ -166,10 +167,10 @@ def din6175_alpha(aspecular_deg: ArrayLike | None, shape: tuple[int, ...]) -> ND
     return np.asarray(out, dtype=np.float64)
 
 
-def _din6175(
+def din6175_unchecked(
     ref: NDArray[np.float64], smp: NDArray[np.float64], alpha: NDArray[np.float64], g: DinFactors
 ) -> Din6175Terms:
-    """The DIN 6175-2 arithmetic (no checks); ``station.formulate.de_kernels.din6175`` repeats it."""
+    """The DIN 6175-2 arithmetic without input checks (ColorSnap's kernel calls it directly)."""
     k = DIN6175_COEFFICIENTS
     l_1, a_1, b_1 = ref[..., 0], ref[..., 1], ref[..., 2]
     l_2, a_2, b_2 = smp[..., 0], smp[..., 1], smp[..., 2]
@@ -225,7 +226,7 @@ def din6175_terms(
     if not isinstance(g, DinFactors):
         raise ModelInputError("din6175.g", "a DinFactors", g)
     alpha = din6175_alpha(aspecular_deg, ref.shape[:-1])
-    return _din6175(ref, smp, alpha, g)
+    return din6175_unchecked(ref, smp, alpha, g)
 
 
 def delta_e_din6175(
@@ -287,55 +288,16 @@ def delta_e_cie2000_lc(
 
     ΔE00 = √((ΔL'/(k_L S_L))² + (ΔC'/(k_C S_C))² + (ΔH'/(k_H S_H))² + R_T (ΔC'/(k_C S_C))(ΔH'/(k_H S_H))).
     Tolerance sets name the ratio "l:c" (2:1 for textiles, 1:1 by default); each factor must be finite
-    and > 0. With k_L = k_C = k_H = 1 this is :func:`delta_e` ``"cie2000"`` up to rounding.
+    and > 0. With k_L = k_C = k_H = 1 this is :func:`delta_e` ``"cie2000"`` bit for bit
+    (:func:`station.model.cie2000.cie2000_columns`).
     """
     for name, v in (("k_l", k_l), ("k_c", k_c), ("k_h", k_h)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
             raise ModelInputError(f"cie2000.{name}", "a finite number > 0", v)
     ref, smp = _as_lab_pair(lab_ref, lab_sample)
-    l_1, a_1, b_1 = ref[..., 0], ref[..., 1], ref[..., 2]
-    l_2, a_2, b_2 = smp[..., 0], smp[..., 1], smp[..., 2]
-    c_bar = (np.hypot(a_1, b_1) + np.hypot(a_2, b_2)) / 2
-    c_bar7 = c_bar**7
-    g = 0.5 * (1 - np.sqrt(c_bar7 / (c_bar7 + 25.0**7)))
-    ap_1, ap_2 = (1 + g) * a_1, (1 + g) * a_2
-    cp_1, cp_2 = np.hypot(ap_1, b_1), np.hypot(ap_2, b_2)
-    hp_1 = np.where((ap_1 == 0) & (b_1 == 0), 0.0, np.degrees(np.arctan2(b_1, ap_1)) % 360)
-    hp_2 = np.where((ap_2 == 0) & (b_2 == 0), 0.0, np.degrees(np.arctan2(b_2, ap_2)) % 360)
-    zero = cp_1 * cp_2 == 0
-    dh = hp_2 - hp_1
-    dh = np.where(zero, 0.0, np.where(dh > 180, dh - 360, np.where(dh < -180, dh + 360, dh)))
-    d_lp = l_2 - l_1
-    d_cp = cp_2 - cp_1
-    d_hp = 2 * np.sqrt(cp_1 * cp_2) * np.sin(np.radians(dh / 2))
-    l_barp = (l_1 + l_2) / 2
-    c_barp = (cp_1 + cp_2) / 2
-    h_sum = hp_1 + hp_2
-    h_barp = np.where(
-        zero,
-        h_sum,
-        np.where(
-            np.abs(hp_1 - hp_2) <= 180, h_sum / 2, np.where(h_sum < 360, (h_sum + 360) / 2, (h_sum - 360) / 2)
-        ),
+    return cie2000_columns(
+        ref[..., 0], ref[..., 1], ref[..., 2], smp[..., 0], smp[..., 1], smp[..., 2], k_l, k_c, k_h
     )
-    t = (
-        1
-        - 0.17 * np.cos(np.radians(h_barp - 30))
-        + 0.24 * np.cos(np.radians(2 * h_barp))
-        + 0.32 * np.cos(np.radians(3 * h_barp + 6))
-        - 0.20 * np.cos(np.radians(4 * h_barp - 63))
-    )
-    d_theta = 30 * np.exp(-(((h_barp - 275) / 25) ** 2))
-    c_barp7 = c_barp**7
-    r_c = 2 * np.sqrt(c_barp7 / (c_barp7 + 25.0**7))
-    l50 = (l_barp - 50) ** 2
-    s_l = 1 + 0.015 * l50 / np.sqrt(20 + l50)
-    s_c = 1 + 0.045 * c_barp
-    s_h = 1 + 0.015 * c_barp * t
-    r_t = -np.sin(np.radians(2 * d_theta)) * r_c
-    x = d_cp / (k_c * s_c)
-    y = d_hp / (k_h * s_h)
-    return np.sqrt((d_lp / (k_l * s_l)) ** 2 + x * x + y * y + r_t * x * y)
 
 
 def _colour_method(name: str) -> Callable[[NDArray, NDArray, NDArray | None, DinFactors], NDArray]:
