@@ -140,7 +140,7 @@ def _scalar(value: Any) -> Any:
     return value
 
 
-def payload_sha256(chain: Chain, row: Mapping[str, Any]) -> str:
+def payload_sha256(chain: Chain, row: Mapping[Any, Any]) -> str:
     """SHA-256 (hex) of the canonical payload of *row* (a mapping with every payload column)."""
     payload = {
         name: _floats(row[name]) if name in JSON_COLUMNS or name in FLOAT_COLUMNS else _scalar(row[name])
@@ -185,7 +185,7 @@ def chain_time(head: Head) -> dt.datetime:
     return now if head.at is None or now >= head.at else head.at
 
 
-def seal(chain: Chain, head: Head, row: Mapping[str, Any]) -> tuple[str, str]:
+def seal(chain: Chain, head: Head, row: Mapping[Any, Any]) -> tuple[str, str]:
     """``(row_sha256, chain_sha256)`` of *row* appended after *head*."""
     row_hash = payload_sha256(chain, row)
     return row_hash, link_sha256(head.sha256, row_hash)

@@ -165,14 +165,16 @@ def store_reading(
         created_by_id=created_by_id,
     )
     head = chain.lock_head(session, "measurements")  # serialises appends until the caller commits
-    values["received_at"] = chain.chain_time(head)
-    values["row_sha256"], values["chain_sha256"] = chain.seal("measurements", head, values)
+    received_at = chain.chain_time(head)
+    values["received_at"] = received_at
+    row_sha256, link = chain.seal("measurements", head, values)
+    values["row_sha256"], values["chain_sha256"] = row_sha256, link
     try:
         new_id = session.execute(_measurement_insert(session.get_bind().dialect.name), values).scalar()
     except IntegrityError as exc:  # e.g. supersedes_id already superseded, or a vanished reference
         raise ReferenceNotFoundError(f"reading refused by a database constraint: {exc.orig}") from exc
     if new_id is not None:
-        chain.advance(session, "measurements", head, values["chain_sha256"], values["received_at"])
+        chain.advance(session, "measurements", head, link, received_at)
     if new_id is None:  # stored before (a re-send, a replay, or a concurrent writer)
         row = session.execute(
             select(Measurement.id, Measurement.payload_sha256).where(
