@@ -223,6 +223,7 @@ class Verdict:
     chain: Chain
     rows: int
     broken: str | None = None
+    head_sha256: str = GENESIS
 
 
 def verify_chain(conn: Connection | Session, chain: Chain, *, batch: int = 1000) -> Verdict:
@@ -271,7 +272,7 @@ def verify_chain(conn: Connection | Session, chain: Chain, *, batch: int = 1000)
             count,
             f"{chain}: head records {head.length} rows, table holds {count} (rows removed after id {last_id})",
         )
-    return Verdict(chain, count)
+    return Verdict(chain, count, head_sha256=previous)
 
 
 def verify(conn: Connection | Session) -> list[Verdict]:

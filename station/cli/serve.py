@@ -242,7 +242,11 @@ def _verify(engine: Any) -> dict[str, Any]:
     for verdict in verdicts:
         if verdict.broken is not None:
             raise TamperedError(f"chain broken: {verdict.broken}")
-    return {"chain": "intact", **{v.chain: v.rows for v in verdicts}}
+    result: dict[str, Any] = {"chain": "intact"}
+    for v in verdicts:
+        result[v.chain] = v.rows
+        result[f"{v.chain}_head"] = v.head_sha256
+    return result
 
 
 def users_command(args: argparse.Namespace) -> dict[str, Any]:
