@@ -91,8 +91,9 @@ class _Service:
 
     def _drain(self, proc: subprocess.Popen[str]) -> None:
         if proc.stdout is not None:
-            for line in proc.stdout:
-                self.log.append(line)
+            with proc.stdout:  # closed at EOF (the process is gone), not left to the garbage collector
+                for line in proc.stdout:
+                    self.log.append(line)
 
     def kill(self, proc: subprocess.Popen[str]) -> None:
         """SIGKILL *proc*'s process group (no-op once it is gone)."""
