@@ -50,7 +50,10 @@ class Settings(BaseSettings):
         description="connections and tasks at once before the server answers 503 (uvicorn)",
     )
     max_header_bytes: int = Field(
-        16_384, ge=1024, le=1_048_576, description="largest request line and headers accepted (h11)"
+        16_384,
+        ge=1024,
+        le=1_048_576,
+        description="most bytes of an unfinished request line and headers buffered (h11); beyond: 400",
     )
 
     @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this

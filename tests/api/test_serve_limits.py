@@ -2,7 +2,7 @@
 
 One service on an SQLite data folder that started world-readable (0755/0644) with ``CACAD_HOST``,
 ``CACAD_PORT`` (overridden by ``--port``), a 1 s body deadline, a 1 s keep-alive timeout and a
-concurrency limit of 3, all from the environment. Raw sockets play the slow and idle clients.
+concurrency limit of 3 and a 4 KiB header cap, all from the environment. Raw sockets play the slow and idle clients.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ REPO = Path(__file__).resolve().parents[2]
 BODY_TIMEOUT_S = 1.0
 KEEP_ALIVE_S = 1
 LIMIT = 3
+MAX_HEADER_BYTES = 4096
 
 
 def _free_port() -> int:
@@ -60,6 +61,7 @@ def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
         CACAD_BODY_TIMEOUT_S=str(BODY_TIMEOUT_S),
         CACAD_KEEP_ALIVE_TIMEOUT_S=str(KEEP_ALIVE_S),
         CACAD_LIMIT_CONCURRENCY=str(LIMIT),
+        CACAD_MAX_HEADER_BYTES=str(MAX_HEADER_BYTES),
     )
     cmd = [sys.executable, "-m", "station.cli", "serve", "--data-dir", str(data_dir)]
     cmd += ["--simulators", "", "--no-demo-library", "--port", str(port)]
@@ -158,3 +160,17 @@ def test_concurrency_over_the_limit_is_503(service: Service) -> None:
             sock.close()
     time.sleep(0.3)
     assert httpx.get(service.base + "/health", timeout=10).status_code == 200
+
+
+def test_headers_still_arriving_beyond_the_cap_are_refused(service: Service) -> None:
+    """h11 buffers at most the cap of a request whose headers have not ended yet, then answers 400."""
+    with _connect(service) as sock:
+        sock.sendall(b"GET /health HTTP/1.1\r\nHost: t\r\nX-Pad: " + b"a" * (2 * MAX_HEADER_BYTES))
+        data, _closed_after = _read_all(sock, limit_s=5)
+    assert data.startswith(b"HTTP/1.1 400"), data[:200]
+    with _connect(service) as sock:  # under the cap the same request, once complete, is served
+        sock.sendall(b"GET /health HTTP/1.1\r\nHost: t\r\nX-Pad: " + b"a" * (MAX_HEADER_BYTES // 2))
+        time.sleep(0.2)
+        sock.sendall(b"\r\nConnection: close\r\n\r\n")
+        data, _closed_after = _read_all(sock, limit_s=5)
+    assert data.startswith(b"HTTP/1.1 200"), data[:200]
