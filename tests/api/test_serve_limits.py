@@ -174,3 +174,32 @@ def test_headers_still_arriving_beyond_the_cap_are_refused(service: Service) -> 
         sock.sendall(b"\r\nConnection: close\r\n\r\n")
         data, _closed_after = _read_all(sock, limit_s=5)
     assert data.startswith(b"HTTP/1.1 200"), data[:200]
+
+
+def test_environment_address_and_limits_reach_uvicorn(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """In-process with uvicorn.run stubbed: CACAD_HOST/CACAD_PORT are used, flags override them."""
+    import uvicorn
+
+    from station.api.timeouts import BodyReadTimeout
+    from station.cli import main
+
+    calls: list[tuple[object, dict[str, object]]] = []
+    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: calls.append((app, kw)))
+    monkeypatch.setenv("CACAD_HOST", "127.0.0.2")
+    monkeypatch.setenv("CACAD_PORT", "8765")
+    monkeypatch.setenv("CACAD_LIMIT_CONCURRENCY", "7")
+    argv = ["serve", "--data-dir", str(tmp_path), "--simulators", "", "--no-demo-library"]
+    assert main(argv) == 0
+    assert main([*argv, "--host", "127.0.0.3", "--port", "8766"]) == 0
+    assert [(kw["host"], kw["port"]) for _app, kw in calls] == [("127.0.0.2", 8765), ("127.0.0.3", 8766)]
+    app, kw = calls[0]
+    assert isinstance(app, BodyReadTimeout) and app.timeout_s == 10.0
+    assert (kw["limit_concurrency"], kw["timeout_keep_alive"], kw["h11_max_incomplete_event_size"]) == (
+        7,
+        5,
+        16384,
+    )
+    monkeypatch.setenv("CACAD_PORT", "http")
+    assert main(argv) == 2
