@@ -243,3 +243,25 @@ def test_migration_back_fills_rows_written_before_the_chain(empty_database_url: 
     with engine.connect() as conn:
         assert [v.broken for v in chain.verify(conn)] == [None, None]
     engine.dispose()
+
+
+def test_a_clock_stepped_back_does_not_break_the_chain(
+    database_url: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import datetime as dt
+
+    _fill(database_url, 2)
+    monkeypatch.setattr(chain, "utcnow", lambda: dt.datetime(2001, 1, 1, tzinfo=dt.UTC))  # NTP step back
+    destination = DatabaseDestination(database_url)
+    try:  # readings 2 and 3 written "in 2001"
+        assert [destination.store(make_reading(7, i)).status for i in (2, 3)] == ["stored", "stored"]
+    finally:
+        destination.close()
+    code, out = _verify(database_url, capsys)
+    assert code == 0, out
+    engine = make_engine(database_url, poolclass=NullPool)
+    with engine.connect() as conn:
+        m = chain.chain_table("measurements")
+        times = conn.execute(m.select().with_only_columns(m.c.received_at).order_by(m.c.id)).scalars().all()
+    engine.dispose()
+    assert times == sorted(times) and times[2] == times[3] == times[1]  # held at the last time written
