@@ -15,6 +15,7 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
+from db.files import private_dir, private_sqlite
 from station.errors import InputError
 
 DEFAULT_DB_FILE = "station.sqlite3"
@@ -52,7 +53,8 @@ def make_engine(
 ) -> Engine:
     """Create an engine for *url* with the workstation's durability settings.
 
-    For SQLite the parent folder is created. ``foreign_keys=False`` is only for batch migrations,
+    For SQLite the parent folder is created (0700) and the database file is private (0600, with its
+    journals; see :mod:`db.files`). ``foreign_keys=False`` is only for batch migrations,
     which recreate tables that others reference. ``busy_timeout_ms`` is how long an SQLite writer
     waits for the lock before the database counts as unreachable.
     """
@@ -63,8 +65,11 @@ def make_engine(
         connect_args = kwargs.pop("connect_args", {})
         connect_args.setdefault("connect_timeout", PG_CONNECT_TIMEOUT_S)  # a dead host fails fast → outbox
         return create_engine(url, connect_args=connect_args, **kwargs)
-    if parsed.database and parsed.database != ":memory:":
-        Path(parsed.database).parent.mkdir(parents=True, exist_ok=True)
+    if parsed.database and parsed.database != ":memory:" and not parsed.database.startswith("file:"):
+        folder = Path(parsed.database).parent
+        if not folder.exists():
+            private_dir(folder)
+        private_sqlite(parsed.database)
     connect_args = kwargs.pop("connect_args", {})
     connect_args.setdefault("check_same_thread", False)
     connect_args.setdefault("timeout", busy_timeout_ms / 1000)

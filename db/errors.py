@@ -19,3 +19,7 @@ class DatabaseUnavailableError(DatabaseError, ConnectionError):
 
 class MigrationError(DatabaseError):
     """The schema is not at the revision this code expects, or a migration failed."""
+
+
+class TamperedError(DatabaseError):
+    """A hash chain over the append-only tables does not recompute: rows were changed, removed or added."""

@@ -4,7 +4,7 @@ from db.models.designs import Design, DesignVersion
 from db.models.instruments import CalibrationRecord, Instrument
 from db.models.library import JOB_STATES, AnalysisResult, FormulationJob, LibraryPaint
 from db.models.measurements import PARTS, Measurement, Panel
-from db.models.users import ApiToken, AuditEvent, Role, User
+from db.models.users import ApiToken, AuditEvent, LedgerHead, Role, User
 
 __all__ = [
     "JOB_STATES",
@@ -17,6 +17,7 @@ __all__ = [
     "DesignVersion",
     "FormulationJob",
     "Instrument",
+    "LedgerHead",
     "LibraryPaint",
     "Measurement",
     "Panel",

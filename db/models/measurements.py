@@ -55,6 +55,7 @@ class Measurement(Base):
     reflectance curve (0–1) per geometry sampled at ``wavelengths_nm``; ``gloss_gu`` in gloss units
     at ``gloss_geometry_deg`` (60° by default). ``payload_sha256`` is the SHA-256 of the raw payload
     as received, so a re-sent reading can be told from a different one under the same client id.
+    ``row_sha256`` and ``chain_sha256`` link the row into the measurement hash chain (``db.chain``).
     """
 
     __tablename__ = "measurements"
@@ -79,6 +80,8 @@ class Measurement(Base):
     supersedes_id: Mapped[int | None] = mapped_column(ForeignKey("measurements.id"), unique=True)
     correction_reason: Mapped[str | None] = mapped_column(Text)
     created_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"))
+    row_sha256: Mapped[str | None] = mapped_column(String(64))
+    chain_sha256: Mapped[str | None] = mapped_column(String(64))
 
 
 @event.listens_for(Measurement, "before_update")

@@ -61,7 +61,7 @@ class ApiToken(Base):
 
 
 class AuditEvent(Base):
-    """One write: who did what to which entity, and when (append-only)."""
+    """One write: who did what to which entity, and when (append-only, hash-chained: ``db.chain``)."""
 
     __tablename__ = "audit_events"
 
@@ -72,3 +72,21 @@ class AuditEvent(Base):
     entity: Mapped[str] = mapped_column(String(32))
     entity_id: Mapped[str] = mapped_column(String(64))
     detail: Mapped[dict[str, Any]] = mapped_column(default=dict)
+    row_sha256: Mapped[str | None] = mapped_column(String(64))
+    chain_sha256: Mapped[str | None] = mapped_column(String(64))
+
+
+class LedgerHead(Base):
+    """The head of one hash chain (``measurements`` or ``audit_events``) and the lock its writers take.
+
+    ``length`` rows, the last ``head_sha256`` link, the last write time ``head_at`` (UTC) and the last
+    row back-filled when the chain was introduced (``backfill_last_id``); see ``db.chain``.
+    """
+
+    __tablename__ = "ledger_heads"
+
+    chain: Mapped[str] = mapped_column(String(32), primary_key=True)
+    length: Mapped[int]
+    head_sha256: Mapped[str] = mapped_column(String(64))
+    head_at: Mapped[dt.datetime | None]
+    backfill_last_id: Mapped[int | None]

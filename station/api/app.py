@@ -59,10 +59,12 @@ TAGS = [
 
 
 def _startup(app: FastAPI, settings: Settings) -> None:
+    from db.files import private_dir
     from db.migrate import ensure_at_head
     from station.api.instruments import InstrumentHub
     from station.api.services.library import load_demo_library
 
+    private_dir(settings.data_dir)  # 0700: the database, the outbox and the bootstrap token live here
     url = settings.effective_database_url
     if settings.auto_migrate:
         ensure_at_head(url)

@@ -43,6 +43,24 @@ class Settings(BaseSettings):
         "(default: they need a bearer token like every route but /health)",
     )
     outbox_replay_s: float = Field(10.0, gt=0, le=3600, description="seconds between outbox replay attempts")
+    body_timeout_s: float = Field(
+        10.0, gt=0, le=600, description="seconds a client has to send a whole request body (else 408, closed)"
+    )
+    keep_alive_timeout_s: int = Field(
+        5, ge=1, le=300, description="seconds an idle keep-alive connection stays open (uvicorn)"
+    )
+    limit_concurrency: int = Field(
+        64,
+        ge=1,
+        le=10_000,
+        description="connections and tasks at once before the server answers 503 (uvicorn)",
+    )
+    max_header_bytes: int = Field(
+        16_384,
+        ge=1024,
+        le=1_048_576,
+        description="most bytes of an unfinished request line and headers buffered (h11); beyond: 400",
+    )
 
     @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this
     @property
@@ -55,3 +73,9 @@ class Settings(BaseSettings):
     def outbox_path(self) -> Path:
         """The ingest outbox of readings taken while the database is away."""
         return self.data_dir / "outbox.sqlite3"
+
+    @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this
+    @property
+    def bootstrap_token_path(self) -> Path:
+        """Where ``station serve`` writes the first admin token (0600) when its output is not a terminal."""
+        return self.data_dir / "bootstrap-token"

@@ -1,15 +1,24 @@
 """``station serve``, ``station db …`` and ``station users …``: the workstation service and its admin commands.
 
 ``station serve`` applies migrations, loads the demo library on first start, attaches the simulated
-instruments, prints the bootstrap admin token once (first start only) and serves on loopback.
+instruments, hands out the bootstrap admin token once (first start only: printed on a terminal, else
+written to ``bootstrap-token`` (0600) in the data folder and the path printed) and serves on loopback
+(``--host``/``--port``, else ``$CACAD_HOST``/``$CACAD_PORT``). uvicorn runs with the keep-alive
+timeout, concurrency limit and header size of the settings, behind a request-body deadline.
+
+A database that cannot be reached or a revision that does not exist is one line on stderr and exit
+status 2 for every command here (no traceback). ``station db verify`` recomputes the hash chains of
+measurements and audit events (``db.chain``): exit 0 intact, 1 with the first broken link named.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import ipaddress
 import logging
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +28,62 @@ from station.errors import InputError
 SIM_CHOICES = ("ma6", "ma3", "gloss")
 
 
+class DatabaseUnreachable(InputError):
+    """The database named by ``--database`` / the settings cannot be opened (exit status 2)."""
+
+    def __init__(self, url: str, reason: str) -> None:
+        super().__init__("database", "a reachable database", None, f"{url}: {reason}")
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    text = text.split(" (Background on this error", 1)[0]
+    return f"{type(exc).__name__}: {text}"[:300]
+
+
+def _shown(url: str) -> str:
+    from sqlalchemy.engine import make_url
+
+    try:
+        return make_url(url).render_as_string(hide_password=True)
+    except Exception:
+        return "<unparsable URL>"
+
+
+@contextlib.contextmanager
+def _database_errors(url: str, revision: str | None = None) -> Iterator[None]:
+    """Turn a database that cannot be reached or an unknown revision into one :class:`InputError` line."""
+    from alembic.util.exc import CommandError
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from db.errors import DatabaseError, MigrationError, TamperedError
+
+    try:
+        yield
+    except (InputError, TamperedError):
+        raise
+    except CommandError as exc:
+        from db.migrate import head_revision
+
+        if revision is not None and revision in str(exc):
+            raise InputError(
+                "revision", f"a revision this code knows (head {head_revision()}, base, +N or -N)", revision
+            ) from None
+        raise InputError(
+            "database",
+            f"a database at a revision this code knows (head {head_revision()})",
+            None,
+            _one_line(exc),
+        ) from None
+    except MigrationError as exc:
+        raise InputError("database", "a database at the revision this code expects", None, str(exc)) from None
+    except (SQLAlchemyError, DatabaseError, OSError) as exc:
+        raise DatabaseUnreachable(_shown(url), _one_line(exc)) from None
+
+
 def _settings(args: argparse.Namespace, **extra: Any) -> Any:
+    import pydantic
+
     from station.api.settings import Settings
 
     opts: dict[str, Any] = {}
@@ -27,17 +91,36 @@ def _settings(args: argparse.Namespace, **extra: Any) -> Any:
         opts["database_url"] = args.database
     if getattr(args, "data_dir", None):
         opts["data_dir"] = Path(args.data_dir).resolve()
-    opts.update(extra)
-    return Settings(**opts)
+    opts.update({k: v for k, v in extra.items() if v is not None})
+    try:
+        return Settings(**opts)
+    except pydantic.ValidationError as exc:
+        first = exc.errors()[0]
+        name = ".".join(str(p) for p in first["loc"]) or "settings"
+        raise InputError(f"{name} (or $CACAD_{name.upper()})", first["msg"], first.get("input")) from None
 
 
 def _sessions(url: str) -> tuple[Any, Any]:
     from db.engine import make_engine, make_sessionmaker
     from db.migrate import ensure_at_head
 
-    ensure_at_head(url)
-    engine = make_engine(url)
+    with _database_errors(url):
+        ensure_at_head(url)
+        engine = make_engine(url)
     return engine, make_sessionmaker(engine)
+
+
+def _hand_out_token(token: str, path: Path) -> None:
+    """Print the bootstrap token on a terminal; otherwise write it to *path* (0600) and print the path."""
+    if sys.stdout.isatty():
+        print("bootstrap admin token (shown once, store it now; it is kept only hashed):", flush=True)
+        print(f"  {token}", flush=True)
+        return
+    from db.files import private_dir, write_private_text
+
+    private_dir(path.parent)
+    write_private_text(path, token + "\n")
+    print(f"bootstrap admin token written to {path} (mode 0600; store it, then delete the file)", flush=True)
 
 
 def _is_loopback(host: str) -> bool:
@@ -61,11 +144,13 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
     """Run the service until interrupted."""
     import uvicorn
 
+    from db.files import private_dir
     from station.api import create_app
     from station.api.services.library import load_demo_library
     from station.api.services.users import bootstrap_admin
+    from station.api.timeouts import BodyReadTimeout
 
-    if not 1 <= args.port <= 65535:
+    if args.port is not None and not 1 <= args.port <= 65535:
         raise InputError("--port", "1..65535", args.port)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     logging.getLogger("alembic").setLevel(logging.WARNING)
@@ -77,9 +162,10 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
         load_demo_library=not args.no_demo_library,
     )
     url = settings.effective_database_url
+    private_dir(settings.data_dir)
     engine, sessions = _sessions(url)
     try:
-        with sessions() as session:
+        with _database_errors(url), sessions() as session:
             token = bootstrap_admin(session=session)
             if settings.load_demo_library:
                 try:
@@ -98,15 +184,23 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
         engine.dispose()
     print(f"database: {engine.url.render_as_string(hide_password=True)}", flush=True)
     if token:
-        print("bootstrap admin token (shown once, store it now; it is kept only hashed):", flush=True)
-        print(f"  {token}", flush=True)
-    if not _is_loopback(args.host):
+        _hand_out_token(token, settings.bootstrap_token_path)
+    if not _is_loopback(settings.host):
         print(
-            f"warning: binding {args.host}, which is not loopback: the service is reachable from the network",
+            f"warning: binding {settings.host}, which is not loopback: the service is reachable from the network",
             file=sys.stderr,
             flush=True,
         )
-    uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level=args.log_level)
+    app = BodyReadTimeout(create_app(settings), settings.body_timeout_s)
+    uvicorn.run(
+        app,
+        host=settings.host,
+        port=settings.port,
+        log_level=args.log_level,
+        timeout_keep_alive=settings.keep_alive_timeout_s,
+        limit_concurrency=settings.limit_concurrency,
+        h11_max_incomplete_event_size=settings.max_header_bytes,
+    )
     return None
 
 
@@ -116,15 +210,18 @@ def db_command(args: argparse.Namespace) -> dict[str, Any]:
     from db.engine import make_engine
 
     url = _settings(args).effective_database_url
-    if args.db_action == "upgrade":
-        migrate.upgrade(url, args.revision)
-    elif args.db_action == "downgrade":
-        migrate.downgrade(url, args.revision)
-    engine = make_engine(url)
-    try:
-        current = migrate.current_revision(engine)
-    finally:
-        engine.dispose()
+    with _database_errors(url, args.revision):
+        if args.db_action == "upgrade":
+            migrate.upgrade(url, args.revision)
+        elif args.db_action == "downgrade":
+            migrate.downgrade(url, args.revision)
+        engine = make_engine(url)
+        try:
+            if args.db_action == "verify":
+                return _verify(engine)
+            current = migrate.current_revision(engine)
+        finally:
+            engine.dispose()
     return {
         "database": engine.url.render_as_string(hide_password=True),
         "revision": current,
@@ -132,14 +229,35 @@ def db_command(args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
+def _verify(engine: Any) -> dict[str, Any]:
+    """Recompute both hash chains; :class:`TamperedError` (exit 1) naming the first broken link."""
+    from db import chain
+    from db.errors import TamperedError
+    from db.migrate import current_revision
+
+    if current_revision(engine) is None:
+        raise InputError("database", "a migrated database (run `station db upgrade`)", None)
+    with engine.connect() as conn:
+        verdicts = chain.verify(conn)
+    for verdict in verdicts:
+        if verdict.broken is not None:
+            raise TamperedError(f"chain broken: {verdict.broken}")
+    result: dict[str, Any] = {"chain": "intact"}
+    for v in verdicts:
+        result[v.chain] = v.rows
+        result[f"{v.chain}_head"] = v.head_sha256
+    return result
+
+
 def users_command(args: argparse.Namespace) -> dict[str, Any]:
     """Manage users and tokens from the workstation (audited as actor ``None``, via ``cli``)."""
     from db.models import Role
     from station.api.services import users
 
-    engine, sessions = _sessions(_settings(args).effective_database_url)
+    url = _settings(args).effective_database_url
+    engine, sessions = _sessions(url)
     try:
-        with sessions() as session:
+        with _database_errors(url), sessions() as session:
             if args.users_action == "add":
                 user, token, secret = users.create_user(
                     session=session, actor=None, name=args.name, role=Role(args.role), label="cli"
@@ -180,8 +298,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "serve", help="run the workstation service (FastAPI) with simulated instruments"
     )
     _db_args(p)
-    p.add_argument("--host", default="127.0.0.1", help="bind address (default: loopback 127.0.0.1)")
-    p.add_argument("--port", type=int, default=8000)
+    p.add_argument("--host", help="bind address (default: $CACAD_HOST, else loopback 127.0.0.1)")
+    p.add_argument("--port", type=int, help="TCP port (default: $CACAD_PORT, else 8000)")
     p.add_argument(
         "--simulators",
         default=",".join(SIM_CHOICES),
@@ -191,8 +309,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--log-level", default="info", choices=("critical", "error", "warning", "info", "debug"))
     p.set_defaults(handler=serve)
 
-    p = subparsers.add_parser("db", help="database migrations (upgrade, downgrade, current)")
-    p.add_argument("db_action", choices=("upgrade", "downgrade", "current"))
+    p = subparsers.add_parser(
+        "db", help="database migrations (upgrade, downgrade, current) and the tamper check (verify)"
+    )
+    p.add_argument("db_action", choices=("upgrade", "downgrade", "current", "verify"))
     p.add_argument("revision", nargs="?", default=None, help="target revision (default head / one step back)")
     _db_args(p)
     add_json_flag(p)
@@ -216,7 +336,27 @@ def _db_defaults(args: argparse.Namespace) -> dict[str, Any]:
     return db_command(args)
 
 
+def _validated(model: Any, data: dict[str, Any]) -> None:
+    """Validate *data* with the API's request schema *model*; :class:`InputError` naming the first field."""
+    import pydantic
+
+    try:
+        model.model_validate(data)
+    except pydantic.ValidationError as exc:
+        first = exc.errors()[0]
+        field = ".".join(str(p) for p in first["loc"]) or "input"
+        raise InputError(
+            field, first["msg"].removeprefix("String should ").replace("Value error, ", ""), data.get(field)
+        ) from None
+
+
 def _users_checked(args: argparse.Namespace) -> dict[str, Any]:
+    from station.api.schemas.users import TokenCreate, UserCreate
+
     if args.users_action != "list" and not args.name:
         raise InputError("name", f"a user name for 'users {args.users_action}'", None)
+    if args.users_action == "add":
+        _validated(UserCreate, {"name": args.name, "role": args.role})
+    if args.users_action in ("add", "token"):
+        _validated(TokenCreate, {"label": args.label})
     return users_command(args)

@@ -14,13 +14,13 @@ import uuid
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
-from sqlalchemy import Engine, insert, select
+from sqlalchemy import Engine, select
 from sqlalchemy.exc import DBAPIError, DisconnectionError, InterfaceError, OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
-from db.base import utcnow
+from db.chain import append_audit
 from db.engine import make_engine, make_sessionmaker
-from db.models import AuditEvent, Measurement
+from db.models import Measurement
 from station.ingest.errors import DestinationUnreachableError
 from station.ingest.schema import Reading
 from station.ingest.store import StoreResult, store_reading
@@ -28,7 +28,6 @@ from station.ingest.store import StoreResult, store_reading
 __all__ = ["DatabaseDestination", "Destination", "Receipt", "Status", "is_unreachable", "store_audited"]
 
 Status = Literal["stored", "duplicate", "queued", "refused"]
-_AUDIT_INSERT = insert(AuditEvent.__table__)
 _UNREACHABLE = (
     DestinationUnreachableError,
     OperationalError,
@@ -92,17 +91,16 @@ def store_audited(
     """:func:`store_reading` plus, when the row is new, its audit event, in the caller's transaction.
 
     The audit detail holds the client id, the operator and *source* (when given); *actor_id* is the
-    acting user (``None``: the station account).
+    acting user (``None``: the station account). Both rows join their hash chains (``db.chain``).
     """
     result = store_reading(session, reading, created_by_id=actor_id, instrument_cache=instrument_cache)
     if result.created:
         detail: dict[str, str] = {"client_id": str(reading.client_id), "operator": reading.operator}
         if source is not None:
             detail["source"] = source
-        session.execute(
-            _AUDIT_INSERT,
+        append_audit(
+            session,
             {
-                "at": utcnow(),
                 "actor_id": actor_id,
                 "action": action,
                 "entity": "measurement",

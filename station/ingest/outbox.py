@@ -1,7 +1,7 @@
 """A durable, ordered on-disk outbox for readings the database could not take.
 
 The outbox is a small SQLite file (WAL, ``synchronous=FULL``: an entry is on disk when :meth:`put`
-returns). Entries keep their arrival order (``seq``); a client id is queued at most once. Entries that
+returns), private to its owner (0600). Entries keep their arrival order (``seq``); a client id is queued at most once. Entries that
 the database refuses for a reason other than being unreachable move to a dead-letter table with the
 error, so one bad reading cannot block the readings behind it.
 """
@@ -13,6 +13,8 @@ import sqlite3
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+
+from db.files import private_dir, private_sqlite
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS outbox (
@@ -45,7 +47,9 @@ class Outbox:
 
     def __init__(self, path: Path | str) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        if not self.path.parent.exists():
+            private_dir(self.path.parent)
+        private_sqlite(self.path)  # 0600 before SQLite opens it; its -wal/-shm files take the same mode
         self._conn = sqlite3.connect(self.path, isolation_level=None, timeout=30.0, check_same_thread=False)
         self._conn.execute("PRAGMA journal_mode=WAL")
         self._conn.execute("PRAGMA synchronous=FULL")

@@ -4,6 +4,8 @@ All three statements run in one transaction with ``INSERT … ON CONFLICT DO NOT
 keys (instrument serial, calibration client id, measurement client id), so a reading sent twice, or
 replayed after a crash that hit between the database commit and the outbox acknowledgement, is stored
 once. A second reading under a stored client id but with a different payload hash is refused.
+A new row is appended to the measurement hash chain (``db.chain``) under the chain's lock, held until
+the caller commits.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from db.base import utcnow
+from db import chain
 from db.models import CalibrationRecord, Instrument, Measurement, Panel
 from station.ingest.errors import ClientIdConflictError, ReferenceNotFoundError
 from station.ingest.schema import Reading
@@ -162,12 +164,17 @@ def store_reading(
         correction_reason=correction_reason,
         created_by_id=created_by_id,
     )
-
-    values["received_at"] = utcnow()
+    head = chain.lock_head(session, "measurements")  # serialises appends until the caller commits
+    received_at = chain.chain_time(head)
+    values["received_at"] = received_at
+    row_sha256, link = chain.seal("measurements", head, values)
+    values["row_sha256"], values["chain_sha256"] = row_sha256, link
     try:
         new_id = session.execute(_measurement_insert(session.get_bind().dialect.name), values).scalar()
     except IntegrityError as exc:  # e.g. supersedes_id already superseded, or a vanished reference
         raise ReferenceNotFoundError(f"reading refused by a database constraint: {exc.orig}") from exc
+    if new_id is not None:
+        chain.advance(session, "measurements", head, link, received_at)
     if new_id is None:  # stored before (a re-send, a replay, or a concurrent writer)
         row = session.execute(
             select(Measurement.id, Measurement.payload_sha256).where(

@@ -11,6 +11,7 @@ import os
 import re
 import signal
 import socket
+import stat
 import subprocess
 import sys
 import time
@@ -64,7 +65,8 @@ def _serve(data_dir: Path, *extra: str) -> Iterator[tuple[str, str]]:
             out.append(line)
             if "Uvicorn running" in line or "Application startup complete" in line:
                 break
-        token = next((m.group(0) for m in map(re.compile(r"cst_[\w-]+").search, out) if m), "")
+        token_file = data_dir / "bootstrap-token"  # stdout is a pipe, not a terminal: the token is in a file
+        token = token_file.read_text().strip() if token_file.exists() else ""
         yield base, token
     finally:
         proc.send_signal(signal.SIGINT)
@@ -106,8 +108,12 @@ def test_serve_first_start_real_http(tmp_path: Path) -> None:
     assert (tmp_path / "station.sqlite3").exists()
 
 
-def test_bootstrap_token_is_printed_on_first_start_only(tmp_path: Path, monkeypatch, capsys) -> None:
-    """The serve handler in-process, with uvicorn.run stubbed: first start prints a token, the second does not."""
+def test_bootstrap_token_is_handed_out_on_first_start_only(tmp_path: Path, monkeypatch, capsys) -> None:
+    """The serve handler in-process, with uvicorn.run stubbed: first start hands out a token, the second does not.
+
+    Output captured (not a terminal): the token goes to ``bootstrap-token`` (0600) and only its path is
+    printed; on a terminal it is printed.
+    """
     import uvicorn
 
     from station.cli import main
@@ -117,16 +123,31 @@ def test_bootstrap_token_is_printed_on_first_start_only(tmp_path: Path, monkeypa
     argv = ["serve", "--data-dir", str(tmp_path), "--simulators", "", "--no-demo-library", "--port", "8123"]
     assert main(argv) == 0
     first = capsys.readouterr().out
-    token = re.search(r"cst_[\w-]+", first)
-    assert token, first
+    token_file = tmp_path / "bootstrap-token"
+    assert "cst_" not in first and str(token_file) in first, first
+    assert stat.S_IMODE(token_file.stat().st_mode) == 0o600
+    token = token_file.read_text().strip()
+    assert re.fullmatch(r"cst_[\w-]+", token), token
     assert main(argv) == 0
     assert "cst_" not in capsys.readouterr().out
     assert [kw["host"] for _app, kw in started] == ["127.0.0.1", "127.0.0.1"]
     from fastapi.testclient import TestClient
 
     with TestClient(started[-1][0]) as client:  # the app serve built, on the same data folder
-        me = client.get("/api/v1/me", headers={"Authorization": f"Bearer {token.group(0)}"})
+        me = client.get("/api/v1/me", headers={"Authorization": f"Bearer {token}"})
         assert me.json()["role"] == "admin"
+
+
+def test_bootstrap_token_is_printed_on_a_terminal(tmp_path: Path, monkeypatch, capsys) -> None:
+    import uvicorn
+
+    from station.cli import main
+
+    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: None)
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
+    assert main(["serve", "--data-dir", str(tmp_path), "--simulators", "", "--no-demo-library"]) == 0
+    assert re.search(r"cst_[\w-]+", capsys.readouterr().out)
+    assert not (tmp_path / "bootstrap-token").exists()
 
 
 def test_serve_refuses_bad_input(tmp_path: Path, capsys) -> None:

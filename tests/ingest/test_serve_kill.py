@@ -82,6 +82,9 @@ class _Service:
             if token and not self.token:
                 self.token = token.group(0)
             if "Uvicorn running" in line:  # logged once the socket is bound ("startup complete" comes before)
+                token_file = self.data_dir / "bootstrap-token"  # stdout is a pipe: the token goes to a file
+                if not self.token and token_file.exists():
+                    self.token = token_file.read_text().strip()
                 threading.Thread(target=self._drain, args=(self.proc,), daemon=True).start()
                 return
         pytest.fail("station serve did not start in time:\n" + "".join(self.log[-40:]))

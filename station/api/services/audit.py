@@ -1,4 +1,4 @@
-"""The audit log: one row per write, in the same transaction as the write."""
+"""The audit log: one row per write, in the same transaction as the write, hash-chained (``db.chain``)."""
 
 from __future__ import annotations
 
@@ -7,22 +7,24 @@ from typing import Any
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
+from db.chain import append_audit
 from db.models import AuditEvent, User
 
 
 def record(
     *, session: Session, actor: User | None, action: str, entity: str, entity_id: object, **detail: Any
-) -> AuditEvent:
-    """Add an audit event (committed with the caller's transaction)."""
-    event = AuditEvent(
-        actor_id=actor.id if actor else None,
-        action=action,
-        entity=entity,
-        entity_id=str(entity_id),
-        detail=detail,
+) -> int:
+    """Append an audit event to the chain (committed with the caller's transaction); its id."""
+    return append_audit(
+        session,
+        {
+            "actor_id": actor.id if actor else None,
+            "action": action,
+            "entity": entity,
+            "entity_id": str(entity_id),
+            "detail": detail,
+        },
     )
-    session.add(event)
-    return event
 
 
 def list_events(
