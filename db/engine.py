@@ -18,7 +18,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from station.errors import InputError
 
 DEFAULT_DB_FILE = "station.sqlite3"
-SQLITE_BUSY_TIMEOUT_MS = 30_000
+SQLITE_BUSY_TIMEOUT_MS = 2_000  # a locked database counts as away after 2 s (the reading goes to the outbox)
 PG_CONNECT_TIMEOUT_S = 5
 
 

@@ -37,6 +37,16 @@ class Settings(BaseSettings):
         "(default: they need a bearer token like every route but /health)",
     )
     outbox_replay_s: float = Field(10.0, gt=0, le=3600, description="seconds between outbox replay attempts")
+    token_ttl_days: float = Field(
+        90.0, gt=0, le=3650, description="lifetime of a newly issued bearer token, in days"
+    )
+    token_offline_s: float = Field(
+        900.0,
+        ge=0,
+        le=86_400,
+        description="how long a token verified against the database keeps working while the database "
+        "is away, in seconds (0: never without the database)",
+    )
 
     @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this
     @property

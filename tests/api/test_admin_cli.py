@@ -19,7 +19,7 @@ def test_db_and_users_commands(tmp_path: Path, capsys) -> None:
     d = ["--data-dir", str(tmp_path)]
     assert main(["db", "upgrade", *d, "--json"]) == 0
     out = _json(capsys)
-    assert out["revision"] == out["head"] == "0003"
+    assert out["revision"] == out["head"] == "0004_token_expiry"
     assert main(["db", "downgrade", "0001", *d, "--json"]) == 0
     assert _json(capsys)["revision"] == "0001"
     assert main(["db", "upgrade", *d, "--json"]) == 0
