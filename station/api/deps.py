@@ -7,7 +7,8 @@ token to a user (401 otherwise) and checks the route's scopes against the role (
 
 The token is checked against the database on every request while it is reachable; while it is away
 (``app.state.database``) a token the database verified in the last ``Settings.token_offline_s``
-seconds (``app.state.tokens``) still authenticates, any other gets 503 (it cannot be checked).
+seconds (``app.state.tokens``) still authenticates, any other gets 503 (it cannot be checked). A token
+verified less than ``Settings.token_recheck_s`` seconds ago is not looked up again.
 """
 
 from __future__ import annotations
@@ -81,7 +82,11 @@ def authorize(
     database: DatabaseState = request.app.state.database
     grant: TokenGrant | None = None
     user: User | None = None
-    if database.should_try():
+    recheck_s: float = request.app.state.settings.token_recheck_s
+    recent = tokens.get(token_hash, within_s=recheck_s) if recheck_s > 0 else None
+    if recent is not None:
+        grant = recent  # verified moments ago: no database round trip
+    elif database.should_try():
         try:
             found = _verified(session, token_hash)
         except Exception as exc:
@@ -95,7 +100,7 @@ def authorize(
                 tokens.drop(token_hash)
                 raise _unauthorised("unknown or revoked token")
             grant, user = found
-    verified_now = grant is not None
+    verified_now = grant is not None and recent is None
     if grant is None:
         grant = tokens.get(token_hash)
         if grant is None:

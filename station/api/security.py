@@ -5,9 +5,12 @@ secrets of this entropy: there is nothing to brute-force, unlike a password). Ea
 fewest scopes its job needs (a technician measures; a chemist formulates; only admin manages users).
 
 Tokens expire (``Settings.token_ttl_days``) and can be revoked one by one. A :class:`TokenCache`
-(one per app) remembers the tokens the database verified, so a technician keeps scanning for
-``Settings.token_offline_s`` seconds while the database is away; once it is back every request is
-checked against it again, so a revocation made meanwhile takes effect on the next request.
+(one per app) remembers the tokens the database verified: a token verified less than
+``Settings.token_recheck_s`` seconds ago is not looked up again (the common case under load), and
+while the database is away a technician keeps scanning for ``Settings.token_offline_s`` seconds after
+the last verification. Once the database is back a token is checked against it again within
+``token_recheck_s``, so a revocation made meanwhile takes effect then; one made through this service
+drops the cached grant at once.
 """
 
 from __future__ import annotations
@@ -163,11 +166,12 @@ class TokenCache:
             while len(self._grants) > MAX_CACHED_TOKENS:
                 self._grants.pop(next(iter(self._grants)))
 
-    def get(self, token_hash: str) -> TokenGrant | None:
-        """The grant verified within the last *offline_s* seconds, or ``None``."""
+    def get(self, token_hash: str, within_s: float | None = None) -> TokenGrant | None:
+        """The grant verified within the last *within_s* seconds (default *offline_s*), or ``None``."""
+        limit = self.offline_s if within_s is None else within_s
         with self._lock:
             found = self._grants.get(token_hash)
-        if found is None or time.monotonic() - found[0] > self.offline_s:
+        if found is None or time.monotonic() - found[0] > limit:
             return None
         return found[1]
 

@@ -40,6 +40,14 @@ class Settings(BaseSettings):
     token_ttl_days: float = Field(
         90.0, gt=0, le=3650, description="lifetime of a newly issued bearer token, in days"
     )
+    token_recheck_s: float = Field(
+        5.0,
+        ge=0,
+        le=300,
+        description="seconds a token verified against the database is trusted before it is checked "
+        "again (0: every request); a revocation made through this service applies at once, one made "
+        "elsewhere (the CLI, another service) within this time",
+    )
     token_offline_s: float = Field(
         900.0,
         ge=0,

@@ -25,7 +25,9 @@ from tests.api.conftest import Api, make_api
 
 @pytest.fixture
 def sqlite_file_api(tmp_path: Path) -> Iterator[Api]:
-    yield from make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, token_ttl_days=2.0)
+    yield from make_api(
+        f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, token_ttl_days=2.0, token_recheck_s=0
+    )
 
 
 def _parse(at: str) -> dt.datetime:
@@ -142,6 +144,24 @@ def test_a_verified_token_works_while_the_database_is_locked_and_revocation_hold
             time.sleep(0.5)
         assert r.status_code == 401 and "revoked" in r.json()["detail"]
         assert api.client.get("/health").json()["status"] == "ok"
+    finally:
+        gen.close()
+
+
+def test_a_revocation_made_elsewhere_applies_within_the_recheck_time(tmp_path: Path) -> None:
+    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, token_recheck_s=1.0)
+    api = next(gen)
+    try:
+        assert api.client.get("/api/v1/me", headers=api.auth("qa")).status_code == 200
+        engine = create_engine(f"sqlite:///{tmp_path / 'station.sqlite3'}")
+        with engine.begin() as conn:  # another process (the CLI) revokes every token
+            conn.execute(update(ApiToken).values(revoked_at=dt.datetime.now(dt.UTC)))
+        engine.dispose()
+        revoked_at = time.monotonic()
+        while api.client.get("/api/v1/me", headers=api.auth("qa")).status_code == 200:
+            assert time.monotonic() - revoked_at < 1.5, "revocation not applied within the recheck time"
+            time.sleep(0.05)
+        assert time.monotonic() - revoked_at <= 1.5
     finally:
         gen.close()
 
