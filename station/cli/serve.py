@@ -144,11 +144,22 @@ def users_command(args: argparse.Namespace) -> dict[str, Any]:
                 user, token, secret = users.create_user(
                     session=session, actor=None, name=args.name, role=Role(args.role), label="cli"
                 )
-                return {"user": user.name, "role": user.role.value, "token_id": token.id, "token": secret}
+                return {
+                    "user": user.name,
+                    "role": user.role.value,
+                    "token_id": token.id,
+                    "token": secret,
+                    "expires_at": _iso(token.expires_at),
+                }
             if args.users_action == "token":
                 user = users.find_user(session=session, name=args.name)
                 token, secret = users.issue_token(session=session, actor=None, user=user, label=args.label)
-                return {"user": user.name, "token_id": token.id, "token": secret}
+                return {
+                    "user": user.name,
+                    "token_id": token.id,
+                    "token": secret,
+                    "expires_at": _iso(token.expires_at),
+                }
             if args.users_action == "revoke-token":  # name: the token id (from `users tokens NAME`)
                 token = users.revoke_token(
                     session=session,
