@@ -123,9 +123,6 @@ def _run(service: _Service, url: str, take_away: Callable[[], None], bring_back:
         raise
     finally:
         service.stop()
-        if service.proc is not None and service.proc.stdout is not None:
-            time.sleep(0.2)  # let the log reader see end of file
-            service.proc.stdout.close()
 
 
 @pytest.mark.slow
