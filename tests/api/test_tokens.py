@@ -198,7 +198,7 @@ def test_grant_refusals_name_the_reason() -> None:
     assert "deactivated" in (inactive.refusal(now) or "")
 
 
-def test_audit_rows_are_untouched_by_revocation_reads(tmp_path: Path) -> None:
+def test_revoking_twice_keeps_the_first_time_and_one_audit_event(tmp_path: Path) -> None:
     """Revoking twice records one audit event (the first revocation time is kept)."""
     gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path)
     api = next(gen)
