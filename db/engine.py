@@ -8,18 +8,21 @@ queue on the lock instead of failing on a stale snapshot. PostgreSQL URLs use ps
 from __future__ import annotations
 
 import os
+import sqlite3
+import threading
 from pathlib import Path
 from typing import Any
 
 from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from db.files import private_dir, private_sqlite
 from station.errors import InputError
 
 DEFAULT_DB_FILE = "station.sqlite3"
-SQLITE_BUSY_TIMEOUT_MS = 30_000
+SQLITE_BUSY_TIMEOUT_MS = 2_000  # a locked database counts as away after 2 s (the reading goes to the outbox)
 PG_CONNECT_TIMEOUT_S = 5
 
 
@@ -85,9 +88,32 @@ def make_engine(
         cur.execute(f"PRAGMA busy_timeout={int(busy_timeout_ms)}")
         cur.close()
 
+    # Writers of this engine queue on a lock of their own before BEGIN IMMEDIATE: SQLite's busy handler
+    # polls with growing sleeps (up to 100 ms), which under concurrent writers of one process gives long,
+    # unfair tails; a lock hands over at once. The wait stays bounded by the same busy timeout.
+    writer = threading.Lock()
+    wait_s = busy_timeout_ms / 1000
+
     @event.listens_for(engine, "begin")
     def _on_begin(conn: Any) -> None:
-        conn.exec_driver_sql("BEGIN IMMEDIATE")
+        if not writer.acquire(timeout=wait_s):
+            raise OperationalError(
+                "BEGIN IMMEDIATE",
+                None,
+                sqlite3.OperationalError("database is locked (writers of this process)"),
+            )
+        try:
+            conn.exec_driver_sql("BEGIN IMMEDIATE")
+        except BaseException:
+            writer.release()
+            raise
+        conn.info["cacad_writer"] = True
+
+    @event.listens_for(engine, "commit")
+    @event.listens_for(engine, "rollback")
+    def _on_end(conn: Any) -> None:
+        if conn.info.pop("cacad_writer", False):
+            writer.release()
 
     return engine
 

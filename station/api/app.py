@@ -15,8 +15,10 @@ from fastapi import FastAPI
 
 from db.engine import make_engine, make_sessionmaker
 from station import __version__
+from station.api.availability import DatabaseState, probe_database
 from station.api.errors import install_error_handlers
 from station.api.middleware import BodySizeLimit, SecurityHeaders
+from station.api.security import TokenCache
 from station.api.settings import Settings
 
 log = logging.getLogger(__name__)
@@ -78,17 +80,34 @@ def _startup(app: FastAPI, settings: Settings) -> None:
             except Exception:  # the service still runs; the library routes then list nothing
                 session.rollback()
                 log.exception("demo library not loaded")
-    hub = InstrumentHub(settings=settings, engine=engine, sessions=app.state.sessions)
+    hub = InstrumentHub(
+        settings=settings, engine=engine, sessions=app.state.sessions, database=app.state.database
+    )
     app.state.instruments = hub
     hub.attach_simulators(settings.simulators)
 
 
 async def _replay_outbox_periodically(app: FastAPI, period_s: float) -> None:
-    """Drain the service outbox every *period_s* seconds, so queued readings land without a new measure."""
+    """Every *period_s* seconds: probe the database, mark it away or back, and drain the outbox when it answers.
+
+    The readings queued while the database was away land here without a new measure, in the order
+    they were taken, each exactly once (by client id).
+    """
     import asyncio
 
+    database: DatabaseState = app.state.database
     while True:
         await asyncio.sleep(period_s)
+        try:
+            await asyncio.wait_for(asyncio.to_thread(probe_database, app.state.engine), timeout=10.0)
+        except Exception as exc:
+            if not database.away:
+                log.warning("database unreachable (%s); readings go to the outbox", type(exc).__name__)
+            database.mark_away(exc)
+            continue
+        if database.away:
+            log.info("database reachable again")
+        database.mark_back()
         try:
             done = await asyncio.to_thread(app.state.instruments.replay_outbox)
             if done:
@@ -175,6 +194,8 @@ def create_app(settings: Settings) -> FastAPI:
         openapi_url="/openapi.json" if public else None,
     )
     app.state.settings = settings
+    app.state.tokens = TokenCache(settings.token_offline_s)
+    app.state.database = DatabaseState()
     install_error_handlers(app)
     app.include_router(health.router)
     if not settings.public_docs:

@@ -4,6 +4,11 @@
 tests swap it with ``app.dependency_overrides[get_session]``. ``authorize`` resolves the bearer
 token to a user (401 otherwise) and checks the route's scopes against the role (403 otherwise):
 ``user: Annotated[User, Security(authorize, scopes=[Scope.DESIGNS_WRITE])]``.
+
+The token is checked against the database on every request while it is reachable; while it is away
+(``app.state.database``) a token the database verified in the last ``Settings.token_offline_s``
+seconds (``app.state.tokens``) still authenticates, any other gets 503 (it cannot be checked). A token
+verified less than ``Settings.token_recheck_s`` seconds ago is not looked up again.
 """
 
 from __future__ import annotations
@@ -16,9 +21,12 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer, SecurityS
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from db.base import utcnow
 from db.models import ApiToken, User
-from station.api.security import Scope, allows, hash_token
+from station.api.availability import DatabaseState
+from station.api.security import Scope, TokenCache, TokenGrant, allows, hash_token
 from station.api.settings import Settings
+from station.ingest import is_unreachable
 
 bearer = HTTPBearer(auto_error=False, description="token printed by `station serve` or `station users add`")
 
@@ -42,24 +50,72 @@ def _unauthorised(detail: str) -> HTTPException:
     return HTTPException(status.HTTP_401_UNAUTHORIZED, detail, headers={"WWW-Authenticate": "Bearer"})
 
 
+def _verified(session: Session, token_hash: str) -> tuple[TokenGrant, User] | None:
+    """The grant and user of *token_hash* from the database (``None``: no such token)."""
+    token = session.scalars(select(ApiToken).where(ApiToken.token_hash == token_hash)).first()
+    if token is None:
+        return None
+    grant = TokenGrant.of(token)
+    session.commit()  # end the read transaction: SQLite holds its write lock per transaction (BEGIN IMMEDIATE)
+    return grant, token.user
+
+
+def _unavailable() -> HTTPException:
+    return HTTPException(
+        status.HTTP_503_SERVICE_UNAVAILABLE,
+        "database unavailable and this token was not verified recently; retry later",
+        headers={"Retry-After": "5"},
+    )
+
+
 def authorize(
     security_scopes: SecurityScopes,
+    request: Request,
     session: SessionDep,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer)],
 ) -> User:
     """The active user behind the bearer token, holding every scope the route declares."""
     if credentials is None or credentials.scheme.lower() != "bearer" or not credentials.credentials:
         raise _unauthorised("missing bearer token")
-    token = session.scalars(
-        select(ApiToken).where(ApiToken.token_hash == hash_token(credentials.credentials))
-    ).first()
-    if token is None or token.revoked_at is not None or not token.user.active:
-        raise _unauthorised("unknown or revoked token")
-    user = token.user
-    session.commit()  # end the read transaction: SQLite holds its write lock per transaction (BEGIN IMMEDIATE)
-    missing = [s for s in security_scopes.scopes if not allows(user.role, Scope(s))]
+    token_hash = hash_token(credentials.credentials)
+    tokens: TokenCache = request.app.state.tokens
+    database: DatabaseState = request.app.state.database
+    grant: TokenGrant | None = None
+    user: User | None = None
+    recheck_s: float = request.app.state.settings.token_recheck_s
+    recent = tokens.get(token_hash, within_s=recheck_s) if recheck_s > 0 else None
+    if recent is not None:
+        grant = recent  # verified moments ago: no database round trip
+    elif database.should_try():
+        try:
+            found = _verified(session, token_hash)
+        except Exception as exc:
+            session.rollback()
+            if not is_unreachable(exc):
+                raise
+            database.mark_away(exc)
+        else:
+            database.mark_back()
+            if found is None:
+                tokens.drop(token_hash)
+                raise _unauthorised("unknown or revoked token")
+            grant, user = found
+    verified_now = grant is not None and recent is None
+    if grant is None:
+        grant = tokens.get(token_hash)
+        if grant is None:
+            raise _unavailable()
+    refusal = grant.refusal(utcnow())
+    if refusal is not None:
+        tokens.drop(token_hash)
+        raise _unauthorised(refusal)
+    if verified_now:
+        tokens.put(token_hash, grant)  # only a database answer restarts the offline window
+    if user is None:
+        user = grant.user()
+    missing = [s for s in security_scopes.scopes if not allows(grant.role, Scope(s))]
     if missing:
-        raise HTTPException(status.HTTP_403_FORBIDDEN, f"role {user.role.value} lacks scope {missing[0]}")
+        raise HTTPException(status.HTTP_403_FORBIDDEN, f"role {grant.role.value} lacks scope {missing[0]}")
     return user
 
 

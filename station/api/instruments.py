@@ -4,7 +4,9 @@ Driver calls block (serial I/O, polling), so routes run the hub's methods in a w
 (``asyncio.to_thread``); each instrument serialises its own calls with its lock. A measurement becomes
 an ingest record through ``station.ingest.record_from_reading`` and is stored by the service's
 ``station.ingest.Ingestor`` (exactly once by client id); when the database is away it is kept in the
-on-disk outbox and replayed before the next one and periodically.
+on-disk outbox and replayed before the next one and periodically. While the service knows the
+database is away (:class:`~station.api.availability.DatabaseState`) a measurement goes straight to the
+outbox without waiting on the database.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from sqlalchemy.orm import Session, sessionmaker
 
 from db.base import utcnow
 from db.models import CalibrationRecord, Instrument, User
+from station.api.availability import DatabaseState
 from station.api.errors import ConflictError, NotFoundError
 from station.api.schemas.instruments import (
     CalibrationPublic,
@@ -41,6 +44,7 @@ from station.ingest import (
     Outbox,
     Receipt,
     calibration_client_id,
+    is_unreachable,
     record_from_reading,
 )
 
@@ -60,10 +64,18 @@ class Attached:
 class InstrumentHub:
     """The instruments this service holds open."""
 
-    def __init__(self, *, settings: Settings, engine: Engine, sessions: sessionmaker[Session]) -> None:
+    def __init__(
+        self,
+        *,
+        settings: Settings,
+        engine: Engine,
+        sessions: sessionmaker[Session],
+        database: DatabaseState | None = None,
+    ) -> None:
         self.settings = settings
         self.engine = engine
         self.sessions = sessions
+        self.database = database or DatabaseState()
         self._attached: dict[str, Attached] = {}
         self._lock = threading.Lock()
         self._ingestor: Ingestor | None = None
@@ -261,8 +273,7 @@ class InstrumentHub:
             )
         ingestor = self.ingestor()
         if client_id is not None:
-            ingestor.replay()
-            prior = ingestor.find(client_id)
+            prior = self._prior(ingestor, client_id)
             if prior is not None:
                 return self._result(prior)
         gloss = self._gloss(gloss_instrument_id)
@@ -279,14 +290,34 @@ class InstrumentHub:
             gloss=gloss,
         )
         try:
-            receipt = ingestor.submit(reading, actor_id=actor.id)
+            if self.database.away:
+                receipt = ingestor.enqueue(reading, f"database away: {self.database.reason}")
+            else:
+                receipt = ingestor.submit(reading, actor_id=actor.id)
         except ClientIdConflictError as exc:  # a concurrent request under the same key measured first
             raise ConflictError(str(exc)) from exc
         if receipt.status == "queued":
+            self.database.mark_away(receipt.message or "reading queued")
             log.warning(
                 "database unreachable; reading %s queued in %s", reading.client_id, ingestor.outbox.path
             )
         return self._result(receipt)
+
+    def _prior(self, ingestor: Ingestor, client_id: uuid.UUID) -> Receipt | None:
+        """What an earlier attempt under *client_id* left; only the outbox is asked while the database is away.
+
+        A reading stored before the database went away is not seen then; measured again, its second
+        body is refused on replay (same client id, other payload) and the stored one stays the only one.
+        """
+        if not self.database.away:
+            try:
+                ingestor.replay()
+                return ingestor.find(client_id)
+            except Exception as exc:
+                if not is_unreachable(exc):
+                    raise
+                self.database.mark_away(exc)
+        return ingestor.find_queued(client_id)
 
     def _result(self, receipt: Receipt) -> MeasureResult:
         client_id = uuid.UUID(receipt.client_id)

@@ -61,6 +61,24 @@ class Settings(BaseSettings):
         le=1_048_576,
         description="most bytes of an unfinished request line and headers buffered (h11); beyond: 400",
     )
+    token_ttl_days: float = Field(
+        90.0, gt=0, le=3650, description="lifetime of a newly issued bearer token, in days"
+    )
+    token_recheck_s: float = Field(
+        5.0,
+        ge=0,
+        le=300,
+        description="seconds a token verified against the database is trusted before it is checked "
+        "again (0: every request); a revocation made through this service applies at once, one made "
+        "elsewhere (the CLI, another service) within this time",
+    )
+    token_offline_s: float = Field(
+        900.0,
+        ge=0,
+        le=86_400,
+        description="how long a token verified against the database keeps working while the database "
+        "is away, in seconds (0: never without the database)",
+    )
 
     @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this
     @property

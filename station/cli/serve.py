@@ -262,11 +262,46 @@ def users_command(args: argparse.Namespace) -> dict[str, Any]:
                 user, token, secret = users.create_user(
                     session=session, actor=None, name=args.name, role=Role(args.role), label="cli"
                 )
-                return {"user": user.name, "role": user.role.value, "token_id": token.id, "token": secret}
+                return {
+                    "user": user.name,
+                    "role": user.role.value,
+                    "token_id": token.id,
+                    "token": secret,
+                    "expires_at": _iso(token.expires_at),
+                }
             if args.users_action == "token":
                 user = users.find_user(session=session, name=args.name)
                 token, secret = users.issue_token(session=session, actor=None, user=user, label=args.label)
-                return {"user": user.name, "token_id": token.id, "token": secret}
+                return {
+                    "user": user.name,
+                    "token_id": token.id,
+                    "token": secret,
+                    "expires_at": _iso(token.expires_at),
+                }
+            if args.users_action == "revoke-token":  # name: the token id (from `users tokens NAME`)
+                token = users.revoke_token(
+                    session=session,
+                    actor=None,
+                    token=users.get_token(session=session, token_id=_id(args.name)),
+                )
+                return {
+                    "token_id": token.id,
+                    "revoked_at": token.revoked_at.isoformat() if token.revoked_at else None,
+                }
+            if args.users_action == "tokens":
+                user = users.find_user(session=session, name=args.name)
+                return {
+                    "user": user.name,
+                    "tokens": [
+                        {
+                            "id": t.id,
+                            "label": t.label,
+                            "expires_at": _iso(t.expires_at),
+                            "revoked_at": _iso(t.revoked_at),
+                        }
+                        for t in users.list_tokens(session=session, user=user)
+                    ],
+                }
             if args.users_action == "deactivate":
                 user = users.deactivate(
                     session=session, actor=None, user=users.find_user(session=session, name=args.name)
@@ -319,8 +354,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_db_defaults)
 
     p = subparsers.add_parser("users", help="users and bearer tokens (admin, on this workstation)")
-    p.add_argument("users_action", choices=("list", "add", "token", "deactivate"))
-    p.add_argument("name", nargs="?", help="user name (add, token, deactivate)")
+    p.add_argument("users_action", choices=("list", "add", "token", "tokens", "revoke-token", "deactivate"))
+    p.add_argument(
+        "name", nargs="?", help="user name (add, token, tokens, deactivate) or token id (revoke-token)"
+    )
     p.add_argument(
         "--role", choices=("technician", "qa", "stylist", "chemist", "admin"), default="technician"
     )
@@ -348,6 +385,16 @@ def _validated(model: Any, data: dict[str, Any]) -> None:
         raise InputError(
             field, first["msg"].removeprefix("String should ").replace("Value error, ", ""), data.get(field)
         ) from None
+
+
+def _id(text: str) -> int:
+    if not text.isdigit() or not 1 <= int(text) <= 2**31 - 1:
+        raise InputError("token_id", "a token id, 1 to 2147483647 (see `station users tokens NAME`)", text)
+    return int(text)
+
+
+def _iso(at: Any) -> str | None:
+    return None if at is None else str(at.isoformat())
 
 
 def _users_checked(args: argparse.Namespace) -> dict[str, Any]:

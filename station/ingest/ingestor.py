@@ -124,6 +124,21 @@ class Ingestor:
             stored = self.destination.find(client_id)
         return None if stored is None else Receipt(cid, "duplicate", stored)
 
+    def find_queued(self, client_id: uuid.UUID) -> Receipt | None:
+        """``"queued"`` when *client_id* waits in the outbox, else ``None`` (the destination is not asked)."""
+        cid = str(client_id)
+        with self._lock:
+            if any(e.client_id == cid for e in self.outbox.entries()):
+                return Receipt(cid, "queued", None, "kept in the outbox")
+        return None
+
+    def enqueue(self, reading: Reading, reason: str = "destination away") -> Receipt:
+        """Queue *reading* without trying the destination (known to be away); durable on return."""
+        cid = str(reading.client_id)
+        with self._lock:
+            self.outbox.put(cid, reading.canonical_json())
+        return Receipt(cid, "queued", None, reason)
+
     def submit(self, reading: Reading, *, actor_id: int | None = None) -> Receipt:
         """Store *reading* (after draining the queue), or queue it when the destination is away.
 

@@ -67,6 +67,8 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("POST", f"{V1}/users"): frozenset({A}),
     ("POST", f"{V1}/users/{{user_id}}/tokens"): frozenset({A}),
     ("DELETE", f"{V1}/users/{{user_id}}"): frozenset({A}),
+    ("GET", f"{V1}/users/{{user_id}}/tokens"): frozenset({A}),
+    ("DELETE", f"{V1}/tokens/{{token_id}}"): ALL,  # one's own token; another user's is a 404
     ("GET", f"{V1}/audit"): frozenset({Q, A}),
 }
 PUBLIC = {("GET", "/health")}

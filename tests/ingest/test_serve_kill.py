@@ -54,8 +54,10 @@ class _Service:
         self.base = ""
         self.token = ""
         self.log: list[str] = []
+        self._reader: threading.Thread | None = None
 
     def start(self) -> None:
+        self._close_previous()
         port = _free_port()
         cmd = [sys.executable, "-m", "station.cli", "serve", "--data-dir", str(self.data_dir)]
         if self.database_url is not None:
@@ -85,9 +87,19 @@ class _Service:
                 token_file = self.data_dir / "bootstrap-token"  # stdout is a pipe: the token goes to a file
                 if not self.token and token_file.exists():
                     self.token = token_file.read_text().strip()
-                threading.Thread(target=self._drain, args=(self.proc,), daemon=True).start()
+                self._reader = threading.Thread(target=self._drain, args=(self.proc,), daemon=True)
+                self._reader.start()
                 return
         pytest.fail("station serve did not start in time:\n" + "".join(self.log[-40:]))
+
+    def _close_previous(self) -> None:
+        """Close the pipe of a process that has ended (its reader has seen end of file)."""
+        old = self.proc
+        if old is None or old.poll() is None or old.stdout is None:
+            return
+        if self._reader is not None:
+            self._reader.join(10)
+        old.stdout.close()
 
     def _drain(self, proc: subprocess.Popen[str]) -> None:
         """Collect the service's log until it exits, then reap it and close the pipe (a killed service
@@ -117,6 +129,7 @@ class _Service:
                 self.kill(self.proc)
         self.kill(self.proc)  # whatever is left of the group
         self.proc.wait()
+        self._close_previous()
 
 
 def _instrument(http: httpx.Client, auth: dict[str, str]) -> str:

@@ -49,6 +49,20 @@ class TokenIssued(BaseModel):
     user: UserPublic
     token_id: int
     token: Annotated[str, Field(description="bearer secret; store it now, it is kept only hashed")]
+    expires_at: Annotated[dt.datetime | None, Field(description="when the token stops working (UTC)")] = None
+
+
+class TokenPublic(BaseModel):
+    """One token of a user (never its secret)."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    user_id: int
+    label: str
+    created_at: dt.datetime
+    expires_at: dt.datetime | None
+    revoked_at: dt.datetime | None
 
 
 class AuditEventPublic(BaseModel):

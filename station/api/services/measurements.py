@@ -76,8 +76,9 @@ def ingest(*, session: Session, actor: User, reading: Reading) -> tuple[Measurem
     """Store *reading* once with its audit row (``station.ingest.store_audited``, the writer the
     :class:`~station.ingest.Ingestor` uses); ``(measurement, created)`` (a re-sent reading returns the stored row)."""
     result = store_audited(session, reading, actor_id=actor.id, action="measurement.create")
+    stored = get_measurement(session=session, measurement_id=result.measurement_id)  # same transaction
     session.commit()
-    return get_measurement(session=session, measurement_id=result.measurement_id), result.created
+    return stored, result.created
 
 
 def correct(
