@@ -101,8 +101,11 @@ def serve(data_dir: Path, concurrency: int, root: Path = ROOT) -> Iterator[tuple
             if "Uvicorn running" in line or "Application startup complete" in line:
                 break
         token = next((m.group(0) for m in map(re.compile(r"cst_[\w-]+").search, out) if m), "")
+        token_file = data_dir / "bootstrap-token"  # stdout is a pipe: the service writes the token there
+        if not token and token_file.exists():
+            token = token_file.read_text().strip()
         if not token:
-            raise RuntimeError("no bootstrap token printed:\n" + "".join(out))
+            raise RuntimeError("no bootstrap token printed or written:\n" + "".join(out))
         yield f"http://127.0.0.1:{port}", token, proc.pid
     finally:
         proc.send_signal(signal.SIGINT)
