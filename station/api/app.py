@@ -16,6 +16,7 @@ from fastapi import FastAPI
 from db.engine import make_engine, make_sessionmaker
 from station import __version__
 from station.api.errors import install_error_handlers
+from station.api.json_guard import StrictJsonBody
 from station.api.middleware import BodySizeLimit
 from station.api.settings import Settings
 
@@ -175,5 +176,6 @@ def create_app(settings: Settings) -> FastAPI:
         _protected_docs(app)
     for router in ROUTERS:
         app.include_router(router, prefix=API_PREFIX)
+    app.add_middleware(StrictJsonBody)  # inside the size cap: parses bodies already bounded
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     return app
