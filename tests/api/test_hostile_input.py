@@ -277,3 +277,45 @@ def test_found5_measurement_export_escapes_text_cells_not_numbers(tapi: Api) -> 
         for key, cell in row.items():
             if key not in ("L", "a", "b", "aspecular_deg", "gloss_gu", "gloss_geometry_deg"):
                 assert not cell.startswith(FORMULA_LEADS), (key, cell)
+
+
+# -- over real HTTP: every refusal keeps the keep-alive connection ------------------------------------
+def test_bad_requests_on_one_connection_against_station_serve(tmp_path: Path) -> None:
+    import httpx
+
+    from tests.api.test_serve import _serve
+
+    db = tmp_path / "station.sqlite3"
+    reading = make_reading(55, 0).model_dump(mode="json")
+    reading["lab"][1][2] = "__X__"
+    bad_json = [
+        ("/instruments/connect", json.dumps({"address": f"ma6@spy:///dev/null?file={db}"}).encode()),
+        ("/designs", b'{"name":"d","design":{"face":[NaN,1,1],"flop":[30,1,1],"travel_deg":60}}'),
+        ("/designs", b'{"name":"d","design":{"face":[1e309,1,1],"flop":[30,1,1],"travel_deg":60}}'),
+        ("/panels", b'{"job":"\xed\xa0\x80","part":"door"}'),
+        ("/panels", b'{"job":"J","part":"door","notes":"a\\u0000b"}'),
+        ("/measurements", json.dumps(reading).replace('"__X__"', "true").encode()),
+        ("/measurements", json.dumps(reading).replace('"__X__"', '"-Infinity"').encode()),
+    ]
+    bad_csv = [
+        (HEADER + "R-1" + ROW.replace("\n", "\r") + "R-2" + ROW).encode(),
+        (HEADER + "R-1,solid," + "9" * 140_000 + ROW[9:]).encode(),
+        (HEADER + '"R-1\r\nX-Evil: 1"' + ROW).encode(),
+        (HEADER + "=HYPERLINK(1)" + ROW).encode(),
+    ]
+    with _serve(tmp_path) as (base, token), httpx.Client(base_url=base + V1, timeout=30) as client:
+        auth = {"Authorization": f"Bearer {token}"}
+        before = _digest(db)
+        ports = set()
+        for path, body in bad_json:
+            r = client.post(path, content=body, headers={**auth, "content-type": "application/json"})
+            assert r.status_code == 422, (path, r.status_code, r.text[:200])
+            assert r.json()["detail"][0]["loc"][0] == "body"
+            ports.add(r.extensions["network_stream"].get_extra_info("socket").getsockname()[1])
+        for body in bad_csv:
+            r = client.post("/library/import", content=body, headers={**auth, "content-type": "text/csv"})
+            assert r.status_code == 422, (r.status_code, r.text[:200])
+            ports.add(r.extensions["network_stream"].get_extra_info("socket").getsockname()[1])
+        assert len(ports) == 1  # one connection carried every refusal
+        assert client.get("/me", headers=auth).status_code == 200
+        assert _digest(db)[0] >= before[0] > 0  # the database is still there (it may have grown)
