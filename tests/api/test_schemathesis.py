@@ -8,6 +8,7 @@ under a minute here; ``SCHEMATHESIS_EXAMPLES`` raises it.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import os
@@ -165,8 +166,8 @@ def test_schemathesis_with_hostile_values(sqlite_api: Api) -> None:
         )
         def run(case: schemathesis.Case, value: object, csv_body: bytes, pick: int) -> None:
             upload = case.operation.path.endswith("/library/import")
-            if not upload:
-                case.body = _inject(case.body, pick, value)
+            if not upload:  # a copy: an explicit example's body is shared between cases
+                case.body = _inject(copy.deepcopy(case.body), pick, value)
             unencodable = (isinstance(value, float) and not math.isfinite(value)) or value == "\ud800"
             if upload or unencodable:
                 # schemathesis's serialisers refuse NaN/±inf and lone surrogates (and CSV bytes): send the
