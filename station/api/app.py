@@ -17,6 +17,7 @@ from db.engine import make_engine, make_sessionmaker
 from station import __version__
 from station.api.availability import DatabaseState, probe_database
 from station.api.errors import install_error_handlers
+from station.api.json_guard import StrictJsonBody
 from station.api.middleware import BodySizeLimit, SecurityHeaders
 from station.api.security import TokenCache
 from station.api.settings import Settings
@@ -202,6 +203,7 @@ def create_app(settings: Settings) -> FastAPI:
         _protected_docs(app)
     for router in ROUTERS:
         app.include_router(router, prefix=API_PREFIX)
+    app.add_middleware(StrictJsonBody)  # inside the size cap: parses bodies already bounded
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.add_middleware(SecurityHeaders)  # outermost: the 413 above gets the headers too
     return app

@@ -7,15 +7,19 @@ conflicts (and an instrument needing calibration) → 409, an instrument that ca
 from __future__ import annotations
 
 import logging
+import math
+from collections.abc import Sequence
 from typing import Any
 
 from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel
 from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError
 
 from db.errors import DatabaseUnavailableError, ImmutableRowError
 from station.analysis.errors import AnalysisError
+from station.api.json_guard import safe_text
 from station.design.errors import DesignError
 from station.drivers.errors import CalibrationNeeded, DriverError
 from station.errors import InputError, StationError
@@ -82,12 +86,15 @@ def status_for(exc: StationError) -> int:
     return 500
 
 
+MAX_MSG = 1000
+
+
 def _input_error_body(exc: InputError) -> dict[str, Any]:
     return {
         "detail": [
             {
-                "loc": ["body", *exc.field.split(".")],
-                "msg": str(exc),
+                "loc": ["body", *(safe_text(p) for p in exc.field.split("."))],
+                "msg": safe_text(str(exc), MAX_MSG),
                 "type": "value_error",
                 "ctx": {"accepted": exc.accepted},
             }
@@ -95,8 +102,43 @@ def _input_error_body(exc: InputError) -> dict[str, Any]:
     }
 
 
+def _safe_ctx_value(value: object) -> object:
+    if isinstance(value, bool) or value is None:
+        return value
+    if isinstance(value, int):
+        return value if abs(value) < 2**63 else safe_text(value, MAX_MSG)
+    if isinstance(value, float):
+        return value if math.isfinite(value) else safe_text(value)
+    return safe_text(value, MAX_MSG)
+
+
+def validation_error_body(errors: Sequence[Any]) -> dict[str, Any]:
+    """FastAPI's 422 body (``loc``, ``msg``, ``type``, ``ctx``) without the rejected ``input``.
+
+    The bad value is never written back: it may be NaN or ±Infinity (not JSON), a lone surrogate (not
+    encodable), raw bytes or megabytes of text. Member names in ``loc`` and the message are escaped and
+    bounded, so the response always serialises and the connection stays open.
+    """
+    detail = []
+    for err in errors:
+        item: dict[str, Any] = {
+            "loc": [p if isinstance(p, int) else safe_text(p) for p in err.get("loc", ())],
+            "msg": safe_text(err.get("msg", ""), MAX_MSG),
+            "type": safe_text(err.get("type", "value_error")),
+        }
+        ctx = err.get("ctx")
+        if isinstance(ctx, dict) and ctx:
+            item["ctx"] = {safe_text(k): _safe_ctx_value(v) for k, v in ctx.items()}
+        detail.append(item)
+    return {"detail": detail}
+
+
 def install_error_handlers(app: FastAPI) -> None:
     """Map the domain hierarchy to HTTP once for the whole app."""
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(_req: Request, exc: RequestValidationError) -> JSONResponse:
+        return JSONResponse(validation_error_body(exc.errors()), status_code=422)
 
     @app.exception_handler(InputError)
     async def _input(_req: Request, exc: InputError) -> JSONResponse:
@@ -112,7 +154,8 @@ def install_error_handlers(app: FastAPI) -> None:
     async def _station(_req: Request, exc: StationError) -> JSONResponse:
         status = status_for(exc)
         if status == 422:  # same shape as request validation errors
-            return JSONResponse({"detail": [{"loc": ["body"], "msg": str(exc), "type": "value_error"}]}, 422)
+            body = {"detail": [{"loc": ["body"], "msg": safe_text(str(exc), MAX_MSG), "type": "value_error"}]}
+            return JSONResponse(body, 422)
         if status >= 500:
             log.error("%s: %s", type(exc).__name__, exc)
         return JSONResponse({"detail": str(exc)}, status_code=status)

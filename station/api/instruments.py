@@ -34,6 +34,7 @@ from station.api.services import measurements as measurement_service
 from station.api.settings import Settings
 from station.drivers import CommunicationError, GlossReading, SpectralReading, open_instrument, split_address
 from station.drivers import Instrument as Driver
+from station.drivers.addresses import check_address
 from station.drivers.readings import InstrumentInfo
 from station.drivers.simproc import SimulatorProcess, spawn_simulator
 from station.errors import InputError
@@ -163,14 +164,32 @@ class InstrumentHub:
 
     # -- operations ---------------------------------------------------------------------------------
     def connect(self, *, address: str, actor: User) -> InstrumentPublic:
-        """Open the instrument at *address* and attach it."""
+        """Open the instrument at *address* and attach it (``sim:KIND`` starts a simulator for it).
+
+        *address* must be one of the forms :func:`station.drivers.addresses.check_address` accepts
+        (TCP only to the configured ``instrument_hosts``); anything else is a 422 on ``address``. A
+        failure to open answers without the transport's own text, which may describe local files.
+        """
+        check_address(address, tcp_hosts=self.settings.instrument_hosts)
         with self._lock:
             if any(a.driver.address == address for a in self._attached.values()):
                 raise ConflictError(f"{address} is already attached")
+        sim: SimulatorProcess | None = None
         try:
-            attached = self._attach(address, None)
+            if address.startswith("sim:"):
+                sim = spawn_simulator(address.removeprefix("sim:"))
+                attached = self._attach(sim.address, sim)
+            else:
+                attached = self._attach(address, None)
         except CommunicationError as exc:
-            raise NotFoundError(f"no instrument answers at {address}: {exc}") from exc
+            if sim is not None:
+                sim.close()
+            log.warning("connect %s failed: %s", address, exc)
+            raise NotFoundError(f"no instrument answers at {address}") from exc
+        except BaseException:
+            if sim is not None:
+                sim.close()
+            raise
         with self.sessions() as session:
             audit.record(
                 session=session,

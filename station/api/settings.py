@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
-from pydantic import Field, computed_field
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic import Field, computed_field, field_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
 from db.engine import data_dir, default_database_url
 
@@ -41,6 +42,11 @@ class Settings(BaseSettings):
         False,
         description="serve /docs, /redoc and /openapi.json without a token "
         "(default: they need a bearer token like every route but /health)",
+    )
+    instrument_hosts: Annotated[tuple[str, ...], NoDecode] = Field(
+        (),
+        description="hosts (HOST or HOST:PORT, comma-separated in CACAD_INSTRUMENT_HOSTS) that "
+        "socket:// and rfc2217:// instrument addresses may name; empty: no TCP instruments",
     )
     outbox_replay_s: float = Field(10.0, gt=0, le=3600, description="seconds between outbox replay attempts")
     body_timeout_s: float = Field(
@@ -79,6 +85,21 @@ class Settings(BaseSettings):
         description="how long a token verified against the database keeps working while the database "
         "is away, in seconds (0: never without the database)",
     )
+
+    @field_validator("instrument_hosts", mode="before")
+    @classmethod
+    def _split_hosts(cls, value: object) -> object:
+        """A comma-separated string (the environment's form) becomes a tuple; each entry is checked."""
+        from station.drivers.addresses import parse_host_entry
+
+        if isinstance(value, str):
+            value = tuple(e.strip() for e in value.split(",") if e.strip())
+        if isinstance(value, (list, tuple)):
+            for entry in value:
+                if not isinstance(entry, str):
+                    raise ValueError("instrument_hosts: expected HOST or HOST:PORT strings")
+                parse_host_entry(entry)
+        return value
 
     @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this
     @property

@@ -187,6 +187,9 @@ def _serial_error(address: str, exc: Exception) -> CommunicationError:
     return CommunicationError(f"{address}: {text}")
 
 
+_SERIAL_URL_SCHEMES = ("socket://", "rfc2217://")
+
+
 class SerialTransport(StreamTransport):
     """pyserial: a device path (``/dev/ttyACM0``, a pty) or a URL (``socket://``, ``rfc2217://``).
 
@@ -203,6 +206,12 @@ class SerialTransport(StreamTransport):
         import serial
 
         is_url = "://" in self.address
+        if is_url and not self.address.startswith(_SERIAL_URL_SCHEMES):
+            # pyserial's other handlers (spy:// writes a trace to any file, loop://, hwgrep://, alt://)
+            # are no instrument transport; never hand them to serial_for_url.
+            raise DriverInputError(
+                "address", "a serial device path, socket://HOST:PORT or rfc2217://HOST:PORT"
+            )
         try:
             ser = serial.serial_for_url(self.address, do_not_open=True, baudrate=self.baudrate, timeout=0)
             if not is_url:

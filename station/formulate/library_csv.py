@@ -7,7 +7,10 @@ Format (one header row, then one paint per row)::
 ``type`` is ``solid``, ``metallic`` or ``pearl``; angles are aspecular degrees (illumination at 45°,
 D65 / CIE 1964 10°); more angle triples may follow, named the same way (``L-15,a-15,b-15``, ``L25,…``).
 Validation is strict: each fault raises :class:`LibraryFormatError` naming the 1-based row (header =
-row 1), the column and the accepted range. Accepted ranges: 0 ≤ L* ≤ 150 (a metallic face may exceed 100), −200 ≤ a*, b* ≤ 200,
+row 1), the column and the accepted range. A code is printable text (no control characters, so no
+CR/LF or NUL) and, unless ``allow_formulas``, does not start with ``= + - @`` (CSV injection,
+:mod:`station.csv_cells`); a field is at most 131072 characters (the csv module's limit). The export
+writes such a code with a leading single quote. Accepted ranges: 0 ≤ L* ≤ 150 (a metallic face may exceed 100), −200 ≤ a*, b* ≤ 200,
 0 ≤ gloss ≤ 100 GU (the model's range), codes unique, non-empty, at most 64 characters.
 
 Stated precision of the export: 4 decimals for Lab and gloss (round trip import(export(x)) equals x
@@ -25,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from station.csv_cells import escape_cell, is_formula
 from station.formulate.errors import LibraryFormatError
 from station.formulate.library import PAINT_TYPES, STANDARD_ANGLES, Library
 from station.model.domain import GLOSS_MAX_GU, GLOSS_MIN_GU
@@ -112,10 +116,13 @@ def _records(stream: io.TextIOBase) -> Iterator[list[str]]:
         yield record
 
 
-def read_library_csv(source: str | Path | io.TextIOBase, name: str | None = None) -> Library:
+def read_library_csv(
+    source: str | Path | io.TextIOBase, name: str | None = None, *, allow_formulas: bool = False
+) -> Library:
     """Read a library CSV (see module docstring) from a path or text stream.
 
-    Raises :class:`LibraryFormatError` naming row and column for every fault; never clamps.
+    Raises :class:`LibraryFormatError` naming row and column for every fault; never clamps. A code
+    starting with ``= + - @`` (a spreadsheet formula) is refused unless *allow_formulas*.
     """
     if isinstance(source, (str, Path)):
         path = Path(source)
@@ -150,9 +157,19 @@ def read_library_csv(source: str | Path | io.TextIOBase, name: str | None = None
         if rowno > MAX_ROWS:
             raise LibraryFormatError(rowno, None, f"at most {MAX_ROWS} rows", rowno)
         code = row[0].strip()
-        if not code or len(code) > MAX_CODE_LENGTH:
+        if not code or len(code) > MAX_CODE_LENGTH or not code.isprintable():
             raise LibraryFormatError(
-                rowno, "code", f"a non-empty code of at most {MAX_CODE_LENGTH} characters", code
+                rowno,
+                "code",
+                f"a non-empty code of at most {MAX_CODE_LENGTH} printable characters (no control characters)",
+                code[: MAX_CODE_LENGTH + 1],
+            )
+        if not allow_formulas and is_formula(code):
+            raise LibraryFormatError(
+                rowno,
+                "code",
+                "a code not starting with = + - @ (a spreadsheet formula; allow_formulas)",
+                code,
             )
         if code in seen:
             raise LibraryFormatError(rowno, "code", f"a unique code (first seen on row {seen[code]})", code)
@@ -186,7 +203,8 @@ def write_library_csv(library: Library, target: str | Path | io.TextIOBase) -> N
     """Write *library* as CSV (standard angles first), Lab and gloss to :data:`PRECISION_DECIMALS` decimals.
 
     A synthetic library is written as such: its codes carry the ``SYN-`` prefix the generator gave them,
-    and the export has no place for a comment (the format is a bare table).
+    and the export has no place for a comment (the format is a bare table). A code a spreadsheet would
+    evaluate (``=``, ``+``, ``-``, ``@``, tab, CR first) is written with a leading single quote.
     """
     header = header_for(library.angles_deg)
     order = [library.angles_deg.index(float(h[1:])) for h in header[3::3]]
@@ -199,7 +217,7 @@ def write_library_csv(library: Library, target: str | Path | io.TextIOBase) -> N
         lab = library.lab[:, order, :].reshape(len(library), -1)
         for i in range(len(library)):
             w.writerow(
-                [library.codes[i], library.types[i], fmt.format(library.gloss_gu[i])]
+                [escape_cell(str(library.codes[i])), library.types[i], fmt.format(library.gloss_gu[i])]
                 + [fmt.format(v) for v in lab[i]]
             )
     finally:

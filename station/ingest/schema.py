@@ -9,28 +9,57 @@ from __future__ import annotations
 
 import base64
 import binascii
+import datetime as dt
 import hashlib
 import json
 import uuid
 from typing import Annotated, Literal
 
-from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    AwareDatetime,
+    BaseModel,
+    ConfigDict,
+    Field,
+    field_validator,
+    model_validator,
+)
 
 from db.models.measurements import PARTS
 from station.model.domain import LAB_HI, LAB_LO
 
+# strict=True: a JSON true or "55.3" is refused, not read as a number (an integer is a float).
 Angle = Annotated[
-    float, Field(gt=-90.0, lt=180.0, allow_inf_nan=False, description="aspecular angle, degrees")
+    float,
+    Field(strict=True, gt=-90.0, lt=180.0, allow_inf_nan=False, description="aspecular angle, degrees"),
 ]
 LabTriple = Annotated[
     # The envelope of the domain's Lab bound (station.model.domain); each channel is checked there.
-    list[Annotated[float, Field(ge=min(LAB_LO), le=max(LAB_HI), allow_inf_nan=False)]],
+    list[Annotated[float, Field(strict=True, ge=min(LAB_LO), le=max(LAB_HI), allow_inf_nan=False)]],
     Field(min_length=3, max_length=3, description="[L*, a*, b*]"),
 ]
-Reflectance = Annotated[float, Field(ge=0.0, le=10.0, allow_inf_nan=False)]
+Reflectance = Annotated[float, Field(strict=True, ge=0.0, le=10.0, allow_inf_nan=False)]
 Illuminant = Literal["D65", "D50", "A", "C", "F2", "F7", "F11"]
 Observer = Literal["CIE 1931 2 Degree Standard Observer", "CIE 1964 10 Degree Standard Observer"]
 Text64 = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f]+$")]
+
+#: Accepted instants of a reading or a calibration (UTC): beyond them a time-zone shift overflows.
+EARLIEST = dt.datetime(1970, 1, 1, tzinfo=dt.UTC)
+LATEST = dt.datetime(2200, 1, 1, tzinfo=dt.UTC)
+
+
+def _bounded_instant(value: dt.datetime) -> dt.datetime:
+    """*value* (time-zone aware) if it lies in [EARLIEST, LATEST); ``0001-01-01T00:00+05:00`` is refused."""
+    try:
+        utc = value.astimezone(dt.UTC)
+    except (OverflowError, ValueError) as exc:
+        raise ValueError(f"expected an instant in [{EARLIEST:%Y-%m-%d}, {LATEST:%Y-%m-%d}) UTC") from exc
+    if not EARLIEST <= utc < LATEST:
+        raise ValueError(f"expected an instant in [{EARLIEST:%Y-%m-%d}, {LATEST:%Y-%m-%d}) UTC")
+    return value
+
+
+Timestamp = Annotated[AwareDatetime, AfterValidator(_bounded_instant)]
 
 MAX_GEOMETRIES = 12
 MAX_WAVELENGTHS = 81
@@ -54,7 +83,7 @@ class CalibrationRef(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     client_id: uuid.UUID
-    performed_at: AwareDatetime
+    performed_at: Timestamp
     reference: Annotated[str, Field(max_length=64)] = ""
     passed: bool = True
 
@@ -106,17 +135,17 @@ class Reading(BaseModel):
     client_id: uuid.UUID
     instrument: InstrumentRef
     calibration: CalibrationRef | None = None
-    panel_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
+    panel_id: Annotated[int, Field(strict=True, ge=1, le=2**31 - 1)] | None = None
     panel: PanelRef | None = None
     operator: Text64
-    measured_at: AwareDatetime
+    measured_at: Timestamp
     illuminant: Illuminant = "D65"
     observer: Observer = "CIE 1964 10 Degree Standard Observer"
     geometries_deg: Annotated[list[Angle], Field(min_length=1, max_length=MAX_GEOMETRIES)]
     lab: Annotated[list[LabTriple], Field(min_length=1, max_length=MAX_GEOMETRIES)]
     wavelengths_nm: (
         Annotated[
-            list[Annotated[float, Field(ge=300.0, le=1100.0)]],
+            list[Annotated[float, Field(strict=True, ge=300.0, le=1100.0, allow_inf_nan=False)]],
             Field(min_length=2, max_length=MAX_WAVELENGTHS),
         ]
         | None
@@ -128,7 +157,7 @@ class Reading(BaseModel):
         ]
         | None
     ) = None
-    gloss_gu: Annotated[float, Field(ge=0.0, le=2000.0, allow_inf_nan=False)] | None = None
+    gloss_gu: Annotated[float, Field(strict=True, ge=0.0, le=2000.0, allow_inf_nan=False)] | None = None
     gloss_geometry_deg: Literal[20, 60, 85] | None = None
     raw_payload_b64: Annotated[str, Field(max_length=(MAX_RAW_BYTES * 4) // 3 + 4)] | None = None
 

@@ -8,11 +8,16 @@ under a minute here; ``SCHEMATHESIS_EXAMPLES`` raises it.
 
 from __future__ import annotations
 
+import copy
+import json
+import math
 import os
+from typing import Any
 
 import pytest
 import schemathesis
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
 from schemathesis.checks import not_a_server_error
 from schemathesis.specs.openapi.checks import (
     content_type_conformance,
@@ -24,6 +29,7 @@ from sqlalchemy import insert
 from db.models import LibraryPaint, Role
 from station.api.services.library import library_rows
 from station.formulate.demo import generate_library
+from tests.api._hostile import CSV_BODIES, PY_VALUES
 from tests.api.conftest import Api
 from tests.ingest._readings import make_reading
 
@@ -49,12 +55,9 @@ def test_openapi_schema_is_complete(sqlite_api: Api) -> None:
                 assert spec["components"]["schemas"][name].get("examples"), (method, path, name)
 
 
-@pytest.mark.slow
-def test_schemathesis_conformance(sqlite_api: Api) -> None:
+def _seed(sqlite_api: Api, headers: dict[str, str]) -> None:
+    """Rows for id-addressed operations to reach their happy paths too."""
     app = sqlite_api.client.app
-    headers = sqlite_api.auth(Role.ADMIN)
-    schema = schemathesis.openapi.from_asgi("/openapi.json", app, headers=headers)  # the schema needs a token
-    # seed rows so that id-addressed operations reach their happy paths too
     c = sqlite_api.client
     c.post("/api/v1/panels", json={"job": "J", "part": "door"}, headers=headers)
     c.post(
@@ -72,6 +75,14 @@ def test_schemathesis_conformance(sqlite_api: Api) -> None:
             library_rows(generate_library(n_solid=30, n_metallic=20, n_pearl=10, seed=5)),
         )
         session.commit()
+
+
+@pytest.mark.slow
+def test_schemathesis_conformance(sqlite_api: Api) -> None:
+    app = sqlite_api.client.app
+    headers = sqlite_api.auth(Role.ADMIN)
+    schema = schemathesis.openapi.from_asgi("/openapi.json", app, headers=headers)  # the schema needs a token
+    _seed(sqlite_api, headers)
     failures: list[str] = []
     for result in schema.get_all_operations():
         operation = result.ok()
@@ -89,6 +100,90 @@ def test_schemathesis_conformance(sqlite_api: Api) -> None:
         )
         @given(case=operation.as_strategy())
         def run(case: schemathesis.Case) -> None:
+            case.call_and_validate(headers=headers, checks=CHECKS)
+
+        try:
+            run()
+        except Exception as exc:
+            failures.append(f"{operation.method.upper()} {operation.path}: {str(exc)[:600]}")
+    assert not failures, "\n\n".join(failures)
+
+
+def _members(node: object, path: tuple[object, ...] = ()) -> list[tuple[object, ...]]:
+    out = [path]
+    if isinstance(node, dict):
+        for k, v in node.items():
+            out += _members(v, (*path, k))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            out += _members(v, (*path, i))
+    return out
+
+
+def _inject(body: object, pick: int, value: object) -> object:
+    """*body* with the member number *pick* (pre-order, the body itself first) replaced by *value*."""
+    members = _members(body)
+    where = members[pick % len(members)]
+    if not where:
+        return value
+    parent: Any = body
+    for step in where[:-1]:
+        parent = parent[step]
+    parent[where[-1]] = value
+    return body
+
+
+@pytest.mark.slow
+def test_schemathesis_with_hostile_values(sqlite_api: Api) -> None:
+    """Schema-valid cases from schemathesis, each with one member replaced by a hostile value of issue 13
+    (NaN, ±Infinity, lone surrogates, NUL, bool/str for numbers, year 1/9999 with an offset, CRLF,
+    formulas), and the CSV upload replaced by a hostile CSV: never a 5xx, always a documented answer."""
+    app = sqlite_api.client.app
+    headers = sqlite_api.auth(Role.ADMIN)
+    schema = schemathesis.openapi.from_asgi("/openapi.json", app, headers=headers)
+    _seed(sqlite_api, headers)
+    failures: list[str] = []
+    for result in schema.get_all_operations():
+        operation = result.ok()
+        media = [b.media_type for b in operation.body]
+        if operation.path.endswith("/users/{user_id}") or not media:
+            continue
+        csv_upload = operation.path.endswith("/library/import")
+        if not csv_upload and "application/json" not in media:
+            continue  # image uploads: the fuzz test sends its hostile images
+
+        @settings(
+            max_examples=MAX_EXAMPLES,
+            deadline=None,
+            database=None,
+            derandomize=True,
+            suppress_health_check=list(HealthCheck),
+            phases=(Phase.explicit, Phase.generate),  # a failure is reported as drawn, not shrunk
+        )
+        @given(
+            case=operation.as_strategy(),
+            value=st.sampled_from(PY_VALUES),
+            csv_body=st.sampled_from(CSV_BODIES),
+            pick=st.integers(min_value=0, max_value=10_000),
+        )
+        def run(case: schemathesis.Case, value: object, csv_body: bytes, pick: int) -> None:
+            upload = case.operation.path.endswith("/library/import")
+            if not upload:  # a copy: an explicit example's body is shared between cases
+                case.body = _inject(copy.deepcopy(case.body), pick, value)
+            unencodable = (isinstance(value, float) and not math.isfinite(value)) or value == "\ud800"
+            if upload or unencodable:
+                # schemathesis's serialisers refuse NaN/±inf and lone surrogates (and CSV bytes): send the
+                # same case as raw bytes (JSON with NaN / "\ud800" escapes, or the hostile CSV)
+                raw = csv_body if upload else json.dumps(case.body, allow_nan=True).encode()
+                r = sqlite_api.client.request(
+                    case.method,
+                    case.formatted_path,
+                    params=case.query,
+                    content=raw,
+                    headers={**headers, "content-type": "text/csv" if upload else "application/json"},
+                )
+                assert r.status_code == 422, (case.formatted_path, r.status_code, r.text[:300])
+                return
             case.call_and_validate(headers=headers, checks=CHECKS)
 
         try:

@@ -7,6 +7,7 @@ The library is the one in the database; its ColorSnap index is built once per ap
 from __future__ import annotations
 
 from typing import Annotated, Any
+from urllib.parse import quote
 
 from fastapi import APIRouter, Request, Response, status
 
@@ -35,6 +36,15 @@ _FILE: dict[int | str, dict[str, Any]] = {
         "content": {"application/xml": {"schema": {"type": "string"}}},
     }
 }
+
+
+_HEADER_SAFE = "".join(chr(c) for c in range(0x20, 0x7F) if chr(c) != "%")
+
+
+def header_safe(text: str) -> str:
+    """*text* as an HTTP header value: printable ASCII kept, anything else (CR, LF, NUL, non-ASCII)
+    percent-encoded as UTF-8 (RFC 3986), so a stored code can never split or break the response."""
+    return quote(text, safe=_HEADER_SAFE, errors="backslashreplace")
 
 
 @router.post("/snap", response_model=SnapOut)
@@ -69,11 +79,12 @@ def closed_loop(
 @router.post("/export", response_class=Response, responses=_FILE)
 def export(request: Request, session: SessionDep, _user: Chemist, body: ExportRequest) -> Response:
     """The design at both 3-angle sets (15/45/110 and 25/45/75; 5 angles on request) and its ColorSnap
-    match, as the thesis's XML or CxF3, as a file."""
+    match, as the thesis's XML or CxF3, as a file. ``X-Match-Code`` is the match's code, percent-encoded
+    where it is not printable ASCII."""
     data, filename, code = service.export(
         session=session, cache=service.app_cache(request.app.state), request=body
     )
     headers = {"Content-Disposition": f'attachment; filename="{filename}"'}
     if code is not None:
-        headers["X-Match-Code"] = code
+        headers["X-Match-Code"] = header_safe(code)
     return Response(data, media_type="application/xml", headers=headers)

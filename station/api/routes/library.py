@@ -139,9 +139,17 @@ async def import_csv(
             description="library name stored with each paint",
         ),
     ] = "imported",
+    allow_formulas: Annotated[
+        bool,
+        Query(
+            description="accept codes starting with = + - @ (spreadsheet formulas; the export escapes "
+            "them with a leading single quote); default: such a row is a 422"
+        ),
+    ] = False,
 ) -> LibraryImportOut:
     """Validate a library CSV (header ``code,type,gloss_gu,L15,a15,b15,…``; faults name row and column) and
-    add its paints in one transaction: a code already stored is a 409 and nothing is added. Audited."""
+    add its paints in one transaction: a code already stored is a 409 and nothing is added. Audited.
+    Codes are printable text; one starting with = + - @ is refused unless ``allow_formulas``."""
     try:
         text = (await request.body()).decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -149,7 +157,9 @@ async def import_csv(
 
     def run() -> dict[str, object]:
         with request.app.state.sessions() as session:
-            return formulation.import_csv(session=session, actor=user, text=text, name=name)
+            return formulation.import_csv(
+                session=session, actor=user, text=text, name=name, allow_formulas=allow_formulas
+            )
 
     return LibraryImportOut.model_validate(await asyncio.to_thread(run))
 

@@ -8,17 +8,18 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic.config import JsonDict
 
-from station.api.schemas.common import Polar
+from station.api.schemas.common import Polar, StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
 from station.model.domain import JND_CIE76
 
 Method = Literal["cie76", "cie94", "cie2000", "din6175"]
 Hinge = Annotated[
-    Literal["in-plane", "out-of-plane"] | Annotated[float, Field(ge=-180.0, le=180.0, allow_inf_nan=False)],
+    Literal["in-plane", "out-of-plane"]
+    | Annotated[StrictFloat, Field(ge=-180.0, le=180.0, allow_inf_nan=False)],
     Field(description="in-plane | out-of-plane | hinge azimuth in degrees"),
 ]
 Epsilon = Annotated[
-    float,
+    StrictFloat,
     Field(
         gt=0.0,
         le=50.0,
@@ -27,7 +28,7 @@ Epsilon = Annotated[
     ),
 ]
 Beta = Annotated[
-    float,
+    StrictFloat,
     Field(
         ge=-45.0,
         le=45.0,
@@ -66,8 +67,12 @@ class SeamQaCreate(BaseModel):
         },
     )
 
-    measurement_a: Annotated[int, Field(ge=1, le=2**31 - 1, description="e.g. the fender")] | None = None
-    measurement_b: Annotated[int, Field(ge=1, le=2**31 - 1, description="e.g. the bumper")] | None = None
+    measurement_a: Annotated[StrictInt, Field(ge=1, le=2**31 - 1, description="e.g. the fender")] | None = (
+        None
+    )
+    measurement_b: Annotated[StrictInt, Field(ge=1, le=2**31 - 1, description="e.g. the bumper")] | None = (
+        None
+    )
     design_a: (
         Annotated[DesignBody, Field(description="panel A as a design instead of a measurement")] | None
     ) = None
@@ -76,12 +81,12 @@ class SeamQaCreate(BaseModel):
     ) = None
     beta_deg: Beta
     tolerance: Annotated[
-        float, Field(gt=0.0, le=50.0, description="seam ΔE accepted (1 JND = 2.3 ΔE*ab)")
+        StrictFloat, Field(gt=0.0, le=50.0, description="seam ΔE accepted (1 JND = 2.3 ΔE*ab)")
     ] = JND_CIE76
     method: Method = "cie76"
     lights_deg: Lights = [30.0, 45.0, 60.0]
     aspecular_deg: Annotated[
-        list[Annotated[float, Field(ge=-89.0, le=179.0, allow_inf_nan=False)]],
+        list[Annotated[StrictFloat, Field(ge=-89.0, le=179.0, allow_inf_nan=False)]],
         Field(min_length=1, max_length=16, description="aspecular angles on panel A"),
     ] = [15.0, 25.0, 45.0, 75.0]
     hinge: Hinge = "in-plane"
@@ -123,9 +128,13 @@ class GgIndexRequest(BaseModel):
     method: Method = "cie76"
     hinge: Hinge = "in-plane"
     direction: Literal["+", "-", "either"] = "either"
-    beta_max_deg: Annotated[float, Field(gt=0.0, le=89.0, description="largest β searched, degrees")] = 30.0
-    include_gloss: Annotated[bool, Field(description="add the gloss lobe (excluded in the thesis)")] = False
-    per_geometry: Annotated[bool, Field(description="list β_min for every geometry")] = False
+    beta_max_deg: Annotated[
+        StrictFloat, Field(gt=0.0, le=89.0, description="largest β searched, degrees")
+    ] = 30.0
+    include_gloss: Annotated[StrictBool, Field(description="add the gloss lobe (excluded in the thesis)")] = (
+        False
+    )
+    per_geometry: Annotated[StrictBool, Field(description="list β_min for every geometry")] = False
 
 
 class GgIndexOut(BaseModel):
@@ -170,7 +179,7 @@ class TrompeRequest(BaseModel):
     ) = None
     beta_deg: Beta
     objective: Literal["single", "rms", "minimax", "per_geometry"] = "rms"
-    at: Annotated[int, Field(ge=0, le=31, description="geometry index for objective single")] = 0
+    at: Annotated[StrictInt, Field(ge=0, le=31, description="geometry index for objective single")] = 0
     subset: (
         Annotated[
             str,

@@ -8,6 +8,12 @@ from pydantic import BaseModel, Field
 
 T = TypeVar("T")
 
+#: Numbers of JSON bodies: no bool → number, no numeric string → number, no NaN/±inf (an int is a float).
+StrictFloat = Annotated[float, Field(strict=True, allow_inf_nan=False)]
+StrictInt = Annotated[int, Field(strict=True)]
+StrictBool = Annotated[bool, Field(strict=True)]
+
+#: Path and query parameters arrive as text: these stay lax (``"7"`` → 7).
 Id = Annotated[int, Field(ge=1, le=2**31 - 1)]
 Limit = Annotated[int, Field(ge=1, le=1000, description="page size")]
 Offset = Annotated[int, Field(ge=0, le=10_000_000, description="rows to skip")]
@@ -21,4 +27,4 @@ class Page(BaseModel, Generic[T]):
 
 
 #: Signed polar angle of a light or viewer in degrees (station.analysis.geometry: |θ| <= 89).
-Polar = Annotated[float, Field(ge=-89.0, le=89.0, allow_inf_nan=False)]
+Polar = Annotated[float, Field(strict=True, ge=-89.0, le=89.0, allow_inf_nan=False)]

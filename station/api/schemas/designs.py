@@ -8,14 +8,15 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 from pydantic.config import JsonDict
 
+from station.api.schemas.common import StrictFloat
 from station.model.domain import FACE_ANGLE_DEG, GLOSS_MAX_GU, GLOSS_MIN_GU, LAB_RANGES, TRAVEL_MAX_DEG
 
 # Ranges are the domain's effect-paint bound (station.model.domain): 0 <= L* <= 200, |a*|, |b*| <= 150.
 Lab = Annotated[
     tuple[
-        Annotated[float, Field(ge=LAB_RANGES["L"][0], le=LAB_RANGES["L"][1], allow_inf_nan=False)],
-        Annotated[float, Field(ge=LAB_RANGES["a"][0], le=LAB_RANGES["a"][1], allow_inf_nan=False)],
-        Annotated[float, Field(ge=LAB_RANGES["b"][0], le=LAB_RANGES["b"][1], allow_inf_nan=False)],
+        Annotated[StrictFloat, Field(ge=LAB_RANGES["L"][0], le=LAB_RANGES["L"][1], allow_inf_nan=False)],
+        Annotated[StrictFloat, Field(ge=LAB_RANGES["a"][0], le=LAB_RANGES["a"][1], allow_inf_nan=False)],
+        Annotated[StrictFloat, Field(ge=LAB_RANGES["b"][0], le=LAB_RANGES["b"][1], allow_inf_nan=False)],
     ],
     Field(description="[L*, a*, b*], D65/10°"),
 ]
@@ -44,13 +45,13 @@ class DesignBody(BaseModel):
     flop: Lab
     travel_deg: (
         Annotated[
-            float,
+            StrictFloat,
             Field(gt=FACE_ANGLE_DEG, le=TRAVEL_MAX_DEG, description="θ_clamp, degrees; null for a solid"),
         ]
         | None
     )
     gloss_gu: (
-        Annotated[float, Field(ge=GLOSS_MIN_GU, le=GLOSS_MAX_GU, description="60° gloss units")] | None
+        Annotated[StrictFloat, Field(ge=GLOSS_MIN_GU, le=GLOSS_MAX_GU, description="60° gloss units")] | None
     ) = None
 
 

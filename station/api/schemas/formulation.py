@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic.config import JsonDict, JsonValue
 
+from station.api.schemas.common import StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody, Lab
 from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS_MIN_GU
 
@@ -29,8 +30,8 @@ class DesignSource(BaseModel):
         Annotated[list[Lab], Field(min_length=3, max_length=3, description="Lab at 15°, 45°, 110°")] | None
     ) = None
     design: DesignBody | None = None
-    design_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
-    version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
+    design_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
+    version: Annotated[StrictInt, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
 
     @model_validator(mode="after")
     def _one_source(self) -> DesignSource:
@@ -53,7 +54,7 @@ class SnapRequest(DesignSource):
         },
     )
 
-    k: Annotated[int, Field(ge=1, le=50, description="matches returned, best first")] = 5
+    k: Annotated[StrictInt, Field(ge=1, le=50, description="matches returned, best first")] = 5
     metric: Annotated[
         SnapMetric, Field(description="ΔE summed over the angles (cie76 = ΔE*ab, the thesis's)")
     ] = "cie76"
@@ -93,15 +94,15 @@ class FormulateRequest(DesignSource):
 
     gloss_gu: (
         Annotated[
-            float,
+            StrictFloat,
             Field(ge=GLOSS_MIN_GU, le=GLOSS_MAX_GU, description="60° gloss target; default the design's"),
         ]
         | None
     ) = None
-    tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 for 'formulable'")] = (
+    tolerance: Annotated[StrictFloat, Field(gt=0.0, le=20.0, description="mean ΔE00 for 'formulable'")] = (
         FORMULATION_TOLERANCE_DE00
     )
-    k: Annotated[int, Field(ge=1, le=10, description="library matches tried as starting recipes")] = 3
+    k: Annotated[StrictInt, Field(ge=1, le=10, description="library matches tried as starting recipes")] = 3
 
 
 class FormulateOut(BaseModel):
@@ -138,11 +139,11 @@ class ExportRequest(BaseModel):
     )
 
     design: DesignBody | None = None
-    design_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
-    version: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
+    design_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
+    version: Annotated[StrictInt, Field(ge=1, le=1_000_000)] | None = None
     format: Literal["xml", "cxf"] = "xml"
-    five_angles: Annotated[bool, Field(description="also export 15/25/45/75/110")] = False
-    match: Annotated[bool, Field(description="add the ColorSnap match (needs a loaded library)")] = True
+    five_angles: Annotated[StrictBool, Field(description="also export 15/25/45/75/110")] = False
+    match: Annotated[StrictBool, Field(description="add the ColorSnap match (needs a loaded library)")] = True
     metric: SnapMetric = "cie76"
 
     @model_validator(mode="after")
@@ -193,20 +194,24 @@ class ClosedLoopRequest(BaseModel):
         json_schema_extra={"examples": [{"design_id": 1, "corrections": 3, "tolerance": 1.0, "seed": 7}]},
     )
 
-    design_id: Annotated[int, Field(ge=1, le=2**31 - 1)]
-    version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
+    design_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
+    version: Annotated[StrictInt, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
     gloss_gu: (
         Annotated[
-            float,
+            StrictFloat,
             Field(ge=GLOSS_MIN_GU, le=GLOSS_MAX_GU, description="60° gloss target; default the design's"),
         ]
         | None
     ) = None
-    tolerance: Annotated[float, Field(gt=0.0, le=20.0, description="mean ΔE00 accepted")] = (
+    tolerance: Annotated[StrictFloat, Field(gt=0.0, le=20.0, description="mean ΔE00 accepted")] = (
         FORMULATION_TOLERANCE_DE00
     )
-    corrections: Annotated[int, Field(ge=0, le=5, description="correction steps after the first spray")] = 3
-    seed: Annotated[int, Field(ge=0, le=2**31 - 1, description="seed of the simulated spray-out panel")] = 7
+    corrections: Annotated[
+        StrictInt, Field(ge=0, le=5, description="correction steps after the first spray")
+    ] = 3
+    seed: Annotated[
+        StrictInt, Field(ge=0, le=2**31 - 1, description="seed of the simulated spray-out panel")
+    ] = 7
 
 
 class ClosedLoopOut(BaseModel):

@@ -8,6 +8,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.api.schemas.common import StrictInt
 from station.api.schemas.measurements import MeasurementPublic
 
 
@@ -27,13 +28,25 @@ class InstrumentPublic(BaseModel):
 
 
 class ConnectRequest(BaseModel):
-    """The driver address of an instrument to attach (``family@where``, e.g. ``ma6@/dev/ttyUSB0``)."""
+    """The driver address of an instrument to attach (``family@where``, e.g. ``ma6@/dev/ttyUSB0``, or a
+    simulator ``sim:ma6``); only the transports the product supports are accepted
+    (``station.drivers.addresses``)."""
 
     model_config = ConfigDict(
         extra="forbid", json_schema_extra={"examples": [{"address": "ma6@/dev/ttyUSB0"}]}
     )
 
-    address: Annotated[str, Field(min_length=3, max_length=255, pattern=r"^[a-z0-9_]+@[^\x00-\x1f]+$")]
+    address: Annotated[
+        str,
+        Field(
+            min_length=3,
+            max_length=255,
+            pattern=r"^(sim:[a-z0-9]+|[a-z0-9_]+@[^\x00-\x1f\x7f]+)$",
+            description="sim:ma6|ma3|gloss, FAMILY@/dev/ttyUSBn|/dev/ttyACMn|/dev/serial/by-id/NAME|COMn, "
+            "FAMILY@socket://HOST:PORT or rfc2217://HOST:PORT (HOST in CACAD_INSTRUMENT_HOSTS), "
+            "ma3@usb:VID:PID[:SERIAL], gloss@hid:VID:PID|/dev/hidrawN; anything else is refused",
+        ),
+    ]
 
 
 class CalibrateRequest(BaseModel):
@@ -72,9 +85,9 @@ class MeasureRequest(BaseModel):
     )
 
     client_id: uuid.UUID | None = Field(None, description="idempotency key chosen by the client (a UUID)")
-    panel_id: Annotated[int, Field(ge=1, le=2**31 - 1)] | None = None
+    panel_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
     illumination_deg: Annotated[
-        int, Field(ge=0, le=90, description="illumination angle of the stored block")
+        StrictInt, Field(ge=0, le=90, description="illumination angle of the stored block")
     ] = 45
 
 

@@ -7,6 +7,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.api.schemas.common import StrictInt
+
 Metric = Literal["cie76", "cie2000", "din6175"]
 
 
@@ -18,9 +20,9 @@ class RecipeCreate(BaseModel):
         json_schema_extra={"examples": [{"design_id": 1, "version": None, "k": 5, "metric": "cie2000"}]},
     )
 
-    design_id: Annotated[int, Field(ge=1, le=2**31 - 1)]
-    version: Annotated[int, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
-    k: Annotated[int, Field(ge=1, le=20, description="candidates returned, best first")] = 5
+    design_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
+    version: Annotated[StrictInt, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None
+    k: Annotated[StrictInt, Field(ge=1, le=20, description="candidates returned, best first")] = 5
     metric: Metric = "cie2000"
 
 

@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 from pydantic.config import JsonDict
 
+from station.api.schemas.common import StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
 
 _EXAMPLE: JsonDict = {
@@ -47,7 +48,7 @@ class VariationsRequest(BaseModel):
 
     design: DesignBody
     degree: Annotated[
-        float,
+        StrictFloat,
         Field(
             gt=0.0,
             le=50.0,
@@ -87,12 +88,12 @@ class SwatchRequest(BaseModel):
 
     design: DesignBody
     kind: Literal["swatch", "booklet"] = "swatch"
-    width: Annotated[int, Field(ge=8, le=1024, description="swatch width, pixels")] = 160
-    height: Annotated[int, Field(ge=4, le=256, description="swatch height, pixels")] = 32
+    width: Annotated[StrictInt, Field(ge=8, le=1024, description="swatch width, pixels")] = 160
+    height: Annotated[StrictInt, Field(ge=4, le=256, description="swatch height, pixels")] = 32
     border: Annotated[
-        int, Field(ge=1, le=32, description="swatch border, pixels (< half the smaller side)")
+        StrictInt, Field(ge=1, le=32, description="swatch border, pixels (< half the smaller side)")
     ] = 4
-    size: Annotated[int, Field(ge=16, le=512, description="booklet thumbnail size, pixels")] = 96
+    size: Annotated[StrictInt, Field(ge=16, le=512, description="booklet thumbnail size, pixels")] = 96
 
 
 class GlossOut(BaseModel):
@@ -153,4 +154,4 @@ class RenderRequest(BaseModel):
 
     design: DesignBody | None = None
     scene: Literal["sphere-point", "panel-point"] = "sphere-point"
-    size: Annotated[int, Field(ge=16, le=512, description="square image side, pixels")] = 128
+    size: Annotated[StrictInt, Field(ge=16, le=512, description="square image side, pixels")] = 128

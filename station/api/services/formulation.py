@@ -226,12 +226,15 @@ def export(*, session: Session, cache: LibraryCache, request: ExportRequest) -> 
     return data, f"{stem}.{'xml' if request.format == 'xml' else 'cxf'}", code
 
 
-def import_csv(*, session: Session, actor: User, text: str, name: str) -> dict[str, Any]:
+def import_csv(
+    *, session: Session, actor: User, text: str, name: str, allow_formulas: bool = False
+) -> dict[str, Any]:
     """Validate a library CSV (``read_library_csv``) and add its paints; a code already stored is a 409 and
-    nothing is added (one transaction)."""
+    nothing is added (one transaction). A code starting like a spreadsheet formula is refused unless
+    *allow_formulas*."""
     from station.formulate.library_csv import read_library_csv
 
-    lib = read_library_csv(io.StringIO(text), name=name)
+    lib = read_library_csv(io.StringIO(text), name=name, allow_formulas=allow_formulas)
     codes = [str(c) for c in lib.codes]
     taken = (
         session.scalars(select(LibraryPaint.code).where(LibraryPaint.code.in_(codes))).all() if codes else []

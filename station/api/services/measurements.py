@@ -14,6 +14,7 @@ from db.models import Instrument, Measurement, Panel, User
 from station.api.errors import ConflictError, NotFoundError
 from station.api.schemas.measurements import CorrectionCreate, MeasurementPublic, MeasurementQuery
 from station.api.services import audit
+from station.csv_cells import escape_cell
 from station.ingest import Reading, ReferenceNotFoundError, store_audited, store_reading
 
 _Successor = aliased(Measurement)
@@ -157,7 +158,12 @@ def query(
 
 
 def export_csv(*, session: Session, q: MeasurementQuery, max_rows: int = 100_000) -> Iterator[str]:
-    """CSV text, one line per measurement and geometry (long format), oldest first."""
+    """CSV text, one line per measurement and geometry (long format), oldest first.
+
+    Free-text cells (job, part, instrument serial, operator) that a spreadsheet would evaluate as a
+    formula get a leading single quote (:func:`station.csv_cells.escape_cell`); numbers are written as
+    numbers (``-1.5`` stays ``-1.5``).
+    """
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
@@ -174,10 +180,10 @@ def export_csv(*, session: Session, q: MeasurementQuery, max_rows: int = 100_000
                     m.id,
                     m.client_id,
                     m.panel_id or "",
-                    job or "",
-                    part or "",
-                    serial,
-                    m.operator,
+                    escape_cell(job or ""),
+                    escape_cell(part or ""),
+                    escape_cell(serial),
+                    escape_cell(m.operator),
                     m.measured_at.isoformat(),
                     angle,
                     L,
