@@ -92,3 +92,62 @@ def test_stored_measurements_failure_is_shown(qtbot, tmp_path):
     assert screen.load_stored() == 0
     assert screen.verdict.text() == "error" and "unreachable" in screen.details.text()
     screen.close()
+
+
+def _stored_labels(screen) -> list[str]:
+    """Entries of panel A's picker that are stored measurements, as the user sees them."""
+    items = [screen.panel_a.itemText(i) for i in range(screen.panel_a.count())]
+    return [t for t in items if t.startswith("stored #")]
+
+
+def test_clicking_load_stored_offers_every_stored_measurement(qtbot, tmp_path):
+    """A click (Qt sends ``checked=False``) loads the default number, not 0 rows."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    from tests.ui.test_instruments import _spectral
+    from ui.models.instruments import measurement_from_reading
+    from ui.models.measure_db import LocalSink, PanelInfo
+
+    sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
+    store = MeasurementStore(sink)
+    panels = [
+        PanelInfo("J-9", "bumper", "PP"),
+        PanelInfo("J-9", "fender", "steel"),
+        PanelInfo("J-10", "door"),
+    ]
+    ids = []
+    for i, panel in enumerate(panels):
+        m = store.persist(measurement_from_reading(_spectral(f"SIM-T-{i}"), panel, "test"))
+        assert m.receipt.status == "stored", m.receipt
+        ids.append(m.receipt.measurement_id)
+    screen = QAScreen(DesignerModel(DesignDocument()), store)
+    qtbot.addWidget(screen)
+    screen.show()
+    assert _stored_labels(screen) == []
+    QTest.mouseClick(screen.load_btn, Qt.MouseButton.LeftButton)
+    shown = _stored_labels(screen)
+    assert len(shown) == len(panels)
+    for mid, p in zip(ids, panels, strict=True):
+        assert sum(t.startswith(f"stored #{mid}: {p.job} {p.part} ") for t in shown) == 1
+    assert screen.details.text().startswith(f"{len(panels)} stored measurements offered")
+    assert screen.verdict.text() != "error"
+    screen.close()
+    sink.close()
+
+
+@pytest.mark.parametrize("bad", [False, True, 0, -1, 1001, 2.5, "10", None])
+def test_load_stored_refuses_a_limit_that_is_not_a_row_count(qtbot, tmp_path, bad):
+    from station.errors import InputError
+    from ui.models.measure_db import RECENT_MAX, LocalSink
+
+    sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
+    screen = QAScreen(DesignerModel(DesignDocument()), MeasurementStore(sink))
+    qtbot.addWidget(screen)
+    with pytest.raises(InputError) as err:
+        screen.load_stored(bad)
+    assert err.value.field == "limit" and f"1 ≤ limit ≤ {RECENT_MAX}" in str(err.value)
+    with pytest.raises(InputError):
+        sink.recent(bad)
+    screen.close()
+    sink.close()

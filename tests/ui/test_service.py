@@ -112,6 +112,38 @@ def test_scan_is_stored_on_the_service_and_offered_to_qa(qtbot, api, tmp_path):
     win.close()
 
 
+def test_clicking_load_stored_in_service_mode_offers_the_stored_scans(qtbot, api, tmp_path):
+    """The QA button over HTTP: a click sends a valid page size (no 422) and lists every stored scan."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    from tests.ui.test_instruments import _spectral
+    from ui.models.instruments import measurement_from_reading
+
+    win = _window(api, _token(api, "technician", "operator", "admin"), tmp_path)
+    qtbot.addWidget(win)
+    panels = [PanelInfo("J-8", "bumper", "PP/EPDM"), PanelInfo("J-8", "fender", "steel")]
+    for i, panel in enumerate(panels):
+        m = win.store.persist(measurement_from_reading(_spectral(f"SIM-S-{i}"), panel, "test"))
+        assert m.receipt.status == "stored", m.receipt
+    page = api.client.get("/api/v1/measurements", headers=api.auth("admin")).json()
+    assert page["count"] == len(panels)
+    qa = win.screens["QA"].content()
+    win.show()
+    win.tabs.setCurrentWidget(win.screens["QA"])
+    QTest.mouseClick(qa.load_btn, Qt.MouseButton.LeftButton)
+    assert qa.verdict.text() != "error", qa.details.text()
+    assert "422" not in qa.details.text()
+    items = [qa.panel_a.itemText(i) for i in range(qa.panel_a.count())]
+    shown = [t for t in items if t.startswith("stored #")]
+    assert len(shown) == len(panels)
+    for row in page["data"]:
+        assert sum(t.startswith(f"stored #{row['id']}: ") for t in shown) == 1
+    for p in panels:
+        assert sum(f": {p.job} {p.part} " in t for t in shown) == 1
+    win.close()
+
+
 def test_unreachable_service_keeps_the_reading(qtbot, api, tmp_path):
     down = ServiceClient("http://127.0.0.1:9", "t", timeout_s=2.0)
     sink = ServiceSink(down, tmp_path / "outbox.sqlite3")

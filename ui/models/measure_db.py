@@ -34,9 +34,23 @@ from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 if TYPE_CHECKING:  # SQLAlchemy, pydantic and the ORM load on first use (≈0.5 s off the viewer's start-up)
     from station.ingest import DatabaseDestination, Destination, Ingestor, Outbox, PanelRef, Reading, Receipt
 
+RECENT_DEFAULT = 50
+"""Stored measurements offered by default (newest first)."""
+RECENT_MAX = 1000
+"""Most stored measurements one request returns: the service's page-size bound (``limit`` ≤ 1000)."""
 OUTBOX_FILE = "viewer-outbox.sqlite3"
 SERVICE_OUTBOX_FILE = "viewer-service-outbox.sqlite3"
 _TEXT = re.compile(r"^[^\x00-\x1f]+$")
+
+
+def recent_limit(limit: object) -> int:
+    """*limit* as a row count, or :class:`InputError` naming ``limit`` and ``1 ≤ limit ≤ RECENT_MAX``.
+
+    A ``bool`` is refused, not read as 0 or 1: a button's ``checked`` flag is not a row count.
+    """
+    if isinstance(limit, bool) or not isinstance(limit, int) or not 1 <= limit <= RECENT_MAX:
+        raise InputError("limit", f"an integer number of measurements, 1 ≤ limit ≤ {RECENT_MAX}", limit)
+    return limit
 
 
 @dataclass(frozen=True)
@@ -187,8 +201,9 @@ class MeasurementSink:
         """Readings waiting in the outbox."""
         return len(self.outbox) if self._ingestor is not None or self.outbox_path.exists() else 0
 
-    def recent(self, limit: int = 50) -> list[StoredMeasurement]:
-        """The newest stored measurements (raises :class:`StationError` with a plain message)."""
+    def recent(self, limit: int = RECENT_DEFAULT) -> list[StoredMeasurement]:
+        """The newest *limit* stored measurements (:func:`recent_limit` checks it; raises
+        :class:`StationError` with a plain message)."""
         raise NotImplementedError
 
     def close(self) -> None:
@@ -244,7 +259,8 @@ class LocalSink(MeasurementSink):
         except DestinationUnreachableError:
             pass  # the worker queues the reading and says why
 
-    def recent(self, limit: int = 50) -> list[StoredMeasurement]:
+    def recent(self, limit: int = RECENT_DEFAULT) -> list[StoredMeasurement]:
+        limit = recent_limit(limit)
         from sqlalchemy import select
 
         from db.models import Measurement, Panel
@@ -330,7 +346,8 @@ class ServiceSink(MeasurementSink):
             raise ReadingRefusedError(f"{method} {path}: HTTP {r.status_code} {r.text[:300]}")
         return r
 
-    def recent(self, limit: int = 50) -> list[StoredMeasurement]:
+    def recent(self, limit: int = RECENT_DEFAULT) -> list[StoredMeasurement]:
+        limit = recent_limit(limit)
         from station.ingest import IngestError
 
         try:

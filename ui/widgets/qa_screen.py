@@ -29,6 +29,7 @@ from station.errors import InputError, StationError
 from station.model import FaceFlopTravelGloss
 from ui.models.designer import DesignerModel
 from ui.models.instruments import MeasurementStore
+from ui.models.measure_db import RECENT_DEFAULT, recent_limit
 from ui.models.view import ViewModel, ViewSettings
 from ui.widgets.render_view import make_render_view
 from ui.widgets.tasks import TaskThread
@@ -129,7 +130,8 @@ class QAScreen(QWidget):
 
         self.beta.valueChanged.connect(self._on_beta)
         self.run_btn.clicked.connect(self.run)
-        self.load_btn.clicked.connect(self.load_stored)
+        # clicked(bool) must not reach load_stored: its checked flag would become the row limit
+        self.load_btn.clicked.connect(self._on_load_clicked)
         self.send_btn.clicked.connect(self._send)
         designer.events.palette.connect(self.refresh_sources)
         designer.document.events.changed.connect(self._on_design)
@@ -156,8 +158,17 @@ class QAScreen(QWidget):
         ]
         return out + self.stored
 
-    def load_stored(self, limit: int = 50) -> int:
-        """Offer the newest stored measurements (their FFTG fits) as panels; returns how many."""
+    def _on_load_clicked(self) -> None:
+        """The "Load stored measurements" click: the newest :data:`RECENT_DEFAULT` of the store."""
+        self.load_stored(RECENT_DEFAULT)
+
+    def load_stored(self, limit: int = RECENT_DEFAULT) -> int:
+        """Offer the newest *limit* stored measurements (their FFTG fits) as panels; returns how many.
+
+        *limit* is a row count, ``1 ≤ limit ≤ RECENT_MAX``; anything else (a ``bool`` included) raises
+        :class:`InputError` naming ``limit``. A store that cannot be read is shown, not raised.
+        """
+        limit = recent_limit(limit)
         try:
             rows = self.store.sink.recent(limit)
         except StationError as exc:
