@@ -100,3 +100,21 @@ def test_paints_inside_the_bound_keep_the_unconstrained_fit() -> None:
         )
         assert _cost(m, d.face, d.flop, d.travel_deg) <= best + 1e-9
     assert checked > 480
+
+
+def test_three_angle_closed_form_vertex_beyond_the_bound_is_constrained() -> None:
+    lab = np.array([[67.2, -1.25, -5.6], [40.0, -1.45, -6.7], [1.0, -0.81, -4.1]])
+    m = AspecularMeasurements((15.0, 45.0, 110.0), lab, 60.0)
+    angles = np.asarray(m.angles_deg)
+    # the exact parabola through L* (eq 3.3.4) has its vertex below L* = 0
+    xa, xb, xc = np.polyfit(angles, lab[:, 0], 2)
+    assert xc - xb**2 / (4 * xa) < 0.0
+    fit = fit_fftg(m)
+    d = fit.design
+    assert fit.method == "constrained" and lab_within(np.stack([d.face, d.flop]))
+    best = np.inf
+    for tc in np.arange(FACE_ANGLE_DEG + 0.05, TRAVEL_MAX_DEG + 1e-9, 0.05):
+        coef, *_ = np.linalg.lstsq(_design_matrix(angles, tc), lab, rcond=None)
+        if lab_within(coef):
+            best = min(best, _cost(m, coef[0], coef[1], tc))
+    assert _cost(m, d.face, d.flop, d.travel_deg) <= best + 1e-9
