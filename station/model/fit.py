@@ -7,6 +7,17 @@ angles are fitted by least squares over all parameters, θ_clamp included (varia
 given θ_clamp the model is linear in face and flop). The residual ΔE*ab per angle is always reported.
 
 Model: X(θ) = flop + (face − flop) s(θ)², s(θ) = (θ_c − min(θ, θ_c)) / (θ_c − 15°).
+
+Constrained vertex: when the unconstrained fit puts face or flop outside the Lab bound
+(:data:`station.model.domain.LAB_RANGES`, e.g. a flop L* below 0 from an extrapolated vertex), the
+fit solves instead
+
+    min over θ_c, face, flop of  Σ_θ Σ_c (X_c(θ) − Lab_c(θ))²   subject to  LAB_LO <= face, flop <= LAB_HI,
+
+with θ_c in (15°, TRAVEL_MAX_DEG]. For a fixed θ_c this is a box-constrained linear least squares in
+(face_c, flop_c) per channel, solved exactly (the interior optimum, else the best point on an edge of
+the box); θ_c is found on a grid and refined with a bounded scalar search. The residual per angle is
+reported and a warning says the constraint was active.
 """
 
 from __future__ import annotations
@@ -15,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, minimize_scalar
 
-from station.model.domain import lab_accepted, lab_within
+from station.model.domain import LAB_HI, LAB_LO, lab_accepted, lab_within
 from station.model.errors import FitError
 from station.model.representations import (
     DEFAULT_GLOSS_GU,
@@ -49,7 +60,8 @@ class FitResult:
     exact
         True when every residual is below :data:`EXACT_TOLERANCE_DE`.
     method
-        ``"closed-form"`` (3 angles, L exact) or ``"least-squares"``.
+        ``"closed-form"`` (3 angles, L exact), ``"least-squares"``, or ``"constrained"`` (face and
+        flop held inside the Lab bound; see the module notes).
     warnings
         Human-readable notes: gloss defaulted, flop brighter than face, travel not identifiable, …
     """
@@ -115,6 +127,57 @@ def _least_squares_travel(angles: NDArray, lab: NDArray) -> float:
     return tc
 
 
+def _box_lstsq(a: NDArray[np.float64], y: NDArray[np.float64], lo: float, hi: float) -> NDArray:
+    """Exact minimiser of |a·x − y|² over lo <= x_0, x_1 <= hi for a (n, 2) design matrix.
+
+    The problem is a convex quadratic in two variables: the optimum is the unconstrained solution when
+    it lies in the box, otherwise on one of the four edges, where it is the clipped 1-D minimiser.
+    """
+    x, *_ = np.linalg.lstsq(a, y, rcond=None)
+    if np.all((x >= lo) & (x <= hi)):
+        return np.asarray(x, dtype=float)
+    best, best_cost = np.array([lo, lo]), np.inf
+    for j in (0, 1):
+        k = 1 - j
+        col_k = a[:, k]
+        norm = float(col_k @ col_k)
+        for bound in (lo, hi):
+            r = y - a[:, j] * bound
+            xk = float(np.clip((col_k @ r) / norm, lo, hi)) if norm > 0.0 else lo
+            cand = np.empty(2)
+            cand[j], cand[k] = bound, xk
+            cost = float(np.sum((a @ cand - y) ** 2))
+            if cost < best_cost:
+                best, best_cost = cand, cost
+    return best
+
+
+def _constrained_solve(angles: NDArray, lab: NDArray, tc: float) -> tuple[NDArray, NDArray, NDArray]:
+    """For fixed θ_clamp, face and flop per channel inside the Lab bound; return (face, flop, model)."""
+    u = shape_factor(angles, tc)
+    a = np.stack([u, 1.0 - u], axis=1)
+    coef = np.stack(
+        [_box_lstsq(a, lab[:, c], LAB_LO[c], LAB_HI[c]) for c in range(3)], axis=1
+    )  # (2, 3): rows face, flop
+    return coef[0], coef[1], a @ coef
+
+
+def _constrained_travel(angles: NDArray, lab: NDArray) -> float:
+    """θ_clamp minimising the summed squared residual with face and flop inside the Lab bound."""
+    low = _TC_LOW + 2e-2  # stay clear of the refused vertex at the face angle
+    grid = np.concatenate([np.linspace(low, 30.0, 80), np.arange(30.0, TRAVEL_MAX_DEG + 1e-9, 0.25)])
+
+    def cost(tc: float) -> float:
+        return float(np.sum((_constrained_solve(angles, lab, tc)[2] - lab) ** 2))
+
+    costs = np.array([cost(float(tc)) for tc in grid])
+    i = int(np.argmin(costs))
+    lo, hi = float(grid[max(i - 1, 0)]), float(grid[min(i + 1, grid.size - 1)])
+    sol = minimize_scalar(cost, bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
+    tc = float(sol.x)
+    return tc if cost(tc) <= costs[i] else float(grid[i])
+
+
 def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
     """Fit face/flop/travel/gloss to aspecular measurements (thesis §3.3.3, docs/design.md erratum 5).
 
@@ -142,7 +205,9 @@ def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
     * flop brighter than face (retroreflective) → fitted, with a warning;
     * non-monotone L → least squares over θ_clamp, with the residual and a warning;
     * fewer than two angles below θ_clamp → θ_clamp is not identifiable: every value between the
-      face angle and the second measured angle fits equally; the upper end is reported, with a warning.
+      face angle and the second measured angle fits equally; the upper end is reported, with a warning;
+    * unconstrained face or flop outside the Lab bound (a vertex extrapolated beyond the measured
+      range) → the constrained fit of the module notes, with its residual and a warning.
     """
     angles = np.asarray(measurements.angles_deg, dtype=float)
     lab = np.asarray(measurements.lab, dtype=float)
@@ -191,6 +256,17 @@ def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
             f"(accepted {FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g})"
         )
     face, flop, model = _solve_for_travel(angles, lab, tc)
+    if not lab_within(np.stack([face, flop])) and lab_within(lab):
+        tc_free = tc
+        tc = _constrained_travel(angles, lab)
+        face, flop, model = _constrained_solve(angles, lab, tc)
+        method = "constrained"
+        worst = float(np.max(np.linalg.norm(model - lab, axis=1)))
+        warnings.append(
+            f"unconstrained vertex at {tc_free:.3g}° puts face or flop outside {lab_accepted('L')}, "
+            f"{lab_accepted('a')}, {lab_accepted('b')}: constrained fit (travel {tc:.3g}°), "
+            f"max residual ΔE*ab {worst:.3g}"
+        )
     if face[0] < flop[0]:
         warnings.append("flop brighter than face (L*): retroreflective or inverted travel")
     residual = np.linalg.norm(model - lab, axis=1)

@@ -76,3 +76,76 @@ def test_filters_and_colorsnap(qtbot):
     doc.undo()
     assert not doc.can_undo
     screen.close()
+
+
+def _click_tree_item(qtbot, tree, item) -> None:
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    tree.scrollToItem(item)
+    rect = tree.visualItemRect(item)
+    QTest.mouseClick(tree.viewport(), Qt.MouseButton.LeftButton, pos=rect.center())
+
+
+def _find(tree, text: str):
+    from PySide6.QtWidgets import QTreeWidgetItemIterator
+
+    it = QTreeWidgetItemIterator(tree)
+    while it.value() is not None:
+        if it.value().text(0) == text:
+            return it.value()
+        it += 1
+    raise AssertionError(f"no tree node {text!r}")
+
+
+def test_demo_library_metallics_all_render(qtbot):
+    """On the full demo library, clicking "metallics" lists as many thumbnails as match (up to the page
+    size), each rendered: the paints whose unconstrained fit left the Lab bound render too."""
+    from station.formulate.demo import demo_library
+    from ui.widgets.library_screen import MAX_THUMBS
+
+    lib = demo_library()
+    screen = LibraryScreen(LibraryModel(lib), DesignDocument())
+    qtbot.addWidget(screen)
+    screen.resize(1000, 700)
+    screen.show()
+    from PySide6.QtCore import QPoint, Qt
+    from PySide6.QtTest import QTest
+
+    node = _find(screen.tree, "metallics+pearls")
+    _click_tree_item(qtbot, screen.tree, node)
+    for box in (screen.type_boxes["pearl"], screen.type_boxes["solid"]):  # metallics only
+        QTest.mouseClick(box, Qt.MouseButton.LeftButton, pos=QPoint(8, box.height() // 2))
+        assert not box.isChecked()
+    expected = int(np.sum(lib.types == "metallic"))
+    assert int(np.sum(screen.model.mask)) == expected
+    assert f"{expected} paints match" in screen.count.text()
+    assert screen.thumbs.count() == min(expected, MAX_THUMBS)
+    texts = [screen.thumbs.item(i).text() for i in range(screen.thumbs.count())]
+    assert not [t for t in texts if "cannot render" in t]
+    assert any(t.startswith("SYN-NM0003") for t in texts)  # its unconstrained fit left the bound
+    assert all(not screen.thumbs.item(i).icon().isNull() for i in range(screen.thumbs.count()))
+    screen.close()
+
+
+def test_unrenderable_paint_is_noted_and_the_list_continues(qtbot, monkeypatch):
+    from station.model.errors import FitError
+
+    lib = _library(12)
+    model = LibraryModel(lib)
+    real = LibraryModel.thumbnail
+
+    def thumbnail(self, i: int, size: int = 40):
+        if i == 3:
+            raise FitError("travel_deg: test paint outside the model")
+        return real(self, i, size)
+
+    monkeypatch.setattr(LibraryModel, "thumbnail", thumbnail)
+    screen = LibraryScreen(model, DesignDocument())
+    qtbot.addWidget(screen)
+    screen.show()
+    assert screen.thumbs.count() == 12
+    note = screen.thumbs.item(3).text()
+    assert "cannot render: travel_deg: test paint outside the model" in note
+    assert all("cannot render" not in screen.thumbs.item(i).text() for i in range(12) if i != 3)
+    screen.close()

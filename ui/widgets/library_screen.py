@@ -25,6 +25,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from station.errors import StationError
 from station.formulate.library import PAINT_TYPES
 from station.formulate.snap import view_data
 from station.model import FaceFlopTravelGloss
@@ -235,15 +236,17 @@ class LibraryScreen(QWidget):
         )
         self.thumbs.clear()
         shown = rows[:MAX_THUMBS]
-        if shown.size:
-            for r in shown:
-                it = QListWidgetItem(
-                    QIcon(pixmap_from_array(self.model.thumbnail(int(r)))),
-                    f"{self.model.library.codes[r]}  {self.model.library.types[r]}  "
-                    f"{self.model.library.gloss_gu[r]:.0f} GU",
-                )
-                it.setData(Qt.ItemDataRole.UserRole, int(r))
-                self.thumbs.addItem(it)
+        lib = self.model.library
+        for r in shown:
+            label = f"{lib.codes[r]}  {lib.types[r]}  {lib.gloss_gu[r]:.0f} GU"
+            try:
+                it = QListWidgetItem(QIcon(pixmap_from_array(self.model.thumbnail(int(r)))), label)
+            except StationError as exc:  # one paint that cannot be rendered never stops the list
+                it = QListWidgetItem(f"{label}  — cannot render: {exc}")
+                it.setToolTip(str(exc))
+                it.setFlags(it.flags() & ~Qt.ItemFlag.ItemIsEnabled)
+            it.setData(Qt.ItemDataRole.UserRole, int(r))
+            self.thumbs.addItem(it)
 
     def _on_thumb(self, item: QListWidgetItem) -> None:
         r = int(item.data(Qt.ItemDataRole.UserRole))
