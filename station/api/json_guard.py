@@ -21,6 +21,8 @@ from urllib.parse import parse_qsl
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from station.api.middleware import send_json
+
 __all__ = ["StrictJsonBody", "find_hostile", "safe_text"]
 
 MAX_LOC_TEXT = 64
@@ -127,18 +129,7 @@ def _query_fault(raw: bytes) -> tuple[tuple[int | str, ...], str, str] | None:
 
 async def _refuse(send: Send, fault: tuple[tuple[int | str, ...], str, str]) -> None:
     loc, msg, kind = fault
-    payload = json.dumps({"detail": [{"loc": list(loc), "msg": msg, "type": kind}]}).encode()
-    await send(
-        {
-            "type": "http.response.start",
-            "status": 422,
-            "headers": [
-                (b"content-type", b"application/json"),
-                (b"content-length", str(len(payload)).encode()),
-            ],
-        }
-    )
-    await send({"type": "http.response.body", "body": payload})
+    await send_json(send, 422, [{"loc": list(loc), "msg": msg, "type": kind}])
 
 
 class StrictJsonBody:

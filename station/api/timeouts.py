@@ -10,9 +10,10 @@ client a ``408`` with ``Connection: close`` (whatever the app answered instead i
 from __future__ import annotations
 
 import asyncio
-import json
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from station.api.middleware import send_json
 
 
 class BodyReadTimeout:
@@ -25,19 +26,7 @@ class BodyReadTimeout:
         self.timeout_s = timeout_s
 
     async def _refuse(self, send: Send) -> None:
-        body = json.dumps({"detail": f"request body not received within {self.timeout_s:g} s"}).encode()
-        await send(
-            {
-                "type": "http.response.start",
-                "status": 408,
-                "headers": [
-                    (b"content-type", b"application/json"),
-                    (b"content-length", str(len(body)).encode()),
-                    (b"connection", b"close"),
-                ],
-            }
-        )
-        await send({"type": "http.response.body", "body": body})
+        await send_json(send, 408, f"request body not received within {self.timeout_s:g} s", close=True)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
