@@ -133,7 +133,7 @@ def measurement_from_reading(
 
 
 class MeasurementStore:
-    """The session's scans in memory (the database is the record). Event: ``added(measurement)``.
+    """The scans made since the viewer started, in memory (the database is the record). Event: ``added(measurement)``.
 
     *sink* (a :class:`~ui.models.measure_db.MeasurementSink`) stores each scan; the screen calls
     :meth:`persist` in its worker thread and :meth:`add` in the GUI thread."""

@@ -185,7 +185,7 @@ class InstrumentsScreen(QWidget):
     def _where_text(self) -> str:
         sink = self.store.sink
         if sink is None:
-            return "storage: none (scans kept in this session only)"
+            return "storage: none (scans kept only until the viewer closes)"
         waiting = sink.pending()
         queued = f" ({waiting} readings waiting: Retry queued)" if waiting else ""
         return f"storage: {sink.where}; outbox {sink.outbox_path}{queued}"

@@ -1,5 +1,5 @@
-"""QA screen: two panels (designs, palette entries, this session's scans or measurements stored in the
-database or on the service — "Load stored measurements"), a misalignment and the
+"""QA screen: two panels (designs, palette entries, scans made since the viewer started or measurements
+stored in the database or on the service — "Load stored measurements"), a misalignment and the
 geometry range → seam ΔE per geometry, the goniogeometric index, pass/fail, advice, and the seam rendered
 as is and with the corrected paint for panel B (``station.analysis.qa.seam_qa``). The corrected paint
 can be sent to formulation (ColorSnap in the library tab)."""
