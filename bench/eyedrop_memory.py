@@ -39,6 +39,7 @@ import numpy as np
 from PIL import Image
 
 from bench._report import ROOT, Case, write_section
+from station.api.settings import BOOTSTRAP_TOKEN_FILE
 
 MIB = 1024 * 1024
 BAR_MIB = 300.0
@@ -101,7 +102,7 @@ def serve(data_dir: Path, concurrency: int, root: Path = ROOT) -> Iterator[tuple
             if "Uvicorn running" in line or "Application startup complete" in line:
                 break
         token = next((m.group(0) for m in map(re.compile(r"cst_[\w-]+").search, out) if m), "")
-        token_file = data_dir / "bootstrap-token"  # stdout is a pipe: the service writes the token there
+        token_file = data_dir / BOOTSTRAP_TOKEN_FILE  # stdout is a pipe: the service writes the token there
         if not token and token_file.exists():
             token = token_file.read_text().strip()
         if not token:

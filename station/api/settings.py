@@ -13,6 +13,10 @@ from db.engine import data_dir, default_database_url
 SIM_KINDS = ("ma6", "ma3", "gloss")
 
 
+#: File name, in the data folder, of the first admin token when ``station serve``'s output is not a terminal.
+BOOTSTRAP_TOKEN_FILE = "bootstrap-token"
+
+
 class Settings(BaseSettings):
     """Everything the service needs to start; ``create_app(Settings(...))`` uses only this."""
 
@@ -117,4 +121,4 @@ class Settings(BaseSettings):
     @property
     def bootstrap_token_path(self) -> Path:
         """Where ``station serve`` writes the first admin token (0600) when its output is not a terminal."""
-        return self.data_dir / "bootstrap-token"
+        return self.data_dir / BOOTSTRAP_TOKEN_FILE

@@ -22,6 +22,8 @@ from pathlib import Path
 import httpx
 import pytest
 
+from station.api.settings import BOOTSTRAP_TOKEN_FILE
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -65,7 +67,9 @@ def _serve(data_dir: Path, *extra: str) -> Iterator[tuple[str, str]]:
             out.append(line)
             if "Uvicorn running" in line or "Application startup complete" in line:
                 break
-        token_file = data_dir / "bootstrap-token"  # stdout is a pipe, not a terminal: the token is in a file
+        token_file = (
+            data_dir / BOOTSTRAP_TOKEN_FILE
+        )  # stdout is a pipe, not a terminal: the token is in a file
         token = token_file.read_text().strip() if token_file.exists() else ""
         yield base, token
     finally:
@@ -123,7 +127,7 @@ def test_bootstrap_token_is_handed_out_on_first_start_only(tmp_path: Path, monke
     argv = ["serve", "--data-dir", str(tmp_path), "--simulators", "", "--no-demo-library", "--port", "8123"]
     assert main(argv) == 0
     first = capsys.readouterr().out
-    token_file = tmp_path / "bootstrap-token"
+    token_file = tmp_path / BOOTSTRAP_TOKEN_FILE
     assert "cst_" not in first and str(token_file) in first, first
     assert stat.S_IMODE(token_file.stat().st_mode) == 0o600
     token = token_file.read_text().strip()
@@ -147,7 +151,7 @@ def test_bootstrap_token_is_printed_on_a_terminal(tmp_path: Path, monkeypatch, c
     monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
     assert main(["serve", "--data-dir", str(tmp_path), "--simulators", "", "--no-demo-library"]) == 0
     assert re.search(r"cst_[\w-]+", capsys.readouterr().out)
-    assert not (tmp_path / "bootstrap-token").exists()
+    assert not (tmp_path / BOOTSTRAP_TOKEN_FILE).exists()
 
 
 def test_serve_refuses_bad_input(tmp_path: Path, capsys) -> None:

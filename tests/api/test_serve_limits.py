@@ -19,6 +19,8 @@ from pathlib import Path
 import httpx
 import pytest
 
+from station.api.settings import BOOTSTRAP_TOKEN_FILE
+
 REPO = Path(__file__).resolve().parents[2]
 BODY_TIMEOUT_S = 1.0
 KEEP_ALIVE_S = 1
@@ -79,7 +81,7 @@ def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
                 break
         else:
             pytest.fail("station serve did not start:\n" + "".join(out))
-        token_file = data_dir / "bootstrap-token"
+        token_file = data_dir / BOOTSTRAP_TOKEN_FILE
         assert any(str(token_file) in line for line in out) and not any("cst_" in line for line in out)
         yield Service(f"http://127.0.0.1:{port}", data_dir, token_file.read_text().strip(), env_port, port)
     finally:
@@ -115,7 +117,7 @@ def test_port_flag_overrides_the_environment_and_files_are_private(service: Serv
     with pytest.raises(httpx.ConnectError):
         httpx.get(f"http://127.0.0.1:{service.env_port}/health", timeout=2)
     assert stat.S_IMODE(service.data_dir.stat().st_mode) == 0o700
-    for name in ("station.sqlite3", "station.sqlite3-wal", "bootstrap-token"):
+    for name in ("station.sqlite3", "station.sqlite3-wal", BOOTSTRAP_TOKEN_FILE):
         path = service.data_dir / name
         if path.exists():
             assert stat.S_IMODE(path.stat().st_mode) == 0o600, name

@@ -28,6 +28,7 @@ import pytest
 from sqlalchemy import create_engine, func, select
 
 from db.models import AuditEvent, Measurement
+from station.api.settings import BOOTSTRAP_TOKEN_FILE
 from station.ingest import Outbox
 
 REPO = Path(__file__).resolve().parents[2]
@@ -84,7 +85,9 @@ class _Service:
             if token and not self.token:
                 self.token = token.group(0)
             if "Uvicorn running" in line:  # logged once the socket is bound ("startup complete" comes before)
-                token_file = self.data_dir / "bootstrap-token"  # stdout is a pipe: the token goes to a file
+                token_file = (
+                    self.data_dir / BOOTSTRAP_TOKEN_FILE
+                )  # stdout is a pipe: the token goes to a file
                 if not self.token and token_file.exists():
                     self.token = token_file.read_text().strip()
                 self._reader = threading.Thread(target=self._drain, args=(self.proc,), daemon=True)
