@@ -1,6 +1,10 @@
-"""Instruments screen: connect (simulators offered), calibrate, scan a panel with progress, see the
-reading (L*, a*, b* per angle with the fitted curve, and a rendering), store it in the measurement database
-with the panel metadata (job, part, substrate, notes).
+"""Instruments screen: connect (simulators offered), pair a gloss meter, calibrate, scan a panel with
+progress, see the reading (L*, a*, b* per angle with the fitted curve, the gloss meter's 20/60/85° GU,
+haze and DOI, and a rendering), store it in the measurement database with the panel metadata (job,
+part, substrate, notes).
+
+Progress: steps done of a scan (gloss and colour measured, Lab and fit, stored, shown); a step of
+unknown length (connecting, calibrating) shows a busy bar, never a jump to 100 % before it is done.
 
 Every blocking call (the scan and its store included) runs in a :class:`~ui.widgets.tasks.TaskThread`; the
 thread is joined and the instrument (and simulator) closed when the screen closes. Errors are shown in the
@@ -55,6 +59,15 @@ class InstrumentsScreen(QWidget):
         self.device = QComboBox()
         self.device.setEditable(True)
         self.device.addItems(list(SIM_DEVICES))
+        self.gloss_device = QComboBox()
+        self.gloss_device.setEditable(True)
+        self.gloss_device.addItems(["sim:gloss"])
+        self.gloss_device.setToolTip(
+            "a gloss meter read with every scan; its 60° gloss is stored with the colour"
+        )
+        self.pair_btn = QPushButton("Pair gloss meter")
+        self.gloss = QLabel("gloss: no gloss meter paired")
+        self.gloss.setWordWrap(True)
         self.job = QLineEdit("J-0001")
         self.part = QComboBox()
         self.part.addItems(list(PARTS))
@@ -87,6 +100,10 @@ class InstrumentsScreen(QWidget):
 
         form = QFormLayout()
         form.addRow("device", self.device)
+        pair = QHBoxLayout()
+        pair.addWidget(self.gloss_device, 1)
+        pair.addWidget(self.pair_btn)
+        form.addRow("gloss meter", pair)
         form.addRow("job", self.job)
         form.addRow("part", self.part)
         form.addRow("substrate", self.substrate)
@@ -108,6 +125,7 @@ class InstrumentsScreen(QWidget):
         row.addWidget(self.table, 2)
         row.addWidget(self.render, 1)
         right.addLayout(row)
+        right.addWidget(self.gloss)
         right.addWidget(self.plot, 1)
         right.addWidget(QLabel("stored measurements"))
         right.addWidget(self.stored)
@@ -116,6 +134,7 @@ class InstrumentsScreen(QWidget):
         lay.addLayout(right, 2)
 
         self.connect_btn.clicked.connect(self.connect_device)
+        self.pair_btn.clicked.connect(self.toggle_gloss)
         self.calibrate_btn.clicked.connect(self.calibrate)
         self.scan_btn.clicked.connect(self.scan)
         self.use_btn.clicked.connect(self.use_as_design)
@@ -124,12 +143,14 @@ class InstrumentsScreen(QWidget):
         self._sync_buttons()
 
     # ------------------------------------------------------------------ actions
-    def _run(self, fn, done, label: str) -> None:
+    def _run(self, fn, done, label: str, steps: int = 0) -> None:
+        """Run *fn* in a worker; *steps* > 0: a bar of that many steps, 0: a busy bar (unknown length)."""
         if self.task is not None and self.task.isRunning():
             self._say("busy: wait for the running task")
             return
         if self.store.sink is not None:
             self.store.sink.prepare()  # first open + migration on the GUI thread, never in the worker
+        self.progress.setRange(0, steps)
         self.progress.setValue(0)
         self.state.setText(label)
         self.task = TaskThread(fn)
@@ -146,17 +167,22 @@ class InstrumentsScreen(QWidget):
     def connect_device(self) -> None:
         """Open the chosen device (a simulator is started for ``sim:*``)."""
         device = self.device.currentText()
-        self._run(
-            lambda p: (p(1, "starting"), self.session.connect(device))[1],
-            self._on_connected,
-            f"connecting {device}…",
-        )
+        self._run(lambda _p: self.session.connect(device), self._on_connected, f"connecting {device}…")
+
+    def toggle_gloss(self) -> None:
+        """Pair the gloss meter typed beside "gloss meter" (a simulator for ``sim:gloss``), or unpair it."""
+        if self.session.gloss_meter is not None:
+            self.session.unpair_gloss()
+            self._say("gloss meter unpaired")
+            self.gloss.setText("gloss: no gloss meter paired")
+            self._sync_buttons()
+            return
+        device = self.gloss_device.currentText()
+        self._run(lambda _p: self.session.pair_gloss(device), self._on_paired, f"pairing {device}…")
 
     def calibrate(self) -> None:
-        """Run the calibration sequence."""
-        self._run(
-            lambda p: (p(1, "calibrating"), self.session.calibrate())[1], self._on_calibrated, "calibrating…"
-        )
+        """Run the calibration sequence (of the paired gloss meter too)."""
+        self._run(lambda _p: self.session.calibrate(), self._on_calibrated, "calibrating…")
 
     def panel_info(self) -> PanelInfo:
         """The panel metadata as typed (validated: :class:`InputError` names the field)."""
@@ -172,7 +198,10 @@ class InstrumentsScreen(QWidget):
             self._on_failed(str(exc))
             return
         self._run(
-            lambda p: self.session.scan(panel, p, self.store), self._on_scanned, f"scanning {panel.label}…"
+            lambda p: self.session.scan(panel, p, self.store),
+            self._on_scanned,
+            f"scanning {panel.label}…",
+            STEPS,
         )
 
     def retry(self) -> None:
@@ -180,7 +209,7 @@ class InstrumentsScreen(QWidget):
         sink = self.store.sink
         if sink is None:
             return
-        self._run(lambda p: (p(1, "sending queued readings"), sink.flush())[1], self._on_retried, "retrying…")
+        self._run(lambda _p: sink.flush(), self._on_retried, "sending queued readings…")
 
     def _where_text(self) -> str:
         sink = self.store.sink
@@ -206,31 +235,49 @@ class InstrumentsScreen(QWidget):
         self.progress.setValue(step)
         self.state.setText(text)
 
+    def _done_bar(self) -> None:
+        """The task is done and its result shown: a full bar."""
+        self.progress.setRange(0, STEPS)
+        self.progress.setValue(STEPS)
+
     def _on_failed(self, message: str) -> None:
+        self.progress.setRange(0, STEPS)
         self.progress.setValue(0)
         self.state.setText("failed")
         self._say(f"ERROR {message}")
 
     def _on_connected(self, address: str) -> None:
-        self.progress.setValue(STEPS)
+        self._done_bar()
         self.state.setText(f"connected: {address}")
         self._say(f"connected {self.session.device} at {address}")
 
-    def _on_calibrated(self, result) -> None:
-        self.progress.setValue(STEPS)
-        verdict = "passed" if result.passed else "FAILED"
-        self.state.setText(f"calibration {verdict}")
-        self._say(
-            f"calibration {result.calibration_id} {verdict}: steps {', '.join(result.steps)}, "
-            f"verification ΔE00 {result.verification_de}"
-        )
+    def _on_paired(self, address: str) -> None:
+        self._done_bar()
+        self.pair_btn.setText("Unpair gloss meter")
+        self.state.setText(f"gloss meter paired: {address}")
+        self.gloss.setText(f"gloss: {self.session.gloss_device} paired, read with every scan")
+        self._say(f"paired gloss meter {self.session.gloss_device} at {address}")
+
+    def _on_calibrated(self, results) -> None:
+        self._done_bar()
+        passed = all(r.passed for _d, r in results)
+        self.state.setText(f"calibration {'passed' if passed else 'FAILED'}")
+        for device, r in results:
+            verdict = "passed" if r.passed else "FAILED"
+            de = "" if r.verification_de is None else f", verification ΔE00 {r.verification_de}"
+            self._say(
+                f"calibration of {device}: {r.calibration_id} {verdict}: steps {', '.join(r.steps)}{de}"
+            )
 
     def _on_scanned(self, m: Measurement) -> None:
-        self.progress.setValue(STEPS)
+        self._done_bar()
         self.store.add(m)
         self.where.setText(self._where_text())
         r = m.receipt
-        if r is None:
+        if m.gloss_only:
+            self.state.setText("gloss reading shown (not stored on its own)")
+            self._say(f"gloss reading {m.panel.label}: {m.gloss_text()}; {m.note}")
+        elif r is None:
             self._say(
                 f"scanned {m.panel.label} ({len(m.geometries)} geometries) {m.note}; not stored (no database)"
             )
@@ -245,7 +292,7 @@ class InstrumentsScreen(QWidget):
             self._say(f"ERROR {r.message}")
 
     def _on_retried(self, receipts: dict) -> None:
-        self.progress.setValue(STEPS)
+        self._done_bar()
         self.where.setText(self._where_text())
         done = [r for r in receipts.values() if r.status in ("stored", "duplicate")]
         left = self.store.sink.pending() if self.store.sink is not None else 0
@@ -258,7 +305,9 @@ class InstrumentsScreen(QWidget):
     def _on_added(self, m: Measurement) -> None:
         self.last = m
         status = (
-            "session only"
+            "gloss only, not stored"
+            if m.gloss_only
+            else "session only"
             if m.receipt is None
             else (
                 f"#{m.receipt.measurement_id}"
@@ -274,14 +323,25 @@ class InstrumentsScreen(QWidget):
             sw = QTableWidgetItem("")
             sw.setBackground(lab_colour(lab))
             self.table.setItem(i, 4, sw)
+        self.gloss.setText(
+            f"gloss ({m.device if m.gloss_only else self.session.gloss_device}): {m.gloss_text()}"
+            if m.gloss is not None
+            else "gloss: not measured (no gloss meter paired)"
+        )
         if m.design is not None:
             self.render.setPixmap(pixmap_from_array(booklet(m.design, 160)))
+        else:
+            self.render.clear()
         self.plot.set_reading(m.aspecular_deg, m.lab, m.design)
         self._sync_buttons()
 
     def _sync_buttons(self, busy: bool = False) -> None:
         busy = busy or (self.task is not None and self.task.isRunning())
         self.connect_btn.setEnabled(not busy)
+        self.pair_btn.setEnabled(not busy)
+        self.pair_btn.setText(
+            "Unpair gloss meter" if self.session.gloss_meter is not None else "Pair gloss meter"
+        )
         self.calibrate_btn.setEnabled(not busy and self.session.connected)
         self.scan_btn.setEnabled(not busy and self.session.connected)
         self.retry_btn.setEnabled(not busy and self.store.sink is not None)

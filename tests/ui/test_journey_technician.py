@@ -1,0 +1,171 @@
+"""Lab technician's day on the instruments screen, driven by clicks and key presses on the real widgets:
+connect the MA6 simulator and pair the gloss meter simulator, calibrate both, type the panel (job, part,
+substrate), scan; one measurement with colour at every geometry and the gloss values, the labelled
+L*/a*/b* vs aspecular plot, the job's history; re-scan; each reading stored once (a real SQLite
+database locally, the real FastAPI service in service mode)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PySide6.QtCore import Qt
+from PySide6.QtTest import QTest
+from sqlalchemy import create_engine, select
+from sqlalchemy.orm import Session
+
+from db.models import Measurement as MeasurementRow
+from station.model.spectra import reflectance_to_lab
+from ui.models.instruments import STEPS, MeasurementStore
+from ui.models.measure_db import LocalSink, ServiceSink
+from ui.widgets.instruments_screen import InstrumentsScreen
+from ui.widgets.reading_plot import ANGLE_TICKS, TITLE, X_TITLE
+
+pytestmark = [pytest.mark.qt, pytest.mark.slow]
+
+
+def _click(qtbot, screen, button) -> None:
+    """Click *button* and wait until the task it started has finished and its result is shown."""
+    assert button.isEnabled(), button.text()
+    QTest.mouseClick(button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: screen.idle, timeout=90000)
+
+
+def _type(widget, text: str) -> None:
+    """Select the field's text and type *text* over it, key by key."""
+    widget.setFocus()
+    QTest.keyClick(widget, Qt.Key.Key_A, Qt.KeyboardModifier.ControlModifier)
+    QTest.keyClicks(widget, text)
+
+
+def _day(qtbot, screen: InstrumentsScreen) -> list:
+    """Connect, pair, calibrate, scan twice; returns the two measurements."""
+    screen.show()
+    _type(screen.device.lineEdit(), "sim:ma6")
+    _click(qtbot, screen, screen.connect_btn)
+    assert screen.session.connected, screen.log.toPlainText()
+    _type(screen.gloss_device.lineEdit(), "sim:gloss")
+    _click(qtbot, screen, screen.pair_btn)
+    assert screen.session.gloss_meter is not None, screen.log.toPlainText()
+    assert screen.pair_btn.text() == "Unpair gloss meter"
+    _click(qtbot, screen, screen.calibrate_btn)
+    log = screen.log.toPlainText()
+    assert screen.state.text() == "calibration passed", log
+    assert "calibration of sim:ma6" in log and "calibration of sim:gloss" in log
+    _type(screen.job, "J-2026-0200")
+    screen.part.setFocus()
+    screen.part.setCurrentIndex(screen.part.findText("bumper"))
+    _type(screen.substrate, "PP/EPDM")
+    seen: list[tuple[int, int]] = []  # (value, maximum) of the bar at every progress report
+    screen.progress.valueChanged.connect(lambda v: seen.append((v, screen.progress.maximum())))
+    _click(qtbot, screen, screen.scan_btn)
+    first = screen.store.items[-1]
+    # the bar counted the steps as they were done: 0 → … → 3 in the worker, full only once shown
+    steps = [v for v, mx in seen if mx == STEPS]
+    assert steps == sorted(steps) and steps[-1] == STEPS and STEPS - 1 in steps, seen
+    assert screen.progress.value() == screen.progress.maximum() == STEPS
+    _click(qtbot, screen, screen.scan_btn)  # re-scan the same panel
+    return [first, screen.store.items[-1]]
+
+
+def _check_shown(screen: InstrumentsScreen, m) -> None:
+    # colour at every geometry: the table holds the model's Lab of each measured spectrum
+    assert m.geometries == ("45as-15", "45as15", "45as25", "45as45", "45as75", "45as110")
+    np.testing.assert_allclose(screen.lab_table(), np.round(reflectance_to_lab(m.spectra), 2), atol=0.006)
+    # the gloss meter's values, shown, and its 60° gloss in the design fit
+    g = m.gloss
+    assert g is not None and set(g.gloss_gu) == {20, 60, 85}
+    text = screen.gloss.text()
+    for k in (20, 60, 85):
+        assert f"{k}° {g.gloss_gu[k]:.1f} GU" in text
+    assert f"haze {g.haze_hu:.1f} HU" in text and f"DOI {g.doi:.1f}" in text
+    assert (
+        m.gloss_gu == g.gloss_gu[60]
+        and m.design is not None
+        and m.design.gloss_gu == pytest.approx(g.gloss_gu[60])
+    )
+    # the plot: its titles, ticks, and the fitted curve over the measured range −15…110°
+    plot = screen.plot
+    assert TITLE.startswith("L*, a*, b* against aspecular angle") and X_TITLE == "aspecular angle (°)"
+    assert set(m.aspecular_deg) <= set(ANGLE_TICKS)
+    a = plot.curve_angles()
+    assert a[0] == -15.0 and a[-1] == 110.0
+    # the model is a function of the unsigned angle: the curve at −15° is the fit's value at 15°
+    np.testing.assert_allclose(plot.curve()[0], m.design.lab_at(15.0), atol=1e-9)
+    lo, hi = plot.y_axis(0)
+    assert lo <= plot.curve()[:, 0].min() and plot.curve()[:, 0].max() <= hi
+    img = plot.grab().toImage()
+    assert (
+        img.width() == plot.width() and len({img.pixel(x, img.height() // 2) for x in range(img.width())}) > 3
+    )
+
+
+def test_technician_day_local(qtbot, tmp_path):
+    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    sink = LocalSink(url, tmp_path / "outbox.sqlite3")
+    screen = InstrumentsScreen(MeasurementStore(sink))
+    qtbot.addWidget(screen)
+    first, second = _day(qtbot, screen)
+    _check_shown(screen, second)
+    # the job's history: both scans listed with their row ids
+    history = [screen.stored.item(i).text() for i in range(screen.stored.count())]
+    ids = [m.receipt.measurement_id for m in (first, second)]
+    assert len(history) == 2 and all("J-2026-0200 bumper" in h for h in history)
+    assert [f"#{i}" in h for i, h in zip(ids, history, strict=True)] == [True, True]
+    # each reading stored once, with the paired gloss meter's 60° value
+    engine = create_engine(url)
+    with Session(engine) as s:
+        rows = s.execute(select(MeasurementRow).order_by(MeasurementRow.id)).scalars().all()
+        got = [(r.id, r.gloss_gu, r.gloss_geometry_deg) for r in rows]
+    engine.dispose()
+    assert got == [
+        (i, pytest.approx(m.gloss_gu, abs=1e-6), 60) for i, m in zip(ids, (first, second), strict=True)
+    ]
+    assert first.receipt.status == second.receipt.status == "stored" and ids[0] != ids[1]
+    assert screen.store.persist(second).receipt.status == "duplicate"
+    screen.close()
+    sink.close()
+
+
+def test_a_gloss_meter_alone_shows_its_values_not_refused(qtbot, tmp_path):
+    sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
+    screen = InstrumentsScreen(MeasurementStore(sink))
+    qtbot.addWidget(screen)
+    screen.show()
+    _type(screen.device.lineEdit(), "sim:gloss")
+    _click(qtbot, screen, screen.connect_btn)
+    _click(qtbot, screen, screen.scan_btn)
+    m = screen.store.items[-1]
+    assert m.gloss_only and m.receipt is None
+    assert "REFUSED" not in screen.state.text() and "ERROR" not in screen.log.toPlainText()
+    assert screen.state.text() == "gloss reading shown (not stored on its own)"
+    assert f"60° {m.gloss.gloss_gu[60]:.1f} GU" in screen.gloss.text()
+    assert "gloss only, not stored" in screen.stored.item(0).text() and sink.pending() == 0
+    screen.close()
+    sink.close()
+
+
+def test_technician_day_service_mode(qtbot, tmp_path):
+    from tests.api.conftest import make_api
+    from ui.models.service import ServiceClient
+
+    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path)
+    api = next(gen)
+    try:
+        token = api.tokens[next(r for r in api.tokens if r.value == "technician")]
+        service = ServiceClient("http://testserver", token, client=api.client)
+        sink = ServiceSink(service, tmp_path / "outbox.sqlite3")
+        screen = InstrumentsScreen(MeasurementStore(sink))
+        qtbot.addWidget(screen)
+        first, second = _day(qtbot, screen)
+        _check_shown(screen, second)
+        rows = api.client.get("/api/v1/measurements", headers=api.auth("technician")).json()["data"]
+        by_id = {r["id"]: r for r in rows}
+        for m in (first, second):
+            assert m.receipt.status == "stored", m.receipt
+            row = by_id[m.receipt.measurement_id]
+            assert row["gloss_gu"] == pytest.approx(m.gloss_gu, abs=1e-6)
+        assert len(rows) == 2
+        screen.close()
+        sink.close()
+    finally:
+        gen.close()
