@@ -1,8 +1,11 @@
 """Report pictures made with NumPy and matplotlib only (no renderer import).
 
-* :func:`shade_pair`: the two hinged panels side by side under a point light at a finite distance
-  (so the shading varies across each panel), colours from :func:`station.analysis.shading.point_colour`
-  exposed to panel A's centre, shown in sRGB (display values clipped to [0, 1] for the picture only).
+* :func:`seam_pair_lab` / :func:`shade_pair`: the two hinged panels side by side under a point light at
+  a finite distance (so the shading varies across each panel), colours from
+  :func:`station.analysis.shading.point_colour` exposed to panel A's centre, at one of the analysed
+  geometries (:func:`geometry_caption` says which); shown in sRGB, darkened by
+  :func:`display_exposure` when a paint is brighter than white, so the seam the verdict reports stays
+  visible instead of both panels clipping to white.
 * :func:`plot_seam_report`: the QA report PNG — panels as painted and corrected, and the BRDF curves
   L*, a*, b* against aspecular angle for paint A, paint B and the corrected paint (thesis Fig. 4.7).
 """
@@ -23,7 +26,7 @@ from station.analysis.shading import point_colour
 LIGHT_DISTANCE = 6.0
 
 
-def shade_pair(
+def seam_pair_lab(
     paint_a: Any,
     paint_b: Any,
     beta_deg: float,
@@ -32,12 +35,17 @@ def shade_pair(
     hinge: Hinge = "in-plane",
     size: tuple[int, int] = (96, 192),
 ) -> NDArray[np.float64]:
-    """sRGB picture (h, w, 3) in [0, 1] of panel A (left) and panel B (right, turned by β about the seam).
+    """Lab picture (h, w, 3) of panel A (left) and panel B (right, turned by β about the seam).
 
-    Pixels are laid out in panel coordinates (u across the seam, w along it), u ∈ [−1, 1], w ∈ [−½, ½].
+    Pixels are laid out in panel coordinates (u across the seam, w along it), u ∈ [−1, 1], w ∈ [−½, ½];
+    the light is a point at :data:`LIGHT_DISTANCE` in direction *light_deg*, the viewer distant in
+    direction *view_deg* (signed polar angles, degrees, :mod:`station.analysis.geometry`). Exposure:
+    a white diffuser at panel A's centre is white (L* 100), as the seam model's reference exposure, so
+    the columns beside the seam show the model's colours of this geometry (the light's direction there
+    is *light_deg*): their ΔE is the seam ΔE :func:`station.analysis.qa.seam_qa` reports. Lab may
+    exceed 100 where a paint is brighter than white (an effect paint near the specular direction).
     """
-    from station.model.colorimetry import lab_to_linear_srgb
-    from station.model.display import encode_display
+    from station.model.shading import shade_lab
 
     h, w = size
     az = math.radians(hinge_azimuth_deg(hinge))
@@ -64,8 +72,54 @@ def shade_pair(
     )
     # expose so that a white diffuser at panel A's centre reads white
     k0 = float(np.dot(direction(light_deg), z))
-    rgb = lab_to_linear_srgb(lab) / k0
-    return encode_display(rgb)
+    return np.asarray(shade_lab(lab, 1.0 / k0), dtype=float)
+
+
+def display_exposure(*labs: NDArray[np.float64], percentile: float = 99.0) -> float:
+    """The one display scale (≤ 1) of linear sRGB that fits *labs* below white: 1 unless the
+    *percentile* of their largest linear channel exceeds 1 (a paint brighter than white), then its
+    inverse. Pictures shown side by side share it, so a difference between them stays visible."""
+    from station.model.colorimetry import lab_to_linear_srgb
+
+    peak = max(float(np.percentile(np.max(lab_to_linear_srgb(x), axis=-1), percentile)) for x in labs)
+    return 1.0 if peak <= 1.0 else 1.0 / peak
+
+
+def lab_picture(lab: NDArray[np.float64], exposure: float = 1.0) -> NDArray[np.float64]:
+    """Display sRGB (h, w, 3) in [0, 1] of a Lab picture scaled by *exposure* in linear light."""
+    from station.model.colorimetry import lab_to_linear_srgb
+    from station.model.display import encode_display
+
+    return encode_display(lab_to_linear_srgb(lab) * exposure)
+
+
+def shade_pair(
+    paint_a: Any,
+    paint_b: Any,
+    beta_deg: float,
+    light_deg: float,
+    view_deg: float,
+    hinge: Hinge = "in-plane",
+    size: tuple[int, int] = (96, 192),
+    exposure: float = 1.0,
+) -> NDArray[np.float64]:
+    """sRGB picture (h, w, 3) in [0, 1] of :func:`seam_pair_lab` (display values clipped to [0, 1];
+    *exposure* scales linear light first, e.g. :func:`display_exposure`)."""
+    return lab_picture(seam_pair_lab(paint_a, paint_b, beta_deg, light_deg, view_deg, hinge, size), exposure)
+
+
+def geometry_caption(report: Any, g: int) -> str:
+    """Which geometry a picture of *report* shows: light, view, aspecular on A and on B, β, seam ΔE."""
+    from station.analysis.geometry import rotated_normals
+    from station.model.shading import aspecular_deg
+
+    geo = report.geometries[g]
+    n_b = rotated_normals(np.array([report.beta_deg]), report.hinge)[0]
+    asp_b = float(aspecular_deg(direction(geo.light_deg), direction(geo.view_deg), n_b))
+    return (
+        f"light {geo.light_deg:g}°, view {geo.view_deg:g}° (aspecular {geo.aspecular_deg:.0f}° on A, "
+        f"{asp_b:.0f}° on B), β = {report.beta_deg:+g}°: seam ΔE {report.seam_de[g]:.2f}"
+    )
 
 
 def plot_seam_report(
@@ -85,9 +139,13 @@ def plot_seam_report(
     gs = fig.add_gridspec(3, 2, width_ratios=(1.15, 1.0))
     ax1 = fig.add_subplot(gs[0:1, 0])
     ax2 = fig.add_subplot(gs[1:2, 0])
-    for ax, pb, title in ((ax1, report.paint_b, "as painted"), (ax2, corrected, "panel B corrected")):
-        img = shade_pair(report.paint_a, pb, report.beta_deg, lt, vw, report.hinge)
-        ax.imshow(img, extent=(-1, 1, -0.5, 0.5))
+    labs = [
+        seam_pair_lab(report.paint_a, pb, report.beta_deg, lt, vw, report.hinge)
+        for pb in (report.paint_b, corrected)
+    ]
+    scale = display_exposure(*labs)
+    for ax, lab, title in ((ax1, labs[0], "as painted"), (ax2, labs[1], "panel B corrected")):
+        ax.imshow(lab_picture(lab, scale), extent=(-1, 1, -0.5, 0.5))
         ax.axvline(0.0, color="w", lw=0.5, alpha=0.5)
         ax.set_title(f"{title}: A | B (β = {report.beta_deg:+g}°, light {lt:g}°, view {vw:g}°)", fontsize=9)
         ax.set_xticks([])

@@ -1,17 +1,25 @@
 """QA screen: two panels (designs, palette entries, scans made since the viewer started or measurements
 stored in the database or on the service — "Load stored measurements"), a misalignment and the
-geometry range → seam ΔE per geometry, the goniogeometric index, pass/fail, advice, and the seam rendered
-as is and with the corrected paint for panel B (``station.analysis.qa.seam_qa``). The corrected paint
-can be sent to formulation (ColorSnap in the library tab)."""
+geometry range → seam ΔE per geometry, the goniogeometric index, pass/fail, advice
+(``station.analysis.qa.seam_qa``), and the seam pictured as is and with the corrected paint for panel B
+at one analysed geometry — the worst by default, any other by clicking its row — under the point light
+the verdict is computed for (``station.analysis.picture.seam_pair_lab``: the columns beside the seam
+show the model's colours, so the picture agrees with the ΔE); the caption says which geometry. The
+report exports as JSON with its PNG (``plot_seam_report``); the corrected paint can be sent to
+formulation."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
+import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
+    QAbstractItemView,
     QComboBox,
     QDoubleSpinBox,
+    QFileDialog,
     QFormLayout,
     QHBoxLayout,
     QLabel,
@@ -24,17 +32,33 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from station.analysis.picture import display_exposure, geometry_caption, lab_picture, seam_pair_lab
 from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, SeamReport, seam_qa
 from station.errors import InputError, StationError
 from station.model import FaceFlopTravelGloss
 from ui.models.designer import DesignerModel
 from ui.models.instruments import MeasurementStore
 from ui.models.measure_db import RECENT_DEFAULT, recent_limit
-from ui.models.view import ViewModel, ViewSettings
-from ui.widgets.render_view import make_render_view
+from ui.widgets.common import pixmap_from_array
 from ui.widgets.tasks import TaskThread
 
 METHODS = ("cie76", "cie2000", "din6175")
+PICTURE_SIZE = (120, 240)
+"""Seam pictures, pixels (height, width): panel A left, panel B right."""
+
+
+def export_report(report: SeamReport, path: Path) -> tuple[Path, Path]:
+    """Write *report* as JSON to *path* and its picture PNG beside it (``plot_seam_report``); both paths."""
+    import json
+
+    from station.analysis.picture import plot_seam_report
+
+    path = Path(path)
+    if path.suffix.lower() != ".json":
+        path = path.with_suffix(".json")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(report.to_dict(), indent=2) + "\n", encoding="utf-8")
+    return path, plot_seam_report(report, path.with_suffix(".png"))
 
 
 def _floats(text: str, field: str) -> tuple[float, ...]:
@@ -83,19 +107,33 @@ class QAScreen(QWidget):
         self.stored: list[tuple[str, FaceFlopTravelGloss]] = []
         self.send_btn = QPushButton("Send corrected paint to formulation")
         self.send_btn.setEnabled(False)
+        self.export_btn = QPushButton("Export report…")
+        self.export_btn.setEnabled(False)
+        self.exported: tuple[Path, Path] | None = None
         self.verdict = QLabel("—")
         self.verdict.setStyleSheet("font-size: 18pt; font-weight: bold")
         self.details = QLabel()
         self.details.setWordWrap(True)
         self.details.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
-        self.table = QTableWidget(0, 5)
+        self.table = QTableWidget(0, 6)
         self.table.setHorizontalHeaderLabels(
-            ["light °", "aspecular °", "seam ΔE", "geometric ΔE", "formulation ΔE"]
+            ["light °", "view °", "aspecular °", "seam ΔE", "geometric ΔE", "formulation ΔE"]
         )
-        self.as_is_model = ViewModel(ViewSettings(shape="panels", misalignment_deg=5.0))
-        self.fixed_model = ViewModel(ViewSettings(shape="panels", misalignment_deg=5.0))
-        self.as_is = make_render_view(self.as_is_model)
-        self.fixed = make_render_view(self.fixed_model)
+        self.table.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
+        self.table.setSelectionMode(QAbstractItemView.SelectionMode.SingleSelection)
+        self.table.setEditTriggers(QAbstractItemView.EditTrigger.NoEditTriggers)
+        self.table.setToolTip("click a geometry to picture the seam there")
+        self.shown_geometry: int | None = None
+        self.pictures: tuple | None = None  # (Lab as is, Lab corrected, display exposure)
+        self.as_is = QLabel("run QA to picture the seam at the analysed geometries")
+        self.fixed = QLabel()
+        for pic in (self.as_is, self.fixed):
+            pic.setMinimumSize(PICTURE_SIZE[1], PICTURE_SIZE[0])
+            pic.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.as_is_title = QLabel("seam as is (A | B)")
+        self.fixed_title = QLabel("corrected (A | B′)")
+        self.caption = QLabel()
+        self.caption.setWordWrap(True)
 
         form = QFormLayout()
         form.addRow("panel A", self.panel_a)
@@ -114,15 +152,17 @@ class QAScreen(QWidget):
         left.addWidget(self.run_btn)
         left.addWidget(self.verdict)
         left.addWidget(self.details, 1)
+        left.addWidget(self.export_btn)
         left.addWidget(self.send_btn)
         renders = QHBoxLayout()
-        for title, view in (("seam as is (A | B)", self.as_is), ("corrected (A | B′)", self.fixed)):
+        for title, view in ((self.as_is_title, self.as_is), (self.fixed_title, self.fixed)):
             col = QVBoxLayout()
-            col.addWidget(QLabel(title))
+            col.addWidget(title)
             col.addWidget(view, 1)
             renders.addLayout(col)
         right = QVBoxLayout()
         right.addLayout(renders, 3)
+        right.addWidget(self.caption)
         right.addWidget(self.table, 2)
         lay = QHBoxLayout(self)
         lay.addLayout(left, 1)
@@ -133,6 +173,8 @@ class QAScreen(QWidget):
         # clicked(bool) must not reach load_stored: its checked flag would become the row limit
         self.load_btn.clicked.connect(self._on_load_clicked)
         self.send_btn.clicked.connect(self._send)
+        self.export_btn.clicked.connect(self._on_export_clicked)
+        self.table.itemSelectionChanged.connect(self._on_row)
         designer.events.palette.connect(self.refresh_sources)
         designer.document.events.changed.connect(self._on_design)
         store.events.added.connect(self._on_measurement)
@@ -140,12 +182,14 @@ class QAScreen(QWidget):
         self._on_beta(self.beta.value())
         self.panel_a.currentTextChanged.connect(self._on_pick)
         self.panel_b.currentTextChanged.connect(self._on_pick)
-        self._on_pick()
 
     def _on_pick(self, *_args) -> None:
-        a, b = self.picked()
-        self.as_is_model.show(a, b)
-        self.fixed_model.show(a, b)
+        """Another panel or misalignment: the pictures and verdict of the last run no longer apply."""
+        if self.report is None:
+            return
+        self.caption.setText("the panels or β changed: run QA again")
+        self.verdict.setText("—")
+        self.verdict.setStyleSheet("font-size: 18pt; font-weight: bold")
 
     def sources(self) -> list[tuple[str, FaceFlopTravelGloss]]:
         """(label, design) of every panel that can be picked."""
@@ -203,8 +247,7 @@ class QAScreen(QWidget):
 
     def _on_beta(self, v: int) -> None:
         self.beta_label.setText(f"{v:+d}°")
-        for m in (self.as_is_model, self.fixed_model):
-            m.update(misalignment_deg=float(v))
+        self._on_pick()
 
     def picked(self) -> tuple[FaceFlopTravelGloss, FaceFlopTravelGloss]:
         """Designs of panel A and panel B."""
@@ -223,7 +266,6 @@ class QAScreen(QWidget):
         except InputError as exc:
             self._on_failed(str(exc))
             return
-        self.as_is_model.show(a, b)
         self.verdict.setText("running…")
         self.run_btn.setEnabled(False)
         self.task = TaskThread(
@@ -252,20 +294,86 @@ class QAScreen(QWidget):
             f"({'meets' if r.correction.meets_epsilon else 'does not meet'} tolerance)\n\n"
             + "\n".join(r.advice)
         )
+        self.table.blockSignals(True)
         self.table.setRowCount(len(r.geometries))
         for i, g in enumerate(r.geometries):
-            d = g.to_dict()
             vals = (
-                d.get("light_deg"),
-                d.get("aspecular_deg"),
+                g.light_deg,
+                g.view_deg,
+                g.aspecular_deg,
                 r.seam_de[i],
                 r.geometric_de[i],
                 r.formulation_de[i],
             )
             for j, v in enumerate(vals):
                 self.table.setItem(i, j, QTableWidgetItem(f"{float(v):.2f}"))
-        self.fixed_model.show(r.paint_a, r.correction.paint)
+        self.table.selectRow(r.worst)
+        self.table.blockSignals(False)
+        self.show_geometry(r.worst)
         self.send_btn.setEnabled(self.send_to_formulation is not None)
+        self.export_btn.setEnabled(True)
+
+    def _on_row(self) -> None:
+        rows = {i.row() for i in self.table.selectedItems()}
+        if self.report is not None and len(rows) == 1:
+            self.show_geometry(rows.pop())
+
+    def show_geometry(self, g: int) -> None:
+        """Picture the seam of the last report at its geometry *g*: as is and with the corrected paint,
+        one display exposure for both; the caption says which geometry and the ΔE there."""
+        r = self.report
+        if r is None:
+            return
+        geo = r.geometries[g]
+        labs = [
+            seam_pair_lab(r.paint_a, pb, r.beta_deg, geo.light_deg, geo.view_deg, r.hinge, PICTURE_SIZE)
+            for pb in (r.paint_b, r.correction.paint)
+        ]
+        scale = display_exposure(*labs)
+        self.pictures = (labs[0], labs[1], scale)
+        self.shown_geometry = g
+        for label, lab in ((self.as_is, labs[0]), (self.fixed, labs[1])):
+            label.setPixmap(pixmap_from_array(np.round(lab_picture(lab, scale) * 255.0).astype(np.uint8)))
+        verdict = "PASS" if r.seam_de[g] <= r.tolerance else "FAIL"
+        self.as_is_title.setText(f"seam as is (A | B): ΔE {r.seam_de[g]:.2f} {verdict} here")
+        after = r.correction.seam_de_after
+        fixed_de = float(after[g]) if len(after) == len(r.geometries) else None
+        self.fixed_title.setText("corrected (A | B′)" + ("" if fixed_de is None else f": ΔE {fixed_de:.2f}"))
+        shown = "" if scale == 1.0 else f"; shown {1 / scale:.1f}× darker (a paint brighter than white)"
+        which = "worst geometry" if g == r.worst else f"geometry {g + 1} of {len(r.geometries)}"
+        self.caption.setText(
+            f"pictured at the {which}: {geometry_caption(r, g)} — point light, panel B turned by β "
+            f"about the seam{shown}"
+        )
+
+    def _on_export_clicked(self) -> None:
+        """Ask where to write the report (JSON, with its PNG beside it), then write both in a worker."""
+        path, _filter = QFileDialog.getSaveFileName(
+            self,
+            "Export QA report",
+            str(Path.cwd() / "qa-report.json"),
+            "QA report (*.json)",
+            options=QFileDialog.Option.DontUseNativeDialog,
+        )
+        if path:
+            self.export(Path(path))
+
+    def export(self, path: Path) -> None:
+        """Write the last report to *path* (JSON) and its PNG, in a worker thread."""
+        report = self.report
+        if report is None or (self.task is not None and self.task.isRunning()):
+            return
+        self.export_btn.setEnabled(False)
+        self.details.setText(f"exporting the report to {path}…")
+        self.task = TaskThread(lambda _p: export_report(report, path))
+        self.task.succeeded.connect(self._on_exported)
+        self.task.failed.connect(self._on_failed)
+        self.task.finished.connect(lambda: self.export_btn.setEnabled(self.report is not None))
+        self.task.start()
+
+    def _on_exported(self, paths: tuple[Path, Path]) -> None:
+        self.exported = paths
+        self.details.setText(f"report exported: {paths[0]} and {paths[1]}")
 
     def _send(self) -> None:
         if self.report is not None and self.send_to_formulation is not None:
@@ -277,6 +385,4 @@ class QAScreen(QWidget):
         self.designer.events.palette.disconnect(self.refresh_sources)
         self.designer.document.events.changed.disconnect(self._on_design)
         self.store.events.added.disconnect(self._on_measurement)
-        self.as_is.close()
-        self.fixed.close()
         super().closeEvent(event)
