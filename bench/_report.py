@@ -65,3 +65,16 @@ def write_section(name: str, title: str, cases: list[Case], extra_markdown: str 
     else:
         text = text.rstrip() + "\n\n" + body + "\n"
     REPORT.write_text(text)
+
+
+def bench_cli(doc: str | None, name: str) -> None:
+    """Parse a benchmark's command line before it starts: ``--help`` prints *doc* and exits; any
+    argument the benchmark does not take is refused (exit 2). Nothing is measured or written first."""
+    import argparse
+
+    argparse.ArgumentParser(
+        prog=f"python -m bench.{name}",
+        description=doc,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=f"runs the benchmark and rewrites its section of {REPORT.relative_to(ROOT)}",
+    ).parse_args()

@@ -226,4 +226,7 @@ def m_str(m: int) -> str:
 
 
 if __name__ == "__main__":
+    from bench._report import bench_cli
+
+    bench_cli(__doc__, "basis_accuracy")
     main()

@@ -188,4 +188,7 @@ def _chart(rows: list[tuple[str, str, float, float]], path) -> None:
 
 
 if __name__ == "__main__":
+    from bench._report import bench_cli
+
+    bench_cli(__doc__, "colorsnap")
     run()

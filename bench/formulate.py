@@ -131,4 +131,7 @@ def run() -> None:
 
 
 if __name__ == "__main__":
+    from bench._report import bench_cli
+
+    bench_cli(__doc__, "formulate")
     run()

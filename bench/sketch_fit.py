@@ -337,4 +337,7 @@ def _chart(results: dict[str, dict[str, list[tuple[float, float]]]]) -> None:
 
 
 if __name__ == "__main__":
+    from bench._report import bench_cli
+
+    bench_cli(__doc__, "sketch_fit")
     main()

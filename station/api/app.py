@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from pathlib import Path
 
 from fastapi import FastAPI
 
@@ -139,16 +140,26 @@ def _roles_markdown() -> str:
     )
 
 
-def _protected_docs(app: FastAPI) -> None:
-    """``/openapi.json``, ``/docs`` and ``/redoc`` behind the bearer token (any role), as every route but
-    ``/health`` (issue 5). The HTML pages need the token too; fetch the schema with it (``curl -H``)."""
+DOCS_ASSETS = "/docs-assets"
+"""Where the service serves the Swagger UI's script, style and icon (bundled: no CDN)."""
+SWAGGER_FILES = {
+    "swagger-ui-bundle.js": "text/javascript",
+    "swagger-ui.css": "text/css",
+    "favicon-32x32.png": "image/png",
+}
+
+
+def _docs(app: FastAPI, protected: bool) -> None:
+    """``/openapi.json``, ``/docs`` and ``/redoc``; *protected*: behind the bearer token (any role), as
+    every route but ``/health`` (issue 5) — the HTML pages need the token too; fetch the schema with it
+    (``curl -H``). The Swagger UI's files are served by the service itself (:data:`DOCS_ASSETS`)."""
     from fastapi import Depends
     from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
-    from fastapi.responses import HTMLResponse, JSONResponse
+    from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
 
     from station.api.deps import authorize
 
-    guard = [Depends(authorize)]
+    guard = [Depends(authorize)] if protected else []
 
     @app.get("/openapi.json", include_in_schema=False, dependencies=guard)
     def openapi() -> JSONResponse:
@@ -157,8 +168,24 @@ def _protected_docs(app: FastAPI) -> None:
 
     @app.get("/docs", include_in_schema=False, dependencies=guard)
     def docs() -> HTMLResponse:
-        """The Swagger UI page (fetches the schema with the token)."""
-        return get_swagger_ui_html(openapi_url="/openapi.json", title=f"{app.title} - docs")
+        """The Swagger UI page (fetches the schema with the token; its script and style come from this
+        service, so the page works without the internet)."""
+        return get_swagger_ui_html(
+            openapi_url="/openapi.json",
+            title=f"{app.title} - docs",
+            swagger_js_url=f"{DOCS_ASSETS}/swagger-ui-bundle.js",
+            swagger_css_url=f"{DOCS_ASSETS}/swagger-ui.css",
+            swagger_favicon_url=f"{DOCS_ASSETS}/favicon-32x32.png",
+        )
+
+    @app.get(DOCS_ASSETS + "/{name}", include_in_schema=False)
+    def docs_asset(name: str) -> Response:
+        """The Swagger UI's bundled files (``swagger-ui-bundle``; public, like any static file)."""
+        from swagger_ui_bundle import swagger_ui_path
+
+        if name not in SWAGGER_FILES:
+            return JSONResponse({"detail": f"no such file: {name}"}, status_code=404)
+        return FileResponse(Path(swagger_ui_path) / name, media_type=SWAGGER_FILES[name])
 
     @app.get("/redoc", include_in_schema=False, dependencies=guard)
     def redoc() -> HTMLResponse:
@@ -190,17 +217,16 @@ def create_app(settings: Settings) -> FastAPI:
         description=DESCRIPTION + _roles_markdown(),
         openapi_tags=TAGS,
         lifespan=lifespan,
-        docs_url="/docs" if public else None,
-        redoc_url="/redoc" if public else None,
-        openapi_url="/openapi.json" if public else None,
+        docs_url=None,  # served by _docs, with bundled Swagger UI files
+        redoc_url=None,
+        openapi_url=None,
     )
     app.state.settings = settings
     app.state.tokens = TokenCache(settings.token_offline_s)
     app.state.database = DatabaseState()
     install_error_handlers(app)
     app.include_router(health.router)
-    if not settings.public_docs:
-        _protected_docs(app)
+    _docs(app, protected=not public)
     for router in ROUTERS:
         app.include_router(router, prefix=API_PREFIX)
     app.add_middleware(StrictJsonBody)  # inside the size cap: parses bodies already bounded

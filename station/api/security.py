@@ -38,6 +38,7 @@ class Scope(enum.StrEnum):
     MEASUREMENTS_CORRECT = "measurements:correct"
     DESIGNS_READ = "designs:read"
     DESIGNS_WRITE = "designs:write"
+    STYLING_USE = "styling:use"
     LIBRARY_READ = "library:read"
     LIBRARY_WRITE = "library:write"
     RECIPES_WRITE = "recipes:write"
@@ -63,14 +64,24 @@ ROLE_SCOPES: dict[Role, frozenset[Scope]] = {
             S.MEASUREMENTS_READ,
             S.MEASUREMENTS_CORRECT,
             S.DESIGNS_READ,
+            S.DESIGNS_WRITE,  # a corrected paint goes to formulation as a stored design
             S.LIBRARY_READ,
             S.ANALYSIS_WRITE,
             S.AUDIT_READ,
         }
     ),
-    Role.STYLIST: frozenset({S.MEASUREMENTS_READ, S.DESIGNS_READ, S.DESIGNS_WRITE, S.LIBRARY_READ}),
+    Role.STYLIST: frozenset(
+        {S.MEASUREMENTS_READ, S.DESIGNS_READ, S.DESIGNS_WRITE, S.STYLING_USE, S.LIBRARY_READ}
+    ),
     Role.CHEMIST: frozenset(
-        {S.MEASUREMENTS_READ, S.DESIGNS_READ, S.LIBRARY_READ, S.LIBRARY_WRITE, S.RECIPES_WRITE}
+        {
+            S.MEASUREMENTS_READ,
+            S.DESIGNS_READ,
+            S.DESIGNS_WRITE,  # a formulated or adjusted paint is kept as a design
+            S.LIBRARY_READ,
+            S.LIBRARY_WRITE,
+            S.RECIPES_WRITE,
+        }
     ),
     Role.ADMIN: frozenset(Scope),
 }

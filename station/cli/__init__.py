@@ -42,7 +42,28 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("missing subcommand")
     from station.cli._common import run_handler
 
-    return run_handler(handler, args)
+    try:
+        return run_handler(handler, args)
+    except BrokenPipeError:
+        return _closed_pipe()
+
+
+EXIT_PIPE = 141
+"""Exit status when the reader of the output went away (``| head``): 128 + SIGPIPE, as shells report."""
+
+
+def _closed_pipe() -> int:
+    """The reader closed the pipe: say nothing (no traceback) and leave with :data:`EXIT_PIPE`.
+
+    Standard output is pointed at ``/dev/null`` so the interpreter's final flush cannot fail again."""
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, sys.stdout.fileno())
+    finally:
+        os.close(devnull)
+    return EXIT_PIPE
 
 
 if __name__ == "__main__":

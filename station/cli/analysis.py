@@ -103,10 +103,15 @@ def load_panel(path: str) -> Any:
     """A panel from a design JSON (``cacad.design/1``) or a measurement JSON.
 
     Measurement JSON: ``{"angles_deg": [...], "lab": [[L, a, b], ...], "gloss_gu": g}`` (Lab D65/10°,
-    illumination at 45°); it is fitted to face/flop/travel (eqs 3.3.1–3.3.10).
+    illumination at 45°), or the output of ``station measure --json`` (``"geometries"`` named like
+    ``45as15`` beside ``"lab"``: its positive aspecular angles under 45° illumination are taken, as the
+    viewer fits a scan); it is fitted to face/flop/travel (eqs 3.3.1–3.3.10).
     """
+    import numpy as np
+
     from station.model import AspecularMeasurements
     from station.model.design_io import design_from_dict
+    from station.model.domain import ILLUMINATION_DEG, parse_geometry
 
     try:
         data = json.loads(Path(path).read_text())
@@ -116,6 +121,22 @@ def load_panel(path: str) -> Any:
         raise InputError("panel", "a JSON object", path)
     if "angles_deg" in data and "lab" in data:
         return AspecularMeasurements(tuple(data["angles_deg"]), data["lab"], data.get("gloss_gu"))
+    if "geometries" in data and "lab" in data:  # station measure --json
+        names, lab = data["geometries"], data["lab"]
+        if not isinstance(names, list) or not isinstance(lab, list) or len(names) != len(lab):
+            raise InputError("panel", "a measurement with one Lab row per geometry", path)
+        rows = sorted(
+            (asp, row)
+            for name, row in zip(names, lab, strict=True)
+            for illum, asp in [parse_geometry(name, "panel geometries")]
+            if illum == ILLUMINATION_DEG and asp > 0
+        )
+        if len(rows) < 3:
+            raise InputError(
+                "panel", "a measurement with at least 3 positive aspecular angles under 45° light", path
+            )
+        lab_rows = np.asarray([r for _, r in rows], dtype=float)
+        return AspecularMeasurements(tuple(a for a, _ in rows), lab_rows, data.get("gloss_gu"))
     return design_from_dict(data)
 
 
@@ -202,12 +223,29 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=_trompe)
 
     p = sub.add_parser("seam", help="QA of a seam between two panels (design or measurement JSON)")
-    p.add_argument("panel_a", metavar="PANEL_A")
-    p.add_argument("panel_b", metavar="PANEL_B")
+    p.add_argument(
+        "panel_a",
+        metavar="PANEL_A",
+        help="panel A: a design JSON, a measurement JSON or `station measure --json` output",
+    )
+    p.add_argument("panel_b", metavar="PANEL_B", help="panel B (the misaligned one), same forms as PANEL_A")
     p.add_argument("--beta", type=float, required=True, help="signed misalignment of panel B, degrees")
-    p.add_argument("--lights", default=",".join(f"{x:g}" for x in DEFAULT_LIGHTS_DEG))
-    p.add_argument("--aspecular", default=",".join(f"{x:g}" for x in DEFAULT_ASPECULAR_DEG))
-    p.add_argument("--objective", choices=("rms", "minimax"), default="minimax")
+    p.add_argument(
+        "--lights",
+        default=",".join(f"{x:g}" for x in DEFAULT_LIGHTS_DEG),
+        help="light angles from the panel normal, degrees, comma-separated (default %(default)s)",
+    )
+    p.add_argument(
+        "--aspecular",
+        default=",".join(f"{x:g}" for x in DEFAULT_ASPECULAR_DEG),
+        help="aspecular angles judged with every light, degrees, comma-separated (default %(default)s)",
+    )
+    p.add_argument(
+        "--objective",
+        choices=("rms", "minimax"),
+        default="minimax",
+        help="what the corrected paint for panel B minimises over the geometries (default %(default)s)",
+    )
     p.add_argument("--png", help="write the report picture here")
     _add_common(p)
     add_json_flag(p)

@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -121,7 +122,10 @@ def _de(args: argparse.Namespace) -> dict[str, Any]:
 def _plot(args: argparse.Namespace) -> dict[str, Any]:
     from station.model.plots import plot_designs
 
-    designs = [load_design(p) for p in args.designs]
+    designs = []
+    for p in args.designs:  # an unnamed design is called by its file's name in the legend and here
+        d = load_design(p)
+        designs.append(d if d.name else d.replace(name=Path(p).stem))
     out = plot_designs(designs, args.out)
     return {"out": str(out), "designs": [d.name for d in designs]}
 

@@ -25,6 +25,17 @@ if TYPE_CHECKING:
     from station.render.environment import Environment
 
 ENVS = ("booth", "sky", "overcast")
+DESCRIPTION = (
+    "Render a design on a shape in a lighting environment and save it as a PNG picture. "
+    "Give the design file with --design (a second one with --design2 paints the right half, the "
+    "right panel or the bumper), the lighting with --env (booth, sky, overcast or your own .hdr/.exr "
+    "photo), the shape with --shape and the picture size with --size. The first render of an "
+    "environment takes longer: it is prepared once and kept in the cache folder. With --json the "
+    "result names the engine used and the time each step took."
+)
+EPILOG = (
+    "example: station render --design silver.json --env sky --shape speedshape --size 512 --out silver.png"
+)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -33,18 +44,35 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     from station.render.tonemap import CURVES
 
     p = subparsers.add_parser(
-        "render", help="render a design in an environment to a PNG", description=__doc__.split("\n\n")[1]
+        "render",
+        help="render a design in an environment to a PNG",
+        description=DESCRIPTION,
+        epilog=EPILOG,
     )
-    p.add_argument("--design", required=True, help="design JSON (cacad.design/1)")
+    p.add_argument(
+        "--design", required=True, help="design file (JSON, as the viewer and `station design` save)"
+    )
     p.add_argument("--design2", help="second design for the other half / right panel / bumper")
-    p.add_argument("--env", default="booth", help="booth | sky | overcast | PATH to .hdr/.exr")
-    p.add_argument("--shape", default="sphere", choices=SHAPES)
+    p.add_argument(
+        "--env", default="booth", help="booth | sky | overcast | your own .hdr/.exr file (default booth)"
+    )
+    p.add_argument("--shape", default="sphere", choices=SHAPES, help="object to paint (default sphere)")
     p.add_argument("--size", type=int, default=512, help="image width and height in pixels (8..4096)")
-    p.add_argument("--engine", default="auto", choices=("auto", "gl", "numpy", "truth"))
+    p.add_argument(
+        "--engine",
+        default="auto",
+        choices=("auto", "gl", "numpy", "truth"),
+        help="auto: the graphics card when there is one, else the CPU (numpy); truth: slow reference",
+    )
     p.add_argument("--out", required=True, help="output PNG")
     p.add_argument("--linear-out", help="also write the scene-linear image (.exr or .npy)")
     p.add_argument("--exposure", type=float, default=0.0, help="exposure in EV (default 0)")
-    p.add_argument("--tone", default="aces", choices=CURVES)
+    p.add_argument(
+        "--tone",
+        default="aces",
+        choices=CURVES,
+        help="how bright light is fitted to the screen (default aces)",
+    )
     p.add_argument("--misalignment", type=float, default=0.0, help="panels: right panel turn, degrees")
     p.add_argument("--cache-dir", help="prefilter cache folder (default $CACAD_CACHE_DIR or ~/.cache/cacad)")
     add_json_flag(p)

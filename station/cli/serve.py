@@ -141,7 +141,8 @@ def _parse_sims(text: str) -> tuple[str, ...]:
 
 
 def serve(args: argparse.Namespace) -> dict[str, Any] | None:
-    """Run the service until interrupted."""
+    """Run the service until interrupted (each start-up step is announced on stdout as it begins)."""
+    print("starting the station service: loading its modules…", flush=True)
     import uvicorn
 
     from db.files import private_dir
@@ -164,10 +165,12 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
     url = settings.effective_database_url
     private_dir(settings.data_dir)
     engine, sessions = _sessions(url)
+    print("opening the database (migrations are applied on the first start)…", flush=True)
     try:
         with _database_errors(url), sessions() as session:
             token = bootstrap_admin(session=session)
             if settings.load_demo_library:
+                print("checking the demo library (the first start loads ~6000 paints)…", flush=True)
                 try:
                     added = load_demo_library(session=session)
                 except Exception as exc:  # the service still runs; the library routes then list nothing
@@ -192,6 +195,11 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
             flush=True,
         )
     app = BodyReadTimeout(create_app(settings), settings.body_timeout_s)
+    print(
+        f"starting the web server on http://{settings.host}:{settings.port} "
+        f"(simulators: {', '.join(settings.simulators) or 'none'}; Ctrl+C stops it)…",
+        flush=True,
+    )
     uvicorn.run(
         app,
         host=settings.host,

@@ -96,11 +96,11 @@ def spawn_simulator(
     if design_file is not None:
         if not Path(design_file).is_file():
             raise DriverInputError("design_file", "an existing design JSON file", str(design_file))
-        cmd += ["--design", str(design_file)]
+        cmd += ["--design", str(Path(design_file).resolve())]  # the child runs in the repository
     if recipe_file is not None:
         if not Path(recipe_file).is_file():
             raise DriverInputError("recipe_file", "an existing recipe JSON file", str(recipe_file))
-        cmd += ["--recipe", str(recipe_file)]
+        cmd += ["--recipe", str(Path(recipe_file).resolve())]
     for spec in faults:
         cmd += ["--fault", spec]
     cmd += list(extra_args)

@@ -41,7 +41,7 @@ def image_slots(request: Request) -> asyncio.Semaphore:
 
 ImageSlotsDep = Annotated[asyncio.Semaphore, Depends(image_slots)]
 router = APIRouter(prefix="/styling", tags=["styling"], responses=ERROR_RESPONSES)
-Stylist = Annotated[User, scoped(Scope.DESIGNS_WRITE)]
+Stylist = Annotated[User, scoped(Scope.STYLING_USE)]
 Pixel = Annotated[float, Query(ge=0.0, le=100_000.0, allow_inf_nan=False)]
 _TOO_LARGE: dict[int | str, dict[str, Any]] = {413: {"description": "request body over the service's limit"}}
 

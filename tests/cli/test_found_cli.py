@@ -1,0 +1,174 @@
+"""The command line as a person uses it, each a real ``station`` (or ``python -m bench.X``) subprocess
+run from a temporary user folder that is not the repository: a relative ``--design`` reaches the
+simulator, ``analysis seam`` takes ``station measure --json`` output, ``model plot`` names unnamed
+designs by their file, a closed pipe is quiet, help texts are for people, benchmarks refuse to start
+on ``--help``, ``serve`` says what it is doing from the start."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
+from station.model.design_io import save_design
+from station.model.spectra import reflectance_to_lab
+
+REPO = Path(__file__).resolve().parents[2]
+SILVER = FaceFlopTravelGloss((90.0, 0.0, -2.0), (30.0, 0.0, -4.0), 60.0, 85.0, "silver")
+
+
+def _env(cwd: Path) -> dict[str, str]:
+    return dict(
+        os.environ, PYTHONPATH=str(REPO), CACAD_CACHE_DIR=str(cwd / "cache"), CACAD_DATA_DIR=str(cwd / "data")
+    )
+
+
+def station(cwd: Path, *args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "station.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=cwd,
+        env=_env(cwd),
+    )
+
+
+@pytest.mark.slow
+def test_measure_from_the_users_folder_then_seam_of_its_output(tmp_path: Path) -> None:
+    assert not tmp_path.is_relative_to(REPO)
+    save_design(SILVER, tmp_path / "silver.json")
+    res = station(tmp_path, "measure", "sim:ma6", "--design", "silver.json", "--json")
+    assert res.returncode == 0, res.stderr
+    (tmp_path / "scan.json").write_text(res.stdout)
+    scan = json.loads(res.stdout)
+    assert scan["geometries"] == ["45as-15", "45as15", "45as25", "45as45", "45as75", "45as110"]
+    # the simulator measured the design it was given (relative to the user's folder)
+    lab = reflectance_to_lab(np.asarray(scan["spectra"]))
+    np.testing.assert_allclose(lab[1], SILVER.lab_at(15.0), atol=1.5)
+    np.testing.assert_allclose(lab[-1], SILVER.lab_at(110.0), atol=1.5)
+    seam = station(tmp_path, "analysis", "seam", "scan.json", "scan.json", "--beta", "2", "--json")
+    assert seam.returncode == 0, seam.stderr
+    got = json.loads(seam.stdout)
+    # the same scan on both panels: no formulation ΔE; panel A is the fit of the positive angles
+    fit = fit_fftg(AspecularMeasurements((15.0, 25.0, 45.0, 75.0, 110.0), np.asarray(scan["lab"][1:]))).design
+    assert got["formulation_de_max"] == pytest.approx(0.0, abs=1e-9)
+    assert got["paint_a"]["face"] == pytest.approx(list(fit.face), abs=1e-6)
+    # a measurement without three positive 45° angles is refused with the field, exit 2, one line
+    (tmp_path / "short.json").write_text(json.dumps({"geometries": ["45as15"], "lab": [[50, 0, 0]]}))
+    bad = station(tmp_path, "analysis", "seam", "short.json", "scan.json", "--beta", "2")
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "panel" in bad.stderr
+
+
+def test_model_plot_names_an_unnamed_design_by_its_file(tmp_path: Path) -> None:
+    save_design(SILVER.replace(name=""), tmp_path / "bumper.json")
+    res = station(tmp_path, "model", "plot", "bumper.json", "--out", "p.png")
+    assert res.returncode == 0, res.stderr
+    assert 'designs: ["bumper"]' in res.stdout and (tmp_path / "p.png").stat().st_size > 10_000
+
+
+def test_a_closed_pipe_is_quiet(tmp_path: Path) -> None:
+    save_design(SILVER, tmp_path / "silver.json")
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "station.cli",
+            "model",
+            "eval",
+            "--design",
+            "silver.json",
+            "--angles",
+            "15,45",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=tmp_path,
+        env=_env(tmp_path),
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader (``| head``) has gone before anything is written
+    with proc.stderr:
+        err = proc.stderr.read().decode()
+    assert proc.wait(60) == 141
+    assert err == "", err
+
+
+def test_help_texts_are_for_people(tmp_path: Path) -> None:
+    render = station(tmp_path, "render", "--help")
+    assert render.returncode == 0
+    assert "``" not in render.stdout and "station.render." not in render.stdout
+    assert "--design DESIGN" in render.stdout and "example: station render" in render.stdout
+    seam = station(tmp_path, "analysis", "seam", "--help").stdout.split("positional arguments:")[1]
+    for option in ("PANEL_A", "PANEL_B", "--lights LIGHTS", "--aspecular ASPECULAR", "--objective"):
+        line = next(x for x in seam.splitlines() if x.strip().startswith(option))
+        text = line.strip()[len(option) :].strip() or seam.splitlines()[seam.splitlines().index(line) + 1]
+        assert len(text.strip()) > 10, (option, seam)
+    assert "station measure --json" in " ".join(seam.split())  # wrapped by argparse
+
+
+@pytest.mark.parametrize("bench", ["analysis", "viewer", "colorsnap", "render_gl"])
+def test_a_benchmark_does_not_start_on_help(tmp_path: Path, bench: str) -> None:
+    report = REPO / "docs" / "benchmarks.md"
+    before = report.stat().st_mtime_ns if report.exists() else None
+    t0 = time.perf_counter()
+    res = subprocess.run(
+        [sys.executable, "-m", f"bench.{bench}", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=REPO,
+        env=_env(tmp_path),
+    )
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.startswith(f"usage: python -m bench.{bench}") and "rewrites" in res.stdout
+    assert time.perf_counter() - t0 < 30
+    assert (report.stat().st_mtime_ns if report.exists() else None) == before
+    bad = subprocess.run(
+        [sys.executable, "-m", f"bench.{bench}", "--no-such-option"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=REPO,
+        env=_env(tmp_path),
+    )
+    assert bad.returncode == 2 and "unrecognized arguments" in bad.stderr
+
+
+@pytest.mark.slow
+def test_serve_says_what_it_does_from_the_start(tmp_path: Path) -> None:
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "station.cli", "serve", "--port", str(port), "--simulators", ""],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        cwd=tmp_path,
+        env=_env(tmp_path),
+    )
+    try:
+        assert proc.stdout is not None
+        t0 = time.perf_counter()
+        first = proc.stdout.readline()
+        assert first.startswith("starting the station service"), first
+        assert time.perf_counter() - t0 < 10
+        lines = [first]
+        while "opening the database" not in lines[-1]:
+            lines.append(proc.stdout.readline())
+            assert lines[-1], "".join(lines)
+    finally:
+        proc.terminate()
+        proc.wait(30)
+        if proc.stdout is not None:
+            proc.stdout.close()
