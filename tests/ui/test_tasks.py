@@ -50,3 +50,59 @@ def test_a_collector_switched_off_by_the_caller_stays_off(qtbot) -> None:
         assert not gc.isenabled()
     finally:
         gc.enable()
+
+
+def _press_cancel_when_offered(qtbot, progress) -> float:
+    """Wait for the Cancel button as the user would see it, click it; seconds the task had run."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    qtbot.waitUntil(progress.cancel_btn.isVisible, timeout=10_000)
+    ran = progress.running_ms / 1000
+    QTest.mouseClick(progress.cancel_btn, Qt.MouseButton.LeftButton)
+    return ran
+
+
+def test_progress_shows_after_half_a_second_and_cancel_after_two(qtbot) -> None:
+    import time
+
+    from ui.widgets.tasks import CANCEL_AFTER_MS, SHOW_AFTER_MS, TaskProgress
+
+    progress = TaskProgress()
+    qtbot.addWidget(progress)
+    steps_done: list[int] = []
+
+    def work(report) -> str:
+        for i in range(200):  # 10 s unless cancelled
+            report(i, f"step {i}")
+            steps_done.append(i)
+            time.sleep(0.05)
+        return "done"
+
+    task = TaskThread(work)
+    outcome: list[str] = []
+    task.succeeded.connect(lambda _r: outcome.append("succeeded"))
+    task.cancelled.connect(lambda: outcome.append("cancelled"))
+    progress.watch(task, "counting", 200)
+    task.start()
+    assert not progress.isVisible()
+    qtbot.waitUntil(progress.isVisible, timeout=5_000)
+    assert progress.running_ms >= SHOW_AFTER_MS and not progress.cancel_btn.isVisible()
+    ran = _press_cancel_when_offered(qtbot, progress)
+    assert ran >= CANCEL_AFTER_MS / 1000
+    qtbot.waitUntil(task.isFinished, timeout=5_000)
+    qtbot.waitUntil(lambda: outcome == ["cancelled"], timeout=5_000)
+    assert len(steps_done) < 200 and not progress.isVisible()
+
+
+def test_a_pure_task_cancelled_without_progress_drops_its_result(qtbot) -> None:
+    release = threading.Event()
+    task = TaskThread(lambda _r: release.wait(5) and "result", pure=True)
+    outcome: list[object] = []
+    task.succeeded.connect(outcome.append)
+    task.cancelled.connect(lambda: outcome.append("cancelled"))
+    task.start()
+    task.cancel()
+    with qtbot.waitSignal(task.finished, timeout=10_000):
+        release.set()
+    qtbot.waitUntil(lambda: outcome == ["cancelled"], timeout=5_000)

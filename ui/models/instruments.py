@@ -302,7 +302,8 @@ class InstrumentSession:
         self, panel: PanelInfo, progress: Progress | None = None, store: MeasurementStore | None = None
     ) -> Measurement:
         """Measure one panel. Progress (steps done of :data:`STEPS`, text): 0 measuring (the gloss meter
-        first when paired), 1 measured, 2 Lab and fit done, 3 stored; the screen shows 4 when shown."""
+        first when paired), 1 measured, 2 Lab and fit done (storing); the screen shows :data:`STEPS` once the
+        reading is shown. *progress* may raise (the user cancelled) at any step before storing."""
         inst = self._main.instrument
         if inst is None:
             raise InputError("instrument", "a connected instrument", None)
@@ -320,9 +321,8 @@ class InstrumentSession:
         say(1, "computing Lab and fitting the design")
         m = measurement_from_reading(spectral, panel, self.device, gloss)
         say(2, "storing" if store is not None and not m.gloss_only else "shown, not stored")
-        if store is not None:
+        if store is not None:  # the last step: not cancellable, a stored reading is always shown
             m = store.persist(m)
-        say(3, "stored" if m.receipt is not None else "done")
         return m
 
     def close(self) -> None:

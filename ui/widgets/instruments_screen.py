@@ -39,7 +39,7 @@ from ui.models.instruments import SIM_DEVICES, STEPS, InstrumentSession, Measure
 from ui.models.measure_db import PanelInfo
 from ui.widgets.common import lab_colour, pixmap_from_array
 from ui.widgets.reading_plot import ReadingPlot
-from ui.widgets.tasks import TaskThread
+from ui.widgets.tasks import TaskProgress, TaskThread
 
 
 class InstrumentsScreen(QWidget):
@@ -88,6 +88,7 @@ class InstrumentsScreen(QWidget):
         self.progress = QProgressBar()
         self.progress.setRange(0, STEPS)
         self.state = QLabel("not connected")
+        self.busy = TaskProgress()
         self.log = QPlainTextEdit()
         self.log.setReadOnly(True)
         self.log.setMaximumBlockCount(500)
@@ -115,6 +116,7 @@ class InstrumentsScreen(QWidget):
         left.addLayout(form)
         left.addLayout(buttons)
         left.addWidget(self.progress)
+        left.addWidget(self.busy)
         left.addWidget(self.state)
         left.addWidget(self.where)
         left.addWidget(QLabel("log"))
@@ -158,8 +160,11 @@ class InstrumentsScreen(QWidget):
         self.idle = False
         self.task.succeeded.connect(done)
         self.task.failed.connect(self._on_failed)
+        self.task.cancelled.connect(self._on_cancelled)
         self.task.succeeded.connect(self._on_task_done)  # after the result handler: the result is shown
         self.task.failed.connect(self._on_task_done)
+        self.task.cancelled.connect(self._on_task_done)
+        self.busy.watch(self.task, label, steps, cancellable=steps > 0)  # a scan stops between steps
         self.task.finished.connect(self._sync_buttons)
         self._sync_buttons(busy=True)
         self.task.start()
@@ -239,6 +244,12 @@ class InstrumentsScreen(QWidget):
         """The task is done and its result shown: a full bar."""
         self.progress.setRange(0, STEPS)
         self.progress.setValue(STEPS)
+
+    def _on_cancelled(self) -> None:
+        self.progress.setRange(0, STEPS)
+        self.progress.setValue(0)
+        self.state.setText("cancelled")
+        self._say("cancelled: nothing was stored")
 
     def _on_failed(self, message: str) -> None:
         self.progress.setRange(0, STEPS)

@@ -40,7 +40,7 @@ from ui.models.designer import DesignerModel
 from ui.models.instruments import MeasurementStore
 from ui.models.measure_db import RECENT_DEFAULT, recent_limit
 from ui.widgets.common import pixmap_from_array
-from ui.widgets.tasks import TaskThread
+from ui.widgets.tasks import TaskProgress, TaskThread
 
 METHODS = ("cie76", "cie2000", "din6175")
 PICTURE_SIZE = (120, 240)
@@ -110,6 +110,7 @@ class QAScreen(QWidget):
         self.export_btn = QPushButton("Export report…")
         self.export_btn.setEnabled(False)
         self.exported: tuple[Path, Path] | None = None
+        self.busy = TaskProgress()
         self.verdict = QLabel("—")
         self.verdict.setStyleSheet("font-size: 18pt; font-weight: bold")
         self.details = QLabel()
@@ -150,6 +151,7 @@ class QAScreen(QWidget):
         left.addLayout(form)
         left.addWidget(self.load_btn)
         left.addWidget(self.run_btn)
+        left.addWidget(self.busy)
         left.addWidget(self.verdict)
         left.addWidget(self.details, 1)
         left.addWidget(self.export_btn)
@@ -269,12 +271,24 @@ class QAScreen(QWidget):
         self.verdict.setText("running…")
         self.run_btn.setEnabled(False)
         self.task = TaskThread(
-            lambda _p: seam_qa(a, b, beta, lights_deg=lights, aspecular_deg=asp, tolerance=tol, method=method)
+            lambda _p: seam_qa(
+                a, b, beta, lights_deg=lights, aspecular_deg=asp, tolerance=tol, method=method
+            ),
+            pure=True,
         )
         self.task.succeeded.connect(self._on_report)
         self.task.failed.connect(self._on_failed)
+        self.task.cancelled.connect(self._on_cancelled)
         self.task.finished.connect(lambda: self.run_btn.setEnabled(True))
+        self.busy.watch(
+            self.task, f"seam analysis at β = {beta:+g}° over {len(lights) * len(asp)} geometries"
+        )
         self.task.start()
+
+    def _on_cancelled(self) -> None:
+        self.verdict.setText("cancelled")
+        self.verdict.setStyleSheet("font-size: 18pt; font-weight: bold")
+        self.details.setText("the seam analysis was cancelled; nothing changed")
 
     def _on_failed(self, message: str) -> None:
         self.verdict.setText("error")
@@ -368,6 +382,7 @@ class QAScreen(QWidget):
         self.task = TaskThread(lambda _p: export_report(report, path))
         self.task.succeeded.connect(self._on_exported)
         self.task.failed.connect(self._on_failed)
+        self.busy.watch(self.task, f"writing the report to {path.name} and its picture", cancellable=False)
         self.task.finished.connect(lambda: self.export_btn.setEnabled(self.report is not None))
         self.task.start()
 

@@ -1,4 +1,11 @@
-"""Blocking core calls off the GUI thread: one QThread per task, joined on close.
+"""Blocking core calls off the GUI thread: one QThread per task, joined on close, and the progress
+indicator every screen shows for it (:class:`TaskProgress`: shown once a task has run 0.5 s, with a
+Cancel button once it has run 2 s).
+
+Cancelling is cooperative: :meth:`TaskThread.cancel` sets a flag; the task's next ``progress`` call
+raises :class:`Cancelled` and the task emits ``cancelled`` instead of ``succeeded`` (nothing is shown).
+A task that reports no more progress runs to its end and its result is shown: a scan is not
+cancellable once its reading is being stored, so a stored reading is never hidden.
 
 While any task thread runs, Python's cyclic garbage collector is paused and re-enabled when the last
 one finishes (on the GUI thread). The viewer's test runs crashed the process intermittently (SIGSEGV)
@@ -14,7 +21,17 @@ import gc
 from collections.abc import Callable
 from typing import Any
 
-from PySide6.QtCore import QCoreApplication, QThread, Signal
+from PySide6.QtCore import QCoreApplication, QElapsedTimer, QThread, QTimer, Signal
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QPushButton, QWidget
+
+SHOW_AFTER_MS = 500
+"""A task that runs longer than this shows the progress indicator."""
+CANCEL_AFTER_MS = 2000
+"""... and offers Cancel once it has run this long."""
+
+
+class Cancelled(Exception):
+    """Raised in the worker by ``progress`` once the user cancelled the task."""
 
 
 class GcPause:
@@ -59,12 +76,33 @@ class TaskThread(QThread):
     progress = Signal(int, str)
     succeeded = Signal(object)
     failed = Signal(str)
+    cancelled = Signal()
 
-    def __init__(self, fn: Callable[[Callable[[int, str], None]], Any], parent=None) -> None:
+    def __init__(
+        self, fn: Callable[[Callable[[int, str], None]], Any], parent=None, pure: bool = False
+    ) -> None:
+        """*pure*: *fn* only computes (changes nothing outside): a cancelled run's result is dropped
+        even when it reports no progress, so Cancel takes effect at once for the user."""
         super().__init__(parent)
         self._fn = fn
+        self.pure = pure
         self._paused: GcPause | None = None
+        self._cancel = False
         self.finished.connect(self._resume_gc)
+
+    def cancel(self) -> None:
+        """Ask the task to stop: its next progress report raises :class:`Cancelled`; its result is dropped."""
+        self._cancel = True
+
+    @property
+    def cancel_requested(self) -> bool:
+        """Whether :meth:`cancel` was called."""
+        return self._cancel
+
+    def _report(self, step: int, text: str) -> None:
+        if self._cancel:
+            raise Cancelled
+        self.progress.emit(step, text)
 
     def start(self, *args: Any) -> None:
         """Start the thread (GUI thread), pausing the cyclic collector until it finishes."""
@@ -81,8 +119,89 @@ class TaskThread(QThread):
     def run(self) -> None:
         """Run the task."""
         try:
-            result = self._fn(lambda step, text: self.progress.emit(step, text))
+            result = self._fn(self._report)
+        except Cancelled:
+            self.cancelled.emit()
+            return
         except Exception as exc:  # shown to the user verbatim
             self.failed.emit(f"{type(exc).__name__}: {exc}")
             return
-        self.succeeded.emit(result)
+        if self._cancel and self.pure:
+            self.cancelled.emit()
+        else:
+            self.succeeded.emit(result)  # a task with effects: Cancel came after its last step
+
+
+class TaskProgress(QWidget):
+    """Busy or step bar, what the task is doing, how long it has run, and Cancel (after 2 s).
+
+    Hidden until the watched task has run :data:`SHOW_AFTER_MS`; hidden again when it ends. *steps* 0
+    shows a busy bar (a task of unknown length), else steps done of *steps*."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.bar = QProgressBar()
+        self.text = QLabel()
+        self.cancel_btn = QPushButton("Cancel")
+        self.cancel_btn.setToolTip("stop the running task; its result is not shown")
+        lay = QHBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.bar, 1)
+        lay.addWidget(self.text, 2)
+        lay.addWidget(self.cancel_btn)
+        self.task: TaskThread | None = None
+        self.label = ""
+        self.cancellable = True
+        self._clock = QElapsedTimer()
+        self._tick = QTimer(self)
+        self._tick.setInterval(100)
+        self._tick.timeout.connect(self._update)
+        self.cancel_btn.clicked.connect(self._on_cancel)
+        self.hide()
+
+    def watch(self, task: TaskThread, label: str, steps: int = 0, cancellable: bool = True) -> None:
+        """Follow *task* (call before ``task.start()``); *cancellable* False: no Cancel button (a task
+        that cannot stop part-way, e.g. opening a device)."""
+        self.task = task
+        self.label = label
+        self.cancellable = cancellable
+        self.bar.setRange(0, steps)
+        self.bar.setValue(0)
+        self.text.setText(label)
+        self.cancel_btn.setEnabled(True)
+        self.cancel_btn.hide()
+        task.progress.connect(self._on_progress)
+        task.finished.connect(self._on_finished)
+        self._clock.start()
+        self._tick.start()
+
+    @property
+    def running_ms(self) -> int:
+        """Milliseconds the watched task has run (0 when none runs)."""
+        return int(self._clock.elapsed()) if self._tick.isActive() else 0
+
+    def _on_progress(self, step: int, text: str) -> None:
+        if self.bar.maximum() > 0:
+            self.bar.setValue(step)
+        self.label = text
+        self._update()
+
+    def _update(self) -> None:
+        ms = self.running_ms
+        if ms >= SHOW_AFTER_MS and not self.isVisible():
+            self.show()
+        if ms >= CANCEL_AFTER_MS and self.cancellable and not self.cancel_btn.isVisible():
+            self.cancel_btn.show()
+        self.text.setText(f"{self.label} ({ms / 1000:.1f} s)")
+
+    def _on_cancel(self) -> None:
+        if self.task is not None:
+            self.task.cancel()
+            self.cancel_btn.setEnabled(False)
+            self.label = "cancelling…"
+            self._update()
+
+    def _on_finished(self) -> None:
+        self._tick.stop()
+        self.hide()
+        self.task = None
