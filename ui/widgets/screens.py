@@ -64,9 +64,19 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
     library = LazyScreen(lambda: _library_screen(window))
     window.library_screen = library
 
+    def formulation_screen() -> QWidget:
+        from station.formulate.demo import demo_library
+        from ui.widgets.formulation_screen import FormulationScreen
+
+        return FormulationScreen(demo_library(), window.document)
+
+    formulation = LazyScreen(formulation_screen)
+    window.formulation_screen = formulation
+
     def send_to_formulation(paint) -> None:
-        window.tabs.setCurrentWidget(library)
-        library.content().snap(paint)
+        """QA's corrected paint goes to the chemist's screen, picked and ready for ColorSnap."""
+        window.tabs.setCurrentWidget(formulation)
+        formulation.content().receive(paint)
 
     def moodboard() -> QWidget:
         from ui.widgets.moodboard_screen import MoodBoardScreen
@@ -94,4 +104,5 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         ("Library", library),
         ("Instruments", LazyScreen(instruments)),
         ("QA", LazyScreen(qa)),
+        ("Formulation", formulation),
     ]

@@ -1,0 +1,147 @@
+"""Chemist's day on the Formulation screen of the main window, on the full 6000-paint demo library, driven
+by clicks: open a design file, ColorSnap with a type filter, formulate, see the recipe (mass per batch),
+run the closed loop, export; and the QA engineer's corrected paint arriving there with one click.
+Every number shown is checked against the same core call made here (``station snap`` / ``formulate``
+/ ``export`` call these too)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PySide6.QtCore import Qt, QTimer
+from PySide6.QtTest import QTest
+from PySide6.QtWidgets import QApplication, QFileDialog, QLineEdit
+
+from station.formulate.demo import demo_library
+from station.formulate.formulation import formulate_from_library
+from station.formulate.snap import color_snap
+from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
+from station.model.design_io import save_design
+from station.model.domain import ANGLES_3
+from ui.app import MainWindow
+from ui.models.measure_db import LocalSink
+
+pytestmark = [pytest.mark.qt, pytest.mark.slow]
+
+
+def _library_metallic() -> FaceFlopTravelGloss:
+    """A design fitted to one of the demo library's metallics at 15/45/110° (formulable by construction:
+    its paint has a recipe in the SYNTHETIC colorants)."""
+    lib = demo_library()
+    i = int(np.flatnonzero(lib.types == "metallic")[40])
+    cols = [lib.angles_deg.index(a) for a in ANGLES_3]
+    fit = fit_fftg(AspecularMeasurements(ANGLES_3, lib.lab[i][cols], float(lib.gloss_gu[i])))
+    return fit.design.replace(name=f"{lib.codes[i]} as a design")
+
+
+def _click(qtbot, screen, button) -> None:
+    assert button.isEnabled(), button.text()
+    QTest.mouseClick(button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: screen.idle, timeout=120_000)
+
+
+def _with_dialog(qtbot, button, path, done) -> None:
+    """Click *button*, type *path* into the file dialog it opens and press Enter; wait for *done*()."""
+
+    def fill() -> None:
+        dialog = QApplication.activeModalWidget()
+        if isinstance(dialog, QFileDialog) and dialog.isVisible():
+            name = dialog.findChild(QLineEdit, "fileNameEdit")
+            name.selectAll()
+            QTest.keyClicks(name, str(path))
+            QTest.keyClick(name, Qt.Key.Key_Return)
+        if not done():
+            QTimer.singleShot(300, fill)
+
+    QTimer.singleShot(50, fill)
+    QTest.mouseClick(button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(done, timeout=60_000)
+
+
+def _toggle(box) -> None:
+    """Tick or untick a check box with the keyboard (focus, space)."""
+    box.setFocus()
+    QTest.keyClick(box, Qt.Key.Key_Space)
+
+
+def test_chemist_day(qtbot, tmp_path):
+    BLUE_METALLIC = _library_metallic()
+    save_design(BLUE_METALLIC, tmp_path / "blue.json")
+    win = MainWindow(sink=LocalSink(f"sqlite:///{tmp_path / 's.sqlite3'}", tmp_path / "o.sqlite3"))
+    qtbot.addWidget(win)
+    win.resize(1400, 900)
+    win.show()
+    win.tabs.setCurrentWidget(win.screens["Formulation"])
+    screen = win.screens["Formulation"].content()
+    lib = demo_library()
+    assert len(screen.library) == len(lib) == 6000
+    # open the design file
+    _with_dialog(
+        qtbot,
+        screen.open_btn,
+        tmp_path / "blue.json",
+        lambda: screen.design.currentText() == "file: blue.json",
+    )
+    assert screen.picked() == BLUE_METALLIC
+    # ColorSnap in the metallics only: untick solid and pearl
+    for t in ("solid", "pearl"):
+        _toggle(screen.types[t])
+    assert screen.chosen_types() == ["metallic"]
+    _click(qtbot, screen, screen.snap_btn)
+    metallic = lib.subset(lib.types == "metallic")
+    expected = color_snap(metallic, BLUE_METALLIC.lab_at(np.array(ANGLES_3)), k=5, method="cie2000")
+    shown = [screen.matches.item(i, 0).text() for i in range(screen.matches.rowCount())]
+    assert shown == [m.code for m in expected.matches]
+    assert {screen.matches.item(i, 1).text() for i in range(screen.matches.rowCount())} == {"metallic"}
+    # formulate: the recipe, per colorant, as mass % and grams for a 500 g batch
+    _click(qtbot, screen, screen.formulate_btn)
+    result, _snap = formulate_from_library(
+        BLUE_METALLIC.lab_at(np.array(ANGLES_3)), metallic, gloss_gu=BLUE_METALLIC.gloss_gu
+    )
+    screen.batch.setFocus()
+    screen.batch.selectAll()
+    QTest.keyClicks(screen.batch, "500")
+    QTest.keyClick(screen.batch, Qt.Key.Key_Return)
+    assert screen.batch.value() == 500.0
+    rows = {
+        screen.recipe.item(i, 0).text(): (
+            float(screen.recipe.item(i, 1).text()),
+            float(screen.recipe.item(i, 2).text()),
+        )
+        for i in range(screen.recipe.rowCount())
+    }
+    total = sum(result.recipe.values())
+    assert set(rows) == set(result.recipe)
+    for name, frac in result.recipe.items():
+        assert rows[name][0] == pytest.approx(100 * frac, abs=0.006)
+        assert rows[name][1] == pytest.approx(500.0 * frac / total, abs=0.06)
+    assert sum(g for _p, g in rows.values()) == pytest.approx(500.0, abs=0.5)
+    assert f"mean {result.mean_de:.2f}" in screen.status.text() and "SYNTHETIC" in screen.status.text()
+    # the closed loop: steps until within tolerance (or the correction limit), mean ΔE shown per step
+    _click(qtbot, screen, screen.loop_btn)
+    job = screen.job
+    assert job is not None and screen.loop.rowCount() == len(job.steps) >= 1
+    assert [float(screen.loop.item(i, 2).text()) for i in range(len(job.steps))] == pytest.approx(
+        [round(s.mean_de, 2) for s in job.steps], abs=0.006
+    )
+    assert job.status in screen.status.text()
+    # export as thesis XML, with the metallic match
+    _with_dialog(qtbot, screen.export_btn, tmp_path / "blue.xml", lambda: screen.exported is not None)
+    text = (tmp_path / "blue.xml").read_text()
+    assert screen.exported == tmp_path / "blue.xml" and expected.matches[0].code in text
+    assert f"match {expected.matches[0].code}" in screen.status.text()
+    # QA hands a corrected paint on: one click lands it here, picked
+    qa = win.screens["QA"].content()
+    win.tabs.setCurrentWidget(win.screens["QA"])
+    qa.beta.setValue(3)
+    QTest.mouseClick(qa.run_btn, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: qa.report is not None and not qa.task.isRunning(), timeout=60_000)
+    QTest.mouseClick(qa.send_btn, Qt.MouseButton.LeftButton)
+    assert win.tabs.currentWidget() is win.screens["Formulation"]
+    assert screen.picked() is qa.report.correction.paint
+    assert screen.design.currentText().startswith("sent: ") and screen.matches.rowCount() == 0
+    # a filter with no type is refused with the field named, nothing runs
+    _toggle(screen.types["metallic"])
+    QTest.mouseClick(screen.snap_btn, Qt.MouseButton.LeftButton)
+    assert screen.status.text().startswith("error: types") and screen.idle
+    win.close()
