@@ -2,8 +2,8 @@
 
 Runs the real main window on whatever Qt platform is current (under Xvfb/xcb the 3D views are GL on
 llvmpipe), puts demo content on each screen — a design edit, the demo mood-board photo with the three
-eyedroppers, a ColorSnap of the design in the synthetic demo library, a scan of the MA6 simulator, a seam
-QA — and saves one PNG per screen. Returns the written paths.
+eyedroppers, a ColorSnap of the design in the synthetic demo library, a scan of the MA6 simulator paired with the gloss
+meter simulator, a seam QA, its corrected paint formulated — and saves one PNG per screen. Returns the written paths.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def _wait(pred, timeout_s: float) -> bool:
 
 
 def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
-    """Write ``design.png``, ``tweaker.png``, ``moodboard.png``, ``library.png``, ``instruments.png``, ``qa.png`` to *out*."""
+    """Write ``design.png``, ``tweaker.png``, ``moodboard.png``, ``library.png``, ``instruments.png``, ``qa.png``, ``formulation.png`` to *out*."""
     from ui.app import MainWindow
 
     out = Path(out)
@@ -108,6 +108,9 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
             inst.device.setCurrentText("sim:ma6")
             inst.connect_device()
             _wait(lambda: inst.idle, 60)
+            inst.gloss_device.setCurrentText("sim:gloss")
+            inst.toggle_gloss()
+            _wait(lambda: inst.idle, 60)
             inst.calibrate()
             _wait(lambda: inst.idle, 60)
             inst.job.setText("J-2026-0113")
@@ -128,6 +131,13 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         qa.run()
         _wait(lambda: qa.report is not None and not qa.task.isRunning(), 120)
         shot("qa")
+
+        qa.send_btn.click()  # the corrected paint goes on to formulation
+        chem = win.screens["Formulation"].content()
+        for step in (chem.run_formulate, chem.run_loop):
+            step()
+            _wait(lambda: chem.idle, 120)
+        shot("formulation")
     finally:
         win.close()
         win.deleteLater()

@@ -15,6 +15,7 @@ from PySide6.QtWidgets import (
     QFileDialog,
     QFormLayout,
     QHBoxLayout,
+    QHeaderView,
     QLabel,
     QPushButton,
     QTableWidget,
@@ -73,6 +74,9 @@ class FormulationScreen(QWidget):
         self.recipe.setHorizontalHeaderLabels(["colorant", "mass %", "grams per batch"])
         self.loop = QTableWidget(0, 3)
         self.loop.setHorizontalHeaderLabels(["step", "kind", "measured mean ΔE00"])
+        for t in (self.matches, self.recipe, self.loop):
+            t.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Stretch)
+            t.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
 
         form = QFormLayout()
         row = QHBoxLayout()

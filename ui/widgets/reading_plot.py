@@ -104,12 +104,12 @@ class ReadingPlot(QWidget):
                     p.drawLine(px(a, lo), px(a, hi))
             p.setPen(QPen(QColor(170, 170, 170), 1))
             p.drawRect(r)
-            # y tick labels: bottom, middle, top of the axis
+            # y tick labels: bottom, middle, top of the axis (inside the panel's height: no overlap)
             p.setPen(QColor(90, 90, 90))
-            for v in (lo, (lo + hi) / 2, hi):
+            for v, dy in ((lo, -fm.height()), ((lo + hi) / 2, -fm.height() / 2), (hi, 0.0)):
                 y = px(a_lo, v).y()
                 p.drawText(
-                    QRectF(LEFT - 34, y - fm.height() / 2, 30, fm.height()),
+                    QRectF(LEFT - 34, y + dy, 30, fm.height()),
                     Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter,
                     f"{v:g}",
                 )
