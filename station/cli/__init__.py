@@ -46,8 +46,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return run_handler(handler, args)
     except BrokenPipeError:
         return _closed_pipe()
+    except KeyboardInterrupt:  # Ctrl+C: the command is cancelled, said in one line
+        print("cancelled (Ctrl+C)", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
+EXIT_INTERRUPTED = 130
+"""Exit status after Ctrl+C: 128 + SIGINT, as shells report."""
 EXIT_PIPE = 141
 """Exit status when the reader of the output went away (``| head``): 128 + SIGPIPE, as shells report."""
 

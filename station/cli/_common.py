@@ -26,6 +26,41 @@ EXIT_INPUT = 2
 EXIT_FAILURE = 1
 
 
+class Steps:
+    """A progress bar of a long command's steps on stderr (tqdm), shown only on a terminal.
+
+    ``steps("measuring")`` marks the previous step done and names the next; the bar is removed when
+    the command ends. Piped or redirected output stays clean: the bar is off when stderr is not a
+    terminal. Ctrl+C cancels the command (one line, exit 130).
+    """
+
+    def __init__(self, total: int, desc: str) -> None:
+        from tqdm import tqdm
+
+        self.bar = tqdm(
+            total=total,
+            desc=desc,
+            unit="step",
+            file=sys.stderr,
+            leave=False,
+            disable=None,
+            dynamic_ncols=True,
+        )
+        self.started = False
+
+    def __call__(self, text: str) -> None:
+        if self.started:
+            self.bar.update(1)
+        self.started = True
+        self.bar.set_postfix_str(text)
+
+    def __enter__(self) -> Steps:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.bar.close()
+
+
 def add_json_flag(parser: argparse.ArgumentParser) -> None:
     """Add the ``--json`` flag every command carries."""
     parser.add_argument("--json", action="store_true", help="print machine-readable JSON")

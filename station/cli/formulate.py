@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from station.cli._common import add_json_flag, parse_lab_list
+from station.cli._common import Steps, add_json_flag, parse_lab_list
 from station.errors import InputError
 from station.model.domain import ANGLES_3
 
@@ -202,8 +202,25 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
     lab, gloss, name = _design_lab(args.design)
     if args.gloss is not None:
         gloss = args.gloss
-    lib = _load_library(args.library)
-    result, snap = formulate_from_library(lab, lib, gloss_gu=gloss, tolerance=args.tolerance)
+    with Steps(3 if args.closed_loop else 2, "formulate") as steps:
+        steps(f"loading the library {args.library}")
+        lib = _load_library(args.library)
+        steps("ColorSnap and formulation")
+        result, snap = formulate_from_library(lab, lib, gloss_gu=gloss, tolerance=args.tolerance)
+        if args.closed_loop:
+            steps("closed loop: spraying, measuring, correcting")
+        return _formulated(args, lab, gloss, name, lib, result, snap)
+
+
+def _formulated(
+    args: argparse.Namespace,
+    lab: np.ndarray,
+    gloss: float | None,
+    name: str,
+    lib: Any,
+    result: Any,
+    snap: Any,
+) -> dict[str, Any]:
     out: dict[str, Any] = {
         "design": name,
         **result.to_dict(),

@@ -22,7 +22,7 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
-from station.cli._common import add_json_flag
+from station.cli._common import Steps, add_json_flag
 from station.errors import InputError
 
 
@@ -160,17 +160,28 @@ def _receipt(ingestor: Any, receipt: Any) -> dict[str, Any]:
 
 
 def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
-    """Measure once; spectra per geometry and Lab from the model, or gloss/haze/DOI; with ``--store``, store it."""
+    """Measure once; spectra per geometry and Lab from the model, or gloss/haze/DOI; with ``--store``, store it.
+
+    On a terminal a progress bar shows the steps (connecting — a simulator takes seconds to start —,
+    measuring, converting or storing)."""
+    panel_id = _store_panel_id(args.panel) if args.store is not None else None  # refused before starting
+    with Steps(3, "measure") as steps:
+        steps(f"connecting {args.device}")
+        return _measure(args, panel_id, steps)
+
+
+def _measure(args: argparse.Namespace, panel_id: int | None, steps: Steps) -> dict[str, Any]:
     from station.drivers import GlossReading
 
-    panel_id = _store_panel_id(args.panel) if args.store is not None else None  # refused before starting
     with _ingestor(args) as ingestor, _instrument(args) as inst:
         if ingestor is not None and args.client_id is not None:
             ingestor.replay()
             prior = ingestor.find(args.client_id)
             if prior is not None:  # a retry: answered from the first attempt, nothing measured again
                 return {"device": args.device, "panel": args.panel, "stored": _receipt(ingestor, prior)}
+        steps("measuring")
         reading = inst.measure()
+        steps("converting" if ingestor is None else "storing")
         out: dict[str, Any] = {
             "device": args.device,
             "address": f"{inst.family}@{inst.address}",

@@ -172,3 +172,70 @@ def test_serve_says_what_it_does_from_the_start(tmp_path: Path) -> None:
         proc.wait(30)
         if proc.stdout is not None:
             proc.stdout.close()
+
+
+def _on_a_terminal(cwd: Path, *args: str, interrupt_at: str | None = None) -> tuple[int, str, str]:
+    """Run ``station ARGS`` with stderr on a pseudo-terminal (as a person's shell has it) and stdout on
+    a pipe; optionally press Ctrl+C (SIGINT) once the terminal shows *interrupt_at*. Returns
+    (status, stdout, stderr)."""
+    import fcntl
+    import pty
+    import signal
+    import struct
+    import termios
+
+    leader, follower = pty.openpty()
+    fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))  # a 100-column terminal
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "station.cli", *args],
+        stdout=subprocess.PIPE,
+        stderr=follower,
+        cwd=cwd,
+        env=_env(cwd),
+    )
+    os.close(follower)
+    chunks: list[bytes] = []
+
+    def drain() -> None:  # read while the child runs: Linux drops a closed terminal's unread output
+        while True:
+            try:
+                chunk = os.read(leader, 65536)
+            except OSError:
+                return
+            if not chunk:
+                return
+            chunks.append(chunk)
+
+    import threading
+
+    reader = threading.Thread(target=drain, daemon=True)
+    reader.start()
+    if interrupt_at is not None:
+        deadline = time.monotonic() + 90
+        while interrupt_at not in b"".join(chunks).decode(errors="replace") and time.monotonic() < deadline:
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+    assert proc.stdout is not None
+    with proc.stdout:
+        out = proc.stdout.read().decode()
+    status = proc.wait(120)
+    reader.join(10)
+    os.close(leader)
+    err = b"".join(chunks)
+    return status, out, err.decode(errors="replace")
+
+
+@pytest.mark.slow
+def test_a_long_command_shows_its_steps_on_a_terminal_and_ctrl_c_cancels(tmp_path: Path) -> None:
+    save_design(SILVER, tmp_path / "silver.json")
+    status, out, err = _on_a_terminal(tmp_path, "measure", "sim:ma6", "--design", "silver.json", "--json")
+    assert status == 0, err
+    assert "connecting sim:ma6" in err and "measuring" in err and "step" in err
+    assert json.loads(out)["geometries"][0] == "45as-15"  # the data on stdout stays clean
+    piped = station(tmp_path, "formulate", "silver.json")
+    assert piped.returncode == 0 and piped.stderr == ""  # no bar when stderr is not a terminal
+    status, out, err = _on_a_terminal(
+        tmp_path, "formulate", "silver.json", "--closed-loop", interrupt_at="closed loop"
+    )
+    assert status == 130 and out == "", (status, err)
+    assert "cancelled (Ctrl+C)" in err and "Traceback" not in err
