@@ -145,3 +145,33 @@ def test_chemist_day(qtbot, tmp_path):
     QTest.mouseClick(screen.snap_btn, Qt.MouseButton.LeftButton)
     assert screen.status.text().startswith("error: types") and screen.idle
     win.close()
+
+
+@pytest.mark.parametrize("role", ["qa", "chemist"])
+def test_qa_and_chemist_store_the_paint_on_the_service(qtbot, tmp_path, role):
+    """Service mode: QA's corrected paint (or the chemist's design) is stored on the service from the
+    viewer's Service menu with the user's own token — no administrator needed (was 403)."""
+    from tests.api.conftest import make_api
+    from ui.models.measure_db import ServiceSink
+    from ui.models.service import ServiceClient
+
+    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path)
+    api = next(gen)
+    try:
+        token = api.tokens[next(r for r in api.tokens if r.value == role)]
+        service = ServiceClient("http://testserver", token, client=api.client)
+        win = MainWindow(service=service, sink=ServiceSink(service, tmp_path / "outbox.sqlite3"))
+        qtbot.addWidget(win)
+        paint = _library_metallic()
+        win.document.set_design(paint, "the paint to keep")
+        menu = next(a.menu() for a in win.menuBar().actions() if a.text() == "&Service")
+        save = next(a for a in menu.actions() if a.text() == "Save current design")
+        save.trigger()
+        assert win.statusBar().currentMessage().startswith("saved as design "), (
+            win.statusBar().currentMessage()
+        )
+        rows = api.client.get("/api/v1/designs", headers=api.auth("chemist")).json()["data"]
+        assert len(rows) == 1 and rows[0]["design"]["face"] == pytest.approx(list(paint.face))
+        win.close()
+    finally:
+        gen.close()
