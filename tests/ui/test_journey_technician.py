@@ -64,7 +64,15 @@ def _day(qtbot, screen: InstrumentsScreen) -> list:
     assert steps == sorted(steps) and steps[-1] == STEPS and {1, 2} <= set(steps), seen
     assert screen.progress.value() == screen.progress.maximum() == STEPS
     _click(qtbot, screen, screen.scan_btn)  # re-scan the same panel
-    return [first, screen.store.items[-1]]
+    second = screen.store.items[-1]
+    # the job's history from the store: both scans, newest first, with their row ids
+    _click(qtbot, screen, screen.history_btn)
+    rows = [screen.history.item(i).text() for i in range(screen.history.count())]
+    ids = [m.receipt.measurement_id for m in (second, first)]
+    assert [r.split()[0] for r in rows] == [f"#{i}" for i in ids], rows
+    assert all("J-2026-0200 bumper" in r and "6 geometries" in r for r in rows)
+    assert screen.history_title.text() == "job history (stored): 2 measurements of job J-2026-0200"
+    return [first, second]
 
 
 def _check_shown(screen: InstrumentsScreen, m) -> None:

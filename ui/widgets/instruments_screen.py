@@ -36,7 +36,7 @@ from station.design.palette import booklet
 from station.errors import InputError
 from ui.models.document import DesignDocument
 from ui.models.instruments import SIM_DEVICES, STEPS, InstrumentSession, Measurement, MeasurementStore
-from ui.models.measure_db import PanelInfo
+from ui.models.measure_db import RECENT_MAX, PanelInfo
 from ui.widgets.common import lab_colour, pixmap_from_array
 from ui.widgets.reading_plot import ReadingPlot
 from ui.widgets.tasks import TaskProgress, TaskThread
@@ -79,6 +79,9 @@ class InstrumentsScreen(QWidget):
         self.notes.setMaximumHeight(54)
         self.notes.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
         self.retry_btn = QPushButton("Retry queued")
+        self.history_btn = QPushButton("Job history")
+        self.history_btn.setToolTip("every stored measurement of the job typed above (database or service)")
+        self.history = QListWidget()
         self.where = QLabel(self._where_text())
         self.where.setWordWrap(True)
         self.connect_btn = QPushButton("Connect")
@@ -112,6 +115,7 @@ class InstrumentsScreen(QWidget):
         buttons = QHBoxLayout()
         for b in (self.connect_btn, self.calibrate_btn, self.scan_btn, self.use_btn, self.retry_btn):
             buttons.addWidget(b)
+        buttons.addWidget(self.history_btn)
         left = QVBoxLayout()
         left.addLayout(form)
         left.addLayout(buttons)
@@ -129,8 +133,11 @@ class InstrumentsScreen(QWidget):
         right.addLayout(row)
         right.addWidget(self.gloss)
         right.addWidget(self.plot, 1)
-        right.addWidget(QLabel("stored measurements"))
+        right.addWidget(QLabel("scans since the viewer started"))
         right.addWidget(self.stored)
+        self.history_title = QLabel("job history (stored): click Job history")
+        right.addWidget(self.history_title)
+        right.addWidget(self.history)
         lay = QHBoxLayout(self)
         lay.addLayout(left, 1)
         lay.addLayout(right, 2)
@@ -141,6 +148,7 @@ class InstrumentsScreen(QWidget):
         self.scan_btn.clicked.connect(self.scan)
         self.use_btn.clicked.connect(self.use_as_design)
         self.retry_btn.clicked.connect(self.retry)
+        self.history_btn.clicked.connect(self.job_history)
         self.store.events.added.connect(self._on_added)
         self._sync_buttons()
 
@@ -215,6 +223,26 @@ class InstrumentsScreen(QWidget):
         if sink is None:
             return
         self._run(lambda _p: sink.flush(), self._on_retried, "sending queued readings…")
+
+    def job_history(self) -> None:
+        """List every stored measurement of the typed job, newest first (read in a worker)."""
+        sink = self.store.sink
+        job = self.job.text().strip()
+        if sink is None or not job:
+            return
+        self._run(
+            lambda _p: [r for r in sink.recent(RECENT_MAX) if r.label.startswith(job + " ")],
+            lambda rows: self._on_history(job, rows),
+            f"reading the history of job {job}…",
+        )
+
+    def _on_history(self, job: str, rows: list) -> None:
+        self._done_bar()
+        self.history.clear()
+        for r in rows:
+            self.history.addItem(f"#{r.id}  {r.measured_at}  {r.label}  {len(r.geometries_deg)} geometries")
+        self.history_title.setText(f"job history (stored): {len(rows)} measurements of job {job}")
+        self.state.setText(f"{len(rows)} stored measurements of job {job}")
 
     def _where_text(self) -> str:
         sink = self.store.sink
@@ -356,6 +384,7 @@ class InstrumentsScreen(QWidget):
         self.calibrate_btn.setEnabled(not busy and self.session.connected)
         self.scan_btn.setEnabled(not busy and self.session.connected)
         self.retry_btn.setEnabled(not busy and self.store.sink is not None)
+        self.history_btn.setEnabled(not busy and self.store.sink is not None)
         self.use_btn.setEnabled(
             self.last is not None and self.last.design is not None and self.document is not None
         )
