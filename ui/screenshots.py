@@ -119,6 +119,8 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
             inst.notes.setPlainText("front left door, centre")
             inst.scan()
             _wait(lambda: inst.idle, 60)
+            inst.job_history()
+            _wait(lambda: inst.idle, 60)
         shot("instruments")
 
         win.tabs.setCurrentWidget(win.screens["QA"])

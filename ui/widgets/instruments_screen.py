@@ -18,6 +18,7 @@ from PySide6.QtWidgets import (
     QComboBox,
     QFormLayout,
     QHBoxLayout,
+    QHeaderView,
     QLabel,
     QLineEdit,
     QListWidget,
@@ -97,6 +98,9 @@ class InstrumentsScreen(QWidget):
         self.log.setMaximumBlockCount(500)
         self.table = QTableWidget(0, 5)
         self.table.setHorizontalHeaderLabels(["geometry", "L*", "a*", "b*", "colour"])
+        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Stretch)
+        self.table.verticalHeader().setDefaultSectionSize(20)
+        self.table.setMinimumHeight(150)
         self.render = QLabel()
         self.render.setMinimumSize(160, 160)
         self.plot = ReadingPlot()
@@ -132,12 +136,12 @@ class InstrumentsScreen(QWidget):
         row.addWidget(self.render, 1)
         right.addLayout(row)
         right.addWidget(self.gloss)
-        right.addWidget(self.plot, 1)
+        right.addWidget(self.plot, 3)
         right.addWidget(QLabel("scans since the viewer started"))
-        right.addWidget(self.stored)
+        right.addWidget(self.stored, 1)
         self.history_title = QLabel("job history (stored): click Job history")
         right.addWidget(self.history_title)
-        right.addWidget(self.history)
+        right.addWidget(self.history, 1)
         lay = QHBoxLayout(self)
         lay.addLayout(left, 1)
         lay.addLayout(right, 2)
