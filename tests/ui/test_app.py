@@ -64,6 +64,7 @@ def test_screenshots_of_every_screen(qtbot, tmp_path):
         "library.png",
         "instruments.png",
         "qa.png",
+        "formulation.png",
     ]
     for p in paths:
         with Image.open(p) as im:
