@@ -1,6 +1,7 @@
 """Every table of the measurement database (import this module to register them on ``Base``)."""
 
 from db.models.designs import Design, DesignVersion
+from db.models.gloss import GlossReading
 from db.models.instruments import CalibrationRecord, Instrument
 from db.models.library import JOB_STATES, AnalysisResult, FormulationJob, LibraryPaint
 from db.models.measurements import PARTS, Measurement, Panel
@@ -16,6 +17,7 @@ __all__ = [
     "Design",
     "DesignVersion",
     "FormulationJob",
+    "GlossReading",
     "Instrument",
     "LedgerHead",
     "LibraryPaint",
