@@ -7,7 +7,7 @@ stands alone (gloss-only) and pairs with a colour measurement of the same panel 
 (``station.ingest.gloss.pair_gloss``). Like a measurement, a gloss row is never updated or deleted.
 
 Units: gloss in gloss units (GU, ISO 2813) at 20°, 60° and 85° (any may be absent, at least one is
-given); haze in haze units (ASTM E430), log haze unitless, DOI 0–100, Rspec in GU.
+given); haze in haze units (ASTM E430), log haze in log haze units (0–2000), DOI 0–100, Rspec in GU.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ panel measured on both gives one colour measurement (``measurements``) and one g
 2. a gloss-only reading of a panel pairs with the colour measurement of the same panel nearest in
    time, if within :data:`PAIR_WINDOW` of it; closest pairs first, each reading used once.
 
-Units: gloss in gloss units (GU) per geometry, haze in haze units (HU, ASTM E430), log haze unitless,
+Units: gloss in gloss units (GU) per geometry, haze in haze units (HU, ASTM E430), log haze in log haze units,
 DOI 0–100, Rspec in GU.
 """
 
@@ -94,7 +94,7 @@ class GlossRecord(BaseModel):
     gloss_60_gu: GU | None = None
     gloss_85_gu: GU | None = None
     haze_hu: Annotated[float, Field(strict=True, ge=0.0, le=2000.0, allow_inf_nan=False)] | None = None
-    log_haze: Annotated[float, Field(strict=True, ge=0.0, le=10.0, allow_inf_nan=False)] | None = None
+    log_haze: Annotated[float, Field(strict=True, ge=0.0, le=2000.0, allow_inf_nan=False)] | None = None
     doi: Annotated[float, Field(strict=True, ge=0.0, le=100.0, allow_inf_nan=False)] | None = None
     rspec_gu: GU | None = None
 

@@ -1,0 +1,155 @@
+"""Colour QC: gloss readings, the paired measurement view, checks against standards, job summaries."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from station.api.schemas.common import StrictInt
+from station.api.schemas.measurements import MeasurementPublic
+from station.ingest.schema import MAX_GEOMETRIES, Angle, LabTriple
+from station.model.tolerance import Verdict
+
+
+class GlossPublic(BaseModel):
+    """A stored, immutable gloss reading (gloss in GU per geometry, haze HU, DOI 0–100, Rspec GU)."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    client_id: uuid.UUID
+    panel_id: int | None
+    measurement_id: int | None
+    instrument_id: int
+    calibration_id: int | None
+    operator: str
+    measured_at: dt.datetime
+    received_at: dt.datetime
+    gloss_20_gu: float | None
+    gloss_60_gu: float | None
+    gloss_85_gu: float | None
+    haze_hu: float | None
+    log_haze: float | None
+    doi: float | None
+    rspec_gu: float | None
+    payload_sha256: str
+    created_by_id: int | None
+
+
+class QcMeasurement(MeasurementPublic):
+    """A colour measurement with its panel's job and part and the gloss reading paired with it."""
+
+    job: str | None = None
+    part: str | None = None
+    gloss: GlossPublic | None = Field(
+        default=None, description="the gloss reading of the same panel paired with this measurement"
+    )
+
+
+class GlossMeasureRequest(BaseModel):
+    """Measure on an attached gloss meter: gloss-only on a panel, or joining a colour measurement."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"panel_id": 1}]})
+
+    instrument_id: Annotated[
+        str, Field(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$", examples=["gloss-gl-0001"])
+    ]
+    panel_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
+    measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
+
+
+class LabSource(BaseModel):
+    """A standard or a sample: a stored measurement, or Lab per aspecular angle given inline."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {"measurement_id": 1},
+                {
+                    "geometries_deg": [15.0, 45.0, 110.0],
+                    "lab": [[82.1, -1.2, -18.5], [55.3, -0.4, -12.0], [31.9, 0.8, -6.2]],
+                },
+            ]
+        },
+    )
+
+    measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
+    geometries_deg: Annotated[list[Angle], Field(min_length=1, max_length=MAX_GEOMETRIES)] | None = None
+    lab: Annotated[list[LabTriple], Field(min_length=1, max_length=MAX_GEOMETRIES)] | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> LabSource:
+        inline = self.geometries_deg is not None or self.lab is not None
+        if (self.measurement_id is not None) == inline:
+            raise ValueError("measurement_id: expected a measurement_id or geometries_deg with lab, not both")
+        if inline:
+            if self.geometries_deg is None or self.lab is None:
+                raise ValueError("lab: expected geometries_deg and lab together")
+            if len(self.lab) != len(self.geometries_deg):
+                raise ValueError(f"lab: expected one [L*, a*, b*] per geometry ({len(self.geometries_deg)})")
+            if len(set(self.geometries_deg)) != len(self.geometries_deg):
+                raise ValueError("geometries_deg: expected distinct angles")
+        return self
+
+
+class CheckRequest(BaseModel):
+    """A sample judged against a standard over their common geometries.
+
+    ``tolerance`` is a tolerance set as ``station qc tolerance --json`` writes it; without it the
+    limits are ``de_limit`` (default the domain's QC limit) at every common geometry with ``formula``.
+    """
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {"standard": {"measurement_id": 1}, "sample": {"measurement_id": 2}, "formula": "din6175"}
+            ]
+        },
+    )
+
+    standard: LabSource
+    sample: LabSource
+    formula: Annotated[str, Field(min_length=1, max_length=32, examples=["din6175", "cie2000"])] | None = None
+    de_limit: Annotated[float, Field(strict=True, gt=0.0, le=100.0, allow_inf_nan=False)] | None = None
+    tolerance: dict[str, Any] | None = None
+
+    @model_validator(mode="after")
+    def _set_or_options(self) -> CheckRequest:
+        if self.tolerance is not None and (self.formula is not None or self.de_limit is not None):
+            raise ValueError("tolerance: expected a tolerance set or formula/de_limit, not both")
+        return self
+
+
+class GeometryVerdictOut(BaseModel):
+    """Differences (sample − standard, CIELAB) and the verdict at one geometry."""
+
+    geometry: str
+    aspecular_deg: float
+    dL: float
+    da: float
+    db: float
+    dC: float
+    dH: float
+    dE: float
+    verdict: Verdict
+    reasons: list[str]
+
+
+class CheckResult(BaseModel):
+    """Overall verdict with the reason, per-geometry verdicts, mean and max ΔE and the worst geometry."""
+
+    verdict: Verdict
+    reason: str
+    formula: str
+    aggregation: str
+    per_geometry: list[GeometryVerdictOut]
+    mean_de: float
+    max_de: float
+    worst_geometry: str
+    standard_measurement_id: int | None = None
+    sample_measurement_id: int | None = None
