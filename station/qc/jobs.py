@@ -12,11 +12,13 @@ and summaries (the correction stands for it). Every query works on SQLite and Po
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 from sqlalchemy import and_, func, or_, select
 from sqlalchemy.orm import Session, aliased
 
@@ -44,6 +46,8 @@ __all__ = [
     "standard_reading",
 ]
 
+#: Step of a design standard's curve in the report, degrees.
+CURVE_STEP_DEG = 1.0
 #: Most rows one search returns (a page); callers page with *offset*.
 SEARCH_LIMIT_MAX = 10_000
 _TEXT_MAX = 64
@@ -334,7 +338,8 @@ def standard_reading(session: Session, standard: Standard, angles: Sequence[floa
 
 @dataclass(frozen=True)
 class StandardInfo:
-    """Which standard a part is judged against."""
+    """Which standard a part is judged against: its Lab at the samples' geometries (*reading*) and, for
+    a design, its Lab every :data:`CURVE_STEP_DEG` degrees over the samples' angle range (*curve*)."""
 
     job: str
     part: str
@@ -342,6 +347,7 @@ class StandardInfo:
     design_id: int | None
     created_at: dt.datetime
     reading: Reading
+    curve: Reading | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -468,8 +474,18 @@ def job_summary(
         if info is None:
             ref = standard_reading(session, std, _design_angles(part_rows, std))
             info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref)
+        if std.design_id is not None:
+            info = dataclasses.replace(info, curve=_curve(session, std, samples))
         out.append(PartSummary(part, info, tuple(samples), tuple(unjudged), "; ".join(notes)))
     return JobSummary(job, name, tolerance, tuple(out), dt.datetime.now(dt.UTC))
+
+
+def _curve(session: Session, std: Standard, samples: Sequence[SampleResult]) -> Reading:
+    """A design standard every CURVE_STEP_DEG over its samples' angle range (the 6-angle set's without)."""
+    angles = [a for smp in samples for a in smp.row.reading.aspecular_deg] or list(ANGLES_6)
+    lo, hi = min(angles), max(angles)
+    grid = np.arange(lo, hi + CURVE_STEP_DEG / 2, CURVE_STEP_DEG)
+    return standard_reading(session, std, [float(a) for a in grid])
 
 
 def _design_angles(rows: Sequence[MeasurementRow], std: Standard) -> tuple[float, ...]:

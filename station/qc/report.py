@@ -200,12 +200,17 @@ def _lab_and_bars_page(summary: JobSummary, part: PartSummary) -> Figure:
     order = np.argsort(std.aspecular_deg)
     ang = np.asarray(std.aspecular_deg)[order]
     lab = std.lab_array()[order]
-    swatch = np.clip(lab_to_display(lab[len(lab) // 2]), 0, 1)
+    mid = int(np.argmin(np.abs(ang - 45.0)))
+    swatch = np.clip(lab_to_display(lab[mid]), 0, 1)
     recent = list(part.samples)[-BAR_SAMPLES:]
     cmap = plt.get_cmap("viridis")
+    curve = part.standard.curve
+    kind = "standard (design)" if curve is not None else "standard"
+    line_ang, line_lab = (ang, lab) if curve is None else (np.asarray(curve.aspecular_deg), curve.lab_array())
     for ch, (ax, name) in enumerate(zip(axes.flat[:3], ("L*", "a*", "b*"), strict=True)):
-        ax.plot(ang, lab[:, ch], "-", color="black", lw=2, label="standard")
-        ax.plot(ang, lab[:, ch], "s", color=swatch, mec="black", ms=6)
+        ax.plot(line_ang, line_lab[:, ch], "-", color="black", lw=1.5, label=kind, zorder=3)
+        ax.plot(ang, lab[:, ch], "s", mfc="none", mec="black", mew=1.5, ms=8, zorder=4)
+        ax.plot([], [], "s", color=swatch, mec="black", ms=8, label=f"standard colour at {ang[mid]:g}°")
         for i, s in enumerate(part.samples):
             r = s.row.reading
             ax.plot(
@@ -242,8 +247,8 @@ def _lab_and_bars_page(summary: JobSummary, part: PartSummary) -> Figure:
     ax.plot(x, limits, "_", color="#c0392b", ms=30, mew=2, label="ΔE limit")
     ax.set_xticks(x, names)
     ax.set_ylabel(f"ΔE ({summary.formula})")
-    ax.set_title(f"ΔE per geometry, newest {len(recent)} samples", fontsize=10)
-    ax.legend(fontsize=7, ncol=2)
+    ax.set_title(f"ΔE per geometry, newest {len(recent)} samples (red edge: fail)", fontsize=10)
+    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.1))
     ax.grid(axis="y", alpha=0.3)
     return fig
 
