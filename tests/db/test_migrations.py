@@ -25,6 +25,7 @@ TABLES = {
     "users",
     "api_tokens",
     "audit_events",
+    "standards",
 }
 
 
