@@ -26,6 +26,7 @@ TABLES = {
     "api_tokens",
     "audit_events",
     "standards",
+    "gloss_readings",
 }
 
 

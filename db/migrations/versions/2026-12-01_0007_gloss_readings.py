@@ -6,7 +6,7 @@ refused by triggers as revision 0002 does for measurements (PostgreSQL reuses it
 ``cacad_refuse_change()`` function).
 
 Revision ID: 0007_gloss_readings
-Revises: 0005_token_expiry
+Revises: 0006_qc_standards
 Create Date: 2026-12-01 20:40:00
 """
 
@@ -18,7 +18,7 @@ import sqlalchemy as sa
 from alembic import op
 
 revision: str = "0007_gloss_readings"
-down_revision: str | Sequence[str] | None = "0005_token_expiry"
+down_revision: str | Sequence[str] | None = "0006_qc_standards"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
 
