@@ -43,6 +43,7 @@ class Scope(enum.StrEnum):
     RECIPES_WRITE = "recipes:write"
     ANALYSIS_WRITE = "analysis:write"
     AUDIT_READ = "audit:read"
+    QC_STANDARDS_WRITE = "qc:standards"
     USERS_MANAGE = "users:manage"
 
 
@@ -66,6 +67,7 @@ ROLE_SCOPES: dict[Role, frozenset[Scope]] = {
             S.LIBRARY_READ,
             S.ANALYSIS_WRITE,
             S.AUDIT_READ,
+            S.QC_STANDARDS_WRITE,
         }
     ),
     Role.STYLIST: frozenset({S.MEASUREMENTS_READ, S.DESIGNS_READ, S.DESIGNS_WRITE, S.LIBRARY_READ}),

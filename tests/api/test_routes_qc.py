@@ -119,6 +119,7 @@ def test_check_inline_and_stored_against_hand_values(api: Api) -> None:
     c, qa = api.client, api.auth("qa")
     panel = _panel(api)
     std_id = _colour(api, panel, STD)
+    smp_id = _colour(api, panel, SMP, minutes=1)
     body = {
         "standard": {"measurement_id": std_id},
         "sample": {"geometries_deg": ANGLES, "lab": SMP},
@@ -136,10 +137,14 @@ def test_check_inline_and_stored_against_hand_values(api: Api) -> None:
     assert out["mean_de"] == pytest.approx(sum(de) / 3) and out["max_de"] == pytest.approx(5.0)
     assert out["per_geometry"][2]["dL"] == pytest.approx(3.0) and out["standard_measurement_id"] == std_id
     assert "110" in out["reason"]
-    # a sample at two of the three angles is judged on those two only
-    two = body | {"sample": {"geometries_deg": ANGLES[:2], "lab": SMP[:2]}}
+    # a standard at two of the sample's three angles is judged at those two only
+    two = body | {
+        "standard": {"geometries_deg": ANGLES[:2], "lab": STD[:2]},
+        "sample": {"measurement_id": smp_id},
+    }
     out2 = c.post(f"{V1}/qc/check", json=two, headers=api.auth("technician")).json()
     assert [g["aspecular_deg"] for g in out2["per_geometry"]] == [15.0, 45.0] and out2["verdict"] == "warn"
+    assert out2["sample_measurement_id"] == smp_id
 
 
 def test_check_refusals_name_the_field(api: Api) -> None:
@@ -157,14 +162,14 @@ def test_check_refusals_name_the_field(api: Api) -> None:
             "measurement_id",
         ),
         (good | {"sample": {"geometries_deg": ANGLES, "lab": SMP[:2]}}, 422, "lab"),
-        (good | {"sample": {"geometries_deg": [25.0], "lab": [SMP[0]]}}, 422, "sample.geometries_deg"),
+        (good | {"sample": {"geometries_deg": [15.0], "lab": [SMP[0]]}}, 422, "sample.geometries"),
         (good | {"sample": {"measurement_id": 999_999}}, 404, "sample.measurement_id"),
         (
             good | {"tolerance": {"geometries": [{"geometry": "45as15", "de": 1}], "bogus": 1}},
             422,
             "tolerance.bogus",
         ),
-        (good | {"tolerance": {"geometries": [{"geometry": "45as15", "de": 1}]}}, 422, "angles"),
+        (good | {"tolerance": {"geometries": [{"geometry": "45as25", "de": 1}]}}, 422, "standard.geometries"),
         (good | {"tolerance": {"geometries": []}, "formula": "cie76"}, 422, "tolerance"),
         (good | {"formula": "audi2000"}, 422, "audi2000"),
     ]
@@ -172,3 +177,180 @@ def test_check_refusals_name_the_field(api: Api) -> None:
         r = c.post(f"{V1}/qc/check", json=body, headers=qa)
         assert r.status_code == code, (words, r.text)
         assert words in r.text, (words, r.text)
+
+
+def _populated(api: Api):
+    from tests.qc.conftest import populate
+
+    with api.client.app.state.sessions() as session:  # type: ignore[attr-defined]
+        job = populate(session)
+        session.commit()
+    return job
+
+
+def test_standards_summary_and_reports(api: Api) -> None:
+    c, qa, tech = api.client, api.auth("qa"), api.auth("technician")
+    job = _populated(api)
+    assert c.get(f"{V1}/qc/jobs/J-100/standards/fender", headers=qa).status_code == 404
+    put = c.put(f"{V1}/qc/jobs/J-100/standards/fender", json={"measurement_id": job.standard_id}, headers=qa)
+    assert put.status_code == 200, put.text
+    assert put.json()["measurement_id"] == job.standard_id and put.json()["design_id"] is None
+    # a second standard for the same part needs replace; a technician may not set standards at all
+    again = c.put(
+        f"{V1}/qc/jobs/J-100/standards/fender", json={"measurement_id": job.sample_ids[0]}, headers=qa
+    )
+    assert again.status_code == 422 and again.json()["detail"][0]["loc"][-1] == "replace"
+    assert (
+        c.put(f"{V1}/qc/jobs/J-100/standards/bumper", json={"design_id": 1}, headers=tech).status_code == 403
+    )
+    bumper = c.put(
+        f"{V1}/qc/jobs/J-100/standards/bumper", json={"measurement_id": job.correction_id}, headers=qa
+    )
+    assert bumper.status_code == 200
+    got = c.get(f"{V1}/qc/jobs/J-100/standards/fender", headers=tech).json()
+    assert got["measurement_id"] == job.standard_id and got["created_by_id"] is not None
+    jobs = c.get(f"{V1}/qc/jobs", headers=tech).json()
+    assert [(j["job"], j["parts"]) for j in jobs] == [("J-100", ["bumper", "fender"]), ("J-200", ["door"])]
+
+    s = c.get(f"{V1}/qc/jobs/J-100/summary", params={"formula": "cie76"}, headers=qa)
+    assert s.status_code == 200, s.text
+    parts = {p["part"]: p for p in s.json()["parts"]}
+    fender = parts["fender"]
+    # ΔE*ab of each sample = |offset| at every geometry (the offsets are the same at all three); limit 1
+    from tests.qc.conftest import FENDER_OFFSETS
+
+    expected = [math.sqrt(sum(v * v for v in off)) for off in FENDER_OFFSETS]
+    got_de = [smp["qc"]["max_de"] for smp in fender["samples"]]
+    assert got_de == pytest.approx(expected, abs=1e-9)
+    assert [smp["qc"]["verdict"] for smp in fender["samples"]] == [
+        "fail" if d > 1.0 else "pass" for d in expected
+    ]
+    assert (
+        fender["counts"] == {"pass": 6, "warn": 0, "fail": 1}
+        and fender["standard"]["measurement_id"] == job.standard_id
+    )
+    worst = fender["samples"][5]["qc"]
+    assert "ΔE 2.5 beyond 1" in worst["reason"] and all(g["verdict"] == "fail" for g in worst["per_geometry"])
+    # bumper: the correction (50.3, 0, 0) is the standard, the second sample is (50, 0.6, 0): √(0.09 + 0.36)
+    assert [smp["qc"]["max_de"] for smp in parts["bumper"]["samples"]] == pytest.approx([math.sqrt(0.45)])
+    assert s.json()["counts"] == {"pass": 7, "warn": 0, "fail": 1}
+
+    pdf = c.get(f"{V1}/qc/jobs/J-100/report.pdf", params={"formula": "cie76"}, headers=qa)
+    assert pdf.status_code == 200 and pdf.headers["content-type"] == "application/pdf"
+    assert pdf.content.startswith(b"%PDF") and len(pdf.content) > 10_000
+    csv_text = c.get(f"{V1}/qc/jobs/J-100/report.csv", params={"formula": "cie76"}, headers=qa)
+    assert csv_text.status_code == 200 and csv_text.headers["content-type"].startswith("text/csv")
+    import csv
+    import io
+
+    rows = list(csv.DictReader(io.StringIO(csv_text.text)))
+    assert len(rows) == (7 + 1) * 3  # one row per judged sample and geometry
+    far = [r for r in rows if r["part"] == "fender" and r["measurement_id"] == str(job.sample_ids[5])]
+    assert [float(r["dE"]) for r in far] == pytest.approx([2.5] * 3)
+
+    bad = [
+        (c.get(f"{V1}/qc/jobs/J-404/summary", headers=qa), 422, "job"),
+        (c.get(f"{V1}/qc/jobs/J-100/summary", params={"formula": "cmc2"}, headers=qa), 422, "formula"),
+        (c.get(f"{V1}/qc/jobs/J-100/standards/wing", headers=qa), 422, "part"),
+        (c.put(f"{V1}/qc/jobs/J-100/standards/door", json={}, headers=qa), 422, "standard"),
+        (
+            c.put(f"{V1}/qc/jobs/J-100/standards/door", json={"measurement_id": 999_999}, headers=qa),
+            422,
+            "measurement_id",
+        ),
+        (
+            c.put(
+                f"{V1}/qc/jobs/J-100/standards/door", json={"measurement_id": job.superseded_id}, headers=qa
+            ),
+            422,
+            "superseded",
+        ),
+    ]
+    for r, code, words in bad:
+        assert r.status_code == code, (words, r.text)
+        assert words in r.text, (words, r.text)
+
+
+def _spectral(api: Api, panel: int, curves: list[list[float]], minutes: float) -> int:
+    body = make_reading(31, int(minutes), panel_id=panel).model_dump(mode="json")
+    body |= {
+        "client_id": str(uuid.uuid4()),
+        "geometries_deg": ANGLES,
+        "lab": STD,
+        "wavelengths_nm": [400.0 + 10 * k for k in range(31)],
+        "spectra": curves,
+    }
+    r = api.client.post(f"{V1}/measurements", json=body, headers=api.auth("technician"))
+    assert r.status_code == 201, r.text
+    return r.json()["id"]
+
+
+def test_metamerism_and_repeats(api: Api) -> None:
+    import colour
+    import numpy as np
+
+    c, qa = api.client, api.auth("qa")
+    panel = _panel(api)
+    wl = np.arange(400, 701, 10)
+    flat = [[0.5] * 31, [0.3] * 31, [0.1] * 31]
+    ramp = [
+        list(0.2 + 0.6 * (wl - 400) / 300),
+        list(0.1 + 0.4 * (wl - 400) / 300),
+        list(0.05 + 0.1 * (wl - 400) / 300),
+    ]
+    std_id, smp_id = _spectral(api, panel, flat, 0), _spectral(api, panel, ramp, 1)
+    same = c.post(
+        f"{V1}/qc/metamerism",
+        json={"standard_measurement_id": std_id, "sample_measurement_id": std_id},
+        headers=qa,
+    )
+    assert same.status_code == 200, same.text
+    assert all(g["MI_A"] == 0 and g["MI_F11"] == 0 and g["dE_D65"] == 0 for g in same.json()["per_geometry"])
+    r = c.post(
+        f"{V1}/qc/metamerism",
+        json={"standard_measurement_id": std_id, "sample_measurement_id": smp_id, "formula": "cie76"},
+        headers=qa,
+    ).json()
+    # independent: colour-science Lab under D65 and A (1964 10°), sample corrected additively under D65
+    shape = colour.SpectralShape(400, 700, 10)
+    cmfs = colour.MSDS_CMFS["CIE 1964 10 Degree Standard Observer"].copy().align(shape)
+
+    def lab(curve: list[float], ill: str) -> np.ndarray:
+        sd_ill = colour.SDS_ILLUMINANTS[ill].copy().align(shape)
+        xyz = colour.sd_to_XYZ(colour.SpectralDistribution(dict(zip(wl, curve, strict=True))), cmfs, sd_ill)
+        white = colour.sd_to_XYZ(colour.sd_ones(shape), cmfs, sd_ill)
+        return colour.XYZ_to_Lab(xyz / 100, colour.XYZ_to_xy(white / 100))
+
+    for i, g in enumerate(r["per_geometry"]):
+        d65 = lab(ramp[i], "D65") - lab(flat[i], "D65")
+        a = lab(ramp[i], "A") - lab(flat[i], "A")
+        assert g["dE_D65"] == pytest.approx(float(np.linalg.norm(d65)), abs=0.05)
+        assert g["MI_A"] == pytest.approx(float(np.linalg.norm(a - d65)), abs=0.05)
+    no_spectra = _colour(api, panel, STD, minutes=5)
+    r2 = c.post(
+        f"{V1}/qc/metamerism",
+        json={"standard_measurement_id": no_spectra, "sample_measurement_id": smp_id},
+        headers=qa,
+    )
+    assert r2.status_code == 422 and "standard.spectra" in r2.text
+
+    labs = [[[50.0, 1.0, 2.0]] * 3, [[50.6, 1.0, 2.0]] * 3, [[49.7, 1.3, 2.0]] * 3]
+    ids = [_colour(api, panel, lab3, minutes=10 + k) for k, lab3 in enumerate(labs)]
+    rep = c.post(f"{V1}/qc/repeats", json={"measurement_ids": ids}, headers=qa)
+    assert rep.status_code == 200, rep.text
+    out = rep.json()
+    assert out["n"] == 3 and [row["measurement_id"] for row in out["readings"]] == ids
+    import statistics
+
+    for g in out["per_geometry"]:
+        assert g["mean"] == pytest.approx([50.1, 1.1, 2.0])
+        assert g["sd"] == pytest.approx(
+            [statistics.stdev([50.0, 50.6, 49.7]), statistics.stdev([1.0, 1.0, 1.3]), 0.0]
+        )
+    for body, code, words in [
+        ({"measurement_ids": []}, 422, "measurement_ids"),
+        ({"measurement_ids": [ids[0], ids[0]]}, 422, "distinct"),
+        ({"measurement_ids": [ids[0], 999_999]}, 404, "measurement_ids[1]"),
+    ]:
+        resp = c.post(f"{V1}/qc/repeats", json=body, headers=qa)
+        assert resp.status_code == code and words in resp.text, resp.text

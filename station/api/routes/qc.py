@@ -1,4 +1,5 @@
-"""Colour QC: ``/api/v1/qc`` (gloss readings, the paired measurement view, checks against standards)."""
+"""Colour QC: ``/api/v1/qc`` (gloss readings, the paired measurement view, checks against standards,
+standards per job and part, job summaries, metamerism, repeat readings, PDF/CSV reports)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import asyncio
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request, Response, status
+from fastapi import Path as PathParam
 
 from db.models import User
 from station.api.deps import SessionDep, scoped
@@ -14,7 +16,21 @@ from station.api.instruments import InstrumentHub
 from station.api.routes.measurements import Filters
 from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.schemas.panels import Job, Part
-from station.api.schemas.qc import CheckRequest, CheckResult, GlossMeasureRequest, GlossPublic, QcMeasurement
+from station.api.schemas.qc import (
+    CheckRequest,
+    CheckResult,
+    GlossMeasureRequest,
+    GlossPublic,
+    JobOut,
+    JobSummaryOut,
+    MetamerismOut,
+    MetamerismRequest,
+    QcMeasurement,
+    RepeatsOut,
+    RepeatsRequest,
+    StandardOut,
+    StandardSet,
+)
 from station.api.security import Scope
 from station.api.services import qc as service
 from station.ingest import GlossRecord
@@ -106,3 +122,86 @@ async def measure_gloss(
 def check(session: SessionDep, _user: Reader, body: CheckRequest) -> CheckResult:
     """Pass / warn / fail of a sample against a standard (stored measurements or inline Lab), per geometry and overall."""
     return service.check(session=session, request=body)
+
+
+JobPath = Annotated[
+    str, PathParam(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f/]+$", examples=["J-2026-0113"])
+]
+Formula = Annotated[
+    str | None,
+    Query(min_length=1, max_length=32, description="din6175-2 | cie2000 | cie94 | cie76 (default din6175-2)"),
+]
+StandardWriter = Annotated[User, scoped(Scope.QC_STANDARDS_WRITE)]
+
+
+@router.get("/jobs", response_model=list[JobOut])
+def list_jobs(
+    session: SessionDep,
+    _user: Reader,
+    contains: Annotated[
+        str | None, Query(min_length=1, max_length=64, description="part of the job name")
+    ] = None,
+) -> list[JobOut]:
+    """Every job with its parts, panel and measurement counts and its first and last reading time."""
+    return service.list_jobs(session=session, contains=contains)
+
+
+@router.put("/jobs/{job}/standards/{part}", response_model=StandardOut, responses=NOT_FOUND)
+def set_standard(
+    session: SessionDep, user: StandardWriter, job: JobPath, part: Part, body: StandardSet
+) -> StandardOut:
+    """Make a stored measurement or a design the standard of a job's part (``replace`` to change it)."""
+    return service.set_standard(session=session, actor=user, job=job, part=part, body=body)
+
+
+@router.get("/jobs/{job}/standards/{part}", response_model=StandardOut, responses=NOT_FOUND)
+def get_standard(session: SessionDep, _user: Reader, job: JobPath, part: Part) -> StandardOut:
+    """The standard of a job's part (404 when none is set)."""
+    return service.get_standard(session=session, job=job, part=part)
+
+
+@router.get("/jobs/{job}/summary", response_model=JobSummaryOut)
+def job_summary(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> JobSummaryOut:
+    """Every part of the job with its standard and each sample's pass / warn / fail per geometry, with the reason."""
+    return service.job_summary(session=session, job=job, formula=formula)
+
+
+@router.get(
+    "/jobs/{job}/report.pdf",
+    response_class=Response,
+    responses={200: {"content": {"application/pdf": {"schema": {"type": "string", "format": "binary"}}}}},
+)
+def report_pdf(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> Response:
+    """The job's QC report: verdict table per geometry, L*a*b* against angle, ΔE bars and trend, as PDF."""
+    body = service.report_pdf(session=session, job=job, formula=formula)  # a worker thread: a sync route
+    return Response(
+        body,
+        media_type="application/pdf",
+        headers={"Content-Disposition": 'attachment; filename="qc-report.pdf"'},
+    )
+
+
+@router.get(
+    "/jobs/{job}/report.csv",
+    response_class=Response,
+    responses={200: {"content": {"text/csv": {"schema": {"type": "string"}}}}},
+)
+def report_csv(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> Response:
+    """The job's QC report as CSV: one row per sample and geometry with standard and sample Lab, differences and verdicts."""
+    return Response(
+        service.report_csv(session=session, job=job, formula=formula),
+        media_type="text/csv",
+        headers={"Content-Disposition": 'attachment; filename="qc-report.csv"'},
+    )
+
+
+@router.post("/metamerism", response_model=MetamerismOut, responses=NOT_FOUND)
+def metamerism(session: SessionDep, _user: Reader, body: MetamerismRequest) -> MetamerismOut:
+    """Metamerism index of a sample against its standard from D65 to A and F11, per geometry."""
+    return service.metamerism_of(session=session, request=body)
+
+
+@router.post("/repeats", response_model=RepeatsOut, responses=NOT_FOUND)
+def repeats(session: SessionDep, _user: Reader, body: RepeatsRequest) -> RepeatsOut:
+    """Average of repeat readings of one panel with the sd per geometry and the outliers flagged."""
+    return service.repeats_of(session=session, request=body)

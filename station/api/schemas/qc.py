@@ -153,3 +153,166 @@ class CheckResult(BaseModel):
     worst_geometry: str
     standard_measurement_id: int | None = None
     sample_measurement_id: int | None = None
+
+
+class StandardSet(BaseModel):
+    """Make a stored measurement or a design the standard of a job and part (exactly one id)."""
+
+    model_config = ConfigDict(
+        extra="forbid", json_schema_extra={"examples": [{"measurement_id": 1, "notes": "master panel"}]}
+    )
+
+    measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
+    design_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
+    notes: Annotated[str, Field(max_length=4000)] = ""
+    replace: Annotated[bool, Field(strict=True, description="replace the part's existing standard")] = False
+
+
+class StandardOut(BaseModel):
+    """The standard of a job and part (a reference measurement or a design) and who set it when."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    job: str
+    part: str
+    measurement_id: int | None
+    design_id: int | None
+    notes: str
+    created_at: dt.datetime
+    created_by_id: int | None
+
+
+class JobOut(BaseModel):
+    """A job: its parts, panel and measurement counts, first and last reading time."""
+
+    job: str
+    parts: list[str]
+    panels: int
+    measurements: int
+    first_measured: dt.datetime | None
+    last_measured: dt.datetime | None
+
+
+class StandardLab(BaseModel):
+    """A part's standard as judged: its ids and its Lab at the samples' geometries."""
+
+    job: str
+    part: str
+    measurement_id: int | None
+    design_id: int | None
+    created_at: dt.datetime
+    geometries: list[str]
+    lab: list[list[float]]
+
+
+class SampleVerdict(BaseModel):
+    """One sample of a part, its Lab per geometry and its verdict against the part's standard."""
+
+    measurement_id: int
+    panel_id: int | None
+    job: str | None
+    part: str | None
+    instrument: str
+    operator: str
+    measured_at: dt.datetime
+    geometries: list[str]
+    lab: list[list[float]]
+    qc: CheckResult
+
+
+class PartSummaryOut(BaseModel):
+    """A part: its standard (``null`` when none is set), pass/warn/fail counts, samples and those unjudged."""
+
+    part: str
+    standard: StandardLab | None
+    counts: dict[str, int]
+    samples: list[SampleVerdict]
+    unjudged: list[int]
+    note: str
+
+
+class JobSummaryOut(BaseModel):
+    """Every part of a job with its standard and each sample's verdict, oldest sample first."""
+
+    job: str
+    formula: str
+    tolerance: dict[str, Any] | None
+    counts: dict[str, int]
+    parts: list[PartSummaryOut]
+    generated_at: dt.datetime
+
+
+class MetamerismRequest(BaseModel):
+    """Two stored measurements with spectra (400–700 nm, 10 nm): the standard and the sample."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={"examples": [{"standard_measurement_id": 1, "sample_measurement_id": 2}]},
+    )
+
+    standard_measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
+    sample_measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
+    formula: Annotated[str, Field(min_length=1, max_length=32)] = "cie2000"
+
+
+class MetamerismGeometry(BaseModel):
+    """ΔE under D65 and the metamerism index under A and F11 at one geometry."""
+
+    geometry: str
+    aspecular_deg: float
+    dE_D65: float
+    MI_A: float
+    MI_F11: float
+
+
+class MetamerismOut(BaseModel):
+    """The metamerism index (D65 → A, F11) per geometry and its maximum per test illuminant."""
+
+    formula: str
+    reference_illuminant: str
+    per_geometry: list[MetamerismGeometry]
+    max_index: dict[str, float]
+
+
+class RepeatsRequest(BaseModel):
+    """Repeat readings of one panel (stored measurement ids, N >= 1)."""
+
+    model_config = ConfigDict(
+        extra="forbid", json_schema_extra={"examples": [{"measurement_ids": [1, 2, 3]}]}
+    )
+
+    measurement_ids: Annotated[
+        list[Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]], Field(min_length=1, max_length=100)
+    ]
+
+
+class RepeatGeometry(BaseModel):
+    """Mean Lab and its standard deviation (per channel and as ΔE*ab) at one geometry."""
+
+    geometry: str
+    aspecular_deg: float
+    mean: list[float]
+    sd: list[float] | None
+    sd_de: float | None
+
+
+class RepeatReading(BaseModel):
+    """One repeat reading: its ΔE*ab to the centre, robust z and outlier flag."""
+
+    index: int
+    measurement_id: int
+    de_to_centre: float
+    robust_z: float | None
+    outlier: bool
+
+
+class RepeatsOut(BaseModel):
+    """Mean of N readings with per-geometry sd and outlier flags (the rule named)."""
+
+    n: int
+    per_geometry: list[RepeatGeometry]
+    readings: list[RepeatReading]
+    outliers: list[int]
+    mean_without_outliers: list[list[float]]
+    rule: str

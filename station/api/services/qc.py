@@ -7,7 +7,9 @@ panels on the page, so a reading pairs the same way whatever page it is seen on.
 
 from __future__ import annotations
 
+import tempfile
 from collections.abc import Sequence
+from pathlib import Path
 
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
@@ -15,14 +17,32 @@ from sqlalchemy.orm import Session
 from db.models import GlossReading, Measurement, Panel, User
 from station.api.errors import NotFoundError
 from station.api.schemas.measurements import MeasurementPublic, MeasurementQuery
-from station.api.schemas.qc import CheckRequest, CheckResult, GlossPublic, LabSource, QcMeasurement
+from station.api.schemas.qc import (
+    CheckRequest,
+    CheckResult,
+    GlossPublic,
+    JobOut,
+    JobSummaryOut,
+    LabSource,
+    MetamerismOut,
+    MetamerismRequest,
+    QcMeasurement,
+    RepeatsOut,
+    RepeatsRequest,
+    StandardOut,
+    StandardSet,
+)
+from station.api.services import audit
 from station.api.services import measurements as measurement_service
 from station.errors import InputError
 from station.ingest import GlossRecord, GlossRow, pair_gloss, store_gloss
-from station.model.difference import validate_method
-from station.model.domain import QC_DE_LIMIT, QC_FORMULA
-from station.model.errors import ModelInputError
-from station.model.tolerance import FORMULAS, ToleranceSet, judge
+from station.model.domain import QC_FORMULA
+from station.model.tolerance import ToleranceSet
+from station.qc import jobs
+from station.qc.check import check_pair, formula_name
+from station.qc.metamerism import metamerism
+from station.qc.readings import Reading, reading_from_measurement
+from station.qc.repeats import summarise
 
 
 def get_gloss(*, session: Session, gloss_id: int) -> GlossPublic:
@@ -110,57 +130,139 @@ def get_measurement(*, session: Session, measurement_id: int) -> QcMeasurement:
     return paired(session=session, measurements=[m])[0]
 
 
-def _lab_of(session: Session, source: LabSource, field: str) -> tuple[dict[float, list[float]], int | None]:
-    """Lab by aspecular angle (degrees) of *source*; a stored measurement must exist (404)."""
+def _reading(session: Session, source: LabSource, field: str) -> Reading:
+    """*source* as a QC reading: a stored measurement (404 when missing) or the inline Lab."""
     if source.measurement_id is not None:
         m = session.get(Measurement, source.measurement_id)
         if m is None:
             raise NotFoundError(f"{field}.measurement_id: measurement {source.measurement_id} not found")
-        pairs = zip(m.geometries_deg, m.lab, strict=True)
-        return {float(a): [float(v) for v in lab] for a, lab in pairs}, m.id
+        return reading_from_measurement(m, sample=f"measurement {m.id}")
     angles, labs = source.geometries_deg or [], source.lab or []  # both given: the schema's rule
-    return {float(a): list(lab) for a, lab in zip(angles, labs, strict=True)}, None
+    return Reading(tuple(angles), tuple((lab[0], lab[1], lab[2]) for lab in labs), sample=field, where=field)
 
 
-def tolerance_for(request: CheckRequest, angles: Sequence[float]) -> ToleranceSet:
-    """The tolerance set of *request*: its own, or ``de_limit`` at every angle with ``formula``."""
+def _tolerance(request: CheckRequest, angles: Sequence[float]) -> ToleranceSet | None:
+    """The request's tolerance set, or ``de_limit`` at every angle, or ``None`` (the product default)."""
     if request.tolerance is not None:
         return ToleranceSet.from_dict(request.tolerance)
-    formula = QC_FORMULA
-    if request.formula is not None:
-        try:
-            formula = validate_method(request.formula)
-        except ModelInputError as exc:
-            raise InputError("formula", " | ".join(FORMULAS), request.formula) from exc
-        if formula not in FORMULAS and formula != "audi2000":
-            raise InputError("formula", " | ".join(FORMULAS), request.formula)
-    return ToleranceSet.uniform(
-        angles,
-        QC_DE_LIMIT if request.de_limit is None else request.de_limit,
-        formula=formula,
-        mean_limit=QC_DE_LIMIT if request.de_limit is None else request.de_limit,
-    )
+    if request.de_limit is not None:
+        return ToleranceSet.uniform(
+            tuple(angles),
+            request.de_limit,
+            formula=formula_name(request.formula or QC_FORMULA),
+            mean_limit=request.de_limit,
+        )
+    return None
 
 
 def check(*, session: Session, request: CheckRequest) -> CheckResult:
-    """Verdict of the sample against the standard over their common geometries (``station.model.tolerance.judge``).
+    """Verdict of the sample against the standard (``station.qc.check.check_pair``).
 
-    A tolerance set given with the request must cover those geometries (422 naming ``angles``).
+    Judged at every geometry of the standard (or of the tolerance set), each of which the sample must
+    have (422 naming ``sample.geometries``).
     """
-    std, std_id = _lab_of(session, request.standard, "standard")
-    smp, smp_id = _lab_of(session, request.sample, "sample")
-    angles = sorted(set(std) & set(smp))
-    if not angles:
-        raise InputError(
-            "sample.geometries_deg",
-            "at least one aspecular angle the standard has ("
-            + ", ".join(f"{a:g}" for a in sorted(std))
-            + ")",
-            sorted(smp),
-        )
-    verdict = judge(
-        [std[a] for a in angles], [smp[a] for a in angles], angles, tolerance_for(request, angles)
-    )
+    std = _reading(session, request.standard, "standard")
+    smp = _reading(session, request.sample, "sample")
+    tol = _tolerance(request, std.aspecular_deg)
+    verdict = check_pair(std, smp, tol, request.formula if tol is None else None)
     return CheckResult.model_validate(
-        verdict.to_dict() | {"standard_measurement_id": std_id, "sample_measurement_id": smp_id}
+        verdict.to_dict()
+        | {
+            "standard_measurement_id": request.standard.measurement_id,
+            "sample_measurement_id": request.sample.measurement_id,
+        }
     )
+
+
+def set_standard(*, session: Session, actor: User, job: str, part: str, body: StandardSet) -> StandardOut:
+    """Make a measurement or design the standard of *job*/*part* (``station.qc.jobs.set_standard``), audited."""
+    std = jobs.set_standard(
+        session,
+        job,
+        part,
+        measurement_id=body.measurement_id,
+        design_id=body.design_id,
+        notes=body.notes,
+        created_by_id=actor.id,
+        replace=body.replace,
+    )
+    audit.record(
+        session=session,
+        actor=actor,
+        action="qc.standard.set",
+        entity="standard",
+        entity_id=std.id,
+        job=job,
+        part=part,
+        measurement_id=body.measurement_id,
+        design_id=body.design_id,
+        replace=body.replace,
+    )
+    session.commit()
+    return StandardOut.model_validate(std)
+
+
+def get_standard(*, session: Session, job: str, part: str) -> StandardOut:
+    """The standard of *job*/*part*, or :class:`NotFoundError`."""
+    std = jobs.get_standard(session, job, part)
+    if std is None:
+        raise NotFoundError(f"no standard set for {job}/{part}")
+    return StandardOut.model_validate(std)
+
+
+def list_jobs(*, session: Session, contains: str | None) -> list[JobOut]:
+    """Every job (optionally whose name contains *contains*) with its parts and counts."""
+    return [JobOut.model_validate(j.to_dict()) for j in jobs.list_jobs(session, contains)]
+
+
+def _summary(session: Session, job: str, formula: str | None) -> jobs.JobSummary:
+    return jobs.job_summary(session, job, formula=formula)
+
+
+def job_summary(*, session: Session, job: str, formula: str | None) -> JobSummaryOut:
+    """Every part's standard and each sample's verdict (``station.qc.jobs.job_summary``)."""
+    return JobSummaryOut.model_validate(_summary(session, job, formula).to_dict())
+
+
+def report_pdf(*, session: Session, job: str, formula: str | None) -> bytes:
+    """The job's QC report as PDF bytes (``station.qc.report.write_pdf``)."""
+    from station.qc import report  # matplotlib loads here, not with the service
+
+    summary = _summary(session, job, formula)
+    with tempfile.TemporaryDirectory() as tmp:
+        return report.write_pdf(summary, Path(tmp) / "report.pdf").read_bytes()
+
+
+def report_csv(*, session: Session, job: str, formula: str | None) -> str:
+    """The job's QC report as CSV text, one row per sample and geometry (``station.qc.report.write_csv``)."""
+    from station.qc import report
+
+    summary = _summary(session, job, formula)
+    with tempfile.TemporaryDirectory() as tmp:
+        return report.write_csv(summary, Path(tmp) / "report.csv").read_text(encoding="utf-8")
+
+
+def _stored(session: Session, measurement_id: int, field: str) -> Reading:
+    m = session.get(Measurement, measurement_id)
+    if m is None:
+        raise NotFoundError(f"{field}: measurement {measurement_id} not found")
+    return reading_from_measurement(m, sample=f"measurement {m.id}")
+
+
+def metamerism_of(*, session: Session, request: MetamerismRequest) -> MetamerismOut:
+    """Metamerism index D65 → A, F11 per geometry of two stored measurements (``station.qc.metamerism``)."""
+    std = _stored(session, request.standard_measurement_id, "standard_measurement_id")
+    smp = _stored(session, request.sample_measurement_id, "sample_measurement_id")
+    return MetamerismOut.model_validate(metamerism(std, smp, request.formula).to_dict())
+
+
+def repeats_of(*, session: Session, request: RepeatsRequest) -> RepeatsOut:
+    """Mean, sd per geometry and outliers of repeat readings (``station.qc.repeats.summarise``)."""
+    ids = request.measurement_ids
+    if len(set(ids)) != len(ids):
+        raise InputError("measurement_ids", "distinct measurement ids", ids)
+    readings = [_stored(session, mid, f"measurement_ids[{i}]") for i, mid in enumerate(ids)]
+    out = summarise(readings).to_dict()
+    for row in out["readings"]:
+        row["measurement_id"] = ids[row["index"]]
+    return RepeatsOut.model_validate(out)
