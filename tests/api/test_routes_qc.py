@@ -354,3 +354,62 @@ def test_metamerism_and_repeats(api: Api) -> None:
     ]:
         resp = c.post(f"{V1}/qc/repeats", json=body, headers=qa)
         assert resp.status_code == code and words in resp.text, resp.text
+
+
+def test_qc_journey_over_real_http(tmp_path) -> None:
+    """``station serve`` as a process: gloss meter and MA6 simulators measure a standard and a sample,
+    QA sets the standard, checks the sample, reads the job summary and downloads the CSV report (the PDF
+    is checked in-process above: rendering it here would double this test's time)."""
+    import httpx
+
+    from tests.api.test_serve import _serve
+
+    with _serve(tmp_path, "--simulators", "ma6,gloss") as (base, token):
+        auth = {"Authorization": f"Bearer {token}"}
+        with httpx.Client(base_url=base + V1, timeout=60) as http:
+            ids = {i["kind"]: i["id"] for i in http.get("/instruments", headers=auth).json()}
+            taken = []
+            for _ in range(2):
+                panel = http.post("/panels", json={"job": "J-HTTP", "part": "mirror"}, headers=auth).json()[
+                    "id"
+                ]
+                r = http.post(
+                    f"/instruments/{ids['spectro']}/measure",
+                    params={"gloss_instrument_id": ids["gloss"]},
+                    json={"panel_id": panel},
+                    headers=auth,
+                )
+                assert r.status_code == 201, r.text
+                taken.append(r.json())
+            std, smp = (t["measurement"]["id"] for t in taken)
+            assert (
+                http.put(
+                    "/qc/jobs/J-HTTP/standards/mirror", json={"measurement_id": std}, headers=auth
+                ).status_code
+                == 200
+            )
+            check = http.post(
+                "/qc/check",
+                json={
+                    "standard": {"measurement_id": std},
+                    "sample": {"measurement_id": smp},
+                    "formula": "cie76",
+                },
+                headers=auth,
+            ).json()
+            s_lab, p_lab = (t["measurement"]["lab"] for t in taken)
+            assert [g["dE"] for g in check["per_geometry"]] == pytest.approx(
+                [_de76(a, b) for a, b in zip(s_lab, p_lab, strict=True)], abs=1e-9
+            )
+            summary = http.get("/qc/jobs/J-HTTP/summary", params={"formula": "cie76"}, headers=auth).json()
+            (part,) = summary["parts"]
+            assert [x["measurement_id"] for x in part["samples"]] == [smp]
+            assert part["samples"][0]["qc"]["verdict"] == check["verdict"]
+            view = http.get("/qc/measurements", params={"job": "J-HTTP"}, headers=auth).json()
+            assert {m["gloss"]["id"] for m in view["data"]} == {t["gloss_reading_id"] for t in taken}
+            csv_r = http.get("/qc/jobs/J-HTTP/report.csv", headers=auth)
+            assert (
+                csv_r.status_code == 200 and len(csv_r.text.strip().splitlines()) == 1 + 6
+            )  # header + 6 geometries
+            bad = http.post("/qc/check", json={"standard": {"measurement_id": std}}, headers=auth)
+            assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][-1] == "sample"
