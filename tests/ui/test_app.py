@@ -28,6 +28,7 @@ def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
         "Library",
         "Instruments",
         "QA",
+        "QC",
     ]
     assert not win.undo_action.isEnabled()
     panel = win.designer_panel

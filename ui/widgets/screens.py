@@ -83,6 +83,12 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
 
         return QAScreen(window.designer, window.store, send_to_formulation)
 
+    def qc() -> QWidget:
+        from ui.models.qc import LocalQc, QcModel, ServiceQc
+        from ui.widgets.qc_screen import QcScreen
+
+        return QcScreen(QcModel(ServiceQc(window.service) if window.service is not None else LocalQc()))
+
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
 
@@ -94,4 +100,5 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         ("Library", library),
         ("Instruments", LazyScreen(instruments)),
         ("QA", LazyScreen(qa)),
+        ("QC", LazyScreen(qc)),
     ]
