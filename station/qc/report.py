@@ -297,7 +297,10 @@ def _trend(fig: Figure, summary: JobSummary, part: PartSummary) -> None:
             ax.axhline(limit, color="#c0392b", lw=1.2, label=f"limit {limit:g}")
         ax.set_ylabel(f"ΔE {name}", fontsize=8)
         ax.tick_params(labelsize=7)
-        ax.set_ylim(bottom=0)
+        tops = [*values, limit if np.isfinite(limit) else 0.0]
+        if len(values) >= 2:
+            tops.append(cl.ucl)
+        ax.set_ylim(0, 1.15 * max(tops) or 1.0)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6, loc="upper left", ncol=4)
     if len(axes):
