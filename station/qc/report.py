@@ -297,7 +297,10 @@ def _trend(fig: Figure, summary: JobSummary, part: PartSummary) -> None:
             ax.axhline(limit, color="#c0392b", lw=1.2, label=f"limit {limit:g}")
         ax.set_ylabel(f"ΔE {name}", fontsize=8)
         ax.tick_params(labelsize=7)
-        ax.set_ylim(bottom=0)
+        tops = [*values, limit if np.isfinite(limit) else 0.0]
+        if len(values) >= 2:
+            tops.append(cl.ucl)
+        ax.set_ylim(0, 1.15 * max(tops) or 1.0)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6, loc="upper left", ncol=4)
     if len(axes):
@@ -332,13 +335,20 @@ def report_figures(summary: JobSummary) -> list[Callable[[], Figure]]:
     return pages
 
 
+def _writable(path: str | Path) -> Path:
+    out = Path(path)
+    if not out.parent.is_dir():
+        raise QcInputError("out", "a file in an existing folder", str(out))
+    return out
+
+
 def write_pdf(summary: JobSummary, path: str | Path, progress: Progress | None = None) -> Path:
     """Write the job's QC report as a PDF at *path* (module docstring for the pages); returns the path.
 
     The file is written next to *path* and moved into place at the end, so a failed run leaves no
     half-written report.
     """
-    out = Path(path)
+    out = _writable(path)
     tmp = out.with_name(out.name + ".part")
     pages = report_figures(summary)
     try:
@@ -378,9 +388,9 @@ def write_trend_png(summary: JobSummary, part: str, path: str | Path, dpi: int =
         )
     if not match[0].samples:
         raise QcInputError("part", f"a part with judged samples ({match[0].note or 'none judged'})", part)
+    out = _writable(path)
     fig = plt.figure(figsize=(10, 2.2 * max(1, len(_geometries(match[0]))) + 0.8), constrained_layout=True)
     _trend(fig, summary, match[0])
-    out = Path(path)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out
@@ -435,7 +445,7 @@ def _design_lab(s: SampleResult, angle: float) -> tuple[float, float, float]:
 
 def write_csv(summary: JobSummary, path: str | Path) -> Path:
     """Write one row per sample and geometry (:data:`CSV_COLUMNS`) as UTF-8 CSV at *path*."""
-    out = Path(path)
+    out = _writable(path)
     with out.open("w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(CSV_COLUMNS)
