@@ -9,7 +9,9 @@ DEVICE is ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss`` (a simulator subprocess star
 ``station.ingest.record_from_reading``'s and it goes through ``station.ingest.Ingestor`` (exactly once by
 client id; queued in ``--outbox`` when the database is away and sent by the next ``--store``) into URL,
 or by default the database ``station serve`` uses (``$CACAD_DATABASE_URL``, else ``station.sqlite3`` in
-``$CACAD_DATA_DIR`` or ``./var``), upgraded to the current schema on first use.
+``$CACAD_DATA_DIR`` or ``./var``), upgraded to the current schema on first use. A gloss meter's reading
+(20/60/85 GU, haze, DOI, Rspec) is stored as a gloss-only reading (``station.ingest.store_gloss``) on the
+``--panel`` given, directly (not queued): the QC views pair it with a colour reading of the same panel.
 """
 
 from __future__ import annotations
@@ -159,6 +161,44 @@ def _receipt(ingestor: Any, receipt: Any) -> dict[str, Any]:
     }
 
 
+def _stored_gloss_id(ingestor: Any, client_id: uuid.UUID) -> int | None:
+    """The gloss reading stored under *client_id* in the ``--store`` database, or ``None``."""
+    from sqlalchemy import select
+
+    from db.models import GlossReading as GlossRow
+
+    with ingestor.destination.sessions()() as session:
+        found = session.scalar(select(GlossRow.id).where(GlossRow.client_id == client_id))
+    return None if found is None else int(found)
+
+
+def _gloss_receipt(ingestor: Any, client_id: uuid.UUID, gloss_id: int, status: str) -> dict[str, Any]:
+    return {
+        "status": status,
+        "client_id": str(client_id),
+        "gloss_reading_id": gloss_id,
+        "database": ingestor.destination.where,
+    }
+
+
+def _store_gloss(
+    ingestor: Any, reading: Any, panel_id: int | None, client_id: uuid.UUID | None
+) -> dict[str, Any]:
+    """Store a gloss-only reading (``station.ingest.store_gloss``) straight in the ``--store`` database.
+
+    Gloss readings do not go through the outbox: with the database away this fails and stores nothing.
+    """
+    from station.ingest import gloss_record_from_reading, operator_name, store_gloss
+
+    record = gloss_record_from_reading(
+        reading, operator=operator_name(), client_id=client_id, panel_id=panel_id
+    )
+    with ingestor.destination.sessions().begin() as session:
+        result = store_gloss(session, record)
+    status = "stored" if result.created else "duplicate"
+    return _gloss_receipt(ingestor, record.client_id, result.measurement_id, status)
+
+
 def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
     """Measure once; spectra per geometry and Lab from the model, or gloss/haze/DOI; with ``--store``, store it."""
     from station.drivers import GlossReading
@@ -170,6 +210,10 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
             prior = ingestor.find(args.client_id)
             if prior is not None:  # a retry: answered from the first attempt, nothing measured again
                 return {"device": args.device, "panel": args.panel, "stored": _receipt(ingestor, prior)}
+            gloss_prior = _stored_gloss_id(ingestor, args.client_id)
+            if gloss_prior is not None:
+                stored = _gloss_receipt(ingestor, args.client_id, gloss_prior, "duplicate")
+                return {"device": args.device, "panel": args.panel, "stored": stored}
         reading = inst.measure()
         out: dict[str, Any] = {
             "device": args.device,
@@ -177,10 +221,10 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
             "panel": args.panel,
         }
         if isinstance(reading, GlossReading):
-            if ingestor is not None:
-                raise InputError("--store", "a spectrophotometer reading (Lab per geometry)", args.device)
             data = reading.to_dict()
             out.update({"geometries": [], "lab": [], "spectra": [], **data})
+            if ingestor is not None:
+                out["stored"] = _store_gloss(ingestor, reading, panel_id, args.client_id)
             return out
         from station.model.spectra import reflectance_to_lab
 

@@ -235,9 +235,11 @@ def test_standards_summary_and_reports(api: Api) -> None:
     assert [smp["qc"]["max_de"] for smp in parts["bumper"]["samples"]] == pytest.approx([math.sqrt(0.45)])
     assert s.json()["counts"] == {"pass": 7, "warn": 0, "fail": 1}
 
-    pdf = c.get(f"{V1}/qc/jobs/J-100/report.pdf", params={"formula": "cie76"}, headers=qa)
-    assert pdf.status_code == 200 and pdf.headers["content-type"] == "application/pdf"
-    assert pdf.content.startswith(b"%PDF") and len(pdf.content) > 10_000
+    if c.app.state.settings.effective_database_url.startswith("sqlite"):  # type: ignore[attr-defined]
+        # rendered once (the backend does not change the report; it only costs time)
+        pdf = c.get(f"{V1}/qc/jobs/J-100/report.pdf", params={"formula": "cie76"}, headers=qa)
+        assert pdf.status_code == 200 and pdf.headers["content-type"] == "application/pdf"
+        assert pdf.content.startswith(b"%PDF") and len(pdf.content) > 10_000
     csv_text = c.get(f"{V1}/qc/jobs/J-100/report.csv", params={"formula": "cie76"}, headers=qa)
     assert csv_text.status_code == 200 and csv_text.headers["content-type"].startswith("text/csv")
     import csv
