@@ -39,6 +39,7 @@ __all__ = [
     "GlossMeterLike",
     "GlossRecord",
     "GlossRow",
+    "gloss_of_measurements",
     "gloss_record_from_reading",
     "pair_gloss",
     "store_gloss",
@@ -307,3 +308,35 @@ def pair_gloss(
             paired[c_id] = g_id
             used.add(g_id)
     return paired
+
+
+def gloss_of_measurements(session: Session, measurement_ids: Iterable[int]) -> dict[int, GlossReading]:
+    """Measurement id → its paired gloss reading row (:func:`pair_gloss`), for the given measurements.
+
+    The pairing runs over every colour measurement and gloss reading of their panels (and the gloss
+    readings naming them), so a measurement gets the same gloss reading whichever others are asked for.
+    """
+    ids = set(measurement_ids)
+    if not ids:
+        return {}
+    panel_ids = set(
+        session.scalars(
+            select(Measurement.panel_id).where(Measurement.id.in_(ids), Measurement.panel_id.is_not(None))
+        )
+    )
+    colour = session.execute(
+        select(Measurement.id, Measurement.panel_id, Measurement.measured_at).where(
+            Measurement.panel_id.in_(panel_ids) | Measurement.id.in_(ids)
+        )
+    ).all()
+    gloss = session.scalars(
+        select(GlossReading).where(
+            GlossReading.panel_id.in_(panel_ids) | GlossReading.measurement_id.in_(ids)
+        )
+    ).all()
+    pairs = pair_gloss(
+        [GlossRow(r.id, r.panel_id, r.measured_at) for r in colour],
+        [GlossRow(g.id, g.panel_id, g.measured_at, g.measurement_id) for g in gloss],
+    )
+    by_id = {g.id: g for g in gloss}
+    return {m: by_id[g] for m, g in pairs.items() if m in ids}

@@ -212,6 +212,9 @@ def test_standards_summary_and_reports(api: Api) -> None:
     jobs = c.get(f"{V1}/qc/jobs", headers=tech).json()
     assert [(j["job"], j["parts"]) for j in jobs] == [("J-100", ["bumper", "fender"]), ("J-200", ["door"])]
 
+    linked = c.post(
+        f"{V1}/qc/gloss", json=_gloss(None, 0, 92.0, measurement_id=job.sample_ids[2]), headers=tech
+    ).json()
     s = c.get(f"{V1}/qc/jobs/J-100/summary", params={"formula": "cie76"}, headers=qa)
     assert s.status_code == 200, s.text
     parts = {p["part"]: p for p in s.json()["parts"]}
@@ -234,6 +237,15 @@ def test_standards_summary_and_reports(api: Api) -> None:
     # bumper: the correction (50.3, 0, 0) is the standard, the second sample is (50, 0.6, 0): √(0.09 + 0.36)
     assert [smp["qc"]["max_de"] for smp in parts["bumper"]["samples"]] == pytest.approx([math.sqrt(0.45)])
     assert s.json()["counts"] == {"pass": 7, "warn": 0, "fail": 1}
+    assert [smp["gloss"]["id"] if smp["gloss"] else None for smp in fender["samples"]] == [
+        None,
+        None,
+        linked["id"],
+        None,
+        None,
+        None,
+        None,
+    ]
 
     if c.app.state.settings.effective_database_url.startswith("sqlite"):  # type: ignore[attr-defined]
         # rendered once (the backend does not change the report; it only costs time)

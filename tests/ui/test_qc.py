@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import csv
+import datetime as dt
 import math
+import uuid
 from pathlib import Path
 
 import pytest
@@ -12,6 +14,8 @@ from PySide6.QtWidgets import QFileDialog
 
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
+from db.models import Measurement
+from station.ingest import GlossRecord, InstrumentRef, store_gloss
 from station.qc.jobs import set_standard
 from tests.qc.conftest import FENDER_OFFSETS, populate
 from ui.models.qc import LocalQc, QcModel, ServiceQc
@@ -36,6 +40,32 @@ def _database(tmp_path: Path):
     with make_sessionmaker(engine)() as session:
         job = populate(session)
         set_standard(session, "J-100", "fender", measurement_id=job.standard_id)
+        meter = InstrumentRef(serial="GL-9", model="gloss meter", kind="gloss")
+        first = session.get(Measurement, job.sample_ids[0])
+        second = session.get(Measurement, job.sample_ids[1])
+        assert first is not None and second is not None
+        common = dict(instrument=meter, operator="ana", gloss_20_gu=80.0, gloss_85_gu=95.0)
+        # linked to the first sample; gloss-only on the second sample's panel 5 minutes after it
+        store_gloss(
+            session,
+            GlossRecord(
+                client_id=uuid.uuid4(),
+                measurement_id=first.id,
+                measured_at=first.measured_at,
+                gloss_60_gu=91.25,
+                **common,
+            ),
+        )
+        store_gloss(
+            session,
+            GlossRecord(
+                client_id=uuid.uuid4(),
+                panel_id=second.panel_id,
+                measured_at=second.measured_at + dt.timedelta(minutes=5),
+                gloss_60_gu=88.5,
+                **common,
+            ),
+        )
         session.commit()
     engine.dispose()
     return url, job
@@ -62,6 +92,8 @@ def test_judge_a_job_from_the_local_database_and_export(qtbot, tmp_path, monkeyp
     assert _column(screen, "sample")[15:18] == [str(job.sample_ids[5])] * 3
     assert all("ΔE 2.5 beyond 1" in r for r in _column(screen, "reason")[15:18])
     assert _column(screen, "ΔL*")[15] == "+2.50"
+    # the gloss reading paired with each sample: linked (first), same panel within 30 min (second), none
+    assert _column(screen, "60° GU")[:9] == ["91.2"] * 3 + ["88.5"] * 3 + [""] * 3
     assert f"measurement {job.standard_id}" in screen.standard.text()
     assert "pass 6 · warn 0 · fail 1" in screen.standard.text()
     fail_cell = screen.table.item(15, COLUMNS.index("verdict"))

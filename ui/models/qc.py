@@ -4,7 +4,8 @@ Two sources give the same data: :class:`LocalQc` reads the workstation's databas
 ``station.qc`` (``station.qc.jobs.job_summary``, ``station.qc.report``), :class:`ServiceQc` asks a
 station service's ``/api/v1/qc`` routes. A summary is the JSON form of
 :class:`station.qc.jobs.JobSummary` (``to_dict()``), which is what the service answers too, so the
-table rows (:func:`verdict_rows`) are built one way whatever the source.
+table rows (:func:`verdict_rows`) are built one way whatever the source. Each sample carries the gloss
+reading paired with it (``station.ingest.gloss_of_measurements``), or ``None``.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ if TYPE_CHECKING:
 #: Formulas offered, product default first (names as ``station.qc.check.formula_name`` accepts them).
 FORMULAS = ("din6175-2", "cie2000", "cie94", "cie76")
 REPORT_KINDS = ("pdf", "csv")
+#: The gloss values a summary's sample carries (those of ``GET /api/v1/qc/jobs/{job}/summary``).
+GLOSS_FIELDS = ("id", "gloss_20_gu", "gloss_60_gu", "gloss_85_gu", "haze_hu", "doi")
 
 
 class QcSourceError(StationError):
@@ -52,6 +55,7 @@ class VerdictRow:
     verdict: str
     reason: str
     overall: str
+    gloss_60_gu: float | None = None
 
 
 class QcSource(Protocol):
@@ -105,7 +109,16 @@ class LocalQc:
             return job_summary(session, job, formula=formula)
 
     def summary(self, job: str, formula: str) -> dict[str, Any]:
-        return self._summary(job, formula).to_dict()
+        from station.ingest import gloss_of_measurements
+
+        data = self._summary(job, formula).to_dict()
+        samples = [s for p in data["parts"] for s in p["samples"]]
+        with self._session() as session:
+            gloss = gloss_of_measurements(session, [s["measurement_id"] for s in samples])
+        for s in samples:
+            g = gloss.get(s["measurement_id"])
+            s["gloss"] = None if g is None else {k: getattr(g, k) for k in GLOSS_FIELDS}
+        return data
 
     def report(self, job: str, formula: str, kind: str, path: Path) -> Path:
         from station.qc import report
@@ -154,6 +167,8 @@ def verdict_rows(part: dict[str, Any]) -> list[VerdictRow]:
     rows: list[VerdictRow] = []
     for s in part.get("samples", []):
         qc = s["qc"]
+        gloss = s.get("gloss") or {}
+        g60 = gloss.get("gloss_60_gu")
         for g in qc["per_geometry"]:
             rows.append(
                 VerdictRow(
@@ -168,6 +183,7 @@ def verdict_rows(part: dict[str, Any]) -> list[VerdictRow]:
                     str(g["verdict"]),
                     "; ".join(g.get("reasons", [])),
                     str(qc["verdict"]),
+                    None if g60 is None else float(g60),
                 )
             )
     return rows

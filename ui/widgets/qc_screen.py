@@ -1,7 +1,7 @@
 """QC screen: pick a job and a part, judge the samples against the part's standard, export the report.
 
-The table shows each sample at each geometry (ΔL*, Δa*, Δb*, ΔE, pass / warn / fail and the reason),
-coloured by verdict; the line above names the standard and the counts. Data and reports come from
+The table shows each sample at each geometry (ΔL*, Δa*, Δb*, ΔE, pass / warn / fail, the 60° gloss of
+the gloss reading paired with the sample, and the reason), coloured by verdict; the line above names the standard and the counts. Data and reports come from
 :class:`ui.models.qc.QcModel` (the workstation's database or the service). Reports are written off the
 GUI thread.
 """
@@ -29,7 +29,7 @@ from station.errors import StationError
 from ui.models.qc import FORMULAS, QcModel, verdict_rows
 from ui.widgets.tasks import TaskThread
 
-COLUMNS = ("sample", "measured", "geometry", "ΔL*", "Δa*", "Δb*", "ΔE", "verdict", "reason")
+COLUMNS = ("sample", "measured", "geometry", "ΔL*", "Δa*", "Δb*", "ΔE", "verdict", "60° GU", "reason")
 VERDICT_COLOURS = {"pass": "#b7e1b0", "warn": "#ffe08a", "fail": "#f4a09a"}
 
 
@@ -137,6 +137,7 @@ class QcScreen(QWidget):
                 f"{r.db:+.2f}",
                 f"{r.de:.2f}",
                 r.verdict,
+                "" if r.gloss_60_gu is None else f"{r.gloss_60_gu:.1f}",
                 r.reason,
             )
             for j, text in enumerate(cells):

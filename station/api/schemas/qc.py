@@ -219,6 +219,7 @@ class SampleVerdict(BaseModel):
     geometries: list[str]
     lab: list[list[float]]
     qc: CheckResult
+    gloss: GlossPublic | None = Field(default=None, description="the gloss reading paired with the sample")
 
 
 class PartSummaryOut(BaseModel):

@@ -35,7 +35,7 @@ from station.api.schemas.qc import (
 from station.api.services import audit
 from station.api.services import measurements as measurement_service
 from station.errors import InputError
-from station.ingest import GlossRecord, GlossRow, pair_gloss, store_gloss
+from station.ingest import GlossRecord, gloss_of_measurements, store_gloss
 from station.model.domain import QC_FORMULA
 from station.model.tolerance import ToleranceSet
 from station.qc import jobs
@@ -83,27 +83,12 @@ def list_gloss(
 
 def paired(*, session: Session, measurements: Sequence[MeasurementPublic]) -> list[QcMeasurement]:
     """*measurements* with their panel's job and part and their paired gloss reading (or ``None``)."""
+    gloss = gloss_of_measurements(session, [m.id for m in measurements])
     panel_ids = {m.panel_id for m in measurements if m.panel_id is not None}
-    ids = {m.id for m in measurements}
-    colour_rows = session.execute(
-        select(Measurement.id, Measurement.panel_id, Measurement.measured_at).where(
-            Measurement.panel_id.in_(panel_ids) | Measurement.id.in_(ids)
-        )
-    ).all()
-    gloss_rows = session.scalars(
-        select(GlossReading).where(
-            GlossReading.panel_id.in_(panel_ids) | GlossReading.measurement_id.in_(ids)
-        )
-    ).all()
-    pairs = pair_gloss(
-        [GlossRow(r.id, r.panel_id, r.measured_at) for r in colour_rows],
-        [GlossRow(g.id, g.panel_id, g.measured_at, g.measurement_id) for g in gloss_rows],
-    )
-    gloss_by_id = {g.id: g for g in gloss_rows}
     panels = {p.id: p for p in session.scalars(select(Panel).where(Panel.id.in_(panel_ids))).all()}
     out: list[QcMeasurement] = []
     for m in measurements:
-        g = gloss_by_id.get(pairs[m.id]) if m.id in pairs else None
+        g = gloss.get(m.id)
         panel = panels.get(m.panel_id) if m.panel_id is not None else None
         out.append(
             QcMeasurement(
@@ -220,8 +205,15 @@ def _summary(session: Session, job: str, formula: str | None) -> jobs.JobSummary
 
 
 def job_summary(*, session: Session, job: str, formula: str | None) -> JobSummaryOut:
-    """Every part's standard and each sample's verdict (``station.qc.jobs.job_summary``)."""
-    return JobSummaryOut.model_validate(_summary(session, job, formula).to_dict())
+    """Every part's standard and each sample's verdict (``station.qc.jobs.job_summary``), with each
+    sample's paired gloss reading."""
+    data = _summary(session, job, formula).to_dict()
+    samples = [s for p in data["parts"] for s in p["samples"]]
+    gloss = gloss_of_measurements(session, [s["measurement_id"] for s in samples])
+    for s in samples:
+        g = gloss.get(s["measurement_id"])
+        s["gloss"] = None if g is None else GlossPublic.model_validate(g)
+    return JobSummaryOut.model_validate(data)
 
 
 def report_pdf(*, session: Session, job: str, formula: str | None) -> bytes:
