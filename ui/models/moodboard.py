@@ -220,7 +220,9 @@ class MoodBoardModel:
     def _sample(self, name: str, img: np.ndarray, xy: tuple[float, float]) -> bool:
         try:
             if name == "gloss":
-                blend = (self._blend or GlossBlend(weight=self.gloss_weight)).update(contrast_gloss(region(img, xy, self.radius)))
+                blend = (self._blend or GlossBlend(weight=self.gloss_weight)).update(
+                    contrast_gloss(region(img, xy, self.radius))
+                )
                 self._blend = blend
                 g = float(blend.gloss_gu or 0.0)
                 return self.document.apply(
