@@ -63,3 +63,43 @@ def test_a_solid_next_to_a_metallic_keeps_its_colour() -> None:
 def test_bad_input_names_the_field(principals: list[FaceFlopTravelGloss], steps: int, field: str) -> None:
     with pytest.raises(ModelInputError, match=field):
         colour_sequence(principals, steps)
+
+
+def test_cli_writes_a_palette_the_viewer_opens(tmp_path) -> None:
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from station.design.palette import load_palette
+    from station.model.design_io import save_design
+
+    save_design(SILVER, tmp_path / "silver.json")
+    save_design(BLUE, tmp_path / "blue.json")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    run = subprocess.run(
+        [sys.executable, "-m", "station.cli", "sequence", "silver.json", "blue.json", "--steps", "5"]
+        + ["--out", "wall.json", "--json"],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    entries = load_palette(tmp_path / "wall.json")
+    assert [name for name, _ in entries] == [f"step {i}" for i in range(1, 6)]
+    want = colour_sequence([SILVER, BLUE], 5)
+    for (_, got), ref in zip(entries, want.designs, strict=True):
+        assert np.allclose(got.lab_at(ANGLES), ref.lab_at(ANGLES), atol=1e-9)
+    assert out["step_de"] == pytest.approx(list(want.step_de))
+    bad = subprocess.run(
+        [sys.executable, "-m", "station.cli", "sequence", "silver.json", "--steps", "5"],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "principals" in bad.stderr
