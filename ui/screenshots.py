@@ -57,7 +57,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     sink = LocalSink(
         f"sqlite:///{Path(scratch.name) / 'station.sqlite3'}", Path(scratch.name) / "outbox.sqlite3"
     )
-    win = MainWindow(sink=sink)
+    win = MainWindow(sink=sink, ask_on_close=False)
     win.resize(*SIZE)
     win.show()
     written: list[Path] = []

@@ -169,6 +169,7 @@ def _protected_docs(app: FastAPI) -> None:
 def create_app(settings: Settings) -> FastAPI:
     """Build the service for *settings*."""
     from station.api.routes import ROUTERS, health
+    from station.api.routes.library import IMPORT_PATH as LIBRARY_IMPORT_PATH
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -204,6 +205,10 @@ def create_app(settings: Settings) -> FastAPI:
     for router in ROUTERS:
         app.include_router(router, prefix=API_PREFIX)
     app.add_middleware(StrictJsonBody)  # inside the size cap: parses bodies already bounded
-    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(
+        BodySizeLimit,
+        max_bytes=settings.max_body_bytes,
+        per_path={f"{API_PREFIX}{LIBRARY_IMPORT_PATH}": settings.library_upload_max_bytes},
+    )
     app.add_middleware(SecurityHeaders)  # outermost: the 413 above gets the headers too
     return app

@@ -17,6 +17,10 @@ SIM_KINDS = ("ma6", "ma3", "gloss")
 BOOTSTRAP_TOKEN_FILE = "bootstrap-token"
 
 
+#: Default cap of a library upload: room for about 400 000 paints at six angles.
+LIBRARY_UPLOAD_DEFAULT_BYTES = 64 * 1_048_576
+
+
 class Settings(BaseSettings):
     """Everything the service needs to start; ``create_app(Settings(...))`` uses only this."""
 
@@ -35,6 +39,13 @@ class Settings(BaseSettings):
     )
     max_body_bytes: int = Field(
         1_048_576, ge=1024, le=64 * 1_048_576, description="request body cap (uploads)"
+    )
+    library_upload_max_bytes: int = Field(
+        LIBRARY_UPLOAD_DEFAULT_BYTES,
+        ge=1024,
+        le=1024 * 1_048_576,
+        description="body cap of a library CSV upload (POST /api/v1/library/import; a 50 000-paint "
+        "library at six angles is about 7 MB); every other route keeps max_body_bytes",
     )
     image_decode_concurrency: int = Field(
         2,

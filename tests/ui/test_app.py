@@ -15,7 +15,7 @@ pytestmark = [pytest.mark.qt]
 
 def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
     sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
-    win = MainWindow(sink=sink)
+    win = MainWindow(sink=sink, ask_on_close=False)
     assert win.store.sink is sink
     qtbot.addWidget(win)
     win.resize(1200, 800)
