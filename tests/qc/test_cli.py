@@ -247,3 +247,34 @@ def test_report_pdf_csv_and_trend(
     _refused(inproc(capsys, tmp_path, "qc", "report", "--job", "J-404", "--out", "r.pdf", "--db", url), "job")
     _refused(inproc(capsys, tmp_path, "qc", "search", "--since", "last week", "--db", url), "since")
     assert not (tmp_path / "r.txt").exists()
+
+
+def test_check_reads_vendor_files_through_the_importers(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("station.ingest.formats", reason="the vendor-file importers are not installed")
+    for name in ("s.cgats", "s.cxf"):
+        res = inproc(capsys, tmp_path, "measure", "sim:ma6", "--out", name, "--json")
+        assert res.returncode == 0, res.stderr
+    measured = json.loads(res.stdout)
+    res = inproc(
+        capsys,
+        tmp_path,
+        "qc",
+        "check",
+        "--standard",
+        "s.cgats",
+        "--sample",
+        "s.cxf",
+        "--formula",
+        "cie76",
+        "--json",
+    )
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    assert [g["geometry"] for g in out["per_geometry"]] == measured["geometries"]
+    assert out["max_de"] < 0.01  # the same simulated panel, written in two formats (rounded Lab)
+    (tmp_path / "bad.cgats").write_text("CGATS.17\nBEGIN_DATA_FORMAT\nSAMPLE_ID LAB_L\nEND_DATA_FORMAT\n")
+    _refused(
+        inproc(capsys, tmp_path, "qc", "check", "--standard", "bad.cgats", "--sample", "s.cxf"), "bad.cgats"
+    )
