@@ -243,6 +243,19 @@ def test_report_pdf_csv_and_trend(
         capsys, tmp_path, "qc", "search", "--job", "J-100", "--part", "bumper", "--db", url, "--json"
     )
     assert [m["measurement_id"] for m in json.loads(res.stdout)["measurements"]] == list(job.bumper_ids)
+    panel = json.loads(res.stdout)["measurements"][0]["panel_id"]
+    res = inproc(capsys, tmp_path, "qc", "correlate", "--panel", str(panel), "--db", url, "--json")
+    assert res.returncode == 0, res.stderr
+    bias = json.loads(res.stdout)
+    # MA3 (50, 0.6, 0) against the MA6 correction (50.3, 0, 0): bias (−0.3, 0.6, 0) at each geometry
+    assert (bias["instrument_a"], bias["instrument_b"]) == ("MA6 600123", "MA3 700200")
+    assert [g["dL"] for g in bias["per_geometry"]] == pytest.approx([-0.3] * 3)
+    assert bias["max_de"] == pytest.approx(math.hypot(0.3, 0.6))
+    _refused(
+        inproc(capsys, tmp_path, "qc", "correlate", "--panel", str(panel), "--a", "X9", "--db", url), "a"
+    )
+    res = inproc(capsys, tmp_path, "qc", "repeats", "--panel", str(panel), "--db", url, "--json")
+    assert json.loads(res.stdout)["per_geometry"][0]["mean"] == pytest.approx([50.15, 0.3, 0.0])
     _refused(inproc(capsys, tmp_path, "qc", "report", "--job", "J-100", "--out", "r.txt", "--db", url), "out")
     _refused(inproc(capsys, tmp_path, "qc", "report", "--job", "J-404", "--out", "r.pdf", "--db", url), "job")
     _refused(inproc(capsys, tmp_path, "qc", "search", "--since", "last week", "--db", url), "since")
