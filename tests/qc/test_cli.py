@@ -19,6 +19,8 @@ import pytest
 
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
+from station.qc.jobs import job_summary
+from station.qc.report import csv_text, pdf_bytes
 from station.qc.spc import D2_RANGE_OF_TWO
 from tests.qc.conftest import FENDER_OFFSETS, FENDER_STD, Job, populate
 
@@ -243,6 +245,14 @@ def test_report_pdf_csv_and_trend(
         capsys, tmp_path, "qc", "search", "--job", "J-100", "--part", "bumper", "--db", url, "--json"
     )
     assert [m["measurement_id"] for m in json.loads(res.stdout)["measurements"]] == list(job.bumper_ids)
+    engine = make_engine(url)
+    with make_sessionmaker(engine)() as s:  # the functions the service calls give the same files
+        assert csv_text(job_summary(s, "J-100", formula="cie76")) == (tmp_path / "r.csv").read_bytes().decode(
+            "utf-8"
+        )
+        cover_only = pdf_bytes(job_summary(s, "J-200"))  # no standard: the cover page alone
+    engine.dispose()
+    assert cover_only.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page\b(?!s)", cover_only)) == 1
     panel = json.loads(res.stdout)["measurements"][0]["panel_id"]
     res = inproc(capsys, tmp_path, "qc", "correlate", "--panel", str(panel), "--db", url, "--json")
     assert res.returncode == 0, res.stderr
