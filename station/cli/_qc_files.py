@@ -70,10 +70,25 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
     return None
 
 
+def _panel_rows(args: argparse.Namespace) -> list[Any]:
+    from station.qc.jobs import search_measurements
+
+    with _session(args) as s:
+        rows = search_measurements(s, panel_id=args.panel)
+    if not rows:
+        raise InputError("panel", "the id of a panel with stored measurements", args.panel)
+    return rows
+
+
 def _repeats(args: argparse.Namespace) -> dict[str, Any] | None:
     from station.qc.repeats import summarise
 
-    readings = [r for f in args.files for r in _readings(f, "readings")]
+    if bool(args.files) == (args.panel is not None):
+        raise InputError("files", "reading files or --panel ID (one of the two)", args.files or None)
+    if args.panel is not None:
+        readings = [r.reading for r in _panel_rows(args)]
+    else:
+        readings = [r for f in args.files for r in _readings(f, "readings")]
     out = summarise(readings).to_dict()
     if args.json:
         return out
@@ -98,7 +113,27 @@ def _repeats(args: argparse.Namespace) -> dict[str, Any] | None:
 def _correlate(args: argparse.Namespace) -> dict[str, Any]:
     from station.qc.repeats import correlate
 
-    return correlate(_readings(args.a, "a"), _readings(args.b, "b")).to_dict()
+    if args.panel is None:
+        if not (args.a and args.b):
+            raise InputError("a", "--a FILE and --b FILE (or --panel ID)", args.a)
+        return correlate(_readings(args.a, "a"), _readings(args.b, "b")).to_dict()
+    rows = _panel_rows(args)
+    names = list(dict.fromkeys(r.instrument for r in rows))
+    picked: list[str | None] = []
+    for flag in ("a", "b"):
+        want = getattr(args, flag)
+        if want is None:
+            picked.append(names[len(picked)] if len(names) > len(picked) else None)
+        else:
+            match = [n for n in names if want in n.split()]
+            picked.append(match[0] if match else None)
+            if not match:
+                raise InputError(flag, f"an instrument of panel {args.panel} ({', '.join(names)})", want)
+    if picked[0] is None or picked[1] is None or picked[0] == picked[1]:
+        raise InputError("panel", "a panel measured by two instruments (or --a/--b naming them)", names)
+    a = [r.reading for r in rows if r.instrument == picked[0]]
+    b = [r.reading for r in rows if r.instrument == picked[1]]
+    return correlate(a, b).to_dict()
 
 
 def _metamerism(args: argparse.Namespace) -> dict[str, Any]:
@@ -234,7 +269,7 @@ def _summary_of(args: argparse.Namespace, session: Any, load_tolerance: LoadTole
 
     tolerance = load_tolerance(args.tolerance) if args.tolerance else None
     parts = getattr(args, "parts", None) or None
-    return job_summary(session, args.job, tolerance, args.formula, parts)
+    return job_summary(session, args.job, tolerance, args.formula, parts, args.average_panels)
 
 
 def _summary(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, Any]:
@@ -328,6 +363,11 @@ def _add_db(p: argparse.ArgumentParser) -> None:
 def _add_judging(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tolerance", help="tolerance set JSON file (station qc tolerance --json)")
     p.add_argument("--formula", help=FORMULA_HELP)
+    p.add_argument(
+        "--average-panels",
+        action="store_true",
+        help="average the repeat readings of each panel and judge the panel once",
+    )
 
 
 def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> None:
@@ -340,14 +380,16 @@ def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> 
     p.set_defaults(handler=lambda a: _check(a, load_tolerance))
 
     p = sub.add_parser("repeats", help="mean, sd per geometry and outliers of repeat readings")
-    p.add_argument("files", nargs="+", help="files of readings of one panel")
-    add_json_flag(p)
+    p.add_argument("files", nargs="*", help="files of readings of one panel")
+    p.add_argument("--panel", type=int, help="instead of files: the stored measurements of this panel")
+    _add_db(p)
     p.set_defaults(handler=_repeats)
 
     p = sub.add_parser("correlate", help="bias of instrument B against A on a shared panel")
-    p.add_argument("--a", required=True, help="readings of instrument A")
-    p.add_argument("--b", required=True, help="readings of instrument B")
-    add_json_flag(p)
+    p.add_argument("--a", help="readings of instrument A (with --panel: its serial or model)")
+    p.add_argument("--b", help="readings of instrument B (with --panel: its serial or model)")
+    p.add_argument("--panel", type=int, help="the stored measurements of this panel, by instrument")
+    _add_db(p)
     p.set_defaults(handler=_correlate)
 
     p = sub.add_parser("metamerism", help="metamerism index D65 → A, F11 per geometry (spectra needed)")

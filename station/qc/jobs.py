@@ -30,6 +30,7 @@ from station.model.tolerance import QcVerdict, ToleranceSet
 from station.qc.check import check_pair, formula_name
 from station.qc.errors import QcInputError, StandardMissingError
 from station.qc.readings import Reading, reading_from_measurement
+from station.qc.repeats import RepeatSummary, summarise
 
 __all__ = [
     "JobInfo",
@@ -108,6 +109,7 @@ def _search_query(
     instrument: str | None,
     since: dt.datetime | None,
     until: dt.datetime | None,
+    panel_id: int | None = None,
 ) -> Any:
     newer = aliased(Measurement)
     q = (
@@ -123,6 +125,10 @@ def _search_query(
     if instrument is not None:
         name = _text(instrument, "instrument")
         q = q.where(or_(Instrument.serial == name, Instrument.model == name))
+    if panel_id is not None:
+        if isinstance(panel_id, bool) or not isinstance(panel_id, int) or panel_id < 1:
+            raise QcInputError("panel_id", "a panel id >= 1", panel_id)
+        q = q.where(Measurement.panel_id == panel_id)
     if since is not None:
         q = q.where(Measurement.measured_at >= since)
     if until is not None:
@@ -140,8 +146,9 @@ def search_measurements(
     until: dt.datetime | None = None,
     limit: int = 1000,
     offset: int = 0,
+    panel_id: int | None = None,
 ) -> list[MeasurementRow]:
-    """Measurements by job, part, instrument (serial or model, exact) and time range, oldest first.
+    """Measurements by job, part, panel, instrument (serial or model, exact) and time range, oldest first.
 
     *since* is inclusive, *until* exclusive (timezone-aware); superseded measurements are left out.
     *limit* 1 … :data:`SEARCH_LIMIT_MAX`, *offset* >= 0.
@@ -154,7 +161,7 @@ def search_measurements(
         raise QcInputError("limit", f"an integer, 1 <= limit <= {SEARCH_LIMIT_MAX}", limit)
     if isinstance(offset, bool) or not isinstance(offset, int) or offset < 0:
         raise QcInputError("offset", "an integer >= 0", offset)
-    q = _search_query(job, part, instrument, since, until)
+    q = _search_query(job, part, instrument, since, until, panel_id)
     q = q.order_by(Measurement.measured_at, Measurement.id).limit(limit).offset(offset)
     out = []
     for m, panel, inst in session.execute(q).all():
@@ -363,13 +370,24 @@ class StandardInfo:
 
 @dataclass(frozen=True)
 class SampleResult:
-    """One sample measurement of a part and its verdict against the part's standard."""
+    """One sample of a part and its verdict against the part's standard.
+
+    With panels averaged (:func:`job_summary` ``average_panels=True``) a sample is a panel: *row* is its
+    newest measurement carrying the mean reading, *repeats* the repeat statistics and
+    *measurement_ids* every measurement averaged.
+    """
 
     row: MeasurementRow
     verdict: QcVerdict
+    repeats: RepeatSummary | None = None
+    measurement_ids: tuple[int, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {**self.row.to_dict(), "qc": self.verdict.to_dict()}
+        out = {**self.row.to_dict(), "qc": self.verdict.to_dict()}
+        if self.repeats is not None:
+            out["repeats"] = self.repeats.to_dict()
+            out["measurement_ids"] = list(self.measurement_ids)
+        return out
 
 
 @dataclass(frozen=True)
@@ -433,12 +451,15 @@ def job_summary(
     tolerance: ToleranceSet | None = None,
     formula: str | None = None,
     parts: Sequence[str] | None = None,
+    average_panels: bool = False,
 ) -> JobSummary:
     """Every part of *job* with its standard and each sample's verdict (:func:`check_pair`).
 
     The reference measurement of a standard is not judged as a sample of its own part. A part without
     a standard is listed with its measurements unjudged. A sample that cannot be judged (a geometry
-    of the standard or tolerance missing) is listed unjudged with the reason in the part's note.
+    of the standard or tolerance missing) is listed unjudged with the reason in the part's note. With
+    *average_panels* the repeat readings of each panel are averaged (:func:`station.qc.repeats.summarise`,
+    at the geometries they share) and the panel is judged once, at the time of its newest reading.
     :class:`QcInputError` when the job has no panels.
     """
     job = _text(job, "job")
@@ -460,14 +481,14 @@ def job_summary(
             continue
         samples, unjudged, notes = [], [], []
         info: StandardInfo | None = None
-        for r in part_rows:
-            if r.measurement_id == std.measurement_id:
-                continue
+        candidates = [r for r in part_rows if r.measurement_id != std.measurement_id]
+        for r, repeats, ids in _samples(candidates, average_panels):
             ref = standard_reading(session, std, r.reading.aspecular_deg)
             if info is None:
                 info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref)
             try:
-                samples.append(SampleResult(r, check_pair(ref, r.reading, tolerance, formula)))
+                verdict = check_pair(ref, r.reading, tolerance, formula)
+                samples.append(SampleResult(r, verdict, repeats, ids))
             except (QcInputError, ModelInputError) as exc:
                 unjudged.append(r)
                 notes.append(f"measurement {r.measurement_id}: {exc}")
@@ -478,6 +499,35 @@ def job_summary(
             info = dataclasses.replace(info, curve=_curve(session, std, samples))
         out.append(PartSummary(part, info, tuple(samples), tuple(unjudged), "; ".join(notes)))
     return JobSummary(job, name, tolerance, tuple(out), dt.datetime.now(dt.UTC))
+
+
+def _samples(
+    rows: Sequence[MeasurementRow], average_panels: bool
+) -> list[tuple[MeasurementRow, RepeatSummary | None, tuple[int, ...]]]:
+    """Each row alone, or with *average_panels* one row per panel carrying the mean reading."""
+    if not average_panels:
+        return [(r, None, ()) for r in rows]
+    groups: dict[int | None, list[MeasurementRow]] = {}
+    for r in rows:
+        groups.setdefault(r.panel_id, []).append(r)
+    out: list[tuple[MeasurementRow, RepeatSummary | None, tuple[int, ...]]] = []
+    for group in groups.values():
+        if len(group) == 1:
+            out.append((group[0], None, ()))
+            continue
+        rep = summarise([g.reading for g in group])
+        newest = group[-1]
+        mean = dataclasses.replace(
+            rep.mean,
+            measured_at=newest.measured_at,
+            sample=newest.reading.sample,
+            instrument=", ".join(dict.fromkeys(g.instrument for g in group)),
+            where=f"panel {newest.panel_id}",
+        )
+        row = dataclasses.replace(newest, reading=mean, instrument=mean.instrument)
+        out.append((row, rep, tuple(g.measurement_id for g in group)))
+    out.sort(key=lambda t: (t[0].measured_at, t[0].measurement_id))
+    return out
 
 
 def _curve(session: Session, std: Standard, samples: Sequence[SampleResult]) -> Reading:

@@ -8,11 +8,17 @@ Every QC function takes :class:`Reading` values, whatever their source:
   "instrument", "sample"}, …]}``), one reading per entry;
 * a stored :class:`db.models.Measurement` (:func:`reading_from_measurement`).
 
+* any file ``station import`` reads (CxF3, CGATS.17, the CSV template), through the importers of
+  ``station.ingest.formats`` when they are installed (:func:`load_readings`).
+
 Geometries are aspecular angles under the standard 45° illumination (``45as15`` is 15° from the
-specular direction); a name with another illumination angle is refused, since tolerance sets and
-DIN 6175-2 weights are defined on aspecular angles at 45°. Lab is D65 / CIE 1964 10°; when a source
-has spectra but no Lab, Lab is computed from the spectra (:func:`station.model.spectra.reflectance_to_lab`,
-which needs the product's 400–700 nm, 10 nm grid).
+specular direction), since tolerance sets and DIN 6175-2 weights are defined on aspecular angles at
+45°. A source whose geometries include other illuminations (an MA-T12's second block, ``15as…``)
+keeps its 45° geometries only; one with none at 45° is refused. Lab is D65 / CIE 1964 10°: when a
+source has spectra on the product's 400–700 nm, 10 nm grid, Lab is computed from them wherever Lab is
+absent or stated under another illuminant or observer
+(:func:`station.model.spectra.reflectance_to_lab`); Lab under other conditions without such spectra is
+refused, since it cannot be compared with a D65 standard.
 """
 
 from __future__ import annotations
@@ -151,6 +157,38 @@ def _angle(value: Any, field: str) -> float:
     raise QcInputError(field, 'a geometry name like "45as15" or an aspecular angle', value)
 
 
+def _illumination(value: Any, field: str) -> float:
+    """The illumination angle of a geometry name (45 for a bare aspecular angle)."""
+    if isinstance(value, str):
+        try:
+            return parse_geometry(value, field)[0]
+        except ModelInputError as exc:
+            raise QcInputError(field, 'a geometry name like "45as15" or an aspecular angle', value) from exc
+    return ILLUMINATION_DEG
+
+
+def _rows(value: Any, keep: Sequence[int], field: str, n: int) -> list[Any] | None:
+    """The rows of *value* (one per geometry) at the indices *keep*; None when absent."""
+    if value is None:
+        return None
+    if not isinstance(value, list) or len(value) != n:
+        got = len(value) if isinstance(value, list) else type(value).__name__
+        raise QcInputError(field, f"one row per geometry ({n})", got)
+    return [value[i] for i in keep]
+
+
+def _conditions(data: Mapping[str, Any]) -> str:
+    """Empty when the Lab is stated under D65 / 10° (or the conditions are not stated), else what they are."""
+    ill = data.get("illuminant")
+    obs = data.get("observer")
+    other = []
+    if ill not in (None, "", "D65"):
+        other.append(str(ill))
+    if obs not in (None, "") and "10" not in str(obs):
+        other.append(str(obs))
+    return ", ".join(other)
+
+
 def _text(value: Any) -> str:
     if value is None:
         return ""
@@ -192,19 +230,29 @@ def reading_from_dict(data: Mapping[str, Any], where: str = "reading") -> Readin
             "a non-empty list of geometries (a gloss-only reading has no colour)",
             geoms,
         )
-    angles = tuple(_angle(g, f"{where}.geometries[{i}]") for i, g in enumerate(geoms))
-    spectra = data.get("spectra") or None
+    keep = [
+        i for i, g in enumerate(geoms) if _illumination(g, f"{where}.geometries[{i}]") == ILLUMINATION_DEG
+    ]
+    if not keep:
+        raise QcInputError(
+            f"{where}.geometries", f"at least one {ILLUMINATION_DEG:g}° illumination geometry (45asNN)", geoms
+        )
+    angles = tuple(_angle(geoms[i], f"{where}.geometries[{i}]") for i in keep)
+    spectra = _rows(data.get("spectra") or None, keep, f"{where}.spectra", len(geoms))
     wl = data.get("wavelengths_nm") or None
     if spectra is not None and wl is None:
         wl = WAVELENGTHS.tolist()
-    lab = data.get("lab")
-    if not lab:
-        if spectra is None:
-            raise QcInputError(f"{where}.lab", "L*, a*, b* per geometry (or spectra)", lab)
-        sp = np.asarray(spectra, dtype=float)
-        if wl is None or not np.array_equal(np.asarray(wl, dtype=float), WAVELENGTHS) or sp.ndim != 2:
+    lab = _rows(data.get("lab") or None, keep, f"{where}.lab", len(geoms))
+    conditions = _conditions(data)
+    if lab is None or conditions:
+        sp = None if spectra is None else np.asarray(spectra, dtype=float)
+        grid = wl is not None and np.array_equal(np.asarray(wl, dtype=float), WAVELENGTHS)
+        if sp is None or not grid or sp.ndim != 2:
+            accepted = "spectra at 400–700 nm in 10 nm steps"
+            if lab is None:
+                raise QcInputError(f"{where}.lab", f"L*, a*, b* per geometry (or {accepted})", None)
             raise QcInputError(
-                f"{where}.spectra", "spectra at 400–700 nm in 10 nm steps when lab is absent", wl
+                f"{where}.illuminant", f"Lab under D65 / 10° (or {accepted} to compute it)", conditions
             )
         lab = reflectance_to_lab(sp).tolist()
     if not isinstance(lab, list) or not all(isinstance(r, list) and len(r) == 3 for r in lab):
@@ -247,26 +295,51 @@ def readings_from_json(data: Any, where: str = "file") -> list[Reading]:
 def load_readings(path: str | Path) -> list[Reading]:
     """The readings of a file: ``station measure --json`` or ``station import --json`` output (JSON).
 
-    Raises :class:`~station.qc.errors.QcInputError` naming the file for an unreadable or non-JSON file
-    and naming the field for a bad value; vendor files (CxF3, CGATS, workbooks) go through
-    ``station import FILE --json`` first.
+    A file that is not JSON goes to the importers of ``station import`` (CxF3, CGATS.17, CSV template),
+    when they are installed. Raises :class:`~station.qc.errors.QcInputError` naming the file for an
+    unreadable or unrecognised file and naming the field for a bad value.
     """
     p = Path(path)
     name = p.name
     try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise QcInputError(name, "a readable UTF-8 file", str(p), detail=type(exc).__name__) from exc
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise QcInputError(name, "a readable file", str(p), detail=type(exc).__name__) from exc
+    if raw.lstrip(b"\xef\xbb\xbf").lstrip()[:1] not in (b"{", b"["):
+        imported = _import_vendor_file(p)
+        if imported is not None:
+            return readings_from_json(imported, name)
     try:
-        data = json.loads(text, parse_constant=_refuse_constant)
+        data = json.loads(raw.decode("utf-8"), parse_constant=_refuse_constant)
+    except UnicodeDecodeError as exc:
+        raise QcInputError(name, "a UTF-8 file", None, detail=f"byte {exc.start}") from exc
     except json.JSONDecodeError as exc:
         raise QcInputError(
             name,
-            "JSON written by station measure --json or station import --json",
+            "JSON written by station measure --json or station import --json, or a file station import reads",
             None,
             detail=f"line {exc.lineno}: {exc.msg}",
         ) from exc
     return readings_from_json(data, name)
+
+
+def _import_vendor_file(path: Path) -> dict[str, Any] | None:
+    """The ``station import --json`` document of a vendor file, or None without the importers.
+
+    The importers (``station.ingest.formats.read_measurement_file``) raise their own typed errors
+    (input errors naming file, line or element and field).
+    """
+    import importlib
+
+    try:
+        formats = importlib.import_module("station.ingest.formats")
+    except ImportError:
+        return None
+    reader = getattr(formats, "read_measurement_file", None)
+    if reader is None:
+        return None
+    doc = reader(path).to_dict()
+    return doc if isinstance(doc, dict) else None
 
 
 def _refuse_constant(token: str) -> Any:

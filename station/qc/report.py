@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import csv
 import datetime as dt
+import io
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -43,10 +44,13 @@ from station.qc.spc import ControlLimits, control_limits
 __all__ = [
     "CSV_COLUMNS",
     "Progress",
+    "csv_text",
     "part_figures",
+    "pdf_bytes",
     "report_figures",
     "write_csv",
     "write_pdf",
+    "write_pngs",
     "write_trend_png",
 ]
 
@@ -350,19 +354,30 @@ def write_pdf(summary: JobSummary, path: str | Path, progress: Progress | None =
     """
     out = _writable(path)
     tmp = out.with_name(out.name + ".part")
-    pages = report_figures(summary)
     try:
-        with PdfPages(tmp, metadata={"Title": f"QC report {summary.job}", "Creator": "CACAD Station"}) as pdf:
-            for i, build in enumerate(pages, start=1):
-                fig = build()
-                pdf.savefig(fig)
-                plt.close(fig)
-                if progress is not None:
-                    progress(i, len(pages), f"page {i} of {len(pages)}")
+        _render(summary, tmp, progress)
         tmp.replace(out)
     finally:
         tmp.unlink(missing_ok=True)
     return out
+
+
+def pdf_bytes(summary: JobSummary, progress: Progress | None = None) -> bytes:
+    """The job's QC report as PDF bytes (what :func:`write_pdf` writes; for a service response)."""
+    buf = io.BytesIO()
+    _render(summary, buf, progress)
+    return buf.getvalue()
+
+
+def _render(summary: JobSummary, target: Any, progress: Progress | None) -> None:
+    pages = report_figures(summary)
+    with PdfPages(target, metadata={"Title": f"QC report {summary.job}", "Creator": "CACAD Station"}) as pdf:
+        for i, build in enumerate(pages, start=1):
+            fig = build()
+            pdf.savefig(fig)
+            plt.close(fig)
+            if progress is not None:
+                progress(i, len(pages), f"page {i} of {len(pages)}")
 
 
 def write_pngs(summary: JobSummary, folder: str | Path, dpi: int = 80) -> list[Path]:
@@ -443,11 +458,17 @@ def _design_lab(s: SampleResult, angle: float) -> tuple[float, float, float]:
     return (lab[0] - g.dl, lab[1] - g.da, lab[2] - g.db)
 
 
+def csv_text(summary: JobSummary) -> str:
+    """The CSV :func:`write_csv` writes, as text (header and one row per sample and geometry)."""
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(CSV_COLUMNS)
+    w.writerows(csv_rows(summary))
+    return buf.getvalue()
+
+
 def write_csv(summary: JobSummary, path: str | Path) -> Path:
     """Write one row per sample and geometry (:data:`CSV_COLUMNS`) as UTF-8 CSV at *path*."""
     out = _writable(path)
-    with out.open("w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(CSV_COLUMNS)
-        w.writerows(csv_rows(summary))
+    out.write_text(csv_text(summary), encoding="utf-8", newline="")
     return out

@@ -19,6 +19,8 @@ import pytest
 
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
+from station.qc.jobs import job_summary
+from station.qc.report import csv_text, pdf_bytes
 from station.qc.spc import D2_RANGE_OF_TWO
 from tests.qc.conftest import FENDER_OFFSETS, FENDER_STD, Job, populate
 
@@ -243,7 +245,59 @@ def test_report_pdf_csv_and_trend(
         capsys, tmp_path, "qc", "search", "--job", "J-100", "--part", "bumper", "--db", url, "--json"
     )
     assert [m["measurement_id"] for m in json.loads(res.stdout)["measurements"]] == list(job.bumper_ids)
+    engine = make_engine(url)
+    with make_sessionmaker(engine)() as s:  # the functions the service calls give the same files
+        assert csv_text(job_summary(s, "J-100", formula="cie76")) == (tmp_path / "r.csv").read_bytes().decode(
+            "utf-8"
+        )
+        cover_only = pdf_bytes(job_summary(s, "J-200"))  # no standard: the cover page alone
+    engine.dispose()
+    assert cover_only.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page\b(?!s)", cover_only)) == 1
+    panel = json.loads(res.stdout)["measurements"][0]["panel_id"]
+    res = inproc(capsys, tmp_path, "qc", "correlate", "--panel", str(panel), "--db", url, "--json")
+    assert res.returncode == 0, res.stderr
+    bias = json.loads(res.stdout)
+    # MA3 (50, 0.6, 0) against the MA6 correction (50.3, 0, 0): bias (−0.3, 0.6, 0) at each geometry
+    assert (bias["instrument_a"], bias["instrument_b"]) == ("MA6 600123", "MA3 700200")
+    assert [g["dL"] for g in bias["per_geometry"]] == pytest.approx([-0.3] * 3)
+    assert bias["max_de"] == pytest.approx(math.hypot(0.3, 0.6))
+    _refused(
+        inproc(capsys, tmp_path, "qc", "correlate", "--panel", str(panel), "--a", "X9", "--db", url), "a"
+    )
+    res = inproc(capsys, tmp_path, "qc", "repeats", "--panel", str(panel), "--db", url, "--json")
+    assert json.loads(res.stdout)["per_geometry"][0]["mean"] == pytest.approx([50.15, 0.3, 0.0])
     _refused(inproc(capsys, tmp_path, "qc", "report", "--job", "J-100", "--out", "r.txt", "--db", url), "out")
     _refused(inproc(capsys, tmp_path, "qc", "report", "--job", "J-404", "--out", "r.pdf", "--db", url), "job")
     _refused(inproc(capsys, tmp_path, "qc", "search", "--since", "last week", "--db", url), "since")
     assert not (tmp_path / "r.txt").exists()
+
+
+def test_check_reads_vendor_files_through_the_importers(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("station.ingest.formats", reason="the vendor-file importers are not installed")
+    for name in ("s.cgats", "s.cxf"):
+        res = inproc(capsys, tmp_path, "measure", "sim:ma6", "--out", name, "--json")
+        assert res.returncode == 0, res.stderr
+    measured = json.loads(res.stdout)
+    res = inproc(
+        capsys,
+        tmp_path,
+        "qc",
+        "check",
+        "--standard",
+        "s.cgats",
+        "--sample",
+        "s.cxf",
+        "--formula",
+        "cie76",
+        "--json",
+    )
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    assert [g["geometry"] for g in out["per_geometry"]] == measured["geometries"]
+    assert out["max_de"] < 0.01  # the same simulated panel, written in two formats (rounded Lab)
+    (tmp_path / "bad.cgats").write_text("CGATS.17\nBEGIN_DATA_FORMAT\nSAMPLE_ID LAB_L\nEND_DATA_FORMAT\n")
+    _refused(
+        inproc(capsys, tmp_path, "qc", "check", "--standard", "bad.cgats", "--sample", "s.cxf"), "bad.cgats"
+    )

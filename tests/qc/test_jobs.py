@@ -160,3 +160,22 @@ def test_part_without_standard_is_listed_unjudged(session: Session, job: Job) ->
     fender = next(p for p in s.parts if p.part == "fender")
     assert len(fender.unjudged) == 1 + len(FENDER_OFFSETS) and fender.note == "no standard set"
     assert s.formula == "din6175"
+
+
+def test_repeats_of_a_panel_are_averaged_when_asked(session: Session, job: Job) -> None:
+    set_standard(session, "J-100", "bumper", design_id=job.design_id)
+    session.commit()
+    rows = search_measurements(session, job="J-100", part="bumper")
+    panel = rows[0].panel_id
+    assert panel is not None and [
+        r.measurement_id for r in search_measurements(session, panel_id=panel)
+    ] == list(job.bumper_ids)
+    s = job_summary(session, "J-100", formula="cie76", parts=["bumper"], average_panels=True)
+    (sample,) = s.parts[0].samples
+    # mean of (50.3, 0, 0) and (50, 0.6, 0) is (50.15, 0.3, 0): ΔE*ab to grey 50 = √(0.15² + 0.3²)
+    assert sample.verdict.max_de == pytest.approx(math.hypot(0.15, 0.3))
+    assert sample.measurement_ids == job.bumper_ids and sample.repeats is not None and sample.repeats.n == 2
+    assert sample.row.measured_at == T0 + dt.timedelta(days=2)  # the newest reading's time
+    assert sample.row.instrument == "MA6 600123, MA3 700200"
+    with pytest.raises(QcInputError, match="panel_id"):
+        search_measurements(session, panel_id=0)

@@ -64,7 +64,7 @@ def test_measure_and_import_shapes(tmp_path: Path) -> None:
     ("data", "field"),
     [
         (_measure(STD, ["45as15", "45as15", "45as110"]), "reading.geometries"),
-        (_measure(STD, ["15as15", "45as45", "45as110"]), "reading.geometries[0]"),
+        (_measure(STD, ["15as15", "15as45", "15as110"]), "reading.geometries"),
         (_measure(STD[:2]), "reading.lab"),
         (_measure([[90.0, 1.0], *STD[1:]]), "reading.lab"),
         (_measure([[250.0, 0.0, 0.0], *STD[1:]]), "reading.lab[0].L"),
@@ -87,10 +87,28 @@ def test_bad_files_name_the_file(tmp_path: Path) -> None:
         load_readings(nan)
     junk = tmp_path / "junk.txt"
     junk.write_text("CGATS.17\n")
-    with pytest.raises(QcInputError, match=r"junk\.txt"):
+    with pytest.raises(InputError, match=r"junk\.txt"):  # not JSON: the importers' error, or ours
         load_readings(junk)
     with pytest.raises(QcInputError, match=r"missing\.json"):
         load_readings(tmp_path / "missing.json")
+
+
+def test_other_illuminations_are_left_out_and_other_conditions_need_spectra() -> None:
+    two_blocks = _measure(
+        [STD[0], STD[1], [10.0, 0.0, 0.0], STD[2]], ["45as15", "45as45", "15as45", "45as110"]
+    )
+    r = reading_from_dict(two_blocks)
+    assert r.geometries == tuple(GEOMS) and [list(x) for x in r.lab] == STD
+    with pytest.raises(QcInputError, match="D50") as err:
+        reading_from_dict(_measure(STD, illuminant="D50"))
+    assert err.value.field == "reading.illuminant"
+    flat = [[0.18] * 31] * 3
+    d50 = reading_from_dict(
+        _measure(STD, illuminant="D50", spectra=flat, wavelengths_nm=list(range(400, 701, 10)))
+    )
+    assert d50.lab[0][0] == pytest.approx(116 * 0.18 ** (1 / 3) - 16, abs=1e-3)  # D65 Lab of the spectra
+    same = reading_from_dict(_measure(STD, illuminant="D65", observer="CIE 1964 10 Degree Standard Observer"))
+    assert [list(x) for x in same.lab] == STD
 
 
 def test_spectra_without_lab_give_the_lab_of_the_spectra() -> None:
