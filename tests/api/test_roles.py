@@ -64,6 +64,7 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("GET", f"{V1}/library/{{code}}"): frozenset({Q, S, C, A}),
     ("GET", f"{V1}/library/export.csv"): frozenset({Q, S, C, A}),
     ("GET", f"{V1}/library/browse"): frozenset({Q, S, C, A}),
+    ("GET", f"{V1}/library/libraries"): frozenset({Q, S, C, A}),
     ("POST", f"{V1}/library/import"): frozenset({C, A}),
     ("POST", f"{V1}/styling/variations"): frozenset({S, A}),
     ("POST", f"{V1}/styling/swatch"): frozenset({S, A}),

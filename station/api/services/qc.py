@@ -7,9 +7,7 @@ panels on the page, so a reading pairs the same way whatever page it is seen on.
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Sequence
-from pathlib import Path
 
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
@@ -217,21 +215,17 @@ def job_summary(*, session: Session, job: str, formula: str | None) -> JobSummar
 
 
 def report_pdf(*, session: Session, job: str, formula: str | None) -> bytes:
-    """The job's QC report as PDF bytes (``station.qc.report.write_pdf``)."""
+    """The job's QC report as PDF bytes (``station.qc.report.pdf_bytes``)."""
     from station.qc import report  # matplotlib loads here, not with the service
 
-    summary = _summary(session, job, formula)
-    with tempfile.TemporaryDirectory() as tmp:
-        return report.write_pdf(summary, Path(tmp) / "report.pdf").read_bytes()
+    return report.pdf_bytes(_summary(session, job, formula))
 
 
 def report_csv(*, session: Session, job: str, formula: str | None) -> str:
-    """The job's QC report as CSV text, one row per sample and geometry (``station.qc.report.write_csv``)."""
+    """The job's QC report as CSV text, one row per sample and geometry (``station.qc.report.csv_text``)."""
     from station.qc import report
 
-    summary = _summary(session, job, formula)
-    with tempfile.TemporaryDirectory() as tmp:
-        return report.write_csv(summary, Path(tmp) / "report.csv").read_text(encoding="utf-8")
+    return report.csv_text(_summary(session, job, formula))
 
 
 def _stored(session: Session, measurement_id: int, field: str) -> Reading:
