@@ -158,6 +158,40 @@ def test_judge_through_the_service(qtbot, tmp_path):
         assert _column(screen, "verdict") == ["pass"] * 3
         assert _column(screen, "sample") == [str(job.bumper_ids[1])] * 3
         assert screen.model.source.where == "service http://testserver"
+        # metamerism: a sample with the standard's very spectra has index 0 under A and F11
+        from tests.ingest._readings import make_reading
+
+        tech, qa = api.auth("technician"), api.auth("qa")
+        panel = api.client.post("/api/v1/panels", json={"job": "J-MI", "part": "door"}, headers=tech).json()[
+            "id"
+        ]
+        ids = []
+        for k in range(2):
+            body = make_reading(41, k, panel_id=panel).model_dump(mode="json")
+            body["spectra"] = [[0.5] * 31, [0.3] * 31, [0.1] * 31]
+            r = api.client.post("/api/v1/measurements", json=body, headers=tech)
+            assert r.status_code == 201, r.text
+            ids.append(r.json()["id"])
+        api.client.put("/api/v1/qc/jobs/J-MI/standards/door", json={"measurement_id": ids[0]}, headers=qa)
+        _click(qtbot, screen.load_btn)
+        screen.job.setCurrentText("J-MI")
+        screen.part.setCurrentText("door")
+        _click(qtbot, screen.judge_btn)
+        _click(qtbot, screen.mi_btn)
+        assert screen.status.text() == "error: select a sample row first"
+        cell = screen.table.visualItemRect(screen.table.item(0, 0)).center()
+        qtbot.mouseClick(screen.table.viewport(), Qt.MouseButton.LeftButton, pos=cell)
+        _click(qtbot, screen.mi_btn)
+        assert screen.status.text() == (
+            f"metamerism of {ids[1]} against {ids[0]} (cie76): MI A 0.00 · MI F11 0.00 (max over geometries)"
+        )
+        screen.part.setCurrentText("door")
+        screen.job.setCurrentText("J-100")
+        screen.part.setCurrentText("bumper")
+        _click(qtbot, screen.judge_btn)
+        qtbot.mouseClick(screen.table.viewport(), Qt.MouseButton.LeftButton, pos=cell)
+        _click(qtbot, screen.mi_btn)  # the populated job has no spectra: refused, the field named
+        assert screen.status.text().startswith("error:") and "spectra" in screen.status.text()
         screen.close()
     finally:
         gen.close()

@@ -66,6 +66,7 @@ class QcSource(Protocol):
     def jobs(self) -> list[JobEntry]: ...
     def summary(self, job: str, formula: str) -> dict[str, Any]: ...
     def report(self, job: str, formula: str, kind: str, path: Path) -> Path: ...
+    def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]: ...
 
 
 class LocalQc:
@@ -126,6 +127,18 @@ class LocalQc:
         summary = self._summary(job, formula)
         return report.write_pdf(summary, path) if kind == "pdf" else report.write_csv(summary, path)
 
+    def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
+        from db.models import Measurement
+        from station.qc.metamerism import metamerism
+        from station.qc.readings import reading_from_measurement
+
+        with self._session() as session:
+            rows = [session.get(Measurement, i) for i in (standard_id, sample_id)]
+            if rows[0] is None or rows[1] is None:
+                raise QcSourceError(f"{self.where}: measurement {standard_id} or {sample_id} not found")
+            std, smp = (reading_from_measurement(m) for m in rows)
+        return metamerism(std, smp, formula).to_dict()
+
 
 class ServiceQc:
     """A station service's ``/api/v1/qc`` routes through the viewer's :class:`ServiceClient`."""
@@ -153,6 +166,22 @@ class ServiceQc:
 
     def summary(self, job: str, formula: str) -> dict[str, Any]:
         return self._get(f"/qc/jobs/{quote(job, safe='')}/summary", formula=formula).json()
+
+    def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
+        from ui.models.service import ServiceError
+
+        body = {
+            "standard_measurement_id": standard_id,
+            "sample_measurement_id": sample_id,
+            "formula": formula,
+        }
+        try:
+            r = self.client.request("POST", "/qc/metamerism", json=body)
+        except ServiceError as exc:
+            raise QcSourceError(str(exc)) from exc
+        if r.status_code >= 400:
+            raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
+        return r.json()
 
     def report(self, job: str, formula: str, kind: str, path: Path) -> Path:
         r = self._get(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula=formula)
@@ -244,6 +273,25 @@ class QcModel:
         c = p["counts"]
         note = f"  — {p['note']}" if p.get("note") else ""
         return f"standard: {ref}   pass {c['pass']} · warn {c['warn']} · fail {c['fail']}{note}"
+
+    def metamerism_text(self, part: str, sample_id: int) -> str:
+        """The metamerism index (D65 → A, F11) of *sample_id* against *part*'s standard measurement, one line.
+
+        The formula is the judged one's, except DIN 6175-2 (a tolerance formula): CIEDE2000 then.
+        """
+        p = self.part(part)
+        std = None if p is None else p.get("standard")
+        if std is None or not std.get("measurement_id"):
+            raise InputError("standard", f"a standard measurement for {part} (a design has no spectra)", None)
+        formula = self.summary_key[1] if self.summary_key else "cie2000"
+        formula = "cie2000" if formula.startswith("din") else formula
+        out = self.source.metamerism(int(std["measurement_id"]), sample_id, formula)
+        mx = out["max_index"]
+        return (
+            f"metamerism of {sample_id} against {std['measurement_id']} ({out['formula']}): "
+            + " · ".join(f"MI {ill} {v:.2f}" for ill, v in mx.items())
+            + " (max over geometries)"
+        )
 
     def report(self, kind: str, path: str | Path) -> Path:
         """Write the shown job's report (``pdf`` or ``csv``) at *path*."""

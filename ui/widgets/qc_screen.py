@@ -3,7 +3,8 @@
 The table shows each sample at each geometry (ΔL*, Δa*, Δb*, ΔE, pass / warn / fail, the 60° gloss of
 the gloss reading paired with the sample, and the reason), coloured by verdict; the line above names the standard and the counts. Data and reports come from
 :class:`ui.models.qc.QcModel` (the workstation's database or the service). Reports are written off the
-GUI thread.
+GUI thread. "Metamerism of selected" gives the metamerism index (D65 → A, F11) of the selected sample
+against the part's standard measurement.
 """
 
 from __future__ import annotations
@@ -49,7 +50,8 @@ class QcScreen(QWidget):
         self.judge_btn = QPushButton("Judge")
         self.pdf_btn = QPushButton("Export PDF…")
         self.csv_btn = QPushButton("Export CSV…")
-        for b in (self.judge_btn, self.pdf_btn, self.csv_btn):
+        self.mi_btn = QPushButton("Metamerism of selected")
+        for b in (self.judge_btn, self.pdf_btn, self.csv_btn, self.mi_btn):
             b.setEnabled(False)
         self.standard = QLabel("Load jobs to begin.")
         self.standard.setWordWrap(True)
@@ -65,7 +67,7 @@ class QcScreen(QWidget):
         form.addRow("part", self.part)
         form.addRow("formula", self.formula)
         buttons = QHBoxLayout()
-        for b in (self.load_btn, self.judge_btn, self.pdf_btn, self.csv_btn):
+        for b in (self.load_btn, self.judge_btn, self.pdf_btn, self.csv_btn, self.mi_btn):
             buttons.addWidget(b)
         layout = QVBoxLayout(self)
         layout.addLayout(form)
@@ -80,6 +82,7 @@ class QcScreen(QWidget):
         self.part.currentTextChanged.connect(self._show_part)
         self.pdf_btn.clicked.connect(lambda: self.export("pdf"))
         self.csv_btn.clicked.connect(lambda: self.export("csv"))
+        self.mi_btn.clicked.connect(self.metamerism)
 
     # -- actions -------------------------------------------------------------------------------------
     def load_jobs(self) -> None:
@@ -120,7 +123,20 @@ class QcScreen(QWidget):
         )
         self.pdf_btn.setEnabled(True)
         self.csv_btn.setEnabled(True)
+        self.mi_btn.setEnabled(True)
         self._show_part(self.part.currentText())
+
+    def metamerism(self) -> None:
+        """The metamerism index (D65 → A, F11) of the selected row's sample against the part's standard."""
+        row = self.table.currentRow()
+        if row < 0:
+            self.status.setText("error: select a sample row first")
+            return
+        sample_id = int(self.table.item(row, COLUMNS.index("sample")).text())
+        try:
+            self.status.setText(self.model.metamerism_text(self.part.currentText(), sample_id))
+        except StationError as exc:
+            self.status.setText(f"error: {exc}")
 
     def _show_part(self, part: str) -> None:
         entry = self.model.part(part)
