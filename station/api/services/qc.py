@@ -1,8 +1,11 @@
-"""Colour QC through the service: gloss readings and the measurement view that pairs them with colour.
+"""Colour QC through the service: gloss readings, the measurement view that pairs them with colour,
+checks, standards, job summaries, metamerism, repeat readings and reports.
 
 The pairing rule is ``station.ingest.pair_gloss`` (linked reading first, else the same panel's
-nearest in time within ``station.ingest.PAIR_WINDOW``); it runs over every colour measurement of the
-panels on the page, so a reading pairs the same way whatever page it is seen on.
+nearest in time within ``station.ingest.PAIR_WINDOW``), applied by
+``station.ingest.gloss_of_measurements`` over every colour measurement of the panels concerned, so a
+reading pairs the same way whatever page it is seen on. Everything colorimetric is ``station.qc``'s
+(which applies ``station.model.tolerance``); this module only maps requests and rows onto it.
 """
 
 from __future__ import annotations
