@@ -4,6 +4,7 @@ from db.models.designs import Design, DesignVersion
 from db.models.instruments import CalibrationRecord, Instrument
 from db.models.library import JOB_STATES, AnalysisResult, FormulationJob, LibraryPaint
 from db.models.measurements import PARTS, Measurement, Panel
+from db.models.standards import Standard
 from db.models.users import ApiToken, AuditEvent, LedgerHead, Role, User
 
 __all__ = [
@@ -22,5 +23,6 @@ __all__ = [
     "Measurement",
     "Panel",
     "Role",
+    "Standard",
     "User",
 ]

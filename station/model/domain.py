@@ -262,3 +262,11 @@ QC_WARN_FRACTION_RANGE: tuple[float, float] = (0.0, 1.0)
 QC_AGGREGATION = "max"
 #: Default colour-difference formula of a QC tolerance set.
 QC_FORMULA = "din6175"
+#: Repeat readings: a reading is an outlier when the robust z of its ΔE*ab to the median reading
+#: exceeds this (Iglewicz & Hoaglin's modified z-score threshold, 3.5; station.qc.repeats).
+QC_OUTLIER_Z = 3.5
+#: Floor of the robust scale (1.4826 × MAD) of repeat readings, ΔE*ab: keeps the z finite when most
+#: readings coincide; about an instrument's short-term repeatability.
+QC_OUTLIER_SCALE_FLOOR = 0.02
+#: SPC control limits of ΔE: centre ± this many σ (station.qc.spc).
+QC_SPC_SIGMAS = 3.0
