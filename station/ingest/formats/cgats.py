@@ -201,9 +201,9 @@ def _samples(
     )
     if not has_lab and not spectral:
         raise CgatsImportError(file, where_fmt, "LAB_L", "LAB_L/LAB_A/LAB_B and/or SPECTRAL_NMxxx fields")
-    scale = 1.0
+    divisor = 1.0
     if keywords.get("SPECTRAL_NORM", "").strip() in ("100", "100.0"):
-        scale = 0.01
+        divisor = 100.0  # percent
     texture_cols = [(f, i) for i, f in enumerate(fields) if _TEXTURE.match(f)]
     vendor = keywords.get("MANUFACTURER", "").strip() or keywords.get("INSTRUMENTATION", "").strip()
     if texture_cols and not vendor:
@@ -241,7 +241,7 @@ def _samples(
             if has_lab:
                 labs.append([_float(toks[c], f, file, lineno) for c, f in zip(lab_cols, ("LAB_L", "LAB_A", "LAB_B"), strict=True) if c is not None])  # fmt: skip
             if spectral:
-                curves.append([_float(toks[i], fields[i], file, lineno) * scale for _, i in spectral])
+                curves.append([_float(toks[i], fields[i], file, lineno) / divisor for _, i in spectral])
             for f, i in texture_cols:
                 if toks[i] == "":
                     continue

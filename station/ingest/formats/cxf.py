@@ -31,7 +31,7 @@ from xsdata.exceptions import ParserError
 from xsdata.models.datatype import XmlDateTime
 
 from station.ingest.errors import CxfImportError
-from station.ingest.formats._text import factory, read_bytes
+from station.ingest.formats._text import decode_utf8, factory, read_bytes
 from station.ingest.formats.measurement import (
     ImportedFile,
     ImportedMeasurement,
@@ -142,6 +142,7 @@ def read_cxf(path: Path | str) -> ImportedFile:
     path = Path(path)
     file = path.name
     data = read_bytes(path, CxfImportError)
+    decode_utf8(data, file, CxfImportError)  # CxF3 files are UTF-8: refuse others by line, not by parser
     _screen(data, file)
     try:
         doc = colour_cxf.read_cxf(data)

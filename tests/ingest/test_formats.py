@@ -1,0 +1,268 @@
+"""Importers on files written by the simulator (``station measure sim:ma6 --twelve --out …``): each
+format reads back the simulator's own spectra and Lab; hand-written vendor-style files read as the
+format defines; every malformed case is refused by the format's typed error naming file, place, field."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from station.errors import InputError
+from station.ingest.errors import (
+    CgatsImportError,
+    CsvImportError,
+    CxfImportError,
+    ImportFileError,
+    IngestError,
+    UnknownFormatError,
+)
+from station.ingest.formats import VendorValue, lab_of, read_measurement_file, readings_from_import
+from station.model.design_io import save_design
+from station.model.representations import FaceFlopTravelGloss
+
+REPO = Path(__file__).resolve().parents[2]
+FORMATS = ("cxf", "cgats", "csv")
+ERRORS = {"cxf": CxfImportError, "cgats": CgatsImportError, "csv": CsvImportError}
+
+
+@pytest.fixture(scope="module")
+def sim_files(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, object], dict[str, Path]]:
+    """One simulated 12-geometry reading, as the measure JSON and as one file per format."""
+    d = tmp_path_factory.mktemp("sim")
+    save_design(FaceFlopTravelGloss((80.0, -2.0, -20.0), (30.0, 1.0, -8.0), 60.0), d / "std.json")
+    files = {f: d / f"std.{f}" for f in FORMATS}
+    outs = [a for f in FORMATS for a in ("--out", str(files[f]))]
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    res = subprocess.run(
+        [sys.executable, "-m", "station.cli", "measure", "sim:ma6", "--twelve", "--design", "std.json",
+         "--sample", "std panel", *outs, "--json"],
+        capture_output=True, text=True, timeout=120, cwd=d, env=env,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    return json.loads(res.stdout), files
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_round_trip_of_simulator_files(sim_files: tuple[dict, dict[str, Path]], fmt: str) -> None:
+    measured, files = sim_files
+    got = read_measurement_file(files[fmt])
+    assert got.format == fmt and len(got.measurements) == 1
+    m = got.measurements[0]
+    assert m.sample == "std panel"
+    assert list(m.geometries) == measured["geometries"] and len(m.geometries) == 12
+    assert m.illuminations == (45.0, 15.0)  # two illumination blocks, as an MA-T12 writes them
+    assert m.wavelengths_nm == tuple(float(w) for w in range(400, 701, 10))
+    # spectra to the 6 decimals written, Lab to the 4 decimals measure prints
+    assert np.abs(np.asarray(m.spectra) - np.asarray(measured["spectra"])).max() <= 5e-7 + 1e-12
+    assert np.asarray(m.lab) == pytest.approx(np.asarray(measured["lab"]), abs=1e-4 + 1e-9)
+    assert (m.instrument.model, m.instrument.serial) == (measured["model"], measured["serial"])
+    assert m.measured_at == dt.datetime.fromisoformat(measured["time"])
+    assert m.illuminant == "D65" and m.observer == "CIE 1964 10 Degree Standard Observer"
+    readings = readings_from_import(
+        got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC), job="J-7", part="door"
+    )
+    (r,) = readings
+    assert r.geometries_deg == [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0]  # the 45° block only
+    assert r.lab == [list(v) for v in m.lab[:6]]
+    assert r.panel is not None and (r.panel.job, r.panel.part, r.panel.notes) == (
+        "J-7",
+        "door",
+        "sample: std panel",
+    )
+    again = readings_from_import(got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC))
+    assert again[0].client_id == r.client_id  # same bytes, same client id: a re-import is a duplicate
+    lit15 = readings_from_import(got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC),
+                                 illumination_deg=15)  # fmt: skip
+    assert lit15[0].geometries_deg == [-45.0, -15.0, 15.0, 25.0, 45.0, 60.0]
+    assert lit15[0].client_id != r.client_id
+
+
+ARGYLL_STYLE = """CTI3   # a comment after the file type
+DESCRIPTOR "Argyll-style \"\"multi-angle\"\" export"
+ORIGINATOR "spectro"
+MANUFACTURER "BYK-Gardner"
+INSTRUMENTATION "BYK-mac i"
+KEYWORD "SERIAL_NUMBER"
+SERIAL_NUMBER "1234 567"
+MEASUREMENT_SOURCE "Illumination=D50 ObserverAngle=2"
+SPECTRAL_NORM "100"
+CREATED "2026-11-23T08:30:00Z"
+KEYWORD "ILLUMINATION_ANGLE"
+KEYWORD "ASPECULAR_ANGLE"
+NUMBER_OF_FIELDS 9
+BEGIN_DATA_FORMAT
+SAMPLE_ID SAMPLE_NAME ILLUMINATION_ANGLE ASPECULAR_ANGLE
+SPECTRAL_NM400 SPECTRAL_NM550 SPECTRAL_NM700 SPARKLE_INTENSITY GRAININESS
+END_DATA_FORMAT
+NUMBER_OF_SETS 3
+BEGIN_DATA
+1 "door #1" 45 15 50.0 60.0 70.0 4.5 3.1   # three bands only: spectra without Lab
+2 "door #1" 45 45 10.0 12.0 14.0 "" 3.1
+3 "door #1" 45 110 5.0 6.0 7.0 "" 3.1
+END_DATA
+"""
+
+
+def test_cgats_as_the_format_defines(tmp_path: Path) -> None:
+    f = tmp_path / "byk.txt"
+    f.write_text(ARGYLL_STYLE, encoding="utf-8")
+    (m,) = read_measurement_file(f).measurements
+    assert m.sample == "door #1"  # '#' inside quotes is text, outside it starts a comment
+    assert m.geometries == ("45as15", "45as45", "45as110")
+    assert m.spectra == ((0.5, 0.6, 0.7), (0.1, 0.12, 0.14), (0.05, 0.06, 0.07))  # percent → factor
+    assert m.wavelengths_nm == (400.0, 550.0, 700.0) and m.lab is None
+    assert (m.illuminant, m.observer) == ("D50", "CIE 1931 2 Degree Standard Observer")
+    assert m.instrument.serial == "1234 567" and m.instrument.manufacturer == "BYK-Gardner"
+    assert set(m.texture) == {
+        VendorValue("BYK-Gardner", "sparkle_intensity", 4.5, "45as15"),
+        VendorValue("BYK-Gardner", "graininess", 3.1, ""),
+    }
+    # Lab from three bands is refused: spectra-only files need the product grid
+    with pytest.raises(ImportFileError, match=r"wavelengths_nm: expected .*400–700 nm"):
+        lab_of(m, lambda fl, acc, got: ImportFileError("byk.txt", "", fl, acc, got))
+
+
+def test_texture_never_compares_across_vendors() -> None:
+    byk = VendorValue("BYK-Gardner", "sparkle_grade", 4.0, "45as15")
+    xrite = VendorValue("X-Rite", "sparkle_grade", 3.0, "45as15")
+    assert byk.difference(VendorValue("BYK-Gardner", "sparkle_grade", 3.25, "45as15")) == 0.75
+    with pytest.raises(InputError, match="same vendor"):
+        byk.difference(xrite)
+    with pytest.raises(InputError, match="vendor name"):
+        VendorValue(" ", "graininess", 1.0)
+
+
+def test_csv_spectra_only_computes_lab(sim_files: tuple[dict, dict[str, Path]], tmp_path: Path) -> None:
+    measured, files = sim_files
+    lines = files["csv"].read_text(encoding="utf-8").splitlines()
+    header = lines[1].split(",")
+    keep = [i for i, h in enumerate(header) if h not in ("L", "a", "b")]
+    text = "\n".join(",".join(row.split(",")[i] for i in keep) for row in lines[1:]) + "\n"
+    f = tmp_path / "nolab.csv"
+    f.write_text(text, encoding="utf-8")
+    (m,) = read_measurement_file(f).measurements
+    assert m.lab is None
+    lab = lab_of(m, lambda fl, acc, got: ImportFileError("nolab.csv", "", fl, acc, got))
+    assert lab == pytest.approx(np.asarray(measured["lab"]), abs=2e-3)  # from spectra rounded to 1e-6
+
+
+def _mutate(fmt: str, text: str, case: str) -> str | bytes:
+    """A malformed copy of the simulator file *text* for *case*."""
+    if case == "truncated":
+        return text[: len(text) * 2 // 3]
+    if case == "encoding":
+        return text.replace("std panel", "std pan\xe9l").encode("latin-1")
+    if fmt == "cxf":
+        first_l = text.index("<ns0:L>") + len("<ns0:L>")
+        end_l = text.index("</ns0:L>", first_l)
+        if case == "missing":
+            return text.replace("<ns0:L>", "<ns0:X>", 1).replace("</ns0:L>", "</ns0:X>", 1)
+        if case == "nan":
+            return text[:first_l] + "NaN" + text[end_l:]
+        if case == "range":
+            return text[:first_l] + "250.0" + text[end_l:]
+        if case == "duplicate":  # the second geometry's specification renamed to the first's
+            return text.replace("CS45as15-", "CS45as-15-")
+    lines = text.splitlines()
+    if fmt == "cgats":
+        data = lines.index("BEGIN_DATA") + 1
+        cells = lines[data].split(" ")  # id, '"std', 'panel"', geometry, L, a, b, spectra…
+        if case == "missing":
+            fmt_line = lines.index("BEGIN_DATA_FORMAT") + 1
+            lines[fmt_line] = lines[fmt_line].replace(" GEOMETRY", " GEO")
+        elif case == "nan":
+            cells[5] = "nan"
+        elif case == "range":
+            cells[4] = "-5.0"
+        elif case == "duplicate":
+            cells[3] = lines[data + 1].split(" ")[3]
+        lines[data] = " ".join(cells)
+    else:
+        cells = lines[2].split(",")
+        if case == "missing":
+            lines[1] = lines[1].replace(",geometry,", ",geom,")
+        elif case == "nan":
+            cells[3] = "NaN"
+        elif case == "range":
+            cells[4] = "151"
+        elif case == "duplicate":
+            cells[1] = lines[3].split(",")[1]
+        lines[2] = ",".join(cells)
+    return "\n".join(lines) + "\n"
+
+
+EXPECT = {  # case → (place pattern, field pattern) in the one-line message
+    "truncated": (r"line \d+", r"(xml|END_DATA|row|spectra|measured_at)"),
+    "encoding": (r"line \d+", r"encoding"),
+    "missing": (r"", r"(L|GEOMETRY|geometry|xml)"),
+    "nan": (r"", r"(lab\.[Lab]|a finite number)"),
+    "range": (r"", r"lab\.[Lab]"),
+    "duplicate": (r"", r"geometry"),
+}
+
+
+@pytest.mark.parametrize("case", list(EXPECT))
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_malformed_files_are_refused(
+    sim_files: tuple[dict, dict[str, Path]], tmp_path: Path, fmt: str, case: str
+) -> None:
+    _, files = sim_files
+    bad = _mutate(fmt, files[fmt].read_text(encoding="utf-8"), case)
+    f = tmp_path / f"bad-{case}.{fmt}"
+    if isinstance(bad, bytes):
+        f.write_bytes(bad)
+    else:
+        f.write_text(bad, encoding="utf-8")
+    with pytest.raises(ERRORS[fmt]) as info:
+        read_measurement_file(f)
+    err = info.value
+    assert isinstance(err, InputError) and isinstance(err, IngestError)  # CLI exit 2, ingest hierarchy
+    msg = str(err)
+    assert f.name in msg and "\n" not in msg
+    place, fld = EXPECT[case]
+    assert err.where and (not place or re.search(place, err.where)), msg
+    assert re.search(fld, err.field + " " + err.accepted), msg
+
+
+def test_hostile_and_unknown_files(tmp_path: Path) -> None:
+    xxe = tmp_path / "xxe.cxf"
+    xxe.write_text(
+        '<?xml version="1.0"?><!DOCTYPE x [<!ENTITY e SYSTEM "file:///etc/passwd">]>'
+        '<cc:CxF xmlns:cc="http://colorexchangeformat.com/CxF3-core">&e;</cc:CxF>',
+        encoding="utf-8",
+    )
+    with pytest.raises(CxfImportError, match="DOCTYPE"):
+        read_measurement_file(xxe)
+    other = tmp_path / "notes.bin"
+    other.write_bytes(b"\x00\x01hello")
+    with pytest.raises(UnknownFormatError, match=r"notes\.bin"):
+        read_measurement_file(other)
+    empty = tmp_path / "empty.cxf"
+    empty.write_text(
+        '<cc:CxF xmlns:cc="http://colorexchangeformat.com/CxF3-core"><cc:Resources/></cc:CxF>',
+        encoding="utf-8",
+    )
+    with pytest.raises(CxfImportError, match="Object"):
+        read_measurement_file(empty)
+
+
+def test_out_of_range_angle_and_count_mismatch(tmp_path: Path) -> None:
+    text = (
+        "CGATS.17\nNUMBER_OF_SETS 2\nBEGIN_DATA_FORMAT\nSAMPLE_ID GEOMETRY LAB_L LAB_A LAB_B\nEND_DATA_FORMAT\n"
+        "BEGIN_DATA\nA 45as15 50 1 2\nEND_DATA\n"
+    )
+    f = tmp_path / "count.cgats"
+    f.write_text(text, encoding="utf-8")
+    with pytest.raises(CgatsImportError, match=r"NUMBER_OF_SETS: expected the number of data rows \(1\), got 2 \(count.cgats, line 2\)"):  # fmt: skip
+        read_measurement_file(f)
+    f.write_text(text.replace("NUMBER_OF_SETS 2\n", "").replace("45as15", "45by15"), encoding="utf-8")
+    with pytest.raises(CgatsImportError, match=r"GEOMETRY: expected a name like .* line 6"):
+        read_measurement_file(f)
