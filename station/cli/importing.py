@@ -50,6 +50,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--outbox", type=Path, help="outbox file (default: measure-outbox.sqlite3 in the data folder)"
     )
+    p.add_argument(
+        "--out", type=Path, help="also write the measurements to FILE (.cxf, .cgats, .csv): a conversion"
+    )
     p.add_argument("--job", help="job of the panels the measurements are stored on (with --part)")
     p.add_argument("--part", help="part of those panels (bumper, fender, door, …; with --job)")
     p.add_argument(
@@ -114,6 +117,13 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
         "file": imported.file,
         "measurements": [_measurement_json(m) for m in imported.measurements],
     }
+    if args.out is not None:
+        from station.ingest.formats import write_measurement_file
+
+        out["written"] = {
+            "path": str(args.out),
+            "format": write_measurement_file(imported.measurements, args.out),
+        }
     if args.store is not None:
         from station.cli.instruments import _ingestor, _receipt
         from station.ingest import operator_name
@@ -133,6 +143,8 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
     if not args.json:
         for m in out["measurements"]:
             print(f"{m['sample']}: {len(m['geometries'])} geometries {', '.join(m['geometries'])}")
+        if "written" in out:
+            print(f"written: {out['written']['path']} ({out['written']['format']})")
         for r in out.get("stored", []):
             print(f"stored: {r['status']} {r['client_id']} measurement {r['measurement_id']}")
         return None

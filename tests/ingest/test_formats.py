@@ -24,7 +24,13 @@ from station.ingest.errors import (
     IngestError,
     UnknownFormatError,
 )
-from station.ingest.formats import VendorValue, lab_of, read_measurement_file, readings_from_import
+from station.ingest.formats import (
+    VendorValue,
+    lab_of,
+    read_measurement_file,
+    readings_from_import,
+    write_measurement_file,
+)
 from station.model.design_io import save_design
 from station.model.representations import FaceFlopTravelGloss
 
@@ -266,3 +272,22 @@ def test_out_of_range_angle_and_count_mismatch(tmp_path: Path) -> None:
     f.write_text(text.replace("NUMBER_OF_SETS 2\n", "").replace("45as15", "45by15"), encoding="utf-8")
     with pytest.raises(CgatsImportError, match=r"GEOMETRY: expected a name like .* line 6"):
         read_measurement_file(f)
+
+
+@pytest.mark.parametrize("src", FORMATS)
+def test_every_format_converts_to_every_other(
+    sim_files: tuple[dict, dict[str, Path]], tmp_path: Path, src: str
+) -> None:
+    _, files = sim_files
+    original = read_measurement_file(files[src]).measurements
+    for dst in FORMATS:
+        path = tmp_path / f"converted.{dst}"
+        assert write_measurement_file(original, path) == dst
+        (back,) = read_measurement_file(path).measurements
+        (m,) = original
+        assert (back.geometries, back.lab, back.spectra, back.wavelengths_nm) == (
+            m.geometries, m.lab, m.spectra, m.wavelengths_nm,
+        )  # fmt: skip
+        assert (back.instrument, back.measured_at, back.illuminant, back.observer) == (
+            m.instrument, m.measured_at, m.illuminant, m.observer,
+        )  # fmt: skip
