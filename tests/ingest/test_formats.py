@@ -5,11 +5,7 @@ format defines; every malformed case is refused by the format's typed error nami
 from __future__ import annotations
 
 import datetime as dt
-import json
-import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -31,29 +27,9 @@ from station.ingest.formats import (
     readings_from_import,
     write_measurement_file,
 )
-from station.model.design_io import save_design
-from station.model.representations import FaceFlopTravelGloss
+from tests.ingest.conftest import FORMATS
 
-REPO = Path(__file__).resolve().parents[2]
-FORMATS = ("cxf", "cgats", "csv")
 ERRORS = {"cxf": CxfImportError, "cgats": CgatsImportError, "csv": CsvImportError}
-
-
-@pytest.fixture(scope="module")
-def sim_files(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, object], dict[str, Path]]:
-    """One simulated 12-geometry reading, as the measure JSON and as one file per format."""
-    d = tmp_path_factory.mktemp("sim")
-    save_design(FaceFlopTravelGloss((80.0, -2.0, -20.0), (30.0, 1.0, -8.0), 60.0), d / "std.json")
-    files = {f: d / f"std.{f}" for f in FORMATS}
-    outs = [a for f in FORMATS for a in ("--out", str(files[f]))]
-    env = dict(os.environ, PYTHONPATH=str(REPO))
-    res = subprocess.run(
-        [sys.executable, "-m", "station.cli", "measure", "sim:ma6", "--twelve", "--design", "std.json",
-         "--sample", "std panel", *outs, "--json"],
-        capture_output=True, text=True, timeout=120, cwd=d, env=env,
-    )  # fmt: skip
-    assert res.returncode == 0, res.stderr
-    return json.loads(res.stdout), files
 
 
 @pytest.mark.parametrize("fmt", FORMATS)

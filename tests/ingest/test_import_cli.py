@@ -57,23 +57,29 @@ def _count(url: str) -> int:
         engine.dispose()
 
 
-def test_simulator_to_watch_folder_to_database_to_verdict(tmp_path: Path, _migrated_sqlite: Path) -> None:
+def test_simulator_to_watch_folder_to_database_to_verdict(
+    tmp_path: Path,
+    _migrated_sqlite: Path,
+    sim_files: tuple[dict[str, object], dict[str, Path]],
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from station.cli import main  # in this process, for the checks that need no process of their own
+
     db = tmp_path / "station.sqlite3"
     shutil.copyfile(_migrated_sqlite, db)
     url = f"sqlite:///{db}"
     store = ["--store", url, "--outbox", str(tmp_path / "outbox.sqlite3")]
-    save_design(FaceFlopTravelGloss((80.0, -2.0, -20.0), (30.0, 1.0, -8.0), 60.0), tmp_path / "std.json")
-    save_design(FaceFlopTravelGloss((81.2, -2.6, -21.0), (30.8, 1.3, -8.5), 60.0), tmp_path / "smp.json")
+    # the standard: the simulated MA-T12-style reading of std.json (two illumination blocks) as CxF3
     drop = tmp_path / "drop"
     drop.mkdir()
-    for design, sample, out in (
-        ("std.json", "standard", "drop/std.cxf"),
-        ("smp.json", "trial 1", "smp.cgats"),
-    ):
-        res = station(
-            tmp_path, "measure", "sim:ma6", "--design", design, "--sample", sample, "--out", out, "--json"
-        )
-        assert res.returncode == 0, res.stderr
+    shutil.copy(sim_files[1]["cxf"], drop / "std.cxf")
+    # the trial: the simulator measuring a slightly different design, written as CGATS.17
+    save_design(FaceFlopTravelGloss((81.2, -2.6, -21.0), (30.8, 1.3, -8.5), 60.0), tmp_path / "smp.json")
+    res = station(
+        tmp_path, "measure", "sim:ma6", "--design", "smp.json", "--sample", "trial 1", "--out", "smp.cgats"
+    )
+    assert res.returncode == 0, res.stderr
 
     # station import FILE --store --json: the contract, stored on a job and part
     res = station(tmp_path, "import", "smp.cgats", *store, "--job", "J-100", "--part", "fender", "--json")
@@ -100,11 +106,10 @@ def test_simulator_to_watch_folder_to_database_to_verdict(tmp_path: Path, _migra
     cells[4] = "nan"
     bad[row] = " ".join(cells)
     (tmp_path / "bad.cgats").write_text("\n".join(bad) + "\n", encoding="utf-8")
-    res = station(tmp_path, "import", "bad.cgats", *store, "--job", "J-100", "--part", "fender")
-    assert res.returncode == 2 and res.stdout == ""
-    assert (
-        res.stderr.count("\n") == 1 and f"bad.cgats, line {row + 1}" in res.stderr and "lab.L" in res.stderr
-    )
+    monkeypatch.chdir(tmp_path)
+    assert main(["import", "bad.cgats", *store, "--job", "J-100", "--part", "fender"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"bad.cgats, line {row + 1}" in err and "lab.L" in err
     assert _count(url) == 1
 
     # the watch folder: a good CxF, the good CGATS (already stored), a truncated CSV
@@ -126,7 +131,7 @@ def test_simulator_to_watch_folder_to_database_to_verdict(tmp_path: Path, _migra
     ms, ps = _rows(url)
     assert len(ms) == 2 and [(p.job, p.part, p.notes) for p in ps] == [
         ("J-100", "fender", "sample: trial 1"),
-        ("J-100", "fender", "sample: standard"),
+        ("J-100", "fender", "sample: std panel"),
     ]
     smp, std = ms  # the sample was stored first
     assert smp.panel_id == ps[0].id and std.panel_id == ps[1].id
@@ -136,18 +141,16 @@ def test_simulator_to_watch_folder_to_database_to_verdict(tmp_path: Path, _migra
     def triples(lab: list[list[float]]) -> str:
         return ";".join(",".join(repr(v) for v in t) for t in lab)
 
-    res = station(
-        tmp_path, "qc", "verdict", "--standard", triples(std.lab), "--sample", triples(smp.lab),
-        "--angles=-15,15,25,45,75,110", "--formula", "cie76", "--limit", "2.0", "--json",
-    )  # fmt: skip
-    assert res.returncode == 0, res.stderr
-    verdict = json.loads(res.stdout)
+    assert main(["qc", "verdict", "--standard", triples(std.lab), "--sample", triples(smp.lab),
+                 "--angles=-15,15,25,45,75,110", "--formula", "cie76", "--limit", "2.0", "--json"]) == 0  # fmt: skip
+    verdict = json.loads(capsys.readouterr().out)
     by_hand = [math.dist(a, b) for a, b in zip(std.lab, smp.lab, strict=True)]
     assert [g["dE"] for g in verdict["per_geometry"]] == pytest.approx(by_hand, rel=1e-9)
     assert verdict["max_de"] == pytest.approx(max(by_hand))
     expected = "fail" if max(by_hand) > 2.0 else "warn" if max(by_hand) > 0.8 * 2.0 else "pass"
     assert verdict["verdict"] == expected
     assert 0.5 < max(by_hand) < 5.0  # the two designs differ by about 1.5 ΔE*ab at the face
+    assert std.lab == [list(v) for v in sim_files[0]["lab"][:6]]  # type: ignore[index]  # the simulator's Lab
 
 
 def test_import_refusals(
