@@ -67,13 +67,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=cmd_import)
 
 
-def _measurement_json(m: Any) -> dict[str, Any]:
+def _measurement_json(m: Any, file: str, index: int) -> dict[str, Any]:
+    import functools
+
     from station.ingest.errors import ImportFileError
     from station.ingest.formats import lab_of
 
     out = m.to_dict()
     out["lab_source"] = "file" if m.lab is not None else "spectra"
-    out["lab"] = lab_of(m, lambda f, a, g: ImportFileError(m.sample, "", f, a, g)).round(4).tolist()
+    where = f"measurement {index + 1} ({m.sample})"
+    out["lab"] = lab_of(m, functools.partial(ImportFileError, file, where)).round(4).tolist()
     return out
 
 
@@ -115,7 +118,7 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
     out: dict[str, Any] = {
         "format": imported.format,
         "file": imported.file,
-        "measurements": [_measurement_json(m) for m in imported.measurements],
+        "measurements": [_measurement_json(m, imported.file, i) for i, m in enumerate(imported.measurements)],
     }
     if args.out is not None:
         from station.ingest.formats import write_measurement_file

@@ -41,6 +41,7 @@ from station.ingest.formats.measurement import (
     Instrument,
     VendorValue,
     build_measurement,
+    canonical_geometry,
     observer_degrees,
     observer_name,
 )
@@ -169,7 +170,7 @@ def read_csv(path: Path | str) -> ImportedFile:
             for vendor, qty, per_sample, i in texture_cols:
                 if not row[i].strip() or (per_sample and k != k0):
                     continue
-                geometry = "" if per_sample else row[col["geometry"]].strip().lower()
+                geometry = "" if per_sample else canonical_geometry(row[col["geometry"]], "geometry", err)
                 texture.append(VendorValue(vendor, qty, _float(row[i], header[i], file, k), geometry))
         out.append(
             build_measurement(

@@ -19,6 +19,7 @@ from __future__ import annotations
 import datetime as dt
 import itertools
 import math
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -27,7 +28,7 @@ import colour_cxf
 import defusedxml.ElementTree as DET
 from colour_cxf import cxf3
 from defusedxml import DefusedXmlException
-from xsdata.exceptions import ParserError
+from xsdata.exceptions import ConverterWarning, ParserError
 from xsdata.models.datatype import XmlDateTime
 
 from station.ingest.errors import CxfImportError
@@ -145,7 +146,15 @@ def read_cxf(path: Path | str) -> ImportedFile:
     decode_utf8(data, file, CxfImportError)  # CxF3 files are UTF-8: refuse others by line, not by parser
     _screen(data, file)
     try:
-        doc = colour_cxf.read_cxf(data)
+        with warnings.catch_warnings():  # xsdata keeps a value it cannot convert, with a warning: refuse it
+            warnings.simplefilter("error", ConverterWarning)
+            doc = colour_cxf.read_cxf(data)
+    except ConverterWarning as exc:
+        element, _, rest = str(exc).partition("\n")
+        fld = element.rsplit("`", 2)[-2] if element.count("`") >= 2 else "value"
+        raise CxfImportError(
+            file, f"element {fld.split('.')[0]}", fld, "a value of the element's type", rest.strip()
+        ) from exc
     except (ParserError, ValueError, TypeError) as exc:
         raise CxfImportError(file, "document", "xml", "CxF3 elements with valid values", str(exc)) from exc
     specs = _specs(doc, file)

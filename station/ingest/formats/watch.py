@@ -189,10 +189,17 @@ def scan_once(
     """Process every settled file now in *folder* (oldest name first); one outcome per file."""
     if not folder.is_dir():
         raise InputError("folder", "an existing folder", str(folder))
-    return [
-        process_file(p, ingestor, operator=operator, job=job, part=part, illumination_deg=illumination_deg)
-        for p in _candidates(folder, settle_s)
-    ]
+    outcomes = []
+    for p in _candidates(folder, settle_s):
+        try:
+            outcomes.append(
+                process_file(
+                    p, ingestor, operator=operator, job=job, part=part, illumination_deg=illumination_deg
+                )
+            )
+        except FileNotFoundError:  # taken away meanwhile (by a person, or a second watcher on the folder)
+            log.info("%s left the folder before it was imported", p.name)
+    return outcomes
 
 
 def watch_folder(
