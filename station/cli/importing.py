@@ -1,7 +1,7 @@
 """``station import FILE`` and ``station import watch DIR``: vendor measurement files as a source.
 
-* ``station import FILE [--format cxf|cgats|csv] [--store [URL]] [--job J --part P] [--json]`` reads a
-  CxF3, CGATS.17 or CSV-template file (docs/import.md) and prints
+* ``station import FILE [--format cxf|cgats|csv|xlsx] [--store [URL]] [--job J --part P] [--json]`` reads a
+  CxF3, CGATS.17, MA-T12 workbook or CSV-template file (docs/import.md) and prints
   ``{"measurements": [{"geometries": [...], "lab": [[L,a,b], ...], "spectra": ..., "instrument": ...,
   "sample": ...}, ...]}``. With ``--store`` every measurement is stored through the one ingest path
   (``station.ingest.Ingestor`` into URL, by default the ``station serve`` database, queued in
@@ -38,7 +38,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("target", nargs="+", metavar="FILE | watch DIR", help="a measurement file, or: watch DIR")
     p.add_argument(
-        "--format", choices=("cxf", "cgats", "csv"), help="file format (default: from suffix/content)"
+        "--format", choices=("cxf", "cgats", "csv", "xlsx"), help="file format (default: from suffix/content)"
     )
     p.add_argument(
         "--store",
@@ -51,7 +51,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--outbox", type=Path, help="outbox file (default: measure-outbox.sqlite3 in the data folder)"
     )
     p.add_argument(
-        "--out", type=Path, help="also write the measurements to FILE (.cxf, .cgats, .csv): a conversion"
+        "--out",
+        type=Path,
+        help="also write the measurements to FILE (.cxf, .cgats, .csv, .xlsx): a conversion",
     )
     p.add_argument("--job", help="job of the panels the measurements are stored on (with --part)")
     p.add_argument("--part", help="part of those panels (bumper, fender, door, …; with --job)")

@@ -12,7 +12,7 @@ or by default the database ``station serve`` uses (``$CACAD_DATABASE_URL``, else
 ``$CACAD_DATA_DIR`` or ``./var``), upgraded to the current schema on first use.
 
 ``station measure DEVICE --out FILE [--out FILE …] [--format cxf|cgats|csv] [--sample NAME]`` also
-writes the reading (every geometry, spectra and Lab) as a CxF3, CGATS.17 or CSV-template file that
+writes the reading (every geometry, spectra and Lab) as a CxF3, CGATS.17, MA-T12 workbook or CSV file that
 ``station import`` reads (docs/import.md): how the simulators write each vendor format.
 """
 
@@ -82,10 +82,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                 type=Path,
                 action="append",
                 default=[],
-                help="also write the reading as a measurement file (.cxf, .cgats, .csv; repeatable)",
+                help="also write the reading as a measurement file (.cxf, .cgats, .csv, .xlsx; repeatable)",
             )
             cp.add_argument(
-                "--format", choices=("cxf", "cgats", "csv"), help="format of --out (default: from its suffix)"
+                "--format",
+                choices=("cxf", "cgats", "csv", "xlsx"),
+                help="format of --out (default: from its suffix)",
             )
             cp.add_argument("--sample", default="sample 1", help="sample name written to --out files")
         add_json_flag(cp)

@@ -59,3 +59,7 @@ class CgatsImportError(ImportFileError):
 
 class CsvImportError(ImportFileError):
     """A file in the station CSV import template that is malformed (docs/import.md)."""
+
+
+class WorkbookImportError(ImportFileError):
+    """An MA-T12-style workbook (.xlsx) that is not a workbook, lacks its sheet or holds bad cells."""

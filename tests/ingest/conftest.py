@@ -20,7 +20,8 @@ from tests.db._fixtures import (  # noqa: F401
 )
 
 REPO = Path(__file__).resolve().parents[2]
-FORMATS = ("cxf", "cgats", "csv")
+FORMATS = ("cxf", "cgats", "csv")  # the text formats
+ALL_FORMATS = (*FORMATS, "xlsx")
 
 
 @pytest.fixture(scope="session")
@@ -32,8 +33,8 @@ def sim_files(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, objec
 
     d = tmp_path_factory.mktemp("sim")
     save_design(FaceFlopTravelGloss((80.0, -2.0, -20.0), (30.0, 1.0, -8.0), 60.0), d / "std.json")
-    files = {f: d / f"std.{f}" for f in FORMATS}
-    outs = [a for f in FORMATS for a in ("--out", str(files[f]))]
+    files = {f: d / f"std.{f}" for f in ALL_FORMATS}
+    outs = [a for f in ALL_FORMATS for a in ("--out", str(files[f]))]
     env = dict(os.environ, PYTHONPATH=str(REPO))
     res = subprocess.run(
         [sys.executable, "-m", "station.cli", "measure", "sim:ma6", "--twelve", "--design", "std.json",

@@ -19,6 +19,7 @@ from station.ingest.errors import (
     ImportFileError,
     IngestError,
     UnknownFormatError,
+    WorkbookImportError,
 )
 from station.ingest.formats import (
     VendorValue,
@@ -27,12 +28,17 @@ from station.ingest.formats import (
     readings_from_import,
     write_measurement_file,
 )
-from tests.ingest.conftest import FORMATS
+from tests.ingest.conftest import ALL_FORMATS, FORMATS
 
-ERRORS = {"cxf": CxfImportError, "cgats": CgatsImportError, "csv": CsvImportError}
+ERRORS = {
+    "cxf": CxfImportError,
+    "cgats": CgatsImportError,
+    "csv": CsvImportError,
+    "xlsx": WorkbookImportError,
+}
 
 
-@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("fmt", ALL_FORMATS)
 def test_round_trip_of_simulator_files(sim_files: tuple[dict, dict[str, Path]], fmt: str) -> None:
     measured, files = sim_files
     got = read_measurement_file(files[fmt])
@@ -250,13 +256,13 @@ def test_out_of_range_angle_and_count_mismatch(tmp_path: Path) -> None:
         read_measurement_file(f)
 
 
-@pytest.mark.parametrize("src", FORMATS)
+@pytest.mark.parametrize("src", ALL_FORMATS)
 def test_every_format_converts_to_every_other(
     sim_files: tuple[dict, dict[str, Path]], tmp_path: Path, src: str
 ) -> None:
     _, files = sim_files
     original = read_measurement_file(files[src]).measurements
-    for dst in FORMATS:
+    for dst in ALL_FORMATS:
         path = tmp_path / f"converted.{dst}"
         assert write_measurement_file(original, path) == dst
         (back,) = read_measurement_file(path).measurements
@@ -290,7 +296,7 @@ def test_cxf_values_of_the_wrong_type(
     assert info.value.field == field and "typed.cxf" in str(info.value)
 
 
-@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("fmt", ALL_FORMATS)
 def test_random_damage_is_accepted_or_refused_by_a_typed_error(
     sim_files: tuple[dict, dict[str, Path]], tmp_path: Path, fmt: str
 ) -> None:
@@ -319,3 +325,50 @@ def test_random_damage_is_accepted_or_refused_by_a_typed_error(
         else:
             outcomes["accepted"] += 1
     assert outcomes["refused"] > 100  # most damage is caught, and each refusal was typed
+
+
+def _edit_workbook(src: Path, dst: Path, edit: str) -> None:
+    import openpyxl
+
+    wb = openpyxl.load_workbook(src)
+    ws = wb["Spectral Data"]
+    if edit == "missing":
+        ws.cell(1, 2).value = "Geo"
+    elif edit == "nan":
+        ws.cell(3, 3).value = "nan"
+    elif edit == "range":
+        ws.cell(2, 3).value = 250.0
+    elif edit == "duplicate":
+        ws.cell(3, 2).value = ws.cell(2, 2).value
+    elif edit == "sheet":
+        ws.title = "Data"
+    elif edit == "text":
+        ws.cell(4, 10).value = "n/a"
+    wb.save(dst)
+
+
+@pytest.mark.parametrize(
+    ("edit", "where", "field"),
+    [
+        ("missing", "sheet 'Spectral Data'", "Geometry"),
+        ("nan", "sheet 'Spectral Data' row 3", "lab.L"),
+        ("range", "sheet 'Spectral Data' row 2", "lab.L"),
+        ("duplicate", "sheet 'Spectral Data' row 3", "geometry"),
+        ("sheet", "workbook", "sheet"),
+        ("text", "sheet 'Spectral Data' row 4", "440 nm"),  # column 10: Sample, Geometry, L, a, b, 400…440
+        ("truncated", "workbook", "xlsx"),
+    ],
+)
+def test_malformed_workbooks_are_refused(
+    sim_files: tuple[dict, dict[str, Path]], tmp_path: Path, edit: str, where: str, field: str
+) -> None:
+    f = tmp_path / f"bad-{edit}.xlsx"
+    if edit == "truncated":
+        data = sim_files[1]["xlsx"].read_bytes()
+        f.write_bytes(data[: len(data) // 2])
+    else:
+        _edit_workbook(sim_files[1]["xlsx"], f, edit)
+    with pytest.raises(WorkbookImportError) as info:
+        read_measurement_file(f)
+    assert (info.value.where, info.value.field) == (where, field), str(info.value)
+    assert f.name in str(info.value)

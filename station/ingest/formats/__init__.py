@@ -1,8 +1,8 @@
-"""Vendor measurement files as measurement sources: CxF3, CGATS.17 and the station CSV template.
+"""Vendor measurement files as measurement sources: CxF3, CGATS.17, MA-T12 workbooks, the CSV template.
 
 No automotive multi-angle instrument publishes a wire protocol, so labs integrate through the files
 their instrument software writes. :func:`read_measurement_file` reads any of the three formats
-(chosen by suffix, else by content) into an :class:`ImportedFile` of validated
+(and the MA-T12-style ``.xlsx`` workbook; chosen by suffix, else by content) into an :class:`ImportedFile` of validated
 :class:`ImportedMeasurement`; :func:`readings_from_import` turns them into ingest
 :class:`~station.ingest.Reading` records that go through the one ingest path
 (:class:`~station.ingest.Ingestor`); :func:`write_measurement_file` writes the same formats (the
@@ -21,6 +21,7 @@ from station.ingest.errors import (
     CxfImportError,
     ImportFileError,
     UnknownFormatError,
+    WorkbookImportError,
 )
 from station.ingest.formats.cgats import read_cgats, write_cgats
 from station.ingest.formats.csv_template import read_csv, write_csv
@@ -34,6 +35,7 @@ from station.ingest.formats.measurement import (
     lab_of,
 )
 from station.ingest.formats.records import import_client_id, readings_from_import
+from station.ingest.formats.workbook import read_workbook, write_workbook
 
 __all__ = [
     "FORMATS",
@@ -46,6 +48,7 @@ __all__ = [
     "Instrument",
     "UnknownFormatError",
     "VendorValue",
+    "WorkbookImportError",
     "build_measurement",
     "detect_format",
     "import_client_id",
@@ -60,11 +63,13 @@ FORMATS: Final[dict[str, tuple[str, ...]]] = {
     "cxf": (".cxf", ".cxf3", ".xml"),
     "cgats": (".cgats", ".txt", ".ti3", ".cgt"),
     "csv": (".csv",),
+    "xlsx": (".xlsx", ".xlsm"),
 }
 _READERS: Final[dict[str, Callable[[Path], ImportedFile]]] = {
     "cxf": read_cxf,
     "cgats": read_cgats,
     "csv": read_csv,
+    "xlsx": read_workbook,
 }
 
 
@@ -82,6 +87,8 @@ def detect_format(path: Path | str) -> str:
         raise UnknownFormatError(path.name, "", "file", "a readable file", str(exc)) from exc
     if head.startswith(b"<"):
         return "cxf"
+    if head.startswith(b"PK\x03\x04"):
+        return "xlsx"
     first = head.split(b"\n", 1)[0].strip().upper()
     if first.startswith((b"CGATS", b"CTI", b"LGOROWLENGTH", b"ISO28178")):
         return "cgats"
@@ -91,7 +98,7 @@ def detect_format(path: Path | str) -> str:
         path.name,
         "line 1",
         "format",
-        "CxF3 (.cxf), CGATS.17 (.cgats/.txt) or the CSV template (.csv)",
+        "CxF3 (.cxf), CGATS.17 (.cgats/.txt), an MA-T12 workbook (.xlsx) or the CSV template (.csv)",
         suffix,
     )
 
@@ -117,8 +124,10 @@ def write_measurement_file(
         write_cgats(measurements, path)
     elif fmt == "csv":
         write_csv(measurements, path)
+    elif fmt == "xlsx":
+        write_workbook(measurements, path)
     else:
         raise UnknownFormatError(
-            path.name, "", "format", "cxf | cgats | csv (or a .cxf/.cgats/.csv suffix)", fmt
+            path.name, "", "format", "cxf | cgats | csv | xlsx (or a .cxf/.cgats/.csv/.xlsx suffix)", fmt
         )
     return fmt
