@@ -38,7 +38,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("target", nargs="+", metavar="FILE | watch DIR", help="a measurement file, or: watch DIR")
     p.add_argument(
-        "--format", choices=("cxf", "cgats", "csv", "xlsx"), help="file format (default: from suffix/content)"
+        "--format",
+        choices=("cxf", "cgats", "csv", "xlsx", "json"),
+        help="file format (default: from suffix/content)",
     )
     p.add_argument(
         "--store",

@@ -63,3 +63,7 @@ class CsvImportError(ImportFileError):
 
 class WorkbookImportError(ImportFileError):
     """An MA-T12-style workbook (.xlsx) that is not a workbook, lacks its sheet or holds bad cells."""
+
+
+class JsonImportError(ImportFileError):
+    """A ``station measure --json`` / ``station import --json`` document that cannot be read back."""

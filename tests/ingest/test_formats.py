@@ -18,6 +18,7 @@ from station.ingest.errors import (
     CxfImportError,
     ImportFileError,
     IngestError,
+    JsonImportError,
     UnknownFormatError,
     WorkbookImportError,
 )
@@ -372,3 +373,36 @@ def test_malformed_workbooks_are_refused(
         read_measurement_file(f)
     assert (info.value.where, info.value.field) == (where, field), str(info.value)
     assert f.name in str(info.value)
+
+
+def test_station_json_documents_read_back(sim_files: tuple[dict, dict[str, Path]], tmp_path: Path) -> None:
+    """What ``station measure --json`` and ``station import --json`` print is itself importable."""
+    import json
+
+    measured, files = sim_files
+    f = tmp_path / "measure.json"
+    f.write_text(json.dumps(measured), encoding="utf-8")
+    (m,) = read_measurement_file(f).measurements
+    (ref,) = read_measurement_file(files["cxf"]).measurements
+    assert (m.geometries, m.lab, m.measured_at, m.instrument.serial) == (
+        ref.geometries, ref.lab, ref.measured_at, ref.instrument.serial,
+    )  # fmt: skip
+    assert (
+        np.abs(np.asarray(m.spectra) - np.asarray(ref.spectra)).max() <= 5e-7 + 1e-12
+    )  # unrounded vs 6 decimals
+    doc = {"measurements": [dict(ref.to_dict(), sample="copy")]}
+    f.write_text(json.dumps(doc), encoding="utf-8")
+    (copy,) = read_measurement_file(f).measurements
+    assert (copy.sample, copy.lab, copy.spectra) == ("copy", ref.lab, ref.spectra)
+    for text, where, fld in (
+        ('{"geometries": ["45as15"], "lab": [[50, 1, NaN]]}', "document", "json"),
+        ('{"geometries": ["45as15"], "lab": [[50, 1', "line 1", "json"),
+        ('{"lab": [[50, 1, 2]]}', "$", "geometries"),
+        ('{"geometries": ["45as15"], "lab": [[50, 1, "2"]]}', "$.lab[0]", "lab"),
+        ('{"measurements": [{"geometries": ["45as15", "45as15"], "lab": [[50, 1, 2], [50, 1, 2]]}]}',
+         "$.measurements[0].geometries[1]", "geometry"),
+    ):  # fmt: skip
+        f.write_text(text, encoding="utf-8")
+        with pytest.raises(JsonImportError) as info:
+            read_measurement_file(f)
+        assert (info.value.where, info.value.field) == (where, fld), str(info.value)

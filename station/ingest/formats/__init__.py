@@ -20,12 +20,14 @@ from station.ingest.errors import (
     CsvImportError,
     CxfImportError,
     ImportFileError,
+    JsonImportError,
     UnknownFormatError,
     WorkbookImportError,
 )
 from station.ingest.formats.cgats import read_cgats, write_cgats
 from station.ingest.formats.csv_template import read_csv, write_csv
 from station.ingest.formats.cxf import read_cxf, write_cxf
+from station.ingest.formats.measure_json import read_measure_json
 from station.ingest.formats.measurement import (
     ImportedFile,
     ImportedMeasurement,
@@ -46,6 +48,7 @@ __all__ = [
     "ImportedFile",
     "ImportedMeasurement",
     "Instrument",
+    "JsonImportError",
     "UnknownFormatError",
     "VendorValue",
     "WorkbookImportError",
@@ -64,12 +67,14 @@ FORMATS: Final[dict[str, tuple[str, ...]]] = {
     "cgats": (".cgats", ".txt", ".ti3", ".cgt"),
     "csv": (".csv",),
     "xlsx": (".xlsx", ".xlsm"),
+    "json": (".json",),
 }
 _READERS: Final[dict[str, Callable[[Path], ImportedFile]]] = {
     "cxf": read_cxf,
     "cgats": read_cgats,
     "csv": read_csv,
     "xlsx": read_workbook,
+    "json": read_measure_json,
 }
 
 
@@ -87,6 +92,8 @@ def detect_format(path: Path | str) -> str:
         raise UnknownFormatError(path.name, "", "file", "a readable file", str(exc)) from exc
     if head.startswith(b"<"):
         return "cxf"
+    if head.startswith(b"{"):
+        return "json"
     if head.startswith(b"PK\x03\x04"):
         return "xlsx"
     first = head.split(b"\n", 1)[0].strip().upper()
