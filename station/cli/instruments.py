@@ -11,7 +11,7 @@ client id; queued in ``--outbox`` when the database is away and sent by the next
 or by default the database ``station serve`` uses (``$CACAD_DATABASE_URL``, else ``station.sqlite3`` in
 ``$CACAD_DATA_DIR`` or ``./var``), upgraded to the current schema on first use.
 
-``station measure DEVICE --out FILE [--out FILE …] [--format cxf|cgats|csv] [--sample NAME]`` also
+``station measure DEVICE --out FILE [--out FILE …] [--format cxf|cgats|csv|xlsx] [--sample NAME]`` also
 writes the reading (every geometry, spectra and Lab) as a CxF3, CGATS.17, MA-T12 workbook or CSV file that
 ``station import`` reads (docs/import.md): how the simulators write each vendor format.
 """
@@ -188,6 +188,20 @@ def _receipt(ingestor: Any, receipt: Any) -> dict[str, Any]:
     }
 
 
+def _check_out_formats(args: argparse.Namespace) -> None:
+    """Refuse ``--out`` files of no known format before the instrument is started."""
+    from station.ingest.formats import FORMATS
+
+    if args.format is not None and len(args.out) > 1:
+        raise InputError(
+            "--format", "one --out file with --format (or formats from the suffixes)", args.format
+        )
+    writable = [s for name, sfx in FORMATS.items() if name != "json" for s in sfx]
+    for path in args.out:
+        if args.format is None and path.suffix.lower() not in writable:
+            raise InputError("--out", f"a file ending in {' | '.join(writable)} (or --format)", str(path))
+
+
 def _write_files(reading: Any, args: argparse.Namespace) -> list[dict[str, str]]:
     """Write *reading* to each ``--out`` file (CxF3, CGATS.17 or the CSV template, docs/import.md)."""
     from station.ingest.formats import write_measurement_file
@@ -209,6 +223,7 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
     from station.drivers import GlossReading
 
     panel_id = _store_panel_id(args.panel) if args.store is not None else None  # refused before starting
+    _check_out_formats(args)
     with _ingestor(args) as ingestor, _instrument(args) as inst:
         if ingestor is not None and args.client_id is not None:
             ingestor.replay()

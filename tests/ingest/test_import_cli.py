@@ -185,6 +185,7 @@ def test_import_refusals(
             ["import", "ok.csv", "--store", "sqlite:///x.sqlite3", "--illumination", "15"],
             "illumination_deg: expected one of [45.0]",
         ),
+        (["measure", "sim:ma6", "--out", "x.pdf"], "--out: expected a file ending in .cxf"),
     ):
         assert main(argv) == 2
         err = capsys.readouterr().err

@@ -65,7 +65,8 @@ def _one(doc: dict[str, Any], file: str, where: str, default_sample: str) -> Imp
     if spectra == []:  # a gloss-only measure document prints empty lists
         spectra = None
     rows = [(g, factory(JsonImportError, file, f"{where}.geometries[{i}]")) for i, g in enumerate(geometries)]
-    instrument_doc = doc.get("instrument") if isinstance(doc.get("instrument"), dict) else {}
+    found = doc.get("instrument")
+    instrument_doc: dict[str, Any] = found if isinstance(found, dict) else {}
     instrument = Instrument(
         model=str(instrument_doc.get("model") or doc.get("model") or ""),
         serial=str(instrument_doc.get("serial") or doc.get("serial") or ""),

@@ -111,9 +111,9 @@ def read_workbook(path: Path | str) -> ImportedFile:
         raise WorkbookImportError(file, f"sheet {SHEET!r}", "Geometry", "a header row with a Geometry column")
     header = rows[header_at]
     spectral = sorted(
-        (float(m.group(1)), i)
+        (float(match.group(1)), i)
         for i, c in enumerate(header)
-        if c is not None and (m := _NM.match(str(c).strip()))
+        if c is not None and (match := _NM.match(str(c).strip()))
     )
     lab_cols = [col.get(k) for k in ("l", "a", "b")]
     has_lab = all(c is not None for c in lab_cols)
