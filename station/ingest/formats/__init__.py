@@ -11,8 +11,9 @@ simulators use it, so every importer round-trips). docs/import.md documents the 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from types import MappingProxyType
 from typing import Final
 
 from station.ingest.errors import (
@@ -62,20 +63,24 @@ __all__ = [
 ]
 
 #: Format name → file suffixes it is recognised by.
-FORMATS: Final[dict[str, tuple[str, ...]]] = {
-    "cxf": (".cxf", ".cxf3", ".xml"),
-    "cgats": (".cgats", ".txt", ".ti3", ".cgt"),
-    "csv": (".csv",),
-    "xlsx": (".xlsx", ".xlsm"),
-    "json": (".json",),
-}
-_READERS: Final[dict[str, Callable[[Path], ImportedFile]]] = {
-    "cxf": read_cxf,
-    "cgats": read_cgats,
-    "csv": read_csv,
-    "xlsx": read_workbook,
-    "json": read_measure_json,
-}
+FORMATS: Final[Mapping[str, tuple[str, ...]]] = MappingProxyType(
+    {
+        "cxf": (".cxf", ".cxf3", ".xml"),
+        "cgats": (".cgats", ".txt", ".ti3", ".cgt"),
+        "csv": (".csv",),
+        "xlsx": (".xlsx", ".xlsm"),
+        "json": (".json",),
+    }
+)
+_READERS: Final[Mapping[str, Callable[[Path], ImportedFile]]] = MappingProxyType(
+    {
+        "cxf": read_cxf,
+        "cgats": read_cgats,
+        "csv": read_csv,
+        "xlsx": read_workbook,
+        "json": read_measure_json,
+    }
+)
 
 
 def detect_format(path: Path | str) -> str:

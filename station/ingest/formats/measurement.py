@@ -16,8 +16,9 @@ from __future__ import annotations
 import datetime as dt
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any, Final, get_args
 
 import numpy as np
@@ -43,7 +44,7 @@ __all__ = [
 ILLUMINANTS: Final[tuple[str, ...]] = get_args(Illuminant)
 #: Observers a stored reading may state, full CIE names (the ingest record's vocabulary).
 OBSERVERS: Final[tuple[str, ...]] = get_args(Observer)
-_OBSERVER_SHORT: Final = {"2": OBSERVERS[0], "10": OBSERVERS[1]}
+_OBSERVER_SHORT: Final[Mapping[str, str]] = MappingProxyType({"2": OBSERVERS[0], "10": OBSERVERS[1]})
 
 ErrorFactory = Callable[[str, str, object], ImportFileError]
 """``(field, accepted, got) -> error`` bound to one file and one place in it."""
