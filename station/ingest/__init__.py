@@ -3,6 +3,8 @@
 :class:`Reading` is what a station sends; :func:`store_reading` writes it once inside a transaction;
 :class:`Ingestor` adds the on-disk :class:`Outbox` used while the destination is unreachable;
 :func:`record_from_reading` turns an instrument reading into a :class:`Reading` (the one conversion).
+Vendor measurement files (CxF3, CGATS.17, MA-T12 workbooks, the CSV template) and the watch folder
+live in :mod:`station.ingest.formats`; their readings go through the same :class:`Ingestor`.
 """
 
 from station.ingest.destination import (
