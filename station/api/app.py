@@ -8,8 +8,10 @@ the configured simulators. Tests build one app per database and override ``get_s
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from pathlib import Path
 
 from fastapi import FastAPI
 
@@ -86,6 +88,39 @@ def _startup(app: FastAPI, settings: Settings) -> None:
     )
     app.state.instruments = hub
     hub.attach_simulators(settings.simulators)
+
+
+def _start_watch_folder(app: FastAPI, settings: Settings) -> tuple[threading.Event, threading.Thread] | None:
+    """Start the watch-folder thread when ``settings.watch_dir`` is set: files go through the service's ingestor."""
+    if settings.watch_dir is None:
+        return None
+    from station.ingest.formats.watch import watch_folder
+
+    folder = Path(settings.watch_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    stop = threading.Event()
+    hub = app.state.instruments
+
+    def run() -> None:
+        while not stop.is_set():
+            try:
+                watch_folder(
+                    folder,
+                    hub.ingestor(),
+                    operator="service",
+                    interval_s=settings.watch_interval_s,
+                    stop=stop,
+                    job=settings.watch_job,
+                    part=settings.watch_part,
+                )
+            except Exception:  # the service keeps running; the next scan tries again
+                log.exception("watch folder %s", folder)
+                stop.wait(settings.watch_interval_s)
+
+    thread = threading.Thread(target=run, name="watch-folder", daemon=True)
+    thread.start()
+    log.info("watching %s for measurement files", folder)
+    return stop, thread
 
 
 async def _replay_outbox_periodically(app: FastAPI, period_s: float) -> None:
@@ -178,10 +213,15 @@ def create_app(settings: Settings) -> FastAPI:
         app.state.image_slots = asyncio.Semaphore(settings.image_decode_concurrency)  # this loop's
         await asyncio.to_thread(_startup, app, settings)
         replayer = asyncio.create_task(_replay_outbox_periodically(app, settings.outbox_replay_s))
+        watcher = _start_watch_folder(app, settings)
         try:
             yield
         finally:
             replayer.cancel()
+            if watcher is not None:
+                stop, thread = watcher
+                stop.set()
+                await asyncio.to_thread(thread.join, 30)
             await asyncio.to_thread(_shutdown, app)
 
     public = settings.public_docs  # otherwise the docs are served behind authentication

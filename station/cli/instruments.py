@@ -12,6 +12,10 @@ or by default the database ``station serve`` uses (``$CACAD_DATABASE_URL``, else
 ``$CACAD_DATA_DIR`` or ``./var``), upgraded to the current schema on first use. A gloss meter's reading
 (20/60/85 GU, haze, DOI, Rspec) is stored as a gloss-only reading (``station.ingest.store_gloss``) on the
 ``--panel`` given, directly (not queued): the QC views pair it with a colour reading of the same panel.
+
+``station measure DEVICE --out FILE [--out FILE …] [--format cxf|cgats|csv|xlsx] [--sample NAME]`` also
+writes the reading (every geometry, spectra and Lab) as a CxF3, CGATS.17, MA-T12 workbook or CSV file that
+``station import`` reads (docs/import.md): how the simulators write each vendor format.
 """
 
 from __future__ import annotations
@@ -50,6 +54,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         )
         cp.add_argument("--fault", action="append", default=[], help="simulator fault spec (sim:* only)")
         cp.add_argument("--timeout", type=float, default=1.5, help="reply timeout, seconds")
+        cp.add_argument(
+            "--twelve",
+            action="store_true",
+            help="sim:ma6 only: 12 geometries in two illumination blocks (15° and 45°), as an MA-T12",
+        )
         if name == "measure":
             cp.add_argument("--panel", help="panel recorded with the reading (with --store: a panel id)")
             cp.add_argument(
@@ -70,6 +79,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             cp.add_argument(
                 "--illumination", type=int, default=45, help="illumination angle of the stored block, degrees"
             )
+            cp.add_argument(
+                "--out",
+                type=Path,
+                action="append",
+                default=[],
+                help="also write the reading as a measurement file (.cxf, .cgats, .csv, .xlsx; repeatable)",
+            )
+            cp.add_argument(
+                "--format",
+                choices=("cxf", "cgats", "csv", "xlsx"),
+                help="format of --out (default: from its suffix)",
+            )
+            cp.add_argument("--sample", default="sample 1", help="sample name written to --out files")
         add_json_flag(cp)
         cp.set_defaults(handler=fn)
 
@@ -97,10 +119,17 @@ def _instrument(args: argparse.Namespace) -> Iterator[Any]:
                 raise InputError("device", "sim:ma6 | sim:ma3 | sim:gloss or an address", args.device)
             if args.design is not None and args.recipe is not None:
                 raise InputError("--recipe", "either --design or --recipe, not both", str(args.recipe))
-            sim = stack.enter_context(spawn_simulator(kind, args.design, args.fault, recipe_file=args.recipe))
+            if args.twelve and kind != "ma6":
+                raise InputError("--twelve", "only with sim:ma6", args.device)
+            extra = ["--twelve"] if args.twelve else []
+            design = None if args.design is None else args.design.resolve()  # the child runs elsewhere
+            recipe = None if args.recipe is None else args.recipe.resolve()
+            sim = stack.enter_context(
+                spawn_simulator(kind, design, args.fault, recipe_file=recipe, extra_args=extra)
+            )
             address = sim.address
-        elif args.design is not None or args.recipe is not None or args.fault:
-            raise InputError("--design/--recipe/--fault", "only with a sim:* device", args.device)
+        elif args.design is not None or args.recipe is not None or args.fault or args.twelve:
+            raise InputError("--design/--recipe/--fault/--twelve", "only with a sim:* device", args.device)
         inst = stack.enter_context(open_instrument(address, timeout_s=args.timeout))
         yield inst
 
@@ -199,11 +228,42 @@ def _store_gloss(
     return _gloss_receipt(ingestor, record.client_id, result.measurement_id, status)
 
 
+def _check_out_formats(args: argparse.Namespace) -> None:
+    """Refuse ``--out`` files of no known format before the instrument is started."""
+    from station.ingest.formats import FORMATS
+
+    if args.format is not None and len(args.out) > 1:
+        raise InputError(
+            "--format", "one --out file with --format (or formats from the suffixes)", args.format
+        )
+    writable = [s for name, sfx in FORMATS.items() if name != "json" for s in sfx]
+    for path in args.out:
+        if args.format is None and path.suffix.lower() not in writable:
+            raise InputError("--out", f"a file ending in {' | '.join(writable)} (or --format)", str(path))
+
+
+def _write_files(reading: Any, args: argparse.Namespace) -> list[dict[str, str]]:
+    """Write *reading* to each ``--out`` file (CxF3, CGATS.17 or the CSV template, docs/import.md)."""
+    from station.ingest.formats import write_measurement_file
+    from station.ingest.formats.measurement import from_spectral_reading
+
+    if args.format is not None and len(args.out) > 1:
+        raise InputError(
+            "--format", "one --out file with --format (or formats from the suffixes)", args.format
+        )
+    measurement = from_spectral_reading(reading, args.sample)
+    return [
+        {"path": str(path), "format": write_measurement_file([measurement], path, args.format)}
+        for path in args.out
+    ]
+
+
 def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
     """Measure once; spectra per geometry and Lab from the model, or gloss/haze/DOI; with ``--store``, store it."""
     from station.drivers import GlossReading
 
     panel_id = _store_panel_id(args.panel) if args.store is not None else None  # refused before starting
+    _check_out_formats(args)
     with _ingestor(args) as ingestor, _instrument(args) as inst:
         if ingestor is not None and args.client_id is not None:
             ingestor.replay()
@@ -221,6 +281,8 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
             "panel": args.panel,
         }
         if isinstance(reading, GlossReading):
+            if args.out:
+                raise InputError("--out", "a spectrophotometer reading (Lab per geometry)", args.device)
             data = reading.to_dict()
             out.update({"geometries": [], "lab": [], "spectra": [], **data})
             if ingestor is not None:
@@ -232,6 +294,8 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
         out.update(data)
         out["lab"] = reflectance_to_lab(reading.reflectance).round(4).tolist()
         out["gloss_gu"] = None
+        if args.out:
+            out["files"] = _write_files(reading, args)
         if ingestor is not None:
             from station.ingest import operator_name, record_from_reading
 

@@ -4,7 +4,9 @@
 :class:`Ingestor` adds the on-disk :class:`Outbox` used while the destination is unreachable;
 :func:`record_from_reading` turns an instrument reading into a :class:`Reading` (the one conversion);
 :class:`GlossRecord` is a gloss meter reading, stored by :func:`store_gloss` and joined to a colour
-measurement by :func:`pair_gloss`.
+measurement by :func:`pair_gloss`. Vendor measurement files (CxF3, CGATS.17, MA-T12 workbooks, the CSV
+template) and the watch folder live in :mod:`station.ingest.formats`; their readings go through the
+same :class:`Ingestor`.
 """
 
 from station.ingest.destination import (

@@ -308,14 +308,28 @@ def set_standard(
     return std
 
 
+def current_measurement(session: Session, measurement_id: int) -> Measurement | None:
+    """The measurement *measurement_id* stands for now: itself, or the last correction in its chain."""
+    m = session.get(Measurement, measurement_id)
+    seen = set()
+    while m is not None and m.id not in seen:
+        seen.add(m.id)
+        newer = session.scalars(select(Measurement).where(Measurement.supersedes_id == m.id)).first()
+        if newer is None:
+            return m
+        m = newer
+    return m
+
+
 def standard_reading(session: Session, standard: Standard, angles: Sequence[float] | None = None) -> Reading:
     """The standard as a reading: the reference measurement, or the design's Lab at *angles*.
 
-    A design standard needs *angles* (the sample's aspecular angles, degrees).
+    A reference measurement corrected since it was made the standard stands through its newest
+    correction. A design standard needs *angles* (the sample's aspecular angles, degrees).
     """
     where = f"standard {standard.job}/{standard.part}"
     if standard.measurement_id is not None:
-        m = session.get(Measurement, standard.measurement_id)
+        m = current_measurement(session, standard.measurement_id)
         if m is None:  # the foreign key prevents it; kept for a clear message
             raise QcInputError(f"{where}.measurement_id", "a stored measurement", standard.measurement_id)
         inst = session.get(Instrument, m.instrument_id)
@@ -481,7 +495,11 @@ def job_summary(
             continue
         samples, unjudged, notes = [], [], []
         info: StandardInfo | None = None
-        candidates = [r for r in part_rows if r.measurement_id != std.measurement_id]
+        ref_id = None
+        if std.measurement_id is not None:
+            current = current_measurement(session, std.measurement_id)
+            ref_id = None if current is None else current.id
+        candidates = [r for r in part_rows if r.measurement_id != ref_id]
         for r, repeats, ids in _samples(candidates, average_panels):
             ref = standard_reading(session, std, r.reading.aspecular_deg)
             if info is None:

@@ -58,6 +58,8 @@ Progress = Callable[[int, int, str], None]
 #: Samples shown in a part's verdict table and ΔE bars (the newest).
 TABLE_ROWS = 25
 BAR_SAMPLES = 6
+#: Reasons of the newest warned or failed samples printed under a verdict table.
+REASON_LINES = 5
 _VERDICT_COLOUR = {"pass": "#b7e1b0", "warn": "#ffe08a", "fail": "#f4a09a"}
 _A4 = (8.27, 11.69)
 _A4_LANDSCAPE = (11.69, 8.27)
@@ -157,6 +159,19 @@ def _label(s: SampleResult) -> str:
     return f"#{s.row.measurement_id} {s.row.measured_at.strftime('%m-%d %H:%M')}"
 
 
+def _why(s: SampleResult) -> str:
+    """One line on why a sample did not pass: the geometries out of band, or the mean rule's reason."""
+    v = s.verdict
+    if v.aggregation == "mean":
+        return f"{_label(s)} {v.verdict}: {v.reason}"
+    parts = []
+    for k in ("fail", "warn"):
+        names = [g.geometry for g in v.per_geometry if g.verdict == k]
+        if names:
+            parts.append(f"{k} at {', '.join(names)}")
+    return f"{_label(s)} {v.verdict}: {'; '.join(parts)} (max ΔE {v.max_de:.2f} at {v.worst_geometry})"
+
+
 def _table_page(summary: JobSummary, part: PartSummary) -> Figure:
     fig = plt.figure(figsize=_A4_LANDSCAPE)
     fig.suptitle(f"{summary.job} / {part.part}: verdict per geometry ({summary.formula})", fontsize=13)
@@ -192,7 +207,10 @@ def _table_page(summary: JobSummary, part: PartSummary) -> Figure:
     table.set_fontsize(7.5)
     table.scale(1, 1.25)
     if len(part.samples) > TABLE_ROWS:
-        ax.text(0, -0.02, f"newest {TABLE_ROWS} of {len(part.samples)} samples", fontsize=8, color="0.3")
+        fig.text(0.03, 0.02, f"newest {TABLE_ROWS} of {len(part.samples)} samples", fontsize=8, color="0.3")
+    bad = [s for s in reversed(samples) if s.verdict.verdict != "pass"][:REASON_LINES]
+    for i, s in enumerate(bad):
+        fig.text(0.03, 0.05 + 0.022 * (len(bad) - 1 - i), _why(s)[:200], fontsize=7, color="0.25")
     return fig
 
 

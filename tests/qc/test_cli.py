@@ -19,8 +19,9 @@ import pytest
 
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
+from station.qc.errors import QcInputError
 from station.qc.jobs import job_summary
-from station.qc.report import csv_text, pdf_bytes
+from station.qc.report import csv_text, pdf_bytes, write_pdf, write_trend_png
 from station.qc.spc import D2_RANGE_OF_TWO
 from tests.qc.conftest import FENDER_OFFSETS, FENDER_STD, Job, populate
 
@@ -251,6 +252,10 @@ def test_report_pdf_csv_and_trend(
             "utf-8"
         )
         cover_only = pdf_bytes(job_summary(s, "J-200"))  # no standard: the cover page alone
+        with pytest.raises(QcInputError, match="out"):  # refused before anything is drawn or written
+            write_pdf(job_summary(s, "J-200"), tmp_path / "no-such-folder" / "r.pdf")
+        with pytest.raises(QcInputError, match="part"):
+            write_trend_png(job_summary(s, "J-100"), "roof", tmp_path / "t2.png")
     engine.dispose()
     assert cover_only.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page\b(?!s)", cover_only)) == 1
     panel = json.loads(res.stdout)["measurements"][0]["panel_id"]

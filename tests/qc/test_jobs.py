@@ -179,3 +179,17 @@ def test_repeats_of_a_panel_are_averaged_when_asked(session: Session, job: Job) 
     assert sample.row.instrument == "MA6 600123, MA3 700200"
     with pytest.raises(QcInputError, match="panel_id"):
         search_measurements(session, panel_id=0)
+
+
+def test_a_corrected_reference_stands_through_its_correction(session: Session, job: Job) -> None:
+    # the superseded bumper reading (50.4) was corrected to 50.3: a standard set on it before the
+    # correction judges against 50.3, and the correction is not judged as a sample of its own part
+    std = Standard(job="J-100", part="bumper", measurement_id=job.superseded_id)
+    session.add(std)
+    session.commit()
+    s = job_summary(session, "J-100", formula="cie76", parts=["bumper"])
+    part = s.parts[0]
+    assert part.standard is not None and part.standard.reading.lab[0] == pytest.approx((50.3, 0.0, 0.0))
+    assert [x.row.measurement_id for x in part.samples] == [job.bumper_ids[1]]
+    # the MA3 reading (50, 0.6, 0) against 50.3: ΔE*ab = √(0.3² + 0.6²)
+    assert part.samples[0].verdict.max_de == pytest.approx(math.hypot(0.3, 0.6))
