@@ -16,12 +16,19 @@ seed and a hash of the colorant database.
 from __future__ import annotations
 
 import functools
+import json
 import os
 from pathlib import Path
 
 import numpy as np
 
-from station.formulate.colorants import ColorantDatabase, default_database, predict_gloss, predict_lab
+from station.formulate.colorants import (
+    ColorantDatabase,
+    colorant_data,
+    default_database,
+    predict_gloss,
+    predict_lab,
+)
 from station.formulate.errors import FormulateError
 from station.formulate.library import Library, classify
 
@@ -132,27 +139,11 @@ def generate_library(
 
 
 def _model_key() -> str:
-    """Short hash of the colorant database, so a changed model never loads a stale cached library."""
+    """Short hash of the colorant data file, so a changed model never loads a stale cached library."""
     import hashlib
 
     h = hashlib.sha1(usedforsecurity=False)
-    for c in default_database().colorants:
-        h.update(
-            repr(
-                (
-                    c.name,
-                    c.family,
-                    c.lobe_width_deg,
-                    c.lobe_power,
-                    c.lobe_floor,
-                    c.peak_nm,
-                    c.band_nm,
-                    c.max_fraction,
-                )
-            ).encode()
-        )
-        h.update(np.ascontiguousarray(c.k).tobytes())
-        h.update(np.ascontiguousarray(c.s).tobytes())
+    h.update(json.dumps(colorant_data(), sort_keys=True).encode())
     return h.hexdigest()[:10]
 
 
