@@ -34,9 +34,22 @@ from station.formulate.library import Library, classify
 
 DEMO_SEED = 20090601
 DEMO_ANGLES: tuple[float, ...] = (15.0, 45.0, 110.0, 25.0, 75.0)
-GENERATOR_VERSION = 2
+GENERATOR_VERSION = 3
 DEMO_NAME = "demo (SYNTHETIC: generated from the synthetic colorant model)"
-_TINTS = ("yellow_py", "orange_po", "red_pr", "magenta_pv", "blue_pb", "green_pg")
+_TINTS = (
+    "yellow_py",
+    "orange_po",
+    "red_pr",
+    "magenta_pv",
+    "blue_pb",
+    "green_pg",
+    "red_opaque",
+    "yellow_opaque",
+)
+#: Shares of the metallics' main aluminium grade: bright (silver dollar), coarse, fine.
+FLAKE_GRADE_SHARES = (0.35, 0.6, 0.05)
+#: Every this-many-th metallic is a bright silver (silver-dollar aluminium, no tint).
+BRIGHT_SILVER_EVERY = 20
 
 
 def generate_recipes(
@@ -70,23 +83,41 @@ def generate_recipes(
     c[np.ix_(solid[neutral], tint_idx)] *= 0.05
 
     met = np.arange(n_solid, n_solid + n_metallic)
-    flake = np.where(rng.random(met.size) < 0.5, col["alu_coarse"], col["alu_fine"])
-    c[met, flake] = rng.uniform(0.02, 0.16, met.size)
-    add_tints(met, 2, 0.08)
+    grades = np.array([col["alu_bright"], col["alu_coarse"], col["alu_fine"]])
+    flake = grades[rng.choice(3, size=met.size, p=FLAKE_GRADE_SHARES)]
+    c[met, flake] = rng.uniform(0.02, 0.12, met.size)
+    second = (rng.random(met.size) < 0.15) | (flake == col["alu_bright"])  # fine flake softens the flop
+    c[met[second], col["alu_fine"]] += rng.uniform(0.005, 0.03, second.sum())
+    add_tints(met, 2, 0.07)
     blk = rng.random(met.size) < 0.2
-    c[met[blk], col["black_carbon"]] = rng.uniform(0.0, 0.01, blk.sum())
+    c[met[blk], col["black_carbon"]] = rng.uniform(0.0, 0.004, blk.sum())
+    wht = rng.random(met.size) < 0.08  # white lightens the flop (a lower flop index)
+    c[met[wht], col["white_tio2"]] = rng.uniform(0.0, 0.03, wht.sum())
+    silver = met[: max(n_metallic // BRIGHT_SILVER_EVERY, 0) * BRIGHT_SILVER_EVERY : BRIGHT_SILVER_EVERY]
+    c[silver] = 0.0  # bright silvers: silver-dollar aluminium, a touch of fine flake, no tint
+    c[silver, col["alu_bright"]] = rng.uniform(0.04, 0.1, silver.size)
+    c[silver, col["alu_fine"]] = rng.uniform(0.02, 0.05, silver.size)
 
     prl = np.arange(n_solid + n_metallic, n)
     effects = [
-        col[e] for e in ("pearl_white", "interference_blue", "interference_green", "interference_gold")
+        col[e]
+        for e in (
+            "pearl_white",
+            "interference_blue",
+            "interference_green",
+            "interference_red",
+            "interference_gold",
+        )
     ]
-    eff = np.asarray(effects)[rng.integers(0, 4, size=prl.size)]
+    eff = np.asarray(effects)[rng.integers(0, len(effects), size=prl.size)]
     c[prl, eff] = rng.uniform(0.03, 0.15, prl.size)
     add_tints(prl, 1, 0.06)
     blk = rng.random(prl.size) < 0.5
-    c[prl[blk], col["black_carbon"]] = rng.uniform(0.001, 0.02, blk.sum())
-    alu = rng.random(prl.size) < 0.2
-    c[prl[alu], col["alu_fine"]] = rng.uniform(0.005, 0.04, alu.sum())
+    c[prl[blk], col["black_carbon"]] = rng.uniform(0.001, 0.01, blk.sum())
+    alu = rng.random(prl.size) < 0.7  # pearls over a little aluminium (a pearl-metallic)
+    c[prl[alu], col["alu_coarse"]] = rng.uniform(0.02, 0.08, alu.sum())
+    wht = rng.random(prl.size) < 0.1
+    c[prl[wht], col["white_tio2"]] = rng.uniform(0.0, 0.1, wht.sum())
 
     c[:, col["matting_silica"]] = np.where(rng.random(n) < 0.15, rng.uniform(0.0, 0.12, n), 0.0)
     c = np.minimum(c, db.upper_bounds)
