@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import OptimizeResult, least_squares, minimize
 
+from station.formulate.batch import batch_masses
 from station.formulate.colorants import (
     GLOSS_CLEAR_GU,
     GLOSS_PER_MATTING,
@@ -104,6 +105,8 @@ class FormulationResult:
             "elapsed_s": self.elapsed_s,
             "synthetic_colorants": self.synthetic,
             "warnings": list(self.warnings),
+            "batch": batch_masses(self.recipe).to_dict(),
+            "nearest_achievable_lab": None if self.formulable else self.predicted_lab.tolist(),
         }
 
 
@@ -392,7 +395,8 @@ def formulate(
     message = (
         f"formulated: mean ΔE00 {mean_de:.2f} over {len(angles)} angles (tolerance {tolerance:g})"
         if formulable
-        else f"not formulable with these colorants: best mean ΔE00 {mean_de:.2f} > tolerance {tolerance:g}"
+        else f"not formulable with these colorants: best mean ΔE00 {mean_de:.2f} > tolerance {tolerance:g};"
+        " the nearest achievable paint is the prediction of the best recipe (nearest_achievable_lab)"
     )
     if strict and not formulable:
         raise NotFormulableError(message)
