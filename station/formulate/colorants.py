@@ -61,6 +61,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.formulate.errors import FormulateError, FormulateInputError
+from station.model.domain import ILLUMINATION_DEG
 
 WAVELENGTHS_NM: NDArray[np.float64] = np.arange(400.0, 701.0, 10.0)
 #: Families of colorants the model knows; the effect families carry a :class:`Flake`.
@@ -85,7 +86,6 @@ K2_SAUNDERSON = _constants()["k2_saunderson"]
 K_BINDER = _constants()["k_binder"]
 S_BINDER = _constants()["s_binder"]
 N_BINDER = _constants()["n_binder"]
-ILLUMINATION_DEG = _constants()["illumination_deg"]
 GLOSS_CLEAR_GU = _constants()["gloss_clear_gu"]
 GLOSS_PER_MATTING = _constants()["gloss_per_matting"]
 #: Total pigment mass fraction allowed in a basecoat (the rest is binder).
