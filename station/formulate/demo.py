@@ -225,3 +225,28 @@ def demo_library() -> Library:
     except OSError:
         pass  # a read-only home only costs the regeneration time next run
     return lib
+
+
+#: SpectraMaster figures the demo library is compared with (thesis §5.4, Fig 5.4): the non-solid paints'
+#: mean Flop Index and the share of them with a Flop Index between 0 and 20.
+SPECTRAMASTER_MEAN_FLOP_INDEX = 11.38
+SPECTRAMASTER_SHARE_0_20 = 0.96
+
+
+def flop_index_statistics(lib: Library) -> dict[str, float]:
+    """Flop Index (eq 5.3.1, :meth:`Library.indices`) of the non-solid paints where it is defined:
+    count, mean, median, share in [0, 20], minimum and maximum, and the number of bright silvers
+    (metallics with L*15 ≥ 110)."""
+    cols = lib.angle_columns()
+    fi = lib.indices()["flop"][lib.types != "solid"]
+    fi = fi[np.isfinite(fi)]  # undefined (dark colours, L*15 < L*110) left out
+    bright = int(np.sum((lib.types == "metallic") & (cols[:, 0, 0] >= 110.0)))
+    return {
+        "non_solid": float(fi.size),
+        "mean": float(fi.mean()),
+        "median": float(np.median(fi)),
+        "share_0_20": float(np.mean((fi >= 0) & (fi <= 20))),
+        "min": float(fi.min()),
+        "max": float(fi.max()),
+        "bright_silvers": float(bright),
+    }

@@ -44,6 +44,8 @@ from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS
 DEFAULT_TOLERANCE = FORMULATION_TOLERANCE_DE00
 _FD_STEP = 1e-7
 _PENALTY = 2000.0
+#: Fractions at or below this are dropped from a recipe (:meth:`ColorantDatabase.recipe`'s threshold).
+_RECIPE_THRESHOLD = 1e-6
 
 
 @dataclass(frozen=True)
@@ -388,6 +390,7 @@ def formulate(
             if f < best[0]:
                 best = (f, x, best[2])
     c = objective.full(best[1])
+    c[c <= _RECIPE_THRESHOLD] = 0.0  # the reported recipe omits these: predict exactly what it says
     pred = predict_lab(c, angles, db)
     de = cie2000(design, pred)
     mean_de = float(de.mean())
@@ -401,7 +404,7 @@ def formulate(
     if strict and not formulable:
         raise NotFormulableError(message)
     return FormulationResult(
-        recipe=db.recipe(c),
+        recipe=db.recipe(c, _RECIPE_THRESHOLD),
         concentrations=c,
         angles_deg=angles,
         design_lab=design,

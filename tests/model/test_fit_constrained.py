@@ -45,7 +45,9 @@ def test_every_demo_paint_fits_inside_the_bound() -> None:
 
 
 def test_extrapolated_vertex_is_constrained_and_no_worse_than_brute_force() -> None:
-    lab = np.array([[30.0, 40.0, 0.0], [20.0, 35.0, 0.0], [8.0, 25.0, 0.0], [2.0, 15.0, 0.0], [0.2, 10.0, 0.0]])
+    lab = np.array(
+        [[30.0, 40.0, 0.0], [20.0, 35.0, 0.0], [8.0, 25.0, 0.0], [2.0, 15.0, 0.0], [0.2, 10.0, 0.0]]
+    )
     m = AspecularMeasurements((15.0, 25.0, 45.0, 75.0, 110.0), lab, 90.0)
     angles = np.asarray(m.angles_deg)
     fit = fit_fftg(m)
