@@ -200,6 +200,7 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
     from station.formulate.batch import batch_masses
     from station.formulate.formulation import formulate_from_library
 
+    batch_masses({}, args.batch)  # refuse a bad batch size before formulating
     lab, gloss, name = _design_lab(args.design)
     if args.gloss is not None:
         gloss = args.gloss

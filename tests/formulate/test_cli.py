@@ -100,6 +100,7 @@ def test_export_design_and_match(capsys, tmp_path, fmt: str) -> None:
         ["snap", "--lab", LAB, "--library", "nope.txt"],
         ["library", "browse", "--filter", "flop=abc"],
         ["library", "browse", "--filter", "colour=red"],
+        ["formulate", LAB, "--batch", "-3"],
     ],
 )
 def test_bad_input_exits_2_with_one_line(capsys, argv: list[str]) -> None:
