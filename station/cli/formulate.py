@@ -199,8 +199,10 @@ def cmd_snap(args: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
     """Formulate a recipe from the ColorSnap match's recipe; optionally run the simulated closed loop."""
+    from station.formulate.batch import batch_masses
     from station.formulate.formulation import formulate_from_library
 
+    batch_masses({}, args.batch)  # refuse a bad batch size before formulating
     lab, gloss, name = _design_lab(args.design)
     if args.gloss is not None:
         gloss = args.gloss
@@ -212,6 +214,7 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
         "matches": snap.to_dict()["matches"],
         "snap_warnings": list(snap.warnings),
         "library": lib.name,
+        "batch": batch_masses(result.recipe, args.batch).to_dict(),
     }
     if args.closed_loop:
         from station.formulate.closed_loop import closed_loop
@@ -346,6 +349,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--closed-loop", action="store_true", help="spray, measure and correct (simulated panel)")
     p.add_argument("--corrections", type=int, default=3, help="closed-loop corrections (default 3)")
     p.add_argument("--seed", type=int, default=7, help="seed of the simulated spray-out panel")
+    p.add_argument(
+        "--batch", type=float, default=1000.0, help="batch size in g the recipe is weighed out for"
+    )
     add_json_flag(p)
     p.set_defaults(handler=cmd_formulate)
 

@@ -68,6 +68,11 @@ def plot_range(channel: str, values: ArrayLike = ()) -> tuple[float, float]:
     return max(lo, b_lo), min(hi, b_hi)
 
 
+#: Largest reflectance (radiance) factor a spectrum may state: the one whose L* is :data:`L_MAX`
+#: (Y = ((L* + 16) / 116)³ ≈ 6.5). Flake reflection near specular exceeds a white diffuser (R > 1):
+#: bright silvers read L*15 of 110–140, R ≈ 1.4–2.4.
+REFLECTANCE_MAX = ((L_MAX + 16.0) / 116.0) ** 3
+
 #: Lower and upper Lab bounds as (L*, a*, b*) triples, for vectorised checks.
 LAB_LO: Lab = (L_MIN, -AB_MAX, -AB_MAX)
 LAB_HI: Lab = (L_MAX, AB_MAX, AB_MAX)

@@ -148,6 +148,13 @@ class FormulateOut(BaseModel):
     synthetic_colorants: bool
     matches: list[dict[str, Any]]
     snap_warnings: list[str]
+    batch: dict[str, Any] = Field(
+        description="the recipe weighed out as a 1000 g batch: colorants_g, binder_g, total_g"
+    )
+    nearest_achievable_lab: list[list[float]] | None = Field(
+        default=None,
+        description="when not formulable: Lab per angle of the best recipe (the nearest achievable paint)",
+    )
 
 
 class ExportRequest(BaseModel):
