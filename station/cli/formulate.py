@@ -257,6 +257,7 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
     )
     extras: list[Any] = [None] * len(specs)
     recipe: dict[str, float] | None = None
+    batch: dict[str, float] | None = None
     if args.recipe and library is not None:
         from station.formulate.export import recipe_export
         from station.formulate.formulation import formulate_from_library
@@ -265,11 +266,12 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
             design.lab_at(np.asarray(ANGLES_3)), library, gloss_gu=design.gloss_gu
         )
         spec, extra = recipe_export(
-            result, name=f"{design.name or 'design'} recipe", five_angles=args.five_angles
+            result, name=f"{design.name or 'design'} recipe", five_angles=args.five_angles, batch_g=args.batch
         )
         specs.append(spec)
         extras.append(extra)
         recipe = result.recipe
+        batch = dict(extra.recipe)
     out_path = Path(args.out)
     if args.format == "xml":
         write_color_xml(specs, out_path)
@@ -281,6 +283,7 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
         "colors": [s.name for s in specs],
         "match": match_code,
         "recipe": recipe,
+        "batch_g": batch,
         "angle_sets": [list(s.angles_deg) for s in specs[0].sets],
     }
 
@@ -367,7 +370,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--recipe",
         action="store_true",
         help="also formulate the design and export the recipe as a prediction colour "
-        "(CxF3: with the recipe and the predicted spectra per geometry)",
+        "(CxF3: with the recipe in grams per batch and the predicted spectra per geometry)",
+    )
+    p.add_argument(
+        "--batch", type=float, default=1000.0, help="batch size in g of the exported recipe (default 1000)"
     )
     p.add_argument("--gloss", type=float, help="gloss (GU) when DESIGN is a Lab list (default 90)")
     add_json_flag(p)

@@ -8,10 +8,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from station.formulate.batch import DEFAULT_BATCH_G
 from station.formulate.color_xml import ColorSpec, spec_from_design, spec_from_lab
 from station.formulate.colorants import lab_from_reflectance
 from station.model import FaceFlopTravelGloss
 from station.model.domain import ANGLES_3, ANGLES_3_ALT, ANGLES_5
+
+#: Name of the binder (the base) in an exported recipe.
+BINDER_NAME = "binder"
 
 if TYPE_CHECKING:
     from station.formulate.cxf import ObjectExtras
@@ -60,11 +64,14 @@ def export_specs(
 
 
 def recipe_export(
-    result: FormulationResult, *, name: str, five_angles: bool = False
+    result: FormulationResult, *, name: str, five_angles: bool = False, batch_g: float = DEFAULT_BATCH_G
 ) -> tuple[ColorSpec, ObjectExtras]:
     """A formulated recipe as an export colour (role ``prediction``): the colorant model's Lab at both
-    3-angle sets (and 5 angles with *five_angles*), and, for CxF3, the recipe (mass fractions) with the
-    predicted reflectance per geometry (:func:`station.formulate.colorants.predict_reflectance`)."""
+    3-angle sets (and 5 angles with *five_angles*), and, for CxF3, the recipe weighed out for a batch of
+    *batch_g* grams (:func:`station.formulate.batch.batch_masses`; the binder is the base component
+    :data:`BINDER_NAME`) with the predicted reflectance per geometry
+    (:func:`station.formulate.colorants.predict_reflectance`)."""
+    from station.formulate.batch import batch_masses
     from station.formulate.colorants import predict_reflectance
     from station.formulate.cxf import ObjectExtras
 
@@ -79,9 +86,11 @@ def recipe_export(
         synthetic=result.synthetic,
         five_angles=five_angles,
     )
+    batch = batch_masses(result.recipe, batch_g)
     extras = ObjectExtras(
         spectra=tuple((a, tuple(float(x) for x in r)) for a, r in zip(angles, refl, strict=True)),
-        recipe=tuple((k, float(v)) for k, v in result.recipe.items()),
-        recipe_units="fraction",
+        recipe=((BINDER_NAME, batch.binder_g), *((k, float(v)) for k, v in batch.colorants_g.items())),
+        recipe_units="g",
+        binder=BINDER_NAME,
     )
     return spec, extras

@@ -250,10 +250,15 @@ def test_cli_from_a_user_folder(tmp_path: Path) -> None:
         "--json",
     )
     assert run.returncode == 0, run.stderr
-    recipe = json.loads(run.stdout)["recipe"]
+    out = json.loads(run.stdout)
+    recipe = out["recipe"]
     _, extras = read_cxf_objects(tmp_path / "d.cxf")
     assert extras[:2] == [None, None] and extras[2] is not None
-    assert dict(extras[2].recipe) == pytest.approx(recipe, abs=0.5e-6)
+    # grams for the default 1000 g batch: colorant i = 1000 c_i, binder = 1000 (1 − Σ c_i)
+    grams = {k: 1000.0 * v for k, v in recipe.items()} | {"binder": 1000.0 * (1.0 - sum(recipe.values()))}
+    assert extras[2].recipe_units == "g" and extras[2].binder == "binder"
+    assert dict(extras[2].recipe) == pytest.approx(grams, abs=0.5e-6)
+    assert out["batch_g"] == pytest.approx(grams, abs=0.5e-6)
     db = default_database()
     refl = predict_reflectance(db.vector(recipe), (15.0,), db)[0]
     # 6 decimals in the file, and the recipe omits fractions under 1e-6 (FormulationResult.recipe)
