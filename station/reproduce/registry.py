@@ -1,0 +1,135 @@
+"""The registry of thesis experiments, in thesis order, and the runner behind ``station reproduce``."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+from station.reproduce.core import Experiment, ExperimentResult
+from station.reproduce.errors import ReproduceInputError
+
+
+def _lazy(module: str, function: str) -> Callable[[Path | None], ExperimentResult]:
+    """``station.reproduce.<module>.<function>``, imported on first call (selecting stays cheap)."""
+
+    def run(out_dir: Path | None) -> ExperimentResult:
+        import importlib
+
+        fn: Callable[[Path | None], ExperimentResult] = getattr(
+            importlib.import_module(f"station.reproduce.{module}"), function
+        )
+        return fn(out_dir)
+
+    run.__name__ = f"{module}.{function}"
+    return run
+
+
+#: Every experiment ``station reproduce`` runs; ``slow`` ones take tens of seconds or more.
+EXPERIMENTS: tuple[Experiment, ...] = (
+    Experiment(
+        "ch2-basis",
+        "2",
+        "Basis exponents and errors for 1–11 lobes (eq 2.3.4)",
+        ("2.4", "2.5"),
+        _lazy("ch2", "basis_table"),
+        slow=True,
+    ),
+    Experiment(
+        "ch2-basis-quick",
+        "2",
+        "Basis search, 1–3 lobes, against the shipped table",
+        ("2.4", "2.5"),
+        _lazy("ch2", "basis_quick"),
+    ),
+    Experiment(
+        "ch3-representations",
+        "3",
+        "Representations and conversions (§3.3, eqs 3.3.1–3.3.10)",
+        ("3.3",),
+        _lazy("ch3", "representations"),
+    ),
+    Experiment(
+        "ch4-lambertian",
+        "4",
+        "Lambertian goniogeometric index vs its closed form (§4.3.2)",
+        ("4.3",),
+        _lazy("ch4", "lambertian_index"),
+    ),
+    Experiment(
+        "ch4-fig4.4", "4", "Inverse trompe l'oeil for a solid (Fig. 4.4)", ("4.4",), _lazy("ch4", "fig44")
+    ),
+    Experiment(
+        "ch4-figs4.5-4.7",
+        "4",
+        "Metallic inverse trompe l'oeil (Figs 4.5–4.7)",
+        ("4.5", "4.6", "4.7"),
+        _lazy("ch4", "figs45_47"),
+    ),
+    Experiment(
+        "ch5-library",
+        "5",
+        "Library statistics (Fig. 5.4, §5.3.4)",
+        ("5.3", "5.4"),
+        _lazy("ch5", "library_statistics"),
+    ),
+    Experiment(
+        "ch5-indices",
+        "5",
+        "Index examples GM044, YM144, BM304, GM027 (Figs 5.5–5.8)",
+        ("5.5", "5.6", "5.7", "5.8"),
+        _lazy("ch5", "index_examples"),
+    ),
+    Experiment(
+        "ch5-colorsnap",
+        "5",
+        "ColorSnap on 6000 paints in real time (§5.3.5)",
+        ("5.9",),
+        _lazy("ch5", "colorsnap_timing"),
+    ),
+    Experiment(
+        "gloss-meter",
+        "gloss",
+        "Simulated gloss meter at 20/60/85° vs clear coats",
+        ("gloss",),
+        _lazy("gloss", "meter_geometries"),
+    ),
+)
+
+
+def select(figure: str | None = None, include_slow: bool = True) -> tuple[Experiment, ...]:
+    """The experiments reproducing thesis figure *figure* (e.g. ``"4.4"``, or an experiment key).
+
+    Raises :class:`ReproduceInputError` naming the accepted ids when nothing matches.
+    """
+    chosen = [
+        e
+        for e in EXPERIMENTS
+        if (include_slow or not e.slow) and (figure is None or figure == e.key or figure in e.figures)
+    ]
+    if figure is not None and not chosen:
+        ids = sorted({f for e in EXPERIMENTS for f in e.figures} | {e.key for e in EXPERIMENTS})
+        raise ReproduceInputError("figure", "one of " + ", ".join(ids), figure)
+    if figure is not None and not include_slow and any(e.slow for e in chosen):
+        chosen = [e for e in chosen if not e.slow]
+    return tuple(chosen)
+
+
+def run(
+    experiments: Iterable[Experiment],
+    out_dir: Path | None,
+    progress: Callable[[Experiment], None] | None = None,
+) -> list[ExperimentResult]:
+    """Run *experiments* in order; PNGs go to *out_dir* (``None``: no pictures)."""
+    results = []
+    for e in experiments:
+        if progress is not None:
+            progress(e)
+        t0 = time.perf_counter()
+        r = e.run(out_dir)
+        results.append(
+            ExperimentResult(
+                r.experiment, r.quantities, r.figures, r.notes, time.perf_counter() - t0, r.extra
+            )
+        )
+    return results
