@@ -50,6 +50,21 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         _lazy("ch3", "representations"),
     ),
     Experiment(
+        "ch3-fig3.20",
+        "3",
+        "Sketch fit (Fig. 3.20) with the RMS of an independent re-render; contrast gloss vs art gloss",
+        ("3.20", "3.5"),
+        _lazy("ch3_sketch", "fig320"),
+        slow=True,
+    ),
+    Experiment(
+        "ch3-environment-fit",
+        "3",
+        "Environment-lit sketch fit (§3.7.5): time and re-render RMS",
+        ("3.19", "3.7"),
+        _lazy("ch3_sketch", "environment_fit"),
+    ),
+    Experiment(
         "ch4-lambertian",
         "4",
         "Lambertian goniogeometric index vs its closed form (§4.3.2)",
