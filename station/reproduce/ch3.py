@@ -231,3 +231,81 @@ def representations(out_dir: Path | None) -> ExperimentResult:
         f"100° travel; the fit's shared θ_clamp is {fit.design.travel_deg:.1f}°."
     )
     return ExperimentResult("ch3-representations", quantities, figures, notes, time.perf_counter() - t0)
+
+
+def tweaker(out_dir: Path | None) -> ExperimentResult:
+    """§3.6: the tweaker's blend ratio (eq 3.6.4 with erratum 1) and what a crosshair drag changes."""
+    from station.design.tweaker import adjust_at, ratio_r
+
+    t0 = time.perf_counter()
+    d = EXAMPLES["pearl"]
+    assert d.travel_deg is not None  # noqa: S101
+    tc = d.travel_deg
+    mid = 0.5 * (FACE_ANGLE_DEG + tc)
+
+    def drag(theta: float) -> tuple[float, float]:
+        t = adjust_at(d, np.array([[theta]]), (0, 0), "L", 10.0)
+        return t.design.face[0] - d.face[0], t.design.flop[0] - d.flop[0]
+
+    face_at_face, flop_at_face = drag(FACE_ANGLE_DEG)
+    face_at_flop, flop_at_flop = drag(tc + 10.0)
+    face_mid, flop_mid = drag(mid)
+    erratum = "eq 3.6.4 as printed has its cases reversed (erratum 1); the text and eqs 3.6.5–3.6.6 decide"
+    quantities = (
+        Quantity(
+            "eq 3.6.4", "R at 10° (face region)", "1", 1.0, float(ratio_r(10.0, tc)), 1e-12, source=erratum
+        ),
+        Quantity(
+            "eq 3.6.4",
+            "R halfway between 15° and θ_clamp",
+            "1",
+            0.5,
+            float(ratio_r(mid, tc)),
+            1e-12,
+            source="linear between 15° and θ_clamp (erratum 1)",
+        ),
+        Quantity(
+            "eq 3.6.4", "R beyond θ_clamp", "1", 0.0, float(ratio_r(tc + 10.0, tc)), 1e-12, source=erratum
+        ),
+        Quantity(
+            "§3.6",
+            "ΔL +10 at 15°: face ΔL*",
+            "ΔL*",
+            10.0,
+            face_at_face,
+            1e-9,
+            source="§3.6: a crosshair on the face region adjusts the face",
+        ),
+        Quantity(
+            "§3.6", "ΔL +10 at 15°: flop ΔL*", "ΔL*", 0.0, flop_at_face, 1e-9, source="eq 3.6.6 with R = 1"
+        ),
+        Quantity(
+            "§3.6",
+            "ΔL +10 beyond θ_clamp: flop ΔL*",
+            "ΔL*",
+            10.0,
+            flop_at_flop,
+            1e-9,
+            source="eq 3.6.6, R = 0",
+        ),
+        Quantity(
+            "§3.6",
+            "ΔL +10 beyond θ_clamp: face ΔL*",
+            "ΔL*",
+            0.0,
+            face_at_flop,
+            1e-9,
+            source="eq 3.6.5, R = 0",
+        ),
+        Quantity(
+            "§3.6",
+            "ΔL +10 halfway: face and flop ΔL* each",
+            "ΔL*",
+            5.0,
+            0.5 * (face_mid + flop_mid),
+            1e-9,
+            source="eqs 3.6.5–3.6.6 with R = ½",
+        ),
+    )
+    notes = f"Design {d.name}, θ_clamp {tc:g}°; a +10 L* drag at 15°, at {mid:g}° and at {tc + 10:g}°."
+    return ExperimentResult("ch3-tweaker", quantities, (), notes, time.perf_counter() - t0)

@@ -203,3 +203,73 @@ def colorsnap_timing(out_dir: Path | None, queries: int = 200) -> ExperimentResu
         f"{statistics.median(brute_times):.2f} ms, ΔE*ab summed at 15/45/110° as in the thesis."
     )
     return ExperimentResult("ch5-colorsnap", quantities, (), notes, time.perf_counter() - t0)
+
+
+#: Fig. 5.10's two problem designs (Lab at 15°, 45°, 110°) and one design inside the library's range.
+TOO_DEEP = ((45.0, 85.0, 50.0), (30.0, 60.0, 35.0), (15.0, 35.0, 18.0))
+OFF_RADIAL = ((60.0, 30.0, 5.0), (45.0, 10.0, -20.0), (30.0, -10.0, -30.0))
+
+
+def _hue_deg(a: float, b: float) -> float:
+    import math
+
+    return math.degrees(math.atan2(b, a)) % 360.0
+
+
+def snap_warnings_fig510(out_dir: Path | None) -> ExperimentResult:
+    """Fig. 5.10: ColorSnap exposes a too-saturated design and an off-radial travel (as warnings)."""
+    t0 = time.perf_counter()
+    lib = demo_library()
+    index = SnapIndex(lib)
+    deep = color_snap(lib, np.asarray(TOO_DEEP), 1, "cie76", index=index)
+    off = color_snap(lib, np.asarray(OFF_RADIAL), 1, "cie76", index=index)
+    inside_lab = lib.angle_columns(ANGLES_3)[len(lib) // 2] + 0.3
+    inside = color_snap(lib, inside_lab, 1, "cie76", index=index)
+    match = lib.angle_columns(ANGLES_3)[deep.matches[0].index]
+    dh = abs(
+        (_hue_deg(match[0, 1], match[0, 2]) - _hue_deg(TOO_DEEP[0][1], TOO_DEEP[0][2]) + 180.0) % 360.0
+        - 180.0
+    )
+    quantities = (
+        Quantity(
+            "5.10",
+            "too-saturated design: 'more chromatic than every library paint' warnings",
+            "count",
+            1,
+            sum("more chromatic" in w for w in deep.warnings),
+            0,
+            source="Fig. 5.10 left 'too deep in saturation … hanging far outside'",
+        ),
+        Quantity(
+            "5.10",
+            "too-saturated design: hue angle of the match from the design's (15°)",
+            "deg",
+            0.0,
+            dh,
+            20.0,
+            source="'the nearest match, RM209, is the correct hue'",
+        ),
+        Quantity(
+            "5.10",
+            "off-radial design: 'does not capture the travel' warnings",
+            "count",
+            1,
+            sum("travel" in w for w in off.warnings),
+            0,
+            source="Fig. 5.10 right 'the closest match does not capture the hue-shifting nature'",
+        ),
+        Quantity(
+            "5.10",
+            "a design next to a library paint: warnings",
+            "count",
+            0,
+            len(inside.warnings),
+            0,
+            source="no problem, no warning",
+        ),
+    )
+    notes = (
+        f"Too deep: nearest {deep.matches[0].code}; warnings: {' | '.join(deep.warnings)}. Off-radial: nearest "
+        f"{off.matches[0].code}; warnings: {' | '.join(off.warnings)}."
+    )
+    return ExperimentResult("ch5-fig5.10", quantities, (), notes, time.perf_counter() - t0)

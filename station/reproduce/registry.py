@@ -50,6 +50,13 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         _lazy("ch3", "representations"),
     ),
     Experiment(
+        "ch3-tweaker",
+        "3",
+        "Tweaker blend (eq 3.6.4 with erratum 1) and crosshair drags (§3.6)",
+        ("3.6",),
+        _lazy("ch3", "tweaker"),
+    ),
+    Experiment(
         "ch3-fig3.20",
         "3",
         "Sketch fit (Fig. 3.20) with the RMS of an independent re-render; contrast gloss vs art gloss",
@@ -101,6 +108,13 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         "ColorSnap on 6000 paints in real time (§5.3.5)",
         ("5.9",),
         _lazy("ch5", "colorsnap_timing"),
+    ),
+    Experiment(
+        "ch5-fig5.10",
+        "5",
+        "ColorSnap warnings for a too-saturated and an off-radial design (Fig. 5.10)",
+        ("5.10",),
+        _lazy("ch5", "snap_warnings_fig510"),
     ),
     Experiment(
         "gloss-meter",

@@ -54,3 +54,18 @@ def test_erratum_5_residual_equals_a_by_hand_least_squares() -> None:
     assert expected > 1.0  # the case really has no shared vertex
     assert q.ours == pytest.approx(expected, rel=1e-6)
     assert tc == pytest.approx(60.0, abs=1e-6)  # L* came from a 60° travel
+
+
+def test_tweaker_agrees_and_matches_eqs_365_366_by_hand() -> None:
+    from station.design.tweaker import adjust_at
+    from station.model.examples import EXAMPLES
+
+    r = ch3.tweaker(None)
+    assert all(q.verdict == "agrees" for q in r.quantities)
+    d = EXAMPLES["pearl"]
+    theta, tc = 30.0, d.travel_deg
+    assert tc is not None
+    ratio = (tc - theta) / (tc - 15.0)  # erratum 1
+    t = adjust_at(d, np.array([[theta]]), (0, 0), "L", 10.0)
+    assert t.design.face[0] == pytest.approx(d.face[0] + 10.0 * ratio)  # eq 3.6.5
+    assert t.design.flop[0] == pytest.approx(d.flop[0] + 10.0 * (1.0 - ratio))  # eq 3.6.6

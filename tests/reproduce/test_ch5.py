@@ -53,3 +53,21 @@ def test_colorsnap_is_real_time_and_exact() -> None:
     assert q["nearest paint identical to a brute-force scan"].ours == 100.0
     timing = next(x for x in r.quantities if x.unit == "ms")
     assert timing.ours < 1000.0 / 30.0
+
+
+def test_fig510_designs_are_what_the_warnings_say() -> None:
+    """By hand: the too-deep design is more chromatic than every library paint of its hue; the off-radial
+    design's a*b* travel turns more than 45° away from its face hue direction."""
+    lib = demo_library()
+    std = lib.angle_columns((15.0, 45.0, 110.0))
+    deep = np.asarray(ch5.TOO_DEEP)
+    h = np.degrees(np.arctan2(std[:, 0, 2], std[:, 0, 1])) % 360
+    hd = np.degrees(np.arctan2(deep[0, 2], deep[0, 1])) % 360
+    near = np.abs((h - hd + 180) % 360 - 180) < 20
+    assert np.hypot(deep[:, 1], deep[:, 2]).max() > np.hypot(std[near, :, 1], std[near, :, 2]).max()
+    off = np.asarray(ch5.OFF_RADIAL)
+    travel, face = off[2, 1:] - off[0, 1:], off[0, 1:]
+    cos = travel @ face / (np.linalg.norm(travel) * np.linalg.norm(face))
+    assert np.degrees(np.arccos(cos)) > 45.0
+    r = ch5.snap_warnings_fig510(None)
+    assert all(q.verdict == "agrees" for q in r.quantities)

@@ -24,6 +24,7 @@ def station(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_json_records(tmp_path: Path) -> None:
+    """--figure without --out writes nothing; the JSON list carries every field of each quantity."""
     res = station(tmp_path, "reproduce", "--figure", "4.3", "--json")
     assert res.returncode == 0, res.stderr
     rows = json.loads(res.stdout)
@@ -48,6 +49,7 @@ def test_json_records(tmp_path: Path) -> None:
 def test_markdown_and_png(tmp_path: Path) -> None:
     res = station(tmp_path, "reproduce", "--figure", "3.3", "--out", "site")
     assert res.returncode == 0, res.stderr
+    assert "wrote site/thesis.md" in res.stderr
     md = (tmp_path / "site" / "thesis.md").read_text()
     assert "![3.3](thesis/ch3-representations.png)" in md
     assert (tmp_path / "site" / "thesis" / "ch3-representations.png").stat().st_size > 10_000
