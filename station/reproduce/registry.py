@@ -43,6 +43,13 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         _lazy("ch2", "basis_quick"),
     ),
     Experiment(
+        "ch2-fit-methods",
+        "2",
+        "Lobe-weight fit: the thesis's LP, NNLS, clamped least squares (§2.4)",
+        ("2.6",),
+        _lazy("ch2", "fit_methods"),
+    ),
+    Experiment(
         "ch3-representations",
         "3",
         "Representations and conversions (§3.3, eqs 3.3.1–3.3.10)",

@@ -47,3 +47,11 @@ def test_command_writes_a_new_file_and_leaves_the_shipped_table(tmp_path: Path, 
     assert bs.main(["--install", "--out", str(tmp_path / "y.json")]) == 2
     assert bs.main(["--max-lobes", "12"]) == 2
     assert _digest(bs.SHIPPED_TABLE) == before
+
+
+def test_fit_methods_order_as_the_thesis_says() -> None:
+    r = ch2.fit_comparison(designs=8)
+    nnls, lp, clamped = r["nnls"], r["lp-l1"], r["clamped-lsq"]
+    assert clamped[0] > 1.3 * nnls[0]  # clamping is the rejected baseline
+    assert nnls[0] <= lp[0] + 1e-9  # L2 (NNLS) beats L1 (LP) on the RMS error on this database
+    assert nnls[2] < ch2.REAL_TIME_MS
