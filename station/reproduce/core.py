@@ -165,6 +165,8 @@ class Experiment:
         ``run(out_dir)`` → :class:`ExperimentResult`; ``out_dir`` is where PNGs go (``None``: no PNG).
     slow
         True for experiments that take more than a few seconds (run by the command, not by the tests).
+    quick_of
+        Key of the slow experiment this one is the quick version of (left out when that one runs).
     """
 
     key: str
@@ -173,3 +175,4 @@ class Experiment:
     figures: tuple[str, ...]
     run: Callable[[Path | None], ExperimentResult]
     slow: bool = False
+    quick_of: str = ""

@@ -38,15 +38,16 @@ EXPERIMENTS: tuple[Experiment, ...] = (
     Experiment(
         "ch2-basis-quick",
         "2",
-        "Basis search, 1–3 lobes, against the shipped table",
+        "Basis search, 1–2 lobes, against the shipped table",
         ("2.4", "2.5"),
         _lazy("ch2", "basis_quick"),
+        quick_of="ch2-basis",
     ),
     Experiment(
         "ch2-fit-methods",
         "2",
         "Lobe-weight fit: the thesis's LP, NNLS, clamped least squares (§2.4)",
-        ("2.6",),
+        ("§2.4",),
         _lazy("ch2", "fit_methods"),
     ),
     Experiment(
@@ -133,21 +134,33 @@ EXPERIMENTS: tuple[Experiment, ...] = (
 )
 
 
-def select(figure: str | None = None, include_slow: bool = True) -> tuple[Experiment, ...]:
-    """The experiments reproducing thesis figure *figure* (e.g. ``"4.4"``, or an experiment key).
+def _norm(figure_id: str) -> str:
+    """``"Fig. 4.4"``, ``"fig 4.4"`` and ``"4.4"`` name the same figure (a section keeps its ``§``)."""
+    f = figure_id.strip().lower()
+    for prefix in ("figure", "fig.", "fig"):
+        if f.startswith(prefix):
+            f = f[len(prefix) :].strip()
+    return f
 
-    Raises :class:`ReproduceInputError` naming the accepted ids when nothing matches.
+
+def select(figure: str | None = None, include_slow: bool = True) -> tuple[Experiment, ...]:
+    """The experiments reproducing thesis figure *figure* (e.g. ``"4.4"``, ``"§2.4"``, or an experiment key).
+
+    With *include_slow*, a quick variant is left out when its slow experiment runs. Raises
+    :class:`ReproduceInputError` naming the accepted ids when nothing matches.
     """
+    want = None if figure is None else _norm(figure)
     chosen = [
         e
         for e in EXPERIMENTS
-        if (include_slow or not e.slow) and (figure is None or figure == e.key or figure in e.figures)
+        if (include_slow or not e.slow)
+        and (want is None or want == e.key or want in {_norm(f) for f in e.figures})
     ]
+    keys = {e.key for e in chosen}
+    chosen = [e for e in chosen if not (e.quick_of and e.quick_of in keys)]
     if figure is not None and not chosen:
         ids = sorted({f for e in EXPERIMENTS for f in e.figures} | {e.key for e in EXPERIMENTS})
         raise ReproduceInputError("figure", "one of " + ", ".join(ids), figure)
-    if figure is not None and not include_slow and any(e.slow for e in chosen):
-        chosen = [e for e in chosen if not e.slow]
     return tuple(chosen)
 
 

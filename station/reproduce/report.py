@@ -20,6 +20,8 @@ THESIS_FIGURES = {
     "11.38 without solids, over 96 % in [0, 20].",
     "2.4–2.5": "Figs 2.4–2.5: the exponents chosen for 1–11 lobes (spread evenly in log space) and the "
     "error of the choice (values omitted in the thesis).",
+    "3.20": "Fig. 3.20: the initial image, the goal made by rotating its hue in Photoshop, the least-squares "
+    "match (RMS 2 ΔE) and a contrast-enhanced difference image.",
     "gloss": "§3.3.1 gloss in GU (60°); no thesis figure: published glossmeter behaviour of clear coats.",
 }
 

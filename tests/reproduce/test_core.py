@@ -59,3 +59,13 @@ def test_every_tolerance_fails_a_30_percent_miss() -> None:
             checked += 1
             assert q.tolerance < 0.3 * abs(q.thesis), (q.figure, q.quantity)
     assert checked >= 10
+
+
+def test_selection_names_and_quick_variants() -> None:
+    assert select("Fig. 4.4") == select("4.4") == select("ch4-fig4.4")
+    assert [e.key for e in select("§2.4")] == ["ch2-fit-methods"]
+    full = [e.key for e in select("2.4")]
+    assert full == ["ch2-basis"]  # the quick variant is left out when the full search runs
+    assert [e.key for e in select("2.4", include_slow=False)] == ["ch2-basis-quick"]
+    with pytest.raises(ReproduceInputError):
+        select("3.20", include_slow=False)  # only a slow experiment reproduces it
