@@ -73,6 +73,13 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         slow=True,
     ),
     Experiment(
+        "ch3-traced",
+        "3",
+        "Traced, marker-filled art (Fig. 3.21): re-render RMS",
+        ("3.21",),
+        _lazy("ch3_sketch", "traced_art"),
+    ),
+    Experiment(
         "ch3-environment-fit",
         "3",
         "Environment-lit sketch fit (§3.7.5): time and re-render RMS",
