@@ -473,3 +473,46 @@ def figs45_47(out_dir: Path | None) -> ExperimentResult:
         f"bumper {bumper.rms_before:.2f} → {bumper.rms_after:.2f}."
     )
     return ExperimentResult("ch4-figs4.5-4.7", quantities, figures, notes, time.perf_counter() - t0)
+
+
+#: β step of the Fig. 4.3 sweep (degrees).
+FIG43_STEP_DEG = 0.05
+
+
+def fig43(out_dir: Path | None) -> ExperimentResult:
+    """Fig. 4.3: the index read off the seam-ΔE curves (§4.3.3) against the root of eq 4.3.1."""
+    from station.analysis import plot_sweep, seam_sweep
+
+    t0 = time.perf_counter()
+    b = np.round(np.arange(FIG43_STEP_DEG, 3.0 + 1e-9, FIG43_STEP_DEG), 6)
+    lights = [15.0, 30.0, 45.0, 60.0]
+    views = [float(v) for v in np.arange(-80.0, 81.0, 2.0)]
+    sweep = seam_sweep(BUMPER_PAINT, list(np.concatenate([-b[::-1], b])), lights, views)
+    root = goniogeometric_index(BUMPER_PAINT, lights, views, direction="either")
+    graphical = sweep.index_estimate()
+    if graphical is None or root.beta_min_deg is None:  # pragma: no cover - ε is crossed inside 3°
+        raise ReproduceInputError("betas", "a sweep that crosses ε", None)
+    quantities = (
+        Quantity(
+            "4.3",
+            f"graphical index from the curves ({FIG43_STEP_DEG:g}° steps) against the root of eq 4.3.1",
+            "deg",
+            root.beta_min_deg,
+            graphical,
+            FIG43_STEP_DEG,
+            source="§4.3.3: 'one selects the curve which is below the acceptable color difference threshold'",
+            reference="eq 4.3.1",
+        ),
+    )
+    figures: tuple[Figure, ...] = ()
+    if out_dir is not None:
+        coarse = seam_sweep(BUMPER_PAINT, [-8.0, -3.0, -1.0, -0.3, 0.3, 1.0, 3.0, 8.0], lights, views)
+        path = plot_sweep(coarse, out_dir / "ch4-fig4.3.png", title="Fig. 4.3 on our code: blue metallic")
+        figures = (
+            Figure("4.3", path, "Seam ΔE*ab against view (light 45°) and light (view 0°), one curve per β."),
+        )
+    notes = (
+        f"{BUMPER_PAINT.name}: β_min = {root.beta_min_deg:.4f}° at light {root.geometry['light_deg']:g}°, view "
+        f"{root.geometry['view_deg']:g}° (in plane); the curves give {graphical:g}°."
+    )
+    return ExperimentResult("ch4-fig4.3", quantities, figures, notes, time.perf_counter() - t0)

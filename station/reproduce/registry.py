@@ -94,6 +94,13 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         _lazy("ch4", "lambertian_index"),
     ),
     Experiment(
+        "ch4-fig4.3",
+        "4",
+        "Goniogeometric index read off the seam-ΔE curves (Fig. 4.3)",
+        ("4.3",),
+        _lazy("ch4", "fig43"),
+    ),
+    Experiment(
         "ch4-fig4.4", "4", "Inverse trompe l'oeil for a solid (Fig. 4.4)", ("4.4",), _lazy("ch4", "fig44")
     ),
     Experiment(

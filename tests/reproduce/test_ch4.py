@@ -107,3 +107,11 @@ def test_bad_shading_is_refused() -> None:
         ch4.thesis_convention_solve(SILVER_PAINT, 2.0, full=False, shading="flat")  # type: ignore[arg-type]
     with pytest.raises(ReproduceInputError, match="paint"):
         ch4.thesis_convention_solve(SOLID_PAINT, 2.0, full=False)
+
+
+def test_fig43_graphical_index_brackets_the_root() -> None:
+    r = ch4.fig43(None)
+    q = r.quantities[0]
+    assert q.verdict == "agrees"
+    assert abs(q.ours - q.thesis) <= ch4.FIG43_STEP_DEG
+    assert q.reference == "eq 4.3.1"

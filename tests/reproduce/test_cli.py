@@ -28,7 +28,7 @@ def test_json_records(tmp_path: Path) -> None:
     res = station(tmp_path, "reproduce", "--figure", "4.3", "--json")
     assert res.returncode == 0, res.stderr
     rows = json.loads(res.stdout)
-    assert len(rows) == 6
+    assert len(rows) == 7  # six lights of §4.3.2 and the Fig. 4.3 read-off
     for row in rows:
         assert {
             "figure",
