@@ -309,3 +309,47 @@ def tweaker(out_dir: Path | None) -> ExperimentResult:
     )
     notes = f"Design {d.name}, θ_clamp {tc:g}°; a +10 L* drag at 15°, at {mid:g}° and at {tc + 10:g}°."
     return ExperimentResult("ch3-tweaker", quantities, (), notes, time.perf_counter() - t0)
+
+
+def variations_ring(out_dir: Path | None) -> ExperimentResult:
+    """§3.4.4: every face / flop variation of degree d moves its colour by ΔE*ab = d, the others nothing."""
+    from station.design.variations import variations
+
+    t0 = time.perf_counter()
+    d = EXAMPLES["pearl"]
+    degree = 5.0
+    quantities = []
+    for category, moved, fixed in (("face", "face", "flop"), ("flop", "flop", "face")):
+        ring = variations(d, degree, category)  # type: ignore[arg-type]
+        de = [
+            float(np.linalg.norm(np.subtract(getattr(v.design, moved), getattr(d, moved))))
+            for v in ring.variations
+            if v.design is not None
+        ]
+        other = [
+            float(np.linalg.norm(np.subtract(getattr(v.design, fixed), getattr(d, fixed))))
+            for v in ring.variations
+            if v.design is not None
+        ]
+        quantities += [
+            Quantity(
+                "§3.4.4",
+                f"{category} variations: largest |ΔE*ab − d|",
+                "ΔE*ab",
+                0.0,
+                max(abs(x - degree) for x in de),
+                1e-9,
+                source="one step of the ring = the degree d",
+            ),
+            Quantity(
+                "§3.4.4",
+                f"{category} variations: {fixed} moved",
+                "ΔE*ab",
+                0.0,
+                max(other),
+                1e-9,
+                source="a face variation leaves the flop, and the reverse",
+            ),
+        ]
+    notes = f"{d.name}, degree {degree:g}: lighter/darker, ±chroma and ±hue (ΔH*ab = d) of face and flop."
+    return ExperimentResult("ch3-variations", tuple(quantities), (), notes, time.perf_counter() - t0)

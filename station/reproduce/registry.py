@@ -58,6 +58,13 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         _lazy("ch3", "representations"),
     ),
     Experiment(
+        "ch3-variations",
+        "3",
+        "Variations ring (§3.4.4): one step = the degree",
+        ("3.9", "3.10"),
+        _lazy("ch3", "variations_ring"),
+    ),
+    Experiment(
         "ch3-tweaker",
         "3",
         "Tweaker blend (eq 3.6.4 with erratum 1) and crosshair drags (§3.6)",

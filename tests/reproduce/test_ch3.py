@@ -69,3 +69,21 @@ def test_tweaker_agrees_and_matches_eqs_365_366_by_hand() -> None:
     t = adjust_at(d, np.array([[theta]]), (0, 0), "L", 10.0)
     assert t.design.face[0] == pytest.approx(d.face[0] + 10.0 * ratio)  # eq 3.6.5
     assert t.design.flop[0] == pytest.approx(d.flop[0] + 10.0 * (1.0 - ratio))  # eq 3.6.6
+
+
+def test_variations_agree_and_the_hue_step_is_the_chord_by_hand() -> None:
+    import math
+
+    from station.design.variations import variations
+    from station.model.examples import EXAMPLES
+
+    assert all(q.verdict == "agrees" for q in ch3.variations_ring(None).quantities)
+    d = EXAMPLES["pearl"]
+    _, a, b = d.face
+    c = math.hypot(a, b)
+    dh = 2.0 * math.asin(5.0 / (2.0 * c))  # ΔH*ab = 5 along the hue circle
+    ring = {v.label: v.design for v in variations(d, 5.0, "face").variations}
+    hue_plus = ring["hue +"]
+    assert hue_plus is not None
+    expected = (a * math.cos(dh) - b * math.sin(dh), a * math.sin(dh) + b * math.cos(dh))
+    assert hue_plus.face[1:] == pytest.approx(expected, abs=1e-9)
