@@ -67,11 +67,16 @@ def text_table(results: Sequence[ExperimentResult]) -> str:
     return "\n".join(lines)
 
 
+def _md(text: str) -> str:
+    """Text for a markdown table cell or caption: ``*`` (as in L*, ΔE*ab) and ``|`` escaped."""
+    return text.replace("*", "\\*").replace("|", "\\|")
+
+
 def _md_row(q: Quantity) -> str:
     bound = {"within": "±", "at_most": "≤ +", "at_least": "≥ −"}[q.mode]
-    verdict = "agrees" if q.verdict == "agrees" else f"**differs**: {q.reason}"
+    verdict = "agrees" if q.verdict == "agrees" else f"**differs**: {_md(q.reason)}"
     return (
-        f"| {q.figure} | {q.quantity} | {q.unit} | {_fmt(q.thesis)}{'' if q.reference == 'thesis' else ' (' + q.reference + ')'} | {_fmt(q.ours)} | {_fmt(q.difference)} "
+        f"| {q.figure} | {_md(q.quantity)} | {_md(q.unit)} | {_fmt(q.thesis)}{'' if q.reference == 'thesis' else ' (' + q.reference + ')'} | {_fmt(q.ours)} | {_fmt(q.difference)} "
         f"| {bound}{_fmt(q.tolerance)} | {verdict} |"
     )
 
@@ -105,15 +110,15 @@ def markdown(experiments: Sequence[Experiment], results: Sequence[ExperimentResu
         parts += [_md_row(q) for q in r.quantities]
         parts.append("")
         if r.notes:
-            parts += [r.notes, ""]
+            parts += [r.notes.replace("*", "\\*"), ""]
         for f in r.figures:
             rel = f.path.relative_to(out_dir) if f.path.is_relative_to(out_dir) else f.path
             parts += [
                 "| thesis | ours |",
                 "|---|---|",
-                f"| {THESIS_FIGURES.get(f.figure, 'Fig. ' + f.figure)} | ![{f.figure}]({rel.as_posix()}) |",
+                f"| {_md(THESIS_FIGURES.get(f.figure, 'Fig. ' + f.figure))} | ![{f.figure}]({rel.as_posix()}) |",
                 "",
-                f"*{f.caption}*",
+                f"*{_md(f.caption)}*",
                 "",
             ]
     return "\n".join(parts).rstrip() + "\n"
