@@ -23,12 +23,11 @@ def station(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
     )
 
 
-def test_json_records(tmp_path: Path) -> None:
-    """--figure without --out writes nothing; the JSON list carries every field of each quantity."""
-    res = station(tmp_path, "reproduce", "--figure", "4.3", "--json")
+def test_json_records_markdown_and_png(tmp_path: Path) -> None:
+    res = station(tmp_path, "reproduce", "--figure", "Fig. 3.3", "--out", "site", "--json")
     assert res.returncode == 0, res.stderr
     rows = json.loads(res.stdout)
-    assert len(rows) == 7  # six lights of §4.3.2 and the Fig. 4.3 read-off
+    assert len(rows) == 8
     for row in rows:
         assert {
             "figure",
@@ -40,21 +39,19 @@ def test_json_records(tmp_path: Path) -> None:
             "verdict",
             "reason",
         } <= row.keys()
-        assert row["verdict"] == "agrees" and row["reason"] is None
-        assert abs(row["ours"] - row["thesis"]) <= row["tolerance"]
-    assert "reproduce" in res.stderr  # the progress bar
-    assert not (tmp_path / "docs").exists()  # --figure without --out writes nothing
-
-
-def test_markdown_and_png(tmp_path: Path) -> None:
-    res = station(tmp_path, "reproduce", "--figure", "3.3", "--out", "site")
-    assert res.returncode == 0, res.stderr
-    assert "wrote site/thesis.md" in res.stderr
+        if row["verdict"] == "agrees":
+            assert row["reason"] is None and abs(row["ours"] - row["thesis"]) <= row["tolerance"]
+        else:
+            assert (
+                row["reason"].startswith("erratum 5") and abs(row["ours"] - row["thesis"]) > row["tolerance"]
+            )
+    assert [r["verdict"] for r in rows].count("differs") == 1
+    assert "reproduce" in res.stderr and "wrote site/thesis.md" in res.stderr  # progress, then the file
     md = (tmp_path / "site" / "thesis.md").read_text()
     assert "![3.3](thesis/ch3-representations.png)" in md
     assert (tmp_path / "site" / "thesis" / "ch3-representations.png").stat().st_size > 10_000
     assert "**differs**: erratum 5" in md
-    assert "→ differs" in res.stdout and "reason: erratum 5" in res.stdout
+    assert not (tmp_path / "docs").exists()  # only --out is written
 
 
 def test_unknown_figure_exits_2_with_one_line(tmp_path: Path) -> None:
@@ -62,3 +59,4 @@ def test_unknown_figure_exits_2_with_one_line(tmp_path: Path) -> None:
     assert res.returncode == 2
     lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and lines[0].startswith("error: figure: expected one of")
+    assert not any(tmp_path.iterdir())  # nothing written
