@@ -58,6 +58,13 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         _lazy("ch3", "representations"),
     ),
     Experiment(
+        "ch3-hsb",
+        "3",
+        "Hue / saturation / brightness group edit (§3.4.2)",
+        ("§3.4.2",),
+        _lazy("ch3", "hsb"),
+    ),
+    Experiment(
         "ch3-variations",
         "3",
         "Variations ring (§3.4.4): one step = the degree",
@@ -75,7 +82,7 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         "ch3-fig3.20",
         "3",
         "Sketch fit (Fig. 3.20) with the RMS of an independent re-render; contrast gloss vs art gloss",
-        ("3.20", "3.5"),
+        ("3.20", "§3.5.3"),
         _lazy("ch3_sketch", "fig320"),
         slow=True,
     ),

@@ -87,3 +87,9 @@ def test_variations_agree_and_the_hue_step_is_the_chord_by_hand() -> None:
     assert hue_plus is not None
     expected = (a * math.cos(dh) - b * math.sin(dh), a * math.sin(dh) + b * math.cos(dh))
     assert hue_plus.face[1:] == pytest.approx(expected, abs=1e-9)
+
+
+def test_hsb_edit_is_a_rotate_and_scale_of_every_point() -> None:
+    r = ch3.hsb(None)
+    assert len(r.quantities) == 2
+    assert all(q.verdict == "agrees" and abs(q.ours) <= q.tolerance for q in r.quantities)
