@@ -395,5 +395,5 @@ def hsb(out_dir: Path | None) -> ExperimentResult:
             source="§3.4.2: the group edit keeps the family's shape",
         ),
     )
-    notes = f"{d.name}: hue +{hue:g}°, saturation ×{sat:g}, brightness {bright:+g} L*, checked on 0–150°."
+    notes = f"{d.name}: hue +{hue:g}°, saturation ×{sat:g}, brightness {bright:+g} L*, checked every 2.5° of aspecular angle up to 150°."
     return ExperimentResult("ch3-hsb", quantities, (), notes, time.perf_counter() - t0)
