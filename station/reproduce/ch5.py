@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import statistics
 import time
+from collections.abc import Mapping
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -23,14 +25,16 @@ from station.reproduce.core import ExperimentResult, Figure, Quantity
 
 SYNTHETIC = "the demo library is synthetic (generated from the synthetic colorant model), not SpectraMaster"
 #: The thesis's examples: (figure, thesis code, {index: value}).
-INDEX_EXAMPLES: tuple[tuple[str, str, dict[str, float]], ...] = (
-    ("5.5", "GM044", {"chroma": 46.0}),
-    ("5.6", "YM144", {"hue_shift": 12.6}),
-    ("5.7", "BM304", {"flop": 16.6, "chroma": 5.6}),
-    ("5.8", "GM027", {"hue_shift": 19.8}),
+INDEX_EXAMPLES: tuple[tuple[str, str, Mapping[str, float]], ...] = (
+    ("5.5", "GM044", MappingProxyType({"chroma": 46.0})),
+    ("5.6", "YM144", MappingProxyType({"hue_shift": 12.6})),
+    ("5.7", "BM304", MappingProxyType({"flop": 16.6, "chroma": 5.6})),
+    ("5.8", "GM027", MappingProxyType({"hue_shift": 19.8})),
 )
-HUES = {"G": "green", "Y": "yellow", "B": "blue", "R": "red", "N": "neutral"}
-INDEX_NAMES = {"flop": "Flop Index", "chroma": "Chroma Index", "hue_shift": "Hue Shift Index"}
+HUES = MappingProxyType({"G": "green", "Y": "yellow", "B": "blue", "R": "red", "N": "neutral"})
+INDEX_NAMES = MappingProxyType(
+    {"flop": "Flop Index", "chroma": "Chroma Index", "hue_shift": "Hue Shift Index"}
+)
 #: "In real time": one frame at 30 Hz, in ms.
 REAL_TIME_MS = 1000.0 / 30.0
 
@@ -43,7 +47,7 @@ def _group_rows(library: Library, code: str) -> np.ndarray:
     )
 
 
-def nearest_analogue(library: Library, code: str, targets: dict[str, float]) -> int:
+def nearest_analogue(library: Library, code: str, targets: Mapping[str, float]) -> int:
     """Row of the paint of *code*'s group whose indices are nearest *targets* (relative distance)."""
     rows = _group_rows(library, code)
     idx = library.indices()

@@ -4,26 +4,29 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 from station.reproduce.core import Experiment, ExperimentResult, Quantity
 
 #: What the thesis shows in each figure we set ours beside (the thesis's own pictures are not shipped).
-THESIS_FIGURES = {
-    "3.3": "§3.3: face/flop/travel/gloss, the clamped quadratic (eqs 3.3.1–3.3.2) and aspecular values "
-    "describe one colour; conversions eqs 3.3.4, 3.3.8–3.3.10.",
-    "4.4": "Fig. 4.4: a grid of solid panels misaligned 3°, rows = light 0–52°, columns = identical, "
-    "optimised at 45°, RMS, per row.",
-    "4.5": "Fig. 4.5: RMS ΔE over face L* × L* travel for a silver with a black flop, 2° misalignment; "
-    "minimum at face L* +3.4, travel +2.0°.",
-    "5.4": "Fig. 5.4: distribution of Flop Index for solids, metallics and pearls of SpectraMaster; mean "
-    "11.38 without solids, over 96 % in [0, 20].",
-    "2.4–2.5": "Figs 2.4–2.5: the exponents chosen for 1–11 lobes (spread evenly in log space) and the "
-    "error of the choice (values omitted in the thesis).",
-    "3.20": "Fig. 3.20: the initial image, the goal made by rotating its hue in Photoshop, the least-squares "
-    "match (RMS 2 ΔE) and a contrast-enhanced difference image.",
-    "gloss": "§3.3.1 gloss in GU (60°); no thesis figure: published glossmeter behaviour of clear coats.",
-}
+THESIS_FIGURES = MappingProxyType(
+    {
+        "3.3": "§3.3: face/flop/travel/gloss, the clamped quadratic (eqs 3.3.1–3.3.2) and aspecular values "
+        "describe one colour; conversions eqs 3.3.4, 3.3.8–3.3.10.",
+        "4.4": "Fig. 4.4: a grid of solid panels misaligned 3°, rows = light 0–52°, columns = identical, "
+        "optimised at 45°, RMS, per row.",
+        "4.5": "Fig. 4.5: RMS ΔE over face L* × L* travel for a silver with a black flop, 2° misalignment; "
+        "minimum at face L* +3.4, travel +2.0°.",
+        "5.4": "Fig. 5.4: distribution of Flop Index for solids, metallics and pearls of SpectraMaster; mean "
+        "11.38 without solids, over 96 % in [0, 20].",
+        "2.4–2.5": "Figs 2.4–2.5: the exponents chosen for 1–11 lobes (spread evenly in log space) and the "
+        "error of the choice (values omitted in the thesis).",
+        "3.20": "Fig. 3.20: the initial image, the goal made by rotating its hue in Photoshop, the least-squares "
+        "match (RMS 2 ΔE) and a contrast-enhanced difference image.",
+        "gloss": "§3.3.1 gloss in GU (60°); no thesis figure: published glossmeter behaviour of clear coats.",
+    }
+)
 
 
 def _fmt(v: float) -> str:
