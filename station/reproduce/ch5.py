@@ -143,6 +143,8 @@ def index_examples(out_dir: Path | None) -> ExperimentResult:
         row = nearest_analogue(lib, code, targets)
         ours_code = str(lib.codes[row])
         lines.append(f"{code} → {ours_code}")
+        group = _group_rows(lib, code)
+        names = " and ".join(INDEX_NAMES[k] for k in targets)
         for key, value in targets.items():
             quantities.append(
                 Quantity(
@@ -152,8 +154,9 @@ def index_examples(out_dir: Path | None) -> ExperimentResult:
                     value,
                     float(idx[key][row]),
                     0.1 * value,
-                    reason=SYNTHETIC + f": its {HUES[code[0]]} metallics and pearls reach at most "
-                    f"{float(np.nanmax(idx[key][_group_rows(lib, code)])):.1f}",
+                    reason=SYNTHETIC + f": none of its {group.size} {HUES[code[0]]} metallics and pearls "
+                    f"has {names} all within 10 % of {code}'s (its {INDEX_NAMES[key]} spans "
+                    f"{float(np.nanmin(idx[key][group])):.1f}–{float(np.nanmax(idx[key][group])):.1f})",
                     source=f"Fig. {figure} caption",
                 )
             )
