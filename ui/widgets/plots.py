@@ -58,6 +58,7 @@ class _PlotBase(QWidget):
         self._drag: object | None = None
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
         self.setMinimumSize(160, 120)
+        self.setFocusPolicy(Qt.FocusPolicy.ClickFocus)  # Ctrl+Z after a drag undoes it, not a text box
         model.document.events.changed.connect(self._on_changed)
 
     def _on_changed(self, design: FaceFlopTravelGloss) -> None:
