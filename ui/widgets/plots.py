@@ -139,7 +139,9 @@ class CurvePlot(_PlotBase):
             x = self.to_px(a, lo).x()
             p.drawLine(QPointF(x, r.bottom()), QPointF(x, r.bottom() + 3))
             p.drawText(QRectF(x - 14, r.bottom() + 2, 28, 13), Qt.AlignmentFlag.AlignCenter, str(a))
-        p.drawText(QRectF(r.right() - 34, r.top() + 2, 30, 14), Qt.AlignmentFlag.AlignRight, f"{self.channel}*")
+        p.drawText(
+            QRectF(r.right() - 34, r.top() + 2, 30, 14), Qt.AlignmentFlag.AlignRight, f"{self.channel}*"
+        )
         p.drawText(
             QRectF(r.left(), r.bottom() + 14, r.width(), 14),
             Qt.AlignmentFlag.AlignCenter,
