@@ -129,6 +129,7 @@ def test_stylist_journey(qtbot, window, tmp_path):
     pick_design_from_library(qtbot, win)
     edit_with_plots_and_values(qtbot, win)
     moodboard_eyedroppers(qtbot, win, tmp_path)
+    own_environment(qtbot, win, tmp_path)
     save_reopen_export(qtbot, win, tmp_path)
     assert doc.design is not DEFAULT_DESIGN
     win.view_panel.view.wait_idle()
@@ -317,10 +318,29 @@ def moodboard_eyedroppers(qtbot, win: MainWindow, tmp_path) -> None:
     assert doc.design.gloss_gu == g
 
 
+def own_environment(qtbot, win: MainWindow, tmp_path) -> None:
+    """File → Load environment: with the 3D view's loader a file that is no HDR image is refused in a
+    message box and the view keeps its environment; without it the item is disabled and says why."""
+    action = win.file_actions["Load environment (HDR)"]
+    if not callable(getattr(win.view_model, "load_environment", None)):
+        assert not action.isEnabled() and "not in this build" in action.toolTip()
+        return
+    assert action.isEnabled()
+    bad = tmp_path / "not-an-image.hdr"
+    bad.write_bytes(b"#?RADIANCE\nthis is no picture\n")
+    before = win.view_model.settings
+    file_menu(qtbot, win, "Load environment (HDR)", bad)
+    assert win.error_box is not None and win.error_box.isVisible()
+    assert "not-an-image.hdr" in win.error_box.text()
+    assert win.view_model.settings == before
+    click_center(qtbot, win.error_box.button(QMessageBox.StandardButton.Ok))
+
+
 def save_reopen_export(qtbot, win: MainWindow, tmp_path) -> None:
     doc, files = win.document, win.files
     click_center(qtbot, win.designer_panel.palette_keep)
     assert set(files.unsaved()) == {"design", "palette", "moodboard"}
+    assert win.isWindowModified()  # the title's [*] marker
     saved = doc.design
     design_path, palette_path, board_path = (
         tmp_path / "silver-grey.json",
@@ -331,6 +351,7 @@ def save_reopen_export(qtbot, win: MainWindow, tmp_path) -> None:
     file_menu(qtbot, win, "Save As palette", palette_path)
     file_menu(qtbot, win, "Save As mood board", board_path)
     assert files.unsaved() == []
+    assert not win.isWindowModified() and win.windowTitle().startswith("silver-grey")
     data = json.loads(design_path.read_text())
     assert data["schema"] == "cacad.design/1" and data["name"] == "silver-grey"
     assert data["face"] == list(saved.face) and data["flop"] == list(saved.flop)
