@@ -334,6 +334,16 @@ def own_environment(qtbot, win: MainWindow, tmp_path) -> None:
     assert "not-an-image.hdr" in win.error_box.text()
     assert win.view_model.settings == before
     click_center(qtbot, win.error_box.button(QMessageBox.StandardButton.Ok))
+    # an own HDR: a dim sky with one bright sun, 64 × 32 equirectangular
+    from station.render.hdr_io import write_hdr
+
+    sky = np.full((32, 64, 3), 0.2, np.float32)
+    sky[6:9, 20:23] = 40.0
+    own = tmp_path / "own-sky.hdr"
+    write_hdr(own, sky)
+    file_menu(qtbot, win, "Load environment (HDR)", own)
+    assert win.view_model.settings.environment == str(own)
+    assert f"environment {own}" in win.statusBar().currentMessage()
 
 
 def save_reopen_export(qtbot, win: MainWindow, tmp_path) -> None:
