@@ -276,7 +276,11 @@ class MoodBoardScreen(QWidget):
             + "\nflop L*a*b* "
             + ", ".join(f"{v:.1f}" for v in design.flop)
             + f"\ngloss {design.gloss_gu:.0f} GU"
-            + ("\nface and flop swapped (the face sample was darker)" if self.model.swapped else "")
+            + (
+                "\nface and flop swapped (the face sample was darker)"
+                if self.model.swapped and (self.model.document.undo_label or "").endswith("eyedropper")
+                else ""
+            )
         )
 
     def closeEvent(self, event) -> None:
