@@ -96,6 +96,9 @@ class MainWindow(QMainWindow):
         self.error_box: QMessageBox | None = None
         self._make_file_menu()
         self._make_menu()
+        self.designer.events.palette.connect(self._update_title)
+        self.moodboard.events.board.connect(self._update_title)
+        self._update_title()
         self.statusBar().showMessage(self._status_text())
 
     def _add_screens(self) -> None:
@@ -196,6 +199,7 @@ class MainWindow(QMainWindow):
             return
         self.files.new(kind)
         self.statusBar().showMessage(f"new {TITLES[kind]}")
+        self._update_title()
 
     def file_open(self, kind: Kind) -> bool:
         """File → Open…: choose a file and open it; a bad file shows an error and changes nothing."""
@@ -210,6 +214,7 @@ class MainWindow(QMainWindow):
             self.show_error(f"Cannot open {TITLES[kind]}", str(exc))
             return False
         self.statusBar().showMessage(f"opened {TITLES[kind]} {path}")
+        self._update_title()
         return True
 
     def file_save(self, kind: Kind) -> bool:
@@ -230,6 +235,7 @@ class MainWindow(QMainWindow):
             self.show_error(f"Cannot save {TITLES[kind]}", str(exc))
             return False
         self.statusBar().showMessage(f"saved {TITLES[kind]} {written}")
+        self._update_title()
         return True
 
     def file_export(self, fmt: str) -> bool:
@@ -337,7 +343,14 @@ class MainWindow(QMainWindow):
         self.redo_action.setEnabled(self.document.can_redo)
         self.undo_action.setText(f"Undo {self.document.undo_label or ''}".strip())
 
+    def _update_title(self) -> None:
+        """``name · CACAD Station``, with ``*`` while something is unsaved (Qt's modified marker)."""
+        name = self.document.name
+        self.setWindowTitle(f"{name}[*] · CACAD Station")
+        self.setWindowModified(bool(self.files.unsaved()))
+
     def _on_design(self, design) -> None:
+        self._update_title()
         self.view_model.show(design)
         self.statusBar().showMessage(self._status_text())
 
@@ -357,6 +370,8 @@ class MainWindow(QMainWindow):
         if self.error_box is not None:
             self.error_box.close()
         self.document.events.changed.disconnect(self._on_design)
+        self.designer.events.palette.disconnect(self._update_title)
+        self.moodboard.events.board.disconnect(self._update_title)
         self.document.events.history.disconnect(self._on_history)
         self.designer_panel.close()
         for w in self.screens.values():

@@ -59,6 +59,7 @@ def test_screenshots_of_every_screen(qtbot, tmp_path):
     paths = take_screenshots(tmp_path, scan=False)
     assert [p.name for p in paths] == [
         "design.png",
+        "file-menu.png",
         "tweaker.png",
         "moodboard.png",
         "library.png",

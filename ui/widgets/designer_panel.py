@@ -195,6 +195,7 @@ class DesignerPanel(QWidget):
         QVBoxLayout(var_box).addWidget(self.variations)
         self.palette = PaletteList(model)
         keep = QPushButton("Keep in palette")
+        self.palette_keep = keep
         keep.clicked.connect(lambda: self.model.keep())
         pal_box = QGroupBox("Palette")
         pl = QVBoxLayout(pal_box)

@@ -9,7 +9,7 @@ screen under the cursor (another window, a web page, a photo viewer).
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QPointF, QRectF
+from PySide6.QtCore import QPointF, QRectF, Qt
 from PySide6.QtGui import QColor, QGuiApplication, QImage, QMouseEvent, QPainter, QPen, QWheelEvent
 from PySide6.QtWidgets import (
     QButtonGroup,
@@ -70,6 +70,8 @@ class BoardCanvas(QWidget):
         self._qimages: dict[str, tuple[object, QImage]] = {}
         self.setMinimumSize(320, 240)
         self.setMouseTracking(False)
+        # a click on the board takes the keyboard from the option boxes: Ctrl+Z then undoes the drop
+        self.setFocusPolicy(Qt.FocusPolicy.ClickFocus)
         model.events.board.connect(self.update)
         model.events.eyedropper.connect(self._on_eyedropper)
 
@@ -162,7 +164,9 @@ class MoodBoardScreen(QWidget):
             self.tools.addButton(b)
             b.clicked.connect(lambda _=False, name=t: self.set_tool(name))
             bar.addWidget(b)
+        self.file_dialog = None
         add = QPushButton("Add image…")
+        self.add_button = add
         add.clicked.connect(self._add_dialog)
         new_board = QPushButton("New board")
         new_board.clicked.connect(
@@ -230,7 +234,16 @@ class MoodBoardScreen(QWidget):
             b.setChecked(b.text().split()[0] == name)
 
     def _add_dialog(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self, "Add image", "", "Images (*.png *.jpg *.jpeg)")
+        dlg = QFileDialog(self, "Add image", "", "Images (*.png *.jpg *.jpeg)")
+        dlg.setOption(QFileDialog.Option.DontUseNativeDialog, True)  # the same dialog on every desktop
+        dlg.setFileMode(QFileDialog.FileMode.ExistingFile)
+        self.file_dialog: QFileDialog | None = dlg
+        try:
+            ok = dlg.exec() == QFileDialog.DialogCode.Accepted and bool(dlg.selectedFiles())
+            path = dlg.selectedFiles()[0] if ok else ""
+        finally:
+            self.file_dialog = None
+            dlg.deleteLater()
         if path:
             try:
                 self.model.add_image(path, 10.0, 10.0)
@@ -263,7 +276,11 @@ class MoodBoardScreen(QWidget):
             + "\nflop L*a*b* "
             + ", ".join(f"{v:.1f}" for v in design.flop)
             + f"\ngloss {design.gloss_gu:.0f} GU"
-            + ("\nface and flop swapped (the face sample was darker)" if self.model.swapped else "")
+            + (
+                "\nface and flop swapped (the face sample was darker)"
+                if self.model.swapped and (self.model.document.undo_label or "").endswith("eyedropper")
+                else ""
+            )
         )
 
     def closeEvent(self, event) -> None:

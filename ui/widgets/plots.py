@@ -58,6 +58,7 @@ class _PlotBase(QWidget):
         self._drag: object | None = None
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
         self.setMinimumSize(160, 120)
+        self.setFocusPolicy(Qt.FocusPolicy.ClickFocus)  # Ctrl+Z after a drag undoes it, not a text box
         model.document.events.changed.connect(self._on_changed)
 
     def _on_changed(self, design: FaceFlopTravelGloss) -> None:
@@ -138,7 +139,9 @@ class CurvePlot(_PlotBase):
             x = self.to_px(a, lo).x()
             p.drawLine(QPointF(x, r.bottom()), QPointF(x, r.bottom() + 3))
             p.drawText(QRectF(x - 14, r.bottom() + 2, 28, 13), Qt.AlignmentFlag.AlignCenter, str(a))
-        p.drawText(QRectF(r.left() + 4, r.top() + 2, 30, 14), Qt.AlignmentFlag.AlignLeft, f"{self.channel}*")
+        p.drawText(
+            QRectF(r.right() - 34, r.top() + 2, 30, 14), Qt.AlignmentFlag.AlignRight, f"{self.channel}*"
+        )
         p.drawText(
             QRectF(r.left(), r.bottom() + 14, r.width(), 14),
             Qt.AlignmentFlag.AlignCenter,
@@ -238,8 +241,8 @@ class ABPlot(_PlotBase):
         p.setPen(QPen(QColor(150, 150, 150), 1))
         p.drawLine(self.to_px(-80, 0), self.to_px(80, 0))
         p.drawLine(self.to_px(0, -80), self.to_px(0, 80))
-        p.drawText(self.to_px(70, 2), "a*")
-        p.drawText(self.to_px(2, 72), "b*")
+        p.drawText(self.to_px(62, 5), "a*")
+        p.drawText(self.to_px(-20, 70), "b*")
         p.setPen(QPen(QColor(80, 80, 80), 1))
         for v in AB_TICKS:
             if v == 0:

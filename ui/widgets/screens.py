@@ -92,7 +92,7 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
 
-        return TweakerScreen(window.document)
+        return TweakerScreen(window.document, window.view_model)
 
     return [
         ("Tweaker", LazyScreen(tweaker)),
