@@ -40,7 +40,8 @@ def _one(readings: Sequence[Any], role: str) -> tuple[Any, dict[str, Any] | None
     return summary.mean, summary.to_dict()
 
 
-def _print_verdict(result: dict[str, Any]) -> None:
+def print_verdict(result: dict[str, Any]) -> None:
+    """A QC verdict as a table for people (``qc verdict`` and ``qc check`` without ``--json``)."""
     print(f"verdict: {result['verdict']}  ({result['formula']}, {result['aggregation']} rule)")
     print(f"reason: {result['reason']}")
     print(f"{'geometry':>9} {'dL':>7} {'da':>7} {'db':>7} {'dC':>7} {'dH':>7} {'dE':>7}  verdict")
@@ -62,7 +63,7 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
     result["sample"] = {"file": Path(args.sample).name, "sample": smp.sample, "repeats": smp_rep}
     if args.json:
         return result
-    _print_verdict(result)
+    print_verdict(result)
     for role, rep in (("standard", std_rep), ("sample", smp_rep)):
         if rep is not None:
             flagged = rep["outliers"]

@@ -112,14 +112,9 @@ def _verdict(args: argparse.Namespace) -> dict[str, Any] | None:
     result = judge(std, smp, angles, _tolerance(args, angles)).to_dict()
     if args.json:
         return result
-    print(f"verdict: {result['verdict']}  ({result['formula']}, {result['aggregation']} rule)")
-    print(f"reason: {result['reason']}")
-    print(f"{'geometry':>9} {'dL':>7} {'da':>7} {'db':>7} {'dC':>7} {'dH':>7} {'dE':>7}  verdict")
-    for g in result["per_geometry"]:
-        nums = " ".join(f"{g[k]:7.2f}" for k in ("dL", "da", "db", "dC", "dH", "dE"))
-        why = f"  ({'; '.join(g['reasons'])})" if g["reasons"] else ""
-        print(f"{g['geometry']:>9} {nums}  {g['verdict']}{why}")
-    print(f"mean dE: {result['mean_de']:.3f}   max dE: {result['max_de']:.3f} at {result['worst_geometry']}")
+    from station.cli._qc_files import print_verdict
+
+    print_verdict(result)
     return None
 
 

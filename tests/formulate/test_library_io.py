@@ -7,9 +7,7 @@ from __future__ import annotations
 import datetime as dt
 import io
 import json
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +28,7 @@ from station.formulate.library_csv import read_library_csv, write_library_csv
 from station.formulate.library_io import read_library_file
 from station.formulate.snap import color_snap
 from station.model.spectra import WAVELENGTHS, reflectance_to_lab
+from tests.user_cli import run_station
 
 WHEN = dt.datetime(2026, 5, 6, 7, 8, 9, tzinfo=dt.UTC)
 
@@ -205,15 +204,7 @@ def test_type_filter_refuses_a_type_the_library_lacks(small_library: Library) ->
 
 
 def _station(cwd: Path, *argv: str) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *argv],
-        cwd=cwd,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    return run_station(cwd, *argv, timeout=120)
 
 
 def test_cli_from_a_user_folder(tmp_path: Path) -> None:

@@ -7,10 +7,8 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,21 +19,11 @@ from db.engine import make_engine
 from db.models import Measurement, Panel
 from station.model.design_io import save_design
 from station.model.representations import FaceFlopTravelGloss
-
-REPO = Path(__file__).resolve().parents[2]
+from tests.user_cli import run_station
 
 
 def station(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, PYTHONPATH=str(REPO), STATION_CACHE_DIR=str(cwd / "cache"), CACAD_OPERATOR="qa")
-    env.pop("CACAD_DATABASE_URL", None)
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd=cwd,
-        env=env,
-    )
+    return run_station(cwd, *args, env={"CACAD_OPERATOR": "qa"})
 
 
 def _rows(url: str) -> tuple[list[Measurement], list[Panel]]:

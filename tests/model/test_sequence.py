@@ -67,24 +67,15 @@ def test_bad_input_names_the_field(principals: list[FaceFlopTravelGloss], steps:
 
 def test_cli_writes_a_palette_the_viewer_opens(tmp_path) -> None:
     import json
-    import os
-    import subprocess
-    import sys
 
     from station.design.palette import load_palette
     from station.model.design_io import save_design
+    from tests.user_cli import run_station
 
     save_design(SILVER, tmp_path / "silver.json")
     save_design(BLUE, tmp_path / "blue.json")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
-    run = subprocess.run(
-        [sys.executable, "-m", "station.cli", "sequence", "silver.json", "blue.json", "--steps", "5"]
-        + ["--out", "wall.json", "--json"],
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=120,
+    run = run_station(
+        tmp_path, "sequence", "silver.json", "blue.json", "--steps", "5", "--out", "wall.json", "--json"
     )
     assert run.returncode == 0, run.stderr
     out = json.loads(run.stdout)
@@ -94,12 +85,5 @@ def test_cli_writes_a_palette_the_viewer_opens(tmp_path) -> None:
     for (_, got), ref in zip(entries, want.designs, strict=True):
         assert np.allclose(got.lab_at(ANGLES), ref.lab_at(ANGLES), atol=1e-9)
     assert out["step_de"] == pytest.approx(list(want.step_de))
-    bad = subprocess.run(
-        [sys.executable, "-m", "station.cli", "sequence", "silver.json", "--steps", "5"],
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    bad = run_station(tmp_path, "sequence", "silver.json", "--steps", "5")
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "principals" in bad.stderr

@@ -12,7 +12,6 @@ import math
 import os
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -24,21 +23,11 @@ from station.qc.jobs import job_summary
 from station.qc.report import csv_text, pdf_bytes, write_pdf, write_trend_png
 from station.qc.spc import D2_RANGE_OF_TWO
 from tests.qc.conftest import FENDER_OFFSETS, FENDER_STD, Job, populate
-
-REPO = Path(__file__).resolve().parents[2]
+from tests.user_cli import run_station
 
 
 def station(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, PYTHONPATH=str(REPO), STATION_CACHE_DIR=str(cwd / "cache"))
-    env.pop("CACAD_DATABASE_URL", None)
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *args],
-        capture_output=True,
-        text=True,
-        timeout=180,
-        cwd=cwd,
-        env=env,
-    )
+    return run_station(cwd, *args)
 
 
 def _refused(res: subprocess.CompletedProcess[str], field: str) -> None:
