@@ -21,12 +21,7 @@ from __future__ import annotations
 import argparse
 import io
 import os
-import re
-import signal
-import socket
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import Iterator
@@ -39,7 +34,7 @@ import numpy as np
 from PIL import Image
 
 from bench._report import ROOT, Case, write_section
-from station.api.settings import BOOTSTRAP_TOKEN_FILE
+from station.api.serve_process import serving
 
 MIB = 1024 * 1024
 BAR_MIB = 300.0
@@ -56,12 +51,6 @@ def board_png(side: int = SIDE) -> bytes:
     buf = io.BytesIO()
     Image.fromarray(a).save(buf, format="PNG", optimize=True)
     return buf.getvalue()
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _status_kib(pid: int, field: str) -> float:
@@ -83,40 +72,11 @@ def _reset_peak(pid: int) -> bool:
 @contextmanager
 def serve(data_dir: Path, concurrency: int, root: Path = ROOT) -> Iterator[tuple[str, str, int]]:
     """A real ``station serve`` of the checkout *root* on a free loopback port: (URL, admin token, pid)."""
-    port = _free_port()
-    env = dict(os.environ, PYTHONUNBUFFERED="1", CACAD_IMAGE_DECODE_CONCURRENCY=str(concurrency))
-    env["PYTHONPATH"] = str(root)
-    cmd = [sys.executable, "-m", "station.cli", "serve", "--data-dir", str(data_dir), "--port", str(port)]
-    cmd += ["--no-demo-library", "--simulators", ""]
-    proc = subprocess.Popen(
-        cmd, cwd=root, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
-    )
-    out: list[str] = []
-    try:
-        deadline = time.monotonic() + 90
-        while time.monotonic() < deadline:
-            line = proc.stdout.readline() if proc.stdout else ""
-            if not line and proc.poll() is not None:
-                raise RuntimeError("station serve exited:\n" + "".join(out))
-            out.append(line)
-            if "Uvicorn running" in line or "Application startup complete" in line:
-                break
-        token = next((m.group(0) for m in map(re.compile(r"cst_[\w-]+").search, out) if m), "")
-        token_file = data_dir / BOOTSTRAP_TOKEN_FILE  # stdout is a pipe: the service writes the token there
-        if not token and token_file.exists():
-            token = token_file.read_text().strip()
-        if not token:
-            raise RuntimeError("no bootstrap token printed or written:\n" + "".join(out))
-        yield f"http://127.0.0.1:{port}", token, proc.pid
-    finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(20)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-        if proc.stdout:
-            proc.stdout.close()
+    env = dict(os.environ, CACAD_IMAGE_DECODE_CONCURRENCY=str(concurrency), PYTHONPATH=str(root))
+    with serving(data_dir, "--no-demo-library", "--simulators", "", env=env, cwd=root) as svc:
+        if not svc.token:
+            raise RuntimeError("no bootstrap token printed or written:\n" + svc.tail())
+        yield svc.base, svc.token, svc.pid
 
 
 def measure(concurrency: int, png: bytes, root: Path = ROOT) -> dict[str, float]:

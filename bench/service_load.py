@@ -21,11 +21,7 @@ import argparse
 import multiprocessing as mp
 import os
 import random
-import re
 import secrets
-import socket
-import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -36,72 +32,19 @@ import numpy as np
 
 from bench._report import ROOT, Case, write_section
 from bench.ingest_load import PG_ADMIN, _reading
+from station.api.serve_process import ServeProcess
 
 P99_BAR_MS = 150.0
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-class Service:
+class Service(ServeProcess):
     """``station serve`` on a free loopback port (no simulators, no demo library); the admin token."""
 
     def __init__(self, data_dir: Path, database_url: str | None) -> None:
-        port = _free_port()
-        cmd = [sys.executable, "-m", "station.cli", "serve", "--data-dir", str(data_dir)]
-        if database_url:
-            cmd += ["--database", database_url]
-        cmd += ["--port", str(port), "--no-demo-library", "--simulators", "", "--log-level", "warning"]
-        self.base = f"http://127.0.0.1:{port}"
-        self.proc = subprocess.Popen(
-            cmd,
-            cwd=ROOT,
-            env=dict(os.environ, PYTHONUNBUFFERED="1"),
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-        )
-        self.token = ""
-        assert self.proc.stdout is not None
-        deadline = time.monotonic() + 90
-        while time.monotonic() < deadline and not self.token:
-            line = self.proc.stdout.readline()
-            if not line and self.proc.poll() is not None:
-                raise RuntimeError("station serve exited")
-            found = re.search(r"cst_[\w-]+", line)
-            if found:
-                self.token = found.group(0)
-        threading.Thread(target=self._drain, daemon=True).start()
-        self._wait_ready(deadline)
-
-    def _drain(self) -> None:
-        if self.proc.stdout is not None:
-            for _line in self.proc.stdout:
-                pass
-
-    def _wait_ready(self, deadline: float) -> None:
-        import httpx
-
-        while time.monotonic() < deadline:
-            try:
-                if httpx.get(self.base + "/health", timeout=2).status_code == 200:
-                    return
-            except httpx.TransportError:
-                time.sleep(0.2)
-        raise RuntimeError("station serve did not answer")
-
-    def stop(self) -> None:
-        self.proc.terminate()
-        try:
-            self.proc.wait(20)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-        if self.proc.stdout is not None:
-            self.proc.stdout.close()
+        args = ("--database", database_url) if database_url else ()
+        args += ("--no-demo-library", "--simulators", "", "--log-level", "warning")
+        super().__init__(data_dir, args, cwd=ROOT)
+        self.start()
 
 
 def _client(args: tuple[str, str, str, float, int, int, float]) -> dict[str, Any]:

@@ -40,7 +40,7 @@ STARTUP = textwrap.dedent("""
     app = QApplication([])
     from ui.app import MainWindow
     t_imp = time.perf_counter() - t0
-    win = MainWindow()
+    win = MainWindow(ask_on_close=False)
     win.resize(1500, 950)
     view = win.view_panel.view
     win.show()

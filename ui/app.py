@@ -2,7 +2,10 @@
 tabs for the mood board, library, instruments and QA screens.
 
 Start with ``station viewer`` (or ``python -m ui.app``). Edit → Undo/Redo (Ctrl+Z / Ctrl+Shift+Z) reverts
-any design edit.
+any design edit. File → New / Open / Save / Save As work on the design (Ctrl+N/O/S, Ctrl+Shift+S), the
+palette and the mood board (:class:`ui.models.files.StylistFiles`); File → Export writes the design as
+thesis XML or CxF3; File → Load environment reads an own HDR. Closing with unsaved changes asks first;
+a file that cannot be read is reported in a message box and changes nothing.
 """
 
 from __future__ import annotations
@@ -13,10 +16,19 @@ from typing import TYPE_CHECKING
 
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QAction, QKeySequence
-from PySide6.QtWidgets import QApplication, QDockWidget, QMainWindow, QTabWidget, QWidget
+from PySide6.QtWidgets import (
+    QApplication,
+    QDockWidget,
+    QFileDialog,
+    QMainWindow,
+    QMessageBox,
+    QTabWidget,
+    QWidget,
+)
 
 from ui.models.designer import DesignerModel
 from ui.models.document import DesignDocument
+from ui.models.files import EXPORTS, KINDS, TITLES, FileInputError, Kind, StylistFiles
 from ui.models.view import ViewModel
 from ui.widgets.designer_panel import DesignerPanel
 from ui.widgets.view_panel import ViewPanel
@@ -36,9 +48,11 @@ class MainWindow(QMainWindow):
         sink: MeasurementSink | None = None,
         service: ServiceClient | None = None,
         parent: QWidget | None = None,
+        ask_on_close: bool = True,
     ) -> None:
         """*service* (a client) or *service_url* puts the viewer in service mode; *sink* is where scans
-        are stored (default: the service's measurements, or the workstation's database)."""
+        are stored (default: the service's measurements, or the workstation's database); with
+        *ask_on_close* (the default) closing with unsaved changes asks whether to save them."""
         super().__init__(parent)
         from ui.models.instruments import MeasurementStore
         from ui.models.measure_db import LocalSink, ServiceSink
@@ -77,7 +91,14 @@ class MainWindow(QMainWindow):
             | QDockWidget.DockWidgetFeature.DockWidgetFloatable
         )
         self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, dock)
+        self.files = StylistFiles(self.document, self.designer, self.moodboard)
+        self.ask_on_close = ask_on_close
+        self.error_box: QMessageBox | None = None
+        self._make_file_menu()
         self._make_menu()
+        self.designer.events.palette.connect(self._update_title)
+        self.moodboard.events.board.connect(self._update_title)
+        self._update_title()
         self.statusBar().showMessage(self._status_text())
 
     def _add_screens(self) -> None:
@@ -87,6 +108,193 @@ class MainWindow(QMainWindow):
         for title, widget in screens.build_screens(self):
             self.tabs.addTab(widget, title)
             self.screens[title] = widget
+
+    # ------------------------------------------------------------------ File menu
+    def _make_file_menu(self) -> None:
+        menu = self.menuBar().addMenu("&File")
+        self.file_menu = menu
+        self.file_actions: dict[str, QAction] = {}
+        keys = {
+            "design": (
+                QKeySequence.StandardKey.New,
+                QKeySequence.StandardKey.Open,
+                QKeySequence.StandardKey.Save,
+                QKeySequence.StandardKey.SaveAs,
+            ),
+        }
+        for kind in KINDS:
+            title = TITLES[kind]
+            shortcuts = keys.get(kind)
+            for i, (verb, slot) in enumerate(
+                (
+                    ("New", lambda _=False, k=kind: self.file_new(k)),
+                    ("Open", lambda _=False, k=kind: self.file_open(k)),
+                    ("Save", lambda _=False, k=kind: self.file_save(k)),
+                    ("Save As", lambda _=False, k=kind: self.file_save_as(k)),
+                )
+            ):
+                text = f"{verb} {title}" + ("…" if verb in ("Open", "Save As") else "")
+                act = QAction(text, self)
+                if shortcuts is not None:
+                    act.setShortcut(QKeySequence(shortcuts[i]))
+                act.triggered.connect(slot)
+                menu.addAction(act)
+                self.file_actions[f"{verb} {title}"] = act
+            menu.addSeparator()
+        for fmt, label in (("xml", "Export design as XML…"), ("cxf", "Export design as CxF…")):
+            act = QAction(label, self)
+            act.triggered.connect(lambda _=False, f=fmt: self.file_export(f))
+            menu.addAction(act)
+            self.file_actions[label.rstrip("…")] = act
+        menu.addSeparator()
+        env = QAction("Load environment (HDR)…", self)
+        if callable(getattr(self.view_model, "load_environment", None)):
+            env.triggered.connect(self.load_environment)
+        else:
+            env.setEnabled(False)
+            env.setToolTip("Loading an own HDR needs the 3D view's environment loader (not in this build)")
+        menu.addAction(env)
+        self.file_actions["Load environment (HDR)"] = env
+        menu.addSeparator()
+        quit_act = QAction("Quit", self, shortcut=QKeySequence.StandardKey.Quit)
+        quit_act.triggered.connect(self.close)
+        menu.addAction(quit_act)
+
+    def _ask_path(self, title: str, name_filter: str, save: bool, suffix: str) -> str | None:
+        """A file dialog (Qt's own, the same on every desktop); None when cancelled."""
+        dlg = QFileDialog(self, title, "", name_filter)
+        dlg.setOption(QFileDialog.Option.DontUseNativeDialog, True)
+        dlg.setObjectName("file-dialog")
+        if save:
+            dlg.setAcceptMode(QFileDialog.AcceptMode.AcceptSave)
+            dlg.setFileMode(QFileDialog.FileMode.AnyFile)
+            dlg.setDefaultSuffix(suffix.lstrip("."))
+        else:
+            dlg.setFileMode(QFileDialog.FileMode.ExistingFile)
+        self.file_dialog = dlg
+        try:
+            if dlg.exec() != QFileDialog.DialogCode.Accepted or not dlg.selectedFiles():
+                return None
+            return dlg.selectedFiles()[0]
+        finally:
+            self.file_dialog = None
+            dlg.deleteLater()
+
+    def show_error(self, title: str, message: str) -> None:
+        """A visible, non-blocking message box (and the status bar) for a refused file."""
+        self.statusBar().showMessage(f"{title}: {message}")
+        if self.error_box is not None:
+            self.error_box.close()
+        box = QMessageBox(QMessageBox.Icon.Warning, title, message, QMessageBox.StandardButton.Ok, self)
+        box.setObjectName("error-box")
+        box.open()
+        self.error_box = box
+
+    def _filter(self, kind: Kind) -> str:
+        return f"{TITLES[kind].capitalize()} files (*.json);;All files (*)"
+
+    def file_new(self, kind: Kind) -> None:
+        """File → New design / palette / mood board (unsaved changes of that kind are asked about)."""
+        if kind in self.files.unsaved() and not self._confirm_discard([kind]):
+            return
+        self.files.new(kind)
+        self.statusBar().showMessage(f"new {TITLES[kind]}")
+        self._update_title()
+
+    def file_open(self, kind: Kind) -> bool:
+        """File → Open…: choose a file and open it; a bad file shows an error and changes nothing."""
+        if kind in self.files.unsaved() and not self._confirm_discard([kind]):
+            return False
+        path = self._ask_path(f"Open {TITLES[kind]}", self._filter(kind), save=False, suffix=".json")
+        if path is None:
+            return False
+        try:
+            self.files.open(kind, path)
+        except FileInputError as exc:
+            self.show_error(f"Cannot open {TITLES[kind]}", str(exc))
+            return False
+        self.statusBar().showMessage(f"opened {TITLES[kind]} {path}")
+        self._update_title()
+        return True
+
+    def file_save(self, kind: Kind) -> bool:
+        """File → Save (Save As when it has no file yet)."""
+        if self.files.paths[kind] is None:
+            return self.file_save_as(kind)
+        return self._write(kind, None)
+
+    def file_save_as(self, kind: Kind) -> bool:
+        """File → Save As…"""
+        path = self._ask_path(f"Save {TITLES[kind]} as", self._filter(kind), save=True, suffix=".json")
+        return path is not None and self._write(kind, path)
+
+    def _write(self, kind: Kind, path: str | None) -> bool:
+        try:
+            written = self.files.save(kind, path)
+        except FileInputError as exc:
+            self.show_error(f"Cannot save {TITLES[kind]}", str(exc))
+            return False
+        self.statusBar().showMessage(f"saved {TITLES[kind]} {written}")
+        self._update_title()
+        return True
+
+    def file_export(self, fmt: str) -> bool:
+        """File → Export design as XML / CxF…"""
+        suffix = EXPORTS[fmt]
+        label = "XML" if fmt == "xml" else "CxF3"
+        path = self._ask_path(
+            f"Export design as {label}", f"{label} files (*{suffix});;All files (*)", save=True, suffix=suffix
+        )
+        if path is None:
+            return False
+        try:
+            written = self.files.export(fmt, path)
+        except FileInputError as exc:
+            self.show_error("Cannot export", str(exc))
+            return False
+        self.statusBar().showMessage(f"exported {label} {written}")
+        return True
+
+    def load_environment(self) -> bool:
+        """File → Load environment (HDR)…: an own HDR lights the 3D view."""
+        from station.errors import StationError
+
+        path = self._ask_path("Load environment", "HDR images (*.hdr *.exr);;All files (*)", False, ".hdr")
+        if path is None:
+            return False
+        try:
+            self.view_model.load_environment(path)  # type: ignore[attr-defined]
+        except (StationError, OSError, ValueError) as exc:
+            self.show_error("Cannot load environment", str(exc))
+            return False
+        self.statusBar().showMessage(f"environment {path}")
+        return True
+
+    def _confirm_discard(self, kinds: list[Kind]) -> bool:
+        """Ask about unsaved *kinds*: Save (each), Discard or Cancel; True when it is fine to go on."""
+        names = ", ".join(TITLES[k] for k in kinds)
+        box = QMessageBox(
+            QMessageBox.Icon.Question,
+            "Unsaved changes",
+            f"The {names} {'has' if len(kinds) == 1 else 'have'} unsaved changes.",
+            QMessageBox.StandardButton.Save
+            | QMessageBox.StandardButton.Discard
+            | QMessageBox.StandardButton.Cancel,
+            self,
+        )
+        box.setObjectName("unsaved-box")
+        box.setDefaultButton(QMessageBox.StandardButton.Save)
+        self.unsaved_box = box
+        try:
+            answer = box.exec()
+        finally:
+            self.unsaved_box = None
+            box.deleteLater()
+        if answer == QMessageBox.StandardButton.Discard:
+            return True
+        if answer == QMessageBox.StandardButton.Save:
+            return all(self.file_save(k) for k in kinds)
+        return False
 
     def _make_menu(self) -> None:
         edit = self.menuBar().addMenu("&Edit")
@@ -135,7 +343,14 @@ class MainWindow(QMainWindow):
         self.redo_action.setEnabled(self.document.can_redo)
         self.undo_action.setText(f"Undo {self.document.undo_label or ''}".strip())
 
+    def _update_title(self) -> None:
+        """``name · CACAD Station``, with ``*`` while something is unsaved (Qt's modified marker)."""
+        name = self.document.name
+        self.setWindowTitle(f"{name}[*] · CACAD Station")
+        self.setWindowModified(bool(self.files.unsaved()))
+
     def _on_design(self, design) -> None:
+        self._update_title()
         self.view_model.show(design)
         self.statusBar().showMessage(self._status_text())
 
@@ -148,7 +363,15 @@ class MainWindow(QMainWindow):
         return f"face ({face}) flop ({flop}) {travel} gloss {d.gloss_gu:.0f} GU{src}"
 
     def closeEvent(self, event) -> None:
+        unsaved = self.files.unsaved()
+        if self.ask_on_close and unsaved and not self._confirm_discard(unsaved):
+            event.ignore()
+            return
+        if self.error_box is not None:
+            self.error_box.close()
         self.document.events.changed.disconnect(self._on_design)
+        self.designer.events.palette.disconnect(self._update_title)
+        self.moodboard.events.board.disconnect(self._update_title)
         self.document.events.history.disconnect(self._on_history)
         self.designer_panel.close()
         for w in self.screens.values():

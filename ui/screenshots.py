@@ -12,6 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 from PySide6.QtCore import QCoreApplication
 from PySide6.QtWidgets import QApplication
 
@@ -42,8 +43,21 @@ def _wait(pred, timeout_s: float) -> bool:
     return False
 
 
+def file_menu_shot(win, path: Path) -> Path:
+    """The window with its File menu open (the menu is its own window: the screen is grabbed)."""
+    bar, menu = win.menuBar(), win.file_menu
+    menu.popup(bar.mapToGlobal(bar.actionGeometry(menu.menuAction()).bottomLeft()))
+    _settle(win)
+    geo = win.frameGeometry()
+    win.screen().grabWindow(0, geo.x(), geo.y(), geo.width(), geo.height()).save(str(path))
+    menu.hide()
+    QCoreApplication.processEvents()
+    return path
+
+
 def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
-    """Write ``design.png``, ``tweaker.png``, ``moodboard.png``, ``library.png``, ``instruments.png``, ``qa.png``, ``formulation.png`` to *out*."""
+    """Write ``design.png``, ``file-menu.png``, ``tweaker.png``, ``moodboard.png``, ``library.png``,
+    ``instruments.png``, ``qa.png``, ``formulation.png`` to *out*."""
     from ui.app import MainWindow
 
     out = Path(out)
@@ -57,7 +71,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     sink = LocalSink(
         f"sqlite:///{Path(scratch.name) / 'station.sqlite3'}", Path(scratch.name) / "outbox.sqlite3"
     )
-    win = MainWindow(sink=sink)
+    win = MainWindow(sink=sink, ask_on_close=False)
     win.resize(*SIZE)
     win.show()
     written: list[Path] = []
@@ -79,10 +93,16 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         win.view_panel.shape.setCurrentText("speedshape")
         win.view_panel.model.update(yaw_deg=-15.0, pitch_deg=5.0)
         shot("design")
+        file_menu_shot(win, out / "file-menu.png")
+        written.append(out / "file-menu.png")
 
         win.tabs.setCurrentWidget(win.screens["Tweaker"])
         tw = win.screens["Tweaker"].content().canvas
-        tw.press((230, 250))
+        _settle(win)
+        tw.wait_idle()
+        theta = np.where(tw.scene.mask, tw.scene.aspecular_deg, np.inf)
+        y, x = np.unravel_index(np.argmin(np.abs(theta - 30.0)), theta.shape)
+        tw.press((int(x), int(y)))
         tw.adjust("H", 10.0)
         shot("tweaker")
 

@@ -1,9 +1,11 @@
 """Every table of the measurement database (import this module to register them on ``Base``)."""
 
 from db.models.designs import Design, DesignVersion
+from db.models.gloss import GlossReading
 from db.models.instruments import CalibrationRecord, Instrument
 from db.models.library import JOB_STATES, AnalysisResult, FormulationJob, LibraryPaint
 from db.models.measurements import PARTS, Measurement, Panel
+from db.models.standards import Standard
 from db.models.users import ApiToken, AuditEvent, LedgerHead, Role, User
 
 __all__ = [
@@ -16,11 +18,13 @@ __all__ = [
     "Design",
     "DesignVersion",
     "FormulationJob",
+    "GlossReading",
     "Instrument",
     "LedgerHead",
     "LibraryPaint",
     "Measurement",
     "Panel",
     "Role",
+    "Standard",
     "User",
 ]

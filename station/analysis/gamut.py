@@ -13,6 +13,11 @@ Documented bound (not a pigment database): a colour is paintable when
 
 A paint already outside these bounds (a measured panel) relaxes each bound to its own value, so a
 corrected paint is never required to be more paintable than the original.
+
+This is the physical pre-check. Whether the shipped colorants can mix a paint is a different rule,
+kept in one place with the colorant model (``station.formulate.gamut.colorant_gamut``: formulable
+within the formulation tolerance, else the nearest achievable paint); the CLI and the service apply it
+to the seam QA's corrected paint (``corrected_colorant_gamut``).
 """
 
 from __future__ import annotations

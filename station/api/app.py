@@ -8,6 +8,7 @@ the configured simulators. Tests build one app per database and override ``get_s
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -87,6 +88,39 @@ def _startup(app: FastAPI, settings: Settings) -> None:
     )
     app.state.instruments = hub
     hub.attach_simulators(settings.simulators)
+
+
+def _start_watch_folder(app: FastAPI, settings: Settings) -> tuple[threading.Event, threading.Thread] | None:
+    """Start the watch-folder thread when ``settings.watch_dir`` is set: files go through the service's ingestor."""
+    if settings.watch_dir is None:
+        return None
+    from station.ingest.formats.watch import watch_folder
+
+    folder = Path(settings.watch_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    stop = threading.Event()
+    hub = app.state.instruments
+
+    def run() -> None:
+        while not stop.is_set():
+            try:
+                watch_folder(
+                    folder,
+                    hub.ingestor(),
+                    operator="service",
+                    interval_s=settings.watch_interval_s,
+                    stop=stop,
+                    job=settings.watch_job,
+                    part=settings.watch_part,
+                )
+            except Exception:  # the service keeps running; the next scan tries again
+                log.exception("watch folder %s", folder)
+                stop.wait(settings.watch_interval_s)
+
+    thread = threading.Thread(target=run, name="watch-folder", daemon=True)
+    thread.start()
+    log.info("watching %s for measurement files", folder)
+    return stop, thread
 
 
 async def _replay_outbox_periodically(app: FastAPI, period_s: float) -> None:
@@ -196,6 +230,7 @@ def _docs(app: FastAPI, protected: bool) -> None:
 def create_app(settings: Settings) -> FastAPI:
     """Build the service for *settings*."""
     from station.api.routes import ROUTERS, health
+    from station.api.routes.library import IMPORT_PATH as LIBRARY_IMPORT_PATH
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -204,10 +239,15 @@ def create_app(settings: Settings) -> FastAPI:
         app.state.image_slots = asyncio.Semaphore(settings.image_decode_concurrency)  # this loop's
         await asyncio.to_thread(_startup, app, settings)
         replayer = asyncio.create_task(_replay_outbox_periodically(app, settings.outbox_replay_s))
+        watcher = _start_watch_folder(app, settings)
         try:
             yield
         finally:
             replayer.cancel()
+            if watcher is not None:
+                stop, thread = watcher
+                stop.set()
+                await asyncio.to_thread(thread.join, 30)
             await asyncio.to_thread(_shutdown, app)
 
     public = settings.public_docs  # otherwise the docs are served behind authentication
@@ -230,6 +270,10 @@ def create_app(settings: Settings) -> FastAPI:
     for router in ROUTERS:
         app.include_router(router, prefix=API_PREFIX)
     app.add_middleware(StrictJsonBody)  # inside the size cap: parses bodies already bounded
-    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(
+        BodySizeLimit,
+        max_bytes=settings.max_body_bytes,
+        per_path={f"{API_PREFIX}{LIBRARY_IMPORT_PATH}": settings.library_upload_max_bytes},
+    )
     app.add_middleware(SecurityHeaders)  # outermost: the 413 above gets the headers too
     return app

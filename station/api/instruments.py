@@ -22,7 +22,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from db.base import utcnow
 from db.models import CalibrationRecord, Instrument, User
 from station.api.availability import DatabaseState
-from station.api.errors import ConflictError, NotFoundError
+from station.api.errors import ConflictError, NotFoundError, UnavailableError
 from station.api.schemas.instruments import (
     CalibrationPublic,
     InstrumentPublic,
@@ -45,8 +45,10 @@ from station.ingest import (
     Outbox,
     Receipt,
     calibration_client_id,
+    gloss_record_from_reading,
     is_unreachable,
     record_from_reading,
+    store_gloss,
 )
 
 log = logging.getLogger(__name__)
@@ -320,7 +322,43 @@ class InstrumentHub:
             log.warning(
                 "database unreachable; reading %s queued in %s", reading.client_id, ingestor.outbox.path
             )
-        return self._result(receipt)
+        gloss_id = None
+        if gloss is not None and receipt.measurement_id is not None and receipt.status == "stored":
+            try:  # the colour reading (with its 60° gloss) is stored; the full gloss row joins it
+                gloss_id = self._store_gloss(
+                    gloss, actor=actor, panel_id=None, measurement_id=receipt.measurement_id
+                )
+            except Exception as exc:
+                log.warning("gloss reading of measurement %s not stored: %s", receipt.measurement_id, exc)
+        return self._result(receipt).model_copy(update={"gloss_reading_id": gloss_id})
+
+    def _store_gloss(
+        self, reading: GlossReading, *, actor: User, panel_id: int | None, measurement_id: int | None
+    ) -> int:
+        record = gloss_record_from_reading(
+            reading, operator=actor.name, panel_id=panel_id, measurement_id=measurement_id
+        )
+        with self.sessions.begin() as session:
+            return store_gloss(session, record, created_by_id=actor.id).measurement_id
+
+    def measure_gloss(
+        self, *, instrument_id: str, panel_id: int | None, measurement_id: int | None, actor: User
+    ) -> int:
+        """Measure once on the gloss meter *instrument_id* and store the gloss reading; its row id.
+
+        The reading is gloss-only (with *panel_id*) or names the colour measurement it belongs to
+        (*measurement_id*). It is stored directly, not through the outbox: while the database is away
+        this is a 503 and nothing is measured.
+        """
+        a = self.get(instrument_id)
+        if a.driver.kind != "gloss":
+            raise InputError("instrument_id", "an attached gloss meter", instrument_id)
+        if self.database.away:
+            raise UnavailableError(f"database away: {self.database.reason}; gloss reading not taken")
+        reading = a.driver.measure()
+        if not isinstance(reading, GlossReading):
+            raise InputError("instrument_id", "an attached gloss meter", instrument_id)
+        return self._store_gloss(reading, actor=actor, panel_id=panel_id, measurement_id=measurement_id)
 
     def _prior(self, ingestor: Ingestor, client_id: uuid.UUID) -> Receipt | None:
         """What an earlier attempt under *client_id* left; only the outbox is asked while the database is away.

@@ -4,6 +4,7 @@ security headers on every response."""
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
@@ -26,27 +27,30 @@ class _TooLarge(Exception):
 
 
 class BodySizeLimit:
-    """Refuse a request whose declared or streamed body exceeds *max_bytes*."""
+    """Refuse a request whose declared or streamed body exceeds *max_bytes*, or the cap *per_path* gives
+    its exact path (e.g. a larger one for library uploads)."""
 
-    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
+    def __init__(self, app: ASGIApp, max_bytes: int, per_path: Mapping[str, int] | None = None) -> None:
         self.app = app
         self.max_bytes = max_bytes
+        self.per_path = dict(per_path or {})
 
-    async def _refuse(self, send: Send) -> None:
-        await send_json(send, 413, f"request body over the {self.max_bytes}-byte limit")
+    async def _refuse(self, send: Send, limit: int) -> None:
+        await send_json(send, 413, f"request body over the {limit}-byte limit")
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+        limit = self.per_path.get(scope.get("path", ""), self.max_bytes)
         for name, value in scope.get("headers", []):
             if name == b"content-length":
                 try:
                     declared = int(value)
                 except ValueError:
-                    declared = self.max_bytes + 1
-                if declared > self.max_bytes:
-                    await self._refuse(send)
+                    declared = limit + 1
+                if declared > limit:
+                    await self._refuse(send, limit)
                     return
         seen = 0
         started = False
@@ -56,7 +60,7 @@ class BodySizeLimit:
             message = await receive()
             if message["type"] == "http.request":
                 seen += len(message.get("body", b""))
-                if seen > self.max_bytes:
+                if seen > limit:
                     raise _TooLarge
             return message
 
@@ -70,7 +74,7 @@ class BodySizeLimit:
             await self.app(scope, limited_receive, tracking_send)
         except _TooLarge:
             if not started:
-                await self._refuse(send)
+                await self._refuse(send, limit)
 
 
 #: Added to every response (a route's own value wins): no MIME sniffing of uploads echoed back or of

@@ -44,6 +44,7 @@ class Scope(enum.StrEnum):
     RECIPES_WRITE = "recipes:write"
     ANALYSIS_WRITE = "analysis:write"
     AUDIT_READ = "audit:read"
+    QC_STANDARDS_WRITE = "qc:standards"
     USERS_MANAGE = "users:manage"
 
 
@@ -68,6 +69,7 @@ ROLE_SCOPES: dict[Role, frozenset[Scope]] = {
             S.LIBRARY_READ,
             S.ANALYSIS_WRITE,
             S.AUDIT_READ,
+            S.QC_STANDARDS_WRITE,
         }
     ),
     Role.STYLIST: frozenset(

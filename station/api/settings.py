@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
-from pydantic import Field, computed_field, field_validator
+from pydantic import Field, computed_field, field_validator, model_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
 from db.engine import data_dir, default_database_url
@@ -15,6 +15,10 @@ SIM_KINDS = ("ma6", "ma3", "gloss")
 
 #: File name, in the data folder, of the first admin token when ``station serve``'s output is not a terminal.
 BOOTSTRAP_TOKEN_FILE = "bootstrap-token"
+
+
+#: Default cap of a library upload: room for about 400 000 paints at six angles.
+LIBRARY_UPLOAD_DEFAULT_BYTES = 64 * 1_048_576
 
 
 class Settings(BaseSettings):
@@ -36,6 +40,13 @@ class Settings(BaseSettings):
     max_body_bytes: int = Field(
         1_048_576, ge=1024, le=64 * 1_048_576, description="request body cap (uploads)"
     )
+    library_upload_max_bytes: int = Field(
+        LIBRARY_UPLOAD_DEFAULT_BYTES,
+        ge=1024,
+        le=1024 * 1_048_576,
+        description="body cap of a library CSV upload (POST /api/v1/library/import; a 50 000-paint "
+        "library at six angles is about 7 MB); every other route keeps max_body_bytes",
+    )
     image_decode_concurrency: int = Field(
         2,
         ge=1,
@@ -53,6 +64,16 @@ class Settings(BaseSettings):
         "socket:// and rfc2217:// instrument addresses may name; empty: no TCP instruments",
     )
     outbox_replay_s: float = Field(10.0, gt=0, le=3600, description="seconds between outbox replay attempts")
+    watch_dir: Path | None = Field(
+        None,
+        description="watch folder: measurement files (CxF3, CGATS.17, CSV template) dropped here are "
+        "ingested once and moved to done/ or rejected/ (docs/import.md); unset: no watch folder",
+    )
+    watch_interval_s: float = Field(2.0, gt=0, le=3600, description="seconds between watch-folder scans")
+    watch_job: str | None = Field(
+        None, max_length=64, description="job of watch-folder panels (with watch_part)"
+    )
+    watch_part: str | None = Field(None, description="part of watch-folder panels (with watch_job)")
     body_timeout_s: float = Field(
         10.0, gt=0, le=600, description="seconds a client has to send a whole request body (else 408, closed)"
     )
@@ -104,6 +125,21 @@ class Settings(BaseSettings):
                     raise ValueError("instrument_hosts: expected HOST or HOST:PORT strings")
                 parse_host_entry(entry)
         return value
+
+    @field_validator("watch_part")
+    @classmethod
+    def _known_part(cls, value: str | None) -> str | None:
+        from db.models.measurements import PARTS
+
+        if value is not None and value not in PARTS:
+            raise ValueError(f"watch_part: expected one of {' | '.join(PARTS)}, got {value!r}")
+        return value
+
+    @model_validator(mode="after")
+    def _job_with_part(self) -> Settings:
+        if (self.watch_job is None) != (self.watch_part is None):
+            raise ValueError("watch_job and watch_part: expected both or neither")
+        return self
 
     @computed_field  # type: ignore[prop-decorator]  # mypy rejects decorated properties; pydantic documents this
     @property

@@ -155,6 +155,10 @@ def _seam(args: argparse.Namespace) -> dict[str, Any]:
         objective=args.objective,
     )
     out = r.to_dict()
+    from station.formulate.gamut import colorant_gamut
+
+    # the QA step flags a corrected paint the colorants cannot mix, with the nearest achievable paint
+    out["corrected_colorant_gamut"] = colorant_gamut(r.correction.paint).to_dict()
     if args.png:
         from station.analysis.picture import plot_seam_report
 

@@ -28,9 +28,8 @@ _FILTER_KEYS = ("type", "flop", "chroma", "hue_shift", "set", "kind", "group")
 
 
 def _load_library(spec: str) -> Any:
-    from station.formulate.cxf import read_library_cxf
     from station.formulate.demo import demo_library
-    from station.formulate.library_csv import read_library_csv
+    from station.formulate.library_io import read_library_file
 
     if spec == "demo":
         return demo_library()
@@ -39,11 +38,11 @@ def _load_library(spec: str) -> Any:
 
         return munsell_library()
     path = Path(spec)
-    if path.suffix.lower() == ".csv":
-        return read_library_csv(path)
-    if path.suffix.lower() in (".cxf", ".xml"):
-        return read_library_cxf(path)
-    raise InputError("library", "demo, munsell, or a .csv / .cxf library file", spec)
+    if path.suffix.lower() not in (".csv", ".cxf", ".xml"):
+        raise InputError(
+            "library", "demo, munsell, or a .csv / .cxf / .xml (thesis XML or CxF3) library file", spec
+        )
+    return read_library_file(path)
 
 
 def _design_lab(text: str) -> tuple[np.ndarray, float | None, str]:
@@ -175,15 +174,18 @@ def cmd_library_browse(args: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_snap(args: argparse.Namespace) -> dict[str, Any]:
     """ColorSnap: nearest library paints by summed ΔE over 15/45/110°."""
+    from station.formulate.library import PAINT_TYPES
     from station.formulate.snap import color_snap, view_data
 
     if args.lab is None and args.design is None:
         raise InputError("lab", '--lab "L,a,b;L,a,b;L,a,b" or --design FILE', None)
     lab, _, name = _design_lab(args.lab if args.lab is not None else str(args.design))
     lib = _load_library(args.library)
-    result = color_snap(lib, lab, k=args.k, method=args.de)
+    result = color_snap(lib, lab, k=args.k, method=args.de, types=args.types)
     out: dict[str, Any] = result.to_dict()
-    out.update({"library": lib.name, "synthetic": lib.synthetic})
+    out.update({"library": lib.name, "synthetic": lib.synthetic, "types": sorted(args.types or PAINT_TYPES)})
+    for row, match in zip(out["matches"], result.matches, strict=True):
+        row["type"] = str(lib.types[match.index])
     if args.png or args.view:
         view = view_data(lib, result)
         if args.view:
@@ -197,8 +199,10 @@ def cmd_snap(args: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
     """Formulate a recipe from the ColorSnap match's recipe; optionally run the simulated closed loop."""
+    from station.formulate.batch import batch_masses
     from station.formulate.formulation import formulate_from_library
 
+    batch_masses({}, args.batch)  # refuse a bad batch size before formulating
     lab, gloss, name = _design_lab(args.design)
     if args.gloss is not None:
         gloss = args.gloss
@@ -221,12 +225,15 @@ def _formulated(
     result: Any,
     snap: Any,
 ) -> dict[str, Any]:
+    from station.formulate.batch import batch_masses
+
     out: dict[str, Any] = {
         "design": name,
         **result.to_dict(),
         "matches": snap.to_dict()["matches"],
         "snap_warnings": list(snap.warnings),
         "library": lib.name,
+        "batch": batch_masses(result.recipe, args.batch).to_dict(),
     }
     if args.closed_loop:
         from station.formulate.closed_loop import closed_loop
@@ -263,18 +270,39 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
         design: FaceFlopTravelGloss = fit.design
     else:
         design = load_design(args.design)
-    library = None if args.no_match else _load_library(args.library)
-    specs, match_code = export_specs(design, library, method=args.de, five_angles=args.five_angles)
+    library = None if args.no_match and not args.recipe else _load_library(args.library)
+    specs, match_code = export_specs(
+        design, None if args.no_match else library, method=args.de, five_angles=args.five_angles
+    )
+    extras: list[Any] = [None] * len(specs)
+    recipe: dict[str, float] | None = None
+    batch: dict[str, float] | None = None
+    if args.recipe and library is not None:
+        from station.formulate.export import recipe_export
+        from station.formulate.formulation import formulate_from_library
+
+        result, _ = formulate_from_library(
+            design.lab_at(np.asarray(ANGLES_3)), library, gloss_gu=design.gloss_gu
+        )
+        spec, extra = recipe_export(
+            result, name=f"{design.name or 'design'} recipe", five_angles=args.five_angles, batch_g=args.batch
+        )
+        specs.append(spec)
+        extras.append(extra)
+        recipe = result.recipe
+        batch = dict(extra.recipe)
     out_path = Path(args.out)
     if args.format == "xml":
         write_color_xml(specs, out_path)
     else:
-        out_path.write_bytes(specs_to_cxf(specs))
+        out_path.write_bytes(specs_to_cxf(specs, extras))
     return {
         "out": str(out_path),
         "format": args.format,
         "colors": [s.name for s in specs],
         "match": match_code,
+        "recipe": recipe,
+        "batch_g": batch,
         "angle_sets": [list(s.angles_deg) for s in specs[0].sets],
     }
 
@@ -283,7 +311,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``station library``, ``snap``, ``formulate`` and ``export``."""
     lib = subparsers.add_parser("library", help="colour libraries: import, export, browse (thesis §5.3.3)")
     sub = lib.add_subparsers(dest="library_command", required=True, metavar="SUBCOMMAND")
-    p = sub.add_parser("import", help="read and validate a CSV / CxF3 library; convert with --out")
+    p = sub.add_parser(
+        "import", help="read and validate a CSV, CxF3 or thesis-XML library; convert with --out"
+    )
     p.add_argument("file", type=Path)
     p.add_argument("--out", type=Path, help="write the library again (.csv or .cxf)")
     p.add_argument("--format", choices=("csv", "cxf"), help="format of --out (default: from its suffix)")
@@ -321,6 +351,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default="cie76",
         help="ΔE summed over angles (default cie76 = ΔE*ab, the thesis's)",
     )
+    p.add_argument(
+        "--type",
+        dest="types",
+        action="append",
+        choices=("solid", "metallic", "pearl"),
+        help="search only paints of this type (repeat for several; default: every paint)",
+    )
     p.add_argument("--png", type=Path, help="write the 3D Lab view as PNG")
     p.add_argument("--view", action="store_true", help="include the 3D view data in the output")
     add_json_flag(p)
@@ -334,6 +371,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--closed-loop", action="store_true", help="spray, measure and correct (simulated panel)")
     p.add_argument("--corrections", type=int, default=3, help="closed-loop corrections (default 3)")
     p.add_argument("--seed", type=int, default=7, help="seed of the simulated spray-out panel")
+    p.add_argument(
+        "--batch", type=float, default=1000.0, help="batch size in g the recipe is weighed out for"
+    )
     add_json_flag(p)
     p.set_defaults(handler=cmd_formulate)
 
@@ -344,7 +384,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--library", default="demo", help="library for the match (default demo, SYNTHETIC)")
     p.add_argument("--de", choices=("cie76", "cie2000", "din6175"), default="cie76")
     p.add_argument("--five-angles", action="store_true", help="also export the 15/25/45/75/110 set")
-    p.add_argument("--no-match", action="store_true", help="export the design alone")
+    p.add_argument("--no-match", action="store_true", help="export the design without its ColorSnap match")
+    p.add_argument(
+        "--recipe",
+        action="store_true",
+        help="also formulate the design and export the recipe as a prediction colour "
+        "(CxF3: with the recipe in grams per batch and the predicted spectra per geometry)",
+    )
+    p.add_argument(
+        "--batch", type=float, default=1000.0, help="batch size in g of the exported recipe (default 1000)"
+    )
     p.add_argument("--gloss", type=float, help="gloss (GU) when DESIGN is a Lab list (default 90)")
     add_json_flag(p)
     p.set_defaults(handler=cmd_export)

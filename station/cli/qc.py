@@ -10,6 +10,23 @@
 The verdict is the result, not an error: the command exits 0 for pass, warn and fail alike and 2 for
 bad input (one line naming the field and the accepted range). Angle lists that start with a minus
 sign need the ``=`` form: ``--angles=-15,15,45``.
+
+Readings from files (``station measure --json`` or ``station import --json`` output; station.qc):
+
+* ``check --standard FILE --sample FILE [--tolerance FILE] [--formula din6175-2|cie2000|cie94|cie76]``
+  — the verdict of the sample against the standard (several readings in a file are averaged first,
+  with the repeat statistics reported);
+* ``repeats FILE…`` — mean, per-geometry sd and outliers of repeat readings of one panel;
+* ``correlate --a FILE --b FILE`` — bias of instrument B against A on a shared panel;
+* ``metamerism --standard FILE --sample FILE [--formula]`` — metamerism index D65 → A, F11.
+
+Jobs in the measurement database (``--db URL``, default: the ``station serve`` database):
+
+* ``jobs``, ``search [--job J] [--part P] [--instrument SERIAL|MODEL] [--since T] [--until T]``;
+* ``standard set --job J --part P --measurement ID|--design ID [--replace]``, ``standard show``;
+* ``summary --job J`` — every sample's verdict against its part's standard;
+* ``report --job J --out report.pdf [--csv out.csv]`` (``--out x.csv`` writes the CSV alone) and
+  ``trend --job J --part P --out trend.png`` (the SPC chart of one part).
 """
 
 from __future__ import annotations
@@ -46,6 +63,18 @@ def _lc(text: str) -> tuple[float, float]:
     return values[0], values[1]
 
 
+def _load_tolerance(name: str) -> ToleranceSet:
+    """A tolerance set from its JSON file (``station qc tolerance --json``)."""
+    path = Path(name)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(
+            "tolerance", "a readable JSON tolerance file (station qc tolerance --json)", str(path)
+        ) from exc
+    return ToleranceSet.from_dict(data)
+
+
 def _tolerance(args: argparse.Namespace, angles: list[float]) -> ToleranceSet:
     if args.tolerance:
         given = [f for f in _SET_FLAGS if getattr(args, f) is not None]
@@ -53,14 +82,7 @@ def _tolerance(args: argparse.Namespace, angles: list[float]) -> ToleranceSet:
             raise InputError(
                 given[0].replace("_", "-"), "either --tolerance FILE or limit options, not both", "both"
             )
-        path = Path(args.tolerance)
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise InputError(
-                "tolerance", "a readable JSON tolerance file (station qc tolerance --json)", str(path)
-            ) from exc
-        return ToleranceSet.from_dict(data)
+        return _load_tolerance(args.tolerance)
     components = {c: getattr(args, c) for c in _COMPONENT_FLAGS if getattr(args, c) is not None}
     kwargs: dict[str, Any] = {
         "formula": args.formula or QC_FORMULA,
@@ -90,14 +112,9 @@ def _verdict(args: argparse.Namespace) -> dict[str, Any] | None:
     result = judge(std, smp, angles, _tolerance(args, angles)).to_dict()
     if args.json:
         return result
-    print(f"verdict: {result['verdict']}  ({result['formula']}, {result['aggregation']} rule)")
-    print(f"reason: {result['reason']}")
-    print(f"{'geometry':>9} {'dL':>7} {'da':>7} {'db':>7} {'dC':>7} {'dH':>7} {'dE':>7}  verdict")
-    for g in result["per_geometry"]:
-        nums = " ".join(f"{g[k]:7.2f}" for k in ("dL", "da", "db", "dC", "dH", "dE"))
-        why = f"  ({'; '.join(g['reasons'])})" if g["reasons"] else ""
-        print(f"{g['geometry']:>9} {nums}  {g['verdict']}{why}")
-    print(f"mean dE: {result['mean_de']:.3f}   max dE: {result['max_de']:.3f} at {result['worst_geometry']}")
+    from station.cli._qc_files import print_verdict
+
+    print_verdict(result)
     return None
 
 
@@ -143,3 +160,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = sub.add_parser("tolerance", help="print the tolerance set the options describe")
     _add_set_args(p)
     p.set_defaults(handler=_show_tolerance)
+
+    from station.cli import _qc_files
+
+    _qc_files.register(sub, _load_tolerance)

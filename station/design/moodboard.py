@@ -206,6 +206,20 @@ def eyedrop_lab(image: ArrayLike, xy: tuple[float, float], radius: int = 3) -> N
     return np.asarray(display_to_lab(rgb), dtype=float)
 
 
+def face_darker(face: ArrayLike, flop: ArrayLike) -> bool:
+    """Whether the face (Lab at 15°) is darker (L*) than the flop — a retroreflective colour, rare enough
+    that the eyedroppers swap the two unless told not to (thesis §3.5.2)."""
+    return float(np.asarray(face, dtype=float)[0]) < float(np.asarray(flop, dtype=float)[0])
+
+
+def auto_swap_design(design: FaceFlopTravelGloss) -> tuple[FaceFlopTravelGloss, bool]:
+    """*design* with face and flop exchanged when the face is darker than the flop (thesis §3.5.2),
+    and whether they were; travel and gloss are kept."""
+    if not face_darker(design.face, design.flop):
+        return design, False
+    return design.replace(face=design.flop, flop=design.face), True
+
+
 @dataclass(frozen=True)
 class EyedropResult:
     """Design seeded by the eyedroppers, the sampled Labs and whether face and flop were swapped."""
@@ -255,7 +269,7 @@ def eyedrop_design(
     face_l, face_a, face_b = (float(v) for v in eyedrop_lab(image, face_xy, radius))
     flop_l, flop_a, flop_b = (float(v) for v in eyedrop_lab(image, flop_xy, radius))
     face, flop = (face_l, face_a, face_b), (flop_l, flop_a, flop_b)
-    swapped = bool(auto_swap and face[0] < flop[0])
+    swapped = bool(auto_swap and face_darker(face, flop))
     if swapped:
         face, flop = flop, face
     gloss = None

@@ -1,20 +1,29 @@
 """Colour palette entries (thesis §3.4.6): the gradient swatch and the shaded booklet thumbnail.
 
-Both return sRGB-encoded ``uint8`` arrays ``(H, W, 3)``; :func:`station.design.images.save_png` writes
+A palette file (schema ``cacad.palette/1``) is JSON: ``{"schema": "cacad.palette/1", "entries":
+[{"name": …, "design": <cacad.design/1 object>}, …]}`` (:func:`save_palette` / :func:`load_palette`).
+
+Both images are sRGB-encoded ``uint8`` arrays ``(H, W, 3)``; :func:`station.design.images.save_png` writes
 them (Pillow, with an sRGB profile). Out-of-gamut colours are clipped *for display only*; the swatch
 result reports how many columns were out of gamut so the clip is not hidden.
 """
 
 from __future__ import annotations
 
+import json
+from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from station.design.errors import DesignInputError
 from station.design.scene import panel_scene, shade, srgb_encode, to_uint8
+from station.errors import InputError
 from station.model import FaceFlopTravelGloss
+from station.model.design_io import MAX_DESIGN_BYTES, design_from_dict, design_to_dict
 from station.model.shading import design_reflectance
 
 #: Aspecular range of the gradient bar, degrees (the standard angles 15° … 110°).
@@ -61,3 +70,63 @@ def booklet(design: FaceFlopTravelGloss, size: int = 96) -> NDArray[np.uint8]:
     (:func:`station.design.scene.panel_scene`), on a mid-grey background, gloss highlight included."""
     scene = panel_scene(size)
     return to_uint8(srgb_encode(shade(scene, design, specular=True, background=(0.18, 0.18, 0.18))))
+
+
+# ------------------------------------------------------------------------------------- palette files
+
+PALETTE_SCHEMA = "cacad.palette/1"
+#: Largest palette file accepted, bytes (a palette holds many designs; ten design files' worth).
+MAX_PALETTE_BYTES = 10 * MAX_DESIGN_BYTES
+
+PaletteEntries = list[tuple[str, FaceFlopTravelGloss]]
+
+
+def palette_to_dict(entries: Sequence[tuple[str, FaceFlopTravelGloss]]) -> dict[str, Any]:
+    """The ``cacad.palette/1`` JSON object of named designs (order kept)."""
+    return {
+        "schema": PALETTE_SCHEMA,
+        "entries": [{"name": str(name), "design": design_to_dict(d)} for name, d in entries],
+    }
+
+
+def palette_from_dict(data: Any) -> PaletteEntries:
+    """Parse a ``cacad.palette/1`` object; errors name the entry and the field."""
+    if not isinstance(data, dict) or data.get("schema") != PALETTE_SCHEMA:
+        got = data.get("schema") if isinstance(data, dict) else type(data).__name__
+        raise DesignInputError("schema", f'"{PALETTE_SCHEMA}"', got)
+    rows = data.get("entries")
+    if not isinstance(rows, list):
+        raise DesignInputError("entries", "a list of {name, design}", type(rows).__name__)
+    out: PaletteEntries = []
+    for i, row in enumerate(rows):
+        if not isinstance(row, dict) or not isinstance(row.get("name"), str):
+            raise DesignInputError(f"entries[{i}].name", "a string", row)
+        try:
+            design = design_from_dict(row.get("design"))
+        except (InputError, ValueError) as exc:
+            raise DesignInputError(f"entries[{i}].design", "a cacad.design/1 object", None, str(exc)) from exc
+        out.append((row["name"], design))
+    return out
+
+
+def save_palette(entries: Sequence[tuple[str, FaceFlopTravelGloss]], path: str | Path) -> Path:
+    """Write a palette file (``cacad.palette/1`` JSON); returns the path."""
+    p = Path(path)
+    p.write_text(json.dumps(palette_to_dict(entries), indent=2) + "\n", encoding="utf-8")
+    return p
+
+
+def load_palette(path: str | Path) -> PaletteEntries:
+    """Read a palette file written by :func:`save_palette`; errors name the file or the field."""
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise DesignInputError("palette", "a readable palette file", str(p)) from exc
+    if size > MAX_PALETTE_BYTES:
+        raise DesignInputError("palette", f"a file of at most {MAX_PALETTE_BYTES} bytes", size)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DesignInputError("palette", f"a JSON palette file ({PALETTE_SCHEMA})", f"{p}: {exc}") from exc
+    return palette_from_dict(data)

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from station.formulate.batch import Tinting, batch_masses, tinting_additions
 from station.formulate.colorants import ColorantDatabase, default_database, predict_lab
 from station.formulate.de_kernels import cie2000
 from station.formulate.errors import FormulateInputError
@@ -44,7 +45,8 @@ class LoopStep:
     """One spray-and-measure step.
 
     ``kind`` is ``"initial"`` or ``"correction"``; Lab arrays are (A, 3) at the job's angles;
-    ``de_per_angle`` is the measured CIEDE2000 to the design.
+    ``de_per_angle`` is the measured CIEDE2000 to the design; ``additions`` (corrections only) the
+    tinting additions that turn the previous step's batch into this recipe.
     """
 
     number: int
@@ -58,10 +60,18 @@ class LoopStep:
     mean_de: float
     predicted_mean_de: float
     time: str
+    additions: Tinting | None = None
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-able form."""
-        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+        """JSON-able form (``additions``: the tinting additions in g to a 1 kg batch, corrections only)."""
+        out: dict[str, object] = {}
+        for k, v in self.__dict__.items():
+            if k == "additions":
+                out[k] = None if v is None else v.to_dict()
+            else:
+                out[k] = list(v) if isinstance(v, tuple) else v
+        out["batch"] = batch_masses(self.recipe).to_dict()
+        return out
 
 
 @dataclass(frozen=True)
@@ -179,6 +189,7 @@ def closed_loop(
                 mean_de=float(de.mean()),
                 predicted_mean_de=result.mean_de,
                 time=dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+                additions=None if n == 0 else tinting_additions(steps[-1].recipe, dict(result.recipe)),
             )
         )
         if de.mean() <= tolerance:

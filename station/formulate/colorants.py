@@ -1,199 +1,301 @@
-"""Synthetic colorant database and the per-geometry Kubelka–Munk paint model (SYNTHETIC DATA).
+"""Synthetic colorant database and the effect-paint colorant model (SYNTHETIC DATA).
 
-Nothing here is measured: the colorants are invented, with spectra shaped like their real
-counterparts (TiO2 white, carbon black, organic tints, aluminium flakes, mica pearls, interference
-pigments), so that the formulation pipeline can be built and tested end to end. Every library made
-from it is labelled synthetic.
+Nothing here is measured: the colorants are invented, with spectra shaped like their real counterparts
+(TiO2 white, carbon black, organic tints, three aluminium flake grades, a mica pearl and three
+interference pigments), so that the formulation pipeline can be built and tested end to end. Every
+parameter is in one data file, ``station/formulate/data/colorants.json``; every library made from it
+is labelled synthetic. The model is documented pigment by pigment in docs/formulate.md ("Colorant
+model").
 
-Model (documented in docs/formulate.md, "Colorant model"). For aspecular angle θ (degrees,
-illumination at 45°) and wavelength λ (400–700 nm, 10 nm):
+Model, for aspecular angle θ (degrees, illumination at 45°, only |θ| matters) and wavelength λ
+(400–700 nm, 10 nm), recipe c (mass fractions in the basecoat):
 
-* absorption  K(λ)    = K_binder + Σ_i c_i K_i(λ)
-* scattering  S(θ, λ) = S_binder + Σ_i c_i S_i(λ) g_i(θ, λ)
+1. **Diffuse body** (every colorant, flakes included): two-constant Kubelka–Munk of an opaque layer,
+   K(λ) = K_binder + Σ c_i K_i(λ), S(λ) = S_binder + Σ c_i S_i(λ),
+   R∞ = 1 + K/S − √((K/S)² + 2 K/S) (Kubelka & Munk 1931), through the clear coat by Saunderson
+   (1942) with the specular component excluded: R_d = (1 − k₁)(1 − k₂) R∞ / (1 − k₂ R∞), k₁ the
+   Fresnel reflectance of the binder (n) at the 45° illumination, k₂ = 0.6 (diffuse internal).
+   R_d < 1 always: a diffuse body never reflects more than a white diffuser.
+2. **Flake reflection** (aluminium, pearl, interference), in the manner of the flake radiance-factor
+   models (Mobil, US 3,916,168: diffuse flux + angular flux; PPG, US 5,231,472: flake reflection
+   attenuated by the film on the way in and out). Inside the film the light travels at
+   φ_i′ = asin(sin 45° / n) and the viewing direction at φ_v′ = asin(sin(45° − θ) / n); a flake
+   mirrors one into the other when tilted by α = (φ_i′ − φ_v′)/2, the light meeting it at
+   β = (φ_i′ + φ_v′)/2. With a Beckmann distribution of flake tilts of r.m.s. slope m,
+   D(α) = exp(−tan²α / m²) / (π m² cos⁴α), the flake term is the microfacet radiance factor
+   carried out through the coat (radiance n² law):
 
-  where c_i is the mass fraction of colorant i in the basecoat and g_i is the colorant's angular lobe:
-  1 for diffuse pigments, ``floor + exp(-(|θ|/w)^p)`` for flakes and pearls (bright near the specular
-  direction, dark at flop). Interference pigments also move their reflection band with angle:
-  λ_peak(θ) = λ₀ √(1 − sin²(θ′)/n²), θ′ = min(|θ|, 90°), n = 1.6 (thin-film blue shift).
-* Kubelka–Munk reflectance of an opaque layer: R∞ = 1 + K/S − √((K/S)² + 2 K/S)  (Kubelka & Munk 1931)
-* Saunderson correction, specular component excluded (aspecular geometry):
-  R = (1 − k₁)(1 − k₂) R∞ / (1 − k₂ R∞), k₁ = 0.04, k₂ = 0.6  (Saunderson 1942).
+       R_f(θ, λ) = Σ_j A_j(c) · r_j(β, λ) · π D_j(α) / (4 cos φ_i′ cos φ_v′) · T(45°) T(φ_v) / n²
+                   · exp(−(K′ + f S′) h (1/cos φ_i′ + 1/cos φ_v′))
+                 + Σ_j A_j ρ_d,j T(45°) T(φ_v) / n² · exp(−(K′ + f S′) h (1/cos φ_i′ + 2)),
 
-Lab per angle is CIE L*a*b* D65 / CIE 1964 10° of R through the same tristimulus weights as
-:func:`station.model.spectra.reflectance_to_lab` (a linear map, extracted once; see :func:`lab_from_reflectance`).
+   where A_j is the area fraction covered by flakes of grade j (Beer–Lambert stacking:
+   A = 1 − exp(−Σ σ_j c_j), shared in proportion to σ_j c_j), r_j the flake's reflectance
+   (aluminium: a measured-like metal spectrum; pearl and interference: the thin-film reflectance of a
+   TiO2 layer in the binder at incidence β by the transfer-matrix method of colour-science,
+   ``colour.phenomena.thin_film_tmm``, both faces of the platelet added incoherently), T the Fresnel
+   transmittance of the coat, and the exponential the attenuation by the non-flake pigments above the
+   flakes (K′, S′; depth h and the scattering share f are model constants). The second sum is the
+   flakes' diffuse flux (albedo ρ_d: edges, roughness, flake-to-flake reflection), seen through the
+   same pigments on a diffuse way out (mean path 2 = ∫ μ⁻¹ 2μ dμ): it gives a metallic its flop colour
+   (tint over aluminium). R_f exceeds 1 near
+   specular: bright silvers read L*15 of 110–140 and fall to a dark flop as D(α) does.
 
-Gloss (60°, GU) is a clear-coat property: G = 90 − 650 c_matting (matting silica), 6.5 ≤ G ≤ 90 GU
+R = R_d + R_f. Lab per angle is CIE L*a*b* D65 / CIE 1964 10° of R through the same tristimulus weights
+as :func:`station.model.spectra.reflectance_to_lab` (a linear map, extracted once; see
+:func:`lab_from_reflectance`).
+
+Gloss (60°, GU) is a clear-coat property: G = G_clear − g c_matting (matting silica), 6.5 ≤ G ≤ 90 GU
 over the allowed matting range.
 """
 
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+import json
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.formulate.errors import FormulateInputError
+from station.formulate.errors import FormulateError, FormulateInputError
+from station.model.domain import ILLUMINATION_DEG
 
 WAVELENGTHS_NM: NDArray[np.float64] = np.arange(400.0, 701.0, 10.0)
-K1_SAUNDERSON = 0.04
-K2_SAUNDERSON = 0.6
-K_BINDER = 0.02
-S_BINDER = 0.01
-GLOSS_CLEAR_GU = 90.0
-GLOSS_PER_MATTING = 650.0
-#: Total pigment mass fraction allowed in a basecoat.
-MAX_TOTAL = 0.6
-
-_L = WAVELENGTHS_NM
+#: Families of colorants the model knows; the effect families carry a :class:`Flake`.
+FAMILIES = ("white", "black", "tint", "aluminium", "pearl", "interference", "matting")
+EFFECT_FAMILIES = ("aluminium", "pearl", "interference")
+DATA_FILE = "colorants.json"
 
 
-def _sig(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    return 1.0 / (1.0 + np.exp(-x))
+@functools.lru_cache(maxsize=1)
+def colorant_data() -> dict[str, Any]:
+    """The parsed data file ``station/formulate/data/colorants.json`` (every model parameter)."""
+    text = resources.files("station.formulate").joinpath("data", DATA_FILE).read_text(encoding="utf-8")
+    data: dict[str, Any] = json.loads(text)
+    return data
 
 
-def _gauss(mu: float, sd: float) -> NDArray[np.float64]:
-    return np.exp(-0.5 * ((_L - mu) / sd) ** 2)
+def _constants() -> dict[str, float]:
+    return {k: float(v) for k, v in colorant_data()["model"].items()}
+
+
+K2_SAUNDERSON = _constants()["k2_saunderson"]
+K_BINDER = _constants()["k_binder"]
+S_BINDER = _constants()["s_binder"]
+N_BINDER = _constants()["n_binder"]
+GLOSS_CLEAR_GU = _constants()["gloss_clear_gu"]
+GLOSS_PER_MATTING = _constants()["gloss_per_matting"]
+#: Total pigment mass fraction allowed in a basecoat (the rest is binder).
+MAX_TOTAL = _constants()["max_total"]
+
+
+def fresnel_unpolarised(theta_deg: ArrayLike, n: float = N_BINDER) -> NDArray[np.float64]:
+    """Fresnel reflectance (mean of s and p) of light in air meeting a medium of index *n* at
+    *theta_deg* (degrees from the normal)."""
+    ti = np.radians(np.abs(np.asarray(theta_deg, dtype=np.float64)))
+    tt = np.arcsin(np.sin(ti) / n)
+    ci, ct = np.cos(ti), np.cos(tt)
+    rs = ((ci - n * ct) / (ci + n * ct)) ** 2
+    rp = ((ct - n * ci) / (ct + n * ci)) ** 2
+    return np.asarray(0.5 * (rs + rp), dtype=np.float64)
+
+
+#: Saunderson k₁: the coat's Fresnel reflectance at the 45° illumination (≈ 0.050 for n = 1.5).
+K1_SAUNDERSON = float(fresnel_unpolarised(ILLUMINATION_DEG))
+
+
+@dataclass(frozen=True)
+class FlakeGeometry:
+    """Angles inside the film for aspecular angles θ (module docstring, step 2), all shape (A,), radians.
+
+    ``phi_i``/``phi_v``: internal illumination / viewing angles from the normal (``phi_v`` signed,
+    negative on the illuminator's side); ``tilt``: flake tilt α that mirrors one into the other;
+    ``incidence``: angle β at which the light meets that flake; ``transfer``: T(45°) T(φ_v) / n²
+    (Fresnel transmittances and the radiance n² law); ``path``: 1/cos φ_i′ + 1/cos φ_v′.
+    """
+
+    phi_i: NDArray[np.float64]
+    phi_v: NDArray[np.float64]
+    tilt: NDArray[np.float64]
+    incidence: NDArray[np.float64]
+    transfer: NDArray[np.float64]
+    path: NDArray[np.float64]
+
+
+def flake_geometry(angles_deg: ArrayLike, n: float = N_BINDER) -> FlakeGeometry:
+    """Internal flake geometry for aspecular *angles_deg* (degrees; |θ| ≤ 134 is used, beyond it the
+    view is clamped at grazing)."""
+    theta = np.abs(np.asarray(angles_deg, dtype=np.float64))
+    view_air = np.clip(ILLUMINATION_DEG - theta, -89.0, 89.0)
+    phi_i = np.full(theta.shape, np.arcsin(np.sin(np.radians(ILLUMINATION_DEG)) / n))
+    phi_v = np.arcsin(np.sin(np.radians(view_air)) / n)
+    t_in = 1.0 - fresnel_unpolarised(ILLUMINATION_DEG, n)
+    t_out = 1.0 - fresnel_unpolarised(view_air, n)
+    return FlakeGeometry(
+        phi_i=phi_i,
+        phi_v=phi_v,
+        tilt=0.5 * (phi_i - phi_v),
+        incidence=0.5 * np.abs(phi_i + phi_v),
+        transfer=t_in * t_out / n**2,
+        path=1.0 / np.cos(phi_i) + 1.0 / np.cos(phi_v),
+    )
+
+
+def beckmann(tilt_rad: ArrayLike, m: float) -> NDArray[np.float64]:
+    """Beckmann flake-tilt density D(α) = exp(−tan²α / m²) / (π m² cos⁴α) (normalised: ∫ D cos α dω = 1)."""
+    a = np.asarray(tilt_rad, dtype=np.float64)
+    t2 = np.tan(a) ** 2
+    return np.asarray(np.exp(-t2 / (m * m)) / (np.pi * m * m * np.cos(a) ** 4), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class ThinFilm:
+    """A TiO2 interference layer on a mica platelet: Cauchy index n(λ) = a + b / λ², thickness (nm),
+    *faces* reflecting faces per platelet (added incoherently)."""
+
+    cauchy_a: float
+    cauchy_b_nm2: float
+    thickness_nm: float
+    faces: int = 2
+
+    def __post_init__(self) -> None:
+        if not (self.cauchy_a > 1.0 and self.cauchy_b_nm2 >= 0 and self.thickness_nm > 0 and self.faces >= 1):
+            raise FormulateInputError("thin_film", "cauchy_a > 1, cauchy_b_nm2 >= 0, thickness_nm > 0", self)
+
+    def reflectance(self, incidence_rad: ArrayLike, n_medium: float = N_BINDER) -> NDArray[np.float64]:
+        """Unpolarised platelet reflectance at incidence angles (radians, in the binder), shape (A, 31),
+        by the transfer-matrix method (``colour.phenomena.thin_film_tmm``)."""
+        from colour.phenomena import thin_film_tmm
+
+        n_film = self.cauchy_a + self.cauchy_b_nm2 / WAVELENGTHS_NM**2
+        stack = np.stack([np.full(31, n_medium), n_film, np.full(31, n_medium)])
+        beta = np.degrees(np.atleast_1d(np.asarray(incidence_rad, dtype=np.float64)))
+        r, _t = thin_film_tmm(stack, self.thickness_nm, WAVELENGTHS_NM, beta)
+        one = np.asarray(r, dtype=np.float64)[:, :, 0, :].mean(-1).T  # (A, 31), mean of s and p
+        f = self.faces
+        # f faces of equal reflectance, incoherent multiple reflection: R_f = f R / (1 + (f − 1) R)
+        return np.asarray(f * one / (1.0 + (f - 1) * one), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class Flake:
+    """Flake optics of an effect pigment (module docstring, step 2).
+
+    Attributes
+    ----------
+    coverage_per_fraction
+        σ: flake area per unit film area per unit mass fraction (A = 1 − exp(−σ c)).
+    orientation_m
+        r.m.s. slope m of the Beckmann tilt distribution (small: well-oriented, bright face, dark flop).
+    diffuse_albedo
+        ρ_d: the share of light a flake returns diffusely (edges, roughness, multiple reflection between
+        flakes: the "diffuse flux" of the Mobil model), seen through the pigments above it.
+    reflectance
+        Metal flake reflectance r(λ), shape (31,) (aluminium), or ``None`` for a thin-film platelet.
+    thin_film
+        The interference layer of a pearl / interference pigment, or ``None`` for a metal flake.
+    """
+
+    coverage_per_fraction: float
+    orientation_m: float
+    diffuse_albedo: float = 0.0
+    reflectance: NDArray[np.float64] | None = None
+    thin_film: ThinFilm | None = None
+
+    def __post_init__(self) -> None:
+        if not (
+            self.coverage_per_fraction > 0 and 0 < self.orientation_m < 1.5 and 0 <= self.diffuse_albedo <= 1
+        ):
+            raise FormulateInputError(
+                "flake", "coverage_per_fraction > 0, 0 < orientation_m < 1.5, 0 <= diffuse_albedo <= 1", self
+            )
+        if (self.reflectance is None) == (self.thin_film is None):
+            raise FormulateInputError("flake", "exactly one of reflectance / thin_film", self)
+        if self.reflectance is not None and (
+            self.reflectance.shape != (31,) or np.any(self.reflectance < 0) or np.any(self.reflectance > 1)
+        ):
+            raise FormulateInputError("flake.reflectance", "31 values in [0, 1]", self.reflectance.shape)
+
+    def facet_reflectance(self, incidence_rad: NDArray[np.float64]) -> NDArray[np.float64]:
+        """r(β, λ), shape (A, 31)."""
+        if self.reflectance is not None:
+            return np.broadcast_to(self.reflectance, (incidence_rad.size, 31)).copy()
+        assert self.thin_film is not None  # noqa: S101 - __post_init__ guarantees one of the two
+        return self.thin_film.reflectance(incidence_rad)
+
+    def radiance_factor(self, angles_deg: ArrayLike) -> NDArray[np.float64]:
+        """Specular flake radiance factor at full coverage and no attenuation, shape (A, 31):
+        r(β, λ) π D(α) / (4 cos φ_i′ cos φ_v′) · T T / n²."""
+        g = flake_geometry(angles_deg)
+        d = beckmann(g.tilt, self.orientation_m)
+        geo = np.pi * d / (4.0 * np.cos(g.phi_i) * np.cos(g.phi_v)) * g.transfer
+        return geo[:, None] * self.facet_reflectance(g.incidence)
 
 
 @dataclass(frozen=True)
 class Colorant:
-    """One synthetic colorant.
+    """One synthetic colorant (a record of the data file).
 
     Attributes
     ----------
     name
         Identifier used in recipes.
     family
-        ``"white" | "black" | "tint" | "aluminium" | "pearl" | "interference" | "matting"``.
+        One of :data:`FAMILIES`.
     k, s
-        Absorption and scattering per unit mass fraction, shape (31,) on :data:`WAVELENGTHS_NM`.
-    lobe_width_deg, lobe_power, lobe_floor
-        Angular lobe g(θ) = floor + exp(-(|θ|/w)^p) for effect pigments (``None`` width: diffuse, g = 1).
-    peak_nm, band_nm
-        Interference band centre at normal observation and its width (``None``: no interference).
+        Kubelka–Munk absorption and scattering per unit mass fraction, shape (31,) on
+        :data:`WAVELENGTHS_NM` (the diffuse body; flakes too have one).
+    flake
+        Flake optics (effect families only).
     max_fraction
         Upper bound of its mass fraction in a recipe.
+    doc
+        One line saying what it stands for.
     """
 
     name: str
     family: str
     k: NDArray[np.float64]
     s: NDArray[np.float64]
-    lobe_width_deg: float | None = None
-    lobe_power: float = 1.0
-    lobe_floor: float = 0.0
-    peak_nm: float | None = None
-    band_nm: float = 40.0
+    flake: Flake | None = None
     max_fraction: float = 0.5
+    doc: str = field(default="", compare=False)
 
-    def lobe(self, angles_deg: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Return g(θ) of shape (A,) for aspecular *angles_deg* (degrees)."""
-        a = np.abs(np.asarray(angles_deg, dtype=np.float64))
-        if self.lobe_width_deg is None:
-            return np.ones_like(a)
-        return self.lobe_floor + np.exp(-((a / self.lobe_width_deg) ** self.lobe_power))
-
-    def scattering(self, angles_deg: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Return S_i(λ) g_i(θ, λ), shape (A, 31), per unit mass fraction."""
-        g = self.lobe(angles_deg)[:, None]
-        if self.peak_nm is None:
-            return g * self.s[None, :]
-        theta = np.radians(np.minimum(np.abs(np.asarray(angles_deg, dtype=np.float64)), 90.0))
-        peak = self.peak_nm * np.sqrt(1.0 - (np.sin(theta) / 1.6) ** 2)
-        band = np.exp(-0.5 * ((_L[None, :] - peak[:, None]) / self.band_nm) ** 2)
-        return g * self.s[None, :] * (0.15 + band)
+    def __post_init__(self) -> None:
+        if self.family not in FAMILIES:
+            raise FormulateInputError("colorant.family", f"one of {FAMILIES}", self.family)
+        if (self.flake is not None) != (self.family in EFFECT_FAMILIES):
+            raise FormulateInputError("colorant.flake", "flake optics exactly for effect families", self.name)
+        for nm, arr in (("k", self.k), ("s", self.s)):
+            if arr.shape != (31,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
+                raise FormulateInputError(f"colorant.{nm}", "31 finite values >= 0", self.name)
+        if not 0 < self.max_fraction <= 1:
+            raise FormulateInputError("colorant.max_fraction", "0 < max_fraction <= 1", self.max_fraction)
 
 
-def _tint(name: str, k: NDArray[np.float64], s: float = 0.08, max_fraction: float = 0.3) -> Colorant:
-    return Colorant(name, "tint", k, np.full(31, s), max_fraction=max_fraction)
-
-
-def _build() -> tuple[Colorant, ...]:
-    flat = np.ones(31)
-    return (
-        Colorant(
-            "white_tio2",
-            "white",
-            0.03 + 0.4 * _sig((410.0 - _L) / 8.0),
-            6.0 * (550.0 / _L) ** 1.5,
-            max_fraction=0.45,
-        ),
-        Colorant("black_carbon", "black", 25.0 * flat * (550.0 / _L) ** 0.3, 0.3 * flat, max_fraction=0.1),
-        _tint("yellow_py", 14.0 * _sig((495.0 - _L) / 12.0)),
-        _tint("orange_po", 14.0 * _sig((560.0 - _L) / 12.0)),
-        _tint("red_pr", 16.0 * _sig((595.0 - _L) / 12.0) + 2.0 * _gauss(420.0, 30.0)),
-        _tint("magenta_pv", 12.0 * _gauss(545.0, 38.0)),
-        _tint("blue_pb", 14.0 * _gauss(615.0, 55.0) + 3.0 * _sig((_L - 560.0) / 20.0) + 0.5),
-        _tint("green_pg", 12.0 * _sig((450.0 - _L) / 15.0) + 14.0 * _sig((_L - 575.0) / 15.0)),
-        Colorant(
-            "alu_coarse",
-            "aluminium",
-            1.6 * flat,
-            80.0 * flat,
-            lobe_width_deg=18.0,
-            lobe_power=1.6,
-            lobe_floor=0.001,
-            max_fraction=0.2,
-        ),
-        Colorant(
-            "alu_fine",
-            "aluminium",
-            1.0 * flat,
-            60.0 * flat,
-            lobe_width_deg=28.0,
-            lobe_power=1.5,
-            lobe_floor=0.003,
-            max_fraction=0.2,
-        ),
-        Colorant(
-            "pearl_white",
-            "pearl",
-            0.04 * flat,
-            5.0 * flat,
-            lobe_width_deg=45.0,
-            lobe_power=1.5,
-            lobe_floor=0.08,
-            max_fraction=0.2,
-        ),
-        Colorant(
-            "interference_blue",
-            "interference",
-            0.05 * flat,
-            8.0 * flat,
-            lobe_width_deg=40.0,
-            lobe_power=1.5,
-            lobe_floor=0.03,
-            peak_nm=470.0,
-            band_nm=35.0,
-            max_fraction=0.15,
-        ),
-        Colorant(
-            "interference_green",
-            "interference",
-            0.05 * flat,
-            8.0 * flat,
-            lobe_width_deg=40.0,
-            lobe_power=1.5,
-            lobe_floor=0.03,
-            peak_nm=540.0,
-            band_nm=35.0,
-            max_fraction=0.15,
-        ),
-        Colorant(
-            "interference_gold",
-            "interference",
-            0.05 * flat,
-            8.0 * flat,
-            lobe_width_deg=40.0,
-            lobe_power=1.5,
-            lobe_floor=0.03,
-            peak_nm=600.0,
-            band_nm=45.0,
-            max_fraction=0.15,
-        ),
-        Colorant("matting_silica", "matting", 0.0 * flat, 0.0 * flat, max_fraction=0.13),
+def _colorant_from_record(rec: dict[str, Any]) -> Colorant:
+    fl = rec.get("flake")
+    flake = None
+    if fl is not None:
+        tf = fl.get("thin_film")
+        flake = Flake(
+            coverage_per_fraction=float(fl["coverage_per_fraction"]),
+            orientation_m=float(fl["orientation_m"]),
+            diffuse_albedo=float(fl.get("diffuse_albedo", 0.0)),
+            reflectance=None if fl.get("reflectance") is None else np.asarray(fl["reflectance"], float),
+            thin_film=None if tf is None else ThinFilm(**tf),
+        )
+    return Colorant(
+        name=str(rec["name"]),
+        family=str(rec["family"]),
+        k=np.asarray(rec["k"], dtype=np.float64),
+        s=np.asarray(rec["s"], dtype=np.float64),
+        flake=flake,
+        max_fraction=float(rec["max_fraction"]),
+        doc=str(rec.get("doc", "")),
     )
 
 
@@ -203,12 +305,25 @@ class ColorantDatabase:
 
     Constraints on a recipe c (mass fractions): 0 ≤ c_i ≤ max_fraction_i, Σ c_i ≤ :data:`MAX_TOTAL`
     (the rest is binder), aluminium + pearl + interference ≤ ``max_effect`` (flake limit).
+    ``flake_depth`` (h) and ``scatter_extinction`` (f) set the attenuation of the flake term by the
+    pigments above the flakes (module docstring).
     """
 
     colorants: tuple[Colorant, ...]
     max_total: float = MAX_TOTAL
     max_effect: float = 0.25
     synthetic: bool = True
+    flake_depth: float = 0.35
+    scatter_extinction: float = 0.5
+
+    def __post_init__(self) -> None:
+        names = [c.name for c in self.colorants]
+        if (
+            len(set(names)) != len(names)
+            or names.count("")
+            or "matting" not in [c.family for c in self.colorants]
+        ):
+            raise FormulateInputError("colorants", "unique names and one matting agent", names)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -219,6 +334,39 @@ class ColorantDatabase:
     def _k(self) -> NDArray[np.float64]:
         return np.stack([c.k for c in self.colorants])
 
+    @functools.cached_property
+    def _s(self) -> NDArray[np.float64]:
+        return np.stack([c.s for c in self.colorants])
+
+    @functools.cached_property
+    def _k_above(self) -> NDArray[np.float64]:
+        """K and S of the non-flake colorants only (what lies above the flakes), (n, 31) each."""
+        return np.where(self.effect_mask[:, None], 0.0, self._k)
+
+    @functools.cached_property
+    def _s_above(self) -> NDArray[np.float64]:
+        return np.where(self.effect_mask[:, None], 0.0, self._s)
+
+    @functools.cached_property
+    def effect_index(self) -> NDArray[np.intp]:
+        """Rows of the effect pigments (those with flake optics)."""
+        return np.flatnonzero(self.effect_mask)
+
+    @functools.cached_property
+    def flakes(self) -> tuple[Flake, ...]:
+        """Flake optics of the effect pigments, in :attr:`effect_index` order."""
+        return tuple(c.flake for c in self.colorants if c.flake is not None)
+
+    @functools.cached_property
+    def coverage(self) -> NDArray[np.float64]:
+        """σ_j of the effect pigments, shape (E,)."""
+        return np.array([f.coverage_per_fraction for f in self.flakes])
+
+    @functools.cached_property
+    def diffuse_albedo(self) -> NDArray[np.float64]:
+        """ρ_d of the effect pigments, shape (E,)."""
+        return np.array([f.diffuse_albedo for f in self.flakes])
+
     @property
     def upper_bounds(self) -> NDArray[np.float64]:
         """Per-colorant upper bound of the mass fraction, shape (n,)."""
@@ -227,16 +375,16 @@ class ColorantDatabase:
     @property
     def effect_mask(self) -> NDArray[np.bool_]:
         """True for flake / pearl / interference colorants (the flake limit applies to their sum)."""
-        return np.array([c.family in ("aluminium", "pearl", "interference") for c in self.colorants])
+        return np.array([c.family in EFFECT_FAMILIES for c in self.colorants])
 
     @property
     def matting_index(self) -> int:
         """Row of the matting agent (gloss control)."""
         return [c.family for c in self.colorants].index("matting")
 
-    def scattering_table(self, angles_deg: tuple[float, ...]) -> NDArray[np.float64]:
-        """Return S_i(θ, λ) per unit fraction, shape (n, A, 31)."""
-        return _scattering_table(self, tuple(float(a) for a in angles_deg))
+    def flake_table(self, angles_deg: tuple[float, ...]) -> NDArray[np.float64]:
+        """Flake radiance factors at full coverage, shape (E, A, 31) (cached per angle set)."""
+        return _flake_table(self, tuple(float(a) for a in angles_deg))
 
     def vector(self, recipe: dict[str, float]) -> NDArray[np.float64]:
         """Return the recipe as a concentration vector; unknown colorant names are refused."""
@@ -273,22 +421,66 @@ class ColorantDatabase:
         return self is other
 
 
-@functools.lru_cache(maxsize=16)
-def _scattering_table(db: ColorantDatabase, angles: tuple[float, ...]) -> NDArray[np.float64]:
+@functools.lru_cache(maxsize=32)
+def _flake_table(db: ColorantDatabase, angles: tuple[float, ...]) -> NDArray[np.float64]:
     a = np.asarray(angles)
-    return np.stack([c.scattering(a) for c in db.colorants])
+    rows = [f.radiance_factor(a) for f in db.flakes]
+    return np.stack(rows) if rows else np.zeros((0, len(angles), 31))
 
 
 @functools.lru_cache(maxsize=1)
 def default_database() -> ColorantDatabase:
-    """Return the built-in SYNTHETIC colorant database (15 colorants)."""
-    return ColorantDatabase(_build())
+    """Return the built-in SYNTHETIC colorant database, read from the data file."""
+    data = colorant_data()
+    if data.get("synthetic") is not True:
+        raise FormulateError("the colorant data file must be labelled synthetic")
+    m = data["model"]
+    return ColorantDatabase(
+        tuple(_colorant_from_record(r) for r in data["colorants"]),
+        max_total=float(m["max_total"]),
+        max_effect=float(m["max_effect"]),
+        synthetic=True,
+        flake_depth=float(m["flake_depth"]),
+        scatter_extinction=float(m["scatter_extinction"]),
+    )
+
+
+def diffuse_reflectance(c: ArrayLike, db: ColorantDatabase | None = None) -> NDArray[np.float64]:
+    """The diffuse body R_d (Kubelka–Munk + Saunderson, module docstring step 1), shape (..., 31)."""
+    db = db or default_database()
+    c = np.asarray(c, dtype=np.float64)
+    ks = (K_BINDER + c @ db._k) / (S_BINDER + c @ db._s)
+    r_inf = 1.0 + ks - np.sqrt(ks * ks + 2.0 * ks)
+    return np.asarray(
+        (1.0 - K1_SAUNDERSON) * (1.0 - K2_SAUNDERSON) * r_inf / (1.0 - K2_SAUNDERSON * r_inf),
+        dtype=np.float64,
+    )
+
+
+def flake_reflectance(
+    c: ArrayLike, angles_deg: tuple[float, ...], db: ColorantDatabase | None = None
+) -> NDArray[np.float64]:
+    """The flake term R_f (module docstring step 2), shape (..., A, 31); zero without effect pigments."""
+    db = db or default_database()
+    c = np.asarray(c, dtype=np.float64)
+    table = db.flake_table(angles_deg)  # (E, A, 31)
+    ce = c[..., db.effect_index]  # (..., E)
+    sc = ce * db.coverage
+    tot = sc.sum(-1, keepdims=True)
+    share = np.where(tot > 1e-12, -np.expm1(-tot) / np.maximum(tot, 1e-12), 1.0)  # A/Σσc, → 1 at 0
+    area = sc * share  # (..., E)
+    ext = (c @ db._k_above + db.scatter_extinction * (c @ db._s_above)) * db.flake_depth  # (..., 31)
+    g = flake_geometry(angles_deg)
+    atten = np.exp(-ext[..., None, :] * g.path[:, None])  # (..., A, 31)
+    atten_d = np.exp(-ext * (1.0 / np.cos(g.phi_i[0]) + 2.0)) if g.phi_i.size else ext  # (..., 31)
+    diffuse = (area @ db.diffuse_albedo)[..., None, None] * g.transfer[:, None] * atten_d[..., None, :]
+    return np.asarray(np.einsum("...e,eaw->...aw", area, table) * atten + diffuse, dtype=np.float64)
 
 
 def predict_reflectance(
     c: ArrayLike, angles_deg: tuple[float, ...], db: ColorantDatabase | None = None
 ) -> NDArray[np.float64]:
-    """Predict reflectance factors per angle (Kubelka–Munk + Saunderson, see module docstring).
+    """Predict reflectance factors per angle: R = R_d + R_f (module docstring).
 
     Parameters
     ----------
@@ -300,15 +492,12 @@ def predict_reflectance(
     Returns
     -------
     ndarray
-        R in [0, 1), shape (..., len(angles_deg), 31) on 400–700 nm / 10 nm.
+        Radiance factors ≥ 0, shape (..., len(angles_deg), 31) on 400–700 nm / 10 nm; the diffuse part
+        is below 1, the flake part may exceed 1 near specular.
     """
     db = db or default_database()
-    c = np.asarray(c, dtype=np.float64)
-    k = K_BINDER + c @ db._k  # (..., 31)
-    s = S_BINDER + np.einsum("...i,iaw->...aw", c, db.scattering_table(angles_deg))  # (..., A, 31)
-    ks = k[..., None, :] / s
-    r_inf = 1.0 + ks - np.sqrt(ks * ks + 2.0 * ks)
-    return (1.0 - K1_SAUNDERSON) * (1.0 - K2_SAUNDERSON) * r_inf / (1.0 - K2_SAUNDERSON * r_inf)
+    r_d = diffuse_reflectance(c, db)
+    return np.asarray(r_d[..., None, :] + flake_reflectance(c, angles_deg, db), dtype=np.float64)
 
 
 @functools.lru_cache(maxsize=1)
@@ -346,7 +535,7 @@ def predict_lab(
 
 
 def predict_gloss(c: ArrayLike, db: ColorantDatabase | None = None) -> NDArray[np.float64]:
-    """Predict 60° gloss in GU from the matting fraction: G = 90 − 650 c_matting."""
+    """Predict 60° gloss in GU from the matting fraction: G = G_clear − g c_matting."""
     db = db or default_database()
     c = np.asarray(c, dtype=np.float64)
     return GLOSS_CLEAR_GU - GLOSS_PER_MATTING * c[..., db.matting_index]

@@ -12,14 +12,27 @@ pointing at its specification. CxF3 has no gloss element: the 60° gloss, the pa
 and the synthetic flag travel as ``Tag`` name/value pairs (``cacad.gloss_gu_60``, ``cacad.type``,
 ``cacad.role``, ``cacad.synthetic``, ``cacad.angle_sets``).
 
-Stated precision: 4 decimals for Lab and gloss; import(export(x)) equals x rounded to 1e-4 and a
-second export is byte-identical (tests).
+Spectra and recipes (optional, per object, :class:`ObjectExtras`): reflectance factors per geometry as
+``ColorValues/ReflectanceSpectrum`` (400–700 nm at 10 nm, :data:`station.model.spectra.WAVELENGTHS`)
+pointing at a spectral ``ColorSpecification`` (``Id="SP45as15"``, ``Spectrum_Reflectance``, the same
+``MultiAngle`` geometry, ``WavelengthRange StartWL="400" Increment="10"``), and the recipe as
+``DeviceColorValues/ColorRecipe`` (colour-cxf's ``ColorRecipe``: ``Units`` g or fraction, one
+``Colorant`` per component with its ``Value``; the binder carries ``isBase="true"``).
+
+``FileInformation/CreationDate`` and each object's ``CreationDate`` are the time of the export (UTC, to
+the second) unless the caller passes *created* (for reproducible files).
+
+Stated precision: 4 decimals for Lab and gloss, 6 for reflectance and recipe amounts; import(export(x))
+equals x rounded so, and a second export with the same *created* is byte-identical (tests).
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 import xml.etree.ElementTree as ET  # building only; parsing goes through defusedxml
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -30,16 +43,68 @@ from station.formulate.library import PAINT_TYPES, STANDARD_ANGLES, Library
 from station.formulate.safe_xml import parse_xml
 from station.model import AspecularMeasurements
 from station.model.domain import ILLUMINATION_DEG, LAB_RANGES, aspecular_name, format_angle
+from station.model.spectra import WAVELENGTHS
 
 NAMESPACE = "http://colorexchangeformat.com/CxF3-core"
 MAX_CXF_BYTES = 64 << 20
 DECIMALS = 4
 _NS = f"{{{NAMESPACE}}}"
+SPECTRUM_DECIMALS = 6
 CREATOR = "CACAD Station"
-#: Fixed so exports are byte-reproducible; CxF3 requires a CreationDate.
-CREATION_DATE = "2009-01-01T00:00:00Z"
+RECIPE_UNITS = ("g", "fraction")
 
 Record = tuple[str, dict[float, tuple[float, float, float]], dict[str, str]]
+
+
+@dataclass(frozen=True)
+class ObjectExtras:
+    """What an object carries besides Lab: reflectance per geometry and a recipe.
+
+    Attributes
+    ----------
+    spectra
+        ``((aspecular angle °, (R at 400, 410, …, 700 nm)), …)``, reflectance factors ≥ 0 (a flake
+        paint's radiance factor may exceed 1 near the specular).
+    recipe
+        ``((component, amount), …)`` in *recipe_units*; the component named *binder* is the base.
+    recipe_units
+        ``"g"`` (mass per batch) or ``"fraction"`` (mass fraction 0–1).
+    binder
+        Name of the base / binder component, or ``None``.
+    """
+
+    spectra: tuple[tuple[float, tuple[float, ...]], ...] = ()
+    recipe: tuple[tuple[str, float], ...] = ()
+    recipe_units: str = "g"
+    binder: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.recipe_units not in RECIPE_UNITS:
+            raise XMLFormatError("ColorRecipe@Units", " | ".join(RECIPE_UNITS), self.recipe_units)
+        n = WAVELENGTHS.size
+        for angle, values in self.spectra:
+            if len(values) != n or not all(math.isfinite(v) and v >= 0 for v in values):
+                raise XMLFormatError(
+                    f"ReflectanceSpectrum[{aspecular_name(angle)}]",
+                    f"{n} finite values ≥ 0 (400–700 nm)",
+                    len(values),
+                )
+        for name, amount in self.recipe:
+            if not name or not math.isfinite(amount) or amount < 0:
+                raise XMLFormatError(f"Colorant[{name}]", "a named component with an amount ≥ 0", amount)
+
+    @property
+    def empty(self) -> bool:
+        """True when there is nothing to write."""
+        return not self.spectra and not self.recipe
+
+
+def creation_date(created: dt.datetime | None = None) -> str:
+    """ISO 8601 UTC time stamp of *created* (default: now), to the second, as CxF3 writes it."""
+    when = created or dt.datetime.now(dt.UTC)
+    if when.tzinfo is None:
+        raise XMLFormatError("CreationDate", "a time with a time zone", when.isoformat())
+    return when.astimezone(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 _angle = format_angle
@@ -52,28 +117,58 @@ def _sub(parent: ET.Element, tag: str, text: str | None = None, **attrs: str) ->
     return e
 
 
-def records_to_cxf(records: list[Record], description: str) -> bytes:
-    """Serialise (name, {angle: Lab}, tags) records to CxF3 bytes."""
+def records_to_cxf(
+    records: list[Record],
+    description: str,
+    extras: Sequence[ObjectExtras | None] | None = None,
+    created: dt.datetime | None = None,
+) -> bytes:
+    """Serialise (name, {angle: Lab}, tags) records to CxF3 bytes, with each record's optional
+    :class:`ObjectExtras` (spectra, recipe) and the creation time *created* (default: now, UTC)."""
     if not records:
         raise XMLFormatError("objects", "at least one colour", 0)
+    extras = list(extras) if extras is not None else [None] * len(records)
+    if len(extras) != len(records):
+        raise XMLFormatError("extras", f"one entry per record ({len(records)})", len(extras))
+    stamp = creation_date(created)
     ET.register_namespace("cc", NAMESPACE)
     root = ET.Element(f"{_NS}CxF")
     info = _sub(root, "FileInformation")
     _sub(info, "Creator", CREATOR)
-    _sub(info, "CreationDate", CREATION_DATE)
+    _sub(info, "CreationDate", stamp)
     _sub(info, "Description", description)
     res = _sub(root, "Resources")
     objs = _sub(res, "ObjectCollection")
     angles = sorted({a for _, lab, _ in records for a in lab})
+    spectral_angles = sorted({a for x in extras if x is not None for a, _ in x.spectra})
     fmt = f"{{:.{DECIMALS}f}}"
-    for i, (name, lab, tags) in enumerate(records):
+    sfmt = f"{{:.{SPECTRUM_DECIMALS}f}}"
+    for i, ((name, lab, tags), extra) in enumerate(zip(records, extras, strict=True)):
         obj = _sub(objs, "Object", ObjectType="Standard", Name=name, Id=f"o{i + 1}")
-        _sub(obj, "CreationDate", CREATION_DATE)
+        _sub(obj, "CreationDate", stamp)
         values = _sub(obj, "ColorValues")
         for a in sorted(lab):
             c = _sub(values, "ColorCIELab", ColorSpecification=f"CS{aspecular_name(a)}")
             for tag, v in zip(("L", "A", "B"), lab[a], strict=True):
                 _sub(c, tag, fmt.format(v))
+        if extra is not None:
+            for a, refl in sorted(extra.spectra):
+                _sub(
+                    values,
+                    "ReflectanceSpectrum",
+                    " ".join(sfmt.format(v) for v in refl),
+                    ColorSpecification=f"SP{aspecular_name(a)}",
+                    StartWL=format_angle(float(WAVELENGTHS[0])),
+                )
+            if extra.recipe:
+                device = _sub(obj, "DeviceColorValues")
+                recipe = _sub(device, "ColorRecipe", Units=extra.recipe_units, Name=name)
+                for component, amount in extra.recipe:
+                    attrs = {"Name": component}
+                    if component == extra.binder:
+                        attrs["isBase"] = "true"
+                    col = _sub(recipe, "Colorant", **attrs)
+                    _sub(col, "Value", sfmt.format(amount))
         if tags:
             tc = _sub(obj, "TagCollection")
             for key in sorted(tags):
@@ -90,8 +185,19 @@ def records_to_cxf(records: list[Record], description: str) -> bytes:
         gc = _sub(ms, "GeometryChoice")
         ma = _sub(gc, "MultiAngle")
         ba = _sub(ma, "BRDFAngle", Notation=aspecular_name(a))
-        _sub(ba, "IlluminationAngle", "45")
+        _sub(ba, "IlluminationAngle", format_angle(ILLUMINATION_DEG))
         _sub(ba, "Aspecular", _angle(a))
+    step = float(WAVELENGTHS[1] - WAVELENGTHS[0])
+    for a in spectral_angles:
+        cs = _sub(specs, "ColorSpecification", Id=f"SP{aspecular_name(a)}")
+        ms = _sub(cs, "MeasurementSpec")
+        _sub(ms, "MeasurementType", "Spectrum_Reflectance")
+        gc = _sub(ms, "GeometryChoice")
+        ma = _sub(gc, "MultiAngle")
+        ba = _sub(ma, "BRDFAngle", Notation=aspecular_name(a))
+        _sub(ba, "IlluminationAngle", format_angle(ILLUMINATION_DEG))
+        _sub(ba, "Aspecular", _angle(a))
+        _sub(ms, "WavelengthRange", StartWL=format_angle(float(WAVELENGTHS[0])), Increment=format_angle(step))
     ET.indent(root, "  ")
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True) + b"\n"
 
@@ -108,6 +214,51 @@ def _float(text: str | None, where: str, lo: float, hi: float) -> float:
 
 def read_cxf_records(source: str | Path | bytes) -> list[Record]:
     """Parse CxF3 into (name, {aspecular angle: Lab}, tags) records (multi-angle Lab only)."""
+    return read_cxf_objects(source)[0]
+
+
+def _read_extras(obj: ET.Element, name: str, angle_of: dict[str, float]) -> ObjectExtras | None:
+    """Spectra per geometry and the recipe of one ``Object``, or ``None`` when it has neither."""
+    spectra: list[tuple[float, tuple[float, ...]]] = []
+    n = WAVELENGTHS.size
+    for sp in obj.iter(f"{_NS}ReflectanceSpectrum"):
+        ref = sp.get("ColorSpecification", "")
+        if ref not in angle_of:
+            raise XMLFormatError(
+                f"Object[{name}]/ReflectanceSpectrum", "a multi-angle ColorSpecification", ref
+            )
+        start = _float(sp.get("StartWL"), f"Object[{name}]/ReflectanceSpectrum@StartWL", 0, 10000)
+        if start != float(WAVELENGTHS[0]):
+            raise XMLFormatError(f"Object[{name}]/ReflectanceSpectrum@StartWL", f"{WAVELENGTHS[0]:g}", start)
+        where = f"Object[{name}]/ReflectanceSpectrum[{ref}]"
+        parts = (sp.text or "").split()
+        if len(parts) != n:
+            raise XMLFormatError(where, f"{n} values (400–700 nm at 10 nm)", len(parts))
+        spectra.append((angle_of[ref], tuple(_float(v, where, 0, 1000) for v in parts)))
+    if len({a for a, _ in spectra}) != len(spectra):
+        raise XMLFormatError(f"Object[{name}]/ReflectanceSpectrum", "one spectrum per geometry", len(spectra))
+    recipe: list[tuple[str, float]] = []
+    units, binder = "g", None
+    rec = obj.find(f"{_NS}DeviceColorValues/{_NS}ColorRecipe")
+    if rec is not None:
+        units = rec.get("Units", "g")
+        if units not in RECIPE_UNITS:
+            raise XMLFormatError(f"Object[{name}]/ColorRecipe@Units", " | ".join(RECIPE_UNITS), units)
+        for col in rec.iter(f"{_NS}Colorant"):
+            cname = col.get("Name", "")
+            where = f"Object[{name}]/Colorant[{cname}]"
+            if not cname:
+                raise XMLFormatError(f"Object[{name}]/Colorant@Name", "a non-empty name", None)
+            recipe.append((cname, _float(col.findtext(f"{_NS}Value"), where, 0, 1e9)))
+            if col.get("isBase") == "true":
+                binder = cname
+    if not spectra and not recipe:
+        return None
+    return ObjectExtras(tuple(sorted(spectra)), tuple(recipe), units, binder)
+
+
+def read_cxf_objects(source: str | Path | bytes) -> tuple[list[Record], list[ObjectExtras | None]]:
+    """Parse CxF3 into records and each record's :class:`ObjectExtras` (``None`` where it has none)."""
     root = parse_xml(source, MAX_CXF_BYTES)
     if root.tag != f"{_NS}CxF":
         raise XMLFormatError("root", f"<CxF> in namespace {NAMESPACE}", root.tag)
@@ -130,6 +281,7 @@ def read_cxf_records(source: str | Path | bytes) -> list[Record]:
     if not angle_of:
         raise XMLFormatError("ColorSpecificationCollection", "multi-angle (BRDFAngle) specifications", 0)
     records: list[Record] = []
+    extras: list[ObjectExtras | None] = []
     for obj in root.iter(f"{_NS}Object"):
         name = obj.get("Name") or obj.get("Id") or ""
         if not name:
@@ -150,14 +302,45 @@ def read_cxf_records(source: str | Path | bytes) -> list[Record]:
             lab[angle_of[ref]] = trip
         tags = {t.get("Name", ""): t.get("Value", "") for t in obj.iter(f"{_NS}Tag")}
         records.append((name, lab, tags))
+        extras.append(_read_extras(obj, name, angle_of))
     if not records:
         raise XMLFormatError("ObjectCollection", "at least one Object", 0)
-    return records
+    return records, extras
 
 
 # -- libraries ---------------------------------------------------------------------------------------
-def library_to_cxf(library: Library) -> bytes:
-    """CxF3 of a whole library (every angle it holds); synthetic libraries say so in the description."""
+def library_extras(library: Library, spectra: bool = False) -> list[ObjectExtras | None]:
+    """Each paint's recipe (mass fractions) and, with *spectra*, its predicted reflectance per library
+    angle from the colorant model (:func:`station.formulate.colorants.predict_reflectance`); ``None``
+    for a library without recipes."""
+    if library.recipes is None or library.colorant_names is None:
+        return [None] * len(library)
+    names = library.colorant_names
+    refl = None
+    if spectra:
+        from station.formulate.colorants import default_database, predict_reflectance
+
+        db = default_database()
+        if set(names) <= set(db.names):
+            conc = np.zeros((len(library), len(db.names)))
+            for j, n in enumerate(names):
+                conc[:, db.names.index(n)] = library.recipes[:, j]
+            refl = predict_reflectance(conc, library.angles_deg, db)
+    out: list[ObjectExtras | None] = []
+    for i in range(len(library)):
+        rec = tuple((n, float(v)) for n, v in zip(names, library.recipes[i], strict=True) if v > 0)
+        sp = (
+            ()
+            if refl is None
+            else tuple((a, tuple(float(v) for v in refl[i, j])) for j, a in enumerate(library.angles_deg))
+        )
+        out.append(ObjectExtras(sp, rec, "fraction"))
+    return out
+
+
+def library_to_cxf(library: Library, *, spectra: bool = False, created: dt.datetime | None = None) -> bytes:
+    """CxF3 of a whole library (every angle it holds, recipes where it has them, predicted spectra with
+    *spectra*); synthetic libraries say so in a tag on every paint."""
     fmt = f"{{:.{DECIMALS}f}}"
     recs: list[Record] = []
     for i in range(len(library)):
@@ -169,19 +352,21 @@ def library_to_cxf(library: Library) -> bytes:
         if library.synthetic:
             tags["cacad.synthetic"] = "true"
         recs.append((str(library.codes[i]), lab, tags))
-    return records_to_cxf(recs, library.name)
+    return records_to_cxf(recs, library.name, library_extras(library, spectra), created)
 
 
-def write_library_cxf(library: Library, path: str | Path) -> Path:
+def write_library_cxf(
+    library: Library, path: str | Path, *, spectra: bool = False, created: dt.datetime | None = None
+) -> Path:
     """Write :func:`library_to_cxf` to *path*."""
     path = Path(path)
-    path.write_bytes(library_to_cxf(library))
+    path.write_bytes(library_to_cxf(library, spectra=spectra, created=created))
     return path
 
 
 def read_library_cxf(source: str | Path | bytes, name: str | None = None) -> Library:
     """Read a CxF3 library: every object needs Lab at 15/45/110 and the same angle set as the others."""
-    recs = read_cxf_records(source)
+    recs, extras = read_cxf_objects(source)
     description = (
         parse_xml(source, MAX_CXF_BYTES).findtext(f"{_NS}FileInformation/{_NS}Description") or ""
     ).strip()
@@ -203,6 +388,7 @@ def read_library_cxf(source: str | Path | bytes, name: str | None = None) -> Lib
     if len(set(codes)) != len(codes):
         raise XMLFormatError("Object@Name", "unique names", len(codes) - len(set(codes)))
     synthetic = all(tags.get("cacad.synthetic") == "true" for _, _, tags in recs)
+    recipes, colorant_names = _recipe_matrix(extras)
     return Library(
         name=name or description or ("cxf library (SYNTHETIC)" if synthetic else "cxf library"),
         codes=np.asarray(codes),
@@ -211,13 +397,34 @@ def read_library_cxf(source: str | Path | bytes, name: str | None = None) -> Lib
         angles_deg=tuple(order),
         lab=np.asarray(labs),
         synthetic=synthetic,
+        recipes=recipes,
+        colorant_names=colorant_names,
         source="cxf3",
     )
 
 
+def _recipe_matrix(extras: list[ObjectExtras | None]) -> tuple[np.ndarray | None, tuple[str, ...] | None]:
+    """(N, C) mass fractions of the objects' fraction recipes (library CSV's rule for column order)."""
+    from station.formulate.library_csv import recipe_matrix
+
+    recipes = []
+    for x in extras:
+        if x is not None and x.recipe and x.recipe_units != "fraction":
+            raise XMLFormatError(
+                "ColorRecipe@Units", "fraction (a library holds mass fractions)", x.recipe_units
+            )
+        recipes.append({} if x is None else dict(x.recipe))
+    return recipe_matrix(recipes)
+
+
 # -- design and match --------------------------------------------------------------------------------
-def specs_to_cxf(specs: list[ColorSpec] | tuple[ColorSpec, ...]) -> bytes:
-    """CxF3 of colour specs (e.g. a design and its ColorSnap match); the set structure is kept in a tag."""
+def specs_to_cxf(
+    specs: list[ColorSpec] | tuple[ColorSpec, ...],
+    extras: Sequence[ObjectExtras | None] | None = None,
+    created: dt.datetime | None = None,
+) -> bytes:
+    """CxF3 of colour specs (e.g. a design, its ColorSnap match and the formulated recipe with its
+    predicted spectra in *extras*); the set structure is kept in a tag."""
     fmt = f"{{:.{DECIMALS}f}}"
     recs: list[Record] = []
     for spec in specs:
@@ -237,7 +444,7 @@ def specs_to_cxf(specs: list[ColorSpec] | tuple[ColorSpec, ...]) -> bytes:
         if spec.synthetic:
             tags["cacad.synthetic"] = "true"
         recs.append((spec.name, lab, tags))
-    return records_to_cxf(recs, "CACAD Station design export")
+    return records_to_cxf(recs, "CACAD Station design export", extras, created)
 
 
 def read_cxf_specs(source: str | Path | bytes) -> list[ColorSpec]:

@@ -16,20 +16,40 @@ seed and a hash of the colorant database.
 from __future__ import annotations
 
 import functools
+import json
 import os
 from pathlib import Path
 
 import numpy as np
 
-from station.formulate.colorants import ColorantDatabase, default_database, predict_gloss, predict_lab
+from station.formulate.colorants import (
+    ColorantDatabase,
+    colorant_data,
+    default_database,
+    predict_gloss,
+    predict_lab,
+)
 from station.formulate.errors import FormulateError
 from station.formulate.library import Library, classify
 
 DEMO_SEED = 20090601
 DEMO_ANGLES: tuple[float, ...] = (15.0, 45.0, 110.0, 25.0, 75.0)
-GENERATOR_VERSION = 2
+GENERATOR_VERSION = 3
 DEMO_NAME = "demo (SYNTHETIC: generated from the synthetic colorant model)"
-_TINTS = ("yellow_py", "orange_po", "red_pr", "magenta_pv", "blue_pb", "green_pg")
+_TINTS = (
+    "yellow_py",
+    "orange_po",
+    "red_pr",
+    "magenta_pv",
+    "blue_pb",
+    "green_pg",
+    "red_opaque",
+    "yellow_opaque",
+)
+#: Shares of the metallics' main aluminium grade: bright (silver dollar), coarse, fine.
+FLAKE_GRADE_SHARES = (0.35, 0.6, 0.05)
+#: Every this-many-th metallic is a bright silver (silver-dollar aluminium, no tint).
+BRIGHT_SILVER_EVERY = 20
 
 
 def generate_recipes(
@@ -63,23 +83,41 @@ def generate_recipes(
     c[np.ix_(solid[neutral], tint_idx)] *= 0.05
 
     met = np.arange(n_solid, n_solid + n_metallic)
-    flake = np.where(rng.random(met.size) < 0.5, col["alu_coarse"], col["alu_fine"])
-    c[met, flake] = rng.uniform(0.02, 0.16, met.size)
-    add_tints(met, 2, 0.08)
+    grades = np.array([col["alu_bright"], col["alu_coarse"], col["alu_fine"]])
+    flake = grades[rng.choice(3, size=met.size, p=FLAKE_GRADE_SHARES)]
+    c[met, flake] = rng.uniform(0.02, 0.12, met.size)
+    second = (rng.random(met.size) < 0.15) | (flake == col["alu_bright"])  # fine flake softens the flop
+    c[met[second], col["alu_fine"]] += rng.uniform(0.005, 0.03, second.sum())
+    add_tints(met, 2, 0.07)
     blk = rng.random(met.size) < 0.2
-    c[met[blk], col["black_carbon"]] = rng.uniform(0.0, 0.01, blk.sum())
+    c[met[blk], col["black_carbon"]] = rng.uniform(0.0, 0.004, blk.sum())
+    wht = rng.random(met.size) < 0.08  # white lightens the flop (a lower flop index)
+    c[met[wht], col["white_tio2"]] = rng.uniform(0.0, 0.03, wht.sum())
+    silver = met[: max(n_metallic // BRIGHT_SILVER_EVERY, 0) * BRIGHT_SILVER_EVERY : BRIGHT_SILVER_EVERY]
+    c[silver] = 0.0  # bright silvers: silver-dollar aluminium, a touch of fine flake, no tint
+    c[silver, col["alu_bright"]] = rng.uniform(0.04, 0.1, silver.size)
+    c[silver, col["alu_fine"]] = rng.uniform(0.02, 0.05, silver.size)
 
     prl = np.arange(n_solid + n_metallic, n)
     effects = [
-        col[e] for e in ("pearl_white", "interference_blue", "interference_green", "interference_gold")
+        col[e]
+        for e in (
+            "pearl_white",
+            "interference_blue",
+            "interference_green",
+            "interference_red",
+            "interference_gold",
+        )
     ]
-    eff = np.asarray(effects)[rng.integers(0, 4, size=prl.size)]
+    eff = np.asarray(effects)[rng.integers(0, len(effects), size=prl.size)]
     c[prl, eff] = rng.uniform(0.03, 0.15, prl.size)
     add_tints(prl, 1, 0.06)
     blk = rng.random(prl.size) < 0.5
-    c[prl[blk], col["black_carbon"]] = rng.uniform(0.001, 0.02, blk.sum())
-    alu = rng.random(prl.size) < 0.2
-    c[prl[alu], col["alu_fine"]] = rng.uniform(0.005, 0.04, alu.sum())
+    c[prl[blk], col["black_carbon"]] = rng.uniform(0.001, 0.01, blk.sum())
+    alu = rng.random(prl.size) < 0.7  # pearls over a little aluminium (a pearl-metallic)
+    c[prl[alu], col["alu_coarse"]] = rng.uniform(0.02, 0.08, alu.sum())
+    wht = rng.random(prl.size) < 0.1
+    c[prl[wht], col["white_tio2"]] = rng.uniform(0.0, 0.1, wht.sum())
 
     c[:, col["matting_silica"]] = np.where(rng.random(n) < 0.15, rng.uniform(0.0, 0.12, n), 0.0)
     c = np.minimum(c, db.upper_bounds)
@@ -132,27 +170,11 @@ def generate_library(
 
 
 def _model_key() -> str:
-    """Short hash of the colorant database, so a changed model never loads a stale cached library."""
+    """Short hash of the colorant data file, so a changed model never loads a stale cached library."""
     import hashlib
 
     h = hashlib.sha1(usedforsecurity=False)
-    for c in default_database().colorants:
-        h.update(
-            repr(
-                (
-                    c.name,
-                    c.family,
-                    c.lobe_width_deg,
-                    c.lobe_power,
-                    c.lobe_floor,
-                    c.peak_nm,
-                    c.band_nm,
-                    c.max_fraction,
-                )
-            ).encode()
-        )
-        h.update(np.ascontiguousarray(c.k).tobytes())
-        h.update(np.ascontiguousarray(c.s).tobytes())
+    h.update(json.dumps(colorant_data(), sort_keys=True).encode())
     return h.hexdigest()[:10]
 
 
@@ -203,3 +225,28 @@ def demo_library() -> Library:
     except OSError:
         pass  # a read-only home only costs the regeneration time next run
     return lib
+
+
+#: SpectraMaster figures the demo library is compared with (thesis §5.4, Fig 5.4): the non-solid paints'
+#: mean Flop Index and the share of them with a Flop Index between 0 and 20.
+SPECTRAMASTER_MEAN_FLOP_INDEX = 11.38
+SPECTRAMASTER_SHARE_0_20 = 0.96
+
+
+def flop_index_statistics(lib: Library) -> dict[str, float]:
+    """Flop Index (eq 5.3.1, :meth:`Library.indices`) of the non-solid paints where it is defined:
+    count, mean, median, share in [0, 20], minimum and maximum, and the number of bright silvers
+    (metallics with L*15 ≥ 110)."""
+    cols = lib.angle_columns()
+    fi = lib.indices()["flop"][lib.types != "solid"]
+    fi = fi[np.isfinite(fi)]  # undefined (dark colours, L*15 < L*110) left out
+    bright = int(np.sum((lib.types == "metallic") & (cols[:, 0, 0] >= 110.0)))
+    return {
+        "non_solid": float(fi.size),
+        "mean": float(fi.mean()),
+        "median": float(np.median(fi)),
+        "share_0_20": float(np.mean((fi >= 0) & (fi <= 20))),
+        "min": float(fi.min()),
+        "max": float(fi.max()),
+        "bright_silvers": float(bright),
+    }

@@ -18,13 +18,15 @@ the tolerance (default 1.0) is reported as "not formulable with these colorants"
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import OptimizeResult, minimize
+from scipy.optimize import OptimizeResult, least_squares, minimize
 
+from station.formulate.batch import batch_masses
 from station.formulate.colorants import (
     GLOSS_CLEAR_GU,
     GLOSS_PER_MATTING,
@@ -41,6 +43,9 @@ from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS
 #: Mean CIEDE2000 over the angles accepted as "formulable" (station.model.domain).
 DEFAULT_TOLERANCE = FORMULATION_TOLERANCE_DE00
 _FD_STEP = 1e-7
+_PENALTY = 2000.0
+#: Fractions at or below this are dropped from a recipe (:meth:`ColorantDatabase.recipe`'s threshold).
+_RECIPE_THRESHOLD = 1e-6
 
 
 @dataclass(frozen=True)
@@ -102,6 +107,8 @@ class FormulationResult:
             "elapsed_s": self.elapsed_s,
             "synthetic_colorants": self.synthetic,
             "warnings": list(self.warnings),
+            "batch": batch_masses(self.recipe).to_dict(),
+            "nearest_achievable_lab": None if self.formulable else self.predicted_lab.tolist(),
         }
 
 
@@ -136,6 +143,8 @@ class _Objective:
         self.fixed = fixed
         self.evaluations = 0
         self._cache: tuple[bytes, float, NDArray] | None = None
+        #: Best point evaluated so far (SLSQP's iterates are not monotone; a stopped run keeps this one).
+        self.best: tuple[float, NDArray] = (np.inf, np.zeros(free.size))
 
     def full(self, x: NDArray) -> NDArray:
         c = np.broadcast_to(self.fixed, (*x.shape[:-1], self.fixed.size)).copy()
@@ -155,12 +164,65 @@ class _Objective:
         self.evaluations += n + 1
         grad = (f[1:] - f[0]) / _FD_STEP
         self._cache = (key, float(f[0]), grad)
+        if f[0] < self.best[0]:
+            self.best = (float(f[0]), x.copy())
         return float(f[0]), grad
 
     def value(self, x: NDArray) -> float:
         return self._eval(np.asarray(x, dtype=np.float64))[0]
 
     def grad(self, x: NDArray) -> NDArray:
+        return self._eval(np.asarray(x, dtype=np.float64))[1]
+
+
+class _LabLeastSquares:
+    """Residuals for the fast phase: Lab differences per angle weighted as CIE94 weights them
+    (ΔL*, Δa*/(1 + 0.03 C*), Δb*/(1 + 0.03 C*) with C* of the design), plus penalty rows for the two
+    linear constraints (total and flake fractions); zero residual is an exact match in every metric."""
+
+    def __init__(
+        self,
+        design: NDArray,
+        angles: tuple[float, ...],
+        db: ColorantDatabase,
+        objective: _Objective,
+        max_total: float,
+        effect: NDArray,
+    ):
+        self.design = design
+        chroma = np.hypot(design[:, 1], design[:, 2])
+        self.weight = np.stack([np.ones_like(chroma), 1 / (1 + 0.03 * chroma), 1 / (1 + 0.03 * chroma)], -1)
+        self.angles = angles
+        self.db = db
+        self.objective = objective
+        self.max_total = max_total
+        self.effect = effect
+        self.max_effect = db.max_effect
+        self._cache: tuple[bytes, NDArray, NDArray] | None = None
+
+    def _eval(self, x: NDArray) -> tuple[NDArray, NDArray]:
+        key = x.tobytes()
+        if self._cache is not None and self._cache[0] == key:
+            return self._cache[1], self._cache[2]
+        n = x.size
+        pts = np.repeat(x[None], n + 1, axis=0)
+        pts[np.arange(1, n + 1), np.arange(n)] += _FD_STEP
+        lab = predict_lab(self.objective.full(pts), self.angles, self.db)
+        r = ((lab - self.design[None]) * self.weight[None]).reshape(n + 1, -1)
+        self.objective.evaluations += n + 1
+        over_t = x.sum() - self.max_total
+        over_e = self.effect @ x - self.max_effect
+        pen = np.array([_PENALTY * max(over_t, 0.0), _PENALTY * max(over_e, 0.0)])
+        jp = np.stack([_PENALTY * (over_t > 0) * np.ones(n), _PENALTY * (over_e > 0) * self.effect])
+        res = np.concatenate([r[0], pen])
+        jac = np.vstack([((r[1:] - r[0]) / _FD_STEP).T, jp])
+        self._cache = (key, res, jac)
+        return res, jac
+
+    def residual(self, x: NDArray) -> NDArray:
+        return self._eval(np.asarray(x, dtype=np.float64))[0]
+
+    def jacobian(self, x: NDArray) -> NDArray:
         return self._eval(np.asarray(x, dtype=np.float64))[1]
 
 
@@ -180,22 +242,18 @@ def _project(x: NDArray, ub: NDArray, effect: NDArray, max_effect: float, max_to
 def _generic_starts(db: ColorantDatabase, design: NDArray, angles: tuple[float, ...]) -> list[NDArray]:
     """A pool of generic starting recipes, best first by their multi-angle ΔE00 to the design.
 
-    Bases: TiO2 white (solid), coarse or fine aluminium, mica pearl, each interference pigment; each with
+    Bases: TiO2 white (solid), each aluminium grade and each adjacent pair, each pearl and interference pigment; each with
     one tint, or two tints adjacent in hue, at a low and a high loading. One batched model evaluation
     ranks the whole pool (about 200 recipes).
     """
     names = db.names
     idx = {n: i for i, n in enumerate(names)}
     tints = [c.name for c in db.colorants if c.family == "tint"]
-    bases: list[dict[str, float]] = [
-        {"white_tio2": 0.05},
-        {"white_tio2": 0.15},
-        {"alu_coarse": 0.08},
-        {"alu_fine": 0.08},
-        {"alu_coarse": 0.04, "alu_fine": 0.04},
-        {"pearl_white": 0.08},
-    ]
-    bases += [{c.name: 0.08} for c in db.colorants if c.family == "interference"]
+    fam = {c.name: c.family for c in db.colorants}
+    alu = [n for n in names if fam[n] == "aluminium"]
+    bases: list[dict[str, float]] = [{"white_tio2": 0.05}, {"white_tio2": 0.15}]
+    bases += [{a: 0.08} for a in alu] + [{alu[k]: 0.05, alu[k + 1]: 0.05} for k in range(len(alu) - 1)]
+    bases += [{n: 0.08} for n in names if fam[n] in ("pearl", "interference")]
     mixes = [[t] for t in tints] + [[tints[k], tints[(k + 1) % len(tints)]] for k in range(len(tints))] + [[]]
     pool = []
     for base in bases:
@@ -289,16 +347,33 @@ def formulate(
         ):
             raise StopIteration
 
-    for label, x0 in candidates:
-        if best is not None and (
-            time.perf_counter() - t0 > time_budget_s or best[0] <= (0.2 * tolerance) ** 2
-        ):
+    proj = functools.partial(
+        _project, ub=ub, effect=effect.astype(bool), max_effect=db.max_effect, max_total=db.max_total - c_mat
+    )
+    lsq = _LabLeastSquares(design, angles, db, objective, db.max_total - c_mat, effect)
+    enough = (0.2 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of 0.2 × tolerance
+    for label, x0 in candidates:  # phase 1: Gauss–Newton (trust region) on weighted Lab residuals
+        if best is not None and (time.perf_counter() - t0 > time_budget_s or best[0] <= enough):
             break
-        x0 = np.clip(x0, 0.0, ub)
-
+        res_ls = least_squares(
+            lsq.residual,
+            np.clip(x0, 0.0, ub),
+            jac=lsq.jacobian,
+            bounds=(np.zeros_like(ub), np.maximum(ub, 1e-12)),
+            method="trf",
+            max_nfev=25,
+            xtol=1e-10,
+            ftol=1e-10,
+        )
+        x = proj(res_ls.x)
+        f = objective.value(x)
+        if best is None or f < best[0]:
+            best = (f, x, label)
+    assert best is not None  # noqa: S101 - candidates is never empty (generic starts)
+    if best[0] > enough and time.perf_counter() < deadline:  # phase 2: SLSQP on Σ ΔE00² itself
         res = minimize(
             objective.value,
-            x0,
+            best[1],
             jac=objective.grad,
             method="SLSQP",
             bounds=list(zip(np.zeros_like(ub), ub, strict=True)),
@@ -309,12 +384,13 @@ def formulate(
             options={"maxiter": 150, "ftol": 1e-9},
             callback=stop,
         )
-        x = _project(res.x, ub, effect.astype(bool), db.max_effect, db.max_total - c_mat)
-        f = objective.value(x)
-        if best is None or f < best[0]:
-            best = (f, x, label)
-    assert best is not None  # noqa: S101 - candidates is never empty (generic starts)
+        for point in (res.x, objective.best[1]):
+            x = proj(point)
+            f = objective.value(x)
+            if f < best[0]:
+                best = (f, x, best[2])
     c = objective.full(best[1])
+    c[c <= _RECIPE_THRESHOLD] = 0.0  # the reported recipe omits these: predict exactly what it says
     pred = predict_lab(c, angles, db)
     de = cie2000(design, pred)
     mean_de = float(de.mean())
@@ -322,12 +398,13 @@ def formulate(
     message = (
         f"formulated: mean ΔE00 {mean_de:.2f} over {len(angles)} angles (tolerance {tolerance:g})"
         if formulable
-        else f"not formulable with these colorants: best mean ΔE00 {mean_de:.2f} > tolerance {tolerance:g}"
+        else f"not formulable with these colorants: best mean ΔE00 {mean_de:.2f} > tolerance {tolerance:g};"
+        " the nearest achievable paint is the prediction of the best recipe (nearest_achievable_lab)"
     )
     if strict and not formulable:
         raise NotFormulableError(message)
     return FormulationResult(
-        recipe=db.recipe(c),
+        recipe=db.recipe(c, _RECIPE_THRESHOLD),
         concentrations=c,
         angles_deg=angles,
         design_lab=design,

@@ -2,7 +2,7 @@
 
 Format (one header row, then one paint per row)::
 
-    code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110[,L<angle>,a<angle>,b<angle> ...]
+    code,type,gloss_gu,L15,a15,b15,L45,a45,b45,L110,a110,b110[,L<angle>,a<angle>,b<angle> ...][,synthetic][,recipe]
 
 ``type`` is ``solid``, ``metallic`` or ``pearl``; angles are aspecular degrees (illumination at 45°,
 D65 / CIE 1964 10°); more angle triples may follow, named the same way (``L-15,a-15,b-15``, ``L25,…``).
@@ -12,6 +12,12 @@ CR/LF or NUL) and, unless ``allow_formulas``, does not start with ``= + - @`` (C
 :mod:`station.csv_cells`); a field is at most 131072 characters (the csv module's limit). The export
 writes such a code with a leading single quote. Accepted ranges: 0 ≤ L* ≤ 150 (a metallic face may exceed 100), −200 ≤ a*, b* ≤ 200,
 0 ≤ gloss ≤ 100 GU (the model's range), codes unique, non-empty, at most 64 characters.
+
+Two optional trailing columns keep every field of a library through a round trip: ``synthetic``
+(``true`` | ``false`` per row; the library is synthetic when every row says ``true``) and ``recipe``
+(``colorant=fraction`` pairs separated by ``;``, mass fractions 0–1, the colorants of the library's
+colorant database). The export writes ``synthetic`` for a synthetic library and ``recipe`` when the
+library carries recipes.
 
 Stated precision of the export: 4 decimals for Lab and gloss (round trip import(export(x)) equals x
 rounded to 1e-4, and export(import(export(x))) is byte-identical).
@@ -41,20 +47,64 @@ GLOSS_RANGE = (GLOSS_MIN_GU, GLOSS_MAX_GU)
 MAX_CODE_LENGTH = 64
 MAX_ROWS = 2_000_000
 _ANGLE_COL = re.compile(r"^([Lab])(-?\d+(?:\.\d+)?)$")
+#: Optional trailing columns, in this order.
+EXTRA_COLUMNS = ("synthetic", "recipe")
+RECIPE_DECIMALS = 6
+_BOOL = {"true": True, "1": True, "false": False, "0": False}
 
 
 def _angle_name(a: float) -> str:
     return str(int(a)) if float(a).is_integer() else repr(float(a))
 
 
-def header_for(angles_deg: tuple[float, ...]) -> list[str]:
-    """Return the CSV header for *angles_deg*: the 3 standard angles first, then the others in order."""
+def header_for(angles_deg: tuple[float, ...], extras: tuple[str, ...] = ()) -> list[str]:
+    """Return the CSV header for *angles_deg*: the 3 standard angles first, then the others in order,
+    then the optional *extras* (a subsequence of :data:`EXTRA_COLUMNS`)."""
     ordered = list(STANDARD_ANGLES) + [a for a in angles_deg if a not in STANDARD_ANGLES]
     cols = ["code", "type", "gloss_gu"]
     for a in ordered:
         n = _angle_name(a)
         cols += [f"L{n}", f"a{n}", f"b{n}"]
-    return cols
+    return cols + [c for c in EXTRA_COLUMNS if c in extras]
+
+
+def _split_extras(header: list[str]) -> tuple[list[str], tuple[str, ...]]:
+    """Header without its optional trailing columns, and those columns (in :data:`EXTRA_COLUMNS` order)."""
+    extras: list[str] = []
+    cols = list(header)
+    for name in reversed(EXTRA_COLUMNS):
+        if cols and cols[-1] == name:
+            extras.insert(0, cols.pop())
+    for c in cols:
+        if c in EXTRA_COLUMNS:
+            raise LibraryFormatError(
+                1, c, f"optional columns last, in the order {','.join(EXTRA_COLUMNS)}", c
+            )
+    return cols, tuple(extras)
+
+
+def _parse_recipe(text: str, row: int) -> dict[str, float]:
+    """``name=fraction;…`` → {name: fraction}; empty text is no recipe."""
+    out: dict[str, float] = {}
+    for part in text.split(";"):
+        part = part.strip()
+        if not part:
+            continue
+        name, sep, value = part.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise LibraryFormatError(row, "recipe", "colorant=fraction pairs separated by ';'", part)
+        if name in out:
+            raise LibraryFormatError(row, "recipe", "each colorant once", name)
+        out[name] = _number(value, row, "recipe", 0.0, 1.0)
+    return out
+
+
+def format_recipe(names: tuple[str, ...], fractions: np.ndarray) -> str:
+    """The ``recipe`` cell of one paint: its non-zero mass fractions as ``name=fraction`` pairs."""
+    fmt = f"{{:.{RECIPE_DECIMALS}f}}"
+    rounded = np.round(np.asarray(fractions, dtype=np.float64), RECIPE_DECIMALS)
+    return ";".join(f"{n}={fmt.format(v)}" for n, v in zip(names, rounded, strict=True) if v > 0)
 
 
 def _parse_header(header: list[str]) -> tuple[float, ...]:
@@ -142,12 +192,16 @@ def read_library_csv(
     except StopIteration as exc:
         raise LibraryFormatError(1, None, "a header row", "empty file") from exc
     header = [h.strip() for h in header]
-    angles = _parse_header(header)
+    lab_header, extras = _split_extras(header)
+    angles = _parse_header(lab_header)
+    n_lab = len(lab_header)
     ncol = len(header)
     codes: list[str] = []
     types: list[str] = []
     gloss: list[float] = []
     labs: list[list[float]] = []
+    flags: list[bool] = []
+    recipes: list[dict[str, float]] = []
     seen: dict[str, int] = {}
     for rowno, row in enumerate(reader, start=2):
         if not row or all(not c.strip() for c in row):
@@ -179,8 +233,16 @@ def read_library_csv(
             raise LibraryFormatError(rowno, "type", " | ".join(PAINT_TYPES), row[1])
         g = _number(row[2], rowno, "gloss_gu", *GLOSS_RANGE)
         values = []
-        for col, text in zip(header[3:], row[3:], strict=True):
+        for col, text in zip(lab_header[3:], row[3:n_lab], strict=True):
             values.append(_number(text, rowno, col, *LAB_RANGES[col[0]]))
+        cells = dict(zip(extras, row[n_lab:], strict=True))
+        if "synthetic" in cells:
+            flag = _BOOL.get(cells["synthetic"].strip().lower())
+            if flag is None:
+                raise LibraryFormatError(rowno, "synthetic", "true | false", cells["synthetic"])
+            flags.append(flag)
+        if "recipe" in cells:
+            recipes.append(_parse_recipe(cells["recipe"], rowno))
         codes.append(code)
         types.append(kind)
         gloss.append(g)
@@ -188,6 +250,7 @@ def read_library_csv(
     if not codes:
         raise LibraryFormatError(2, None, "at least one paint row", "none")
     lab = np.asarray(labs, dtype=np.float64).reshape(len(codes), len(angles), 3)
+    fractions, colorant_names = recipe_matrix(recipes)
     return Library(
         name=name or "library",
         codes=np.asarray(codes),
@@ -195,19 +258,45 @@ def read_library_csv(
         gloss_gu=np.asarray(gloss),
         angles_deg=angles,
         lab=lab,
+        synthetic=bool(flags) and all(flags),
+        recipes=fractions,
+        colorant_names=colorant_names,
         source="csv",
     )
+
+
+def recipe_matrix(recipes: list[dict[str, float]]) -> tuple[np.ndarray | None, tuple[str, ...] | None]:
+    """(N, C) mass fractions over the colorants named anywhere in *recipes*, or none when no row has a
+    recipe; columns in the colorant database's order when every name is one of its colorants (so a round
+    trip of the demo library gives back its matrix), else in first-seen order."""
+    from station.formulate.colorants import default_database
+
+    names: list[str] = []
+    for r in recipes:
+        names += [n for n in r if n not in names]
+    if not names:
+        return None, None
+    known = default_database().names
+    if set(names) <= set(known):
+        names = list(known)
+    matrix = np.array([[r.get(n, 0.0) for n in names] for r in recipes], dtype=np.float64)
+    return matrix, tuple(names)
 
 
 def write_library_csv(library: Library, target: str | Path | io.TextIOBase) -> None:
     """Write *library* as CSV (standard angles first), Lab and gloss to :data:`PRECISION_DECIMALS` decimals.
 
-    A synthetic library is written as such: its codes carry the ``SYN-`` prefix the generator gave them,
-    and the export has no place for a comment (the format is a bare table). A code a spreadsheet would
+    A synthetic library is written as such: a ``synthetic`` column (and its codes carry the ``SYN-`` prefix
+    the generator gave them); recipes go in a ``recipe`` column. A code a spreadsheet would
     evaluate (``=``, ``+``, ``-``, ``@``, tab, CR first) is written with a leading single quote.
     """
-    header = header_for(library.angles_deg)
-    order = [library.angles_deg.index(float(h[1:])) for h in header[3::3]]
+    names, fractions = library.colorant_names, library.recipes
+    extras: tuple[str, ...] = ("synthetic",) if library.synthetic else ()
+    if fractions is not None and names is not None:
+        extras += ("recipe",)
+    header = header_for(library.angles_deg, extras)
+    lab_cols = header[: len(header) - len(extras)]
+    order = [library.angles_deg.index(float(h[1:])) for h in lab_cols[3::3]]
     fmt = f"{{:.{PRECISION_DECIMALS}f}}"
     own = isinstance(target, (str, Path))
     fh = open(target, "w", newline="", encoding="utf-8") if isinstance(target, (str, Path)) else target
@@ -216,9 +305,15 @@ def write_library_csv(library: Library, target: str | Path | io.TextIOBase) -> N
         w.writerow(header)
         lab = library.lab[:, order, :].reshape(len(library), -1)
         for i in range(len(library)):
+            tail: list[str] = []
+            if library.synthetic:
+                tail.append("true")
+            if fractions is not None and names is not None:
+                tail.append(format_recipe(names, fractions[i]))
             w.writerow(
                 [escape_cell(str(library.codes[i])), library.types[i], fmt.format(library.gloss_gu[i])]
                 + [fmt.format(v) for v in lab[i]]
+                + tail
             )
     finally:
         if own:

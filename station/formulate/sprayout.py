@@ -7,7 +7,8 @@ with a fixed seed:
 
 * per-colorant strength: K_i and S_i multiplied by (1 + ε), ε ~ N(0, ``strength_sd``), with a gentle
   wavelength tilt (± ``tilt_sd`` across 400–700 nm);
-* flake orientation: effect-pigment lobe widths multiplied by (1 + N(0, ``flake_sd``));
+* flake orientation: the r.m.s. tilt slope m of every effect pigment multiplied by (1 + N(0, ``flake_sd``)),
+  its coverage σ by (1 + N(0, ``strength_sd``));
 * measurement: Gaussian noise on L*, a*, b* (σ ``lab_noise``) and on gloss (σ ``gloss_noise`` GU).
 
 ``measure(recipe)`` returns :class:`station.model.AspecularMeasurements`, the same type a
@@ -42,10 +43,22 @@ def perturbed_database(
     for c in db.colorants:
         fk = (1.0 + rng.normal(0, strength_sd)) * (1.0 + rng.normal(0, tilt_sd) * tilt_axis)
         fs = (1.0 + rng.normal(0, strength_sd)) * (1.0 + rng.normal(0, tilt_sd) * tilt_axis)
-        lobe = c.lobe_width_deg
-        lobe = None if lobe is None else lobe * (1.0 + rng.normal(0, flake_sd))
-        out.append(dataclasses.replace(c, k=c.k * fk, s=c.s * fs, lobe_width_deg=lobe))
-    return ColorantDatabase(tuple(out), db.max_total, db.max_effect, synthetic=True)
+        flake = c.flake
+        if flake is not None:
+            flake = dataclasses.replace(
+                flake,
+                orientation_m=flake.orientation_m * (1.0 + rng.normal(0, flake_sd)),
+                coverage_per_fraction=flake.coverage_per_fraction * (1.0 + rng.normal(0, strength_sd)),
+            )
+        out.append(dataclasses.replace(c, k=c.k * fk, s=c.s * fs, flake=flake))
+    return ColorantDatabase(
+        tuple(out),
+        db.max_total,
+        db.max_effect,
+        synthetic=True,
+        flake_depth=db.flake_depth,
+        scatter_extinction=db.scatter_extinction,
+    )
 
 
 class SprayOutModel:

@@ -10,9 +10,10 @@ the caller commits.
 
 from __future__ import annotations
 
+import datetime as dt
 import functools
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from sqlalchemy import Table, select
 from sqlalchemy.dialects import postgresql, sqlite
@@ -22,7 +23,24 @@ from sqlalchemy.orm import Session
 from db import chain
 from db.models import CalibrationRecord, Instrument, Measurement, Panel
 from station.ingest.errors import ClientIdConflictError, ReferenceNotFoundError
-from station.ingest.schema import Reading
+from station.ingest.schema import CalibrationRef, InstrumentRef, PanelRef, Reading
+
+
+class Provenance(Protocol):
+    """What the instrument, calibration and panel upserts read of a record (a colour or a gloss reading)."""
+
+    @property
+    def instrument(self) -> InstrumentRef: ...
+    @property
+    def calibration(self) -> CalibrationRef | None: ...
+    @property
+    def panel(self) -> PanelRef | None: ...
+    @property
+    def panel_id(self) -> int | None: ...
+    @property
+    def operator(self) -> str: ...
+    @property
+    def measured_at(self) -> dt.datetime: ...
 
 
 @dataclass(frozen=True)
@@ -42,7 +60,7 @@ def _insert(session: Session, table: Table) -> Any:
     raise NotImplementedError(f"ingest supports sqlite and postgresql, not {dialect}")
 
 
-def _instrument_id(session: Session, reading: Reading, cache: dict[str, int] | None) -> int:
+def _instrument_id(session: Session, reading: Provenance, cache: dict[str, int] | None) -> int:
     ref = reading.instrument
     if cache is not None and ref.serial in cache:
         return cache[ref.serial]
@@ -64,7 +82,7 @@ def _instrument_id(session: Session, reading: Reading, cache: dict[str, int] | N
     return instrument_id
 
 
-def _calibration_id(session: Session, reading: Reading, instrument_id: int) -> int | None:
+def _calibration_id(session: Session, reading: Provenance, instrument_id: int) -> int | None:
     cal = reading.calibration
     if cal is None:
         return None
@@ -94,7 +112,7 @@ def _measurement_insert(dialect: str) -> Any:
     return stmt.on_conflict_do_nothing(index_elements=["client_id"]).returning(Measurement.id)
 
 
-def _panel_id(session: Session, reading: Reading, created_by_id: int | None) -> int | None:
+def _panel_id(session: Session, reading: Provenance, created_by_id: int | None) -> int | None:
     """The panel of *reading*: ``panel_id`` (which must exist), or the panel its metadata names (found or created)."""
     if reading.panel is None:
         if reading.panel_id is not None and session.get(Panel, reading.panel_id) is None:

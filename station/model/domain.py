@@ -68,6 +68,11 @@ def plot_range(channel: str, values: ArrayLike = ()) -> tuple[float, float]:
     return max(lo, b_lo), min(hi, b_hi)
 
 
+#: Largest reflectance (radiance) factor a spectrum may state: the one whose L* is :data:`L_MAX`
+#: (Y = ((L* + 16) / 116)³ ≈ 6.5). Flake reflection near specular exceeds a white diffuser (R > 1):
+#: bright silvers read L*15 of 110–140, R ≈ 1.4–2.4.
+REFLECTANCE_MAX = ((L_MAX + 16.0) / 116.0) ** 3
+
 #: Lower and upper Lab bounds as (L*, a*, b*) triples, for vectorised checks.
 LAB_LO: Lab = (L_MIN, -AB_MAX, -AB_MAX)
 LAB_HI: Lab = (L_MAX, AB_MAX, AB_MAX)
@@ -262,3 +267,11 @@ QC_WARN_FRACTION_RANGE: tuple[float, float] = (0.0, 1.0)
 QC_AGGREGATION = "max"
 #: Default colour-difference formula of a QC tolerance set.
 QC_FORMULA = "din6175"
+#: Repeat readings: a reading is an outlier when the robust z of its ΔE*ab to the median reading
+#: exceeds this (Iglewicz & Hoaglin's modified z-score threshold, 3.5; station.qc.repeats).
+QC_OUTLIER_Z = 3.5
+#: Floor of the robust scale (1.4826 × MAD) of repeat readings, ΔE*ab: keeps the z finite when most
+#: readings coincide; about an instrument's short-term repeatability.
+QC_OUTLIER_SCALE_FLOOR = 0.02
+#: SPC control limits of ΔE: centre ± this many σ (station.qc.spc).
+QC_SPC_SIGMAS = 3.0

@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import LinearConstraint, minimize
 
 from station.model.colorimetry import OBSERVER_10, xyz_to_lab
+from station.model.domain import REFLECTANCE_MAX
 from station.model.errors import FitError, ModelInputError
 
 #: Wavelength grid of every reflectance spectrum in the product, nm (31 values).
@@ -65,8 +66,12 @@ def _check_reflectance(reflectance: ArrayLike) -> NDArray[np.float64]:
         raise ModelInputError(
             "reflectance", f"shape (..., {WAVELENGTHS.size}) for 400–700 nm at 10 nm", r.shape
         )
-    if not np.all(np.isfinite(r)) or np.any(r < 0.0) or np.any(r > 2.0):
-        raise ModelInputError("reflectance", "finite reflectance factors 0 <= R <= 2", "out-of-range values")
+    if not np.all(np.isfinite(r)) or np.any(r < 0.0) or np.any(r > REFLECTANCE_MAX):
+        raise ModelInputError(
+            "reflectance",
+            f"finite reflectance factors 0 <= R <= {REFLECTANCE_MAX:.3g}",
+            "out-of-range values",
+        )
     return r
 
 

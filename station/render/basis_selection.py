@@ -7,9 +7,16 @@ geometries between design i and its non-negative fit with exponents E. As in the
 added one at a time from 1 to 11 and the optimum for m lobes starts the search for m + 1: the new
 exponent is tried at every point of a log-spaced grid, and the best few starts are polished by
 Nelder–Mead over all log-exponents (the thesis used Levenberg–Marquardt; f has a max in it, so a
-derivative-free search is the safer choice). Deterministic: no random numbers.
+derivative-free search is the safer choice).
 
-Run ``python -m station.render.basis_selection`` to regenerate station/render/data/lobe_basis.json.
+Reproducible: no random numbers, and the search runs with BLAS/OpenMP pools held to one thread, so the
+floating-point sums (and Nelder–Mead's path, which amplifies their last bits) are the same run to run and
+machine to machine.
+
+``python -m station.render.basis_selection`` writes the regenerated table to a NEW file
+(``lobe_basis.regenerated.json`` in the current directory, or ``--out PATH``); only ``--install``
+replaces the shipped station/render/data/lobe_basis.json. ``station reproduce --figure 2.4`` runs the
+same search and compares it with the shipped table.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from station.errors import InputError
 from station.render import lobe_fit as lf
 from station.render.lobes import EXPONENT_RANGE, MAX_LOBES, LobeBasis
 
@@ -31,6 +39,10 @@ from station.render.lobes import EXPONENT_RANGE, MAX_LOBES, LobeBasis
 SEARCH_RANGE = (1.0, 2.0e4)
 #: Candidate positions tried for each new lobe.
 CANDIDATES = 16
+#: The shipped table (replaced only by ``--install``).
+SHIPPED_TABLE = Path(__file__).parent / "data" / "lobe_basis.json"
+#: Default output of the command: a new file in the current directory.
+DEFAULT_OUT = Path("lobe_basis.regenerated.json")
 
 
 @dataclass(frozen=True)
@@ -76,7 +88,22 @@ def select_bases(
     max_evals: int = 400,
     log: Callable[[str], None] | None = None,
 ) -> list[BasisRow]:
-    """Greedy forward selection of 1..max_lobes exponents minimising eq 2.3.4 (module docstring)."""
+    """Greedy forward selection of 1..max_lobes exponents minimising eq 2.3.4 (module docstring).
+
+    Runs with the BLAS/OpenMP thread pools limited to one thread (reproducible sums).
+    """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):
+        return _select_bases(brdfs, max_lobes, max_evals, log)
+
+
+def _select_bases(
+    brdfs: Sequence[lf.DesignedBRDF],
+    max_lobes: int,
+    max_evals: int,
+    log: Callable[[str], None] | None,
+) -> list[BasisRow]:
     from scipy.optimize import minimize
 
     errors = make_objective(brdfs)
@@ -148,26 +175,49 @@ def table_json(rows: Sequence[BasisRow], default_lobes: int, note: str) -> dict[
     }
 
 
-def main(argv: Sequence[str] | None = None) -> None:
-    """Regenerate the shipped basis table (slow: minutes)."""
+def output_path(out: Path | None, install: bool) -> Path:
+    """Where the command writes: *out*, the shipped table with *install*, else :data:`DEFAULT_OUT`."""
+    if install and out is not None:
+        raise InputError("--out", "either --out PATH or --install, not both", str(out))
+    if install:
+        return SHIPPED_TABLE
+    return DEFAULT_OUT if out is None else out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Regenerate the basis table (slow: minutes) into a new file, or the shipped one with ``--install``."""
+    import sys
+
     from station.render.design_db import design_database
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--max-lobes", type=int, default=MAX_LOBES)
     ap.add_argument("--max-evals", type=int, default=400)
     ap.add_argument("--default-lobes", type=int, default=6)
-    ap.add_argument("--out", type=Path, default=Path(__file__).parent / "data" / "lobe_basis.json")
+    ap.add_argument("--out", type=Path, default=None, help=f"output file (default {DEFAULT_OUT})")
+    ap.add_argument(
+        "--install", action="store_true", help="replace the shipped table station/render/data/lobe_basis.json"
+    )
     args = ap.parse_args(argv)
+    try:
+        out = output_path(args.out, args.install)
+        if not 1 <= args.max_lobes <= MAX_LOBES:
+            raise InputError("--max-lobes", f"1 to {MAX_LOBES}", args.max_lobes)
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     brdfs = [lf.designed_brdf(d) for d in design_database()]
-    rows = select_bases(brdfs, args.max_lobes, args.max_evals, log=print)
+    rows = select_bases(brdfs, args.max_lobes, args.max_evals, log=lambda s: print(s, file=sys.stderr))
     doc = table_json(
         rows,
         args.default_lobes,
         f"{len(brdfs)} designs of station.render.design_db; "
-        "regenerate with python -m station.render.basis_selection",
+        "regenerate with python -m station.render.basis_selection [--install]",
     )
-    args.out.write_text(json.dumps(doc, indent=1) + "\n")
+    out.write_text(json.dumps(doc, indent=1) + "\n")
+    print(f"wrote {out}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

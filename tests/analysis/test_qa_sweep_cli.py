@@ -156,6 +156,10 @@ def test_cli_seam_with_design_and_measurement_files(tmp_path, capsys, blue_metal
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["passed"] is False and png.exists()
+    # the corrected paint is checked against the colorants: the verdict follows the recipe's own ΔE00
+    gamut = out["corrected_colorant_gamut"]
+    assert gamut["inside_colorant_gamut"] == (gamut["mean_de"] <= gamut["tolerance"])
+    assert set(gamut["nearest_achievable_paint"]) >= {"face", "flop", "travel_deg"} and gamut["recipe"]
     assert main(["analysis", "seam", str(tmp_path / "missing.json"), str(b), "--beta", "2"]) == 2
 
 

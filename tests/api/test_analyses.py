@@ -47,6 +47,11 @@ def test_seam_qa_of_two_measured_panels(sqlite_api: Api) -> None:
     assert stored["result"]["passed"] is direct.passed
     assert stored["result"]["seam_de_max"] == pytest.approx(max(direct.seam_de), rel=1e-9)
     assert stored["result"]["corrected_paint"]["face"] == pytest.approx(list(direct.correction.paint.face))
+    from station.formulate.gamut import colorant_gamut
+
+    gamut = stored["result"]["corrected_colorant_gamut"]  # flagged at the QA step against the colorants
+    assert gamut["inside_colorant_gamut"] == colorant_gamut(direct.correction.paint).inside
+    assert gamut["inside_colorant_gamut"] == (gamut["mean_de"] <= gamut["tolerance"])
     got = sqlite_api.client.get(f"{V1}/analyses/{stored['id']}", headers=sqlite_api.auth("stylist")).json()
     assert got == stored
     listed = sqlite_api.client.get(

@@ -102,3 +102,35 @@ def test_measure_with_a_client_id_is_idempotent(sim_api: Api) -> None:
     assert count() == before + 2
     clash = c.post(url, json={"client_id": cid}, headers={**tech, "Idempotency-Key": str(uuid.uuid4())})
     assert clash.status_code == 422 and "Idempotency-Key" in clash.text
+
+
+def test_gloss_meter_alone_and_joined_stores_full_gloss_readings(sim_api: Api) -> None:
+    ids = _ids(sim_api)
+    c, tech, qa = sim_api.client, sim_api.auth("technician"), sim_api.auth("qa")
+    panel = c.post(f"{V1}/panels", json={"job": "J-GL", "part": "hood"}, headers=tech).json()["id"]
+    alone = c.post(
+        f"{V1}/qc/gloss/measure", json={"instrument_id": ids["gloss"], "panel_id": panel}, headers=tech
+    )
+    assert alone.status_code == 201, alone.text
+    g = alone.json()
+    assert g["panel_id"] == panel and g["measurement_id"] is None
+    assert (
+        all(0 <= g[k] <= 2000 for k in ("gloss_20_gu", "gloss_60_gu", "gloss_85_gu")) and 0 <= g["doi"] <= 100
+    )
+    r = c.post(
+        f"{V1}/instruments/{ids['spectro']}/measure",
+        params={"gloss_instrument_id": ids["gloss"]},
+        json={"panel_id": panel},
+        headers=tech,
+    )
+    assert r.status_code == 201, r.text
+    m, gid = r.json()["measurement"], r.json()["gloss_reading_id"]
+    joined = c.get(f"{V1}/qc/gloss/{gid}", headers=qa).json()
+    assert joined["measurement_id"] == m["id"] and joined["panel_id"] == panel
+    assert joined["gloss_60_gu"] == m["gloss_gu"]  # the measurement's 60° value is the same reading's
+    view = c.get(f"{V1}/qc/measurements/{m['id']}", headers=qa).json()
+    assert view["gloss"]["id"] == gid  # the linked reading wins over the gloss-only one taken just before
+    wrong = c.post(f"{V1}/qc/gloss/measure", json={"instrument_id": ids["spectro"]}, headers=tech)
+    assert wrong.status_code == 422 and wrong.json()["detail"][0]["loc"][-1] == "instrument_id"
+    missing = c.post(f"{V1}/qc/gloss/measure", json={"instrument_id": "gloss-none"}, headers=tech)
+    assert missing.status_code == 404

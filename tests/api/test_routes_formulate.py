@@ -305,6 +305,18 @@ def test_closed_loop_is_stored_with_its_history(lib_api: tuple[Api, list[dict]])
         de = delta_e(design_lab, np.asarray(step["measured_lab"]), method="cie2000")
         np.testing.assert_allclose(step["de_per_angle"], de, atol=1e-6)
         assert step["mean_de"] == pytest.approx(float(np.mean(de)), abs=1e-6)
+        # the recipe weighed out as 1 kg: fraction × 1000 g, binder the rest
+        assert step["batch"]["total_g"] == 1000.0
+        assert step["batch"]["binder_g"] == pytest.approx(1000.0 * (1 - sum(step["recipe"].values())))
+    for before, after in zip(
+        job["steps"], job["steps"][1:], strict=False
+    ):  # tinting additions per correction
+        add = after["additions"]
+        if not add["remake"]:  # adding to the mixed batch reaches the corrected proportions
+            total = add["new_total_g"]
+            for name, frac in after["recipe"].items():
+                mixed = 1000.0 * before["recipe"].get(name, 0.0) + add["additions_g"].get(name, 0.0)
+                assert mixed == pytest.approx(frac * total, abs=1e-6)
     assert (job["status"] == "converged") is (job["steps"][-1]["mean_de"] <= 1.0)
     stored = api.client.get(f"{V1}/recipes/{job['recipe_id']}", headers=api.auth("qa")).json()
     assert stored["recipe"] == job["final_recipe"] and stored["state"] in ("done", "failed")

@@ -7,14 +7,9 @@ in-process (the serve handler with uvicorn stubbed) to keep the suite fast.
 
 from __future__ import annotations
 
-import os
 import re
-import signal
-import socket
 import stat
-import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -22,65 +17,20 @@ from pathlib import Path
 import httpx
 import pytest
 
+from station.api.serve_process import ServeStartError, serving
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
 
 REPO = Path(__file__).resolve().parents[2]
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @contextmanager
 def _serve(data_dir: Path, *extra: str) -> Iterator[tuple[str, str]]:
-    port = _free_port()
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "station.cli",
-            "serve",
-            "--data-dir",
-            str(data_dir),
-            "--port",
-            str(port),
-            "--no-demo-library",
-            *extra,
-        ],
-        cwd=REPO,
-        env=env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-    base = f"http://127.0.0.1:{port}"
-    out: list[str] = []
+    """A real ``station serve`` (no demo library) of this checkout: (base URL, admin token)."""
     try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            line = proc.stdout.readline() if proc.stdout else ""
-            if not line and proc.poll() is not None:
-                pytest.fail("station serve exited:\n" + "".join(out))
-            out.append(line)
-            if "Uvicorn running" in line or "Application startup complete" in line:
-                break
-        token_file = (
-            data_dir / BOOTSTRAP_TOKEN_FILE
-        )  # stdout is a pipe, not a terminal: the token is in a file
-        token = token_file.read_text().strip() if token_file.exists() else ""
-        yield base, token
-    finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(20)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-        if proc.stdout:
-            proc.stdout.close()
+        with serving(data_dir, "--no-demo-library", *extra, cwd=REPO, start_timeout_s=60) as svc:
+            yield svc.base, svc.token
+    except ServeStartError as exc:
+        pytest.fail(str(exc))
 
 
 def test_serve_first_start_real_http(tmp_path: Path) -> None:

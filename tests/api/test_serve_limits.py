@@ -8,6 +8,7 @@ concurrency limit of 3 and a 4 KiB header cap, all from the environment. Raw soc
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import stat
 import subprocess
@@ -19,6 +20,7 @@ from pathlib import Path
 import httpx
 import pytest
 
+from station.api.serve_process import ServeProcess, ServeStartError, free_port
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
 
 REPO = Path(__file__).resolve().parents[2]
@@ -26,12 +28,6 @@ BODY_TIMEOUT_S = 1.0
 KEEP_ALIVE_S = 1
 LIMIT = 3
 MAX_HEADER_BYTES = 4096
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class Service:
@@ -56,7 +52,7 @@ def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
     assert created.returncode == 0, created.stderr
     os.chmod(data_dir, 0o755)  # as an earlier version left it
     os.chmod(data_dir / "station.sqlite3", 0o644)
-    env_port, port = _free_port(), _free_port()
+    env_port = free_port()
     env.update(
         CACAD_HOST="127.0.0.1",
         CACAD_PORT=str(env_port),
@@ -65,34 +61,19 @@ def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
         CACAD_LIMIT_CONCURRENCY=str(LIMIT),
         CACAD_MAX_HEADER_BYTES=str(MAX_HEADER_BYTES),
     )
-    cmd = [sys.executable, "-m", "station.cli", "serve", "--data-dir", str(data_dir)]
-    cmd += ["--simulators", "", "--no-demo-library", "--port", str(port)]
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    out: list[str] = []
+    svc = ServeProcess(data_dir, ("--simulators", "", "--no-demo-library"), env=env, start_timeout_s=60)
     try:
-        deadline = time.monotonic() + 60
-        assert proc.stdout is not None
-        while time.monotonic() < deadline:
-            line = proc.stdout.readline()
-            if not line and proc.poll() is not None:
-                pytest.fail("station serve exited:\n" + "".join(out))
-            out.append(line)
-            if "Uvicorn running" in line:
-                break
-        else:
-            pytest.fail("station serve did not start:\n" + "".join(out))
+        svc.start()
+    except ServeStartError as exc:
+        pytest.fail(str(exc))
+    try:
         token_file = data_dir / BOOTSTRAP_TOKEN_FILE
-        assert any(str(token_file) in line for line in out) and not any("cst_" in line for line in out)
-        yield Service(f"http://127.0.0.1:{port}", data_dir, token_file.read_text().strip(), env_port, port)
+        assert any(str(token_file) in line for line in svc.log) and not any(
+            "cst_" in line for line in svc.log
+        )
+        yield Service(svc.base, data_dir, token_file.read_text().strip(), env_port, svc.port)
     finally:
-        proc.terminate()
-        try:
-            proc.wait(20)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-        if proc.stdout:
-            proc.stdout.close()
+        svc.stop(signal.SIGTERM)
 
 
 def _connect(service: Service) -> socket.socket:

@@ -4,9 +4,7 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,20 +12,11 @@ import pytest
 
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.design_io import save_design
-
-REPO = Path(__file__).resolve().parents[2]
+from tests.user_cli import run_station
 
 
 def station(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, PYTHONPATH=str(REPO), STATION_CACHE_DIR=str(cwd / "cache"))
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-        env=env,
-    )
+    return run_station(cwd, *args)
 
 
 def _lab_arg(lab: np.ndarray) -> str:

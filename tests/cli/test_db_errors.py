@@ -7,29 +7,18 @@ every command that opens the database. ``users add`` refuses the names the API r
 
 from __future__ import annotations
 
-import os
 import socket
 import stat
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
+from tests.user_cli import run_station
 
 
 def _station(cwd: Path, *args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    full_env = dict(os.environ, PYTHONPATH=str(REPO), **(env or {}))
-    full_env.pop("CACAD_DATABASE_URL", None)
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *args],
-        cwd=cwd,
-        env=full_env,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    return run_station(cwd, *args, env=env, timeout=120)
 
 
 def _closed_port() -> int:

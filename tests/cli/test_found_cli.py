@@ -19,26 +19,26 @@ import pytest
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.design_io import save_design
 from station.model.spectra import reflectance_to_lab
+from tests.user_cli import run_station
 
 REPO = Path(__file__).resolve().parents[2]
 SILVER = FaceFlopTravelGloss((90.0, 0.0, -2.0), (30.0, 0.0, -4.0), 60.0, 85.0, "silver")
 
 
+def _folders(cwd: Path) -> dict[str, str]:
+    """The cache and data folders in the user's folder *cwd*."""
+    return {"CACAD_CACHE_DIR": str(cwd / "cache"), "CACAD_DATA_DIR": str(cwd / "data")}
+
+
 def _env(cwd: Path) -> dict[str, str]:
-    return dict(
-        os.environ, PYTHONPATH=str(REPO), CACAD_CACHE_DIR=str(cwd / "cache"), CACAD_DATA_DIR=str(cwd / "data")
-    )
+    """The whole environment for the cases that drive the process themselves (Popen), as run_station."""
+    env = dict(os.environ, PYTHONPATH=str(REPO), **_folders(cwd))
+    env.pop("CACAD_DATABASE_URL", None)
+    return env
 
 
 def station(cwd: Path, *args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *args],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        cwd=cwd,
-        env=_env(cwd),
-    )
+    return run_station(cwd, *args, env=_folders(cwd), timeout=timeout)
 
 
 @pytest.mark.slow

@@ -6,30 +6,20 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from tests.model.test_din6175 import _by_hand
+from tests.user_cli import run_station
 
-REPO = Path(__file__).resolve().parents[2]
 STD = "90,1,-2;50,2,-3;30,3,-4"
 SMP = "90.5,1,-2;50,2.5,-3.2;31.2,3,-4"
 
 
 def station(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, PYTHONPATH=str(REPO), STATION_CACHE_DIR=str(cwd / "cache"))
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd=cwd,
-        env=env,
-    )
+    return run_station(cwd, *args)
 
 
 def _triples(text: str) -> list[list[float]]:

@@ -25,6 +25,8 @@ TABLES = {
     "users",
     "api_tokens",
     "audit_events",
+    "standards",
+    "gloss_readings",
 }
 
 
@@ -83,3 +85,35 @@ def test_constraints_follow_the_naming_convention(database_url: str) -> None:
 def test_ensure_at_head_is_idempotent(empty_database_url: str) -> None:
     assert migrate.ensure_at_head(empty_database_url) == migrate.head_revision()
     assert migrate.ensure_at_head(empty_database_url) == migrate.head_revision()
+
+
+def test_qc_standards_revision(empty_database_url: str) -> None:
+    engine = make_engine(empty_database_url)
+    try:
+        migrate.upgrade(empty_database_url, "0005_token_expiry")
+        assert "standards" not in inspect(engine).get_table_names()
+        migrate.upgrade(empty_database_url, "0006_qc_standards")
+        insp = inspect(engine)
+        assert {c["name"] for c in insp.get_columns("standards")} == {
+            "id",
+            "job",
+            "part",
+            "measurement_id",
+            "design_id",
+            "notes",
+            "created_at",
+            "created_by_id",
+        }
+        assert {"ck_standards_one_reference", "ck_standards_part"} <= {
+            ck["name"] for ck in insp.get_check_constraints("standards")
+        }
+        assert "uq_standards_job_part" in {uq["name"] for uq in insp.get_unique_constraints("standards")}
+        assert {fk["referred_table"] for fk in insp.get_foreign_keys("standards")} == {
+            "measurements",
+            "designs",
+            "users",
+        }
+        migrate.downgrade(empty_database_url, "0005_token_expiry")
+        assert "standards" not in inspect(engine).get_table_names()
+    finally:
+        engine.dispose()

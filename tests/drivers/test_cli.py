@@ -93,5 +93,52 @@ def test_measure_store_goes_through_the_ingestor_once(capsys, tmp_path, monkeypa
     assert rc == 0 and json.loads(out)["stored"]["status"] == "stored", err
     rc, _, err = run(capsys, "measure", "sim:ma6", "--store", "--panel", "P-17")
     assert rc == 2 and "--panel" in err
-    rc, _, err = run(capsys, "measure", "sim:gloss", "--store")
-    assert rc == 2 and "--store" in err
+
+
+def test_measure_store_keeps_a_gloss_only_reading(capsys, tmp_path):
+    """A gloss meter's reading is stored whole (20/60/85 GU, haze, DOI) on its panel, once per client id
+    (an unknown panel is refused by ``store_gloss``: tests/ingest/test_gloss.py, tests/api/test_routes_qc.py)."""
+    import uuid
+
+    from sqlalchemy import create_engine, select
+    from sqlalchemy.orm import Session
+
+    from db.models import GlossReading, Panel
+
+    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    from db.migrate import ensure_at_head
+
+    ensure_at_head(url)
+    engine = create_engine(url)
+    with Session(engine) as s:
+        panel = Panel(job="J-G", part="roof")
+        s.add(panel)
+        s.commit()
+        panel_id = panel.id
+    cid = str(uuid.uuid4())
+    answers = []
+    for _ in range(2):
+        rc, out, err = run(
+            capsys,
+            "measure",
+            "sim:gloss",
+            "--store",
+            url,
+            "--panel",
+            str(panel_id),
+            "--client-id",
+            cid,
+            "--json",
+        )
+        assert rc == 0, err
+        answers.append(json.loads(out))
+    assert [a["stored"]["status"] for a in answers] == ["stored", "duplicate"]
+    with Session(engine) as s:
+        rows = s.scalars(select(GlossReading)).all()
+    engine.dispose()
+    assert len(rows) == 1 and str(rows[0].client_id) == cid and rows[0].panel_id == panel_id
+    printed = answers[0]
+    assert [rows[0].gloss_20_gu, rows[0].gloss_60_gu, rows[0].gloss_85_gu] == [
+        printed["gloss_gu"][k] for k in ("20", "60", "85")
+    ]
+    assert rows[0].haze_hu == printed["haze_hu"] and rows[0].doi == printed["doi"]

@@ -70,9 +70,14 @@ def test_formulate_and_closed_loop(capsys) -> None:
     lib = demo_library()
     lab = lib.angle_columns()[4321] + 0.8
     text = ";".join(",".join(f"{v:.4f}" for v in row) for row in lab)
-    out = _run(capsys, "formulate", text, "--closed-loop")
+    out = _run(capsys, "formulate", text, "--closed-loop", "--batch", "250")
     assert out["formulable"] and out["mean_de"] <= 1.0 and len(out["de_per_angle"]) == 3
     assert out["synthetic_colorants"] is True
+    batch = out["batch"]  # grams for a 250 g batch: fraction × 250, binder the rest
+    assert batch["total_g"] == 250.0
+    for name, frac in out["recipe"].items():
+        assert batch["colorants_g"][name] == pytest.approx(250.0 * frac)
+    assert batch["binder_g"] == pytest.approx(250.0 * (1.0 - sum(out["recipe"].values())))
     assert out["closed_loop"]["status"] == "converged" and out["closed_loop"]["corrections"] <= 3
 
 
@@ -95,6 +100,7 @@ def test_export_design_and_match(capsys, tmp_path, fmt: str) -> None:
         ["snap", "--lab", LAB, "--library", "nope.txt"],
         ["library", "browse", "--filter", "flop=abc"],
         ["library", "browse", "--filter", "colour=red"],
+        ["formulate", LAB, "--batch", "-3"],
     ],
 )
 def test_bad_input_exits_2_with_one_line(capsys, argv: list[str]) -> None:

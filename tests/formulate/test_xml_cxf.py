@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import datetime as dt
+
 import numpy as np
 import pytest
 import xmlschema
@@ -23,6 +25,7 @@ from station.formulate.errors import HostileXMLError, XMLFormatError
 from station.formulate.library import Library
 from station.model import FaceFlopTravelGloss
 
+WHEN = dt.datetime(2026, 3, 4, 5, 6, 7, tzinfo=dt.UTC)
 DESIGN = FaceFlopTravelGloss((62.5, 38.25, 20.125), (20.0, 30.5, 12.0), 80.0, 85.0, name="Red metallic")
 
 
@@ -72,7 +75,7 @@ def test_xml_round_trip_is_lossless_and_stable(small_library: Library) -> None:
 
 def test_cxf_design_and_match_round_trip(small_library: Library) -> None:
     specs = _specs(small_library)
-    data = specs_to_cxf(specs)
+    data = specs_to_cxf(specs, created=WHEN)
     back = read_cxf_specs(data)
     assert [s.name for s in back] == [s.name for s in specs]
     for a, b in zip(specs, back, strict=True):
@@ -80,20 +83,20 @@ def test_cxf_design_and_match_round_trip(small_library: Library) -> None:
         for sa, sb in zip(a.sets, b.sets, strict=True):
             assert np.max(np.abs(np.asarray(sa.lab) - np.asarray(sb.lab))) <= 0.5e-4 + 1e-12
         assert (b.role, b.code, b.paint_type, b.synthetic) == (a.role, a.code, a.paint_type, a.synthetic)
-    assert specs_to_cxf(back) == data
+    assert specs_to_cxf(back, created=WHEN) == data
 
 
 def test_cxf_library_round_trip_and_colour_cxf_reads_it(small_library: Library) -> None:
     import colour_cxf
 
-    data = library_to_cxf(small_library)
+    data = library_to_cxf(small_library, created=WHEN)
     lib = read_library_cxf(data)
     assert lib.codes.tolist() == small_library.codes.tolist()
     assert lib.types.tolist() == small_library.types.tolist()
     assert lib.synthetic
     for a in small_library.angles_deg:
         assert np.max(np.abs(lib.angle_columns((a,)) - small_library.angle_columns((a,)))) <= 0.5e-4 + 1e-12
-    assert library_to_cxf(lib) == data
+    assert library_to_cxf(lib, created=WHEN) == data
     cxf = colour_cxf.read_cxf(data)  # the reference CxF3 binding parses what we write
     objects = cxf.resources.object_collection.object_value
     assert len(objects) == len(small_library)

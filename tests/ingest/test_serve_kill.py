@@ -13,11 +13,6 @@ from __future__ import annotations
 
 import os
 import random
-import re
-import signal
-import socket
-import subprocess
-import sys
 import threading
 import time
 import uuid
@@ -28,7 +23,7 @@ import pytest
 from sqlalchemy import create_engine, func, select
 
 from db.models import AuditEvent, Measurement
-from station.api.settings import BOOTSTRAP_TOKEN_FILE
+from station.api.serve_process import ServeProcess, ServeStartError
 from station.ingest import Outbox
 
 REPO = Path(__file__).resolve().parents[2]
@@ -39,100 +34,20 @@ START_TIMEOUT_S = 90.0
 TEST_BUDGET_S = 240.0
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-class _Service:
-    """``station serve`` on a free port in its own process group; started, killed and restarted by the test."""
+class _Service(ServeProcess):
+    """``station serve`` with a simulated MA6 in its own process group; started, killed and restarted."""
 
     def __init__(self, data_dir: Path, database_url: str | None) -> None:
-        self.data_dir = data_dir
-        self.database_url = database_url
-        self.proc: subprocess.Popen[str] | None = None
-        self.base = ""
-        self.token = ""
-        self.log: list[str] = []
-        self._reader: threading.Thread | None = None
+        args = ("--database", database_url) if database_url is not None else ()
+        args += ("--no-demo-library", "--simulators", "ma6")
+        super().__init__(data_dir, args, cwd=REPO, own_group=True, start_timeout_s=START_TIMEOUT_S)
 
-    def start(self) -> None:
-        self._close_previous()
-        port = _free_port()
-        cmd = [sys.executable, "-m", "station.cli", "serve", "--data-dir", str(self.data_dir)]
-        if self.database_url is not None:
-            cmd += ["--database", self.database_url]
-        cmd += ["--port", str(port), "--no-demo-library", "--simulators", "ma6"]
-        self.proc = subprocess.Popen(
-            cmd,
-            cwd=REPO,
-            env=dict(os.environ, PYTHONUNBUFFERED="1"),
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            start_new_session=True,  # its own group: the kill takes the simulator child with it
-        )
-        self.base = f"http://127.0.0.1:{port}"
-        deadline = time.monotonic() + START_TIMEOUT_S
-        assert self.proc.stdout is not None
-        while time.monotonic() < deadline:
-            line = self.proc.stdout.readline()
-            if not line and self.proc.poll() is not None:
-                pytest.fail("station serve exited:\n" + "".join(self.log[-40:]))
-            self.log.append(line)
-            token = re.search(r"cst_[\w-]+", line)
-            if token and not self.token:
-                self.token = token.group(0)
-            if "Uvicorn running" in line:  # logged once the socket is bound ("startup complete" comes before)
-                token_file = (
-                    self.data_dir / BOOTSTRAP_TOKEN_FILE
-                )  # stdout is a pipe: the token goes to a file
-                if not self.token and token_file.exists():
-                    self.token = token_file.read_text().strip()
-                self._reader = threading.Thread(target=self._drain, args=(self.proc,), daemon=True)
-                self._reader.start()
-                return
-        pytest.fail("station serve did not start in time:\n" + "".join(self.log[-40:]))
-
-    def _close_previous(self) -> None:
-        """Close the pipe of a process that has ended (its reader has seen end of file)."""
-        old = self.proc
-        if old is None or old.poll() is None or old.stdout is None:
-            return
-        if self._reader is not None:
-            self._reader.join(10)
-        old.stdout.close()
-
-    def _drain(self, proc: subprocess.Popen[str]) -> None:
-        """Collect the service's log until it exits, then reap it and close the pipe (a killed service
-        must leave no open file behind: warnings are errors in the suite)."""
-        if proc.stdout is not None:
-            with proc.stdout:
-                for line in proc.stdout:
-                    self.log.append(line)
-        proc.wait()
-
-    def kill(self, proc: subprocess.Popen[str]) -> None:
-        """SIGKILL *proc*'s process group (no-op once it is gone)."""
-        if proc.poll() is None:
-            try:
-                os.killpg(proc.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-
-    def stop(self) -> None:
-        if self.proc is None:
-            return
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(20)
-            except subprocess.TimeoutExpired:
-                self.kill(self.proc)
-        self.kill(self.proc)  # whatever is left of the group
-        self.proc.wait()
-        self._close_previous()
+    def start(self) -> _Service:
+        try:
+            super().start()
+        except ServeStartError as exc:
+            pytest.fail(str(exc))
+        return self
 
 
 def _instrument(http: httpx.Client, auth: dict[str, str]) -> str:

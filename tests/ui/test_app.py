@@ -15,7 +15,7 @@ pytestmark = [pytest.mark.qt]
 
 def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
     sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
-    win = MainWindow(sink=sink)
+    win = MainWindow(sink=sink, ask_on_close=False)
     assert win.store.sink is sink
     qtbot.addWidget(win)
     win.resize(1200, 800)
@@ -28,6 +28,7 @@ def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
         "Library",
         "Instruments",
         "QA",
+        "QC",
         "Formulation",
     ]
     assert not win.undo_action.isEnabled()
@@ -59,6 +60,7 @@ def test_screenshots_of_every_screen(qtbot, tmp_path):
     paths = take_screenshots(tmp_path, scan=False)
     assert [p.name for p in paths] == [
         "design.png",
+        "file-menu.png",
         "tweaker.png",
         "moodboard.png",
         "library.png",

@@ -58,6 +58,22 @@ def _with_dialog(qtbot, button, path, done) -> None:
     qtbot.waitUntil(done, timeout=60_000)
 
 
+def _close_discarding(win) -> None:
+    """Close the window as the user does after the day's work: the unsaved design is discarded."""
+    from PySide6.QtWidgets import QMessageBox
+
+    def answer() -> None:
+        box = getattr(win, "unsaved_box", None)
+        if box is not None and box.isVisible():
+            QTest.mouseClick(box.button(QMessageBox.StandardButton.Discard), Qt.MouseButton.LeftButton)
+        elif win.isVisible():
+            QTimer.singleShot(100, answer)
+
+    QTimer.singleShot(100, answer)
+    win.close()
+    assert not win.isVisible()
+
+
 def _toggle(box) -> None:
     """Tick or untick a check box with the keyboard (focus, space)."""
     box.setFocus()
@@ -68,7 +84,7 @@ def test_chemist_day(qtbot, tmp_path):
     BLUE_METALLIC = _library_metallic()
     save_design(BLUE_METALLIC, tmp_path / "blue.json")
     win = MainWindow(sink=LocalSink(f"sqlite:///{tmp_path / 's.sqlite3'}", tmp_path / "o.sqlite3"))
-    qtbot.addWidget(win)
+    # not qtbot.addWidget: its teardown close would ask about the unsaved design again
     win.resize(1400, 900)
     win.show()
     win.tabs.setCurrentWidget(win.screens["Formulation"])
@@ -110,11 +126,12 @@ def test_chemist_day(qtbot, tmp_path):
         )
         for i in range(screen.recipe.rowCount())
     }
-    total = sum(result.recipe.values())
-    assert set(rows) == set(result.recipe)
+    # m_i = c_i · M per colorant, the binder the rest of the batch (thesis-free hand calculation)
+    assert set(rows) == {*result.recipe, "binder"}
     for name, frac in result.recipe.items():
         assert rows[name][0] == pytest.approx(100 * frac, abs=0.006)
-        assert rows[name][1] == pytest.approx(500.0 * frac / total, abs=0.06)
+        assert rows[name][1] == pytest.approx(500.0 * frac, abs=0.06)
+    assert rows["binder"][1] == pytest.approx(500.0 * (1 - sum(result.recipe.values())), abs=0.06)
     assert sum(g for _p, g in rows.values()) == pytest.approx(500.0, abs=0.5)
     assert f"mean {result.mean_de:.2f}" in screen.status.text() and "SYNTHETIC" in screen.status.text()
     # the closed loop: steps until within tolerance (or the correction limit), mean ΔE shown per step
@@ -144,7 +161,7 @@ def test_chemist_day(qtbot, tmp_path):
     _toggle(screen.types["metallic"])
     QTest.mouseClick(screen.snap_btn, Qt.MouseButton.LeftButton)
     assert screen.status.text().startswith("error: types") and screen.idle
-    win.close()
+    _close_discarding(win)
 
 
 @pytest.mark.parametrize("role", ["qa", "chemist"])
@@ -161,7 +178,7 @@ def test_qa_and_chemist_store_the_paint_on_the_service(qtbot, tmp_path, role):
         token = api.tokens[next(r for r in api.tokens if r.value == role)]
         service = ServiceClient("http://testserver", token, client=api.client)
         win = MainWindow(service=service, sink=ServiceSink(service, tmp_path / "outbox.sqlite3"))
-        qtbot.addWidget(win)
+        # not qtbot.addWidget: its teardown close would ask about the unsaved design again
         paint = _library_metallic()
         win.document.set_design(paint, "the paint to keep")
         menu = next(a.menu() for a in win.menuBar().actions() if a.text() == "&Service")
@@ -172,6 +189,6 @@ def test_qa_and_chemist_store_the_paint_on_the_service(qtbot, tmp_path, role):
         )
         rows = api.client.get("/api/v1/designs", headers=api.auth("chemist")).json()["data"]
         assert len(rows) == 1 and rows[0]["design"]["face"] == pytest.approx(list(paint.face))
-        win.close()
+        _close_discarding(win)
     finally:
         gen.close()

@@ -35,7 +35,9 @@ def _token(api, *roles: str) -> str:
 
 def _window(api, token: str, tmp_path) -> MainWindow:
     service = ServiceClient("http://testserver", token, client=api.client)
-    return MainWindow(service=service, sink=ServiceSink(service, tmp_path / "outbox.sqlite3"))
+    return MainWindow(
+        service=service, sink=ServiceSink(service, tmp_path / "outbox.sqlite3"), ask_on_close=False
+    )
 
 
 def test_viewer_loads_and_saves_designs(qtbot, api, tmp_path):

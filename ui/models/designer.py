@@ -10,6 +10,7 @@ from station.design.designer import (
     Channel,
     data_points,
     hsb_edit,
+    move_arrow,
     move_face,
     move_flop,
     move_point,
@@ -29,6 +30,7 @@ class DesignerModel:
         self.document = document
         self.palette: list[tuple[str, FaceFlopTravelGloss]] = []
         self._hsb_base: FaceFlopTravelGloss | None = None
+        self._arrow_base: FaceFlopTravelGloss | None = None
         self.events = EventGroup("palette")
 
     @property
@@ -57,6 +59,19 @@ class DesignerModel:
         """Drag the arrow base (flop) in the a–b plane."""
         return self.document.apply(lambda d: move_flop(d, a, b), "move flop", merge_key="flop")
 
+    def move_arrow(self, da: float, db: float) -> bool:
+        """Drag the whole face→flop arrow by (*da*, *db*) from where the drag started (thesis §3.4.3)."""
+        if self._arrow_base is None:
+            self._arrow_base = self.design
+        base = self._arrow_base
+        return self.document.apply(lambda _d: move_arrow(base, da, db), "move arrow", merge_key="arrow")
+
+    def set_lab(self, which: str, lab: tuple[float, float, float]) -> bool:
+        """Type the face or flop Lab (L*, a*, b*, D65/10°); the core checks the domain."""
+        op = move_face if which == "face" else move_flop
+        L, a, b = lab
+        return self.document.apply(lambda d: op(d, a, b, L), f"type {which} Lab")
+
     def set_travel(self, travel_deg: float) -> bool:
         """Set θ_clamp."""
         return self.document.apply(lambda d: set_travel(d, travel_deg), "travel", merge_key="travel")
@@ -77,6 +92,7 @@ class DesignerModel:
     def end_drag(self) -> None:
         """Mouse released: close the merged undo step and forget the HSB base."""
         self._hsb_base = None
+        self._arrow_base = None
         self.document.end_merge()
 
     def variations(self, category: Category, degree: float) -> VariationRing:

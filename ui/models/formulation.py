@@ -18,14 +18,15 @@ from typing import Any
 import numpy as np
 
 from station.errors import InputError
+from station.formulate.batch import DEFAULT_BATCH_G
 from station.formulate.library import PAINT_TYPES, Library
 from station.model import FaceFlopTravelGloss
 from station.model.domain import ANGLES_3
 
-BATCH_G_DEFAULT = 1000.0
-"""Default batch size, grams."""
+BATCH_G_DEFAULT = DEFAULT_BATCH_G
+"""Default batch size, grams (the CLI's and the service's)."""
 BATCH_G_RANGE = (1.0, 1_000_000.0)
-"""Accepted batch sizes, grams."""
+"""Batch sizes the screen's spin box offers, grams (the core accepts 0 < batch ≤ 1e6 g)."""
 SPRAY_SEED = 7
 """Seed of the simulated spray-out panel (as ``station formulate --closed-loop``)."""
 
@@ -47,15 +48,14 @@ def filtered(library: Library, types: Iterable[str]) -> Library:
     return sub
 
 
-def batch_masses(recipe: dict[str, float], batch_g: float) -> list[tuple[str, float, float]]:
-    """(colorant, mass fraction, grams in a *batch_g* batch) per colorant, largest first."""
-    lo, hi = BATCH_G_RANGE
-    if not (np.isfinite(batch_g) and lo <= batch_g <= hi):
-        raise InputError("batch", f"{lo:g} ≤ batch ≤ {hi:g} g", batch_g)
-    total = sum(recipe.values())
-    return [
-        (name, frac, frac / total * batch_g) for name, frac in sorted(recipe.items(), key=lambda kv: -kv[1])
-    ]
+def batch_rows(recipe: dict[str, float], batch_g: float) -> list[tuple[str, float, float]]:
+    """(component, mass fraction, grams in a *batch_g* batch): the colorants, largest first, then the
+    binder (``station.formulate.batch.batch_masses``: m_i = c_i·M, the binder the rest)."""
+    from station.formulate.batch import batch_masses
+
+    b = batch_masses(recipe, batch_g)  # FormulateInputError naming batch_g outside 0 < batch ≤ 1e6 g
+    rows = [(name, recipe[name], b.colorants_g[name]) for name in sorted(recipe, key=lambda k: -recipe[k])]
+    return [*rows, ("binder", b.binder_g / b.total_g, b.binder_g)]
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,6 @@
-"""Designer panel: L/a/b plots, the a–b arrow plot, HSB and gloss sliders, variations grid, palette."""
+"""Designer panel: L/a/b plots, the a–b arrow plot, HSB, gloss and travel sliders (each with its value in
+an editable box), face and flop Lab typed in, the variations grid (each variation rendered on the shaded
+booklet panel) and the palette."""
 
 from __future__ import annotations
 
@@ -12,16 +14,18 @@ from PySide6.QtWidgets import (
     QGroupBox,
     QHBoxLayout,
     QLabel,
+    QLineEdit,
     QListWidget,
     QListWidgetItem,
     QPushButton,
     QSlider,
+    QSpinBox,
     QToolButton,
     QVBoxLayout,
     QWidget,
 )
 
-from station.design.palette import swatch
+from station.design.palette import booklet, swatch
 from station.design.variations import CATEGORIES
 from station.model import FaceFlopTravelGloss
 from ui.models.designer import DesignerModel
@@ -29,6 +33,8 @@ from ui.widgets.common import pixmap_from_array
 from ui.widgets.plots import ABPlot, CurvePlot
 
 HUE_RANGE, SAT_RANGE, BRIGHT_RANGE = 180, (0, 200), 50
+#: Size of a variation's rendered object (pixels).
+VARIATION_PX = 44
 
 
 def _slider(lo: int, hi: int, value: int) -> QSlider:
@@ -56,10 +62,12 @@ class VariationsGrid(QWidget):
         top.addWidget(self.degree)
         grid = QGridLayout()
         self.buttons: list[QToolButton] = []
+        longest = max(("more chroma", "less travel", "current", "more gloss"), key=len)
         for i in range(9):
             b = QToolButton()
-            b.setIconSize(QSize(72, 20))
-            b.setFixedSize(80, 40)
+            b.setIconSize(QSize(VARIATION_PX, VARIATION_PX))
+            width = max(VARIATION_PX + 12, b.fontMetrics().horizontalAdvance(longest) + 16)
+            b.setFixedSize(width, VARIATION_PX + b.fontMetrics().height() + 12)
             b.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextUnderIcon)
             b.clicked.connect(lambda _=False, k=i: self._on_click(k))
             grid.addWidget(b, i // 3, i % 3)
@@ -92,7 +100,7 @@ class VariationsGrid(QWidget):
             b.setEnabled(design is not None)
             b.setToolTip(reason or label)
             b.setIcon(
-                QIcon(pixmap_from_array(swatch(design, 72, 20, 2).pixels)) if design is not None else QIcon()
+                QIcon(pixmap_from_array(booklet(design, VARIATION_PX))) if design is not None else QIcon()
             )
 
     def _on_click(self, cell: int) -> None:
@@ -150,12 +158,25 @@ class DesignerPanel(QWidget):
         self.bright = _slider(-BRIGHT_RANGE, BRIGHT_RANGE, 0)
         self.gloss = _slider(0, 100, round(model.design.gloss_gu))
         self.travel = _slider(16, 180, round(model.design.travel_deg or 75))
+        self.values: dict[str, QSpinBox] = {}
         form = QFormLayout()
-        form.addRow("hue (°)", self.hue)
-        form.addRow("saturation (%)", self.sat)
-        form.addRow("brightness (ΔL*)", self.bright)
-        form.addRow("gloss (GU)", self.gloss)
-        form.addRow("travel θ_clamp (°)", self.travel)
+        for key, label, slider in (
+            ("hue", "hue (°)", self.hue),
+            ("sat", "saturation (%)", self.sat),
+            ("bright", "brightness (ΔL*)", self.bright),
+            ("gloss", "gloss (GU)", self.gloss),
+            ("travel", "travel θ_clamp (°)", self.travel),
+        ):
+            form.addRow(label, self._with_value(key, slider))
+        self.lab_edits: dict[str, QLineEdit] = {}
+        for which in ("face", "flop"):
+            e = QLineEdit()
+            e.setObjectName(f"{which}-lab")
+            e.setToolTip(f"{which} L*, a*, b* (D65/10°): type three numbers and press Enter")
+            e.returnPressed.connect(lambda w=which: self._on_lab_typed(w))
+            self.lab_edits[which] = e
+            form.addRow(f"{which} L*, a*, b*", e)
+        self._show_lab(model.design)
         self.status = QLabel("")
         self.status.setWordWrap(True)
         hsb_box = QGroupBox("Colour")
@@ -174,6 +195,7 @@ class DesignerPanel(QWidget):
         QVBoxLayout(var_box).addWidget(self.variations)
         self.palette = PaletteList(model)
         keep = QPushButton("Keep in palette")
+        self.palette_keep = keep
         keep.clicked.connect(lambda: self.model.keep())
         pal_box = QGroupBox("Palette")
         pl = QVBoxLayout(pal_box)
@@ -189,6 +211,57 @@ class DesignerPanel(QWidget):
         model.document.events.changed.connect(self._on_changed)
         model.document.events.error.connect(self._on_error)
 
+    def _with_value(self, key: str, slider: QSlider) -> QWidget:
+        """The slider and an editable box with its value (typed value + Enter = one undo step)."""
+        box = QSpinBox()
+        box.setObjectName(f"{key}-value")
+        box.setRange(slider.minimum(), slider.maximum())
+        box.setValue(slider.value())
+        box.setKeyboardTracking(False)
+        self.values[key] = box
+
+        def from_slider(v: int) -> None:
+            box.blockSignals(True)
+            box.setValue(v)
+            box.blockSignals(False)
+
+        def from_box() -> None:
+            if box.value() != slider.value():
+                slider.setValue(box.value())
+                if key in ("hue", "sat", "bright"):
+                    self._on_hsb_released()
+                else:
+                    self.model.end_drag()
+
+        slider.valueChanged.connect(from_slider)
+        box.editingFinished.connect(from_box)
+        row = QWidget()
+        lay = QHBoxLayout(row)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(slider, 1)
+        lay.addWidget(box)
+        return row
+
+    def _show_lab(self, design: FaceFlopTravelGloss) -> None:
+        for which, lab in (("face", design.face), ("flop", design.flop)):
+            e = self.lab_edits[which]
+            if not e.hasFocus() or not e.isModified():
+                e.setText(", ".join(f"{v:.1f}" for v in lab))
+                e.setModified(False)
+
+    def _on_lab_typed(self, which: str) -> None:
+        e = self.lab_edits[which]
+        try:
+            parts = [float(t) for t in e.text().replace(";", ",").split(",")]
+        except ValueError:
+            parts = []
+        if len(parts) != 3:
+            self.status.setText(f"Refused: {which}: expected three numbers L*, a*, b*, got {e.text()!r}")
+            return
+        e.setModified(False)
+        if self.model.set_lab(which, (parts[0], parts[1], parts[2])):
+            self._show_lab(self.model.design)
+
     def _on_hsb(self, _v: int) -> None:
         self.model.set_hsb(float(self.hue.value()), self.sat.value() / 100.0, float(self.bright.value()))
 
@@ -198,6 +271,10 @@ class DesignerPanel(QWidget):
             s.blockSignals(True)
             s.setValue(v)
             s.blockSignals(False)
+        for k, v in (("hue", 0), ("sat", 100), ("bright", 0)):
+            self.values[k].blockSignals(True)
+            self.values[k].setValue(v)
+            self.values[k].blockSignals(False)
 
     def _on_travel(self, v: int) -> None:
         if not self.model.design.is_solid:
@@ -205,11 +282,18 @@ class DesignerPanel(QWidget):
 
     def _on_changed(self, design: FaceFlopTravelGloss) -> None:
         self.status.setText("")
-        for s, v in ((self.gloss, round(design.gloss_gu)), (self.travel, round(design.travel_deg or 75))):
+        for key, s, v in (
+            ("gloss", self.gloss, round(design.gloss_gu)),
+            ("travel", self.travel, round(design.travel_deg or 75)),
+        ):
             if s.value() != v and not s.isSliderDown():
                 s.blockSignals(True)
                 s.setValue(v)
                 s.blockSignals(False)
+                self.values[key].blockSignals(True)
+                self.values[key].setValue(v)
+                self.values[key].blockSignals(False)
+        self._show_lab(design)
 
     def _on_error(self, message: str) -> None:
         self.status.setText(f"Refused: {message}")

@@ -71,7 +71,7 @@ class FormulationScreen(QWidget):
         self.matches = QTableWidget(0, 3)
         self.matches.setHorizontalHeaderLabels(["match", "type", "ΣΔE00 15/45/110"])
         self.recipe = QTableWidget(0, 3)
-        self.recipe.setHorizontalHeaderLabels(["colorant", "mass %", "grams per batch"])
+        self.recipe.setHorizontalHeaderLabels(["component", "mass %", "grams per batch"])
         self.loop = QTableWidget(0, 3)
         self.loop.setHorizontalHeaderLabels(["step", "kind", "measured mean ΔE00"])
         for t in (self.matches, self.recipe, self.loop):
@@ -278,7 +278,7 @@ class FormulationScreen(QWidget):
     def _show_recipe(self, *_args) -> None:
         if self.formulation is None:
             return
-        rows = fm.batch_masses(self.formulation.result.recipe, self.batch.value())
+        rows = fm.batch_rows(self.formulation.result.recipe, self.batch.value())
         self.recipe.setRowCount(len(rows))
         for i, (name, frac, grams) in enumerate(rows):
             for j, text in enumerate((name, f"{100 * frac:.2f}", f"{grams:.1f}")):

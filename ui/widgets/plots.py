@@ -1,6 +1,8 @@
 """QPainter plots of the designer: L, a, b against aspecular angle, and the a–b plane with the
 face→flop arrow over a hue wheel (thesis Figs. 3.5–3.7). Dragging edits the design through
 :class:`ui.models.designer.DesignerModel`; the plots redraw from the document's ``changed`` event.
+Every axis carries tick labels (:func:`ticks`); on the a–b plot the arrowhead moves the face, the base
+moves the flop and the shaft moves the whole arrow.
 """
 
 from __future__ import annotations
@@ -16,10 +18,33 @@ from ui.models.designer import DesignerModel
 from ui.widgets.common import lab_colour, lab_colours
 
 CURVE_ANGLES = np.linspace(0.0, 120.0, 121)
+#: Labelled aspecular angles on the curve plots (degrees).
+ANGLE_TICKS = (0, 15, 45, 75, 110)
 #: Default axes (display only); :meth:`CurvePlot.axis` widens them to show a bright silver's L* > 100.
 RANGES = LAB_PLOT_RANGES
-MARGIN = 26
+#: Labelled a* and b* values on the a–b plot.
+AB_TICKS = (-80, -40, 0, 40, 80)
+MARGIN = 34
+BOTTOM = 30
 HANDLE_PX = 8
+#: Pixels from the shaft of the a–b arrow that grab the whole arrow.
+SHAFT_PX = 5
+
+
+def ticks(lo: float, hi: float, count: int = 5) -> list[float]:
+    """Round tick values inside [*lo*, *hi*]: a 1-2-5 step giving about *count* ticks."""
+    span = hi - lo
+    if not np.isfinite(span) or span <= 0:
+        return [lo]
+    raw = span / max(1, count - 1)
+    mag = 10.0 ** np.floor(np.log10(raw))
+    step = next(m * mag for m in (1, 2, 5, 10) if m * mag >= raw)
+    first = np.ceil(lo / step) * step
+    return [float(v) for v in np.arange(first, hi + 1e-9 * span, step)]
+
+
+def _tick_text(v: float) -> str:
+    return f"{v:.0f}" if abs(v - round(v)) < 1e-9 else f"{v:g}"
 
 
 class _PlotBase(QWidget):
@@ -33,6 +58,7 @@ class _PlotBase(QWidget):
         self._drag: object | None = None
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
         self.setMinimumSize(160, 120)
+        self.setFocusPolicy(Qt.FocusPolicy.ClickFocus)  # Ctrl+Z after a drag undoes it, not a text box
         model.document.events.changed.connect(self._on_changed)
 
     def _on_changed(self, design: FaceFlopTravelGloss) -> None:
@@ -40,7 +66,7 @@ class _PlotBase(QWidget):
 
     def plot_rect(self) -> QRectF:
         """The data area in widget pixels."""
-        return QRectF(MARGIN, 8, max(1, self.width() - MARGIN - 8), max(1, self.height() - MARGIN - 8))
+        return QRectF(MARGIN, 8, max(1, self.width() - MARGIN - 8), max(1, self.height() - BOTTOM - 8))
 
     def mouseReleaseEvent(self, event: QMouseEvent) -> None:
         if self._drag is not None:
@@ -69,6 +95,10 @@ class CurvePlot(_PlotBase):
         _, lab = self.model.points()
         vals = np.concatenate([self.model.design.lab_at(CURVE_ANGLES)[:, self.k], np.asarray(lab)[:, self.k]])
         return plot_range(self.channel, vals)
+
+    def value_ticks(self) -> list[float]:
+        """Labelled values of the value axis."""
+        return ticks(*self.axis())
 
     def to_px(self, angle: float, value: float) -> QPointF:
         """Data (degrees, value) → pixels."""
@@ -100,11 +130,22 @@ class CurvePlot(_PlotBase):
             p.drawLine(self.to_px(a, lo), self.to_px(a, hi))
         p.setPen(QPen(QColor(90, 90, 90), 1))
         p.drawRect(r)
-        p.drawText(QRectF(2, r.top(), MARGIN - 4, 16), Qt.AlignmentFlag.AlignRight, f"{self.channel}*")
+        right = Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter
+        for v in self.value_ticks():
+            y = self.to_px(0.0, v).y()
+            p.drawLine(QPointF(r.left() - 3, y), QPointF(r.left(), y))
+            p.drawText(QRectF(0, y - 7, MARGIN - 5, 14), right, _tick_text(v))
+        for a in ANGLE_TICKS:
+            x = self.to_px(a, lo).x()
+            p.drawLine(QPointF(x, r.bottom()), QPointF(x, r.bottom() + 3))
+            p.drawText(QRectF(x - 14, r.bottom() + 2, 28, 13), Qt.AlignmentFlag.AlignCenter, str(a))
         p.drawText(
-            QRectF(r.left(), r.bottom() + 2, r.width(), 16),
+            QRectF(r.right() - 34, r.top() + 2, 30, 14), Qt.AlignmentFlag.AlignRight, f"{self.channel}*"
+        )
+        p.drawText(
+            QRectF(r.left(), r.bottom() + 14, r.width(), 14),
             Qt.AlignmentFlag.AlignCenter,
-            "aspecular θ, 0–120°",
+            "aspecular angle θ (°)",
         )
         design = self.model.design
         vals = design.lab_at(CURVE_ANGLES)[:, self.k]
@@ -155,7 +196,7 @@ class ABPlot(_PlotBase):
     def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
         super().__init__(model, parent)
         self._wheel: tuple[float, int, int, QImage] | None = None
-        self.setToolTip("a*–b*: drag the arrowhead (face) or its base (flop)")
+        self.setToolTip("a*–b*: drag the arrowhead (face), its base (flop) or the shaft (whole arrow)")
 
     def plot_rect(self) -> QRectF:
         """Square data area."""
@@ -200,8 +241,18 @@ class ABPlot(_PlotBase):
         p.setPen(QPen(QColor(150, 150, 150), 1))
         p.drawLine(self.to_px(-80, 0), self.to_px(80, 0))
         p.drawLine(self.to_px(0, -80), self.to_px(0, 80))
-        p.drawText(self.to_px(70, 2), "a*")
-        p.drawText(self.to_px(2, 72), "b*")
+        p.drawText(self.to_px(62, 5), "a*")
+        p.drawText(self.to_px(-20, 70), "b*")
+        p.setPen(QPen(QColor(80, 80, 80), 1))
+        for v in AB_TICKS:
+            if v == 0:
+                continue
+            x = self.to_px(v, 0)
+            p.drawLine(QPointF(x.x(), x.y() - 3), QPointF(x.x(), x.y() + 3))
+            p.drawText(QRectF(x.x() - 14, x.y() + 3, 28, 13), Qt.AlignmentFlag.AlignCenter, _tick_text(v))
+            y = self.to_px(0, v)
+            p.drawLine(QPointF(y.x() - 3, y.y()), QPointF(y.x() + 3, y.y()))
+            p.drawText(QRectF(y.x() + 4, y.y() - 7, 28, 14), Qt.AlignmentFlag.AlignLeft, _tick_text(v))
         lab = d.lab_at(CURVE_ANGLES)
         path = QPainterPath(self.to_px(lab[0, 1], lab[0, 2]))
         for row in lab[1:]:
@@ -223,17 +274,35 @@ class ABPlot(_PlotBase):
             p.drawEllipse(pt, HANDLE_PX, HANDLE_PX)
         p.end()
 
+    def on_shaft(self, pos: QPointF) -> bool:
+        """Whether *pos* is within :data:`SHAFT_PX` of the arrow's shaft (between the handles)."""
+        h = self.handles()
+        p0, p1 = np.array([h["flop"].x(), h["flop"].y()]), np.array([h["face"].x(), h["face"].y()])
+        q = np.array([pos.x(), pos.y()])
+        d = p1 - p0
+        n2 = float(d @ d)
+        if n2 < 1e-9:
+            return False
+        t = float((q - p0) @ d) / n2
+        return 0.0 < t < 1.0 and float(np.linalg.norm(p0 + t * d - q)) <= SHAFT_PX
+
     def mousePressEvent(self, event: QMouseEvent) -> None:
         pos = event.position()
         for name, pt in self.handles().items():
             if abs(pt.x() - pos.x()) <= HANDLE_PX + 2 and abs(pt.y() - pos.y()) <= HANDLE_PX + 2:
                 self._drag = name
                 return
+        if self.on_shaft(pos):
+            self._drag = ("arrow", self.from_px(pos))
 
     def mouseMoveEvent(self, event: QMouseEvent) -> None:
         if self._drag is None:
             return
         a, b = self.from_px(event.position())
         a, b = float(np.clip(a, -80, 80)), float(np.clip(b, -80, 80))
-        (self.model.move_face if self._drag == "face" else self.model.move_flop)(a, b)
+        if isinstance(self._drag, tuple):
+            a0, b0 = self._drag[1]
+            self.model.move_arrow(a - a0, b - b0)
+        else:
+            (self.model.move_face if self._drag == "face" else self.model.move_flop)(a, b)
         self.edited.emit()

@@ -93,10 +93,16 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
 
         return QAScreen(window.designer, window.store, send_to_formulation)
 
+    def qc() -> QWidget:
+        from ui.models.qc import LocalQc, QcModel, ServiceQc
+        from ui.widgets.qc_screen import QcScreen
+
+        return QcScreen(QcModel(ServiceQc(window.service) if window.service is not None else LocalQc()))
+
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
 
-        return TweakerScreen(window.document)
+        return TweakerScreen(window.document, window.view_model)
 
     return [
         ("Tweaker", LazyScreen(tweaker)),
@@ -104,5 +110,6 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         ("Library", library),
         ("Instruments", LazyScreen(instruments)),
         ("QA", LazyScreen(qa)),
+        ("QC", LazyScreen(qc)),
         ("Formulation", formulation),
     ]

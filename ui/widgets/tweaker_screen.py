@@ -1,6 +1,10 @@
 """Tweaker (thesis §3.6, Figs. 3.15, 3.17–3.18): edit the design on the rendered object.
 
-A point-lit sphere (``station.design.scene``) is shaded with the design; the HUD draws the iso-angle
+In the viewer the tweaker shows the 3D view's scene — its shape, orbit camera and environment
+(:func:`ui.models.tweaker.main_scene`, computed off the GUI thread at the canvas size, again after a
+shape, camera or environment change) — with θ per pixel taken against the environment's dominant
+light. Without a view model (a bare canvas) a point-lit sphere (``station.design.scene``) is used. The
+HUD draws the iso-angle
 rings at 15° (face), 45° and θ_clamp (flop), the highlight's half-maximum edge, and a gloss checkerboard
 off the object. Click the object to place the crosshair; the buttons around it make it lighter/darker,
 more/less chroma, hue ± there (``station.design.tweaker.adjust_at``: the blend ratio R of eq 3.6.4 depends
@@ -11,7 +15,7 @@ dragging the highlight centre moves the light. Every edit is one undo step.
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QPoint, QPointF
+from PySide6.QtCore import QPoint, QPointF, QThread, Signal
 from PySide6.QtGui import QColor, QImage, QMouseEvent, QPainter, QPen
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
 
@@ -27,8 +31,14 @@ from station.design.tweaker import (
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from ui.models.document import DesignDocument
+from ui.models.tweaker import MainScene, main_scene
+from ui.models.view import ViewModel, ViewSettings
 
 SIZE = 400
+#: Side panel (gloss checkerboard and legend) width, pixels.
+SIDE = 120
+#: Largest main-scene render of the tweaker, pixels per side.
+MAX_SCENE_PX = 900
 STEPS = {"L": 3.0, "C": 0.1, "H": 5.0}
 BUTTONS = (
     ("lighter", "L", +1, (0, -34)),
@@ -46,17 +56,45 @@ RING_COLOURS = {
 }
 
 
-class TweakerCanvas(QWidget):
-    """The shaded object, HUD and crosshair; mouse edits go to the document."""
+class SceneWorker(QThread):
+    """Computes the main scene's basis images and tweaker geometry off the GUI thread."""
 
-    def __init__(self, document: DesignDocument, parent: QWidget | None = None) -> None:
+    done = Signal(object)  # MainScene
+
+    def __init__(self, settings: ViewSettings, width: int, height: int, parent=None) -> None:
+        super().__init__(parent)
+        self.settings, self.width_px, self.height_px = settings, width, height
+
+    def run(self) -> None:
+        """Compute and report."""
+        self.done.emit(main_scene(self.settings, self.width_px, self.height_px))
+
+
+class TweakerCanvas(QWidget):
+    """The shaded object, HUD and crosshair; mouse edits go to the document.
+
+    With *view_model* the object is the 3D view's scene (any shape, environment lit) filling the canvas;
+    without, a point-lit sphere of :data:`SIZE` pixels.
+    """
+
+    def __init__(
+        self, document: DesignDocument, view_model: ViewModel | None = None, parent: QWidget | None = None
+    ) -> None:
         super().__init__(parent)
         self.document = document
+        self.view_model = view_model
         self.scene = sphere_scene(SIZE)
+        self.main: MainScene | None = None
         self.crosshair: tuple[int, int] | None = None
         self._drag: str | None = None
+        self._worker: SceneWorker | None = None
+        self._pending = False
         self.message = ""
-        self.setFixedSize(SIZE + 120, SIZE)
+        if view_model is None:
+            self.setFixedSize(SIZE + SIDE, SIZE)
+        else:
+            self.setMinimumSize(320 + SIDE, 320)
+            view_model.events.settings.connect(self._on_settings)
         self.buttons: dict[str, QToolButton] = {}
         for label, kind, sign, _off in BUTTONS:
             b = QToolButton(self)
@@ -67,12 +105,69 @@ class TweakerCanvas(QWidget):
         document.events.changed.connect(self._on_changed)
         self._render()
 
+    # ------------------------------------------------------------------ main scene
+    def scene_size(self) -> tuple[int, int]:
+        """(width, height) of the object image: the canvas less the side panel."""
+        if self.view_model is None:
+            return SIZE, SIZE
+        w = max(64, min(MAX_SCENE_PX, self.width() - SIDE))
+        h = max(64, min(MAX_SCENE_PX, self.height()))
+        return w, h
+
+    def _on_settings(self, _settings) -> None:
+        self.refresh_scene()
+
+    def refresh_scene(self) -> None:
+        """Recompute the main scene at the current size (one worker at a time; the latest request wins)."""
+        if self.view_model is None:
+            return
+        if self._worker is not None and self._worker.isRunning():
+            self._pending = True
+            return
+        self._pending = False
+        w, h = self.scene_size()
+        self.message = "preparing the scene…"
+        self._worker = SceneWorker(self.view_model.settings, w, h)  # owned here, not by the widget
+        self._worker.done.connect(self._on_scene)
+        self._worker.start()
+        self.update()
+
+    def _on_scene(self, main: MainScene) -> None:
+        self.main = main
+        self.scene = main.scene
+        self.crosshair = None
+        for b in self.buttons.values():
+            b.hide()
+        self.message = ""
+        self._render()
+        if self._pending:
+            self.refresh_scene()
+
+    def wait_idle(self, timeout_ms: int = 60000) -> None:
+        """Block until the scene worker (and a queued refresh) has finished (tests, screenshots)."""
+        from PySide6.QtCore import QCoreApplication
+
+        while self._worker is not None and (self._worker.isRunning() or self._pending):
+            self._worker.wait(timeout_ms)
+            QCoreApplication.processEvents()
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        if self.view_model is not None and (
+            self.main is None or self.main.scene.shape[::-1] != self.scene_size()
+        ):
+            self.refresh_scene()
+
     # ------------------------------------------------------------------ drawing
     def _render(self) -> None:
         d = self.document.design
-        rgb = to_uint8(srgb_encode(shade(self.scene, d, background=(0.05, 0.05, 0.06))))
+        if self.main is not None:
+            rgb = self.main.image(d)
+        else:
+            rgb = to_uint8(srgb_encode(shade(self.scene, d, background=(0.05, 0.05, 0.06))))
         self._buf = np.ascontiguousarray(rgb)
-        self._image = QImage(self._buf.data, SIZE, SIZE, 3 * SIZE, QImage.Format.Format_RGB888)
+        h, w = self._buf.shape[:2]
+        self._image = QImage(self._buf.data, w, h, 3 * w, QImage.Format.Format_RGB888)
         self.update()
 
     def rings(self) -> dict[str, float]:
@@ -88,6 +183,7 @@ class TweakerCanvas(QWidget):
         p.fillRect(self.rect(), QColor(30, 30, 34))
         p.drawImage(0, 0, self._image)
         theta, mask = self.scene.aspecular_deg, self.scene.mask
+        side = self._image.width()
         for name, angle in self.rings().items():
             edge = mask & (np.abs(theta - angle) < 0.9)
             ys, xs = np.nonzero(edge)
@@ -99,14 +195,17 @@ class TweakerCanvas(QWidget):
         for i in range(6):
             for j in range(6):
                 v = int(128 + (1 if (i + j) % 2 else -1) * 110 * g)
-                p.fillRect(SIZE + 20 + 12 * i, 20 + 12 * j, 12, 12, QColor(v, v, v))
+                p.fillRect(side + 20 + 12 * i, 20 + 12 * j, 12, 12, QColor(v, v, v))
         p.setPen(QColor(220, 220, 220))
-        p.drawText(SIZE + 20, 104, f"gloss {self.document.design.gloss_gu:.0f} GU")
+        p.drawText(side + 20, 104, f"gloss {self.document.design.gloss_gu:.0f} GU")
         y = 124
         for name, col in RING_COLOURS.items():
             p.setPen(col)
-            p.drawText(SIZE + 20, y, name)
+            p.drawText(side + 20, y, name)
             y += 16
+        if self.message:
+            p.setPen(QColor(230, 230, 230))
+            p.drawText(12, self.height() - 12, self.message)
         if self.crosshair is not None:
             x, yy = self.crosshair
             p.setPen(QPen(QColor(255, 255, 255), 1))
@@ -118,13 +217,14 @@ class TweakerCanvas(QWidget):
         if self.crosshair is None:
             return
         x, y = self.crosshair
+        h, w = self.scene.shape
         for label, _k, _s, (dx, dy) in BUTTONS:
             b = self.buttons[label]
             b.adjustSize()
             b.move(
                 QPoint(
-                    int(min(max(x + dx - b.width() / 2, 0), SIZE - b.width())),
-                    int(min(max(y + dy - b.height() / 2, 0), SIZE - b.height())),
+                    int(min(max(x + dx - b.width() / 2, 0), w - b.width())),
+                    int(min(max(y + dy - b.height() / 2, 0), h - b.height())),
                 )
             )
             b.show()
@@ -132,7 +232,8 @@ class TweakerCanvas(QWidget):
     # ------------------------------------------------------------------ editing
     def _pixel(self, pos: QPointF) -> tuple[int, int] | None:
         x, y = int(pos.x()), int(pos.y())
-        if 0 <= x < SIZE and 0 <= y < SIZE and self.scene.mask[y, x]:
+        h, w = self.scene.shape
+        if 0 <= x < w and 0 <= y < h and self.scene.mask[y, x]:
             return x, y
         return None
 
@@ -181,6 +282,12 @@ class TweakerCanvas(QWidget):
                     "tw:edge",
                 )
             elif self._drag == "highlight-centre":
+                if self.main is not None:
+                    self.message = (
+                        "the environment lights the object: orbit the 3D view to move the highlight"
+                    )
+                    self.update()
+                    return
                 self.scene = s.with_light(drag_highlight_centre(s.light_dirs, xy, s.mask))
                 self._render()
         except InputError as exc:
@@ -206,28 +313,41 @@ class TweakerCanvas(QWidget):
 
     def closeEvent(self, event) -> None:
         self.document.events.changed.disconnect(self._on_changed)
+        if self.view_model is not None:
+            self.view_model.events.settings.disconnect(self._on_settings)
+        self._pending = False
+        if self._worker is not None:
+            self._worker.wait()
         super().closeEvent(event)
 
 
 class TweakerScreen(QWidget):
-    """The canvas and a short legend."""
+    """The canvas and a short legend (with *view_model*: the 3D view's scene, filling the tab)."""
 
-    def __init__(self, document: DesignDocument, parent: QWidget | None = None) -> None:
+    def __init__(
+        self, document: DesignDocument, view_model: ViewModel | None = None, parent: QWidget | None = None
+    ) -> None:
         super().__init__(parent)
-        self.canvas = TweakerCanvas(document)
+        self.canvas = TweakerCanvas(document, view_model)
         help_text = QLabel(
             "Click the object to place the crosshair, then use the buttons around it. Drag the "
-            "θ_clamp ring (blue) to set travel, the highlight edge (red) to set gloss, the "
-            "highlight centre to move the light."
+            "θ_clamp ring (blue) to set travel, the highlight edge (red) to set gloss"
+            + (
+                ". The object, camera and environment are the Design view's: change them there."
+                if view_model is not None
+                else ", the highlight centre to move the light."
+            )
         )
         help_text.setWordWrap(True)
         row = QHBoxLayout()
-        row.addWidget(self.canvas)
-        row.addStretch(1)
+        row.addWidget(self.canvas, 1 if view_model is not None else 0)
+        if view_model is None:
+            row.addStretch(1)
         lay = QVBoxLayout(self)
         lay.addWidget(help_text)
-        lay.addLayout(row)
-        lay.addStretch(1)
+        lay.addLayout(row, 1)
+        if view_model is None:
+            lay.addStretch(1)
 
     def closeEvent(self, event) -> None:
         self.canvas.close()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import codecs
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Path, Query, Request, Response, status
@@ -11,7 +12,7 @@ from db.models import User
 from station.api.deps import SessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.common import Limit, Offset, Page
-from station.api.schemas.formulation import BrowseOut, LibraryImportOut
+from station.api.schemas.formulation import BrowseOut, LibraryImportOut, StoredLibraryOut
 from station.api.schemas.library import LibraryPaintPublic
 from station.api.security import Scope
 from station.api.services import formulation
@@ -19,6 +20,8 @@ from station.api.services import library as service
 from station.errors import InputError
 
 router = APIRouter(prefix="/library", tags=["library"], responses=ERROR_RESPONSES)
+#: Path of the CSV upload under the API prefix; its body cap is ``Settings.library_upload_max_bytes``.
+IMPORT_PATH = "/library/import"
 Reader = Annotated[User, scoped(Scope.LIBRARY_READ)]
 Importer = Annotated[User, scoped(Scope.LIBRARY_WRITE)]
 
@@ -109,10 +112,10 @@ def export_csv(
 
 
 @router.post(
-    "/import",
+    IMPORT_PATH.removeprefix("/library"),
     status_code=status.HTTP_201_CREATED,
     response_model=LibraryImportOut,
-    responses={**CONFLICT, 413: {"description": "request body over the service's limit"}},
+    responses={**CONFLICT, 413: {"description": "request body over the library upload limit"}},
     openapi_extra={
         "requestBody": {
             "required": True,
@@ -147,13 +150,20 @@ async def import_csv(
         ),
     ] = False,
 ) -> LibraryImportOut:
-    """Validate a library CSV (header ``code,type,gloss_gu,L15,a15,b15,…``; faults name row and column) and
-    add its paints in one transaction: a code already stored is a 409 and nothing is added. Audited.
-    Codes are printable text; one starting with = + - @ is refused unless ``allow_formulas``."""
+    """Validate a library CSV (header ``code,type,gloss_gu,L15,a15,b15,…[,synthetic][,recipe]``; faults
+    name row and column) and add its paints in one transaction: a code already stored is a 409 and
+    nothing is added. Audited. Codes are printable text; one starting with = + - @ is refused unless
+    ``allow_formulas``. The body is read as a stream, decoded chunk by chunk, under its own cap
+    (``library_upload_max_bytes``, 64 MiB by default: a 50 000-paint library fits)."""
+    decoder = codecs.getincrementaldecoder("utf-8-sig")()
+    parts: list[str] = []
     try:
-        text = (await request.body()).decode("utf-8-sig")
+        async for chunk in request.stream():
+            parts.append(decoder.decode(chunk))
+        parts.append(decoder.decode(b"", final=True))
     except UnicodeDecodeError as exc:
         raise InputError("body", "UTF-8 CSV text") from exc
+    text = "".join(parts)
 
     def run() -> dict[str, object]:
         with request.app.state.sessions() as session:
@@ -162,6 +172,13 @@ async def import_csv(
             )
 
     return LibraryImportOut.model_validate(await asyncio.to_thread(run))
+
+
+@router.get("/libraries", response_model=list[StoredLibraryOut], responses=CONFLICT)
+def libraries(request: Request, session: SessionDep, _user: Reader) -> list[dict[str, object]]:
+    """The libraries stored (each import is one, the demo library another): name, paints per type and
+    whether they are synthetic. ``POST /formulation/snap`` searches one of them with ``library``."""
+    return formulation.stored_libraries(session=session, cache=formulation.app_cache(request.app.state))
 
 
 @router.get("/{code}", response_model=LibraryPaintPublic, responses=NOT_FOUND)

@@ -12,6 +12,7 @@ from station.api.schemas.designs import DesignBody, Lab
 from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS_MIN_GU
 
 SnapMetric = Literal["cie76", "cie2000", "din6175"]
+PaintType = Literal["solid", "metallic", "pearl"]
 _DESIGN: JsonDict = {
     "name": "Blue metallic",
     "face": [62.0, -4.0, -38.0],
@@ -58,6 +59,25 @@ class SnapRequest(DesignSource):
     metric: Annotated[
         SnapMetric, Field(description="ΔE summed over the angles (cie76 = ΔE*ab, the thesis's)")
     ] = "cie76"
+    types: (
+        Annotated[
+            list[PaintType],
+            Field(min_length=1, max_length=3, description="search only paints of these types; default all"),
+        ]
+        | None
+    ) = None
+    library: (
+        Annotated[
+            str,
+            Field(
+                min_length=1,
+                max_length=64,
+                description="search one stored library (its name, as GET /library/libraries lists); "
+                "default every stored paint",
+            ),
+        ]
+        | None
+    ) = None
 
 
 class SnapMatchOut(BaseModel):
@@ -65,6 +85,9 @@ class SnapMatchOut(BaseModel):
 
     code: str
     library_paint_id: int
+    type: PaintType
+    library: str
+    synthetic: bool
     sum_de: float
     de_per_angle: list[float]
     recipe: dict[str, float] | None
@@ -79,7 +102,9 @@ class SnapOut(BaseModel):
     angles_deg: list[float]
     design_lab: list[list[float]]
     library_paints: int
-    synthetic: bool
+    libraries: list[str]
+    types: list[PaintType]
+    synthetic: bool = Field(description="true when any match is a synthetic (generated) paint")
 
 
 class FormulateRequest(DesignSource):
@@ -123,6 +148,13 @@ class FormulateOut(BaseModel):
     synthetic_colorants: bool
     matches: list[dict[str, Any]]
     snap_warnings: list[str]
+    batch: dict[str, Any] = Field(
+        description="the recipe weighed out as a 1000 g batch: colorants_g, binder_g, total_g"
+    )
+    nearest_achievable_lab: list[list[float]] | None = Field(
+        default=None,
+        description="when not formulable: Lab per angle of the best recipe (the nearest achievable paint)",
+    )
 
 
 class ExportRequest(BaseModel):
@@ -226,3 +258,12 @@ class ClosedLoopOut(BaseModel):
     final_recipe: dict[str, float] | None
     steps: list[dict[str, Any]]
     measurement: str
+
+
+class StoredLibraryOut(BaseModel):
+    """One stored library: its name, paints per type, and whether its paints are synthetic."""
+
+    name: str
+    paints: int
+    types: dict[str, int]
+    synthetic: bool

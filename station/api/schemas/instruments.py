@@ -97,3 +97,6 @@ class MeasureResult(BaseModel):
     status: Literal["stored", "duplicate", "queued"]
     client_id: uuid.UUID
     measurement: MeasurementPublic | None
+    gloss_reading_id: int | None = Field(
+        default=None, description="the full gloss reading stored with it when a gloss meter joined"
+    )

@@ -74,11 +74,16 @@ def _seam_report(session: Session, request: SeamQaCreate) -> SeamReport:
 
 def seam_qa(*, session: Session, actor: User, request: SeamQaCreate) -> AnalysisResult:
     """Fit measured panels (eqs 3.3.x) or take the designs, judge the seam at β and store the report."""
+    from station.formulate.gamut import colorant_gamut
+
     report = _seam_report(session, request)
+    result = report.to_dict()
+    # flag a corrected paint outside the colorant gamut, with the nearest achievable paint
+    result["corrected_colorant_gamut"] = colorant_gamut(report.correction.paint).to_dict()
     row = AnalysisResult(
         kind="seam_qa",
         inputs=request.model_dump(mode="json", by_alias=True, exclude_none=True),
-        result=report.to_dict(),
+        result=result,
         created_by_id=actor.id,
     )
     session.add(row)

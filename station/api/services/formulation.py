@@ -24,6 +24,7 @@ from station.api.schemas.formulation import DesignSource, ExportRequest, Formula
 from station.api.services import audit
 from station.api.services.designs import design_version, to_design
 from station.api.services.library import library_rows
+from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_from_dict
 from station.model.domain import ANGLES_3
@@ -43,6 +44,8 @@ class CachedLibrary:
     with_recipes: Any | None
     with_recipes_index: Any | None
     with_recipes_rows: np.ndarray
+    library_names: np.ndarray
+    synthetic_rows: np.ndarray
 
 
 class LibraryCache:
@@ -117,7 +120,16 @@ def _build(session: Session, key: tuple[int, int]) -> CachedLibrary:
         )
         with_index = SnapIndex(with_recipes)
     return CachedLibrary(
-        key, lib, SnapIndex(lib), np.array([r.id for r in rows]), recipes, with_recipes, with_index, rows_with
+        key,
+        lib,
+        SnapIndex(lib),
+        np.array([r.id for r in rows]),
+        recipes,
+        with_recipes,
+        with_index,
+        rows_with,
+        np.array([str(x.get("library", "database")) for x in extras]),
+        np.array([bool(x.get("synthetic")) for x in extras], dtype=bool),
     )
 
 
@@ -135,30 +147,68 @@ def _target(session: Session, source: DesignSource) -> tuple[np.ndarray, FaceFlo
 
 
 def snap(*, session: Session, cache: LibraryCache, request: SnapRequest) -> dict[str, Any]:
-    """ColorSnap top-k against the database library (``station.formulate.snap.color_snap``)."""
-    from station.formulate.snap import color_snap
+    """ColorSnap top-k against the database library (``station.formulate.snap.color_snap``), optionally
+    one stored library only (``request.library``) and some paint types only (``request.types``); every
+    match says its library and whether it is synthetic."""
+    from station.formulate.library import PAINT_TYPES
+    from station.formulate.snap import color_snap, type_rows
 
     lab, _ = _target(session, request)
     cached = cache.get(session)
+    lib, index, rows = cached.library, cached.index, np.arange(len(cached.library))
+    if request.library is not None:
+        rows = np.flatnonzero(cached.library_names == request.library)
+        if rows.size == 0:
+            held = " | ".join(sorted(set(cached.library_names.tolist())))
+            raise InputError("library", f"a stored library: {held}", request.library)
+        lib, index = lib.subset(rows), None
+    type_rows(lib, request.types, field="types")  # 422 naming ``types`` before the search
     result = color_snap(
-        cached.library, lab, k=min(request.k, len(cached.library)), method=request.metric, index=cached.index
+        lib, lab, k=min(request.k, len(lib)), method=request.metric, index=index, types=request.types
     )
     out = result.to_dict()
+    hits = [int(rows[m.index]) for m in result.matches]
     out["matches"] = [
         {
             "code": m.code,
-            "library_paint_id": int(cached.ids[m.index]),
+            "library_paint_id": int(cached.ids[r]),
+            "type": str(cached.library.types[r]),
+            "library": str(cached.library_names[r]),
+            "synthetic": bool(cached.synthetic_rows[r]),
             "sum_de": m.sum_de,
             "de_per_angle": list(m.de_per_angle),
-            "recipe": cached.recipes[m.index],
+            "recipe": cached.recipes[r],
         }
-        for m in result.matches
+        for m, r in zip(result.matches, hits, strict=True)
     ]
+    searched = rows if request.types is None else rows[np.isin(cached.library.types[rows], request.types)]
     out.update(
         design_lab=np.asarray(result.design_lab, dtype=float).tolist(),
-        library_paints=len(cached.library),
-        synthetic=bool(cached.library.synthetic),
+        library_paints=int(searched.size),
+        libraries=sorted(set(cached.library_names[searched].tolist())),
+        types=sorted(request.types or PAINT_TYPES),
+        synthetic=any(bool(cached.synthetic_rows[r]) for r in hits),
     )
+    return out
+
+
+def stored_libraries(*, session: Session, cache: LibraryCache) -> list[dict[str, object]]:
+    """Each stored library (``extra.library`` of its paints): paints per type and its synthetic flag."""
+    from station.formulate.library import PAINT_TYPES
+
+    cached = cache.get(session)
+    out: list[dict[str, object]] = []
+    for name in sorted(set(cached.library_names.tolist())):
+        rows = cached.library_names == name
+        types = cached.library.types[rows]
+        out.append(
+            {
+                "name": name,
+                "paints": int(rows.sum()),
+                "types": {t: int(np.sum(types == t)) for t in PAINT_TYPES},
+                "synthetic": bool(cached.synthetic_rows[rows].all()),
+            }
+        )
     return out
 
 

@@ -49,7 +49,7 @@ path is chosen per call (``use_numba=False``).
 from __future__ import annotations
 
 from station.formulate.snap.bounds import METHODS
-from station.formulate.snap.index import SnapHits, SnapIndex, brute_force, color_snap
+from station.formulate.snap.index import SnapHits, SnapIndex, brute_force, color_snap, type_rows
 from station.formulate.snap.results import (
     FAR_THRESHOLD,
     HUE_SHIFT_THRESHOLD,
@@ -76,6 +76,7 @@ __all__ = [
     "brute_force",
     "color_snap",
     "snap_warnings",
+    "type_rows",
     "validate_design_lab",
     "view_data",
 ]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import threading
+from collections.abc import Collection
 from typing import NamedTuple
 
 import numpy as np
@@ -17,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.formulate.de_kernels import KERNELS, cie2000_columns
 from station.formulate.errors import FormulateInputError
-from station.formulate.library import STANDARD_ANGLES, Library
+from station.formulate.library import PAINT_TYPES, STANDARD_ANGLES, Library
 from station.formulate.snap.bounds import (
     METHODS,
     SAFETY,
@@ -489,6 +490,30 @@ def brute_force(
     return top, s[top], per[top]
 
 
+def type_rows(
+    library: Library, types: Collection[str] | None, field: str = "type"
+) -> NDArray[np.intp] | None:
+    """Rows of *library* whose paint type is in *types*; ``None`` when *types* restricts nothing.
+
+    Raises :class:`FormulateInputError` (naming *field*) for an unknown type or when no paint of the
+    library has one of the types."""
+    if types is None:
+        return None
+    chosen = frozenset(str(t) for t in types)
+    unknown = sorted(chosen - set(PAINT_TYPES))
+    if unknown or not chosen:
+        raise FormulateInputError(field, " | ".join(PAINT_TYPES), ",".join(unknown) or "none")
+    if chosen >= set(library.types.tolist()):
+        return None
+    rows = np.flatnonzero(np.isin(library.types, sorted(chosen)))
+    if rows.size == 0:
+        held = sorted(set(library.types.tolist()))
+        raise FormulateInputError(
+            field, f"a type the library holds: {' | '.join(held)}", ",".join(sorted(chosen))
+        )
+    return rows
+
+
 def color_snap(
     library: Library,
     lab: ArrayLike,
@@ -496,6 +521,7 @@ def color_snap(
     method: str = "cie76",
     index: SnapIndex | None = None,
     use_numba: bool = True,
+    types: Collection[str] | None = None,
 ) -> SnapResult:
     """ColorSnap: top-*k* library paints nearest to the design Lab (15/45/110), with warnings.
 
@@ -514,7 +540,23 @@ def color_snap(
     use_numba
         Run CIEDE2000 through the numba-compiled walk where numba is installed (the NumPy path
         otherwise; same matches).
+    types
+        Paint types to search (``solid``, ``metallic``, ``pearl``); ``None`` searches every paint. A
+        restriction searches an index of those paints only (built per call, ~10 ms for 6000 paints;
+        *index* is then not used) and reports the matches by their row in *library*.
     """
+    rows = type_rows(library, types)
+    if rows is not None:
+        sub = library.subset(rows)
+        found = color_snap(sub, lab, min(k, len(sub)), method, None, use_numba)
+        return SnapResult(
+            tuple(SnapMatch(int(rows[m.index]), m.code, m.sum_de, m.de_per_angle) for m in found.matches),
+            found.method,
+            found.angles_deg,
+            found.design_lab,
+            found.warnings,
+            found.stats,
+        )
     index = index or SnapIndex(library)
     result = index.snap(lab, k, method, use_numba)
     return SnapResult(

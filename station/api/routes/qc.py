@@ -1,0 +1,207 @@
+"""Colour QC: ``/api/v1/qc`` (gloss readings, the paired measurement view, checks against standards,
+standards per job and part, job summaries, metamerism, repeat readings, PDF/CSV reports)."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Annotated
+
+from fastapi import APIRouter, Query, Request, Response, status
+from fastapi import Path as PathParam
+
+from db.models import User
+from station.api.deps import SessionDep, scoped
+from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND, UNAVAILABLE
+from station.api.instruments import InstrumentHub
+from station.api.routes.measurements import Filters
+from station.api.schemas.common import Id, Limit, Offset, Page
+from station.api.schemas.panels import Job, Part
+from station.api.schemas.qc import (
+    CheckRequest,
+    CheckResult,
+    GlossMeasureRequest,
+    GlossPublic,
+    JobOut,
+    JobSummaryOut,
+    MetamerismOut,
+    MetamerismRequest,
+    QcMeasurement,
+    RepeatsOut,
+    RepeatsRequest,
+    StandardOut,
+    StandardSet,
+)
+from station.api.security import Scope
+from station.api.services import qc as service
+from station.ingest import GlossRecord
+
+router = APIRouter(prefix="/qc", tags=["qc"], responses=ERROR_RESPONSES)
+Reader = Annotated[User, scoped(Scope.MEASUREMENTS_READ)]
+Writer = Annotated[User, scoped(Scope.MEASUREMENTS_WRITE)]
+Operator = Annotated[User, scoped(Scope.INSTRUMENTS_OPERATE)]
+
+
+@router.get("/measurements", response_model=Page[QcMeasurement])
+def list_measurements(
+    session: SessionDep, _user: Reader, q: Filters, limit: Limit = 100, offset: Offset = 0
+) -> Page[QcMeasurement]:
+    """Measurements by job, part, panel, instrument and time, newest first, each with its paired gloss reading."""
+    rows, total = service.list_measurements(session=session, q=q, limit=limit, offset=offset)
+    return Page[QcMeasurement](data=rows, count=total)
+
+
+@router.get("/measurements/{measurement_id}", response_model=QcMeasurement, responses=NOT_FOUND)
+def get_measurement(session: SessionDep, _user: Reader, measurement_id: Id) -> QcMeasurement:
+    """One measurement with its job, part and paired gloss reading."""
+    return service.get_measurement(session=session, measurement_id=measurement_id)
+
+
+@router.post(
+    "/gloss",
+    status_code=status.HTTP_201_CREATED,
+    response_model=GlossPublic,
+    responses={
+        200: {"model": GlossPublic, "description": "already stored (same client_id)"},
+        **NOT_FOUND,
+        **CONFLICT,
+    },
+)
+def create_gloss(session: SessionDep, user: Writer, record: GlossRecord, response: Response) -> GlossPublic:
+    """Store a gloss reading once (gloss-only, or naming its colour measurement); a re-send returns 200."""
+    stored, created = service.ingest_gloss(session=session, actor=user, record=record)
+    if not created:
+        response.status_code = status.HTTP_200_OK
+    return stored
+
+
+@router.get("/gloss", response_model=Page[GlossPublic])
+def list_gloss(
+    session: SessionDep,
+    _user: Reader,
+    job: Annotated[Job | None, Query()] = None,
+    part: Part | None = None,
+    panel_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
+    limit: Limit = 100,
+    offset: Offset = 0,
+) -> Page[GlossPublic]:
+    """Gloss readings of a job, part and/or panel, newest first."""
+    rows, total = service.list_gloss(
+        session=session, job=job, part=part, panel_id=panel_id, limit=limit, offset=offset
+    )
+    return Page[GlossPublic](data=rows, count=total)
+
+
+@router.get("/gloss/{gloss_id}", response_model=GlossPublic, responses=NOT_FOUND)
+def get_gloss(session: SessionDep, _user: Reader, gloss_id: Id) -> GlossPublic:
+    """One gloss reading."""
+    return service.get_gloss(session=session, gloss_id=gloss_id)
+
+
+@router.post(
+    "/gloss/measure",
+    status_code=status.HTTP_201_CREATED,
+    response_model=GlossPublic,
+    responses={**NOT_FOUND, **UNAVAILABLE},
+)
+async def measure_gloss(
+    request: Request, session: SessionDep, user: Operator, body: GlossMeasureRequest
+) -> GlossPublic:
+    """Measure once on an attached gloss meter and store the reading (20/60/85 GU, haze, DOI, Rspec)."""
+    hub: InstrumentHub = request.app.state.instruments
+    gloss_id = await asyncio.to_thread(
+        hub.measure_gloss,
+        instrument_id=body.instrument_id,
+        panel_id=body.panel_id,
+        measurement_id=body.measurement_id,
+        actor=user,
+    )
+    return service.get_gloss(session=session, gloss_id=gloss_id)
+
+
+@router.post("/check", response_model=CheckResult, responses=NOT_FOUND)
+def check(session: SessionDep, _user: Reader, body: CheckRequest) -> CheckResult:
+    """Pass / warn / fail of a sample against a standard (stored measurements or inline Lab), per geometry and overall."""
+    return service.check(session=session, request=body)
+
+
+JobPath = Annotated[
+    str, PathParam(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f/]+$", examples=["J-2026-0113"])
+]
+Formula = Annotated[
+    str | None,
+    Query(min_length=1, max_length=32, description="din6175-2 | cie2000 | cie94 | cie76 (default din6175-2)"),
+]
+StandardWriter = Annotated[User, scoped(Scope.QC_STANDARDS_WRITE)]
+
+
+@router.get("/jobs", response_model=list[JobOut])
+def list_jobs(
+    session: SessionDep,
+    _user: Reader,
+    contains: Annotated[
+        str | None, Query(min_length=1, max_length=64, description="part of the job name")
+    ] = None,
+) -> list[JobOut]:
+    """Every job with its parts, panel and measurement counts and its first and last reading time."""
+    return service.list_jobs(session=session, contains=contains)
+
+
+@router.put("/jobs/{job}/standards/{part}", response_model=StandardOut, responses=NOT_FOUND)
+def set_standard(
+    session: SessionDep, user: StandardWriter, job: JobPath, part: Part, body: StandardSet
+) -> StandardOut:
+    """Make a stored measurement or a design the standard of a job's part (``replace`` to change it)."""
+    return service.set_standard(session=session, actor=user, job=job, part=part, body=body)
+
+
+@router.get("/jobs/{job}/standards/{part}", response_model=StandardOut, responses=NOT_FOUND)
+def get_standard(session: SessionDep, _user: Reader, job: JobPath, part: Part) -> StandardOut:
+    """The standard of a job's part (404 when none is set)."""
+    return service.get_standard(session=session, job=job, part=part)
+
+
+@router.get("/jobs/{job}/summary", response_model=JobSummaryOut)
+def job_summary(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> JobSummaryOut:
+    """Every part of the job with its standard and each sample's pass / warn / fail per geometry, with the reason."""
+    return service.job_summary(session=session, job=job, formula=formula)
+
+
+@router.get(
+    "/jobs/{job}/report.pdf",
+    response_class=Response,
+    responses={200: {"content": {"application/pdf": {"schema": {"type": "string", "format": "binary"}}}}},
+)
+def report_pdf(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> Response:
+    """The job's QC report: verdict table per geometry, L*a*b* against angle, ΔE bars and trend, as PDF."""
+    body = service.report_pdf(session=session, job=job, formula=formula)  # a worker thread: a sync route
+    return Response(
+        body,
+        media_type="application/pdf",
+        headers={"Content-Disposition": 'attachment; filename="qc-report.pdf"'},
+    )
+
+
+@router.get(
+    "/jobs/{job}/report.csv",
+    response_class=Response,
+    responses={200: {"content": {"text/csv": {"schema": {"type": "string"}}}}},
+)
+def report_csv(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> Response:
+    """The job's QC report as CSV: one row per sample and geometry with standard and sample Lab, differences and verdicts."""
+    return Response(
+        service.report_csv(session=session, job=job, formula=formula),
+        media_type="text/csv",
+        headers={"Content-Disposition": 'attachment; filename="qc-report.csv"'},
+    )
+
+
+@router.post("/metamerism", response_model=MetamerismOut, responses=NOT_FOUND)
+def metamerism(session: SessionDep, _user: Reader, body: MetamerismRequest) -> MetamerismOut:
+    """Metamerism index of a sample against its standard from D65 to A and F11, per geometry."""
+    return service.metamerism_of(session=session, request=body)
+
+
+@router.post("/repeats", response_model=RepeatsOut, responses=NOT_FOUND)
+def repeats(session: SessionDep, _user: Reader, body: RepeatsRequest) -> RepeatsOut:
+    """Average of repeat readings of one panel with the sd per geometry and the outliers flagged."""
+    return service.repeats_of(session=session, request=body)

@@ -1,0 +1,345 @@
+"""CGATS.17 ASCII measurement files, as X-Rite and ArgyllCMS write them: read and write.
+
+Layout read (ANSI CGATS.17): a first line naming the file type (``CGATS.17``, ``CTI3``, …), keyword
+lines (``KEYWORD value``; a value with spaces is double-quoted, ``""`` inside quotes is one quote),
+``BEGIN_DATA_FORMAT`` … ``END_DATA_FORMAT`` listing the fields, and ``BEGIN_DATA`` … ``END_DATA`` with
+one row per sample and geometry. ``#`` outside quotes starts a comment. Only the first table is read.
+
+Fields used: ``SAMPLE_ID`` and ``SAMPLE_NAME`` (rows with the same ``SAMPLE_NAME``, or without that
+field the same ``SAMPLE_ID``, are one sample); ``GEOMETRY`` (``45as15``) or ``ILLUMINATION_ANGLE`` +
+``ASPECULAR_ANGLE`` (degrees); ``LAB_L``, ``LAB_A``, ``LAB_B`` and/or ``SPECTRAL_NMxxx`` (reflectance
+factor, or percent when the keyword ``SPECTRAL_NORM`` is 100); vendor texture fields ``SPARKLE…`` and
+``GRAININESS…`` (an empty ``""`` cell means "not measured at this geometry"), tagged with the
+``MANUFACTURER`` keyword (else ``INSTRUMENTATION``). Any other field and keyword is ignored.
+
+Keywords read: ``INSTRUMENTATION`` (model), ``MANUFACTURER``, ``INSTRUMENT_SERIAL`` (or
+``SERIAL_NUMBER``), ``CREATED`` (ISO 8601 instant of the measurement), ``MEASUREMENT_SOURCE``
+(``"Illumination=D65 ObserverAngle=10"``, X-Rite's form) or ``ILLUMINANT`` and ``OBSERVER``; the default
+is D65 and the CIE 1964 10° observer.
+
+Refused (:class:`~station.ingest.errors.CgatsImportError` naming the line and field): not UTF-8, no
+data table, a table without ``END_DATA`` (truncated), a row with too few or too many values, a row
+count different from ``NUMBER_OF_SETS``, a missing sample, geometry or colour field, a number that
+does not parse or is not finite, a repeated geometry in a sample, Lab outside the domain bound.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+from station.ingest.errors import CgatsImportError
+from station.ingest.formats._text import decode_utf8, factory, parse_instant, read_bytes
+from station.ingest.formats.measurement import (
+    ImportedFile,
+    ImportedMeasurement,
+    Instrument,
+    VendorValue,
+    build_measurement,
+    canonical_geometry,
+    observer_degrees,
+    observer_name,
+)
+from station.model.domain import geometry_name
+
+__all__ = ["read_cgats", "write_cgats"]
+
+_SPECTRAL = re.compile(r"^SPECTRAL_NM_?(\d+(?:\.\d+)?)$", re.IGNORECASE)
+_TEXTURE = re.compile(r"^(SPARKLE|GRAININESS)", re.IGNORECASE)
+_ORIGINATOR = "CACAD Station"
+LAB_DECIMALS = 4
+SPECTRA_DECIMALS = 6
+
+
+def _tokens(line: str, file: str, lineno: int) -> list[str]:
+    """Split one line into tokens: whitespace-separated, double quotes group, ``#`` starts a comment."""
+    out: list[str] = []
+    i, n = 0, len(line)
+    while i < n:
+        c = line[i]
+        if c.isspace():
+            i += 1
+        elif c == "#":
+            break
+        elif c == '"':
+            j, buf = i + 1, []
+            while True:
+                if j >= n:
+                    raise CgatsImportError(file, f"line {lineno}", "quote", 'a closing "', line.strip())
+                if line[j] == '"':
+                    if j + 1 < n and line[j + 1] == '"':
+                        buf.append('"')
+                        j += 2
+                        continue
+                    break
+                buf.append(line[j])
+                j += 1
+            out.append("".join(buf))
+            i = j + 1
+        else:
+            j = i
+            while j < n and not line[j].isspace() and line[j] != '"':
+                j += 1
+            out.append(line[i:j])
+            i = j
+    return out
+
+
+def _float(text: str, fld: str, file: str, lineno: int) -> float:
+    try:
+        return float(text)
+    except ValueError as exc:
+        raise CgatsImportError(file, f"line {lineno}", fld, "a number", text) from exc
+
+
+def _conditions(keywords: dict[str, str], file: str) -> tuple[str, str]:
+    illuminant, observer = "D65", observer_name("10") or ""
+    source = keywords.get("MEASUREMENT_SOURCE", "")
+    for part in source.replace(",", " ").split():
+        key, _, value = part.partition("=")
+        if key.lower() == "illumination" and value:
+            illuminant = value.upper()
+        elif key.lower() == "observerangle" and value:
+            observer = observer_name(value) or value
+    if "ILLUMINANT" in keywords:
+        illuminant = keywords["ILLUMINANT"].strip().upper()
+    if "OBSERVER" in keywords:
+        observer = observer_name(keywords["OBSERVER"]) or keywords["OBSERVER"]
+    return illuminant, observer
+
+
+def read_cgats(path: Path | str) -> ImportedFile:
+    """Read a CGATS.17 file into one :class:`ImportedMeasurement` per sample (module doc for the rules)."""
+    path = Path(path)
+    file = path.name
+    text = decode_utf8(read_bytes(path, CgatsImportError), file, CgatsImportError)
+    lines = text.splitlines()
+    if not lines or not lines[0].strip():
+        raise CgatsImportError(file, "line 1", "file type", "a first line such as CGATS.17", "empty")
+    keywords: dict[str, str] = {}
+    fields: list[str] = []
+    rows: list[tuple[int, list[str]]] = []
+    state = "header"
+    declared_sets: tuple[int, int] | None = None
+    for lineno, raw in enumerate(lines[1:], start=2):
+        toks = _tokens(raw, file, lineno)
+        if not toks:
+            continue
+        head = toks[0].upper()
+        if state == "header":
+            if head == "BEGIN_DATA_FORMAT":
+                state, fields = "format", [t.upper() for t in toks[1:]]
+            elif head == "BEGIN_DATA":
+                raise CgatsImportError(file, f"line {lineno}", "BEGIN_DATA", "a BEGIN_DATA_FORMAT first")
+            elif head == "NUMBER_OF_SETS":
+                value = toks[1] if len(toks) > 1 else ""
+                if not value.isdigit():
+                    raise CgatsImportError(file, f"line {lineno}", "NUMBER_OF_SETS", "a count", value)
+                declared_sets = (int(value), lineno)
+            elif head != "KEYWORD":
+                keywords[head] = toks[1] if len(toks) > 1 else ""
+        elif state == "format":
+            if head == "END_DATA_FORMAT":
+                state = "between"
+            else:
+                fields.extend(t.upper() for t in toks)
+        elif state == "between":
+            if head == "BEGIN_DATA":
+                state = "data"
+            elif head == "NUMBER_OF_SETS":
+                value = toks[1] if len(toks) > 1 else ""
+                if not value.isdigit():
+                    raise CgatsImportError(file, f"line {lineno}", "NUMBER_OF_SETS", "a count", value)
+                declared_sets = (int(value), lineno)
+            elif head != "KEYWORD":
+                keywords[head] = toks[1] if len(toks) > 1 else ""
+        elif state == "data":
+            if head == "END_DATA":
+                state = "done"
+                break
+            if len(toks) != len(fields):
+                raise CgatsImportError(
+                    file, f"line {lineno}", "row", f"{len(fields)} values (one per field)", len(toks)
+                )
+            rows.append((lineno, toks))
+    last = len(lines)
+    if state in ("header", "format"):
+        raise CgatsImportError(file, f"line {last}", "BEGIN_DATA", "a data table (file truncated?)")
+    if state in ("between", "data"):
+        raise CgatsImportError(file, f"line {last}", "END_DATA", "an END_DATA line (file truncated?)")
+    if declared_sets is not None and declared_sets[0] != len(rows):
+        raise CgatsImportError(
+            file, f"line {declared_sets[1]}", "NUMBER_OF_SETS", f"the number of data rows ({len(rows)})",
+            declared_sets[0],
+        )  # fmt: skip
+    if not rows:
+        raise CgatsImportError(file, "BEGIN_DATA", "rows", "at least one data row", 0)
+    return ImportedFile("cgats", file, _samples(file, fields, rows, keywords))
+
+
+def _samples(
+    file: str, fields: list[str], rows: list[tuple[int, list[str]]], keywords: dict[str, str]
+) -> tuple[ImportedMeasurement, ...]:
+    col = {f: i for i, f in enumerate(fields)}
+    where_fmt = "BEGIN_DATA_FORMAT"
+    key_field = "SAMPLE_NAME" if "SAMPLE_NAME" in col else "SAMPLE_ID"
+    if key_field not in col:
+        raise CgatsImportError(file, where_fmt, "SAMPLE_ID", "a SAMPLE_ID or SAMPLE_NAME field")
+    if "GEOMETRY" not in col and not {"ILLUMINATION_ANGLE", "ASPECULAR_ANGLE"} <= col.keys():
+        raise CgatsImportError(
+            file, where_fmt, "GEOMETRY", "a GEOMETRY field, or ILLUMINATION_ANGLE and ASPECULAR_ANGLE"
+        )
+    lab_cols = [col.get(f"LAB_{c}") for c in "LAB"]
+    has_lab = all(c is not None for c in lab_cols)
+    if any(c is not None for c in lab_cols) and not has_lab:
+        raise CgatsImportError(file, where_fmt, "LAB_L", "all of LAB_L, LAB_A, LAB_B (or none)")
+    spectral = sorted(
+        ((float(m.group(1)), i) for i, f in enumerate(fields) if (m := _SPECTRAL.match(f))),
+        key=lambda t: t[0],
+    )
+    if not has_lab and not spectral:
+        raise CgatsImportError(file, where_fmt, "LAB_L", "LAB_L/LAB_A/LAB_B and/or SPECTRAL_NMxxx fields")
+    divisor = 1.0
+    if keywords.get("SPECTRAL_NORM", "").strip() in ("100", "100.0"):
+        divisor = 100.0  # percent
+    texture_cols = [(f, i) for i, f in enumerate(fields) if _TEXTURE.match(f)]
+    vendor = keywords.get("MANUFACTURER", "").strip() or keywords.get("INSTRUMENTATION", "").strip()
+    if texture_cols and not vendor:
+        raise CgatsImportError(
+            file, "header", "MANUFACTURER", "a MANUFACTURER or INSTRUMENTATION keyword with texture fields"
+        )
+    instrument = Instrument(
+        model=keywords.get("INSTRUMENTATION", "").strip(),
+        serial=(keywords.get("INSTRUMENT_SERIAL") or keywords.get("SERIAL_NUMBER") or "").strip(),
+        manufacturer=keywords.get("MANUFACTURER", "").strip(),
+    )
+    illuminant, observer = _conditions(keywords, file)
+    measured_at: dt.datetime | None = parse_instant(keywords.get("CREATED", ""))
+    groups: dict[str, list[tuple[int, list[str]]]] = {}
+    for lineno, toks in rows:
+        key = toks[col[key_field]].strip()
+        if not key:
+            raise CgatsImportError(file, f"line {lineno}", key_field, "a non-empty sample", key)
+        groups.setdefault(key, []).append((lineno, toks))
+    out = []
+    for key, group in groups.items():
+        geo_rows = []
+        labs, curves = [], []
+        texture: list[VendorValue] = []
+        for lineno, toks in group:
+            err = factory(CgatsImportError, file, f"line {lineno}")
+            if "GEOMETRY" in col:
+                name = toks[col["GEOMETRY"]]
+            else:
+                ill = _float(toks[col["ILLUMINATION_ANGLE"]], "ILLUMINATION_ANGLE", file, lineno)
+                asp = _float(toks[col["ASPECULAR_ANGLE"]], "ASPECULAR_ANGLE", file, lineno)
+                name = geometry_name(ill, asp)
+            geometry = canonical_geometry(name, "GEOMETRY", err)
+            geo_rows.append((geometry, err))
+            if has_lab:
+                labs.append([_float(toks[c], f, file, lineno) for c, f in zip(lab_cols, ("LAB_L", "LAB_A", "LAB_B"), strict=True) if c is not None])  # fmt: skip
+            if spectral:
+                curves.append([_float(toks[i], fields[i], file, lineno) / divisor for _, i in spectral])
+            for f, i in texture_cols:
+                if toks[i] == "":
+                    continue
+                value = _float(toks[i], f, file, lineno)
+                per_sample = f.startswith("GRAININESS")
+                texture.append(VendorValue(vendor, f.lower(), value, "" if per_sample else geometry))
+        out.append(
+            build_measurement(
+                sample=key,
+                rows=geo_rows,
+                lab=labs if has_lab else None,
+                wavelengths_nm=[w for w, _ in spectral] if spectral else None,
+                spectra=curves if spectral else None,
+                instrument=instrument,
+                illuminant=illuminant,
+                observer=observer,
+                measured_at=measured_at,
+                texture=_dedupe(texture, file, group[0][0]),
+                err=factory(CgatsImportError, file, f"line {group[0][0]}"),
+            )
+        )
+    return tuple(out)
+
+
+def _dedupe(values: list[VendorValue], file: str, lineno: int) -> list[VendorValue]:
+    """Per-sample values repeated on each row of a sample count once; they must agree."""
+    seen: dict[tuple[str, str], VendorValue] = {}
+    for v in values:
+        prior = seen.get((v.name, v.geometry))
+        if prior is not None and prior.value != v.value:
+            raise CgatsImportError(file, f"line {lineno}", v.name.upper(), "one value per sample", v.value)
+        seen[(v.name, v.geometry)] = v
+    return list(seen.values())
+
+
+def _quote(text: str) -> str:
+    return '"' + text.replace('"', '""') + '"'
+
+
+def _num(value: float, decimals: int) -> str:
+    return f"{value:.{decimals}f}"
+
+
+def write_cgats(measurements: Sequence[ImportedMeasurement], path: Path | str | None = None) -> str:
+    """CGATS.17 text of *measurements* (one row per sample and geometry); written to *path* when given.
+
+    Every measurement needs the same wavelength grid (or none) and, when one has Lab, all of them.
+    Instrument, illuminant, observer and time come from the first measurement.
+    """
+    if not measurements:
+        raise CgatsImportError(str(path or "cgats"), "", "measurements", "at least one measurement", 0)
+    first = measurements[0]
+    wl = first.wavelengths_nm
+    has_lab = first.lab is not None
+    fields = ["SAMPLE_ID", "SAMPLE_NAME", "GEOMETRY"]
+    if has_lab:
+        fields += ["LAB_L", "LAB_A", "LAB_B"]
+    if wl is not None:
+        fields += [f"SPECTRAL_NM{w:g}" for w in wl]
+    texture_names = sorted({t.name.upper() for m in measurements for t in m.texture})
+    fields += texture_names
+    lines = [
+        "CGATS.17",
+        f"ORIGINATOR {_quote(_ORIGINATOR)}",
+        f"DESCRIPTOR {_quote('multi-angle measurements')}",
+    ]
+    if first.measured_at is not None:
+        lines.append(f"CREATED {_quote(first.measured_at.isoformat())}")
+    if first.instrument.model:
+        lines.append(f"INSTRUMENTATION {_quote(first.instrument.model)}")
+    if first.instrument.manufacturer:
+        lines.append(f"MANUFACTURER {_quote(first.instrument.manufacturer)}")
+    if first.instrument.serial:
+        lines += ['KEYWORD "INSTRUMENT_SERIAL"', f"INSTRUMENT_SERIAL {_quote(first.instrument.serial)}"]
+    source = f"Illumination={first.illuminant} ObserverAngle={observer_degrees(first.observer)}"
+    lines.append(f"MEASUREMENT_SOURCE {_quote(source)}")
+    for f in ("SAMPLE_NAME", "GEOMETRY", *texture_names):
+        lines.append(f'KEYWORD "{f}"')
+    lines += [f"NUMBER_OF_FIELDS {len(fields)}", "BEGIN_DATA_FORMAT", " ".join(fields), "END_DATA_FORMAT"]
+    body = []
+    for n, m in enumerate(measurements, start=1):
+        if m.wavelengths_nm != wl or (m.lab is not None) != has_lab:
+            raise CgatsImportError(
+                str(path or "cgats"), f"measurement {n}", "wavelengths_nm", "the first measurement's layout"
+            )
+        by_geo = {(t.name.upper(), t.geometry): t.value for t in m.texture}
+        for k, g in enumerate(m.geometries):
+            cells = [str(n), _quote(m.sample), g]
+            if m.lab is not None:
+                cells += [_num(v, LAB_DECIMALS) for v in m.lab[k]]
+            if m.spectra is not None:
+                cells += [_num(v, SPECTRA_DECIMALS) for v in m.spectra[k]]
+            for t in texture_names:
+                value = by_geo.get((t, g), by_geo.get((t, "")))
+                cells.append('""' if value is None else repr(float(value)))
+            body.append(" ".join(cells))
+    lines += [f"NUMBER_OF_SETS {len(body)}", "BEGIN_DATA", *body, "END_DATA", ""]
+    text = "\n".join(lines)
+    if path is not None:
+        Path(path).write_text(text, encoding="utf-8")
+    return text

@@ -1,0 +1,120 @@
+"""SIGKILL a real ``station import watch`` process while it ingests a drop folder, then restart it:
+every file ends in ``done/`` exactly once, every measurement of every file is stored exactly once
+(under the client id its bytes give), and the stored Lab is the file's."""
+
+from __future__ import annotations
+
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from sqlalchemy import select
+
+from db.engine import make_engine
+from db.models import Measurement
+from station.ingest.errors import ImportFileError
+from station.ingest.formats import build_measurement, import_client_id, write_measurement_file
+from station.ingest.formats.measurement import OBSERVERS, Instrument
+from station.ingest.formats.records import file_sha256
+from station.model.domain import ANGLES_6, aspecular_name
+
+REPO = Path(__file__).resolve().parents[2]
+FILES = 30
+KILLS = 1
+SAMPLES = 2
+FORMATS = ("cxf", "cgats", "csv")
+
+
+def _write_drop(drop: Path, rng: random.Random) -> dict[str, list[list[list[float]]]]:
+    """FILES files of SAMPLES samples each (Lab only, the 6-angle set); returns name → Lab per sample."""
+    expected = {}
+    geometries = [aspecular_name(a) for a in ANGLES_6]
+
+    def err(fld: str, accepted: str, got: object) -> ImportFileError:
+        return ImportFileError("generated", "", fld, accepted, got)
+
+    for n in range(FILES):
+        samples = []
+        for s in range(SAMPLES):
+            lab = [[round(rng.uniform(20, 90), 4), round(rng.uniform(-20, 20), 4), round(rng.uniform(-20, 20), 4)]
+                   for _ in geometries]  # fmt: skip
+            samples.append(
+                build_measurement(
+                    sample=f"panel {n}-{s}",
+                    rows=[(g, err) for g in geometries],
+                    lab=lab,
+                    wavelengths_nm=None,
+                    spectra=None,
+                    instrument=Instrument("MA-T6", f"SN{n}"),
+                    illuminant="D65",
+                    observer=OBSERVERS[1],
+                    measured_at=None,
+                    err=err,
+                )
+            )
+        name = f"m{n:02d}.{FORMATS[n % 3]}"
+        tmp = drop / (name + ".part")  # written aside, then renamed in: the watcher skips .part files
+        write_measurement_file(samples, tmp, FORMATS[n % 3])
+        os.replace(tmp, drop / name)
+        expected[name] = [[list(v) for v in m.lab or ()] for m in samples]
+    return expected
+
+
+def _spawn(cwd: Path, url: str, *extra: str) -> subprocess.Popen[bytes]:
+    env = dict(os.environ, PYTHONPATH=str(REPO), CACAD_OPERATOR="qa")
+    return subprocess.Popen(
+        [sys.executable, "-m", "station.cli", "import", "watch", "drop", "--settle", "0", "--interval", "0.05",
+         "--store", url, "--outbox", str(cwd / "outbox.sqlite3"), *extra],
+        cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+    )  # fmt: skip
+
+
+def test_killed_watcher_ingests_each_file_exactly_once(tmp_path: Path, _migrated_sqlite: Path) -> None:
+    db = tmp_path / "station.sqlite3"
+    shutil.copyfile(_migrated_sqlite, db)
+    url = f"sqlite:///{db}"
+    drop = tmp_path / "drop"
+    drop.mkdir()
+    rng = random.Random(int.from_bytes(os.urandom(4), "little"))
+    expected = _write_drop(drop, rng)
+    shas = {name: file_sha256(drop / name) for name in expected}
+    killed_mid_run = 0
+    for _ in range(KILLS):
+        proc = _spawn(tmp_path, url)
+        deadline = time.monotonic() + 90
+        before = len(list((drop / "done").glob("*"))) if (drop / "done").exists() else 0
+        while time.monotonic() < deadline:  # wait until it is ingesting, then kill it at a random instant
+            if (drop / "done").exists() and len(list((drop / "done").iterdir())) > before:
+                break
+            time.sleep(0.02)
+        time.sleep(rng.uniform(0.0, 0.25))
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(10)
+        assert proc.returncode == -signal.SIGKILL, proc.stderr.read().decode() if proc.stderr else ""
+        if proc.stderr:
+            proc.stderr.close()
+        left = [p for p in drop.iterdir() if p.is_file()]
+        killed_mid_run += bool(left)
+    proc = _spawn(tmp_path, url, "--once")
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err.decode()
+    assert killed_mid_run == KILLS, "the kill landed after the folder was empty: the test proved nothing"
+
+    assert [p.name for p in drop.iterdir() if p.is_file()] == []
+    assert sorted(p.name for p in (drop / "done").iterdir()) == sorted(expected)
+    assert not (drop / "rejected").exists()
+    engine = make_engine(url)
+    with engine.connect() as conn:
+        rows = conn.execute(select(Measurement.client_id, Measurement.lab, Measurement.geometries_deg)).all()
+    engine.dispose()
+    assert len(rows) == FILES * SAMPLES, "a measurement is missing or stored twice"
+    stored = {str(r.client_id): r for r in rows}
+    for name, labs in expected.items():
+        for i, lab in enumerate(labs):
+            row = stored[str(import_client_id(shas[name], i, 45))]
+            assert row.lab == lab and row.geometries_deg == list(ANGLES_6)

@@ -1,0 +1,303 @@
+"""The QC screen's model (Qt-free): jobs, a job's parts, the standard-vs-samples verdict table, reports.
+
+Two sources give the same data: :class:`LocalQc` reads the workstation's database with
+``station.qc`` (``station.qc.jobs.job_summary``, ``station.qc.report``), :class:`ServiceQc` asks a
+station service's ``/api/v1/qc`` routes. A summary is the JSON form of
+:class:`station.qc.jobs.JobSummary` (``to_dict()``), which is what the service answers too, so the
+table rows (:func:`verdict_rows`) are built one way whatever the source. Each sample carries the gloss
+reading paired with it (``station.ingest.gloss_of_measurements``), or ``None``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
+from urllib.parse import quote
+
+from station.errors import InputError, StationError
+
+if TYPE_CHECKING:
+    from ui.models.service import ServiceClient
+
+#: Formulas offered, product default first (names as ``station.qc.check.formula_name`` accepts them).
+FORMULAS = ("din6175-2", "cie2000", "cie94", "cie76")
+REPORT_KINDS = ("pdf", "csv")
+#: The gloss values a summary's sample carries (those of ``GET /api/v1/qc/jobs/{job}/summary``).
+GLOSS_FIELDS = ("id", "gloss_20_gu", "gloss_60_gu", "gloss_85_gu", "haze_hu", "doi")
+
+
+class QcSourceError(StationError):
+    """The database or service could not answer (the message says which and why)."""
+
+
+@dataclass(frozen=True)
+class JobEntry:
+    """A job and its parts."""
+
+    job: str
+    parts: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class VerdictRow:
+    """One line of the verdict table: one sample at one geometry (differences sample − standard)."""
+
+    measurement_id: int
+    measured_at: str
+    instrument: str
+    geometry: str
+    dl: float
+    da: float
+    db: float
+    de: float
+    verdict: str
+    reason: str
+    overall: str
+    gloss_60_gu: float | None = None
+
+
+class QcSource(Protocol):
+    """Where the QC screen reads jobs and summaries and writes reports."""
+
+    @property
+    def where(self) -> str: ...
+    def jobs(self) -> list[JobEntry]: ...
+    def summary(self, job: str, formula: str) -> dict[str, Any]: ...
+    def report(self, job: str, formula: str, kind: str, path: Path) -> Path: ...
+    def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]: ...
+
+
+class LocalQc:
+    """The workstation's database (as ``station serve``: ``$CACAD_DATABASE_URL`` or the default SQLite)."""
+
+    def __init__(self, url: str | None = None) -> None:
+        self._url = url
+        self._sessions: Any = None
+
+    @property
+    def url(self) -> str:
+        if self._url is None:
+            from db.engine import default_database_url
+
+            self._url = os.environ.get("CACAD_DATABASE_URL") or default_database_url()
+        return self._url
+
+    @property
+    def where(self) -> str:
+        return f"database {self.url}"
+
+    def _session(self) -> Any:
+        if self._sessions is None:
+            from db.engine import make_engine, make_sessionmaker
+            from db.migrate import ensure_at_head
+
+            ensure_at_head(self.url)
+            self._sessions = make_sessionmaker(make_engine(self.url))
+        return self._sessions()
+
+    def jobs(self) -> list[JobEntry]:
+        from station.qc.jobs import list_jobs
+
+        with self._session() as session:
+            return [JobEntry(j.job, tuple(j.parts)) for j in list_jobs(session)]
+
+    def _summary(self, job: str, formula: str) -> Any:
+        from station.qc.jobs import job_summary
+
+        with self._session() as session:
+            return job_summary(session, job, formula=formula)
+
+    def summary(self, job: str, formula: str) -> dict[str, Any]:
+        from station.ingest import gloss_of_measurements
+
+        data = self._summary(job, formula).to_dict()
+        samples = [s for p in data["parts"] for s in p["samples"]]
+        with self._session() as session:
+            gloss = gloss_of_measurements(session, [s["measurement_id"] for s in samples])
+        for s in samples:
+            g = gloss.get(s["measurement_id"])
+            s["gloss"] = None if g is None else {k: getattr(g, k) for k in GLOSS_FIELDS}
+        return data
+
+    def report(self, job: str, formula: str, kind: str, path: Path) -> Path:
+        from station.qc import report
+
+        summary = self._summary(job, formula)
+        return report.write_pdf(summary, path) if kind == "pdf" else report.write_csv(summary, path)
+
+    def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
+        from db.models import Measurement
+        from station.qc.metamerism import metamerism
+        from station.qc.readings import reading_from_measurement
+
+        with self._session() as session:
+            rows = [session.get(Measurement, i) for i in (standard_id, sample_id)]
+            if rows[0] is None or rows[1] is None:
+                raise QcSourceError(f"{self.where}: measurement {standard_id} or {sample_id} not found")
+            std, smp = (reading_from_measurement(m) for m in rows)
+        return metamerism(std, smp, formula).to_dict()
+
+
+class ServiceQc:
+    """A station service's ``/api/v1/qc`` routes through the viewer's :class:`ServiceClient`."""
+
+    def __init__(self, client: ServiceClient) -> None:
+        self.client = client
+
+    @property
+    def where(self) -> str:
+        return f"service {self.client.url}"
+
+    def _get(self, path: str, **params: str) -> Any:
+        from ui.models.service import ServiceError
+
+        try:
+            r = self.client.request("GET", path, params=params)
+        except ServiceError as exc:
+            raise QcSourceError(str(exc)) from exc
+        if r.status_code >= 400:
+            raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
+        return r
+
+    def jobs(self) -> list[JobEntry]:
+        return [JobEntry(j["job"], tuple(j["parts"])) for j in self._get("/qc/jobs").json()]
+
+    def summary(self, job: str, formula: str) -> dict[str, Any]:
+        return self._get(f"/qc/jobs/{quote(job, safe='')}/summary", formula=formula).json()
+
+    def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
+        from ui.models.service import ServiceError
+
+        body = {
+            "standard_measurement_id": standard_id,
+            "sample_measurement_id": sample_id,
+            "formula": formula,
+        }
+        try:
+            r = self.client.request("POST", "/qc/metamerism", json=body)
+        except ServiceError as exc:
+            raise QcSourceError(str(exc)) from exc
+        if r.status_code >= 400:
+            raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
+        return r.json()
+
+    def report(self, job: str, formula: str, kind: str, path: Path) -> Path:
+        r = self._get(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula=formula)
+        tmp = path.with_name(path.name + ".part")
+        tmp.write_bytes(r.content)
+        tmp.replace(path)
+        return path
+
+
+def verdict_rows(part: dict[str, Any]) -> list[VerdictRow]:
+    """The table of one part of a summary: each sample at each geometry, oldest sample first."""
+    rows: list[VerdictRow] = []
+    for s in part.get("samples", []):
+        qc = s["qc"]
+        gloss = s.get("gloss") or {}
+        g60 = gloss.get("gloss_60_gu")
+        for g in qc["per_geometry"]:
+            rows.append(
+                VerdictRow(
+                    int(s["measurement_id"]),
+                    str(s["measured_at"]),
+                    str(s.get("instrument", "")),
+                    str(g["geometry"]),
+                    float(g["dL"]),
+                    float(g["da"]),
+                    float(g["db"]),
+                    float(g["dE"]),
+                    str(g["verdict"]),
+                    "; ".join(g.get("reasons", [])),
+                    str(qc["verdict"]),
+                    None if g60 is None else float(g60),
+                )
+            )
+    return rows
+
+
+class QcModel:
+    """State of the QC screen: the jobs, the chosen job, part and formula, the summary shown."""
+
+    def __init__(self, source: QcSource) -> None:
+        self.source = source
+        self.jobs: list[JobEntry] = []
+        self.summary: dict[str, Any] | None = None
+        self.summary_key: tuple[str, str] | None = None
+
+    def load_jobs(self) -> list[JobEntry]:
+        """Read the jobs from the source (:class:`QcSourceError` when it cannot answer)."""
+        try:
+            self.jobs = self.source.jobs()
+        except (QcSourceError, InputError):
+            raise
+        except Exception as exc:  # a database that cannot be opened: say where and why
+            raise QcSourceError(f"{self.source.where}: {type(exc).__name__}: {exc}") from exc
+        return self.jobs
+
+    def parts_of(self, job: str) -> tuple[str, ...]:
+        """The parts of *job* (empty when the job is unknown)."""
+        return next((j.parts for j in self.jobs if j.job == job), ())
+
+    def judge(self, job: str, formula: str) -> dict[str, Any]:
+        """The summary of *job* in *formula* (every part); kept as :attr:`summary`."""
+        if formula not in FORMULAS:
+            raise InputError("formula", " | ".join(FORMULAS), formula)
+        if not job:
+            raise InputError("job", "a job (Load jobs lists them)", job)
+        self.summary = self.source.summary(job, formula)
+        self.summary_key = (job, formula)
+        return self.summary
+
+    def part(self, part: str) -> dict[str, Any] | None:
+        """The summary's entry for *part*, or ``None``."""
+        if self.summary is None:
+            return None
+        return next((p for p in self.summary["parts"] if p["part"] == part), None)
+
+    def standard_text(self, part: str) -> str:
+        """One line naming the part's standard and the pass/warn/fail counts."""
+        p = self.part(part)
+        if p is None:
+            return "no summary"
+        std = p.get("standard")
+        if std is None:
+            return f"{part}: no standard set (set one with station qc standard or the service)"
+        ref = (
+            f"measurement {std['measurement_id']}"
+            if std.get("measurement_id")
+            else f"design {std['design_id']}"
+        )
+        c = p["counts"]
+        note = f"  — {p['note']}" if p.get("note") else ""
+        return f"standard: {ref}   pass {c['pass']} · warn {c['warn']} · fail {c['fail']}{note}"
+
+    def metamerism_text(self, part: str, sample_id: int) -> str:
+        """The metamerism index (D65 → A, F11) of *sample_id* against *part*'s standard measurement, one line.
+
+        The formula is the judged one's, except DIN 6175-2 (a tolerance formula): CIEDE2000 then.
+        """
+        p = self.part(part)
+        std = None if p is None else p.get("standard")
+        if std is None or not std.get("measurement_id"):
+            raise InputError("standard", f"a standard measurement for {part} (a design has no spectra)", None)
+        formula = self.summary_key[1] if self.summary_key else "cie2000"
+        formula = "cie2000" if formula.startswith("din") else formula
+        out = self.source.metamerism(int(std["measurement_id"]), sample_id, formula)
+        mx = out["max_index"]
+        return (
+            f"metamerism of {sample_id} against {std['measurement_id']} ({out['formula']}): "
+            + " · ".join(f"MI {ill} {v:.2f}" for ill, v in mx.items())
+            + " (max over geometries)"
+        )
+
+    def report(self, kind: str, path: str | Path) -> Path:
+        """Write the shown job's report (``pdf`` or ``csv``) at *path*."""
+        if kind not in REPORT_KINDS:
+            raise InputError("kind", " | ".join(REPORT_KINDS), kind)
+        if self.summary_key is None:
+            raise InputError("job", "a judged job (press Judge first)", None)
+        job, formula = self.summary_key
+        return self.source.report(job, formula, kind, Path(path))
