@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
@@ -54,6 +55,9 @@ class GLRenderer:
     change, into a gloss cube Σ w_G,i C_i and a directionally diffuse cube Σ w_DD,i C_i at the largest
     lobe resolution (``shaders/combine.frag.glsl``), so a frame costs three cube lookups per pixel
     whatever the lobe count; ``combined=False`` looks every lobe up per pixel.
+
+    ``coat`` (of :meth:`render` / :meth:`render_linear`): a :class:`station.model.gloss.ClearCoat` scales
+    the gloss terms per pixel by Schlick's Fresnel (as ``numpy_renderer`` does); None: the thesis's model.
     """
 
     def __init__(
@@ -184,7 +188,7 @@ class GLRenderer:
         w_d, w_dd, w_g = w.map_weights()
         return w_d, w_dd[self._order], w_g[self._order]
 
-    def _draw(self, scene, paints, linear: bool, exposure_ev: float, curve: str):
+    def _draw(self, scene, paints, linear: bool, exposure_ev: float, curve: str, coat: ClearCoat | None):
         pair = check_paints(self.basis, paints)
         prog, vao = self._program(scene.shape, linear)
         _, fbo = self._target(linear)
@@ -206,6 +210,9 @@ class GLRenderer:
             "u_background": (BACKGROUND,) * 3,
             "u_diffuse": m + 4,
             "u_horizon": m + 5,
+            "u_coat_on": int(coat is not None),
+            "u_coat_f0": coat.f0 if coat is not None else 0.0,
+            "u_coat_ref": coat.reference if coat is not None else 1.0,
         }
         if not linear:
             check_curve(curve)
@@ -242,15 +249,17 @@ class GLRenderer:
         vao.render(mode=self.ctx.TRIANGLES, vertices=3)
         return fbo
 
-    def render(self, scene, paints, exposure_ev: float = 0.0, curve: str = "aces"):
+    def render(
+        self, scene, paints, exposure_ev: float = 0.0, curve: str = "aces", coat: ClearCoat | None = None
+    ):
         """8-bit sRGB frame (H, W, 3) uint8 (a view of the RGBA read-back, the driver's fast path)."""
-        fbo = self._draw(scene, paints, False, exposure_ev, curve)
+        fbo = self._draw(scene, paints, False, exposure_ev, curve, coat)
         data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
         return data.reshape(self.height, self.width, 4)[::-1, :, :3]
 
-    def render_linear(self, scene, paints):
+    def render_linear(self, scene, paints, coat: ClearCoat | None = None):
         """Linear sRGB radiance (H, W, 3) float32."""
-        fbo = self._draw(scene, paints, True, 0.0, "clip")
+        fbo = self._draw(scene, paints, True, 0.0, "clip", coat)
         data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
         return data.reshape(self.height, self.width, 3)[::-1].copy()
 

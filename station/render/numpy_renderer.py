@@ -27,6 +27,10 @@ and the diffuse map keep the lights in their maps (exact there already).
 The diffuse map is either the exponent-1 cube (``diffuse="cube"``, default — exact up to resolution)
 or the 9-coefficient SH irradiance (``diffuse="sh"``, thesis §2.5.3; up to ~10 % off beside a sun).
 
+Clear coat: with a :class:`station.model.gloss.ClearCoat` every gloss term (w_G,i, lobe maps and
+lights) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°), Schlick's Fresnel of the coat's index
+(thesis §2.5.2, last paragraph); ``coat=None`` is the thesis's model as printed.
+
 Pixels that miss the object show a constant grey background. Output is linear sRGB radiance; the
 display transform is :mod:`station.render.tonemap`.
 """
@@ -38,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from station.model.gloss import ClearCoat
 from station.render.cubemap import sample_cube
 from station.render.errors import RenderInputError
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
@@ -153,17 +158,22 @@ def shade_pixels(
     n_dot_v: np.ndarray,
     diffuse: str = "cube",
     horizon: str = "lut",
+    coat: ClearCoat | None = None,
 ) -> np.ndarray:
-    """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation)."""
+    """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation).
+
+    *coat*: the clear coat's Fresnel factor on the gloss terms (module docstring); None: none.
+    """
     w_d, w_dd, w_g = weights.map_weights()
     d = sample_cube(basis.diffuse, normal) if diffuse == "cube" else sh_diffuse(basis.sh, normal)
     g, h = lobe_factors(horizon_table(basis.exponents, horizon), n_dot_v)
+    s = np.ones((n_dot_v.shape[0], 1)) if coat is None else coat.gloss_scale(n_dot_v)[:, None]
     out = w_d * d
     for i, cube in enumerate(basis.cubes):
-        out = out + (h[:, i : i + 1] * w_g[i] + g[:, i : i + 1] * w_dd[i]) * sample_cube(cube, reflect)
+        out = out + (s * h[:, i : i + 1] * w_g[i] + g[:, i : i + 1] * w_dd[i]) * sample_cube(cube, reflect)
         lights = light_terms(basis, i, normal, reflect)
         if lights is not None:
-            out = out + w_g[i] * lights[0] + w_dd[i] * lights[1]
+            out = out + s * w_g[i] * lights[0] + w_dd[i] * lights[1]
     return out
 
 
@@ -175,8 +185,12 @@ def render_linear(
     height: int,
     diffuse: str = "cube",
     horizon: str = "lut",
+    coat: ClearCoat | None = None,
 ) -> np.ndarray:
-    """Linear sRGB radiance image (H, W, 3) float32 of the scene lit by the prefiltered basis."""
+    """Linear sRGB radiance image (H, W, 3) float32 of the scene lit by the prefiltered basis.
+
+    *coat*: clear-coat Fresnel on the gloss terms (module docstring); None: the thesis's model.
+    """
     if diffuse not in ("cube", "sh"):
         raise RenderInputError("diffuse", "cube | sh", diffuse)
     pair = check_paints(basis, paints)
@@ -186,5 +200,5 @@ def render_linear(
     for k in (0, 1):
         m = g.mask & (g.paint == k)
         if m.any():
-            img[m] = shade_pixels(basis, pair[k], g.normal[m], g.reflect[m], ndv[m], diffuse, horizon)
+            img[m] = shade_pixels(basis, pair[k], g.normal[m], g.reflect[m], ndv[m], diffuse, horizon, coat)
     return img.astype(np.float32)

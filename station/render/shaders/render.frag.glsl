@@ -29,7 +29,16 @@ uniform vec3 u_wd[2];
 uniform vec3 u_wdd[2 * N_LOBES];
 uniform float u_wg[2 * N_LOBES];
 uniform vec3 u_background;
+// Clear coat (station.model.gloss.ClearCoat): gloss terms times s = F(N.V)/F(cos 60), Schlick's F with
+// F0 = u_coat_f0; u_coat_on = 0 is the thesis's model (s = 1).
+uniform int u_coat_on;
+uniform float u_coat_f0, u_coat_ref;
 out vec4 f_color;
+
+float coat_scale(float ndv) {
+    if (u_coat_on == 0) return 1.0;
+    return (u_coat_f0 + (1.0 - u_coat_f0) * pow(1.0 - ndv, 5.0)) / u_coat_ref;
+}
 
 vec2 horizon(int i, float c) {
     return texture(u_horizon, vec2((c * float(HORIZON_N - 1) + 0.5) / float(HORIZON_N),
@@ -54,14 +63,15 @@ void main() {
         vec3 v = -d;
         float ndv = clamp(dot(n, v), 0.0, 1.0);
         vec3 r = 2.0 * dot(n, v) * n - v;
+        float s = coat_scale(ndv);
 #if DIFFUSE_SH
         rgb = u_wd[paint] * sh_eval(n);
 #else
         rgb = u_wd[paint] * textureLod(u_diffuse, n, 0.0).rgb;
 #endif
 #if COMBINED
-        if (paint == 0) rgb += textureLod(u_gloss0, r, 0.0).rgb + ndv * textureLod(u_dd0, r, 0.0).rgb;
-        else rgb += textureLod(u_gloss1, r, 0.0).rgb + ndv * textureLod(u_dd1, r, 0.0).rgb;
+        if (paint == 0) rgb += s * textureLod(u_gloss0, r, 0.0).rgb + ndv * textureLod(u_dd0, r, 0.0).rgb;
+        else rgb += s * textureLod(u_gloss1, r, 0.0).rgb + ndv * textureLod(u_dd1, r, 0.0).rgb;
 #endif
 #if COMBINED
         for (int i = 0; i < N_WIDE; ++i) {
@@ -70,7 +80,7 @@ void main() {
 #endif
             int k = paint * N_LOBES + i;
             vec2 gh = horizon(i, ndv);
-            rgb += (gh.y * u_wg[k] + gh.x * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
+            rgb += (s * gh.y * u_wg[k] + gh.x * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
             if (u_exponent[i] < WIDE_EXPONENT) {
                 // exact directional lights: wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux
                 float e = u_exponent[i];
@@ -78,7 +88,7 @@ void main() {
                     float nl = dot(n, u_light_dir[l]);
                     if (nl <= 0.0) continue;
                     float p = (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e);
-                    rgb += (u_wg[k] + nl * u_wdd[k]) * p * u_light_flux[l];
+                    rgb += (s * u_wg[k] + nl * u_wdd[k]) * p * u_light_flux[l];
                 }
             }
         }
