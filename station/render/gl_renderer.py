@@ -30,7 +30,8 @@ from station.render.numpy_renderer import (
 )
 from station.render.prefilter import WIDE_EXPONENT
 from station.render.sh import sh_diffuse_matrix
-from station.render.shapes import SHAPE_INDEX
+from station.render.shapes import GROUNDS, OCCLUDERS, SHAPE_INDEX
+from station.render.stage import MAX_OCCLUDERS, backdrop_lobe, lookup_matrix
 from station.render.tonemap import CURVES, check_curve
 
 __all__ = [
@@ -203,6 +204,13 @@ class GLRenderer:
             tex.use(unit)
         self._diffuse_tex.use(m + 4)
         self._horizon_tex.use(m + 5)
+        stage = scene.stage
+        backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
+        self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
+        occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
+        occluders = OCCLUDERS[scene.shape]
+        occ[: len(occluders)] = occluders
+        gx, gy, gz = GROUNDS[scene.shape]
         uniforms = {
             **scene.view_camera.uniforms(self.width, self.height),
             "u_size": (float(self.width), float(self.height)),
@@ -213,6 +221,22 @@ class GLRenderer:
             "u_coat_on": int(coat is not None),
             "u_coat_f0": coat.f0 if coat is not None else 0.0,
             "u_coat_ref": coat.reference if coat is not None else 1.0,
+            "u_rot": tuple(
+                float(v) for v in lookup_matrix(stage.rotation_deg if stage else 0.0).T.ravel()
+            ),  # column-major
+            "u_stage": int(stage is not None),
+            "u_backdrop_on": int(stage is not None and stage.backdrop),
+            "u_backdrop": m + 6,
+            "u_backdrop_exp": float(self.basis.exponents[backdrop]),
+            "u_backdrop_lights": int(
+                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[backdrop])
+            ),
+            "u_ground_on": int(stage is not None and stage.ground),
+            "u_ground_y": float(gy),
+            "u_ground_c": (float(gx), float(gz)),
+            "u_ground_albedo": stage.ground_albedo if stage is not None else 0.0,
+            "u_ground_radius": stage.ground_radius if stage is not None else 1.0,
+            "u_n_occ": len(occluders),
         }
         if not linear:
             check_curve(curve)
@@ -244,6 +268,8 @@ class GLRenderer:
             if name in prog:
                 n = prog[name].array_length
                 prog[name].write(np.concatenate([w[part] for w in mw]).astype(np.float32)[:n].tobytes())
+        if "u_occ" in prog:
+            prog["u_occ"].write(occ.tobytes())
         if "u_sh" in prog:
             prog["u_sh"].write(self._sh.tobytes())
         vao.render(mode=self.ctx.TRIANGLES, vertices=3)

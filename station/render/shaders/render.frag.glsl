@@ -33,6 +33,15 @@ uniform vec3 u_background;
 // F0 = u_coat_f0; u_coat_on = 0 is the thesis's model (s = 1).
 uniform int u_coat_on;
 uniform float u_coat_f0, u_coat_ref;
+// Stage (station/render/stage.py): lookups at u_rot * d (environment turned about +Y), the backdrop
+// lobe map u_backdrop (exponent u_backdrop_exp, its lights added when u_backdrop_lights), the ground disc
+// at height u_ground_y about u_ground_c with contact shadow from u_n_occ sphere proxies u_occ (xyz, r).
+uniform mat3 u_rot;
+uniform int u_stage, u_backdrop_on, u_backdrop_lights, u_ground_on, u_n_occ;
+uniform samplerCube u_backdrop;
+uniform float u_backdrop_exp, u_ground_y, u_ground_albedo, u_ground_radius;
+uniform vec2 u_ground_c;
+uniform vec4 u_occ[8];
 out vec4 f_color;
 
 float coat_scale(float ndv) {
@@ -52,6 +61,42 @@ vec3 sh_eval(vec3 n) {
          + u_sh[8] * (0.546274 * (n.x * n.x - n.y * n.y));
 }
 
+vec3 stage_background(vec3 o, vec3 d) {
+    vec3 bg = u_background;
+    if (u_stage == 0) return bg;
+    if (u_backdrop_on != 0) {
+        vec3 de = u_rot * d;
+        bg = textureLod(u_backdrop, de, 0.0).rgb;
+        if (u_backdrop_lights != 0) {
+            float e = u_backdrop_exp;
+            for (int l = 0; l < u_n_lights; ++l)
+                bg += (e + 1.0) / (2.0 * PI) * pow(max(dot(de, u_light_dir[l]), 0.0), e) * u_light_flux[l];
+        }
+    }
+    if (u_ground_on != 0 && d.y < -1e-9) {
+        float t = (u_ground_y - o.y) / d.y;
+        if (t > 0.0) {
+            vec3 p = o + t * d;
+            float x = clamp((length(p.xz - u_ground_c) - 0.5 * u_ground_radius) / (0.5 * u_ground_radius), 0.0, 1.0);
+            float w = 1.0 - x * x * (3.0 - 2.0 * x);
+            float occ = 0.0;
+            for (int k = 0; k < u_n_occ; ++k) {
+                vec3 v = u_occ[k].xyz - p;
+                float r2 = u_occ[k].w * u_occ[k].w;
+                float d2 = max(dot(v, v), r2);
+                occ += r2 / d2 * clamp(v.y / sqrt(d2), 0.0, 1.0);
+            }
+#if DIFFUSE_SH
+            vec3 sky = sh_eval(vec3(0.0, 1.0, 0.0));
+#else
+            vec3 sky = textureLod(u_diffuse, vec3(0.0, 1.0, 0.0), 0.0).rgb;
+#endif
+            bg = mix(bg, u_ground_albedo * sky * (1.0 - clamp(occ, 0.0, 1.0)), w);
+        }
+    }
+    return bg;
+}
+
 void main() {
     vec2 ndc = 2.0 * gl_FragCoord.xy / u_size - 1.0;
     vec3 d = normalize(u_forward + ndc.x * u_tan_half_fov * u_aspect * u_right + ndc.y * u_tan_half_fov * u_up);
@@ -62,7 +107,8 @@ void main() {
     if (hit(u_eye, d, t, n, paint)) {
         vec3 v = -d;
         float ndv = clamp(dot(n, v), 0.0, 1.0);
-        vec3 r = 2.0 * dot(n, v) * n - v;
+        vec3 r = u_rot * (2.0 * dot(n, v) * n - v);  // lookups in the environment's frame
+        n = u_rot * n;
         float s = coat_scale(ndv);
 #if DIFFUSE_SH
         rgb = u_wd[paint] * sh_eval(n);
@@ -92,6 +138,8 @@ void main() {
                 }
             }
         }
+    } else {
+        rgb = stage_background(u_eye, d);
     }
 #if OUTPUT_LINEAR
     f_color = vec4(rgb, 1.0);
