@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ from station.render.basis_images import BasisImages as CoreBasisImages
 from station.render.basis_images import build_basis_images
 from station.render.camera import Camera
 from station.render.envcache import PrefilterCache
+from station.render.environment import Environment, load_environment
 from station.render.lobe_fit import fit_design
 from station.render.prefilter import PrefilteredBasis, prefilter_basis
 from station.render.procedural import procedural_environment
@@ -31,6 +33,8 @@ from station.render.weights import LobeWeights
 from ui.models.events import EventGroup
 
 ENVIRONMENTS = ("booth", "sky", "overcast")
+#: File types the viewer loads as environments (``station.render.environment.load_environment``).
+ENVIRONMENT_SUFFIXES = (".hdr", ".exr")
 ENV_WIDTH = 256
 PREFILTER_MAX_SIZE = 64
 PREVIEW_PREFILTER_SIZE = 16  # cube faces of the first-frame prefilter (brute quadrature, ~0.1 s)
@@ -56,15 +60,44 @@ def basis_exponents() -> tuple[float, ...]:
 _READY: set[tuple[str, int]] = set()
 
 
+def is_environment_file(name: str) -> bool:
+    """Whether *name* names an environment file (a path ending in .hdr or .exr) rather than a built-in."""
+    return Path(name).suffix.lower() in ENVIRONMENT_SUFFIXES
+
+
+def check_environment(name: str) -> None:
+    """Accept a built-in environment name or the path of an existing .hdr/.exr file (ViewInputError)."""
+    if name in ENVIRONMENTS:
+        return
+    if not isinstance(name, str) or not is_environment_file(name) or not Path(name).is_file():
+        raise ViewInputError(
+            "environment", " | ".join(ENVIRONMENTS) + " | the path of an existing .hdr/.exr file", name
+        )
+
+
+@lru_cache(maxsize=8)
+def _file_environment(path: str, mtime_ns: int) -> Environment:
+    env = load_environment(path)
+    return env.downsampled(ENV_WIDTH) if env.equirect.shape[1] > ENV_WIDTH else env
+
+
+def load_environment_file(path: str | Path) -> Environment:
+    """The environment in an .hdr/.exr file at the viewer's working width (ENV_WIDTH), cached per file
+    version; EnvironmentFileError (names the file) for a file that is not a usable HDR image."""
+    p = Path(path)
+    check_environment(str(p))
+    return _file_environment(str(p), p.stat().st_mtime_ns)
+
+
 def environment_basis(env_name: str, max_size: int = PREFILTER_MAX_SIZE) -> PrefilteredBasis:
-    """The procedural environment *env_name* prefiltered for the basis exponents (disk-cached).
+    """The environment *env_name* (built-in name or .hdr/.exr path) prefiltered for the basis exponents
+    (disk-cached).
 
     *max_size* caps the cube face size: PREFILTER_MAX_SIZE for the full-quality view,
     PREVIEW_PREFILTER_SIZE for the first frame of a cold cache (same environment and lobes, coarser
     maps of the narrow lobes; ~0.1 s instead of ~3 s).
     """
-    if env_name not in ENVIRONMENTS:
-        raise ViewInputError("environment", " | ".join(ENVIRONMENTS), env_name)
+    check_environment(env_name)
     basis = _environment_basis(env_name, int(max_size))
     _READY.add((env_name, int(max_size)))
     return basis
@@ -77,7 +110,11 @@ def environment_ready(env_name: str, max_size: int = PREFILTER_MAX_SIZE) -> bool
 
 @lru_cache(maxsize=8)
 def _environment_basis(env_name: str, max_size: int) -> PrefilteredBasis:
-    env = procedural_environment(env_name, ENV_WIDTH)
+    env = (
+        load_environment_file(env_name)
+        if env_name not in ENVIRONMENTS
+        else procedural_environment(env_name, ENV_WIDTH)
+    )
     return prefilter_basis(env, basis_exponents(), engine="numpy", cache=PrefilterCache(), max_size=max_size)
 
 
@@ -85,6 +122,8 @@ def _environment_basis(env_name: str, max_size: int) -> PrefilteredBasis:
 class ViewSettings:
     """What the 3D view shows: environment, shape, exposure (EV) and the orbit around the shape.
 
+    ``environment`` is a built-in name (ENVIRONMENTS) or the path of an .hdr/.exr file
+    (:meth:`ViewModel.load_environment`).
     ``yaw_deg``/``pitch_deg`` rotate the shape's default camera about the target (degrees),
     ``zoom`` divides the eye distance (1 = the default framing). ``misalignment_deg`` turns the right
     panel of the ``panels`` shape about its hinge (thesis ch. 4).
@@ -99,8 +138,7 @@ class ViewSettings:
     misalignment_deg: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.environment not in ENVIRONMENTS:
-            raise ViewInputError("environment", " | ".join(ENVIRONMENTS), self.environment)
+        check_environment(self.environment)
         if self.shape not in SHAPES:
             raise ViewInputError("shape", " | ".join(SHAPES), self.shape)
         if not (math.isfinite(self.exposure_ev) and -10.0 <= self.exposure_ev <= 10.0):
@@ -247,6 +285,15 @@ class ViewModel:
         if new != self._settings:
             self._settings = new
             self.events.settings.emit(new)
+
+    def load_environment(self, path: str | Path) -> Environment:
+        """Show the environment in the .hdr/.exr file *path* (read and checked now; the view then
+        prefilters it). Raises ViewInputError for a path that is no .hdr/.exr file and
+        EnvironmentFileError (names the file) for one that is not a usable HDR image; the settings are
+        unchanged on failure. Returns the loaded environment."""
+        env = load_environment_file(path)
+        self.update(environment=str(Path(path)))
+        return env
 
     def show(self, design: FaceFlopTravelGloss, other: FaceFlopTravelGloss | None = None) -> None:
         """Show *design* on both halves, or *design* | *other* side by side."""
