@@ -30,7 +30,7 @@ from station.render.numpy_renderer import (
 )
 from station.render.prefilter import WIDE_EXPONENT
 from station.render.sh import sh_diffuse_matrix
-from station.render.shapes import GROUNDS, OCCLUDERS, SHAPE_INDEX
+from station.render.shapes import GROUNDS, OCCLUDERS, SHAPE_INDEX, Scene
 from station.render.stage import MAX_OCCLUDERS, backdrop_lobe, lookup_matrix
 from station.render.tonemap import CURVES, check_curve
 
@@ -118,14 +118,21 @@ class GLRenderer:
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[tuple[str, bool], tuple] = {}
+        self._programs: dict[tuple[str, bool, str], tuple] = {}
+        self._mesh: tuple | None = None
         self._targets: dict[bool, tuple] = {}
 
-    def _program(self, shape: str, linear: bool):
-        key = (shape, linear)
+    def _program(self, shape: str, linear: bool, kind: str = "shape"):
+        """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh")."""
+        key = (shape, linear, kind)
         if key not in self._programs:
+            from station.render.meshes import NEUTRAL_ALBEDO
+
             defines = {
                 "SHAPE": SHAPE_INDEX[shape],
+                "MESH": int(kind == "mesh"),
+                "NO_SHAPE": int(kind == "stage"),
+                "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
                 "N_LOBES": len(self._lobes),
                 "OUTPUT_LINEAR": int(linear),
                 "DIFFUSE_SH": int(self.diffuse == "sh"),
@@ -135,14 +142,19 @@ class GLRenderer:
                 "MAX_LIGHTS": max(1, self._lights.count if self._lights is not None else 1),
                 "WIDE_EXPONENT": f"{self._wide_exponent:.1f}",
             }
-            prog = build_program(self.ctx, "fullscreen.vert.glsl", "render.frag.glsl", defines)
-            self._programs[key] = (prog, self.ctx.vertex_array(prog, []))
+            vert = "mesh.vert.glsl" if kind == "mesh" else "fullscreen.vert.glsl"
+            prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
+            self._programs[key] = (prog, None if kind == "mesh" else self.ctx.vertex_array(prog, []))
         return self._programs[key]
 
     def _target(self, linear: bool):
         if linear not in self._targets:
             tex = self.ctx.texture((self.width, self.height), 4, dtype="f4" if linear else "f1")
-            self._targets[linear] = (tex, self.ctx.framebuffer(color_attachments=[tex]))
+            depth = self.ctx.depth_renderbuffer((self.width, self.height))
+            self._targets[linear] = (
+                tex,
+                self.ctx.framebuffer(color_attachments=[tex], depth_attachment=depth),
+            )
         return self._targets[linear]
 
     def _combined_cubes(self, pair) -> list:
@@ -189,9 +201,14 @@ class GLRenderer:
         w_d, w_dd, w_g = w.map_weights()
         return w_d, w_dd[self._order], w_g[self._order]
 
-    def _draw(self, scene, paints, linear: bool, exposure_ev: float, curve: str, coat: ClearCoat | None):
+    def _draw(
+        self, scene, paints, linear: bool, exposure_ev: float, curve: str, coat: ClearCoat | None, mesh=None
+    ):
         pair = check_paints(self.basis, paints)
-        prog, vao = self._program(scene.shape, linear)
+        if mesh is None:
+            passes = [self._program(scene.shape, linear)]
+        else:
+            passes = [self._program("sphere", linear, "stage"), self._program("sphere", linear, "mesh")]
         _, fbo = self._target(linear)
         fbo.use()
         m = len(self._lobes)
@@ -208,9 +225,13 @@ class GLRenderer:
         backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
         occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
-        occluders = OCCLUDERS[scene.shape]
+        if mesh is None:
+            occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
+            gx, gy, gz = GROUNDS[scene.shape]
+        else:
+            occluders = mesh.occluders().astype(np.float32)
+            gx, gy, gz = 0.0, mesh.floor_y, 0.0
         occ[: len(occluders)] = occluders
-        gx, gy, gz = GROUNDS[scene.shape]
         uniforms = {
             **scene.view_camera.uniforms(self.width, self.height),
             "u_size": (float(self.width), float(self.height)),
@@ -242,14 +263,59 @@ class GLRenderer:
             check_curve(curve)
             uniforms["u_exposure"] = float(2.0**exposure_ev)
             uniforms["u_curve"] = CURVES.index(curve)
+        mw = [self._bound_weights(w) for w in pair]
+        for prog, _ in passes:
+            self._set_uniforms(prog, uniforms, mw, occ, m)
+        if mesh is None:
+            prog, vao = passes[0]
+            vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+            return fbo
+        fbo.clear(depth=1.0)
+        self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
+        passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
+        self.ctx.enable(self.ctx.DEPTH_TEST)
+        try:
+            self._mesh_vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
+        finally:
+            self.ctx.disable(self.ctx.DEPTH_TEST)
+        return fbo
+
+    def _mesh_vao(self, mesh, prog):
+        """Vertex array of *mesh* for *prog* (buffers uploaded once per mesh and program)."""
+        key = (id(mesh), id(prog))
+        if self._mesh is None or self._mesh[0] != key:
+            self._release_mesh()
+            vbo = self.ctx.buffer(
+                np.concatenate([mesh.positions, mesh.normals, mesh.painted[:, None]], axis=1)
+                .astype(np.float32)
+                .tobytes()
+            )
+            ibo = self.ctx.buffer(mesh.faces.astype(np.uint32).tobytes())
+            vao = self.ctx.vertex_array(
+                prog,
+                [(vbo, "3f 3f 1f", "in_pos", "in_normal", "in_painted")],
+                index_buffer=ibo,
+                index_element_size=4,
+            )
+            self._mesh = (key, mesh, vbo, ibo, vao)
+        return self._mesh[4]
+
+    def _release_mesh(self) -> None:
+        if self._mesh is not None:
+            for obj in self._mesh[2:]:
+                obj.release()
+            self._mesh = None
+
+    def _set_uniforms(self, prog, uniforms: dict, mw: list, occ: np.ndarray, m: int) -> None:
         for name, value in uniforms.items():
             if name in prog:
                 prog[name].value = value
-        mw = [self._bound_weights(w) for w in pair]
-        prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
+        if "u_wd" in prog:
+            prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
         if self.combined:
             for unit, name in enumerate(("u_gloss0", "u_dd0", "u_gloss1", "u_dd1")):
-                prog[name].value = m + unit
+                if name in prog:
+                    prog[name].value = m + unit
         # The compiler trims uniform arrays to the entries the shader can reach (N_WIDE when combined).
         if "u_lobes" in prog:
             n = prog["u_lobes"].array_length
@@ -269,11 +335,9 @@ class GLRenderer:
                 n = prog[name].array_length
                 prog[name].write(np.concatenate([w[part] for w in mw]).astype(np.float32)[:n].tobytes())
         if "u_occ" in prog:
-            prog["u_occ"].write(occ.tobytes())
+            prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
         if "u_sh" in prog:
             prog["u_sh"].write(self._sh.tobytes())
-        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-        return fbo
 
     def render(
         self, scene, paints, exposure_ev: float = 0.0, curve: str = "aces", coat: ClearCoat | None = None
@@ -289,10 +353,37 @@ class GLRenderer:
         data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
         return data.reshape(self.height, self.width, 3)[::-1].copy()
 
+    def render_mesh(
+        self,
+        mesh,
+        paints,
+        camera=None,
+        stage=None,
+        coat: ClearCoat | None = None,
+        exposure_ev: float = 0.0,
+        curve: str = "aces",
+        linear: bool = False,
+    ):
+        """A :class:`station.render.meshes.Mesh` rasterised and shaded with the same equations as the
+        shapes (paint 0 at x < 0, paint 1 at x >= 0, neutral parts grey) on *stage* (ground at the mesh's
+        floor, contact shadow from its sphere proxies), seen by *camera* (default MESH_CAMERA).
+        8-bit sRGB (H, W, 3), or linear float32 radiance with ``linear=True``; row 0 at the top."""
+        from station.render.meshes import MESH_CAMERA
+
+        scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage)
+        fbo = self._draw(scene, paints, linear, exposure_ev, curve, coat, mesh=mesh)
+        if linear:
+            data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
+            return data.reshape(self.height, self.width, 3)[::-1].copy()
+        data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
+        return data.reshape(self.height, self.width, 4)[::-1, :, :3]
+
     def release(self) -> None:
         """Free textures, programs, targets (and the context if this object created it)."""
+        self._release_mesh()
         for prog, vao in self._programs.values():
-            vao.release()
+            if vao is not None:
+                vao.release()
             prog.release()
         for tex, fbo in self._targets.values():
             fbo.release()

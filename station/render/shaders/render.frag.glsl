@@ -8,6 +8,18 @@
 // index 0/1 from the shape. Defines: SHAPE, N_LOBES, OUTPUT_LINEAR (1: float radiance out),
 // DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube), COMBINED (1: the lobes of each
 // paint pre-summed into a gloss and a directionally-diffuse cube, shaders/combine.frag.glsl).
+// MESH (1): shade the fragments of a rasterised mesh (shaders/mesh.vert.glsl) instead of ray casting a
+// shape; NO_SHAPE (1): nothing to hit, the stage only (the backdrop pass under a mesh). Mesh parts with
+// v_painted = 0 are neutral: NEUTRAL_ALBEDO x the diffuse map.
+#ifndef MESH
+#define MESH 0
+#endif
+#ifndef NO_SHAPE
+#define NO_SHAPE 0
+#endif
+#ifndef NEUTRAL_ALBEDO
+#define NEUTRAL_ALBEDO 0.18
+#endif
 //#include shapes.glsl
 //#include tonemap.glsl
 uniform vec3 u_eye, u_forward, u_right, u_up;
@@ -97,14 +109,39 @@ vec3 stage_background(vec3 o, vec3 d) {
     return bg;
 }
 
+#if MESH
+in vec3 v_pos;
+in vec3 v_normal;
+in float v_painted;
+#endif
+
 void main() {
-    vec2 ndc = 2.0 * gl_FragCoord.xy / u_size - 1.0;
-    vec3 d = normalize(u_forward + ndc.x * u_tan_half_fov * u_aspect * u_right + ndc.y * u_tan_half_fov * u_up);
     float t;
     vec3 n;
     int paint;
     vec3 rgb = u_background;
-    if (hit(u_eye, d, t, n, paint)) {
+#if MESH
+    vec3 d = normalize(v_pos - u_eye);
+    n = normalize(v_normal);
+    if (dot(n, d) > 0.0) n = -n;  // shade the side facing the camera
+    paint = v_painted > 0.5 ? (v_pos.x < 0.0 ? 0 : 1) : -1;
+    bool hit_any = true;
+#else
+    vec2 ndc = 2.0 * gl_FragCoord.xy / u_size - 1.0;
+    vec3 d = normalize(u_forward + ndc.x * u_tan_half_fov * u_aspect * u_right + ndc.y * u_tan_half_fov * u_up);
+#if NO_SHAPE
+    bool hit_any = false;
+#else
+    bool hit_any = hit(u_eye, d, t, n, paint);
+#endif
+#endif
+    if (hit_any && paint < 0) {
+#if DIFFUSE_SH
+        rgb = NEUTRAL_ALBEDO * sh_eval(u_rot * n);
+#else
+        rgb = NEUTRAL_ALBEDO * textureLod(u_diffuse, u_rot * n, 0.0).rgb;
+#endif
+    } else if (hit_any) {
         vec3 v = -d;
         float ndv = clamp(dot(n, v), 0.0, 1.0);
         vec3 r = u_rot * (2.0 * dot(n, v) * n - v);  // lookups in the environment's frame
