@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
+from station.render.flakes import FlakeChoice, flake_lod, flake_uniforms
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
     SHADER_DIR,
@@ -120,6 +122,8 @@ class GLRenderer:
         self._sh = sh_diffuse_matrix(basis.sh)
         self._programs: dict[tuple[str, bool, str], tuple] = {}
         self._mesh: tuple | None = None
+        #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
+        self.last_flakes: FlakeChoice | None = None
         self._targets: dict[bool, tuple] = {}
 
     def _program(self, shape: str, linear: bool, kind: str = "shape"):
@@ -202,9 +206,18 @@ class GLRenderer:
         return w_d, w_dd[self._order], w_g[self._order]
 
     def _draw(
-        self, scene, paints, linear: bool, exposure_ev: float, curve: str, coat: ClearCoat | None, mesh=None
+        self,
+        scene,
+        paints,
+        linear: bool,
+        exposure_ev: float,
+        curve: str,
+        coat: ClearCoat | None,
+        mesh=None,
+        flakes: FlakeLayer | None = None,
     ):
         pair = check_paints(self.basis, paints)
+        self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
         if mesh is None:
             passes = [self._program(scene.shape, linear)]
         else:
@@ -258,7 +271,21 @@ class GLRenderer:
             "u_ground_albedo": stage.ground_albedo if stage is not None else 0.0,
             "u_ground_radius": stage.ground_radius if stage is not None else 1.0,
             "u_n_occ": len(occluders),
+            "u_flakes_on": int(self.last_flakes.on),
+            "u_flake_sharp": m + 7,
+            "u_flake_mean": m + 8,
         }
+        if flakes is not None and self.last_flakes.on:
+            uniforms.update(flake_uniforms(flakes))
+            sharp = int(np.argmax(self.basis.exponents))
+            target = np.log(flakes.reflected_exponent)
+            mean = int(np.argmin([abs(np.log(e) - target) for e in self.basis.exponents]))
+            self._lobes[int(np.nonzero(self._order == sharp)[0][0])].use(m + 7)
+            self._lobes[int(np.nonzero(self._order == mean)[0][0])].use(m + 8)
+            uniforms["u_flake_mean_exp"] = float(self.basis.exponents[mean])
+            uniforms["u_flake_mean_lights"] = int(
+                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[mean])
+            )
         if not linear:
             check_curve(curve)
             uniforms["u_exposure"] = float(2.0**exposure_ev)
@@ -334,22 +361,33 @@ class GLRenderer:
             if name in prog:
                 n = prog[name].array_length
                 prog[name].write(np.concatenate([w[part] for w in mw]).astype(np.float32)[:n].tobytes())
+        if "u_flake_tint" in prog:
+            prog["u_flake_tint"].write(np.array([w[1].sum(axis=0) for w in mw], np.float32).tobytes())
         if "u_occ" in prog:
             prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
         if "u_sh" in prog:
             prog["u_sh"].write(self._sh.tobytes())
 
     def render(
-        self, scene, paints, exposure_ev: float = 0.0, curve: str = "aces", coat: ClearCoat | None = None
+        self,
+        scene,
+        paints,
+        exposure_ev: float = 0.0,
+        curve: str = "aces",
+        coat: ClearCoat | None = None,
+        flakes: FlakeLayer | None = None,
     ):
-        """8-bit sRGB frame (H, W, 3) uint8 (a view of the RGBA read-back, the driver's fast path)."""
-        fbo = self._draw(scene, paints, False, exposure_ev, curve, coat)
+        """8-bit sRGB frame (H, W, 3) uint8 (a view of the RGBA read-back, the driver's fast path).
+
+        *flakes*: the paints' flake layer (sparkle, ``station.render.flakes``); the level of detail's
+        choice is in :attr:`last_flakes`."""
+        fbo = self._draw(scene, paints, False, exposure_ev, curve, coat, flakes=flakes)
         data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
         return data.reshape(self.height, self.width, 4)[::-1, :, :3]
 
-    def render_linear(self, scene, paints, coat: ClearCoat | None = None):
+    def render_linear(self, scene, paints, coat: ClearCoat | None = None, flakes: FlakeLayer | None = None):
         """Linear sRGB radiance (H, W, 3) float32."""
-        fbo = self._draw(scene, paints, True, 0.0, "clip", coat)
+        fbo = self._draw(scene, paints, True, 0.0, "clip", coat, flakes=flakes)
         data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
         return data.reshape(self.height, self.width, 3)[::-1].copy()
 
@@ -363,6 +401,7 @@ class GLRenderer:
         exposure_ev: float = 0.0,
         curve: str = "aces",
         linear: bool = False,
+        flakes: FlakeLayer | None = None,
     ):
         """A :class:`station.render.meshes.Mesh` rasterised and shaded with the same equations as the
         shapes (paint 0 at x < 0, paint 1 at x >= 0, neutral parts grey) on *stage* (ground at the mesh's
@@ -371,7 +410,7 @@ class GLRenderer:
         from station.render.meshes import MESH_CAMERA
 
         scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage)
-        fbo = self._draw(scene, paints, linear, exposure_ev, curve, coat, mesh=mesh)
+        fbo = self._draw(scene, paints, linear, exposure_ev, curve, coat, mesh=mesh, flakes=flakes)
         if linear:
             data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
             return data.reshape(self.height, self.width, 3)[::-1].copy()

@@ -54,7 +54,42 @@ uniform samplerCube u_backdrop;
 uniform float u_backdrop_exp, u_ground_y, u_ground_albedo, u_ground_radius;
 uniform vec2 u_ground_c;
 uniform vec4 u_occ[8];
+// Flakes (station/render/flakes.py): one random flake normal per surface cell; zero-mean sparkle
+// tint * reflectance * (L_sharp(R_m) - C_E(R)) / sqrt(N).
+uniform int u_flakes_on, u_flake_mean_lights;
+uniform samplerCube u_flake_sharp, u_flake_mean;
+uniform float u_flake_size_mm, u_flake_density, u_flake_sigma, u_flake_reflectance, u_unit_mm, u_flake_mean_exp;
+uniform vec3 u_flake_tint[2];
 out vec4 f_color;
+
+uvec3 pcg3d(uvec3 v) {
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.z; v.y += v.z * v.x; v.z += v.x * v.y;
+    v ^= v >> 16u;
+    v.x += v.y * v.z; v.y += v.z * v.x; v.z += v.x * v.y;
+    return v;
+}
+
+vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint) {
+    // n, ve, r in the environment's frame; p the world position (the cell), dist the eye distance.
+    float cell_mm = max(u_flake_size_mm, 2.0 * dist * u_tan_half_fov / u_size.y * u_unit_mm);
+    float count = max(1.0, u_flake_density * cell_mm * cell_mm);
+    uvec3 h = pcg3d(uvec3(ivec3(floor(p * (u_unit_mm / cell_mm))) + ivec3(1 << 20)));
+    vec2 u = (vec2(h.xy >> 8u) + 0.5) / 16777216.0;
+    vec2 g = sqrt(-2.0 * log(u.x)) * vec2(cos(2.0 * PI * u.y), sin(2.0 * PI * u.y));
+    vec3 t = normalize(abs(n.y) < 0.9 ? cross(n, vec3(0.0, 1.0, 0.0)) : cross(n, vec3(1.0, 0.0, 0.0)));
+    vec3 b = cross(n, t);
+    vec3 m = normalize(n + u_flake_sigma * (g.x * t + g.y * b));
+    vec3 rm = 2.0 * dot(m, ve) * m - ve;
+    vec3 glint = dot(rm, n) > 0.0 ? textureLod(u_flake_sharp, rm, 0.0).rgb : vec3(0.0);
+    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb;
+    if (u_flake_mean_lights != 0) {
+        float e = u_flake_mean_exp;
+        for (int l = 0; l < u_n_lights; ++l)
+            mean += (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e) * u_light_flux[l];
+    }
+    return u_flake_tint[paint] * u_flake_reflectance * (glint - mean) / sqrt(count);
+}
 
 float coat_scale(float ndv) {
     if (u_coat_on == 0) return 1.0;
@@ -122,6 +157,7 @@ void main() {
     vec3 rgb = u_background;
 #if MESH
     vec3 d = normalize(v_pos - u_eye);
+    t = length(v_pos - u_eye);
     n = normalize(v_normal);
     if (dot(n, d) > 0.0) n = -n;  // shade the side facing the camera
     paint = v_painted > 0.5 ? (v_pos.x < 0.0 ? 0 : 1) : -1;
@@ -147,6 +183,7 @@ void main() {
         vec3 r = u_rot * (2.0 * dot(n, v) * n - v);  // lookups in the environment's frame
         n = u_rot * n;
         float s = coat_scale(ndv);
+        vec3 sparkle = u_flakes_on != 0 ? flake_sparkle(u_eye + t * d, t, n, u_rot * v, r, paint) : vec3(0.0);
 #if DIFFUSE_SH
         rgb = u_wd[paint] * sh_eval(n);
 #else
@@ -175,6 +212,7 @@ void main() {
                 }
             }
         }
+        rgb += max(sparkle, -u_flake_reflectance * rgb);  // a cell's flakes never reflect less than nothing
     } else {
         rgb = stage_background(u_eye, d);
     }
