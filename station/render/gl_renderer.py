@@ -385,6 +385,20 @@ class GLRenderer:
         data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
         return data.reshape(self.height, self.width, 4)[::-1, :, :3]
 
+    def draw(
+        self,
+        scene,
+        paints,
+        exposure_ev: float = 0.0,
+        curve: str = "aces",
+        coat: ClearCoat | None = None,
+        flakes: FlakeLayer | None = None,
+    ):
+        """Render the 8-bit display frame into this renderer's framebuffer and return it (no read-back:
+        a caller on the same context blits it, e.g. ``ctx.copy_framebuffer(screen, fbo)``; row 0 is the
+        bottom row, GL's convention)."""
+        return self._draw(scene, paints, False, exposure_ev, curve, coat, flakes=flakes)
+
     def render_linear(self, scene, paints, coat: ClearCoat | None = None, flakes: FlakeLayer | None = None):
         """Linear sRGB radiance (H, W, 3) float32."""
         fbo = self._draw(scene, paints, True, 0.0, "clip", coat, flakes=flakes)
