@@ -120,15 +120,18 @@ class GLRenderer:
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[tuple[str, bool, str], tuple] = {}
+        self._programs: dict[tuple[str, bool, str, tuple[int, int, int]], tuple] = {}
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
-        self._targets: dict[bool, tuple] = {}
+        self._targets: dict[tuple[bool, bool], tuple] = {}
 
-    def _program(self, shape: str, linear: bool, kind: str = "shape"):
-        """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh")."""
-        key = (shape, linear, kind)
+    def _program(
+        self, shape: str, linear: bool, kind: str = "shape", features: tuple[int, int, int] = (0, 0, 0)
+    ):
+        """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
+        *features* = (coat, stage, flakes) compiled in (0/1 each)."""
+        key = (shape, linear, kind, features)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
 
@@ -136,6 +139,9 @@ class GLRenderer:
                 "SHAPE": SHAPE_INDEX[shape],
                 "MESH": int(kind == "mesh"),
                 "NO_SHAPE": int(kind == "stage"),
+                "HAS_COAT": features[0],
+                "HAS_STAGE": features[1],
+                "HAS_FLAKES": features[2],
                 "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
                 "N_LOBES": len(self._lobes),
                 "OUTPUT_LINEAR": int(linear),
@@ -151,15 +157,14 @@ class GLRenderer:
             self._programs[key] = (prog, None if kind == "mesh" else self.ctx.vertex_array(prog, []))
         return self._programs[key]
 
-    def _target(self, linear: bool):
-        if linear not in self._targets:
+    def _target(self, linear: bool, depth: bool = False):
+        """Colour target (with a depth buffer for meshes only: llvmpipe is slower with one attached)."""
+        key = (linear, depth)
+        if key not in self._targets:
             tex = self.ctx.texture((self.width, self.height), 4, dtype="f4" if linear else "f1")
-            depth = self.ctx.depth_renderbuffer((self.width, self.height))
-            self._targets[linear] = (
-                tex,
-                self.ctx.framebuffer(color_attachments=[tex], depth_attachment=depth),
-            )
-        return self._targets[linear]
+            rb = self.ctx.depth_renderbuffer((self.width, self.height)) if depth else None
+            self._targets[key] = (tex, self.ctx.framebuffer(color_attachments=[tex], depth_attachment=rb), rb)
+        return self._targets[key][:2]
 
     def _combined_cubes(self, pair) -> list:
         """[gloss0, dd0, gloss1, dd1] cube textures for these paints (rebuilt when weights change)."""
@@ -218,11 +223,15 @@ class GLRenderer:
     ):
         pair = check_paints(self.basis, paints)
         self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
+        feats = (int(coat is not None), int(scene.stage is not None), int(self.last_flakes.on))
         if mesh is None:
-            passes = [self._program(scene.shape, linear)]
+            passes = [self._program(scene.shape, linear, "shape", feats)]
         else:
-            passes = [self._program("sphere", linear, "stage"), self._program("sphere", linear, "mesh")]
-        _, fbo = self._target(linear)
+            passes = [
+                self._program("sphere", linear, "stage", (0, feats[1], 0)),
+                self._program("sphere", linear, "mesh", feats),
+            ]
+        _, fbo = self._target(linear, depth=mesh is not None)
         fbo.use()
         m = len(self._lobes)
         if self.combined:
@@ -438,9 +447,11 @@ class GLRenderer:
             if vao is not None:
                 vao.release()
             prog.release()
-        for tex, fbo in self._targets.values():
+        for tex, fbo, rb in self._targets.values():
             fbo.release()
             tex.release()
+            if rb is not None:
+                rb.release()
         for tex in [
             *self._lobes,
             self._diffuse_tex,

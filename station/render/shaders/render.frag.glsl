@@ -11,8 +11,19 @@
 // MESH (1): shade the fragments of a rasterised mesh (shaders/mesh.vert.glsl) instead of ray casting a
 // shape; NO_SHAPE (1): nothing to hit, the stage only (the backdrop pass under a mesh). Mesh parts with
 // v_painted = 0 are neutral: NEUTRAL_ALBEDO x the diffuse map.
+// HAS_COAT, HAS_STAGE, HAS_FLAKES (0/1): compile the clear coat, the stage and the flakes in only when a
+// frame uses them (llvmpipe pays for code behind uniform branches).
 #ifndef MESH
 #define MESH 0
+#endif
+#ifndef HAS_COAT
+#define HAS_COAT 1
+#endif
+#ifndef HAS_STAGE
+#define HAS_STAGE 1
+#endif
+#ifndef HAS_FLAKES
+#define HAS_FLAKES 1
 #endif
 #ifndef NO_SHAPE
 #define NO_SHAPE 0
@@ -171,19 +182,34 @@ void main() {
     bool hit_any = hit(u_eye, d, t, n, paint);
 #endif
 #endif
+#if MESH
     if (hit_any && paint < 0) {
 #if DIFFUSE_SH
         rgb = NEUTRAL_ALBEDO * sh_eval(u_rot * n);
 #else
         rgb = NEUTRAL_ALBEDO * textureLod(u_diffuse, u_rot * n, 0.0).rgb;
 #endif
-    } else if (hit_any) {
+    } else
+#endif
+    if (hit_any) {
         vec3 v = -d;
         float ndv = clamp(dot(n, v), 0.0, 1.0);
+#if HAS_STAGE
         vec3 r = u_rot * (2.0 * dot(n, v) * n - v);  // lookups in the environment's frame
         n = u_rot * n;
+#else
+        vec3 r = 2.0 * dot(n, v) * n - v;
+#endif
+#if HAS_COAT
         float s = coat_scale(ndv);
-        vec3 sparkle = u_flakes_on != 0 ? flake_sparkle(u_eye + t * d, t, n, u_rot * v, r, paint) : vec3(0.0);
+#else
+        float s = 1.0;
+#endif
+#if HAS_FLAKES
+        vec3 sparkle = flake_sparkle(u_eye + t * d, t, n, u_rot * v, r, paint);
+#else
+        vec3 sparkle = vec3(0.0);
+#endif
 #if DIFFUSE_SH
         rgb = u_wd[paint] * sh_eval(n);
 #else
@@ -214,7 +240,9 @@ void main() {
         }
         rgb += max(sparkle, -u_flake_reflectance * rgb);  // a cell's flakes never reflect less than nothing
     } else {
+#if HAS_STAGE
         rgb = stage_background(u_eye, d);
+#endif
     }
 #if OUTPUT_LINEAR
     f_color = vec4(rgb, 1.0);
