@@ -31,9 +31,11 @@ from station.render.numpy_renderer import (
     horizon_table,
     light_terms,
     lobe_factors,
+    stage_background,
 )
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
 from station.render.shapes import Scene
+from station.render.stage import lookup_matrix
 from station.render.weights import LobeWeights
 
 if TYPE_CHECKING:
@@ -52,6 +54,8 @@ class BasisImages:
     images: np.ndarray  # (3, K, P) float32: channel, image (see layout), pixel
     n_dot_v: np.ndarray  # (P,) float32
     layout: tuple[tuple[str, int], ...] = ()  # ("D", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image
+    #: (H·W, 3) linear radiance behind the object when the scene has a stage (backdrop, ground), else None.
+    background: np.ndarray | None = field(default=None, repr=False)
     _lut_key: tuple = field(default=(), repr=False)
     _lut: np.ndarray | None = field(default=None, repr=False)
     _scale: float = field(default=1.0, repr=False)
@@ -92,7 +96,11 @@ class BasisImages:
 
     def linear_image(self, paints: Sequence[LobeWeights]) -> np.ndarray:
         """Full linear frame (H, W, 3) float32 with the background."""
-        img = np.full((self.height * self.width, 3), BACKGROUND, np.float32)
+        img = (
+            np.full((self.height * self.width, 3), BACKGROUND, np.float32)
+            if self.background is None
+            else self.background.astype(np.float32).copy()
+        )
         img[self.pixels] = self.linear(paints).T
         return img.reshape(self.height, self.width, 3)
 
@@ -104,8 +112,12 @@ class BasisImages:
         lut32 = lut.astype(np.uint32)
         # One table per channel, already shifted into its byte of an RGBA8 word (little-endian), alpha set.
         self._lut = np.stack([lut32, lut32 << 8, (lut32 << 16) | np.uint32(0xFF000000)])
-        bg = tonemap.to_display(np.array([BACKGROUND] * 3), exposure_ev, curve).astype(np.uint32)
-        self._bg32 = np.uint32(bg[0] | (bg[1] << 8) | (bg[2] << 16) | 0xFF000000)
+        if self.background is None:
+            bg = tonemap.to_display(np.array([BACKGROUND] * 3), exposure_ev, curve).astype(np.uint32)
+            self._bg32 = np.asarray(bg[0] | (bg[1] << 8) | (bg[2] << 16) | 0xFF000000, np.uint32)
+        else:  # the stage: one pre-encoded word per pixel
+            bg = tonemap.to_display(self.background.astype(np.float32), exposure_ev, curve).astype(np.uint32)
+            self._bg32 = np.asarray(bg[:, 0] | (bg[:, 1] << 8) | (bg[:, 2] << 16) | 0xFF000000, np.uint32)
         self._lut_key = key
 
     def edit_rgba(
@@ -214,9 +226,16 @@ def build_basis_images(
     ndv = g.n_dot_v.reshape(-1)[pixels].astype(np.float32)
     m = len(basis.exponents)
     e = np.array(basis.exponents)
+    background = None
+    rot = lookup_matrix(scene.stage.rotation_deg) if scene.stage is not None else np.eye(3)
+    if scene.stage is not None:
+        origin, dirs = scene.view_camera.rays(width, height)
+        background = np.zeros((width * height, 3), np.float32)
+        miss = ~mask
+        background[miss] = stage_background(scene, basis, origin, dirs.reshape(-1, 3)[miss])
     if gl_renderer is None:
-        normals = g.normal.reshape(-1, 3)[pixels]
-        refl = g.reflect.reshape(-1, 3)[pixels]
+        normals = g.normal.reshape(-1, 3)[pixels] @ rot.T  # lookups in the environment's frame
+        refl = g.reflect.reshape(-1, 3)[pixels] @ rot.T
         gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
         lookups: dict[int, np.ndarray] = {}
         for j, (kind, i) in enumerate(layout):
@@ -241,4 +260,6 @@ def build_basis_images(
                 k_g[i] = (e[i] + 1.0) / (2.0 * np.pi)
             unit = LobeWeights(basis.exponents, k_d, k_dd, k_g)
             images[:, j] = gl_renderer.render_linear(scene, [unit]).reshape(-1, 3)[pixels].T
-    return BasisImages(basis, width, height, pixels, split, np.ascontiguousarray(images), ndv, layout)
+    return BasisImages(
+        basis, width, height, pixels, split, np.ascontiguousarray(images), ndv, layout, background=background
+    )

@@ -146,3 +146,16 @@ def test_gl_stage_agrees_with_numpy(gl_ctx, sky_basis, stage) -> None:
     assert close.mean() > 0.97
     g = nr.gbuffer(scene, w, h)
     assert np.abs(ref[~g.mask] - nr.BACKGROUND).max() > 0.1  # the stage is visible
+
+
+def test_basis_images_carry_the_stage(sky_basis) -> None:
+    """The cached basis images of a staged, rotated view re-weight to the NumPy renderer's picture."""
+    from station.render.basis_images import build_basis_images
+    from station.render.tonemap import to_display
+
+    scene = shapes.Scene("speedshape", stage=st.Stage(rotation_deg=70.0))
+    cached = build_basis_images(scene, sky_basis, 64, 40)
+    ref = nr.render_linear(scene, sky_basis, [_paint()], 64, 40)
+    assert cached.linear_image([_paint()]) == pytest.approx(ref, rel=1e-4, abs=1e-5)
+    frame = cached.edit([_paint()], 0.5)
+    assert np.abs(frame.astype(int) - to_display(ref, 0.5).astype(int)).max() <= 1

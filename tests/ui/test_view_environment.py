@@ -112,3 +112,29 @@ def test_broken_file_is_refused_and_said(qtbot, tmp_path) -> None:
     assert "broken.hdr" in panel.env_status.text()
     assert panel.environment.currentText() == "booth"
     panel.close()
+
+
+@pytest.mark.gl
+def test_stage_checkbox_same_picture_on_both_paths(qtbot, tmp_path, hdri_files, own_cache) -> None:
+    """Backdrop + ground: the GL frame of a view change and the cached basis agree (corner and object)."""
+    from station.render.environment import load_environment
+    from station.render.hdr_io import write_hdr
+
+    path = tmp_path / "small.hdr"
+    write_hdr(path, load_environment(hdri_files[0]).downsampled(64).equirect)
+    model = ViewModel(ViewSettings(environment=str(path)))
+    model.show(DEFAULT_DESIGN)
+    panel = _panel(qtbot, model)
+    qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
+    flat = panel.view.grab_image()
+    QTest.mouseClick(panel.stage, Qt.MouseButton.LeftButton)
+    assert model.settings.stage is True
+    gl_frame = panel.view.grab_image()  # drawn by the core's GL renderer before the worker is done
+    panel.view.wait_idle(60000)
+    qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
+    cached = panel.view.grab_image()
+    np.testing.assert_array_equal(cached, panel.view.basis.core.edit(list(model.weights()), 0.0))
+    assert np.abs(cached[0, 0].astype(int) - flat[0, 0].astype(int)).max() > 3  # backdrop, not grey
+    diff = np.abs(gl_frame.astype(int) - cached.astype(int))
+    assert np.median(diff) <= 2 and np.percentile(diff, 99) <= 12  # GL float32 vs NumPy float64 lookups
+    panel.close()

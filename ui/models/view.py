@@ -126,7 +126,8 @@ class ViewSettings:
     (:meth:`ViewModel.load_environment`).
     ``yaw_deg``/``pitch_deg`` rotate the shape's default camera about the target (degrees),
     ``zoom`` divides the eye distance (1 = the default framing). ``misalignment_deg`` turns the right
-    panel of the ``panels`` shape about its hinge (thesis ch. 4).
+    panel of the ``panels`` shape about its hinge (thesis ch. 4). ``stage`` shows the environment as
+    backdrop over a ground with contact shadow (``station.render.stage.Stage``) instead of flat grey.
     """
 
     environment: str = "booth"
@@ -136,6 +137,7 @@ class ViewSettings:
     pitch_deg: float = 0.0
     zoom: float = 1.0
     misalignment_deg: float = 0.0
+    stage: bool = False
 
     def __post_init__(self) -> None:
         check_environment(self.environment)
@@ -149,6 +151,8 @@ class ViewSettings:
             raise ViewInputError("zoom", "0.5 <= zoom <= 4", self.zoom)
         if not (math.isfinite(self.misalignment_deg) and -45.0 <= self.misalignment_deg <= 45.0):
             raise ViewInputError("misalignment_deg", "-45 <= misalignment <= 45", self.misalignment_deg)
+        if not isinstance(self.stage, bool):
+            raise ViewInputError("stage", "true | false", self.stage)
         if not math.isfinite(self.yaw_deg):
             raise ViewInputError("yaw_deg", "a finite angle", self.yaw_deg)
 
@@ -170,8 +174,12 @@ class ViewSettings:
         return Camera((x, y, z), base.target, base.up, base.fov_deg)
 
     def scene(self) -> Scene:
-        """The core scene (shape + orbit camera)."""
-        return Scene(self.shape, self.misalignment_deg, camera=self.camera())
+        """The core scene (shape + orbit camera, and the stage when ``stage``)."""
+        from station.render.stage import Stage
+
+        return Scene(
+            self.shape, self.misalignment_deg, camera=self.camera(), stage=Stage() if self.stage else None
+        )
 
     def replace(self, **kw: Any) -> ViewSettings:
         """A copy with fields replaced (validated)."""

@@ -340,7 +340,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         if weights is None or self.basis is None:
             self.ctx.clear(BACKGROUND, BACKGROUND, BACKGROUND)
             return
-        if self.mode == "cpu":
+        if self.mode == "cpu" or self.basis.core.background is not None:  # the stage: per-pixel background
             self._draw_cpu_frame(weights, w, h)
         else:
             self._draw_gpu(weights, w, h)

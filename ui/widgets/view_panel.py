@@ -6,6 +6,7 @@ from pathlib import Path
 
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
+    QCheckBox,
     QComboBox,
     QFileDialog,
     QHBoxLayout,
@@ -56,6 +57,8 @@ class ViewPanel(QWidget):
         self.exposure.setValue(round(s.exposure_ev * EXPOSURE_STEPS_PER_EV))
         self.exposure_label = QLabel()
         reset = QPushButton("Reset camera")
+        self.stage = QCheckBox("backdrop + ground")
+        self.stage.setChecked(s.stage)
         bar = QHBoxLayout()
         for w in (
             QLabel("environment"),
@@ -67,6 +70,7 @@ class ViewPanel(QWidget):
             QLabel("exposure"),
             self.exposure,
             self.exposure_label,
+            self.stage,
             reset,
         ):
             bar.addWidget(w)
@@ -82,6 +86,7 @@ class ViewPanel(QWidget):
             lambda t: self.model.update(shape=t, yaw_deg=0.0, pitch_deg=0.0, zoom=1.0)
         )
         self.exposure.valueChanged.connect(lambda v: self.model.update(exposure_ev=v / EXPOSURE_STEPS_PER_EV))
+        self.stage.toggled.connect(lambda on: self.model.update(stage=bool(on)))
         reset.clicked.connect(lambda: self.model.update(yaw_deg=0.0, pitch_deg=0.0, zoom=1.0))
         model.events.settings.connect(self._on_settings)
         self._on_settings(s)
