@@ -24,7 +24,7 @@ def own_cache(tmp_path, monkeypatch):
 def _panel(qtbot, model: ViewModel) -> ViewPanel:
     panel = ViewPanel(model)
     qtbot.addWidget(panel)
-    panel.resize(420, 200)
+    panel.resize(320, 150)
     panel.show()
     qtbot.waitExposed(panel)
     panel.view.wait_idle()
@@ -87,7 +87,7 @@ def test_load_hdr_button_and_dialog(qtbot, hdri_files, own_cache, tmp_path) -> N
     after = panel.view.grab_image()
     np.testing.assert_array_equal(after, panel.view.basis.core.edit(list(model.weights()), 0.0))
     obj = panel.view.basis.paint >= 0
-    assert obj.mean() > 0.1
+    assert obj.mean() > 0.05
     if hdri_files[0] != hdri_files[-1]:  # a different light: the object's mean colour moves
         assert np.abs(after[obj].astype(float).mean(axis=0) - before[obj].mean(axis=0)).max() > 3
     # picking the first file again from the combo returns to it
