@@ -12,7 +12,9 @@ Scene options: ``--stage`` shows the environment as backdrop over a ground with 
 (``--blur DEG``, ``--rotate DEG``, ``--no-ground``); ``--coat N`` adds the clear coat's Fresnel of index N
 to the gloss (thesis model without it); GL engine only: ``--mesh FILE`` renders a .glb/.gltf/.obj/.stl
 model instead of the shape (``--paint-part NAME`` picks the part to paint) and ``--flakes`` draws the
-design file's flake layer (the JSON says what the level of detail chose).
+design file's flake layer (the JSON says what the level of detail chose). ``--lod DE`` lets the level of
+detail (``station.render.lod.choose_lod``, against the ground truth on a 16 × 16 sample of the view) pick
+the lobe count and environment resolution for a CIEDE2000 tolerance and reports the choice.
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--mesh", help="GL engine: render this .glb/.gltf/.obj/.stl model instead of the shape")
     p.add_argument("--paint-part", help="with --mesh: the mesh or material name of the part to paint")
     p.add_argument("--flakes", action="store_true", help="GL engine: the design file's flake layer")
+    p.add_argument("--lod", type=float, help="CIEDE2000 tolerance: level of detail picks lobes and map size")
     add_json_flag(p)
     p.set_defaults(handler=_render)
 
@@ -113,6 +116,37 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         )
     coat = ClearCoat(args.coat) if args.coat is not None else None
     scene = Scene(args.shape, misalignment_deg=args.misalignment, stage=stage)
+    lod_report = None
+    if args.lod is not None:
+        from station.render.lobes import basis_for_count
+        from station.render.lod import choose_lod
+
+        t0 = time.perf_counter()
+        g16 = gbuffer(scene, 16, 16)
+        sel = g16.mask & (g16.n_dot_v > 0.05)
+        if not sel.any():
+            raise InputError("lod", "a view that shows the shape", args.lod)
+        choice = choose_lod(
+            designs,
+            env,
+            g16.normal[sel],
+            g16.view[sel],
+            args.lod,
+            mode="prefiltered-lut",
+            samples=64,
+            quadrature_width=64,
+        )
+        paints = [lobe_fit.fit_design(d, basis_for_count(choice.lobes)) for d in designs]
+        if choice.environment_width < env.equirect.shape[1]:
+            env = env.downsampled(choice.environment_width)
+        lod_report = {
+            "lobes": choice.lobes,
+            "environment_width": int(env.equirect.shape[1]),
+            "met": choice.met,
+            "errors": {k: round(float(v), 3) for k, v in choice.errors.items()},
+            "describe": choice.describe(),
+        }
+        timings["lod"] = time.perf_counter() - t0
     engine = args.engine
     if engine == "auto":
         engine = "gl" if gl_available() else "numpy"
@@ -186,6 +220,7 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         "stage": stage is not None,
         "coat_index": args.coat,
         "flakes": flake_report,
+        "lod": lod_report,
         "out": str(out),
         "linear_out": args.linear_out,
         "timings": {k: round(v, 4) for k, v in timings.items()},

@@ -203,3 +203,19 @@ def test_render_gl_mesh_with_flakes(files, tmp_path, capsys, gl_ctx):
     result = json.loads(capsys.readouterr().out)
     assert result["shape"] == "box" and "per pixel" in result["flakes"]
     assert np.asarray(Image.open(out)).shape == (32, 32, 3)
+
+
+def test_render_level_of_detail_is_chosen_and_reported(files, tmp_path, capsys):
+    d1, _, env = files
+    out = tmp_path / "l.png"
+    base = ["render", "--design", str(d1), "--env", str(env), "--size", "24", "--engine", "numpy"]
+    rc = main([*base, "--lod", "3.0", "--out", str(out), "--cache-dir", str(tmp_path / "c"), "--json"])
+    assert rc == 0
+    result = json.loads(capsys.readouterr().out)
+    lod = result["lod"]
+    assert lod["lobes"] == len(result["lobes"])  # the render used the chosen basis
+    assert lod["environment_width"] <= 128 and "Tolerance ΔE 3" in lod["describe"]
+    share = 3.0 / np.sqrt(3.0)
+    assert lod["met"] == all(v <= share + 1e-9 for v in lod["errors"].values())
+    assert main([*base, "--lod", "0", "--out", str(out)]) == 2
+    assert "tolerance_de" in capsys.readouterr().err
