@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from station.model.gloss import ClearCoat
 from station.render import tonemap
 from station.render.cubemap import sample_cube
 from station.render.errors import RenderError
@@ -53,7 +54,9 @@ class BasisImages:
     split: int  # pixels[:split] carry paint 0, pixels[split:] paint 1
     images: np.ndarray  # (3, K, P) float32: channel, image (see layout), pixel
     n_dot_v: np.ndarray  # (P,) float32
-    layout: tuple[tuple[str, int], ...] = ()  # ("D", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image
+    # ("D", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image; with a clear coat ("Cg", i) s·C_i (gloss) and
+    # ("Cd", i) C_i (directionally diffuse, times c) replace ("C", i), and the Gh images hold s·h_i·C_i.
+    layout: tuple[tuple[str, int], ...] = ()
     #: (H·W, 3) linear radiance behind the object when the scene has a stage (backdrop, ground), else None.
     background: np.ndarray | None = field(default=None, repr=False)
     _lut_key: tuple = field(default=(), repr=False)
@@ -77,6 +80,10 @@ class BasisImages:
                 rows[:, 0, j] = w_g[i]
             elif kind == "Dg":
                 rows[:, 0, j] = w_dd[i]
+            elif kind == "Cg":
+                rows[:, 0, j] = w_g[i]
+            elif kind == "Cd":
+                rows[:, 1, j] = w_dd[i]
             else:
                 rows[:, 0, j] = w_g[i]
                 rows[:, 1, j] = w_dd[i]
@@ -193,14 +200,20 @@ class BasisImages:
         return self.edit_rgba(paints, exposure_ev, curve)[..., :3]
 
 
-def image_layout(exponents: Sequence[float], horizon: str = "lut") -> tuple[tuple[str, int], ...]:
-    """The cached images of a basis: D, then per lobe (Gh, Dg) when wide, (C,) when narrow."""
+def image_layout(
+    exponents: Sequence[float], horizon: str = "lut", coat: bool = False
+) -> tuple[tuple[str, int], ...]:
+    """The cached images of a basis: D, then per lobe (Gh, Dg) when wide, (C,) when narrow ((Cg, Cd) with a
+    clear coat, whose per-pixel gloss factor the shared C image cannot carry)."""
     table = horizon_table(exponents, horizon)
     c = np.linspace(0.0, 1.0, table.shape[1])
     layout: list[tuple[str, int]] = [("D", -1)]
     for i, e in enumerate(exponents):
         exact = np.allclose(table[i, :, 0], c) and np.allclose(table[i, :, 1], 1.0)
-        layout += [("C", i)] if exact and e >= WIDE_EXPONENT else [("Gh", i), ("Dg", i)]
+        if exact and e >= WIDE_EXPONENT:
+            layout += [("Cg", i), ("Cd", i)] if coat else [("C", i)]
+        else:
+            layout += [("Gh", i), ("Dg", i)]
     return tuple(layout)
 
 
@@ -211,17 +224,19 @@ def build_basis_images(
     height: int,
     gl_renderer: GLRenderer | None = None,
     horizon: str = "lut",
+    coat: ClearCoat | None = None,
 ) -> BasisImages:
     """Render the basis images of one view (NumPy lookups, or GL when a GLRenderer is given).
 
-    A GL renderer must have been made with the same *horizon* setting.
+    A GL renderer must have been made with the same *horizon* setting. *coat*: the clear coat's Fresnel
+    factor s(N·V) folded into the gloss images (``numpy_renderer``'s equation with a coat).
     """
     g = gbuffer(scene, width, height)
     mask = g.mask.reshape(-1)
     paint = g.paint.reshape(-1)
     pixels = np.concatenate([np.flatnonzero(mask & (paint == 0)), np.flatnonzero(mask & (paint == 1))])
     split = int(np.count_nonzero(mask & (paint == 0)))
-    layout = image_layout(basis.exponents, horizon)
+    layout = image_layout(basis.exponents, horizon, coat is not None)
     images = np.empty((3, len(layout), pixels.size), np.float32)
     ndv = g.n_dot_v.reshape(-1)[pixels].astype(np.float32)
     m = len(basis.exponents)
@@ -237,6 +252,7 @@ def build_basis_images(
         normals = g.normal.reshape(-1, 3)[pixels] @ rot.T  # lookups in the environment's frame
         refl = g.reflect.reshape(-1, 3)[pixels] @ rot.T
         gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
+        sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
         lookups: dict[int, np.ndarray] = {}
         for j, (kind, i) in enumerate(layout):
             if kind == "D":
@@ -244,11 +260,11 @@ def build_basis_images(
                 continue
             if i not in lookups:
                 lookups[i] = sample_cube(basis.cubes[i], refl).T
-            factor = hf[:, i] if kind == "Gh" else gf[:, i] if kind == "Dg" else 1.0
+            factor = {"Gh": hf[:, i] * sc, "Dg": gf[:, i], "Cg": sc}.get(kind, 1.0)
             images[:, j] = lookups[i] * factor
-            lights = light_terms(basis, i, normals, refl) if kind != "C" else None
+            lights = light_terms(basis, i, normals, refl) if kind in ("Gh", "Dg") else None
             if lights is not None:
-                images[:, j] += (lights[0] if kind == "Gh" else lights[1]).T
+                images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1]).T
     else:
         for j, (kind, i) in enumerate(layout):
             k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)
@@ -259,7 +275,8 @@ def build_basis_images(
             else:
                 k_g[i] = (e[i] + 1.0) / (2.0 * np.pi)
             unit = LobeWeights(basis.exponents, k_d, k_dd, k_g)
-            images[:, j] = gl_renderer.render_linear(scene, [unit]).reshape(-1, 3)[pixels].T
+            unit_coat = coat if kind in ("Gh", "Cg") else None
+            images[:, j] = gl_renderer.render_linear(scene, [unit], coat=unit_coat).reshape(-1, 3)[pixels].T
     return BasisImages(
         basis, width, height, pixels, split, np.ascontiguousarray(images), ndv, layout, background=background
     )

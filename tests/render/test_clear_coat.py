@@ -136,3 +136,20 @@ def test_truth_closed_form_and_renderer_agreement() -> None:
         method="cie2000",
     )
     assert on_off.max() > 3.0 * errors["on"].mean()
+
+
+def test_basis_images_fold_the_coat_in(const_basis) -> None:
+    """Cached basis images with the coat re-weight to the NumPy renderer's picture with the coat."""
+    from station.render import procedural
+    from station.render.basis_images import build_basis_images
+
+    basis = prefilter.prefilter_basis(procedural.sunny_sky(64), EXPS, max_size=32)
+    paint = LobeWeights(EXPS, [0.05, 0.04, 0.03], np.full((4, 3), 0.03), [0.0, 0.2, 0.5, 2.0])
+    scene = shapes.Scene("sphere")
+    coat = ClearCoat()
+    cached = build_basis_images(scene, basis, 40, 40, coat=coat)
+    assert ("Cg", 3) in cached.layout and ("Cd", 3) in cached.layout
+    ref = nr.render_linear(scene, basis, [paint], 40, 40, coat=coat)
+    assert cached.linear_image([paint]) == pytest.approx(ref, rel=1e-4, abs=1e-5)
+    plain = nr.render_linear(scene, basis, [paint], 40, 40)
+    assert np.abs(ref - plain).max() > 0.05

@@ -138,3 +138,30 @@ def test_stage_checkbox_same_picture_on_both_paths(qtbot, tmp_path, hdri_files, 
     diff = np.abs(gl_frame.astype(int) - cached.astype(int))
     assert np.median(diff) <= 2 and np.percentile(diff, 99) <= 12  # GL float32 vs NumPy float64 lookups
     panel.close()
+
+
+@pytest.mark.gl
+def test_clear_coat_checkbox(qtbot, own_cache) -> None:
+    from ui.models.view import layer_weights
+
+    model = ViewModel()
+    model.show(DEFAULT_DESIGN)
+    panel = _panel(qtbot, model)
+    qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
+    before = panel.view.grab_image()
+    QTest.mouseClick(panel.coat, Qt.MouseButton.LeftButton)
+    assert model.settings.coat is True
+    panel.view.wait_idle(60000)
+    qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
+    basis = panel.view.basis
+    assert any(kind == "Cg" for kind, _ in basis.layout)
+    after = panel.view.grab_image()
+    np.testing.assert_array_equal(after, basis.core.edit(list(model.weights()), 0.0))
+    obj = basis.paint >= 0
+    assert np.abs(after[obj].astype(int) - before[obj].astype(int)).max() > 3  # grazing gloss rises
+    # the GPU composite weights of the split images: Cg constant w_G, Cd times c w_DD
+    const, times_c = layer_weights(basis.layout, model.weights()[0])
+    w_dd = model.weights()[0].map_weights()[1]
+    j = basis.layout.index(next(x for x in basis.layout if x[0] == "Cd"))
+    assert const[j] == pytest.approx(0.0) and times_c[j] == pytest.approx(w_dd[basis.layout[j][1]])
+    panel.close()

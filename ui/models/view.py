@@ -19,6 +19,7 @@ import numpy as np
 
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
+from station.model.gloss import ClearCoat
 from station.render.basis_images import BasisImages as CoreBasisImages
 from station.render.basis_images import build_basis_images
 from station.render.camera import Camera
@@ -127,7 +128,8 @@ class ViewSettings:
     ``yaw_deg``/``pitch_deg`` rotate the shape's default camera about the target (degrees),
     ``zoom`` divides the eye distance (1 = the default framing). ``misalignment_deg`` turns the right
     panel of the ``panels`` shape about its hinge (thesis ch. 4). ``stage`` shows the environment as
-    backdrop over a ground with contact shadow (``station.render.stage.Stage``) instead of flat grey.
+    backdrop over a ground with contact shadow (``station.render.stage.Stage``) instead of flat grey;
+    ``coat`` adds the clear coat's Fresnel on the gloss (``station.model.gloss.ClearCoat``, index 1.5).
     """
 
     environment: str = "booth"
@@ -138,6 +140,7 @@ class ViewSettings:
     zoom: float = 1.0
     misalignment_deg: float = 0.0
     stage: bool = False
+    coat: bool = False
 
     def __post_init__(self) -> None:
         check_environment(self.environment)
@@ -151,8 +154,9 @@ class ViewSettings:
             raise ViewInputError("zoom", "0.5 <= zoom <= 4", self.zoom)
         if not (math.isfinite(self.misalignment_deg) and -45.0 <= self.misalignment_deg <= 45.0):
             raise ViewInputError("misalignment_deg", "-45 <= misalignment <= 45", self.misalignment_deg)
-        if not isinstance(self.stage, bool):
-            raise ViewInputError("stage", "true | false", self.stage)
+        for name in ("stage", "coat"):
+            if not isinstance(getattr(self, name), bool):
+                raise ViewInputError(name, "true | false", getattr(self, name))
         if not math.isfinite(self.yaw_deg):
             raise ViewInputError("yaw_deg", "a finite angle", self.yaw_deg)
 
@@ -181,6 +185,10 @@ class ViewSettings:
             self.shape, self.misalignment_deg, camera=self.camera(), stage=Stage() if self.stage else None
         )
 
+    def clear_coat(self) -> ClearCoat | None:
+        """The clear coat shown (``coat``), or None for the thesis's model."""
+        return ClearCoat() if self.coat else None
+
     def replace(self, **kw: Any) -> ViewSettings:
         """A copy with fields replaced (validated)."""
         return replace(self, **kw)
@@ -199,10 +207,12 @@ def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tu
     for j, (kind, i) in enumerate(layout):
         if kind == "D":
             const[j] = w_d
-        elif kind in ("Gh", "C"):
+        elif kind in ("Gh", "C", "Cg"):
             const[j] = w_g[i]
             if kind == "C":
                 times_c[j] = w_dd[i]
+        elif kind == "Cd":
+            times_c[j] = w_dd[i]
         else:
             const[j] = w_dd[i]
     return const, times_c
@@ -245,7 +255,7 @@ class BasisImages:
         *prefilter_size* caps the prefiltered cube faces (see :func:`environment_basis`).
         """
         env = environment_basis(settings.environment, prefilter_size)
-        core = build_basis_images(settings.scene(), env, width, height)
+        core = build_basis_images(settings.scene(), env, width, height, coat=settings.clear_coat())
         k = core.images.shape[1]
         layers = np.zeros((k, height * width, 3), np.float32)
         layers[:, core.pixels] = core.images.transpose(1, 2, 0)

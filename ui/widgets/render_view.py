@@ -364,7 +364,9 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
                     self._core.release()
                 self._core = GLRenderer(basis, w, h, ctx=self.ctx)
                 self._core_key = key
-            fbo = self._core.draw(settings.scene(), list(weights), settings.exposure_ev)
+            fbo = self._core.draw(
+                settings.scene(), list(weights), settings.exposure_ev, coat=settings.clear_coat()
+            )
         except RenderError:  # no GL 4.3 here: fall back to the quarter-resolution preview path
             self._core_ok = False
             self._core = None

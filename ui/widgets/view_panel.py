@@ -59,6 +59,8 @@ class ViewPanel(QWidget):
         reset = QPushButton("Reset camera")
         self.stage = QCheckBox("backdrop + ground")
         self.stage.setChecked(s.stage)
+        self.coat = QCheckBox("clear coat")
+        self.coat.setChecked(s.coat)
         bar = QHBoxLayout()
         for w in (
             QLabel("environment"),
@@ -71,6 +73,7 @@ class ViewPanel(QWidget):
             self.exposure,
             self.exposure_label,
             self.stage,
+            self.coat,
             reset,
         ):
             bar.addWidget(w)
@@ -87,6 +90,7 @@ class ViewPanel(QWidget):
         )
         self.exposure.valueChanged.connect(lambda v: self.model.update(exposure_ev=v / EXPOSURE_STEPS_PER_EV))
         self.stage.toggled.connect(lambda on: self.model.update(stage=bool(on)))
+        self.coat.toggled.connect(lambda on: self.model.update(coat=bool(on)))
         reset.clicked.connect(lambda: self.model.update(yaw_deg=0.0, pitch_deg=0.0, zoom=1.0))
         model.events.settings.connect(self._on_settings)
         self._on_settings(s)
