@@ -7,6 +7,7 @@ never overwrite each other's results.
 
 from __future__ import annotations
 
+import argparse
 import datetime as _dt
 import platform
 import re
@@ -67,14 +68,16 @@ def write_section(name: str, title: str, cases: list[Case], extra_markdown: str 
     REPORT.write_text(text)
 
 
-def bench_cli(doc: str | None, name: str) -> None:
+def bench_cli(doc: str | None, name: str, flags: dict[str, str] | None = None) -> argparse.Namespace:
     """Parse a benchmark's command line before it starts: ``--help`` prints *doc* and exits; any
-    argument the benchmark does not take is refused (exit 2). Nothing is measured or written first."""
-    import argparse
-
-    argparse.ArgumentParser(
+    argument the benchmark does not take is refused (exit 2). Nothing is measured or written first.
+    *flags*: on/off options the benchmark takes (name → help)."""
+    parser = argparse.ArgumentParser(
         prog=f"python -m bench.{name}",
         description=doc,
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog=f"runs the benchmark and rewrites its section of {REPORT.relative_to(ROOT)}",
-    ).parse_args()
+    )
+    for flag, text in (flags or {}).items():
+        parser.add_argument(flag, action="store_true", help=text)
+    return parser.parse_args()

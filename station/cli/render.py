@@ -7,6 +7,14 @@ basis (cached on disk under ``--cache-dir`` / ``$CACAD_CACHE_DIR`` / ``~/.cache/
 maps and writes the PNG (and, with ``--linear-out FILE.exr``, the scene-linear image). ``--design2``
 paints the right half (or right panel, or bumper) with a second design. The JSON names the engine,
 the lobes and the timings (seconds).
+
+Scene options: ``--stage`` shows the environment as backdrop over a ground with contact shadow
+(``--blur DEG``, ``--rotate DEG``, ``--no-ground``); ``--coat N`` adds the clear coat's Fresnel of index N
+to the gloss (thesis model without it); GL engine only: ``--mesh FILE`` renders a .glb/.gltf/.obj/.stl
+model instead of the shape (``--paint-part NAME`` picks the part to paint) and ``--flakes`` draws the
+design file's flake layer (the JSON says what the level of detail chose). ``--lod DE`` lets the level of
+detail (``station.render.lod.choose_lod``, against the ground truth on a 16 × 16 sample of the view) pick
+the lobe count and environment resolution for a CIEDE2000 tolerance and reports the choice.
 """
 
 from __future__ import annotations
@@ -75,6 +83,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--misalignment", type=float, default=0.0, help="panels: right panel turn, degrees")
     p.add_argument("--cache-dir", help="prefilter cache folder (default $CACAD_CACHE_DIR or ~/.cache/cacad)")
+    p.add_argument("--stage", action="store_true", help="environment backdrop and ground with contact shadow")
+    p.add_argument("--blur", type=float, default=0.0, help="backdrop blur, degrees (with --stage)")
+    p.add_argument("--rotate", type=float, default=0.0, help="environment turn about the vertical, degrees")
+    p.add_argument("--no-ground", action="store_true", help="with --stage: backdrop only")
+    p.add_argument("--coat", type=float, help="clear coat index for Schlick Fresnel on the gloss (e.g. 1.5)")
+    p.add_argument("--mesh", help="GL engine: render this .glb/.gltf/.obj/.stl model instead of the shape")
+    p.add_argument("--paint-part", help="with --mesh: the mesh or material name of the part to paint")
+    p.add_argument("--flakes", action="store_true", help="GL engine: the design file's flake layer")
+    p.add_argument("--lod", type=float, help="CIEDE2000 tolerance: level of detail picks lobes and map size")
     add_json_flag(p)
     p.set_defaults(handler=_render)
 
@@ -114,10 +131,68 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     t0 = time.perf_counter()
     env = _environment(args.env)
     timings["environment"] = time.perf_counter() - t0
-    scene = Scene(args.shape, misalignment_deg=args.misalignment)
+    from station.model.gloss import ClearCoat
+    from station.render.stage import Stage
+
+    stage = None
+    if args.stage or args.rotate:
+        stage = Stage(
+            backdrop=bool(args.stage),
+            backdrop_blur_deg=args.blur,
+            rotation_deg=args.rotate,
+            ground=bool(args.stage) and not args.no_ground,
+        )
+    coat = ClearCoat(args.coat) if args.coat is not None else None
+    scene = Scene(args.shape, misalignment_deg=args.misalignment, stage=stage)
+    lod_report = None
+    if args.lod is not None:
+        from station.render.lobes import basis_for_count
+        from station.render.lod import choose_lod
+
+        t0 = time.perf_counter()
+        g16 = gbuffer(scene, 16, 16)
+        sel = g16.mask & (g16.n_dot_v > 0.05)
+        if not sel.any():
+            raise InputError("lod", "a view that shows the shape", args.lod)
+        choice = choose_lod(
+            designs,
+            env,
+            g16.normal[sel],
+            g16.view[sel],
+            args.lod,
+            mode="prefiltered-lut",
+            samples=64,
+            quadrature_width=64,
+        )
+        paints = [lobe_fit.fit_design(d, basis_for_count(choice.lobes)) for d in designs]
+        if choice.environment_width < env.equirect.shape[1]:
+            env = env.downsampled(choice.environment_width)
+        lod_report = {
+            "lobes": choice.lobes,
+            "environment_width": int(env.equirect.shape[1]),
+            "met": choice.met,
+            "errors": {k: round(float(v), 3) for k, v in choice.errors.items()},
+            "describe": choice.describe(),
+        }
+        timings["lod"] = time.perf_counter() - t0
     engine = args.engine
     if engine == "auto":
         engine = "gl" if gl_available() else "numpy"
+    if (args.mesh or args.flakes) and engine != "gl":
+        raise InputError("engine", "gl (or auto with a GL stack) for --mesh / --flakes", engine)
+    if engine == "truth" and (stage is not None or coat is not None):
+        raise InputError("engine", "gl | numpy with --stage / --rotate / --coat", engine)
+    mesh = None
+    if args.mesh:
+        from station.render.meshes import load_mesh
+
+        mesh = load_mesh(args.mesh, paint=args.paint_part)
+    flakes = None
+    if args.flakes:
+        from station.model.design_io import load_design_flakes
+
+        flakes = load_design_flakes(args.design)[1]
+    flake_report = None
     size = args.size
     exps = paints[0].exponents
     if engine == "truth":
@@ -143,9 +218,13 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
             from station.render.gl_renderer import GLRenderer
 
             with GLRenderer(basis, size, size) as gl:
-                linear = gl.render_linear(scene, paints)
+                if mesh is not None:
+                    linear = gl.render_mesh(mesh, paints, stage=stage, coat=coat, linear=True, flakes=flakes)
+                else:
+                    linear = gl.render_linear(scene, paints, coat=coat, flakes=flakes)
+                flake_report = gl.last_flakes.reason if gl.last_flakes is not None else None
         else:
-            linear = render_linear(scene, basis, paints, size, size)
+            linear = render_linear(scene, basis, paints, size, size, coat=coat)
         timings["render"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     image8 = tonemap.to_display(linear, args.exposure, args.tone)
@@ -164,8 +243,12 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         "engine": engine,
         "lobes": list(exps),
         "environment": env.name,
-        "shape": args.shape,
+        "shape": args.shape if mesh is None else mesh.name,
         "size": size,
+        "stage": stage is not None,
+        "coat_index": args.coat,
+        "flakes": flake_report,
+        "lod": lod_report,
         "out": str(out),
         "linear_out": args.linear_out,
         "timings": {k: round(v, 4) for k, v in timings.items()},

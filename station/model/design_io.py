@@ -8,8 +8,14 @@ A design file is a JSON object::
       "face": [L, a, b],                    # Lab (D65/10°) at 15°
       "flop": [L, a, b],                    # Lab at the travel angle
       "travel_deg": 62.0,                   # θ_clamp in degrees; null for a solid
-      "gloss_gu": 85.0                      # 60° gloss units; null = not measured (default used)
+      "gloss_gu": 85.0,                     # 60° gloss units; null = not measured (default used)
+      "flakes": {"size_um": 25, "density_per_mm2": 400, "spread_deg": 8, "reflectance": 0.5}
     }
+
+``flakes`` is optional (:class:`station.model.flakes.FlakeLayer`; missing keys take its defaults): absent,
+the paint type's default applies (:func:`default_flakes`: none for a solid, aluminium flakes for an effect
+paint); ``null`` means no flake layer. :func:`design_from_dict` ignores it, so older readers and files
+keep working; :func:`flakes_from_dict` reads it.
 
 Any other keys are kept by the caller and ignored here, so the JSON printed by
 ``station model from-angles`` (which adds ``residual_de`` and more) is itself a valid design file.
@@ -22,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from station.model.errors import ModelInputError
+from station.model.flakes import METALLIC_FLAKES, FlakeLayer
 from station.model.representations import DEFAULT_GLOSS_GU, FaceFlopTravelGloss
 
 SCHEMA = "cacad.design/1"
@@ -78,6 +85,20 @@ def design_from_dict(data: Any) -> FaceFlopTravelGloss:
     )
 
 
+def default_flakes(design: FaceFlopTravelGloss) -> FlakeLayer | None:
+    """The paint type's default flake layer: None for a solid (no travel), METALLIC_FLAKES otherwise."""
+    return None if design.travel_deg is None else METALLIC_FLAKES
+
+
+def flakes_from_dict(data: Any, design: FaceFlopTravelGloss | None = None) -> FlakeLayer | None:
+    """The design file's flake layer (module docstring); ModelInputError names ``flakes.<field>``."""
+    if not isinstance(data, dict) or "flakes" not in data:
+        return default_flakes(design if design is not None else design_from_dict(data))
+    if data["flakes"] is None:
+        return None
+    return FlakeLayer.from_dict(data["flakes"])
+
+
 def load_design(path: str | Path) -> FaceFlopTravelGloss:
     """Read a design file (``cacad.design/1`` JSON); errors name the file and the field."""
     p = Path(path)
@@ -92,6 +113,13 @@ def load_design(path: str | Path) -> FaceFlopTravelGloss:
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ModelInputError("design", f"a JSON design file ({SCHEMA})", f"{p}: {exc}") from exc
     return design_from_dict(data)
+
+
+def load_design_flakes(path: str | Path) -> tuple[FaceFlopTravelGloss, FlakeLayer | None]:
+    """Read a design file with its flake layer (:func:`flakes_from_dict`)."""
+    design = load_design(path)
+    data = json.loads(Path(path).read_text(encoding="utf-8"))
+    return design, flakes_from_dict(data, design)
 
 
 def save_design(design: FaceFlopTravelGloss, path: str | Path, **extra: Any) -> Path:

@@ -74,6 +74,78 @@ def fresnel_unpolarised(theta_deg: float, n: float) -> float:
     return 0.5 * (rs + rp)
 
 
+#: Refractive index of an automotive clear coat (acrylic / polyurethane binders, about 1.5).
+CLEAR_COAT_INDEX = 1.5
+#: Incidence (degrees) at which a design's specular albedo is defined: the 60° gloss geometry (above).
+COAT_REFERENCE_DEG = 60.0
+
+
+def schlick_f0(n: float) -> float:
+    """Normal-incidence reflectance F0 = ((n − 1)/(n + 1))² of a dielectric of index *n* from air."""
+    return ((n - 1.0) / (n + 1.0)) ** 2
+
+
+def fresnel_schlick(cos_theta: NDArray | float, n: float) -> NDArray[np.float64]:
+    """Schlick's approximation F(θ) = F0 + (1 − F0)(1 − cos θ)⁵ of the dielectric Fresnel reflectance.
+
+    *cos_theta* is clipped to [0, 1] (grazing beyond 90° reads as 90°); *n* the coat's index.
+    """
+    c = np.clip(np.asarray(cos_theta, dtype=float), 0.0, 1.0)
+    f0 = schlick_f0(n)
+    return f0 + (1.0 - f0) * (1.0 - c) ** 5
+
+
+@dataclass(frozen=True)
+class ClearCoat:
+    """The clear coat's Fresnel reflection on the gloss lobes (thesis §2.5.2, last paragraph, first way:
+    "increase the relative weights of the environment maps with high specular exponents at grazing
+    angles").
+
+    A design's gloss weights hold its specular albedo at the 60° gloss geometry
+    (:attr:`SpecularLobe.specular_albedo`), so the gloss lobes are scaled per pixel by
+
+        s(N·V) = F(N·V; n) / F(cos 60°; n)
+
+    with F Schlick's approximation (:func:`fresnel_schlick`) evaluated at the view angle (the angle at
+    which the mirror reflection leaves the coat; for the lobes about R it is the split-sum assumption of
+    one Fresnel factor per pixel). s = 1 at 60°, F0/F(60°) ≈ 0.57 head-on and 1/F(60°) ≈ 14 at grazing
+    for n = 1.5. The colour terms (diffuse, directionally diffuse) are not changed: the measured
+    colours already include the coat's transmission. ``None`` in place of a ClearCoat is the thesis's
+    model (no Fresnel).
+
+    Attributes
+    ----------
+    index
+        Refractive index n of the coat, 1.0 < n <= 3.0 (default CLEAR_COAT_INDEX = 1.5).
+    """
+
+    index: float = CLEAR_COAT_INDEX
+
+    def __post_init__(self) -> None:
+        n = self.index
+        if (
+            isinstance(n, bool)
+            or not isinstance(n, (int, float))
+            or not (math.isfinite(n) and 1.0 < n <= 3.0)
+        ):
+            raise ModelInputError("coat_index", "1.0 < n <= 3.0", n)
+        object.__setattr__(self, "index", float(n))
+
+    @property
+    def f0(self) -> float:
+        """Normal-incidence reflectance F0 of the coat."""
+        return schlick_f0(self.index)
+
+    @property
+    def reference(self) -> float:
+        """F(cos 60°): the Schlick reflectance at the geometry the design's gloss is defined at."""
+        return float(fresnel_schlick(math.cos(math.radians(COAT_REFERENCE_DEG)), self.index))
+
+    def gloss_scale(self, n_dot_v: NDArray | float) -> NDArray[np.float64]:
+        """s(N·V) = F(N·V)/F(cos 60°), the factor on the gloss lobes (dimensionless, class docstring)."""
+        return fresnel_schlick(n_dot_v, self.index) / self.reference
+
+
 @dataclass(frozen=True)
 class SpecularLobe:
     """Energy-conserving specular lobe of the clear coat.

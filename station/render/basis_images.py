@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from station.model.gloss import ClearCoat
 from station.render import tonemap
 from station.render.cubemap import sample_cube
 from station.render.errors import RenderError
@@ -31,9 +32,11 @@ from station.render.numpy_renderer import (
     horizon_table,
     light_terms,
     lobe_factors,
+    stage_background,
 )
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
 from station.render.shapes import Scene
+from station.render.stage import lookup_matrix
 from station.render.weights import LobeWeights
 
 if TYPE_CHECKING:
@@ -51,7 +54,11 @@ class BasisImages:
     split: int  # pixels[:split] carry paint 0, pixels[split:] paint 1
     images: np.ndarray  # (3, K, P) float32: channel, image (see layout), pixel
     n_dot_v: np.ndarray  # (P,) float32
-    layout: tuple[tuple[str, int], ...] = ()  # ("D", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image
+    # ("D", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image; with a clear coat ("Cg", i) s·C_i (gloss) and
+    # ("Cd", i) C_i (directionally diffuse, times c) replace ("C", i), and the Gh images hold s·h_i·C_i.
+    layout: tuple[tuple[str, int], ...] = ()
+    #: (H·W, 3) linear radiance behind the object when the scene has a stage (backdrop, ground), else None.
+    background: np.ndarray | None = field(default=None, repr=False)
     _lut_key: tuple = field(default=(), repr=False)
     _lut: np.ndarray | None = field(default=None, repr=False)
     _scale: float = field(default=1.0, repr=False)
@@ -73,6 +80,10 @@ class BasisImages:
                 rows[:, 0, j] = w_g[i]
             elif kind == "Dg":
                 rows[:, 0, j] = w_dd[i]
+            elif kind == "Cg":
+                rows[:, 0, j] = w_g[i]
+            elif kind == "Cd":
+                rows[:, 1, j] = w_dd[i]
             else:
                 rows[:, 0, j] = w_g[i]
                 rows[:, 1, j] = w_dd[i]
@@ -92,7 +103,11 @@ class BasisImages:
 
     def linear_image(self, paints: Sequence[LobeWeights]) -> np.ndarray:
         """Full linear frame (H, W, 3) float32 with the background."""
-        img = np.full((self.height * self.width, 3), BACKGROUND, np.float32)
+        img = (
+            np.full((self.height * self.width, 3), BACKGROUND, np.float32)
+            if self.background is None
+            else self.background.astype(np.float32).copy()
+        )
         img[self.pixels] = self.linear(paints).T
         return img.reshape(self.height, self.width, 3)
 
@@ -104,8 +119,12 @@ class BasisImages:
         lut32 = lut.astype(np.uint32)
         # One table per channel, already shifted into its byte of an RGBA8 word (little-endian), alpha set.
         self._lut = np.stack([lut32, lut32 << 8, (lut32 << 16) | np.uint32(0xFF000000)])
-        bg = tonemap.to_display(np.array([BACKGROUND] * 3), exposure_ev, curve).astype(np.uint32)
-        self._bg32 = np.uint32(bg[0] | (bg[1] << 8) | (bg[2] << 16) | 0xFF000000)
+        if self.background is None:
+            bg = tonemap.to_display(np.array([BACKGROUND] * 3), exposure_ev, curve).astype(np.uint32)
+            self._bg32 = np.asarray(bg[0] | (bg[1] << 8) | (bg[2] << 16) | 0xFF000000, np.uint32)
+        else:  # the stage: one pre-encoded word per pixel
+            bg = tonemap.to_display(self.background.astype(np.float32), exposure_ev, curve).astype(np.uint32)
+            self._bg32 = np.asarray(bg[:, 0] | (bg[:, 1] << 8) | (bg[:, 2] << 16) | 0xFF000000, np.uint32)
         self._lut_key = key
 
     def edit_rgba(
@@ -181,14 +200,20 @@ class BasisImages:
         return self.edit_rgba(paints, exposure_ev, curve)[..., :3]
 
 
-def image_layout(exponents: Sequence[float], horizon: str = "lut") -> tuple[tuple[str, int], ...]:
-    """The cached images of a basis: D, then per lobe (Gh, Dg) when wide, (C,) when narrow."""
+def image_layout(
+    exponents: Sequence[float], horizon: str = "lut", coat: bool = False
+) -> tuple[tuple[str, int], ...]:
+    """The cached images of a basis: D, then per lobe (Gh, Dg) when wide, (C,) when narrow ((Cg, Cd) with a
+    clear coat, whose per-pixel gloss factor the shared C image cannot carry)."""
     table = horizon_table(exponents, horizon)
     c = np.linspace(0.0, 1.0, table.shape[1])
     layout: list[tuple[str, int]] = [("D", -1)]
     for i, e in enumerate(exponents):
         exact = np.allclose(table[i, :, 0], c) and np.allclose(table[i, :, 1], 1.0)
-        layout += [("C", i)] if exact and e >= WIDE_EXPONENT else [("Gh", i), ("Dg", i)]
+        if exact and e >= WIDE_EXPONENT:
+            layout += [("Cg", i), ("Cd", i)] if coat else [("C", i)]
+        else:
+            layout += [("Gh", i), ("Dg", i)]
     return tuple(layout)
 
 
@@ -199,25 +224,35 @@ def build_basis_images(
     height: int,
     gl_renderer: GLRenderer | None = None,
     horizon: str = "lut",
+    coat: ClearCoat | None = None,
 ) -> BasisImages:
     """Render the basis images of one view (NumPy lookups, or GL when a GLRenderer is given).
 
-    A GL renderer must have been made with the same *horizon* setting.
+    A GL renderer must have been made with the same *horizon* setting. *coat*: the clear coat's Fresnel
+    factor s(N·V) folded into the gloss images (``numpy_renderer``'s equation with a coat).
     """
     g = gbuffer(scene, width, height)
     mask = g.mask.reshape(-1)
     paint = g.paint.reshape(-1)
     pixels = np.concatenate([np.flatnonzero(mask & (paint == 0)), np.flatnonzero(mask & (paint == 1))])
     split = int(np.count_nonzero(mask & (paint == 0)))
-    layout = image_layout(basis.exponents, horizon)
+    layout = image_layout(basis.exponents, horizon, coat is not None)
     images = np.empty((3, len(layout), pixels.size), np.float32)
     ndv = g.n_dot_v.reshape(-1)[pixels].astype(np.float32)
     m = len(basis.exponents)
     e = np.array(basis.exponents)
+    background = None
+    rot = lookup_matrix(scene.stage.rotation_deg) if scene.stage is not None else np.eye(3)
+    if scene.stage is not None:
+        origin, dirs = scene.view_camera.rays(width, height)
+        background = np.zeros((width * height, 3), np.float32)
+        miss = ~mask
+        background[miss] = stage_background(scene, basis, origin, dirs.reshape(-1, 3)[miss])
     if gl_renderer is None:
-        normals = g.normal.reshape(-1, 3)[pixels]
-        refl = g.reflect.reshape(-1, 3)[pixels]
+        normals = g.normal.reshape(-1, 3)[pixels] @ rot.T  # lookups in the environment's frame
+        refl = g.reflect.reshape(-1, 3)[pixels] @ rot.T
         gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
+        sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
         lookups: dict[int, np.ndarray] = {}
         for j, (kind, i) in enumerate(layout):
             if kind == "D":
@@ -225,11 +260,11 @@ def build_basis_images(
                 continue
             if i not in lookups:
                 lookups[i] = sample_cube(basis.cubes[i], refl).T
-            factor = hf[:, i] if kind == "Gh" else gf[:, i] if kind == "Dg" else 1.0
+            factor = {"Gh": hf[:, i] * sc, "Dg": gf[:, i], "Cg": sc}.get(kind, 1.0)
             images[:, j] = lookups[i] * factor
-            lights = light_terms(basis, i, normals, refl) if kind != "C" else None
+            lights = light_terms(basis, i, normals, refl) if kind in ("Gh", "Dg") else None
             if lights is not None:
-                images[:, j] += (lights[0] if kind == "Gh" else lights[1]).T
+                images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1]).T
     else:
         for j, (kind, i) in enumerate(layout):
             k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)
@@ -240,5 +275,8 @@ def build_basis_images(
             else:
                 k_g[i] = (e[i] + 1.0) / (2.0 * np.pi)
             unit = LobeWeights(basis.exponents, k_d, k_dd, k_g)
-            images[:, j] = gl_renderer.render_linear(scene, [unit]).reshape(-1, 3)[pixels].T
-    return BasisImages(basis, width, height, pixels, split, np.ascontiguousarray(images), ndv, layout)
+            unit_coat = coat if kind in ("Gh", "Cg") else None
+            images[:, j] = gl_renderer.render_linear(scene, [unit], coat=unit_coat).reshape(-1, 3)[pixels].T
+    return BasisImages(
+        basis, width, height, pixels, split, np.ascontiguousarray(images), ndv, layout, background=background
+    )

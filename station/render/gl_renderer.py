@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from station.model.flakes import FlakeLayer
+from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
+from station.render.flakes import FlakeChoice, flake_lod, flake_uniforms
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
     SHADER_DIR,
@@ -29,7 +32,8 @@ from station.render.numpy_renderer import (
 )
 from station.render.prefilter import WIDE_EXPONENT
 from station.render.sh import sh_diffuse_matrix
-from station.render.shapes import SHAPE_INDEX
+from station.render.shapes import GROUNDS, OCCLUDERS, SHAPE_INDEX, Scene
+from station.render.stage import MAX_OCCLUDERS, backdrop_lobe, lookup_matrix
 from station.render.tonemap import CURVES, check_curve
 
 __all__ = [
@@ -54,6 +58,9 @@ class GLRenderer:
     change, into a gloss cube Σ w_G,i C_i and a directionally diffuse cube Σ w_DD,i C_i at the largest
     lobe resolution (``shaders/combine.frag.glsl``), so a frame costs three cube lookups per pixel
     whatever the lobe count; ``combined=False`` looks every lobe up per pixel.
+
+    ``coat`` (of :meth:`render` / :meth:`render_linear`): a :class:`station.model.gloss.ClearCoat` scales
+    the gloss terms per pixel by Schlick's Fresnel (as ``numpy_renderer`` does); None: the thesis's model.
     """
 
     def __init__(
@@ -113,14 +120,29 @@ class GLRenderer:
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[tuple[str, bool], tuple] = {}
-        self._targets: dict[bool, tuple] = {}
+        self._programs: dict[tuple[str, bool, str, tuple[int, int, int]], tuple] = {}
+        self._mesh: tuple | None = None
+        #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
+        self.last_flakes: FlakeChoice | None = None
+        self._targets: dict[tuple[bool, bool], tuple] = {}
 
-    def _program(self, shape: str, linear: bool):
-        key = (shape, linear)
+    def _program(
+        self, shape: str, linear: bool, kind: str = "shape", features: tuple[int, int, int] = (0, 0, 0)
+    ):
+        """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
+        *features* = (coat, stage, flakes) compiled in (0/1 each)."""
+        key = (shape, linear, kind, features)
         if key not in self._programs:
+            from station.render.meshes import NEUTRAL_ALBEDO
+
             defines = {
                 "SHAPE": SHAPE_INDEX[shape],
+                "MESH": int(kind == "mesh"),
+                "NO_SHAPE": int(kind == "stage"),
+                "HAS_COAT": features[0],
+                "HAS_STAGE": features[1],
+                "HAS_FLAKES": features[2],
+                "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
                 "N_LOBES": len(self._lobes),
                 "OUTPUT_LINEAR": int(linear),
                 "DIFFUSE_SH": int(self.diffuse == "sh"),
@@ -130,15 +152,19 @@ class GLRenderer:
                 "MAX_LIGHTS": max(1, self._lights.count if self._lights is not None else 1),
                 "WIDE_EXPONENT": f"{self._wide_exponent:.1f}",
             }
-            prog = build_program(self.ctx, "fullscreen.vert.glsl", "render.frag.glsl", defines)
-            self._programs[key] = (prog, self.ctx.vertex_array(prog, []))
+            vert = "mesh.vert.glsl" if kind == "mesh" else "fullscreen.vert.glsl"
+            prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
+            self._programs[key] = (prog, None if kind == "mesh" else self.ctx.vertex_array(prog, []))
         return self._programs[key]
 
-    def _target(self, linear: bool):
-        if linear not in self._targets:
+    def _target(self, linear: bool, depth: bool = False):
+        """Colour target (with a depth buffer for meshes only: llvmpipe is slower with one attached)."""
+        key = (linear, depth)
+        if key not in self._targets:
             tex = self.ctx.texture((self.width, self.height), 4, dtype="f4" if linear else "f1")
-            self._targets[linear] = (tex, self.ctx.framebuffer(color_attachments=[tex]))
-        return self._targets[linear]
+            rb = self.ctx.depth_renderbuffer((self.width, self.height)) if depth else None
+            self._targets[key] = (tex, self.ctx.framebuffer(color_attachments=[tex], depth_attachment=rb), rb)
+        return self._targets[key][:2]
 
     def _combined_cubes(self, pair) -> list:
         """[gloss0, dd0, gloss1, dd1] cube textures for these paints (rebuilt when weights change)."""
@@ -184,10 +210,28 @@ class GLRenderer:
         w_d, w_dd, w_g = w.map_weights()
         return w_d, w_dd[self._order], w_g[self._order]
 
-    def _draw(self, scene, paints, linear: bool, exposure_ev: float, curve: str):
+    def _draw(
+        self,
+        scene,
+        paints,
+        linear: bool,
+        exposure_ev: float,
+        curve: str,
+        coat: ClearCoat | None,
+        mesh=None,
+        flakes: FlakeLayer | None = None,
+    ):
         pair = check_paints(self.basis, paints)
-        prog, vao = self._program(scene.shape, linear)
-        _, fbo = self._target(linear)
+        self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
+        feats = (int(coat is not None), int(scene.stage is not None), int(self.last_flakes.on))
+        if mesh is None:
+            passes = [self._program(scene.shape, linear, "shape", feats)]
+        else:
+            passes = [
+                self._program("sphere", linear, "stage", (0, feats[1], 0)),
+                self._program("sphere", linear, "mesh", feats),
+            ]
+        _, fbo = self._target(linear, depth=mesh is not None)
         fbo.use()
         m = len(self._lobes)
         if self.combined:
@@ -199,6 +243,17 @@ class GLRenderer:
             tex.use(unit)
         self._diffuse_tex.use(m + 4)
         self._horizon_tex.use(m + 5)
+        stage = scene.stage
+        backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
+        self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
+        occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
+        if mesh is None:
+            occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
+            gx, gy, gz = GROUNDS[scene.shape]
+        else:
+            occluders = mesh.occluders().astype(np.float32)
+            gx, gy, gz = 0.0, mesh.floor_y, 0.0
+        occ[: len(occluders)] = occluders
         uniforms = {
             **scene.view_camera.uniforms(self.width, self.height),
             "u_size": (float(self.width), float(self.height)),
@@ -206,19 +261,97 @@ class GLRenderer:
             "u_background": (BACKGROUND,) * 3,
             "u_diffuse": m + 4,
             "u_horizon": m + 5,
+            "u_coat_on": int(coat is not None),
+            "u_coat_f0": coat.f0 if coat is not None else 0.0,
+            "u_coat_ref": coat.reference if coat is not None else 1.0,
+            "u_rot": tuple(
+                float(v) for v in lookup_matrix(stage.rotation_deg if stage else 0.0).T.ravel()
+            ),  # column-major
+            "u_stage": int(stage is not None),
+            "u_backdrop_on": int(stage is not None and stage.backdrop),
+            "u_backdrop": m + 6,
+            "u_backdrop_exp": float(self.basis.exponents[backdrop]),
+            "u_backdrop_lights": int(
+                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[backdrop])
+            ),
+            "u_ground_on": int(stage is not None and stage.ground),
+            "u_ground_y": float(gy),
+            "u_ground_c": (float(gx), float(gz)),
+            "u_ground_albedo": stage.ground_albedo if stage is not None else 0.0,
+            "u_ground_radius": stage.ground_radius if stage is not None else 1.0,
+            "u_n_occ": len(occluders),
+            "u_flakes_on": int(self.last_flakes.on),
+            "u_flake_sharp": m + 7,
+            "u_flake_mean": m + 8,
         }
+        if flakes is not None and self.last_flakes.on:
+            uniforms.update(flake_uniforms(flakes))
+            sharp = int(np.argmax(self.basis.exponents))
+            target = np.log(flakes.reflected_exponent)
+            mean = int(np.argmin([abs(np.log(e) - target) for e in self.basis.exponents]))
+            self._lobes[int(np.nonzero(self._order == sharp)[0][0])].use(m + 7)
+            self._lobes[int(np.nonzero(self._order == mean)[0][0])].use(m + 8)
+            uniforms["u_flake_mean_exp"] = float(self.basis.exponents[mean])
+            uniforms["u_flake_mean_lights"] = int(
+                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[mean])
+            )
         if not linear:
             check_curve(curve)
             uniforms["u_exposure"] = float(2.0**exposure_ev)
             uniforms["u_curve"] = CURVES.index(curve)
+        mw = [self._bound_weights(w) for w in pair]
+        for prog, _ in passes:
+            self._set_uniforms(prog, uniforms, mw, occ, m)
+        if mesh is None:
+            prog, vao = passes[0]
+            vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+            return fbo
+        fbo.clear(depth=1.0)
+        self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
+        passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
+        self.ctx.enable(self.ctx.DEPTH_TEST)
+        try:
+            self._mesh_vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
+        finally:
+            self.ctx.disable(self.ctx.DEPTH_TEST)
+        return fbo
+
+    def _mesh_vao(self, mesh, prog):
+        """Vertex array of *mesh* for *prog* (buffers uploaded once per mesh and program)."""
+        key = (id(mesh), id(prog))
+        if self._mesh is None or self._mesh[0] != key:
+            self._release_mesh()
+            vbo = self.ctx.buffer(
+                np.concatenate([mesh.positions, mesh.normals, mesh.painted[:, None]], axis=1)
+                .astype(np.float32)
+                .tobytes()
+            )
+            ibo = self.ctx.buffer(mesh.faces.astype(np.uint32).tobytes())
+            vao = self.ctx.vertex_array(
+                prog,
+                [(vbo, "3f 3f 1f", "in_pos", "in_normal", "in_painted")],
+                index_buffer=ibo,
+                index_element_size=4,
+            )
+            self._mesh = (key, mesh, vbo, ibo, vao)
+        return self._mesh[4]
+
+    def _release_mesh(self) -> None:
+        if self._mesh is not None:
+            for obj in self._mesh[2:]:
+                obj.release()
+            self._mesh = None
+
+    def _set_uniforms(self, prog, uniforms: dict, mw: list, occ: np.ndarray, m: int) -> None:
         for name, value in uniforms.items():
             if name in prog:
                 prog[name].value = value
-        mw = [self._bound_weights(w) for w in pair]
-        prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
+        if "u_wd" in prog:
+            prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
         if self.combined:
             for unit, name in enumerate(("u_gloss0", "u_dd0", "u_gloss1", "u_dd1")):
-                prog[name].value = m + unit
+                if name in prog:
+                    prog[name].value = m + unit
         # The compiler trims uniform arrays to the entries the shader can reach (N_WIDE when combined).
         if "u_lobes" in prog:
             n = prog["u_lobes"].array_length
@@ -237,31 +370,88 @@ class GLRenderer:
             if name in prog:
                 n = prog[name].array_length
                 prog[name].write(np.concatenate([w[part] for w in mw]).astype(np.float32)[:n].tobytes())
+        if "u_flake_tint" in prog:
+            prog["u_flake_tint"].write(np.array([w[1].sum(axis=0) for w in mw], np.float32).tobytes())
+        if "u_occ" in prog:
+            prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
         if "u_sh" in prog:
             prog["u_sh"].write(self._sh.tobytes())
-        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-        return fbo
 
-    def render(self, scene, paints, exposure_ev: float = 0.0, curve: str = "aces"):
-        """8-bit sRGB frame (H, W, 3) uint8 (a view of the RGBA read-back, the driver's fast path)."""
-        fbo = self._draw(scene, paints, False, exposure_ev, curve)
+    def render(
+        self,
+        scene,
+        paints,
+        exposure_ev: float = 0.0,
+        curve: str = "aces",
+        coat: ClearCoat | None = None,
+        flakes: FlakeLayer | None = None,
+    ):
+        """8-bit sRGB frame (H, W, 3) uint8 (a view of the RGBA read-back, the driver's fast path).
+
+        *flakes*: the paints' flake layer (sparkle, ``station.render.flakes``); the level of detail's
+        choice is in :attr:`last_flakes`."""
+        fbo = self._draw(scene, paints, False, exposure_ev, curve, coat, flakes=flakes)
         data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
         return data.reshape(self.height, self.width, 4)[::-1, :, :3]
 
-    def render_linear(self, scene, paints):
+    def draw(
+        self,
+        scene,
+        paints,
+        exposure_ev: float = 0.0,
+        curve: str = "aces",
+        coat: ClearCoat | None = None,
+        flakes: FlakeLayer | None = None,
+    ):
+        """Render the 8-bit display frame into this renderer's framebuffer and return it (no read-back:
+        a caller on the same context blits it, e.g. ``ctx.copy_framebuffer(screen, fbo)``; row 0 is the
+        bottom row, GL's convention)."""
+        return self._draw(scene, paints, False, exposure_ev, curve, coat, flakes=flakes)
+
+    def render_linear(self, scene, paints, coat: ClearCoat | None = None, flakes: FlakeLayer | None = None):
         """Linear sRGB radiance (H, W, 3) float32."""
-        fbo = self._draw(scene, paints, True, 0.0, "clip")
+        fbo = self._draw(scene, paints, True, 0.0, "clip", coat, flakes=flakes)
         data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
         return data.reshape(self.height, self.width, 3)[::-1].copy()
 
+    def render_mesh(
+        self,
+        mesh,
+        paints,
+        camera=None,
+        stage=None,
+        coat: ClearCoat | None = None,
+        exposure_ev: float = 0.0,
+        curve: str = "aces",
+        linear: bool = False,
+        flakes: FlakeLayer | None = None,
+    ):
+        """A :class:`station.render.meshes.Mesh` rasterised and shaded with the same equations as the
+        shapes (paint 0 at x < 0, paint 1 at x >= 0, neutral parts grey) on *stage* (ground at the mesh's
+        floor, contact shadow from its sphere proxies), seen by *camera* (default MESH_CAMERA).
+        8-bit sRGB (H, W, 3), or linear float32 radiance with ``linear=True``; row 0 at the top."""
+        from station.render.meshes import MESH_CAMERA
+
+        scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage)
+        fbo = self._draw(scene, paints, linear, exposure_ev, curve, coat, mesh=mesh, flakes=flakes)
+        if linear:
+            data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
+            return data.reshape(self.height, self.width, 3)[::-1].copy()
+        data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
+        return data.reshape(self.height, self.width, 4)[::-1, :, :3]
+
     def release(self) -> None:
         """Free textures, programs, targets (and the context if this object created it)."""
+        self._release_mesh()
         for prog, vao in self._programs.values():
-            vao.release()
+            if vao is not None:
+                vao.release()
             prog.release()
-        for tex, fbo in self._targets.values():
+        for tex, fbo, rb in self._targets.values():
             fbo.release()
             tex.release()
+            if rb is not None:
+                rb.release()
         for tex in [
             *self._lobes,
             self._diffuse_tex,

@@ -27,7 +27,13 @@ and the diffuse map keep the lights in their maps (exact there already).
 The diffuse map is either the exponent-1 cube (``diffuse="cube"``, default — exact up to resolution)
 or the 9-coefficient SH irradiance (``diffuse="sh"``, thesis §2.5.3; up to ~10 % off beside a sun).
 
-Pixels that miss the object show a constant grey background. Output is linear sRGB radiance; the
+Clear coat: with a :class:`station.model.gloss.ClearCoat` every gloss term (w_G,i, lobe maps and
+lights) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°), Schlick's Fresnel of the coat's index
+(thesis §2.5.2, last paragraph); ``coat=None`` is the thesis's model as printed.
+
+Pixels that miss the object show a constant grey background, or with a scene's
+:class:`~station.render.stage.Stage` the environment as backdrop over a ground disc with its contact
+shadow, the environment turned about +Y (:func:`stage_background`; formulas in ``station.render.stage``). Output is linear sRGB radiance; the
 display transform is :mod:`station.render.tonemap`.
 """
 
@@ -38,11 +44,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from station.model.gloss import ClearCoat
 from station.render.cubemap import sample_cube
 from station.render.errors import RenderInputError
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
 from station.render.sh import sh_diffuse
-from station.render.shapes import Scene, intersect
+from station.render.shapes import GROUNDS, OCCLUDERS, Scene, intersect
+from station.render.stage import backdrop_lobe, ground_fade, lookup_matrix, sphere_occlusion
 from station.render.weights import LobeWeights
 
 BACKGROUND = 0.18
@@ -153,17 +161,59 @@ def shade_pixels(
     n_dot_v: np.ndarray,
     diffuse: str = "cube",
     horizon: str = "lut",
+    coat: ClearCoat | None = None,
 ) -> np.ndarray:
-    """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation)."""
+    """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation).
+
+    *coat*: the clear coat's Fresnel factor on the gloss terms (module docstring); None: none.
+    """
     w_d, w_dd, w_g = weights.map_weights()
     d = sample_cube(basis.diffuse, normal) if diffuse == "cube" else sh_diffuse(basis.sh, normal)
     g, h = lobe_factors(horizon_table(basis.exponents, horizon), n_dot_v)
+    s = np.ones((n_dot_v.shape[0], 1)) if coat is None else coat.gloss_scale(n_dot_v)[:, None]
     out = w_d * d
     for i, cube in enumerate(basis.cubes):
-        out = out + (h[:, i : i + 1] * w_g[i] + g[:, i : i + 1] * w_dd[i]) * sample_cube(cube, reflect)
+        out = out + (s * h[:, i : i + 1] * w_g[i] + g[:, i : i + 1] * w_dd[i]) * sample_cube(cube, reflect)
         lights = light_terms(basis, i, normal, reflect)
         if lights is not None:
-            out = out + w_g[i] * lights[0] + w_dd[i] * lights[1]
+            out = out + s * w_g[i] * lights[0] + w_dd[i] * lights[1]
+    return out
+
+
+def stage_background(
+    scene: Scene, basis: PrefilteredBasis, origin: np.ndarray, dirs: np.ndarray, diffuse: str = "cube"
+) -> np.ndarray:
+    """Radiance (P, 3) seen along rays *dirs* (P, 3) from *origin* (3,) that miss the shape.
+
+    BACKGROUND grey without a stage; else the backdrop lobe map at R_y(−θ)·d (plus its extracted lights)
+    blended with the ground disc, albedo · D(+Y) · (1 − O) (``station.render.stage``).
+    """
+    d = np.asarray(dirs, dtype=float).reshape(-1, 3)
+    stage = scene.stage
+    out = np.full(d.shape, BACKGROUND)
+    if stage is None:
+        return out
+    m = lookup_matrix(stage.rotation_deg)
+    if stage.backdrop:
+        i = backdrop_lobe(basis.exponents, stage.backdrop_blur_deg)
+        de = d @ m.T
+        out = sample_cube(basis.cubes[i], de).astype(float)
+        if basis.lights is not None and basis.wide and basis.wide[i]:
+            e = basis.exponents[i]
+            p = (e + 1.0) / (2.0 * np.pi) * np.clip(de @ basis.lights.directions.T, 0.0, None) ** e
+            out = out + p @ basis.lights.flux
+    if stage.ground:
+        cx, gy, cz = GROUNDS[scene.shape]
+        down = d[:, 1] < -1e-9
+        t = np.where(down, (gy - origin[1]) / np.where(down, d[:, 1], -1.0), -1.0)
+        hit = t > 0
+        pts = origin + np.where(hit, t, 0.0)[:, None] * d
+        w = ground_fade(np.hypot(pts[:, 0] - cx, pts[:, 2] - cz), stage.ground_radius) * hit
+        up = np.array([[0.0, 1.0, 0.0]])
+        sky = sample_cube(basis.diffuse, up)[0] if diffuse == "cube" else sh_diffuse(basis.sh, up)[0]
+        visible = 1.0 - sphere_occlusion(pts, OCCLUDERS[scene.shape])
+        ground = stage.ground_albedo * sky[None, :] * visible[:, None]
+        out = out * (1.0 - w[:, None]) + ground * w[:, None]
     return out
 
 
@@ -175,16 +225,25 @@ def render_linear(
     height: int,
     diffuse: str = "cube",
     horizon: str = "lut",
+    coat: ClearCoat | None = None,
 ) -> np.ndarray:
-    """Linear sRGB radiance image (H, W, 3) float32 of the scene lit by the prefiltered basis."""
+    """Linear sRGB radiance image (H, W, 3) float32 of the scene lit by the prefiltered basis.
+
+    *coat*: clear-coat Fresnel on the gloss terms (module docstring); None: the thesis's model.
+    """
     if diffuse not in ("cube", "sh"):
         raise RenderInputError("diffuse", "cube | sh", diffuse)
     pair = check_paints(basis, paints)
     g = gbuffer(scene, width, height)
     img = np.full((height, width, 3), BACKGROUND, dtype=np.float64)
+    if scene.stage is not None:
+        origin, dirs = scene.view_camera.rays(width, height)
+        img[~g.mask] = stage_background(scene, basis, origin, dirs[~g.mask], diffuse)
+    rot = lookup_matrix(scene.stage.rotation_deg if scene.stage is not None else 0.0)
     ndv = g.n_dot_v
     for k in (0, 1):
         m = g.mask & (g.paint == k)
         if m.any():
-            img[m] = shade_pixels(basis, pair[k], g.normal[m], g.reflect[m], ndv[m], diffuse, horizon)
+            n_env, r_env = g.normal[m] @ rot.T, g.reflect[m] @ rot.T
+            img[m] = shade_pixels(basis, pair[k], n_env, r_env, ndv[m], diffuse, horizon, coat)
     return img.astype(np.float32)

@@ -226,6 +226,10 @@ def overcast_sky(width: int = 512) -> Environment:
     return Environment(f"overcast{width}", np.repeat(sky[..., None], 3, axis=-1).astype(np.float32))
 
 
+#: Names of the built-in procedural environments (:func:`procedural_environment`).
+NAMES = ("booth", "sky", "overcast")
+
+
 def procedural_environment(name: str, width: int = 512) -> Environment:
     """Environment by name: ``booth``, ``sky`` or ``overcast`` (defaults of each generator)."""
     makers = {"booth": light_booth, "sky": sunny_sky, "overcast": overcast_sky}

@@ -24,6 +24,7 @@ import numpy as np
 
 from station.render.camera import Camera
 from station.render.errors import RenderInputError
+from station.render.stage import Stage
 
 SHAPES = ("sphere", "cylinder", "speedshape", "panels", "seam")
 SHAPE_INDEX = {name: i for i, name in enumerate(SHAPES)}
@@ -40,13 +41,41 @@ DEFAULT_CAMERAS = {
 }
 
 
+#: Ground disc of each shape for :class:`station.render.stage.Stage`: (centre x, floor height y, centre z).
+GROUNDS: dict[str, tuple[float, float, float]] = {
+    "sphere": (0.0, -1.0, 0.0),
+    "cylinder": (0.0, -1.0, 0.0),
+    "speedshape": (0.5, -SPEED_H, 0.0),
+    "panels": (0.0, -0.7, 0.0),
+    "seam": (0.0, -0.9 * SEAM_R, 0.0),
+}
+#: Sphere proxies (centre x, y, z, radius) of each shape for the contact shadow (``stage.sphere_occlusion``).
+OCCLUDERS: dict[str, tuple[tuple[float, float, float, float], ...]] = {
+    "sphere": ((0.0, 0.0, 0.0, 1.0),),
+    "cylinder": ((0.0, -0.2, 0.0, 0.8), (0.0, 0.6, 0.0, 0.8)),
+    "speedshape": (
+        (-0.3, 0.0, 0.0, 0.4),
+        (0.2, 0.0, 0.0, 0.42),
+        (0.75, 0.0, 0.0, 0.36),
+        (1.25, 0.0, 0.0, 0.25),
+    ),
+    "panels": ((-0.52, -0.5, 0.0, 0.2), (0.52, -0.5, 0.0, 0.2)),
+    "seam": ((0.0, -0.2, -0.3, 0.35),),
+}
+
+
 @dataclass(frozen=True)
 class Scene:
-    """A shape, its parameters and the camera looking at it."""
+    """A shape, its parameters, the camera looking at it and the stage around it.
+
+    ``stage``: backdrop, environment rotation and ground (:class:`station.render.stage.Stage`); None shows
+    the shape on the flat grey background in the unrotated environment.
+    """
 
     shape: str = "sphere"
     misalignment_deg: float = 0.0
     camera: Camera | None = None
+    stage: Stage | None = None
 
     def __post_init__(self) -> None:
         if self.shape not in SHAPES:
@@ -55,6 +84,8 @@ class Scene:
             raise RenderInputError("misalignment_deg", "-45 <= misalignment_deg <= 45", self.misalignment_deg)
         if self.camera is None:
             object.__setattr__(self, "camera", DEFAULT_CAMERAS[self.shape])
+        if self.stage is not None and not isinstance(self.stage, Stage):
+            raise RenderInputError("stage", "a Stage or None", self.stage)
 
     @property
     def view_camera(self) -> Camera:

@@ -25,6 +25,10 @@ Per pixel the quadrature and point lights are first binned by ψ on the 0.25° g
 BRDF's table (linear hat weights, the same interpolation :meth:`DesignedBRDF.rho` uses), so each further
 design or lobe costs one dot product per pixel.
 
+Clear coat: with a :class:`station.model.gloss.ClearCoat` the gloss term (the designed BRDF's Phong
+lobe, the lobe model's K_G lobes) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°) (Schlick's
+Fresnel of the coat's index, the factor the renderers apply); ``coat=None`` is the thesis's BRDF.
+
 Environments: anything with an ``equirect`` array (H, 2H, 3) (``station.render.environment.
 Environment``) or the array itself, in the equirectangular convention of ``station.render.cubemap``
 (+Y up, θ from +Y down the rows, φ = 2π(u − ½), direction (sin θ sin φ, cos θ, −sin θ cos φ)).
@@ -38,6 +42,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
 from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf
 from station.render.lobes import bent_direction, horizon_factors
@@ -323,8 +328,14 @@ class TruthScene:
 
     # -- shading -------------------------------------------------------------------------------------
 
-    def truth(self, brdf: DesignedBRDF) -> NDArray[np.float64]:
-        """Radiance of the designed BRDF, (..., 3) (module docstring)."""
+    def coat_scale(self, coat: ClearCoat | None) -> NDArray[np.float64]:
+        """Per pixel factor on the gloss terms, (P, 1): s(N·V) of *coat*, ones for None (module docstring)."""
+        if coat is None:
+            return np.ones((self.normals.shape[0], 1))
+        return coat.gloss_scale(np.einsum("ij,ij->i", self.normals, self.views))[:, None]
+
+    def truth(self, brdf: DesignedBRDF, coat: ClearCoat | None = None) -> NDArray[np.float64]:
+        """Radiance of the designed BRDF, (..., 3) (module docstring); *coat*: clear-coat Fresnel or None."""
         colour = self._binned("cos", brdf.reflectance / np.pi, points_only=False)
         gloss = (
             brdf.specular_albedo
@@ -332,9 +343,9 @@ class TruthScene:
             / (2.0 * np.pi)
             * self.lobe(brdf.phong_exponent, "mask")
         )
-        return (colour + gloss).reshape(*self.shape, 3)
+        return (colour + self.coat_scale(coat) * gloss).reshape(*self.shape, 3)
 
-    def truth_direct(self, brdf: DesignedBRDF) -> NDArray[np.float64]:
+    def truth_direct(self, brdf: DesignedBRDF, coat: ClearCoat | None = None) -> NDArray[np.float64]:
         """:meth:`truth` without the per-pixel histograms: one pass over the directions for one design.
 
         Same integrals (up to the 0.25° binning the histograms add); faster when only one design is shaded.
@@ -344,6 +355,7 @@ class TruthScene:
         n_exp = brdf.phong_exponent
         peak = brdf.specular_albedo * (n_exp + 1.0) / (2.0 * np.pi)
         sharp = n_exp >= SHARP_EXPONENT
+        scale = self.coat_scale(coat)
         out = np.empty((self.normals.shape[0], 3))
         for s in range(0, out.shape[0], _PIXEL_CHUNK):
             sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
@@ -358,12 +370,14 @@ class TruthScene:
             lobe = (n_dot > 0.0) * np.clip(cos_psi, 0.0, 1.0) ** n_exp
             if sharp:  # residual map by importance sampling below; only the point lights here
                 lobe[:, : self.lighting.quad_dirs.shape[0]] = 0.0
-            out[sl] = colour + peak * (lobe @ flux)
+            out[sl] = colour + scale[sl] * peak * (lobe @ flux)
         if sharp:
-            out += peak * self._sampled(n_exp, "mask")
+            out += scale * peak * self._sampled(n_exp, "mask")
         return out.reshape(*self.shape, 3)
 
-    def lobes(self, weights: LobeWeights, mode: str = "exact") -> NDArray[np.float64]:
+    def lobes(
+        self, weights: LobeWeights, mode: str = "exact", coat: ClearCoat | None = None
+    ) -> NDArray[np.float64]:
         """Radiance of the lobe model, (..., 3).
 
         ``exact``: eqs 2.3.1–2.3.3 integrated like the truth. ``prefiltered``: as the renderers evaluate
@@ -374,18 +388,20 @@ class TruthScene:
         ``prefiltered-lut+lights``: as ``prefiltered-lut`` for the map without its extracted point lights
         (the sun), which are shaded exactly as directional lights. ``prefiltered-bent+lights``: as that,
         with the directionally diffuse lookup of each wide lobe (E < SHARP_EXPONENT) at
-        :func:`station.render.lobes.bent_direction` instead of R.
+        :func:`station.render.lobes.bent_direction` instead of R. *coat*: the clear coat's Fresnel factor
+        on every K_G term (module docstring), None for none.
         """
         if mode not in LOBE_MODES:
             raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
         out = weights.k_d[None, :] * self.irradiance()
+        s = self.coat_scale(coat)
         r_dot_n = np.einsum("ij,ij->i", self.reflect, self.normals)
         for i, e in enumerate(weights.exponents):
             if mode == "exact":
                 out = (
                     out
                     + weights.k_dd[i][None, :] * self.lobe(e, "cos")
-                    + weights.k_g[i] * self.lobe(e, "mask")
+                    + s * weights.k_g[i] * self.lobe(e, "mask")
                 )
                 continue
             lobe = self.lobe(e, "open")
@@ -406,9 +422,11 @@ class TruthScene:
                 )
                 out = out + (
                     weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
-                    + weights.k_g[i] * self._binned("mask", kernel, points_only=True)
+                    + s * weights.k_g[i] * self._binned("mask", kernel, points_only=True)
                 )
-            out = out + weights.k_dd[i][None, :] * g[:, None] * dd_lobe + weights.k_g[i] * h[:, None] * lobe
+            out = (
+                out + weights.k_dd[i][None, :] * g[:, None] * dd_lobe + s * weights.k_g[i] * h[:, None] * lobe
+            )
         return out.reshape(*self.shape, 3)
 
     def _bent_lobe(self, exponent: float) -> NDArray[np.float64]:
@@ -460,6 +478,7 @@ def render_truth(
     samples: int = LOBE_SAMPLES,
     quadrature_width: int = 64,
     backfacing: str = "bend",
+    coat: ClearCoat | None = None,
 ) -> NDArray[np.float64]:
     """Ground-truth radiance of *design* in *environment* per pixel (for ``station render --engine truth``).
 
@@ -480,6 +499,9 @@ def render_truth(
         Pixels with N·V <= BEND_COS (silhouettes of shading normals): ``"bend"`` turns the normal towards
         the view until N·V = BEND_COS (the usual silhouette fix, :func:`bend_silhouettes`); ``"error"``
         refuses them.
+    coat
+        Clear-coat Fresnel on the gloss lobe (:class:`station.model.gloss.ClearCoat`); None: the thesis's
+        BRDF without it.
 
     Returns
     -------
@@ -493,7 +515,7 @@ def render_truth(
     if backfacing == "bend":
         n, _ = bend_silhouettes(n, v)
     brdf = design if isinstance(design, DesignedBRDF) else designed_brdf(design)
-    return TruthScene(environment, n, v, samples, quadrature_width).truth_direct(brdf)
+    return TruthScene(environment, n, v, samples, quadrature_width).truth_direct(brdf, coat)
 
 
 def sphere_pixels(size: int, radius: float = 0.98) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

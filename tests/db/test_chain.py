@@ -112,8 +112,8 @@ def _delete_last(conn: Connection, dialect: str) -> None:
 
 
 def _truncate(conn: Connection, dialect: str) -> None:
-    if dialect == "postgresql":  # TRUNCATE fires no row trigger
-        conn.execute(text("TRUNCATE measurements"))
+    if dialect == "postgresql":  # TRUNCATE fires no row trigger; CASCADE takes the rows that refer to them
+        conn.execute(text("TRUNCATE measurements CASCADE"))
     else:  # SQLite has no TRUNCATE: drop the triggers, then delete everything
         _lift(conn, dialect, "measurements")
         conn.execute(text("DELETE FROM measurements"))

@@ -117,3 +117,105 @@ def test_render_gl_engine(files, tmp_path, capsys, gl_ctx):
     assert rc == 0
     assert json.loads(capsys.readouterr().out)["engine"] == "gl"
     assert np.asarray(Image.open(out)).shape == (32, 32, 3)
+
+
+def test_render_stage_coat_and_refusals(files, tmp_path, capsys):
+    d1, _, env = files
+    out = tmp_path / "s.png"
+    base = [
+        "render",
+        "--design",
+        str(d1),
+        "--env",
+        str(env),
+        "--size",
+        "24",
+        "--cache-dir",
+        str(tmp_path / "c"),
+    ]
+    rc = main(
+        [
+            *base,
+            "--engine",
+            "numpy",
+            "--stage",
+            "--rotate",
+            "30",
+            "--coat",
+            "1.5",
+            "--out",
+            str(out),
+            "--json",
+        ]
+    )
+    assert rc == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["stage"] is True and result["coat_index"] == 1.5
+    img = np.asarray(Image.open(out)).astype(int)
+    plain = tmp_path / "p.png"
+    assert main([*base, "--engine", "numpy", "--out", str(plain)]) == 0
+    capsys.readouterr()
+    flat = np.asarray(Image.open(plain)).astype(int)
+    assert (flat[0, 0] == flat[0, 0, 0]).all()  # the flat grey background
+    assert np.abs(img[0, 0] - flat[0, 0]).max() > 3  # the backdrop shows the environment instead
+    # --mesh and --flakes need the GL engine; the truth takes no stage; a bad coat index names its field
+    for extra, field in (
+        (["--engine", "numpy", "--mesh", "car.glb"], "engine"),
+        (["--engine", "truth", "--stage"], "engine"),
+        (["--engine", "numpy", "--coat", "0.5"], "coat_index"),
+    ):
+        assert main([*base, *extra, "--out", str(out)]) == 2
+        assert field in capsys.readouterr().err
+
+
+@pytest.mark.gl
+def test_render_gl_mesh_with_flakes(files, tmp_path, capsys, gl_ctx):
+    import trimesh
+
+    d1, _, env = files
+    trimesh.creation.box((2.0, 0.6, 0.9)).export(tmp_path / "box.stl")
+    out = tmp_path / "m.png"
+    rc = main(
+        [
+            "render",
+            "--design",
+            str(d1),
+            "--env",
+            str(env),
+            "--size",
+            "32",
+            "--engine",
+            "gl",
+            "--stage",
+            "--mesh",
+            str(tmp_path / "box.stl"),
+            "--flakes",
+            "--coat",
+            "1.5",
+            "--out",
+            str(out),
+            "--cache-dir",
+            str(tmp_path / "c"),
+            "--json",
+        ]
+    )
+    assert rc == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["shape"] == "box" and "per pixel" in result["flakes"]
+    assert np.asarray(Image.open(out)).shape == (32, 32, 3)
+
+
+def test_render_level_of_detail_is_chosen_and_reported(files, tmp_path, capsys):
+    d1, _, env = files
+    out = tmp_path / "l.png"
+    base = ["render", "--design", str(d1), "--env", str(env), "--size", "24", "--engine", "numpy"]
+    rc = main([*base, "--lod", "3.0", "--out", str(out), "--cache-dir", str(tmp_path / "c"), "--json"])
+    assert rc == 0
+    result = json.loads(capsys.readouterr().out)
+    lod = result["lod"]
+    assert lod["lobes"] == len(result["lobes"])  # the render used the chosen basis
+    assert lod["environment_width"] <= 128 and "Tolerance ΔE 3" in lod["describe"]
+    share = 3.0 / np.sqrt(3.0)
+    assert lod["met"] == all(v <= share + 1e-9 for v in lod["errors"].values())
+    assert main([*base, "--lod", "0", "--out", str(out)]) == 2
+    assert "tolerance_de" in capsys.readouterr().err

@@ -165,29 +165,31 @@ def cold_prefilter_cache(tmp_path, monkeypatch):
 
 @pytest.mark.gl
 def test_cold_cache_first_frame_from_coarse_prefilter_then_full_quality(qtbot, cold_prefilter_cache):
-    from ui.models.view import PREFILTER_MAX_SIZE, PREVIEW_PREFILTER_SIZE, environment_ready
+    """A view change is drawn at once, at full resolution, by the core's GL renderer (from the coarse
+    prefilter while the full one is made), then paint edits run on the worker's cached basis."""
+    from ui.models.view import PREFILTER_MAX_SIZE, environment_ready
 
     model = ViewModel()
     model.show(DEFAULT_DESIGN)
     view = GLRenderView(model)
     qtbot.addWidget(view)
     first: list = []
-    view.frame_rendered.connect(
-        lambda: (
-            first
-            or first.append((view.basis, view.full_quality, environment_ready("booth"), view._frame.copy()))
-        )
-    )
+
+    def on_frame() -> None:
+        if not first:
+            w, h = view._pixel_size()
+            pixels = np.frombuffer(view._screen.read(viewport=(0, 0, w, h), components=3), np.uint8)
+            frame = pixels.reshape(h, w, 3)[::-1]
+            first.append((view.gl_frames, view.full_quality, environment_ready("booth"), frame.copy()))
+
+    view.frame_rendered.connect(on_frame)
     view.resize(160, 120)
     view.show()
     qtbot.waitUntil(lambda: view.frames > 0, timeout=20000)
-    basis0, full0, ready0, frame0 = first[0]
-    # the first frame is drawn before the full prefilter exists, from the coarse one of the same environment
-    assert not full0 and not ready0
-    assert basis0.prefilter_size == PREVIEW_PREFILTER_SIZE and basis0.size == (40, 30)
-    obj0 = basis0.paint >= 0
-    assert obj0.mean() > 0.2  # the sphere is on screen, lit
-    assert frame0[..., :3][obj0].mean() > 20
+    gl_frames0, full0, ready0, frame0 = first[0]
+    # the first frame is the core's GL frame, before the full prefilter exists, at full resolution
+    assert gl_frames0 == 1 and not full0 and not ready0
+    assert frame0.shape == (120, 160, 3)
     qtbot.waitUntil(lambda: view.full_quality, timeout=60000)
     view.wait_idle()
     assert environment_ready("booth") and view.basis.prefilter_size == PREFILTER_MAX_SIZE
@@ -195,7 +197,15 @@ def test_cold_cache_first_frame_from_coarse_prefilter_then_full_quality(qtbot, c
     assert any(cold_prefilter_cache.glob("*-o64-*.npy"))  # the full maps were made and cached now
     img = view.grab_image()
     np.testing.assert_array_equal(img, view.basis.core.edit(list(model.weights()), 0.0))
-    # the preview is the same picture at lower quality: mean object colour within a few levels
-    full_small = img[1::4, 1::4][obj0].astype(float).mean(axis=0)
-    assert np.abs(full_small - frame0[..., :3][obj0].astype(float).mean(axis=0)).max() < 8
+    obj = view.basis.paint >= 0
+    assert obj.mean() > 0.2  # the sphere is on screen, lit
+    # the first frame is the same picture from coarser maps: mean object colour within a few levels
+    assert np.abs(img[obj].astype(float).mean(axis=0) - frame0[obj].astype(float).mean(axis=0)).max() < 8
+    # an orbit step is drawn by the GL renderer at once (full prefilter now: full quality), no preview
+    n = view.gl_frames
+    model.update(yaw_deg=20.0)
+    orbit = view.grab_image()  # renders the frame
+    assert view.gl_frames > n and view.full_quality and not view.basis_current
+    assert np.abs(orbit.astype(int) - img.astype(int)).max() > 10  # the view moved
+    view.wait_idle()
     view.close()

@@ -12,16 +12,19 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
+from station.model.gloss import ClearCoat
 from station.render.basis_images import BasisImages as CoreBasisImages
 from station.render.basis_images import build_basis_images
 from station.render.camera import Camera
 from station.render.envcache import PrefilterCache
+from station.render.environment import Environment, load_environment
 from station.render.lobe_fit import fit_design
 from station.render.prefilter import PrefilteredBasis, prefilter_basis
 from station.render.procedural import procedural_environment
@@ -31,6 +34,8 @@ from station.render.weights import LobeWeights
 from ui.models.events import EventGroup
 
 ENVIRONMENTS = ("booth", "sky", "overcast")
+#: File types the viewer loads as environments (``station.render.environment.load_environment``).
+ENVIRONMENT_SUFFIXES = (".hdr", ".exr")
 ENV_WIDTH = 256
 PREFILTER_MAX_SIZE = 64
 PREVIEW_PREFILTER_SIZE = 16  # cube faces of the first-frame prefilter (brute quadrature, ~0.1 s)
@@ -56,15 +61,44 @@ def basis_exponents() -> tuple[float, ...]:
 _READY: set[tuple[str, int]] = set()
 
 
+def is_environment_file(name: str) -> bool:
+    """Whether *name* names an environment file (a path ending in .hdr or .exr) rather than a built-in."""
+    return Path(name).suffix.lower() in ENVIRONMENT_SUFFIXES
+
+
+def check_environment(name: str) -> None:
+    """Accept a built-in environment name or the path of an existing .hdr/.exr file (ViewInputError)."""
+    if name in ENVIRONMENTS:
+        return
+    if not isinstance(name, str) or not is_environment_file(name) or not Path(name).is_file():
+        raise ViewInputError(
+            "environment", " | ".join(ENVIRONMENTS) + " | the path of an existing .hdr/.exr file", name
+        )
+
+
+@lru_cache(maxsize=8)
+def _file_environment(path: str, mtime_ns: int) -> Environment:
+    env = load_environment(path)
+    return env.downsampled(ENV_WIDTH) if env.equirect.shape[1] > ENV_WIDTH else env
+
+
+def load_environment_file(path: str | Path) -> Environment:
+    """The environment in an .hdr/.exr file at the viewer's working width (ENV_WIDTH), cached per file
+    version; EnvironmentFileError (names the file) for a file that is not a usable HDR image."""
+    p = Path(path)
+    check_environment(str(p))
+    return _file_environment(str(p), p.stat().st_mtime_ns)
+
+
 def environment_basis(env_name: str, max_size: int = PREFILTER_MAX_SIZE) -> PrefilteredBasis:
-    """The procedural environment *env_name* prefiltered for the basis exponents (disk-cached).
+    """The environment *env_name* (built-in name or .hdr/.exr path) prefiltered for the basis exponents
+    (disk-cached).
 
     *max_size* caps the cube face size: PREFILTER_MAX_SIZE for the full-quality view,
     PREVIEW_PREFILTER_SIZE for the first frame of a cold cache (same environment and lobes, coarser
     maps of the narrow lobes; ~0.1 s instead of ~3 s).
     """
-    if env_name not in ENVIRONMENTS:
-        raise ViewInputError("environment", " | ".join(ENVIRONMENTS), env_name)
+    check_environment(env_name)
     basis = _environment_basis(env_name, int(max_size))
     _READY.add((env_name, int(max_size)))
     return basis
@@ -77,7 +111,11 @@ def environment_ready(env_name: str, max_size: int = PREFILTER_MAX_SIZE) -> bool
 
 @lru_cache(maxsize=8)
 def _environment_basis(env_name: str, max_size: int) -> PrefilteredBasis:
-    env = procedural_environment(env_name, ENV_WIDTH)
+    env = (
+        load_environment_file(env_name)
+        if env_name not in ENVIRONMENTS
+        else procedural_environment(env_name, ENV_WIDTH)
+    )
     return prefilter_basis(env, basis_exponents(), engine="numpy", cache=PrefilterCache(), max_size=max_size)
 
 
@@ -85,9 +123,13 @@ def _environment_basis(env_name: str, max_size: int) -> PrefilteredBasis:
 class ViewSettings:
     """What the 3D view shows: environment, shape, exposure (EV) and the orbit around the shape.
 
+    ``environment`` is a built-in name (ENVIRONMENTS) or the path of an .hdr/.exr file
+    (:meth:`ViewModel.load_environment`).
     ``yaw_deg``/``pitch_deg`` rotate the shape's default camera about the target (degrees),
     ``zoom`` divides the eye distance (1 = the default framing). ``misalignment_deg`` turns the right
-    panel of the ``panels`` shape about its hinge (thesis ch. 4).
+    panel of the ``panels`` shape about its hinge (thesis ch. 4). ``stage`` shows the environment as
+    backdrop over a ground with contact shadow (``station.render.stage.Stage``) instead of flat grey;
+    ``coat`` adds the clear coat's Fresnel on the gloss (``station.model.gloss.ClearCoat``, index 1.5).
     """
 
     environment: str = "booth"
@@ -97,10 +139,11 @@ class ViewSettings:
     pitch_deg: float = 0.0
     zoom: float = 1.0
     misalignment_deg: float = 0.0
+    stage: bool = False
+    coat: bool = False
 
     def __post_init__(self) -> None:
-        if self.environment not in ENVIRONMENTS:
-            raise ViewInputError("environment", " | ".join(ENVIRONMENTS), self.environment)
+        check_environment(self.environment)
         if self.shape not in SHAPES:
             raise ViewInputError("shape", " | ".join(SHAPES), self.shape)
         if not (math.isfinite(self.exposure_ev) and -10.0 <= self.exposure_ev <= 10.0):
@@ -111,6 +154,9 @@ class ViewSettings:
             raise ViewInputError("zoom", "0.5 <= zoom <= 4", self.zoom)
         if not (math.isfinite(self.misalignment_deg) and -45.0 <= self.misalignment_deg <= 45.0):
             raise ViewInputError("misalignment_deg", "-45 <= misalignment <= 45", self.misalignment_deg)
+        for name in ("stage", "coat"):
+            if not isinstance(getattr(self, name), bool):
+                raise ViewInputError(name, "true | false", getattr(self, name))
         if not math.isfinite(self.yaw_deg):
             raise ViewInputError("yaw_deg", "a finite angle", self.yaw_deg)
 
@@ -132,8 +178,16 @@ class ViewSettings:
         return Camera((x, y, z), base.target, base.up, base.fov_deg)
 
     def scene(self) -> Scene:
-        """The core scene (shape + orbit camera)."""
-        return Scene(self.shape, self.misalignment_deg, camera=self.camera())
+        """The core scene (shape + orbit camera, and the stage when ``stage``)."""
+        from station.render.stage import Stage
+
+        return Scene(
+            self.shape, self.misalignment_deg, camera=self.camera(), stage=Stage() if self.stage else None
+        )
+
+    def clear_coat(self) -> ClearCoat | None:
+        """The clear coat shown (``coat``), or None for the thesis's model."""
+        return ClearCoat() if self.coat else None
 
     def replace(self, **kw: Any) -> ViewSettings:
         """A copy with fields replaced (validated)."""
@@ -153,10 +207,12 @@ def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tu
     for j, (kind, i) in enumerate(layout):
         if kind == "D":
             const[j] = w_d
-        elif kind in ("Gh", "C"):
+        elif kind in ("Gh", "C", "Cg"):
             const[j] = w_g[i]
             if kind == "C":
                 times_c[j] = w_dd[i]
+        elif kind == "Cd":
+            times_c[j] = w_dd[i]
         else:
             const[j] = w_dd[i]
     return const, times_c
@@ -199,7 +255,7 @@ class BasisImages:
         *prefilter_size* caps the prefiltered cube faces (see :func:`environment_basis`).
         """
         env = environment_basis(settings.environment, prefilter_size)
-        core = build_basis_images(settings.scene(), env, width, height)
+        core = build_basis_images(settings.scene(), env, width, height, coat=settings.clear_coat())
         k = core.images.shape[1]
         layers = np.zeros((k, height * width, 3), np.float32)
         layers[:, core.pixels] = core.images.transpose(1, 2, 0)
@@ -247,6 +303,15 @@ class ViewModel:
         if new != self._settings:
             self._settings = new
             self.events.settings.emit(new)
+
+    def load_environment(self, path: str | Path) -> Environment:
+        """Show the environment in the .hdr/.exr file *path* (read and checked now; the view then
+        prefilters it). Raises ViewInputError for a path that is no .hdr/.exr file and
+        EnvironmentFileError (names the file) for one that is not a usable HDR image; the settings are
+        unchanged on failure. Returns the loaded environment."""
+        env = load_environment_file(path)
+        self.update(environment=str(Path(path)))
+        return env
 
     def show(self, design: FaceFlopTravelGloss, other: FaceFlopTravelGloss | None = None) -> None:
         """Show *design* on both halves, or *design* | *other* side by side."""

@@ -1,8 +1,12 @@
 """The 3D view: cached basis images re-weighted by the paint, on the GPU (QOpenGLWidget + moderngl).
 
 A camera, shape, environment or size change recomputes the basis images (NumPy, the core's ray
-caster and prefiltered maps): first a quarter-resolution preview in the GUI thread, then full
-resolution in a worker QThread (joined on close). On a cold prefilter cache (first start) the preview
+caster and prefiltered maps) in a worker QThread (joined on close). Meanwhile the GL view draws every
+frame with the core's GL renderer (:class:`station.render.gl_renderer.GLRenderer` on the widget's own
+context, full resolution, the full prefilter once it is in memory): orbiting is at full quality from the
+first frame, and paint edits switch to the cached basis images as soon as the worker has them. Without
+a GL 4.3 context (and in :class:`ImageRenderView`) a view change shows a quarter-resolution preview of
+the basis images in the GUI thread instead, then full resolution from the worker. On a cold prefilter cache (first start) the preview
 is also rendered from a coarse prefilter of the same environment (``PREVIEW_PREFILTER_SIZE`` faces,
 ~0.1 s) and the worker makes the full prefilter and the full-resolution basis, so the first frame
 does not wait for the ~3 s prefilter (docs/viewer.md). A paint edit only uploads new weights, so the
@@ -103,6 +107,9 @@ class _ViewLogic:
         self._drag: QPointF | None = None
         self.frames = 0
         self.last_frame_s = 0.0
+        self._basis_settings: ViewSettings | None = None
+        self._gl_full_key: tuple | None = None
+        self.gl_frames = 0  # frames drawn by the core's GL renderer
         self.setMinimumSize(160, 120)
         model.events.settings.connect(self._on_settings)
         model.events.paints.connect(self._on_paints)
@@ -112,13 +119,21 @@ class _ViewLogic:
         r = self.devicePixelRatioF()
         return max(8, round(self.width() * r)), max(8, round(self.height() * r))
 
+    def _gl_frames(self) -> bool:
+        """Whether view changes are drawn by the core's GL renderer until the basis is ready (GL view)."""
+        return False
+
     def _refresh_basis(self) -> None:
-        """Preview now (quarter size; coarse prefilter until the full one is in memory), full in the worker."""
+        """Preview now (quarter size; coarse prefilter until the full one is in memory), full in the worker;
+        with GL frames no preview: the core's GL renderer draws the view until the worker is done."""
         w, h = self._pixel_size()
         key = (self.model.settings, w, h)
         if key == self._basis_key:
             return
         self._basis_key = key
+        if self._gl_frames():
+            self._start_worker(key)
+            return
         pw, ph = max(8, w // PREVIEW_DIVISOR), max(8, h // PREVIEW_DIVISOR)
         env = self.model.settings.environment
         size = PREFILTER_MAX_SIZE if environment_ready(env) else PREVIEW_PREFILTER_SIZE
@@ -126,15 +141,22 @@ class _ViewLogic:
         self._start_worker(key)
 
     @property
-    def full_quality(self) -> bool:
-        """Whether the shown basis is the final one (full resolution, full prefilter) for the current view."""
+    def basis_current(self) -> bool:
+        """Whether the cached basis is the final one (full resolution, full prefilter) for the current view."""
         b = self.basis
         return (
             b is not None
             and self._basis_key is not None
+            and self._basis_settings in (None, self._basis_key[0])
             and b.prefilter_size == PREFILTER_MAX_SIZE
             and b.size == self._basis_key[1:]
         )
+
+    @property
+    def full_quality(self) -> bool:
+        """Whether the picture shown is final for the current view: the current basis, or a full-resolution
+        frame of the core's GL renderer from the full prefilter."""
+        return self.basis_current or (self._gl_full_key is not None and self._gl_full_key == self._basis_key)
 
     def _start_worker(self, key: tuple) -> None:
         if self._worker is not None and self._worker.isRunning():
@@ -151,6 +173,7 @@ class _ViewLogic:
             and self._basis_key[0] == settings
             and basis.size == self._basis_key[1:]
         ):
+            self._basis_settings = settings
             self._set_basis(basis)
         if self._worker is not None:
             self._worker.wait()
@@ -237,6 +260,12 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self._screen = None
         self._screen_id = -1
         self.gl_renderer = ""
+        self._core = None  # the core's GLRenderer on this context, for view changes
+        self._core_key: tuple | None = None
+        self._core_ok = True  # False when the context cannot build the core's shaders (GL < 4.3)
+
+    def _gl_frames(self) -> bool:
+        return self._core_ok
 
     def _set_basis(self, basis: BasisImages) -> None:
         self.basis = basis
@@ -251,10 +280,12 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
 
         self.ctx = moderngl.create_context()
         self.gl_renderer = self.ctx.info["GL_RENDERER"]
-        self._prog = composite_program(self.ctx, len(self.basis.layout))
         quad = np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4")
         self._vbo = self.ctx.buffer(quad.tobytes())
-        self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
+        if self.basis is not None:  # else built on the first upload (GL frames come first)
+            self._prog = composite_program(self.ctx, len(self.basis.layout))
+            self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
+            self._layers = len(self.basis.layout)
         self._frame_prog = self.ctx.program(
             vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(),
             fragment_shader=(SHADER_DIR / "frame.frag.glsl").read_text(),
@@ -268,9 +299,10 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
             if t is not None:
                 t.release()
         w, h = basis.size
-        if self._prog is not None and self._layers != len(basis.layout):
-            self._prog.release()
-            self._vao.release()
+        if self._prog is None or self._layers != len(basis.layout):
+            if self._prog is not None:
+                self._prog.release()
+                self._vao.release()
             self._prog = composite_program(self.ctx, len(basis.layout))
             self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
         self._layers = len(basis.layout)
@@ -298,16 +330,53 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         w, h = self._pixel_size()
         self.ctx.viewport = (0, 0, w, h)
         weights = self.model.weights()
+        if weights is not None and self._core_ok and not self.basis_current:
+            if self._draw_core_frame(weights, w, h):
+                self.frames += 1
+                self.gl_frames += 1
+                self.last_frame_s = time.perf_counter() - t0
+                self.frame_rendered.emit()
+                return
         if weights is None or self.basis is None:
             self.ctx.clear(BACKGROUND, BACKGROUND, BACKGROUND)
             return
-        if self.mode == "cpu":
+        if self.mode == "cpu" or self.basis.core.background is not None:  # the stage: per-pixel background
             self._draw_cpu_frame(weights, w, h)
         else:
             self._draw_gpu(weights, w, h)
         self.frames += 1  # no glFinish: Qt flushes when it composites the widget (bench/viewer.py times that)
         self.last_frame_s = time.perf_counter() - t0
         self.frame_rendered.emit()
+
+    def _draw_core_frame(self, weights, w: int, h: int) -> bool:
+        """Draw the current view with the core's GL renderer (full resolution); False when it cannot."""
+        from station.render.errors import RenderError
+        from station.render.gl_renderer import GLRenderer
+        from ui.models.view import environment_basis
+
+        settings = self.model.settings
+        size = PREFILTER_MAX_SIZE if environment_ready(settings.environment) else PREVIEW_PREFILTER_SIZE
+        basis = environment_basis(settings.environment, size)
+        key = (id(basis), w, h)
+        try:
+            if self._core is None or self._core_key != key:
+                if self._core is not None:
+                    self._core.release()
+                self._core = GLRenderer(basis, w, h, ctx=self.ctx)
+                self._core_key = key
+            fbo = self._core.draw(
+                settings.scene(), list(weights), settings.exposure_ev, coat=settings.clear_coat()
+            )
+        except RenderError:  # no GL 4.3 here: fall back to the quarter-resolution preview path
+            self._core_ok = False
+            self._core = None
+            self._basis_key = None
+            self._refresh_basis()
+            return False
+        self.ctx.copy_framebuffer(self._screen, fbo)
+        self._screen.use()
+        self._gl_full_key = self._basis_key if size == PREFILTER_MAX_SIZE else None
+        return True
 
     def _draw_cpu_frame(self, weights, w: int, h: int) -> None:
         import moderngl
@@ -357,6 +426,9 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self._shutdown()
         if self.ctx is not None:
             self.makeCurrent()
+            if self._core is not None:
+                self._core.release()
+                self._core = None
             for obj in (
                 self._vao,
                 self._vbo,

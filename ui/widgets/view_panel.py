@@ -1,27 +1,54 @@
-"""The 3D view with its pickers: environment, shape, exposure, camera reset."""
+"""The 3D view with its pickers: environment (built-in or an .hdr/.exr file), shape, exposure, camera reset."""
 
 from __future__ import annotations
 
-from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QVBoxLayout, QWidget
+from pathlib import Path
 
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import (
+    QCheckBox,
+    QComboBox,
+    QFileDialog,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSlider,
+    QVBoxLayout,
+    QWidget,
+)
+
+from station.errors import InputError
 from station.render.shapes import SHAPES
-from ui.models.view import ENVIRONMENTS, ViewModel, ViewSettings
+from ui.models.view import ENVIRONMENT_SUFFIXES, ENVIRONMENTS, ViewModel, ViewSettings
 from ui.widgets.render_view import make_render_view
 
 EXPOSURE_STEPS_PER_EV = 10
 
 
 class ViewPanel(QWidget):
-    """Pickers above the render view; they write :class:`ViewModel` settings."""
+    """Pickers above the render view; they write :class:`ViewModel` settings.
+
+    "Load HDR…" opens a file dialog (:attr:`env_dialog`, non-modal) for any .hdr/.exr environment; a
+    loaded file joins the environment picker under its file name, a file that cannot be used leaves the
+    view as it was and says why in :attr:`env_status`.
+    """
 
     def __init__(self, model: ViewModel, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.model = model
         s = model.settings
         self.environment = QComboBox()
-        self.environment.addItems(list(ENVIRONMENTS))
-        self.environment.setCurrentText(s.environment)
+        for name in ENVIRONMENTS:
+            self.environment.addItem(name, name)
+        self._select_environment(s.environment)
+        self.load_env = QPushButton("Load HDR…")
+        self.env_status = QLabel()
+        self.env_dialog = QFileDialog(self, "Load an environment (HDR)")
+        self.env_dialog.setFileMode(QFileDialog.FileMode.ExistingFile)
+        self.env_dialog.setNameFilter(
+            "HDR environments (" + " ".join(f"*{x}" for x in ENVIRONMENT_SUFFIXES) + ")"
+        )
+        self.env_dialog.setOption(QFileDialog.Option.DontUseNativeDialog, True)
         self.shape = QComboBox()
         self.shape.addItems(list(SHAPES))
         self.shape.setCurrentText(s.shape)
@@ -30,15 +57,23 @@ class ViewPanel(QWidget):
         self.exposure.setValue(round(s.exposure_ev * EXPOSURE_STEPS_PER_EV))
         self.exposure_label = QLabel()
         reset = QPushButton("Reset camera")
+        self.stage = QCheckBox("backdrop + ground")
+        self.stage.setChecked(s.stage)
+        self.coat = QCheckBox("clear coat")
+        self.coat.setChecked(s.coat)
         bar = QHBoxLayout()
         for w in (
             QLabel("environment"),
             self.environment,
+            self.load_env,
+            self.env_status,
             QLabel("shape"),
             self.shape,
             QLabel("exposure"),
             self.exposure,
             self.exposure_label,
+            self.stage,
+            self.coat,
             reset,
         ):
             bar.addWidget(w)
@@ -47,17 +82,46 @@ class ViewPanel(QWidget):
         lay.setContentsMargins(2, 2, 2, 2)
         lay.addLayout(bar)
         lay.addWidget(self.view, 1)
-        self.environment.currentTextChanged.connect(lambda t: self.model.update(environment=t))
+        self.environment.currentIndexChanged.connect(self._on_environment_picked)
+        self.load_env.clicked.connect(self.env_dialog.open)
+        self.env_dialog.fileSelected.connect(self.load_environment)
         self.shape.currentTextChanged.connect(
             lambda t: self.model.update(shape=t, yaw_deg=0.0, pitch_deg=0.0, zoom=1.0)
         )
         self.exposure.valueChanged.connect(lambda v: self.model.update(exposure_ev=v / EXPOSURE_STEPS_PER_EV))
+        self.stage.toggled.connect(lambda on: self.model.update(stage=bool(on)))
+        self.coat.toggled.connect(lambda on: self.model.update(coat=bool(on)))
         reset.clicked.connect(lambda: self.model.update(yaw_deg=0.0, pitch_deg=0.0, zoom=1.0))
         model.events.settings.connect(self._on_settings)
         self._on_settings(s)
 
+    def _select_environment(self, env: str) -> None:
+        i = self.environment.findData(env)
+        if i < 0:
+            self.environment.addItem(Path(env).name, env)
+            i = self.environment.count() - 1
+        if i != self.environment.currentIndex():
+            self.environment.setCurrentIndex(i)
+
+    def _on_environment_picked(self, index: int) -> None:
+        env = self.environment.itemData(index)
+        if env is not None:
+            self.model.update(environment=env)
+
+    def load_environment(self, path: str) -> bool:
+        """Load the .hdr/.exr file *path* into the view (the dialog's answer); False, with the reason in
+        :attr:`env_status`, when the file cannot be used."""
+        try:
+            self.model.load_environment(path)
+        except InputError as exc:
+            self.env_status.setText(f"not loaded: {exc}")
+            return False
+        self.env_status.setText("")
+        return True
+
     def _on_settings(self, s: ViewSettings) -> None:
         self.exposure_label.setText(f"{s.exposure_ev:+.1f} EV")
+        self._select_environment(s.environment)
 
     def closeEvent(self, event) -> None:
         self.model.events.settings.disconnect(self._on_settings)

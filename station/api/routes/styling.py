@@ -63,8 +63,11 @@ def swatch(_user: Stylist, request: SwatchRequest) -> Response:
 
 @router.post("/render", response_class=Response, responses=PNG_RESPONSE)
 def render(_user: Stylist, request: RenderRequest) -> Response:
-    """A design (default silver) rendered in a built-in point-light scene as PNG: the picture an artist
-    paints over before the sketch fit (thesis §3.7.1)."""
+    """A design (default silver) as PNG: in a built-in point-light scene (the picture an artist paints over
+    before the sketch fit, thesis §3.7.1), or lit by an environment, built-in (``environment``) or an
+    uploaded .hdr/.exr (``environment_hdr``, base64, size-capped), on a shape with backdrop, rotation,
+    ground and contact shadow, exposure and the clear coat's Fresnel (``design2``: a second design on
+    the right half)."""
     return Response(service.render_png(request=request), media_type="image/png")
 
 

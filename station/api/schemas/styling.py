@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 from pydantic.config import JsonDict
 
 from station.api.schemas.common import StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
+from station.render.procedural import NAMES as ENVIRONMENT_NAMES
+from station.render.scene_image import MAX_UPLOAD_BYTES
+from station.render.shapes import SHAPES
 
 _EXAMPLE: JsonDict = {
     "name": "Blue metallic",
@@ -140,7 +143,9 @@ class SketchFitOut(BaseModel):
 
 class RenderRequest(BaseModel):
     """A design (default: the thesis's silver) in a built-in point-light scene: the picture an artist paints
-    over before ``/styling/sketch-fit`` (§3.7.1)."""
+    over before ``/styling/sketch-fit`` (§3.7.1); or, with ``environment`` or ``environment_hdr``, lit by
+    that environment on a shape with the stage options (backdrop, rotation, ground, exposure, clear coat).
+    """
 
     model_config = ConfigDict(
         extra="forbid",
@@ -148,6 +153,7 @@ class RenderRequest(BaseModel):
             "examples": [
                 {"design": _EXAMPLE, "scene": "sphere-point", "size": 128},
                 {"scene": "panel-point", "size": 96},
+                {"design": _EXAMPLE, "environment": "sky", "shape": "speedshape", "size": 256},
             ]
         },
     )
@@ -155,3 +161,53 @@ class RenderRequest(BaseModel):
     design: DesignBody | None = None
     scene: Literal["sphere-point", "panel-point"] = "sphere-point"
     size: Annotated[StrictInt, Field(ge=16, le=512, description="square image side, pixels")] = 128
+    environment: str | None = Field(
+        None,
+        description="built-in environment (" + " | ".join(ENVIRONMENT_NAMES) + "); the render is then "
+        "environment-lit instead of the point-light scene",
+        json_schema_extra={"enum": list(ENVIRONMENT_NAMES)},
+    )
+    environment_hdr: str | None = Field(
+        None,
+        max_length=(MAX_UPLOAD_BYTES * 4) // 3 + 4,
+        description=f"base64 of an equirectangular .hdr/.exr file (at most {MAX_UPLOAD_BYTES} bytes, "
+        "2048 x 1024 pixels; the service's body cap applies first), instead of a built-in environment",
+    )
+    design2: DesignBody | None = Field(
+        None, description="environment renders: a second design on the right half"
+    )
+    shape: str = Field(
+        "speedshape", description="environment renders: the shape", json_schema_extra={"enum": list(SHAPES)}
+    )
+    backdrop: bool = Field(True, description="show the environment behind the shape")
+    backdrop_blur_deg: Annotated[
+        StrictFloat, Field(ge=0.0, le=90.0, description="backdrop blur, degrees")
+    ] = 0.0
+    rotation_deg: Annotated[
+        StrictFloat, Field(ge=-360.0, le=360.0, description="environment turn about the vertical, degrees")
+    ] = 0.0
+    ground: bool = Field(True, description="ground disc with contact shadow")
+    exposure_ev: Annotated[StrictFloat, Field(ge=-10.0, le=10.0, description="exposure, EV")] = 0.0
+    coat_index: Annotated[
+        StrictFloat | None,
+        Field(
+            gt=1.0,
+            le=3.0,
+            description="clear coat's refractive index (Schlick Fresnel on the gloss); "
+            "null: no Fresnel, the thesis's model",
+        ),
+    ] = 1.5
+
+    @field_validator("environment")
+    @classmethod
+    def _known_environment(cls, v: str | None) -> str | None:
+        if v is not None and v not in ENVIRONMENT_NAMES:
+            raise ValueError("expected " + " | ".join(ENVIRONMENT_NAMES))
+        return v
+
+    @field_validator("shape")
+    @classmethod
+    def _known_shape(cls, v: str) -> str:
+        if v not in SHAPES:
+            raise ValueError("expected " + " | ".join(SHAPES))
+        return v

@@ -59,11 +59,49 @@ def _silver() -> Any:
 
 
 def render_png(*, request: RenderRequest) -> bytes:
-    """The design (default silver) shaded in the built-in scene, sRGB-encoded PNG."""
-    from station.design.scene import builtin_scene, shade, srgb_encode, to_uint8
-
+    """The design (default silver) shaded in the built-in scene, or lit by the requested environment on
+    its stage (``station.render.scene_image``), sRGB-encoded PNG."""
     design = to_design(request.design) if request.design is not None else _silver()
-    return png_bytes(to_uint8(srgb_encode(shade(builtin_scene(request.scene, request.size), design))))
+    if request.environment is None and request.environment_hdr is None:
+        from station.design.scene import builtin_scene, shade, srgb_encode, to_uint8
+
+        return png_bytes(to_uint8(srgb_encode(shade(builtin_scene(request.scene, request.size), design))))
+    import base64
+    import binascii
+
+    from station.model.gloss import ClearCoat
+    from station.render.procedural import procedural_environment
+    from station.render.scene_image import ENV_WIDTH, environment_from_bytes, render_design_image
+    from station.render.stage import Stage
+
+    if request.environment is not None and request.environment_hdr is not None:
+        raise InputError("environment_hdr", "either environment or environment_hdr, not both", None)
+    if request.environment_hdr is not None:
+        try:
+            data = base64.b64decode(request.environment_hdr, validate=True)
+        except (binascii.Error, ValueError):
+            raise InputError("environment_hdr", "base64 of an .hdr/.exr file", None, "not base64") from None
+        env = environment_from_bytes(data, "environment_hdr")
+    else:
+        env = procedural_environment(str(request.environment), ENV_WIDTH)
+    designs = [design] + ([to_design(request.design2)] if request.design2 is not None else [])
+    stage = Stage(
+        backdrop=request.backdrop,
+        backdrop_blur_deg=request.backdrop_blur_deg,
+        rotation_deg=request.rotation_deg,
+        ground=request.ground,
+    )
+    coat = ClearCoat(request.coat_index) if request.coat_index is not None else None
+    image = render_design_image(
+        designs,
+        env,
+        shape=request.shape,
+        stage=stage,
+        coat=coat,
+        exposure_ev=request.exposure_ev,
+        size=request.size,
+    )
+    return png_bytes(image)
 
 
 def load_upload(data: bytes, *, max_bytes: int, max_pixels: int) -> Any:

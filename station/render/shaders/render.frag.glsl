@@ -8,6 +8,29 @@
 // index 0/1 from the shape. Defines: SHAPE, N_LOBES, OUTPUT_LINEAR (1: float radiance out),
 // DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube), COMBINED (1: the lobes of each
 // paint pre-summed into a gloss and a directionally-diffuse cube, shaders/combine.frag.glsl).
+// MESH (1): shade the fragments of a rasterised mesh (shaders/mesh.vert.glsl) instead of ray casting a
+// shape; NO_SHAPE (1): nothing to hit, the stage only (the backdrop pass under a mesh). Mesh parts with
+// v_painted = 0 are neutral: NEUTRAL_ALBEDO x the diffuse map.
+// HAS_COAT, HAS_STAGE, HAS_FLAKES (0/1): compile the clear coat, the stage and the flakes in only when a
+// frame uses them (llvmpipe pays for code behind uniform branches).
+#ifndef MESH
+#define MESH 0
+#endif
+#ifndef HAS_COAT
+#define HAS_COAT 1
+#endif
+#ifndef HAS_STAGE
+#define HAS_STAGE 1
+#endif
+#ifndef HAS_FLAKES
+#define HAS_FLAKES 1
+#endif
+#ifndef NO_SHAPE
+#define NO_SHAPE 0
+#endif
+#ifndef NEUTRAL_ALBEDO
+#define NEUTRAL_ALBEDO 0.18
+#endif
 //#include shapes.glsl
 //#include tonemap.glsl
 uniform vec3 u_eye, u_forward, u_right, u_up;
@@ -29,7 +52,60 @@ uniform vec3 u_wd[2];
 uniform vec3 u_wdd[2 * N_LOBES];
 uniform float u_wg[2 * N_LOBES];
 uniform vec3 u_background;
+// Clear coat (station.model.gloss.ClearCoat): gloss terms times s = F(N.V)/F(cos 60), Schlick's F with
+// F0 = u_coat_f0; u_coat_on = 0 is the thesis's model (s = 1).
+uniform int u_coat_on;
+uniform float u_coat_f0, u_coat_ref;
+// Stage (station/render/stage.py): lookups at u_rot * d (environment turned about +Y), the backdrop
+// lobe map u_backdrop (exponent u_backdrop_exp, its lights added when u_backdrop_lights), the ground disc
+// at height u_ground_y about u_ground_c with contact shadow from u_n_occ sphere proxies u_occ (xyz, r).
+uniform mat3 u_rot;
+uniform int u_stage, u_backdrop_on, u_backdrop_lights, u_ground_on, u_n_occ;
+uniform samplerCube u_backdrop;
+uniform float u_backdrop_exp, u_ground_y, u_ground_albedo, u_ground_radius;
+uniform vec2 u_ground_c;
+uniform vec4 u_occ[8];
+// Flakes (station/render/flakes.py): one random flake normal per surface cell; zero-mean sparkle
+// tint * reflectance * (L_sharp(R_m) - C_E(R)) / sqrt(N).
+uniform int u_flakes_on, u_flake_mean_lights;
+uniform samplerCube u_flake_sharp, u_flake_mean;
+uniform float u_flake_size_mm, u_flake_density, u_flake_sigma, u_flake_reflectance, u_unit_mm, u_flake_mean_exp;
+uniform vec3 u_flake_tint[2];
 out vec4 f_color;
+
+uvec3 pcg3d(uvec3 v) {
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.z; v.y += v.z * v.x; v.z += v.x * v.y;
+    v ^= v >> 16u;
+    v.x += v.y * v.z; v.y += v.z * v.x; v.z += v.x * v.y;
+    return v;
+}
+
+vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint) {
+    // n, ve, r in the environment's frame; p the world position (the cell), dist the eye distance.
+    float cell_mm = max(u_flake_size_mm, 2.0 * dist * u_tan_half_fov / u_size.y * u_unit_mm);
+    float count = max(1.0, u_flake_density * cell_mm * cell_mm);
+    uvec3 h = pcg3d(uvec3(ivec3(floor(p * (u_unit_mm / cell_mm))) + ivec3(1 << 20)));
+    vec2 u = (vec2(h.xy >> 8u) + 0.5) / 16777216.0;
+    vec2 g = sqrt(-2.0 * log(u.x)) * vec2(cos(2.0 * PI * u.y), sin(2.0 * PI * u.y));
+    vec3 t = normalize(abs(n.y) < 0.9 ? cross(n, vec3(0.0, 1.0, 0.0)) : cross(n, vec3(1.0, 0.0, 0.0)));
+    vec3 b = cross(n, t);
+    vec3 m = normalize(n + u_flake_sigma * (g.x * t + g.y * b));
+    vec3 rm = 2.0 * dot(m, ve) * m - ve;
+    vec3 glint = dot(rm, n) > 0.0 ? textureLod(u_flake_sharp, rm, 0.0).rgb : vec3(0.0);
+    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb;
+    if (u_flake_mean_lights != 0) {
+        float e = u_flake_mean_exp;
+        for (int l = 0; l < u_n_lights; ++l)
+            mean += (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e) * u_light_flux[l];
+    }
+    return u_flake_tint[paint] * u_flake_reflectance * (glint - mean) / sqrt(count);
+}
+
+float coat_scale(float ndv) {
+    if (u_coat_on == 0) return 1.0;
+    return (u_coat_f0 + (1.0 - u_coat_f0) * pow(1.0 - ndv, 5.0)) / u_coat_ref;
+}
 
 vec2 horizon(int i, float c) {
     return texture(u_horizon, vec2((c * float(HORIZON_N - 1) + 0.5) / float(HORIZON_N),
@@ -43,25 +119,105 @@ vec3 sh_eval(vec3 n) {
          + u_sh[8] * (0.546274 * (n.x * n.x - n.y * n.y));
 }
 
+vec3 stage_background(vec3 o, vec3 d) {
+    vec3 bg = u_background;
+    if (u_stage == 0) return bg;
+    if (u_backdrop_on != 0) {
+        vec3 de = u_rot * d;
+        bg = textureLod(u_backdrop, de, 0.0).rgb;
+        if (u_backdrop_lights != 0) {
+            float e = u_backdrop_exp;
+            for (int l = 0; l < u_n_lights; ++l)
+                bg += (e + 1.0) / (2.0 * PI) * pow(max(dot(de, u_light_dir[l]), 0.0), e) * u_light_flux[l];
+        }
+    }
+    if (u_ground_on != 0 && d.y < -1e-9) {
+        float t = (u_ground_y - o.y) / d.y;
+        if (t > 0.0) {
+            vec3 p = o + t * d;
+            float x = clamp((length(p.xz - u_ground_c) - 0.5 * u_ground_radius) / (0.5 * u_ground_radius), 0.0, 1.0);
+            float w = 1.0 - x * x * (3.0 - 2.0 * x);
+            float occ = 0.0;
+            for (int k = 0; k < u_n_occ; ++k) {
+                vec3 v = u_occ[k].xyz - p;
+                float r2 = u_occ[k].w * u_occ[k].w;
+                float d2 = max(dot(v, v), r2);
+                occ += r2 / d2 * clamp(v.y / sqrt(d2), 0.0, 1.0);
+            }
+#if DIFFUSE_SH
+            vec3 sky = sh_eval(vec3(0.0, 1.0, 0.0));
+#else
+            vec3 sky = textureLod(u_diffuse, vec3(0.0, 1.0, 0.0), 0.0).rgb;
+#endif
+            bg = mix(bg, u_ground_albedo * sky * (1.0 - clamp(occ, 0.0, 1.0)), w);
+        }
+    }
+    return bg;
+}
+
+#if MESH
+in vec3 v_pos;
+in vec3 v_normal;
+in float v_painted;
+#endif
+
 void main() {
-    vec2 ndc = 2.0 * gl_FragCoord.xy / u_size - 1.0;
-    vec3 d = normalize(u_forward + ndc.x * u_tan_half_fov * u_aspect * u_right + ndc.y * u_tan_half_fov * u_up);
     float t;
     vec3 n;
     int paint;
     vec3 rgb = u_background;
-    if (hit(u_eye, d, t, n, paint)) {
+#if MESH
+    vec3 d = normalize(v_pos - u_eye);
+    t = length(v_pos - u_eye);
+    n = normalize(v_normal);
+    if (dot(n, d) > 0.0) n = -n;  // shade the side facing the camera
+    paint = v_painted > 0.5 ? (v_pos.x < 0.0 ? 0 : 1) : -1;
+    bool hit_any = true;
+#else
+    vec2 ndc = 2.0 * gl_FragCoord.xy / u_size - 1.0;
+    vec3 d = normalize(u_forward + ndc.x * u_tan_half_fov * u_aspect * u_right + ndc.y * u_tan_half_fov * u_up);
+#if NO_SHAPE
+    bool hit_any = false;
+#else
+    bool hit_any = hit(u_eye, d, t, n, paint);
+#endif
+#endif
+#if MESH
+    if (hit_any && paint < 0) {
+#if DIFFUSE_SH
+        rgb = NEUTRAL_ALBEDO * sh_eval(u_rot * n);
+#else
+        rgb = NEUTRAL_ALBEDO * textureLod(u_diffuse, u_rot * n, 0.0).rgb;
+#endif
+    } else
+#endif
+    if (hit_any) {
         vec3 v = -d;
         float ndv = clamp(dot(n, v), 0.0, 1.0);
+#if HAS_STAGE
+        vec3 r = u_rot * (2.0 * dot(n, v) * n - v);  // lookups in the environment's frame
+        n = u_rot * n;
+#else
         vec3 r = 2.0 * dot(n, v) * n - v;
+#endif
+#if HAS_COAT
+        float s = coat_scale(ndv);
+#else
+        float s = 1.0;
+#endif
+#if HAS_FLAKES
+        vec3 sparkle = flake_sparkle(u_eye + t * d, t, n, u_rot * v, r, paint);
+#else
+        vec3 sparkle = vec3(0.0);
+#endif
 #if DIFFUSE_SH
         rgb = u_wd[paint] * sh_eval(n);
 #else
         rgb = u_wd[paint] * textureLod(u_diffuse, n, 0.0).rgb;
 #endif
 #if COMBINED
-        if (paint == 0) rgb += textureLod(u_gloss0, r, 0.0).rgb + ndv * textureLod(u_dd0, r, 0.0).rgb;
-        else rgb += textureLod(u_gloss1, r, 0.0).rgb + ndv * textureLod(u_dd1, r, 0.0).rgb;
+        if (paint == 0) rgb += s * textureLod(u_gloss0, r, 0.0).rgb + ndv * textureLod(u_dd0, r, 0.0).rgb;
+        else rgb += s * textureLod(u_gloss1, r, 0.0).rgb + ndv * textureLod(u_dd1, r, 0.0).rgb;
 #endif
 #if COMBINED
         for (int i = 0; i < N_WIDE; ++i) {
@@ -70,7 +226,7 @@ void main() {
 #endif
             int k = paint * N_LOBES + i;
             vec2 gh = horizon(i, ndv);
-            rgb += (gh.y * u_wg[k] + gh.x * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
+            rgb += (s * gh.y * u_wg[k] + gh.x * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
             if (u_exponent[i] < WIDE_EXPONENT) {
                 // exact directional lights: wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux
                 float e = u_exponent[i];
@@ -78,10 +234,15 @@ void main() {
                     float nl = dot(n, u_light_dir[l]);
                     if (nl <= 0.0) continue;
                     float p = (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e);
-                    rgb += (u_wg[k] + nl * u_wdd[k]) * p * u_light_flux[l];
+                    rgb += (s * u_wg[k] + nl * u_wdd[k]) * p * u_light_flux[l];
                 }
             }
         }
+        rgb += max(sparkle, -u_flake_reflectance * rgb);  // a cell's flakes never reflect less than nothing
+    } else {
+#if HAS_STAGE
+        rgb = stage_background(u_eye, d);
+#endif
     }
 #if OUTPUT_LINEAR
     f_color = vec4(rgb, 1.0);

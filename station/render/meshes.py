@@ -1,0 +1,346 @@
+"""Own meshes for the GL renderer: glTF/GLB, OBJ and STL through trimesh, plus a procedural car body.
+
+:func:`load_mesh` reads a file with ``trimesh`` (scene graph transforms applied), picks the part to paint
+by mesh (node or geometry) name or material name (case-insensitive substring; default: every part is
+painted), marks the other parts neutral (drawn as a grey diffuse, ``NEUTRAL_ALBEDO``), and places the
+model on the renderer's stage: centred on the origin in x and z, its floor at MESH_FLOOR_Y, its longest
+horizontal side MESH_LENGTH long. Paint halves follow the shapes' rule: paint 0 where x < 0, paint 1
+where x ≥ 0 (design | match side by side), −1 on neutral parts.
+
+glTF files compressed with ``EXT_meshopt_compression`` (and quantised with ``KHR_mesh_quantization``), as
+glTF-Transform writes them, are first decoded with the ``meshoptimizer`` package (the reference codec's
+Python binding) into a plain GLB of float attributes, which trimesh then reads; textures are dropped (the
+paint comes from the design).
+
+:func:`car_body` is a smooth procedural car body (a superellipsoid hull with a cabin and wheel-arch
+shoulders, C¹ everywhere), for stylists who have no mesh at hand.
+
+Contact shadow: :meth:`Mesh.occluders` gives MAX_OCCLUDERS sphere proxies along the model's length
+(``station.render.stage.sphere_occlusion``).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.render.camera import Camera
+from station.render.errors import RenderInputError
+from station.render.stage import MAX_OCCLUDERS
+
+#: File types :func:`load_mesh` reads.
+MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".stl")
+#: Longest horizontal side of a loaded model (scene units; the speed shape is 2.4 long).
+MESH_LENGTH = 2.4
+#: Floor height of a loaded model.
+MESH_FLOOR_Y = -0.5
+#: Reflectance of the neutral (unpainted) parts.
+NEUTRAL_ALBEDO = 0.18
+#: Default camera on a placed model (three-quarter front view, slightly above).
+MESH_CAMERA = Camera((2.3, 1.1, 3.9), (0.0, -0.2, 0.0), fov_deg=34.0)
+_GLB_MAGIC = b"glTF"
+_COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
+_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
+_NORM = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """A triangle mesh on the stage: positions (V, 3) float32, unit vertex normals (V, 3) float32, faces
+    (F, 3) uint32 and per-vertex paint flag (V,) float32 (1 painted, 0 neutral); ``name`` for reports."""
+
+    name: str
+    positions: NDArray[np.float32] = field(repr=False)
+    normals: NDArray[np.float32] = field(repr=False)
+    faces: NDArray[np.uint32] = field(repr=False)
+    painted: NDArray[np.float32] = field(repr=False)
+
+    def __post_init__(self) -> None:
+        v = self.positions.shape[0]
+        if (
+            self.positions.shape != (v, 3)
+            or self.normals.shape != (v, 3)
+            or self.painted.shape != (v,)
+            or self.faces.ndim != 2
+            or self.faces.shape[1] != 3
+            or self.faces.shape[0] == 0
+            or v < 3
+        ):
+            raise RenderInputError("mesh", "vertices (V, 3), normals (V, 3), faces (F, 3), F > 0", self.name)
+        if self.faces.max() >= v or not np.all(np.isfinite(self.positions)):
+            raise RenderInputError("mesh", "faces indexing its vertices, finite positions", self.name)
+
+    @property
+    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(min corner, max corner) of the positions."""
+        return self.positions.min(axis=0).astype(float), self.positions.max(axis=0).astype(float)
+
+    @property
+    def floor_y(self) -> float:
+        """Height of the model's lowest point (where the ground goes)."""
+        return float(self.positions[:, 1].min())
+
+    def occluders(self) -> NDArray[np.float64]:
+        """(k, 4) sphere proxies (centre, radius) for the contact shadow: spheres along the longer horizontal
+        axis, radius half the smaller horizontal extent (capped by the height), resting on the floor."""
+        lo, hi = self.bounds
+        ext = hi - lo
+        long_axis = 0 if ext[0] >= ext[2] else 2
+        short = ext[2 if long_axis == 0 else 0]
+        r = 0.5 * min(short, ext[1] * 1.2)
+        k = int(np.clip(np.ceil(ext[long_axis] / max(r, 1e-6)), 1, MAX_OCCLUDERS))
+        out = np.zeros((k, 4))
+        centre = 0.5 * (lo + hi)
+        for i in range(k):
+            c = centre.copy()
+            c[long_axis] = lo[long_axis] + r + (ext[long_axis] - 2 * r) * (i / max(k - 1, 1))
+            c[1] = lo[1] + r
+            out[i] = (*c, r)
+        return out
+
+
+def _part_matches(query: str | None, *names: str | None) -> bool:
+    if query is None:
+        return True
+    q = query.lower()
+    return any(n is not None and q in n.lower() for n in names)
+
+
+def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
+    """Read a .glb/.gltf/.obj/.stl file and place it on the stage (module docstring).
+
+    *paint*: the part to paint, by mesh/node or material name (case-insensitive substring); None paints
+    every part. RenderInputError (field ``mesh``) for an unknown suffix, an unreadable file, a file with
+    no triangles, or a *paint* that matches no part (the message lists the parts).
+    """
+    import trimesh
+
+    p = Path(path)
+    if p.suffix.lower() not in MESH_SUFFIXES:
+        raise RenderInputError("mesh", " | ".join(MESH_SUFFIXES) + " file", str(p.name))
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise RenderInputError("mesh", "a readable mesh file", str(p.name), exc.strerror or "") from None
+    file_type = p.suffix.lower().lstrip(".")
+    if file_type == "glb" and data[:4] == _GLB_MAGIC:
+        data = decode_meshopt_glb(data)
+    try:
+        scene: Any = trimesh.load(io.BytesIO(data), file_type=file_type, force="scene", process=False)
+    except Exception as exc:  # trimesh raises many types for malformed files
+        raise RenderInputError("mesh", "a valid mesh file", str(p.name), str(exc)[:200]) from None
+    parts = []
+    for node in scene.graph.nodes_geometry:
+        transform, geom_name = scene.graph[node]
+        geom = scene.geometry[geom_name]
+        if not hasattr(geom, "faces") or len(geom.faces) == 0:
+            continue
+        material = getattr(getattr(geom, "visual", None), "material", None)
+        parts.append((node, geom_name, getattr(material, "name", None), geom, transform))
+    if not parts:
+        raise RenderInputError("mesh", "a file with triangles", str(p.name))
+    chosen = [_part_matches(paint, n, g, m) for n, g, m, _, _ in parts]
+    if not any(chosen):
+        names = sorted({str(x) for n, g, m, _, _ in parts for x in (n, g, m) if x})
+        raise RenderInputError("paint", "a part name: " + ", ".join(names), paint)
+    pos, nrm, faces, painted = [], [], [], []
+    base = 0
+    for (_, _, _, geom, transform), is_paint in zip(parts, chosen, strict=True):
+        v = np.asarray(geom.vertices, float)
+        v = v @ transform[:3, :3].T + transform[:3, 3]
+        n = np.asarray(geom.vertex_normals, float) @ np.linalg.inv(transform[:3, :3])
+        pos.append(v)
+        nrm.append(n)
+        faces.append(np.asarray(geom.faces, np.int64) + base)
+        painted.append(np.full(len(v), 1.0 if is_paint else 0.0))
+        base += len(v)
+    return place_on_stage(
+        p.stem, np.concatenate(pos), np.concatenate(nrm), np.concatenate(faces), np.concatenate(painted)
+    )
+
+
+def place_on_stage(
+    name: str, positions: NDArray, normals: NDArray, faces: NDArray, painted: NDArray | None = None
+) -> Mesh:
+    """Centre in x/z, floor at MESH_FLOOR_Y, longest horizontal side MESH_LENGTH along x (turned 90° about
+    +Y when it lies along z); normals unit length."""
+    v = np.asarray(positions, float)
+    n = np.asarray(normals, float)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    if hi[2] - lo[2] > hi[0] - lo[0]:
+        turn = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # (x, y, z) -> (z, y, -x)
+        v, n = v @ turn.T, n @ turn.T
+        lo, hi = v.min(axis=0), v.max(axis=0)
+    size = max(hi[0] - lo[0], hi[2] - lo[2])
+    if not size > 0:
+        raise RenderInputError("mesh", "a model with a horizontal extent", name)
+    s = MESH_LENGTH / size
+    centre = np.array([0.5 * (lo[0] + hi[0]), lo[1], 0.5 * (lo[2] + hi[2])])
+    v = (v - centre) * s + np.array([0.0, MESH_FLOOR_Y, 0.0])
+    n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    f = np.asarray(faces, np.int64)
+    paint = np.ones(len(v)) if painted is None else np.asarray(painted, float)
+    return Mesh(
+        name, v.astype(np.float32), n.astype(np.float32), f.astype(np.uint32), paint.astype(np.float32)
+    )
+
+
+# -- glTF with EXT_meshopt_compression --------------------------------------------------------------------
+
+
+def decode_meshopt_glb(data: bytes) -> bytes:
+    """A GLB whose buffer views use EXT_meshopt_compression rewritten as a plain GLB of float32 attributes
+    and uint32 indices (quantised attributes dequantised, textures dropped); other GLBs come back as they are.
+    """
+    if len(data) < 20 or data[:4] != _GLB_MAGIC:
+        return data
+    json_len, _ = struct.unpack_from("<II", data, 12)
+    doc = json.loads(data[20 : 20 + json_len])
+    if "EXT_meshopt_compression" not in doc.get("extensionsUsed", []):
+        return data
+    import meshoptimizer
+
+    off = 20 + json_len
+    bin_chunk = b""
+    if off + 8 <= len(data):
+        bin_len, _ = struct.unpack_from("<II", data, off)
+        bin_chunk = data[off + 8 : off + 8 + bin_len]
+
+    def view_bytes(i: int) -> bytes:
+        bv = doc["bufferViews"][i]
+        ext = bv.get("extensions", {}).get("EXT_meshopt_compression")
+        if ext is None:
+            start = bv.get("byteOffset", 0)
+            return bin_chunk[start : start + bv["byteLength"]]
+        start = ext.get("byteOffset", 0)
+        src = np.frombuffer(bin_chunk[start : start + ext["byteLength"]], np.uint8)
+        count, stride, mode = ext["count"], ext["byteStride"], ext["mode"]
+        if mode == "ATTRIBUTES":
+            raw = meshoptimizer.decode_vertex_buffer(count, stride, src, dtype=np.dtype(f"V{stride}"))
+            filt = ext.get("filter", "NONE")
+            if filt == "OCTAHEDRAL":
+                raw = meshoptimizer.decode_filter_oct(raw, count, stride)
+            elif filt == "QUATERNION":
+                raw = meshoptimizer.decode_filter_quat(raw, count, stride)
+            elif filt == "EXPONENTIAL":
+                raw = meshoptimizer.decode_filter_exp(raw, count, stride)
+        elif mode == "TRIANGLES":
+            raw = meshoptimizer.decode_index_buffer(count, stride, src)
+        else:
+            raw = meshoptimizer.decode_index_sequence(count, stride, src)
+        return np.ascontiguousarray(raw).tobytes()[: count * stride]
+
+    cache: dict[int, bytes] = {}
+    out = bytearray()
+    views, accessors = [], []
+    for acc in doc["accessors"]:
+        i = acc["bufferView"]
+        if i not in cache:
+            cache[i] = view_bytes(i)
+        raw = cache[i]
+        bv = doc["bufferViews"][i]
+        ct, k = acc["componentType"], _COMPONENTS[acc["type"]]
+        dt = np.dtype(_DTYPES[ct])
+        stride = bv.get("byteStride") or bv.get("extensions", {}).get("EXT_meshopt_compression", {}).get(
+            "byteStride", dt.itemsize * k
+        )
+        n = acc["count"]
+        base = acc.get("byteOffset", 0)
+        rows = np.frombuffer(raw, np.uint8)[base : base + n * stride]
+        rows = np.pad(rows, (0, max(0, n * stride - rows.size))).reshape(n, stride)
+        vals = rows[:, : dt.itemsize * k].copy().view(dt).reshape(n, k)
+        if acc.get("normalized") and ct in _NORM:
+            arr = np.maximum(vals.astype(np.float32) / _NORM[ct], -1.0)
+            new_ct = 5126
+        elif ct == 5126:
+            arr, new_ct = vals.astype(np.float32), 5126
+        elif acc["type"] == "SCALAR":  # indices
+            arr, new_ct = vals.astype(np.uint32), 5125
+        else:
+            arr, new_ct = vals.astype(np.float32), 5126
+        blob = arr.tobytes()
+        views.append({"buffer": 0, "byteOffset": len(out), "byteLength": len(blob)})
+        out += blob + b"\0" * (-len(blob) % 4)
+        new = {key: acc[key] for key in ("type", "count", "name") if key in acc}
+        new.update({"bufferView": len(views) - 1, "componentType": new_ct, "byteOffset": 0})
+        if "min" in acc and new_ct == 5126 and acc.get("normalized"):
+            new["min"] = list(map(float, arr.min(axis=0)))
+            new["max"] = list(map(float, arr.max(axis=0)))
+        elif "min" in acc and not acc.get("normalized"):
+            new["min"], new["max"] = acc["min"], acc["max"]
+        accessors.append(new)
+    doc["accessors"], doc["bufferViews"] = accessors, views
+    doc["buffers"] = [{"byteLength": len(out)}]
+    for key in ("images", "textures", "samplers"):
+        doc.pop(key, None)
+    for m in doc.get("materials", []):
+        m.get("pbrMetallicRoughness", {}).pop("baseColorTexture", None)
+        m.get("pbrMetallicRoughness", {}).pop("metallicRoughnessTexture", None)
+        for t in ("normalTexture", "occlusionTexture", "emissiveTexture"):
+            m.pop(t, None)
+    for key in ("extensionsUsed", "extensionsRequired"):
+        doc[key] = [
+            e
+            for e in doc.get(key, [])
+            if e not in ("EXT_meshopt_compression", "KHR_mesh_quantization", "EXT_texture_webp")
+        ]
+        if not doc[key]:
+            del doc[key]
+    js = json.dumps(doc).encode()
+    js += b" " * (-len(js) % 4)
+    total = 12 + 8 + len(js) + 8 + len(out)
+    return (
+        struct.pack("<4sII", _GLB_MAGIC, 2, total)
+        + struct.pack("<II", len(js), 0x4E4F534A)
+        + js
+        + struct.pack("<II", len(out), 0x004E4942)
+        + bytes(out)
+    )
+
+
+# -- procedural car body -----------------------------------------------------------------------------------
+
+
+def car_body(n_u: int = 160, n_v: int = 96) -> Mesh:
+    """A smooth procedural car body (module docstring), as a closed latitude-longitude grid mesh.
+
+    A sphere with its poles at the nose (−x) and tail (+x), deformed smoothly: semi-axes 1.2 long,
+    0.5 wide, 0.27 high, the cross-section a superellipse of exponent 3 (square-ish shoulders, C²),
+    the lower side flattened, and a cabin 0.2·exp(−((x − 0.15)/0.5)⁴) raised on the upper side and
+    narrowed towards the roof. Normals from the mesh (smooth, area-weighted). Placed on the stage like
+    a loaded model.
+    """
+    import trimesh
+
+    theta = np.linspace(0.0, np.pi, n_v)  # 0: tail (+x), π: nose (−x)
+    phi = np.linspace(-np.pi, np.pi, n_u, endpoint=False)
+    tt, pp = np.meshgrid(theta, phi, indexing="ij")
+    a, b, c, p = 1.2, 0.27, 0.5, 3.0
+    r = (np.abs(np.cos(pp)) ** p + np.abs(np.sin(pp)) ** p) ** (-1.0 / p)
+    x = a * np.cos(tt)
+    up = np.sin(tt) * np.cos(pp) * r  # in [−1, 1] across the section
+    side = np.sin(tt) * np.sin(pp) * r
+    y = b * np.where(up < 0.0, 0.6 * up, up)
+    top = np.clip(up, 0.0, None) ** 2
+    cabin = np.exp(-(((x - 0.15) / 0.5) ** 4))
+    y = y + 0.2 * cabin * top
+    z = c * side * (1.0 - 0.3 * cabin * top)
+    verts = np.stack([x, y, z], axis=-1).reshape(-1, 3)
+    idx = np.arange(n_v * n_u).reshape(n_v, n_u)
+    nxt = np.roll(idx, -1, axis=1)
+    q = np.stack([idx[:-1], nxt[:-1], nxt[1:], idx[1:]], axis=-1).reshape(-1, 4)
+    faces = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
+    tm = trimesh.Trimesh(verts, faces, process=True)  # merges the pole vertices, drops degenerate faces
+    tm.fix_normals()  # consistent outward winding (the body is closed)
+    normals = np.asarray(tm.vertex_normals, float)
+    outward = np.einsum("ij,ij->i", normals, tm.vertices - tm.vertices.mean(axis=0))
+    if (outward > 0).mean() < 0.5:
+        normals = -normals
+    return place_on_stage("car", tm.vertices, normals, tm.faces)

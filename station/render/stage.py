@@ -1,0 +1,121 @@
+"""The stage around the shape: the environment as backdrop, its rotation, and a ground with contact shadow.
+
+Shared by the NumPy renderer and ``shaders/render.frag.glsl`` (the same formulas):
+
+* **Rotation.** ``rotation_deg`` turns the environment about the vertical axis (+Y): a feature at
+  direction e of the map appears in the world at R_y(θ)·e, so every lookup (diffuse map at N, lobe maps
+  at R, point lights, backdrop) uses the direction R_y(−θ)·d (:func:`lookup_matrix`).
+* **Backdrop.** Rays that miss the shape show the environment itself, looked up in one of the basis's
+  prefiltered lobe maps: the one whose half width at half maximum arccos(2^(−1/E)) is nearest to
+  ``backdrop_blur_deg`` (0: the sharpest lobe, :func:`backdrop_lobe`). Where the basis took the sun
+  out of that map (a wide lobe), each light is added as p_E(d·l)·Φ, p_E = (E+1)/(2π) (d·l)₊^E.
+* **Ground.** A horizontal disc at the shape's floor height (``station.render.shapes.GROUND_Y``), a grey
+  Lambertian of albedo ``ground_albedo`` lit by the environment's irradiance from above, E(+Y)/π·albedo
+  (the diffuse map at +Y), times the ambient visibility 1 − O. The occlusion O of a point on the ground
+  by the shape is summed over sphere proxies of the shape (``station.render.shapes.OCCLUDERS``), each
+  in closed form: a sphere of radius r whose centre lies at distance d in direction ĉ above the
+  horizon hides the cosine-weighted fraction (r/d)²·(n·ĉ) of the sky (the projected solid angle
+  π sin²α cos β of a cap of half-angle α = arcsin(r/d) at elevation angle 90° − β, over π). That is the
+  contact shadow; O is clipped to [0, 1]. The disc fades into the backdrop between half its radius and
+  its radius (smoothstep), so the floor has no hard edge.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from station.render.errors import RenderInputError
+
+#: Most sphere proxies one shape may use for its contact shadow (the shader's array size).
+MAX_OCCLUDERS = 8
+
+
+def _finite(name: str, value: object, lo: float, hi: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise RenderInputError(name, f"a number in [{lo}, {hi}]", value)
+    if not lo <= value <= hi:
+        raise RenderInputError(name, f"{lo} <= {name} <= {hi}", value)
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Stage:
+    """Backdrop, environment rotation and ground of a scene (module docstring).
+
+    Attributes
+    ----------
+    backdrop
+        Show the environment behind the shape (else the flat grey of ``numpy_renderer.BACKGROUND``).
+    backdrop_blur_deg
+        Blur of the backdrop as a lobe half width at half maximum, degrees in [0, 90].
+    rotation_deg
+        Turn of the environment about the vertical axis, degrees in [−360, 360].
+    ground
+        Draw the ground disc with its contact shadow.
+    ground_albedo
+        Reflectance of the grey ground, in [0, 1].
+    ground_radius
+        Radius of the ground disc (scene units, > 0 and <= 100).
+    """
+
+    backdrop: bool = True
+    backdrop_blur_deg: float = 0.0
+    rotation_deg: float = 0.0
+    ground: bool = True
+    ground_albedo: float = 0.3
+    ground_radius: float = 6.0
+
+    def __post_init__(self) -> None:
+        for name in ("backdrop", "ground"):
+            if not isinstance(getattr(self, name), bool):
+                raise RenderInputError(name, "true | false", getattr(self, name))
+        object.__setattr__(
+            self, "backdrop_blur_deg", _finite("backdrop_blur_deg", self.backdrop_blur_deg, 0, 90)
+        )
+        object.__setattr__(self, "rotation_deg", _finite("rotation_deg", self.rotation_deg, -360, 360))
+        object.__setattr__(self, "ground_albedo", _finite("ground_albedo", self.ground_albedo, 0, 1))
+        object.__setattr__(self, "ground_radius", _finite("ground_radius", self.ground_radius, 1e-3, 100))
+
+
+def lookup_matrix(rotation_deg: float) -> NDArray[np.float64]:
+    """3 × 3 matrix taking a world direction to the environment map's frame: R_y(−θ) (module docstring)."""
+    a = math.radians(-rotation_deg)
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def half_width_deg(exponent: float) -> float:
+    """Half width at half maximum of the Phong lobe cos^E ψ, degrees: arccos(2^(−1/E))."""
+    return math.degrees(math.acos(2.0 ** (-1.0 / exponent)))
+
+
+def backdrop_lobe(exponents: tuple[float, ...] | list[float], blur_deg: float) -> int:
+    """Index of the basis lobe shown as backdrop for *blur_deg* (nearest half width; 0: the sharpest)."""
+    if blur_deg <= 0.0:
+        return int(np.argmax(exponents))
+    widths = [half_width_deg(float(e)) for e in exponents]
+    return int(np.argmin([abs(w - blur_deg) for w in widths]))
+
+
+def sphere_occlusion(points: ArrayLike, occluders: ArrayLike) -> NDArray[np.float64]:
+    """Cosine-weighted occluded fraction O (P,) of the sky above ground *points* (P, 3) (normal +Y) by
+    spheres *occluders* (k, 4) = (centre x, y, z, radius), summed in closed form and clipped to [0, 1]."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    occ = np.zeros(p.shape[0])
+    for cx, cy, cz, r in np.asarray(occluders, dtype=float).reshape(-1, 4):
+        v = np.array([cx, cy, cz]) - p
+        d2 = np.maximum(np.sum(v * v, axis=-1), r * r)
+        cos_b = v[:, 1] / np.sqrt(d2)
+        occ += (r * r / d2) * np.clip(cos_b, 0.0, 1.0)
+    return np.clip(occ, 0.0, 1.0)
+
+
+def ground_fade(distance: NDArray, radius: float) -> NDArray[np.float64]:
+    """Weight of the ground over the backdrop at horizontal *distance* from the centre: 1 inside radius/2,
+    smoothstep down to 0 at the radius."""
+    x = np.clip((np.asarray(distance, dtype=float) - 0.5 * radius) / (0.5 * radius), 0.0, 1.0)
+    return 1.0 - x * x * (3.0 - 2.0 * x)

@@ -1,0 +1,155 @@
+"""Clear-coat Fresnel (Schlick, coat index) on the gloss lobes: hand values, closed forms, GL, ground truth."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from station.model.colorimetry import linear_srgb_to_lab
+from station.model.difference import delta_e
+from station.model.errors import ModelInputError
+from station.model.gloss import ClearCoat, fresnel_schlick, fresnel_unpolarised
+from station.render import numpy_renderer as nr
+from station.render import prefilter, shapes
+from station.render import truth as tr
+from station.render.environment import Environment
+from station.render.weights import LobeWeights
+
+EXPS = (1.0, 8.0, 64.0, 512.0)
+
+
+def test_schlick_hand_values() -> None:
+    # n = 1.5: F0 = (0.5/2.5)² = 0.04; at 60° (1 − cos)⁵ = 0.5⁵ = 0.03125 → F = 0.04 + 0.96·0.03125 = 0.07.
+    coat = ClearCoat()
+    assert coat.index == 1.5
+    assert coat.f0 == pytest.approx(0.04, abs=1e-15)
+    assert coat.reference == pytest.approx(0.07, abs=1e-12)
+    assert fresnel_schlick(0.0, 1.5) == pytest.approx(1.0)
+    s = coat.gloss_scale(np.array([1.0, 0.5, 0.0]))
+    assert s == pytest.approx([0.04 / 0.07, 1.0, 1.0 / 0.07], rel=1e-12)
+    # Schlick equals the exact dielectric Fresnel head-on and is 0.019 low at 60° (0.070 vs 0.089).
+    assert fresnel_unpolarised(0.0, 1.5) == pytest.approx(float(fresnel_schlick(1.0, 1.5)), abs=1e-12)
+    assert fresnel_unpolarised(60.0, 1.5) - coat.reference == pytest.approx(0.0192, abs=5e-4)
+    # Index 2.0: F0 = 1/9.
+    assert ClearCoat(2.0).f0 == pytest.approx(1.0 / 9.0)
+
+
+@pytest.mark.parametrize("bad", [1.0, 0.5, 3.5, math.nan, True, "1.5"])
+def test_bad_coat_index_names_the_field(bad) -> None:
+    with pytest.raises(ModelInputError, match="coat_index"):
+        ClearCoat(bad)
+
+
+def _gloss_only(albedo: float, e: float) -> LobeWeights:
+    k_g = np.zeros(len(EXPS))
+    k_g[EXPS.index(e)] = albedo * (e + 1) / (2 * np.pi)
+    return LobeWeights(EXPS, np.zeros(3), np.zeros((len(EXPS), 3)), k_g)
+
+
+@pytest.fixture(scope="module")
+def const_basis():
+    return prefilter.prefilter_basis(
+        Environment("c", np.full((32, 64, 3), 2.0, np.float32)), EXPS, engine="numpy"
+    )
+
+
+def test_numpy_constant_environment_closed_form(const_basis) -> None:
+    """A narrow gloss lobe of albedo a in a constant radiance 2 reflects 2 a s(N·V) with the coat, 2 a without."""
+    scene = shapes.Scene("sphere")
+    g = nr.gbuffer(scene, 40, 40)
+    paint = [_gloss_only(0.05, 512.0)]
+    off = nr.render_linear(scene, const_basis, paint, 40, 40)
+    on = nr.render_linear(scene, const_basis, paint, 40, 40, coat=ClearCoat())
+    c = g.n_dot_v[g.mask]
+    f = 0.04 + 0.96 * (1.0 - c) ** 5
+    assert off[g.mask][:, 1] == pytest.approx(np.full(c.shape, 0.1), rel=3e-3)
+    assert on[g.mask][:, 1] == pytest.approx(0.1 * f / 0.07, rel=3e-3)
+    # Colour terms are untouched by the coat.
+    diffuse = [LobeWeights(EXPS, np.array([0.2, 0.1, 0.05]), np.zeros((4, 3)), np.zeros(4))]
+    assert nr.render_linear(scene, const_basis, diffuse, 40, 40, coat=ClearCoat()) == pytest.approx(
+        nr.render_linear(scene, const_basis, diffuse, 40, 40)
+    )
+
+
+@pytest.mark.gl
+def test_gl_applies_the_same_coat(gl_ctx, const_basis) -> None:
+    from station.render.gl_renderer import GLRenderer
+
+    scene = shapes.Scene("speedshape")
+    paint = [_gloss_only(0.05, 512.0), _gloss_only(0.08, 64.0)]
+    g = nr.gbuffer(scene, 64, 48)
+    with GLRenderer(const_basis, 64, 48, ctx=gl_ctx) as gl:
+        on = gl.render_linear(scene, paint, coat=ClearCoat(1.6))
+        off = gl.render_linear(scene, paint)
+    ref_on = nr.render_linear(scene, const_basis, paint, 64, 48, coat=ClearCoat(1.6))
+    ref_off = nr.render_linear(scene, const_basis, paint, 64, 48)
+    inner = g.mask & (np.abs(on - ref_on).max(axis=-1) < 0.5 * ref_on.max())
+    assert inner.mean() > 0.97 * g.mask.mean()
+    assert on[inner] == pytest.approx(ref_on[inner], rel=0.02, abs=2e-3)
+    assert off[inner] == pytest.approx(ref_off[inner], rel=0.02, abs=2e-3)
+    assert np.abs(on[inner] - off[inner]).max() > 0.05  # the coat is visible at grazing pixels
+
+
+def test_truth_closed_form_and_renderer_agreement() -> None:
+    from station.model import FaceFlopTravelGloss
+    from station.render import lobe_fit as lf
+
+    # Closed form: a grey solid head-on in a constant radiance 1: ρ + ρ_s s(N·V).
+    n, v = tr.sphere_pixels(12)
+    scene = tr.TruthScene(np.ones((64, 128, 3)), n, v, samples=128, quadrature_width=128)
+    design = FaceFlopTravelGloss((60.0, 0.0, 0.0), (60.0, 0.0, 0.0), None, 60.0, "grey")
+    brdf = lf.designed_brdf(design)
+    head_on = n[:, 2] > 0.97
+    coat = ClearCoat()
+    got = scene.truth(brdf, coat)[head_on]
+    expected = brdf.reflectance[0][0] + brdf.specular_albedo * coat.gloss_scale(n[head_on, 2])
+    assert got[:, 0] == pytest.approx(expected, rel=5e-3)
+    assert scene.truth_direct(brdf, coat)[head_on] == pytest.approx(got, rel=5e-3)
+    # The lobe model evaluated exactly carries the same factor on K_G.
+    w = _gloss_only(0.05, 512.0)
+    assert scene.lobes(w, "exact", coat) == pytest.approx(scene.lobes(w) * scene.coat_scale(coat), rel=1e-9)
+
+    # Against ground truth on the sky: the NumPy renderer with the coat tracks the truth with the coat
+    # as closely as the thesis model tracks the thesis truth, and the coat changes the picture.
+    from station.render import procedural
+
+    env = procedural.sunny_sky(128)
+    weights = lf.fit_design(FaceFlopTravelGloss((45.0, 40.0, 25.0), (20.0, 30.0, 15.0), 60.0, 85.0, "red"))
+    basis = prefilter.prefilter_basis(env, weights.exponents, engine="numpy", max_size=32)
+    sc = shapes.Scene("sphere")
+    gb = nr.gbuffer(sc, 28, 28)
+    truth = tr.TruthScene(env, gb.normal[gb.mask], gb.view[gb.mask], samples=64, quadrature_width=64)
+    brdf_red = lf.designed_brdf(
+        FaceFlopTravelGloss((45.0, 40.0, 25.0), (20.0, 30.0, 15.0), 60.0, 85.0, "red")
+    )
+    errors = {}
+    for key, c in (("on", coat), ("off", None)):
+        img = nr.render_linear(sc, basis, [weights], 28, 28, coat=c)[gb.mask]
+        ref = truth.truth_direct(brdf_red, c)
+        errors[key] = delta_e(linear_srgb_to_lab(img), linear_srgb_to_lab(ref), method="cie2000")
+    assert errors["on"].mean() <= errors["off"].mean() + 0.3
+    on_off = delta_e(
+        linear_srgb_to_lab(truth.truth_direct(brdf_red, coat)),
+        linear_srgb_to_lab(truth.truth_direct(brdf_red)),
+        method="cie2000",
+    )
+    assert on_off.max() > 3.0 * errors["on"].mean()
+
+
+def test_basis_images_fold_the_coat_in(const_basis) -> None:
+    """Cached basis images with the coat re-weight to the NumPy renderer's picture with the coat."""
+    from station.render import procedural
+    from station.render.basis_images import build_basis_images
+
+    basis = prefilter.prefilter_basis(procedural.sunny_sky(64), EXPS, max_size=32)
+    paint = LobeWeights(EXPS, [0.05, 0.04, 0.03], np.full((4, 3), 0.03), [0.0, 0.2, 0.5, 2.0])
+    scene = shapes.Scene("sphere")
+    coat = ClearCoat()
+    cached = build_basis_images(scene, basis, 40, 40, coat=coat)
+    assert ("Cg", 3) in cached.layout and ("Cd", 3) in cached.layout
+    ref = nr.render_linear(scene, basis, [paint], 40, 40, coat=coat)
+    assert cached.linear_image([paint]) == pytest.approx(ref, rel=1e-4, abs=1e-5)
+    plain = nr.render_linear(scene, basis, [paint], 40, 40)
+    assert np.abs(ref - plain).max() > 0.05

@@ -1,0 +1,146 @@
+"""Own meshes: trimesh loading (GLB incl. meshopt-compressed, OBJ, STL), part choice, placement, GL raster."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from station.render import meshes as me
+from station.render import numpy_renderer as nr
+from station.render import prefilter, procedural, shapes
+from station.render.errors import RenderInputError
+from station.render.weights import LobeWeights
+
+EXPS = (1.0, 8.0, 64.0, 512.0)
+
+
+def _pair() -> list[LobeWeights]:
+    return [
+        LobeWeights(EXPS, [0.12, 0.02, 0.02], np.full((4, 3), 0.02), [0.0, 0.0, 0.1, 1.5]),
+        LobeWeights(EXPS, [0.02, 0.03, 0.12], np.full((4, 3), 0.01), [0.0, 0.0, 0.2, 1.0]),
+    ]
+
+
+@pytest.fixture(scope="module")
+def sky_basis():
+    return prefilter.prefilter_basis(procedural.sunny_sky(128), EXPS, max_size=32)
+
+
+@pytest.fixture(scope="module")
+def cc0_cars(shared_dir: Path) -> list[Path]:
+    files = sorted((shared_dir / "data" / "meshes").glob("*.glb"))
+    if not files:
+        pytest.skip("no CC0 car meshes in ../shared/data/meshes")
+    return files
+
+
+def test_cc0_car_loads_and_is_placed(cc0_cars) -> None:
+    for path in cc0_cars:
+        mesh = me.load_mesh(path)
+        lo, hi = mesh.bounds
+        assert mesh.faces.shape[0] > 1000
+        assert hi[0] - lo[0] == pytest.approx(me.MESH_LENGTH, rel=1e-5)  # longest side along x
+        assert hi[2] - lo[2] < hi[0] - lo[0]
+        assert lo[1] == pytest.approx(me.MESH_FLOOR_Y, abs=1e-6)
+        assert abs(lo[0] + hi[0]) < 1e-5 and abs(lo[2] + hi[2]) < 1e-5
+        assert np.linalg.norm(mesh.normals, axis=1) == pytest.approx(1.0, abs=1e-5)
+        assert mesh.painted.min() == 1.0  # one part: all painted
+        # Normals point out of the body for most vertices (decoded octahedral normals, turned with it).
+        out = np.einsum("ij,ij->i", mesh.normals, mesh.positions - mesh.positions.mean(axis=0))
+        assert (out > 0).mean() > 0.7
+    with pytest.raises(RenderInputError, match="paint") as err:
+        me.load_mesh(cc0_cars[0], paint="wheel")
+    assert "Mesh" in str(err.value)  # the message lists the parts
+
+
+def test_parts_by_name_in_glb_obj_stl(tmp_path) -> None:
+    import trimesh
+
+    body = trimesh.creation.box((2.0, 0.6, 0.9))
+    glass = trimesh.creation.box((0.8, 0.3, 0.7))
+    glass.apply_translation((0.0, 0.45, 0.0))
+    scene = trimesh.Scene({"body": body, "glass": glass})
+    scene.export(tmp_path / "two.glb")
+    mesh = me.load_mesh(tmp_path / "two.glb", paint="BODY")
+    assert mesh.painted.sum() == len(body.vertices)  # 24 box vertices painted, the glass neutral
+    assert mesh.painted.size == len(body.vertices) + len(glass.vertices)
+    lo, hi = mesh.bounds
+    assert hi[0] - lo[0] == pytest.approx(me.MESH_LENGTH) and lo[1] == pytest.approx(me.MESH_FLOOR_Y)
+    # Height scales with the length: 0.6 + 0.15 + ... over 2.0 → (0.6/2 + 0.3) * 2.4/2.0 box top.
+    assert hi[1] - lo[1] == pytest.approx((0.45 + 0.15 + 0.3) * me.MESH_LENGTH / 2.0)
+    for suffix in (".obj", ".stl"):
+        body.export(tmp_path / f"box{suffix}")
+        m = me.load_mesh(tmp_path / f"box{suffix}")
+        assert m.positions.shape[0] >= 8 and m.faces.shape[0] == 12
+        assert (m.bounds[1] - m.bounds[0]) == pytest.approx([2.4, 0.72, 1.08], rel=1e-5)
+    (tmp_path / "bad.obj").write_text("this is not a mesh\n")
+    with pytest.raises(RenderInputError, match="mesh"):
+        me.load_mesh(tmp_path / "bad.obj")
+    with pytest.raises(RenderInputError, match="mesh"):
+        me.load_mesh(tmp_path / "model.ply")
+
+
+def test_car_body_is_smooth_and_closed() -> None:
+    car = me.car_body(96, 48)
+    lo, hi = car.bounds
+    assert hi[0] - lo[0] == pytest.approx(me.MESH_LENGTH)
+    assert 0.4 < (hi[2] - lo[2]) / (hi[0] - lo[0]) < 0.5  # width 1.0 of 2.4
+    # Smooth: neighbouring vertex normals differ by < 25° everywhere along the edges.
+    e = np.concatenate([car.faces[:, [0, 1]], car.faces[:, [1, 2]], car.faces[:, [2, 0]]])
+    cosines = np.einsum("ij,ij->i", car.normals[e[:, 0]], car.normals[e[:, 1]])
+    assert cosines.min() > np.cos(np.radians(25.0))
+    out = np.einsum("ij,ij->i", car.normals, car.positions - car.positions.mean(axis=0))
+    assert (out > 0).mean() > 0.95
+
+
+@pytest.mark.gl
+def test_mesh_raster_matches_the_ray_cast_sphere(gl_ctx, sky_basis) -> None:
+    """A finely tessellated unit sphere with exact normals, rasterised, shades like the ray-cast sphere."""
+    import trimesh
+
+    from station.render.gl_renderer import GLRenderer
+
+    ico = trimesh.creation.icosphere(subdivisions=5)
+    v = np.asarray(ico.vertices, np.float32)
+    mesh = me.Mesh(
+        "ico",
+        v,
+        v / np.linalg.norm(v, axis=1, keepdims=True),
+        np.asarray(ico.faces, np.uint32),
+        np.ones(len(v), np.float32),
+    )
+    scene = shapes.Scene("sphere")
+    w = h = 72
+    with GLRenderer(sky_basis, w, h, ctx=gl_ctx) as gl:
+        raster = gl.render_mesh(mesh, _pair(), camera=scene.view_camera, linear=True)
+        ray = gl.render_linear(scene, _pair())
+    g = nr.gbuffer(scene, w, h)
+    inner = g.mask & (g.n_dot_v > 0.2)
+    rel = np.abs(raster[inner] - ray[inner]) / np.maximum(ray[inner], 0.02)
+    assert np.median(rel) < 0.01 and np.percentile(rel, 95) < 0.05
+    assert raster[~g.mask & (np.abs(ray - nr.BACKGROUND).max(axis=-1) < 1e-6)] == pytest.approx(nr.BACKGROUND)
+
+
+@pytest.mark.gl
+def test_neutral_parts_are_grey(gl_ctx, sky_basis, tmp_path) -> None:
+    import trimesh
+
+    from station.render.gl_renderer import GLRenderer
+
+    body = trimesh.creation.box((2.0, 0.6, 0.9))
+    glass = trimesh.creation.box((1.0, 0.3, 0.7))
+    glass.apply_translation((0.0, 0.45, 0.0))
+    glass.unmerge_vertices()  # flat faces: the roof's vertex normals are all +Y
+    trimesh.Scene({"body": body, "glass": glass}).export(tmp_path / "two.glb")
+    mesh = me.load_mesh(tmp_path / "two.glb", paint="body")
+    top = shapes.Camera((0.0, 4.0, 0.01), (0.0, 0.0, 0.0), fov_deg=20.0)  # looking down on the glass
+    with GLRenderer(sky_basis, 64, 64, ctx=gl_ctx) as gl:
+        img = gl.render_mesh(mesh, _pair(), camera=top, linear=True)
+    centre = img[30:34, 28:36].reshape(-1, 3)  # glass roof: neutral grey diffuse
+    up = sky_basis.diffuse  # the diffuse map at +Y, times the neutral albedo
+    from station.render.cubemap import sample_cube
+
+    expected = me.NEUTRAL_ALBEDO * sample_cube(up, np.array([[0.0, 1.0, 0.0]]))[0]
+    assert centre == pytest.approx(np.broadcast_to(expected, centre.shape), rel=0.03)
