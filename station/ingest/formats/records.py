@@ -10,8 +10,9 @@ A stored reading holds one illumination block (the measurement table keys geomet
 angle under its ``illumination_deg``): a two-illumination file (an MA-T12's 45° and 15° blocks) becomes
 one reading per block on the same panel, or the one block asked for. Lab is the file's (with its
 illuminant and observer), or computed from the spectra when the file gives none. Vendor texture values
-travel vendor-tagged with the block of their geometry; per-sample values (graininess) with the 45° block
-(``station.model.domain.ILLUMINATION_DEG``), or with the first block stored when that one is not.
+travel vendor-tagged with the block of their geometry; per-sample values (graininess) with the file's 45°
+block (``station.model.domain.ILLUMINATION_DEG``), or its first block when it has none at 45°, so a block's
+reading is the same whichever blocks one import stores (``--illumination 15`` leaves them out).
 """
 
 from __future__ import annotations
@@ -95,7 +96,8 @@ def readings_from_import(
         if not _block(m, blocks[0]):
             lit = sorted(m.illuminations)
             raise error(imported.file, where, "illumination_deg", f"one of {lit}", illumination_deg)
-        sample_block = ILLUMINATION_DEG if ILLUMINATION_DEG in blocks else blocks[0]
+        # per-sample texture goes with one block of the file, whichever blocks are stored
+        sample_block = ILLUMINATION_DEG if ILLUMINATION_DEG in m.illuminations else m.illuminations[0]
         lab = lab_of(m, functools.partial(error, imported.file, where))
         for block in blocks:
             reading = _reading(
