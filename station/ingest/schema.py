@@ -137,7 +137,7 @@ class TextureValue(BaseModel):
         if value == "":
             return value
         try:
-            return geometry_name(*parse_geometry(value, "texture.geometry"))
+            return geometry_name(*parse_geometry(value.strip().lower(), "texture.geometry"))
         except ModelInputError as exc:
             raise ValueError(f"geometry: expected {exc.accepted} or empty, got {value!r}") from exc
 
