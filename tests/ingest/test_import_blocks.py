@@ -191,3 +191,34 @@ def test_an_import_that_names_no_block_of_the_file_stores_nothing(
     code, text = _main(capsys, *_args(tmp_path, database_url, files[0].name, "--illumination", "90"))
     assert code == 2 and "--illumination" in text and "0 < degrees < 90" in text
     assert _rows(database_url) == []
+
+
+@pytest.mark.parametrize(
+    ("geometry", "words"),
+    [("45as33", "texture"), ("bogus", "texture.geometry"), ("45AS15", None)],
+)
+def test_texture_geometries_are_checked_against_the_sample(
+    sim_files: tuple[dict[str, object], dict[str, Path]], geometry: str, words: str | None
+) -> None:
+    """A texture value at a geometry the sample lacks, or a malformed one, is refused naming texture."""
+    import datetime as dt
+
+    from station.ingest.errors import ImportFileError
+    from station.ingest.formats import ImportedFile
+    from station.ingest.formats.records import readings_from_import
+
+    (m,) = read_measurement_file(sim_files[1]["cgats"]).measurements
+    bad = dataclasses.replace(m, texture=(VendorValue("X-Rite", "sparkle", 1.0, geometry),))
+    imported = ImportedFile("cgats", "tex.cgats", (bad,))
+    kw = {"sha256": "1" * 64, "operator": "qa", "fallback_time": dt.datetime.now(dt.UTC)}
+    if words is None:  # any spelling of a geometry of the sample is stored in the domain's
+        r45, r15 = readings_from_import(imported, **kw)  # type: ignore[arg-type]
+        assert (
+            r45.texture is not None
+            and [t.geometry for t in r45.texture] == ["45as15"]
+            and r15.texture is None
+        )
+        return
+    with pytest.raises(ImportFileError, match=words) as err:
+        readings_from_import(imported, **kw)  # type: ignore[arg-type]
+    assert "tex.cgats" in str(err.value) and "measurement 1" in str(err.value)

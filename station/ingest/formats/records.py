@@ -27,7 +27,13 @@ import numpy as np
 from pydantic import ValidationError
 
 from station.ingest.errors import ImportFileError
-from station.ingest.formats.measurement import ImportedFile, ImportedMeasurement, lab_of
+from station.ingest.formats.measurement import (
+    ErrorFactory,
+    ImportedFile,
+    ImportedMeasurement,
+    canonical_geometry,
+    lab_of,
+)
 from station.ingest.records import LAB_DECIMALS, SPECTRA_DECIMALS
 from station.ingest.schema import InstrumentRef, PanelRef, Reading, TextureValue
 from station.model.domain import ILLUMINATION_DEG, parse_geometry
@@ -57,14 +63,18 @@ def _block(m: ImportedMeasurement, illumination_deg: float) -> list[int]:
     return [i for i, g in enumerate(m.geometries) if parse_geometry(g)[0] == illumination_deg]
 
 
-def _texture(m: ImportedMeasurement, illumination_deg: float, per_sample: bool) -> list[TextureValue] | None:
-    """The texture values of *m* that go with its *illumination_deg* block (and the per-sample ones)."""
-    out = [
-        TextureValue(vendor=t.vendor, name=t.name, geometry=t.geometry, value=t.value)
-        for t in m.texture
-        if (t.geometry == "" and per_sample)
-        or (t.geometry != "" and parse_geometry(t.geometry)[0] == illumination_deg)
-    ]
+def _texture(
+    m: ImportedMeasurement, illumination_deg: float, per_sample: bool, err: ErrorFactory
+) -> list[TextureValue] | None:
+    """The texture values of *m* that go with its *illumination_deg* block (and the per-sample ones).
+
+    A value's geometry is read in the domain's spelling; a malformed one is *err* naming ``texture.geometry``.
+    """
+    out = []
+    for t in m.texture:
+        geometry = "" if t.geometry == "" else canonical_geometry(t.geometry, "texture.geometry", err)
+        if (geometry == "" and per_sample) or (geometry and parse_geometry(geometry)[0] == illumination_deg):
+            out.append(TextureValue(vendor=t.vendor, name=t.name, geometry=geometry, value=t.value))
     return out or None
 
 
@@ -158,7 +168,7 @@ def _reading(
             spectra=None
             if m.spectra is None
             else [[round(v, SPECTRA_DECIMALS) for v in m.spectra[i]] for i in idx],
-            texture=_texture(m, illumination_deg, per_sample),
+            texture=_texture(m, illumination_deg, per_sample, functools.partial(error, imported.file, where)),
         )
     except ValidationError as exc:
         first = exc.errors()[0]
