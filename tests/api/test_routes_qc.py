@@ -457,6 +457,16 @@ def test_a_15_degree_block_is_shown_with_its_texture_and_never_judged(api: Api) 
     lit45 = _colour(api, panel, STD)
     shown = c.get(f"{V1}/measurements/{lit45}", headers=qa).json()
     assert (shown["illumination_deg"], shown["texture"]) == (45.0, None)
+    by_block = {
+        ill: [m["id"] for m in c.get(f"{V1}/measurements", params={"panel_id": panel, "illumination_deg": ill},
+                                     headers=qa).json()["data"]]
+        for ill in (15, 45)
+    }  # fmt: skip
+    assert by_block == {15: [got["id"]], 45: [lit45]}
+    csv_text = c.get(f"{V1}/measurements/export.csv", params={"panel_id": panel}, headers=qa).text
+    header, *lines = csv_text.splitlines()
+    col = header.split(",").index("illumination_deg")
+    assert sorted({line.split(",")[col] for line in lines}) == ["15.0", "45.0"] and len(lines) == 6
     check = {"standard": {"measurement_id": lit45}, "sample": {"measurement_id": r.json()["id"]}}
     refused = c.post(f"{V1}/qc/check", json=check, headers=qa)
     assert refused.status_code == 422 and "illumination_deg" in refused.text and "45°" in refused.text

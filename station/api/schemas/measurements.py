@@ -90,3 +90,4 @@ class MeasurementQuery(BaseModel):
     since: dt.datetime | None = None
     until: dt.datetime | None = None
     include_superseded: bool = False
+    illumination_deg: float | None = None

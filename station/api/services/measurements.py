@@ -139,6 +139,8 @@ def _filtered(q: MeasurementQuery) -> Select[Measurement, str, int, str, str]:
         query = query.where(Measurement.measured_at >= q.since)
     if q.until is not None:
         query = query.where(Measurement.measured_at < q.until)
+    if q.illumination_deg is not None:
+        query = query.where(Measurement.illumination_deg == q.illumination_deg)
     if not q.include_superseded:
         query = query.where(_Successor.id.is_(None))
     return query
