@@ -15,7 +15,10 @@ predecessor; rows written before the chain existed are
 exempt, their times are as they were) or a truncated tail (the head says more rows than the table holds).
 
 The payload columns are fixed here (:data:`PAYLOAD_COLUMNS`), not read from the models: a column added
-to a chained table later does not change the hash of the rows already written.
+to a chained table later does not change the hash of the rows already written. Columns added later that
+enter the hash are :data:`OPTIONAL_COLUMNS`: each is hashed only when its value differs from the value every
+row written before it exists reads (``measurements.illumination_deg`` 45°, ``measurements.texture`` null,
+revision 0008), so the rows written before keep their hashes and a changed value still breaks the link.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from sqlalchemy.orm import Session
 from sqlalchemy.sql.expression import TableClause
 
 from db.base import JSONType, UTCDateTime, utcnow
+from station.model.domain import ILLUMINATION_DEG
 
 Chain = Literal["measurements", "audit_events"]
 CHAINS: tuple[Chain, ...] = ("audit_events", "measurements")  # lock order: always audit first
@@ -40,9 +44,9 @@ GENESIS = "0" * 64
 #: The column of each chain that the chain keeps monotonic (the write time).
 TIME_COLUMN: dict[Chain, str] = {"measurements": "received_at", "audit_events": "at"}
 #: The JSON-typed payload columns; their numbers are hashed as floats (JSON number round-trips differ).
-JSON_COLUMNS = frozenset({"geometries_deg", "lab", "wavelengths_nm", "spectra", "detail"})
+JSON_COLUMNS = frozenset({"geometries_deg", "lab", "wavelengths_nm", "spectra", "texture", "detail"})
 #: Floating-point payload columns: hashed as floats whether the writer passed 60 or 60.0.
-FLOAT_COLUMNS = frozenset({"gloss_gu", "gloss_geometry_deg"})
+FLOAT_COLUMNS = frozenset({"gloss_gu", "gloss_geometry_deg", "illumination_deg"})
 
 _TYPES: dict[str, Any] = {
     "id": Integer,
@@ -61,6 +65,8 @@ _TYPES: dict[str, Any] = {
     "spectra": JSONType,
     "gloss_gu": Float,
     "gloss_geometry_deg": Float,
+    "illumination_deg": Float,
+    "texture": JSONType,
     "payload_sha256": String,
     "supersedes_id": Integer,
     "correction_reason": Text,
@@ -99,6 +105,13 @@ PAYLOAD_COLUMNS: dict[Chain, tuple[str, ...]] = {
     ),
     "audit_events": ("at", "actor_id", "action", "entity", "entity_id", "detail"),
 }
+#: Payload columns added after the chain: name → the value rows written before the column existed read.
+#: A row's payload holds such a column only when its value differs from that value (a row without the
+#: column, e.g. during revision 0004's back-fill, reads it too).
+OPTIONAL_COLUMNS: dict[Chain, dict[str, Any]] = {
+    "measurements": {"illumination_deg": ILLUMINATION_DEG, "texture": None},
+    "audit_events": {},
+}
 
 HEADS: TableClause = table(
     "ledger_heads",
@@ -110,9 +123,13 @@ HEADS: TableClause = table(
 )
 
 
-def chain_table(chain: Chain) -> TableClause:
-    """A lightweight table of *chain* with its id, payload columns and hashes (typed for round-trips)."""
-    names = ("id", *PAYLOAD_COLUMNS[chain], "row_sha256", "chain_sha256")
+def chain_table(chain: Chain, *, optional: bool = True) -> TableClause:
+    """A lightweight table of *chain* with its id, payload columns and hashes (typed for round-trips).
+
+    *optional*: with the :data:`OPTIONAL_COLUMNS` (``False`` for a migration that runs before they exist).
+    """
+    extra = tuple(OPTIONAL_COLUMNS[chain]) if optional else ()
+    names = ("id", *PAYLOAD_COLUMNS[chain], *extra, "row_sha256", "chain_sha256")
     return table(chain, *(column(n, _TYPES[n]) for n in names))
 
 
@@ -140,12 +157,21 @@ def _scalar(value: Any) -> Any:
     return value
 
 
+def _canonical(name: str, value: Any) -> Any:
+    return _floats(value) if name in JSON_COLUMNS or name in FLOAT_COLUMNS else _scalar(value)
+
+
 def payload_sha256(chain: Chain, row: Mapping[Any, Any]) -> str:
-    """SHA-256 (hex) of the canonical payload of *row* (a mapping with every payload column)."""
-    payload = {
-        name: _floats(row[name]) if name in JSON_COLUMNS or name in FLOAT_COLUMNS else _scalar(row[name])
-        for name in PAYLOAD_COLUMNS[chain]
-    }
+    """SHA-256 (hex) of the canonical payload of *row* (a mapping with every payload column).
+
+    An optional column (:data:`OPTIONAL_COLUMNS`) enters the payload only when *row* holds it with a
+    value other than its old-row value.
+    """
+    payload = {name: _canonical(name, row[name]) for name in PAYLOAD_COLUMNS[chain]}
+    for name, old in OPTIONAL_COLUMNS[chain].items():
+        value = _canonical(name, row.get(name, old))
+        if value != _canonical(name, old):
+            payload[name] = value
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False)
     return hashlib.sha256(text.encode("ascii")).hexdigest()
 

@@ -11,11 +11,12 @@ import datetime as dt
 import uuid
 from typing import Any
 
-from sqlalchemy import Enum, ForeignKey, String, Text, event
+from sqlalchemy import Enum, ForeignKey, String, Text, event, text
 from sqlalchemy.orm import Mapped, mapped_column
 
 from db.base import Base, JSONType, utcnow
 from db.errors import ImmutableRowError
+from station.model.domain import ILLUMINATION_DEG
 
 PARTS: tuple[str, ...] = (
     "bumper",
@@ -50,10 +51,14 @@ class Panel(Base):
 class Measurement(Base):
     """One immutable reading: Lab (and spectra) per aspecular geometry, gloss, provenance, hash.
 
-    ``geometries_deg`` are aspecular angles in degrees; ``lab`` is one [L*, a*, b*] per geometry
+    ``geometries_deg`` are aspecular angles in degrees under ``illumination_deg`` (45° unless the row holds
+    another illumination block of a multi-illumination instrument, e.g. an MA-T12's 15°); ``lab`` is one [L*, a*, b*] per geometry
     (D65 / CIE 1964 10° unless ``illuminant``/``observer`` say otherwise); ``spectra`` is one
     reflectance curve (0–1) per geometry sampled at ``wavelengths_nm``; ``gloss_gu`` in gloss units
-    at ``gloss_geometry_deg`` (60° by default). ``payload_sha256`` is the SHA-256 of the raw payload
+    at ``gloss_geometry_deg`` (60° by default). ``texture`` holds the instrument's vendor texture values
+    (sparkle, graininess) as ``[{"vendor", "name", "geometry", "value"}, …]`` (``geometry`` a name such as
+    ``45as15``, or ``""`` for a per-sample value), or ``None``: device-dependent values, never compared
+    across vendors. ``payload_sha256`` is the SHA-256 of the raw payload
     as received, so a re-sent reading can be told from a different one under the same client id.
     ``row_sha256`` and ``chain_sha256`` link the row into the measurement hash chain (``db.chain``).
     """
@@ -76,6 +81,10 @@ class Measurement(Base):
     spectra: Mapped[list[list[float]] | None] = mapped_column(JSONType)
     gloss_gu: Mapped[float | None]
     gloss_geometry_deg: Mapped[float | None]
+    illumination_deg: Mapped[float] = mapped_column(
+        default=ILLUMINATION_DEG, server_default=text(f"{ILLUMINATION_DEG:g}"), index=True
+    )
+    texture: Mapped[list[dict[str, Any]] | None] = mapped_column(JSONType)
     payload_sha256: Mapped[str] = mapped_column(String(64))
     supersedes_id: Mapped[int | None] = mapped_column(ForeignKey("measurements.id"), unique=True)
     correction_reason: Mapped[str | None] = mapped_column(Text)

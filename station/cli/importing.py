@@ -5,8 +5,9 @@
   ``{"measurements": [{"geometries": [...], "lab": [[L,a,b], ...], "spectra": ..., "instrument": ...,
   "sample": ...}, ...]}``. With ``--store`` every measurement is stored through the one ingest path
   (``station.ingest.Ingestor`` into URL, by default the ``station serve`` database, queued in
-  ``--outbox`` while it is away), its 45° illumination block (``--illumination``), on the panel
-  job/part/"sample: NAME" when ``--job`` and ``--part`` are given. Importing the same file again stores
+  ``--outbox`` while it is away), one stored measurement per illumination block (an MA-T12-style file's
+  45° and 15° blocks; ``--illumination`` stores one block only) with its vendor texture values, on the
+  panel job/part/"sample: NAME" when ``--job`` and ``--part`` are given. Importing the same file again stores
   nothing new (client ids derive from the file's bytes).
 * ``station import watch DIR [--once] [--interval S] [--settle S]`` (same store options) ingests each
   file dropped into DIR exactly once, moving it to ``DIR/done/``, or to ``DIR/rejected/`` with a
@@ -60,7 +61,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--job", help="job of the panels the measurements are stored on (with --part)")
     p.add_argument("--part", help="part of those panels (bumper, fender, door, …; with --job)")
     p.add_argument(
-        "--illumination", type=float, default=None, help="illumination block stored, degrees (default 45)"
+        "--illumination",
+        type=float,
+        default=None,
+        help="store this illumination block only, degrees (default: every block of the file)",
     )
     p.add_argument("--once", action="store_true", help="watch: process the files there now, then exit")
     p.add_argument("--interval", type=float, default=1.0, help="watch: seconds between scans (default 1)")
@@ -97,10 +101,13 @@ def _panel(args: argparse.Namespace) -> tuple[str | None, str | None]:
     return args.job, args.part
 
 
-def _illumination(args: argparse.Namespace) -> float:
-    from station.model.domain import ILLUMINATION_DEG
-
-    return ILLUMINATION_DEG if args.illumination is None else float(args.illumination)
+def _illumination(args: argparse.Namespace) -> float | None:
+    """The one illumination block to store (degrees), or ``None``: every block."""
+    if args.illumination is None:
+        return None
+    if not 0 < args.illumination < 90:
+        raise InputError("--illumination", "0 < degrees < 90", args.illumination)
+    return float(args.illumination)
 
 
 def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
@@ -146,14 +153,20 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
             part=part,
         )  # every reading validated before the first is stored
         with _ingestor(args) as ingestor:
-            out["stored"] = [_receipt(ingestor, ingestor.submit(r)) for r in readings]
+            out["stored"] = [
+                _receipt(ingestor, ingestor.submit(r)) | {"illumination_deg": r.illumination_deg}
+                for r in readings
+            ]
     if not args.json:
         for m in out["measurements"]:
             print(f"{m['sample']}: {len(m['geometries'])} geometries {', '.join(m['geometries'])}")
         if "written" in out:
             print(f"written: {out['written']['path']} ({out['written']['format']})")
         for r in out.get("stored", []):
-            print(f"stored: {r['status']} {r['client_id']} measurement {r['measurement_id']}")
+            print(
+                f"stored: {r['status']} {r['client_id']} measurement {r['measurement_id']}"
+                f" ({r['illumination_deg']:g}° illumination)"
+            )
         return None
     return out
 

@@ -35,7 +35,7 @@ from station.ingest.gloss import (
 from station.ingest.ingestor import Ingestor
 from station.ingest.outbox import Outbox, OutboxEntry
 from station.ingest.records import calibration_client_id, operator_name, record_from_reading
-from station.ingest.schema import CalibrationRef, InstrumentRef, PanelRef, Reading
+from station.ingest.schema import CalibrationRef, InstrumentRef, PanelRef, Reading, TextureValue
 from station.ingest.store import StoreResult, store_reading
 
 __all__ = [
@@ -58,6 +58,7 @@ __all__ = [
     "Receipt",
     "ReferenceNotFoundError",
     "StoreResult",
+    "TextureValue",
     "calibration_client_id",
     "gloss_of_measurements",
     "gloss_record_from_reading",

@@ -148,6 +148,7 @@ def record_from_reading(
         panel=panel,
         operator=operator,
         measured_at=reading.time,
+        illumination_deg=float(illumination_deg),
         geometries_deg=[float(a) for a in angles],
         lab=lab.round(LAB_DECIMALS).tolist(),
         wavelengths_nm=[float(w) for w in reading.wavelengths_nm],

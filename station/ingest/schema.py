@@ -2,7 +2,10 @@
 
 Units: aspecular angles in degrees; Lab is CIE L*a*b* (D65 / CIE 1964 10° unless ``illuminant`` and
 ``observer`` say otherwise); reflectance factors are unitless (metallic faces exceed 1 at 15°);
-wavelengths in nanometres; gloss in gloss units at ``gloss_geometry_deg`` (ISO 2813: 20°, 60°, 85°).
+wavelengths in nanometres; gloss in gloss units at ``gloss_geometry_deg`` (ISO 2813: 20°, 60°, 85°);
+``illumination_deg`` is the illumination angle of the block the aspecular angles belong to (45° unless an
+instrument with a second block, an MA-T12's 15°, says otherwise); ``texture`` holds vendor texture values
+(sparkle, graininess: unitless, device-dependent, tagged with the vendor whose procedure made them).
 """
 
 from __future__ import annotations
@@ -26,7 +29,8 @@ from pydantic import (
 )
 
 from db.models.measurements import PARTS
-from station.model.domain import LAB_HI, LAB_LO
+from station.model.domain import ILLUMINATION_DEG, LAB_HI, LAB_LO, geometry_name, parse_geometry
+from station.model.errors import ModelInputError
 
 # strict=True: a JSON true or "55.3" is refused, not read as a number (an integer is a float).
 Angle = Annotated[
@@ -64,6 +68,8 @@ Timestamp = Annotated[AwareDatetime, AfterValidator(_bounded_instant)]
 MAX_GEOMETRIES = 12
 MAX_WAVELENGTHS = 81
 MAX_RAW_BYTES = 65_536
+#: Texture values one reading may carry (a few quantities per geometry).
+MAX_TEXTURE = 8 * MAX_GEOMETRIES
 
 
 class InstrumentRef(BaseModel):
@@ -110,6 +116,32 @@ class PanelRef(BaseModel):
         return value
 
 
+class TextureValue(BaseModel):
+    """A vendor texture value (sparkle, graininess; unitless) as the vendor's software computed it.
+
+    ``geometry`` is the geometry name it belongs to (``45as15``; stored in the domain's spelling) or
+    ``""`` for a per-sample value (graininess is measured under diffuse light). Values of different
+    vendors are never compared (``station.ingest.formats.VendorValue.difference`` refuses).
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    vendor: Text64
+    name: Text64
+    geometry: Annotated[str, Field(max_length=16)] = ""
+    value: Annotated[float, Field(strict=True, ge=-1e6, le=1e6, allow_inf_nan=False)]
+
+    @field_validator("geometry")
+    @classmethod
+    def _geometry(cls, value: str) -> str:
+        if value == "":
+            return value
+        try:
+            return geometry_name(*parse_geometry(value.strip().lower(), "texture.geometry"))
+        except ModelInputError as exc:
+            raise ValueError(f"geometry: expected {exc.accepted} or empty, got {value!r}") from exc
+
+
 class Reading(BaseModel):
     """One instrument reading as sent by a station; ``client_id`` makes re-sending idempotent."""
 
@@ -139,6 +171,10 @@ class Reading(BaseModel):
     panel: PanelRef | None = None
     operator: Text64
     measured_at: Timestamp
+    illumination_deg: Annotated[
+        float,
+        Field(strict=True, gt=0.0, lt=90.0, allow_inf_nan=False, description="illumination angle, degrees"),
+    ] = ILLUMINATION_DEG
     illuminant: Illuminant = "D65"
     observer: Observer = "CIE 1964 10 Degree Standard Observer"
     geometries_deg: Annotated[list[Angle], Field(min_length=1, max_length=MAX_GEOMETRIES)]
@@ -160,6 +196,7 @@ class Reading(BaseModel):
     gloss_gu: Annotated[float, Field(strict=True, ge=0.0, le=2000.0, allow_inf_nan=False)] | None = None
     gloss_geometry_deg: Literal[20, 60, 85] | None = None
     raw_payload_b64: Annotated[str, Field(max_length=(MAX_RAW_BYTES * 4) // 3 + 4)] | None = None
+    texture: Annotated[list[TextureValue], Field(max_length=MAX_TEXTURE)] | None = None
 
     @model_validator(mode="after")
     def _consistent(self) -> Reading:
@@ -183,6 +220,10 @@ class Reading(BaseModel):
                 raise ValueError("wavelengths_nm: expected strictly increasing values")
         if self.gloss_gu is not None and self.gloss_geometry_deg is None:
             self.gloss_geometry_deg = 60
+        if self.texture is not None:
+            self._check_texture(self.texture)
+            if not self.texture:
+                self.texture = None  # no texture values: stored and hashed as none at all
         if self.raw_payload_b64 is not None:
             try:
                 raw = base64.b64decode(self.raw_payload_b64, validate=True)
@@ -192,12 +233,38 @@ class Reading(BaseModel):
                 raise ValueError(f"raw_payload_b64: expected at most {MAX_RAW_BYTES} bytes")
         return self
 
+    def _check_texture(self, texture: list[TextureValue]) -> None:
+        seen: set[tuple[str, str, str]] = set()
+        for i, t in enumerate(texture):
+            key = (t.vendor, t.name, t.geometry)
+            if key in seen:
+                raise ValueError(f"texture[{i}]: expected each vendor, name and geometry once, got {key}")
+            seen.add(key)
+            if t.geometry:
+                ill, asp = parse_geometry(t.geometry)
+                if ill != self.illumination_deg or asp not in self.geometries_deg:
+                    raise ValueError(
+                        f"texture[{i}].geometry: expected a geometry of this reading "
+                        f"({', '.join(geometry_name(self.illumination_deg, a) for a in self.geometries_deg)}) "
+                        f"or empty, got {t.geometry!r}"
+                    )
+
     def canonical_json(self) -> str:
         """The reading as compact JSON with sorted keys (what the outbox stores).
 
-        ``panel`` is left out when absent, so a reading without panel metadata hashes as it always has.
+        ``panel`` and ``texture`` are left out when absent and ``illumination_deg`` when it is 45°, so a
+        reading without them hashes as it always has (and an older outbox body still decodes).
         """
-        body = self.model_dump(mode="json", exclude={"panel"} if self.panel is None else None)
+        exclude = {
+            name
+            for name, absent in (
+                ("panel", self.panel is None),
+                ("texture", self.texture is None),
+                ("illumination_deg", self.illumination_deg == ILLUMINATION_DEG),
+            )
+            if absent
+        }
+        body = self.model_dump(mode="json", exclude=exclude or None)
         return json.dumps(body, sort_keys=True, separators=(",", ":"))
 
     def payload_sha256(self) -> str:

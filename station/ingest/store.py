@@ -177,6 +177,8 @@ def store_reading(
         spectra=reading.spectra,
         gloss_gu=reading.gloss_gu,
         gloss_geometry_deg=reading.gloss_geometry_deg,
+        illumination_deg=reading.illumination_deg,
+        texture=None if reading.texture is None else [t.model_dump() for t in reading.texture],
         payload_sha256=sha,
         supersedes_id=supersedes_id,
         correction_reason=correction_reason,

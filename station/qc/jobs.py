@@ -6,7 +6,9 @@ A **job** is the ``job`` text its panels carry; its **parts** are the panels' ``
 standard gives the Lab of its model at each sample's aspecular angles
 (:meth:`station.model.FaceFlopTravelGloss.lab_at`, latest design version).
 
-Corrected measurements count once: a measurement superseded by a correction is left out of searches
+QC judges the 45° illumination block (``station.model.domain.ILLUMINATION_DEG``): the rows of another
+block of a two-illumination instrument (an MA-T12's 15° block, stored as its own measurement on the same
+panel) are left out of searches and summaries and refused as a standard. Corrected measurements count once: a measurement superseded by a correction is left out of searches
 and summaries (the correction stands for it). Every query works on SQLite and PostgreSQL.
 """
 
@@ -24,7 +26,7 @@ from sqlalchemy.orm import Session, aliased
 
 from db.models import PARTS, Design, DesignVersion, Instrument, Measurement, Panel, Standard
 from station.model.design_io import design_from_dict
-from station.model.domain import ANGLES_6, QC_FORMULA
+from station.model.domain import ANGLES_6, ILLUMINATION_DEG, QC_FORMULA
 from station.model.errors import ModelInputError
 from station.model.tolerance import QcVerdict, ToleranceSet
 from station.qc.check import check_pair, formula_name
@@ -117,6 +119,7 @@ def _search_query(
         .join(Instrument, Instrument.id == Measurement.instrument_id)
         .outerjoin(Panel, Panel.id == Measurement.panel_id)
         .where(~select(newer.id).where(newer.supersedes_id == Measurement.id).exists())
+        .where(Measurement.illumination_deg == ILLUMINATION_DEG)  # the block QC judges
     )
     if job is not None:
         q = q.where(Panel.job == _text(job, "job"))
@@ -150,7 +153,8 @@ def search_measurements(
 ) -> list[MeasurementRow]:
     """Measurements by job, part, panel, instrument (serial or model, exact) and time range, oldest first.
 
-    *since* is inclusive, *until* exclusive (timezone-aware); superseded measurements are left out.
+    *since* is inclusive, *until* exclusive (timezone-aware); superseded measurements and those of
+    another illumination block than 45° are left out.
     *limit* 1 … :data:`SEARCH_LIMIT_MAX`, *offset* >= 0.
     """
     _aware(since, "since")
@@ -279,6 +283,13 @@ def set_standard(
         if newer is not None:
             raise QcInputError(
                 "measurement_id", f"a current measurement (it is superseded by {newer})", measurement_id
+            )
+        if m.illumination_deg != ILLUMINATION_DEG:
+            raise QcInputError(
+                "measurement_id",
+                f"a measurement of the {ILLUMINATION_DEG:g}° illumination block "
+                f"(measurement {m.id} is the {m.illumination_deg:g}° block)",
+                measurement_id,
             )
     elif session.get(Design, design_id) is None:
         raise QcInputError("design_id", "the id of a stored design", design_id)

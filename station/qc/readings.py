@@ -347,7 +347,19 @@ def _refuse_constant(token: str) -> Any:
 
 
 def reading_from_measurement(m: Measurement, instrument: str = "", sample: str = "") -> Reading:
-    """A stored measurement as a reading (its aspecular angles, Lab, spectra and time)."""
+    """A stored measurement as a reading (its aspecular angles, Lab, spectra and time).
+
+    Only a measurement of the 45° illumination block is a QC reading: another block (the 15° block of
+    an MA-T12-style reading, stored as its own measurement) is refused, never mixed with a 45° one.
+    """
+    illumination = ILLUMINATION_DEG if m.illumination_deg is None else float(m.illumination_deg)
+    if illumination != ILLUMINATION_DEG:
+        raise QcInputError(
+            f"measurement {m.id}.illumination_deg",
+            f"a measurement of the {ILLUMINATION_DEG:g}° illumination block "
+            f"(its {ILLUMINATION_DEG:g}° sibling on the same panel)",
+            illumination,
+        )
     return Reading(
         tuple(float(a) for a in m.geometries_deg),
         tuple((float(r[0]), float(r[1]), float(r[2])) for r in m.lab),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import json
 import math
 import uuid
 
@@ -427,3 +428,55 @@ def test_qc_journey_over_real_http(tmp_path) -> None:
             )  # header + 6 geometries
             bad = http.post("/qc/check", json={"standard": {"measurement_id": std}}, headers=auth)
             assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][-1] == "sample"
+
+
+def test_a_15_degree_block_is_shown_with_its_texture_and_never_judged(api: Api) -> None:
+    """A measurement of the 15° block keeps its illumination and vendor texture; QC refuses it."""
+    c, tech, qa = api.client, api.auth("technician"), api.auth("qa")
+    panel = _panel(api, "J-15")
+    body = make_reading(22, 1, panel_id=panel).model_dump(mode="json") | {
+        "client_id": str(uuid.uuid4()),
+        "illumination_deg": 15,
+        "geometries_deg": ANGLES,
+        "lab": SMP,
+        "spectra": None,
+        "wavelengths_nm": None,
+        "texture": [
+            {"vendor": "BYK-Gardner", "name": "sparkle_area", "geometry": "15AS15", "value": 12.5},
+            {"vendor": "BYK-Gardner", "name": "graininess", "geometry": "", "value": 4.0},
+        ],
+    }
+    r = c.post(f"{V1}/measurements", json=body, headers=tech)
+    assert r.status_code == 201, r.text
+    got = c.get(f"{V1}/measurements/{r.json()['id']}", headers=qa).json()
+    assert got["illumination_deg"] == 15.0 and got["geometries_deg"] == ANGLES
+    assert got["texture"] == [  # the geometry in the domain's spelling, values as sent
+        {"vendor": "BYK-Gardner", "name": "sparkle_area", "geometry": "15as15", "value": 12.5},
+        {"vendor": "BYK-Gardner", "name": "graininess", "geometry": "", "value": 4.0},
+    ]
+    lit45 = _colour(api, panel, STD)
+    shown = c.get(f"{V1}/measurements/{lit45}", headers=qa).json()
+    assert (shown["illumination_deg"], shown["texture"]) == (45.0, None)
+    by_block = {
+        ill: [m["id"] for m in c.get(f"{V1}/measurements", params={"panel_id": panel, "illumination_deg": ill},
+                                     headers=qa).json()["data"]]
+        for ill in (15, 45)
+    }  # fmt: skip
+    assert by_block == {15: [got["id"]], 45: [lit45]}
+    csv_text = c.get(f"{V1}/measurements/export.csv", params={"panel_id": panel}, headers=qa).text
+    header, *lines = csv_text.splitlines()
+    col = header.split(",").index("illumination_deg")
+    assert sorted({line.split(",")[col] for line in lines}) == ["15.0", "45.0"] and len(lines) == 6
+    check = {"standard": {"measurement_id": lit45}, "sample": {"measurement_id": r.json()["id"]}}
+    refused = c.post(f"{V1}/qc/check", json=check, headers=qa)
+    assert refused.status_code == 422 and "illumination_deg" in refused.text and "45°" in refused.text
+    # a texture value at a geometry of another block, or twice, is refused naming texture
+    for texture in (
+        [{"vendor": "V", "name": "sparkle", "geometry": "45as15", "value": 1.0}],
+        [{"vendor": "V", "name": "g", "value": 1.0}, {"vendor": "V", "name": "g", "value": 2.0}],
+        [{"vendor": "V", "name": "g", "geometry": "15as15", "value": float("nan")}],
+    ):
+        bad = body | {"client_id": str(uuid.uuid4()), "texture": texture}
+        raw = json.dumps(bad)  # NaN written as the bare token a hostile client sends
+        r = c.post(f"{V1}/measurements", content=raw, headers=tech | {"content-type": "application/json"})
+        assert r.status_code == 422 and "texture" in r.text, r.text

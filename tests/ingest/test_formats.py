@@ -58,8 +58,12 @@ def test_round_trip_of_simulator_files(sim_files: tuple[dict, dict[str, Path]], 
     readings = readings_from_import(
         got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC), job="J-7", part="door"
     )
-    (r,) = readings
-    assert r.geometries_deg == [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0]  # the 45° block only
+    r, r15 = readings  # one reading per illumination block, in the file's order, on the same panel
+    assert (r.illumination_deg, r15.illumination_deg) == (45.0, 15.0) and r15.panel == r.panel
+    assert r.geometries_deg == [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0]  # the 45° block
+    assert r15.geometries_deg == [-45.0, -15.0, 15.0, 25.0, 45.0, 60.0] and r15.lab == [
+        list(v) for v in m.lab[6:]
+    ]
     assert r.lab == [list(v) for v in m.lab[:6]]
     assert r.panel is not None and (r.panel.job, r.panel.part, r.panel.notes) == (
         "J-7",
@@ -70,7 +74,9 @@ def test_round_trip_of_simulator_files(sim_files: tuple[dict, dict[str, Path]], 
     assert again[0].client_id == r.client_id  # same bytes, same client id: a re-import is a duplicate
     lit15 = readings_from_import(got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC),
                                  illumination_deg=15)  # fmt: skip
-    assert lit15[0].geometries_deg == [-45.0, -15.0, 15.0, 25.0, 45.0, 60.0]
+    assert lit15 == [
+        r15.model_copy(update={"panel": None})
+    ]  # that block only, as in the pair (no panel asked)
     assert lit15[0].client_id != r.client_id
 
 

@@ -111,19 +111,21 @@ def test_simulator_to_watch_folder_to_database_to_verdict(
     out = json.loads(res.stdout)
     assert (out["done"], out["rejected"]) == (2, 1)
     status = {f["file"]: [r["status"] for r in f["receipts"]] for f in out["files"]}
-    assert status == {"broken.csv": [], "smp.cgats": ["duplicate"], "std.cxf": ["stored"]}
+    # the standard's file holds two illumination blocks: one measurement each
+    assert status == {"broken.csv": [], "smp.cgats": ["duplicate"], "std.cxf": ["stored", "stored"]}
     assert sorted(p.name for p in (drop / "done").iterdir()) == ["smp.cgats", "std.cxf"]
     reason = (drop / "rejected" / "broken.csv.reason").read_text(encoding="utf-8")
     assert "CsvImportError" in reason and "broken.csv, line 2" in reason and "row" in reason
     assert (drop / "rejected" / "broken.csv").is_file() and (drop / ".hidden.cxf").is_file()
 
     ms, ps = _rows(url)
-    assert len(ms) == 2 and [(p.job, p.part, p.notes) for p in ps] == [
+    assert len(ms) == 3 and [(p.job, p.part, p.notes) for p in ps] == [
         ("J-100", "fender", "sample: trial 1"),
         ("J-100", "fender", "sample: std panel"),
     ]
-    smp, std = ms  # the sample was stored first
-    assert smp.panel_id == ps[0].id and std.panel_id == ps[1].id
+    smp, std, std15 = ms  # the sample was stored first, then the standard's 45° and 15° blocks
+    assert smp.panel_id == ps[0].id and std.panel_id == std15.panel_id == ps[1].id
+    assert (smp.illumination_deg, std.illumination_deg, std15.illumination_deg) == (45.0, 45.0, 15.0)
     assert std.geometries_deg == smp.geometries_deg == [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0]
 
     # QC verdict on the stored rows: ΔE*ab per geometry is the Euclidean distance (CIE76)

@@ -68,6 +68,7 @@ def test_record_options_and_refusals() -> None:
         _flat(), operator="ana", illumination_deg=15, client_id=cid, instrument=info, gloss=gloss, panel_id=3
     )
     assert rec.client_id == cid and rec.geometries_deg == [15.0] and rec.panel_id == 3
+    assert rec.illumination_deg == 15.0  # the block it is, stored with it
     assert (rec.gloss_gu, rec.gloss_geometry_deg) == (91.5, 60)
     assert rec.instrument.model == "MA6" and rec.instrument.firmware == "2.1"
     with pytest.raises(InputError, match="illumination_deg") as err:

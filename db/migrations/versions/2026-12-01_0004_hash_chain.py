@@ -50,7 +50,7 @@ def _restore_triggers(pg: bool) -> None:
 
 def _backfill(conn: sa.Connection) -> None:
     for chain in CHAINS:
-        tbl = chain_table(chain)
+        tbl = chain_table(chain, optional=False)  # the columns of revision 0008 do not exist yet
         previous, count, last_at, last_id = GENESIS, 0, None, None
         for row in conn.execute(sa.select(tbl).order_by(tbl.c.id)).mappings().all():
             row_hash = payload_sha256(chain, row)

@@ -35,6 +35,12 @@ def _query(
     ] = None,
     until: Annotated[AwareDatetime | None, Query(description="measured before (ISO 8601 with zone)")] = None,
     include_superseded: bool = False,
+    illumination_deg: Annotated[
+        float | None,
+        Query(
+            gt=0, lt=90, description="only this illumination block, degrees (e.g. 45; default: every block)"
+        ),
+    ] = None,
 ) -> MeasurementQuery:
     """The measurement filters of the query string (the list and the CSV export take the same)."""
     return MeasurementQuery(
@@ -45,6 +51,7 @@ def _query(
         since=since,
         until=until,
         include_superseded=include_superseded,
+        illumination_deg=illumination_deg,
     )
 
 
@@ -75,7 +82,7 @@ def create_measurement(
 def list_measurements(
     session: SessionDep, _user: Reader, q: Filters, limit: Limit = 100, offset: Offset = 0
 ) -> Page[MeasurementPublic]:
-    """Query by job, part, panel, instrument and time; newest first."""
+    """Query by job, part, panel, instrument, time and illumination block; newest first."""
     rows, total = service.query(session=session, q=q, limit=limit, offset=offset)
     return Page[MeasurementPublic](data=rows, count=total)
 

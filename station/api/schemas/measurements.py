@@ -9,11 +9,17 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field
 from pydantic.config import JsonDict
 
-from station.ingest import Reading
+from station.ingest import Reading, TextureValue
 
 
 class MeasurementPublic(BaseModel):
-    """A stored, immutable measurement (angles in degrees, Lab D65/10° unless stated, gloss in GU)."""
+    """A stored, immutable measurement (angles in degrees, Lab D65/10° unless stated, gloss in GU).
+
+    ``geometries_deg`` are aspecular angles under ``illumination_deg`` (45° unless the row is another
+    block of a two-illumination reading, e.g. an MA-T12's 15° block stored beside its 45° block);
+    ``texture`` lists the vendor texture values (sparkle, graininess) as the vendor reported them, or
+    ``null``.
+    """
 
     model_config = ConfigDict(from_attributes=True)
 
@@ -28,8 +34,10 @@ class MeasurementPublic(BaseModel):
     received_at: dt.datetime
     illuminant: str
     observer: str
+    illumination_deg: float
     geometries_deg: list[float]
     lab: list[list[float]]
+    texture: list[TextureValue] | None = None
     wavelengths_nm: list[float] | None
     spectra: list[list[float]] | None
     gloss_gu: float | None
@@ -82,3 +90,4 @@ class MeasurementQuery(BaseModel):
     since: dt.datetime | None = None
     until: dt.datetime | None = None
     include_superseded: bool = False
+    illumination_deg: float | None = None

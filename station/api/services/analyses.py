@@ -21,6 +21,7 @@ from station.api.services import audit
 from station.api.services.designs import to_design
 from station.errors import InputError
 from station.model import AspecularMeasurements
+from station.model.domain import ILLUMINATION_DEG
 
 if TYPE_CHECKING:
     from station.analysis.qa import SeamReport
@@ -30,6 +31,12 @@ def _aspecular(session: Session, measurement_id: int) -> AspecularMeasurements:
     m = session.get(Measurement, measurement_id)
     if m is None:
         raise NotFoundError(f"measurement {measurement_id} not found")
+    if m.illumination_deg != ILLUMINATION_DEG:  # the seam analysis fits aspecular angles at 45°
+        raise InputError(
+            "measurement_id",
+            f"a measurement of the {ILLUMINATION_DEG:g}° illumination block",
+            f"measurement {m.id} ({m.illumination_deg:g}° illumination)",
+        )
     order = np.argsort(m.geometries_deg)
     return AspecularMeasurements(
         angles_deg=tuple(float(m.geometries_deg[i]) for i in order),

@@ -28,6 +28,7 @@ CSV_COLUMNS = (
     "instrument_serial",
     "operator",
     "measured_at",
+    "illumination_deg",
     "aspecular_deg",
     "L",
     "a",
@@ -138,6 +139,8 @@ def _filtered(q: MeasurementQuery) -> Select[Measurement, str, int, str, str]:
         query = query.where(Measurement.measured_at >= q.since)
     if q.until is not None:
         query = query.where(Measurement.measured_at < q.until)
+    if q.illumination_deg is not None:
+        query = query.where(Measurement.illumination_deg == q.illumination_deg)
     if not q.include_superseded:
         query = query.where(_Successor.id.is_(None))
     return query
@@ -185,6 +188,7 @@ def export_csv(*, session: Session, q: MeasurementQuery, max_rows: int = 100_000
                     escape_cell(serial),
                     escape_cell(m.operator),
                     m.measured_at.isoformat(),
+                    m.illumination_deg,
                     angle,
                     L,
                     a,

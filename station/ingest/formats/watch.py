@@ -33,7 +33,6 @@ from station.ingest.errors import IngestError
 from station.ingest.formats import read_measurement_file
 from station.ingest.formats.records import file_sha256, readings_from_import
 from station.ingest.ingestor import Ingestor
-from station.model.domain import ILLUMINATION_DEG
 
 log = logging.getLogger(__name__)
 
@@ -119,7 +118,7 @@ def process_file(
     operator: str,
     job: str | None = None,
     part: str | None = None,
-    illumination_deg: float = ILLUMINATION_DEG,
+    illumination_deg: float | None = None,
 ) -> WatchOutcome:
     """Import *path* through *ingestor*, then move it to ``done/`` (or ``rejected/`` with a reason)."""
     try:
@@ -184,7 +183,7 @@ def scan_once(
     settle_s: float = SETTLE_S,
     job: str | None = None,
     part: str | None = None,
-    illumination_deg: float = ILLUMINATION_DEG,
+    illumination_deg: float | None = None,
 ) -> list[WatchOutcome]:
     """Process every settled file now in *folder* (oldest name first); one outcome per file."""
     if not folder.is_dir():
@@ -213,7 +212,7 @@ def watch_folder(
     on_outcome: Callable[[WatchOutcome], None] | None = None,
     job: str | None = None,
     part: str | None = None,
-    illumination_deg: float = ILLUMINATION_DEG,
+    illumination_deg: float | None = None,
 ) -> None:
     """Scan *folder* every *interval_s* seconds until *stop* is set; *on_outcome* hears of each file."""
     stop = stop or threading.Event()
