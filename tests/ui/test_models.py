@@ -117,3 +117,24 @@ def test_basis_composite_equals_the_core_numpy_renderer():
     ours = basis.composite_linear((a, b))
     ref = render_linear(s.scene(), environment_basis("booth"), [a, b], 48, 40)
     np.testing.assert_allclose(ours, ref, rtol=1e-5, atol=1e-6)
+
+
+def test_stored_lists_offer_the_45_degree_block_only(tmp_path) -> None:
+    """A two-illumination file stores its 15° block as its own row; the QA and job-history lists (the
+    sink's ``recent``) offer 45° readings only, so a 15° block is never judged as a 45° one."""
+    from station.ingest import Reading
+    from tests.ingest._readings import make_reading
+    from ui.models.measure_db import LocalSink, PanelInfo
+
+    sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
+    sink.prepare()
+    panel = PanelInfo("J-45", "bumper")
+    r45 = make_reading(7, 0)
+    fields = make_reading(7, 1).model_dump()
+    fields["illumination_deg"] = 15
+    r15 = Reading(**fields)
+    assert sink.submit(panel, r45).status == "stored" and sink.submit(panel, r15).status == "stored"
+    rows = sink.recent(10)
+    assert len(rows) == 1 and rows[0].label == "J-45 bumper"
+    assert rows[0].lab.tolist() == [list(map(float, row)) for row in r45.lab]
+    sink.close()

@@ -30,6 +30,7 @@ import numpy as np
 
 from station.errors import InputError, StationError
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
+from station.model.domain import ILLUMINATION_DEG
 
 if TYPE_CHECKING:  # SQLAlchemy, pydantic and the ORM load on first use (≈0.5 s off the viewer's start-up)
     from station.ingest import DatabaseDestination, Destination, Ingestor, Outbox, PanelRef, Reading, Receipt
@@ -271,6 +272,7 @@ class LocalSink(MeasurementSink):
                 rows = session.execute(
                     select(Measurement, Panel)
                     .outerjoin(Panel, Panel.id == Measurement.panel_id)
+                    .where(Measurement.illumination_deg == ILLUMINATION_DEG)  # the 45° block only
                     .order_by(Measurement.id.desc())
                     .limit(limit)
                 ).all()
@@ -351,7 +353,8 @@ class ServiceSink(MeasurementSink):
         from station.ingest import IngestError
 
         try:
-            rows = self._request("GET", "/measurements", params={"limit": limit}).json()["data"]
+            params = {"limit": limit, "illumination_deg": ILLUMINATION_DEG}  # the 45° block only
+            rows = self._request("GET", "/measurements", params=params).json()["data"]
             panels = {
                 int(p["id"]): p
                 for p in self._request("GET", "/panels", params={"limit": 1000}).json()["data"]
