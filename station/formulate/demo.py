@@ -34,7 +34,7 @@ from station.formulate.library import Library, classify
 
 DEMO_SEED = 20090601
 DEMO_ANGLES: tuple[float, ...] = (15.0, 45.0, 110.0, 25.0, 75.0)
-GENERATOR_VERSION = 3
+GENERATOR_VERSION = 4
 DEMO_NAME = "demo (SYNTHETIC: generated from the synthetic colorant model)"
 _TINTS = (
     "yellow_py",
@@ -46,8 +46,10 @@ _TINTS = (
     "red_opaque",
     "yellow_opaque",
 )
-#: Shares of the metallics' main aluminium grade: bright (silver dollar), coarse, fine.
-FLAKE_GRADE_SHARES = (0.35, 0.6, 0.05)
+#: Dirichlet concentrations of the metallics' aluminium blend over the grades bright (silver dollar),
+#: coarse and fine. Pure grades span Flop Index ≈ 20 / 10.5 / 3.3 and blends fill the range between, so
+#: the library's Flop Index spreads like a real book's (thesis Fig 5.4) instead of clustering per grade.
+FLAKE_BLEND_ALPHA = (1.0, 1.0, 0.3)
 #: Every this-many-th metallic is a bright silver (silver-dollar aluminium, no tint).
 BRIGHT_SILVER_EVERY = 20
 
@@ -84,10 +86,8 @@ def generate_recipes(
 
     met = np.arange(n_solid, n_solid + n_metallic)
     grades = np.array([col["alu_bright"], col["alu_coarse"], col["alu_fine"]])
-    flake = grades[rng.choice(3, size=met.size, p=FLAKE_GRADE_SHARES)]
-    c[met, flake] = rng.uniform(0.02, 0.12, met.size)
-    second = (rng.random(met.size) < 0.15) | (flake == col["alu_bright"])  # fine flake softens the flop
-    c[met[second], col["alu_fine"]] += rng.uniform(0.005, 0.03, second.sum())
+    blend = rng.dirichlet(FLAKE_BLEND_ALPHA, size=met.size)  # a continuous flop from soft to hard
+    c[np.ix_(met, grades)] = rng.uniform(0.02, 0.12, met.size)[:, None] * blend
     add_tints(met, 2, 0.07)
     blk = rng.random(met.size) < 0.2
     c[met[blk], col["black_carbon"]] = rng.uniform(0.0, 0.004, blk.sum())
