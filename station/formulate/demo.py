@@ -49,7 +49,9 @@ _TINTS = (
 #: Dirichlet concentrations of the metallics' aluminium blend over the grades bright (silver dollar),
 #: coarse and fine. Pure grades span Flop Index ≈ 20 / 10.5 / 3.3 and blends fill the range between, so
 #: the library's Flop Index spreads like a real book's (thesis Fig 5.4) instead of clustering per grade.
-FLAKE_BLEND_ALPHA = (1.0, 1.0, 0.3)
+FLAKE_BLEND_ALPHA = (0.9, 1.0, 0.3)
+#: Smallest share of the aluminium a grade in the blend holds (smaller shares are dropped).
+MIN_BLEND_SHARE = 0.05
 #: Every this-many-th metallic is a bright silver (silver-dollar aluminium, no tint).
 BRIGHT_SILVER_EVERY = 20
 
@@ -87,6 +89,8 @@ def generate_recipes(
     met = np.arange(n_solid, n_solid + n_metallic)
     grades = np.array([col["alu_bright"], col["alu_coarse"], col["alu_fine"]])
     blend = rng.dirichlet(FLAKE_BLEND_ALPHA, size=met.size)  # a continuous flop from soft to hard
+    blend[blend < MIN_BLEND_SHARE] = 0.0  # no trace additions: a grade is in the batch or it is not
+    blend /= blend.sum(1, keepdims=True)
     c[np.ix_(met, grades)] = rng.uniform(0.02, 0.12, met.size)[:, None] * blend
     add_tints(met, 2, 0.07)
     blk = rng.random(met.size) < 0.2
