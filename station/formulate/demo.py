@@ -3,7 +3,8 @@
 Every paint has a recipe (mass fractions over :func:`station.formulate.colorants.default_database`), so
 ColorSnap's match is always a formulation starting point. The generator draws, with seed
 :data:`DEMO_SEED`: 3000 solids (1–2 tints, TiO2 white, sometimes carbon black), 2000 metallics
-(coarse or fine aluminium with 0–2 tints) and 1000 pearls (mica pearl or an interference pigment, with
+(a blend of the three aluminium grades, :data:`FLAKE_BLEND_ALPHA`, with 0–2 tints; every
+:data:`BRIGHT_SILVER_EVERY`-th a bright silver) and 1000 pearls (mica pearl or an interference pigment, with
 tints or black), plus a matting fraction setting the gloss. Lab is predicted at 15, 25, 45, 75 and 110°.
 
 Codes read ``SYN-<hue><type><serial>`` (hue letter R/Y/G/B, or N for neutral; type S/M/P), in the
