@@ -3,7 +3,8 @@
 Every paint has a recipe (mass fractions over :func:`station.formulate.colorants.default_database`), so
 ColorSnap's match is always a formulation starting point. The generator draws, with seed
 :data:`DEMO_SEED`: 3000 solids (1–2 tints, TiO2 white, sometimes carbon black), 2000 metallics
-(coarse or fine aluminium with 0–2 tints) and 1000 pearls (mica pearl or an interference pigment, with
+(a blend of the three aluminium grades, :data:`FLAKE_BLEND_ALPHA`, with 0–2 tints; every
+:data:`BRIGHT_SILVER_EVERY`-th a bright silver) and 1000 pearls (mica pearl or an interference pigment, with
 tints or black), plus a matting fraction setting the gloss. Lab is predicted at 15, 25, 45, 75 and 110°.
 
 Codes read ``SYN-<hue><type><serial>`` (hue letter R/Y/G/B, or N for neutral; type S/M/P), in the
@@ -34,7 +35,7 @@ from station.formulate.library import Library, classify
 
 DEMO_SEED = 20090601
 DEMO_ANGLES: tuple[float, ...] = (15.0, 45.0, 110.0, 25.0, 75.0)
-GENERATOR_VERSION = 3
+GENERATOR_VERSION = 4
 DEMO_NAME = "demo (SYNTHETIC: generated from the synthetic colorant model)"
 _TINTS = (
     "yellow_py",
@@ -46,8 +47,12 @@ _TINTS = (
     "red_opaque",
     "yellow_opaque",
 )
-#: Shares of the metallics' main aluminium grade: bright (silver dollar), coarse, fine.
-FLAKE_GRADE_SHARES = (0.35, 0.6, 0.05)
+#: Dirichlet concentrations of the metallics' aluminium blend over the grades bright (silver dollar),
+#: coarse and fine. Pure grades span Flop Index ≈ 20 / 10.5 / 3.3 and blends fill the range between, so
+#: the library's Flop Index spreads like a real book's (thesis Fig 5.4) instead of clustering per grade.
+FLAKE_BLEND_ALPHA = (0.9, 1.0, 0.3)
+#: Smallest share of the aluminium a grade in the blend holds (smaller shares are dropped).
+MIN_BLEND_SHARE = 0.05
 #: Every this-many-th metallic is a bright silver (silver-dollar aluminium, no tint).
 BRIGHT_SILVER_EVERY = 20
 
@@ -84,10 +89,10 @@ def generate_recipes(
 
     met = np.arange(n_solid, n_solid + n_metallic)
     grades = np.array([col["alu_bright"], col["alu_coarse"], col["alu_fine"]])
-    flake = grades[rng.choice(3, size=met.size, p=FLAKE_GRADE_SHARES)]
-    c[met, flake] = rng.uniform(0.02, 0.12, met.size)
-    second = (rng.random(met.size) < 0.15) | (flake == col["alu_bright"])  # fine flake softens the flop
-    c[met[second], col["alu_fine"]] += rng.uniform(0.005, 0.03, second.sum())
+    blend = rng.dirichlet(FLAKE_BLEND_ALPHA, size=met.size)  # a continuous flop from soft to hard
+    blend[blend < MIN_BLEND_SHARE] = 0.0  # no trace additions: a grade is in the batch or it is not
+    blend /= blend.sum(1, keepdims=True)
+    c[np.ix_(met, grades)] = rng.uniform(0.02, 0.12, met.size)[:, None] * blend
     add_tints(met, 2, 0.07)
     blk = rng.random(met.size) < 0.2
     c[met[blk], col["black_carbon"]] = rng.uniform(0.0, 0.004, blk.sum())

@@ -113,7 +113,7 @@ def library_statistics(out_dir: Path | None) -> ExperimentResult:
             11.38,
             float(np.mean(flop[effect])),
             1.5,
-            reason=SYNTHETIC + "; its effect paints flop less on average",
+            reason=SYNTHETIC + "; its flake blends are drawn, not sampled from real paints",
             source="Fig. 5.4 caption",
         ),
         Quantity(

@@ -54,7 +54,10 @@ class SimulatedBench:
 
 @pytest.mark.slow
 def test_closed_loop_through_simulator_subprocesses(tmp_path: Path) -> None:
-    _, conc = generate_recipes(0, 1, 0, seed=77)
+    # a red metallic (L*15 77): the simulators' design-file panels take only colours inside the
+    # object-colour solid (reflectance <= 1), so not one of the generator's bright silvers
+    _, conc = generate_recipes(0, 1, 0, seed=100)
+    assert predict_lab(conc[0], A3)[0, 0] < 100.0
     design = fit_fftg(AspecularMeasurements(A3, predict_lab(conc[0], A3), 88.0)).design
     save_design(design, tmp_path / "design.json")
     with simproc.spawn_simulator(

@@ -104,3 +104,19 @@ def test_munsell_library_is_real_and_ordered() -> None:
     assert np.all((hue[red] < 40) | (hue[red] > 340))
     result = color_snap(lib, lab[100], k=1)
     assert result.matches[0].code == lib.codes[100]
+
+
+def test_demo_metallics_blend_the_aluminium_grades_without_traces() -> None:
+    lib = demo_library()
+    assert lib.recipes is not None and lib.colorant_names is not None
+    grades = [lib.colorant_names.index(g) for g in ("alu_bright", "alu_coarse", "alu_fine")]
+    alu = lib.recipes[lib.types == "metallic"][:, grades]
+    total = alu.sum(1)
+    assert np.all((total > 0.02 - 1e-9) & (total < 0.15 + 1e-9))  # 2–12 % aluminium, bright silvers 6–15 %
+    share = alu / total[:, None]
+    assert np.all((share == 0.0) | (share >= 0.05 - 1e-12))  # no trace grade in a batch
+    assert np.mean(np.sum(share > 0, axis=1) >= 2) > 0.5  # most metallics are blends
+    fi = lib.indices()["flop"][lib.types == "metallic"]
+    hard, coarse, soft = share[:, 0] >= 0.9, share[:, 1] >= 0.9, share[:, 2] >= 0.5
+    # the grades' own order (silver dollar flops hardest, fine softest) carries over to the blends
+    assert np.nanmean(fi[hard]) > np.nanmean(fi[coarse]) > np.nanmean(fi[soft])
