@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import LinearConstraint, minimize
 
 from station.model.colorimetry import OBSERVER_10, xyz_to_lab
-from station.model.domain import REFLECTANCE_MAX
+from station.model.domain import DIFFUSE_WHITE_L, REFLECTANCE_MAX
 from station.model.errors import FitError, ModelInputError
 
 #: Wavelength grid of every reflectance spectrum in the product, nm (31 values).
@@ -111,12 +111,16 @@ def _difference_operator(n: int) -> NDArray[np.float64]:
 def reflectance_from_lab(
     lab: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10
 ) -> NDArray[np.float64]:
-    """Recover smooth reflectance spectra (..., 31) in [0, 1] that reproduce Lab exactly.
+    """Recover smooth reflectance spectra (..., 31) that reproduce Lab exactly.
+
+    Reflectance is bounded to [0, 1] for L* up to :data:`~station.model.domain.DIFFUSE_WHITE_L` (an
+    object colour) and to [0, :data:`~station.model.domain.REFLECTANCE_MAX`] above: an effect paint's
+    face near the specular (L* 100–200, a bright aluminium) has a radiance factor above 1.
 
     Raises
     ------
     ModelInputError
-        When a Lab lies outside the object-colour solid (no reflectance in [0, 1] reproduces it).
+        When a Lab lies outside the colour solid of those bounds (no reflectance reproduces it).
     """
     lab_arr = np.asarray(lab, dtype=float)
     if lab_arr.shape[-1:] != (3,) or not np.all(np.isfinite(lab_arr)):
@@ -139,13 +143,14 @@ def reflectance_from_lab(
 
     out = np.empty((flat.shape[0], n))
     for k, xyz in enumerate(targets):
+        top = 1.0 if flat[k, 0] <= DIFFUSE_WHITE_L else REFLECTANCE_MAX
         r = q_inv_w @ np.linalg.solve(gram, xyz)  # closed form without bounds
-        if np.any(r < -1e-12) or np.any(r > 1 + 1e-12):
+        if np.any(r < -1e-12) or np.any(r > top + 1e-12):
             res = minimize(
                 roughness,
-                np.clip(r, 0.0, 1.0),
+                np.clip(r, 0.0, top),
                 jac=roughness_grad,
-                bounds=[(0.0, 1.0)] * n,
+                bounds=[(0.0, top)] * n,
                 constraints=LinearConstraint(w.T, xyz, xyz),  # W^T R = XYZ exactly
                 method="SLSQP",
                 options={"ftol": 1e-14, "maxiter": 500},
@@ -154,10 +159,10 @@ def reflectance_from_lab(
             if not res.success or np.max(np.abs(r @ w - xyz)) > 1e-7:
                 raise ModelInputError(
                     f"lab[{k}]",
-                    "a colour inside the object-colour solid (reachable with 0 <= R <= 1)",
+                    f"a colour inside the object-colour solid (reachable with 0 <= R <= {top:.3g})",
                     [round(float(v), 3) for v in flat[k]],
                 )
-        out[k] = np.clip(r, 0.0, 1.0)
+        out[k] = np.clip(r, 0.0, top)
     return out.reshape((*lab_arr.shape[:-1], n))
 
 
