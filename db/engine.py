@@ -37,6 +37,12 @@ def default_database_url(folder: Path | None = None) -> str:
     return f"sqlite:///{(folder / DEFAULT_DB_FILE).as_posix()}"
 
 
+def configured_database_url() -> str:
+    """The database ``station serve`` uses: ``$CACAD_DATABASE_URL``, else :func:`default_database_url`
+    (the embedded SQLite file in ``$CACAD_DATA_DIR`` or ``./var``)."""
+    return os.environ.get("CACAD_DATABASE_URL") or default_database_url()
+
+
 def normalise_url(url: str) -> str:
     """Accept ``postgres://``/``postgresql://`` and pin the psycopg 3 driver; refuse other backends."""
     try:

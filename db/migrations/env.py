@@ -2,20 +2,18 @@
 
 from __future__ import annotations
 
-import os
-
 from alembic import context
 
 import db.models  # noqa: F401  (registers every table on Base.metadata)
 from db.base import Base
-from db.engine import default_database_url, make_engine, normalise_url
+from db.engine import configured_database_url, make_engine, normalise_url
 
 config = context.config
 target_metadata = Base.metadata
 
 
 def _url() -> str:
-    url = config.attributes.get("url") or os.environ.get("CACAD_DATABASE_URL") or default_database_url()
+    url = config.attributes.get("url") or configured_database_url()
     return normalise_url(url)
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
-import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -160,9 +159,9 @@ def _spectral(path: str) -> list[Any]:
 
 
 def _url(args: argparse.Namespace) -> str:
-    from db.engine import default_database_url
+    from db.engine import configured_database_url
 
-    return args.db or os.environ.get("CACAD_DATABASE_URL") or default_database_url()
+    return args.db or configured_database_url()
 
 
 @contextmanager

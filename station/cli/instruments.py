@@ -21,7 +21,6 @@ writes the reading (every geometry, spectra and Lab) as a CxF3, CGATS.17, MA-T12
 from __future__ import annotations
 
 import argparse
-import os
 import uuid
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
@@ -167,10 +166,10 @@ def _ingestor(args: argparse.Namespace) -> Iterator[Any]:
     if args.store is None:
         yield None
         return
-    from db.engine import data_dir, default_database_url
+    from db.engine import configured_database_url, data_dir
     from station.ingest import DatabaseDestination, Ingestor
 
-    url = args.store or os.environ.get("CACAD_DATABASE_URL") or default_database_url()
+    url = args.store or configured_database_url()
     destination = DatabaseDestination(url, migrate=True, source="cli")
     try:
         with Ingestor(destination, args.outbox or data_dir() / "measure-outbox.sqlite3") as ingestor:

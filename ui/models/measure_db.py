@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import datetime as dt
 import json
-import os
 import re
 import uuid
 from dataclasses import dataclass, replace
@@ -228,9 +227,9 @@ class LocalSink(MeasurementSink):
         """The database URL: as ``station serve``, ``$CACAD_DATABASE_URL`` or ``station.sqlite3`` in
         :func:`db.engine.data_dir` (``$CACAD_DATA_DIR`` or ``./var``)."""
         if self._url is None:
-            from db.engine import default_database_url
+            from db.engine import configured_database_url
 
-            self._url = os.environ.get("CACAD_DATABASE_URL") or default_database_url()
+            self._url = configured_database_url()
         return self._url
 
     @property

@@ -10,7 +10,6 @@ reading paired with it (``station.ingest.gloss_of_measurements``), or ``None``.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -79,9 +78,9 @@ class LocalQc:
     @property
     def url(self) -> str:
         if self._url is None:
-            from db.engine import default_database_url
+            from db.engine import configured_database_url
 
-            self._url = os.environ.get("CACAD_DATABASE_URL") or default_database_url()
+            self._url = configured_database_url()
         return self._url
 
     @property
