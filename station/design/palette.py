@@ -23,7 +23,7 @@ from station.design.errors import DesignInputError
 from station.design.scene import panel_scene, shade, srgb_encode, to_uint8
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
-from station.model.design_io import MAX_DESIGN_BYTES, design_from_dict, design_to_dict
+from station.model.design_io import MAX_DESIGN_BYTES, design_from_dict, design_to_dict, read_json_file
 from station.model.shading import design_reflectance
 
 #: Aspecular range of the gradient bar, degrees (the standard angles 15° … 110°).
@@ -118,15 +118,7 @@ def save_palette(entries: Sequence[tuple[str, FaceFlopTravelGloss]], path: str |
 
 def load_palette(path: str | Path) -> PaletteEntries:
     """Read a palette file written by :func:`save_palette`; errors name the file or the field."""
-    p = Path(path)
-    try:
-        size = p.stat().st_size
-    except OSError as exc:
-        raise DesignInputError("palette", "a readable palette file", str(p)) from exc
-    if size > MAX_PALETTE_BYTES:
-        raise DesignInputError("palette", f"a file of at most {MAX_PALETTE_BYTES} bytes", size)
-    try:
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise DesignInputError("palette", f"a JSON palette file ({PALETTE_SCHEMA})", f"{p}: {exc}") from exc
+    data = read_json_file(
+        path, "palette", f"palette file ({PALETTE_SCHEMA})", MAX_PALETTE_BYTES, error=DesignInputError
+    )
     return palette_from_dict(data)

@@ -24,9 +24,11 @@ Any other keys are kept by the caller and ignored here, so the JSON printed by
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from station.errors import InputError
 from station.model.errors import ModelInputError
 from station.model.flakes import METALLIC_FLAKES, FlakeLayer
 from station.model.representations import DEFAULT_GLOSS_GU, FaceFlopTravelGloss
@@ -99,26 +101,40 @@ def flakes_from_dict(data: Any, design: FaceFlopTravelGloss | None = None) -> Fl
     return FlakeLayer.from_dict(data["flakes"])
 
 
-def load_design(path: str | Path) -> FaceFlopTravelGloss:
-    """Read a design file (``cacad.design/1`` JSON); errors name the file and the field."""
+def read_json_file(
+    path: str | Path,
+    field: str,
+    what: str,
+    max_bytes: int,
+    error: Callable[[str, str, Any], InputError] = ModelInputError,
+) -> Any:
+    """Parse a size-capped UTF-8 JSON file (design, palette and mood-board files share this reader).
+
+    ``field`` and ``what`` name the file in the error: a missing file, one above ``max_bytes`` bytes, or one
+    that is not UTF-8 JSON raises ``error(field, accepted, got)`` (an :class:`InputError`).
+    """
     p = Path(path)
     try:
         size = p.stat().st_size
     except OSError as exc:
-        raise ModelInputError("design", "a readable design file", str(p)) from exc
-    if size > MAX_DESIGN_BYTES:
-        raise ModelInputError("design", f"a file of at most {MAX_DESIGN_BYTES} bytes", size)
+        raise error(field, f"a readable {what}", str(p)) from exc
+    if size > max_bytes:
+        raise error(field, f"a file of at most {max_bytes} bytes", size)
     try:
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ModelInputError("design", f"a JSON design file ({SCHEMA})", f"{p}: {exc}") from exc
-    return design_from_dict(data)
+        return json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise error(field, f"a JSON {what}", f"{p}: {exc}") from exc
+
+
+def load_design(path: str | Path) -> FaceFlopTravelGloss:
+    """Read a design file (``cacad.design/1`` JSON); errors name the file and the field."""
+    return design_from_dict(read_json_file(path, "design", f"design file ({SCHEMA})", MAX_DESIGN_BYTES))
 
 
 def load_design_flakes(path: str | Path) -> tuple[FaceFlopTravelGloss, FlakeLayer | None]:
     """Read a design file with its flake layer (:func:`flakes_from_dict`)."""
-    design = load_design(path)
-    data = json.loads(Path(path).read_text(encoding="utf-8"))
+    data = read_json_file(path, "design", f"design file ({SCHEMA})", MAX_DESIGN_BYTES)
+    design = design_from_dict(data)
     return design, flakes_from_dict(data, design)
 
 
