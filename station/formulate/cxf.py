@@ -42,15 +42,14 @@ from station.formulate.errors import XMLFormatError
 from station.formulate.library import PAINT_TYPES, STANDARD_ANGLES, Library
 from station.formulate.safe_xml import parse_xml
 from station.model import AspecularMeasurements
+from station.model.cxf_names import CREATOR, NAMESPACE
 from station.model.domain import ILLUMINATION_DEG, LAB_RANGES, aspecular_name, format_angle
 from station.model.spectra import WAVELENGTHS
 
-NAMESPACE = "http://colorexchangeformat.com/CxF3-core"
 MAX_CXF_BYTES = 64 << 20
 DECIMALS = 4
 _NS = f"{{{NAMESPACE}}}"
 SPECTRUM_DECIMALS = 6
-CREATOR = "CACAD Station"
 RECIPE_UNITS = ("g", "fraction")
 
 Record = tuple[str, dict[float, tuple[float, float, float]], dict[str, str]]

@@ -20,12 +20,12 @@ import numpy as np
 
 from station.formulate.color_xml import NAMESPACE as COLOR_XML_NAMESPACE
 from station.formulate.color_xml import ColorSpec, read_color_xml
-from station.formulate.cxf import NAMESPACE as CXF_NAMESPACE
 from station.formulate.cxf import read_library_cxf
 from station.formulate.errors import LibraryFormatError, XMLFormatError
 from station.formulate.library import STANDARD_ANGLES, Library
 from station.formulate.library_csv import read_library_csv
 from station.formulate.safe_xml import parse_xml
+from station.model.cxf_names import NAMESPACE as CXF_NAMESPACE
 
 #: Largest ΔE*ab between angles of a colour read as ``solid`` when the file gives no type.
 SOLID_SPREAD = 0.5

@@ -42,12 +42,11 @@ from station.ingest.formats.measurement import (
     observer_degrees,
     observer_name,
 )
+from station.model.cxf_names import CREATOR, NAMESPACE
 from station.model.domain import format_angle, geometry_name
 
 __all__ = ["read_cxf", "write_cxf"]
 
-NAMESPACE = "http://colorexchangeformat.com/CxF3-core"
-CREATOR = "CACAD Station"
 TEXTURE_TAGS = "texture"
 LAB_DECIMALS = 4
 SPECTRA_DECIMALS = 6
