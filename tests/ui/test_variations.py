@@ -131,6 +131,15 @@ def test_variations_are_the_object_of_the_main_view_and_a_click_applies_one(qtbo
     assert not np.array_equal(grid.images[4], shown)
     ref, full = reference_swatch(win.view_model.settings, lighter, *view.basis.size, VARIATION_PX)
     assert np.linalg.norm(mean_lab(grid.images[4]) - mean_lab(ref)) < WHOLE_DE
+    # another environment: lit by the sky, still the direct renderer's colour
+    booth = grid.images[4].copy()
+    combo = win.view_panel.environment
+    combo.setCurrentIndex([combo.itemData(i) for i in range(combo.count())].index("sky"))
+    assert win.view_model.settings.environment == "sky"
+    wait_main_source(qtbot, win)
+    assert not np.array_equal(grid.images[4], booth)
+    ref, full = reference_swatch(win.view_model.settings, lighter, *view.basis.size, VARIATION_PX)
+    assert np.linalg.norm(mean_lab(grid.images[4][full]) - mean_lab(ref[full])) < OBJECT_DE
 
 
 def test_a_panel_without_a_view_renders_on_its_own_sphere(qtbot) -> None:
