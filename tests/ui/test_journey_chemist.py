@@ -272,8 +272,25 @@ def test_chemist_day_in_service_mode_uses_the_services_library(qtbot, tmp_path):
             for name, frac in got["recipe"].items():
                 assert shown[name] == pytest.approx(screen.batch.value() * frac, abs=0.06)
             assert f"mean {got['mean_de']:.2f}" in screen.status.text()
-            # the closed loop on the service: the design and the job stored there
+            # the closed loop on the service: the design and the job stored there; the progress indicator
+            # shows while it runs past 0.5 s (SHOW_AFTER_MS), with no Cancel (it cannot stop part-way)
+            seen: list[tuple[int, bool, bool, str]] = []
+            poll = QTimer()
+            poll.timeout.connect(
+                lambda: seen.append(
+                    (
+                        screen.busy.running_ms,
+                        screen.busy.isVisible(),
+                        screen.busy.cancel_btn.isVisible(),
+                        screen.busy.text.text(),
+                    )
+                )
+            )
+            poll.start(50)
             _click(qtbot, screen, screen.loop_btn)
+            poll.stop()
+            late = [s for s in seen if s[0] >= 700]
+            assert all(vis and not cancel and "on the service" in text for _ms, vis, cancel, text in late)
             job = screen.job
             assert job is not None and screen.loop.rowCount() == len(job.steps) >= 1
             stored = service.call("GET", f"/recipes/{job.recipe_id}")
