@@ -81,7 +81,7 @@ class MainWindow(QMainWindow):
         self.screens: dict[str, QWidget] = {"Design": self.view_panel}
         self._add_screens()
 
-        self.designer_panel = DesignerPanel(self.designer)
+        self.designer_panel = DesignerPanel(self.designer, self.view_model, self._view_basis)
         self.designer_panel.setMinimumWidth(440)
         dock = QDockWidget("Designer", self)
         dock.setObjectName("designer-dock")
@@ -100,6 +100,12 @@ class MainWindow(QMainWindow):
         self.moodboard.events.board.connect(self._update_title)
         self._update_title()
         self.statusBar().showMessage(self._status_text())
+
+    def _view_basis(self):
+        """The main view's cached basis images (the core's) when they are final for the view, else None:
+        the variations grid renders its swatches from them."""
+        v = self.view_panel.view
+        return v.basis.core if v.basis is not None and v.basis_current else None
 
     def _add_screens(self) -> None:
         """Tabs of the other screens (each module is optional while its core lands)."""

@@ -192,3 +192,114 @@ def test_qa_and_chemist_store_the_paint_on_the_service(qtbot, tmp_path, role):
         _close_discarding(win)
     finally:
         gen.close()
+
+
+def test_chemist_day_in_service_mode_uses_the_services_library(qtbot, tmp_path):
+    """Service mode against a real ``station serve``: ColorSnap, formulation, the closed loop and the
+    export run on the service, against the SERVICE's library. A paint uploaded only to the service (its
+    Lab = the design's at every angle, so ΣΔE00 = 0) is the best match and the export's match; picking
+    that one stored library searches its single paint; the other matches are the demo library's
+    metallics in the core's own ColorSnap order."""
+    from station.model.design_io import design_to_dict
+    from tests.ui.real_service import paint_csv, station_service
+    from ui.models.measure_db import ServiceSink
+    from ui.models.service import ServiceClient
+
+    design = _library_metallic()
+    save_design(design, tmp_path / "blue.json")
+    angles = (15.0, 25.0, 45.0, 75.0, 110.0)
+    lab = {a: tuple(float(v) for v in design.lab_at(np.array([a]))[0]) for a in angles}
+    lib = demo_library()
+    assert "SVC-ONLY-1" not in set(lib.codes)
+    with station_service(tmp_path, "chemist") as (base, tokens):
+        service = ServiceClient(base, tokens["chemist"], timeout_s=120.0)
+        up = service.checked(
+            "POST",
+            "/library/import",
+            params={"name": "service-only"},
+            content=paint_csv([("SVC-ONLY-1", "metallic", design.gloss_gu, lab)]),
+            headers={"Content-Type": "text/csv"},
+        )
+        assert up.status_code == 201 and up.json()["paints"] == 1
+        win = MainWindow(service=service, sink=ServiceSink(service, tmp_path / "outbox.sqlite3"))
+        try:
+            win.resize(1400, 900)
+            win.show()
+            win.tabs.setCurrentWidget(win.screens["Formulation"])
+            screen = win.screens["Formulation"].content()
+            assert screen.remote is not None and screen.library is None  # no local library in use
+            offered = [screen.source.itemText(i) for i in range(screen.source.count())]
+            assert offered[0] == "every stored library" and "service-only" in offered
+            assert "6001 paints in 2 stored libraries" in screen.status.text()
+            _with_dialog(
+                qtbot,
+                screen.open_btn,
+                tmp_path / "blue.json",
+                lambda: screen.design.currentText() == "file: blue.json",
+            )
+            for t in ("solid", "pearl"):
+                _toggle(screen.types[t])
+            _click(qtbot, screen, screen.snap_btn)
+            rows = [
+                [screen.matches.item(i, j).text() for j in range(4)] for i in range(screen.matches.rowCount())
+            ]
+            assert rows[0][0] == "SVC-ONLY-1" and rows[0][3] == "service-only"
+            assert float(rows[0][2]) == pytest.approx(0.0, abs=0.01)
+            metallic = lib.subset(lib.types == "metallic")
+            expected = color_snap(metallic, design.lab_at(np.array(ANGLES_3)), k=4, method="cie2000")
+            assert [r[0] for r in rows[1:]] == [m.code for m in expected.matches]
+            assert [float(r[2]) for r in rows[1:]] == pytest.approx(
+                [round(m.sum_de, 2) for m in expected.matches], abs=0.011
+            )
+            assert {r[1] for r in rows} == {"metallic"}
+            assert "2001 paints" in screen.status.text()  # the demo's 2000 metallics and the upload
+            # the one stored library picked with the keyboard: its single paint searched
+            screen.source.setFocus()
+            QTest.keyClicks(screen.source, "service-only")
+            assert screen.source.currentText() == "service-only"
+            _click(qtbot, screen, screen.snap_btn)
+            assert screen.matches.rowCount() == 1 and screen.matches.item(0, 0).text() == "SVC-ONLY-1"
+            assert "service-only (metallic), 1 paints" in screen.status.text()
+            # formulate on the service: its recipe, weighed out per batch as the core does
+            _click(qtbot, screen, screen.formulate_btn)
+            got = service.call("POST", "/formulation/formulate", json={"design": design_to_dict(design)})
+            f = screen.formulation
+            assert f is not None and f.result.recipe == pytest.approx(got["recipe"], abs=1e-9)
+            shown = {
+                screen.recipe.item(i, 0).text(): float(screen.recipe.item(i, 2).text())
+                for i in range(screen.recipe.rowCount())
+            }
+            for name, frac in got["recipe"].items():
+                assert shown[name] == pytest.approx(screen.batch.value() * frac, abs=0.06)
+            assert f"mean {got['mean_de']:.2f}" in screen.status.text()
+            # the closed loop on the service: the design and the job stored there; the progress indicator
+            # shows while it runs past 0.5 s (SHOW_AFTER_MS), with no Cancel (it cannot stop part-way)
+            seen: list[tuple[int, bool, bool, str]] = []
+            poll = QTimer()
+            poll.timeout.connect(
+                lambda: seen.append(
+                    (
+                        screen.busy.running_ms,
+                        screen.busy.isVisible(),
+                        screen.busy.cancel_btn.isVisible(),
+                        screen.busy.text.text(),
+                    )
+                )
+            )
+            poll.start(50)
+            _click(qtbot, screen, screen.loop_btn)
+            poll.stop()
+            late = [s for s in seen if s[0] >= 700]
+            assert all(vis and not cancel and "on the service" in text for _ms, vis, cancel, text in late)
+            job = screen.job
+            assert job is not None and screen.loop.rowCount() == len(job.steps) >= 1
+            stored = service.call("GET", f"/recipes/{job.recipe_id}")
+            assert stored["id"] == job.recipe_id
+            assert f"stored on the service as job {job.recipe_id}" in screen.status.text()
+            # the export's match is the service-only paint
+            _with_dialog(qtbot, screen.export_btn, tmp_path / "blue.xml", lambda: screen.exported is not None)
+            assert "SVC-ONLY-1" in (tmp_path / "blue.xml").read_text()
+            assert "match SVC-ONLY-1" in screen.status.text()
+        finally:
+            _close_discarding(win)
+            service.close()

@@ -138,3 +138,39 @@ def test_stored_lists_offer_the_45_degree_block_only(tmp_path) -> None:
     assert len(rows) == 1 and rows[0].label == "J-45 bumper"
     assert rows[0].lab.tolist() == [list(map(float, row)) for row in r45.lab]
     sink.close()
+
+
+def test_swatch_basis_is_the_view_at_the_grid_points_and_a_swatch_its_box_filter():
+    """The sampled basis re-weighted equals the full view's frame read at the grid points (brute force:
+    the grid laid out here from the object's bounding box), and a swatch is its s × s mean, encoded."""
+    from station.render.tonemap import to_display
+    from ui.models.designer import SWATCH_MARGIN, SwatchInputError, VariationSwatches, swatch_basis
+
+    settings = ViewSettings(shape="speedshape", yaw_deg=-15.0)
+    view = BasisImages.compute(settings, 160, 120, prefilter_size=16).core
+    w = paint_weights(DEFAULT_DESIGN)
+    full = view.linear_image([w, w])  # (120, 160, 3)
+    size = 20
+    sub = swatch_basis(view, size, supersample=3)
+    ys, xs = np.divmod(view.pixels, view.width)
+    side = max(xs.max() + 1 - xs.min(), ys.max() + 1 - ys.min()) * (1 + 2 * SWATCH_MARGIN)
+    s = min(3, int(side // size))
+    n = size * s
+    assert sub.width == sub.height == n
+    t = (np.arange(n) + 0.5) / n - 0.5
+    gx = np.clip(np.floor((xs.min() + xs.max() + 1) / 2 + t * side), 0, 159).astype(int)
+    gy = np.clip(np.floor((ys.min() + ys.max() + 1) / 2 + t * side), 0, 119).astype(int)
+    expect = full[gy[:, None], gx[None, :]]
+    assert np.allclose(sub.linear_image([w, w]), expect, rtol=1e-5, atol=1e-6)
+    sw = VariationSwatches(size, supersample=3)
+    sw.use(view)
+    box = expect.reshape(size, s, size, s, 3).mean(axis=(1, 3))
+    assert np.array_equal(sw.render(DEFAULT_DESIGN), to_display(box, 0.0))
+    # a lighter design gives a lighter swatch on the object pixels, the background unchanged
+    lighter = DEFAULT_DESIGN.replace(face=(DEFAULT_DESIGN.face[0] + 10, *DEFAULT_DESIGN.face[1:]))
+    a, b = sw.render(DEFAULT_DESIGN).astype(int), sw.render(lighter).astype(int)
+    assert (b.sum(-1) >= a.sum(-1) - 1).all() and (b.sum(-1) > a.sum(-1) + 3).mean() > 0.1
+    with pytest.raises(SwatchInputError, match="size"):
+        swatch_basis(view, 2)
+    with pytest.raises(SwatchInputError, match="source"):
+        VariationSwatches(10).render(DEFAULT_DESIGN)

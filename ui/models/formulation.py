@@ -6,6 +6,13 @@ library paint's ``type``); the recipe is formulated from the best matches' recip
 (``station.formulate.formulate_from_library``) and shown per colorant as mass fraction and as mass for
 a batch; the closed loop sprays, measures (the SYNTHETIC spray-out panel model) and corrects until the
 panel is within tolerance. The demo library and colorants are SYNTHETIC and every result says so.
+
+In service mode (``station viewer --service URL``) the same four steps run on the service, against the
+SERVICE's library (every stored library, or one of them): ``POST /api/v1/formulation/snap`` (with
+``types`` and ``library``), ``/formulation/formulate``, ``/formulation/closed-loop`` (on the design
+stored first with ``POST /designs``) and ``/formulation/export``. :class:`ServiceFormulation` does those
+calls and returns what the screen shows in the same shape as the local calls (:class:`SnapView`, a
+recipe result, a job with steps).
 """
 
 from __future__ import annotations
@@ -13,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -21,7 +28,11 @@ from station.errors import InputError
 from station.formulate.batch import DEFAULT_BATCH_G
 from station.formulate.library import PAINT_TYPES, Library
 from station.model import FaceFlopTravelGloss
+from station.model.design_io import design_to_dict
 from station.model.domain import ANGLES_3
+
+if TYPE_CHECKING:
+    from ui.models.service import ServiceClient
 
 BATCH_G_DEFAULT = DEFAULT_BATCH_G
 """Default batch size, grams (the CLI's and the service's)."""
@@ -31,13 +42,19 @@ SPRAY_SEED = 7
 """Seed of the simulated spray-out panel (as ``station formulate --closed-loop``)."""
 
 
-def filtered(library: Library, types: Iterable[str]) -> Library:
-    """The paints of *library* whose type is one of *types*; :class:`InputError` naming ``types``
-    when none is chosen or one is not a paint type."""
+def checked_types(types: Iterable[str]) -> list[str]:
+    """*types* sorted; :class:`InputError` naming ``types`` when none is chosen or one is not a paint type."""
     chosen = sorted(set(types))
     bad = [t for t in chosen if t not in PAINT_TYPES]
     if not chosen or bad:
         raise InputError("types", f"one or more of {', '.join(PAINT_TYPES)}", chosen)
+    return chosen
+
+
+def filtered(library: Library, types: Iterable[str]) -> Library:
+    """The paints of *library* whose type is one of *types*; :class:`InputError` naming ``types``
+    when none is chosen or one is not a paint type."""
+    chosen = checked_types(types)
     if set(chosen) == set(PAINT_TYPES):
         return library
     sub = library.subset(np.isin(library.types, chosen), name=f"{library.name} ({'+'.join(chosen)})")
@@ -59,6 +76,23 @@ def batch_rows(recipe: dict[str, float], batch_g: float) -> list[tuple[str, floa
 
 
 @dataclass(frozen=True)
+class SnapView:
+    """What the screen shows of a ColorSnap: where it searched (*searched*, e.g. ``"demo (metallic), 3000
+    paints"``), the matches best first as (code, paint type, ΣΔE00 over 15/45/110°, library) and the
+    Fig. 5.10 warnings."""
+
+    searched: str
+    rows: tuple[tuple[str, str, float, str], ...]
+    warnings: tuple[str, ...] = ()
+
+
+def snap_view(library: Library, result: Any) -> SnapView:
+    """:class:`SnapView` of a local ColorSnap *result* (``station.formulate.snap.SnapResult``) in *library*."""
+    rows = tuple((m.code, str(library.types[m.index]), float(m.sum_de), library.name) for m in result.matches)
+    return SnapView(f"{library.name}, {len(library)} paints", rows, tuple(result.warnings))
+
+
+@dataclass(frozen=True)
 class Formulation:
     """A formulation of one design against a filtered library: ColorSnap result and recipe."""
 
@@ -66,6 +100,144 @@ class Formulation:
     library: Library
     snap: Any  # station.formulate.SnapResult
     result: Any  # station.formulate.FormulationResult
+
+    @property
+    def shown(self) -> SnapView:
+        """The matches the recipe started from."""
+        return snap_view(self.library, self.snap)
+
+
+@dataclass(frozen=True)
+class ServiceRecipe:
+    """The service's recipe (``FormulationResult.to_dict()`` of ``POST /formulation/formulate``): the
+    fields the screen shows, under the core result's names."""
+
+    recipe: dict[str, float]
+    start: str
+    mean_de: float
+    max_de: float
+    formulable: bool
+    tolerance: float
+    message: str
+    synthetic: bool
+
+
+@dataclass(frozen=True)
+class ServiceStep:
+    """One spray-and-measure step of a service closed loop."""
+
+    number: int
+    kind: str
+    mean_de: float
+
+
+@dataclass(frozen=True)
+class ServiceJob:
+    """A closed loop run on the service, stored there as formulation job *recipe_id* (``GET /recipes/{id}``)."""
+
+    recipe_id: int
+    design_id: int
+    status: str
+    message: str
+    corrections: int
+    steps: tuple[ServiceStep, ...]
+
+
+@dataclass(frozen=True)
+class ServiceFormulated:
+    """A recipe formulated on the service for *design* from its matches (*shown*)."""
+
+    design: FaceFlopTravelGloss
+    shown: SnapView
+    result: ServiceRecipe
+
+
+class ServiceFormulation:
+    """ColorSnap, formulation, closed loop and export through the service's routes, on its library.
+
+    *library*: one stored library's name (``GET /library/libraries``), or None for every stored paint.
+    Each call is one blocking HTTP request (run it in a worker); a refusal raises ``ServiceError`` with
+    the service's message."""
+
+    def __init__(self, client: ServiceClient, library: str | None = None) -> None:
+        self.client = client
+        self.library = library
+
+    def libraries(self) -> list[dict[str, Any]]:
+        """The service's stored libraries: name, paints, paints per type, synthetic flag."""
+        return list(self.client.call("GET", "/library/libraries"))
+
+    def snap(self, design: FaceFlopTravelGloss, types: Iterable[str], k: int = 5) -> SnapView:
+        """``POST /formulation/snap``: CIEDE2000 ColorSnap of *design* at 15/45/110° in the service's
+        library (``self.library``) restricted to *types*."""
+        chosen = checked_types(types)
+        body: dict[str, Any] = {"design": design_to_dict(design), "k": k, "metric": "cie2000"}
+        if set(chosen) != set(PAINT_TYPES):
+            body["types"] = chosen
+        if self.library is not None:
+            body["library"] = self.library
+        got = self.client.call("POST", "/formulation/snap", json=body)
+        rows = tuple(
+            (str(m["code"]), str(m["type"]), float(m["sum_de"]), str(m["library"])) for m in got["matches"]
+        )
+        where = ", ".join(got["libraries"]) or "no library"
+        searched = (
+            f"service {self.client.url}: {where} ({'+'.join(got['types'])}), {got['library_paints']} paints"
+        )
+        return SnapView(searched, rows, tuple(got["warnings"]))
+
+    def formulate(self, design: FaceFlopTravelGloss) -> ServiceFormulated:
+        """``POST /formulation/formulate``: a recipe from the service library's recipe-bearing matches."""
+        got = self.client.call("POST", "/formulation/formulate", json={"design": design_to_dict(design)})
+        rows = tuple(
+            (str(m["code"]), str(m.get("type", "")), float(m["sum_de"]), str(got.get("library", "")))
+            for m in got["matches"]
+        )
+        shown = SnapView(
+            f"service {self.client.url}: {got.get('library', '')}", rows, tuple(got["snap_warnings"])
+        )
+        result = ServiceRecipe(
+            {str(k): float(v) for k, v in got["recipe"].items()},
+            str(got.get("start", "")),
+            float(got["mean_de"]),
+            float(got["max_de"]),
+            bool(got["formulable"]),
+            float(got["tolerance"]),
+            str(got["message"]),
+            bool(got["synthetic_colorants"]),
+        )
+        return ServiceFormulated(design, shown, result)
+
+    def closed_loop(self, design: FaceFlopTravelGloss, seed: int = SPRAY_SEED) -> ServiceJob:
+        """Store *design* on the service (``POST /designs``), then ``POST /formulation/closed-loop`` on it
+        (the service's spray-out simulation, seed *seed*); the job is stored there."""
+        design_id = self.client.save_design(design.name or "formulated design", design, "closed loop")
+        got = self.client.call(
+            "POST", "/formulation/closed-loop", json={"design_id": design_id, "seed": seed}
+        )
+        steps = tuple(
+            ServiceStep(int(st["number"]), str(st["kind"]), float(st["mean_de"])) for st in got["steps"]
+        )
+        return ServiceJob(
+            int(got["recipe_id"]),
+            design_id,
+            str(got["status"]),
+            str(got["message"]),
+            int(got["corrections"]),
+            steps,
+        )
+
+    def export(self, design: FaceFlopTravelGloss, path: Path) -> tuple[Path, str | None]:
+        """``POST /formulation/export`` (XML for ``.xml``, CxF3 for ``.cxf``) written to *path*; returns
+        the path and the match code (header ``X-Match-Code``)."""
+        path = Path(path)
+        suffix = path.suffix.lower()
+        if suffix not in (".xml", ".cxf"):
+            raise InputError("file", "a name ending in .xml (thesis XML) or .cxf (CxF3)", path.name)
+        body = {"design": design_to_dict(design), "format": suffix[1:], "match": True}
+        r = self.client.checked("POST", "/formulation/export", json=body)
+        path.write_bytes(r.content)
+        return path, r.headers.get("X-Match-Code")
 
 
 def snap(design: FaceFlopTravelGloss, library: Library, k: int = 5) -> Any:

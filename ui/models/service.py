@@ -44,26 +44,32 @@ class ServiceClient:
 
     def request(self, method: str, path: str, **kw: Any) -> httpx.Response:
         """One request under ``/api/v1`` with the token; :class:`ServiceUnreachable` when nothing answers."""
+        headers = {**self._headers, **kw.pop("headers", {})}
         try:
-            return self._client.request(method, f"{API}{path}", headers=self._headers, **kw)
+            return self._client.request(method, f"{API}{path}", headers=headers, **kw)
         except httpx.HTTPError as exc:
             raise ServiceUnreachable(f"service {self.url} unreachable: {exc}") from exc
 
-    def _call(self, method: str, path: str, **kw: Any) -> Any:
+    def checked(self, method: str, path: str, **kw: Any) -> httpx.Response:
+        """:meth:`request`, and :class:`ServiceError` (status and the service's message) on HTTP >= 400."""
         r = self.request(method, path, **kw)
         if r.status_code >= 400:
             raise ServiceError(f"service {method} {path}: HTTP {r.status_code} {r.text[:300]}")
-        return r.json()
+        return r
+
+    def call(self, method: str, path: str, **kw: Any) -> Any:
+        """:meth:`checked`, returning the decoded JSON body."""
+        return self.checked(method, path, **kw).json()
 
     def list_designs(self, limit: int = 100) -> list[tuple[int, str, FaceFlopTravelGloss]]:
         """(id, name, design) of the service's designs (first *limit*)."""
-        page = self._call("GET", "/designs", params={"limit": limit})
+        page = self.call("GET", "/designs", params={"limit": limit})
         return [(int(d["id"]), str(d["name"]), design_from_dict(d["design"])) for d in page["data"]]
 
     def save_design(self, name: str, design: FaceFlopTravelGloss, note: str = "") -> int:
         """Store *design* as a new service design; returns its id."""
         body = {"name": name, "design": design_to_dict(design), "note": note}
-        return int(self._call("POST", "/designs", json=body)["id"])
+        return int(self.call("POST", "/designs", json=body)["id"])
 
     def library(self, page: int = 1000) -> Library:
         """The service's paint library as a ``station.formulate.library.Library`` (every page).
@@ -72,7 +78,7 @@ class ServiceClient:
         library's ``source`` says how many."""
         rows: list[dict[str, Any]] = []
         while True:
-            got = self._call("GET", "/library", params={"limit": page, "offset": len(rows)})
+            got = self.call("GET", "/library", params={"limit": page, "offset": len(rows)})
             rows += got["data"]
             if not got["data"] or len(rows) >= int(got["count"]):
                 break

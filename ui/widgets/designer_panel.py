@@ -1,10 +1,12 @@
 """Designer panel: L/a/b plots, the a–b arrow plot, HSB, gloss and travel sliders (each with its value in
-an editable box), face and flop Lab typed in, the variations grid (each variation rendered on the shaded
-booklet panel) and the palette."""
+an editable box), face and flop Lab typed in, the variations grid (each variation rendered on the object
+of the main view, in its environment) and the palette."""
 
 from __future__ import annotations
 
-from PySide6.QtCore import QSize, Qt
+from collections.abc import Callable
+
+from PySide6.QtCore import QSize, Qt, QTimer
 from PySide6.QtGui import QIcon
 from PySide6.QtWidgets import (
     QComboBox,
@@ -25,16 +27,22 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from station.design.palette import booklet, swatch
+from station.design.palette import swatch
 from station.design.variations import CATEGORIES
 from station.model import FaceFlopTravelGloss
-from ui.models.designer import DesignerModel
+from station.render.basis_images import BasisImages
+from ui.models.designer import DesignerModel, VariationSwatches
+from ui.models.view import ViewModel, ViewSettings
 from ui.widgets.common import pixmap_from_array
 from ui.widgets.plots import ABPlot, CurvePlot
 
 HUE_RANGE, SAT_RANGE, BRIGHT_RANGE = 180, (0, 200), 50
 #: Size of a variation's rendered object (pixels).
 VARIATION_PX = 44
+#: How often (ms) the grid looks for the main view's basis images while it renders from its own.
+SOURCE_POLL_MS = 250
+#: Where the swatches come from: the main view's cached basis images when they are current, else None.
+BasisSource = Callable[[], BasisImages | None]
 
 
 def _slider(lo: int, hi: int, value: int) -> QSlider:
@@ -45,12 +53,33 @@ def _slider(lo: int, hi: int, value: int) -> QSlider:
 
 
 class VariationsGrid(QWidget):
-    """3 × 3 grid: the current design in the centre, its ring of variations around (click to accept)."""
+    """3 × 3 grid: the current design in the centre, its ring of variations around (click to accept).
 
-    # Cell of each ring label in the grid (row, column), thesis Fig. 3.8 layout.
-    def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
+    Each cell shows its design rendered on the object of the main view (shape, camera, environment,
+    stage, coat and exposure of *view_model*): the main view's cached basis images (*basis_source*)
+    re-weighted for the cell's design and box-filtered to VARIATION_PX² (:class:`VariationSwatches`).
+    While the main view has no current basis (a view change in progress) the grid renders the view
+    itself at a small size and switches to the main view's images when they arrive. ``source`` says which
+    (``"main view"`` or ``"own"``).
+    """
+
+    def __init__(
+        self,
+        model: DesignerModel,
+        view_model: ViewModel | None = None,
+        basis_source: BasisSource | None = None,
+        parent: QWidget | None = None,
+    ) -> None:
         super().__init__(parent)
         self.model = model
+        self.view_model = view_model
+        self.basis_source = basis_source
+        self.swatches = VariationSwatches(VARIATION_PX)
+        self.source = ""
+        self.images: list = [None] * 9  # the (px, px, 3) uint8 swatch of each cell, None when disabled
+        self._poll = QTimer(self)
+        self._poll.setInterval(SOURCE_POLL_MS)
+        self._poll.timeout.connect(self._on_poll)
         self.category = QComboBox()
         self.category.addItems(list(CATEGORIES))
         self.degree = QDoubleSpinBox()
@@ -79,13 +108,41 @@ class VariationsGrid(QWidget):
         self.category.currentTextChanged.connect(lambda _t: self.refresh())
         self.degree.valueChanged.connect(lambda _v: self.refresh())
         model.document.events.changed.connect(self._on_changed)
+        if view_model is not None:
+            view_model.events.settings.connect(self._on_view)
+        self.refresh()
+
+    def _settings(self) -> ViewSettings:
+        return self.view_model.settings if self.view_model is not None else ViewSettings()
+
+    def _choose_source(self) -> bool:
+        """Use the main view's basis when it is current, else an own render; True if the source changed."""
+        main = self.basis_source() if self.basis_source is not None else None
+        if main is not None:
+            self._poll.stop()
+            changed = self.swatches.use(main)
+            self.source = "main view"
+            return changed
+        changed = self.swatches.use_settings(self._settings())
+        self.source = "own"
+        if self.basis_source is not None and not self._poll.isActive():
+            self._poll.start()
+        return changed
+
+    def _on_poll(self) -> None:
+        if self.basis_source is not None and self.basis_source() is not None:
+            self.refresh()
+
+    def _on_view(self, _settings: ViewSettings) -> None:
         self.refresh()
 
     def _on_changed(self, design: FaceFlopTravelGloss) -> None:
         self.refresh()
 
     def refresh(self) -> None:
-        """Recompute the ring around the current design."""
+        """Recompute the ring around the current design and render each cell on the object."""
+        self._choose_source()
+        exposure = self._settings().exposure_ev
         ring = self.model.variations(self.category.currentText(), self.degree.value())
         order = [0, 1, 2, 3, None, 4, 5, 6, 7]  # ring of 8 around the centre cell
         for cell, idx in enumerate(order):
@@ -99,9 +156,9 @@ class VariationsGrid(QWidget):
             b.setText(label)
             b.setEnabled(design is not None)
             b.setToolTip(reason or label)
-            b.setIcon(
-                QIcon(pixmap_from_array(booklet(design, VARIATION_PX))) if design is not None else QIcon()
-            )
+            image = None if design is None else self.swatches.render(design, exposure)
+            self.images[cell] = image
+            b.setIcon(QIcon(pixmap_from_array(image)) if image is not None else QIcon())
 
     def _on_click(self, cell: int) -> None:
         d = self.cells[cell]
@@ -109,7 +166,10 @@ class VariationsGrid(QWidget):
             self.model.accept(d, f"variation {self.buttons[cell].text()}")
 
     def closeEvent(self, event) -> None:
+        self._poll.stop()
         self.model.document.events.changed.disconnect(self._on_changed)
+        if self.view_model is not None:
+            self.view_model.events.settings.disconnect(self._on_view)
         super().closeEvent(event)
 
 
@@ -142,7 +202,16 @@ class PaletteList(QListWidget):
 class DesignerPanel(QWidget):
     """Everything that edits the design; every edit is one undoable step of the document."""
 
-    def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
+    def __init__(
+        self,
+        model: DesignerModel,
+        view_model: ViewModel | None = None,
+        basis_source: BasisSource | None = None,
+        parent: QWidget | None = None,
+    ) -> None:
+        """*view_model* and *basis_source* (the main view's settings and its current cached basis images)
+        let the variations render on the object shown; without them they render on a sphere in the
+        booth."""
         super().__init__(parent)
         self.model = model
         self.plots = {c: CurvePlot(model, c) for c in "Lab"}
@@ -190,7 +259,7 @@ class DesignerPanel(QWidget):
         self.travel.valueChanged.connect(self._on_travel)
         self.travel.sliderReleased.connect(self.model.end_drag)
 
-        self.variations = VariationsGrid(model)
+        self.variations = VariationsGrid(model, view_model, basis_source)
         var_box = QGroupBox("Variations (click to accept)")
         QVBoxLayout(var_box).addWidget(self.variations)
         self.palette = PaletteList(model)

@@ -2,11 +2,16 @@
 ColorSnap it in the library restricted to solid / metallic / pearl paints, formulate the recipe (mass
 fraction and grams per batch per colorant), run the closed loop on the SYNTHETIC spray-out panel, and
 export the design with its match as thesis XML or CxF3 — as ``station snap`` / ``formulate`` /
-``export`` do. Every computation runs in a worker with the progress indicator."""
+``export`` do. Every computation runs in a worker with the progress indicator.
+
+In service mode every step runs on the service against the service's library (every stored library, or
+the one picked in "library"): ``ui.models.formulation.ServiceFormulation``. The closed loop stores the
+design and the job on the service and runs to its end once started (no Cancel)."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -32,19 +37,37 @@ from ui.models import formulation as fm
 from ui.models.document import DesignDocument
 from ui.widgets.tasks import TaskProgress, TaskThread
 
+if TYPE_CHECKING:
+    from ui.models.service import ServiceClient
+
+#: The "library" choice that searches every library the service stores.
+EVERY_LIBRARY = "every stored library"
+
 DIALOG = QFileDialog.Option.DontUseNativeDialog
 
 
 class FormulationScreen(QWidget):
     """Design picker, type filter, batch size; matches, recipe and closed-loop tables; export."""
 
-    def __init__(self, library: Library, document: DesignDocument, parent: QWidget | None = None) -> None:
+    def __init__(
+        self,
+        library: Library | None,
+        document: DesignDocument,
+        parent: QWidget | None = None,
+        service: ServiceClient | None = None,
+    ) -> None:
+        """*library*: the local library (the demo library); with *service* every step runs on the service
+        and its library instead (*library* may then be None)."""
         super().__init__(parent)
+        if library is None and service is None:
+            raise InputError("library", "a library, or a service to formulate on", None)
         self.library = library
+        self.remote = fm.ServiceFormulation(service) if service is not None else None
         self.document = document
         self.designs: dict[str, FaceFlopTravelGloss] = {}
         self.formulation: fm.Formulation | None = None
         self.job = None
+        self.snapped: fm.SnapView | None = None
         self.exported: Path | None = None
         self.task: TaskThread | None = None
         self.idle = True
@@ -64,12 +87,20 @@ class FormulationScreen(QWidget):
         self.loop_btn = QPushButton("Run closed loop")
         self.export_btn = QPushButton("Export XML / CxF…")
         self.busy = TaskProgress()
-        self.status = QLabel(
-            f"library: {library.name} ({len(library)} paints{', SYNTHETIC' if library.synthetic else ''})"
-        )
+        self.source = QComboBox()
+        self.source.setObjectName("service-library")
+        self.status = QLabel("")
         self.status.setWordWrap(True)
-        self.matches = QTableWidget(0, 3)
-        self.matches.setHorizontalHeaderLabels(["match", "type", "ΣΔE00 15/45/110"])
+        if self.remote is None and library is not None:
+            self.source.addItem(library.name)
+            self.source.setEnabled(False)
+            self.status.setText(
+                f"library: {library.name} ({len(library)} paints{', SYNTHETIC' if library.synthetic else ''})"
+            )
+        else:
+            self.refresh_libraries()
+        self.matches = QTableWidget(0, 4)
+        self.matches.setHorizontalHeaderLabels(["match", "type", "ΣΔE00 15/45/110", "library"])
         self.recipe = QTableWidget(0, 3)
         self.recipe.setHorizontalHeaderLabels(["component", "mass %", "grams per batch"])
         self.loop = QTableWidget(0, 3)
@@ -83,6 +114,7 @@ class FormulationScreen(QWidget):
         row.addWidget(self.design, 1)
         row.addWidget(self.open_btn)
         form.addRow("design", row)
+        form.addRow("library", self.source)
         types = QHBoxLayout()
         for box in self.types.values():
             types.addWidget(box)
@@ -186,24 +218,77 @@ class FormulationScreen(QWidget):
         self._sync(busy=True)
         self.task.start()
 
+    def refresh_libraries(self) -> None:
+        """Service mode: offer the service's stored libraries (``GET /library/libraries``)."""
+        if self.remote is None:
+            return
+        from ui.models.service import ServiceError
+
+        self.source.clear()
+        self.source.addItem(EVERY_LIBRARY)
+        try:
+            libs = self.remote.libraries()
+        except ServiceError as exc:
+            self.status.setText(f"error: the service's libraries: {exc}")
+            return
+        for lib in libs:
+            self.source.addItem(str(lib["name"]))
+        total = sum(int(lib["paints"]) for lib in libs)
+        self.status.setText(
+            f"library: service {self.remote.client.url}, {total} paints in {len(libs)} stored "
+            f"librar{'y' if len(libs) == 1 else 'ies'} ({', '.join(str(lib['name']) for lib in libs)})"
+        )
+
+    def _remote(self) -> fm.ServiceFormulation | None:
+        """The service formulation with the library picked, or None in local mode."""
+        if self.remote is not None:
+            text = self.source.currentText()
+            self.remote.library = None if text in ("", EVERY_LIBRARY) else text
+        return self.remote
+
     def _library(self) -> Library | None:
         try:
+            if self.library is None:  # service mode: the service filters; the types are checked here
+                fm.checked_types(self.chosen_types())
+                return None
             return fm.filtered(self.library, self.chosen_types())
         except InputError as exc:
             self.status.setText(f"error: {exc}")
             return None
 
+    def _types_ok(self) -> bool:
+        try:
+            fm.checked_types(self.chosen_types())
+        except InputError as exc:
+            self.status.setText(f"error: {exc}")
+            return False
+        return True
+
     def run_snap(self) -> None:
-        """ColorSnap the design in the library of the ticked types."""
-        lib, design = self._library(), self.picked()
+        """ColorSnap the design in the library of the ticked types (the service's in service mode)."""
+        design, remote = self.picked(), self._remote()
+        if remote is not None:
+            if self._types_ok():
+                types = self.chosen_types()
+                self._run(
+                    lambda _p: remote.snap(design, types), self._on_snapped, "ColorSnap on the service…"
+                )
+            return
+        lib = self._library()
         if lib is not None:
             self._run(
-                lambda _p: (lib, fm.snap(design, lib)), self._on_snapped, f"ColorSnap in {len(lib)} paints…"
+                lambda _p: fm.snap_view(lib, fm.snap(design, lib)),
+                self._on_snapped,
+                f"ColorSnap in {len(lib)} paints…",
             )
 
     def run_formulate(self) -> None:
         """Formulate the recipe from the matches' recipes."""
-        lib, design = self._library(), self.picked()
+        design, remote = self.picked(), self._remote()
+        if remote is not None:
+            self._run(lambda _p: remote.formulate(design), self._on_formulated, "formulating on the service…")
+            return
+        lib = self._library()
         if lib is not None:
             self._run(
                 lambda _p: fm.formulate(design, lib),
@@ -213,9 +298,20 @@ class FormulationScreen(QWidget):
 
     def run_loop(self) -> None:
         """Spray, measure, correct until within tolerance."""
-        f = self.formulation
-        if f is not None:
-            self._run(lambda _p: fm.closed_loop(f), self._on_loop, "closed loop: spraying and measuring…")
+        f, remote = self.formulation, self._remote()
+        if f is None:
+            return
+        if remote is not None:
+            design = f.design
+            self._run(
+                lambda _p: remote.closed_loop(design),
+                self._on_loop,
+                "closed loop on the service: spraying and measuring…",
+                pure=False,
+                cancellable=False,
+            )
+            return
+        self._run(lambda _p: fm.closed_loop(f), self._on_loop, "closed loop: spraying and measuring…")
 
     def _on_export_clicked(self) -> None:
         name = (self.picked().name or "design").replace(" ", "-")
@@ -230,8 +326,19 @@ class FormulationScreen(QWidget):
             self.export(Path(path))
 
     def export(self, path: Path) -> None:
-        """Write the design and its ColorSnap match (library of the ticked types) to *path*."""
-        lib, design = self._library(), self.picked()
+        """Write the design and its ColorSnap match (library of the ticked types; in service mode the
+        service's export with its library's match) to *path*."""
+        design, remote = self.picked(), self._remote()
+        if remote is not None:
+            self._run(
+                lambda _p: remote.export(design, path),
+                self._on_exported,
+                f"exporting to {path.name} on the service…",
+                False,
+                False,
+            )
+            return
+        lib = self._library()
         if lib is not None:
             self._run(
                 lambda _p: fm.export(design, lib, path),
@@ -249,24 +356,21 @@ class FormulationScreen(QWidget):
     def _on_failed(self, message: str) -> None:
         self.status.setText(f"error: {message}")
 
-    def _show_matches(self, lib: Library, result) -> None:
-        self.matches.setRowCount(len(result.matches))
-        for i, m in enumerate(result.matches):
-            for j, text in enumerate((m.code, str(lib.types[m.index]), f"{m.sum_de:.2f}")):
+    def _show_matches(self, view: fm.SnapView) -> None:
+        self.matches.setRowCount(len(view.rows))
+        for i, (code, kind, sum_de, library) in enumerate(view.rows):
+            for j, text in enumerate((code, kind, f"{sum_de:.2f}", library)):
                 self.matches.setItem(i, j, QTableWidgetItem(text))
 
-    def _on_snapped(self, got) -> None:
-        lib, result = got
-        self._show_matches(lib, result)
-        warn = "; ".join(result.warnings)
-        self.status.setText(
-            f"{len(result.matches)} matches in {lib.name} ({len(lib)} paints)"
-            + (f" — {warn}" if warn else "")
-        )
+    def _on_snapped(self, view: fm.SnapView) -> None:
+        self.snapped = view
+        self._show_matches(view)
+        warn = "; ".join(view.warnings)
+        self.status.setText(f"{len(view.rows)} matches in {view.searched}" + (f" — {warn}" if warn else ""))
 
-    def _on_formulated(self, f: fm.Formulation) -> None:
+    def _on_formulated(self, f) -> None:
         self.formulation = f
-        self._show_matches(f.library, f.snap)
+        self._show_matches(f.shown)
         self._show_recipe()
         r = f.result
         self.status.setText(
@@ -290,7 +394,10 @@ class FormulationScreen(QWidget):
         for i, s in enumerate(job.steps):
             for j, text in enumerate((str(s.number), s.kind, f"{s.mean_de:.2f}")):
                 self.loop.setItem(i, j, QTableWidgetItem(text))
-        self.status.setText(f"closed loop {job.status}: {job.message} ({job.corrections} corrections)")
+        stored = f"; stored on the service as job {job.recipe_id}" if hasattr(job, "recipe_id") else ""
+        self.status.setText(
+            f"closed loop {job.status}: {job.message} ({job.corrections} corrections){stored}"
+        )
 
     def _on_exported(self, got) -> None:
         path, code = got

@@ -68,6 +68,8 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         from station.formulate.demo import demo_library
         from ui.widgets.formulation_screen import FormulationScreen
 
+        if window.service is not None:  # every step on the service, against its library
+            return FormulationScreen(None, window.document, service=window.service)
         return FormulationScreen(demo_library(), window.document)
 
     formulation = LazyScreen(formulation_screen)
