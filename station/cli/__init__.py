@@ -14,13 +14,23 @@ import importlib
 import pkgutil
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from station import __version__
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one line on stderr and exit status 2, like every other
+    error of the command line (the full usage stays behind ``--help``). Subcommand parsers inherit it."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``error: PROG: MESSAGE (see PROG --help)`` and exit with status 2."""
+        self.exit(2, f"error: {self.prog}: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the top-level parser with every subcommand module found in this package."""
-    parser = argparse.ArgumentParser(prog="station", description="CACAD Station command line")
+    parser = OneLineParser(prog="station", description="CACAD Station command line")
     parser.add_argument("--version", action="version", version=f"station {__version__}")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):

@@ -210,7 +210,9 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
         steps(f"loading the library {args.library}")
         lib = _load_library(args.library)
         steps("ColorSnap and formulation")
-        result, snap = formulate_from_library(lab, lib, gloss_gu=gloss, tolerance=args.tolerance)
+        result, snap = formulate_from_library(
+            lab, lib, gloss_gu=gloss, tolerance=args.tolerance, types=args.types
+        )
         if args.closed_loop:
             steps("closed loop: spraying, measuring, correcting")
         return _formulated(args, lab, gloss, name, lib, result, snap)
@@ -226,13 +228,18 @@ def _formulated(
     snap: Any,
 ) -> dict[str, Any]:
     from station.formulate.batch import batch_masses
+    from station.formulate.library import PAINT_TYPES
 
     out: dict[str, Any] = {
         "design": name,
         **result.to_dict(),
-        "matches": snap.to_dict()["matches"],
+        "matches": [
+            {**row, "type": str(lib.types[m.index])}
+            for row, m in zip(snap.to_dict()["matches"], snap.matches, strict=True)
+        ],
         "snap_warnings": list(snap.warnings),
         "library": lib.name,
+        "types": sorted(args.types or PAINT_TYPES),
         "batch": batch_masses(result.recipe, args.batch).to_dict(),
     }
     if args.closed_loop:
@@ -368,6 +375,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--library", default="demo", help="library with recipes (default demo, SYNTHETIC)")
     p.add_argument("--gloss", type=float, help="60° gloss target in GU (default: the design's)")
     p.add_argument("--tolerance", type=float, default=1.0, help="mean ΔE00 for 'formulable' (default 1.0)")
+    p.add_argument(
+        "--type",
+        dest="types",
+        action="append",
+        choices=("solid", "metallic", "pearl"),
+        help="start only from library paints of this type (repeat for several; default: every paint)",
+    )
     p.add_argument("--closed-loop", action="store_true", help="spray, measure and correct (simulated panel)")
     p.add_argument("--corrections", type=int, default=3, help="closed-loop corrections (default 3)")
     p.add_argument("--seed", type=int, default=7, help="seed of the simulated spray-out panel")

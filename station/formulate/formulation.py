@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import functools
 import time
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -433,9 +434,13 @@ def formulate_from_library(
     tolerance: float = DEFAULT_TOLERANCE,
     db: ColorantDatabase | None = None,
     time_budget_s: float = 0.8,
+    types: Collection[str] | None = None,
 ) -> tuple[FormulationResult, SnapResult]:
     """ColorSnap (CIEDE2000) the design against a library with recipes, then formulate from the
-    *k* best matches' recipes (thesis §5.3.4–5.3.5: the match is the formulation starting point)."""
+    *k* best matches' recipes (thesis §5.3.4–5.3.5: the match is the formulation starting point).
+
+    *types* restricts the matches (and so the starting recipes) to those paint types (``solid``,
+    ``metallic``, ``pearl``); ``None`` searches every paint."""
     if library.recipes is None or library.colorant_names is None:
         raise FormulateInputError("library", "a library with recipes (the demo library)", library.name)
     db = db or default_database()
@@ -444,7 +449,7 @@ def formulate_from_library(
             "library.colorant_names", f"the colorants {db.names}", library.colorant_names
         )
     design = validate_design_lab(design_lab, 3, "design_lab")
-    snap = color_snap(library, design, k=k, method="cie2000", index=index)
+    snap = color_snap(library, design, k=k, method="cie2000", index=index, types=types)
     starts = [(m.code, library.recipes[m.index]) for m in snap.matches]
     result = formulate(design, STANDARD_ANGLES, starts, gloss_gu, tolerance, db, time_budget_s)
     return result, snap

@@ -145,6 +145,41 @@ def test_formulate_predicted_de_is_the_colorant_models(lib_api: tuple[Api, list[
     assert r.status_code == 422 and r.json()["detail"][0]["loc"][:2] == ["body", "tolerance"]
 
 
+@pytest.mark.parametrize("kind", ["solid", "pearl"])
+def test_formulate_starts_only_from_the_chosen_types_nearest_matches(
+    lib_api: tuple[Api, list[dict]], kind: str
+) -> None:
+    api, rows = lib_api
+    body = {"design": DESIGN, "types": [kind], "k": 3, "library": rows[0]["extra"]["library"]}
+    r = api.client.post(f"{V1}/formulation/formulate", json=body, headers=api.auth("chemist"))
+    assert r.status_code == 200, r.text
+    got = r.json()
+    # brute force: summed CIEDE2000 over 15/45/110 against every stored paint of that type
+    target = design_from_dict(DESIGN).lab_at(np.array(ANGLES))
+    of_kind = [r for r in rows if r["category"] == kind]
+    sums = np.array([delta_e(lab, target, method="cie2000").sum() for lab in _stored_lab(of_kind)])
+    expected = [of_kind[i]["code"] for i in np.argsort(sums)[:3]]
+    assert [m["code"] for m in got["matches"]] == expected
+    assert {m["type"] for m in got["matches"]} == {kind}
+    np.testing.assert_allclose([m["sum_de"] for m in got["matches"]], np.sort(sums)[:3], atol=1e-9)
+
+
+def test_formulate_refuses_an_unknown_type_or_library_naming_the_field(
+    lib_api: tuple[Api, list[dict]],
+) -> None:
+    api, _ = lib_api
+    before = _counts(api)
+    for body, field in (
+        ({"design": DESIGN, "types": ["chrome"]}, "types"),
+        ({"design": DESIGN, "types": []}, "types"),
+        ({"design": DESIGN, "library": "no-such-library"}, "library"),
+    ):
+        r = api.client.post(f"{V1}/formulation/formulate", json=body, headers=api.auth("chemist"))
+        assert r.status_code == 422, r.text
+        assert field in r.text
+    assert _counts(api) == before
+
+
 def test_formulate_a_stored_design_version(lib_api: tuple[Api, list[dict]]) -> None:
     api, _ = lib_api
     d = api.client.post(

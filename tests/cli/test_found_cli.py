@@ -67,6 +67,25 @@ def test_measure_from_the_users_folder_then_seam_of_its_output(tmp_path: Path) -
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "panel" in bad.stderr
 
 
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [
+        ((), "COMMAND"),
+        (("formulate", "x", "--type", "chrome"), "--type"),
+        (("render", "--design", "d.json"), "--out"),
+        (("qc", "check", "--formula", "cie1976"), "--standard"),
+        (("snap", "--k", "many"), "--k"),
+    ],
+)
+def test_a_usage_error_is_one_line_naming_the_argument(
+    tmp_path: Path, argv: tuple[str, ...], named: str
+) -> None:
+    res = run_station(tmp_path, *argv)
+    assert res.returncode == 2 and res.stdout == ""
+    assert res.stderr.count("\n") == 1 and res.stderr.startswith("error: station")
+    assert named in res.stderr and "--help" in res.stderr
+
+
 def test_model_plot_names_an_unnamed_design_by_its_file(tmp_path: Path) -> None:
     save_design(SILVER.replace(name=""), tmp_path / "bumper.json")
     res = station(tmp_path, "model", "plot", "bumper.json", "--out", "p.png")

@@ -14,6 +14,7 @@ from station.formulate.demo import demo_library
 from station.formulate.library import Library
 from station.formulate.library_csv import read_library_csv, write_library_csv
 from station.formulate.snap import brute_force
+from tests.user_cli import run_station
 
 LAB = "60,30,10;40,28,12;20,20,10"
 
@@ -79,6 +80,21 @@ def test_formulate_and_closed_loop(capsys) -> None:
         assert batch["colorants_g"][name] == pytest.approx(250.0 * frac)
     assert batch["binder_g"] == pytest.approx(250.0 * (1.0 - sum(out["recipe"].values())))
     assert out["closed_loop"]["status"] == "converged" and out["closed_loop"]["corrections"] <= 3
+
+
+def test_formulate_with_a_type_starts_from_that_types_nearest_paints(tmp_path) -> None:
+    lib = demo_library()
+    lab = np.array([[60, 30, 10], [40, 28, 12], [20, 20, 10.0]])
+    run = run_station(tmp_path, "formulate", LAB, "--type", "pearl", "--json")
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    pearls = np.flatnonzero(lib.types == "pearl")
+    rows, sums, _ = brute_force(lib.angle_columns()[pearls], lab, 3, "cie2000")
+    assert [m["code"] for m in out["matches"]] == lib.codes[pearls[rows]].tolist()
+    assert {m["type"] for m in out["matches"]} == {"pearl"} and out["types"] == ["pearl"]
+    np.testing.assert_allclose([m["sum_de"] for m in out["matches"]], sums, atol=1e-9)
+    bad = run_station(tmp_path, "formulate", LAB, "--type", "chrome")
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--type" in bad.stderr
 
 
 @pytest.mark.parametrize("fmt", ["xml", "cxf"])

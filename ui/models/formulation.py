@@ -186,11 +186,22 @@ class ServiceFormulation:
         )
         return SnapView(searched, rows, tuple(got["warnings"]))
 
-    def formulate(self, design: FaceFlopTravelGloss) -> ServiceFormulated:
-        """``POST /formulation/formulate``: a recipe from the service library's recipe-bearing matches."""
-        got = self.client.call("POST", "/formulation/formulate", json={"design": design_to_dict(design)})
+    def formulate(self, design: FaceFlopTravelGloss, types: Iterable[str] | None = None) -> ServiceFormulated:
+        """``POST /formulation/formulate``: a recipe from the service library's recipe-bearing matches of
+        *types* (all when ``None``) in the picked library (``self.library``; every library when ``None``)."""
+        body: dict[str, Any] = {"design": design_to_dict(design)}
+        if types is not None:
+            body["types"] = checked_types(types)
+        if self.library is not None:
+            body["library"] = self.library
+        got = self.client.call("POST", "/formulation/formulate", json=body)
         rows = tuple(
-            (str(m["code"]), str(m.get("type", "")), float(m["sum_de"]), str(got.get("library", "")))
+            (
+                str(m["code"]),
+                str(m.get("type", "")),
+                float(m["sum_de"]),
+                str(m.get("library", got.get("library", ""))),
+            )
             for m in got["matches"]
         )
         shown = SnapView(

@@ -286,7 +286,13 @@ class FormulationScreen(QWidget):
         """Formulate the recipe from the matches' recipes."""
         design, remote = self.picked(), self._remote()
         if remote is not None:
-            self._run(lambda _p: remote.formulate(design), self._on_formulated, "formulating on the service…")
+            if self._types_ok():
+                types = self.chosen_types()
+                self._run(
+                    lambda _p: remote.formulate(design, types),
+                    self._on_formulated,
+                    "formulating on the service…",
+                )
             return
         lib = self._library()
         if lib is not None:

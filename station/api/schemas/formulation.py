@@ -128,6 +128,29 @@ class FormulateRequest(DesignSource):
         FORMULATION_TOLERANCE_DE00
     )
     k: Annotated[StrictInt, Field(ge=1, le=10, description="library matches tried as starting recipes")] = 3
+    types: (
+        Annotated[
+            list[PaintType],
+            Field(
+                min_length=1,
+                max_length=3,
+                description="start only from matches of these paint types; default all",
+            ),
+        ]
+        | None
+    ) = None
+    library: (
+        Annotated[
+            str,
+            Field(
+                min_length=1,
+                max_length=64,
+                description="start only from one stored library's paints (GET /library/libraries); "
+                "default every stored paint with a recipe",
+            ),
+        ]
+        | None
+    ) = None
 
 
 class FormulateOut(BaseModel):

@@ -222,29 +222,44 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
         if request.gloss_gu is not None
         else (design.gloss_gu if design is not None else None)
     )
+    from station.formulate.snap import type_rows
+
     cached = cache.get(session)
     if cached.with_recipes is None:
         raise ConflictError("no library paint has a recipe in the colorant database: load the demo library")
+    lib, index = cached.with_recipes, cached.with_recipes_index
+    rows = cached.with_recipes_rows
+    if request.library is not None:
+        names = cached.library_names[rows]
+        keep = np.flatnonzero(names == request.library)
+        if keep.size == 0:
+            held = " | ".join(sorted(set(names.tolist())))
+            raise InputError("library", f"a stored library with recipes: {held}", request.library)
+        lib, index, rows = lib.subset(keep), None, rows[keep]
+    type_rows(lib, request.types, field="types")  # 422 naming ``types`` before formulating
     result, matches = formulate_from_library(
         lab,
-        cached.with_recipes,
-        index=cached.with_recipes_index,
-        k=min(request.k, len(cached.with_recipes)),
+        lib,
+        index=index,
+        k=min(request.k, len(lib)),
         gloss_gu=gloss,
         tolerance=request.tolerance,
+        types=request.types,
     )
     out = result.to_dict()
     out["matches"] = [
         {
             "code": m.code,
+            "type": str(cached.library.types[rows[m.index]]),
+            "library": str(cached.library_names[rows[m.index]]),
             "sum_de": m.sum_de,
             "de_per_angle": list(m.de_per_angle),
-            "library_paint_id": int(cached.ids[cached.with_recipes_rows[m.index]]),
+            "library_paint_id": int(cached.ids[rows[m.index]]),
         }
         for m in matches.matches
     ]
     out["snap_warnings"] = list(matches.warnings)
-    out["library"] = cached.library.name
+    out["library"] = cached.library.name if request.library is None else request.library
     return out
 
 
