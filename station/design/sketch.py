@@ -94,7 +94,7 @@ HIGHLIGHT_DEG = 15.0
 #: Fewer highlight pixels than this: the gloss is the default (50 GU).
 MIN_HIGHLIGHT_PIXELS = 10
 #: Rounds of ``gloss="highlight"``: read the gloss off the highlight, refit the colours without it.
-HIGHLIGHT_ROUNDS = 3
+HIGHLIGHT_ROUNDS = 2
 #: Squared encoded error per channel value below which two gloss values fit the highlight alike.
 TIE_SSE = 1e-8
 #: Rec. 709 luminance weights of linear sRGB.
