@@ -449,7 +449,7 @@ class CoatLobes:
     peak_exponent
         Phong exponent of the peak lobe, ≥ 1 (default :data:`PEAK_EXPONENT`).
     albedo_scale
-        0 < s ≤ 1: below the gloss of the widest lobe the reflection is scaled down (as in
+        0 ≤ s ≤ 1: below the gloss of the widest lobe the reflection is scaled down (as in
         :func:`lobe_from_gloss`).
     """
 
@@ -576,7 +576,7 @@ def coat_from_gloss(gloss_gu: float) -> CoatLobes:
     Westlund & Meyer (2001; thesis [65]) set a lobe from gloss and haze; here the shapes come from
     the measurement standards and published coat figures, and the 60° gloss sets the mixture:
 
-    1. ``max(g) > g ≥ G_clear``, G_clear = 60° reading of a lone peak of index
+    1. ``100 ≥ g ≥ G_clear``, G_clear = 60° reading of a lone peak of index
        :data:`CLEAR_COAT_INDEX` (1.50, about 89.1 GU): a haze-free coat; the index rises from 1.50 to
        at most the black glass's 1.567 so the peak reads *g* (real clear coats reading 90–100 GU at 60°
        are of index 1.52–1.57, not smoother than a mirror).

@@ -16,6 +16,11 @@ from station.render.hdr_io import write_hdr
 from tests.user_cli import run_station
 
 GREEN = FaceFlopTravelGloss((60.0, -25.0, 20.0), (28.0, -10.0, 12.0), 60.0, 50.0, "green metallic")
+#: ``station design render`` of GREEN to art.png (size and lighting added by each test).
+_GREEN_RENDER = (
+    *("design", "render", "--out", "art.png", "--travel", f"{GREEN.travel_deg:g}"),
+    *("--face", ",".join(f"{v:g}" for v in GREEN.face), "--flop", ",".join(f"{v:g}" for v in GREEN.flop)),
+)
 
 
 def _json(cwd: Path, *args: str) -> dict:
@@ -66,24 +71,7 @@ def test_environment_lit_sketch_fit_from_a_hdr(tmp_path: Path) -> None:
         tmp_path, "design", "render", "--environment", "env.hdr", "--size", "48", "--out", "init.png"
     )
     assert (tmp_path / "init.png").is_file() and init["scene"] == "sphere-env"
-    face, flop = (",".join(f"{v:g}" for v in c) for c in (GREEN.face, GREEN.flop))
-    _json(
-        tmp_path,
-        "design",
-        "render",
-        "--environment",
-        "env.hdr",
-        "--size",
-        "48",
-        "--face",
-        face,
-        "--flop",
-        flop,
-        "--travel",
-        "60",
-        "--out",
-        "art.png",
-    )
+    _json(tmp_path, *_GREEN_RENDER, "--environment", "env.hdr", "--size", "48")
     fit = _json(
         tmp_path,
         "design",
@@ -104,39 +92,12 @@ def test_environment_lit_sketch_fit_from_a_hdr(tmp_path: Path) -> None:
     _one_line_error(
         tmp_path, "environment", "design", "sketch-fit", "--art", "art.png", "--environment", "missing.hdr"
     )
-    _one_line_error(
-        tmp_path,
-        "scene",
-        "design",
-        "sketch-fit",
-        "--art",
-        "art.png",
-        "--environment",
-        "studio",
-        "--scene",
-        "panel-point",
-    )
+    studio_with_scene = ("--environment", "studio", "--scene", "panel-point")
+    _one_line_error(tmp_path, "scene", "design", "sketch-fit", "--art", "art.png", *studio_with_scene)
     _one_line_error(tmp_path, "gloss_gu", "design", "sketch-fit", "--art", "art.png", "--gloss-gu", "40")
 
 
 def test_point_lit_fit_reads_the_gloss_of_the_art(tmp_path: Path) -> None:
-    face, flop = (",".join(f"{v:g}" for v in c) for c in (GREEN.face, GREEN.flop))
-    _json(
-        tmp_path,
-        "design",
-        "render",
-        "--size",
-        "64",
-        "--face",
-        face,
-        "--flop",
-        flop,
-        "--travel",
-        "60",
-        "--gloss",
-        "80",
-        "--out",
-        "art.png",
-    )
+    _json(tmp_path, *_GREEN_RENDER, "--size", "64", "--gloss", "80")
     fit = _json(tmp_path, "design", "sketch-fit", "--art", "art.png")
     assert fit["gloss_source"] == "highlight" and fit["design"]["gloss_gu"] == pytest.approx(80.0, abs=3.0)
