@@ -8,16 +8,13 @@ driver's :class:`~station.drivers.transport.HidTransport` takes these through it
 and ``enumerate_fn`` arguments; the real ``hid.enumerate`` path is tested separately. For another
 process, :class:`HidBridgeServer` serves the same calls over a pty (``python -m simulators.gloss``).
 
-Physics (:class:`GlossPhysics`): the panel's 60° gloss gives a specular lobe
-(``station.model.gloss.lobe_from_gloss``), read by the simulated ISO 2813 meter
-(``simulate_gloss_meter``) at 20/60/85°. Closed forms on the normalised Phong lobe
-p(ψ) = (n + 1)/(2π) cosⁿψ, each relative to the black-glass standard:
-
-* haze (ASTM E430 method B, two narrow apertures at 20° ± 1.9°, Ω_h = 2 × 0.4° × 3.6°):
-  ``HU = 100 · ρ(20°)/F(20°; 1.567) · Ω_h · p(1.9°)``; ``log haze = 1285 · log10(HU/20 + 1)``
-  (Rhopoint's form, UNCONFIRMED);
-* DOI = 100 · (1 − p(0.3°)/p(0°)) = 100 · (1 − cos^n 0.3°);
-* Rspec = 100 · ρ(20°)/F(20°; 1.567) · (1 − cos^{n+1} 0.0991°) (narrow ±0.0991° aperture).
+Physics (:class:`GlossPhysics`): the panel's 60° gloss gives its clear coat, a sharp peak plus haze
+(``station.model.gloss.coat_from_gloss``), and the meter reads it with
+``station.model.gloss.coat_readings``: 20/60/85° gloss of the simulated ISO 2813 meter, haze (ASTM E430
+method B), log haze, DOI and Rspec, each relative to the black-glass standard (the closed forms are in
+that function's docstring; log haze = 1285 · log10(HU/20 + 1) is Rhopoint's form, UNCONFIRMED). An 88 GU
+panel reads about 78/88/97 GU, DOI 90, haze 0.5 HU (before this coat model, one wide lobe read
+34/88/79 GU and DOI 2.3). Black-glass references (:func:`reference_coat`) are one lobe of index 1.567.
 
 Noise ±0.2 GU (1σ 0.1 GU) repeatability and a linearity error ≤ 0.2 % of reading, within the
 ±0.5 GU class of combined meters (research note instruments.md §2, UNCONFIRMED vendor figures).
@@ -44,13 +41,12 @@ if TYPE_CHECKING:
     from simulators.pty_host import PtyHost
     from simulators.recipe import RecipePanel
 
-__all__ = ["GlossDevice", "GlossPhysics", "HidBridgeServer", "build_device", "reference_lobe"]
+__all__ = ["GlossDevice", "GlossPhysics", "HidBridgeServer", "build_device", "reference_coat"]
 
 REPORT = 64
 GEOMETRIES = (20, 60, 85)
 PATH = b"/sim/hidraw0"
 VID, PID = 0x1209, 0xCA60
-HAZE_OMEGA_SR = 2 * math.radians(0.4) * math.radians(3.6)
 
 
 def _xor(data: bytes) -> int:
@@ -61,28 +57,18 @@ def _xor(data: bytes) -> int:
 
 
 @functools.cache
-def lobe_for(gloss_60_gu: float) -> Any:
-    """``lobe_from_gloss`` memoised (the inverse meter takes about a second)."""
-    from station.model.gloss import lobe_from_gloss
-
-    return lobe_from_gloss(gloss_60_gu)
-
-
-@functools.cache
-def meter_readings(phong_exponent: float, albedo: float) -> tuple[float, float, float]:
-    """Noise-free 20/60/85° readings of a Phong lobe (GU), memoised."""
-    from station.model.gloss import STANDARD_INDEX, SpecularLobe, simulate_gloss_meter
-
-    lobe = SpecularLobe(phong_exponent, albedo, 0.01, STANDARD_INDEX)
-    return tuple(simulate_gloss_meter(lobe, g) for g in GEOMETRIES)  # type: ignore[return-value]
-
-
-@functools.cache
-def reference_lobe(gloss_gu: float, geometry_deg: int) -> Any:
-    """A black-glass-like reference reading *gloss_gu* at *geometry_deg* (Phong exponent solved)."""
+def reference_coat(gloss_gu: float, geometry_deg: int) -> Any:
+    """A black-glass-like reference reading *gloss_gu* at *geometry_deg*: one Phong lobe of index 1.567
+    (exponent solved), as a ``station.model.gloss.CoatLobes``."""
     from scipy.optimize import brentq
 
-    from station.model.gloss import STANDARD_INDEX, SpecularLobe, fresnel_unpolarised, simulate_gloss_meter
+    from station.model.gloss import (
+        STANDARD_INDEX,
+        SpecularLobe,
+        coat_from_lobe,
+        fresnel_unpolarised,
+        simulate_gloss_meter,
+    )
 
     albedo = fresnel_unpolarised(60.0, STANDARD_INDEX)
 
@@ -92,15 +78,15 @@ def reference_lobe(gloss_gu: float, geometry_deg: int) -> Any:
     log_n = brentq(
         lambda x: simulate_gloss_meter(lobe(x), geometry_deg) - gloss_gu, 0.0, math.log(1e7), xtol=1e-12
     )
-    return lobe(log_n)
+    return coat_from_lobe(lobe(log_n))
 
 
 @dataclass
 class GlossPhysics:
-    """The panel (a specular lobe) under a simulated meter with noise, linearity error and calibration."""
+    """The panel (a two-lobe clear coat) under a simulated meter with noise, linearity error and calibration."""
 
     gloss_60_gu: float = 88.0
-    lobe: Any = None
+    coat: Any = None
     serial: str = "GM0815"
     noise_gu: float = 0.1
     linearity: tuple[float, float, float] = (0.0015, -0.001, 0.002)
@@ -109,21 +95,26 @@ class GlossPhysics:
     _rng: np.random.Generator = field(init=False)
 
     def __post_init__(self) -> None:
-        if self.lobe is None:
-            self.lobe = lobe_for(float(self.gloss_60_gu))
+        if self.coat is None:
+            from station.model.gloss import coat_from_gloss
+
+            self.coat = coat_from_gloss(float(self.gloss_60_gu))
         self._rng = np.random.default_rng(self.seed)
         self.standard_gu = [100.0, 100.0, 100.0]
         self.counter = 1
         self.calibrated_at: float | None = time.monotonic()
         self.gain = [1.0, 1.0, 1.0]
 
+    def true_readings(self) -> Any:
+        """Noise-free readings of the panel (``station.model.gloss.GlossReadings``)."""
+        from station.model.gloss import coat_readings
+
+        return coat_readings(self.coat)
+
     def true_gloss(self) -> list[float]:
         """Noise-free 20/60/85° readings of the panel (GU)."""
-        if self.lobe.coat_index == 1.567:
-            return list(meter_readings(float(self.lobe.phong_exponent), float(self.lobe.specular_albedo)))
-        from station.model.gloss import simulate_gloss_meter
-
-        return [simulate_gloss_meter(self.lobe, g) for g in GEOMETRIES]
+        r = self.true_readings()
+        return [r.g20_gu, r.g60_gu, r.g85_gu]
 
     def raw(self, values: list[float]) -> list[float]:
         """What the detector reports for true *values*: linearity error and noise."""
@@ -145,25 +136,18 @@ class GlossPhysics:
         return self.calibrated_at is None or time.monotonic() - self.calibrated_at > self.calibration_life_s
 
     def measure(self) -> dict[str, float]:
-        """One reading: gloss per geometry (GU), haze (HU), log haze, DOI, Rspec."""
-        from station.model.gloss import STANDARD_INDEX, fresnel_unpolarised
-
-        g = [v * k for v, k in zip(self.raw(self.true_gloss()), self.gain, strict=True)]
-        n = float(self.lobe.phong_exponent)
-        rel20 = self.lobe.albedo_at(20.0) / fresnel_unpolarised(20.0, STANDARD_INDEX)
-
-        def p(psi_deg: float) -> float:
-            return (n + 1) / (2 * math.pi) * math.cos(math.radians(psi_deg)) ** n
-
-        haze = 100.0 * rel20 * HAZE_OMEGA_SR * p(1.9)
+        """One reading: gloss per geometry (GU, with noise), haze (HU), log haze, DOI, Rspec."""
+        r = self.true_readings()
+        true = [r.g20_gu, r.g60_gu, r.g85_gu]
+        g = [v * k for v, k in zip(self.raw(true), self.gain, strict=True)]
         return {
             "g20": g[0],
             "g60": g[1],
             "g85": g[2],
-            "haze": haze,
-            "log_haze": 1285.0 * math.log10(haze / 20 + 1),
-            "doi": 100.0 * (1 - math.cos(math.radians(0.3)) ** n),
-            "rspec": 100.0 * rel20 * (1 - math.cos(math.radians(0.0991)) ** (n + 1)),
+            "haze": r.haze_hu,
+            "log_haze": r.log_haze,
+            "doi": r.doi,
+            "rspec": r.rspec_gu,
         }
 
 

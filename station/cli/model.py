@@ -4,7 +4,8 @@
   its JSON is a valid design file.
 * ``eval`` — a design (``--design FILE`` or ``--face/--flop/--travel``) → Lab at aspecular angles.
 * ``indices`` — Flop, Chroma and Hue Shift Index with failure warnings.
-* ``gloss`` — GU → Phong exponent, specular albedo, Ward α and the simulated meter reading.
+* ``gloss`` — 60° GU ⇄ the render lobe's Phong exponent (``--gu`` or ``--lobe-exponent``), with the
+  simulated meter's 20/60/85° GU, haze, DOI and Rspec of the clear coat of that gloss.
 * ``de`` — colour difference per angle and aggregated between two Lab lists.
 * ``plot`` — PNG of L*, a*, b* against aspecular angle for one or more designs.
 """
@@ -23,7 +24,18 @@ from station.model import ANGLES_3, AspecularMeasurements, fit_fftg
 from station.model.design_io import design_to_dict, load_design
 from station.model.difference import DELTA_E_METHODS, delta_e
 from station.model.domain import ANGLES_5, format_angle
-from station.model.gloss import lobe_from_gloss, simulate_gloss_meter
+from station.model.gloss import (
+    PHONG_MAX,
+    PHONG_MIN,
+    STANDARD_INDEX,
+    SpecularLobe,
+    coat_from_gloss,
+    coat_readings,
+    fresnel_unpolarised,
+    gloss_from_lobe,
+    lobe_from_gloss,
+    simulate_gloss_meter,
+)
 from station.model.indices import library_indices
 
 STANDARD_EVAL_ANGLES = ",".join(format_angle(a) for a in ANGLES_5)
@@ -84,16 +96,38 @@ def _indices(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _gloss(args: argparse.Namespace) -> dict[str, Any]:
-    lobe = lobe_from_gloss(args.gu, args.coat_index)
+    """60° GU ⇄ render lobe, plus the meter's readings of the clear coat of that gloss."""
+    if args.lobe_exponent is not None:
+        n = args.lobe_exponent
+        if not (PHONG_MIN <= n <= PHONG_MAX):
+            raise InputError("lobe_exponent", f"{PHONG_MIN:g} <= n <= {PHONG_MAX:g} (Phong exponent)", n)
+        albedo = fresnel_unpolarised(60.0, args.coat_index)
+        gu = gloss_from_lobe(SpecularLobe(n, albedo, 0.0, args.coat_index))
+        lobe = lobe_from_gloss(min(gu, 100.0), args.coat_index)
+    else:
+        gu = args.gu
+        lobe = lobe_from_gloss(gu, args.coat_index)
+    coat = coat_from_gloss(min(gu, 100.0))
+    meter = coat_readings(coat)
     return {
-        "gloss_gu": args.gu,
-        "phong_exponent": lobe.phong_exponent,
+        "gloss_gu": gu,
+        "phong_exponent": lobe.phong_exponent if args.lobe_exponent is None else args.lobe_exponent,
         "specular_albedo": lobe.specular_albedo,
         "ward_alpha": lobe.ward_alpha,
         "simulated_gu": simulate_gloss_meter(lobe, 60, "phong"),
         "simulated_gu_ward": simulate_gloss_meter(lobe, 60, "ward"),
-        "simulated_gu_20": simulate_gloss_meter(lobe, 20, "phong"),
-        "simulated_gu_85": simulate_gloss_meter(lobe, 85, "phong"),
+        "meter_gu_20": meter.g20_gu,
+        "meter_gu_60": meter.g60_gu,
+        "meter_gu_85": meter.g85_gu,
+        "haze_hu": meter.haze_hu,
+        "log_haze": meter.log_haze,
+        "doi": meter.doi,
+        "rspec_gu": meter.rspec_gu,
+        "d4039_haze_gu": meter.d4039_haze_gu,
+        "coat_index": coat.coat_index,
+        "coat_haze_weight": coat.haze_weight,
+        "coat_peak_exponent": coat.peak_exponent,
+        "coat_haze_exponent": coat.haze_exponent,
     }
 
 
@@ -155,10 +189,27 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_json_flag(p)
     p.set_defaults(handler=_indices)
 
-    p = sub.add_parser("gloss", help="60° gloss (GU) → specular lobe parameters via the simulated meter")
-    p.add_argument("--gu", type=float, required=True, help="60° gloss in GU (0–100)")
+    p = sub.add_parser(
+        "gloss",
+        help="60° gloss (GU) ⇄ render lobe exponent, with the gloss meter's 20/60/85° GU, haze and DOI",
+        description=(
+            "Give the 60° gloss (--gu) or the render lobe's Phong exponent (--lobe-exponent) and get the "
+            "other, with what the simulated gloss meter reads on a clear coat of that gloss: gloss at "
+            "20/60/85° (GU), haze (HU), log haze, DOI (0-100) and Rspec. The renderers draw one lobe "
+            "(phong_exponent, specular_albedo, ward_alpha); the meter reads the clear coat, a sharp "
+            "peak plus haze (coat_*)."
+        ),
+    )
+    which = p.add_mutually_exclusive_group(required=True)
+    which.add_argument("--gu", type=float, help="60° gloss in GU (0–100)")
+    which.add_argument(
+        "--lobe-exponent", type=float, help=f"Phong exponent of the render lobe ({PHONG_MIN:g}–{PHONG_MAX:g})"
+    )
     p.add_argument(
-        "--coat-index", type=float, default=1.567, help="clear-coat refractive index (default 1.567)"
+        "--coat-index",
+        type=float,
+        default=STANDARD_INDEX,
+        help=f"refractive index of the render lobe's Fresnel albedo (default {STANDARD_INDEX:g})",
     )
     add_json_flag(p)
     p.set_defaults(handler=_gloss)

@@ -11,8 +11,18 @@ unlit pixels removed, solve per channel X ∈ {R, G, B} in least squares::
 for every θ_clamp of a sweep (default 16°…180° in 1° steps) and keep the θ_clamp of least error. The
 RGB curve is converted to Lab at the standard angles (15°, 45°, 110°) as in the thesis, and to the
 face/flop/travel design that best matches the whole curve in Lab (variable projection over travel,
-:func:`fftg_from_curve`). Gloss: the contrast-gloss rule (§3.5.3) on the foreground pixels with
-θ < 15°, or the default 50 GU.
+:func:`fftg_from_curve`).
+
+Gloss (``gloss=``): ``"highlight"`` (the default) fits the highlight the art shows: the 60° gloss g whose
+rendering of the fitted design reproduces the foreground pixels within 15° of specular, each clipped to
+display white as the art is (:func:`fit_highlight_gloss`: least squares in encoded sRGB over g ∈ [0, 100],
+a 1-GU grid then a bounded Brent polish). The mapping from the art's highlight to GU is the scene's own
+shading, so art rendered at a higher gloss reads a higher gloss (monotone; tests sweep 10–95 GU).
+``"contrast"`` is the thesis's eyedropper rule (§3.5.3, :func:`station.design.moodboard.contrast_gloss`:
+the brightest minus the darkest 10 % of those pixels, 0–0.5 → 0–100 GU), kept for comparison: it is not
+monotone in the art's gloss (a highlight smaller than the brightest tail lowers the contrast as the gloss
+rises, and it saturates from about 40 GU). ``"default"`` is 50 GU; ``"fit"`` subtracts each candidate's
+highlight before eq 3.7.2 (:data:`GLOSS_CANDIDATES`).
 
 Failure ("the colour gradations do not match the lighting", §3.7.4) is detected when more than 25 % of
 the pixels are outliers, the RGB curve leaves the physical range over 15°…θ_clamp, the model refuses the
@@ -44,7 +54,7 @@ from scipy.optimize import least_squares, nnls
 
 from station.design.errors import DesignInputError, SketchFitError
 from station.design.moodboard import contrast_gloss
-from station.design.scene import LobeBasis, Scene, shade, srgb_decode
+from station.design.scene import LobeBasis, Scene, shade, srgb_decode, srgb_encode
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
 from station.model.design_io import design_to_dict
@@ -60,6 +70,8 @@ MIN_PIXELS = 30
 TRAVEL_SWEEP = tuple(float(t) for t in range(16, 181))
 #: Below this ΔE*ab between face and flop the result is a solid.
 SOLID_DE = 0.5
+#: Gloss modes of :func:`fit_point_light` (module docstring).
+GLOSS_MODES = ("highlight", "contrast", "default", "fit")
 #: Gloss values (GU) tried by ``gloss="fit"``.
 GLOSS_CANDIDATES: tuple[float, ...] = (
     0.0,
@@ -77,6 +89,14 @@ GLOSS_CANDIDATES: tuple[float, ...] = (
     90.0,
     100.0,
 )
+#: Pixels within this aspecular angle (degrees) are the highlight the gloss is read from.
+HIGHLIGHT_DEG = 15.0
+#: Fewer highlight pixels than this: the gloss is the default (50 GU).
+MIN_HIGHLIGHT_PIXELS = 10
+#: Rounds of ``gloss="highlight"``: read the gloss off the highlight, refit the colours without it.
+HIGHLIGHT_ROUNDS = 2
+#: Squared encoded error per channel value below which two gloss values fit the highlight alike.
+TIE_SSE = 1e-8
 #: Rec. 709 luminance weights of linear sRGB.
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 HIGHLIGHT_SIGMAS = 3.0
@@ -110,7 +130,7 @@ class SketchFit:
     failed, reason : failure flag and why (empty when it succeeded)
     theta_clamp_deg : the θ_clamp of the sweep kept (point fit) or of the projection (environment fit)
     pixels : number of pixels fitted
-    gloss_source : ``"contrast"`` or ``"default"``
+    gloss_source : ``"highlight"``, ``"contrast"``, ``"fit"`` or ``"default"``
     seconds : wall time of the fit
     """
 
@@ -304,7 +324,7 @@ def fit_point_light(
     *,
     min_aspecular_deg: float = 10.0,
     min_lambert: float = 0.05,
-    gloss: str = "contrast",
+    gloss: str = "highlight",
     max_shading_de: float = MAX_SHADING_DE,
     travel_sweep: tuple[float, ...] = TRAVEL_SWEEP,
     edge_px: int = 1,
@@ -324,8 +344,10 @@ def fit_point_light(
     min_aspecular_deg
         Pixels below this aspecular angle are the highlight and are not fitted (degrees).
     gloss
-        ``"contrast"`` (contrast gloss of the foreground pixels with θ < 15°, default 50 GU when fewer
-        than 10 such pixels; the thesis's rule), ``"default"`` (50 GU), or ``"fit"``: the highlight of
+        ``"highlight"`` (default: the gloss whose rendering reproduces the art's pixels with θ < 15°,
+        :func:`fit_highlight_gloss`; 50 GU when fewer than 10 such pixels), ``"contrast"`` (contrast
+        gloss of those pixels, the thesis's rule, not monotone in the art's gloss), ``"default"``
+        (50 GU), or ``"fit"``: the highlight of
         each gloss in :data:`GLOSS_CANDIDATES` (rendered with the scene shader's specular term) is
         subtracted before eq 3.7.2 and the gloss of least error is kept — an extension of the thesis,
         which did not solve for gloss; it also stops a broad low-gloss highlight from being read as a
@@ -357,8 +379,8 @@ def fit_point_light(
         Fewer than 30 usable pixels.
     """
     t0 = time.perf_counter()
-    if gloss not in ("contrast", "default", "fit"):
-        raise DesignInputError("gloss", "contrast | default | fit", gloss)
+    if gloss not in GLOSS_MODES:
+        raise DesignInputError("gloss", " | ".join(GLOSS_MODES), gloss)
     art_a = _check_art(art, scene.shape, "art")
     init_a = None if initial is None else _check_art(initial, scene.shape, "initial")
     changed = changed_pixels(art_a, init_a, scene.mask)
@@ -376,7 +398,7 @@ def fit_point_light(
     theta_all, phi_all = scene.aspecular_deg[use], scene.lambert[use]
     y_all = srgb_decode(art_a[use]) / scene.irradiance  # inverse gamma
     keep = np.ones(n_all, dtype=bool)
-    candidates: tuple[float | None, ...] = GLOSS_CANDIDATES if gloss == "fit" else (None,)
+    candidates: tuple[float | None, ...] = GLOSS_CANDIDATES if gloss in ("fit", "highlight") else (None,)
     spec_all = {g: (np.zeros(n_all) if g is None else lobe_reflectance(g, theta_all)) for g in candidates}
     g_fit: float | None = None
     for _ in range(outlier_rounds + 1):  # robust least squares: trim outliers, refit
@@ -405,6 +427,27 @@ def fit_point_light(
     trimmed = 1.0 - n / n_all
 
     gloss_gu, gloss_source = DEFAULT_GLOSS_GU, "default"
+    if gloss == "highlight":  # alternate: highlight gloss of the fitted colours, colours with it removed
+        for _ in range(HIGHLIGHT_ROUNDS):
+            try:
+                trial, _tc = _design_from_curve(
+                    np.arange(15.0, max(float(theta.max()), 15.0) + 1.0, 1.0),
+                    linear_srgb_to_lab(
+                        np.clip(
+                            _curve(coef, tc, np.arange(15.0, max(float(theta.max()), 15.0) + 1.0)), 1e-6, None
+                        )
+                    ),
+                    DEFAULT_GLOSS_GU,
+                )
+            except ValueError:
+                break
+            read = fit_highlight_gloss(scene, art_a, trial, edge_px=edge_px, min_lambert=min_lambert)
+            if read is None:
+                break
+            gloss_gu, gloss_source = read, "highlight"
+            coef, tc, _sse = _sweep_quadratic(
+                theta, phi, y - lobe_reflectance(read, theta)[:, None], travel_sweep
+            )
     if gloss == "fit" and g_fit is not None:
         gloss_gu, gloss_source = float(g_fit), "fit"
     elif gloss == "contrast":
@@ -464,6 +507,63 @@ def fit_point_light(
         gloss_source,
         time.perf_counter() - t0,
     )
+
+
+def fit_highlight_gloss(
+    scene: Scene,
+    art: ArrayLike,
+    design: FaceFlopTravelGloss,
+    *,
+    edge_px: int = 1,
+    min_lambert: float = 0.05,
+) -> float | None:
+    """The 60° gloss (GU) whose rendering of *design* in *scene* best reproduces the art's highlight.
+
+    Over the foreground pixels with aspecular angle below :data:`HIGHLIGHT_DEG` (lit, away from the
+    silhouette by *edge_px*), minimise Σ ‖encode(clip(D + E·g_lobe(θ; g))) − art‖² over g ∈ [0, 100] GU:
+    the 1-GU grid's best point, then a bounded Brent search within ±1 GU of it. D is the design's diffuse
+    shading (the scene shader without its lobe), g_lobe the lobe of
+    :func:`station.model.lobe.lobe_reflectance`. The render is clipped at display white as painted art
+    is, so a saturated highlight is read from the pixels around it. Where several gloss values fit
+    alike (within :data:`TIE_SSE` per value: a near-white design whose highlight lies wholly in pixels
+    clipped at white, which no method can read), the one nearest the default 50 GU is returned. ``None``
+    when fewer than
+    :data:`MIN_HIGHLIGHT_PIXELS` pixels are in the highlight.
+    """
+    from scipy.optimize import minimize_scalar
+
+    from station.model.domain import GLOSS_MAX_GU, GLOSS_MIN_GU
+    from station.model.shading import point_light_rgb
+
+    art_a = _check_art(art, scene.shape, "art")
+    sel = (
+        scene.mask
+        & (scene.aspecular_deg < HIGHLIGHT_DEG)
+        & (scene.lambert > min_lambert)
+        & _eroded(scene.mask, edge_px)
+    )
+    if int(sel.sum()) < MIN_HIGHLIGHT_PIXELS:
+        return None
+    target = art_a[sel]
+    lam, theta = scene.lambert[sel], scene.aspecular_deg[sel]
+    diffuse = point_light_rgb(design, lam, theta, irradiance=scene.irradiance, specular=False)
+
+    def sse(g: float) -> float:
+        spec = (scene.irradiance * lobe_reflectance(float(g), theta))[:, None]
+        return float(np.sum((srgb_encode(diffuse + spec) - target) ** 2))
+
+    grid = np.arange(GLOSS_MIN_GU, GLOSS_MAX_GU + 0.5, 1.0)
+    errors = np.array([sse(g) for g in grid])
+    # gloss values the art cannot tell apart (a highlight hidden in pixels clipped at white): the one
+    # nearest the default
+    tied = np.flatnonzero(errors <= errors.min() + TIE_SSE * target.size)
+    best = float(grid[tied[np.argmin(np.abs(grid[tied] - DEFAULT_GLOSS_GU))]])
+    if tied.size > 1:
+        return best
+    lo, hi = max(GLOSS_MIN_GU, best - 1.0), min(GLOSS_MAX_GU, best + 1.0)
+    res = minimize_scalar(sse, bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
+    g = float(res.x) if float(res.fun) <= errors.min() else best
+    return min(max(g, GLOSS_MIN_GU), GLOSS_MAX_GU)
 
 
 def _refine(

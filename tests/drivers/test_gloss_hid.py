@@ -10,7 +10,7 @@ import time
 import pytest
 
 from simulators.faults import FaultPlan
-from simulators.gloss import PATH, GlossDevice, GlossPhysics, reference_lobe
+from simulators.gloss import PATH, GlossDevice, GlossPhysics, reference_coat
 from station.drivers import (
     BatteryLow,
     CalibrationNeeded,
@@ -178,7 +178,7 @@ def gm():
 def test_black_glass_references_read_back(gm, value, geometry):
     """EURAMET black-glass artefacts 95/69/40/27 GU read back within ±0.5 GU (mean of 5) after calibration."""
     gm.inst.calibrate()
-    gm.dev.physics.lobe = reference_lobe(value, geometry)
+    gm.dev.physics.coat = reference_coat(value, geometry)
     readings = [gm.inst.measure().gloss_gu[geometry] for _ in range(5)]
     assert abs(sum(readings) / 5 - value) <= 0.5
     assert max(readings) - min(readings) < 1.0
@@ -188,8 +188,9 @@ def test_reading_physics(gm):
     r = gm.inst.measure()
     assert isinstance(r, GlossReading)
     assert abs(r.gloss_gu[60] - 88.0) < 0.6
-    assert r.gloss_gu[20] < r.gloss_gu[60]  # a wide Phong lobe loses more through the 20° receptor
-    assert 0 < r.haze_hu < 50 and 0 <= r.doi <= 100 and r.rspec >= 0
+    # the clear coat (peak + haze, index 1.50): below its 60° gloss at 20° (Fresnel and haze), DOI near 90
+    assert 70.0 < r.gloss_gu[20] < r.gloss_gu[60]
+    assert 0 < r.haze_hu < 50 and 85.0 <= r.doi <= 95.0 and r.rspec >= 0
 
 
 @pytest.mark.parametrize(

@@ -57,3 +57,13 @@ def test_traced_art_fails_about_as_often_as_the_thesis_says() -> None:
     share = q["traced art: fits that fail on the first try"]
     assert abs(share.ours - 35.0) <= 10.0  # thesis: about 35 %
     assert share.verdict == "agrees"
+
+
+def test_highlight_gloss_rises_with_the_art_gloss_and_reads_the_silver() -> None:
+    """The experiment's sweep (5–95 GU art) read by the default gloss="highlight": no fall, within 3 GU from
+    10 GU up, and the 90 GU silver the contrast rule read as 0 GU reads within 10 GU of 90."""
+    read = cs.gloss_readings("highlight")
+    assert cs._decreases(read, slack=0.0) == 0
+    assert max(abs(r - a) for a, r in zip(cs.ART_GLOSS_GU, read, strict=True) if a >= 10.0) < 3.0
+    assert abs(cs.silver_reading("highlight") - 90.0) <= 10.0
+    assert cs.silver_reading("contrast") < 50.0  # the thesis's rule on the same art (the issue's 0 GU)

@@ -118,7 +118,7 @@ async def sketch_fit(
     scene: Annotated[
         Literal["sphere-point", "panel-point"], Query(description="built-in point-light scene")
     ] = "sphere-point",
-    gloss_mode: Annotated[Literal["contrast", "default", "fit"], Query()] = "contrast",
+    gloss_mode: Annotated[Literal["highlight", "contrast", "default", "fit"], Query()] = "highlight",
 ) -> dict[str, Any]:
     """Fit a design to concept art painted over a built-in point-light scene (thesis §3.7, eq 3.7.2): the
     art is the upload, a square image the scene's size, painted over the scene rendered in silver."""
