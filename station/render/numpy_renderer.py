@@ -33,8 +33,14 @@ lights) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°), Schlick's Fres
 
 Pixels that miss the object show a constant grey background, or with a scene's
 :class:`~station.render.stage.Stage` the environment as backdrop over a ground disc with its contact
-shadow, the environment turned about +Y (:func:`stage_background`; formulas in ``station.render.stage``). Output is linear sRGB radiance; the
-display transform is :mod:`station.render.tonemap`.
+shadow and the extracted lights' sun shadows, the environment turned about +Y (:func:`stage_background`;
+formulas in ``station.render.stage``).
+
+Flakes: with a :class:`station.model.flakes.FlakeLayer` each paint pixel gets the zero-mean sparkle of
+:func:`station.render.flakes.sparkle_pixels` (the shader's cells, flake normals and maps), added as
+max(sparkle, −reflectance · radiance), where :func:`~station.render.flakes.flake_lod` keeps the layer on.
+
+Output is linear sRGB radiance; the display transform is :mod:`station.render.tonemap`.
 """
 
 from __future__ import annotations
