@@ -1,23 +1,26 @@
-"""Figures of docs/render.md: one paint on the speed shape, the procedural car and a CC0 car, in the booth,
-the sunny sky and a photographed HDR, on the stage (backdrop, ground, contact shadow) with the clear coat;
-and a close-up with flakes off and on.
+"""Figures of docs/render.md: one paint (the issue's silver, L* 90 → 30) on the speed shape, the procedural
+car and a CC0 car, in the booth, the sunny sky and a photographed HDR, on the stage (backdrop, ground with
+contact and sun shadows) with the clear coat, flakes off and on; and close-ups where the flakes sparkle.
 
-Run: ``.venv/bin/python -m bench.render_scene`` (GL renderer on EGL). The CC0 car and HDR come from
-``../shared/data`` (meshes/*.glb, hdri/*.hdr); without them their row / column is left out. Writes
-``docs/render-scene.png`` and ``docs/render-flakes.png`` and prints the frame times.
+Run: ``.venv/bin/python -m bench.render_scene [--shared DIR]`` (GL renderer on EGL). The CC0 car and the HDR
+come from ``DIR/meshes/*.glb`` and ``DIR/hdri/*.hdr`` (default: the ``shared/data`` folder beside the
+checkout); without them their column / row is left out. Writes ``docs/render/sheet-flakes-off.png``,
+``docs/render/sheet-flakes-on.png`` and ``docs/render/closeup-flakes.png`` and prints the frame times and
+what the flakes' level of detail chose per tile. Not a benchmark: it is never run by the test suite.
 """
 
 from __future__ import annotations
 
+import argparse
 import time
 from pathlib import Path
 
 import numpy as np
 
+from station.model import FaceFlopTravelGloss
 from station.model.flakes import METALLIC_FLAKES
 from station.model.gloss import ClearCoat
 from station.render.camera import Camera
-from station.render.design_db import design_database
 from station.render.envcache import PrefilterCache
 from station.render.environment import load_environment
 from station.render.gl_renderer import GLRenderer
@@ -29,60 +32,82 @@ from station.render.shapes import Scene
 from station.render.stage import Stage
 from station.render.tonemap import save_png
 
-DOCS = Path(__file__).resolve().parents[1] / "docs"
+OUT = Path(__file__).resolve().parents[1] / "docs" / "render"
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
-W, H = 384, 240
-PAINT = "red-metallic"
+#: Tile size of the contact sheets (3 × 3 tiles: 720 × 450).
+W, H = 240, 150
+#: The issue's silver: L* 90 at the face, 30 at the flop, travel 60°, 88 GU.
+SILVER = FaceFlopTravelGloss((90.0, 0.0, -1.0), (30.0, 0.0, -2.0), 60.0, 88.0, "silver")
+#: Three-quarter front view, closer than the default cameras (flakes still above a pixel's worth).
+MODEL_CAMERA = Camera((1.55, 0.55, 2.55), (0.0, -0.25, 0.0), fov_deg=34.0)
+SHAPE_CAMERA = Camera((1.45, 0.75, 2.9), (0.45, -0.1, 0.0), fov_deg=34.0)
+#: Close-ups (1/4 of the sheet's distance): the sparkle a stylist sees leaning over the panel.
+MODEL_CLOSE = Camera((0.75, 0.15, 1.05), (0.2, -0.2, 0.35), fov_deg=34.0)
+SHAPE_CLOSE = Camera((0.6, 0.35, 1.2), (0.3, 0.0, 0.0), fov_deg=30.0)
 
 
-def main() -> None:
-    design = {d.name: d for d in design_database()}[PAINT]
-    w = fit_design(design)
-    envs = [("booth", procedural_environment("booth", 512)), ("sky", procedural_environment("sky", 512))]
-    hdrs = sorted((SHARED / "hdri").glob("studio*.hdr")) or sorted((SHARED / "hdri").glob("*.hdr"))
+def _environments(shared: Path) -> list[tuple[str, object]]:
+    envs: list[tuple[str, object]] = [
+        ("booth", procedural_environment("booth", 512)),
+        ("sky", procedural_environment("sky", 512)),
+    ]
+    hdrs = sorted((shared / "hdri").glob("spruit*.hdr")) or sorted((shared / "hdri").glob("*.hdr"))
     if hdrs:
         envs.append((hdrs[0].stem, load_environment(hdrs[0]).downsampled(512)))
+    return envs
+
+
+def _models(shared: Path) -> list[tuple[str, object]]:
     models: list[tuple[str, object]] = [("speed shape", None), ("procedural car", car_body())]
-    cars = sorted((SHARED / "meshes").glob("*.glb"))
+    cars = sorted((shared / "meshes").glob("*.glb"))
     if cars:
         models.append((cars[-1].stem + " (CC0)", load_mesh(cars[-1])))
-    rows = []
+    return models
+
+
+def _tile(gl: GLRenderer, mesh: object, w, flakes, close: bool) -> np.ndarray:
     coat = ClearCoat()
+    if mesh is None:
+        scene = Scene("speedshape", camera=SHAPE_CLOSE if close else SHAPE_CAMERA, stage=Stage())
+        return np.ascontiguousarray(gl.render(scene, [w], coat=coat, flakes=flakes))
+    camera = MODEL_CLOSE if close else MODEL_CAMERA
+    return np.ascontiguousarray(
+        gl.render_mesh(mesh, [w], camera=camera, stage=Stage(), coat=coat, flakes=flakes)
+    )
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="bench.render_scene", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--shared", type=Path, default=SHARED, help="folder with meshes/ and hdri/")
+    args = parser.parse_args(argv)
+    w = fit_design(SILVER)
+    envs, models = _environments(args.shared), _models(args.shared)
+    OUT.mkdir(parents=True, exist_ok=True)
+    sheets: dict[str, list[np.ndarray]] = {"off": [], "on": []}
+    close_rows = []
     for env_name, env in envs:
         t0 = time.perf_counter()
         basis = prefilter_basis(env, w.exponents, engine="gl", cache=PrefilterCache())
         print(f"{env_name}: prefilter {time.perf_counter() - t0:.2f} s")
         with GLRenderer(basis, W, H) as gl:
-            row = []
-            for name, mesh in models:
-                t0 = time.perf_counter()
-                if mesh is None:
-                    img = gl.render(Scene("speedshape", stage=Stage()), [w], coat=coat)
-                else:
-                    img = gl.render_mesh(mesh, [w], stage=Stage(), coat=coat)
-                print(f"  {name}: {1e3 * (time.perf_counter() - t0):.1f} ms")
-                row.append(np.ascontiguousarray(img))
-            rows.append(np.concatenate(row, axis=1))
-    save_png(DOCS / "render-scene.png", np.concatenate(rows, axis=0))
-    # Flakes off / on: a close-up of the speed shape's tail in the sky (sun glints) and the booth.
-    close = Camera((0.6, 0.35, 1.2), (0.3, 0.0, 0.0), fov_deg=30.0)
-    tiles = []
-    for env_name, env in envs[:2]:
-        basis = prefilter_basis(env, w.exponents, engine="gl", cache=PrefilterCache())
-        with GLRenderer(basis, W, H) as gl:
-            for flakes in (None, METALLIC_FLAKES):
-                tiles.append(
-                    np.ascontiguousarray(
-                        gl.render(
-                            Scene("speedshape", camera=close, stage=Stage()), [w], coat=coat, flakes=flakes
-                        )
-                    )
-                )
-                print(f"  flakes {env_name}: {gl.last_flakes.reason}")
-    save_png(
-        DOCS / "render-flakes.png",
-        np.concatenate([np.concatenate(tiles[:2], axis=1), np.concatenate(tiles[2:], axis=1)], axis=0),
-    )
+            for state, flakes in (("off", None), ("on", METALLIC_FLAKES)):
+                row = []
+                for name, mesh in models:
+                    t0 = time.perf_counter()
+                    row.append(_tile(gl, mesh, w, flakes, close=False))
+                    why = gl.last_flakes.reason if gl.last_flakes is not None else ""
+                    print(f"  {name}, flakes {state}: {1e3 * (time.perf_counter() - t0):.0f} ms; {why}")
+                sheets[state].append(np.concatenate(row, axis=1))
+            pair = []  # close-ups: the speed shape's tail and the last model's side, flakes off | on
+            for name, mesh in [models[0], models[-1]]:
+                for flakes in (None, METALLIC_FLAKES):
+                    pair.append(_tile(gl, mesh, w, flakes, close=True))
+                    if flakes is not None and gl.last_flakes is not None:
+                        print(f"  close-up {name}: {gl.last_flakes.reason}")
+            close_rows.append(np.concatenate(pair, axis=1))
+    for state, rows in sheets.items():
+        save_png(OUT / f"sheet-flakes-{state}.png", np.concatenate(rows, axis=0))
+    save_png(OUT / "closeup-flakes.png", np.concatenate(close_rows, axis=0))
 
 
 if __name__ == "__main__":

@@ -403,6 +403,38 @@ def goniogeometric_index(
     return _search(model, paint, eps, bmax, step, signs)
 
 
+#: Orientations of panel A for :func:`environment_index`: its normal in the world (+Y up).
+PANEL_FRAMES: dict[str, NDArray[np.float64]] = {
+    # rows: the panel's x, y, z (normal) axes in world coordinates (right-handed)
+    "up": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]),  # a bonnet or roof
+    "front": np.eye(3),  # a door facing +Z
+}
+
+
+def environment_index(
+    paint: FaceFlopTravelGloss,
+    directions: NDArray[np.float64],
+    radiance: NDArray[np.float64],
+    view: float | Sequence[float] | None = None,
+    *,
+    panel: str = "up",
+    **options: Any,
+) -> IndexResult:
+    """Environment-lit goniogeometric index (eq 4.3.1 with c of an environment, thesis §4.3): the
+    environment given as world samples — unit *directions* (n, 3) (+Y up) and radiance × solid angle
+    *radiance* (n, 3) — is turned into the frame of panel A (``panel``: ``"up"`` a horizontal panel,
+    ``"front"`` a vertical one facing +Z; PANEL_FRAMES) and :func:`goniogeometric_index` searched over
+    the views (signed polar angles in the panel's x–z plane; None: normal view) with *options* (epsilon,
+    method, hinge, direction, beta_max_deg, grid_step_deg, gloss)."""
+    if panel not in PANEL_FRAMES:
+        raise AnalysisInputError("panel", " | ".join(PANEL_FRAMES), panel)
+    d = np.asarray(directions, dtype=float)
+    if d.ndim != 2 or d.shape[-1:] != (3,):
+        raise AnalysisInputError("environment.directions", "an (n, 3) array of unit vectors", d.shape)
+    env = Environment(d @ PANEL_FRAMES[panel].T, np.asarray(radiance, dtype=float))
+    return goniogeometric_index(paint, env, view, **options)
+
+
 def _search(
     model: SeamModel,
     paint: FaceFlopTravelGloss,

@@ -10,11 +10,12 @@ the lobes and the timings (seconds).
 
 Scene options: ``--stage`` shows the environment as backdrop over a ground with contact shadow
 (``--blur DEG``, ``--rotate DEG``, ``--no-ground``); ``--coat N`` adds the clear coat's Fresnel of index N
-to the gloss (thesis model without it); GL engine only: ``--mesh FILE`` renders a .glb/.gltf/.obj/.stl
-model instead of the shape (``--paint-part NAME`` picks the part to paint) and ``--flakes`` draws the
-design file's flake layer (the JSON says what the level of detail chose). ``--lod DE`` lets the level of
-detail (``station.render.lod.choose_lod``, against the ground truth on a 16 × 16 sample of the view) pick
-the lobe count and environment resolution for a CIEDE2000 tolerance and reports the choice.
+to the gloss (thesis model without it); ``--flakes`` draws the design file's flake layer (GL and NumPy
+engines; the JSON says what the level of detail chose); GL engine only: ``--mesh FILE`` renders a
+.glb/.gltf/.obj/.stl model instead of the shape (``--paint-part NAME`` picks the part to paint).
+``--lod DE`` lets the level of detail (``station.render.scene_image.scene_lod``, against the ground truth
+on a 16 × 16 sample of the view) pick the lobe count and environment resolution for a CIEDE2000
+tolerance and reports the choice.
 """
 
 from __future__ import annotations
@@ -90,7 +91,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--coat", type=float, help="clear coat index for Schlick Fresnel on the gloss (e.g. 1.5)")
     p.add_argument("--mesh", help="GL engine: render this .glb/.gltf/.obj/.stl model instead of the shape")
     p.add_argument("--paint-part", help="with --mesh: the mesh or material name of the part to paint")
-    p.add_argument("--flakes", action="store_true", help="GL engine: the design file's flake layer")
+    p.add_argument("--flakes", action="store_true", help="the design file's flake layer (metallic sparkle)")
     p.add_argument("--lod", type=float, help="CIEDE2000 tolerance: level of detail picks lobes and map size")
     add_json_flag(p)
     p.set_defaults(handler=_render)
@@ -111,6 +112,7 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     from station.model.design_io import load_design
     from station.render import lobe_fit, tonemap
     from station.render.envcache import PrefilterCache
+    from station.render.flakes import flake_lod
     from station.render.gl_renderer import gl_available
     from station.render.numpy_renderer import BACKGROUND, gbuffer, render_linear
     from station.render.prefilter import prefilter_basis
@@ -146,42 +148,18 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     scene = Scene(args.shape, misalignment_deg=args.misalignment, stage=stage)
     lod_report = None
     if args.lod is not None:
-        from station.render.lobes import basis_for_count
-        from station.render.lod import choose_lod
+        from station.render.scene_image import scene_lod
 
         t0 = time.perf_counter()
-        g16 = gbuffer(scene, 16, 16)
-        sel = g16.mask & (g16.n_dot_v > 0.05)
-        if not sel.any():
-            raise InputError("lod", "a view that shows the shape", args.lod)
-        choice = choose_lod(
-            designs,
-            env,
-            g16.normal[sel],
-            g16.view[sel],
-            args.lod,
-            mode="prefiltered-lut",
-            samples=64,
-            quadrature_width=64,
-        )
-        paints = [lobe_fit.fit_design(d, basis_for_count(choice.lobes)) for d in designs]
-        if choice.environment_width < env.equirect.shape[1]:
-            env = env.downsampled(choice.environment_width)
-        lod_report = {
-            "lobes": choice.lobes,
-            "environment_width": int(env.equirect.shape[1]),
-            "met": choice.met,
-            "errors": {k: round(float(v), 3) for k, v in choice.errors.items()},
-            "describe": choice.describe(),
-        }
+        paints, env, lod_report = scene_lod(designs, env, scene, args.lod)
         timings["lod"] = time.perf_counter() - t0
     engine = args.engine
     if engine == "auto":
         engine = "gl" if gl_available() else "numpy"
-    if (args.mesh or args.flakes) and engine != "gl":
-        raise InputError("engine", "gl (or auto with a GL stack) for --mesh / --flakes", engine)
-    if engine == "truth" and (stage is not None or coat is not None):
-        raise InputError("engine", "gl | numpy with --stage / --rotate / --coat", engine)
+    if args.mesh and engine != "gl":
+        raise InputError("engine", "gl (or auto with a GL stack) for --mesh", engine)
+    if engine == "truth" and (stage is not None or coat is not None or args.flakes):
+        raise InputError("engine", "gl | numpy with --stage / --rotate / --coat / --flakes", engine)
     mesh = None
     if args.mesh:
         from station.render.meshes import load_mesh
@@ -192,7 +170,7 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         from station.model.design_io import load_design_flakes
 
         flakes = load_design_flakes(args.design)[1]
-    flake_report = None
+    flake_report = "no flake layer" if args.flakes and flakes is None else None
     size = args.size
     exps = paints[0].exponents
     if engine == "truth":
@@ -224,7 +202,9 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
                     linear = gl.render_linear(scene, paints, coat=coat, flakes=flakes)
                 flake_report = gl.last_flakes.reason if gl.last_flakes is not None else None
         else:
-            linear = render_linear(scene, basis, paints, size, size, coat=coat)
+            linear = render_linear(scene, basis, paints, size, size, coat=coat, flakes=flakes)
+            if flakes is not None:
+                flake_report = flake_lod(flakes, scene.view_camera, size).reason
         timings["render"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     image8 = tonemap.to_display(linear, args.exposure, args.tone)

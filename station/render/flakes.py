@@ -78,3 +78,104 @@ def flake_uniforms(flakes: FlakeLayer) -> dict[str, float]:
         "u_flake_reflectance": flakes.reflectance,
         "u_unit_mm": UNIT_MM,
     }
+
+
+def flake_lobes(exponents: tuple[float, ...] | list[float], flakes: FlakeLayer) -> tuple[int, int]:
+    """(sharp, mean) lobe indices of a basis for the sparkle: the sharpest map (L_sharp, the glint) and the
+    map whose exponent is nearest in log to the flakes' E ≈ 1/(2σ)² (C_E, the expected flake reflection)."""
+    sharp = int(np.argmax(exponents))
+    target = math.log(flakes.reflected_exponent)
+    mean = int(np.argmin([abs(math.log(float(e)) - target) for e in exponents]))
+    return sharp, mean
+
+
+def flake_tint(dd_map_weights: np.ndarray) -> np.ndarray:
+    """Tint (3,) of a paint's flakes: its directionally diffuse colour Σ_i w_DD,i (map weights (m, 3),
+    :meth:`station.render.weights.LobeWeights.map_weights`)."""
+    return np.asarray(dd_map_weights, dtype=np.float64).reshape(-1, 3).sum(axis=0)
+
+
+def cell_mm(flakes: FlakeLayer, distance: np.ndarray, tan_half_fov: float, height: int) -> np.ndarray:
+    """Side of a flake cell per pixel, mm: the pixel's footprint at eye *distance* (scene units), or one
+    flake when flakes are larger (the shader's ``cell_mm``)."""
+    px = 2.0 * np.asarray(distance, dtype=np.float64) * tan_half_fov / height * UNIT_MM
+    return np.maximum(flakes.size_um / 1000.0, px)
+
+
+def _pcg3d(v: np.ndarray) -> np.ndarray:
+    """The shader's ``pcg3d`` hash on (P, 3) uint32 (wrapping arithmetic)."""
+    v = v.astype(np.uint32) * np.uint32(1664525) + np.uint32(1013904223)
+    x, y, z = v[:, 0].copy(), v[:, 1].copy(), v[:, 2].copy()
+    x += y * z
+    y += z * x
+    z += x * y
+    x ^= x >> np.uint32(16)
+    y ^= y >> np.uint32(16)
+    z ^= z >> np.uint32(16)
+    x += y * z
+    y += z * x
+    z += x * y
+    return np.stack([x, y, z], axis=-1)
+
+
+def flake_normals(
+    flakes: FlakeLayer, positions: np.ndarray, cells_mm: np.ndarray, normals: np.ndarray
+) -> np.ndarray:
+    """One flake normal m (P, 3) per surface cell, as ``render.frag.glsl`` draws it: the cell of a world
+    *position* (P, 3) is floor(p · UNIT_MM / cell) hashed with pcg3d to two uniforms, Box–Muller to a
+    standard normal pair g, and m = normalize(N + σ (g_x T + g_y B)) about the shading normal N (P, 3)
+    with σ = spread_deg in radians and the frame T = normalize(N × Y) (N × X near ±Y), B = N × T."""
+    p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    scale = (UNIT_MM / np.asarray(cells_mm, dtype=np.float64)).reshape(-1, 1)
+    cells = np.floor(p * scale).astype(np.int64) + (1 << 20)
+    h = _pcg3d((cells & 0xFFFFFFFF).astype(np.uint32))
+    u = ((h[:, :2] >> np.uint32(8)).astype(np.float64) + 0.5) / 16777216.0
+    rad = np.sqrt(-2.0 * np.log(u[:, 0]))
+    g = rad[:, None] * np.stack([np.cos(2.0 * np.pi * u[:, 1]), np.sin(2.0 * np.pi * u[:, 1])], axis=-1)
+    n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+    helper = np.where(np.abs(n[:, 1:2]) < 0.9, np.array([[0.0, 1.0, 0.0]]), np.array([[1.0, 0.0, 0.0]]))
+    t = np.cross(n, helper)
+    t /= np.linalg.norm(t, axis=-1, keepdims=True)
+    b = np.cross(n, t)
+    sigma = math.radians(flakes.spread_deg)
+    m = n + sigma * (g[:, :1] * t + g[:, 1:] * b)
+    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+
+
+def clip_sparkle(sparkle: np.ndarray, radiance: np.ndarray, flakes: FlakeLayer) -> np.ndarray:
+    """The sparkle added to a pixel of *radiance*: never darker by more than the flakes' share,
+    max(sparkle, −reflectance · radiance) (module docstring)."""
+    return np.maximum(sparkle, -flakes.reflectance * np.asarray(radiance))
+
+
+def sparkle_pixels(
+    basis,
+    flakes: FlakeLayer,
+    tint: np.ndarray,
+    positions: np.ndarray,
+    distance: np.ndarray,
+    normal: np.ndarray,
+    view: np.ndarray,
+    reflect: np.ndarray,
+    tan_half_fov: float,
+    height: int,
+) -> np.ndarray:
+    """Zero-mean sparkle (P, 3) of the NumPy renderer: tint · reflectance · (L_sharp(R_m) − C_E(R)) / √N
+    (module docstring), the same terms as the shader. *positions* (P, 3) world, *distance* (P,) to the eye,
+    *normal*, *view*, *reflect* (P, 3) in the environment's frame, *basis* a
+    :class:`~station.render.prefilter.PrefilteredBasis` (its lights added to C_E where that map lacks them)."""
+    from station.render.cubemap import sample_cube
+
+    cells = cell_mm(flakes, distance, tan_half_fov, height)
+    count = np.maximum(1.0, flakes.density_per_mm2 * cells * cells)
+    m = flake_normals(flakes, positions, cells, normal)
+    rm = 2.0 * np.sum(m * view, axis=-1, keepdims=True) * m - view
+    sharp, mean_i = flake_lobes(basis.exponents, flakes)
+    up = np.sum(rm * normal, axis=-1) > 0.0
+    glint = np.where(up[:, None], sample_cube(basis.cubes[sharp], rm), 0.0)
+    mean = sample_cube(basis.cubes[mean_i], reflect).astype(np.float64)
+    if basis.lights is not None and basis.wide and basis.wide[mean_i]:
+        e = float(basis.exponents[mean_i])
+        p = (e + 1.0) / (2.0 * np.pi) * np.clip(reflect @ basis.lights.directions.T, 0.0, None) ** e
+        mean = mean + p @ basis.lights.flux
+    return np.asarray(tint)[None, :] * flakes.reflectance * (glint - mean) / np.sqrt(count)[:, None]

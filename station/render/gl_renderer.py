@@ -14,7 +14,7 @@ import numpy as np
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
-from station.render.flakes import FlakeChoice, flake_lod, flake_uniforms
+from station.render.flakes import FlakeChoice, flake_lobes, flake_lod, flake_tint, flake_uniforms
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
     SHADER_DIR,
@@ -33,7 +33,7 @@ from station.render.numpy_renderer import (
 from station.render.prefilter import WIDE_EXPONENT
 from station.render.sh import sh_diffuse_matrix
 from station.render.shapes import GROUNDS, OCCLUDERS, SHAPE_INDEX, Scene
-from station.render.stage import MAX_OCCLUDERS, backdrop_lobe, lookup_matrix
+from station.render.stage import MAX_OCCLUDERS, PENUMBRA_DEG, backdrop_lobe, lookup_matrix
 from station.render.tonemap import CURVES, check_curve
 
 __all__ = [
@@ -143,6 +143,7 @@ class GLRenderer:
                 "HAS_STAGE": features[1],
                 "HAS_FLAKES": features[2],
                 "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
+                "PENUMBRA_DEG": f"{PENUMBRA_DEG:.4f}",
                 "N_LOBES": len(self._lobes),
                 "OUTPUT_LINEAR": int(linear),
                 "DIFFUSE_SH": int(self.diffuse == "sh"),
@@ -286,9 +287,7 @@ class GLRenderer:
         }
         if flakes is not None and self.last_flakes.on:
             uniforms.update(flake_uniforms(flakes))
-            sharp = int(np.argmax(self.basis.exponents))
-            target = np.log(flakes.reflected_exponent)
-            mean = int(np.argmin([abs(np.log(e) - target) for e in self.basis.exponents]))
+            sharp, mean = flake_lobes(self.basis.exponents, flakes)
             self._lobes[int(np.nonzero(self._order == sharp)[0][0])].use(m + 7)
             self._lobes[int(np.nonzero(self._order == mean)[0][0])].use(m + 8)
             uniforms["u_flake_mean_exp"] = float(self.basis.exponents[mean])
@@ -371,7 +370,7 @@ class GLRenderer:
                 n = prog[name].array_length
                 prog[name].write(np.concatenate([w[part] for w in mw]).astype(np.float32)[:n].tobytes())
         if "u_flake_tint" in prog:
-            prog["u_flake_tint"].write(np.array([w[1].sum(axis=0) for w in mw], np.float32).tobytes())
+            prog["u_flake_tint"].write(np.array([flake_tint(w[1]) for w in mw], np.float32).tobytes())
         if "u_occ" in prog:
             prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
         if "u_sh" in prog:

@@ -33,8 +33,14 @@ lights) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°), Schlick's Fres
 
 Pixels that miss the object show a constant grey background, or with a scene's
 :class:`~station.render.stage.Stage` the environment as backdrop over a ground disc with its contact
-shadow, the environment turned about +Y (:func:`stage_background`; formulas in ``station.render.stage``). Output is linear sRGB radiance; the
-display transform is :mod:`station.render.tonemap`.
+shadow and the extracted lights' sun shadows, the environment turned about +Y (:func:`stage_background`;
+formulas in ``station.render.stage``).
+
+Flakes: with a :class:`station.model.flakes.FlakeLayer` each paint pixel gets the zero-mean sparkle of
+:func:`station.render.flakes.sparkle_pixels` (the shader's cells, flake normals and maps), added as
+max(sparkle, −reflectance · radiance), where :func:`~station.render.flakes.flake_lod` keeps the layer on.
+
+Output is linear sRGB radiance; the display transform is :mod:`station.render.tonemap`.
 """
 
 from __future__ import annotations
@@ -44,13 +50,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.cubemap import sample_cube
 from station.render.errors import RenderInputError
+from station.render.flakes import clip_sparkle, flake_lod, flake_tint, sparkle_pixels
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
 from station.render.sh import sh_diffuse
 from station.render.shapes import GROUNDS, OCCLUDERS, Scene, intersect
-from station.render.stage import backdrop_lobe, ground_fade, lookup_matrix, sphere_occlusion
+from station.render.stage import backdrop_lobe, ground_fade, ground_radiance, lookup_matrix
 from station.render.weights import LobeWeights
 
 BACKGROUND = 0.18
@@ -186,7 +194,8 @@ def stage_background(
     """Radiance (P, 3) seen along rays *dirs* (P, 3) from *origin* (3,) that miss the shape.
 
     BACKGROUND grey without a stage; else the backdrop lobe map at R_y(−θ)·d (plus its extracted lights)
-    blended with the ground disc, albedo · D(+Y) · (1 − O) (``station.render.stage``).
+    blended with the ground disc: its sky part with the contact shadow, the extracted lights with their
+    sun shadows (:func:`station.render.stage.ground_radiance`).
     """
     d = np.asarray(dirs, dtype=float).reshape(-1, 3)
     stage = scene.stage
@@ -211,8 +220,15 @@ def stage_background(
         w = ground_fade(np.hypot(pts[:, 0] - cx, pts[:, 2] - cz), stage.ground_radius) * hit
         up = np.array([[0.0, 1.0, 0.0]])
         sky = sample_cube(basis.diffuse, up)[0] if diffuse == "cube" else sh_diffuse(basis.sh, up)[0]
-        visible = 1.0 - sphere_occlusion(pts, OCCLUDERS[scene.shape])
-        ground = stage.ground_albedo * sky[None, :] * visible[:, None]
+        lights = basis.lights
+        ground = ground_radiance(
+            pts,
+            OCCLUDERS[scene.shape],
+            stage.ground_albedo,
+            sky,
+            None if lights is None else lights.directions @ m,  # the lights' world directions
+            None if lights is None else lights.flux,
+        )
         out = out * (1.0 - w[:, None]) + ground * w[:, None]
     return out
 
@@ -226,10 +242,13 @@ def render_linear(
     diffuse: str = "cube",
     horizon: str = "lut",
     coat: ClearCoat | None = None,
+    flakes: FlakeLayer | None = None,
 ) -> np.ndarray:
     """Linear sRGB radiance image (H, W, 3) float32 of the scene lit by the prefiltered basis.
 
     *coat*: clear-coat Fresnel on the gloss terms (module docstring); None: the thesis's model.
+    *flakes*: the paints' flake layer, drawn as the GL renderer draws it when the level of detail
+    (:func:`station.render.flakes.flake_lod` of this view and height, which says why) keeps it on.
     """
     if diffuse not in ("cube", "sh"):
         raise RenderInputError("diffuse", "cube | sh", diffuse)
@@ -241,9 +260,27 @@ def render_linear(
         img[~g.mask] = stage_background(scene, basis, origin, dirs[~g.mask], diffuse)
     rot = lookup_matrix(scene.stage.rotation_deg if scene.stage is not None else 0.0)
     ndv = g.n_dot_v
+    on = flakes is not None and flake_lod(flakes, scene.view_camera, height).on
+    tan_half = float(np.tan(np.radians(scene.view_camera.fov_deg) / 2.0))
     for k in (0, 1):
         m = g.mask & (g.paint == k)
         if m.any():
             n_env, r_env = g.normal[m] @ rot.T, g.reflect[m] @ rot.T
             img[m] = shade_pixels(basis, pair[k], n_env, r_env, ndv[m], diffuse, horizon, coat)
+            if flakes is not None and on:
+                eye = np.asarray(scene.view_camera.eye, dtype=float)
+                dist = np.linalg.norm(g.position[m] - eye, axis=-1)
+                sparkle = sparkle_pixels(
+                    basis,
+                    flakes,
+                    flake_tint(pair[k].map_weights()[1]),
+                    g.position[m],
+                    dist,
+                    n_env,
+                    g.view[m] @ rot.T,
+                    r_env,
+                    tan_half,
+                    height,
+                )
+                img[m] = img[m] + clip_sparkle(sparkle, img[m], flakes)
     return img.astype(np.float32)

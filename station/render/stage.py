@@ -16,7 +16,15 @@ Shared by the NumPy renderer and ``shaders/render.frag.glsl`` (the same formulas
   in closed form: a sphere of radius r whose centre lies at distance d in direction ĉ above the
   horizon hides the cosine-weighted fraction (r/d)²·(n·ĉ) of the sky (the projected solid angle
   π sin²α cos β of a cap of half-angle α = arcsin(r/d) at elevation angle 90° − β, over π). That is the
-  contact shadow; O is clipped to [0, 1]. The disc fades into the backdrop between half its radius and
+  contact shadow; O is clipped to [0, 1]. With lights taken out of the environment (the sun, a booth's
+  lamps: ``PrefilteredBasis.lights``, directions l and flux Φ) each also casts a sun shadow: the ground is
+  albedo · [(D(+Y) − Σ_l (l_y)₊Φ_l/π)₊ (1 − O) + Σ_l (l_y)₊Φ_l/π · V_l], the sky part with the contact
+  shadow and each light's direct part with its visibility V_l (:func:`light_visibility`): the product
+  over the sphere proxies of the unblocked share of a light of angular radius PENUMBRA_DEG, which a
+  sphere seen at angular radius α = arcsin(r/d), its centre β away from l, covers for β < α − PENUMBRA_DEG
+  and misses for β > α + PENUMBRA_DEG (smoothstep between). The shadow of a sphere thus falls around
+  the ground point p = c − l (c_y − y_ground)/l_y (centre c), a disc stretched by 1/l_y along the light.
+  The disc fades into the backdrop between half its radius and
   its radius (smoothstep), so the floor has no hard edge.
 """
 
@@ -32,6 +40,9 @@ from station.render.errors import RenderInputError
 
 #: Most sphere proxies one shape may use for its contact shadow (the shader's array size).
 MAX_OCCLUDERS = 8
+#: Angular radius of a light for its sun shadow's penumbra, degrees (the sun's 0.27° widened so the
+#: sphere proxies' shadows stay smooth).
+PENUMBRA_DEG = 1.0
 
 
 def _finite(name: str, value: object, lo: float, hi: float) -> float:
@@ -119,3 +130,46 @@ def ground_fade(distance: NDArray, radius: float) -> NDArray[np.float64]:
     smoothstep down to 0 at the radius."""
     x = np.clip((np.asarray(distance, dtype=float) - 0.5 * radius) / (0.5 * radius), 0.0, 1.0)
     return 1.0 - x * x * (3.0 - 2.0 * x)
+
+
+def light_visibility(points: ArrayLike, occluders: ArrayLike, directions: ArrayLike) -> NDArray[np.float64]:
+    """Visibility V (P, k) of lights in world *directions* (k, 3) from ground *points* (P, 3) past the
+    sphere proxies *occluders* (n, 4): per sphere smoothstep(α − w, α + w, β) with α = arcsin(r/d) its
+    angular radius, β the angle between the light and its centre, w = PENUMBRA_DEG (module docstring);
+    lights below the horizon (l_y <= 0) get 0."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    ls = np.asarray(directions, dtype=float).reshape(-1, 3)
+    w = math.radians(PENUMBRA_DEG)
+    vis = np.ones((p.shape[0], ls.shape[0]))
+    for cx, cy, cz, r in np.asarray(occluders, dtype=float).reshape(-1, 4):
+        v = np.array([cx, cy, cz]) - p
+        d = np.maximum(np.linalg.norm(v, axis=-1), r * (1.0 + 1e-9))
+        alpha = np.arcsin(np.clip(r / d, 0.0, 1.0))
+        beta = np.arccos(np.clip((v @ ls.T) / d[:, None], -1.0, 1.0))
+        x = np.clip((beta - (alpha[:, None] - w)) / (2.0 * w), 0.0, 1.0)
+        vis *= x * x * (3.0 - 2.0 * x)
+    return vis * (ls[:, 1] > 0.0)[None, :]
+
+
+def ground_radiance(
+    points: ArrayLike,
+    occluders: ArrayLike,
+    albedo: float,
+    sky_down: ArrayLike,
+    light_dirs: ArrayLike | None = None,
+    light_flux: ArrayLike | None = None,
+) -> NDArray[np.float64]:
+    """Radiance (P, 3) of the ground at *points* (P, 3): albedo · [(D(+Y) − Σ (l_y)₊Φ/π)₊ (1 − O) +
+    Σ (l_y)₊Φ/π · V] (module docstring) with *sky_down* = D(+Y) (3,), the diffuse map (irradiance / π)
+    looking up, and optional lights (world directions (k, 3), flux (k, 3)) casting sun shadows."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    sky = np.asarray(sky_down, dtype=float).reshape(3)
+    open_sky = (1.0 - sphere_occlusion(p, occluders))[:, None]
+    if light_dirs is None or light_flux is None or not len(np.asarray(light_dirs)):
+        return albedo * sky[None, :] * open_sky
+    ls = np.asarray(light_dirs, dtype=float).reshape(-1, 3)
+    direct = (
+        np.clip(ls[:, 1], 0.0, None)[:, None] * np.asarray(light_flux, dtype=float).reshape(-1, 3) / np.pi
+    )
+    rest = np.clip(sky - direct.sum(axis=0), 0.0, None)
+    return albedo * (rest[None, :] * open_sky + light_visibility(p, occluders, ls) @ direct)

@@ -48,6 +48,7 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("POST", f"{V1}/qc/repeats"): ALL,
     ("POST", f"{V1}/analyses/seam"): frozenset({Q, A}),
     ("POST", f"{V1}/analyses/gg-index"): frozenset({Q, A}),
+    ("POST", f"{V1}/analyses/gg-index/environment"): frozenset({Q, A}),
     ("POST", f"{V1}/analyses/trompe-loeil"): frozenset({Q, A}),
     ("POST", f"{V1}/analyses/sweep"): frozenset({Q, A}),
     ("GET", f"{V1}/analyses"): ALL,

@@ -158,7 +158,7 @@ def test_render_stage_coat_and_refusals(files, tmp_path, capsys):
     flat = np.asarray(Image.open(plain)).astype(int)
     assert (flat[0, 0] == flat[0, 0, 0]).all()  # the flat grey background
     assert np.abs(img[0, 0] - flat[0, 0]).max() > 3  # the backdrop shows the environment instead
-    # --mesh and --flakes need the GL engine; the truth takes no stage; a bad coat index names its field
+    # --mesh needs the GL engine; the truth takes no stage; a bad coat index names its field
     for extra, field in (
         (["--engine", "numpy", "--mesh", "car.glb"], "engine"),
         (["--engine", "truth", "--stage"], "engine"),

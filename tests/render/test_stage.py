@@ -10,6 +10,7 @@ import pytest
 from station.render import numpy_renderer as nr
 from station.render import prefilter, procedural, shapes
 from station.render import stage as st
+from station.render.camera import Camera
 from station.render.cubemap import equirect_directions
 from station.render.environment import Environment
 from station.render.errors import RenderInputError
@@ -159,3 +160,82 @@ def test_basis_images_carry_the_stage(sky_basis) -> None:
     assert cached.linear_image([_paint()]) == pytest.approx(ref, rel=1e-4, abs=1e-5)
     frame = cached.edit([_paint()], 0.5)
     assert np.abs(frame.astype(int) - to_display(ref, 0.5).astype(int)).max() <= 1
+
+
+def _sun_world(rotation_deg: float) -> np.ndarray:
+    """The brightest direction of the procedural sky's map, turned by the stage's rotation R_y(θ)."""
+    eq = procedural.sunny_sky(128).equirect
+    lum = eq @ np.array([0.2126, 0.7152, 0.0722])
+    j, i = np.unravel_index(np.argmax(lum), lum.shape)
+    e = equirect_directions(*lum.shape)[j, i]
+    a = math.radians(rotation_deg)
+    return np.array([math.cos(a) * e[0] + math.sin(a) * e[2], e[1], -math.sin(a) * e[0] + math.cos(a) * e[2]])
+
+
+def test_light_visibility_edges_where_the_ray_grazes_the_sphere() -> None:
+    c, r, gy = np.array([0.2, 0.0, -0.3]), 1.0, -1.0
+    light = np.array([0.5, 0.6, 0.4])
+    light /= np.linalg.norm(light)
+    centre = c - light * (c[1] - gy) / light[1]  # where the ray through the sphere's centre meets the ground
+    occ = [(*c, r)]
+    assert st.light_visibility([centre], occ, [light])[0, 0] == 0.0
+    assert st.light_visibility([centre + np.array([6.0, 0.0, 0.0])], occ, [light])[0, 0] == 1.0
+    assert st.light_visibility([centre], occ, [[0.3, -0.2, 0.93]])[0, 0] == 0.0  # below the horizon
+    # Walking sideways out of the shadow, V = 1/2 where the ray from the point just grazes the sphere:
+    # the distance from c to the line p + t·l equals r (bisection on that distance, no angles).
+    side = np.cross(light, [0.0, 1.0, 0.0])
+    side /= np.linalg.norm(side)
+
+    def miss(s: float) -> float:
+        v = c - (centre + s * side)
+        return float(np.linalg.norm(v - (v @ light) * light)) - r
+
+    lo, hi = 0.0, 4.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if miss(mid) < 0 else (lo, mid)
+    assert st.light_visibility([centre + lo * side], occ, [light])[0, 0] == pytest.approx(0.5, abs=0.02)
+    assert st.light_visibility([centre + (lo - 0.1) * side], occ, [light])[0, 0] < 0.05
+    assert st.light_visibility([centre + (lo + 0.1) * side], occ, [light])[0, 0] > 0.95
+
+
+@pytest.mark.parametrize("rotation", [0.0, 90.0])
+def test_sun_shadow_falls_where_the_sun_ray_meets_the_sphere(sky_basis, rotation) -> None:
+    """Ground pixels whose ray to the sun hits the sphere (brute-force ray cast) are darker by the sun's
+    direct part albedo · l_y Φ/π; the others keep it."""
+    stage = st.Stage(backdrop=False, rotation_deg=rotation, ground_radius=20.0)
+    cam = Camera((0.0, 4.0, 4.5), (0.0, -1.0, 0.0), fov_deg=50.0)
+    scene = shapes.Scene("sphere", camera=cam, stage=stage)
+    w, h = 120, 90
+    img = nr.render_linear(scene, sky_basis, [_paint()], w, h).astype(float)
+    g = nr.gbuffer(scene, w, h)
+    origin, dirs = cam.rays(w, h)
+    ground = ~g.mask & (dirs[..., 1] < 0)
+    t = (-1.0 - origin[1]) / np.where(ground, dirs[..., 1], -1.0)
+    pts = origin + t[..., None] * dirs
+    sun = _sun_world(rotation)
+    # Ray p + s·sun against the unit sphere at the origin: hit when the closest approach is < 1 ahead.
+    along = -(pts @ sun)  # (c − p)·l with c = 0
+    closest = np.linalg.norm(-pts - along[..., None] * sun, axis=-1)
+    near_floor = np.hypot(pts[..., 0], pts[..., 2]) < 5.0
+    shade = ground & near_floor & (along > 0) & (closest < 0.8)
+    lit = ground & near_floor & ((along <= 0) | (closest > 1.3)) & (np.hypot(pts[..., 0], pts[..., 2]) > 2.5)
+    assert shade.sum() > 30 and lit.sum() > 30
+    direct = stage.ground_albedo * sun[1] * sky_basis.lights.flux[0, 1] / np.pi
+    # In the shadow the sun's part is gone (the contact shadow takes a little more of the sky).
+    assert img[lit, 1].mean() - img[shade, 1].mean() > 0.9 * direct
+    assert img[shade, 1].max() < img[lit, 1].min()
+
+
+@pytest.mark.gl
+def test_gl_sun_shadow_agrees_with_numpy(gl_ctx, sky_basis) -> None:
+    from station.render.gl_renderer import GLRenderer
+
+    cam = Camera((0.0, 4.0, 4.5), (0.0, -1.0, 0.0), fov_deg=50.0)
+    scene = shapes.Scene("sphere", camera=cam, stage=st.Stage(backdrop=False, rotation_deg=60.0))
+    with GLRenderer(sky_basis, 96, 72, ctx=gl_ctx) as gl:
+        got = gl.render_linear(scene, [_paint()])
+    ref = nr.render_linear(scene, sky_basis, [_paint()], 96, 72)
+    floor = ~nr.gbuffer(scene, 96, 72).mask
+    assert np.percentile(np.abs(got - ref)[floor], 99) < 0.01
+    assert np.ptp(ref[floor][:, 1]) > 0.2  # the shadow is there to agree on (sun part 0.3 · 0.58 · 4.5/π)

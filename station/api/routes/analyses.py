@@ -11,6 +11,7 @@ from station.api.deps import SessionDep, scoped
 from station.api.errors import ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.analyses import (
     AnalysisPublic,
+    GgIndexEnvironmentRequest,
     GgIndexOut,
     GgIndexRequest,
     SeamQaCreate,
@@ -42,6 +43,15 @@ def gg_index(_user: Analyst, request: GgIndexRequest) -> dict[str, Any]:
     """Goniogeometric index β_min (eq 4.3.1): the smallest misalignment whose seam ΔE reaches ε over the
     given geometries, the direction and the geometry attaining it (resolution 1e-6°). Nothing is stored."""
     return service.gg_index(request=request)
+
+
+@router.post("/gg-index/environment", response_model=GgIndexOut)
+def gg_index_environment(_user: Analyst, request: GgIndexEnvironmentRequest) -> dict[str, Any]:
+    """Environment-lit goniogeometric index β_min (eq 4.3.1, thesis §4.3): the smallest misalignment whose
+    seam ΔE reaches ε with both panels lit by a built-in environment or an uploaded .hdr/.exr
+    (``environment_hdr``, base64, size-capped as for ``/styling/render``), turned by ``rotation_deg``,
+    panel A facing up or front; nothing is stored. The answer adds ``environment`` and ``samples``."""
+    return service.gg_index_environment(request=request)
 
 
 @router.post("/trompe-loeil", response_model=TrompeOut)

@@ -65,10 +65,12 @@ def swatch(_user: Stylist, request: SwatchRequest) -> Response:
 def render(_user: Stylist, request: RenderRequest) -> Response:
     """A design (default silver) as PNG: in a built-in point-light scene (the picture an artist paints over
     before the sketch fit, thesis §3.7.1), or lit by an environment, built-in (``environment``) or an
-    uploaded .hdr/.exr (``environment_hdr``, base64, size-capped), on a shape with backdrop, rotation,
-    ground and contact shadow, exposure and the clear coat's Fresnel (``design2``: a second design on
-    the right half)."""
-    return Response(service.render_png(request=request), media_type="image/png")
+    uploaded .hdr/.exr (``environment_hdr``, base64, size-capped), on a shape or the built-in car mesh
+    with backdrop, rotation, ground with contact and sun shadows, exposure, the clear coat's Fresnel,
+    metallic flakes and a level-of-detail tolerance (``design2``: a second design on the right half).
+    Headers ``X-Flakes`` and ``X-Lod`` say what the level of detail chose, ``X-Render-Engine`` the engine."""
+    png, headers = service.render_png(request=request)
+    return Response(png, media_type="image/png", headers=headers)
 
 
 @router.post("/eyedrop", response_model=EyedropOut, openapi_extra=IMAGE_BODY, responses=_TOO_LARGE)

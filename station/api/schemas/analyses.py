@@ -5,12 +5,14 @@ from __future__ import annotations
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 from pydantic.config import JsonDict
 
 from station.api.schemas.common import Polar, StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
 from station.model.domain import JND_CIE76
+from station.render.procedural import NAMES as ENVIRONMENT_NAMES
+from station.render.scene_image import MAX_UPLOAD_BYTES
 
 Method = Literal["cie76", "cie94", "cie2000", "din6175"]
 Hinge = Annotated[
@@ -149,6 +151,62 @@ class GgIndexOut(BaseModel):
     epsilon: float
     method: str
     message: str
+
+
+class GgIndexEnvironmentRequest(BaseModel):
+    """Environment-lit goniogeometric index (eq 4.3.1, thesis §4.3): one paint on both panels lit by a
+    built-in environment or an uploaded .hdr/.exr (the same inputs as ``/styling/render``)."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [{"paint": _PAINT, "environment": "sky", "views_deg": [0.0, 30.0], "panel": "up"}]
+        },
+    )
+
+    paint: DesignBody
+    environment: str | None = Field(
+        None,
+        description="built-in environment (" + " | ".join(ENVIRONMENT_NAMES) + "); or environment_hdr",
+        json_schema_extra={"enum": list(ENVIRONMENT_NAMES)},
+    )
+    environment_hdr: str | None = Field(
+        None,
+        max_length=(MAX_UPLOAD_BYTES * 4) // 3 + 4,
+        description=f"base64 of an equirectangular .hdr/.exr file (at most {MAX_UPLOAD_BYTES} bytes, "
+        "2048 x 1024 pixels)",
+    )
+    rotation_deg: Annotated[
+        StrictFloat, Field(ge=-360.0, le=360.0, description="environment turn about the vertical, degrees")
+    ] = 0.0
+    panel: Literal["up", "front"] = Field(
+        "up", description="panel A's orientation: up (bonnet, roof) or front (a door facing +Z)"
+    )
+    views_deg: (
+        Annotated[
+            list[Polar],
+            Field(min_length=1, max_length=64, description="view polar angles in the panel's x-z plane"),
+        ]
+        | None
+    ) = None
+    epsilon: Epsilon = JND_CIE76
+    method: Literal["cie76", "cie94", "cie2000"] = "cie76"
+    hinge: Hinge = "in-plane"
+    direction: Literal["+", "-", "either"] = "either"
+    beta_max_deg: Annotated[
+        StrictFloat, Field(gt=0.0, le=89.0, description="largest β searched, degrees")
+    ] = 30.0
+    include_gloss: Annotated[StrictBool, Field(description="add the gloss lobe (excluded in the thesis)")] = (
+        False
+    )
+    per_geometry: Annotated[StrictBool, Field(description="list β_min for every view")] = False
+
+    @field_validator("environment")
+    @classmethod
+    def _known_environment(cls, v: str | None) -> str | None:
+        if v is not None and v not in ENVIRONMENT_NAMES:
+            raise ValueError("expected " + " | ".join(ENVIRONMENT_NAMES))
+        return v
 
 
 class TrompeRequest(BaseModel):

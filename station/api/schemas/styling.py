@@ -7,10 +7,11 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 from pydantic.config import JsonDict
 
-from station.api.schemas.common import StrictFloat, StrictInt
+from station.api.schemas.common import StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
+from station.model.flakes import FLAKE_RANGES
 from station.render.procedural import NAMES as ENVIRONMENT_NAMES
-from station.render.scene_image import MAX_UPLOAD_BYTES
+from station.render.scene_image import BUILTIN_MESHES, LOD_MAX_DE, MAX_UPLOAD_BYTES
 from station.render.shapes import SHAPES
 
 _EXAMPLE: JsonDict = {
@@ -141,6 +142,23 @@ class SketchFitOut(BaseModel):
     gloss_source: str
 
 
+def _flake_field(name: str, description: str) -> Any:
+    lo, hi = FLAKE_RANGES[name]
+    return Field(None, ge=lo, le=hi, allow_inf_nan=False, description=f"{description} ({lo} to {hi})")
+
+
+class FlakeLayerBody(BaseModel):
+    """A flake layer's physical parameters (``station.model.flakes.FlakeLayer``); missing fields take the
+    defaults of the paint type (metallic)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    size_um: StrictFloat | None = _flake_field("size_um", "mean flake diameter, µm")
+    density_per_mm2: StrictFloat | None = _flake_field("density_per_mm2", "flakes per mm² seen from above")
+    spread_deg: StrictFloat | None = _flake_field("spread_deg", "flake-normal spread per axis, degrees")
+    reflectance: StrictFloat | None = _flake_field("reflectance", "share of the reflection the flakes carry")
+
+
 class RenderRequest(BaseModel):
     """A design (default: the thesis's silver) in a built-in point-light scene: the picture an artist paints
     over before ``/styling/sketch-fit`` (§3.7.1); or, with ``environment`` or ``environment_hdr``, lit by
@@ -179,14 +197,14 @@ class RenderRequest(BaseModel):
     shape: str = Field(
         "speedshape", description="environment renders: the shape", json_schema_extra={"enum": list(SHAPES)}
     )
-    backdrop: bool = Field(True, description="show the environment behind the shape")
+    backdrop: StrictBool = Field(True, description="show the environment behind the shape")
     backdrop_blur_deg: Annotated[
         StrictFloat, Field(ge=0.0, le=90.0, description="backdrop blur, degrees")
     ] = 0.0
     rotation_deg: Annotated[
         StrictFloat, Field(ge=-360.0, le=360.0, description="environment turn about the vertical, degrees")
     ] = 0.0
-    ground: bool = Field(True, description="ground disc with contact shadow")
+    ground: StrictBool = Field(True, description="ground disc with contact shadow")
     exposure_ev: Annotated[StrictFloat, Field(ge=-10.0, le=10.0, description="exposure, EV")] = 0.0
     coat_index: Annotated[
         StrictFloat | None,
@@ -197,6 +215,26 @@ class RenderRequest(BaseModel):
             "null: no Fresnel, the thesis's model",
         ),
     ] = 1.5
+    flakes: StrictBool = Field(
+        False,
+        description="environment renders: draw the design's flake layer (the paint type's default, or "
+        "flake_layer); the level of detail switches it off where flakes are far below a pixel and says so "
+        "in the X-Flakes header",
+    )
+    flake_layer: FlakeLayerBody | None = Field(None, description="with flakes: the layer's parameters")
+    mesh: Literal[BUILTIN_MESHES] | None = Field(  # type: ignore[valid-type]
+        None, description="environment renders: a built-in mesh instead of the shape (car: procedural body)"
+    )
+    lod_de: Annotated[
+        StrictFloat | None,
+        Field(
+            gt=0.0,
+            le=LOD_MAX_DE,
+            allow_inf_nan=False,
+            description="CIEDE2000 tolerance: the level of detail picks lobes and environment resolution "
+            "(X-Lod header); null: the default basis",
+        ),
+    ] = None
 
     @field_validator("environment")
     @classmethod

@@ -15,7 +15,13 @@ from sqlalchemy.orm import Session
 
 from db.models import AnalysisResult, Measurement, User
 from station.api.errors import NotFoundError
-from station.api.schemas.analyses import GgIndexRequest, SeamQaCreate, SweepRequest, TrompeRequest
+from station.api.schemas.analyses import (
+    GgIndexEnvironmentRequest,
+    GgIndexRequest,
+    SeamQaCreate,
+    SweepRequest,
+    TrompeRequest,
+)
 from station.api.schemas.designs import DesignBody
 from station.api.services import audit
 from station.api.services.designs import to_design
@@ -138,6 +144,50 @@ def gg_index(*, request: GgIndexRequest) -> dict[str, Any]:
         **_options(request, INDEX_OPTIONS),
     )
     return r.to_dict(per_geometry=request.per_geometry)
+
+
+#: Width of the equirectangular map an environment is reduced to for the index (64 × 32 samples).
+INDEX_ENV_WIDTH = 64
+
+
+def gg_index_environment(*, request: GgIndexEnvironmentRequest) -> dict[str, Any]:
+    """Environment-lit goniogeometric index (``station.analysis.index.environment_index``) as
+    ``IndexResult.to_dict()`` plus the environment's name and sample count; nothing is stored. The map
+    (built-in or uploaded, ``station.api.services.styling.request_environment``) is box-filtered to
+    INDEX_ENV_WIDTH, turned by ``rotation_deg`` about +Y, and each pixel becomes a sample (direction,
+    radiance × solid angle)."""
+    import math
+
+    import numpy as np
+
+    from station.analysis.index import environment_index
+    from station.api.services.styling import request_environment
+    from station.render.cubemap import equirect_directions
+    from station.render.truth import equirect_solid_angles
+
+    env = request_environment(request.environment, request.environment_hdr)
+    small = env.downsampled(INDEX_ENV_WIDTH) if env.equirect.shape[1] > INDEX_ENV_WIDTH else env
+    img = np.asarray(small.equirect, dtype=float)
+    h, w = img.shape[:2]
+    e = equirect_directions(h, w).reshape(-1, 3)
+    a = math.radians(request.rotation_deg)  # world = R_y(θ) · map direction (station.render.stage)
+    rot = np.array([[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]])
+    radiance = img.reshape(-1, 3) * equirect_solid_angles(h, w).reshape(-1, 1)
+    keep = radiance.sum(axis=1) > 0.0
+    r = environment_index(
+        to_design(request.paint, "paint"),
+        (e @ rot.T)[keep],
+        radiance[keep],
+        request.views_deg,
+        panel=request.panel,
+        gloss=request.include_gloss,
+        **_options(request, INDEX_OPTIONS),
+    )
+    return {
+        **r.to_dict(per_geometry=request.per_geometry),
+        "environment": env.name,
+        "samples": int(keep.sum()),
+    }
 
 
 def trompe_loeil(*, request: TrompeRequest) -> dict[str, Any]:

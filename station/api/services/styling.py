@@ -10,9 +10,11 @@ The routes bound how many uploads are decoded at once (``app.state.image_slots``
 from __future__ import annotations
 
 import io
+import json
 import math
 from typing import Any
 
+from station.api.errors import UnavailableError
 from station.api.schemas.styling import RenderRequest, SwatchRequest, VariationsRequest
 from station.api.services.designs import to_design
 from station.errors import InputError
@@ -58,32 +60,25 @@ def _silver() -> Any:
     return FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")  # thesis §3.7.1
 
 
-def render_png(*, request: RenderRequest) -> bytes:
+def render_png(*, request: RenderRequest) -> tuple[bytes, dict[str, str]]:
     """The design (default silver) shaded in the built-in scene, or lit by the requested environment on
-    its stage (``station.render.scene_image``), sRGB-encoded PNG."""
+    its stage (``station.render.scene_image``), sRGB-encoded PNG, and the headers that report the level of
+    detail's choices (``X-Flakes``, the flakes' reason; ``X-Lod``, the choice as ASCII JSON) and the engine (``X-Render-Engine``)."""
     design = to_design(request.design) if request.design is not None else _silver()
     if request.environment is None and request.environment_hdr is None:
         from station.design.scene import builtin_scene, shade, srgb_encode, to_uint8
 
-        return png_bytes(to_uint8(srgb_encode(shade(builtin_scene(request.scene, request.size), design))))
-    import base64
-    import binascii
-
+        for name in ("flakes", "mesh", "lod_de"):
+            if getattr(request, name) not in (None, False):
+                raise InputError(name, "an environment render (environment or environment_hdr)", None)
+        png = png_bytes(to_uint8(srgb_encode(shade(builtin_scene(request.scene, request.size), design))))
+        return png, {}
+    from station.model.design_io import default_flakes
+    from station.model.flakes import FlakeLayer
     from station.model.gloss import ClearCoat
-    from station.render.procedural import procedural_environment
-    from station.render.scene_image import ENV_WIDTH, environment_from_bytes, render_design_image
+    from station.render.errors import GLUnavailableError
     from station.render.stage import Stage
 
-    if request.environment is not None and request.environment_hdr is not None:
-        raise InputError("environment_hdr", "either environment or environment_hdr, not both", None)
-    if request.environment_hdr is not None:
-        try:
-            data = base64.b64decode(request.environment_hdr, validate=True)
-        except (binascii.Error, ValueError):
-            raise InputError("environment_hdr", "base64 of an .hdr/.exr file", None, "not base64") from None
-        env = environment_from_bytes(data, "environment_hdr")
-    else:
-        env = procedural_environment(str(request.environment), ENV_WIDTH)
     designs = [design] + ([to_design(request.design2)] if request.design2 is not None else [])
     stage = Stage(
         backdrop=request.backdrop,
@@ -92,16 +87,60 @@ def render_png(*, request: RenderRequest) -> bytes:
         ground=request.ground,
     )
     coat = ClearCoat(request.coat_index) if request.coat_index is not None else None
-    image = render_design_image(
-        designs,
-        env,
-        shape=request.shape,
-        stage=stage,
-        coat=coat,
-        exposure_ev=request.exposure_ev,
-        size=request.size,
-    )
-    return png_bytes(image)
+    if request.flake_layer is not None and not request.flakes:
+        raise InputError("flake_layer", "flakes: true with a flake layer", None)
+    flakes = None
+    if request.flakes:
+        if request.flake_layer is not None:
+            given = {k: v for k, v in request.flake_layer.model_dump().items() if v is not None}
+            flakes = FlakeLayer(**{**(default_flakes(design) or FlakeLayer()).to_dict(), **given})
+        else:
+            flakes = default_flakes(design)
+    from station.render.scene_image import render_scene_image
+
+    try:
+        result = render_scene_image(
+            designs,
+            request_environment(request.environment, request.environment_hdr),
+            shape=request.shape,
+            stage=stage,
+            coat=coat,
+            exposure_ev=request.exposure_ev,
+            size=request.size,
+            flakes=flakes,
+            mesh=request.mesh,
+            lod_de=request.lod_de,
+        )
+    except GLUnavailableError as exc:
+        raise UnavailableError(f"mesh renders need an OpenGL stack on the service: {exc}") from None
+    headers = {"X-Render-Engine": result.engine}
+    if request.flakes:
+        headers["X-Flakes"] = "no flake layer" if result.flakes is None else result.flakes.reason
+    if result.lod is not None:  # JSON with non-ASCII escaped: header values are Latin-1
+        headers["X-Lod"] = json.dumps(result.lod, ensure_ascii=True, separators=(",", ":"))
+    return png_bytes(result.image), headers
+
+
+def request_environment(environment: str | None, environment_hdr: str | None) -> Any:
+    """The ``station.render`` environment of a request: the built-in *environment* at ENV_WIDTH or the
+    base64 .hdr/.exr upload *environment_hdr* (InputError naming the field; not both)."""
+    import base64
+    import binascii
+
+    from station.render.procedural import procedural_environment
+    from station.render.scene_image import ENV_WIDTH, environment_from_bytes
+
+    if environment is not None and environment_hdr is not None:
+        raise InputError("environment_hdr", "either environment or environment_hdr, not both", None)
+    if environment_hdr is not None:
+        try:
+            data = base64.b64decode(environment_hdr, validate=True)
+        except (binascii.Error, ValueError):
+            raise InputError("environment_hdr", "base64 of an .hdr/.exr file", None, "not base64") from None
+        return environment_from_bytes(data, "environment_hdr")
+    if environment is None:
+        raise InputError("environment", "a built-in environment or environment_hdr", None)
+    return procedural_environment(str(environment), ENV_WIDTH)
 
 
 def load_upload(data: bytes, *, max_bytes: int, max_pixels: int) -> Any:

@@ -28,6 +28,9 @@
 #ifndef NO_SHAPE
 #define NO_SHAPE 0
 #endif
+#ifndef PENUMBRA_DEG
+#define PENUMBRA_DEG 1.0
+#endif
 #ifndef NEUTRAL_ALBEDO
 #define NEUTRAL_ALBEDO 0.18
 #endif
@@ -149,7 +152,29 @@ vec3 stage_background(vec3 o, vec3 d) {
 #else
             vec3 sky = textureLod(u_diffuse, vec3(0.0, 1.0, 0.0), 0.0).rgb;
 #endif
-            bg = mix(bg, u_ground_albedo * sky * (1.0 - clamp(occ, 0.0, 1.0)), w);
+            // Sun shadows (station.render.stage.ground_radiance): each extracted light's direct part times
+            // its visibility past the sphere proxies; the rest of the sky with the contact shadow.
+            vec3 lit = vec3(0.0);
+            vec3 direct_sum = vec3(0.0);
+            float pw = radians(PENUMBRA_DEG);
+            for (int l = 0; l < u_n_lights; ++l) {
+                vec3 ld = transpose(u_rot) * u_light_dir[l];  // the light's world direction
+                if (ld.y <= 0.0) continue;
+                vec3 direct = ld.y * u_light_flux[l] / PI;
+                direct_sum += direct;
+                float vis = 1.0;
+                for (int k = 0; k < u_n_occ; ++k) {
+                    vec3 v = u_occ[k].xyz - p;
+                    float dl = max(length(v), u_occ[k].w * (1.0 + 1e-6));
+                    float alpha = asin(clamp(u_occ[k].w / dl, 0.0, 1.0));
+                    float beta = acos(clamp(dot(v, ld) / dl, -1.0, 1.0));
+                    float xs = clamp((beta - (alpha - pw)) / (2.0 * pw), 0.0, 1.0);
+                    vis *= xs * xs * (3.0 - 2.0 * xs);
+                }
+                lit += direct * vis;
+            }
+            vec3 rest = max(sky - direct_sum, vec3(0.0));
+            bg = mix(bg, u_ground_albedo * (rest * (1.0 - clamp(occ, 0.0, 1.0)) + lit), w);
         }
     }
     return bg;
