@@ -326,9 +326,23 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         if self._worker is not None and self._worker.isRunning():
             return  # its done handler schedules again
         env = self._gl_envs.get(key[0].environment)
-        if env is None:  # paintGL prefilters it on the context: draw, then look again
-            self.update()
-            self._settle.start()
+        if env is None and self.ctx is not None:  # e.g. an environment change while hidden
+            from station.render.errors import RenderError
+
+            self.makeCurrent()
+            try:
+                env = self._gl_env(key[0].environment)
+            except RenderError:  # no GL 4.3 here: the preview path and the NumPy prefilter
+                self._core_ok = False
+                self._basis_key = None
+                self._refresh_basis()
+                return
+            finally:
+                self.doneCurrent()
+        if env is None:  # never drawn: the first paintGL prefilters and schedules again
+            if self.isVisible():
+                self.update()
+                self._settle.start()
             return
         self._start_worker(key, env)
 
