@@ -221,6 +221,7 @@ class GLRenderer:
         coat: ClearCoat | None,
         mesh=None,
         flakes: FlakeLayer | None = None,
+        target=None,
     ):
         pair = check_paints(self.basis, paints)
         self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
@@ -232,7 +233,7 @@ class GLRenderer:
                 self._program("sphere", linear, "stage", (0, feats[1], 0)),
                 self._program("sphere", linear, "mesh", feats),
             ]
-        _, fbo = self._target(linear, depth=mesh is not None)
+        fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
         fbo.use()
         m = len(self._lobes)
         if self.combined:
@@ -401,11 +402,14 @@ class GLRenderer:
         curve: str = "aces",
         coat: ClearCoat | None = None,
         flakes: FlakeLayer | None = None,
+        target=None,
     ):
         """Render the 8-bit display frame into this renderer's framebuffer and return it (no read-back:
         a caller on the same context blits it, e.g. ``ctx.copy_framebuffer(screen, fbo)``; row 0 is the
-        bottom row, GL's convention)."""
-        return self._draw(scene, paints, False, exposure_ev, curve, coat, flakes=flakes)
+        bottom row, GL's convention). *target*: a framebuffer of this context and of this renderer's
+        size (e.g. a widget's, ``ctx.detect_framebuffer``) drawn into instead, which saves the blit; not
+        for meshes (no depth buffer is assumed)."""
+        return self._draw(scene, paints, False, exposure_ev, curve, coat, flakes=flakes, target=target)
 
     def render_linear(self, scene, paints, coat: ClearCoat | None = None, flakes: FlakeLayer | None = None):
         """Linear sRGB radiance (H, W, 3) float32."""

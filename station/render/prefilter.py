@@ -12,7 +12,8 @@ Estimators of the same integral:
 
 * :func:`prefilter_brute` — direct quadrature over every source texel with exact solid angles; the
   reference for tests, and the production path for wide lobes (output faces ≤ BRUTE_MAX_SIZE, from
-  a source cube of max(32, 2× the output size)), where it costs milliseconds and has no sampling error.
+  a source cube of max(32, 2× the output size)), where it has no sampling error; :class:`GLBrute` is
+  its GL twin (same float32 terms) for the ``gl`` engine.
 * the GL pass of :class:`GLPrefilter` and its NumPy twin :func:`prefilter_grid_numpy` —
   deterministic quadrature on a G×G tangent-plane grid around each texel direction covering the lobe
   down to cos^n = 1e-3, each sample read from the source mip level matching the grid step (see
@@ -31,6 +32,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -98,6 +100,67 @@ def prefilter_brute(src_cube: np.ndarray, exponent: float, out_size: int) -> np.
         acc = lobe_weights(out_dirs[i : i + 256], src_dirs, exponent) @ rad
         out[i : i + 256] = acc[:, :3] / acc[:, 3:]
     return out.reshape(6, out_size, out_size, 3)
+
+
+class GLBrute:
+    """:func:`prefilter_brute` as one GL pass per map (``shaders/prefilter_brute.frag.glsl``) on *ctx*:
+    the same float32 terms as the NumPy version, so the maps agree to float rounding, ~50× faster on
+    llvmpipe. Source cubes are uploaded once per object; a context manager (*ctx* is not released)."""
+
+    def __init__(self, ctx) -> None:
+        self.ctx = ctx
+        self.prog = build_program(ctx, "fullscreen.vert.glsl", "prefilter_brute.frag.glsl")
+        self.vao = ctx.vertex_array(self.prog, [])
+        self._sources: dict[int, tuple[np.ndarray, Any, Any]] = {}
+
+    def _texture(self, data: np.ndarray):
+        """(6, S, S, C) float32 as an (S, 6S) float texture (faces stacked), nearest texel fetches."""
+        s, c = data.shape[1], data.shape[-1]
+        flat = np.ascontiguousarray(data.reshape(6 * s, s, c), dtype=np.float32)
+        return self.ctx.texture((s, 6 * s), c, flat.tobytes(), dtype="f4")
+
+    def run(self, src_cube: np.ndarray, exponent: float, out_size: int) -> np.ndarray:
+        """Prefiltered cube (6, out, out, 3) float32 (as :func:`prefilter_brute`)."""
+        key = id(src_cube)
+        if key not in self._sources:
+            s = src_cube.shape[1]
+            dirs = cubemap.face_directions(s).astype(np.float32)
+            sa = np.tile(cubemap.texel_solid_angles(s), (6, 1, 1))[..., None].astype(np.float32)
+            rad = np.concatenate([src_cube.astype(np.float32) * sa, sa], axis=-1)
+            self._sources[key] = (src_cube, self._texture(dirs), self._texture(rad))  # keeps id valid
+        _, src_dirs, src_rad = self._sources[key]
+        out_dirs = self._texture(cubemap.face_directions(out_size))
+        target = self.ctx.texture((out_size, 6 * out_size), 4, dtype="f4")
+        fbo = self.ctx.framebuffer(color_attachments=[target])
+        try:
+            fbo.use()
+            for unit, tex in enumerate((out_dirs, src_dirs, src_rad)):
+                tex.use(unit)
+            self.prog["u_out_dirs"] = 0
+            self.prog["u_src_dirs"] = 1
+            self.prog["u_src_rad"] = 2
+            self.prog["u_exponent"] = float(exponent)
+            self.vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+            data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
+        finally:
+            for obj in (fbo, target, out_dirs):
+                obj.release()
+        return data.reshape(6, out_size, out_size, 4)[..., :3].copy()
+
+    def release(self) -> None:
+        """Free the GL objects."""
+        for _, a, b in self._sources.values():
+            a.release()
+            b.release()
+        self._sources.clear()
+        self.vao.release()
+        self.prog.release()
+
+    def __enter__(self) -> GLBrute:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
 
 
 TAIL = 1.0e-3
@@ -261,7 +324,8 @@ def prefilter_basis(
 ) -> PrefilteredBasis:
     """Prefilter *env* for every exponent, plus its SH coefficients (timings in seconds).
 
-    engine: ``gl`` (filtered IS on the GL context), ``numpy`` (same estimator, slower; output faces
+    engine: ``gl`` (the tangent-grid quadrature, and the brute-force sums of the wide lobes and the
+    diffuse map (:class:`GLBrute`), on the GL context), ``numpy`` (same estimators, slower; output faces
     capped at 64) or ``auto`` (GL when a context can be made). *cache* (optional) stores and reuses
     maps on disk. *max_size* caps the output face size (level of detail). With *lights* (default)
     compact bright sources are taken out of the environment (:func:`extract_lights`): lobes with
@@ -298,37 +362,47 @@ def prefilter_basis(
             small[(k, size)] = cubemap.equirect_to_cube((residual if k else env).equirect, size)
         return small[(k, size)]
 
-    if todo:
-        t0 = time.perf_counter()
-        brute = [i for i in todo if plan[i][1] <= BRUTE_MAX_SIZE]
-        sampled = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
-        for i in brute:
-            e, size, _ = plan[i]
-            cubes[i] = prefilter_brute(small_cube(int(wide[i]), max(32, 2 * size)), e, size).astype(
-                np.float32
-            )
-        timings["brute"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        for k in (0, 1):
-            group = [i for i in sampled if int(wide[i]) == k]
-            if not group:
-                continue
-            source = residual if k else env
-            if engine == "gl":
-                own = ctx is None
-                gl_ctx = create_gl_context() if own else ctx
-                try:
+    own = engine == "gl" and ctx is None
+    gl_ctx = create_gl_context() if own else ctx
+    brute_gl = GLBrute(gl_ctx) if engine == "gl" else None
+
+    def brute(k: int, exponent: float, size: int, src_size: int) -> np.ndarray:
+        cube = small_cube(k, src_size)
+        if brute_gl is not None:
+            return brute_gl.run(cube, exponent, size)
+        return prefilter_brute(cube, exponent, size).astype(np.float32)
+
+    try:
+        if todo:
+            t0 = time.perf_counter()
+            for i in [i for i in todo if plan[i][1] <= BRUTE_MAX_SIZE]:
+                e, size, _ = plan[i]
+                cubes[i] = brute(int(wide[i]), e, size, max(32, 2 * size))
+            timings["brute"] = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            sampled = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
+            for k in (0, 1):
+                group = [i for i in sampled if int(wide[i]) == k]
+                if not group:
+                    continue
+                source = residual if k else env
+                if engine == "gl":
                     with GLPrefilter.from_equirect(source.equirect, src, gl_ctx) as gl:
                         for i in group:
                             cubes[i] = gl.run(*plan[i])
-                finally:
-                    if own:
-                        gl_ctx.release()
-            else:
-                src_cube = source.to_cube(src)
-                for i in group:
-                    cubes[i] = prefilter_grid_numpy(src_cube, *plan[i]).astype(np.float32)
-        timings["lobes"] = time.perf_counter() - t0
+                else:
+                    src_cube = source.to_cube(src)
+                    for i in group:
+                        cubes[i] = prefilter_grid_numpy(src_cube, *plan[i]).astype(np.float32)
+            timings["lobes"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        diffuse = brute(0, 1.0, DIFFUSE_SIZE, 32)
+        timings["diffuse"] = time.perf_counter() - t0
+    finally:
+        if brute_gl is not None:
+            brute_gl.release()
+        if own:
+            gl_ctx.release()
     maps = [c for c in cubes if c is not None]
     if len(maps) != len(cubes):
         raise RenderError("prefilter: a lobe was neither cached nor computed")
@@ -336,9 +410,6 @@ def prefilter_basis(
         for i in todo:
             cache.put(keys[i], maps[i])
     timings["cache_hits"] = float(len(exps) - len(todo))
-    t0 = time.perf_counter()
-    diffuse = prefilter_brute(small_cube(0, 32), 1.0, DIFFUSE_SIZE).astype(np.float32)
-    timings["diffuse"] = time.perf_counter() - t0
     return PrefilteredBasis(
         env_name=env.name,
         env_hash=env.content_hash,

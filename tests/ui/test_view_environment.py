@@ -58,7 +58,6 @@ def test_model_loads_a_photographed_hdr(hdri_files) -> None:
 def test_load_hdr_button_and_dialog(qtbot, hdri_files, own_cache, tmp_path) -> None:
     from station.render.environment import load_environment
     from station.render.hdr_io import write_hdr
-    from ui.models.view import PREFILTER_MAX_SIZE, environment_basis
 
     # The photographed environments written small (64 × 32) as real Radiance files: the same path through
     # the reader, and prefilters the test can wait for. The view starts in the first, the dialog loads
@@ -83,7 +82,7 @@ def test_load_hdr_button_and_dialog(qtbot, hdri_files, own_cache, tmp_path) -> N
     panel.view.wait_idle(60000)
     qtbot.waitUntil(lambda: panel.view.full_quality, timeout=60000)
     # the frame shown is the core's picture of this file's prefiltered maps
-    assert panel.view.basis.core.basis is environment_basis(str(small[1]), PREFILTER_MAX_SIZE)
+    assert panel.view.basis.core.basis is panel.view.environment_prefilter(str(small[1]))
     after = panel.view.grab_image()
     np.testing.assert_array_equal(after, panel.view.basis.core.edit(list(model.weights()), 0.0))
     obj = panel.view.basis.paint >= 0

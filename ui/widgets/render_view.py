@@ -3,14 +3,17 @@
 A camera, shape, environment or size change recomputes the basis images (NumPy, the core's ray
 caster and prefiltered maps) in a worker QThread (joined on close). Meanwhile the GL view draws every
 frame with the core's GL renderer (:class:`station.render.gl_renderer.GLRenderer` on the widget's own
-context, full resolution, the full prefilter once it is in memory): orbiting is at full quality from the
-first frame, and paint edits switch to the cached basis images as soon as the worker has them. Without
-a GL 4.3 context (and in :class:`ImageRenderView`) a view change shows a quarter-resolution preview of
-the basis images in the GUI thread instead, then full resolution from the worker. On a cold prefilter cache (first start) the preview
-is also rendered from a coarse prefilter of the same environment (``PREVIEW_PREFILTER_SIZE`` faces,
-~0.1 s) and the worker makes the full prefilter and the full-resolution basis, so the first frame
-does not wait for the ~3 s prefilter (docs/viewer.md). A paint edit only uploads new weights, so the
-picture follows the mouse. :class:`ImageRenderView` is the same view without GL (the NumPy
+context, straight into the widget's framebuffer, full resolution, full prefilter): orbiting is at full
+quality from the first frame. The environment is prefiltered on the same context
+(:func:`ui.models.view.environment_basis_gl`, one render-to-texture pass per lobe), so an environment
+change reaches full quality in about a second, cold cache included. The worker starts only once the
+view has been still for ``SETTLE_MS`` (it would take the CPU llvmpipe draws the orbit with); paint
+edits switch to its cached basis images as soon as it has them. Without a GL 4.3 context (and in
+:class:`ImageRenderView`) a view change shows a quarter-resolution preview of the basis images in the
+GUI thread instead, then full resolution from the worker; on a cold prefilter cache that preview is
+rendered from a coarse NumPy prefilter of the same environment (``PREVIEW_PREFILTER_SIZE`` faces,
+~0.1 s) while the worker makes the full one (docs/viewer.md). A paint edit only uploads new weights, so
+the picture follows the mouse. :class:`ImageRenderView` is the same view without GL (the NumPy
 composite drawn as a QImage) for platforms that have no OpenGL (Qt's offscreen QPA).
 
 Mouse: left drag orbits (yaw/pitch), the wheel zooms.
@@ -22,12 +25,14 @@ import time
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QPointF, QThread, Signal
+from PySide6.QtCore import QPointF, QThread, QTimer, Signal
 from PySide6.QtGui import QImage, QMouseEvent, QPainter, QSurfaceFormat, QWheelEvent
 from PySide6.QtOpenGLWidgets import QOpenGLWidget
 from PySide6.QtWidgets import QWidget
 
+from station.render.gl_context import GL_TEXTURE_CUBE_MAP_SEAMLESS
 from station.render.numpy_renderer import BACKGROUND
+from station.render.prefilter import PrefilteredBasis
 from ui.models.view import (
     PREFILTER_MAX_SIZE,
     PREVIEW_PREFILTER_SIZE,
@@ -41,6 +46,11 @@ from ui.models.view import (
 SHADER_DIR = Path(__file__).resolve().parents[1] / "shaders"
 PREVIEW_DIVISOR = 4
 ORBIT_DEG_PER_PIXEL = 0.4
+#: The GL view starts the basis worker once the view has not changed for this long (ms): during an orbit
+#: the worker's NumPy ray cast would take the CPU that llvmpipe draws the frames with.
+SETTLE_MS = 250
+#: Prefiltered environments a GL view keeps in memory (the current one and the last few).
+GL_ENV_KEEP = 4
 GL_RGB9_E5 = 0x8C3D
 
 
@@ -86,13 +96,21 @@ class BasisWorker(QThread):
 
     done = Signal(object, object)  # (ViewSettings, BasisImages)
 
-    def __init__(self, settings: ViewSettings, width: int, height: int, parent=None) -> None:
+    def __init__(
+        self,
+        settings: ViewSettings,
+        width: int,
+        height: int,
+        env: PrefilteredBasis | None = None,
+        parent=None,
+    ) -> None:
         super().__init__(parent)
-        self.settings, self.width_px, self.height_px = settings, width, height
+        self.settings, self.width_px, self.height_px, self.env = settings, width, height, env
 
     def run(self) -> None:
-        """Compute and report."""
-        self.done.emit(self.settings, BasisImages.compute(self.settings, self.width_px, self.height_px))
+        """Compute and report (from *env* when given, else ``environment_basis``'s NumPy prefilter)."""
+        basis = BasisImages.compute(self.settings, self.width_px, self.height_px, env=self.env)
+        self.done.emit(self.settings, basis)
 
 
 class _ViewLogic:
@@ -132,7 +150,7 @@ class _ViewLogic:
             return
         self._basis_key = key
         if self._gl_frames():
-            self._start_worker(key)
+            self._schedule_worker()
             return
         pw, ph = max(8, w // PREVIEW_DIVISOR), max(8, h // PREVIEW_DIVISOR)
         env = self.model.settings.environment
@@ -158,12 +176,15 @@ class _ViewLogic:
         frame of the core's GL renderer from the full prefilter."""
         return self.basis_current or (self._gl_full_key is not None and self._gl_full_key == self._basis_key)
 
-    def _start_worker(self, key: tuple) -> None:
+    def _schedule_worker(self) -> None:
+        """GL frames: start the worker for the current key later (GLRenderView)."""
+
+    def _start_worker(self, key: tuple, env: PrefilteredBasis | None = None) -> None:
         if self._worker is not None and self._worker.isRunning():
             self._pending = key
             return
         settings, w, h = key
-        self._worker = BasisWorker(settings, w, h)
+        self._worker = BasisWorker(settings, w, h, env)
         self._worker.done.connect(self._on_worker_done)
         self._worker.start()
 
@@ -177,7 +198,11 @@ class _ViewLogic:
             self._set_basis(basis)
         if self._worker is not None:
             self._worker.wait()
-        if self._pending is not None:
+        if self._gl_frames():  # a stale result: start again once the view is still
+            self._pending = None
+            if not self.basis_current:
+                self._schedule_worker()
+        elif self._pending is not None:
             key, self._pending = self._pending, None
             self._start_worker(key)
 
@@ -188,10 +213,18 @@ class _ViewLogic:
         deadline = time.perf_counter() + timeout_ms / 1000
         while time.perf_counter() < deadline:
             QCoreApplication.processEvents()
-            if (self._worker is None or self._worker.isFinished()) and self._pending is None:
+            if (
+                (self._worker is None or self._worker.isFinished())
+                and self._pending is None
+                and not self._busy()
+            ):
                 QCoreApplication.processEvents()
                 return
             time.sleep(0.005)
+
+    def _busy(self) -> bool:
+        """Whether a worker start is still scheduled (GLRenderView's settle timer)."""
+        return False
 
     def _shutdown(self) -> None:
         self.model.events.disconnect_all(self)
@@ -263,9 +296,71 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self._core = None  # the core's GLRenderer on this context, for view changes
         self._core_key: tuple | None = None
         self._core_ok = True  # False when the context cannot build the core's shaders (GL < 4.3)
+        self._gl_envs: dict[str, PrefilteredBasis] = {}  # full prefilters made on this context
+        self._settle = QTimer(self)
+        self._settle.setSingleShot(True)
+        self._settle.setInterval(SETTLE_MS)
+        self._settle.timeout.connect(self._on_settle)
+        self.frameSwapped.connect(self._on_swapped)
 
     def _gl_frames(self) -> bool:
         return self._core_ok
+
+    def _schedule_worker(self) -> None:
+        self._settle.start()  # restarted by every view change: the worker waits for a still view
+
+    def _busy(self) -> bool:
+        return self._settle.isActive()
+
+    def _on_swapped(self) -> None:
+        """A frame is on screen: the view counts as still from now (llvmpipe finishes the frame while Qt
+        composites it, which can outlast SETTLE_MS on a loaded machine)."""
+        if self._settle.isActive():
+            self._settle.start()
+
+    def _on_settle(self) -> None:
+        """The view is still: start the worker on the environment prefiltered on this context."""
+        key = self._basis_key
+        if key is None or self.basis_current or not self._core_ok:
+            return
+        if self._worker is not None and self._worker.isRunning():
+            return  # its done handler schedules again
+        env = self._gl_envs.get(key[0].environment)
+        if env is None and self.ctx is not None:  # e.g. an environment change while hidden
+            from station.render.errors import RenderError
+
+            self.makeCurrent()
+            try:
+                env = self._gl_env(key[0].environment)
+            except RenderError:  # no GL 4.3 here: the preview path and the NumPy prefilter
+                self._core_ok = False
+                self._basis_key = None
+                self._refresh_basis()
+                return
+            finally:
+                self.doneCurrent()
+        if env is None:  # never drawn: the first paintGL prefilters and schedules again
+            if self.isVisible():
+                self.update()
+                self._settle.start()
+            return
+        self._start_worker(key, env)
+
+    def environment_prefilter(self, env_name: str) -> PrefilteredBasis | None:
+        """The full prefilter of *env_name* made on this view's context, or None before its first frame."""
+        return self._gl_envs.get(env_name)
+
+    def _gl_env(self, env_name: str) -> PrefilteredBasis:
+        """The full prefilter of *env_name* on this context (made now when new; the last GL_ENV_KEEP kept)."""
+        from ui.models.view import environment_basis_gl
+
+        basis = self._gl_envs.pop(env_name, None)
+        if basis is None:
+            basis = environment_basis_gl(env_name, self.ctx)
+        self._gl_envs[env_name] = basis  # most recent last
+        while len(self._gl_envs) > GL_ENV_KEEP:
+            del self._gl_envs[next(iter(self._gl_envs))]
+        return basis
 
     def _set_basis(self, basis: BasisImages) -> None:
         self.basis = basis
@@ -279,6 +374,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         import moderngl
 
         self.ctx = moderngl.create_context()
+        self.ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)  # as the core's contexts (gl_context)
         self.gl_renderer = self.ctx.info["GL_RENDERER"]
         quad = np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4")
         self._vbo = self.ctx.buffer(quad.tobytes())
@@ -332,6 +428,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         weights = self.model.weights()
         if weights is not None and self._core_ok and not self.basis_current:
             if self._draw_core_frame(weights, w, h):
+                self._settle.start()  # still means no new view for SETTLE_MS after this frame
                 self.frames += 1
                 self.gl_frames += 1
                 self.last_frame_s = time.perf_counter() - t0
@@ -349,33 +446,35 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self.frame_rendered.emit()
 
     def _draw_core_frame(self, weights, w: int, h: int) -> bool:
-        """Draw the current view with the core's GL renderer (full resolution); False when it cannot."""
+        """Draw the current view with the core's GL renderer straight into the widget's framebuffer (full
+        resolution, full prefilter made on this context); False when the context cannot."""
         from station.render.errors import RenderError
         from station.render.gl_renderer import GLRenderer
-        from ui.models.view import environment_basis
 
         settings = self.model.settings
-        size = PREFILTER_MAX_SIZE if environment_ready(settings.environment) else PREVIEW_PREFILTER_SIZE
-        basis = environment_basis(settings.environment, size)
-        key = (id(basis), w, h)
         try:
+            basis = self._gl_env(settings.environment)
+            key = (id(basis), w, h)
             if self._core is None or self._core_key != key:
                 if self._core is not None:
                     self._core.release()
                 self._core = GLRenderer(basis, w, h, ctx=self.ctx)
                 self._core_key = key
-            fbo = self._core.draw(
-                settings.scene(), list(weights), settings.exposure_ev, coat=settings.clear_coat()
+            self._core.draw(
+                settings.scene(),
+                list(weights),
+                settings.exposure_ev,
+                coat=settings.clear_coat(),
+                target=self._screen,
             )
         except RenderError:  # no GL 4.3 here: fall back to the quarter-resolution preview path
             self._core_ok = False
             self._core = None
             self._basis_key = None
+            self._screen.use()
             self._refresh_basis()
             return False
-        self.ctx.copy_framebuffer(self._screen, fbo)
-        self._screen.use()
-        self._gl_full_key = self._basis_key if size == PREFILTER_MAX_SIZE else None
+        self._gl_full_key = self._basis_key
         return True
 
     def _draw_cpu_frame(self, weights, w: int, h: int) -> None:
@@ -423,6 +522,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
 
     def close_view(self) -> None:
         """Join the worker and release GPU objects."""
+        self._settle.stop()
         self._shutdown()
         if self.ctx is not None:
             self.makeCurrent()
