@@ -9,10 +9,11 @@ given θ_clamp the model is linear in face and flop). The residual ΔE*ab per an
 Model: X(θ) = flop + (face − flop) s(θ)², s(θ) = (θ_c − min(θ, θ_c)) / (θ_c − 15°).
 
 Search for θ_clamp: the projected cost f(θ_c) = min over face, flop of Σ_θ Σ_c (X_c(θ) − Lab_c(θ))² is
-evaluated on a fixed grid, and the grid's best point is refined inside its two neighbours by a bracketed root search (Illinois regula falsi)
-on the exact slope f'(θ_c) = 2 Σ_θ Σ_c r_c(θ) (face_c − flop_c) ∂s²/∂θ_c (the envelope theorem: face
-and flop are optimal, so only the explicit dependence counts), down to the last bits of θ_c. The
-refined point is kept only when it costs no more than the grid's best.
+evaluated on a fixed grid, and the grid's best point is refined inside its two neighbours by a
+bracketed root search (Illinois regula falsi) on the exact slope
+f'(θ_c) = 2 Σ_θ Σ_c r_c(θ) (face_c − flop_c) ∂s²/∂θ_c (the envelope theorem: face and flop are
+optimal, so only the explicit dependence counts), down to the last bits of θ_c. The refined point is
+kept only when it costs no more than the grid's best.
 
 Constrained vertex: when the unconstrained fit puts face or flop outside the Lab bound
 (:data:`station.model.domain.LAB_RANGES`, e.g. a flop L* below 0 from an extrapolated vertex), the
@@ -59,7 +60,7 @@ NEAR_SOLID_DE = 0.5
 #: Paints per block of the grid search (bounds the working memory: block × grid × angles × 3 floats).
 _BLOCK = 128
 #: Most steps of the root search on the slope (it stops at one ulp of θ_c long before).
-_BISECTIONS = 100
+_ROOT_STEPS = 100
 
 F64 = NDArray[np.float64]
 Solve = Callable[[F64, F64], tuple[F64, F64, F64]]
@@ -313,7 +314,7 @@ def _slope_root(slope: Callable[[F64, NDArray[np.intp]], F64], lo: F64, hi: F64,
     x = 0.5 * (lo + hi)
     side = np.zeros(lo.size, dtype=int)  # -1: lo moved last, +1: hi moved last
     running = np.ones(lo.size, dtype=bool)
-    for _ in range(_BISECTIONS):
+    for _ in range(_ROOT_STEPS):
         running &= hi - lo > 2.0 * np.spacing(hi)
         sel = np.flatnonzero(running)
         if sel.size == 0:

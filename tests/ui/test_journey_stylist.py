@@ -167,7 +167,7 @@ def pick_design_from_library(qtbot, win: MainWindow) -> None:
     assert all(not thumbs.item(i).icon().isNull() for i in range(thumbs.count()))
     # double-click a thumbnail: that paint becomes the design
     item = thumbs.item(thumbs.count() // 2)
-    row = int(item.data(Qt.ItemDataRole.UserRole))
+    row = lib_screen.row_of(item)
     thumbs.scrollToItem(item)
     pos = thumbs.visualItemRect(item).center()
     qtbot.mouseClick(thumbs.viewport(), LEFT, pos=pos)

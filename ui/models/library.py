@@ -27,8 +27,9 @@ from station.model.fit import fit_fftg_batch
 from ui.models.events import EventGroup
 
 SNAP_ANGLES = ANGLES_3
-#: Paints fitted and rendered per step of :meth:`LibraryModel.thumbnails` (one progress report each).
-THUMB_CHUNK = 100
+#: Paints fitted and rendered per step of :meth:`LibraryModel.thumbnails` (one progress report each;
+#: a step is also how long a stopped task takes to stop).
+THUMB_CHUNK = 50
 #: Edge of a library thumbnail, pixels.
 THUMB_SIZE = 40
 

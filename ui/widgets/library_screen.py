@@ -78,15 +78,24 @@ class LabCloud(QWidget):
 
     def paintEvent(self, event) -> None:
         p = QPainter(self)
-        p.fillRect(self.rect(), QColor(40, 40, 44))
+        # the background and the cloud's 2×2 px points as one image: one painter call, not one per
+        # point (each call from Python costs the same as a whole image, and the cloud has 1500)
+        w, h = max(self.width(), 1), max(self.height(), 1)
+        canvas = np.empty((h, w, 3), np.uint8)
+        canvas[:] = (40, 40, 44)
+        if self.data is not None:
+            pts = np.trunc(self.project(self._cloud)).astype(int)
+            for dx in (0, 1):
+                for dy in (0, 1):
+                    x, y = pts[:, 0] + dx, pts[:, 1] + dy
+                    inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+                    canvas[y[inside], x[inside]] = self._cloud_rgb[inside]
+        p.drawPixmap(0, 0, pixmap_from_array(canvas))
         p.setPen(QPen(QColor(120, 120, 120), 1))
         for a, b in (((50, -80, 0), (50, 80, 0)), ((50, 0, -80), (50, 0, 80)), ((0, 0, 0), (100, 0, 0))):
             pa, pb = self.project(np.array(a)), self.project(np.array(b))
             p.drawLine(QPointF(*pa), QPointF(*pb))
         if self.data is not None:
-            pts = self.project(self._cloud)
-            for (x, y), c in zip(pts, self._cloud_rgb, strict=True):
-                p.fillRect(int(x), int(y), 2, 2, QColor(int(c[0]), int(c[1]), int(c[2])))
             p.setPen(QPen(QColor(255, 255, 255), 1))
             for m in self.data["matches"]:
                 x, y = self.project(np.asarray(m["lab"][1]))
@@ -177,6 +186,7 @@ class LibraryScreen(QWidget):
         self._thumbs_running = False  # from start until its finished signal reached this thread
         self._snap_running = False
         self._rows = np.zeros(0, dtype=int)
+        self._item_rows: list[int] = []  # library row of each list item, in list order
 
         browse = QVBoxLayout()
         browse.addWidget(self.title)
@@ -254,6 +264,7 @@ class LibraryScreen(QWidget):
         """Show the filtered paints' thumbnails: a task still making those of the previous filter is
         stopped first (after its current step), then the new one starts."""
         self.thumbs.clear()
+        self._item_rows = []
         self._unrendered = 0
         self._rows = self.model.rows
         self._count_text()
@@ -302,18 +313,21 @@ class LibraryScreen(QWidget):
         del pending[: len(items)]
         lib = self.model.library
         self.thumbs.setUpdatesEnabled(False)
-        for t in items:
+        for t in items:  # items made with the list as parent: no further call per item
             label = f"{lib.codes[t.row]}  {lib.types[t.row]}  {lib.gloss_gu[t.row]:.0f} GU"
+            self._item_rows.append(int(t.row))
             if t.image is not None:
-                it = QListWidgetItem(QIcon(pixmap_from_array(t.image)), label)
+                QListWidgetItem(QIcon(pixmap_from_array(t.image)), label, self.thumbs)
             else:
-                it = QListWidgetItem(f"{label}  — cannot render: {t.error}")
+                it = QListWidgetItem(f"{label}  — cannot render: {t.error}", self.thumbs)
                 it.setToolTip(str(t.error))
                 it.setFlags(it.flags() & ~Qt.ItemFlag.ItemIsEnabled)
                 self._unrendered += 1
-            it.setData(Qt.ItemDataRole.UserRole, int(t.row))
-            self.thumbs.addItem(it)
         self.thumbs.setUpdatesEnabled(True)
+
+    def row_of(self, item: QListWidgetItem) -> int:
+        """Library row of a thumbnail list item."""
+        return self._item_rows[self.thumbs.row(item)]
 
     def _on_thumb_progress(self, _done: int, _text: str) -> None:
         if not self._restart:  # else the step belongs to a filter no longer shown
@@ -340,7 +354,7 @@ class LibraryScreen(QWidget):
 
     def _on_thumb(self, item: QListWidgetItem) -> None:
         """Double-click: the paint becomes the current design (undoable, named after the paint)."""
-        self.pick(int(item.data(Qt.ItemDataRole.UserRole)))
+        self.pick(self.row_of(item))
 
     def pick(self, row: int) -> None:
         """Make library paint *row* the current design (a paint without a fit says why, in the list's
