@@ -248,8 +248,9 @@ def main() -> None:
             cases,
             f"Main window with its 3D view at {view_size}, GL renderer: {renderer} under Xvfb (xcb). "
             "Thumbnails are 40² booklet renders (station.design.palette.booklet); after the batch fit "
-            f"they are most of the time. Machine shared with other jobs: load average {load:.1f} on "
-            f"{os.cpu_count()} CPUs at the end.",
+            "they are most of the time. The per-paint baseline is today's fit_fftg, itself the batch's "
+            "one-paint case (no scipy search any more). Machine shared with other jobs: load average "
+            f"{load:.1f} on {os.cpu_count()} CPUs at the end.",
         )
     finally:
         xvfb.terminate()
