@@ -478,21 +478,19 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
         for w in notes:
             w.append(f"gloss not measured: default {DEFAULT_GLOSS_GU:g} GU used")
 
-    spread = np.zeros(n)
-    for i in range(k):
-        for j in range(i + 1, k):
-            diff = y[:, i] - y[:, j]
-            spread = np.maximum(spread, np.sqrt(diff[:, 0] ** 2 + diff[:, 1] ** 2 + diff[:, 2] ** 2))
+    diff = y[:, :, None, :] - y[:, None, :, :]  # every pair of angles
+    spread = np.sqrt(diff[..., 0] ** 2 + diff[..., 1] ** 2 + diff[..., 2] ** 2).max(axis=(1, 2), initial=0.0)
     solid = spread == 0.0
     for r in np.flatnonzero(~solid & (spread < NEAR_SOLID_DE)):
         notes[r].append(f"near-solid (max ΔE*ab between angles {spread[r]:.3g}): travel is poorly determined")
 
-    method = np.where(solid, "closed-form", "least-squares").astype(object)
+    method = ["closed-form" if s else "least-squares" for s in solid]
     tc = np.full(n, np.nan)
     live = ~solid
     if k == 3:
         tc = np.where(live, _three_angle_travel(ang, y[:, :, 0]), np.nan)
-        method[live & np.isfinite(tc)] = "closed-form"
+        for r in np.flatnonzero(live & np.isfinite(tc)):
+            method[r] = "closed-form"
         flat_l = np.ptp(y[:, :, 0], axis=1) == 0.0
         for r in np.flatnonzero(live & np.isnan(tc)):
             notes[r].append(
@@ -538,7 +536,8 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
     def outside(x: F64) -> NDArray[np.bool_]:
         return np.logical_not(np.all((x >= lo) & (x <= hi), axis=-1))
 
-    bounded = np.flatnonzero(live & (outside(face) | outside(flop)))
+    out_of_bound = live & (outside(face) | outside(flop))
+    bounded = np.flatnonzero(out_of_bound)
     if bounded.size:
         tc_free = tc[bounded].copy()
         grid, yb = _constrained_grid(), y[bounded]
@@ -558,7 +557,9 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
             )
     for r in np.flatnonzero(live & (face[:, 0] < flop[:, 0])):
         notes[r].append("flop brighter than face (L*): retroreflective or inverted travel")
-    for r in np.flatnonzero(live & (outside(face) | outside(flop))):
+    if bounded.size:
+        out_of_bound[bounded] = outside(face[bounded]) | outside(flop[bounded])
+    for r in np.flatnonzero(out_of_bound):
         errors[r] = (
             f"lab: the fitted face or flop falls outside {lab_accepted('L')}, {lab_accepted('a')}, "
             f"{lab_accepted('b')}; "
@@ -582,7 +583,7 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
         gloss,
         residual,
         exact,
-        tuple(str(m) for m in method),
+        tuple(method),
         tuple(tuple(w) for w in notes),
         tuple(errors),
     )
