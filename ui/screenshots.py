@@ -120,6 +120,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         win.tabs.setCurrentWidget(win.screens["Library"])
         lib = win.screens["Library"].content()
         lib.snap()
+        _wait(lambda: lib.idle, 300)  # thumbnails and ColorSnap run in the background
         shot("library")
 
         win.tabs.setCurrentWidget(win.screens["Instruments"])

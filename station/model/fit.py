@@ -8,6 +8,13 @@ given θ_clamp the model is linear in face and flop). The residual ΔE*ab per an
 
 Model: X(θ) = flop + (face − flop) s(θ)², s(θ) = (θ_c − min(θ, θ_c)) / (θ_c − 15°).
 
+Search for θ_clamp: the projected cost f(θ_c) = min over face, flop of Σ_θ Σ_c (X_c(θ) − Lab_c(θ))² is
+evaluated on a fixed grid, and the grid's best point is refined inside its two neighbours by a
+bracketed root search (Illinois regula falsi) on the exact slope
+f'(θ_c) = 2 Σ_θ Σ_c r_c(θ) (face_c − flop_c) ∂s²/∂θ_c (the envelope theorem: face and flop are
+optimal, so only the explicit dependence counts), down to the last bits of θ_c. The refined point is
+kept only when it costs no more than the grid's best.
+
 Constrained vertex: when the unconstrained fit puts face or flop outside the Lab bound
 (:data:`station.model.domain.LAB_RANGES`, e.g. a flop L* below 0 from an extrapolated vertex), the
 fit solves instead
@@ -16,20 +23,25 @@ fit solves instead
 
 with θ_c in (15°, TRAVEL_MAX_DEG]. For a fixed θ_c this is a box-constrained linear least squares in
 (face_c, flop_c) per channel, solved exactly (the interior optimum, else the best point on an edge of
-the box); θ_c is found on a grid and refined with a bounded scalar search. The residual per angle is
-reported and a warning says the constraint was active.
+the box); θ_c is searched as above (the envelope theorem holds for the box-constrained optimum too).
+The residual per angle is reported and a warning says the constraint was active.
+
+Every paint of a library is fitted at once by :func:`fit_fftg_batch` (the arrays carry one row per
+paint; sums over the angles are written out term by term, so a paint's result does not depend on
+which other paints share the batch); :func:`fit_fftg` is the same fit for one set of measurements.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
-from scipy.optimize import least_squares, minimize_scalar
+from numpy.typing import ArrayLike, NDArray
 
-from station.model.domain import LAB_HI, LAB_LO, lab_accepted, lab_within
-from station.model.errors import FitError
+from station.model.angles import validate_angle_set
+from station.model.domain import LAB_HI, LAB_LO, check_gloss, check_lab, lab_accepted
+from station.model.errors import FitError, ModelInputError
 from station.model.representations import (
     DEFAULT_GLOSS_GU,
     FACE_ANGLE_DEG,
@@ -45,6 +57,13 @@ EXACT_TOLERANCE_DE = 1e-6
 _TC_LOW = FACE_ANGLE_DEG + 1e-3
 #: Max ΔE*ab between any two angles under which a sample is reported as near-solid.
 NEAR_SOLID_DE = 0.5
+#: Paints per block of the grid search (bounds the working memory: block × grid × angles × 3 floats).
+_BLOCK = 128
+#: Most steps of the root search on the slope (it stops at one ulp of θ_c long before).
+_ROOT_STEPS = 100
+
+F64 = NDArray[np.float64]
+Solve = Callable[[F64, F64], tuple[F64, F64, F64]]
 
 
 @dataclass(frozen=True)
@@ -73,113 +92,507 @@ class FitResult:
     warnings: tuple[str, ...] = ()
 
 
-def _linear_fit(u: NDArray[np.float64], lab: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
-    """For fixed s² = u per angle, least-squares face and flop per channel; return (face, flop, model)."""
-    a = np.stack([u, 1.0 - u], axis=1)  # X = face·u + flop·(1 − u)
-    coef, *_ = np.linalg.lstsq(a, lab, rcond=None)
-    return coef[0], coef[1], a @ coef
+@dataclass(frozen=True, eq=False)
+class FitBatch:
+    """Fits of many paints measured at the same angles (:func:`fit_fftg_batch`), one row per paint.
 
-
-def _solve_for_travel(angles: NDArray, lab: NDArray, tc: float) -> tuple[NDArray, NDArray, NDArray]:
-    return _linear_fit(shape_factor(angles, tc), lab)
-
-
-def _three_angle_travel(angles: NDArray, lum: NDArray) -> float | None:
-    """θ_clamp that makes L pass exactly through three values (closed form), or None.
-
-    Case A, θ_c >= θ3: the unclamped parabola through the three points has its vertex at θ_c (eq 3.3.4).
-    Case B, θ2 < θ_c < θ3: flop = L3 and (L2 − flop)/(L1 − flop) = ((θ_c − θ2)/(θ_c − θ1))².
+    Attributes
+    ----------
+    angles_deg
+        The measured aspecular angles, degrees.
+    face, flop
+        (N, 3) Lab; NaN in the rows of paints that could not be fitted (see *errors*).
+    travel_deg
+        (N,) θ_clamp in degrees; NaN for a solid (and for a paint that could not be fitted).
+    gloss_gu
+        (N,) gloss in GU (the default where not measured).
+    residual_de
+        (N, k) ΔE*ab between measured and modelled Lab per angle (NaN where not fitted).
+    exact
+        (N,) every residual below :data:`EXACT_TOLERANCE_DE`.
+    method, warnings
+        Per paint, as :class:`FitResult`.
+    errors
+        Per paint: None, or why it could not be fitted (the :class:`FitError` message).
     """
-    t1, t2, t3 = angles
-    l1, l2, l3 = lum
-    vander = np.vander(angles, 3)
-    xa, xb, _ = np.linalg.solve(vander, lum)
-    if xa != 0.0:
-        vertex = -xb / (2.0 * xa)
-        if t3 <= vertex <= TRAVEL_MAX_DEG and vertex > FACE_ANGLE_DEG:
-            return float(vertex)
-    d1, d2 = l1 - l3, l2 - l3
-    if d1 != 0.0:
-        rho = d2 / d1
-        if 0.0 < rho < 1.0:
-            r = np.sqrt(rho)
-            tc = (t2 - t1 * r) / (1.0 - r)
-            if t2 < tc < t3 and tc > FACE_ANGLE_DEG:
-                return float(tc)
-    return None
+
+    angles_deg: tuple[float, ...]
+    face: F64
+    flop: F64
+    travel_deg: F64
+    gloss_gu: F64
+    residual_de: F64
+    exact: NDArray[np.bool_]
+    method: tuple[str, ...]
+    warnings: tuple[tuple[str, ...], ...]
+    errors: tuple[str | None, ...]
+
+    def __len__(self) -> int:
+        return len(self.method)
+
+    def result(self, i: int) -> FitResult:
+        """The :class:`FitResult` of paint *i* (row order of the input).
+
+        Raises
+        ------
+        FitError
+            The paint could not be fitted (the message of :attr:`errors`).
+        """
+        error = self.errors[i]
+        if error is not None:
+            raise FitError(error)
+        tc = float(self.travel_deg[i])
+        face, flop = self.face[i], self.flop[i]
+        design = FaceFlopTravelGloss(
+            (float(face[0]), float(face[1]), float(face[2])),
+            (float(flop[0]), float(flop[1]), float(flop[2])),
+            None if np.isnan(tc) else tc,
+            float(self.gloss_gu[i]),
+        )
+        return FitResult(
+            design,
+            tuple(float(r) for r in self.residual_de[i]),
+            bool(self.exact[i]),
+            self.method[i],
+            self.warnings[i],
+        )
 
 
-def _least_squares_travel(angles: NDArray, lab: NDArray) -> float:
-    """θ_clamp minimising the summed squared residual of all channels (variable projection)."""
-    grid = np.concatenate([np.linspace(_TC_LOW, 30.0, 60), np.arange(30.0, TRAVEL_MAX_DEG + 1e-9, 0.5)])
-    cost = np.array([np.sum((_solve_for_travel(angles, lab, tc)[2] - lab) ** 2) for tc in grid])
-    tc0 = float(grid[int(np.argmin(cost))])
+# ------------------------------------------------------------------------------ sums over angles
 
-    def residual(p: NDArray) -> NDArray:
-        return (_solve_for_travel(angles, lab, float(p[0]))[2] - lab).ravel()
 
-    sol = least_squares(
-        residual, [tc0], bounds=([_TC_LOW], [TRAVEL_MAX_DEG]), xtol=1e-15, ftol=1e-15, gtol=1e-15
+def _sum_angles(x: F64) -> F64:
+    """Σ over the angle axis (the last) term by term: the same rounding whatever the leading shape."""
+    acc = x[..., 0].copy()
+    for j in range(1, x.shape[-1]):
+        acc += x[..., j]
+    return acc
+
+
+def _sum_angles_lab(x: F64) -> F64:
+    """Σ over the angle axis of (..., k, 3) arrays, term by term → (..., 3)."""
+    acc = x[..., 0, :].copy()
+    for j in range(1, x.shape[-2]):
+        acc += x[..., j, :]
+    return acc
+
+
+# ------------------------------------------------------------------------------ linear parts
+
+
+def _project(u: F64, y: F64) -> tuple[F64, F64, F64]:
+    """Linear least squares X = face·u + flop·(1 − u) per channel for fixed s² = *u*.
+
+    *u* is (..., k), *y* (..., k, 3) (broadcasting); returns face (..., 3), flop (..., 3) and the model
+    (..., k, 3). Solved by a QR factorisation of [u, 1 − u] (modified Gram–Schmidt, two columns); when
+    u is 0 at every angle (θ_c at or below the first measured angle) face is undetermined and the
+    minimum-norm answer face = 0 is returned.
+    """
+    a1, a2 = u, 1.0 - u
+    n1 = np.sqrt(_sum_angles(a1 * a1))
+    has_face = n1 > 0.0
+    q1 = np.divide(a1, n1[..., None], out=np.zeros_like(a1), where=has_face[..., None])
+    r12 = _sum_angles(q1 * a2)
+    v = a2 - r12[..., None] * q1
+    n2 = np.sqrt(_sum_angles(v * v))
+    q2 = np.divide(v, n2[..., None], out=np.zeros_like(v), where=(n2 > 0.0)[..., None])
+    z1 = _sum_angles_lab(q1[..., None] * y)
+    w = y - q1[..., None] * z1[..., None, :]
+    z2 = _sum_angles_lab(q2[..., None] * w)
+    flop = np.divide(z2, n2[..., None], out=np.zeros_like(z2), where=(n2 > 0.0)[..., None])
+    face = np.divide(
+        z1 - r12[..., None] * flop, n1[..., None], out=np.zeros_like(z1), where=has_face[..., None]
     )
-    tc = float(sol.x[0])
-    if np.sum(residual(sol.x) ** 2) > cost.min():
-        tc = tc0
+    model = u[..., None] * face[..., None, :] + a2[..., None] * flop[..., None, :]
+    return face, flop, model
+
+
+def _box_project(u: F64, y: F64) -> tuple[F64, F64, F64]:
+    """As :func:`_project` with face and flop of each channel held inside the Lab bound.
+
+    A convex quadratic in two variables per channel: the optimum is the unconstrained solution when it
+    lies in the box, otherwise on one of the four edges, where it is the clipped 1-D minimiser.
+    """
+    lo, hi = np.asarray(LAB_LO, dtype=float), np.asarray(LAB_HI, dtype=float)
+    face0, flop0, _ = _project(u, y)
+    inside = (face0 >= lo) & (face0 <= hi) & (flop0 >= lo) & (flop0 <= hi)
+    cols = (u, 1.0 - u)
+    candidates: list[tuple[F64, F64, F64]] = []
+    for j in (0, 1):  # variable j held on a bound, the other solved and clipped
+        cj, ck = cols[j][..., None], cols[1 - j][..., None]
+        norm = _sum_angles(cols[1 - j] * cols[1 - j])[..., None]
+        for bound in (lo, hi):
+            r = y - cj * bound
+            num = _sum_angles_lab(ck * r)
+            xk = np.clip(np.divide(num, norm, out=np.zeros_like(num), where=norm > 0.0), lo, hi)
+            xk = np.where(norm > 0.0, xk, lo)
+            xj = np.broadcast_to(bound, xk.shape)
+            face, flop = (xj, xk) if j == 0 else (xk, xj)
+            miss = u[..., None] * face[..., None, :] + cols[1][..., None] * flop[..., None, :] - y
+            candidates.append((face, flop, _sum_angles_lab(miss * miss)))
+    best_face, best_flop, best_cost = candidates[0]
+    for face, flop, cost in candidates[1:]:  # the first of equal costs is kept
+        better = cost < best_cost
+        best_face = np.where(better, face, best_face)
+        best_flop = np.where(better, flop, best_flop)
+        best_cost = np.where(better, cost, best_cost)
+    face = np.where(inside, face0, best_face)
+    flop = np.where(inside, flop0, best_flop)
+    model = u[..., None] * face[..., None, :] + cols[1][..., None] * flop[..., None, :]
+    return face, flop, model
+
+
+# ------------------------------------------------------------------------------ θ_clamp search
+
+
+def _cost(model: F64, y: F64) -> F64:
+    miss = model - y
+    return _sum_angles(_sum_angles_lab(miss * miss))
+
+
+def _cost_and_slope(theta: F64, y: F64, tc: F64, solve: Solve) -> tuple[F64, F64]:
+    """Projected cost f(θ_c) and its exact slope f'(θ_c) per paint (module notes); *tc* is (M,)."""
+    col = tc[:, None]
+    u = shape_factor(theta, col)
+    face, flop, model = solve(u, y)
+    clamped = np.minimum(theta, col)
+    du = 2.0 * np.sqrt(u) * (clamped - FACE_ANGLE_DEG) / (col - FACE_ANGLE_DEG) ** 2  # ∂s²/∂θ_c
+    miss = model - y
+    weighted = miss * (face - flop)[:, None, :]
+    per_angle = weighted[..., 0] + weighted[..., 1] + weighted[..., 2]  # Σ_c, (M, k)
+    return _cost(model, y), 2.0 * _sum_angles(du * per_angle)
+
+
+def _grid_costs(theta: F64, y: F64, grid: F64, solve: Solve) -> F64:
+    """f(θ_c) of every paint (rows of *y*) at every grid point: (M, G)."""
+    u = shape_factor(theta[None, :], grid[:, None])[None]  # (1, G, k)
+    out = np.empty((y.shape[0], grid.size))
+    for start in range(0, y.shape[0], _BLOCK):
+        yb = y[start : start + _BLOCK, None]  # (b, 1, k, 3)
+        out[start : start + _BLOCK] = _cost(solve(u, yb)[2], yb)
+    return out
+
+
+def _free_grid_costs(theta: F64, y: F64, grid: F64) -> F64:
+    """f(θ_c) of the unconstrained fit on the grid, (M, G): |y|² − |Qᵀy|² with the orthonormal basis Q of
+    [u, 1 − u] at each grid point (shared by all paints, so no (M, G, k, 3) array is formed). The
+    subtraction costs accuracy near a zero residual (about 1e-16 of |y|²); these costs only rank the
+    grid points, and the costs compared afterwards are computed from the residual itself."""
+    u = shape_factor(theta[None, :], grid[:, None])  # (G, k)
+    a2 = 1.0 - u
+    n1 = np.sqrt(_sum_angles(u * u))
+    q1 = np.divide(u, n1[:, None], out=np.zeros_like(u), where=n1[:, None] > 0.0)
+    r12 = _sum_angles(q1 * a2)
+    v = a2 - r12[:, None] * q1
+    n2 = np.sqrt(_sum_angles(v * v))
+    q2 = np.divide(v, n2[:, None], out=np.zeros_like(v), where=n2[:, None] > 0.0)
+    out = np.empty((y.shape[0], grid.size))
+    for start in range(0, y.shape[0], 4 * _BLOCK):
+        yb = y[start : start + 4 * _BLOCK]  # (b, k, 3)
+        sq = yb * yb
+        total = _sum_angles(sq[..., 0] + sq[..., 1] + sq[..., 2])
+        z1 = q1[None, :, 0, None] * yb[:, None, 0, :]  # (b, G, 3)
+        z2 = q2[None, :, 0, None] * yb[:, None, 0, :]
+        for j in range(1, theta.size):
+            z1 += q1[None, :, j, None] * yb[:, None, j, :]
+            z2 += q2[None, :, j, None] * yb[:, None, j, :]
+        p = z1 * z1 + z2 * z2
+        out[start : start + 4 * _BLOCK] = total[:, None] - (p[..., 0] + p[..., 1] + p[..., 2])
+    return out
+
+
+def _slope_root(slope: Callable[[F64, NDArray[np.intp]], F64], lo: F64, hi: F64, g_lo: F64, g_hi: F64) -> F64:
+    """Root of the slope inside brackets with g_lo < 0 < g_hi, per row (Illinois regula falsi).
+
+    Each step takes the secant point of the bracket (halving the weight of an end kept twice in a
+    row, so both ends move), falling back to the midpoint where the secant leaves the bracket; a row
+    stops once its bracket is two ulps wide or its step no longer moves θ_c. ``slope(x, rows)`` gives
+    f' at x for the given rows. A stopped row is not touched again, so its result does not depend on
+    the other rows.
+    """
+    lo, hi, g_lo, g_hi = lo.copy(), hi.copy(), g_lo.copy(), g_hi.copy()
+    x = 0.5 * (lo + hi)
+    side = np.zeros(lo.size, dtype=int)  # -1: lo moved last, +1: hi moved last
+    running = np.ones(lo.size, dtype=bool)
+    for _ in range(_ROOT_STEPS):
+        running &= hi - lo > 2.0 * np.spacing(hi)
+        sel = np.flatnonzero(running)
+        if sel.size == 0:
+            break
+        a, b, ga, gb = lo[sel], hi[sel], g_lo[sel], g_hi[sel]
+        secant = b - gb * (b - a) / (gb - ga)
+        mid = 0.5 * (a + b)
+        xs = np.where((secant > a) & (secant < b), secant, mid)
+        g = slope(xs, sel)
+        still = np.abs(xs - x[sel]) > np.spacing(xs)
+        x[sel] = xs
+        falling = g < 0.0
+        rising = g > 0.0
+        s_prev = side[sel]
+        lo[sel] = np.where(falling, xs, a)
+        g_lo[sel] = np.where(falling, g, np.where(rising & (s_prev == 1), 0.5 * ga, ga))
+        hi[sel] = np.where(rising, xs, b)
+        g_hi[sel] = np.where(rising, g, np.where(falling & (s_prev == -1), 0.5 * gb, gb))
+        side[sel] = np.where(falling, -1, np.where(rising, 1, 0))
+        running[sel] = still & (g != 0.0)
+    return x
+
+
+def _search_travel(theta: F64, y: F64, grid: F64, costs: F64, solve: Solve) -> F64:
+    """θ_clamp of least projected cost per paint: the best point of the grid (*costs*, (M, G)), refined
+    by the root search on the slope inside its two neighbours."""
+    i = np.argmin(costs, axis=1)
+    m = grid[i]
+    a, b = grid[np.maximum(i - 1, 0)], grid[np.minimum(i + 1, grid.size - 1)]
+    _, da = _cost_and_slope(theta, y, a, solve)
+    best, dm = _cost_and_slope(theta, y, m, solve)
+    _, db = _cost_and_slope(theta, y, b, solve)
+    right = dm < 0.0  # cost still falling at the grid's best: the minimum lies towards b
+    lo, hi = np.where(right, m, a), np.where(right, b, m)
+    ok = np.where(right, db > 0.0, (dm > 0.0) & (da < 0.0))
+    rows = np.flatnonzero(ok)
+    tc = m.copy()
+    if rows.size:
+        yr = y[rows]
+        refined = _slope_root(
+            lambda x, sel: _cost_and_slope(theta, yr[sel], x, solve)[1],
+            lo[rows],
+            hi[rows],
+            np.where(right, dm, da)[rows],
+            np.where(right, db, dm)[rows],
+        )
+        cost, _ = _cost_and_slope(theta, yr, refined, solve)
+        tc[rows] = np.where(cost <= best[rows], refined, m[rows])
     return tc
 
 
-def _box_lstsq(a: NDArray[np.float64], y: NDArray[np.float64], lo: float, hi: float) -> NDArray:
-    """Exact minimiser of |a·x − y|² over lo <= x_0, x_1 <= hi for a (n, 2) design matrix.
-
-    The problem is a convex quadratic in two variables: the optimum is the unconstrained solution when
-    it lies in the box, otherwise on one of the four edges, where it is the clipped 1-D minimiser.
-    """
-    x, *_ = np.linalg.lstsq(a, y, rcond=None)
-    if np.all((x >= lo) & (x <= hi)):
-        return np.asarray(x, dtype=float)
-    best, best_cost = np.array([lo, lo]), np.inf
-    for j in (0, 1):
-        k = 1 - j
-        col_k = a[:, k]
-        norm = float(col_k @ col_k)
-        for bound in (lo, hi):
-            r = y - a[:, j] * bound
-            xk = float(np.clip((col_k @ r) / norm, lo, hi)) if norm > 0.0 else lo
-            cand = np.empty(2)
-            cand[j], cand[k] = bound, xk
-            cost = float(np.sum((a @ cand - y) ** 2))
-            if cost < best_cost:
-                best, best_cost = cand, cost
-    return best
+def _free_grid() -> F64:
+    return np.unique(
+        np.concatenate([np.linspace(_TC_LOW, 30.0, 60), np.arange(30.0, TRAVEL_MAX_DEG + 1e-9, 0.5)])
+    )
 
 
-def _constrained_solve(angles: NDArray, lab: NDArray, tc: float) -> tuple[NDArray, NDArray, NDArray]:
-    """For fixed θ_clamp, face and flop per channel inside the Lab bound; return (face, flop, model)."""
-    u = shape_factor(angles, tc)
-    a = np.stack([u, 1.0 - u], axis=1)
-    coef = np.stack(
-        [_box_lstsq(a, lab[:, c], LAB_LO[c], LAB_HI[c]) for c in range(3)], axis=1
-    )  # (2, 3): rows face, flop
-    return coef[0], coef[1], a @ coef
-
-
-def _constrained_travel(angles: NDArray, lab: NDArray) -> float:
-    """θ_clamp minimising the summed squared residual with face and flop inside the Lab bound."""
+def _constrained_grid() -> F64:
     low = _TC_LOW + 2e-2  # stay clear of the refused vertex at the face angle
-    grid = np.concatenate([np.linspace(low, 30.0, 80), np.arange(30.0, TRAVEL_MAX_DEG + 1e-9, 0.25)])
+    return np.unique(
+        np.concatenate([np.linspace(low, 30.0, 80), np.arange(30.0, TRAVEL_MAX_DEG + 1e-9, 0.25)])
+    )
 
-    def cost(tc: float) -> float:
-        return float(np.sum((_constrained_solve(angles, lab, tc)[2] - lab) ** 2))
 
-    costs = np.array([cost(float(tc)) for tc in grid])
-    i = int(np.argmin(costs))
-    lo, hi = float(grid[max(i - 1, 0)]), float(grid[min(i + 1, grid.size - 1)])
-    sol = minimize_scalar(cost, bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
-    tc = float(sol.x)
-    return tc if cost(tc) <= costs[i] else float(grid[i])
+def _three_angle_travel(angles: F64, lum: F64) -> F64:
+    """θ_clamp that makes L pass exactly through three values (closed form) per paint, NaN where none.
+
+    Case A, θ_c >= θ3: the unclamped parabola through the three points has its vertex at θ_c (eq 3.3.4).
+    Case B, θ2 < θ_c < θ3: flop = L3 and (L2 − flop)/(L1 − flop) = ((θ_c − θ2)/(θ_c − θ1))².
+    *lum* is (N, 3).
+    """
+    t1, t2, t3 = float(angles[0]), float(angles[1]), float(angles[2])
+    l1, l2, l3 = lum[:, 0], lum[:, 1], lum[:, 2]
+    # the parabola X_a θ² + X_b θ + X_c through the three points, in Lagrange form
+    w1, w2, w3 = 1.0 / ((t1 - t2) * (t1 - t3)), 1.0 / ((t2 - t1) * (t2 - t3)), 1.0 / ((t3 - t1) * (t3 - t2))
+    xa = w1 * l1 + w2 * l2 + w3 * l3
+    xb = -(w1 * (t2 + t3) * l1 + w2 * (t1 + t3) * l2 + w3 * (t1 + t2) * l3)
+    vertex = np.divide(-xb, 2.0 * xa, out=np.full_like(xb, np.nan), where=xa != 0.0)
+    case_a = (vertex >= t3) & (vertex <= TRAVEL_MAX_DEG) & (vertex > FACE_ANGLE_DEG)  # NaN: False
+    d1, d2 = lum[:, 0] - lum[:, 2], lum[:, 1] - lum[:, 2]
+    rho = np.divide(d2, d1, out=np.full_like(d2, np.nan), where=d1 != 0.0)
+    ok_rho = (rho > 0.0) & (rho < 1.0)
+    r = np.sqrt(np.where(ok_rho, rho, 0.25))
+    tc_b = (t2 - t1 * r) / (1.0 - r)
+    case_b = ok_rho & (tc_b > t2) & (tc_b < t3) & (tc_b > FACE_ANGLE_DEG)
+    return np.where(case_a, vertex, np.where(case_b, tc_b, np.nan))
+
+
+# ------------------------------------------------------------------------------ the fit
+
+
+def _validated(
+    angles_deg: Sequence[float], lab: ArrayLike, gloss_gu: ArrayLike | None
+) -> tuple[tuple[float, ...], F64, F64 | None]:
+    angles = validate_angle_set(angles_deg)
+    try:
+        arr = np.asarray(lab, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ModelInputError("lab", "one L*, a*, b* triple per paint and angle", lab) from exc
+    if arr.ndim != 3 or arr.shape[1:] != (len(angles), 3):
+        raise ModelInputError("lab", f"shape (paints, {len(angles)}, 3): L*, a*, b* per angle", arr.shape)
+    bad = ~(np.isfinite(arr) & (arr >= np.asarray(LAB_LO)) & (arr <= np.asarray(LAB_HI))).all(axis=-1)
+    if bad.any():
+        n, j = np.argwhere(bad)[0]
+        check_lab(arr[n, j], f"lab[{n}][{j}]")  # raises, naming the channel and its range
+    if gloss_gu is None:
+        return angles, arr, None
+    try:
+        gloss = np.asarray(gloss_gu, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise ModelInputError("gloss_gu", "one gloss value (GU) per paint", gloss_gu) from exc
+    if gloss.size != arr.shape[0]:
+        raise ModelInputError("gloss_gu", f"{arr.shape[0]} gloss values (one per paint)", gloss.size)
+    for n, g in enumerate(gloss):
+        check_gloss(float(g), f"gloss_gu[{n}]")
+    return angles, arr, gloss
+
+
+def fit_fftg_batch(
+    angles_deg: Sequence[float], lab: ArrayLike, gloss_gu: ArrayLike | None = None
+) -> FitBatch:
+    """Fit face/flop/travel/gloss to many paints measured at the same aspecular angles (thesis §3.3.3).
+
+    Parameters
+    ----------
+    angles_deg
+        At least three aspecular angles in degrees, strictly increasing (shared by every paint).
+    lab
+        (N, k, 3): Lab per paint and angle, inside the Lab bound.
+    gloss_gu
+        (N,) gloss per paint in GU (60°), or None when not measured (the default is used, with a
+        warning on every paint).
+
+    Returns
+    -------
+    FitBatch
+        Per paint: the fit :func:`fit_fftg` gives, or why there is none (:attr:`FitBatch.errors`).
+
+    Raises
+    ------
+    ModelInputError
+        Bad angles, a Lab or gloss value outside its range (the error names the paint and angle).
+    FitError
+        Fewer than three angles.
+    """
+    angles, y, gloss = _validated(angles_deg, lab, gloss_gu)
+    return _fit(angles, y, gloss)
+
+
+def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
+    """The fit of :func:`fit_fftg_batch` on validated input (module notes)."""
+    n, k = y.shape[0], len(angles)
+    if k < 3:
+        raise FitError(f"angles_deg: need at least 3 aspecular angles to fit the model, got {k}")
+    ang = np.asarray(angles, dtype=float)
+    theta = np.abs(ang)
+    notes: list[list[str]] = [[] for _ in range(n)]
+    errors: list[str | None] = [None] * n
+    if gloss is None:
+        gloss = np.full(n, DEFAULT_GLOSS_GU)
+        for w in notes:
+            w.append(f"gloss not measured: default {DEFAULT_GLOSS_GU:g} GU used")
+
+    diff = y[:, :, None, :] - y[:, None, :, :]  # every pair of angles
+    spread = np.sqrt(diff[..., 0] ** 2 + diff[..., 1] ** 2 + diff[..., 2] ** 2).max(axis=(1, 2), initial=0.0)
+    solid = spread == 0.0
+    for r in np.flatnonzero(~solid & (spread < NEAR_SOLID_DE)):
+        notes[r].append(f"near-solid (max ΔE*ab between angles {spread[r]:.3g}): travel is poorly determined")
+
+    method = ["closed-form" if s else "least-squares" for s in solid]
+    tc = np.full(n, np.nan)
+    live = ~solid
+    if k == 3:
+        tc = np.where(live, _three_angle_travel(ang, y[:, :, 0]), np.nan)
+        for r in np.flatnonzero(live & np.isfinite(tc)):
+            method[r] = "closed-form"
+        flat_l = np.ptp(y[:, :, 0], axis=1) == 0.0
+        for r in np.flatnonzero(live & np.isnan(tc)):
+            notes[r].append(
+                "L* identical at every angle: travel fitted from a*, b* alone"
+                if flat_l[r]
+                else "no monotone clamped quadratic passes through L*: least-squares fit, see residual"
+            )
+    search = np.flatnonzero(live & np.isnan(tc))
+    if search.size:
+        grid = _free_grid()
+        ys = y[search]
+        tc[search] = _search_travel(theta, ys, grid, _free_grid_costs(theta, ys, grid), _project)
+
+    distinct = np.unique(theta)  # the model sees the unsigned angle from specular
+    if distinct.size > 1 and distinct[1] > FACE_ANGLE_DEG:
+        upper = float(distinct[1])
+        below = np.zeros(n, dtype=int)
+        for d in distinct:
+            below += d < tc
+        for r in np.flatnonzero(live & (below < 2) & (upper > tc)):
+            notes[r].append(
+                f"travel not identifiable from angles {list(angles)}: any value in "
+                f"({FACE_ANGLE_DEG:g}, {upper:g}] fits; the upper end is reported"
+            )
+            tc[r] = upper
+    low_vertex = live & (tc - _TC_LOW < 1e-2)
+    for r in np.flatnonzero(low_vertex):
+        errors[r] = (
+            f"travel_deg: the best fit puts the vertex at or below {FACE_ANGLE_DEG:g}° "
+            f"(accepted {FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g})"
+        )
+    live &= ~low_vertex
+
+    face, flop = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+    model = np.full((n, k, 3), np.nan)
+    face[solid] = flop[solid] = y[solid, 0]
+    model[solid] = y[solid]
+    rows = np.flatnonzero(live)
+    if rows.size:
+        face[rows], flop[rows], model[rows] = _project(shape_factor(theta, tc[rows, None]), y[rows])
+    lo, hi = np.asarray(LAB_LO), np.asarray(LAB_HI)
+
+    def outside(x: F64) -> NDArray[np.bool_]:
+        return np.logical_not(np.all((x >= lo) & (x <= hi), axis=-1))
+
+    out_of_bound = live & (outside(face) | outside(flop))
+    bounded = np.flatnonzero(out_of_bound)
+    if bounded.size:
+        tc_free = tc[bounded].copy()
+        grid, yb = _constrained_grid(), y[bounded]
+        costs = _grid_costs(theta, yb, grid, _box_project)
+        tc[bounded] = _search_travel(theta, yb, grid, costs, _box_project)
+        face[bounded], flop[bounded], model[bounded] = _box_project(
+            shape_factor(theta, tc[bounded, None]), y[bounded]
+        )
+        miss = model[bounded] - y[bounded]
+        worst = np.sqrt(miss[..., 0] ** 2 + miss[..., 1] ** 2 + miss[..., 2] ** 2).max(axis=1)
+        for r, t_free, t, wst in zip(bounded, tc_free, tc[bounded], worst, strict=True):
+            method[r] = "constrained"
+            notes[r].append(
+                f"unconstrained vertex at {t_free:.3g}° puts face or flop outside {lab_accepted('L')}, "
+                f"{lab_accepted('a')}, {lab_accepted('b')}: constrained fit (travel {t:.3g}°), "
+                f"max residual ΔE*ab {wst:.3g}"
+            )
+    for r in np.flatnonzero(live & (face[:, 0] < flop[:, 0])):
+        notes[r].append("flop brighter than face (L*): retroreflective or inverted travel")
+    if bounded.size:
+        out_of_bound[bounded] = outside(face[bounded]) | outside(flop[bounded])
+    for r in np.flatnonzero(out_of_bound):
+        errors[r] = (
+            f"lab: the fitted face or flop falls outside {lab_accepted('L')}, {lab_accepted('a')}, "
+            f"{lab_accepted('b')}; "
+            f"face={np.round(face[r], 3).tolist()}, flop={np.round(flop[r], 3).tolist()}"
+        )
+    miss = model - y
+    residual = np.sqrt(miss[..., 0] ** 2 + miss[..., 1] ** 2 + miss[..., 2] ** 2)
+    exact = np.all(residual < EXACT_TOLERANCE_DE, axis=1)  # NaN (not fitted) compares False
+    for r in np.flatnonzero(solid):
+        notes[r].append("solid")
+    failed = np.array([e is not None for e in errors], dtype=bool)
+    face[failed] = flop[failed] = np.nan
+    tc[failed | solid] = np.nan
+    residual[failed] = np.nan
+    exact &= ~failed
+    return FitBatch(
+        angles,
+        face,
+        flop,
+        tc,
+        gloss,
+        residual,
+        exact,
+        tuple(method),
+        tuple(tuple(w) for w in notes),
+        tuple(errors),
+    )
 
 
 def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
     """Fit face/flop/travel/gloss to aspecular measurements (thesis §3.3.3, docs/design.md erratum 5).
+
+    The one-paint case of :func:`fit_fftg_batch` (the same rule, the same numbers).
 
     Parameters
     ----------
@@ -209,73 +622,6 @@ def fit_fftg(measurements: AspecularMeasurements) -> FitResult:
     * unconstrained face or flop outside the Lab bound (a vertex extrapolated beyond the measured
       range) → the constrained fit of the module notes, with its residual and a warning.
     """
-    angles = np.asarray(measurements.angles_deg, dtype=float)
-    lab = np.asarray(measurements.lab, dtype=float)
-    warnings: list[str] = []
-    if angles.size < 3:
-        raise FitError(f"angles_deg: need at least 3 aspecular angles to fit the model, got {angles.size}")
-    gloss = measurements.gloss_gu
-    if gloss is None:
-        gloss = DEFAULT_GLOSS_GU
-        warnings.append(f"gloss not measured: default {DEFAULT_GLOSS_GU:g} GU used")
-
-    spread = np.max(np.linalg.norm(lab[:, None, :] - lab[None, :, :], axis=-1))
-    if spread == 0.0:
-        design = FaceFlopTravelGloss(tuple(lab[0]), tuple(lab[0]), None, gloss)
-        return FitResult(design, tuple(0.0 for _ in angles), True, "closed-form", tuple([*warnings, "solid"]))
-    if spread < NEAR_SOLID_DE:
-        warnings.append(f"near-solid (max ΔE*ab between angles {spread:.3g}): travel is poorly determined")
-
-    method = "least-squares"
-    tc: float | None = None
-    if angles.size == 3:
-        tc = _three_angle_travel(angles, lab[:, 0])
-        if tc is not None:
-            method = "closed-form"
-        elif np.ptp(lab[:, 0]) == 0.0:
-            warnings.append("L* identical at every angle: travel fitted from a*, b* alone")
-        else:
-            warnings.append(
-                "no monotone clamped quadratic passes through L*: least-squares fit, see residual"
-            )
-    if tc is None:
-        tc = _least_squares_travel(angles, lab)
-    distinct = np.unique(np.abs(angles))  # the model sees the unsigned angle from specular
-    below = int(np.sum(distinct < tc))
-    if below < 2:
-        upper = float(distinct[1]) if distinct.size > 1 and distinct[1] > FACE_ANGLE_DEG else tc
-        if upper > tc:
-            warnings.append(
-                f"travel not identifiable from angles {angles.tolist()}: any value in "
-                f"({FACE_ANGLE_DEG:g}, {upper:g}] fits; the upper end is reported"
-            )
-            tc = upper
-    if tc - _TC_LOW < 1e-2:
-        raise FitError(
-            f"travel_deg: the best fit puts the vertex at or below {FACE_ANGLE_DEG:g}° "
-            f"(accepted {FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g})"
-        )
-    face, flop, model = _solve_for_travel(angles, lab, tc)
-    if not lab_within(np.stack([face, flop])) and lab_within(lab):
-        tc_free = tc
-        tc = _constrained_travel(angles, lab)
-        face, flop, model = _constrained_solve(angles, lab, tc)
-        method = "constrained"
-        worst = float(np.max(np.linalg.norm(model - lab, axis=1)))
-        warnings.append(
-            f"unconstrained vertex at {tc_free:.3g}° puts face or flop outside {lab_accepted('L')}, "
-            f"{lab_accepted('a')}, {lab_accepted('b')}: constrained fit (travel {tc:.3g}°), "
-            f"max residual ΔE*ab {worst:.3g}"
-        )
-    if face[0] < flop[0]:
-        warnings.append("flop brighter than face (L*): retroreflective or inverted travel")
-    residual = np.linalg.norm(model - lab, axis=1)
-    if not lab_within(np.stack([face, flop])):
-        raise FitError(
-            f"lab: the fitted face or flop falls outside {lab_accepted('L')}, {lab_accepted('a')}, "
-            f"{lab_accepted('b')}; "
-            f"face={np.round(face, 3).tolist()}, flop={np.round(flop, 3).tolist()}"
-        )
-    design = FaceFlopTravelGloss(tuple(face), tuple(flop), tc, gloss)
-    exact = bool(np.all(residual < EXACT_TOLERANCE_DE))
-    return FitResult(design, tuple(float(r) for r in residual), exact, method, tuple(warnings))
+    gloss = None if measurements.gloss_gu is None else np.array([measurements.gloss_gu], dtype=float)
+    lab = np.asarray(measurements.lab, dtype=float)[None]  # validated by AspecularMeasurements
+    return _fit(measurements.angles_deg, lab, gloss).result(0)

@@ -60,7 +60,7 @@ def _as_angles(angles_deg: ArrayLike) -> NDArray[np.float64]:
     return theta
 
 
-def shape_factor(angles_deg: ArrayLike, travel_deg: float) -> NDArray[np.float64]:
+def shape_factor(angles_deg: ArrayLike, travel_deg: float | NDArray[np.float64]) -> NDArray[np.float64]:
     """Return s(θ)² = ((θ_c − min(θ, θ_c)) / (θ_c − 15°))², the weight of the face in X(θ).
 
     Parameters
@@ -68,7 +68,7 @@ def shape_factor(angles_deg: ArrayLike, travel_deg: float) -> NDArray[np.float64
     angles_deg
         Aspecular angles θ in degrees, any shape.
     travel_deg
-        θ_clamp in degrees (> 15).
+        θ_clamp in degrees (> 15); an array broadcasts against *angles_deg* (one θ_clamp per row).
 
     Returns
     -------

@@ -150,30 +150,35 @@ def pick_design_from_library(qtbot, win: MainWindow) -> None:
     lib_screen = show_tab(qtbot, win, "Library")
     lib = lib_screen.model.library
     assert len(lib) == 6000  # the full demo library
-    # ColorSnap the new design against the library, take the nearest paint
-    click_center(qtbot, lib_screen.snap_btn)
-    result = lib_screen.model.snap_result
-    assert result is not None and lib_screen.matches.count() == len(result.matches) == 5
-    # brute force: the first match has the least ΣΔE*ab over 15/45/110° of all 6000 paints
-    target = DEFAULT_DESIGN.lab_at(np.array([15.0, 45.0, 110.0]))
-    cols = [list(lib.angles_deg).index(a) for a in (15.0, 45.0, 110.0)]
-    sums = np.linalg.norm(lib.lab[:, cols] - target[None], axis=-1).sum(axis=1)
-    best = int(np.argmin(sums))
-    assert result.matches[0].index == best
-    item = lib_screen.matches.item(0)
-    qtbot.mouseClick(
-        lib_screen.matches.viewport(), LEFT, pos=lib_screen.matches.visualItemRect(item).center()
-    )
-    click_center(qtbot, lib_screen.use_btn)
+    # narrow the list: metallics+pearls → neutral → light in the hierarchy, pearls unticked
+    tree = lib_screen.tree
+    node = tree.topLevelItem(0)
+    for name in ("metallics+pearls", "neutral", "light"):
+        node = next(node.child(i) for i in range(node.childCount()) if node.child(i).text(0) == name)
+    tree.scrollToItem(node)  # opens its parents, as clicking their arrows would
+    qtbot.mouseClick(tree.viewport(), LEFT, pos=tree.visualItemRect(node).center())
+    click_box(qtbot, lib_screen.type_boxes["pearl"])
+    expected = np.flatnonzero(lib_screen.model.filter.mask(lib))
+    assert expected.size and all(lib.types[r] == "metallic" for r in expected)
+    # the thumbnails are made in the background; every listed paint renders
+    qtbot.waitUntil(lambda: lib_screen.idle, timeout=120_000)
+    thumbs = lib_screen.thumbs
+    assert thumbs.count() == expected.size and lib_screen.count.text() == f"{expected.size} paints match"
+    assert all(not thumbs.item(i).icon().isNull() for i in range(thumbs.count()))
+    # double-click a thumbnail: that paint becomes the design
+    item = thumbs.item(thumbs.count() // 2)
+    row = lib_screen.row_of(item)
+    thumbs.scrollToItem(item)
+    pos = thumbs.visualItemRect(item).center()
+    qtbot.mouseClick(thumbs.viewport(), LEFT, pos=pos)
+    qtbot.mouseDClick(thumbs.viewport(), LEFT, pos=pos)
     d = doc.design
-    assert doc.undo_label == f"ColorSnap {lib.codes[best]}"
-    assert d.gloss_gu == pytest.approx(float(lib.gloss_gu[best]), abs=1e-9)
+    assert doc.undo_label == f"library {lib.codes[row]}"
+    assert d.gloss_gu == pytest.approx(float(lib.gloss_gu[row]), abs=1e-9)
     # the fit passes near the measured colour at every library angle (a few ΔE at most)
     fitted = d.lab_at(np.asarray(lib.angles_deg))
-    assert float(np.max(np.linalg.norm(fitted - lib.lab[best], axis=-1))) < 12.0
-    if d.is_solid:  # the journey goes on with a metallic: give the paint a flop to travel to
-        type_into(qtbot, win.designer_panel.lab_edits["flop"], f"{d.face[0] - 20:.1f}, {d.face[1]:.1f}, 0")
-    assert d.travel_deg is not None or not doc.design.is_solid
+    assert float(np.max(np.linalg.norm(fitted - lib.lab[row], axis=-1))) < 12.0
+    assert d.travel_deg is not None  # a metallic: the journey goes on with its flop
     show_tab(qtbot, win, "Design")
 
 

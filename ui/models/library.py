@@ -1,34 +1,70 @@
-"""Library browser state (Qt-free): filter, hierarchy, ColorSnap of the current design, match designs.
+"""Library browser state (Qt-free): filter, hierarchy, ColorSnap of the current design, match designs,
+and the booklet thumbnails of the paints a filter passes.
 
 Everything numeric is the formulation core's: :class:`station.formulate.library.LibraryFilter`,
-:func:`~station.formulate.library.hierarchy_counts`, :func:`station.formulate.snap.color_snap`; a library
-paint becomes a design with ``station.model.fit_fftg`` on its measured angles.
+:func:`~station.formulate.library.hierarchy_counts`, :func:`station.formulate.snap.color_snap`; library
+paints become designs with ``station.model.fit.fit_fftg_batch`` on their measured angles (many at once;
+one paint fits exactly as with ``fit_fftg``), and thumbnails are ``station.design.palette.booklet``.
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
-from functools import lru_cache
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from station.design.palette import booklet
+from station.errors import StationError
 from station.formulate.library import Library, LibraryFilter, hierarchy_counts
 from station.formulate.snap import SnapIndex, SnapResult, color_snap
-from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
+from station.model import FaceFlopTravelGloss, FitResult
 from station.model.display import lab_to_display
 from station.model.domain import ANGLES_3
+from station.model.errors import FitError
+from station.model.fit import fit_fftg_batch
 from ui.models.events import EventGroup
 
 SNAP_ANGLES = ANGLES_3
+#: Paints fitted and rendered per step of :meth:`LibraryModel.thumbnails` (one progress report each;
+#: a step is also how long a stopped task takes to stop).
+THUMB_CHUNK = 50
+#: Edge of a library thumbnail, pixels.
+THUMB_SIZE = 40
+
+
+def paint_fits(library: Library, rows: Sequence[int]) -> list[FitResult | FitError]:
+    """FFTG fits of library paints *rows* through their measured angles, in one batch (eqs 3.3.1–3.3.10):
+    a :class:`FitResult` per paint, or the :class:`FitError` saying why it has none."""
+    order = np.argsort(library.angles_deg)
+    angles = tuple(float(library.angles_deg[j]) for j in order)
+    idx = np.asarray(rows, dtype=int)
+    batch = fit_fftg_batch(angles, library.lab[idx][:, order], library.gloss_gu[idx])
+    out: list[FitResult | FitError] = []
+    for n in range(len(batch)):
+        try:
+            out.append(batch.result(n))
+        except FitError as exc:
+            out.append(exc)
+    return out
 
 
 def paint_design(library: Library, i: int) -> FaceFlopTravelGloss:
-    """FFTG fit of library paint *i* through its measured angles (eqs 3.3.1–3.3.10)."""
-    order = np.argsort(library.angles_deg)
-    angles = tuple(float(library.angles_deg[j]) for j in order)
-    return fit_fftg(AspecularMeasurements(angles, library.lab[i][order], float(library.gloss_gu[i]))).design
+    """FFTG fit of library paint *i* through its measured angles (raises :class:`FitError` if none)."""
+    fit = paint_fits(library, [i])[0]
+    if isinstance(fit, FitError):
+        raise fit
+    return fit.design
+
+
+@dataclass(frozen=True)
+class Thumbnail:
+    """One library paint's thumbnail: the booklet image, or why the paint cannot be rendered."""
+
+    row: int
+    image: np.ndarray | None
+    error: str | None = None
 
 
 def bar_images(library: Library, rows: np.ndarray, width: int = 64, height: int = 14) -> np.ndarray:
@@ -53,6 +89,8 @@ class LibraryModel:
         self.mask = np.ones(len(library), bool)
         self.snap_result: SnapResult | None = None
         self._index = SnapIndex(library)
+        self._fits: dict[int, FitResult | FitError] = {}
+        self._thumbs: dict[tuple[int, int], np.ndarray] = {}
         self.events = EventGroup("filtered", "snapped")
 
     def counts(self) -> dict[str, dict[str, dict[str, int]]]:
@@ -76,20 +114,72 @@ class LibraryModel:
         """Library rows passing the filter."""
         return np.flatnonzero(self.mask)
 
-    def snap(self, design: FaceFlopTravelGloss, k: int = 5, method: str = "cie76") -> SnapResult:
-        """ColorSnap the design's Lab at 15/45/110° against the whole library."""
+    def compute_snap(self, design: FaceFlopTravelGloss, k: int = 5, method: str = "cie76") -> SnapResult:
+        """ColorSnap the design's Lab at 15/45/110° against the whole library, and fit the matches'
+        designs (no event: safe off the GUI thread; :meth:`accept_snap` publishes the result)."""
         lab = design.lab_at(np.array(SNAP_ANGLES))
-        self.snap_result = color_snap(self.library, lab, k, method, self._index)
-        self.events.snapped.emit(self.snap_result)
-        return self.snap_result
+        result = color_snap(self.library, lab, k, method, self._index)
+        self.fits([m.index for m in result.matches])
+        return result
 
-    @lru_cache(maxsize=1024)  # noqa: B019 (one model per window; the cache dies with it)
+    def accept_snap(self, result: SnapResult) -> None:
+        """Make *result* the current ColorSnap result (event ``snapped``)."""
+        self.snap_result = result
+        self.events.snapped.emit(result)
+
+    def snap(self, design: FaceFlopTravelGloss, k: int = 5, method: str = "cie76") -> SnapResult:
+        """:meth:`compute_snap` then :meth:`accept_snap`."""
+        result = self.compute_snap(design, k, method)
+        self.accept_snap(result)
+        return result
+
+    def fits(self, rows: Sequence[int]) -> list[FitResult | FitError]:
+        """Fits of library rows *rows* (one batch for those not fitted before; cached)."""
+        todo = sorted({int(r) for r in rows if int(r) not in self._fits})
+        if todo:
+            self._fits.update(zip(todo, paint_fits(self.library, todo), strict=True))
+        return [self._fits[int(r)] for r in rows]
+
     def design_of(self, i: int) -> FaceFlopTravelGloss:
-        """Design of library row *i*."""
-        return paint_design(self.library, i)
+        """Design of library row *i* (raises :class:`FitError` when the paint has none)."""
+        fit = self.fits([i])[0]
+        if isinstance(fit, FitError):
+            raise fit
+        return fit.design
 
-    @lru_cache(maxsize=1024)  # noqa: B019
-    def thumbnail(self, i: int, size: int = 40) -> np.ndarray:
+    def thumbnail(self, i: int, size: int = THUMB_SIZE) -> np.ndarray:
         """Rendered thumbnail of row *i*: its design on the bent booklet panel
-        (``station.design.palette.booklet``), (size, size, 3) uint8."""
-        return booklet(self.design_of(i), size)
+        (``station.design.palette.booklet``), (size, size, 3) uint8 (cached)."""
+        key = (int(i), int(size))
+        if key not in self._thumbs:
+            self._thumbs[key] = booklet(self.design_of(i), size)
+        return self._thumbs[key]
+
+    def thumbnails(
+        self,
+        rows: Sequence[int],
+        on_chunk: Callable[[list[Thumbnail]], None],
+        progress: Callable[[int, str], None] | None = None,
+        size: int = THUMB_SIZE,
+    ) -> int:
+        """Thumbnails of *rows* in steps of :data:`THUMB_CHUNK`: each step fits its paints in one batch,
+        renders them and hands the list to *on_chunk*, then reports ``progress(done, text)`` (which may
+        raise to stop). A paint that cannot be fitted or rendered gets its reason instead of an image.
+        Returns the number of thumbnails made."""
+        done = 0
+        for start in range(0, len(rows), THUMB_CHUNK):
+            chunk = [int(r) for r in rows[start : start + THUMB_CHUNK]]
+            out: list[Thumbnail] = []
+            for r, fit in zip(chunk, self.fits(chunk), strict=True):
+                if isinstance(fit, FitError):
+                    out.append(Thumbnail(r, None, str(fit)))
+                    continue
+                try:
+                    out.append(Thumbnail(r, self.thumbnail(r, size)))
+                except StationError as exc:  # one paint that cannot be rendered never stops the list
+                    out.append(Thumbnail(r, None, str(exc)))
+            on_chunk(out)
+            done += len(out)
+            if progress is not None:
+                progress(done, f"thumbnails {done} of {len(rows)}")
+        return done

@@ -1,6 +1,12 @@
 """Library browser (thesis §5.3.3, Figs. 5.3, 5.9–5.11): hierarchy tree, thumbnails, index filter sliders,
 type check boxes, and the ColorSnap view — matches, the library cloud in Lab space (3D, drag to turn)
-and the design beside its match on the two halves of a cylinder."""
+and the design beside its match on the two halves of a cylinder.
+
+Every paint the filter passes gets a thumbnail: they are fitted (one batch per step) and rendered in a
+background task, with the viewer's progress indicator (:class:`~ui.widgets.tasks.TaskProgress`), and
+the list fills step by step; a paint that cannot be rendered is listed with the reason. A new filter
+stops the running task. Double-clicking a thumbnail makes that paint the current design (undoable).
+ColorSnap runs in the background too, with its own indicator."""
 
 from __future__ import annotations
 
@@ -25,17 +31,17 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from station.errors import StationError
 from station.formulate.library import PAINT_TYPES
 from station.formulate.snap import view_data
 from station.model import FaceFlopTravelGloss
+from station.model.errors import FitError
 from ui.models.document import DesignDocument
-from ui.models.library import LibraryModel, bar_images
+from ui.models.library import LibraryModel, Thumbnail, bar_images
 from ui.models.view import ViewModel, ViewSettings
 from ui.widgets.common import lab_colours, pixmap_from_array
 from ui.widgets.render_view import make_render_view
+from ui.widgets.tasks import TaskProgress, TaskThread
 
-MAX_THUMBS = 120
 SLIDER_STEPS = 100
 INDICES = ("flop", "chroma", "hue_shift")
 
@@ -72,15 +78,24 @@ class LabCloud(QWidget):
 
     def paintEvent(self, event) -> None:
         p = QPainter(self)
-        p.fillRect(self.rect(), QColor(40, 40, 44))
+        # the background and the cloud's 2×2 px points as one image: one painter call, not one per
+        # point (each call from Python costs the same as a whole image, and the cloud has 1500)
+        w, h = max(self.width(), 1), max(self.height(), 1)
+        canvas = np.empty((h, w, 3), np.uint8)
+        canvas[:] = (40, 40, 44)
+        if self.data is not None:
+            pts = np.trunc(self.project(self._cloud)).astype(int)
+            for dx in (0, 1):
+                for dy in (0, 1):
+                    x, y = pts[:, 0] + dx, pts[:, 1] + dy
+                    inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+                    canvas[y[inside], x[inside]] = self._cloud_rgb[inside]
+        p.drawPixmap(0, 0, pixmap_from_array(canvas))
         p.setPen(QPen(QColor(120, 120, 120), 1))
         for a, b in (((50, -80, 0), (50, 80, 0)), ((50, 0, -80), (50, 0, 80)), ((0, 0, 0), (100, 0, 0))):
             pa, pb = self.project(np.array(a)), self.project(np.array(b))
             p.drawLine(QPointF(*pa), QPointF(*pb))
         if self.data is not None:
-            pts = self.project(self._cloud)
-            for (x, y), c in zip(pts, self._cloud_rgb, strict=True):
-                p.fillRect(int(x), int(y), 2, 2, QColor(int(c[0]), int(c[1]), int(c[2])))
             p.setPen(QPen(QColor(255, 255, 255), 1))
             for m in self.data["matches"]:
                 x, y = self.project(np.asarray(m["lab"][1]))
@@ -159,7 +174,19 @@ class LibraryScreen(QWidget):
         self.count = QLabel()
         self.thumbs = QListWidget()
         self.thumbs.setIconSize(QSize(40, 40))
+        self.thumbs.setUniformItemSizes(True)
+        self.thumbs.setToolTip("double-click a paint to make it the current design")
         self.thumbs.itemDoubleClicked.connect(self._on_thumb)
+        self.thumb_busy = TaskProgress()
+        self.thumb_task: TaskThread | None = None
+        self._pending: list[Thumbnail] = []  # made by the running task, not yet listed
+        self._unrendered = 0
+        self._restart = False
+        self._closing = False
+        self._thumbs_running = False  # from start until its finished signal reached this thread
+        self._snap_running = False
+        self._rows = np.zeros(0, dtype=int)
+        self._item_rows: list[int] = []  # library row of each list item, in list order
 
         browse = QVBoxLayout()
         browse.addWidget(self.title)
@@ -167,11 +194,14 @@ class LibraryScreen(QWidget):
         browse.addLayout(types)
         browse.addLayout(form)
         browse.addWidget(self.count)
+        browse.addWidget(self.thumb_busy)
         browse.addWidget(self.thumbs, 2)
 
         self.snap_btn = QPushButton("ColorSnap current design")
         self._snap_design = document.design
         self.snap_btn.clicked.connect(lambda: self.snap())
+        self.snap_busy = TaskProgress()
+        self.snap_task: TaskThread | None = None
         self.matches = QListWidget()
         self.matches.setIconSize(QSize(64, 14))
         self.matches.currentRowChanged.connect(self._on_match)
@@ -186,6 +216,7 @@ class LibraryScreen(QWidget):
         snap_box = QGroupBox("ColorSnap")
         sl = QVBoxLayout(snap_box)
         sl.addWidget(self.snap_btn)
+        sl.addWidget(self.snap_busy)
         sl.addWidget(self.matches)
         sl.addWidget(self.use_btn)
         sl.addWidget(self.warnings)
@@ -230,33 +261,140 @@ class LibraryScreen(QWidget):
         self.model.set_filter(**{k: (path[i] if i < len(path) else None) for i, k in enumerate(keys)})
 
     def _on_filtered(self) -> None:
-        rows = self.model.rows
-        self.count.setText(
-            f"{rows.size} paints match" + (f" (first {MAX_THUMBS} shown)" if rows.size > MAX_THUMBS else "")
-        )
+        """Show the filtered paints' thumbnails: a task still making those of the previous filter is
+        stopped first (after its current step), then the new one starts."""
         self.thumbs.clear()
-        shown = rows[:MAX_THUMBS]
+        self._item_rows = []
+        self._unrendered = 0
+        self._rows = self.model.rows
+        self._count_text()
+        if self.thumb_task is not None and self._thumbs_running:  # its queued results still to come
+            self.thumb_task.cancel()
+            self._restart = True  # _on_thumbs_finished starts the new filter's thumbnails
+            return
+        self._start_thumbs()
+
+    def _start_thumbs(self) -> None:
+        self._restart = False
+        rows = self._rows
+        if rows.size == 0 or self._closing:
+            self.thumb_task = None
+            return
+        pending: list[Thumbnail] = []
+        self._pending = pending
+        task = TaskThread(lambda progress: self.model.thumbnails(rows, pending.extend, progress), pure=True)
+        # the indicator first: its end-of-task slot runs before ours, which may start the next task
+        self.thumb_busy.watch(task, f"thumbnails of {rows.size} paints…", steps=int(rows.size))
+        task.progress.connect(self._on_thumb_progress)
+        task.succeeded.connect(self._on_thumbs_done)
+        task.failed.connect(self._on_thumbs_failed)
+        task.cancelled.connect(self._on_thumbs_cancelled)
+        task.finished.connect(self._on_thumbs_finished)
+        self.thumb_task = task
+        self._thumbs_running = True
+        task.start()
+
+    def _on_thumbs_finished(self) -> None:
+        self._thumbs_running = False
+        if self._restart:
+            self._start_thumbs()
+
+    def _count_text(self, note: str = "") -> None:
+        n, shown = int(self._rows.size), self.thumbs.count()
+        text = f"{n} paints match"
+        if shown < n:
+            text += f" ({shown} thumbnails so far)"
+        if self._unrendered:
+            text += f"; {self._unrendered} cannot be rendered (reason in the list)"
+        self.count.setText(text + note)
+
+    def _add_pending(self) -> None:
+        items, pending = self._pending[:], self._pending
+        del pending[: len(items)]
         lib = self.model.library
-        for r in shown:
-            label = f"{lib.codes[r]}  {lib.types[r]}  {lib.gloss_gu[r]:.0f} GU"
-            try:
-                it = QListWidgetItem(QIcon(pixmap_from_array(self.model.thumbnail(int(r)))), label)
-            except StationError as exc:  # one paint that cannot be rendered never stops the list
-                it = QListWidgetItem(f"{label}  — cannot render: {exc}")
-                it.setToolTip(str(exc))
+        self.thumbs.setUpdatesEnabled(False)
+        for t in items:  # items made with the list as parent: no further call per item
+            label = f"{lib.codes[t.row]}  {lib.types[t.row]}  {lib.gloss_gu[t.row]:.0f} GU"
+            self._item_rows.append(int(t.row))
+            if t.image is not None:
+                QListWidgetItem(QIcon(pixmap_from_array(t.image)), label, self.thumbs)
+            else:
+                it = QListWidgetItem(f"{label}  — cannot render: {t.error}", self.thumbs)
+                it.setToolTip(str(t.error))
                 it.setFlags(it.flags() & ~Qt.ItemFlag.ItemIsEnabled)
-            it.setData(Qt.ItemDataRole.UserRole, int(r))
-            self.thumbs.addItem(it)
+                self._unrendered += 1
+        self.thumbs.setUpdatesEnabled(True)
+
+    def row_of(self, item: QListWidgetItem) -> int:
+        """Library row of a thumbnail list item."""
+        return self._item_rows[self.thumbs.row(item)]
+
+    def _on_thumb_progress(self, _done: int, _text: str) -> None:
+        if not self._restart:  # else the step belongs to a filter no longer shown
+            self._add_pending()
+            self._count_text()
+
+    def _on_thumbs_done(self, _n: object) -> None:
+        self._on_thumb_progress(0, "")
+
+    def _on_thumbs_cancelled(self) -> None:
+        if not self._restart:  # Cancel pressed: keep what was made
+            self._add_pending()
+            self._count_text(" — thumbnails stopped")
+
+    def _on_thumbs_failed(self, message: str) -> None:
+        if not self._restart:
+            self._add_pending()
+            self._count_text(f" — thumbnails failed: {message}")
+
+    @property
+    def idle(self) -> bool:
+        """No thumbnail or ColorSnap task is running or has results still to show."""
+        return not (self._restart or self._thumbs_running or self._snap_running)
 
     def _on_thumb(self, item: QListWidgetItem) -> None:
-        r = int(item.data(Qt.ItemDataRole.UserRole))
-        self.document.set_design(self.model.design_of(r), f"library {self.model.library.codes[r]}")
+        """Double-click: the paint becomes the current design (undoable, named after the paint)."""
+        self.pick(self.row_of(item))
+
+    def pick(self, row: int) -> None:
+        """Make library paint *row* the current design (a paint without a fit says why, in the list's
+        tooltip and the warnings line)."""
+        code = self.model.library.codes[row]
+        try:
+            design = self.model.design_of(row)
+        except FitError as exc:
+            self.warnings.setText(f"{code} cannot be used: {exc}")
+            return
+        self.document.set_design(design, f"library {code}")
 
     # ---------------------------------------------------------------- ColorSnap
     def snap(self, design: FaceFlopTravelGloss | None = None) -> None:
-        """ColorSnap *design* (default: the current design)."""
-        self._snap_design = design if design is not None else self.document.design
-        self.model.snap(self._snap_design)
+        """ColorSnap *design* (default: the current design) in the background; the matches appear when
+        it is done (a second request while one runs is ignored)."""
+        if self._snap_running:
+            return
+        target = design if design is not None else self.document.design
+        self._snap_design = target
+        task = TaskThread(lambda _progress: self.model.compute_snap(target), pure=True)
+        task.succeeded.connect(self._on_snap_done)
+        task.failed.connect(self._on_snap_failed)
+        task.finished.connect(self._on_snap_finished)
+        self.snap_task = task
+        self._snap_running = True
+        self.snap_btn.setEnabled(False)
+        self.warnings.setText("")
+        self.snap_busy.watch(task, f"ColorSnap in {len(self.model.library)} paints…")
+        task.start()
+
+    def _on_snap_done(self, result) -> None:
+        self.model.accept_snap(result)
+
+    def _on_snap_failed(self, message: str) -> None:
+        self.warnings.setText(f"ColorSnap failed: {message}")
+
+    def _on_snap_finished(self) -> None:
+        self._snap_running = False
+        self.snap_btn.setEnabled(True)
 
     def _on_snapped(self, result) -> None:
         self.matches.clear()
@@ -278,7 +416,12 @@ class LibraryScreen(QWidget):
         res = self.model.snap_result
         if res is None or not 0 <= row < len(res.matches):
             return
-        self.compare_model.show(self._snap_design, self.model.design_of(res.matches[row].index))
+        try:
+            match = self.model.design_of(res.matches[row].index)
+        except FitError as exc:
+            self.warnings.setText(f"{res.matches[row].code} cannot be shown: {exc}")
+            return
+        self.compare_model.show(self._snap_design, match)
 
     def use_match(self) -> None:
         """Make the selected match's design current (undoable)."""
@@ -286,9 +429,20 @@ class LibraryScreen(QWidget):
         row = self.matches.currentRow()
         if res is not None and 0 <= row < len(res.matches):
             m = res.matches[row]
-            self.document.set_design(self.model.design_of(m.index), f"ColorSnap {m.code}")
+            try:
+                design = self.model.design_of(m.index)
+            except FitError as exc:
+                self.warnings.setText(f"{m.code} cannot be used: {exc}")
+                return
+            self.document.set_design(design, f"ColorSnap {m.code}")
 
     def closeEvent(self, event) -> None:
+        self._closing = True
+        self._restart = False
+        for task in (self.thumb_task, self.snap_task):
+            if task is not None:
+                task.cancel()
+                task.wait()
         self.model.events.filtered.disconnect(self._on_filtered)
         self.model.events.snapped.disconnect(self._on_snapped)
         self.compare.close()
