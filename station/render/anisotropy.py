@@ -55,7 +55,9 @@ import numpy as np
 from scipy.optimize import nnls
 
 from station.model.anisotropy import ANISOTROPY_RANGES, Anisotropy
+from station.render.camera import Camera
 from station.render.cubemap import face_directions, sample_cube, texel_solid_angles
+from station.render.environment import Environment
 from station.render.errors import RenderInputError
 from station.render.numpy_renderer import BACKGROUND, gbuffer, horizon_table, light_terms, lobe_factors
 from station.render.prefilter import PrefilteredBasis
@@ -296,3 +298,96 @@ def ward_truth(scene: Scene, src_cube: np.ndarray, lobe: WardLobe, width: int, h
     img = np.full((height, width, 3), BACKGROUND, np.float64)
     img[g.mask] = ward_truth_pixels(src_cube, lobe, g.normal[g.mask], g.view[g.mask])
     return img.astype(np.float32)
+
+
+#: Sample counts of the error-against-samples sweep (odd: one sample on the specular direction).
+SWEEP_COUNTS = (1, 3, 5, 7, 9, 11, 15, 21, 25, 31, 35, 41, 51, 61, 71, 81)
+#: The scene of the sweep: the sphere seen slightly from above.
+SWEEP_SCENE = Scene("sphere", camera=Camera((0.0, 0.5, 5.0), (0.0, 0.0, 0.0), fov_deg=28))
+#: The lobe basis of the sweep (normalised cosine lobes spanning the anisotropic widths).
+SWEEP_EXPONENTS = (1.0, 4.0, 16.0, 64.0, 256.0, 1024.0, 4096.0)
+
+
+@dataclass(frozen=True)
+class SampleSweep:
+    """Error of the sampled reconstruction against the brute-force integral, per sample count.
+
+    ΔE00 between tone-mapped display colours (ACES curve, Lab of the decoded sRGB) per object pixel;
+    ``images`` holds the linear radiance (H, W, 3) of the counts asked for, ``truth`` the reference."""
+
+    samples: tuple[int, ...]
+    mean_de: tuple[float, ...]
+    p95_de: tuple[float, ...]
+    images: dict[int, np.ndarray]
+    truth: np.ndarray
+    seconds: float
+
+    def converged(self, slack: float = 0.1) -> int:
+        """Fewest samples whose mean ΔE00 is within *slack* of the most-sampled count's."""
+        floor = self.mean_de[-1]
+        return next(s for s, e in zip(self.samples, self.mean_de, strict=True) if e <= floor + slack)
+
+    def meets(self, mean_bar: float, p95_bar: float) -> int | None:
+        """Fewest samples meeting both bars (mean and 95th percentile ΔE00), None when none does."""
+        for s, m, p in zip(self.samples, self.mean_de, self.p95_de, strict=True):
+            if m <= mean_bar and p <= p95_bar:
+                return s
+        return None
+
+
+def point_light_environment(
+    direction: tuple[float, float, float] = (0.35, 0.55, 0.76),
+    radius_deg: float = 2.0,
+    flux: float = 4.0,
+    ambient: float = 0.03,
+    height: int = 128,
+) -> Environment:
+    """One small bright disc (the thesis's Fig 2.10 "one point light source") over a dim constant sky:
+    radiance *ambient* everywhere plus *flux* / (disc solid angle) inside the disc."""
+    from station.render.cubemap import equirect_directions
+
+    d = equirect_directions(height, 2 * height)
+    c = np.asarray(direction, dtype=np.float64)
+    c /= np.linalg.norm(c)
+    inside = d @ c > np.cos(np.radians(radius_deg))
+    omega = 2.0 * np.pi * (1.0 - np.cos(np.radians(radius_deg)))
+    img = np.full(d.shape, ambient) + inside[..., None] * (flux / omega)
+    return Environment("point light", img.astype(np.float32))
+
+
+def sample_sweep(
+    environment: Environment,
+    lobe: WardLobe,
+    counts: tuple[int, ...] = SWEEP_COUNTS,
+    size: int = 48,
+    truth_face: int = 64,
+    keep: tuple[int, ...] = (),
+) -> SampleSweep:
+    """Mean and 95th-percentile ΔE00 of eq 2.5.7 with each sample count against :func:`ward_truth`
+    (thesis's energy, ``energy="ward"``) on :data:`SWEEP_SCENE` at *size*², NumPy prefiltered basis of
+    :data:`SWEEP_EXPONENTS`; the truth integrates a *truth_face*² cube of the environment."""
+    import time
+
+    from station.model.colorimetry import linear_srgb_to_lab
+    from station.model.difference import delta_e
+    from station.render import prefilter, tonemap
+
+    t0 = time.perf_counter()
+    basis = prefilter.prefilter_basis(environment, SWEEP_EXPONENTS, engine="numpy")
+    g = gbuffer(SWEEP_SCENE, size, size)
+    truth = ward_truth(SWEEP_SCENE, environment.to_cube(truth_face), lobe, size, size)
+
+    def lab(x: np.ndarray) -> np.ndarray:
+        return linear_srgb_to_lab(tonemap.srgb_decode(tonemap.to_display(x) / 255.0))
+
+    ref = lab(truth[g.mask])
+    means, p95s, images = [], [], {}
+    for j in counts:
+        img = np.full((size, size, 3), BACKGROUND, np.float32)
+        img[g.mask] = shade_anisotropic(basis, lobe, j, g.normal[g.mask], g.view[g.mask])
+        d = delta_e(lab(img[g.mask]), ref, "cie2000")
+        means.append(float(d.mean()))
+        p95s.append(float(np.percentile(d, 95)))
+        if j in keep:
+            images[j] = img
+    return SampleSweep(tuple(counts), tuple(means), tuple(p95s), images, truth, time.perf_counter() - t0)
