@@ -71,8 +71,9 @@ class GLRenderer:
 
     ``anisotropy`` (same methods): a :class:`station.model.anisotropy.Anisotropy` replaces both paints'
     gloss lobes by Ward's anisotropic lobe of that (α_x, α_y, direction), with P_s the paint's gloss
-    energy Σ w_G,i (kept at every view unless :attr:`anisotropy_energy` is "ward"), rendered by off-specular samples (eqs 2.5.4–2.5.7, ``shaders/anisotropy.glsl``, the
-    equations of :func:`station.render.anisotropy.shade_anisotropic`). The sample count is
+    energy Σ w_G,i (kept at every view unless :attr:`anisotropy_energy` is "ward"), rendered by
+    off-specular samples (eqs 2.5.4–2.5.7, ``shaders/anisotropy.glsl``, the equations of
+    :func:`station.render.anisotropy.shade_anisotropic`). The sample count is
     ``anisotropic_samples`` when given, else the level of detail's choice for this environment and
     :attr:`anisotropy_tolerance_de` (:func:`station.render.lod.choose_anisotropic_samples`), reported in
     :attr:`last_anisotropy`. None (default) compiles none of it in: the isotropic path is unchanged.
@@ -154,7 +155,7 @@ class GLRenderer:
         shape: str,
         linear: bool,
         kind: str = "shape",
-        features: tuple[int, int, int] | tuple[int, int, int, int] = (0, 0, 0),
+        features: tuple[int, ...] = (0, 0, 0),
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
         *features* = (coat, stage, flakes[, anisotropy]) compiled in (0/1 each)."""
@@ -265,11 +266,11 @@ class GLRenderer:
         else:
             self.last_anisotropy = None
         if mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats)]  # type: ignore[arg-type]
+            passes = [self._program(scene.shape, linear, "shape", feats)]
         else:
             passes = [
                 self._program("sphere", linear, "stage", (0, feats[1], 0)),
-                self._program("sphere", linear, "mesh", feats),  # type: ignore[arg-type]
+                self._program("sphere", linear, "mesh", feats),
             ]
         _, fbo = self._target(linear, depth=mesh is not None)
         fbo.use()
