@@ -550,15 +550,30 @@ class GLRenderer:
         curve: str = "aces",
         linear: bool = False,
         flakes: FlakeLayer | None = None,
+        anisotropy: Anisotropy | None = None,
+        anisotropic_samples: int | None = None,
     ):
         """A :class:`station.render.meshes.Mesh` rasterised and shaded with the same equations as the
         shapes (paint 0 at x < 0, paint 1 at x >= 0, neutral parts grey) on *stage* (ground at the mesh's
         floor, contact shadow from its sphere proxies), seen by *camera* (default MESH_CAMERA).
-        8-bit sRGB (H, W, 3), or linear float32 radiance with ``linear=True``; row 0 at the top."""
+        8-bit sRGB (H, W, 3), or linear float32 radiance with ``linear=True``; row 0 at the top.
+        *anisotropy*, *anisotropic_samples*: the class doc (the principal direction is world +x rotated
+        by the direction angle, e.g. along the car body)."""
         from station.render.meshes import MESH_CAMERA
 
         scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage)
-        fbo = self._draw(scene, paints, linear, exposure_ev, curve, coat, mesh=mesh, flakes=flakes)
+        fbo = self._draw(
+            scene,
+            paints,
+            linear,
+            exposure_ev,
+            curve,
+            coat,
+            mesh=mesh,
+            flakes=flakes,
+            anisotropy=anisotropy,
+            anisotropic_samples=anisotropic_samples,
+        )
         if linear:
             data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
             return data.reshape(self.height, self.width, 3)[::-1].copy()

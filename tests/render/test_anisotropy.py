@@ -226,3 +226,27 @@ def test_design_file_round_trip(tmp_path):
     ):
         with pytest.raises(ModelInputError, match=field.replace(".", r"\.")):
             io.anisotropy_from_dict({"anisotropy": bad})
+
+
+def test_mesh_takes_the_anisotropy_and_its_isotropic_limit(gl_ctx):
+    from station.model.anisotropy import Anisotropy
+    from station.render.gl_renderer import GLRenderer
+    from station.render.meshes import car_body
+    from station.render.weights import LobeWeights
+
+    basis = prefilter.prefilter_basis(procedural.sunny_sky(128), EXPS, ctx=gl_ctx)
+    mesh = car_body(48, 24)
+    fit = an.fit_isotropic(EXPS, 0.05)
+    paint = LobeWeights(
+        EXPS, np.array([0.05, 0.02, 0.01]), np.zeros((len(EXPS), 3)), _gloss_paint(0.8, fit).k_g
+    )
+    with GLRenderer(basis, 48, 32, ctx=gl_ctx, half_float=False) as gl:
+        iso = gl.render_mesh(mesh, [paint], linear=True)
+        same = gl.render_mesh(
+            mesh, [paint], linear=True, anisotropy=Anisotropy(0.05, 0.05), anisotropic_samples=9
+        )
+        brushed = gl.render_mesh(
+            mesh, [paint], linear=True, anisotropy=Anisotropy(0.05, 0.3), anisotropic_samples=9
+        )
+    np.testing.assert_allclose(same, iso, rtol=1e-4, atol=1e-6)
+    assert np.abs(brushed - iso).max() > 0.05  # the highlight is drawn out across +x
