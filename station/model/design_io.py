@@ -9,13 +9,18 @@ A design file is a JSON object::
       "flop": [L, a, b],                    # Lab at the travel angle
       "travel_deg": 62.0,                   # θ_clamp in degrees; null for a solid
       "gloss_gu": 85.0,                     # 60° gloss units; null = not measured (default used)
-      "flakes": {"size_um": 25, "density_per_mm2": 400, "spread_deg": 8, "reflectance": 0.5}
+      "flakes": {"size_um": 25, "density_per_mm2": 400, "spread_deg": 8, "reflectance": 0.5},
+      "anisotropy": {"alpha_x": 0.05, "alpha_y": 0.25, "direction_deg": 0}
     }
 
 ``flakes`` is optional (:class:`station.model.flakes.FlakeLayer`; missing keys take its defaults): absent,
 the paint type's default applies (:func:`default_flakes`: none for a solid, aluminium flakes for an effect
 paint); ``null`` means no flake layer. :func:`design_from_dict` ignores it, so older readers and files
 keep working; :func:`flakes_from_dict` reads it.
+
+``anisotropy`` is optional too (:class:`station.model.anisotropy.Anisotropy`, Ward's α_x ≤ α_y and the
+direction of principal anisotropy, eq 2.5.4): absent or ``null``, the design is isotropic (its own gloss
+lobes); :func:`anisotropy_from_dict` reads it.
 
 Any other keys are kept by the caller and ignored here, so the JSON printed by
 ``station model from-angles`` (which adds ``residual_de`` and more) is itself a valid design file.
@@ -29,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from station.errors import InputError
+from station.model.anisotropy import Anisotropy
 from station.model.errors import ModelInputError
 from station.model.flakes import METALLIC_FLAKES, FlakeLayer
 from station.model.representations import DEFAULT_GLOSS_GU, FaceFlopTravelGloss
@@ -101,6 +107,13 @@ def flakes_from_dict(data: Any, design: FaceFlopTravelGloss | None = None) -> Fl
     return FlakeLayer.from_dict(data["flakes"])
 
 
+def anisotropy_from_dict(data: Any) -> Anisotropy | None:
+    """The design file's anisotropy (module docstring): None (isotropic) when absent or null."""
+    if not isinstance(data, dict) or data.get("anisotropy") is None:
+        return None
+    return Anisotropy.from_dict(data["anisotropy"])
+
+
 def read_json_file(
     path: str | Path,
     field: str,
@@ -136,6 +149,12 @@ def load_design_flakes(path: str | Path) -> tuple[FaceFlopTravelGloss, FlakeLaye
     data = read_json_file(path, "design", f"design file ({SCHEMA})", MAX_DESIGN_BYTES)
     design = design_from_dict(data)
     return design, flakes_from_dict(data, design)
+
+
+def load_design_anisotropy(path: str | Path) -> tuple[FaceFlopTravelGloss, Anisotropy | None]:
+    """Read a design file with its anisotropy (:func:`anisotropy_from_dict`)."""
+    data = read_json_file(path, "design", f"design file ({SCHEMA})", MAX_DESIGN_BYTES)
+    return design_from_dict(data), anisotropy_from_dict(data)
 
 
 def save_design(design: FaceFlopTravelGloss, path: str | Path, **extra: Any) -> Path:

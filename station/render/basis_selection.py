@@ -9,6 +9,16 @@ exponent is tried at every point of a log-spaced grid, and the best few starts a
 Nelder–Mead over all log-exponents (the thesis used Levenberg–Marquardt; f has a max in it, so a
 derivative-free search is the safer choice).
 
+Independent of the evaluation cap: Nelder–Mead is run to convergence (simplex within XATOL in
+log-exponent and FATOL in f), and restarted from its result with a fresh simplex until a restart
+improves f by no more than FATOL (a collapsed simplex is the usual way Nelder–Mead stalls short of a
+minimum). ``max_evals`` is only a safety limit per start; a start that reaches it is reported
+(``BasisRow.converged`` False), because where a search is cut off, not the objective, would then decide
+the answer. The score of a row is f evaluated at the row's own (rounded) exponents, so a row's
+numbers are a function of its exponents only. (A capped search, as before, returned the point where the
+budget ran out: from 5 lobes on, a different cap gave a different basis and score, and the greedy warm
+start carried that into every larger count.)
+
 Reproducible: no random numbers, and the search runs with BLAS/OpenMP pools held to one thread, so the
 floating-point sums (and Nelder–Mead's path, which amplifies their last bits) are the same run to run and
 machine to machine.
@@ -39,6 +49,10 @@ from station.render.lobes import EXPONENT_RANGE, MAX_LOBES, LobeBasis
 SEARCH_RANGE = (1.0, 2.0e4)
 #: Candidate positions tried for each new lobe.
 CANDIDATES = 16
+#: Convergence of the polish: simplex size in log-exponent, and f (ΔE00); a restart must beat FATOL.
+XATOL, FATOL = 1e-3, 1e-4
+#: Default safety limit of evaluations per start (not reached by a converging search on the database).
+MAX_EVALS = 4000
 #: The shipped table (replaced only by ``--install``).
 SHIPPED_TABLE = Path(__file__).parent / "data" / "lobe_basis.json"
 #: Default output of the command: a new file in the current directory.
@@ -55,6 +69,7 @@ class BasisRow:
     mean_error: float
     evaluations: int
     seconds: float
+    converged: bool = True
 
     @property
     def objective(self) -> float:
@@ -82,10 +97,41 @@ def make_objective(
     return errors
 
 
+def polish(
+    f: Callable[[NDArray[np.float64]], float], x0: NDArray[np.float64], max_evals: int
+) -> tuple[NDArray[np.float64], float, bool]:
+    """(x, f(x), converged): Nelder–Mead from *x0*, restarted until a restart gains ≤ FATOL (module doc).
+
+    *converged* is False when the *max_evals* budget ran out first."""
+    from scipy.optimize import minimize
+
+    x = np.asarray(x0, dtype=np.float64)
+    fx = float(f(x))
+    used = 1
+    while used < max_evals:
+        res = minimize(
+            f,
+            x,
+            method="Nelder-Mead",
+            options={"maxfev": max_evals - used, "xatol": XATOL, "fatol": FATOL, "adaptive": True},
+        )
+        used += int(res.nfev)
+        if not res.success:  # the budget ran out mid-search
+            if res.fun < fx:
+                x, fx = np.asarray(res.x), float(res.fun)
+            return x, fx, False
+        if res.fun >= fx - FATOL:
+            if res.fun < fx:
+                x, fx = np.asarray(res.x), float(res.fun)
+            return x, fx, True
+        x, fx = np.asarray(res.x), float(res.fun)
+    return x, fx, False
+
+
 def select_bases(
     brdfs: Sequence[lf.DesignedBRDF],
     max_lobes: int = MAX_LOBES,
-    max_evals: int = 400,
+    max_evals: int = MAX_EVALS,
     log: Callable[[str], None] | None = None,
 ) -> list[BasisRow]:
     """Greedy forward selection of 1..max_lobes exponents minimising eq 2.3.4 (module docstring).
@@ -104,8 +150,6 @@ def _select_bases(
     max_evals: int,
     log: Callable[[str], None] | None,
 ) -> list[BasisRow]:
-    from scipy.optimize import minimize
-
     errors = make_objective(brdfs)
     lo, hi = np.log(SEARCH_RANGE[0]), np.log(SEARCH_RANGE[1])
     grid = np.linspace(lo, hi, CANDIDATES)
@@ -127,30 +171,23 @@ def _select_bases(
             key=lambda t: t[0],
         )[:2]
         best_x, best_f = np.asarray(starts[0][1]), starts[0][0]
+        converged = True
         for _, x0 in starts:
-            res = minimize(
-                f,
-                np.asarray(x0),
-                method="Nelder-Mead",
-                options={"maxfev": max_evals, "xatol": 1e-3, "fatol": 1e-4, "adaptive": True},
-            )
-            if res.fun < best_f:
-                best_x, best_f = res.x, float(res.fun)
-        current = np.sort(np.clip(best_x, lo, hi))
-        mx, mean = errors(np.exp(current))
-        row = BasisRow(
-            m,
-            tuple(float(x) for x in np.round(np.exp(current), 4)),
-            mx,
-            mean,
-            evals,
-            time.perf_counter() - t0,
-        )
+            x, fx, ok = polish(f, np.asarray(x0), max_evals)
+            converged = converged and ok
+            if fx < best_f:
+                best_x, best_f = x, fx
+        exponents = tuple(float(x) for x in np.round(np.exp(np.sort(np.clip(best_x, lo, hi))), 4))
+        current = np.log(np.asarray(exponents))
+        mx, mean = errors(np.asarray(exponents))  # the row's score: f at its own exponents
+        row = BasisRow(m, exponents, mx, mean, evals, time.perf_counter() - t0, converged)
         rows.append(row)
         if log is not None:
             log(
                 f"{m:2d} lobes  max {mx:7.3f}  mean {mean:7.3f}  f {mx + mean:7.3f}  "
-                f"E = {', '.join(f'{e:.4g}' for e in row.exponents)}  ({evals} evals, {row.seconds:.1f} s)"
+                f"E = {', '.join(f'{e:.4g}' for e in row.exponents)}  ({evals} evals, {row.seconds:.1f} s"
+                + ("" if converged else f", CUT OFF at {max_evals} evaluations per start: not converged")
+                + ")"
             )
     return rows
 
@@ -192,7 +229,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--max-lobes", type=int, default=MAX_LOBES)
-    ap.add_argument("--max-evals", type=int, default=400)
+    ap.add_argument("--max-evals", type=int, default=MAX_EVALS, help="safety limit of evaluations per start")
     ap.add_argument("--default-lobes", type=int, default=6)
     ap.add_argument("--out", type=Path, default=None, help=f"output file (default {DEFAULT_OUT})")
     ap.add_argument(

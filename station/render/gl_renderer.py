@@ -9,10 +9,14 @@ and are re-exported here for callers that import them from this module.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
+from station.model.anisotropy import Anisotropy
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
+from station.render import anisotropy as an
 from station.render.errors import RenderInputError
 from station.render.flakes import FlakeChoice, flake_lobes, flake_lod, flake_tint, flake_uniforms
 from station.render.gl_context import (
@@ -35,6 +39,9 @@ from station.render.sh import sh_diffuse_matrix
 from station.render.shapes import GROUNDS, OCCLUDERS, SHAPE_INDEX, Scene
 from station.render.stage import MAX_OCCLUDERS, PENUMBRA_DEG, backdrop_lobe, lookup_matrix
 from station.render.tonemap import CURVES, check_curve
+
+if TYPE_CHECKING:
+    from station.render.lod import AnisotropyChoice
 
 __all__ = [
     "GL_TEXTURE_CUBE_MAP_SEAMLESS",
@@ -61,6 +68,15 @@ class GLRenderer:
 
     ``coat`` (of :meth:`render` / :meth:`render_linear`): a :class:`station.model.gloss.ClearCoat` scales
     the gloss terms per pixel by Schlick's Fresnel (as ``numpy_renderer`` does); None: the thesis's model.
+
+    ``anisotropy`` (same methods): a :class:`station.model.anisotropy.Anisotropy` replaces both paints'
+    gloss lobes by Ward's anisotropic lobe of that (α_x, α_y, direction), with P_s the paint's gloss
+    energy Σ w_G,i (kept at every view unless :attr:`anisotropy_energy` is "ward"), rendered by
+    off-specular samples (eqs 2.5.4–2.5.7, ``shaders/anisotropy.glsl``, the equations of
+    :func:`station.render.anisotropy.shade_anisotropic`). The sample count is
+    ``anisotropic_samples`` when given, else the level of detail's choice for this environment and
+    :attr:`anisotropy_tolerance_de` (:func:`station.render.lod.choose_anisotropic_samples`), reported in
+    :attr:`last_anisotropy`. None (default) compiles none of it in: the isotropic path is unchanged.
     """
 
     def __init__(
@@ -120,17 +136,29 @@ class GLRenderer:
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[tuple[str, bool, str, tuple[int, int, int]], tuple] = {}
+        self._programs: dict[tuple[str, bool, str, tuple[int, ...]], tuple] = {}
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
         self._targets: dict[tuple[bool, bool], tuple] = {}
+        #: ΔE00 tolerance the level of detail meets when it picks the anisotropic sample count.
+        self.anisotropy_tolerance_de = 1.0
+        #: Energy of the anisotropic lobe (:data:`station.render.anisotropy.ENERGIES`): "design" keeps the
+        #: paint's gloss energy at every view; "ward" is eq 2.5.4's, times its albedo A(N, V).
+        self.anisotropy_energy = "design"
+        #: The anisotropic sample choice of the last frame (None: isotropic frame).
+        self.last_anisotropy: AnisotropyChoice | None = None
+        self._aniso: dict[tuple, tuple] = {}
 
     def _program(
-        self, shape: str, linear: bool, kind: str = "shape", features: tuple[int, int, int] = (0, 0, 0)
+        self,
+        shape: str,
+        linear: bool,
+        kind: str = "shape",
+        features: tuple[int, ...] = (0, 0, 0),
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
-        *features* = (coat, stage, flakes) compiled in (0/1 each)."""
+        *features* = (coat, stage, flakes[, anisotropy]) compiled in (0/1 each)."""
         key = (shape, linear, kind, features)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
@@ -142,6 +170,7 @@ class GLRenderer:
                 "HAS_COAT": features[0],
                 "HAS_STAGE": features[1],
                 "HAS_FLAKES": features[2],
+                **({"HAS_ANISO": 1} if len(features) > 3 and features[3] else {}),
                 "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
                 "PENUMBRA_DEG": f"{PENUMBRA_DEG:.4f}",
                 "N_LOBES": len(self._lobes),
@@ -222,10 +251,22 @@ class GLRenderer:
         mesh=None,
         flakes: FlakeLayer | None = None,
         target=None,
+        anisotropy: Anisotropy | None = None,
+        anisotropic_samples: int | None = None,
     ):
         pair = check_paints(self.basis, paints)
         self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
-        feats = (int(coat is not None), int(scene.stage is not None), int(self.last_flakes.on))
+        feats: tuple[int, ...] = (
+            int(coat is not None),
+            int(scene.stage is not None),
+            int(self.last_flakes.on),
+        )
+        aniso_uniforms: dict = {}
+        if anisotropy is not None:
+            pair, aniso_uniforms = self._anisotropy(pair, anisotropy, anisotropic_samples)
+            feats = (*feats, 1)
+        else:
+            self.last_anisotropy = None
         if mesh is None:
             passes = [self._program(scene.shape, linear, "shape", feats)]
         else:
@@ -295,6 +336,9 @@ class GLRenderer:
             uniforms["u_flake_mean_lights"] = int(
                 self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[mean])
             )
+        if aniso_uniforms:
+            self._aniso[aniso_uniforms.pop("_key")][0].use(m + 9)
+            uniforms.update(aniso_uniforms)
         if not linear:
             check_curve(curve)
             uniforms["u_exposure"] = float(2.0**exposure_ev)
@@ -315,6 +359,54 @@ class GLRenderer:
         finally:
             self.ctx.disable(self.ctx.DEPTH_TEST)
         return fbo
+
+    def _anisotropy(self, pair, anisotropy: Anisotropy, samples: int | None) -> tuple[list, dict]:
+        """Paints with their gloss moved into the anisotropic lobe, and the lobe's uniforms (class doc)."""
+        import moderngl
+
+        from station.render.lod import AnisotropyChoice, choose_anisotropic_samples
+        from station.render.truth import sphere_pixels
+        from station.render.weights import LobeWeights
+
+        if self.anisotropy_energy not in an.ENERGIES:
+            raise RenderInputError("anisotropy_energy", " | ".join(an.ENERGIES), self.anisotropy_energy)
+        lobe = an.WardLobe.from_design(anisotropy)
+        key = (lobe.alpha_x, lobe.alpha_y)
+        if key not in self._aniso:
+            table = an.albedo_table(lobe)
+            tex = self.ctx.texture((table.shape[1], table.shape[0]), 1, table.tobytes(), dtype="f4")
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            w = an.fit_isotropic(self.basis.exponents, lobe.alpha_x)
+            self._aniso[key] = (tex, (w / w.sum())[self._order], {})
+        tex, w_bound, choices = self._aniso[key]
+        if samples is not None:
+            an.sample_offsets(lobe, samples)  # validates
+            choice = AnisotropyChoice(
+                samples, float("nan"), float("nan"), f"{samples} anisotropic samples (given)"
+            )
+        else:
+            ck = (float(self.anisotropy_tolerance_de), self.anisotropy_energy, lobe.tangent)
+            if ck not in choices:
+                choices[ck] = choose_anisotropic_samples(
+                    self.basis, lobe, *sphere_pixels(8), ck[0], energy=self.anisotropy_energy
+                )
+            choice = choices[ck]
+        self.last_anisotropy = choice
+        ps = [float(w.map_weights()[2].sum()) for w in pair]
+        pair = [LobeWeights(w.exponents, w.k_d, w.k_dd, np.zeros_like(w.k_g)) for w in pair]
+        uniforms = {
+            "_key": key,
+            "u_aniso_samples": int(choice.samples) if lobe.spread > 0 else 1,
+            "u_aniso_spread": lobe.spread,
+            "u_aniso_hint": tuple(float(c) for c in lobe.tangent),
+            "u_aniso_albedo": len(self._lobes) + 9,
+            "u_aniso_cos_min": an.ALBEDO_COS_MIN,
+            "u_aniso_ward_energy": int(self.anisotropy_energy == "ward"),
+            "_aniso_w": w_bound,
+            "_aniso_ps": (ps + ps)[:2],
+        }
+        return pair, uniforms
 
     def _mesh_vao(self, mesh, prog):
         """Vertex array of *mesh* for *prog* (buffers uploaded once per mesh and program)."""
@@ -370,6 +462,9 @@ class GLRenderer:
             if name in prog:
                 n = prog[name].array_length
                 prog[name].write(np.concatenate([w[part] for w in mw]).astype(np.float32)[:n].tobytes())
+        if "u_aniso_w" in prog:
+            prog["u_aniso_w"].write(np.asarray(uniforms["_aniso_w"], np.float32).tobytes())
+            prog["u_aniso_ps"].write(np.asarray(uniforms["_aniso_ps"], np.float32).tobytes())
         if "u_flake_tint" in prog:
             prog["u_flake_tint"].write(np.array([flake_tint(w[1]) for w in mw], np.float32).tobytes())
         if "u_occ" in prog:
@@ -385,12 +480,24 @@ class GLRenderer:
         curve: str = "aces",
         coat: ClearCoat | None = None,
         flakes: FlakeLayer | None = None,
+        anisotropy: Anisotropy | None = None,
+        anisotropic_samples: int | None = None,
     ):
         """8-bit sRGB frame (H, W, 3) uint8 (a view of the RGBA read-back, the driver's fast path).
 
         *flakes*: the paints' flake layer (sparkle, ``station.render.flakes``); the level of detail's
-        choice is in :attr:`last_flakes`."""
-        fbo = self._draw(scene, paints, False, exposure_ev, curve, coat, flakes=flakes)
+        choice is in :attr:`last_flakes`. *anisotropy*, *anisotropic_samples*: see the class doc."""
+        fbo = self._draw(
+            scene,
+            paints,
+            False,
+            exposure_ev,
+            curve,
+            coat,
+            flakes=flakes,
+            anisotropy=anisotropy,
+            anisotropic_samples=anisotropic_samples,
+        )
         data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
         return data.reshape(self.height, self.width, 4)[::-1, :, :3]
 
@@ -403,17 +510,48 @@ class GLRenderer:
         coat: ClearCoat | None = None,
         flakes: FlakeLayer | None = None,
         target=None,
+        anisotropy: Anisotropy | None = None,
+        anisotropic_samples: int | None = None,
     ):
         """Render the 8-bit display frame into this renderer's framebuffer and return it (no read-back:
         a caller on the same context blits it, e.g. ``ctx.copy_framebuffer(screen, fbo)``; row 0 is the
         bottom row, GL's convention). *target*: a framebuffer of this context and of this renderer's
         size (e.g. a widget's, ``ctx.detect_framebuffer``) drawn into instead, which saves the blit; not
         for meshes (no depth buffer is assumed)."""
-        return self._draw(scene, paints, False, exposure_ev, curve, coat, flakes=flakes, target=target)
+        return self._draw(
+            scene,
+            paints,
+            False,
+            exposure_ev,
+            curve,
+            coat,
+            flakes=flakes,
+            target=target,
+            anisotropy=anisotropy,
+            anisotropic_samples=anisotropic_samples,
+        )
 
-    def render_linear(self, scene, paints, coat: ClearCoat | None = None, flakes: FlakeLayer | None = None):
-        """Linear sRGB radiance (H, W, 3) float32."""
-        fbo = self._draw(scene, paints, True, 0.0, "clip", coat, flakes=flakes)
+    def render_linear(
+        self,
+        scene,
+        paints,
+        coat: ClearCoat | None = None,
+        flakes: FlakeLayer | None = None,
+        anisotropy: Anisotropy | None = None,
+        anisotropic_samples: int | None = None,
+    ):
+        """Linear sRGB radiance (H, W, 3) float32 (*anisotropy*, *anisotropic_samples*: the class doc)."""
+        fbo = self._draw(
+            scene,
+            paints,
+            True,
+            0.0,
+            "clip",
+            coat,
+            flakes=flakes,
+            anisotropy=anisotropy,
+            anisotropic_samples=anisotropic_samples,
+        )
         data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
         return data.reshape(self.height, self.width, 3)[::-1].copy()
 
@@ -428,15 +566,30 @@ class GLRenderer:
         curve: str = "aces",
         linear: bool = False,
         flakes: FlakeLayer | None = None,
+        anisotropy: Anisotropy | None = None,
+        anisotropic_samples: int | None = None,
     ):
         """A :class:`station.render.meshes.Mesh` rasterised and shaded with the same equations as the
         shapes (paint 0 at x < 0, paint 1 at x >= 0, neutral parts grey) on *stage* (ground at the mesh's
         floor, contact shadow from its sphere proxies), seen by *camera* (default MESH_CAMERA).
-        8-bit sRGB (H, W, 3), or linear float32 radiance with ``linear=True``; row 0 at the top."""
+        8-bit sRGB (H, W, 3), or linear float32 radiance with ``linear=True``; row 0 at the top.
+        *anisotropy*, *anisotropic_samples*: the class doc (the principal direction is world +x rotated
+        by the direction angle, e.g. along the car body)."""
         from station.render.meshes import MESH_CAMERA
 
         scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage)
-        fbo = self._draw(scene, paints, linear, exposure_ev, curve, coat, mesh=mesh, flakes=flakes)
+        fbo = self._draw(
+            scene,
+            paints,
+            linear,
+            exposure_ev,
+            curve,
+            coat,
+            mesh=mesh,
+            flakes=flakes,
+            anisotropy=anisotropy,
+            anisotropic_samples=anisotropic_samples,
+        )
         if linear:
             data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
             return data.reshape(self.height, self.width, 3)[::-1].copy()
@@ -462,6 +615,9 @@ class GLRenderer:
             *(self._combined[1] if self._combined else []),
         ]:
             tex.release()
+        for tex, *_ in self._aniso.values():
+            tex.release()
+        self._aniso.clear()
         self._combined = None
         self._programs.clear()
         self._targets.clear()

@@ -8,6 +8,8 @@ Given the designs on screen, the environment and the pixels (normals, views), :f
    within the tolerance of the full-resolution images, with m lobes;
 3. the fewest anisotropic off-specular samples (eqs 2.5.4–2.5.7) whose images stay within the
    tolerance of the most-sampled image, when the caller renders anisotropy (an isotropic scene needs 1).
+   :func:`choose_anisotropic_samples` makes the same choice for one design's anisotropy on its own (the
+   GL renderer calls it per environment and anisotropy, and reports it as ``last_anisotropy``).
 
 Each factor gets a share tolerance/√3 of the budget (errors of independent approximations add roughly
 in quadrature), measured as the given percentile of CIEDE2000 over pixels and designs, Lab relative to
@@ -81,6 +83,76 @@ def _de(scene_white: float, ref: NDArray[np.float64], img: NDArray[np.float64], 
 
     d = delta_e(linear_srgb_to_lab(ref / scene_white), linear_srgb_to_lab(img / scene_white), "cie2000")
     return float(np.percentile(d, percentile))
+
+
+def _fewest_samples(
+    render: Callable[[int], NDArray[np.float64]],
+    white: float,
+    share: float,
+    percentile: float,
+    sample_counts: Sequence[int],
+) -> tuple[int, float]:
+    """(fewest samples within *share* of the most-sampled image, its ΔE); the most when none is."""
+    counts = sorted(sample_counts)
+    if not counts or counts[0] < 1:
+        raise RenderInputError("sample_counts", "sample counts >= 1", list(sample_counts))
+    best = np.asarray(render(counts[-1]), dtype=float)
+    for s in counts[:-1]:
+        err = _de(white, best, np.asarray(render(s), dtype=float), percentile)
+        if err <= share:
+            return s, err
+    return counts[-1], 0.0
+
+
+@dataclass(frozen=True)
+class AnisotropyChoice:
+    """The anisotropic sample count :func:`choose_anisotropic_samples` chose, with its ΔE and why."""
+
+    samples: int
+    error_de: float  # CIEDE2000 at the percentile against the most-sampled image
+    tolerance_de: float
+    reason: str
+
+
+def choose_anisotropic_samples(
+    basis: Any,
+    lobe: Any,
+    normals: ArrayLike,
+    views: ArrayLike,
+    tolerance_de: float = 1.0,
+    *,
+    percentile: float = 95.0,
+    sample_counts: Sequence[int] = SAMPLE_COUNTS,
+    energy: str = "ward",
+) -> AnisotropyChoice:
+    """Fewest off-specular samples of *lobe* (:class:`station.render.anisotropy.WardLobe`) on *basis*
+    whose gloss at the pixels (*normals*, *views*: (P, 3)) stays within tolerance/√3 of the most-sampled
+    one (step 3 of the module docstring); Lab relative to the brightest white-Lambertian pixel
+    (the exponent-1 map at the normals). An isotropic lobe (α_x = α_y) needs 1. *energy*: the lobe's
+    energy convention (:data:`station.render.anisotropy.ENERGIES`)."""
+    from station.render import anisotropy as an
+    from station.render.cubemap import sample_cube
+
+    if not (np.isfinite(tolerance_de) and tolerance_de > 0):
+        raise RenderInputError("tolerance_de", "a CIEDE2000 tolerance > 0", tolerance_de)
+    if not 0.0 < percentile <= 100.0:
+        raise RenderInputError("percentile", "0 < percentile <= 100", percentile)
+    n = np.asarray(normals, dtype=np.float64)
+    v = np.asarray(views, dtype=np.float64)
+    share = tolerance_de / np.sqrt(3.0)
+    if lobe.spread <= 0.0:
+        return AnisotropyChoice(1, 0.0, float(tolerance_de), "isotropic (alpha_x = alpha_y): 1 sample")
+    white = float(sample_cube(basis.diffuse, n)[..., 1].max())  # as choose_lod: G of the white pixel
+    s, err = _fewest_samples(
+        lambda j: an.shade_anisotropic(basis, lobe, j, n, v, energy), white, share, percentile, sample_counts
+    )
+    most = max(sample_counts)
+    why = (
+        f"{s} anisotropic samples: ΔE {err:.2f} (p{percentile:g}) against {most} <= {share:.2f}"
+        if s < most
+        else f"{most} anisotropic samples: no fewer reach ΔE {share:.2f} against {most}"
+    )
+    return AnisotropyChoice(s, err, float(tolerance_de), why)
 
 
 def choose_lod(
@@ -173,14 +245,7 @@ def choose_lod(
     # 3. anisotropic samples against the most-sampled image
     chosen_s, aniso_err = 1, 0.0
     if anisotropic is not None:
-        counts = sorted(sample_counts)
-        best = np.asarray(anisotropic(counts[-1]), dtype=float)
-        chosen_s = counts[-1]
-        for s in counts[:-1]:
-            err = _de(white, best, np.asarray(anisotropic(s), dtype=float), percentile)
-            if err <= share:
-                chosen_s, aniso_err = s, err
-                break
+        chosen_s, aniso_err = _fewest_samples(anisotropic, white, share, percentile, sample_counts)
     return LodChoice(
         chosen_m,
         basis_for_count(chosen_m).exponents,

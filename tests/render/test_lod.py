@@ -113,3 +113,46 @@ def test_input_errors(metallic, pixels) -> None:
         lod.choose_lod([], np.ones((8, 16, 3)), *pixels)
     with pytest.raises(InputError):
         lod.choose_lod([metallic], np.ones((8, 16, 3)), *pixels, percentile=0.0)
+
+
+def test_choose_anisotropic_samples_is_the_fewest_within_the_share() -> None:
+    """The choice against an independent sweep: the chosen count's ΔE00 (p95, against 81 samples, Lab
+    relative to the white Lambertian pixel) is within tolerance/√3 and the next fewer count's is not."""
+    from station.model.colorimetry import linear_srgb_to_lab
+    from station.model.difference import delta_e
+    from station.render import anisotropy as an
+    from station.render import prefilter, procedural
+    from station.render.cubemap import sample_cube
+
+    basis = prefilter.prefilter_basis(procedural.light_booth(64), (4.0, 64.0, 1024.0, 4096.0), engine="numpy")
+    n, v = tr.sphere_pixels(8)
+    lobe = an.WardLobe((0.8, 0.8, 0.8), 0.03, 0.3)
+    white = float(np.max(sample_cube(basis.diffuse, n)[:, 1]))
+    best = an.shade_anisotropic(basis, lobe, 81, n, v)
+    err = {
+        s: float(
+            np.percentile(
+                delta_e(
+                    linear_srgb_to_lab(best / white),
+                    linear_srgb_to_lab(an.shade_anisotropic(basis, lobe, s, n, v) / white),
+                    "cie2000",
+                ),
+                95,
+            )
+        )
+        for s in lod.SAMPLE_COUNTS
+    }
+    chosen = {}
+    for tol in (3.0, 1.0, 0.3):
+        c = lod.choose_anisotropic_samples(basis, lobe, n, v, tol)
+        share = tol / np.sqrt(3.0)
+        i = lod.SAMPLE_COUNTS.index(c.samples)
+        assert err[c.samples] <= share or c.samples == 81
+        assert i == 0 or err[lod.SAMPLE_COUNTS[i - 1]] > share
+        assert c.error_de == pytest.approx(err[c.samples] if c.samples < 81 else 0.0, abs=1e-9)
+        chosen[tol] = c.samples
+    assert 1 < chosen[3.0] <= chosen[1.0] <= chosen[0.3]
+    iso = lod.choose_anisotropic_samples(basis, an.WardLobe((0.8,) * 3, 0.1, 0.1), n, v, 0.3)
+    assert iso.samples == 1 and "isotropic" in iso.reason
+    with pytest.raises(InputError):
+        lod.choose_anisotropic_samples(basis, lobe, n, v, 0.0)

@@ -13,6 +13,8 @@
 // v_painted = 0 are neutral: NEUTRAL_ALBEDO x the diffuse map.
 // HAS_COAT, HAS_STAGE, HAS_FLAKES (0/1): compile the clear coat, the stage and the flakes in only when a
 // frame uses them (llvmpipe pays for code behind uniform branches).
+// HAS_ANISO (0/1): the gloss of both paints is anisotropic Ward by off-specular samples
+// (shaders/anisotropy.glsl); the caller then passes the paints' own gloss weights as zero.
 #ifndef MESH
 #define MESH 0
 #endif
@@ -24,6 +26,9 @@
 #endif
 #ifndef HAS_FLAKES
 #define HAS_FLAKES 1
+#endif
+#ifndef HAS_ANISO
+#define HAS_ANISO 0
 #endif
 #ifndef NO_SHAPE
 #define NO_SHAPE 0
@@ -180,6 +185,8 @@ vec3 stage_background(vec3 o, vec3 d) {
     return bg;
 }
 
+//#include anisotropy.glsl
+
 #if MESH
 in vec3 v_pos;
 in vec3 v_normal;
@@ -263,6 +270,13 @@ void main() {
                 }
             }
         }
+#if HAS_ANISO
+#if HAS_STAGE
+        rgb += s * aniso_gloss(n, u_rot * v, u_rot * u_aniso_hint, paint);
+#else
+        rgb += s * aniso_gloss(n, v, u_aniso_hint, paint);
+#endif
+#endif
         rgb += max(sparkle, -u_flake_reflectance * rgb);  // a cell's flakes never reflect less than nothing
     } else {
 #if HAS_STAGE
