@@ -11,7 +11,8 @@ the lobes and the timings (seconds).
 Scene options: ``--stage`` shows the environment as backdrop over a ground with contact shadow
 (``--blur DEG``, ``--rotate DEG``, ``--no-ground``); ``--coat N`` adds the clear coat's Fresnel of index N
 to the gloss (thesis model without it); ``--flakes`` draws the design file's flake layer (GL and NumPy
-engines; the JSON says what the level of detail chose); GL engine only: ``--mesh FILE`` renders a
+engines; the JSON says what the level of detail chose); a design file's ``anisotropy`` (α_x, α_y,
+direction; GL engine) is drawn with the level of detail's sample count, reported in the JSON; GL engine only: ``--mesh FILE`` renders a
 .glb/.gltf/.obj/.stl model instead of the shape (``--paint-part NAME`` picks the part to paint).
 ``--lod DE`` lets the level of detail (``station.render.scene_image.scene_lod``, against the ground truth
 on a 16 × 16 sample of the view) pick the lobe count and environment resolution for a CIEDE2000
@@ -171,6 +172,12 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
 
         flakes = load_design_flakes(args.design)[1]
     flake_report = "no flake layer" if args.flakes and flakes is None else None
+    from station.model.design_io import load_design_anisotropy
+
+    anisotropy = load_design_anisotropy(args.design)[1]
+    if anisotropy is not None and engine != "gl":
+        raise InputError("engine", "gl (or auto with a GL stack) for a design with anisotropy", engine)
+    aniso_report = None
     size = args.size
     exps = paints[0].exponents
     if engine == "truth":
@@ -197,10 +204,24 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
 
             with GLRenderer(basis, size, size) as gl:
                 if mesh is not None:
-                    linear = gl.render_mesh(mesh, paints, stage=stage, coat=coat, linear=True, flakes=flakes)
+                    linear = gl.render_mesh(
+                        mesh,
+                        paints,
+                        stage=stage,
+                        coat=coat,
+                        linear=True,
+                        flakes=flakes,
+                        anisotropy=anisotropy,
+                    )
                 else:
-                    linear = gl.render_linear(scene, paints, coat=coat, flakes=flakes)
+                    linear = gl.render_linear(scene, paints, coat=coat, flakes=flakes, anisotropy=anisotropy)
                 flake_report = gl.last_flakes.reason if gl.last_flakes is not None else None
+                if gl.last_anisotropy is not None:
+                    aniso_report = {
+                        "samples": gl.last_anisotropy.samples,
+                        "error_de": round(gl.last_anisotropy.error_de, 4),
+                        "reason": gl.last_anisotropy.reason,
+                    }
         else:
             linear = render_linear(scene, basis, paints, size, size, coat=coat, flakes=flakes)
             if flakes is not None:
@@ -228,6 +249,7 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         "stage": stage is not None,
         "coat_index": args.coat,
         "flakes": flake_report,
+        "anisotropy": aniso_report,
         "lod": lod_report,
         "out": str(out),
         "linear_out": args.linear_out,

@@ -119,6 +119,32 @@ def test_render_gl_engine(files, tmp_path, capsys, gl_ctx):
     assert np.asarray(Image.open(out)).shape == (32, 32, 3)
 
 
+@pytest.mark.gl
+def test_render_draws_a_design_files_anisotropy_on_the_gl_engine(files, tmp_path, capsys, gl_ctx):
+    _, _, env = files
+    iso, aniso = tmp_path / "iso.json", tmp_path / "aniso.json"
+    design = FaceFlopTravelGloss((70.0, 0.0, 0.0), (30.0, 0.0, 0.0), 60.0, 90.0)
+    save_design(design, iso)
+    save_design(design, aniso, anisotropy={"alpha_x": 0.03, "alpha_y": 0.3, "direction_deg": 0.0})
+
+    def run(path, *extra):
+        out = tmp_path / f"{path.stem}.png"
+        argv = ["render", "--design", str(path), "--env", str(env), "--size", "48", "--out", str(out)]
+        rc = main([*argv, "--cache-dir", str(tmp_path / "c"), "--json", *extra])
+        return rc, out
+
+    rc, iso_png = run(iso, "--engine", "gl")
+    assert rc == 0 and json.loads(capsys.readouterr().out)["anisotropy"] is None
+    rc, aniso_png = run(aniso, "--engine", "gl")
+    got = json.loads(capsys.readouterr().out)["anisotropy"]
+    assert rc == 0 and got["samples"] >= 2 and got["reason"]
+    a, b = (np.asarray(Image.open(p), dtype=float) for p in (iso_png, aniso_png))
+    assert np.abs(a - b).max() > 10  # the stretched highlight moves pixels, not just rounding
+    rc, _ = run(aniso, "--engine", "numpy")
+    err = capsys.readouterr().err
+    assert rc == 2 and "engine" in err and err.count("\n") == 1
+
+
 def test_render_stage_coat_and_refusals(files, tmp_path, capsys):
     d1, _, env = files
     out = tmp_path / "s.png"
