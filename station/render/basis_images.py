@@ -2,7 +2,9 @@
 
 For a fixed scene and camera, every object pixel p (paint k) is (numpy_renderer's equation)
 
-    rgb_p = w_D ⊙ D_p + Σ_i (h_i(c_p) w_G,i + g_i(c_p) w_DD,i) ⊙ C_i,p,    c_p = N·V,
+    rgb_p = w_D ⊙ D_p + Σ_i (h_i(c_p) w_G,i ⊙ C_i,p + g_i(c_p) w_DD,i ⊙ C_i(B_i,p)),    c_p = N·V,
+
+(B_i = R for narrow lobes, the bent direction of ``numpy_renderer.dd_direction`` for wide ones),
 
 so caching per-pixel images turns a paint edit into a small weighted sum. The images are D (diffuse
 map at N); for each wide lobe (horizon table) h_i·C_i and g_i·C_i; for each narrow lobe
@@ -28,6 +30,7 @@ from station.render.errors import RenderError
 from station.render.numpy_renderer import (
     BACKGROUND,
     check_paints,
+    dd_direction,
     gbuffer,
     horizon_table,
     light_terms,
@@ -260,8 +263,10 @@ def build_basis_images(
                 continue
             if i not in lookups:
                 lookups[i] = sample_cube(basis.cubes[i], refl).T
+            bent = dd_direction(basis.exponents[i], normals, refl, horizon) if kind == "Dg" else None
+            lookup = lookups[i] if bent is None else sample_cube(basis.cubes[i], bent).T
             factor = {"Gh": hf[:, i] * sc, "Dg": gf[:, i], "Cg": sc}.get(kind, 1.0)
-            images[:, j] = lookups[i] * factor
+            images[:, j] = lookup * factor
             lights = light_terms(basis, i, normals, refl) if kind in ("Gh", "Dg") else None
             if lights is not None:
                 images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1]).T

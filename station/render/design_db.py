@@ -22,6 +22,15 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from station.model import FaceFlopTravelGloss
 
+#: The design classes of the module docstring, in table order, and how many rows each holds.
+CLASSES: tuple[tuple[str, int], ...] = (
+    ("solid", 8),
+    ("silver", 8),
+    ("metallic", 12),
+    ("pearl", 8),
+    ("extreme", 4),
+)
+
 #: name, face Lab, flop Lab, travel (deg, None = solid), gloss GU.
 _ROWS: tuple[tuple[str, tuple[float, float, float], tuple[float, float, float], float | None, float], ...] = (
     # solids
@@ -89,3 +98,15 @@ def design_database() -> tuple[FaceFlopTravelGloss, ...]:
         if np.any(rgb < -1e-9):  # a programming error in the table above, never user input
             raise AssertionError(f"design database entry {d.name!r} leaves the sRGB gamut")
     return designs
+
+
+def design_classes() -> dict[str, tuple[int, ...]]:
+    """Indices into :func:`design_database` of each class of the module docstring (CLASSES order)."""
+    out: dict[str, tuple[int, ...]] = {}
+    start = 0
+    for name, count in CLASSES:
+        out[name] = tuple(range(start, start + count))
+        start += count
+    if start != len(_ROWS):  # a programming error in the tables above
+        raise AssertionError("design_db.CLASSES does not cover the design table")
+    return out

@@ -27,6 +27,7 @@ from station.render.gl_context import (
     gl_available,
     load_shader,
 )
+from station.render.lobes import COSINE_SG_SHARPNESS
 from station.render.numpy_renderer import (
     BACKGROUND,
     HORIZON_MAX_EXPONENT,
@@ -116,10 +117,11 @@ class GLRenderer:
         # Lobes in binding order: the wide ones (horizon table) first, so the shader loops over a prefix.
         has_lights = basis.lights is not None and any(basis.wide)
         wide = [
-            int((horizon == "lut" and e < HORIZON_MAX_EXPONENT) or (has_lights and basis.wide[i]))
+            int((horizon != "none" and e < HORIZON_MAX_EXPONENT) or (has_lights and basis.wide[i]))
             for i, e in enumerate(basis.exponents)
         ]
         self._wide_exponent = WIDE_EXPONENT
+        self._horizon = horizon
         self._lights = basis.lights if has_lights else None
         self._order = np.array(
             [i for i in range(len(wide)) if wide[i]] + [i for i in range(len(wide)) if not wide[i]]
@@ -181,6 +183,8 @@ class GLRenderer:
                 "N_WIDE": self._n_wide,
                 "MAX_LIGHTS": max(1, self._lights.count if self._lights is not None else 1),
                 "WIDE_EXPONENT": f"{self._wide_exponent:.1f}",
+                "BENT_DD": int(self._horizon == "lut"),
+                "COSINE_SG": f"{COSINE_SG_SHARPNESS:.4f}",
             }
             vert = "mesh.vert.glsl" if kind == "mesh" else "fullscreen.vert.glsl"
             prog = build_program(self.ctx, vert, "render.frag.glsl", defines)

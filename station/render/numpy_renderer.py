@@ -2,7 +2,7 @@
 
 Per pixel, with N the normal, V the unit vector to the eye and R = 2(N·V)N − V the reflected view:
 
-    radiance = π K_D · D(N) + Σ_i (2π/(E_i+1)) · (h_i(R·N) K_G,i + g_i(R·N) K_DD,i) · C_i(R)
+    radiance = π K_D · D(N) + Σ_i (2π/(E_i+1)) · (h_i(R·N) K_G,i C_i(R) + g_i(R·N) K_DD,i C_i(B_i))
 
 where C_i is the environment prefiltered with the normalised lobe of exponent E_i and D the diffuse
 map E(N)/π (:mod:`station.render.prefilter`), and the factors π and 2π/(E+1) convert the sr⁻¹
@@ -19,6 +19,14 @@ a wide lobe about R spills below the surface, which the cube lookup C_i(R) canno
 ground truth (:mod:`station.render.truth`, booth, default basis) this halves the mean ΔE00. Narrow
 lobes keep (c, 1): within 0.004 of the tables except at grazing pixels, and it lets the GL renderer
 pre-sum them (``gl_renderer``).
+Bent lookups (default ``horizon="lut"``): the directionally diffuse integrand of a wide lobe,
+(N·ω)₊(R·ω)₊^E_i, is a lobe about B_i = normalize(E_i R + 2.133 N), not about R (the product of two
+spherical Gaussians, :func:`station.render.lobes.bent_direction`), so its map is read at B_i; narrow
+lobes and the gloss keep R (B_i = R with ``horizon="lut-r"`` or ``"none"``). Measured against the ground
+truth it is what makes environments with a bright extended region near the horizon (a sunset, a low
+sun) meet the bar: with every lookup at R the directionally diffuse term of a strong-flop silver reads
+the glow along R at grazing pixels, where the true integrand, weighted by N·ω, sees the sky above
+(docs/benchmarks.md, "Accuracy on every environment").
 Lights: when :func:`~station.render.prefilter.prefilter_basis` took compact bright sources (the
 sun) out of the environment, the wide lobes' maps hold the rest and each light (direction l, flux Φ)
 is added exactly per wide lobe: w_G,i 1[N·l>0] p_i(l) Φ + w_DD,i (N·l)₊ p_i(l) Φ, with
@@ -55,6 +63,7 @@ from station.model.gloss import ClearCoat
 from station.render.cubemap import sample_cube
 from station.render.errors import RenderInputError
 from station.render.flakes import clip_sparkle, flake_lod, flake_tint, sparkle_pixels
+from station.render.lobes import bent_direction
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
 from station.render.sh import sh_diffuse
 from station.render.shapes import GROUNDS, OCCLUDERS, Scene, intersect
@@ -64,18 +73,22 @@ from station.render.weights import LobeWeights
 BACKGROUND = 0.18
 HORIZON_MAX_EXPONENT = WIDE_EXPONENT
 HORIZON_TABLE_SIZE = 128
+#: Shading methods: "lut" horizon tables with the wide lobes' directionally diffuse lookups bent towards
+#: N (default); "lut-r" the same tables with every lookup at R (the method before the bend); "none" the
+#: thesis's equations as printed.
+HORIZONS = ("lut", "lut-r", "none")
 
 
 def horizon_table(exponents: Sequence[float], horizon: str = "lut") -> np.ndarray:
     """(m, HORIZON_TABLE_SIZE, 2) float32 table of (g_i, h_i) at c = k/(N−1) (module doc)."""
-    if horizon not in ("lut", "none"):
-        raise RenderInputError("horizon", "lut | none", horizon)
+    if horizon not in HORIZONS:
+        raise RenderInputError("horizon", " | ".join(HORIZONS), horizon)
     from station.render.lobes import horizon_factors
 
     c = np.linspace(0.0, 1.0, HORIZON_TABLE_SIZE)
     table = np.empty((len(exponents), c.size, 2), np.float32)
     for i, e in enumerate(exponents):
-        if horizon == "lut" and e < HORIZON_MAX_EXPONENT:
+        if horizon != "none" and e < HORIZON_MAX_EXPONENT:
             g, h = horizon_factors(float(e), c)
             table[i, :, 0], table[i, :, 1] = g, h
         else:
@@ -143,6 +156,20 @@ def check_paints(basis: PrefilteredBasis, paints: Sequence[LobeWeights]) -> list
     return paints if len(paints) == 2 else paints * 2
 
 
+def dd_direction(
+    exponent: float, normal: np.ndarray, reflect: np.ndarray, horizon: str = "lut"
+) -> np.ndarray | None:
+    """Lookup direction of a lobe's directionally diffuse term, (P, 3), or None for R itself.
+
+    Wide lobes with horizon tables (E < HORIZON_MAX_EXPONENT, ``horizon="lut"``) look their map up at
+    B = normalize(E·R + 2.133·N) (:func:`station.render.lobes.bent_direction`, module docstring);
+    narrow lobes, ``"lut-r"`` and ``"none"`` (the thesis as printed) at R.
+    """
+    if horizon != "lut" or exponent >= HORIZON_MAX_EXPONENT:
+        return None
+    return bent_direction(exponent, reflect, normal)
+
+
 def light_terms(
     basis: PrefilteredBasis, i: int, normal: np.ndarray, reflect: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -181,7 +208,10 @@ def shade_pixels(
     s = np.ones((n_dot_v.shape[0], 1)) if coat is None else coat.gloss_scale(n_dot_v)[:, None]
     out = w_d * d
     for i, cube in enumerate(basis.cubes):
-        out = out + (s * h[:, i : i + 1] * w_g[i] + g[:, i : i + 1] * w_dd[i]) * sample_cube(cube, reflect)
+        c_r = sample_cube(cube, reflect)
+        bent = dd_direction(basis.exponents[i], normal, reflect, horizon)
+        c_dd = c_r if bent is None else sample_cube(cube, bent)
+        out = out + s * h[:, i : i + 1] * w_g[i] * c_r + g[:, i : i + 1] * w_dd[i] * c_dd
         lights = light_terms(basis, i, normal, reflect)
         if lights is not None:
             out = out + s * w_g[i] * lights[0] + w_dd[i] * lights[1]

@@ -1,7 +1,8 @@
 #version 430
 // Lobe-blend shading (thesis eqs 2.5.1-2.5.3), the same equation as station/render/numpy_renderer.py:
 //   radiance = wd * D(N) + sum_i (h_i(R.N) wg_i + g_i(R.N) wdd_i) * C_i(R)
-// with (g_i, h_i) read from the horizon table u_horizon (HORIZON_N x N_LOBES, RG). The lobes are
+// with (g_i, h_i) read from the horizon table u_horizon (HORIZON_N x N_LOBES, RG); with BENT_DD (1) the
+// directionally diffuse term of a wide lobe reads C_i at B = normalize(E_i R + COSINE_SG N). The lobes are
 // bound with the N_WIDE wide ones (horizon table) first; the narrow ones have (g, h) = (R.N, 1)
 // exactly and, when COMBINED, are pre-summed per paint, so only the wide ones are looked up here.
 // with the weights already converted to normalised maps (LobeWeights.map_weights). Two paints:
@@ -35,6 +36,12 @@
 #endif
 #ifndef PENUMBRA_DEG
 #define PENUMBRA_DEG 1.0
+#endif
+#ifndef BENT_DD
+#define BENT_DD 0
+#endif
+#ifndef COSINE_SG
+#define COSINE_SG 2.133
 #endif
 #ifndef NEUTRAL_ALBEDO
 #define NEUTRAL_ALBEDO 0.18
@@ -258,7 +265,15 @@ void main() {
 #endif
             int k = paint * N_LOBES + i;
             vec2 gh = horizon(i, ndv);
-            rgb += (s * gh.y * u_wg[k] + gh.x * u_wdd[k]) * textureLod(u_lobes[i], r, 0.0).rgb;
+            vec3 c_r = textureLod(u_lobes[i], r, 0.0).rgb;
+            vec3 c_dd = c_r;
+#if BENT_DD
+            // directionally diffuse lookup of a wide lobe at B = normalize(E R + COSINE_SG N)
+            // (numpy_renderer.dd_direction, station.render.lobes.bent_direction)
+            if (u_exponent[i] < WIDE_EXPONENT)
+                c_dd = textureLod(u_lobes[i], normalize(u_exponent[i] * r + COSINE_SG * n), 0.0).rgb;
+#endif
+            rgb += s * gh.y * u_wg[k] * c_r + gh.x * u_wdd[k] * c_dd;
             if (u_exponent[i] < WIDE_EXPONENT) {
                 // exact directional lights: wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux
                 float e = u_exponent[i];
