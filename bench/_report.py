@@ -68,16 +68,23 @@ def write_section(name: str, title: str, cases: list[Case], extra_markdown: str 
     REPORT.write_text(text)
 
 
-def bench_cli(doc: str | None, name: str, flags: dict[str, str] | None = None) -> argparse.Namespace:
-    """Parse a benchmark's command line before it starts: ``--help`` prints *doc* and exits; any
-    argument the benchmark does not take is refused (exit 2). Nothing is measured or written first.
-    *flags*: on/off options the benchmark takes (name → help)."""
-    parser = argparse.ArgumentParser(
+def bench_parser(doc: str | None, name: str) -> argparse.ArgumentParser:
+    """The argument parser of benchmark *name*: ``python -m bench.NAME``, *doc* as its description and
+    an epilog saying that a run rewrites its section of docs/benchmarks.md. A benchmark with options of
+    its own adds them to this parser and parses before anything is measured."""
+    return argparse.ArgumentParser(
         prog=f"python -m bench.{name}",
         description=doc,
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog=f"runs the benchmark and rewrites its section of {REPORT.relative_to(ROOT)}",
     )
+
+
+def bench_cli(doc: str | None, name: str, flags: dict[str, str] | None = None) -> argparse.Namespace:
+    """Parse a benchmark's command line before it starts: ``--help`` prints *doc* and exits; any
+    argument the benchmark does not take is refused (exit 2). Nothing is measured or written first.
+    *flags*: on/off options the benchmark takes (name → help)."""
+    parser = bench_parser(doc, name)
     for flag, text in (flags or {}).items():
         parser.add_argument(flag, action="store_true", help=text)
     return parser.parse_args()

@@ -16,7 +16,6 @@ Run: ``.venv/bin/python -m bench.driver_overhead [--n 30]``.
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import struct
 import time
@@ -26,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import serial
 
-from bench._report import Case, write_section
+from bench._report import Case, bench_parser, write_section
 from simulators.gloss import PATH, GlossDevice, GlossPhysics
 from simulators.ma3 import Ma3Firmware
 from simulators.ma6 import Ma6Device
@@ -161,7 +160,7 @@ def _chart(rows: list[tuple[str, float, float]]) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     """Run the three families and write the ``driver_overhead`` section of docs/benchmarks.md."""
-    p = argparse.ArgumentParser()
+    p = bench_parser(__doc__, "driver_overhead")
     p.add_argument("--n", type=int, default=30)
     args = p.parse_args(argv)
     cases: list[Case] = []

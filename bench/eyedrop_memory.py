@@ -18,7 +18,6 @@ figure is the peak above idle; the bar is ≤ 300 MiB for 16 concurrent eyedrops
 
 from __future__ import annotations
 
-import argparse
 import io
 import os
 import statistics
@@ -33,7 +32,7 @@ import httpx
 import numpy as np
 from PIL import Image
 
-from bench._report import ROOT, Case, write_section
+from bench._report import ROOT, Case, bench_parser, write_section
 from station.api.serve_process import serving
 
 MIB = 1024 * 1024
@@ -126,7 +125,7 @@ def measure(concurrency: int, png: bytes, root: Path = ROOT) -> dict[str, float]
 
 def main(argv: list[str] | None = None) -> int:
     """Run both services, print the cases, rewrite the benchmark's section; exit 1 over the bar."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = bench_parser(__doc__, "eyedrop_memory")
     parser.add_argument("--no-report", action="store_true", help="do not rewrite docs/benchmarks.md")
     parser.add_argument(
         "--compare-tree",

@@ -12,7 +12,6 @@ The baseline, measured in the same run, is one station alone; the report gives t
 
 from __future__ import annotations
 
-import argparse
 import datetime as dt
 import multiprocessing as mp
 import os
@@ -26,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from bench._report import ROOT, Case, write_section
+from bench._report import ROOT, Case, bench_parser, write_section
 
 PG_ADMIN = "postgresql://postgres@127.0.0.1:5432/postgres"
 
@@ -166,7 +165,7 @@ def _chart(base: dict[str, Any], load: dict[str, Any], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = bench_parser(__doc__, "ingest_load")
     parser.add_argument("--stations", type=int, default=8)
     parser.add_argument("--duration", type=float, default=60.0, help="seconds of the loaded run (default 60)")
     parser.add_argument("--baseline-duration", type=float, default=15.0, help="seconds of the 1-station run")

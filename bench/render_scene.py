@@ -11,12 +11,12 @@ what the flakes' level of detail chose per tile. Not a benchmark: it is never ru
 
 from __future__ import annotations
 
-import argparse
 import time
 from pathlib import Path
 
 import numpy as np
 
+from bench._report import bench_parser
 from station.model import FaceFlopTravelGloss
 from station.model.flakes import METALLIC_FLAKES
 from station.model.gloss import ClearCoat
@@ -77,7 +77,7 @@ def _tile(gl: GLRenderer, mesh: object, w, flakes, close: bool) -> np.ndarray:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="bench.render_scene", description=__doc__.split("\n\n")[0])
+    parser = bench_parser(__doc__, "render_scene")
     parser.add_argument("--shared", type=Path, default=SHARED, help="folder with meshes/ and hdri/")
     args = parser.parse_args(argv)
     w = fit_design(SILVER)

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from bench._report import ROOT, Case, write_section
+from bench._report import ROOT, Case, bench_parser, write_section
 from bench.ingest_load import PG_ADMIN, _reading
 from station.api.serve_process import ServeProcess
 
@@ -214,7 +214,7 @@ def _backend(name: str, url: str | None, data_dir: Path, args: argparse.Namespac
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser = bench_parser(__doc__, "service_load")
     parser.add_argument("--clients", type=int, default=8)
     parser.add_argument("--duration", type=float, default=20.0, help="seconds of each loaded run (≤ 60)")
     parser.add_argument(
