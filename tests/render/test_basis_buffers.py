@@ -37,6 +37,30 @@ def test_paint_edit_equals_full_render(basis):
     assert cache.edit_rgba([_paint(3)])[..., 3].min() == 255
 
 
+def test_paint_edit_in_pixel_blocks_equals_the_full_render(basis, monkeypatch):
+    """The edit runs in blocks of EDIT_CHUNK pixels: blocks that straddle the paint split and a short last
+    block give the same frame as the full render (tone-mapped independently, at most one code off) and
+    as one block over all pixels (bit-equal)."""
+    scene = shapes.Scene("sphere")
+    pair = [_paint(4), _paint(14)]
+    whole = basis_images.build_basis_images(scene, basis, 48, 40)
+    assert whole.pixels.size < basis_images.EDIT_CHUNK  # one block
+    one_block = whole.edit_rgba(pair, exposure_ev=0.3)
+    monkeypatch.setattr(basis_images, "EDIT_CHUNK", 37)
+    cache = basis_images.build_basis_images(scene, basis, 48, 40)
+    assert cache.split % 37 and cache.pixels.size % 37 and cache.pixels.size > 20 * 37
+    frame = cache.edit_rgba(pair, exposure_ev=0.3)
+    np.testing.assert_array_equal(frame, one_block)
+    expect = tonemap.to_display(nr.render_linear(scene, basis, pair, 48, 40), exposure_ev=0.3)
+    assert np.abs(frame[..., :3].astype(int) - expect).max() <= 1
+    # a second edit into the same buffer (the viewer's path) overwrites every object pixel
+    again = cache.edit_rgba([_paint(5), _paint(15)], exposure_ev=0.3, out=frame.copy())
+    ref2 = tonemap.to_display(
+        nr.render_linear(scene, basis, [_paint(5), _paint(15)], 48, 40), exposure_ev=0.3
+    )
+    assert np.abs(again[..., :3].astype(int) - ref2).max() <= 1
+
+
 @pytest.mark.gl
 def test_gl_built_basis_images_match_numpy_built(gl_ctx, basis):
     from station.render.gl_renderer import GLRenderer

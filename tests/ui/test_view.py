@@ -240,3 +240,51 @@ def test_orbit_is_drawn_by_gl_at_full_quality_and_the_worker_waits_for_a_still_v
     assert view.basis is not basis0 and view._basis_settings.yaw_deg == 50.0
     np.testing.assert_array_equal(view.grab_image(), view.basis.core.edit(list(model.weights()), 0.0))
     view.close()
+
+
+def _on_screen(view) -> np.ndarray:
+    """What the X server shows in the (top-level) view: (H, W, 3) uint8 read back from the screen."""
+    from PySide6.QtGui import QImage
+
+    top_left = view.mapToGlobal(QPoint(0, 0))
+    shot = view.screen().grabWindow(0, top_left.x(), top_left.y(), view.width(), view.height())
+    img = shot.toImage().convertToFormat(QImage.Format.Format_RGB888)
+    w, h = img.width(), img.height()
+    rows = np.frombuffer(img.constBits(), np.uint8).reshape(h, img.bytesPerLine())
+    return rows[:, : 3 * w].reshape(h, w, 3).copy()  # a copy: the QImage's memory goes with it
+
+
+@pytest.mark.gl
+def test_paint_edit_on_screen_is_the_core_frame_and_an_orbit_brings_back_the_gl_window(qtbot):
+    """cpu mode, cached basis: an edit is painted by the widget itself (the GL window hidden, so Qt does no
+    OpenGL compositing) and the screen shows the core's ``edit_rgba`` frame pixel for pixel (ΔE00 = 0);
+    an orbit step shows the GL window again with the core's GL frame of the new view, which the cached
+    basis of that view then matches within the core's GL-vs-NumPy bound (mean ΔE00 ≤ 0.5, p99 ≤ 2)."""
+    from station.model.difference import delta_e
+
+    model = ViewModel()
+    model.show(DEFAULT_DESIGN)
+    view = _gl_view(qtbot, model)
+    assert view.basis_current and view._container.isHidden()
+    n = view.frames
+    model.show(DEFAULT_DESIGN.replace(face=(55.0, 40.0, 10.0), flop=(28.0, 30.0, 5.0)))
+    qtbot.waitUntil(lambda: view.frames > n, timeout=5000)
+    qtbot.wait(50)
+    expect = view.basis.core.edit_rgba(list(model.weights()), 0.0)[..., :3]
+    np.testing.assert_array_equal(_on_screen(view), expect)
+    assert view._container.isHidden()
+    g = view.gl_frames
+    model.update(yaw_deg=20.0)
+    qtbot.waitUntil(lambda: view.gl_frames > g, timeout=10000)
+    assert not view._container.isHidden() and not view.basis_current
+    qtbot.wait(50)
+    gl_shot = _on_screen(view)
+    obj = view.basis.paint >= 0  # the sphere's silhouette does not move with the yaw
+    assert np.abs(gl_shot[obj].astype(int) - expect[obj]).max() > 10  # the highlight moved
+    qtbot.waitUntil(lambda: view.basis_current, timeout=60000)
+    view.wait_idle()
+    assert view._container.isHidden()
+    cached = view.grab_image()
+    de = delta_e(_lab8(gl_shot[obj]), _lab8(cached[obj]), method="cie2000")
+    assert de.mean() <= 0.5 and np.percentile(de, 99) <= 2.0, (de.mean(), np.percentile(de, 99))
+    view.close()

@@ -1,9 +1,9 @@
-"""The 3D view: cached basis images re-weighted by the paint, on the GPU (QOpenGLWidget + moderngl).
+"""The 3D view: the core's GL frames while the view changes, cached basis images re-weighted by the paint.
 
 A camera, shape, environment or size change recomputes the basis images (NumPy, the core's ray
 caster and prefiltered maps) in a worker QThread (joined on close). Meanwhile the GL view draws every
 frame with the core's GL renderer (:class:`station.render.gl_renderer.GLRenderer` on the widget's own
-context, straight into the widget's framebuffer, full resolution, full prefilter): orbiting is at full
+context, straight into the framebuffer of a child GL window, full resolution, full prefilter): orbiting is at full
 quality from the first frame. The environment is prefiltered on the same context
 (:func:`ui.models.view.environment_basis_gl`, one render-to-texture pass per lobe), so an environment
 change reaches full quality in about a second, cold cache included. The worker starts only once the
@@ -12,8 +12,9 @@ edits switch to its cached basis images as soon as it has them. Without a GL 4.3
 :class:`ImageRenderView`) a view change shows a quarter-resolution preview of the basis images in the
 GUI thread instead, then full resolution from the worker; on a cold prefilter cache that preview is
 rendered from a coarse NumPy prefilter of the same environment (``PREVIEW_PREFILTER_SIZE`` faces,
-~0.1 s) while the worker makes the full one (docs/viewer.md). A paint edit only uploads new weights, so
-the picture follows the mouse. :class:`ImageRenderView` is the same view without GL (the NumPy
+~0.1 s) while the worker makes the full one (docs/viewer.md). A paint edit re-weights the cached images
+(the core's NumPy edit painted as an image, the GL window hidden; gpu mode: new weights for the fragment
+shader), so the picture follows the mouse. :class:`ImageRenderView` is the same view without GL (the NumPy
 composite drawn as a QImage) for platforms that have no OpenGL (Qt's offscreen QPA).
 
 Mouse: left drag orbits (yaw/pitch), the wheel zooms.
@@ -27,7 +28,7 @@ from pathlib import Path
 import numpy as np
 from PySide6.QtCore import QPointF, QThread, QTimer, Signal
 from PySide6.QtGui import QImage, QMouseEvent, QPainter, QSurfaceFormat, QWheelEvent
-from PySide6.QtOpenGLWidgets import QOpenGLWidget
+from PySide6.QtOpenGL import QOpenGLWindow
 from PySide6.QtWidgets import QWidget
 
 from station.render.gl_context import GL_TEXTURE_CUBE_MAP_SEAMLESS
@@ -262,16 +263,47 @@ class _ViewLogic:
         self.model.update(zoom=max(0.5, min(4.0, z)))
 
 
-class GLRenderView(_ViewLogic, QOpenGLWidget):
-    """The GL view (moderngl on Qt's context; framebuffer = ``defaultFramebufferObject()``).
+class _GLSurface(QOpenGLWindow):
+    """The GL surface of a :class:`GLRenderView`: a native child window (``createWindowContainer``), so Qt
+    draws it straight to the screen instead of compositing a widget texture into the window."""
 
-    Two ways to re-weight the cached basis images on a paint edit (``mode``):
+    def __init__(self, view: GLRenderView) -> None:
+        super().__init__()
+        self._view = view
 
-    * ``"cpu"`` (default): the core's NumPy edit (BLAS weighted sum + tone-map LUT,
-      ``station.render.basis_images.BasisImages.edit_rgba``) makes the 8-bit frame, which is uploaded
-      as one texture and drawn; on llvmpipe this is the faster path (bench/viewer.py).
+    def paintGL(self) -> None:
+        self._view._paint_gl()
+
+    def resizeGL(self, w: int, h: int) -> None:
+        self._view._screen = None
+
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        self._view.mousePressEvent(event)
+
+    def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        self._view.mouseMoveEvent(event)
+
+    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
+        self._view.mouseReleaseEvent(event)
+
+    def wheelEvent(self, event: QWheelEvent) -> None:
+        self._view.wheelEvent(event)
+
+
+class GLRenderView(_ViewLogic, QWidget):
+    """The GL view: moderngl on the context of a child :class:`_GLSurface` window (framebuffer =
+    ``defaultFramebufferObject()``) for the core's GL frames, and a plain raster widget for paint edits.
+
+    View changes are drawn by the core's GL renderer in the GL surface. Two ways to re-weight the cached
+    basis images on a paint edit (``mode``):
+
+    * ``"cpu"`` (default): the core's NumPy edit (weighted sum + tone-map LUT,
+      ``station.render.basis_images.BasisImages.edit_rgba``) makes the 8-bit frame, which this widget
+      paints as an image while the GL surface is hidden. No GL and no OpenGL compositing is involved: a
+      QOpenGLWidget (or any in the window) makes Qt composite the whole window through OpenGL on every
+      frame, which on llvmpipe costs more than the edit itself (bench/viewer.py).
     * ``"gpu"``: the basis images live in GPU memory and ``shaders/composite.frag.glsl`` does the sum
-      and the display transform per fragment (the path for a real GPU).
+      and the display transform per fragment in the GL surface (the path for a real GPU).
     """
 
     frame_rendered = Signal()
@@ -282,6 +314,8 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         if mode not in self.MODES:
             raise ValueError(f"mode: expected one of {self.MODES}, got {mode!r}")
         self.mode = mode
+        self._surface = _GLSurface(self)
+        self._container = QWidget.createWindowContainer(self._surface, self)
         self._frame_prog = self._frame_vao = self._tex_frame = None
         self._frame: np.ndarray | None = None
         self._frame_key: tuple | None = None
@@ -301,7 +335,72 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self._settle.setSingleShot(True)
         self._settle.setInterval(SETTLE_MS)
         self._settle.timeout.connect(self._on_settle)
-        self.frameSwapped.connect(self._on_swapped)
+        self._surface.frameSwapped.connect(self._on_swapped)
+
+    # ---------------------------------------------------------------- GL surface or raster
+    def makeCurrent(self) -> None:
+        """Make the GL surface's context current."""
+        self._surface.makeCurrent()
+
+    def doneCurrent(self) -> None:
+        self._surface.doneCurrent()
+
+    def defaultFramebufferObject(self) -> int:
+        return self._surface.defaultFramebufferObject()
+
+    def _raster(self) -> bool:
+        """Whether the picture is the core's 8-bit edit frame painted by this widget (cpu mode, cached basis
+        current or no GL frames) rather than a GL frame in the GL surface."""
+        if self.basis is None or self.model.weights() is None:
+            return False
+        if self.mode == "gpu" and self.basis.core.background is None:
+            return False
+        return self.basis_current or not self._core_ok
+
+    def update(self) -> None:  # type: ignore[override]
+        """Schedule a frame on the path that draws it now (this widget, or the GL surface)."""
+        if self._raster():
+            if not self._container.isHidden():
+                self._container.hide()
+            QWidget.update(self)
+        else:
+            if self._container.isHidden():
+                self._container.show()
+            self._surface.update()
+
+    def resizeEvent(self, event) -> None:
+        self._container.setGeometry(self.rect())
+        self._screen = None
+        self._refresh_basis()
+        super().resizeEvent(event)
+
+    def _edit_frame(self) -> np.ndarray:
+        """The core's 8-bit RGBA edit frame of the current paints (buffer reused while basis and exposure
+        stay)."""
+        basis, ev = self.basis, self.model.settings.exposure_ev
+        key = (id(basis), ev)
+        reuse = self._frame if key == self._frame_key else None
+        self._frame = basis.core.edit_rgba(list(self.model.weights()), ev, out=reuse)
+        self._frame_key = key
+        return self._frame
+
+    def _paint_raster(self, painter: QPainter, frame: np.ndarray) -> None:
+        h, w = frame.shape[:2]
+        qimg = QImage(frame.data, w, h, 4 * w, QImage.Format.Format_RGBX8888)
+        painter.drawImage(self.rect(), qimg)
+
+    def paintEvent(self, event) -> None:
+        if not self._raster():  # the state changed since update(): the GL surface draws
+            self.update()
+            return
+        t0 = time.perf_counter()
+        frame = self._edit_frame()
+        painter = QPainter(self)
+        self._paint_raster(painter, frame)
+        painter.end()
+        self.frames += 1
+        self.last_frame_s = time.perf_counter() - t0
+        self.frame_rendered.emit()
 
     def _gl_frames(self) -> bool:
         return self._core_ok
@@ -366,10 +465,6 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self.basis = basis
         self.update()
 
-    def resizeGL(self, w: int, h: int) -> None:
-        self._screen = None
-        self._refresh_basis()
-
     def _build(self) -> None:
         import moderngl
 
@@ -413,15 +508,19 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
             t.repeat_x = t.repeat_y = False
         self._uploaded = basis
 
-    def paintGL(self) -> None:
+    def _paint_gl(self, target=None) -> None:
+        """Draw a frame into the GL surface (its context current), or into the moderngl *target*."""
         t0 = time.perf_counter()
         if self.basis is None:
             self._refresh_basis()
         if self.ctx is None:
             self._build()
-        fbo = self.defaultFramebufferObject()
-        if self._screen is None or self._screen_id != fbo:  # Qt may recreate its FBO (resize, re-parent)
-            self._screen, self._screen_id = self.ctx.detect_framebuffer(fbo), fbo
+        if target is not None:
+            self._screen, self._screen_id = target, -1
+        else:
+            fbo = self.defaultFramebufferObject()
+            if self._screen is None or self._screen_id != fbo:  # Qt may recreate its FBO (resize)
+                self._screen, self._screen_id = self.ctx.detect_framebuffer(fbo), fbo
         self._screen.use()
         w, h = self._pixel_size()
         self.ctx.viewport = (0, 0, w, h)
@@ -441,7 +540,7 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
             self._draw_cpu_frame(weights, w, h)
         else:
             self._draw_gpu(weights, w, h)
-        self.frames += 1  # no glFinish: Qt flushes when it composites the widget (bench/viewer.py times that)
+        self.frames += 1  # no glFinish: Qt flushes when it swaps the surface (bench/viewer.py times that)
         self.last_frame_s = time.perf_counter() - t0
         self.frame_rendered.emit()
 
@@ -478,14 +577,11 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         return True
 
     def _draw_cpu_frame(self, weights, w: int, h: int) -> None:
+        """The edit frame as a texture in the GL surface (the stage in gpu mode; a surface exposed late)."""
         import moderngl
 
-        basis, ev = self.basis, self.model.settings.exposure_ev
-        key = (id(basis), ev)
-        reuse = self._frame if key == self._frame_key else None
-        self._frame = basis.core.edit_rgba(list(weights), ev, out=reuse)
-        self._frame_key = key
-        bw, bh = basis.size
+        self._edit_frame()
+        bw, bh = self.basis.size
         if self._tex_frame is None or self._tex_frame.size != (bw, bh):
             if self._tex_frame is not None:
                 self._tex_frame.release()
@@ -510,15 +606,42 @@ class GLRenderView(_ViewLogic, QOpenGLWidget):
         self._vao.render(mode=self.ctx.TRIANGLE_STRIP)
 
     def grab_image(self) -> np.ndarray:
-        """The current frame as (H, W, 3) uint8 (renders it)."""
-        img = self.grabFramebuffer().convertToFormat(QImage.Format.Format_RGB888)
-        w, h = img.width(), img.height()
-        return (
-            np.frombuffer(img.constBits(), np.uint8)
-            .reshape(h, img.bytesPerLine())[:, : 3 * w]
-            .reshape(h, w, 3)
-            .copy()
-        )
+        """The current frame as (H, W, 3) uint8 at the view's pixel size (renders it, on the path that
+        shows it: the raster edit frame, or a GL frame drawn into an offscreen framebuffer)."""
+        w, h = self._pixel_size()
+        if self._raster():
+            img = QImage(w, h, QImage.Format.Format_RGB888)
+            painter = QPainter(img)
+            frame = self._edit_frame()
+            fh, fw = frame.shape[:2]
+            painter.drawImage(img.rect(), QImage(frame.data, fw, fh, 4 * fw, QImage.Format.Format_RGBX8888))
+            painter.end()
+            return (
+                np.frombuffer(img.constBits(), np.uint8)
+                .reshape(h, img.bytesPerLine())[:, : 3 * w]
+                .reshape(h, w, 3)
+                .copy()
+            )
+        if self.ctx is None:  # never drawn yet: show the surface and let it make its context
+            self.update()
+            from PySide6.QtCore import QCoreApplication
+
+            deadline = time.perf_counter() + 30.0
+            while self.ctx is None and time.perf_counter() < deadline:
+                QCoreApplication.processEvents()
+                time.sleep(0.005)
+        self.makeCurrent()
+        try:
+            fbo = self.ctx.simple_framebuffer((w, h), components=4)
+            try:
+                self._paint_gl(target=fbo)
+                pixels = np.frombuffer(fbo.read(viewport=(0, 0, w, h), components=3), np.uint8)
+            finally:
+                fbo.release()
+                self._screen = None
+        finally:
+            self.doneCurrent()
+        return pixels.reshape(h, w, 3)[::-1].copy()
 
     def close_view(self) -> None:
         """Join the worker and release GPU objects."""
