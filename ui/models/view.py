@@ -156,6 +156,9 @@ class ViewSettings:
     panel of the ``panels`` shape about its hinge (thesis ch. 4). ``stage`` shows the environment as
     backdrop over a ground with contact shadow (``station.render.stage.Stage``) instead of flat grey;
     ``coat`` adds the clear coat's Fresnel on the gloss (``station.model.gloss.ClearCoat``, index 1.5).
+    ``flakes`` draws the effect paint's flake layer (sparkle and glints, ``station.render.flakes``; the
+    paint type's default layer, :func:`station.model.design_io.default_flakes`) in every frame through
+    the core's GL renderer; the level of detail may turn it off where flakes are below a pixel.
     """
 
     environment: str = "booth"
@@ -167,6 +170,7 @@ class ViewSettings:
     misalignment_deg: float = 0.0
     stage: bool = False
     coat: bool = False
+    flakes: bool = False
 
     def __post_init__(self) -> None:
         check_environment(self.environment)
@@ -180,7 +184,7 @@ class ViewSettings:
             raise ViewInputError("zoom", "0.5 <= zoom <= 4", self.zoom)
         if not (math.isfinite(self.misalignment_deg) and -45.0 <= self.misalignment_deg <= 45.0):
             raise ViewInputError("misalignment_deg", "-45 <= misalignment <= 45", self.misalignment_deg)
-        for name in ("stage", "coat"):
+        for name in ("stage", "coat", "flakes"):
             if not isinstance(getattr(self, name), bool):
                 raise ViewInputError(name, "true | false", getattr(self, name))
         if not math.isfinite(self.yaw_deg):

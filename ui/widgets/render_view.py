@@ -330,6 +330,8 @@ class GLRenderView(_ViewLogic, QWidget):
         self._core = None  # the core's GLRenderer on this context, for view changes
         self._core_key: tuple | None = None
         self._core_ok = True  # False when the context cannot build the core's shaders (GL < 4.3)
+        #: What the level of detail did with the flake layer in the last GL frame (None: flakes off).
+        self.flake_report: str | None = None
         self._gl_envs: dict[str, PrefilteredBasis] = {}  # full prefilters made on this context
         self._settle = QTimer(self)
         self._settle.setSingleShot(True)
@@ -355,6 +357,8 @@ class GLRenderView(_ViewLogic, QWidget):
             return False
         if self.mode == "gpu" and self.basis.core.background is None:
             return False
+        if self.model.settings.flakes and self._core_ok:
+            return False  # flakes are drawn by the core's GL renderer only
         return self.basis_current or not self._core_ok
 
     def update(self) -> None:  # type: ignore[override]
@@ -525,7 +529,8 @@ class GLRenderView(_ViewLogic, QWidget):
         w, h = self._pixel_size()
         self.ctx.viewport = (0, 0, w, h)
         weights = self.model.weights()
-        if weights is not None and self._core_ok and not self.basis_current:
+        flakes_on = self.model.settings.flakes
+        if weights is not None and self._core_ok and (flakes_on or not self.basis_current):
             if self._draw_core_frame(weights, w, h):
                 self._settle.start()  # still means no new view for SETTLE_MS after this frame
                 self.frames += 1
@@ -564,8 +569,11 @@ class GLRenderView(_ViewLogic, QWidget):
                 list(weights),
                 settings.exposure_ev,
                 coat=settings.clear_coat(),
+                flakes=self._flake_layer(),
                 target=self._screen,
             )
+            last = self._core.last_flakes
+            self.flake_report = None if last is None else last.reason
         except RenderError:  # no GL 4.3 here: fall back to the quarter-resolution preview path
             self._core_ok = False
             self._core = None
@@ -575,6 +583,24 @@ class GLRenderView(_ViewLogic, QWidget):
             return False
         self._gl_full_key = self._basis_key
         return True
+
+    @property
+    def draws_flakes(self) -> bool:
+        """Whether this view can draw the flake layer (the core's GL renderer works on its context)."""
+        return self._core_ok
+
+    def _flake_layer(self):
+        """The flake layer drawn (``settings.flakes``): the first design's paint-type default, or None."""
+        from station.model.design_io import default_flakes
+
+        designs = self.model.designs
+        if not self.model.settings.flakes or designs is None:
+            self.flake_report = None
+            return None
+        layer = default_flakes(designs[0])
+        if layer is None:
+            self.flake_report = "no flake layer: a solid paint"
+        return layer
 
     def _draw_cpu_frame(self, weights, w: int, h: int) -> None:
         """The edit frame as a texture in the GL surface (the stage in gpu mode; a surface exposed late)."""
@@ -677,6 +703,9 @@ class ImageRenderView(_ViewLogic, QWidget):
     """The same view drawn from the NumPy composite (no GL); used where Qt has no OpenGL."""
 
     frame_rendered = Signal()
+    #: Flakes are drawn by the core's GL renderer only.
+    draws_flakes = False
+    flake_report: str | None = None
 
     def __init__(self, model: ViewModel, parent: QWidget | None = None) -> None:
         super().__init__(parent)

@@ -23,6 +23,8 @@ from ui.models.view import ENVIRONMENT_SUFFIXES, ENVIRONMENTS, ViewModel, ViewSe
 from ui.widgets.render_view import make_render_view
 
 EXPOSURE_STEPS_PER_EV = 10
+#: Width of the flakes' level-of-detail note, px (the full text is its tooltip).
+FLAKE_STATUS_WIDTH = 240
 
 
 class ViewPanel(QWidget):
@@ -61,6 +63,11 @@ class ViewPanel(QWidget):
         self.stage.setChecked(s.stage)
         self.coat = QCheckBox("clear coat")
         self.coat.setChecked(s.coat)
+        self.flakes = QCheckBox("flakes")
+        self.flakes.setChecked(s.flakes)
+        self.flakes.setToolTip("metallic sparkle and glints (drawn by the GL renderer in every frame)")
+        self.flake_status = QLabel()
+        self.flake_status.setFixedWidth(FLAKE_STATUS_WIDTH)  # its text must not resize the view
         bar = QHBoxLayout()
         for w in (
             QLabel("environment"),
@@ -74,6 +81,8 @@ class ViewPanel(QWidget):
             self.exposure_label,
             self.stage,
             self.coat,
+            self.flakes,
+            self.flake_status,
             reset,
         ):
             bar.addWidget(w)
@@ -91,6 +100,8 @@ class ViewPanel(QWidget):
         self.exposure.valueChanged.connect(lambda v: self.model.update(exposure_ev=v / EXPOSURE_STEPS_PER_EV))
         self.stage.toggled.connect(lambda on: self.model.update(stage=bool(on)))
         self.coat.toggled.connect(lambda on: self.model.update(coat=bool(on)))
+        self.flakes.toggled.connect(lambda on: self.model.update(flakes=bool(on)))
+        self.view.frame_rendered.connect(self._on_frame)
         reset.clicked.connect(lambda: self.model.update(yaw_deg=0.0, pitch_deg=0.0, zoom=1.0))
         model.events.settings.connect(self._on_settings)
         self._on_settings(s)
@@ -122,6 +133,22 @@ class ViewPanel(QWidget):
     def _on_settings(self, s: ViewSettings) -> None:
         self.exposure_label.setText(f"{s.exposure_ev:+.1f} EV")
         self._select_environment(s.environment)
+
+    def _on_frame(self) -> None:
+        """Say what the level of detail did with the flakes in the frame just drawn."""
+        text = ""
+        if self.model.settings.flakes:
+            text = (
+                (self.view.flake_report or "flakes drawn")
+                if self.view.draws_flakes
+                else ("flakes need the GL renderer (OpenGL 4.3)")
+            )
+        if self.flake_status.toolTip() != text:
+            metrics = self.flake_status.fontMetrics()
+            self.flake_status.setText(
+                metrics.elidedText(text, Qt.TextElideMode.ElideRight, FLAKE_STATUS_WIDTH)
+            )
+            self.flake_status.setToolTip(text)
 
     def closeEvent(self, event) -> None:
         self.model.events.settings.disconnect(self._on_settings)
