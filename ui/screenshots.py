@@ -55,9 +55,38 @@ def file_menu_shot(win, path: Path) -> Path:
     return path
 
 
+def qc_shot(win, url: str, inst) -> None:
+    """The QC tab on the scanned job: the first scan of the door made its standard, a second scan of the
+    same panel judged against it (pass/warn/fail per geometry, paired gloss)."""
+    from sqlalchemy import select
+
+    from db.engine import make_engine, make_sessionmaker
+    from db.models import Measurement
+    from station.qc.jobs import set_standard
+
+    engine = make_engine(url)
+    try:
+        with make_sessionmaker(engine)() as session:
+            first = session.scalars(select(Measurement.id).order_by(Measurement.id)).first()
+            if first is None:
+                return
+            set_standard(session, "J-2026-0113", "door", measurement_id=first, replace=True)
+            session.commit()
+    finally:
+        engine.dispose()
+    inst.scan()  # a second reading of the panel: the sample
+    _wait(lambda: inst.idle, 60)
+    win.tabs.setCurrentWidget(win.screens["QC"])
+    qc = win.screens["QC"].content()
+    qc.load_jobs()
+    qc.job.setCurrentText("J-2026-0113")
+    qc.part.setCurrentText("door")
+    qc.judge()
+
+
 def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     """Write ``design.png``, ``file-menu.png``, ``tweaker.png``, ``moodboard.png``, ``library.png``,
-    ``instruments.png``, ``qa.png``, ``formulation.png`` to *out*."""
+    ``instruments.png``, ``qa.png``, ``qc.png`` (with *scan*), ``formulation.png`` to *out*."""
     from ui.app import MainWindow
 
     out = Path(out)
@@ -154,6 +183,11 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         qa.run()
         _wait(lambda: qa.report is not None and not qa.task.isRunning(), 120)
         shot("qa")
+
+        if scan:
+            qc_shot(win, sink.url, inst)
+            shot("qc")
+            win.tabs.setCurrentWidget(win.screens["QA"])
 
         qa.send_btn.click()  # the corrected paint goes on to formulation
         chem = win.screens["Formulation"].content()

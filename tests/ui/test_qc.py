@@ -195,3 +195,21 @@ def test_judge_through_the_service(qtbot, tmp_path):
         screen.close()
     finally:
         gen.close()
+
+
+def test_the_qc_tab_reads_the_database_the_scans_go_to(qtbot, tmp_path):
+    """The main window's QC tab judges the jobs of the window's own database (its sink), not the
+    configured default: a job stored there is listed."""
+    from ui.app import MainWindow
+    from ui.models.measure_db import LocalSink
+
+    url, _job = _database(tmp_path)
+    win = MainWindow(sink=LocalSink(url, tmp_path / "outbox.sqlite3"), ask_on_close=False)
+    qtbot.addWidget(win)
+    win.show()
+    win.tabs.setCurrentWidget(win.screens["QC"])
+    screen = win.screens["QC"].content()
+    assert screen.model.source.url == url
+    _click(qtbot, screen.load_btn)
+    assert [screen.job.itemText(i) for i in range(screen.job.count())] == ["J-100", "J-200"]
+    win.close()

@@ -96,10 +96,15 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         return QAScreen(window.designer, window.store, send_to_formulation)
 
     def qc() -> QWidget:
+        from ui.models.measure_db import LocalSink
         from ui.models.qc import LocalQc, QcModel, ServiceQc
         from ui.widgets.qc_screen import QcScreen
 
-        return QcScreen(QcModel(ServiceQc(window.service) if window.service is not None else LocalQc()))
+        if window.service is not None:
+            return QcScreen(QcModel(ServiceQc(window.service)))
+        sink = window.store.sink
+        url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
+        return QcScreen(QcModel(LocalQc(url)))
 
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
