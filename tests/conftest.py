@@ -28,7 +28,9 @@ def _private_caches(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
 
     ``$STATION_CACHE_DIR`` (the demo library, ``station.formulate.demo``) and ``$CACAD_CACHE_DIR``
     (prefiltered cube maps, ``station.render.envcache``) otherwise default to folders under ``$HOME``,
-    which parallel workers and other checkouts would share. Subprocesses inherit the variables.
+    which parallel workers and other checkouts would share (the demo library is written through one
+    fixed temporary name, so two processes generating it at once would write the same file). A worker
+    generates the demo library once (about 4 s). Subprocesses inherit the variables.
     """
     root = tmp_path_factory.mktemp("cache")
     patch = pytest.MonkeyPatch()
