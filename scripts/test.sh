@@ -6,6 +6,12 @@
 # The viewer's tests run in a pytest process of their own: Qt draws through GLX under Xvfb, the core's
 # renderer through moderngl's standalone EGL contexts, and Mesa cannot make a Qt GLX context current in
 # a process that has already used EGL device contexts ("QOpenGLWidget: Failed to make context current").
+#
+# The core process runs in parallel (pytest-xdist): CACAD_TEST_WORKERS workers (default: one per CPU
+# core, at most 4), each test file on one worker (--dist loadfile: a file's module fixtures, such as a
+# running service, are built once). The viewer process stays serial: one Qt application and one Xvfb
+# display. CACAD_TEST_WORKERS=0 runs the core in one process; extra arguments (e.g. -n 0) come last and
+# win.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -23,15 +29,17 @@ reports="$root/.test-results"
 rm -rf "$reports" && mkdir -p "$reports"
 set +e
 echo "== pytest: core, service, drivers, tools"
-python -m pytest --ignore=tests/ui --junitxml="$reports/core.xml" "$@"
+workers="${CACAD_TEST_WORKERS:-auto}"
+python -m pytest --ignore=tests/ui -n "$workers" --maxprocesses 4 --dist loadfile \
+  --junitxml="$reports/core.xml" "$@"
 core=$?
 echo "== pytest: viewer (own process, Qt on Xvfb)"
 python -m pytest tests/ui --junitxml="$reports/ui.xml" "$@"
 ui=$?
 set -e
 echo "== all tests"
-python scripts/junit_summary.py "$reports/core.xml" "$reports/ui.xml"
-summary=$?
+summary=0
+python scripts/junit_summary.py "$reports/core.xml" "$reports/ui.xml" || summary=$?
 if [ "$core" -ne 0 ] || [ "$ui" -ne 0 ] || [ "$summary" -ne 0 ]; then
   echo "FAILED (core pytest exit $core, viewer pytest exit $ui)" >&2
   exit 1
