@@ -70,6 +70,17 @@ def test_filters_and_colorsnap(qtbot):
             for i in range(screen.tree.topLevelItem(0).childCount())
         ].index("solids")
     )
+    # every hierarchy name is shown whole, not elided ("more…roma" was a defect)
+    fm = screen.tree.fontMetrics()
+    items = [screen.tree.topLevelItem(0)]
+    while items:
+        item = items.pop()
+        rect = screen.tree.visualItemRect(item)
+        if not rect.isEmpty():
+            assert fm.horizontalAdvance(item.text(0)) <= screen.tree.columnWidth(0) - rect.left() + 4, (
+                item.text(0)
+            )
+        items.extend(item.child(i) for i in range(item.childCount()))
     _click_tree_item(qtbot, screen.tree, solids)
     _wait_idle(qtbot, screen)
     assert screen.thumbs.count() == int(np.sum(lib.types == "solid")) == int(solids.text(1))

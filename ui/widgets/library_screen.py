@@ -20,6 +20,7 @@ from PySide6.QtWidgets import (
     QFormLayout,
     QGroupBox,
     QHBoxLayout,
+    QHeaderView,
     QLabel,
     QListWidget,
     QListWidgetItem,
@@ -148,6 +149,9 @@ class LibraryScreen(QWidget):
                 for g, n in groups.items():
                     k_item.addChild(QTreeWidgetItem([g, str(n)]))
         self.tree.expandToDepth(1)
+        # the names in full ("metallics", "chromatic"), never elided: the first column fits its contents
+        self.tree.header().setSectionResizeMode(0, QHeaderView.ResizeMode.ResizeToContents)
+        self.tree.header().setStretchLastSection(True)
         self.tree.itemClicked.connect(self._on_tree)
 
         self.type_boxes = {t: QCheckBox(t) for t in PAINT_TYPES}
