@@ -222,7 +222,7 @@ def sample_targets(designs: Sequence[FaceFlopTravelGloss]) -> Targets:
     # The model's X(θ) = flop + (face − flop)·s(θ)² (eq 3.3.2, station.model.representations.shape_factor),
     # broadcast over designs; a solid (no travel) is its face.
     tc = np.where(np.isnan(travel), 2 * FACE_ANGLE_DEG, travel)[:, None]
-    s2 = np.where(np.isnan(travel)[:, None], 1.0, shape_factor(theta[None, :], tc))  # type: ignore[arg-type]
+    s2 = np.where(np.isnan(travel)[:, None], 1.0, shape_factor(theta[None, :], tc))
     lab = flop[:, None, :] + (face - flop)[:, None, :] * s2[:, :, None]
     n, rho_s = phong_lobe(np.array([float(d.gloss_gu) for d in designs]))
     return Targets(_rgb_table(lab), np.atleast_1d(n), np.atleast_1d(rho_s))

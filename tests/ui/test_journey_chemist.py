@@ -260,9 +260,21 @@ def test_chemist_day_in_service_mode_uses_the_services_library(qtbot, tmp_path):
             _click(qtbot, screen, screen.snap_btn)
             assert screen.matches.rowCount() == 1 and screen.matches.item(0, 0).text() == "SVC-ONLY-1"
             assert "service-only (metallic), 1 paints" in screen.status.text()
-            # formulate on the service: its recipe, weighed out per batch as the core does
+            # formulating from that library is refused, naming it: its paint carries no recipe
             _click(qtbot, screen, screen.formulate_btn)
-            got = service.call("POST", "/formulation/formulate", json={"design": design_to_dict(design)})
+            assert screen.formulation is None
+            assert "error" in screen.status.text() and "library" in screen.status.text()
+            # formulate on the service from every stored library's metallics (the ticked type): its
+            # recipe, weighed out per batch as the core does
+            screen.source.setCurrentIndex(0)
+            assert screen.source.currentText() == "every stored library"
+            _click(qtbot, screen, screen.formulate_btn)
+            got = service.call(
+                "POST",
+                "/formulation/formulate",
+                json={"design": design_to_dict(design), "types": ["metallic"]},
+            )
+            assert {m["type"] for m in got["matches"]} == {"metallic"}
             f = screen.formulation
             assert f is not None and f.result.recipe == pytest.approx(got["recipe"], abs=1e-9)
             shown = {

@@ -73,7 +73,9 @@ def test_stylist_day_in_service_mode(qtbot, tmp_path):
             lib_screen = show_tab(qtbot, win, "Library")
             lib = lib_screen.model.library
             assert base in lib_screen.title.text() and len(lib) == 6001  # the demo's 6000 and the upload
+            qtbot.waitUntil(lambda: lib_screen.idle, timeout=120000)  # thumbnails of 6001 paints
             click_center(qtbot, lib_screen.snap_btn)
+            qtbot.waitUntil(lambda: lib_screen.idle, timeout=60000)  # ColorSnap runs in the background
             result = lib_screen.model.snap_result
             assert result is not None and result.matches[0].code == "STUDIO-1"
             assert result.matches[0].sum_de == pytest.approx(0.0, abs=1e-3)
