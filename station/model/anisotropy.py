@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from station.model.domain import check_ranged
 from station.model.errors import ModelInputError
 
 #: Accepted ranges: field → (low, high); α_y is further bounded below by α_x.
@@ -39,15 +40,7 @@ class Anisotropy:
 
     def __post_init__(self) -> None:
         for name, (lo, hi) in ANISOTROPY_RANGES.items():
-            v = getattr(self, name)
-            if (
-                isinstance(v, bool)
-                or not isinstance(v, (int, float))
-                or not math.isfinite(v)
-                or not lo <= v <= hi
-            ):
-                raise ModelInputError(f"anisotropy.{name}", f"{lo} <= {name} <= {hi}", v)
-            object.__setattr__(self, name, float(v))
+            object.__setattr__(self, name, check_ranged(f"anisotropy.{name}", getattr(self, name), lo, hi))
         if self.alpha_y < self.alpha_x:
             raise ModelInputError(
                 "anisotropy.alpha_y", f"alpha_x ({self.alpha_x}) <= alpha_y <= 1", self.alpha_y

@@ -199,6 +199,20 @@ def check_gloss(value: float | None, field: str = "gloss_gu", allow_none: bool =
     return g
 
 
+def check_ranged(field: str, value: object, lo: float, hi: float, name: str | None = None) -> float:
+    """A real number (not a bool) with lo <= value <= hi, as float; :class:`ModelInputError` naming *field*
+    with the range ``lo <= name <= hi`` otherwise (*name* defaults to the last part of *field*)."""
+    label = name or field.rsplit(".", 1)[-1]
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or not lo <= value <= hi
+    ):
+        raise ModelInputError(field, f"{lo} <= {label} <= {hi}", value)
+    return float(value)
+
+
 # ----------------------------------------------------------------------------- geometry sets
 
 #: The common 3-angle set (ASTM E2194), aspecular degrees.

@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from station.model.domain import check_ranged
 from station.model.errors import ModelInputError
 
 #: Accepted ranges: field → (low, high).
@@ -44,15 +45,7 @@ class FlakeLayer:
 
     def __post_init__(self) -> None:
         for name, (lo, hi) in FLAKE_RANGES.items():
-            v = getattr(self, name)
-            if (
-                isinstance(v, bool)
-                or not isinstance(v, (int, float))
-                or not math.isfinite(v)
-                or not lo <= v <= hi
-            ):
-                raise ModelInputError(f"flakes.{name}", f"{lo} <= {name} <= {hi}", v)
-            object.__setattr__(self, name, float(v))
+            object.__setattr__(self, name, check_ranged(f"flakes.{name}", getattr(self, name), lo, hi))
 
     @property
     def reflected_exponent(self) -> float:
