@@ -67,7 +67,7 @@ def register(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "reproduce",
         help="run the thesis's experiments on our code: thesis value, ours, difference, verdict",
-        description=__doc__,
+        description=(__doc__ or "").replace("``", ""),  # plain text for people, not reStructuredText
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--figure", help="thesis figure id (4.4, 3.3, 5.4, 2.4, …) or experiment key")

@@ -120,6 +120,30 @@ def test_a_closed_pipe_is_quiet(tmp_path: Path) -> None:
     assert err == "", err
 
 
+def test_no_help_text_shows_markup_or_internal_names() -> None:
+    """Every command's and subcommand's --help is plain text: no reStructuredText literals or roles, no
+    dotted module paths."""
+    import argparse
+    import re
+
+    from station.cli import build_parser
+
+    def walk(parser: argparse.ArgumentParser, path: str):
+        yield path, parser
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    yield from walk(sub, f"{path} {name}")
+
+    seen = 0
+    for path, parser in walk(build_parser(), "station"):
+        text = parser.format_help()
+        seen += 1
+        assert "``" not in text and ":func:" not in text and ":class:" not in text, path
+        assert not re.search(r"\bstation\.[a-z_]+\.[a-z_]+", text), path
+    assert seen > 40
+
+
 def test_help_texts_are_for_people(tmp_path: Path) -> None:
     render = station(tmp_path, "render", "--help")
     assert render.returncode == 0
