@@ -34,7 +34,11 @@ python -m pytest --ignore=tests/ui -n "$workers" --maxprocesses 4 --dist loadfil
   --junitxml="$reports/core.xml" "$@"
 core=$?
 echo "== pytest: viewer (own process, Qt on Xvfb)"
-python -m pytest tests/ui --junitxml="$reports/ui.xml" "$@"
+# Two workers at most (each starts its own Xvfb). A test stuck in a nested Qt event loop (a modal
+# dialog) never returns to Python, so SIGALRM cannot stop it: the viewer's timeout uses a thread,
+# which dumps the stacks and ends the worker instead of hanging the run.
+python -m pytest tests/ui -n "$workers" --maxprocesses 2 --dist loadfile -o timeout_method=thread \
+  --junitxml="$reports/ui.xml" "$@"
 ui=$?
 set -e
 echo "== all tests"

@@ -49,6 +49,9 @@ def _with_dialog(qtbot, button, path, done) -> None:
             name = dialog.findChild(QLineEdit, "fileNameEdit")
             name.selectAll()
             QTest.keyClicks(name, str(path))
+            popup = name.completer().popup() if name.completer() is not None else None
+            if popup is not None and popup.isVisible():  # the completer offers a file of the folder
+                QTest.keyClick(popup, Qt.Key.Key_Escape)  # (blue.json for blue.): keep what was typed
             QTest.keyClick(name, Qt.Key.Key_Return)
         if not done():
             QTimer.singleShot(300, fill)

@@ -103,6 +103,9 @@ def _export_via_dialog(qtbot, screen: QAScreen, path) -> None:
             name = dialog.findChild(QLineEdit, "fileNameEdit")
             name.selectAll()
             QTest.keyClicks(name, str(path))
+            popup = name.completer().popup() if name.completer() is not None else None
+            if popup is not None and popup.isVisible():  # the completer offers a file of the folder
+                QTest.keyClick(popup, Qt.Key.Key_Escape)  # (blue.json for blue.): keep what was typed
             QTest.keyClick(name, Qt.Key.Key_Return)
         if screen.exported is None:  # the dialog not up yet, or still reading its folder: again
             QTimer.singleShot(300, fill)
