@@ -37,6 +37,8 @@ if TYPE_CHECKING:
 
 #: Largest uploaded environment file (bytes): a 1k Radiance file with RLE is about 1.4 MB.
 MAX_UPLOAD_BYTES = 4 * 1_048_576
+#: Longest base64 text of such a file in a JSON body (4 characters per 3 bytes, plus padding).
+MAX_UPLOAD_BASE64_CHARS = (MAX_UPLOAD_BYTES * 4) // 3 + 4
 #: Largest uploaded environment (pixels): 2048 × 1024.
 MAX_UPLOAD_PIXELS = 2048 * 1024
 #: Width the environment is box-filtered to before prefiltering (equirect, pixels).

@@ -12,7 +12,7 @@ from station.api.schemas.common import Polar, StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
 from station.model.domain import JND_CIE76
 from station.render.procedural import NAMES as ENVIRONMENT_NAMES
-from station.render.scene_image import MAX_UPLOAD_BYTES
+from station.render.scene_image import MAX_UPLOAD_BASE64_CHARS, MAX_UPLOAD_BYTES
 
 Method = Literal["cie76", "cie94", "cie2000", "din6175"]
 Hinge = Annotated[
@@ -172,7 +172,7 @@ class GgIndexEnvironmentRequest(BaseModel):
     )
     environment_hdr: str | None = Field(
         None,
-        max_length=(MAX_UPLOAD_BYTES * 4) // 3 + 4,
+        max_length=MAX_UPLOAD_BASE64_CHARS,
         description=f"base64 of an equirectangular .hdr/.exr file (at most {MAX_UPLOAD_BYTES} bytes, "
         "2048 x 1024 pixels)",
     )

@@ -13,6 +13,10 @@ from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS
 
 SnapMetric = Literal["cie76", "cie2000", "din6175"]
 PaintType = Literal["solid", "metallic", "pearl"]
+#: A paint-type filter of one to three types (ColorSnap and formulation).
+PaintTypes = Annotated[list[PaintType], Field(min_length=1, max_length=3)]
+#: The name of one stored library (``extra.library`` of its paints, as GET /library/libraries lists).
+LibraryName = Annotated[str, Field(min_length=1, max_length=64)]
 _DESIGN: JsonDict = {
     "name": "Blue metallic",
     "face": [62.0, -4.0, -38.0],
@@ -59,25 +63,12 @@ class SnapRequest(DesignSource):
     metric: Annotated[
         SnapMetric, Field(description="ΔE summed over the angles (cie76 = ΔE*ab, the thesis's)")
     ] = "cie76"
-    types: (
-        Annotated[
-            list[PaintType],
-            Field(min_length=1, max_length=3, description="search only paints of these types; default all"),
-        ]
-        | None
-    ) = None
-    library: (
-        Annotated[
-            str,
-            Field(
-                min_length=1,
-                max_length=64,
-                description="search one stored library (its name, as GET /library/libraries lists); "
-                "default every stored paint",
-            ),
-        ]
-        | None
-    ) = None
+    types: PaintTypes | None = Field(None, description="search only paints of these types; default all")
+    library: LibraryName | None = Field(
+        None,
+        description="search one stored library (its name, as GET /library/libraries lists); "
+        "default every stored paint",
+    )
 
 
 class SnapMatchOut(BaseModel):
@@ -128,29 +119,14 @@ class FormulateRequest(DesignSource):
         FORMULATION_TOLERANCE_DE00
     )
     k: Annotated[StrictInt, Field(ge=1, le=10, description="library matches tried as starting recipes")] = 3
-    types: (
-        Annotated[
-            list[PaintType],
-            Field(
-                min_length=1,
-                max_length=3,
-                description="start only from matches of these paint types; default all",
-            ),
-        ]
-        | None
-    ) = None
-    library: (
-        Annotated[
-            str,
-            Field(
-                min_length=1,
-                max_length=64,
-                description="start only from one stored library's paints (GET /library/libraries); "
-                "default every stored paint with a recipe",
-            ),
-        ]
-        | None
-    ) = None
+    types: PaintTypes | None = Field(
+        None, description="start only from matches of these paint types; default all"
+    )
+    library: LibraryName | None = Field(
+        None,
+        description="start only from one stored library's paints (GET /library/libraries); "
+        "default every stored paint with a recipe",
+    )
 
 
 class FormulateOut(BaseModel):

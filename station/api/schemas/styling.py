@@ -11,7 +11,7 @@ from station.api.schemas.common import StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
 from station.model.flakes import FLAKE_RANGES
 from station.render.procedural import NAMES as ENVIRONMENT_NAMES
-from station.render.scene_image import BUILTIN_MESHES, LOD_MAX_DE, MAX_UPLOAD_BYTES
+from station.render.scene_image import BUILTIN_MESHES, LOD_MAX_DE, MAX_UPLOAD_BASE64_CHARS, MAX_UPLOAD_BYTES
 from station.render.shapes import SHAPES
 
 _EXAMPLE: JsonDict = {
@@ -187,7 +187,7 @@ class RenderRequest(BaseModel):
     )
     environment_hdr: str | None = Field(
         None,
-        max_length=(MAX_UPLOAD_BYTES * 4) // 3 + 4,
+        max_length=MAX_UPLOAD_BASE64_CHARS,
         description=f"base64 of an equirectangular .hdr/.exr file (at most {MAX_UPLOAD_BYTES} bytes, "
         "2048 x 1024 pixels; the service's body cap applies first), instead of a built-in environment",
     )
