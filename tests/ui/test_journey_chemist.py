@@ -18,6 +18,7 @@ from station.formulate.snap import color_snap
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.design_io import save_design
 from station.model.domain import ANGLES_3
+from tests.ui.dialogs import enter_file_name
 from ui.app import MainWindow
 from ui.models.measure_db import LocalSink
 
@@ -47,12 +48,7 @@ def _with_dialog(qtbot, button, path, done) -> None:
         dialog = QApplication.activeModalWidget()
         if isinstance(dialog, QFileDialog) and dialog.isVisible():
             name = dialog.findChild(QLineEdit, "fileNameEdit")
-            name.selectAll()
-            QTest.keyClicks(name, str(path))
-            popup = name.completer().popup() if name.completer() is not None else None
-            if popup is not None and popup.isVisible():  # the completer offers a file of the folder
-                QTest.keyClick(popup, Qt.Key.Key_Escape)  # (blue.json for blue.): keep what was typed
-            QTest.keyClick(name, Qt.Key.Key_Return)
+            enter_file_name(name, path)
         if not done():
             QTimer.singleShot(300, fill)
 

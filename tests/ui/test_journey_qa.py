@@ -22,6 +22,7 @@ from station.drivers.readings import SpectralReading
 from station.model.colorimetry import linear_srgb_to_lab
 from station.model.display import decode_display
 from station.model.spectra import reflectance_to_lab
+from tests.ui.dialogs import enter_file_name
 from ui.models.designer import DesignerModel
 from ui.models.document import DesignDocument
 from ui.models.instruments import MeasurementStore, measurement_from_reading
@@ -101,12 +102,7 @@ def _export_via_dialog(qtbot, screen: QAScreen, path) -> None:
         dialog = QApplication.activeModalWidget()
         if isinstance(dialog, QFileDialog) and dialog.isVisible():
             name = dialog.findChild(QLineEdit, "fileNameEdit")
-            name.selectAll()
-            QTest.keyClicks(name, str(path))
-            popup = name.completer().popup() if name.completer() is not None else None
-            if popup is not None and popup.isVisible():  # the completer offers a file of the folder
-                QTest.keyClick(popup, Qt.Key.Key_Escape)  # (blue.json for blue.): keep what was typed
-            QTest.keyClick(name, Qt.Key.Key_Return)
+            enter_file_name(name, path)
         if screen.exported is None:  # the dialog not up yet, or still reading its folder: again
             QTimer.singleShot(300, fill)
 

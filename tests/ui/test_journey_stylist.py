@@ -22,6 +22,7 @@ from PySide6.QtGui import QColor, QPalette
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QLineEdit, QMessageBox, QWidget
 
+from tests.ui.dialogs import enter_file_name
 from ui.app import MainWindow
 from ui.demo import patch_image
 from ui.models.document import DEFAULT_DESIGN
@@ -75,14 +76,7 @@ def answer_file_dialog(holder, path, tries: int = 20) -> None:
     the dialog is still busy listing its folder and clears what was typed)."""
 
     def act(dlg) -> None:
-        edit = dlg.findChild(QLineEdit, "fileNameEdit")
-        QTest.keyClick(edit, Qt.Key.Key_A, CTRL)
-        QTest.keyClick(edit, Qt.Key.Key_Delete)
-        QTest.keyClicks(edit, str(path))
-        popup = edit.completer().popup() if edit.completer() is not None else None
-        if popup is not None and popup.isVisible():  # the file-name completer: dismiss, keep the typing
-            QTest.keyClick(popup, Qt.Key.Key_Escape)
-        QTest.keyClick(edit, Qt.Key.Key_Return)
+        enter_file_name(dlg.findChild(QLineEdit, "fileNameEdit"), path)
         left[0] -= 1
         if dlg.isVisible() and left[0] > 0:
             QTimer.singleShot(200, lambda: act(dlg) if dlg.isVisible() else None)

@@ -595,12 +595,8 @@ class GLRenderView(_ViewLogic, QWidget):
 
         designs = self.model.designs
         if not self.model.settings.flakes or designs is None:
-            self.flake_report = None
             return None
-        layer = default_flakes(designs[0])
-        if layer is None:
-            self.flake_report = "no flake layer: a solid paint"
-        return layer
+        return default_flakes(designs[0])
 
     def _draw_cpu_frame(self, weights, w: int, h: int) -> None:
         """The edit frame as a texture in the GL surface (the stage in gpu mode; a surface exposed late)."""
