@@ -114,6 +114,9 @@ class GLRenderer:
         self._cube_texture = cube_texture
         self.combined = combined
         self._combined: tuple[bytes, list] | None = None
+        self._combine: tuple | None = None  # (framebuffer, program, vertex array) of the atlas pass
+        self._half_float = half_float
+        self._atlas_face = max(c.shape[1] for c in basis.cubes)
         # Lobes in binding order: the wide ones (horizon table) first, so the shader loops over a prefix.
         has_lights = basis.lights is not None and any(basis.wide)
         wide = [
@@ -132,8 +135,12 @@ class GLRenderer:
         self._diffuse_tex = cube_texture(basis.diffuse)
         table = horizon_table(basis.exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
         self._horizon_n = table.shape[1]
+        # Two lobes per RGBA row (lobe 2k in .rg, 2k+1 in .ba): one lookup serves a pair of wide lobes.
+        pairs = np.zeros(((table.shape[0] + 1) // 2, table.shape[1], 4), np.float32)
+        for i in range(table.shape[0]):
+            pairs[i // 2, :, 2 * (i % 2) : 2 * (i % 2) + 2] = table[i]
         self._horizon_tex = self.ctx.texture(
-            (table.shape[1], table.shape[0]), 2, np.ascontiguousarray(table).tobytes(), dtype="f4"
+            (table.shape[1], pairs.shape[0]), 4, np.ascontiguousarray(pairs).tobytes(), dtype="f4"
         )
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
@@ -180,8 +187,16 @@ class GLRenderer:
                 "DIFFUSE_SH": int(self.diffuse == "sh"),
                 "COMBINED": int(self.combined),
                 "HORIZON_N": self._horizon_n,
+                "ATLAS_FACE": self._atlas_face,
                 "N_WIDE": self._n_wide,
                 "MAX_LIGHTS": max(1, self._lights.count if self._lights is not None else 1),
+                # The lights and exponents are fixed per renderer: compiled in as constants, so the
+                # lobe and light loops unroll with constant indices (llvmpipe gathers a uniform
+                # array indexed by a loop counter per pixel).
+                "N_LIGHTS": self._lights.count if self._lights is not None else 0,
+                "LOBE_EXPONENTS": ", ".join(
+                    f"{float(e):.9g}" for e in np.asarray(self.basis.exponents)[self._order]
+                ),
                 "WIDE_EXPONENT": f"{self._wide_exponent:.1f}",
                 "BENT_DD": int(self._horizon == "lut"),
                 "COSINE_SG": f"{COSINE_SG_SHARPNESS:.4f}",
@@ -201,43 +216,40 @@ class GLRenderer:
         return self._targets[key][:2]
 
     def _combined_cubes(self, pair) -> list:
-        """[gloss0, dd0, gloss1, dd1] cube textures for these paints (rebuilt when weights change)."""
+        """[gloss, dd] atlas textures of both paints' narrow lobes (shaders/combine.frag.glsl; rebuilt on
+        the GPU when the weights change, never read back)."""
         mw = [self._bound_weights(w) for w in pair]
         key = b"".join(np.concatenate([w[1].ravel(), w[2]]).astype(np.float32).tobytes() for w in mw)
         if self._combined is not None and self._combined[0] == key:
             return self._combined[1]
-        if self._combined is not None:
-            for tex in self._combined[1]:
-                tex.release()
         m = len(self._lobes)
-        size = max(c.shape[1] for c in self.basis.cubes)
-        prog = build_program(self.ctx, "fullscreen.vert.glsl", "combine.frag.glsl", {"N_LOBES": m})
-        vao = self.ctx.vertex_array(prog, [])
-        targets = [self.ctx.texture((size, 6 * size), 4, dtype="f4") for _ in range(2)]
-        fbo = self.ctx.framebuffer(color_attachments=targets)
-        cubes = []
-        try:
-            fbo.use()
-            for unit, tex in enumerate(self._lobes):
-                tex.use(unit)
-            prog["u_lobes"].value = list(range(m)) if m > 1 else 0
-            prog["u_size"].value = size
-            narrow = (self._wide[self._order] == 0).astype(np.float32)
-            for w in mw:  # wide lobes are looked up per pixel with their horizon factors
-                prog["u_wg"].write((w[2] * narrow).astype(np.float32).tobytes())
-                prog["u_wdd"].write((w[1] * narrow[:, None]).astype(np.float32).tobytes())
-                vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-                for att in range(2):
-                    data = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=att), np.float32)
-                    cubes.append(self._cube_texture(data.reshape(6, size, size, 4)[..., :3]))
-        finally:
-            fbo.release()
-            for t in targets:
-                t.release()
-            vao.release()
-            prog.release()
-        self._combined = (key, cubes)
-        return cubes
+        size = self._atlas_face
+        if self._combined is None:
+            import moderngl
+
+            dtype = "f2" if self._half_float else "f4"
+            atlas = [self.ctx.texture((size + 2, 12 * (size + 2)), 4, dtype=dtype) for _ in range(2)]
+            for tex in atlas:
+                tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+                tex.repeat_x = tex.repeat_y = False
+            fbo = self.ctx.framebuffer(color_attachments=atlas)
+            prog = build_program(self.ctx, "fullscreen.vert.glsl", "combine.frag.glsl", {"N_LOBES": m})
+            self._combine = (fbo, prog, self.ctx.vertex_array(prog, []))
+        else:
+            atlas = self._combined[1]
+        fbo, prog, vao = self._combine
+        fbo.use()
+        for unit, tex in enumerate(self._lobes):
+            tex.use(unit)
+        prog["u_lobes"].value = list(range(m)) if m > 1 else 0
+        prog["u_size"].value = size
+        narrow = (self._wide[self._order] == 0).astype(np.float32)
+        # wide lobes are looked up per pixel with their horizon factors
+        prog["u_wg"].write(np.concatenate([w[2] * narrow for w in mw]).astype(np.float32).tobytes())
+        prog["u_wdd"].write(np.concatenate([w[1] * narrow[:, None] for w in mw]).astype(np.float32).tobytes())
+        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+        self._combined = (key, atlas)
+        return atlas
 
     def _bound_weights(self, w):
         """map_weights() of *w* with the lobes in binding order."""
@@ -445,23 +457,20 @@ class GLRenderer:
         if "u_wd" in prog:
             prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
         if self.combined:
-            for unit, name in enumerate(("u_gloss0", "u_dd0", "u_gloss1", "u_dd1")):
+            for unit, name in enumerate(("u_gloss", "u_dd")):
                 if name in prog:
                     prog[name].value = m + unit
         # The compiler trims uniform arrays to the entries the shader can reach (N_WIDE when combined).
         if "u_lobes" in prog:
             n = prog["u_lobes"].array_length
             prog["u_lobes"].value = list(range(n)) if n > 1 else 0
-        if "u_exponent" in prog:
-            e = np.asarray(self.basis.exponents, np.float32)[self._order]
-            prog["u_exponent"].write(e[: prog["u_exponent"].array_length].tobytes())
+        lights = self._lights
         if "u_n_lights" in prog:
-            lights = self._lights
-            n_lights = lights.count if lights is not None else 0
-            prog["u_n_lights"].value = n_lights
-            if lights is not None and n_lights:
-                prog["u_light_dir"].write(lights.directions.astype(np.float32).tobytes())
-                prog["u_light_flux"].write(lights.flux.astype(np.float32).tobytes())
+            prog["u_n_lights"].value = lights.count if lights is not None else 0
+        if lights is not None and lights.count:  # the compiler drops what a program never reads
+            for name, values in (("u_light_dir", lights.directions), ("u_light_flux", lights.flux)):
+                if name in prog:
+                    prog[name].write(values.astype(np.float32).tobytes())
         for name, part in (("u_wdd", 1), ("u_wg", 2)):
             if name in prog:
                 n = prog[name].array_length
@@ -622,6 +631,10 @@ class GLRenderer:
         for tex, *_ in self._aniso.values():
             tex.release()
         self._aniso.clear()
+        if self._combine is not None:
+            for obj in self._combine:
+                obj.release()
+            self._combine = None
         self._combined = None
         self._programs.clear()
         self._targets.clear()

@@ -22,8 +22,8 @@ vec3 aniso_blend(vec3 r, vec3 n) {
     for (int i = 0; i < N_LOBES; ++i) {
         if (u_aniso_w[i] <= 0.0) continue;
         s += u_aniso_w[i] * horizon(i, rn).y * textureLod(u_lobes[i], r, 0.0).rgb;
-        if (u_exponent[i] < WIDE_EXPONENT) {
-            float e = u_exponent[i];
+        if (LOBE_E[i] < WIDE_EXPONENT) {
+            float e = LOBE_E[i];
             for (int l = 0; l < u_n_lights; ++l) {
                 if (dot(n, u_light_dir[l]) <= 0.0) continue;
                 s += u_aniso_w[i] * (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e)

@@ -1,28 +1,43 @@
 #version 430
-// Pre-combine the lobe maps of one paint into two cube maps (faces stacked in an (S, 6S) target):
-//   gloss(R) = sum_i wg_i C_i(R)      dd(R) = sum_i wdd_i C_i(R)
-// so the per-pixel shader needs 2 lookups per paint instead of one per lobe (the image is linear in
-// the weights, thesis eqs 2.5.1-2.5.2). Rebuilt only when the weights change.
+// Pre-combine the lobe maps of both paints into two atlases (thesis eqs 2.5.1-2.5.2; the image is linear
+// in the weights):
+//   gloss_p(R) = sum_i wg_{p,i} C_i(R)      dd_p(R) = sum_i wdd_{p,i} C_i(R)
+// so the per-pixel shader needs 2 lookups for either paint instead of one per lobe and paint. Atlas
+// layout (atlas.glsl): 12 cube faces of u_size texels plus a 1-texel border each (faces 0..5 of paint 0,
+// then of paint 1, stacked in y); a border texel holds the neighbouring face's edge texel, so bilinear
+// filtering across a face edge is a seamless cube lookup. Rebuilt only when the weights
+// change; the shader that reads it never reads it back to the CPU.
 //#include cubeface.glsl
 uniform samplerCube u_lobes[N_LOBES];
-uniform float u_wg[N_LOBES];
-uniform vec3 u_wdd[N_LOBES];
+uniform float u_wg[2 * N_LOBES];
+uniform vec3 u_wdd[2 * N_LOBES];
 uniform int u_size;
 layout(location = 0) out vec4 f_gloss;
 layout(location = 1) out vec4 f_dd;
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
-    int face = p.y / u_size;
-    int row = p.y - face * u_size;
-    float a = 2.0 * (float(p.x) + 0.5) / float(u_size) - 1.0;
-    float b = 2.0 * (float(row) + 0.5) / float(u_size) - 1.0;
+    int tile = u_size + 2;
+    int block = p.y / tile;  // paint * 6 + face
+    int paint = block / 6;
+    int face = block - 6 * paint;
+    int row = p.y - block * tile;
+    float a = (2.0 * float(p.x) - 1.0) / float(u_size) - 1.0;
+    float b = (2.0 * float(row) - 1.0) / float(u_size) - 1.0;
     vec3 r = cube_face_dir(face, a, b);
+    // A border texel takes the neighbouring face's texel at the shared edge: its direction is snapped to
+    // the nearest texel centre of the face it points into (interior texels are centres already), so the
+    // bilinear filter across an edge is GL's seamless cube filter (corners: one texel instead of three).
+    vec2 ab;
+    int f2 = cube_face_of(r, ab);
+    vec2 cell = clamp(floor((ab + 1.0) * (0.5 * float(u_size))), 0.0, float(u_size - 1));
+    ab = (2.0 * cell + 1.0) / float(u_size) - 1.0;
+    r = cube_face_dir(f2, ab.x, ab.y);
     vec3 g = vec3(0.0), dd = vec3(0.0);
     for (int i = 0; i < N_LOBES; ++i) {
         vec3 c = textureLod(u_lobes[i], r, 0.0).rgb;
-        g += u_wg[i] * c;
-        dd += u_wdd[i] * c;
+        g += u_wg[paint * N_LOBES + i] * c;
+        dd += u_wdd[paint * N_LOBES + i] * c;
     }
     f_gloss = vec4(g, 1.0);
     f_dd = vec4(dd, 1.0);

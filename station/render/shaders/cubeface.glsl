@@ -8,3 +8,18 @@ vec3 cube_face_dir(int face, float a, float b) {
     if (face == 4) return vec3(a, -b, 1.0);
     return vec3(-a, -b, -1.0);
 }
+
+// Inverse of cube_face_dir: the face a direction d (any length) points into and its (a, b) there.
+int cube_face_of(vec3 d, out vec2 ab) {
+    vec3 q = abs(d);
+    if (q.x >= q.y && q.x >= q.z) {
+        ab = vec2(d.x > 0.0 ? -d.z : d.z, -d.y) / q.x;
+        return d.x > 0.0 ? 0 : 1;
+    }
+    if (q.y >= q.z) {
+        ab = vec2(d.x, d.y > 0.0 ? d.z : -d.z) / q.y;
+        return d.y > 0.0 ? 2 : 3;
+    }
+    ab = vec2(d.z > 0.0 ? d.x : -d.x, -d.y) / q.z;
+    return d.z > 0.0 ? 4 : 5;
+}

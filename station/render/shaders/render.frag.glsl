@@ -4,11 +4,12 @@
 // with (g_i, h_i) read from the horizon table u_horizon (HORIZON_N x N_LOBES, RG); with BENT_DD (1) the
 // directionally diffuse term of a wide lobe reads C_i at B = normalize(E_i R + COSINE_SG N). The lobes are
 // bound with the N_WIDE wide ones (horizon table) first; the narrow ones have (g, h) = (R.N, 1)
-// exactly and, when COMBINED, are pre-summed per paint, so only the wide ones are looked up here.
+// exactly and, when COMBINED, are pre-summed per paint into an atlas (shaders/atlas.glsl), so only the
+// wide ones are looked up per lobe here.
 // with the weights already converted to normalised maps (LobeWeights.map_weights). Two paints:
 // index 0/1 from the shape. Defines: SHAPE, N_LOBES, OUTPUT_LINEAR (1: float radiance out),
-// DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube), COMBINED (1: the lobes of each
-// paint pre-summed into a gloss and a directionally-diffuse cube, shaders/combine.frag.glsl).
+// DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube), COMBINED (1: the narrow lobes of
+// both paints pre-summed into a gloss and a directionally-diffuse atlas, shaders/combine.frag.glsl).
 // MESH (1): shade the fragments of a rasterised mesh (shaders/mesh.vert.glsl) instead of ray casting a
 // shape; NO_SHAPE (1): nothing to hit, the stage only (the backdrop pass under a mesh). Mesh parts with
 // v_painted = 0 are neutral: NEUTRAL_ALBEDO x the diffuse map.
@@ -53,13 +54,16 @@ uniform float u_tan_half_fov, u_aspect;
 uniform vec2 u_size;
 uniform samplerCube u_lobes[N_LOBES];
 uniform sampler2D u_horizon;
-uniform float u_exponent[N_LOBES];       // bound order
-uniform int u_n_lights;                   // lights taken out of the wide lobes' maps
+// LOBE_EXPONENTS: the exponents in bound order; N_LIGHTS: the lights taken out of the wide lobes' maps
+// (both fixed per renderer, compiled in so the loops below unroll with constant indices).
+const float LOBE_E[N_LOBES] = float[N_LOBES](LOBE_EXPONENTS);
+uniform int u_n_lights;                   // = N_LIGHTS (the stage, flakes and anisotropy loops)
 uniform vec3 u_light_dir[MAX_LIGHTS];
 uniform vec3 u_light_flux[MAX_LIGHTS];
 const float PI = 3.14159265358979;
 #if COMBINED
-uniform samplerCube u_gloss0, u_gloss1, u_dd0, u_dd1;
+uniform sampler2D u_gloss, u_dd;  // both paints' pre-summed narrow lobes (atlas.glsl)
+//#include atlas.glsl
 #endif
 uniform samplerCube u_diffuse;
 uniform vec3 u_sh[9];
@@ -122,9 +126,12 @@ float coat_scale(float ndv) {
     return (u_coat_f0 + (1.0 - u_coat_f0) * pow(1.0 - ndv, 5.0)) / u_coat_ref;
 }
 
+// (g, h) of bound lobe i at c = R.N: lobes 2k and 2k+1 share row k (.rg, .ba), so with a constant i
+// the two lookups of a pair are one.
 vec2 horizon(int i, float c) {
-    return texture(u_horizon, vec2((c * float(HORIZON_N - 1) + 0.5) / float(HORIZON_N),
-                                   (float(i) + 0.5) / float(N_LOBES))).rg;
+    vec4 t = texture(u_horizon, vec2((c * float(HORIZON_N - 1) + 0.5) / float(HORIZON_N),
+                                     (float(i / 2) + 0.5) / float((N_LOBES + 1) / 2)));
+    return (i % 2 == 0) ? t.rg : t.ba;
 }
 
 vec3 sh_eval(vec3 n) {
@@ -255,36 +262,49 @@ void main() {
         rgb = u_wd[paint] * textureLod(u_diffuse, n, 0.0).rgb;
 #endif
 #if COMBINED
-        if (paint == 0) rgb += s * textureLod(u_gloss0, r, 0.0).rgb + ndv * textureLod(u_dd0, r, 0.0).rgb;
-        else rgb += s * textureLod(u_gloss1, r, 0.0).rgb + ndv * textureLod(u_dd1, r, 0.0).rgb;
+        {
+            vec2 uv = atlas_uv(r, paint);  // one pair of lookups for either paint (no branch on the paint)
+            rgb += s * textureLod(u_gloss, uv, 0.0).rgb + ndv * textureLod(u_dd, uv, 0.0).rgb;
+        }
 #endif
 #if COMBINED
-        for (int i = 0; i < N_WIDE; ++i) {
+#define N_LOOP N_WIDE
 #else
-        for (int i = 0; i < N_LOBES; ++i) {
+#define N_LOOP N_LOBES
 #endif
-            int k = paint * N_LOBES + i;
+        // The paint's weights are selected per lobe (a select; indexing by the paint would gather).
+        for (int i = 0; i < N_LOOP; ++i) {
+            float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
+            vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
             vec2 gh = horizon(i, ndv);
             vec3 c_r = textureLod(u_lobes[i], r, 0.0).rgb;
             vec3 c_dd = c_r;
 #if BENT_DD
             // directionally diffuse lookup of a wide lobe at B = normalize(E R + COSINE_SG N)
             // (numpy_renderer.dd_direction, station.render.lobes.bent_direction)
-            if (u_exponent[i] < WIDE_EXPONENT)
-                c_dd = textureLod(u_lobes[i], normalize(u_exponent[i] * r + COSINE_SG * n), 0.0).rgb;
+            if (LOBE_E[i] < WIDE_EXPONENT)
+                c_dd = textureLod(u_lobes[i], normalize(LOBE_E[i] * r + COSINE_SG * n), 0.0).rgb;
 #endif
-            rgb += s * gh.y * u_wg[k] * c_r + gh.x * u_wdd[k] * c_dd;
-            if (u_exponent[i] < WIDE_EXPONENT) {
-                // exact directional lights: wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux
-                float e = u_exponent[i];
-                for (int l = 0; l < u_n_lights; ++l) {
-                    float nl = dot(n, u_light_dir[l]);
-                    if (nl <= 0.0) continue;
-                    float p = (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e);
-                    rgb += (s * u_wg[k] + nl * u_wdd[k]) * p * u_light_flux[l];
+            rgb += s * gh.y * wg * c_r + gh.x * wdd * c_dd;
+        }
+#if N_LIGHTS > 0
+        // exact directional lights on the lobes they were taken out of (E < WIDE_EXPONENT):
+        // wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux, p = (E+1)/(2 pi) max(R.l, 0)^E; one log2 per light.
+        for (int l = 0; l < N_LIGHTS; ++l) {
+            float nl = dot(n, u_light_dir[l]);
+            float lg = log2(max(dot(r, u_light_dir[l]), 1e-30));
+            vec3 acc = vec3(0.0);
+            for (int i = 0; i < N_LOOP; ++i) {
+                if (LOBE_E[i] < WIDE_EXPONENT) {
+                    float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
+                    vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
+                    float p = (LOBE_E[i] + 1.0) / (2.0 * PI) * exp2(LOBE_E[i] * lg);
+                    acc += (s * wg + nl * wdd) * p;
                 }
             }
+            if (nl > 0.0) rgb += acc * u_light_flux[l];
         }
+#endif
 #if HAS_ANISO
 #if HAS_STAGE
         rgb += s * aniso_gloss(n, u_rot * v, u_rot * u_aniso_hint, paint);
