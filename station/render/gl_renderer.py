@@ -165,10 +165,13 @@ class GLRenderer:
         linear: bool,
         kind: str = "shape",
         features: tuple[int, ...] = (0, 0, 0),
+        terms: tuple[int, int] = (-1, 1),
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
-        *features* = (coat, stage, flakes[, anisotropy]) compiled in (0/1 each)."""
-        key = (shape, linear, kind, features)
+        *features* = (coat, stage, flakes[, anisotropy]) compiled in (0/1 each); *terms* =
+        (bit mask of the wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally
+        diffuse weight is), see :meth:`_terms`."""
+        key = (shape, linear, kind, features, terms)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
 
@@ -176,6 +179,8 @@ class GLRenderer:
                 "SHAPE": SHAPE_INDEX[shape],
                 "MESH": int(kind == "mesh"),
                 "NO_SHAPE": int(kind == "stage"),
+                "WIDE_GLOSS_MASK": terms[0],
+                "NARROW_DD": terms[1],
                 "HAS_COAT": features[0],
                 "HAS_STAGE": features[1],
                 "HAS_FLAKES": features[2],
@@ -251,6 +256,23 @@ class GLRenderer:
         self._combined = (key, atlas)
         return atlas
 
+    def _terms(self, pair) -> tuple[int, int]:
+        """Which weight groups of these paints are non-zero: (bit i set when wide lobe i has a gloss
+        weight in either paint, 1 when a narrow lobe has a directionally diffuse weight). A term whose
+        weights are all exactly zero adds nothing, so its lookups are compiled out: a typical effect
+        paint has its gloss in the narrow lobes and its colour travel in the wide ones (3 of 8 lookups).
+        Without the combined maps every lobe is looked up (mask -1)."""
+        if not self.combined:
+            return (-1, 1)
+        mw = [self._bound_weights(w) for w in pair]
+        wide = self._wide[self._order] != 0
+        mask = 0
+        for i in np.nonzero(wide)[0]:
+            if any(w[2][i] > 0.0 for w in mw):
+                mask |= 1 << int(i)
+        narrow_dd = int(any(np.any(w[1][~wide] > 0.0) for w in mw))
+        return (mask, narrow_dd)
+
     def _bound_weights(self, w):
         """map_weights() of *w* with the lobes in binding order."""
         w_d, w_dd, w_g = w.map_weights()
@@ -283,12 +305,13 @@ class GLRenderer:
             feats = (*feats, 1)
         else:
             self.last_anisotropy = None
+        terms = self._terms(pair)
         if mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats)]
+            passes = [self._program(scene.shape, linear, "shape", feats, terms)]
         else:
             passes = [
                 self._program("sphere", linear, "stage", (0, feats[1], 0)),
-                self._program("sphere", linear, "mesh", feats),
+                self._program("sphere", linear, "mesh", feats, terms),
             ]
         fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
         fbo.use()

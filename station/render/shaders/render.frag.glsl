@@ -35,6 +35,15 @@
 #ifndef NO_SHAPE
 #define NO_SHAPE 0
 #endif
+// WIDE_GLOSS_MASK: bit i set when bound wide lobe i carries gloss in either paint; NARROW_DD (0/1): a
+// narrow lobe carries a directionally diffuse weight. Zero-weight terms are compiled out
+// (GLRenderer._terms): exact, since they add nothing.
+#ifndef WIDE_GLOSS_MASK
+#define WIDE_GLOSS_MASK -1
+#endif
+#ifndef NARROW_DD
+#define NARROW_DD 1
+#endif
 #ifndef PENUMBRA_DEG
 #define PENUMBRA_DEG 1.0
 #endif
@@ -264,7 +273,10 @@ void main() {
 #if COMBINED
         {
             vec2 uv = atlas_uv(r, paint);  // one pair of lookups for either paint (no branch on the paint)
-            rgb += s * textureLod(u_gloss, uv, 0.0).rgb + ndv * textureLod(u_dd, uv, 0.0).rgb;
+            rgb += s * textureLod(u_gloss, uv, 0.0).rgb;
+#if NARROW_DD
+            rgb += ndv * textureLod(u_dd, uv, 0.0).rgb;
+#endif
         }
 #endif
 #if COMBINED
@@ -277,15 +289,18 @@ void main() {
             float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
             vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
             vec2 gh = horizon(i, ndv);
-            vec3 c_r = textureLod(u_lobes[i], r, 0.0).rgb;
-            vec3 c_dd = c_r;
+            bool gloss = ((WIDE_GLOSS_MASK >> i) & 1) != 0;  // constant: no lookup for a zero gloss weight
 #if BENT_DD
             // directionally diffuse lookup of a wide lobe at B = normalize(E R + COSINE_SG N)
             // (numpy_renderer.dd_direction, station.render.lobes.bent_direction)
-            if (LOBE_E[i] < WIDE_EXPONENT)
-                c_dd = textureLod(u_lobes[i], normalize(LOBE_E[i] * r + COSINE_SG * n), 0.0).rgb;
+            bool bent = LOBE_E[i] < WIDE_EXPONENT;
+#else
+            bool bent = false;
 #endif
-            rgb += s * gh.y * wg * c_r + gh.x * wdd * c_dd;
+            vec3 c_r = (gloss || !bent) ? textureLod(u_lobes[i], r, 0.0).rgb : vec3(0.0);
+            vec3 c_dd = bent ? textureLod(u_lobes[i], normalize(LOBE_E[i] * r + COSINE_SG * n), 0.0).rgb : c_r;
+            if (gloss) rgb += s * gh.y * wg * c_r;
+            rgb += gh.x * wdd * c_dd;
         }
 #if N_LIGHTS > 0
         // exact directional lights on the lobes they were taken out of (E < WIDE_EXPONENT):
@@ -299,7 +314,7 @@ void main() {
                     float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
                     vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
                     float p = (LOBE_E[i] + 1.0) / (2.0 * PI) * exp2(LOBE_E[i] * lg);
-                    acc += (s * wg + nl * wdd) * p;
+                    acc += (((WIDE_GLOSS_MASK >> i) & 1) != 0 ? s * wg + nl * wdd : nl * wdd) * p;
                 }
             }
             if (nl > 0.0) rgb += acc * u_light_flux[l];
