@@ -55,6 +55,11 @@ __all__ = [
 ]
 
 
+#: Texels per side of the baked ground map (the disc's square; 6-unit radius: 1.2 cm a texel, a 1°
+#: penumbra at 2 units from its occluder spans ~6 texels).
+GROUND_MAP = 1024
+
+
 class GLRenderer:
     """Renders scenes with one prefiltered basis on a GL context; a context manager.
 
@@ -62,10 +67,14 @@ class GLRenderer:
     program is built per (shape, output kind) on first use. :meth:`render` returns the 8-bit sRGB
     frame (tone mapped in the shader), :meth:`render_linear` float radiance; both row 0 at the top.
 
-    With ``combined=True`` (default) the lobes of each paint are pre-summed, whenever the weights
-    change, into a gloss cube Σ w_G,i C_i and a directionally diffuse cube Σ w_DD,i C_i at the largest
-    lobe resolution (``shaders/combine.frag.glsl``), so a frame costs three cube lookups per pixel
-    whatever the lobe count; ``combined=False`` looks every lobe up per pixel.
+    With ``combined=True`` (default) the narrow lobes of both paints are pre-summed on the GPU, whenever
+    the weights change, into a gloss atlas Σ w_G,i C_i and a directionally diffuse atlas Σ w_DD,i C_i at
+    the largest lobe resolution (``shaders/combine.frag.glsl``, cube faces with seamless borders), so
+    the narrow lobes cost two lookups per pixel whatever their count and without a branch on the paint;
+    the wide lobes (horizon factors, exact lights, bent lookups) are looked up per lobe, and weight groups
+    that are all zero are compiled out (:meth:`_terms`). ``combined=False`` looks every lobe up per
+    pixel. The lights and exponents are compiled in (the loops unroll), and the ground of a stage is
+    baked into a map once per stage (:meth:`_ground_map`).
 
     ``coat`` (of :meth:`render` / :meth:`render_linear`): a :class:`station.model.gloss.ClearCoat` scales
     the gloss terms per pixel by Schlick's Fresnel (as ``numpy_renderer`` does); None: the thesis's model.
@@ -115,6 +124,7 @@ class GLRenderer:
         self.combined = combined
         self._combined: tuple[bytes, list] | None = None
         self._combine: tuple | None = None  # (framebuffer, program, vertex array) of the atlas pass
+        self._ground: tuple | None = None  # (key, texture, framebuffer) of the baked ground map
         self._half_float = half_float
         self._atlas_face = max(c.shape[1] for c in basis.cubes)
         # Lobes in binding order: the wide ones (horizon table) first, so the shader loops over a prefix.
@@ -145,7 +155,7 @@ class GLRenderer:
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[tuple[str, bool, str, tuple[int, ...]], tuple] = {}
+        self._programs: dict[tuple[str, bool, str, tuple[int, ...], tuple[int, int], int], tuple] = {}
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
@@ -166,21 +176,25 @@ class GLRenderer:
         kind: str = "shape",
         features: tuple[int, ...] = (0, 0, 0),
         terms: tuple[int, int] = (-1, 1),
+        n_occ: int = 0,
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
         *features* = (coat, stage, flakes[, anisotropy]) compiled in (0/1 each); *terms* =
         (bit mask of the wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally
-        diffuse weight is), see :meth:`_terms`."""
-        key = (shape, linear, kind, features, terms)
+        diffuse weight is), see :meth:`_terms`; *n_occ*: the ground's sphere occluders (0 without a
+        stage), compiled in with the light count so the stage's loops unroll."""
+        key = (shape, linear, kind, features, terms, n_occ)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
 
             defines = {
                 "SHAPE": SHAPE_INDEX[shape],
                 "MESH": int(kind == "mesh"),
-                "NO_SHAPE": int(kind == "stage"),
+                "NO_SHAPE": int(kind in ("stage", "ground")),
+                "BAKE_GROUND": int(kind == "ground"),
                 "WIDE_GLOSS_MASK": terms[0],
                 "NARROW_DD": terms[1],
+                "N_OCC": n_occ,
                 "HAS_COAT": features[0],
                 "HAS_STAGE": features[1],
                 "HAS_FLAKES": features[2],
@@ -242,6 +256,7 @@ class GLRenderer:
             self._combine = (fbo, prog, self.ctx.vertex_array(prog, []))
         else:
             atlas = self._combined[1]
+        assert self._combine is not None
         fbo, prog, vao = self._combine
         fbo.use()
         for unit, tex in enumerate(self._lobes):
@@ -307,11 +322,18 @@ class GLRenderer:
             self.last_anisotropy = None
         terms = self._terms(pair)
         if mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats, terms)]
+            occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
+            gx, gy, gz = GROUNDS[scene.shape]
+        else:
+            occluders = mesh.occluders().astype(np.float32)
+            gx, gy, gz = 0.0, mesh.floor_y, 0.0
+        n_occ = len(occluders) if scene.stage is not None else 0
+        if mesh is None:
+            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ)]
         else:
             passes = [
-                self._program("sphere", linear, "stage", (0, feats[1], 0)),
-                self._program("sphere", linear, "mesh", feats, terms),
+                self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ),
+                self._program("sphere", linear, "mesh", feats, terms, n_occ),
             ]
         fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
         fbo.use()
@@ -329,12 +351,6 @@ class GLRenderer:
         backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
         occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
-        if mesh is None:
-            occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
-            gx, gy, gz = GROUNDS[scene.shape]
-        else:
-            occluders = mesh.occluders().astype(np.float32)
-            gx, gy, gz = 0.0, mesh.floor_y, 0.0
         occ[: len(occluders)] = occluders
         uniforms = {
             **scene.view_camera.uniforms(self.width, self.height),
@@ -361,7 +377,6 @@ class GLRenderer:
             "u_ground_c": (float(gx), float(gz)),
             "u_ground_albedo": stage.ground_albedo if stage is not None else 0.0,
             "u_ground_radius": stage.ground_radius if stage is not None else 1.0,
-            "u_n_occ": len(occluders),
             "u_flakes_on": int(self.last_flakes.on),
             "u_flake_sharp": m + 7,
             "u_flake_mean": m + 8,
@@ -383,6 +398,10 @@ class GLRenderer:
             uniforms["u_exposure"] = float(2.0**exposure_ev)
             uniforms["u_curve"] = CURVES.index(curve)
         mw = [self._bound_weights(w) for w in pair]
+        if stage is not None and stage.ground:
+            self._ground_map(uniforms, mw, occ, n_occ, m).use(m + 2)
+            fbo.use()
+            uniforms["u_ground_map"] = m + 2
         for prog, _ in passes:
             self._set_uniforms(prog, uniforms, mw, occ, m)
         if mesh is None:
@@ -398,6 +417,36 @@ class GLRenderer:
         finally:
             self.ctx.disable(self.ctx.DEPTH_TEST)
         return fbo
+
+    def _ground_map(self, uniforms: dict, mw: list, occ: np.ndarray, n_occ: int, m: int):
+        """The ground's radiance per unit albedo over the disc's square (GROUND_MAP² texels, linear), baked
+        by ``ground_radiance`` of shaders/render.frag.glsl when the ground, its occluders or the
+        environment's turn change; the frame then looks it up once per ground pixel (it depends on the
+        ground point only: a Lambertian ground)."""
+        key = (
+            occ[:n_occ].tobytes(),
+            uniforms["u_ground_y"],
+            uniforms["u_ground_c"],
+            uniforms["u_ground_radius"],
+            uniforms["u_rot"],
+        )
+        if self._ground is not None and self._ground[0] == key:
+            return self._ground[1]
+        if self._ground is None:
+            import moderngl
+
+            tex = self.ctx.texture((GROUND_MAP, GROUND_MAP), 4, dtype="f2" if self._half_float else "f4")
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            target = self.ctx.framebuffer(color_attachments=[tex])
+        else:
+            tex, target = self._ground[1], self._ground[2]
+        prog, vao = self._program("sphere", True, "ground", (0, 1, 0), n_occ=n_occ)
+        self._set_uniforms(prog, {**uniforms, "u_size": (float(GROUND_MAP),) * 2}, mw, occ, m)
+        target.use()
+        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+        self._ground = (key, tex, target)
+        return tex
 
     def _anisotropy(self, pair, anisotropy: Anisotropy, samples: int | None) -> tuple[list, dict]:
         """Paints with their gloss moved into the anisotropic lobe, and the lobe's uniforms (class doc)."""
@@ -488,8 +537,6 @@ class GLRenderer:
             n = prog["u_lobes"].array_length
             prog["u_lobes"].value = list(range(n)) if n > 1 else 0
         lights = self._lights
-        if "u_n_lights" in prog:
-            prog["u_n_lights"].value = lights.count if lights is not None else 0
         if lights is not None and lights.count:  # the compiler drops what a program never reads
             for name, values in (("u_light_dir", lights.directions), ("u_light_flux", lights.flux)):
                 if name in prog:
@@ -658,6 +705,10 @@ class GLRenderer:
             for obj in self._combine:
                 obj.release()
             self._combine = None
+        if self._ground is not None:
+            self._ground[2].release()
+            self._ground[1].release()
+            self._ground = None
         self._combined = None
         self._programs.clear()
         self._targets.clear()

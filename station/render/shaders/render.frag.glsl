@@ -44,6 +44,12 @@
 #ifndef NARROW_DD
 #define NARROW_DD 1
 #endif
+#ifndef N_OCC
+#define N_OCC 0
+#endif
+#ifndef BAKE_GROUND
+#define BAKE_GROUND 0
+#endif
 #ifndef PENUMBRA_DEG
 #define PENUMBRA_DEG 1.0
 #endif
@@ -66,7 +72,6 @@ uniform sampler2D u_horizon;
 // LOBE_EXPONENTS: the exponents in bound order; N_LIGHTS: the lights taken out of the wide lobes' maps
 // (both fixed per renderer, compiled in so the loops below unroll with constant indices).
 const float LOBE_E[N_LOBES] = float[N_LOBES](LOBE_EXPONENTS);
-uniform int u_n_lights;                   // = N_LIGHTS (the stage, flakes and anisotropy loops)
 uniform vec3 u_light_dir[MAX_LIGHTS];
 uniform vec3 u_light_flux[MAX_LIGHTS];
 const float PI = 3.14159265358979;
@@ -86,11 +91,13 @@ uniform int u_coat_on;
 uniform float u_coat_f0, u_coat_ref;
 // Stage (station/render/stage.py): lookups at u_rot * d (environment turned about +Y), the backdrop
 // lobe map u_backdrop (exponent u_backdrop_exp, its lights added when u_backdrop_lights), the ground disc
-// at height u_ground_y about u_ground_c with contact shadow from u_n_occ sphere proxies u_occ (xyz, r).
+// at height u_ground_y about u_ground_c with contact shadow from N_OCC sphere proxies u_occ (xyz, r)
+// (N_OCC compiled in: the loops unroll), baked into u_ground_map (ground_radiance).
 uniform mat3 u_rot;
-uniform int u_stage, u_backdrop_on, u_backdrop_lights, u_ground_on, u_n_occ;
+uniform int u_stage, u_backdrop_on, u_backdrop_lights, u_ground_on;
 uniform samplerCube u_backdrop;
 uniform float u_backdrop_exp, u_ground_y, u_ground_albedo, u_ground_radius;
+uniform sampler2D u_ground_map;
 uniform vec2 u_ground_c;
 uniform vec4 u_occ[8];
 // Flakes (station/render/flakes.py): one random flake normal per surface cell; zero-mean sparkle
@@ -124,7 +131,7 @@ vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint) {
     vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb;
     if (u_flake_mean_lights != 0) {
         float e = u_flake_mean_exp;
-        for (int l = 0; l < u_n_lights; ++l)
+        for (int l = 0; l < N_LIGHTS; ++l)
             mean += (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e) * u_light_flux[l];
     }
     return u_flake_tint[paint] * u_flake_reflectance * (glint - mean) / sqrt(count);
@@ -150,6 +157,46 @@ vec3 sh_eval(vec3 n) {
          + u_sh[8] * (0.546274 * (n.x * n.x - n.y * n.y));
 }
 
+// Radiance of the white ground at p, per unit albedo (station.render.stage.ground_radiance): the rest of
+// the sky (the diffuse map at +Y less the extracted lights' direct parts) with the contact shadow of the
+// sphere proxies, plus each light's direct part times its visibility past them. View-independent: baked
+// once per stage into a texture over the disc (BAKE_GROUND), which the frame looks up.
+vec3 ground_radiance(vec3 p) {
+    float occ = 0.0;
+    for (int k = 0; k < N_OCC; ++k) {
+        vec3 v = u_occ[k].xyz - p;
+        float r2 = u_occ[k].w * u_occ[k].w;
+        float d2 = max(dot(v, v), r2);
+        occ += r2 / d2 * clamp(v.y / sqrt(d2), 0.0, 1.0);
+    }
+#if DIFFUSE_SH
+    vec3 sky = sh_eval(vec3(0.0, 1.0, 0.0));
+#else
+    vec3 sky = textureLod(u_diffuse, vec3(0.0, 1.0, 0.0), 0.0).rgb;
+#endif
+    vec3 lit = vec3(0.0);
+    vec3 direct_sum = vec3(0.0);
+    float pw = radians(PENUMBRA_DEG);
+    for (int l = 0; l < N_LIGHTS; ++l) {
+        vec3 ld = transpose(u_rot) * u_light_dir[l];  // the light's world direction
+        if (ld.y <= 0.0) continue;
+        vec3 direct = ld.y * u_light_flux[l] / PI;
+        direct_sum += direct;
+        float vis = 1.0;
+        for (int k = 0; k < N_OCC; ++k) {
+            vec3 v = u_occ[k].xyz - p;
+            float dl = max(length(v), u_occ[k].w * (1.0 + 1e-6));
+            float alpha = asin(clamp(u_occ[k].w / dl, 0.0, 1.0));
+            float beta = acos(clamp(dot(v, ld) / dl, -1.0, 1.0));
+            float xs = clamp((beta - (alpha - pw)) / (2.0 * pw), 0.0, 1.0);
+            vis *= xs * xs * (3.0 - 2.0 * xs);
+        }
+        lit += direct * vis;
+    }
+    vec3 rest = max(sky - direct_sum, vec3(0.0));
+    return rest * (1.0 - clamp(occ, 0.0, 1.0)) + lit;
+}
+
 vec3 stage_background(vec3 o, vec3 d) {
     vec3 bg = u_background;
     if (u_stage == 0) return bg;
@@ -158,7 +205,7 @@ vec3 stage_background(vec3 o, vec3 d) {
         bg = textureLod(u_backdrop, de, 0.0).rgb;
         if (u_backdrop_lights != 0) {
             float e = u_backdrop_exp;
-            for (int l = 0; l < u_n_lights; ++l)
+            for (int l = 0; l < N_LIGHTS; ++l)
                 bg += (e + 1.0) / (2.0 * PI) * pow(max(dot(de, u_light_dir[l]), 0.0), e) * u_light_flux[l];
         }
     }
@@ -166,43 +213,11 @@ vec3 stage_background(vec3 o, vec3 d) {
         float t = (u_ground_y - o.y) / d.y;
         if (t > 0.0) {
             vec3 p = o + t * d;
-            float x = clamp((length(p.xz - u_ground_c) - 0.5 * u_ground_radius) / (0.5 * u_ground_radius), 0.0, 1.0);
+            vec2 q = (p.xz - u_ground_c) / u_ground_radius;  // the disc in [-1, 1]^2
+            float x = clamp((length(q) - 0.5) / 0.5, 0.0, 1.0);
             float w = 1.0 - x * x * (3.0 - 2.0 * x);
-            float occ = 0.0;
-            for (int k = 0; k < u_n_occ; ++k) {
-                vec3 v = u_occ[k].xyz - p;
-                float r2 = u_occ[k].w * u_occ[k].w;
-                float d2 = max(dot(v, v), r2);
-                occ += r2 / d2 * clamp(v.y / sqrt(d2), 0.0, 1.0);
-            }
-#if DIFFUSE_SH
-            vec3 sky = sh_eval(vec3(0.0, 1.0, 0.0));
-#else
-            vec3 sky = textureLod(u_diffuse, vec3(0.0, 1.0, 0.0), 0.0).rgb;
-#endif
-            // Sun shadows (station.render.stage.ground_radiance): each extracted light's direct part times
-            // its visibility past the sphere proxies; the rest of the sky with the contact shadow.
-            vec3 lit = vec3(0.0);
-            vec3 direct_sum = vec3(0.0);
-            float pw = radians(PENUMBRA_DEG);
-            for (int l = 0; l < u_n_lights; ++l) {
-                vec3 ld = transpose(u_rot) * u_light_dir[l];  // the light's world direction
-                if (ld.y <= 0.0) continue;
-                vec3 direct = ld.y * u_light_flux[l] / PI;
-                direct_sum += direct;
-                float vis = 1.0;
-                for (int k = 0; k < u_n_occ; ++k) {
-                    vec3 v = u_occ[k].xyz - p;
-                    float dl = max(length(v), u_occ[k].w * (1.0 + 1e-6));
-                    float alpha = asin(clamp(u_occ[k].w / dl, 0.0, 1.0));
-                    float beta = acos(clamp(dot(v, ld) / dl, -1.0, 1.0));
-                    float xs = clamp((beta - (alpha - pw)) / (2.0 * pw), 0.0, 1.0);
-                    vis *= xs * xs * (3.0 - 2.0 * xs);
-                }
-                lit += direct * vis;
-            }
-            vec3 rest = max(sky - direct_sum, vec3(0.0));
-            bg = mix(bg, u_ground_albedo * (rest * (1.0 - clamp(occ, 0.0, 1.0)) + lit), w);
+            // the ground's radiance before its albedo, baked per stage into u_ground_map (GLRenderer._ground)
+            bg = mix(bg, u_ground_albedo * textureLod(u_ground_map, 0.5 * q + 0.5, 0.0).rgb, w);
         }
     }
     return bg;
@@ -216,6 +231,14 @@ in vec3 v_normal;
 in float v_painted;
 #endif
 
+#if BAKE_GROUND
+// One texel of the ground map: the disc's square [-1, 1]^2 (times the radius, about u_ground_c).
+void main() {
+    vec2 q = 2.0 * gl_FragCoord.xy / u_size - 1.0;
+    f_color = vec4(ground_radiance(vec3(u_ground_c.x + q.x * u_ground_radius, u_ground_y,
+                                        u_ground_c.y + q.y * u_ground_radius)), 1.0);
+}
+#else
 void main() {
     float t;
     vec3 n;
@@ -339,3 +362,4 @@ void main() {
     f_color = vec4(display(rgb), 1.0);
 #endif
 }
+#endif
