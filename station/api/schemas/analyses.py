@@ -5,14 +5,19 @@ from __future__ import annotations
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic.config import JsonDict
 
 from station.api.schemas.common import Polar, StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
+from station.api.schemas.environment import (
+    ENVIRONMENT_CHOICES,
+    UPLOAD_DESCRIPTION,
+    BuiltinEnvironment,
+    EnvironmentTurn,
+    UploadedEnvironment,
+)
 from station.model.domain import JND_CIE76
-from station.render.procedural import NAMES as ENVIRONMENT_NAMES
-from station.render.scene_image import MAX_UPLOAD_BASE64_CHARS, MAX_UPLOAD_BYTES
 
 Method = Literal["cie76", "cie94", "cie2000", "din6175"]
 Hinge = Annotated[
@@ -165,20 +170,11 @@ class GgIndexEnvironmentRequest(BaseModel):
     )
 
     paint: DesignBody
-    environment: str | None = Field(
-        None,
-        description="built-in environment (" + " | ".join(ENVIRONMENT_NAMES) + "); or environment_hdr",
-        json_schema_extra={"enum": list(ENVIRONMENT_NAMES)},
+    environment: BuiltinEnvironment = Field(
+        None, description=f"built-in environment ({ENVIRONMENT_CHOICES}); or environment_hdr"
     )
-    environment_hdr: str | None = Field(
-        None,
-        max_length=MAX_UPLOAD_BASE64_CHARS,
-        description=f"base64 of an equirectangular .hdr/.exr file (at most {MAX_UPLOAD_BYTES} bytes, "
-        "2048 x 1024 pixels)",
-    )
-    rotation_deg: Annotated[
-        StrictFloat, Field(ge=-360.0, le=360.0, description="environment turn about the vertical, degrees")
-    ] = 0.0
+    environment_hdr: UploadedEnvironment = Field(None, description=UPLOAD_DESCRIPTION + ")")
+    rotation_deg: EnvironmentTurn = 0.0
     panel: Literal["up", "front"] = Field(
         "up", description="panel A's orientation: up (bonnet, roof) or front (a door facing +Z)"
     )
@@ -200,13 +196,6 @@ class GgIndexEnvironmentRequest(BaseModel):
         False
     )
     per_geometry: Annotated[StrictBool, Field(description="list β_min for every view")] = False
-
-    @field_validator("environment")
-    @classmethod
-    def _known_environment(cls, v: str | None) -> str | None:
-        if v is not None and v not in ENVIRONMENT_NAMES:
-            raise ValueError("expected " + " | ".join(ENVIRONMENT_NAMES))
-        return v
 
 
 class TrompeRequest(BaseModel):

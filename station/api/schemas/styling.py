@@ -9,9 +9,15 @@ from pydantic.config import JsonDict
 
 from station.api.schemas.common import StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody
+from station.api.schemas.environment import (
+    ENVIRONMENT_CHOICES,
+    UPLOAD_DESCRIPTION,
+    BuiltinEnvironment,
+    EnvironmentTurn,
+    UploadedEnvironment,
+)
 from station.model.flakes import FLAKE_RANGES
-from station.render.procedural import NAMES as ENVIRONMENT_NAMES
-from station.render.scene_image import BUILTIN_MESHES, LOD_MAX_DE, MAX_UPLOAD_BASE64_CHARS, MAX_UPLOAD_BYTES
+from station.render.scene_image import BUILTIN_MESHES, LOD_MAX_DE
 from station.render.shapes import SHAPES
 
 _EXAMPLE: JsonDict = {
@@ -179,17 +185,15 @@ class RenderRequest(BaseModel):
     design: DesignBody | None = None
     scene: Literal["sphere-point", "panel-point"] = "sphere-point"
     size: Annotated[StrictInt, Field(ge=16, le=512, description="square image side, pixels")] = 128
-    environment: str | None = Field(
+    environment: BuiltinEnvironment = Field(
         None,
-        description="built-in environment (" + " | ".join(ENVIRONMENT_NAMES) + "); the render is then "
+        description=f"built-in environment ({ENVIRONMENT_CHOICES}); the render is then "
         "environment-lit instead of the point-light scene",
-        json_schema_extra={"enum": list(ENVIRONMENT_NAMES)},
     )
-    environment_hdr: str | None = Field(
+    environment_hdr: UploadedEnvironment = Field(
         None,
-        max_length=MAX_UPLOAD_BASE64_CHARS,
-        description=f"base64 of an equirectangular .hdr/.exr file (at most {MAX_UPLOAD_BYTES} bytes, "
-        "2048 x 1024 pixels; the service's body cap applies first), instead of a built-in environment",
+        description=UPLOAD_DESCRIPTION
+        + "; the service's body cap applies first), instead of a built-in environment",
     )
     design2: DesignBody | None = Field(
         None, description="environment renders: a second design on the right half"
@@ -201,9 +205,7 @@ class RenderRequest(BaseModel):
     backdrop_blur_deg: Annotated[
         StrictFloat, Field(ge=0.0, le=90.0, description="backdrop blur, degrees")
     ] = 0.0
-    rotation_deg: Annotated[
-        StrictFloat, Field(ge=-360.0, le=360.0, description="environment turn about the vertical, degrees")
-    ] = 0.0
+    rotation_deg: EnvironmentTurn = 0.0
     ground: StrictBool = Field(True, description="ground disc with contact shadow")
     exposure_ev: Annotated[StrictFloat, Field(ge=-10.0, le=10.0, description="exposure, EV")] = 0.0
     coat_index: Annotated[
@@ -235,13 +237,6 @@ class RenderRequest(BaseModel):
             "(X-Lod header); null: the default basis",
         ),
     ] = None
-
-    @field_validator("environment")
-    @classmethod
-    def _known_environment(cls, v: str | None) -> str | None:
-        if v is not None and v not in ENVIRONMENT_NAMES:
-            raise ValueError("expected " + " | ".join(ENVIRONMENT_NAMES))
-        return v
 
     @field_validator("shape")
     @classmethod
