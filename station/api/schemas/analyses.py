@@ -44,6 +44,10 @@ Beta = Annotated[
     ),
 ]
 Lights = Annotated[list[Polar], Field(min_length=1, max_length=16, description="light polar angles, degrees")]
+#: The index search's options shared by the point-lit and the environment-lit index.
+Direction = Literal["+", "-", "either"]
+BetaMax = Annotated[StrictFloat, Field(gt=0.0, le=89.0, description="largest β searched, degrees")]
+IncludeGloss = Annotated[StrictBool, Field(description="add the gloss lobe (excluded in the thesis)")]
 
 _PAINT: JsonDict = {
     "face": [60.0, -4.0, -42.0],
@@ -134,13 +138,9 @@ class GgIndexRequest(BaseModel):
     epsilon: Epsilon = JND_CIE76
     method: Method = "cie76"
     hinge: Hinge = "in-plane"
-    direction: Literal["+", "-", "either"] = "either"
-    beta_max_deg: Annotated[
-        StrictFloat, Field(gt=0.0, le=89.0, description="largest β searched, degrees")
-    ] = 30.0
-    include_gloss: Annotated[StrictBool, Field(description="add the gloss lobe (excluded in the thesis)")] = (
-        False
-    )
+    direction: Direction = "either"
+    beta_max_deg: BetaMax = 30.0
+    include_gloss: IncludeGloss = False
     per_geometry: Annotated[StrictBool, Field(description="list β_min for every geometry")] = False
 
 
@@ -188,13 +188,9 @@ class GgIndexEnvironmentRequest(BaseModel):
     epsilon: Epsilon = JND_CIE76
     method: Literal["cie76", "cie94", "cie2000"] = "cie76"
     hinge: Hinge = "in-plane"
-    direction: Literal["+", "-", "either"] = "either"
-    beta_max_deg: Annotated[
-        StrictFloat, Field(gt=0.0, le=89.0, description="largest β searched, degrees")
-    ] = 30.0
-    include_gloss: Annotated[StrictBool, Field(description="add the gloss lobe (excluded in the thesis)")] = (
-        False
-    )
+    direction: Direction = "either"
+    beta_max_deg: BetaMax = 30.0
+    include_gloss: IncludeGloss = False
     per_geometry: Annotated[StrictBool, Field(description="list β_min for every view")] = False
 
 
