@@ -10,7 +10,8 @@ Run: ``.venv/bin/python -m bench.viewer`` (starts its own Xvfb; Qt on xcb, GL on
   the view's GL window hidden: no OpenGL compositing; the default) and ``gpu`` (per-fragment sum in the
   GL window, swapped to the screen).
   Baseline in the same run: the core's NumPy edit alone (no Qt, no GL), so ratio = overhead of the view.
-* View changes (orbit) at 1024×1024: each ``ViewModel.update(yaw_deg=…)`` → the frame delivered (drawn by
+* View changes (orbit) at 1024×1024, booth, the default view, then the stylist's scene (STYLIST_SCENE: stage,
+  clear coat, flakes): each ``ViewModel.update(yaw_deg=…)`` → the frame delivered (drawn by
   the core's GL renderer on the widget's context at full resolution, straight into the widget's
   framebuffer; the basis worker waits for a still view); fps and whether each frame was full quality.
   Baseline in the same run: the core's ``GLRenderer.render`` alone on an EGL context (a subprocess, no
@@ -47,10 +48,12 @@ BAR_ENV_S = 1.5
 
 CORE_ORBIT = textwrap.dedent("""
     import time, sys
+    from station.model.design_io import default_flakes
     from station.render.gl_renderer import GLRenderer, create_gl_context
     from ui.models.document import DEFAULT_DESIGN
     from ui.models.view import ViewSettings, environment_basis, environment_basis_gl, paint_weights
-    size, n, engine = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
+    size, n, engine, orbit_env = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], sys.argv[4]
+    flags = {k: True for k in sys.argv[5].split(",") if k}
     w = paint_weights(DEFAULT_DESIGN)
     ctx = create_gl_context()
     t0, c0 = time.perf_counter(), time.process_time()
@@ -58,19 +61,23 @@ CORE_ORBIT = textwrap.dedent("""
     with GLRenderer(basis, size, size, ctx=ctx) as gl:
         gl.render(ViewSettings(environment="sky").scene(), [w, w])
         t_env, c_env = time.perf_counter() - t0, time.process_time() - c0
+    flakes = default_flakes(DEFAULT_DESIGN) if flags.get("flakes") else None
+    with GLRenderer(environment_basis_gl(orbit_env, ctx), size, size, ctx=ctx) as gl:
         ts = []
         c1 = 0.0
         for i in range(n + 2):
-            s = ViewSettings(environment="sky", yaw_deg=3.0 * (i + 1)).scene()
+            st = ViewSettings(environment=orbit_env, yaw_deg=3.0 * (i + 1), **flags)
             if i == 2:
                 c1 = time.process_time()
             t = time.perf_counter()
-            gl.render(s, [w, w])
+            gl.render(st.scene(), [w, w], st.exposure_ev, coat=st.clear_coat(), flakes=flakes)
             ts.append(time.perf_counter() - t)
         cpu = (time.process_time() - c1) / n
     ts = sorted(ts[2:])
     print(f"CORE {ts[len(ts) // 2]:.6f} {ts[0]:.6f} {cpu:.6f} {t_env:.4f} {c_env:.4f}", flush=True)
 """)
+#: The stylist's scene: the environment as backdrop over a ground with shadows, clear coat, flakes.
+STYLIST_SCENE = {"stage": True, "coat": True, "flakes": True}
 
 STARTUP = textwrap.dedent("""
     import time
@@ -151,9 +158,12 @@ def measure_edits(mode: str) -> tuple[list[float], list[float], str, float]:
     return total, paint, renderer, cpu
 
 
-def measure_view_changes(cold_dir: str) -> tuple[list[float], float, int, float, float]:
+def measure_view_changes(
+    cold_dir: str | None, scene: dict[str, bool] | None = None
+) -> tuple[list[float], float, int, float, float]:
     """(orbit step → frame delivered latencies (s), process CPU per orbit frame (s), frames at full
-    quality, env change → full quality with the empty prefilter cache *cold_dir* (s), its CPU (s))."""
+    quality, env change → full quality with the empty prefilter cache *cold_dir* (s), its CPU (s); NaN
+    without *cold_dir*). *scene*: view settings switched on before the orbit (e.g. STYLIST_SCENE)."""
     from PySide6.QtCore import QCoreApplication
 
     from ui.models.document import DEFAULT_DESIGN
@@ -162,6 +172,8 @@ def measure_view_changes(cold_dir: str) -> tuple[list[float], float, int, float,
 
     vm = ViewModel()
     vm.show(DEFAULT_DESIGN)
+    if scene:
+        vm.update(**scene)
     view = GLRenderView(vm)
     view.resize(SIZE, SIZE)
     view.show()
@@ -183,6 +195,9 @@ def measure_view_changes(cold_dir: str) -> tuple[list[float], float, int, float,
             full += int(view.full_quality)
     cpu = (time.process_time() - c0) / ORBITS
     view.wait_idle(120000)
+    if cold_dir is None:
+        view.close()
+        return times, cpu, full, float("nan"), float("nan")
     old = os.environ.get("CACAD_CACHE_DIR")
     os.environ["CACAD_CACHE_DIR"] = cold_dir
     try:
@@ -201,14 +216,17 @@ def measure_view_changes(cold_dir: str) -> tuple[list[float], float, int, float,
     return times, cpu, full, env_s, env_cpu
 
 
-def core_orbit(cache_dir: str | None, engine: str = "gl") -> tuple[float, ...]:
-    """(median, best and CPU per core GL frame at SIZE², environment prefilter (*engine*) + first frame
-    wall and CPU) in seconds, in a fresh process."""
+def core_orbit(
+    cache_dir: str | None, engine: str = "gl", scene: dict[str, bool] | None = None
+) -> tuple[float, ...]:
+    """(median, best and CPU per core GL frame at SIZE² over the viewer's orbit (booth, the view's
+    default, with *scene*'s settings), the sky's prefilter (*engine*) + first frame wall and CPU) in
+    seconds, in a fresh process."""
     env = dict(os.environ)
     if cache_dir is not None:
         env["CACAD_CACHE_DIR"] = cache_dir
     out = subprocess.run(
-        [sys.executable, "-c", CORE_ORBIT, str(SIZE), str(ORBITS), engine],
+        [sys.executable, "-c", CORE_ORBIT, str(SIZE), str(ORBITS), engine, "booth", ",".join(scene or {})],
         env=env,
         capture_output=True,
         text=True,
@@ -287,6 +305,9 @@ def orbit_main() -> None:
         with tempfile.TemporaryDirectory() as cold_dir:
             orbit, orbit_cpu, full, env_s, env_cpu = measure_view_changes(cold_dir)
         orbit_med, orbit_best = statistics.median(orbit), min(orbit)
+        st_med, st_best, st_cpu, _, _ = core_orbit(None, scene=STYLIST_SCENE)
+        st_orbit, st_orbit_cpu, st_full, _, _ = measure_view_changes(None, STYLIST_SCENE)
+        st_orbit_med = statistics.median(st_orbit)
         cases += [
             Case(
                 "orbit: view change -> frame on screen, median",
@@ -320,6 +341,22 @@ def orbit_main() -> None:
             Case("  orbit median / core median", "", orbit_med / core_med, "ratio"),
             Case("  orbit best / core best", "", orbit_best / core_best, "ratio"),
             Case("  orbit CPU / core CPU per frame", "", orbit_cpu / core_cpu, "ratio"),
+            Case(
+                "orbit, stylist's scene (stage + clear coat + flakes), median",
+                f"{SIZE}x{SIZE}",
+                st_orbit_med * 1e3,
+                "ms",
+                f"{1.0 / st_orbit_med:.1f} fps (best {1.0 / min(st_orbit):.1f}); {st_full}/{len(st_orbit)} "
+                f"full quality; process CPU {st_orbit_cpu * 1e3:.1f} ms/frame",
+            ),
+            Case(
+                "  core GLRenderer.render alone, same scene, median (baseline)",
+                f"{SIZE}x{SIZE}",
+                st_med * 1e3,
+                "ms",
+                f"best {st_best * 1e3:.1f} ms, CPU {st_cpu * 1e3:.1f} ms/frame",
+            ),
+            Case("  ratio", "", st_orbit_med / st_med, "ratio"),
             Case(
                 "environment change -> full-quality frame, cold cache",
                 f"{SIZE}x{SIZE}",
