@@ -270,7 +270,9 @@ def shade_pixels(
     s = np.ones((n_dot_v.shape[0], 1)) if coat is None else coat.gloss_scale(n_dot_v)[:, None]
     out = w_d * d
     if weights.has_fall_off:
-        out = out + weights.fall_off_map_weight() * fall_off_term(basis, normal, reflect, n_dot_v, diffuse, horizon)
+        out = out + weights.fall_off_map_weight() * fall_off_term(
+            basis, normal, reflect, n_dot_v, diffuse, horizon
+        )
     for i, cube in enumerate(basis.cubes):
         c_r = sample_cube(cube, reflect)
         bent = dd_direction(basis.exponents[i], normal, reflect, horizon)

@@ -403,7 +403,9 @@ class TruthScene:
             raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
         out = weights.k_d[None, :] * self.irradiance()
         if weights.has_fall_off:
-            out = out + weights.k_a[None, :] * self._binned("cos", fall_off_factor(_COS_GRID), points_only=False)
+            out = out + weights.k_a[None, :] * self._binned(
+                "cos", fall_off_factor(_COS_GRID), points_only=False
+            )
         s = self.coat_scale(coat)
         r_dot_n = np.einsum("ij,ij->i", self.reflect, self.normals)
         for i, e in enumerate(weights.exponents):
