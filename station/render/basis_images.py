@@ -5,7 +5,7 @@ For a fixed scene and camera, every object pixel p (paint k) is (numpy_renderer'
     rgb_p = w_D ⊙ D_p + w_A ⊙ A_p + Σ_i (h_i(c_p) w_G,i ⊙ C_i,p + g_i(c_p) w_DD,i ⊙ C_i(B_i,p)),    c_p = N·V,
 
 (B_i = R for narrow lobes, the bent direction of ``numpy_renderer.dd_direction`` for wide ones; A_p the
-aspecular fall-off image ``numpy_renderer.fall_off_term`` with weight w_A = π K_A),
+aspecular fall-off correction ``numpy_renderer.fall_off_term`` with weight w_A = π K_A; w_D = π (K_D + K_A)),
 
 so caching per-pixel images turns a paint edit into a small weighted sum. The images are D (diffuse
 map at N); A (the fall-off term, computed with NumPy also when the other images come from GL); for each wide lobe (horizon table) h_i·C_i and g_i·C_i; for each narrow lobe

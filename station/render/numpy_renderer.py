@@ -45,13 +45,15 @@ map, D = E/π):
     radiance_A = π K_A · max(0, D(N) − g₁(−N·V) D'(B_A) − (1/π) Σ_l (N·l)₊ (a·l)₊ Φ_l),
     B_A = normalize(N − R),   g₁(c) = (2/(3π)) ((π − β) c + sin β),  β = arccos c,
 
-g₁ the horizon factor g of :func:`station.render.lobes.horizon_factors` for E = 1 in closed form (the
+of which π K_A D(N) is in the diffuse term (``LobeWeights.map_weights`` gives w_D = π (K_D + K_A)) and
+:func:`fall_off_term` is the rest, −min(D(N), g₁ D'(B_A) + (1/π) Σ_l …), with weight π K_A. g₁ is
+the horizon factor g of :func:`station.render.lobes.horizon_factors` for E = 1 in closed form (the
 integral of two clamped cosines whose axes are β apart), B_A the product-of-spherical-Gaussians direction
 of two exponent-1 lobes about a and N (equal sharpness, so the bisector), and D' the diffuse map without
 the extracted lights, D(B_A) − (1/π) Σ_l (B_A·l)₊ Φ_l, whose lights are added exactly instead (the sum).
 The true value is ≥ 0 (min(1, 1 + cos α) ≥ 0), hence the clamp. ``"lut-r"`` evaluates the term as
 ``"lut"`` does (so lut against lut-r still measures the bend of the wide lobes' DD lookups alone);
-``"none"`` uses g₁ → (a·N)₊ = 0, i.e. a plain diffuse term π K_A D(N). Against the exact integral
+``"none"`` uses g₁ → (a·N)₊ = 0, i.e. a plain diffuse term π K_A D(N) (the correction is zero). Against the exact integral
 (:meth:`station.render.truth.TruthScene.lobes`) the mean |error| / E(N) over a sphere is 0.3 % (booth),
 0.8 % (sky), 0.7 % (overcast), 0.5 % (sunrise), 3.1 % (studio), 1.1 % (sunset); reading D' at a instead
 of B_A gives 0.7–3.3 %, at normalize(a + 2.133 N) (the wide lobes' bend) 0.5–3.3 %.
@@ -224,7 +226,8 @@ def fall_off_term(
     diffuse: str = "cube",
     horizon: str = "lut",
 ) -> np.ndarray:
-    """Radiance (P, 3) of the aspecular fall-off term per unit map weight π K_A (module docstring).
+    """Fall-off correction (P, 3) per unit map weight π K_A, ≤ 0 (module docstring): with w_D D(N) it
+    gives the term's radiance π K_A max(0, D(N) − A/π).
 
     *normal*, *reflect* (P, 3) unit, *n_dot_v* (P,) = R·N. Units: the diffuse map's (radiance).
     """
@@ -232,9 +235,10 @@ def fall_off_term(
     def d_map(x: np.ndarray) -> np.ndarray:
         return sample_cube(basis.diffuse, x) if diffuse == "cube" else sh_diffuse(basis.sh, x)
 
-    out = np.asarray(d_map(normal), dtype=float)
+    d_n = np.asarray(d_map(normal), dtype=float)
+    out = d_n.copy()
     if horizon == "none":
-        return out
+        return np.zeros_like(d_n)
     anti = -reflect
     look = normal - reflect
     look = look / np.maximum(np.linalg.norm(look, axis=-1, keepdims=True), 1e-12)
@@ -246,7 +250,7 @@ def fall_off_term(
         exact = (np.clip(normal @ l_dirs.T, 0.0, None) * np.clip(anti @ l_dirs.T, 0.0, None)) @ flux
         out = out - exact / np.pi
     out = out - fall_off_g1(-np.asarray(n_dot_v, dtype=float))[:, None] * np.maximum(d_look, 0.0)
-    return np.maximum(out, 0.0)
+    return np.maximum(out, 0.0) - d_n
 
 
 def shade_pixels(
@@ -262,7 +266,7 @@ def shade_pixels(
     """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation).
 
     *coat*: the clear coat's Fresnel factor on the gloss terms (module docstring); None: none. The
-    aspecular fall-off term (K_A > 0) adds π K_A · :func:`fall_off_term`.
+    aspecular fall-off term (K_A > 0) is π K_A D(N) (in w_D) plus π K_A · :func:`fall_off_term`.
     """
     w_d, w_dd, w_g = weights.map_weights()
     d = sample_cube(basis.diffuse, normal) if diffuse == "cube" else sh_diffuse(basis.sh, normal)

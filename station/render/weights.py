@@ -26,8 +26,12 @@ over the sphere, so a constant environment of radiance 1 prefilters to 1) use
     diffuse map   D(N) = (1/π) ∫ L(ω) max(N·ω, 0) dω          → weight π·K_D
     lobe map      C_E(R) = (E+1)/(2π) ∫ L(ω) max(R·ω, 0)^E dω  → weight 2π/(E+1)·K
 
-so that, following eqs 2.5.1–2.5.3, radiance = π K_D D(N) + (R·N) Σ w_DD,i C_i(R) + Σ w_G,i C_i(R);
-the fall-off term's map weight is π K_A (:meth:`LobeWeights.fall_off_map_weight`), on the diffuse map.
+so that, following eqs 2.5.1–2.5.3, radiance = π K_D D(N) + (R·N) Σ w_DD,i C_i(R) + Σ w_G,i C_i(R).
+With the fall-off term the model is rewritten as (L·N)(K_D + K_A) − (L·N) K_A (−R·V)₊: the diffuse map
+weight is w_D = π (K_D + K_A), exact for α ≤ 90°, and the renderers subtract π K_A times the exponent-1
+lobe about −R (:meth:`LobeWeights.fall_off_map_weight`, ``numpy_renderer.fall_off_term``). A renderer
+that knows nothing of K_A and reads :meth:`map_weights` is therefore exact up to α = 90° and too bright
+past it, instead of missing the term altogether.
 (The renderers may equally do this conversion themselves, see ``station.render.numpy_renderer``.)
 """
 
@@ -86,9 +90,12 @@ class LobeWeights:
         return len(self.exponents)
 
     def map_weights(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Return (w_d (3,), w_dd (m,3), w_g (m,)) for normalised prefiltered maps (see module doc)."""
+        """Return (w_d (3,), w_dd (m,3), w_g (m,)) for normalised prefiltered maps (see module doc).
+
+        w_d = π (K_D + K_A): the diffuse map carries the fall-off term's part up to α = 90° (module doc).
+        """
         scale = 2.0 * np.pi / (np.asarray(self.exponents) + 1.0)
-        return np.pi * self.k_d, self.k_dd * scale[:, None], self.k_g * scale
+        return np.pi * (self.k_d + self.k_a), self.k_dd * scale[:, None], self.k_g * scale
 
     @property
     def has_fall_off(self) -> bool:
@@ -96,7 +103,8 @@ class LobeWeights:
         return bool(np.any(self.k_a > 0.0))
 
     def fall_off_map_weight(self) -> np.ndarray:
-        """(3,) weight π·K_A of the fall-off term on the normalised diffuse map (module doc)."""
+        """(3,) weight π·K_A of the fall-off correction (≤ 0 per unit weight, ``numpy_renderer.fall_off_term``)
+        that the renderers add to w_D D(N) (module doc)."""
         return np.pi * self.k_a
 
     def brdf_cos(self, n_dot_l: np.ndarray, r_dot_v: np.ndarray) -> np.ndarray:

@@ -228,7 +228,7 @@ def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tu
     """Per cached image j: (constant weight (K, 3), weight × c (K, 3)) of *paint*.
 
     The layout is ``station.render.basis_images``'s: ``("D", -1)`` diffuse map → w_D; ``("A", -1)`` the
-    aspecular fall-off image → w_A = π K_A (:meth:`LobeWeights.fall_off_map_weight`); ``("Gh", i)``
+    aspecular fall-off correction → w_A = π K_A (w_D includes π K_A) (:meth:`LobeWeights.fall_off_map_weight`); ``("Gh", i)``
     h_i·C_i → w_G,i; ``("Dg", i)`` g_i·C_i → w_DD,i; ``("C", i)`` C_i of a narrow lobe → w_G,i
     constant and w_DD,i times c = N·V (weights from :meth:`LobeWeights.map_weights`).
     """
