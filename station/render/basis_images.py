@@ -175,7 +175,7 @@ class BasisImages:
             self._blas = ThreadpoolController()
         ab_pair, idx_all, code_all, packed = self._work
         scale = np.float32(self._scale)
-        # K is tiny (m + 1): the product is memory-bound, and BLAS threads only add spin-wait jitter.
+        # K is tiny (m + 2 to 2m + 2): the product is memory-bound, and BLAS threads only add spin-wait jitter.
         with self._blas.limit(limits=1, user_api="blas"):
             self._combine(pair, scale, ab_pair, idx_all, code_all, packed)
         frame[self.pixels] = packed
