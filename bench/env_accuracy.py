@@ -9,6 +9,8 @@ the checkout (left out when absent), each box-filtered to 512 × 256.
   (orthographic, 32 × 32 pixels, rim excluded) by the NumPy renderer's per-pixel equation
   (``numpy_renderer.shade_pixels``, GL-prefiltered maps, lights extracted as the renderers do);
 * ground truth: :class:`station.render.truth.TruthScene` integrates the designed BRDF itself;
+* fits with the aspecular fall-off term K_A (``station.render.weights``, the default) and without it
+  (``fall_off=False``, the thesis's eqs 2.3.1–2.3.3: columns "thesis model"), both lut and fit only;
 * methods (``horizon`` of the renderers): ``none`` the thesis's eqs 2.5.1–2.5.3 as printed (no lights
   taken out); ``lut-r`` horizon tables and exact lights with every lookup at R (the method before this
   benchmark, the baseline); ``lut`` the same with the wide lobes' directionally diffuse lookups bent
@@ -191,6 +193,7 @@ def main() -> None:
     counts = sorted(set(LOBE_COUNTS) | {default_m})
     reports = {m: lf.fit_targets(targets, basis_for_count(m)) for m in counts}
     radiance = lf.fit_targets(targets, basis_for_count(default_m), RADIANCE_FIT)
+    thesis = lf.fit_targets(targets, basis_for_count(default_m), fall_off=False)
     normals, views = tr.sphere_pixels(SPHERE)
     cases: list[Case] = []
     results: dict[str, dict[tuple[str, int], np.ndarray]] = {}
@@ -201,7 +204,11 @@ def main() -> None:
         white = float(scene.white()[..., 1].max())
         refs = [linear_srgb_to_lab(scene.truth(b) / white) for b in brdfs]
         results[env.name] = method_errors(env, scene, refs, white, reports, normals, views)
-        for key, rep in (("exact", reports[default_m]), (f"exact-{RADIANCE_FIT}", radiance)):
+        for key, rep in (
+            ("exact", reports[default_m]),
+            (f"exact-{RADIANCE_FIT}", radiance),
+            ("exact-thesis", thesis),
+        ):
             results[env.name][(key, default_m)] = np.stack(
                 [
                     delta_e(ref, linear_srgb_to_lab(scene.lobes(rep.weights(i), "exact") / white), "cie2000")
@@ -209,26 +216,27 @@ def main() -> None:
                 ]
             )
         pb = prefilter_basis(env, basis_for_count(default_m).exponents, engine="auto")
-        results[env.name][(f"lut-{RADIANCE_FIT}", default_m)] = np.stack(
-            [
-                delta_e(
-                    ref,
-                    linear_srgb_to_lab(
-                        nr.shade_pixels(
-                            pb,
-                            radiance.weights(i),
-                            normals,
-                            reflect_of(normals, views),
-                            ndv_of(normals, views),
-                            horizon="lut",
-                        )
-                        / white
-                    ),
-                    "cie2000",
-                )
-                for i, ref in enumerate(refs)
-            ]
-        )
+        for key, rep in ((f"lut-{RADIANCE_FIT}", radiance), ("lut-thesis", thesis)):
+            results[env.name][(key, default_m)] = np.stack(
+                [
+                    delta_e(
+                        ref,
+                        linear_srgb_to_lab(
+                            nr.shade_pixels(
+                                pb,
+                                rep.weights(i),
+                                normals,
+                                reflect_of(normals, views),
+                                ndv_of(normals, views),
+                                horizon="lut",
+                            )
+                            / white
+                        ),
+                        "cie2000",
+                    )
+                    for i, ref in enumerate(refs)
+                ]
+            )
         print(f"{env.name}: {time.perf_counter() - t0:.1f} s", flush=True)
     groups = {"all": tuple(range(len(designs)))} | classes
     for env in envs:
@@ -266,13 +274,21 @@ def main() -> None:
     lines = [
         "| environment | class | "
         + " | ".join(f"{m} mean / p95" for m in METHODS)
-        + f" | fit only mean / p95 | lut, {RADIANCE_FIT} fit | fit only, {RADIANCE_FIT} fit |",
-        "|---|---|" + "---|" * (len(METHODS) + 3),
+        + f" | fit only mean / p95 | lut, {RADIANCE_FIT} fit | fit only, {RADIANCE_FIT} fit"
+        + " | lut, thesis model | fit only, thesis model |",
+        "|---|---|" + "---|" * (len(METHODS) + 5),
     ]
     for env in envs:
         for cls, idx in groups.items():
             cells = []
-            for method in (*METHODS, "exact", f"lut-{RADIANCE_FIT}", f"exact-{RADIANCE_FIT}"):
+            for method in (
+                *METHODS,
+                "exact",
+                f"lut-{RADIANCE_FIT}",
+                f"exact-{RADIANCE_FIT}",
+                "lut-thesis",
+                "exact-thesis",
+            ):
                 e = results[env.name][(method, default_m)][list(idx)]
                 mean, p95 = e.mean(), np.percentile(e, 95)
                 mark = "" if mean <= MEAN_BAR and p95 <= P95_BAR else " ✗"
@@ -284,6 +300,8 @@ def main() -> None:
         "the error the shading method cannot remove. "
         f'*{RADIANCE_FIT} fit*: the same with the radiance-weighted fit of eq 2.4.2 (`method="{RADIANCE_FIT}"`, '
         "the default before the perceptual row weights). "
+        "*thesis model*: the perceptual fit without the aspecular fall-off term K_A (`fall_off=False`, "
+        "eqs 2.3.1–2.3.3 as printed; the default before it). "
         "Error against GL frame time: `docs/render-accuracy-vs-time.png`.\n\n" + "\n".join(lines)
     )
     write_section(

@@ -2,12 +2,13 @@
 
 For a fixed scene and camera, every object pixel p (paint k) is (numpy_renderer's equation)
 
-    rgb_p = w_D ⊙ D_p + Σ_i (h_i(c_p) w_G,i ⊙ C_i,p + g_i(c_p) w_DD,i ⊙ C_i(B_i,p)),    c_p = N·V,
+    rgb_p = w_D ⊙ D_p + w_A ⊙ A_p + Σ_i (h_i(c_p) w_G,i ⊙ C_i,p + g_i(c_p) w_DD,i ⊙ C_i(B_i,p)),    c_p = N·V,
 
-(B_i = R for narrow lobes, the bent direction of ``numpy_renderer.dd_direction`` for wide ones),
+(B_i = R for narrow lobes, the bent direction of ``numpy_renderer.dd_direction`` for wide ones; A_p the
+aspecular fall-off correction ``numpy_renderer.fall_off_term`` with weight w_A = π K_A; w_D = π (K_D + K_A)),
 
 so caching per-pixel images turns a paint edit into a small weighted sum. The images are D (diffuse
-map at N); for each wide lobe (horizon table) h_i·C_i and g_i·C_i; for each narrow lobe
+map at N); A (the fall-off term, computed with NumPy also when the other images come from GL); for each wide lobe (horizon table) h_i·C_i and g_i·C_i; for each narrow lobe
 (g = c, h = 1) C_i alone, its directionally diffuse part weighted by the cached c. Per channel that is
 a (2 × K) · (K × P) matrix product (K images, P object pixels, BLAS), then tone mapping and sRGB encoding
 by a 64 k-entry lookup table, then a scatter into the cached frame (background pre-encoded). The edit runs
@@ -34,6 +35,7 @@ from station.render.numpy_renderer import (
     BACKGROUND,
     check_paints,
     dd_direction,
+    fall_off_term,
     gbuffer,
     horizon_table,
     light_terms,
@@ -65,7 +67,7 @@ class BasisImages:
     split: int  # pixels[:split] carry paint 0, pixels[split:] paint 1
     images: np.ndarray  # (3, K, P) float32: channel, image (see layout), pixel
     n_dot_v: np.ndarray  # (P,) float32
-    # ("D", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image; with a clear coat ("Cg", i) s·C_i (gloss) and
+    # ("D", -1) | ("A", -1) | ("Gh", i) | ("Dg", i) | ("C", i) per image; with a clear coat ("Cg", i) s·C_i (gloss) and
     # ("Cd", i) C_i (directionally diffuse, times c) replace ("C", i), and the Gh images hold s·h_i·C_i.
     layout: tuple[tuple[str, int], ...] = ()
     #: (H·W, 3) linear radiance behind the object when the scene has a stage (backdrop, ground), else None.
@@ -81,12 +83,14 @@ class BasisImages:
         return int(self.images.nbytes + self.n_dot_v.nbytes)
 
     def _weight_rows(self, paint: LobeWeights) -> np.ndarray:
-        """(3, 2, K): per channel, row 0 = constant weights [w_D, w_G], row 1 = weights × c [0, w_DD]."""
+        """(3, 2, K): per channel, row 0 = constant weights [w_D, w_A, w_G], row 1 = weights × c [0, w_DD]."""
         w_d, w_dd, w_g = paint.map_weights()
         rows = np.zeros((3, 2, len(self.layout)), np.float32)
         for j, (kind, i) in enumerate(self.layout):
             if kind == "D":
                 rows[:, 0, j] = w_d
+            elif kind == "A":
+                rows[:, 0, j] = paint.fall_off_map_weight()
             elif kind == "Gh":
                 rows[:, 0, j] = w_g[i]
             elif kind == "Dg":
@@ -171,7 +175,7 @@ class BasisImages:
             self._blas = ThreadpoolController()
         ab_pair, idx_all, code_all, packed = self._work
         scale = np.float32(self._scale)
-        # K is tiny (m + 1): the product is memory-bound, and BLAS threads only add spin-wait jitter.
+        # K is tiny (m + 2 to 2m + 2): the product is memory-bound, and BLAS threads only add spin-wait jitter.
         with self._blas.limit(limits=1, user_api="blas"):
             self._combine(pair, scale, ab_pair, idx_all, code_all, packed)
         frame[self.pixels] = packed
@@ -219,11 +223,11 @@ class BasisImages:
 def image_layout(
     exponents: Sequence[float], horizon: str = "lut", coat: bool = False
 ) -> tuple[tuple[str, int], ...]:
-    """The cached images of a basis: D, then per lobe (Gh, Dg) when wide, (C,) when narrow ((Cg, Cd) with a
-    clear coat, whose per-pixel gloss factor the shared C image cannot carry)."""
+    """The cached images of a basis: D, A (the aspecular fall-off), then per lobe (Gh, Dg) when wide, (C,)
+    when narrow ((Cg, Cd) with a clear coat, whose per-pixel gloss factor the shared C image cannot carry)."""
     table = horizon_table(exponents, horizon)
     c = np.linspace(0.0, 1.0, table.shape[1])
-    layout: list[tuple[str, int]] = [("D", -1)]
+    layout: list[tuple[str, int]] = [("D", -1), ("A", -1)]
     for i, e in enumerate(exponents):
         exact = np.allclose(table[i, :, 0], c) and np.allclose(table[i, :, 1], 1.0)
         if exact and e >= WIDE_EXPONENT:
@@ -264,15 +268,19 @@ def build_basis_images(
         background = np.zeros((width * height, 3), np.float32)
         miss = ~mask
         background[miss] = stage_background(scene, basis, origin, dirs.reshape(-1, 3)[miss])
+    normals = g.normal.reshape(-1, 3)[pixels] @ rot.T  # lookups in the environment's frame
+    refl = g.reflect.reshape(-1, 3)[pixels] @ rot.T
+    fall_off = fall_off_term(basis, normals, refl, ndv.astype(np.float64), horizon=horizon).T
     if gl_renderer is None:
-        normals = g.normal.reshape(-1, 3)[pixels] @ rot.T  # lookups in the environment's frame
-        refl = g.reflect.reshape(-1, 3)[pixels] @ rot.T
         gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
         sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
         lookups: dict[int, np.ndarray] = {}
         for j, (kind, i) in enumerate(layout):
             if kind == "D":
                 images[:, j] = sample_cube(basis.diffuse, normals).T
+                continue
+            if kind == "A":
+                images[:, j] = fall_off
                 continue
             if i not in lookups:
                 lookups[i] = sample_cube(basis.cubes[i], refl).T
@@ -285,6 +293,9 @@ def build_basis_images(
                 images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1]).T
     else:
         for j, (kind, i) in enumerate(layout):
+            if kind == "A":  # the GL renderer has no fall-off term: NumPy's image
+                images[:, j] = fall_off
+                continue
             k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)
             if kind == "D":
                 k_d[:] = 1.0 / np.pi

@@ -78,9 +78,13 @@ class BasisRow:
 
 
 def make_objective(
-    brdfs: Sequence[lf.DesignedBRDF], method: str = "nnls"
+    brdfs: Sequence[lf.DesignedBRDF], method: str = "nnls", fall_off: bool = False
 ) -> Callable[[NDArray[np.float64]], tuple[float, float]]:
-    """Return E ↦ (max, mean) of Error(E, B_i) over *brdfs* (exponents as an array, any order)."""
+    """Return E ↦ (max, mean) of Error(E, B_i) over *brdfs* (exponents as an array, any order).
+
+    *fall_off*: fit the aspecular fall-off weight K_A as well (``lobe_fit``); False (default): the thesis's
+    model of eq 2.3.4, with which the shipped basis table was selected.
+    """
     targets = lf.targets_from_brdfs(brdfs)
     reference = lf.designed_reflectance(brdfs)
     from station.model.colorimetry import linear_srgb_to_lab
@@ -89,7 +93,7 @@ def make_objective(
 
     def errors(exponents: NDArray[np.float64]) -> tuple[float, float]:
         basis = LobeBasis(tuple(np.clip(exponents, *EXPONENT_RANGE)))
-        rep = lf.fit_targets(targets, basis, method)
+        rep = lf.fit_targets(targets, basis, method, fall_off=fall_off)
         err = lf.fit_error_de_lab(ref_lab, rep)
         lf.fit_problem.cache_clear()
         return float(err.max()), float(err.mean())

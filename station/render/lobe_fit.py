@@ -25,10 +25,14 @@ The lobe model (eqs 2.3.1–2.3.3, :mod:`station.render.weights`) splits the sam
 two fixed-matrix problems per design, each over the sample geometries of :mod:`station.render.lobes`
 weighted by √(solid angle):
 
-* colour rows, per RGB channel:   (N·L)[K_D + Σ K_DD,i cos^E_i α] ≈ (N·L) ρ(α)/π   (m + 1 unknowns)
+* colour rows, per RGB channel:   (N·L)[K_D + Σ K_DD,i cos^E_i α + K_A min(1, 1 + cos α)] ≈ (N·L) ρ(α)/π
+                                   (m + 2 unknowns; with ``fall_off=False`` no K_A: m + 1, the thesis)
 * gloss rows, grey:                Σ K_G,i cos^E_i α ≈ ρ_s (n+1)/(2π) cos^n α         (m unknowns)
 
 (``gloss_form="cosine"`` instead folds the gloss into grey K_DD over all rows; kept for comparison.)
+K_A is the aspecular fall-off term of :mod:`station.render.weights` (not in the thesis): the only column
+that is non-zero past α = 90° besides K_D, and there it falls linearly in cos α to zero at 180°, so the fit
+can follow a colour that keeps darkening past 90° (a 180° travel) without lifting K_D (docs/render.md).
 
 Methods (all return weights ≥ 0; compare them with ``python -m bench.lobe_fit``):
 
@@ -299,7 +303,8 @@ class FitProblem:
     basis, geometry, gloss_form
         The lobe basis, the sample geometries and where the gloss lobe goes (GLOSS_FORMS).
     colour
-        Part with columns w·(N·L)·[1, cos^E_i α] (K_D, K_DD,i) over its rows.
+        Part with columns w·(N·L)·[1, cos^E_i α, min(1, 1 + cos α)] (K_D, K_DD,i and, with *fall_off*, K_A)
+        over its rows.
     gloss
         ``thesis`` form only: part with columns w·cos^E_i α (K_G,i) over the gloss rows.
     colour_rows, gloss_rows
@@ -314,6 +319,7 @@ class FitProblem:
     colour_rows: NDArray[np.intp]
     gloss_rows: NDArray[np.intp]
     alpha_index: NDArray[np.intp]  # (rows,) index of each geometry row's α in TARGET_ALPHAS_DEG
+    fall_off: bool = True
 
     def _gloss_values(self, t: Targets, rows: NDArray[np.intp]) -> NDArray[np.float64]:
         """Gloss term of BRDF·cos, ρ_s (n+1)/(2π) cos^n α, at *rows*, shape (d, len(rows))."""
@@ -368,9 +374,20 @@ class FitProblem:
         return (self._gloss_values(t, rows) * g.weight[rows][None, :])[:, :, None]
 
 
+def fall_off_factor(cos_alpha: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The aspecular fall-off min(1, 1 + cos α) = 1 − (−cos α)₊ (dimensionless, in [0, 1]; weights module doc)."""
+    return np.minimum(1.0, 1.0 + np.clip(np.asarray(cos_alpha, dtype=float), -1.0, 1.0))
+
+
 @lru_cache(maxsize=64)
-def fit_problem(basis: LobeBasis, gloss_form: str = "thesis", target: str = "brdf") -> FitProblem:
-    """Build (and cache) the fixed matrices of eq 2.4.2 for *basis* over :func:`sample_geometries`."""
+def fit_problem(
+    basis: LobeBasis, gloss_form: str = "thesis", target: str = "brdf", fall_off: bool = True
+) -> FitProblem:
+    """Build (and cache) the fixed matrices of eq 2.4.2 for *basis* over :func:`sample_geometries`.
+
+    *fall_off*: add the K_A column (the aspecular fall-off term, module docstring); False: the thesis's
+    m + 1 colour columns.
+    """
     if gloss_form not in GLOSS_FORMS:
         raise RenderInputError("gloss_form", " | ".join(GLOSS_FORMS), gloss_form)
     if target not in TARGETS:
@@ -384,11 +401,17 @@ def fit_problem(basis: LobeBasis, gloss_form: str = "thesis", target: str = "brd
     w = g.weight[colour_rows]
     dd_cos = g.n_dot_v[colour_rows] if target == "renderer" else g.n_dot_l[colour_rows]
     lobes_c = basis.lobes(g.cos_alpha[colour_rows]) * (w * dd_cos)[:, None]
-    a_c = np.concatenate([(w * g.n_dot_l[colour_rows])[:, None], lobes_c], axis=1)
+    columns = [(w * g.n_dot_l[colour_rows])[:, None], lobes_c]
+    if fall_off:
+        fade = fall_off_factor(g.cos_alpha[colour_rows])
+        columns.append((w * g.n_dot_l[colour_rows] * fade)[:, None])
+    a_c = np.concatenate(columns, axis=1)
     gloss = None
     if gloss_form == "thesis":
         gloss = _Part.build(g.weight[gloss_rows][:, None] * basis.lobes(g.cos_alpha[gloss_rows]))
-    return FitProblem(basis, g, gloss_form, _Part.build(a_c), gloss, colour_rows, gloss_rows, alpha_index)
+    return FitProblem(
+        basis, g, gloss_form, _Part.build(a_c), gloss, colour_rows, gloss_rows, alpha_index, fall_off
+    )
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -504,7 +527,7 @@ def _solve_perceptual(prob: FitProblem, t: Targets) -> tuple[NDArray[np.float64]
             s = s_c[i, :, c]
             x_c[:, i, c] = nnls(prob.colour.a * s[:, None], b_c[i, :, c] * s, maxiter=50 * k)[0]
     if prob.gloss is None:
-        return x_c, np.zeros((d, k - 1))
+        return x_c, np.zeros((d, prob.basis.size))
     lobe_g = prob._gloss_values(t, rg)  # (d, rows) unweighted gloss term
     grey_g = t.rho[:, prob.alpha_index[rg], :].mean(axis=2) * (g.n_dot_l[rg] / np.pi)[None, :]
     s_g = np.maximum(lobe_g + grey_g, PERCEPTUAL_FLOOR) ** -PERCEPTUAL_POWER
@@ -524,6 +547,8 @@ class FitReport:
     ----------
     k_d, k_dd, k_g
         (d, 3), (d, m, 3), (d, m) weights (sr⁻¹).
+    k_a
+        (d, 3) aspecular fall-off weights K_A (sr⁻¹); None: a fit without the term (zeros).
     method
         Solver used.
     seconds
@@ -540,10 +565,12 @@ class FitReport:
     seconds: float
     fallbacks: int = 0
     target: str = "brdf"
+    k_a: NDArray[np.float64] | None = None
 
     def weights(self, i: int) -> LobeWeights:
         """The LobeWeights of design *i*."""
-        return LobeWeights(self.basis.exponents, self.k_d[i], self.k_dd[i], self.k_g[i])
+        k_a = np.zeros(3) if self.k_a is None else self.k_a[i]
+        return LobeWeights(self.basis.exponents, self.k_d[i], self.k_dd[i], self.k_g[i], k_a)
 
 
 def fit_targets(
@@ -552,12 +579,16 @@ def fit_targets(
     method: str = METHODS[0],
     gloss_form: str = "thesis",
     target: str = "brdf",
+    fall_off: bool = True,
 ) -> FitReport:
-    """Fit a batch of sampled designs to *basis* (default: the shipped one) with *method*."""
+    """Fit a batch of sampled designs to *basis* (default: the shipped one) with *method*.
+
+    *fall_off*: fit the aspecular fall-off weight K_A too (module docstring); False: the thesis's model.
+    """
     if method not in METHODS:
         raise RenderInputError("method", " | ".join(METHODS), method)
     basis = default_basis() if basis is None else basis
-    prob = fit_problem(basis, gloss_form, target)
+    prob = fit_problem(basis, gloss_form, target, fall_off)
     n, m = len(targets), basis.size
     t0 = time.perf_counter()
     fallbacks = 0
@@ -572,7 +603,7 @@ def fit_targets(
         solve = {"kkt": _solve_kkt, "enum": _solve_enum, "nnls": _solve_nnls, "clamped-lsq": _solve_clamped}[
             method
         ]
-        x_c = solve(prob.colour, prob.colour_d(targets)).reshape(m + 1, n, 3)
+        x_c = solve(prob.colour, prob.colour_d(targets)).reshape(prob.colour.a.shape[1], n, 3)
     if method != "perceptual":
         if prob.gloss is None:
             x_g = np.zeros((n, m))
@@ -584,7 +615,9 @@ def fit_targets(
     seconds = time.perf_counter() - t0
     if not (np.all(np.isfinite(x_c)) and np.all(np.isfinite(x_g))):
         raise LobeFitError(f"lobe fit ({method}) produced non-finite weights")
-    return FitReport(basis, x_c[0], x_c[1:].transpose(1, 0, 2), x_g, method, seconds, fallbacks, target)
+    k_a = x_c[m + 1] if fall_off else None
+    k_dd = x_c[1 : m + 1].transpose(1, 0, 2)
+    return FitReport(basis, x_c[0], k_dd, x_g, method, seconds, fallbacks, target, k_a)
 
 
 def fit_designs(
@@ -593,15 +626,16 @@ def fit_designs(
     method: str = METHODS[0],
     gloss_form: str = "thesis",
     target: str = "brdf",
+    fall_off: bool = True,
 ) -> FitReport:
     """Fit every design of a batch (vectorised for ``kkt``, ``enum`` and ``clamped-lsq``)."""
-    return fit_targets(sample_targets(designs), basis, method, gloss_form, target)
+    return fit_targets(sample_targets(designs), basis, method, gloss_form, target, fall_off)
 
 
 def fit_design(
     design: FaceFlopTravelGloss, basis: LobeBasis | None = None, method: str = "default"
 ) -> LobeWeights:
-    """Fit one design's lobe weights K_D, K_DD,i, K_G,i ≥ 0 (eqs 2.4.1–2.4.2).
+    """Fit one design's lobe weights K_D, K_DD,i, K_G,i and the fall-off K_A, all ≥ 0 (eqs 2.4.1–2.4.2).
 
     Parameters
     ----------
@@ -629,6 +663,8 @@ def fitted_reflectance(report: FitReport, geometry: SampleGeometries | None = No
     lobes = report.basis.lobes(g.cos_alpha)  # (rows, m)
     dd = lobes * (g.n_dot_v / np.maximum(g.n_dot_l, 1e-9))[:, None] if report.target == "renderer" else lobes
     colour = report.k_d[:, None, :] + np.einsum("rm,dmc->drc", dd, report.k_dd)
+    if report.k_a is not None:
+        colour = colour + fall_off_factor(g.cos_alpha)[None, :, None] * report.k_a[:, None, :]
     gloss = np.einsum("rm,dm->dr", lobes, report.k_g) / np.maximum(g.n_dot_l, 1e-9)[None, :]
     return np.pi * (colour + gloss[:, :, None])
 

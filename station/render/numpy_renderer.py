@@ -35,6 +35,29 @@ and the diffuse map keep the lights in their maps (exact there already).
 The diffuse map is either the exponent-1 cube (``diffuse="cube"``, default — exact up to resolution)
 or the 9-coefficient SH irradiance (``diffuse="sh"``, thesis §2.5.3; up to ~10 % off beside a sun).
 
+Aspecular fall-off (K_A, :mod:`station.render.weights`; not in the thesis): the term
+(N·L) K_A min(1, 1 + R·V) integrates to K_A (E(N) − A) with A = ∫ L(ω)(N·ω)₊(a·ω)₊ dω, a = −R, the
+directionally diffuse integral of the exponent-1 lobe about −R (the mirror of the view through the tangent
+plane: a·N = −N·V ≤ 0, so the lobe lies mostly below the horizon). With ``horizon="lut"`` it is shaded
+like a wide lobe's directionally diffuse term, from the diffuse map (which is the normalised exponent-1
+map, D = E/π):
+
+    radiance_A = π K_A · max(0, D(N) − g₁(−N·V) D'(B_A) − (1/π) Σ_l (N·l)₊ (a·l)₊ Φ_l),
+    B_A = normalize(N − R),   g₁(c) = (2/(3π)) ((π − β) c + sin β),  β = arccos c,
+
+of which π K_A D(N) is in the diffuse term (``LobeWeights.map_weights`` gives w_D = π (K_D + K_A)) and
+:func:`fall_off_term` is the rest, −min(D(N), g₁ D'(B_A) + (1/π) Σ_l …), with weight π K_A. g₁ is
+the horizon factor g of :func:`station.render.lobes.horizon_factors` for E = 1 in closed form (the
+integral of two clamped cosines whose axes are β apart), B_A the product-of-spherical-Gaussians direction
+of two exponent-1 lobes about a and N (equal sharpness, so the bisector), and D' the diffuse map without
+the extracted lights, D(B_A) − (1/π) Σ_l (B_A·l)₊ Φ_l, whose lights are added exactly instead (the sum).
+The true value is ≥ 0 (min(1, 1 + cos α) ≥ 0), hence the clamp. ``"lut-r"`` evaluates the term as
+``"lut"`` does (so lut against lut-r still measures the bend of the wide lobes' DD lookups alone);
+``"none"`` uses g₁ → (a·N)₊ = 0, i.e. a plain diffuse term π K_A D(N) (the correction is zero). Against the exact integral
+(:meth:`station.render.truth.TruthScene.lobes`) the mean |error| / E(N) over a sphere is 0.3 % (booth),
+0.8 % (sky), 0.7 % (overcast), 0.5 % (sunrise), 3.1 % (studio), 1.1 % (sunset); reading D' at a instead
+of B_A gives 0.7–3.3 %, at normalize(a + 2.133 N) (the wide lobes' bend) 0.5–3.3 %.
+
 Clear coat: with a :class:`station.model.gloss.ClearCoat` every gloss term (w_G,i, lobe maps and
 lights) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°), Schlick's Fresnel of the coat's index
 (thesis §2.5.2, last paragraph); ``coat=None`` is the thesis's model as printed.
@@ -188,6 +211,48 @@ def light_terms(
     return gloss, dd
 
 
+def fall_off_g1(c: np.ndarray) -> np.ndarray:
+    """g₁(c) = ∫ (1/π)(a·ω)₊ (N·ω)₊ dω for unit a, N with a·N = c ∈ [−1, 1] (module docstring), dimensionless."""
+    c = np.clip(np.asarray(c, dtype=float), -1.0, 1.0)
+    beta = np.arccos(c)
+    return 2.0 / (3.0 * np.pi) * ((np.pi - beta) * c + np.sin(beta))
+
+
+def fall_off_term(
+    basis: PrefilteredBasis,
+    normal: np.ndarray,
+    reflect: np.ndarray,
+    n_dot_v: np.ndarray,
+    diffuse: str = "cube",
+    horizon: str = "lut",
+) -> np.ndarray:
+    """Fall-off correction (P, 3) per unit map weight π K_A, ≤ 0 (module docstring): with w_D D(N) it
+    gives the term's radiance π K_A max(0, D(N) − A/π).
+
+    *normal*, *reflect* (P, 3) unit, *n_dot_v* (P,) = R·N. Units: the diffuse map's (radiance).
+    """
+
+    def d_map(x: np.ndarray) -> np.ndarray:
+        return sample_cube(basis.diffuse, x) if diffuse == "cube" else sh_diffuse(basis.sh, x)
+
+    d_n = np.asarray(d_map(normal), dtype=float)
+    out = d_n.copy()
+    if horizon == "none":
+        return np.zeros_like(d_n)
+    anti = -reflect
+    look = normal - reflect
+    look = look / np.maximum(np.linalg.norm(look, axis=-1, keepdims=True), 1e-12)
+    d_look = np.asarray(d_map(look), dtype=float)
+    lights = basis.lights
+    if lights is not None and lights.count:
+        l_dirs, flux = lights.directions, lights.flux
+        d_look = d_look - (np.clip(look @ l_dirs.T, 0.0, None) @ flux) / np.pi
+        exact = (np.clip(normal @ l_dirs.T, 0.0, None) * np.clip(anti @ l_dirs.T, 0.0, None)) @ flux
+        out = out - exact / np.pi
+    out = out - fall_off_g1(-np.asarray(n_dot_v, dtype=float))[:, None] * np.maximum(d_look, 0.0)
+    return np.maximum(out, 0.0) - d_n
+
+
 def shade_pixels(
     basis: PrefilteredBasis,
     weights: LobeWeights,
@@ -200,13 +265,18 @@ def shade_pixels(
 ) -> np.ndarray:
     """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation).
 
-    *coat*: the clear coat's Fresnel factor on the gloss terms (module docstring); None: none.
+    *coat*: the clear coat's Fresnel factor on the gloss terms (module docstring); None: none. The
+    aspecular fall-off term (K_A > 0) is π K_A D(N) (in w_D) plus π K_A · :func:`fall_off_term`.
     """
     w_d, w_dd, w_g = weights.map_weights()
     d = sample_cube(basis.diffuse, normal) if diffuse == "cube" else sh_diffuse(basis.sh, normal)
     g, h = lobe_factors(horizon_table(basis.exponents, horizon), n_dot_v)
     s = np.ones((n_dot_v.shape[0], 1)) if coat is None else coat.gloss_scale(n_dot_v)[:, None]
     out = w_d * d
+    if weights.has_fall_off:
+        out = out + weights.fall_off_map_weight() * fall_off_term(
+            basis, normal, reflect, n_dot_v, diffuse, horizon
+        )
     for i, cube in enumerate(basis.cubes):
         c_r = sample_cube(cube, reflect)
         bent = dd_direction(basis.exponents[i], normal, reflect, horizon)

