@@ -123,7 +123,7 @@ class GLRenderer:
         self._cube_texture = cube_texture
         self.combined = combined
         self._combined: tuple[bytes, list] | None = None
-        self._combine: tuple | None = None  # (framebuffer, program, vertex array) of the atlas pass
+        self._combine: tuple | None = None  # (framebuffer, program, vertex array, [gloss, dd]) of the atlas
         self._ground: tuple | None = None  # (key, texture, framebuffer) of the baked ground map
         self._half_float = half_float
         self._atlas_face = max(c.shape[1] for c in basis.cubes)
@@ -155,7 +155,7 @@ class GLRenderer:
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[tuple[str, bool, str, tuple[int, ...], tuple[int, int], int], tuple] = {}
+        self._programs: dict[tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int], tuple] = {}
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
@@ -175,13 +175,13 @@ class GLRenderer:
         linear: bool,
         kind: str = "shape",
         features: tuple[int, ...] = (0, 0, 0),
-        terms: tuple[int, int] = (-1, 1),
+        terms: tuple[int, int, int] = (-1, 1, 0),
         n_occ: int = 0,
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
         *features* = (coat, stage, flakes[, anisotropy]) compiled in (0/1 each); *terms* =
         (bit mask of the wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally
-        diffuse weight is), see :meth:`_terms`; *n_occ*: the ground's sphere occluders (0 without a
+        diffuse weight is, whether the aspecular fall-off is shaded), see :meth:`_terms`; *n_occ*: the ground's sphere occluders (0 without a
         stage), compiled in with the light count so the stage's loops unroll."""
         key = (shape, linear, kind, features, terms, n_occ)
         if key not in self._programs:
@@ -194,6 +194,7 @@ class GLRenderer:
                 "BAKE_GROUND": int(kind == "ground"),
                 "WIDE_GLOSS_MASK": terms[0],
                 "NARROW_DD": terms[1],
+                "HAS_FALL_OFF": terms[2],
                 "N_OCC": n_occ,
                 "HAS_COAT": features[0],
                 "HAS_STAGE": features[1],
@@ -243,7 +244,8 @@ class GLRenderer:
             return self._combined[1]
         m = len(self._lobes)
         size = self._atlas_face
-        if self._combined is None:
+        combine = self._combine
+        if combine is None:
             import moderngl
 
             dtype = "f2" if self._half_float else "f4"
@@ -251,13 +253,10 @@ class GLRenderer:
             for tex in atlas:
                 tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
                 tex.repeat_x = tex.repeat_y = False
-            fbo = self.ctx.framebuffer(color_attachments=atlas)
             prog = build_program(self.ctx, "fullscreen.vert.glsl", "combine.frag.glsl", {"N_LOBES": m})
-            self._combine = (fbo, prog, self.ctx.vertex_array(prog, []))
-        else:
-            atlas = self._combined[1]
-        assert self._combine is not None
-        fbo, prog, vao = self._combine
+            fbo = self.ctx.framebuffer(color_attachments=atlas)
+            combine = self._combine = (fbo, prog, self.ctx.vertex_array(prog, []), atlas)
+        fbo, prog, vao, atlas = combine
         fbo.use()
         for unit, tex in enumerate(self._lobes):
             tex.use(unit)
@@ -271,14 +270,16 @@ class GLRenderer:
         self._combined = (key, atlas)
         return atlas
 
-    def _terms(self, pair) -> tuple[int, int]:
+    def _terms(self, pair) -> tuple[int, int, int]:
         """Which weight groups of these paints are non-zero: (bit i set when wide lobe i has a gloss
-        weight in either paint, 1 when a narrow lobe has a directionally diffuse weight). A term whose
-        weights are all exactly zero adds nothing, so its lookups are compiled out: a typical effect
-        paint has its gloss in the narrow lobes and its colour travel in the wide ones (3 of 8 lookups).
-        Without the combined maps every lobe is looked up (mask -1)."""
+        weight in either paint, 1 when a narrow lobe has a directionally diffuse weight, 1 when either
+        paint has an aspecular fall-off K_A and the horizon tables are on). A term whose weights are all
+        exactly zero adds nothing, so its lookups are compiled out: a typical effect paint has its gloss
+        in the narrow lobes and its colour travel in the wide ones (3 of 8 lookups). Without the
+        combined maps every lobe is looked up (mask -1)."""
+        fall_off = int(self._horizon != "none" and any(w.has_fall_off for w in pair))
         if not self.combined:
-            return (-1, 1)
+            return (-1, 1, fall_off)
         mw = [self._bound_weights(w) for w in pair]
         wide = self._wide[self._order] != 0
         mask = 0
@@ -286,7 +287,7 @@ class GLRenderer:
             if any(w[2][i] > 0.0 for w in mw):
                 mask |= 1 << int(i)
         narrow_dd = int(any(np.any(w[1][~wide] > 0.0) for w in mw))
-        return (mask, narrow_dd)
+        return (mask, narrow_dd, fall_off)
 
     def _bound_weights(self, w):
         """map_weights() of *w* with the lobes in binding order."""
@@ -398,6 +399,7 @@ class GLRenderer:
             uniforms["u_exposure"] = float(2.0**exposure_ev)
             uniforms["u_curve"] = CURVES.index(curve)
         mw = [self._bound_weights(w) for w in pair]
+        uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
         if stage is not None and stage.ground:
             self._ground_map(uniforms, mw, occ, n_occ, m).use(m + 2)
             fbo.use()
@@ -482,7 +484,7 @@ class GLRenderer:
             choice = choices[ck]
         self.last_anisotropy = choice
         ps = [float(w.map_weights()[2].sum()) for w in pair]
-        pair = [LobeWeights(w.exponents, w.k_d, w.k_dd, np.zeros_like(w.k_g)) for w in pair]
+        pair = [LobeWeights(w.exponents, w.k_d, w.k_dd, np.zeros_like(w.k_g), w.k_a) for w in pair]
         uniforms = {
             "_key": key,
             "u_aniso_samples": int(choice.samples) if lobe.spread > 0 else 1,
@@ -550,6 +552,8 @@ class GLRenderer:
             prog["u_aniso_ps"].write(np.asarray(uniforms["_aniso_ps"], np.float32).tobytes())
         if "u_flake_tint" in prog:
             prog["u_flake_tint"].write(np.array([flake_tint(w[1]) for w in mw], np.float32).tobytes())
+        if "u_wa" in prog:
+            prog["u_wa"].write(np.asarray(uniforms["_wa"], np.float32).tobytes())
         if "u_occ" in prog:
             prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
         if "u_sh" in prog:
@@ -695,14 +699,13 @@ class GLRenderer:
             *self._lobes,
             self._diffuse_tex,
             self._horizon_tex,
-            *(self._combined[1] if self._combined else []),
         ]:
             tex.release()
         for tex, *_ in self._aniso.values():
             tex.release()
         self._aniso.clear()
         if self._combine is not None:
-            for obj in self._combine:
+            for obj in (*self._combine[:3], *self._combine[3]):
                 obj.release()
             self._combine = None
         if self._ground is not None:

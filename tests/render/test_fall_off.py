@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from station.model.colorimetry import linear_srgb_to_lab
+from station.model.difference import delta_e
 from station.render import basis_images, prefilter, procedural, shapes
 from station.render import lobe_fit as lf
 from station.render import numpy_renderer as nr
@@ -174,3 +176,46 @@ def test_basis_images_carry_the_fall_off_image() -> None:
 def test_negative_fall_off_weight_is_rejected() -> None:
     with pytest.raises(ValueError, match="k_a"):
         LobeWeights(EXPS, np.zeros(3), np.zeros((3, 3)), np.zeros(3), np.array([0.1, -0.1, 0.0]))
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("env_name", ["sky", "booth"])
+def test_gl_shades_the_fall_off_as_numpy(gl_ctx, env_name) -> None:
+    """The GL frame of fitted paints with K_A > 0 (travel past 90°) agrees with the NumPy renderer's
+    linear radiance, lights and bent lookup included; without its term GL would be too bright past 90°
+    (the part the diffuse weight carries), so the same check fails with the fall-off compiled out."""
+    from station.render.design_db import design_database
+    from station.render.gl_renderer import GLRenderer
+
+    env = procedural.sunny_sky(128) if env_name == "sky" else procedural.light_booth(128)
+    basis = prefilter.prefilter_basis(env, lf.default_basis().exponents, ctx=gl_ctx)
+    db = {d.name: d for d in design_database()}
+    report = lf.fit_designs([db["extreme-travel-180"], db["silver-bright"]])
+    pair = [report.weights(0), report.weights(1)]
+    assert all(w.has_fall_off for w in pair)
+    scene = shapes.Scene("sphere")
+    size = 64
+    ref = nr.render_linear(scene, basis, pair, size, size)
+    mask = nr.gbuffer(scene, size, size).mask
+
+    class WithoutFallOff(GLRenderer):
+        def _terms(self, paints):
+            return (*super()._terms(paints)[:2], 0)
+
+    with (
+        GLRenderer(basis, size, size, ctx=gl_ctx) as gl,
+        WithoutFallOff(basis, size, size, ctx=gl_ctx) as bare,
+    ):
+        assert gl._terms(pair)[2] == 1
+        got = gl.render_linear(scene, pair)
+        without = bare.render_linear(scene, pair)
+    white = float(ref[mask].max())
+
+    def de(img):  # CIEDE2000 against the NumPy frame, Lab relative to the frame's brightest pixel
+        lab = [linear_srgb_to_lab(np.clip(x[mask], 0.0, None) / white) for x in (img, ref)]
+        return delta_e(lab[0], lab[1], method="cie2000")
+
+    with_term, without_term = de(got), de(without)
+    assert with_term.mean() < 0.02 and np.percentile(with_term, 99) < 0.2
+    assert without_term.mean() > 5 * with_term.mean()
+    assert np.percentile(without_term, 99) > 0.5

@@ -191,21 +191,21 @@ def test_zero_weight_terms_are_compiled_out_exactly(gl_ctx, sky_basis):
 
     class AllTerms(GLRenderer):
         def _terms(self, pair):
-            return (-1, 1)
+            return (-1, 1, 0)
 
     # EXPS = (1, 8, 64, 512): the first three are wide (bound first), 512 is narrow.
     metallic = _weights(
         (0.02, 0.02, 0.03), [[0.2, 0.1, 0.3], [0.5, 0.2, 0.4], [0, 0, 0], [0, 0, 0]], [0, 0, 0, 3.0]
     )
     matte = _weights((0.1, 0.05, 0.02), [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0.3, 0.2, 0.1]], [0, 0.4, 0, 0])
-    cases = {(0, 0): [metallic], (2, 1): [matte], (2, 1, "pair"): [metallic, matte]}
+    cases = {(0, 0, 0): [metallic], (2, 1, 0): [matte], (2, 1, 0, "pair"): [metallic, matte]}
     scene = shapes.Scene("sphere")
     with (
         GLRenderer(sky_basis, 40, 40, ctx=gl_ctx) as fast,
         AllTerms(sky_basis, 40, 40, ctx=gl_ctx) as full,
     ):
         for key, paints in cases.items():
-            assert fast._terms(paints) == key[:2]
+            assert fast._terms(paints) == key[:3]
             got, ref = fast.render_linear(scene, paints), full.render_linear(scene, paints)
             assert ref.max() > 0.05
             np.testing.assert_allclose(got, ref, rtol=1e-5, atol=1e-7)

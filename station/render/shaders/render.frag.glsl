@@ -50,6 +50,9 @@
 #ifndef BAKE_GROUND
 #define BAKE_GROUND 0
 #endif
+#ifndef HAS_FALL_OFF
+#define HAS_FALL_OFF 0
+#endif
 #ifndef PENUMBRA_DEG
 #define PENUMBRA_DEG 1.0
 #endif
@@ -223,6 +226,34 @@ vec3 stage_background(vec3 o, vec3 d) {
     return bg;
 }
 
+#if HAS_FALL_OFF
+// Aspecular fall-off (station.render.weights, numpy_renderer.fall_off_term): u_wd carries pi (K_D + K_A),
+// the term's part up to alpha = 90 deg; this correction per unit map weight pi K_A (<= 0) takes off the part
+// past 90 deg: max(0, D(N) - g1(-N.V) D'(B) - (1/pi) sum_l (N.l)+ (-R.l)+ flux_l) - D(N), with D' the
+// diffuse map without the extracted lights at B = normalize(N - R) and
+// g1(c) = (2/(3 pi))((pi - beta) c + sin beta), beta = acos c. Compiled in when a paint has K_A > 0 and
+// the horizon tables are on (GLRenderer._terms; "none" is the thesis's model without it).
+uniform vec3 u_wa[2];
+vec3 fall_off(vec3 n, vec3 r, float ndv, vec3 d_n) {
+    vec3 a = -r;
+    vec3 b = normalize(n - r);
+#if DIFFUSE_SH
+    vec3 d_b = sh_eval(b);
+#else
+    vec3 d_b = textureLod(u_diffuse, b, 0.0).rgb;
+#endif
+    vec3 f = d_n;
+    for (int l = 0; l < N_LIGHTS; ++l) {
+        d_b -= max(dot(b, u_light_dir[l]), 0.0) / PI * u_light_flux[l];
+        f -= max(dot(n, u_light_dir[l]), 0.0) * max(dot(a, u_light_dir[l]), 0.0) / PI * u_light_flux[l];
+    }
+    float c = -ndv;
+    float beta = acos(clamp(c, -1.0, 1.0));
+    float g1 = 2.0 / (3.0 * PI) * ((PI - beta) * c + sin(beta));
+    return max(f - g1 * max(d_b, vec3(0.0)), vec3(0.0)) - d_n;
+}
+#endif
+
 //#include anisotropy.glsl
 
 #if MESH
@@ -289,9 +320,13 @@ void main() {
         vec3 sparkle = vec3(0.0);
 #endif
 #if DIFFUSE_SH
-        rgb = u_wd[paint] * sh_eval(n);
+        vec3 d_n = sh_eval(n);
 #else
-        rgb = u_wd[paint] * textureLod(u_diffuse, n, 0.0).rgb;
+        vec3 d_n = textureLod(u_diffuse, n, 0.0).rgb;
+#endif
+        rgb = (paint == 0 ? u_wd[0] : u_wd[1]) * d_n;
+#if HAS_FALL_OFF
+        rgb += (paint == 0 ? u_wa[0] : u_wa[1]) * fall_off(n, r, ndv, d_n);
 #endif
 #if COMBINED
         {
