@@ -155,7 +155,9 @@ class GLRenderer:
         self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int], tuple] = {}
+        self._programs: dict[
+            tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int], tuple
+        ] = {}
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
@@ -177,13 +179,15 @@ class GLRenderer:
         features: tuple[int, ...] = (0, 0, 0),
         terms: tuple[int, int, int] = (-1, 1, 0),
         n_occ: int = 0,
+        flake_mean: int = -1,
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
         *features* = (coat, stage, flakes[, anisotropy]) compiled in (0/1 each); *terms* =
         (bit mask of the wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally
         diffuse weight is, whether the aspecular fall-off is shaded), see :meth:`_terms`; *n_occ*: the ground's sphere occluders (0 without a
-        stage), compiled in with the light count so the stage's loops unroll."""
-        key = (shape, linear, kind, features, terms, n_occ)
+        stage), compiled in with the light count so the stage's loops unroll; *flake_mean*: the bound
+        index of the flakes' mean lobe when its lights are added exactly (else -1)."""
+        key = (shape, linear, kind, features, terms, n_occ, flake_mean)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
 
@@ -196,6 +200,7 @@ class GLRenderer:
                 "NARROW_DD": terms[1],
                 "HAS_FALL_OFF": terms[2],
                 "N_OCC": n_occ,
+                "FLAKE_MEAN_LOBE": flake_mean,
                 "HAS_COAT": features[0],
                 "HAS_STAGE": features[1],
                 "HAS_FLAKES": features[2],
@@ -322,6 +327,11 @@ class GLRenderer:
         else:
             self.last_anisotropy = None
         terms = self._terms(pair)
+        flake_mean = -1
+        if flakes is not None and self.last_flakes.on:
+            mean = flake_lobes(self.basis.exponents, flakes)[1]
+            if self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[mean]):
+                flake_mean = int(np.nonzero(self._order == mean)[0][0])
         if mesh is None:
             occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
             gx, gy, gz = GROUNDS[scene.shape]
@@ -330,11 +340,11 @@ class GLRenderer:
             gx, gy, gz = 0.0, mesh.floor_y, 0.0
         n_occ = len(occluders) if scene.stage is not None else 0
         if mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ)]
+            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, flake_mean)]
         else:
             passes = [
                 self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ),
-                self._program("sphere", linear, "mesh", feats, terms, n_occ),
+                self._program("sphere", linear, "mesh", feats, terms, n_occ, flake_mean),
             ]
         fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
         fbo.use()
@@ -387,10 +397,6 @@ class GLRenderer:
             sharp, mean = flake_lobes(self.basis.exponents, flakes)
             self._lobes[int(np.nonzero(self._order == sharp)[0][0])].use(m + 7)
             self._lobes[int(np.nonzero(self._order == mean)[0][0])].use(m + 8)
-            uniforms["u_flake_mean_exp"] = float(self.basis.exponents[mean])
-            uniforms["u_flake_mean_lights"] = int(
-                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[mean])
-            )
         if aniso_uniforms:
             self._aniso[aniso_uniforms.pop("_key")][0].use(m + 9)
             uniforms.update(aniso_uniforms)

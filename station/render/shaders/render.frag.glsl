@@ -53,6 +53,9 @@
 #ifndef HAS_FALL_OFF
 #define HAS_FALL_OFF 0
 #endif
+#ifndef FLAKE_MEAN_LOBE
+#define FLAKE_MEAN_LOBE -1
+#endif
 #ifndef PENUMBRA_DEG
 #define PENUMBRA_DEG 1.0
 #endif
@@ -105,9 +108,9 @@ uniform vec2 u_ground_c;
 uniform vec4 u_occ[8];
 // Flakes (station/render/flakes.py): one random flake normal per surface cell; zero-mean sparkle
 // tint * reflectance * (L_sharp(R_m) - C_E(R)) / sqrt(N).
-uniform int u_flakes_on, u_flake_mean_lights;
+uniform int u_flakes_on;
 uniform samplerCube u_flake_sharp, u_flake_mean;
-uniform float u_flake_size_mm, u_flake_density, u_flake_sigma, u_flake_reflectance, u_unit_mm, u_flake_mean_exp;
+uniform float u_flake_size_mm, u_flake_density, u_flake_sigma, u_flake_reflectance, u_unit_mm;
 uniform vec3 u_flake_tint[2];
 out vec4 f_color;
 
@@ -119,7 +122,7 @@ uvec3 pcg3d(uvec3 v) {
     return v;
 }
 
-vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint) {
+vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint, vec3 mean_lights) {
     // n, ve, r in the environment's frame; p the world position (the cell), dist the eye distance.
     float cell_mm = max(u_flake_size_mm, 2.0 * dist * u_tan_half_fov / u_size.y * u_unit_mm);
     float count = max(1.0, u_flake_density * cell_mm * cell_mm);
@@ -131,12 +134,9 @@ vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint) {
     vec3 m = normalize(n + u_flake_sigma * (g.x * t + g.y * b));
     vec3 rm = 2.0 * dot(m, ve) * m - ve;
     vec3 glint = dot(rm, n) > 0.0 ? textureLod(u_flake_sharp, rm, 0.0).rgb : vec3(0.0);
-    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb;
-    if (u_flake_mean_lights != 0) {
-        float e = u_flake_mean_exp;
-        for (int l = 0; l < N_LIGHTS; ++l)
-            mean += (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e) * u_light_flux[l];
-    }
+    // C_E(R): the mean lobe's map plus, when its lights were taken out of it, their exact part (summed by
+    // the wide lobes' light loop for bound lobe FLAKE_MEAN_LOBE: the same p(l) as there).
+    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb + mean_lights;
     return u_flake_tint[paint] * u_flake_reflectance * (glint - mean) / sqrt(count);
 }
 
@@ -315,9 +315,7 @@ void main() {
         float s = 1.0;
 #endif
 #if HAS_FLAKES
-        vec3 sparkle = flake_sparkle(u_eye + t * d, t, n, u_rot * v, r, paint);
-#else
-        vec3 sparkle = vec3(0.0);
+        vec3 flake_lights = vec3(0.0);  // the flake mean lobe's extracted lights (the light loop below)
 #endif
 #if DIFFUSE_SH
         vec3 d_n = sh_eval(n);
@@ -373,10 +371,18 @@ void main() {
                     vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
                     float p = (LOBE_E[i] + 1.0) / (2.0 * PI) * exp2(LOBE_E[i] * lg);
                     acc += (((WIDE_GLOSS_MASK >> i) & 1) != 0 ? s * wg + nl * wdd : nl * wdd) * p;
+#if HAS_FLAKES
+                    if (i == FLAKE_MEAN_LOBE) flake_lights += p * u_light_flux[l];
+#endif
                 }
             }
             if (nl > 0.0) rgb += acc * u_light_flux[l];
         }
+#endif
+#if HAS_FLAKES
+        vec3 sparkle = flake_sparkle(u_eye + t * d, t, n, u_rot * v, r, paint, flake_lights);
+#else
+        vec3 sparkle = vec3(0.0);
 #endif
 #if HAS_ANISO
 #if HAS_STAGE
