@@ -10,8 +10,8 @@ Run: ``.venv/bin/python -m bench.viewer`` (starts its own Xvfb; Qt on xcb, GL on
   the view's GL window hidden: no OpenGL compositing; the default) and ``gpu`` (per-fragment sum in the
   GL window, swapped to the screen).
   Baseline in the same run: the core's NumPy edit alone (no Qt, no GL), so ratio = overhead of the view.
-* View changes (orbit) at 1024×1024, booth, the default view, then the stylist's scene (STYLIST_SCENE: stage,
-  clear coat, flakes): each ``ViewModel.update(yaw_deg=…)`` → the frame delivered (drawn by
+* View changes (orbit) at 1024×1024, booth, the default view, then the SCENES (the stage; stage, clear coat
+  and flakes): each ``ViewModel.update(yaw_deg=…)`` → the frame delivered (drawn by
   the core's GL renderer on the widget's context at full resolution, straight into the widget's
   framebuffer; the basis worker waits for a still view); fps and whether each frame was full quality.
   Baseline in the same run: the core's ``GLRenderer.render`` alone on an EGL context (a subprocess, no
@@ -76,8 +76,12 @@ CORE_ORBIT = textwrap.dedent("""
     ts = sorted(ts[2:])
     print(f"CORE {ts[len(ts) // 2]:.6f} {ts[0]:.6f} {cpu:.6f} {t_env:.4f} {c_env:.4f}", flush=True)
 """)
-#: The stylist's scene: the environment as backdrop over a ground with shadows, clear coat, flakes.
-STYLIST_SCENE = {"stage": True, "coat": True, "flakes": True}
+#: Scenes orbited after the default view: the environment as backdrop over a ground with shadows, then
+#: the stylist's whole scene (with clear coat and flakes).
+SCENES = {
+    "stage (backdrop + ground)": {"stage": True},
+    "stylist's scene (stage + clear coat + flakes)": {"stage": True, "coat": True, "flakes": True},
+}
 
 STARTUP = textwrap.dedent("""
     import time
@@ -163,7 +167,7 @@ def measure_view_changes(
 ) -> tuple[list[float], float, int, float, float]:
     """(orbit step → frame delivered latencies (s), process CPU per orbit frame (s), frames at full
     quality, env change → full quality with the empty prefilter cache *cold_dir* (s), its CPU (s); NaN
-    without *cold_dir*). *scene*: view settings switched on before the orbit (e.g. STYLIST_SCENE)."""
+    without *cold_dir*). *scene*: view settings switched on before the orbit (one of SCENES)."""
     from PySide6.QtCore import QCoreApplication
 
     from ui.models.document import DEFAULT_DESIGN
@@ -305,9 +309,29 @@ def orbit_main() -> None:
         with tempfile.TemporaryDirectory() as cold_dir:
             orbit, orbit_cpu, full, env_s, env_cpu = measure_view_changes(cold_dir)
         orbit_med, orbit_best = statistics.median(orbit), min(orbit)
-        st_med, st_best, st_cpu, _, _ = core_orbit(None, scene=STYLIST_SCENE)
-        st_orbit, st_orbit_cpu, st_full, _, _ = measure_view_changes(None, STYLIST_SCENE)
-        st_orbit_med = statistics.median(st_orbit)
+        scene_cases: list[Case] = []
+        for label, scene in SCENES.items():
+            st_med, st_best, st_cpu, _, _ = core_orbit(None, scene=scene)
+            st_orbit, st_orbit_cpu, st_full, _, _ = measure_view_changes(None, scene)
+            st_orbit_med = statistics.median(st_orbit)
+            scene_cases += [
+                Case(
+                    f"orbit, {label}, median",
+                    f"{SIZE}x{SIZE}",
+                    st_orbit_med * 1e3,
+                    "ms",
+                    f"{1.0 / st_orbit_med:.1f} fps (best {1.0 / min(st_orbit):.1f}); {st_full}/{len(st_orbit)} "
+                    f"full quality; process CPU {st_orbit_cpu * 1e3:.1f} ms/frame",
+                ),
+                Case(
+                    "  core GLRenderer.render alone, same scene, median (baseline)",
+                    f"{SIZE}x{SIZE}",
+                    st_med * 1e3,
+                    "ms",
+                    f"best {st_best * 1e3:.1f} ms, CPU {st_cpu * 1e3:.1f} ms/frame",
+                ),
+                Case("  ratio", "", st_orbit_med / st_med, "ratio"),
+            ]
         cases += [
             Case(
                 "orbit: view change -> frame on screen, median",
@@ -341,22 +365,7 @@ def orbit_main() -> None:
             Case("  orbit median / core median", "", orbit_med / core_med, "ratio"),
             Case("  orbit best / core best", "", orbit_best / core_best, "ratio"),
             Case("  orbit CPU / core CPU per frame", "", orbit_cpu / core_cpu, "ratio"),
-            Case(
-                "orbit, stylist's scene (stage + clear coat + flakes), median",
-                f"{SIZE}x{SIZE}",
-                st_orbit_med * 1e3,
-                "ms",
-                f"{1.0 / st_orbit_med:.1f} fps (best {1.0 / min(st_orbit):.1f}); {st_full}/{len(st_orbit)} "
-                f"full quality; process CPU {st_orbit_cpu * 1e3:.1f} ms/frame",
-            ),
-            Case(
-                "  core GLRenderer.render alone, same scene, median (baseline)",
-                f"{SIZE}x{SIZE}",
-                st_med * 1e3,
-                "ms",
-                f"best {st_best * 1e3:.1f} ms, CPU {st_cpu * 1e3:.1f} ms/frame",
-            ),
-            Case("  ratio", "", st_orbit_med / st_med, "ratio"),
+            *scene_cases,
             Case(
                 "environment change -> full-quality frame, cold cache",
                 f"{SIZE}x{SIZE}",

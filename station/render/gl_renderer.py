@@ -156,7 +156,7 @@ class GLRenderer:
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
         self._programs: dict[
-            tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int], tuple
+            tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int, int], tuple
         ] = {}
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
@@ -180,14 +180,17 @@ class GLRenderer:
         terms: tuple[int, int, int] = (-1, 1, 0),
         n_occ: int = 0,
         flake_mean: int = -1,
+        curve: int = 0,
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
-        *features* = (coat, stage, flakes[, anisotropy]) compiled in (0/1 each); *terms* =
+        *features* = (coat, stage bits, flakes[, anisotropy]) compiled in (0/1 each; the stage's bits: 1 a
+        stage, 2 its backdrop, 4 its ground, 8 the backdrop lobe's lights); *terms* =
         (bit mask of the wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally
         diffuse weight is, whether the aspecular fall-off is shaded), see :meth:`_terms`; *n_occ*: the ground's sphere occluders (0 without a
         stage), compiled in with the light count so the stage's loops unroll; *flake_mean*: the bound
-        index of the flakes' mean lobe when its lights are added exactly (else -1)."""
-        key = (shape, linear, kind, features, terms, n_occ, flake_mean)
+        index of the flakes' mean lobe when its lights are added exactly (else -1); *curve*: the tone
+        curve's index in CURVES (8-bit output)."""
+        key = (shape, linear, kind, features, terms, n_occ, flake_mean, curve)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
 
@@ -201,8 +204,12 @@ class GLRenderer:
                 "HAS_FALL_OFF": terms[2],
                 "N_OCC": n_occ,
                 "FLAKE_MEAN_LOBE": flake_mean,
+                "CURVE": curve,
                 "HAS_COAT": features[0],
-                "HAS_STAGE": features[1],
+                "HAS_STAGE": int(features[1] != 0),
+                "STAGE_BACKDROP": features[1] >> 1 & 1,
+                "STAGE_GROUND": features[1] >> 2 & 1,
+                "BACKDROP_LIGHTS": features[1] >> 3 & 1,
                 "HAS_FLAKES": features[2],
                 **({"HAS_ANISO": 1} if len(features) > 3 and features[3] else {}),
                 "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
@@ -315,11 +322,20 @@ class GLRenderer:
     ):
         pair = check_paints(self.basis, paints)
         self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
-        feats: tuple[int, ...] = (
-            int(coat is not None),
-            int(scene.stage is not None),
-            int(self.last_flakes.on),
-        )
+        stage = scene.stage
+        backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
+        stage_bits = 0  # bit 0: a stage, 1: its backdrop, 2: its ground, 3: the backdrop lobe's lights
+        if stage is not None:
+            lit_backdrop = (
+                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[backdrop])
+            )
+            stage_bits = (
+                1
+                | int(stage.backdrop) << 1
+                | int(stage.ground) << 2
+                | int(stage.backdrop and lit_backdrop) << 3
+            )
+        feats: tuple[int, ...] = (int(coat is not None), stage_bits, int(self.last_flakes.on))
         aniso_uniforms: dict = {}
         if anisotropy is not None:
             pair, aniso_uniforms = self._anisotropy(pair, anisotropy, anisotropic_samples)
@@ -327,6 +343,9 @@ class GLRenderer:
         else:
             self.last_anisotropy = None
         terms = self._terms(pair)
+        if not linear:
+            check_curve(curve)
+        curve_i = 0 if linear else CURVES.index(curve)
         flake_mean = -1
         if flakes is not None and self.last_flakes.on:
             mean = flake_lobes(self.basis.exponents, flakes)[1]
@@ -340,11 +359,11 @@ class GLRenderer:
             gx, gy, gz = 0.0, mesh.floor_y, 0.0
         n_occ = len(occluders) if scene.stage is not None else 0
         if mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, flake_mean)]
+            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, flake_mean, curve_i)]
         else:
             passes = [
-                self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ),
-                self._program("sphere", linear, "mesh", feats, terms, n_occ, flake_mean),
+                self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
+                self._program("sphere", linear, "mesh", feats, terms, n_occ, flake_mean, curve_i),
             ]
         fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
         fbo.use()
@@ -358,8 +377,6 @@ class GLRenderer:
             tex.use(unit)
         self._diffuse_tex.use(m + 4)
         self._horizon_tex.use(m + 5)
-        stage = scene.stage
-        backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
         occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
         occ[: len(occluders)] = occluders
@@ -370,25 +387,17 @@ class GLRenderer:
             "u_background": (BACKGROUND,) * 3,
             "u_diffuse": m + 4,
             "u_horizon": m + 5,
-            "u_coat_on": int(coat is not None),
             "u_coat_f0": coat.f0 if coat is not None else 0.0,
             "u_coat_ref": coat.reference if coat is not None else 1.0,
             "u_rot": tuple(
                 float(v) for v in lookup_matrix(stage.rotation_deg if stage else 0.0).T.ravel()
             ),  # column-major
-            "u_stage": int(stage is not None),
-            "u_backdrop_on": int(stage is not None and stage.backdrop),
             "u_backdrop": m + 6,
             "u_backdrop_exp": float(self.basis.exponents[backdrop]),
-            "u_backdrop_lights": int(
-                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[backdrop])
-            ),
-            "u_ground_on": int(stage is not None and stage.ground),
             "u_ground_y": float(gy),
             "u_ground_c": (float(gx), float(gz)),
             "u_ground_albedo": stage.ground_albedo if stage is not None else 0.0,
             "u_ground_radius": stage.ground_radius if stage is not None else 1.0,
-            "u_flakes_on": int(self.last_flakes.on),
             "u_flake_sharp": m + 7,
             "u_flake_mean": m + 8,
         }
@@ -401,9 +410,7 @@ class GLRenderer:
             self._aniso[aniso_uniforms.pop("_key")][0].use(m + 9)
             uniforms.update(aniso_uniforms)
         if not linear:
-            check_curve(curve)
             uniforms["u_exposure"] = float(2.0**exposure_ev)
-            uniforms["u_curve"] = CURVES.index(curve)
         mw = [self._bound_weights(w) for w in pair]
         uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
         if stage is not None and stage.ground:

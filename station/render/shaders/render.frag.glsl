@@ -56,6 +56,15 @@
 #ifndef FLAKE_MEAN_LOBE
 #define FLAKE_MEAN_LOBE -1
 #endif
+#ifndef STAGE_BACKDROP
+#define STAGE_BACKDROP 0
+#endif
+#ifndef STAGE_GROUND
+#define STAGE_GROUND 0
+#endif
+#ifndef BACKDROP_LIGHTS
+#define BACKDROP_LIGHTS 0
+#endif
 #ifndef PENUMBRA_DEG
 #define PENUMBRA_DEG 1.0
 #endif
@@ -92,15 +101,14 @@ uniform vec3 u_wdd[2 * N_LOBES];
 uniform float u_wg[2 * N_LOBES];
 uniform vec3 u_background;
 // Clear coat (station.model.gloss.ClearCoat): gloss terms times s = F(N.V)/F(cos 60), Schlick's F with
-// F0 = u_coat_f0; u_coat_on = 0 is the thesis's model (s = 1).
-uniform int u_coat_on;
+// F0 = u_coat_f0, compiled in (HAS_COAT) only for a frame with a coat; without it s = 1, the thesis's model.
 uniform float u_coat_f0, u_coat_ref;
 // Stage (station/render/stage.py): lookups at u_rot * d (environment turned about +Y), the backdrop
-// lobe map u_backdrop (exponent u_backdrop_exp, its lights added when u_backdrop_lights), the ground disc
+// lobe map u_backdrop (exponent u_backdrop_exp, its lights added when BACKDROP_LIGHTS), the ground disc
 // at height u_ground_y about u_ground_c with contact shadow from N_OCC sphere proxies u_occ (xyz, r)
 // (N_OCC compiled in: the loops unroll), baked into u_ground_map (ground_radiance).
 uniform mat3 u_rot;
-uniform int u_stage, u_backdrop_on, u_backdrop_lights, u_ground_on;
+// STAGE_BACKDROP, STAGE_GROUND, BACKDROP_LIGHTS (0/1): compiled in per stage (the frame's stage options).
 uniform samplerCube u_backdrop;
 uniform float u_backdrop_exp, u_ground_y, u_ground_albedo, u_ground_radius;
 uniform sampler2D u_ground_map;
@@ -108,7 +116,6 @@ uniform vec2 u_ground_c;
 uniform vec4 u_occ[8];
 // Flakes (station/render/flakes.py): one random flake normal per surface cell; zero-mean sparkle
 // tint * reflectance * (L_sharp(R_m) - C_E(R)) / sqrt(N).
-uniform int u_flakes_on;
 uniform samplerCube u_flake_sharp, u_flake_mean;
 uniform float u_flake_size_mm, u_flake_density, u_flake_sigma, u_flake_reflectance, u_unit_mm;
 uniform vec3 u_flake_tint[2];
@@ -137,11 +144,10 @@ vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint, vec3 
     // C_E(R): the mean lobe's map plus, when its lights were taken out of it, their exact part (summed by
     // the wide lobes' light loop for bound lobe FLAKE_MEAN_LOBE: the same p(l) as there).
     vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb + mean_lights;
-    return u_flake_tint[paint] * u_flake_reflectance * (glint - mean) / sqrt(count);
+    return (paint == 0 ? u_flake_tint[0] : u_flake_tint[1]) * u_flake_reflectance * (glint - mean) / sqrt(count);
 }
 
 float coat_scale(float ndv) {
-    if (u_coat_on == 0) return 1.0;
     return (u_coat_f0 + (1.0 - u_coat_f0) * pow(1.0 - ndv, 5.0)) / u_coat_ref;
 }
 
@@ -202,17 +208,17 @@ vec3 ground_radiance(vec3 p) {
 
 vec3 stage_background(vec3 o, vec3 d) {
     vec3 bg = u_background;
-    if (u_stage == 0) return bg;
-    if (u_backdrop_on != 0) {
-        vec3 de = u_rot * d;
-        bg = textureLod(u_backdrop, de, 0.0).rgb;
-        if (u_backdrop_lights != 0) {
-            float e = u_backdrop_exp;
-            for (int l = 0; l < N_LIGHTS; ++l)
-                bg += (e + 1.0) / (2.0 * PI) * pow(max(dot(de, u_light_dir[l]), 0.0), e) * u_light_flux[l];
-        }
-    }
-    if (u_ground_on != 0 && d.y < -1e-9) {
+#if STAGE_BACKDROP
+    vec3 de = u_rot * d;
+    bg = textureLod(u_backdrop, de, 0.0).rgb;
+#if BACKDROP_LIGHTS
+    float e = u_backdrop_exp;
+    for (int l = 0; l < N_LIGHTS; ++l)
+        bg += (e + 1.0) / (2.0 * PI) * pow(max(dot(de, u_light_dir[l]), 0.0), e) * u_light_flux[l];
+#endif
+#endif
+#if STAGE_GROUND
+    if (d.y < -1e-9) {
         float t = (u_ground_y - o.y) / d.y;
         if (t > 0.0) {
             vec3 p = o + t * d;
@@ -223,6 +229,7 @@ vec3 stage_background(vec3 o, vec3 d) {
             bg = mix(bg, u_ground_albedo * textureLod(u_ground_map, 0.5 * q + 0.5, 0.0).rgb, w);
         }
     }
+#endif
     return bg;
 }
 

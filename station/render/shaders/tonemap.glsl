@@ -1,14 +1,19 @@
 // Display transform, the same formulas as station/render/tonemap.py.
-// u_curve: 0 = ACES fit (Narkowicz 2015), 1 = Reinhard x/(1+x), 2 = clip.
+// CURVE (compiled in per frame's curve): 0 = ACES fit (Narkowicz 2015), 1 = Reinhard x/(1+x), 2 = clip.
+#ifndef CURVE
+#define CURVE 0
+#endif
 uniform float u_exposure;  // 2^EV
-uniform int u_curve;
 
 vec3 tone_curve(vec3 x) {
     x = max(x, vec3(0.0));
-    vec3 y;
-    if (u_curve == 0) y = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
-    else if (u_curve == 1) y = x / (1.0 + x);
-    else y = x;
+#if CURVE == 0
+    vec3 y = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
+#elif CURVE == 1
+    vec3 y = x / (1.0 + x);
+#else
+    vec3 y = x;
+#endif
     return clamp(y, 0.0, 1.0);
 }
 
