@@ -140,7 +140,7 @@ vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint, vec3 
     vec3 b = cross(n, t);
     vec3 m = normalize(n + u_flake_sigma * (g.x * t + g.y * b));
     vec3 rm = 2.0 * dot(m, ve) * m - ve;
-    vec3 glint = dot(rm, n) > 0.0 ? textureLod(u_flake_sharp, rm, 0.0).rgb : vec3(0.0);
+    vec3 glint = float(dot(rm, n) > 0.0) * textureLod(u_flake_sharp, rm, 0.0).rgb;  // a select, no branch
     // C_E(R): the mean lobe's map plus, when its lights were taken out of it, their exact part (summed by
     // the wide lobes' light loop for bound lobe FLAKE_MEAN_LOBE: the same p(l) as there).
     vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb + mean_lights;
@@ -148,7 +148,8 @@ vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint, vec3 
 }
 
 float coat_scale(float ndv) {
-    return (u_coat_f0 + (1.0 - u_coat_f0) * pow(1.0 - ndv, 5.0)) / u_coat_ref;
+    float m = 1.0 - ndv, m2 = m * m;  // (1 - N.V)^5 by products (a pow is an exp2 and a log2 here)
+    return (u_coat_f0 + (1.0 - u_coat_f0) * (m2 * m2 * m)) / u_coat_ref;
 }
 
 // (g, h) of bound lobe i at c = R.N: lobes 2k and 2k+1 share row k (.rg, .ba), so with a constant i
