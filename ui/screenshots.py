@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QCoreApplication
+from PySide6.QtCore import QCoreApplication, QEvent
 from PySide6.QtWidgets import QApplication
 
 from ui.demo import demo_photo
@@ -198,6 +198,10 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     finally:
         win.close()
         win.deleteLater()
+        # Delete the window now, while the application lives: a window still queued for deletion when
+        # the caller shuts Qt down (``station viewer screenshots``) crashed the process in teardown.
+        QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+        QApplication.processEvents()
         QCoreApplication.processEvents()
         scratch.cleanup()
     return written

@@ -3,6 +3,12 @@ screenshots command writes one PNG per screen, the CLI refuses bad input."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
 from PIL import Image
 
@@ -51,6 +57,32 @@ def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
     assert "gloss 20 GU" in win.statusBar().currentMessage()
     win.view_panel.view.wait_idle()
     win.close()
+
+
+@pytest.mark.slow
+def test_screenshots_command_exits_cleanly(tmp_path):
+    """``station viewer screenshots`` run as a user runs it, from a folder outside the checkout: every
+    screen written and a clean exit (it used to write them all, then crash in Qt's teardown, exit 139)."""
+    out = tmp_path / "shots"
+    proc = subprocess.run(
+        [
+            str(Path(sys.executable).with_name("station")),
+            "viewer",
+            "screenshots",
+            "--no-scan",
+            "--out",
+            str(out),
+            "--json",
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "QT_QPA_PLATFORM": os.environ.get("QT_QPA_PLATFORM", "xcb")},
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    written = json.loads(proc.stdout)["written"]
+    assert len(written) == 8 and all(Path(p).is_file() for p in written)
 
 
 @pytest.mark.slow
