@@ -173,11 +173,12 @@ class InstrumentsScreen(QWidget):
         self.task.succeeded.connect(done)
         self.task.failed.connect(self._on_failed)
         self.task.cancelled.connect(self._on_cancelled)
-        self.task.succeeded.connect(self._on_task_done)  # after the result handler: the result is shown
-        self.task.failed.connect(self._on_task_done)
-        self.task.cancelled.connect(self._on_task_done)
         self.busy.watch(self.task, label, steps, cancellable=steps > 0)  # a scan stops between steps
         self.task.finished.connect(self._sync_buttons)
+        # Idle only once the thread has ended and the buttons are live again: the result signal comes
+        # first (the result is shown), but until ``finished`` the buttons are still disabled and a new
+        # task would be refused as busy.
+        self.task.finished.connect(self._on_task_done)
         self._sync_buttons(busy=True)
         self.task.start()
 
