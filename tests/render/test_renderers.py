@@ -184,6 +184,23 @@ def test_gl_per_lobe_path_matches_combined_path(gl_ctx, sky_basis):
 
 
 @pytest.mark.gl
+@pytest.mark.parametrize("curve", tonemap.CURVES)
+def test_gl_display_transform_is_numpys_for_every_curve(gl_ctx, sky_basis, curve):
+    """The 8-bit frame (tone curve compiled in per frame) is the NumPy display transform of the linear
+    frame, with the stage's backdrop and ground too, to one 8-bit level."""
+    from station.render.gl_renderer import GLRenderer
+    from station.render.stage import Stage
+
+    with GLRenderer(sky_basis, 40, 40, ctx=gl_ctx) as gl:
+        for stage in (None, Stage()):
+            scene = shapes.Scene("sphere", stage=stage)
+            got = gl.render(scene, _paint_pair(), 0.7, curve).astype(int)
+            ref = tonemap.to_display(gl.render_linear(scene, _paint_pair()), 0.7, curve).astype(int)
+            assert np.abs(got - ref).max() <= 1
+            assert len(np.unique(got.reshape(-1, 3), axis=0)) > 50
+
+
+@pytest.mark.gl
 def test_zero_weight_terms_are_compiled_out_exactly(gl_ctx, sky_basis):
     """A program without the lookups of the all-zero weight groups (wide-lobe gloss, narrow-lobe
     directionally diffuse) renders what the program with every lookup renders, to float rounding."""
