@@ -270,14 +270,17 @@ def build_basis_images(
         background[miss] = stage_background(scene, basis, origin, dirs.reshape(-1, 3)[miss])
     normals = g.normal.reshape(-1, 3)[pixels] @ rot.T  # lookups in the environment's frame
     refl = g.reflect.reshape(-1, 3)[pixels] @ rot.T
-    fall_off = fall_off_term(basis, normals, refl, ndv.astype(np.float64), horizon=horizon).T
+    d_normal = sample_cube(basis.diffuse, normals)
+    fall_off = fall_off_term(
+        basis, normals, refl, ndv.astype(np.float64), horizon=horizon, d_normal=d_normal
+    ).T
     if gl_renderer is None:
         gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
         sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
         lookups: dict[int, np.ndarray] = {}
         for j, (kind, i) in enumerate(layout):
             if kind == "D":
-                images[:, j] = sample_cube(basis.diffuse, normals).T
+                images[:, j] = d_normal.T
                 continue
             if kind == "A":
                 images[:, j] = fall_off
@@ -293,7 +296,7 @@ def build_basis_images(
                 images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1]).T
     else:
         for j, (kind, i) in enumerate(layout):
-            if kind == "A":  # the GL renderer has no fall-off term: NumPy's image
+            if kind == "A":  # one image, made by numpy_renderer.fall_off_term as on the NumPy path
                 images[:, j] = fall_off
                 continue
             k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)

@@ -120,7 +120,6 @@ class GLRenderer:
             tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
             return tex
 
-        self._cube_texture = cube_texture
         self.combined = combined
         self._combined: tuple[bytes, list] | None = None
         self._combine: tuple | None = None  # (framebuffer, program, vertex array, [gloss, dd]) of the atlas
@@ -184,12 +183,12 @@ class GLRenderer:
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
         *features* = (coat, stage bits, flakes[, anisotropy]) compiled in (0/1 each; the stage's bits: 1 a
-        stage, 2 its backdrop, 4 its ground, 8 the backdrop lobe's lights); *terms* =
-        (bit mask of the wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally
-        diffuse weight is, whether the aspecular fall-off is shaded), see :meth:`_terms`; *n_occ*: the ground's sphere occluders (0 without a
-        stage), compiled in with the light count so the stage's loops unroll; *flake_mean*: the bound
-        index of the flakes' mean lobe when its lights are added exactly (else -1); *curve*: the tone
-        curve's index in CURVES (8-bit output)."""
+        stage, 2 its backdrop, 4 its ground, 8 the backdrop lobe's lights); *terms* = (bit mask of the
+        wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally diffuse weight
+        is, whether the aspecular fall-off is shaded), see :meth:`_terms`; *n_occ*: the ground's sphere
+        occluders (0 without a stage), compiled in with the light count so the stage's loops unroll;
+        *flake_mean*: the bound index of the flakes' mean lobe when its lights are added exactly (else
+        -1); *curve*: the tone curve's index in CURVES (8-bit output)."""
         key = (shape, linear, kind, features, terms, n_occ, flake_mean, curve)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
@@ -247,7 +246,7 @@ class GLRenderer:
             self._targets[key] = (tex, self.ctx.framebuffer(color_attachments=[tex], depth_attachment=rb), rb)
         return self._targets[key][:2]
 
-    def _combined_cubes(self, pair) -> list:
+    def _combined_atlas(self, pair) -> list:
         """[gloss, dd] atlas textures of both paints' narrow lobes (shaders/combine.frag.glsl; rebuilt on
         the GPU when the weights change, never read back)."""
         mw = [self._bound_weights(w) for w in pair]
@@ -301,6 +300,11 @@ class GLRenderer:
         narrow_dd = int(any(np.any(w[1][~wide] > 0.0) for w in mw))
         return (mask, narrow_dd, fall_off)
 
+    def _lights_taken_out(self, lobe: int) -> bool:
+        """Whether the extracted lights were taken out of basis lobe *lobe*'s map (so a lookup of it adds
+        them back exactly)."""
+        return self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[lobe])
+
     def _bound_weights(self, w):
         """map_weights() of *w* with the lobes in binding order."""
         w_d, w_dd, w_g = w.map_weights()
@@ -326,14 +330,11 @@ class GLRenderer:
         backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         stage_bits = 0  # bit 0: a stage, 1: its backdrop, 2: its ground, 3: the backdrop lobe's lights
         if stage is not None:
-            lit_backdrop = (
-                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[backdrop])
-            )
             stage_bits = (
                 1
                 | int(stage.backdrop) << 1
                 | int(stage.ground) << 2
-                | int(stage.backdrop and lit_backdrop) << 3
+                | int(stage.backdrop and self._lights_taken_out(backdrop)) << 3
             )
         feats: tuple[int, ...] = (int(coat is not None), stage_bits, int(self.last_flakes.on))
         aniso_uniforms: dict = {}
@@ -347,17 +348,18 @@ class GLRenderer:
             check_curve(curve)
         curve_i = 0 if linear else CURVES.index(curve)
         flake_mean = -1
+        flake_maps = None  # (sharp, mean) basis lobes of the sparkle
         if flakes is not None and self.last_flakes.on:
-            mean = flake_lobes(self.basis.exponents, flakes)[1]
-            if self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[mean]):
-                flake_mean = int(np.nonzero(self._order == mean)[0][0])
+            flake_maps = flake_lobes(self.basis.exponents, flakes)
+            if self._lights_taken_out(flake_maps[1]):
+                flake_mean = int(np.nonzero(self._order == flake_maps[1])[0][0])
         if mesh is None:
             occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
             gx, gy, gz = GROUNDS[scene.shape]
         else:
             occluders = mesh.occluders().astype(np.float32)
             gx, gy, gz = 0.0, mesh.floor_y, 0.0
-        n_occ = len(occluders) if scene.stage is not None else 0
+        n_occ = len(occluders) if stage is not None else 0
         if mesh is None:
             passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, flake_mean, curve_i)]
         else:
@@ -369,7 +371,7 @@ class GLRenderer:
         fbo.use()
         m = len(self._lobes)
         if self.combined:
-            cubes = self._combined_cubes(pair)
+            cubes = self._combined_atlas(pair)
             fbo.use()
             for unit, tex in enumerate(cubes):
                 tex.use(m + unit)
@@ -401,9 +403,9 @@ class GLRenderer:
             "u_flake_sharp": m + 7,
             "u_flake_mean": m + 8,
         }
-        if flakes is not None and self.last_flakes.on:
+        if flakes is not None and flake_maps is not None:
             uniforms.update(flake_uniforms(flakes))
-            sharp, mean = flake_lobes(self.basis.exponents, flakes)
+            sharp, mean = flake_maps
             self._lobes[int(np.nonzero(self._order == sharp)[0][0])].use(m + 7)
             self._lobes[int(np.nonzero(self._order == mean)[0][0])].use(m + 8)
         if aniso_uniforms:

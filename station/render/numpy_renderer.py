@@ -218,6 +218,12 @@ def fall_off_g1(c: np.ndarray) -> np.ndarray:
     return 2.0 / (3.0 * np.pi) * ((np.pi - beta) * c + np.sin(beta))
 
 
+def diffuse_lookup(basis: PrefilteredBasis, directions: np.ndarray, diffuse: str = "cube") -> np.ndarray:
+    """The normalised diffuse map D (..., 3) at unit *directions* (..., 3): the exponent-1 cube
+    (``diffuse="cube"``) or the 9-coefficient SH irradiance (``"sh"``), module docstring."""
+    return sample_cube(basis.diffuse, directions) if diffuse == "cube" else sh_diffuse(basis.sh, directions)
+
+
 def fall_off_term(
     basis: PrefilteredBasis,
     normal: np.ndarray,
@@ -225,24 +231,22 @@ def fall_off_term(
     n_dot_v: np.ndarray,
     diffuse: str = "cube",
     horizon: str = "lut",
+    d_normal: np.ndarray | None = None,
 ) -> np.ndarray:
     """Fall-off correction (P, 3) per unit map weight π K_A, ≤ 0 (module docstring): with w_D D(N) it
     gives the term's radiance π K_A max(0, D(N) − A/π).
 
-    *normal*, *reflect* (P, 3) unit, *n_dot_v* (P,) = R·N. Units: the diffuse map's (radiance).
+    *normal*, *reflect* (P, 3) unit, *n_dot_v* (P,) = R·N; *d_normal*: D(N) when the caller has it
+    already. Units: the diffuse map's (radiance).
     """
-
-    def d_map(x: np.ndarray) -> np.ndarray:
-        return sample_cube(basis.diffuse, x) if diffuse == "cube" else sh_diffuse(basis.sh, x)
-
-    d_n = np.asarray(d_map(normal), dtype=float)
-    out = d_n.copy()
     if horizon == "none":
-        return np.zeros_like(d_n)
+        return np.zeros((np.asarray(normal).shape[0], 3))
+    d_n = np.asarray(diffuse_lookup(basis, normal, diffuse) if d_normal is None else d_normal, dtype=float)
+    out = d_n.copy()
     anti = -reflect
     look = normal - reflect
     look = look / np.maximum(np.linalg.norm(look, axis=-1, keepdims=True), 1e-12)
-    d_look = np.asarray(d_map(look), dtype=float)
+    d_look = np.asarray(diffuse_lookup(basis, look, diffuse), dtype=float)
     lights = basis.lights
     if lights is not None and lights.count:
         l_dirs, flux = lights.directions, lights.flux
@@ -269,13 +273,13 @@ def shade_pixels(
     aspecular fall-off term (K_A > 0) is π K_A D(N) (in w_D) plus π K_A · :func:`fall_off_term`.
     """
     w_d, w_dd, w_g = weights.map_weights()
-    d = sample_cube(basis.diffuse, normal) if diffuse == "cube" else sh_diffuse(basis.sh, normal)
+    d = diffuse_lookup(basis, normal, diffuse)
     g, h = lobe_factors(horizon_table(basis.exponents, horizon), n_dot_v)
     s = np.ones((n_dot_v.shape[0], 1)) if coat is None else coat.gloss_scale(n_dot_v)[:, None]
     out = w_d * d
     if weights.has_fall_off:
         out = out + weights.fall_off_map_weight() * fall_off_term(
-            basis, normal, reflect, n_dot_v, diffuse, horizon
+            basis, normal, reflect, n_dot_v, diffuse, horizon, d_normal=d
         )
     for i, cube in enumerate(basis.cubes):
         c_r = sample_cube(cube, reflect)
@@ -319,7 +323,7 @@ def stage_background(
         pts = origin + np.where(hit, t, 0.0)[:, None] * d
         w = ground_fade(np.hypot(pts[:, 0] - cx, pts[:, 2] - cz), stage.ground_radius) * hit
         up = np.array([[0.0, 1.0, 0.0]])
-        sky = sample_cube(basis.diffuse, up)[0] if diffuse == "cube" else sh_diffuse(basis.sh, up)[0]
+        sky = diffuse_lookup(basis, up, diffuse)[0]
         lights = basis.lights
         ground = ground_radiance(
             pts,

@@ -226,7 +226,7 @@ vec3 stage_background(vec3 o, vec3 d) {
             vec2 q = (p.xz - u_ground_c) / u_ground_radius;  // the disc in [-1, 1]^2
             float x = clamp((length(q) - 0.5) / 0.5, 0.0, 1.0);
             float w = 1.0 - x * x * (3.0 - 2.0 * x);
-            // the ground's radiance before its albedo, baked per stage into u_ground_map (GLRenderer._ground)
+            // the ground's radiance before its albedo, baked per stage into u_ground_map (GLRenderer._ground_map)
             bg = mix(bg, u_ground_albedo * textureLod(u_ground_map, 0.5 * q + 0.5, 0.0).rgb, w);
         }
     }
