@@ -1,8 +1,17 @@
 """Engines and sessions for the embedded SQLite file or a shared PostgreSQL server.
 
 SQLite runs in WAL mode with ``synchronous=FULL`` (a committed reading survives power loss), with
-foreign keys enforced, a busy timeout, and ``BEGIN IMMEDIATE`` transactions so concurrent writers
-queue on the lock instead of failing on a stale snapshot. PostgreSQL URLs use psycopg 3.
+foreign keys enforced and a busy timeout. A transaction that may write begins ``BEGIN IMMEDIATE``, so
+concurrent writers queue on the lock instead of failing on a stale snapshot; that is the default for
+every session and connection. Code that only reads uses :func:`reading` (or
+``make_sessionmaker(engine, read_only=True)``): its transactions begin deferred (``BEGIN``), which in
+WAL mode never wait for a writer and never make one wait, and run with ``PRAGMA query_only`` so a
+write slipped into a read path fails loudly ("attempt to write a readonly database") instead of
+racing the writers. On PostgreSQL the same read path runs ``READ ONLY`` transactions.
+
+The database file itself is only ever opened by SQLite (see :mod:`db.files`): a missing file is
+created private without a descriptor left to close, an existing one is not touched, and a path that
+is not a regular file is refused. PostgreSQL URLs use psycopg 3.
 """
 
 from __future__ import annotations
@@ -18,12 +27,14 @@ from sqlalchemy.engine import make_url
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
-from db.files import private_dir, private_sqlite
+from db.files import check_regular, private_dir, private_sqlite
 from station.errors import InputError
 
 DEFAULT_DB_FILE = "station.sqlite3"
 SQLITE_BUSY_TIMEOUT_MS = 2_000  # a locked database counts as away after 2 s (the reading goes to the outbox)
 PG_CONNECT_TIMEOUT_S = 5
+READ_ONLY_OPTION = "cacad_read_only"  # execution option: this connection's transactions only read
+_QUERY_ONLY_INFO = "cacad_query_only"  # per SQLite connection: whether PRAGMA query_only is on now
 
 
 def data_dir() -> Path:
@@ -62,10 +73,16 @@ def make_engine(
 ) -> Engine:
     """Create an engine for *url* with the workstation's durability settings.
 
-    For SQLite the parent folder is created (0700) and the database file is private (0600, with its
-    journals; see :mod:`db.files`). ``foreign_keys=False`` is only for batch migrations,
+    For SQLite a missing parent folder is created (0700) and a missing database file is created 0600
+    (SQLite gives its journals the same mode); an existing file or folder is left as it is, and a
+    database path that is a symlink, folder, FIFO or device is refused with
+    :class:`db.files.NotRegularFileError` (an :class:`InputError` naming ``database``), before anything
+    is opened. ``foreign_keys=False`` is only for batch migrations,
     which recreate tables that others reference. ``busy_timeout_ms`` is how long an SQLite writer
     waits for the lock before the database counts as unreachable.
+
+    Every transaction of the returned engine may write (``BEGIN IMMEDIATE`` on SQLite); derive the
+    read-only face with :func:`reading` once and keep it for the read paths.
     """
     url = normalise_url(url)
     parsed = make_url(url)
@@ -75,10 +92,10 @@ def make_engine(
         connect_args.setdefault("connect_timeout", PG_CONNECT_TIMEOUT_S)  # a dead host fails fast → outbox
         return create_engine(url, connect_args=connect_args, **kwargs)
     if parsed.database and parsed.database != ":memory:" and not parsed.database.startswith("file:"):
-        folder = Path(parsed.database).parent
-        if not folder.exists():
-            private_dir(folder)
-        private_sqlite(parsed.database)
+        file = Path(parsed.database)
+        if not check_regular(file):  # refuse a symlink/FIFO/device/folder before creating its folder
+            private_dir(file.parent)
+        private_sqlite(file)
     connect_args = kwargs.pop("connect_args", {})
     connect_args.setdefault("check_same_thread", False)
     connect_args.setdefault("timeout", busy_timeout_ms / 1000)
@@ -97,11 +114,20 @@ def make_engine(
     # Writers of this engine queue on a lock of their own before BEGIN IMMEDIATE: SQLite's busy handler
     # polls with growing sleeps (up to 100 ms), which under concurrent writers of one process gives long,
     # unfair tails; a lock hands over at once. The wait stays bounded by the same busy timeout.
+    # Readers (READ_ONLY_OPTION) take neither that lock nor SQLite's: a deferred BEGIN under query_only.
     writer = threading.Lock()
     wait_s = busy_timeout_ms / 1000
 
     @event.listens_for(engine, "begin")
     def _on_begin(conn: Any) -> None:
+        read_only = bool(conn.get_execution_options().get(READ_ONLY_OPTION, False))
+        pooled = conn.connection.info  # lives as long as the SQLite connection itself
+        if pooled.get(_QUERY_ONLY_INFO, False) != read_only:
+            conn.exec_driver_sql(f"PRAGMA query_only={'ON' if read_only else 'OFF'}")
+            pooled[_QUERY_ONLY_INFO] = read_only
+        if read_only:
+            conn.exec_driver_sql("BEGIN")
+            return
         if not writer.acquire(timeout=wait_s):
             raise OperationalError(
                 "BEGIN IMMEDIATE",
@@ -124,6 +150,24 @@ def make_engine(
     return engine
 
 
-def make_sessionmaker(engine: Engine) -> sessionmaker[Session]:
-    """A session factory bound to *engine* (objects stay readable after commit)."""
-    return sessionmaker(engine, expire_on_commit=False)
+def reading(engine: Engine) -> Engine:
+    """The read-only face of *engine* (same pool): transactions that never take the write lock.
+
+    SQLite: ``BEGIN`` (deferred) under ``PRAGMA query_only``, without the engine's writer queue; in WAL
+    mode such a reader neither waits for a writer nor delays one, and a write attempted through it
+    fails with "attempt to write a readonly database". PostgreSQL: ``READ ONLY`` transactions. Call it
+    once per engine and keep the result (each call registers the dialect's connection options anew).
+    """
+    options: dict[str, Any] = {READ_ONLY_OPTION: True}
+    if engine.dialect.name == "postgresql":
+        options["postgresql_readonly"] = True
+    return engine.execution_options(**options)
+
+
+def make_sessionmaker(engine: Engine, *, read_only: bool = False) -> sessionmaker[Session]:
+    """A session factory bound to *engine* (objects stay readable after commit).
+
+    ``read_only=True`` binds it to :func:`reading` of *engine*: for code paths that never write (lists,
+    exports, checks), whose transactions then never take or wait for the write lock.
+    """
+    return sessionmaker(reading(engine) if read_only else engine, expire_on_commit=False)

@@ -1,9 +1,13 @@
-"""Outbox and database files are private: folder 0700, files (journals included) 0600, checked with os.stat."""
+"""Outbox and database files are private: folder 0700, files (journals included) 0600, checked with os.stat;
+the database file is only ever opened through SQLite, so processes sharing it lose nothing."""
 
 from __future__ import annotations
 
 import os
+import shutil
 import stat
+import subprocess
+import sys
 from pathlib import Path
 
 from sqlalchemy import text
@@ -11,6 +15,8 @@ from sqlalchemy.pool import NullPool
 
 from db.engine import make_engine
 from station.ingest import Outbox
+from tests.ingest.conftest import REPO
+from tests.user_cli import run_station
 
 
 def _mode(path: Path) -> int:
@@ -27,12 +33,14 @@ def test_outbox_is_private_with_its_journals(tmp_path: Path) -> None:
         assert [_mode(p) for p in (path, *journals)] == [0o600, 0o600, 0o600]
 
 
-def test_an_existing_world_readable_outbox_is_tightened(tmp_path: Path) -> None:
+def test_an_existing_outbox_keeps_its_mode(tmp_path: Path) -> None:
+    """The product creates its files 0600 and never chmods a file that is already there."""
     path = tmp_path / "outbox.sqlite3"
     Outbox(path).close()
-    os.chmod(path, 0o644)
-    Outbox(path).close()
-    assert _mode(path) == 0o600
+    os.chmod(path, 0o640)
+    with Outbox(path) as outbox:
+        outbox.put("c-1", "{}")
+    assert _mode(path) == 0o640
 
 
 def test_a_new_sqlite_database_is_private(tmp_path: Path) -> None:
@@ -44,3 +52,55 @@ def test_a_new_sqlite_database_is_private(tmp_path: Path) -> None:
         assert _mode(path.with_name("station.sqlite3-wal")) == 0o600
     engine.dispose()
     assert _mode(path.parent) == 0o700 and _mode(path) == 0o600
+
+
+def _measurements(url: str) -> list[tuple[int, str]]:
+    engine = make_engine(url, poolclass=NullPool)
+    try:
+        with engine.connect() as conn:
+            rows = conn.execute(text("SELECT id, client_id FROM measurements ORDER BY id")).all()
+    finally:
+        engine.dispose()
+    return [(int(r[0]), str(r[1])) for r in rows]
+
+
+def test_two_processes_sharing_the_database_lose_no_reading(
+    tmp_path: Path, _migrated_sqlite: Path, sim_files: tuple[dict[str, object], dict[str, Path]]
+) -> None:
+    """Found 1: a viewer-like process with open engines, an import from a terminal, the viewer's next scan.
+
+    The holder stores a reading, creates more engines on the same file (the viewer makes three),
+    ``station import FILE --store`` stores from its own process and exits, then the holder stores
+    again. Every reading must be in the file once, under its own id, after both processes are gone.
+    """
+    db = tmp_path / "station.sqlite3"
+    shutil.copyfile(_migrated_sqlite, db)
+    url = f"sqlite:///{db}"
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    env.pop("CACAD_DATABASE_URL", None)
+    holder = subprocess.Popen(
+        [sys.executable, "-m", "tests.db._engine_holder", url, str(tmp_path / "viewer-outbox.sqlite3"), "7"],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO, env=env,
+    )  # fmt: skip
+    try:
+        assert holder.stdout is not None and holder.stdin is not None
+        lines = [holder.stdout.readline().strip(), holder.stdout.readline().strip()]
+        assert lines[0].startswith("stored ") and lines[1] == "ready", (lines, holder.stderr)
+        imported = run_station(
+            tmp_path, "import", str(sim_files[1]["cxf"]), "--store", url,
+            "--outbox", str(tmp_path / "cli-outbox.sqlite3"), "--json",
+        )  # fmt: skip
+        assert imported.returncode == 0, imported.stderr
+        out, err = holder.communicate("go\n", timeout=120)
+        assert holder.returncode == 0, err
+    finally:
+        if holder.poll() is None:
+            holder.kill()
+            holder.wait(timeout=30)
+    stored = [int(line.split()[1]) for line in [lines[0], *out.split("\n")] if line.startswith("stored ")]
+    rows = _measurements(url)
+    imported_rows = [r for r in rows if r[0] not in stored]
+    assert len(stored) == 2 and len(set(stored)) == 2, (stored, rows)
+    assert len(rows) == 2 + len(imported_rows) and imported_rows, rows  # the import is still there
+    assert len({r[1] for r in rows}) == len(rows), rows  # every reading once
+    assert set(stored) <= {r[0] for r in rows}, (stored, rows)
