@@ -17,7 +17,7 @@ from fastapi import FastAPI
 
 from db.engine import make_engine, make_sessionmaker
 from station import __version__
-from station.api.availability import DatabaseState, probe_database
+from station.api.availability import PROBE_BUSY, DatabaseState, probe_database
 from station.api.errors import install_error_handlers
 from station.api.json_guard import StrictJsonBody
 from station.api.middleware import BodySizeLimit, SecurityHeaders
@@ -76,6 +76,7 @@ def _startup(app: FastAPI, settings: Settings) -> None:
     engine = make_engine(url)
     app.state.engine = engine
     app.state.sessions = make_sessionmaker(engine)
+    app.state.read_sessions = make_sessionmaker(engine, read_only=True)  # GET routes, token checks
     if settings.load_demo_library:
         with app.state.sessions() as session:
             try:
@@ -135,12 +136,14 @@ async def _replay_outbox_periodically(app: FastAPI, period_s: float) -> None:
     while True:
         await asyncio.sleep(period_s)
         try:
-            await asyncio.wait_for(asyncio.to_thread(probe_database, app.state.engine), timeout=10.0)
+            answer = await asyncio.wait_for(asyncio.to_thread(probe_database, app.state.engine), timeout=10.0)
         except Exception as exc:
             if not database.away:
                 log.warning("database unreachable (%s); readings go to the outbox", type(exc).__name__)
             database.mark_away(exc)
             continue
+        if database.away and answer == PROBE_BUSY:
+            continue  # readable, but a write just gave up on its lock: drain once the lock is free
         if database.away:
             log.info("database reachable again")
         database.mark_back()

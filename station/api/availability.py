@@ -11,10 +11,13 @@ from __future__ import annotations
 import sqlite3
 import threading
 import time
+from urllib.parse import quote
 
 from sqlalchemy import Engine, text
 
-PROBE_BUSY_TIMEOUT_S = 0.2
+PROBE_BUSY_TIMEOUT_S = 0.2  # how long the probe's read may wait (WAL readers do not wait for writers)
+PROBE_OK = "ok"  # the database answers and its write lock is free
+PROBE_BUSY = "busy"  # the database answers; another connection holds the write lock (writers queue)
 
 
 class DatabaseState:
@@ -78,23 +81,38 @@ class DatabaseState:
             self._reason = ""
 
 
-def probe_database(engine: Engine) -> None:
-    """Raise unless the database takes a write transaction now (SQLite: within 0.2 s; PostgreSQL: ``SELECT 1``).
+def probe_database(engine: Engine) -> str:
+    """``"ok"`` or ``"busy"`` when the database answers a read now; raises when it cannot be opened or read.
 
-    SQLite is probed on its own connection with ``BEGIN IMMEDIATE`` and a short busy timeout, so a
-    competing writer holding the lock makes the probe fail fast instead of waiting the engine's
-    busy timeout.
+    SQLite is probed on its own connection (opened by SQLite, ``mode=rw``: a missing file is not
+    created) with a deferred read, which in WAL mode does not wait for a writer; then a zero-wait
+    ``BEGIN IMMEDIATE`` (rolled back at once, nothing written) tells whether another connection holds
+    the write lock: ``"busy"``, a healthy database whose writers queue. Only a database that cannot
+    be opened or read (within :data:`PROBE_BUSY_TIMEOUT_S`) raises, which the callers count as away.
+    PostgreSQL: ``SELECT 1`` on a read-only transaction.
     """
     if engine.dialect.name == "sqlite":
         path = engine.url.database
-        if not path or path == ":memory:":
-            return
-        raw = sqlite3.connect(path, timeout=PROBE_BUSY_TIMEOUT_S, isolation_level=None)
+        if not path or path == ":memory:" or path.startswith("file:"):
+            return PROBE_OK
+        raw = sqlite3.connect(
+            f"file:{quote(path)}?mode=rw", uri=True, timeout=PROBE_BUSY_TIMEOUT_S, isolation_level=None
+        )
         try:
-            raw.execute("BEGIN IMMEDIATE")
+            raw.execute("BEGIN")
+            raw.execute("SELECT count(*) FROM sqlite_master").fetchone()
+            raw.execute("COMMIT")
+            raw.execute("PRAGMA busy_timeout=0")
+            try:
+                raw.execute("BEGIN IMMEDIATE")
+            except sqlite3.OperationalError as exc:
+                if exc.sqlite_errorcode & 0xFF in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED):
+                    return PROBE_BUSY
+                raise
             raw.execute("ROLLBACK")
         finally:
             raw.close()
-        return
+        return PROBE_OK
     with engine.connect() as conn:
         conn.execute(text("SELECT 1"))
+    return PROBE_OK

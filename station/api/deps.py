@@ -1,7 +1,9 @@
 """Dependencies shared by the routers: the session, the settings, the caller and its scopes.
 
-``SessionDep`` yields a session from the app's own session factory (built in ``create_app``);
-tests swap it with ``app.dependency_overrides[get_session]``. ``authorize`` resolves the bearer
+``SessionDep`` yields a session from the app's own session factory (built in ``create_app``), whose
+transactions may write (SQLite: ``BEGIN IMMEDIATE``); ``ReadSessionDep`` yields one from its read-only
+factory (``db.engine.reading``: SQLite deferred reads that never take or wait for the write lock), for
+routes and checks that only read; tests swap them with ``app.dependency_overrides[get_session]``. ``authorize`` resolves the bearer
 token to a user (401 otherwise) and checks the route's scopes against the role (403 otherwise):
 ``user: Annotated[User, Security(authorize, scopes=[Scope.DESIGNS_WRITE])]``.
 
@@ -37,12 +39,19 @@ def get_session(request: Request) -> Iterator[Session]:
         yield session
 
 
+def get_read_session(request: Request) -> Iterator[Session]:
+    """One read-only session per request (a write through it fails: "attempt to write a readonly database")."""
+    with request.app.state.read_sessions() as session:
+        yield session
+
+
 def get_settings(request: Request) -> Settings:
     """The settings the app was created with."""
     return request.app.state.settings
 
 
 SessionDep = Annotated[Session, Depends(get_session)]
+ReadSessionDep = Annotated[Session, Depends(get_read_session)]
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 
 
@@ -55,9 +64,9 @@ def _verified(session: Session, token_hash: str) -> tuple[TokenGrant, User] | No
     token = session.scalars(select(ApiToken).where(ApiToken.token_hash == token_hash)).first()
     if token is None:
         return None
-    grant = TokenGrant.of(token)
-    session.commit()  # end the read transaction: SQLite holds its write lock per transaction (BEGIN IMMEDIATE)
-    return grant, token.user
+    grant, user = TokenGrant.of(token), token.user
+    session.commit()  # end the read transaction (a read-only session: it never held the write lock)
+    return grant, user
 
 
 def _unavailable() -> HTTPException:
@@ -71,7 +80,7 @@ def _unavailable() -> HTTPException:
 def authorize(
     security_scopes: SecurityScopes,
     request: Request,
-    session: SessionDep,
+    session: ReadSessionDep,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer)],
 ) -> User:
     """The active user behind the bearer token, holding every scope the route declares."""

@@ -240,12 +240,13 @@ def db_command(args: argparse.Namespace) -> dict[str, Any]:
 def _verify(engine: Any) -> dict[str, Any]:
     """Recompute both hash chains; :class:`TamperedError` (exit 1) naming the first broken link."""
     from db import chain
+    from db.engine import reading
     from db.errors import TamperedError
     from db.migrate import current_revision
 
     if current_revision(engine) is None:
         raise InputError("database", "a migrated database (run `station db upgrade`)", None)
-    with engine.connect() as conn:
+    with reading(engine).connect() as conn:  # a read: never takes or waits for the write lock
         verdicts = chain.verify(conn)
     for verdict in verdicts:
         if verdict.broken is not None:

@@ -107,9 +107,11 @@ def _lock(path: Path) -> sqlite3.Connection:
     return conn
 
 
-def test_a_verified_token_works_while_the_database_is_locked_and_revocation_holds_once_back(
+def test_tokens_are_checked_while_another_writer_holds_the_lock_and_revocation_holds_after(
     tmp_path: Path,
 ) -> None:
+    """Token checks only read: a competing writer's lock neither delays them nor makes them 503 (issue 24
+    Found 4, first logins refused while someone wrote), and ``/health`` says ``busy``, not away."""
     gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, token_offline_s=60)
     api = next(gen)
     try:
@@ -123,12 +125,13 @@ def test_a_verified_token_works_while_the_database_is_locked_and_revocation_hold
                 took = time.monotonic() - t0
                 assert r.status_code == 200, r.text
                 assert r.json()["name"] == "technician-1"
-                assert took < 3.0, took  # at most one bounded busy wait (2 s), never 30 s
-            # a token never verified by this service cannot be checked now: 503, not 401
+                assert took < 1.0, took  # a read does not wait for the writer's lock
+            # a token this service never verified is checked all the same: the read needs no lock
+            t0 = time.monotonic()
             r = api.client.get("/api/v1/me", headers=api.auth("stylist"))
-            assert r.status_code == 503
+            assert r.status_code == 200 and time.monotonic() - t0 < 1.0, r.text
             health = api.client.get("/health").json()
-            assert health["status"] == "degraded" and health["database"] == "unreachable"
+            assert health["status"] == "ok" and health["database"] == "busy", health
         finally:
             lock.execute("ROLLBACK")
             lock.close()

@@ -9,7 +9,7 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, Path, Query, Request, Response, status
 
 from db.models import User
-from station.api.deps import SessionDep, scoped
+from station.api.deps import ReadSessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.common import Limit, Offset, Page
 from station.api.schemas.formulation import BrowseOut, LibraryImportOut, StoredLibraryOut
@@ -28,7 +28,7 @@ Importer = Annotated[User, scoped(Scope.LIBRARY_WRITE)]
 
 @router.get("", response_model=Page[LibraryPaintPublic])
 def list_paints(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     category: Literal["solid", "metallic", "pearl"] | None = None,
     code_prefix: Annotated[str | None, Query(max_length=64)] = None,
@@ -48,7 +48,7 @@ IndexBound = Annotated[float | None, Query(ge=-1000.0, le=1000.0, allow_inf_nan=
 @router.get("/browse", response_model=BrowseOut, responses=CONFLICT)
 def browse(
     request: Request,
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     types: Annotated[
         list[Literal["solid", "metallic", "pearl"]] | None,
@@ -98,7 +98,7 @@ def browse(
 )
 def export_csv(
     request: Request,
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     category: Literal["solid", "metallic", "pearl"] | None = None,
 ) -> Response:
@@ -175,7 +175,7 @@ async def import_csv(
 
 
 @router.get("/libraries", response_model=list[StoredLibraryOut], responses=CONFLICT)
-def libraries(request: Request, session: SessionDep, _user: Reader) -> list[dict[str, object]]:
+def libraries(request: Request, session: ReadSessionDep, _user: Reader) -> list[dict[str, object]]:
     """The libraries stored (each import is one, the demo library another): name, paints per type and
     whether they are synthetic. ``POST /formulation/snap`` searches one of them with ``library``."""
     return formulation.stored_libraries(session=session, cache=formulation.app_cache(request.app.state))
@@ -183,7 +183,7 @@ def libraries(request: Request, session: SessionDep, _user: Reader) -> list[dict
 
 @router.get("/{code}", response_model=LibraryPaintPublic, responses=NOT_FOUND)
 def get_paint(
-    session: SessionDep, _user: Reader, code: Annotated[str, Path(min_length=1, max_length=64)]
+    session: ReadSessionDep, _user: Reader, code: Annotated[str, Path(min_length=1, max_length=64)]
 ) -> LibraryPaintPublic:
     """One library paint."""
     return LibraryPaintPublic.model_validate(service.get_paint(session=session, code=code))

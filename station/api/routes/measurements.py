@@ -9,7 +9,7 @@ from fastapi.responses import StreamingResponse
 from pydantic import AwareDatetime
 
 from db.models import User
-from station.api.deps import SessionDep, scoped
+from station.api.deps import ReadSessionDep, SessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.schemas.measurements import CorrectionCreate, MeasurementPublic, MeasurementQuery
@@ -80,7 +80,7 @@ def create_measurement(
 
 @router.get("", response_model=Page[MeasurementPublic])
 def list_measurements(
-    session: SessionDep, _user: Reader, q: Filters, limit: Limit = 100, offset: Offset = 0
+    session: ReadSessionDep, _user: Reader, q: Filters, limit: Limit = 100, offset: Offset = 0
 ) -> Page[MeasurementPublic]:
     """Query by job, part, panel, instrument, time and illumination block; newest first."""
     rows, total = service.query(session=session, q=q, limit=limit, offset=offset)
@@ -102,7 +102,7 @@ def list_measurements(
         }
     },
 )
-def export_csv(session: SessionDep, _user: Reader, q: Filters) -> StreamingResponse:
+def export_csv(session: ReadSessionDep, _user: Reader, q: Filters) -> StreamingResponse:
     """The same filters as the list, as CSV (long format: one row per geometry)."""
     lines = list(service.export_csv(session=session, q=q))
     return StreamingResponse(
@@ -113,7 +113,7 @@ def export_csv(session: SessionDep, _user: Reader, q: Filters) -> StreamingRespo
 
 
 @router.get("/{measurement_id}", response_model=MeasurementPublic, responses=NOT_FOUND)
-def get_measurement(session: SessionDep, _user: Reader, measurement_id: Id) -> MeasurementPublic:
+def get_measurement(session: ReadSessionDep, _user: Reader, measurement_id: Id) -> MeasurementPublic:
     """One measurement (with ``superseded_by_id`` when corrected)."""
     return service.get_measurement(session=session, measurement_id=measurement_id)
 
