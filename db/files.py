@@ -42,7 +42,9 @@ class NotRegularFileError(InputError):
     """A path the product would open as its own file is a symlink, folder, FIFO or device (exit status 2)."""
 
     def __init__(self, field: str, path: Path, kind: str) -> None:
-        super().__init__(field, "a regular file (or a new path) for the product's own file", str(path), kind)
+        super().__init__(
+            field, "a regular file or a new path (not a symlink, folder, FIFO or device)", str(path), kind
+        )
         self.path = path
         self.kind = kind
 
