@@ -118,7 +118,7 @@ def read_csv(path: Path | str, data: bytes | None = None) -> ImportedFile:
     col = {h: i for i, h in enumerate(lower)}
     if len(col) != len(lower):
         dup = next(h for h in lower if lower.count(h) > 1)
-        raise CsvImportError(file, f"line {start + 1}", dup, "each column once", dup)
+        raise CsvImportError(file, f"line {start + 1}", "header", "each column once", dup)
     for required in ("sample", "geometry"):
         if required not in col:
             raise CsvImportError(file, f"line {start + 1}", required, f"a {required!r} column", header)
@@ -135,7 +135,11 @@ def read_csv(path: Path | str, data: bytes | None = None) -> ImportedFile:
             parts = header[i].split(":")
             if len(parts) not in (3, 4) or not parts[1] or not parts[2] or parts[3:] not in ([], ["sample"]):
                 raise CsvImportError(
-                    file, f"line {start + 1}", header[i], "texture:VENDOR:NAME or texture:VENDOR:NAME:sample"
+                    file,
+                    f"line {start + 1}",
+                    "header",
+                    "texture:VENDOR:NAME or texture:VENDOR:NAME:sample",
+                    header[i],
                 )
             texture_cols.append((parts[1], parts[2], len(parts) == 4, i))
     spectral.sort()

@@ -97,7 +97,7 @@ def _specs(doc: cxf3.CxF, file: str) -> dict[str, dict[str, Any]]:
     out: dict[str, dict[str, Any]] = {}
     coll = doc.resources.color_specification_collection if doc.resources else None
     for k, cs in enumerate(coll.color_specification if coll else []):
-        where = f"ColorSpecification[{k + 1}] {cs.id!r}"
+        where = f"ColorSpecification[{k + 1}]"  # an index, never the file's text
         ms = cs.measurement_spec
         choice = ms.geometry_choice.choice if ms and ms.geometry_choice else None
         if not isinstance(choice, cxf3.MultiAngleType):
@@ -199,7 +199,7 @@ def read_cxf(path: Path | str, data: bytes | None = None) -> ImportedFile:
         raise CxfImportError(file, "Resources/ObjectCollection", "Object", "at least one Object")
     out = []
     for i, obj in enumerate(objects, start=1):
-        where = f"Object[{i}] {obj.name!r}"
+        where = f"Object[{i}]"  # an index, never the file's text
         err = factory(CxfImportError, file, where)
         values = obj.color_values.choice if obj.color_values else []
         per_geo: dict[str, dict[str, Any]] = {}

@@ -135,12 +135,14 @@ def shown(name: str) -> str:
 def reason_of(exc: BaseException) -> str:
     """Why a file was refused, in one line that holds no byte of the file.
 
-    The error's class, then for an input error its field, the accepted form and the place in the file
-    (never the value found there, which :class:`~station.errors.InputError` calls *got*).
+    The error's class, then for an input error its field, the accepted form, the file's name and the
+    place in it (never the value found there, which :class:`~station.errors.InputError` calls *got*).
     """
     kind = type(exc).__name__
     if isinstance(exc, InputError):
-        where = f" ({exc.where})" if isinstance(exc, ImportFileError) and exc.where else ""
+        where = ""
+        if isinstance(exc, ImportFileError):
+            where = f" ({exc.file}, {exc.where})" if exc.where else f" ({exc.file})"
         return shown(f"{kind}: {exc.field}: expected {exc.accepted}{where}")
     if isinstance(exc, IngestError):
         return f"{kind}: the destination refused the reading"
