@@ -284,7 +284,7 @@ def _cxf(samples: int) -> bytes:
             observer=OBSERVERS[1],
             measured_at=None,
             err=err,
-        )  # fmt: skip
+        )
         for s in range(samples)
     ]
     with tempfile.TemporaryDirectory() as d:
