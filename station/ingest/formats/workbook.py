@@ -64,6 +64,7 @@ INFO = "Info"
 DEFAULT_VENDOR = "X-Rite"
 _NM = re.compile(r"^(\d{3,4}(?:\.\d+)?)\s*(?:nm)?$", re.IGNORECASE)
 _TEXTURE = re.compile(r"^(sparkle|graininess)", re.IGNORECASE)
+_ROW_NUMBER = re.compile(rb"<row\b[^>]*?\sr=\"(\d{1,12})\"")
 LAB_DECIMALS = 4
 SPECTRA_DECIMALS = 6
 #: Largest workbook read, bytes on disk (an MA-T12 export of 1000 samples is ≈ 3 MB).
@@ -108,34 +109,62 @@ class _CellBudget:
         for r, row in enumerate(ws.iter_rows(values_only=True), start=1):
             self.left -= max(1, len(row))
             if self.left < 0:
-                raise WorkbookImportError(
-                    self.file, f"sheet {sheet!r} row {r}", "cells", f"at most {MAX_WORKBOOK_CELLS} cells"
-                )
+                raise _cell_error(self.file, f"sheet {sheet!r} row {r}")
             end = len(row)
             while end and row[end - 1] is None:
                 end -= 1
             yield tuple(row[:end])
 
 
-def _unpacked_sizes(data: bytes, file: str) -> None:
-    """Refuse a workbook whose zip members unpack past the bounds (module doc), before parsing it."""
+def _cell_error(file: str, where: str) -> WorkbookImportError:
+    return WorkbookImportError(file, where, "cells", f"at most {MAX_WORKBOOK_CELLS} cells")
+
+
+def _count_cells(zf: zipfile.ZipFile, member: zipfile.ZipInfo, file: str) -> None:
+    """Refuse a worksheet part holding more cells, or reaching further down, than the cell bound,
+    counted on its unpacked XML as it streams by (C-speed, before openpyxl builds a cell)."""
+    cells = 0
+    tail = b""
+    with zf.open(member) as fh:
+        while chunk := fh.read(1 << 20):
+            text = tail + chunk
+            cells += text.count(b"<c ") + text.count(b"<c>") + text.count(b"<c/")
+            rows = [int(m) for m in _ROW_NUMBER.findall(text)]
+            if cells > MAX_WORKBOOK_CELLS or (rows and max(rows) > MAX_WORKBOOK_CELLS):
+                raise _cell_error(file, f"part {member.filename!r}")
+            tail = text[-64:]
+            cells -= tail.count(b"<c ") + tail.count(b"<c>") + tail.count(b"<c/")  # counted again next
+
+
+def _screen(data: bytes, file: str) -> None:
+    """Refuse a workbook whose zip members unpack past the bounds, or whose sheets hold more cells
+    than the bound (module doc), before openpyxl parses it."""
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as zf:
             members = zf.infolist()
-    except (zipfile.BadZipFile, OSError, ValueError, EOFError) as exc:
+            total = sum(m.file_size for m in members)
+            if total > MAX_WORKBOOK_XML_BYTES:
+                raise WorkbookImportError(
+                    file, "workbook", "xlsx", f"at most {MAX_WORKBOOK_XML_BYTES} bytes unpacked", total
+                )
+            strings = sum(m.file_size for m in members if m.filename.lower().endswith("sharedstrings.xml"))
+            if strings > MAX_SHARED_STRINGS_BYTES:
+                raise WorkbookImportError(
+                    file,
+                    "workbook",
+                    "sharedStrings",
+                    f"at most {MAX_SHARED_STRINGS_BYTES} bytes unpacked",
+                    strings,
+                )
+            for m in members:
+                if m.filename.lower().startswith("xl/worksheets/") and m.filename.lower().endswith(".xml"):
+                    _count_cells(zf, m, file)
+    except WorkbookImportError:
+        raise
+    except Exception as exc:  # a damaged zip fails in many ways (zlib, CRC, headers): all "not a workbook"
         raise WorkbookImportError(
             file, "workbook", "xlsx", "an Excel workbook (.xlsx), not truncated", type(exc).__name__
         ) from exc
-    total = sum(m.file_size for m in members)
-    if total > MAX_WORKBOOK_XML_BYTES:
-        raise WorkbookImportError(
-            file, "workbook", "xlsx", f"at most {MAX_WORKBOOK_XML_BYTES} bytes unpacked", total
-        )
-    strings = sum(m.file_size for m in members if m.filename.lower().endswith("sharedstrings.xml"))
-    if strings > MAX_SHARED_STRINGS_BYTES:
-        raise WorkbookImportError(
-            file, "workbook", "sharedStrings", f"at most {MAX_SHARED_STRINGS_BYTES} bytes unpacked", strings
-        )
 
 
 def _info(wb: Any, budget: _CellBudget) -> dict[str, Any]:
@@ -172,7 +201,7 @@ def read_workbook(path: Path | str, data: bytes | None = None) -> ImportedFile:
     path = Path(path)
     file = path.name
     data = read_bytes(path, WorkbookImportError, data, MAX_WORKBOOK_BYTES)  # parsed from memory
-    _unpacked_sizes(data, file)
+    _screen(data, file)
     budget = _CellBudget(file)
     try:
         wb = openpyxl.load_workbook(io.BytesIO(data), read_only=True, data_only=True)
