@@ -236,15 +236,22 @@ class WatchFolder:
             self._root = os.open(self.folder, _DIR_FLAGS)
         except OSError as exc:
             raise InputError("folder", "an existing folder", str(self.folder)) from exc
+        self._mine_name = ""
         try:
             self._open_folders()
-            self._mine_name = f"{os.getpid()}-{secrets.token_hex(4)}"
-            os.mkdir(self._mine_name, FOLDER_MODE, dir_fd=self._fds[PROCESSING])
-            self._mine = os.open(self._mine_name, _DIR_FLAGS | os.O_NOFOLLOW, dir_fd=self._fds[PROCESSING])
-            fcntl.flock(self._mine, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BaseException:
             self._close_fds()
             raise
+
+    def _make_mine(self) -> None:
+        """Make and lock this watcher's claim folder in ``processing/``."""
+        if self._mine >= 0:
+            os.close(self._mine)
+            self._mine = -1
+        self._mine_name = f"{os.getpid()}-{secrets.token_hex(4)}"
+        os.mkdir(self._mine_name, FOLDER_MODE, dir_fd=self._fds[PROCESSING])
+        self._mine = os.open(self._mine_name, _DIR_FLAGS | os.O_NOFOLLOW, dir_fd=self._fds[PROCESSING])
+        fcntl.flock(self._mine, fcntl.LOCK_EX | fcntl.LOCK_NB)
 
     def _open_folders(self) -> None:
         for name in (DONE, REJECTED, PROCESSING):
@@ -253,6 +260,8 @@ class WatchFolder:
             if name in self._fds:  # removed or replaced while running: made again, or refused
                 os.close(self._fds.pop(name))
             self._fds[name] = _own_folder(self._root, name, str(self.folder / name))
+            if name == PROCESSING:
+                self._make_mine()
 
     def _close_fds(self) -> None:
         for fd in self._fds.values():
@@ -322,6 +331,8 @@ class WatchFolder:
         if stat.S_ISREG(st.st_mode) and st.st_nlink == 1:
             try:
                 fd = os.open(name, _READ_FLAGS, dir_fd=self._root)
+            except PermissionError:
+                return self._move_in(name)  # unreadable: rejected as such
             except OSError:
                 return None  # taken, or replaced by a link: the next scan sees it
             try:
@@ -373,6 +384,9 @@ class WatchFolder:
                         continue  # its watcher is running
                     raise
                 for name in sorted(os.listdir(fd)):
+                    if name.startswith("."):  # a reason the killed watcher was writing
+                        os.unlink(name, dir_fd=fd)
+                        continue
                     target = next(_free_name(self._mine, name))
                     try:
                         os.rename(name, target, src_dir_fd=fd, dst_dir_fd=self._mine)
