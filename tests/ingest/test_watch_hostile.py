@@ -16,7 +16,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -119,10 +119,10 @@ def station(tmp_path: Path, _migrated_sqlite: Path) -> Iterator[Station]:
         st.kill_all()
 
 
-def _wait(cond: object, timeout_s: float = 30.0) -> bool:
+def _wait(cond: Callable[[], bool], timeout_s: float = 60.0) -> bool:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
-        if cond():  # type: ignore[operator]
+        if cond():
             return True
         time.sleep(0.02)
     return False

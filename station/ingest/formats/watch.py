@@ -146,7 +146,7 @@ def reason_of(exc: BaseException) -> str:
         return shown(f"{kind}: {exc.field}: expected {exc.accepted}{where}")
     if isinstance(exc, IngestError):
         return f"{kind}: the destination refused the reading"
-    return f"{kind}: refused"
+    return f"{kind}: the file could not be read"
 
 
 def _kind(mode: int) -> str:
@@ -417,6 +417,11 @@ class WatchFolder:
                 fallback_time=dt.datetime.fromtimestamp(mtime, dt.UTC).replace(microsecond=0),
                 **common,
             )
+        except _Refused as exc:
+            return self._reject(name, exc.reason, receipts)
+        except Exception as exc:  # unreadable: a typed error, or a parser failing on hostile bytes
+            return self._reject(name, reason_of(exc), receipts)
+        try:
             for reading in readings:
                 receipt = ingestor.submit(reading)
                 receipts.append(
@@ -427,9 +432,7 @@ class WatchFolder:
                         "message": receipt.message,
                     }
                 )
-        except _Refused as exc:
-            return self._reject(name, exc.reason, receipts)
-        except (InputError, IngestError, ValueError) as exc:  # unreadable, or refused by the destination
+        except (IngestError, ValueError) as exc:  # refused by the destination (not unreachable)
             return self._reject(name, reason_of(exc), receipts)
         target = next(_free_name(self._fds[DONE], name))
         os.rename(name, target, src_dir_fd=self._mine, dst_dir_fd=self._fds[DONE])
