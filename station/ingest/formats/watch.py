@@ -176,6 +176,12 @@ def _own_folder(parent: int, name: str, shown_path: str) -> int:
         raise InputError(name, accepted, _kind(st.st_mode), detail=shown_path)
     if st.st_uid != os.geteuid():
         raise InputError(name, accepted, f"a folder of user id {st.st_uid}", detail=shown_path)
+    if stat.S_IMODE(st.st_mode) & 0o077:  # made by someone else, or an older version: left as it is
+        log.warning(
+            "%s is open to other users (mode %o); the watcher leaves it so",
+            shown_path,
+            stat.S_IMODE(st.st_mode),
+        )
     fd = os.open(name, _DIR_FLAGS | os.O_NOFOLLOW, dir_fd=parent)
     fst = os.fstat(fd)
     if (fst.st_dev, fst.st_ino) != (st.st_dev, st.st_ino):  # swapped between the check and the open
