@@ -23,6 +23,7 @@ from station.api.json_guard import StrictJsonBody
 from station.api.middleware import BodySizeLimit, SecurityHeaders
 from station.api.security import TokenCache
 from station.api.settings import Settings
+from station.errors import InputError
 
 log = logging.getLogger(__name__)
 
@@ -114,6 +115,9 @@ def _start_watch_folder(app: FastAPI, settings: Settings) -> tuple[threading.Eve
                     job=settings.watch_job,
                     part=settings.watch_part,
                 )
+            except InputError as exc:  # a linked or foreign done/ or rejected/: never used, not retried
+                log.error("watch folder %s refused: %s", folder, exc)
+                return
             except Exception:  # the service keeps running; the next scan tries again
                 log.exception("watch folder %s", folder)
                 stop.wait(settings.watch_interval_s)

@@ -108,7 +108,8 @@ def test_killed_watcher_ingests_each_file_exactly_once(tmp_path: Path, _migrated
 
     assert [p.name for p in drop.iterdir() if p.is_file()] == []
     assert sorted(p.name for p in (drop / "done").iterdir()) == sorted(expected)
-    assert not (drop / "rejected").exists()
+    assert list((drop / "rejected").iterdir()) == []
+    assert [p.name for p in (drop / "processing").iterdir()] == []  # every claim folder given back
     engine = make_engine(url)
     with engine.connect() as conn:
         rows = conn.execute(select(Measurement.client_id, Measurement.lab, Measurement.geometries_deg)).all()

@@ -3,6 +3,7 @@ through the service's ingestor on the configured job and part, a bad one is move
 
 from __future__ import annotations
 
+import logging
 import time
 from pathlib import Path
 
@@ -40,7 +41,7 @@ def test_service_watch_folder(tmp_path: Path) -> None:
             rows = session.execute(select(Measurement.geometries_deg, Measurement.lab, Panel.job, Panel.part, Panel.notes).join(Panel)).all()  # fmt: skip
     assert (drop / "done" / "a.csv").is_file()
     assert (
-        "geometry: expected each geometry once per sample (p2)"
+        "CsvImportError: geometry: expected each geometry once per sample (b.csv, line 3)"
         in (drop / "rejected" / "b.csv.reason").read_text()
     )
     assert [tuple(r) for r in rows] == [
@@ -53,3 +54,33 @@ def test_watch_settings_refuse_half_a_panel(tmp_path: Path) -> None:
         Settings(data_dir=tmp_path, watch_dir=tmp_path, watch_job="J")
     with pytest.raises(ValidationError, match="watch_part: expected one of bumper"):
         Settings(data_dir=tmp_path, watch_dir=tmp_path, watch_job="J", watch_part="wing")
+
+
+def test_service_watch_folder_refuses_a_linked_rejected_folder(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """``rejected/`` made beforehand as a symbolic link: the service's watcher refuses the folder with
+    one error line and stops; the dropped files stay where they were, nothing goes through the link."""
+    drop = tmp_path / "drop"
+    drop.mkdir()
+    outside = tmp_path / "cron.d"
+    outside.mkdir()
+    (drop / "rejected").symlink_to(outside)
+    (drop / "evil").write_text("* * * * * root sh -c 'id > /tmp/owned'\n")
+    settings = Settings(
+        database_url=f"sqlite:///{tmp_path / 'station.sqlite3'}",
+        data_dir=tmp_path,
+        simulators=(),
+        load_demo_library=False,
+        watch_dir=drop,
+        watch_interval_s=0.05,
+    )
+    app = create_app(settings)
+    with caplog.at_level(logging.INFO, logger="station.api.app"), TestClient(app):
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline and not any("refused" in r.message for r in caplog.records):
+            time.sleep(0.05)
+        refusals = [r for r in caplog.records if r.levelno >= logging.ERROR]
+    assert len(refusals) == 1 and "rejected: expected a folder the watcher makes" in refusals[0].getMessage()
+    assert "a symbolic link" in refusals[0].getMessage() and refusals[0].exc_info is None
+    assert list(outside.iterdir()) == [] and (drop / "evil").is_file()

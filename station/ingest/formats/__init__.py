@@ -25,6 +25,7 @@ from station.ingest.errors import (
     UnknownFormatError,
     WorkbookImportError,
 )
+from station.ingest.formats import cgats, csv_template, cxf, measure_json, workbook
 from station.ingest.formats.cgats import read_cgats, write_cgats
 from station.ingest.formats.csv_template import read_csv, write_csv
 from station.ingest.formats.cxf import read_cxf, write_cxf
@@ -56,6 +57,7 @@ __all__ = [
     "build_measurement",
     "detect_format",
     "import_client_id",
+    "is_complete",
     "lab_of",
     "read_measurement_file",
     "readings_from_import",
@@ -72,7 +74,7 @@ FORMATS: Final[Mapping[str, tuple[str, ...]]] = MappingProxyType(
         "json": (".json",),
     }
 )
-_READERS: Final[Mapping[str, Callable[[Path], ImportedFile]]] = MappingProxyType(
+_READERS: Final[Mapping[str, Callable[[Path, bytes | None], ImportedFile]]] = MappingProxyType(
     {
         "cxf": read_cxf,
         "cgats": read_cgats,
@@ -81,20 +83,35 @@ _READERS: Final[Mapping[str, Callable[[Path], ImportedFile]]] = MappingProxyType
         "json": read_measure_json,
     }
 )
+#: Format name → whether a file's bytes are whole (not cut short by a writer still at work).
+_COMPLETE: Final[Mapping[str, Callable[[bytes], bool]]] = MappingProxyType(
+    {
+        "cxf": cxf.is_complete,
+        "cgats": cgats.is_complete,
+        "csv": csv_template.is_complete,
+        "xlsx": workbook.is_complete,
+        "json": measure_json.is_complete,
+    }
+)
 
 
-def detect_format(path: Path | str) -> str:
-    """``"cxf"``, ``"cgats"`` or ``"csv"`` for *path*: by suffix, else by the first bytes."""
+def detect_format(path: Path | str, data: bytes | None = None) -> str:
+    """The format of *path* (a key of :data:`FORMATS`): by suffix, else by the first bytes (of *data*
+    when given: the file's bytes, already read)."""
     path = Path(path)
     suffix = path.suffix.lower()
     for name, suffixes in FORMATS.items():
         if suffix in suffixes:
             return name
-    try:
-        with path.open("rb") as fh:
-            head = fh.read(512).lstrip(b"\xef\xbb\xbf").lstrip()
-    except OSError as exc:
-        raise UnknownFormatError(path.name, "", "file", "a readable file", str(exc)) from exc
+    if data is not None:
+        head = data[:512]
+    else:
+        try:
+            with path.open("rb") as fh:
+                head = fh.read(512)
+        except OSError as exc:
+            raise UnknownFormatError(path.name, "", "file", "a readable file", str(exc)) from exc
+    head = head.lstrip(b"\xef\xbb\xbf").lstrip()
     if head.startswith(b"<"):
         return "cxf"
     if head.startswith(b"{"):
@@ -115,12 +132,35 @@ def detect_format(path: Path | str) -> str:
     )
 
 
-def read_measurement_file(path: Path | str, fmt: str | None = None) -> ImportedFile:
-    """Read *path* in format *fmt* (default: :func:`detect_format`); typed errors name file, place, field."""
-    fmt = fmt or detect_format(path)
+def read_measurement_file(
+    path: Path | str, fmt: str | None = None, data: bytes | None = None
+) -> ImportedFile:
+    """Read *path* in format *fmt* (default: :func:`detect_format`); typed errors name file, place, field.
+
+    *data*: the file's bytes when the caller has read them already (the watch folder reads through a
+    descriptor it checked); *path* then only names the file.
+    """
+    fmt = fmt or detect_format(path, data)
     if fmt not in _READERS:
         raise UnknownFormatError(Path(path).name, "", "format", " | ".join(_READERS), fmt)
-    return _READERS[fmt](Path(path))
+    return _READERS[fmt](Path(path), data)
+
+
+def is_complete(path: Path | str, data: bytes) -> bool:
+    """Whether *data*, the bytes of *path*, are a whole file rather than one a writer is still writing.
+
+    Empty is not whole. CxF: the root element is closed; CGATS: an ``END_DATA`` line is there; an
+    ``.xlsx``: the zip's central directory (written last) is; JSON: every bracket and string is
+    closed; CSV, which has no end marker: the last line is ended. Bytes that are none of the formats
+    count as whole (they are refused as they are). docs/import.md: the watch folder's protocol.
+    """
+    if not data:
+        return False
+    try:
+        fmt = detect_format(path, data)
+    except UnknownFormatError:
+        return True
+    return _COMPLETE[fmt](data)
 
 
 def write_measurement_file(

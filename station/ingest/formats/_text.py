@@ -12,16 +12,26 @@ from station.ingest.errors import ImportFileError
 MAX_FILE_BYTES = 64 << 20
 
 
-def read_bytes(path: Path, error: type[ImportFileError]) -> bytes:
-    """The bytes of *path*, refusing a missing, unreadable or oversized file with *error*."""
+def read_bytes(
+    path: Path, error: type[ImportFileError], data: bytes | None = None, limit: int = MAX_FILE_BYTES
+) -> bytes:
+    """The bytes of *path* (or *data*, already read from it), refusing a missing, unreadable or
+    oversized file (more than *limit* bytes) with *error*."""
+    if data is not None:
+        if len(data) > limit:
+            raise error(path.name, "", "file", f"at most {limit} bytes", len(data))
+        return data
     try:
         size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise error(path.name, "", "file", f"at most {MAX_FILE_BYTES} bytes", size)
+        if size > limit:
+            raise error(path.name, "", "file", f"at most {limit} bytes", size)
         with path.open("rb") as fh:
-            return fh.read(MAX_FILE_BYTES + 1)
+            out = fh.read(limit + 1)
     except OSError as exc:
         raise error(path.name, "", "file", "a readable file", str(exc)) from exc
+    if len(out) > limit:  # grew since stat
+        raise error(path.name, "", "file", f"at most {limit} bytes", len(out))
+    return out
 
 
 def decode_utf8(data: bytes, file: str, error: type[ImportFileError]) -> str:

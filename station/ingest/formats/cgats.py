@@ -44,7 +44,7 @@ from station.ingest.formats.measurement import (
 )
 from station.model.domain import geometry_name
 
-__all__ = ["read_cgats", "write_cgats"]
+__all__ = ["is_complete", "read_cgats", "write_cgats"]
 
 _SPECTRAL = re.compile(r"^SPECTRAL_NM_?(\d+(?:\.\d+)?)$", re.IGNORECASE)
 _TEXTURE = re.compile(r"^(SPARKLE|GRAININESS)", re.IGNORECASE)
@@ -110,11 +110,17 @@ def _conditions(keywords: dict[str, str], file: str) -> tuple[str, str]:
     return illuminant, observer
 
 
-def read_cgats(path: Path | str) -> ImportedFile:
+def is_complete(data: bytes) -> bool:
+    """Whether *data* holds a whole CGATS file: its ``END_DATA`` line is written (a writer still at
+    work has not written it yet)."""
+    return any(line.split()[:1] == [b"END_DATA"] for line in data.upper().splitlines())
+
+
+def read_cgats(path: Path | str, data: bytes | None = None) -> ImportedFile:
     """Read a CGATS.17 file into one :class:`ImportedMeasurement` per sample (module doc for the rules)."""
     path = Path(path)
     file = path.name
-    text = decode_utf8(read_bytes(path, CgatsImportError), file, CgatsImportError)
+    text = decode_utf8(read_bytes(path, CgatsImportError, data), file, CgatsImportError)
     lines = text.splitlines()
     if not lines or not lines[0].strip():
         raise CgatsImportError(file, "line 1", "file type", "a first line such as CGATS.17", "empty")

@@ -46,7 +46,7 @@ from station.ingest.formats.measurement import (
     observer_name,
 )
 
-__all__ = ["TEMPLATE_COLUMNS", "read_csv", "write_csv"]
+__all__ = ["TEMPLATE_COLUMNS", "is_complete", "read_csv", "write_csv"]
 
 #: Columns of the template other than the spectral ``nmXXX`` and ``texture:…`` ones.
 TEMPLATE_COLUMNS = (
@@ -91,11 +91,18 @@ def _float(cell: str, fld: str, file: str, lineno: int) -> float:
         raise CsvImportError(file, f"line {lineno}", fld, "a number", cell) from exc
 
 
-def read_csv(path: Path | str) -> ImportedFile:
+def is_complete(data: bytes) -> bool:
+    """Whether *data* ends with a line break. A CSV has no end marker, so this only tells a row cut
+    short; a writer that pauses between rows must write under a ``.part`` name and rename the file
+    when done (docs/import.md, watch folder)."""
+    return data.endswith((b"\n", b"\r"))
+
+
+def read_csv(path: Path | str, data: bytes | None = None) -> ImportedFile:
     """Read a file in the CSV template into one :class:`ImportedMeasurement` per sample."""
     path = Path(path)
     file = path.name
-    text = decode_utf8(read_bytes(path, CsvImportError), file, CsvImportError)
+    text = decode_utf8(read_bytes(path, CsvImportError, data), file, CsvImportError)
     lines = text.splitlines()
     start = 0
     while start < len(lines) and (not lines[start].strip() or lines[start].lstrip().startswith("#")):
@@ -111,7 +118,7 @@ def read_csv(path: Path | str) -> ImportedFile:
     col = {h: i for i, h in enumerate(lower)}
     if len(col) != len(lower):
         dup = next(h for h in lower if lower.count(h) > 1)
-        raise CsvImportError(file, f"line {start + 1}", dup, "each column once", dup)
+        raise CsvImportError(file, f"line {start + 1}", "header", "each column once", dup)
     for required in ("sample", "geometry"):
         if required not in col:
             raise CsvImportError(file, f"line {start + 1}", required, f"a {required!r} column", header)
@@ -128,7 +135,11 @@ def read_csv(path: Path | str) -> ImportedFile:
             parts = header[i].split(":")
             if len(parts) not in (3, 4) or not parts[1] or not parts[2] or parts[3:] not in ([], ["sample"]):
                 raise CsvImportError(
-                    file, f"line {start + 1}", header[i], "texture:VENDOR:NAME or texture:VENDOR:NAME:sample"
+                    file,
+                    f"line {start + 1}",
+                    "header",
+                    "texture:VENDOR:NAME or texture:VENDOR:NAME:sample",
+                    header[i],
                 )
             texture_cols.append((parts[1], parts[2], len(parts) == 4, i))
     spectral.sort()

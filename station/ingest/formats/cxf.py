@@ -45,7 +45,7 @@ from station.ingest.formats.measurement import (
 from station.model.cxf_names import CREATOR, NAMESPACE
 from station.model.domain import format_angle, geometry_name
 
-__all__ = ["read_cxf", "write_cxf"]
+__all__ = ["is_complete", "read_cxf", "write_cxf"]
 
 TEXTURE_TAGS = "texture"
 LAB_DECIMALS = 4
@@ -97,7 +97,7 @@ def _specs(doc: cxf3.CxF, file: str) -> dict[str, dict[str, Any]]:
     out: dict[str, dict[str, Any]] = {}
     coll = doc.resources.color_specification_collection if doc.resources else None
     for k, cs in enumerate(coll.color_specification if coll else []):
-        where = f"ColorSpecification[{k + 1}] {cs.id!r}"
+        where = f"ColorSpecification[{k + 1}]"  # an index, never the file's text
         ms = cs.measurement_spec
         choice = ms.geometry_choice.choice if ms and ms.geometry_choice else None
         if not isinstance(choice, cxf3.MultiAngleType):
@@ -137,11 +137,47 @@ def _specs(doc: cxf3.CxF, file: str) -> dict[str, dict[str, Any]]:
     return out
 
 
-def read_cxf(path: Path | str) -> ImportedFile:
+class _Declared(Exception):
+    """A DTD or entity declaration: the reader refuses the document whole, no need to read on."""
+
+
+def is_complete(data: bytes) -> bool:
+    """Whether *data* holds a whole XML document: its root element is closed (a document a writer is
+    still writing is not); malformed or declaring XML counts as complete: the reader refuses it."""
+    from xml.parsers import expat
+
+    parser = expat.ParserCreate()
+    depth = 0
+    closed = False
+
+    def start(name: str, attrs: object) -> None:
+        nonlocal depth
+        depth += 1
+
+    def end(name: str) -> None:
+        nonlocal depth, closed
+        depth -= 1
+        closed = closed or depth == 0
+
+    def declared(*args: object) -> None:
+        raise _Declared
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.StartDoctypeDeclHandler = declared
+    parser.EntityDeclHandler = declared
+    try:
+        parser.Parse(data, False)
+    except (expat.ExpatError, _Declared):
+        return True
+    return closed
+
+
+def read_cxf(path: Path | str, data: bytes | None = None) -> ImportedFile:
     """Read the multi-angle objects of a CxF3 file (module doc for the layout and the refusals)."""
     path = Path(path)
     file = path.name
-    data = read_bytes(path, CxfImportError)
+    data = read_bytes(path, CxfImportError, data)
     decode_utf8(data, file, CxfImportError)  # CxF3 files are UTF-8: refuse others by line, not by parser
     _screen(data, file)
     try:
@@ -163,7 +199,7 @@ def read_cxf(path: Path | str) -> ImportedFile:
         raise CxfImportError(file, "Resources/ObjectCollection", "Object", "at least one Object")
     out = []
     for i, obj in enumerate(objects, start=1):
-        where = f"Object[{i}] {obj.name!r}"
+        where = f"Object[{i}]"  # an index, never the file's text
         err = factory(CxfImportError, file, where)
         values = obj.color_values.choice if obj.color_values else []
         per_geo: dict[str, dict[str, Any]] = {}

@@ -10,6 +10,7 @@ document (``geometries``, ``lab``, optional ``spectra`` with ``wavelengths_nm``,
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +26,10 @@ from station.ingest.formats.measurement import (
     observer_name,
 )
 
-__all__ = ["read_measure_json"]
+__all__ = ["is_complete", "read_measure_json"]
+
+#: A closed JSON string (escapes included), as bytes.
+_STRINGS = re.compile(rb'"(?:[^"\\]|\\.)*"', re.DOTALL)
 
 
 def _reject_constant(name: str) -> float:
@@ -105,11 +109,21 @@ def _one(doc: dict[str, Any], file: str, where: str, default_sample: str) -> Imp
     )
 
 
-def read_measure_json(path: Path | str) -> ImportedFile:
+def is_complete(data: bytes) -> bool:
+    """Whether every string, object and array *data* opens is closed (a document cut short is not);
+    malformed JSON counts as complete: the reader refuses it whole."""
+    bare = _STRINGS.sub(b"", data)
+    if b'"' in bare:  # a string still open
+        return False
+    opened = bare.count(b"{") + bare.count(b"[")
+    return bool(bare.strip()) and opened <= bare.count(b"}") + bare.count(b"]")
+
+
+def read_measure_json(path: Path | str, data: bytes | None = None) -> ImportedFile:
     """Read a ``station measure --json`` or ``station import --json`` document (module doc)."""
     path = Path(path)
     file = path.name
-    text = decode_utf8(read_bytes(path, JsonImportError), file, JsonImportError)
+    text = decode_utf8(read_bytes(path, JsonImportError, data), file, JsonImportError)
     try:
         doc = json.loads(text, parse_constant=_reject_constant)
     except (json.JSONDecodeError, ValueError) as exc:

@@ -221,7 +221,7 @@ def build_measurement(
     for name, row_err in rows:
         g = canonical_geometry(name, "geometry", row_err)
         if g in names:
-            raise row_err("geometry", f"each geometry once per sample ({sample})", name)
+            raise row_err("geometry", "each geometry once per sample", name)
         names.append(g)
     if lab is None and spectra is None:
         raise err("lab", "Lab values and/or spectra per geometry", None)

@@ -17,6 +17,12 @@ An optional sheet ``Info`` with ``key | value`` rows gives ``Instrument``, ``Ser
 ``Measured at`` (an ISO 8601 instant or a date cell), ``Illuminant`` and ``Observer``. Other sheets
 (``Texture Images``) are ignored. Refusals are :class:`~station.ingest.errors.WorkbookImportError`
 naming the sheet, the cell row and the column.
+
+A workbook is read as a stream (openpyxl's read-only mode), within bounds a hostile file cannot
+stretch: at most :data:`MAX_WORKBOOK_BYTES` bytes on disk, :data:`MAX_WORKBOOK_XML_BYTES` bytes
+unpacked (:data:`MAX_SHARED_STRINGS_BYTES` of them the shared-strings part, which openpyxl holds
+whole) and :data:`MAX_WORKBOOK_CELLS` cells read, padding of short rows and skipped rows included;
+past any of them the workbook is refused naming the bound.
 """
 
 from __future__ import annotations
@@ -24,7 +30,8 @@ from __future__ import annotations
 import datetime as dt
 import io
 import re
-from collections.abc import Sequence
+import zipfile
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -41,15 +48,34 @@ from station.ingest.formats.measurement import (
     observer_name,
 )
 
-__all__ = ["SHEET", "read_workbook", "write_workbook"]
+__all__ = [
+    "MAX_SHARED_STRINGS_BYTES",
+    "MAX_WORKBOOK_BYTES",
+    "MAX_WORKBOOK_CELLS",
+    "MAX_WORKBOOK_XML_BYTES",
+    "SHEET",
+    "is_complete",
+    "read_workbook",
+    "write_workbook",
+]
 
 SHEET = "Spectral Data"
 INFO = "Info"
 DEFAULT_VENDOR = "X-Rite"
 _NM = re.compile(r"^(\d{3,4}(?:\.\d+)?)\s*(?:nm)?$", re.IGNORECASE)
 _TEXTURE = re.compile(r"^(sparkle|graininess)", re.IGNORECASE)
+_ROW_NUMBER = re.compile(rb"<row\b[^>]*?\sr=\"(\d{1,12})\"")
 LAB_DECIMALS = 4
 SPECTRA_DECIMALS = 6
+#: Largest workbook read, bytes on disk (an MA-T12 export of 1000 samples is ≈ 3 MB).
+MAX_WORKBOOK_BYTES = 16 << 20
+#: Largest workbook unpacked, bytes: the sum of its zip members' sizes (1000 samples ≈ 25 MB of XML).
+MAX_WORKBOOK_XML_BYTES = 128 << 20
+#: Largest shared-strings part, bytes unpacked (openpyxl keeps it whole in memory).
+MAX_SHARED_STRINGS_BYTES = 16 << 20
+#: Most cells read from a workbook, its sheets together (1000 samples × 12 geometries × 40 columns
+#: = 480 000): each short row counts as padded to its last cell, an empty row as one cell.
+MAX_WORKBOOK_CELLS = 1_000_000
 
 
 def _header_map(row: Sequence[Any]) -> dict[str, int] | None:
@@ -70,28 +96,123 @@ def _number(value: Any, fld: str, file: str, where: str) -> float:
         raise WorkbookImportError(file, where, fld, "a number", value) from exc
 
 
-def _info(wb: Any) -> dict[str, Any]:
+class _CellBudget:
+    """Counts the cells read against :data:`MAX_WORKBOOK_CELLS`; refuses the workbook past it."""
+
+    def __init__(self, file: str) -> None:
+        self.file = file
+        self.left = MAX_WORKBOOK_CELLS
+
+    def rows(self, ws: Any, sheet: str) -> Iterator[tuple[Any, ...]]:
+        """The rows of *ws* as value tuples (trailing empty cells dropped), each charged to the budget."""
+        ws.reset_dimensions()  # a declared A1:XFD1048576 must not pad every row to 16 384 cells
+        for r, row in enumerate(ws.iter_rows(values_only=True), start=1):
+            self.left -= max(1, len(row))
+            if self.left < 0:
+                raise _cell_error(self.file, f"sheet {sheet!r} row {r}")
+            end = len(row)
+            while end and row[end - 1] is None:
+                end -= 1
+            yield tuple(row[:end])
+
+
+def _cell_error(file: str, where: str) -> WorkbookImportError:
+    return WorkbookImportError(file, where, "cells", f"at most {MAX_WORKBOOK_CELLS} cells")
+
+
+def _count_cells(zf: zipfile.ZipFile, member: zipfile.ZipInfo, file: str) -> None:
+    """Refuse a worksheet part holding more cells, or reaching further down, than the cell bound,
+    counted on its unpacked XML as it streams by (C-speed, before openpyxl builds a cell)."""
+    cells = 0
+    tail = b""
+    with zf.open(member) as fh:
+        while chunk := fh.read(1 << 20):
+            text = tail + chunk
+            cells += text.count(b"<c ") + text.count(b"<c>") + text.count(b"<c/")
+            rows = [int(m) for m in _ROW_NUMBER.findall(text)]
+            if cells > MAX_WORKBOOK_CELLS or (rows and max(rows) > MAX_WORKBOOK_CELLS):
+                raise _cell_error(file, f"part {member.filename!r}")
+            tail = text[-64:]
+            cells -= tail.count(b"<c ") + tail.count(b"<c>") + tail.count(b"<c/")  # counted again next
+
+
+def _screen(data: bytes, file: str) -> None:
+    """Refuse a workbook whose zip members unpack past the bounds, or whose sheets hold more cells
+    than the bound (module doc), before openpyxl parses it."""
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as zf:
+            members = zf.infolist()
+            total = sum(m.file_size for m in members)
+            if total > MAX_WORKBOOK_XML_BYTES:
+                raise WorkbookImportError(
+                    file, "workbook", "xlsx", f"at most {MAX_WORKBOOK_XML_BYTES} bytes unpacked", total
+                )
+            strings = sum(m.file_size for m in members if m.filename.lower().endswith("sharedstrings.xml"))
+            if strings > MAX_SHARED_STRINGS_BYTES:
+                raise WorkbookImportError(
+                    file,
+                    "workbook",
+                    "sharedStrings",
+                    f"at most {MAX_SHARED_STRINGS_BYTES} bytes unpacked",
+                    strings,
+                )
+            for m in members:
+                if m.filename.lower().startswith("xl/worksheets/") and m.filename.lower().endswith(".xml"):
+                    _count_cells(zf, m, file)
+    except WorkbookImportError:
+        raise
+    except Exception as exc:  # a damaged zip fails in many ways (zlib, CRC, headers): all "not a workbook"
+        raise WorkbookImportError(
+            file, "workbook", "xlsx", "an Excel workbook (.xlsx), not truncated", type(exc).__name__
+        ) from exc
+
+
+def _info(wb: Any, budget: _CellBudget) -> dict[str, Any]:
     if INFO not in wb.sheetnames:
         return {}
     out = {}
-    for row in wb[INFO].iter_rows(values_only=True):
+    for row in budget.rows(wb[INFO], INFO):
         if row and row[0] is not None and len(row) > 1:
             out[str(row[0]).strip().lower()] = row[1]
     return out
 
 
-def read_workbook(path: Path | str) -> ImportedFile:
-    """Read an MA-T12-style workbook (module doc) into one :class:`ImportedMeasurement` per sample."""
+def is_complete(data: bytes) -> bool:
+    """Whether *data* holds a whole zip: its central directory, written last, is there. Bytes that are
+    no zip at all count as complete (the reader refuses them)."""
+    if not data.startswith(b"PK\x03\x04"):
+        return True
+    try:
+        zipfile.ZipFile(io.BytesIO(data)).close()
+    except zipfile.BadZipFile:
+        return False
+    except (OSError, ValueError, EOFError):
+        return True
+    return True
+
+
+def read_workbook(path: Path | str, data: bytes | None = None) -> ImportedFile:
+    """Read an MA-T12-style workbook (module doc) into one :class:`ImportedMeasurement` per sample.
+
+    *data*: the file's bytes when already read (else read from *path*, which also names the file).
+    """
     import openpyxl  # loaded on use: the other formats do not need it
 
     path = Path(path)
     file = path.name
-    data = read_bytes(path, WorkbookImportError)  # size bound, readable; parsed from memory (no open file)
+    data = read_bytes(path, WorkbookImportError, data, MAX_WORKBOOK_BYTES)  # parsed from memory
+    _screen(data, file)
+    budget = _CellBudget(file)
     try:
-        wb = openpyxl.load_workbook(io.BytesIO(data), data_only=True)
-        sheets = list(wb.sheetnames)
-        info = _info(wb)
-        rows = list(wb[SHEET].iter_rows(values_only=True)) if SHEET in sheets else []
+        wb = openpyxl.load_workbook(io.BytesIO(data), read_only=True, data_only=True)
+        try:
+            sheets = list(wb.sheetnames)
+            info = _info(wb, budget)
+            rows = list(budget.rows(wb[SHEET], SHEET)) if SHEET in sheets else []
+        finally:
+            wb.close()
+    except WorkbookImportError:
+        raise
     except (
         Exception
     ) as exc:  # a damaged zip or XML part fails in many ways inside openpyxl: all are "not a workbook"
@@ -134,7 +255,7 @@ def read_workbook(path: Path | str) -> ImportedFile:
     illuminant = str(info.get("illuminant") or "D65").strip().upper()
     observer_text = str(info.get("observer") or "10").strip()
     observer = observer_name(observer_text) or observer_text
-    groups: dict[str, list[tuple[int, Sequence[Any]]]] = {}
+    groups: dict[str, list[tuple[int, tuple[Any, ...]]]] = {}
     sample_col = col.get("sample", col.get("name"))
     for r, row in enumerate(rows[header_at + 1 :], start=header_at + 2):
         if not row or all(c is None or str(c).strip() == "" for c in row):
