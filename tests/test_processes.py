@@ -96,31 +96,44 @@ def test_run_is_subprocess_run_with_text_output(tmp_path: Path) -> None:
 def test_run_past_its_timeout_kills_the_whole_group(tmp_path: Path) -> None:
     """``subprocess.run`` kills only the child: a grandchild keeps running (and keeps the pipe open)."""
     argv, pid_file = _stubborn(tmp_path)
-    with pytest.raises(subprocess.TimeoutExpired) as raised:
-        run(argv, timeout=3)
-    assert raised.value.stdout is not None and b"ready" in raised.value.stdout
+    for timeout in (2, 20, 120):  # long enough for the child to have started its grandchild
+        with pytest.raises(subprocess.TimeoutExpired) as raised:
+            run(argv, timeout=timeout)
+        if raised.value.stdout is not None and b"ready" in raised.value.stdout:
+            break
+    else:
+        pytest.fail("the child never got to start its grandchild")
     grandchild = int(pid_file.read_text())
     wait_until(lambda: not is_running(grandchild), 10, what="the grandchild to end with its group")
 
 
 def test_a_process_left_running_is_found_and_ended() -> None:
     """What ``tests/conftest.py`` does after every test: a child started (and not ended) since the look
-    before is killed and named; one that ends by itself within the grace time is not."""
+    before is killed and named; one that has ended, or ends by itself within the grace time, is not."""
     before = set(children_of_this_process())
-    quick = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    stopping = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.read()"], stdin=subprocess.PIPE)
     left_behind = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(600)"])
     try:
-        assert left_behind.pid in children_of_this_process()
-        ended = end_leftovers(before, grace_s=0.5)
-        assert list(ended) == [left_behind.pid] and "time.sleep(600)" in ended[left_behind.pid]
+        assert ended.wait(60) == 0
+        assert {stopping.pid, left_behind.pid} <= set(children_of_this_process())
+        killed = end_leftovers(before, grace_s=0.2)
+        assert set(killed) == {stopping.pid, left_behind.pid}
+        assert "time.sleep(600)" in killed[left_behind.pid]
         assert left_behind.wait(10) == -signal.SIGKILL
-        assert quick.wait(10) == 0
-        assert end_leftovers(before, grace_s=0.0) == {}
+        assert stopping.wait(10) == -signal.SIGKILL
+        told = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.read()"], stdin=subprocess.PIPE)
+        assert told.stdin is not None
+        told.stdin.close()  # told to stop: it goes by itself, well within the grace time
+        assert end_leftovers(before, grace_s=120) == {}
+        assert told.wait(10) == 0
     finally:
-        for proc in (quick, left_behind):
+        for proc in (ended, stopping, left_behind):
             if proc.poll() is None:
                 proc.kill()
             proc.wait(10)
+            if proc.stdin is not None:
+                proc.stdin.close()
 
 
 def test_wait_until_returns_the_value_or_fails_at_the_deadline() -> None:

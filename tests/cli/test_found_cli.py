@@ -220,12 +220,17 @@ def test_serve_says_what_it_does_from_the_start(tmp_path: Path) -> None:
 
 
 def _on_a_terminal(
-    cwd: Path, argv: list[str], *, interrupt_at: str | None = None, timeout: float = 180
+    cwd: Path,
+    argv: list[str],
+    *,
+    interrupt_at: str | None = None,
+    interrupt_within: float = 180,
+    timeout: float = 180,
 ) -> tuple[int, str, str]:
     """Run *argv* with stderr on a pseudo-terminal (as a person's shell has it) and stdout on a pipe;
-    optionally press Ctrl+C (SIGINT) once the terminal shows *interrupt_at*. Returns (status, stdout,
-    terminal). Every wait ends within *timeout* seconds (``WaitTimeout``), and the process and whatever
-    it started are killed on the way out."""
+    optionally press Ctrl+C (SIGINT) once the terminal shows *interrupt_at* (within *interrupt_within*
+    seconds). Returns (status, stdout, terminal). The run must end within *timeout* seconds (after the
+    Ctrl+C, if any), else ``WaitTimeout``; the process and whatever it started are killed on the way out."""
     import fcntl
     import pty
     import struct
@@ -244,7 +249,7 @@ def _on_a_terminal(
     with child, Stream(leader, "terminal") as terminal:
         assert child.out is not None
         if interrupt_at is not None:
-            terminal.wait_for(interrupt_at, timeout)
+            terminal.wait_for(interrupt_at, interrupt_within)
             child.send_signal(signal.SIGINT)
         status = child.finish(timeout)
         terminal.wait_eof(timeout)
@@ -270,7 +275,7 @@ def test_a_terminal_run_that_hangs_fails_in_time_and_leaves_nothing_running(tmp_
     )
     before = set(children_of_this_process())
     with pytest.raises(WaitTimeout, match="still running"):
-        _on_a_terminal(tmp_path, [sys.executable, "-c", stubborn], interrupt_at="ready", timeout=3)
+        _on_a_terminal(tmp_path, [sys.executable, "-c", stubborn], interrupt_at="ready", timeout=2)
     assert set(children_of_this_process()) <= before
     grandchild = int(pid_file.read_text())
     wait_until(lambda: not is_running(grandchild), 10, what="the grandchild to be gone")

@@ -20,9 +20,13 @@ import tempfile
 
 import pytest
 
+from tests.processes import KILL_WAIT_S, Stream
 from tests.services import service_missing
+from tests.waiting import WaitTimeout
 
 XVFB_ERROR = ""
+#: Seconds Xvfb gets to report its display number.
+XVFB_START_S = 60.0
 
 
 def _start_xvfb() -> subprocess.Popen | None:
@@ -54,15 +58,29 @@ def _start_xvfb() -> subprocess.Popen | None:
         return None
     finally:
         os.close(w)
-    with os.fdopen(r) as fh:
-        display = fh.readline().strip()
+    with Stream(r, "Xvfb's display number") as reported:  # a line, or nothing once Xvfb has failed
+        try:
+            display = reported.wait_for("\n", XVFB_START_S).strip()
+        except WaitTimeout:
+            display = ""
     if not display:
         proc.kill()
-        XVFB_ERROR = "Xvfb did not report a display number"
+        proc.wait(KILL_WAIT_S)
+        XVFB_ERROR = f"Xvfb did not report a display number within {XVFB_START_S:g} s"
         return None
     os.environ["DISPLAY"] = f":{display}"
-    atexit.register(lambda: (proc.terminate(), proc.wait(5)))
+    atexit.register(_stop_xvfb, proc)
     return proc
+
+
+def _stop_xvfb(proc: subprocess.Popen) -> None:
+    """End the session's Xvfb: asked first, killed when it does not go."""
+    proc.terminate()
+    try:
+        proc.wait(KILL_WAIT_S)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(KILL_WAIT_S)
 
 
 XVFB = _start_xvfb()
