@@ -38,7 +38,7 @@ SLEEP_PENDING = {
 #: Files that may start processes with ``subprocess`` directly, each with its reason.
 SUBPROCESS_ALLOWED = {
     "tests/processes.py": "Child and run themselves",
-    "tests/ui/conftest.py": "the viewer suite's Xvfb, started at import for the whole session",
+    "tests/ui/conftest.py": "the viewer suite's Xvfb, started at import for the whole test run",
     "tests/test_processes.py": "a process deliberately left running, for the leftover check to find",
 }
 #: As SLEEP_PENDING, for direct ``subprocess`` use.

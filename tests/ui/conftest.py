@@ -74,7 +74,7 @@ def _start_xvfb() -> subprocess.Popen | None:
 
 
 def _stop_xvfb(proc: subprocess.Popen) -> None:
-    """End the session's Xvfb: asked first, killed when it does not go."""
+    """End the test run's Xvfb: asked first, killed when it does not go."""
     proc.terminate()
     try:
         proc.wait(KILL_WAIT_S)
