@@ -12,6 +12,10 @@
 # running service, are built once). The viewer process stays serial: one Qt application and one Xvfb
 # display. CACAD_TEST_WORKERS=0 runs the core in one process; extra arguments (e.g. -n 0) come last and
 # win.
+#
+# Under CI=true (as CI services set it) a test whose service is missing (the PostgreSQL server, an
+# OpenGL context, Xvfb) fails instead of skipping (tests/services.py). Every test that leaves a process
+# running fails, after the process is killed (tests/conftest.py).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"

@@ -6,6 +6,11 @@ unless a suite (the viewer's GL tests under Xvfb) sets another.
 The suite runs in parallel (pytest-xdist, ``scripts/test.sh``): every pytest process (worker) has its
 own temporary folders (``tmp_path``), its own disk caches (below), its own throwaway PostgreSQL
 databases (``tests/db/_fixtures.py``), free loopback ports and, in the viewer suite, its own Xvfb display.
+
+No test leaves a process running: after each test, a child process of this pytest process that was not
+there before the test (and has not ended within ``LEFTOVER_GRACE_S``) is killed with its process group
+and the test fails naming it. Tests start processes through ``tests.processes`` (``Child``, ``run``),
+which end them on every path; they wait with ``tests.waiting.wait_until``, never a fixed sleep.
 """
 
 from __future__ import annotations
@@ -16,10 +21,30 @@ from pathlib import Path
 
 import pytest
 
+from tests.processes import children_of_this_process, end_leftovers
+
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"
+
+#: Seconds a process a test has already told to stop gets to go before it counts as left running.
+LEFTOVER_GRACE_S = 5.0
+
+
+@pytest.fixture(autouse=True)
+def _no_process_left() -> Iterator[None]:
+    """Fail a test that leaves a child process running (after killing it): a leaked process would
+    otherwise hold files and ports, and break a later, unrelated test when its ``Popen`` is collected
+    (``ResourceWarning`` is an error in this suite). Processes of wider-scoped fixtures (a module's
+    service, the viewer suite's Xvfb) were started before this fixture's first look and are not
+    counted."""
+    before = set(children_of_this_process())
+    yield
+    left = end_leftovers(before, LEFTOVER_GRACE_S)
+    if left:
+        listed = "; ".join(f"pid {pid}: {cmd[:200]}" for pid, cmd in sorted(left.items()))
+        pytest.fail(f"the test left {len(left)} process(es) running (now killed): {listed}", pytrace=False)
 
 
 @pytest.fixture(scope="session", autouse=True)

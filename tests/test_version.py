@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import importlib.metadata
 import os
-import subprocess
 import sys
 import tomllib
 import warnings
@@ -18,6 +17,7 @@ from pathlib import Path
 import pytest
 
 import station
+from tests.processes import run
 
 ROOT = Path(__file__).resolve().parents[1]
 DISTRIBUTION = "cacad-station"
@@ -52,14 +52,8 @@ def test_cli_version_agrees() -> None:
         **os.environ,
         "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
     }
-    out = subprocess.run(
-        [sys.executable, "-m", "station.cli", "--version"],
-        capture_output=True,
-        text=True,
-        check=True,
-        env=env,
-        timeout=120,
-    )
+    out = run([sys.executable, "-m", "station.cli", "--version"], env=env, timeout=120)
+    assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == f"station {station.__version__}"
 
 

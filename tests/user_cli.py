@@ -13,21 +13,17 @@ import sys
 from collections.abc import Mapping
 from pathlib import Path
 
+from tests.processes import run
+
 REPO = Path(__file__).resolve().parents[1]
 
 
 def run_station(
     cwd: Path, *args: str, env: Mapping[str, str] | None = None, timeout: float = 300
 ) -> subprocess.CompletedProcess[str]:
-    """``python -m station.cli ARGS`` in *cwd*, with extra environment *env*; output captured as text."""
+    """``python -m station.cli ARGS`` in *cwd*, with extra environment *env*; output captured as text.
+    Past *timeout* seconds the command and everything it started are killed (``TimeoutExpired``)."""
     full = dict(os.environ, PYTHONPATH=str(REPO), STATION_CACHE_DIR=str(Path(cwd) / "cache"))
     full.pop("CACAD_DATABASE_URL", None)
     full.update(env or {})
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *args],
-        cwd=cwd,
-        env=full,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-    )
+    return run([sys.executable, "-m", "station.cli", *args], cwd=cwd, env=full, timeout=timeout)

@@ -9,6 +9,7 @@ from station.cli import main
 from station.ingest import Outbox
 from tests.api.conftest import Api
 from tests.ingest._readings import make_reading
+from tests.waiting import wait_until
 
 
 def _json(capsys) -> dict:
@@ -42,8 +43,6 @@ def test_db_and_users_commands(tmp_path: Path, capsys) -> None:
 
 
 def test_service_drains_its_outbox_in_the_background(tmp_path: Path) -> None:
-    import time
-
     from tests.api.conftest import make_api
 
     reading = make_reading(22, 0)
@@ -52,11 +51,12 @@ def test_service_drains_its_outbox_in_the_background(tmp_path: Path) -> None:
     gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path, outbox_replay_s=0.2)
     api = next(gen)
     try:
-        deadline = time.monotonic() + 20
-        count = 0
-        while time.monotonic() < deadline and count == 0:
-            time.sleep(0.2)
-            count = api.client.get("/api/v1/measurements", headers=api.auth("qa")).json()["count"]
+        count = wait_until(
+            lambda: api.client.get("/api/v1/measurements", headers=api.auth("qa")).json()["count"],
+            60,
+            interval=0.2,
+            what="the outbox reading to be stored",
+        )
         assert count == 1
     finally:
         gen.close()

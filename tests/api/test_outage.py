@@ -26,6 +26,7 @@ from db.models import AuditEvent, Measurement
 from station.ingest import Outbox
 from tests.api._proxy import TcpProxy
 from tests.ingest.test_serve_kill import _Service
+from tests.waiting import wait_until
 
 PANELS = 6
 REQUEST_BOUND_S = 5.0  # one bounded busy wait (2 s) plus the measurement itself, with margin
@@ -83,13 +84,12 @@ def _scan_through_outage(
         finally:
             bring_back()
 
-        deadline = time.monotonic() + DRAIN_TIMEOUT_S
-        while time.monotonic() < deadline:
-            health = http.get("/health").json()
-            if health["status"] == "ok" and health["queued"] == 0:
-                break
-            time.sleep(0.3)
-        assert health == {**health, "status": "ok", "queued": 0}, health
+        wait_until(
+            lambda: (h := http.get("/health").json())["status"] == "ok" and h["queued"] == 0,
+            DRAIN_TIMEOUT_S,
+            interval=0.3,
+            what="the outbox to drain (/health ok, queued 0)",
+        )
         r, _ = _measure(http, inst, panels[0], keys[0], auth)  # the retry now finds the stored reading
         assert r.status_code == 200 and r.json()["status"] == "duplicate", r.text
 

@@ -3,7 +3,6 @@ the type checker sees ``transport`` as that type, and construction refuses anoth
 
 from __future__ import annotations
 
-import subprocess
 import sys
 import textwrap
 from pathlib import Path
@@ -22,6 +21,7 @@ from station.drivers.transport import (
     StreamTransport,
     UsbTransport,
 )
+from tests.processes import run
 
 
 def test_each_family_declares_its_transport() -> None:
@@ -64,7 +64,8 @@ def test_subclass_of_a_family_keeps_its_transport_type() -> None:
 def test_type_checker_sees_the_transport_type(tmp_path: Path) -> None:
     """mypy infers ``GlossMeter(...).transport`` as ReportTransport and ``MA6Spectro(...).transport`` as
     StreamTransport, and rejects a serial transport for the gloss meter."""
-    pytest.importorskip("mypy")
+    import mypy  # noqa: F401  (a dev dependency: missing, the test fails)
+
     probe = tmp_path / "probe.py"
     probe.write_text(
         textwrap.dedent(
@@ -80,14 +81,8 @@ def test_type_checker_sees_the_transport_type(tmp_path: Path) -> None:
         )
     )
     root = Path(__file__).resolve().parents[2]
-    out = subprocess.run(
-        [sys.executable, "-m", "mypy", "--ignore-missing-imports", "--follow-imports=silent", str(probe)],
-        capture_output=True,
-        text=True,
-        cwd=root,
-        timeout=300,
-        check=False,
-    ).stdout
+    argv = [sys.executable, "-m", "mypy", "--ignore-missing-imports", "--follow-imports=silent", str(probe)]
+    out = run(argv, cwd=root, timeout=300).stdout
     assert 'Revealed type is "station.drivers.transport.ReportTransport"' in out, out
     assert 'Revealed type is "station.drivers.transport.StreamTransport"' in out, out
     assert 'incompatible type "SerialTransport"; expected "ReportTransport"' in out, out

@@ -163,26 +163,22 @@ def test_port_held_by_another_process():
     import subprocess
     import sys
 
+    from tests.processes import Child
+
     bench = Ma6Bench()
-    holder = subprocess.Popen(
-        [
-            sys.executable,
-            "-c",
-            "import fcntl, os, sys; fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY);"
-            "fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB); print('held', flush=True); sys.stdin.read()",
-            bench.host.path,
-        ],
-        stdin=subprocess.PIPE,
-        stdout=subprocess.PIPE,
+    hold = (
+        "import fcntl, os, sys; fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY);"
+        "fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB); print('held', flush=True); sys.stdin.read()"
     )
     try:
-        assert holder.stdout.readline().strip() == b"held"
-        with pytest.raises(DeviceInUse):
-            bench.inst.open()
+        with Child([sys.executable, "-c", hold, bench.host.path], stdin=subprocess.PIPE) as holder:
+            assert holder.out is not None and holder.stdin is not None
+            holder.out.wait_for("held", timeout=60)
+            with pytest.raises(DeviceInUse):
+                bench.inst.open()
+            holder.stdin.close()  # the holder reads to the end of its input, then exits
+            assert holder.finish(60) == 0
     finally:
-        holder.stdin.close()
-        holder.wait(5)
-        holder.stdout.close()
         bench.close()
     bench2 = Ma6Bench()  # once the other process is gone the port opens
     try:

@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from station import drivers
+from station.drivers import simproc
 from station.formulate.closed_loop import closed_loop
 from station.formulate.colorants import predict_lab
 from station.formulate.demo import generate_recipes
@@ -23,9 +25,6 @@ from station.model import AspecularMeasurements, fit_fftg
 from station.model.design_io import save_design
 from station.model.difference import delta_e
 from station.model.spectra import reflectance_to_lab
-
-simproc = pytest.importorskip("station.drivers.simproc")
-drivers = pytest.importorskip("station.drivers")
 
 A3 = (15.0, 45.0, 110.0)
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -18,6 +17,7 @@ from tests.db._fixtures import (  # noqa: F401
     pg_server,
     pg_url,
 )
+from tests.processes import run
 
 REPO = Path(__file__).resolve().parents[2]
 FORMATS = ("cxf", "cgats", "csv")  # the text formats
@@ -36,10 +36,10 @@ def sim_files(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, objec
     files = {f: d / f"std.{f}" for f in ALL_FORMATS}
     outs = [a for f in ALL_FORMATS for a in ("--out", str(files[f]))]
     env = dict(os.environ, PYTHONPATH=str(REPO))
-    res = subprocess.run(
+    res = run(
         [sys.executable, "-m", "station.cli", "measure", "sim:ma6", "--twelve", "--design", "std.json",
          "--sample", "std panel", *outs, "--json"],
-        capture_output=True, text=True, timeout=120, cwd=d, env=env,
+        timeout=120, cwd=d, env=env,
     )  # fmt: skip
     assert res.returncode == 0, res.stderr
     return json.loads(res.stdout), files

@@ -1,7 +1,9 @@
 """SIGKILL a real ingesting process at random instants: nothing acknowledged is lost, nothing is stored twice.
 
 Each round starts ``tests.ingest._child`` (a separate Python process writing through the real
-``Ingestor``), kills it with SIGKILL after a random delay, and checks the invariants: every reading the
+``Ingestor``), kills it with SIGKILL once it has acknowledged a random number (0 included: killed while
+starting) of further readings, counted in its acknowledgement file, so that a loaded machine cannot
+make a round end before the child got going or after the stream was done; then checks the invariants: every reading the
 child acknowledged is in the database or in the outbox, no client id is stored twice, every stored
 row has the hash of the reading it claims to be, and rows reach the database in stream order. Some
 rounds run with the database unreachable (PostgreSQL: a closed port; SQLite: another process holds the
@@ -17,7 +19,6 @@ import signal
 import sqlite3
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -27,36 +28,34 @@ from db.engine import make_engine
 from db.models import Measurement
 from station.ingest import Outbox
 from tests.ingest._readings import make_reading
+from tests.processes import Child
+from tests.waiting import wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 COUNT = 900
 ROUNDS = 5
 SEED = 7
+#: A round kills the child once it has acknowledged up to this many readings more (database up, away: a
+#: round with the database away acknowledges one reading per busy wait, 150 ms, so it stays short).
+ROUND_ACKS = (60, 8)
+#: Seconds a round may take to reach its kill point before it fails.
+ROUND_TIMEOUT_S = 120.0
 
 
-def _spawn(url: str, outbox: Path, acks: Path, busy_ms: int) -> subprocess.Popen[bytes]:
-    return subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "tests.ingest._child",
-            url,
-            str(outbox),
-            str(acks),
-            str(SEED),
-            str(COUNT),
-            str(busy_ms),
-        ],
-        cwd=REPO,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-    )
+def _spawn(url: str, outbox: Path, acks: Path, busy_ms: int) -> Child:
+    argv = [sys.executable, "-m", "tests.ingest._child", url, str(outbox), str(acks), str(SEED), str(COUNT)]
+    return Child([*argv, str(busy_ms)], cwd=REPO, stdout=subprocess.DEVNULL)
 
 
 def _acked(acks: Path) -> set[str]:
     if not acks.exists():
         return set()
     return {line.split()[1] for line in acks.read_text().splitlines() if len(line.split()) == 3}
+
+
+def _ack_lines(acks: Path) -> int:
+    """Acknowledgements written so far (complete lines)."""
+    return acks.read_text().count("\n") if acks.exists() else 0
 
 
 def _check(url: str, outbox_path: Path, acks: Path) -> int:
@@ -90,22 +89,25 @@ def _run_rounds(url: str, tmp_path: Path, hold_lock: object) -> None:
     outbox, acks = tmp_path / "outbox.sqlite3", tmp_path / "acks.txt"
     for round_no in range(ROUNDS):
         down = round_no % 3 == 1
-        with hold_lock(down) as (child_url, busy_ms):
-            proc = _spawn(child_url, outbox, acks, busy_ms)
-            time.sleep(rng.uniform(0.3, 1.8))
-            proc.send_signal(signal.SIGKILL)
-            proc.wait(10)
-            assert proc.returncode in (-signal.SIGKILL, 0), proc.stderr.read().decode() if proc.stderr else ""
-            if proc.stderr:
-                proc.stderr.close()
+        with hold_lock(down) as (child_url, busy_ms), _spawn(child_url, outbox, acks, busy_ms) as child:
+            target = _ack_lines(acks) + rng.randint(0, ROUND_ACKS[down])
+            wait_until(
+                lambda n=target, c=child: _ack_lines(acks) >= n or c.poll() is not None,
+                ROUND_TIMEOUT_S,
+                interval=0.01,
+                what=f"round {round_no}: {target} acknowledgements",
+            )
+            child.kill()
+            status = child.wait(30)
+            assert child.err is not None
+            assert status in (-signal.SIGKILL, 0), child.err.text()
         stored = _check(url, outbox, acks)
         with Outbox(outbox) as box:
             print(
                 f"round {round_no} down={down}: stored {stored}, queued {len(box)}, acked {len(_acked(acks))}"
             )
-    proc = _spawn(url, outbox, acks, 30_000)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 0, err.decode()
+    with _spawn(url, outbox, acks, 30_000) as child:
+        assert child.finish(300) == 0, child.err.text() if child.err else ""
     assert _check(url, outbox, acks) == COUNT
     with Outbox(outbox) as box:
         assert len(box) == 0

@@ -10,12 +10,11 @@ import numpy as np
 import pytest
 
 from station.model import FaceFlopTravelGloss
+from tests.processes import run
 
 
 def station(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "station.cli", *args], capture_output=True, text=True, timeout=120
-    )
+    return run([sys.executable, "-m", "station.cli", *args], timeout=120)
 
 
 def test_from_angles_contract_and_design_file(tmp_path) -> None:

@@ -269,7 +269,6 @@ def test_report_pdf_csv_and_trend(
 def test_check_reads_vendor_files_through_the_importers(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    pytest.importorskip("station.ingest.formats", reason="the vendor-file importers are not installed")
     for name in ("s.cgats", "s.cxf"):
         res = inproc(capsys, tmp_path, "measure", "sim:ma6", "--out", name, "--json")
         assert res.returncode == 0, res.stderr

@@ -1,4 +1,5 @@
-"""Fixtures of the renderer suite: a GL context when one can be made (tests marked ``gl`` skip otherwise)."""
+"""Fixtures of the renderer suite: a GL context when one can be made (tests that need it skip otherwise,
+and fail under ``CI=true``: ``tests.services.service_missing``)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import pytest
 
 from station.render.errors import GLUnavailableError
 from station.render.gl_renderer import create_gl_context
+from tests.services import service_missing
 
 
 @pytest.fixture(scope="session")
@@ -14,6 +16,6 @@ def gl_ctx():
     try:
         ctx = create_gl_context()
     except GLUnavailableError as exc:
-        pytest.skip(f"no OpenGL context: {exc}")
+        service_missing(f"no OpenGL context: {exc}")
     yield ctx
     ctx.release()

@@ -3,7 +3,8 @@
 Qt reads ``QT_QPA_PLATFORM`` once, when the QApplication is created, so the platform is chosen here at
 import time, before pytest-qt's ``qapp`` exists: an Xvfb server is started on a free display
 (``-displayfd``) and every viewer test runs on ``xcb`` with Mesa's llvmpipe serving GL. If Xvfb is
-missing or fails, the session stays on ``offscreen`` and the GL tests skip with the reason.
+missing or fails, the session stays on ``offscreen`` and the GL tests skip with the reason (under
+``CI=true`` they fail: ``tests.services.service_missing``).
 
 * Qt messages of level WARNING or above fail the test (``qt_log_level_fail`` marker on every item).
 * Autouse fixture: after each test no top-level widget is left open and no QThread is still running.
@@ -19,7 +20,13 @@ import tempfile
 
 import pytest
 
+from tests.processes import KILL_WAIT_S, Stream
+from tests.services import service_missing
+from tests.waiting import WaitTimeout
+
 XVFB_ERROR = ""
+#: Seconds Xvfb gets to report its display number.
+XVFB_START_S = 60.0
 
 
 def _start_xvfb() -> subprocess.Popen | None:
@@ -51,15 +58,29 @@ def _start_xvfb() -> subprocess.Popen | None:
         return None
     finally:
         os.close(w)
-    with os.fdopen(r) as fh:
-        display = fh.readline().strip()
+    with Stream(r, "Xvfb's display number") as reported:  # a line, or nothing once Xvfb has failed
+        try:
+            display = reported.wait_for("\n", XVFB_START_S).strip()
+        except WaitTimeout:
+            display = ""
     if not display:
         proc.kill()
-        XVFB_ERROR = "Xvfb did not report a display number"
+        proc.wait(KILL_WAIT_S)
+        XVFB_ERROR = f"Xvfb did not report a display number within {XVFB_START_S:g} s"
         return None
     os.environ["DISPLAY"] = f":{display}"
-    atexit.register(lambda: (proc.terminate(), proc.wait(5)))
+    atexit.register(_stop_xvfb, proc)
     return proc
+
+
+def _stop_xvfb(proc: subprocess.Popen) -> None:
+    """End the test run's Xvfb: asked first, killed when it does not go."""
+    proc.terminate()
+    try:
+        proc.wait(KILL_WAIT_S)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(KILL_WAIT_S)
 
 
 XVFB = _start_xvfb()
@@ -72,16 +93,20 @@ GL = XVFB is not None
 
 
 def pytest_collection_modifyitems(config, items) -> None:
-    """Every viewer test fails on Qt warnings; GL tests skip when there is no Xvfb."""
+    """Every viewer test fails on Qt warnings."""
     here = os.path.dirname(__file__)
-    skip_gl = pytest.mark.skip(reason=f"no GL-capable Qt platform: {XVFB_ERROR}")
     for item in items:
         if str(item.fspath).startswith(here):
             item.add_marker(pytest.mark.qt_log_level_fail("WARNING"))
             # the offscreen platform plugin's own limitation (QMainWindow docks), not a viewer fault
             item.add_marker(pytest.mark.qt_log_ignore("This plugin does not support propagateSizeHints"))
-            if "gl" in item.keywords and not GL:
-                item.add_marker(skip_gl)
+
+
+@pytest.fixture(autouse=True)
+def _gl_platform(request: pytest.FixtureRequest) -> None:
+    """A test marked ``gl`` skips when there is no Xvfb (fails under ``CI=true``)."""
+    if request.node.get_closest_marker("gl") is not None and not GL:
+        service_missing(f"no GL-capable Qt platform: {XVFB_ERROR}")
 
 
 @pytest.fixture(scope="package", autouse=True)

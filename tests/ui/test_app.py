@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 from PIL import Image
 
+from tests.processes import run
 from ui.app import MainWindow
 from ui.models.document import DEFAULT_DESIGN
 from ui.models.measure_db import LocalSink
@@ -64,7 +64,7 @@ def test_screenshots_command_exits_cleanly(tmp_path):
     """``station viewer screenshots`` run as a user runs it, from a folder outside the checkout: every
     screen written and a clean exit (it used to write them all, then crash in Qt's teardown, exit 139)."""
     out = tmp_path / "shots"
-    proc = subprocess.run(
+    proc = run(
         [
             str(Path(sys.executable).with_name("station")),
             "viewer",
@@ -75,8 +75,6 @@ def test_screenshots_command_exits_cleanly(tmp_path):
             "--json",
         ],
         cwd=tmp_path,
-        capture_output=True,
-        text=True,
         timeout=300,
         env={**os.environ, "QT_QPA_PLATFORM": os.environ.get("QT_QPA_PLATFORM", "xcb")},
     )

@@ -64,19 +64,19 @@ def _press_cancel_when_offered(qtbot, progress) -> float:
 
 
 def test_progress_shows_after_half_a_second_and_cancel_after_two(qtbot) -> None:
-    import time
-
     from ui.widgets.tasks import CANCEL_AFTER_MS, SHOW_AFTER_MS, TaskProgress
 
     progress = TaskProgress()
     qtbot.addWidget(progress)
     steps_done: list[int] = []
+    ended = threading.Event()  # set when the test ends, so the task never outlives it
 
     def work(report) -> str:
-        for i in range(200):  # 10 s unless cancelled
-            report(i, f"step {i}")
+        i = 0
+        while not ended.wait(0.05):  # a step of work, until Cancel (the next report raises)
+            report(min(i, 199), f"step {i}")
             steps_done.append(i)
-            time.sleep(0.05)
+            i += 1
         return "done"
 
     task = TaskThread(work)
@@ -85,14 +85,18 @@ def test_progress_shows_after_half_a_second_and_cancel_after_two(qtbot) -> None:
     task.cancelled.connect(lambda: outcome.append("cancelled"))
     progress.watch(task, "counting", 200)
     task.start()
-    assert not progress.isVisible()
-    qtbot.waitUntil(progress.isVisible, timeout=5_000)
-    assert progress.running_ms >= SHOW_AFTER_MS and not progress.cancel_btn.isVisible()
-    ran = _press_cancel_when_offered(qtbot, progress)
-    assert ran >= CANCEL_AFTER_MS / 1000
-    qtbot.waitUntil(task.isFinished, timeout=5_000)
-    qtbot.waitUntil(lambda: outcome == ["cancelled"], timeout=5_000)
-    assert len(steps_done) < 200 and not progress.isVisible()
+    try:
+        assert not progress.isVisible()
+        qtbot.waitUntil(progress.isVisible, timeout=5_000)
+        assert progress.running_ms >= SHOW_AFTER_MS and not progress.cancel_btn.isVisible()
+        ran = _press_cancel_when_offered(qtbot, progress)
+        assert ran >= CANCEL_AFTER_MS / 1000
+        qtbot.waitUntil(task.isFinished, timeout=10_000)
+        qtbot.waitUntil(lambda: outcome == ["cancelled"], timeout=5_000)
+    finally:
+        ended.set()
+        task.wait(10_000)
+    assert steps_done and not progress.isVisible()
 
 
 def test_a_pure_task_cancelled_without_progress_drops_its_result(qtbot) -> None:
