@@ -170,6 +170,9 @@ class Front:
                 if not self._retired.is_set():
                     self.findings.add(f"{self.label}: did not start: {exc}")
                 continue
+            except Exception:
+                self.findings.add(f"{self.label}: supervisor failed:\n{traceback.format_exc()}")
+                return
             with self._lock:
                 self.proc = proc
                 self.starts += 1
@@ -233,6 +236,7 @@ class Front:
             self._retired.set()
             self._wake.set()
             proc = self.proc
+            self._abort_start()
         kill_group(proc)
         if proc is not None:
             proc.wait()
@@ -257,7 +261,8 @@ class ViewerFront(Front):
         return _tail(self.stderr)
 
     def _abort_start(self) -> None:
-        kill_group(self._starting)
+        if self._starting is not None and self._starting.poll() is None:
+            kill_group(self._starting)
 
     def _spawn(self) -> subprocess.Popen[bytes]:
         with open(self.stderr, "ab") as err:
@@ -335,12 +340,17 @@ class ServiceFront(Front):
         return self.serve.tail(15)
 
     def _abort_start(self) -> None:
-        kill_group(self.serve.proc)  # the one starting: its log ends, ServeProcess.start gives up
+        proc = self.serve.proc
+        if proc is not None and proc.poll() is None:
+            kill_group(proc)  # the one starting: its log ends, ServeProcess.start gives up
 
     def _spawn(self) -> subprocess.Popen[str]:
         try:
             self.serve.start()
         except ServeStartError as exc:
+            proc = self.serve.proc  # ServeProcess.start leaves the failed start's log pipe open
+            if proc is not None and proc.stdout is not None:
+                proc.stdout.close()
             raise StartError(str(exc)) from exc
         assert self.serve.proc is not None
         if not self.serve.token:
@@ -375,7 +385,8 @@ class WatcherFront(Front):
         return _tail(self.stderr)
 
     def _abort_start(self) -> None:
-        kill_group(self._starting)
+        if self._starting is not None and self._starting.poll() is None:
+            kill_group(self._starting)
 
     def _spawn(self) -> subprocess.Popen[bytes]:
         out = os.open(self.outcomes, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o600)

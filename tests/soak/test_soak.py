@@ -4,19 +4,23 @@ For a bounded time (``$CACAD_SOAK_SECONDS``, default :data:`DEFAULT_SOAK_S`; set
 dedicated run) four writers store into ONE database, an SQLite file and, second, a PostgreSQL database:
 the viewer's models (headless child process), ``station import FILE --store`` run from a folder outside
 the checkout, a real ``station serve`` measuring its MA6 simulator over HTTP, and ``station import
-watch`` fed by dropped files (see :mod:`tests.soak._fronts`). A seeded chaos loop SIGKILLs a random
-subset of them every few seconds; each killed front is restarted and each sender retries what it was
-sending, as a person or a station would. Every sender keeps its own fsynced log of what it sent and what
-the product acknowledged (:mod:`tests.soak._log`).
+watch`` fed by dropped files (see :mod:`tests.soak._fronts`). They join as on a technician's day: the
+viewer and the terminal imports first, the service and the watch folder once both have stored something.
+Then a seeded chaos loop SIGKILLs a random subset of them every few seconds; each killed front is
+restarted after a random while and each sender retries what it was sending, as a person or a station
+would. Every sender keeps its own fsynced log of what it sent and what the product acknowledged
+(:mod:`tests.soak._log`; the watch folder's acknowledgements are its ``--json`` outcome lines).
 
-At the end (senders stopped, fronts asked to end, the outboxes drained by the product's ingest loop as
-a restart would) the logs are accounted against the database (:mod:`tests.soak._accounting`): every
+At the end (senders stopped, what they had in hand left unacknowledged, fronts asked to end, the
+outboxes drained by the product's ingest loop as a restart would) the logs are accounted against the database (:mod:`tests.soak._accounting`): every
 acknowledged reading stored exactly once under the id it was given, no id given to two readings, an
 unacknowledged send stored at most once, one audit event each; and ``station db verify`` says intact.
 
 The soak lasts at least the configured time and until every sender has had :data:`MIN_ACKS` answers
 and every front has been killed once, so a slow machine makes it longer, never weaker; past
-:data:`OVERRUN_S` more it fails as too slow. The seed is printed (``$CACAD_SOAK_SEED`` replays it).
+:data:`OVERRUN_S` more it fails as too slow. A front that crashes or answers an error ends the chaos at
+once (the run has failed). The seed is printed (``$CACAD_SOAK_SEED`` replays the chaos schedule; the
+timing of the processes is the machine's).
 
 The detector itself is tested below: one acknowledged reading deleted with raw SQL and the chain heads
 rewound must show up in the accounting and in ``station db verify``.
