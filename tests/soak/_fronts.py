@@ -89,8 +89,9 @@ def child_env(work: Path) -> dict[str, str]:
 
 
 def kill_group(proc: subprocess.Popen[bytes] | subprocess.Popen[str] | None) -> None:
-    """SIGKILL *proc*'s process group (it leads one); no-op once it is gone."""
-    if proc is None:
+    """SIGKILL *proc*'s process group (it leads one) while *proc* is not yet reaped (a reaped id may
+    be reused); a simulator left in the group ends on its own when its stdin closes."""
+    if proc is None or proc.poll() is not None:
         return
     try:
         os.killpg(proc.pid, signal.SIGKILL)
@@ -225,7 +226,7 @@ class Front:
                 self.findings.add(
                     f"{self.label}: did not end within {STOP_TIMEOUT_S:g} s of {self.stop_signal!r}"
                 )
-            kill_group(proc)  # whatever is left of its group (a simulator)
+            kill_group(proc)
             proc.wait()
         if self._thread is not None:
             self._thread.join(STOP_TIMEOUT_S)

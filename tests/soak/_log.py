@@ -122,18 +122,32 @@ def read_logs(paths: Iterable[Path]) -> list[Entry]:
     return [e for p in paths for e in read_log(p)]
 
 
-def read_watch_outcomes(path: Path, sender: str) -> list[Entry]:
-    """The acknowledgements a watch folder printed (``station import watch --json``: one outcome per
-    line, a receipt per reading of a file moved to ``done/``), as ``ack`` entries of *sender*."""
+def _outcomes(path: Path) -> list[dict[str, Any]]:
+    """The complete JSON lines of a watch folder's outcome file."""
     if not path.exists():
         return []
     out = []
     for line in path.read_text(encoding="utf-8").splitlines():
         try:
             doc = json.loads(line)
-        except json.JSONDecodeError:
+        except json.JSONDecodeError:  # torn by a kill mid-line
             continue
-        if not isinstance(doc, dict) or doc.get("status") != "done":
+        if isinstance(doc, dict):
+            out.append(doc)
+    return out
+
+
+def read_watch_rejections(path: Path) -> list[str]:
+    """``file: reason`` of each file the watch folder moved to ``rejected/`` (none was meant to be)."""
+    return [f"{d.get('file')}: {d.get('reason')}" for d in _outcomes(path) if d.get("status") == "rejected"]
+
+
+def read_watch_outcomes(path: Path, sender: str) -> list[Entry]:
+    """The acknowledgements a watch folder printed (``station import watch --json``: one outcome per
+    line, a receipt per reading of a file moved to ``done/``), as ``ack`` entries of *sender*."""
+    out = []
+    for doc in _outcomes(path):
+        if doc.get("status") != "done":
             continue
         for r in doc.get("receipts", []):
             mid = r.get("measurement_id")

@@ -65,7 +65,7 @@ from tests.soak._fronts import (
     child_env,
     wait_until,
 )
-from tests.soak._log import SenderLog, read_log, read_logs, read_watch_outcomes
+from tests.soak._log import SenderLog, read_log, read_logs, read_watch_outcomes, read_watch_rejections
 
 DEFAULT_SOAK_S = 20.0
 #: Answers every sender must have had before the soak may end.
@@ -277,6 +277,8 @@ def run_soak(work: Path, url: str, seed: int, soak_s: float) -> SoakReport:
         report.acks = answers()
         for outbox in (viewer.outbox, importer.outbox, service.outbox, watcher.outbox):
             report.drained += _drain(url, outbox, findings)
+        for rejected in read_watch_rejections(watcher.outcomes):
+            findings.add(f"watcher rejected {rejected}")
         entries = read_logs(logs.values()) + read_watch_outcomes(watcher.outcomes, "watcher")
         try:
             report.accounts = account(entries, read_stored(url))
