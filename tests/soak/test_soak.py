@@ -149,7 +149,11 @@ class SoakReport:
     def summary(self) -> str:
         """The figures, one paragraph."""
         acc = self.accounts.summary() if self.accounts is not None else "not accounted"
-        verify = "not run" if self.verify is None else f"status {self.verify.status} {self.verify.report}"
+        verify = (
+            "not run"
+            if self.verify is None
+            else f"status {self.verify.status} {self.verify.report} {self.verify.stderr.strip()[-300:]}"
+        )
         phases = ", ".join(f"{name} {s:.0f} s" for name, s in self.phases.items())
         return (
             f"soak seed {self.seed} on {self.url.split(':', 1)[0]} ({phases}): "
