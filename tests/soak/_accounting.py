@@ -76,13 +76,16 @@ class Accounts:
     unacknowledged: int
     stored: int
     lost: tuple[str, ...] = ()
+    lost_by_sender: dict[str, int] = field(default_factory=dict)
+    reused_ids: int = 0
     problems: tuple[str, ...] = field(default=())
 
     def summary(self) -> str:
         """One line of figures."""
         return (
             f"{self.sent} sent, {self.acknowledged} acknowledged, {self.unacknowledged} unacknowledged, "
-            f"{self.stored} stored, {len(self.lost)} acknowledged readings missing, "
+            f"{self.stored} stored, {len(self.lost)} acknowledged readings missing {self.lost_by_sender}, "
+            f"{self.reused_ids} measurement ids acknowledged for two readings or more, "
             f"{len(self.problems)} problems"
         )
 
@@ -105,6 +108,7 @@ def account(entries: Iterable[Entry], stored: Stored) -> Accounts:
         rows[r.client_id].append(r)
     problems: list[str] = []
     lost: list[str] = []
+    lost_by: dict[str, int] = defaultdict(int)
     ids_acknowledged: dict[int, set[str]] = defaultdict(set)
 
     for cid, answers in sorted(acks.items()):
@@ -119,6 +123,8 @@ def account(entries: Iterable[Entry], stored: Stored) -> Accounts:
         senders = sorted({a.sender for a in answers})
         if not here:
             lost.append(cid)
+            for sender in senders:
+                lost_by[sender] += 1
             given = sorted({a.measurement_id for a in answers if a.measurement_id is not None})
             problems.append(
                 f"{'/'.join(senders)}: acknowledged reading {cid} (measurement {given}) is not stored"
@@ -138,8 +144,10 @@ def account(entries: Iterable[Entry], stored: Stored) -> Accounts:
                 problems.append(f"{e.sender}: reading {cid} stored with another Lab than it {e.event}")
                 break
 
+    reused = 0
     for mid, cids in sorted(ids_acknowledged.items()):
         if len(cids) > 1:
+            reused += 1
             problems.append(
                 f"measurement id {mid} acknowledged for {len(cids)} different readings: {sorted(cids)}"
             )
@@ -164,6 +172,8 @@ def account(entries: Iterable[Entry], stored: Stored) -> Accounts:
         unacknowledged=len(unacknowledged),
         stored=len(stored.rows),
         lost=tuple(lost),
+        lost_by_sender=dict(lost_by),
+        reused_ids=reused,
         problems=tuple(problems),
     )
 

@@ -360,7 +360,7 @@ class ServiceFront(Front):
         return self.serve.proc
 
     def target(self, timeout_s: float) -> tuple[str, dict[str, str]] | None:
-        """``(base URL, auth header)`` of the serving service, waiting up to *timeout_s*; ``None`` if not up."""
+        """``(base URL, auth header)`` of the serving service, waiting up to *timeout_s*; else ``None``."""
         with self._lock:
             if self._ready.is_set():
                 return self.serve.base, {"Authorization": f"Bearer {self.serve.token}"}

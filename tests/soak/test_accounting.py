@@ -40,7 +40,9 @@ def test_each_broken_rule_is_a_problem() -> None:
         *_sent_and_acked("refused", None, "refused"),
     ]
     stored = _stored((3, "moved"), (5, "twin-1"), (6, "twin-2"), (7, "phantom"))
-    problems = "\n".join(account(entries, stored).problems)
+    accounts = account(entries, stored)
+    assert (accounts.lost, accounts.lost_by_sender, accounts.reused_ids) == (("lost",), {"s": 1}, 1)
+    problems = "\n".join(accounts.problems)
     assert "reading lost (measurement [1]) is not stored" in problems
     assert "reading moved acknowledged as measurement 2, stored as 3" in problems
     assert "measurement id 5 acknowledged for 2 different readings" in problems
