@@ -49,7 +49,7 @@ from sqlalchemy.pool import NullPool
 from db.chain import verify as verify_chains
 from db.engine import normalise_url
 from db.models import Measurement
-from station.ingest import DatabaseDestination, Ingestor
+from station.ingest import Ingestor
 from tests.ingest._readings import make_reading
 from tests.soak._accounting import Accounts, account, format_problems, read_stored
 from tests.soak._fronts import (
@@ -172,7 +172,7 @@ def _drain(url: str, outbox: Path, findings: Findings) -> int:
     """Replay *outbox* into *url* as the front's next start would; how many readings left it."""
     if not outbox.exists():
         return 0
-    with Ingestor(DatabaseDestination(url), outbox) as ingestor:
+    with Ingestor(url, outbox) as ingestor:  # from a URL: the ingest loop closes its engine with it
         try:
             receipts = ingestor.drain()
         except Exception as exc:  # a database the fronts broke
