@@ -1,0 +1,1 @@
+"""The multi-process soak test: every front of the product on one database, killed at random."""
