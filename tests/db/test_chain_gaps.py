@@ -264,3 +264,18 @@ def test_a_row_dated_in_the_future_is_not_carried_forward(
     assert len(times) == 3 and ats[0].year == 2099 and all(at <= real() for at in ats[1:]), ats
     code, report = _report(database_url, tmp_path, capsys)
     assert code == 1 and _kinds(report) == [("audit_events", "future", times[0])], report
+
+
+def test_a_head_moves_only_onto_the_chains_last_row(database_url: str) -> None:
+    """Even a writer allowed to update ``ledger_heads`` cannot move a head past rows that are not there."""
+    from sqlalchemy.exc import DBAPIError
+
+    _store(database_url, [make_reading(17, i) for i in range(2)])
+    for statement in (
+        "UPDATE ledger_heads SET length = length + 1, head_sha256 = :f WHERE chain = 'measurements'",
+        "UPDATE ledger_heads SET length = length + 1, head_sha256 = (SELECT chain_sha256 FROM measurements "
+        "WHERE id = 1) WHERE chain = 'measurements'",
+        "UPDATE ledger_heads SET length = length + 1, legacy_last_id = 99 WHERE chain = 'record_events'",
+    ):
+        with pytest.raises(DBAPIError, match="only moves forward"):
+            _owner(database_url, lambda conn, _d, s=statement: conn.execute(text(s), {"f": "f" * 64}))
