@@ -599,10 +599,16 @@ def read_checkpoints(folder: Path | None, database: str) -> tuple[list[Checkpoin
     """The checkpoints of *database* in *folder*'s file, and a finding for each line that is not genuine."""
     if folder is None:
         return [], []
-    data = _read_regular(folder / CHECKPOINT_FILE)
+    try:
+        data = _read_regular(folder / CHECKPOINT_FILE)
+        key = checkpoint_key(folder, create=False) if data is not None else None
+    except (OSError, ValueError) as exc:  # a link, a folder, an unreadable or mangled key
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        return [], [
+            Finding("checkpoints", "checkpoint_invalid", None, f"{CHECKPOINT_FILE}: cannot be read ({why})")
+        ]
     if data is None:
         return [], []
-    key = checkpoint_key(folder, create=False)
     found: list[Checkpoint] = []
     bad: list[Finding] = []
     for number, raw in enumerate(data.decode("utf-8", "replace").splitlines(), start=1):

@@ -279,3 +279,16 @@ def test_a_head_moves_only_onto_the_chains_last_row(database_url: str) -> None:
     ):
         with pytest.raises(DBAPIError, match="only moves forward"):
             _owner(database_url, lambda conn, _d, s=statement: conn.execute(text(s), {"f": "f" * 64}))
+
+
+def test_a_checkpoint_file_replaced_by_a_link_is_named_not_followed(
+    database_url: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _store(database_url, [make_reading(18, 0)])
+    assert _report(database_url, tmp_path, capsys, "checkpoint")[0] == 0
+    path = tmp_path / chain.CHECKPOINT_FILE
+    elsewhere = tmp_path / "elsewhere.jsonl"
+    path.rename(elsewhere)
+    path.symlink_to(elsewhere)
+    code, report = _report(database_url, tmp_path, capsys)
+    assert code == 1 and _kinds(report) == [("checkpoints", "checkpoint_invalid", None)], report
