@@ -292,3 +292,31 @@ def test_a_checkpoint_file_replaced_by_a_link_is_named_not_followed(
     path.symlink_to(elsewhere)
     code, report = _report(database_url, tmp_path, capsys)
     assert code == 1 and _kinds(report) == [("checkpoints", "checkpoint_invalid", None)], report
+
+
+def test_a_tail_replaced_to_the_same_length_differs_from_the_checkpoint(
+    database_url: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _store(database_url, [make_reading(19, i) for i in range(4)])
+    assert _report(database_url, tmp_path, capsys, "checkpoint")[0] == 0
+
+    def rewind(conn: Connection, dialect: str) -> None:
+        _lift(conn, dialect, "measurements")
+        _lift(conn, dialect, "ledger_heads")
+        kept = conn.execute(text("SELECT chain_sha256, received_at FROM measurements WHERE id = 2")).one()
+        conn.execute(text("DELETE FROM measurements WHERE id > 2"))
+        conn.execute(
+            text(
+                "UPDATE ledger_heads SET length = 2, head_sha256 = :h, head_at = :at WHERE chain = 'measurements'"
+            ),
+            {"h": kept[0], "at": kept[1]},
+        )
+        if dialect == "postgresql":
+            conn.execute(text("ALTER TABLE ledger_heads ENABLE TRIGGER ALL"))
+            conn.execute(text("ALTER TABLE measurements ENABLE TRIGGER ALL"))
+
+    _owner(database_url, rewind)
+    _store(database_url, [make_reading(20, i) for i in range(2)])  # two other readings take their places
+    code, report = _report(database_url, tmp_path, capsys)
+    assert code == 1, report
+    assert [(c, k) for c, k, _id in _kinds(report)] == [("measurements", "checkpoint_mismatch")], report
