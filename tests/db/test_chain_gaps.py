@@ -320,3 +320,34 @@ def test_a_tail_replaced_to_the_same_length_differs_from_the_checkpoint(
     code, report = _report(database_url, tmp_path, capsys)
     assert code == 1, report
     assert [(c, k) for c, k, _id in _kinds(report)] == [("measurements", "checkpoint_mismatch")], report
+
+
+def test_a_gloss_reading_is_sealed_and_a_change_to_it_named(
+    database_url: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from station.ingest import InstrumentRef
+    from station.ingest.gloss import GlossRecord, store_gloss
+
+    engine = make_engine(database_url, poolclass=NullPool)
+    record = GlossRecord(
+        client_id=uuid.uuid4(),
+        instrument=InstrumentRef(serial="GL-1", model="gloss meter", kind="gloss"),
+        operator="ana",
+        measured_at=dt.datetime(2026, 12, 1, 8, 0, tzinfo=dt.UTC),
+        gloss_60_gu=-0.0,  # a legal reading of a matte black, rounded
+        gloss_85_gu=2.5,
+        panel=PanelRef(job="J-9", part="hood"),
+    )
+    with make_sessionmaker(engine).begin() as session:
+        gloss_id = store_gloss(session, record).measurement_id
+    engine.dispose()
+    code, report = _report(database_url, tmp_path, capsys)
+    assert (code, report["findings"]) == (0, []), report
+
+    def tamper(conn: Connection, dialect: str) -> None:
+        _lift(conn, dialect, "gloss_readings")
+        conn.execute(text("UPDATE gloss_readings SET gloss_85_gu = 3.5"))
+
+    _owner(database_url, tamper)
+    code, report = _report(database_url, tmp_path, capsys)
+    assert code == 1 and _kinds(report) == [("gloss_readings", "record_changed", gloss_id)], report
