@@ -762,7 +762,12 @@ def _verify_chain(
                 chain,
                 "head_mismatch",
                 None,
-                f"{chain}: head records {head['length']} rows, table holds {count} (rows removed after id {last_id})",
+                f"{chain}: head records {head['length']} rows, table holds {count} "
+                + (
+                    f"(rows removed after id {last_id})"
+                    if int(head["length"]) > count
+                    else "(rows appended without moving the head)"
+                ),
             )
         )
 

@@ -240,6 +240,21 @@ def db_command(args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
+@contextlib.contextmanager
+def _snapshot(engine: Any) -> Iterator[Any]:
+    """A connection that reads one snapshot of the whole database while writers go on appending.
+
+    PostgreSQL: a read-only REPEATABLE READ transaction; SQLite: the engine's one transaction (WAL).
+    """
+    conn = engine.connect()
+    try:
+        if engine.dialect.name == "postgresql":
+            conn = conn.execution_options(isolation_level="REPEATABLE READ", postgresql_readonly=True)
+        yield conn
+    finally:
+        conn.close()
+
+
 def _verify(engine: Any, url: str, data_dir: Path, args: argparse.Namespace) -> dict[str, Any]:
     """Verify every chain, sealed record and checkpoint; report every finding (``db.chain.audit_database``).
 
@@ -255,7 +270,7 @@ def _verify(engine: Any, url: str, data_dir: Path, args: argparse.Namespace) -> 
     if current_revision(engine) is None:
         raise InputError("database", "a migrated database (run `station db upgrade`)", None)
     database = chain.database_identity(url)
-    with engine.connect() as conn:
+    with _snapshot(engine) as conn:
         report = chain.audit_database(conn, checkpoint_folder=data_dir, database=database)
     result: dict[str, Any] = {"chain": "intact" if report.intact else "broken", "intact": report.intact}
     for name in chain.CHAINS:

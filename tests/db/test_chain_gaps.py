@@ -351,3 +351,34 @@ def test_a_gloss_reading_is_sealed_and_a_change_to_it_named(
     _owner(database_url, tamper)
     code, report = _report(database_url, tmp_path, capsys)
     assert code == 1 and _kinds(report) == [("gloss_readings", "record_changed", gloss_id)], report
+
+
+def test_verify_reads_one_snapshot_while_writers_append(
+    database_url: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Readings stored during a verify never show as a head that disagrees with the table."""
+    import threading
+
+    _store(database_url, [make_reading(22, i) for i in range(3)])
+    stop = threading.Event()
+    stored: list[str] = []
+
+    def write() -> None:
+        destination = DatabaseDestination(database_url)
+        try:
+            i = 3
+            while not stop.is_set() and i < 200:
+                stored.append(destination.store(make_reading(22, i)).status)
+                i += 1
+        finally:
+            destination.close()
+
+    writer = threading.Thread(target=write)
+    writer.start()
+    try:
+        reports = [_report(database_url, tmp_path, capsys) for _ in range(4)]
+    finally:
+        stop.set()
+        writer.join(timeout=60)
+    assert not writer.is_alive() and stored and set(stored) == {"stored"}
+    assert [(code, r["findings"]) for code, r in reports] == [(0, [])] * 4, reports
