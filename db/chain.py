@@ -502,22 +502,27 @@ def _signature(key: bytes, body: Mapping[str, Any]) -> str:
     return hmac.new(key, text.encode("ascii"), hashlib.sha256).hexdigest()
 
 
-def write_checkpoint(conn: Connection | Session, folder: Path, database: str) -> dict[str, Any]:
-    """Append one signed checkpoint of every chain's committed head to *folder*'s checkpoint file.
+def write_checkpoint(source: Connection | Session | Report, folder: Path, database: str) -> dict[str, Any]:
+    """Append one signed checkpoint of every chain's length and head to *folder*'s checkpoint file.
 
+    *source*: a :class:`Report` (the heads it verified) or a connection (the committed heads, read now).
     *database* is :func:`database_identity` of the database. The key is made on first use. Returns the
     line written (without its signature).
     """
     key = checkpoint_key(folder, create=True)
     if key is None:  # made just now, then removed by someone else
         raise FileNotFoundError(folder / CHECKPOINT_KEY_FILE)
-    heads = conn.execute(
-        select(HEADS.c.chain, HEADS.c.length, HEADS.c.head_sha256).where(HEADS.c.chain.in_(CHAINS))
-    ).all()
+    if isinstance(source, Report):
+        chains = {c: {"length": source.rows[c], "head_sha256": source.heads[c]} for c in sorted(source.rows)}
+    else:
+        heads = source.execute(
+            select(HEADS.c.chain, HEADS.c.length, HEADS.c.head_sha256).where(HEADS.c.chain.in_(CHAINS))
+        ).all()
+        chains = {str(h.chain): {"length": int(h.length), "head_sha256": str(h.head_sha256)} for h in heads}
     body: dict[str, Any] = {
         "database": database,
         "at": utcnow().isoformat(timespec="microseconds"),
-        "chains": {str(h.chain): {"length": int(h.length), "head_sha256": str(h.head_sha256)} for h in heads},
+        "chains": chains,
     }
     line = json.dumps({**body, "hmac": _signature(key, body)}, sort_keys=True, separators=(",", ":"))
     fd = os.open(folder / CHECKPOINT_FILE, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o600)

@@ -297,8 +297,7 @@ def _verify(engine: Any, url: str, data_dir: Path, args: argparse.Namespace) -> 
         from db.files import private_dir
 
         private_dir(data_dir)
-        with engine.connect() as conn:
-            written = chain.write_checkpoint(conn, data_dir, database)
+        written = chain.write_checkpoint(report, data_dir, database)  # exactly the heads verified
         result["checkpoint"] = {c: v["length"] for c, v in written["chains"].items()}
         result["checkpoints"] = report.checkpoints + 1
     return result
