@@ -2,8 +2,10 @@
 # PostgreSQL for a deployment: two roles and one database.
 #   owner   (CACAD_PG_OWNER, default cacad_owner)    owns the database and the tables; runs migrations.
 #   service (CACAD_PG_SERVICE, default cacad_service) what `station serve` connects as: reads and writes
-#           rows, but cannot TRUNCATE, ALTER, DROP or DISABLE the append-only triggers, and cannot UPDATE
-#           or DELETE measurements, audit events and gloss readings at all.
+#           rows, but cannot TRUNCATE, ALTER, DROP or DISABLE the append-only triggers, cannot UPDATE
+#           or DELETE measurements, audit events, record events and gloss readings at all, and can move
+#           a chain head (ledger_heads) only onto the chain's new last row, linked from the old head
+#           (the owner's trigger checks the link; see db/chain.py).
 # Creates what is missing, migrates the database to head as the owner (`station db upgrade`), then
 # (re)grants the service role. Idempotent: run it again after every upgrade of the code.
 # Environment: CACAD_PG_HOST (127.0.0.1), CACAD_PG_PORT (5432), CACAD_PG_SUPERUSER (postgres; the
@@ -58,7 +60,7 @@ service_url="$(url_of "$service" "$service_pw")"
 psql_as_super "$db" <<'SQL'
 SELECT format('REVOKE ALL ON ALL TABLES IN SCHEMA public FROM %I', :'service') \gexec
 SELECT format('GRANT SELECT, INSERT, UPDATE, DELETE ON ALL TABLES IN SCHEMA public TO %I', :'service') \gexec
-SELECT format('REVOKE UPDATE, DELETE ON measurements, audit_events, gloss_readings FROM %I', :'service') \gexec
+SELECT format('REVOKE UPDATE, DELETE ON measurements, audit_events, record_events, gloss_readings FROM %I', :'service') \gexec
 SELECT format('REVOKE DELETE ON ledger_heads FROM %I', :'service') \gexec
 SELECT format('REVOKE INSERT, UPDATE, DELETE ON alembic_version FROM %I', :'service') \gexec
 SELECT format('GRANT USAGE, SELECT ON ALL SEQUENCES IN SCHEMA public TO %I', :'service') \gexec

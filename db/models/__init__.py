@@ -1,12 +1,13 @@
 """Every table of the measurement database (import this module to register them on ``Base``)."""
 
+import db.chain  # noqa: F401  (seals record rows on every ORM flush: db.chain._seal_flushed)
 from db.models.designs import Design, DesignVersion
 from db.models.gloss import GlossReading
 from db.models.instruments import CalibrationRecord, Instrument
 from db.models.library import JOB_STATES, AnalysisResult, FormulationJob, LibraryPaint
 from db.models.measurements import PARTS, Measurement, Panel
 from db.models.standards import Standard
-from db.models.users import ApiToken, AuditEvent, LedgerHead, Role, User
+from db.models.users import ApiToken, AuditEvent, LedgerHead, RecordEvent, Role, User
 
 __all__ = [
     "JOB_STATES",
@@ -24,6 +25,7 @@ __all__ = [
     "LibraryPaint",
     "Measurement",
     "Panel",
+    "RecordEvent",
     "Role",
     "Standard",
     "User",

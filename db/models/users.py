@@ -77,11 +77,32 @@ class AuditEvent(Base):
     chain_sha256: Mapped[str | None] = mapped_column(String(64))
 
 
-class LedgerHead(Base):
-    """The head of one hash chain (``measurements`` or ``audit_events``) and the lock its writers take.
+class RecordEvent(Base):
+    """One change the product made to a sealed record table (append-only, hash-chained: ``db.chain``).
 
-    ``length`` rows, the last ``head_sha256`` link, the last write time ``head_at`` (UTC) and the last
-    row back-filled when the chain was introduced (``backfill_last_id``); see ``db.chain``.
+    ``entity`` is the table (``db.chain.RECORD_TABLES``), ``entity_id`` the row id, ``op`` ``insert``,
+    ``update`` or ``delete`` and ``state_sha256`` the hash of the row as the change left it (null for
+    a delete); ``at`` is the write time (UTC).
+    """
+
+    __tablename__ = "record_events"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    at: Mapped[dt.datetime] = mapped_column(default=utcnow)
+    entity: Mapped[str] = mapped_column(String(32))
+    entity_id: Mapped[str] = mapped_column(String(64))
+    op: Mapped[str] = mapped_column(String(8))
+    state_sha256: Mapped[str | None] = mapped_column(String(64))
+    row_sha256: Mapped[str | None] = mapped_column(String(64))
+    chain_sha256: Mapped[str | None] = mapped_column(String(64))
+
+
+class LedgerHead(Base):
+    """The head of one hash chain (``measurements``, ``audit_events``, ``record_events``) and the lock its writers take.
+
+    ``length`` rows, the last ``head_sha256`` link, the last write time ``head_at`` (UTC), the last
+    row back-filled when the chain was introduced (``backfill_last_id``) and the last row hashed with
+    the canonical form before revision 0009 (``legacy_last_id``); see ``db.chain``.
     """
 
     __tablename__ = "ledger_heads"
@@ -91,3 +112,4 @@ class LedgerHead(Base):
     head_sha256: Mapped[str] = mapped_column(String(64))
     head_at: Mapped[dt.datetime | None]
     backfill_last_id: Mapped[int | None]
+    legacy_last_id: Mapped[int | None]

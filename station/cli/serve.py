@@ -8,7 +8,9 @@ timeout, concurrency limit and header size of the settings, behind a request-bod
 
 A database that cannot be reached or a revision that does not exist is one line on stderr and exit
 status 2 for every command here (no traceback). ``station db verify`` recomputes the hash chains of
-measurements and audit events (``db.chain``): exit 0 intact, 1 with the first broken link named.
+measurements, audit events and record events, the sealed records and the signed checkpoints of the
+data folder (``db.chain.audit_database``): exit 0 intact, 1 with every finding listed (``--json``: the
+report with its ``findings``). ``station db checkpoint`` verifies, then appends a signed checkpoint.
 """
 
 from __future__ import annotations
@@ -213,11 +215,12 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
 
 
 def db_command(args: argparse.Namespace) -> dict[str, Any]:
-    """Migrate, revert or inspect the database."""
+    """Migrate, revert, inspect, verify or checkpoint the database."""
     from db import migrate
     from db.engine import make_engine
 
-    url = _settings(args).effective_database_url
+    settings = _settings(args)
+    url = settings.effective_database_url
     with _database_errors(url, args.revision):
         if args.db_action == "upgrade":
             migrate.upgrade(url, args.revision)
@@ -225,8 +228,8 @@ def db_command(args: argparse.Namespace) -> dict[str, Any]:
             migrate.downgrade(url, args.revision)
         engine = make_engine(url)
         try:
-            if args.db_action == "verify":
-                return _verify(engine)
+            if args.db_action in ("verify", "checkpoint"):
+                return _verify(engine, url, settings.data_dir, args)
             current = migrate.current_revision(engine)
         finally:
             engine.dispose()
@@ -237,24 +240,68 @@ def db_command(args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def _verify(engine: Any) -> dict[str, Any]:
-    """Recompute both hash chains; :class:`TamperedError` (exit 1) naming the first broken link."""
-    from db import chain
+@contextlib.contextmanager
+def _snapshot(engine: Any) -> Iterator[Any]:
+    """A connection that reads one snapshot of the whole database while writers go on appending.
+
+    PostgreSQL: a read-only REPEATABLE READ transaction; SQLite: one deferred read transaction (WAL).
+    """
     from db.engine import reading
+
+    conn = reading(engine).connect()  # a read: never takes or waits for the SQLite write lock
+    try:
+        if engine.dialect.name == "postgresql":
+            conn = conn.execution_options(isolation_level="REPEATABLE READ", postgresql_readonly=True)
+        yield conn
+    finally:
+        conn.close()
+
+
+def _verify(engine: Any, url: str, data_dir: Path, args: argparse.Namespace) -> dict[str, Any]:
+    """Verify every chain, sealed record and checkpoint; report every finding (``db.chain.audit_database``).
+
+    Intact: the report is the result (exit 0). Broken: the report is printed (JSON with ``--json``, else
+    one ``finding: …`` line each) and :class:`TamperedError` (exit 1) names the first finding and the
+    count. ``checkpoint`` verifies first and appends a signed checkpoint only when intact.
+    """
+    from db import chain
     from db.errors import TamperedError
     from db.migrate import current_revision
+    from station.cli._common import emit
 
     if current_revision(engine) is None:
         raise InputError("database", "a migrated database (run `station db upgrade`)", None)
-    with reading(engine).connect() as conn:  # a read: never takes or waits for the write lock
-        verdicts = chain.verify(conn)
-    for verdict in verdicts:
-        if verdict.broken is not None:
-            raise TamperedError(f"chain broken: {verdict.broken}")
-    result: dict[str, Any] = {"chain": "intact"}
-    for v in verdicts:
-        result[v.chain] = v.rows
-        result[f"{v.chain}_head"] = v.head_sha256
+    database = chain.database_identity(url)
+    with _snapshot(engine) as conn:
+        report = chain.audit_database(conn, checkpoint_folder=data_dir, database=database)
+    result: dict[str, Any] = {"chain": "intact" if report.intact else "broken", "intact": report.intact}
+    for name in chain.CHAINS:
+        if name in report.rows:
+            result[name] = report.rows[name]
+    for name in chain.CHAINS:
+        if name in report.heads:
+            result[f"{name}_head"] = report.heads[name]
+    result["checkpoints"] = report.checkpoints
+    result["checkpoint_file"] = str(data_dir / chain.CHECKPOINT_FILE)
+    result["findings"] = [f.as_dict() for f in report.findings]
+    if not report.intact:
+        if getattr(args, "json", False):
+            emit(result, True)
+        else:
+            for finding in report.findings:
+                print(f"finding: {finding.message}")
+        sys.stdout.flush()
+        count = len(report.findings)
+        raise TamperedError(
+            f"chain broken: {report.findings[0].message} ({count} finding{'s' if count != 1 else ''})"
+        )
+    if args.db_action == "checkpoint":
+        from db.files import private_dir
+
+        private_dir(data_dir)
+        written = chain.write_checkpoint(report, data_dir, database)  # exactly the heads verified
+        result["checkpoint"] = {c: v["length"] for c, v in written["chains"].items()}
+        result["checkpoints"] = report.checkpoints + 1
     return result
 
 
@@ -354,9 +401,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=serve)
 
     p = subparsers.add_parser(
-        "db", help="database migrations (upgrade, downgrade, current) and the tamper check (verify)"
+        "db",
+        help="database migrations (upgrade, downgrade, current), the tamper check (verify) and checkpoint",
     )
-    p.add_argument("db_action", choices=("upgrade", "downgrade", "current", "verify"))
+    p.add_argument("db_action", choices=("upgrade", "downgrade", "current", "verify", "checkpoint"))
     p.add_argument("revision", nargs="?", default=None, help="target revision (default head / one step back)")
     _db_args(p)
     add_json_flag(p)

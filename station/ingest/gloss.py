@@ -27,7 +27,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from db.chain import append_audit
+from db.chain import append_audit, record_change
 from db.models import GlossReading, Measurement
 from station.ingest.errors import ClientIdConflictError, ReferenceNotFoundError
 from station.ingest.schema import CalibrationRef, InstrumentRef, PanelRef, Text64, Timestamp
@@ -253,6 +253,7 @@ def store_gloss(session: Session, record: GlossRecord, *, created_by_id: int | N
         if row.payload_sha256 != sha:
             raise ClientIdConflictError(str(record.client_id), row.payload_sha256, sha)
         return StoreResult(int(row.id), created=False)
+    record_change(session, "gloss_readings", int(new_id), "insert")
     append_audit(
         session,
         {

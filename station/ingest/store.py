@@ -65,7 +65,7 @@ def _instrument_id(session: Session, reading: Provenance, cache: dict[str, int] 
     if cache is not None and ref.serial in cache:
         return cache[ref.serial]
     table = Instrument.__table__
-    session.execute(
+    created = session.execute(
         _insert(session, table)
         .values(
             serial=ref.serial,
@@ -75,7 +75,10 @@ def _instrument_id(session: Session, reading: Provenance, cache: dict[str, int] 
             created_at=reading.measured_at,
         )
         .on_conflict_do_nothing(index_elements=["serial"])
-    )
+        .returning(table.c.id)
+    ).scalar()
+    if created is not None:
+        chain.record_change(session, "instruments", int(created), "insert")
     instrument_id = session.scalars(select(Instrument.id).where(Instrument.serial == ref.serial)).one()
     if cache is not None:
         cache[ref.serial] = instrument_id
@@ -86,7 +89,7 @@ def _calibration_id(session: Session, reading: Provenance, instrument_id: int) -
     cal = reading.calibration
     if cal is None:
         return None
-    session.execute(
+    created = session.execute(
         _insert(session, CalibrationRecord.__table__)
         .values(
             client_id=cal.client_id,
@@ -98,7 +101,10 @@ def _calibration_id(session: Session, reading: Provenance, instrument_id: int) -
             result={},
         )
         .on_conflict_do_nothing(index_elements=["client_id"])
-    )
+        .returning(CalibrationRecord.__table__.c.id)
+    ).scalar()
+    if created is not None:
+        chain.record_change(session, "calibration_records", int(created), "insert")
     return session.scalars(
         select(CalibrationRecord.id).where(CalibrationRecord.client_id == cal.client_id)
     ).one()

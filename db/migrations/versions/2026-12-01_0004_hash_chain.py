@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import sqlalchemy as sa
 from alembic import op
 
-from db.chain import CHAINS, GENESIS, HEADS, TIME_COLUMN, chain_table, link_sha256, payload_sha256
+from db.chain import GENESIS, HEADS, READING_CHAINS, TIME_COLUMN, chain_table, link_sha256, payload_sha256
 
 revision: str = "0004_hash_chain"
 down_revision: str | Sequence[str] | None = "0003"
@@ -30,7 +30,7 @@ _HEAD_RULE = "ledger_heads only moves forward one row at a time"
 
 
 def _lift_triggers(pg: bool) -> None:
-    for table in CHAINS:
+    for table in READING_CHAINS:
         if pg:
             op.execute(f"ALTER TABLE {table} DISABLE TRIGGER tr_{table}_append_only")
         else:
@@ -38,7 +38,7 @@ def _lift_triggers(pg: bool) -> None:
 
 
 def _restore_triggers(pg: bool) -> None:
-    for table in CHAINS:
+    for table in READING_CHAINS:
         if pg:
             op.execute(f"ALTER TABLE {table} ENABLE TRIGGER tr_{table}_append_only")
         else:
@@ -49,7 +49,7 @@ def _restore_triggers(pg: bool) -> None:
 
 
 def _backfill(conn: sa.Connection) -> None:
-    for chain in CHAINS:
+    for chain in READING_CHAINS:
         tbl = chain_table(chain, optional=False)  # the columns of revision 0008 do not exist yet
         previous, count, last_at, last_id = GENESIS, 0, None, None
         for row in conn.execute(sa.select(tbl).order_by(tbl.c.id)).mappings().all():
@@ -71,7 +71,7 @@ def _backfill(conn: sa.Connection) -> None:
 def upgrade() -> None:
     conn = op.get_bind()
     pg = conn.dialect.name == "postgresql"
-    for table in CHAINS:
+    for table in READING_CHAINS:
         op.add_column(table, sa.Column("row_sha256", sa.String(length=64), nullable=True))
         op.add_column(table, sa.Column("chain_sha256", sa.String(length=64), nullable=True))
     op.create_table(
@@ -119,6 +119,6 @@ def downgrade() -> None:
         op.execute("DROP TRIGGER IF EXISTS tr_ledger_heads_forward")
         op.execute("DROP TRIGGER IF EXISTS tr_ledger_heads_no_delete")
     op.drop_table("ledger_heads")
-    for table in CHAINS:
+    for table in READING_CHAINS:
         op.drop_column(table, "chain_sha256")
         op.drop_column(table, "row_sha256")

@@ -8,6 +8,7 @@ from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
 from db.base import utcnow
+from db.chain import record_change
 from db.models import ApiToken, Role, User
 from station.api.errors import ConflictError, NotFoundError
 from station.api.security import DEFAULT_TOKEN_TTL, hash_token, new_token
@@ -102,11 +103,14 @@ def deactivate(*, session: Session, actor: User | None, user: User) -> User:
     if actor is not None and actor.id == user.id:
         raise ConflictError("an admin cannot deactivate themself")
     user.active = False
-    session.execute(
+    revoked = session.execute(
         update(ApiToken)
         .where(ApiToken.user_id == user.id, ApiToken.revoked_at.is_(None))
         .values(revoked_at=utcnow())
-    )
+        .returning(ApiToken.id)
+    ).scalars()
+    for token_id in sorted(revoked):  # a Core UPDATE: sealed here, not by the flush hook
+        record_change(session, "api_tokens", token_id, "update")
     audit.record(session=session, actor=actor, action="user.deactivate", entity="user", entity_id=user.id)
     session.commit()
     return user
