@@ -40,6 +40,7 @@ SUBPROCESS_ALLOWED = {
     "tests/processes.py": "Child and run themselves",
     "tests/ui/conftest.py": "the viewer suite's Xvfb, started at import for the whole test run",
     "tests/test_processes.py": "a process deliberately left running, for the leftover check to find",
+    "tests/soak/_fronts.py": "fronts killed at random (SIGKILL to their own process groups) and restarted",
 }
 #: As SLEEP_PENDING, for direct ``subprocess`` use.
 SUBPROCESS_PENDING = {
