@@ -1,8 +1,10 @@
 """``station serve`` as a real process: address from the environment, private files, server limits.
 
 One service on an SQLite data folder that started world-readable (0755/0644) with ``CACAD_HOST``,
-``CACAD_PORT`` (overridden by ``--port``), a 1 s body deadline, a 1 s keep-alive timeout and a
-concurrency limit of 3 and a 4 KiB header cap, all from the environment. Raw sockets play the slow and idle clients.
+``CACAD_PORT`` (overridden by ``--port``), a 1 s body deadline, a 1 s header deadline, a 1 s keep-alive
+timeout, a limit of 3 requests at once, 2 connections per client and a 4 KiB header cap, all from the
+environment. Raw sockets play the slow and idle clients; other client addresses are other loopback
+addresses (127.0.0.2, …) bound as the source.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import stat
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import httpx
@@ -28,6 +30,8 @@ BODY_TIMEOUT_S = 1.0
 KEEP_ALIVE_S = 1
 LIMIT = 3
 MAX_HEADER_BYTES = 4096
+HEADER_TIMEOUT_S = 1.0
+PER_CLIENT = 2
 
 
 class Service:
@@ -60,6 +64,8 @@ def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
         CACAD_KEEP_ALIVE_TIMEOUT_S=str(KEEP_ALIVE_S),
         CACAD_LIMIT_CONCURRENCY=str(LIMIT),
         CACAD_MAX_HEADER_BYTES=str(MAX_HEADER_BYTES),
+        CACAD_HEADER_TIMEOUT_S=str(HEADER_TIMEOUT_S),
+        CACAD_MAX_CONNECTIONS_PER_CLIENT=str(PER_CLIENT),
     )
     svc = ServeProcess(data_dir, ("--simulators", "", "--no-demo-library"), env=env, start_timeout_s=60)
     try:
@@ -76,8 +82,9 @@ def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
         svc.stop(signal.SIGTERM)
 
 
-def _connect(service: Service) -> socket.socket:
-    return socket.create_connection(("127.0.0.1", service.port), timeout=10)
+def _connect(service: Service, source: str = "127.0.0.1") -> socket.socket:
+    """A TCP connection to the service from the loopback address *source*."""
+    return socket.create_connection(("127.0.0.1", service.port), timeout=10, source_address=(source, 0))
 
 
 def _read_all(sock: socket.socket, limit_s: float) -> tuple[bytes, float]:
@@ -132,17 +139,146 @@ def test_an_idle_keep_alive_connection_is_closed(service: Service) -> None:
     assert closed_after <= KEEP_ALIVE_S + 3, closed_after
 
 
-def test_concurrency_over_the_limit_is_503(service: Service) -> None:
-    held = [_connect(service) for _ in range(LIMIT - 1)]
+def _slow_body(service: Service, source: str) -> socket.socket:
+    """A request in flight: headers and part of a body, the rest never sent (408 after the body deadline)."""
+    sock = _connect(service, source)
+    sock.sendall(
+        b"POST /api/v1/panels HTTP/1.1\r\nHost: t\r\nContent-Type: application/json\r\n"
+        + f"Authorization: Bearer {service.token}\r\nContent-Length: 200\r\n\r\n".encode()
+        + b'{"job": "J'
+    )
+    return sock
+
+
+def _is_closed(sock: socket.socket, within_s: float) -> tuple[bool, bytes]:
+    """Whether the server closed *sock* within *within_s* seconds, and what it sent before."""
+    data, _after = _read_all(sock, limit_s=within_s)
     try:
-        time.sleep(0.3)
+        sock.settimeout(0.05)
+        closed = sock.recv(1) == b""
+    except TimeoutError:
+        closed = False
+    except OSError:
+        closed = True
+    return closed, data
+
+
+def _wait_until(condition: Callable[[], bool], timeout_s: float) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.05)
+    return condition()
+
+
+def test_requests_over_the_limit_are_503(service: Service) -> None:
+    """Three requests in flight (from three clients): the fourth is 503; once they end, 200 again."""
+    held = [_slow_body(service, f"127.0.0.{n}") for n in (4, 5, 6)]
+    try:
+        time.sleep(0.2)
         r = httpx.get(service.base + "/health", timeout=10)
         assert r.status_code == 503, r.text
     finally:
         for sock in held:
             sock.close()
-    time.sleep(0.3)
-    assert httpx.get(service.base + "/health", timeout=10).status_code == 200
+    assert _wait_until(lambda: httpx.get(service.base + "/health", timeout=10).status_code == 200, 10)
+
+
+def test_idle_connections_without_a_token_do_not_make_requests_503(service: Service) -> None:
+    """64 connections that never send a request, from another client and from this one, leave the
+    service answering: idle connections count against no request limit and yield to new ones."""
+    held = [_connect(service, "127.0.0.2") for _ in range(64)]
+    held += [_connect(service) for _ in range(64)]
+    try:
+        time.sleep(0.2)
+        for _ in range(5):
+            assert httpx.get(service.base + "/health", timeout=10).status_code == 200
+        r = httpx.get(
+            service.base + "/api/v1/panels", headers={"Authorization": f"Bearer {service.token}"}, timeout=10
+        )
+        assert r.status_code == 200, r.text
+    finally:
+        for sock in held:
+            sock.close()
+
+
+def test_a_connection_without_a_whole_request_is_closed_at_the_header_deadline(service: Service) -> None:
+    """Nothing sent: closed silently; headers trickled one byte at a time (before the first request
+    and after a response): 408 and closed, both within the header deadline."""
+    quiet = _connect(service)
+    first = _connect(service)
+    later = _connect(service)
+    later.sendall(b"GET /health HTTP/1.1\r\nHost: t\r\n\r\n")
+    reply, _ = _read_until(later, b"\r\n\r\n", 5)
+    assert reply.startswith(b"HTTP/1.1 200"), reply[:200]
+    for sock in (first, later):
+        sock.sendall(b"GET /health HTTP/1.1\r\nHost: t\r\n")
+    start = time.monotonic()
+    answers: dict[int, bytes] = {}
+    try:
+        while len(answers) < 2 and time.monotonic() - start < 10 * HEADER_TIMEOUT_S:
+            for i, sock in enumerate((first, later)):
+                if i in answers:
+                    continue
+                try:
+                    sock.sendall(b"X")  # a slow client: one header byte every 0.1 s
+                    sock.settimeout(0.05)
+                    data = sock.recv(65536)
+                    answers[i] = data + _read_all(sock, 2)[0]
+                except TimeoutError:
+                    continue
+                except OSError:
+                    answers[i] = b""
+            time.sleep(0.05)
+        elapsed = time.monotonic() - start
+        assert set(answers) == {0, 1}, f"still open after {elapsed:.1f} s"
+        assert elapsed <= HEADER_TIMEOUT_S + 3, elapsed
+        assert all(a.startswith(b"HTTP/1.1 408") or a == b"" for a in answers.values()), answers
+        assert any(a.startswith(b"HTTP/1.1 408") for a in answers.values()), answers
+        closed, data = _is_closed(quiet, 3)
+        assert closed and data == b"", data
+    finally:
+        for sock in (quiet, first, later):
+            sock.close()
+
+
+def test_a_client_over_its_connection_cap_yields_its_oldest_idle_one(service: Service) -> None:
+    """A client at its cap: a new connection closes its oldest idle one (and is served); when every
+    one of its connections is busy, the new one is refused with 503. Other clients are served."""
+    idle = [_connect(service, "127.0.0.7") for _ in range(PER_CLIENT)]
+    newest = _connect(service, "127.0.0.7")
+    try:
+        closed, data = _is_closed(idle[0], 2)
+        assert closed and data == b""
+        assert not _is_closed(idle[1], 0.2)[0]
+        newest.sendall(b"GET /health HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n")
+        assert _read_all(newest, 5)[0].startswith(b"HTTP/1.1 200")
+    finally:
+        for sock in (*idle, newest):
+            sock.close()
+    busy = [_slow_body(service, "127.0.0.8") for _ in range(PER_CLIENT)]
+    try:
+        time.sleep(0.2)
+        with _connect(service, "127.0.0.8") as refused:
+            data, _ = _read_all(refused, 5)
+        assert data.startswith(b"HTTP/1.1 503") and b"per client" in data, data[:300]
+        assert httpx.get(service.base + "/health", timeout=10).status_code == 200
+    finally:
+        for sock in busy:
+            sock.close()
+
+
+def _read_until(sock: socket.socket, marker: bytes, limit_s: float) -> tuple[bytes, float]:
+    start = time.monotonic()
+    data = b""
+    sock.settimeout(limit_s)
+    while marker not in data and time.monotonic() - start < limit_s:
+        chunk = sock.recv(65536)
+        if not chunk:
+            break
+        data += chunk
+    return data, time.monotonic() - start
 
 
 def test_headers_still_arriving_beyond_the_cap_are_refused(service: Service) -> None:
@@ -165,6 +301,7 @@ def test_environment_address_and_limits_reach_uvicorn(
     """In-process with uvicorn.run stubbed: CACAD_HOST/CACAD_PORT are used, flags override them."""
     import uvicorn
 
+    from station.api.connections import GuardedH11Protocol, RequestConcurrencyLimit
     from station.api.timeouts import BodyReadTimeout
     from station.cli import main
 
@@ -173,16 +310,22 @@ def test_environment_address_and_limits_reach_uvicorn(
     monkeypatch.setenv("CACAD_HOST", "127.0.0.2")
     monkeypatch.setenv("CACAD_PORT", "8765")
     monkeypatch.setenv("CACAD_LIMIT_CONCURRENCY", "7")
+    monkeypatch.setenv("CACAD_MAX_CONNECTIONS_PER_CLIENT", "5")
     argv = ["serve", "--data-dir", str(tmp_path), "--simulators", "", "--no-demo-library"]
     assert main(argv) == 0
     assert main([*argv, "--host", "127.0.0.3", "--port", "8766"]) == 0
     assert [(kw["host"], kw["port"]) for _app, kw in calls] == [("127.0.0.2", 8765), ("127.0.0.3", 8766)]
     app, kw = calls[0]
-    assert isinstance(app, BodyReadTimeout) and app.timeout_s == 10.0
-    assert (kw["limit_concurrency"], kw["timeout_keep_alive"], kw["h11_max_incomplete_event_size"]) == (
-        7,
-        5,
-        16384,
-    )
+    assert isinstance(app, RequestConcurrencyLimit) and app.limit == 7
+    assert isinstance(app.app, BodyReadTimeout) and app.app.timeout_s == 10.0
+    assert (kw["timeout_keep_alive"], kw["h11_max_incomplete_event_size"]) == (5, 16384)
+    assert "limit_concurrency" not in kw  # uvicorn's counts idle connections
+    protocol = kw["http"]
+    assert isinstance(protocol, type) and issubclass(protocol, GuardedH11Protocol)
+    guard = protocol.guard
+    assert (guard.header_timeout_s, guard.max_connections, guard.max_per_client) == (10.0, 256, 5)
     monkeypatch.setenv("CACAD_PORT", "http")
+    assert main(argv) == 2
+    monkeypatch.setenv("CACAD_PORT", "8765")
+    monkeypatch.setenv("CACAD_MAX_CONNECTIONS", "4")  # below the per-client cap
     assert main(argv) == 2
