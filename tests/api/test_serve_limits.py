@@ -210,7 +210,7 @@ def test_a_connection_without_a_whole_request_is_closed_at_the_header_deadline(s
     first = _connect(service)
     later = _connect(service)
     later.sendall(b"GET /health HTTP/1.1\r\nHost: t\r\n\r\n")
-    reply, _ = _read_until(later, b"\r\n\r\n", 5)
+    reply = _read_response(later, 5)
     assert reply.startswith(b"HTTP/1.1 200"), reply[:200]
     for sock in (first, later):
         sock.sendall(b"GET /health HTTP/1.1\r\nHost: t\r\n")
@@ -269,16 +269,26 @@ def test_a_client_over_its_connection_cap_yields_its_oldest_idle_one(service: Se
             sock.close()
 
 
-def _read_until(sock: socket.socket, marker: bytes, limit_s: float) -> tuple[bytes, float]:
-    start = time.monotonic()
+def _read_response(sock: socket.socket, limit_s: float) -> bytes:
+    """One whole response (headers and its Content-Length of body) from a kept-alive connection."""
+    deadline = time.monotonic() + limit_s
     data = b""
     sock.settimeout(limit_s)
-    while marker not in data and time.monotonic() - start < limit_s:
-        chunk = sock.recv(65536)
-        if not chunk:
-            break
-        data += chunk
-    return data, time.monotonic() - start
+    while b"\r\n\r\n" not in data and time.monotonic() < deadline:
+        data += sock.recv(65536) or b""
+    head, _, body = data.partition(b"\r\n\r\n")
+    length = next(
+        (
+            int(line.split(b":", 1)[1])
+            for line in head.split(b"\r\n")
+            if line.lower().startswith(b"content-length:")
+        ),
+        0,
+    )
+    while len(body) < length and time.monotonic() < deadline:
+        body += sock.recv(65536) or b""
+    assert len(body) == length, data
+    return head + b"\r\n\r\n" + body
 
 
 def test_headers_still_arriving_beyond_the_cap_are_refused(service: Service) -> None:
