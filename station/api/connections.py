@@ -6,9 +6,10 @@ uvicorn's ``limit_concurrency`` counts open connections, so connections that nev
 ``timeout_keep_alive`` only starts after a first response. Here:
 
 - :class:`GuardedH11Protocol` (uvicorn's h11 protocol with a :class:`ConnectionGuard`) gives each
-  connection ``header_timeout_s`` seconds, from its opening and again from the end of each response,
-  to deliver a complete request line and headers; a connection that has sent part of one then gets a
-  ``408`` and is closed, one that has sent nothing is closed (a slow-header client cannot hold it).
+  connection ``header_timeout_s`` seconds, from its opening (and, on a kept-alive connection, from the
+  first byte of each later request) to deliver a complete request line and headers; a connection that
+  has sent part of one then gets a ``408`` and is closed, one that has sent nothing is closed (a
+  slow-header client cannot hold it; between requests the keep-alive timeout applies).
 - At most ``max_per_client`` connections per client address and ``max_connections`` in all: a new
   connection beyond either first closes the oldest *idle* connection (no request being handled) of
   that client (or of any client, for the total); when every one is busy the new connection is
@@ -140,15 +141,18 @@ class GuardedH11Protocol(H11Protocol):
         self.guard.release(self)
         super().connection_lost(exc)
 
+    def data_received(self, data: bytes) -> None:
+        super().data_received(data)
+        if self._header_deadline is None and self._awaiting_headers():
+            self._arm_header_deadline()  # the first bytes of a request after a response: its time starts
+
     def handle_events(self) -> None:
         super().handle_events()
         if self.conn.their_state is not h11.IDLE:  # the request line and headers are in
             self._disarm_header_deadline()
 
-    def on_response_complete(self) -> None:
-        super().on_response_complete()
-        if not self.transport.is_closing() and self.conn.their_state is h11.IDLE:
-            self._arm_header_deadline()  # the next request's headers have the same time
+    def _awaiting_headers(self) -> bool:
+        return not self.transport.is_closing() and self.conn.their_state is h11.IDLE
 
     def close_idle(self) -> None:
         """Close this idle connection to make room for another (as a keep-alive timeout would)."""
@@ -167,7 +171,7 @@ class GuardedH11Protocol(H11Protocol):
 
     def _headers_late(self) -> None:
         self._header_deadline = None
-        if self.transport.is_closing() or self.conn.their_state is not h11.IDLE:
+        if not self._awaiting_headers():
             return
         started, _closed = self.conn.trailing_data
         if started:

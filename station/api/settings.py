@@ -101,8 +101,9 @@ class Settings(BaseSettings):
         10.0,
         gt=0,
         le=600,
-        description="seconds a connection has, from its opening and from the end of each response, to send "
-        "a complete request line and headers (else 408 when it sent part of one, and closed)",
+        description="seconds a connection has, from its opening (on a kept-alive connection: from the first "
+        "byte of each later request), to send a complete request line and headers (else 408 when it sent "
+        "part of one, and closed)",
     )
     max_connections: int = Field(
         256,
