@@ -2,8 +2,9 @@
 
 One service on an SQLite data folder that started world-readable (0755/0644) with ``CACAD_HOST``,
 ``CACAD_PORT`` (overridden by ``--port``), a 1 s body deadline, a 1 s header deadline, a 1 s keep-alive
-timeout, a limit of 3 requests at once, 2 connections per client and a 4 KiB header cap, all from the
-environment. Raw sockets play the slow and idle clients; other client addresses are other loopback
+timeout, a limit of 3 requests at once, 2 connections per client, 80 in all and a 4 KiB header cap, all
+from the environment (a second service has a 120 s header deadline, for the tests that hold idle
+connections). Raw sockets play the slow and idle clients; other client addresses are other loopback
 addresses (127.0.0.2, …) bound as the source.
 """
 
@@ -32,6 +33,8 @@ LIMIT = 3
 MAX_HEADER_BYTES = 4096
 HEADER_TIMEOUT_S = 1.0
 PER_CLIENT = 2
+MAX_CONNECTIONS = 80
+ROOMY_HEADER_TIMEOUT_S = 120.0
 
 
 class Service:
@@ -43,6 +46,16 @@ class Service:
 
 @pytest.fixture(scope="module")
 def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
+    yield from _serve(tmp_path_factory, HEADER_TIMEOUT_S)
+
+
+@pytest.fixture(scope="module")
+def roomy(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
+    """The same limits with a header deadline far beyond the test (idle connections stay while it runs)."""
+    yield from _serve(tmp_path_factory, ROOMY_HEADER_TIMEOUT_S)
+
+
+def _serve(tmp_path_factory: pytest.TempPathFactory, header_timeout_s: float) -> Iterator[Service]:
     data_dir = tmp_path_factory.mktemp("serve") / "data"
     env = dict(os.environ, PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1")
     env.pop("CACAD_DATABASE_URL", None)
@@ -64,8 +77,9 @@ def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
         CACAD_KEEP_ALIVE_TIMEOUT_S=str(KEEP_ALIVE_S),
         CACAD_LIMIT_CONCURRENCY=str(LIMIT),
         CACAD_MAX_HEADER_BYTES=str(MAX_HEADER_BYTES),
-        CACAD_HEADER_TIMEOUT_S=str(HEADER_TIMEOUT_S),
+        CACAD_HEADER_TIMEOUT_S=str(header_timeout_s),
         CACAD_MAX_CONNECTIONS_PER_CLIENT=str(PER_CLIENT),
+        CACAD_MAX_CONNECTIONS=str(MAX_CONNECTIONS),
     )
     svc = ServeProcess(data_dir, ("--simulators", "", "--no-demo-library"), env=env, start_timeout_s=60)
     try:
@@ -185,17 +199,20 @@ def test_requests_over_the_limit_are_503(service: Service) -> None:
     assert _wait_until(lambda: httpx.get(service.base + "/health", timeout=10).status_code == 200, 10)
 
 
-def test_idle_connections_without_a_token_do_not_make_requests_503(service: Service) -> None:
-    """64 connections that never send a request, from another client and from this one, leave the
-    service answering: idle connections count against no request limit and yield to new ones."""
-    held = [_connect(service, "127.0.0.2") for _ in range(64)]
-    held += [_connect(service) for _ in range(64)]
+def test_idle_connections_without_a_token_do_not_make_requests_503(roomy: Service) -> None:
+    """64 connections that never send a request, from 64 other clients, from one other client and from
+    this one, leave the roomy answering: idle connections count against no request limit and yield
+    to new ones."""
+    held = [_connect(roomy, f"127.0.1.{n}") for n in range(1, 65)]
+    held += [_connect(roomy, "127.0.0.2") for _ in range(64)]
+    held += [_connect(roomy) for _ in range(64)]
     try:
         time.sleep(0.2)
+        assert not any(_is_closed(sock, 0.01)[0] for sock in held[:64])  # one each: all still open
         for _ in range(5):
-            assert httpx.get(service.base + "/health", timeout=10).status_code == 200
+            assert httpx.get(roomy.base + "/health", timeout=10).status_code == 200
         r = httpx.get(
-            service.base + "/api/v1/panels", headers={"Authorization": f"Bearer {service.token}"}, timeout=10
+            roomy.base + "/api/v1/panels", headers={"Authorization": f"Bearer {roomy.token}"}, timeout=10
         )
         assert r.status_code == 200, r.text
     finally:
@@ -243,11 +260,11 @@ def test_a_connection_without_a_whole_request_is_closed_at_the_header_deadline(s
             sock.close()
 
 
-def test_a_client_over_its_connection_cap_yields_its_oldest_idle_one(service: Service) -> None:
+def test_a_client_over_its_connection_cap_yields_its_oldest_idle_one(roomy: Service) -> None:
     """A client at its cap: a new connection closes its oldest idle one (and is served); when every
     one of its connections is busy, the new one is refused with 503. Other clients are served."""
-    idle = [_connect(service, "127.0.0.7") for _ in range(PER_CLIENT)]
-    newest = _connect(service, "127.0.0.7")
+    idle = [_connect(roomy, "127.0.0.7") for _ in range(PER_CLIENT)]
+    newest = _connect(roomy, "127.0.0.7")
     try:
         closed, data = _is_closed(idle[0], 2)
         assert closed and data == b""
@@ -257,15 +274,31 @@ def test_a_client_over_its_connection_cap_yields_its_oldest_idle_one(service: Se
     finally:
         for sock in (*idle, newest):
             sock.close()
-    busy = [_slow_body(service, "127.0.0.8") for _ in range(PER_CLIENT)]
+    busy = [_slow_body(roomy, "127.0.0.8") for _ in range(PER_CLIENT)]
     try:
         time.sleep(0.2)
-        with _connect(service, "127.0.0.8") as refused:
+        with _connect(roomy, "127.0.0.8") as refused:
             data, _ = _read_all(refused, 5)
         assert data.startswith(b"HTTP/1.1 503") and b"per client" in data, data[:300]
-        assert httpx.get(service.base + "/health", timeout=10).status_code == 200
+        assert httpx.get(roomy.base + "/health", timeout=10).status_code == 200
     finally:
         for sock in busy:
+            sock.close()
+
+
+def test_connections_over_the_total_cap_close_the_oldest_idle_ones(roomy: Service) -> None:
+    """At the total cap a new connection (of any client) closes the oldest idle one; requests are served."""
+    held = [_connect(roomy, f"127.0.2.{n}") for n in range(1, MAX_CONNECTIONS + 1)]
+    extra = [_connect(roomy, f"127.0.3.{n}") for n in range(1, 6)]
+    try:
+        time.sleep(0.3)
+        closed = [sock for sock in held if _is_closed(sock, 0.01)[0]]
+        assert len(closed) >= len(extra), len(closed)
+        assert closed[0] is held[0]
+        assert not any(_is_closed(sock, 0.01)[0] for sock in extra)
+        assert httpx.get(roomy.base + "/health", timeout=10).status_code == 200
+    finally:
+        for sock in (*held, *extra):
             sock.close()
 
 
