@@ -98,8 +98,17 @@ def _settings(args: argparse.Namespace, **extra: Any) -> Any:
         return Settings(**opts)
     except pydantic.ValidationError as exc:
         first = exc.errors()[0]
-        name = ".".join(str(p) for p in first["loc"]) or "settings"
-        raise InputError(f"{name} (or $CACAD_{name.upper()})", first["msg"], first.get("input")) from None
+        name = ".".join(str(p) for p in first["loc"])
+        msg, got = first["msg"], first.get("input")
+        if not name:  # a check across settings names its field first: "NAME: expected …, got …"
+            msg, got = msg.removeprefix("Value error, "), None
+            field, _, rest = msg.partition(": ")
+            name, msg = (
+                (field, rest.removeprefix("expected "))
+                if field in Settings.model_fields
+                else ("settings", msg)
+            )
+        raise InputError(f"{name} (or $CACAD_{name.upper()})", msg, got) from None
 
 
 def _sessions(url: str) -> tuple[Any, Any]:

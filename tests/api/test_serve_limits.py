@@ -339,7 +339,7 @@ def test_headers_still_arriving_beyond_the_cap_are_refused(service: Service) -> 
 
 
 def test_environment_address_and_limits_reach_uvicorn(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """In-process with uvicorn.run stubbed: CACAD_HOST/CACAD_PORT are used, flags override them."""
     import uvicorn
@@ -371,4 +371,9 @@ def test_environment_address_and_limits_reach_uvicorn(
     assert main(argv) == 2
     monkeypatch.setenv("CACAD_PORT", "8765")
     monkeypatch.setenv("CACAD_MAX_CONNECTIONS", "4")  # below the per-client cap
+    capsys.readouterr()
     assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert (
+        len(err) == 1 and "max_connections_per_client" in err[0] and "at most max_connections (4)" in err[0]
+    )
