@@ -171,7 +171,7 @@ def test_an_image_pillow_cannot_decode_is_an_image_load_error_and_one_cli_line(t
     import sys
 
     from station.design.errors import ImageLoadError
-    from tests.api.test_service_guards import bomb_png
+    from tests.api._images import bomb_png
 
     data = bomb_png()
     with pytest.raises(ImageLoadError) as caught:

@@ -7,38 +7,23 @@ The simulator processes are found as the service's children in ``/proc``.
 
 from __future__ import annotations
 
-import io
 import json
 import os
 import signal
 import socket
-import struct
 import time
-import zlib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import httpx
 import pytest
-from PIL import Image
 
 from station.api.serve_process import ServeProcess, ServeStartError
+from tests.api._images import bomb_png
 
 V1 = "/api/v1"
 MAX_SIMULATORS = 2
-
-
-def bomb_png() -> bytes:
-    """An 8 × 8 PNG (about 50 KB) with a zTXt chunk whose text inflates to 64 MiB (Pillow refuses
-    text beyond ``PngImagePlugin.MAX_TEXT_CHUNK`` with a ``ValueError``)."""
-    buf = io.BytesIO()
-    Image.new("RGB", (8, 8), (200, 10, 10)).save(buf, "PNG")
-    png = buf.getvalue()
-    body = b"Comment\x00\x00" + zlib.compress(b"a" * (64 * 1_048_576), 9)
-    chunk = struct.pack(">I", len(body)) + b"zTXt" + body + struct.pack(">I", zlib.crc32(b"zTXt" + body))
-    ihdr_end = 8 + 25  # signature, then IHDR (length, type, 13 bytes, CRC)
-    return png[:ihdr_end] + chunk + png[ihdr_end:]
 
 
 @dataclass
@@ -109,7 +94,7 @@ def _exchange(sock: socket.socket, request: bytes, limit_s: float = 30) -> tuple
 )
 def test_an_image_pillow_cannot_decode_is_422_and_the_connection_stays(served: Served, path: str) -> None:
     png = bomb_png()
-    assert len(png) < 64 * 1024
+    assert len(png) < 50_000
     token = served.tokens["sty"]
     with socket.create_connection(("127.0.0.1", served.svc.port), timeout=30) as sock:
         status, headers, body = _exchange(
@@ -173,13 +158,13 @@ def _simulator_pids(parent: int) -> set[int]:
     return found
 
 
-def _until(condition: object, timeout_s: float) -> bool:
+def _until(condition: Callable[[], bool], timeout_s: float) -> bool:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
-        if condition():  # type: ignore[operator]
+        if condition():
             return True
         time.sleep(0.05)
-    return bool(condition())  # type: ignore[operator]
+    return condition()
 
 
 def test_simulators_are_capped_detachable_and_end_with_the_service(tmp_path: Path) -> None:
