@@ -54,6 +54,17 @@ from station.ingest import (
 log = logging.getLogger(__name__)
 
 
+class SimulatorLimitError(ConflictError):
+    """The station runs ``max_simulators`` simulators already (409 naming the limit)."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        super().__init__(
+            f"simulator limit reached: at most {limit} simulators run on this station (max_simulators, "
+            "$CACAD_MAX_SIMULATORS); detach one first (DELETE /api/v1/instruments/{id})"
+        )
+
+
 @dataclass
 class Attached:
     """One attached instrument and, for a simulator, the child process behind it."""
@@ -80,22 +91,43 @@ class InstrumentHub:
         self.sessions = sessions
         self.database = database or DatabaseState()
         self._attached: dict[str, Attached] = {}
+        self._spawning = 0  # simulator slots reserved by spawns under way (guarded by _lock)
         self._lock = threading.Lock()
         self._ingestor: Ingestor | None = None
         self._ingestor_lock = threading.Lock()
 
     # -- lifecycle ----------------------------------------------------------------------------------
     def attach_simulators(self, kinds: tuple[str, ...] | list[str]) -> None:
-        """Spawn and attach one simulator per kind; a failure is logged, not fatal."""
+        """Spawn and attach one simulator per kind; a failure (the cap included) is logged, not fatal."""
         for kind in kinds:
-            sim = None
             try:
-                sim = spawn_simulator(kind)
-                self._attach(sim.address, sim)
+                self._spawn_and_attach(kind)
             except Exception as exc:
                 log.warning("simulator %s not attached: %s", kind, exc)
-                if sim is not None:
-                    sim.close()
+
+    def _reserve_simulator(self) -> None:
+        """Take one of the ``max_simulators`` slots or raise :class:`SimulatorLimitError`."""
+        limit = self.settings.max_simulators
+        with self._lock:
+            running = sum(a.simulator is not None for a in self._attached.values()) + self._spawning
+            if running >= limit:
+                raise SimulatorLimitError(limit)
+            self._spawning += 1
+
+    def _spawn_and_attach(self, kind: str) -> Attached:
+        """Spawn simulator *kind* within the cap and attach it; the child is ended on any failure."""
+        self._reserve_simulator()
+        sim: SimulatorProcess | None = None
+        try:
+            sim = spawn_simulator(kind)
+            return self._attach(sim.address, sim)
+        except BaseException:
+            if sim is not None:
+                sim.close()
+            raise
+        finally:
+            with self._lock:
+                self._spawning -= 1
 
     def close(self) -> None:
         """Close every instrument and stop every simulator."""
@@ -176,22 +208,14 @@ class InstrumentHub:
         with self._lock:
             if any(a.driver.address == address for a in self._attached.values()):
                 raise ConflictError(f"{address} is already attached")
-        sim: SimulatorProcess | None = None
         try:
             if address.startswith("sim:"):
-                sim = spawn_simulator(address.removeprefix("sim:"))
-                attached = self._attach(sim.address, sim)
+                attached = self._spawn_and_attach(address.removeprefix("sim:"))
             else:
                 attached = self._attach(address, None)
         except CommunicationError as exc:
-            if sim is not None:
-                sim.close()
             log.warning("connect %s failed: %s", address, exc)
             raise NotFoundError(f"no instrument answers at {address}") from exc
-        except BaseException:
-            if sim is not None:
-                sim.close()
-            raise
         with self.sessions() as session:
             audit.record(
                 session=session,
@@ -203,6 +227,34 @@ class InstrumentHub:
             )
             session.commit()
         return self._public(attached)
+
+    def detach(self, *, instrument_id: str, actor: User) -> None:
+        """Close the attached instrument *instrument_id* and forget it; a simulator's process is ended.
+
+        A call under way on the instrument finishes first (the driver's lock); the handle then names
+        nothing (404) and the address may be connected again.
+        """
+        with self._lock:
+            attached = self._attached.pop(instrument_id, None)
+        if attached is None:
+            raise NotFoundError(f"instrument {instrument_id!r} is not attached")
+        try:
+            attached.driver.close()
+        except Exception as exc:  # a device already gone: its handle is dropped all the same
+            log.warning("instrument %s did not close cleanly: %s", instrument_id, exc)
+        finally:
+            if attached.simulator is not None:
+                attached.simulator.close()
+        with self.sessions() as session:
+            audit.record(
+                session=session,
+                actor=actor,
+                action="instrument.detach",
+                entity="instrument",
+                entity_id=instrument_id,
+                address=attached.driver.address,
+            )
+            session.commit()
 
     def _instrument_row(self, session: Session, a: Attached) -> Instrument:
         row = session.scalar(select(Instrument).where(Instrument.serial == a.info.serial))

@@ -17,6 +17,10 @@ SIM_KINDS = ("ma6", "ma3", "gloss")
 BOOTSTRAP_TOKEN_FILE = "bootstrap-token"
 
 
+#: Default cap of simulator processes per station: the three kinds attached on start and one more.
+MAX_SIMULATORS_DEFAULT = 4
+
+
 #: Default cap of a library upload: room for about 400 000 paints at six angles.
 LIBRARY_UPLOAD_DEFAULT_BYTES = 64 * 1_048_576
 
@@ -34,6 +38,13 @@ class Settings(BaseSettings):
     port: int = Field(8000, ge=1, le=65535)
     auto_migrate: bool = Field(True, description="apply Alembic migrations on start")
     simulators: tuple[str, ...] = Field(("ma6",), description="simulators to spawn and attach on start")
+    max_simulators: int = Field(
+        MAX_SIMULATORS_DEFAULT,
+        ge=0,
+        le=32,
+        description="simulator processes (about 140 MiB each) this station runs at once, those "
+        "attached on start included; a connect to sim:KIND beyond it is a 409 until one is detached",
+    )
     load_demo_library: bool = Field(
         True, description="load station.formulate's demo library when the table is empty"
     )
@@ -84,7 +95,29 @@ class Settings(BaseSettings):
         64,
         ge=1,
         le=10_000,
-        description="connections and tasks at once before the server answers 503 (uvicorn)",
+        description="requests handled at once before the server answers 503 (idle connections do not count)",
+    )
+    header_timeout_s: float = Field(
+        10.0,
+        gt=0,
+        le=600,
+        description="seconds a connection has, from its opening (on a kept-alive connection: from the first "
+        "byte of each later request), to send a complete request line and headers (else 408 when it sent "
+        "part of one, and closed)",
+    )
+    max_connections: int = Field(
+        256,
+        ge=1,
+        le=10_000,
+        description="open connections in all; a new one beyond closes the oldest idle one, or is refused "
+        "(503) when every one is busy",
+    )
+    max_connections_per_client: int = Field(
+        32,
+        ge=1,
+        le=10_000,
+        description="open connections of one client address; a new one beyond closes that client's oldest "
+        "idle one, or is refused (503) when every one is busy",
     )
     max_header_bytes: int = Field(
         16_384,
@@ -134,6 +167,15 @@ class Settings(BaseSettings):
         if value is not None and value not in PARTS:
             raise ValueError(f"watch_part: expected one of {' | '.join(PARTS)}, got {value!r}")
         return value
+
+    @model_validator(mode="after")
+    def _per_client_within_total(self) -> Settings:
+        if self.max_connections_per_client > self.max_connections:
+            raise ValueError(
+                f"max_connections_per_client: expected at most max_connections ({self.max_connections}), "
+                f"got {self.max_connections_per_client}"
+            )
+        return self
 
     @model_validator(mode="after")
     def _job_with_part(self) -> Settings:

@@ -4,7 +4,9 @@
 instruments, hands out the bootstrap admin token once (first start only: printed on a terminal, else
 written to ``bootstrap-token`` (0600) in the data folder and the path printed) and serves on loopback
 (``--host``/``--port``, else ``$CACAD_HOST``/``$CACAD_PORT``). uvicorn runs with the keep-alive
-timeout, concurrency limit and header size of the settings, behind a request-body deadline.
+timeout and header size of the settings, its h11 protocol under the header deadline and the connection
+caps of ``station.api.connections``, the app behind a request-body deadline and a bound on requests
+handled at once (idle connections do not count against it).
 
 A database that cannot be reached or a revision that does not exist is one line on stderr and exit
 status 2 for every command here (no traceback). ``station db verify`` recomputes the hash chains of
@@ -98,8 +100,17 @@ def _settings(args: argparse.Namespace, **extra: Any) -> Any:
         return Settings(**opts)
     except pydantic.ValidationError as exc:
         first = exc.errors()[0]
-        name = ".".join(str(p) for p in first["loc"]) or "settings"
-        raise InputError(f"{name} (or $CACAD_{name.upper()})", first["msg"], first.get("input")) from None
+        name = ".".join(str(p) for p in first["loc"])
+        msg, got = first["msg"], first.get("input")
+        if not name:  # a check across settings names its field first: "NAME: expected …, got …"
+            msg, got = msg.removeprefix("Value error, "), None
+            field, _, rest = msg.partition(": ")
+            name, msg = (
+                (field, rest.removeprefix("expected "))
+                if field in Settings.model_fields
+                else ("settings", msg)
+            )
+        raise InputError(f"{name} (or $CACAD_{name.upper()})", msg, got) from None
 
 
 def _sessions(url: str) -> tuple[Any, Any]:
@@ -149,6 +160,7 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
 
     from db.files import private_dir
     from station.api import create_app
+    from station.api.connections import ConnectionGuard, RequestConcurrencyLimit, guarded_protocol
     from station.api.services.library import load_demo_library
     from station.api.services.users import bootstrap_admin
     from station.api.timeouts import BodyReadTimeout
@@ -196,7 +208,14 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
             file=sys.stderr,
             flush=True,
         )
-    app = BodyReadTimeout(create_app(settings), settings.body_timeout_s)
+    guard = ConnectionGuard(
+        header_timeout_s=settings.header_timeout_s,
+        max_connections=settings.max_connections,
+        max_per_client=settings.max_connections_per_client,
+    )
+    app = RequestConcurrencyLimit(
+        BodyReadTimeout(create_app(settings), settings.body_timeout_s), settings.limit_concurrency
+    )
     print(
         f"starting the web server on http://{settings.host}:{settings.port} "
         f"(simulators: {', '.join(settings.simulators) or 'none'}; Ctrl+C stops it)…",
@@ -207,8 +226,9 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
         host=settings.host,
         port=settings.port,
         log_level=args.log_level,
+        http=guarded_protocol(guard),
+        ws="none",  # no WebSocket routes: an upgrade request is an ordinary request
         timeout_keep_alive=settings.keep_alive_timeout_s,
-        limit_concurrency=settings.limit_concurrency,
         h11_max_incomplete_event_size=settings.max_header_bytes,
     )
     return None

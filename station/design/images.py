@@ -3,7 +3,9 @@
 Guards, in order: the file exists and is at most :data:`MAX_FILE_BYTES`; Pillow identifies it as PNG
 or JPEG; its declared size is at most :data:`MAX_PIXELS` *before* any pixel is decoded; Pillow's own
 decompression-bomb check (``Image.MAX_IMAGE_PIXELS``, raised as ``DecompressionBombError`` or warned
-as ``DecompressionBombWarning``) is turned into :class:`~station.design.errors.ImageLoadError`.
+as ``DecompressionBombWarning``) is turned into :class:`~station.design.errors.ImageLoadError`, and so is
+every other failure to decode (a compressed text chunk beyond ``PngImagePlugin.MAX_TEXT_CHUNK``, a
+broken chunk table): the service answers 422 naming ``image``, the CLI one line and exit status 2.
 
 Colour: an embedded ICC profile is honoured — pixels are converted to sRGB with Pillow's ImageCms
 (perceptual intent) and the result states it; an image without a profile is *assumed* sRGB and the
@@ -13,7 +15,9 @@ result says so. CMYK, greyscale, palette and alpha images are converted to RGB (
 from __future__ import annotations
 
 import io
+import struct
 import warnings
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -118,13 +122,27 @@ def _decode(source: Path | io.BytesIO, suffix: str, max_pixels: int) -> EncodedI
                 converted, note, did = _to_srgb(im)
                 pixels = np.asarray(converted, dtype=np.uint8)
                 converted.close()
+    except ImageLoadError:
+        raise  # an InputError is a ValueError too: ours, raised above, passes unchanged
     except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
         raise ImageLoadError("image", "not a decompression bomb", None, str(exc)) from exc
     except UnidentifiedImageError as exc:
         raise ImageLoadError("image", "PNG or JPEG", suffix, str(exc)) from exc
     except OSError as exc:
         raise ImageLoadError("image", "a complete, readable image file", None, str(exc)) from exc
+    except (ValueError, SyntaxError, EOFError, IndexError, struct.error, zlib.error) as exc:
+        # Pillow's other decoding failures: e.g. ValueError "Decompressed data too large" for a
+        # compressed text chunk (zTXt/iTXt/iCCP) beyond PngImagePlugin.MAX_TEXT_CHUNK, SyntaxError
+        # "broken PNG file", a truncated chunk table
+        raise ImageLoadError(
+            "image", "an image whose chunks decode within Pillow's limits", None, _reason(exc)
+        ) from exc
     return EncodedImage(pixels, fmt, note, did)
+
+
+def _reason(exc: BaseException) -> str:
+    """One line saying why Pillow refused the file (at most 200 characters)."""
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:200]
 
 
 def decode_image(data: bytes, max_pixels: int = MAX_PIXELS, max_bytes: int = MAX_FILE_BYTES) -> EncodedImage:

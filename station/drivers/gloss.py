@@ -262,10 +262,17 @@ class HidBridgeDevice:
         self._baud = baudrate
 
     def open_path(self, path: bytes) -> None:
+        """Open the serial line and the HID handle behind it; on any failure the line is closed again
+        (its claim and ``flock`` released), so a later open of the same path starts afresh."""
         t = SerialTransport(path.decode(), self._baud)
         t.open()
         self._t = t
-        self._call(b"O", path, 2.0)
+        try:
+            self._call(b"O", path, 2.0)
+        except BaseException:
+            self._t = None
+            t.close()
+            raise
 
     def _call(self, op: bytes, payload: bytes, timeout_s: float) -> bytes:
         if self._t is None:

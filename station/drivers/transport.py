@@ -448,12 +448,14 @@ class HidTransport(ReportTransport):
         dev = self._factory()
         try:
             dev.open_path(self.path)
-        except OSError as exc:
-            try:  # hidapi keeps the handle of a half-done open until closed
+        except BaseException as exc:
+            try:  # hidapi keeps the handle of a half-done open until closed; so does a bridge
                 dev.close()
-            except OSError:
+            except (OSError, CommunicationError, DeviceTimeout):
                 pass
-            raise self._error("open", exc) from exc
+            if isinstance(exc, OSError):
+                raise self._error("open", exc) from exc
+            raise
         self._dev = dev
 
     def _close(self) -> None:

@@ -162,3 +162,45 @@ def test_concurrent_uploads_are_decoded_at_most_n_at_once(
         codes = list(pool.map(post, range(8)))
     assert codes == [200] * 8
     assert most == 2
+
+
+def test_an_image_pillow_cannot_decode_is_an_image_load_error_and_one_cli_line(tmp_path: Path) -> None:
+    """A compressed text chunk beyond Pillow's limit (``ValueError`` inside Pillow) is refused as an
+    :class:`ImageLoadError` naming ``image``; ``station design eyedrop`` prints one line, exit 2."""
+    import subprocess
+    import sys
+
+    from station.design.errors import ImageLoadError
+    from tests.api._images import bomb_png
+
+    data = bomb_png()
+    with pytest.raises(ImageLoadError) as caught:
+        decode_image(data)
+    assert caught.value.field == "image" and "Decompressed" in str(caught.value)
+    gif = io.BytesIO()
+    Image.new("RGB", (4, 4)).save(gif, "GIF")
+    with pytest.raises(ImageLoadError, match="PNG or JPEG"):  # the guards' own refusals pass unchanged
+        decode_image(gif.getvalue())
+    path = tmp_path / "board.png"
+    path.write_bytes(data)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "station.cli",
+            "design",
+            "eyedrop",
+            str(path),
+            "--face",
+            "1,1",
+            "--flop",
+            "6,6",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=Path(__file__).resolve().parents[2],
+    )
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "image" in lines[0] and "Traceback" not in done.stderr, done.stderr

@@ -61,7 +61,8 @@ def _scan_through_outage(
             assert r.status_code == 201, r.text
             panels.append(int(r.json()["id"]))
         inst = http.get("/api/v1/instruments", headers=auth).json()[0]["id"]
-        keys = [str(uuid.uuid4()) for _ in range(PANELS)]  # a UUID key is the reading's client id as it is
+        keys = [str(uuid.uuid4()) for _ in range(PANELS)]
+        client_ids: list[str] = []  # the service derives each reading's id from the user and the key
 
         take_away()
         try:
@@ -70,9 +71,11 @@ def _scan_through_outage(
                 r, dt_s = _measure(http, inst, panel, key, auth)
                 assert r.status_code == 201, r.text
                 assert r.json()["status"] == "queued" and r.json()["measurement"] is None
+                client_ids.append(r.json()["client_id"])
                 took.append(dt_s)
             r, dt_s = _measure(http, inst, panels[0], keys[0], auth)  # a client retry: nothing new queued
             assert r.status_code == 201 and r.json()["status"] == "queued", r.text
+            assert r.json()["client_id"] == client_ids[0]
             took.append(dt_s)
             print(f"measure seconds with the database away: {[round(t, 2) for t in took]}")
             assert max(took) < REQUEST_BOUND_S, took
@@ -93,7 +96,8 @@ def _scan_through_outage(
         r, _ = _measure(http, inst, panels[0], keys[0], auth)  # the retry now finds the stored reading
         assert r.status_code == 200 and r.json()["status"] == "duplicate", r.text
 
-    expected = {uuid.UUID(k) for k in keys}
+    expected = {uuid.UUID(c) for c in client_ids}
+    assert len(expected) == PANELS
     engine = create_engine(url)
     try:
         with engine.connect() as conn:

@@ -21,6 +21,7 @@ V1 = "/api/v1"
 EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("GET", f"{V1}/instruments"): frozenset({T, Q, A}),
     ("POST", f"{V1}/instruments/connect"): frozenset({T, A}),
+    ("DELETE", f"{V1}/instruments/{{instrument_id}}"): frozenset({T, A}),
     ("POST", f"{V1}/instruments/{{instrument_id}}/calibrate"): frozenset({T, A}),
     ("POST", f"{V1}/instruments/{{instrument_id}}/measure"): frozenset({T, A}),
     ("POST", f"{V1}/panels"): frozenset({T, A}),

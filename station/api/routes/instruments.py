@@ -1,4 +1,4 @@
-"""Instruments: ``/api/v1/instruments`` (list, connect, calibrate, measure); driver calls off the event loop."""
+"""Instruments: ``/api/v1/instruments`` (list, connect, detach, calibrate, measure); driver calls off the event loop."""
 
 from __future__ import annotations
 
@@ -44,17 +44,26 @@ def _hub(request: Request) -> InstrumentHub:
     return request.app.state.instruments
 
 
-def client_id_of(body_id: uuid.UUID | None, key: str | None) -> uuid.UUID | None:
-    """The request's client id: ``client_id``, else the ``Idempotency-Key`` (a UUID as it is, any other key hashed)."""
+def client_id_of(body_id: uuid.UUID | None, key: str | None, user_id: int) -> uuid.UUID | None:
+    """The request's client id: ``client_id``, else one derived from the ``Idempotency-Key`` and the user.
+
+    A key is the client's name for one attempt, chosen per user ("scan-1"): the stored id is
+    ``uuid5(namespace, "<user id>:<key>")`` for every key, a UUID key included, so two users' equal
+    keys name two readings, while the same user's retry (any of its tokens, after a restart, while the
+    reading waits in the outbox) derives the same id and gets its first answer. With both, the header
+    must repeat the body's ``client_id`` (the client then named the reading's id itself; it is used as is).
+    """
     if key is None:
         return body_id
-    try:
-        from_key = uuid.UUID(key)
-    except ValueError:
-        from_key = uuid.uuid5(_KEY_NAMESPACE, key)
-    if body_id is not None and body_id != from_key:
-        raise InputError("Idempotency-Key", f"the body's client_id {body_id} or no header", key)
-    return from_key
+    if body_id is not None:
+        try:
+            same = uuid.UUID(key) == body_id
+        except ValueError:
+            same = False
+        if not same:
+            raise InputError("Idempotency-Key", f"the body's client_id {body_id} or no header", key)
+        return body_id
+    return uuid.uuid5(_KEY_NAMESPACE, f"{user_id}:{key}")
 
 
 @router.get("", response_model=list[InstrumentPublic])
@@ -70,8 +79,17 @@ async def list_instruments(request: Request, _user: Reader) -> list[InstrumentPu
     responses={**NOT_FOUND, **CONFLICT},
 )
 async def connect(request: Request, user: Operator, body: ConnectRequest) -> InstrumentPublic:
-    """Open the instrument at a driver address and attach it."""
+    """Open the instrument at a driver address and attach it (a `sim:` address: at most max_simulators, 409 beyond)."""
     return await asyncio.to_thread(_hub(request).connect, address=body.address, actor=user)
+
+
+@router.delete(
+    "/{instrument_id}", status_code=status.HTTP_204_NO_CONTENT, response_class=Response, responses=NOT_FOUND
+)
+async def detach(request: Request, user: Operator, instrument_id: InstrumentId) -> Response:
+    """Detach an instrument: close it and, for a simulator, end its process (frees a simulator slot)."""
+    await asyncio.to_thread(_hub(request).detach, instrument_id=instrument_id, actor=user)
+    return Response(status_code=status.HTTP_204_NO_CONTENT)
 
 
 @router.post(
@@ -104,7 +122,8 @@ async def measure(
             min_length=1,
             max_length=255,
             pattern=r"^[\x21-\x7e]+$",
-            description="client-chosen key making a retry store no second reading (alternative to client_id)",
+            description="client-chosen key making a retry store no second reading (alternative to client_id); "
+            "scoped to the user: another user's equal key names another reading",
         ),
     ] = None,
     gloss_instrument_id: Annotated[
@@ -128,7 +147,7 @@ async def measure(
         req=body,
         gloss_instrument_id=gloss_instrument_id,
         actor=user,
-        client_id=client_id_of(body.client_id, idempotency_key),
+        client_id=client_id_of(body.client_id, idempotency_key, user.id),
     )
     if result.status == "duplicate":
         response.status_code = status.HTTP_200_OK
