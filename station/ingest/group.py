@@ -5,15 +5,15 @@ Every store into the measurement database is serialised twice over: by the write
 (``db.chain``). Stored one transaction per reading, concurrent writers queue on that lock and each
 pays a commit (an fsync) while the others wait. :class:`GroupCommit` lets concurrent callers share
 the transaction instead: the first caller that finds no write in progress becomes the writer, takes
-every reading queued so far (at most ``max_batch``), stores each under its own savepoint, commits
+every reading queued so far (at most ``max_batch``), stores them one after the other, commits
 once and hands each caller its own outcome; callers that arrived meanwhile form the next group.
 Nothing waits for a group to fill: a caller alone is stored at once, so no timer decides a result.
 
 Each caller still gets an answer only after its reading is committed (durable), and each reading is
 stored exactly once by client id, as :func:`~station.ingest.destination.store_audited` stores it. A
-reading the database refuses (a client-id conflict, a missing panel) is rolled back to its savepoint
-and raises in its own caller only; a failed commit (the database away, locked, full) raises in every
-caller of the group, none of whose readings is then stored.
+reading the database refuses (a client-id conflict, a missing panel) raises in its own caller only
+(the group is then stored again one reading per transaction); a failed commit (the database away,
+locked, full) raises in every caller of the group, none of whose readings is then stored.
 """
 
 from __future__ import annotations
@@ -116,40 +116,55 @@ class GroupCommit(Generic[T]):
     def _write(
         self, session: Session, group: list[_Pending[T]], answer: Callable[[Session, Reading, StoreResult], T]
     ) -> None:
-        """Store *group* in one transaction on *session*: a savepoint per reading, one commit.
+        """Store *group* in one transaction on *session* with one commit.
 
-        Instrument ids learnt in the group are remembered only once it is committed (a rolled-back
-        upsert must not leave the id of a row that was never stored).
+        No savepoints (each costs the database two more round trips per reading): when the database
+        refuses one reading, the transaction is rolled back and each reading of the group is stored
+        again in a transaction of its own, so the refusal reaches only its caller. Instrument ids
+        learnt in the group are remembered only once it is committed (a rolled-back upsert must not
+        leave the id of a row that was never stored).
         """
         learnt: dict[str, int] = {}
+        refused: tuple[_Pending[T], Exception] | None = None
         try:
             for pending in group:
                 seen = {**self._instrument_ids, **learnt}
                 try:
-                    with session.begin_nested():
-                        result = store_audited(
-                            session,
-                            pending.reading,
-                            actor_id=pending.actor_id,
-                            action=self.action,
-                            instrument_cache=seen,
-                        )
-                        pending.value = (answer(session, pending.reading, result), result.created)
+                    result = store_audited(
+                        session,
+                        pending.reading,
+                        actor_id=pending.actor_id,
+                        action=self.action,
+                        instrument_cache=seen,
+                    )
+                    pending.value = (answer(session, pending.reading, result), result.created)
                 except Exception as exc:
                     if is_unreachable(exc):
                         raise  # the database, not this reading: the whole group fails below
-                    pending.error = exc
-                else:
-                    learnt.update(seen)
-            session.commit()
+                    refused = (pending, exc)
+                    break
+                learnt.update(seen)
+            if refused is None:
+                session.commit()
+            else:
+                session.rollback()
         except BaseException as exc:
             try:
                 session.rollback()
             finally:
                 for pending in group:
                     pending.value = None
-                    pending.error = pending.error or exc
+                    pending.error = exc
             if not isinstance(exc, Exception):
                 raise
-        else:
+            return
+        if refused is None:
             self._instrument_ids.update(learnt)
+            return
+        for pending in group:
+            pending.value = None  # rolled back
+        if len(group) == 1:
+            refused[0].error = refused[1]
+            return
+        for pending in group:
+            self._write(session, [pending], answer)
