@@ -24,6 +24,7 @@ from station.api.middleware import BodySizeLimit, SecurityHeaders
 from station.api.security import TokenCache
 from station.api.settings import Settings
 from station.errors import InputError
+from station.ingest.group import GroupCommit
 
 log = logging.getLogger(__name__)
 
@@ -238,6 +239,7 @@ def create_app(settings: Settings) -> FastAPI:
     """Build the service for *settings*."""
     from station.api.routes import ROUTERS, health
     from station.api.routes.library import IMPORT_PATH as LIBRARY_IMPORT_PATH
+    from station.api.routes.measurements import CREATE_ACTION
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -271,6 +273,7 @@ def create_app(settings: Settings) -> FastAPI:
     app.state.settings = settings
     app.state.tokens = TokenCache(settings.token_offline_s)
     app.state.database = DatabaseState()
+    app.state.measurement_writes = GroupCommit(CREATE_ACTION)  # POST /measurements: group commit
     install_error_handlers(app)
     app.include_router(health.router)
     _docs(app, protected=not public)

@@ -178,7 +178,13 @@ class DatabaseDestination:
         return self.open()[1]
 
     def store(self, reading: Reading, *, actor_id: int | None = None, replayed: bool = False) -> Receipt:
-        """Store *reading* and its audit row in one transaction (``ON CONFLICT (client_id) DO NOTHING``)."""
+        """Store *reading* and its audit row in one transaction (``ON CONFLICT (client_id) DO NOTHING``).
+
+        An instrument id learnt here is remembered only once the transaction is committed: a refused
+        reading rolls its instrument row back too, and a remembered id of it would name no row (or,
+        reused, another instrument).
+        """
+        seen = dict(self._instrument_ids)
         with self.sessions().begin() as session:
             result = store_audited(
                 session,
@@ -186,8 +192,9 @@ class DatabaseDestination:
                 actor_id=actor_id,
                 action=self.replay_action if replayed else self.action,
                 source=self.source,
-                instrument_cache=self._instrument_ids,
+                instrument_cache=seen,
             )
+        self._instrument_ids.update(seen)
         status: Status = "stored" if result.created else "duplicate"
         return Receipt(str(reading.client_id), status, result.measurement_id)
 

@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import datetime as dt
 import functools
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from sqlalchemy import Table, select
@@ -45,10 +46,12 @@ class Provenance(Protocol):
 
 @dataclass(frozen=True)
 class StoreResult:
-    """Outcome of :func:`store_reading`: the row id and whether this call created it."""
+    """Outcome of :func:`store_reading`: the row id, whether this call created it and, when it did,
+    the column values it inserted (``row``: what the stored row reads, its id aside)."""
 
     measurement_id: int
     created: bool
+    row: Mapping[str, Any] | None = field(default=None, compare=False, repr=False)
 
 
 def _insert(session: Session, table: Table) -> Any:
@@ -210,4 +213,4 @@ def store_reading(
         if row.payload_sha256 != sha:
             raise ClientIdConflictError(str(reading.client_id), row.payload_sha256, sha)
         return StoreResult(row.id, created=False)
-    return StoreResult(new_id, created=True)
+    return StoreResult(new_id, created=True, row=values)

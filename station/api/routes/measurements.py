@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import datetime as dt
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Query, Response, status
+from fastapi import APIRouter, Depends, Query, Request, Response, status
 from fastapi.responses import StreamingResponse
 from pydantic import AwareDatetime
+from sqlalchemy.orm import Session
 
 from db.models import User
 from station.api.deps import ReadSessionDep, SessionDep, scoped
@@ -16,7 +18,8 @@ from station.api.schemas.measurements import CorrectionCreate, MeasurementPublic
 from station.api.schemas.panels import Job, Part
 from station.api.security import Scope
 from station.api.services import measurements as service
-from station.ingest import Reading
+from station.ingest import Reading, StoreResult
+from station.ingest.group import GroupCommit
 
 router = APIRouter(prefix="/measurements", tags=["measurements"], responses=ERROR_RESPONSES)
 Reader = Annotated[User, scoped(Scope.MEASUREMENTS_READ)]
@@ -57,6 +60,29 @@ def _query(
 
 Filters = Annotated[MeasurementQuery, Depends(_query)]
 
+#: The audit action of a reading stored through this route.
+CREATE_ACTION = "measurement.create"
+
+
+def measurement_writes(request: Request) -> GroupCommit[MeasurementPublic]:
+    """The app's group commit for this route (``app.state.measurement_writes``, made by ``create_app``)."""
+    writes: GroupCommit[MeasurementPublic] = request.app.state.measurement_writes
+    return writes
+
+
+def _stored(session: Session, reading: Reading, result: StoreResult) -> MeasurementPublic:
+    """The stored row as the route answers it: a new row from the values just inserted (what it
+    reads back, with times in UTC), a row stored before read in the storing transaction."""
+    row = result.row
+    if not result.created or row is None:
+        return service.get_measurement(session=session, measurement_id=result.measurement_id)
+    data = {name: row[name] for name in MeasurementPublic.model_fields if name in row}
+    for name in ("measured_at", "received_at"):
+        data[name] = row[name].astimezone(dt.UTC)
+    return MeasurementPublic(
+        **data, id=result.measurement_id, instrument_serial=reading.instrument.serial, superseded_by_id=None
+    )
+
 
 @router.post(
     "",
@@ -69,10 +95,18 @@ Filters = Annotated[MeasurementQuery, Depends(_query)]
     },
 )
 def create_measurement(
-    session: SessionDep, user: Writer, reading: Reading, response: Response
+    session: SessionDep,
+    user: Writer,
+    reading: Reading,
+    response: Response,
+    writes: Annotated[GroupCommit[MeasurementPublic], Depends(measurement_writes)],
 ) -> MeasurementPublic:
-    """Store a reading once: re-sending the same ``client_id`` returns the stored row with 200."""
-    measurement, created = service.ingest(session=session, actor=user, reading=reading)
+    """Store a reading once: re-sending the same ``client_id`` returns the stored row with 200.
+
+    Readings posted at the same moment share one transaction (:class:`GroupCommit`); each answer
+    comes once its reading is committed.
+    """
+    measurement, created = writes.store(session, reading, actor_id=user.id, answer=_stored)
     if not created:
         response.status_code = status.HTTP_200_OK
     return measurement
