@@ -91,12 +91,11 @@ def test_killed_watcher_ingests_each_file_exactly_once(tmp_path: Path, _migrated
         # random delay after the first file let a fast machine finish all 30 before the kill landed.
         target = rng.randint(1, FILES // 2)
         with _spawn(tmp_path, url) as proc:
-            wait_until(
-                lambda n=target: (drop / "done").exists() and len(list((drop / "done").iterdir())) >= n,
-                90,
-                interval=0.001,
-                what=f"{target} files done",
-            )
+
+            def reached(n: int = target) -> bool:
+                return (drop / "done").exists() and len(list((drop / "done").iterdir())) >= n
+
+            wait_until(reached, 90, interval=0.001, what=f"{target} files done")
             proc.send_signal(signal.SIGKILL)
             assert proc.wait(10) == -signal.SIGKILL, proc.err.text() if proc.err else ""
         left = [p for p in drop.iterdir() if p.is_file()]
