@@ -1,7 +1,9 @@
 """Rules that keep the suite green on a loaded machine, checked on the test sources themselves:
 
 * no test pauses with ``time.sleep``: it waits with a deadline (``tests.waiting.wait_until``), so a busy
-  machine makes a test slower, never wrong, and an idle one never waits a guessed time;
+  machine makes a test slower, never wrong, and an idle one never waits a guessed time; a pause that is
+  itself the behaviour under test (a slow client, a device that answers late) is
+  ``tests.waiting.pause``, in the files named here only;
 * no test starts a process with ``subprocess.Popen`` / ``subprocess.run`` directly: it goes through
   ``tests.processes`` (``Child``, ``run``), which ends the process and what it started on every path;
 * no ``pytest.importorskip`` of the project's own packages or of a declared dependency: a missing one is
@@ -26,14 +28,12 @@ REPO = TESTS.parent
 SLEEP_ALLOWED = {
     "tests/waiting.py": "wait_until's polling interval",
 }
-#: Test files being reworked in parallel with this rule (their sleeps are replaced there); to be emptied
-#: once those changes are merged.
-SLEEP_PENDING = {
-    "tests/api/test_serve_limits.py",
-    "tests/api/test_image_bounds.py",
-    "tests/ingest/test_watch_service.py",
-    "tests/ingest/test_watch_kill.py",
-    "tests/drivers/test_gloss_hid.py",
+#: Files that may call ``tests.waiting.pause`` (a pause that plays part of the behaviour under test and
+#: waits for nothing), each with what the pause plays.
+PAUSE_ALLOWED = {
+    "tests/api/test_serve_limits.py": "a slow client trickling header bytes, headers sent in two parts",
+    "tests/api/test_image_bounds.py": "a slow decode holding its slot, so that concurrent uploads overlap",
+    "tests/drivers/test_gloss_hid.py": "the fake hidapi device blocking for its read timeout",
 }
 #: Files that may start processes with ``subprocess`` directly, each with its reason.
 SUBPROCESS_ALLOWED = {
@@ -41,17 +41,6 @@ SUBPROCESS_ALLOWED = {
     "tests/ui/conftest.py": "the viewer suite's Xvfb, started at import for the whole test run",
     "tests/test_processes.py": "a process deliberately left running, for the leftover check to find",
     "tests/soak/_fronts.py": "fronts killed at random (SIGKILL to their own process groups) and restarted",
-}
-#: As SLEEP_PENDING, for direct ``subprocess`` use.
-SUBPROCESS_PENDING = {
-    "tests/api/test_serve_limits.py",
-    "tests/ingest/test_watch_kill.py",
-    "tests/db/test_pg_roles.py",
-    "tests/ingest/conftest.py",
-    "tests/model/test_cli_model.py",
-    "tests/test_version.py",
-    "tests/ui/test_app.py",
-    "tests/drivers/test_ma6_faults.py",
 }
 
 #: The project's own top-level packages (setuptools' list plus the benchmarks and the tests).
@@ -114,7 +103,7 @@ def test_no_test_sleeps(sources: Sources) -> None:
     found = [
         f"{path}:{line}: {call}"
         for path, tree in sources.items()
-        if path not in SLEEP_ALLOWED and path not in SLEEP_PENDING
+        if path not in SLEEP_ALLOWED
         for line, call in _calls(tree, "time", {"sleep"})
     ]
     assert not found, "wait with tests.waiting.wait_until (a deadline), not a fixed sleep:\n" + "\n".join(
@@ -127,16 +116,28 @@ def test_no_test_starts_a_process_it_might_not_end(sources: Sources) -> None:
     found = [
         f"{path}:{line}: {call}"
         for path, tree in sources.items()
-        if path not in SUBPROCESS_ALLOWED and path not in SUBPROCESS_PENDING
+        if path not in SUBPROCESS_ALLOWED
         for line, call in _calls(tree, "subprocess", starts)
     ]
     assert not found, "start processes with tests.processes.Child or run:\n" + "\n".join(found)
+
+
+def test_pauses_only_where_the_pause_is_the_behaviour(sources: Sources) -> None:
+    """``tests.waiting.pause`` only in the files that :data:`PAUSE_ALLOWED` names with their reason."""
+    found = [
+        f"{path}:{line}: {call}"
+        for path, tree in sources.items()
+        if path not in PAUSE_ALLOWED
+        for line, call in _calls(tree, "tests.waiting", {"pause"})
+    ]
+    assert not found, "wait with tests.waiting.wait_until (a deadline), not a pause:\n" + "\n".join(found)
 
 
 def test_the_allowances_are_still_needed(sources: Sources) -> None:
     """An allowance whose file no longer does what it allows is removed (the rules only tighten)."""
     trees = sources
     stale = [p for p in SLEEP_ALLOWED if p not in trees or not _calls(trees[p], "time", {"sleep"})]
+    stale += [p for p in PAUSE_ALLOWED if p not in trees or not _calls(trees[p], "tests.waiting", {"pause"})]
     stale += [
         p
         for p in SUBPROCESS_ALLOWED

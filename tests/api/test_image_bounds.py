@@ -11,7 +11,6 @@ from __future__ import annotations
 import io
 import struct
 import threading
-import time
 import tracemalloc
 import zlib
 from collections.abc import Iterator
@@ -27,6 +26,8 @@ from station.api.services import styling as service
 from station.design.images import decode_image, load_image
 from station.design.moodboard import region
 from tests.api.conftest import Api, make_api
+from tests.processes import run
+from tests.waiting import pause
 
 V1 = "/api/v1"
 PNG = {"Content-Type": "image/png"}
@@ -141,7 +142,7 @@ def test_concurrent_uploads_are_decoded_at_most_n_at_once(
         with lock:
             running += 1
             most = max(most, running)
-        time.sleep(0.15)
+        pause(0.15, "a slow decode holding its slot, so that the posts overlap")
         try:
             return real(**kwargs)
         finally:
@@ -167,7 +168,6 @@ def test_concurrent_uploads_are_decoded_at_most_n_at_once(
 def test_an_image_pillow_cannot_decode_is_an_image_load_error_and_one_cli_line(tmp_path: Path) -> None:
     """A compressed text chunk beyond Pillow's limit (``ValueError`` inside Pillow) is refused as an
     :class:`ImageLoadError` naming ``image``; ``station design eyedrop`` prints one line, exit 2."""
-    import subprocess
     import sys
 
     from station.design.errors import ImageLoadError
@@ -183,7 +183,7 @@ def test_an_image_pillow_cannot_decode_is_an_image_load_error_and_one_cli_line(t
         decode_image(gif.getvalue())
     path = tmp_path / "board.png"
     path.write_bytes(data)
-    done = subprocess.run(
+    done = run(
         [
             sys.executable,
             "-m",
@@ -196,8 +196,6 @@ def test_an_image_pillow_cannot_decode_is_an_image_load_error_and_one_cli_line(t
             "--flop",
             "6,6",
         ],
-        capture_output=True,
-        text=True,
         timeout=120,
         cwd=Path(__file__).resolve().parents[2],
     )

@@ -14,7 +14,6 @@ import os
 import signal
 import socket
 import stat
-import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -25,6 +24,8 @@ import pytest
 
 from station.api.serve_process import ServeProcess, ServeStartError, free_port
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
+from tests.processes import run
+from tests.waiting import WaitTimeout, pause, wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 BODY_TIMEOUT_S = 1.0
@@ -59,11 +60,9 @@ def _serve(tmp_path_factory: pytest.TempPathFactory, header_timeout_s: float) ->
     data_dir = tmp_path_factory.mktemp("serve") / "data"
     env = dict(os.environ, PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1")
     env.pop("CACAD_DATABASE_URL", None)
-    created = subprocess.run(
+    created = run(
         [sys.executable, "-m", "station.cli", "db", "upgrade", "--data-dir", str(data_dir)],
         env=env,
-        capture_output=True,
-        text=True,
         timeout=120,
     )
     assert created.returncode == 0, created.stderr
@@ -178,21 +177,36 @@ def _is_closed(sock: socket.socket, within_s: float) -> tuple[bool, bytes]:
 
 
 def _wait_until(condition: Callable[[], bool], timeout_s: float) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.05)
-    return condition()
+    """Whether *condition* came true within *timeout_s* seconds (polled every 0.05 s)."""
+    try:
+        wait_until(condition, timeout_s)
+    except WaitTimeout:
+        return False
+    return True
+
+
+def _taken_in(service: Service) -> None:
+    """Return once the service has taken in every connection opened (and every byte sent) before this
+    call: the kernel hands connections over in the order they came, so a request on a new connection is
+    answered only after the service has accepted all of the earlier ones and read what they sent."""
+    r = httpx.get(service.base + "/health", timeout=10)
+    assert r.status_code == 200, r.text
 
 
 def test_requests_over_the_limit_are_503(service: Service) -> None:
     """Three requests in flight (from three clients): the fourth is 503; once they end, 200 again."""
     held = [_slow_body(service, f"127.0.0.{n}") for n in (4, 5, 6)]
     try:
-        time.sleep(0.2)
-        r = httpx.get(service.base + "/health", timeout=10)
-        assert r.status_code == 503, r.text
+        # polled: a fourth request is served until the service has read the three; from then until their
+        # body deadline (408) it must be refused. The deadline only bounds how long a failure takes.
+        statuses: list[int] = []
+
+        def refused() -> bool:
+            statuses.append(httpx.get(service.base + "/health", timeout=10).status_code)
+            return statuses[-1] == 503
+
+        assert _wait_until(refused, 5 * BODY_TIMEOUT_S), statuses
+        assert set(statuses) <= {200, 503}, statuses
     finally:
         for sock in held:
             sock.close()
@@ -207,7 +221,7 @@ def test_idle_connections_without_a_token_do_not_make_requests_503(roomy: Servic
     held += [_connect(roomy, "127.0.0.2") for _ in range(64)]
     held += [_connect(roomy) for _ in range(64)]
     try:
-        time.sleep(0.2)
+        _taken_in(roomy)  # every one of them accepted: a cap that closed them would have done so
         assert not any(_is_closed(sock, 0.01)[0] for sock in held[:64])  # one each: all still open
         for _ in range(5):
             assert httpx.get(roomy.base + "/health", timeout=10).status_code == 200
@@ -247,7 +261,7 @@ def test_a_connection_without_a_whole_request_is_closed_at_the_header_deadline(s
                     continue
                 except OSError:
                     answers[i] = b""
-            time.sleep(0.05)
+            pause(0.05, "a slow client between two header bytes")
         elapsed = time.monotonic() - start
         assert set(answers) == {0, 1}, f"still open after {elapsed:.1f} s"
         assert elapsed <= HEADER_TIMEOUT_S + 3, elapsed
@@ -276,7 +290,7 @@ def test_a_client_over_its_connection_cap_yields_its_oldest_idle_one(roomy: Serv
             sock.close()
     busy = [_slow_body(roomy, "127.0.0.8") for _ in range(PER_CLIENT)]
     try:
-        time.sleep(0.2)
+        _taken_in(roomy)  # both requests read: both connections busy
         with _connect(roomy, "127.0.0.8") as refused:
             data, _ = _read_all(refused, 5)
         assert data.startswith(b"HTTP/1.1 503") and b"per client" in data, data[:300]
@@ -291,7 +305,8 @@ def test_connections_over_the_total_cap_close_the_oldest_idle_ones(roomy: Servic
     held = [_connect(roomy, f"127.0.2.{n}") for n in range(1, MAX_CONNECTIONS + 1)]
     extra = [_connect(roomy, f"127.0.3.{n}") for n in range(1, 6)]
     try:
-        time.sleep(0.3)
+        # polled: each extra connection the service accepts closes one held one
+        assert _wait_until(lambda: sum(_is_closed(sock, 0.01)[0] for sock in held) >= len(extra), 10)
         closed = [sock for sock in held if _is_closed(sock, 0.01)[0]]
         assert len(closed) >= len(extra), len(closed)
         assert closed[0] is held[0]
@@ -332,7 +347,7 @@ def test_headers_still_arriving_beyond_the_cap_are_refused(service: Service) -> 
     assert data.startswith(b"HTTP/1.1 400"), data[:200]
     with _connect(service) as sock:  # under the cap the same request, once complete, is served
         sock.sendall(b"GET /health HTTP/1.1\r\nHost: t\r\nX-Pad: " + b"a" * (MAX_HEADER_BYTES // 2))
-        time.sleep(0.2)
+        pause(0.2, "headers sent in two parts, the service reading the first on its own")
         sock.sendall(b"\r\nConnection: close\r\n\r\n")
         data, _closed_after = _read_all(sock, limit_s=5)
     assert data.startswith(b"HTTP/1.1 200"), data[:200]

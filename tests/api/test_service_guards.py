@@ -11,7 +11,6 @@ import json
 import os
 import signal
 import socket
-import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +20,7 @@ import pytest
 
 from station.api.serve_process import ServeProcess, ServeStartError
 from tests.api._images import bomb_png
+from tests.waiting import WaitTimeout, wait_until
 
 V1 = "/api/v1"
 MAX_SIMULATORS = 2
@@ -159,12 +159,12 @@ def _simulator_pids(parent: int) -> set[int]:
 
 
 def _until(condition: Callable[[], bool], timeout_s: float) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.05)
-    return condition()
+    """Whether *condition* came true within *timeout_s* seconds (polled every 0.05 s)."""
+    try:
+        wait_until(condition, timeout_s, interval=0.05)
+    except WaitTimeout:
+        return False
+    return True
 
 
 def test_simulators_are_capped_detachable_and_end_with_the_service(tmp_path: Path) -> None:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import secrets
-import subprocess
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -24,6 +23,7 @@ from db.engine import make_engine
 from station.ingest import DatabaseDestination
 from tests.db._fixtures import PG_ADMIN_URL
 from tests.ingest._readings import make_reading
+from tests.processes import run
 
 pytestmark = pytest.mark.postgres
 REPO = Path(__file__).resolve().parents[2]
@@ -49,9 +49,7 @@ def roles(pg_server: object) -> Iterator[tuple[str, str]]:
         CACAD_PG_SUPERUSER=admin.username or "postgres",
         PYTHON=os.environ.get("PYTHON", "python"),
     )
-    done = subprocess.run(
-        ["bash", str(REPO / "scripts" / "pg-roles.sh")], env=env, capture_output=True, text=True, timeout=120
-    )
+    done = run(["bash", str(REPO / "scripts" / "pg-roles.sh")], env=env, timeout=120)
     assert done.returncode == 0, done.stderr + done.stdout
     base = f"postgresql://{{}}@{admin.host}:{admin.port or 5432}/{names['CACAD_PG_DB']}"
     try:

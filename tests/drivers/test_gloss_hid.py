@@ -28,6 +28,7 @@ from station.drivers import (
 from station.drivers.discovery import list_devices
 from station.drivers.gloss import GlossMeter, hid_path_for
 from station.drivers.transport import HidTransport
+from tests.waiting import pause
 
 FAST = {"timeout_s": 0.2, "retries": 1, "measure_limit_s": 0.6}
 
@@ -72,7 +73,7 @@ class ScriptedHid:
 
     def read(self, size, timeout_ms=0):
         if not self.inbox:
-            time.sleep(timeout_ms / 1000)
+            pause(timeout_ms / 1000, "hidapi's read blocking for its timeout with nothing to read")
             return []
         return list(self.inbox.pop(0))
 

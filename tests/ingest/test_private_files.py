@@ -16,6 +16,7 @@ from sqlalchemy.pool import NullPool
 from db.engine import make_engine
 from station.ingest import Outbox
 from tests.ingest.conftest import REPO
+from tests.processes import Child
 from tests.user_cli import run_station
 
 
@@ -78,25 +79,27 @@ def test_two_processes_sharing_the_database_lose_no_reading(
     url = f"sqlite:///{db}"
     env = dict(os.environ, PYTHONPATH=str(REPO))
     env.pop("CACAD_DATABASE_URL", None)
-    holder = subprocess.Popen(
+    with Child(
         [sys.executable, "-m", "tests.db._engine_holder", url, str(tmp_path / "viewer-outbox.sqlite3"), "7"],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO, env=env,
-    )  # fmt: skip
-    try:
-        assert holder.stdout is not None and holder.stdin is not None
-        lines = [holder.stdout.readline().strip(), holder.stdout.readline().strip()]
-        assert lines[0].startswith("stored ") and lines[1] == "ready", (lines, holder.stderr)
+        stdin=subprocess.PIPE, cwd=REPO, env=env,
+    ) as holder:  # fmt: skip
+        assert holder.out is not None and holder.err is not None and holder.stdin is not None
+        seen = holder.out.wait_for("ready\n", timeout=120)
+        first = seen[: seen.index("ready\n") + len("ready\n")]  # the holder now waits for "go"
+        lines = [line.strip() for line in first.splitlines()]
+        assert len(lines) == 2 and lines[0].startswith("stored ") and lines[1] == "ready", (
+            lines,
+            holder.err.text(),
+        )
         imported = run_station(
             tmp_path, "import", str(sim_files[1]["cxf"]), "--store", url,
             "--outbox", str(tmp_path / "cli-outbox.sqlite3"), "--json",
         )  # fmt: skip
         assert imported.returncode == 0, imported.stderr
-        out, err = holder.communicate("go\n", timeout=120)
-        assert holder.returncode == 0, err
-    finally:
-        if holder.poll() is None:
-            holder.kill()
-            holder.wait(timeout=30)
+        holder.stdin.write(b"go\n")
+        holder.stdin.close()
+        assert holder.finish(timeout=120) == 0, holder.err.text()
+        out = holder.out.text()[len(first) :]
     stored = [int(line.split()[1]) for line in [lines[0], *out.split("\n")] if line.startswith("stored ")]
     rows = _measurements(url)
     imported_rows = [r for r in rows if r[0] not in stored]

@@ -24,6 +24,8 @@ from sqlalchemy import func, select
 
 from db.engine import make_engine
 from db.models import Measurement
+from tests.processes import Child, run
+from tests.waiting import WaitTimeout, wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 #: A secret the dropped links point at: it must never appear in a reason, a log line or the output.
@@ -58,7 +60,7 @@ class Station:
         self.url = f"sqlite:///{self.db}"
         self.drop = root / "drop"
         self.drop.mkdir()
-        self.procs: list[subprocess.Popen[str]] = []
+        self.procs: list[Child] = []
 
     def _argv(self, *extra: str) -> list[str]:
         return [sys.executable, "-m", "station.cli", "import", "watch", "drop", "--store", self.url,
@@ -69,37 +71,29 @@ class Station:
 
     def once(self, *extra: str) -> subprocess.CompletedProcess[str]:
         """``station import watch drop --once --settle 0`` (and *extra*), run to its end."""
-        return subprocess.run(
-            self._argv("--once", "--settle", "0", *extra),
-            cwd=self.root, env=self._env(), capture_output=True, text=True, timeout=120,
-        )  # fmt: skip
+        return run(self._argv("--once", "--settle", "0", *extra), cwd=self.root, env=self._env(), timeout=120)
 
-    def start(self, *extra: str) -> subprocess.Popen[str]:
+    def start(self, *extra: str) -> Child:
         """A watcher running in the background (stopped with :meth:`stop`, killed at teardown); its
-        stdout and stderr go to files (:meth:`ready` reads its stderr)."""
-        n = len(self.procs)
-        with (self.root / f"watch{n}.out").open("w") as out, (self.root / f"watch{n}.err").open("w") as err:
-            proc = subprocess.Popen(
-                self._argv(*extra), cwd=self.root, env=self._env(), text=True, stdout=out, stderr=err
-            )
+        stdout and stderr are read into the child's streams (:meth:`ready` reads its stderr)."""
+        proc = Child(self._argv(*extra), cwd=self.root, env=self._env())
         self.procs.append(proc)
         return proc
 
-    def ready(self, proc: subprocess.Popen[str]) -> bool:
+    def ready(self, proc: Child) -> bool:
         """Whether *proc* (a :meth:`start` watcher) says it is watching."""
-        n = self.procs.index(proc)
-        return "watching drop" in (self.root / f"watch{n}.err").read_text()
+        assert proc.err is not None
+        return "watching drop" in proc.err.text()
 
-    def stop(self, proc: subprocess.Popen[str]) -> None:
-        """Ctrl-C *proc* and wait for it to end."""
+    def stop(self, proc: Child) -> None:
+        """Ctrl-C *proc* and wait (at most 30 s) for it to end."""
         proc.send_signal(signal.SIGINT)
         proc.wait(timeout=30)
 
     def kill_all(self) -> None:
+        """Kill every watcher still running (with what it started) and close its pipes."""
         for proc in self.procs:
-            if proc.poll() is None:
-                proc.kill()
-            proc.wait(timeout=30)
+            proc.close()
 
     def stored(self) -> int:
         engine = make_engine(self.url)
@@ -120,12 +114,12 @@ def station(tmp_path: Path, _migrated_sqlite: Path) -> Iterator[Station]:
 
 
 def _wait(cond: Callable[[], bool], timeout_s: float = 60.0) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if cond():
-            return True
-        time.sleep(0.02)
-    return False
+    """Whether *cond* came true within *timeout_s* seconds (polled every 0.02 s)."""
+    try:
+        wait_until(cond, timeout_s, interval=0.02)
+    except WaitTimeout:
+        return False
+    return True
 
 
 def _tree(folder: Path) -> list[str]:

@@ -10,7 +10,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 from sqlalchemy import select
@@ -22,6 +21,8 @@ from station.ingest.formats import build_measurement, import_client_id, write_me
 from station.ingest.formats.measurement import OBSERVERS, Instrument
 from station.ingest.formats.records import file_sha256
 from station.model.domain import ANGLES_6, aspecular_name
+from tests.processes import Child
+from tests.waiting import wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 FILES = 30
@@ -65,9 +66,10 @@ def _write_drop(drop: Path, rng: random.Random) -> dict[str, list[list[list[floa
     return expected
 
 
-def _spawn(cwd: Path, url: str, *extra: str) -> subprocess.Popen[bytes]:
+def _spawn(cwd: Path, url: str, *extra: str) -> Child:
+    """``station import watch drop`` (and *extra*) in *cwd*, its stderr read into ``child.err``."""
     env = dict(os.environ, PYTHONPATH=str(REPO), CACAD_OPERATOR="qa")
-    return subprocess.Popen(
+    return Child(
         [sys.executable, "-m", "station.cli", "import", "watch", "drop", "--settle", "0", "--interval", "0.05",
          "--store", url, "--outbox", str(cwd / "outbox.sqlite3"), *extra],
         cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
@@ -85,25 +87,21 @@ def test_killed_watcher_ingests_each_file_exactly_once(tmp_path: Path, _migrated
     shas = {name: file_sha256(drop / name) for name in expected}
     killed_mid_run = 0
     for _ in range(KILLS):
-        proc = _spawn(tmp_path, url)
-        deadline = time.monotonic() + 90
         # Kill it at a random point of the run: once a random number of files (1 .. FILES/2) is done. A
         # random delay after the first file let a fast machine finish all 30 before the kill landed.
         target = rng.randint(1, FILES // 2)
-        while time.monotonic() < deadline:
-            if (drop / "done").exists() and len(list((drop / "done").iterdir())) >= target:
-                break
-            time.sleep(0.001)
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(10)
-        assert proc.returncode == -signal.SIGKILL, proc.stderr.read().decode() if proc.stderr else ""
-        if proc.stderr:
-            proc.stderr.close()
+        with _spawn(tmp_path, url) as proc:
+
+            def reached(n: int = target) -> bool:
+                return (drop / "done").exists() and len(list((drop / "done").iterdir())) >= n
+
+            wait_until(reached, 90, interval=0.001, what=f"{target} files done")
+            proc.send_signal(signal.SIGKILL)
+            assert proc.wait(10) == -signal.SIGKILL, proc.err.text() if proc.err else ""
         left = [p for p in drop.iterdir() if p.is_file()]
         killed_mid_run += bool(left)
-    proc = _spawn(tmp_path, url, "--once")
-    _, err = proc.communicate(timeout=120)
-    assert proc.returncode == 0, err.decode()
+    with _spawn(tmp_path, url, "--once") as proc:
+        assert proc.finish(120) == 0, proc.err.text() if proc.err else ""
     assert killed_mid_run == KILLS, "the kill landed after the folder was empty: the test proved nothing"
 
     assert [p.name for p in drop.iterdir() if p.is_file()] == []

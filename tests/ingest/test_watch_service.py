@@ -4,7 +4,6 @@ through the service's ingestor on the configured job and part, a bad one is move
 from __future__ import annotations
 
 import logging
-import time
 from pathlib import Path
 
 import pytest
@@ -14,6 +13,7 @@ from sqlalchemy import select
 
 from db.models import Measurement, Panel
 from station.api import Settings, create_app
+from tests.waiting import wait_until
 
 
 def test_service_watch_folder(tmp_path: Path) -> None:
@@ -34,9 +34,11 @@ def test_service_watch_folder(tmp_path: Path) -> None:
         (drop / "a.csv.part").write_text("sample,geometry,L,a,b\np1,45as15,50,1,2\np1,45as45,40,1.5,2.5\n")
         (drop / "a.csv.part").rename(drop / "a.csv")
         (drop / "b.csv").write_text("sample,geometry,L,a,b\np2,45as15,50,1,2\np2,45as15,40,1.5,2.5\n")
-        deadline = time.monotonic() + 20
-        while time.monotonic() < deadline and not ((drop / "done" / "a.csv").exists() and (drop / "rejected" / "b.csv").exists()):  # fmt: skip
-            time.sleep(0.05)
+        wait_until(
+            lambda: (drop / "done" / "a.csv").exists() and (drop / "rejected" / "b.csv").exists(),
+            20,
+            what="a.csv done and b.csv rejected",
+        )
         with app.state.sessions() as session:
             rows = session.execute(select(Measurement.geometries_deg, Measurement.lab, Panel.job, Panel.part, Panel.notes).join(Panel)).all()  # fmt: skip
     assert (drop / "done" / "a.csv").is_file()
@@ -77,9 +79,9 @@ def test_service_watch_folder_refuses_a_linked_rejected_folder(
     )
     app = create_app(settings)
     with caplog.at_level(logging.INFO, logger="station.api.app"), TestClient(app):
-        deadline = time.monotonic() + 20
-        while time.monotonic() < deadline and not any("refused" in r.message for r in caplog.records):
-            time.sleep(0.05)
+        wait_until(
+            lambda: any("refused" in r.message for r in caplog.records), 20, what="the watch folder refused"
+        )
         refusals = [r for r in caplog.records if r.levelno >= logging.ERROR]
     assert len(refusals) == 1 and "rejected: expected a folder the watcher makes" in refusals[0].getMessage()
     assert "a symbolic link" in refusals[0].getMessage() and refusals[0].exc_info is None

@@ -7,7 +7,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import subprocess
 import sys
 import zipfile
 from pathlib import Path
@@ -24,6 +23,7 @@ from station.ingest.formats.workbook import (
     MAX_WORKBOOK_XML_BYTES,
     SHEET,
 )
+from tests.processes import run
 
 REPO = Path(__file__).resolve().parents[2]
 #: Address space the reading child may use, bytes: the whole-workbook load of a million cells needs
@@ -80,9 +80,7 @@ out["growth_kib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
 print(json.dumps(out))
 """
     env = dict(os.environ, PYTHONPATH=str(REPO), OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-    res = subprocess.run(
-        [sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120, env=env
-    )
+    res = run([sys.executable, "-c", code, str(path)], timeout=120, env=env)
     assert res.returncode == 0, res.stderr[-2000:]
     return dict(json.loads(res.stdout))
 
