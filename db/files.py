@@ -50,9 +50,9 @@ class NotRegularFileError(InputError):
 
 
 def file_kind(mode: int) -> str:
-    """What an ``lstat`` *mode* is, in words (``"a symlink"``, ``"a FIFO"``, ``"a character device"`` …)."""
+    """What an ``lstat`` *mode* is, in words (``"a symbolic link"``, ``"a FIFO"``, ``"a character device"`` …)."""
     for test, name in (
-        (stat.S_ISLNK, "a symlink"),
+        (stat.S_ISLNK, "a symbolic link"),
         (stat.S_ISDIR, "a folder"),
         (stat.S_ISFIFO, "a FIFO"),
         (stat.S_ISCHR, "a character device"),

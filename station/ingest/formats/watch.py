@@ -54,6 +54,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any, Literal
 
+from db.files import file_kind
 from station.errors import InputError
 from station.ingest.errors import ImportFileError, IngestError
 from station.ingest.formats import is_complete, read_measurement_file
@@ -88,14 +89,6 @@ REASON_MODE = 0o600
 
 _DIR_FLAGS = os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC
 _READ_FLAGS = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC
-_KINDS = (
-    (stat.S_ISLNK, "a symbolic link"),
-    (stat.S_ISFIFO, "a FIFO"),
-    (stat.S_ISCHR, "a character device"),
-    (stat.S_ISBLK, "a block device"),
-    (stat.S_ISSOCK, "a socket"),
-    (stat.S_ISDIR, "a folder"),
-)
 
 
 @dataclass(frozen=True)
@@ -149,10 +142,6 @@ def reason_of(exc: BaseException) -> str:
     return f"{kind}: the file could not be read"
 
 
-def _kind(mode: int) -> str:
-    return next((what for test, what in _KINDS if test(mode)), "not a regular file")
-
-
 def _fsync(fd: int) -> None:
     try:
         os.fsync(fd)
@@ -173,7 +162,7 @@ def _own_folder(parent: int, name: str, shown_path: str) -> int:
     except OSError as exc:
         raise InputError(name, accepted, exc.strerror, detail=shown_path) from exc
     if not stat.S_ISDIR(st.st_mode):
-        raise InputError(name, accepted, _kind(st.st_mode), detail=shown_path)
+        raise InputError(name, accepted, file_kind(st.st_mode), detail=shown_path)
     if st.st_uid != os.geteuid():
         raise InputError(name, accepted, f"a folder of user id {st.st_uid}", detail=shown_path)
     if stat.S_IMODE(st.st_mode) & 0o077:  # made by someone else, or an older version: left as it is
@@ -451,7 +440,7 @@ class WatchFolder:
         regular file with one name (a link, FIFO or device is never opened)."""
         st = os.lstat(name, dir_fd=self._mine)
         if not stat.S_ISREG(st.st_mode):
-            raise _Refused(f"NotARegularFile: file: expected a regular file, got {_kind(st.st_mode)}")
+            raise _Refused(f"NotARegularFile: file: expected a regular file, got {file_kind(st.st_mode)}")
         if st.st_nlink != 1:
             raise _Refused("HardLink: file: expected a file with one name, got a hard link")
         try:
