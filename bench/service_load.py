@@ -372,7 +372,7 @@ def main(argv: list[str] | None = None) -> int:
             print(c.line())
     else:
         extra = (
-            f"Verdict: {verdict}. Clients are {n} processes with one keep-alive HTTP/1.1 connection each to a real "
+            f"Verdict: {verdict}. Clients are {n} processes with one keep-alive HTTP/1.1 connection each (Python's `http.client`) to a real "
             f"`station serve` (uvicorn, one worker, default log level) on 127.0.0.1, posting "
             f"`POST /api/v1/measurements` (token check, strict validation, insert, hash chain, audit row; "
             f"readings posted together share one transaction and one commit, each answered once committed). "
