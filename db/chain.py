@@ -42,6 +42,7 @@ signature does not recompute.
 from __future__ import annotations
 
 import datetime as dt
+import functools
 import hashlib
 import hmac
 import itertools
@@ -63,6 +64,7 @@ from sqlalchemy import (
     Table,
     Text,
     Uuid,
+    bindparam,
     column,
     event,
     select,
@@ -314,18 +316,53 @@ class Head:
     at: dt.datetime | None
 
 
+#: Where a transaction keeps the heads it locked (``Connection.info``; see :func:`lock_head`).
+_HEADS_INFO = "db.chain.heads"
+
+#: Every chain's head row, locked for the transaction (one statement, by name, built once).
+_LOCK_HEADS = (
+    select(HEADS.c.chain, HEADS.c.length, HEADS.c.head_sha256, HEADS.c.head_at)
+    .where(HEADS.c.chain.in_(CHAINS))
+    .order_by(HEADS.c.chain)
+    .with_for_update()
+)
+#: Move one chain's head (parameters bound per call: ``c_chain``, ``length``, ``head_sha256``, ``head_at``).
+_ADVANCE = (
+    update(HEADS)
+    .where(HEADS.c.chain == bindparam("c_chain"))
+    .values(length=bindparam("length"), head_sha256=bindparam("head_sha256"), head_at=bindparam("head_at"))
+)
+
+
+def _transaction_key(conn: Connection) -> tuple[object, object]:
+    """The database transaction *conn* is in now: its root transaction and innermost savepoint."""
+    return (conn.get_transaction(), conn.get_nested_transaction())
+
+
+def _connection(session: Session | Connection) -> Connection:
+    return session.connection() if isinstance(session, Session) else session
+
+
 def lock_head(session: Session | Connection, chain: Chain) -> Head:
-    """Lock every chain's head row for this transaction (one statement, by name) and return *chain*'s."""
-    rows = session.execute(
-        select(HEADS.c.chain, HEADS.c.length, HEADS.c.head_sha256, HEADS.c.head_at)
-        .where(HEADS.c.chain.in_(CHAINS))
-        .order_by(HEADS.c.chain)
-        .with_for_update()
-    ).all()
-    for row in rows:
-        if row.chain == chain:
-            return Head(int(row.length), str(row.head_sha256), row.head_at)
-    raise LookupError(f"ledger_heads has no row for {chain}: is the database migrated?")
+    """Lock every chain's head row for this transaction (one statement, by name) and return *chain*'s.
+
+    The heads are read once per database transaction (and savepoint): the rows stay locked until it
+    ends, and :func:`advance` keeps the copy current, so a later call in the same transaction reads the
+    copy instead of the database. A transaction that moves a head some other way must not call this
+    afterwards (no product code does; the database refuses a head that does not follow its table).
+    """
+    conn = _connection(session)
+    kept = conn.info.get(_HEADS_INFO)
+    if kept is not None and kept[0] == _transaction_key(conn) and chain in kept[1]:
+        head: Head = kept[1][chain]
+        return head
+    rows = conn.execute(_LOCK_HEADS).all()
+    heads = {row.chain: Head(int(row.length), str(row.head_sha256), row.head_at) for row in rows}
+    key = _transaction_key(conn)  # after the statement: it began the transaction when none was open
+    conn.info[_HEADS_INFO] = (key, heads) if key[0] is not None else None
+    if chain not in heads:
+        raise LookupError(f"ledger_heads has no row for {chain}: is the database migrated?")
+    return heads[chain]
 
 
 def chain_time(head: Head, now: dt.datetime | None = None) -> dt.datetime:
@@ -347,14 +384,23 @@ def seal(chain: Chain, head: Head, row: Mapping[Any, Any]) -> tuple[str, str]:
 
 
 def advance(session: Session | Connection, chain: Chain, head: Head, link: str, at: dt.datetime) -> Head:
-    """Move *chain*'s head past one appended row (call after the row is inserted)."""
+    """Move *chain*'s head past one appended row (call after the row is inserted); the new head."""
     new = Head(head.length + 1, link, at)
-    session.execute(
-        update(HEADS)
-        .where(HEADS.c.chain == chain)
-        .values(length=new.length, head_sha256=new.sha256, head_at=new.at)
+    conn = _connection(session)
+    conn.execute(
+        _ADVANCE, {"c_chain": chain, "length": new.length, "head_sha256": new.sha256, "head_at": new.at}
     )
+    kept = conn.info.get(_HEADS_INFO)
+    if kept is not None and kept[0] == _transaction_key(conn):
+        kept[1][chain] = new
     return new
+
+
+@functools.cache
+def _chain_insert(chain: Chain) -> Any:
+    """``INSERT … RETURNING id`` into *chain* (every payload column, optional ones included, and the hashes)."""
+    tbl = chain_table(chain)
+    return tbl.insert().returning(tbl.c.id)
 
 
 def _append(session: Session | Connection, chain: Chain, values: Mapping[str, Any]) -> int:
@@ -362,10 +408,8 @@ def _append(session: Session | Connection, chain: Chain, values: Mapping[str, An
     row = dict(values)
     row[TIME_COLUMN[chain]] = chain_time(head)
     row_hash, link = seal(chain, head, row)
-    tbl = chain_table(chain)
-    new_id = session.execute(
-        tbl.insert().values(**row, row_sha256=row_hash, chain_sha256=link).returning(tbl.c.id)
-    ).scalar_one()
+    row["row_sha256"], row["chain_sha256"] = row_hash, link
+    new_id = session.execute(_chain_insert(chain), row).scalar_one()
     advance(session, chain, head, link, row[TIME_COLUMN[chain]])
     return int(new_id)
 

@@ -8,24 +8,30 @@ database (PostgreSQL refuses NUL) or the response. This pure-ASGI middleware par
 once more with those values caught, and answers 422 in the request-validation shape with ``loc``
 naming the offending member (``["body", "design", "face", 0]``); the bad value itself is never
 written back. Bodies that are not JSON pass unchanged. A query parameter holding NUL (``%00``) is
-refused the same way (``["query", NAME]``).
+refused the same way (``["query", NAME]``). A route of class :class:`ParsedJsonRoute` reads the document
+parsed here instead of parsing the body a second time.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Coroutine, Iterator
 from typing import Any
 from urllib.parse import parse_qsl
 
+from fastapi.routing import APIRoute
+from starlette.requests import Request
+from starlette.responses import Response
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from station.api.middleware import send_json
 
-__all__ = ["StrictJsonBody", "find_hostile", "safe_text"]
+__all__ = ["PARSED_BODY", "ParsedJsonRoute", "StrictJsonBody", "find_hostile", "safe_text"]
 
 MAX_LOC_TEXT = 64
+#: Scope key under which :class:`StrictJsonBody` leaves ``(body, document)`` for :class:`ParsedJsonRoute`.
+PARSED_BODY = "station.json_body"
 _JSON_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 
 
@@ -85,6 +91,26 @@ def _walk(node: Any, path: tuple[int | str, ...]) -> Iterator[tuple[tuple[int | 
             yield from _walk(value, (*path, i))
 
 
+def _checked(body: bytes) -> tuple[Any, tuple[tuple[int | str, ...], str, str] | None]:
+    """``(document, fault)`` of JSON *body*: the parsed document (``None`` when there is a fault or it does
+    not parse) and :func:`find_hostile`'s fault."""
+    try:
+        doc = json.loads(body, parse_constant=_NonFinite, parse_float=_parse_float)
+    except json.JSONDecodeError:
+        return None, None
+    except UnicodeDecodeError:
+        return None, ((), "UTF-8 JSON text", "json_invalid")
+    except (ValueError, RecursionError):
+        return None, (
+            (),
+            "JSON within the parser's limits (integers of at most 4300 digits, bounded nesting)",
+            "json_invalid",
+        )
+    for loc, msg, kind in _walk(doc, ()):
+        return None, (tuple(safe_text(p) if isinstance(p, str) else p for p in loc), msg, kind)
+    return doc, None
+
+
 def find_hostile(body: bytes) -> tuple[tuple[int | str, ...], str, str] | None:
     """``(loc, msg, type)`` of the first value in JSON *body* that no route accepts, else ``None``.
 
@@ -92,21 +118,33 @@ def find_hostile(body: bytes) -> tuple[tuple[int | str, ...], str, str] | None:
     fails on with something else than a syntax error (an integer of more than 4300 digits, nesting
     deeper than the interpreter's recursion limit), which are reported here at ``body``.
     """
-    try:
-        doc = json.loads(body, parse_constant=_NonFinite, parse_float=_parse_float)
-    except json.JSONDecodeError:
-        return None
-    except UnicodeDecodeError:
-        return (), "UTF-8 JSON text", "json_invalid"
-    except (ValueError, RecursionError):
-        return (
-            (),
-            "JSON within the parser's limits (integers of at most 4300 digits, bounded nesting)",
-            "json_invalid",
-        )
-    for loc, msg, kind in _walk(doc, ()):
-        return tuple(safe_text(p) if isinstance(p, str) else p for p in loc), msg, kind
-    return None
+    return _checked(body)[1]
+
+
+class _ParsedRequest(Request):
+    """A request whose JSON body :class:`StrictJsonBody` already parsed: :meth:`json` hands that on."""
+
+    async def json(self) -> Any:
+        held = self.scope.get(PARSED_BODY)
+        if held is not None and held[0] == await self.body():
+            return held[1]
+        return await super().json()
+
+
+class ParsedJsonRoute(APIRoute):
+    """A route that reads the JSON document :class:`StrictJsonBody` parsed instead of parsing it again.
+
+    The document is the one Python's ``json`` gives for a body without the values the guard refuses,
+    so what the route validates is unchanged; a body the guard did not hold is parsed as usual.
+    """
+
+    def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
+        handler = super().get_route_handler()
+
+        async def parsed_handler(request: Request) -> Response:
+            return await handler(_ParsedRequest(request.scope, request.receive))
+
+        return parsed_handler
 
 
 def _is_json(scope: Scope) -> bool:
@@ -158,11 +196,13 @@ class StrictJsonBody:
             chunks.append(message.get("body", b""))
             more = message.get("more_body", False)
         body = b"".join(chunks)
-        fault = find_hostile(body) if body.strip() else None
+        doc, fault = _checked(body) if body.strip() else (None, None)
         if fault is not None:
             loc, msg, kind = fault
             await _refuse(send, (("body", *loc), msg, kind))
             return
+        if doc is not None:
+            scope[PARSED_BODY] = (body, doc)
         replayed = False
 
         async def replay() -> Message:

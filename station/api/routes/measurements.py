@@ -13,6 +13,7 @@ from sqlalchemy.orm import Session
 from db.models import User
 from station.api.deps import ReadSessionDep, SessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
+from station.api.json_guard import ParsedJsonRoute
 from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.schemas.measurements import CorrectionCreate, MeasurementPublic, MeasurementQuery
 from station.api.schemas.panels import Job, Part
@@ -21,7 +22,9 @@ from station.api.services import measurements as service
 from station.ingest import Reading, StoreResult
 from station.ingest.group import GroupCommit
 
-router = APIRouter(prefix="/measurements", tags=["measurements"], responses=ERROR_RESPONSES)
+router = APIRouter(
+    prefix="/measurements", tags=["measurements"], responses=ERROR_RESPONSES, route_class=ParsedJsonRoute
+)
 Reader = Annotated[User, scoped(Scope.MEASUREMENTS_READ)]
 Writer = Annotated[User, scoped(Scope.MEASUREMENTS_WRITE)]
 Corrector = Annotated[User, scoped(Scope.MEASUREMENTS_CORRECT)]
