@@ -6,12 +6,12 @@ status and the report's shape are checked, never a figure (the machine's load de
 from __future__ import annotations
 
 import os
-import signal
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from tests.processes import run
 
 REPO = Path(__file__).resolve().parents[2]
 DEADLINE_S = 300  # the whole run, service start-up included, on a loaded machine
@@ -23,22 +23,10 @@ def test_service_load_runs_in_a_tiny_mode() -> None:
     before = report.read_bytes() if report.exists() else b""
     cmd = [sys.executable, "-m", "bench.service_load", "--clients", "2", "--rounds", "1", "--duration", "1"]
     cmd += ["--no-postgres", "--no-report"]
-    proc = subprocess.Popen(
-        cmd,
-        cwd=REPO,
-        env=dict(os.environ, PYTHONPATH=str(REPO)),
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        start_new_session=True,  # its service and client processes go with it on a timeout
-    )
-    try:
-        out, _ = proc.communicate(timeout=DEADLINE_S)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.communicate()
-    assert proc.returncode == 0, out[-3000:]
+    # its own process group: its service and client processes go with it on a timeout
+    done = run(cmd, cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO)), timeout=DEADLINE_S)
+    out = done.stdout + done.stderr
+    assert done.returncode == 0, out[-3000:]
     first = out.splitlines()[0] if out else ""
     assert first.startswith("exactly once: PASS; SQLite "), out[-3000:]
     assert "× raw (bar 0.5×)" in first and "(bar 150 ms)" in first

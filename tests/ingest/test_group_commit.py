@@ -9,7 +9,6 @@ intact, and a refused reading failing only its own caller.
 from __future__ import annotations
 
 import threading
-import time
 import uuid
 from typing import Any
 
@@ -23,6 +22,7 @@ from db.models import AuditEvent, Measurement
 from station.ingest import ClientIdConflictError, Reading, StoreResult
 from station.ingest.group import GroupCommit
 from tests.ingest._readings import make_reading
+from tests.waiting import wait_until
 
 CALLERS = 8
 WAIT_S = 60.0  # a deadline for the test's own hand-off, never a pass condition
@@ -49,9 +49,7 @@ def _run(
     def answer(_session: Session, _reading: Reading, result: StoreResult) -> int:
         if hold_first and not first_in.is_set():
             first_in.set()  # the first writer waits, in its transaction, for everyone else to queue
-            deadline = time.monotonic() + WAIT_S
-            while group.queued < len(readings) - 1 and time.monotonic() < deadline:
-                time.sleep(0.01)
+            wait_until(lambda: group.queued >= len(readings) - 1, WAIT_S, 0.01, "the other writers queued")
         return result.measurement_id
 
     def call(k: int) -> None:
