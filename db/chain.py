@@ -71,6 +71,7 @@ from sqlalchemy import (
     table,
     update,
 )
+from sqlalchemy.engine import RowMapping
 from sqlalchemy.orm import Session, UOWTransaction
 from sqlalchemy.sql.expression import TableClause
 from sqlalchemy.types import JSON, TypeEngine
@@ -687,6 +688,20 @@ def _row_matches(chain: Chain, row: Mapping[Any, Any], legacy: bool) -> bool:
     return legacy and any(h == stored for h in legacy_hashes(chain, row))
 
 
+def _rows_by_id(conn: Connection | Session, tbl: TableClause, batch: int) -> Iterator[RowMapping]:
+    """Every row of *tbl* in id order, read *batch* rows at a time (keyset pages: no OFFSET scans)."""
+    last_id: int | None = None
+    while True:
+        query = select(tbl).order_by(tbl.c.id).limit(batch)
+        if last_id is not None:
+            query = query.where(tbl.c.id > last_id)
+        rows = conn.execute(query).mappings().all()
+        if not rows:
+            return
+        yield from rows
+        last_id = int(rows[-1]["id"])
+
+
 def _verify_chain(
     conn: Connection | Session,
     chain: Chain,
@@ -717,69 +732,60 @@ def _verify_chain(
             found.append(_mismatch(chain, cp, None))
     previous, previous_at, count, last_id = GENESIS, None, 0, None
     future_limit = now + MAX_CLOCK_SKEW
-    while True:
-        query = select(tbl).order_by(tbl.c.id).limit(batch)
-        if last_id is not None:
-            query = query.where(tbl.c.id > last_id)
-        rows = conn.execute(query).mappings().all()
-        if not rows:
-            break
-        for row in rows:
-            rid = int(row["id"])
-            count += 1
-            last_id = rid
-            if row["row_sha256"] is None or row["chain_sha256"] is None:
-                found.append(
-                    Finding(chain, "unhashed", rid, f"{chain} id {rid}: no hash (written around the chain)")
+    for row in _rows_by_id(conn, tbl, batch):
+        rid = int(row["id"])
+        count += 1
+        last_id = rid
+        if row["row_sha256"] is None or row["chain_sha256"] is None:
+            found.append(
+                Finding(chain, "unhashed", rid, f"{chain} id {rid}: no hash (written around the chain)")
+            )
+            continue
+        try:
+            same = _row_matches(chain, row, rid <= legacy_through)
+        except (ValueError, TypeError):  # a value no writer of the product stores (NaN …)
+            same = False
+        if not same:
+            found.append(
+                Finding(chain, "row_changed", rid, f"{chain} id {rid}: payload hash differs (row changed)")
+            )
+        if link_sha256(previous, row["row_sha256"]) != row["chain_sha256"]:
+            found.append(
+                Finding(
+                    chain,
+                    "link_broken",
+                    rid,
+                    f"{chain} id {rid}: link to the previous row differs (row removed or inserted)",
                 )
-                continue
-            try:
-                same = _row_matches(chain, row, rid <= legacy_through)
-            except (ValueError, TypeError):  # a value no writer of the product stores (NaN …)
-                same = False
-            if not same:
-                found.append(
-                    Finding(
-                        chain, "row_changed", rid, f"{chain} id {rid}: payload hash differs (row changed)"
-                    )
+            )
+        for cp in marks.get(count, []):
+            if cp.chains[chain][1] != row["chain_sha256"]:
+                found.append(_mismatch(chain, cp, rid))
+        at = row[time_col]
+        if at is not None and at > future_limit:
+            found.append(
+                Finding(
+                    chain,
+                    "future",
+                    rid,
+                    f"{chain} id {rid}: {time_col} {at.isoformat()} is in the future",
                 )
-            if link_sha256(previous, row["row_sha256"]) != row["chain_sha256"]:
+            )
+        elif at is not None:
+            late = rid > unordered_through  # rows back-filled by the migration kept their old times
+            if late and previous_at is not None and at < previous_at:
                 found.append(
                     Finding(
                         chain,
-                        "link_broken",
+                        "backdated",
                         rid,
-                        f"{chain} id {rid}: link to the previous row differs (row removed or inserted)",
+                        f"{chain} id {rid}: {time_col} {at.isoformat()} earlier than its predecessor",
                     )
                 )
-            for cp in marks.get(count, []):
-                if cp.chains[chain][1] != row["chain_sha256"]:
-                    found.append(_mismatch(chain, cp, rid))
-            at = row[time_col]
-            if at is not None and at > future_limit:
-                found.append(
-                    Finding(
-                        chain,
-                        "future",
-                        rid,
-                        f"{chain} id {rid}: {time_col} {at.isoformat()} is in the future",
-                    )
-                )
-            elif at is not None:
-                late = rid > unordered_through  # rows back-filled by the migration kept their old times
-                if late and previous_at is not None and at < previous_at:
-                    found.append(
-                        Finding(
-                            chain,
-                            "backdated",
-                            rid,
-                            f"{chain} id {rid}: {time_col} {at.isoformat()} earlier than its predecessor",
-                        )
-                    )
-                previous_at = at if previous_at is None or at > previous_at else previous_at
-            if records is not None and same:
-                records[(str(row["entity"]), str(row["entity_id"]))] = (str(row["op"]), row["state_sha256"])
-            previous = row["chain_sha256"]
+            previous_at = at if previous_at is None or at > previous_at else previous_at
+        if records is not None and same:
+            records[(str(row["entity"]), str(row["entity_id"]))] = (str(row["op"]), row["state_sha256"])
+        previous = row["chain_sha256"]
     report.rows[chain] = count
     report.heads[chain] = previous
     for length, cps in sorted(marks.items()):
@@ -854,37 +860,29 @@ def _verify_records(
         if name not in present:
             continue
         tbl = _record_table(name)
-        last_id: int | None = None
-        while True:
-            query = select(tbl).order_by(tbl.c.id).limit(batch)
-            if last_id is not None:
-                query = query.where(tbl.c.id > last_id)
-            rows = conn.execute(query).mappings().all()
-            if not rows:
-                break
-            for row in rows:
-                last_id = int(row["id"])
-                key = (name, str(last_id))
-                seen.add(key)
-                sealed = records.get(key)
-                if sealed is None or sealed[0] == "delete":
-                    report.findings.append(
-                        Finding(
-                            name,
-                            "record_unsealed",
-                            last_id,
-                            f"{name} id {last_id}: no record event (written around the product)",
-                        )
+        for row in _rows_by_id(conn, tbl, batch):
+            rid = int(row["id"])
+            key = (name, str(rid))
+            seen.add(key)
+            sealed = records.get(key)
+            if sealed is None or sealed[0] == "delete":
+                report.findings.append(
+                    Finding(
+                        name,
+                        "record_unsealed",
+                        rid,
+                        f"{name} id {rid}: no record event (written around the product)",
                     )
-                elif sealed[1] != state_sha256(name, row):
-                    report.findings.append(
-                        Finding(
-                            name,
-                            "record_changed",
-                            last_id,
-                            f"{name} id {last_id}: differs from its last record event (changed outside the product)",
-                        )
+                )
+            elif sealed[1] != state_sha256(name, row):
+                report.findings.append(
+                    Finding(
+                        name,
+                        "record_changed",
+                        rid,
+                        f"{name} id {rid}: differs from its last record event (changed outside the product)",
                     )
+                )
     for (name, rid), (op, _state) in sorted(records.items()):
         if op != "delete" and (name, rid) not in seen and name in present:
             report.findings.append(
