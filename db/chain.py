@@ -861,8 +861,8 @@ def _verify_records(
             continue
         tbl = _record_table(name)
         for row in _rows_by_id(conn, tbl, batch):
-            rid = int(row["id"])
-            key = (name, str(rid))
+            row_id = int(row["id"])
+            key = (name, str(row_id))
             seen.add(key)
             sealed = records.get(key)
             if sealed is None or sealed[0] == "delete":
@@ -870,8 +870,8 @@ def _verify_records(
                     Finding(
                         name,
                         "record_unsealed",
-                        rid,
-                        f"{name} id {rid}: no record event (written around the product)",
+                        row_id,
+                        f"{name} id {row_id}: no record event (written around the product)",
                     )
                 )
             elif sealed[1] != state_sha256(name, row):
@@ -879,8 +879,8 @@ def _verify_records(
                     Finding(
                         name,
                         "record_changed",
-                        rid,
-                        f"{name} id {rid}: differs from its last record event (changed outside the product)",
+                        row_id,
+                        f"{name} id {row_id}: differs from its last record event (changed outside the product)",
                     )
                 )
     for (name, rid), (op, _state) in sorted(records.items()):
