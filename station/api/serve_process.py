@@ -12,6 +12,7 @@ after *stop_timeout_s*; :meth:`ServeProcess.kill` SIGKILLs the process group whe
 from __future__ import annotations
 
 import os
+import queue
 import re
 import signal
 import socket
@@ -92,13 +93,18 @@ class ServeProcess:
             start_new_session=self.own_group,
         )
         self.base = f"http://127.0.0.1:{self.port}"
+        lines: queue.SimpleQueue[str | None] = queue.SimpleQueue()
+        self._reader = threading.Thread(target=self._drain, args=(self.proc, lines), daemon=True)
+        self._reader.start()
         deadline = time.monotonic() + self.start_timeout_s
-        assert self.proc.stdout is not None  # noqa: S101 - Popen with stdout=PIPE always has one
-        while time.monotonic() < deadline:
-            line = self.proc.stdout.readline()
-            if not line and self.proc.poll() is not None:
+        while (left := deadline - time.monotonic()) > 0:
+            try:
+                line = lines.get(timeout=left)  # the reader thread reads, so a silent child cannot hang us
+            except queue.Empty:
+                break
+            if line is None:  # the pipe closed: the service exited before it listened
+                self.proc.wait()
                 raise ServeStartError(f"station serve exited ({self.proc.returncode}):\n{self.tail()}")
-            self.log.append(line)
             found = _TOKEN.search(line)
             if found and not self.token:
                 self.token = found.group(0)
@@ -106,22 +112,26 @@ class ServeProcess:
                 token_file = self.data_dir / BOOTSTRAP_TOKEN_FILE
                 if not self.token and token_file.exists():
                     self.token = token_file.read_text().strip()
-                self._reader = threading.Thread(target=self._drain, args=(self.proc,), daemon=True)
-                self._reader.start()
                 return self
         self.kill()
+        self._reader.join(10)
         raise ServeStartError(f"station serve did not start in {self.start_timeout_s:g} s:\n{self.tail()}")
 
     def tail(self, lines: int = 40) -> str:
         """The last *lines* lines of the log."""
         return "".join(self.log[-lines:])
 
-    def _drain(self, proc: subprocess.Popen[str]) -> None:
-        """Collect the log until the service exits, then reap it and close the pipe."""
+    def _drain(self, proc: subprocess.Popen[str], lines: queue.SimpleQueue[str | None] | None = None) -> None:
+        """Collect the log until the service exits (passing each line to *lines* too, then ``None``),
+        then reap it and close the pipe."""
         if proc.stdout is not None:
             with proc.stdout:
                 for line in proc.stdout:
                     self.log.append(line)
+                    if lines is not None:
+                        lines.put(line)
+        if lines is not None:
+            lines.put(None)
         proc.wait()
 
     def _close_previous(self) -> None:

@@ -49,7 +49,8 @@ class Outbox:
         self.path = Path(path)
         if not self.path.parent.exists():
             private_dir(self.path.parent)
-        private_sqlite(self.path)  # 0600 before SQLite opens it; its -wal/-shm files take the same mode
+        # 0600 before SQLite opens it; its -wal/-shm files take the same mode
+        private_sqlite(self.path, "outbox")
         self._conn = sqlite3.connect(self.path, isolation_level=None, timeout=30.0, check_same_thread=False)
         self._conn.execute("PRAGMA journal_mode=WAL")
         self._conn.execute("PRAGMA synchronous=FULL")

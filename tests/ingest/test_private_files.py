@@ -14,6 +14,7 @@ from sqlalchemy import text
 from sqlalchemy.pool import NullPool
 
 from db.engine import make_engine
+from db.files import NotRegularFileError
 from station.ingest import Outbox
 from tests.ingest.conftest import REPO
 from tests.processes import Child
@@ -42,6 +43,22 @@ def test_an_existing_outbox_keeps_its_mode(tmp_path: Path) -> None:
     with Outbox(path) as outbox:
         outbox.put("c-1", "{}")
     assert _mode(path) == 0o640
+
+
+def test_an_outbox_path_that_is_a_symlink_is_refused_naming_the_outbox(tmp_path: Path) -> None:
+    """A link at the outbox path is refused with an error naming the outbox, and its target is left alone."""
+    target = tmp_path / "elsewhere.txt"
+    target.write_text("not ours")
+    os.chmod(target, 0o644)
+    link = tmp_path / "outbox.sqlite3"
+    link.symlink_to(target)
+    try:
+        Outbox(link)
+    except NotRegularFileError as exc:
+        assert exc.field == "outbox" and "symlink" in str(exc)
+    else:
+        raise AssertionError("an outbox path that is a symlink was accepted")
+    assert target.read_text() == "not ours" and _mode(target) == 0o644
 
 
 def test_a_new_sqlite_database_is_private(tmp_path: Path) -> None:
