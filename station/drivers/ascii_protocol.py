@@ -28,6 +28,7 @@ from station.drivers.errors import (
     ProtocolError,
     error_for_code,
 )
+from station.drivers.exchange_log import ExchangeLog
 from station.drivers.transport import SerialTransport, StreamTransport
 
 __all__ = ["BAUD_RATES", "PROMPT", "AsciiPromptProtocol", "AsciiReply", "checksum16"]
@@ -96,7 +97,7 @@ class AsciiPromptProtocol:
         self.retries = retries
         self.resync_timeout_s = resync_timeout_s
         self.baudrate = baudrate
-        self.log: list[tuple[bytes, bytes]] = []
+        self.log = ExchangeLog("ma6", transport.address)
 
     # -- link --------------------------------------------------------------------------------------
     def negotiate_baud(self) -> int:
@@ -157,9 +158,8 @@ class AsciiPromptProtocol:
         self.transport.flush_input()  # a stale (late) reply already here must not answer this command
         self.transport.write(data)
         raw = self.transport.read_until(PROMPT, self.timeout_s if timeout_s is None else timeout_s)
-        self.log.append((data, raw))
-        del self.log[:-64]
         reply = parse_reply(raw)
+        self.log.record(data, raw, f"{command!r} -> code {reply.code}, {len(reply.lines)} lines")
         if reply.code not in OK_CODES:
             self._clear_error()
             raise error_for_code(reply.code)
@@ -169,7 +169,7 @@ class AsciiPromptProtocol:
         try:
             self.transport.write(b"CE\r")
             raw = self.transport.read_until(PROMPT, self.timeout_s)
-            self.log.append((b"CE\r", raw))
+            self.log.record(b"CE\r", raw, "'CE' (clear error)")
         except (DeviceTimeout, ProtocolError):
             self.resync()
 

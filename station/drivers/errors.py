@@ -40,8 +40,10 @@ class DriverInputError(InputError):
     """A bad argument to a driver call (address, timeout, geometry name)."""
 
 
-class CommunicationError(DriverError):
-    """The transport failed: the port could not be opened, written or read."""
+class CommunicationError(DriverError, ConnectionError):
+    """The transport failed: the port could not be opened, written or read.
+
+    Also a :class:`ConnectionError`, so code written for the standard library's errors catches it."""
 
 
 class Disconnected(CommunicationError):
@@ -52,8 +54,10 @@ class DeviceInUse(CommunicationError):
     """Another process or owner holds the device (serial lock, USB EBUSY, open in this process)."""
 
 
-class DeviceTimeout(DriverError):
-    """No complete reply within the time limit (also: busy for longer than allowed)."""
+class DeviceTimeout(DriverError, TimeoutError):
+    """No complete reply within the time limit (also: busy for longer than allowed).
+
+    Also a :class:`TimeoutError`, so code written for the standard library's errors catches it."""
 
 
 class ProtocolError(DriverError):

@@ -29,6 +29,7 @@ from station.drivers.errors import (
     ProtocolError,
     error_for_code,
 )
+from station.drivers.exchange_log import ExchangeLog
 from station.drivers.instrument import Instrument
 from station.drivers.readings import CalibrationResult, CalibrationStatus, GlossReading, InstrumentInfo
 from station.drivers.transport import ReportTransport, SerialTransport
@@ -101,7 +102,7 @@ class GlossMeter(Instrument[ReportTransport]):
         self.measure_limit_s = measure_limit_s
         self._seq = 0
         self.info: InstrumentInfo | None = None
-        self.log: list[tuple[bytes, bytes]] = []
+        self.log = ExchangeLog(self.family, transport.address)
 
     def _connect(self) -> None:
         self.info = self.identify()
@@ -184,8 +185,7 @@ class GlossMeter(Instrument[ReportTransport]):
                 if busy:
                     continue
                 raise DeviceTimeout(f"{self.address}: read timed out (hidapi returned 0)")
-            self.log.append((out, raw))
-            del self.log[:-64]
+            self.log.record(out, raw, f"command {cmd:#04x} seq {seq} -> {len(raw)}-byte report, id {raw[0]}")
             if len(raw) != REPORT + 1 or raw[0] != IN_ID:
                 raise ProtocolError(f"input report of {len(raw)} bytes, id {raw[0]}")
             if xor8(raw[1:REPORT]) != raw[REPORT]:

@@ -33,6 +33,7 @@ from station.drivers.errors import (
     UnexpectedReply,
     error_for_code,
 )
+from station.drivers.exchange_log import ExchangeLog
 from station.drivers.instrument import Instrument
 from station.drivers.readings import (
     WAVELENGTHS_NM,
@@ -101,6 +102,14 @@ class Frame:
     payload: bytes
 
 
+def _msg_name(msg: int) -> str:
+    """The message's name (``IDENTIFY``), or its number in hex when it is not one we know."""
+    try:
+        return Msg(msg).name
+    except ValueError:
+        return f"{msg:#06x}"
+
+
 def encode_frame(
     msg: int, request_id: int, payload: bytes = b"", flags: int = Flags.ACK_REQUESTED, error: int = 0
 ) -> bytes:
@@ -147,7 +156,7 @@ class MA3Spectro(Instrument[StreamTransport]):
         self.quiet_s = quiet_s
         self._rid = 0
         self.info: InstrumentInfo | None = None
-        self.log: list[tuple[bytes, bytes]] = []
+        self.log = ExchangeLog(self.family, transport.address)
 
     def _connect(self) -> None:
         self.transport.flush_input()
@@ -189,8 +198,12 @@ class MA3Spectro(Instrument[StreamTransport]):
         deadline = time.monotonic() + timeout_s
         while True:
             frame, raw = self._read_frame(deadline)
-            self.log.append((data, raw))
-            del self.log[:-64]
+            self.log.record(
+                data,
+                raw,
+                f"{_msg_name(msg)} #{rid} ({len(payload)} B) -> {_msg_name(frame.msg)} #{frame.request_id}"
+                f" flags {frame.flags:#06x} error {frame.error} ({len(frame.payload)} B)",
+            )
             if frame.request_id != rid:
                 continue  # a late reply to an earlier request: drop it
             if not frame.flags & Flags.REPLY or frame.msg != msg:

@@ -24,8 +24,10 @@ from station.drivers.errors import (
     DeviceInUse,
     DeviceTimeout,
     Disconnected,
+    DriverError,
     DriverInputError,
 )
+from station.drivers.exchange_log import log_wire
 
 __all__ = [
     "HidTransport",
@@ -247,6 +249,7 @@ class SerialTransport(StreamTransport):
         try:
             if hasattr(ser, "fd") and ser.write_timeout != timeout_s:
                 ser.write_timeout = timeout_s
+            log_wire(self.address, "tx", data)
             ser.write(data)
             ser.flush()
         except Exception as exc:
@@ -261,13 +264,16 @@ class SerialTransport(StreamTransport):
             if fd is not None:  # a local tty: wait with select, pyserial reads without reconfiguring
                 if not ser.in_waiting and not select.select([fd], [], [], timeout_s)[0]:
                     return b""
-                return bytes(ser.read(max(1, min(size, ser.in_waiting))))
-            if ser.timeout != timeout_s:  # URL handlers: each timeout change is cheap there
-                ser.timeout = timeout_s
-            waiting = ser.in_waiting
-            return bytes(ser.read(min(size, waiting) if waiting else 1))
+                got = bytes(ser.read(max(1, min(size, ser.in_waiting))))
+            else:
+                if ser.timeout != timeout_s:  # URL handlers: each timeout change is cheap there
+                    ser.timeout = timeout_s
+                waiting = ser.in_waiting
+                got = bytes(ser.read(min(size, waiting) if waiting else 1))
         except Exception as exc:
             raise _serial_error(self.address, exc) from exc
+        log_wire(self.address, "rx", got)
+        return got
 
 
 def _usb_error(address: str, exc: Exception) -> CommunicationError:
@@ -355,6 +361,7 @@ class UsbTransport(StreamTransport):
 
         if self._dev is None:
             raise CommunicationError(f"{self.address}: not open")
+        log_wire(self.address, "tx", data)
         try:
             n = self._dev.write(self.ep_out, data, max(1, int(timeout_s * 1000)))
         except usb.core.USBTimeoutError as exc:
@@ -378,6 +385,7 @@ class UsbTransport(StreamTransport):
                 raise _usb_error(self.address, exc) from exc
         out = bytes(self._rx[:size])
         del self._rx[:size]
+        log_wire(self.address, "rx", out)
         return out
 
     def flush_input(self) -> None:
@@ -453,7 +461,7 @@ class HidTransport(ReportTransport):
                 dev.close()
             except (OSError, CommunicationError, DeviceTimeout):
                 pass
-            if isinstance(exc, OSError):
+            if isinstance(exc, OSError) and not isinstance(exc, DriverError):  # ours pass as they are
                 raise self._error("open", exc) from exc
             raise
         self._dev = dev
@@ -482,8 +490,11 @@ class HidTransport(ReportTransport):
         return self._dev
 
     def write_report(self, report: bytes) -> None:
+        log_wire(self.address, "tx", report)
         try:
             n = self._device().write(report)
+        except DriverError:  # a bridge's own typed error (also an OSError) passes as it is
+            raise
         except OSError as exc:
             raise self._error("write", exc) from exc
         if n < 0:
@@ -491,14 +502,19 @@ class HidTransport(ReportTransport):
 
     def read_report(self, size: int, timeout_s: float) -> bytes:
         try:
-            data = self._device().read(size, max(1, int(timeout_s * 1000)))
+            data = bytes(self._device().read(size, max(1, int(timeout_s * 1000))))
+        except DriverError:  # a bridge's own typed error (also an OSError) passes as it is
+            raise
         except OSError as exc:
             raise self._error("read", exc) from exc
-        return bytes(data)
+        log_wire(self.address, "rx", data)
+        return data
 
     def get_feature(self, report_id: int, size: int) -> bytes:
         try:
             data = self._device().get_feature_report(report_id, size)
+        except DriverError:  # a bridge's own typed error (also an OSError) passes as it is
+            raise
         except OSError as exc:
             raise self._error("get_feature_report", exc) from exc
         if not data:
@@ -508,6 +524,8 @@ class HidTransport(ReportTransport):
     def send_feature(self, report: bytes) -> None:
         try:
             n = self._device().send_feature_report(report)
+        except DriverError:  # a bridge's own typed error (also an OSError) passes as it is
+            raise
         except OSError as exc:
             raise self._error("send_feature_report", exc) from exc
         if n < 0:
