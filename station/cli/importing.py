@@ -71,6 +71,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--settle", type=float, default=None, help="watch: seconds a file must be unchanged (default 2)"
     )
+    p.add_argument(
+        "--abandon",
+        type=float,
+        default=None,
+        help="watch: seconds a file that is not whole may stay unchanged before it is rejected as "
+        "incomplete (default 600)",
+    )
     add_json_flag(p)
     p.set_defaults(handler=cmd_import)
 
@@ -174,7 +181,7 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
 def _watch(args: argparse.Namespace) -> dict[str, Any] | None:
     from station.cli.instruments import _ingestor
     from station.ingest import operator_name
-    from station.ingest.formats.watch import SETTLE_S, scan_once, watch_folder
+    from station.ingest.formats.watch import ABANDON_S, SETTLE_S, scan_once, watch_folder
 
     folder = Path(args.target[1])
     if not folder.is_dir():
@@ -183,6 +190,9 @@ def _watch(args: argparse.Namespace) -> dict[str, Any] | None:
     settle = SETTLE_S if args.settle is None else args.settle
     if not 0 <= settle <= 3600:
         raise InputError("--settle", "0 <= seconds <= 3600", settle)
+    abandon = ABANDON_S if args.abandon is None else args.abandon
+    if not settle < abandon <= 86400:
+        raise InputError("--abandon", f"{settle:g} (--settle) < seconds <= 86400", abandon)
     if not 0.05 <= args.interval <= 3600:
         raise InputError("--interval", "0.05 <= seconds <= 3600", args.interval)
     if args.store is None:
@@ -192,6 +202,7 @@ def _watch(args: argparse.Namespace) -> dict[str, Any] | None:
         "job": job,
         "part": part,
         "illumination_deg": _illumination(args),
+        "abandon_s": abandon,
     }
     with _ingestor(args) as ingestor:
         if args.once:

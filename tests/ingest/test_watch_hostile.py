@@ -231,7 +231,8 @@ def test_reasons_hold_no_byte_of_the_file(station: Station) -> None:
 
 def test_a_file_still_being_written_is_never_imported_half(station: Station) -> None:
     """CGATS without END_DATA yet, CxF with its root open, a CSV cut inside a row: each is left in the
-    folder however long it has been still; once finished it is imported whole (4 samples, not 2)."""
+    folder for as long as the watcher is told to be patient (here two hours; an hour-old file waits);
+    once finished it is imported whole (4 samples, not 2)."""
     full_cgats = _cgats(["s1", "s2", "s3", "s4"])
     cut = full_cgats.index("s3 ")
     (station.drop / "slow.cgats").write_text(full_cgats[:cut])
@@ -239,7 +240,7 @@ def test_a_file_still_being_written_is_never_imported_half(station: Station) -> 
     long_ago = time.time() - 3600
     for p in station.drop.iterdir():
         os.utime(p, (long_ago, long_ago))  # settled: unchanged for an hour
-    res = station.once("--json")
+    res = station.once("--json", "--abandon", "7200")
     assert res.returncode == 0, res.stderr
     assert sorted(p.name for p in station.drop.iterdir() if p.is_file()) == ["slow.cgats", "slow.csv"]
     assert list((station.drop / "done").iterdir()) == list((station.drop / "rejected").iterdir()) == []
@@ -248,10 +249,32 @@ def test_a_file_still_being_written_is_never_imported_half(station: Station) -> 
         fh.write(full_cgats[cut:])
     with (station.drop / "slow.csv").open("a") as fh:
         fh.write(".5,2.5\n")
-    res = station.once("--json")
+    res = station.once("--json", "--abandon", "7200")
     assert res.returncode == 0, res.stderr
     assert sorted(p.name for p in (station.drop / "done").iterdir()) == ["slow.cgats", "slow.csv"]
     assert station.stored() == 5
+
+
+def test_a_file_left_unfinished_past_the_patience_is_rejected_as_incomplete(station: Station) -> None:
+    """The same cut CGATS, unchanged for an hour: with the default patience (600 s) it is rejected as
+    Incomplete (never half imported); a cut file written just now still waits; a bad --abandon is one
+    line and exit 2 with nothing moved."""
+    full_cgats = _cgats(["s1", "s2", "s3", "s4"])
+    cut = full_cgats[: full_cgats.index("s3 ")]
+    (station.drop / "old.cgats").write_text(cut)
+    long_ago = time.time() - 3600
+    os.utime(station.drop / "old.cgats", (long_ago, long_ago))
+    (station.drop / "new.cgats").write_text(cut)
+    bad = station.once("--abandon", "0")
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--abandon" in bad.stderr
+    assert sorted(p.name for p in station.drop.iterdir()) == ["new.cgats", "old.cgats"]
+    res = station.once("--json")
+    assert res.returncode == 0, res.stderr
+    assert [p.name for p in station.drop.iterdir() if p.is_file()] == ["new.cgats"]
+    assert sorted(p.name for p in (station.drop / "rejected").iterdir()) == ["old.cgats", "old.cgats.reason"]
+    reason = (station.drop / "rejected" / "old.cgats.reason").read_text()
+    assert reason.startswith("Incomplete: file:") and "s1" not in reason
+    assert station.stored() == 0
 
 
 def _cxf(samples: int) -> bytes:

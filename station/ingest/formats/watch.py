@@ -82,6 +82,9 @@ PROCESSING = "processing"
 SKIPPED_SUFFIXES = (".part", ".tmp", ".partial", ".crdownload", ".reason")
 #: Default settle time: a file younger than this (seconds since its last change) waits for the next scan.
 SETTLE_S = 2.0
+#: Default patience with a file that is not whole: unchanged this long (seconds) and still not whole, it is
+#: taken as truncated and rejected (``Incomplete``) instead of waiting for ever.
+ABANDON_S = 600.0
 #: Mode of the folders the watcher makes (owner only).
 FOLDER_MODE = 0o700
 #: Mode of a ``.reason`` file (owner only).
@@ -295,9 +298,11 @@ class WatchFolder:
         job: str | None = None,
         part: str | None = None,
         illumination_deg: float | None = None,
+        abandon_s: float = ABANDON_S,
     ) -> list[WatchOutcome]:
         """Process every settled, whole file now in the folder (name order), and the files of killed
-        watchers; one outcome per file."""
+        watchers; one outcome per file. A file unchanged for *abandon_s* seconds and still not whole is
+        rejected as ``Incomplete``."""
         self._open_folders()
         common: dict[str, Any] = {
             "operator": operator, "job": job, "part": part, "illumination_deg": illumination_deg
@@ -315,14 +320,15 @@ class WatchFolder:
                 continue
             if stat.S_ISREG(st.st_mode) and now - st.st_mtime < settle_s:
                 continue
-            claimed = self._claim(name, st)
+            claimed = self._claim(name, st, abandoned=now - st.st_mtime >= abandon_s)
             if claimed is not None:
                 outcomes.append(self._finish(claimed, ingestor, common))
         return outcomes
 
-    def _claim(self, name: str, st: os.stat_result) -> str | None:
-        """Move *name* into this watcher's folder when it is another kind of file, a hard link, or a
-        whole regular file that stayed as it was read; ``None`` when it must wait or was taken."""
+    def _claim(self, name: str, st: os.stat_result, abandoned: bool = False) -> str | None:
+        """Move *name* into this watcher's folder when it is another kind of file, a hard link, a whole
+        regular file that stayed as it was read, or (*abandoned*) one left unfinished for too long;
+        ``None`` when it must wait or was taken."""
         if stat.S_ISREG(st.st_mode) and st.st_nlink == 1:
             try:
                 fd = os.open(name, _READ_FLAGS, dir_fd=self._root)
@@ -338,7 +344,7 @@ class WatchFolder:
                 after = os.fstat(fd)
                 if (after.st_size, after.st_mtime_ns) != (before.st_size, before.st_mtime_ns):
                     return None  # still being written
-                if not is_complete(name, data):
+                if not is_complete(name, data) and not abandoned:
                     key = (name, before.st_ino, before.st_size)
                     if key not in self._waiting:
                         self._waiting.add(key)
@@ -455,12 +461,15 @@ class WatchFolder:
             after = os.fstat(fd)
         finally:
             os.close(fd)
-        if (after.st_size, after.st_mtime_ns) != (before.st_size, before.st_mtime_ns) or not is_complete(
-            name, data
-        ):
+        if (after.st_size, after.st_mtime_ns) != (before.st_size, before.st_mtime_ns):
             raise _Refused(
                 "ChangedWhileRead: file: expected a file that is whole and no longer written "
                 "(write it under NAME.part and rename it when done)"
+            )
+        if not is_complete(name, data):
+            raise _Refused(
+                "Incomplete: file: expected a whole file; it stopped changing before it was whole "
+                "(truncated? write it under NAME.part and rename it when done)"
             )
         return data, before.st_mtime
 
@@ -517,6 +526,7 @@ def scan_once(
     job: str | None = None,
     part: str | None = None,
     illumination_deg: float | None = None,
+    abandon_s: float = ABANDON_S,
 ) -> list[WatchOutcome]:
     """Process every settled, whole file now in *folder* (oldest name first); one outcome per file."""
     with WatchFolder(folder) as watcher:
@@ -527,6 +537,7 @@ def scan_once(
             job=job,
             part=part,
             illumination_deg=illumination_deg,
+            abandon_s=abandon_s,
         )
 
 
@@ -542,6 +553,7 @@ def watch_folder(
     job: str | None = None,
     part: str | None = None,
     illumination_deg: float | None = None,
+    abandon_s: float = ABANDON_S,
 ) -> None:
     """Scan *folder* every *interval_s* seconds until *stop* is set; *on_outcome* hears of each file.
 
@@ -558,6 +570,7 @@ def watch_folder(
                 job=job,
                 part=part,
                 illumination_deg=illumination_deg,
+                abandon_s=abandon_s,
             ):
                 if on_outcome is not None:
                     on_outcome(outcome)
