@@ -7,7 +7,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query, Response, status
 
 from db.models import User
-from station.api.deps import SessionDep, scoped
+from station.api.deps import ReadSessionDep, SessionDep, scoped
 from station.api.errors import ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.analyses import (
     AnalysisPublic,
@@ -69,7 +69,7 @@ def sweep(_user: Analyst, request: SweepRequest) -> dict[str, Any]:
 
 @router.get("", response_model=Page[AnalysisPublic])
 def list_analyses(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     kind: Annotated[str | None, Query(max_length=32)] = None,
     limit: Limit = 100,
@@ -91,13 +91,13 @@ def list_analyses(
         },
     },
 )
-def report_png(session: SessionDep, _user: Reader, analysis_id: Id) -> Response:
+def report_png(session: ReadSessionDep, _user: Reader, analysis_id: Id) -> Response:
     """The seam QA report as a PNG: both panels rendered side by side as painted and with the corrected
     paint, and the BRDF curves of paint A, paint B and the correction compared (thesis Fig. 4.7)."""
     return Response(service.report_png(session=session, analysis_id=analysis_id), media_type="image/png")
 
 
 @router.get("/{analysis_id}", response_model=AnalysisPublic, responses=NOT_FOUND)
-def get_analysis(session: SessionDep, _user: Reader, analysis_id: Id) -> AnalysisPublic:
+def get_analysis(session: ReadSessionDep, _user: Reader, analysis_id: Id) -> AnalysisPublic:
     """One stored analysis."""
     return AnalysisPublic.model_validate(service.get_analysis(session=session, analysis_id=analysis_id))

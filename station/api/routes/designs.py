@@ -7,7 +7,7 @@ from typing import Annotated
 from fastapi import APIRouter, Query, status
 
 from db.models import User
-from station.api.deps import SessionDep, scoped
+from station.api.deps import ReadSessionDep, SessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.schemas.designs import DesignCreate, DesignPublic, DesignUpdate, DesignVersionPublic
@@ -29,7 +29,7 @@ def create_design(session: SessionDep, user: Writer, design_in: DesignCreate) ->
 
 @router.get("", response_model=Page[DesignPublic])
 def list_designs(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     name: Annotated[str | None, Query(max_length=128, description="substring of the name")] = None,
     include_archived: bool = False,
@@ -44,7 +44,7 @@ def list_designs(
 
 
 @router.get("/{design_id}", response_model=DesignPublic, responses=NOT_FOUND)
-def get_design(session: SessionDep, _user: Reader, design_id: Id) -> DesignPublic:
+def get_design(session: ReadSessionDep, _user: Reader, design_id: Id) -> DesignPublic:
     """One design, latest version."""
     return service.get_design(session=session, design_id=design_id)
 
@@ -64,12 +64,12 @@ def archive_design(session: SessionDep, user: Writer, design_id: Id) -> DesignPu
 
 
 @router.get("/{design_id}/versions", response_model=list[DesignVersionPublic], responses=NOT_FOUND)
-def list_versions(session: SessionDep, _user: Reader, design_id: Id) -> list[DesignVersionPublic]:
+def list_versions(session: ReadSessionDep, _user: Reader, design_id: Id) -> list[DesignVersionPublic]:
     """Every version, oldest first."""
     return service.list_versions(session=session, design_id=design_id)
 
 
 @router.get("/{design_id}/versions/{version}", response_model=DesignVersionPublic, responses=NOT_FOUND)
-def get_version(session: SessionDep, _user: Reader, design_id: Id, version: Id) -> DesignVersionPublic:
+def get_version(session: ReadSessionDep, _user: Reader, design_id: Id, version: Id) -> DesignVersionPublic:
     """One version."""
     return service.get_version(session=session, design_id=design_id, version=version)

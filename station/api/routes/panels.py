@@ -7,7 +7,7 @@ from typing import Annotated
 from fastapi import APIRouter, Query, status
 
 from db.models import User
-from station.api.deps import SessionDep, scoped
+from station.api.deps import ReadSessionDep, SessionDep, scoped
 from station.api.errors import ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.schemas.panels import Job, PanelCreate, PanelPublic, Part
@@ -27,7 +27,7 @@ def create_panel(session: SessionDep, user: Writer, panel_in: PanelCreate) -> Pa
 
 @router.get("", response_model=Page[PanelPublic])
 def list_panels(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     job: Annotated[Job | None, Query()] = None,
     part: Part | None = None,
@@ -40,6 +40,6 @@ def list_panels(
 
 
 @router.get("/{panel_id}", response_model=PanelPublic, responses=NOT_FOUND)
-def get_panel(session: SessionDep, _user: Reader, panel_id: Id) -> PanelPublic:
+def get_panel(session: ReadSessionDep, _user: Reader, panel_id: Id) -> PanelPublic:
     """One panel."""
     return PanelPublic.model_validate(service.get_panel(session=session, panel_id=panel_id))

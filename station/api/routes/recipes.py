@@ -7,7 +7,7 @@ from typing import Annotated
 from fastapi import APIRouter, Query, Request, status
 
 from db.models import User
-from station.api.deps import SessionDep, scoped
+from station.api.deps import ReadSessionDep, SessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND
 from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.schemas.recipes import RecipeCreate, RecipePublic
@@ -34,7 +34,7 @@ def create_recipe(
 
 @router.get("", response_model=Page[RecipePublic])
 def list_recipes(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     design_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
     limit: Limit = 100,
@@ -46,6 +46,6 @@ def list_recipes(
 
 
 @router.get("/{recipe_id}", response_model=RecipePublic, responses=NOT_FOUND)
-def get_recipe(session: SessionDep, _user: Reader, recipe_id: Id) -> RecipePublic:
+def get_recipe(session: ReadSessionDep, _user: Reader, recipe_id: Id) -> RecipePublic:
     """One formulation job."""
     return service.get_recipe(session=session, recipe_id=recipe_id)

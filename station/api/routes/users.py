@@ -11,7 +11,7 @@ from typing import Annotated
 from fastapi import APIRouter, Query, Request, status
 
 from db.models import User
-from station.api.deps import AnyUser, SessionDep, SettingsDep, scoped
+from station.api.deps import AnyUser, ReadSessionDep, SessionDep, SettingsDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND, NotFoundError
 from station.api.schemas.common import Id, Limit, Offset, Page
 from station.api.schemas.users import (
@@ -42,7 +42,7 @@ def me(user: AnyUser) -> UserPublic:
 
 
 @router.get("/users", response_model=list[UserPublic])
-def list_users(session: SessionDep, _user: Admin) -> list[UserPublic]:
+def list_users(session: ReadSessionDep, _user: Admin) -> list[UserPublic]:
     """Every user."""
     return [UserPublic.model_validate(u) for u in service.list_users(session=session)]
 
@@ -78,7 +78,7 @@ def issue_token(
 
 
 @router.get("/users/{user_id}/tokens", response_model=list[TokenPublic], responses=NOT_FOUND)
-def list_tokens(session: SessionDep, _admin: Admin, user_id: Id) -> list[TokenPublic]:
+def list_tokens(session: ReadSessionDep, _admin: Admin, user_id: Id) -> list[TokenPublic]:
     """A user's tokens (ids, labels, expiry, revocation; never the secrets)."""
     user = service.get_user(session=session, user_id=user_id)
     return [TokenPublic.model_validate(t) for t in service.list_tokens(session=session, user=user)]
@@ -108,7 +108,7 @@ def deactivate_user(request: Request, session: SessionDep, admin: Admin, user_id
 
 @router.get("/audit", response_model=Page[AuditEventPublic])
 def list_audit(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Auditor,
     entity: Annotated[str | None, Query(max_length=32)] = None,
     actor_id: Annotated[int | None, Query(ge=1, le=2**31 - 1)] = None,
