@@ -76,7 +76,8 @@ from sqlalchemy.orm import Session, UOWTransaction
 from sqlalchemy.sql.expression import TableClause
 from sqlalchemy.types import JSON, TypeEngine
 
-from db.base import JSONType, UTCDateTime, utcnow
+import db.models  # noqa: F401  (registers every table the chain seals)
+from db.base import Base, JSONType, UTCDateTime, utcnow
 from station.model.domain import ILLUMINATION_DEG
 
 Chain = Literal["measurements", "audit_events", "record_events"]
@@ -424,9 +425,6 @@ def append_audit(session: Session | Connection, values: Mapping[str, Any]) -> in
 
 
 def _record_table(name: str) -> Table:
-    from db.base import Base
-    from db.models import __all__ as _models  # noqa: F401  (registers every table)
-
     return Base.metadata.tables[name]
 
 

@@ -170,4 +170,6 @@ def make_sessionmaker(engine: Engine, *, read_only: bool = False) -> sessionmake
     ``read_only=True`` binds it to :func:`reading` of *engine*: for code paths that never write (lists,
     exports, checks), whose transactions then never take or wait for the write lock.
     """
+    import db.chain  # noqa: F401  (its flush hook seals every record row a session writes: db.chain._seal_flushed)
+
     return sessionmaker(reading(engine) if read_only else engine, expire_on_commit=False)

@@ -1,6 +1,5 @@
 """Every table of the measurement database (import this module to register them on ``Base``)."""
 
-import db.chain  # noqa: F401  (seals record rows on every ORM flush: db.chain._seal_flushed)
 from db.models.designs import Design, DesignVersion
 from db.models.gloss import GlossReading
 from db.models.instruments import CalibrationRecord, Instrument
