@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Idempotent set-up shared by scripts/serve.sh and scripts/test.sh.
 # - installs the system libraries the product needs (Mesa EGL for headless OpenGL, Qt's runtime
-#   libraries, Xvfb for the viewer's GL tests) when run as root, or prints the exact command otherwise;
+#   libraries, Xvfb for the viewer's GL tests, Chromium for the API docs pages' test) when run as root, or prints the exact command otherwise;
 # - creates or reuses the virtual environment .venv and installs the project with its dev extras,
 #   again only when pyproject.toml changed since the last install.
 set -euo pipefail
@@ -10,7 +10,7 @@ cd "$root"
 
 SYSTEM_PACKAGES=(libegl1 libegl-mesa0 libgl1-mesa-dri libgles2 libglib2.0-0 libfontconfig1 libdbus-1-3
   libxkbcommon0 libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0
-  libxcb-render-util0 libxcb-randr0 libxcb-shape0 libxcb-xfixes0 libxcb-xkb1 libx11-xcb1 xvfb xauth)
+  libxcb-render-util0 libxcb-randr0 libxcb-shape0 libxcb-xfixes0 libxcb-xkb1 libx11-xcb1 xvfb xauth chromium)
 
 missing=()
 if command -v dpkg-query >/dev/null 2>&1; then

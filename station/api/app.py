@@ -62,6 +62,11 @@ TAGS = [
     },
     {"name": "users", "description": "users and tokens (admin)"},
     {"name": "audit", "description": "who wrote what, when"},
+    {
+        "name": "qc",
+        "description": "colour QC against standards: measurements with gloss, sample-versus-standard "
+        "verdicts, job summaries, reports (QA)",
+    },
 ]
 
 
@@ -183,25 +188,34 @@ def _roles_markdown() -> str:
 
 
 DOCS_ASSETS = "/docs-assets"
-"""Where the service serves the Swagger UI's script, style and icon (bundled: no CDN)."""
-SWAGGER_FILES = {
+"""Where the service serves the docs pages' scripts, style and icon (bundled: no CDN)."""
+DOCS_FILES = {
     "swagger-ui-bundle.js": "text/javascript",
     "swagger-ui.css": "text/css",
-    "favicon-32x32.png": "image/png",
+    "redoc.standalone.js": "text/javascript",
+    "favicon.png": "image/png",
 }
+"""The files of ``fastapi-offline``'s bundle the pages use: Swagger UI 5 (it reads OpenAPI 3.1, the
+version FastAPI writes; Swagger UI 3 and 4 cannot) and ReDoc 2."""
 
 
 def _docs(app: FastAPI, protected: bool) -> None:
-    """``/openapi.json``, ``/docs`` and ``/redoc``; *protected*: behind the bearer token (any role), as
-    every route but ``/health`` (issue 5) — the HTML pages need the token too; fetch the schema with it
-    (``curl -H``). The Swagger UI's files are served by the service itself (:data:`DOCS_ASSETS`)."""
+    """``/openapi.json``, ``/docs``, ``/redoc`` and ``/`` (a link to them); *protected*: behind the
+    bearer token (any role), as every route but ``/health`` (issue 5) — the HTML pages need the token
+    too; fetch the schema with it (``curl -H``). Their scripts are served by the service itself
+    (:data:`DOCS_ASSETS`), so the pages work without the internet."""
     from fastapi import Depends
     from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
-    from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
+    from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, RedirectResponse, Response
 
     from station.api.deps import authorize
 
     guard = [Depends(authorize)] if protected else []
+
+    @app.get("/", include_in_schema=False)
+    def root() -> RedirectResponse:
+        """The service's front door: the API documentation (``/docs``)."""
+        return RedirectResponse("/docs", status_code=307)
 
     @app.get("/openapi.json", include_in_schema=False, dependencies=guard)
     def openapi() -> JSONResponse:
@@ -217,22 +231,30 @@ def _docs(app: FastAPI, protected: bool) -> None:
             title=f"{app.title} - docs",
             swagger_js_url=f"{DOCS_ASSETS}/swagger-ui-bundle.js",
             swagger_css_url=f"{DOCS_ASSETS}/swagger-ui.css",
-            swagger_favicon_url=f"{DOCS_ASSETS}/favicon-32x32.png",
+            swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png",
         )
 
     @app.get(DOCS_ASSETS + "/{name}", include_in_schema=False)
     def docs_asset(name: str) -> Response:
-        """The Swagger UI's bundled files (``swagger-ui-bundle``; public, like any static file)."""
-        from swagger_ui_bundle import swagger_ui_path
+        """The docs pages' bundled files (``fastapi-offline``; public, like any static file)."""
+        import fastapi_offline
 
-        if name not in SWAGGER_FILES:
+        if name not in DOCS_FILES:
             return JSONResponse({"detail": f"no such file: {name}"}, status_code=404)
-        return FileResponse(Path(swagger_ui_path) / name, media_type=SWAGGER_FILES[name])
+        return FileResponse(
+            Path(fastapi_offline.__file__).parent / "static" / name, media_type=DOCS_FILES[name]
+        )
 
     @app.get("/redoc", include_in_schema=False, dependencies=guard)
     def redoc() -> HTMLResponse:
-        """The ReDoc page (fetches the schema with the token)."""
-        return get_redoc_html(openapi_url="/openapi.json", title=f"{app.title} - ReDoc")
+        """The ReDoc page (fetches the schema with the token; its script comes from this service)."""
+        return get_redoc_html(
+            openapi_url="/openapi.json",
+            title=f"{app.title} - ReDoc",
+            redoc_js_url=f"{DOCS_ASSETS}/redoc.standalone.js",
+            redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+            with_google_fonts=False,
+        )
 
 
 def create_app(settings: Settings) -> FastAPI:

@@ -45,3 +45,16 @@ def test_docs_page_loads_its_files_from_the_service(sqlite_api: Api) -> None:
     assert js.headers["content-type"].startswith("text/javascript") and b"SwaggerUIBundle" in js.content
     assert c.get("/docs-assets/../app.py").status_code == 404
     assert c.get("/docs-assets/index.html").status_code == 404
+
+
+def test_redoc_and_the_front_door_work_offline(sqlite_api: Api) -> None:
+    c = sqlite_api.client
+    page = c.get("/redoc", headers=sqlite_api.auth(Role.TECHNICIAN))
+    assert page.status_code == 200
+    urls = re.findall(r"""(?:src|href)=["']([^"']+)["']""", page.text)
+    assert urls and all(u.startswith("/docs-assets/") for u in urls), urls
+    assert "http://" not in page.text and "https://" not in page.text  # no CDN, no web fonts
+    js = c.get("/docs-assets/redoc.standalone.js")
+    assert js.status_code == 200 and b"Redoc" in js.content
+    front = c.get("/", follow_redirects=False)
+    assert front.status_code == 307 and front.headers["location"] == "/docs"

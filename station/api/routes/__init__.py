@@ -27,6 +27,7 @@ ROUTERS = [
     recipes.router,
     formulation.router,
     users.router,
+    users.audit_router,
 ]
 
 __all__ = ["ROUTERS", "health"]

@@ -27,6 +27,8 @@ from station.api.services import audit
 from station.api.services import users as service
 
 router = APIRouter(tags=["users"], responses=ERROR_RESPONSES)
+#: The audit log has a section of its own in the API docs.
+audit_router = APIRouter(tags=["audit"], responses=ERROR_RESPONSES)
 Admin = Annotated[User, scoped(Scope.USERS_MANAGE)]
 Auditor = Annotated[User, scoped(Scope.AUDIT_READ)]
 
@@ -106,7 +108,7 @@ def deactivate_user(request: Request, session: SessionDep, admin: Admin, user_id
     return UserPublic.model_validate(deactivated)
 
 
-@router.get("/audit", response_model=Page[AuditEventPublic])
+@audit_router.get("/audit", response_model=Page[AuditEventPublic])
 def list_audit(
     session: ReadSessionDep,
     _user: Auditor,
