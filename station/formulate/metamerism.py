@@ -51,9 +51,9 @@ __all__ = [
     "Candidate",
     "MetamerismRanking",
     "RankedCandidate",
+    "chosen_illuminants",
     "rank_candidates",
     "rank_formulation",
-    "chosen_illuminants",
 ]
 
 #: Metamerism indices closer than this (ΔE00) rank as equal (rule step 2).
