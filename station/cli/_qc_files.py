@@ -65,11 +65,11 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
     verdict = check_pair(std, smp, tolerance, args.formula)
     booth = None
     if args.illuminant_limits is not None:
-        from station.qc.booth import check_illuminants, parse_illuminant_limits
+        from station.qc.illuminant_rows import check_illuminants, parse_illuminant_limits
 
         limits = parse_illuminant_limits(args.illuminant_limits)
         booth = check_illuminants(std, smp, limits, verdict.formula)
-    from station.qc.booth import PairVerdict
+    from station.qc.illuminant_rows import PairVerdict
 
     result = PairVerdict(verdict, booth).to_dict()
     result["standard"] = {"file": Path(args.standard).name, "sample": std.sample, "repeats": std_rep}
@@ -285,7 +285,7 @@ def _summary_of(args: argparse.Namespace, session: Any, load_tolerance: LoadTole
     parts = getattr(args, "parts", None) or None
     limits = None
     if getattr(args, "illuminant_limits", None) is not None:
-        from station.qc.booth import parse_illuminant_limits
+        from station.qc.illuminant_rows import parse_illuminant_limits
 
         limits = parse_illuminant_limits(args.illuminant_limits)
     return job_summary(

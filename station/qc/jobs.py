@@ -29,8 +29,8 @@ from station.model.design_io import design_from_dict
 from station.model.domain import ANGLES_6, ILLUMINATION_DEG, QC_FORMULA
 from station.model.errors import ModelInputError
 from station.model.tolerance import QcVerdict, ToleranceSet, Verdict
-from station.qc.booth import IlluminantCheck, PairVerdict, check_illuminants
-from station.qc.booth import illuminant_limits as booth_limits
+from station.qc.illuminant_rows import IlluminantCheck, PairVerdict, check_illuminants
+from station.qc.illuminant_rows import illuminant_limits as booth_limits
 from station.qc.check import check_pair, formula_name
 from station.qc.errors import QcInputError, StandardMissingError
 from station.qc.readings import Reading, reading_from_measurement
@@ -497,7 +497,7 @@ def job_summary(
     *average_panels* the repeat readings of each panel are averaged (:func:`station.qc.repeats.summarise`,
     at the geometries they share) and the panel is judged once, at the time of its newest reading.
     With *illuminant_limits* (``{illuminant: metamerism-index limit}``) each sample also gets its
-    illuminant rows (:func:`station.qc.booth.check_illuminants`) and its verdict is the worse of the
+    illuminant rows (:func:`station.qc.illuminant_rows.check_illuminants`) and its verdict is the worse of the
     two; a sample or standard without spectra is then listed unjudged with the reason.
     :class:`QcInputError` when the job has no panels.
     """

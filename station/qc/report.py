@@ -10,7 +10,7 @@
      geometry coloured by its verdict, and the overall verdict with the worst geometry;
    * with illuminant limits (:func:`station.qc.jobs.job_summary` ``illuminant_limits``) the
      **illuminant rows**: per sample and test illuminant, the metamerism index at each geometry against
-     its limit ("MI 0.80 <= 1 pass"), coloured pass / fail (:mod:`station.qc.booth`);
+     its limit ("MI 0.80 <= 1 pass"), coloured pass / fail (:mod:`station.qc.illuminant_rows`);
    * **L\\*, a\\*, b\\* against aspecular angle** of the standard (line) and the samples (points);
    * **ΔE per geometry bars** of the newest samples, with the ΔE limit of each geometry;
    * the **trend / SPC chart**: ΔE per geometry against time with the individuals-chart centre and

@@ -19,7 +19,7 @@ import pytest
 
 from station.api.serve_process import ServeStartError, serving
 from station.model.spectra import WAVELENGTHS, reflectance_to_lab
-from tests.qc.test_booth_rows import _mi_cs, _pair
+from tests.qc.test_illuminant_rows import _mi_cs, _pair
 
 REPO = Path(__file__).resolve().parents[2]
 V1 = "/api/v1"

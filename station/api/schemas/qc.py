@@ -166,7 +166,7 @@ class IlluminantRowOut(BaseModel):
 
 
 class IlluminantCheckOut(BaseModel):
-    """Illuminant rows of a sample (``station.qc.booth``): fail when any row is above its limit."""
+    """Illuminant rows of a sample (``station.qc.illuminant_rows``): fail when any row is above its limit."""
 
     reference_illuminant: str
     formula: str

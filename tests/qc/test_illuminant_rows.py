@@ -1,4 +1,4 @@
-"""Illuminant rows of QC verdicts (station.qc.booth): the metamerism index from D65 per geometry judged
+"""Illuminant rows of QC verdicts (station.qc.illuminant_rows): the metamerism index from D65 per geometry judged
 against the user's limit per test illuminant, in the check, the job summary and the PDF report.
 
 The index is checked against colour-science's own integration of the same spectra (ASTM E308,
@@ -24,7 +24,7 @@ from sqlalchemy.orm import Session
 from db.engine import make_engine, make_sessionmaker
 from db.models import Instrument, Measurement, Panel
 from station.model.spectra import WAVELENGTHS, reflectance_to_lab, weighting_factors
-from station.qc.booth import PairVerdict, check_illuminants, parse_illuminant_limits
+from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_illuminant_limits
 from station.qc.check import check_pair
 from station.qc.errors import QcInputError
 from station.qc.jobs import job_summary, set_standard
