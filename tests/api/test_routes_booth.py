@@ -138,7 +138,7 @@ def test_booth_spectra_in_body_user_lamp_and_refusals(api: Api) -> None:
     assert got["name"] == "bench lamp"
     assert got["per_geometry"][0]["standard_lab"] == pytest.approx(expected, abs=1e-6)
     bad_lamp = lamp | {"wavelengths_nm": [float(w) for w in range(450, 851, 10)]}
-    for extra, code, words in [
+    cases: list[tuple[dict[str, object], int, str]] = [
         ({"illuminants": ["D65", "D93"]}, 422, "illuminants[1]"),
         ({"illuminants": []}, 422, "illuminants"),
         ({"illuminants": ["A", "a"]}, 422, "distinct"),
@@ -151,7 +151,8 @@ def test_booth_spectra_in_body_user_lamp_and_refusals(api: Api) -> None:
             "user_illuminants[0].wavelengths_nm",
         ),
         ({"standard": {"geometries": GEOMETRIES, "spectra": [[0.5] * 31] * 2}}, 422, "standard.spectra"),
-    ]:
+    ]
+    for extra, code, words in cases:
         resp = c.post(f"{V1}/booth", json=body | extra, headers=qa)
         assert resp.status_code == code and words in resp.text, (extra, resp.text)
 

@@ -230,3 +230,28 @@ def test_illuminant_is_hashable_key() -> None:
     a = Illuminant("x", (400.0, 700.0), (1.0, 1.0))
     b = Illuminant("x", (400.0, 700.0), (1.0, 1.0))
     assert hash(a) == hash(b) and weighting_factors(a) is weighting_factors(b)
+
+
+def test_user_illuminant_from_arrays(blue: np.ndarray) -> None:
+    from station.model.illuminants import illuminant_from_spd
+
+    wl = [380.0, 500.0, 780.0]
+    lamp = illuminant_from_spd("bench", wl, [1.0, 2.0, 1.5], "body.lamp")
+    assert lamp == Illuminant("bench", tuple(wl), (1.0, 2.0, 1.5))
+    sd = colour.SpectralDistribution(
+        dict(zip(wl, [1.0, 2.0, 1.5], strict=True)), interpolator=colour.LinearInterpolator
+    )
+    assert reflectance_to_lab(blue, lamp) == pytest.approx(
+        _colour_lab(blue, sd, observer_cie_name("10")), abs=1e-6
+    )
+    for args, field in [
+        (("", wl, [1.0, 2.0, 1.5]), "body.lamp.name"),
+        (("TL84", wl, [1.0, 2.0, 1.5]), "body.lamp.name"),
+        (("x", wl, [1.0, 2.0]), "body.lamp.values"),
+        (("x", wl, [1.0, -2.0, 1.5]), "body.lamp.values[1]"),
+        (("x", [380.0, 380.0, 780.0], [1.0, 2.0, 1.5]), "body.lamp.wavelengths_nm[1]"),
+        (("x", [420.0, 500.0, 780.0], [1.0, 2.0, 1.5]), "body.lamp.wavelengths_nm"),
+    ]:
+        with pytest.raises(InputError) as err:
+            illuminant_from_spd(*args, field="body.lamp")
+        assert err.value.field == field
