@@ -24,9 +24,9 @@ from sqlalchemy.orm import Session
 from db.engine import make_engine, make_sessionmaker
 from db.models import Instrument, Measurement, Panel
 from station.model.spectra import WAVELENGTHS, reflectance_to_lab, weighting_factors
-from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_illuminant_limits
 from station.qc.check import check_pair
 from station.qc.errors import QcInputError
+from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_illuminant_limits
 from station.qc.jobs import job_summary, set_standard
 from station.qc.readings import reading_from_dict
 from tests.user_cli import run_station

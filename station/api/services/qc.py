@@ -40,8 +40,8 @@ from station.ingest import GlossRecord, gloss_of_measurements, store_gloss
 from station.model.domain import QC_FORMULA
 from station.model.tolerance import ToleranceSet
 from station.qc import jobs
-from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_illuminant_limits
 from station.qc.check import check_pair, formula_name
+from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_illuminant_limits
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading, reading_from_measurement
 from station.qc.repeats import summarise
