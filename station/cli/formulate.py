@@ -230,8 +230,9 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
         return out
 
 
-def _illuminants(args: argparse.Namespace) -> tuple[str, ...]:
-    """The ``--illuminants`` list as catalogue names (one line, exit 2 for an unknown one)."""
+def _illuminants(args: argparse.Namespace) -> tuple[Any, ...]:
+    """The ``--illuminants`` list as catalogue names or user SPD files (``*.csv``; one line, exit 2 for an
+    unknown name or a bad file)."""
     from station.formulate.metamerism import chosen_illuminants
 
     if args.illuminants is None:
@@ -239,10 +240,10 @@ def _illuminants(args: argparse.Namespace) -> tuple[str, ...]:
     if args.candidates < 1:
         raise InputError("candidates", "a count >= 1", args.candidates)
     names = [n for n in args.illuminants.replace(" ", "").split(",") if n]
-    return chosen_illuminants(names, "illuminants")
+    return chosen_illuminants(names, "illuminants", allow_files=True)
 
 
-def _ranking(args: argparse.Namespace, result: Any, illuminants: tuple[str, ...]) -> Any:
+def _ranking(args: argparse.Namespace, result: Any, illuminants: tuple[Any, ...]) -> Any:
     """The candidates ranked by metamerism index: the full record with --json, one line each without."""
     from station.formulate.metamerism import rank_formulation
 
@@ -426,7 +427,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--illuminants",
         help="rank the candidate recipes by metamerism index (reference D65) under these test "
-        "illuminants, e.g. A,F11",
+        "illuminants, e.g. A,F11,TL84,LED-B4 or a lamp's SPD file lamp.csv (wavelength_nm,value rows)",
     )
     p.add_argument(
         "--candidates",

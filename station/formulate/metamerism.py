@@ -43,7 +43,12 @@ from station.formulate.errors import FormulateInputError
 from station.formulate.formulation import FormulationResult
 from station.model.domain import aspecular_name
 from station.model.errors import ModelInputError
-from station.model.illuminants import REFERENCE_ILLUMINANT, illuminant_name
+from station.model.illuminants import (
+    REFERENCE_ILLUMINANT,
+    Illuminant,
+    SpdFileError,
+    illuminant_from_text,
+)
 from station.model.spectra import WAVELENGTHS, metamerism_index, reflectance_from_lab
 
 __all__ = [
@@ -64,18 +69,26 @@ RULE = (
 )
 
 
-def chosen_illuminants(names: Sequence[str], field: str = "illuminants") -> tuple[str, ...]:
-    """The chosen test illuminants as catalogue names, each once, in the order given.
+def chosen_illuminants(
+    names: Sequence[str | Illuminant], field: str = "illuminants", allow_files: bool = False
+) -> tuple[str | Illuminant, ...]:
+    """The chosen test illuminants as catalogue names (or user SPDs), each once, in the order given.
+
+    With *allow_files* a ``*.csv`` entry is a user SPD file
+    (:func:`station.model.illuminants.illuminant_from_text`); an :class:`Illuminant` is kept as given.
 
     Raises
     ------
     FormulateInputError
-        Empty, an unknown name, or the reference illuminant D65 itself (its index is 0 by construction).
+        Empty, an unknown name, or the reference illuminant D65 itself (its index is 0 by construction);
+        a bad SPD file raises its own error naming the file.
     """
-    out: list[str] = []
+    out: list[str | Illuminant] = []
     for i, raw in enumerate(names):
         try:
-            name = illuminant_name(raw)
+            name = raw if isinstance(raw, Illuminant) else illuminant_from_text(raw, allow_files)
+        except SpdFileError:
+            raise
         except ModelInputError as exc:
             raise FormulateInputError(f"{field}[{i}]", exc.accepted, raw) from exc
         if name == REFERENCE_ILLUMINANT:
@@ -155,7 +168,7 @@ class RankedCandidate:
 class MetamerismRanking:
     """Candidates best first under :data:`RULE`, with what the indices were computed from."""
 
-    illuminants: tuple[str, ...]
+    illuminants: tuple[str, ...]  # display names (a user SPD by its name)
     angles_deg: tuple[float, ...]
     reference_spectra: str
     ranked: tuple[RankedCandidate, ...]
@@ -181,7 +194,7 @@ def rank_candidates(
     reference_reflectance: ArrayLike,
     candidates: Sequence[Candidate],
     angles_deg: Sequence[float],
-    illuminants: Sequence[str],
+    illuminants: Sequence[str | Illuminant],
     reference_spectra: str = "given",
 ) -> MetamerismRanking:
     """Rank *candidates* by their metamerism index against the standard (module docstring's rule).
@@ -195,9 +208,10 @@ def rank_candidates(
     angles_deg
         Aspecular angles (degrees) of the A geometries.
     illuminants
-        Test illuminants (catalogue names, :func:`chosen_illuminants`); reference D65.
+        Test illuminants (catalogue names or user SPDs, :func:`chosen_illuminants`); reference D65.
     """
-    ills = chosen_illuminants(illuminants)
+    chosen = chosen_illuminants(illuminants)
+    ills = tuple(i.name if isinstance(i, Illuminant) else i for i in chosen)
     angles = tuple(float(a) for a in angles_deg)
     ref = np.asarray(reference_reflectance, dtype=float)
     if ref.shape != (len(angles), WAVELENGTHS.size):
@@ -209,7 +223,7 @@ def rank_candidates(
     names = [aspecular_name(a) for a in angles]
     scored = []
     for order, cand in enumerate(candidates):
-        out = metamerism_index(ref, cand.reflectance, REFERENCE_ILLUMINANT, ills, method="cie2000")
+        out = metamerism_index(ref, cand.reflectance, REFERENCE_ILLUMINANT, chosen, method="cie2000")
         index = {ill: tuple(float(v) for v in out[ill]) for ill in ills}
         table = np.array([index[ill] for ill in ills])
         i, j = np.unravel_index(int(np.argmax(table)), table.shape)
@@ -226,7 +240,7 @@ def rank_candidates(
 
 def rank_formulation(
     result: FormulationResult,
-    illuminants: Sequence[str],
+    illuminants: Sequence[str | Illuminant],
     db: ColorantDatabase | None = None,
     reference_reflectance: ArrayLike | None = None,
 ) -> MetamerismRanking:

@@ -145,3 +145,39 @@ def test_cli_ranks_by_illuminants_and_refuses_an_unknown_one(tmp_path: Path) -> 
     assert bad.returncode == 2
     assert bad.stderr.strip().splitlines() == [bad.stderr.strip()]
     assert "illuminants[1]" in bad.stderr and "Q7" in bad.stderr
+
+
+def _write_lamp(path: Path) -> None:
+    """Illuminant A's SPD (colour-science's table, 400–700 nm) as a lab's lamp file."""
+    sd = colour.SDS_ILLUMINANTS["A"]
+    rows = [f"{w:g},{sd[w]:.6f}" for w in range(380, 781, 5)]
+    path.write_text("wavelength_nm,value\n" + "\n".join(rows) + "\n")
+
+
+def test_a_lamp_file_ranks_as_its_spd(tmp_path: Path) -> None:
+    from station.formulate.metamerism import chosen_illuminants
+
+    _write_lamp(tmp_path / "lamp.csv")
+    (lamp,) = chosen_illuminants([str(tmp_path / "lamp.csv")], allow_files=True)
+    ref = _standard()
+    cands = [
+        Candidate("m", {}, ref + 0.9 * ref.min(axis=1, keepdims=True) * _metameric_black(), (0.0,) * 3, True)
+    ]
+    by_file = rank_candidates(ref, cands, ANGLES, [lamp]).best
+    by_name = rank_candidates(ref, cands, ANGLES, ["A"]).best
+    assert by_file.index["lamp"] == pytest.approx(by_name.index["A"], abs=1e-4)  # the file: 6 decimals
+    with pytest.raises(FormulateInputError, match=r"^illuminants\[0\]"):
+        chosen_illuminants([str(tmp_path / "lamp.csv")])  # files only where allowed (the CLI)
+
+
+def test_cli_takes_a_lamp_file_and_refuses_a_bad_one(tmp_path: Path) -> None:
+    _write_lamp(tmp_path / "lamp.csv")
+    (tmp_path / "bad.csv").write_text("wavelength_nm,value\n500,1\n")
+    design = "60,10,-30;45,8,-25;30,5,-18"
+    r = run_station(
+        tmp_path, "formulate", design, "--illuminants", "lamp.csv,F11", "--candidates", "2", "--json"
+    )
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["metamerism_ranking"]["illuminants"] == ["lamp", "F11"]
+    bad = run_station(tmp_path, "formulate", design, "--illuminants", "bad.csv")
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "bad.csv" in bad.stderr
