@@ -244,19 +244,20 @@ def _illuminants(args: argparse.Namespace) -> tuple[Any, ...]:
 
 
 def _ranking(args: argparse.Namespace, result: Any, illuminants: tuple[Any, ...]) -> Any:
-    """The candidates ranked by metamerism index: the full record with --json, one line each without."""
+    """The candidates ranked by metamerism index: the full record with --json, one line each without
+    (printed below the ``metamerism_ranking:`` key)."""
     from station.formulate.metamerism import rank_formulation
 
     ranking = rank_formulation(result, illuminants).to_dict()
     if args.json:
         return ranking
-    return [
+    return "\n" + "\n".join(
         f"{c['rank']}. {c['start']}: worst MI {c['worst_index']:.2f} ({c['worst_illuminant']}, "
         f"{c['worst_geometry']}), "
         + ", ".join(f"{ill} {v:.2f}" for ill, v in c["max_index"].items())
         + f"; mean dE00 {c['mean_de']:.2f}{'' if c['formulable'] else ' (not formulable)'}"
         for c in ranking["candidates"]
-    ]
+    )
 
 
 def _formulated(
