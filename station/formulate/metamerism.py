@@ -253,7 +253,14 @@ def rank_formulation(
     cands = result.candidates or (("winner", result.concentrations),)
     angles = result.angles_deg
     if reference_reflectance is None:
-        ref = reflectance_from_lab(result.design_lab)
+        try:
+            ref = reflectance_from_lab(result.design_lab)
+        except ModelInputError as exc:
+            raise FormulateInputError(
+                "design_lab",
+                "a design some reflectance reproduces (the metamerism reference), or the standard's spectra",
+                exc.got,
+            ) from exc
         source = "the smoothest reflectance reproducing the design's Lab (D65/10°) per geometry"
     else:
         ref = np.asarray(reference_reflectance, dtype=float)
