@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QFileDialog
+from PySide6.QtWidgets import QFileDialog, QTableWidgetItem
 
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
@@ -22,9 +22,15 @@ from ui.widgets.qc_screen import COLUMNS, QcScreen
 pytestmark = [pytest.mark.qt]
 
 
+def _cell(screen: QcScreen, row: int, column: int) -> QTableWidgetItem:
+    item = screen.table.item(row, column)
+    assert item is not None
+    return item
+
+
 def _column(screen: QcScreen, name: str) -> list[str]:
     j = COLUMNS.index(name)
-    return [screen.table.item(i, j).text() for i in range(screen.table.rowCount())]
+    return [_cell(screen, i, j).text() for i in range(screen.table.rowCount())]
 
 
 def test_illuminant_limits_fail_the_metameric_sample(qtbot, tmp_path: Path, monkeypatch) -> None:
@@ -61,16 +67,19 @@ def test_illuminant_limits_fail_the_metameric_sample(qtbot, tmp_path: Path, monk
     assert f"A 45as15: MI {mi_a[0]:.2f} > {limit:.2f} fail" in reasons[samples.index(str(metameric))]
     assert "pass 1 · warn 0 · fail 1" in screen.standard.text()
     row = COLUMNS.index("verdict")
-    assert screen.table.item(samples.index(str(metameric)), row).background().color().name() == "#f4a09a"
+    assert _cell(screen, samples.index(str(metameric)), row).background().color().name() == "#f4a09a"
 
     pdf = tmp_path / "report.pdf"
     monkeypatch.setattr(QFileDialog, "getSaveFileName", staticmethod(lambda *a, **k: (str(pdf), "")))
     qtbot.mouseClick(screen.pdf_btn, Qt.MouseButton.LeftButton)
     qtbot.waitUntil(lambda: screen.last_report == pdf, timeout=60000)
+    assert screen.task is not None
     screen.task.wait()
     body = pdf.read_bytes()
     assert body.startswith(b"%PDF")
-    assert body.count(b"/Type /Page ") + body.count(b"/Type /Page\n") == 1 + 4  # with the illuminant rows page
+    assert (
+        body.count(b"/Type /Page ") + body.count(b"/Type /Page\n") == 1 + 4
+    )  # with the illuminant rows page
 
     screen.limits.clear()
     qtbot.keyClicks(screen.limits, "Q9=1")
