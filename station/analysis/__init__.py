@@ -15,7 +15,7 @@ from station.analysis.index import (
     SeamModel,
     goniogeometric_index,
 )
-from station.analysis.qa import SeamReport, as_paint, seam_qa
+from station.analysis.qa import SeamReport, as_paint, measurements_under, seam_qa
 from station.analysis.shading import Environment, environment_colour, point_colour, shade_lab
 from station.analysis.sweep import SweepResult, plot_sweep, seam_sweep
 from station.analysis.trompe import OBJECTIVES, SUBSETS, TrompeResult, inverse_trompe_loeil
@@ -41,6 +41,7 @@ __all__ = [
     "environment_colour",
     "goniogeometric_index",
     "inverse_trompe_loeil",
+    "measurements_under",
     "plot_sweep",
     "point_colour",
     "rotated_normals",

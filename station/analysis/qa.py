@@ -5,6 +5,11 @@ how much of it is geometric (identical paint, misaligned) and how much is formul
 differ on aligned panels), what seam angle this paint tolerates (the goniogeometric index, eq 4.3.1),
 pass or fail against a tolerance, the thesis's §4.5 styling guidelines applied to this case, and a
 corrected second paint (inverse trompe l'oeil, §4.4) ready for formulation.
+
+Under a chosen illuminant (``illuminant``, default D65): measured panels that carry spectra give their
+Lab per geometry under that illuminant (:func:`measurements_under`: CIELAB relative to the
+illuminant's own white, 10° observer), so the fitted designs, the seam ΔE and the correction are
+those a viewer sees in a booth under it. Under D65 the stored Lab is used as before.
 """
 
 from __future__ import annotations
@@ -27,11 +32,76 @@ DEFAULT_ASPECULAR_DEG = (15.0, 25.0, 45.0, 75.0)
 HIGH_TRAVEL_DELTA_L = 30.0
 
 
-def as_paint(panel: Any, field: str = "panel") -> Any:
-    """A ``FaceFlopTravelGloss`` from a design or from ``AspecularMeasurements`` (fitted, eqs 3.3.x)."""
+def measurements_under(
+    angles_deg: Sequence[float],
+    spectra: Any,
+    illuminant: str,
+    gloss_gu: float | None = None,
+    field: str = "panel",
+) -> Any:
+    """``AspecularMeasurements`` of a measured panel under *illuminant*, from its spectra.
+
+    Parameters
+    ----------
+    angles_deg
+        Aspecular angles (degrees, 45° illumination), one per spectrum.
+    spectra
+        Reflectance factors per angle, shape (n, 31) on 400–700 nm / 10 nm.
+    illuminant
+        A catalogue name (:func:`station.model.illuminants.illuminant_name`).
+    gloss_gu
+        60° gloss (GU) carried through.
+
+    Raises
+    ------
+    AnalysisInputError
+        Naming ``illuminant`` for an unknown name, ``FIELD.spectra`` for spectra of the wrong shape or range.
+    """
+    from station.model import AspecularMeasurements
+    from station.model.errors import ModelInputError
+    from station.model.spectra import reflectance_to_lab
+
+    name = _illuminant(illuminant)
+    arr = np.asarray(spectra, dtype=float)
+    if arr.ndim != 2 or arr.shape[0] != len(angles_deg):
+        raise AnalysisInputError(f"{field}.spectra", f"{len(angles_deg)} spectra (one per angle)", arr.shape)
+    try:
+        lab = reflectance_to_lab(arr, name)
+    except ModelInputError as exc:
+        raise AnalysisInputError(f"{field}.spectra", exc.accepted, exc.got) from exc
+    return AspecularMeasurements(tuple(float(a) for a in angles_deg), lab, gloss_gu, illuminant=name)
+
+
+def _illuminant(name: str) -> str:
+    from station.model.errors import ModelInputError
+    from station.model.illuminants import illuminant_name
+
+    try:
+        return illuminant_name(name)
+    except ModelInputError as exc:
+        raise AnalysisInputError("illuminant", exc.accepted, name) from exc
+
+
+def as_paint(panel: Any, field: str = "panel", illuminant: str = "D65") -> Any:
+    """A ``FaceFlopTravelGloss`` from a design or from ``AspecularMeasurements`` (fitted, eqs 3.3.x).
+
+    Under an *illuminant* other than D65 only measurements taken under it
+    (:func:`measurements_under`) are accepted: a design's Lab, and a measurement's stored Lab, are D65's.
+    """
     from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 
+    name = _illuminant(illuminant)
+    if name != "D65" and isinstance(panel, AspecularMeasurements) and panel.illuminant != name:
+        raise AnalysisInputError(
+            field, f"a measurement with spectra, its Lab taken under {name}", f"Lab under {panel.illuminant}"
+        )
     if isinstance(panel, FaceFlopTravelGloss):
+        if name != "D65":
+            raise AnalysisInputError(
+                field,
+                f"a measurement with spectra to judge under {name} (a design's Lab is D65's)",
+                "a design",
+            )
         return panel
     if isinstance(panel, AspecularMeasurements):
         return fit_fftg(panel).design
@@ -59,6 +129,7 @@ class SeamReport:
     diagnosis: str
     advice: tuple[str, ...]
     correction: TrompeResult
+    illuminant: str = "D65"
 
     @property
     def worst(self) -> int:
@@ -73,6 +144,7 @@ class SeamReport:
             "beta_deg": self.beta_deg,
             "hinge": self.hinge if isinstance(self.hinge, str) else float(self.hinge),
             "method": self.method,
+            "illuminant": self.illuminant,
             "tolerance": self.tolerance,
             "seam_de_max": float(max(self.seam_de)),
             "seam_de_rms": float(np.sqrt(np.mean(np.square(self.seam_de)))),
@@ -107,6 +179,7 @@ def seam_qa(
     method: str = "cie76",
     hinge: Hinge = "in-plane",
     objective: Objective = "minimax",
+    illuminant: str = "D65",
 ) -> SeamReport:
     """Predict and judge a seam; propose a corrected paint for panel B.
 
@@ -125,13 +198,16 @@ def seam_qa(
         ΔE formula.
     objective
         Objective of the correction (``"minimax"`` default, or ``"rms"``).
+    illuminant
+        The illuminant the seam is judged under (default D65); other than D65 the panels must be
+        measurements under it (:func:`measurements_under`), see :func:`as_paint`.
 
     Returns
     -------
     SeamReport
     """
-    a = as_paint(panel_a, "panel_a")
-    b = as_paint(panel_b, "panel_b")
+    a = as_paint(panel_a, "panel_a", illuminant)
+    b = as_paint(panel_b, "panel_b", illuminant)
     ls, vs = [], []
     for lt in lights_deg:
         for asp in aspecular_deg:
@@ -197,6 +273,7 @@ def seam_qa(
         diagnosis,
         advice,
         correction,
+        _illuminant(illuminant),
     )
 
 

@@ -49,6 +49,11 @@ def print_verdict(result: dict[str, Any]) -> None:
         why = f"  ({'; '.join(g['reasons'])})" if g["reasons"] else ""
         print(f"{g['geometry']:>9} {nums}  {g['verdict']}{why}")
     print(f"mean dE: {result['mean_de']:.3f}   max dE: {result['max_de']:.3f} at {result['worst_geometry']}")
+    booth = result.get("illuminants")
+    if booth:
+        print(f"illuminant rows (metamerism index from D65, {booth['formula']}): {booth['verdict']}")
+        for row in booth["rows"]:
+            print(f"  {row['text']}")
 
 
 def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, Any] | None:
@@ -57,7 +62,16 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
     tolerance = load_tolerance(args.tolerance) if args.tolerance else None
     std, std_rep = _one(_readings(args.standard, "standard"), "standard")
     smp, smp_rep = _one(_readings(args.sample, "sample"), "sample")
-    result = check_pair(std, smp, tolerance, args.formula).to_dict()
+    verdict = check_pair(std, smp, tolerance, args.formula)
+    booth = None
+    if args.illuminant_limits is not None:
+        from station.qc.illuminant_rows import check_illuminants, parse_illuminant_limits
+
+        limits = parse_illuminant_limits(args.illuminant_limits)
+        booth = check_illuminants(std, smp, limits, verdict.formula)
+    from station.qc.illuminant_rows import PairVerdict
+
+    result = PairVerdict(verdict, booth).to_dict()
     result["standard"] = {"file": Path(args.standard).name, "sample": std.sample, "repeats": std_rep}
     result["sample"] = {"file": Path(args.sample).name, "sample": smp.sample, "repeats": smp_rep}
     if args.json:
@@ -269,7 +283,14 @@ def _summary_of(args: argparse.Namespace, session: Any, load_tolerance: LoadTole
 
     tolerance = load_tolerance(args.tolerance) if args.tolerance else None
     parts = getattr(args, "parts", None) or None
-    return job_summary(session, args.job, tolerance, args.formula, parts, args.average_panels)
+    limits = None
+    if getattr(args, "illuminant_limits", None) is not None:
+        from station.qc.illuminant_rows import parse_illuminant_limits
+
+        limits = parse_illuminant_limits(args.illuminant_limits)
+    return job_summary(
+        session, args.job, tolerance, args.formula, parts, args.average_panels, illuminant_limits=limits
+    )
 
 
 def _summary(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, Any]:
@@ -370,12 +391,22 @@ def _add_judging(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_illuminant_limits(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--illuminant-limits",
+        metavar="ILL=LIMIT,…",
+        help="add illuminant rows: the metamerism index from D65 per geometry judged against a limit per "
+        'test illuminant, in the formula\'s ΔE units, e.g. "A=1.0,F11=1.5" (spectra needed)',
+    )
+
+
 def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> None:
     """Add the file and database commands under ``station qc``."""
     p = sub.add_parser("check", help="verdict of a sample file against a standard file")
     p.add_argument("--standard", required=True, help="standard: station measure/import --json output")
     p.add_argument("--sample", required=True, help="sample: station measure/import --json output")
     _add_judging(p)
+    _add_illuminant_limits(p)
     add_json_flag(p)
     p.set_defaults(handler=lambda a: _check(a, load_tolerance))
 
@@ -436,6 +467,7 @@ def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> 
     p.add_argument("--job", required=True)
     p.add_argument("--part", dest="parts", action="append", help="only this part (repeatable)")
     _add_judging(p)
+    _add_illuminant_limits(p)
     _add_db(p)
     p.set_defaults(handler=lambda a: _summary(a, load_tolerance))
 
@@ -446,6 +478,7 @@ def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> 
     p.add_argument("--part", dest="parts", action="append", help="only this part (repeatable)")
     p.add_argument("--progress", action="store_true", help="draw a progress bar on stderr")
     _add_judging(p)
+    _add_illuminant_limits(p)
     _add_db(p)
     p.set_defaults(handler=lambda a: _report(a, load_tolerance))
 

@@ -27,6 +27,7 @@ from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, seam_
 from station.analysis.trompe import OBJECTIVES, inverse_trompe_loeil
 from station.cli._common import add_json_flag, design_from_args, parse_floats
 from station.errors import InputError
+from station.model.illuminants import illuminant_name
 
 
 def _hinge(text: str) -> Hinge:
@@ -99,13 +100,17 @@ def _trompe(args: argparse.Namespace) -> dict[str, Any]:
     return r.to_dict()
 
 
-def load_panel(path: str) -> Any:
+def load_panel(path: str, illuminant: str = "D65") -> Any:
     """A panel from a design JSON (``cacad.design/1``) or a measurement JSON.
 
     Measurement JSON: ``{"angles_deg": [...], "lab": [[L, a, b], ...], "gloss_gu": g}`` (Lab D65/10°,
     illumination at 45°), or the output of ``station measure --json`` (``"geometries"`` named like
     ``45as15`` beside ``"lab"``: its positive aspecular angles under 45° illumination are taken, as the
     viewer fits a scan); it is fitted to face/flop/travel (eqs 3.3.1–3.3.10).
+
+    Under an *illuminant* other than D65 the measurement must carry ``"spectra"`` (one 400–700 nm,
+    10 nm reflectance per row, ``"wavelengths_nm"`` optional) and its Lab is taken from them under that
+    illuminant (:func:`station.analysis.measurements_under`); a design or a Lab-only file is refused.
     """
     import numpy as np
 
@@ -119,6 +124,8 @@ def load_panel(path: str) -> Any:
         raise InputError("panel", "a readable JSON file (design or measurement)", path) from exc
     if not isinstance(data, dict):
         raise InputError("panel", "a JSON object", path)
+    if illuminant_name(illuminant) != "D65":
+        return _panel_under(data, path, illuminant)
     if "angles_deg" in data and "lab" in data:
         return AspecularMeasurements(tuple(data["angles_deg"]), data["lab"], data.get("gloss_gu"))
     if "geometries" in data and "lab" in data:  # station measure --json
@@ -140,9 +147,42 @@ def load_panel(path: str) -> Any:
     return design_from_dict(data)
 
 
+def _panel_under(data: dict[str, Any], path: str, illuminant: str) -> Any:
+    """A measurement file's panel with its Lab from its spectra under *illuminant* (see :func:`load_panel`)."""
+    from station.analysis import measurements_under
+    from station.model.domain import ILLUMINATION_DEG, parse_geometry
+    from station.model.spectra import WAVELENGTHS
+
+    name = illuminant_name(illuminant)
+    need = f"a measurement with spectra (400–700 nm, 10 nm) to judge under {name}"
+    spectra = data.get("spectra")
+    if not isinstance(spectra, list) or not spectra:
+        raise InputError("panel", need, path)
+    wl = data.get("wavelengths_nm")
+    if wl is not None and [float(w) for w in wl] != WAVELENGTHS.tolist():
+        raise InputError("panel", need, path, detail="other wavelengths")
+    if "angles_deg" in data:
+        angles, rows = list(data["angles_deg"]), spectra
+    elif isinstance(data.get("geometries"), list) and len(data["geometries"]) == len(spectra):
+        picked = sorted(
+            (asp, row)
+            for geo, row in zip(data["geometries"], spectra, strict=True)
+            for illum, asp in [parse_geometry(geo, "panel geometries")]
+            if illum == ILLUMINATION_DEG and asp > 0
+        )
+        angles, rows = [a for a, _ in picked], [r for _, r in picked]
+    else:
+        raise InputError("panel", need, path)
+    if len(angles) < 3:
+        raise InputError(
+            "panel", "a measurement with at least 3 positive aspecular angles under 45° light", path
+        )
+    return measurements_under(angles, rows, name, data.get("gloss_gu"), field="panel")
+
+
 def _seam(args: argparse.Namespace) -> dict[str, Any]:
-    a = load_panel(args.panel_a)
-    b = load_panel(args.panel_b)
+    a = load_panel(args.panel_a, args.illuminant)
+    b = load_panel(args.panel_b, args.illuminant)
     r = seam_qa(
         a,
         b,
@@ -153,6 +193,7 @@ def _seam(args: argparse.Namespace) -> dict[str, Any]:
         method=args.de,
         hinge=_hinge(args.hinge),
         objective=args.objective,
+        illuminant=args.illuminant,
     )
     out = r.to_dict()
     from station.formulate.gamut import colorant_gamut
@@ -249,6 +290,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         choices=("rms", "minimax"),
         default="minimax",
         help="what the corrected paint for panel B minimises over the geometries (default %(default)s)",
+    )
+    p.add_argument(
+        "--illuminant",
+        default="D65",
+        help="judge the seam under this illuminant, e.g. A or F11 (panels with spectra; default D65)",
     )
     p.add_argument("--png", help="write the report picture here")
     _add_common(p)

@@ -5,7 +5,10 @@
   browse [--library demo|FILE] --filter type=metallic,pearl --filter flop=3:10 …``.
 * ``station snap --library FILE|demo --lab "L,a,b;L,a,b;L,a,b" [--k 5] [--de cie76|cie2000|din6175]
   [--png OUT]`` → ``{"matches": [{"code", "sum_de", "de_per_angle"}], "warnings": [...]}``.
-* ``station formulate DESIGN [--closed-loop]`` — recipe from the ColorSnap match's recipe.
+* ``station formulate DESIGN [--closed-loop] [--illuminants A,F11 [--candidates N]]`` — recipe from the
+  ColorSnap match's recipe; with ``--illuminants`` the distinct candidate recipes ranked by their
+  metamerism index under those illuminants (``metamerism_ranking``, rule in
+  :mod:`station.formulate.metamerism`).
 * ``station export DESIGN --format xml|cxf --out FILE`` — the design (both angle sets) and its match.
 
 DESIGN is a ``cacad.design/1`` JSON file or ``"L,a,b;L,a,b;L,a,b"`` at 15/45/110°. The demo
@@ -210,12 +213,51 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
         steps(f"loading the library {args.library}")
         lib = _load_library(args.library)
         steps("ColorSnap and formulation")
+        illuminants = _illuminants(args)
         result, snap = formulate_from_library(
-            lab, lib, gloss_gu=gloss, tolerance=args.tolerance, types=args.types
+            lab,
+            lib,
+            gloss_gu=gloss,
+            tolerance=args.tolerance,
+            types=args.types,
+            candidates=args.candidates if illuminants else 0,
         )
         if args.closed_loop:
             steps("closed loop: spraying, measuring, correcting")
-        return _formulated(args, lab, gloss, name, lib, result, snap)
+        out = _formulated(args, lab, gloss, name, lib, result, snap)
+        if illuminants:
+            out["metamerism_ranking"] = _ranking(args, result, illuminants)
+        return out
+
+
+def _illuminants(args: argparse.Namespace) -> tuple[Any, ...]:
+    """The ``--illuminants`` list as catalogue names or user SPD files (``*.csv``; one line, exit 2 for an
+    unknown name or a bad file)."""
+    from station.formulate.metamerism import chosen_illuminants
+
+    if args.illuminants is None:
+        return ()
+    if args.candidates < 1:
+        raise InputError("candidates", "a count >= 1", args.candidates)
+    names = [n for n in args.illuminants.replace(" ", "").split(",") if n]
+    return chosen_illuminants(names, "illuminants", allow_files=True)
+
+
+def _ranking(args: argparse.Namespace, result: Any, illuminants: tuple[Any, ...]) -> Any:
+    """The candidates ranked by metamerism index: the full record with --json, one line each without
+    (printed below the ``metamerism_ranking:`` key)."""
+    from station.formulate.metamerism import rank_formulation
+
+    ranking = rank_formulation(result, illuminants).to_dict()
+    if args.json:
+        return ranking
+    return "\n" + "\n".join(
+        f"{c['rank']}. {c['start']}: worst MI {c['worst_index']:.2f} ({c['worst_illuminant']}, "
+        f"{c['worst_geometry']}), "
+        + ", ".join(f"{ill} {v:.2f}" for ill, v in c["max_index"].items())
+        + f"; mean dE00 {c['mean_de']:.2f}{'' if c['formulable'] else ' (not formulable)'}"
+        for c in ranking["candidates"]
+    )
 
 
 def _formulated(
@@ -383,6 +425,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="start only from library paints of this type (repeat for several; default: every paint)",
     )
     p.add_argument("--closed-loop", action="store_true", help="spray, measure and correct (simulated panel)")
+    p.add_argument(
+        "--illuminants",
+        help="rank the candidate recipes by metamerism index (reference D65) under these test "
+        "illuminants, e.g. A,F11,TL84,LED-B4 or a lamp's SPD file lamp.csv (wavelength_nm,value rows)",
+    )
+    p.add_argument(
+        "--candidates",
+        type=int,
+        default=4,
+        help="with --illuminants: starts tried to convergence at least (default 4)",
+    )
     p.add_argument("--corrections", type=int, default=3, help="closed-loop corrections (default 3)")
     p.add_argument("--seed", type=int, default=7, help="seed of the simulated spray-out panel")
     p.add_argument(

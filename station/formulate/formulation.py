@@ -69,6 +69,10 @@ class FormulationResult:
         Predicted 60° gloss (GU) of the recipe.
     start
         Where the winning start came from (a library code, "given" or "generic").
+    candidates
+        ``(start label, full concentration vector)`` of the distinct recipes the starts converged to,
+        the winning recipe first (filled when :func:`formulate` is asked for ``candidates``); their
+        metamerism ranking is :func:`station.formulate.metamerism.rank_formulation`.
     """
 
     recipe: dict[str, float]
@@ -88,6 +92,7 @@ class FormulationResult:
     evaluations: int = 0
     synthetic: bool = True
     warnings: tuple[str, ...] = field(default=())
+    candidates: tuple[tuple[str, NDArray[np.float64]], ...] = field(default=())
 
     def to_dict(self) -> dict[str, object]:
         """JSON-able form for the CLI and the service."""
@@ -280,6 +285,7 @@ def formulate(
     db: ColorantDatabase | None = None,
     time_budget_s: float = 0.8,
     strict: bool = False,
+    candidates: int = 0,
 ) -> FormulationResult:
     """Formulate a recipe for the design (see module docstring).
 
@@ -301,7 +307,12 @@ def formulate(
         stops (keeping its best point) at 1.15 × the budget.
     strict
         Raise :class:`NotFormulableError` instead of returning an unformulable result.
+    candidates
+        Try at least this many starts to convergence, whatever the time budget, and keep each distinct
+        recipe they reach as :attr:`FormulationResult.candidates` (0: stop at the first good enough).
     """
+    if candidates < 0:
+        raise FormulateInputError("candidates", "a count >= 0", candidates)
     t0 = time.perf_counter()
     db = db or default_database()
     angles = tuple(float(a) for a in angles_deg)
@@ -332,11 +343,11 @@ def formulate(
         return -effect
 
     objective = _Objective(design, angles, db, free, fixed)
-    candidates: list[tuple[str, NDArray]] = []
+    starts_x: list[tuple[str, NDArray]] = []
     for label, rec in starts or []:
         vec = db.vector(rec) if isinstance(rec, dict) else np.asarray(rec, dtype=np.float64)
-        candidates.append((label, db.check(vec, field=f"starts[{label}]")[free]))
-    candidates += [("generic", s[free]) for s in _generic_starts(db, design, angles)]
+        starts_x.append((label, db.check(vec, field=f"starts[{label}]")[free]))
+    starts_x += [("generic", s[free]) for s in _generic_starts(db, design, angles)]
     best: tuple[float, NDArray, str] | None = None
     good_enough = (0.02 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of ~0.02
     deadline = t0 + max(time_budget_s, 0.05) * 1.15
@@ -353,8 +364,13 @@ def formulate(
     )
     lsq = _LabLeastSquares(design, angles, db, objective, db.max_total - c_mat, effect)
     enough = (0.2 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of 0.2 × tolerance
-    for label, x0 in candidates:  # phase 1: Gauss–Newton (trust region) on weighted Lab residuals
-        if best is not None and (time.perf_counter() - t0 > time_budget_s or best[0] <= enough):
+    tried: list[tuple[str, NDArray]] = []
+    for label, x0 in starts_x:  # phase 1: Gauss–Newton (trust region) on weighted Lab residuals
+        if (
+            best is not None
+            and len(tried) >= candidates
+            and (time.perf_counter() - t0 > time_budget_s or best[0] <= enough)
+        ):
             break
         res_ls = least_squares(
             lsq.residual,
@@ -368,9 +384,10 @@ def formulate(
         )
         x = proj(res_ls.x)
         f = objective.value(x)
+        tried.append((label, x))
         if best is None or f < best[0]:
             best = (f, x, label)
-    assert best is not None  # noqa: S101 - candidates is never empty (generic starts)
+    assert best is not None  # noqa: S101 - starts_x is never empty (generic starts)
     if best[0] > enough and time.perf_counter() < deadline:  # phase 2: SLSQP on Σ ΔE00² itself
         res = minimize(
             objective.value,
@@ -422,7 +439,21 @@ def formulate(
         evaluations=objective.evaluations,
         synthetic=db.synthetic,
         warnings=tuple(warnings),
+        candidates=_distinct(best[2], c, [(lb, objective.full(x)) for lb, x in tried]) if candidates else (),
     )
+
+
+def _distinct(
+    label: str, winner: NDArray, tried: list[tuple[str, NDArray]]
+) -> tuple[tuple[str, NDArray[np.float64]], ...]:
+    """The winning recipe first, then each recipe *tried* that differs from every one kept (by more than
+    :data:`_RECIPE_THRESHOLD` in some fraction), the reported threshold applied to each."""
+    kept: list[tuple[str, NDArray[np.float64]]] = [(label, winner)]
+    for lb, x in tried:
+        x = np.where(x <= _RECIPE_THRESHOLD, 0.0, x)
+        if all(np.max(np.abs(x - k)) > 1e-4 for _, k in kept):
+            kept.append((lb, x))
+    return tuple(kept)
 
 
 def formulate_from_library(
@@ -435,12 +466,13 @@ def formulate_from_library(
     db: ColorantDatabase | None = None,
     time_budget_s: float = 0.8,
     types: Collection[str] | None = None,
+    candidates: int = 0,
 ) -> tuple[FormulationResult, SnapResult]:
     """ColorSnap (CIEDE2000) the design against a library with recipes, then formulate from the
     *k* best matches' recipes (thesis §5.3.4–5.3.5: the match is the formulation starting point).
 
     *types* restricts the matches (and so the starting recipes) to those paint types (``solid``,
-    ``metallic``, ``pearl``); ``None`` searches every paint."""
+    ``metallic``, ``pearl``); ``None`` searches every paint. *candidates*: see :func:`formulate`."""
     if library.recipes is None or library.colorant_names is None:
         raise FormulateInputError("library", "a library with recipes (the demo library)", library.name)
     db = db or default_database()
@@ -451,5 +483,7 @@ def formulate_from_library(
     design = validate_design_lab(design_lab, 3, "design_lab")
     snap = color_snap(library, design, k=k, method="cie2000", index=index, types=types)
     starts = [(m.code, library.recipes[m.index]) for m in snap.matches]
-    result = formulate(design, STANDARD_ANGLES, starts, gloss_gu, tolerance, db, time_budget_s)
+    result = formulate(
+        design, STANDARD_ANGLES, starts, gloss_gu, tolerance, db, time_budget_s, candidates=candidates
+    )
     return result, snap

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as dt
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -28,9 +28,11 @@ from db.models import PARTS, Design, DesignVersion, Instrument, Measurement, Pan
 from station.model.design_io import design_from_dict
 from station.model.domain import ANGLES_6, ILLUMINATION_DEG, QC_FORMULA
 from station.model.errors import ModelInputError
-from station.model.tolerance import QcVerdict, ToleranceSet
+from station.model.tolerance import QcVerdict, ToleranceSet, Verdict
 from station.qc.check import check_pair, formula_name
 from station.qc.errors import QcInputError, StandardMissingError
+from station.qc.illuminant_rows import IlluminantCheck, PairVerdict, check_illuminants
+from station.qc.illuminant_rows import illuminant_limits as booth_limits
 from station.qc.readings import Reading, reading_from_measurement
 from station.qc.repeats import RepeatSummary, summarise
 
@@ -406,9 +408,15 @@ class SampleResult:
     verdict: QcVerdict
     repeats: RepeatSummary | None = None
     measurement_ids: tuple[int, ...] = ()
+    illuminants: IlluminantCheck | None = None
+
+    @property
+    def overall(self) -> Verdict:
+        """The D65 verdict, or the worse of it and the illuminant rows' verdict when they were judged."""
+        return PairVerdict(self.verdict, self.illuminants).verdict
 
     def to_dict(self) -> dict[str, Any]:
-        out = {**self.row.to_dict(), "qc": self.verdict.to_dict()}
+        out = {**self.row.to_dict(), "qc": PairVerdict(self.verdict, self.illuminants).to_dict()}
         if self.repeats is not None:
             out["repeats"] = self.repeats.to_dict()
             out["measurement_ids"] = list(self.measurement_ids)
@@ -428,7 +436,7 @@ class PartSummary:
     def counts(self) -> dict[str, int]:
         out = {"pass": 0, "warn": 0, "fail": 0}
         for s in self.samples:
-            out[s.verdict.verdict] += 1
+            out[s.overall] += 1
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -451,6 +459,7 @@ class JobSummary:
     tolerance: ToleranceSet | None
     parts: tuple[PartSummary, ...]
     generated_at: dt.datetime
+    illuminant_limits: dict[str, float] | None = None
 
     def counts(self) -> dict[str, int]:
         out = {"pass": 0, "warn": 0, "fail": 0}
@@ -467,6 +476,7 @@ class JobSummary:
             "counts": self.counts(),
             "parts": [p.to_dict() for p in self.parts],
             "generated_at": self.generated_at.isoformat(),
+            "illuminant_limits": self.illuminant_limits,
         }
 
 
@@ -477,6 +487,7 @@ def job_summary(
     formula: str | None = None,
     parts: Sequence[str] | None = None,
     average_panels: bool = False,
+    illuminant_limits: Mapping[str, float] | None = None,
 ) -> JobSummary:
     """Every part of *job* with its standard and each sample's verdict (:func:`check_pair`).
 
@@ -485,8 +496,12 @@ def job_summary(
     of the standard or tolerance missing) is listed unjudged with the reason in the part's note. With
     *average_panels* the repeat readings of each panel are averaged (:func:`station.qc.repeats.summarise`,
     at the geometries they share) and the panel is judged once, at the time of its newest reading.
+    With *illuminant_limits* (``{illuminant: metamerism-index limit}``) each sample also gets its
+    illuminant rows (:func:`station.qc.illuminant_rows.check_illuminants`) and its verdict is the worse of the
+    two; a sample or standard without spectra is then listed unjudged with the reason.
     :class:`QcInputError` when the job has no panels.
     """
+    limits = None if illuminant_limits is None else booth_limits(illuminant_limits)
     job = _text(job, "job")
     rows = search_measurements(session, job=job, limit=SEARCH_LIMIT_MAX)
     known = session.scalars(select(Panel.part).where(Panel.job == job).distinct()).all()
@@ -517,7 +532,8 @@ def job_summary(
                 info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref)
             try:
                 verdict = check_pair(ref, r.reading, tolerance, formula)
-                samples.append(SampleResult(r, verdict, repeats, ids))
+                booth = None if limits is None else check_illuminants(ref, r.reading, limits, verdict.formula)
+                samples.append(SampleResult(r, verdict, repeats, ids, booth))
             except (QcInputError, ModelInputError) as exc:
                 unjudged.append(r)
                 notes.append(f"measurement {r.measurement_id}: {exc}")
@@ -527,7 +543,7 @@ def job_summary(
         if std.design_id is not None:
             info = dataclasses.replace(info, curve=_curve(session, std, samples))
         out.append(PartSummary(part, info, tuple(samples), tuple(unjudged), "; ".join(notes)))
-    return JobSummary(job, name, tolerance, tuple(out), dt.datetime.now(dt.UTC))
+    return JobSummary(job, name, tolerance, tuple(out), dt.datetime.now(dt.UTC), limits)
 
 
 def _samples(

@@ -52,8 +52,14 @@ class MetamerismResult:
         }
 
 
-def metamerism(standard: Reading, sample: Reading, formula: str = "cie2000") -> MetamerismResult:
-    """Metamerism index (D65 → A, F11) at the geometries both readings have, in *formula*."""
+def metamerism(
+    standard: Reading,
+    sample: Reading,
+    formula: str = "cie2000",
+    illuminants: tuple[str, ...] = TEST_ILLUMINANTS,
+) -> MetamerismResult:
+    """Metamerism index (D65 → each of *illuminants*, default A and F11) at the geometries both
+    readings have, in *formula*. *illuminants* are catalogue names (``station.model.illuminants``)."""
     for r, role in ((standard, "standard"), (sample, "sample")):
         if not r.has_product_spectra():
             raise QcInputError(f"{role}.spectra", "spectra at 400–700 nm in 10 nm steps", r.wavelengths_nm)
@@ -66,11 +72,11 @@ def metamerism(standard: Reading, sample: Reading, formula: str = "cie2000") -> 
     ref = np.asarray(standard.spectra, dtype=float)[si]
     smp = np.asarray(sample.spectra, dtype=float)[pi]
     out = metamerism_index(
-        ref, smp, REFERENCE_ILLUMINANT, TEST_ILLUMINANTS, method=name, aspecular_deg=np.asarray(angles)
+        ref, smp, REFERENCE_ILLUMINANT, illuminants, method=name, aspecular_deg=np.asarray(angles)
     )
     return MetamerismResult(
         name,
         angles,
         tuple(float(v) for v in out["reference"]),
-        {ill: tuple(float(v) for v in out[ill]) for ill in TEST_ILLUMINANTS},
+        {ill: tuple(float(v) for v in out[ill]) for ill in illuminants},
     )

@@ -8,6 +8,9 @@
 
    * the **verdict table per geometry**: one row per sample (newest :data:`TABLE_ROWS`), ΔE at each
      geometry coloured by its verdict, and the overall verdict with the worst geometry;
+   * with illuminant limits (:func:`station.qc.jobs.job_summary` ``illuminant_limits``) the
+     **illuminant rows**: per sample and test illuminant, the metamerism index at each geometry against
+     its limit ("MI 0.80 <= 1 pass"), coloured pass / fail (:mod:`station.qc.illuminant_rows`);
    * **L\\*, a\\*, b\\* against aspecular angle** of the standard (line) and the samples (points);
    * **ΔE per geometry bars** of the newest samples, with the ΔE limit of each geometry;
    * the **trend / SPC chart**: ΔE per geometry against time with the individuals-chart centre and
@@ -108,6 +111,9 @@ def _cover(summary: JobSummary) -> Figure:
         f"formula: {summary.formula}",
         f"tolerance: {rule}",
     ]
+    if summary.illuminant_limits:
+        limits = ", ".join(f"{k} MI <= {v:g}" for k, v in summary.illuminant_limits.items())
+        lines.append(f"illuminant rows: {limits} (metamerism index from D65, {summary.formula})")
     for i, text in enumerate(lines):
         fig.text(0.08, 0.90 - 0.025 * i, text, fontsize=10)
     rows = []
@@ -160,8 +166,15 @@ def _label(s: SampleResult) -> str:
 
 
 def _why(s: SampleResult) -> str:
-    """One line on why a sample did not pass: the geometries out of band, or the mean rule's reason."""
+    """One line on why a sample did not pass: the geometries out of band, or the mean rule's reason,
+    then the illuminant rows that failed."""
     v = s.verdict
+    booth = s.illuminants
+    if booth is not None and booth.verdict == "fail":
+        failed = [r for r in booth.rows if r.verdict == "fail"]
+        rows = "; ".join(f"{r.illuminant} {r.geometry} MI {r.index:.2f} > {r.limit:g}" for r in failed)
+        d65 = "" if v.verdict == "pass" else f"D65 {v.verdict}; "
+        return f"{_label(s)} {s.overall}: {d65}{rows}"
     if v.aggregation == "mean":
         return f"{_label(s)} {v.verdict}: {v.reason}"
     parts = []
@@ -192,8 +205,8 @@ def _table_page(summary: JobSummary, part: PartSummary) -> Figure:
             cells.append("—" if g is None else f"{g.de:.2f}")
             cols.append("white" if g is None else _VERDICT_COLOUR[g.verdict])
         v = s.verdict
-        cells += [f"{v.mean_de:.2f}", f"{v.max_de:.2f} @ {v.worst_geometry}", v.verdict]
-        cols += ["white", "white", _VERDICT_COLOUR[v.verdict]]
+        cells += [f"{v.mean_de:.2f}", f"{v.max_de:.2f} @ {v.worst_geometry}", s.overall]
+        cols += ["white", "white", _VERDICT_COLOUR[s.overall]]
         rows.append(cells)
         colours.append(cols)
     table = ax.table(
@@ -208,9 +221,65 @@ def _table_page(summary: JobSummary, part: PartSummary) -> Figure:
     table.scale(1, 1.25)
     if len(part.samples) > TABLE_ROWS:
         fig.text(0.03, 0.02, f"newest {TABLE_ROWS} of {len(part.samples)} samples", fontsize=8, color="0.3")
-    bad = [s for s in reversed(samples) if s.verdict.verdict != "pass"][:REASON_LINES]
+    bad = [s for s in reversed(samples) if s.overall != "pass"][:REASON_LINES]
     for i, s in enumerate(bad):
         fig.text(0.03, 0.05 + 0.022 * (len(bad) - 1 - i), _why(s)[:200], fontsize=7, color="0.25")
+    return fig
+
+
+def _illuminant_page(summary: JobSummary, part: PartSummary) -> Figure:
+    """Illuminant rows of the newest samples: per test illuminant and geometry the metamerism index
+    against its limit, coloured pass / fail (one table row per sample and illuminant)."""
+    fig = plt.figure(figsize=_A4_LANDSCAPE)
+    limits = summary.illuminant_limits or {}
+    fig.suptitle(
+        f"{summary.job} / {part.part}: illuminant rows — metamerism index from D65 ({summary.formula})",
+        fontsize=13,
+    )
+    fig.text(
+        0.03,
+        0.91,
+        "limits: "
+        + ", ".join(f"{k}: MI <= {v:g}" for k, v in limits.items())
+        + "   (CIE special index: the sample corrected additively for its D65 difference)",
+        fontsize=9,
+        color="0.25",
+    )
+    samples = [s for s in part.samples if s.illuminants is not None][-TABLE_ROWS:]
+    ax = fig.add_axes((0.03, 0.05, 0.94, 0.83))
+    ax.axis("off")
+    if not samples:
+        ax.text(0.5, 0.5, "no sample with spectra judged under the illuminants", ha="center", fontsize=12)
+        return fig
+    names = list(dict.fromkeys(r.geometry for s in samples for r in s.illuminants.rows))  # type: ignore[union-attr]
+    rows, colours = [], []
+    for s in samples:
+        check = s.illuminants
+        assert check is not None  # noqa: S101 - filtered above
+        for ill in check.limits:
+            by = {r.geometry: r for r in check.rows if r.illuminant == ill}
+            cells, cols = [_label(s), ill], ["white", "white"]
+            for n in names:
+                r = by.get(n)
+                op = "" if r is None else ("<=" if r.verdict == "pass" else ">")
+                cells.append("—" if r is None else f"MI {r.index:.2f} {op} {r.limit:g} {r.verdict}")
+                cols.append("white" if r is None else _VERDICT_COLOUR[r.verdict])
+            worst = max(by.values(), key=lambda r: r.index)
+            verdict = "fail" if any(r.verdict == "fail" for r in by.values()) else "pass"
+            cells += [f"{worst.index:.2f} @ {worst.geometry}", verdict]
+            cols += ["white", _VERDICT_COLOUR[verdict]]
+            rows.append(cells)
+            colours.append(cols)
+    table = ax.table(
+        cellText=rows,
+        cellColours=colours,
+        colLabels=["sample", "illuminant", *names, "max MI", "verdict"],
+        loc="upper center",
+        cellLoc="center",
+    )
+    table.auto_set_font_size(False)
+    table.set_fontsize(7.5)
+    table.scale(1, 1.25)
     return fig
 
 
@@ -341,19 +410,23 @@ def _trend_page(summary: JobSummary, part: PartSummary) -> Figure:
 
 
 def part_figures(summary: JobSummary, part: PartSummary) -> list[Figure]:
-    """The pages of one judged part: verdict table, Lab vs angle with ΔE bars, SPC trend."""
-    return [_table_page(summary, part), _lab_and_bars_page(summary, part), _trend_page(summary, part)]
+    """The pages of one judged part: verdict table, (illuminant rows,) Lab vs angle with ΔE bars, SPC trend."""
+    return [build() for build in _part_pages(summary, part)]
+
+
+def _part_pages(summary: JobSummary, part: PartSummary) -> list[Callable[[], Figure]]:
+    pages: list[Callable[[], Figure]] = [lambda: _table_page(summary, part)]
+    if summary.illuminant_limits:
+        pages.append(lambda: _illuminant_page(summary, part))
+    pages += [lambda: _lab_and_bars_page(summary, part), lambda: _trend_page(summary, part)]
+    return pages
 
 
 def report_figures(summary: JobSummary) -> list[Callable[[], Figure]]:
-    """The report's pages as builders (cover, then three per judged part), in order."""
+    """The report's pages as builders (cover, then three per judged part, four with illuminant rows)."""
     pages: list[Callable[[], Figure]] = [lambda: _cover(summary)]
     for part in _judged(summary):
-        pages += [
-            lambda p=part: _table_page(summary, p),  # type: ignore[misc]
-            lambda p=part: _lab_and_bars_page(summary, p),  # type: ignore[misc]
-            lambda p=part: _trend_page(summary, p),  # type: ignore[misc]
-        ]
+        pages += _part_pages(summary, part)
     return pages
 
 
@@ -462,7 +535,7 @@ def csv_rows(summary: JobSummary) -> list[list[object]]:
                         g.dh,
                         g.de,
                         g.verdict,
-                        s.verdict.verdict,
+                        s.overall,
                         summary.formula,
                     ]
                 )

@@ -63,8 +63,10 @@ class QcSource(Protocol):
     @property
     def where(self) -> str: ...
     def jobs(self) -> list[JobEntry]: ...
-    def summary(self, job: str, formula: str) -> dict[str, Any]: ...
-    def report(self, job: str, formula: str, kind: str, path: Path) -> Path: ...
+    def summary(self, job: str, formula: str, illuminant_limits: str | None = None) -> dict[str, Any]: ...
+    def report(
+        self, job: str, formula: str, kind: str, path: Path, illuminant_limits: str | None = None
+    ) -> Path: ...
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]: ...
 
 
@@ -102,16 +104,18 @@ class LocalQc:
         with self._session() as session:
             return [JobEntry(j.job, tuple(j.parts)) for j in list_jobs(session)]
 
-    def _summary(self, job: str, formula: str) -> Any:
+    def _summary(self, job: str, formula: str, illuminant_limits: str | None = None) -> Any:
+        from station.qc.illuminant_rows import parse_illuminant_limits
         from station.qc.jobs import job_summary
 
+        limits = None if illuminant_limits is None else parse_illuminant_limits(illuminant_limits)
         with self._session() as session:
-            return job_summary(session, job, formula=formula)
+            return job_summary(session, job, formula=formula, illuminant_limits=limits)
 
-    def summary(self, job: str, formula: str) -> dict[str, Any]:
+    def summary(self, job: str, formula: str, illuminant_limits: str | None = None) -> dict[str, Any]:
         from station.ingest import gloss_of_measurements
 
-        data = self._summary(job, formula).to_dict()
+        data = self._summary(job, formula, illuminant_limits).to_dict()
         samples = [s for p in data["parts"] for s in p["samples"]]
         with self._session() as session:
             gloss = gloss_of_measurements(session, [s["measurement_id"] for s in samples])
@@ -120,10 +124,12 @@ class LocalQc:
             s["gloss"] = None if g is None else {k: getattr(g, k) for k in GLOSS_FIELDS}
         return data
 
-    def report(self, job: str, formula: str, kind: str, path: Path) -> Path:
+    def report(
+        self, job: str, formula: str, kind: str, path: Path, illuminant_limits: str | None = None
+    ) -> Path:
         from station.qc import report
 
-        summary = self._summary(job, formula)
+        summary = self._summary(job, formula, illuminant_limits)
         return report.write_pdf(summary, path) if kind == "pdf" else report.write_csv(summary, path)
 
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
@@ -163,8 +169,9 @@ class ServiceQc:
     def jobs(self) -> list[JobEntry]:
         return [JobEntry(j["job"], tuple(j["parts"])) for j in self._get("/qc/jobs").json()]
 
-    def summary(self, job: str, formula: str) -> dict[str, Any]:
-        return self._get(f"/qc/jobs/{quote(job, safe='')}/summary", formula=formula).json()
+    def summary(self, job: str, formula: str, illuminant_limits: str | None = None) -> dict[str, Any]:
+        extra = {} if illuminant_limits is None else {"illuminant_limits": illuminant_limits}
+        return self._get(f"/qc/jobs/{quote(job, safe='')}/summary", formula=formula, **extra).json()
 
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
         from ui.models.service import ServiceError
@@ -182,8 +189,11 @@ class ServiceQc:
             raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
         return r.json()
 
-    def report(self, job: str, formula: str, kind: str, path: Path) -> Path:
-        r = self._get(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula=formula)
+    def report(
+        self, job: str, formula: str, kind: str, path: Path, illuminant_limits: str | None = None
+    ) -> Path:
+        extra = {} if illuminant_limits is None or kind != "pdf" else {"illuminant_limits": illuminant_limits}
+        r = self._get(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula=formula, **extra)
         tmp = path.with_name(path.name + ".part")
         tmp.write_bytes(r.content)
         tmp.replace(path)
@@ -197,7 +207,13 @@ def verdict_rows(part: dict[str, Any]) -> list[VerdictRow]:
         qc = s["qc"]
         gloss = s.get("gloss") or {}
         g60 = gloss.get("gloss_60_gu")
+        booth = (qc.get("illuminants") or {}).get("rows", [])
         for g in qc["per_geometry"]:
+            verdict, reasons = str(g["verdict"]), list(g.get("reasons", []))
+            for r in (r for r in booth if r["geometry"] == g["geometry"]):
+                if r["verdict"] == "fail":  # an illuminant row over its limit fails the geometry
+                    verdict = "fail"
+                    reasons.append(str(r["text"]))
             rows.append(
                 VerdictRow(
                     int(s["measurement_id"]),
@@ -208,8 +224,8 @@ def verdict_rows(part: dict[str, Any]) -> list[VerdictRow]:
                     float(g["da"]),
                     float(g["db"]),
                     float(g["dE"]),
-                    str(g["verdict"]),
-                    "; ".join(g.get("reasons", [])),
+                    verdict,
+                    "; ".join(reasons),
                     str(qc["verdict"]),
                     None if g60 is None else float(g60),
                 )
@@ -225,6 +241,7 @@ class QcModel:
         self.jobs: list[JobEntry] = []
         self.summary: dict[str, Any] | None = None
         self.summary_key: tuple[str, str] | None = None
+        self.illuminant_limits: str | None = None
 
     def load_jobs(self) -> list[JobEntry]:
         """Read the jobs from the source (:class:`QcSourceError` when it cannot answer)."""
@@ -240,14 +257,24 @@ class QcModel:
         """The parts of *job* (empty when the job is unknown)."""
         return next((j.parts for j in self.jobs if j.job == job), ())
 
-    def judge(self, job: str, formula: str) -> dict[str, Any]:
-        """The summary of *job* in *formula* (every part); kept as :attr:`summary`."""
+    def judge(self, job: str, formula: str, illuminant_limits: str = "") -> dict[str, Any]:
+        """The summary of *job* in *formula* (every part); kept as :attr:`summary`.
+
+        *illuminant_limits* (``"A=1.0,F11=1.5"``; blank for none) adds the illuminant rows
+        (:mod:`station.qc.illuminant_rows`): a geometry whose row is over its limit fails, with the row
+        as its reason."""
         if formula not in FORMULAS:
             raise InputError("formula", " | ".join(FORMULAS), formula)
         if not job:
             raise InputError("job", "a job (Load jobs lists them)", job)
-        self.summary = self.source.summary(job, formula)
+        limits = illuminant_limits.strip() or None
+        if limits is not None:
+            from station.qc.illuminant_rows import parse_illuminant_limits
+
+            parse_illuminant_limits(limits)  # a bad entry is named before the source is asked
+        self.summary = self.source.summary(job, formula, limits)
         self.summary_key = (job, formula)
+        self.illuminant_limits = limits
         return self.summary
 
     def part(self, part: str) -> dict[str, Any] | None:
@@ -299,4 +326,4 @@ class QcModel:
         if self.summary_key is None:
             raise InputError("job", "a judged job (press Judge first)", None)
         job, formula = self.summary_key
-        return self.source.report(job, formula, kind, Path(path))
+        return self.source.report(job, formula, kind, Path(path), self.illuminant_limits)

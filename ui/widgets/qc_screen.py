@@ -4,7 +4,9 @@ The table shows each sample at each geometry (ΔL*, Δa*, Δb*, ΔE, pass / warn
 the gloss reading paired with the sample, and the reason), coloured by verdict; the line above names the standard and the counts. Data and reports come from
 :class:`ui.models.qc.QcModel` (the workstation's database or the service). Reports are written off the
 GUI thread. "Metamerism of selected" gives the metamerism index (D65 → A, F11) of the selected sample
-against the part's standard measurement.
+against the part's standard measurement. "Illuminant limits" (e.g. ``A=1.0,F11=1.5``) judges the samples
+under those illuminants too: a geometry whose metamerism index is over its illuminant's limit fails, the
+row named in its reason, and the PDF report gets the illuminant rows.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QHeaderView,
     QLabel,
+    QLineEdit,
     QPushButton,
     QTableWidget,
     QTableWidgetItem,
@@ -46,6 +49,8 @@ class QcScreen(QWidget):
         self.part = QComboBox()
         self.formula = QComboBox()
         self.formula.addItems(list(FORMULAS))
+        self.limits = QLineEdit()
+        self.limits.setPlaceholderText("e.g. A=1.0,F11=1.5 — metamerism index limits (spectra needed)")
         self.load_btn = QPushButton("Load jobs")
         self.judge_btn = QPushButton("Judge")
         self.pdf_btn = QPushButton("Export PDF…")
@@ -66,6 +71,7 @@ class QcScreen(QWidget):
         form.addRow("job", self.job)
         form.addRow("part", self.part)
         form.addRow("formula", self.formula)
+        form.addRow("illuminant limits", self.limits)
         buttons = QHBoxLayout()
         for b in (self.load_btn, self.judge_btn, self.pdf_btn, self.csv_btn, self.mi_btn):
             buttons.addWidget(b)
@@ -111,7 +117,7 @@ class QcScreen(QWidget):
     def judge(self) -> None:
         """Judge every sample of the chosen job against its part's standard and show the chosen part."""
         try:
-            self.model.judge(self.job.currentText(), self.formula.currentText())
+            self.model.judge(self.job.currentText(), self.formula.currentText(), self.limits.text())
         except StationError as exc:
             self.status.setText(f"error: {exc}")
             return

@@ -132,6 +132,16 @@ Formula = Annotated[
     Query(min_length=1, max_length=32, description="din6175-2 | cie2000 | cie94 | cie76 (default din6175-2)"),
 ]
 StandardWriter = Annotated[User, scoped(Scope.QC_STANDARDS_WRITE)]
+IlluminantLimits = Annotated[
+    str | None,
+    Query(
+        min_length=1,
+        max_length=200,
+        description="illuminant rows: ILLUMINANT=LIMIT pairs, the limit on the metamerism index from D65 "
+        "per geometry in the formula's ΔE units, e.g. A=1.0,F11=1.5 (samples and standard need spectra)",
+        examples=["A=1.0,F11=1.5"],
+    ),
+]
 
 
 @router.get("/jobs", response_model=list[JobOut])
@@ -161,9 +171,16 @@ def get_standard(session: SessionDep, _user: Reader, job: JobPath, part: Part) -
 
 
 @router.get("/jobs/{job}/summary", response_model=JobSummaryOut)
-def job_summary(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> JobSummaryOut:
-    """Every part of the job with its standard and each sample's pass / warn / fail per geometry, with the reason."""
-    return service.job_summary(session=session, job=job, formula=formula)
+def job_summary(
+    session: SessionDep,
+    _user: Reader,
+    job: JobPath,
+    formula: Formula = None,
+    illuminant_limits: IlluminantLimits = None,
+) -> JobSummaryOut:
+    """Every part of the job with its standard and each sample's pass / warn / fail per geometry, with the reason
+    (and its illuminant rows with ``illuminant_limits``)."""
+    return service.job_summary(session=session, job=job, formula=formula, illuminant_limits=illuminant_limits)
 
 
 @router.get(
@@ -171,9 +188,18 @@ def job_summary(session: SessionDep, _user: Reader, job: JobPath, formula: Formu
     response_class=Response,
     responses={200: {"content": {"application/pdf": {"schema": {"type": "string", "format": "binary"}}}}},
 )
-def report_pdf(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> Response:
-    """The job's QC report: verdict table per geometry, L*a*b* against angle, ΔE bars and trend, as PDF."""
-    body = service.report_pdf(session=session, job=job, formula=formula)  # a worker thread: a sync route
+def report_pdf(
+    session: SessionDep,
+    _user: Reader,
+    job: JobPath,
+    formula: Formula = None,
+    illuminant_limits: IlluminantLimits = None,
+) -> Response:
+    """The job's QC report: verdict table per geometry (illuminant rows with ``illuminant_limits``), L*a*b*
+    against angle, ΔE bars and trend, as PDF."""
+    body = service.report_pdf(  # a worker thread: a sync route
+        session=session, job=job, formula=formula, illuminant_limits=illuminant_limits
+    )
     return Response(
         body,
         media_type="application/pdf",

@@ -102,6 +102,15 @@ class SeamQaCreate(BaseModel):
     ] = [15.0, 25.0, 45.0, 75.0]
     hinge: Hinge = "in-plane"
     objective: Literal["rms", "minimax"] = "minimax"
+    illuminant: Annotated[
+        str,
+        Field(
+            min_length=1,
+            max_length=32,
+            description="judge the seam under this illuminant (e.g. A, F11): the measurements' Lab is taken "
+            "from their spectra under it; other than D65 both panels must be measurements with spectra",
+        ),
+    ] = "D65"
 
     @model_validator(mode="after")
     def _one_source_per_panel(self) -> SeamQaCreate:

@@ -127,6 +127,21 @@ class FormulateRequest(DesignSource):
         description="start only from one stored library's paints (GET /library/libraries); "
         "default every stored paint with a recipe",
     )
+    illuminants: (
+        Annotated[
+            list[Annotated[str, Field(min_length=1, max_length=32)]],
+            Field(
+                min_length=1,
+                max_length=8,
+                description="rank the candidate recipes by metamerism index (reference D65) under these "
+                'test illuminants, e.g. ["A", "F11"]',
+            ),
+        ]
+        | None
+    ) = None
+    candidates: Annotated[
+        StrictInt, Field(ge=1, le=12, description="with illuminants: starts tried to convergence at least")
+    ] = 4
 
 
 class FormulateOut(BaseModel):
@@ -153,6 +168,11 @@ class FormulateOut(BaseModel):
     nearest_achievable_lab: list[list[float]] | None = Field(
         default=None,
         description="when not formulable: Lab per angle of the best recipe (the nearest achievable paint)",
+    )
+    metamerism_ranking: dict[str, Any] | None = Field(
+        default=None,
+        description="with illuminants: the candidate recipes best first by metamerism index "
+        "(station.formulate.metamerism: rule, illuminants, per candidate the index per illuminant and geometry)",
     )
 
 

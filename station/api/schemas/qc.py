@@ -117,6 +117,19 @@ class CheckRequest(BaseModel):
     formula: Annotated[str, Field(min_length=1, max_length=32, examples=["din6175", "cie2000"])] | None = None
     de_limit: Annotated[float, Field(strict=True, gt=0.0, le=100.0, allow_inf_nan=False)] | None = None
     tolerance: dict[str, Any] | None = None
+    illuminant_limits: (
+        Annotated[
+            dict[Annotated[str, Field(min_length=1, max_length=32)], float],
+            Field(
+                min_length=1,
+                max_length=8,
+                description="illuminant rows: {test illuminant: limit on the metamerism index from D65, in "
+                'the formula\'s ΔE units}, e.g. {"A": 1.0}; both measurements need spectra',
+                examples=[{"A": 1.0, "F11": 1.5}],
+            ),
+        ]
+        | None
+    ) = None
 
     @model_validator(mode="after")
     def _set_or_options(self) -> CheckRequest:
@@ -140,8 +153,34 @@ class GeometryVerdictOut(BaseModel):
     reasons: list[str]
 
 
+class IlluminantRowOut(BaseModel):
+    """The metamerism index under one test illuminant at one geometry against its limit."""
+
+    illuminant: str
+    geometry: str
+    aspecular_deg: float
+    metamerism_index: float
+    limit: float
+    verdict: Verdict
+    text: str = Field(examples=["A 45as15: MI 0.80 <= 1.00 pass"])
+
+
+class IlluminantCheckOut(BaseModel):
+    """Illuminant rows of a sample (``station.qc.illuminant_rows``): fail when any row is above its limit."""
+
+    reference_illuminant: str
+    formula: str
+    index: str
+    limits: dict[str, float]
+    verdict: Verdict
+    reason: str
+    rows: list[IlluminantRowOut]
+
+
 class CheckResult(BaseModel):
-    """Overall verdict with the reason, per-geometry verdicts, mean and max ΔE and the worst geometry."""
+    """Overall verdict with the reason, per-geometry verdicts, mean and max ΔE and the worst geometry.
+
+    With illuminant rows, ``verdict`` is the worse of ``d65_verdict`` and ``illuminants.verdict``."""
 
     verdict: Verdict
     reason: str
@@ -153,6 +192,8 @@ class CheckResult(BaseModel):
     worst_geometry: str
     standard_measurement_id: int | None = None
     sample_measurement_id: int | None = None
+    d65_verdict: Verdict | None = None
+    illuminants: IlluminantCheckOut | None = None
 
 
 class StandardSet(BaseModel):
@@ -242,6 +283,7 @@ class JobSummaryOut(BaseModel):
     counts: dict[str, int]
     parts: list[PartSummaryOut]
     generated_at: dt.datetime
+    illuminant_limits: dict[str, float] | None = None
 
 
 class MetamerismRequest(BaseModel):

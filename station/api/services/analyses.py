@@ -28,12 +28,16 @@ from station.api.services.designs import to_design
 from station.errors import InputError
 from station.model import AspecularMeasurements
 from station.model.domain import ILLUMINATION_DEG
+from station.model.illuminants import illuminant_name
+from station.model.spectra import WAVELENGTHS
 
 if TYPE_CHECKING:
     from station.analysis.qa import SeamReport
 
 
-def _aspecular(session: Session, measurement_id: int) -> AspecularMeasurements:
+def _aspecular(
+    session: Session, measurement_id: int, illuminant: str = "D65", field: str = "measurement_id"
+) -> AspecularMeasurements:
     m = session.get(Measurement, measurement_id)
     if m is None:
         raise NotFoundError(f"measurement {measurement_id} not found")
@@ -44,6 +48,22 @@ def _aspecular(session: Session, measurement_id: int) -> AspecularMeasurements:
             f"measurement {m.id} ({m.illumination_deg:g}° illumination)",
         )
     order = np.argsort(m.geometries_deg)
+    if illuminant_name(illuminant) != "D65":  # Lab under another light: from the spectra
+        from station.analysis import measurements_under
+
+        if not m.spectra or [float(w) for w in (m.wavelengths_nm or [])] != WAVELENGTHS.tolist():
+            raise InputError(
+                field,
+                f"a measurement with spectra (400–700 nm, 10 nm) to judge under {illuminant_name(illuminant)}",
+                f"measurement {m.id} (no such spectra)",
+            )
+        return measurements_under(
+            [float(m.geometries_deg[i]) for i in order],
+            np.asarray(m.spectra, dtype=float)[order],
+            illuminant,
+            m.gloss_gu,
+            field=field,
+        )
     return AspecularMeasurements(
         angles_deg=tuple(float(m.geometries_deg[i]) for i in order),
         lab=np.asarray(m.lab, dtype=float)[order],
@@ -53,16 +73,27 @@ def _aspecular(session: Session, measurement_id: int) -> AspecularMeasurements:
     )
 
 
-def _panel(session: Session, measurement_id: int | None, body: DesignBody | None, side: str) -> Any:
+def _panel(
+    session: Session, measurement_id: int | None, body: DesignBody | None, side: str, illuminant: str = "D65"
+) -> Any:
     if measurement_id is not None:
-        return _aspecular(session, measurement_id)
+        return _aspecular(session, measurement_id, illuminant, f"measurement_{side}")
     if body is None:  # the schema asks for exactly one source per panel
         raise InputError(f"design_{side}", f"measurement_{side} or design_{side}")
     return to_design(body, f"design_{side}")
 
 
 #: Request fields passed to the ``station.analysis`` function of the same parameter name, as validated.
-SEAM_OPTIONS = ("beta_deg", "lights_deg", "aspecular_deg", "tolerance", "method", "hinge", "objective")
+SEAM_OPTIONS = (
+    "beta_deg",
+    "lights_deg",
+    "aspecular_deg",
+    "tolerance",
+    "method",
+    "hinge",
+    "objective",
+    "illuminant",
+)
 INDEX_OPTIONS = ("epsilon", "method", "hinge", "direction", "beta_max_deg")
 TROMPE_OPTIONS = ("beta_deg", "objective", "at", "subset", "hinge", "method", "epsilon", "allow_face_darker")
 SWEEP_OPTIONS = ("hinge", "method", "epsilon")
@@ -80,8 +111,8 @@ def _seam_report(session: Session, request: SeamQaCreate) -> SeamReport:
     """Seam QA of the request's two panels (a stored measurement is fitted, eqs 3.3.x) at β."""
     from station.analysis import seam_qa as run_seam_qa
 
-    a = _panel(session, request.measurement_a, request.design_a, "a")
-    b = _panel(session, request.measurement_b, request.design_b, "b")
+    a = _panel(session, request.measurement_a, request.design_a, "a", request.illuminant)
+    b = _panel(session, request.measurement_b, request.design_b, "b", request.illuminant)
     return run_seam_qa(a, b, **_options(request, SEAM_OPTIONS))
 
 

@@ -213,8 +213,10 @@ def stored_libraries(*, session: Session, cache: LibraryCache) -> list[dict[str,
 
 
 def formulate(*, session: Session, cache: LibraryCache, request: FormulateRequest) -> dict[str, Any]:
-    """Recipe for the target from the matches' recipes (``formulate_from_library``); nothing is stored."""
+    """Recipe for the target from the matches' recipes (``formulate_from_library``); nothing is stored.
+    With ``illuminants`` the candidate recipes ranked by metamerism index (``station.formulate.metamerism``)."""
     from station.formulate.formulation import formulate_from_library
+    from station.formulate.metamerism import chosen_illuminants, rank_formulation
 
     lab, design = _target(session, request)
     gloss = (
@@ -237,6 +239,7 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
             raise InputError("library", f"a stored library with recipes: {held}", request.library)
         lib, index, rows = lib.subset(keep), None, rows[keep]
     type_rows(lib, request.types, field="types")  # 422 naming ``types`` before formulating
+    illuminants = () if request.illuminants is None else chosen_illuminants(request.illuminants)
     result, matches = formulate_from_library(
         lab,
         lib,
@@ -245,8 +248,11 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
         gloss_gu=gloss,
         tolerance=request.tolerance,
         types=request.types,
+        candidates=request.candidates if illuminants else 0,
     )
     out = result.to_dict()
+    if illuminants:
+        out["metamerism_ranking"] = rank_formulation(result, illuminants).to_dict()
     out["matches"] = [
         {
             "code": m.code,

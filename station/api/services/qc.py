@@ -41,6 +41,7 @@ from station.model.domain import QC_FORMULA
 from station.model.tolerance import ToleranceSet
 from station.qc import jobs
 from station.qc.check import check_pair, formula_name
+from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_illuminant_limits
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading, reading_from_measurement
 from station.qc.repeats import summarise
@@ -151,8 +152,11 @@ def check(*, session: Session, request: CheckRequest) -> CheckResult:
     smp = _reading(session, request.sample, "sample")
     tol = _tolerance(request, std.aspecular_deg)
     verdict = check_pair(std, smp, tol, request.formula if tol is None else None)
+    booth = None
+    if request.illuminant_limits is not None:
+        booth = check_illuminants(std, smp, request.illuminant_limits, verdict.formula)
     return CheckResult.model_validate(
-        verdict.to_dict()
+        PairVerdict(verdict, booth).to_dict()
         | {
             "standard_measurement_id": request.standard.measurement_id,
             "sample_measurement_id": request.sample.measurement_id,
@@ -201,14 +205,19 @@ def list_jobs(*, session: Session, contains: str | None) -> list[JobOut]:
     return [JobOut.model_validate(j.to_dict()) for j in jobs.list_jobs(session, contains)]
 
 
-def _summary(session: Session, job: str, formula: str | None) -> jobs.JobSummary:
-    return jobs.job_summary(session, job, formula=formula)
+def _summary(
+    session: Session, job: str, formula: str | None, illuminant_limits: str | None = None
+) -> jobs.JobSummary:
+    limits = None if illuminant_limits is None else parse_illuminant_limits(illuminant_limits)
+    return jobs.job_summary(session, job, formula=formula, illuminant_limits=limits)
 
 
-def job_summary(*, session: Session, job: str, formula: str | None) -> JobSummaryOut:
+def job_summary(
+    *, session: Session, job: str, formula: str | None, illuminant_limits: str | None = None
+) -> JobSummaryOut:
     """Every part's standard and each sample's verdict (``station.qc.jobs.job_summary``), with each
     sample's paired gloss reading."""
-    data = _summary(session, job, formula).to_dict()
+    data = _summary(session, job, formula, illuminant_limits).to_dict()
     samples = [s for p in data["parts"] for s in p["samples"]]
     gloss = gloss_of_measurements(session, [s["measurement_id"] for s in samples])
     for s in samples:
@@ -217,11 +226,14 @@ def job_summary(*, session: Session, job: str, formula: str | None) -> JobSummar
     return JobSummaryOut.model_validate(data)
 
 
-def report_pdf(*, session: Session, job: str, formula: str | None) -> bytes:
-    """The job's QC report as PDF bytes (``station.qc.report.pdf_bytes``)."""
+def report_pdf(
+    *, session: Session, job: str, formula: str | None, illuminant_limits: str | None = None
+) -> bytes:
+    """The job's QC report as PDF bytes (``station.qc.report.pdf_bytes``), with illuminant rows when
+    *illuminant_limits* (``"A=1.0,F11=1.5"``) is given."""
     from station.qc import report  # matplotlib loads here, not with the service
 
-    return report.pdf_bytes(_summary(session, job, formula))
+    return report.pdf_bytes(_summary(session, job, formula, illuminant_limits))
 
 
 def report_csv(*, session: Session, job: str, formula: str | None) -> str:
@@ -231,7 +243,8 @@ def report_csv(*, session: Session, job: str, formula: str | None) -> str:
     return report.csv_text(_summary(session, job, formula))
 
 
-def _stored(session: Session, measurement_id: int, field: str) -> Reading:
+def stored_reading(session: Session, measurement_id: int, field: str) -> Reading:
+    """The stored measurement *measurement_id* as a QC reading; 404 naming *field* when there is none."""
     m = session.get(Measurement, measurement_id)
     if m is None:
         raise NotFoundError(f"{field}: measurement {measurement_id} not found")
@@ -240,8 +253,8 @@ def _stored(session: Session, measurement_id: int, field: str) -> Reading:
 
 def metamerism_of(*, session: Session, request: MetamerismRequest) -> MetamerismOut:
     """Metamerism index D65 → A, F11 per geometry of two stored measurements (``station.qc.metamerism``)."""
-    std = _stored(session, request.standard_measurement_id, "standard_measurement_id")
-    smp = _stored(session, request.sample_measurement_id, "sample_measurement_id")
+    std = stored_reading(session, request.standard_measurement_id, "standard_measurement_id")
+    smp = stored_reading(session, request.sample_measurement_id, "sample_measurement_id")
     return MetamerismOut.model_validate(metamerism(std, smp, request.formula).to_dict())
 
 
@@ -250,7 +263,7 @@ def repeats_of(*, session: Session, request: RepeatsRequest) -> RepeatsOut:
     ids = request.measurement_ids
     if len(set(ids)) != len(ids):
         raise InputError("measurement_ids", "distinct measurement ids", ids)
-    readings = [_stored(session, mid, f"measurement_ids[{i}]") for i, mid in enumerate(ids)]
+    readings = [stored_reading(session, mid, f"measurement_ids[{i}]") for i, mid in enumerate(ids)]
     out = summarise(readings).to_dict()
     for row in out["readings"]:
         row["measurement_id"] = ids[row["index"]]
