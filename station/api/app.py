@@ -67,6 +67,11 @@ TAGS = [
         "description": "colour QC against standards: measurements with gloss, sample-versus-standard "
         "verdicts, job summaries, reports (QA)",
     },
+    {
+        "name": "booth",
+        "description": "virtual light booth: standard against sample under D65, A, F11, TL84, LED and "
+        "a lab's own lamps, with the CIE special metamerism index",
+    },
 ]
 
 

@@ -26,7 +26,10 @@ def test_hex_ascii_by_hand() -> None:
 def test_every_exchange_is_logged_as_hex_and_decoded(caplog: pytest.LogCaptureFixture) -> None:
     caplog.set_level(logging.DEBUG, logger="station.drivers")
     pairs = [(b"\r", OK), (b"ID\r", ID_REPLY)]
-    with scripted_pty(pairs) as (path, _), MA6Spectro(SerialTransport(path), timeout_s=0.25, retries=1).open() as inst:
+    with (
+        scripted_pty(pairs) as (path, _),
+        MA6Spectro(SerialTransport(path), timeout_s=0.25, retries=1).open() as inst,
+    ):
         assert inst.info is not None and inst.info.serial == "600123"
         assert [sent for sent, _ in inst.protocol.log] == [b"ID\r"]
     family = [r.getMessage() for r in caplog.records if r.name == "station.drivers.ma6"]
