@@ -43,6 +43,7 @@ from station.analysis.geometry import (
 )
 from station.analysis.shading import Environment, Exposure, environment_colour, point_colour
 from station.model.difference import delta_e
+from station.model.domain import DELTA_E_COMPUTED
 from station.model.domain import JND_CIE76 as DOMAIN_JND_CIE76
 from station.model.shading import aspecular_deg
 
@@ -52,7 +53,7 @@ if TYPE_CHECKING:
 #: ε of the thesis: one JND, in ΔE*ab.
 JND_CIE76 = DOMAIN_JND_CIE76
 #: ΔE formulas accepted (station.model.difference.delta_e).
-DE_METHODS = ("cie76", "cie94", "cie2000", "din6175")
+DE_METHODS = DELTA_E_COMPUTED
 #: Brent's absolute tolerance on β (degrees); the stated resolution of β_min is 1e-6°.
 BRENT_XTOL_DEG = 1e-7
 RESOLUTION_DEG = 1e-6

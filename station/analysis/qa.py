@@ -23,11 +23,9 @@ import numpy as np
 from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import Hinge, SeamGeometry
 from station.analysis.index import JND_CIE76, IndexResult, SeamModel, goniogeometric_index
+from station.analysis.options import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG
 from station.analysis.trompe import Objective, TrompeResult, inverse_trompe_loeil, paint_to_dict
 
-#: Default geometries: lights 30/45/60°, aspecular 15–75° (the range a seam is usually judged over).
-DEFAULT_LIGHTS_DEG = (30.0, 45.0, 60.0)
-DEFAULT_ASPECULAR_DEG = (15.0, 25.0, 45.0, 75.0)
 #: Travel / lightness flop beyond which a paint counts as "high travel" in the advice.
 HIGH_TRAVEL_DELTA_L = 30.0
 

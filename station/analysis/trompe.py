@@ -24,7 +24,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,12 +34,11 @@ from station.analysis.errors import AnalysisError, AnalysisInputError
 from station.analysis.gamut import GamutReport, check_paintable, rgb_bounds
 from station.analysis.geometry import Hinge, SeamGeometry, check_polar
 from station.analysis.index import JND_CIE76, SeamModel
+from station.analysis.options import OBJECTIVES, Objective
 from station.analysis.shading import Environment, Exposure
 from station.model.colorimetry import lab_to_linear_srgb
 from station.model.domain import FACE_ANGLE_DEG, LAB_RANGES, TRAVEL_MAX_DEG
 
-Objective = Literal["single", "rms", "minimax", "per_geometry"]
-OBJECTIVES = ("single", "rms", "minimax", "per_geometry")
 PARAMS = ("face_L", "face_a", "face_b", "flop_L", "flop_a", "flop_b", "travel_deg")
 #: Named parameter subsets.
 SUBSETS: dict[str, tuple[str, ...]] = {

@@ -13,13 +13,16 @@ import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from station.cli._common import add_json_flag
 from station.errors import InputError
-from station.model.tolerance import ToleranceSet
 
-LoadTolerance = Callable[[str], ToleranceSet]
+if TYPE_CHECKING:
+    from station.model.tolerance import ToleranceSet
+
+    LoadTolerance = Callable[[str], ToleranceSet]
+
 FORMULA_HELP = "din6175-2 | cie2000 | cie94 | cie76 (default din6175-2, or the tolerance file's)"
 
 

@@ -18,16 +18,15 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from station.analysis import goniogeometric_index
-from station.analysis.geometry import Hinge
-from station.analysis.index import DE_METHODS, JND_CIE76
-from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, seam_qa
-from station.analysis.trompe import OBJECTIVES, inverse_trompe_loeil
+from station.analysis.options import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, OBJECTIVES
 from station.cli._common import add_json_flag, design_from_args, parse_floats
 from station.errors import InputError
-from station.model.illuminants import illuminant_name
+from station.model.domain import DELTA_E_COMPUTED, JND_CIE76
+
+if TYPE_CHECKING:
+    from station.analysis.geometry import Hinge
 
 
 def _hinge(text: str) -> Hinge:
@@ -50,7 +49,7 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--epsilon", type=float, default=JND_CIE76, help="ΔE threshold (default 2.3 = 1 JND ΔE*ab)"
     )
-    p.add_argument("--de", choices=DE_METHODS, default="cie76", help="colour-difference formula")
+    p.add_argument("--de", choices=DELTA_E_COMPUTED, default="cie76", help="colour-difference formula")
     p.add_argument("--hinge", default="in-plane", help="in-plane | out-of-plane | hinge azimuth in degrees")
 
 
@@ -71,6 +70,8 @@ def _paint_and_geometry(
 
 
 def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
+    from station.analysis import goniogeometric_index
+
     paint, lights, views = _paint_and_geometry(args, "light", "view")
     r = goniogeometric_index(
         paint,
@@ -85,6 +86,8 @@ def _gg_index(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _trompe(args: argparse.Namespace) -> dict[str, Any]:
+    from station.analysis.trompe import inverse_trompe_loeil
+
     paint, lights, views = _paint_and_geometry(args, "lights", "views")
     r = inverse_trompe_loeil(
         paint,
@@ -117,6 +120,7 @@ def load_panel(path: str, illuminant: str = "D65") -> Any:
     from station.model import AspecularMeasurements
     from station.model.design_io import design_from_dict
     from station.model.domain import ILLUMINATION_DEG, parse_geometry
+    from station.model.illuminants import illuminant_name
 
     try:
         data = json.loads(Path(path).read_text())
@@ -151,6 +155,7 @@ def _panel_under(data: dict[str, Any], path: str, illuminant: str) -> Any:
     """A measurement file's panel with its Lab from its spectra under *illuminant* (see :func:`load_panel`)."""
     from station.analysis import measurements_under
     from station.model.domain import ILLUMINATION_DEG, parse_geometry
+    from station.model.illuminants import illuminant_name
     from station.model.spectra import WAVELENGTHS
 
     name = illuminant_name(illuminant)
@@ -181,6 +186,8 @@ def _panel_under(data: dict[str, Any], path: str, illuminant: str) -> Any:
 
 
 def _seam(args: argparse.Namespace) -> dict[str, Any]:
+    from station.analysis.qa import seam_qa
+
     a = load_panel(args.panel_a, args.illuminant)
     b = load_panel(args.panel_b, args.illuminant)
     r = seam_qa(

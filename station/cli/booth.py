@@ -118,9 +118,7 @@ def _print_table(result: dict[str, Any], out: str | None) -> None:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``station booth``."""
-    from station.model.booth import BOOTH_SHAPES
-    from station.model.illuminants import BOOTH_ILLUMINANTS
-    from station.qc.booth import DEFAULT_BOOTH_ILLUMINANTS
+    from station.model.domain import BOOTH_ILLUMINANTS, BOOTH_SHAPES, DEFAULT_BOOTH_ILLUMINANTS
 
     p = subparsers.add_parser(
         "booth", help="virtual light booth: standard against sample under booth illuminants, from spectra"

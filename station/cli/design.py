@@ -16,33 +16,26 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from station.cli._common import add_design_args, add_json_flag, design_from_args, parse_floats
-from station.design.images import load_image, save_png
-from station.design.moodboard import eyedrop_design
-from station.design.palette import booklet, swatch
-from station.design.scene import (
-    BUILTIN_SCENES,
-    EnvironmentScene,
-    aspecular_and_lambert,
-    builtin_scene,
-    environment_sphere_scene,
-    shade,
-    shade_environment,
-    sphere_scene,
-    srgb_encode,
-)
-from station.design.sketch import GLOSS_MODES, fit_environment, fit_point_light
-from station.design.variations import CATEGORIES, variations
+from station.design.options import CATEGORIES, GLOSS_MODES, SCENE_NAMES
 from station.errors import InputError
-from station.model import FaceFlopTravelGloss
-from station.model.design_io import design_to_dict
 
-#: The thesis's default starting colour for a sketch (§3.7.1: "The system's default is silver").
-DEFAULT_SILVER = FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")
+if TYPE_CHECKING:
+    from station.design.scene import EnvironmentScene
+    from station.model import FaceFlopTravelGloss
+
+
+def _default_silver() -> FaceFlopTravelGloss:
+    """The thesis's default starting colour for a sketch (§3.7.1: "The system's default is silver")."""
+    from station.model import FaceFlopTravelGloss
+
+    return FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")
+
+
 #: Directional lights an environment map is cut into by default (the studio environment's count).
 DEFAULT_LIGHTS = 16
 STUDIO = "studio"
@@ -57,6 +50,7 @@ def _hdr_lights(path: Path, count: int) -> tuple[np.ndarray, np.ndarray]:
     point of a white diffuse sphere in the view reads 1 (the exposure: the map's absolute scale is
     arbitrary).
     """
+    from station.design.scene import sphere_scene
     from station.render.cubemap import equirect_directions, equirect_solid_angles
     from station.render.environment import load_environment
 
@@ -85,6 +79,13 @@ def _hdr_lights(path: Path, count: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _environment_scene(spec: str, size: int, lights: int) -> EnvironmentScene:
     """The sphere of *size* pixels under the studio lights or under the lights of an HDR file."""
+    from station.design.scene import (
+        EnvironmentScene,
+        aspecular_and_lambert,
+        environment_sphere_scene,
+        sphere_scene,
+    )
+
     if not 1 <= lights <= 512:
         raise InputError("lights", "1 <= lights <= 512", lights)
     if spec == STUDIO:
@@ -104,11 +105,16 @@ def _xy(text: str, field: str) -> tuple[float, float]:
 
 
 def _variations(args: argparse.Namespace) -> dict[str, Any]:
+    from station.design.variations import variations
+
     ring = variations(design_from_args(args), args.degree, args.category)
     return ring.to_dict()
 
 
 def _eyedrop(args: argparse.Namespace) -> dict[str, Any]:
+    from station.design.images import load_image
+    from station.design.moodboard import eyedrop_design
+
     img = load_image(args.image)
     face, flop = _xy(args.face, "face"), _xy(args.flop, "flop")
     r = eyedrop_design(
@@ -125,7 +131,11 @@ def _eyedrop(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _render(args: argparse.Namespace) -> dict[str, Any]:
-    design = design_from_args(args) if (args.design or args.face) else DEFAULT_SILVER
+    from station.design.images import save_png
+    from station.design.scene import builtin_scene, shade, shade_environment, srgb_encode
+    from station.model.design_io import design_to_dict
+
+    design = design_from_args(args) if (args.design or args.face) else _default_silver()
     if args.environment is not None:
         if args.scene is not None:
             raise InputError(
@@ -141,6 +151,9 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _palette(args: argparse.Namespace) -> dict[str, Any]:
+    from station.design.images import save_png
+    from station.design.palette import booklet, swatch
+
     design = design_from_args(args)
     out = Path(args.out)
     sw = swatch(design)
@@ -150,6 +163,10 @@ def _palette(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _sketch_fit(args: argparse.Namespace) -> dict[str, Any]:
+    from station.design.images import load_image
+    from station.design.scene import builtin_scene, shade, srgb_encode
+    from station.design.sketch import fit_point_light
+
     art = load_image(args.art).pixels
     h, w = art.shape[:2]
     if h != w:
@@ -165,7 +182,9 @@ def _sketch_fit(args: argparse.Namespace) -> dict[str, Any]:
             "gloss_gu", "only with --environment (a point-lit fit reads --gloss-mode)", args.gloss_gu
         )
     scene = builtin_scene(args.scene or "sphere-point", h)
-    initial = load_image(args.initial).pixels if args.initial else srgb_encode(shade(scene, DEFAULT_SILVER))
+    initial = (
+        load_image(args.initial).pixels if args.initial else srgb_encode(shade(scene, _default_silver()))
+    )
     fit = fit_point_light(scene, art, initial, gloss=args.gloss_mode or "highlight")
     return fit.to_dict()
 
@@ -174,7 +193,9 @@ def _environment_fit(args: argparse.Namespace, art: np.ndarray) -> dict[str, Any
     """The environment-lit fit (§3.7.5): basis images of the sphere in the environment, then NNLS."""
     import time
 
-    from station.design.scene import lobe_basis
+    from station.design.images import load_image
+    from station.design.scene import lobe_basis, shade_environment, srgb_encode
+    from station.design.sketch import fit_environment
     from station.model.domain import DEFAULT_GLOSS_GU, check_gloss
 
     for name, value in (("scene", args.scene), ("gloss_mode", args.gloss_mode)):
@@ -190,7 +211,7 @@ def _environment_fit(args: argparse.Namespace, art: np.ndarray) -> dict[str, Any
     initial = (
         load_image(args.initial).pixels
         if args.initial
-        else srgb_encode(shade_environment(env, DEFAULT_SILVER))
+        else srgb_encode(shade_environment(env, _default_silver()))
     )
     fit = fit_environment(basis, art, initial, gloss_gu=gloss)
     out = fit.to_dict()
@@ -231,7 +252,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("render", help="render a design (default silver) in a built-in scene to PNG")
     add_design_args(p)
-    p.add_argument("--scene", choices=tuple(BUILTIN_SCENES), help="point-lit scene (default sphere-point)")
+    p.add_argument("--scene", choices=SCENE_NAMES, help="point-lit scene (default sphere-point)")
     _add_environment_args(p)
     p.add_argument("--size", type=int, default=128, help="image size in pixels (square)")
     p.add_argument("--out", required=True, help="PNG to write")
@@ -255,7 +276,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "the basis images are built (the thesis's search took several minutes)."
         ),
     )
-    p.add_argument("--scene", choices=tuple(BUILTIN_SCENES), help="point-lit scene (default sphere-point)")
+    p.add_argument("--scene", choices=SCENE_NAMES, help="point-lit scene (default sphere-point)")
     p.add_argument("--art", required=True, help="the artist's image (PNG/JPEG, the scene's size)")
     p.add_argument("--initial", help="the image the artist started from (default: the scene in silver)")
     p.add_argument(

@@ -20,23 +20,9 @@ import numpy as np
 
 from station.cli._common import add_design_args, add_json_flag, design_from_args, parse_floats, parse_lab_list
 from station.errors import InputError
-from station.model import ANGLES_3, AspecularMeasurements, fit_fftg
-from station.model.design_io import design_to_dict, load_design
-from station.model.difference import DELTA_E_METHODS, delta_e
-from station.model.domain import ANGLES_5, format_angle
-from station.model.gloss import (
-    PHONG_MAX,
-    PHONG_MIN,
-    STANDARD_INDEX,
-    SpecularLobe,
-    coat_from_gloss,
-    coat_readings,
-    fresnel_unpolarised,
-    gloss_from_lobe,
-    lobe_from_gloss,
-    simulate_gloss_meter,
-)
-from station.model.indices import library_indices
+from station.model import ANGLES_3
+from station.model.domain import ANGLES_5, DELTA_E_METHOD_NAMES, format_angle
+from station.model.gloss import PHONG_MAX, PHONG_MIN, STANDARD_INDEX
 
 STANDARD_EVAL_ANGLES = ",".join(format_angle(a) for a in ANGLES_5)
 
@@ -46,6 +32,9 @@ def _angles(text: str) -> list[float]:
 
 
 def _from_angles(args: argparse.Namespace) -> dict[str, Any]:
+    from station.model import AspecularMeasurements, fit_fftg
+    from station.model.design_io import design_to_dict
+
     angles = _angles(args.angles)
     lab = parse_lab_list(args.lab)
     if len(lab) != len(angles):
@@ -70,6 +59,10 @@ def _eval(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _indices(args: argparse.Namespace) -> dict[str, Any]:
+    from station.model import AspecularMeasurements, fit_fftg
+    from station.model.design_io import load_design
+    from station.model.indices import library_indices
+
     angles = _angles(args.angles)
     warnings: list[str] = []
     if args.design:
@@ -97,6 +90,16 @@ def _indices(args: argparse.Namespace) -> dict[str, Any]:
 
 def _gloss(args: argparse.Namespace) -> dict[str, Any]:
     """60° GU ⇄ render lobe, plus the meter's readings of the clear coat of that gloss."""
+    from station.model.gloss import (
+        SpecularLobe,
+        coat_from_gloss,
+        coat_readings,
+        fresnel_unpolarised,
+        gloss_from_lobe,
+        lobe_from_gloss,
+        simulate_gloss_meter,
+    )
+
     if args.lobe_exponent is not None:
         n = args.lobe_exponent
         if not (PHONG_MIN <= n <= PHONG_MAX):
@@ -132,6 +135,8 @@ def _gloss(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _de(args: argparse.Namespace) -> dict[str, Any]:
+    from station.model.difference import delta_e
+
     ref = np.asarray(parse_lab_list(args.reference, "reference"))
     smp = np.asarray(parse_lab_list(args.sample, "sample"))
     if ref.shape != smp.shape:
@@ -154,6 +159,7 @@ def _de(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _plot(args: argparse.Namespace) -> dict[str, Any]:
+    from station.model.design_io import load_design
     from station.model.plots import plot_designs
 
     designs = []
@@ -217,7 +223,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = sub.add_parser("de", help="colour difference per angle between two Lab lists")
     p.add_argument("--reference", required=True, help='"L,a,b;L,a,b;…"')
     p.add_argument("--sample", required=True, help='"L,a,b;L,a,b;…"')
-    p.add_argument("--de", default="cie2000", choices=sorted(DELTA_E_METHODS))
+    p.add_argument("--de", default="cie2000", choices=sorted(DELTA_E_METHOD_NAMES))
     p.add_argument("--angles", help="aspecular angle of each triple, degrees (required by din6175)")
     add_json_flag(p)
     p.set_defaults(handler=_de)

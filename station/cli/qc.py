@@ -34,7 +34,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from station.cli._common import add_json_flag, parse_floats, parse_lab_list
 from station.errors import InputError
@@ -44,9 +44,12 @@ from station.model.domain import (
     QC_DE_LIMIT,
     QC_FORMULA,
     QC_WARN_FRACTION,
+    TOLERANCE_AGGREGATIONS,
     format_angle,
 )
-from station.model.tolerance import AGGREGATIONS, ToleranceSet, judge
+
+if TYPE_CHECKING:
+    from station.model.tolerance import ToleranceSet
 
 _COMPONENT_FLAGS = ("dl", "da", "db", "dc", "dh")
 _SET_FLAGS = ("formula", "limit", "warn", "aggregate", "mean_limit", "lc", *_COMPONENT_FLAGS)
@@ -65,6 +68,8 @@ def _lc(text: str) -> tuple[float, float]:
 
 def _load_tolerance(name: str) -> ToleranceSet:
     """A tolerance set from its JSON file (``station qc tolerance --json``)."""
+    from station.model.tolerance import ToleranceSet
+
     path = Path(name)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
@@ -76,6 +81,8 @@ def _load_tolerance(name: str) -> ToleranceSet:
 
 
 def _tolerance(args: argparse.Namespace, angles: list[float]) -> ToleranceSet:
+    from station.model.tolerance import ToleranceSet
+
     if args.tolerance:
         given = [f for f in _SET_FLAGS if getattr(args, f) is not None]
         if given:
@@ -102,6 +109,8 @@ def _angles(args: argparse.Namespace) -> list[float]:
 
 
 def _verdict(args: argparse.Namespace) -> dict[str, Any] | None:
+    from station.model.tolerance import judge
+
     std = parse_lab_list(args.standard, "standard")
     smp = parse_lab_list(args.sample, "sample")
     angles = _angles(args)
@@ -134,7 +143,9 @@ def _add_set_args(p: argparse.ArgumentParser) -> None:
         "--warn", type=float, help=f"warn band as a fraction of each limit (default {QC_WARN_FRACTION:g})"
     )
     p.add_argument(
-        "--aggregate", choices=AGGREGATIONS, help=f"rule over the geometries (default {QC_AGGREGATION})"
+        "--aggregate",
+        choices=TOLERANCE_AGGREGATIONS,
+        help=f"rule over the geometries (default {QC_AGGREGATION})",
     )
     p.add_argument(
         "--mean-limit", type=float, help="limit on the mean ΔE under --aggregate mean (default --limit)"

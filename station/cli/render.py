@@ -50,8 +50,8 @@ EPILOG = (
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``station render``."""
+    from station.render.options import CURVES
     from station.render.shapes import SHAPES
-    from station.render.tonemap import CURVES
 
     p = subparsers.add_parser(
         "render",

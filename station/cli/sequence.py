@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from station.cli._common import add_json_flag
 from station.errors import InputError
-from station.model import FaceFlopTravelGloss
 from station.model.domain import ANGLES_3
+
+if TYPE_CHECKING:
+    from station.model import FaceFlopTravelGloss
 
 
 def _principal(text: str) -> FaceFlopTravelGloss:

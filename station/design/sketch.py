@@ -54,6 +54,7 @@ from scipy.optimize import least_squares, nnls
 
 from station.design.errors import DesignInputError, SketchFitError
 from station.design.moodboard import contrast_gloss
+from station.design.options import GLOSS_MODES
 from station.design.scene import LobeBasis, Scene, shade, srgb_decode, srgb_encode
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
@@ -70,8 +71,6 @@ MIN_PIXELS = 30
 TRAVEL_SWEEP = tuple(float(t) for t in range(16, 181))
 #: Below this ΔE*ab between face and flop the result is a solid.
 SOLID_DE = 0.5
-#: Gloss modes of :func:`fit_point_light` (module docstring).
-GLOSS_MODES = ("highlight", "contrast", "default", "fit")
 #: Gloss values (GU) tried by ``gloss="fit"``.
 GLOSS_CANDIDATES: tuple[float, ...] = (
     0.0,

@@ -26,11 +26,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
 from station.design.errors import DesignInputError
+from station.design.options import CATEGORIES, Category
 from station.model import FaceFlopTravelGloss, ModelError
 from station.model.design_io import design_to_dict
 from station.model.domain import (
@@ -44,8 +45,6 @@ from station.model.domain import (
 )
 from station.model.errors import ModelInputError
 
-Category = Literal["face", "flop", "travel-gloss"]
-CATEGORIES: tuple[str, ...] = ("face", "flop", "travel-gloss")
 COLOUR_RING: tuple[str, ...] = ("lighter", "darker", "more chroma", "less chroma", "hue +", "hue -")
 TRAVEL_GLOSS_RING: tuple[str, ...] = ("more travel", "less travel", "more gloss", "less gloss")
 RING: dict[str, tuple[str, ...]] = {

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.model.colorimetry import OBSERVER_10, lab_to_linear_srgb, lab_to_xyz, xyz_to_lab
 from station.model.display import encode_display
-from station.model.domain import REFLECTANCE_MAX, check_ranged
+from station.model.domain import BOOTH_SHAPES, REFLECTANCE_MAX, check_ranged
 from station.model.errors import ModelInputError
 from station.model.fit import FitResult, fit_fftg
 from station.model.illuminants import REFERENCE_ILLUMINANT, Illuminant, illuminant_sd, observer_cie_name
@@ -47,9 +47,6 @@ __all__ = [
     "metameric_black",
     "metameric_pair",
 ]
-
-#: What a booth shows standard and sample on: two flat panels side by side, a bumper/fender seam, a car.
-BOOTH_SHAPES: tuple[str, ...] = ("panels", "seam", "car")
 
 
 def check_booth_shape(shape: str, field: str = "shape") -> str:

@@ -325,7 +325,8 @@ def _audi2000(a: NDArray, b: NDArray, _alpha: NDArray | None, _g: DinFactors) ->
     raise audi2000_unavailable()
 
 
-#: Formula name → ``fn(lab_ref, lab_sample, aspecular_deg, din_factors)`` (read-only).
+#: Formula name → ``fn(lab_ref, lab_sample, aspecular_deg, din_factors)`` (read-only); the names are
+#: :data:`station.model.domain.DELTA_E_METHOD_NAMES` (tests/test_vocabulary.py ties them).
 DELTA_E_METHODS: Mapping[str, Callable[[NDArray, NDArray, NDArray | None, DinFactors], NDArray]] = (
     MappingProxyType(
         {

@@ -263,6 +263,24 @@ def parse_geometry(name: str, field: str = "geometry") -> tuple[float, float]:
 
 # ------------------------------------------------------------------------------ tolerances
 
+#: The light booth's illuminants, in the order a booth's switch offers them (TL84 is F11's lamp; a user
+#: SPD file adds its own), the reference of the product's Lab and of the metamerism index, and the
+#: illuminants a booth comparison and the QC metamerism index use when none are chosen.
+BOOTH_ILLUMINANTS: tuple[str, ...] = ("D65", "D50", "A", "F2", "F11", "TL84", "LED-B3", "LED-B4")
+REFERENCE_ILLUMINANT = "D65"
+DEFAULT_BOOTH_ILLUMINANTS: tuple[str, ...] = ("D65", "A", "F11")
+METAMERISM_TEST_ILLUMINANTS: tuple[str, ...] = ("A", "F11")
+#: What the light booth shows standard and sample on: two flat panels side by side, a bumper/fender seam,
+#: a car.
+BOOTH_SHAPES: tuple[str, ...] = ("panels", "seam", "car")
+#: Colour-difference formulas by the names every front accepts (``station.model.difference`` holds
+#: their implementations under exactly these keys); ``audi2000`` is named but licensed separately.
+DELTA_E_METHOD_NAMES: tuple[str, ...] = ("cie76", "cie94", "cie2000", "din6175", "audi2000")
+#: The formulas the product computes itself (every name above but the separately licensed one).
+DELTA_E_COMPUTED: tuple[str, ...] = ("cie76", "cie94", "cie2000", "din6175")
+#: Rules that turn per-geometry colour differences into one tolerance verdict (QC).
+TOLERANCE_AGGREGATIONS: tuple[str, ...] = ("max", "mean")
+
 #: One just-noticeable difference in ΔE*ab (CIE76), the thesis's ε (§4.3).
 JND_CIE76 = 2.3
 #: Default formulation tolerance: mean CIEDE2000 over the angles for "formulable" (formulation-qc).

@@ -43,7 +43,6 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import brentq
 
 from station.model.errors import ModelInputError
 
@@ -342,6 +341,8 @@ def lobe_from_gloss(gloss_gu: float, coat_index: float = STANDARD_INDEX) -> Spec
         albedo is scaled down so the reading still matches. At the top the exponent is capped at
         :data:`PHONG_MAX` (a mirror to the meter's resolution).
     """
+    from scipy.optimize import brentq
+
     if not (1.3 <= float(coat_index) <= 2.0):
         raise ModelInputError("coat_index", "1.3 <= n <= 2.0", coat_index)
     top = max_gloss_gu(coat_index)
@@ -378,6 +379,8 @@ def lobe_from_gloss(gloss_gu: float, coat_index: float = STANDARD_INDEX) -> Spec
 
 def _ward_alpha_for(target: float, phong_n: float, gu_ward: Callable[[float], float]) -> float:
     """Ward α reading *target* GU: bracket around the small-angle match α ≈ 1/√(2n), then Brent."""
+    from scipy.optimize import brentq
+
     f = gu_ward  # log α → GU, decreasing
     lo_x, hi_x = math.log(WARD_MIN), math.log(WARD_MAX)
     guess = min(max(0.5 * math.log(1.0 / (2.0 * phong_n)), lo_x), hi_x)
@@ -603,6 +606,8 @@ def coat_from_gloss(gloss_gu: float) -> CoatLobes:
     ModelInputError
         *gloss_gu* outside 0–100 or not a number.
     """
+    from scipy.optimize import brentq
+
     try:
         g = float(gloss_gu)
     except (TypeError, ValueError) as exc:

@@ -24,6 +24,7 @@ from typing import Final
 import colour
 
 from station.model.colorimetry import OBSERVER_10
+from station.model.domain import BOOTH_ILLUMINANTS, REFERENCE_ILLUMINANT
 from station.model.errors import ModelInputError
 
 __all__ = [
@@ -48,14 +49,10 @@ __all__ = [
 OBSERVER_2: Final = "CIE 1931 2 Degree Standard Observer"
 #: Observers offered, short form → colour-science name.
 OBSERVERS: Final = MappingProxyType({"2": OBSERVER_2, "10": OBSERVER_10})
-#: The booth's illuminants, in the order a booth's switch offers them.
-BOOTH_ILLUMINANTS: Final = ("D65", "D50", "A", "F2", "F11", "TL84", "LED-B3", "LED-B4")
 #: Booth names → colour-science's names (F-series lamps are "FL" there; TL84 is sold as F11's lamp).
 ILLUMINANT_ALIASES: Final = MappingProxyType(
     {"F2": "FL2", "F7": "FL7", "F11": "FL11", "TL84": "FL11", "FL2": "FL2", "FL11": "FL11"}
 )
-#: The reference illuminant of the metamerism index and of the product's Lab.
-REFERENCE_ILLUMINANT: Final = "D65"
 #: Wavelength range (nm) a user SPD must cover: the product's reflectance grid.
 SPD_RANGE_NM: Final = (400.0, 700.0)
 

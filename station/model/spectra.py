@@ -27,9 +27,6 @@ from station.model.illuminants import Illuminant, illuminant_sd, observer_cie_na
 #: Wavelength grid of every reflectance spectrum in the product, nm (31 values).
 WAVELENGTHS: NDArray[np.float64] = np.arange(400.0, 701.0, 10.0)
 _SHAPE = colour.SpectralShape(400, 700, 10)
-#: Illuminants offered for colorimetry and the metamerism index (the booth's catalogue is
-#: :data:`station.model.illuminants.BOOTH_ILLUMINANTS`; a user SPD is an ``Illuminant``).
-ILLUMINANTS = ("D65", "A", "F11", "D50")
 
 
 def weighting_factors(

@@ -56,6 +56,7 @@ from station.model.domain import (
     QC_FORMULA,
     QC_WARN_FRACTION,
     QC_WARN_FRACTION_RANGE,
+    TOLERANCE_AGGREGATIONS,
     aspecular_name,
     check_lab,
     parse_geometry,
@@ -78,7 +79,7 @@ Verdict = Literal["pass", "warn", "fail"]
 #: Formulas a tolerance set may name.
 FORMULAS = ("cie76", "cie94", "cie2000", "din6175")
 #: Aggregation rules over the geometries.
-AGGREGATIONS = ("max", "mean")
+AGGREGATIONS = TOLERANCE_AGGREGATIONS
 _RANK: Mapping[str, int] = MappingProxyType({"pass": 0, "warn": 1, "fail": 2})
 _COMPONENTS = ("dl", "da", "db", "dc", "dh")
 _SYMBOL: Mapping[str, str] = MappingProxyType(

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.model.colorimetry import OBSERVER_10
 from station.model.difference import delta_e
-from station.model.domain import aspecular_name
+from station.model.domain import DEFAULT_BOOTH_ILLUMINANTS, aspecular_name
 from station.model.errors import ModelInputError
 from station.model.illuminants import REFERENCE_ILLUMINANT, Illuminant, illuminant_sd, observer_cie_name
 from station.model.spectra import WAVELENGTHS, metamerism_index, reflectance_to_lab
@@ -40,7 +40,6 @@ __all__ = [
 ]
 
 #: The illuminants of a booth check when none are named: daylight, tungsten, shop light.
-DEFAULT_BOOTH_ILLUMINANTS: tuple[str, ...] = ("D65", "A", "F11")
 
 
 @dataclass(frozen=True)

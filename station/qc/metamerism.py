@@ -13,17 +13,13 @@ from typing import Any
 
 import numpy as np
 
-from station.model.domain import aspecular_name
+from station.model.domain import METAMERISM_TEST_ILLUMINANTS, REFERENCE_ILLUMINANT, aspecular_name
 from station.model.spectra import metamerism_index
 from station.qc.check import formula_name
 from station.qc.errors import QcInputError
 from station.qc.readings import Reading
 
 __all__ = ["MetamerismResult", "metamerism"]
-
-#: The reference and test illuminants of the QC metamerism index.
-REFERENCE_ILLUMINANT = "D65"
-TEST_ILLUMINANTS = ("A", "F11")
 
 
 @dataclass(frozen=True)
@@ -56,7 +52,7 @@ def metamerism(
     standard: Reading,
     sample: Reading,
     formula: str = "cie2000",
-    illuminants: tuple[str, ...] = TEST_ILLUMINANTS,
+    illuminants: tuple[str, ...] = METAMERISM_TEST_ILLUMINANTS,
 ) -> MetamerismResult:
     """Metamerism index (D65 → each of *illuminants*, default A and F11) at the geometries both
     readings have, in *formula*. *illuminants* are catalogue names (``station.model.illuminants``)."""

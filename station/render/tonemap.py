@@ -21,6 +21,7 @@ import numpy as np
 from station.model.display import decode_display as srgb_decode
 from station.model.display import encode_display as srgb_encode
 from station.render.errors import RenderInputError
+from station.render.options import CURVES
 
 __all__ = [
     "CURVES",
@@ -32,8 +33,6 @@ __all__ = [
     "to_display",
     "tone_curve",
 ]
-
-CURVES = ("aces", "reinhard", "clip")
 
 
 def check_curve(curve: str) -> str:

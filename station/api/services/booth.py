@@ -7,7 +7,7 @@ from sqlalchemy.orm import Session
 from station.api.schemas.booth import BoothCatalogue, BoothOut, BoothRequest, BoothSpectra
 from station.api.services.qc import stored_reading
 from station.errors import InputError
-from station.model.booth import BOOTH_SHAPES
+from station.model.domain import BOOTH_SHAPES
 from station.model.errors import ModelInputError
 from station.model.illuminants import (
     BOOTH_ILLUMINANTS,

@@ -1,0 +1,66 @@
+"""The command line answers at once: ``station --help``, ``station --version`` and every ``station X
+--help`` import nothing beyond the standard library, NumPy and the product's own light modules (no
+colour-science, SciPy, Matplotlib, SQLAlchemy, FastAPI, Qt or GL). The timing against a bare
+``import numpy`` is in ``bench/cli_start.py``."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.processes import run
+
+REPO = Path(__file__).resolve().parents[2]
+#: Third-party packages the start-up path may load.
+ALLOWED = {"numpy"}
+
+_PROBE = """
+import json, sys
+from station.cli import build_parser, main
+
+commands = {commands}
+for argv in commands:
+    try:
+        main(argv)
+    except SystemExit:
+        pass
+ours = {{"station", "__main__", "__editable___cacad_station_0_1_0_finder", "_distutils_hack"}}
+top = {{m.split(".")[0] for m in sys.modules}}
+foreign = sorted(t for t in top if t not in sys.stdlib_module_names and t not in ours and not t.startswith("_"))
+print(json.dumps(foreign), file=sys.stderr)
+"""
+
+
+def _foreign(commands: list[list[str]]) -> list[str]:
+    done = run([sys.executable, "-c", _PROBE.format(commands=commands)], cwd=REPO, timeout=120)
+    assert done.stderr.strip(), done.stdout[-2000:]
+    return list(json.loads(done.stderr.strip().splitlines()[-1]))
+
+
+def _subcommands() -> list[str]:
+    from station.cli import build_parser
+
+    parser = build_parser()
+    action = next(a for a in parser._actions if a.dest == "command")  # argparse has no public API for it
+    assert action.choices is not None
+    return sorted(action.choices)
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["--version"]])
+def test_the_top_level_answers_without_heavy_imports(argv: list[str]) -> None:
+    assert set(_foreign([argv])) <= ALLOWED
+
+
+def test_every_subcommand_help_answers_without_heavy_imports() -> None:
+    names = _subcommands()
+    assert {"analysis", "booth", "design", "qc", "render", "serve", "viewer"} <= set(names)
+    assert set(_foreign([[name, "--help"] for name in names])) <= ALLOWED
+
+
+def test_the_probe_sees_a_heavy_import() -> None:
+    """The check can fail: running a command that does load the model shows colour-science."""
+    foreign = _foreign([["model", "from-angles", "--angles", "15,45,110", "--lab", "50,0,0;40,0,0;30,0,0"]])
+    assert "colour" in foreign
