@@ -199,22 +199,42 @@ def metameric_black(
     invisible_under: str | Illuminant = "D65",
     visible_under: str | Illuminant = "A",
     observer: str = OBSERVER_10,
+    free: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """A metameric black: a spectrum (31,) with XYZ = 0 under *invisible_under*, unit Euclidean norm.
 
     It is the direction of the null space of *invisible_under*'s weighting factors W (P = I − W W⁺)
     whose tristimulus values under *visible_under* are largest (the leading right singular vector of
     W_vis^T P), signed so that it raises the long-wavelength end (where A is strongest).
+
+    *free* (boolean, 31) restricts it to those wavelengths (zero elsewhere): the black of a spectrum
+    that sits on a bound (R = 0 or the maximum) at the other wavelengths.
+
+    Raises
+    ------
+    ModelInputError
+        Fewer than four free wavelengths (three constraints leave no null space).
     """
     w0 = weighting_factors(invisible_under, observer)
     w1 = weighting_factors(visible_under, observer)
-    projector = np.eye(WAVELENGTHS.size) - w0 @ np.linalg.pinv(w0)
-    _, _, vt = np.linalg.svd(w1.T @ projector)
-    black = projector @ vt[0]
+    mask = np.ones(WAVELENGTHS.size, dtype=bool) if free is None else np.asarray(free, dtype=bool)
+    if mask.shape != WAVELENGTHS.shape or int(mask.sum()) < 4:
+        raise ModelInputError(
+            "free", f"a mask of {WAVELENGTHS.size} wavelengths with at least 4 free", int(mask.sum())
+        )
+    w0f, w1f = w0[mask], w1[mask]
+    projector = np.eye(int(mask.sum())) - w0f @ np.linalg.pinv(w0f)
+    _, _, vt = np.linalg.svd(w1f.T @ projector)
+    black = np.zeros(WAVELENGTHS.size)
+    black[mask] = projector @ vt[0]
     black /= np.linalg.norm(black)
-    if black[-5:].sum() < 0.0:
+    if black @ np.linspace(-1.0, 1.0, WAVELENGTHS.size) < 0.0:  # more at the long-wavelength end
         black = -black
     return np.asarray(black, dtype=float)
+
+
+#: Reflectance within this of a bound counts as on it: a metameric black leaves such wavelengths alone.
+_BOUND_MARGIN = 1e-4
 
 
 def metameric_pair(
@@ -226,9 +246,10 @@ def metameric_pair(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """A metameric pair per geometry: ``(standard, sample)``, equal under one illuminant, not another.
 
-    The sample is each geometry's spectrum plus t_g times :func:`metameric_black`, with t_g = *strength*
-    times the largest step (either sign) that keeps 0 <= R <= REFLECTANCE_MAX at that geometry; so its
-    Lab under *invisible_under* equals the standard's (to round-off) and differs under *visible_under*.
+    The sample is each geometry's spectrum plus t_g times its :func:`metameric_black` (restricted to
+    the wavelengths where the spectrum is off its bounds), with t_g = *strength* times the largest step
+    (either sign) that keeps 0 <= R <= REFLECTANCE_MAX at that geometry; so its Lab under
+    *invisible_under* equals the standard's (to round-off) and differs under *visible_under*.
 
     Parameters
     ----------
@@ -241,21 +262,26 @@ def metameric_pair(
     Raises
     ------
     ModelInputError
-        The spectra are not (n, 31) in range, or a geometry's spectrum admits no step (it touches both
-        bounds where the black needs room).
+        The spectra are not (n, 31) in range, or a geometry's spectrum has fewer than four wavelengths
+        off its bounds (no room for a metameric black).
     """
     s = check_ranged("strength", strength, 0.0, 1.0)
     if s <= 0.0:
         raise ModelInputError("strength", "0 < strength <= 1", strength)
     std = np.atleast_2d(np.asarray(reflectance, dtype=float))
     reflectance_to_lab(std)  # validates shape and range
-    black = metameric_black(invisible_under, visible_under, observer)
     out = np.empty_like(std)
     for g, r in enumerate(std):
+        free = (r > _BOUND_MARGIN) & (r < REFLECTANCE_MAX - _BOUND_MARGIN)
+        if int(free.sum()) < 4:
+            raise ModelInputError(
+                f"reflectance[{g}]", "a spectrum with room for a metameric black", "no room"
+            )
+        black = metameric_black(invisible_under, visible_under, observer, free)
         steps = []
         for sign in (1.0, -1.0):
             b = sign * black
-            with np.errstate(divide="ignore"):
+            with np.errstate(divide="ignore", invalid="ignore"):  # 0 / 0 where the black is 0
                 up = np.where(b > 0, (REFLECTANCE_MAX - r) / b, np.inf)
                 down = np.where(b < 0, -r / b, np.inf)
             steps.append(sign * float(min(up.min(), down.min())))

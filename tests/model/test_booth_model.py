@@ -280,3 +280,37 @@ def test_display_equivalent_lab_and_design(blue: np.ndarray) -> None:
     # under A a fully adapted observer sees the blue still blue, but not the D65 colour
     shown_a = display_equivalent_lab(reflectance_to_lab(blue, "A"), "A")
     assert np.all(shown_a[:, 2] < -15) and np.abs(shown_a - lab).max() > 1
+
+
+def test_metameric_pair_of_spectra_on_their_bounds() -> None:
+    """A saturated paint's spectrum sits on R = 0 over a band: the black leaves that band alone."""
+    r = np.where(WAVELENGTHS < 560, 0.0, np.linspace(0.0, 0.9, 31))  # a red: black below 560 nm
+    standard, sample = metameric_pair(r[None, :])
+    on_bound = r == 0.0
+    assert np.all(sample[0, on_bound] == 0.0) and np.all(sample >= 0)
+    de65 = colour.delta_E(reflectance_to_lab(standard), reflectance_to_lab(sample), method="CIE 2000")
+    dea = colour.delta_E(
+        reflectance_to_lab(standard, "A"), reflectance_to_lab(sample, "A"), method="CIE 2000"
+    )
+    assert de65[0] < 1e-9 and dea[0] > 0.1
+    with pytest.raises(InputError, match="no room"):
+        metameric_pair(np.where(WAVELENGTHS < 680, 0.0, 0.5)[None, :])  # 2 free wavelengths only
+
+
+def test_metameric_pairs_of_library_paints() -> None:
+    """Library paints (a small synthetic library): each recoverable paint gives a pair, equal under D65."""
+    from station.formulate.demo import generate_library
+
+    lib = generate_library(3, 3, 3, seed=11)
+    made = 0
+    for lab in lib.angle_columns():
+        try:
+            spectra = reflectance_from_lab(lab)
+        except InputError:
+            continue  # a face outside the object-colour solid of R <= 1: no spectrum to start from
+        standard, sample = metameric_pair(spectra)
+        de65 = colour.delta_E(reflectance_to_lab(standard), reflectance_to_lab(sample), method="CIE 2000")
+        assert np.all(de65 < 1e-6)
+        assert np.any(metamerism_index(standard, sample, "D65", ("A",))["A"] > 0.05)
+        made += 1
+    assert made >= 6
