@@ -22,26 +22,35 @@ from scipy.optimize import LinearConstraint, minimize
 from station.model.colorimetry import OBSERVER_10, xyz_to_lab
 from station.model.domain import DIFFUSE_WHITE_L, REFLECTANCE_MAX
 from station.model.errors import FitError, ModelInputError
+from station.model.illuminants import Illuminant, illuminant_sd, observer_cie_name
 
 #: Wavelength grid of every reflectance spectrum in the product, nm (31 values).
 WAVELENGTHS: NDArray[np.float64] = np.arange(400.0, 701.0, 10.0)
 _SHAPE = colour.SpectralShape(400, 700, 10)
-#: Illuminants offered for colorimetry and the metamerism index.
+#: Illuminants offered for colorimetry and the metamerism index (the booth's catalogue is
+#: :data:`station.model.illuminants.BOOTH_ILLUMINANTS`; a user SPD is an ``Illuminant``).
 ILLUMINANTS = ("D65", "A", "F11", "D50")
-#: Our names → colour-science's (the F-series are "FL" there).
-_ILLUMINANT_ALIASES = {"F2": "FL2", "F7": "FL7", "F11": "FL11"}
+
+
+def weighting_factors(
+    illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10
+) -> NDArray[np.float64]:
+    """ASTM E308 tristimulus weighting factors, shape (31, 3), normalised so white has Y = 1.
+
+    *illuminant* is a catalogue name (:func:`station.model.illuminants.illuminant_name`: D65, D50, A,
+    F2, F11, TL84, LED-B3, LED-B4 or another colour-science illuminant) or a user
+    :class:`~station.model.illuminants.Illuminant`; *observer* a colour-science observer name or
+    ``"2"`` / ``"10"``. Computed once per (illuminant, observer) and cached.
+    """
+    if not isinstance(illuminant, Illuminant):
+        illuminant, _ = illuminant_sd(illuminant)  # the canonical name (validates)
+    return _weighting_factors(illuminant, observer_cie_name(observer))
 
 
 @cache
-def weighting_factors(illuminant: str = "D65", observer: str = OBSERVER_10) -> NDArray[np.float64]:
-    """ASTM E308 tristimulus weighting factors, shape (31, 3), normalised so white has Y = 1."""
-    illuminant = _ILLUMINANT_ALIASES.get(illuminant, illuminant)
-    if illuminant not in colour.SDS_ILLUMINANTS:
-        raise ModelInputError("illuminant", f"one of {', '.join(ILLUMINANTS)}", illuminant)
-    if observer not in colour.MSDS_CMFS:
-        raise ModelInputError("observer", f"a CIE observer name, e.g. {OBSERVER_10!r}", observer)
+def _weighting_factors(illuminant: str | Illuminant, observer: str) -> NDArray[np.float64]:
+    _, sd_illuminant = illuminant_sd(illuminant)
     cmfs = colour.MSDS_CMFS[observer]
-    sd_illuminant = colour.SDS_ILLUMINANTS[illuminant]
     w = np.empty((WAVELENGTHS.size, 3))
     for i in range(WAVELENGTHS.size):  # XYZ is linear in R: integrate unit impulses once
         values = np.zeros(WAVELENGTHS.size)
@@ -55,7 +64,7 @@ def weighting_factors(illuminant: str = "D65", observer: str = OBSERVER_10) -> N
     return w
 
 
-def whitepoint_xyz(illuminant: str = "D65", observer: str = OBSERVER_10) -> NDArray[np.float64]:
+def whitepoint_xyz(illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10) -> NDArray[np.float64]:
     """XYZ of the perfect white under *illuminant* with the product's weights (Y = 1)."""
     return weighting_factors(illuminant, observer).sum(axis=0)
 
@@ -76,14 +85,14 @@ def _check_reflectance(reflectance: ArrayLike) -> NDArray[np.float64]:
 
 
 def reflectance_to_xyz(
-    reflectance: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10
+    reflectance: ArrayLike, illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10
 ) -> NDArray[np.float64]:
     """XYZ (white Y = 1) of reflectance spectra (..., 31) under *illuminant* (ASTM E308)."""
     return _check_reflectance(reflectance) @ weighting_factors(illuminant, observer)
 
 
 def reflectance_to_lab(
-    reflectance: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10
+    reflectance: ArrayLike, illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10
 ) -> NDArray[np.float64]:
     """CIE L*a*b* of reflectance spectra (..., 31) relative to *illuminant*'s white for *observer*.
 
@@ -92,9 +101,10 @@ def reflectance_to_lab(
     reflectance
         Reflectance factors at :data:`WAVELENGTHS` (400–700 nm, 10 nm), shape (..., 31).
     illuminant
-        ``"D65"`` (default), ``"A"``, ``"F11"`` or another colour-science illuminant name.
+        ``"D65"`` (default), a booth name (``"A"``, ``"F11"``, ``"TL84"``, ``"LED-B3"``, …), another
+        colour-science illuminant name, or a user :class:`~station.model.illuminants.Illuminant`.
     observer
-        CIE observer; default the 1964 10° observer.
+        CIE observer (colour-science name or ``"2"`` / ``"10"``); default the 1964 10° observer.
     """
     xyz = reflectance_to_xyz(reflectance, illuminant, observer)
     white = whitepoint_xyz(illuminant, observer)
@@ -109,7 +119,7 @@ def _difference_operator(n: int) -> NDArray[np.float64]:
 
 
 def reflectance_from_lab(
-    lab: ArrayLike, illuminant: str = "D65", observer: str = OBSERVER_10
+    lab: ArrayLike, illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10
 ) -> NDArray[np.float64]:
     """Recover smooth reflectance spectra (..., 31) that reproduce Lab exactly.
 
@@ -169,14 +179,17 @@ def reflectance_from_lab(
 def metamerism_index(
     reflectance_ref: ArrayLike,
     reflectance_sample: ArrayLike,
-    reference_illuminant: str = "D65",
-    test_illuminants: tuple[str, ...] = ("A", "F11"),
+    reference_illuminant: str | Illuminant = "D65",
+    test_illuminants: tuple[str | Illuminant, ...] = ("A", "F11"),
     method: str = "cie2000",
     aspecular_deg: ArrayLike | None = None,
+    observer: str = OBSERVER_10,
 ) -> dict[str, NDArray[np.float64]]:
     """Special metamerism index (change in illuminant) between two samples, per geometry.
 
-    *aspecular_deg* (degrees, one per spectrum) is required by ``method="din6175"``.
+    *aspecular_deg* (degrees, one per spectrum) is required by ``method="din6175"``. Illuminants are
+    catalogue names or user :class:`~station.model.illuminants.Illuminant` objects (keyed by their
+    ``name`` in the result); *observer* is a colour-science name or ``"2"`` / ``"10"``.
 
     The sample is first corrected additively in Lab for its mismatch under the reference illuminant
     (CIE 15 / ISO 105-J02 practice), then the difference under each test illuminant is the index.
@@ -193,13 +206,15 @@ def metamerism_index(
     smp = np.asarray(reflectance_sample, dtype=float)
     if ref.shape != smp.shape:
         raise FitError(f"reflectance_sample: shape {smp.shape} differs from reflectance_ref {ref.shape}")
-    lab_r0 = reflectance_to_lab(ref, reference_illuminant)
-    lab_s0 = reflectance_to_lab(smp, reference_illuminant)
+    lab_r0 = reflectance_to_lab(ref, reference_illuminant, observer)
+    lab_s0 = reflectance_to_lab(smp, reference_illuminant, observer)
     out: dict[str, NDArray[np.float64]] = {
         "reference": delta_e(lab_r0, lab_s0, method, aspecular_deg=aspecular_deg)
     }
     for ill in test_illuminants:
-        lab_r = reflectance_to_lab(ref, ill)
-        lab_s = reflectance_to_lab(smp, ill) - (lab_s0 - lab_r0)
-        out[ill] = delta_e(lab_r, lab_s, method, aspecular_deg=aspecular_deg)
+        lab_r = reflectance_to_lab(ref, ill, observer)
+        lab_s = reflectance_to_lab(smp, ill, observer) - (lab_s0 - lab_r0)
+        out[ill.name if isinstance(ill, Illuminant) else ill] = delta_e(
+            lab_r, lab_s, method, aspecular_deg=aspecular_deg
+        )
     return out

@@ -1,0 +1,220 @@
+"""Appearance under a booth illuminant: display colour (CAT16), a design per illuminant, metameric pairs.
+
+Lab under an illuminant is :func:`station.model.spectra.reflectance_to_lab` (ASTM E308 weights through
+colour-science, relative to that illuminant's own white, 2° or 10° observer); this module builds on it:
+
+* :func:`lab_to_display_under` — what a display adapted to D65 shows of a Lab seen under an illuminant,
+  for an observer adapted (fully, or to a degree D) to that illuminant: Lab → XYZ relative to the
+  illuminant's white → CAT16 to the sRGB white (colour-science's von Kries / Zhai 2018 adaptation with
+  the CAT16 matrix) → linear sRGB → the display encoding (:mod:`station.model.display`).
+* :func:`light_colour` — the booth light's own colour on that display (no adaptation): what the
+  environment of a booth render is tinted by.
+* :func:`fit_under_illuminant` — the face/flop/travel/gloss design fitted to the Lab per geometry under
+  an illuminant (the model hierarchy unchanged: the same :func:`station.model.fit.fit_fftg`).
+* :func:`metameric_black` / :func:`metameric_pair` — a spectrum invisible under one illuminant (the null
+  space of its weighting factors) and, added to a paint's spectra per geometry, a sample that matches
+  the standard under D65 and not under A: the test object of every booth check.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import colour
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from station.model.colorimetry import OBSERVER_10, lab_to_xyz
+from station.model.display import encode_display
+from station.model.domain import REFLECTANCE_MAX, check_ranged
+from station.model.errors import ModelInputError
+from station.model.fit import FitResult, fit_fftg
+from station.model.illuminants import Illuminant, illuminant_sd, observer_cie_name
+from station.model.representations import AspecularMeasurements
+from station.model.spectra import WAVELENGTHS, reflectance_to_lab, weighting_factors, whitepoint_xyz
+
+__all__ = [
+    "DISPLAY_WHITE_XYZ",
+    "fit_under_illuminant",
+    "lab_to_display_under",
+    "lab_to_linear_srgb_under",
+    "light_colour",
+    "metameric_black",
+    "metameric_pair",
+]
+
+_SRGB = colour.RGB_COLOURSPACES["sRGB"]
+#: XYZ of the display's white, sRGB's D65 (CIE 1931 2°): the XYZ that sRGB's IEC 61966-2-1 matrix maps
+#: to linear (1, 1, 1) (Y = 1 to the matrix's 4 decimals).
+DISPLAY_WHITE_XYZ: NDArray[np.float64] = np.linalg.solve(_SRGB.matrix_XYZ_to_RGB, np.ones(3))
+DISPLAY_WHITE_XYZ.flags.writeable = False
+
+
+def _name(illuminant: str | Illuminant) -> str:
+    return illuminant.name if isinstance(illuminant, Illuminant) else illuminant_sd(illuminant)[0]
+
+
+def lab_to_linear_srgb_under(
+    lab: ArrayLike,
+    illuminant: str | Illuminant,
+    observer: str = OBSERVER_10,
+    adaptation: float = 1.0,
+) -> NDArray[np.float64]:
+    """Linear sRGB (unclipped, white = 1) of Lab seen under *illuminant*, shown on a D65 display.
+
+    Parameters
+    ----------
+    lab
+        CIE L*a*b* relative to *illuminant*'s white for *observer*, shape (..., 3)
+        (:func:`station.model.spectra.reflectance_to_lab` with the same illuminant and observer).
+    illuminant
+        Booth name or user :class:`~station.model.illuminants.Illuminant`.
+    observer
+        colour-science observer name or ``"2"`` / ``"10"``.
+    adaptation
+        Degree of adaptation D of the observer to *illuminant*, 0–1: 1 (default) a fully adapted
+        observer (CAT16 von Kries: the illuminant's white shows as the display white); below 1 the
+        two-step CAT16 of Zhai & Luo (2018) with D_b = D, D_d = 1 (the light's colour shows through).
+    """
+    d = check_ranged("adaptation", adaptation, 0.0, 1.0)
+    white = whitepoint_xyz(illuminant, observer)  # Y = 1
+    xyz = lab_to_xyz(lab, colour.XYZ_to_xy(white))  # Y of the white = 1
+    if d == 1.0:
+        adapted = colour.adaptation.chromatic_adaptation_VonKries(
+            xyz, white, DISPLAY_WHITE_XYZ, transform="CAT16"
+        )
+    else:
+        with colour.utilities.domain_range_scale("reference"):
+            adapted = (
+                colour.adaptation.chromatic_adaptation_Zhai2018(
+                    xyz * 100.0, white * 100.0, DISPLAY_WHITE_XYZ * 100.0, D_b=d, D_d=1.0, transform="CAT16"
+                )
+                / 100.0
+            )
+    return np.asarray(adapted @ _SRGB.matrix_XYZ_to_RGB.T, dtype=float)
+
+
+def lab_to_display_under(
+    lab: ArrayLike,
+    illuminant: str | Illuminant,
+    observer: str = OBSERVER_10,
+    adaptation: float = 1.0,
+) -> NDArray[np.float64]:
+    """Display sRGB in [0, 1] of Lab seen under *illuminant* (see :func:`lab_to_linear_srgb_under`)."""
+    return encode_display(lab_to_linear_srgb_under(lab, illuminant, observer, adaptation))
+
+
+def light_colour(illuminant: str | Illuminant, observer: str = OBSERVER_10) -> NDArray[np.float64]:
+    """Linear sRGB of the illuminant's white on a D65 display, scaled so its largest channel is 1.
+
+    No adaptation: the colour of the booth's light as a D65-adapted viewer sees it (A is orange, D65
+    white), the tint of a booth environment. Shape (3,).
+    """
+    rgb = _SRGB.matrix_XYZ_to_RGB @ whitepoint_xyz(illuminant, observer)
+    rgb = np.clip(rgb, 0.0, None)
+    return np.asarray(rgb / rgb.max(), dtype=float)
+
+
+def fit_under_illuminant(
+    reflectance: ArrayLike,
+    angles_deg: Sequence[float],
+    illuminant: str | Illuminant,
+    observer: str = OBSERVER_10,
+    gloss_gu: float | None = None,
+) -> FitResult:
+    """The face/flop/travel/gloss design of spectra per geometry as seen under *illuminant*.
+
+    Lab per geometry under *illuminant* (its own white, *observer*) → :func:`station.model.fit.fit_fftg`
+    (thesis §3.3.3; the model hierarchy unchanged). The design's Lab is relative to that illuminant.
+
+    Parameters
+    ----------
+    reflectance
+        Shape (n, 31): one spectrum per aspecular angle, 400–700 nm at 10 nm.
+    angles_deg
+        The n aspecular angles in degrees, strictly increasing (at least three).
+    gloss_gu
+        Specular gloss (GU) or None.
+    """
+    lab = reflectance_to_lab(reflectance, illuminant, observer)
+    measurements = AspecularMeasurements(
+        tuple(float(a) for a in angles_deg),
+        lab,
+        gloss_gu,
+        illuminant=_name(illuminant),
+        observer=observer_cie_name(observer),
+    )
+    return fit_fftg(measurements)
+
+
+def metameric_black(
+    invisible_under: str | Illuminant = "D65",
+    visible_under: str | Illuminant = "A",
+    observer: str = OBSERVER_10,
+) -> NDArray[np.float64]:
+    """A metameric black: a spectrum (31,) with XYZ = 0 under *invisible_under*, unit Euclidean norm.
+
+    It is the direction of the null space of *invisible_under*'s weighting factors W (P = I − W W⁺)
+    whose tristimulus values under *visible_under* are largest (the leading right singular vector of
+    W_vis^T P), signed so that it raises the long-wavelength end (where A is strongest).
+    """
+    w0 = weighting_factors(invisible_under, observer)
+    w1 = weighting_factors(visible_under, observer)
+    projector = np.eye(WAVELENGTHS.size) - w0 @ np.linalg.pinv(w0)
+    _, _, vt = np.linalg.svd(w1.T @ projector)
+    black = projector @ vt[0]
+    black /= np.linalg.norm(black)
+    if black[-5:].sum() < 0.0:
+        black = -black
+    return np.asarray(black, dtype=float)
+
+
+def metameric_pair(
+    reflectance: ArrayLike,
+    strength: float = 0.3,
+    invisible_under: str | Illuminant = "D65",
+    visible_under: str | Illuminant = "A",
+    observer: str = OBSERVER_10,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A metameric pair per geometry: ``(standard, sample)``, equal under one illuminant, not another.
+
+    The sample is each geometry's spectrum plus t_g times :func:`metameric_black`, with t_g = *strength*
+    times the largest step (either sign) that keeps 0 <= R <= REFLECTANCE_MAX at that geometry; so its
+    Lab under *invisible_under* equals the standard's (to round-off) and differs under *visible_under*.
+
+    Parameters
+    ----------
+    reflectance
+        The standard's spectra, shape (n, 31) (e.g. a library paint's, via
+        :func:`station.model.spectra.reflectance_from_lab`).
+    strength
+        Fraction 0 < strength <= 1 of the admissible step.
+
+    Raises
+    ------
+    ModelInputError
+        The spectra are not (n, 31) in range, or a geometry's spectrum admits no step (it touches both
+        bounds where the black needs room).
+    """
+    s = check_ranged("strength", strength, 0.0, 1.0)
+    if s <= 0.0:
+        raise ModelInputError("strength", "0 < strength <= 1", strength)
+    std = np.atleast_2d(np.asarray(reflectance, dtype=float))
+    reflectance_to_lab(std)  # validates shape and range
+    black = metameric_black(invisible_under, visible_under, observer)
+    out = np.empty_like(std)
+    for g, r in enumerate(std):
+        steps = []
+        for sign in (1.0, -1.0):
+            b = sign * black
+            with np.errstate(divide="ignore"):
+                up = np.where(b > 0, (REFLECTANCE_MAX - r) / b, np.inf)
+                down = np.where(b < 0, -r / b, np.inf)
+            steps.append(sign * float(min(up.min(), down.min())))
+        t = max(steps, key=abs) * s
+        if abs(t) <= 1e-9:
+            raise ModelInputError(
+                f"reflectance[{g}]", "a spectrum with room for a metameric black", "no room"
+            )
+        out[g] = np.clip(r + t * black, 0.0, REFLECTANCE_MAX)
+    return std.copy(), out
