@@ -3,18 +3,22 @@
 Each paint is given by its reflectance spectra per aspecular geometry (400–700 nm, 10 nm). Under an
 illuminant and observer:
 
-* **Paint colour (the adapted observer).** The spectra give XYZ under the illuminant (ASTM E308,
-  ``station.model.spectra``); CAT16 (colour-science, full adaptation) maps them to the D65 display white,
-  and their CIELAB (D65) per geometry is fitted to a face/flop/travel/gloss design (thesis §3.3,
+* **Paint colour (the adapted observer).** The spectra give Lab under the illuminant relative to its own
+  white (ASTM E308, ``station.model.spectra``); CAT16 with full adaptation maps them to the D65 display
+  white (``station.model.booth.lab_to_linear_srgb_under``), and that display colour per geometry, as the
+  renderer's Lab (D65/10°), is fitted to a face/flop/travel/gloss design (thesis §3.3,
   ``station.model.fit_fftg``) and its lobe weights (thesis eqs 2.4.1–2.4.2). A white paint therefore looks
   white under every illuminant, and two paints that match under D65 but not under A (metamerism) look
   alike in the D65 picture and different in the A one, as a viewer adapted to the booth light sees them.
 * **Light colour (what adaptation leaves).** A viewer of the picture sits at a D65 display, not in the
   booth, and adapts only partly to the booth light. The whole frame (paints, walls, floor) is multiplied
-  by the illuminant's white after CAT16 with the CIECAM16 degree of adaptation D for a display
-  (L_A = ``DISPLAY_ADAPTING_CD_M2``, average surround: D ≈ 0.86), normalised to luminance 1
-  (:func:`light_tint`). D65 gives (1, 1, 1); A gives a warm and F11 a slightly green-yellow light. The tint
-  multiplies both halves alike, so it never creates or hides a difference between them.
+  by the illuminant's white seen with the CIECAM16 degree of adaptation D of a viewer at a display
+  (L_A = ``DISPLAY_ADAPTING_CD_M2``, average surround: D ≈ 0.86; two-step CAT16), normalised to luminance
+  1 (:func:`light_tint`). D65 gives (1, 1, 1); A gives a warm light, F11 a slightly warm one. For neutral
+  surfaces (walls, floor) this is the partial CAT16 exactly; for the paints it is its per-channel
+  approximation in linear sRGB. The tint multiplies both halves alike, so it never creates or hides a
+  difference between them: the table beside the picture (CIELAB under the illuminant's own white,
+  CIEDE2000, the metamerism index) is the measure, the picture the impression.
 
 The booth is ``station.render.procedural.light_booth`` (neutral grey walls and floor, two overhead
 diffusers) on a stage (backdrop and ground). For a fixed shape and view the image is linear in the lobe
@@ -40,6 +44,7 @@ from station.render.errors import RenderInputError
 
 if TYPE_CHECKING:
     from station.model import FaceFlopTravelGloss
+    from station.model.illuminants import Illuminant
     from station.render.basis_images import BasisImages
     from station.render.prefilter import PrefilteredBasis
     from station.render.weights import LobeWeights
@@ -92,19 +97,19 @@ class BoothPaint:
 
 
 def adapted_lab(
-    spectra: NDArray[np.float64], illuminant: str = "D65", observer: str = OBSERVER_10
+    spectra: NDArray[np.float64], illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10
 ) -> NDArray[np.float64]:
-    """CIELAB (D65 white) of reflectance *spectra* (..., 31) seen under *illuminant* by a viewer fully
-    adapted to it: XYZ under the illuminant (ASTM E308), CAT16 to D65 (colour-science), Lab (module doc)."""
-    import colour
+    """The renderer's Lab (D65/10°, ``station.model.colorimetry.linear_srgb_to_lab``) of reflectance
+    *spectra* (..., 31) seen under *illuminant* by a viewer fully adapted to it: Lab under the
+    illuminant's own white (``station.model.spectra.reflectance_to_lab``), CAT16 to the display white
+    (``station.model.booth.lab_to_linear_srgb_under``, adaptation 1), back to Lab. The lobe fit then
+    reproduces exactly that display colour (module doc)."""
+    from station.model.booth import lab_to_linear_srgb_under
+    from station.model.colorimetry import linear_srgb_to_lab
+    from station.model.spectra import reflectance_to_lab
 
-    from station.model.spectra import reflectance_to_xyz, whitepoint_xyz
-
-    xyz = reflectance_to_xyz(spectra, illuminant, observer)
-    white = whitepoint_xyz(illuminant, observer)
-    d65 = whitepoint_xyz("D65", observer)
-    adapted = colour.adaptation.chromatic_adaptation_VonKries(xyz, white, d65, transform="CAT16")
-    return np.asarray(colour.XYZ_to_Lab(adapted, colour.XYZ_to_xy(d65)), dtype=float)
+    lab = reflectance_to_lab(spectra, illuminant, observer)
+    return np.asarray(linear_srgb_to_lab(lab_to_linear_srgb_under(lab, illuminant, observer)), dtype=float)
 
 
 def degree_of_adaptation(adapting_cd_m2: float = DISPLAY_ADAPTING_CD_M2, f: float = 1.0) -> float:
@@ -113,29 +118,26 @@ def degree_of_adaptation(adapting_cd_m2: float = DISPLAY_ADAPTING_CD_M2, f: floa
 
 
 def light_tint(
-    illuminant: str = "D65", observer: str = OBSERVER_10, degree: float | None = None
+    illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10, degree: float | None = None
 ) -> NDArray[np.float64]:
-    """(3,) linear sRGB multiplier of the booth light: the illuminant's white after CAT16 to D65 with
-    degree of adaptation *degree* (default :func:`degree_of_adaptation`), luminance 1 (module doc)."""
-    import colour
+    """(3,) linear sRGB multiplier of the booth light: the illuminant's white seen with degree of
+    adaptation *degree* (default :func:`degree_of_adaptation`; ``station.model.booth.lab_to_linear_srgb_under``,
+    CAT16 two-step), divided by D65's (the display's light) and scaled to luminance 1 (module doc). D65 gives (1, 1, 1)."""
+    from station.model.booth import lab_to_linear_srgb_under
 
-    from station.model.spectra import whitepoint_xyz
-
-    d = degree_of_adaptation() if degree is None else float(degree)
-    if not 0.0 <= d <= 1.0:
+    d = degree_of_adaptation() if degree is None else degree
+    if isinstance(d, bool) or not isinstance(d, (int, float)) or not 0.0 <= d <= 1.0:
         raise RenderInputError("degree", "0 <= degree <= 1", degree)
-    white = whitepoint_xyz(illuminant, observer)
-    d65 = whitepoint_xyz("D65", observer)
-    m = np.asarray(colour.adaptation.CAT_CAT16)
-    lms = d * (m @ d65) + (1.0 - d) * (m @ white) * (d65[1] / white[1])
-    xyz = np.linalg.solve(m, lms)
-    rgb = np.asarray(colour.XYZ_to_RGB(xyz, "sRGB", illuminant=colour.XYZ_to_xy(d65)), dtype=float)
-    rgb = np.maximum(rgb, 0.0)
-    return rgb / float(rgb @ _SRGB_LUMINANCE)
+    white = np.array([100.0, 0.0, 0.0])
+    rgb = np.maximum(lab_to_linear_srgb_under(white, illuminant, observer, float(d)), 0.0)
+    # Relative to D65 seen the same way: D65 is the display's own light (its 10° white differs from the
+    # display's 2° one by a hair that partial adaptation would otherwise leave as a tint).
+    rgb = rgb / np.maximum(lab_to_linear_srgb_under(white, "D65", observer, float(d)), 1e-12)
+    return np.asarray(rgb / float(rgb @ _SRGB_LUMINANCE), dtype=float)
 
 
 def booth_design(
-    paint: BoothPaint, illuminant: str = "D65", observer: str = OBSERVER_10
+    paint: BoothPaint, illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10
 ) -> FaceFlopTravelGloss:
     """The face/flop/travel/gloss design of *paint* under *illuminant* (adapted Lab of its positive
     aspecular geometries, thesis eqs 3.3.1–3.3.10)."""
@@ -178,13 +180,14 @@ def _unit_weights(exponents: tuple[float, ...], kind: str, i: int) -> LobeWeight
     return LobeWeights(exponents, k_d, k_dd, k_g, k_a)
 
 
-def mesh_basis_images(basis: PrefilteredBasis, size: int) -> BasisImages:
+def mesh_basis_images(basis: PrefilteredBasis, size: int, gl_ctx: object = None) -> BasisImages:
     """Basis images of the built-in car body on the booth stage, probed with the GL renderer.
 
     One render per image with unit weights on both halves (layout D, A, then (Gh, i), (Dg, i) per lobe:
     every lobe's directionally diffuse image holds its N·V factor, so the cached N·V is unused), minus the
     render with zero weights (the stage behind); the halves' pixels from a diffuse probe on each. The
-    fall-off image A is the unit-K_A render minus the unit-K_D one (``weights`` module doc)."""
+    fall-off image A is the unit-K_A render minus the unit-K_D one (``weights`` module doc). *gl_ctx*: a
+    moderngl context to draw on (default: a headless one of its own)."""
     from station.render.basis_images import BasisImages
     from station.render.gl_renderer import GLRenderer
     from station.render.scene_image import builtin_mesh
@@ -197,7 +200,7 @@ def mesh_basis_images(basis: PrefilteredBasis, size: int) -> BasisImages:
         layout += [("Gh", i), ("Dg", i)]
     zero = _unit_weights(e, "", -1)
     stage = Stage()
-    with GLRenderer(basis, size, size) as gl:
+    with GLRenderer(basis, size, size, ctx=gl_ctx) as gl:
 
         def shot(pair: list[LobeWeights]) -> NDArray[np.float32]:
             return np.asarray(gl.render_mesh(mesh, pair, stage=stage, linear=True), np.float32).reshape(-1, 3)
@@ -239,12 +242,14 @@ class BoothFrame:
 class BoothRenderer:
     """Renders booth pictures, keeping the prefiltered booth and each shape's basis images (module doc).
 
-    ``size``: picture side in pixels. One renderer per caller (a viewer screen, a CLI run); not shared
+    ``size``: picture side in pixels; ``gl_ctx``: a moderngl context for the car's basis images (default:
+    a headless one made when needed). One renderer per caller (a viewer screen, a CLI run); not shared
     between threads.
     """
 
-    def __init__(self, size: int = BOOTH_SIZE) -> None:
+    def __init__(self, size: int = BOOTH_SIZE, gl_ctx: object = None) -> None:
         self.size = _check_size(size)
+        self._gl_ctx = gl_ctx
         self._basis: PrefilteredBasis | None = None
         self._views: dict[str, BasisImages] = {}
 
@@ -276,7 +281,7 @@ class BoothRenderer:
         panels and the seam, the GL renderer for the car, GLUnavailableError without an OpenGL stack)."""
         if _check_shape(shape) not in self._views:
             if shape == "car":
-                self._views[shape] = mesh_basis_images(self.basis, self.size)
+                self._views[shape] = mesh_basis_images(self.basis, self.size, self._gl_ctx)
             else:
                 from station.render.basis_images import build_basis_images
                 from station.render.shapes import Scene
@@ -290,7 +295,7 @@ class BoothRenderer:
         self,
         standard: BoothPaint,
         trial: BoothPaint,
-        illuminant: str = "D65",
+        illuminant: str | Illuminant = "D65",
         observer: str = OBSERVER_10,
         shape: str = "panels",
     ) -> BoothFrame:
@@ -327,7 +332,7 @@ def write_png(image: NDArray[np.uint8], out_path: str | Path) -> Path:
 def render_booth_png(
     standard: BoothPaint,
     sample: BoothPaint,
-    illuminant: str = "D65",
+    illuminant: str | Illuminant = "D65",
     observer: str = OBSERVER_10,
     shape: str = "panels",
     out_path: str | Path = "booth.png",
@@ -342,7 +347,7 @@ def render_booth_png(
 def booth_strip(
     standard: BoothPaint,
     sample: BoothPaint,
-    illuminants: Sequence[str],
+    illuminants: Sequence[str | Illuminant],
     observer: str = OBSERVER_10,
     shape: str = "panels",
     size: int = BOOTH_SIZE,
