@@ -243,14 +243,17 @@ class BoothRenderer:
     """Renders booth pictures, keeping the prefiltered booth and each shape's basis images (module doc).
 
     ``size``: picture side in pixels; ``gl_ctx``: a moderngl context for the car's basis images (default:
-    a headless one made when needed). One renderer per caller (a viewer screen, a CLI run); not shared
+    a headless one made when needed); ``basis``: the prefiltered booth of another renderer to share
+(default: built on first use). One renderer per caller (a viewer screen, a CLI run); not shared
     between threads.
     """
 
-    def __init__(self, size: int = BOOTH_SIZE, gl_ctx: object = None) -> None:
+    def __init__(
+        self, size: int = BOOTH_SIZE, gl_ctx: object = None, basis: PrefilteredBasis | None = None
+    ) -> None:
         self.size = _check_size(size)
         self._gl_ctx = gl_ctx
-        self._basis: PrefilteredBasis | None = None
+        self._basis = basis
         self._views: dict[str, BasisImages] = {}
 
     @property
