@@ -34,7 +34,9 @@ from station.model.representations import AspecularMeasurements
 from station.model.spectra import WAVELENGTHS, reflectance_to_lab, weighting_factors, whitepoint_xyz
 
 __all__ = [
+    "BOOTH_SHAPES",
     "DISPLAY_WHITE_XYZ",
+    "check_booth_shape",
     "fit_under_illuminant",
     "lab_to_display_under",
     "lab_to_linear_srgb_under",
@@ -43,11 +45,21 @@ __all__ = [
     "metameric_pair",
 ]
 
+#: What a booth shows standard and sample on: two flat panels side by side, a bumper/fender seam, a car.
+BOOTH_SHAPES: tuple[str, ...] = ("panels", "seam", "car")
+
 _SRGB = colour.RGB_COLOURSPACES["sRGB"]
 #: XYZ of the display's white, sRGB's D65 (CIE 1931 2°): the XYZ that sRGB's IEC 61966-2-1 matrix maps
 #: to linear (1, 1, 1) (Y = 1 to the matrix's 4 decimals).
 DISPLAY_WHITE_XYZ: NDArray[np.float64] = np.linalg.solve(_SRGB.matrix_XYZ_to_RGB, np.ones(3))
 DISPLAY_WHITE_XYZ.flags.writeable = False
+
+
+def check_booth_shape(shape: str, field: str = "shape") -> str:
+    """*shape* if it is one of :data:`BOOTH_SHAPES`, else :class:`ModelInputError` naming *field*."""
+    if shape not in BOOTH_SHAPES:
+        raise ModelInputError(field, f"one of {', '.join(BOOTH_SHAPES)}", shape)
+    return shape
 
 
 def _name(illuminant: str | Illuminant) -> str:

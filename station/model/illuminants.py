@@ -35,6 +35,7 @@ __all__ = [
     "Illuminant",
     "SpdFileError",
     "booth_illuminant",
+    "illuminant_from_text",
     "illuminant_name",
     "illuminant_sd",
     "observer_cie_name",
@@ -105,7 +106,9 @@ def illuminant_name(name: str) -> str:
             return known
     if text in colour.SDS_ILLUMINANTS:
         return text
-    raise ModelInputError("illuminant", f"one of {', '.join(BOOTH_ILLUMINANTS)} or a user SPD file", name)
+    raise ModelInputError(
+        "illuminant", f"one of {', '.join(BOOTH_ILLUMINANTS)} or a user SPD file (.csv)", name
+    )
 
 
 def booth_illuminant(name: str) -> Illuminant:
@@ -184,3 +187,21 @@ def read_spd_file(path: str | Path, name: str | None = None) -> Illuminant:
         got = f"{wavelengths[0]:g}–{wavelengths[-1]:g} nm" if wavelengths else "no rows"
         raise SpdFileError(p, "wavelength_nm", f"a range covering {lo:g}–{hi:g} nm", got)
     return Illuminant(name or p.stem, tuple(wavelengths), tuple(values))
+
+
+def illuminant_from_text(text: str, allow_files: bool = True) -> str | Illuminant:
+    """A catalogue name (canonical spelling) or, with *allow_files*, a user SPD file path (``*.csv``).
+
+    Raises
+    ------
+    ModelInputError
+        Neither a known illuminant nor (when allowed) a readable SPD file; :class:`SpdFileError` for a
+        bad file.
+    """
+    t = str(text).strip()
+    try:
+        return illuminant_name(t)
+    except ModelInputError:
+        if allow_files and t.lower().endswith(".csv"):
+            return read_spd_file(t)
+        raise
