@@ -16,10 +16,10 @@ import time
 import numpy as np
 
 from bench._report import Case, bench_parser, write_section
-from station.model.booth import metameric_pair
+from station.model.booth import BOOTH_SHAPES, metameric_pair
 from station.model.examples import SILVER
 from station.model.spectra import reflectance_from_lab
-from station.render.booth import BOOTH_SHAPES, BOOTH_SIZE, BoothPaint, BoothRenderer
+from station.render.booth import BOOTH_SIZE, BoothPaint, BoothRenderer
 
 ANGLES = (15.0, 25.0, 45.0, 75.0, 110.0)
 CYCLE = ("D65", "A", "F11", "TL84", "LED-B4")
@@ -28,12 +28,16 @@ SWITCHES = 20
 
 def _pair() -> tuple[BoothPaint, BoothPaint]:
     std, smp = metameric_pair(reflectance_from_lab(SILVER.lab_at(ANGLES)), strength=0.3)
-    return BoothPaint(ANGLES, std, SILVER.gloss_gu, "standard"), BoothPaint(ANGLES, smp, SILVER.gloss_gu, "trial")
+    return BoothPaint(ANGLES, std, SILVER.gloss_gu, "standard"), BoothPaint(
+        ANGLES, smp, SILVER.gloss_gu, "trial"
+    )
 
 
 def main() -> None:
     ap = bench_parser(__doc__, "booth")
-    ap.add_argument("--size", type=int, default=BOOTH_SIZE, help=f"picture side in pixels (default {BOOTH_SIZE})")
+    ap.add_argument(
+        "--size", type=int, default=BOOTH_SIZE, help=f"picture side in pixels (default {BOOTH_SIZE})"
+    )
     args = ap.parse_args()
     size = args.size
     std, smp = _pair()
@@ -54,7 +58,13 @@ def main() -> None:
         px = f"{size}x{size}"
         cases += [
             Case(f"{shape}: cold first picture (baseline)", px, cold * 1e3, "ms", "basis images + frame"),
-            Case(f"{shape}: illuminant switch, median", px, med * 1e3, "ms", f"bar <= 500 ms; {cold / med:.0f}x faster"),
+            Case(
+                f"{shape}: illuminant switch, median",
+                px,
+                med * 1e3,
+                "ms",
+                f"bar <= 500 ms; {cold / med:.0f}x faster",
+            ),
             Case(f"{shape}: illuminant switch, worst", px, max(times) * 1e3, "ms", f"{SWITCHES} switches"),
         ]
     write_section(

@@ -34,13 +34,29 @@ import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from station.model.booth import BOOTH_SHAPES, check_booth_shape
 from station.model.colorimetry import OBSERVER_10
+from station.model.errors import ModelInputError
 from station.render.errors import RenderInputError
+
+__all__ = [
+    "BOOTH_SHAPES",
+    "BoothFrame",
+    "BoothPaint",
+    "BoothRenderer",
+    "adapted_lab",
+    "booth_design",
+    "booth_strip",
+    "light_tint",
+    "paint_from_reading",
+    "render_booth_file",
+    "render_booth_png",
+]
 
 if TYPE_CHECKING:
     from station.model import FaceFlopTravelGloss
@@ -49,8 +65,6 @@ if TYPE_CHECKING:
     from station.render.prefilter import PrefilteredBasis
     from station.render.weights import LobeWeights
 
-#: Parts the booth shows: two flat panels side by side, a fender-over-bumper seam, the car body.
-BOOTH_SHAPES = ("panels", "seam", "car")
 #: Default picture size (pixels, square).
 BOOTH_SIZE = 384
 #: Largest picture side (pixels).
@@ -86,7 +100,9 @@ class BoothPaint:
         field_name = f"{self.name or 'paint'}.spectra"
         if sp.shape != (len(angles), WAVELENGTHS.size) or not np.all(np.isfinite(sp)):
             raise RenderInputError(
-                field_name, f"{len(angles)} finite spectra of {WAVELENGTHS.size} values (400–700 nm, 10 nm)", sp.shape
+                field_name,
+                f"{len(angles)} finite spectra of {WAVELENGTHS.size} values (400–700 nm, 10 nm)",
+                sp.shape,
             )
         if sum(1 for a in angles if a > 0) < 3:
             raise RenderInputError(
@@ -152,9 +168,11 @@ def booth_design(
 
 
 def _check_shape(shape: str) -> str:
-    if shape not in BOOTH_SHAPES:
-        raise RenderInputError("shape", " | ".join(BOOTH_SHAPES), shape)
-    return shape
+    """*shape* when it is one of the model's BOOTH_SHAPES (panels, seam, car), else RenderInputError."""
+    try:
+        return check_booth_shape(shape)
+    except ModelInputError as exc:
+        raise RenderInputError(exc.field, exc.accepted, exc.got) from None
 
 
 def _check_size(size: int) -> int:
@@ -242,10 +260,10 @@ class BoothFrame:
 class BoothRenderer:
     """Renders booth pictures, keeping the prefiltered booth and each shape's basis images (module doc).
 
-    ``size``: picture side in pixels; ``gl_ctx``: a moderngl context for the car's basis images (default:
-    a headless one made when needed); ``basis``: the prefiltered booth of another renderer to share
-(default: built on first use). One renderer per caller (a viewer screen, a CLI run); not shared
-    between threads.
+        ``size``: picture side in pixels; ``gl_ctx``: a moderngl context for the car's basis images (default:
+        a headless one made when needed); ``basis``: the prefiltered booth of another renderer to share
+    (default: built on first use). One renderer per caller (a viewer screen, a CLI run); not shared
+        between threads.
     """
 
     def __init__(
@@ -360,4 +378,75 @@ def booth_strip(
     if not illuminants:
         raise RenderInputError("illuminants", "at least one illuminant", list(illuminants))
     r = renderer if renderer is not None else BoothRenderer(size)
-    return np.concatenate([r.frame(standard, sample, ill, observer, shape).image for ill in illuminants], axis=1)
+    return np.concatenate(
+        [r.frame(standard, sample, ill, observer, shape).image for ill in illuminants], axis=1
+    )
+
+
+class SpectralReading(Protocol):
+    """What :func:`paint_from_reading` reads of a reading (``station.qc.readings.Reading`` has it)."""
+
+    @property
+    def aspecular_deg(self) -> tuple[float, ...]: ...
+    @property
+    def spectra(self) -> tuple[tuple[float, ...], ...] | None: ...
+    @property
+    def wavelengths_nm(self) -> tuple[float, ...] | None: ...
+
+
+def paint_from_reading(reading: SpectralReading, role: str, gloss_gu: float | None = None) -> BoothPaint:
+    """A :class:`BoothPaint` of a reading's spectra at the product's wavelengths (400–700 nm, 10 nm).
+
+    RenderInputError naming ``<role>.spectra`` when the reading has no spectra or misses a band."""
+    from station.model.spectra import WAVELENGTHS
+
+    if reading.spectra is None or reading.wavelengths_nm is None:
+        raise RenderInputError(f"{role}.spectra", "a reading with spectra", "no spectra")
+    wl = [float(w) for w in reading.wavelengths_nm]
+    missing = [float(w) for w in WAVELENGTHS if float(w) not in wl]
+    if missing:
+        raise RenderInputError(
+            f"{role}.spectra", "every band of 400–700 nm at 10 nm", f"missing {missing[:3]}"
+        )
+    cols = [wl.index(float(w)) for w in WAVELENGTHS]
+    return BoothPaint(reading.aspecular_deg, np.asarray(reading.spectra, float)[:, cols], gloss_gu, role)
+
+
+def _caption(image: NDArray[np.uint8], text: str) -> NDArray[np.uint8]:
+    """*image* with a strip of *text* below it (Pillow's default font)."""
+    from PIL import Image, ImageDraw
+
+    h, w = image.shape[:2]
+    bar = max(14, h // 16)
+    canvas = Image.new("RGB", (w, h + bar), (32, 32, 32))
+    canvas.paste(Image.fromarray(np.ascontiguousarray(image)), (0, 0))
+    ImageDraw.Draw(canvas).text((4, h + (bar - 11) // 2), text, fill=(235, 235, 235))
+    return np.asarray(canvas)
+
+
+def render_booth_file(
+    *,
+    comparison: object,
+    standard: SpectralReading,
+    sample: SpectralReading,
+    illuminants: Sequence[str | Illuminant],
+    observer: str,
+    shape: str,
+    out: Path,
+    size: int = BOOTH_SIZE,
+) -> Path:
+    """``station booth --out``: the booth under each illuminant side by side, each tile captioned with the
+    illuminant and, when *comparison* (``station.qc.booth.BoothComparison``) is given, its mean ΔE00."""
+    std, smp = paint_from_reading(standard, "standard"), paint_from_reading(sample, "sample")
+    if not illuminants:
+        raise RenderInputError("illuminants", "at least one illuminant", [])
+    r = BoothRenderer(size)
+    tiles = []
+    for ill in illuminants:
+        name = getattr(ill, "name", ill)
+        text = f"{name}"
+        under = getattr(comparison, "under", None)
+        if under is not None:
+            text += f"   mean dE00 {under(name).mean_de:.2f}"
+        tiles.append(_caption(r.frame(std, smp, ill, observer, shape).image, text))
+    return write_png(np.concatenate(tiles, axis=1), out)

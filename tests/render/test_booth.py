@@ -63,7 +63,9 @@ def test_light_tint_d65_neutral_a_warm_luminance_one() -> None:
     ratio = (m @ xyz_a) / (m @ xyz_d)
     t0 = booth.light_tint("A", degree=0.0)
     assert t0[2] / t0[0] == pytest.approx(ratio[2] / ratio[0], rel=0.1)
-    b_over_r = [booth.light_tint("A", degree=d)[2] / booth.light_tint("A", degree=d)[0] for d in (0, 0.5, 0.9)]
+    b_over_r = [
+        booth.light_tint("A", degree=d)[2] / booth.light_tint("A", degree=d)[0] for d in (0, 0.5, 0.9)
+    ]
     assert b_over_r == sorted(b_over_r)
 
 
@@ -140,7 +142,9 @@ def test_car_basis_images_equal_a_direct_gl_render(gl_ctx, pair) -> None:
 
 def test_render_booth_png_writes_the_picture(tmp_path, renderer, pair) -> None:
     std, smp = pair
-    out = booth.render_booth_png(std, smp, "F11", shape="panels", out_path=tmp_path / "b.png", renderer=renderer)
+    out = booth.render_booth_png(
+        std, smp, "F11", shape="panels", out_path=tmp_path / "b.png", renderer=renderer
+    )
     with Image.open(out) as im:
         assert im.size == (SIZE, SIZE) and im.mode == "RGB"
     strip = booth.booth_strip(std, smp, ["D65", "A"], renderer=renderer)
