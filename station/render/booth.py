@@ -246,6 +246,49 @@ def mesh_basis_images(basis: PrefilteredBasis, size: int, gl_ctx: object = None)
     )
 
 
+#: Longest wait for the process that draws the car's basis images (seconds).
+ISOLATED_TIMEOUT_S = 300.0
+
+
+def mesh_basis_images_isolated(basis: PrefilteredBasis, size: int) -> BasisImages:
+    """:func:`mesh_basis_images` run by a Python process of its own (``python -m station.render.booth``,
+    the basis in and the images out as pickles over its stdin / stdout), so its headless EGL context
+    never shares a process with the caller's GL (a Qt viewer: Mesa cannot make a Qt GLX context current
+    in a process that has used EGL, docs/adr/0003). Costs the child's start (about a second) per view;
+    RenderError with the child's last error line when it fails."""
+    import pickle
+    import subprocess
+    import sys
+
+    from station.render.errors import RenderError
+
+    try:
+        done = subprocess.run(  # this interpreter running this module
+            [sys.executable, "-m", "station.render.booth"],
+            input=pickle.dumps((basis, int(size))),
+            capture_output=True,
+            timeout=ISOLATED_TIMEOUT_S,
+            check=False,
+        )
+    except subprocess.TimeoutExpired as exc:
+        raise RenderError(f"car basis images: no answer in {ISOLATED_TIMEOUT_S:g} s") from exc
+    if done.returncode != 0:
+        lines = done.stderr.decode("utf-8", "replace").strip().splitlines() or ["no message"]
+        raise RenderError(f"car basis images: the drawing process failed: {lines[-1]}")
+    images: BasisImages = pickle.loads(done.stdout)  # our own child's answer
+    return images
+
+
+def _serve_mesh_basis_images() -> None:
+    """The child of :func:`mesh_basis_images_isolated`: (basis, size) pickled on stdin → images on stdout."""
+    import pickle
+    import sys
+
+    basis, size = pickle.loads(sys.stdin.buffer.read())  # from our own parent
+    sys.stdout.buffer.write(pickle.dumps(mesh_basis_images(basis, size), protocol=pickle.HIGHEST_PROTOCOL))
+    sys.stdout.buffer.flush()
+
+
 @dataclass(frozen=True)
 class BoothFrame:
     """A booth picture: ``image`` (H, W, 3) uint8 sRGB, the ``designs`` (standard, trial) it shows, the
@@ -260,17 +303,23 @@ class BoothFrame:
 class BoothRenderer:
     """Renders booth pictures, keeping the prefiltered booth and each shape's basis images (module doc).
 
-        ``size``: picture side in pixels; ``gl_ctx``: a moderngl context for the car's basis images (default:
-        a headless one made when needed); ``basis``: the prefiltered booth of another renderer to share
-    (default: built on first use). One renderer per caller (a viewer screen, a CLI run); not shared
-        between threads.
+            ``size``: picture side in pixels; ``gl_ctx``: a moderngl context for the car's basis images (default:
+            a headless one made when needed); ``basis``: the prefiltered booth of another renderer to share
+        (default: built on first use); ``isolate_gl``: build the car's images in a process of its own
+    (:func:`mesh_basis_images_isolated`, for a caller with GL of its own, the viewer). One renderer per caller (a viewer screen, a CLI run); not shared
+            between threads.
     """
 
     def __init__(
-        self, size: int = BOOTH_SIZE, gl_ctx: object = None, basis: PrefilteredBasis | None = None
+        self,
+        size: int = BOOTH_SIZE,
+        gl_ctx: object = None,
+        basis: PrefilteredBasis | None = None,
+        isolate_gl: bool = False,
     ) -> None:
         self.size = _check_size(size)
         self._gl_ctx = gl_ctx
+        self._isolate_gl = bool(isolate_gl)
         self._basis = basis
         self._views: dict[str, BasisImages] = {}
 
@@ -302,7 +351,11 @@ class BoothRenderer:
         panels and the seam, the GL renderer for the car, GLUnavailableError without an OpenGL stack)."""
         if _check_shape(shape) not in self._views:
             if shape == "car":
-                self._views[shape] = mesh_basis_images(self.basis, self.size, self._gl_ctx)
+                self._views[shape] = (
+                    mesh_basis_images_isolated(self.basis, self.size)
+                    if self._isolate_gl
+                    else mesh_basis_images(self.basis, self.size, self._gl_ctx)
+                )
             else:
                 from station.render.basis_images import build_basis_images
                 from station.render.shapes import Scene
@@ -450,3 +503,7 @@ def render_booth_file(
             text += f"   mean dE00 {under(name).mean_de:.2f}"
         tiles.append(_caption(r.frame(std, smp, ill, observer, shape).image, text))
     return write_png(np.concatenate(tiles, axis=1), out)
+
+
+if __name__ == "__main__":
+    _serve_mesh_basis_images()

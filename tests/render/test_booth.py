@@ -169,3 +169,13 @@ def test_bad_input_names_the_field(renderer, pair) -> None:
     with pytest.raises(InputError) as bad:
         renderer.frame(std, std, "Z99", shape="panels")
     assert "illuminant" in str(bad.value)
+
+
+@pytest.mark.gl
+def test_isolated_car_images_equal_the_in_process_ones(gl_ctx, renderer) -> None:
+    """The viewer's path (a spawned process draws the car) gives the same basis images."""
+    here = booth.mesh_basis_images(renderer.basis, SIZE, gl_ctx)
+    there = booth.BoothRenderer(SIZE, basis=renderer.basis, isolate_gl=True).view("car")
+    np.testing.assert_array_equal(here.pixels, there.pixels)
+    assert here.split == there.split and here.layout == there.layout
+    np.testing.assert_allclose(here.images, there.images, atol=1e-5)
