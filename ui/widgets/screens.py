@@ -106,6 +106,15 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
         return QcScreen(QcModel(LocalQc(url)))
 
+    def booth() -> QWidget:
+        from ui.models.booth import BoothModel, LocalBoothSource
+        from ui.models.measure_db import LocalSink
+        from ui.widgets.booth_screen import BoothScreen
+
+        sink = window.store.sink
+        url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
+        return BoothScreen(BoothModel(None if window.service is not None else LocalBoothSource(url)))
+
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
 
@@ -118,5 +127,6 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         ("Instruments", LazyScreen(instruments)),
         ("QA", LazyScreen(qa)),
         ("QC", LazyScreen(qc)),
+        ("Booth", LazyScreen(booth)),
         ("Formulation", formulation),
     ]
