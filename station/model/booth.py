@@ -3,14 +3,16 @@
 Lab under an illuminant is :func:`station.model.spectra.reflectance_to_lab` (ASTM E308 weights through
 colour-science, relative to that illuminant's own white, 2° or 10° observer); this module builds on it:
 
-* :func:`lab_to_display_under` — what a display adapted to D65 shows of a Lab seen under an illuminant,
-  for an observer adapted (fully, or to a degree D) to that illuminant: Lab → XYZ relative to the
-  illuminant's white → CAT16 to the sRGB white (colour-science's von Kries / Zhai 2018 adaptation with
-  the CAT16 matrix) → linear sRGB → the display encoding (:mod:`station.model.display`).
+* :func:`display_equivalent_lab` / :func:`lab_to_display_under` — what a D65 display shows of a Lab
+  seen under an illuminant, for an observer adapted (fully, or to a degree D) to that illuminant:
+  Lab → XYZ relative to the illuminant's white → CAT16 to D65's white (colour-science's von Kries /
+  Zhai 2018 adaptation with the CAT16 matrix) → the product's D65 Lab → its display pipeline
+  (:mod:`station.model.colorimetry`, :mod:`station.model.display`). Under D65 nothing changes.
 * :func:`light_colour` — the booth light's own colour on that display (no adaptation): what the
   environment of a booth render is tinted by.
 * :func:`fit_under_illuminant` — the face/flop/travel/gloss design fitted to the Lab per geometry under
-  an illuminant (the model hierarchy unchanged: the same :func:`station.model.fit.fit_fftg`).
+  an illuminant (the model hierarchy unchanged: the same :func:`station.model.fit.fit_fftg`);
+  :func:`display_design_under` — the design to render: fitted to the display-equivalent Lab.
 * :func:`metameric_black` / :func:`metameric_pair` — a spectrum invisible under one illuminant (the null
   space of its weighting factors) and, added to a paint's spectra per geometry, a sample that matches
   the standard under D65 and not under A: the test object of every booth check.
@@ -24,19 +26,20 @@ import colour
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.model.colorimetry import OBSERVER_10, lab_to_xyz
+from station.model.colorimetry import OBSERVER_10, lab_to_linear_srgb, lab_to_xyz, xyz_to_lab
 from station.model.display import encode_display
 from station.model.domain import REFLECTANCE_MAX, check_ranged
 from station.model.errors import ModelInputError
 from station.model.fit import FitResult, fit_fftg
-from station.model.illuminants import Illuminant, illuminant_sd, observer_cie_name
+from station.model.illuminants import REFERENCE_ILLUMINANT, Illuminant, illuminant_sd, observer_cie_name
 from station.model.representations import AspecularMeasurements
 from station.model.spectra import WAVELENGTHS, reflectance_to_lab, weighting_factors, whitepoint_xyz
 
 __all__ = [
     "BOOTH_SHAPES",
-    "DISPLAY_WHITE_XYZ",
     "check_booth_shape",
+    "display_design_under",
+    "display_equivalent_lab",
     "fit_under_illuminant",
     "lab_to_display_under",
     "lab_to_linear_srgb_under",
@@ -47,12 +50,6 @@ __all__ = [
 
 #: What a booth shows standard and sample on: two flat panels side by side, a bumper/fender seam, a car.
 BOOTH_SHAPES: tuple[str, ...] = ("panels", "seam", "car")
-
-_SRGB = colour.RGB_COLOURSPACES["sRGB"]
-#: XYZ of the display's white, sRGB's D65 (CIE 1931 2°): the XYZ that sRGB's IEC 61966-2-1 matrix maps
-#: to linear (1, 1, 1) (Y = 1 to the matrix's 4 decimals).
-DISPLAY_WHITE_XYZ: NDArray[np.float64] = np.linalg.solve(_SRGB.matrix_XYZ_to_RGB, np.ones(3))
-DISPLAY_WHITE_XYZ.flags.writeable = False
 
 
 def check_booth_shape(shape: str, field: str = "shape") -> str:
@@ -66,13 +63,18 @@ def _name(illuminant: str | Illuminant) -> str:
     return illuminant.name if isinstance(illuminant, Illuminant) else illuminant_sd(illuminant)[0]
 
 
-def lab_to_linear_srgb_under(
+def display_equivalent_lab(
     lab: ArrayLike,
     illuminant: str | Illuminant,
     observer: str = OBSERVER_10,
     adaptation: float = 1.0,
 ) -> NDArray[np.float64]:
-    """Linear sRGB (unclipped, white = 1) of Lab seen under *illuminant*, shown on a D65 display.
+    """The corresponding colour under D65 of *lab* seen under *illuminant* (CAT16), as the product's Lab.
+
+    Lab → XYZ relative to *illuminant*'s white → CAT16 (colour-science) to D65's white for the same
+    observer → Lab relative to D65. Hand the result to anything that takes the product's D65 Lab or a
+    design (the display pipeline, the renderer): it shows the colour as the booth's observer sees it.
+    Under D65 it is *lab* itself.
 
     Parameters
     ----------
@@ -90,20 +92,33 @@ def lab_to_linear_srgb_under(
     """
     d = check_ranged("adaptation", adaptation, 0.0, 1.0)
     white = whitepoint_xyz(illuminant, observer)  # Y = 1
+    target = whitepoint_xyz(REFERENCE_ILLUMINANT, observer)
     xyz = lab_to_xyz(lab, colour.XYZ_to_xy(white))  # Y of the white = 1
     if d == 1.0:
-        adapted = colour.adaptation.chromatic_adaptation_VonKries(
-            xyz, white, DISPLAY_WHITE_XYZ, transform="CAT16"
-        )
+        adapted = colour.adaptation.chromatic_adaptation_VonKries(xyz, white, target, transform="CAT16")
     else:
         with colour.utilities.domain_range_scale("reference"):
             adapted = (
                 colour.adaptation.chromatic_adaptation_Zhai2018(
-                    xyz * 100.0, white * 100.0, DISPLAY_WHITE_XYZ * 100.0, D_b=d, D_d=1.0, transform="CAT16"
+                    xyz * 100.0, white * 100.0, target * 100.0, D_b=d, D_d=1.0, transform="CAT16"
                 )
                 / 100.0
             )
-    return np.asarray(adapted @ _SRGB.matrix_XYZ_to_RGB.T, dtype=float)
+    return xyz_to_lab(adapted, colour.XYZ_to_xy(target))
+
+
+def lab_to_linear_srgb_under(
+    lab: ArrayLike,
+    illuminant: str | Illuminant,
+    observer: str = OBSERVER_10,
+    adaptation: float = 1.0,
+) -> NDArray[np.float64]:
+    """Linear sRGB (unclipped, white = 1) of Lab seen under *illuminant*, shown on a D65 display.
+
+    :func:`station.model.colorimetry.lab_to_linear_srgb` of :func:`display_equivalent_lab` (same
+    parameters): a perfect white under any illuminant, fully adapted, is (1, 1, 1).
+    """
+    return lab_to_linear_srgb(display_equivalent_lab(lab, illuminant, observer, adaptation))
 
 
 def lab_to_display_under(
@@ -116,14 +131,38 @@ def lab_to_display_under(
     return encode_display(lab_to_linear_srgb_under(lab, illuminant, observer, adaptation))
 
 
+def display_design_under(
+    reflectance: ArrayLike,
+    angles_deg: Sequence[float],
+    illuminant: str | Illuminant,
+    observer: str = OBSERVER_10,
+    gloss_gu: float | None = None,
+    adaptation: float = 1.0,
+) -> FitResult:
+    """The design to render for spectra per geometry seen under *illuminant* (the model hierarchy unchanged).
+
+    Lab per geometry under *illuminant* → :func:`display_equivalent_lab` →
+    :func:`station.model.fit.fit_fftg`.
+    The design is in the product's D65 / 10° Lab, so the renderer, its lobe fit and cached basis images
+    are used as they are; switching illuminant changes the design's numbers only. (:func:`fit_under_illuminant`
+    is the colorimetric design, Lab relative to the illuminant's white.)
+    """
+    lab = display_equivalent_lab(
+        reflectance_to_lab(reflectance, illuminant, observer), illuminant, observer, adaptation
+    )
+    return fit_fftg(AspecularMeasurements(tuple(float(a) for a in angles_deg), lab, gloss_gu))
+
+
 def light_colour(illuminant: str | Illuminant, observer: str = OBSERVER_10) -> NDArray[np.float64]:
     """Linear sRGB of the illuminant's white on a D65 display, scaled so its largest channel is 1.
 
-    No adaptation: the colour of the booth's light as a D65-adapted viewer sees it (A is orange, D65
-    white), the tint of a booth environment. Shape (3,).
+    No adaptation: the colour of the booth's light as a D65-adapted viewer sees it (the lamp's white as
+    Lab relative to D65's white, then the product's display pipeline): A is orange, D65 is (1, 1, 1).
+    The tint of a booth environment. Shape (3,).
     """
-    rgb = _SRGB.matrix_XYZ_to_RGB @ whitepoint_xyz(illuminant, observer)
-    rgb = np.clip(rgb, 0.0, None)
+    white = whitepoint_xyz(illuminant, observer)
+    d65 = whitepoint_xyz(REFERENCE_ILLUMINANT, observer)
+    rgb = np.clip(lab_to_linear_srgb(xyz_to_lab(white, colour.XYZ_to_xy(d65))), 0.0, None)
     return np.asarray(rgb / rgb.max(), dtype=float)
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -35,6 +36,7 @@ __all__ = [
     "Illuminant",
     "SpdFileError",
     "booth_illuminant",
+    "illuminant_from_spd",
     "illuminant_from_text",
     "illuminant_name",
     "illuminant_sd",
@@ -182,11 +184,55 @@ def read_spd_file(path: str | Path, name: str | None = None) -> Illuminant:
             raise SpdFileError(p, f"row {i}: value", "a finite spectral power > 0", cells[1])
         wavelengths.append(w)
         values.append(v)
-    lo, hi = SPD_RANGE_NM
-    if len(wavelengths) < 2 or wavelengths[0] > lo or wavelengths[-1] < hi:
-        got = f"{wavelengths[0]:g}–{wavelengths[-1]:g} nm" if wavelengths else "no rows"
-        raise SpdFileError(p, "wavelength_nm", f"a range covering {lo:g}–{hi:g} nm", got)
+    short = _range_short(wavelengths)
+    if short is not None:
+        raise SpdFileError(p, "wavelength_nm", _RANGE_ACCEPTED, short)
     return Illuminant(name or p.stem, tuple(wavelengths), tuple(values))
+
+
+_RANGE_ACCEPTED = f"a range covering {SPD_RANGE_NM[0]:g}–{SPD_RANGE_NM[1]:g} nm"
+
+
+def _range_short(wavelengths: Sequence[float]) -> str | None:
+    """None when *wavelengths* cover :data:`SPD_RANGE_NM`, else what they do cover (for the message)."""
+    lo, hi = SPD_RANGE_NM
+    if len(wavelengths) >= 2 and wavelengths[0] <= lo and wavelengths[-1] >= hi:
+        return None
+    return f"{wavelengths[0]:g}–{wavelengths[-1]:g} nm" if wavelengths else "no values"
+
+
+def illuminant_from_spd(
+    name: str, wavelengths_nm: Sequence[float], values: Sequence[float], field: str = "illuminant"
+) -> Illuminant:
+    """A user :class:`Illuminant` from arrays (a service body), validated like :func:`read_spd_file`.
+
+    Raises
+    ------
+    ModelInputError
+        Naming ``FIELD.name``, ``FIELD.wavelengths_nm`` or ``FIELD.values``: an empty name or one that
+        shadows a catalogue illuminant, wavelengths not strictly increasing or not covering 400–700 nm,
+        a value not finite and > 0, or lengths that differ.
+    """
+    label = str(name).strip()
+    if not label:
+        raise ModelInputError(f"{field}.name", "a non-empty name", name)
+    if any(label.upper() == known.upper() for known in BOOTH_ILLUMINANTS):
+        raise ModelInputError(f"{field}.name", "a name that is not a catalogue illuminant", name)
+    wl = [float(w) for w in wavelengths_nm]
+    vals = [float(v) for v in values]
+    if len(wl) != len(vals):
+        raise ModelInputError(f"{field}.values", f"{len(wl)} values (one per wavelength)", len(vals))
+    for i in range(len(wl)):
+        if not math.isfinite(wl[i]) or (i and wl[i] <= wl[i - 1]):
+            raise ModelInputError(
+                f"{field}.wavelengths_nm[{i}]", "finite wavelengths, strictly increasing", wl[i]
+            )
+        if not math.isfinite(vals[i]) or vals[i] <= 0.0:
+            raise ModelInputError(f"{field}.values[{i}]", "a finite spectral power > 0", vals[i])
+    short = _range_short(wl)
+    if short is not None:
+        raise ModelInputError(f"{field}.wavelengths_nm", _RANGE_ACCEPTED, short)
+    return Illuminant(label, tuple(wl), tuple(vals))
 
 
 def illuminant_from_text(text: str, allow_files: bool = True) -> str | Illuminant:

@@ -59,7 +59,11 @@ def _weighting_factors(illuminant: str | Illuminant, observer: str) -> NDArray[n
         with warnings.catch_warnings():  # colour warns that it trims the CMFs to our 400–700 nm range
             warnings.simplefilter("ignore")
             w[i] = colour.sd_to_XYZ(sd, cmfs, sd_illuminant, method="ASTM E308", shape=_SHAPE) / 100.0
-    w /= w[:, 1].sum()  # white → Y = 1 exactly
+    white_y = w[:, 1].sum()
+    if not (np.all(np.isfinite(w)) and np.isfinite(white_y) and white_y > 0.0):
+        name = illuminant.name if isinstance(illuminant, Illuminant) else illuminant
+        raise ModelInputError("illuminant", "a spectral power giving a finite, positive white", name)
+    w /= white_y  # white → Y = 1 exactly
     w.setflags(write=False)
     return w
 

@@ -47,6 +47,8 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("GET", f"{V1}/qc/jobs/{{job}}/report.csv"): ALL,
     ("POST", f"{V1}/qc/metamerism"): ALL,
     ("POST", f"{V1}/qc/repeats"): ALL,
+    ("POST", f"{V1}/booth"): ALL,
+    ("GET", f"{V1}/booth/illuminants"): ALL,
     ("POST", f"{V1}/analyses/seam"): frozenset({Q, A}),
     ("POST", f"{V1}/analyses/gg-index"): frozenset({Q, A}),
     ("POST", f"{V1}/analyses/gg-index/environment"): frozenset({Q, A}),

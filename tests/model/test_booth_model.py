@@ -11,7 +11,6 @@ import pytest
 
 from station.errors import InputError
 from station.model.booth import (
-    DISPLAY_WHITE_XYZ,
     fit_under_illuminant,
     lab_to_display_under,
     lab_to_linear_srgb_under,
@@ -191,23 +190,32 @@ def test_fit_under_illuminant_is_the_fit_of_that_lab(blue: np.ndarray) -> None:
     assert result.design != fit_under_illuminant(blue, (15, 45, 110), "D65").design
 
 
-def test_display_under_illuminant_is_cat16_to_display_white(blue: np.ndarray) -> None:
-    srgb = colour.RGB_COLOURSPACES["sRGB"]
+def test_display_under_illuminant_is_cat16_to_d65(blue: np.ndarray) -> None:
+    from station.model.booth import display_equivalent_lab
+    from station.model.colorimetry import lab_to_linear_srgb
+    from station.model.display import lab_to_display
+
     for name in ("A", "F11", "LED-B4"):
         # a perfect white under any illuminant, fully adapted, is the display white
         assert lab_to_linear_srgb_under([100, 0, 0], name) == pytest.approx([1, 1, 1], abs=1e-9)
         lab = reflectance_to_lab(blue, name)
         w = weighting_factors(name).sum(axis=0)
+        w65 = weighting_factors("D65").sum(axis=0)
         xyz = colour.Lab_to_XYZ(lab, colour.XYZ_to_xy(w)) * w[1]
-        adapted = colour.chromatic_adaptation(
-            xyz, w, DISPLAY_WHITE_XYZ, method="Von Kries", transform="CAT16"
+        adapted = colour.chromatic_adaptation(xyz, w, w65, method="Von Kries", transform="CAT16")
+        expected_lab = colour.XYZ_to_Lab(adapted / w65[1], colour.XYZ_to_xy(w65))
+        assert display_equivalent_lab(lab, name) == pytest.approx(expected_lab, abs=1e-9)
+        assert lab_to_linear_srgb_under(lab, name) == pytest.approx(
+            lab_to_linear_srgb(expected_lab), abs=1e-9
         )
-        expected = colour.XYZ_to_RGB(adapted, srgb, apply_cctf_encoding=False)
-        assert lab_to_linear_srgb_under(lab, name) == pytest.approx(expected, abs=1e-9)
-        shown = lab_to_display_under(lab, name)
-        assert shown == pytest.approx(np.clip(srgb.cctf_encoding(np.clip(expected, 0, 1)), 0, 1), abs=1e-9)
-        # partial adaptation: Zhai 2018 with D = 1 is the full adaptation; D = 0 keeps the light's cast
-        assert lab_to_linear_srgb_under(lab, name, adaptation=1 - 1e-12) == pytest.approx(expected, abs=1e-4)
+        assert lab_to_display_under(lab, name) == pytest.approx(lab_to_display(expected_lab), abs=1e-9)
+        # partial adaptation: Zhai 2018 with D = 1 is the full adaptation
+        assert display_equivalent_lab(lab, name, adaptation=1 - 1e-12) == pytest.approx(
+            expected_lab, abs=1e-4
+        )
+    # under D65 the booth changes nothing
+    lab = reflectance_to_lab(blue)
+    assert display_equivalent_lab(lab, "D65") == pytest.approx(lab, abs=1e-9)
     white_a = lab_to_linear_srgb_under([100, 0, 0], "A", adaptation=0.0)
     assert white_a[0] > white_a[2] * 1.5  # tungsten stays orange to an unadapted eye
     with pytest.raises(InputError, match="adaptation"):
@@ -217,7 +225,7 @@ def test_display_under_illuminant_is_cat16_to_display_white(blue: np.ndarray) ->
 def test_light_colour() -> None:
     a = light_colour("A")
     assert a.max() == pytest.approx(1.0) and a[0] == 1.0 and a[2] < 0.3
-    assert light_colour("D65") == pytest.approx([1, 1, 1], abs=0.03)
+    assert light_colour("D65") == pytest.approx([1, 1, 1], abs=1e-9)
 
 
 def test_metameric_pair_refuses_bad_strength(blue: np.ndarray) -> None:
@@ -230,3 +238,45 @@ def test_illuminant_is_hashable_key() -> None:
     a = Illuminant("x", (400.0, 700.0), (1.0, 1.0))
     b = Illuminant("x", (400.0, 700.0), (1.0, 1.0))
     assert hash(a) == hash(b) and weighting_factors(a) is weighting_factors(b)
+
+
+def test_user_illuminant_from_arrays(blue: np.ndarray) -> None:
+    from station.model.illuminants import illuminant_from_spd
+
+    wl = [380.0, 500.0, 780.0]
+    lamp = illuminant_from_spd("bench", wl, [1.0, 2.0, 1.5], "body.lamp")
+    assert lamp == Illuminant("bench", tuple(wl), (1.0, 2.0, 1.5))
+    sd = colour.SpectralDistribution(
+        dict(zip(wl, [1.0, 2.0, 1.5], strict=True)), interpolator=colour.LinearInterpolator
+    )
+    assert reflectance_to_lab(blue, lamp) == pytest.approx(
+        _colour_lab(blue, sd, observer_cie_name("10")), abs=1e-6
+    )
+    for args, field in [
+        (("", wl, [1.0, 2.0, 1.5]), "body.lamp.name"),
+        (("TL84", wl, [1.0, 2.0, 1.5]), "body.lamp.name"),
+        (("x", wl, [1.0, 2.0]), "body.lamp.values"),
+        (("x", wl, [1.0, -2.0, 1.5]), "body.lamp.values[1]"),
+        (("x", [380.0, 380.0, 780.0], [1.0, 2.0, 1.5]), "body.lamp.wavelengths_nm[1]"),
+        (("x", [420.0, 500.0, 780.0], [1.0, 2.0, 1.5]), "body.lamp.wavelengths_nm"),
+    ]:
+        with pytest.raises(InputError) as err:
+            illuminant_from_spd(*args, field="body.lamp")
+        assert err.value.field == field
+
+
+def test_display_equivalent_lab_and_design(blue: np.ndarray) -> None:
+    from station.model.booth import display_design_under, display_equivalent_lab
+    from station.model.colorimetry import lab_to_linear_srgb
+
+    for name in ("A", "F11", "LED-B3"):
+        lab = reflectance_to_lab(blue, name)
+        shown = display_equivalent_lab(lab, name)
+        assert lab_to_linear_srgb(shown) == pytest.approx(lab_to_linear_srgb_under(lab, name), abs=1e-9)
+        result = display_design_under(blue, (15, 45, 110), name, gloss_gu=80.0)
+        direct = fit_fftg(AspecularMeasurements((15.0, 45.0, 110.0), shown, 80.0))
+        assert result.design == direct.design and result.design.gloss_gu == 80.0
+    lab = reflectance_to_lab(blue)
+    # under A a fully adapted observer sees the blue still blue, but not the D65 colour
+    shown_a = display_equivalent_lab(reflectance_to_lab(blue, "A"), "A")
+    assert np.all(shown_a[:, 2] < -15) and np.abs(shown_a - lab).max() > 1

@@ -96,7 +96,7 @@ def test_user_illuminant_and_2_degree(pair: tuple[np.ndarray, np.ndarray]) -> No
 
 def test_refusals(pair: tuple[np.ndarray, np.ndarray]) -> None:
     std, _ = pair
-    lab_only = Reading(ANGLES, tuple(tuple(r) for r in GREEN), where="lab_only.json")
+    lab_only = Reading(ANGLES, tuple((r[0], r[1], r[2]) for r in GREEN), where="lab_only.json")
     with pytest.raises(QcInputError, match=r"lab_only\.json") as err:
         booth_compare(lab_only, _reading(std, "s"))
     assert "spectra" in str(err.value)

@@ -2,6 +2,7 @@
 
 from station.api.routes import (
     analyses,
+    booth,
     designs,
     formulation,
     health,
@@ -20,6 +21,7 @@ ROUTERS = [
     panels.router,
     measurements.router,
     qc.router,
+    booth.router,
     analyses.router,
     designs.router,
     library.router,

@@ -231,7 +231,8 @@ def report_csv(*, session: Session, job: str, formula: str | None) -> str:
     return report.csv_text(_summary(session, job, formula))
 
 
-def _stored(session: Session, measurement_id: int, field: str) -> Reading:
+def stored_reading(session: Session, measurement_id: int, field: str) -> Reading:
+    """The stored measurement *measurement_id* as a QC reading; 404 naming *field* when there is none."""
     m = session.get(Measurement, measurement_id)
     if m is None:
         raise NotFoundError(f"{field}: measurement {measurement_id} not found")
@@ -240,8 +241,8 @@ def _stored(session: Session, measurement_id: int, field: str) -> Reading:
 
 def metamerism_of(*, session: Session, request: MetamerismRequest) -> MetamerismOut:
     """Metamerism index D65 → A, F11 per geometry of two stored measurements (``station.qc.metamerism``)."""
-    std = _stored(session, request.standard_measurement_id, "standard_measurement_id")
-    smp = _stored(session, request.sample_measurement_id, "sample_measurement_id")
+    std = stored_reading(session, request.standard_measurement_id, "standard_measurement_id")
+    smp = stored_reading(session, request.sample_measurement_id, "sample_measurement_id")
     return MetamerismOut.model_validate(metamerism(std, smp, request.formula).to_dict())
 
 
@@ -250,7 +251,7 @@ def repeats_of(*, session: Session, request: RepeatsRequest) -> RepeatsOut:
     ids = request.measurement_ids
     if len(set(ids)) != len(ids):
         raise InputError("measurement_ids", "distinct measurement ids", ids)
-    readings = [_stored(session, mid, f"measurement_ids[{i}]") for i, mid in enumerate(ids)]
+    readings = [stored_reading(session, mid, f"measurement_ids[{i}]") for i, mid in enumerate(ids)]
     out = summarise(readings).to_dict()
     for row in out["readings"]:
         row["measurement_id"] = ids[row["index"]]

@@ -1,0 +1,112 @@
+"""The virtual light booth: standard against sample under booth illuminants (``/api/v1/booth``)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from station.api.schemas.common import StrictFloat, StrictInt
+from station.ingest.schema import MAX_GEOMETRIES
+
+#: At most this many values in one spectrum or user SPD (a 1 nm grid from 300 to 830 nm fits).
+MAX_BANDS = 531
+#: At most this many illuminants in one booth request.
+MAX_ILLUMINANTS = 16
+
+MeasurementId = Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
+Name = Annotated[str, Field(min_length=1, max_length=64)]
+
+
+class BoothSpectra(BaseModel):
+    """Reflectance per geometry in the body (measured elsewhere, imported or recipe-predicted)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    geometries: Annotated[
+        list[Annotated[str, Field(min_length=1, max_length=16)]],
+        Field(min_length=1, max_length=MAX_GEOMETRIES),
+    ]
+    spectra: Annotated[
+        list[Annotated[list[StrictFloat], Field(min_length=2, max_length=MAX_BANDS)]],
+        Field(min_length=1, max_length=MAX_GEOMETRIES),
+    ]
+    wavelengths_nm: Annotated[list[StrictFloat], Field(min_length=2, max_length=MAX_BANDS)] | None = None
+
+
+class UserIlluminant(BaseModel):
+    """A lamp of the lab's own: relative spectral power per wavelength, covering 400–700 nm, all > 0."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: Name
+    wavelengths_nm: Annotated[list[StrictFloat], Field(min_length=2, max_length=MAX_BANDS)]
+    values: Annotated[list[StrictFloat], Field(min_length=2, max_length=MAX_BANDS)]
+
+
+class BoothRequest(BaseModel):
+    """Standard and sample (stored measurement ids or spectra in the body), illuminants and observer."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "standard_measurement_id": 1,
+                    "sample_measurement_id": 2,
+                    "illuminants": ["D65", "A", "F11"],
+                    "observer": "10",
+                }
+            ]
+        },
+    )
+
+    standard_measurement_id: MeasurementId | None = None
+    sample_measurement_id: MeasurementId | None = None
+    standard: BoothSpectra | None = None
+    sample: BoothSpectra | None = None
+    illuminants: Annotated[list[Name], Field(min_length=1, max_length=MAX_ILLUMINANTS)] = ["D65", "A", "F11"]
+    user_illuminants: Annotated[list[UserIlluminant], Field(max_length=MAX_ILLUMINANTS)] = []
+    observer: Literal["2", "10"] = "10"
+
+    @model_validator(mode="after")
+    def _one_source_each(self) -> BoothRequest:
+        for role in ("standard", "sample"):
+            given = (getattr(self, f"{role}_measurement_id") is not None) + (getattr(self, role) is not None)
+            if given != 1:
+                raise ValueError(f"{role}: give exactly one of {role}_measurement_id and {role}")
+        return self
+
+
+class BoothGeometryOut(BaseModel):
+    """One geometry under one illuminant: both Lab (that illuminant's white), ΔE00 and the metamerism index."""
+
+    geometry: str
+    standard_lab: list[float]
+    sample_lab: list[float]
+    dE00: float
+    metamerism_index: float
+
+
+class BoothIlluminantOut(BaseModel):
+    """Every shared geometry under one illuminant, and the mean ΔE00 over them."""
+
+    name: str
+    per_geometry: list[BoothGeometryOut]
+    mean_de: float
+
+
+class BoothOut(BaseModel):
+    """Per illuminant and geometry: Lab of both, ΔE00, the CIE special metamerism index from the reference."""
+
+    illuminants: list[BoothIlluminantOut]
+    reference: str
+
+
+class BoothCatalogue(BaseModel):
+    """The booth's illuminants, observers and shapes."""
+
+    illuminants: list[str]
+    observers: dict[str, str]
+    shapes: list[str]
+    reference: str
