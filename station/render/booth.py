@@ -4,9 +4,9 @@ Each paint is given by its reflectance spectra per aspecular geometry (400–700
 illuminant and observer:
 
 * **Paint colour (the adapted observer).** The spectra give Lab under the illuminant relative to its own
-  white (ASTM E308, ``station.model.spectra``); CAT16 with full adaptation maps them to the D65 display
-  white (``station.model.booth.lab_to_linear_srgb_under``), and that display colour per geometry, as the
-  renderer's Lab (D65/10°), is fitted to a face/flop/travel/gloss design (thesis §3.3,
+  white (ASTM E308, ``station.model.spectra``); their CAT16 corresponding colour under D65 (full
+  adaptation, ``station.model.booth.display_design_under``), as the product's D65 Lab per geometry, is
+  fitted to a face/flop/travel/gloss design (thesis §3.3,
   ``station.model.fit_fftg``) and its lobe weights (thesis eqs 2.4.1–2.4.2). A white paint therefore looks
   white under every illuminant, and two paints that match under D65 but not under A (metamerism) look
   alike in the D65 picture and different in the A one, as a viewer adapted to the booth light sees them.
@@ -115,17 +115,15 @@ class BoothPaint:
 def adapted_lab(
     spectra: NDArray[np.float64], illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10
 ) -> NDArray[np.float64]:
-    """The renderer's Lab (D65/10°, ``station.model.colorimetry.linear_srgb_to_lab``) of reflectance
-    *spectra* (..., 31) seen under *illuminant* by a viewer fully adapted to it: Lab under the
-    illuminant's own white (``station.model.spectra.reflectance_to_lab``), CAT16 to the display white
-    (``station.model.booth.lab_to_linear_srgb_under``, adaptation 1), back to Lab. The lobe fit then
-    reproduces exactly that display colour (module doc)."""
-    from station.model.booth import lab_to_linear_srgb_under
-    from station.model.colorimetry import linear_srgb_to_lab
+    """The product's Lab (D65) of reflectance *spectra* (..., 31) seen under *illuminant* by a viewer fully
+    adapted to it: Lab under the illuminant's own white (``station.model.spectra.reflectance_to_lab``),
+    its CAT16 corresponding colour under D65 (``station.model.booth.display_equivalent_lab``). Identity
+    under D65 (module doc)."""
+    from station.model.booth import display_equivalent_lab
     from station.model.spectra import reflectance_to_lab
 
     lab = reflectance_to_lab(spectra, illuminant, observer)
-    return np.asarray(linear_srgb_to_lab(lab_to_linear_srgb_under(lab, illuminant, observer)), dtype=float)
+    return np.asarray(display_equivalent_lab(lab, illuminant, observer), dtype=float)
 
 
 def degree_of_adaptation(adapting_cd_m2: float = DISPLAY_ADAPTING_CD_M2, f: float = 1.0) -> float:
@@ -155,16 +153,16 @@ def light_tint(
 def booth_design(
     paint: BoothPaint, illuminant: str | Illuminant = "D65", observer: str = OBSERVER_10
 ) -> FaceFlopTravelGloss:
-    """The face/flop/travel/gloss design of *paint* under *illuminant* (adapted Lab of its positive
-    aspecular geometries, thesis eqs 3.3.1–3.3.10)."""
-    from station.model import AspecularMeasurements, fit_fftg
+    """The design to render for *paint* under *illuminant*: ``station.model.booth.display_design_under``
+    of its positive aspecular geometries (the adapted colour, thesis eqs 3.3.1–3.3.10)."""
+    from station.model.booth import display_design_under
 
     keep = sorted((a, i) for i, a in enumerate(paint.aspecular_deg) if a > 0)
-    angles = tuple(a for a, _ in keep)
-    lab = adapted_lab(paint.spectra[[i for _, i in keep]], illuminant, observer)
-    with warnings.catch_warnings():
+    angles = [a for a, _ in keep]
+    spectra = paint.spectra[[i for _, i in keep]]
+    with warnings.catch_warnings():  # a fit's residual warning: the picture is drawn all the same
         warnings.simplefilter("ignore")
-        return fit_fftg(AspecularMeasurements(angles, lab, paint.gloss_gu)).design
+        return display_design_under(spectra, angles, illuminant, observer, paint.gloss_gu).design
 
 
 def _check_shape(shape: str) -> str:
