@@ -17,11 +17,12 @@ import numpy as np
 
 from bench._report import Case, bench_parser, write_section
 from station.model.booth import BOOTH_SHAPES, metameric_pair
+from station.model.domain import ANGLES_5
 from station.model.examples import SILVER
 from station.model.spectra import reflectance_from_lab
 from station.render.booth import BOOTH_SIZE, BoothPaint, BoothRenderer
 
-ANGLES = (15.0, 25.0, 45.0, 75.0, 110.0)
+ANGLES = ANGLES_5
 CYCLE = ("D65", "A", "F11", "TL84", "LED-B4")
 SWITCHES = 20
 

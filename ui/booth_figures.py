@@ -24,8 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
+from station.model.domain import ANGLES_5
+
 #: The pair's geometries (aspecular degrees) and metameric strength.
-ANGLES = (15.0, 25.0, 45.0, 75.0, 110.0)
+ANGLES = ANGLES_5
 STRENGTH = 0.2
 #: Picture side of the car figures and of the screen's picture (pixels).
 FIGURE_SIZE = 384
@@ -49,10 +51,15 @@ def car_figures(out: Path) -> list[Path]:
     from station.render.booth import BoothPaint, BoothRenderer, render_booth_png
 
     std, smp = silver_pair()
-    paints = BoothPaint(ANGLES, std, SILVER.gloss_gu, "standard"), BoothPaint(ANGLES, smp, SILVER.gloss_gu, "trial")
+    paints = (
+        BoothPaint(ANGLES, std, SILVER.gloss_gu, "standard"),
+        BoothPaint(ANGLES, smp, SILVER.gloss_gu, "trial"),
+    )
     renderer = BoothRenderer(FIGURE_SIZE, isolate_gl=True)
     return [
-        render_booth_png(*paints, ill, shape="car", out_path=out / f"booth-car-{ill.lower()}.png", renderer=renderer)
+        render_booth_png(
+            *paints, ill, shape="car", out_path=out / f"booth-car-{ill.lower()}.png", renderer=renderer
+        )
         for ill in ("D65", "A", "F11")
     ]
 
@@ -134,7 +141,9 @@ def write_figures(out: str | Path) -> list[Path]:
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="python -m ui.booth_figures", description=__doc__.split("\n")[0])
-    ap.add_argument("--out", type=Path, default=Path("docs/images"), help="output folder (default docs/images)")
+    ap.add_argument(
+        "--out", type=Path, default=Path("docs/images"), help="output folder (default docs/images)"
+    )
     args = ap.parse_args(argv)
     for path in write_figures(args.out):
         print(path)

@@ -8,12 +8,13 @@ from PIL import Image
 
 from station.errors import InputError
 from station.model.booth import metameric_pair
+from station.model.domain import ANGLES_5
 from station.model.examples import RED_METALLIC, SILVER
 from station.model.spectra import reflectance_from_lab, reflectance_to_lab
 from station.render import booth
 from station.render.errors import RenderInputError
 
-ANGLES = (15.0, 25.0, 45.0, 75.0, 110.0)
+ANGLES = ANGLES_5
 SIZE = 96
 
 

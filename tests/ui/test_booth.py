@@ -16,6 +16,7 @@ from db.migrate import ensure_at_head
 from db.models import Instrument, Measurement, Panel
 from station.model.booth import metameric_pair
 from station.model.difference import delta_e
+from station.model.domain import ANGLES_5
 from station.model.examples import SILVER
 from station.model.spectra import WAVELENGTHS, reflectance_from_lab, reflectance_to_lab
 from station.render.booth import BoothRenderer
@@ -25,7 +26,7 @@ from ui.widgets.booth_screen import COLUMNS, BoothScreen
 
 pytestmark = [pytest.mark.qt]
 
-ANGLES = [15.0, 25.0, 45.0, 75.0, 110.0]
+ANGLES = list(ANGLES_5)
 SIZE = 128
 
 
