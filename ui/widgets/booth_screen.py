@@ -11,7 +11,7 @@ shown in the message line, never raised.
 from __future__ import annotations
 
 from PySide6.QtCore import Qt
-from PySide6.QtGui import QColor
+from PySide6.QtGui import QColor, QGuiApplication
 from PySide6.QtWidgets import (
     QButtonGroup,
     QComboBox,
@@ -212,11 +212,18 @@ class BoothScreen(QWidget):
             missing = [r for r in ROLES if self.booth.readings[r] is None]
             self._say(f"choose the {' and the '.join(missing)}")
             return
+        cold = not self.booth.renderer.cached(self.booth.shape)
+        if cold:  # the part's basis images are drawn once (about a second; the car in a process of its own)
+            self._say(f"drawing the {self.booth.shape} in the booth once…")
+            QGuiApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
         try:
             view = self.booth.compute()
         except StationError as exc:
             self._fail(exc)
             return
+        finally:
+            if cold:
+                QGuiApplication.restoreOverrideCursor()
         self.last_view = view
         self.picture.setPixmap(pixmap_from_array(view.image))
         self._fill_table(view)
