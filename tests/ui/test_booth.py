@@ -193,3 +193,45 @@ def test_the_main_window_booth_tab_reads_the_scans_database(qtbot, tmp_path, spe
     assert booth.pickers["standard"].findData(std_id) > 0
     win.view_panel.view.wait_idle()
     win.close()
+
+
+def test_pair_from_a_services_measurements(qtbot, tmp_path, spectra) -> None:
+    from station.qc.booth import booth_compare_spectra
+    from tests.api.conftest import make_api
+    from tests.ingest._readings import make_reading
+    from ui.models.booth import ServiceBoothSource
+    from ui.models.service import ServiceClient
+
+    angles = [15.0, 45.0, 110.0]
+    rows = [ANGLES.index(a) for a in angles]
+    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path)
+    api = next(gen)
+    try:
+        tech = api.auth("technician")
+        panel = api.client.post("/api/v1/panels", json={"job": "J-SVC", "part": "door"}, headers=tech)
+        ids = []
+        for k, sp in enumerate(spectra):
+            body = make_reading(7, k, panel_id=panel.json()["id"]).model_dump(mode="json")
+            body["lab"] = reflectance_to_lab(sp[rows]).round(4).tolist()
+            body["spectra"] = sp[rows].tolist()
+            r = api.client.post("/api/v1/measurements", json=body, headers=tech)
+            assert r.status_code == 201, r.text
+            ids.append(r.json()["id"])
+        service = ServiceClient("http://testserver", api.tokens[next(iter(api.tokens))], client=api.client)
+        s = BoothScreen(BoothModel(ServiceBoothSource(service), BoothRenderer(SIZE)))
+        qtbot.addWidget(s)
+        s.show()
+        assert "J-SVC door" in s.pickers["standard"].itemText(s.pickers["standard"].findData(ids[0]))
+        _pick(qtbot, s, "standard", ids[0])
+        _pick(qtbot, s, "trial", ids[1])
+        _click(qtbot, s.illuminant_btns["F11"])
+        expected = booth_compare_spectra(spectra[0][rows], spectra[1][rows], angles, ["F11"]).illuminants[0]
+        np.testing.assert_allclose(_column(s, "ΔE00"), [g.de00 for g in expected.per_geometry], atol=0.006)
+        assert min(_column(s, "ΔE00")) > 2.0
+        r = api.client.get("/api/v1/measurements/999999", headers=tech)
+        assert r.status_code == 404
+        s.pickers["trial"].addItem("#999999 gone", 999999)
+        _pick(qtbot, s, "trial", 999999)
+        assert "error" in s.message.text() and "404" in s.message.text()
+    finally:
+        gen.close()

@@ -1,7 +1,8 @@
 """The light booth screen's model (Qt-free): standard and trial, the illuminant, the picture and the table.
 
 Standard and trial come from the job history (the measurements of the workstation's database, newest
-first, as ``station.qc.readings.reading_from_measurement`` reads them) or from a file
+first, as ``station.qc.readings.reading_from_measurement`` reads them, or a service's measurements:
+:class:`ServiceBoothSource`) or from a file
 (``station.qc.readings.load_readings``: ``station measure --json`` / ``station import`` output, CxF3,
 CGATS, the CSV template). Both need spectra. The illuminant is one of the booth's
 (``station.model.illuminants.BOOTH_ILLUMINANTS``) or a user SPD file (``read_spd_file``); the observer
@@ -27,6 +28,7 @@ if TYPE_CHECKING:
     from station.model.illuminants import Illuminant
     from station.qc.readings import Reading
     from station.render.booth import BoothRenderer
+    from ui.models.service import ServiceClient
 
 #: The two sides of the booth.
 ROLES = ("standard", "trial")
@@ -130,6 +132,58 @@ class LocalBoothSource:
             if m is None:
                 raise BoothSourceError(f"{self.where}: measurement {measurement_id} not found")
             return reading_from_measurement(m, sample=f"#{measurement_id}")
+
+
+class ServiceBoothSource:
+    """A station service: ``GET /api/v1/measurements`` (45° block, newest first), ``/panels`` for the
+    labels, ``GET /api/v1/measurements/{id}`` for a reading with its spectra."""
+
+    def __init__(self, client: ServiceClient) -> None:
+        self.client = client
+
+    @property
+    def where(self) -> str:
+        return f"service {self.client.url}"
+
+    def _get(self, path: str, **params: Any) -> Any:
+        from ui.models.service import ServiceUnreachable
+
+        try:
+            r = self.client.request("GET", path, params=params or None)
+        except ServiceUnreachable as exc:
+            raise BoothSourceError(f"{self.where}: {exc}") from exc
+        if r.status_code >= 400:
+            raise BoothSourceError(f"{self.where}: GET {path}: HTTP {r.status_code} {r.text[:300]}")
+        return r.json()
+
+    def history(self, limit: int = HISTORY_LIMIT) -> list[HistoryEntry]:
+        """The newest *limit* measurements of the 45° illumination block, newest first."""
+        from station.model.domain import ILLUMINATION_DEG
+
+        rows = self._get("/measurements", limit=limit, illumination_deg=ILLUMINATION_DEG)["data"]
+        panels = {int(p["id"]): p for p in self._get("/panels", limit=1000)["data"]}
+        out = []
+        for m in rows:
+            p = panels.get(m.get("panel_id") or -1)
+            label = f"{p['job']} {p['part']}" if p else "no panel"
+            out.append(HistoryEntry(int(m["id"]), label, str(m["measured_at"]), m.get("spectra") is not None))
+        return out
+
+    def reading(self, measurement_id: int) -> Reading:
+        """The stored measurement *measurement_id* as a reading (its spectra included)."""
+        from station.qc.readings import Reading
+
+        m = self._get(f"/measurements/{int(measurement_id)}")
+        spectra = m.get("spectra")
+        return Reading(
+            tuple(float(a) for a in m["geometries_deg"]),
+            tuple((float(r[0]), float(r[1]), float(r[2])) for r in m["lab"]),
+            None if spectra is None else tuple(tuple(float(v) for v in r) for r in spectra),
+            None if spectra is None else tuple(float(w) for w in m["wavelengths_nm"]),
+            sample=f"#{measurement_id}",
+            measurement_id=int(measurement_id),
+            where=f"measurement {measurement_id}",
+        )
 
 
 def _when(value: Any) -> str:

@@ -107,13 +107,15 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         return QcScreen(QcModel(LocalQc(url)))
 
     def booth() -> QWidget:
-        from ui.models.booth import BoothModel, LocalBoothSource
+        from ui.models.booth import BoothModel, LocalBoothSource, ServiceBoothSource
         from ui.models.measure_db import LocalSink
         from ui.widgets.booth_screen import BoothScreen
 
+        if window.service is not None:
+            return BoothScreen(BoothModel(ServiceBoothSource(window.service)))
         sink = window.store.sink
         url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
-        return BoothScreen(BoothModel(None if window.service is not None else LocalBoothSource(url)))
+        return BoothScreen(BoothModel(LocalBoothSource(url)))
 
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
