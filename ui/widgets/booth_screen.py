@@ -47,6 +47,13 @@ class BoothScreen(QWidget):
         super().__init__(parent)
         self.booth = booth
         self.last_view: BoothView | None = None
+        self._make_widgets()
+        self._lay_out()
+        self._connect()
+        self.reload_history()
+
+    # -- construction ----------------------------------------------------------------------------------
+    def _make_widgets(self) -> None:
         self.pickers = {role: QComboBox() for role in ROLES}
         self.file_btns = {role: QPushButton("From file…") for role in ROLES}
         self.reload_btn = QPushButton("Reload history")
@@ -63,11 +70,7 @@ class BoothScreen(QWidget):
         self.table = self._make_table()
         self.message = QLabel("")
         self.message.setWordWrap(True)
-        self._lay_out()
-        self._connect()
-        self.reload_history()
 
-    # -- construction ----------------------------------------------------------------------------------
     def _make_table(self) -> QTableWidget:
         table = QTableWidget(0, len(COLUMNS))
         table.setHorizontalHeaderLabels(list(COLUMNS))
