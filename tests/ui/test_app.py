@@ -35,6 +35,7 @@ def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
         "Instruments",
         "QA",
         "QC",
+        "Booth",
         "Formulation",
     ]
     assert not win.undo_action.isEnabled()

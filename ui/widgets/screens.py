@@ -106,6 +106,17 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
         return QcScreen(QcModel(LocalQc(url)))
 
+    def booth() -> QWidget:
+        from ui.models.booth import BoothModel, LocalBoothSource, ServiceBoothSource
+        from ui.models.measure_db import LocalSink
+        from ui.widgets.booth_screen import BoothScreen
+
+        if window.service is not None:
+            return BoothScreen(BoothModel(ServiceBoothSource(window.service)))
+        sink = window.store.sink
+        url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
+        return BoothScreen(BoothModel(LocalBoothSource(url)))
+
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
 
@@ -118,5 +129,6 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         ("Instruments", LazyScreen(instruments)),
         ("QA", LazyScreen(qa)),
         ("QC", LazyScreen(qc)),
+        ("Booth", LazyScreen(booth)),
         ("Formulation", formulation),
     ]
