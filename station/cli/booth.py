@@ -16,15 +16,13 @@ Exit 0 whatever the differences, 2 with one line for bad input.
 from __future__ import annotations
 
 import argparse
-import importlib
 from pathlib import Path
 from typing import Any
 
 from station.cli._common import add_json_flag
-from station.errors import InputError, StationError
+from station.errors import InputError
 
 #: The module that draws the booth image for ``--out`` (the renderer's; the CLI only calls it).
-RENDER_MODULE = "station.render.booth"
 
 
 def _illuminants(text: str) -> list[Any]:
@@ -51,28 +49,18 @@ def _one_reading(path: str, role: str) -> Any:
 def render_booth_image(
     comparison: Any, standard: Any, sample: Any, illuminants: list[Any], observer: str, shape: str, out: Path
 ) -> Path:
-    """The one call point of the booth renderer: draw *standard* and *sample* (Readings) on *shape*.
+    """Draw *standard* and *sample* (Readings) on *shape* under each illuminant, side by side, into *out*
+    (:func:`station.render.booth.render_booth_file`)."""
+    from station.render.booth import render_booth_file
 
-    Calls ``station.render.booth.render_booth_file`` when the renderer is installed; until then it
-    raises a :class:`~station.errors.StationError` saying so (no image is faked).
-    """
-    try:
-        module = importlib.import_module(RENDER_MODULE)
-    except ModuleNotFoundError as exc:
-        raise StationError(f"--out: the booth renderer ({RENDER_MODULE}) is not part of this build") from exc
-    render = getattr(module, "render_booth_file", None)
-    if render is None:
-        raise StationError(f"--out: {RENDER_MODULE} has no render_booth_file")
-    return Path(
-        render(
-            comparison=comparison,
-            standard=standard,
-            sample=sample,
-            illuminants=illuminants,
-            observer=observer,
-            shape=shape,
-            out=out,
-        )
+    return render_booth_file(
+        comparison=comparison,
+        standard=standard,
+        sample=sample,
+        illuminants=illuminants,
+        observer=observer,
+        shape=shape,
+        out=out,
     )
 
 

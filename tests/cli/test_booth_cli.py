@@ -124,15 +124,3 @@ def test_booth_refusals(tmp_path: Path, pair: tuple[np.ndarray, np.ndarray]) -> 
         assert out.returncode == 2, (extra, out.stderr)
         assert named in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
         assert out.stdout == ""
-
-
-def test_booth_out_without_the_renderer_says_so(tmp_path: Path, pair: tuple[np.ndarray, np.ndarray]) -> None:
-    from importlib.util import find_spec
-
-    if find_spec("station.render.booth") is not None:
-        pytest.skip("the booth renderer is installed: --out is its tests' subject")
-    std, _ = pair
-    write_measurement_file([_measurement("standard", std)], tmp_path / "s.cxf")
-    out = run_station(tmp_path, "booth", "--standard", "s.cxf", "--sample", "s.cxf", "--out", "booth.png")
-    assert out.returncode == 1 and "station.render.booth" in out.stderr
-    assert not (tmp_path / "booth.png").exists()
