@@ -45,7 +45,7 @@ from station.model.domain import (
 from station.model.errors import ModelInputError
 
 Category = Literal["face", "flop", "travel-gloss"]
-CATEGORIES: tuple[str, ...] = ("face", "flop", "travel-gloss")
+CATEGORIES: tuple[Category, ...] = ("face", "flop", "travel-gloss")
 COLOUR_RING: tuple[str, ...] = ("lighter", "darker", "more chroma", "less chroma", "hue +", "hue -")
 TRAVEL_GLOSS_RING: tuple[str, ...] = ("more travel", "less travel", "more gloss", "less gloss")
 RING: dict[str, tuple[str, ...]] = {
