@@ -151,7 +151,7 @@ def main() -> None:
     brdfs = [lf.designed_brdf(d) for d in designs]
     normals, views = tr.sphere_pixels(SPHERE)
     table = basis_table()
-    bases = [(int(r["lobes"]), LobeBasis(tuple(r["exponents"]))) for r in table["bases"]]  # type: ignore[index]
+    bases = [(int(r["lobes"]), LobeBasis(tuple(r["exponents"]))) for r in table["bases"]]
     scenes = {}
     cases: list[Case] = []
     for env in ENVIRONMENTS:

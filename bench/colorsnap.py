@@ -97,8 +97,8 @@ def run() -> None:
             bt.append(time.perf_counter() - t)
             assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"
         for q, r in zip(qs[60:], results[60:], strict=True):
-            b = _fast_brute(std, q, method)
-            assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"
+            fast = _fast_brute(std, q, method)
+            assert r[0].tolist() == fast[0].tolist() and np.array_equal(r[1], fast[1]), "not exact"
         med, bmed = float(np.median(times)) * 1e3, float(np.median(bt)) * 1e3
         if method == "cie2000":
             _numpy_path(index, std, qs, 60, "6000", cases)
@@ -133,8 +133,8 @@ def run() -> None:
             bt.append(time.perf_counter() - t)
             assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"
         for q, r in zip(qs[3:20], results[3:20], strict=True):
-            b = _fast_brute(big, q, method)
-            assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"
+            fast = _fast_brute(big, q, method)
+            assert r[0].tolist() == fast[0].tolist() and np.array_equal(r[1], fast[1]), "not exact"
         med, bmed = float(np.median(times)) * 1e3, float(np.median(bt)) * 1e3
         if method == "cie2000":
             _numpy_path(bindex, big, qs, 5, "1e6", cases)

@@ -66,7 +66,7 @@ def histogram(fi: np.ndarray) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=110)
-    ax.hist(fi, bins=np.arange(0, 31, 1.0), color="#5a7fa8", edgecolor="white")
+    ax.hist(fi, bins=np.arange(0, 31, 1.0).tolist(), color="#5a7fa8", edgecolor="white")
     ax.axvline(float(fi.mean()), color="#b04030", lw=1.5, label=f"demo mean {fi.mean():.2f}")
     ax.axvline(SPECTRAMASTER_MEAN_FLOP_INDEX, color="k", ls="--", lw=1.2, label="SpectraMaster mean 11.38")
     ax.set_xlabel("Flop Index (eq 5.3.1)")

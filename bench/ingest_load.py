@@ -152,7 +152,7 @@ def _chart(base: dict[str, Any], load: dict[str, Any], path: Path) -> None:
 
     fig, ax = plt.subplots(figsize=(7, 3.6), dpi=110)
     hi = float(np.percentile(load["latencies_ms"], 99.5))
-    bins = np.linspace(0, max(hi, 1e-3), 80)
+    bins = np.linspace(0, max(hi, 1e-3), 80).tolist()
     ax.hist(base["latencies_ms"], bins=bins, alpha=0.6, density=True, label="1 station (baseline)")
     ax.hist(load["latencies_ms"], bins=bins, alpha=0.6, density=True, label=f"{load['stations']} stations")
     ax.set_xlabel("submit latency (ms)")

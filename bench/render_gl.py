@@ -34,7 +34,7 @@ def _paints(exps) -> list[LobeWeights]:
 def _fps(gl: GLRenderer, shape: str, exps, frames: int = 30) -> tuple[float, float]:
     """(frames per wall-clock second, frames per process-CPU second) over an orbit of *frames*."""
     paints = _paints(exps)
-    base = shapes.Scene(shape).camera
+    base = shapes.Scene(shape).view_camera
     gl.render(shapes.Scene(shape), paints)  # compile + warm up
     t0, c0 = time.perf_counter(), time.process_time()
     for k in range(frames):

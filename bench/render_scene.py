@@ -22,7 +22,7 @@ from station.model.flakes import METALLIC_FLAKES
 from station.model.gloss import ClearCoat
 from station.render.camera import Camera
 from station.render.envcache import PrefilterCache
-from station.render.environment import load_environment
+from station.render.environment import Environment, load_environment
 from station.render.gl_renderer import GLRenderer
 from station.render.lobe_fit import fit_design
 from station.render.meshes import car_body, load_mesh
@@ -46,8 +46,8 @@ MODEL_CLOSE = Camera((0.75, 0.15, 1.05), (0.2, -0.2, 0.35), fov_deg=34.0)
 SHAPE_CLOSE = Camera((0.6, 0.35, 1.2), (0.3, 0.0, 0.0), fov_deg=30.0)
 
 
-def _environments(shared: Path) -> list[tuple[str, object]]:
-    envs: list[tuple[str, object]] = [
+def _environments(shared: Path) -> list[tuple[str, Environment]]:
+    envs: list[tuple[str, Environment]] = [
         ("booth", procedural_environment("booth", 512)),
         ("sky", procedural_environment("sky", 512)),
     ]

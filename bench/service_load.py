@@ -77,7 +77,7 @@ def _client(args: tuple[str, str, str, float, int, int, float]) -> dict[str, Any
     where = urlsplit(base)
     # the standard library's client on one keep-alive connection: the load generator shares the
     # service's CPUs, so it spends as little per request as a client can
-    http = http.client.HTTPConnection(where.hostname or "127.0.0.1", where.port, timeout=30)
+    conn = http.client.HTTPConnection(where.hostname or "127.0.0.1", where.port, timeout=30)
     try:
         deadline = time.perf_counter() + duration
         last: bytes | None = None
@@ -96,14 +96,14 @@ def _client(args: tuple[str, str, str, float, int, int, float]) -> dict[str, Any
                 sent.append(str(reading.client_id))
                 expect = 201
             t0 = time.perf_counter()
-            http.request("POST", "/api/v1/measurements", body=body, headers=headers)
-            answer = http.getresponse()
+            conn.request("POST", "/api/v1/measurements", body=body, headers=headers)
+            answer = conn.getresponse()
             answer.read()
             latencies.append(time.perf_counter() - t0)
             errors += answer.status != expect
             last = body
     finally:
-        http.close()
+        conn.close()
     return {"sent": sent, "resent": resent, "errors": errors, "latencies": latencies}
 
 

@@ -136,7 +136,7 @@ def measure_edits(mode: str) -> tuple[list[float], list[float], str, float]:
     view.show()
     view.wait_idle(120000)
     view.grab_image()
-    assert view.basis.size == (SIZE, SIZE), view.basis.size
+    assert view.basis is not None and view.basis.size == (SIZE, SIZE), view.basis
     done: list[float] = []
     view.frame_rendered.connect(lambda: done.append(time.perf_counter()))
     total, paint = [], []

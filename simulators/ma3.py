@@ -225,9 +225,9 @@ class Ma3Firmware:
             for fault, code in (("lamp-failure", 111), ("tilt", 140), ("battery-low", 180)):
                 if f.fire(fault, "MS"):
                     return code, b""
-            needed = p.cal.needed(now)
-            if needed is not None:
-                return {"zero": 131, "white": 130, "verify": 132}[needed], b""
+            due = p.cal.needed(now)
+            if due is not None:
+                return {"zero": 131, "white": 130, "verify": 132}[due], b""
             self.state, self.done_at, self.has_data = 1, now + self.measure_time_s, False
             return 0, b""
         if label == "PO":

@@ -64,7 +64,12 @@ class Rfc2217Server:
 
     def _bridge(self, conn: socket.socket) -> None:
         ser = _PtySerial(self.path, timeout=0.05)
-        manager: Any = _Plain() if self.raw else serial.rfc2217.PortManager(ser, _Writer(conn))
+        manager: Any = (
+            _Plain()
+            if self.raw
+            # types-pyserial types both arguments as rfc2217.Serial; PortManager takes any port and any writer
+            else serial.rfc2217.PortManager(ser, _Writer(conn))  # type: ignore[arg-type]
+        )
         done = threading.Event()
 
         def serial_to_net() -> None:

@@ -35,11 +35,20 @@ from ui.widgets.view_panel import ViewPanel
 
 if TYPE_CHECKING:
     from ui.models.measure_db import MeasurementSink
+    from ui.models.moodboard import MoodBoardModel
     from ui.models.service import ServiceClient
+    from ui.widgets.formulation_screen import FormulationScreen
+    from ui.widgets.library_screen import LibraryScreen
+    from ui.widgets.screens import LazyScreen
 
 
 class MainWindow(QMainWindow):
     """Docks and tabs around one design document and one view model."""
+
+    # set by ui.widgets.screens.build_screens while the tabs are added
+    moodboard: MoodBoardModel
+    library_screen: LazyScreen[LibraryScreen]
+    formulation_screen: LazyScreen[FormulationScreen]
 
     def __init__(
         self,
@@ -94,6 +103,8 @@ class MainWindow(QMainWindow):
         self.files = StylistFiles(self.document, self.designer, self.moodboard)
         self.ask_on_close = ask_on_close
         self.error_box: QMessageBox | None = None
+        self.file_dialog: QFileDialog | None = None  # the open file dialog (tests drive it)
+        self.unsaved_box: QMessageBox | None = None  # the open "unsaved changes" question
         self._make_file_menu()
         self._make_menu()
         self.designer.events.palette.connect(self._update_title)
@@ -162,7 +173,7 @@ class MainWindow(QMainWindow):
         menu.addAction(env)
         self.file_actions["Load environment (HDR)"] = env
         menu.addSeparator()
-        quit_act = QAction("Quit", self, shortcut=QKeySequence.StandardKey.Quit)
+        quit_act = QAction("Quit", self, shortcut=QKeySequence(QKeySequence.StandardKey.Quit))
         quit_act.triggered.connect(self.close)
         menu.addAction(quit_act)
 
@@ -269,7 +280,7 @@ class MainWindow(QMainWindow):
         if path is None:
             return False
         try:
-            self.view_model.load_environment(path)  # type: ignore[attr-defined]
+            self.view_model.load_environment(path)
         except (StationError, OSError, ValueError) as exc:
             self.show_error("Cannot load environment", str(exc))
             return False
@@ -304,8 +315,8 @@ class MainWindow(QMainWindow):
 
     def _make_menu(self) -> None:
         edit = self.menuBar().addMenu("&Edit")
-        self.undo_action = QAction("Undo", self, shortcut=QKeySequence.StandardKey.Undo)
-        self.redo_action = QAction("Redo", self, shortcut=QKeySequence.StandardKey.Redo)
+        self.undo_action = QAction("Undo", self, shortcut=QKeySequence(QKeySequence.StandardKey.Undo))
+        self.redo_action = QAction("Redo", self, shortcut=QKeySequence(QKeySequence.StandardKey.Redo))
         self.undo_action.triggered.connect(self.document.undo)
         self.redo_action.triggered.connect(self.document.redo)
         edit.addAction(self.undo_action)
@@ -321,6 +332,9 @@ class MainWindow(QMainWindow):
         """Add every service design to the palette; returns how many (errors go to the status bar)."""
         from ui.models.service import ServiceError
 
+        if self.service is None:
+            self.statusBar().showMessage("no service: the viewer runs on this workstation's database")
+            return 0
         try:
             rows = self.service.list_designs()
         except ServiceError as exc:
@@ -336,6 +350,9 @@ class MainWindow(QMainWindow):
         """Save the current design to the service as a new design."""
         from ui.models.service import ServiceError
 
+        if self.service is None:
+            self.statusBar().showMessage("no service: the viewer runs on this workstation's database")
+            return None
         try:
             new_id = self.service.save_design(self.document.name, self.document.design)
         except ServiceError as exc:

@@ -11,13 +11,20 @@ from __future__ import annotations
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 from PySide6.QtCore import QCoreApplication, QEvent
-from PySide6.QtWidgets import QApplication
+from PySide6.QtWidgets import QApplication, QWidget
 
 from ui.demo import demo_photo
 from ui.widgets.render_view import GLRenderView, ImageRenderView
+from ui.widgets.screens import LazyScreen
+
+if TYPE_CHECKING:
+    from ui.app import MainWindow
+
+Screen = TypeVar("Screen", bound=QWidget)
 
 SIZE = (1500, 950)
 
@@ -29,7 +36,7 @@ def _settle(win, seconds: float = 0.3) -> None:
         time.sleep(0.01)
     for v in (*win.findChildren(GLRenderView), *win.findChildren(ImageRenderView)):
         v.wait_idle()
-        v.update()
+        v.request_frame()
     QCoreApplication.processEvents()
 
 
@@ -41,6 +48,15 @@ def _wait(pred, timeout_s: float) -> bool:
             return True
         time.sleep(0.02)
     return False
+
+
+def _screen(win: MainWindow, title: str, kind: type[Screen]) -> Screen:
+    """The screen of tab *title* (built now if needed), checked to be a *kind*."""
+    page = win.screens[title]
+    screen = page.content() if isinstance(page, LazyScreen) else page
+    if not isinstance(screen, kind):
+        raise TypeError(f"tab {title!r}: expected a {kind.__name__}, got {type(screen).__name__}")
+    return screen
 
 
 def file_menu_shot(win, path: Path) -> Path:
@@ -88,6 +104,11 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     """Write ``design.png``, ``file-menu.png``, ``tweaker.png``, ``moodboard.png``, ``library.png``,
     ``instruments.png``, ``qa.png``, ``qc.png`` (with *scan*), ``formulation.png`` to *out*."""
     from ui.app import MainWindow
+    from ui.widgets.formulation_screen import FormulationScreen
+    from ui.widgets.instruments_screen import InstrumentsScreen
+    from ui.widgets.library_screen import LibraryScreen
+    from ui.widgets.qa_screen import QAScreen
+    from ui.widgets.tweaker_screen import TweakerScreen
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -126,7 +147,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         written.append(out / "file-menu.png")
 
         win.tabs.setCurrentWidget(win.screens["Tweaker"])
-        tw = win.screens["Tweaker"].content().canvas
+        tw = _screen(win, "Tweaker", TweakerScreen).canvas
         _settle(win)
         tw.wait_idle()
         theta = np.where(tw.scene.mask, tw.scene.aspecular_deg, np.inf)
@@ -147,13 +168,13 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
             shot("moodboard")
 
         win.tabs.setCurrentWidget(win.screens["Library"])
-        lib = win.screens["Library"].content()
+        lib = _screen(win, "Library", LibraryScreen)
         lib.snap()
         _wait(lambda: lib.idle, 300)  # thumbnails and ColorSnap run in the background
         shot("library")
 
         win.tabs.setCurrentWidget(win.screens["Instruments"])
-        inst = win.screens["Instruments"].content()
+        inst = _screen(win, "Instruments", InstrumentsScreen)
         if scan:
             inst.device.setCurrentText("sim:ma6")
             inst.connect_device()
@@ -174,14 +195,14 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         shot("instruments")
 
         win.tabs.setCurrentWidget(win.screens["QA"])
-        qa = win.screens["QA"].content()
+        qa = _screen(win, "QA", QAScreen)
         if scan:
             qa.load_stored()
         qa.panel_a.setCurrentText("palette: as designed")
         qa.panel_b.setCurrentText("palette: bluer face, 70 GU")
         qa.beta.setValue(4)
         qa.run()
-        _wait(lambda: qa.report is not None and not qa.task.isRunning(), 120)
+        _wait(lambda: qa.report is not None and (qa.task is None or not qa.task.isRunning()), 120)
         shot("qa")
 
         if scan:
@@ -190,7 +211,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
             win.tabs.setCurrentWidget(win.screens["QA"])
 
         qa.send_btn.click()  # the corrected paint goes on to formulation
-        chem = win.screens["Formulation"].content()
+        chem = _screen(win, "Formulation", FormulationScreen)
         for step in (chem.run_formulate, chem.run_loop):
             step()
             _wait(lambda: chem.idle, 120)

@@ -36,7 +36,7 @@ from station.model import (
 from station.model.domain import check_lab_channel
 
 Channel = Literal["L", "a", "b"]
-CHANNELS: tuple[str, ...] = ("L", "a", "b")
+CHANNELS: tuple[Channel, ...] = ("L", "a", "b")
 
 
 def _finite(value: float, name: str) -> float:

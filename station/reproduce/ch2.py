@@ -20,6 +20,7 @@ import json
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,6 +29,9 @@ from station.render import lobe_fit as lf
 from station.render.design_db import design_database
 from station.render.lobes import MAX_LOBES
 from station.reproduce.core import ExperimentResult, Figure, Quantity
+
+if TYPE_CHECKING:
+    from station.render.anisotropy import SampleSweep, WardLobe
 
 SHIPPED = "shipped table (station/render/data/lobe_basis.json)"
 #: Relative tolerance between a regenerated objective f(E) and the shipped one.
@@ -290,13 +294,13 @@ ROUNDS = 3
 
 def anisotropy_sweeps(
     counts: tuple[int, ...] | None = None, size: int = SWEEP_SIZE, truth_face: int = SWEEP_TRUTH_FACE
-) -> list[tuple[str, object, object]]:
+) -> list[tuple[str, WardLobe, SampleSweep]]:
     """[(case name, WardLobe, SampleSweep)] for :data:`ANISO_CASES` (P_s = 0.8, direction along +x)."""
     from station.render import anisotropy as an
     from station.render import procedural
 
     counts = an.SWEEP_COUNTS if counts is None else counts
-    out: list[tuple[str, object, object]] = []
+    out: list[tuple[str, WardLobe, SampleSweep]] = []
     for name, env_name, (ax, ay) in ANISO_CASES:
         env = procedural.light_booth(128) if env_name == "booth" else an.point_light_environment()
         lobe = an.WardLobe((0.8, 0.8, 0.8), ax, ay)
@@ -305,7 +309,7 @@ def anisotropy_sweeps(
     return out
 
 
-def plot_anisotropy_samples(path: Path, sweeps: Sequence[tuple[str, object, object]]) -> Path:
+def plot_anisotropy_samples(path: Path, sweeps: Sequence[tuple[str, WardLobe, SampleSweep]]) -> Path:
     """Mean and 95th-percentile ΔE00 against samples, the failure regions (above the bars) shaded."""
     import matplotlib
 
@@ -324,12 +328,12 @@ def plot_anisotropy_samples(path: Path, sweeps: Sequence[tuple[str, object, obje
         ax.axhline(bar, color="C3", lw=1)
         for k, (name, lobe, s) in enumerate(sweeps):
             ax.plot(
-                s.samples,  # type: ignore[attr-defined]
+                s.samples,
                 getattr(s, attr),
                 "o-",
                 ms=3.5,
                 color=f"C{k}",
-                label=f"{name}: α = {lobe.alpha_x:g} / {lobe.alpha_y:g}",  # type: ignore[attr-defined]
+                label=f"{name}: α = {lobe.alpha_x:g} / {lobe.alpha_y:g}",
             )
         ax.set_xscale("log")
         ticks = [1, 3, 5, 9, 15, 31, 81]

@@ -157,7 +157,7 @@ class LibraryModel:
 
     def thumbnails(
         self,
-        rows: Sequence[int],
+        rows: Sequence[int] | np.ndarray,
         on_chunk: Callable[[list[Thumbnail]], None],
         progress: Callable[[int, str], None] | None = None,
         size: int = THUMB_SIZE,

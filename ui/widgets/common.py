@@ -1,9 +1,10 @@
-"""Small Qt helpers shared by the widgets: NumPy images to pixmaps, Lab to display colours."""
+"""Small Qt helpers shared by the widgets: NumPy images to pixmaps, Lab to display colours, table cells."""
 
 from __future__ import annotations
 
 import numpy as np
 from PySide6.QtGui import QColor, QImage, QPixmap
+from PySide6.QtWidgets import QTableWidget
 
 from station.model.display import lab_to_display
 
@@ -24,3 +25,11 @@ def lab_colour(lab) -> QColor:
 def lab_colours(lab: np.ndarray) -> np.ndarray:
     """Display sRGB uint8 (..., 3) of Lab values (..., 3)."""
     return np.round(lab_to_display(np.asarray(lab, float)) * 255).astype(np.uint8)
+
+
+def cell_text(table: QTableWidget, row: int, column: int) -> str:
+    """The text of a filled cell of *table* (LookupError naming the cell when it holds no item)."""
+    item = table.item(row, column)
+    if item is None:
+        raise LookupError(f"table cell (row {row}, column {column}) is empty")
+    return item.text()

@@ -27,6 +27,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from station.design.designer import CHANNELS
 from station.design.palette import swatch
 from station.design.variations import CATEGORIES
 from station.model import FaceFlopTravelGloss
@@ -143,7 +144,7 @@ class VariationsGrid(QWidget):
         """Recompute the ring around the current design and render each cell on the object."""
         self._choose_source()
         exposure = self._settings().exposure_ev
-        ring = self.model.variations(self.category.currentText(), self.degree.value())
+        ring = self.model.variations(CATEGORIES[self.category.currentIndex()], self.degree.value())
         order = [0, 1, 2, 3, None, 4, 5, 6, 7]  # ring of 8 around the centre cell
         for cell, idx in enumerate(order):
             b = self.buttons[cell]
@@ -178,7 +179,7 @@ class PaletteList(QListWidget):
 
     def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.model = model
+        self.designer = model
         self.setIconSize(QSize(160, 32))
         self.setMaximumHeight(130)
         model.events.palette.connect(self._on_palette)
@@ -186,16 +187,16 @@ class PaletteList(QListWidget):
 
     def _on_palette(self) -> None:
         self.clear()
-        for name, design in self.model.palette:
+        for name, design in self.designer.palette:
             item = QListWidgetItem(QIcon(pixmap_from_array(swatch(design).pixels)), name)
             self.addItem(item)
 
     def _on_item(self, item: QListWidgetItem) -> None:
-        name, design = self.model.palette[self.row(item)]
-        self.model.accept(design, f"palette {name}")
+        name, design = self.designer.palette[self.row(item)]
+        self.designer.accept(design, f"palette {name}")
 
     def closeEvent(self, event) -> None:
-        self.model.events.palette.disconnect(self._on_palette)
+        self.designer.events.palette.disconnect(self._on_palette)
         super().closeEvent(event)
 
 
@@ -214,7 +215,7 @@ class DesignerPanel(QWidget):
         booth."""
         super().__init__(parent)
         self.model = model
-        self.plots = {c: CurvePlot(model, c) for c in "Lab"}
+        self.plots = {c: CurvePlot(model, c) for c in CHANNELS}
         self.ab = ABPlot(model)
         plots = QGridLayout()
         plots.addWidget(self.plots["L"], 0, 0)
@@ -262,14 +263,14 @@ class DesignerPanel(QWidget):
         self.variations = VariationsGrid(model, view_model, basis_source)
         var_box = QGroupBox("Variations (click to accept)")
         QVBoxLayout(var_box).addWidget(self.variations)
-        self.palette = PaletteList(model)
+        self.palette_list = PaletteList(model)
         keep = QPushButton("Keep in palette")
         self.palette_keep = keep
         keep.clicked.connect(lambda: self.model.keep())
         pal_box = QGroupBox("Palette")
         pl = QVBoxLayout(pal_box)
         pl.addWidget(keep)
-        pl.addWidget(self.palette)
+        pl.addWidget(self.palette_list)
 
         lay = QVBoxLayout(self)
         lay.addLayout(plots, 3)
@@ -370,6 +371,7 @@ class DesignerPanel(QWidget):
     def closeEvent(self, event) -> None:
         self.model.document.events.changed.disconnect(self._on_changed)
         self.model.document.events.error.disconnect(self._on_error)
-        for w in (*self.plots.values(), self.ab, self.variations, self.palette):
+        children: tuple[QWidget, ...] = (*self.plots.values(), self.ab, self.variations, self.palette_list)
+        for w in children:
             w.close()
         super().closeEvent(event)

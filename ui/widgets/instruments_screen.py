@@ -38,7 +38,7 @@ from station.errors import InputError
 from ui.models.document import DesignDocument
 from ui.models.instruments import SIM_DEVICES, STEPS, InstrumentSession, Measurement, MeasurementStore
 from ui.models.measure_db import RECENT_MAX, PanelInfo
-from ui.widgets.common import lab_colour, pixmap_from_array
+from ui.widgets.common import cell_text, lab_colour, pixmap_from_array
 from ui.widgets.reading_plot import ReadingPlot
 from ui.widgets.tasks import TaskProgress, TaskThread
 
@@ -101,8 +101,8 @@ class InstrumentsScreen(QWidget):
         self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Stretch)
         self.table.verticalHeader().setDefaultSectionSize(20)
         self.table.setMinimumHeight(150)
-        self.render = QLabel()
-        self.render.setMinimumSize(160, 160)
+        self.swatch = QLabel()
+        self.swatch.setMinimumSize(160, 160)
         self.plot = ReadingPlot()
         self.stored = QListWidget()
 
@@ -133,7 +133,7 @@ class InstrumentsScreen(QWidget):
         right.addWidget(QLabel("last reading"))
         row = QHBoxLayout()
         row.addWidget(self.table, 2)
-        row.addWidget(self.render, 1)
+        row.addWidget(self.swatch, 1)
         right.addLayout(row)
         right.addWidget(self.gloss)
         right.addWidget(self.plot, 3)
@@ -373,9 +373,9 @@ class InstrumentsScreen(QWidget):
             else "gloss: not measured (no gloss meter paired)"
         )
         if m.design is not None:
-            self.render.setPixmap(pixmap_from_array(booklet(m.design, 160)))
+            self.swatch.setPixmap(pixmap_from_array(booklet(m.design, 160)))
         else:
-            self.render.clear()
+            self.swatch.clear()
         self.plot.set_reading(m.aspecular_deg, m.lab, m.design)
         self._sync_buttons()
 
@@ -397,7 +397,7 @@ class InstrumentsScreen(QWidget):
     def lab_table(self) -> np.ndarray:
         """The Lab values shown in the table (rows × 3)."""
         return np.array(
-            [[float(self.table.item(i, j).text()) for j in (1, 2, 3)] for i in range(self.table.rowCount())]
+            [[float(cell_text(self.table, i, j)) for j in (1, 2, 3)] for i in range(self.table.rowCount())]
         )
 
     def closeEvent(self, event) -> None:

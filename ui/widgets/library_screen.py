@@ -257,10 +257,11 @@ class LibraryScreen(QWidget):
         self.model.set_filter(**kw)
 
     def _on_tree(self, item: QTreeWidgetItem, _col: int) -> None:
-        path = []
-        while item is not None and item.parent() is not None:
-            path.insert(0, item.text(0))
-            item = item.parent()
+        path: list[str] = []
+        node: QTreeWidgetItem | None = item
+        while node is not None and node.parent() is not None:
+            path.insert(0, node.text(0))
+            node = node.parent()
         keys = ("set_name", "kind", "group")
         self.model.set_filter(**{k: (path[i] if i < len(path) else None) for i, k in enumerate(keys)})
 
@@ -403,7 +404,7 @@ class LibraryScreen(QWidget):
     def _on_snapped(self, result) -> None:
         self.matches.clear()
         rows = np.array([m.index for m in result.matches])
-        bars = bar_images(self.model.library, rows) if rows.size else []
+        bars: np.ndarray | list[np.ndarray] = bar_images(self.model.library, rows) if rows.size else []
         for m, img in zip(result.matches, bars, strict=True):
             de = " / ".join(f"{v:.1f}" for v in m.de_per_angle)
             self.matches.addItem(

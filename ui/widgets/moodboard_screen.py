@@ -164,7 +164,7 @@ class MoodBoardScreen(QWidget):
             self.tools.addButton(b)
             b.clicked.connect(lambda _=False, name=t: self.set_tool(name))
             bar.addWidget(b)
-        self.file_dialog = None
+        self.file_dialog: QFileDialog | None = None  # the open "Add image" dialog (tests drive it)
         add = QPushButton("Add image…")
         self.add_button = add
         add.clicked.connect(self._add_dialog)
@@ -237,7 +237,7 @@ class MoodBoardScreen(QWidget):
         dlg = QFileDialog(self, "Add image", "", "Images (*.png *.jpg *.jpeg)")
         dlg.setOption(QFileDialog.Option.DontUseNativeDialog, True)  # the same dialog on every desktop
         dlg.setFileMode(QFileDialog.FileMode.ExistingFile)
-        self.file_dialog: QFileDialog | None = dlg
+        self.file_dialog = dlg
         try:
             ok = dlg.exec() == QFileDialog.DialogCode.Accepted and bool(dlg.selectedFiles())
             path = dlg.selectedFiles()[0] if ok else ""

@@ -12,6 +12,7 @@ from PySide6.QtCore import QPointF, QRectF, Qt, Signal
 from PySide6.QtGui import QColor, QImage, QMouseEvent, QPainter, QPainterPath, QPen, QPolygonF
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
+from station.design.designer import Channel
 from station.model import FaceFlopTravelGloss
 from station.model.domain import LAB_PLOT_RANGES, LAB_RANGES, plot_range
 from ui.models.designer import DesignerModel
@@ -81,7 +82,10 @@ class _PlotBase(QWidget):
 class CurvePlot(_PlotBase):
     """One channel (``L``, ``a`` or ``b``) against aspecular angle 0–120°, points at the 5 angles."""
 
-    def __init__(self, model: DesignerModel, channel: str, parent: QWidget | None = None) -> None:
+    #: The aspecular angle (degrees) of the point being dragged.
+    _drag: float | None
+
+    def __init__(self, model: DesignerModel, channel: Channel, parent: QWidget | None = None) -> None:
         super().__init__(model, parent)
         self.channel = channel
         self.k = "Lab".index(channel)
@@ -193,9 +197,12 @@ class ABPlot(_PlotBase):
     Drag the arrowhead (face) or the base (flop); the dashed circle is the chroma of the face.
     """
 
+    #: What is dragged: ``"face"``, ``"flop"``, or ``("arrow", (a*, b*) where the drag started)``.
+    _drag: str | tuple[str, tuple[float, float]] | None
+
     def __init__(self, model: DesignerModel, parent: QWidget | None = None) -> None:
         super().__init__(model, parent)
-        self._wheel: tuple[float, int, int, QImage] | None = None
+        self._wheel: tuple[float, int, QImage] | None = None  # (L*, size in pixels, hue wheel)
         self.setToolTip("a*–b*: drag the arrowhead (face), its base (flop) or the shaft (whole arrow)")
 
     def plot_rect(self) -> QRectF:
@@ -262,13 +269,13 @@ class ABPlot(_PlotBase):
         h = self.handles()
         p.setPen(QPen(QColor(20, 20, 20), 2))
         p.drawLine(h["flop"], h["face"])
-        v = h["face"] - h["flop"]
-        n = max(1e-6, (v.x() ** 2 + v.y() ** 2) ** 0.5)
-        u = QPointF(v.x() / n, v.y() / n)
+        shaft = h["face"] - h["flop"]
+        n = max(1e-6, (shaft.x() ** 2 + shaft.y() ** 2) ** 0.5)
+        u = QPointF(shaft.x() / n, shaft.y() / n)
         w = QPointF(-u.y(), u.x())
         tip = h["face"]
         p.setBrush(QColor(20, 20, 20))
-        p.drawPolygon(QPolygonF([tip, tip - 12 * u + 5 * w, tip - 12 * u - 5 * w]))
+        p.drawPolygon(QPolygonF([tip, tip - u * 12 + w * 5, tip - u * 12 - w * 5]))
         for name, pt in h.items():
             p.setBrush(lab_colour(d.face if name == "face" else d.flop))
             p.drawEllipse(pt, HANDLE_PX, HANDLE_PX)

@@ -217,8 +217,12 @@ class QAScreen(QWidget):
         :class:`InputError` naming ``limit``. A store that cannot be read is shown, not raised.
         """
         limit = recent_limit(limit)
+        sink = self.store.sink
+        if sink is None:
+            self._on_failed("stored measurements: no measurement store is open")
+            return 0
         try:
-            rows = self.store.sink.recent(limit)
+            rows = sink.recent(limit)
         except StationError as exc:
             self._on_failed(f"stored measurements: {exc}")
             return 0
@@ -228,7 +232,7 @@ class QAScreen(QWidget):
         self.refresh_sources()
         self.details.setText(
             f"{len(self.stored)} stored measurements offered as panels "
-            f"({len(rows) - len(self.stored)} without a design fit) from {self.store.sink.where}"
+            f"({len(rows) - len(self.stored)} without a design fit) from {sink.where}"
         )
         return len(self.stored)
 

@@ -31,6 +31,7 @@ from PySide6.QtWidgets import (
 
 from station.errors import StationError
 from ui.models.qc import FORMULAS, QcModel, verdict_rows
+from ui.widgets.common import cell_text
 from ui.widgets.tasks import TaskThread
 
 COLUMNS = ("sample", "measured", "geometry", "ΔL*", "Δa*", "Δb*", "ΔE", "verdict", "60° GU", "reason")
@@ -138,7 +139,7 @@ class QcScreen(QWidget):
         if row < 0:
             self.status.setText("error: select a sample row first")
             return
-        sample_id = int(self.table.item(row, COLUMNS.index("sample")).text())
+        sample_id = int(cell_text(self.table, row, COLUMNS.index("sample")))
         try:
             self.status.setText(self.model.metamerism_text(self.part.currentText(), sample_id))
         except StationError as exc:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from PySide6.QtCore import QPointF, QThread, QTimer, Signal
@@ -54,6 +55,12 @@ SETTLE_MS = 250
 GL_ENV_KEEP = 4
 GL_RGB9_E5 = 0x8C3D
 
+if TYPE_CHECKING:
+    import moderngl
+
+    from station.render.gl_renderer import GLRenderer
+    from station.render.weights import LobeWeights
+
 
 def configure_default_format() -> None:
     """Ask for an OpenGL 3.3 core context for every GL widget (call before the QApplication exists)."""
@@ -64,7 +71,7 @@ def configure_default_format() -> None:
     QSurfaceFormat.setDefaultFormat(fmt)
 
 
-def composite_program(ctx, layers: int):
+def composite_program(ctx: moderngl.Context, layers: int) -> moderngl.Program:
     """Compile ``shaders/composite.*.glsl`` for a basis of *layers* cached images."""
     frag = (
         (SHADER_DIR / "composite.frag.glsl")
@@ -74,22 +81,36 @@ def composite_program(ctx, layers: int):
     return ctx.program(vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(), fragment_shader=frag)
 
 
+def _uniform(prog: moderngl.Program, name: str) -> moderngl.Uniform:
+    """The uniform *name* of *prog* (a program member of another kind is a shader error)."""
+    import moderngl
+
+    member = prog[name]
+    if not isinstance(member, moderngl.Uniform):
+        raise TypeError(f"{name}: expected a uniform of the program, got {type(member).__name__}")
+    return member
+
+
 def set_composite_uniforms(
-    prog, basis: BasisImages, weights, exposure_ev: float, viewport: tuple[int, int]
+    prog: moderngl.Program,
+    basis: BasisImages,
+    weights: tuple[LobeWeights, LobeWeights],
+    exposure_ev: float,
+    viewport: tuple[int, int],
 ) -> None:
     """Write both paints' per-image weights (:func:`ui.models.view.layer_weights`) and display settings."""
     (a0, b0), (a1, b1) = (layer_weights(basis.layout, w) for w in weights)
     k = len(basis.layout)
     active = [j for j in range(k) if a0[j].any() or b0[j].any() or a1[j].any() or b1[j].any()]
     pad = np.zeros((k - len(active), 3))
-    prog["u_n_active"].value = len(active)
-    prog["u_layer"].write(np.array(active + [0] * (k - len(active)), "i4").tobytes())
+    _uniform(prog, "u_n_active").value = len(active)
+    _uniform(prog, "u_layer").write(np.array(active + [0] * (k - len(active)), "i4").tobytes())
     for name, arr in (("u_a0", a0), ("u_b0", b0), ("u_a1", a1), ("u_b1", b1)):
-        prog[name].write(np.concatenate([arr[active], pad]).astype("f4").tobytes())
-    prog["u_exposure"].value = float(2.0**exposure_ev)
-    prog["u_background"].value = (BACKGROUND,) * 3
-    prog["u_viewport"].value = tuple(map(float, viewport))
-    prog["u_size"].value = basis.size
+        _uniform(prog, name).write(np.concatenate([arr[active], pad]).astype("f4").tobytes())
+    _uniform(prog, "u_exposure").value = float(2.0**exposure_ev)
+    _uniform(prog, "u_background").value = (BACKGROUND,) * 3
+    _uniform(prog, "u_viewport").value = tuple(map(float, viewport))
+    _uniform(prog, "u_size").value = basis.size
 
 
 class BasisWorker(QThread):
@@ -114,8 +135,8 @@ class BasisWorker(QThread):
         self.done.emit(self.settings, basis)
 
 
-class _ViewLogic:
-    """Shared state handling of both views (mouse orbit, basis refresh, worker); a plain mixin."""
+class _ViewLogic(QWidget):
+    """Shared state handling of both views (mouse orbit, basis refresh, worker)."""
 
     def _init_logic(self, model: ViewModel) -> None:
         self.model = model
@@ -234,12 +255,20 @@ class _ViewLogic:
             self._worker.wait()
             self._worker = None
 
-    def _on_settings(self, settings: ViewSettings) -> None:
-        self._refresh_basis()
+    def _set_basis(self, basis: BasisImages) -> None:
+        self.basis = basis
+        self.request_frame()
+
+    def request_frame(self) -> None:
+        """Schedule a frame on the path that draws it (this widget by default)."""
         self.update()
 
-    def _on_paints(self, pair) -> None:
-        self.update()
+    def _on_settings(self, settings: ViewSettings) -> None:
+        self._refresh_basis()
+        self.request_frame()
+
+    def _on_paints(self, pair: object) -> None:
+        self.request_frame()
 
     # ---------------------------------------------------------------- mouse
     def mousePressEvent(self, event: QMouseEvent) -> None:
@@ -290,7 +319,7 @@ class _GLSurface(QOpenGLWindow):
         self._view.wheelEvent(event)
 
 
-class GLRenderView(_ViewLogic, QWidget):
+class GLRenderView(_ViewLogic):
     """The GL view: moderngl on the context of a child :class:`_GLSurface` window (framebuffer =
     ``defaultFramebufferObject()``) for the core's GL frames, and a plain raster widget for paint edits.
 
@@ -316,18 +345,24 @@ class GLRenderView(_ViewLogic, QWidget):
         self.mode = mode
         self._surface = _GLSurface(self)
         self._container = QWidget.createWindowContainer(self._surface, self)
-        self._frame_prog = self._frame_vao = self._tex_frame = None
+        self._frame_prog: moderngl.Program | None = None
+        self._frame_vao: moderngl.VertexArray | None = None
+        self._tex_frame: moderngl.Texture | None = None
         self._frame: np.ndarray | None = None
         self._frame_key: tuple | None = None
         self._init_logic(model)
-        self.ctx = None
-        self._prog = self._vao = self._vbo = self._tex_basis = self._tex_geom = None
+        self.ctx: moderngl.Context | None = None
+        self._prog: moderngl.Program | None = None
+        self._vao: moderngl.VertexArray | None = None
+        self._vbo: moderngl.Buffer | None = None
+        self._tex_basis: moderngl.Texture | None = None
+        self._tex_geom: moderngl.Texture | None = None
         self._uploaded: BasisImages | None = None
         self._layers = 0
-        self._screen = None
+        self._screen: moderngl.Framebuffer | None = None
         self._screen_id = -1
         self.gl_renderer = ""
-        self._core = None  # the core's GLRenderer on this context, for view changes
+        self._core: GLRenderer | None = None  # the core's GLRenderer on this context, for view changes
         self._core_key: tuple | None = None
         self._core_ok = True  # False when the context cannot build the core's shaders (GL < 4.3)
         #: What the level of detail did with the flake layer in the last GL frame (None: flakes off).
@@ -361,12 +396,12 @@ class GLRenderView(_ViewLogic, QWidget):
             return False  # flakes are drawn by the core's GL renderer only
         return self.basis_current or not self._core_ok
 
-    def update(self) -> None:  # type: ignore[override]
+    def request_frame(self) -> None:
         """Schedule a frame on the path that draws it now (this widget, or the GL surface)."""
         if self._raster():
             if not self._container.isHidden():
                 self._container.hide()
-            QWidget.update(self)
+            self.update()
         else:
             if self._container.isHidden():
                 self._container.show()
@@ -380,13 +415,15 @@ class GLRenderView(_ViewLogic, QWidget):
 
     def _edit_frame(self) -> np.ndarray:
         """The core's 8-bit RGBA edit frame of the current paints (buffer reused while basis and exposure
-        stay)."""
-        basis, ev = self.basis, self.model.settings.exposure_ev
+        stay); only called while :meth:`_raster` holds or the GL path has a basis and a design."""
+        basis, weights, ev = self.basis, self.model.weights(), self.model.settings.exposure_ev
+        if basis is None or weights is None:
+            raise RuntimeError("no edit frame before the first basis images and design")
         key = (id(basis), ev)
         reuse = self._frame if key == self._frame_key else None
-        self._frame = basis.core.edit_rgba(list(self.model.weights()), ev, out=reuse)
-        self._frame_key = key
-        return self._frame
+        frame = basis.core.edit_rgba(list(weights), ev, out=reuse)
+        self._frame, self._frame_key = frame, key
+        return frame
 
     def _paint_raster(self, painter: QPainter, frame: np.ndarray) -> None:
         h, w = frame.shape[:2]
@@ -394,8 +431,8 @@ class GLRenderView(_ViewLogic, QWidget):
         painter.drawImage(self.rect(), qimg)
 
     def paintEvent(self, event) -> None:
-        if not self._raster():  # the state changed since update(): the GL surface draws
-            self.update()
+        if not self._raster():  # the state changed since request_frame(): the GL surface draws
+            self.request_frame()
             return
         t0 = time.perf_counter()
         frame = self._edit_frame()
@@ -444,7 +481,7 @@ class GLRenderView(_ViewLogic, QWidget):
                 self.doneCurrent()
         if env is None:  # never drawn: the first paintGL prefilters and schedules again
             if self.isVisible():
-                self.update()
+                self.request_frame()
                 self._settle.start()
             return
         self._start_worker(key, env)
@@ -465,91 +502,103 @@ class GLRenderView(_ViewLogic, QWidget):
             del self._gl_envs[next(iter(self._gl_envs))]
         return basis
 
-    def _set_basis(self, basis: BasisImages) -> None:
-        self.basis = basis
-        self.update()
-
-    def _build(self) -> None:
+    def _build(self) -> moderngl.Context:
+        """Create this view's moderngl context on the current GL context and the programs it draws with."""
         import moderngl
 
-        self.ctx = moderngl.create_context()
-        self.ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)  # as the core's contexts (gl_context)
-        self.gl_renderer = self.ctx.info["GL_RENDERER"]
+        ctx = self.ctx = moderngl.create_context()
+        ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)  # as the core's contexts (gl_context)
+        self.gl_renderer = ctx.info["GL_RENDERER"]
         quad = np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4")
-        self._vbo = self.ctx.buffer(quad.tobytes())
+        vbo = self._vbo = ctx.buffer(quad.tobytes())
         if self.basis is not None:  # else built on the first upload (GL frames come first)
-            self._prog = composite_program(self.ctx, len(self.basis.layout))
-            self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
+            self._prog = composite_program(ctx, len(self.basis.layout))
+            self._vao = ctx.vertex_array(self._prog, [(vbo, "2f", "in_pos")])
             self._layers = len(self.basis.layout)
-        self._frame_prog = self.ctx.program(
+        self._frame_prog = ctx.program(
             vertex_shader=(SHADER_DIR / "composite.vert.glsl").read_text(),
             fragment_shader=(SHADER_DIR / "frame.frag.glsl").read_text(),
         )
-        self._frame_vao = self.ctx.vertex_array(self._frame_prog, [(self._vbo, "2f", "in_pos")])
+        self._frame_vao = ctx.vertex_array(self._frame_prog, [(vbo, "2f", "in_pos")])
+        return ctx
 
-    def _upload(self, basis: BasisImages) -> None:
+    def _upload(
+        self, ctx: moderngl.Context, basis: BasisImages
+    ) -> tuple[moderngl.Program, moderngl.VertexArray]:
+        """Put *basis* in GPU textures (the composite program rebuilt for a new layer count); the program and
+        its vertex array."""
         import moderngl
 
         for t in (self._tex_basis, self._tex_geom):
             if t is not None:
                 t.release()
         w, h = basis.size
-        if self._prog is None or self._layers != len(basis.layout):
+        if self._prog is None or self._vao is None or self._layers != len(basis.layout):
             if self._prog is not None:
                 self._prog.release()
+            if self._vao is not None:
                 self._vao.release()
-            self._prog = composite_program(self.ctx, len(basis.layout))
-            self._vao = self.ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
+            self._prog = composite_program(ctx, len(basis.layout))
+            self._vao = ctx.vertex_array(self._prog, [(self._vbo, "2f", "in_pos")])
         self._layers = len(basis.layout)
         layers = basis.layers
-        self._tex_basis = self.ctx.texture(
+        self._tex_basis = ctx.texture(
             (w, h * layers.shape[0]), 3, layers.tobytes(), dtype="f4", internal_format=GL_RGB9_E5
         )
         geom = np.stack([basis.n_dot_v, basis.paint.astype(np.float32)], axis=-1).astype("f2")
-        self._tex_geom = self.ctx.texture((w, h), 2, geom.tobytes(), dtype="f2")
+        self._tex_geom = ctx.texture((w, h), 2, geom.tobytes(), dtype="f2")
         for t in (self._tex_basis, self._tex_geom):
             t.filter = (moderngl.NEAREST, moderngl.NEAREST)
             t.repeat_x = t.repeat_y = False
         self._uploaded = basis
+        return self._prog, self._vao
 
-    def _paint_gl(self, target=None) -> None:
+    def _paint_gl(self, target: moderngl.Framebuffer | None = None) -> None:
         """Draw a frame into the GL surface (its context current), or into the moderngl *target*."""
         t0 = time.perf_counter()
         if self.basis is None:
             self._refresh_basis()
-        if self.ctx is None:
-            self._build()
+        ctx = self.ctx if self.ctx is not None else self._build()
         if target is not None:
             self._screen, self._screen_id = target, -1
         else:
             fbo = self.defaultFramebufferObject()
             if self._screen is None or self._screen_id != fbo:  # Qt may recreate its FBO (resize)
-                self._screen, self._screen_id = self.ctx.detect_framebuffer(fbo), fbo
-        self._screen.use()
+                self._screen, self._screen_id = ctx.detect_framebuffer(fbo), fbo
+        screen = self._screen
+        screen.use()
         w, h = self._pixel_size()
-        self.ctx.viewport = (0, 0, w, h)
+        ctx.viewport = (0, 0, w, h)
         weights = self.model.weights()
         flakes_on = self.model.settings.flakes
         if weights is not None and self._core_ok and (flakes_on or not self.basis_current):
-            if self._draw_core_frame(weights, w, h):
+            if self._draw_core_frame(ctx, screen, weights, w, h):
                 self._settle.start()  # still means no new view for SETTLE_MS after this frame
                 self.frames += 1
                 self.gl_frames += 1
                 self.last_frame_s = time.perf_counter() - t0
                 self.frame_rendered.emit()
                 return
-        if weights is None or self.basis is None:
-            self.ctx.clear(BACKGROUND, BACKGROUND, BACKGROUND)
+        basis = self.basis
+        if weights is None or basis is None:
+            ctx.clear(BACKGROUND, BACKGROUND, BACKGROUND)
             return
-        if self.mode == "cpu" or self.basis.core.background is not None:  # the stage: per-pixel background
-            self._draw_cpu_frame(weights, w, h)
+        if self.mode == "cpu" or basis.core.background is not None:  # the stage: per-pixel background
+            self._draw_cpu_frame(ctx, basis, w, h)
         else:
-            self._draw_gpu(weights, w, h)
+            self._draw_gpu(ctx, basis, weights, w, h)
         self.frames += 1  # no glFinish: Qt flushes when it swaps the surface (bench/viewer.py times that)
         self.last_frame_s = time.perf_counter() - t0
         self.frame_rendered.emit()
 
-    def _draw_core_frame(self, weights, w: int, h: int) -> bool:
+    def _draw_core_frame(
+        self,
+        ctx: moderngl.Context,
+        screen: moderngl.Framebuffer,
+        weights: tuple[LobeWeights, LobeWeights],
+        w: int,
+        h: int,
+    ) -> bool:
         """Draw the current view with the core's GL renderer straight into the widget's framebuffer (full
         resolution, full prefilter made on this context); False when the context cannot."""
         from station.render.errors import RenderError
@@ -562,7 +611,7 @@ class GLRenderView(_ViewLogic, QWidget):
             if self._core is None or self._core_key != key:
                 if self._core is not None:
                     self._core.release()
-                self._core = GLRenderer(basis, w, h, ctx=self.ctx)
+                self._core = GLRenderer(basis, w, h, ctx=ctx)
                 self._core_key = key
             self._core.draw(
                 settings.scene(),
@@ -570,7 +619,7 @@ class GLRenderView(_ViewLogic, QWidget):
                 settings.exposure_ev,
                 coat=settings.clear_coat(),
                 flakes=self._flake_layer(),
-                target=self._screen,
+                target=screen,
             )
             last = self._core.last_flakes
             self.flake_report = None if last is None else last.reason
@@ -578,7 +627,7 @@ class GLRenderView(_ViewLogic, QWidget):
             self._core_ok = False
             self._core = None
             self._basis_key = None
-            self._screen.use()
+            screen.use()
             self._refresh_basis()
             return False
         self._gl_full_key = self._basis_key
@@ -598,34 +647,46 @@ class GLRenderView(_ViewLogic, QWidget):
             return None
         return default_flakes(designs[0])
 
-    def _draw_cpu_frame(self, weights, w: int, h: int) -> None:
+    def _draw_cpu_frame(self, ctx: moderngl.Context, basis: BasisImages, w: int, h: int) -> None:
         """The edit frame as a texture in the GL surface (the stage in gpu mode; a surface exposed late)."""
         import moderngl
 
-        self._edit_frame()
-        bw, bh = self.basis.size
-        if self._tex_frame is None or self._tex_frame.size != (bw, bh):
-            if self._tex_frame is not None:
-                self._tex_frame.release()
-            self._tex_frame = self.ctx.texture((bw, bh), 4)
-            self._tex_frame.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        self._tex_frame.write(self._frame)
-        self._tex_frame.use(0)
-        p = self._frame_prog
-        p["u_frame"].value = 0
-        p["u_viewport"].value = (float(w), float(h))
-        p["u_size"].value = (bw, bh)
-        self._frame_vao.render(mode=self.ctx.TRIANGLE_STRIP)
+        frame = self._edit_frame()
+        bw, bh = basis.size
+        tex = self._tex_frame
+        if tex is None or tex.size != (bw, bh):
+            if tex is not None:
+                tex.release()
+            tex = self._tex_frame = ctx.texture((bw, bh), 4)
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        tex.write(frame)
+        tex.use(0)
+        p, vao = self._frame_prog, self._frame_vao
+        if p is None or vao is None:
+            raise RuntimeError("the frame program is made by _build before the first frame")
+        _uniform(p, "u_frame").value = 0
+        _uniform(p, "u_viewport").value = (float(w), float(h))
+        _uniform(p, "u_size").value = (bw, bh)
+        vao.render(mode=ctx.TRIANGLE_STRIP)
 
-    def _draw_gpu(self, weights, w: int, h: int) -> None:
-        if self._uploaded is not self.basis:
-            self._upload(self.basis)
-        set_composite_uniforms(self._prog, self.basis, weights, self.model.settings.exposure_ev, (w, h))
-        self._tex_basis.use(0)
-        self._tex_geom.use(1)
-        self._prog["u_basis"].value = 0
-        self._prog["u_geom"].value = 1
-        self._vao.render(mode=self.ctx.TRIANGLE_STRIP)
+    def _draw_gpu(
+        self,
+        ctx: moderngl.Context,
+        basis: BasisImages,
+        weights: tuple[LobeWeights, LobeWeights],
+        w: int,
+        h: int,
+    ) -> None:
+        prog, vao = self._prog, self._vao
+        if self._uploaded is not basis or prog is None or vao is None:
+            prog, vao = self._upload(ctx, basis)
+        set_composite_uniforms(prog, basis, weights, self.model.settings.exposure_ev, (w, h))
+        for unit, tex in enumerate((self._tex_basis, self._tex_geom)):
+            if tex is not None:  # both made by _upload
+                tex.use(unit)
+        _uniform(prog, "u_basis").value = 0
+        _uniform(prog, "u_geom").value = 1
+        vao.render(mode=ctx.TRIANGLE_STRIP)
 
     def grab_image(self) -> np.ndarray:
         """The current frame as (H, W, 3) uint8 at the view's pixel size (renders it, on the path that
@@ -645,16 +706,19 @@ class GLRenderView(_ViewLogic, QWidget):
                 .copy()
             )
         if self.ctx is None:  # never drawn yet: show the surface and let it make its context
-            self.update()
+            self.request_frame()
             from PySide6.QtCore import QCoreApplication
 
             deadline = time.perf_counter() + 30.0
             while self.ctx is None and time.perf_counter() < deadline:
                 QCoreApplication.processEvents()
                 time.sleep(0.005)
+        ctx = self.ctx
+        if ctx is None:
+            raise RuntimeError("the GL surface made no context within 30 s of being shown")
         self.makeCurrent()
         try:
-            fbo = self.ctx.simple_framebuffer((w, h), components=4)
+            fbo = ctx.simple_framebuffer((w, h), components=4)
             try:
                 self._paint_gl(target=fbo)
                 pixels = np.frombuffer(fbo.read(viewport=(0, 0, w, h), components=3), np.uint8)
@@ -695,7 +759,7 @@ class GLRenderView(_ViewLogic, QWidget):
         super().closeEvent(event)
 
 
-class ImageRenderView(_ViewLogic, QWidget):
+class ImageRenderView(_ViewLogic):
     """The same view drawn from the NumPy composite (no GL); used where Qt has no OpenGL."""
 
     frame_rendered = Signal()
@@ -708,10 +772,6 @@ class ImageRenderView(_ViewLogic, QWidget):
         self._init_logic(model)
         self.gl_renderer = "none (NumPy composite)"
         self._image: np.ndarray | None = None
-
-    def _set_basis(self, basis: BasisImages) -> None:
-        self.basis = basis
-        self.update()
 
     def resizeEvent(self, event) -> None:
         self._refresh_basis()

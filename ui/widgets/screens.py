@@ -4,27 +4,36 @@ time its tab is shown, so start-up reaches the first frame of the 3D view sooner
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from ui.models.instruments import MeasurementStore
 from ui.models.moodboard import MoodBoardModel
 
+if TYPE_CHECKING:
+    from ui.widgets.formulation_screen import FormulationScreen
+    from ui.widgets.library_screen import LibraryScreen
 
-class LazyScreen(QWidget):
+#: The screen class a :class:`LazyScreen` builds.
+Screen = TypeVar("Screen", bound=QWidget)
+
+
+class LazyScreen(QWidget, Generic[Screen]):
     """A tab page that builds its content with *factory* when first shown (or on :meth:`content`)."""
 
-    def __init__(self, factory: Callable[[], QWidget], parent: QWidget | None = None) -> None:
+    def __init__(self, factory: Callable[[], Screen], parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._factory = factory
-        self._content: QWidget | None = None
-        QVBoxLayout(self).setContentsMargins(0, 0, 0, 0)
+        self._content: Screen | None = None
+        self._box = QVBoxLayout(self)
+        self._box.setContentsMargins(0, 0, 0, 0)
 
-    def content(self) -> QWidget:
+    def content(self) -> Screen:
         """The real screen (built now if needed)."""
         if self._content is None:
             self._content = self._factory()
-            self.layout().addWidget(self._content)
+            self._box.addWidget(self._content)
         return self._content
 
     def showEvent(self, event) -> None:
@@ -37,7 +46,7 @@ class LazyScreen(QWidget):
         super().closeEvent(event)
 
 
-def _library_screen(window) -> QWidget:
+def _library_screen(window) -> LibraryScreen:
     """The service's library in service mode (the demo library, said so, when the service cannot give one)."""
     from station.formulate.demo import demo_library
     from ui.models.library import LibraryModel
@@ -64,7 +73,7 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
     library = LazyScreen(lambda: _library_screen(window))
     window.library_screen = library
 
-    def formulation_screen() -> QWidget:
+    def formulation_screen() -> FormulationScreen:
         from station.formulate.demo import demo_library
         from ui.widgets.formulation_screen import FormulationScreen
 

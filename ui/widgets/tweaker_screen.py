@@ -21,6 +21,7 @@ from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWi
 
 from station.design.scene import shade, sphere_scene, srgb_encode, to_uint8
 from station.design.tweaker import (
+    Adjustment,
     adjust_at,
     drag_highlight_centre,
     drag_highlight_edge,
@@ -39,8 +40,10 @@ SIZE = 400
 SIDE = 120
 #: Largest main-scene render of the tweaker, pixels per side.
 MAX_SCENE_PX = 900
-STEPS = {"L": 3.0, "C": 0.1, "H": 5.0}
-BUTTONS = (
+#: One button press: ΔL* (L* units), relative ΔC (0.1 = +10 %) or ΔH (degrees).
+STEPS: dict[Adjustment, float] = {"L": 3.0, "C": 0.1, "H": 5.0}
+#: (label, adjustment, sign, offset from the crosshair in pixels) of the buttons around the crosshair.
+BUTTONS: tuple[tuple[str, Adjustment, int, tuple[int, int]], ...] = (
     ("lighter", "L", +1, (0, -34)),
     ("darker", "L", -1, (0, 34)),
     ("chroma +", "C", +1, (44, -12)),
@@ -237,7 +240,7 @@ class TweakerCanvas(QWidget):
             return x, y
         return None
 
-    def adjust(self, kind: str, delta: float) -> bool:
+    def adjust(self, kind: Adjustment, delta: float) -> bool:
         """Lighter/darker (ΔL*), chroma (relative) or hue (degrees) at the crosshair."""
         if self.crosshair is None:
             return False
@@ -249,7 +252,7 @@ class TweakerCanvas(QWidget):
                     self.scene.aspecular_deg,
                     xy,
                     kind,
-                    delta,  # type: ignore[arg-type]
+                    delta,
                     self.scene.mask,
                 ).design
             ),
