@@ -10,7 +10,7 @@ from fastapi import APIRouter, Query, Request, Response, status
 from fastapi import Path as PathParam
 
 from db.models import User
-from station.api.deps import SessionDep, scoped
+from station.api.deps import ReadSessionDep, SessionDep, scoped
 from station.api.errors import CONFLICT, ERROR_RESPONSES, NOT_FOUND, UNAVAILABLE
 from station.api.instruments import InstrumentHub
 from station.api.routes.measurements import Filters
@@ -43,7 +43,7 @@ Operator = Annotated[User, scoped(Scope.INSTRUMENTS_OPERATE)]
 
 @router.get("/measurements", response_model=Page[QcMeasurement])
 def list_measurements(
-    session: SessionDep, _user: Reader, q: Filters, limit: Limit = 100, offset: Offset = 0
+    session: ReadSessionDep, _user: Reader, q: Filters, limit: Limit = 100, offset: Offset = 0
 ) -> Page[QcMeasurement]:
     """Measurements by job, part, panel, instrument and time, newest first, each with its paired gloss reading."""
     rows, total = service.list_measurements(session=session, q=q, limit=limit, offset=offset)
@@ -51,7 +51,7 @@ def list_measurements(
 
 
 @router.get("/measurements/{measurement_id}", response_model=QcMeasurement, responses=NOT_FOUND)
-def get_measurement(session: SessionDep, _user: Reader, measurement_id: Id) -> QcMeasurement:
+def get_measurement(session: ReadSessionDep, _user: Reader, measurement_id: Id) -> QcMeasurement:
     """One measurement with its job, part and paired gloss reading."""
     return service.get_measurement(session=session, measurement_id=measurement_id)
 
@@ -76,7 +76,7 @@ def create_gloss(session: SessionDep, user: Writer, record: GlossRecord, respons
 
 @router.get("/gloss", response_model=Page[GlossPublic])
 def list_gloss(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     job: Annotated[Job | None, Query()] = None,
     part: Part | None = None,
@@ -92,7 +92,7 @@ def list_gloss(
 
 
 @router.get("/gloss/{gloss_id}", response_model=GlossPublic, responses=NOT_FOUND)
-def get_gloss(session: SessionDep, _user: Reader, gloss_id: Id) -> GlossPublic:
+def get_gloss(session: ReadSessionDep, _user: Reader, gloss_id: Id) -> GlossPublic:
     """One gloss reading."""
     return service.get_gloss(session=session, gloss_id=gloss_id)
 
@@ -146,7 +146,7 @@ IlluminantLimits = Annotated[
 
 @router.get("/jobs", response_model=list[JobOut])
 def list_jobs(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     contains: Annotated[
         str | None, Query(min_length=1, max_length=64, description="part of the job name")
@@ -165,14 +165,14 @@ def set_standard(
 
 
 @router.get("/jobs/{job}/standards/{part}", response_model=StandardOut, responses=NOT_FOUND)
-def get_standard(session: SessionDep, _user: Reader, job: JobPath, part: Part) -> StandardOut:
+def get_standard(session: ReadSessionDep, _user: Reader, job: JobPath, part: Part) -> StandardOut:
     """The standard of a job's part (404 when none is set)."""
     return service.get_standard(session=session, job=job, part=part)
 
 
 @router.get("/jobs/{job}/summary", response_model=JobSummaryOut)
 def job_summary(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     job: JobPath,
     formula: Formula = None,
@@ -189,7 +189,7 @@ def job_summary(
     responses={200: {"content": {"application/pdf": {"schema": {"type": "string", "format": "binary"}}}}},
 )
 def report_pdf(
-    session: SessionDep,
+    session: ReadSessionDep,
     _user: Reader,
     job: JobPath,
     formula: Formula = None,
@@ -212,7 +212,7 @@ def report_pdf(
     response_class=Response,
     responses={200: {"content": {"text/csv": {"schema": {"type": "string"}}}}},
 )
-def report_csv(session: SessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> Response:
+def report_csv(session: ReadSessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> Response:
     """The job's QC report as CSV: one row per sample and geometry with standard and sample Lab, differences and verdicts."""
     return Response(
         service.report_csv(session=session, job=job, formula=formula),
