@@ -48,6 +48,16 @@ class ScanResult:
     gloss_receipt: GlossReceipt | None = None
     note: str = ""
 
+    @classmethod
+    def of(
+        cls, device: str, reading: SpectralReading | GlossReading, gloss: GlossReading | None = None
+    ) -> ScanResult:
+        """Readings taken already (by :func:`station.scan.take`, or built by a test) as a scan of *device*:
+        a gloss meter's reading alone is gloss-only, a spectral one pairs with *gloss*."""
+        if isinstance(reading, GlossReading):
+            return cls(device, None, reading)
+        return cls(device, reading, gloss)
+
     @property
     def gloss_only(self) -> bool:
         """A gloss meter's reading without colour (stored as a gloss reading of its own)."""

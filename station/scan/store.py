@@ -46,7 +46,7 @@ class ScanTarget(Protocol):
         """Queue a colour record without trying the destination (known to be away)."""
         ...
 
-    def store_gloss(self, record: GlossRecord, *, actor_id: int | None = None) -> GlossReceipt:
+    def submit_gloss(self, record: GlossRecord, *, actor_id: int | None = None) -> GlossReceipt:
         """Store a gloss record once (``stored`` or ``duplicate``); raise when away or refused."""
         ...
 
@@ -80,7 +80,7 @@ class DatabaseTarget:
             raise TypeError(f"{destination.where} is not a database")
         return destination.sessions()
 
-    def store_gloss(self, record: GlossRecord, *, actor_id: int | None = None) -> GlossReceipt:
+    def submit_gloss(self, record: GlossRecord, *, actor_id: int | None = None) -> GlossReceipt:
         from station.ingest import store_gloss
 
         with self._sessions().begin() as session:
@@ -140,13 +140,13 @@ def store(
     Colour: submitted (or, with *away* — why the destination is known to be away — queued at once);
     once stored (or found stored) the gloss record joins it by ``measurement_id``; a gloss record that
     cannot be stored then is logged and its receipt says why (the colour record holds the 60° gloss).
-    Gloss alone: stored through :meth:`ScanTarget.store_gloss`; what it raises (database away, client id
+    Gloss alone: stored through :meth:`ScanTarget.submit_gloss`; what it raises (database away, client id
     conflict, unknown panel) reaches the caller. A result without records is returned unchanged.
     """
     if result.record is None:
         if result.gloss_record is None:
             return result
-        return replace(result, gloss_receipt=target.store_gloss(result.gloss_record, actor_id=actor_id))
+        return replace(result, gloss_receipt=target.submit_gloss(result.gloss_record, actor_id=actor_id))
     if away is not None:
         receipt = target.enqueue(result.record, away)
     else:
@@ -160,7 +160,7 @@ def store(
         return replace(stored, gloss_receipt=GlossReceipt(gloss_cid, "not stored", None, why))
     joined = result.gloss_record.model_copy(update={"measurement_id": receipt.measurement_id})
     try:
-        gloss_receipt = target.store_gloss(joined, actor_id=actor_id)
+        gloss_receipt = target.submit_gloss(joined, actor_id=actor_id)
     except Exception as exc:  # the colour reading (with its 60° gloss) is stored; say why the row is not
         log.warning("gloss reading of measurement %s not stored: %s", receipt.measurement_id, exc)
         gloss_receipt = GlossReceipt(gloss_cid, "not stored", None, f"{type(exc).__name__}: {exc}")

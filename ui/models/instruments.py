@@ -133,9 +133,7 @@ def measurement_from_reading(
     gloss: GlossReading | None = None,
 ) -> Measurement:
     """The measurement of one scan (:func:`measurement_from_scan` of the readings as taken)."""
-    if isinstance(reading, GlossReading):
-        return measurement_from_scan(ScanResult(device, None, reading), panel)
-    return measurement_from_scan(ScanResult(device, reading, gloss), panel)
+    return measurement_from_scan(ScanResult.of(device, reading, gloss), panel)
 
 
 def measurement_from_scan(result: ScanResult, panel: PanelInfo) -> Measurement:
@@ -252,8 +250,8 @@ class _PanelTarget:
     def enqueue(self, reading: Reading, reason: str) -> Receipt:
         return self.sink.submit(self.panel, reading)  # the viewer's ingest queues every reading first
 
-    def store_gloss(self, record: GlossRecord, *, actor_id: int | None = None) -> GlossReceipt:
-        return self.sink.store_gloss(self.panel, record)
+    def submit_gloss(self, record: GlossRecord, *, actor_id: int | None = None) -> GlossReceipt:
+        return self.sink.submit_gloss(self.panel, record)
 
 
 class InstrumentSession:

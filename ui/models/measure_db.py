@@ -185,14 +185,14 @@ class MeasurementSink:
         record = reading.model_copy(update={"panel": panel.ref(), "panel_id": None})
         return self._receipt(self.ingestor.submit(record))
 
-    def store_gloss(self, panel: PanelInfo, record: GlossRecord) -> GlossReceipt:
+    def submit_gloss(self, panel: PanelInfo, record: GlossRecord) -> GlossReceipt:
         """Store a gloss record once, not queued: a gloss-only one on *panel*, a paired one on the panel of
         the measurement it names. Raises when the store is away or refuses it. Blocking."""
         if record.measurement_id is None:
             record = record.model_copy(update={"panel": panel.ref(), "panel_id": None})
-        return self._store_gloss(record)
+        return self._submit_gloss(record)
 
-    def _store_gloss(self, record: GlossRecord) -> GlossReceipt:
+    def _submit_gloss(self, record: GlossRecord) -> GlossReceipt:
         raise NotImplementedError
 
     def flush(self) -> dict[str, Receipt]:
@@ -311,11 +311,11 @@ class LocalSink(MeasurementSink):
             for m, p in rows
         ]
 
-    def _store_gloss(self, record: GlossRecord) -> GlossReceipt:
+    def _submit_gloss(self, record: GlossRecord) -> GlossReceipt:
         """``station.ingest.store_gloss`` in the workstation's database (through ``station.scan``)."""
         from station.scan import DatabaseTarget
 
-        return DatabaseTarget(self.ingestor).store_gloss(record)
+        return DatabaseTarget(self.ingestor).submit_gloss(record)
 
     def close(self) -> None:
         super().close()
@@ -373,7 +373,7 @@ class ServiceSink(MeasurementSink):
             raise ReadingRefusedError(f"{method} {path}: HTTP {r.status_code} {r.text[:300]}")
         return r
 
-    def _store_gloss(self, record: GlossRecord) -> GlossReceipt:
+    def _submit_gloss(self, record: GlossRecord) -> GlossReceipt:
         """``POST /qc/gloss``: 201 stored, 200 already stored (the service's token names the actor)."""
         from station.scan import GlossReceipt
 
