@@ -5,13 +5,16 @@ DEVICE is ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss`` (a simulator subprocess star
 (``/dev/ttyACM0``, ``ma3@usb:1209:ca03``, ``gloss@hid:PATH`` …). Lab comes from
 ``station.model.spectra.reflectance_to_lab`` (D65, CIE 1964 10°), never from the driver.
 
-``station measure DEVICE --store [URL]`` also stores the reading: the record is
-``station.ingest.record_from_reading``'s and it goes through ``station.ingest.Ingestor`` (exactly once by
-client id; queued in ``--outbox`` when the database is away and sent by the next ``--store``) into URL,
-or by default the database ``station serve`` uses (``$CACAD_DATABASE_URL``, else ``station.sqlite3`` in
-``$CACAD_DATA_DIR`` or ``./var``), upgraded to the current schema on first use. A gloss meter's reading
-(20/60/85 GU, haze, DOI, Rspec) is stored as a gloss-only reading (``station.ingest.store_gloss``) on the
-``--panel`` given, directly (not queued): the QC views pair it with a colour reading of the same panel.
+Every measurement goes through ``station.scan``, the scan path the viewer and the service use too.
+``station measure DEVICE --gloss GLOSS_DEVICE`` reads the gloss meter first (``station.scan.take``): its
+60° gloss goes into the colour record. ``--store [URL]`` also stores the reading (``station.scan.store``):
+through ``station.ingest.Ingestor`` (exactly once by client id; queued in ``--outbox`` when the database
+is away and sent by the next ``--store``) into URL, or by default the database ``station serve`` uses
+(``$CACAD_DATABASE_URL``, else ``station.sqlite3`` in ``$CACAD_DATA_DIR`` or ``./var``), upgraded to the
+current schema on first use; the paired meter's whole reading then becomes a gloss reading naming the
+measurement. A gloss meter alone gives a gloss-only reading (20/60/85 GU, haze, DOI, Rspec), stored as a
+gloss reading of its own on the ``--panel`` given, directly (not queued): the QC views pair it with a
+colour reading of the same panel.
 
 ``station measure DEVICE --out FILE [--out FILE …] [--format cxf|cgats|csv|xlsx] [--sample NAME]`` also
 writes the reading (every geometry, spectra and Lab) as a CxF3, CGATS.17, MA-T12 workbook or CSV file that
@@ -59,6 +62,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             help="sim:ma6 only: 12 geometries in two illumination blocks (15° and 45°), as an MA-T12",
         )
         if name == "measure":
+            cp.add_argument(
+                "--gloss",
+                metavar="DEVICE",
+                help="gloss meter read first (sim:gloss or an address): its 60° gloss is stored with the "
+                "colour, its whole reading as a gloss reading of the measurement",
+            )
             cp.add_argument("--panel", help="panel recorded with the reading (with --store: a panel id)")
             cp.add_argument(
                 "--store",
@@ -124,6 +133,18 @@ def _instrument(args: argparse.Namespace) -> Iterator[Any]:
         extra_args=extra,
     ) as device:
         yield device
+
+
+@contextmanager
+def _gloss_meter(args: argparse.Namespace) -> Iterator[Any]:
+    """The ``--gloss`` meter (``station.scan.open_gloss_meter``), or ``None`` without ``--gloss``."""
+    if getattr(args, "gloss", None) is None:
+        yield None
+        return
+    from station.scan import open_gloss_meter
+
+    with open_gloss_meter(args.gloss, timeout_s=args.timeout, field="--gloss") as meter:
+        yield meter
 
 
 def cmd_calibrate(args: argparse.Namespace) -> dict[str, Any]:
@@ -252,7 +273,7 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
 def _measure(args: argparse.Namespace, panel_id: int | None, steps: Steps) -> dict[str, Any]:
     from station import scan
 
-    with _target(args) as target, _instrument(args) as device:
+    with _target(args) as target, _instrument(args) as device, _gloss_meter(args) as meter:
         if target is not None and args.client_id is not None:
             prior = scan.prior(target, args.client_id)
             if prior is not None:  # a retry: answered from the first attempt, nothing measured again
@@ -264,7 +285,13 @@ def _measure(args: argparse.Namespace, panel_id: int | None, steps: Steps) -> di
                 return {"device": args.device, "panel": args.panel, "stored": stored}
         steps("measuring")
         inst = device.instrument
-        result = scan.take(inst, device=args.device)
+        result = scan.take(
+            inst,
+            None if meter is None else meter.instrument,
+            device=args.device,
+            gloss_device=args.gloss or "",
+            gloss_field="--gloss",
+        )
         steps("converting" if target is None else "storing")
         out: dict[str, Any] = {
             "device": args.device,
