@@ -33,11 +33,11 @@ from station.api.schemas.instruments import (
 from station.api.services import audit
 from station.api.services import measurements as measurement_service
 from station.api.settings import Settings
-from station.drivers import CommunicationError, open_instrument, split_address
+from station.drivers import CommunicationError, split_address
 from station.drivers import Instrument as Driver
 from station.drivers.addresses import check_address
 from station.drivers.readings import InstrumentInfo
-from station.drivers.simproc import SimulatorProcess, spawn_simulator
+from station.drivers.simproc import SimulatorProcess
 from station.errors import InputError
 from station.ingest import (
     ClientIdConflictError,
@@ -115,14 +115,8 @@ class InstrumentHub:
     def _spawn_and_attach(self, kind: str) -> Attached:
         """Spawn simulator *kind* within the cap and attach it; the child is ended on any failure."""
         self._reserve_simulator()
-        sim: SimulatorProcess | None = None
         try:
-            sim = spawn_simulator(kind)
-            return self._attach(sim.address, sim)
-        except BaseException:
-            if sim is not None:
-                sim.close()
-            raise
+            return self._attach(f"sim:{kind}")
         finally:
             with self._lock:
                 self._spawning -= 1
@@ -140,21 +134,23 @@ class InstrumentHub:
         if self._ingestor is not None:
             self._ingestor.close()
 
-    def _attach(self, address: str, simulator: SimulatorProcess | None) -> Attached:
-        family, _ = split_address(address)
-        driver = open_instrument(address)
+    def _attach(self, address: str) -> Attached:
+        """Open *address* through ``station.scan.open_device`` (``sim:KIND`` starts its simulator) and
+        attach it under a fresh handle; the instrument and its simulator are closed on any failure."""
+        device = scan.open_device(address, field="address")
         try:
-            info = driver.identify()
+            info = device.instrument.identify()
         except BaseException:
-            driver.close()
+            device.close()
             raise
+        family, _ = split_address(device.address)
         with self._lock:
             base = f"{family}-{info.serial}".lower()
             ident, n = base, 1
             while ident in self._attached:
                 n += 1
                 ident = f"{base}-{n}"
-            attached = Attached(ident, driver, info, simulator)
+            attached = Attached(ident, device.instrument, info, device.simulator)
             self._attached[ident] = attached
         return attached
 
@@ -210,7 +206,7 @@ class InstrumentHub:
             if address.startswith("sim:"):
                 attached = self._spawn_and_attach(address.removeprefix("sim:"))
             else:
-                attached = self._attach(address, None)
+                attached = self._attach(address)
         except CommunicationError as exc:
             log.warning("connect %s failed: %s", address, exc)
             raise NotFoundError(f"no instrument answers at {address}") from exc

@@ -56,14 +56,15 @@ class Device:
 def open_device(
     device: str,
     *,
-    timeout_s: float = 5.0,
+    timeout_s: float | None = None,
     design_file: Path | None = None,
     recipe_file: Path | None = None,
     faults: Sequence[str] = (),
     extra_args: Sequence[str] = (),
     field: str = "device",
 ) -> Device:
-    """Open *device* (reply timeout *timeout_s*, seconds); ``sim:KIND`` starts its simulator first.
+    """Open *device* (reply timeout *timeout_s*, seconds; the family's own without it); ``sim:KIND``
+    starts its simulator first.
 
     *design_file*, *recipe_file*, *faults* and *extra_args* set up the simulated panel and are refused
     (:class:`ScanInputError` naming them) for a real address. Raises :class:`ScanInputError` naming
@@ -90,14 +91,15 @@ def open_device(
     elif design_file is not None or recipe_file is not None or faults or extra_args:
         raise ScanInputError("--design/--recipe/--fault/--twelve", "only with a sim:* device", device)
     try:
-        return Device(name, open_instrument(address, timeout_s=timeout_s), simulator)
+        options = {} if timeout_s is None else {"timeout_s": timeout_s}
+        return Device(name, open_instrument(address, **options), simulator)
     except BaseException:
         if simulator is not None:
             simulator.close()
         raise
 
 
-def open_gloss_meter(device: str, *, timeout_s: float = 5.0, field: str = "gloss_device") -> Device:
+def open_gloss_meter(device: str, *, timeout_s: float | None = None, field: str = "gloss_device") -> Device:
     """Open *device* as the gloss meter paired with a spectrophotometer; anything that is not a gloss
     meter is closed and refused (:class:`ScanInputError` naming *field*)."""
     opened = open_device(device, timeout_s=timeout_s, field=field)
