@@ -1,10 +1,12 @@
 """Instruments attached to the service: simulators spawned at start, devices connected by address.
 
 Driver calls block (serial I/O, polling), so routes run the hub's methods in a worker thread
-(``asyncio.to_thread``); each instrument serialises its own calls with its lock. A measurement becomes
-an ingest record through ``station.ingest.record_from_reading`` and is stored by the service's
-``station.ingest.Ingestor`` (exactly once by client id); when the database is away it is kept in the
-on-disk outbox and replayed before the next one and periodically. While the service knows the
+(``asyncio.to_thread``); each instrument serialises its own calls with its lock. Instruments are opened,
+measured, paired with a gloss meter, turned into records and stored through ``station.scan``, the scan
+path the viewer and the CLI use too; this hub holds them open, keeps the audit and the calibration
+records, and presents the result. A measurement is stored by the service's ``station.ingest.Ingestor``
+(exactly once by client id); when the database is away it is kept in the on-disk outbox and replayed
+before the next one and periodically. While the service knows the
 database is away (:class:`~station.api.availability.DatabaseState`) a measurement goes straight to the
 outbox without waiting on the database.
 """
