@@ -154,7 +154,7 @@ def measurement_from_scan(result: ScanResult, panel: PanelInfo) -> Measurement:
             np.zeros((0, 31)),
             result.gloss_60_gu,
             None,
-            result.note or "gloss meter alone: stored as a gloss reading of the panel",
+            result.note or "gloss meter alone: a gloss reading of the panel",
             gloss=result.gloss,
             gloss_record=result.gloss_record,
         )
