@@ -355,11 +355,11 @@ class InstrumentsScreen(QWidget):
 
     def _on_added(self, m: Measurement) -> None:
         self.last = m
-        g = m.gloss_receipt
+        gloss_receipt = m.gloss_receipt
         status = (
             (
-                f"gloss #{g.gloss_reading_id}"
-                if g is not None and g.gloss_reading_id
+                f"gloss #{gloss_receipt.gloss_reading_id}"
+                if gloss_receipt is not None and gloss_receipt.gloss_reading_id
                 else "gloss only, not stored"
             )
             if m.gloss_only
