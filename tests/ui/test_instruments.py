@@ -215,10 +215,9 @@ def test_a_reading_queued_by_the_previous_viewer_layout_is_still_sent(tmp_path):
     from dataclasses import asdict
 
     from station.ingest import Outbox
-    from ui.models.instruments import ingest_record
 
     url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
-    reading = ingest_record(_spectral())
+    reading = measurement_from_reading(_spectral(), PanelInfo("J-3", "hood"), "test").reading
     body = {"panel": asdict(PanelInfo("J-3", "hood")), "reading": reading.model_dump(mode="json")}
     with Outbox(tmp_path / "outbox.sqlite3") as box:
         box.put(str(reading.client_id), json.dumps(body, sort_keys=True))

@@ -103,17 +103,6 @@ class Measurement:
         }
 
 
-def ingest_record(reading: SpectralReading, gloss: GlossReading | None = None) -> Reading:
-    """The ingest record of the scan's in-plane 45° illumination block (``station.scan.make_records``:
-    Lab from the spectra through the model, D65/10°; 60° gloss of the paired meter; a fresh client id;
-    ``$CACAD_OPERATOR`` or the login name as operator). Raises :class:`InputError` when the reading has
-    no 45° illumination block."""
-    record = _records(ScanResult("", reading, gloss), refused="raise").record
-    if record is None:  # make_records raises rather than leave a colour reading without its record
-        raise InputError("reading", "a spectral reading", type(reading).__name__)
-    return record
-
-
 def _records(result: ScanResult, refused: Literal["raise", "note"] = "note") -> ScanResult:
     from station.ingest import operator_name  # ingest loads SQLAlchemy: on first scan only
 
