@@ -17,7 +17,7 @@ from __future__ import annotations
 import datetime as dt
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -103,12 +103,6 @@ class Measurement:
         }
 
 
-def _records(result: ScanResult, refused: Literal["raise", "note"] = "note") -> ScanResult:
-    from station.ingest import operator_name  # ingest loads SQLAlchemy: on first scan only
-
-    return make_records(result, operator=operator_name("viewer"), illumination_deg=45, refused=refused)
-
-
 def gloss_summary(g: GlossReading) -> str:
     """``gloss 20° … GU · 60° … GU · 85° … GU · haze … HU · DOI …`` (the meter's geometries, ISO 2813)."""
     gu = " · ".join(f"{k}° {v:.1f} GU" for k, v in sorted(g.gloss_gu.items()))
@@ -129,8 +123,10 @@ def measurement_from_scan(result: ScanResult, panel: PanelInfo) -> Measurement:
     """Lab (model), the FFTG fit of the 45° block's positive aspecular angles (eqs 3.3.1–3.3.10) with
     the paired meter's 60° gloss (GU), and the records of :func:`station.scan.make_records`. A gloss
     meter alone gives a measurement without colour whose gloss reading is stored on its own."""
+    from station.ingest import operator_name  # ingest loads SQLAlchemy: on first scan only
+
     now = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
-    result = _records(result)
+    result = make_records(result, operator=operator_name("viewer"), illumination_deg=45, refused="note")
     reading = result.colour
     if reading is None:
         return Measurement(
