@@ -358,6 +358,8 @@ class InstrumentHub:
             if exc.field == "instrument":
                 raise InputError("instrument_id", "a spectrophotometer", instrument_id) from exc
             raise
+        if taken.colour is None:  # a device that answered as a gloss meter: not stored as colour
+            raise InputError("instrument_id", "a spectrophotometer", instrument_id)
         taken = scan.make_records(
             taken,
             operator=actor.name,
