@@ -280,3 +280,111 @@ def test_the_redefinition_check_can_fail() -> None:
         redefinitions("from station.model.domain import FACE_ANGLE_DEG\nX = FACE_ANGLE_DEG\n", constants)
         == []
     )
+
+
+# -- one scan path ---------------------------------------------------------------------------------------
+# Pairing a gloss reading with a colour reading, turning readings into ingest records and storing gloss rows
+# happen in station/scan only (the drivers and ingest define the pieces). A front (the viewer, the service,
+# the CLI) or any other module that measures an instrument itself, sorts readings into gloss and colour, or
+# builds or stores their records has grown a second scan path: these checks fail on it.
+
+SCAN_HOMES = ("station/scan/", "station/ingest/", "station/drivers/")
+#: Names only the scan path uses: the reading → record conversions, the gloss geometry stored with colour,
+#: the gloss writer.
+SCAN_NAMES = frozenset(
+    {"record_from_reading", "gloss_record_from_reading", "GLOSS_GEOMETRY_DEG", "store_gloss"}
+)
+#: Reading types whose isinstance test sorts a reading into gloss or colour.
+READING_TYPES = frozenset({"GlossReading", "SpectralReading"})
+#: (file, name) allowed outside the scan path, each with its reason.
+SCAN_EXCEPTIONS = {
+    # POST /qc/gloss stores a gloss record a client sent: no instrument is read and nothing is paired.
+    ("station/api/services/qc.py", "store_gloss"),
+}
+
+
+def scan_copies(source: str, where: str = "<source>") -> list[str]:
+    """Places in *source* (a module outside the scan path) that do the scan path's work themselves, by line."""
+    found: list[tuple[int, str]] = []
+    for node in ast.walk(ast.parse(source)):
+        names: list[str] = []
+        if isinstance(node, ast.ImportFrom):
+            names = [a.name for a in node.names]
+        elif isinstance(node, (ast.Name, ast.Attribute)):
+            names = [_identifier(node) or ""]
+        for name in names:
+            if name in SCAN_NAMES and (where, name) not in SCAN_EXCEPTIONS:
+                found.append(
+                    (node.lineno, f"{where}:{node.lineno}: {name} outside station/scan (call station.scan)")
+                )
+        if not isinstance(node, ast.Call):
+            continue
+        func = node.func
+        if isinstance(func, ast.Attribute) and func.attr == "measure" and not node.args and not node.keywords:
+            what = "an instrument measured outside station/scan (station.scan.take)"
+            found.append((node.lineno, f"{where}:{node.lineno}: {what}"))
+        if isinstance(func, ast.Name) and func.id == "isinstance" and len(node.args) == 2:
+            kinds = node.args[1].elts if isinstance(node.args[1], ast.Tuple) else [node.args[1]]
+            if any(_identifier(k) in READING_TYPES for k in kinds):
+                what = "a reading sorted into gloss or colour outside station/scan"
+                found.append((node.lineno, f"{where}:{node.lineno}: {what}"))
+    return [text for _line, text in sorted(found)]
+
+
+def _scan_copies_under(root: Path) -> list[str]:
+    found = []
+    for top in ROOTS:
+        for path in sorted((root / top).rglob("*.py")):
+            rel = path.relative_to(root).as_posix()
+            if rel.startswith(SCAN_HOMES) or any(rel.startswith(f) for f in FROZEN):
+                continue
+            found += scan_copies(path.read_text(), rel)
+    return found
+
+
+def test_only_the_scan_path_pairs_gloss_with_colour() -> None:
+    assert (REPO / "station" / "scan" / "store.py").is_file()
+    found = _scan_copies_under(REPO)
+    assert found == [], "\n".join(found)
+
+
+# The viewer's own scan as it was before station/scan existed: it measured both instruments, sorted the
+# readings and built the record with the 60° gloss itself.
+_PLANTED_VIEWER_SCAN = """
+from station.drivers import GlossReading
+from station.ingest.records import GLOSS_GEOMETRY_DEG
+
+
+def scan(session, panel):
+    gloss = session.gloss_meter.measure()
+    if not isinstance(gloss, GlossReading):
+        raise ValueError("gloss_device")
+    reading = session.instrument.measure()
+    from station.ingest import operator_name, record_from_reading
+
+    return record_from_reading(reading, operator=operator_name(), gloss=gloss)
+"""
+
+
+def test_a_planted_scan_in_a_front_fails_the_check(tmp_path: Path) -> None:
+    """A copy of the old viewer scan planted in a temporary tree's ui/models is found, line by line; the
+    same front calling station.scan is clean; the allowed writer call is allowed in its one file only."""
+    (tmp_path / "ui" / "models").mkdir(parents=True)
+    (tmp_path / "ui" / "models" / "planted.py").write_text(_PLANTED_VIEWER_SCAN)
+    (tmp_path / "station" / "scan").mkdir(parents=True)
+    (tmp_path / "station" / "scan" / "take.py").write_text(_PLANTED_VIEWER_SCAN)  # the scan path may
+    found = _scan_copies_under(tmp_path)
+    assert [f.split(": ", 1)[0] for f in found] == [
+        "ui/models/planted.py:3",  # GLOSS_GEOMETRY_DEG imported
+        "ui/models/planted.py:7",  # the gloss meter measured
+        "ui/models/planted.py:8",  # the reading sorted
+        "ui/models/planted.py:10",  # the colour measured
+        "ui/models/planted.py:11",  # record_from_reading imported
+        "ui/models/planted.py:13",  # and called
+    ], "\n".join(found)
+    thin = "from station import scan\n\ndef measure(hub, a):\n    return scan.take(a.driver, device='x')\n"
+    assert scan_copies(thin, "station/api/instruments.py") == []
+    store = "from station.ingest import store_gloss\n"
+    assert scan_copies(store, "station/api/services/qc.py") == []
+    assert scan_copies(store, "station/cli/instruments.py") != []
+    assert scan_copies("r = self.sink.store_gloss(panel, record)\n", "ui/models/instruments.py") != []

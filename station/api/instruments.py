@@ -1,10 +1,12 @@
 """Instruments attached to the service: simulators spawned at start, devices connected by address.
 
 Driver calls block (serial I/O, polling), so routes run the hub's methods in a worker thread
-(``asyncio.to_thread``); each instrument serialises its own calls with its lock. A measurement becomes
-an ingest record through ``station.ingest.record_from_reading`` and is stored by the service's
-``station.ingest.Ingestor`` (exactly once by client id); when the database is away it is kept in the
-on-disk outbox and replayed before the next one and periodically. While the service knows the
+(``asyncio.to_thread``); each instrument serialises its own calls with its lock. Instruments are opened,
+measured, paired with a gloss meter, turned into records and stored through ``station.scan``, the scan
+path the viewer and the CLI use too; this hub holds them open, keeps the audit and the calibration
+records, and presents the result. A measurement is stored by the service's ``station.ingest.Ingestor``
+(exactly once by client id); when the database is away it is kept in the on-disk outbox and replayed
+before the next one and periodically. While the service knows the
 database is away (:class:`~station.api.availability.DatabaseState`) a measurement goes straight to the
 outbox without waiting on the database.
 """
@@ -21,6 +23,7 @@ from sqlalchemy.orm import Session, sessionmaker
 
 from db.base import utcnow
 from db.models import CalibrationRecord, Instrument, User
+from station import scan
 from station.api.availability import DatabaseState
 from station.api.errors import ConflictError, NotFoundError, UnavailableError
 from station.api.schemas.instruments import (
@@ -32,11 +35,11 @@ from station.api.schemas.instruments import (
 from station.api.services import audit
 from station.api.services import measurements as measurement_service
 from station.api.settings import Settings
-from station.drivers import CommunicationError, GlossReading, SpectralReading, open_instrument, split_address
+from station.drivers import CommunicationError, split_address
 from station.drivers import Instrument as Driver
 from station.drivers.addresses import check_address
 from station.drivers.readings import InstrumentInfo
-from station.drivers.simproc import SimulatorProcess, spawn_simulator
+from station.drivers.simproc import SimulatorProcess
 from station.errors import InputError
 from station.ingest import (
     ClientIdConflictError,
@@ -45,11 +48,8 @@ from station.ingest import (
     Outbox,
     Receipt,
     calibration_client_id,
-    gloss_record_from_reading,
-    is_unreachable,
-    record_from_reading,
-    store_gloss,
 )
+from station.scan import ScanInputError
 
 log = logging.getLogger(__name__)
 
@@ -117,14 +117,8 @@ class InstrumentHub:
     def _spawn_and_attach(self, kind: str) -> Attached:
         """Spawn simulator *kind* within the cap and attach it; the child is ended on any failure."""
         self._reserve_simulator()
-        sim: SimulatorProcess | None = None
         try:
-            sim = spawn_simulator(kind)
-            return self._attach(sim.address, sim)
-        except BaseException:
-            if sim is not None:
-                sim.close()
-            raise
+            return self._attach(f"sim:{kind}")
         finally:
             with self._lock:
                 self._spawning -= 1
@@ -142,21 +136,23 @@ class InstrumentHub:
         if self._ingestor is not None:
             self._ingestor.close()
 
-    def _attach(self, address: str, simulator: SimulatorProcess | None) -> Attached:
-        family, _ = split_address(address)
-        driver = open_instrument(address)
+    def _attach(self, address: str) -> Attached:
+        """Open *address* through ``station.scan.open_device`` (``sim:KIND`` starts its simulator) and
+        attach it under a fresh handle; the instrument and its simulator are closed on any failure."""
+        device = scan.open_device(address, field="address")
         try:
-            info = driver.identify()
+            info = device.instrument.identify()
         except BaseException:
-            driver.close()
+            device.close()
             raise
+        family, _ = split_address(device.address)
         with self._lock:
             base = f"{family}-{info.serial}".lower()
             ident, n = base, 1
             while ident in self._attached:
                 n += 1
                 ident = f"{base}-{n}"
-            attached = Attached(ident, driver, info, simulator)
+            attached = Attached(ident, device.instrument, info, device.simulator)
             self._attached[ident] = attached
         return attached
 
@@ -212,7 +208,7 @@ class InstrumentHub:
             if address.startswith("sim:"):
                 attached = self._spawn_and_attach(address.removeprefix("sim:"))
             else:
-                attached = self._attach(address, None)
+                attached = self._attach(address)
         except CommunicationError as exc:
             log.warning("connect %s failed: %s", address, exc)
             raise NotFoundError(f"no instrument answers at {address}") from exc
@@ -314,13 +310,14 @@ class InstrumentHub:
                 expires=result.expires,
             )
 
-    def _gloss(self, gloss_id: str | None) -> GlossReading | None:
+    def _gloss_meter(self, gloss_id: str | None) -> Driver | None:
+        """The attached gloss meter *gloss_id* to pair with a scan (``None`` without one)."""
         if gloss_id is None:
             return None
-        reading = self.get(gloss_id).driver.measure()
-        if not isinstance(reading, GlossReading) or 60 not in reading.gloss_gu:
+        driver = self.get(gloss_id).driver
+        if driver.kind != "gloss":
             raise InputError("gloss_instrument_id", "an attached gloss meter with a 60° geometry", gloss_id)
-        return reading
+        return driver
 
     def measure(
         self,
@@ -331,11 +328,12 @@ class InstrumentHub:
         actor: User,
         client_id: uuid.UUID | None = None,
     ) -> MeasureResult:
-        """Measure once and store it exactly once through the :class:`Ingestor` (queued on disk when the database is away).
+        """Measure once through ``station.scan`` and store it exactly once (queued on disk when the database is away).
 
         With *client_id* (the request's, or its ``Idempotency-Key``) a retry is answered from what the
         first attempt left: the stored measurement (``duplicate``) or the outbox entry (``queued``),
-        without measuring again.
+        without measuring again. A paired gloss meter's reading is stored as a gloss reading naming the
+        measurement (``gloss_reading_id``) once the measurement is stored.
         """
         a = self.get(instrument_id)
         if a.driver.kind != "spectro":
@@ -344,59 +342,55 @@ class InstrumentHub:
                 "a spectrophotometer (gloss meters join via gloss_instrument_id)",
                 instrument_id,
             )
-        ingestor = self.ingestor()
-        if client_id is not None:
-            prior = self._prior(ingestor, client_id)
-            if prior is not None:
-                return self._result(prior)
-        gloss = self._gloss(gloss_instrument_id)
-        spectral = a.driver.measure()
-        if not isinstance(spectral, SpectralReading):
+        target = self.target()
+        found = scan.prior(target, client_id, away=self.database.away)
+        if isinstance(found, Receipt):
+            return self._result(found)
+        try:
+            taken = scan.take(
+                a.driver,
+                self._gloss_meter(gloss_instrument_id),
+                device=instrument_id,
+                gloss_device=gloss_instrument_id or "",
+                gloss_field="gloss_instrument_id",
+            )
+        except ScanInputError as exc:
+            if exc.field == "instrument":
+                raise InputError("instrument_id", "a spectrophotometer", instrument_id) from exc
+            raise
+        if taken.colour is None:  # a device that answered as a gloss meter: not stored as colour
             raise InputError("instrument_id", "a spectrophotometer", instrument_id)
-        reading = record_from_reading(
-            spectral,
+        taken = scan.make_records(
+            taken,
             operator=actor.name,
             illumination_deg=req.illumination_deg,
             client_id=client_id,
             instrument=a.info,
             panel_id=req.panel_id,
-            gloss=gloss,
         )
+        away = f"database away: {self.database.reason}" if self.database.away else None
         try:
-            if self.database.away:
-                receipt = ingestor.enqueue(reading, f"database away: {self.database.reason}")
-            else:
-                receipt = ingestor.submit(reading, actor_id=actor.id)
+            result = scan.store(taken, target, actor_id=actor.id, away=away)
         except ClientIdConflictError as exc:  # a concurrent request under the same key measured first
             raise ConflictError(str(exc)) from exc
+        receipt = result.receipt
+        if receipt is None:  # make_records raises rather than leave a colour reading without its record
+            raise RuntimeError(f"reading of {instrument_id} has no record")
         if receipt.status == "queued":
             self.database.mark_away(receipt.message or "reading queued")
             log.warning(
-                "database unreachable; reading %s queued in %s", reading.client_id, ingestor.outbox.path
+                "database unreachable; reading %s queued in %s",
+                receipt.client_id,
+                target.ingestor.outbox.path,
             )
-        gloss_id = None
-        if gloss is not None and receipt.measurement_id is not None and receipt.status == "stored":
-            try:  # the colour reading (with its 60° gloss) is stored; the full gloss row joins it
-                gloss_id = self._store_gloss(
-                    gloss, actor=actor, panel_id=None, measurement_id=receipt.measurement_id
-                )
-            except Exception as exc:
-                log.warning("gloss reading of measurement %s not stored: %s", receipt.measurement_id, exc)
+        gloss_id = None if result.gloss_receipt is None else result.gloss_receipt.gloss_reading_id
         return self._result(receipt).model_copy(update={"gloss_reading_id": gloss_id})
-
-    def _store_gloss(
-        self, reading: GlossReading, *, actor: User, panel_id: int | None, measurement_id: int | None
-    ) -> int:
-        record = gloss_record_from_reading(
-            reading, operator=actor.name, panel_id=panel_id, measurement_id=measurement_id
-        )
-        with self.sessions.begin() as session:
-            return store_gloss(session, record, created_by_id=actor.id).measurement_id
 
     def measure_gloss(
         self, *, instrument_id: str, panel_id: int | None, measurement_id: int | None, actor: User
     ) -> int:
-        """Measure once on the gloss meter *instrument_id* and store the gloss reading; its row id.
+        """Measure once on the gloss meter *instrument_id* through ``station.scan`` and store the gloss
+        reading; its row id.
 
         The reading is gloss-only (with *panel_id*) or names the colour measurement it belongs to
         (*measurement_id*). It is stored directly, not through the outbox: while the database is away
@@ -407,26 +401,16 @@ class InstrumentHub:
             raise InputError("instrument_id", "an attached gloss meter", instrument_id)
         if self.database.away:
             raise UnavailableError(f"database away: {self.database.reason}; gloss reading not taken")
-        reading = a.driver.measure()
-        if not isinstance(reading, GlossReading):
+        taken = scan.take(a.driver, device=instrument_id)
+        if not taken.gloss_only:
             raise InputError("instrument_id", "an attached gloss meter", instrument_id)
-        return self._store_gloss(reading, actor=actor, panel_id=panel_id, measurement_id=measurement_id)
-
-    def _prior(self, ingestor: Ingestor, client_id: uuid.UUID) -> Receipt | None:
-        """What an earlier attempt under *client_id* left; only the outbox is asked while the database is away.
-
-        A reading stored before the database went away is not seen then; measured again, its second
-        body is refused on replay (same client id, other payload) and the stored one stays the only one.
-        """
-        if not self.database.away:
-            try:
-                ingestor.replay()
-                return ingestor.find(client_id)
-            except Exception as exc:
-                if not is_unreachable(exc):
-                    raise
-                self.database.mark_away(exc)
-        return ingestor.find_queued(client_id)
+        taken = scan.make_records(
+            taken, operator=actor.name, panel_id=panel_id, measurement_id=measurement_id
+        )
+        receipt = scan.store(taken, self.target(), actor_id=actor.id).gloss_receipt
+        if receipt is None or receipt.gloss_reading_id is None:  # store_gloss raises before this
+            raise RuntimeError(f"gloss reading of {instrument_id} not stored")
+        return receipt.gloss_reading_id
 
     def _result(self, receipt: Receipt) -> MeasureResult:
         client_id = uuid.UUID(receipt.client_id)
@@ -451,6 +435,11 @@ class InstrumentHub:
                     self.settings.outbox_path,
                 )
             return self._ingestor
+
+    def target(self) -> scan.DatabaseTarget:
+        """Where scans are stored: the service's ingestor (colour) and its database (gloss); a prior attempt
+        that finds the database away marks it away."""
+        return scan.DatabaseTarget(self.ingestor(), on_unreachable=self.database.mark_away)
 
     def outbox(self) -> Outbox:
         """The service's outbox (opened on first use)."""

@@ -5,13 +5,16 @@ DEVICE is ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss`` (a simulator subprocess star
 (``/dev/ttyACM0``, ``ma3@usb:1209:ca03``, ``gloss@hid:PATH`` …). Lab comes from
 ``station.model.spectra.reflectance_to_lab`` (D65, CIE 1964 10°), never from the driver.
 
-``station measure DEVICE --store [URL]`` also stores the reading: the record is
-``station.ingest.record_from_reading``'s and it goes through ``station.ingest.Ingestor`` (exactly once by
-client id; queued in ``--outbox`` when the database is away and sent by the next ``--store``) into URL,
-or by default the database ``station serve`` uses (``$CACAD_DATABASE_URL``, else ``station.sqlite3`` in
-``$CACAD_DATA_DIR`` or ``./var``), upgraded to the current schema on first use. A gloss meter's reading
-(20/60/85 GU, haze, DOI, Rspec) is stored as a gloss-only reading (``station.ingest.store_gloss``) on the
-``--panel`` given, directly (not queued): the QC views pair it with a colour reading of the same panel.
+Every measurement goes through ``station.scan``, the scan path the viewer and the service use too.
+``station measure DEVICE --gloss GLOSS_DEVICE`` reads the gloss meter first (``station.scan.take``): its
+60° gloss goes into the colour record. ``--store [URL]`` also stores the reading (``station.scan.store``):
+through ``station.ingest.Ingestor`` (exactly once by client id; queued in ``--outbox`` when the database
+is away and sent by the next ``--store``) into URL, or by default the database ``station serve`` uses
+(``$CACAD_DATABASE_URL``, else ``station.sqlite3`` in ``$CACAD_DATA_DIR`` or ``./var``), upgraded to the
+current schema on first use; the paired meter's whole reading then becomes a gloss reading naming the
+measurement. A gloss meter alone gives a gloss-only reading (20/60/85 GU, haze, DOI, Rspec), stored as a
+gloss reading of its own on the ``--panel`` given, directly (not queued): the QC views pair it with a
+colour reading of the same panel.
 
 ``station measure DEVICE --out FILE [--out FILE …] [--format cxf|cgats|csv|xlsx] [--sample NAME]`` also
 writes the reading (every geometry, spectra and Lab) as a CxF3, CGATS.17, MA-T12 workbook or CSV file that
@@ -23,7 +26,7 @@ from __future__ import annotations
 import argparse
 import uuid
 from collections.abc import Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -59,6 +62,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             help="sim:ma6 only: 12 geometries in two illumination blocks (15° and 45°), as an MA-T12",
         )
         if name == "measure":
+            cp.add_argument(
+                "--gloss",
+                metavar="DEVICE",
+                help="gloss meter read first (sim:gloss or an address): its 60° gloss is stored with the "
+                "colour, its whole reading as a gloss reading of the measurement",
+            )
             cp.add_argument("--panel", help="panel recorded with the reading (with --store: a panel id)")
             cp.add_argument(
                 "--store",
@@ -105,38 +114,46 @@ def cmd_list(args: argparse.Namespace) -> dict[str, Any]:
 
 @contextmanager
 def _instrument(args: argparse.Namespace) -> Iterator[Any]:
-    from station.drivers import open_instrument
-    from station.drivers.simproc import SIM_KINDS, spawn_simulator
+    """The device of the command, opened through ``station.scan.open_device`` (closed on the way out)."""
+    from station.scan import open_device
 
     if not (0.05 <= args.timeout <= 60):
         raise InputError("--timeout", "0.05 <= seconds <= 60", args.timeout)
-    with ExitStack() as stack:
-        address = args.device
-        if args.device.startswith("sim:"):
-            kind = args.device[4:]
-            if kind not in SIM_KINDS:
-                raise InputError("device", "sim:ma6 | sim:ma3 | sim:gloss or an address", args.device)
-            if args.design is not None and args.recipe is not None:
-                raise InputError("--recipe", "either --design or --recipe, not both", str(args.recipe))
-            if args.twelve and kind != "ma6":
-                raise InputError("--twelve", "only with sim:ma6", args.device)
-            extra = ["--twelve"] if args.twelve else []
-            design = None if args.design is None else args.design.resolve()  # the child runs elsewhere
-            recipe = None if args.recipe is None else args.recipe.resolve()
-            sim = stack.enter_context(
-                spawn_simulator(kind, design, args.fault, recipe_file=recipe, extra_args=extra)
-            )
-            address = sim.address
-        elif args.design is not None or args.recipe is not None or args.fault or args.twelve:
-            raise InputError("--design/--recipe/--fault/--twelve", "only with a sim:* device", args.device)
-        inst = stack.enter_context(open_instrument(address, timeout_s=args.timeout))
-        yield inst
+    if args.design is not None and args.recipe is not None:
+        raise InputError("--recipe", "either --design or --recipe, not both", str(args.recipe))
+    if args.twelve and args.device.startswith("sim:") and args.device != "sim:ma6":
+        raise InputError("--twelve", "only with sim:ma6", args.device)
+    extra = ["--twelve"] if args.twelve else []
+    with open_device(
+        args.device,
+        timeout_s=args.timeout,
+        design_file=args.design,
+        recipe_file=args.recipe,
+        faults=args.fault,
+        extra_args=extra,
+    ) as device:
+        yield device
+
+
+@contextmanager
+def _gloss_meter(args: argparse.Namespace) -> Iterator[Any]:
+    """The ``--gloss`` meter (``station.scan.open_gloss_meter``), or ``None`` without ``--gloss``."""
+    if getattr(args, "gloss", None) is None:
+        yield None
+        return
+    from station.scan import open_gloss_meter
+
+    with open_gloss_meter(args.gloss, timeout_s=args.timeout, field="--gloss") as meter:
+        yield meter
 
 
 def cmd_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     """Run the calibration sequence and report it."""
-    with _instrument(args) as inst:
-        r = inst.calibrate()
+    from station.scan import calibrate
+
+    with _instrument(args) as device:
+        inst = device.instrument
+        (_name, r), *_ = calibrate(device)
         return {
             "device": args.device,
             "address": f"{inst.family}@{inst.address}",
@@ -161,70 +178,54 @@ def _store_panel_id(panel: str | None) -> int | None:
 
 
 @contextmanager
-def _ingestor(args: argparse.Namespace) -> Iterator[Any]:
-    """The :class:`~station.ingest.Ingestor` into the ``--store`` database (``None`` without ``--store``)."""
+def _target(args: argparse.Namespace) -> Iterator[Any]:
+    """The :class:`station.scan.DatabaseTarget` of the ``--store`` database (``None`` without ``--store``)."""
     if args.store is None:
         yield None
         return
     from db.engine import configured_database_url, data_dir
     from station.ingest import DatabaseDestination, Ingestor
+    from station.scan import DatabaseTarget
 
     url = args.store or configured_database_url()
     destination = DatabaseDestination(url, migrate=True, source="cli")
     try:
         with Ingestor(destination, args.outbox or data_dir() / "measure-outbox.sqlite3") as ingestor:
-            yield ingestor
+            yield DatabaseTarget(ingestor)
     finally:
         destination.close()
 
 
-def _receipt(ingestor: Any, receipt: Any) -> dict[str, Any]:
+def _receipt(target: Any, receipt: Any) -> dict[str, Any]:
+    """The ``stored`` answer of a colour reading (a :class:`station.ingest.Receipt`)."""
     return {
         "status": receipt.status,
         "client_id": receipt.client_id,
         "measurement_id": receipt.measurement_id,
-        "database": ingestor.destination.where,
-        "outbox": str(ingestor.outbox.path),
+        "database": target.where,
+        "outbox": str(target.ingestor.outbox.path),
         "message": receipt.message,
     }
 
 
-def _stored_gloss_id(ingestor: Any, client_id: uuid.UUID) -> int | None:
-    """The gloss reading stored under *client_id* in the ``--store`` database, or ``None``."""
-    from sqlalchemy import select
-
-    from db.models import GlossReading as GlossRow
-
-    with ingestor.destination.sessions()() as session:
-        found = session.scalar(select(GlossRow.id).where(GlossRow.client_id == client_id))
-    return None if found is None else int(found)
-
-
-def _gloss_receipt(ingestor: Any, client_id: uuid.UUID, gloss_id: int, status: str) -> dict[str, Any]:
+def _gloss_receipt(target: Any, receipt: Any) -> dict[str, Any]:
+    """The ``stored`` answer of a gloss reading (a :class:`station.scan.GlossReceipt`)."""
     return {
-        "status": status,
-        "client_id": str(client_id),
-        "gloss_reading_id": gloss_id,
-        "database": ingestor.destination.where,
+        "status": receipt.status,
+        "client_id": receipt.client_id,
+        "gloss_reading_id": receipt.gloss_reading_id,
+        "database": target.where,
     }
 
 
-def _store_gloss(
-    ingestor: Any, reading: Any, panel_id: int | None, client_id: uuid.UUID | None
-) -> dict[str, Any]:
-    """Store a gloss-only reading (``station.ingest.store_gloss``) straight in the ``--store`` database.
-
-    Gloss readings do not go through the outbox: with the database away this fails and stores nothing.
-    """
-    from station.ingest import gloss_record_from_reading, operator_name, store_gloss
-
-    record = gloss_record_from_reading(
-        reading, operator=operator_name(), client_id=client_id, panel_id=panel_id
-    )
-    with ingestor.destination.sessions().begin() as session:
-        result = store_gloss(session, record)
-    status = "stored" if result.created else "duplicate"
-    return _gloss_receipt(ingestor, record.client_id, result.measurement_id, status)
+def _stored(target: Any, result: Any) -> dict[str, Any]:
+    """What became of the scan's records: the colour receipt (with its gloss reading's id), or the gloss one."""
+    if result.receipt is None:
+        return _gloss_receipt(target, result.gloss_receipt)
+    out = _receipt(target, result.receipt)
+    if result.gloss_receipt is not None:
+        out["gloss_reading_id"] = result.gloss_receipt.gloss_reading_id
+    return out
 
 
 def _check_out_formats(args: argparse.Namespace) -> None:
@@ -270,52 +271,53 @@ def cmd_measure(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _measure(args: argparse.Namespace, panel_id: int | None, steps: Steps) -> dict[str, Any]:
-    from station.drivers import GlossReading
+    from station import scan
 
-    with _ingestor(args) as ingestor, _instrument(args) as inst:
-        if ingestor is not None and args.client_id is not None:
-            ingestor.replay()
-            prior = ingestor.find(args.client_id)
+    with _target(args) as target, _instrument(args) as device, _gloss_meter(args) as meter:
+        if target is not None and args.client_id is not None:
+            prior = scan.prior(target, args.client_id)
             if prior is not None:  # a retry: answered from the first attempt, nothing measured again
-                return {"device": args.device, "panel": args.panel, "stored": _receipt(ingestor, prior)}
-            gloss_prior = _stored_gloss_id(ingestor, args.client_id)
-            if gloss_prior is not None:
-                stored = _gloss_receipt(ingestor, args.client_id, gloss_prior, "duplicate")
+                stored = (
+                    _gloss_receipt(target, prior)
+                    if isinstance(prior, scan.GlossReceipt)
+                    else _receipt(target, prior)
+                )
                 return {"device": args.device, "panel": args.panel, "stored": stored}
         steps("measuring")
-        reading = inst.measure()
-        steps("converting" if ingestor is None else "storing")
+        inst = device.instrument
+        result = scan.take(
+            inst,
+            None if meter is None else meter.instrument,
+            device=args.device,
+            gloss_device=args.gloss or "",
+            gloss_field="--gloss",
+        )
+        steps("converting" if target is None else "storing")
         out: dict[str, Any] = {
             "device": args.device,
             "address": f"{inst.family}@{inst.address}",
             "panel": args.panel,
         }
-        if isinstance(reading, GlossReading):
+        if result.gloss_only and result.gloss is not None:
             if args.out:
                 raise InputError("--out", "a spectrophotometer reading (Lab per geometry)", args.device)
-            data = reading.to_dict()
-            out.update({"geometries": [], "lab": [], "spectra": [], **data})
-            if ingestor is not None:
-                out["stored"] = _store_gloss(ingestor, reading, panel_id, args.client_id)
-            return out
-        from station.model.spectra import reflectance_to_lab
+            out.update({"geometries": [], "lab": [], "spectra": [], **result.gloss.to_dict()})
+        elif result.colour is not None:
+            out.update(result.colour.to_dict())
+            out["lab"] = result.lab.round(4).tolist()
+            out["gloss_gu"] = result.gloss_60_gu
+            if args.out:
+                out["files"] = _write_files(result.colour, args)
+        if target is not None:
+            from station.ingest import operator_name
 
-        data = reading.to_dict()
-        out.update(data)
-        out["lab"] = reflectance_to_lab(reading.reflectance).round(4).tolist()
-        out["gloss_gu"] = None
-        if args.out:
-            out["files"] = _write_files(reading, args)
-        if ingestor is not None:
-            from station.ingest import operator_name, record_from_reading
-
-            record = record_from_reading(
-                reading,
+            result = scan.make_records(
+                result,
                 operator=operator_name(),
                 illumination_deg=args.illumination,
                 client_id=args.client_id,
-                instrument=inst.identify(),
+                instrument=inst.identify() if result.colour is not None else None,
                 panel_id=panel_id,
             )
-            out["stored"] = _receipt(ingestor, ingestor.submit(record))
+            out["stored"] = _stored(target, scan.store(result, target))
         return out

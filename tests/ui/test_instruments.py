@@ -215,10 +215,9 @@ def test_a_reading_queued_by_the_previous_viewer_layout_is_still_sent(tmp_path):
     from dataclasses import asdict
 
     from station.ingest import Outbox
-    from ui.models.instruments import ingest_record
 
     url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
-    reading = ingest_record(_spectral())
+    reading = measurement_from_reading(_spectral(), PanelInfo("J-3", "hood"), "test").reading
     body = {"panel": asdict(PanelInfo("J-3", "hood")), "reading": reading.model_dump(mode="json")}
     with Outbox(tmp_path / "outbox.sqlite3") as box:
         box.put(str(reading.client_id), json.dumps(body, sort_keys=True))
@@ -227,4 +226,51 @@ def test_a_reading_queued_by_the_previous_viewer_layout_is_still_sent(tmp_path):
     assert [r.status for r in sink.flush().values()] == ["stored"] and sink.pending() == 0
     rows = _rows(url)
     assert [(str(m.client_id), p.job, p.part) for m, p in rows] == [(str(reading.client_id), "J-3", "hood")]
+    sink.close()
+
+
+def _gloss_reading():
+    """A gloss meter's reading built here (no device)."""
+    from station.drivers import GlossReading
+
+    return GlossReading(
+        {20: 80.5, 60: 90.25, 85: 97.0},
+        12.5,
+        1.1,
+        88.0,
+        91.0,
+        "GM-T-1",
+        "CAL-G",
+        dt.datetime(2026, 11, 23, 7, 5, tzinfo=dt.UTC),
+        23.0,
+        model="test gloss",
+    )
+
+
+def test_a_gloss_only_reading_is_not_queued_while_the_database_is_away(tmp_path):
+    """Gloss readings are stored directly on every front: with the database away the receipt says why and
+    nothing waits in the outbox; once it is back the same reading is stored once on the typed panel."""
+    from db.models import GlossReading as GlossRow
+
+    blocker = tmp_path / "db"
+    blocker.write_text("a file where the database folder should be")
+    url = f"sqlite:///{blocker / 'station.sqlite3'}"
+    sink = LocalSink(url, tmp_path / "outbox.sqlite3")
+    store = MeasurementStore(sink)
+    m = measurement_from_reading(_gloss_reading(), PanelInfo("J-G", "trunk"), "test")
+    assert m.gloss_only and m.reading is None and m.gloss_gu == 90.25
+    away = store.persist(m)
+    assert away.gloss_receipt.status == "not stored" and "unreachable" in away.gloss_receipt.message
+    assert away.receipt is None and sink.pending() == 0
+    blocker.unlink()
+    back = store.persist(m)
+    assert back.gloss_receipt.status == "stored" and store.persist(m).gloss_receipt.status == "duplicate"
+    engine = create_engine(url)
+    with Session(engine) as s:
+        rows = s.execute(select(GlossRow, Panel).join(Panel, Panel.id == GlossRow.panel_id)).all()
+    engine.dispose()
+    assert [(r.id, r.gloss_60_gu, r.haze_hu, p.job, p.part) for r, p in rows] == [
+        (back.gloss_receipt.gloss_reading_id, 90.25, 12.5, "J-G", "trunk")
+    ]
+    assert _rows(url) == []  # no colour measurement
     sink.close()

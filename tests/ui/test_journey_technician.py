@@ -134,22 +134,88 @@ def test_technician_day_local(qtbot, tmp_path):
     sink.close()
 
 
-def test_a_gloss_meter_alone_shows_its_values_not_refused(qtbot, tmp_path):
-    sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
-    screen = InstrumentsScreen(MeasurementStore(sink))
-    qtbot.addWidget(screen)
+def _gloss_alone(qtbot, screen: InstrumentsScreen, job: str):
+    """Connect the gloss meter alone, type the panel and scan by clicks; the measurement shown."""
     screen.show()
     _type(screen.device.lineEdit(), "sim:gloss")
     _click(qtbot, screen, screen.connect_btn)
+    _type(screen.job, job)
+    screen.part.setCurrentIndex(screen.part.findText("roof"))
     _click(qtbot, screen, screen.scan_btn)
     m = screen.store.items[-1]
-    assert m.gloss_only and m.receipt is None
-    assert "REFUSED" not in screen.state.text() and "ERROR" not in screen.log.toPlainText()
-    assert screen.state.text() == "gloss reading shown (not stored on its own)"
+    assert m.gloss_only and m.receipt is None and m.gloss is not None
+    assert "ERROR" not in screen.log.toPlainText(), screen.log.toPlainText()
     assert f"60° {m.gloss.gloss_gu[60]:.1f} GU" in screen.gloss.text()
-    assert "gloss only, not stored" in screen.stored.item(0).text() and sink.pending() == 0
+    return m
+
+
+def _expected_gloss_row(m) -> tuple:
+    """The row a gloss-only reading must become: its own record, the meter's values as it read them."""
+    g = m.gloss
+    return (str(m.gloss_record.client_id), g.gloss_gu[20], g.gloss_gu[60], g.gloss_gu[85], g.haze_hu, g.doi)
+
+
+def _check_row(got: tuple, m) -> None:
+    want = _expected_gloss_row(m)
+    assert str(got[0]) == want[0] and got[1:] == pytest.approx(want[1:], abs=1e-9)
+
+
+def test_a_gloss_meter_alone_is_stored_as_a_gloss_reading_of_the_panel(qtbot, tmp_path):
+    """As ``station measure sim:gloss --store`` and the service's gloss measure: a gloss reading of its own
+    (gloss_readings), on the panel typed, no colour measurement; a re-send stores nothing new."""
+    from db.models import GlossReading, Panel
+
+    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    sink = LocalSink(url, tmp_path / "outbox.sqlite3")
+    screen = InstrumentsScreen(MeasurementStore(sink))
+    qtbot.addWidget(screen)
+    m = _gloss_alone(qtbot, screen, "J-2026-0300")
+    g = m.gloss_receipt
+    assert g is not None and g.status == "stored" and g.gloss_reading_id is not None
+    assert screen.state.text() == f"stored as gloss reading {g.gloss_reading_id}"
+    assert f"gloss #{g.gloss_reading_id}" in screen.stored.item(0).text() and sink.pending() == 0
+    engine = create_engine(url)
+    with Session(engine) as s:
+        rows = s.execute(select(GlossReading, Panel).join(Panel, Panel.id == GlossReading.panel_id)).all()
+        colour = s.scalars(select(MeasurementRow)).all()
+    engine.dispose()
+    assert colour == [] and len(rows) == 1
+    row, panel = rows[0]
+    assert (panel.job, panel.part) == ("J-2026-0300", "roof") and row.id == g.gloss_reading_id
+    _check_row((row.client_id, row.gloss_20_gu, row.gloss_60_gu, row.gloss_85_gu, row.haze_hu, row.doi), m)
+    assert screen.store.persist(m).gloss_receipt.status == "duplicate"
     screen.close()
     sink.close()
+
+
+def test_a_gloss_meter_alone_in_service_mode_is_stored_by_the_service(qtbot, tmp_path):
+    from tests.api.conftest import make_api
+    from ui.models.service import ServiceClient
+
+    gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path)
+    api = next(gen)
+    try:
+        token = api.tokens[next(r for r in api.tokens if r.value == "technician")]
+        sink = ServiceSink(
+            ServiceClient("http://testserver", token, client=api.client), tmp_path / "o.sqlite3"
+        )
+        screen = InstrumentsScreen(MeasurementStore(sink))
+        qtbot.addWidget(screen)
+        m = _gloss_alone(qtbot, screen, "J-2026-0301")
+        g = m.gloss_receipt
+        assert g is not None and g.status == "stored", screen.log.toPlainText()
+        tech = api.auth("technician")
+        rows = api.client.get("/api/v1/qc/gloss", params={"job": "J-2026-0301"}, headers=tech).json()
+        assert [r["id"] for r in rows["data"]] == [g.gloss_reading_id]
+        r = rows["data"][0]
+        _check_row(
+            (r["client_id"], r["gloss_20_gu"], r["gloss_60_gu"], r["gloss_85_gu"], r["haze_hu"], r["doi"]), m
+        )
+        assert api.client.get("/api/v1/measurements", headers=tech).json()["data"] == []
+        screen.close()
+        sink.close()
+    finally:
+        gen.close()
 
 
 def test_technician_day_service_mode(qtbot, tmp_path):

@@ -32,7 +32,17 @@ from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.domain import ILLUMINATION_DEG
 
 if TYPE_CHECKING:  # SQLAlchemy, pydantic and the ORM load on first use (≈0.5 s off the viewer's start-up)
-    from station.ingest import DatabaseDestination, Destination, Ingestor, Outbox, PanelRef, Reading, Receipt
+    from station.ingest import (
+        DatabaseDestination,
+        Destination,
+        GlossRecord,
+        Ingestor,
+        Outbox,
+        PanelRef,
+        Reading,
+        Receipt,
+    )
+    from station.scan import GlossReceipt, GlossStatus
 
 RECENT_DEFAULT = 50
 """Stored measurements offered by default (newest first)."""
@@ -175,6 +185,16 @@ class MeasurementSink:
         record = reading.model_copy(update={"panel": panel.ref(), "panel_id": None})
         return self._receipt(self.ingestor.submit(record))
 
+    def submit_gloss(self, panel: PanelInfo, record: GlossRecord) -> GlossReceipt:
+        """Store a gloss record once, not queued: a gloss-only one on *panel*, a paired one on the panel of
+        the measurement it names. Raises when the store is away or refuses it. Blocking."""
+        if record.measurement_id is None:
+            record = record.model_copy(update={"panel": panel.ref(), "panel_id": None})
+        return self._submit_gloss(record)
+
+    def _submit_gloss(self, record: GlossRecord) -> GlossReceipt:
+        raise NotImplementedError
+
     def flush(self) -> dict[str, Receipt]:
         """Send queued readings oldest first; stop at the first "unreachable". Receipts by client id."""
         return {r.client_id: self._receipt(r) for r in self.ingestor.drain()}
@@ -291,6 +311,12 @@ class LocalSink(MeasurementSink):
             for m, p in rows
         ]
 
+    def _submit_gloss(self, record: GlossRecord) -> GlossReceipt:
+        """``station.ingest.store_gloss`` in the workstation's database (through ``station.scan``)."""
+        from station.scan import DatabaseTarget
+
+        return DatabaseTarget(self.ingestor).submit_gloss(record)
+
     def close(self) -> None:
         super().close()
         self._db = None
@@ -346,6 +372,14 @@ class ServiceSink(MeasurementSink):
         if r.status_code >= 400:
             raise ReadingRefusedError(f"{method} {path}: HTTP {r.status_code} {r.text[:300]}")
         return r
+
+    def _submit_gloss(self, record: GlossRecord) -> GlossReceipt:
+        """``POST /qc/gloss``: 201 stored, 200 already stored (the service's token names the actor)."""
+        from station.scan import GlossReceipt
+
+        r = self._request("POST", "/qc/gloss", json=record.model_dump(mode="json"))
+        status: GlossStatus = "stored" if r.status_code == 201 else "duplicate"
+        return GlossReceipt(str(record.client_id), status, int(r.json()["id"]))
 
     def recent(self, limit: int = RECENT_DEFAULT) -> list[StoredMeasurement]:
         limit = recent_limit(limit)

@@ -318,9 +318,16 @@ class InstrumentsScreen(QWidget):
         self.store.add(m)
         self.where.setText(self._where_text())
         r = m.receipt
-        if m.gloss_only:
-            self.state.setText("gloss reading shown (not stored on its own)")
-            self._say(f"gloss reading {m.panel.label}: {m.gloss_text()}; {m.note}")
+        g = m.gloss_receipt
+        if m.gloss_only and (g is None or g.gloss_reading_id is None):
+            self.state.setText("gloss reading NOT STORED" if g is not None else "gloss reading shown")
+            self._say(
+                f"{'ERROR ' if g is not None else ''}gloss reading {m.panel.label}: {m.gloss_text()}; "
+                f"{g.message if g is not None else 'not stored (no database)'}"
+            )
+        elif m.gloss_only and g is not None:
+            self.state.setText(f"stored as gloss reading {g.gloss_reading_id}")
+            self._say(f"{g.status} {m.panel.label} as gloss reading {g.gloss_reading_id}: {m.gloss_text()}")
         elif r is None:
             self._say(
                 f"scanned {m.panel.label} ({len(m.geometries)} geometries) {m.note}; not stored (no database)"
@@ -348,8 +355,13 @@ class InstrumentsScreen(QWidget):
 
     def _on_added(self, m: Measurement) -> None:
         self.last = m
+        gloss_receipt = m.gloss_receipt
         status = (
-            "gloss only, not stored"
+            (
+                f"gloss #{gloss_receipt.gloss_reading_id}"
+                if gloss_receipt is not None and gloss_receipt.gloss_reading_id
+                else "gloss only, not stored"
+            )
             if m.gloss_only
             else "session only"
             if m.receipt is None
