@@ -146,7 +146,7 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
             "format": write_measurement_file(imported.measurements, args.out),
         }
     if args.store is not None:
-        from station.cli.instruments import _ingestor, _receipt
+        from station.cli.instruments import _receipt, _target
         from station.ingest import operator_name
 
         mtime = dt.datetime.fromtimestamp(path.stat().st_mtime, dt.UTC).replace(microsecond=0)
@@ -159,9 +159,9 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
             job=job,
             part=part,
         )  # every reading validated before the first is stored
-        with _ingestor(args) as ingestor:
+        with _target(args) as target:
             out["stored"] = [
-                _receipt(ingestor, ingestor.submit(r)) | {"illumination_deg": r.illumination_deg}
+                _receipt(target, target.ingestor.submit(r)) | {"illumination_deg": r.illumination_deg}
                 for r in readings
             ]
     if not args.json:
@@ -179,7 +179,7 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
 
 
 def _watch(args: argparse.Namespace) -> dict[str, Any] | None:
-    from station.cli.instruments import _ingestor
+    from station.cli.instruments import _target
     from station.ingest import operator_name
     from station.ingest.formats.watch import ABANDON_S, SETTLE_S, scan_once, watch_folder
 
@@ -204,7 +204,8 @@ def _watch(args: argparse.Namespace) -> dict[str, Any] | None:
         "illumination_deg": _illumination(args),
         "abandon_s": abandon,
     }
-    with _ingestor(args) as ingestor:
+    with _target(args) as target:
+        ingestor = target.ingestor
         if args.once:
             outcomes = scan_once(folder, ingestor, settle_s=settle, **common)
             result = {
