@@ -105,7 +105,7 @@ def test_booth_measurement_against_a_stored_recipe_over_http(tmp_path: Path) -> 
         pytest.fail(str(exc))
 
 
-def test_booth_refuses_a_job_without_a_recipe(sqlite_api: Api) -> None:
+def test_booth_refuses_a_job_without_a_usable_recipe(sqlite_api: Api) -> None:
     from sqlalchemy import select
 
     from db.models import DesignVersion, FormulationJob
@@ -114,15 +114,25 @@ def test_booth_refuses_a_job_without_a_recipe(sqlite_api: Api) -> None:
     d = c.post(f"{V1}/designs", json={"name": "red", "design": DESIGN}, headers=sqlite_api.auth("stylist"))
     assert d.status_code == 201, d.text
     with c.app.state.sessions() as session:  # type: ignore[attr-defined]
-        dv = session.scalars(select(DesignVersion).where(DesignVersion.design_id == d.json()["id"])).first()
-        job = FormulationJob(
-            design_version_id=dv.id, state="failed", target={}, recipe={"candidates": [], "recipe": None}
-        )
-        session.add(job)
+        dv = session.scalars(select(DesignVersion).where(DesignVersion.design_id == d.json()["id"])).one()
+        jobs = [
+            FormulationJob(
+                design_version_id=dv.id, state="failed", target={}, recipe={"candidates": [], "recipe": rc}
+            )
+            for rc in (None, {"unobtainium": 0.1})
+        ]
+        session.add_all(jobs)
         session.commit()
-        job_id = job.id
+        ids = [j.id for j in jobs]
     spectra = {"geometries": ["45as15"], "spectra": [[0.5] * 31], "wavelengths_nm": WAVELENGTHS.tolist()}
+    for job_id, words in zip(ids, ("no recipe", "unobtainium"), strict=True):
+        r = c.post(
+            f"{V1}/booth",
+            json={"standard": spectra, "sample_recipe_id": job_id},
+            headers=sqlite_api.auth("qa"),
+        )
+        assert r.status_code == 422 and "sample_recipe_id" in r.text and words in r.text, r.text
     r = c.post(
-        f"{V1}/booth", json={"standard": spectra, "sample_recipe_id": job_id}, headers=sqlite_api.auth("qa")
+        f"{V1}/booth", json={"standard": spectra, "sample_recipe_id": 999_999}, headers=sqlite_api.auth("qa")
     )
-    assert r.status_code == 422 and "sample_recipe_id" in r.text and "recipe" in r.text, r.text
+    assert r.status_code == 404 and "sample_recipe_id" in r.text, r.text

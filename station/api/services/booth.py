@@ -10,8 +10,8 @@ from station.api.errors import NotFoundError
 from station.api.schemas.booth import BoothCatalogue, BoothOut, BoothRequest, BoothSpectra
 from station.api.services.qc import stored_reading
 from station.errors import InputError
-from station.formulate.recipe_spectra import is_recipe_document, recipe_from_document
-from station.model.domain import BOOTH_SHAPES
+from station.formulate.recipe_spectra import is_recipe_document, recipe_from_document, recipe_spectra
+from station.model.domain import ANGLES_3, BOOTH_SHAPES
 from station.model.errors import ModelInputError
 from station.model.illuminants import (
     BOOTH_ILLUMINANTS,
@@ -60,7 +60,9 @@ def stored_recipe(session: Session, recipe_id: int, field: str) -> BoothRecipe:
         raise InputError(
             field, "a formulation job with a recipe of the colorants", f"recipe {recipe_id}: no recipe"
         )
-    return BoothRecipe(recipe_from_document(job.recipe, field), f"recipe {recipe_id}")
+    fractions = recipe_from_document(job.recipe, field)
+    recipe_spectra(fractions, ANGLES_3, where=field)  # 422 naming the field: a colorant the model lacks
+    return BoothRecipe(fractions, f"recipe {recipe_id}")
 
 
 def _illuminants(request: BoothRequest) -> list[str | Illuminant]:
