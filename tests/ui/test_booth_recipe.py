@@ -24,14 +24,15 @@ pytestmark = [pytest.mark.qt]
 RECIPE = {"red_pr": 0.08, "magenta_pv": 0.01, "alu_bright": 0.04, "white_tio2": 0.005}
 
 
+def _cell(screen: BoothScreen, i: int, column: str) -> str:
+    item = screen.table.item(i, COLUMNS.index(column))
+    assert item is not None
+    return item.text()
+
+
 def _labs(screen: BoothScreen, column: str) -> np.ndarray:
-    j = COLUMNS.index(column)
-    return np.array(
-        [
-            [float(v) for v in screen.table.item(i, j).text().split(",")]
-            for i in range(screen.table.rowCount())
-        ]
-    )
+    n = screen.table.rowCount()
+    return np.array([[float(v) for v in _cell(screen, i, column).split(",")] for i in range(n)])
 
 
 def _predicted(angles: list[float]) -> np.ndarray:
@@ -60,7 +61,7 @@ def test_trial_from_a_recipe_file(qtbot, tmp_path, spectra, monkeypatch) -> None
         )
         de = delta_e(reflectance_to_lab(spectra[0], name), reflectance_to_lab(predicted, name), "cie2000")
         np.testing.assert_allclose(
-            [float(screen.table.item(i, 3).text()) for i in range(len(ANGLES))], de, atol=0.006
+            np.array([float(_cell(screen, i, "ΔE00")) for i in range(len(ANGLES))]), de, atol=0.006
         )
     assert "recipe recipe.json" in screen.message.text()
     # a measurement file is not a recipe: a visible message naming it
