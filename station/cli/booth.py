@@ -4,8 +4,9 @@
 [--shape panels|seam|car] [--out booth.png] [--json]``
 
 FILE is anything ``station import`` reads that carries spectra (CxF3, CGATS.17, the CSV template, or
-``station measure --json`` / ``station import --json`` output); a file without spectra is refused with
-one line naming it. ``--illuminants`` takes booth names (D65, D50, A, F2, F11, TL84, LED-B3, LED-B4) and
+``station measure --json`` / ``station import --json`` output) or a recipe (the JSON ``station
+formulate --json`` writes: its colorant model's predicted spectra at the other side's geometries, or at
+15/45/110° when both sides are recipes); a file that is neither is refused with one line naming it. ``--illuminants`` takes booth names (D65, D50, A, F2, F11, TL84, LED-B3, LED-B4) and
 user SPD files (``lamp.csv``: ``wavelength_nm,value`` rows covering 400–700 nm). The JSON is
 ``{"illuminants": [{"name", "per_geometry": [{"geometry", "standard_lab", "sample_lab", "dE00",
 "metamerism_index"}], "mean_de"}], "reference": "D65"}``; without ``--json`` the same numbers as a
@@ -34,18 +35,6 @@ def _illuminants(text: str) -> list[Any]:
     return [illuminant_from_text(p) for p in parts]
 
 
-def _one_reading(path: str, role: str) -> Any:
-    from station.qc.errors import QcInputError
-    from station.qc.readings import load_readings
-
-    readings = load_readings(path)
-    if len(readings) != 1:
-        raise QcInputError(
-            f"{role} {Path(path).name}", "one reading with spectra (spectra are not averaged)", len(readings)
-        )
-    return readings[0]
-
-
 def render_booth_image(
     comparison: Any, standard: Any, sample: Any, illuminants: list[Any], observer: str, shape: str, out: Path
 ) -> Path:
@@ -67,13 +56,14 @@ def render_booth_image(
 def _booth(args: argparse.Namespace) -> dict[str, Any] | None:
     from station.model.booth import check_booth_shape
     from station.model.illuminants import observer_cie_name
-    from station.qc.booth import booth_compare
+    from station.qc.booth import booth_compare, booth_sides, load_booth_side
 
     shape = check_booth_shape(args.shape)
     observer = observer_cie_name(args.observer)
     illuminants = _illuminants(args.illuminants)
-    standard = _one_reading(args.standard, "standard")
-    sample = _one_reading(args.sample, "sample")
+    standard, sample = booth_sides(
+        load_booth_side(args.standard, "standard"), load_booth_side(args.sample, "sample")
+    )
     comparison = booth_compare(standard, sample, illuminants, observer)
     result = comparison.to_dict()
     if args.out:
@@ -112,9 +102,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "booth", help="virtual light booth: standard against sample under booth illuminants, from spectra"
     )
     p.add_argument(
-        "--standard", required=True, help="the standard: a file station import reads, with spectra"
+        "--standard",
+        required=True,
+        help="the standard: a file station import reads, with spectra, or a recipe (station formulate --json)",
     )
-    p.add_argument("--sample", required=True, help="the sample (trial): a file with spectra")
+    p.add_argument("--sample", required=True, help="the sample (trial): a file with spectra or a recipe JSON")
     p.add_argument(
         "--illuminants",
         default=",".join(DEFAULT_BOOTH_ILLUMINANTS),

@@ -9,34 +9,46 @@ itself is 0 by definition. ``mean_de`` is the mean ΔE00 over the geometries.
 
 Both readings need spectra covering the product's 400–700 nm grid at 10 nm (any finer or wider grid
 holding those bands is cut to them); a reading without spectra is refused naming its source.
+
+Either side may be a recipe (:class:`BoothRecipe`): its reading is the colorant model's predicted
+reflectance (:func:`station.formulate.recipe_spectra.recipe_spectra`) at the other side's geometries, or
+at the product's standard 3-angle set when both sides are recipes (:func:`booth_sides`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from station.formulate.errors import FormulateInputError
+from station.formulate.recipe_spectra import is_recipe_document, recipe_from_document, recipe_spectra
 from station.model.colorimetry import OBSERVER_10
 from station.model.difference import delta_e
-from station.model.domain import DEFAULT_BOOTH_ILLUMINANTS, aspecular_name
+from station.model.domain import ANGLES_3, DEFAULT_BOOTH_ILLUMINANTS, aspecular_name
 from station.model.errors import ModelInputError
 from station.model.illuminants import REFERENCE_ILLUMINANT, Illuminant, illuminant_sd, observer_cie_name
 from station.model.spectra import WAVELENGTHS, metamerism_index, reflectance_to_lab
 from station.qc.errors import QcInputError
-from station.qc.readings import Reading
+from station.qc.readings import Reading, load_readings
 
 __all__ = [
     "DEFAULT_BOOTH_ILLUMINANTS",
     "BoothComparison",
     "BoothGeometry",
     "BoothIlluminant",
+    "BoothRecipe",
     "booth_compare",
     "booth_compare_spectra",
+    "booth_sides",
+    "load_booth_side",
     "product_spectra",
+    "recipe_reading",
 ]
 
 #: The illuminants of a booth check when none are named: daylight, tungsten, shop light.
@@ -234,3 +246,98 @@ def booth_compare(
     si = [standard.aspecular_deg.index(a) for a in angles]
     pi = [sample.aspecular_deg.index(a) for a in angles]
     return booth_compare_spectra(std_all[si], smp_all[pi], angles, illuminants, observer)
+
+
+@dataclass(frozen=True)
+class BoothRecipe:
+    """A recipe on one side of the booth: ``{colorant: mass fraction}`` and its name for messages (a file
+    name, ``"recipe 4"``)."""
+
+    fractions: Mapping[str, float] = field(hash=False)
+    where: str = "recipe"
+
+
+def recipe_reading(recipe: BoothRecipe, aspecular_deg: Sequence[float] = ANGLES_3, role: str = "") -> Reading:
+    """The reading of *recipe* predicted by the colorant model at *aspecular_deg*: spectra per geometry
+    on the product's grid and their Lab (D65 / 10°).
+
+    Raises
+    ------
+    QcInputError
+        Naming the recipe: an unknown colorant, a fraction or total out of bounds.
+    """
+    where = recipe.where if not role else f"{role} {recipe.where}"
+    angles = tuple(float(a) for a in aspecular_deg)
+    try:
+        spectra = recipe_spectra(recipe.fractions, angles, where=where)
+    except FormulateInputError as exc:
+        raise QcInputError(exc.field, exc.accepted, exc.got) from exc
+    lab = reflectance_to_lab(spectra)
+    return Reading(
+        angles,
+        tuple((float(r[0]), float(r[1]), float(r[2])) for r in lab),
+        tuple(tuple(float(v) for v in row) for row in spectra),
+        tuple(float(w) for w in WAVELENGTHS),
+        sample=recipe.where,
+        where=where,
+    )
+
+
+def booth_sides(standard: Reading | BoothRecipe, sample: Reading | BoothRecipe) -> tuple[Reading, Reading]:
+    """Both sides as readings: a recipe is predicted at the other side's geometries, or at the product's
+    standard 3-angle set (:data:`~station.model.domain.ANGLES_3`) when both are recipes."""
+
+    def geometries(other: Reading | BoothRecipe) -> tuple[float, ...]:
+        return other.aspecular_deg if isinstance(other, Reading) else ANGLES_3
+
+    std = (
+        standard
+        if isinstance(standard, Reading)
+        else recipe_reading(standard, geometries(sample), "standard")
+    )
+    smp = sample if isinstance(sample, Reading) else recipe_reading(sample, geometries(standard), "sample")
+    return std, smp
+
+
+def load_booth_side(path: str | Path, role: str) -> Reading | BoothRecipe:
+    """One side of the booth from file *path*, recognised by its content: a recipe (JSON with
+    ``"recipe": {colorant: fraction}``, as ``station formulate --json`` writes it) or a file
+    ``station import`` reads holding one reading with spectra.
+
+    Raises
+    ------
+    QcInputError
+        Naming *role* and the file when it is neither a recipe nor one reading with spectra.
+    """
+    p = Path(path)
+    where = f"{role} {p.name}"
+    accepted = (
+        "a measurement with spectra (a file station import reads) or a recipe (station formulate --json)"
+    )
+    data = _json_or_none(p)
+    if data is not None and is_recipe_document(data):
+        return BoothRecipe(recipe_from_document(data, where), p.name)
+    try:
+        readings = load_readings(p)
+    except QcInputError as exc:
+        raise QcInputError(where, accepted, None, detail=str(exc)) from exc
+    if len(readings) != 1:
+        raise QcInputError(
+            where, "one reading with spectra (spectra are not averaged) or a recipe", len(readings)
+        )
+    if readings[0].spectra is None:
+        raise QcInputError(where, accepted, "no spectra")
+    return readings[0]
+
+
+def _json_or_none(path: Path) -> Any:
+    try:
+        raw = path.read_bytes()
+    except OSError:
+        return None  # load_readings says why
+    if raw.lstrip(b"\xef\xbb\xbf").lstrip()[:1] != b"{":
+        return None
+    try:
+        return json.loads(raw.decode("utf-8-sig"))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        return None

@@ -4,7 +4,10 @@ Standard and trial come from the job history (the measurements of the workstatio
 first, as ``station.qc.readings.reading_from_measurement`` reads them, or a service's measurements:
 :class:`ServiceBoothSource`) or from a file
 (``station.qc.readings.load_readings``: ``station measure --json`` / ``station import`` output, CxF3,
-CGATS, the CSV template). Both need spectra. The illuminant is one of the booth's
+CGATS, the CSV template). Both need spectra. Either side may instead be a recipe: a recipe JSON file
+(``station formulate --json`` output, recognised by content) or a stored formulation job (the workstation's
+database or a service's ``GET /api/v1/recipes``), predicted by the colorant model at the other side's
+geometries (``station.qc.booth.booth_sides``). The illuminant is one of the booth's
 (``station.model.illuminants.BOOTH_ILLUMINANTS``) or a user SPD file (``read_spd_file``); the observer
 2° or 10°; the shape panels, seam or car (``station.model.booth.BOOTH_SHAPES``).
 
@@ -18,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -26,6 +29,7 @@ from station.errors import InputError, StationError
 
 if TYPE_CHECKING:
     from station.model.illuminants import Illuminant
+    from station.qc.booth import BoothRecipe
     from station.qc.readings import Reading
     from station.render.booth import BoothRenderer
     from ui.models.service import ServiceClient
@@ -55,6 +59,44 @@ class HistoryEntry:
     def text(self) -> str:
         """The picker's line, e.g. ``#12 J-100 fender 2026-11-02T08:00:00`` (``no spectra`` when so)."""
         return f"#{self.id} {self.label} {self.measured_at}" + ("" if self.has_spectra else " (no spectra)")
+
+
+@dataclass(frozen=True)
+class RecipeJobEntry:
+    """One stored formulation job: id, design and version, state, whether it holds a recipe."""
+
+    id: int
+    design_id: int
+    version: int
+    state: str
+    has_recipe: bool
+
+    @property
+    def text(self) -> str:
+        """The picker's line, e.g. ``recipe #4 design 2 v1 done`` (``no recipe`` when so)."""
+        return f"recipe #{self.id} design {self.design_id} v{self.version} {self.state}" + (
+            "" if self.has_recipe else " (no recipe)"
+        )
+
+
+@runtime_checkable
+class RecipeJobSource(Protocol):
+    """Where the booth reads the stored formulation jobs (a source may have none)."""
+
+    def recipe_jobs(self, limit: int) -> list[RecipeJobEntry]: ...
+    def recipe(self, recipe_id: int) -> BoothRecipe: ...
+
+
+def _job_recipe(recipe_id: int, recipe: Any, where: str) -> BoothRecipe:
+    from station.formulate.recipe_spectra import is_recipe_document, recipe_from_document
+    from station.qc.booth import BoothRecipe
+
+    doc = {"recipe": recipe} if not isinstance(recipe, dict) or "recipe" not in recipe else recipe
+    if not is_recipe_document(doc):
+        raise InputError(
+            f"recipe {recipe_id}", "a formulation job with a recipe of the colorants", "no recipe"
+        )
+    return BoothRecipe(recipe_from_document(doc, f"recipe {recipe_id}"), f"recipe #{recipe_id} ({where})")
 
 
 class BoothSource(Protocol):
@@ -133,6 +175,34 @@ class LocalBoothSource:
                 raise BoothSourceError(f"{self.where}: measurement {measurement_id} not found")
             return reading_from_measurement(m, sample=f"#{measurement_id}")
 
+    def recipe_jobs(self, limit: int = HISTORY_LIMIT) -> list[RecipeJobEntry]:
+        """The newest *limit* stored formulation jobs, newest first."""
+        from sqlalchemy import select
+
+        from db.models import DesignVersion, FormulationJob
+
+        with self._session() as session:
+            rows = session.execute(
+                select(FormulationJob, DesignVersion.design_id, DesignVersion.version)
+                .join(DesignVersion, DesignVersion.id == FormulationJob.design_version_id)
+                .order_by(FormulationJob.id.desc())
+                .limit(limit)
+            ).all()
+            return [
+                RecipeJobEntry(int(j.id), int(d), int(v), str(j.state), bool((j.recipe or {}).get("recipe")))
+                for j, d, v in rows
+            ]
+
+    def recipe(self, recipe_id: int) -> BoothRecipe:
+        """The recipe of the stored formulation job *recipe_id*."""
+        from db.models import FormulationJob
+
+        with self._session() as session:
+            job = session.get(FormulationJob, recipe_id)
+            if job is None:
+                raise BoothSourceError(f"{self.where}: recipe {recipe_id} not found")
+            return _job_recipe(recipe_id, job.recipe, "database")
+
 
 class ServiceBoothSource:
     """A station service: ``GET /api/v1/measurements`` (45° block, newest first), ``/panels`` for the
@@ -185,6 +255,24 @@ class ServiceBoothSource:
             where=f"measurement {measurement_id}",
         )
 
+    def recipe_jobs(self, limit: int = HISTORY_LIMIT) -> list[RecipeJobEntry]:
+        """The newest *limit* formulation jobs of ``GET /api/v1/recipes``, newest first."""
+        rows = self._get("/recipes", limit=limit)["data"]
+        return [
+            RecipeJobEntry(
+                int(r["id"]),
+                int(r["design_id"]),
+                int(r["design_version"]),
+                str(r["state"]),
+                bool(r.get("recipe")),
+            )
+            for r in rows
+        ]
+
+    def recipe(self, recipe_id: int) -> BoothRecipe:
+        """The recipe of formulation job *recipe_id* (``GET /api/v1/recipes/{id}``)."""
+        return _job_recipe(recipe_id, self._get(f"/recipes/{int(recipe_id)}").get("recipe"), "service")
+
 
 def _when(value: Any) -> str:
     return value if isinstance(value, str) else value.isoformat(timespec="seconds")
@@ -221,7 +309,7 @@ class BoothModel:
 
         self.source = source
         self.renderer = renderer if renderer is not None else BoothRenderer(isolate_gl=True)
-        self.readings: dict[str, Reading | None] = dict.fromkeys(ROLES)
+        self.readings: dict[str, Reading | BoothRecipe | None] = dict.fromkeys(ROLES)
         self.labels: dict[str, str] = dict.fromkeys(ROLES, "")
         self.illuminant: str | Illuminant = "D65"
         self.observer = "10"
@@ -252,10 +340,13 @@ class BoothModel:
         if role not in ROLES:
             raise InputError("role", " | ".join(ROLES), role)
 
-    def _set(self, role: str, reading: Reading, label: str) -> str:
-        from station.qc.booth import product_spectra
+    def _set(self, role: str, reading: Reading | BoothRecipe, label: str) -> str:
+        from station.qc.booth import BoothRecipe, product_spectra, recipe_reading
 
-        product_spectra(reading, role)  # refuse a reading without spectra now, naming it
+        if isinstance(reading, BoothRecipe):
+            recipe_reading(reading, role=role)  # refuse an unknown colorant or a fraction out of bounds now
+        else:
+            product_spectra(reading, role)  # refuse a reading without spectra now, naming it
         self.readings[role] = reading
         self.labels[role] = label
         return label
@@ -268,15 +359,48 @@ class BoothModel:
         return self._set(role, self.source.reading(measurement_id), f"measurement #{measurement_id}")
 
     def pick_file(self, role: str, path: str | Path) -> str:
-        """Use the one reading of file *path* as *role*; returns its label."""
-        from station.qc.errors import QcInputError
-        from station.qc.readings import load_readings
+        """Use file *path* as *role*: one reading with spectra, or a recipe (recognised by content);
+        returns its label."""
+        from station.qc.booth import load_booth_side
 
         self._check_role(role)
-        readings = load_readings(path)
-        if len(readings) != 1:
-            raise QcInputError(f"{role} {Path(path).name}", "a file with one reading", len(readings))
-        return self._set(role, readings[0], Path(path).name)
+        return self._set(role, load_booth_side(path, role), Path(path).name)
+
+    def pick_recipe_file(self, role: str, path: str | Path) -> str:
+        """Use the recipe of file *path* (``station formulate --json`` output) as *role*; returns its label."""
+        from station.qc.booth import BoothRecipe, load_booth_side
+        from station.qc.errors import QcInputError
+
+        self._check_role(role)
+        side = load_booth_side(path, role)
+        if not isinstance(side, BoothRecipe):
+            raise QcInputError(
+                f"{role} {Path(path).name}", "a recipe (station formulate --json)", "a measurement"
+            )
+        return self._set(role, side, f"recipe {Path(path).name}")
+
+    @property
+    def has_recipe_jobs(self) -> bool:
+        """Whether the source lists stored formulation jobs."""
+        return isinstance(self.source, RecipeJobSource)
+
+    def recipe_jobs(self, limit: int = HISTORY_LIMIT) -> list[RecipeJobEntry]:
+        """The stored formulation jobs, newest first (BoothSourceError without a source that has them)."""
+        if not isinstance(self.source, RecipeJobSource):
+            raise BoothSourceError("no formulation jobs: choose a recipe file")
+        try:
+            return self.source.recipe_jobs(limit)
+        except StationError:
+            raise
+        except Exception as exc:  # a database driver's own error: say where and what
+            raise BoothSourceError(f"{type(exc).__name__}: {exc}") from exc
+
+    def pick_recipe_job(self, role: str, recipe_id: int) -> str:
+        """Use the recipe of stored formulation job *recipe_id* as *role*; returns its label."""
+        self._check_role(role)
+        if not isinstance(self.source, RecipeJobSource):
+            raise BoothSourceError("no formulation jobs")
+        return self._set(role, self.source.recipe(recipe_id), f"recipe #{recipe_id}")
 
     def set_illuminant(self, name: str) -> str:
         """Choose a booth illuminant by name (any case; TL84 is F11's booth name); returns its name."""
@@ -308,13 +432,14 @@ class BoothModel:
         """The picture and the per-geometry rows under the chosen illuminant (InputError when a side is
         missing or the readings do not fit together)."""
         from station.model.illuminants import observer_cie_name
-        from station.qc.booth import booth_compare
+        from station.qc.booth import booth_compare, booth_sides
         from station.render.booth import paint_from_reading
 
-        standard, trial = self.readings["standard"], self.readings["trial"]
-        if standard is None or trial is None:
+        std_side, trial_side = self.readings["standard"], self.readings["trial"]
+        if std_side is None or trial_side is None:
             missing = [r for r in ROLES if self.readings[r] is None]
-            raise InputError(missing[0], "a reading with spectra (job history or file)", None)
+            raise InputError(missing[0], "a reading with spectra or a recipe (job history or file)", None)
+        standard, trial = booth_sides(std_side, trial_side)
         observer = observer_cie_name(self.observer)
         comparison = booth_compare(standard, trial, [self.illuminant], observer).illuminants[0]
         frame = self.renderer.frame(

@@ -1,7 +1,8 @@
 """Light booth screen: standard and trial side by side on a part, under a booth illuminant.
 
 Standard and trial are picked from the job history (the measurement database, newest first) or from a
-file; the illuminant from a row of buttons (D65 … LED-B4) or a user SPD file; the observer (10°, 2°) and
+file; the trial may also be a recipe ("From recipe…": a ``station formulate --json`` file, or a stored
+formulation job from the jobs picker), predicted by the colorant model at the standard's geometries; the illuminant from a row of buttons (D65 … LED-B4) or a user SPD file; the observer (10°, 2°) and
 the part (panels, seam, car) from pickers. The picture is redrawn on every change and the table beside
 it gives, per geometry under that illuminant, both Lab (the illuminant's own white), ΔE00 and the
 metamerism index from D65. State and numbers live in :class:`ui.models.booth.BoothModel`; errors are
@@ -56,6 +57,9 @@ class BoothScreen(QWidget):
     def _make_widgets(self) -> None:
         self.pickers = {role: QComboBox() for role in ROLES}
         self.file_btns = {role: QPushButton("From file…") for role in ROLES}
+        self.recipe_btn = QPushButton("From recipe…")
+        self.recipe_jobs = QComboBox()
+        self.recipe_jobs.setVisible(self.booth.has_recipe_jobs)
         self.reload_btn = QPushButton("Reload history")
         self.observer = QComboBox()
         self.observer.addItems([f"{o}°" for o in OBSERVER_CHOICES])
@@ -96,7 +100,10 @@ class BoothScreen(QWidget):
             row = QHBoxLayout()
             row.addWidget(self.pickers[role], 1)
             row.addWidget(self.file_btns[role])
+            if role == "trial":
+                row.addWidget(self.recipe_btn)
             form.addRow(role, row)
+        form.addRow("", self.recipe_jobs)
         form.addRow("", self.reload_btn)
         form.addRow("illuminant", self._illuminant_row())
         form.addRow("observer", self.observer)
@@ -115,6 +122,8 @@ class BoothScreen(QWidget):
         for role in ROLES:
             self.pickers[role].activated.connect(lambda _i, r=role: self.pick_history(r))
             self.file_btns[role].clicked.connect(lambda _c=False, r=role: self.pick_file(r))
+        self.recipe_btn.clicked.connect(lambda _c=False: self.pick_recipe_file("trial"))
+        self.recipe_jobs.activated.connect(lambda _i: self.pick_recipe_job("trial"))
         self.reload_btn.clicked.connect(self.reload_history)
         for name, btn in self.illuminant_btns.items():
             btn.clicked.connect(lambda _c=False, n=name: self.choose_illuminant(n))
@@ -144,6 +153,51 @@ class BoothScreen(QWidget):
             for e in entries:
                 picker.addItem(e.text, e.id)
         self._say(f"{len(entries)} measurements in the job history")
+        self.reload_recipe_jobs()
+
+    def reload_recipe_jobs(self) -> None:
+        """Fill the formulation jobs picker (service or database mode); the first entry is a prompt."""
+        if not self.booth.has_recipe_jobs:
+            return
+        try:
+            jobs = self.booth.recipe_jobs()
+        except StationError as exc:
+            self._fail(exc)
+            return
+        self.recipe_jobs.clear()
+        self.recipe_jobs.addItem("— trial from a formulation job —", None)
+        for j in jobs:
+            self.recipe_jobs.addItem(j.text, j.id)
+
+    def pick_recipe_job(self, role: str) -> None:
+        """Use the recipe of the formulation job chosen in the jobs picker as *role*."""
+        rid = self.recipe_jobs.currentData()
+        if rid is None:
+            return
+        try:
+            label = self.booth.pick_recipe_job(role, int(rid))
+        except StationError as exc:
+            self._fail(exc)
+            return
+        self.pickers[role].setCurrentIndex(0)
+        self.pickers[role].setToolTip(label)
+        self.refresh()
+
+    def pick_recipe_file(self, role: str) -> None:
+        """Use a recipe file (``station formulate --json`` output) as *role* (a file dialog)."""
+        path, _f = QFileDialog.getOpenFileName(
+            self, f"Open the {role}'s recipe", "", "Recipes (*.json);;All files (*)"
+        )
+        if not path:
+            return
+        try:
+            label = self.booth.pick_recipe_file(role, path)
+        except StationError as exc:
+            self._fail(exc)
+            return
+        self.pickers[role].setCurrentIndex(0)
+        self.pickers[role].setToolTip(label)
+        self.refresh()
 
     def pick_history(self, role: str) -> None:
         """Use the measurement chosen in *role*'s picker."""
@@ -160,7 +214,10 @@ class BoothScreen(QWidget):
     def pick_file(self, role: str) -> None:
         """Use the one reading of a file as *role* (a file dialog)."""
         path, _f = QFileDialog.getOpenFileName(
-            self, f"Open the {role}", "", "Readings (*.json *.cxf *.cgats *.txt *.csv);;All files (*)"
+            self,
+            f"Open the {role}",
+            "",
+            "Readings or recipes (*.json *.cxf *.cgats *.txt *.csv);;All files (*)",
         )
         if not path:
             return

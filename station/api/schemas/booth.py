@@ -45,7 +45,9 @@ class UserIlluminant(BaseModel):
 
 
 class BoothRequest(BaseModel):
-    """Standard and sample (stored measurement ids or spectra in the body), illuminants and observer."""
+    """Standard and sample (stored measurement ids, stored formulation jobs' recipes or spectra in the
+    body), illuminants and observer. A recipe is predicted by the colorant model at the other side's
+    geometries (15/45/110° when both sides are recipes)."""
 
     model_config = ConfigDict(
         extra="forbid",
@@ -63,6 +65,8 @@ class BoothRequest(BaseModel):
 
     standard_measurement_id: MeasurementId | None = None
     sample_measurement_id: MeasurementId | None = None
+    standard_recipe_id: MeasurementId | None = None
+    sample_recipe_id: MeasurementId | None = None
     standard: BoothSpectra | None = None
     sample: BoothSpectra | None = None
     illuminants: Annotated[list[Name], Field(min_length=1, max_length=MAX_ILLUMINANTS)] = ["D65", "A", "F11"]
@@ -72,9 +76,9 @@ class BoothRequest(BaseModel):
     @model_validator(mode="after")
     def _one_source_each(self) -> BoothRequest:
         for role in ("standard", "sample"):
-            given = (getattr(self, f"{role}_measurement_id") is not None) + (getattr(self, role) is not None)
-            if given != 1:
-                raise ValueError(f"{role}: give exactly one of {role}_measurement_id and {role}")
+            keys = (f"{role}_measurement_id", f"{role}_recipe_id", role)
+            if sum(getattr(self, k) is not None for k in keys) != 1:
+                raise ValueError(f"{role}: give exactly one of {', '.join(keys)}")
         return self
 
 

@@ -1,13 +1,17 @@
-"""The virtual light booth over stored measurements or spectra in the body (``station.qc.booth``)."""
+"""The virtual light booth over stored measurements, stored formulation jobs' recipes (predicted by the
+colorant model) or spectra in the body (``station.qc.booth``)."""
 
 from __future__ import annotations
 
 from sqlalchemy.orm import Session
 
+from db.models import FormulationJob
+from station.api.errors import NotFoundError
 from station.api.schemas.booth import BoothCatalogue, BoothOut, BoothRequest, BoothSpectra
 from station.api.services.qc import stored_reading
 from station.errors import InputError
-from station.model.domain import BOOTH_SHAPES
+from station.formulate.recipe_spectra import is_recipe_document, recipe_from_document, recipe_spectra
+from station.model.domain import ANGLES_3, BOOTH_SHAPES
 from station.model.errors import ModelInputError
 from station.model.illuminants import (
     BOOTH_ILLUMINANTS,
@@ -17,10 +21,10 @@ from station.model.illuminants import (
     illuminant_from_spd,
     illuminant_name,
 )
-from station.qc.booth import booth_compare
+from station.qc.booth import BoothRecipe, booth_compare, booth_sides
 from station.qc.readings import Reading, reading_from_dict
 
-__all__ = ["booth_of", "catalogue"]
+__all__ = ["booth_of", "catalogue", "stored_recipe"]
 
 
 def catalogue() -> BoothCatalogue:
@@ -33,12 +37,32 @@ def catalogue() -> BoothCatalogue:
     )
 
 
-def _reading(session: Session, measurement_id: int | None, body: BoothSpectra | None, role: str) -> Reading:
+def _side(session: Session, request: BoothRequest, role: str) -> Reading | BoothRecipe:
+    measurement_id = getattr(request, f"{role}_measurement_id")
+    recipe_id = getattr(request, f"{role}_recipe_id")
+    body: BoothSpectra | None = getattr(request, role)
     if measurement_id is not None:
         return stored_reading(session, measurement_id, f"{role}_measurement_id")
-    if body is None:  # the request's validator allows exactly one of the two
-        raise InputError(role, f"{role}_measurement_id or {role}", None)
+    if recipe_id is not None:
+        return stored_recipe(session, recipe_id, f"{role}_recipe_id")
+    if body is None:  # the request's validator allows exactly one of the three
+        raise InputError(role, f"{role}_measurement_id, {role}_recipe_id or {role}", None)
     return reading_from_dict(body.model_dump(), role)
+
+
+def stored_recipe(session: Session, recipe_id: int, field: str) -> BoothRecipe:
+    """The recipe of the stored formulation job *recipe_id*: 404 naming *field* when there is no such
+    job, 422 naming it when the job holds no recipe (its paints' recipes are not from the colorants)."""
+    job = session.get(FormulationJob, recipe_id)
+    if job is None:
+        raise NotFoundError(f"{field}: recipe {recipe_id} not found")
+    if not is_recipe_document(job.recipe):
+        raise InputError(
+            field, "a formulation job with a recipe of the colorants", f"recipe {recipe_id}: no recipe"
+        )
+    fractions = recipe_from_document(job.recipe, field)
+    recipe_spectra(fractions, ANGLES_3, where=field)  # 422 naming the field: a colorant the model lacks
+    return BoothRecipe(fractions, f"recipe {recipe_id}")
 
 
 def _illuminants(request: BoothRequest) -> list[str | Illuminant]:
@@ -64,6 +88,5 @@ def _illuminants(request: BoothRequest) -> list[str | Illuminant]:
 def booth_of(*, session: Session, request: BoothRequest) -> BoothOut:
     """Standard against sample per illuminant and geometry: Lab, ΔE00, metamerism index from D65."""
     illuminants = _illuminants(request)
-    std = _reading(session, request.standard_measurement_id, request.standard, "standard")
-    smp = _reading(session, request.sample_measurement_id, request.sample, "sample")
+    std, smp = booth_sides(_side(session, request, "standard"), _side(session, request, "sample"))
     return BoothOut.model_validate(booth_compare(std, smp, illuminants, request.observer).to_dict())
