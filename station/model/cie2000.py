@@ -3,7 +3,8 @@
 colour-science's ``delta_E_CIE2000`` validates and converts on every call (about 150 µs), which would
 dominate ColorSnap's sub-millisecond search and the tolerance checks. :func:`cie2000_columns` performs
 the same floating-point operations in the same order without the checks, so its results are
-bit-identical to colour's (tests/formulate/test_snap.py and tests/model/test_din6175.py assert ``==``).
+bit-identical to colour's (tests/model/test_cie2000_reference.py asserts ``==`` on random pairs and
+Sharma et al.'s published pairs to their 4 decimals; docs/adr/0006-numpy-ciede2000.md says why).
 :func:`station.model.difference.delta_e_cie2000_lc` validates its input and calls it with parametric
 factors; ``station.formulate.de_kernels`` uses it as ColorSnap's kernel.
 """
