@@ -47,9 +47,10 @@ def lab_to_xyz(lab: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np
 
     f_y = (L* + 16) / 116, f_x = f_y + a* / 500, f_z = f_y − b* / 200, and each tristimulus ratio is
     f³ where f > 6/29, else (116 f − 16) / κ. Written in NumPy rather than calling
-    ``colour.Lab_to_XYZ`` because the analyses call it per geometry inside root searches, where
-    colour-science's per-call overhead (≈ 0.3 ms) dominated; ``tests/model/test_colorimetry.py`` holds
-    it to colour-science's result to 1e-12.
+    ``colour.Lab_to_XYZ`` because the formulation solver, the shading of eq 4.3.2 and the booth call
+    it in inner loops, where colour-science's per-call overhead (≈ 0.3 ms) dominated
+    (docs/adr/0007-numpy-cie-lab.md); ``tests/model/test_colorimetry.py`` holds it to colour-science's
+    result to 1e-12.
 
     Parameters
     ----------
