@@ -36,9 +36,10 @@ or Gauss–Legendre (Ward); source points are averaged with Gauss–Legendre nod
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cache
+from types import MappingProxyType
 from typing import Literal
 
 import numpy as np
@@ -189,8 +190,11 @@ def _direction(theta: float, u: NDArray, v: NDArray) -> NDArray:
 @cache
 def _geometry_nodes(
     geometry_deg: int, n_phi: int = 192, n_src: tuple[int, int] = (3, 5)
-) -> dict[str, NDArray]:
-    """Polar boundary distances ψ_b(φ) about each source point's mirror image, plus quadrature weights."""
+) -> Mapping[str, NDArray]:
+    """Polar boundary distances ψ_b(φ) about each source point's mirror image, plus quadrature weights.
+
+    Cached for the process: a read-only mapping of read-only arrays (CONTRIBUTING.md, module-level caches).
+    """
     su, sv, ru, rv = (math.radians(x) / 2.0 for x in APERTURES_DEG[geometry_deg])
     theta = math.radians(geometry_deg)
     xu, wu = np.polynomial.legendre.leggauss(n_src[0])
@@ -218,7 +222,10 @@ def _geometry_nodes(
         lo = np.where(ok, mid, lo)
         hi = np.where(ok, hi, mid)
     psi_b = 0.5 * (lo + hi)
-    return {"psi_b": psi_b, "w_src": w_src, "centres": centres, "dirs": dirs, "theta": np.float64(theta)}
+    nodes = {"psi_b": psi_b, "w_src": w_src, "centres": centres, "dirs": dirs}
+    for array in nodes.values():
+        array.flags.writeable = False
+    return MappingProxyType({**nodes, "theta": np.float64(theta)})
 
 
 def _phong_fractions(exponents: NDArray[np.float64], geometry_deg: int) -> NDArray[np.float64]:
