@@ -109,7 +109,11 @@ def module_state(source: str) -> list[str]:
             _is_cache(d) for d in node.decorator_list
         ):
             found.append(node.name)
-        elif isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None and _is_mutable(node.value):
+        elif (
+            isinstance(node, (ast.Assign, ast.AnnAssign))
+            and node.value is not None
+            and _is_mutable(node.value)
+        ):
             targets = node.targets if isinstance(node, ast.Assign) else [node.target]
             found += [ast.unparse(t) for t in targets]
     found += [f"global {name}" for n in ast.walk(tree) if isinstance(n, ast.Global) for name in n.names]

@@ -39,6 +39,16 @@ def cie2000_columns(
     way, would reach np.select's default); the achromatic hue
     test skipped for a side with no a* = b* = 0 element (there (1+G)a* = 0 ⇔ a* = 0, so the test is
     all false and np.where returns its second argument unchanged).
+
+    Examples
+    --------
+    Sharma et al. (2005) Table 1 pairs 7 and 17 (published 2.3669 and 27.1492), as columns:
+
+    >>> import numpy as np
+    >>> L1, a1, b1 = np.array([[50.0, 0.0, 0.0], [50.0, 2.5, 0.0]]).T
+    >>> L2, a2, b2 = np.array([[50.0, -1.0, 2.0], [73.0, 25.0, -18.0]]).T
+    >>> cie2000_columns(L1, a1, b1, L2, a2, b2).round(4).tolist()
+    [2.3669, 27.1492]
     """
     C_1_ab = np.hypot(a_1, b_1)
     C_2_ab = np.hypot(a_2, b_2)
