@@ -1,10 +1,13 @@
 """Dependencies shared by the routers: the session, the settings, the caller and its scopes.
 
-``SessionDep`` yields a session from the app's own session factory (built in ``create_app``), whose
-transactions may write (SQLite: ``BEGIN IMMEDIATE``); ``ReadSessionDep`` yields one from its read-only
-factory (``db.engine.reading``: SQLite deferred reads that never take or wait for the write lock), for
-routes and checks that only read; tests swap them with ``app.dependency_overrides[get_session]``. ``authorize`` resolves the bearer
-token to a user (401 otherwise) and checks the route's scopes against the role (403 otherwise):
+``SessionDep`` yields a session from the app's own session factory (``app.state.sessions``, built in
+``create_app``), whose transactions may write (SQLite: ``BEGIN IMMEDIATE``); ``ReadSessionDep`` yields
+one from its read-only factory (``app.state.read_sessions``, on ``db.engine.reading``: SQLite deferred
+reads that never take or wait for the write lock), for routes and checks that only read. Nothing swaps
+them: the service's tests build the app with ``create_app`` on a real test database, SQLite or
+PostgreSQL (tests/api/conftest.py).
+``authorize`` resolves the bearer token to a user (401 otherwise) and checks the route's scopes against
+the role (403 otherwise):
 ``user: Annotated[User, Security(authorize, scopes=[Scope.DESIGNS_WRITE])]``.
 
 The token is checked against the database on every request while it is reachable; while it is away

@@ -31,6 +31,7 @@ from fastapi import FastAPI, routing
 
 from db.models import Role
 from station.api.deps import authorize
+from station.api.errors import ApiError
 from station.api.security import ROLE_SCOPES, Scope
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,8 +44,8 @@ _HTTP_METHODS = ("GET", "POST", "PUT", "PATCH", "DELETE")
 _SECTIONS_OUTSIDE_SCHEMA = "service"
 
 
-class DocgenError(RuntimeError):
-    """The template lacks a marker, or the committed document is out of date."""
+class DocgenError(ApiError, RuntimeError):
+    """The template lacks a marker, or the committed document is out of date (a service-layer error)."""
 
 
 @dataclass(frozen=True)

@@ -3,9 +3,11 @@
 Labs iterate: they spray the formulated recipe, measure the panel, and correct the recipe by the
 difference between what the model predicted and what the panel shows. :func:`closed_loop` does that
 with the measuring injected as a callable ``measure(recipe) -> AspecularMeasurements`` (this package
-may not import the drivers): a simulated spectrophotometer through
-:func:`station.drivers.simproc.spawn_simulator`, the in-process :class:`~station.formulate.sprayout.SprayOutModel`,
-or a person typing in readings.
+may not import the drivers). Every front (``station formulate --closed-loop``, the service's
+``POST /formulation/closed-loop``, the viewer's "Run closed loop") passes the in-process SYNTHETIC
+:class:`~station.formulate.sprayout.SprayOutModel`; tests/formulate/test_closed_loop_simulator.py passes
+the ma3 spectrophotometer simulator run as a subprocess (:func:`station.drivers.simproc.spawn_simulator`),
+which shows an instrument can stand in for it.
 
 Correction (additive offset per angle, the usual "batch correction"): with recipe r_n, prediction
 P(r_n) and measurement M_n, the next recipe is formulated against the shifted target

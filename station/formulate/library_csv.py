@@ -10,7 +10,8 @@ Validation is strict: each fault raises :class:`LibraryFormatError` naming the 1
 row 1), the column and the accepted range. A code is printable text (no control characters, so no
 CR/LF or NUL) and, unless ``allow_formulas``, does not start with ``= + - @`` (CSV injection,
 :mod:`station.csv_cells`); a field is at most 131072 characters (the csv module's limit). The export
-writes such a code with a leading single quote. Accepted ranges: 0 ≤ L* ≤ 150 (a metallic face may exceed 100), −200 ≤ a*, b* ≤ 200,
+writes such a code with a leading single quote. Accepted ranges: the domain's Lab bound, 0 ≤ L* ≤ 200 (a metallic face may exceed 100),
+−150 ≤ a*, b* ≤ 150 (:data:`station.model.domain.LAB_RANGES`),
 0 ≤ gloss ≤ 100 GU (the model's range), codes unique, non-empty, at most 64 characters.
 
 Two optional trailing columns keep every field of a library through a round trip: ``synthetic``

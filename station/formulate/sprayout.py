@@ -1,4 +1,4 @@
-"""A physical spray-out panel model for the closed loop when no instrument is attached (SYNTHETIC).
+"""A physical spray-out panel model, the measuring of every front's closed loop (SYNTHETIC).
 
 A real spray-out differs from the formulation model's prediction: the colorants in the can are
 not exactly the database's (batch-to-batch strength), the film is thicker or thinner, flakes lie

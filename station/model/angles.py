@@ -46,6 +46,19 @@ def validate_angle_set(angles_deg: Sequence[float], field: str = "angles_deg") -
     ------
     ModelInputError
         Naming the field and the accepted range.
+
+    Examples
+    --------
+    >>> validate_angle_set([15, 45, 110])
+    (15.0, 45.0, 110.0)
+    >>> validate_angle_set([15, 200])
+    Traceback (most recent call last):
+        ...
+    station.model.errors.ModelInputError: angles_deg[1]: expected a finite angle in [-90, 180] degrees, got 200.0
+    >>> validate_angle_set([45, 15])
+    Traceback (most recent call last):
+        ...
+    station.model.errors.ModelInputError: angles_deg: expected angles in increasing order, got [45.0, 15.0]
     """
     try:
         arr = np.asarray(angles_deg, dtype=float).reshape(-1)

@@ -3,7 +3,8 @@
 colour-science's ``delta_E_CIE2000`` validates and converts on every call (about 150 µs), which would
 dominate ColorSnap's sub-millisecond search and the tolerance checks. :func:`cie2000_columns` performs
 the same floating-point operations in the same order without the checks, so its results are
-bit-identical to colour's (tests/formulate/test_snap.py and tests/model/test_din6175.py assert ``==``).
+bit-identical to colour's (tests/model/test_cie2000_reference.py asserts ``==`` on random pairs and
+Sharma et al.'s published pairs to their 4 decimals; docs/adr/0006-numpy-ciede2000.md says why).
 :func:`station.model.difference.delta_e_cie2000_lc` validates its input and calls it with parametric
 factors; ``station.formulate.de_kernels`` uses it as ColorSnap's kernel.
 """
@@ -38,6 +39,16 @@ def cie2000_columns(
     way, would reach np.select's default); the achromatic hue
     test skipped for a side with no a* = b* = 0 element (there (1+G)a* = 0 ⇔ a* = 0, so the test is
     all false and np.where returns its second argument unchanged).
+
+    Examples
+    --------
+    Sharma et al. (2005) Table 1 pairs 7 and 17 (published 2.3669 and 27.1492), as columns:
+
+    >>> import numpy as np
+    >>> L1, a1, b1 = np.array([[50.0, 0.0, 0.0], [50.0, 2.5, 0.0]]).T
+    >>> L2, a2, b2 = np.array([[50.0, -1.0, 2.0], [73.0, 25.0, -18.0]]).T
+    >>> cie2000_columns(L1, a1, b1, L2, a2, b2).round(4).tolist()
+    [2.3669, 27.1492]
     """
     C_1_ab = np.hypot(a_1, b_1)
     C_2_ab = np.hypot(a_2, b_2)

@@ -47,9 +47,10 @@ def lab_to_xyz(lab: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np
 
     f_y = (L* + 16) / 116, f_x = f_y + a* / 500, f_z = f_y − b* / 200, and each tristimulus ratio is
     f³ where f > 6/29, else (116 f − 16) / κ. Written in NumPy rather than calling
-    ``colour.Lab_to_XYZ`` because the analyses call it per geometry inside root searches, where
-    colour-science's per-call overhead (≈ 0.3 ms) dominated; ``tests/model/test_colorimetry.py`` holds
-    it to colour-science's result to 1e-12.
+    ``colour.Lab_to_XYZ`` because the formulation solver, the shading of eq 4.3.2 and the booth call
+    it in inner loops, where colour-science's per-call overhead (≈ 0.3 ms) dominated
+    (docs/adr/0007-numpy-cie-lab.md); ``tests/model/test_colorimetry.py`` holds it to colour-science's
+    result to 1e-12.
 
     Parameters
     ----------
@@ -62,6 +63,15 @@ def lab_to_xyz(lab: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np
     -------
     ndarray
         XYZ, shape (..., 3), Y of the white = 1.
+
+    Examples
+    --------
+    >>> xyz = lab_to_xyz([[100, 0, 0], [50, 0, 0], [4, 0, 0]])
+    >>> round(float(xyz[1, 1]), 12) == round((66 / 116) ** 3, 12), round(float(xyz[2, 1] * 24389 / 27), 12)
+    (True, 4.0)
+    >>> x, y = WHITEPOINT
+    >>> bool(np.allclose(xyz[0], [x / y, 1.0, (1 - x - y) / y], rtol=0, atol=1e-15))
+    True
     """
     lab = np.asarray(lab, dtype=float)
     f = np.empty(lab.shape, dtype=float)
@@ -81,6 +91,11 @@ def xyz_to_lab(xyz: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np
 
     With t = X / X_n etc., f(t) = t^(1/3) where t > ε, else (κ t + 16) / 116; L* = 116 f_y − 16,
     a* = 500 (f_x − f_y), b* = 200 (f_y − f_z). NumPy for the reason given in :func:`lab_to_xyz`.
+
+    Examples
+    --------
+    >>> xyz_to_lab(lab_to_xyz([62.0, -4.0, -38.0])).round(9).tolist()
+    [62.0, -4.0, -38.0]
     """
     t = np.asarray(xyz, dtype=float) / _white_xyz(whitepoint)
     f = np.where(t > _CIE_EPSILON, np.cbrt(t), (_CIE_KAPPA * t + 16.0) / 116.0)
@@ -107,6 +122,11 @@ def lab_to_linear_srgb(lab: ArrayLike) -> NDArray[np.float64]:
 
     Out-of-gamut colours give channel values below 0 or above 1; they are returned as they are so
     the caller decides (the renderer reports them, never clamps silently).
+
+    Examples
+    --------
+    >>> lab_to_linear_srgb([100, 0, 0]).round(12).tolist()
+    [1.0, 1.0, 1.0]
     """
     return lab_to_xyz(lab) @ _XYZ10_TO_LINEAR_SRGB.T
 
@@ -117,7 +137,15 @@ def linear_srgb_to_lab(rgb: ArrayLike) -> NDArray[np.float64]:
 
 
 def srgb_encode(rgb_linear: ArrayLike) -> NDArray[np.float64]:
-    """Apply the IEC 61966-2-1 sRGB transfer function (inverse EOTF) to linear values in [0, 1]."""
+    """Apply the IEC 61966-2-1 sRGB transfer function (inverse EOTF) to linear values in [0, 1].
+
+    Examples
+    --------
+    Above the linear segment, 1.055 x^(1/2.4) − 0.055:
+
+    >>> round(float(srgb_encode(0.5)), 6), round(float(srgb_encode(1.0)), 12)
+    (0.735357, 1.0)
+    """
     return np.asarray(colour.models.eotf_inverse_sRGB(np.asarray(rgb_linear, dtype=float)), dtype=float)
 
 

@@ -250,6 +250,14 @@ def delta_e_din6175(
     -------
     ndarray
         ΔE_eff per pair, shape (...).
+
+    Examples
+    --------
+    Greys at L* 36 and 64 at α = 45°: L̄ = √(36·64) = 48, S_L = 0.15√48 + 31.5/45, and with ΔC = ΔH = 0
+    both forms give ΔL/S_L = 28/1.7392 whatever σ:
+
+    >>> round(float(delta_e_din6175([36, 0, 0], [64, 0, 0], 45.0)), 6)
+    16.099074
     """
     return din6175_terms(lab_ref, lab_sample, aspecular_deg, g).de_eff
 
@@ -290,6 +298,14 @@ def delta_e_cie2000_lc(
     Tolerance sets name the ratio "l:c" (2:1 for textiles, 1:1 by default); each factor must be finite
     and > 0. With k_L = k_C = k_H = 1 this is :func:`delta_e` ``"cie2000"`` bit for bit
     (:func:`station.model.cie2000.cie2000_columns`).
+
+    Examples
+    --------
+    Greys at L* 49 and 51: L̄' = 50, so S_L = 1 and ΔE00 = ΔL'/k_L:
+
+    >>> grey_49, grey_51 = [49, 0, 0], [51, 0, 0]
+    >>> float(delta_e_cie2000_lc(grey_49, grey_51)), float(delta_e_cie2000_lc(grey_49, grey_51, k_l=2.0))
+    (2.0, 1.0)
     """
     for name, v in (("k_l", k_l), ("k_c", k_c), ("k_h", k_h)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
@@ -358,7 +374,17 @@ _ALIASES: Mapping[str, str] = MappingProxyType(
 
 
 def validate_method(method: str) -> str:
-    """Return the canonical method name or raise :class:`ModelInputError` listing the valid ones."""
+    """Return the canonical method name or raise :class:`ModelInputError` listing the valid ones.
+
+    Examples
+    --------
+    >>> validate_method("CIEDE2000"), validate_method("cie76")
+    ('cie2000', 'cie76')
+    >>> validate_method("cmc9")
+    Traceback (most recent call last):
+        ...
+    station.model.errors.ModelInputError: de: expected one of cie76, cie94, cie2000, din6175, audi2000, got 'cmc9'
+    """
     key = str(method).lower().replace(" ", "").replace("-", "").replace("_", "")
     key = _ALIASES.get(key, key)
     if key not in DELTA_E_METHODS:
@@ -392,6 +418,20 @@ def delta_e(
     -------
     ndarray
         ΔE of shape (...).
+
+    Examples
+    --------
+    A 3-4-5 triangle in ΔE*ab, Sharma et al. (2005) Table 1 pairs 1 and 7 in CIEDE2000 (published 2.0425
+    and 2.3669), and per angle over a (3, 3) array:
+
+    >>> float(delta_e([50, 0, 0], [53, 4, 0], "cie76"))
+    5.0
+    >>> round(float(delta_e([50, 2.6772, -79.7751], [50, 0, -82.7485])), 4)
+    2.0425
+    >>> round(float(delta_e([50, 0, 0], [50, -1, 2], "cie2000")), 4)
+    2.3669
+    >>> delta_e([[90, 1, 1], [50, 1, 1], [30, 1, 1]], [[93, 5, 1], [50, 1, 1], [30, 1, 2]], "cie76").tolist()
+    [5.0, 0.0, 1.0]
     """
     fn = DELTA_E_METHODS[validate_method(method)]
     ref, smp = _as_lab_pair(lab_ref, lab_sample)
@@ -407,7 +447,15 @@ def delta_e_aggregate(
     *,
     aspecular_deg: ArrayLike | None = None,
 ) -> float:
-    """ΔE aggregated over an angle set: ``mean``, ``max``, ``rms`` or ``sum`` of the per-angle values."""
+    """ΔE aggregated over an angle set: ``mean``, ``max``, ``rms`` or ``sum`` of the per-angle values.
+
+    Examples
+    --------
+    >>> ref = [[90, 1, 1], [50, 1, 1], [30, 1, 1]]
+    >>> smp = [[93, 5, 1], [50, 1, 1], [30, 1, 2]]
+    >>> [round(delta_e_aggregate(ref, smp, "cie76", a), 6) for a in ("mean", "max", "sum")]
+    [2.0, 5.0, 6.0]
+    """
     per_angle = delta_e(lab_ref, lab_sample, method, aspecular_deg=aspecular_deg).reshape(-1)
     ops: dict[str, Callable[[NDArray], float | np.floating]] = {
         "mean": np.mean,

@@ -80,7 +80,13 @@ LAB_CHANNELS: tuple[str, str, str] = ("L", "a", "b")
 
 
 def lab_accepted(channel: str) -> str:
-    """Return the accepted range of one Lab channel as text, e.g. ``"0 <= L* <= 200"``."""
+    """Return the accepted range of one Lab channel as text, e.g. ``"0 <= L* <= 200"``.
+
+    Examples
+    --------
+    >>> lab_accepted("L"), lab_accepted("b")
+    ('0 <= L* <= 200', '-150 <= b* <= 150')
+    """
     lo, hi = LAB_RANGES[channel]
     return f"{lo:g} <= {channel}* <= {hi:g}"
 
@@ -126,6 +132,17 @@ def check_lab(value: ArrayLike, field: str) -> Lab:
     ------
     ModelInputError
         Not three numbers, a non-finite number, or a coordinate outside the bound.
+
+    Examples
+    --------
+    An effect paint's face above L* 100 is valid; a coordinate outside the bound names its channel:
+
+    >>> check_lab([125, -0.6, -1.8], "face")
+    (125.0, -0.6, -1.8)
+    >>> check_lab((250, 0, 0), "face")
+    Traceback (most recent call last):
+        ...
+    station.model.errors.ModelInputError: face.L: expected 0 <= L* <= 200, got 250.0
     """
     try:
         arr = np.asarray(value, dtype=float).reshape(-1)
@@ -140,7 +157,13 @@ def check_lab(value: ArrayLike, field: str) -> Lab:
 
 
 def lab_within(value: ArrayLike) -> bool:
-    """True when every Lab triple in *value* (shape ``(..., 3)``) is finite and inside the bound."""
+    """True when every Lab triple in *value* (shape ``(..., 3)``) is finite and inside the bound.
+
+    Examples
+    --------
+    >>> lab_within([[50, 0, 0], [200, -150, 150]]), lab_within([[50, 0, 0], [201, 0, 0]])
+    (True, False)
+    """
     arr = np.asarray(value, dtype=float)
     return bool(((arr >= np.asarray(LAB_LO)) & (arr <= np.asarray(LAB_HI))).all())
 
@@ -160,7 +183,17 @@ ANGLE_MAX_DEG = 180.0
 
 
 def check_travel(value: float | None, field: str = "travel_deg") -> float | None:
-    """Validate θ_clamp in degrees: FACE_ANGLE_DEG < travel <= TRAVEL_MAX_DEG, or None (a solid)."""
+    """Validate θ_clamp in degrees: FACE_ANGLE_DEG < travel <= TRAVEL_MAX_DEG, or None (a solid).
+
+    Examples
+    --------
+    >>> check_travel(75), check_travel(None)
+    (75.0, None)
+    >>> check_travel(12.0)
+    Traceback (most recent call last):
+        ...
+    station.model.errors.ModelInputError: travel_deg: expected 15 < travel_deg <= 180 (vertex above the face angle), got 12.0
+    """
     if value is None:
         return None
     try:
@@ -185,7 +218,17 @@ DEFAULT_GLOSS_GU = 50.0
 
 
 def check_gloss(value: float | None, field: str = "gloss_gu", allow_none: bool = False) -> float | None:
-    """Validate a gloss value in GU (60°): finite, GLOSS_MIN_GU <= g <= GLOSS_MAX_GU."""
+    """Validate a gloss value in GU (60°): finite, GLOSS_MIN_GU <= g <= GLOSS_MAX_GU.
+
+    Examples
+    --------
+    >>> check_gloss(85)
+    85.0
+    >>> check_gloss(120.0)
+    Traceback (most recent call last):
+        ...
+    station.model.errors.ModelInputError: gloss_gu: expected 0 <= gloss_gu <= 100, got 120.0
+    """
     if value is None:
         if allow_none:
             return None
@@ -201,7 +244,17 @@ def check_gloss(value: float | None, field: str = "gloss_gu", allow_none: bool =
 
 def check_ranged(field: str, value: object, lo: float, hi: float, name: str | None = None) -> float:
     """A real number (not a bool) with lo <= value <= hi, as float; :class:`ModelInputError` naming *field*
-    with the range ``lo <= name <= hi`` otherwise (*name* defaults to the last part of *field*)."""
+    with the range ``lo <= name <= hi`` otherwise (*name* defaults to the last part of *field*).
+
+    Examples
+    --------
+    >>> check_ranged("coat.index", 1.5, 1.3, 2.0)
+    1.5
+    >>> check_ranged("coat.index", True, 1.3, 2.0)
+    Traceback (most recent call last):
+        ...
+    station.model.errors.ModelInputError: coat.index: expected 1.3 <= index <= 2.0, got True
+    """
     label = name or field.rsplit(".", 1)[-1]
     if (
         isinstance(value, bool)
@@ -232,7 +285,13 @@ _GEOMETRY = re.compile(r"^(-?\d+(?:\.\d+)?)as(-?\d+(?:\.\d+)?)$")
 
 
 def format_angle(angle_deg: float) -> str:
-    """Angle as geometry names write it: ``15.0`` → ``"15"``, ``-15`` → ``"-15"``, ``12.5`` → ``"12.5"``."""
+    """Angle as geometry names write it: ``15.0`` → ``"15"``, ``-15`` → ``"-15"``, ``12.5`` → ``"12.5"``.
+
+    Examples
+    --------
+    >>> format_angle(15.0), format_angle(-15), format_angle(12.5)
+    ('15', '-15', '12.5')
+    """
     a = float(angle_deg)
     return str(int(a)) if a.is_integer() else repr(a)
 
@@ -254,6 +313,13 @@ def parse_geometry(name: str, field: str = "geometry") -> tuple[float, float]:
     ------
     ModelInputError
         The name is not ``<illumination>as<aspecular>`` with numbers in degrees.
+
+    Examples
+    --------
+    >>> parse_geometry("45as110"), parse_geometry("15as-15")
+    ((45.0, 110.0), (15.0, -15.0))
+    >>> geometry_name(*parse_geometry("45as-15")) == aspecular_name(-15) == "45as-15"
+    True
     """
     m = _GEOMETRY.match(str(name).strip())
     if m is None:

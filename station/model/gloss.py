@@ -36,9 +36,10 @@ or Gauss–Legendre (Ward); source points are averaged with Gauss–Legendre nod
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cache
+from types import MappingProxyType
 from typing import Literal
 
 import numpy as np
@@ -63,7 +64,15 @@ LobeModel = Literal["phong", "ward"]
 
 
 def fresnel_unpolarised(theta_deg: float, n: float) -> float:
-    """Fresnel reflectance of a dielectric (index *n*, from air) at incidence *theta_deg*, unpolarised."""
+    """Fresnel reflectance of a dielectric (index *n*, from air) at incidence *theta_deg*, unpolarised.
+
+    Examples
+    --------
+    Normal incidence gives ((n − 1)/(n + 1))²; the black-glass standard (n = 1.567) reflects 10.0 % at 60°:
+
+    >>> round(fresnel_unpolarised(0.0, 1.5), 12), round(fresnel_unpolarised(60.0, 1.567), 6)
+    (0.04, 0.100056)
+    """
     ti = math.radians(theta_deg)
     st = math.sin(ti) / n
     tt = math.asin(st)
@@ -80,7 +89,13 @@ COAT_REFERENCE_DEG = 60.0
 
 
 def schlick_f0(n: float) -> float:
-    """Normal-incidence reflectance F0 = ((n − 1)/(n + 1))² of a dielectric of index *n* from air."""
+    """Normal-incidence reflectance F0 = ((n − 1)/(n + 1))² of a dielectric of index *n* from air.
+
+    Examples
+    --------
+    >>> round(schlick_f0(1.5), 12)
+    0.04
+    """
     return ((n - 1.0) / (n + 1.0)) ** 2
 
 
@@ -189,8 +204,11 @@ def _direction(theta: float, u: NDArray, v: NDArray) -> NDArray:
 @cache
 def _geometry_nodes(
     geometry_deg: int, n_phi: int = 192, n_src: tuple[int, int] = (3, 5)
-) -> dict[str, NDArray]:
-    """Polar boundary distances ψ_b(φ) about each source point's mirror image, plus quadrature weights."""
+) -> Mapping[str, NDArray]:
+    """Polar boundary distances ψ_b(φ) about each source point's mirror image, plus quadrature weights.
+
+    Cached for the process: a read-only mapping of read-only arrays (CONTRIBUTING.md, module-level caches).
+    """
     su, sv, ru, rv = (math.radians(x) / 2.0 for x in APERTURES_DEG[geometry_deg])
     theta = math.radians(geometry_deg)
     xu, wu = np.polynomial.legendre.leggauss(n_src[0])
@@ -218,7 +236,10 @@ def _geometry_nodes(
         lo = np.where(ok, mid, lo)
         hi = np.where(ok, hi, mid)
     psi_b = 0.5 * (lo + hi)
-    return {"psi_b": psi_b, "w_src": w_src, "centres": centres, "dirs": dirs, "theta": np.float64(theta)}
+    nodes = {"psi_b": psi_b, "w_src": w_src, "centres": centres, "dirs": dirs}
+    for array in nodes.values():
+        array.flags.writeable = False
+    return MappingProxyType({**nodes, "theta": np.float64(theta)})
 
 
 def _phong_fractions(exponents: NDArray[np.float64], geometry_deg: int) -> NDArray[np.float64]:
@@ -318,7 +339,15 @@ def _gu_from_fraction(frac: float, coat_index: float) -> float:
 
 
 def max_gloss_gu(coat_index: float = STANDARD_INDEX) -> float:
-    """Largest 60° gloss a coat of *coat_index* can read (a mirror: all of its Fresnel reflection collected)."""
+    """Largest 60° gloss a coat of *coat_index* can read (a mirror: all of its Fresnel reflection collected).
+
+    Examples
+    --------
+    The black glass itself reads 100 GU; a clear coat of index 1.5 reflects less at 60° and tops out lower:
+
+    >>> max_gloss_gu(), round(max_gloss_gu(1.5), 2)
+    (100.0, 89.14)
+    """
     return 100.0 * fresnel_unpolarised(60.0, coat_index) / fresnel_unpolarised(60.0, STANDARD_INDEX)
 
 
@@ -397,7 +426,17 @@ def _ward_alpha_for(target: float, phong_n: float, gu_ward: Callable[[float], fl
 
 
 def gloss_from_lobe(lobe: SpecularLobe, model: LobeModel = "phong") -> float:
-    """60° gloss of a lobe (GU): the simulated meter reading (the forward direction of the mapping)."""
+    """60° gloss of a lobe (GU): the simulated meter reading (the forward direction of the mapping).
+
+    Examples
+    --------
+    The meter's reading of the lobe fitted to a gloss is that gloss; the lobe's albedo is the coat's
+    Fresnel reflectance at 60°:
+
+    >>> lobe = lobe_from_gloss(60.0)
+    >>> round(gloss_from_lobe(lobe), 6), round(lobe.specular_albedo, 6)
+    (60.0, 0.100056)
+    """
     return simulate_gloss_meter(lobe, 60, model)
 
 
@@ -638,5 +677,13 @@ def coat_from_gloss(gloss_gu: float) -> CoatLobes:
 
 
 def coat_gloss_readings(gloss_gu: float) -> GlossReadings:
-    """The meter's readings of the clear coat of a design's 60° gloss: ``coat_readings(coat_from_gloss(g))``."""
+    """The meter's readings of the clear coat of a design's 60° gloss: ``coat_readings(coat_from_gloss(g))``.
+
+    Examples
+    --------
+    The two-lobe coat reads its own 60° gloss back:
+
+    >>> round(coat_gloss_readings(60.0).g60_gu, 6)
+    60.0
+    """
     return coat_readings(coat_from_gloss(gloss_gu))

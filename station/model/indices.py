@@ -49,6 +49,18 @@ def library_indices(lab15: ArrayLike, lab45: ArrayLike, lab110: ArrayLike) -> In
     Flop Index = 2.69 (L15 − L110)^1.11 / L45^0.86 (eq 5.3.1);
     Chroma Index = |C15 − C110| (eq 5.3.2);
     Hue Shift Index = |a110 b15 − a15 b110| / C15 (eq 5.3.3).
+
+    Examples
+    --------
+    Flop Index 2.69·70^1.11/60^0.86; Chroma Index |50 − √500|; Hue Shift Index |10·40 − 30·20|/50, and
+    none for an achromatic face (C*15 < 2):
+
+    >>> r = library_indices([100, 0, 0], [60, 0, 0], [30, 0, 0])
+    >>> round(r.flop_index, 4), r.chroma_index, r.hue_shift_index
+    (8.8838, 0.0, None)
+    >>> r = library_indices([60, 30, 40], [45, 20, 30], [30, 10, 20])
+    >>> round(r.chroma_index, 6), round(r.hue_shift_index, 6)
+    (27.63932, 4.0)
     """
     l15, l45, l110 = _lab(lab15, "lab15"), _lab(lab45, "lab45"), _lab(lab110, "lab110")
     warnings: list[str] = []

@@ -51,7 +51,9 @@ def _table() -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
     gu = phong_gloss_readings(np.exp(ln_n))
     # the meter saturates at 100 GU near a mirror: keep the strictly increasing head of the curve
     keep = np.logical_and.accumulate(np.concatenate([[True], np.diff(gu) > 1e-9]))
-    return gu[keep], ln_n[keep], albedo
+    gu, ln_n = gu[keep], ln_n[keep]
+    gu.flags.writeable = ln_n.flags.writeable = False  # cached for the process: read-only
+    return gu, ln_n, albedo
 
 
 def phong_lobe(gloss_gu: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

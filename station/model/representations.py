@@ -81,6 +81,13 @@ def shape_factor(angles_deg: ArrayLike, travel_deg: float | NDArray[np.float64])
     The model is a function of the unsigned angle between the view and the specular direction, as
     in the thesis's renderer ("clamped to be between zero and the clamp point", §2.2): a signed
     instrument angle such as −15° (behind gloss) evaluates as 15°.
+
+    Examples
+    --------
+    With θ_c = 75°, s = (75 − θ)/60: 1 at the face angle, (30/60)² at 45°, 0 from θ_c on; −15° reads as 15°:
+
+    >>> shape_factor([-15, 15, 45, 75, 110], 75.0).tolist()
+    [1.0, 1.0, 0.25, 0.0, 0.0]
     """
     theta = np.minimum(np.abs(_as_angles(angles_deg)), travel_deg)
     s = (travel_deg - theta) / (travel_deg - FACE_ANGLE_DEG)
@@ -103,6 +110,18 @@ class FaceFlopTravelGloss:
         Specular gloss in gloss units at the 60° geometry, 0–100.
     name
         Optional label.
+
+    Examples
+    --------
+    At 45° with θ_c = 75°, s² = 0.25, so X = flop + (face − flop)/4 per channel (eq 3.3.1):
+
+    >>> d = FaceFlopTravelGloss(face=(90, 2, -5), flop=(30, 0.5, -1), travel_deg=75, gloss_gu=85)
+    >>> d.lab_at([15, 45, 110]).round(4).tolist()
+    [[90.0, 2.0, -5.0], [45.0, 0.875, -2.0], [30.0, 0.5, -1.0]]
+    >>> FaceFlopTravelGloss(face=(90, 2, -5), flop=(30, 0.5, -1), travel_deg=12)
+    Traceback (most recent call last):
+        ...
+    station.model.errors.ModelInputError: travel_deg: expected 15 < travel_deg <= 180 (vertex above the face angle), got 12.0
     """
 
     face: Lab

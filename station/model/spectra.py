@@ -106,6 +106,17 @@ def reflectance_to_lab(
         colour-science illuminant name, or a user :class:`~station.model.illuminants.Illuminant`.
     observer
         CIE observer (colour-science name or ``"2"`` / ``"10"``); default the 1964 10° observer.
+
+    Examples
+    --------
+    A flat reflectance R reads X/X_n = Y/Y_n = Z/Z_n = R, so L* = 116 R^(1/3) − 16 and a* = b* = 0:
+
+    >>> import numpy as np
+    >>> reflectance_to_lab(np.ones(31)).round(9).tolist()
+    [100.0, 0.0, 0.0]
+    >>> lab = reflectance_to_lab(np.full(31, 0.18))
+    >>> round(float(lab[0]), 6), bool(np.all(np.abs(lab[1:]) < 1e-9))
+    (49.496108, True)
     """
     xyz = reflectance_to_xyz(reflectance, illuminant, observer)
     white = whitepoint_xyz(illuminant, observer)

@@ -212,7 +212,7 @@ def mip_chain(cube: np.ndarray) -> list[np.ndarray]:
 
 
 class GLPrefilter:
-    """The GL filtered-importance-sampling pass for one source cube; a context manager.
+    """The GL tangent-grid quadrature pass for one source cube (module docstring); a context manager.
 
     Pass *ctx* to share a context (it is then not released here); otherwise one is created.
     """
