@@ -10,7 +10,10 @@ once and hands each caller its own outcome; callers that arrived meanwhile form 
 Nothing waits for a group to fill: a caller alone is stored at once, so no timer decides a result.
 
 Each caller still gets an answer only after its reading is committed (durable), and each reading is
-stored exactly once by client id, as :func:`~station.ingest.destination.store_audited` stores it. A
+stored exactly once by client id, as :func:`~station.ingest.destination.store_audited` stores it
+(the group through :func:`~station.ingest.destination.store_audited_many`: on PostgreSQL the chain's
+head is locked and the stored client ids are looked up once per group, and the group's rows and head
+moves travel in one pipeline per chain). A
 reading the database refuses (a client-id conflict, a missing panel) raises in its own caller only
 (the group is then stored again one reading per transaction); a failed commit (the database away,
 locked, full) raises in every caller of the group, none of whose readings is then stored.
@@ -26,7 +29,7 @@ from typing import Generic, TypeVar
 
 from sqlalchemy.orm import Session
 
-from station.ingest.destination import is_unreachable, store_audited
+from station.ingest.destination import is_unreachable, store_audited_many
 from station.ingest.schema import Reading
 from station.ingest.store import StoreResult
 
@@ -118,32 +121,29 @@ class GroupCommit(Generic[T]):
     ) -> None:
         """Store *group* in one transaction on *session* with one commit.
 
-        No savepoints (each costs the database two more round trips per reading): when the database
-        refuses one reading, the transaction is rolled back and each reading of the group is stored
-        again in a transaction of its own, so the refusal reaches only its caller. Instrument ids
-        learnt in the group are remembered only once it is committed (a rolled-back upsert must not
-        leave the id of a row that was never stored).
+        The readings go to :func:`~station.ingest.destination.store_audited_many` together (on
+        PostgreSQL a few round trips for the whole group, not several per reading). No savepoints:
+        when the database refuses a reading, the transaction is rolled back and each reading of the
+        group is stored again in a transaction of its own, so the refusal reaches only its caller.
+        Instrument ids learnt in the group are remembered only once it is committed (a rolled-back
+        upsert must not leave the id of a row that was never stored).
         """
-        learnt: dict[str, int] = {}
-        refused: tuple[_Pending[T], Exception] | None = None
+        learnt = dict(self._instrument_ids)
+        refused: Exception | None = None
         try:
-            for pending in group:
-                seen = {**self._instrument_ids, **learnt}
-                try:
-                    result = store_audited(
-                        session,
-                        pending.reading,
-                        actor_id=pending.actor_id,
-                        action=self.action,
-                        instrument_cache=seen,
-                    )
+            try:
+                results = store_audited_many(
+                    session,
+                    [(pending.reading, pending.actor_id) for pending in group],
+                    action=self.action,
+                    instrument_cache=learnt,
+                )
+                for pending, result in zip(group, results, strict=True):
                     pending.value = (answer(session, pending.reading, result), result.created)
-                except Exception as exc:
-                    if is_unreachable(exc):
-                        raise  # the database, not this reading: the whole group fails below
-                    refused = (pending, exc)
-                    break
-                learnt.update(seen)
+            except Exception as exc:
+                if is_unreachable(exc):
+                    raise  # the database, not a reading: the whole group fails below
+                refused = exc
             if refused is None:
                 session.commit()
             else:
@@ -164,7 +164,7 @@ class GroupCommit(Generic[T]):
         for pending in group:
             pending.value = None  # rolled back
         if len(group) == 1:
-            refused[0].error = refused[1]
+            group[0].error = refused
             return
         for pending in group:
             self._write(session, [pending], answer)

@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import datetime as dt
 import functools
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from sqlalchemy import Table, select
+from sqlalchemy import Table, Uuid, any_, bindparam, select
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
@@ -167,32 +167,15 @@ def store_reading(
     owned by the caller) saves the instrument upsert for instruments already seen; instrument rows are
     never deleted, so an entry cannot go stale. The common case is then one ``INSERT … RETURNING``.
     """
-    sha = reading.payload_sha256()
-    panel_id = _panel_id(session, reading, created_by_id)
-    instrument_id = _instrument_id(session, reading, instrument_cache)
-    calibration_id = _calibration_id(session, reading, instrument_id)
-    values = dict(
-        client_id=reading.client_id,
-        panel_id=panel_id,
-        instrument_id=instrument_id,
-        calibration_id=calibration_id,
-        operator=reading.operator,
-        measured_at=reading.measured_at,
-        illuminant=reading.illuminant,
-        observer=reading.observer,
-        geometries_deg=list(reading.geometries_deg),
-        lab=[list(v) for v in reading.lab],
-        wavelengths_nm=reading.wavelengths_nm,
-        spectra=reading.spectra,
-        gloss_gu=reading.gloss_gu,
-        gloss_geometry_deg=reading.gloss_geometry_deg,
-        illumination_deg=reading.illumination_deg,
-        texture=None if reading.texture is None else [t.model_dump() for t in reading.texture],
-        payload_sha256=sha,
+    values = _values(
+        session,
+        reading,
+        created_by_id=created_by_id,
         supersedes_id=supersedes_id,
         correction_reason=correction_reason,
-        created_by_id=created_by_id,
+        instrument_cache=instrument_cache,
     )
+    sha = values["payload_sha256"]
     head = chain.lock_head(session, "measurements")  # serialises appends until the caller commits
     received_at = chain.chain_time(head)
     values["received_at"] = received_at
@@ -214,3 +197,94 @@ def store_reading(
             raise ClientIdConflictError(str(reading.client_id), row.payload_sha256, sha)
         return StoreResult(row.id, created=False)
     return StoreResult(new_id, created=True, row=values)
+
+
+#: The stored rows among some client ids (PostgreSQL: one array parameter, one statement text for any count).
+_STORED_PG = select(Measurement.id, Measurement.client_id, Measurement.payload_sha256).where(
+    Measurement.client_id == any_(bindparam("ids", type_=postgresql.ARRAY(Uuid())))
+)
+
+
+def store_readings(
+    session: Session,
+    readings: Sequence[tuple[Reading, int | None]],
+    *,
+    instrument_cache: dict[str, int] | None = None,
+) -> list[StoreResult]:
+    """Store each ``(reading, created_by_id)`` once inside the caller's transaction, in order: the
+    outcomes :func:`store_reading` called on each in turn gives, with the same rows and chain.
+
+    On PostgreSQL with more than one reading, fewer round trips: the chain's head is locked and the
+    client ids already stored are looked up once for all of them, and the new rows are appended in
+    one pipeline (:func:`db.chain.append_many`). Raises as :func:`store_reading` does for a refused
+    reading (the caller rolls back); a client id twice among *readings* is stored one reading at a time.
+    """
+    ids = [reading.client_id for reading, _ in readings]
+    if len(readings) < 2 or session.get_bind().dialect.name != "postgresql" or len(set(ids)) != len(ids):
+        return [
+            store_reading(session, reading, created_by_id=by, instrument_cache=instrument_cache)
+            for reading, by in readings
+        ]
+    values = [
+        _values(session, reading, created_by_id=by, instrument_cache=instrument_cache)
+        for reading, by in readings
+    ]
+    chain.lock_head(session, "measurements")  # before the look-up: no writer can store these ids meanwhile
+    stored = {row.client_id: row for row in session.execute(_STORED_PG, {"ids": ids})}
+    fresh: list[dict[str, Any]] = []
+    for row_values in values:
+        found = stored.get(row_values["client_id"])
+        if found is not None and found.payload_sha256 != row_values["payload_sha256"]:
+            raise ClientIdConflictError(
+                str(row_values["client_id"]), found.payload_sha256, row_values["payload_sha256"]
+            )
+        if found is None:
+            fresh.append(row_values)
+    appended = iter(chain.append_many(session, "measurements", fresh))
+    results: list[StoreResult] = []
+    for row_values in values:
+        found = stored.get(row_values["client_id"])
+        if found is not None:
+            results.append(StoreResult(int(found.id), created=False))
+        else:
+            new_id, row = next(appended)
+            results.append(StoreResult(new_id, created=True, row=row))
+    return results
+
+
+def _values(
+    session: Session,
+    reading: Reading,
+    *,
+    created_by_id: int | None,
+    supersedes_id: int | None = None,
+    correction_reason: str | None = None,
+    instrument_cache: dict[str, int] | None,
+) -> dict[str, Any]:
+    """The measurement row of *reading* before the chain dates and seals it (panel, instrument and
+    calibration resolved: found, or created in this transaction)."""
+    panel_id = _panel_id(session, reading, created_by_id)
+    instrument_id = _instrument_id(session, reading, instrument_cache)
+    calibration_id = _calibration_id(session, reading, instrument_id)
+    return dict(
+        client_id=reading.client_id,
+        panel_id=panel_id,
+        instrument_id=instrument_id,
+        calibration_id=calibration_id,
+        operator=reading.operator,
+        measured_at=reading.measured_at,
+        illuminant=reading.illuminant,
+        observer=reading.observer,
+        geometries_deg=list(reading.geometries_deg),
+        lab=[list(v) for v in reading.lab],
+        wavelengths_nm=reading.wavelengths_nm,
+        spectra=reading.spectra,
+        gloss_gu=reading.gloss_gu,
+        gloss_geometry_deg=reading.gloss_geometry_deg,
+        illumination_deg=reading.illumination_deg,
+        texture=None if reading.texture is None else [t.model_dump() for t in reading.texture],
+        payload_sha256=reading.payload_sha256(),
+        supersedes_id=supersedes_id,
+        correction_reason=correction_reason,
+        created_by_id=created_by_id,
+    )

@@ -67,7 +67,7 @@ Filters = Annotated[MeasurementQuery, Depends(_query)]
 CREATE_ACTION = "measurement.create"
 
 
-def measurement_writes(request: Request) -> GroupCommit[MeasurementPublic]:
+async def measurement_writes(request: Request) -> GroupCommit[MeasurementPublic]:
     """The app's group commit for this route (``app.state.measurement_writes``, made by ``create_app``)."""
     writes: GroupCommit[MeasurementPublic] = request.app.state.measurement_writes
     return writes
