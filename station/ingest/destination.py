@@ -13,13 +13,13 @@ import threading
 import uuid
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal, Protocol
+from typing import Any, Literal, Protocol
 
 from sqlalchemy import Engine, select
 from sqlalchemy.exc import DBAPIError, DisconnectionError, InterfaceError, OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
-from db.chain import append_audit, append_many
+from db.chain import append_audit
 from db.engine import make_engine, make_sessionmaker
 from db.models import Measurement
 from station.ingest.errors import DestinationUnreachableError
@@ -128,24 +128,21 @@ def store_audited_many(
     instrument_cache: dict[str, int] | None = None,
 ) -> list[StoreResult]:
     """:func:`store_audited` of each ``(reading, actor_id)`` in turn, in the caller's transaction: the
-    same rows, audit events and outcomes, with fewer round trips on PostgreSQL (the readings through
-    :func:`~station.ingest.store.store_readings`, their audit events appended together by
-    :func:`db.chain.append_many`). Raises as :func:`store_audited` does for a refused reading.
+    same rows, audit events and outcomes, with fewer round trips on PostgreSQL (the readings and their
+    events through :func:`~station.ingest.store.store_readings`). Raises as :func:`store_audited` does
+    for a refused reading.
     """
-    results = store_readings(session, readings, instrument_cache=instrument_cache)
-    events = [
-        {
+
+    def event(measurement_id: int, reading: Reading, actor_id: int | None) -> dict[str, Any]:
+        return {
             "actor_id": actor_id,
             "action": action,
             "entity": "measurement",
-            "entity_id": str(result.measurement_id),
+            "entity_id": str(measurement_id),
             "detail": {"client_id": str(reading.client_id), "operator": reading.operator},
         }
-        for (reading, actor_id), result in zip(readings, results, strict=True)
-        if result.created
-    ]
-    append_many(session, "audit_events", events)
-    return results
+
+    return store_readings(session, readings, instrument_cache=instrument_cache, audit=event)
 
 
 class DatabaseDestination:

@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import datetime as dt
 import functools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from sqlalchemy import Table, Uuid, any_, bindparam, select
+from sqlalchemy import Table, select
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
@@ -199,10 +199,13 @@ def store_reading(
     return StoreResult(new_id, created=True, row=values)
 
 
-#: The stored rows among some client ids (PostgreSQL: one array parameter, one statement text for any count).
-_STORED_PG = select(Measurement.id, Measurement.client_id, Measurement.payload_sha256).where(
-    Measurement.client_id == any_(bindparam("ids", type_=postgresql.ARRAY(Uuid())))
-)
+#: The stored rows among some client ids, and ids for new rows from the table's sequence (PostgreSQL text).
+_PG_STORED = "SELECT client_id, id, payload_sha256 FROM measurements WHERE client_id = ANY(%(ids)s)"
+_PG_NEW_IDS = "SELECT nextval(pg_get_serial_sequence('measurements', 'id')) FROM generate_series(1, %(n)s)"
+
+#: What :func:`store_readings` appends with each new reading: a row of another chain (the audit event),
+#: from the new measurement id, the reading and its ``created_by_id``.
+Companion = Callable[[int, Reading, "int | None"], Mapping[str, Any]]
 
 
 def store_readings(
@@ -210,44 +213,60 @@ def store_readings(
     readings: Sequence[tuple[Reading, int | None]],
     *,
     instrument_cache: dict[str, int] | None = None,
+    audit: Companion | None = None,
 ) -> list[StoreResult]:
-    """Store each ``(reading, created_by_id)`` once inside the caller's transaction, in order: the
-    outcomes :func:`store_reading` called on each in turn gives, with the same rows and chain.
+    """Store each ``(reading, created_by_id)`` once inside the caller's transaction, in order, and with
+    each new one its audit event (*audit*: the event's columns, appended to the ``audit_events`` chain):
+    the outcomes of :func:`store_reading` (and :func:`db.chain.append_audit`) called on each in turn,
+    with the same rows and chains.
 
-    On PostgreSQL with more than one reading, fewer round trips: the chain's head is locked and the
-    client ids already stored are looked up once for all of them, and the new rows are appended in
-    one pipeline (:func:`db.chain.append_many`). Raises as :func:`store_reading` does for a refused
-    reading (the caller rolls back); a client id twice among *readings* is stored one reading at a time.
+    On PostgreSQL with more than one reading, three round trips in all: the heads are locked, the client
+    ids already stored looked up and ids for the new rows drawn from the table's sequence in one; every
+    new row, event and head move appended in a second (:func:`db.chain.append_many`); the caller's
+    commit. Raises as :func:`store_reading` does for a refused reading (the caller rolls back). A
+    client id twice among *readings* is stored one reading at a time.
     """
     ids = [reading.client_id for reading, _ in readings]
     if len(readings) < 2 or session.get_bind().dialect.name != "postgresql" or len(set(ids)) != len(ids):
-        return [
-            store_reading(session, reading, created_by_id=by, instrument_cache=instrument_cache)
-            for reading, by in readings
-        ]
+        results: list[StoreResult] = []
+        for reading, by in readings:
+            result = store_reading(session, reading, created_by_id=by, instrument_cache=instrument_cache)
+            if result.created and audit is not None:
+                chain.append_audit(session, audit(result.measurement_id, reading, by))
+            results.append(result)
+        return results
     values = [
         _values(session, reading, created_by_id=by, instrument_cache=instrument_cache)
         for reading, by in readings
     ]
-    chain.lock_head(session, "measurements")  # before the look-up: no writer can store these ids meanwhile
-    stored = {row.client_id: row for row in session.execute(_STORED_PG, {"ids": ids})}
+    # the look-up runs once the heads are locked: no writer can store one of these ids meanwhile
+    _head, (found, drawn) = chain.lock_head_with(
+        session, "measurements", [(_PG_STORED, {"ids": ids}), (_PG_NEW_IDS, {"n": len(readings)})]
+    )
+    stored = {client_id: (int(row_id), sha) for client_id, row_id, sha in found}
+    new_ids = iter(sorted(int(row_id) for (row_id,) in drawn))
     fresh: list[dict[str, Any]] = []
-    for row_values in values:
-        found = stored.get(row_values["client_id"])
-        if found is not None and found.payload_sha256 != row_values["payload_sha256"]:
-            raise ClientIdConflictError(
-                str(row_values["client_id"]), found.payload_sha256, row_values["payload_sha256"]
-            )
-        if found is None:
-            fresh.append(row_values)
-    appended = iter(chain.append_many(session, "measurements", fresh))
-    results: list[StoreResult] = []
-    for row_values in values:
-        found = stored.get(row_values["client_id"])
-        if found is not None:
-            results.append(StoreResult(int(found.id), created=False))
+    events: list[Mapping[str, Any]] = []
+    for (reading, by), row in zip(readings, values, strict=True):
+        old = stored.get(reading.client_id)
+        if old is not None:
+            if old[1] != row["payload_sha256"]:
+                raise ClientIdConflictError(str(reading.client_id), old[1], row["payload_sha256"])
+            continue
+        row["id"] = next(new_ids)
+        fresh.append(row)
+        if audit is not None:
+            events.append(audit(row["id"], reading, by))
+    appended = chain.append_many(session, {"measurements": fresh, "audit_events": events})
+    rows = iter(appended.get("measurements", []))
+    results = []
+    for reading, _by in readings:
+        old = stored.get(reading.client_id)
+        if old is not None:
+            results.append(StoreResult(old[0], created=False))
         else:
-            new_id, row = next(appended)
+            new_id, row = next(rows)
+            del row["id"]  # the row as store_reading reports it: its id aside
             results.append(StoreResult(new_id, created=True, row=row))
     return results
 
