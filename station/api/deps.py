@@ -90,6 +90,12 @@ def _verified(session: Session, token_hash: str) -> tuple[TokenGrant, User] | No
     return grant, user
 
 
+def _lookup(request: Request, token_hash: str) -> tuple[TokenGrant, User] | None:
+    """:func:`_verified` on a read-only session of its own (closed, its transaction ended, on return)."""
+    with request.app.state.read_sessions() as session:
+        return _verified(session, token_hash)
+
+
 def _unavailable() -> HTTPException:
     return HTTPException(
         status.HTTP_503_SERVICE_UNAVAILABLE,
@@ -101,13 +107,13 @@ def _unavailable() -> HTTPException:
 async def authorize(
     security_scopes: SecurityScopes,
     request: Request,
-    session: ReadSessionDep,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer)],
 ) -> User:
     """The active user behind the bearer token, holding every scope the route declares.
 
-    A token verified within ``token_recheck_s`` costs no database round trip and no worker thread;
-    the database lookup otherwise runs in a worker thread.
+    A token verified within ``token_recheck_s`` costs no session, no database round trip and no
+    worker thread; otherwise the lookup runs in a worker thread, on a read-only session of the app's
+    (``app.state.read_sessions``).
     """
     if credentials is None or credentials.scheme.lower() != "bearer" or not credentials.credentials:
         raise _unauthorised("missing bearer token")
@@ -122,9 +128,8 @@ async def authorize(
         grant = recent  # verified moments ago: no database round trip
     elif database.should_try():
         try:
-            found = await run_in_threadpool(_verified, session, token_hash)
+            found = await run_in_threadpool(_lookup, request, token_hash)
         except Exception as exc:
-            await run_in_threadpool(session.rollback)
             if not is_unreachable(exc):
                 raise
             database.mark_away(exc)

@@ -220,14 +220,14 @@ def store_readings(
     the outcomes of :func:`store_reading` (and :func:`db.chain.append_audit`) called on each in turn,
     with the same rows and chains.
 
-    On PostgreSQL with more than one reading, three round trips in all: the heads are locked, the client
+    On PostgreSQL, three round trips in all, however many readings: the heads are locked, the client
     ids already stored looked up and ids for the new rows drawn from the table's sequence in one; every
     new row, event and head move appended in a second (:func:`db.chain.append_many`); the caller's
     commit. Raises as :func:`store_reading` does for a refused reading (the caller rolls back). A
     client id twice among *readings* is stored one reading at a time.
     """
     ids = [reading.client_id for reading, _ in readings]
-    if len(readings) < 2 or session.get_bind().dialect.name != "postgresql" or len(set(ids)) != len(ids):
+    if session.get_bind().dialect.name != "postgresql" or len(set(ids)) != len(ids):
         results: list[StoreResult] = []
         for reading, by in readings:
             result = store_reading(session, reading, created_by_id=by, instrument_cache=instrument_cache)
@@ -257,7 +257,10 @@ def store_readings(
         fresh.append(row)
         if audit is not None:
             events.append(audit(row["id"], reading, by))
-    appended = chain.append_many(session, {"measurements": fresh, "audit_events": events})
+    try:
+        appended = chain.append_many(session, {"measurements": fresh, "audit_events": events})
+    except IntegrityError as exc:  # e.g. a vanished reference, as store_reading says it
+        raise ReferenceNotFoundError(f"reading refused by a database constraint: {exc.orig}") from exc
     rows = iter(appended.get("measurements", []))
     results = []
     for reading, _by in readings:

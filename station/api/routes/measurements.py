@@ -98,7 +98,7 @@ def _stored(session: Session, reading: Reading, result: StoreResult) -> Measurem
     },
 )
 def create_measurement(
-    session: SessionDep,
+    request: Request,
     user: Writer,
     reading: Reading,
     response: Response,
@@ -107,9 +107,11 @@ def create_measurement(
     """Store a reading once: re-sending the same ``client_id`` returns the stored row with 200.
 
     Readings posted at the same moment share one transaction (:class:`GroupCommit`); each answer
-    comes once its reading is committed.
+    comes once its reading is committed. The session is the app's (``app.state.sessions``), opened
+    here, in the route's worker thread: it touches the database only if this caller writes a group.
     """
-    measurement, created = writes.store(session, reading, actor_id=user.id, answer=_stored)
+    with request.app.state.sessions() as session:
+        measurement, created = writes.store(session, reading, actor_id=user.id, answer=_stored)
     if not created:
         response.status_code = status.HTTP_200_OK
     return measurement
