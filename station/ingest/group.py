@@ -43,13 +43,16 @@ T = TypeVar("T")
 
 @dataclass(eq=False)
 class _Pending(Generic[T]):
-    """One caller's reading and, once its group is written, what became of it."""
+    """One caller's reading and, once its group is written, what became of it.
+
+    *wake* is set when the caller has its outcome (*done*) or is to write the next group."""
 
     reading: Reading
     actor_id: int | None
     done: bool = False
     value: tuple[T, bool] | None = None
     error: BaseException | None = field(default=None, repr=False)
+    wake: threading.Event = field(default_factory=threading.Event, repr=False)
 
 
 class GroupCommit(Generic[T]):
@@ -58,7 +61,8 @@ class GroupCommit(Generic[T]):
     Thread-safe; one per database (the service keeps one on ``app.state``). *action* is the audit
     action of each stored reading; *max_batch* the most readings one transaction carries. The
     instrument ids seen are remembered (instrument rows are never deleted), so a known instrument
-    costs no upsert.
+    costs no upsert. A writer hands over to the first caller still queued once its group is written:
+    only that caller and the group's callers wake, not every waiting one.
     """
 
     def __init__(self, action: str, *, max_batch: int = MAX_GROUP) -> None:
@@ -66,7 +70,7 @@ class GroupCommit(Generic[T]):
             raise ValueError(f"max_batch: expected ≥ 1, got {max_batch}")
         self.action = action
         self.max_batch = max_batch
-        self._cv = threading.Condition()
+        self._lock = threading.Lock()
         self._queue: deque[_Pending[T]] = deque()
         self._writing = False
         self._instrument_ids: dict[str, int] = {}
@@ -74,7 +78,7 @@ class GroupCommit(Generic[T]):
     @property
     def queued(self) -> int:
         """Readings waiting for a group (not yet taken by a writer)."""
-        with self._cv:
+        with self._lock:
             return len(self._queue)
 
     def store(
@@ -93,24 +97,27 @@ class GroupCommit(Generic[T]):
         raised, or what the group's commit raised.
         """
         mine: _Pending[T] = _Pending(reading, actor_id)
-        with self._cv:
+        with self._lock:
             self._queue.append(mine)
-        while True:
-            with self._cv:
-                while self._writing and not mine.done:
-                    self._cv.wait()
-                if mine.done:
-                    break
-                self._writing = True
+            writer = not self._writing
+            self._writing = True
+        if not writer:
+            mine.wake.wait()  # done by another writer, or handed the next group (first in the queue)
+        if not mine.done:
+            with self._lock:
                 group = [self._queue.popleft() for _ in range(min(len(self._queue), self.max_batch))]
             try:
                 self._write(session, group, answer)
             finally:
-                with self._cv:
+                with self._lock:
                     for pending in group:
                         pending.done = True
-                    self._writing = False
-                    self._cv.notify_all()
+                    successor = self._queue[0] if self._queue else None
+                    self._writing = successor is not None
+                for pending in group:
+                    pending.wake.set()
+                if successor is not None:
+                    successor.wake.set()
         if mine.error is not None:
             raise mine.error
         assert mine.value is not None  # noqa: S101 - a finished entry holds a value or an error
