@@ -97,7 +97,7 @@ def _stored(session: Session, reading: Reading, result: StoreResult) -> Measurem
         **CONFLICT,
     },
 )
-def create_measurement(
+async def create_measurement(
     request: Request,
     user: Writer,
     reading: Reading,
@@ -107,11 +107,12 @@ def create_measurement(
     """Store a reading once: re-sending the same ``client_id`` returns the stored row with 200.
 
     Readings posted at the same moment share one transaction (:class:`GroupCommit`); each answer
-    comes once its reading is committed. The session is the app's (``app.state.sessions``), opened
-    here, in the route's worker thread: it touches the database only if this caller writes a group.
+    comes once its reading is committed. The request waits on the event loop, without a thread of
+    its own: a worker thread writes the groups, each on a session of the app's (``app.state.sessions``).
     """
-    with request.app.state.sessions() as session:
-        measurement, created = writes.store(session, reading, actor_id=user.id, answer=_stored)
+    measurement, created = await writes.store_async(
+        request.app.state.sessions, reading, actor_id=user.id, answer=_stored
+    )
     if not created:
         response.status_code = status.HTTP_200_OK
     return measurement
