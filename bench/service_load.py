@@ -14,7 +14,9 @@ durability settings (``db.engine.make_engine``: SQLite in WAL mode with ``synchr
 PostgreSQL with its synchronous commit), no HTTP, no chain, no audit row, no validation. Baseline
 and service run in the same run on the same database, interleaved in ``--rounds`` rounds (raw, then
 service, each ``--duration`` seconds), so both see the same machine load; the 1-minute load average
-is sampled at every phase boundary and reported. Bars: service ≥ 0.5× raw throughput and p99 ≤ 150 ms.
+is sampled at every phase boundary and reported, and so is the CPU time (user + system, from ``/proc``)
+of ``station serve`` per request and of the raw inserting process per row: on a machine shared with
+other work, CPU per reading is what decides throughput. Bars: service ≥ 0.5× raw throughput and p99 ≤ 150 ms.
 The exit status says only whether every reading was stored exactly once.
 
     python -m bench.service_load [--clients 8] [--rounds 3] [--duration 10] [--no-postgres]
@@ -212,6 +214,15 @@ def count_check(url: str, sent: list[str]) -> dict[str, int]:
     }
 
 
+def process_cpu_s(pid: int) -> float:
+    """CPU seconds (user + system) process *pid* has used so far (Linux ``/proc``; NaN elsewhere)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return float("nan")
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def _pct(lat: np.ndarray, q: float) -> float:
     return float(np.percentile(lat, q)) if lat.size else float("nan")
 
@@ -233,8 +244,11 @@ def _backend(name: str, url: str | None, data_dir: Path, args: argparse.Namespac
             pool.map(_warm, range(args.clients))
             for k in range(args.rounds):
                 loads.append(os.getloadavg()[0])
+                cpu0 = process_cpu_s(os.getpid())
                 raws.append(run_raw(engine, args.clients, args.duration, f"{name}{k}"))
+                raws[-1]["cpu_s"] = process_cpu_s(os.getpid()) - cpu0
                 loads.append(os.getloadavg()[0])
+                cpu0 = process_cpu_s(service.pid)
                 phases.append(
                     run_service(
                         pool,
@@ -246,6 +260,7 @@ def _backend(name: str, url: str | None, data_dir: Path, args: argparse.Namespac
                         f"{name}{k}",
                     )
                 )
+                phases[-1]["cpu_s"] = process_cpu_s(service.pid) - cpu0
                 loads.append(os.getloadavg()[0])
     finally:
         service.stop()
@@ -263,8 +278,14 @@ def _backend(name: str, url: str | None, data_dir: Path, args: argparse.Namespac
         "throughput": len(sent) / seconds,
         "p50": _pct(lat, 50),
         "p99": _pct(lat, 99),
+        "cpu_ms": 1000.0 * sum(p["cpu_s"] for p in phases) / max(1, int(lat.size)),
     }
-    raw = {"throughput": sum(r["rows"] for r in raws) / raw_seconds, "p99": _pct(raw_lat, 99)}
+    raw_rows = sum(r["rows"] for r in raws)
+    raw = {
+        "throughput": raw_rows / raw_seconds,
+        "p99": _pct(raw_lat, 99),
+        "cpu_ms": 1000.0 * sum(r["cpu_s"] for r in raws) / max(1, raw_rows),
+    }
     rounds = [
         len(p["sent"]) / p["seconds"] / (r["rows"] / r["seconds"]) for p, r in zip(phases, raws, strict=True)
     ]
@@ -344,6 +365,20 @@ def main(argv: list[str] | None = None) -> int:
             Case(f"{backend}: service latency p50", "", load["p50"], "ms"),
             Case(f"{backend}: service latency p99", "", load["p99"], "ms", f"bar ≤ {P99_BAR_MS:g} ms"),
             Case(f"{backend}: raw insert latency p99", "", raw["p99"], "ms"),
+            Case(
+                f"{backend}: service process CPU per request",
+                "",
+                load["cpu_ms"],
+                "ms",
+                "user + system of `station serve` during the service phases",
+            ),
+            Case(
+                f"{backend}: raw inserts CPU per row",
+                "",
+                raw["cpu_ms"],
+                "ms",
+                "the inserting process (reading made, SQLAlchemy, driver); the database's own CPU in neither",
+            ),
             Case(
                 f"{backend}: load average during the run",
                 "",

@@ -50,7 +50,7 @@ import json
 import os
 import secrets
 import uuid
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -71,7 +71,7 @@ from sqlalchemy import (
     table,
     update,
 )
-from sqlalchemy.engine import RowMapping
+from sqlalchemy.engine import Dialect, RowMapping
 from sqlalchemy.orm import Session, UOWTransaction
 from sqlalchemy.sql.expression import TableClause
 from sqlalchemy.types import JSON, TypeEngine
@@ -419,6 +419,151 @@ def _append(session: Session | Connection, chain: Chain, values: Mapping[str, An
 def append_audit(session: Session | Connection, values: Mapping[str, Any]) -> int:
     """Insert one audit event (``actor_id``, ``action``, ``entity``, ``entity_id``, ``detail``) on the chain; its id."""
     return _append(session, "audit_events", values)
+
+
+def append_many(
+    session: Session | Connection, batches: Mapping[Chain, Sequence[Mapping[str, Any]]]
+) -> dict[Chain, list[tuple[int, dict[str, Any]]]]:
+    """Append each chain's rows, in order (each row: its payload columns, the time column left to the
+    chain, as :func:`append_audit` takes one; an ``id`` may be given, from the table's sequence);
+    ``(id, row as inserted)`` of each, time and hashes included, by chain.
+
+    The same rows, hashes, times and head moves as one append per row (each row inserted, then its
+    chain's head moved onto it: the database's head rule), under the same lock (:func:`lock_head`).
+    On PostgreSQL every insert and head move travels in one pipeline: one round trip for all of them
+    instead of two per row. The rows of one chain must hold the same columns.
+    """
+    conn = _connection(session)
+    sealed: dict[Chain, list[tuple[dict[str, Any], Head]]] = {}
+    for chain, rows in batches.items():
+        if not rows:
+            continue
+        head = lock_head(session, chain)
+        sealed[chain] = []
+        for values in rows:
+            row = dict(values)
+            at = chain_time(head)
+            row[TIME_COLUMN[chain]] = at
+            row_hash, link = seal(chain, head, row)
+            row["row_sha256"], row["chain_sha256"] = row_hash, link
+            head = Head(head.length + 1, link, at)
+            sealed[chain].append((row, head))
+    if conn.dialect.name == "postgresql":
+        ids = _pipelined_append(conn, sealed)
+        kept = conn.info.get(_HEADS_INFO)
+        if kept is not None and kept[0] == _transaction_key(conn):
+            for chain, rows_heads in sealed.items():
+                kept[1][chain] = rows_heads[-1][1]
+    else:
+        ids = {}
+        for chain, rows_heads in sealed.items():
+            ids[chain] = []
+            for row, new in rows_heads:
+                ids[chain].append(int(session.execute(_chain_insert(chain), row).scalar_one()))
+                advance(session, chain, lock_head(session, chain), new.sha256, row[TIME_COLUMN[chain]])
+    return {
+        chain: [(new_id, row) for new_id, (row, _) in zip(ids[chain], rows_heads, strict=True)]
+        for chain, rows_heads in sealed.items()
+    }
+
+
+#: :data:`_LOCK_HEADS` as PostgreSQL text, for a pipeline.
+_PG_LOCK_HEADS = (
+    "SELECT chain, length, head_sha256, head_at FROM ledger_heads WHERE chain IN ("
+    + ", ".join(f"'{c}'" for c in CHAINS)
+    + ") ORDER BY chain FOR UPDATE"
+)
+#: :data:`_ADVANCE` as PostgreSQL text (psycopg's named placeholders), for a pipeline.
+_PG_ADVANCE = (
+    "UPDATE ledger_heads SET length = %(length)s, head_sha256 = %(head_sha256)s, head_at = %(head_at)s "
+    "WHERE ledger_heads.chain = %(c_chain)s"
+)
+
+
+def lock_head_with(
+    session: Session | Connection, chain: Chain, queries: Sequence[tuple[str, Mapping[str, Any]]]
+) -> tuple[Head, list[list[tuple[Any, ...]]]]:
+    """PostgreSQL only: :func:`lock_head`, then *queries* (driver text with psycopg's named placeholders,
+    and their parameters) in the same transaction, all in one round trip (a pipeline); *chain*'s head
+    and each query's rows. A query runs once the heads are locked: it sees every row a writer that
+    held the lock before committed."""
+    conn = _connection(session)
+    if conn.dialect.name != "postgresql":
+        raise NotImplementedError("lock_head_with pipelines PostgreSQL statements")
+    kept = conn.info.get(_HEADS_INFO)
+    locked = kept is not None and kept[0] == _transaction_key(conn) and chain in kept[1]
+    statements: list[tuple[str, Mapping[str, Any]]] = [] if locked else [(_PG_LOCK_HEADS, {})]
+    statements += queries
+    results = _pipelined(conn, statements)
+    if not locked:
+        heads = {
+            str(name): Head(int(length), str(sha), None if at is None else at.astimezone(dt.UTC))
+            for name, length, sha, at in results.pop(0)
+        }
+        conn.info[_HEADS_INFO] = (_transaction_key(conn), heads)
+        if chain not in heads:
+            raise LookupError(f"ledger_heads has no row for {chain}: is the database migrated?")
+    return lock_head(session, chain), results
+
+
+def _pipelined(
+    conn: Connection, statements: Sequence[tuple[str, Mapping[str, Any]]]
+) -> list[list[tuple[Any, ...]]]:
+    """Run *statements* in one psycopg pipeline on *conn*'s transaction; each one's rows (``[]`` for
+    one that returns none). A driver error is raised as SQLAlchemy's wrapped error
+    (``OperationalError`` for a lost server, ``IntegrityError`` for a refused row), as
+    :meth:`Connection.execute` raises it."""
+    from sqlalchemy.exc import DBAPIError
+
+    driver: Any = conn.connection.driver_connection
+    dbapi_error = conn.dialect.loaded_dbapi.Error
+    cursors = []
+    try:
+        with driver.pipeline():
+            for sql, params in statements:
+                cursors.append(driver.execute(sql, params))
+        return [cursor.fetchall() if cursor.description is not None else [] for cursor in cursors]
+    except dbapi_error as exc:
+        raise DBAPIError.instance(statements[0][0], None, exc, dbapi_error) from exc
+    finally:
+        for cursor in cursors:
+            cursor.close()
+
+
+@functools.cache
+def _pg_insert(chain: Chain, names: tuple[str, ...]) -> str:
+    """``INSERT INTO chain (names) VALUES (…) RETURNING id`` as PostgreSQL text (psycopg's named placeholders)."""
+    columns = ", ".join(names)
+    values = ", ".join(f"%({n})s" for n in names)
+    return f"INSERT INTO {chain} ({columns}) VALUES ({values}) RETURNING id"
+
+
+@functools.lru_cache(maxsize=64)
+def _bind_processors(dialect: Dialect, chain: Chain, names: tuple[str, ...]) -> tuple[tuple[str, Any], ...]:
+    """``(column, processor or None)`` per column: SQLAlchemy's own conversion of each value for the driver."""
+    tbl = chain_table(chain)
+    return tuple((n, tbl.c[n].type.dialect_impl(dialect).bind_processor(dialect)) for n in names)
+
+
+def _pipelined_append(
+    conn: Connection, sealed: Mapping[Chain, Sequence[tuple[dict[str, Any], Head]]]
+) -> dict[Chain, list[int]]:
+    """Insert each sealed row and move its chain's head onto it, all in one pipeline; the new ids."""
+    statements: list[tuple[str, Mapping[str, Any]]] = []
+    for chain, rows_heads in sealed.items():
+        names = tuple(rows_heads[0][0])
+        sql = _pg_insert(chain, names)
+        processors = _bind_processors(conn.dialect, chain, names)
+        for row, head in rows_heads:
+            statements.append((sql, {n: row[n] if p is None else p(row[n]) for n, p in processors}))
+            statements.append(
+                (
+                    _PG_ADVANCE,
+                    {"c_chain": chain, "length": head.length, "head_sha256": head.sha256, "head_at": head.at},
+                )
+            )
+    results = iter(_pipelined(conn, statements)[::2])  # each insert's RETURNING row
+    return {chain: [int(next(results)[0][0]) for _ in rows_heads] for chain, rows_heads in sealed.items()}
 
 
 # --- records ------------------------------------------------------------------------------------------

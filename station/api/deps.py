@@ -10,6 +10,11 @@ PostgreSQL (tests/api/conftest.py).
 the role (403 otherwise):
 ``user: Annotated[User, Security(authorize, scopes=[Scope.DESIGNS_WRITE])]``.
 
+These dependencies run on the event loop (no worker-thread hop per dependency: a request to a sync
+route pays one, for the route itself); whatever may block goes to a worker thread: closing a session
+that still holds a connection (returning it to the pool may talk to the database) and the token's
+database lookup.
+
 The token is checked against the database on every request while it is reachable; while it is away
 (``app.state.database``) a token the database verified in the last ``Settings.token_offline_s``
 seconds (``app.state.tokens``) still authenticates, any other gets 503 (it cannot be checked). A token
@@ -18,13 +23,14 @@ verified less than ``Settings.token_recheck_s`` seconds ago is not looked up aga
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import AsyncIterator
 from typing import Annotated
 
 from fastapi import Depends, HTTPException, Request, Security, status
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer, SecurityScopes
 from sqlalchemy import select
 from sqlalchemy.orm import Session
+from starlette.concurrency import run_in_threadpool
 
 from db.base import utcnow
 from db.models import ApiToken, User
@@ -36,16 +42,31 @@ from station.ingest import is_unreachable
 bearer = HTTPBearer(auto_error=False, description="token printed by `station serve` or `station users add`")
 
 
-def get_session(request: Request) -> Iterator[Session]:
-    """One session per request from the app's session factory."""
-    with request.app.state.sessions() as session:
+async def _close(session: Session) -> None:
+    """Close *session*: in a worker thread when it is in a transaction (its connection goes back to the
+    pool, which may end the transaction on the database), at once when it never began one."""
+    if session.in_transaction():
+        await run_in_threadpool(session.close)
+    else:
+        session.close()
+
+
+async def get_session(request: Request) -> AsyncIterator[Session]:
+    """One session per request from the app's session factory (made without touching the database)."""
+    session: Session = request.app.state.sessions()
+    try:
         yield session
+    finally:
+        await _close(session)
 
 
-def get_read_session(request: Request) -> Iterator[Session]:
+async def get_read_session(request: Request) -> AsyncIterator[Session]:
     """One read-only session per request (a write through it fails: "attempt to write a readonly database")."""
-    with request.app.state.read_sessions() as session:
+    session: Session = request.app.state.read_sessions()
+    try:
         yield session
+    finally:
+        await _close(session)
 
 
 def get_settings(request: Request) -> Settings:
@@ -72,6 +93,12 @@ def _verified(session: Session, token_hash: str) -> tuple[TokenGrant, User] | No
     return grant, user
 
 
+def _lookup(request: Request, token_hash: str) -> tuple[TokenGrant, User] | None:
+    """:func:`_verified` on a read-only session of its own (closed, its transaction ended, on return)."""
+    with request.app.state.read_sessions() as session:
+        return _verified(session, token_hash)
+
+
 def _unavailable() -> HTTPException:
     return HTTPException(
         status.HTTP_503_SERVICE_UNAVAILABLE,
@@ -80,13 +107,17 @@ def _unavailable() -> HTTPException:
     )
 
 
-def authorize(
+async def authorize(
     security_scopes: SecurityScopes,
     request: Request,
-    session: ReadSessionDep,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer)],
 ) -> User:
-    """The active user behind the bearer token, holding every scope the route declares."""
+    """The active user behind the bearer token, holding every scope the route declares.
+
+    A token verified within ``token_recheck_s`` costs no session, no database round trip and no
+    worker thread; otherwise the lookup runs in a worker thread, on a read-only session of the app's
+    (``app.state.read_sessions``).
+    """
     if credentials is None or credentials.scheme.lower() != "bearer" or not credentials.credentials:
         raise _unauthorised("missing bearer token")
     token_hash = hash_token(credentials.credentials)
@@ -100,9 +131,8 @@ def authorize(
         grant = recent  # verified moments ago: no database round trip
     elif database.should_try():
         try:
-            found = _verified(session, token_hash)
+            found = await run_in_threadpool(_lookup, request, token_hash)
         except Exception as exc:
-            session.rollback()
             if not is_unreachable(exc):
                 raise
             database.mark_away(exc)

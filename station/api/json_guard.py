@@ -35,20 +35,6 @@ PARSED_BODY = "station.json_body"
 _JSON_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 
 
-class _NonFinite:
-    """Stands in for a number JSON cannot represent (``NaN``, ``±Infinity``, an overflowing float)."""
-
-    __slots__ = ("text",)
-
-    def __init__(self, text: str) -> None:
-        self.text = text
-
-
-def _parse_float(text: str) -> float | _NonFinite:
-    value = float(text)
-    return value if math.isfinite(value) else _NonFinite(text)
-
-
 def safe_text(value: object, limit: int = MAX_LOC_TEXT) -> str:
     """*value* as printable text: surrogates and control characters escaped, at most *limit* characters."""
     text = value if isinstance(value, str) else str(value)
@@ -70,7 +56,9 @@ def _string_fault(text: str) -> str | None:
 
 
 def _walk(node: Any, path: tuple[int | str, ...]) -> Iterator[tuple[tuple[int | str, ...], str, str]]:
-    if isinstance(node, _NonFinite):
+    """The faults in *node* (as Python's ``json`` parses it: ``NaN``, ``±Infinity`` and overflowing
+    numbers come out as non-finite floats), in document order."""
+    if isinstance(node, float) and not math.isfinite(node):
         yield (
             path,
             "a finite number (NaN, Infinity and overflowing numbers are not JSON numbers)",
@@ -88,6 +76,9 @@ def _walk(node: Any, path: tuple[int | str, ...]) -> Iterator[tuple[tuple[int | 
             yield from _walk(value, (*path, key))
     elif isinstance(node, list):
         for i, value in enumerate(node):
+            kind = value.__class__
+            if kind is int or (kind is float and math.isfinite(value)):
+                continue  # the common case (spectra, Lab): nothing to look into
             yield from _walk(value, (*path, i))
 
 
@@ -95,7 +86,7 @@ def _checked(body: bytes) -> tuple[Any, tuple[tuple[int | str, ...], str, str] |
     """``(document, fault)`` of JSON *body*: the parsed document (``None`` when there is a fault or it does
     not parse) and :func:`find_hostile`'s fault."""
     try:
-        doc = json.loads(body, parse_constant=_NonFinite, parse_float=_parse_float)
+        doc = json.loads(body)
     except json.JSONDecodeError:
         return None, None
     except UnicodeDecodeError:

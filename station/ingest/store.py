@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import datetime as dt
 import functools
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -167,32 +167,15 @@ def store_reading(
     owned by the caller) saves the instrument upsert for instruments already seen; instrument rows are
     never deleted, so an entry cannot go stale. The common case is then one ``INSERT … RETURNING``.
     """
-    sha = reading.payload_sha256()
-    panel_id = _panel_id(session, reading, created_by_id)
-    instrument_id = _instrument_id(session, reading, instrument_cache)
-    calibration_id = _calibration_id(session, reading, instrument_id)
-    values = dict(
-        client_id=reading.client_id,
-        panel_id=panel_id,
-        instrument_id=instrument_id,
-        calibration_id=calibration_id,
-        operator=reading.operator,
-        measured_at=reading.measured_at,
-        illuminant=reading.illuminant,
-        observer=reading.observer,
-        geometries_deg=list(reading.geometries_deg),
-        lab=[list(v) for v in reading.lab],
-        wavelengths_nm=reading.wavelengths_nm,
-        spectra=reading.spectra,
-        gloss_gu=reading.gloss_gu,
-        gloss_geometry_deg=reading.gloss_geometry_deg,
-        illumination_deg=reading.illumination_deg,
-        texture=None if reading.texture is None else [t.model_dump() for t in reading.texture],
-        payload_sha256=sha,
+    values = _values(
+        session,
+        reading,
+        created_by_id=created_by_id,
         supersedes_id=supersedes_id,
         correction_reason=correction_reason,
-        created_by_id=created_by_id,
+        instrument_cache=instrument_cache,
     )
+    sha = values["payload_sha256"]
     head = chain.lock_head(session, "measurements")  # serialises appends until the caller commits
     received_at = chain.chain_time(head)
     values["received_at"] = received_at
@@ -214,3 +197,116 @@ def store_reading(
             raise ClientIdConflictError(str(reading.client_id), row.payload_sha256, sha)
         return StoreResult(row.id, created=False)
     return StoreResult(new_id, created=True, row=values)
+
+
+#: The stored rows among some client ids, and ids for new rows from the table's sequence (PostgreSQL text).
+_PG_STORED = "SELECT client_id, id, payload_sha256 FROM measurements WHERE client_id = ANY(%(ids)s)"
+_PG_NEW_IDS = "SELECT nextval(pg_get_serial_sequence('measurements', 'id')) FROM generate_series(1, %(n)s)"
+
+#: What :func:`store_readings` appends with each new reading: a row of another chain (the audit event),
+#: from the new measurement id, the reading and its ``created_by_id``.
+Companion = Callable[[int, Reading, "int | None"], Mapping[str, Any]]
+
+
+def store_readings(
+    session: Session,
+    readings: Sequence[tuple[Reading, int | None]],
+    *,
+    instrument_cache: dict[str, int] | None = None,
+    audit: Companion | None = None,
+) -> list[StoreResult]:
+    """Store each ``(reading, created_by_id)`` once inside the caller's transaction, in order, and with
+    each new one its audit event (*audit*: the event's columns, appended to the ``audit_events`` chain):
+    the outcomes of :func:`store_reading` (and :func:`db.chain.append_audit`) called on each in turn,
+    with the same rows and chains.
+
+    On PostgreSQL, three round trips in all, however many readings: the heads are locked, the client
+    ids already stored looked up and ids for the new rows drawn from the table's sequence in one; every
+    new row, event and head move appended in a second (:func:`db.chain.append_many`); the caller's
+    commit. Raises as :func:`store_reading` does for a refused reading (the caller rolls back). A
+    client id twice among *readings* is stored one reading at a time.
+    """
+    ids = [reading.client_id for reading, _ in readings]
+    if session.get_bind().dialect.name != "postgresql" or len(set(ids)) != len(ids):
+        results: list[StoreResult] = []
+        for reading, by in readings:
+            result = store_reading(session, reading, created_by_id=by, instrument_cache=instrument_cache)
+            if result.created and audit is not None:
+                chain.append_audit(session, audit(result.measurement_id, reading, by))
+            results.append(result)
+        return results
+    values = [
+        _values(session, reading, created_by_id=by, instrument_cache=instrument_cache)
+        for reading, by in readings
+    ]
+    # the look-up runs once the heads are locked: no writer can store one of these ids meanwhile
+    _head, (found, drawn) = chain.lock_head_with(
+        session, "measurements", [(_PG_STORED, {"ids": ids}), (_PG_NEW_IDS, {"n": len(readings)})]
+    )
+    stored = {client_id: (int(row_id), sha) for client_id, row_id, sha in found}
+    new_ids = iter(sorted(int(row_id) for (row_id,) in drawn))
+    fresh: list[dict[str, Any]] = []
+    events: list[Mapping[str, Any]] = []
+    for (reading, by), row in zip(readings, values, strict=True):
+        old = stored.get(reading.client_id)
+        if old is not None:
+            if old[1] != row["payload_sha256"]:
+                raise ClientIdConflictError(str(reading.client_id), old[1], row["payload_sha256"])
+            continue
+        row["id"] = next(new_ids)
+        fresh.append(row)
+        if audit is not None:
+            events.append(audit(row["id"], reading, by))
+    try:
+        appended = chain.append_many(session, {"measurements": fresh, "audit_events": events})
+    except IntegrityError as exc:  # e.g. a vanished reference, as store_reading says it
+        raise ReferenceNotFoundError(f"reading refused by a database constraint: {exc.orig}") from exc
+    rows = iter(appended.get("measurements", []))
+    results = []
+    for reading, _by in readings:
+        old = stored.get(reading.client_id)
+        if old is not None:
+            results.append(StoreResult(old[0], created=False))
+        else:
+            new_id, row = next(rows)
+            del row["id"]  # the row as store_reading reports it: its id aside
+            results.append(StoreResult(new_id, created=True, row=row))
+    return results
+
+
+def _values(
+    session: Session,
+    reading: Reading,
+    *,
+    created_by_id: int | None,
+    supersedes_id: int | None = None,
+    correction_reason: str | None = None,
+    instrument_cache: dict[str, int] | None,
+) -> dict[str, Any]:
+    """The measurement row of *reading* before the chain dates and seals it (panel, instrument and
+    calibration resolved: found, or created in this transaction)."""
+    panel_id = _panel_id(session, reading, created_by_id)
+    instrument_id = _instrument_id(session, reading, instrument_cache)
+    calibration_id = _calibration_id(session, reading, instrument_id)
+    return dict(
+        client_id=reading.client_id,
+        panel_id=panel_id,
+        instrument_id=instrument_id,
+        calibration_id=calibration_id,
+        operator=reading.operator,
+        measured_at=reading.measured_at,
+        illuminant=reading.illuminant,
+        observer=reading.observer,
+        geometries_deg=list(reading.geometries_deg),
+        lab=[list(v) for v in reading.lab],
+        wavelengths_nm=reading.wavelengths_nm,
+        spectra=reading.spectra,
+        gloss_gu=reading.gloss_gu,
+        gloss_geometry_deg=reading.gloss_geometry_deg,
+        illumination_deg=reading.illumination_deg,
+        texture=None if reading.texture is None else [t.model_dump() for t in reading.texture],
+        payload_sha256=reading.payload_sha256(),
+        supersedes_id=supersedes_id,
+        correction_reason=correction_reason,
+        created_by_id=created_by_id,
+    )

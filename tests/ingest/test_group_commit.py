@@ -8,6 +8,7 @@ intact, and a refused reading failing only its own caller.
 
 from __future__ import annotations
 
+import asyncio
 import threading
 import uuid
 from typing import Any
@@ -131,3 +132,73 @@ def test_a_failed_commit_fails_every_caller_of_the_group(tmp_path: Any) -> None:
     engine.dispose()
     assert "no such table" in str(caught.value)
     assert group.queued == 0
+
+
+def test_a_group_with_stored_and_clashing_readings_matches_one_at_a_time(database_url: str) -> None:
+    """Without a client id twice in the group (the batched path on PostgreSQL): a re-sent reading
+    answers its stored row, a clash fails only its caller, the rest are stored once with their events."""
+    readings = [make_reading(44, i, serial=f"GB-{i % 2}") for i in range(CALLERS)]
+    stored_first = _run(database_url, readings[:2], hold_first=False)[0]
+    clash = readings[1].model_copy(update={"operator": "someone else"})
+    again = [readings[0], clash, *readings[2:]]  # a re-send, a clash, six new ones: no id twice
+    answers, errors, _commits = _run(database_url, again)
+    assert isinstance(errors[1], ClientIdConflictError)
+    assert [e for k, e in enumerate(errors) if k != 1] == [None] * (CALLERS - 1)
+    assert answers[0] == (stored_first[0][0], False)  # the stored row's id, not created again
+    assert all(a[1] is True for a in answers[2:])
+    assert len({a[0] for a in answers if a is not None}) == CALLERS - 1
+    ids, audits, verdicts = _stored(database_url)
+    assert sorted(ids) == sorted(str(r.client_id) for r in readings)
+    assert audits == CALLERS  # one event per stored reading, none for the re-send or the clash
+    assert [v.broken for v in verdicts] == [None, None]
+
+
+def test_coroutine_and_thread_callers_share_groups(database_url: str) -> None:
+    """store_async (the service's route) and store (threads) on one GroupCommit: each reading once,
+    with one audit event, in fewer commits than readings, the chain intact."""
+    engine = make_engine(database_url, pool_size=4)
+    sessions = make_sessionmaker(engine)
+    commits = 0
+
+    @event.listens_for(engine, "commit")
+    def _count(_conn: Any) -> None:
+        nonlocal commits
+        commits += 1
+
+    group: GroupCommit[int] = GroupCommit("measurement.create")
+    readings = [make_reading(45, i, serial=f"GA-{i % 3}") for i in range(3 * CALLERS)]
+
+    def answer(_session: Session, _reading: Reading, result: StoreResult) -> int:
+        return result.measurement_id
+
+    async def coroutines() -> list[tuple[int, bool]]:
+        return await asyncio.gather(
+            *(group.store_async(sessions, r, actor_id=None, answer=answer) for r in readings[: CALLERS * 2])
+        )
+
+    threaded: list[tuple[int, bool] | BaseException] = []
+
+    def thread_call(reading: Reading) -> None:
+        with sessions() as session:
+            try:
+                threaded.append(group.store(session, reading, actor_id=None, answer=answer))
+            except BaseException as exc:  # recorded for the assertions
+                threaded.append(exc)
+
+    threads = [threading.Thread(target=thread_call, args=(r,)) for r in readings[CALLERS * 2 :]]
+    for t in threads:
+        t.start()
+    awaited = asyncio.run(coroutines())
+    for t in threads:
+        t.join(WAIT_S)
+        assert not t.is_alive()
+    engine.dispose()
+    answers = [*awaited, *threaded]
+    assert all(isinstance(a, tuple) and a[1] is True for a in answers)
+    assert len({a[0] for a in answers if isinstance(a, tuple)}) == len(readings)
+    assert commits < len(readings)
+    assert group.queued == 0
+    ids, audits, verdicts = _stored(database_url)
+    assert sorted(ids) == sorted(str(r.client_id) for r in readings)
+    assert audits == len(readings)
+    assert [v.broken for v in verdicts] == [None, None]

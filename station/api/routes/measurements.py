@@ -67,7 +67,7 @@ Filters = Annotated[MeasurementQuery, Depends(_query)]
 CREATE_ACTION = "measurement.create"
 
 
-def measurement_writes(request: Request) -> GroupCommit[MeasurementPublic]:
+async def measurement_writes(request: Request) -> GroupCommit[MeasurementPublic]:
     """The app's group commit for this route (``app.state.measurement_writes``, made by ``create_app``)."""
     writes: GroupCommit[MeasurementPublic] = request.app.state.measurement_writes
     return writes
@@ -97,8 +97,8 @@ def _stored(session: Session, reading: Reading, result: StoreResult) -> Measurem
         **CONFLICT,
     },
 )
-def create_measurement(
-    session: SessionDep,
+async def create_measurement(
+    request: Request,
     user: Writer,
     reading: Reading,
     response: Response,
@@ -107,9 +107,12 @@ def create_measurement(
     """Store a reading once: re-sending the same ``client_id`` returns the stored row with 200.
 
     Readings posted at the same moment share one transaction (:class:`GroupCommit`); each answer
-    comes once its reading is committed.
+    comes once its reading is committed. The request waits on the event loop, without a thread of
+    its own: a worker thread writes the groups, each on a session of the app's (``app.state.sessions``).
     """
-    measurement, created = writes.store(session, reading, actor_id=user.id, answer=_stored)
+    measurement, created = await writes.store_async(
+        request.app.state.sessions, reading, actor_id=user.id, answer=_stored
+    )
     if not created:
         response.status_code = status.HTTP_200_OK
     return measurement
