@@ -57,6 +57,8 @@ ALLOWED: dict[str, str] = {
     # compiled SQL statements per dialect / chain (pure functions of a name)
     "station/ingest/store.py:_measurement_insert": "the compiled measurement INSERT per SQL dialect",
     "db/chain.py:_chain_insert": "the compiled INSERT of one tamper-evident chain",
+    "db/chain.py:_pg_insert": "the PostgreSQL INSERT text of a chain's columns (strings in, a string out)",
+    "db/chain.py:_bind_processors": "SQLAlchemy's bind processors per dialect, chain and columns (bounded LRU)",
     # compilation, once per process
     "station/formulate/snap/kernel.py:_compile": "numba's compilation of the ColorSnap walk (ADR 0002)",
     "station/formulate/snap/kernel.py:_COMPILE_LOCK": "one compilation at a time",
