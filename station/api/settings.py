@@ -10,9 +10,6 @@ from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
 from db.engine import data_dir, default_database_url
 
-SIM_KINDS = ("ma6", "ma3", "gloss")
-
-
 #: File name, in the data folder, of the first admin token when ``station serve``'s output is not a terminal.
 BOOTSTRAP_TOKEN_FILE = "bootstrap-token"
 
