@@ -122,7 +122,7 @@ def make_instrument(address: str, **options: Any) -> Instrument[Any]:
     cls = getattr(importlib.import_module(module), cls_name)
     if family.transport == "usb" and where.startswith("usb:"):
         vid, pid, serial = parse_usb_id(where[4:])
-        return cls(UsbTransport(vid, pid, serial, backend=options.pop("backend", None)), **options)  # type: ignore[no-any-return]
+        return cls(UsbTransport(vid, pid, serial, backend=options.pop("backend", None)), **options)
     if family.transport == "hid":
         from station.drivers.gloss import HidBridgeDevice, hid_path_for
 
@@ -139,8 +139,8 @@ def make_instrument(address: str, **options: Any) -> Instrument[Any]:
                 lambda v, p: [{"path": where.encode()}],
                 address=f"{family.name}@{where}",
             )
-        return cls(transport, **options)  # type: ignore[no-any-return]
-    return cls(SerialTransport(where, baudrate=family.baudrate), **options)  # type: ignore[no-any-return]
+        return cls(transport, **options)
+    return cls(SerialTransport(where, baudrate=family.baudrate), **options)
 
 
 def open_instrument(address: str, **options: Any) -> Instrument[Any]:
