@@ -142,6 +142,11 @@ def test_station_serve_offers_the_new_family(tree: Path, user: Path) -> None:
     assert default == "ma6,ma3,gloss,ma6b"
     assert chosen == "ma6b"
     assert "ma6b" in accepted.split(" ")[-3].split(",")
+    # the command itself: an unknown kind is refused (exit 2, one line) naming the new family among the
+    # accepted ones, before the service starts
+    rc, out, err = _python(tree, user, "-m", "station.cli", "serve", "--simulators", "ma6b,nope", timeout=60)
+    assert rc == 2, err
+    assert "--simulators" in err and "ma6,ma3,gloss,ma6b" in err
 
 
 _PICKER = """
