@@ -433,7 +433,11 @@ def vocabulary_copies(source: str, where: str = "<source>") -> list[str]:
         if isinstance(node, (ast.Tuple, ast.List, ast.Set)) and len(node.elts) >= 2:
             if all(isinstance(e, ast.Constant) and isinstance(e.value, str) for e in node.elts):
                 # "sim:ma6" names the family ma6 too
-                written = {re.sub(r"^[a-z]+:", "", e.value) for e in node.elts if isinstance(e, ast.Constant)}
+                written = {
+                    re.sub(r"^[a-z]+:", "", e.value)
+                    for e in node.elts
+                    if isinstance(e, ast.Constant) and isinstance(e.value, str)
+                }
                 for what, names in VOCABULARIES.items():
                     if written == set(names):
                         found.append((node.lineno, f"{where}:{node.lineno}: a copy of the {what}: import it"))
