@@ -55,6 +55,11 @@ def build_parser(kind: str) -> argparse.ArgumentParser:
         metavar="SPEC",
         help="NAME[@COMMAND][:N]; known: " + ", ".join(FAULTS),
     )
+    p.add_argument(
+        "--family",
+        default=kind,
+        help=f"the family served (its address prefix; a family whose simulator is simulators.{kind})",
+    )
     p.add_argument("--serial", default=None, help="instrument serial number")
     p.add_argument(
         "--bias", type=float, default=0.0, help="inter-instrument bias scale (0 = none, 1 = typical)"
@@ -72,7 +77,8 @@ def build_parser(kind: str) -> argparse.ArgumentParser:
 def config_from_args(kind: str, args: argparse.Namespace) -> SimulatorConfig:
     """The validated configuration of the parsed command line (SimulatorConfigError, FaultSpecError)."""
     return SimulatorConfig(
-        kind=kind,
+        kind=args.family,
+        protocol=kind,
         design=args.design,
         recipe=args.recipe,
         faults=tuple(args.fault),

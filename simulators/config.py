@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from simulators.faults import FaultPlan
+from station.drivers.families import SIM_FAMILY_NAMES, family_named
 from station.errors import InputError
 
 if TYPE_CHECKING:
@@ -26,7 +27,8 @@ if TYPE_CHECKING:
 
 __all__ = ["KINDS", "SimulatorConfig", "SimulatorConfigError", "spectro_physics"]
 
-KINDS = ("ma6", "ma3", "gloss")
+#: The families a simulator can be started for (:data:`station.drivers.families.FAMILIES`).
+KINDS = SIM_FAMILY_NAMES
 MAX_BIAS_SCALE = 10.0
 MAX_NOISE_SCALE = 100.0
 MAX_MEASURE_TIME_S = 60.0
@@ -50,7 +52,10 @@ class SimulatorConfig:
     Attributes
     ----------
     kind
-        ``ma6``, ``ma3`` or ``gloss``.
+        The family served, one of :data:`KINDS`: the prefix of the address (``KIND@/dev/pts/N``).
+    protocol
+        The simulator module's own family (``ma6`` for :mod:`simulators.ma6`); empty: *kind*. The
+        family *kind* must name this module as its simulator.
     design, recipe
         The virtual panel: a ``cacad.design/1`` file or a recipe file of the synthetic colorants, at
         most one of the two (neither: the built-in default panel).
@@ -75,6 +80,7 @@ class SimulatorConfig:
     """
 
     kind: str
+    protocol: str = ""
     design: Path | None = None
     recipe: Path | None = None
     faults: tuple[str, ...] = ()
@@ -91,6 +97,15 @@ class SimulatorConfig:
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
             raise SimulatorConfigError("kind", " | ".join(KINDS), self.kind)
+        protocol = self.protocol or self.kind
+        family = family_named(self.kind)
+        if family is None or family.simulator != f"simulators.{protocol}":
+            raise SimulatorConfigError(
+                "kind",
+                f"a family served by simulators.{protocol}",
+                None if family is None else family.simulator,
+            )
+        object.__setattr__(self, "protocol", protocol)
         if self.design is not None and self.recipe is not None:
             raise SimulatorConfigError("recipe", "either design or recipe, not both", str(self.recipe))
         if self.serial is not None and not self.serial.strip():
@@ -102,8 +117,8 @@ class SimulatorConfig:
         object.__setattr__(
             self, "measure_time_s", _check_scale("measure_time_s", self.measure_time_s, MAX_MEASURE_TIME_S)
         )
-        if self.twelve and self.kind != "ma6":
-            raise SimulatorConfigError("twelve", "only with kind ma6", self.kind)
+        if self.twelve and self.protocol != "ma6":
+            raise SimulatorConfigError("twelve", "only with the ma6 protocol", self.protocol)
 
     def fault_plan(self) -> FaultPlan:
         """A fresh plan with this configuration's faults armed (plans are consumed as faults fire)."""

@@ -25,7 +25,16 @@ from pathlib import Path
 
 import pytest
 
-from station.model.domain import ANGLES_3, ANGLES_3_ALT, ANGLES_5, ANGLES_6
+from station.drivers.families import FAMILY_NAMES
+from station.model.domain import (
+    ANGLES_3,
+    ANGLES_3_ALT,
+    ANGLES_5,
+    ANGLES_6,
+    BOOTH_ILLUMINANTS,
+    DELTA_E_METHOD_NAMES,
+    TOLERANCE_AGGREGATIONS,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 DOMAIN = REPO / "station" / "model" / "domain.py"
@@ -388,3 +397,125 @@ def test_a_planted_scan_in_a_front_fails_the_check(tmp_path: Path) -> None:
     assert scan_copies(store, "station/api/services/qc.py") == []
     assert scan_copies(store, "station/cli/instruments.py") != []
     assert scan_copies("r = self.sink.store_gloss(panel, record)\n", "ui/models/instruments.py") != []
+
+
+# -- one vocabulary ----------------------------------------------------------------------------------------
+# The instrument families are listed in station/drivers/families.py and the ΔE method names, tolerance
+# aggregations and booth illuminants in station/model/domain.py; everything else derives from them. A second
+# copy — a tuple, list or set (a ``Literal[...]`` too) holding exactly one of these vocabularies, or a message
+# spelling one out (``"sim:ma6|ma3|gloss"``, ``"ma6, ma3 or gloss"``) — fails these checks.
+
+VOCABULARIES: dict[str, tuple[str, ...]] = {
+    "instrument families (station.drivers.families)": FAMILY_NAMES,
+    "ΔE method names (station.model.domain)": DELTA_E_METHOD_NAMES,
+    "tolerance aggregations (station.model.domain)": TOLERANCE_AGGREGATIONS,
+    "booth illuminants (station.model.domain)": BOOTH_ILLUMINANTS,
+}
+VOCABULARY_HOMES = ("station/drivers/families.py", "station/model/domain.py")
+VOCABULARY_ROOTS = (*ROOTS, "simulators")
+
+
+def _spelled_out(names: tuple[str, ...]) -> re.Pattern[str]:
+    """The names in order, joined by separators (``|``, ``, ``, `` or ``) and an optional ``sim:``-style prefix."""
+    joint = r"\s*(?:[|,/]|\bor\b|\band\b)\s*(?:(?:or|and)\s+)?(?:[a-z]+:)?"
+    return re.compile(r"(?<![\w-])" + joint.join(re.escape(n) for n in names) + r"(?![\w-])")
+
+
+_SPELLED = {what: _spelled_out(names) for what, names in VOCABULARIES.items() if len(names) >= 3}
+
+
+def vocabulary_copies(source: str, where: str = "<source>") -> list[str]:
+    """Places in *source* that write out a vocabulary of :data:`VOCABULARIES` instead of importing it."""
+    tree = ast.parse(source)
+    docs = _docstrings(tree)
+    found: list[tuple[int, str]] = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Tuple, ast.List, ast.Set)) and len(node.elts) >= 2:
+            if all(isinstance(e, ast.Constant) and isinstance(e.value, str) for e in node.elts):
+                # "sim:ma6" names the family ma6 too
+                written = {
+                    re.sub(r"^[a-z]+:", "", e.value)
+                    for e in node.elts
+                    if isinstance(e, ast.Constant) and isinstance(e.value, str)
+                }
+                for what, names in VOCABULARIES.items():
+                    if written == set(names):
+                        found.append((node.lineno, f"{where}:{node.lineno}: a copy of the {what}: import it"))
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs:
+            for what, pattern in _SPELLED.items():
+                if pattern.search(node.value):
+                    found.append((node.lineno, f"{where}:{node.lineno}: the {what} spelled out: derive it"))
+    return [text for _line, text in sorted(found)]
+
+
+def _vocabulary_copies_under(root: Path) -> list[str]:
+    found = []
+    for top in VOCABULARY_ROOTS:
+        for path in sorted((root / top).rglob("*.py")):
+            rel = path.relative_to(root).as_posix()
+            if rel in VOCABULARY_HOMES or any(rel.startswith(f) for f in FROZEN):
+                continue
+            found += vocabulary_copies(path.read_text(), rel)
+    return found
+
+
+def test_the_vocabulary_is_written_once() -> None:
+    assert set(FAMILY_NAMES) >= {"ma6", "ma3", "gloss"}
+    found = _vocabulary_copies_under(REPO)
+    assert found == [], "\n".join(found)
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        'SIM_KINDS = ("ma6", "ma3", "gloss")\n',
+        'FAMILIES = ["gloss", "ma6", "ma3"]\n',  # any order
+        'Kind = Literal["ma6", "ma3", "gloss"]\n',
+        'import re\n_SIM = re.compile(r"^sim:(ma6|ma3|gloss)$")\n',
+        'HELP = "sim:ma6 | sim:ma3 | sim:gloss | an address"\n',
+        'MSG = "FAMILY@WHERE with FAMILY ma6, ma3 or gloss"\n',
+        'METHODS = ("cie76", "cie94", "cie2000", "din6175", "audi2000")\n',
+        'DeltaE = Literal["cie76", "cie94", "cie2000", "din6175", "audi2000"]\n',
+        'def f(agg: str = "max") -> None:\n    if agg not in {"mean", "max"}:\n        raise ValueError(agg)\n',
+        'ILLS = ("D65", "D50", "A", "F2", "F11", "TL84", "LED-B3", "LED-B4")\n',
+    ],
+)
+def test_the_vocabulary_check_finds_a_copy(source: str) -> None:
+    assert vocabulary_copies(source), source
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        'def f():\n    """Families ma6, ma3 or gloss."""\n',  # docstrings may name them
+        'SNAP = Literal["cie76", "cie2000", "din6175"]\n',  # a narrower choice is a different vocabulary
+        'DEFAULTS = ("D65", "A", "F11")\n',
+        'PAIR = ("ma6", "gloss")\n',
+        'AGGREGATE = Literal["mean", "max", "rms", "sum"]\n',
+        'LABEL = "ma6x"\n',
+    ],
+)
+def test_the_vocabulary_check_leaves_other_lists_alone(source: str) -> None:
+    assert vocabulary_copies(source) == [], source
+
+
+def test_a_planted_family_list_in_a_temporary_tree_fails_the_check(tmp_path: Path) -> None:
+    """The seven copies the family list once had, planted in a temporary tree, are each found; the homes are not."""
+    planted = {
+        "station/api/settings.py": 'SIM_KINDS = ("ma6", "ma3", "gloss")\n',
+        "station/cli/serve.py": 'SIM_CHOICES = ("ma6", "ma3", "gloss")\n',
+        "station/drivers/__init__.py": 'FAMILIES = ("ma6", "ma3", "gloss")\n',
+        "station/drivers/simproc.py": 'SIM_KINDS = ("ma6", "ma3", "gloss")\n',
+        "station/drivers/addresses.py": '_SERIAL_FAMILIES = ("ma6", "ma3", "gloss")\n',
+        "simulators/config.py": 'KINDS = ("ma6", "ma3", "gloss")\n',
+        "ui/models/devices.py": 'SIM_DEVICES = ("sim:ma6", "sim:ma3", "sim:gloss")\n',
+        "station/drivers/families.py": 'NAMES = ("ma6", "ma3", "gloss")\n',  # the home may
+        "station/model/domain.py": 'DELTA_E_METHOD_NAMES = ("cie76", "cie94", "cie2000", "din6175", "audi2000")\n',
+    }
+    for rel, text in planted.items():
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(text)
+    found = _vocabulary_copies_under(tmp_path)
+    assert sorted(f.split(": ", 1)[0] for f in found) == sorted(
+        f"{rel}:1" for rel in planted if rel not in VOCABULARY_HOMES
+    ), "\n".join(found)

@@ -9,16 +9,15 @@ from pydantic import Field, computed_field, field_validator, model_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
 from db.engine import data_dir, default_database_url
-
-SIM_KINDS = ("ma6", "ma3", "gloss")
-
+from station.drivers.families import SIM_FAMILY_NAMES
 
 #: File name, in the data folder, of the first admin token when ``station serve``'s output is not a terminal.
 BOOTSTRAP_TOKEN_FILE = "bootstrap-token"
 
 
-#: Default cap of simulator processes per station: the three kinds attached on start and one more.
-MAX_SIMULATORS_DEFAULT = 4
+#: Default cap of simulator processes per station: one per simulated family (``station serve`` attaches
+#: them all by default) and one more.
+MAX_SIMULATORS_DEFAULT = len(SIM_FAMILY_NAMES) + 1
 
 
 #: Default cap of a library upload: room for about 400 000 paints at six angles.

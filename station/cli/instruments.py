@@ -47,7 +47,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         ("measure", cmd_measure, "measure once and print spectra, Lab and gloss"),
     ):
         cp = subparsers.add_parser(name, help=text)
-        cp.add_argument("device", help="sim:ma6 | sim:ma3 | sim:gloss | an address (see docs/protocols)")
+        cp.add_argument(
+            "device",
+            help="sim:FAMILY (the simulators of `station instruments list`) | an address (see docs/protocols)",
+        )
         cp.add_argument("--design", type=Path, help="design file of the simulated panel (sim:* only)")
         cp.add_argument(
             "--recipe",

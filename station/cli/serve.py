@@ -29,8 +29,6 @@ from typing import Any
 from station.cli._common import add_json_flag
 from station.errors import InputError
 
-SIM_CHOICES = ("ma6", "ma3", "gloss")
-
 
 class DatabaseUnreachable(InputError):
     """The database named by ``--database`` / the settings cannot be opened (exit status 2)."""
@@ -145,11 +143,18 @@ def _is_loopback(host: str) -> bool:
         return False
 
 
-def _parse_sims(text: str) -> tuple[str, ...]:
+def _parse_sims(text: str | None) -> tuple[str, ...]:
+    """The simulator kinds of ``--simulators`` (``None``: every family with a simulator)."""
+    from station.drivers.families import SIM_FAMILY_NAMES
+
+    if text is None:
+        return SIM_FAMILY_NAMES
     kinds = tuple(k for k in text.split(",") if k)
     for k in kinds:
-        if k not in SIM_CHOICES:
-            raise InputError("--simulators", f"comma-separated subset of {','.join(SIM_CHOICES)} or ''", text)
+        if k not in SIM_FAMILY_NAMES:
+            raise InputError(
+                "--simulators", f"comma-separated subset of {','.join(SIM_FAMILY_NAMES)} or ''", text
+            )
     return kinds
 
 
@@ -413,8 +418,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--port", type=int, help="TCP port (default: $CACAD_PORT, else 8000)")
     p.add_argument(
         "--simulators",
-        default=",".join(SIM_CHOICES),
-        help="simulators to attach, comma-separated (default: all; '' for none)",
+        default=None,
+        help="simulators to attach, comma-separated family names (default: all; '' for none)",
     )
     p.add_argument("--no-demo-library", action="store_true", help="do not load the demo paint library")
     p.add_argument("--log-level", default="info", choices=("critical", "error", "warning", "info", "debug"))

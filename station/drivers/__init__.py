@@ -37,6 +37,7 @@ from station.drivers.errors import (
     TiltDetected,
     UnexpectedReply,
 )
+from station.drivers.families import FAMILIES, FAMILY_NAMES, family_named, first_on
 from station.drivers.instrument import Instrument
 from station.drivers.readings import (
     WAVELENGTHS_NM,
@@ -49,6 +50,7 @@ from station.drivers.readings import (
 
 __all__ = [
     "FAMILIES",
+    "FAMILY_NAMES",
     "WAVELENGTHS_NM",
     "BatteryLow",
     "CalibrationNeeded",
@@ -74,23 +76,27 @@ __all__ = [
     "split_address",
 ]
 
-FAMILIES = ("ma6", "ma3", "gloss")
-
 
 def split_address(address: str) -> tuple[str, str]:
-    """Return ``(family, where)`` for an address; infer the family from the transport if omitted."""
+    """Return ``(family, where)`` for an address; infer the family from the transport if omitted.
+
+    Without ``NAME@``, ``usb:…`` means the first USB family of :data:`FAMILIES`, ``hid:…`` the first HID
+    family and a serial path or URL the first serial family.
+    """
     head, sep, rest = address.partition("@")
-    if sep and head in FAMILIES:
+    if sep and head in FAMILY_NAMES:
         family, where = head, rest
     elif address.startswith("usb:"):
-        family, where = "ma3", address
+        family, where = first_on("usb").name, address
     elif address.startswith("hid:"):
-        family, where = "gloss", address
+        family, where = first_on("hid").name, address
     elif address.startswith(("/", "socket://", "rfc2217://", "COM")):
-        family, where = "ma6", address
+        family, where = first_on("serial").name, address
     else:
         raise DriverInputError(
-            "address", "FAMILY@WHERE (ma6|ma3|gloss) or a serial path, usb:VID:PID, hid:PATH", address
+            "address",
+            f"FAMILY@WHERE ({'|'.join(FAMILY_NAMES)}) or a serial path, usb:VID:PID, hid:PATH",
+            address,
         )
     if not where:
         raise DriverInputError("address", "a non-empty location after '@'", address)
@@ -98,37 +104,43 @@ def split_address(address: str) -> tuple[str, str]:
 
 
 def make_instrument(address: str, **options: Any) -> Instrument[Any]:
-    """Build (not open) the instrument for *address*; *options* go to the instrument class."""
+    """Build (not open) the instrument for *address*; *options* go to the instrument class.
+
+    The family's entry in :data:`FAMILIES` names the driver class and its transport: ``usb:…`` opens USB
+    bulk endpoints, ``hid:…`` a HID device, any other location a serial line at the family's baud rate
+    (a ``hid`` family's serial line is the HID-over-pty bridge of its simulator).
+    """
+    import importlib
+
     from station.drivers.transport import HidTransport, SerialTransport, UsbTransport, parse_usb_id
 
-    family, where = split_address(address)
-    if family == "ma6":
-        from station.drivers.ma6 import MA6Spectro
+    name, where = split_address(address)
+    family = family_named(name)
+    if family is None:  # split_address returns registered names only
+        raise DriverInputError("address", f"FAMILY@WHERE ({'|'.join(FAMILY_NAMES)})", address)
+    module, _, cls_name = family.driver.partition(":")
+    cls = getattr(importlib.import_module(module), cls_name)
+    if family.transport == "usb" and where.startswith("usb:"):
+        vid, pid, serial = parse_usb_id(where[4:])
+        return cls(UsbTransport(vid, pid, serial, backend=options.pop("backend", None)), **options)
+    if family.transport == "hid":
+        from station.drivers.gloss import HidBridgeDevice, hid_path_for
 
-        return MA6Spectro(SerialTransport(where), **options)
-    if family == "ma3":
-        from station.drivers.ma3 import MA3Spectro
-
-        if where.startswith("usb:"):
-            vid, pid, serial = parse_usb_id(where[4:])
-            return MA3Spectro(UsbTransport(vid, pid, serial, backend=options.pop("backend", None)), **options)
-        return MA3Spectro(SerialTransport(where, baudrate=115200), **options)
-    from station.drivers.gloss import GlossMeter, HidBridgeDevice, hid_path_for
-
-    if where.startswith("hid:"):
-        transport = HidTransport(
-            hid_path_for(where[4:], options.pop("enumerate_fn", None)),
-            options.pop("device_factory", None),
-            address=where,
-        )
-    else:
-        transport = HidTransport(
-            where.encode(),
-            lambda: HidBridgeDevice(),
-            lambda v, p: [{"path": where.encode()}],
-            address=f"gloss@{where}",
-        )
-    return GlossMeter(transport, **options)
+        if where.startswith("hid:"):
+            transport = HidTransport(
+                hid_path_for(where[4:], options.pop("enumerate_fn", None)),
+                options.pop("device_factory", None),
+                address=where,
+            )
+        else:
+            transport = HidTransport(
+                where.encode(),
+                lambda: HidBridgeDevice(),
+                lambda v, p: [{"path": where.encode()}],
+                address=f"{family.name}@{where}",
+            )
+        return cls(transport, **options)
+    return cls(SerialTransport(where, baudrate=family.baudrate), **options)
 
 
 def open_instrument(address: str, **options: Any) -> Instrument[Any]:

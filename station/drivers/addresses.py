@@ -1,7 +1,8 @@
 """The instrument addresses the product accepts from a caller: an allow-list, not a pass-through.
 
 An address handed to :func:`open_instrument` from outside the process (the service's connect route,
-a settings file) is checked here first. Accepted forms (``FAMILY`` is ``ma6``, ``ma3`` or ``gloss``):
+a settings file) is checked here first. Accepted forms (``FAMILY`` is a name of
+:data:`station.drivers.families.FAMILIES`; ``ma3`` is the USB family, ``gloss`` the HID one):
 
 =============================================  ==============================================================
 ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss``       a simulator subprocess started for the caller
@@ -26,19 +27,25 @@ import re
 from collections.abc import Iterable
 
 from station.drivers.errors import DriverInputError
+from station.drivers.families import FAMILIES, FAMILY_NAMES, SIM_FAMILY_NAMES, names_pattern
 
 __all__ = ["ACCEPTED", "SIM_KINDS", "check_address", "is_serial_url", "parse_host_entry"]
 
-SIM_KINDS = ("ma6", "ma3", "gloss")
+#: The ``sim:NAME`` kinds (the families with a simulator).
+SIM_KINDS = SIM_FAMILY_NAMES
 #: Human-readable list of the accepted forms (the ``accepted`` of every refusal).
 ACCEPTED = (
-    "sim:ma6|ma3|gloss, FAMILY@/dev/ttyUSBn, FAMILY@/dev/ttyACMn, FAMILY@/dev/serial/by-id/NAME, "
+    f"sim:{names_pattern(SIM_KINDS)}, FAMILY@/dev/ttyUSBn, FAMILY@/dev/ttyACMn, FAMILY@/dev/serial/by-id/NAME, "
     "FAMILY@COMn, FAMILY@socket://HOST:PORT or FAMILY@rfc2217://HOST:PORT (HOST configured in "
-    "CACAD_INSTRUMENT_HOSTS), ma3@usb:VID:PID[:SERIAL], gloss@hid:VID:PID or gloss@hid:/dev/hidrawN"
+    "CACAD_INSTRUMENT_HOSTS)"
+    + "".join(f", {f.name}@usb:VID:PID[:SERIAL]" for f in FAMILIES if f.transport == "usb")
+    + "".join(
+        f", {f.name}@hid:VID:PID or {f.name}@hid:/dev/hidrawN" for f in FAMILIES if f.transport == "hid"
+    )
 )
 MAX_LENGTH = 255
 
-_SIM = re.compile(r"^sim:(ma6|ma3|gloss)$")
+_SIM = re.compile(rf"^sim:({names_pattern(SIM_KINDS)})$")
 _SERIAL_PATH = re.compile(
     r"^(?:/dev/tty(?:USB|ACM)\d{1,3}|/dev/serial/by-(?:id|path)/[A-Za-z0-9][A-Za-z0-9._:+-]{0,199}"
     r"|/dev/cu\.usbmodem[A-Za-z0-9]{1,32}|COM\d{1,3})$"
@@ -46,8 +53,8 @@ _SERIAL_PATH = re.compile(
 _TCP = re.compile(r"^(socket|rfc2217)://([A-Za-z0-9.-]{1,253}|\[[0-9A-Fa-f:.]{2,45}\]):(\d{1,5})$")
 _USB = re.compile(r"^usb:[0-9a-fA-F]{4}:[0-9a-fA-F]{4}(?::[A-Za-z0-9._-]{1,64})?$")
 _HID = re.compile(r"^hid:(?:[0-9a-fA-F]{4}:[0-9a-fA-F]{4}|/dev/hidraw\d{1,3})$")
-_FAMILY = re.compile(r"^(ma6|ma3|gloss)@(.+)$", re.DOTALL)
-_SERIAL_FAMILIES = ("ma6", "ma3", "gloss")  # gloss: the HID-over-serial bridge
+_FAMILY = re.compile(rf"^({names_pattern()})@(.+)$", re.DOTALL)
+_TRANSPORT = {f.name: f.transport for f in FAMILIES}
 
 
 def parse_host_entry(entry: str) -> tuple[str, int | None]:
@@ -85,9 +92,9 @@ def check_address(address: str, *, tcp_hosts: Iterable[str] = ()) -> str:
         return address
     m = _FAMILY.fullmatch(address)
     if m is None:
-        raise _refuse("FAMILY@WHERE with FAMILY ma6, ma3 or gloss")
+        raise _refuse(f"FAMILY@WHERE with FAMILY one of {', '.join(FAMILY_NAMES)}")
     family, where = m.group(1), m.group(2)
-    if family in _SERIAL_FAMILIES and _SERIAL_PATH.fullmatch(where):
+    if _SERIAL_PATH.fullmatch(where):  # every family: hid ones through the HID-over-serial bridge
         return address
     tcp = _TCP.fullmatch(where)
     if tcp is not None:
@@ -98,8 +105,8 @@ def check_address(address: str, *, tcp_hosts: Iterable[str] = ()) -> str:
         if not any(h == host and (p is None or p == port) for h, p in allowed):
             raise _refuse("this TCP host and port are not among the configured instrument hosts")
         return address
-    if family == "ma3" and _USB.fullmatch(where):
+    if _TRANSPORT[family] == "usb" and _USB.fullmatch(where):
         return address
-    if family == "gloss" and _HID.fullmatch(where):
+    if _TRANSPORT[family] == "hid" and _HID.fullmatch(where):
         return address
     raise _refuse("not a supported transport for this family")

@@ -11,6 +11,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from station.drivers.families import FAMILIES
+
 __all__ = ["GLOSS_USB_ID", "MA3_USB_ID", "DeviceCandidate", "list_devices"]
 
 MA3_USB_ID = (0x1209, 0xCA03)
@@ -93,10 +95,7 @@ def list_devices(
             found += fn()
         except Exception as exc:  # a missing libusb/hidraw must not hide the other buses
             notes.append(f"{name}: {type(exc).__name__}: {exc}")
-    for kind, what in (
-        ("ma6", "simulated 6-angle spectro (ASCII serial)"),
-        ("ma3", "simulated 3-angle spectro (binary frames)"),
-        ("gloss", "simulated 20/60/85 gloss meter (HID reports)"),
-    ):
-        found.append(DeviceCandidate(f"sim:{kind}", kind, "simulator", what))
+    for family in FAMILIES:
+        if family.simulator is not None:
+            found.append(DeviceCandidate(f"sim:{family.name}", family.name, "simulator", family.label))
     return found, notes

@@ -1,4 +1,4 @@
-"""Start a simulator as a subprocess (``python -m simulators.<kind>``) and learn its address.
+"""Start a simulator as a subprocess (``python -m <simulator> --family <kind>``) and learn its address.
 
 Runtime code never imports :mod:`simulators` (import-linter contract); it runs them as programs. The
 child prints ``ADDRESS <family>@<where>`` once it serves; :func:`spawn_simulator` waits for that line
@@ -10,7 +10,7 @@ The virtual panel is a design file or a recipe file (``station formulate --json`
 file the simulator refuses comes back as a typed :class:`DriverInputError` naming the field (the child
 reports it on one ``INPUT-ERROR {json}`` line instead of its address).
 
-Kinds: ``ma6`` (ASCII prompt protocol on a pty), ``ma3`` (the binary framed protocol; across a
+Kinds: the families of :data:`station.drivers.families.FAMILIES` with a simulator module, e.g. ``ma6`` (ASCII prompt protocol on a pty), ``ma3`` (the binary framed protocol; across a
 process boundary it is served on a pty instead of a pyusb backend, see docs/protocols/ma3-binary.md),
 ``gloss`` (HID reports through the HID-over-pty bridge, docs/protocols/gloss-hid.md).
 """
@@ -28,10 +28,12 @@ from pathlib import Path
 from typing import Self
 
 from station.drivers.errors import CommunicationError, DriverInputError
+from station.drivers.families import SIM_FAMILY_NAMES, family_named
 
 __all__ = ["SIM_KINDS", "SimulatorProcess", "spawn_simulator"]
 
-SIM_KINDS = ("ma6", "ma3", "gloss")
+#: The kinds that can be spawned: the families of :data:`station.drivers.families.FAMILIES` with a simulator.
+SIM_KINDS = SIM_FAMILY_NAMES
 _ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -79,7 +81,7 @@ def spawn_simulator(
     extra_args: Sequence[str] = (),
     startup_timeout_s: float = 20.0,
 ) -> SimulatorProcess:
-    """Start simulator *kind* (``ma6``, ``ma3``, ``gloss``) and return once it serves.
+    """Start simulator *kind* (one of :data:`SIM_KINDS`) and return once it serves.
 
     *design_file* is a ``cacad.design/1`` JSON file for the virtual panel, or *recipe_file* a recipe
     (``station formulate --json`` output or its ``"recipe"`` object; the panel's spectra and gloss then
@@ -88,9 +90,10 @@ def spawn_simulator(
     or recipe file, both at once, or a recipe the simulator refuses (field and accepted range named),
     :class:`CommunicationError` if the child fails to start.
     """
-    if kind not in SIM_KINDS:
+    family = family_named(kind)
+    if family is None or family.simulator is None:
         raise DriverInputError("kind", " | ".join(SIM_KINDS), kind)
-    cmd = [sys.executable, "-m", f"simulators.{kind}"]
+    cmd = [sys.executable, "-m", family.simulator, "--family", kind]
     if design_file is not None and recipe_file is not None:
         raise DriverInputError("recipe_file", "either design_file or recipe_file, not both", str(recipe_file))
     if design_file is not None:

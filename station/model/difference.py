@@ -58,7 +58,6 @@ from station.model.cie2000 import cie2000_columns
 from station.model.domain import ANGLE_MAX_DEG
 from station.model.errors import ModelInputError
 
-DeltaEMethod = Literal["cie76", "cie94", "cie2000", "din6175", "audi2000"]
 Aggregate = Literal["mean", "max", "rms", "sum"]
 
 #: Coefficients of DIN 6175-2 as published in the public implementation (module docstring): the

@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from station.api.schemas.common import StrictInt
 from station.api.schemas.measurements import MeasurementPublic
+from station.drivers.families import SIM_FAMILY_NAMES
 
 
 class InstrumentPublic(BaseModel):
@@ -42,7 +43,7 @@ class ConnectRequest(BaseModel):
             min_length=3,
             max_length=255,
             pattern=r"^(sim:[a-z0-9]+|[a-z0-9_]+@[^\x00-\x1f\x7f]+)$",
-            description="sim:ma6|ma3|gloss, FAMILY@/dev/ttyUSBn|/dev/ttyACMn|/dev/serial/by-id/NAME|COMn, "
+            description=f"sim:{'|'.join(SIM_FAMILY_NAMES)}, FAMILY@/dev/ttyUSBn|/dev/ttyACMn|/dev/serial/by-id/NAME|COMn, "
             "FAMILY@socket://HOST:PORT or rfc2217://HOST:PORT (HOST in CACAD_INSTRUMENT_HOSTS), "
             "ma3@usb:VID:PID[:SERIAL], gloss@hid:VID:PID|/dev/hidrawN; anything else is refused",
         ),
