@@ -81,7 +81,7 @@ def _unit_word(key: str) -> str:
 
 def _general(value: float) -> str:
     """A number without a known unit: 4 significant digits, at most 4 decimals."""
-    if value == 0 or value.is_integer() and abs(value) < 1e15:
+    if value == 0 or (value.is_integer() and abs(value) < 1e15):
         return f"{value:.0f}"
     if abs(value) >= 1:
         return f"{value:.4g}" if abs(value) < 1e6 else f"{value:.3e}"
@@ -215,13 +215,19 @@ def human_text(data: Mapping[str, Any], indent: str = "", parent: str = "") -> s
                 lines.append(f"{label} {' × '.join(map(str, shape))} values (see --json)")
                 continue
             labels = next(
-                (k for k in ROW_LABEL_KEYS if k != key and _is_list(data.get(k)) and len(data[k]) == len(val)),
+                (
+                    k
+                    for k in ROW_LABEL_KEYS
+                    if k != key and _is_list(data.get(k)) and len(data[k]) == len(val)
+                ),
                 None,
             )
             row_labels = [format_scalar(labels, v) for v in data[labels]] if labels else None
             lines += [label, _matrix(key, val, row_labels, inner)]
         elif _is_list(val) and len(val) > WIDE_COLUMNS and all(_is_number(v) for v in val):
-            lines.append(f"{label} {len(val)} values, {format_scalar(key, val[0])} … {format_scalar(key, val[-1])}")
+            lines.append(
+                f"{label} {len(val)} values, {format_scalar(key, val[0])} … {format_scalar(key, val[-1])}"
+            )
         elif _is_list(val) and any(isinstance(v, str) and len(v) > LONG_TEXT for v in val):
             lines += [label, *(f"{inner}- {v}" for v in val)]
         elif _is_list(val) and not val:
