@@ -44,6 +44,9 @@ ROW_LABEL_KEYS = ("geometries", "angles_deg", "angles")
 WIDE_COLUMNS = 12
 """A list of rows wider than this (spectra) is summarised by its shape, the values left to --json."""
 
+TABLE_CELL_ITEMS = 6
+"""A list of more items than this does not go in a table cell: its row is printed as a block."""
+
 LONG_TEXT = 40
 """A list holding a text longer than this is printed one item a line (advice, warnings)."""
 
@@ -130,11 +133,21 @@ def format_table(rows: Sequence[Sequence[str]], header: Sequence[str] | None = N
     return "\n".join(lines)
 
 
+def _fits_a_cell(value: Any) -> bool:
+    """A value short enough for a table cell: a scalar, up to 6 scalars, up to 3 Lab triples."""
+    if not _is_list(value):
+        return not isinstance(value, Mapping)
+    if all(not _is_list(v) and not isinstance(v, Mapping) for v in value):
+        return len(value) <= TABLE_CELL_ITEMS
+    return len(value) <= 3 and all(_is_list(v) and len(v) <= 3 and _fits_a_cell(v) for v in value)
+
+
 def _flatten(row: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """*row* with each nested dict of cell-sized values spread over ``key.sub`` columns."""
     out: dict[str, Any] = {}
     for k, v in row.items():
         name = f"{prefix}{k}"
-        if isinstance(v, Mapping) and v and len(v) <= 8:
+        if isinstance(v, Mapping) and v and len(v) <= 8 and all(_fits_a_cell(x) for x in v.values()):
             out.update(_flatten(v, f"{name}."))
         else:
             out[name] = v
@@ -142,7 +155,13 @@ def _flatten(row: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
 
 
 def _dict_rows(key: str, rows: Sequence[Mapping[str, Any]], indent: str) -> str:
+    """Rows of dicts as one aligned table, or, when a row holds more than a cell can, one block a row."""
     flat = [_flatten(r) for r in rows]
+    if not all(_fits_a_cell(v) for r in flat for v in r.values()):
+        blocks = []
+        for i, row in enumerate(rows, 1):
+            blocks += [f"{indent}{key} {i} of {len(rows)}:", human_text(row, indent + INDENT, key)]
+        return "\n".join(blocks)
     columns: list[str] = []
     for r in flat:
         columns += [c for c in r if c not in columns]

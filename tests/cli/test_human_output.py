@@ -78,7 +78,7 @@ RUNS: dict[str, list[tuple[str, ...]]] = {
     "qc metamerism": [("--standard", "std.cxf", "--sample", "smp.cxf")],
     "qc jobs": [("--db", DB)],
     "qc search": [("--db", DB, "--job", "J1")],
-    "qc standard set": [("--db", DB, "--job", "J1", "--part", "bumper", "--measurement", "1")],
+    "qc standard set": [("--db", DB, "--job", "J1", "--part", "bumper", "--measurement", "1", "--replace")],
     "qc standard show": [("--db", DB, "--job", "J1", "--part", "bumper")],
     "qc summary": [("--db", DB, "--job", "J1")],
     "qc report": [("--db", DB, "--job", "J1", "--out", "rep.pdf")],
@@ -118,7 +118,8 @@ def test_every_subcommand_is_covered() -> None:
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A user folder with two designs, two scans of them (JSON and CxF), a render, a library file and a
-    database holding both scans under job J1, part bumper — all written by ``station`` itself."""
+    database holding both scans under job J1, part bumper (the first its standard) and a user — all
+    written by ``station`` itself."""
     cwd = tmp_path_factory.mktemp("user")
     save_design(
         FaceFlopTravelGloss((90.0, 0.0, -2.0), (30.0, 0.0, -4.0), 60.0, 85.0, "silver"), cwd / "silver.json"
@@ -133,6 +134,10 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
         (("import", "smp.json", "--out", "smp.cxf"), None),
         (("import", "std.cxf", "--store", DB, "--job", "J1", "--part", "bumper"), None),
         (("import", "smp.cxf", "--store", DB, "--job", "J1", "--part", "bumper"), None),
+        (
+            ("qc", "standard", "set", "--db", DB, "--job", "J1", "--part", "bumper", "--measurement", "1"),
+            None,
+        ),
         (("users", "add", "admin", "--role", "admin", "--database", DB), None),
         (("render", "--design", "silver.json", "--out", "r.png", "--size", "160"), None),
         (("library", "export", "demo", "--out", "lib.csv"), None),
