@@ -1,8 +1,8 @@
 """Shared plumbing of CLI handlers: JSON output, error reporting, argument parsers.
 
 A handler takes the parsed ``argparse.Namespace`` and returns a JSON-able ``dict`` (or ``None`` when it
-printed what it had to). Text output is the same dict, one ``key: value`` line each, so a person and a
-script read the same numbers.
+printed what it had to). Text output is the same dict for a person (:mod:`station.cli._text`): one
+``key: value`` line each, lists of rows as aligned tables, numbers rounded and with their units.
 """
 
 from __future__ import annotations
@@ -86,17 +86,14 @@ def to_jsonable(value: Any) -> Any:
 
 
 def emit(result: dict[str, Any], as_json: bool) -> None:
-    """Print *result* as JSON or as ``key: value`` lines."""
+    """Print *result* as JSON or as text for a person (:func:`station.cli._text.human_text`)."""
     data = to_jsonable(result)
     if as_json:
         print(json.dumps(data))
         return
-    for key, val in data.items():
-        if isinstance(val, float):
-            val = f"{val:.4g}"
-        elif isinstance(val, list):
-            val = json.dumps(val)
-        print(f"{key}: {val}")
+    from station.cli._text import human_text
+
+    print(human_text(data))
 
 
 def run_handler(handler: Handler, args: argparse.Namespace) -> int:

@@ -51,7 +51,7 @@ def print_verdict(result: dict[str, Any]) -> None:
         nums = " ".join(f"{g[k]:7.2f}" for k in ("dL", "da", "db", "dC", "dH", "dE"))
         why = f"  ({'; '.join(g['reasons'])})" if g["reasons"] else ""
         print(f"{g['geometry']:>9} {nums}  {g['verdict']}{why}")
-    print(f"mean dE: {result['mean_de']:.3f}   max dE: {result['max_de']:.3f} at {result['worst_geometry']}")
+    print(f"mean dE: {result['mean_de']:.2f}   max dE: {result['max_de']:.2f} at {result['worst_geometry']}")
     booth = result.get("illuminants")
     if booth:
         print(f"illuminant rows (metamerism index from D65, {booth['formula']}): {booth['verdict']}")
@@ -83,7 +83,7 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
     for role, rep in (("standard", std_rep), ("sample", smp_rep)):
         if rep is not None:
             flagged = rep["outliers"]
-            print(f"{role}: mean of {rep['n']} readings, outliers: {flagged or 'none'}")
+            print(f"{role}: mean of {rep['n']} readings, outliers: {', '.join(map(str, flagged)) or 'none'}")
     return None
 
 
@@ -115,14 +115,14 @@ def _repeats(args: argparse.Namespace) -> dict[str, Any] | None:
         sd = g["sd"] or [float("nan")] * 3
         print(
             f"{g['geometry']:>9} "
-            + " ".join(f"{v:8.3f}" for v in g["mean"])
+            + " ".join(f"{v:8.2f}" for v in g["mean"])
             + " "
-            + " ".join(f"{v:7.3f}" for v in sd)
+            + " ".join(f"{v:7.2f}" for v in sd)
         )
     for r in out["readings"]:
         z = "—" if r["robust_z"] is None else f"{r['robust_z']:.2f}"
         print(
-            f"reading {r['index']}: ΔE to centre {r['de_to_centre']:.3f}, z {z}{'  OUTLIER' if r['outlier'] else ''}"
+            f"reading {r['index']}: ΔE to centre {r['de_to_centre']:.2f}, z {z}{'  OUTLIER' if r['outlier'] else ''}"
         )
     return None
 

@@ -87,9 +87,9 @@ def _print_table(result: dict[str, Any], out: str | None) -> None:
             smp = ",".join(f"{v:.2f}" for v in g["sample_lab"])
             print(
                 f"{ill['name']:<10} {g['geometry']:<9} {std:>24} {smp:>24} "
-                f"{g['dE00']:>7.3f} {g['metamerism_index']:>7.3f}"
+                f"{g['dE00']:>7.2f} {g['metamerism_index']:>7.2f}"
             )
-        print(f"{ill['name']:<10} {'mean':<9} {'':>24} {'':>24} {ill['mean_de']:>7.3f}")
+        print(f"{ill['name']:<10} {'mean':<9} {'':>24} {'':>24} {ill['mean_de']:>7.2f}")
     if out:
         print(f"image: {out}")
 

@@ -30,12 +30,15 @@ THESIS_FIGURES = MappingProxyType(
 
 
 def _fmt(v: float) -> str:
+    """A number in a table: 4 significant digits (3 from 1000 up and below 0.1), at most 4 decimals."""
     if v == 0:
         return "0"
     a = abs(v)
     if a >= 1000 and v == round(v):
         return f"{v:.0f}"
-    if a >= 1000 or a < 1e-3:
+    if a < 0.01:
+        return f"{v:.2e}"
+    if a >= 1000 or a < 0.1:
         return f"{v:.3g}"
     return f"{v:.4g}"
 
