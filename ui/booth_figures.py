@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station.model.domain import ANGLES_5
+from station.model.domain import ANGLES_5, DEFAULT_BOOTH_ILLUMINANTS
 
 #: The pair's geometries (aspecular degrees) and metameric strength.
 ANGLES = ANGLES_5
@@ -60,7 +60,7 @@ def car_figures(out: Path) -> list[Path]:
         render_booth_png(
             *paints, ill, shape="car", out_path=out / f"booth-car-{ill.lower()}.png", renderer=renderer
         )
-        for ill in ("D65", "A", "F11")
+        for ill in DEFAULT_BOOTH_ILLUMINANTS
     ]
 
 

@@ -8,6 +8,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from station.api.schemas.common import StrictFloat, StrictInt
 from station.ingest.schema import MAX_GEOMETRIES
+from station.model.domain import DEFAULT_BOOTH_ILLUMINANTS
 
 #: At most this many values in one spectrum or user SPD (a 1 nm grid from 300 to 830 nm fits).
 MAX_BANDS = 531
@@ -56,7 +57,7 @@ class BoothRequest(BaseModel):
                 {
                     "standard_measurement_id": 1,
                     "sample_measurement_id": 2,
-                    "illuminants": ["D65", "A", "F11"],
+                    "illuminants": list(DEFAULT_BOOTH_ILLUMINANTS),
                     "observer": "10",
                 }
             ]
@@ -69,7 +70,9 @@ class BoothRequest(BaseModel):
     sample_recipe_id: MeasurementId | None = None
     standard: BoothSpectra | None = None
     sample: BoothSpectra | None = None
-    illuminants: Annotated[list[Name], Field(min_length=1, max_length=MAX_ILLUMINANTS)] = ["D65", "A", "F11"]
+    illuminants: Annotated[list[Name], Field(min_length=1, max_length=MAX_ILLUMINANTS)] = list(
+        DEFAULT_BOOTH_ILLUMINANTS
+    )
     user_illuminants: Annotated[list[UserIlluminant], Field(max_length=MAX_ILLUMINANTS)] = []
     observer: Literal["2", "10"] = "10"
 
