@@ -12,13 +12,12 @@ from PySide6.QtWidgets import QLineEdit
 def enter_file_name(edit: QLineEdit, path: str | Path) -> None:
     """Replace the dialog's file name with *path* and press Enter.
 
-    The file-name completer may pop up with a file of the folder (``blue.json`` for ``…/blue.``); it is
-    dismissed first, so Enter takes what was typed, not its suggestion (which could open an overwrite
-    prompt and hang the test in that dialog's event loop)."""
+    The dialog's file-name completer is taken off the field first: it offers a file of the folder
+    (``blue.json`` for ``…/blue.``) as the folder's listing arrives, which on a busy machine can be after
+    any check for its popup, and Enter would then take the suggestion — an existing file, whose
+    overwrite prompt hangs the test in that dialog's event loop. Enter takes what was typed."""
+    edit.setCompleter(None)
     QTest.keyClick(edit, Qt.Key.Key_A, Qt.KeyboardModifier.ControlModifier)
     QTest.keyClick(edit, Qt.Key.Key_Delete)
     QTest.keyClicks(edit, str(path))
-    popup = edit.completer().popup() if edit.completer() is not None else None
-    if popup is not None and popup.isVisible():
-        QTest.keyClick(popup, Qt.Key.Key_Escape)
     QTest.keyClick(edit, Qt.Key.Key_Return)
