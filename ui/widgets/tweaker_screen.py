@@ -120,6 +120,8 @@ class TweakerCanvas(QWidget):
         self.scene = sphere_scene(SIZE if view_model is None else 16)
         #: Canvas pixels per scene pixel (above 1 while the preview is shown).
         self.zoom = 1.0
+        #: How many main scenes (previews included) have been drawn.
+        self.scenes_shown = 0
         self._announce = False
         self.main: MainScene | None = None
         self.crosshair: tuple[int, int] | None = None
@@ -274,6 +276,7 @@ class TweakerCanvas(QWidget):
         p.end()
         if self._announce:
             self._announce = False
+            self.scenes_shown += 1
             self.scene_shown.emit()
 
     def _place_buttons(self) -> None:
