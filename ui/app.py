@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from ui.widgets.screens import LazyScreen
 
 #: Width of the designer panel in its dock, pixels (the window's minimum fits 1280 × 800 with it).
-DESIGNER_WIDTH = 400
+DESIGNER_WIDTH = 370
 
 
 class MainWindow(QMainWindow):

@@ -182,6 +182,7 @@ class LibraryScreen(QWidget):
         self.title = QLabel(
             f"{lib.name}: {len(lib)} paints" + (" — SYNTHETIC demo data" if lib.synthetic else "")
         )
+        self.title.setWordWrap(True)  # a long library name must not widen the screen
         self.tree = QTreeWidget()
         self.tree.setHeaderLabels(["hierarchy", "paints"])
         root = QTreeWidgetItem(["all", str(len(lib))])
