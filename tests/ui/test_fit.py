@@ -24,6 +24,7 @@ from PySide6.QtWidgets import (
 from ui.app import MainWindow
 from ui.models.measure_db import LocalSink
 from ui.widgets.library_screen import LabCloud
+from ui.widgets.reading_plot import TITLE, ReadingPlot
 from ui.widgets.screens import LazyScreen
 
 pytestmark = [pytest.mark.qt]
@@ -186,3 +187,25 @@ def test_lab_cloud_axes_labelled_inside_the_widget(qtbot, size):
     img = cloud.grab().toImage()
     assert not img.isNull()
     cloud.close()
+
+
+@pytest.mark.parametrize("width", [300, 640])
+def test_reading_plot_title_and_ticks_inside_the_widget(qtbot, width):
+    plot = ReadingPlot()
+    qtbot.addWidget(plot)
+    plot.resize(width, 320)
+    plot.show()
+    qtbot.waitExposed(plot)
+    fm = plot.fontMetrics()
+    bounds = plot.rect()
+    title = plot.title_rect()
+    assert bounds.contains(title.toAlignedRect())
+    # the whole title fits: wrapped to as many lines as its width needs, never clipped at the sides
+    lines = -(-fm.horizontalAdvance(TITLE) // int(title.width()))
+    assert title.height() >= lines * fm.height() - 1
+    assert title.width() < fm.horizontalAdvance(TITLE) or title.height() < 2 * fm.height()
+    for x in (0.0, width / 2, float(width)):  # first, middle and last angle ticks
+        r = plot.tick_rect(x, 100.0, fm.height())
+        assert bounds.contains(r.toAlignedRect()), (x, r)
+        assert r.width() >= fm.horizontalAdvance("110")
+    plot.close()
