@@ -20,8 +20,10 @@ from PySide6.QtWidgets import (
     QApplication,
     QDockWidget,
     QFileDialog,
+    QFrame,
     QMainWindow,
     QMessageBox,
+    QScrollArea,
     QTabWidget,
     QWidget,
 )
@@ -40,6 +42,9 @@ if TYPE_CHECKING:
     from ui.widgets.formulation_screen import FormulationScreen
     from ui.widgets.library_screen import LibraryScreen
     from ui.widgets.screens import LazyScreen
+
+#: Width of the designer panel in its dock, pixels (the window's minimum fits 1280 × 800 with it).
+DESIGNER_WIDTH = 370
 
 
 class MainWindow(QMainWindow):
@@ -91,15 +96,26 @@ class MainWindow(QMainWindow):
         self._add_screens()
 
         self.designer_panel = DesignerPanel(self.designer, self.view_model, self._view_basis)
-        self.designer_panel.setMinimumWidth(440)
+        self.designer_panel.setMinimumWidth(DESIGNER_WIDTH)
+        # the designer scrolls inside its dock, and the dock can be closed (View menu) or floated
+        designer_scroll = QScrollArea()
+        designer_scroll.setObjectName("designer-scroll")
+        designer_scroll.setWidgetResizable(True)
+        designer_scroll.setFrameShape(QFrame.Shape.NoFrame)
+        designer_scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        designer_scroll.setWidget(self.designer_panel)
+        vbar = designer_scroll.verticalScrollBar().sizeHint().width()
+        designer_scroll.setMinimumWidth(DESIGNER_WIDTH + vbar)
         dock = QDockWidget("Designer", self)
         dock.setObjectName("designer-dock")
-        dock.setWidget(self.designer_panel)
+        dock.setWidget(designer_scroll)
         dock.setFeatures(
             QDockWidget.DockWidgetFeature.DockWidgetMovable
             | QDockWidget.DockWidgetFeature.DockWidgetFloatable
+            | QDockWidget.DockWidgetFeature.DockWidgetClosable
         )
         self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, dock)
+        self.designer_dock = dock
         self.files = StylistFiles(self.document, self.designer, self.moodboard)
         self.ask_on_close = ask_on_close
         self.error_box: QMessageBox | None = None
@@ -323,6 +339,10 @@ class MainWindow(QMainWindow):
         edit.addAction(self.redo_action)
         self.document.events.history.connect(self._on_history)
         self._on_history()
+        view_menu = self.menuBar().addMenu("&View")
+        self.designer_action = self.designer_dock.toggleViewAction()
+        self.designer_action.setText("Designer panel")
+        view_menu.addAction(self.designer_action)
         if self.service is not None:
             svc = self.menuBar().addMenu("&Service")
             svc.addAction("Load designs into palette", self.load_from_service)

@@ -26,7 +26,8 @@ if TYPE_CHECKING:
 
 Screen = TypeVar("Screen", bound=QWidget)
 
-SIZE = (1500, 950)
+#: Window size of the screenshots: the smallest display the viewer is laid out for.
+SIZE = (1280, 800)
 
 
 def _settle(win, seconds: float = 0.3) -> None:

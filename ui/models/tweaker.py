@@ -18,7 +18,7 @@ from station.design.scene import Scene, scene_from_buffers
 from station.model import FaceFlopTravelGloss
 from station.render.buffers import angle_buffers, dominant_light_direction
 from station.render.numpy_renderer import gbuffer
-from ui.models.view import BasisImages, ViewSettings, paint_weights
+from ui.models.view import PREFILTER_MAX_SIZE, BasisImages, ViewSettings, paint_weights
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,9 +35,13 @@ class MainScene:
         return np.ascontiguousarray(self.basis.composite_display((w, w), self.settings.exposure_ev))
 
 
-def main_scene(settings: ViewSettings, width: int, height: int) -> MainScene:
-    """Basis images and tweaker geometry of the 3D view's scene at *width* × *height* pixels (seconds)."""
-    basis = BasisImages.compute(settings, width, height)
+def main_scene(
+    settings: ViewSettings, width: int, height: int, prefilter_size: int = PREFILTER_MAX_SIZE
+) -> MainScene:
+    """Basis images and tweaker geometry of the 3D view's scene at *width* × *height* pixels (seconds at
+    the canvas size, a tenth of a second at 160 pixels a side); *prefilter_size* caps the prefiltered
+    environment's cube faces (:func:`ui.models.view.environment_basis`)."""
+    basis = BasisImages.compute(settings, width, height, prefilter_size)
     g = gbuffer(settings.scene(), width, height)
     light = dominant_light_direction(basis.core.basis.sh)
     ab = angle_buffers(g, light)

@@ -17,6 +17,7 @@ import numpy as np
 from PySide6.QtWidgets import (
     QComboBox,
     QFormLayout,
+    QGridLayout,
     QHBoxLayout,
     QHeaderView,
     QLabel,
@@ -116,10 +117,18 @@ class InstrumentsScreen(QWidget):
         form.addRow("part", self.part)
         form.addRow("substrate", self.substrate)
         form.addRow("notes", self.notes)
-        buttons = QHBoxLayout()
-        for b in (self.connect_btn, self.calibrate_btn, self.scan_btn, self.use_btn, self.retry_btn):
-            buttons.addWidget(b)
-        buttons.addWidget(self.history_btn)
+        buttons = QGridLayout()  # two rows of three: the screen fits beside the designer at 1280 px
+        for i, btn in enumerate(
+            (
+                self.connect_btn,
+                self.calibrate_btn,
+                self.scan_btn,
+                self.use_btn,
+                self.retry_btn,
+                self.history_btn,
+            )
+        ):
+            buttons.addWidget(btn, i // 3, i % 3)
         left = QVBoxLayout()
         left.addLayout(form)
         left.addLayout(buttons)

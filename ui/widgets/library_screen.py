@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from PySide6.QtCore import QPointF, QSize, Qt
+from PySide6.QtCore import QPointF, QRectF, QSize, Qt
 from PySide6.QtGui import QColor, QIcon, QMouseEvent, QPainter, QPen
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -45,6 +45,11 @@ from ui.widgets.tasks import TaskProgress, TaskThread
 
 SLIDER_STEPS = 100
 INDICES = ("flop", "chroma", "hue_shift")
+#: Labelled values on the Lab cloud's axes: L* 0–100 (vertical), a* and b* −80…80 (CIE units).
+L_TICKS = (0.0, 25.0, 50.0, 75.0, 100.0)
+AB_TICKS = (-80.0, -40.0, 40.0, 80.0)
+#: Caption of the Lab cloud (wrapped to the widget's width).
+CLOUD_CAPTION = "Lab space: library at 45°, design 15→45→110° (yellow), matches (rings)"
 
 
 class LabCloud(QWidget):
@@ -96,6 +101,13 @@ class LabCloud(QWidget):
         for a, b in (((50, -80, 0), (50, 80, 0)), ((50, 0, -80), (50, 0, 80)), ((0, 0, 0), (100, 0, 0))):
             pa, pb = self.project(np.array(a)), self.project(np.array(b))
             p.drawLine(QPointF(*pa), QPointF(*pb))
+        for lab, _text in self._ticks():
+            c = self.project(np.asarray(lab))
+            p.drawLine(QPointF(c[0] - 2, c[1]), QPointF(c[0] + 2, c[1]))
+            p.drawLine(QPointF(c[0], c[1] - 2), QPointF(c[0], c[1] + 2))
+        for text, rect, axis_name in self.axis_labels():
+            p.setPen(QColor(235, 235, 235) if axis_name else QColor(160, 160, 160))
+            p.drawText(rect, Qt.AlignmentFlag.AlignCenter, text)
         if self.data is not None:
             p.setPen(QPen(QColor(255, 255, 255), 1))
             for m in self.data["matches"]:
@@ -107,8 +119,42 @@ class LabCloud(QWidget):
                 p.drawLine(QPointF(*d[i]), QPointF(*d[i + 1]))
             p.drawEllipse(QPointF(*d[0]), 4, 4)
         p.setPen(QColor(200, 200, 200))
-        p.drawText(6, 14, "Lab space: library at 45°, design 15→45→110° (yellow), matches (rings)")
+        p.drawText(self.caption_rect(), Qt.TextFlag.TextWordWrap, CLOUD_CAPTION)
         p.end()
+
+    def caption_rect(self) -> QRectF:
+        """Where the caption is drawn: the widget's top, as many lines as its width needs."""
+        r = self.fontMetrics().boundingRect(
+            0, 0, max(self.width() - 12, 1), 10_000, Qt.TextFlag.TextWordWrap, CLOUD_CAPTION
+        )
+        return QRectF(6, 2, self.width() - 12, r.height())
+
+    @staticmethod
+    def _ticks() -> list[tuple[tuple[float, float, float], str]]:
+        """(Lab point, label) of every tick: L* on the vertical axis, a* and b* through L* = 50."""
+        out = [((v, 0.0, 0.0), f"{v:.0f}") for v in L_TICKS]
+        out += [((50.0, v, 0.0), f"{v:+.0f}") for v in AB_TICKS]
+        out += [((50.0, 0.0, v), f"{v:+.0f}") for v in AB_TICKS]
+        return out
+
+    def axis_labels(self) -> list[tuple[str, QRectF, bool]]:
+        """(text, rectangle, is an axis name) of the axis names (L*, a*, b* at the positive ends) and the
+        tick labels, each placed beside its point and kept inside the widget."""
+        fm = self.fontMetrics()
+        items: list[tuple[str, tuple[float, float, float], bool]] = [
+            ("L*", (100.0 + 8.0, 0.0, 0.0), True),
+            ("a*", (50.0, 80.0 + 12.0, 0.0), True),
+            ("b*", (50.0, 0.0, 80.0 + 12.0), True),
+        ]
+        items += [(text, lab, False) for lab, text in self._ticks()]
+        out = []
+        for text, lab, is_name in items:
+            x, y = self.project(np.asarray(lab))
+            w, h = fm.horizontalAdvance(text) + 4, fm.height()
+            left = min(max(x + 3.0, 0.0), self.width() - w)
+            top = min(max(y - h / 2, 0.0), self.height() - h)
+            out.append((text, QRectF(left, top, w, h), is_name))
+        return out
 
     def mousePressEvent(self, event: QMouseEvent) -> None:
         self._drag = event.position()
@@ -136,6 +182,7 @@ class LibraryScreen(QWidget):
         self.title = QLabel(
             f"{lib.name}: {len(lib)} paints" + (" — SYNTHETIC demo data" if lib.synthetic else "")
         )
+        self.title.setWordWrap(True)  # a long library name must not widen the screen
         self.tree = QTreeWidget()
         self.tree.setHeaderLabels(["hierarchy", "paints"])
         root = QTreeWidgetItem(["all", str(len(lib))])

@@ -249,7 +249,7 @@ class ABPlot(_PlotBase):
         p.drawLine(self.to_px(-80, 0), self.to_px(80, 0))
         p.drawLine(self.to_px(0, -80), self.to_px(0, 80))
         p.drawText(self.to_px(62, 5), "a*")
-        p.drawText(self.to_px(-20, 70), "b*")
+        p.drawText(self.to_px(-24, 60), "b*")  # left of the axis, between the 40 and 80 ticks
         p.setPen(QPen(QColor(80, 80, 80), 1))
         for v in AB_TICKS:
             if v == 0:

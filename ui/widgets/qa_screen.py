@@ -26,6 +26,7 @@ from PySide6.QtWidgets import (
     QLabel,
     QLineEdit,
     QPushButton,
+    QSizePolicy,
     QSlider,
     QTableWidget,
     QTableWidgetItem,
@@ -133,8 +134,12 @@ class QAScreen(QWidget):
         for pic in (self.as_is, self.fixed):
             pic.setMinimumSize(PICTURE_SIZE[1], PICTURE_SIZE[0])
             pic.setAlignment(Qt.AlignmentFlag.AlignCenter)
+            # a picture wider than its column is cropped at the sides, not made to widen the screen
+            pic.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Ignored)
         self.as_is_title = QLabel("seam as is (A | B)")
         self.fixed_title = QLabel("corrected (A | B′)")
+        for title in (self.as_is_title, self.fixed_title):
+            title.setWordWrap(True)
         self.caption = QLabel()
         self.caption.setWordWrap(True)
 

@@ -77,19 +77,32 @@ class ReadingPlot(QWidget):
         """The axis of channel *k*: :func:`station.model.domain.plot_range` of what is shown."""
         return plot_range(CHANNELS[k][0][0], self._values(k))
 
+    def title_rect(self) -> QRectF:
+        """Where the title is drawn: the top of the widget, wrapped to as many lines as its width needs."""
+        r = self.fontMetrics().boundingRect(
+            0, 0, max(self.width() - 8, 1), 10_000, Qt.TextFlag.TextWordWrap, TITLE
+        )
+        return QRectF(4, 1, self.width() - 8, r.height())
+
+    def tick_rect(self, x: float, top: float, height: float) -> QRectF:
+        """The rectangle of an angle tick label centred at *x* (pixels), kept inside the widget."""
+        return QRectF(min(max(x - 18, 0.0), self.width() - 36.0), top, 36, height)
+
     def paintEvent(self, event) -> None:
         p = QPainter(self)
         p.setRenderHint(QPainter.RenderHint.Antialiasing)
         p.fillRect(self.rect(), QColor(250, 250, 250))
         fm = p.fontMetrics()
         p.setPen(QColor(60, 60, 60))
-        p.drawText(QRectF(0, 1, self.width(), TOP - 2), Qt.AlignmentFlag.AlignCenter, TITLE)
+        title = self.title_rect()
+        p.drawText(title, Qt.AlignmentFlag.AlignCenter | Qt.TextFlag.TextWordWrap, TITLE)
+        top = max(TOP, title.bottom() + 2)
         a_lo, a_hi = self.angle_axis()
-        h = (self.height() - TOP - BOTTOM) / 3
+        h = (self.height() - top - BOTTOM) / 3
         curve_a, curve = self.curve_angles(), self.curve()
         for k, (name, col, _default) in enumerate(CHANNELS):
             lo, hi = self.y_axis(k)
-            r = QRectF(LEFT, TOP + k * h + 2, self.width() - LEFT - RIGHT, h - 6)
+            r = QRectF(LEFT, top + k * h + 2, self.width() - LEFT - RIGHT, h - 6)
 
             def px(a: float, v: float, r=r, lo=lo, hi=hi) -> QPointF:
                 return QPointF(
@@ -133,12 +146,12 @@ class ReadingPlot(QWidget):
                 p.setBrush(Qt.BrushStyle.NoBrush)
         # x tick labels under the last panel, then the axis title
         p.setPen(QColor(90, 90, 90))
-        base = TOP + 3 * h - 4
+        base = top + 3 * h - 4
         width = self.width() - LEFT - RIGHT
         for a in ANGLE_TICKS:
             if a_lo <= a <= a_hi:
                 x = LEFT + (a - a_lo) / (a_hi - a_lo) * width
-                p.drawText(QRectF(x - 18, base, 36, fm.height()), Qt.AlignmentFlag.AlignCenter, f"{a:g}")
+                p.drawText(self.tick_rect(x, base, fm.height()), Qt.AlignmentFlag.AlignCenter, f"{a:g}")
         p.drawText(
             QRectF(LEFT, base + fm.height(), width, fm.height()), Qt.AlignmentFlag.AlignCenter, X_TITLE
         )

@@ -1,12 +1,13 @@
 """The tabs beside the design view. Each screen is built (and its core modules imported) the first
-time its tab is shown, so start-up reaches the first frame of the 3D view sooner."""
+time its tab is shown, so start-up reaches the first frame of the 3D view sooner. Every tab page scrolls
+when the window is smaller than the screen's minimum size, so the viewer fits a 1280 × 800 display."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Generic, TypeVar
 
-from PySide6.QtWidgets import QVBoxLayout, QWidget
+from PySide6.QtWidgets import QFrame, QScrollArea, QVBoxLayout, QWidget
 
 from ui.models.instruments import MeasurementStore
 from ui.models.moodboard import MoodBoardModel
@@ -19,15 +20,22 @@ if TYPE_CHECKING:
 Screen = TypeVar("Screen", bound=QWidget)
 
 
-class LazyScreen(QWidget, Generic[Screen]):
-    """A tab page that builds its content with *factory* when first shown (or on :meth:`content`)."""
+class LazyScreen(QScrollArea, Generic[Screen]):
+    """A tab page that builds its content with *factory* when first shown (or on :meth:`content`).
+
+    The content fills the page and scrolls when the page is smaller than the content's minimum size.
+    """
 
     def __init__(self, factory: Callable[[], Screen], parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._factory = factory
         self._content: Screen | None = None
-        self._box = QVBoxLayout(self)
+        self.setWidgetResizable(True)
+        self.setFrameShape(QFrame.Shape.NoFrame)
+        holder = QWidget()
+        self._box = QVBoxLayout(holder)
         self._box.setContentsMargins(0, 0, 0, 0)
+        self.setWidget(holder)
 
     def content(self) -> Screen:
         """The real screen (built now if needed)."""

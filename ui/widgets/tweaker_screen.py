@@ -1,8 +1,9 @@
 """Tweaker (thesis §3.6, Figs. 3.15, 3.17–3.18): edit the design on the rendered object.
 
 In the viewer the tweaker shows the 3D view's scene — its shape, orbit camera and environment
-(:func:`ui.models.tweaker.main_scene`, computed off the GUI thread at the canvas size, again after a
-shape, camera or environment change) — with θ per pixel taken against the environment's dominant
+(:func:`ui.models.tweaker.main_scene`, computed off the GUI thread, again after a shape, camera or
+environment change: first a preview of at most :data:`PREVIEW_PX` pixels a side, shown scaled up within a
+second, then the scene at the canvas size) — with θ per pixel taken against the environment's dominant
 light. Without a view model (a bare canvas) a point-lit sphere (``station.design.scene``) is used. The
 HUD draws the iso-angle
 rings at 15° (face), 45° and θ_clamp (flop), the highlight's half-maximum edge, and a gloss checkerboard
@@ -33,13 +34,21 @@ from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from ui.models.document import DesignDocument
 from ui.models.tweaker import MainScene, main_scene
-from ui.models.view import ViewModel, ViewSettings
+from ui.models.view import (
+    PREFILTER_MAX_SIZE,
+    PREVIEW_PREFILTER_SIZE,
+    ViewModel,
+    ViewSettings,
+    environment_ready,
+)
 
 SIZE = 400
 #: Side panel (gloss checkerboard and legend) width, pixels.
 SIDE = 120
 #: Largest main-scene render of the tweaker, pixels per side.
 MAX_SCENE_PX = 900
+#: Longest side of the preview scene shown first, pixels (it takes a tenth of a second to compute).
+PREVIEW_PX = 160
 #: One button press: ΔL* (L* units), relative ΔC (0.1 = +10 %) or ΔH (degrees).
 STEPS: dict[Adjustment, float] = {"L": 3.0, "C": 0.1, "H": 5.0}
 #: (label, adjustment, sign, offset from the crosshair in pixels) of the buttons around the crosshair.
@@ -59,8 +68,16 @@ RING_COLOURS = {
 }
 
 
+def preview_size(width: int, height: int) -> tuple[int, int]:
+    """(width, height) of the preview scene for a *width* × *height* scene: the same aspect, longest
+    side at most :data:`PREVIEW_PX` pixels."""
+    k = min(1.0, PREVIEW_PX / max(width, height))
+    return max(16, round(width * k)), max(16, round(height * k))
+
+
 class SceneWorker(QThread):
-    """Computes the main scene's basis images and tweaker geometry off the GUI thread."""
+    """Computes the main scene's basis images and tweaker geometry off the GUI thread: the preview
+    first, then the full size (skipped when a newer request interrupts the worker)."""
 
     done = Signal(object)  # MainScene
 
@@ -69,8 +86,18 @@ class SceneWorker(QThread):
         self.settings, self.width_px, self.height_px = settings, width, height
 
     def run(self) -> None:
-        """Compute and report."""
-        self.done.emit(main_scene(self.settings, self.width_px, self.height_px))
+        """Compute and report each size."""
+        sizes = [preview_size(self.width_px, self.height_px), (self.width_px, self.height_px)]
+        if sizes[0] == sizes[1]:
+            sizes.pop(0)
+        env = self.settings.environment
+        for i, (w, h) in enumerate(sizes):
+            if self.isInterruptionRequested():
+                return
+            # a cold environment cache: the preview uses the coarse prefilter (~0.1 s instead of seconds)
+            coarse = i == 0 and len(sizes) > 1 and not environment_ready(env, PREFILTER_MAX_SIZE)
+            size = PREVIEW_PREFILTER_SIZE if coarse else PREFILTER_MAX_SIZE
+            self.done.emit(main_scene(self.settings, w, h, size))
 
 
 class TweakerCanvas(QWidget):
@@ -80,13 +107,22 @@ class TweakerCanvas(QWidget):
     without, a point-lit sphere of :data:`SIZE` pixels.
     """
 
+    #: A main scene (preview or full size) has been drawn for the first time.
+    scene_shown = Signal()
+
     def __init__(
         self, document: DesignDocument, view_model: ViewModel | None = None, parent: QWidget | None = None
     ) -> None:
         super().__init__(parent)
         self.document = document
         self.view_model = view_model
-        self.scene = sphere_scene(SIZE)
+        # with a view model the object arrives from the scene worker: nothing to shade here meanwhile
+        self.scene = sphere_scene(SIZE if view_model is None else 16)
+        #: Canvas pixels per scene pixel (above 1 while the preview is shown).
+        self.zoom = 1.0
+        #: How many main scenes (previews included) have been drawn.
+        self.scenes_shown = 0
+        self._announce = False
         self.main: MainScene | None = None
         self.crosshair: tuple[int, int] | None = None
         self._drag: str | None = None
@@ -126,23 +162,40 @@ class TweakerCanvas(QWidget):
             return
         if self._worker is not None and self._worker.isRunning():
             self._pending = True
+            self._worker.requestInterruption()
             return
         self._pending = False
         w, h = self.scene_size()
         self.message = "preparing the scene…"
         self._worker = SceneWorker(self.view_model.settings, w, h)  # owned here, not by the widget
         self._worker.done.connect(self._on_scene)
+        self._worker.finished.connect(self._on_worker_finished)
         self._worker.start()
         self.update()
 
     def _on_scene(self, main: MainScene) -> None:
+        if self._pending:  # a newer request is waiting: this scene is already stale
+            return
+        old = self.main
         self.main = main
         self.scene = main.scene
-        self.crosshair = None
+        self.zoom = self.scene_size()[0] / main.scene.shape[1]
+        if self.crosshair is not None and old is not None and old.settings == main.settings:
+            # the same scene at another resolution: the crosshair stays on the same spot of the object
+            k = main.scene.shape[1] / old.scene.shape[1]
+            h, w = main.scene.shape
+            x, y = min(w - 1, int(self.crosshair[0] * k)), min(h - 1, int(self.crosshair[1] * k))
+            self.crosshair = (x, y) if main.scene.mask[y, x] else None
+        else:
+            self.crosshair = None
         for b in self.buttons.values():
             b.hide()
-        self.message = ""
+        self._place_buttons()
+        self.message = "" if self.zoom <= 1.0 else "preview: the full-size scene follows…"
+        self._announce = True
         self._render()
+
+    def _on_worker_finished(self) -> None:
         if self._pending:
             self.refresh_scene()
 
@@ -166,6 +219,8 @@ class TweakerCanvas(QWidget):
         d = self.document.design
         if self.main is not None:
             rgb = self.main.image(d)
+        elif self.view_model is not None:  # the scene is being prepared
+            rgb = np.full((*self.scene.shape, 3), 30, np.uint8)
         else:
             rgb = to_uint8(srgb_encode(shade(self.scene, d, background=(0.05, 0.05, 0.06))))
         self._buf = np.ascontiguousarray(rgb)
@@ -184,15 +239,19 @@ class TweakerCanvas(QWidget):
     def paintEvent(self, event) -> None:
         p = QPainter(self)
         p.fillRect(self.rect(), QColor(30, 30, 34))
+        p.save()
+        p.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform)
+        p.scale(self.zoom, self.zoom)
         p.drawImage(0, 0, self._image)
         theta, mask = self.scene.aspecular_deg, self.scene.mask
-        side = self._image.width()
-        for name, angle in self.rings().items():
+        for name, angle in self.rings().items() if self.main is not None or self.view_model is None else ():
             edge = mask & (np.abs(theta - angle) < 0.9)
             ys, xs = np.nonzero(edge)
             p.setPen(QPen(RING_COLOURS[name], 1))
             for x, y in zip(xs[::2], ys[::2], strict=True):
                 p.drawPoint(int(x), int(y))
+        p.restore()
+        side = round(self._image.width() * self.zoom)
         # gloss checkerboard off the object: contrast of the squares ∝ gloss (0–100 GU)
         g = self.document.design.gloss_gu / 100.0
         for i in range(6):
@@ -210,17 +269,21 @@ class TweakerCanvas(QWidget):
             p.setPen(QColor(230, 230, 230))
             p.drawText(12, self.height() - 12, self.message)
         if self.crosshair is not None:
-            x, yy = self.crosshair
+            x, yy = self.crosshair[0] * self.zoom, self.crosshair[1] * self.zoom
             p.setPen(QPen(QColor(255, 255, 255), 1))
             p.drawLine(QPointF(x - 10, yy), QPointF(x + 10, yy))
             p.drawLine(QPointF(x, yy - 10), QPointF(x, yy + 10))
         p.end()
+        if self._announce:
+            self._announce = False
+            self.scenes_shown += 1
+            self.scene_shown.emit()
 
     def _place_buttons(self) -> None:
         if self.crosshair is None:
             return
-        x, y = self.crosshair
-        h, w = self.scene.shape
+        x, y = self.crosshair[0] * self.zoom, self.crosshair[1] * self.zoom
+        h, w = self.scene.shape[0] * self.zoom, self.scene.shape[1] * self.zoom
         for label, _k, _s, (dx, dy) in BUTTONS:
             b = self.buttons[label]
             b.adjustSize()
@@ -234,7 +297,7 @@ class TweakerCanvas(QWidget):
 
     # ------------------------------------------------------------------ editing
     def _pixel(self, pos: QPointF) -> tuple[int, int] | None:
-        x, y = int(pos.x()), int(pos.y())
+        x, y = int(pos.x() / self.zoom), int(pos.y() / self.zoom)
         h, w = self.scene.shape
         if 0 <= x < w and 0 <= y < h and self.scene.mask[y, x]:
             return x, y
@@ -320,6 +383,7 @@ class TweakerCanvas(QWidget):
             self.view_model.events.settings.disconnect(self._on_settings)
         self._pending = False
         if self._worker is not None:
+            self._worker.requestInterruption()
             self._worker.wait()
         super().closeEvent(event)
 

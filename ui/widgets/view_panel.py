@@ -68,24 +68,27 @@ class ViewPanel(QWidget):
         self.flakes.setToolTip("metallic sparkle and glints (drawn by the GL renderer in every frame)")
         self.flake_status = QLabel()
         self.flake_status.setFixedWidth(FLAKE_STATUS_WIDTH)  # its text must not resize the view
-        bar = QHBoxLayout()
-        for w in (
-            QLabel("environment"),
-            self.environment,
-            self.load_env,
-            self.env_status,
-            QLabel("shape"),
-            self.shape,
-            QLabel("exposure"),
-            self.exposure,
-            self.exposure_label,
-            self.stage,
-            self.coat,
-            self.flakes,
-            self.flake_status,
-            reset,
+        # two rows of pickers, so the panel fits beside the designer on a 1280-pixel-wide display
+        bar = QVBoxLayout()
+        for row_widgets in (
+            (
+                QLabel("environment"),
+                self.environment,
+                self.load_env,
+                self.env_status,
+                QLabel("shape"),
+                self.shape,
+                QLabel("exposure"),
+                self.exposure,
+                self.exposure_label,
+            ),
+            (self.stage, self.coat, self.flakes, self.flake_status, reset),
         ):
-            bar.addWidget(w)
+            row = QHBoxLayout()
+            for w in row_widgets:
+                row.addWidget(w)
+            row.addStretch(1)
+            bar.addLayout(row)
         self.view = make_render_view(model)
         lay = QVBoxLayout(self)
         lay.setContentsMargins(2, 2, 2, 2)
