@@ -19,7 +19,7 @@ from station.cli._common import add_json_flag
 from station.errors import InputError
 
 if TYPE_CHECKING:
-    from station.model.tolerance import ToleranceSet
+    from station.qc.tolerance import ToleranceSet
 
     LoadTolerance = Callable[[str], ToleranceSet]
 

@@ -159,8 +159,8 @@ def _de(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _plot(args: argparse.Namespace) -> dict[str, Any]:
+    from station.design.plots import plot_designs
     from station.model.design_io import load_design
-    from station.model.plots import plot_designs
 
     designs = []
     for p in args.designs:  # an unnamed design is called by its file's name in the legend and here

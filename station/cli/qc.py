@@ -1,4 +1,4 @@
-"""``station qc …``: colour QC of a sample against its standard (station.model.tolerance).
+"""``station qc …``: colour QC of a sample against its standard (station.qc.tolerance).
 
 * ``verdict`` — pass / warn / fail per geometry and overall, with the reasons, from Lab lists:
   ``station qc verdict --standard "L,a,b;…" --sample "L,a,b;…" --angles 15,45,110 --formula din6175
@@ -49,7 +49,7 @@ from station.model.domain import (
 )
 
 if TYPE_CHECKING:
-    from station.model.tolerance import ToleranceSet
+    from station.qc.tolerance import ToleranceSet
 
 _COMPONENT_FLAGS = ("dl", "da", "db", "dc", "dh")
 _SET_FLAGS = ("formula", "limit", "warn", "aggregate", "mean_limit", "lc", *_COMPONENT_FLAGS)
@@ -68,7 +68,7 @@ def _lc(text: str) -> tuple[float, float]:
 
 def _load_tolerance(name: str) -> ToleranceSet:
     """A tolerance set from its JSON file (``station qc tolerance --json``)."""
-    from station.model.tolerance import ToleranceSet
+    from station.qc.tolerance import ToleranceSet
 
     path = Path(name)
     try:
@@ -81,7 +81,7 @@ def _load_tolerance(name: str) -> ToleranceSet:
 
 
 def _tolerance(args: argparse.Namespace, angles: list[float]) -> ToleranceSet:
-    from station.model.tolerance import ToleranceSet
+    from station.qc.tolerance import ToleranceSet
 
     if args.tolerance:
         given = [f for f in _SET_FLAGS if getattr(args, f) is not None]
@@ -109,7 +109,7 @@ def _angles(args: argparse.Namespace) -> list[float]:
 
 
 def _verdict(args: argparse.Namespace) -> dict[str, Any] | None:
-    from station.model.tolerance import judge
+    from station.qc.tolerance import judge
 
     std = parse_lab_list(args.standard, "standard")
     smp = parse_lab_list(args.sample, "sample")

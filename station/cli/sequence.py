@@ -2,7 +2,7 @@
 
 ``station sequence A.json B.json [C.json …] --steps 9 [--formulate] [--out palette.json] [--json]``: the
 steps from A to the last principal colour, evenly spaced by mean CIEDE2000 over 15/45/110°
-(:mod:`station.model.sequence`); with ``--formulate`` each step is formulated with the shipped
+(:mod:`station.formulate.sequence`); with ``--formulate`` each step is formulated with the shipped
 (SYNTHETIC) colorants and says whether it is formulable; ``--out`` writes the steps as a palette file
 the viewer opens (File → Open palette).
 """
@@ -40,7 +40,7 @@ def _principal(text: str) -> FaceFlopTravelGloss:
 
 def cmd_sequence(args: argparse.Namespace) -> dict[str, Any]:
     """Steps between the principal colours; optionally formulated and written as a palette."""
-    from station.model.sequence import colour_sequence
+    from station.formulate.sequence import colour_sequence
 
     principals = [_principal(t) for t in args.principal]
     seq = colour_sequence(principals, args.steps)

@@ -355,7 +355,7 @@ FORMULATION_TOLERANCE_DE00 = 1.0
 SHADING_MISFIT_DE = 3 * JND_CIE76
 #: Default QC limit on ΔE at each geometry (and on the mean under the "mean" rule), in the units of
 #: the tolerance set's formula. A product default, not a standard's value: customers' tolerance sets
-#: state their own (station.model.tolerance).
+#: state their own (station.qc.tolerance).
 QC_DE_LIMIT = 1.0
 #: Default warn band of QC verdicts: "warn" once a value exceeds this fraction of its limit.
 QC_WARN_FRACTION = 0.8

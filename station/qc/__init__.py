@@ -19,6 +19,6 @@ dataclass with ``to_dict()``:
 :func:`station.qc.report.write_pdf`            the job's QC report as PDF (``write_csv``, ``write_trend_png``)
 =============================================  =============================================================
 
-The science (ΔE formulas, tolerance sets, verdict rules) lives in :mod:`station.model.tolerance` and
+The science (ΔE formulas, tolerance sets, verdict rules) lives in :mod:`station.qc.tolerance` and
 :mod:`station.model.difference`; this package applies it to readings and stored jobs.
 """

@@ -1,7 +1,7 @@
 """Verdict of one sample reading against its standard reading (``station qc check``).
 
 :func:`check_pair` matches the two readings geometry by geometry (aspecular angle) and judges them
-with :func:`station.model.tolerance.judge`:
+with :func:`station.qc.tolerance.judge`:
 
 * with a tolerance set, at the geometries the set names (each must be in both readings, so a missing
   geometry is an error, never a silent pass); geometries the set does not name are not judged;
@@ -21,9 +21,9 @@ from collections.abc import Sequence
 from station.model.difference import audi2000_unavailable, validate_method
 from station.model.domain import QC_FORMULA, aspecular_name
 from station.model.errors import ModelInputError
-from station.model.tolerance import FORMULAS, QcVerdict, ToleranceSet, judge
 from station.qc.errors import QcInputError
 from station.qc.readings import Reading, lab_at
+from station.qc.tolerance import FORMULAS, QcVerdict, ToleranceSet, judge
 
 __all__ = ["check_pair", "default_tolerance", "formula_name"]
 

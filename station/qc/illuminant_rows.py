@@ -22,10 +22,10 @@ from typing import Any
 from station.model.domain import aspecular_name
 from station.model.errors import ModelInputError
 from station.model.illuminants import REFERENCE_ILLUMINANT, illuminant_name
-from station.model.tolerance import QcVerdict, Verdict
 from station.qc.errors import QcInputError
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading
+from station.qc.tolerance import QcVerdict, Verdict
 
 __all__ = [
     "IlluminantCheck",

@@ -28,13 +28,13 @@ from db.models import PARTS, Design, DesignVersion, Instrument, Measurement, Pan
 from station.model.design_io import design_from_dict
 from station.model.domain import ANGLES_6, ILLUMINATION_DEG, QC_FORMULA
 from station.model.errors import ModelInputError
-from station.model.tolerance import QcVerdict, ToleranceSet, Verdict
 from station.qc.check import check_pair, formula_name
 from station.qc.errors import QcInputError, StandardMissingError
 from station.qc.illuminant_rows import IlluminantCheck, PairVerdict, check_illuminants
 from station.qc.illuminant_rows import illuminant_limits as booth_limits
 from station.qc.readings import Reading, reading_from_measurement
 from station.qc.repeats import RepeatSummary, summarise
+from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict
 
 __all__ = [
     "JobInfo",

@@ -13,7 +13,6 @@ from sqlalchemy.orm import Session
 
 from db.engine import make_engine, make_sessionmaker
 from db.models import Standard
-from station.model.tolerance import ToleranceSet
 from station.qc.errors import QcInputError, StandardMissingError
 from station.qc.jobs import (
     get_standard,
@@ -23,6 +22,7 @@ from station.qc.jobs import (
     search_measurements,
     set_standard,
 )
+from station.qc.tolerance import ToleranceSet
 from tests.qc.conftest import FENDER_OFFSETS, T0, Job, populate
 
 

@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from station.errors import InputError
-from station.model.tolerance import ToleranceSet
 from station.qc.check import check_pair
 from station.qc.errors import QcInputError
 from station.qc.readings import Reading, load_readings, reading_from_dict
+from station.qc.tolerance import ToleranceSet
 from tests.model.test_din6175 import _by_hand
 
 STD = [[90.0, 1.0, -2.0], [50.0, 2.0, -3.0], [30.0, 3.0, -4.0]]

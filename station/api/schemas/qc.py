@@ -11,7 +11,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from station.api.schemas.common import StrictInt
 from station.api.schemas.measurements import MeasurementPublic
 from station.ingest.schema import MAX_GEOMETRIES, Angle, LabTriple
-from station.model.tolerance import Verdict
+from station.qc.tolerance import Verdict
 
 
 class GlossPublic(BaseModel):

@@ -5,7 +5,7 @@ The pairing rule is ``station.ingest.pair_gloss`` (linked reading first, else th
 nearest in time within ``station.ingest.PAIR_WINDOW``), applied by
 ``station.ingest.gloss_of_measurements`` over every colour measurement of the panels concerned, so a
 reading pairs the same way whatever page it is seen on. Everything colorimetric is ``station.qc``'s
-(which applies ``station.model.tolerance``); this module only maps requests and rows onto it.
+(which applies ``station.qc.tolerance``); this module only maps requests and rows onto it.
 """
 
 from __future__ import annotations
@@ -38,13 +38,13 @@ from station.api.services import measurements as measurement_service
 from station.errors import InputError
 from station.ingest import GlossRecord, gloss_of_measurements, store_gloss
 from station.model.domain import QC_FORMULA
-from station.model.tolerance import ToleranceSet
 from station.qc import jobs
 from station.qc.check import check_pair, formula_name
 from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_illuminant_limits
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading, reading_from_measurement
 from station.qc.repeats import summarise
+from station.qc.tolerance import ToleranceSet
 
 
 def get_gloss(*, session: Session, gloss_id: int) -> GlossPublic:

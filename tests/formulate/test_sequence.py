@@ -7,9 +7,9 @@ import colour
 import numpy as np
 import pytest
 
+from station.formulate.sequence import colour_sequence
 from station.model import FaceFlopTravelGloss
 from station.model.errors import ModelInputError
-from station.model.sequence import colour_sequence
 
 SILVER = FaceFlopTravelGloss((95.0, -1.0, -3.0), (35.0, 0.0, -2.0), 70.0, 90.0, name="silver")
 BLUE = FaceFlopTravelGloss((60.0, -5.0, -40.0), (22.0, 2.0, -22.0), 65.0, 85.0, name="blue")

@@ -1,6 +1,6 @@
 """Pictures of designs: L*, a*, b* against aspecular angle, and the a*–b* travel path.
 
-``python -m station.model.plots`` regenerates ``docs/model-curves.png`` from the example designs.
+``python -m station.design.plots`` regenerates ``docs/model-curves.png`` from the example designs.
 """
 
 from __future__ import annotations
@@ -8,11 +8,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 
 from station.model.angles import ANGLES_6
 from station.model.display import lab_to_display
@@ -30,7 +27,8 @@ def plot_designs(designs: Sequence[FaceFlopTravelGloss], out: str | Path) -> Pat
     Measured-angle markers sit at the 6-angle set −15/15/25/45/75/110°; the travel angle θ_clamp is marked on the L* plot.
     """
     theta = np.linspace(-15.0, 130.0, 291)
-    fig, axes = plt.subplots(1, 4, figsize=(16, 4.2), constrained_layout=True)
+    fig = Figure(figsize=(16, 4.2), layout="constrained")  # no pyplot: no backend switched, no global state
+    axes = fig.subplots(1, 4)
     for i, d in enumerate(designs):
         lab = d.lab_at(theta)
         pts = d.lab_at(np.asarray(ANGLES_6))
@@ -65,7 +63,6 @@ def plot_designs(designs: Sequence[FaceFlopTravelGloss], out: str | Path) -> Pat
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)
-    plt.close(fig)
     return out
 
 

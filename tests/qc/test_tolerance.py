@@ -12,7 +12,7 @@ import pytest
 from station.model import domain
 from station.model.difference import FormulaUnavailableError
 from station.model.errors import ModelInputError
-from station.model.tolerance import GeometryLimits, ToleranceSet, judge, lab_components
+from station.qc.tolerance import GeometryLimits, ToleranceSet, judge, lab_components
 from tests.model.test_din6175 import _by_hand
 
 STD = [[90.0, 1.0, -2.0], [50.0, 2.0, -3.0], [30.0, 3.0, -4.0]]
