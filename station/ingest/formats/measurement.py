@@ -16,6 +16,7 @@ from __future__ import annotations
 import datetime as dt
 import itertools
 import math
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -38,6 +39,7 @@ __all__ = [
     "VendorValue",
     "build_measurement",
     "observer_name",
+    "single_angle_geometry",
 ]
 
 #: Illuminants a stored reading may state (the ingest record's vocabulary).
@@ -188,6 +190,26 @@ def canonical_geometry(name: str, fld: str, err: ErrorFactory) -> str:
     except ModelInputError as exc:
         raise err(fld, exc.accepted, name) from exc
     return geometry_name(ill, asp)
+
+
+_SINGLE = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*[/:]\s*(\d+(?:\.\d+)?)\s*$")
+
+
+def single_angle_geometry(text: str, fld: str, err: ErrorFactory) -> str:
+    """The geometry name of a single-angle geometry written ``"45/0"`` (CIE illumination/viewing
+    angles from the normal, ``:`` also accepted) or already ``"45as45"``.
+
+    Viewing is on the far side of the normal from the illumination, so the aspecular angle is
+    ``illumination − viewing`` (45/0 → ``45as45``, the 45/0 geometry lit from one direction).
+    Refused (*err*): anything else, and 0/45 (illumination along the normal has no aspecular side).
+    """
+    m = _SINGLE.match(text)
+    if m is None:
+        return canonical_geometry(text, fld, err)
+    ill, view = float(m.group(1)), float(m.group(2))
+    if ill == 0.0:
+        raise err(fld, 'a directional geometry such as "45/0" or "45as45"', text)
+    return canonical_geometry(geometry_name(ill, ill - view), fld, err)
 
 
 def build_measurement(
