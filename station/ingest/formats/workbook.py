@@ -7,16 +7,29 @@ X-Rite MA-T12 exports hold a sheet ``Spectral Data`` with one row per geometry n
 * ``Geometry`` (or ``Angle``): the geometry name, ``45as15`` style;
 * wavelength columns headed by a number of nanometres (``400``, ``400nm``, ``400 nm``); values are
   reflectance factors, or percent when any value exceeds 2 (the sheet then reads as percent);
-* optional ``Sample`` (or ``Name``) — rows of one sample share it; without it the file's stem names
-  the one sample;
+* optional ``Sample Name`` (or ``Sample``, ``Name``) — rows of one sample share it; without it the
+  file's stem names the one sample;
+* optional ``Date/Time``: the measurement instant of the sample (its first row's cell): an Excel date
+  (the instrument computer's local time, which carries no zone: read as UTC) or ISO 8601 text;
+  anything else is refused naming ``Date/Time``;
 * optional ``L``, ``a``, ``b`` (``L*``, ``a*``, ``b*``) Lab columns;
-* optional texture columns headed ``Sparkle…`` or ``Graininess…``, stored tagged with the vendor
-  (``Manufacturer`` in a sheet ``Info`` when present, else ``X-Rite``, the workbook's maker), never compared across vendors.
+* optional texture columns headed ``Sparkle…`` or ``Graininess…`` (stored as ``sparkle_intensity``,
+  ``graininess``: lower case, spaces as ``_``), tagged with the vendor (``Manufacturer`` in a sheet
+  ``Info`` when present, else ``X-Rite``, the workbook's maker), never compared across vendors.
 
-An optional sheet ``Info`` with ``key | value`` rows gives ``Instrument``, ``Serial``, ``Manufacturer``,
-``Measured at`` (an ISO 8601 instant or a date cell), ``Illuminant`` and ``Observer``. Other sheets
-(``Texture Images``) are ignored. Refusals are :class:`~station.ingest.errors.WorkbookImportError`
-naming the sheet, the cell row and the column.
+Rows above the header are titles, except an ``Illuminant/Observer`` row (``Illuminant/Observer |
+D65/10°`` or one cell ``Illuminant/Observer: D65/10°``): it gives the conditions of the Lab and is
+refused naming ``Illuminant/Observer`` when it does not read as ``<illuminant>/<observer>``; an
+illuminant or observer the store does not keep is refused as ``illuminant``/``observer``.
+
+A sheet ``Texture Data`` (header: ``Sample Name``, ``Geometry``, ``Sparkle…``/``Graininess…``
+columns) adds texture values per sample and geometry (a graininess, or a row without geometry, is
+per sample); a sample not in ``Spectral Data`` is refused naming ``Sample``, two different values
+for one quantity and geometry naming the quantity. An optional sheet ``Info`` with ``key | value``
+rows gives ``Instrument``, ``Serial``, ``Manufacturer``, ``Measured at`` (used when there is no
+``Date/Time`` column), ``Illuminant`` and ``Observer``. ``Texture Images`` (pictures) are not read.
+Refusals are :class:`~station.ingest.errors.WorkbookImportError` naming the sheet, the cell row and
+the column.
 
 A workbook is read as a stream (openpyxl's read-only mode), within bounds a hostile file cannot
 stretch: at most :data:`MAX_WORKBOOK_BYTES` bytes on disk, :data:`MAX_WORKBOOK_XML_BYTES` bytes
