@@ -212,6 +212,51 @@ def single_angle_geometry(text: str, fld: str, err: ErrorFactory) -> str:
     return canonical_geometry(geometry_name(ill, ill - view), fld, err)
 
 
+def _checked_lab(
+    rows: Sequence[tuple[str, ErrorFactory]], lab: Sequence[Sequence[float]], err: ErrorFactory
+) -> tuple[tuple[float, float, float], ...]:
+    """One finite L*a*b* within the domain bound per geometry row (each refusal names its row)."""
+    if len(lab) != len(rows):
+        raise err("lab", f"one L*a*b* per geometry ({len(rows)})", len(lab))
+    checked = []
+    for (_, row_err), triple in zip(rows, lab, strict=True):
+        vals = [_finite(float(v), f"lab.{c}", row_err) for c, v in zip("Lab", triple, strict=False)]
+        try:
+            checked.append(check_lab(vals, "lab"))
+        except ModelInputError as exc:
+            raise row_err(exc.field, exc.accepted, exc.got) from exc
+    return tuple(checked)
+
+
+def _checked_spectra(
+    rows: Sequence[tuple[str, ErrorFactory]],
+    wavelengths_nm: Sequence[float] | None,
+    spectra: Sequence[Sequence[float]] | None,
+    err: ErrorFactory,
+) -> tuple[tuple[float, ...] | None, tuple[tuple[float, ...], ...] | None]:
+    """The wavelength grid (nm, strictly increasing) and one reflectance curve (≥ 0) per geometry row."""
+    if (spectra is None) != (wavelengths_nm is None):
+        raise err("spectra", "spectra together with their wavelengths", None)
+    if spectra is None or wavelengths_nm is None:
+        return None, None
+    wl = [_finite(float(w), "wavelengths_nm", err) for w in wavelengths_nm]
+    if not 2 <= len(wl) <= MAX_WAVELENGTHS:
+        raise err("wavelengths_nm", f"2 to {MAX_WAVELENGTHS} wavelengths", len(wl))
+    if any(b <= a for a, b in itertools.pairwise(wl)):
+        raise err("wavelengths_nm", "strictly increasing wavelengths (nm)", wl)
+    if len(spectra) != len(rows):
+        raise err("spectra", f"one spectrum per geometry ({len(rows)})", len(spectra))
+    curves = []
+    for (_, row_err), curve in zip(rows, spectra, strict=True):
+        if len(curve) != len(wl):
+            raise row_err("spectra", f"{len(wl)} values (one per wavelength)", len(curve))
+        vals = [_finite(float(v), "spectra", row_err) for v in curve]
+        if min(vals) < 0.0:
+            raise row_err("spectra", "reflectance factors >= 0", min(vals))
+        curves.append(tuple(vals))
+    return tuple(wl), tuple(curves)
+
+
 def build_measurement(
     *,
     sample: str,
@@ -251,39 +296,8 @@ def build_measurement(
         raise err("illuminant", " | ".join(ILLUMINANTS), illuminant)
     if observer not in OBSERVERS:
         raise err("observer", "2 | 10 (degrees)", observer)
-    lab_out: tuple[tuple[float, float, float], ...] | None = None
-    if lab is not None:
-        if len(lab) != len(rows):
-            raise err("lab", f"one L*a*b* per geometry ({len(rows)})", len(lab))
-        checked = []
-        for (_, row_err), triple in zip(rows, lab, strict=True):
-            vals = [_finite(float(v), f"lab.{c}", row_err) for c, v in zip("Lab", triple, strict=False)]
-            try:
-                checked.append(check_lab(vals, "lab"))
-            except ModelInputError as exc:
-                raise row_err(exc.field, exc.accepted, exc.got) from exc
-        lab_out = tuple(checked)
-    wl_out: tuple[float, ...] | None = None
-    sp_out: tuple[tuple[float, ...], ...] | None = None
-    if (spectra is None) != (wavelengths_nm is None):
-        raise err("spectra", "spectra together with their wavelengths", None)
-    if spectra is not None and wavelengths_nm is not None:
-        wl = [_finite(float(w), "wavelengths_nm", err) for w in wavelengths_nm]
-        if not 2 <= len(wl) <= MAX_WAVELENGTHS:
-            raise err("wavelengths_nm", f"2 to {MAX_WAVELENGTHS} wavelengths", len(wl))
-        if any(b <= a for a, b in itertools.pairwise(wl)):
-            raise err("wavelengths_nm", "strictly increasing wavelengths (nm)", wl)
-        if len(spectra) != len(rows):
-            raise err("spectra", f"one spectrum per geometry ({len(rows)})", len(spectra))
-        curves = []
-        for (_, row_err), curve in zip(rows, spectra, strict=True):
-            if len(curve) != len(wl):
-                raise row_err("spectra", f"{len(wl)} values (one per wavelength)", len(curve))
-            vals = [_finite(float(v), "spectra", row_err) for v in curve]
-            if min(vals) < 0.0:
-                raise row_err("spectra", "reflectance factors >= 0", min(vals))
-            curves.append(tuple(vals))
-        wl_out, sp_out = tuple(wl), tuple(curves)
+    lab_out = None if lab is None else _checked_lab(rows, lab, err)
+    wl_out, sp_out = _checked_spectra(rows, wavelengths_nm, spectra, err)
     return ImportedMeasurement(
         sample=sample.strip(),
         geometries=tuple(names),
