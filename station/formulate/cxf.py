@@ -10,13 +10,14 @@ E308_Table6, ``MultiAngle/BRDFAngle`` with IlluminationAngle 45 and the Aspecula
 ``45as15``); one ``Object`` per paint whose ``ColorValues`` hold one ``ColorCIELab`` per angle, each
 pointing at its specification. CxF3 has no gloss element: the 60° gloss, the paint type, the role
 and the synthetic flag travel as ``Tag`` name/value pairs (``cacad.gloss_gu_60``, ``cacad.type``,
-``cacad.role``, ``cacad.synthetic``, ``cacad.angle_sets``).
+``cacad.role``, ``cacad.synthetic``, ``cacad.angle_sets``) in a ``TagCollection Name="cacad"``.
 
 Spectra and recipes (optional, per object, :class:`ObjectExtras`): reflectance factors per geometry as
 ``ColorValues/ReflectanceSpectrum`` (400–700 nm at 10 nm, :data:`station.model.spectra.WAVELENGTHS`)
 pointing at a spectral ``ColorSpecification`` (``Id="SP45as15"``, ``Spectrum_Reflectance``, the same
 ``MultiAngle`` geometry, ``WavelengthRange StartWL="400" Increment="10"``), and the recipe as
-``DeviceColorValues/ColorRecipe`` (colour-cxf's ``ColorRecipe``: ``Units`` g or fraction, one
+``DeviceColorValues/ColorRecipe`` (colour-cxf's ``ColorRecipe``: ``Units`` g or fraction, its own
+``CreationDate`` (the schema requires it), one
 ``Colorant`` per component with its ``Value``; the binder carries ``isBase="true"``).
 
 ``FileInformation/CreationDate`` and each object's ``CreationDate`` are the time of the export (UTC, to
