@@ -127,3 +127,15 @@ def test_measurement_export_is_schema_valid_and_reimports_equal(
     assert _errors(schema, path.read_bytes()) == []
     (back,) = read_measurement_file(path).measurements
     assert back == m
+
+
+def test_an_undated_measurement_stays_undated(schema: xmlschema.XMLSchema, tmp_path: Path) -> None:
+    """The schema requires a CreationDate; the placeholder written for it never reads back as a date."""
+    import dataclasses
+
+    m = dataclasses.replace(_measurement(), measured_at=None)
+    path = tmp_path / "undated.cxf"
+    write_measurement_file([m], path)
+    assert _errors(schema, path.read_bytes()) == []
+    (back,) = read_measurement_file(path).measurements
+    assert back.measured_at is None and back == m

@@ -17,7 +17,10 @@ One ``Object`` per sample (its
 ``Name``; ``CreationDate`` is the measurement instant) whose ``ColorValues`` hold a ``ColorCIELab``
 and/or a ``ReflectanceSpectrum`` per geometry, each pointing at its specification. Vendor texture
 values travel in a ``TagCollection Name="texture"``: ``Tag Name="VENDOR|NAME|GEOMETRY"`` (GEOMETRY
-empty for a per-sample value) with the number as ``Value``.
+empty for a per-sample value) with the number as ``Value``. A measurement without an instant is
+written with the schema's required ``CreationDate`` set to 2000-01-01 and a ``TagCollection
+Name="measurement"`` holding ``Tag Name="measured_at" Value="unknown"``; the reader then gives no
+instant, so the placeholder never passes for a date.
 
 The bytes are screened first with defusedxml (no DTD, no entity declarations, no external
 references: XXE and "billion laughs" are refused before any expansion), then parsed by colour-cxf.
@@ -58,6 +61,9 @@ from station.model.domain import format_angle, geometry_name
 __all__ = ["is_complete", "read_cxf", "write_cxf"]
 
 TEXTURE_TAGS = "texture"
+#: ``TagCollection`` marking an object whose ``CreationDate`` (required by the schema) is a placeholder.
+UNDATED_TAGS = "measurement"
+_UNDATED = cxf3.TagCollection(tag=[cxf3.Tag(name="measured_at", value="unknown")], name=UNDATED_TAGS)
 LAB_DECIMALS = 4
 SPECTRA_DECIMALS = 6
 
@@ -352,9 +358,17 @@ def _object(obj: Any, i: int, specs: dict[str, dict[str, Any]], file: str) -> Im
         instrument=slots[0]["spec"]["instrument"],
         illuminant=illuminant,
         observer=observer,
-        measured_at=_instant(obj.creation_date),
+        measured_at=None if _undated(obj) else _instant(obj.creation_date),
         texture=_texture(obj, where, file),
         err=factory(CxfImportError, file, where),
+    )
+
+
+def _undated(obj: Any) -> bool:
+    """Whether the writer marked the object's ``CreationDate`` as a placeholder (no measurement instant)."""
+    return any(
+        tc.name == UNDATED_TAGS and any(t.name == "measured_at" and t.value == "unknown" for t in tc.tag)
+        for tc in obj.tag_collection
     )
 
 
@@ -408,7 +422,8 @@ def write_cxf(measurements: Sequence[ImportedMeasurement], path: Path | str | No
             cxf3.Object(
                 creation_date=_when(m.measured_at),
                 color_values=cxf3.ColorValues(choice=values),
-                tag_collection=[cxf3.TagCollection(tag=tags, name=TEXTURE_TAGS)] if tags else [],
+                tag_collection=([cxf3.TagCollection(tag=tags, name=TEXTURE_TAGS)] if tags else [])
+                + ([] if m.measured_at is not None else [_UNDATED]),
                 object_type="Target",
                 name=m.sample,
                 id=f"o{i}",
