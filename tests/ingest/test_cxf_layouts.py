@@ -126,3 +126,16 @@ def test_a_missing_unnamed_value_is_refused(tmp_path: Path) -> None:
     with pytest.raises(CxfImportError) as info:
         read_measurement_file(_edited(tmp_path, line + "\n", ""))
     assert info.value.field == "ColorSpecification" and "got 5" in str(info.value)
+
+
+def test_zero_forty_five_is_refused_naming_the_angle(tmp_path: Path) -> None:
+    text = (DATA / "colour_cxf" / "sample.cxf").read_text(encoding="utf-8")
+    old = "<cc:IlluminationAngle>45.0</cc:IlluminationAngle>"
+    assert old in text
+    f = tmp_path / "zero45.cxf"
+    text = text.replace(old, "<cc:IlluminationAngle>0.0</cc:IlluminationAngle>")
+    text = text.replace("<cc:MeasurementAngle>0.0<", "<cc:MeasurementAngle>45.0<")
+    f.write_text(text, encoding="utf-8")
+    with pytest.raises(CxfImportError) as info:
+        read_measurement_file(f)
+    assert info.value.field == "IlluminationAngle" and "0/45" in str(info.value)

@@ -11,7 +11,8 @@ colour-cxf's test resources). A value pointing at it names its geometry by ``Nam
 then number exactly one per ``BRDFAngle``. An out-of-plane ``Azimuth`` other than 0 is refused (the
 product's geometries are in-plane). A ``SingleAngle`` specification (e.g. 45/0, annular or
 uniplanar) is one geometry, ``<IlluminationAngle>as<IlluminationAngle − MeasurementAngle>``
-(45/0 → ``45as45``). Values under other geometries (sphere, emissive, unknown) are skipped.
+(45/0 → ``45as45``); 0/45 is refused (illumination along the normal has no aspecular side).
+Values under other geometries (sphere, emissive, unknown) are skipped.
 
 One ``Object`` per sample (its
 ``Name``; ``CreationDate`` is the measurement instant) whose ``ColorValues`` hold a ``ColorCIELab``
@@ -108,15 +109,22 @@ def _enum_text(value: Any) -> str:
     return "" if raw is None else str(raw)
 
 
-def _angles(cs: Any, where: str, file: str) -> tuple[list[str], dict[str, str]] | str | None:
+def _angles(cs: Any, where: str, file: str) -> tuple[list[str], dict[str, str]] | tuple[str, str, str] | None:
     """Geometry names of a specification in ``BRDFAngle`` order and its Notation → name map; ``None``
-    for a non-directional geometry; the refusal text when a geometry is outside the product's."""
+    for a non-directional geometry; ``(field, accepted, got)`` when its geometry is outside the
+    product's (refused when a value uses it)."""
     ms = cs.measurement_spec
     choice = ms.geometry_choice.choice if ms and ms.geometry_choice else None
     if isinstance(choice, cxf3.SingleAngleType):
         ill, meas = choice.illumination_angle, choice.measurement_angle
         if ill is None or meas is None or not (math.isfinite(ill) and math.isfinite(meas)):
             raise CxfImportError(file, f"{where}/SingleAngle", "MeasurementAngle", "finite angles (degrees)")
+        if ill == 0.0:
+            return (
+                "IlluminationAngle",
+                "a directional geometry such as 45/0",
+                f"{where}/SingleAngle: 0/{meas:g}",
+            )
         return [geometry_name(ill, ill - meas)], {}
     if not isinstance(choice, cxf3.MultiAngleType):
         return None
@@ -131,7 +139,7 @@ def _angles(cs: Any, where: str, file: str) -> tuple[list[str], dict[str, str]] 
         if not (math.isfinite(angle.illumination_angle) and math.isfinite(angle.aspecular)):
             raise CxfImportError(file, here, "Aspecular", "finite angles (degrees)")
         if angle.azimuth not in (None, 0.0):
-            return f"{here}: Azimuth {angle.azimuth:g}° (out-of-plane; in-plane geometries, Azimuth 0)"
+            return ("Azimuth", "an in-plane geometry (Azimuth 0)", f"{here}: Azimuth {angle.azimuth:g}°")
         g = geometry_name(angle.illumination_angle, angle.aspecular)
         if g in names:
             raise CxfImportError(file, here, "BRDFAngle", "each geometry once per MultiAngle", g)
@@ -149,7 +157,7 @@ def _specs(doc: cxf3.CxF, file: str) -> dict[str, dict[str, Any]]:
     for k, cs in enumerate(coll.color_specification if coll else []):
         where = f"ColorSpecification[{k + 1}]"  # an index, never the file's text
         angles = _angles(cs, where, file)
-        if not isinstance(angles, tuple):
+        if angles is None or len(angles) == 3:
             out[str(cs.id)] = {"geometries": None, "refused": angles, "where": where}
             continue
         ts = cs.tristimulus_spec
@@ -287,7 +295,7 @@ def _values(obj: Any, where: str, specs: dict[str, dict[str, Any]], file: str) -
             raise CxfImportError(file, vwhere, "ColorSpecification", "the Id of a ColorSpecification", v.color_specification)  # fmt: skip
         if spec["geometries"] is None:
             if spec["refused"]:
-                raise CxfImportError(file, vwhere, "Azimuth", "an in-plane geometry", spec["refused"])
+                raise CxfImportError(file, vwhere, *spec["refused"])
             continue  # not a directional value (e.g. a sphere reading in the same file)
         group = unnamed.get((str(v.color_specification), type(v)), [])
         g = _geometry_of(v, spec, len(group), group.index(j) if j in group else 0, file, vwhere)
