@@ -102,7 +102,7 @@ def test_one_value_for_several_angles_is_refused_naming_the_field() -> None:
     with pytest.raises(CxfImportError) as info:
         read_measurement_file(DATA / "colour_cxf" / "geometry_edge_cases.cxf")
     assert info.value.field == "ColorSpecification"
-    assert "one ColorCielab per BRDFAngle" in str(info.value) and "(3," in str(info.value)
+    assert "one ColorCIELab per BRDFAngle" in str(info.value) and "(3," in str(info.value)
 
 
 def _edited(tmp_path: Path, old: str, new: str, count: int = 1) -> Path:

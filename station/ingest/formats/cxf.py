@@ -254,6 +254,11 @@ def read_cxf(path: Path | str, data: bytes | None = None) -> ImportedFile:
     return ImportedFile("cxf", file, tuple(_object(obj, i, specs, file) for i, obj in enumerate(objects, 1)))
 
 
+def _element(v: Any) -> str:
+    """The CxF3 element name of a colour value (``ColorCIELab``, ``ReflectanceSpectrum``)."""
+    return "ColorCIELab" if isinstance(v, cxf3.ColorCielab) else "ReflectanceSpectrum"
+
+
 def _geometry_of(v: Any, spec: dict[str, Any], count: int, position: int, file: str, vwhere: str) -> str:
     """The geometry of value *v* under *spec*: by ``Name`` = a BRDFAngle Notation, else by its
     *position* among the *count* unnamed values of its kind pointing at the same specification."""
@@ -268,7 +273,7 @@ def _geometry_of(v: Any, spec: dict[str, Any], count: int, position: int, file: 
             file,
             vwhere,
             "ColorSpecification",
-            f"one {type(v).__name__} per BRDFAngle of {spec['where']} ({len(names)}, in BRDFAngle "
+            f"one {_element(v)} per BRDFAngle of {spec['where']} ({len(names)}, in BRDFAngle "
             "order) or a Name equal to a BRDFAngle Notation",
             count,
         )
@@ -289,7 +294,7 @@ def _values(obj: Any, where: str, specs: dict[str, dict[str, Any]], file: str) -
     per_geo: dict[str, dict[str, Any]] = {}
     for j, v in kept:
         kind = "lab" if isinstance(v, cxf3.ColorCielab) else "spectrum"
-        vwhere = f"{where}/ColorValues[{j}] {type(v).__name__}"
+        vwhere = f"{where}/ColorValues[{j}] {_element(v)}"
         spec = specs.get(str(v.color_specification))
         if spec is None:
             raise CxfImportError(file, vwhere, "ColorSpecification", "the Id of a ColorSpecification", v.color_specification)  # fmt: skip
@@ -301,7 +306,7 @@ def _values(obj: Any, where: str, specs: dict[str, dict[str, Any]], file: str) -
         g = _geometry_of(v, spec, len(group), group.index(j) if j in group else 0, file, vwhere)
         slot = per_geo.setdefault(g, {"spec": spec, "err": factory(CxfImportError, file, vwhere)})
         if kind in slot:
-            raise CxfImportError(file, vwhere, "geometry", f"one {type(v).__name__} per geometry", g)
+            raise CxfImportError(file, vwhere, "geometry", f"one {_element(v)} per geometry", g)
         if isinstance(v, cxf3.ColorCielab):
             if v.l is None or v.a is None or v.b is None:
                 raise CxfImportError(file, vwhere, "L", "L, A and B elements")
