@@ -60,6 +60,7 @@ def test_six_brdf_angles_in_one_specification_read_in_order_and_by_notation() ->
     named = [v for v in objects[1].color_values.choice if isinstance(v, cxf3.ColorCielab)]
     got = dict(zip(red.geometries, red.lab, strict=True))
     assert got == {by_notation[v.name]: (v.l, v.a, v.b) for v in named}
+    assert list(red.geometries) == expected_order  # named values in shuffled order: stored in BRDFAngle order
     assert got["45as110"] == (21.47, 21.88, 10.52) and red.spectra is None
     assert (silver.illuminant, silver.observer) == ("D65", "CIE 1964 10 Degree Standard Observer")
     assert (silver.instrument.model, silver.instrument.serial, silver.instrument.manufacturer) == (

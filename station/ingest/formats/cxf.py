@@ -281,7 +281,7 @@ def _geometry_of(v: Any, spec: dict[str, Any], count: int, position: int, file: 
 
 
 def _values(obj: Any, where: str, specs: dict[str, dict[str, Any]], file: str) -> list[tuple[str, dict]]:
-    """The object's directional Lab and spectra grouped per geometry, in first-seen order."""
+    """The object's directional Lab and spectra grouped per geometry, in specification order."""
     values = obj.color_values.choice if obj.color_values else []
     kept = [
         (j, v) for j, v in enumerate(values, 1) if isinstance(v, (cxf3.ColorCielab, cxf3.ReflectanceSpectrum))
@@ -317,7 +317,14 @@ def _values(obj: Any, where: str, specs: dict[str, dict[str, Any]], file: str) -
                 raise CxfImportError(file, vwhere, "StartWL", "StartWL and a WavelengthRange Increment")
             slot["spectrum"] = list(v.value)
             slot["wl"] = [float(start + spec["step"] * n) for n in range(len(v.value))]
-    return list(per_geo.items())
+    first_seen: dict[str, int] = {}
+    for slot in per_geo.values():
+        first_seen.setdefault(slot["spec"]["where"], len(first_seen))
+    # specifications in first-seen order; within one, its BRDFAngle order (named values may be shuffled)
+    return sorted(
+        per_geo.items(),
+        key=lambda kv: (first_seen[kv[1]["spec"]["where"]], kv[1]["spec"]["geometries"].index(kv[0])),
+    )
 
 
 def _texture(obj: Any, where: str, file: str) -> list[VendorValue]:
