@@ -1,5 +1,5 @@
 """Every CxF the product writes validates against X-Rite's published CxF3 core schema (3.0.018,
-vendored in tests/ingest/data/cxf_schema with its licence) and reads back equal: measurements,
+read from ../shared/reference, never committed) and reads back equal: measurements,
 recipes with predicted spectra, whole libraries."""
 
 from __future__ import annotations
@@ -28,14 +28,14 @@ from station.ingest.formats.measurement import Instrument, VendorValue, build_me
 from station.model import FaceFlopTravelGloss
 from station.model.domain import ANGLES_3
 
-SCHEMA = Path(__file__).parents[1] / "ingest" / "data" / "cxf_schema" / "CxF3_Core.xsd"
 WHEN = dt.datetime(2026, 3, 4, 5, 6, 7, tzinfo=dt.UTC)
 DESIGN = FaceFlopTravelGloss((62.5, 38.25, 20.125), (20.0, 30.5, 12.0), 80.0, 85.0, name="Red metallic")
 
 
 @pytest.fixture(scope="module")
-def schema() -> xmlschema.XMLSchema:
-    return xmlschema.XMLSchema(str(SCHEMA))
+def schema(shared_dir: Path) -> xmlschema.XMLSchema:
+    """X-Rite's published CxF3 core schema (3.0.018), read from ../shared/reference (never committed)."""
+    return xmlschema.XMLSchema(str(shared_dir / "reference" / "CxF3_Core.xsd"))
 
 
 def _errors(schema: xmlschema.XMLSchema, data: bytes) -> list[str]:

@@ -15,13 +15,13 @@ from station.ingest.formats import CxfImportError, read_measurement_file
 from station.model.domain import geometry_name
 
 DATA = Path(__file__).parent / "data"
-SCHEMA = DATA / "cxf_schema" / "CxF3_Core.xsd"
 SIX = DATA / "six_angles_one_spec.cxf"
 
 
 @pytest.fixture(scope="module")
-def schema() -> xmlschema.XMLSchema:
-    return xmlschema.XMLSchema(str(SCHEMA))
+def schema(shared_dir: Path) -> xmlschema.XMLSchema:
+    """X-Rite's published CxF3 core schema (3.0.018), read from ../shared/reference (never committed)."""
+    return xmlschema.XMLSchema(str(shared_dir / "reference" / "CxF3_Core.xsd"))
 
 
 def _reference(path: Path) -> tuple[cxf3.CxF, dict[str, cxf3.ColorSpecification]]:
