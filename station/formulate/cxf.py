@@ -10,13 +10,14 @@ E308_Table6, ``MultiAngle/BRDFAngle`` with IlluminationAngle 45 and the Aspecula
 ``45as15``); one ``Object`` per paint whose ``ColorValues`` hold one ``ColorCIELab`` per angle, each
 pointing at its specification. CxF3 has no gloss element: the 60° gloss, the paint type, the role
 and the synthetic flag travel as ``Tag`` name/value pairs (``cacad.gloss_gu_60``, ``cacad.type``,
-``cacad.role``, ``cacad.synthetic``, ``cacad.angle_sets``).
+``cacad.role``, ``cacad.synthetic``, ``cacad.angle_sets``) in a ``TagCollection Name="cacad"``.
 
 Spectra and recipes (optional, per object, :class:`ObjectExtras`): reflectance factors per geometry as
 ``ColorValues/ReflectanceSpectrum`` (400–700 nm at 10 nm, :data:`station.model.spectra.WAVELENGTHS`)
 pointing at a spectral ``ColorSpecification`` (``Id="SP45as15"``, ``Spectrum_Reflectance``, the same
 ``MultiAngle`` geometry, ``WavelengthRange StartWL="400" Increment="10"``), and the recipe as
-``DeviceColorValues/ColorRecipe`` (colour-cxf's ``ColorRecipe``: ``Units`` g or fraction, one
+``DeviceColorValues/ColorRecipe`` (colour-cxf's ``ColorRecipe``: ``Units`` g or fraction, its own
+``CreationDate`` (the schema requires it), one
 ``Colorant`` per component with its ``Value``; the binder carries ``isBase="true"``).
 
 ``FileInformation/CreationDate`` and each object's ``CreationDate`` are the time of the export (UTC, to
@@ -116,6 +117,10 @@ def _sub(parent: ET.Element, tag: str, text: str | None = None, **attrs: str) ->
     return e
 
 
+TAG_COLLECTION = "cacad"
+"""``Name`` of the object's ``TagCollection`` (the schema requires one) holding the ``cacad.*`` tags."""
+
+
 def records_to_cxf(
     records: list[Record],
     description: str,
@@ -123,7 +128,10 @@ def records_to_cxf(
     created: dt.datetime | None = None,
 ) -> bytes:
     """Serialise (name, {angle: Lab}, tags) records to CxF3 bytes, with each record's optional
-    :class:`ObjectExtras` (spectra, recipe) and the creation time *created* (default: now, UTC)."""
+    :class:`ObjectExtras` (spectra, recipe) and the creation time *created* (default: now, UTC).
+
+    The document validates against the published CxF3 core schema (3.0.018; tests check it).
+    """
     if not records:
         raise XMLFormatError("objects", "at least one colour", 0)
     extras = list(extras) if extras is not None else [None] * len(records)
@@ -138,67 +146,76 @@ def records_to_cxf(
     _sub(info, "Description", description)
     res = _sub(root, "Resources")
     objs = _sub(res, "ObjectCollection")
-    angles = sorted({a for _, lab, _ in records for a in lab})
-    spectral_angles = sorted({a for x in extras if x is not None for a, _ in x.spectra})
-    fmt = f"{{:.{DECIMALS}f}}"
-    sfmt = f"{{:.{SPECTRUM_DECIMALS}f}}"
-    for i, ((name, lab, tags), extra) in enumerate(zip(records, extras, strict=True)):
-        obj = _sub(objs, "Object", ObjectType="Standard", Name=name, Id=f"o{i + 1}")
-        _sub(obj, "CreationDate", stamp)
-        values = _sub(obj, "ColorValues")
-        for a in sorted(lab):
-            c = _sub(values, "ColorCIELab", ColorSpecification=f"CS{aspecular_name(a)}")
-            for tag, v in zip(("L", "A", "B"), lab[a], strict=True):
-                _sub(c, tag, fmt.format(v))
-        if extra is not None:
-            for a, refl in sorted(extra.spectra):
-                _sub(
-                    values,
-                    "ReflectanceSpectrum",
-                    " ".join(sfmt.format(v) for v in refl),
-                    ColorSpecification=f"SP{aspecular_name(a)}",
-                    StartWL=format_angle(float(WAVELENGTHS[0])),
-                )
-            if extra.recipe:
-                device = _sub(obj, "DeviceColorValues")
-                recipe = _sub(device, "ColorRecipe", Units=extra.recipe_units, Name=name)
-                for component, amount in extra.recipe:
-                    attrs = {"Name": component}
-                    if component == extra.binder:
-                        attrs["isBase"] = "true"
-                    col = _sub(recipe, "Colorant", **attrs)
-                    _sub(col, "Value", sfmt.format(amount))
-        if tags:
-            tc = _sub(obj, "TagCollection")
-            for key in sorted(tags):
-                _sub(tc, "Tag", Name=key, Value=tags[key])
+    for i, (record, extra) in enumerate(zip(records, extras, strict=True)):
+        _write_object(objs, i, record, extra, stamp)
     specs = _sub(res, "ColorSpecificationCollection")
-    for a in angles:
+    for a in sorted({a for _, lab, _ in records for a in lab}):
         cs = _sub(specs, "ColorSpecification", Id=f"CS{aspecular_name(a)}")
         ts = _sub(cs, "TristimulusSpec")
         _sub(ts, "Illuminant", "D65")
         _sub(ts, "Observer", "10_Degree")
         _sub(ts, "Method", "E308_Table6")
-        ms = _sub(cs, "MeasurementSpec")
-        _sub(ms, "MeasurementType", "Colorimetric_Reflectance")
-        gc = _sub(ms, "GeometryChoice")
-        ma = _sub(gc, "MultiAngle")
-        ba = _sub(ma, "BRDFAngle", Notation=aspecular_name(a))
-        _sub(ba, "IlluminationAngle", format_angle(ILLUMINATION_DEG))
-        _sub(ba, "Aspecular", _angle(a))
+        _write_geometry(cs, a, "Colorimetric_Reflectance")
     step = float(WAVELENGTHS[1] - WAVELENGTHS[0])
-    for a in spectral_angles:
+    for a in sorted({a for x in extras if x is not None for a, _ in x.spectra}):
         cs = _sub(specs, "ColorSpecification", Id=f"SP{aspecular_name(a)}")
-        ms = _sub(cs, "MeasurementSpec")
-        _sub(ms, "MeasurementType", "Spectrum_Reflectance")
-        gc = _sub(ms, "GeometryChoice")
-        ma = _sub(gc, "MultiAngle")
-        ba = _sub(ma, "BRDFAngle", Notation=aspecular_name(a))
-        _sub(ba, "IlluminationAngle", format_angle(ILLUMINATION_DEG))
-        _sub(ba, "Aspecular", _angle(a))
+        ms = _write_geometry(cs, a, "Spectrum_Reflectance")
         _sub(ms, "WavelengthRange", StartWL=format_angle(float(WAVELENGTHS[0])), Increment=format_angle(step))
     ET.indent(root, "  ")
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True) + b"\n"
+
+
+def _write_geometry(cs: ET.Element, angle: float, kind: str) -> ET.Element:
+    """The ``MeasurementSpec`` of *cs*: *kind* and one ``MultiAngle/BRDFAngle`` at *angle* (°)."""
+    ms = _sub(cs, "MeasurementSpec")
+    _sub(ms, "MeasurementType", kind)
+    gc = _sub(ms, "GeometryChoice")
+    ma = _sub(gc, "MultiAngle")
+    ba = _sub(ma, "BRDFAngle", Notation=aspecular_name(angle))
+    _sub(ba, "IlluminationAngle", format_angle(ILLUMINATION_DEG))
+    _sub(ba, "Aspecular", _angle(angle))
+    return ms
+
+
+def _write_object(objs: ET.Element, i: int, record: Record, extra: ObjectExtras | None, stamp: str) -> None:
+    """One ``Object``: Lab per angle (4 decimals), then spectra and recipe (6 decimals), then tags.
+
+    Schema order: ``CreationDate``, ``ColorValues``, ``DeviceColorValues``, ``TagCollection``; a
+    ``ColorRecipe`` opens with its own ``CreationDate``; a ``TagCollection`` needs a ``Name``.
+    """
+    name, lab, tags = record
+    fmt = f"{{:.{DECIMALS}f}}"
+    sfmt = f"{{:.{SPECTRUM_DECIMALS}f}}"
+    obj = _sub(objs, "Object", ObjectType="Standard", Name=name, Id=f"o{i + 1}")
+    _sub(obj, "CreationDate", stamp)
+    values = _sub(obj, "ColorValues")
+    for a in sorted(lab):
+        c = _sub(values, "ColorCIELab", ColorSpecification=f"CS{aspecular_name(a)}")
+        for tag, v in zip(("L", "A", "B"), lab[a], strict=True):
+            _sub(c, tag, fmt.format(v))
+    if extra is not None:
+        for a, refl in sorted(extra.spectra):
+            _sub(
+                values,
+                "ReflectanceSpectrum",
+                " ".join(sfmt.format(v) for v in refl),
+                ColorSpecification=f"SP{aspecular_name(a)}",
+                StartWL=format_angle(float(WAVELENGTHS[0])),
+            )
+        if extra.recipe:
+            device = _sub(obj, "DeviceColorValues")
+            recipe = _sub(device, "ColorRecipe", Units=extra.recipe_units, Name=name)
+            _sub(recipe, "CreationDate", stamp)
+            for component, amount in extra.recipe:
+                attrs = {"Name": component}
+                if component == extra.binder:
+                    attrs["isBase"] = "true"
+                col = _sub(recipe, "Colorant", **attrs)
+                _sub(col, "Value", sfmt.format(amount))
+    if tags:
+        tc = _sub(obj, "TagCollection", Name=TAG_COLLECTION)
+        for key in sorted(tags):
+            _sub(tc, "Tag", Name=key, Value=tags[key])
 
 
 def _float(text: str | None, where: str, lo: float, hi: float) -> float:

@@ -7,15 +7,20 @@ one row per sample and geometry. ``#`` outside quotes starts a comment. Only the
 
 Fields used: ``SAMPLE_ID`` and ``SAMPLE_NAME`` (rows with the same ``SAMPLE_NAME``, or without that
 field the same ``SAMPLE_ID``, are one sample); ``GEOMETRY`` (``45as15``) or ``ILLUMINATION_ANGLE`` +
-``ASPECULAR_ANGLE`` (degrees); ``LAB_L``, ``LAB_A``, ``LAB_B`` and/or ``SPECTRAL_NMxxx`` (reflectance
-factor, or percent when the keyword ``SPECTRAL_NORM`` is 100); vendor texture fields ``SPARKLE…`` and
+``ASPECULAR_ANGLE`` (degrees) — or, in a single-geometry file without them, the keyword
+``MEASUREMENT_GEOMETRY`` (``"45/0"`` → ``45as45``; every row is then one sample at that geometry);
+``LAB_L``, ``LAB_A``, ``LAB_B`` and/or spectral fields ``SPECTRAL_NMxxx`` (X-Rite) or ``SPEC_xxx``
+(ArgyllCMS), divided by the keyword ``SPECTRAL_NORM`` when present (``100``/``"100.000000"``: percent;
+absent: reflectance factors); vendor texture fields ``SPARKLE…`` and
 ``GRAININESS…`` (an empty ``""`` cell means "not measured at this geometry"), tagged with the
 ``MANUFACTURER`` keyword (else ``INSTRUMENTATION``). Any other field and keyword is ignored.
 
-Keywords read: ``INSTRUMENTATION`` (model), ``MANUFACTURER``, ``INSTRUMENT_SERIAL`` (or
-``SERIAL_NUMBER``), ``CREATED`` (ISO 8601 instant of the measurement), ``MEASUREMENT_SOURCE``
+Keywords read: ``INSTRUMENTATION`` (model; ArgyllCMS: ``TARGET_INSTRUMENT``), ``MANUFACTURER``,
+``INSTRUMENT_SERIAL`` (or ``SERIAL_NUMBER``), ``CREATED`` (the measurement instant: ISO 8601, or
+ArgyllCMS's ``"Wed Mar 04 09:12:44 2026"`` read as UTC), ``MEASUREMENT_SOURCE``
 (``"Illumination=D65 ObserverAngle=10"``, X-Rite's form) or ``ILLUMINANT`` and ``OBSERVER``; the default
-is D65 and the CIE 1964 10° observer.
+is D65 and the CIE 1964 10° observer, except in an ArgyllCMS ``CTI3`` file, whose Lab are ICC PCS
+values: D50 and the CIE 1931 2° observer.
 
 Refused (:class:`~station.ingest.errors.CgatsImportError` naming the line and field): not UTF-8, no
 data table, a table without ``END_DATA`` (truncated), a row with too few or too many values, a row
@@ -26,9 +31,11 @@ does not parse or is not finite, a repeated geometry in a sample, Lab outside th
 from __future__ import annotations
 
 import datetime as dt
+import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from station.ingest.errors import CgatsImportError
 from station.ingest.formats._text import decode_utf8, factory, parse_instant, read_bytes
@@ -41,12 +48,15 @@ from station.ingest.formats.measurement import (
     canonical_geometry,
     observer_degrees,
     observer_name,
+    single_angle_geometry,
 )
 from station.model.domain import geometry_name
 
 __all__ = ["is_complete", "read_cgats", "write_cgats"]
 
-_SPECTRAL = re.compile(r"^SPECTRAL_NM_?(\d+(?:\.\d+)?)$", re.IGNORECASE)
+_SPECTRAL = re.compile(r"^(?:SPECTRAL_NM_?|SPEC_)(\d+(?:\.\d+)?)$", re.IGNORECASE)
+#: Conditions of an ArgyllCMS ``CTI3`` file that states none: its Lab/XYZ are ICC PCS values (D50, 2°).
+_ARGYLL_CONDITIONS = ("D50", "2")
 _TEXTURE = re.compile(r"^(SPARKLE|GRAININESS)", re.IGNORECASE)
 _ORIGINATOR = "CACAD Station"
 LAB_DECIMALS = 4
@@ -94,8 +104,11 @@ def _float(text: str, fld: str, file: str, lineno: int) -> float:
         raise CgatsImportError(file, f"line {lineno}", fld, "a number", text) from exc
 
 
-def _conditions(keywords: dict[str, str], file: str) -> tuple[str, str]:
-    illuminant, observer = "D65", observer_name("10") or ""
+def _conditions(keywords: dict[str, str], file_type: str) -> tuple[str, str]:
+    """Illuminant and observer: ``MEASUREMENT_SOURCE``, ``ILLUMINANT``/``OBSERVER``, else the default of
+    the file type (ArgyllCMS ``CTI3``: D50 and 2°; others D65 and 10°)."""
+    ill0, obs0 = _ARGYLL_CONDITIONS if file_type == "CTI3" else ("D65", "10")
+    illuminant, observer = ill0, observer_name(obs0) or ""
     source = keywords.get("MEASUREMENT_SOURCE", "")
     for part in source.replace(",", " ").split():
         key, _, value = part.partition("=")
@@ -182,21 +195,40 @@ def read_cgats(path: Path | str, data: bytes | None = None) -> ImportedFile:
         )  # fmt: skip
     if not rows:
         raise CgatsImportError(file, "BEGIN_DATA", "rows", "at least one data row", 0)
-    return ImportedFile("cgats", file, _samples(file, fields, rows, keywords))
+    file_type = (_tokens(lines[0], file, 1) or [""])[0].upper()
+    return ImportedFile("cgats", file, _samples(file, fields, rows, keywords, file_type))
 
 
-def _samples(
-    file: str, fields: list[str], rows: list[tuple[int, list[str]]], keywords: dict[str, str]
-) -> tuple[ImportedMeasurement, ...]:
+def _created(text: str) -> dt.datetime | None:
+    """The ``CREATED`` keyword: ISO 8601 (naive means UTC), or ArgyllCMS's C ``ctime`` form
+    (``"Wed Mar 04 09:12:44 2026"``, local time without a zone: read as UTC); else ``None``."""
+    value = parse_instant(text)
+    if value is None and text.strip():
+        try:
+            value = dt.datetime.strptime(" ".join(text.split()), "%a %b %d %H:%M:%S %Y").replace(
+                tzinfo=dt.UTC
+            )
+        except ValueError:
+            return None
+    return value
+
+
+def _layout(file: str, fields: list[str], keywords: dict[str, str]) -> dict[str, Any]:
+    """Which fields hold what, checked against the format's rules (module doc)."""
     col = {f: i for i, f in enumerate(fields)}
     where_fmt = "BEGIN_DATA_FORMAT"
     key_field = "SAMPLE_NAME" if "SAMPLE_NAME" in col else "SAMPLE_ID"
     if key_field not in col:
         raise CgatsImportError(file, where_fmt, "SAMPLE_ID", "a SAMPLE_ID or SAMPLE_NAME field")
+    single = None
     if "GEOMETRY" not in col and not {"ILLUMINATION_ANGLE", "ASPECULAR_ANGLE"} <= col.keys():
-        raise CgatsImportError(
-            file, where_fmt, "GEOMETRY", "a GEOMETRY field, or ILLUMINATION_ANGLE and ASPECULAR_ANGLE"
-        )
+        if "MEASUREMENT_GEOMETRY" not in keywords:
+            raise CgatsImportError(
+                file, where_fmt, "GEOMETRY", "a GEOMETRY field, ILLUMINATION_ANGLE and ASPECULAR_ANGLE, "
+                'or for a single-geometry file a MEASUREMENT_GEOMETRY keyword (e.g. "45/0")',
+            )  # fmt: skip
+        err = factory(CgatsImportError, file, "header")
+        single = single_angle_geometry(keywords["MEASUREMENT_GEOMETRY"], "MEASUREMENT_GEOMETRY", err)
     lab_cols = [col.get(f"LAB_{c}") for c in "LAB"]
     has_lab = all(c is not None for c in lab_cols)
     if any(c is not None for c in lab_cols) and not has_lab:
@@ -206,66 +238,90 @@ def _samples(
         key=lambda t: t[0],
     )
     if not has_lab and not spectral:
-        raise CgatsImportError(file, where_fmt, "LAB_L", "LAB_L/LAB_A/LAB_B and/or SPECTRAL_NMxxx fields")
-    divisor = 1.0
-    if keywords.get("SPECTRAL_NORM", "").strip() in ("100", "100.0"):
-        divisor = 100.0  # percent
+        raise CgatsImportError(
+            file, where_fmt, "LAB_L", "LAB_L/LAB_A/LAB_B and/or SPECTRAL_NMxxx or SPEC_xxx fields"
+        )
+    norm_text = keywords.get("SPECTRAL_NORM", "").strip()
+    try:
+        divisor = float(norm_text) if norm_text else 1.0
+    except ValueError:
+        divisor = math.nan
+    if not (divisor > 0 and math.isfinite(divisor)):
+        raise CgatsImportError(file, "header", "SPECTRAL_NORM", "a number > 0 (100: percent)", norm_text)
     texture_cols = [(f, i) for i, f in enumerate(fields) if _TEXTURE.match(f)]
     vendor = keywords.get("MANUFACTURER", "").strip() or keywords.get("INSTRUMENTATION", "").strip()
     if texture_cols and not vendor:
         raise CgatsImportError(
             file, "header", "MANUFACTURER", "a MANUFACTURER or INSTRUMENTATION keyword with texture fields"
         )
+    return {
+        "col": col, "key": key_field, "single": single, "lab": lab_cols if has_lab else None,
+        "spectral": spectral, "divisor": divisor, "texture": texture_cols, "vendor": vendor,
+    }  # fmt: skip
+
+
+def _row(file: str, fields: list[str], lay: dict[str, Any], lineno: int, toks: list[str], acc: dict) -> None:
+    """Add one data row (one geometry of a sample) to the sample's accumulators *acc*."""
+    col = lay["col"]
+    err = factory(CgatsImportError, file, f"line {lineno}")
+    if lay["single"] is not None:
+        geometry = lay["single"]
+    else:
+        if "GEOMETRY" in col:
+            name = toks[col["GEOMETRY"]]
+        else:
+            ill = _float(toks[col["ILLUMINATION_ANGLE"]], "ILLUMINATION_ANGLE", file, lineno)
+            asp = _float(toks[col["ASPECULAR_ANGLE"]], "ASPECULAR_ANGLE", file, lineno)
+            name = geometry_name(ill, asp)
+        geometry = canonical_geometry(name, "GEOMETRY", err)
+    acc["rows"].append((geometry, err))
+    if lay["lab"] is not None:
+        acc["lab"].append([_float(toks[c], f, file, lineno) for c, f in zip(lay["lab"], ("LAB_L", "LAB_A", "LAB_B"), strict=True)])  # fmt: skip
+    if lay["spectral"]:
+        acc["spectra"].append([_float(toks[i], fields[i], file, lineno) / lay["divisor"] for _, i in lay["spectral"]])  # fmt: skip
+    for f, i in lay["texture"]:
+        if toks[i] == "":
+            continue
+        value = _float(toks[i], f, file, lineno)
+        per_sample = f.startswith("GRAININESS")
+        acc["texture"].append(VendorValue(lay["vendor"], f.lower(), value, "" if per_sample else geometry))
+
+
+def _samples(
+    file: str, fields: list[str], rows: list[tuple[int, list[str]]], keywords: dict[str, str], file_type: str
+) -> tuple[ImportedMeasurement, ...]:
+    """One validated measurement per sample (rows grouped by ``SAMPLE_NAME``, else ``SAMPLE_ID``)."""
+    lay = _layout(file, fields, keywords)
     instrument = Instrument(
-        model=keywords.get("INSTRUMENTATION", "").strip(),
+        model=(keywords.get("INSTRUMENTATION") or keywords.get("TARGET_INSTRUMENT") or "").strip(),
         serial=(keywords.get("INSTRUMENT_SERIAL") or keywords.get("SERIAL_NUMBER") or "").strip(),
         manufacturer=keywords.get("MANUFACTURER", "").strip(),
     )
-    illuminant, observer = _conditions(keywords, file)
-    measured_at: dt.datetime | None = parse_instant(keywords.get("CREATED", ""))
+    illuminant, observer = _conditions(keywords, file_type)
+    measured_at = _created(keywords.get("CREATED", ""))
     groups: dict[str, list[tuple[int, list[str]]]] = {}
     for lineno, toks in rows:
-        key = toks[col[key_field]].strip()
+        key = toks[lay["col"][lay["key"]]].strip()
         if not key:
-            raise CgatsImportError(file, f"line {lineno}", key_field, "a non-empty sample", key)
+            raise CgatsImportError(file, f"line {lineno}", lay["key"], "a non-empty sample", key)
         groups.setdefault(key, []).append((lineno, toks))
     out = []
     for key, group in groups.items():
-        geo_rows = []
-        labs, curves = [], []
-        texture: list[VendorValue] = []
+        acc: dict[str, list[Any]] = {"rows": [], "lab": [], "spectra": [], "texture": []}
         for lineno, toks in group:
-            err = factory(CgatsImportError, file, f"line {lineno}")
-            if "GEOMETRY" in col:
-                name = toks[col["GEOMETRY"]]
-            else:
-                ill = _float(toks[col["ILLUMINATION_ANGLE"]], "ILLUMINATION_ANGLE", file, lineno)
-                asp = _float(toks[col["ASPECULAR_ANGLE"]], "ASPECULAR_ANGLE", file, lineno)
-                name = geometry_name(ill, asp)
-            geometry = canonical_geometry(name, "GEOMETRY", err)
-            geo_rows.append((geometry, err))
-            if has_lab:
-                labs.append([_float(toks[c], f, file, lineno) for c, f in zip(lab_cols, ("LAB_L", "LAB_A", "LAB_B"), strict=True) if c is not None])  # fmt: skip
-            if spectral:
-                curves.append([_float(toks[i], fields[i], file, lineno) / divisor for _, i in spectral])
-            for f, i in texture_cols:
-                if toks[i] == "":
-                    continue
-                value = _float(toks[i], f, file, lineno)
-                per_sample = f.startswith("GRAININESS")
-                texture.append(VendorValue(vendor, f.lower(), value, "" if per_sample else geometry))
+            _row(file, fields, lay, lineno, toks, acc)
         out.append(
             build_measurement(
                 sample=key,
-                rows=geo_rows,
-                lab=labs if has_lab else None,
-                wavelengths_nm=[w for w, _ in spectral] if spectral else None,
-                spectra=curves if spectral else None,
+                rows=acc["rows"],
+                lab=acc["lab"] if lay["lab"] is not None else None,
+                wavelengths_nm=[w for w, _ in lay["spectral"]] if lay["spectral"] else None,
+                spectra=acc["spectra"] if lay["spectral"] else None,
                 instrument=instrument,
                 illuminant=illuminant,
                 observer=observer,
                 measured_at=measured_at,
-                texture=_dedupe(texture, file, group[0][0]),
+                texture=_dedupe(acc["texture"], file, group[0][0]),
                 err=factory(CgatsImportError, file, f"line {group[0][0]}"),
             )
         )

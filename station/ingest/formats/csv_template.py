@@ -31,6 +31,7 @@ import csv
 import io
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from station.csv_cells import escape_cell, is_formula
 from station.ingest.errors import CsvImportError
@@ -98,11 +99,8 @@ def is_complete(data: bytes) -> bool:
     return data.endswith((b"\n", b"\r"))
 
 
-def read_csv(path: Path | str, data: bytes | None = None) -> ImportedFile:
-    """Read a file in the CSV template into one :class:`ImportedMeasurement` per sample."""
-    path = Path(path)
-    file = path.name
-    text = decode_utf8(read_bytes(path, CsvImportError, data), file, CsvImportError)
+def _table(text: str, file: str) -> tuple[int, list[list[str]]]:
+    """The first non-comment line's index (the header) and the CSV rows from it on."""
     lines = text.splitlines()
     start = 0
     while start < len(lines) and (not lines[start].strip() or lines[start].lstrip().startswith("#")):
@@ -110,22 +108,25 @@ def read_csv(path: Path | str, data: bytes | None = None) -> ImportedFile:
     if start == len(lines):
         raise CsvImportError(file, "line 1", "header", "a header row (sample,geometry,L,a,b,…)", "empty")
     try:
-        table = list(csv.reader(io.StringIO("\n".join(lines[start:])), strict=True))
+        return start, list(csv.reader(io.StringIO("\n".join(lines[start:])), strict=True))
     except csv.Error as exc:
         raise CsvImportError(file, f"line {start + 1}", "csv", "well-formed CSV", str(exc)) from exc
-    header = [h.strip() for h in table[0]]
+
+
+def _columns(header: list[str], where: str, file: str) -> dict[str, Any]:
+    """Which columns hold what (module doc), checked: each once, sample and geometry, Lab whole."""
     lower = [h.lower() for h in header]
     col = {h: i for i, h in enumerate(lower)}
     if len(col) != len(lower):
         dup = next(h for h in lower if lower.count(h) > 1)
-        raise CsvImportError(file, f"line {start + 1}", "header", "each column once", dup)
+        raise CsvImportError(file, where, "header", "each column once", dup)
     for required in ("sample", "geometry"):
         if required not in col:
-            raise CsvImportError(file, f"line {start + 1}", required, f"a {required!r} column", header)
+            raise CsvImportError(file, where, required, f"a {required!r} column", header)
     lab_cols = [col.get(c) for c in "lab"]
     has_lab = all(c is not None for c in lab_cols)
     if any(c is not None for c in lab_cols) and not has_lab:
-        raise CsvImportError(file, f"line {start + 1}", "L", "all of the L, a, b columns (or none)", header)
+        raise CsvImportError(file, where, "L", "all of the L, a, b columns (or none)", header)
     spectral: list[tuple[float, int]] = []
     texture_cols: list[tuple[str, str, bool, int]] = []
     for i, h in enumerate(lower):
@@ -135,70 +136,79 @@ def read_csv(path: Path | str, data: bytes | None = None) -> ImportedFile:
             parts = header[i].split(":")
             if len(parts) not in (3, 4) or not parts[1] or not parts[2] or parts[3:] not in ([], ["sample"]):
                 raise CsvImportError(
-                    file,
-                    f"line {start + 1}",
-                    "header",
-                    "texture:VENDOR:NAME or texture:VENDOR:NAME:sample",
-                    header[i],
+                    file, where, "header", "texture:VENDOR:NAME or texture:VENDOR:NAME:sample", header[i]
                 )
             texture_cols.append((parts[1], parts[2], len(parts) == 4, i))
     spectral.sort()
     if not has_lab and not spectral:
-        raise CsvImportError(file, f"line {start + 1}", "L", "L, a, b and/or nmXXX columns", header)
+        raise CsvImportError(file, where, "L", "L, a, b and/or nmXXX columns", header)
+    return {"col": col, "lab": lab_cols if has_lab else None, "spectral": spectral, "texture": texture_cols}
+
+
+def read_csv(path: Path | str, data: bytes | None = None) -> ImportedFile:
+    """Read a file in the CSV template into one :class:`ImportedMeasurement` per sample."""
+    path = Path(path)
+    file = path.name
+    text = decode_utf8(read_bytes(path, CsvImportError, data), file, CsvImportError)
+    start, table = _table(text, file)
+    header = [h.strip() for h in table[0]]
+    lay = _columns(header, f"line {start + 1}", file)
     groups: dict[str, list[tuple[int, list[str]]]] = {}
     for k, row in enumerate(table[1:], start=start + 2):
         if not row or all(not c.strip() for c in row):
             continue
         if len(row) != len(header):
             raise CsvImportError(file, f"line {k}", "row", f"{len(header)} cells (one per column)", len(row))
-        name = _text(row[col["sample"]].strip(), "sample", file, k)
+        name = _text(row[lay["col"]["sample"]].strip(), "sample", file, k)
         if not name:
             raise CsvImportError(file, f"line {k}", "sample", "a non-empty sample name", "")
         groups.setdefault(name, []).append((k, row))
     if not groups:
         raise CsvImportError(file, f"line {start + 1}", "rows", "at least one data row", 0)
-    out = []
-    for name, group in groups.items():
-        k0, first = group[0]
+    return ImportedFile("csv", file, tuple(_sample(name, g, header, lay, file) for name, g in groups.items()))
 
-        def opt(column: str, row: list[str] = first, lineno: int = k0) -> str:
-            return _text(row[col[column]].strip(), column, file, lineno) if column in col else ""
 
-        observer_text = opt("observer") or "10"
-        observer = observer_name(observer_text) or observer_text
-        when = opt("measured_at")
-        measured_at = parse_instant(when)
-        if when and measured_at is None:
-            raise CsvImportError(file, f"line {k0}", "measured_at", "an ISO 8601 instant", when)
-        rows, labs, curves, texture = [], [], [], []
-        for k, row in group:
-            err = factory(CsvImportError, file, f"line {k}")
-            rows.append((row[col["geometry"]], err))
-            if has_lab:
-                labs.append([_float(row[c], h, file, k) for c, h in zip(lab_cols, "Lab", strict=True) if c is not None])  # fmt: skip
-            if spectral:
-                curves.append([_float(row[i], header[i], file, k) for _, i in spectral])
-            for vendor, qty, per_sample, i in texture_cols:
-                if not row[i].strip() or (per_sample and k != k0):
-                    continue
-                geometry = "" if per_sample else canonical_geometry(row[col["geometry"]], "geometry", err)
-                texture.append(VendorValue(vendor, qty, _float(row[i], header[i], file, k), geometry))
-        out.append(
-            build_measurement(
-                sample=name,
-                rows=rows,
-                lab=labs if has_lab else None,
-                wavelengths_nm=[w for w, _ in spectral] if spectral else None,
-                spectra=curves if spectral else None,
-                instrument=Instrument(opt("instrument"), opt("serial"), opt("manufacturer")),
-                illuminant=(opt("illuminant") or "D65").upper(),
-                observer=observer,
-                measured_at=measured_at,
-                texture=texture,
-                err=factory(CsvImportError, file, f"line {k0}"),
-            )
-        )
-    return ImportedFile("csv", file, tuple(out))
+def _sample(
+    name: str, group: list[tuple[int, list[str]]], header: list[str], lay: dict[str, Any], file: str
+) -> ImportedMeasurement:
+    """One sample's rows as a validated measurement; per-sample columns are read from its first row."""
+    col = lay["col"]
+    k0, first = group[0]
+
+    def opt(column: str) -> str:
+        return _text(first[col[column]].strip(), column, file, k0) if column in col else ""
+
+    observer_text = opt("observer") or "10"
+    when = opt("measured_at")
+    measured_at = parse_instant(when)
+    if when and measured_at is None:
+        raise CsvImportError(file, f"line {k0}", "measured_at", "an ISO 8601 instant", when)
+    rows, labs, curves, texture = [], [], [], []
+    for k, row in group:
+        err = factory(CsvImportError, file, f"line {k}")
+        rows.append((row[col["geometry"]], err))
+        if lay["lab"] is not None:
+            labs.append([_float(row[c], h, file, k) for c, h in zip(lay["lab"], "Lab", strict=True)])
+        if lay["spectral"]:
+            curves.append([_float(row[i], header[i], file, k) for _, i in lay["spectral"]])
+        for vendor, qty, per_sample, i in lay["texture"]:
+            if not row[i].strip() or (per_sample and k != k0):
+                continue
+            geometry = "" if per_sample else canonical_geometry(row[col["geometry"]], "geometry", err)
+            texture.append(VendorValue(vendor, qty, _float(row[i], header[i], file, k), geometry))
+    return build_measurement(
+        sample=name,
+        rows=rows,
+        lab=labs if lay["lab"] is not None else None,
+        wavelengths_nm=[w for w, _ in lay["spectral"]] if lay["spectral"] else None,
+        spectra=curves if lay["spectral"] else None,
+        instrument=Instrument(opt("instrument"), opt("serial"), opt("manufacturer")),
+        illuminant=(opt("illuminant") or "D65").upper(),
+        observer=observer_name(observer_text) or observer_text,
+        measured_at=measured_at,
+        texture=texture,
+        err=factory(CsvImportError, file, f"line {k0}"),
+    )
 
 
 def write_csv(measurements: Sequence[ImportedMeasurement], path: Path | str | None = None) -> str:

@@ -1,13 +1,27 @@
 """CxF3 (ISO 17972-1) multi-angle measurements through ``colour-cxf``: read and write.
 
-Layout: one ``ColorSpecification`` per geometry (``Id="CS45as15"``) whose ``MeasurementSpec`` has a
-``GeometryChoice/MultiAngle`` with one ``BRDFAngle`` (IlluminationAngle, Aspecular, Notation
-``45as15``), the ``WavelengthRange`` of the spectra and the ``Device`` (manufacturer, model, serial);
-its ``TristimulusSpec`` gives the illuminant and observer of the Lab. One ``Object`` per sample (its
+Layout written (and read): one ``ColorSpecification`` per geometry (``Id="CS45as15"``) whose
+``MeasurementSpec`` has a ``GeometryChoice/MultiAngle`` with one ``BRDFAngle`` (IlluminationAngle,
+Aspecular, Notation ``45as15``), the ``WavelengthRange`` of the spectra and the ``Device``
+(manufacturer, model, serial); its ``TristimulusSpec`` gives the illuminant and observer of the Lab.
+
+Also read: one ``ColorSpecification`` whose ``MultiAngle`` lists several ``BRDFAngle`` (the layout of
+colour-cxf's test resources). A value pointing at it names its geometry by ``Name`` equal to a
+``BRDFAngle/@Notation``; unnamed values of one kind take the angles in ``BRDFAngle`` order and must
+then number exactly one per ``BRDFAngle``. An out-of-plane ``Azimuth`` other than 0 is refused (the
+product's geometries are in-plane). A ``SingleAngle`` specification (e.g. 45/0, annular or
+uniplanar) is one geometry, ``<IlluminationAngle>as<IlluminationAngle − MeasurementAngle>``
+(45/0 → ``45as45``); 0/45 is refused (illumination along the normal has no aspecular side).
+Values under other geometries (sphere, emissive, unknown) are skipped.
+
+One ``Object`` per sample (its
 ``Name``; ``CreationDate`` is the measurement instant) whose ``ColorValues`` hold a ``ColorCIELab``
 and/or a ``ReflectanceSpectrum`` per geometry, each pointing at its specification. Vendor texture
 values travel in a ``TagCollection Name="texture"``: ``Tag Name="VENDOR|NAME|GEOMETRY"`` (GEOMETRY
-empty for a per-sample value) with the number as ``Value``.
+empty for a per-sample value) with the number as ``Value``. A measurement without an instant is
+written with the schema's required ``CreationDate`` set to 2000-01-01 and a ``TagCollection
+Name="measurement"`` holding ``Tag Name="measured_at" Value="unknown"``; the reader then gives no
+instant, so the placeholder never passes for a date.
 
 The bytes are screened first with defusedxml (no DTD, no entity declarations, no external
 references: XXE and "billion laughs" are refused before any expansion), then parsed by colour-cxf.
@@ -48,6 +62,9 @@ from station.model.domain import format_angle, geometry_name
 __all__ = ["is_complete", "read_cxf", "write_cxf"]
 
 TEXTURE_TAGS = "texture"
+#: ``TagCollection`` marking an object whose ``CreationDate`` (required by the schema) is a placeholder.
+UNDATED_TAGS = "measurement"
+_UNDATED = cxf3.TagCollection(tag=[cxf3.Tag(name="measured_at", value="unknown")], name=UNDATED_TAGS)
 LAB_DECIMALS = 4
 SPECTRA_DECIMALS = 6
 
@@ -92,37 +109,69 @@ def _enum_text(value: Any) -> str:
     return "" if raw is None else str(raw)
 
 
+def _angles(cs: Any, where: str, file: str) -> tuple[list[str], dict[str, str]] | tuple[str, str, str] | None:
+    """Geometry names of a specification in ``BRDFAngle`` order and its Notation → name map; ``None``
+    for a non-directional geometry; ``(field, accepted, got)`` when its geometry is outside the
+    product's (refused when a value uses it)."""
+    ms = cs.measurement_spec
+    choice = ms.geometry_choice.choice if ms and ms.geometry_choice else None
+    if isinstance(choice, cxf3.SingleAngleType):
+        ill, meas = choice.illumination_angle, choice.measurement_angle
+        if ill is None or meas is None or not (math.isfinite(ill) and math.isfinite(meas)):
+            raise CxfImportError(file, f"{where}/SingleAngle", "MeasurementAngle", "finite angles (degrees)")
+        if ill == 0.0:
+            return (
+                "IlluminationAngle",
+                "a directional geometry such as 45/0",
+                f"{where}/SingleAngle: 0/{meas:g}",
+            )
+        return [geometry_name(ill, ill - meas)], {}
+    if not isinstance(choice, cxf3.MultiAngleType):
+        return None
+    if not choice.brdfangle:
+        raise CxfImportError(file, f"{where}/MultiAngle", "BRDFAngle", "at least one BRDFAngle", 0)
+    names: list[str] = []
+    notations: dict[str, str] = {}
+    for n, angle in enumerate(choice.brdfangle, start=1):
+        here = f"{where}/BRDFAngle[{n}]"
+        if angle.illumination_angle is None or angle.aspecular is None:
+            raise CxfImportError(file, here, "Aspecular", "IlluminationAngle and Aspecular")
+        if not (math.isfinite(angle.illumination_angle) and math.isfinite(angle.aspecular)):
+            raise CxfImportError(file, here, "Aspecular", "finite angles (degrees)")
+        if angle.azimuth not in (None, 0.0):
+            return ("Azimuth", "an in-plane geometry (Azimuth 0)", f"{here}: Azimuth {angle.azimuth:g}°")
+        g = geometry_name(angle.illumination_angle, angle.aspecular)
+        if g in names:
+            raise CxfImportError(file, here, "BRDFAngle", "each geometry once per MultiAngle", g)
+        names.append(g)
+        if angle.notation:
+            notations[str(angle.notation).strip()] = g
+    return names, notations
+
+
 def _specs(doc: cxf3.CxF, file: str) -> dict[str, dict[str, Any]]:
-    """Per ColorSpecification Id: geometry name, illuminant, observer, wavelength start/step, device."""
+    """Per ColorSpecification Id: geometry names (``None``: not directional; ``refused``: why not read),
+    Notation map, illuminant, observer, wavelength start/step, device."""
     out: dict[str, dict[str, Any]] = {}
     coll = doc.resources.color_specification_collection if doc.resources else None
     for k, cs in enumerate(coll.color_specification if coll else []):
         where = f"ColorSpecification[{k + 1}]"  # an index, never the file's text
-        ms = cs.measurement_spec
-        choice = ms.geometry_choice.choice if ms and ms.geometry_choice else None
-        if not isinstance(choice, cxf3.MultiAngleType):
-            out[str(cs.id)] = {"geometry": None, "where": where}
+        angles = _angles(cs, where, file)
+        if angles is None or len(angles) == 3:
+            out[str(cs.id)] = {"geometries": None, "refused": angles, "where": where}
             continue
-        if len(choice.brdfangle) != 1:
-            raise CxfImportError(
-                file, f"{where}/MultiAngle", "BRDFAngle", "one BRDFAngle per ColorSpecification",
-                len(choice.brdfangle),
-            )  # fmt: skip
-        angle = choice.brdfangle[0]
-        if angle.illumination_angle is None or angle.aspecular is None:
-            raise CxfImportError(file, f"{where}/BRDFAngle", "Aspecular", "IlluminationAngle and Aspecular")
-        if not (math.isfinite(angle.illumination_angle) and math.isfinite(angle.aspecular)):
-            raise CxfImportError(file, f"{where}/BRDFAngle", "Aspecular", "finite angles (degrees)")
         ts = cs.tristimulus_spec
         ill = ts.illuminant_or_custom_illuminant if ts else None
         illuminant = (
             _enum_text(ill) if isinstance(ill, cxf3.Illuminant) else "D65" if ill is None else "custom"
         )
         obs_text = _enum_text(ts.observer) if ts and ts.observer else "10_Degree"
+        ms = cs.measurement_spec
         wr = ms.wavelength_range if ms else None
         dev = ms.device if ms else None
         out[str(cs.id)] = {
-            "geometry": geometry_name(angle.illumination_angle, angle.aspecular),
+            "geometries": angles[0],
+            "notations": angles[1],
             "where": where,
             "illuminant": illuminant,
             "observer": observer_name(obs_text) or obs_text,
@@ -173,17 +222,12 @@ def is_complete(data: bytes) -> bool:
     return closed
 
 
-def read_cxf(path: Path | str, data: bytes | None = None) -> ImportedFile:
-    """Read the multi-angle objects of a CxF3 file (module doc for the layout and the refusals)."""
-    path = Path(path)
-    file = path.name
-    data = read_bytes(path, CxfImportError, data)
-    decode_utf8(data, file, CxfImportError)  # CxF3 files are UTF-8: refuse others by line, not by parser
-    _screen(data, file)
+def _parse(data: bytes, file: str) -> cxf3.CxF:
+    """The colour-cxf document of screened *data*; a value xsdata cannot convert is refused by element."""
     try:
         with warnings.catch_warnings():  # xsdata keeps a value it cannot convert, with a warning: refuse it
             warnings.simplefilter("error", ConverterWarning)
-            doc = colour_cxf.read_cxf(data)
+            return colour_cxf.read_cxf(data)
     except ConverterWarning as exc:
         element, _, rest = str(exc).partition("\n")
         fld = element.rsplit("`", 2)[-2] if element.count("`") >= 2 else "value"
@@ -192,96 +236,160 @@ def read_cxf(path: Path | str, data: bytes | None = None) -> ImportedFile:
         ) from exc
     except (ParserError, ValueError, TypeError) as exc:
         raise CxfImportError(file, "document", "xml", "CxF3 elements with valid values", str(exc)) from exc
+
+
+def read_cxf(path: Path | str, data: bytes | None = None) -> ImportedFile:
+    """Read the multi-angle objects of a CxF3 file (module doc for the layouts and the refusals)."""
+    path = Path(path)
+    file = path.name
+    data = read_bytes(path, CxfImportError, data)
+    decode_utf8(data, file, CxfImportError)  # CxF3 files are UTF-8: refuse others by line, not by parser
+    _screen(data, file)
+    doc = _parse(data, file)
     specs = _specs(doc, file)
     coll = doc.resources.object_collection if doc.resources else None
     objects = coll.object_value if coll else []
     if not objects:
         raise CxfImportError(file, "Resources/ObjectCollection", "Object", "at least one Object")
-    out = []
-    for i, obj in enumerate(objects, start=1):
-        where = f"Object[{i}]"  # an index, never the file's text
-        err = factory(CxfImportError, file, where)
-        values = obj.color_values.choice if obj.color_values else []
-        per_geo: dict[str, dict[str, Any]] = {}
-        rows = []
-        for j, v in enumerate(values, start=1):
-            if not isinstance(v, (cxf3.ColorCielab, cxf3.ReflectanceSpectrum)):
-                continue
-            kind = "lab" if isinstance(v, cxf3.ColorCielab) else "spectrum"
-            vwhere = f"{where}/ColorValues[{j}] {type(v).__name__}"
-            spec = specs.get(str(v.color_specification))
-            if spec is None:
-                raise CxfImportError(file, vwhere, "ColorSpecification", "the Id of a ColorSpecification", v.color_specification)  # fmt: skip
-            if spec["geometry"] is None:
-                continue  # not a multi-angle value (e.g. a sphere reading in the same file)
-            g = spec["geometry"]
-            slot = per_geo.get(g)
-            if slot is None:
-                slot = per_geo[g] = {"spec": spec, "err": factory(CxfImportError, file, vwhere)}
-                rows.append((g, slot["err"]))
-            if kind in slot:
-                raise CxfImportError(file, vwhere, "geometry", f"one {type(v).__name__} per geometry", g)
-            if isinstance(v, cxf3.ColorCielab):
-                if v.l is None or v.a is None or v.b is None:
-                    raise CxfImportError(file, vwhere, "L", "L, A and B elements")
-                slot["lab"] = (v.l, v.a, v.b)
-            else:
-                start = v.start_wl if v.start_wl is not None else spec["start"]
-                if start is None or spec["step"] is None:
-                    raise CxfImportError(file, vwhere, "StartWL", "StartWL and a WavelengthRange Increment")
-                slot["spectrum"] = list(v.value)
-                slot["wl"] = [float(start + spec["step"] * n) for n in range(len(v.value))]
-        if not rows:
-            raise CxfImportError(
-                file, where, "ColorValues", "MultiAngle ColorCIELab or ReflectanceSpectrum values"
-            )
-        slots = [per_geo[g] for g, _ in rows]
-        has_lab = [("lab" in s) for s in slots]
-        has_sp = [("spectrum" in s) for s in slots]
-        if any(has_lab) and not all(has_lab):
-            raise CxfImportError(file, where, "ColorCIELab", "Lab at every geometry or none")
-        if any(has_sp) and not all(has_sp):
-            raise CxfImportError(file, where, "ReflectanceSpectrum", "a spectrum at every geometry or none")
-        wl = slots[0].get("wl")
-        if any(s.get("wl") != wl for s in slots):
-            raise CxfImportError(file, where, "WavelengthRange", "one wavelength grid for all geometries")
-        conds = {(s["spec"]["illuminant"], s["spec"]["observer"]) for s in slots}
-        if len(conds) != 1:
-            raise CxfImportError(file, where, "TristimulusSpec", "one illuminant and observer per sample")
-        illuminant, observer = conds.pop()
-        texture = []
-        for tc in obj.tag_collection:
-            if tc.name != TEXTURE_TAGS:
-                continue
-            for tag in tc.tag:
-                parts = str(tag.name or "").split("|")
-                if len(parts) != 3:
-                    raise CxfImportError(
-                        file, f"{where}/TagCollection", "Tag", "Name=VENDOR|NAME|GEOMETRY", tag.name
-                    )
-                try:
-                    value = float(tag.value or "")
-                except ValueError as exc:
-                    raise CxfImportError(
-                        file, f"{where}/TagCollection", parts[1], "a number", tag.value
-                    ) from exc
-                texture.append(VendorValue(parts[0], parts[1], value, parts[2]))
-        out.append(
-            build_measurement(
-                sample=str(obj.name or ""),
-                rows=rows,
-                lab=[s["lab"] for s in slots] if all(has_lab) else None,
-                wavelengths_nm=wl if all(has_sp) else None,
-                spectra=[s["spectrum"] for s in slots] if all(has_sp) else None,
-                instrument=slots[0]["spec"]["instrument"],
-                illuminant=illuminant,
-                observer=observer,
-                measured_at=_instant(obj.creation_date),
-                texture=texture,
-                err=err,
-            )
+    return ImportedFile("cxf", file, tuple(_object(obj, i, specs, file) for i, obj in enumerate(objects, 1)))
+
+
+def _element(v: Any) -> str:
+    """The CxF3 element name of a colour value (``ColorCIELab``, ``ReflectanceSpectrum``)."""
+    return "ColorCIELab" if isinstance(v, cxf3.ColorCielab) else "ReflectanceSpectrum"
+
+
+def _geometry_of(v: Any, spec: dict[str, Any], count: int, position: int, file: str, vwhere: str) -> str:
+    """The geometry of value *v* under *spec*: by ``Name`` = a BRDFAngle Notation, else by its
+    *position* among the *count* unnamed values of its kind pointing at the same specification."""
+    names: list[str] = spec["geometries"]
+    if len(names) == 1:
+        return names[0]
+    name = str(v.name or "").strip()
+    if name in spec["notations"]:
+        return str(spec["notations"][name])
+    if count != len(names):
+        raise CxfImportError(
+            file,
+            vwhere,
+            "ColorSpecification",
+            f"one {_element(v)} per BRDFAngle of {spec['where']} ({len(names)}, in BRDFAngle "
+            "order) or a Name equal to a BRDFAngle Notation",
+            count,
         )
-    return ImportedFile("cxf", file, tuple(out))
+    return names[position]
+
+
+def _values(obj: Any, where: str, specs: dict[str, dict[str, Any]], file: str) -> list[tuple[str, dict]]:
+    """The object's directional Lab and spectra grouped per geometry, in specification order."""
+    values = obj.color_values.choice if obj.color_values else []
+    kept = [
+        (j, v) for j, v in enumerate(values, 1) if isinstance(v, (cxf3.ColorCielab, cxf3.ReflectanceSpectrum))
+    ]
+    unnamed: dict[tuple[str, type], list[int]] = {}
+    for j, v in kept:
+        spec = specs.get(str(v.color_specification))
+        if spec is not None and spec["geometries"] and str(v.name or "").strip() not in spec["notations"]:
+            unnamed.setdefault((str(v.color_specification), type(v)), []).append(j)
+    per_geo: dict[str, dict[str, Any]] = {}
+    for j, v in kept:
+        kind = "lab" if isinstance(v, cxf3.ColorCielab) else "spectrum"
+        vwhere = f"{where}/ColorValues[{j}] {_element(v)}"
+        spec = specs.get(str(v.color_specification))
+        if spec is None:
+            raise CxfImportError(file, vwhere, "ColorSpecification", "the Id of a ColorSpecification", v.color_specification)  # fmt: skip
+        if spec["geometries"] is None:
+            if spec["refused"]:
+                raise CxfImportError(file, vwhere, *spec["refused"])
+            continue  # not a directional value (e.g. a sphere reading in the same file)
+        group = unnamed.get((str(v.color_specification), type(v)), [])
+        g = _geometry_of(v, spec, len(group), group.index(j) if j in group else 0, file, vwhere)
+        slot = per_geo.setdefault(g, {"spec": spec, "err": factory(CxfImportError, file, vwhere)})
+        if kind in slot:
+            raise CxfImportError(file, vwhere, "geometry", f"one {_element(v)} per geometry", g)
+        if isinstance(v, cxf3.ColorCielab):
+            if v.l is None or v.a is None or v.b is None:
+                raise CxfImportError(file, vwhere, "L", "L, A and B elements")
+            slot["lab"] = (v.l, v.a, v.b)
+        else:
+            start = v.start_wl if v.start_wl is not None else spec["start"]
+            if start is None or spec["step"] is None:
+                raise CxfImportError(file, vwhere, "StartWL", "StartWL and a WavelengthRange Increment")
+            slot["spectrum"] = list(v.value)
+            slot["wl"] = [float(start + spec["step"] * n) for n in range(len(v.value))]
+    first_seen: dict[str, int] = {}
+    for slot in per_geo.values():
+        first_seen.setdefault(slot["spec"]["where"], len(first_seen))
+    # specifications in first-seen order; within one, its BRDFAngle order (named values may be shuffled)
+    return sorted(
+        per_geo.items(),
+        key=lambda kv: (first_seen[kv[1]["spec"]["where"]], kv[1]["spec"]["geometries"].index(kv[0])),
+    )
+
+
+def _texture(obj: Any, where: str, file: str) -> list[VendorValue]:
+    """The vendor texture values of the object's ``TagCollection Name="texture"``."""
+    texture = []
+    for tc in obj.tag_collection:
+        if tc.name != TEXTURE_TAGS:
+            continue
+        for tag in tc.tag:
+            parts = str(tag.name or "").split("|")
+            if len(parts) != 3:
+                raise CxfImportError(
+                    file, f"{where}/TagCollection", "Tag", "Name=VENDOR|NAME|GEOMETRY", tag.name
+                )
+            try:
+                value = float(tag.value or "")
+            except ValueError as exc:
+                raise CxfImportError(file, f"{where}/TagCollection", parts[1], "a number", tag.value) from exc
+            texture.append(VendorValue(parts[0], parts[1], value, parts[2]))
+    return texture
+
+
+def _object(obj: Any, i: int, specs: dict[str, dict[str, Any]], file: str) -> ImportedMeasurement:
+    """One ``Object`` as a validated measurement (every geometry with Lab, spectra, or both)."""
+    where = f"Object[{i}]"  # an index, never the file's text
+    groups = _values(obj, where, specs, file)
+    if not groups:
+        raise CxfImportError(
+            file, where, "ColorValues", "directional ColorCIELab or ReflectanceSpectrum values"
+        )
+    slots = [s for _, s in groups]
+    has_lab = [("lab" in s) for s in slots]
+    has_sp = [("spectrum" in s) for s in slots]
+    if any(has_lab) and not all(has_lab):
+        raise CxfImportError(file, where, "ColorCIELab", "Lab at every geometry or none")
+    if any(has_sp) and not all(has_sp):
+        raise CxfImportError(file, where, "ReflectanceSpectrum", "a spectrum at every geometry or none")
+    wl = slots[0].get("wl")
+    if any(s.get("wl") != wl for s in slots):
+        raise CxfImportError(file, where, "WavelengthRange", "one wavelength grid for all geometries")
+    conds = {(s["spec"]["illuminant"], s["spec"]["observer"]) for s in slots}
+    if len(conds) != 1:
+        raise CxfImportError(file, where, "TristimulusSpec", "one illuminant and observer per sample")
+    illuminant, observer = conds.pop()
+    return build_measurement(
+        sample=str(obj.name or ""),
+        rows=[(g, s["err"]) for g, s in groups],
+        lab=[s["lab"] for s in slots] if all(has_lab) else None,
+        wavelengths_nm=wl if all(has_sp) else None,
+        spectra=[s["spectrum"] for s in slots] if all(has_sp) else None,
+        instrument=slots[0]["spec"]["instrument"],
+        illuminant=illuminant,
+        observer=observer,
+        measured_at=None if _undated(obj) else _instant(obj.creation_date),
+        texture=_texture(obj, where, file),
+        err=factory(CxfImportError, file, where),
+    )
+
+
+def _undated(obj: Any) -> bool:
+    """Whether the writer marked the object's ``CreationDate`` as a placeholder (no measurement instant)."""
+    return any(
+        tc.name == UNDATED_TAGS and any(t.name == "measured_at" and t.value == "unknown" for t in tc.tag)
+        for tc in obj.tag_collection
+    )
 
 
 def _when(instant: dt.datetime | None) -> cxf3.CreationDate:
@@ -334,7 +442,8 @@ def write_cxf(measurements: Sequence[ImportedMeasurement], path: Path | str | No
             cxf3.Object(
                 creation_date=_when(m.measured_at),
                 color_values=cxf3.ColorValues(choice=values),
-                tag_collection=[cxf3.TagCollection(tag=tags, name=TEXTURE_TAGS)] if tags else [],
+                tag_collection=([cxf3.TagCollection(tag=tags, name=TEXTURE_TAGS)] if tags else [])
+                + ([] if m.measured_at is not None else [_UNDATED]),
                 object_type="Target",
                 name=m.sample,
                 id=f"o{i}",

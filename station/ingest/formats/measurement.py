@@ -16,6 +16,7 @@ from __future__ import annotations
 import datetime as dt
 import itertools
 import math
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -38,6 +39,7 @@ __all__ = [
     "VendorValue",
     "build_measurement",
     "observer_name",
+    "single_angle_geometry",
 ]
 
 #: Illuminants a stored reading may state (the ingest record's vocabulary).
@@ -190,6 +192,71 @@ def canonical_geometry(name: str, fld: str, err: ErrorFactory) -> str:
     return geometry_name(ill, asp)
 
 
+_SINGLE = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*[/:]\s*(\d+(?:\.\d+)?)\s*$")
+
+
+def single_angle_geometry(text: str, fld: str, err: ErrorFactory) -> str:
+    """The geometry name of a single-angle geometry written ``"45/0"`` (CIE illumination/viewing
+    angles from the normal, ``:`` also accepted) or already ``"45as45"``.
+
+    Viewing is on the far side of the normal from the illumination, so the aspecular angle is
+    ``illumination − viewing`` (45/0 → ``45as45``, the 45/0 geometry lit from one direction).
+    Refused (*err*): anything else, and 0/45 (illumination along the normal has no aspecular side).
+    """
+    m = _SINGLE.match(text)
+    if m is None:
+        return canonical_geometry(text, fld, err)
+    ill, view = float(m.group(1)), float(m.group(2))
+    if ill == 0.0:
+        raise err(fld, 'a directional geometry such as "45/0" or "45as45"', text)
+    return canonical_geometry(geometry_name(ill, ill - view), fld, err)
+
+
+def _checked_lab(
+    rows: Sequence[tuple[str, ErrorFactory]], lab: Sequence[Sequence[float]], err: ErrorFactory
+) -> tuple[tuple[float, float, float], ...]:
+    """One finite L*a*b* within the domain bound per geometry row (each refusal names its row)."""
+    if len(lab) != len(rows):
+        raise err("lab", f"one L*a*b* per geometry ({len(rows)})", len(lab))
+    checked = []
+    for (_, row_err), triple in zip(rows, lab, strict=True):
+        vals = [_finite(float(v), f"lab.{c}", row_err) for c, v in zip("Lab", triple, strict=False)]
+        try:
+            checked.append(check_lab(vals, "lab"))
+        except ModelInputError as exc:
+            raise row_err(exc.field, exc.accepted, exc.got) from exc
+    return tuple(checked)
+
+
+def _checked_spectra(
+    rows: Sequence[tuple[str, ErrorFactory]],
+    wavelengths_nm: Sequence[float] | None,
+    spectra: Sequence[Sequence[float]] | None,
+    err: ErrorFactory,
+) -> tuple[tuple[float, ...] | None, tuple[tuple[float, ...], ...] | None]:
+    """The wavelength grid (nm, strictly increasing) and one reflectance curve (≥ 0) per geometry row."""
+    if (spectra is None) != (wavelengths_nm is None):
+        raise err("spectra", "spectra together with their wavelengths", None)
+    if spectra is None or wavelengths_nm is None:
+        return None, None
+    wl = [_finite(float(w), "wavelengths_nm", err) for w in wavelengths_nm]
+    if not 2 <= len(wl) <= MAX_WAVELENGTHS:
+        raise err("wavelengths_nm", f"2 to {MAX_WAVELENGTHS} wavelengths", len(wl))
+    if any(b <= a for a, b in itertools.pairwise(wl)):
+        raise err("wavelengths_nm", "strictly increasing wavelengths (nm)", wl)
+    if len(spectra) != len(rows):
+        raise err("spectra", f"one spectrum per geometry ({len(rows)})", len(spectra))
+    curves = []
+    for (_, row_err), curve in zip(rows, spectra, strict=True):
+        if len(curve) != len(wl):
+            raise row_err("spectra", f"{len(wl)} values (one per wavelength)", len(curve))
+        vals = [_finite(float(v), "spectra", row_err) for v in curve]
+        if min(vals) < 0.0:
+            raise row_err("spectra", "reflectance factors >= 0", min(vals))
+        curves.append(tuple(vals))
+    return tuple(wl), tuple(curves)
+
+
 def build_measurement(
     *,
     sample: str,
@@ -229,39 +296,8 @@ def build_measurement(
         raise err("illuminant", " | ".join(ILLUMINANTS), illuminant)
     if observer not in OBSERVERS:
         raise err("observer", "2 | 10 (degrees)", observer)
-    lab_out: tuple[tuple[float, float, float], ...] | None = None
-    if lab is not None:
-        if len(lab) != len(rows):
-            raise err("lab", f"one L*a*b* per geometry ({len(rows)})", len(lab))
-        checked = []
-        for (_, row_err), triple in zip(rows, lab, strict=True):
-            vals = [_finite(float(v), f"lab.{c}", row_err) for c, v in zip("Lab", triple, strict=False)]
-            try:
-                checked.append(check_lab(vals, "lab"))
-            except ModelInputError as exc:
-                raise row_err(exc.field, exc.accepted, exc.got) from exc
-        lab_out = tuple(checked)
-    wl_out: tuple[float, ...] | None = None
-    sp_out: tuple[tuple[float, ...], ...] | None = None
-    if (spectra is None) != (wavelengths_nm is None):
-        raise err("spectra", "spectra together with their wavelengths", None)
-    if spectra is not None and wavelengths_nm is not None:
-        wl = [_finite(float(w), "wavelengths_nm", err) for w in wavelengths_nm]
-        if not 2 <= len(wl) <= MAX_WAVELENGTHS:
-            raise err("wavelengths_nm", f"2 to {MAX_WAVELENGTHS} wavelengths", len(wl))
-        if any(b <= a for a, b in itertools.pairwise(wl)):
-            raise err("wavelengths_nm", "strictly increasing wavelengths (nm)", wl)
-        if len(spectra) != len(rows):
-            raise err("spectra", f"one spectrum per geometry ({len(rows)})", len(spectra))
-        curves = []
-        for (_, row_err), curve in zip(rows, spectra, strict=True):
-            if len(curve) != len(wl):
-                raise row_err("spectra", f"{len(wl)} values (one per wavelength)", len(curve))
-            vals = [_finite(float(v), "spectra", row_err) for v in curve]
-            if min(vals) < 0.0:
-                raise row_err("spectra", "reflectance factors >= 0", min(vals))
-            curves.append(tuple(vals))
-        wl_out, sp_out = tuple(wl), tuple(curves)
+    lab_out = None if lab is None else _checked_lab(rows, lab, err)
+    wl_out, sp_out = _checked_spectra(rows, wavelengths_nm, spectra, err)
     return ImportedMeasurement(
         sample=sample.strip(),
         geometries=tuple(names),

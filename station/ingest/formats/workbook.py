@@ -7,16 +7,29 @@ X-Rite MA-T12 exports hold a sheet ``Spectral Data`` with one row per geometry n
 * ``Geometry`` (or ``Angle``): the geometry name, ``45as15`` style;
 * wavelength columns headed by a number of nanometres (``400``, ``400nm``, ``400 nm``); values are
   reflectance factors, or percent when any value exceeds 2 (the sheet then reads as percent);
-* optional ``Sample`` (or ``Name``) — rows of one sample share it; without it the file's stem names
-  the one sample;
+* optional ``Sample Name`` (or ``Sample``, ``Name``) — rows of one sample share it; without it the
+  file's stem names the one sample;
+* optional ``Date/Time``: the measurement instant of the sample (its first row's cell): an Excel date
+  (the instrument computer's local time, which carries no zone: read as UTC) or ISO 8601 text;
+  anything else is refused naming ``Date/Time``;
 * optional ``L``, ``a``, ``b`` (``L*``, ``a*``, ``b*``) Lab columns;
-* optional texture columns headed ``Sparkle…`` or ``Graininess…``, stored tagged with the vendor
-  (``Manufacturer`` in a sheet ``Info`` when present, else ``X-Rite``, the workbook's maker), never compared across vendors.
+* optional texture columns headed ``Sparkle…`` or ``Graininess…`` (stored as ``sparkle_intensity``,
+  ``graininess``: lower case, spaces as ``_``), tagged with the vendor (``Manufacturer`` in a sheet
+  ``Info`` when present, else ``X-Rite``, the workbook's maker), never compared across vendors.
 
-An optional sheet ``Info`` with ``key | value`` rows gives ``Instrument``, ``Serial``, ``Manufacturer``,
-``Measured at`` (an ISO 8601 instant or a date cell), ``Illuminant`` and ``Observer``. Other sheets
-(``Texture Images``) are ignored. Refusals are :class:`~station.ingest.errors.WorkbookImportError`
-naming the sheet, the cell row and the column.
+Rows above the header are titles, except an ``Illuminant/Observer`` row (``Illuminant/Observer |
+D65/10°`` or one cell ``Illuminant/Observer: D65/10°``): it gives the conditions of the Lab and is
+refused naming ``Illuminant/Observer`` when it does not read as ``<illuminant>/<observer>``; an
+illuminant or observer the store does not keep is refused as ``illuminant``/``observer``.
+
+A sheet ``Texture Data`` (header: ``Sample Name``, ``Geometry``, ``Sparkle…``/``Graininess…``
+columns) adds texture values per sample and geometry (a graininess, or a row without geometry, is
+per sample); a sample not in ``Spectral Data`` is refused naming ``Sample``, two different values
+for one quantity and geometry naming the quantity. An optional sheet ``Info`` with ``key | value``
+rows gives ``Instrument``, ``Serial``, ``Manufacturer``, ``Measured at`` (used when there is no
+``Date/Time`` column), ``Illuminant`` and ``Observer``. ``Texture Images`` (pictures) are not read.
+Refusals are :class:`~station.ingest.errors.WorkbookImportError` naming the sheet, the cell row and
+the column.
 
 A workbook is read as a stream (openpyxl's read-only mode), within bounds a hostile file cannot
 stretch: at most :data:`MAX_WORKBOOK_BYTES` bytes on disk, :data:`MAX_WORKBOOK_XML_BYTES` bytes
@@ -61,6 +74,10 @@ __all__ = [
 
 SHEET = "Spectral Data"
 INFO = "Info"
+TEXTURE_SHEET = "Texture Data"
+_SAMPLE_KEYS = ("sample", "sample name", "name")
+_DATE_KEYS = ("date/time", "date / time", "datetime", "date", "measured at")
+_CONDITIONS = re.compile(r"^\s*([A-Za-z]+\d*)\s*/\s*(\d+)\s*(?:°|deg(?:ree)?s?)?\s*$")
 DEFAULT_VENDOR = "X-Rite"
 _NM = re.compile(r"^(\d{3,4}(?:\.\d+)?)\s*(?:nm)?$", re.IGNORECASE)
 _TEXTURE = re.compile(r"^(sparkle|graininess)", re.IGNORECASE)
@@ -191,31 +208,26 @@ def is_complete(data: bytes) -> bool:
     return True
 
 
-def read_workbook(path: Path | str, data: bytes | None = None) -> ImportedFile:
-    """Read an MA-T12-style workbook (module doc) into one :class:`ImportedMeasurement` per sample.
-
-    *data*: the file's bytes when already read (else read from *path*, which also names the file).
-    """
+def _load(
+    data: bytes, file: str, budget: _CellBudget
+) -> tuple[dict[str, Any], list[tuple[Any, ...]], list | None]:
+    """The ``Info`` map, the ``Spectral Data`` rows and the ``Texture Data`` rows (``None``: no sheet)."""
     import openpyxl  # loaded on use: the other formats do not need it
 
-    path = Path(path)
-    file = path.name
-    data = read_bytes(path, WorkbookImportError, data, MAX_WORKBOOK_BYTES)  # parsed from memory
-    _screen(data, file)
-    budget = _CellBudget(file)
     try:
         wb = openpyxl.load_workbook(io.BytesIO(data), read_only=True, data_only=True)
         try:
             sheets = list(wb.sheetnames)
+            if SHEET not in sheets:
+                raise WorkbookImportError(file, "workbook", "sheet", f"a sheet {SHEET!r}", sheets)
             info = _info(wb, budget)
-            rows = list(budget.rows(wb[SHEET], SHEET)) if SHEET in sheets else []
+            rows = list(budget.rows(wb[SHEET], SHEET))
+            texture = list(budget.rows(wb[TEXTURE_SHEET], TEXTURE_SHEET)) if TEXTURE_SHEET in sheets else None
         finally:
             wb.close()
     except WorkbookImportError:
         raise
-    except (
-        Exception
-    ) as exc:  # a damaged zip or XML part fails in many ways inside openpyxl: all are "not a workbook"
+    except Exception as exc:  # a damaged zip or XML part fails in many ways inside openpyxl: "not a workbook"
         raise WorkbookImportError(
             file,
             "workbook",
@@ -223,8 +235,49 @@ def read_workbook(path: Path | str, data: bytes | None = None) -> ImportedFile:
             "an Excel workbook (.xlsx), not truncated",
             f"{type(exc).__name__}: {exc}",
         ) from exc
-    if SHEET not in sheets:
-        raise WorkbookImportError(file, "workbook", "sheet", f"a sheet {SHEET!r}", sheets)
+    return info, rows, texture
+
+
+def _conditions(above: Sequence[tuple[Any, ...]], info: dict[str, Any], file: str) -> tuple[str, str]:
+    """Illuminant and observer: the ``Illuminant/Observer`` row above the header (``D65/10°``), else
+    the ``Info`` sheet's ``Illuminant`` and ``Observer``, else D65 and 10°."""
+    illuminant = str(info.get("illuminant") or "D65").strip().upper()
+    observer_text = str(info.get("observer") or "10").strip()
+    for r, row in enumerate(above, start=1):
+        cells = [str(c).strip() for c in row if c is not None and str(c).strip()]
+        if not cells or not cells[0].lower().replace(" ", "").startswith("illuminant/observer"):
+            continue
+        if len(cells) > 1:
+            text = " ".join(cells[1:])  # label cell, value cell
+        else:
+            text = cells[0].split(":", 1)[1] if ":" in cells[0] else ""  # "Illuminant/Observer: D65/10°"
+        m = _CONDITIONS.match(text)
+        if m is None:
+            raise WorkbookImportError(
+                file,
+                f"sheet {SHEET!r} row {r}",
+                "Illuminant/Observer",
+                'an illuminant and observer like "D65/10°"',
+                text,
+            )
+        illuminant, observer_text = m.group(1).upper(), m.group(2)
+    return illuminant, observer_name(observer_text) or observer_text
+
+
+def _instant(value: Any, file: str, where: str) -> dt.datetime | None:
+    """A ``Date/Time`` cell: an Excel date (instrument local time without a zone: read as UTC) or ISO text."""
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return None
+    if isinstance(value, dt.datetime):
+        return value if value.tzinfo is not None else value.replace(tzinfo=dt.UTC)
+    parsed = parse_instant(str(value))
+    if parsed is None:
+        raise WorkbookImportError(file, where, "Date/Time", "an Excel date cell or ISO 8601 text", value)
+    return parsed
+
+
+def _header(rows: Sequence[tuple[Any, ...]], file: str) -> dict[str, Any]:
+    """The ``Spectral Data`` header: its row index and the columns of each quantity (module doc)."""
     header_at, col = next(
         ((i, m) for i, r in enumerate(rows) if (m := _header_map(r)) is not None), (-1, None)
     )
@@ -240,83 +293,176 @@ def read_workbook(path: Path | str, data: bytes | None = None) -> ImportedFile:
     has_lab = all(c is not None for c in lab_cols)
     if not spectral and not has_lab:
         raise WorkbookImportError(file, f"sheet {SHEET!r} row {header_at + 1}", "400", "wavelength columns (400 … 700 nm) and/or L, a, b")  # fmt: skip
-    manufacturer = str(info.get("manufacturer") or "").strip()
-    vendor = manufacturer or DEFAULT_VENDOR
-    texture_cols = [(str(c).strip().lower(), i) for i, c in enumerate(header) if c is not None and _TEXTURE.match(str(c).strip())]  # fmt: skip
-    measured = info.get("measured at")
-    measured_at = measured if isinstance(measured, dt.datetime) else parse_instant(str(measured or ""))
-    if measured_at is not None and measured_at.tzinfo is None:
-        measured_at = measured_at.replace(tzinfo=dt.UTC)
-    instrument = Instrument(
-        model=str(info.get("instrument") or "MA-T12"),
-        serial=str(info.get("serial") or ""),
-        manufacturer=manufacturer,
-    )
-    illuminant = str(info.get("illuminant") or "D65").strip().upper()
-    observer_text = str(info.get("observer") or "10").strip()
-    observer = observer_name(observer_text) or observer_text
-    groups: dict[str, list[tuple[int, tuple[Any, ...]]]] = {}
-    sample_col = col.get("sample", col.get("name"))
-    for r, row in enumerate(rows[header_at + 1 :], start=header_at + 2):
+    return {
+        "at": header_at,
+        "width": len(header),
+        "geometry": col["geometry"],
+        "sample": next((col[k] for k in _SAMPLE_KEYS if k in col), None),
+        "date": next((col[k] for k in _DATE_KEYS if k in col), None),
+        "spectral": spectral,
+        "lab": lab_cols if has_lab else None,
+        "texture": _texture_columns(header),
+    }
+
+
+def _texture_columns(header: Sequence[Any]) -> list[tuple[str, int]]:
+    """``(quantity, column)`` of each ``Sparkle…``/``Graininess…`` column, named ``sparkle_intensity``."""
+    return [
+        (re.sub(r"[\s\-]+", "_", str(c).strip().lower()), i)
+        for i, c in enumerate(header)
+        if c is not None and _TEXTURE.match(str(c).strip())
+    ]
+
+
+def _texture_value(
+    vendor: str, qty: str, value: Any, geometry: str, file: str, where: str
+) -> VendorValue | None:
+    if value is None or str(value).strip() == "":
+        return None
+    per_sample = qty.startswith("graininess") or not geometry
+    return VendorValue(vendor, qty, _number(value, qty, file, where), "" if per_sample else geometry)
+
+
+def _texture_sheet(
+    rows: list[tuple[Any, ...]], stem: str, vendor: str, file: str
+) -> dict[str, list[VendorValue]]:
+    """Per sample, the vendor texture values of the ``Texture Data`` sheet (module doc)."""
+    sheet = f"sheet {TEXTURE_SHEET!r}"
+    at = next((i for i, r in enumerate(rows) if _texture_columns(r)), None)
+    if at is None:
+        raise WorkbookImportError(file, sheet, "Sparkle", "a header row with Sparkle… or Graininess… columns")
+    names = {str(c).strip().lower().rstrip("*"): i for i, c in enumerate(rows[at]) if c is not None}
+    sample_col = next((names[k] for k in _SAMPLE_KEYS if k in names), None)
+    geo_col = names.get("geometry", names.get("angle"))
+    out: dict[str, list[VendorValue]] = {}
+    for r, row in enumerate(rows[at + 1 :], start=at + 2):
         if not row or all(c is None or str(c).strip() == "" for c in row):
             continue
-        if len(row) < len(header):
-            row = tuple(row) + (None,) * (len(header) - len(row))
-        name = path.stem if sample_col is None else str(row[sample_col] or "").strip()
+        row = tuple(row) + (None,) * (len(rows[at]) - len(row))
+        where = f"{sheet} row {r}"
+        name = stem if sample_col is None else str(row[sample_col] or "").strip()
+        geo = str(row[geo_col] or "").strip() if geo_col is not None else ""
+        geometry = (
+            canonical_geometry(geo, "Geometry", factory(WorkbookImportError, file, where)) if geo else ""
+        )
+        for qty, i in _texture_columns(rows[at]):
+            v = _texture_value(vendor, qty, row[i], geometry, file, where)
+            if v is not None:
+                out.setdefault(name, []).append(v)
+    return out
+
+
+def _merge_texture(values: list[VendorValue], file: str, where: str) -> list[VendorValue]:
+    """One value per (quantity, geometry): a per-sample value repeated on rows counts once; they must agree."""
+    seen: dict[tuple[str, str], VendorValue] = {}
+    for v in values:
+        prior = seen.get((v.name, v.geometry))
+        if prior is not None and prior.value != v.value:
+            raise WorkbookImportError(file, where, v.name, f"one value per sample ({prior.value:g})", v.value)
+        seen[(v.name, v.geometry)] = v
+    return list(seen.values())
+
+
+def read_workbook(path: Path | str, data: bytes | None = None) -> ImportedFile:
+    """Read an MA-T12-style workbook (module doc) into one :class:`ImportedMeasurement` per sample.
+
+    *data*: the file's bytes when already read (else read from *path*, which also names the file).
+    """
+    path = Path(path)
+    file = path.name
+    data = read_bytes(path, WorkbookImportError, data, MAX_WORKBOOK_BYTES)  # parsed from memory
+    _screen(data, file)
+    info, rows, texture_rows = _load(data, file, _CellBudget(file))
+    head = _header(rows, file)
+    manufacturer = str(info.get("manufacturer") or "").strip()
+    vendor = manufacturer or DEFAULT_VENDOR
+    measured = info.get("measured at")
+    ctx = {
+        "file": file,
+        "vendor": vendor,
+        "measured_at": _instant(measured, file, f"sheet {INFO!r}") if measured else None,
+        "instrument": Instrument(
+            model=str(info.get("instrument") or "MA-T12"),
+            serial=str(info.get("serial") or ""),
+            manufacturer=manufacturer,
+        ),
+        "conditions": _conditions(rows[: head["at"]], info, file),
+    }
+    groups: dict[str, list[tuple[int, tuple[Any, ...]]]] = {}
+    for r, row in enumerate(rows[head["at"] + 1 :], start=head["at"] + 2):
+        if not row or all(c is None or str(c).strip() == "" for c in row):
+            continue
+        row = tuple(row) + (None,) * (head["width"] - len(row))
+        name = path.stem if head["sample"] is None else str(row[head["sample"]] or "").strip()
         groups.setdefault(name, []).append((r, row))
     if not groups:
         raise WorkbookImportError(file, f"sheet {SHEET!r}", "rows", "at least one geometry row", 0)
-    curves_raw: list[
-        tuple[str, list[tuple[str, Any]], list[list[float]], list[list[float]], list[VendorValue], int]
-    ] = []
-    peak = 0.0
-    for name, group in groups.items():
-        geo_rows, labs, curves, texture = [], [], [], []
-        for r, row in group:
-            where = f"sheet {SHEET!r} row {r}"
-            err = factory(WorkbookImportError, file, where)
-            geometry = canonical_geometry(str(row[col["geometry"]] or ""), "Geometry", err)
-            geo_rows.append((geometry, err))
-            if has_lab:
-                labs.append([_number(row[c], h, file, where) for c, h in zip(lab_cols, "Lab", strict=True) if c is not None])  # fmt: skip
-            if spectral:
-                curve = [_number(row[i], f"{w:g} nm", file, where) for w, i in spectral]
-                peak = max(peak, max(curve))
-                curves.append(curve)
-            for qty, i in texture_cols:
-                if row[i] is None or str(row[i]).strip() == "":
-                    continue
-                per_sample = qty.startswith("graininess")
-                texture.append(
-                    VendorValue(
-                        vendor, qty, _number(row[i], qty, file, where), "" if per_sample else geometry
-                    )
-                )
-        curves_raw.append((name, geo_rows, labs, curves, texture, group[0][0]))
-    percent = peak > 2.0
-    out = []
-    for name, geo_rows, labs, curves, texture, first_row in curves_raw:
-        if percent:
-            curves = [[v / 100.0 for v in c] for c in curves]
-        seen = {
-            (v.name, v.geometry): v for v in texture
-        }  # a per-sample value repeated on each row counts once
-        out.append(
-            build_measurement(
-                sample=name,
-                rows=geo_rows,
-                lab=labs if has_lab else None,
-                wavelengths_nm=[w for w, _ in spectral] if spectral else None,
-                spectra=curves if spectral else None,
-                instrument=instrument,
-                illuminant=illuminant,
-                observer=observer,
-                measured_at=measured_at,
-                texture=list(seen.values()),
-                err=factory(WorkbookImportError, file, f"sheet {SHEET!r} row {first_row}"),
-            )
+    extra = _texture_sheet(texture_rows, path.stem, vendor, file) if texture_rows is not None else {}
+    unknown = sorted(set(extra) - set(groups))
+    if unknown:
+        raise WorkbookImportError(
+            file, f"sheet {TEXTURE_SHEET!r}", "Sample", f"a sample of sheet {SHEET!r}", unknown[0]
         )
-    return ImportedFile("xlsx", file, tuple(out))
+    samples = [_sample(name, group, head, ctx) for name, group in groups.items()]
+    percent = max((max(c) for s in samples for c in s["curves"]), default=0.0) > 2.0
+    return ImportedFile(
+        "xlsx", file, tuple(_build(s, head, ctx, percent, extra.get(s["name"], [])) for s in samples)
+    )
+
+
+def _sample(
+    name: str, group: list[tuple[int, tuple[Any, ...]]], head: dict[str, Any], ctx: dict[str, Any]
+) -> dict[str, Any]:
+    """The rows of one sample: geometries, Lab, raw curves, texture and the measurement instant."""
+    file = ctx["file"]
+    geo_rows, labs, curves, texture = [], [], [], []
+    when = None
+    for r, row in group:
+        where = f"sheet {SHEET!r} row {r}"
+        err = factory(WorkbookImportError, file, where)
+        geometry = canonical_geometry(str(row[head["geometry"]] or ""), "Geometry", err)
+        geo_rows.append((geometry, err))
+        if head["date"] is not None and when is None:
+            when = _instant(row[head["date"]], file, where)
+        if head["lab"] is not None:
+            labs.append([_number(row[c], h, file, where) for c, h in zip(head["lab"], "Lab", strict=True)])
+        if head["spectral"]:
+            curves.append([_number(row[i], f"{w:g} nm", file, where) for w, i in head["spectral"]])
+        for qty, i in head["texture"]:
+            v = _texture_value(ctx["vendor"], qty, row[i], geometry, file, where)
+            if v is not None:
+                texture.append(v)
+    return {
+        "name": name,
+        "first": group[0][0],
+        "rows": geo_rows,
+        "labs": labs,
+        "curves": curves,
+        "texture": texture,
+        "when": when,
+    }
+
+
+def _build(
+    s: dict[str, Any], head: dict[str, Any], ctx: dict[str, Any], percent: bool, extra: list[VendorValue]
+) -> ImportedMeasurement:
+    """Validate one sample (:func:`build_measurement`); percent curves become reflectance factors."""
+    where = f"sheet {SHEET!r} row {s['first']}"
+    curves = [[v / 100.0 for v in c] for c in s["curves"]] if percent else s["curves"]
+    illuminant, observer = ctx["conditions"]
+    return build_measurement(
+        sample=s["name"],
+        rows=s["rows"],
+        lab=s["labs"] if head["lab"] is not None else None,
+        wavelengths_nm=[w for w, _ in head["spectral"]] if head["spectral"] else None,
+        spectra=curves if head["spectral"] else None,
+        instrument=ctx["instrument"],
+        illuminant=illuminant,
+        observer=observer,
+        measured_at=s["when"] or ctx["measured_at"],
+        texture=_merge_texture([*s["texture"], *extra], ctx["file"], where),
+        err=factory(WorkbookImportError, ctx["file"], where),
+    )
 
 
 def write_workbook(measurements: Sequence[ImportedMeasurement], path: Path | str) -> None:
@@ -337,6 +483,7 @@ def write_workbook(measurements: Sequence[ImportedMeasurement], path: Path | str
         header += [f"{w:g}" for w in wl]
     tex = sorted({(t.name, t.geometry == "") for m in measurements for t in m.texture})
     header += [name.capitalize() for name, _ in tex]
+    header.append("Date/Time")
     ws.append(header)
     for n, m in enumerate(measurements, start=1):
         if m.wavelengths_nm != wl or (m.lab is None) != (first.lab is None):
@@ -351,6 +498,7 @@ def write_workbook(measurements: Sequence[ImportedMeasurement], path: Path | str
             if m.spectra is not None:
                 row += [round(v, SPECTRA_DECIMALS) for v in m.spectra[k]]
             row += [values.get((name, "" if per_sample else g)) for name, per_sample in tex]
+            row.append("" if m.measured_at is None else m.measured_at.isoformat())
             ws.append(row)
     info = wb.create_sheet(INFO)
     info.append(["Instrument", first.instrument.model])
