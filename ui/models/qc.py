@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from urllib.parse import quote
 
 from station.errors import InputError, StationError
+from ui.models.local_db import LocalDatabase
 
 if TYPE_CHECKING:
     from ui.models.service import ServiceClient
@@ -70,33 +71,10 @@ class QcSource(Protocol):
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]: ...
 
 
-class LocalQc:
+class LocalQc(LocalDatabase):
     """The workstation's database (as ``station serve``: ``$CACAD_DATABASE_URL`` or the default SQLite)."""
 
-    def __init__(self, url: str | None = None) -> None:
-        self._url = url
-        self._sessions: Any = None
-
-    @property
-    def url(self) -> str:
-        if self._url is None:
-            from db.engine import configured_database_url
-
-            self._url = configured_database_url()
-        return self._url
-
-    @property
-    def where(self) -> str:
-        return f"database {self.url}"
-
-    def _session(self) -> Any:
-        if self._sessions is None:
-            from db.engine import make_engine, make_sessionmaker
-            from db.migrate import ensure_at_head
-
-            ensure_at_head(self.url)
-            self._sessions = make_sessionmaker(make_engine(self.url))
-        return self._sessions()
+    source_error = QcSourceError
 
     def jobs(self) -> list[JobEntry]:
         from station.qc.jobs import list_jobs
