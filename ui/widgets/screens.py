@@ -15,6 +15,7 @@ from ui.models.moodboard import MoodBoardModel
 if TYPE_CHECKING:
     from ui.widgets.formulation_screen import FormulationScreen
     from ui.widgets.library_screen import LibraryScreen
+    from ui.widgets.qc_screen import QcScreen
 
 #: The screen class a :class:`LazyScreen` builds.
 Screen = TypeVar("Screen", bound=QWidget)
@@ -105,23 +106,31 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
     def instruments() -> QWidget:
         from ui.widgets.instruments_screen import InstrumentsScreen
 
-        return InstrumentsScreen(window.store, window.document)
+        return InstrumentsScreen(window.store, window.document, open_job=open_job)
 
     def qa() -> QWidget:
         from ui.widgets.qa_screen import QAScreen
 
         return QAScreen(window.designer, window.store, send_to_formulation)
 
-    def qc() -> QWidget:
+    def open_job(job: str, part: str, measurement_id: int) -> None:
+        """A job-history row opened in the Instruments tab: its job's verdicts in the QC tab."""
+        window.tabs.setCurrentWidget(qc_page)
+        qc_page.content().open_job(job, part, measurement_id)
+
+    def qc() -> QcScreen:
         from ui.models.measure_db import LocalSink
         from ui.models.qc import LocalQc, QcModel, ServiceQc
         from ui.widgets.qc_screen import QcScreen
 
+        sink = window.store.sink  # imported vendor files are stored where the scans go
         if window.service is not None:
-            return QcScreen(QcModel(ServiceQc(window.service)))
-        sink = window.store.sink
+            return QcScreen(QcModel(ServiceQc(window.service)), sink=sink)
         url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
-        return QcScreen(QcModel(LocalQc(url)))
+        return QcScreen(QcModel(LocalQc(url)), sink=sink)
+
+    qc_page: LazyScreen[QcScreen] = LazyScreen(qc)
+    window.qc_screen = qc_page
 
     def booth() -> QWidget:
         from ui.models.booth import BoothModel, LocalBoothSource, ServiceBoothSource
@@ -145,7 +154,7 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         ("Library", library),
         ("Instruments", LazyScreen(instruments)),
         ("QA", LazyScreen(qa)),
-        ("QC", LazyScreen(qc)),
+        ("QC", qc_page),
         ("Booth", LazyScreen(booth)),
         ("Formulation", formulation),
     ]
