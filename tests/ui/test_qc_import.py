@@ -214,3 +214,47 @@ def test_an_import_without_a_job_names_the_field(qtbot, tmp_path, monkeypatch):
     assert screen.import_result.text().startswith("error: import job: expected a job name")
     assert screen.task is None and screen.imports == []
     screen.close()
+
+
+@pytest.mark.slow  # the whole main window, its 3D view included
+def test_the_window_imports_from_the_file_menu_and_drops_and_opens_history_rows(qtbot, tmp_path, monkeypatch):
+    from ui.app import MainWindow
+
+    files = _files(tmp_path)
+    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    win = MainWindow(sink=LocalSink(url, tmp_path / "outbox.sqlite3"), ask_on_close=False)
+    qtbot.addWidget(win)
+    win.resize(1280, 800)
+    win.show()
+    qtbot.waitExposed(win)
+    qc = win.qc_screen.content()
+    _type(qc.import_job, "J-400")
+    monkeypatch.setattr(
+        QFileDialog, "getOpenFileNames", staticmethod(lambda *a, **k: ([str(files["master"])], ""))
+    )
+    win.tabs.setCurrentIndex(0)
+    win.file_actions["Import measurement files"].trigger()
+    assert win.tabs.currentWidget() is win.qc_screen
+    qtbot.waitUntil(lambda: len(qc.imports) == 1 and qc.import_btn.isEnabled(), timeout=30000)
+    win.tabs.setCurrentIndex(0)
+    assert _drop(win, [files["trial 1"]])  # dropped anywhere on the window
+    assert win.tabs.currentWidget() is win.qc_screen
+    qtbot.waitUntil(lambda: qc.imports[0].file == "trial1.cgats" and qc.import_btn.isEnabled(), timeout=30000)
+    ids = [r[0] for r in _stored(url)]
+    assert len(ids) == 2
+    # the technician's job history in the Instruments tab: a double click opens the job in the QC tab
+    win.tabs.setCurrentWidget(win.screens["Instruments"])
+    inst = win.screens["Instruments"].content()
+    _type(inst.job, "J-400")
+    QTest.mouseClick(inst.history_btn, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: inst.idle and inst.history.count() == 2, timeout=30000)
+    item = inst.history.item(0)  # newest first: trial 1
+    at = inst.history.visualItemRect(item).center()
+    QTest.mouseClick(inst.history.viewport(), Qt.MouseButton.LeftButton, pos=at)
+    QTest.mouseDClick(inst.history.viewport(), Qt.MouseButton.LeftButton, pos=at)
+    assert win.tabs.currentWidget() is win.qc_screen
+    assert qc.job.currentText() == "J-400" and qc.part.currentText() == "test_panel"
+    assert "no standard set" in qc.standard.text()
+    assert [qc.standard_pick.itemData(i) for i in range(qc.standard_pick.count())] == ids
+    win.view_panel.view.wait_idle()
+    win.close()

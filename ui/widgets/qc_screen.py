@@ -281,7 +281,7 @@ class QcScreen(QWidget):
             ]
             if hits:
                 self.table.selectRow(hits[0])
-                self.table.scrollToItem(self.table.item(hits[0], 0))
+                self.table.scrollTo(self.table.model().index(hits[0], 0))
             if not hits:
                 self.status.setText(
                     f"{self.status.text()} — measurement {measurement_id} is not a judged sample of {part}"
