@@ -160,6 +160,7 @@ class QAScreen(QWidget):
         self.verdict.setStyleSheet(VERDICT_STYLE)
         self.details = QLabel()
         self.details.setWordWrap(True)
+        self.details.setAlignment(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop)
         self.details.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
         self.table = QTableWidget(0, 6)
         self.table.setHorizontalHeaderLabels(
