@@ -6,6 +6,7 @@ CIEDE2000 of those values computed by colour-science."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import colour
@@ -258,3 +259,43 @@ def test_the_window_imports_from_the_file_menu_and_drops_and_opens_history_rows(
     assert [qc.standard_pick.itemData(i) for i in range(qc.standard_pick.count())] == ids
     win.view_panel.view.wait_idle()
     win.close()
+
+
+def test_import_and_set_the_standard_through_the_service(qtbot, tmp_path, monkeypatch):
+    from station.api.security import Role
+    from tests.api.conftest import make_api
+    from ui.models.measure_db import ServiceSink
+    from ui.models.qc import ServiceQc
+    from ui.models.service import ServiceClient
+
+    files = _files(tmp_path)
+    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    gen = make_api(url, tmp_path)
+    api = next(gen)
+    try:
+        service = ServiceClient("http://testserver", api.tokens[Role.ADMIN], client=api.client)
+        sink = ServiceSink(service, tmp_path / "service-outbox.sqlite3")
+        screen = QcScreen(QcModel(ServiceQc(service)), sink=sink)
+        qtbot.addWidget(screen)
+        screen.show()
+        _type(screen.import_job, "J-500")
+        picked = [str(files["master"]), str(files["trial 2"])]
+        monkeypatch.setattr(QFileDialog, "getOpenFileNames", staticmethod(lambda *a, **k: (picked, "")))
+        QTest.mouseClick(screen.import_btn, Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: len(screen.imports) == 2 and screen.import_btn.isEnabled(), timeout=30000)
+        assert [r.statuses for r in screen.imports] == [("stored",), ("stored",)], screen.import_result.text()
+        ids = [r[0] for r in _stored(url)]
+        assert screen.job.currentText() == "J-500"
+        screen.formula.setCurrentIndex(screen.formula.findText("cie76"))
+        QTest.mouseClick(screen.judge_btn, Qt.MouseButton.LeftButton)
+        screen.part.setCurrentIndex(screen.part.findText("test_panel"))
+        assert [screen.standard_pick.itemData(i) for i in range(screen.standard_pick.count())] == ids
+        QTest.mouseClick(screen.set_standard_btn, Qt.MouseButton.LeftButton)  # the first: the master
+        assert f"standard: measurement {ids[0]}" in screen.standard.text(), screen.status.text()
+        # judged again in the judged formula (CIE76): ΔE*ab of trial 2 is |offset| at every geometry
+        de = math.sqrt(sum(v * v for v in TRIALS["trial 2"]))
+        assert _column(screen, "ΔE") == [f"{de:.2f}"] * len(GEOMETRIES)
+        screen.close()
+        sink.close()
+    finally:
+        gen.close()
