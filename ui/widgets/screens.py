@@ -75,6 +75,33 @@ def _library_screen(window) -> LibraryScreen:
     return LibraryScreen(LibraryModel(library if library is not None else demo_library()), window.document)
 
 
+def _qc_screen(window) -> QcScreen:
+    """The QC screen on the service, or on the database the window's scans go to; vendor files it imports
+    are stored where the scans go (the window's sink)."""
+    from ui.models.measure_db import LocalSink
+    from ui.models.qc import LocalQc, QcModel, ServiceQc
+    from ui.widgets.qc_screen import QcScreen
+
+    sink = window.store.sink
+    if window.service is not None:
+        return QcScreen(QcModel(ServiceQc(window.service)), sink=sink)
+    url = sink.url if isinstance(sink, LocalSink) else None
+    return QcScreen(QcModel(LocalQc(url)), sink=sink)
+
+
+def _booth_screen(window) -> QWidget:
+    """The light booth on the service, or on the database the window's scans go to."""
+    from ui.models.booth import BoothModel, LocalBoothSource, ServiceBoothSource
+    from ui.models.measure_db import LocalSink
+    from ui.widgets.booth_screen import BoothScreen
+
+    if window.service is not None:
+        return BoothScreen(BoothModel(ServiceBoothSource(window.service)))
+    sink = window.store.sink
+    url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
+    return BoothScreen(BoothModel(LocalBoothSource(url)))
+
+
 def build_screens(window) -> list[tuple[str, QWidget]]:
     """(title, widget) of every secondary screen; sets ``window.store`` and ``window.moodboard``."""
     window.store = getattr(window, "store", None) or MeasurementStore()
@@ -113,35 +140,13 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
 
         return QAScreen(window.designer, window.store, send_to_formulation)
 
+    qc_page: LazyScreen[QcScreen] = LazyScreen(lambda: _qc_screen(window))
+    window.qc_screen = qc_page
+
     def open_job(job: str, part: str, measurement_id: int) -> None:
         """A job-history row opened in the Instruments tab: its job's verdicts in the QC tab."""
         window.tabs.setCurrentWidget(qc_page)
         qc_page.content().open_job(job, part, measurement_id)
-
-    def qc() -> QcScreen:
-        from ui.models.measure_db import LocalSink
-        from ui.models.qc import LocalQc, QcModel, ServiceQc
-        from ui.widgets.qc_screen import QcScreen
-
-        sink = window.store.sink  # imported vendor files are stored where the scans go
-        if window.service is not None:
-            return QcScreen(QcModel(ServiceQc(window.service)), sink=sink)
-        url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
-        return QcScreen(QcModel(LocalQc(url)), sink=sink)
-
-    qc_page: LazyScreen[QcScreen] = LazyScreen(qc)
-    window.qc_screen = qc_page
-
-    def booth() -> QWidget:
-        from ui.models.booth import BoothModel, LocalBoothSource, ServiceBoothSource
-        from ui.models.measure_db import LocalSink
-        from ui.widgets.booth_screen import BoothScreen
-
-        if window.service is not None:
-            return BoothScreen(BoothModel(ServiceBoothSource(window.service)))
-        sink = window.store.sink
-        url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
-        return BoothScreen(BoothModel(LocalBoothSource(url)))
 
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
@@ -155,6 +160,6 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         ("Instruments", LazyScreen(instruments)),
         ("QA", LazyScreen(qa)),
         ("QC", qc_page),
-        ("Booth", LazyScreen(booth)),
+        ("Booth", LazyScreen(lambda: _booth_screen(window))),
         ("Formulation", formulation),
     ]
