@@ -139,9 +139,10 @@ def test_import_choose_the_standard_judge_and_open_a_row(qtbot, tmp_path, monkey
     other = tmp_path / "notes.docx"
     other.write_bytes(b"not a measurement")
     assert not _drop(screen, [other])
-    assert _drop(screen, [files["trial 3"]])
+    assert _drop(screen, [files["trial 3"], other])
     qtbot.waitUntil(lambda: len(screen.imports) == 1 and screen.import_btn.isEnabled(), timeout=30000)
     assert screen.imports[0].statuses == ("stored",)
+    assert screen.import_result.text().splitlines()[-1] == "not measurement files (skipped): notes.docx"
     # the database holds each sample once, on job J-300 / door, with the Lab written into its file
     rows = _stored(url)
     assert [(r[1], r[2], r[3]) for r in rows] == [

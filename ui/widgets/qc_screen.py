@@ -306,8 +306,9 @@ class QcScreen(QWidget):
         if paths:
             self.import_paths([Path(p) for p in paths])
 
-    def import_paths(self, paths: list[Path]) -> None:
-        """Import *paths* in a worker through the one ingest path, then show what each file gave."""
+    def import_paths(self, paths: list[Path], skipped: tuple[str, ...] = ()) -> None:
+        """Import *paths* in a worker through the one ingest path, then show what each file gave
+        (*skipped*: names of dropped files of no importable kind, said with the result)."""
         sink = self.sink
         if sink is None or (self.task is not None and self.task.isRunning()):
             return
@@ -321,14 +322,17 @@ class QcScreen(QWidget):
         self.import_btn.setEnabled(False)
         self.import_result.setText(f"importing {len(paths)} files into {job} {part}…")
         self.task = TaskThread(lambda _p: import_files(paths, ingestor, job, part), self)
-        self.task.succeeded.connect(lambda results: self._on_imported(job, results))
+        self.task.succeeded.connect(lambda results: self._on_imported(job, results, skipped))
         self.task.failed.connect(lambda msg: self.import_result.setText(f"error: {msg}"))
         self.task.finished.connect(lambda: self.import_btn.setEnabled(True))
         self.task.start()
 
-    def _on_imported(self, job: str, results: list[FileImport]) -> None:
+    def _on_imported(self, job: str, results: list[FileImport], skipped: tuple[str, ...] = ()) -> None:
         self.imports = results
-        self.import_result.setText("\n".join([import_summary(results), *(r.text() for r in results)]))
+        lines = [import_summary(results), *(r.text() for r in results)]
+        if skipped:
+            lines.append(f"not measurement files (skipped): {', '.join(skipped)}")
+        self.import_result.setText("\n".join(lines))
         if any(r.stored for r in results):
             self.load_jobs()
             i = self.job.findText(job)
@@ -350,7 +354,7 @@ class QcScreen(QWidget):
             event.ignore()
             return
         event.acceptProposedAction()
-        self.import_paths(ok)
+        self.import_paths(ok, tuple(f.name for f in files if f not in ok))
 
     def export(self, kind: str, path: str | None = None) -> None:
         """Write the judged job's report (``pdf`` or ``csv``) to *path*, asked for when not given."""
