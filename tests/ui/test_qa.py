@@ -179,6 +179,15 @@ def test_bad_lights_clear_the_last_answer_and_name_the_field(qtbot):
     assert screen.export_btn.isEnabled() and screen.table.rowCount() > 0
     assert screen.as_is.pixmap() is not None and not screen.as_is.pixmap().isNull()
     assert "ΔE" in screen.as_is_title.text()
+    # another misalignment: the answer of the last run leaves the screen too
+    qtbot.keyClick(screen.beta, Qt.Key.Key_Right)
+    assert screen.beta_label.text() == "+6°" and screen.verdict.text() == "—"
+    assert screen.report is None and screen.table.rowCount() == 0 and not screen.export_btn.isEnabled()
+    assert screen.caption.text() == "the panels or β changed: run QA again"
+    qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: screen.report is not None, timeout=60000)
+    qtbot.waitUntil(screen.run_btn.isEnabled, timeout=10000)
+    assert screen.report.beta_deg == 6.0 and screen.export_btn.isEnabled()
     _type(qtbot, screen.lights, "30, abc, 95")
     qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
     assert screen.verdict.text() == "error"

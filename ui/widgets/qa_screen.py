@@ -240,12 +240,14 @@ class QAScreen(QWidget):
         self.panel_b.currentTextChanged.connect(self._on_pick)
 
     def _on_pick(self, *_args) -> None:
-        """Another panel or misalignment: the pictures and verdict of the last run no longer apply."""
+        """Another panel or misalignment: the last run's answer no longer applies and leaves the screen."""
         if self.report is None:
             return
+        self.clear_result()
         self.caption.setText("the panels or β changed: run QA again")
         self.verdict.setText("—")
         self.verdict.setStyleSheet(VERDICT_STYLE)
+        self.details.setText("")
 
     def sources(self) -> list[tuple[str, FaceFlopTravelGloss]]:
         """(label, design) of every panel that can be picked."""
