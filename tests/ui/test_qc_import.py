@@ -195,6 +195,8 @@ def test_import_choose_the_standard_judge_and_open_a_row(qtbot, tmp_path, monkey
     screen.open_job("J-300", "door", ids[1])
     assert screen.job.currentText() == "J-300" and screen.part.currentText() == "door"
     assert cell_of_selected(screen) == str(ids[1])
+    screen.open_job("J-300", "door", ids[3])  # the standard's own row: said, not selected
+    assert screen.status.text().endswith(f"measurement {ids[3]} is the standard of door")
     screen.open_job("J-999", "door", 1)
     assert screen.status.text() == "error: job: expected a stored job, got 'J-999'"
     screen.close()

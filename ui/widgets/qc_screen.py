@@ -283,8 +283,12 @@ class QcScreen(QWidget):
                 self.table.selectRow(hits[0])
                 self.table.scrollTo(self.table.model().index(hits[0], 0))
             if not hits:
+                std = (self.model.part(part) or {}).get("standard") or {}
+                what = (
+                    "the standard" if std.get("measurement_id") == measurement_id else "not a judged sample"
+                )
                 self.status.setText(
-                    f"{self.status.text()} — measurement {measurement_id} is not a judged sample of {part}"
+                    f"{self.status.text()} — measurement {measurement_id} is {what} of {part}"
                 )
 
     # -- import --------------------------------------------------------------------------------------
