@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from ui.models.service import ServiceClient
     from ui.widgets.formulation_screen import FormulationScreen
     from ui.widgets.library_screen import LibraryScreen
+    from ui.widgets.qc_screen import QcScreen
     from ui.widgets.screens import LazyScreen
 
 #: Width of the designer panel in its dock, pixels (the window's minimum fits 1280 × 800 with it).
@@ -54,6 +55,7 @@ class MainWindow(QMainWindow):
     moodboard: MoodBoardModel
     library_screen: LazyScreen[LibraryScreen]
     formulation_screen: LazyScreen[FormulationScreen]
+    qc_screen: LazyScreen[QcScreen]
 
     def __init__(
         self,
@@ -188,6 +190,13 @@ class MainWindow(QMainWindow):
             env.setToolTip("Loading an own HDR needs the 3D view's environment loader (not in this build)")
         menu.addAction(env)
         self.file_actions["Load environment (HDR)"] = env
+        imp = QAction("Import measurement files…", self)
+        imp.setToolTip("CxF3, CGATS, MA-T12 workbook or CSV files into the measurement store (QC tab)")
+        imp.triggered.connect(self.import_measurements)
+        imp.setEnabled(self.store.sink is not None)
+        menu.addAction(imp)
+        self.file_actions["Import measurement files"] = imp
+        self.setAcceptDrops(self.store.sink is not None)
         menu.addSeparator()
         quit_act = QAction("Quit", self, shortcut=QKeySequence(QKeySequence.StandardKey.Quit))
         quit_act.triggered.connect(self.close)
@@ -287,6 +296,20 @@ class MainWindow(QMainWindow):
             return False
         self.statusBar().showMessage(f"exported {label} {written}")
         return True
+
+    def import_measurements(self) -> None:
+        """File ▸ Import measurement files…: the QC tab, then its file dialog (the import runs there)."""
+        self.tabs.setCurrentWidget(self.qc_screen)
+        self.qc_screen.content().ask_import()
+
+    def dragEnterEvent(self, event) -> None:
+        """Vendor measurement files dragged over the window go to the QC tab's import."""
+        self.qc_screen.content().dragEnterEvent(event)
+
+    def dropEvent(self, event) -> None:
+        """Vendor measurement files dropped on the window are imported in the QC tab, which is shown."""
+        self.tabs.setCurrentWidget(self.qc_screen)
+        self.qc_screen.content().dropEvent(event)
 
     def load_environment(self) -> bool:
         """File → Load environment (HDR)…: an own HDR lights the 3D view."""

@@ -72,33 +72,35 @@ def file_menu_shot(win, path: Path) -> Path:
     return path
 
 
-def qc_shot(win, url: str, inst) -> None:
-    """The QC tab on the scanned job: the first scan of the door made its standard, a second scan of the
-    same panel judged against it (pass/warn/fail per geometry, paired gloss)."""
-    from sqlalchemy import select
+def answer_calibration(win, inst) -> None:
+    """Calibrate as the technician does: OK at each prompt (black trap, white tile, …), then the sequence."""
+    from PySide6.QtWidgets import QMessageBox
 
-    from db.engine import make_engine, make_sessionmaker
-    from db.models import Measurement
-    from station.qc.jobs import set_standard
+    inst.calibrate()
+    while inst.prompt is not None:
+        _wait(lambda: inst.prompt is None or inst.prompt.isVisible(), 10)
+        if inst.prompt is not None:
+            inst.prompt.button(QMessageBox.StandardButton.Ok).click()
+        QCoreApplication.processEvents()
+    _wait(lambda: inst.idle, 60)
 
-    engine = make_engine(url)
-    try:
-        with make_sessionmaker(engine)() as session:
-            first = session.scalars(select(Measurement.id).order_by(Measurement.id)).first()
-            if first is None:
-                return
-            set_standard(session, "J-2026-0113", "door", measurement_id=first, replace=True)
-            session.commit()
-    finally:
-        engine.dispose()
+
+def qc_shot(win, inst) -> None:
+    """The QC tab on the scanned job: the first scan of the door made its standard in the tab (the standard
+    picker), a second scan of the same panel judged against it (pass/warn/fail per geometry, paired gloss)."""
     inst.scan()  # a second reading of the panel: the sample
     _wait(lambda: inst.idle, 60)
     win.tabs.setCurrentWidget(win.screens["QC"])
     qc = win.screens["QC"].content()
     qc.load_jobs()
     qc.job.setCurrentText("J-2026-0113")
-    qc.part.setCurrentText("door")
     qc.judge()
+    qc.part.setCurrentText("door")
+    if qc.standard_pick.count():
+        qc.standard_pick.setCurrentIndex(0)  # the oldest reading: the first scan
+        qc.set_standard()
+    qc.import_job.setText("J-2026-0113")
+    qc.import_part.setCurrentText("door")
 
 
 def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
@@ -183,8 +185,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
             inst.gloss_device.setCurrentText("sim:gloss")
             inst.toggle_gloss()
             _wait(lambda: inst.idle, 60)
-            inst.calibrate()
-            _wait(lambda: inst.idle, 60)
+            answer_calibration(win, inst)
             inst.job.setText("J-2026-0113")
             inst.part.setCurrentText("door")
             inst.substrate.setText("steel, e-coat")
@@ -207,7 +208,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         shot("qa")
 
         if scan:
-            qc_shot(win, sink.url, inst)
+            qc_shot(win, inst)
             shot("qc")
             win.tabs.setCurrentWidget(win.screens["QA"])
 

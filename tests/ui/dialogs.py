@@ -21,3 +21,20 @@ def enter_file_name(edit: QLineEdit, path: str | Path) -> None:
     QTest.keyClick(edit, Qt.Key.Key_Delete)
     QTest.keyClicks(edit, str(path))
     QTest.keyClick(edit, Qt.Key.Key_Return)
+
+
+def answer_calibration(qtbot, screen, answers: list[str]) -> list[str]:
+    """Click the instruments screen's Calibrate button and answer its prompts in turn, as a person does:
+    each of *answers* is ``"ok"`` or ``"cancel"`` for the next prompt shown. Returns the prompts' titles."""
+    from PySide6.QtWidgets import QMessageBox
+
+    buttons = {"ok": QMessageBox.StandardButton.Ok, "cancel": QMessageBox.StandardButton.Cancel}
+    QTest.mouseClick(screen.calibrate_btn, Qt.MouseButton.LeftButton)
+    titles = []
+    for answer in answers:
+        qtbot.waitUntil(lambda: screen.prompt is not None and screen.prompt.isVisible(), timeout=10000)
+        box = screen.prompt
+        titles.append(box.windowTitle())
+        QTest.mouseClick(box.button(buttons[answer]), Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda b=box: screen.prompt is not b, timeout=10000)
+    return titles

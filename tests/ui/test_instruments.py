@@ -16,6 +16,7 @@ from db.models import Panel
 from station.drivers.readings import SpectralReading
 from station.errors import InputError
 from station.model.spectra import reflectance_to_lab
+from tests.ui.dialogs import answer_calibration
 from ui.models.document import DesignDocument
 from ui.models.instruments import InstrumentSession, MeasurementStore, measurement_from_reading
 from ui.models.measure_db import LocalSink, PanelInfo
@@ -45,7 +46,8 @@ def test_scan_with_simulator_stores_one_row_with_panel_metadata(qtbot, tmp_path)
     qtbot.waitUntil(lambda: screen.idle, timeout=90000)
     assert screen.session.connected, screen.log.toPlainText()
     assert screen.scan_btn.isEnabled()
-    screen.calibrate_btn.click()
+    titles = answer_calibration(qtbot, screen, ["ok", "ok", "ok"])
+    assert titles == ["Black trap", "White tile", "Verification tile"]
     qtbot.waitUntil(lambda: screen.idle, timeout=90000)
     assert "calibration" in screen.log.toPlainText() and "passed" in screen.state.text(), (
         screen.log.toPlainText()

@@ -15,6 +15,7 @@ from sqlalchemy.orm import Session
 
 from db.models import Measurement as MeasurementRow
 from station.model.spectra import reflectance_to_lab
+from tests.ui.dialogs import answer_calibration
 from ui.models.instruments import STEPS, MeasurementStore
 from ui.models.measure_db import LocalSink, ServiceSink
 from ui.widgets.instruments_screen import InstrumentsScreen
@@ -47,7 +48,13 @@ def _day(qtbot, screen: InstrumentsScreen) -> list:
     _click(qtbot, screen, screen.pair_btn)
     assert screen.session.gloss_meter is not None, screen.log.toPlainText()
     assert screen.pair_btn.text() == "Unpair gloss meter"
-    _click(qtbot, screen, screen.calibrate_btn)
+    # the screen asks for the black trap and the white tile first; a cancel calibrates nothing
+    assert answer_calibration(qtbot, screen, ["ok", "cancel"]) == ["Black trap", "White tile"]
+    assert screen.state.text() == "calibration cancelled" and screen.calibrate_btn.isEnabled()
+    assert "calibration of" not in screen.log.toPlainText()
+    titles = answer_calibration(qtbot, screen, ["ok"] * 4)
+    assert titles == ["Black trap", "White tile", "Verification tile", "Gloss standard"]
+    qtbot.waitUntil(lambda: screen.idle, timeout=90000)
     log = screen.log.toPlainText()
     assert screen.state.text() == "calibration passed", log
     assert "calibration of sim:ma6" in log and "calibration of sim:gloss" in log
@@ -72,6 +79,13 @@ def _day(qtbot, screen: InstrumentsScreen) -> list:
     assert [r.split()[0] for r in rows] == [f"#{i}" for i in ids], rows
     assert all("J-2026-0200 bumper" in r and "6 geometries" in r for r in rows)
     assert screen.history_title.text() == "job history (stored): 2 measurements of job J-2026-0200"
+    # a history row opens: a double click hands its job, part and measurement to the QC tab
+    opened: list[tuple[str, str, int]] = []
+    screen.open_job = lambda job, part, mid: opened.append((job, part, mid))
+    row = screen.history.visualItemRect(screen.history.item(1)).center()
+    QTest.mouseClick(screen.history.viewport(), Qt.MouseButton.LeftButton, pos=row)
+    QTest.mouseDClick(screen.history.viewport(), Qt.MouseButton.LeftButton, pos=row)
+    assert opened == [("J-2026-0200", "bumper", ids[1])]
     return [first, second]
 
 

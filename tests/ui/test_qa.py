@@ -149,3 +149,63 @@ def test_load_stored_refuses_a_limit_that_is_not_a_row_count(qtbot, tmp_path, ba
         sink.recent(bad)
     screen.close()
     sink.close()
+
+
+def _type(qtbot, edit, text: str) -> None:
+    """Select the field's text and type *text* over it, as a person does."""
+    from PySide6.QtCore import Qt
+
+    qtbot.keyClick(edit, Qt.Key.Key_A, Qt.KeyboardModifier.ControlModifier)
+    qtbot.keyClicks(edit, text)
+
+
+def test_bad_lights_clear_the_last_answer_and_name_the_field(qtbot):
+    from PySide6.QtCore import Qt
+
+    designer = DesignerModel(DesignDocument())
+    designer.keep("A")
+    designer.set_gloss(60.0)
+    designer.keep("B")
+    screen = QAScreen(designer, MeasurementStore(), lambda _p: None)
+    qtbot.addWidget(screen)
+    screen.resize(900, 600)
+    screen.show()
+    screen.panel_a.setCurrentText("palette: A")
+    screen.panel_b.setCurrentText("palette: B")
+    _type(qtbot, screen.aspecular, "15, 45")
+    qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: screen.report is not None, timeout=60000)
+    qtbot.waitUntil(screen.run_btn.isEnabled, timeout=10000)
+    assert screen.export_btn.isEnabled() and screen.table.rowCount() > 0
+    assert screen.as_is.pixmap() is not None and not screen.as_is.pixmap().isNull()
+    assert "ΔE" in screen.as_is_title.text()
+    # another misalignment: the answer of the last run leaves the screen too
+    qtbot.keyClick(screen.beta, Qt.Key.Key_Right)
+    assert screen.beta_label.text() == "+6°" and screen.verdict.text() == "—"
+    assert screen.report is None and screen.table.rowCount() == 0 and not screen.export_btn.isEnabled()
+    assert screen.caption.text() == "the panels or β changed: run QA again"
+    qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: screen.report is not None, timeout=60000)
+    qtbot.waitUntil(screen.run_btn.isEnabled, timeout=10000)
+    assert screen.report.beta_deg == 6.0 and screen.export_btn.isEnabled()
+    _type(qtbot, screen.lights, "30, abc, 95")
+    qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
+    assert screen.verdict.text() == "error"
+    message = screen.details.text()
+    assert message.startswith("lights: expected") and "-90 < angle < 90" in message and "abc" in message
+    assert screen.report is None and screen.pictures is None
+    assert screen.table.rowCount() == 0
+    assert screen.as_is.pixmap().isNull() and screen.fixed.pixmap().isNull()
+    assert "ΔE" not in screen.as_is_title.text() and "ΔE" not in screen.fixed_title.text()
+    assert screen.caption.text() == ""
+    assert not screen.export_btn.isEnabled() and not screen.send_btn.isEnabled()
+    # a number out of range is named too: the light at 95° is below the horizon
+    _type(qtbot, screen.lights, "30, 95")
+    qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
+    assert screen.details.text() == "lights: expected comma-separated angles, -90 < angle < 90, got 95.0"
+    _type(qtbot, screen.lights, "30")
+    _type(qtbot, screen.aspecular, "15, 400")
+    qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
+    assert "aspecular range: expected" in screen.details.text() and "400" in screen.details.text()
+    assert screen.report is None and not screen.export_btn.isEnabled()
+    screen.close()

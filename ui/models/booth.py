@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 
 from station.errors import InputError, StationError
+from ui.models.local_db import LocalDatabase
 
 if TYPE_CHECKING:
     from station.model.illuminants import Illuminant
@@ -108,36 +109,10 @@ class BoothSource(Protocol):
     def reading(self, measurement_id: int) -> Reading: ...
 
 
-class LocalBoothSource:
+class LocalBoothSource(LocalDatabase):
     """The workstation's database (as ``station serve``: ``$CACAD_DATABASE_URL`` or the default SQLite)."""
 
-    def __init__(self, url: str | None = None) -> None:
-        self._url = url
-        self._sessions: Any = None
-
-    @property
-    def url(self) -> str:
-        if self._url is None:
-            from db.engine import configured_database_url
-
-            self._url = configured_database_url()
-        return self._url
-
-    @property
-    def where(self) -> str:
-        return f"database {self.url}"
-
-    def _session(self) -> Any:
-        if self._sessions is None:
-            from db.engine import make_engine, make_sessionmaker
-            from db.migrate import ensure_at_head
-
-            try:
-                ensure_at_head(self.url)
-            except Exception as exc:
-                raise BoothSourceError(f"{self.where}: {type(exc).__name__}: {exc}") from exc
-            self._sessions = make_sessionmaker(make_engine(self.url))
-        return self._sessions()
+    source_error = BoothSourceError
 
     def history(self, limit: int = HISTORY_LIMIT) -> list[HistoryEntry]:
         """The newest *limit* measurements of the 45° illumination block, newest first."""

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from urllib.parse import quote
 
 from station.errors import InputError, StationError
+from ui.models.local_db import LocalDatabase
 
 if TYPE_CHECKING:
     from ui.models.service import ServiceClient
@@ -68,35 +69,13 @@ class QcSource(Protocol):
         self, job: str, formula: str, kind: str, path: Path, illuminant_limits: str | None = None
     ) -> Path: ...
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]: ...
+    def set_standard(self, job: str, part: str, measurement_id: int) -> None: ...
 
 
-class LocalQc:
+class LocalQc(LocalDatabase):
     """The workstation's database (as ``station serve``: ``$CACAD_DATABASE_URL`` or the default SQLite)."""
 
-    def __init__(self, url: str | None = None) -> None:
-        self._url = url
-        self._sessions: Any = None
-
-    @property
-    def url(self) -> str:
-        if self._url is None:
-            from db.engine import configured_database_url
-
-            self._url = configured_database_url()
-        return self._url
-
-    @property
-    def where(self) -> str:
-        return f"database {self.url}"
-
-    def _session(self) -> Any:
-        if self._sessions is None:
-            from db.engine import make_engine, make_sessionmaker
-            from db.migrate import ensure_at_head
-
-            ensure_at_head(self.url)
-            self._sessions = make_sessionmaker(make_engine(self.url))
-        return self._sessions()
+    source_error = QcSourceError
 
     def jobs(self) -> list[JobEntry]:
         from station.qc.jobs import list_jobs
@@ -144,6 +123,14 @@ class LocalQc:
             std, smp = (reading_from_measurement(m) for m in rows)
         return metamerism(std, smp, formula).to_dict()
 
+    def set_standard(self, job: str, part: str, measurement_id: int) -> None:
+        """Make measurement *measurement_id* the standard of *job*/*part*, replacing the one there."""
+        from station.qc.jobs import set_standard
+
+        with self._session() as session:
+            set_standard(session, job, part, measurement_id=measurement_id, replace=True)
+            session.commit()
+
 
 class ServiceQc:
     """A station service's ``/api/v1/qc`` routes through the viewer's :class:`ServiceClient`."""
@@ -188,6 +175,20 @@ class ServiceQc:
         if r.status_code >= 400:
             raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
         return r.json()
+
+    def set_standard(self, job: str, part: str, measurement_id: int) -> None:
+        """``PUT /qc/jobs/{job}/standards/{part}`` with the measurement, replacing the one there."""
+        from ui.models.service import ServiceError
+
+        body = {"measurement_id": measurement_id, "replace": True}
+        try:
+            r = self.client.request(
+                "PUT", f"/qc/jobs/{quote(job, safe='')}/standards/{quote(part, safe='')}", json=body
+            )
+        except ServiceError as exc:
+            raise QcSourceError(str(exc)) from exc
+        if r.status_code >= 400:
+            raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
 
     def report(
         self, job: str, formula: str, kind: str, path: Path, illuminant_limits: str | None = None
@@ -283,6 +284,30 @@ class QcModel:
             return None
         return next((p for p in self.summary["parts"] if p["part"] == part), None)
 
+    def standard_candidates(self, part: str) -> list[tuple[int, str]]:
+        """(measurement id, label) of every stored measurement of *part* in the judged job that could be
+        its standard: its samples and its unjudged measurements, oldest first; the standard itself not."""
+        p = self.part(part)
+        if p is None:
+            return []
+        seen = {int(s["measurement_id"]): str(s["measured_at"])[:16].replace("T", " ") for s in p["samples"]}
+        seen.update({int(i): "" for i in p.get("unjudged", []) if int(i) not in seen})
+        std = p.get("standard") or {}
+        seen.pop(int(std.get("measurement_id") or 0), None)
+        return [(i, f"measurement {i}" + (f"  {when}" if when else "")) for i, when in sorted(seen.items())]
+
+    def set_standard(self, part: str, measurement_id: int) -> dict[str, Any]:
+        """Make *measurement_id* the standard of *part* of the judged job, then judge the job again (same
+        formula and illuminant limits); the new summary. The id must be one of :meth:`standard_candidates`."""
+        if self.summary_key is None:
+            raise InputError("job", "a judged job (press Judge first)", None)
+        ids = [i for i, _ in self.standard_candidates(part)]
+        if measurement_id not in ids:
+            raise InputError("standard", f"a measurement of {part}: one of {ids}", measurement_id)
+        job, formula = self.summary_key
+        self.source.set_standard(job, part, measurement_id)
+        return self.judge(job, formula, self.illuminant_limits or "")
+
     def standard_text(self, part: str) -> str:
         """One line naming the part's standard and the pass/warn/fail counts."""
         p = self.part(part)
@@ -290,7 +315,7 @@ class QcModel:
             return "no summary"
         std = p.get("standard")
         if std is None:
-            return f"{part}: no standard set (set one with station qc standard or the service)"
+            return f"{part}: no standard set (pick a measurement and press Set as standard)"
         ref = (
             f"measurement {std['measurement_id']}"
             if std.get("measurement_id")

@@ -13,7 +13,10 @@ log as they are; a reading the database or service could not take stays in the o
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
     QComboBox,
     QFormLayout,
@@ -23,6 +26,8 @@ from PySide6.QtWidgets import (
     QLabel,
     QLineEdit,
     QListWidget,
+    QListWidgetItem,
+    QMessageBox,
     QPlainTextEdit,
     QProgressBar,
     QPushButton,
@@ -43,21 +48,62 @@ from ui.widgets.common import cell_text, lab_colour, pixmap_from_array
 from ui.widgets.reading_plot import ReadingPlot
 from ui.widgets.tasks import TaskProgress, TaskThread
 
+#: (title, text) of the calibration prompts, in the order the instruments' sequence reads the tiles
+#: (zero on the black trap, then the white tile, then the verification tile; ``station.drivers``).
+CALIBRATION_PROMPTS: tuple[tuple[str, str], ...] = (
+    (
+        "Black trap",
+        "Calibrating {device}, step 1 of 3: have the black trap (light trap) ready for the zero reading, "
+        "then press OK.",
+    ),
+    (
+        "White tile",
+        "Step 2 of 3: have the white calibration tile of {device} ready (clean, the serial number of its "
+        "certificate), then press OK.",
+    ),
+    (
+        "Verification tile",
+        "Step 3 of 3: have the verification tile ready; its ΔE00 against the certificate decides the "
+        "calibration. Press OK to run the sequence: zero, white, verification.",
+    ),
+)
+GLOSS_PROMPT = (
+    "Gloss standard",
+    "The paired gloss meter calibrates too: place it on its calibration standard (the black glass tile), "
+    "then press OK.",
+)
+PROMPT_BUTTONS = QMessageBox.StandardButton.Ok | QMessageBox.StandardButton.Cancel
+
 
 class InstrumentsScreen(QWidget):
     """Device picker, actions, progress, the last reading and the stored list."""
 
     def __init__(
-        self, store: MeasurementStore, document: DesignDocument | None = None, parent: QWidget | None = None
+        self,
+        store: MeasurementStore,
+        document: DesignDocument | None = None,
+        parent: QWidget | None = None,
+        open_job: Callable[[str, str, int], None] | None = None,
     ) -> None:
         super().__init__(parent)
         self.store = store
         self.document = document
+        self.open_job = open_job
         self.session = InstrumentSession()
         self.task: TaskThread | None = None
         self.last: Measurement | None = None
         self.idle = True  # no task running and its result handled
+        self.prompt: QMessageBox | None = None  # the calibration prompt on screen (tests answer it)
+        self._prompts: list[tuple[str, str]] = []
+        self._build_panel_form()
+        self._build_actions()
+        self._build_reading()
+        self._lay_out()
+        self._connect()
+        self._sync_buttons()
 
+    def _build_panel_form(self) -> None:
+        """Device and gloss meter pickers and the panel metadata (job, part, substrate, notes)."""
         self.device = QComboBox()
         self.device.setEditable(True)
         self.device.addItems(list(SIM_DEVICES))
@@ -67,9 +113,6 @@ class InstrumentsScreen(QWidget):
         self.gloss_device.setToolTip(
             "a gloss meter read with every scan; its 60° gloss is stored with the colour"
         )
-        self.pair_btn = QPushButton("Pair gloss meter")
-        self.gloss = QLabel("gloss: no gloss meter paired")
-        self.gloss.setWordWrap(True)
         self.job = QLineEdit("J-0001")
         self.part = QComboBox()
         self.part.addItems(list(PARTS))
@@ -80,23 +123,32 @@ class InstrumentsScreen(QWidget):
         self.notes.setPlaceholderText("notes stored with the panel")
         self.notes.setMaximumHeight(54)
         self.notes.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
+
+    def _build_actions(self) -> None:
+        """The buttons, progress, state line, storage line and log."""
+        self.pair_btn = QPushButton("Pair gloss meter")
         self.retry_btn = QPushButton("Retry queued")
         self.history_btn = QPushButton("Job history")
         self.history_btn.setToolTip("every stored measurement of the job typed above (database or service)")
-        self.history = QListWidget()
-        self.where = QLabel(self._where_text())
-        self.where.setWordWrap(True)
         self.connect_btn = QPushButton("Connect")
         self.calibrate_btn = QPushButton("Calibrate")
+        self.calibrate_btn.setToolTip("asks for the black trap and the white tile, then calibrates")
         self.scan_btn = QPushButton("Scan panel")
         self.use_btn = QPushButton("Use as design")
         self.progress = QProgressBar()
         self.progress.setRange(0, STEPS)
         self.state = QLabel("not connected")
         self.busy = TaskProgress()
+        self.where = QLabel(self._where_text())
+        self.where.setWordWrap(True)
         self.log = QPlainTextEdit()
         self.log.setReadOnly(True)
         self.log.setMaximumBlockCount(500)
+
+    def _build_reading(self) -> None:
+        """The last reading (table, swatch, gloss, plot), the session's scans and the job history."""
+        self.gloss = QLabel("gloss: no gloss meter paired")
+        self.gloss.setWordWrap(True)
         self.table = QTableWidget(0, 5)
         self.table.setHorizontalHeaderLabels(["geometry", "L*", "a*", "b*", "colour"])
         self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Stretch)
@@ -106,7 +158,12 @@ class InstrumentsScreen(QWidget):
         self.swatch.setMinimumSize(160, 160)
         self.plot = ReadingPlot()
         self.stored = QListWidget()
+        self.history = QListWidget()
+        self.history.setToolTip("double-click a measurement to open its job's verdicts in the QC tab")
+        self.history_title = QLabel("job history (stored): click Job history")
 
+    def _lay_out(self) -> None:
+        """Form, buttons and log on the left; the reading and the lists on the right."""
         form = QFormLayout()
         form.addRow("device", self.device)
         pair = QHBoxLayout()
@@ -132,12 +189,8 @@ class InstrumentsScreen(QWidget):
         left = QVBoxLayout()
         left.addLayout(form)
         left.addLayout(buttons)
-        left.addWidget(self.progress)
-        left.addWidget(self.busy)
-        left.addWidget(self.state)
-        left.addWidget(self.where)
-        left.addWidget(QLabel("log"))
-        left.addWidget(self.log)
+        for w in (self.progress, self.busy, self.state, self.where, QLabel("log"), self.log):
+            left.addWidget(w)
         right = QVBoxLayout()
         right.addWidget(QLabel("last reading"))
         row = QHBoxLayout()
@@ -148,13 +201,14 @@ class InstrumentsScreen(QWidget):
         right.addWidget(self.plot, 3)
         right.addWidget(QLabel("scans since the viewer started"))
         right.addWidget(self.stored, 1)
-        self.history_title = QLabel("job history (stored): click Job history")
         right.addWidget(self.history_title)
         right.addWidget(self.history, 1)
         lay = QHBoxLayout(self)
         lay.addLayout(left, 1)
         lay.addLayout(right, 2)
 
+    def _connect(self) -> None:
+        """Wire the buttons, the history list and the store's events."""
         self.connect_btn.clicked.connect(self.connect_device)
         self.pair_btn.clicked.connect(self.toggle_gloss)
         self.calibrate_btn.clicked.connect(self.calibrate)
@@ -162,8 +216,8 @@ class InstrumentsScreen(QWidget):
         self.use_btn.clicked.connect(self.use_as_design)
         self.retry_btn.clicked.connect(self.retry)
         self.history_btn.clicked.connect(self.job_history)
+        self.history.itemDoubleClicked.connect(self._on_history_opened)
         self.store.events.added.connect(self._on_added)
-        self._sync_buttons()
 
     # ------------------------------------------------------------------ actions
     def _run(self, fn, done, label: str, steps: int = 0) -> None:
@@ -207,9 +261,53 @@ class InstrumentsScreen(QWidget):
         device = self.gloss_device.currentText()
         self._run(lambda _p: self.session.pair_gloss(device), self._on_paired, f"pairing {device}…")
 
+    def calibration_prompts(self) -> list[tuple[str, str]]:
+        """(title, text) of each tile the technician is asked for, in the instrument's order: the black
+        trap (zero), the white tile, the verification tile, then the paired gloss meter's standard."""
+        device = self.session.device or "the instrument"
+        out = [(title, text.format(device=device)) for title, text in CALIBRATION_PROMPTS]
+        if self.session.gloss_meter is not None:
+            out.append(GLOSS_PROMPT)
+        return out
+
     def calibrate(self) -> None:
-        """Run the calibration sequence (of the paired gloss meter too)."""
-        self._run(lambda _p: self.session.calibrate(), self._on_calibrated, "calibrating…")
+        """Ask for each calibration tile in turn (:meth:`calibration_prompts`); once every one is
+        confirmed, run the calibration sequence (of the paired gloss meter too) through ``station.scan``.
+        Cancel at any prompt calibrates nothing."""
+        if self.prompt is not None or not self.session.connected:
+            return
+        self._prompts = self.calibration_prompts()
+        self._sync_buttons(busy=True)
+        self._next_prompt()
+
+    def _next_prompt(self) -> None:
+        if not self._prompts:
+            self.prompt = None
+            self._run(lambda _p: self.session.calibrate(), self._on_calibrated, "calibrating…")
+            return
+        title, text = self._prompts.pop(0)
+        box = QMessageBox(QMessageBox.Icon.Information, title, text, PROMPT_BUTTONS, self)
+        box.setDefaultButton(QMessageBox.StandardButton.Ok)
+        box.setEscapeButton(QMessageBox.StandardButton.Cancel)
+        box.setWindowModality(Qt.WindowModality.WindowModal)
+        box.finished.connect(lambda _r, b=box, t=title: self._on_prompt(b, t))
+        self.prompt = box
+        self.state.setText(f"calibration: {title.lower()}")
+        box.open()
+
+    def _on_prompt(self, box: QMessageBox, title: str) -> None:
+        """A prompt answered: the next one on OK; on Cancel nothing is calibrated."""
+        ok = box.clickedButton() is box.button(QMessageBox.StandardButton.Ok)
+        box.deleteLater()
+        if ok:
+            self._say(f"calibration: {title.lower()} confirmed")
+            self._next_prompt()
+            return
+        self.prompt = None
+        self._prompts = []
+        self.state.setText("calibration cancelled")
+        self._say(f"calibration cancelled at the {title.lower()}: nothing was calibrated")
+        self._sync_buttons()
 
     def panel_info(self) -> PanelInfo:
         """The panel metadata as typed (validated: :class:`InputError` names the field)."""
@@ -254,9 +352,19 @@ class InstrumentsScreen(QWidget):
         self._done_bar()
         self.history.clear()
         for r in rows:
-            self.history.addItem(f"#{r.id}  {r.measured_at}  {r.label}  {len(r.geometries_deg)} geometries")
+            item = QListWidgetItem(f"#{r.id}  {r.measured_at}  {r.label}  {len(r.geometries_deg)} geometries")
+            item.setData(Qt.ItemDataRole.UserRole, (job, r.label[len(job) + 1 :], r.id))
+            self.history.addItem(item)
         self.history_title.setText(f"job history (stored): {len(rows)} measurements of job {job}")
         self.state.setText(f"{len(rows)} stored measurements of job {job}")
+
+    def _on_history_opened(self, item: QListWidgetItem) -> None:
+        """A history row double-clicked: its job's verdicts (in the QC tab), that measurement selected."""
+        job, part, measurement_id = item.data(Qt.ItemDataRole.UserRole)
+        if self.open_job is None:
+            self.state.setText("no QC tab to open the job in")
+            return
+        self.open_job(job, part, int(measurement_id))
 
     def _where_text(self) -> str:
         sink = self.store.sink
@@ -401,7 +509,7 @@ class InstrumentsScreen(QWidget):
         self._sync_buttons()
 
     def _sync_buttons(self, busy: bool = False) -> None:
-        busy = busy or (self.task is not None and self.task.isRunning())
+        busy = busy or self.prompt is not None or (self.task is not None and self.task.isRunning())
         self.connect_btn.setEnabled(not busy)
         self.pair_btn.setEnabled(not busy)
         self.pair_btn.setText(
@@ -422,6 +530,9 @@ class InstrumentsScreen(QWidget):
         )
 
     def closeEvent(self, event) -> None:
+        if self.prompt is not None:
+            self._prompts = []
+            self.prompt.reject()
         if self.task is not None:
             self.task.wait()
         self.session.close()

@@ -10,6 +10,7 @@ formulation."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 
@@ -38,6 +39,7 @@ from station.analysis.picture import display_exposure, geometry_caption, lab_pic
 from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, SeamReport, seam_qa
 from station.errors import InputError, StationError
 from station.model import FaceFlopTravelGloss
+from station.model.domain import ANGLE_MAX_DEG, ANGLE_MIN_DEG
 from ui.models.designer import DesignerModel
 from ui.models.instruments import MeasurementStore
 from ui.models.measure_db import RECENT_DEFAULT, recent_limit
@@ -47,6 +49,15 @@ from ui.widgets.tasks import TaskProgress, TaskThread
 METHODS = ("cie76", "cie2000", "din6175")
 PICTURE_SIZE = (120, 240)
 """Seam pictures, pixels (height, width): panel A left, panel B right."""
+VERDICT_STYLE = "font-size: 18pt; font-weight: bold"
+ERROR_STYLE = VERDICT_STYLE + "; color: #b00020"
+PICTURES_HINT = "run QA to picture the seam at the analysed geometries"
+AS_IS_TITLE = "seam as is (A | B)"
+FIXED_TITLE = "corrected (A | B′)"
+#: Accepted light polar angles (signed, degrees from the normal): a light at or below the horizon lights nothing.
+LIGHT_LIMIT_DEG = 90.0
+LIGHTS_RANGE = f"comma-separated angles, {-LIGHT_LIMIT_DEG:g} < angle < {LIGHT_LIMIT_DEG:g}"
+ASPECULAR_RANGE = f"comma-separated angles, {ANGLE_MIN_DEG:g} <= angle <= {ANGLE_MAX_DEG:g}"
 
 
 def export_report(report: SeamReport, path: Path) -> tuple[Path, Path]:
@@ -63,15 +74,32 @@ def export_report(report: SeamReport, path: Path) -> tuple[Path, Path]:
     return path, plot_seam_report(report, path.with_suffix(".png"))
 
 
-def _floats(text: str, field: str) -> tuple[float, ...]:
-    """Comma-separated angles in degrees; InputError naming *field* otherwise (the core checks ranges)."""
+def _floats(
+    text: str, field: str, accepted: str, lo: float, hi: float, open_range: bool
+) -> tuple[float, ...]:
+    """Comma-separated angles in degrees within *lo* … *hi* (exclusive when *open_range*);
+    :class:`InputError` naming *field* and *accepted* otherwise."""
     try:
         vals = tuple(float(t) for t in text.replace(";", ",").split(",") if t.strip())
     except ValueError as exc:
-        raise InputError(field, "comma-separated angles in degrees", text) from exc
+        raise InputError(field, accepted, text) from exc
     if not vals:
-        raise InputError(field, "at least one angle in degrees", text)
+        raise InputError(field, accepted, text)
+    for v in vals:
+        inside = lo < v < hi if open_range else lo <= v <= hi
+        if not (math.isfinite(v) and inside):
+            raise InputError(field, accepted, v)
     return vals
+
+
+def parse_lights(text: str) -> tuple[float, ...]:
+    """The light polar angles typed, degrees (:data:`LIGHTS_RANGE`)."""
+    return _floats(text, "lights", LIGHTS_RANGE, -LIGHT_LIMIT_DEG, LIGHT_LIMIT_DEG, True)
+
+
+def parse_aspecular(text: str) -> tuple[float, ...]:
+    """The aspecular angles typed, degrees (:data:`ASPECULAR_RANGE`, the model's angle range)."""
+    return _floats(text, "aspecular range", ASPECULAR_RANGE, ANGLE_MIN_DEG, ANGLE_MAX_DEG, False)
 
 
 class QAScreen(QWidget):
@@ -90,6 +118,18 @@ class QAScreen(QWidget):
         self.send_to_formulation = send_to_formulation
         self.report: SeamReport | None = None
         self.task: TaskThread | None = None
+        self.stored: list[tuple[str, FaceFlopTravelGloss]] = []
+        self.exported: tuple[Path, Path] | None = None
+        self.shown_geometry: int | None = None
+        self.pictures: tuple | None = None  # (Lab as is, Lab corrected, display exposure)
+        self._build_inputs()
+        self._build_results()
+        self._build_pictures()
+        self._lay_out()
+        self._connect()
+
+    def _build_inputs(self) -> None:
+        """Panel pickers, misalignment, tolerance, formula, geometries and the action buttons."""
         self.panel_a, self.panel_b = QComboBox(), QComboBox()
         self.beta = QSlider(Qt.Orientation.Horizontal)
         self.beta.setRange(-45, 45)
@@ -101,22 +141,26 @@ class QAScreen(QWidget):
         self.method = QComboBox()
         self.method.addItems(list(METHODS))
         self.lights = QLineEdit(", ".join(f"{v:g}" for v in DEFAULT_LIGHTS_DEG))
+        self.lights.setToolTip(f"light polar angles, degrees: {LIGHTS_RANGE}")
         self.aspecular = QLineEdit(", ".join(f"{v:g}" for v in DEFAULT_ASPECULAR_DEG))
+        self.aspecular.setToolTip(f"aspecular angles, degrees: {ASPECULAR_RANGE}")
         self.run_btn = QPushButton("Run QA")
         self.load_btn = QPushButton("Load stored measurements")
-        self.load_btn.setEnabled(store.sink is not None)
+        self.load_btn.setEnabled(self.store.sink is not None)
         self.load_btn.setToolTip("the newest measurements of the database (or the service in service mode)")
-        self.stored: list[tuple[str, FaceFlopTravelGloss]] = []
         self.send_btn = QPushButton("Send corrected paint to formulation")
         self.send_btn.setEnabled(False)
         self.export_btn = QPushButton("Export report…")
         self.export_btn.setEnabled(False)
-        self.exported: tuple[Path, Path] | None = None
         self.busy = TaskProgress()
+
+    def _build_results(self) -> None:
+        """The verdict, its details and the per-geometry table."""
         self.verdict = QLabel("—")
-        self.verdict.setStyleSheet("font-size: 18pt; font-weight: bold")
+        self.verdict.setStyleSheet(VERDICT_STYLE)
         self.details = QLabel()
         self.details.setWordWrap(True)
+        self.details.setAlignment(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop)
         self.details.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
         self.table = QTableWidget(0, 6)
         self.table.setHorizontalHeaderLabels(
@@ -127,22 +171,25 @@ class QAScreen(QWidget):
         self.table.setSelectionMode(QAbstractItemView.SelectionMode.SingleSelection)
         self.table.setEditTriggers(QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.setToolTip("click a geometry to picture the seam there")
-        self.shown_geometry: int | None = None
-        self.pictures: tuple | None = None  # (Lab as is, Lab corrected, display exposure)
-        self.as_is = QLabel("run QA to picture the seam at the analysed geometries")
+
+    def _build_pictures(self) -> None:
+        """The two seam pictures (as is, corrected), their titles and the caption."""
+        self.as_is = QLabel(PICTURES_HINT)
         self.fixed = QLabel()
         for pic in (self.as_is, self.fixed):
             pic.setMinimumSize(PICTURE_SIZE[1], PICTURE_SIZE[0])
             pic.setAlignment(Qt.AlignmentFlag.AlignCenter)
             # a picture wider than its column is cropped at the sides, not made to widen the screen
             pic.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Ignored)
-        self.as_is_title = QLabel("seam as is (A | B)")
-        self.fixed_title = QLabel("corrected (A | B′)")
+        self.as_is_title = QLabel(AS_IS_TITLE)
+        self.fixed_title = QLabel(FIXED_TITLE)
         for title in (self.as_is_title, self.fixed_title):
             title.setWordWrap(True)
         self.caption = QLabel()
         self.caption.setWordWrap(True)
 
+    def _lay_out(self) -> None:
+        """Inputs and verdict on the left, pictures and table on the right."""
         form = QFormLayout()
         form.addRow("panel A", self.panel_a)
         form.addRow("panel B", self.panel_b)
@@ -156,10 +203,8 @@ class QAScreen(QWidget):
         form.addRow("aspecular range (°)", self.aspecular)
         left = QVBoxLayout()
         left.addLayout(form)
-        left.addWidget(self.load_btn)
-        left.addWidget(self.run_btn)
-        left.addWidget(self.busy)
-        left.addWidget(self.verdict)
+        for w in (self.load_btn, self.run_btn, self.busy, self.verdict):
+            left.addWidget(w)
         left.addWidget(self.details, 1)
         left.addWidget(self.export_btn)
         left.addWidget(self.send_btn)
@@ -177,6 +222,8 @@ class QAScreen(QWidget):
         lay.addLayout(left, 1)
         lay.addLayout(right, 2)
 
+    def _connect(self) -> None:
+        """Wire the widgets and the models' events."""
         self.beta.valueChanged.connect(self._on_beta)
         self.run_btn.clicked.connect(self.run)
         # clicked(bool) must not reach load_stored: its checked flag would become the row limit
@@ -184,21 +231,23 @@ class QAScreen(QWidget):
         self.send_btn.clicked.connect(self._send)
         self.export_btn.clicked.connect(self._on_export_clicked)
         self.table.itemSelectionChanged.connect(self._on_row)
-        designer.events.palette.connect(self.refresh_sources)
-        designer.document.events.changed.connect(self._on_design)
-        store.events.added.connect(self._on_measurement)
+        self.designer.events.palette.connect(self.refresh_sources)
+        self.designer.document.events.changed.connect(self._on_design)
+        self.store.events.added.connect(self._on_measurement)
         self.refresh_sources()
         self._on_beta(self.beta.value())
         self.panel_a.currentTextChanged.connect(self._on_pick)
         self.panel_b.currentTextChanged.connect(self._on_pick)
 
     def _on_pick(self, *_args) -> None:
-        """Another panel or misalignment: the pictures and verdict of the last run no longer apply."""
+        """Another panel or misalignment: the last run's answer no longer applies and leaves the screen."""
         if self.report is None:
             return
+        self.clear_result()
         self.caption.setText("the panels or β changed: run QA again")
         self.verdict.setText("—")
-        self.verdict.setStyleSheet("font-size: 18pt; font-weight: bold")
+        self.verdict.setStyleSheet(VERDICT_STYLE)
+        self.details.setText("")
 
     def sources(self) -> list[tuple[str, FaceFlopTravelGloss]]:
         """(label, design) of every panel that can be picked."""
@@ -224,12 +273,12 @@ class QAScreen(QWidget):
         limit = recent_limit(limit)
         sink = self.store.sink
         if sink is None:
-            self._on_failed("stored measurements: no measurement store is open")
+            self._show_error("stored measurements: no measurement store is open")
             return 0
         try:
             rows = sink.recent(limit)
         except StationError as exc:
-            self._on_failed(f"stored measurements: {exc}")
+            self._show_error(f"stored measurements: {exc}")
             return 0
         self.stored = [
             (f"stored #{r.id}: {r.label} {r.measured_at}", d) for r in rows if (d := r.design()) is not None
@@ -274,8 +323,8 @@ class QAScreen(QWidget):
         a, b = self.picked()
         beta, tol, method = float(self.beta.value()), self.tolerance.value(), self.method.currentText()
         try:
-            lights = _floats(self.lights.text(), "lights")
-            asp = _floats(self.aspecular.text(), "aspecular range")
+            lights = parse_lights(self.lights.text())
+            asp = parse_aspecular(self.aspecular.text())
         except InputError as exc:
             self._on_failed(str(exc))
             return
@@ -298,12 +347,37 @@ class QAScreen(QWidget):
 
     def _on_cancelled(self) -> None:
         self.verdict.setText("cancelled")
-        self.verdict.setStyleSheet("font-size: 18pt; font-weight: bold")
+        self.verdict.setStyleSheet(VERDICT_STYLE)
         self.details.setText("the seam analysis was cancelled; nothing changed")
 
     def _on_failed(self, message: str) -> None:
+        """The analysis could not run: nothing of the last report stays on screen, the error is shown."""
+        self.clear_result()
+        self._show_error(message)
+
+    def _show_error(self, message: str) -> None:
+        """An error in the verdict's place (red), the message (field and accepted range) below it."""
         self.verdict.setText("error")
+        self.verdict.setStyleSheet(ERROR_STYLE)
         self.details.setText(message)
+
+    def clear_result(self) -> None:
+        """Forget the last report: pictures, titles, caption, table, export and send, all cleared."""
+        self.report = None
+        self.pictures = None
+        self.shown_geometry = None
+        self.exported = None
+        self.as_is.clear()
+        self.as_is.setText(PICTURES_HINT)
+        self.fixed.clear()
+        self.as_is_title.setText(AS_IS_TITLE)
+        self.fixed_title.setText(FIXED_TITLE)
+        self.caption.clear()
+        self.table.blockSignals(True)
+        self.table.setRowCount(0)
+        self.table.blockSignals(False)
+        self.export_btn.setEnabled(False)
+        self.send_btn.setEnabled(False)
 
     def _on_report(self, r: SeamReport) -> None:
         self.report = r
@@ -392,7 +466,7 @@ class QAScreen(QWidget):
         self.details.setText(f"exporting the report to {path}…")
         self.task = TaskThread(lambda _p: export_report(report, path))
         self.task.succeeded.connect(self._on_exported)
-        self.task.failed.connect(self._on_failed)
+        self.task.failed.connect(lambda msg: self.details.setText(f"export failed: {msg}"))
         self.busy.watch(self.task, f"writing the report to {path.name} and its picture", cancellable=False)
         self.task.finished.connect(lambda: self.export_btn.setEnabled(self.report is not None))
         self.task.start()

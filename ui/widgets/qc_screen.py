@@ -13,8 +13,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
+    QAbstractItemView,
     QComboBox,
     QFileDialog,
     QFormLayout,
@@ -29,7 +31,10 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from station.errors import StationError
+from db.models import PARTS
+from station.errors import InputError, StationError
+from ui.models.imports import FileImport, import_files, import_filter, import_summary, importable
+from ui.models.measure_db import MeasurementSink
 from ui.models.qc import FORMULAS, QcModel, verdict_rows
 from ui.widgets.common import cell_text
 from ui.widgets.tasks import TaskThread
@@ -39,19 +44,41 @@ VERDICT_COLOURS = {"pass": "#b7e1b0", "warn": "#ffe08a", "fail": "#f4a09a"}
 
 
 class QcScreen(QWidget):
-    """Job, part and formula pickers; the verdict table per geometry; PDF and CSV export."""
+    """Job, part and formula pickers; the standard picker; the verdict table per geometry; PDF and CSV
+    export; vendor files imported by button or dropped on the screen."""
 
-    def __init__(self, model: QcModel, parent: QWidget | None = None) -> None:
+    def __init__(
+        self, model: QcModel, parent: QWidget | None = None, sink: MeasurementSink | None = None
+    ) -> None:
         super().__init__(parent)
         self.model = model
+        self.sink = sink
         self.task: TaskThread | None = None
         self.last_report: Path | None = None
+        self.imports: list[FileImport] = []
+        self._build_pickers()
+        self._build_buttons()
+        self._build_import()
+        self._build_results()
+        self._lay_out()
+        self._connect()
+        self.setAcceptDrops(sink is not None)
+
+    def _build_pickers(self) -> None:
+        """Job, part, formula, illuminant limits and the standard picker."""
         self.job = QComboBox()
         self.part = QComboBox()
         self.formula = QComboBox()
         self.formula.addItems(list(FORMULAS))
         self.limits = QLineEdit()
         self.limits.setPlaceholderText("e.g. A=1.0,F11=1.5 — metamerism index limits (spectra needed)")
+        self.standard_pick = QComboBox()
+        self.standard_pick.setToolTip("a stored measurement of the part; selecting a table row picks it too")
+        self.set_standard_btn = QPushButton("Set as standard")
+        self.set_standard_btn.setEnabled(False)
+
+    def _build_buttons(self) -> None:
+        """Load, judge, export and metamerism buttons (all but Load wait for data)."""
         self.load_btn = QPushButton("Load jobs")
         self.judge_btn = QPushButton("Judge")
         self.pdf_btn = QPushButton("Export PDF…")
@@ -59,30 +86,64 @@ class QcScreen(QWidget):
         self.mi_btn = QPushButton("Metamerism of selected")
         for b in (self.judge_btn, self.pdf_btn, self.csv_btn, self.mi_btn):
             b.setEnabled(False)
+
+    def _build_import(self) -> None:
+        """The job and part imported files are stored on, the Import button and the result lines."""
+        self.import_job = QLineEdit()
+        self.import_job.setPlaceholderText("job the imported panels belong to, e.g. J-2026-0300")
+        self.import_part = QComboBox()
+        self.import_part.addItems(list(PARTS))
+        self.import_part.setCurrentText("test_panel")
+        self.import_btn = QPushButton("Import files…")
+        self.import_btn.setEnabled(self.sink is not None)
+        self.import_btn.setToolTip("CxF3, CGATS, MA-T12 workbook or CSV files; or drop them on this tab")
+        self.import_result = QLabel(
+            "Import vendor files with Import files… or drop them here." if self.sink is not None else ""
+        )
+        self.import_result.setWordWrap(True)
+        self.import_result.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+
+    def _build_results(self) -> None:
+        """The standard line, the verdict table and the status line."""
         self.standard = QLabel("Load jobs to begin.")
         self.standard.setWordWrap(True)
-        self.status = QLabel(f"source: {model.source.where}")
+        self.status = QLabel(f"source: {self.model.source.where}")
         self.status.setWordWrap(True)
         self.table = QTableWidget(0, len(COLUMNS))
         self.table.setHorizontalHeaderLabels(list(COLUMNS))
         self.table.horizontalHeader().setSectionResizeMode(len(COLUMNS) - 1, QHeaderView.ResizeMode.Stretch)
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        self.table.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
 
+    def _lay_out(self) -> None:
+        """Pickers, buttons, the import row, then the standard line, table and status."""
         form = QFormLayout()
         form.addRow("job", self.job)
         form.addRow("part", self.part)
         form.addRow("formula", self.formula)
         form.addRow("illuminant limits", self.limits)
+        std = QHBoxLayout()
+        std.addWidget(self.standard_pick, 1)
+        std.addWidget(self.set_standard_btn)
+        form.addRow("standard", std)
+        imp = QHBoxLayout()
+        imp.addWidget(self.import_job, 2)
+        imp.addWidget(self.import_part, 1)
+        imp.addWidget(self.import_btn)
+        form.addRow("import into", imp)
         buttons = QHBoxLayout()
         for b in (self.load_btn, self.judge_btn, self.pdf_btn, self.csv_btn, self.mi_btn):
             buttons.addWidget(b)
         layout = QVBoxLayout(self)
         layout.addLayout(form)
+        layout.addWidget(self.import_result)
         layout.addLayout(buttons)
         layout.addWidget(self.standard)
         layout.addWidget(self.table, 1)
         layout.addWidget(self.status)
 
+    def _connect(self) -> None:
+        """Wire the buttons and pickers."""
         self.load_btn.clicked.connect(self.load_jobs)
         self.judge_btn.clicked.connect(self.judge)
         self.job.currentTextChanged.connect(self._on_job)
@@ -90,6 +151,9 @@ class QcScreen(QWidget):
         self.pdf_btn.clicked.connect(lambda: self.export("pdf"))
         self.csv_btn.clicked.connect(lambda: self.export("csv"))
         self.mi_btn.clicked.connect(self.metamerism)
+        self.set_standard_btn.clicked.connect(self.set_standard)
+        self.import_btn.clicked.connect(self.ask_import)
+        self.table.itemSelectionChanged.connect(self._on_row)
 
     # -- actions -------------------------------------------------------------------------------------
     def load_jobs(self) -> None:
@@ -149,6 +213,12 @@ class QcScreen(QWidget):
         entry = self.model.part(part)
         rows = verdict_rows(entry) if entry is not None else []
         self.standard.setText(self.model.standard_text(part))
+        self.standard_pick.clear()
+        for mid, label in self.model.standard_candidates(part):
+            self.standard_pick.addItem(label, mid)
+        self.set_standard_btn.setEnabled(self.standard_pick.count() > 0)
+        self.table.blockSignals(True)
+        self.table.clearSelection()
         self.table.setRowCount(len(rows))
         for i, r in enumerate(rows):
             cells = (
@@ -168,6 +238,127 @@ class QcScreen(QWidget):
                 if j == COLUMNS.index("verdict"):
                     item.setBackground(QColor(VERDICT_COLOURS.get(r.verdict, "#ffffff")))
                 self.table.setItem(i, j, item)
+        self.table.blockSignals(False)
+
+    def _on_row(self) -> None:
+        """A selected sample row becomes the standard picker's choice."""
+        row = self.table.currentRow()
+        if row < 0 or self.table.item(row, 0) is None:
+            return
+        i = self.standard_pick.findData(int(cell_text(self.table, row, COLUMNS.index("sample"))))
+        if i >= 0:
+            self.standard_pick.setCurrentIndex(i)
+
+    def set_standard(self) -> None:
+        """Make the picked measurement the standard of the shown part, then judge the job again."""
+        part, mid = self.part.currentText(), self.standard_pick.currentData()
+        if mid is None:
+            self.status.setText("error: standard: pick a measurement of the part first")
+            return
+        try:
+            self.model.set_standard(part, int(mid))
+        except StationError as exc:
+            self.status.setText(f"error: {exc}")
+            return
+        self.status.setText(f"measurement {mid} is now the standard of {part}; the job was judged again")
+        self._show_part(part)
+
+    def open_job(self, job: str, part: str, measurement_id: int | None = None) -> None:
+        """Show *job*'s verdicts at *part* (a job-history row opened), the rows of *measurement_id* selected."""
+        self.load_jobs()
+        i = self.job.findText(job)
+        if i < 0:
+            self.status.setText(f"error: job: expected a stored job, got {job!r}")
+            return
+        self.job.setCurrentIndex(i)
+        self.judge()
+        if self.model.summary_key is None or self.model.summary_key[0] != job:
+            return
+        self.part.setCurrentText(part)
+        if measurement_id is not None:
+            hits = [
+                r for r in range(self.table.rowCount()) if cell_text(self.table, r, 0) == str(measurement_id)
+            ]
+            if hits:
+                self.table.selectRow(hits[0])
+                self.table.scrollTo(self.table.model().index(hits[0], 0))
+            if not hits:
+                std = (self.model.part(part) or {}).get("standard") or {}
+                what = (
+                    "the standard" if std.get("measurement_id") == measurement_id else "not a judged sample"
+                )
+                self.status.setText(
+                    f"{self.status.text()} — measurement {measurement_id} is {what} of {part}"
+                )
+
+    # -- import --------------------------------------------------------------------------------------
+    def _import_panel(self) -> tuple[str, str]:
+        """The job and part typed for the imported panels (:class:`InputError` naming the field)."""
+        job = self.import_job.text().strip() or self.job.currentText()
+        if not job:
+            raise InputError("import job", "a job name (type it beside Import files…)", job)
+        return job, self.import_part.currentText()
+
+    def ask_import(self) -> None:
+        paths, _ = QFileDialog.getOpenFileNames(
+            self,
+            "Import vendor measurement files",
+            "",
+            import_filter(),
+            options=QFileDialog.Option.DontUseNativeDialog,
+        )
+        if paths:
+            self.import_paths([Path(p) for p in paths])
+
+    def import_paths(self, paths: list[Path], skipped: tuple[str, ...] = ()) -> None:
+        """Import *paths* in a worker through the one ingest path, then show what each file gave
+        (*skipped*: names of dropped files of no importable kind, said with the result)."""
+        sink = self.sink
+        if sink is None or (self.task is not None and self.task.isRunning()):
+            return
+        try:
+            job, part = self._import_panel()
+        except InputError as exc:
+            self.import_result.setText(f"error: {exc}")
+            return
+        sink.prepare()  # first open + migration on the GUI thread, never in the worker
+        ingestor = sink.ingestor
+        self.import_btn.setEnabled(False)
+        self.import_result.setText(f"importing {len(paths)} files into {job} {part}…")
+        self.task = TaskThread(lambda _p: import_files(paths, ingestor, job, part), self)
+        self.task.succeeded.connect(lambda results: self._on_imported(job, results, skipped))
+        self.task.failed.connect(lambda msg: self.import_result.setText(f"error: {msg}"))
+        self.task.finished.connect(lambda: self.import_btn.setEnabled(True))
+        self.task.start()
+
+    def _on_imported(self, job: str, results: list[FileImport], skipped: tuple[str, ...] = ()) -> None:
+        self.imports = results
+        lines = [import_summary(results), *(r.text() for r in results)]
+        if skipped:
+            lines.append(f"not measurement files (skipped): {', '.join(skipped)}")
+        self.import_result.setText("\n".join(lines))
+        if any(r.stored for r in results):
+            self.load_jobs()
+            i = self.job.findText(job)
+            if i >= 0:
+                self.job.setCurrentIndex(i)
+
+    def dragEnterEvent(self, event) -> None:
+        """Vendor files dragged over the tab are accepted (other things are not)."""
+        if any(importable(u.toLocalFile()) for u in event.mimeData().urls() if u.isLocalFile()):
+            event.acceptProposedAction()
+        else:
+            event.ignore()
+
+    def dropEvent(self, event) -> None:
+        """Vendor files dropped on the tab are imported; other files are named as refused."""
+        files = [Path(u.toLocalFile()) for u in event.mimeData().urls() if u.isLocalFile()]
+        ok = [f for f in files if importable(f)]
+        if not ok:
+            event.ignore()
+            return
+        event.acceptProposedAction()
+        self.import_paths(ok, tuple(f.name for f in files if f not in ok))
 
     def export(self, kind: str, path: str | None = None) -> None:
         """Write the judged job's report (``pdf`` or ``csv``) to *path*, asked for when not given."""

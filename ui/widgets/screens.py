@@ -15,6 +15,7 @@ from ui.models.moodboard import MoodBoardModel
 if TYPE_CHECKING:
     from ui.widgets.formulation_screen import FormulationScreen
     from ui.widgets.library_screen import LibraryScreen
+    from ui.widgets.qc_screen import QcScreen
 
 #: The screen class a :class:`LazyScreen` builds.
 Screen = TypeVar("Screen", bound=QWidget)
@@ -74,6 +75,33 @@ def _library_screen(window) -> LibraryScreen:
     return LibraryScreen(LibraryModel(library if library is not None else demo_library()), window.document)
 
 
+def _qc_screen(window) -> QcScreen:
+    """The QC screen on the service, or on the database the window's scans go to; vendor files it imports
+    are stored where the scans go (the window's sink)."""
+    from ui.models.measure_db import LocalSink
+    from ui.models.qc import LocalQc, QcModel, ServiceQc
+    from ui.widgets.qc_screen import QcScreen
+
+    sink = window.store.sink
+    if window.service is not None:
+        return QcScreen(QcModel(ServiceQc(window.service)), sink=sink)
+    url = sink.url if isinstance(sink, LocalSink) else None
+    return QcScreen(QcModel(LocalQc(url)), sink=sink)
+
+
+def _booth_screen(window) -> QWidget:
+    """The light booth on the service, or on the database the window's scans go to."""
+    from ui.models.booth import BoothModel, LocalBoothSource, ServiceBoothSource
+    from ui.models.measure_db import LocalSink
+    from ui.widgets.booth_screen import BoothScreen
+
+    if window.service is not None:
+        return BoothScreen(BoothModel(ServiceBoothSource(window.service)))
+    sink = window.store.sink
+    url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
+    return BoothScreen(BoothModel(LocalBoothSource(url)))
+
+
 def build_screens(window) -> list[tuple[str, QWidget]]:
     """(title, widget) of every secondary screen; sets ``window.store`` and ``window.moodboard``."""
     window.store = getattr(window, "store", None) or MeasurementStore()
@@ -105,34 +133,20 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
     def instruments() -> QWidget:
         from ui.widgets.instruments_screen import InstrumentsScreen
 
-        return InstrumentsScreen(window.store, window.document)
+        return InstrumentsScreen(window.store, window.document, open_job=open_job)
 
     def qa() -> QWidget:
         from ui.widgets.qa_screen import QAScreen
 
         return QAScreen(window.designer, window.store, send_to_formulation)
 
-    def qc() -> QWidget:
-        from ui.models.measure_db import LocalSink
-        from ui.models.qc import LocalQc, QcModel, ServiceQc
-        from ui.widgets.qc_screen import QcScreen
+    qc_page: LazyScreen[QcScreen] = LazyScreen(lambda: _qc_screen(window))
+    window.qc_screen = qc_page
 
-        if window.service is not None:
-            return QcScreen(QcModel(ServiceQc(window.service)))
-        sink = window.store.sink
-        url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
-        return QcScreen(QcModel(LocalQc(url)))
-
-    def booth() -> QWidget:
-        from ui.models.booth import BoothModel, LocalBoothSource, ServiceBoothSource
-        from ui.models.measure_db import LocalSink
-        from ui.widgets.booth_screen import BoothScreen
-
-        if window.service is not None:
-            return BoothScreen(BoothModel(ServiceBoothSource(window.service)))
-        sink = window.store.sink
-        url = sink.url if isinstance(sink, LocalSink) else None  # the database the scans go to
-        return BoothScreen(BoothModel(LocalBoothSource(url)))
+    def open_job(job: str, part: str, measurement_id: int) -> None:
+        """A job-history row opened in the Instruments tab: its job's verdicts in the QC tab."""
+        window.tabs.setCurrentWidget(qc_page)
+        qc_page.content().open_job(job, part, measurement_id)
 
     def tweaker() -> QWidget:
         from ui.widgets.tweaker_screen import TweakerScreen
@@ -145,7 +159,7 @@ def build_screens(window) -> list[tuple[str, QWidget]]:
         ("Library", library),
         ("Instruments", LazyScreen(instruments)),
         ("QA", LazyScreen(qa)),
-        ("QC", LazyScreen(qc)),
-        ("Booth", LazyScreen(booth)),
+        ("QC", qc_page),
+        ("Booth", LazyScreen(lambda: _booth_screen(window))),
         ("Formulation", formulation),
     ]
