@@ -73,7 +73,8 @@ class FitResult:
     Attributes
     ----------
     design
-        The fitted design (gloss from the measurements, or the default when not measured).
+        The fitted design (gloss from the measurements, or the default when not measured, in which case
+        ``design.gloss_measured`` is False and a warning says so).
     residual_de
         ΔE*ab between measured and modelled Lab, per measured angle.
     exact
@@ -114,6 +115,9 @@ class FitBatch:
         Per paint, as :class:`FitResult`.
     errors
         Per paint: None, or why it could not be fitted (the :class:`FitError` message).
+    gloss_measured
+        False when no gloss was given: *gloss_gu* then holds the default, and every design says so
+        (:attr:`FaceFlopTravelGloss.gloss_measured`).
     """
 
     angles_deg: tuple[float, ...]
@@ -126,6 +130,7 @@ class FitBatch:
     method: tuple[str, ...]
     warnings: tuple[tuple[str, ...], ...]
     errors: tuple[str | None, ...]
+    gloss_measured: bool = True
 
     def __len__(self) -> int:
         return len(self.method)
@@ -148,6 +153,7 @@ class FitBatch:
             (float(flop[0]), float(flop[1]), float(flop[2])),
             None if np.isnan(tc) else tc,
             float(self.gloss_gu[i]),
+            gloss_measured=self.gloss_measured,
         )
         return FitResult(
             design,
@@ -464,29 +470,31 @@ def fit_fftg_batch(
     return _fit(angles, y, gloss)
 
 
-def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
-    """The fit of :func:`fit_fftg_batch` on validated input (module notes)."""
-    n, k = y.shape[0], len(angles)
-    if k < 3:
-        raise FitError(f"angles_deg: need at least 3 aspecular angles to fit the model, got {k}")
-    ang = np.asarray(angles, dtype=float)
-    theta = np.abs(ang)
-    notes: list[list[str]] = [[] for _ in range(n)]
-    errors: list[str | None] = [None] * n
-    if gloss is None:
-        gloss = np.full(n, DEFAULT_GLOSS_GU)
-        for w in notes:
-            w.append(f"gloss not measured: default {DEFAULT_GLOSS_GU:g} GU used")
+def _gloss_or_default(n: int, gloss: F64 | None, notes: list[list[str]]) -> tuple[F64, bool]:
+    """The gloss per paint and whether it was measured; the default (with a note) when it was not."""
+    if gloss is not None:
+        return gloss, True
+    for w in notes:
+        w.append(f"gloss not measured: default {DEFAULT_GLOSS_GU:g} GU used")
+    return np.full(n, DEFAULT_GLOSS_GU), False
 
+
+def _solid_rows(y: F64, notes: list[list[str]]) -> NDArray[np.bool_]:
+    """Rows whose Lab is identical at every angle (solids); near-solids get a note."""
     diff = y[:, :, None, :] - y[:, None, :, :]  # every pair of angles
     spread = np.sqrt(diff[..., 0] ** 2 + diff[..., 1] ** 2 + diff[..., 2] ** 2).max(axis=(1, 2), initial=0.0)
-    solid = spread == 0.0
+    solid: NDArray[np.bool_] = spread == 0.0
     for r in np.flatnonzero(~solid & (spread < NEAR_SOLID_DE)):
         notes[r].append(f"near-solid (max ΔE*ab between angles {spread[r]:.3g}): travel is poorly determined")
+    return solid
 
-    method = ["closed-form" if s else "least-squares" for s in solid]
+
+def _initial_travel(
+    ang: F64, theta: F64, y: F64, live: NDArray[np.bool_], method: list[str], notes: list[list[str]]
+) -> F64:
+    """θ_clamp per live row: closed form through three angles where it exists, else the grid search."""
+    n, k = y.shape[0], ang.size
     tc = np.full(n, np.nan)
-    live = ~solid
     if k == 3:
         tc = np.where(live, _three_angle_travel(ang, y[:, :, 0]), np.nan)
         for r in np.flatnonzero(live & np.isfinite(tc)):
@@ -503,7 +511,19 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
         grid = _free_grid()
         ys = y[search]
         tc[search] = _search_travel(theta, ys, grid, _free_grid_costs(theta, ys, grid), _project)
+    return tc
 
+
+def _identifiable_travel(
+    angles: tuple[float, ...],
+    theta: F64,
+    tc: F64,
+    live: NDArray[np.bool_],
+    notes: list[list[str]],
+    errors: list[str | None],
+) -> NDArray[np.bool_]:
+    """Report unidentifiable travel at its upper end (in place); the live rows left after a low vertex."""
+    n = tc.size
     distinct = np.unique(theta)  # the model sees the unsigned angle from specular
     if distinct.size > 1 and distinct[1] > FACE_ANGLE_DEG:
         upper = float(distinct[1])
@@ -522,8 +542,31 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
             f"travel_deg: the best fit puts the vertex at or below {FACE_ANGLE_DEG:g}° "
             f"(accepted {FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g})"
         )
-    live &= ~low_vertex
+    out: NDArray[np.bool_] = live & ~low_vertex
+    return out
 
+
+def _outside_bound(x: F64) -> NDArray[np.bool_]:
+    """Rows of Lab outside the domain's Lab bound."""
+    lo, hi = np.asarray(LAB_LO), np.asarray(LAB_HI)
+    out: NDArray[np.bool_] = np.logical_not(np.all((x >= lo) & (x <= hi), axis=-1))
+    return out
+
+
+def _face_flop(
+    theta: F64,
+    y: F64,
+    tc: F64,
+    solid: NDArray[np.bool_],
+    live: NDArray[np.bool_],
+    method: list[str],
+    notes: list[list[str]],
+) -> tuple[F64, F64, F64, NDArray[np.bool_]]:
+    """Face, flop and model Lab per row (in place on *tc*), constrained to the Lab bound where needed.
+
+    Returns face (N, 3), flop (N, 3), model (N, k, 3) and the rows still outside the bound.
+    """
+    n, k = y.shape[0], theta.size
     face, flop = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
     model = np.full((n, k, 3), np.nan)
     face[solid] = flop[solid] = y[solid, 0]
@@ -531,12 +574,7 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
     rows = np.flatnonzero(live)
     if rows.size:
         face[rows], flop[rows], model[rows] = _project(shape_factor(theta, tc[rows, None]), y[rows])
-    lo, hi = np.asarray(LAB_LO), np.asarray(LAB_HI)
-
-    def outside(x: F64) -> NDArray[np.bool_]:
-        return np.logical_not(np.all((x >= lo) & (x <= hi), axis=-1))
-
-    out_of_bound = live & (outside(face) | outside(flop))
+    out_of_bound = live & (_outside_bound(face) | _outside_bound(flop))
     bounded = np.flatnonzero(out_of_bound)
     if bounded.size:
         tc_free = tc[bounded].copy()
@@ -558,7 +596,25 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
     for r in np.flatnonzero(live & (face[:, 0] < flop[:, 0])):
         notes[r].append("flop brighter than face (L*): retroreflective or inverted travel")
     if bounded.size:
-        out_of_bound[bounded] = outside(face[bounded]) | outside(flop[bounded])
+        out_of_bound[bounded] = _outside_bound(face[bounded]) | _outside_bound(flop[bounded])
+    return face, flop, model, out_of_bound
+
+
+def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
+    """The fit of :func:`fit_fftg_batch` on validated input (module notes)."""
+    n, k = y.shape[0], len(angles)
+    if k < 3:
+        raise FitError(f"angles_deg: need at least 3 aspecular angles to fit the model, got {k}")
+    ang = np.asarray(angles, dtype=float)
+    theta = np.abs(ang)
+    notes: list[list[str]] = [[] for _ in range(n)]
+    errors: list[str | None] = [None] * n
+    gloss_gu, measured = _gloss_or_default(n, gloss, notes)
+    solid = _solid_rows(y, notes)
+    method = ["closed-form" if s else "least-squares" for s in solid]
+    tc = _initial_travel(ang, theta, y, ~solid, method, notes)
+    live = _identifiable_travel(angles, theta, tc, ~solid, notes, errors)
+    face, flop, model, out_of_bound = _face_flop(theta, y, tc, solid, live, method, notes)
     for r in np.flatnonzero(out_of_bound):
         errors[r] = (
             f"lab: the fitted face or flop falls outside {lab_accepted('L')}, {lab_accepted('a')}, "
@@ -580,12 +636,13 @@ def _fit(angles: tuple[float, ...], y: F64, gloss: F64 | None) -> FitBatch:
         face,
         flop,
         tc,
-        gloss,
+        gloss_gu,
         residual,
         exact,
         tuple(method),
         tuple(tuple(w) for w in notes),
         tuple(errors),
+        measured,
     )
 
 

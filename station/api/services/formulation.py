@@ -222,7 +222,7 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
     gloss = (
         request.gloss_gu
         if request.gloss_gu is not None
-        else (design.gloss_gu if design is not None else None)
+        else (design.gloss_target_gu if design is not None else None)
     )
     from station.formulate.snap import type_rows
 
@@ -394,7 +394,7 @@ def closed_loop(*, session: Session, actor: User, cache: LibraryCache, request: 
     dv = design_version(session=session, design_id=request.design_id, version=request.version)
     design = design_from_dict(dv.body)
     lab = np.asarray(design.lab_at(np.asarray(STANDARD)), dtype=float)
-    gloss = request.gloss_gu if request.gloss_gu is not None else design.gloss_gu
+    gloss = request.gloss_gu if request.gloss_gu is not None else design.gloss_target_gu
     cached = cache.get(session)
     if cached.with_recipes is None:
         raise ConflictError("no library paint has a recipe in the colorant database: load the demo library")
