@@ -11,13 +11,14 @@ import statistics
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 #: Requests timed per case (the median is reported).
 REPEATS = 15
 DESIGN = {"face": [62.0, -4.0, -38.0], "flop": [24.0, 1.0, -20.0], "travel_deg": 70.0, "gloss_gu": 88.0}
 
 
-def _rows(tmp: Path):  # type: ignore[no-untyped-def]
+def _rows() -> list[dict[str, Any]]:
     from station.api.services.library import library_rows
     from station.formulate.demo import demo_library, generate_library
 
@@ -41,20 +42,20 @@ def run() -> None:
 
     with tempfile.TemporaryDirectory() as tmp_dir:
         tmp = Path(tmp_dir)
-        settings = Settings(
-            database_url=f"sqlite:///{tmp / 'bench.sqlite3'}",
-            data_dir=tmp,
-            simulators=(),
-            load_demo_library=False,
-        )
-        app = create_app(settings)
+        opts: dict[str, Any] = {
+            "database_url": f"sqlite:///{tmp / 'bench.sqlite3'}",
+            "data_dir": tmp,
+            "simulators": (),
+            "load_demo_library": False,
+        }
+        app = create_app(Settings(**opts))
         with TestClient(app) as client:
             with app.state.sessions() as session:
                 users.bootstrap_admin(session=session)
                 _u, _t, secret = users.create_user(
                     session=session, actor=None, name="chemist-1", role=Role.CHEMIST
                 )
-                rows = _rows(tmp)
+                rows = _rows()
                 session.execute(insert(LibraryPaint), rows)
                 session.commit()
             auth = {"Authorization": f"Bearer {secret}"}

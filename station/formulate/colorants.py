@@ -4,8 +4,7 @@ Nothing here is measured: the colorants are invented, with spectra shaped like t
 (TiO2 white, carbon black, organic tints, three aluminium flake grades, a mica pearl and three
 interference pigments), so that the formulation pipeline can be built and tested end to end. Every
 parameter is in one data file, ``station/formulate/data/colorants.json``; every library made from it
-is labelled synthetic. The model is documented pigment by pigment in docs/formulate.md ("Colorant
-model").
+is labelled synthetic. The effect pigments are documented one by one in docs/effect-pigments.md.
 
 Model, for aspecular angle θ (degrees, illumination at 45°, signed: positive towards the illumination, so
 −15° views at 60° from the normal and +15° at 30°, and the two differ as on a real multi-angle
