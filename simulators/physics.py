@@ -2,7 +2,9 @@
 temperature and calibration state.
 
 * Panel: a design (face/flop/travel/gloss, thesis §3.3) gives Lab at each aspecular angle
-  (``FaceFlopTravelGloss.lab_at``); spectral recovery (``reflectance_from_lab``, colour-science)
+  (``FaceFlopTravelGloss.lab_at``), a negative angle evaluated where its flakes are as tilted
+  (``station.model.angles.flake_equivalent_aspecular``: −15° reads like 12.5°, lighter than +15°, as on
+  a real multi-angle instrument); spectral recovery (``reflectance_from_lab``, colour-science)
   turns it into reflectance factors at 400–700 nm / 10 nm. Or a recipe (:mod:`simulators.recipe`):
   the colorant model of :mod:`station.formulate` gives the reflectance at each aspecular angle directly.
 * Noise: a common-mode relative scale term plus independent per-band relative noise, both Gaussian.
@@ -30,6 +32,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from station.model import FaceFlopTravelGloss
+from station.model.angles import flake_equivalent_aspecular
 from station.model.difference import delta_e
 from station.model.spectra import reflectance_from_lab, reflectance_to_lab
 
@@ -47,6 +50,11 @@ __all__ = [
 DEFAULT_DESIGN = FaceFlopTravelGloss(
     face=(78.0, -0.8, -1.5), flop=(32.0, -0.4, -4.5), travel_deg=80.0, gloss_gu=88.0
 )
+#: Radiance factor at which the simulated detector saturates: the simulated instruments' wire formats encode
+#: reflectance factors up to 2.0; 5 % headroom keeps the bias, noise and drift inside it.
+FULL_SCALE_R = 0.95 * 2.0
+#: The L* of :data:`FULL_SCALE_R` (127.7). A bright silver's −15° (lighter than its face) can reach it.
+FULL_SCALE_L = 116.0 * FULL_SCALE_R ** (1.0 / 3.0) - 16.0
 # Certified Lab of the simulated verification tile (a mid-grey ceramic)
 VERIFY_TILE_LAB = (52.0, -0.3, 1.2)
 
@@ -173,7 +181,8 @@ class SpectroPhysics:
                 if self.recipe is not None:
                     self._cache[key] = np.asarray(self.recipe.reflectance(key), dtype=float)
                 else:
-                    lab = self.design.lab_at(np.asarray(key))
+                    lab = self.design.lab_at(flake_equivalent_aspecular(key))
+                    lab[..., 0] = np.minimum(lab[..., 0], FULL_SCALE_L)  # the detector saturates
                     self._cache[key] = np.asarray(reflectance_from_lab(lab), dtype=float)
             return self._cache[key]
 

@@ -35,7 +35,7 @@ from starlette.concurrency import run_in_threadpool
 from db.base import utcnow
 from db.models import ApiToken, User
 from station.api.availability import DatabaseState
-from station.api.security import Scope, TokenCache, TokenGrant, allows, hash_token
+from station.api.security import Scope, TokenCache, TokenGrant, allows, hash_token, scope_refusal
 from station.api.settings import Settings
 from station.ingest import is_unreachable
 
@@ -157,7 +157,7 @@ async def authorize(
         user = grant.user()
     missing = [s for s in security_scopes.scopes if not allows(grant.role, Scope(s))]
     if missing:
-        raise HTTPException(status.HTTP_403_FORBIDDEN, f"role {grant.role.value} lacks scope {missing[0]}")
+        raise HTTPException(status.HTTP_403_FORBIDDEN, scope_refusal(grant.role, Scope(missing[0])))
     return user
 
 

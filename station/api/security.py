@@ -41,6 +41,7 @@ class Scope(enum.StrEnum):
     STYLING_USE = "styling:use"
     LIBRARY_READ = "library:read"
     LIBRARY_WRITE = "library:write"
+    FORMULATION_USE = "formulation:use"  # ColorSnap, formulate, export: computed, nothing stored
     RECIPES_WRITE = "recipes:write"
     ANALYSIS_WRITE = "analysis:write"
     AUDIT_READ = "audit:read"
@@ -65,8 +66,9 @@ ROLE_SCOPES: dict[Role, frozenset[Scope]] = {
             S.MEASUREMENTS_READ,
             S.MEASUREMENTS_CORRECT,
             S.DESIGNS_READ,
-            S.DESIGNS_WRITE,  # a corrected paint goes to formulation as a stored design
+            S.DESIGNS_WRITE,  # a corrected paint goes to the chemist as a stored design
             S.LIBRARY_READ,
+            S.FORMULATION_USE,  # whether the corrected paint is formulable; storing a job stays the chemist's
             S.ANALYSIS_WRITE,
             S.AUDIT_READ,
             S.QC_STANDARDS_WRITE,
@@ -82,6 +84,7 @@ ROLE_SCOPES: dict[Role, frozenset[Scope]] = {
             S.DESIGNS_WRITE,  # a formulated or adjusted paint is kept as a design
             S.LIBRARY_READ,
             S.LIBRARY_WRITE,
+            S.FORMULATION_USE,
             S.RECIPES_WRITE,
         }
     ),
@@ -102,6 +105,12 @@ def hash_token(token: str) -> str:
 def allows(role: Role, scope: Scope) -> bool:
     """Whether *role* holds *scope*."""
     return scope in ROLE_SCOPES[role]
+
+
+def scope_refusal(role: Role, scope: Scope) -> str:
+    """The 403 message for *role* lacking *scope*: what is missing and which roles hold it."""
+    holders = ", ".join(r.value for r in Role if allows(r, scope))
+    return f"role {role.value} lacks scope {scope.value} (held by: {holders})"
 
 
 DEFAULT_TOKEN_TTL = dt.timedelta(days=90)

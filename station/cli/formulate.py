@@ -58,7 +58,7 @@ def _design_lab(text: str) -> tuple[np.ndarray, float | None, str]:
             raise InputError("design", '3 Lab triples at 15/45/110: "L,a,b;L,a,b;L,a,b"', text)
         return lab, None, "design"
     design = load_design(text)
-    return design.lab_at(np.array(ANGLES_3)), design.gloss_gu, design.name or Path(text).stem
+    return design.lab_at(np.array(ANGLES_3)), design.gloss_target_gu, design.name or Path(text).stem
 
 
 def _library_summary(lib: Any) -> dict[str, Any]:
@@ -331,7 +331,7 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
         from station.formulate.formulation import formulate_from_library
 
         result, _ = formulate_from_library(
-            design.lab_at(np.asarray(ANGLES_3)), library, gloss_gu=design.gloss_gu
+            design.lab_at(np.asarray(ANGLES_3)), library, gloss_gu=design.gloss_target_gu
         )
         spec, extra = recipe_export(
             result, name=f"{design.name or 'design'} recipe", five_angles=args.five_angles, batch_g=args.batch

@@ -4,10 +4,11 @@ Nothing here is measured: the colorants are invented, with spectra shaped like t
 (TiO2 white, carbon black, organic tints, three aluminium flake grades, a mica pearl and three
 interference pigments), so that the formulation pipeline can be built and tested end to end. Every
 parameter is in one data file, ``station/formulate/data/colorants.json``; every library made from it
-is labelled synthetic. The model is documented pigment by pigment in docs/formulate.md ("Colorant
-model").
+is labelled synthetic. The effect pigments are documented one by one in docs/effect-pigments.md.
 
-Model, for aspecular angle θ (degrees, illumination at 45°, only |θ| matters) and wavelength λ
+Model, for aspecular angle θ (degrees, illumination at 45°, signed: positive towards the illumination, so
+−15° views at 60° from the normal and +15° at 30°, and the two differ as on a real multi-angle
+instrument) and wavelength λ
 (400–700 nm, 10 nm), recipe c (mass fractions in the basecoat):
 
 1. **Diffuse body** (every colorant, flakes included): two-constant Kubelka–Munk of an opaque layer,
@@ -41,7 +42,14 @@ Model, for aspecular angle θ (degrees, illumination at 45°, only |θ| matters)
    (tint over aluminium). R_f exceeds 1 near
    specular: bright silvers read L*15 of 110–140 and fall to a dark flop as D(α) does.
 
-R = R_d + R_f. Lab per angle is CIE L*a*b* D65 / CIE 1964 10° of R through the same tristimulus weights
+3. **Through the platelets** (pearl, interference): a non-absorbing thin film transmits 1 − r̄(λ), the
+   complement of its reflection colour (r̄ the platelet reflectance for diffuse light), so the body is
+   seen filtered by F(λ) = 1 − Σ_j A_j r̄_j (2 − r̄_j) (down and up through the platelets); the diffuse
+   flux of a rough platelet keeps its interference colour, ρ_d,j(λ) = ρ_d,j r̄_j(λ) / ⟨r̄_j⟩. Over a light
+   base the flop shows the complementary colour, over a dark one a weak interference colour
+   (docs/effect-pigments.md).
+
+R = R_d F + R_f. Lab per angle is CIE L*a*b* D65 / CIE 1964 10° of R through the same tristimulus weights
 as :func:`station.model.spectra.reflectance_to_lab` (a linear map, extracted once; see
 :func:`lab_from_reflectance`).
 
@@ -52,132 +60,73 @@ over the allowed matting range.
 from __future__ import annotations
 
 import functools
-import json
 from dataclasses import dataclass, field
-from importlib import resources
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from station.formulate.effect_optics import (
+    DATA_FILE,
+    GLOSS_CLEAR_GU,
+    GLOSS_PER_MATTING,
+    K1_SAUNDERSON,
+    K2_SAUNDERSON,
+    K_BINDER,
+    MAX_TOTAL,
+    N_BINDER,
+    S_BINDER,
+    WAVELENGTHS_NM,
+    FlakeGeometry,
+    ThinFilm,
+    beckmann,
+    colorant_data,
+    flake_geometry,
+    fresnel_unpolarised,
+)
 from station.formulate.errors import FormulateError, FormulateInputError
-from station.model.domain import ILLUMINATION_DEG
 
-WAVELENGTHS_NM: NDArray[np.float64] = np.arange(400.0, 701.0, 10.0)
+#: The model's public names; the optics of :mod:`station.formulate.effect_optics` are re-exported.
+__all__ = [
+    "DATA_FILE",
+    "EFFECT_FAMILIES",
+    "FAMILIES",
+    "GLOSS_CLEAR_GU",
+    "GLOSS_PER_MATTING",
+    "K1_SAUNDERSON",
+    "K2_SAUNDERSON",
+    "K_BINDER",
+    "MAX_TOTAL",
+    "MODEL_REVISION",
+    "N_BINDER",
+    "S_BINDER",
+    "WAVELENGTHS_NM",
+    "Colorant",
+    "ColorantDatabase",
+    "Flake",
+    "FlakeGeometry",
+    "ThinFilm",
+    "beckmann",
+    "body_filter",
+    "colorant_data",
+    "default_database",
+    "diffuse_reflectance",
+    "flake_area",
+    "flake_geometry",
+    "flake_reflectance",
+    "fresnel_unpolarised",
+    "lab_from_reflectance",
+    "predict_gloss",
+    "predict_lab",
+    "predict_reflectance",
+]
+
+#: Revision of the model's equations (the data file holds every parameter): a cached library made with
+#: another revision is stale. 2: spectral platelet albedo, the body seen through the platelets, signed θ.
+MODEL_REVISION = 2
 #: Families of colorants the model knows; the effect families carry a :class:`Flake`.
 FAMILIES = ("white", "black", "tint", "aluminium", "pearl", "interference", "matting")
 EFFECT_FAMILIES = ("aluminium", "pearl", "interference")
-DATA_FILE = "colorants.json"
-
-
-@functools.lru_cache(maxsize=1)
-def colorant_data() -> dict[str, Any]:
-    """The parsed data file ``station/formulate/data/colorants.json`` (every model parameter)."""
-    text = resources.files("station.formulate").joinpath("data", DATA_FILE).read_text(encoding="utf-8")
-    data: dict[str, Any] = json.loads(text)
-    return data
-
-
-def _constants() -> dict[str, float]:
-    return {k: float(v) for k, v in colorant_data()["model"].items()}
-
-
-K2_SAUNDERSON = _constants()["k2_saunderson"]
-K_BINDER = _constants()["k_binder"]
-S_BINDER = _constants()["s_binder"]
-N_BINDER = _constants()["n_binder"]
-GLOSS_CLEAR_GU = _constants()["gloss_clear_gu"]
-GLOSS_PER_MATTING = _constants()["gloss_per_matting"]
-#: Total pigment mass fraction allowed in a basecoat (the rest is binder).
-MAX_TOTAL = _constants()["max_total"]
-
-
-def fresnel_unpolarised(theta_deg: ArrayLike, n: float = N_BINDER) -> NDArray[np.float64]:
-    """Fresnel reflectance (mean of s and p) of light in air meeting a medium of index *n* at
-    *theta_deg* (degrees from the normal)."""
-    ti = np.radians(np.abs(np.asarray(theta_deg, dtype=np.float64)))
-    tt = np.arcsin(np.sin(ti) / n)
-    ci, ct = np.cos(ti), np.cos(tt)
-    rs = ((ci - n * ct) / (ci + n * ct)) ** 2
-    rp = ((ct - n * ci) / (ct + n * ci)) ** 2
-    return np.asarray(0.5 * (rs + rp), dtype=np.float64)
-
-
-#: Saunderson k₁: the coat's Fresnel reflectance at the 45° illumination (≈ 0.050 for n = 1.5).
-K1_SAUNDERSON = float(fresnel_unpolarised(ILLUMINATION_DEG))
-
-
-@dataclass(frozen=True)
-class FlakeGeometry:
-    """Angles inside the film for aspecular angles θ (module docstring, step 2), all shape (A,), radians.
-
-    ``phi_i``/``phi_v``: internal illumination / viewing angles from the normal (``phi_v`` signed,
-    negative on the illuminator's side); ``tilt``: flake tilt α that mirrors one into the other;
-    ``incidence``: angle β at which the light meets that flake; ``transfer``: T(45°) T(φ_v) / n²
-    (Fresnel transmittances and the radiance n² law); ``path``: 1/cos φ_i′ + 1/cos φ_v′.
-    """
-
-    phi_i: NDArray[np.float64]
-    phi_v: NDArray[np.float64]
-    tilt: NDArray[np.float64]
-    incidence: NDArray[np.float64]
-    transfer: NDArray[np.float64]
-    path: NDArray[np.float64]
-
-
-def flake_geometry(angles_deg: ArrayLike, n: float = N_BINDER) -> FlakeGeometry:
-    """Internal flake geometry for aspecular *angles_deg* (degrees; |θ| ≤ 134 is used, beyond it the
-    view is clamped at grazing)."""
-    theta = np.abs(np.asarray(angles_deg, dtype=np.float64))
-    view_air = np.clip(ILLUMINATION_DEG - theta, -89.0, 89.0)
-    phi_i = np.full(theta.shape, np.arcsin(np.sin(np.radians(ILLUMINATION_DEG)) / n))
-    phi_v = np.arcsin(np.sin(np.radians(view_air)) / n)
-    t_in = 1.0 - fresnel_unpolarised(ILLUMINATION_DEG, n)
-    t_out = 1.0 - fresnel_unpolarised(view_air, n)
-    return FlakeGeometry(
-        phi_i=phi_i,
-        phi_v=phi_v,
-        tilt=0.5 * (phi_i - phi_v),
-        incidence=0.5 * np.abs(phi_i + phi_v),
-        transfer=t_in * t_out / n**2,
-        path=1.0 / np.cos(phi_i) + 1.0 / np.cos(phi_v),
-    )
-
-
-def beckmann(tilt_rad: ArrayLike, m: float) -> NDArray[np.float64]:
-    """Beckmann flake-tilt density D(α) = exp(−tan²α / m²) / (π m² cos⁴α) (normalised: ∫ D cos α dω = 1)."""
-    a = np.asarray(tilt_rad, dtype=np.float64)
-    t2 = np.tan(a) ** 2
-    return np.asarray(np.exp(-t2 / (m * m)) / (np.pi * m * m * np.cos(a) ** 4), dtype=np.float64)
-
-
-@dataclass(frozen=True)
-class ThinFilm:
-    """A TiO2 interference layer on a mica platelet: Cauchy index n(λ) = a + b / λ², thickness (nm),
-    *faces* reflecting faces per platelet (added incoherently)."""
-
-    cauchy_a: float
-    cauchy_b_nm2: float
-    thickness_nm: float
-    faces: int = 2
-
-    def __post_init__(self) -> None:
-        if not (self.cauchy_a > 1.0 and self.cauchy_b_nm2 >= 0 and self.thickness_nm > 0 and self.faces >= 1):
-            raise FormulateInputError("thin_film", "cauchy_a > 1, cauchy_b_nm2 >= 0, thickness_nm > 0", self)
-
-    def reflectance(self, incidence_rad: ArrayLike, n_medium: float = N_BINDER) -> NDArray[np.float64]:
-        """Unpolarised platelet reflectance at incidence angles (radians, in the binder), shape (A, 31),
-        by the transfer-matrix method (``colour.phenomena.thin_film_tmm``)."""
-        from colour.phenomena import thin_film_tmm
-
-        n_film = self.cauchy_a + self.cauchy_b_nm2 / WAVELENGTHS_NM**2
-        stack = np.stack([np.full(31, n_medium), n_film, np.full(31, n_medium)])
-        beta = np.degrees(np.atleast_1d(np.asarray(incidence_rad, dtype=np.float64)))
-        r, _t = thin_film_tmm(stack, self.thickness_nm, WAVELENGTHS_NM, beta)
-        one = np.asarray(r, dtype=np.float64)[:, :, 0, :].mean(-1).T  # (A, 31), mean of s and p
-        f = self.faces
-        # f faces of equal reflectance, incoherent multiple reflection: R_f = f R / (1 + (f − 1) R)
-        return np.asarray(f * one / (1.0 + (f - 1) * one), dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -225,6 +174,28 @@ class Flake:
             return np.broadcast_to(self.reflectance, (incidence_rad.size, 31)).copy()
         assert self.thin_film is not None  # noqa: S101 - __post_init__ guarantees one of the two
         return self.thin_film.reflectance(incidence_rad)
+
+    def diffuse_albedo_spectrum(self) -> NDArray[np.float64]:
+        """ρ_d(λ), shape (31,): neutral ρ_d for a metal flake; for a thin-film platelet the diffuse flux keeps
+        the interference colour, ρ_d(λ) = min(1, ρ_d r̄(λ) / ⟨r̄⟩) (its spectral mean is ρ_d; r̄ from
+        :meth:`ThinFilm.diffuse_reflectance`, ⟨·⟩ the mean over the 31 bands)."""
+        if self.thin_film is None:
+            return np.full(31, self.diffuse_albedo)
+        r = self.thin_film.diffuse_reflectance()
+        return np.asarray(np.minimum(1.0, self.diffuse_albedo * r / r.mean()), dtype=np.float64)
+
+    def body_loss(self) -> NDArray[np.float64]:
+        """L(λ), shape (31,): the share of the body's light a platelet removes on the way down and up.
+
+        A non-absorbing thin film transmits 1 − r̄(λ), the complement of its reflection colour, so the
+        body seen through it is filtered by (1 − r̄)² and L = 1 − (1 − r̄)² = r̄ (2 − r̄): over a light
+        base the flop shows the complementary colour. A metal flake (opaque; its hiding is already in
+        the body's K and S) removes nothing here: L = 0.
+        """
+        if self.thin_film is None:
+            return np.zeros(31)
+        r = self.thin_film.diffuse_reflectance()
+        return np.asarray(r * (2.0 - r), dtype=np.float64)
 
     def radiance_factor(self, angles_deg: ArrayLike) -> NDArray[np.float64]:
         """Specular flake radiance factor at full coverage and no attenuation, shape (A, 31):
@@ -364,8 +335,15 @@ class ColorantDatabase:
 
     @functools.cached_property
     def diffuse_albedo(self) -> NDArray[np.float64]:
-        """ρ_d of the effect pigments, shape (E,)."""
-        return np.array([f.diffuse_albedo for f in self.flakes])
+        """ρ_d(λ) of the effect pigments, shape (E, 31) (:meth:`Flake.diffuse_albedo_spectrum`)."""
+        return (
+            np.stack([f.diffuse_albedo_spectrum() for f in self.flakes]) if self.flakes else np.zeros((0, 31))
+        )
+
+    @functools.cached_property
+    def body_loss(self) -> NDArray[np.float64]:
+        """L_j(λ) of the effect pigments, shape (E, 31) (:meth:`Flake.body_loss`)."""
+        return np.stack([f.body_loss() for f in self.flakes]) if self.flakes else np.zeros((0, 31))
 
     @property
     def upper_bounds(self) -> NDArray[np.float64]:
@@ -457,6 +435,22 @@ def diffuse_reflectance(c: ArrayLike, db: ColorantDatabase | None = None) -> NDA
     )
 
 
+def flake_area(c: ArrayLike, db: ColorantDatabase) -> NDArray[np.float64]:
+    """Area fraction A_j covered by each effect pigment, shape (..., E): A = 1 − exp(−Σ σ_j c_j) shared in
+    proportion to σ_j c_j (Beer–Lambert stacking, module docstring step 2)."""
+    sc = np.asarray(c, dtype=np.float64)[..., db.effect_index] * db.coverage
+    tot = sc.sum(-1, keepdims=True)
+    share = np.where(tot > 1e-12, -np.expm1(-tot) / np.maximum(tot, 1e-12), 1.0)  # A/Σσc, → 1 at 0
+    return np.asarray(sc * share, dtype=np.float64)
+
+
+def body_filter(c: ArrayLike, db: ColorantDatabase | None = None) -> NDArray[np.float64]:
+    """F(λ) = 1 − Σ_j A_j L_j(λ), shape (..., 31): the body seen through the thin-film platelets
+    (:meth:`Flake.body_loss`); 1 without interference or pearl pigments."""
+    db = db or default_database()
+    return np.asarray(1.0 - flake_area(c, db) @ db.body_loss, dtype=np.float64)
+
+
 def flake_reflectance(
     c: ArrayLike, angles_deg: tuple[float, ...], db: ColorantDatabase | None = None
 ) -> NDArray[np.float64]:
@@ -464,23 +458,19 @@ def flake_reflectance(
     db = db or default_database()
     c = np.asarray(c, dtype=np.float64)
     table = db.flake_table(angles_deg)  # (E, A, 31)
-    ce = c[..., db.effect_index]  # (..., E)
-    sc = ce * db.coverage
-    tot = sc.sum(-1, keepdims=True)
-    share = np.where(tot > 1e-12, -np.expm1(-tot) / np.maximum(tot, 1e-12), 1.0)  # A/Σσc, → 1 at 0
-    area = sc * share  # (..., E)
+    area = flake_area(c, db)  # (..., E)
     ext = (c @ db._k_above + db.scatter_extinction * (c @ db._s_above)) * db.flake_depth  # (..., 31)
     g = flake_geometry(angles_deg)
     atten = np.exp(-ext[..., None, :] * g.path[:, None])  # (..., A, 31)
     atten_d = np.exp(-ext * (1.0 / np.cos(g.phi_i[0]) + 2.0)) if g.phi_i.size else ext  # (..., 31)
-    diffuse = (area @ db.diffuse_albedo)[..., None, None] * g.transfer[:, None] * atten_d[..., None, :]
+    diffuse = (area @ db.diffuse_albedo)[..., None, :] * g.transfer[:, None] * atten_d[..., None, :]
     return np.asarray(np.einsum("...e,eaw->...aw", area, table) * atten + diffuse, dtype=np.float64)
 
 
 def predict_reflectance(
     c: ArrayLike, angles_deg: tuple[float, ...], db: ColorantDatabase | None = None
 ) -> NDArray[np.float64]:
-    """Predict reflectance factors per angle: R = R_d + R_f (module docstring).
+    """Predict reflectance factors per angle: R = R_d F + R_f (module docstring).
 
     Parameters
     ----------
@@ -496,7 +486,7 @@ def predict_reflectance(
         is below 1, the flake part may exceed 1 near specular.
     """
     db = db or default_database()
-    r_d = diffuse_reflectance(c, db)
+    r_d = diffuse_reflectance(c, db) * body_filter(c, db)
     return np.asarray(r_d[..., None, :] + flake_reflectance(c, angles_deg, db), dtype=np.float64)
 
 

@@ -52,7 +52,7 @@ def design_to_dict(design: FaceFlopTravelGloss, **extra: Any) -> dict[str, Any]:
         "face": list(design.face),
         "flop": list(design.flop),
         "travel_deg": design.travel_deg,
-        "gloss_gu": design.gloss_gu,
+        "gloss_gu": design.gloss_target_gu,  # null: not measured (the default renders, nothing is matted)
     }
     out.update(extra)
     return out
@@ -90,6 +90,7 @@ def design_from_dict(data: Any) -> FaceFlopTravelGloss:
         travel_deg=data["travel_deg"],
         gloss_gu=DEFAULT_GLOSS_GU if gloss is None else gloss,
         name=name,
+        gloss_measured=gloss is not None,
     )
 
 

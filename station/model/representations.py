@@ -110,6 +110,10 @@ class FaceFlopTravelGloss:
         Specular gloss in gloss units at the 60° geometry, 0–100.
     name
         Optional label.
+    gloss_measured
+        Whether *gloss_gu* was measured (a gloss meter) or typed. ``False`` when nobody measured it: the
+        gloss then holds the thesis's default for rendering only, and :attr:`gloss_target_gu` is ``None``
+        so formulation keeps full gloss (no matting agent for a gloss nobody measured).
 
     Examples
     --------
@@ -129,6 +133,7 @@ class FaceFlopTravelGloss:
     travel_deg: float | None
     gloss_gu: float = DEFAULT_GLOSS_GU
     name: str = ""
+    gloss_measured: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "face", check_lab(self.face, "face"))
@@ -141,6 +146,15 @@ class FaceFlopTravelGloss:
                 f"{FACE_ANGLE_DEG:g} < travel_deg <= {TRAVEL_MAX_DEG:g} when face != flop (None only for a solid)",
                 None,
             )
+
+    @property
+    def gloss_target_gu(self) -> float | None:
+        """The 60° gloss (GU) to formulate to: :attr:`gloss_gu` when measured or typed, else ``None``.
+
+        ``None`` means "not measured": a recipe keeps the clear coat's full gloss instead of adding
+        matting agent to reach the thesis's default.
+        """
+        return self.gloss_gu if self.gloss_measured else None
 
     @property
     def is_solid(self) -> bool:

@@ -17,7 +17,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from station.formulate.demo import demo_library
+from station.formulate.demo import FLOP_INDEX_CALIBRATION, demo_library
 from station.formulate.library import Library
 from station.formulate.snap import SnapIndex, brute_force, color_snap
 from station.model.domain import ANGLES_3
@@ -115,6 +115,7 @@ def library_statistics(out_dir: Path | None) -> ExperimentResult:
             1.5,
             reason=SYNTHETIC + "; its flake blends are drawn, not sampled from real paints",
             source="Fig. 5.4 caption",
+            calibration=FLOP_INDEX_CALIBRATION,
         ),
         Quantity(
             "5.4",

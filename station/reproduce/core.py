@@ -3,7 +3,9 @@
 A :class:`Quantity` holds the thesis's value, ours, a stated tolerance and how they are compared
 (:data:`MODES`); its verdict is computed, never stored: ``agrees`` when ours lies within the tolerance of
 the thesis's value, ``differs`` otherwise, and a quantity that differs must carry the documented reason
-(construction refuses one that does not, so no disagreement goes unexplained).
+(construction refuses one that does not, so no disagreement goes unexplained). A quantity that a parameter
+of ours was set to reproduce states that calibration and reads ``calibrated to the thesis`` whatever the
+difference: a number tuned to match is no evidence of agreement.
 """
 
 from __future__ import annotations
@@ -21,7 +23,9 @@ Mode = Literal["within", "at_most", "at_least"]
 #: ``within`` |ours − t| ≤ τ; ``at_most`` ours ≤ t + τ (the thesis states a bound, e.g. "real time");
 #: ``at_least`` ours ≥ t − τ (e.g. "over 96 %").
 MODES: tuple[Mode, ...] = ("within", "at_most", "at_least")
-Verdict = Literal["agrees", "differs"]
+Verdict = Literal["agrees", "differs", "calibrated to the thesis"]
+#: The verdict of a quantity that a parameter of ours was set to reproduce (:attr:`Quantity.calibration`).
+CALIBRATED: Verdict = "calibrated to the thesis"
 
 
 def _finite(value: float, name: str) -> float:
@@ -58,6 +62,9 @@ class Quantity:
     reference
         What ``thesis`` holds: ``"thesis"`` (a value the thesis states or implies), or another reference
         where the thesis gives none (e.g. ``"shipped table"`` for the basis errors it omits).
+    calibration
+        Which parameter of ours was set so that ours meets the thesis's value, and how (empty when
+        nothing was). A calibrated quantity's verdict is :data:`CALIBRATED`, never ``agrees``.
     """
 
     figure: str
@@ -70,6 +77,7 @@ class Quantity:
     mode: Mode = "within"
     source: str = ""
     reference: str = "thesis"
+    calibration: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thesis", _finite(self.thesis, f"{self.quantity}: thesis value"))
@@ -80,7 +88,7 @@ class Quantity:
         object.__setattr__(self, "tolerance", tol)
         if self.mode not in MODES:
             raise ReproduceInputError("mode", " | ".join(MODES), self.mode)
-        if self.verdict == "differs" and not self.reason.strip():
+        if self._met() is False and not self.calibration.strip() and not self.reason.strip():
             raise ReproduceError(
                 f"{self.figure} {self.quantity}: ours ({self.ours:.4g}) differs from the thesis "
                 f"({self.thesis:.4g} ± {self.tolerance:.3g}) and no reason is documented"
@@ -93,7 +101,14 @@ class Quantity:
 
     @property
     def verdict(self) -> Verdict:
-        """``agrees`` when ours meets the thesis's value under :attr:`mode` and :attr:`tolerance`."""
+        """``agrees`` when ours meets the thesis's value under :attr:`mode` and :attr:`tolerance`;
+        :data:`CALIBRATED` when a parameter of ours was set to meet it (:attr:`calibration`)."""
+        if self.calibration.strip():
+            return CALIBRATED
+        return "agrees" if self._met() else "differs"
+
+    def _met(self) -> bool:
+        """Whether ours meets the thesis's value under :attr:`mode` and :attr:`tolerance`."""
         d = self.difference
         slack = 1e-12 * max(1.0, abs(self.thesis))
         if self.mode == "within":
@@ -102,7 +117,7 @@ class Quantity:
             ok = d <= self.tolerance + slack
         else:
             ok = d >= -self.tolerance - slack
-        return "agrees" if ok else "differs"
+        return bool(ok)
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON record of ``station reproduce --json``."""
@@ -117,6 +132,7 @@ class Quantity:
             "mode": self.mode,
             "verdict": self.verdict,
             "reason": self.reason if self.verdict == "differs" else None,
+            "calibration": self.calibration or None,
             "source": self.source,
             "reference": self.reference,
         }

@@ -8,6 +8,7 @@ import numpy as np
 
 from station.cli import main
 from station.model import FaceFlopTravelGloss
+from station.model.angles import flake_equivalent_aspecular
 from station.model.design_io import save_design
 from station.model.difference import delta_e
 
@@ -37,7 +38,9 @@ def test_measure_sim_ma6_json_with_design(capsys, tmp_path):
     assert data["geometries"] == ["45as-15", "45as15", "45as25", "45as45", "45as75", "45as110"]
     assert np.asarray(data["spectra"]).shape == (6, 31)
     de = delta_e(
-        np.asarray(data["lab"]), design.lab_at(np.asarray([-15, 15, 25, 45, 75, 110])), method="cie2000"
+        np.asarray(data["lab"]),
+        design.lab_at(flake_equivalent_aspecular([-15, 15, 25, 45, 75, 110])),
+        method="cie2000",
     )
     assert float(de.max()) < 0.15
     assert data["gloss_gu"] is None and data["serial"] == "600123"

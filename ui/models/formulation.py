@@ -263,7 +263,7 @@ def formulate(design: FaceFlopTravelGloss, library: Library) -> Formulation:
     from station.formulate.formulation import formulate_from_library
 
     result, found = formulate_from_library(
-        design.lab_at(np.array(ANGLES_3)), library, gloss_gu=design.gloss_gu
+        design.lab_at(np.array(ANGLES_3)), library, gloss_gu=design.gloss_target_gu
     )
     return Formulation(design, library, found, result)
 
@@ -282,7 +282,7 @@ def closed_loop(f: Formulation, seed: int = SPRAY_SEED) -> Any:
         f.design.lab_at(np.array(ANGLES_3)),
         spray.measure,
         starts=starts,
-        gloss_gu=f.design.gloss_gu,
+        gloss_gu=f.design.gloss_target_gu,
         tolerance=f.result.tolerance,
     )
 

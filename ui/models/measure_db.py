@@ -28,8 +28,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from station.errors import InputError, StationError
-from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
-from station.model.domain import ILLUMINATION_DEG
+from station.model import AspecularMeasurements, FaceFlopTravelGloss, FitResult, fit_fftg
+from station.model.domain import DEFAULT_GLOSS_GU, ILLUMINATION_DEG
 
 if TYPE_CHECKING:  # SQLAlchemy, pydantic and the ORM load on first use (≈0.5 s off the viewer's start-up)
     from station.ingest import (
@@ -51,6 +51,20 @@ RECENT_MAX = 1000
 OUTBOX_FILE = "viewer-outbox.sqlite3"
 SERVICE_OUTBOX_FILE = "viewer-service-outbox.sqlite3"
 _TEXT = re.compile(r"^[^\x00-\x1f]+$")
+
+
+def gloss_warning(labels: list[str]) -> str:
+    """The visible line for designs whose gloss nobody measured, or ``""`` when every gloss was measured.
+
+    *labels* name those designs (``#12``, ``B′``). Their gloss shows the thesis's default
+    (:data:`station.model.domain.DEFAULT_GLOSS_GU`) and formulation keeps full gloss for them.
+    """
+    if not labels:
+        return ""
+    return (
+        f"\nwarning: gloss not measured for {', '.join(labels)}: the default {DEFAULT_GLOSS_GU:g} GU is shown, "
+        "and formulation adds no matting agent (measure or type a gloss target)"
+    )
 
 
 def recent_limit(limit: object) -> int:
@@ -111,17 +125,26 @@ class StoredMeasurement:
     lab: np.ndarray
     gloss_gu: float | None
 
-    def design(self) -> FaceFlopTravelGloss | None:
-        """FFTG fit of the positive aspecular angles (eqs 3.3.1–3.3.10), or ``None`` with fewer than 3."""
+    def fit(self) -> FitResult | None:
+        """FFTG fit of the positive aspecular angles (eqs 3.3.1–3.3.10), or ``None`` with fewer than 3.
+
+        The result keeps the fit's warnings (a gloss not measured among them: its design then has
+        ``gloss_measured`` False, so formulation adds no matting agent for it).
+        """
         keep = sorted((a, i) for i, a in enumerate(self.geometries_deg) if a > 0)
         if len(keep) < 3:
             return None
         angles = tuple(a for a, _ in keep)
         lab = self.lab[[i for _, i in keep]]
         try:
-            return fit_fftg(AspecularMeasurements(angles, lab, self.gloss_gu)).design
+            return fit_fftg(AspecularMeasurements(angles, lab, self.gloss_gu))
         except InputError:
             return None
+
+    def design(self) -> FaceFlopTravelGloss | None:
+        """The design of :meth:`fit`, or ``None`` when there is none."""
+        result = self.fit()
+        return None if result is None else result.design
 
 
 def _decode_entry(body: str) -> Reading:

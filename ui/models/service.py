@@ -26,6 +26,20 @@ class ServiceError(StationError):
     """The service refused a request or could not be reached (the message says which and why)."""
 
 
+def _detail(r: httpx.Response) -> str:
+    """The service's own message of an error answer (its ``detail``), else the start of the body."""
+    try:
+        detail = r.json().get("detail")
+    except (ValueError, AttributeError):
+        detail = None
+    if isinstance(detail, str):
+        return detail
+    if isinstance(detail, list) and detail and isinstance(detail[0], dict):  # 422: the first field named
+        first = detail[0]
+        return f"{'.'.join(str(x) for x in first.get('loc', ())[1:])}: {first.get('msg', '')}"
+    return r.text[:300]
+
+
 class ServiceUnreachable(ServiceError):
     """No HTTP answer at all (connection refused, timeout)."""
 
@@ -54,7 +68,7 @@ class ServiceClient:
         """:meth:`request`, and :class:`ServiceError` (status and the service's message) on HTTP >= 400."""
         r = self.request(method, path, **kw)
         if r.status_code >= 400:
-            raise ServiceError(f"service {method} {path}: HTTP {r.status_code} {r.text[:300]}")
+            raise ServiceError(f"service {method} {path}: HTTP {r.status_code} {_detail(r)}")
         return r
 
     def call(self, method: str, path: str, **kw: Any) -> Any:

@@ -161,11 +161,22 @@ class FormulationScreen(QWidget):
         self._on_design_changed()
 
     def receive(self, paint: FaceFlopTravelGloss) -> None:
-        """A paint sent on for formulation (QA's corrected paint): picked, ready for ColorSnap."""
+        """A paint sent on for formulation (QA's corrected paint): picked, ready for ColorSnap; in service
+        mode also stored there as a design, so the chemist finds it (``GET /designs``)."""
         self.add_design(f"sent: {paint.name or 'paint'}", paint, select=True)
-        self.status.setText(
-            f"received {paint.name or 'a paint'} for formulation: ColorSnap it, then Formulate"
-        )
+        text = f"received {paint.name or 'a paint'} for formulation: ColorSnap it, then Formulate"
+        if self.remote is not None:
+            from ui.models.service import ServiceError
+
+            try:
+                design_id = self.remote.client.save_design(
+                    paint.name or "corrected paint", paint, "QA correction, for formulation"
+                )
+            except ServiceError as exc:
+                text += f"\nnot stored on the service for the chemist: {exc}"
+            else:
+                text += f"\nstored on the service as design #{design_id} for the chemist"
+        self.status.setText(text)
 
     def picked(self) -> FaceFlopTravelGloss:
         """The design being formulated."""

@@ -42,7 +42,7 @@ from station.model import FaceFlopTravelGloss
 from station.model.domain import ANGLE_MAX_DEG, ANGLE_MIN_DEG
 from ui.models.designer import DesignerModel
 from ui.models.instruments import MeasurementStore
-from ui.models.measure_db import RECENT_DEFAULT, recent_limit
+from ui.models.measure_db import RECENT_DEFAULT, gloss_warning, recent_limit
 from ui.widgets.common import pixmap_from_array
 from ui.widgets.tasks import TaskProgress, TaskThread
 
@@ -280,13 +280,13 @@ class QAScreen(QWidget):
         except StationError as exc:
             self._show_error(f"stored measurements: {exc}")
             return 0
-        self.stored = [
-            (f"stored #{r.id}: {r.label} {r.measured_at}", d) for r in rows if (d := r.design()) is not None
-        ]
+        fits = [(r, f) for r in rows if (f := r.fit()) is not None]
+        self.stored = [(f"stored #{r.id}: {r.label} {r.measured_at}", f.design) for r, f in fits]
         self.refresh_sources()
         self.details.setText(
             f"{len(self.stored)} stored measurements offered as panels "
             f"({len(rows) - len(self.stored)} without a design fit) from {sink.where}"
+            + gloss_warning([f"#{r.id}" for r, f in fits if not f.design.gloss_measured])
         )
         return len(self.stored)
 
@@ -390,7 +390,9 @@ class QAScreen(QWidget):
             f"seam ΔE max {max(r.seam_de):.2f} ({r.method}, tolerance {r.tolerance:g})\n{r.diagnosis}\n"
             f"goniogeometric index: {idx.get('message', '')}\n"
             f"corrected B′: seam ΔE max {r.correction.max_after:.2f} "
-            f"({'meets' if r.correction.meets_epsilon else 'does not meet'} tolerance)\n\n"
+            f"({'meets' if r.correction.meets_epsilon else 'does not meet'} tolerance)"
+            + gloss_warning(["B′"] if not r.correction.paint.gloss_measured else [])
+            + "\n\n"
             + "\n".join(r.advice)
         )
         self.table.blockSignals(True)

@@ -1,4 +1,5 @@
-"""Formulation: ``/api/v1/formulation`` (chemists): ColorSnap, recipe formulation, XML / CxF3 export.
+"""Formulation: ``/api/v1/formulation``: ColorSnap, recipe formulation, XML / CxF3 export (chemists and QA:
+computed, nothing stored), and the closed loop (chemists: it stores a formulation job).
 
 The library is the one in the database; its ColorSnap index is built once per app and library
 (``app.state.library_cache``). CPU work runs in the thread pool (plain ``def`` routes).
@@ -30,6 +31,8 @@ router = APIRouter(
     prefix="/formulation", tags=["formulation"], responses={**ERROR_RESPONSES, **NOT_FOUND, **CONFLICT}
 )
 Chemist = Annotated[User, scoped(Scope.RECIPES_WRITE)]
+#: ColorSnap, formulate and export compute and store nothing: QA may judge a corrected paint with them.
+Formulator = Annotated[User, scoped(Scope.FORMULATION_USE)]
 _FILE: dict[int | str, dict[str, Any]] = {
     200: {
         "description": "the thesis's XML (§5.3.1) or CxF3 (ISO 17972) file; header X-Match-Code",
@@ -48,7 +51,7 @@ def header_safe(text: str) -> str:
 
 
 @router.post("/snap", response_model=SnapOut)
-def snap(request: Request, session: SessionDep, _user: Chemist, body: SnapRequest) -> dict[str, Any]:
+def snap(request: Request, session: SessionDep, _user: Formulator, body: SnapRequest) -> dict[str, Any]:
     """ColorSnap: the k library paints nearest to the target by ΔE summed over 15°/45°/110° (cie76 = ΔE*ab as
     in the thesis, cie2000, din6175), exact, with the Fig. 5.10 warnings. Nothing is stored (a stored
     formulation job is ``POST /recipes``)."""
@@ -57,7 +60,7 @@ def snap(request: Request, session: SessionDep, _user: Chemist, body: SnapReques
 
 @router.post("/formulate", response_model=FormulateOut)
 def formulate(
-    request: Request, session: SessionDep, _user: Chemist, body: FormulateRequest
+    request: Request, session: SessionDep, _user: Formulator, body: FormulateRequest
 ) -> dict[str, Any]:
     """A recipe for the target from the SYNTHETIC colorant database, started from the ColorSnap matches'
     recipes: predicted Lab and CIEDE2000 per angle, and whether it is formulable within the tolerance."""
@@ -77,7 +80,7 @@ def closed_loop(
 
 
 @router.post("/export", response_class=Response, responses=_FILE)
-def export(request: Request, session: SessionDep, _user: Chemist, body: ExportRequest) -> Response:
+def export(request: Request, session: SessionDep, _user: Formulator, body: ExportRequest) -> Response:
     """The design at both 3-angle sets (15/45/110 and 25/45/75; 5 angles on request) and its ColorSnap
     match, as the thesis's XML or CxF3, as a file. ``X-Match-Code`` is the match's code, percent-encoded
     where it is not printable ASCII."""

@@ -2,7 +2,8 @@
 
 The library rows are turned into one ``station.formulate.library.Library`` and its exact ColorSnap index
 (``SnapIndex``) once per library per app: :class:`LibraryCache` lives on ``app.state`` and rebuilds only
-when the rows change (count or newest id). Paints with a recipe in the colorant database's names form a
+when the rows change (count or newest id). A search restricted to one named stored library uses that
+library's own index, built on its first use and kept until the rows change (:meth:`LibraryCache.named`). Paints with a recipe in the colorant database's names form a
 second library (with its own index) that formulation starts from. The demo library and the colorants
 are SYNTHETIC; every result says so.
 """
@@ -48,13 +49,39 @@ class CachedLibrary:
     synthetic_rows: np.ndarray
 
 
+@dataclass(frozen=True)
+class NamedLibrary:
+    """One named stored library: its rows in the cached library, the subset ``Library`` and its index
+    (``library`` and ``index`` are ``None`` when no row carries the name)."""
+
+    rows: np.ndarray
+    library: Any | None
+    index: Any | None
+
+
 class LibraryCache:
-    """One :class:`CachedLibrary` per app, rebuilt when the ``library_paints`` rows change."""
+    """One :class:`CachedLibrary` per app, rebuilt when the ``library_paints`` rows change, and the named
+    libraries' indices (:meth:`named`), dropped with it. ``builds`` and ``named_builds`` count the builds."""
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self._cached: CachedLibrary | None = None
+        self._named: dict[tuple[str, bool], NamedLibrary] = {}
         self.builds = 0
+        self.named_builds = 0
+
+    def named(self, cached: CachedLibrary, name: str, with_recipes: bool) -> NamedLibrary:
+        """The stored library *name* of *cached* (its recipe-bearing paints when *with_recipes*), with its
+        exact ColorSnap index: built once per name while the rows stay the same."""
+        with self._lock:
+            if cached is not self._cached:  # rows changed meanwhile: answer this request, keep nothing
+                return _named(cached, name, with_recipes)
+            key = (name, with_recipes)
+            hit = self._named.get(key)
+            if hit is None:
+                hit = self._named[key] = _named(cached, name, with_recipes)
+                self.named_builds += 1
+            return hit
 
     def get(self, session: Session) -> CachedLibrary:
         """The cached library, (re)built from the rows when needed; 409 when the table is empty."""
@@ -68,8 +95,24 @@ class LibraryCache:
                     "the paint library is empty: load one (station serve loads the demo library)"
                 )
             self._cached = _build(session, key)
+            self._named = {}
             self.builds += 1
             return self._cached
+
+
+def _named(cached: CachedLibrary, name: str, with_recipes: bool) -> NamedLibrary:
+    """:meth:`LibraryCache.named` without the cache."""
+    from station.formulate.snap import SnapIndex
+
+    if with_recipes:
+        base, base_rows = cached.with_recipes, cached.with_recipes_rows
+    else:
+        base, base_rows = cached.library, np.arange(len(cached.library))
+    keep = np.flatnonzero(cached.library_names[base_rows] == name)
+    if base is None or keep.size == 0:
+        return NamedLibrary(base_rows[keep], None, None)
+    sub = base.subset(keep)
+    return NamedLibrary(base_rows[keep], sub, SnapIndex(sub))
 
 
 def _build(session: Session, key: tuple[int, int]) -> CachedLibrary:
@@ -157,11 +200,11 @@ def snap(*, session: Session, cache: LibraryCache, request: SnapRequest) -> dict
     cached = cache.get(session)
     lib, index, rows = cached.library, cached.index, np.arange(len(cached.library))
     if request.library is not None:
-        rows = np.flatnonzero(cached.library_names == request.library)
-        if rows.size == 0:
+        named = cache.named(cached, request.library, with_recipes=False)
+        if named.library is None:
             held = " | ".join(sorted(set(cached.library_names.tolist())))
             raise InputError("library", f"a stored library: {held}", request.library)
-        lib, index = lib.subset(rows), None
+        lib, index, rows = named.library, named.index, named.rows
     type_rows(lib, request.types, field="types")  # 422 naming ``types`` before the search
     result = color_snap(
         lib, lab, k=min(request.k, len(lib)), method=request.metric, index=index, types=request.types
@@ -222,7 +265,7 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
     gloss = (
         request.gloss_gu
         if request.gloss_gu is not None
-        else (design.gloss_gu if design is not None else None)
+        else (design.gloss_target_gu if design is not None else None)
     )
     from station.formulate.snap import type_rows
 
@@ -232,12 +275,11 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
     lib, index = cached.with_recipes, cached.with_recipes_index
     rows = cached.with_recipes_rows
     if request.library is not None:
-        names = cached.library_names[rows]
-        keep = np.flatnonzero(names == request.library)
-        if keep.size == 0:
-            held = " | ".join(sorted(set(names.tolist())))
+        named = cache.named(cached, request.library, with_recipes=True)
+        if named.library is None:
+            held = " | ".join(sorted(set(cached.library_names[rows].tolist())))
             raise InputError("library", f"a stored library with recipes: {held}", request.library)
-        lib, index, rows = lib.subset(keep), None, rows[keep]
+        lib, index, rows = named.library, named.index, named.rows
     type_rows(lib, request.types, field="types")  # 422 naming ``types`` before formulating
     illuminants = () if request.illuminants is None else chosen_illuminants(request.illuminants)
     result, matches = formulate_from_library(
@@ -394,7 +436,7 @@ def closed_loop(*, session: Session, actor: User, cache: LibraryCache, request: 
     dv = design_version(session=session, design_id=request.design_id, version=request.version)
     design = design_from_dict(dv.body)
     lab = np.asarray(design.lab_at(np.asarray(STANDARD)), dtype=float)
-    gloss = request.gloss_gu if request.gloss_gu is not None else design.gloss_gu
+    gloss = request.gloss_gu if request.gloss_gu is not None else design.gloss_target_gu
     cached = cache.get(session)
     if cached.with_recipes is None:
         raise ConflictError("no library paint has a recipe in the colorant database: load the demo library")
