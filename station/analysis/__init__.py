@@ -5,23 +5,17 @@ This package builds on :mod:`station.model` only (it never imports :mod:`station
 lighting arrives as plain samples (:class:`Environment`), converted by the caller.
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from station.analysis.errors import AnalysisError, AnalysisInputError
 from station.analysis.options import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, OBJECTIVES
+from station.lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from station.analysis.geometry import SeamGeometry, aspecular_deg, direction, rotated_normals
-    from station.analysis.index import (
-        DE_METHODS,
-        JND_CIE76,
-        GeometryIndex,
-        IndexResult,
-        SeamModel,
-        goniogeometric_index,
-    )
+    from station.analysis.index import JND_CIE76, GeometryIndex, IndexResult, goniogeometric_index
     from station.analysis.qa import SeamReport, as_paint, measurements_under, seam_qa
+    from station.analysis.seam_model import DE_METHODS, SeamModel
     from station.analysis.shading import Environment, environment_colour, point_colour, shade_lab
     from station.analysis.sweep import SweepResult, plot_sweep, seam_sweep
     from station.analysis.trompe import SUBSETS, TrompeResult, inverse_trompe_loeil
@@ -33,11 +27,11 @@ _LAZY = {
     "aspecular_deg": "station.analysis.geometry",
     "direction": "station.analysis.geometry",
     "rotated_normals": "station.analysis.geometry",
-    "DE_METHODS": "station.analysis.index",
+    "DE_METHODS": "station.analysis.seam_model",
     "JND_CIE76": "station.analysis.index",
     "GeometryIndex": "station.analysis.index",
     "IndexResult": "station.analysis.index",
-    "SeamModel": "station.analysis.index",
+    "SeamModel": "station.analysis.seam_model",
     "goniogeometric_index": "station.analysis.index",
     "SeamReport": "station.analysis.qa",
     "as_paint": "station.analysis.qa",
@@ -55,13 +49,7 @@ _LAZY = {
     "inverse_trompe_loeil": "station.analysis.trompe",
 }
 
-
-def __getattr__(name: str) -> Any:
-    """Load a name of :data:`_LAZY` from its module the first time it is asked for."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(module), name)
+__getattr__ = lazy_getattr(__name__, _LAZY)
 
 
 __all__ = [

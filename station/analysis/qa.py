@@ -22,8 +22,9 @@ import numpy as np
 
 from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import Hinge, SeamGeometry
-from station.analysis.index import JND_CIE76, IndexResult, SeamModel, goniogeometric_index
+from station.analysis.index import JND_CIE76, IndexResult, goniogeometric_index
 from station.analysis.options import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG
+from station.analysis.seam_model import SeamModel
 from station.analysis.trompe import Objective, TrompeResult, inverse_trompe_loeil, paint_to_dict
 
 #: Travel / lightness flop beyond which a paint counts as "high travel" in the advice.

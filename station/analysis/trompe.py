@@ -33,8 +33,9 @@ from scipy.optimize import minimize
 from station.analysis.errors import AnalysisError, AnalysisInputError
 from station.analysis.gamut import GamutReport, check_paintable, rgb_bounds
 from station.analysis.geometry import Hinge, SeamGeometry, check_polar
-from station.analysis.index import JND_CIE76, SeamModel
+from station.analysis.index import JND_CIE76
 from station.analysis.options import OBJECTIVES, Objective
+from station.analysis.seam_model import SeamModel
 from station.analysis.shading import Environment, Exposure
 from station.model.colorimetry import lab_to_linear_srgb
 from station.model.domain import FACE_ANGLE_DEG, LAB_RANGES, TRAVEL_MAX_DEG

@@ -8,9 +8,9 @@ share: the gloss lobe (:mod:`station.model.lobe`), the reference point-light sha
 (:mod:`station.model.shading`) and Lab ⇄ display sRGB (:mod:`station.model.display`).
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from station.lazy import lazy_getattr
 from station.model.angles import validate_angle_set
 from station.model.domain import (
     AB_MAX,
@@ -50,13 +50,7 @@ _LAZY = {
     "FaceFlopTravelGloss": "station.model.representations",
 }
 
-
-def __getattr__(name: str) -> Any:
-    """Load a name of :data:`_LAZY` from its module the first time it is asked for."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(module), name)
+__getattr__ = lazy_getattr(__name__, _LAZY)
 
 
 __all__ = [
