@@ -40,7 +40,7 @@ import numpy as np
 
 from bench._report import ROOT, Case, bench_parser, write_section
 from bench.ingest_load import PG_ADMIN, _reading
-from station.api.serve_process import ServeProcess
+from tests.serve_process import ServeProcess
 
 P99_BAR_MS = 150.0
 RATIO_BAR = 0.5
