@@ -18,7 +18,7 @@ import numpy as np
 
 from bench._report import Case, write_section
 from station.analysis import Environment, goniogeometric_index
-from station.analysis.picture import plot_seam_report, shade_pair
+from station.analysis.picture import SOLID_GRID_COLUMNS, draw_solid_grid, plot_seam_report
 from station.analysis.qa import seam_qa
 from station.analysis.scenarios import BUMPER_PAINT, SILVER_PAINT, SOLID_LIGHTS_DEG, SOLID_PAINT, solid_panels
 from station.analysis.seam_model import SeamModel
@@ -59,32 +59,8 @@ def fig44_grid(path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    s = solid_panels()
-    cols = [
-        ("identical", None),
-        ("optimised at 45°", s["single_45"]),
-        ("RMS over all", s["rms"]),
-        ("per row", s["per_geometry"]),
-    ]
-    fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), 4, figsize=(9, 9))
-    for i, light in enumerate(SOLID_LIGHTS_DEG):
-        for j, (name, res) in enumerate(cols):
-            if res is None:
-                pb, de = SOLID_PAINT, s["rms"].seam_de_before[i]
-            elif name == "per row":
-                pb, de = res.paints[i], res.seam_de_after[i]
-            else:
-                pb, de = res.paint, res.seam_de_after[i]
-            img = shade_pair(SOLID_PAINT, pb, -3.0, light, 0.0, size=(40, 80))
-            ax = axes[i, j]
-            ax.imshow(img)
-            ax.set_xticks([])
-            ax.set_yticks([])
-            ax.set_xlabel(f"ΔE {de:.2f}", fontsize=8)
-            if i == 0:
-                ax.set_title(name, fontsize=9)
-            if j == 0:
-                ax.set_ylabel(f"light {light:g}°", fontsize=8)
+    fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), len(SOLID_GRID_COLUMNS), figsize=(9, 9))
+    draw_solid_grid(axes, SOLID_PAINT, solid_panels(), SOLID_LIGHTS_DEG, -3.0, (40, 80))
     fig.suptitle("Fig. 4.4 reproduced: solid, panels misaligned 3°, seam ΔE*ab under each")
     fig.tight_layout()
     fig.savefig(path, dpi=90)

@@ -107,35 +107,10 @@ def _fig44_picture(out_dir: Path, panels: dict[str, object]) -> Figure:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from station.analysis.picture import shade_pair
-    from station.analysis.trompe import TrompeResult
+    from station.analysis.picture import SOLID_GRID_COLUMNS, draw_solid_grid
 
-    cols: list[tuple[str, TrompeResult | None]] = [("identical", None)]
-    for name, key in (("optimised at 45°", "single_45"), ("RMS", "rms"), ("per row", "per_geometry")):
-        res = panels[key]
-        if not isinstance(res, TrompeResult):  # pragma: no cover - solid_panels returns TrompeResults
-            raise TypeError(key)
-        cols.append((name, res))
-    fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), len(cols), figsize=(8, 8))
-    for i, light in enumerate(SOLID_LIGHTS_DEG):
-        for j, (name, res) in enumerate(cols):
-            if res is None:
-                rms = panels["rms"]
-                assert isinstance(rms, TrompeResult)  # noqa: S101
-                pb, de = SOLID_PAINT, rms.seam_de_before[i]
-            elif name == "per row":
-                pb, de = res.paints[i], res.seam_de_after[i]
-            else:
-                pb, de = res.paint, res.seam_de_after[i]
-            ax = axes[i, j]
-            ax.imshow(shade_pair(SOLID_PAINT, pb, SOLID_BETA_DEG, light, 0.0, size=(36, 72)))
-            ax.set_xticks([])
-            ax.set_yticks([])
-            ax.set_xlabel(f"ΔE {de:.2f}", fontsize=8)
-            if i == 0:
-                ax.set_title(name, fontsize=9)
-            if j == 0:
-                ax.set_ylabel(f"light {light:g}°", fontsize=8)
+    fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), len(SOLID_GRID_COLUMNS), figsize=(8, 8))
+    draw_solid_grid(axes, SOLID_PAINT, panels, SOLID_LIGHTS_DEG, SOLID_BETA_DEG, (36, 72))
     fig.suptitle("Fig. 4.4 on our code: solid, 3° misalignment, seam ΔE*ab", fontsize=10)
     fig.tight_layout()
     path = out_dir / "ch4-fig4.4.png"
