@@ -22,7 +22,7 @@ def _package(root: Path) -> None:
             """
             from station.lazy import lazy_getattr
 
-            __getattr__ = lazy_getattr(__name__, {"VALUE": "lazypkg.heavy"})
+            __getattr__ = lazy_getattr(__name__, {"lazypkg.heavy": ("VALUE",)})
             """
         )
     )
@@ -56,16 +56,16 @@ def test_a_name_is_loaded_on_first_use_and_only_then(tmp_path: Path) -> None:
 def test_an_unknown_name_raises_attribute_error_naming_the_package() -> None:
     import json
 
-    getter = lazy_getattr("some.package", {"dumps": "json"})
+    getter = lazy_getattr("some.package", {"json": ("dumps",)})
     assert getter("dumps") is json.dumps
     with pytest.raises(AttributeError, match=r"module 'some.package' has no attribute 'missing'"):
         getter("missing")
 
 
 def test_the_map_is_copied_so_a_later_change_to_it_does_not_leak_in() -> None:
-    names = {"dumps": "json"}
+    names = {"json": ["dumps"]}
     getter = lazy_getattr("pkg", names)
-    names["loads"] = "json"
+    names["json"].append("loads")
     import json
 
     assert getter("dumps") is json.dumps
@@ -78,8 +78,14 @@ def test_every_lazy_name_of_the_packages_is_the_object_its_module_defines(packag
     pkg = importlib.import_module(package)
     lazy = pkg._LAZY
     assert lazy, package
-    for name, module in lazy.items():
-        assert getattr(pkg, name) is getattr(importlib.import_module(module), name), (name, module)
-        assert name in pkg.__all__, name
+    for module, names in lazy.items():
+        for name in names:
+            assert getattr(pkg, name) is getattr(importlib.import_module(module), name), (name, module)
+            assert name in pkg.__all__, name
     with pytest.raises(AttributeError, match=package):
         pkg.no_such_name  # noqa: B018
+
+
+def test_a_name_listed_under_two_modules_is_refused() -> None:
+    with pytest.raises(ValueError, match="'dumps' listed under json and pickle"):
+        lazy_getattr("pkg", {"json": ("dumps",), "pickle": ("dumps",)})

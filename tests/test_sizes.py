@@ -33,7 +33,7 @@ ALLOWED: dict[str, str] = {
     "station/cli/_qc_files.py:register": "QC command-line parsers, being split in the QC work",
     "station/cli/formulate.py:register": _FORMULATE,
     "station/cli/render.py:_render": "the render command, being split in the renderer work",
-    "station/design/sketch.py": "the sketch fit, being split by fit (point light, environment) in the sketch work",
+    "station/design/sketch.py": "the sketch fit, being split by fit (point light, environment)",
     "station/design/sketch.py:fit_point_light": "the point-light fit, being split in the sketch work",
     "station/design/sketch.py:fit_environment": "the environment fit, being split in the sketch work",
     "station/formulate/closed_loop.py:closed_loop": _FORMULATE,

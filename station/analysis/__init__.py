@@ -20,33 +20,17 @@ if TYPE_CHECKING:
     from station.analysis.sweep import SweepResult, plot_sweep, seam_sweep
     from station.analysis.trompe import SUBSETS, TrompeResult, inverse_trompe_loeil
 
-#: Names loaded on first use (PEP 562): the analysis imports colour-science and SciPy, which take a
-#: second or more; its errors and the options its fronts list stay cheap for a command line's ``--help``.
+#: Names loaded on first use (PEP 562), by module: the analysis imports colour-science and SciPy, which
+#: take a second or more; its errors and the options its fronts list stay cheap for a command line's
+#: ``--help``.
 _LAZY = {
-    "SeamGeometry": "station.analysis.geometry",
-    "aspecular_deg": "station.analysis.geometry",
-    "direction": "station.analysis.geometry",
-    "rotated_normals": "station.analysis.geometry",
-    "DE_METHODS": "station.analysis.seam_model",
-    "JND_CIE76": "station.analysis.index",
-    "GeometryIndex": "station.analysis.index",
-    "IndexResult": "station.analysis.index",
-    "SeamModel": "station.analysis.seam_model",
-    "goniogeometric_index": "station.analysis.index",
-    "SeamReport": "station.analysis.qa",
-    "as_paint": "station.analysis.qa",
-    "measurements_under": "station.analysis.qa",
-    "seam_qa": "station.analysis.qa",
-    "Environment": "station.analysis.shading",
-    "environment_colour": "station.analysis.shading",
-    "point_colour": "station.analysis.shading",
-    "shade_lab": "station.analysis.shading",
-    "SweepResult": "station.analysis.sweep",
-    "plot_sweep": "station.analysis.sweep",
-    "seam_sweep": "station.analysis.sweep",
-    "SUBSETS": "station.analysis.trompe",
-    "TrompeResult": "station.analysis.trompe",
-    "inverse_trompe_loeil": "station.analysis.trompe",
+    "station.analysis.geometry": ("SeamGeometry", "aspecular_deg", "direction", "rotated_normals"),
+    "station.analysis.seam_model": ("DE_METHODS", "SeamModel"),
+    "station.analysis.index": ("JND_CIE76", "GeometryIndex", "IndexResult", "goniogeometric_index"),
+    "station.analysis.qa": ("SeamReport", "as_paint", "measurements_under", "seam_qa"),
+    "station.analysis.shading": ("Environment", "environment_colour", "point_colour", "shade_lab"),
+    "station.analysis.sweep": ("SweepResult", "plot_sweep", "seam_sweep"),
+    "station.analysis.trompe": ("SUBSETS", "TrompeResult", "inverse_trompe_loeil"),
 }
 
 __getattr__ = lazy_getattr(__name__, _LAZY)

@@ -40,14 +40,11 @@ if TYPE_CHECKING:
         FaceFlopTravelGloss,
     )
 
-#: Names loaded on first use (PEP 562): they import colour-science, which takes a second or more, and
-#: the domain's limits and names above must stay cheap for a command line's ``--help``.
+#: Names loaded on first use (PEP 562), by module: they import colour-science, which takes a second or
+#: more, and the domain's limits and names above must stay cheap for a command line's ``--help``.
 _LAZY = {
-    "FitResult": "station.model.fit",
-    "fit_fftg": "station.model.fit",
-    "AspecularMeasurements": "station.model.representations",
-    "ClampedQuadratic": "station.model.representations",
-    "FaceFlopTravelGloss": "station.model.representations",
+    "station.model.fit": ("FitResult", "fit_fftg"),
+    "station.model.representations": ("AspecularMeasurements", "ClampedQuadratic", "FaceFlopTravelGloss"),
 }
 
 __getattr__ = lazy_getattr(__name__, _LAZY)
