@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import importlib
-import subprocess
 import sys
 import textwrap
 from pathlib import Path
@@ -11,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from station.lazy import lazy_getattr
+from tests.processes import run
 
 
 def _package(root: Path) -> None:
@@ -43,13 +43,9 @@ def test_a_name_is_loaded_on_first_use_and_only_then(tmp_path: Path) -> None:
         """
     )
     env_path = f"{tmp_path}:{Path(__file__).resolve().parents[1]}"
-    out = subprocess.run(
-        [sys.executable, "-c", script],
-        capture_output=True,
-        text=True,
-        check=True,
-        env={"PYTHONPATH": env_path, "PATH": ""},
-    ).stdout.split()
+    done = run([sys.executable, "-c", script], timeout=60, env={"PYTHONPATH": env_path, "PATH": ""})
+    assert done.returncode == 0, done.stderr
+    out = done.stdout.split()
     assert out == ["False", "42", "42", "1"]
 
 
