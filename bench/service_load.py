@@ -187,30 +187,18 @@ def run_raw(engine: Any, threads: int, duration: float, tag: str) -> dict[str, A
 
 
 def count_check(url: str, sent: list[str]) -> dict[str, int]:
-    """Rows stored under the sent client ids, distinct ids, missing ones, and audit rows per stored row."""
-    from sqlalchemy import func, select
+    """Rows stored under the sent client ids, distinct ids, missing ones, and audit rows per stored row
+    (the database read as the soak test reads it: ``tests.soak._accounting.read_stored``)."""
+    from tests.soak._accounting import read_stored
 
-    from db.engine import make_engine
-    from db.models import AuditEvent, Measurement
-
-    engine = make_engine(url)
+    stored = read_stored(url)
     wanted = set(sent)
-    with engine.connect() as conn:
-        rows = [(str(c), int(i)) for c, i in conn.execute(select(Measurement.client_id, Measurement.id))]
-        audits = dict(
-            conn.execute(
-                select(AuditEvent.entity_id, func.count())
-                .where(AuditEvent.entity == "measurement")
-                .group_by(AuditEvent.entity_id)
-            ).all()
-        )
-    engine.dispose()
-    ours = [(c, i) for c, i in rows if c in wanted]
+    ours = [(r.client_id, r.id) for r in stored.rows if r.client_id in wanted]
     return {
         "rows": len(ours),
         "distinct": len({c for c, _ in ours}),
         "missing": len(wanted - {c for c, _ in ours}),
-        "audited_once": sum(1 for _, i in ours if audits.get(str(i)) == 1),
+        "audited_once": sum(1 for _, i in ours if stored.audits.get(i) == 1),
     }
 
 
