@@ -18,10 +18,10 @@ import numpy as np
 
 from bench._report import Case, write_section
 from station.analysis import Environment, goniogeometric_index
-from station.analysis.index import SeamModel
-from station.analysis.picture import plot_seam_report, shade_pair
+from station.analysis.picture import SOLID_GRID_COLUMNS, draw_solid_grid, plot_seam_report
 from station.analysis.qa import seam_qa
 from station.analysis.scenarios import BUMPER_PAINT, SILVER_PAINT, SOLID_LIGHTS_DEG, SOLID_PAINT, solid_panels
+from station.analysis.seam_model import SeamModel
 from station.analysis.sweep import SweepResult, plot_sweep, seam_sweep
 from station.analysis.trompe import inverse_trompe_loeil
 from station.model import FaceFlopTravelGloss
@@ -59,32 +59,8 @@ def fig44_grid(path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    s = solid_panels()
-    cols = [
-        ("identical", None),
-        ("optimised at 45°", s["single_45"]),
-        ("RMS over all", s["rms"]),
-        ("per row", s["per_geometry"]),
-    ]
-    fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), 4, figsize=(9, 9))
-    for i, light in enumerate(SOLID_LIGHTS_DEG):
-        for j, (name, res) in enumerate(cols):
-            if res is None:
-                pb, de = SOLID_PAINT, s["rms"].seam_de_before[i]
-            elif name == "per row":
-                pb, de = res.paints[i], res.seam_de_after[i]
-            else:
-                pb, de = res.paint, res.seam_de_after[i]
-            img = shade_pair(SOLID_PAINT, pb, -3.0, light, 0.0, size=(40, 80))
-            ax = axes[i, j]
-            ax.imshow(img)
-            ax.set_xticks([])
-            ax.set_yticks([])
-            ax.set_xlabel(f"ΔE {de:.2f}", fontsize=8)
-            if i == 0:
-                ax.set_title(name, fontsize=9)
-            if j == 0:
-                ax.set_ylabel(f"light {light:g}°", fontsize=8)
+    fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), len(SOLID_GRID_COLUMNS), figsize=(9, 9))
+    draw_solid_grid(axes, SOLID_PAINT, solid_panels(), SOLID_LIGHTS_DEG, -3.0, (40, 80))
     fig.suptitle("Fig. 4.4 reproduced: solid, panels misaligned 3°, seam ΔE*ab under each")
     fig.tight_layout()
     fig.savefig(path, dpi=90)
@@ -137,9 +113,27 @@ def fig45_contour(path: Path) -> Path:
 
 
 def main() -> None:
+    cases = [*_index_cases(), _sweep_case(), *_trompe_cases()]
+    t = timeit(lambda: seam_qa(BUMPER_PAINT, BUMPER_PAINT.replace(face=(61.0, -4.0, -41.0)), -3.0), repeat=3)
+    cases.append(Case("QA workflow (seam_qa, no PNG)", "3 lights × 4 aspecular", t * 1e3, "ms"))
+
+    report = seam_qa(BUMPER_PAINT, BUMPER_PAINT.replace(face=(61.0, -4.0, -41.0)), -3.0)
+    plot_seam_report(report, DOCS / "misalignment-qa.png")
+    fig44_grid(DOCS / "misalignment-fig44.png")
+    fig45_contour(DOCS / "misalignment-fig45.png")
+    write_section(
+        "analysis",
+        "Misalignment analysis (goniogeometric index, inverse trompe l'oeil)",
+        cases,
+        "Figures: docs/misalignment-index.png, docs/misalignment-fig44.png, docs/misalignment-fig45.png, "
+        "docs/misalignment-qa.png.",
+    )
+
+
+def _index_cases() -> list[Case]:
+    """The goniogeometric index against the plain 1e-3° scan (the baseline, timed first)."""
     grey = FaceFlopTravelGloss((60.0, 0.0, 0.0), (60.0, 0.0, 0.0), None)
     cases: list[Case] = []
-
     base = timeit(lambda: plain_scan(grey, 45.0, 0.0, 1.0), repeat=10)
     cases.append(Case("baseline: plain 1e-3° scan, solid", "30001 β", base * 1e3, "ms"))
     t = timeit(lambda: goniogeometric_index(grey, 45.0, 0.0, direction="+"))
@@ -163,6 +157,11 @@ def main() -> None:
     env = Environment.from_equirect(np.random.default_rng(0).uniform(0.2, 1.0, (16, 32, 3)))
     t = timeit(lambda: goniogeometric_index(BUMPER_PAINT, env, -10.0), repeat=5)
     cases.append(Case("index: environment (16×32 equirect)", "512 samples", t * 1e3, "ms"))
+    return cases
+
+
+def _sweep_case() -> Case:
+    """The Fig. 4.3 sweep, timed, then drawn to docs/misalignment-index.png."""
 
     def fig_4_3_sweep() -> SweepResult:
         return seam_sweep(
@@ -173,14 +172,19 @@ def main() -> None:
         )
 
     t = timeit(fig_4_3_sweep, repeat=10)
-    cases.append(Case("Fig. 4.3 sweep", "6 β × 15 lights × 96 views", t * 1e3, "ms", "bar ≤ 1 s"))
+    case = Case("Fig. 4.3 sweep", "6 β × 15 lights × 96 views", t * 1e3, "ms", "bar ≤ 1 s")
     plot_sweep(
         fig_4_3_sweep(),
         DOCS / "misalignment-index.png",
         view_for_lights=0.0,
         title="Seam ΔE*ab against view, light and misalignment, blue metallic (thesis Fig. 4.3)",
     )
+    return case
 
+
+def _trompe_cases() -> list[Case]:
+    """Inverse trompe l'oeil solves: the solid, the silver and the metallic."""
+    cases: list[Case] = []
     lights = list(SOLID_LIGHTS_DEG)
     t = timeit(lambda: inverse_trompe_loeil(SOLID_PAINT, lights, beta_deg=-3.0, objective="rms"), repeat=5)
     cases.append(Case("trompe l'oeil: solid, RMS", "6 geometries, 3 params", t * 1e3, "ms", "bar ≤ 1 s"))
@@ -219,20 +223,7 @@ def main() -> None:
             "bar ≤ 1 s",
         )
     )
-    t = timeit(lambda: seam_qa(BUMPER_PAINT, BUMPER_PAINT.replace(face=(61.0, -4.0, -41.0)), -3.0), repeat=3)
-    cases.append(Case("QA workflow (seam_qa, no PNG)", "3 lights × 4 aspecular", t * 1e3, "ms"))
-
-    report = seam_qa(BUMPER_PAINT, BUMPER_PAINT.replace(face=(61.0, -4.0, -41.0)), -3.0)
-    plot_seam_report(report, DOCS / "misalignment-qa.png")
-    fig44_grid(DOCS / "misalignment-fig44.png")
-    fig45_contour(DOCS / "misalignment-fig45.png")
-    write_section(
-        "analysis",
-        "Misalignment analysis (goniogeometric index, inverse trompe l'oeil)",
-        cases,
-        "Figures: docs/misalignment-index.png, docs/misalignment-fig44.png, docs/misalignment-fig45.png, "
-        "docs/misalignment-qa.png.",
-    )
+    return cases
 
 
 if __name__ == "__main__":

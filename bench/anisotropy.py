@@ -1,7 +1,7 @@
 """Anisotropic Ward (eqs 2.5.4–2.5.7): CIEDE2000 of the sampled reconstruction against ground truth, per
 sample count, with the failure region of the accuracy bar (mean ≤ 1.0, p95 ≤ 2.3) charted.
 
-Run: ``.venv/bin/python -m bench.anisotropy``. For each case of ``station.reproduce.ch2.ANISO_CASES``
+Run: ``.venv/bin/python -m bench.anisotropy``. For each case of ``station.reproduce.ch2_aniso.ANISO_CASES``
 (mild and strong anisotropy in the light booth; strong under one point light, the thesis's Fig. 2.10)
 the off-specular sum of eq 2.5.7 (``station.render.anisotropy.shade_anisotropic``, which the GL shader
 matches to < 0.1 ΔE00, tests/render/test_anisotropy.py) is rendered with J = 1 … 81 samples and
@@ -14,7 +14,7 @@ the mirror direction), each line giving err(J) / err(1). The same data is ``stat
 from __future__ import annotations
 
 from bench._report import REPORT, Case, bench_cli, write_section
-from station.reproduce import ch2
+from station.reproduce import ch2_aniso as ch2
 
 CHART = REPORT.parent / "render-anisotropy-samples.png"
 

@@ -33,7 +33,7 @@ import numpy as np
 from PIL import Image
 
 from bench._report import ROOT, Case, bench_parser, write_section
-from station.api.serve_process import serving
+from tests.serve_process import serving
 
 MIB = 1024 * 1024
 BAR_MIB = 300.0

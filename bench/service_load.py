@@ -40,7 +40,7 @@ import numpy as np
 
 from bench._report import ROOT, Case, bench_parser, write_section
 from bench.ingest_load import PG_ADMIN, _reading
-from station.api.serve_process import ServeProcess
+from tests.serve_process import ServeProcess
 
 P99_BAR_MS = 150.0
 RATIO_BAR = 0.5
@@ -187,30 +187,18 @@ def run_raw(engine: Any, threads: int, duration: float, tag: str) -> dict[str, A
 
 
 def count_check(url: str, sent: list[str]) -> dict[str, int]:
-    """Rows stored under the sent client ids, distinct ids, missing ones, and audit rows per stored row."""
-    from sqlalchemy import func, select
+    """Rows stored under the sent client ids, distinct ids, missing ones, and audit rows per stored row
+    (the database read as the soak test reads it: ``tests.soak._accounting.read_stored``)."""
+    from tests.soak._accounting import read_stored
 
-    from db.engine import make_engine
-    from db.models import AuditEvent, Measurement
-
-    engine = make_engine(url)
+    stored = read_stored(url)
     wanted = set(sent)
-    with engine.connect() as conn:
-        rows = [(str(c), int(i)) for c, i in conn.execute(select(Measurement.client_id, Measurement.id))]
-        audits = dict(
-            conn.execute(
-                select(AuditEvent.entity_id, func.count())
-                .where(AuditEvent.entity == "measurement")
-                .group_by(AuditEvent.entity_id)
-            ).all()
-        )
-    engine.dispose()
-    ours = [(c, i) for c, i in rows if c in wanted]
+    ours = [(r.client_id, r.id) for r in stored.rows if r.client_id in wanted]
     return {
         "rows": len(ours),
         "distinct": len({c for c, _ in ours}),
         "missing": len(wanted - {c for c, _ in ours}),
-        "audited_once": sum(1 for _, i in ours if audits.get(str(i)) == 1),
+        "audited_once": sum(1 for _, i in ours if stored.audits.get(i) == 1),
     }
 
 
@@ -304,101 +292,16 @@ def _backend(name: str, url: str | None, data_dir: Path, args: argparse.Namespac
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = bench_parser(__doc__, "service_load")
-    parser.add_argument("--clients", type=int, default=8, help="client processes and raw threads (default 8)")
-    parser.add_argument("--rounds", type=int, default=3, help="raw/service rounds per backend (default 3)")
-    parser.add_argument(
-        "--duration", type=float, default=10.0, help="seconds of each raw and each service phase (≤ 60)"
-    )
-    parser.add_argument("--resend-every", type=int, default=20, help="re-send every Nth reading (0: never)")
-    parser.add_argument(
-        "--pg-admin", default=PG_ADMIN, help="maintenance database URL (a throwaway DB is made)"
-    )
-    parser.add_argument("--no-postgres", action="store_true")
-    parser.add_argument("--no-report", action="store_true", help="print only; leave docs/ alone")
-    args = parser.parse_args(argv)
-    if not 0 < args.duration <= 60:
-        parser.error("--duration: 0 < seconds ≤ 60")
-    if not 1 <= args.clients <= 64 or not 1 <= args.rounds <= 20:
-        parser.error("--clients: 1 to 64; --rounds: 1 to 20")
-
-    results: dict[str, dict[str, Any]] = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        results["SQLite"] = _backend("sqlite", None, Path(tmp) / "sqlite", args)
-        if not args.no_postgres:
-            import psycopg
-
-            name = f"cacad_bench_{secrets.token_hex(4)}"
-            admin = psycopg.connect(args.pg_admin, autocommit=True)
-            admin.execute(f'CREATE DATABASE "{name}"')
-            try:
-                url = args.pg_admin.rsplit("/", 1)[0] + "/" + name
-                results["PostgreSQL"] = _backend("pg", url, Path(tmp) / "pg", args)
-            finally:
-                admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
-                admin.close()
-
+    args = _arguments(argv)
+    results = _run_backends(args)
     n = args.clients
     phase = f"{args.rounds}×{args.duration:g} s"
     cases: list[Case] = []
     verdicts: list[str] = []
     for backend, r in results.items():
-        load, raw, check = r["load"], r["raw"], r["check"]
-        ratio = load["throughput"] / raw["throughput"]
-        lo, hi = min(r["loadavg"]), max(r["loadavg"])
-        cases += [
-            Case(f"{backend}: service ingest, {n} clients", phase, load["throughput"], "readings/s"),
-            Case(
-                f"{backend}: raw SQLAlchemy inserts, {n} threads",
-                phase,
-                raw["throughput"],
-                "rows/s",
-                "one commit per row, interleaved with the service phases",
-            ),
-            Case(
-                f"{backend}: service / raw throughput",
-                "",
-                ratio,
-                "x",
-                f"bar ≥ {RATIO_BAR:g}; rounds {', '.join(f'{x:.2f}' for x in r['round_ratios'])}",
-            ),
-            Case(f"{backend}: service latency p50", "", load["p50"], "ms"),
-            Case(f"{backend}: service latency p99", "", load["p99"], "ms", f"bar ≤ {P99_BAR_MS:g} ms"),
-            Case(f"{backend}: raw insert latency p99", "", raw["p99"], "ms"),
-            Case(
-                f"{backend}: service process CPU per request",
-                "",
-                load["cpu_ms"],
-                "ms",
-                "user + system of `station serve` during the service phases",
-            ),
-            Case(
-                f"{backend}: raw inserts CPU per row",
-                "",
-                raw["cpu_ms"],
-                "ms",
-                "the inserting process (reading made, SQLAlchemy, driver); the database's own CPU in neither",
-            ),
-            Case(
-                f"{backend}: load average during the run",
-                "",
-                hi,
-                "max 1-min",
-                f"min {lo:.1f}, {os.cpu_count()} CPUs",
-            ),
-            Case(
-                f"{backend}: rows stored / distinct sent",
-                "",
-                check["rows"],
-                "rows",
-                f"of {len(set(load['sent']))} sent (+{load['resent']} re-sent duplicates); missing {check['missing']}; "
-                f"audited once {check['audited_once']}; unexpected statuses {load['errors']}",
-            ),
-        ]
-        verdicts.append(
-            f"{backend} {'PASS' if ratio >= RATIO_BAR else 'MISS'} {ratio:.2f}× raw (bar {RATIO_BAR:g}×), "
-            f"{'PASS' if load['p99'] <= P99_BAR_MS else 'MISS'} p99 {load['p99']:.0f} ms (bar {P99_BAR_MS:g} ms)"
-        )
+        backend_cases, backend_verdict = _backend_cases(backend, r, n, phase)
+        cases += backend_cases
+        verdicts.append(backend_verdict)
     exactly_once = all(r["exactly_once"] for r in results.values())
     verdict = f"exactly once: {'PASS' if exactly_once else 'FAIL'}; " + "; ".join(verdicts)
     print(verdict)
@@ -420,6 +323,109 @@ def main(argv: list[str] | None = None) -> int:
         )
         write_section("service_load", f"Service load: {n} HTTP clients, SQLite and PostgreSQL", cases, extra)
     return 0 if exactly_once else 1
+
+
+def _arguments(argv: list[str] | None) -> argparse.Namespace:
+    """The command line, checked (clients 1–64, rounds 1–20, 0 < duration ≤ 60 s)."""
+    parser = bench_parser(__doc__, "service_load")
+    parser.add_argument("--clients", type=int, default=8, help="client processes and raw threads (default 8)")
+    parser.add_argument("--rounds", type=int, default=3, help="raw/service rounds per backend (default 3)")
+    parser.add_argument(
+        "--duration", type=float, default=10.0, help="seconds of each raw and each service phase (≤ 60)"
+    )
+    parser.add_argument("--resend-every", type=int, default=20, help="re-send every Nth reading (0: never)")
+    parser.add_argument(
+        "--pg-admin", default=PG_ADMIN, help="maintenance database URL (a throwaway DB is made)"
+    )
+    parser.add_argument("--no-postgres", action="store_true")
+    parser.add_argument("--no-report", action="store_true", help="print only; leave docs/ alone")
+    args = parser.parse_args(argv)
+    if not 0 < args.duration <= 60:
+        parser.error("--duration: 0 < seconds ≤ 60")
+    if not 1 <= args.clients <= 64 or not 1 <= args.rounds <= 20:
+        parser.error("--clients: 1 to 64; --rounds: 1 to 20")
+    return args
+
+
+def _run_backends(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """The measured phases on SQLite and (unless ``--no-postgres``) on a throwaway PostgreSQL database."""
+    results: dict[str, dict[str, Any]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        results["SQLite"] = _backend("sqlite", None, Path(tmp) / "sqlite", args)
+        if not args.no_postgres:
+            import psycopg
+
+            name = f"cacad_bench_{secrets.token_hex(4)}"
+            admin = psycopg.connect(args.pg_admin, autocommit=True)
+            admin.execute(f'CREATE DATABASE "{name}"')
+            try:
+                url = args.pg_admin.rsplit("/", 1)[0] + "/" + name
+                results["PostgreSQL"] = _backend("pg", url, Path(tmp) / "pg", args)
+            finally:
+                admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+                admin.close()
+    return results
+
+
+def _backend_cases(backend: str, r: dict[str, Any], n: int, phase: str) -> tuple[list[Case], str]:
+    """One backend's lines (throughput, latency, CPU, load, counts) and its one-line verdict."""
+    load, raw, check = r["load"], r["raw"], r["check"]
+    ratio = load["throughput"] / raw["throughput"]
+    lo, hi = min(r["loadavg"]), max(r["loadavg"])
+    cases = [
+        Case(f"{backend}: service ingest, {n} clients", phase, load["throughput"], "readings/s"),
+        Case(
+            f"{backend}: raw SQLAlchemy inserts, {n} threads",
+            phase,
+            raw["throughput"],
+            "rows/s",
+            "one commit per row, interleaved with the service phases",
+        ),
+        Case(
+            f"{backend}: service / raw throughput",
+            "",
+            ratio,
+            "x",
+            f"bar ≥ {RATIO_BAR:g}; rounds {', '.join(f'{x:.2f}' for x in r['round_ratios'])}",
+        ),
+        Case(f"{backend}: service latency p50", "", load["p50"], "ms"),
+        Case(f"{backend}: service latency p99", "", load["p99"], "ms", f"bar ≤ {P99_BAR_MS:g} ms"),
+        Case(f"{backend}: raw insert latency p99", "", raw["p99"], "ms"),
+        Case(
+            f"{backend}: service process CPU per request",
+            "",
+            load["cpu_ms"],
+            "ms",
+            "user + system of `station serve` during the service phases",
+        ),
+        Case(
+            f"{backend}: raw inserts CPU per row",
+            "",
+            raw["cpu_ms"],
+            "ms",
+            "the inserting process (reading made, SQLAlchemy, driver); the database's own CPU in neither",
+        ),
+        Case(
+            f"{backend}: load average during the run",
+            "",
+            hi,
+            "max 1-min",
+            f"min {lo:.1f}, {os.cpu_count()} CPUs",
+        ),
+        Case(
+            f"{backend}: rows stored / distinct sent",
+            "",
+            check["rows"],
+            "rows",
+            f"of {len(set(load['sent']))} sent (+{load['resent']} re-sent duplicates); missing {check['missing']}; "
+            f"audited once {check['audited_once']}; unexpected statuses {load['errors']}",
+        ),
+    ]
+    verdict = (
+        f"{backend} {'PASS' if ratio >= RATIO_BAR else 'MISS'} {ratio:.2f}× raw (bar {RATIO_BAR:g}×), "
+        f"{'PASS' if load['p99'] <= P99_BAR_MS else 'MISS'} p99 {load['p99']:.0f} ms (bar {P99_BAR_MS:g} ms)"
+    )
+    return cases, verdict
 
 
 if __name__ == "__main__":

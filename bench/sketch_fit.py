@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
 import matplotlib
 
@@ -117,24 +119,68 @@ def style(kind: str, art: np.ndarray, mask: np.ndarray, rng: np.random.Generator
 
 
 def main() -> None:
+    su = _Setup.make()
+    rng = np.random.default_rng(11)
+    cases = [*_fig320_cases(su), *_gloss_cases(su)]
+    results, env_s, stability = _stability_cases(su, rng)
+    cases += [*stability, *_style_cases(su, rng), *_timing_cases(su, env_s)]
+    _chart(results)
+    extra = (
+        "Stability chart: `docs/sketch-stability.png` (success rate solid, median RMS ΔE*ab against the "
+        "unperturbed goal dashed; point-light fit blue, environment fit orange; gloss fixed at 50 GU in "
+        "both, so the figure measures colour, not the contrast-gloss guess). A fit is also failed when it "
+        "comes out retroreflective (face darker than flop), which is what flat fills produce. Failure is flagged when "
+        "the systematic misfit exceeds 6.9 ΔE*ab = 3 JND (RMS of cell means: aspecular-angle × Lambert cells for the "
+        "point fit, 4×4-pixel tiles for the environment fit) or more than 25 % of the pixels are outliers; "
+        "the fallback is the average diffuse colour. Art styles are random stand-ins (hue rotation; + ramp "
+        "≤ 0.4, flattening ≤ 0.4, blur and noise for airbrush; + flat fill 0.2–0.6, posterisation, "
+        "≤ 1.5 px misregistration for traced art), "
+        "not the thesis's artworks, so their failure rates are indicative only."
+    )
+    write_section("sketch_fit", "Sketch fit (thesis §3.7)", cases, extra)
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """The scenes, the basis images, the random designs and their renderings every part shares."""
+
+    designs: list[FaceFlopTravelGloss]
+    point: Any
+    env: Any
+    basis: Any
+    basis_s: float
+    init_p: np.ndarray
+    init_e: np.ndarray
+    goals_p: list[np.ndarray]
+    goals_e: list[np.ndarray]
+
+    @classmethod
+    def make(cls) -> _Setup:
+        """Render :data:`TRIALS` random designs and the silver start on both scenes; time the basis."""
+        designs = random_designs(TRIALS)
+        point = sphere_scene(SIZE_POINT)
+        env = environment_sphere_scene(SIZE_ENV)
+        t0 = time.perf_counter()
+        basis = lobe_basis(env)
+        basis_s = time.perf_counter() - t0
+        init_p = srgb_encode(shade(point, SILVER))
+        init_e = srgb_encode(shade_environment(env, SILVER))
+        goals_p = [srgb_encode(shade(point, d)) for d in designs]
+        goals_e = [srgb_encode(shade_environment(env, d)) for d in designs]
+        return cls(designs, point, env, basis, basis_s, init_p, init_e, goals_p, goals_e)
+
+    def render_p(self, d: FaceFlopTravelGloss) -> np.ndarray:
+        """*d* on the point-lit sphere (linear sRGB)."""
+        return shade(self.point, d)
+
+    def render_e(self, d: FaceFlopTravelGloss) -> np.ndarray:
+        """*d* on the environment-lit sphere (linear sRGB)."""
+        return shade_environment(self.env, d)
+
+
+def _fig320_cases(su: _Setup) -> list[Case]:
+    """Fig. 3.20: hue-rotated art fitted with the point light, for three gloss choices."""
     cases: list[Case] = []
-    designs = random_designs(TRIALS)
-    point = sphere_scene(SIZE_POINT)
-    env = environment_sphere_scene(SIZE_ENV)
-    t0 = time.perf_counter()
-    basis = lobe_basis(env)
-    basis_s = time.perf_counter() - t0
-    init_p = srgb_encode(shade(point, SILVER))
-    init_e = srgb_encode(shade_environment(env, SILVER))
-    goals_p = [srgb_encode(shade(point, d)) for d in designs]
-    goals_e = [srgb_encode(shade_environment(env, d)) for d in designs]
-
-    def render_p(d: FaceFlopTravelGloss) -> np.ndarray:
-        return shade(point, d)
-
-    def render_e(d: FaceFlopTravelGloss) -> np.ndarray:
-        return shade_environment(env, d)
-
     # --- Fig. 3.20 --------------------------------------------------------------------------------
     for refine, gloss, label in (
         (False, "default", "gloss 50 GU"),
@@ -142,11 +188,11 @@ def main() -> None:
         (True, "default", "gloss 50 GU + Lab polish"),
     ):
         fig320, fit_s = [], []
-        for goal in goals_p:
+        for goal in su.goals_p:
             for hue in (30.0, 90.0, 180.0):
-                art = artwork.rotate_hue(goal, hue, point.mask)
-                fit = fit_point_light(point, art, init_p, refine=refine, gloss=gloss)
-                fig320.append(goal_rms(art, fit.design, render_p, point.mask))
+                art = artwork.rotate_hue(goal, hue, su.point.mask)
+                fit = fit_point_light(su.point, art, su.init_p, refine=refine, gloss=gloss)
+                fig320.append(goal_rms(art, fit.design, su.render_p, su.point.mask))
                 fit_s.append(fit.seconds)
         fig320_a = np.array(fig320)
         cases += [
@@ -171,14 +217,19 @@ def main() -> None:
                 "ms",
             ),
         ]
+    return cases
 
+
+def _gloss_cases(su: _Setup) -> list[Case]:
+    """Art rendered at 5–80 GU fitted with each gloss rule: face and gloss errors."""
+    cases: list[Case] = []
     # --- gloss: the thesis's rules against fitting it with the colour ------------------------------
     for gloss_gu in (5.0, 10.0, 20.0, 30.0, 50.0, 80.0):
         for mode in ("default", "contrast", "fit"):
             face_err, gloss_err = [], []
-            for d in designs[:6]:
-                art = srgb_encode(shade(point, d.replace(gloss_gu=gloss_gu)))
-                fit = fit_point_light(point, art, init_p, gloss=mode)
+            for d in su.designs[:6]:
+                art = srgb_encode(shade(su.point, d.replace(gloss_gu=gloss_gu)))
+                fit = fit_point_light(su.point, art, su.init_p, gloss=mode)
                 face_err.append(float(np.linalg.norm(np.subtract(fit.design.face, d.face))))
                 gloss_err.append(abs(fit.design.gloss_gu - gloss_gu))
             cases.append(
@@ -190,29 +241,36 @@ def main() -> None:
                     f"|gloss error| median {np.median(gloss_err):.0f} GU",
                 )
             )
+    return cases
 
+
+def _stability_cases(
+    su: _Setup, rng: np.random.Generator
+) -> tuple[dict[str, dict[str, list[tuple[float, float]]]], list[float], list[Case]]:
+    """Both fits on perturbed art at every level: (success, median RMS) per level, the environment fit's
+    times (s), and the middle level's lines."""
+    cases: list[Case] = []
     # --- stability --------------------------------------------------------------------------------
     results: dict[str, dict[str, list[tuple[float, float]]]] = {}
-    rng = np.random.default_rng(11)
     env_s: list[float] = []
     for kind, (_, levels) in PERTURBATIONS.items():
         results[kind] = {"point": [], "environment": []}
         for level in levels:
             for fit_name, scene_mask, goals, init, render in (
-                ("point", point.mask, goals_p, init_p, render_p),
-                ("environment", env.mask, goals_e, init_e, render_e),
+                ("point", su.point.mask, su.goals_p, su.init_p, su.render_p),
+                ("environment", su.env.mask, su.goals_e, su.init_e, su.render_e),
             ):
                 ok, errs = 0, []
                 for goal in goals:
                     art = perturb(kind, level, goal, scene_mask, rng)
                     if fit_name == "point":
-                        fit = fit_point_light(point, art, init, gloss="default")
+                        fit = fit_point_light(su.point, art, init, gloss="default")
                     else:
-                        fit = fit_environment(basis, art, init)
+                        fit = fit_environment(su.basis, art, init)
                         env_s.append(fit.seconds)
                     ok += not fit.failed
                     errs.append(goal_rms(goal, fit.design, render, scene_mask))
-                results[kind][fit_name].append((ok / len(designs), float(np.median(errs))))
+                results[kind][fit_name].append((ok / len(su.designs), float(np.median(errs))))
     for kind, (unit, levels) in PERTURBATIONS.items():
         for fit_name in ("point", "environment"):
             rate, med = results[kind][fit_name][2]
@@ -225,14 +283,19 @@ def main() -> None:
                     f"median RMS {med:.2f} ΔE",
                 )
             )
+    return results, env_s, cases
 
+
+def _style_cases(su: _Setup, rng: np.random.Generator) -> list[Case]:
+    """First-try failure rates of the art styles at three misfit thresholds."""
+    cases: list[Case] = []
     # --- art styles: first-try failure -------------------------------------------------------------
     for kind in ("correction", "airbrushed", "traced"):
         # fit once with the misfit test off, then apply each threshold to the fit's own misfit
         fits = [
-            fit_point_light(point, style(kind, goal, point.mask, rng), init_p, max_shading_de=np.inf)
+            fit_point_light(su.point, style(kind, goal, su.point.mask, rng), su.init_p, max_shading_de=np.inf)
             for _rep in range(3)
-            for goal in goals_p
+            for goal in su.goals_p
         ]
         thesis = {
             "correction": "thesis: almost never",
@@ -250,13 +313,17 @@ def main() -> None:
                     thesis if threshold == MAX_SHADING_DE else "",
                 )
             )
+    return cases
 
+
+def _timing_cases(su: _Setup, env_s: list[float]) -> list[Case]:
+    """The environment fit through basis images against the thesis's nonlinear search, same scene."""
     # --- timing: basis-image fit vs nonlinear search -----------------------------------------------
-    goal = goals_e[0]
+    goal = su.goals_e[0]
     t0 = time.perf_counter()
-    fit = fit_environment(basis, goal, init_e)
+    fit = fit_environment(su.basis, goal, su.init_e)
     basis_fit_s = time.perf_counter() - t0
-    m = env.mask & (np.min(goal, axis=-1) < 0.95)
+    m = su.env.mask & (np.min(goal, axis=-1) < 0.95)
     goal_lab = _lab(goal[m])
 
     def objective(x: np.ndarray) -> float:
@@ -264,7 +331,7 @@ def main() -> None:
             guess = FaceFlopTravelGloss(tuple(x[:3]), tuple(x[3:6]), float(x[6]), 50.0)
         except ValueError:
             return 1e6
-        return rms_delta_e(_lab(srgb_encode(shade_environment(env, guess))[m]), goal_lab)
+        return rms_delta_e(_lab(srgb_encode(shade_environment(su.env, guess))[m]), goal_lab)
 
     x0 = np.array([*SILVER.face, *SILVER.flop, SILVER.travel_deg])
     t0 = time.perf_counter()
@@ -272,16 +339,16 @@ def main() -> None:
         objective, x0, method="Nelder-Mead", options={"maxfev": 3000, "xatol": 0.05, "fatol": 0.01}
     )
     nl_s = time.perf_counter() - t0
-    cases += [
+    return [
         Case(
             "environment fit via basis images",
-            f"{SIZE_ENV}² px, {len(basis.exponents)} lobes",
+            f"{SIZE_ENV}² px, {len(su.basis.exponents)} lobes",
             basis_fit_s * 1e3,
             "ms",
-            f"RMS {goal_rms(goal, fit.design, render_e, env.mask):.2f} ΔE",
+            f"RMS {goal_rms(goal, fit.design, su.render_e, su.env.mask):.2f} ΔE",
         ),
         Case("environment fit: median over stability runs", "", float(np.median(env_s)) * 1e3, "ms"),
-        Case("basis images (once per view)", f"{len(env.light_dirs)} lights", basis_s * 1e3, "ms"),
+        Case("basis images (once per view)", f"{len(su.env.light_dirs)} lights", su.basis_s * 1e3, "ms"),
         Case(
             "nonlinear search (thesis §3.7.5 method)",
             f"{res.nfev} renders",
@@ -291,21 +358,6 @@ def main() -> None:
         ),
         Case("speed-up of the basis fit", "same scene", nl_s / basis_fit_s, "x"),
     ]
-
-    _chart(results)
-    extra = (
-        "Stability chart: `docs/sketch-stability.png` (success rate solid, median RMS ΔE*ab against the "
-        "unperturbed goal dashed; point-light fit blue, environment fit orange; gloss fixed at 50 GU in "
-        "both, so the figure measures colour, not the contrast-gloss guess). A fit is also failed when it "
-        "comes out retroreflective (face darker than flop), which is what flat fills produce. Failure is flagged when "
-        "the systematic misfit exceeds 6.9 ΔE*ab = 3 JND (RMS of cell means: aspecular-angle × Lambert cells for the "
-        "point fit, 4×4-pixel tiles for the environment fit) or more than 25 % of the pixels are outliers; "
-        "the fallback is the average diffuse colour. Art styles are random stand-ins (hue rotation; + ramp "
-        "≤ 0.4, flattening ≤ 0.4, blur and noise for airbrush; + flat fill 0.2–0.6, posterisation, "
-        "≤ 1.5 px misregistration for traced art), "
-        "not the thesis's artworks, so their failure rates are indicative only."
-    )
-    write_section("sketch_fit", "Sketch fit (thesis §3.7)", cases, extra)
 
 
 def _chart(results: dict[str, dict[str, list[tuple[float, float]]]]) -> None:

@@ -1,59 +1,35 @@
-"""Hash chains over the append-only tables, record seals, checkpoints and :func:`audit_database`.
+"""Hash chains over the append-only tables: heads, appends and record seals.
 
 Three chains: ``measurements``, ``audit_events`` and ``record_events``. Each row carries ``row_sha256``,
-the SHA-256 of its canonical payload (the columns of :data:`PAYLOAD_COLUMNS` as sorted-key JSON, UTC ISO
-timestamps with microseconds, numbers of float and JSON columns as floats), and ``chain_sha256`` =
-SHA-256(previous row's ``chain_sha256`` ‖ ``row_sha256``), hex strings, the first row chaining from
-:data:`GENESIS`. The chain runs in id order. ``ledger_heads`` holds one row per chain with its length,
-last link and last write time; it is the lock every writer takes before appending (all heads at once, in
-one ``SELECT … FOR UPDATE``, so two writers never wait on each other crosswise), so concurrent writers
-form one chain. The database refuses a head that does not end on the table's last row (and, on
+the SHA-256 of its canonical payload, and ``chain_sha256`` = SHA-256(previous row's ``chain_sha256`` ‖
+``row_sha256``), hex strings, the first row chaining from :data:`GENESIS` (the canonical form and the
+hashes: ``db.chain_hash``). The chain runs in id order. ``ledger_heads`` holds one row per chain with its
+length, last link and last write time; it is the lock every writer takes before appending (all heads at
+once, in one ``SELECT … FOR UPDATE``, so two writers never wait on each other crosswise), so concurrent
+writers form one chain. The database refuses a head that does not end on the table's last row (and, on
 PostgreSQL, one whose link is not SHA-256(old head ‖ that row's hash)): revision 0009.
-
-**Canonical numbers** (form 2, every row written from revision 0009 on): a number in a float or JSON
-column is hashed as the shortest round-trip repr of the IEEE double (``json``'s), integers as floats,
-and −0.0 as 0.0 (SQLite's REAL and PostgreSQL's JSONB both store −0.0 as 0). Rows written before
-(``id <= ledger_heads.legacy_last_id``) were hashed with form 1, which kept the sign of zero: they
-verify against form 2, form 1, or form 1 with the sign of some zeros restored (at most
-:data:`LEGACY_ZERO_SIGNS` zeros, the signs the storage dropped).
 
 **Records** that are not readings but matter (users and their roles, API tokens, instruments,
 calibration records, panels, standards, gloss readings: :data:`RECORD_TABLES`) are sealed through the
 ``record_events`` chain: every insert, update and delete the product makes appends one event
 ``(entity, entity_id, op, state_sha256)`` where ``state_sha256`` is the hash of the row's whole content
 as stored (:func:`state_sha256`) and null for a delete. ORM writes are sealed by a flush hook; Core
-writes call :func:`record_change`. :func:`audit_database` compares every row of those tables with its
-last event: a row changed, inserted or deleted outside the product is named.
+writes call :func:`record_change`.
 
 **Time** (``received_at``, ``at``) is written by the chain, never ahead of the clock: the next row takes
 now, or the head's time when the clock is behind it by at most :data:`MAX_CLOCK_SKEW` (a small NTP step);
-a head further ahead (a row dated in the future) is not carried forward. :func:`audit_database` names a
-row dated beyond its own clock plus the skew, and a row earlier than its last plausible predecessor.
+a head further ahead (a row dated in the future) is not carried forward.
 
-**Checkpoints** (:func:`write_checkpoint`) are lines appended to a file in the data folder outside the
-database, HMAC-SHA256-signed with a key kept next to it (mode 0600): each records every chain's length
-and head. :func:`audit_database` names a chain that holds fewer rows than a checkpoint recorded or a
-different link at a checkpointed length (a tail removed and the head rewound), and a line whose
-signature does not recompute.
-
-:func:`audit_database` reports every finding (:class:`Finding`), not only the first.
+Checkpoints and the audit of every chain, seal and checkpoint: ``db.chain_audit``.
 """
 
 from __future__ import annotations
 
 import datetime as dt
 import functools
-import hashlib
-import hmac
-import itertools
-import json
-import os
-import secrets
-import uuid
-from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
-from typing import Any, Literal
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
 
 from sqlalchemy import (
     Boolean,
@@ -71,16 +47,61 @@ from sqlalchemy import (
     table,
     update,
 )
-from sqlalchemy.engine import Dialect, RowMapping
+from sqlalchemy.engine import Dialect
 from sqlalchemy.orm import Session, UOWTransaction
 from sqlalchemy.sql.expression import TableClause
 from sqlalchemy.types import JSON, TypeEngine
 
 import db.models  # noqa: F401  (registers every table the chain seals)
 from db.base import Base, JSONType, UTCDateTime, utcnow
-from station.model.domain import ILLUMINATION_DEG
+from db.chain_hash import (
+    FLOAT_COLUMNS,
+    JSON_COLUMNS,
+    LEGACY_ZERO_SIGNS,
+    OPTIONAL_COLUMNS,
+    PAYLOAD_COLUMNS,
+    Chain,
+    _digest,
+    _floats,
+    _number,
+    _scalar,
+    legacy_hashes,
+    link_sha256,
+    payload_sha256,
+)
 
-Chain = Literal["measurements", "audit_events", "record_events"]
+__all__ = [
+    "CHAINS",
+    "FLOAT_COLUMNS",
+    "GENESIS",
+    "HEADS",
+    "JSON_COLUMNS",
+    "LEGACY_ZERO_SIGNS",
+    "MAX_CLOCK_SKEW",
+    "OPTIONAL_COLUMNS",
+    "PAYLOAD_COLUMNS",
+    "READING_CHAINS",
+    "RECORD_OPS",
+    "RECORD_TABLES",
+    "TIME_COLUMN",
+    "Chain",
+    "Head",
+    "advance",
+    "append_audit",
+    "append_many",
+    "chain_table",
+    "chain_time",
+    "legacy_hashes",
+    "link_sha256",
+    "lock_head",
+    "lock_head_with",
+    "payload_sha256",
+    "record_change",
+    "seal",
+    "state_sha256",
+    "utcnow",
+]
+
 #: Every chain, in the order their head rows are locked (one statement, sorted by name).
 CHAINS: tuple[Chain, ...] = ("audit_events", "measurements", "record_events")
 #: The chains of revision 0004 (before ``record_events``).
@@ -88,15 +109,9 @@ READING_CHAINS: tuple[Chain, ...] = ("measurements", "audit_events")
 GENESIS = "0" * 64
 #: The column of each chain that the chain keeps monotonic (the write time).
 TIME_COLUMN: dict[Chain, str] = {"measurements": "received_at", "audit_events": "at", "record_events": "at"}
-#: The JSON-typed payload columns; their numbers are hashed as floats (JSON number round-trips differ).
-JSON_COLUMNS = frozenset({"geometries_deg", "lab", "wavelengths_nm", "spectra", "texture", "detail"})
-#: Floating-point payload columns: hashed as floats whether the writer passed 60 or 60.0.
-FLOAT_COLUMNS = frozenset({"gloss_gu", "gloss_geometry_deg", "illumination_deg"})
 #: How far (s) the chain's time may run ahead of the writer's clock and still be carried forward, and
 #: how far ahead of the verifier's clock a row may be dated before it is named.
 MAX_CLOCK_SKEW = dt.timedelta(seconds=300)
-#: The most zeros of a form-1 row whose signs :func:`audit_database` tries to restore (2**n hashes).
-LEGACY_ZERO_SIGNS = 10
 #: Tables sealed through ``record_events`` (mutable or not: any UPDATE or DELETE outside the product shows).
 RECORD_TABLES: tuple[str, ...] = (
     "users",
@@ -108,9 +123,6 @@ RECORD_TABLES: tuple[str, ...] = (
     "gloss_readings",
 )
 RECORD_OPS: tuple[str, ...] = ("insert", "update", "delete")
-#: Files of the data folder: the signed checkpoints (one JSON object a line) and the key (0600).
-CHECKPOINT_FILE = "chain-checkpoints.jsonl"
-CHECKPOINT_KEY_FILE = "chain-checkpoint.key"
 
 _TYPES: dict[str, Any] = {
     "id": Integer,
@@ -147,39 +159,6 @@ _TYPES: dict[str, Any] = {
     "chain_sha256": String,
 }
 
-PAYLOAD_COLUMNS: dict[Chain, tuple[str, ...]] = {
-    "measurements": (
-        "client_id",
-        "panel_id",
-        "instrument_id",
-        "calibration_id",
-        "operator",
-        "measured_at",
-        "received_at",
-        "illuminant",
-        "observer",
-        "geometries_deg",
-        "lab",
-        "wavelengths_nm",
-        "spectra",
-        "gloss_gu",
-        "gloss_geometry_deg",
-        "payload_sha256",
-        "supersedes_id",
-        "correction_reason",
-        "created_by_id",
-    ),
-    "audit_events": ("at", "actor_id", "action", "entity", "entity_id", "detail"),
-    "record_events": ("at", "entity", "entity_id", "op", "state_sha256"),
-}
-#: Payload columns added after the chain: name → the value rows written before the column existed read.
-#: A row's payload holds such a column only when its value differs from that value (a row without the
-#: column, e.g. during revision 0004's back-fill, reads it too).
-OPTIONAL_COLUMNS: dict[Chain, dict[str, Any]] = {
-    "measurements": {"illumination_deg": ILLUMINATION_DEG, "texture": None},
-    "audit_events": {},
-    "record_events": {},
-}
 
 HEADS: TableClause = table(
     "ledger_heads",
@@ -200,110 +179,6 @@ def chain_table(chain: Chain, *, optional: bool = True) -> TableClause:
     extra = tuple(OPTIONAL_COLUMNS[chain]) if optional else ()
     names = ("id", *PAYLOAD_COLUMNS[chain], *extra, "row_sha256", "chain_sha256")
     return table(chain, *(column(n, _TYPES[n]) for n in names))
-
-
-# --- canonical form -----------------------------------------------------------------------------------
-
-
-def _number(value: float, form: int) -> float:
-    """A number as hashed: a float; form 2 also folds −0.0 into 0.0."""
-    number = float(value)
-    return 0.0 if form >= 2 and number == 0.0 else number
-
-
-def _floats(value: Any, form: int = 2) -> Any:
-    if isinstance(value, bool) or value is None or isinstance(value, str):
-        return value
-    if isinstance(value, (int, float)):
-        return _number(value, form)
-    if isinstance(value, Mapping):
-        return {str(k): _floats(v, form) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_floats(v, form) for v in value]
-    return value
-
-
-def _scalar(value: Any) -> Any:
-    if isinstance(value, dt.datetime):
-        if value.tzinfo is None:
-            value = value.replace(tzinfo=dt.UTC)
-        return value.astimezone(dt.UTC).isoformat(timespec="microseconds")
-    if isinstance(value, uuid.UUID):
-        return str(value)
-    if hasattr(value, "value") and not isinstance(value, (int, float, str)):  # an enum member
-        return value.value
-    return value
-
-
-def _canonical(name: str, value: Any, form: int = 2) -> Any:
-    return _floats(value, form) if name in JSON_COLUMNS or name in FLOAT_COLUMNS else _scalar(value)
-
-
-def _digest(payload: Mapping[str, Any]) -> str:
-    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False)
-    return hashlib.sha256(text.encode("ascii")).hexdigest()
-
-
-def _payload(chain: Chain, row: Mapping[Any, Any], form: int) -> dict[str, Any]:
-    payload = {name: _canonical(name, row[name], form) for name in PAYLOAD_COLUMNS[chain]}
-    for name, old in OPTIONAL_COLUMNS[chain].items():
-        value = _canonical(name, row.get(name, old), form)
-        if value != _canonical(name, old, form):
-            payload[name] = value
-    return payload
-
-
-def payload_sha256(chain: Chain, row: Mapping[Any, Any], *, form: int = 2) -> str:
-    """SHA-256 (hex) of the canonical payload of *row* (a mapping with every payload column).
-
-    An optional column (:data:`OPTIONAL_COLUMNS`) enters the payload only when *row* holds it with a
-    value other than its old-row value. *form* 1 is the form of rows written before revision 0009.
-    """
-    return _digest(_payload(chain, row, form))
-
-
-def _zero_paths(value: Any, path: tuple[Any, ...] = ()) -> Iterator[tuple[Any, ...]]:
-    if isinstance(value, float) and value == 0.0:
-        yield path
-    elif isinstance(value, dict):
-        for k, v in value.items():
-            yield from _zero_paths(v, (*path, k))
-    elif isinstance(value, list):
-        for i, v in enumerate(value):
-            yield from _zero_paths(v, (*path, i))
-
-
-def _negated(payload: Any, path: tuple[Any, ...]) -> Any:
-    if not path:
-        return -0.0
-    head, rest = path[0], path[1:]
-    if isinstance(payload, dict):
-        return {k: (_negated(v, rest) if k == head else v) for k, v in payload.items()}
-    return [(_negated(v, rest) if i == head else v) for i, v in enumerate(payload)]
-
-
-def legacy_hashes(chain: Chain, row: Mapping[Any, Any]) -> Iterator[str]:
-    """The form-1 hashes *row* may have been written with: as read, then with the sign of zeros restored.
-
-    Form 1 hashed −0.0 as ``-0.0``; the storage returns 0.0, so the sign is tried back on every subset of
-    the row's zeros (none when it holds more than :data:`LEGACY_ZERO_SIGNS`).
-    """
-    payload = _payload(chain, row, 1)
-    yield _digest(payload)
-    zeros = list(_zero_paths(payload))
-    if len(zeros) > LEGACY_ZERO_SIGNS:
-        return
-    for size in range(1, len(zeros) + 1):
-        for subset in itertools.combinations(zeros, size):
-            signed: Any = payload
-            for path in subset:
-                signed = _negated(signed, path)
-            yield _digest(signed)
-
-
-def link_sha256(previous: str, row_sha256: str) -> str:
-    """SHA-256 (hex) of the previous link followed by this row's payload hash (both hex)."""
-    return hashlib.sha256((previous + row_sha256).encode("ascii")).hexdigest()
 
 
 # --- appending ----------------------------------------------------------------------------------------
@@ -634,452 +509,3 @@ def _seal_flushed(session: Session, _context: UOWTransaction) -> None:
         conn = session.connection()
         for name, row_id, op in sorted(changes, key=lambda c: (RECORD_OPS.index(c[2]), c[0], c[1])):
             record_change(conn, name, row_id, op)
-
-
-# --- checkpoints --------------------------------------------------------------------------------------
-
-
-def _create_private(path: Path, data: bytes) -> None:
-    """Create *path* with *data*, mode 0600, failing if anything (a link included) is already there."""
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
-    try:
-        os.write(fd, data)
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def _read_regular(path: Path) -> bytes | None:
-    """The bytes of *path* when it is a regular file (not a link); ``None`` when absent."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
-    except FileNotFoundError:
-        return None
-    try:
-        with os.fdopen(fd, "rb", closefd=False) as f:
-            return f.read()
-    finally:
-        os.close(fd)
-
-
-def checkpoint_key(folder: Path, *, create: bool) -> bytes | None:
-    """The checkpoint key of the data *folder* (32 random bytes, hex in a 0600 file); made when *create*."""
-    path = folder / CHECKPOINT_KEY_FILE
-    data = _read_regular(path)
-    if data is None and create:
-        try:
-            _create_private(path, secrets.token_hex(32).encode("ascii") + b"\n")
-        except FileExistsError:
-            pass  # another process made it first
-        data = _read_regular(path)
-    return None if data is None else bytes.fromhex(data.decode("ascii").strip())
-
-
-def database_identity(url: str) -> str:
-    """The name checkpoints give a database: the SQLite file's absolute path, or host:port/name."""
-    from sqlalchemy.engine import make_url
-
-    parsed = make_url(url)
-    if parsed.get_backend_name() == "sqlite":
-        return f"sqlite:{Path(parsed.database or '').resolve()}"
-    return f"{parsed.get_backend_name()}:{parsed.host}:{parsed.port or 5432}/{parsed.database}"
-
-
-def _signature(key: bytes, body: Mapping[str, Any]) -> str:
-    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
-    return hmac.new(key, text.encode("ascii"), hashlib.sha256).hexdigest()
-
-
-def write_checkpoint(source: Connection | Session | Report, folder: Path, database: str) -> dict[str, Any]:
-    """Append one signed checkpoint of every chain's length and head to *folder*'s checkpoint file.
-
-    *source*: a :class:`Report` (the heads it verified) or a connection (the committed heads, read now).
-    *database* is :func:`database_identity` of the database. The key is made on first use. Returns the
-    line written (without its signature).
-    """
-    key = checkpoint_key(folder, create=True)
-    if key is None:  # made just now, then removed by someone else
-        raise FileNotFoundError(folder / CHECKPOINT_KEY_FILE)
-    if isinstance(source, Report):
-        chains = {c: {"length": source.rows[c], "head_sha256": source.heads[c]} for c in sorted(source.rows)}
-    else:
-        heads = source.execute(
-            select(HEADS.c.chain, HEADS.c.length, HEADS.c.head_sha256).where(HEADS.c.chain.in_(CHAINS))
-        ).all()
-        chains = {str(h.chain): {"length": int(h.length), "head_sha256": str(h.head_sha256)} for h in heads}
-    body: dict[str, Any] = {
-        "database": database,
-        "at": utcnow().isoformat(timespec="microseconds"),
-        "chains": chains,
-    }
-    line = json.dumps({**body, "hmac": _signature(key, body)}, sort_keys=True, separators=(",", ":"))
-    fd = os.open(folder / CHECKPOINT_FILE, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o600)
-    try:
-        os.write(fd, (line + "\n").encode("ascii"))
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-    return body
-
-
-@dataclass(frozen=True)
-class Checkpoint:
-    """One signed checkpoint line: when, and each chain's length and head link then."""
-
-    line: int
-    at: str
-    chains: dict[str, tuple[int, str]]
-
-
-# --- verification -------------------------------------------------------------------------------------
-
-FindingKind = Literal[
-    "unhashed",
-    "row_changed",
-    "link_broken",
-    "backdated",
-    "future",
-    "head_mismatch",
-    "rewound",
-    "checkpoint_mismatch",
-    "checkpoint_invalid",
-    "record_changed",
-    "record_unsealed",
-    "record_missing",
-]
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One break: the chain or table, its kind, the row id (``None``: the chain as a whole), in words."""
-
-    chain: str
-    kind: FindingKind
-    id: int | None
-    message: str
-
-    def as_dict(self) -> dict[str, Any]:
-        """The finding as a JSON object (``chain``, ``kind``, ``id``, ``message``)."""
-        return asdict(self)
-
-
-@dataclass(frozen=True)
-class Verdict:
-    """Result of :func:`verify` for one chain: rows checked and the first finding (``None``: intact)."""
-
-    chain: Chain
-    rows: int
-    broken: str | None = None
-    head_sha256: str = GENESIS
-
-
-@dataclass
-class Report:
-    """Result of :func:`audit_database`: rows and head of each chain, checkpoints read, every finding."""
-
-    rows: dict[str, int] = field(default_factory=dict)
-    heads: dict[str, str] = field(default_factory=dict)
-    checkpoints: int = 0
-    findings: list[Finding] = field(default_factory=list)
-
-    @property
-    def intact(self) -> bool:
-        """No finding at all."""
-        return not self.findings
-
-
-def read_checkpoints(folder: Path | None, database: str) -> tuple[list[Checkpoint], list[Finding]]:
-    """The checkpoints of *database* in *folder*'s file, and a finding for each line that is not genuine."""
-    if folder is None:
-        return [], []
-    try:
-        data = _read_regular(folder / CHECKPOINT_FILE)
-        key = checkpoint_key(folder, create=False) if data is not None else None
-    except (OSError, ValueError) as exc:  # a link, a folder, an unreadable or mangled key
-        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        return [], [
-            Finding("checkpoints", "checkpoint_invalid", None, f"{CHECKPOINT_FILE}: cannot be read ({why})")
-        ]
-    if data is None:
-        return [], []
-    found: list[Checkpoint] = []
-    bad: list[Finding] = []
-    for number, raw in enumerate(data.decode("utf-8", "replace").splitlines(), start=1):
-        if not raw.strip():
-            continue
-        try:
-            obj = json.loads(raw)
-            body = {k: obj[k] for k in ("database", "at", "chains")}
-            genuine = key is not None and hmac.compare_digest(str(obj["hmac"]), _signature(key, body))
-            chains = {str(c): (int(v["length"]), str(v["head_sha256"])) for c, v in body["chains"].items()}
-        except (ValueError, KeyError, TypeError, AttributeError):
-            genuine, chains, body = False, {}, {"database": database, "at": ""}
-        if not genuine:
-            why = "no key to check it with" if key is None else "its signature does not recompute"
-            bad.append(
-                Finding("checkpoints", "checkpoint_invalid", None, f"{CHECKPOINT_FILE} line {number}: {why}")
-            )
-        elif body["database"] == database:
-            found.append(Checkpoint(number, str(body["at"]), chains))
-    return found, bad
-
-
-def _row_matches(chain: Chain, row: Mapping[Any, Any], legacy: bool) -> bool:
-    stored = row["row_sha256"]
-    if payload_sha256(chain, row) == stored:
-        return True
-    return legacy and any(h == stored for h in legacy_hashes(chain, row))
-
-
-def _rows_by_id(conn: Connection | Session, tbl: TableClause, batch: int) -> Iterator[RowMapping]:
-    """Every row of *tbl* in id order, read *batch* rows at a time (keyset pages: no OFFSET scans)."""
-    last_id: int | None = None
-    while True:
-        query = select(tbl).order_by(tbl.c.id).limit(batch)
-        if last_id is not None:
-            query = query.where(tbl.c.id > last_id)
-        rows = conn.execute(query).mappings().all()
-        if not rows:
-            return
-        yield from rows
-        last_id = int(rows[-1]["id"])
-
-
-def _verify_chain(
-    conn: Connection | Session,
-    chain: Chain,
-    report: Report,
-    checkpoints: list[Checkpoint],
-    now: dt.datetime,
-    batch: int,
-    records: dict[tuple[str, str], tuple[str, str | None]] | None = None,
-) -> None:
-    tbl = chain_table(chain)
-    time_col = TIME_COLUMN[chain]
-    found = report.findings
-    head_cols = [HEADS.c.length, HEADS.c.head_sha256, HEADS.c.backfill_last_id]
-    has_legacy = "legacy_last_id" in _head_columns(conn)
-    if has_legacy:
-        head_cols.append(HEADS.c.legacy_last_id)
-    head = (
-        conn.execute(select(*head_cols).select_from(HEADS).where(HEADS.c.chain == chain)).mappings().first()
-    )
-    unordered_through = int(head["backfill_last_id"] or 0) if head is not None else 0
-    legacy_through = int(head["legacy_last_id"] or 0) if head is not None and has_legacy else 1 << 62
-    marks: dict[int, list[Checkpoint]] = {}
-    for cp in checkpoints:
-        if chain in cp.chains:
-            marks.setdefault(cp.chains[chain][0], []).append(cp)
-    for cp in marks.get(0, []):
-        if cp.chains[chain][1] != GENESIS:
-            found.append(_mismatch(chain, cp, None))
-    previous, previous_at, count, last_id = GENESIS, None, 0, None
-    future_limit = now + MAX_CLOCK_SKEW
-    for row in _rows_by_id(conn, tbl, batch):
-        rid = int(row["id"])
-        count += 1
-        last_id = rid
-        if row["row_sha256"] is None or row["chain_sha256"] is None:
-            found.append(
-                Finding(chain, "unhashed", rid, f"{chain} id {rid}: no hash (written around the chain)")
-            )
-            continue
-        try:
-            same = _row_matches(chain, row, rid <= legacy_through)
-        except (ValueError, TypeError):  # a value no writer of the product stores (NaN …)
-            same = False
-        if not same:
-            found.append(
-                Finding(chain, "row_changed", rid, f"{chain} id {rid}: payload hash differs (row changed)")
-            )
-        if link_sha256(previous, row["row_sha256"]) != row["chain_sha256"]:
-            found.append(
-                Finding(
-                    chain,
-                    "link_broken",
-                    rid,
-                    f"{chain} id {rid}: link to the previous row differs (row removed or inserted)",
-                )
-            )
-        for cp in marks.get(count, []):
-            if cp.chains[chain][1] != row["chain_sha256"]:
-                found.append(_mismatch(chain, cp, rid))
-        at = row[time_col]
-        if at is not None and at > future_limit:
-            found.append(
-                Finding(
-                    chain,
-                    "future",
-                    rid,
-                    f"{chain} id {rid}: {time_col} {at.isoformat()} is in the future",
-                )
-            )
-        elif at is not None:
-            late = rid > unordered_through  # rows back-filled by the migration kept their old times
-            if late and previous_at is not None and at < previous_at:
-                found.append(
-                    Finding(
-                        chain,
-                        "backdated",
-                        rid,
-                        f"{chain} id {rid}: {time_col} {at.isoformat()} earlier than its predecessor",
-                    )
-                )
-            previous_at = at if previous_at is None or at > previous_at else previous_at
-        if records is not None and same:
-            records[(str(row["entity"]), str(row["entity_id"]))] = (str(row["op"]), row["state_sha256"])
-        previous = row["chain_sha256"]
-    report.rows[chain] = count
-    report.heads[chain] = previous
-    for length, cps in sorted(marks.items()):
-        if length > count:
-            cp = cps[-1]
-            found.append(
-                Finding(
-                    chain,
-                    "rewound",
-                    None,
-                    f"{chain}: checkpoint of {cp.at} (line {cp.line}) recorded {length} rows, "
-                    f"the table holds {count} (rows removed after id {last_id})",
-                )
-            )
-    if head is None:
-        found.append(Finding(chain, "head_mismatch", None, f"{chain}: head row missing from ledger_heads"))
-    elif int(head["length"]) == count and head["head_sha256"] != previous:
-        found.append(
-            Finding(
-                chain,
-                "head_mismatch",
-                None,
-                f"{chain}: the last row is not the one the head records (rows replaced)",
-            )
-        )
-    elif int(head["length"]) != count:
-        found.append(
-            Finding(
-                chain,
-                "head_mismatch",
-                None,
-                f"{chain}: head records {head['length']} rows, table holds {count} "
-                + (
-                    f"(rows removed after id {last_id})"
-                    if int(head["length"]) > count
-                    else "(rows appended without moving the head)"
-                ),
-            )
-        )
-
-
-def _mismatch(chain: Chain, cp: Checkpoint, rid: int | None) -> Finding:
-    length = cp.chains[chain][0]
-    return Finding(
-        chain,
-        "checkpoint_mismatch",
-        rid,
-        f"{chain}: row {length} is not the one the checkpoint of {cp.at} (line {cp.line}) recorded "
-        "(rows replaced since)",
-    )
-
-
-def _head_columns(conn: Connection | Session) -> set[str]:
-    from sqlalchemy import inspect
-
-    bind = conn.connection() if isinstance(conn, Session) else conn
-    return {c["name"] for c in inspect(bind).get_columns("ledger_heads")}
-
-
-def _verify_records(
-    conn: Connection | Session,
-    report: Report,
-    records: dict[tuple[str, str], tuple[str, str | None]],
-    batch: int,
-) -> None:
-    from sqlalchemy import inspect
-
-    bind = conn.connection() if isinstance(conn, Session) else conn
-    present = set(inspect(bind).get_table_names())
-    seen: set[tuple[str, str]] = set()
-    for name in RECORD_TABLES:
-        if name not in present:
-            continue
-        tbl = _record_table(name)
-        for row in _rows_by_id(conn, tbl, batch):
-            row_id = int(row["id"])
-            key = (name, str(row_id))
-            seen.add(key)
-            sealed = records.get(key)
-            if sealed is None or sealed[0] == "delete":
-                report.findings.append(
-                    Finding(
-                        name,
-                        "record_unsealed",
-                        row_id,
-                        f"{name} id {row_id}: no record event (written around the product)",
-                    )
-                )
-            elif sealed[1] != state_sha256(name, row):
-                report.findings.append(
-                    Finding(
-                        name,
-                        "record_changed",
-                        row_id,
-                        f"{name} id {row_id}: differs from its last record event (changed outside the product)",
-                    )
-                )
-    for (name, rid), (op, _state) in sorted(records.items()):
-        if op != "delete" and (name, rid) not in seen and name in present:
-            report.findings.append(
-                Finding(
-                    name,
-                    "record_missing",
-                    int(rid),
-                    f"{name} id {rid}: sealed but gone (deleted outside the product)",
-                )
-            )
-
-
-def audit_database(
-    conn: Connection | Session,
-    *,
-    checkpoint_folder: Path | None = None,
-    database: str | None = None,
-    now: dt.datetime | None = None,
-    batch: int = 1000,
-) -> Report:
-    """Verify every chain, every sealed record table and the checkpoints of *checkpoint_folder*.
-
-    *database*: :func:`database_identity` of the database (the checkpoints of other databases in the
-    folder are skipped); *now*: the verifier's clock (rows dated beyond it plus the skew are named).
-    Reads in batches of *batch* rows; returns a :class:`Report` holding every finding.
-    """
-    from sqlalchemy import inspect
-
-    report = Report()
-    checkpoints, bad = read_checkpoints(checkpoint_folder, database or "")
-    report.checkpoints = len(checkpoints)
-    report.findings.extend(bad)
-    now = utcnow() if now is None else now
-    bind = conn.connection() if isinstance(conn, Session) else conn
-    present = set(inspect(bind).get_table_names())
-    records: dict[tuple[str, str], tuple[str, str | None]] = {}
-    for chain in (*READING_CHAINS, "record_events"):
-        if chain in present:
-            _verify_chain(
-                conn, chain, report, checkpoints, now, batch, records if chain == "record_events" else None
-            )
-    if "record_events" in present:
-        _verify_records(conn, report, records, batch)
-    return report
-
-
-def verify_chain(conn: Connection | Session, chain: Chain, *, batch: int = 1000) -> Verdict:
-    """Recompute *chain* in id order and compare with the stored hashes and the head row (first finding)."""
-    report = Report()
-    _verify_chain(conn, chain, report, [], utcnow(), batch)
-    first = next((f.message for f in report.findings), None)
-    return Verdict(chain, report.rows.get(chain, 0), first, report.heads.get(chain, GENESIS))
-
-
-def verify(conn: Connection | Session) -> list[Verdict]:
-    """Verify the reading chains (measurements, then audit events); see :func:`audit_database` for all."""
-    return [verify_chain(conn, chain) for chain in READING_CHAINS]

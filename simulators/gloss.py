@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from simulators.faults import FaultPlan
+from station.drivers.families import FAMILIES
 
 if TYPE_CHECKING:
     from simulators.config import SimulatorConfig
@@ -46,7 +47,8 @@ __all__ = ["GlossDevice", "GlossPhysics", "HidBridgeServer", "build_device", "re
 REPORT = 64
 GEOMETRIES = (20, 60, 85)
 PATH = b"/sim/hidraw0"
-VID, PID = 0x1209, 0xCA60
+#: The USB ids the simulated meter presents: the gloss family's (``station.drivers.families``).
+VID, PID = next(f for f in FAMILIES if f.name == "gloss").device_id()
 
 
 def _xor(data: bytes) -> int:

@@ -18,9 +18,13 @@ from typing import Any
 import usb.backend
 import usb.core
 
+from station.drivers.families import FAMILIES
+
 __all__ = ["SimUsbBackend", "SimUsbDevice"]
 
 PACKET = 64
+#: The ids a simulated device presents by default: the ma3 family's (``station.drivers.families``).
+MA3_USB_ID = next(f for f in FAMILIES if f.name == "ma3").device_id()
 
 
 @dataclass(eq=False)
@@ -28,8 +32,8 @@ class SimUsbDevice:
     """One simulated USB device: ids, strings and the firmware behind its bulk endpoints."""
 
     firmware: Any
-    vid: int = 0x1209
-    pid: int = 0xCA03
+    vid: int = MA3_USB_ID[0]
+    pid: int = MA3_USB_ID[1]
     manufacturer: str = "CACAD Sim"
     product: str = "MA3 simulated spectrophotometer"
     serial: str = "300456"

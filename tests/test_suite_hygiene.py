@@ -41,6 +41,7 @@ SUBPROCESS_ALLOWED = {
     "tests/ui/conftest.py": "the viewer suite's Xvfb, started at import for the whole test run",
     "tests/test_processes.py": "a process deliberately left running, for the leftover check to find",
     "tests/soak/_fronts.py": "fronts killed at random (SIGKILL to their own process groups) and restarted",
+    "tests/serve_process.py": "ServeProcess owns its `station serve` child: stop() interrupts then kills it",
 }
 
 #: The project's own top-level packages (setuptools' list plus the benchmarks and the tests).

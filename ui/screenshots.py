@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
@@ -23,6 +24,8 @@ from ui.widgets.screens import LazyScreen
 
 if TYPE_CHECKING:
     from ui.app import MainWindow
+    from ui.widgets.instruments_screen import InstrumentsScreen
+    from ui.widgets.qa_screen import QAScreen
 
 Screen = TypeVar("Screen", bound=QWidget)
 
@@ -107,11 +110,7 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     """Write ``design.png``, ``file-menu.png``, ``tweaker.png``, ``moodboard.png``, ``library.png``,
     ``instruments.png``, ``qa.png``, ``qc.png`` (with *scan*), ``formulation.png`` to *out*."""
     from ui.app import MainWindow
-    from ui.widgets.formulation_screen import FormulationScreen
-    from ui.widgets.instruments_screen import InstrumentsScreen
-    from ui.widgets.library_screen import LibraryScreen
-    from ui.widgets.qa_screen import QAScreen
-    from ui.widgets.tweaker_screen import TweakerScreen
+    from ui.models.measure_db import LocalSink
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -119,8 +118,6 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
     if app is None:
         raise RuntimeError("create the QApplication before taking screenshots")
     scratch = tempfile.TemporaryDirectory()
-    from ui.models.measure_db import LocalSink
-
     sink = LocalSink(
         f"sqlite:///{Path(scratch.name) / 'station.sqlite3'}", Path(scratch.name) / "outbox.sqlite3"
     )
@@ -136,88 +133,19 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         written.append(path)
 
     try:
-        d = win.designer
-        d.keep("as designed")
-        d.move_face(18.0, -44.0)
-        d.end_drag()
-        d.set_gloss(70.0)
-        d.end_drag()
-        d.keep("bluer face, 70 GU")
-        win.view_panel.shape.setCurrentText("speedshape")
-        win.view_panel.model.update(yaw_deg=-15.0, pitch_deg=5.0)
-        shot("design")
+        _design_shots(win, shot)
         file_menu_shot(win, out / "file-menu.png")
         written.append(out / "file-menu.png")
-
-        win.tabs.setCurrentWidget(win.screens["Tweaker"])
-        tw = _screen(win, "Tweaker", TweakerScreen).canvas
-        _settle(win)
-        tw.wait_idle()
-        theta = np.where(tw.scene.mask, tw.scene.aspecular_deg, np.inf)
-        y, x = np.unravel_index(np.argmin(np.abs(theta - 30.0)), theta.shape)
-        tw.press((int(x), int(y)))
-        tw.adjust("H", 10.0)
-        shot("tweaker")
-
-        with tempfile.TemporaryDirectory() as tmp:
-            photo = demo_photo(Path(tmp) / "demo-photo.png")
-            mb = win.moodboard
-            mb.add_image(str(photo), 20.0, 20.0, 2.0)
-            win.tabs.setCurrentWidget(win.screens["Mood board"])
-            mb.drop("face", 20 + 2 * 70, 20 + 2 * 60)
-            mb.drop("flop", 20 + 2 * 125, 20 + 2 * 118)
-            mb.drop("gloss", 20 + 2 * 58, 20 + 2 * 52)
-            mb.end_drop()
-            shot("moodboard")
-
-        win.tabs.setCurrentWidget(win.screens["Library"])
-        lib = _screen(win, "Library", LibraryScreen)
-        lib.snap()
-        _wait(lambda: lib.idle, 300)  # thumbnails and ColorSnap run in the background
-        shot("library")
-
-        win.tabs.setCurrentWidget(win.screens["Instruments"])
-        inst = _screen(win, "Instruments", InstrumentsScreen)
-        if scan:
-            inst.device.setCurrentText("sim:ma6")
-            inst.connect_device()
-            _wait(lambda: inst.idle, 60)
-            inst.gloss_device.setCurrentText("sim:gloss")
-            inst.toggle_gloss()
-            _wait(lambda: inst.idle, 60)
-            answer_calibration(win, inst)
-            inst.job.setText("J-2026-0113")
-            inst.part.setCurrentText("door")
-            inst.substrate.setText("steel, e-coat")
-            inst.notes.setPlainText("front left door, centre")
-            inst.scan()
-            _wait(lambda: inst.idle, 60)
-            inst.job_history()
-            _wait(lambda: inst.idle, 60)
-        shot("instruments")
-
-        win.tabs.setCurrentWidget(win.screens["QA"])
-        qa = _screen(win, "QA", QAScreen)
-        if scan:
-            qa.load_stored()
-        qa.panel_a.setCurrentText("palette: as designed")
-        qa.panel_b.setCurrentText("palette: bluer face, 70 GU")
-        qa.beta.setValue(4)
-        qa.run()
-        _wait(lambda: qa.report is not None and (qa.task is None or not qa.task.isRunning()), 120)
-        shot("qa")
-
+        _tweaker_shot(win, shot)
+        _moodboard_shot(win, shot)
+        _library_shot(win, shot)
+        inst = _instruments_shot(win, shot, scan)
+        qa = _qa_shot(win, shot, scan)
         if scan:
             qc_shot(win, inst)
             shot("qc")
             win.tabs.setCurrentWidget(win.screens["QA"])
-
-        qa.send_btn.click()  # the corrected paint goes on to formulation
-        chem = _screen(win, "Formulation", FormulationScreen)
-        for step in (chem.run_formulate, chem.run_loop):
-            step()
-            _wait(lambda: chem.idle, 120)
-        shot("formulation")
+        _formulation_shot(win, shot, qa)
     finally:
         win.close()
         win.deleteLater()
@@ -228,3 +156,115 @@ def take_screenshots(out: str | Path, scan: bool = True) -> list[Path]:
         QCoreApplication.processEvents()
         scratch.cleanup()
     return written
+
+
+Shot = Callable[[str], None]
+
+
+def _design_shots(win: MainWindow, shot: Shot) -> None:
+    """The designer with two kept designs (the second bluer and at 70 GU) on the speedshape."""
+    d = win.designer
+    d.keep("as designed")
+    d.move_face(18.0, -44.0)
+    d.end_drag()
+    d.set_gloss(70.0)
+    d.end_drag()
+    d.keep("bluer face, 70 GU")
+    win.view_panel.shape.setCurrentText("speedshape")
+    win.view_panel.model.update(yaw_deg=-15.0, pitch_deg=5.0)
+    shot("design")
+
+
+def _tweaker_shot(win: MainWindow, shot: Shot) -> None:
+    """The tweaker with the crosshair at 30° aspecular and the hue turned by 10°."""
+    from ui.widgets.tweaker_screen import TweakerScreen
+
+    win.tabs.setCurrentWidget(win.screens["Tweaker"])
+    tw = _screen(win, "Tweaker", TweakerScreen).canvas
+    _settle(win)
+    tw.wait_idle()
+    theta = np.where(tw.scene.mask, tw.scene.aspecular_deg, np.inf)
+    y, x = np.unravel_index(np.argmin(np.abs(theta - 30.0)), theta.shape)
+    tw.press((int(x), int(y)))
+    tw.adjust("H", 10.0)
+    shot("tweaker")
+
+
+def _moodboard_shot(win: MainWindow, shot: Shot) -> None:
+    """The mood board with the demo photo and the three eyedroppers dropped on it."""
+    with tempfile.TemporaryDirectory() as tmp:
+        photo = demo_photo(Path(tmp) / "demo-photo.png")
+        mb = win.moodboard
+        mb.add_image(str(photo), 20.0, 20.0, 2.0)
+        win.tabs.setCurrentWidget(win.screens["Mood board"])
+        mb.drop("face", 20 + 2 * 70, 20 + 2 * 60)
+        mb.drop("flop", 20 + 2 * 125, 20 + 2 * 118)
+        mb.drop("gloss", 20 + 2 * 58, 20 + 2 * 52)
+        mb.end_drop()
+        shot("moodboard")
+
+
+def _library_shot(win: MainWindow, shot: Shot) -> None:
+    """The library after a ColorSnap of the design (thumbnails and the search run in the background)."""
+    from ui.widgets.library_screen import LibraryScreen
+
+    win.tabs.setCurrentWidget(win.screens["Library"])
+    lib = _screen(win, "Library", LibraryScreen)
+    lib.snap()
+    _wait(lambda: lib.idle, 300)
+    shot("library")
+
+
+def _instruments_shot(win: MainWindow, shot: Shot, scan: bool) -> InstrumentsScreen:
+    """The instruments screen; with *scan*, after a paired MA6 + gloss-meter scan of the door."""
+    from ui.widgets.instruments_screen import InstrumentsScreen
+
+    win.tabs.setCurrentWidget(win.screens["Instruments"])
+    inst = _screen(win, "Instruments", InstrumentsScreen)
+    if scan:
+        inst.device.setCurrentText("sim:ma6")
+        inst.connect_device()
+        _wait(lambda: inst.idle, 60)
+        inst.gloss_device.setCurrentText("sim:gloss")
+        inst.toggle_gloss()
+        _wait(lambda: inst.idle, 60)
+        answer_calibration(win, inst)
+        inst.job.setText("J-2026-0113")
+        inst.part.setCurrentText("door")
+        inst.substrate.setText("steel, e-coat")
+        inst.notes.setPlainText("front left door, centre")
+        inst.scan()
+        _wait(lambda: inst.idle, 60)
+        inst.job_history()
+        _wait(lambda: inst.idle, 60)
+    shot("instruments")
+    return inst
+
+
+def _qa_shot(win: MainWindow, shot: Shot, scan: bool) -> QAScreen:
+    """A seam QA of the two kept designs at β = 4° (the stored readings loaded with *scan*)."""
+    from ui.widgets.qa_screen import QAScreen
+
+    win.tabs.setCurrentWidget(win.screens["QA"])
+    qa = _screen(win, "QA", QAScreen)
+    if scan:
+        qa.load_stored()
+    qa.panel_a.setCurrentText("palette: as designed")
+    qa.panel_b.setCurrentText("palette: bluer face, 70 GU")
+    qa.beta.setValue(4)
+    qa.run()
+    _wait(lambda: qa.report is not None and (qa.task is None or not qa.task.isRunning()), 120)
+    shot("qa")
+    return qa
+
+
+def _formulation_shot(win: MainWindow, shot: Shot, qa: QAScreen) -> None:
+    """The corrected paint of the QA sent on to formulation, formulated and run through the closed loop."""
+    from ui.widgets.formulation_screen import FormulationScreen
+
+    qa.send_btn.click()
+    chem = _screen(win, "Formulation", FormulationScreen)
+    for step in (chem.run_formulate, chem.run_loop):
+        step()
+        _wait(lambda: chem.idle, 120)
+    shot("formulation")

@@ -5,63 +5,35 @@ This package builds on :mod:`station.model` only (it never imports :mod:`station
 lighting arrives as plain samples (:class:`Environment`), converted by the caller.
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from station.analysis.errors import AnalysisError, AnalysisInputError
 from station.analysis.options import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, OBJECTIVES
+from station.lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from station.analysis.geometry import SeamGeometry, aspecular_deg, direction, rotated_normals
-    from station.analysis.index import (
-        DE_METHODS,
-        JND_CIE76,
-        GeometryIndex,
-        IndexResult,
-        SeamModel,
-        goniogeometric_index,
-    )
+    from station.analysis.index import JND_CIE76, GeometryIndex, IndexResult, goniogeometric_index
     from station.analysis.qa import SeamReport, as_paint, measurements_under, seam_qa
+    from station.analysis.seam_model import DE_METHODS, SeamModel
     from station.analysis.shading import Environment, environment_colour, point_colour, shade_lab
     from station.analysis.sweep import SweepResult, plot_sweep, seam_sweep
     from station.analysis.trompe import SUBSETS, TrompeResult, inverse_trompe_loeil
 
-#: Names loaded on first use (PEP 562): the analysis imports colour-science and SciPy, which take a
-#: second or more; its errors and the options its fronts list stay cheap for a command line's ``--help``.
+#: Names loaded on first use (PEP 562), by module: the analysis imports colour-science and SciPy, which
+#: take a second or more; its errors and the options its fronts list stay cheap for a command line's
+#: ``--help``.
 _LAZY = {
-    "SeamGeometry": "station.analysis.geometry",
-    "aspecular_deg": "station.analysis.geometry",
-    "direction": "station.analysis.geometry",
-    "rotated_normals": "station.analysis.geometry",
-    "DE_METHODS": "station.analysis.index",
-    "JND_CIE76": "station.analysis.index",
-    "GeometryIndex": "station.analysis.index",
-    "IndexResult": "station.analysis.index",
-    "SeamModel": "station.analysis.index",
-    "goniogeometric_index": "station.analysis.index",
-    "SeamReport": "station.analysis.qa",
-    "as_paint": "station.analysis.qa",
-    "measurements_under": "station.analysis.qa",
-    "seam_qa": "station.analysis.qa",
-    "Environment": "station.analysis.shading",
-    "environment_colour": "station.analysis.shading",
-    "point_colour": "station.analysis.shading",
-    "shade_lab": "station.analysis.shading",
-    "SweepResult": "station.analysis.sweep",
-    "plot_sweep": "station.analysis.sweep",
-    "seam_sweep": "station.analysis.sweep",
-    "SUBSETS": "station.analysis.trompe",
-    "TrompeResult": "station.analysis.trompe",
-    "inverse_trompe_loeil": "station.analysis.trompe",
+    "station.analysis.geometry": ("SeamGeometry", "aspecular_deg", "direction", "rotated_normals"),
+    "station.analysis.seam_model": ("DE_METHODS", "SeamModel"),
+    "station.analysis.index": ("JND_CIE76", "GeometryIndex", "IndexResult", "goniogeometric_index"),
+    "station.analysis.qa": ("SeamReport", "as_paint", "measurements_under", "seam_qa"),
+    "station.analysis.shading": ("Environment", "environment_colour", "point_colour", "shade_lab"),
+    "station.analysis.sweep": ("SweepResult", "plot_sweep", "seam_sweep"),
+    "station.analysis.trompe": ("SUBSETS", "TrompeResult", "inverse_trompe_loeil"),
 }
 
-
-def __getattr__(name: str) -> Any:
-    """Load a name of :data:`_LAZY` from its module the first time it is asked for."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(module), name)
+__getattr__ = lazy_getattr(__name__, _LAZY)
 
 
 __all__ = [

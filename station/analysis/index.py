@@ -13,8 +13,10 @@ Root finding (first crossing, so a non-monotone ΔE(β) never yields a later roo
    difference next to interval j (a local curvature bound), an interval whose bound
    ``max(F_j, F_{j+1}) + K_j h²/8`` reaches 0 is subdivided (16 points, recursively, down to 1e-3°)
    before the first bracketed crossing is accepted.
-3. Two vectorised 32-fold subdivisions of the bracket, then Brent's method (:func:`scipy.optimize.brentq`, ``xtol = 1e-7°``) inside the first bracket of the
-   row(s) that can hold the minimum. Stated resolution: 1e-6° on β_min.
+3. Two vectorised 32-fold subdivisions of the bracket, then Brent's method (:func:`scipy.optimize.brentq`,
+   ``xtol = 1e-7°``) inside the first bracket of the row(s) that can hold the minimum. Stated
+   resolution: 1e-6° on β_min. Steps 2 and 3: :mod:`station.analysis.bracket`; the seam ΔE itself:
+   :class:`station.analysis.seam_model.SeamModel`.
 
 When ΔE stays below ε up to β_max (or up to the angle at which panel B turns away from the viewer),
 the result says so: ``reached = False``, ``beta_min_deg = None`` and the largest ΔE seen.
@@ -29,36 +31,26 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import brentq
 
+from station.analysis.bracket import brent, first_bracket, shrink
 from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import (
     Direction,
     Hinge,
     SeamGeometry,
     check_polar,
-    direction,
-    hinge_azimuth_deg,
-    rotated_normals,
 )
-from station.analysis.shading import Environment, Exposure, environment_colour, point_colour
-from station.model.difference import delta_e
-from station.model.domain import DELTA_E_COMPUTED
+from station.analysis.seam_model import SeamModel
+from station.analysis.shading import Environment, Exposure
 from station.model.domain import JND_CIE76 as DOMAIN_JND_CIE76
-from station.model.shading import aspecular_deg
 
 if TYPE_CHECKING:
     from station.model import FaceFlopTravelGloss
 
 #: ε of the thesis: one JND, in ΔE*ab.
 JND_CIE76 = DOMAIN_JND_CIE76
-#: ΔE formulas accepted (station.model.difference.delta_e).
-DE_METHODS = DELTA_E_COMPUTED
-#: Brent's absolute tolerance on β (degrees); the stated resolution of β_min is 1e-6°.
-BRENT_XTOL_DEG = 1e-7
+#: The stated resolution of β_min (degrees; Brent's tolerance is ``station.analysis.bracket.BRENT_XTOL_DEG``).
 RESOLUTION_DEG = 1e-6
-_GUARD_MIN_WIDTH_DEG = 1e-3
-_GUARD_SUBDIV = 16
 #: Aspecular angles (degrees) scanned when no view is given for an effect paint: the measured range.
 DEFAULT_ASPECULAR_SCAN = tuple(float(a) for a in range(15, 111, 5))
 
@@ -145,13 +137,6 @@ class IndexResult:
         return out
 
 
-def check_method(method: str) -> str:
-    """Validate a ΔE formula name."""
-    if method not in DE_METHODS:
-        raise AnalysisInputError("method", " | ".join(DE_METHODS), method)
-    return method
-
-
 def _check_positive(value: float, field_name: str, upper: float | None = None) -> float:
     try:
         v = float(value)
@@ -170,154 +155,6 @@ def _as_list(values: float | Sequence[float], field_name: str) -> list[float]:
     if not vals:
         raise AnalysisInputError(field_name, "at least one angle in degrees", vals)
     return [check_polar(v, f"{field_name}[{i}]") for i, v in enumerate(vals)]
-
-
-class SeamModel:
-    """Vectorised seam ΔE for a set of geometries: panel A (+z) against panel B rotated by β.
-
-    Rows are geometries (a light/view pair, or a view under an environment). Used by the index, the
-    sweep and the inverse trompe l'oeil.
-    """
-
-    def __init__(
-        self,
-        lights: list[float] | Environment,
-        views: list[float],
-        *,
-        hinge: Hinge = "in-plane",
-        method: str = "cie76",
-        exposure: Exposure = "reference",
-        gloss: bool = False,
-    ) -> None:
-        self.method = check_method(method)
-        hinge_azimuth_deg(hinge)
-        self.hinge = hinge
-        self.exposure = exposure
-        if exposure not in ("reference", "absolute"):
-            raise AnalysisInputError("exposure", '"reference" or "absolute"', exposure)
-        self.gloss = gloss
-        self.env = lights if isinstance(lights, Environment) else None
-        if not isinstance(lights, Environment):
-            if len(lights) != len(views):
-                raise AnalysisInputError("views", f"{len(lights)} view angles (one per light)", len(views))
-            self.light_deg = np.asarray(lights, dtype=float)
-            self.L = direction(self.light_deg)[:, None, :]  # (G, 1, 3)
-        else:
-            self.light_deg = np.full(len(views), np.nan)
-        self.view_deg = np.asarray(views, dtype=float)
-        self.V = direction(self.view_deg)[:, None, :]  # (G, 1, 3)
-        self._alpha = self._din_angles() if self.method == "din6175" else None
-        self._ref_cache: tuple[int, object, NDArray[np.float64]] | None = None
-
-    def _din_angles(self) -> NDArray[np.float64]:
-        """Aspecular angle of each geometry on panel A (degrees, (G,)): the angle DIN 6175-2 weighs by."""
-        if self.env is not None:
-            raise AnalysisInputError(
-                "method",
-                "cie76 | cie94 | cie2000 under an environment (din6175 weighs by the aspecular angle of a point light)",
-                self.method,
-            )
-        alpha = aspecular_deg(self.L[:, 0], self.V[:, 0], np.array([0.0, 0.0, 1.0]))
-        if np.any(alpha <= 0.0):
-            raise AnalysisInputError(
-                "views",
-                "geometries off the specular direction for din6175 (aspecular > 0)",
-                self.view_deg.tolist(),
-            )
-        return alpha
-
-    @property
-    def size(self) -> int:
-        """Number of geometries (rows)."""
-        return len(self.view_deg)
-
-    def colour(
-        self, paint: FaceFlopTravelGloss, normals: NDArray[np.float64], rows: NDArray[np.intp] | None = None
-    ) -> NDArray[np.float64]:
-        """Lab of *paint* on panels with *normals* (B, 3) for each geometry row → (G, B, 3)."""
-        rows = np.arange(self.size) if rows is None else rows
-        V = self.V[rows]
-        if self.env is None:
-            return point_colour(
-                paint, self.L[rows], V, normals[None, :, :], exposure=self.exposure, gloss=self.gloss
-            )
-        out = np.empty((len(rows), len(normals), 3))
-        for i, r in enumerate(rows):
-            out[i] = environment_colour(paint, self.env, self.V[r, 0], normals, gloss=self.gloss)
-        return out
-
-    def reference(
-        self, paint: FaceFlopTravelGloss, rows: NDArray[np.intp] | None = None
-    ) -> NDArray[np.float64]:
-        """Lab of *paint* on panel A for each geometry row → (G, 1, 3)."""
-        return self.colour(paint, np.array([[0.0, 0.0, 1.0]]), rows)
-
-    def delta_e(
-        self,
-        paint_a: FaceFlopTravelGloss,
-        paint_b: FaceFlopTravelGloss,
-        beta_deg: NDArray[np.float64],
-        rows: NDArray[np.intp] | None = None,
-    ) -> NDArray[np.float64]:
-        """Seam ΔE (G, B): paint A on panel A against paint B on panel B rotated by each β (degrees)."""
-        normals = rotated_normals(np.asarray(beta_deg, dtype=float).reshape(-1), self.hinge)
-        ca = self._reference_cached(paint_a, rows)
-        cb = self.colour(paint_b, normals, rows)
-        return self.difference(ca, cb, rows)
-
-    def difference(
-        self, lab_a: NDArray[np.float64], lab_b: NDArray[np.float64], rows: NDArray[np.intp] | None = None
-    ) -> NDArray[np.float64]:
-        """ΔE with this model's formula (reference first), (G, B) for the geometry *rows* (all by default);
-        CIE76 is computed inline (same numbers). DIN 6175-2 weighs each row by its aspecular angle on panel A."""
-        lab_a = np.broadcast_to(lab_a, lab_b.shape)
-        if self.method == "cie76":
-            d = lab_b - lab_a
-            return np.sqrt(np.einsum("...i,...i->...", d, d))
-        alpha = None
-        if self._alpha is not None:
-            per_row = self._alpha if rows is None else self._alpha[rows]
-            alpha = np.broadcast_to(per_row.reshape(-1, *([1] * (lab_b.ndim - 2))), lab_b.shape[:-1])
-        return np.asarray(delta_e(lab_a, lab_b, method=self.method, aspecular_deg=alpha), dtype=float)
-
-    def _reference_cached(
-        self, paint: FaceFlopTravelGloss, rows: NDArray[np.intp] | None
-    ) -> NDArray[np.float64]:
-        key = id(paint)
-        cache = self._ref_cache
-        if cache is None or cache[0] != key or cache[1] is not paint:
-            cache = (key, paint, self.reference(paint))
-            self._ref_cache = cache
-        ref = cache[2]
-        return ref if rows is None else ref[rows]
-
-    def delta_e_rows(
-        self,
-        paint_a: FaceFlopTravelGloss,
-        paint_b: FaceFlopTravelGloss,
-        beta_deg: NDArray[np.float64],
-        rows: NDArray[np.intp],
-    ) -> NDArray[np.float64]:
-        """Seam ΔE (C, B) for candidate rows (C,) each with its own β values (C, B), degrees."""
-        normals = rotated_normals(beta_deg, self.hinge)  # (C, B, 3)
-        ca = self._reference_cached(paint_a, rows)  # (C, 1, 3)
-        if self.env is None:
-            cb = point_colour(
-                paint_b, self.L[rows], self.V[rows], normals, exposure=self.exposure, gloss=self.gloss
-            )
-        else:
-            cb = np.stack(
-                [
-                    environment_colour(paint_b, self.env, self.V[r, 0], normals[i], gloss=self.gloss)
-                    for i, r in enumerate(rows)
-                ]
-            )
-        return self.difference(ca, cb, rows)
-
-    def visible(self, beta_deg: NDArray[np.float64]) -> NDArray[np.bool_]:
-        """(G, B): whether panel B, rotated by β, still faces the viewer (V·N_B > 0.01)."""
-        normals = rotated_normals(np.asarray(beta_deg, dtype=float).reshape(-1), self.hinge)
-        return np.sum(self.V * normals[None, :, :], axis=-1) > 0.01
 
 
 def default_views(paint: FaceFlopTravelGloss, lights: list[float]) -> tuple[list[float], list[float]]:
@@ -436,6 +273,9 @@ def environment_index(
     return goniogeometric_index(paint, env, view, **options)
 
 
+Bracket = tuple[float, float, int, int]  # (lo, hi, geometry row, direction index), F(lo) < 0 <= F(hi)
+
+
 def _search(
     model: SeamModel,
     paint: FaceFlopTravelGloss,
@@ -444,29 +284,24 @@ def _search(
     step: float,
     signs: tuple[float, ...],
 ) -> IndexResult:
+    """β_min over every geometry row and direction: grid brackets, then the first crossing (eq 4.3.1)."""
     n = max(3, math.ceil(bmax / step) + 1)
     grid = np.linspace(0.0, bmax, n)
     signed = np.concatenate([s * grid for s in signs])  # (S·n,)
-    de = model.delta_e(paint, paint, signed)  # (G, S·n)
-    vis = model.visible(signed)
     G, S = model.size, len(signs)
-    de = de.reshape(G, S, n)
-    vis = vis.reshape(G, S, n)
+    de = model.delta_e(paint, paint, signed).reshape(G, S, n)  # (G, S, n)
     # Beyond the first invisible β the row ends.
-    vis = np.cumprod(vis, axis=-1).astype(bool)
+    vis = np.cumprod(model.visible(signed).reshape(G, S, n), axis=-1).astype(bool)
     F = np.where(vis, de - eps, -np.inf)
     max_de = float(np.max(np.where(vis, de, 0.0)))
 
-    brackets: list[tuple[float, float, int, int]] = []  # (lo, hi, g, s) with F(lo) < 0 <= F(hi)
+    brackets: list[Bracket] = []
     for g in range(G):
         for si in range(S):
-            br = _first_bracket(model, paint, eps, signs[si], g, grid, F[g, si])
+            br = first_bracket(model, paint, eps, signs[si], g, grid, F[g, si])
             if br is not None:
                 brackets.append((br[0], br[1], g, si))
-
-    per: tuple[GeometryIndex, ...] = ()
     if not brackets:
-        geom = _geometry_dict(model, 0)
         per = tuple(
             GeometryIndex(_light(model, g), float(model.view_deg[g]), "+" if s > 0 else "-", None)
             for g in range(G)
@@ -476,7 +311,7 @@ def _search(
             None,
             False,
             None,
-            geom,
+            _geometry_dict(model, 0),
             eps,
             model.method,
             bmax,
@@ -484,14 +319,46 @@ def _search(
             message=(f"ε = {eps:g} is never reached up to β = {bmax:g}° (largest ΔE seen {max_de:.3g})"),
             per_geometry=per,
         )
+    (beta, g, si), approx = _roots(model, paint, eps, signs, brackets)
+    per = tuple(
+        GeometryIndex(
+            _light(model, gg), float(model.view_deg[gg]), "+" if signs[ss] > 0 else "-", approx.get((gg, ss))
+        )
+        for gg in range(G)
+        for ss in range(S)
+    )
+    d = "+" if signs[si] > 0 else "-"
+    return IndexResult(
+        beta,
+        True,
+        d,
+        _geometry_dict(model, g),
+        eps,
+        model.method,
+        bmax,
+        max_de,
+        message=f"ΔE reaches {eps:g} at β = {beta:.4f}° (direction {d})",
+        per_geometry=per,
+    )
 
+
+def _roots(
+    model: SeamModel,
+    paint: FaceFlopTravelGloss,
+    eps: float,
+    signs: tuple[float, ...],
+    brackets: list[Bracket],
+) -> tuple[tuple[float, int, int], dict[tuple[int, int], float]]:
+    """The overall first crossing ``(β, row, direction index)`` from non-empty *brackets*, and β of
+    every (row, direction): Brent's root where the bracket can hold the minimum, else linear
+    interpolation inside the bracket."""
     best_hi = min(b[1] for b in brackets)
     known: dict[tuple[int, int], dict[float, float]] = {}
     # Shrink the brackets that can hold the minimum (vectorised, 32-fold per pass, two passes), then
     # run Brent only where the shrunken bracket still can.
     for _ in range(2):
         cand = [i for i, b in enumerate(brackets) if b[0] <= best_hi]
-        shrunk = _shrink(model, paint, eps, signs, [brackets[i] for i in cand], known)
+        shrunk = shrink(model, paint, eps, signs, [brackets[i] for i in cand], known)
         for i, lohi in zip(cand, shrunk, strict=True):
             brackets[i] = (*lohi, brackets[i][2], brackets[i][3])
         best_hi = min(b[1] for b in brackets)
@@ -500,7 +367,7 @@ def _search(
     rest = []
     for lo, hi, g, si in brackets:
         if lo <= best_hi:
-            root = _brent(model, paint, eps, signs[si], g, lo, hi, known.get((g, si)))
+            root = brent(model, paint, eps, signs[si], g, lo, hi, known.get((g, si)))
             approx[(g, si)] = root
             if best is None or root < best[0]:
                 best = (root, g, si)
@@ -512,28 +379,7 @@ def _search(
         for (lo, hi, g, si), (flo, fhi) in zip(rest, F, strict=True):
             approx[(g, si)] = float(lo + (hi - lo) * (-flo) / (fhi - flo)) if fhi > flo else hi
     assert best is not None  # noqa: S101 - brackets is non-empty
-    beta, g, si = best
-    per = tuple(
-        GeometryIndex(
-            _light(model, gg), float(model.view_deg[gg]), "+" if signs[ss] > 0 else "-", approx.get((gg, ss))
-        )
-        for gg in range(G)
-        for ss in range(S)
-    )
-    geom = _geometry_dict(model, g)
-    d = "+" if signs[si] > 0 else "-"
-    return IndexResult(
-        beta,
-        True,
-        d,
-        geom,
-        eps,
-        model.method,
-        bmax,
-        max_de,
-        message=f"ΔE reaches {eps:g} at β = {beta:.4f}° (direction {d})",
-        per_geometry=per,
-    )
+    return best, approx
 
 
 def _light(model: SeamModel, g: int) -> float | None:
@@ -548,115 +394,3 @@ def _geometry_dict(model: SeamModel, g: int) -> dict[str, Any]:
             "hinge": model.hinge if isinstance(model.hinge, str) else float(model.hinge),
         }
     return SeamGeometry(float(model.light_deg[g]), float(model.view_deg[g]), model.hinge).to_dict()
-
-
-def _curvature(row: NDArray[np.float64], h: float) -> NDArray[np.float64]:
-    """Per-interval curvature bound: twice the largest |second difference| / h² next to each interval."""
-    n = len(row)
-    d2 = np.zeros(n)
-    if n >= 3:
-        with np.errstate(invalid="ignore"):  # −inf marks hidden geometries; masked just below
-            inner = np.abs(row[:-2] - 2.0 * row[1:-1] + row[2:]) / (h * h)
-        d2[1:-1] = np.where(np.isfinite(inner), inner, 0.0)
-        d2[0], d2[-1] = d2[1], d2[-2]
-    # interval j spans points j, j+1: neighbours j-1 … j+2
-    padded = np.concatenate([[d2[0]], d2, [d2[-1]]])
-    win = np.maximum.reduce([padded[0 : n - 1], padded[1:n], padded[2 : n + 1], padded[3 : n + 2]])
-    return 2.0 * win
-
-
-def _first_bracket(
-    model: SeamModel,
-    paint: FaceFlopTravelGloss,
-    eps: float,
-    sign: float,
-    g: int,
-    grid: NDArray[np.float64],
-    row: NDArray[np.float64],
-) -> tuple[float, float] | None:
-    """First interval [lo, hi] of *grid* with F(lo) < 0 ≤ F(hi).
-
-    Before accepting it, every earlier interval whose curvature bound
-    ``max(F_j, F_{j+1}) + K_j h²/8`` reaches 0 is searched on a finer grid (a crossing hidden between
-    two grid points needs that much curvature).
-    """
-    hits = np.nonzero(row >= 0.0)[0]
-    end = int(hits[0]) if hits.size else len(row)
-    h = float(grid[1] - grid[0])
-    finite = np.isfinite(row)
-    last = min(end, int(np.sum(np.cumprod(finite)))) - 1  # last index before a hit or the invisible tail
-    if last >= 1:
-        K = _curvature(np.where(finite, row, np.nan), h)
-        bound = np.maximum(row[:last], row[1 : last + 1]) + K[:last] * h * h / 8.0
-        for j in np.nonzero(bound >= 0.0)[0]:
-            sub = _refine(model, paint, eps, sign, g, float(grid[j]), float(grid[j + 1]))
-            if sub is not None:
-                return sub
-    if hits.size and end >= 1 and np.isfinite(row[end - 1]):
-        return float(grid[end - 1]), float(grid[end])
-    return None
-
-
-def _refine(
-    model: SeamModel, paint: FaceFlopTravelGloss, eps: float, sign: float, g: int, lo: float, hi: float
-) -> tuple[float, float] | None:
-    """Look for a crossing hidden inside [lo, hi] on a finer grid (recursive down to 1e-3°)."""
-    if hi - lo < _GUARD_MIN_WIDTH_DEG:
-        return None
-    sub = np.linspace(lo, hi, _GUARD_SUBDIV + 1)
-    F = model.delta_e(paint, paint, sign * sub, rows=np.array([g]))[0] - eps
-    vis = model.visible(sign * sub)[g]
-    F = np.where(np.cumprod(vis).astype(bool), F, -np.inf)
-    return _first_bracket(model, paint, eps, sign, g, sub, F)
-
-
-def _shrink(
-    model: SeamModel,
-    paint: FaceFlopTravelGloss,
-    eps: float,
-    signs: tuple[float, ...],
-    brackets: list[tuple[float, float, int, int]],
-    known: dict[tuple[int, int], dict[float, float]] | None = None,
-) -> list[tuple[float, float]]:
-    """Shrink each bracket 32-fold with one vectorised evaluation for all (keeps the first crossing).
-
-    The values at the new bracket ends are stored in *known* (per (row, direction)) so Brent does not
-    evaluate them again.
-    """
-    subs = np.array([np.linspace(lo, hi, 33) for lo, hi, _, _ in brackets])
-    sign = np.array([signs[si] for _, _, _, si in brackets])[:, None]
-    rows = np.array([g for _, _, g, _ in brackets])
-    F = model.delta_e_rows(paint, paint, sign * subs, rows) - eps
-    out = []
-    for (lo, hi, g, si), sub, row in zip(brackets, subs, F, strict=True):
-        j = int(np.argmax(row >= 0.0))
-        if j > 0 and row[j] >= 0.0 and np.all(row[:j] < 0.0):
-            out.append((float(sub[j - 1]), float(sub[j])))
-            if known is not None:
-                known.setdefault((int(g), int(si)), {}).update(
-                    {float(sub[j - 1]): float(row[j - 1]), float(sub[j]): float(row[j])}
-                )
-        else:
-            out.append((lo, hi))
-    return out
-
-
-def _brent(
-    model: SeamModel,
-    paint: FaceFlopTravelGloss,
-    eps: float,
-    sign: float,
-    g: int,
-    lo: float,
-    hi: float,
-    known: dict[float, float] | None = None,
-) -> float:
-    rows = np.array([g])
-    known = known or {}
-
-    def f(b: float) -> float:
-        if b in known:  # bracket ends already evaluated by the shrink step
-            return known[b]
-        return float(model.delta_e(paint, paint, np.array([sign * b]), rows=rows)[0, 0]) - eps
-
-    return float(brentq(f, lo, hi, xtol=BRENT_XTOL_DEG, rtol=4 * np.finfo(float).eps))

@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -106,6 +107,45 @@ def shade_pair(
     """sRGB picture (h, w, 3) in [0, 1] of :func:`seam_pair_lab` (display values clipped to [0, 1];
     *exposure* scales linear light first, e.g. :func:`display_exposure`)."""
     return lab_picture(seam_pair_lab(paint_a, paint_b, beta_deg, light_deg, view_deg, hinge, size), exposure)
+
+
+#: Fig. 4.4's columns: (title, key of :func:`station.analysis.scenarios.solid_panels`; ``None``: paint A).
+SOLID_GRID_COLUMNS: tuple[tuple[str, str | None], ...] = (
+    ("identical", None),
+    ("optimised at 45°", "single_45"),
+    ("RMS", "rms"),
+    ("per row", "per_geometry"),
+)
+
+
+def draw_solid_grid(
+    axes: Any,
+    paint: Any,
+    panels: Mapping[str, Any],
+    lights_deg: Sequence[float],
+    beta_deg: float,
+    size: tuple[int, int],
+) -> None:
+    """Fig. 4.4 on a (lights × 4) grid of Matplotlib *axes*: per light (degrees, viewed from the normal)
+    the seam of *paint* beside each column's paint B (:data:`SOLID_GRID_COLUMNS`, from the
+    ``TrompeResult`` values of *panels*) misaligned by *beta_deg*, its seam ΔE*ab below."""
+    for i, light in enumerate(lights_deg):
+        for j, (name, key) in enumerate(SOLID_GRID_COLUMNS):
+            if key is None:
+                pb, de = paint, panels["rms"].seam_de_before[i]
+            elif key == "per_geometry":
+                pb, de = panels[key].paints[i], panels[key].seam_de_after[i]
+            else:
+                pb, de = panels[key].paint, panels[key].seam_de_after[i]
+            ax = axes[i, j]
+            ax.imshow(shade_pair(paint, pb, beta_deg, light, 0.0, size=size))
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_xlabel(f"ΔE {de:.2f}", fontsize=8)
+            if i == 0:
+                ax.set_title(name, fontsize=9)
+            if j == 0:
+                ax.set_ylabel(f"light {light:g}°", fontsize=8)
 
 
 def geometry_caption(report: Any, g: int) -> str:

@@ -22,8 +22,9 @@ import numpy as np
 
 from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import Hinge, SeamGeometry
-from station.analysis.index import JND_CIE76, IndexResult, SeamModel, goniogeometric_index
+from station.analysis.index import JND_CIE76, IndexResult, goniogeometric_index
 from station.analysis.options import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG
+from station.analysis.seam_model import SeamModel
 from station.analysis.trompe import Objective, TrompeResult, inverse_trompe_loeil, paint_to_dict
 
 #: Travel / lightness flop beyond which a paint counts as "high travel" in the advice.
@@ -206,23 +207,8 @@ def seam_qa(
     """
     a = as_paint(panel_a, "panel_a", illuminant)
     b = as_paint(panel_b, "panel_b", illuminant)
-    ls, vs = [], []
-    for lt in lights_deg:
-        for asp in aspecular_deg:
-            v = float(asp) - float(lt)
-            if abs(v) <= 89.0:
-                ls.append(float(lt))
-                vs.append(v)
-    if not ls:
-        raise AnalysisInputError(
-            "aspecular_deg", "aspecular angles reachable from the lights (|view| <= 89°)", list(aspecular_deg)
-        )
-    try:
-        beta_ok = bool(np.isfinite(float(beta_deg)) and 0.0 < abs(float(beta_deg)) <= 45.0)
-    except (TypeError, ValueError):
-        beta_ok = False
-    if not beta_ok:
-        raise AnalysisInputError("beta_deg", "0 < |β| <= 45 degrees", beta_deg)
+    ls, vs = _geometries(lights_deg, aspecular_deg)
+    _check_beta(beta_deg)
     model = SeamModel(ls, vs, hinge=hinge, method=method)
     beta = np.array([float(beta_deg)])
     seam = model.delta_e(a, b, beta)[:, 0]
@@ -235,24 +221,7 @@ def seam_qa(
     )
     passed = bool(np.max(seam) <= tolerance)
     diagnosis = _diagnosis(seam, geometric, formulation, tolerance)
-    subset = "solid" if a.is_solid else "full"
-    correction = inverse_trompe_loeil(
-        a,
-        ls,
-        vs,
-        beta_deg=float(beta_deg),
-        objective=objective,
-        subset=subset,
-        hinge=hinge,
-        method=method,
-        epsilon=tolerance,
-    )
-    name = f"{a.name or 'panel A paint'}, corrected for panel B ({beta_deg:+g}°)"
-    correction = replace(
-        correction,
-        paint=correction.paint.replace(name=name),
-        paints=tuple(p.replace(name=name) for p in correction.paints),
-    )
+    correction = _correction(a, ls, vs, float(beta_deg), objective, hinge, method, tolerance)
     geoms = tuple(SeamGeometry(lt, v, hinge) for lt, v in zip(ls, vs, strict=True))
     advice = _advice(a, float(beta_deg), index, seam, geoms, correction, tolerance, hinge, method)
     return SeamReport(
@@ -272,6 +241,65 @@ def seam_qa(
         advice,
         correction,
         _illuminant(illuminant),
+    )
+
+
+def _geometries(
+    lights_deg: Sequence[float], aspecular_deg: Sequence[float]
+) -> tuple[list[float], list[float]]:
+    """Every light (signed polar, degrees) with every aspecular angle on panel A: parallel lists
+    (lights, views) in degrees, views beyond 89° from the normal dropped."""
+    ls, vs = [], []
+    for lt in lights_deg:
+        for asp in aspecular_deg:
+            v = float(asp) - float(lt)
+            if abs(v) <= 89.0:
+                ls.append(float(lt))
+                vs.append(v)
+    if not ls:
+        raise AnalysisInputError(
+            "aspecular_deg", "aspecular angles reachable from the lights (|view| <= 89°)", list(aspecular_deg)
+        )
+    return ls, vs
+
+
+def _check_beta(beta_deg: float) -> None:
+    """Refuse a misalignment outside 0 < |β| <= 45 degrees (or not a number)."""
+    try:
+        beta_ok = bool(np.isfinite(float(beta_deg)) and 0.0 < abs(float(beta_deg)) <= 45.0)
+    except (TypeError, ValueError):
+        beta_ok = False
+    if not beta_ok:
+        raise AnalysisInputError("beta_deg", "0 < |β| <= 45 degrees", beta_deg)
+
+
+def _correction(
+    a: Any,
+    ls: list[float],
+    vs: list[float],
+    beta_deg: float,
+    objective: Objective,
+    hinge: Hinge,
+    method: str,
+    tolerance: float,
+) -> TrompeResult:
+    """The corrected paint for panel B (inverse trompe l'oeil, §4.4), named after panel A's paint."""
+    correction = inverse_trompe_loeil(
+        a,
+        ls,
+        vs,
+        beta_deg=beta_deg,
+        objective=objective,
+        subset="solid" if a.is_solid else "full",
+        hinge=hinge,
+        method=method,
+        epsilon=tolerance,
+    )
+    name = f"{a.name or 'panel A paint'}, corrected for panel B ({beta_deg:+g}°)"
+    return replace(
+        correction,
+        paint=correction.paint.replace(name=name),
+        paints=tuple(p.replace(name=name) for p in correction.paints),
     )
 
 

@@ -18,7 +18,8 @@ from numpy.typing import NDArray
 
 from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import Hinge, check_polar
-from station.analysis.index import JND_CIE76, SeamModel, check_method
+from station.analysis.index import JND_CIE76
+from station.analysis.seam_model import SeamModel, check_method
 
 #: Default misalignments of the figure, degrees.
 DEFAULT_BETAS_DEG = (0.5, 1.0, 2.0, 3.0, 5.0, 8.0)

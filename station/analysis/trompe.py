@@ -24,7 +24,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,8 +33,9 @@ from scipy.optimize import minimize
 from station.analysis.errors import AnalysisError, AnalysisInputError
 from station.analysis.gamut import GamutReport, check_paintable, rgb_bounds
 from station.analysis.geometry import Hinge, SeamGeometry, check_polar
-from station.analysis.index import JND_CIE76, SeamModel
+from station.analysis.index import JND_CIE76
 from station.analysis.options import OBJECTIVES, Objective
+from station.analysis.seam_model import SeamModel
 from station.analysis.shading import Environment, Exposure
 from station.model.colorimetry import lab_to_linear_srgb
 from station.model.domain import FACE_ANGLE_DEG, LAB_RANGES, TRAVEL_MAX_DEG
@@ -340,6 +341,46 @@ def inverse_trompe_loeil(
     TrompeResult
     """
     t0 = time.perf_counter()
+    beta = _check_request(beta_deg, objective, epsilon)
+    names = _subset(paint_a, subset)
+    env, ls, vs = _request_geometries(lights_deg, views_deg)
+    if objective == "single" and not (0 <= at < len(ls)):
+        raise AnalysisInputError("at", f"0 <= at < {len(ls)}", at)
+    model = SeamModel(
+        env if env is not None else ls, vs, hinge=hinge, method=method, exposure=exposure, gloss=gloss
+    )
+    prob = _Problem(paint_a, model, beta, names, allow_face_darker)
+    before = prob.de(prob.x0)
+    sol = _solve_for(prob, objective, at, len(ls), paint_a, allow_face_darker)
+    judged = sol.after if objective != "single" else sol.after[[at]]
+    meets = bool(np.all(judged <= epsilon))
+    msg = _message(meets, judged, before, epsilon, objective, _subset_name(subset, paint_a), sol)
+    return TrompeResult(
+        objective=objective,
+        subset=_subset_name(subset, paint_a),
+        paint=sol.paints[0],
+        paints=sol.paints,
+        geometries=tuple(
+            EnvironmentGeometry(v, hinge) if env is not None else SeamGeometry(lt, v, hinge)
+            for lt, v in zip(ls, vs, strict=True)
+        ),
+        beta_deg=beta,
+        method=method,
+        epsilon=float(epsilon),
+        seam_de_before=tuple(float(v) for v in before),
+        seam_de_after=tuple(float(v) for v in sol.after),
+        meets_epsilon=meets,
+        gamut=sol.gamut,
+        changes=_changes(prob, sol.x_main),
+        solve_ms=(time.perf_counter() - t0) * 1e3,
+        message=msg,
+        converged=sol.converged,
+        per_geometry_changes=sol.per_changes,
+    )
+
+
+def _check_request(beta_deg: float, objective: str, epsilon: float) -> float:
+    """β in degrees, once β (0 < |β| <= 45), the objective and ε (> 0) are known to be valid."""
     try:
         beta = float(beta_deg)
     except (TypeError, ValueError) as exc:
@@ -350,87 +391,85 @@ def inverse_trompe_loeil(
         raise AnalysisInputError("objective", " | ".join(OBJECTIVES), objective)
     if not (np.isfinite(epsilon) and epsilon > 0):
         raise AnalysisInputError("epsilon", "epsilon > 0", epsilon)
-    names = _subset(paint_a, subset)
-    env = lights_deg if isinstance(lights_deg, Environment) else None
-    if isinstance(lights_deg, Environment):
-        vs = (
-            [0.0]
-            if views_deg is None
-            else [check_polar(v, f"views_deg[{i}]") for i, v in enumerate(views_deg)]
-        )
-        if not vs:
-            raise AnalysisInputError("views_deg", "at least one view angle in degrees", list(views_deg or []))
-        ls = [float("nan")] * len(vs)
-    else:
+    return beta
+
+
+def _request_geometries(
+    lights_deg: Sequence[float] | Environment, views_deg: Sequence[float] | None
+) -> tuple[Environment | None, list[float], list[float]]:
+    """The environment (or ``None``) and parallel lists (lights, views) in degrees; lights are NaN
+    under an environment, whose geometries are the views (default: the normal view)."""
+    if not isinstance(lights_deg, Environment):
         ls, vs = _geometries(lights_deg, views_deg)
-    if objective == "single" and not (0 <= at < len(ls)):
-        raise AnalysisInputError("at", f"0 <= at < {len(ls)}", at)
-    model = SeamModel(
-        env if env is not None else ls, vs, hinge=hinge, method=method, exposure=exposure, gloss=gloss
-    )
-    prob = _Problem(paint_a, model, beta, names, allow_face_darker)
-    before = prob.de(prob.x0)
-    converged = True
-    per_changes: tuple[dict[str, float], ...] = ()
-    if objective == "per_geometry":
-        xs, after = [], []
-        for g in range(len(ls)):
-            x, ok = _solve(prob, "single", np.array([g]))
-            converged &= ok
-            xs.append(x)
-            after.append(float(prob.de(x, rows=np.array([g]))[0]))
-        paints = tuple(prob.paint(x) for x in xs)
-        after_arr = np.array(after)
-        per_changes = tuple(_changes(prob, x) for x in xs)
-        x_main = xs[0]
-        reports = [check_paintable(p, allow_face_darker=allow_face_darker, relax_to=paint_a) for p in paints]
-        gamut = GamutReport(
-            all(r.paintable for r in reports),
-            tuple(q for r in reports for q in r.problems),
-            None if any(r.pointer_gamut is None for r in reports) else all(r.pointer_gamut for r in reports),
-        )
-    else:
+        return None, ls, vs
+    vs = [0.0] if views_deg is None else [check_polar(v, f"views_deg[{i}]") for i, v in enumerate(views_deg)]
+    if not vs:
+        raise AnalysisInputError("views_deg", "at least one view angle in degrees", list(views_deg or []))
+    return lights_deg, [float("nan")] * len(vs), vs
+
+
+class _Solution(NamedTuple):
+    """What :func:`_solve_for` found: the paints, seam ΔE after, the main solution and its checks."""
+
+    paints: tuple[Any, ...]
+    after: NDArray[np.float64]
+    x_main: NDArray[np.float64]
+    converged: bool
+    gamut: GamutReport
+    per_changes: tuple[dict[str, float], ...]
+
+
+def _solve_for(
+    prob: _Problem, objective: Objective, at: int, count: int, paint_a: Any, allow_face_darker: bool
+) -> _Solution:
+    """Solve *objective* over the *count* geometries: one paint per geometry for ``per_geometry``,
+    else one paint (for geometry *at* alone with ``single``)."""
+    if objective != "per_geometry":
         rows = np.array([at]) if objective == "single" else None
         x_main, converged = _solve(prob, objective, rows)
-        paints = (prob.paint(x_main),)
-        after_arr = prob.de(x_main)
-        gamut = check_paintable(paints[0], allow_face_darker=allow_face_darker, relax_to=paint_a)
-    judged = after_arr if objective != "single" else after_arr[[at]]
-    meets = bool(np.all(judged <= epsilon))
+        paint = prob.paint(x_main)
+        gamut = check_paintable(paint, allow_face_darker=allow_face_darker, relax_to=paint_a)
+        return _Solution((paint,), prob.de(x_main), x_main, converged, gamut, ())
+    converged = True
+    xs, after = [], []
+    for g in range(count):
+        x, ok = _solve(prob, "single", np.array([g]))
+        converged &= ok
+        xs.append(x)
+        after.append(float(prob.de(x, rows=np.array([g]))[0]))
+    paints = tuple(prob.paint(x) for x in xs)
+    reports = [check_paintable(p, allow_face_darker=allow_face_darker, relax_to=paint_a) for p in paints]
+    gamut = GamutReport(
+        all(r.paintable for r in reports),
+        tuple(q for r in reports for q in r.problems),
+        None if any(r.pointer_gamut is None for r in reports) else all(r.pointer_gamut for r in reports),
+    )
+    return _Solution(paints, np.array(after), xs[0], converged, gamut, tuple(_changes(prob, x) for x in xs))
+
+
+def _message(
+    meets: bool,
+    judged: NDArray[np.float64],
+    before: NDArray[np.float64],
+    epsilon: float,
+    objective: str,
+    subset: str,
+    sol: _Solution,
+) -> str:
+    """One sentence on the solution: ε met or not (worst seam ΔE), out of gamut, not converged."""
     worst = float(np.max(judged))
     if meets:
         msg = f"seam ΔE ≤ {epsilon:g} on every {'target ' if objective == 'single' else ''}geometry (worst {worst:.3g})"
     else:
         msg = (
-            f"no paint in subset '{_subset_name(subset, paint_a)}' brings every seam under ε = {epsilon:g}: "
+            f"no paint in subset '{subset}' brings every seam under ε = {epsilon:g}: "
             f"worst ΔE {worst:.3g} after, {float(np.max(before)):.3g} before"
         )
-    if not gamut.paintable:
-        msg += "; solution outside the paintable bound: " + "; ".join(gamut.problems)
-    if not converged:
+    if not sol.gamut.paintable:
+        msg += "; solution outside the paintable bound: " + "; ".join(sol.gamut.problems)
+    if not sol.converged:
         msg += "; the optimiser stopped before convergence (best point returned)"
-    return TrompeResult(
-        objective=objective,
-        subset=_subset_name(subset, paint_a),
-        paint=paints[0],
-        paints=paints,
-        geometries=tuple(
-            EnvironmentGeometry(v, hinge) if env is not None else SeamGeometry(lt, v, hinge)
-            for lt, v in zip(ls, vs, strict=True)
-        ),
-        beta_deg=beta,
-        method=method,
-        epsilon=float(epsilon),
-        seam_de_before=tuple(float(v) for v in before),
-        seam_de_after=tuple(float(v) for v in after_arr),
-        meets_epsilon=meets,
-        gamut=gamut,
-        changes=_changes(prob, x_main),
-        solve_ms=(time.perf_counter() - t0) * 1e3,
-        message=msg,
-        converged=converged,
-        per_geometry_changes=per_changes,
-    )
+    return msg
 
 
 def _subset_name(subset: str | None, paint_a: Any) -> str:

@@ -239,7 +239,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "analysis", help="misalignment QA: goniogeometric index, inverse trompe l'oeil"
     )
     sub = top.add_subparsers(dest="analysis_command", required=True, metavar="SUBCOMMAND")
+    for add in (_add_gg_index, _add_trompe, _add_seam, _add_sweep):
+        add(sub)
 
+
+def _add_gg_index(sub: argparse._SubParsersAction) -> None:
+    """Add ``station analysis gg-index``: the goniogeometric index β_min (eq 4.3.1)."""
     p = sub.add_parser("gg-index", help="goniogeometric index β_min (eq 4.3.1)")
     _add_paint_args(p)
     p.add_argument("--light", required=True, help="light polar angle(s) in degrees, comma-separated")
@@ -256,6 +261,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_json_flag(p)
     p.set_defaults(handler=_gg_index)
 
+
+def _add_trompe(sub: argparse._SubParsersAction) -> None:
+    """Add ``station analysis trompe-loeil``: the paint for the misaligned panel (§4.4)."""
     p = sub.add_parser("trompe-loeil", help="inverse trompe l'oeil: paint for the misaligned panel (§4.4)")
     _add_paint_args(p)
     p.add_argument("--beta", type=float, required=True, help="signed misalignment of panel B, degrees")
@@ -274,6 +282,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_json_flag(p)
     p.set_defaults(handler=_trompe)
 
+
+def _add_seam(sub: argparse._SubParsersAction) -> None:
+    """Add ``station analysis seam``: QA of a seam between two panels."""
     p = sub.add_parser("seam", help="QA of a seam between two panels (design or measurement JSON)")
     p.add_argument(
         "panel_a",
@@ -308,6 +319,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_json_flag(p)
     p.set_defaults(handler=_seam)
 
+
+def _add_sweep(sub: argparse._SubParsersAction) -> None:
+    """Add ``station analysis sweep``: seam ΔE over view × light × β (Fig. 4.3)."""
     p = sub.add_parser("sweep", help="seam ΔE over view × light × β (thesis Fig. 4.3)")
     _add_paint_args(p)
     p.add_argument("--betas", default="0.5,1,2,3,5,8")

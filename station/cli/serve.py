@@ -11,7 +11,7 @@ handled at once (idle connections do not count against it).
 A database that cannot be reached or a revision that does not exist is one line on stderr and exit
 status 2 for every command here (no traceback). ``station db verify`` recomputes the hash chains of
 measurements, audit events and record events, the sealed records and the signed checkpoints of the
-data folder (``db.chain.audit_database``): exit 0 intact, 1 with every finding listed (``--json``: the
+data folder (``db.chain_audit.audit_database``): exit 0 intact, 1 with every finding listed (``--json``: the
 report with its ``findings``). ``station db checkpoint`` verifies, then appends a signed checkpoint.
 """
 
@@ -283,22 +283,22 @@ def _snapshot(engine: Any) -> Iterator[Any]:
 
 
 def _verify(engine: Any, url: str, data_dir: Path, args: argparse.Namespace) -> dict[str, Any]:
-    """Verify every chain, sealed record and checkpoint; report every finding (``db.chain.audit_database``).
+    """Verify every chain, sealed record and checkpoint; report every finding (``db.chain_audit.audit_database``).
 
     Intact: the report is the result (exit 0). Broken: the report is printed (JSON with ``--json``, else
     one ``finding: …`` line each) and :class:`TamperedError` (exit 1) names the first finding and the
     count. ``checkpoint`` verifies first and appends a signed checkpoint only when intact.
     """
-    from db import chain
+    from db import chain, chain_audit
     from db.errors import TamperedError
     from db.migrate import current_revision
     from station.cli._common import emit
 
     if current_revision(engine) is None:
         raise InputError("database", "a migrated database (run `station db upgrade`)", None)
-    database = chain.database_identity(url)
+    database = chain_audit.database_identity(url)
     with _snapshot(engine) as conn:
-        report = chain.audit_database(conn, checkpoint_folder=data_dir, database=database)
+        report = chain_audit.audit_database(conn, checkpoint_folder=data_dir, database=database)
     result: dict[str, Any] = {"chain": "intact" if report.intact else "broken", "intact": report.intact}
     for name in chain.CHAINS:
         if name in report.rows:
@@ -307,7 +307,7 @@ def _verify(engine: Any, url: str, data_dir: Path, args: argparse.Namespace) -> 
         if name in report.heads:
             result[f"{name}_head"] = report.heads[name]
     result["checkpoints"] = report.checkpoints
-    result["checkpoint_file"] = str(data_dir / chain.CHECKPOINT_FILE)
+    result["checkpoint_file"] = str(data_dir / chain_audit.CHECKPOINT_FILE)
     result["findings"] = [f.as_dict() for f in report.findings]
     if not report.intact:
         if getattr(args, "json", False):
@@ -324,7 +324,7 @@ def _verify(engine: Any, url: str, data_dir: Path, args: argparse.Namespace) -> 
         from db.files import private_dir
 
         private_dir(data_dir)
-        written = chain.write_checkpoint(report, data_dir, database)  # exactly the heads verified
+        written = chain_audit.write_checkpoint(report, data_dir, database)  # exactly the heads verified
         result["checkpoint"] = {c: v["length"] for c, v in written["chains"].items()}
         result["checkpoints"] = report.checkpoints + 1
     return result

@@ -1,7 +1,7 @@
 """Discovery: candidate instruments on serial ports, USB (VID:PID) and HID, plus the simulators.
 
-USB and HID ids of the simulated families use the pid.codes open-source VID 0x1209 with test PIDs
-(docs/udev.md gives the matching udev rules). Each lookup that fails (no libusb, no hidraw) is
+The USB and HID ids looked for are the families' (``Family.usb_id`` in
+:mod:`station.drivers.families`); a serial port is offered as the first serial family. Each lookup that fails (no libusb, no hidraw) is
 reported in ``notes`` instead of raising, so ``station instruments list`` always answers.
 """
 
@@ -11,12 +11,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from station.drivers.families import FAMILIES
+from station.drivers.families import FAMILIES, first_on
 
-__all__ = ["GLOSS_USB_ID", "MA3_USB_ID", "DeviceCandidate", "list_devices"]
+__all__ = ["DeviceCandidate", "list_devices"]
 
-MA3_USB_ID = (0x1209, 0xCA03)
-GLOSS_USB_ID = (0x1209, 0xCA60)
 SERIAL_HINTS = ("ttyACM", "ttyUSB", "usbmodem", "COM")
 
 
@@ -37,12 +35,13 @@ class DeviceCandidate:
 def _serial() -> list[DeviceCandidate]:
     from serial.tools import list_ports
 
+    name = first_on("serial").name  # a serial port does not say which family answers on it
     out = []
     for port in list_ports.comports():
         if any(h in port.device for h in SERIAL_HINTS):
             out.append(
                 DeviceCandidate(
-                    f"ma6@{port.device}", "ma6", "serial", port.description or port.hwid or "serial port"
+                    f"{name}@{port.device}", name, "serial", port.description or port.hwid or "serial port"
                 )
             )
     return out
@@ -51,13 +50,21 @@ def _serial() -> list[DeviceCandidate]:
 def _usb(backend: Any = None) -> list[DeviceCandidate]:
     import usb.core
 
-    devs = usb.core.find(find_all=True, idVendor=MA3_USB_ID[0], idProduct=MA3_USB_ID[1], backend=backend)
-    return [
-        DeviceCandidate(
-            f"ma3@usb:{d.idVendor:04x}:{d.idProduct:04x}", "ma3", "usb", f"bus {d.bus} address {d.address}"
-        )
-        for d in devs
-    ]
+    out = []
+    for family in FAMILIES:
+        if family.transport != "usb":
+            continue
+        vid, pid = family.device_id()
+        out += [
+            DeviceCandidate(
+                f"{family.name}@usb:{d.idVendor:04x}:{d.idProduct:04x}",
+                family.name,
+                "usb",
+                f"bus {d.bus} address {d.address}",
+            )
+            for d in usb.core.find(find_all=True, idVendor=vid, idProduct=pid, backend=backend)
+        ]
+    return out
 
 
 def _hid(enumerate_fn: Callable[[int, int], Sequence[dict[str, Any]]] | None = None) -> list[DeviceCandidate]:
@@ -66,16 +73,19 @@ def _hid(enumerate_fn: Callable[[int, int], Sequence[dict[str, Any]]] | None = N
 
         enumerate_fn = hid.enumerate
     out = []
-    for d in enumerate_fn(*GLOSS_USB_ID):
-        path = d["path"].decode() if isinstance(d["path"], bytes) else str(d["path"])
-        out.append(
-            DeviceCandidate(
-                f"gloss@hid:{path}",
-                "gloss",
-                "hid",
-                f"{d.get('manufacturer_string') or ''} {d.get('product_string') or ''}".strip(),
+    for family in FAMILIES:
+        if family.transport != "hid":
+            continue
+        for d in enumerate_fn(*family.device_id()):
+            path = d["path"].decode() if isinstance(d["path"], bytes) else str(d["path"])
+            out.append(
+                DeviceCandidate(
+                    f"{family.name}@hid:{path}",
+                    family.name,
+                    "hid",
+                    f"{d.get('manufacturer_string') or ''} {d.get('product_string') or ''}".strip(),
+                )
             )
-        )
     return out
 
 

@@ -56,6 +56,10 @@ class Family:
         The module run as ``python -m <simulator>`` for ``sim:NAME``; ``None``: no simulator.
     baudrate
         Serial line speed in baud (serial transports and the simulator's pty).
+    usb_id
+        ``(VID, PID)`` of the real device on a ``usb`` or ``hid`` transport: what discovery looks for and
+        what the simulator presents. The simulated families use the pid.codes open-source VID 0x1209 with
+        test PIDs (docs/udev.md gives the matching udev rules). ``None`` on a serial transport.
     """
 
     name: str
@@ -64,12 +68,25 @@ class Family:
     label: str
     simulator: str | None = None
     baudrate: int = 9600
+    usb_id: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         if not (self.name.isascii() and self.name.isalnum() and self.name.islower()):
             raise ValueError(f"family name {self.name!r}: lower-case letters and digits only")
         if ":" not in self.driver:
             raise ValueError(f"family {self.name!r}: driver must be 'module:Class', got {self.driver!r}")
+        if (self.usb_id is None) != (self.transport == "serial"):
+            raise ValueError(
+                f"family {self.name!r}: a usb or hid transport has a (VID, PID), a serial one none"
+            )
+        if self.usb_id is not None and not all(0 <= n <= 0xFFFF for n in self.usb_id):
+            raise ValueError(f"family {self.name!r}: VID and PID are 16-bit, got {self.usb_id!r}")
+
+    def device_id(self) -> tuple[int, int]:
+        """``(VID, PID)`` of the real device (:attr:`usb_id`); a serial family has none."""
+        if self.usb_id is None:
+            raise LookupError(f"family {self.name!r} is reached on a serial line: it has no USB id")
+        return self.usb_id
 
 
 #: The families, in the order the pickers offer them. The first family on a transport is the one an
@@ -89,6 +106,7 @@ FAMILIES: tuple[Family, ...] = (
         "simulated 3-angle spectro (binary frames)",
         simulator="simulators.ma3",
         baudrate=115200,
+        usb_id=(0x1209, 0xCA03),
     ),
     Family(
         "gloss",
@@ -96,6 +114,7 @@ FAMILIES: tuple[Family, ...] = (
         "hid",
         "simulated 20/60/85 gloss meter (HID reports)",
         simulator="simulators.gloss",
+        usb_id=(0x1209, 0xCA60),
     ),
 )
 

@@ -8,9 +8,9 @@ share: the gloss lobe (:mod:`station.model.lobe`), the reference point-light sha
 (:mod:`station.model.shading`) and Lab ⇄ display sRGB (:mod:`station.model.display`).
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from station.lazy import lazy_getattr
 from station.model.angles import validate_angle_set
 from station.model.domain import (
     AB_MAX,
@@ -40,23 +40,14 @@ if TYPE_CHECKING:
         FaceFlopTravelGloss,
     )
 
-#: Names loaded on first use (PEP 562): they import colour-science, which takes a second or more, and
-#: the domain's limits and names above must stay cheap for a command line's ``--help``.
+#: Names loaded on first use (PEP 562), by module: they import colour-science, which takes a second or
+#: more, and the domain's limits and names above must stay cheap for a command line's ``--help``.
 _LAZY = {
-    "FitResult": "station.model.fit",
-    "fit_fftg": "station.model.fit",
-    "AspecularMeasurements": "station.model.representations",
-    "ClampedQuadratic": "station.model.representations",
-    "FaceFlopTravelGloss": "station.model.representations",
+    "station.model.fit": ("FitResult", "fit_fftg"),
+    "station.model.representations": ("AspecularMeasurements", "ClampedQuadratic", "FaceFlopTravelGloss"),
 }
 
-
-def __getattr__(name: str) -> Any:
-    """Load a name of :data:`_LAZY` from its module the first time it is asked for."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(module), name)
+__getattr__ = lazy_getattr(__name__, _LAZY)
 
 
 __all__ = [

@@ -50,6 +50,21 @@ def cie2000_columns(
     >>> cie2000_columns(L1, a1, b1, L2, a2, b2).round(4).tolist()
     [2.3669, 27.1492]
     """
+    C_p_1, C_p_2, h_p_1, h_p_2 = _primed(a_1, b_1, a_2, b_2)
+    delta_L_p = L_2 - L_1
+    delta_C_p = C_p_2 - C_p_1
+    delta_H_p, h_bar_p = _hue_terms(C_p_1, C_p_2, h_p_1, h_p_2)
+    S_L, S_C, S_H, R_T = _weights((L_1 + L_2) / 2, (C_p_1 + C_p_2) / 2, h_bar_p)
+    x = delta_C_p / (k_c * S_C)
+    y = delta_H_p / (k_h * S_H)
+    return np.sqrt((delta_L_p / (k_l * S_L)) ** 2 + x**2 + y**2 + R_T * x * y)
+
+
+Array = NDArray[np.float64]
+
+
+def _primed(a_1: Array, b_1: Array, a_2: Array, b_2: Array) -> tuple[Array, Array, Array, Array]:
+    """C'₁, C'₂ and h'₁, h'₂ (degrees in [0, 360)): a* scaled by 1 + G (Sharma et al. 2005, eqs 1–7)."""
     C_1_ab = np.hypot(a_1, b_1)
     C_2_ab = np.hypot(a_2, b_2)
     C_bar_ab = (C_1_ab + C_2_ab) / 2
@@ -66,8 +81,11 @@ def cie2000_columns(
     h_p_2 = np.degrees(np.arctan2(b_2, a_p_2)) % 360
     if np.logical_and(b_2 == 0, a_2 == 0).any():
         h_p_2 = np.where(np.logical_and(b_2 == 0, a_p_2 == 0), 0, h_p_2)
-    delta_L_p = L_2 - L_1
-    delta_C_p = C_p_2 - C_p_1
+    return C_p_1, C_p_2, h_p_1, h_p_2
+
+
+def _hue_terms(C_p_1: Array, C_p_2: Array, h_p_1: Array, h_p_2: Array) -> tuple[Array, Array]:
+    """ΔH' and the mean hue h̄' (degrees) (Sharma et al. 2005, eqs 10–11 and 14)."""
     h_p_2_s_1 = h_p_2 - h_p_1
     C_p_1_m_2 = C_p_1 * C_p_2
     zero = C_p_1_m_2 == 0
@@ -80,8 +98,6 @@ def cie2000_columns(
         np.where(a_h_p_1_s_2 <= 180, h_p_2_s_1, np.where(h_p_2_s_1 > 180, h_p_2_s_1 - 360, h_p_2_s_1 + 360)),
     )
     delta_H_p = 2 * np.sqrt(C_p_1_m_2) * np.sin(np.deg2rad(delta_h_p / 2))
-    L_bar_p = (L_1 + L_2) / 2
-    C_bar_p = (C_p_1 + C_p_2) / 2
     h_p_1_a_2 = h_p_1 + h_p_2
     h_bar_p = np.where(
         zero,
@@ -92,6 +108,11 @@ def cie2000_columns(
             np.where(h_p_1_a_2 < 360, (h_p_1_a_2 + 360) / 2, (h_p_1_a_2 - 360) / 2),
         ),
     )
+    return delta_H_p, h_bar_p
+
+
+def _weights(L_bar_p: Array, C_bar_p: Array, h_bar_p: Array) -> tuple[Array, Array, Array, Array]:
+    """S_L, S_C, S_H and R_T from the means L̄', C̄', h̄' (Sharma et al. 2005, eqs 15–21)."""
     T = (
         1
         - 0.17 * np.cos(np.deg2rad(h_bar_p - 30))
@@ -107,6 +128,4 @@ def cie2000_columns(
     S_C = 1 + 0.045 * C_bar_p
     S_H = 1 + 0.015 * C_bar_p * T
     R_T = -np.sin(np.deg2rad(2 * delta_theta)) * R_C
-    x = delta_C_p / (k_c * S_C)
-    y = delta_H_p / (k_h * S_H)
-    return np.sqrt((delta_L_p / (k_l * S_L)) ** 2 + x**2 + y**2 + R_T * x * y)
+    return S_L, S_C, S_H, R_T

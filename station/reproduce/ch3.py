@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from station.model import AspecularMeasurements, FaceFlopTravelGloss
 from station.model.domain import ANGLES_3, ANGLES_5, FACE_ANGLE_DEG
 from station.model.examples import EXAMPLES
-from station.model.fit import fit_fftg
+from station.model.fit import FitResult, fit_fftg
 from station.reproduce.core import ExperimentResult, Figure, Quantity
 
 #: The designs every conversion is checked on (station.model.examples, solids excluded where travel matters).
@@ -141,12 +141,22 @@ def representations(out_dir: Path | None) -> ExperimentResult:
     de_rt, dt_rt = _round_trip()
     meas = erratum5_measurements()
     fit = fit_fftg(meas)
-    res = np.asarray(fit.residual_de)
-    model = fit.design.lab_at(meas.angles_deg)
-    l_res = float(np.max(np.abs(model[:, 0] - meas.lab[:, 0])))
-    ab_res = float(np.max(np.linalg.norm(model[:, 1:] - meas.lab[:, 1:], axis=-1)))
+    quantities = (*_conversion_quantities(de_rt, dt_rt), *_erratum5_quantities(meas, fit))
+    figures = (_plot(out_dir, fit.design, meas),) if out_dir is not None else ()
+    notes = (
+        "Conversions are checked against an independent route: the coefficients against a direct "
+        "linear solve of eqs 3.3.5–3.3.7, travel against eq 3.3.4 by hand, fits against the designs "
+        "they came from on a 0–150° grid. The erratum-5 case has L* from a 60° travel and a*, b* from a "
+        f"100° travel; the fit's shared θ_clamp is {fit.design.travel_deg:.1f}°."
+    )
+    return ExperimentResult("ch3-representations", quantities, figures, notes, time.perf_counter() - t0)
+
+
+def _conversion_quantities(de_rt: float, dt_rt: float) -> tuple[Quantity, ...]:
+    """The conversions the thesis calls exact (eqs 3.3.2–3.3.10, §3.3.3), each against an independent
+    route; *de_rt*, *dt_rt*: the FFTG round trip's largest ΔE*ab and |Δ travel| (degrees)."""
     exact = "the thesis calls the conversion exact"
-    quantities = (
+    return (
         Quantity(
             "eqs 3.3.8–3.3.10",
             "coefficients vs direct solve of eqs 3.3.5–3.3.7 (max relative difference)",
@@ -201,6 +211,17 @@ def representations(out_dir: Path | None) -> ExperimentResult:
             1e-6,
             source="exact when the data come from the model",
         ),
+    )
+
+
+def _erratum5_quantities(meas: AspecularMeasurements, fit: FitResult) -> tuple[Quantity, ...]:
+    """The 3-angle measurement of the erratum-5 case against its fitted model: L* exact, a*b* fitted."""
+    res = np.asarray(fit.residual_de)
+    model = fit.design.lab_at(meas.angles_deg)
+    l_res = float(np.max(np.abs(model[:, 0] - meas.lab[:, 0])))
+    ab_res = float(np.max(np.linalg.norm(model[:, 1:] - meas.lab[:, 1:], axis=-1)))
+    exact = "the thesis calls the conversion exact"
+    return (
         Quantity(
             "§3.3.3",
             "3-angle measurement → model: L* residual (erratum 5 case)",
@@ -223,14 +244,6 @@ def representations(out_dir: Path | None) -> ExperimentResult:
             source=exact,
         ),
     )
-    figures = (_plot(out_dir, fit.design, meas),) if out_dir is not None else ()
-    notes = (
-        "Conversions are checked against an independent route: the coefficients against a direct "
-        "linear solve of eqs 3.3.5–3.3.7, travel against eq 3.3.4 by hand, fits against the designs "
-        "they came from on a 0–150° grid. The erratum-5 case has L* from a 60° travel and a*, b* from a "
-        f"100° travel; the fit's shared θ_clamp is {fit.design.travel_deg:.1f}°."
-    )
-    return ExperimentResult("ch3-representations", quantities, figures, notes, time.perf_counter() - t0)
 
 
 def tweaker(out_dir: Path | None) -> ExperimentResult:

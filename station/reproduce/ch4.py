@@ -24,7 +24,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -49,6 +49,9 @@ from station.model.domain import FACE_ANGLE_DEG
 from station.model.shading import shade_lab
 from station.reproduce.core import ExperimentResult, Figure, Quantity
 from station.reproduce.errors import ReproduceInputError
+
+if TYPE_CHECKING:
+    from station.analysis.trompe import TrompeResult
 
 Shading = Literal["printed", "lambert"]
 #: The thesis's face angle in §4.3.3 ("g … goes from C_face at 0 aspecular angle"), degrees.
@@ -104,35 +107,10 @@ def _fig44_picture(out_dir: Path, panels: dict[str, object]) -> Figure:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from station.analysis.picture import shade_pair
-    from station.analysis.trompe import TrompeResult
+    from station.analysis.picture import SOLID_GRID_COLUMNS, draw_solid_grid
 
-    cols: list[tuple[str, TrompeResult | None]] = [("identical", None)]
-    for name, key in (("optimised at 45°", "single_45"), ("RMS", "rms"), ("per row", "per_geometry")):
-        res = panels[key]
-        if not isinstance(res, TrompeResult):  # pragma: no cover - solid_panels returns TrompeResults
-            raise TypeError(key)
-        cols.append((name, res))
-    fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), len(cols), figsize=(8, 8))
-    for i, light in enumerate(SOLID_LIGHTS_DEG):
-        for j, (name, res) in enumerate(cols):
-            if res is None:
-                rms = panels["rms"]
-                assert isinstance(rms, TrompeResult)  # noqa: S101
-                pb, de = SOLID_PAINT, rms.seam_de_before[i]
-            elif name == "per row":
-                pb, de = res.paints[i], res.seam_de_after[i]
-            else:
-                pb, de = res.paint, res.seam_de_after[i]
-            ax = axes[i, j]
-            ax.imshow(shade_pair(SOLID_PAINT, pb, SOLID_BETA_DEG, light, 0.0, size=(36, 72)))
-            ax.set_xticks([])
-            ax.set_yticks([])
-            ax.set_xlabel(f"ΔE {de:.2f}", fontsize=8)
-            if i == 0:
-                ax.set_title(name, fontsize=9)
-            if j == 0:
-                ax.set_ylabel(f"light {light:g}°", fontsize=8)
+    fig, axes = plt.subplots(len(SOLID_LIGHTS_DEG), len(SOLID_GRID_COLUMNS), figsize=(8, 8))
+    draw_solid_grid(axes, SOLID_PAINT, panels, SOLID_LIGHTS_DEG, SOLID_BETA_DEG, (36, 72))
     fig.suptitle("Fig. 4.4 on our code: solid, 3° misalignment, seam ΔE*ab", fontsize=10)
     fig.tight_layout()
     path = out_dir / "ch4-fig4.4.png"
@@ -359,11 +337,29 @@ def figs45_47(out_dir: Path | None) -> ExperimentResult:
         "every aspecular angle shifted by 2β and the exact fix moves the travel by ≈ 2β; the thesis's "
         "travel equals β (see the thesis-convention rows)"
     )
+    quantities = (*_fig45_quantities(silver, ts, mirror), *_fig46_47_quantities(bumper, tb, tb_lam, mirror))
+    figures = (
+        (
+            _fig45_picture(
+                out_dir,
+                silver.changes["face_L"],
+                silver.changes["travel_deg"],
+                ts.face_change[0],
+                ts.travel_change_deg,
+            ),
+        )
+        if out_dir is not None
+        else ()
+    )
+    notes = _figs45_47_notes(silver, bumper, ts, tb)
+    return ExperimentResult("ch4-figs4.5-4.7", quantities, figures, notes, time.perf_counter() - t0)
+
+
+def _fig45_quantities(silver: TrompeResult, ts: ConventionResult, mirror: str) -> tuple[Quantity, ...]:
+    """Fig. 4.5 (silver, black flop, β = 2°): travel and face L* changes, ours and the thesis convention."""
     assert SILVER_PAINT.travel_deg is not None  # noqa: S101
     implied = implied_face_flop_difference(3.4, SILVER_PAINT.travel_deg, abs(SILVER_BETA_DEG))
-    b_face_c = math.hypot(BUMPER_PAINT.face[1] + tb.face_change[1], BUMPER_PAINT.face[2] + tb.face_change[2])
-    a_face_c = math.hypot(BUMPER_PAINT.face[1], BUMPER_PAINT.face[2])
-    quantities = (
+    return (
         Quantity(
             "4.5",
             "Δ travel, ours (in-plane)",
@@ -405,6 +401,16 @@ def figs45_47(out_dir: Path | None) -> ExperimentResult:
             f"for face − flop = {implied:.0f} L* at a 60° travel (ours: 95)",
             source="§4.4.2",
         ),
+    )
+
+
+def _fig46_47_quantities(
+    bumper: TrompeResult, tb: ConventionResult, tb_lam: ConventionResult, mirror: str
+) -> tuple[Quantity, ...]:
+    """Figs 4.6–4.7 (bumper and fender, full FFTG): the flop angle's change and the face's chroma."""
+    b_face_c = math.hypot(BUMPER_PAINT.face[1] + tb.face_change[1], BUMPER_PAINT.face[2] + tb.face_change[2])
+    a_face_c = math.hypot(BUMPER_PAINT.face[1], BUMPER_PAINT.face[2])
+    return (
         Quantity(
             "4.6–4.7",
             "Δ θ_flop, ours (in-plane, full FFTG)",
@@ -444,20 +450,13 @@ def figs45_47(out_dir: Path | None) -> ExperimentResult:
             source="§4.4.2 'the face color is brighter and more chromatic'",
         ),
     )
-    figures = (
-        (
-            _fig45_picture(
-                out_dir,
-                silver.changes["face_L"],
-                silver.changes["travel_deg"],
-                ts.face_change[0],
-                ts.travel_change_deg,
-            ),
-        )
-        if out_dir is not None
-        else ()
-    )
-    notes = (
+
+
+def _figs45_47_notes(
+    silver: TrompeResult, bumper: TrompeResult, ts: ConventionResult, tb: ConventionResult
+) -> str:
+    """Why ours differ from Figs 4.5–4.7, with the RMS before and after of each solve (ΔE*ab)."""
+    return (
         "Why ours differ. (1) §4.3.3 writes g from the face at 0° aspecular; §3.3 (and we) put it at 15° "
         "(erratum 3). (2) An in-plane turn by β moves the specular direction by 2β; the thesis's travel "
         "changes equal β in both figures (+2.0° for 2°, ≈ +8° for 8°), which is what a shift of β gives for "
@@ -472,7 +471,6 @@ def figs45_47(out_dir: Path | None) -> ExperimentResult:
         f"{tb.flop_change[0]:+.1f}. Ours, silver: RMS {silver.rms_before:.2f} → {silver.rms_after:.2f}; "
         f"bumper {bumper.rms_before:.2f} → {bumper.rms_after:.2f}."
     )
-    return ExperimentResult("ch4-figs4.5-4.7", quantities, figures, notes, time.perf_counter() - t0)
 
 
 #: β step of the Fig. 4.3 sweep (degrees).

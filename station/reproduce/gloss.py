@@ -30,7 +30,9 @@ from station.model.gloss import (
     CLEAR_COAT_INDEX,
     COAT_PEAK_DOI,
     STANDARD_INDEX,
+    CoatLobes,
     GlossReadings,
+    SpecularLobe,
     coat_from_gloss,
     coat_from_lobe,
     coat_readings,
@@ -94,8 +96,25 @@ def meter_geometries(out_dir: Path | None) -> ExperimentResult:
         f"reads H = {floor:.1f} GU from Fresnel alone, so the haze is H − {floor:.1f}: 0 for a haze-free "
         "coat, tolerance 5 GU"
     )
-    doi_source = "automotive top coats: DOI ≈ 0.9 of a mirror (luxury top coats, PGD 0.9)"
     quantities = (
+        *_render_lobe_quantities(one, floor, d4039, one_lobe),
+        *_clear_coat_quantities(two, floor, d4039),
+    )
+    figures = (_picture(out_dir, one, two),) if out_dir is not None else ()
+    notes = _meter_notes(lobe, coat, one, two, mirror[60.0])
+    return ExperimentResult("gloss-meter", quantities, figures, notes, time.perf_counter() - t0)
+
+
+#: Where the DOI the coat is held to comes from.
+DOI_SOURCE = "automotive top coats: DOI ≈ 0.9 of a mirror (luxury top coats, PGD 0.9)"
+
+
+def _render_lobe_quantities(
+    one: GlossReadings, floor: float, d4039: str, one_lobe: str
+) -> tuple[Quantity, ...]:
+    """The meter's readings of the render lobe alone: D4039 haze beyond the Fresnel *floor* (GU), DOI."""
+    doi_source = DOI_SOURCE
+    return (
         Quantity(
             "gloss",
             "render lobe alone: D4039 haze beyond the Fresnel floor",
@@ -116,6 +135,13 @@ def meter_geometries(out_dir: Path | None) -> ExperimentResult:
             reason=one_lobe,
             source=doi_source,
         ),
+    )
+
+
+def _clear_coat_quantities(two: GlossReadings, floor: float, d4039: str) -> tuple[Quantity, ...]:
+    """The meter's readings of the two-lobe clear coat: D4039 and E430 haze, DOI, G85 against G60."""
+    doi_source = DOI_SOURCE
+    return (
         Quantity(
             "gloss",
             "clear coat: D4039 haze beyond the Fresnel floor",
@@ -155,16 +181,20 @@ def meter_geometries(out_dir: Path | None) -> ExperimentResult:
             source="black-glass scale: a near-mirror coat reads highest at 85°",
         ),
     )
-    figures = (_picture(out_dir, one, two),) if out_dir is not None else ()
+
+
+def _meter_notes(
+    lobe: SpecularLobe, coat: CoatLobes, one: GlossReadings, two: GlossReadings, mirror_60: float
+) -> str:
+    """Every reading of both surfaces in words; *mirror_60*: the 60° gloss of a haze-free coat (GU)."""
     (ws, ns), (wh, nh) = coat.lobes
-    notes = (
+    return (
         f"Render lobe alone (n = {lobe.phong_exponent:.0f}, index {STANDARD_INDEX:g}): G20/G60/G85 = "
         f"{one.g20_gu:.1f}/{one.g60_gu:.1f}/{one.g85_gu:.1f} GU, DOI {one.doi:.1f}, haze {one.haze_hu:.1f} HU. "
         f"Clear coat (index {coat.coat_index:g}; {ws:.2f} × peak n {ns:.3g} + {wh:.2f} × haze n {nh:.0f}): "
         f"{two.g20_gu:.1f}/{two.g60_gu:.1f}/{two.g85_gu:.1f} GU, DOI {two.doi:.1f}, haze {two.haze_hu:.2f} HU "
         f"(log haze {two.log_haze:.0f}), Rspec {two.rspec_gu:.1f} GU. The gloss-meter simulator, "
         "`station model gloss` and this experiment read the clear coat; the renderers draw the render lobe. "
-        f"(A clear coat of index {CLEAR_COAT_INDEX:g} cannot read more than {mirror[60.0]:.1f} GU at 60°: "
+        f"(A clear coat of index {CLEAR_COAT_INDEX:g} cannot read more than {mirror_60:.1f} GU at 60°: "
         "above it the coat is haze-free and its index rises towards the black glass's.)"
     )
-    return ExperimentResult("gloss-meter", quantities, figures, notes, time.perf_counter() - t0)

@@ -55,7 +55,7 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         "2",
         "Anisotropic reconstruction against off-specular samples, vs ground truth (§2.5.3)",
         ("2.10",),
-        _lazy("ch2", "fig210"),
+        _lazy("ch2_aniso", "fig210"),
         slow=True,
     ),
     Experiment(
@@ -63,7 +63,7 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         "2",
         "Anisotropic reconstruction against samples, coarse sweep",
         ("2.10",),
-        _lazy("ch2", "fig210_quick"),
+        _lazy("ch2_aniso", "fig210_quick"),
         quick_of="ch2-fig2.10",
     ),
     Experiment(
@@ -71,7 +71,7 @@ EXPERIMENTS: tuple[Experiment, ...] = (
         "2",
         "Lobe renderer frame rates for 5 / 9 / 31 / 81 anisotropic samples, as ratios (§2.5.3)",
         ("§2.5.3",),
-        _lazy("ch2", "frame_rates"),
+        _lazy("ch2_aniso", "frame_rates"),
     ),
     Experiment(
         "ch3-representations",

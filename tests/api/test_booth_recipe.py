@@ -17,11 +17,11 @@ import httpx
 import numpy as np
 import pytest
 
-from station.api.serve_process import ServeStartError, serving
 from station.formulate.colorants import default_database, predict_reflectance
 from station.model.colorimetry import OBSERVER_10
 from station.model.spectra import WAVELENGTHS, reflectance_from_lab
 from tests.api.conftest import Api
+from tests.serve_process import ServeStartError, serving
 
 REPO = Path(__file__).resolve().parents[2]
 V1 = "/api/v1"

@@ -17,9 +17,9 @@ import httpx
 import numpy as np
 import pytest
 
-from station.api.serve_process import ServeStartError, serving
 from station.model.spectra import WAVELENGTHS, reflectance_to_lab
 from tests.qc.test_illuminant_rows import _mi_cs, _pair
+from tests.serve_process import ServeStartError, serving
 
 REPO = Path(__file__).resolve().parents[2]
 V1 = "/api/v1"

@@ -16,8 +16,8 @@ import httpx
 import pytest
 from PIL import Image
 
-from station.api.serve_process import ServeProcess, ServeStartError, serving
 from tests.processes import run
+from tests.serve_process import ServeProcess, ServeStartError, serving
 from tests.services import service_missing
 
 REPO = Path(__file__).resolve().parents[2]

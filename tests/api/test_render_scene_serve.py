@@ -16,7 +16,6 @@ import pytest
 from PIL import Image
 
 from station.analysis import goniogeometric_index
-from station.api.serve_process import ServeProcess, ServeStartError
 from station.model import FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
 from station.model.design_io import default_flakes
@@ -31,6 +30,7 @@ from station.render.procedural import procedural_environment
 from station.render.scene_image import ENV_WIDTH, render_scene_image, scene_lod
 from station.render.shapes import Scene
 from station.render.stage import Stage
+from tests.serve_process import ServeProcess, ServeStartError
 
 REPO = Path(__file__).resolve().parents[2]
 V1 = "/api/v1"

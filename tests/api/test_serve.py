@@ -17,8 +17,8 @@ from pathlib import Path
 import httpx
 import pytest
 
-from station.api.serve_process import ServeStartError, serving
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
+from tests.serve_process import ServeStartError, serving
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -22,9 +22,9 @@ from pathlib import Path
 import httpx
 import pytest
 
-from station.api.serve_process import ServeProcess, ServeStartError, free_port
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
 from tests.processes import run
+from tests.serve_process import ServeProcess, ServeStartError, free_port
 from tests.waiting import WaitTimeout, pause, wait_until
 
 REPO = Path(__file__).resolve().parents[2]

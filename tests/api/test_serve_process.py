@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from station.api.serve_process import ServeProcess, ServeStartError
+from tests.serve_process import ServeProcess, ServeStartError
 
 REPO = Path(__file__).resolve().parents[2]
 

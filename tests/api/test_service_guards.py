@@ -18,8 +18,8 @@ from pathlib import Path
 import httpx
 import pytest
 
-from station.api.serve_process import ServeProcess, ServeStartError
 from tests.api._images import bomb_png
+from tests.serve_process import ServeProcess, ServeStartError
 from tests.waiting import WaitTimeout, wait_until
 
 V1 = "/api/v1"

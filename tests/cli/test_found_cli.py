@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from station.api.serve_process import free_port
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.design_io import save_design
 from station.model.spectra import reflectance_to_lab
 from tests.processes import Child, Stream, children_of_this_process, is_running, run
+from tests.serve_process import free_port
 from tests.user_cli import run_station
 from tests.waiting import WaitTimeout, wait_until
 

@@ -23,7 +23,7 @@ from sqlalchemy import text
 from sqlalchemy.pool import NullPool
 
 from db.engine import make_engine
-from station.api.serve_process import serving
+from tests.serve_process import serving
 
 REPO = Path(__file__).resolve().parents[2]
 SCANS = 12

@@ -17,7 +17,7 @@ import pytest
 from sqlalchemy import Connection, text
 from sqlalchemy.pool import NullPool
 
-from db import chain
+from db import chain, chain_audit
 from db.engine import make_engine, make_sessionmaker
 from station.api.services import audit
 from station.cli import main
@@ -237,7 +237,7 @@ def test_migration_back_fills_rows_written_before_the_chain(empty_database_url: 
             )
     migrate.upgrade(empty_database_url)
     with engine.connect() as conn:
-        verdicts = chain.verify(conn)
+        verdicts = chain_audit.verify(conn)
     engine.dispose()
     assert [(v.chain, v.rows, v.broken) for v in verdicts] == [
         ("measurements", 0, None),
@@ -246,7 +246,7 @@ def test_migration_back_fills_rows_written_before_the_chain(empty_database_url: 
     _fill(empty_database_url, 2)  # new rows chain on from the back-filled head
     engine = make_engine(empty_database_url, poolclass=NullPool)
     with engine.connect() as conn:
-        assert [v.broken for v in chain.verify(conn)] == [None, None]
+        assert [v.broken for v in chain_audit.verify(conn)] == [None, None]
     engine.dispose()
 
 

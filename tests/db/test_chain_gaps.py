@@ -18,7 +18,7 @@ import pytest
 from sqlalchemy import Connection, text
 from sqlalchemy.pool import NullPool
 
-from db import chain
+from db import chain, chain_audit
 from db.engine import make_engine, make_sessionmaker
 from db.models import Role
 from station.api.services import audit, users
@@ -128,7 +128,7 @@ def test_a_rewound_tail_is_caught_by_the_signed_checkpoint(
     _store(database_url, [make_reading(13, i) for i in range(4)])
     code, report = _report(database_url, tmp_path, capsys, "checkpoint")
     assert code == 0 and report["checkpoint"]["measurements"] == 4, report
-    assert oct((tmp_path / chain.CHECKPOINT_KEY_FILE).stat().st_mode & 0o777) == "0o600"
+    assert oct((tmp_path / chain_audit.CHECKPOINT_KEY_FILE).stat().st_mode & 0o777) == "0o600"
 
     def rewind(conn: Connection, dialect: str) -> None:  # two statements, as the writer of the database
         _lift(conn, dialect, "measurements")
@@ -156,7 +156,7 @@ def test_a_forged_checkpoint_line_is_named(
 ) -> None:
     _store(database_url, [make_reading(14, 0)])
     assert _report(database_url, tmp_path, capsys, "checkpoint")[0] == 0
-    path = tmp_path / chain.CHECKPOINT_FILE
+    path = tmp_path / chain_audit.CHECKPOINT_FILE
     line = json.loads(path.read_text().splitlines()[-1])
     line["chains"]["measurements"]["length"] = 0
     with path.open("a") as f:
@@ -286,7 +286,7 @@ def test_a_checkpoint_file_replaced_by_a_link_is_named_not_followed(
 ) -> None:
     _store(database_url, [make_reading(18, 0)])
     assert _report(database_url, tmp_path, capsys, "checkpoint")[0] == 0
-    path = tmp_path / chain.CHECKPOINT_FILE
+    path = tmp_path / chain_audit.CHECKPOINT_FILE
     elsewhere = tmp_path / "elsewhere.jsonl"
     path.rename(elsewhere)
     path.symlink_to(elsewhere)

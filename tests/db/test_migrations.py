@@ -127,7 +127,7 @@ def test_measurement_texture_revision_keeps_old_rows_hashes(empty_database_url: 
     from sqlalchemy import column, select, table
     from sqlalchemy.pool import NullPool
 
-    from db import chain
+    from db import chain, chain_audit
 
     url = empty_database_url
     migrate.upgrade(url, "0007_gloss_readings")
@@ -183,7 +183,7 @@ def test_measurement_texture_revision_keeps_old_rows_hashes(empty_database_url: 
             m = conn.execute(select(chain.chain_table("measurements"))).mappings().one()
             assert (m["illumination_deg"], m["texture"]) == (45.0, None)
             assert m["row_sha256"] == old_hash == chain.payload_sha256("measurements", m)
-            assert [v.broken for v in chain.verify(conn)] == [None, None]
+            assert [v.broken for v in chain_audit.verify(conn)] == [None, None]
         # a 15° block with texture hashes its two values: changing either changes the hash
         lit15 = dict(row, illumination_deg=15.0, texture=[{"vendor": "X", "name": "sparkle", "geometry": "",
                                                            "value": 1.5}])  # fmt: skip

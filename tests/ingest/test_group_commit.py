@@ -17,7 +17,7 @@ import pytest
 from sqlalchemy import event, func, select
 from sqlalchemy.orm import Session
 
-from db import chain
+from db import chain_audit
 from db.engine import make_engine, make_sessionmaker
 from db.models import AuditEvent, Measurement
 from station.ingest import ClientIdConflictError, Reading, StoreResult
@@ -76,14 +76,14 @@ def _run(
     return answers, errors, commits
 
 
-def _stored(url: str) -> tuple[list[str], int, list[chain.Verdict]]:
+def _stored(url: str) -> tuple[list[str], int, list[chain_audit.Verdict]]:
     engine = make_engine(url)
     with engine.connect() as conn:
         ids = [str(c) for c in conn.execute(select(Measurement.client_id)).scalars()]
         audits = conn.execute(
             select(func.count()).select_from(AuditEvent).where(AuditEvent.entity == "measurement")
         ).scalar_one()
-        verdicts = chain.verify(conn)
+        verdicts = chain_audit.verify(conn)
     engine.dispose()
     return ids, int(audits), verdicts
 

@@ -23,8 +23,8 @@ import pytest
 from sqlalchemy import create_engine, func, select
 
 from db.models import AuditEvent, Measurement
-from station.api.serve_process import ServeProcess, ServeStartError
 from station.ingest import Outbox
+from tests.serve_process import ServeProcess, ServeStartError
 
 REPO = Path(__file__).resolve().parents[2]
 NAMESPACE = uuid.UUID("2c4e6a80-1b3d-4f5a-9c7e-0d2f4b6a8c13")

@@ -9,7 +9,7 @@ import pytest
 
 from station.errors import InputError
 from station.render import basis_selection as bs
-from station.reproduce import ch2
+from station.reproduce import ch2, ch2_aniso
 
 
 def _digest(path: Path) -> str:
@@ -119,17 +119,17 @@ def test_fig210_quantities_and_a_constant_environment() -> None:
     env = Environment("c", np.full((32, 64, 3), 1.0, np.float32))
     s = an.sample_sweep(env, an.WardLobe((0.8,) * 3, 0.03, 0.3), (1, 9, 81), size=16, truth_face=24)
     assert max(s.mean_de) < 0.3 and s.converged() == 1 and s.meets(1.0, 2.3) == 1
-    sweeps = ch2.anisotropy_sweeps((1, 9, 81), size=16, truth_face=24)
+    sweeps = ch2_aniso.anisotropy_sweeps((1, 9, 81), size=16, truth_face=24)
     for _, _, sw in sweeps[1:]:  # strong anisotropy: the samples draw the highlight out
         assert sw.mean_de[-1] < 0.6 * sw.mean_de[0]
-    q = {x.quantity: x for x in ch2._fig210_quantities(sweeps)}
+    q = {x.quantity: x for x in ch2_aniso._fig210_quantities(sweeps)}
     mild = q["samples until the mean ΔE00 settles (within 0.1 of 81), mild anisotropy"]
     assert mild.thesis == 9 and mild.ours == sweeps[0][2].converged()
     assert mild.verdict == ("agrees" if mild.ours <= 9 else "differs")
     strong = q["samples until the mean ΔE00 settles, α_y ≫ α_x, one point light"]
     assert strong.thesis == 80 and strong.tolerance == 40
     bars = [x for x in q.values() if x.reference == "accuracy bar"]
-    assert len(bars) == 2 * len(ch2.ANISO_CASES)
+    assert len(bars) == 2 * len(ch2_aniso.ANISO_CASES)
     for x in bars:
         assert x.verdict == ("agrees" if x.ours <= x.thesis else "differs")
 
@@ -141,21 +141,21 @@ def test_frame_rate_verdicts_compare_ratios(monkeypatch) -> None:
     just inside 0.771 + 0.231 = 1.002."""
 
     def stub(rates):
-        monkeypatch.setattr(ch2, "lobe_renderer_rates", lambda: (rates, "stub"))
-        return {x.quantity: x for x in ch2.frame_rates(None).quantities}
+        monkeypatch.setattr(ch2_aniso, "lobe_renderer_rates", lambda: (rates, "stub"))
+        return {x.quantity: x for x in ch2_aniso.frame_rates(None).quantities}
 
     for scale in (0.01, 100.0):
-        q = stub({j: scale * hz for j, hz in ch2.THESIS_HZ.items()})
+        q = stub({j: scale * hz for j, hz in ch2_aniso.THESIS_HZ.items()})
         assert [x.verdict for x in q.values()] == ["agrees"] * 3
-    q = stub({j: 100.0 / j for j in ch2.THESIS_HZ})
+    q = stub({j: 100.0 / j for j in ch2_aniso.THESIS_HZ})
     assert q["frame rate at 9 samples / at 5 samples"].ours == pytest.approx(5 / 9)
     assert [x.verdict for x in q.values()] == ["agrees"] * 3
-    q = stub({j: 20.0 for j in ch2.THESIS_HZ})
+    q = stub({j: 20.0 for j in ch2_aniso.THESIS_HZ})
     assert [x.verdict for x in q.values()] == ["agrees", "differs", "differs"]
     assert all("load average" in x.reason for x in q.values())
 
 
 def test_frame_rates_are_measured() -> None:
-    rates, renderer = ch2.lobe_renderer_rates((5, 81), size=64, min_seconds=0.2)
+    rates, renderer = ch2_aniso.lobe_renderer_rates((5, 81), size=64, min_seconds=0.2)
     assert rates[81] < rates[5]
     assert renderer

@@ -22,9 +22,9 @@ from sqlalchemy.orm import Session
 
 from db.migrate import ensure_at_head
 from db.models import GlossReading, Measurement, Panel
-from station.api.serve_process import ServeProcess, ServeStartError
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import save_design
+from tests.serve_process import ServeProcess, ServeStartError
 from tests.user_cli import run_station
 
 pytestmark = pytest.mark.slow

@@ -36,12 +36,12 @@ from typing import IO, Protocol
 
 import httpx
 
-from station.api.serve_process import ServeProcess, ServeStartError
 from station.ingest.errors import ImportFileError
 from station.ingest.formats import build_measurement, import_client_id, write_measurement_file
 from station.ingest.formats.measurement import OBSERVERS, ImportedMeasurement, Instrument
 from station.ingest.formats.records import file_sha256
 from station.model.domain import ANGLES_6, ILLUMINATION_DEG, aspecular_name
+from tests.serve_process import ServeProcess, ServeStartError
 from tests.soak._log import SenderLog
 
 REPO = Path(__file__).resolve().parents[2]

@@ -45,7 +45,7 @@ import pytest
 from sqlalchemy import Connection, create_engine, select, text
 from sqlalchemy.pool import NullPool
 
-from db.chain import verify as verify_chains
+from db.chain_audit import verify as verify_chains
 from db.engine import normalise_url
 from db.models import Measurement
 from station.ingest import Ingestor

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import httpx
 
-from station.api.serve_process import serving
+from tests.serve_process import serving
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -183,6 +183,30 @@ class LibraryScreen(QWidget):
             f"{lib.name}: {len(lib)} paints" + (" — SYNTHETIC demo data" if lib.synthetic else "")
         )
         self.title.setWordWrap(True)  # a long library name must not widen the screen
+        self._build_tree()
+        types, form = self._build_filters()
+        self._build_thumbs()
+        browse = QVBoxLayout()
+        browse.addWidget(self.title)
+        browse.addWidget(self.tree, 1)
+        browse.addLayout(types)
+        browse.addLayout(form)
+        browse.addWidget(self.count)
+        browse.addWidget(self.thumb_busy)
+        browse.addWidget(self.thumbs, 2)
+        snap_box = self._build_snap_box()
+
+        lay = QHBoxLayout(self)
+        lay.addLayout(browse, 2)
+        lay.addWidget(snap_box, 3)
+        model.events.filtered.connect(self._on_filtered)
+        model.events.snapped.connect(self._on_snapped)
+        self._on_filter()
+
+    # ---------------------------------------------------------------- builders
+    def _build_tree(self) -> None:
+        """The hierarchy of the library (set, kind, group) with the number of paints in each."""
+        lib, model = self.model.library, self.model
         self.tree = QTreeWidget()
         self.tree.setHeaderLabels(["hierarchy", "paints"])
         root = QTreeWidgetItem(["all", str(len(lib))])
@@ -201,6 +225,9 @@ class LibraryScreen(QWidget):
         self.tree.header().setStretchLastSection(True)
         self.tree.itemClicked.connect(self._on_tree)
 
+    def _build_filters(self) -> tuple[QHBoxLayout, QFormLayout]:
+        """The paint-type check boxes and a low/high slider pair per index; (their row, their form)."""
+        model = self.model
         self.type_boxes = {t: QCheckBox(t) for t in PAINT_TYPES}
         types = QHBoxLayout()
         for b in self.type_boxes.values():
@@ -222,6 +249,10 @@ class LibraryScreen(QWidget):
             row.addWidget(hi_s)
             row.addWidget(label)
             form.addRow(f"{name.replace('_', ' ')} index", row)
+        return types, form
+
+    def _build_thumbs(self) -> None:
+        """The count of shown paints and their thumbnails (rendered in the background)."""
         self.count = QLabel()
         self.thumbs = QListWidget()
         self.thumbs.setIconSize(QSize(40, 40))
@@ -239,15 +270,9 @@ class LibraryScreen(QWidget):
         self._rows = np.zeros(0, dtype=int)
         self._item_rows: list[int] = []  # library row of each list item, in list order
 
-        browse = QVBoxLayout()
-        browse.addWidget(self.title)
-        browse.addWidget(self.tree, 1)
-        browse.addLayout(types)
-        browse.addLayout(form)
-        browse.addWidget(self.count)
-        browse.addWidget(self.thumb_busy)
-        browse.addWidget(self.thumbs, 2)
-
+    def _build_snap_box(self) -> QGroupBox:
+        """ColorSnap: the button, its matches, the Lab cloud and the design | match comparison."""
+        document = self.document
         self.snap_btn = QPushButton("ColorSnap current design")
         self._snap_design = document.design
         self.snap_btn.clicked.connect(lambda: self.snap())
@@ -278,13 +303,7 @@ class LibraryScreen(QWidget):
         col.addWidget(self.compare, 1)
         views.addLayout(col, 1)
         sl.addLayout(views, 2)
-
-        lay = QHBoxLayout(self)
-        lay.addLayout(browse, 2)
-        lay.addWidget(snap_box, 3)
-        model.events.filtered.connect(self._on_filtered)
-        model.events.snapped.connect(self._on_snapped)
-        self._on_filter()
+        return snap_box
 
     # ---------------------------------------------------------------- filter
     def _slider_bounds(self, name: str) -> tuple[float | None, float | None]:

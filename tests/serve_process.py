@@ -1,4 +1,4 @@
-"""``station serve`` as a child process on a free loopback port: for scripts, benchmarks and tests.
+"""``station serve`` as a child process on a free loopback port: test and benchmark tooling (not shipped).
 
 :class:`ServeProcess` starts ``python -m station.cli serve --data-dir DIR --port PORT`` (plus the caller's
 arguments; *env* is the whole environment, default this process's), waits until uvicorn reports the socket bound (``Uvicorn running``), reads the
