@@ -39,7 +39,8 @@ ALLOWED: dict[str, str] = {
     "station/model/spectra.py:_weighting_factors": "ASTM E308 weights per illuminant/observer; read-only",
     # pure functions, data shipped with the product, loaded once
     "station/analysis/gamut.py:_pointer_hull": "Pointer's gamut hull (published data)",
-    "station/formulate/colorants.py:colorant_data": "the shipped colorant data file, parsed",
+    "station/formulate/effect_optics.py:colorant_data": "the shipped colorant data file, parsed",
+    "station/formulate/effect_optics.py:_hemispherical_film": "a thin film's hemispherical reflectance (pure function of a frozen film)",
     "station/formulate/colorants.py:_flake_table": "flake reflectance table per (database, angle tuple)",
     "station/formulate/colorants.py:default_database": "the shipped colorant database, built once",
     "station/formulate/colorants.py:_tristimulus": "linear tristimulus weights of the product's own Lab",
