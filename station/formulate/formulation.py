@@ -383,20 +383,8 @@ def formulate(
     t0 = time.perf_counter()
     db = db or default_database()
     angles = tuple(float(a) for a in angles_deg)
-    design = validate_design_lab(design_lab, len(angles), "design_lab")
-    if not (np.isfinite(tolerance) and tolerance > 0):
-        raise FormulateInputError("tolerance", "a positive ΔE00", tolerance)
+    design, starts_c = _checked_inputs(design_lab, angles, starts, tolerance, db)
     c_mat, warn = matting_for_gloss(GLOSS_CLEAR_GU if gloss_gu is None else gloss_gu, db)
-    starts_c = [
-        (
-            lb,
-            db.check(
-                db.vector(rec) if isinstance(rec, dict) else np.asarray(rec, dtype=np.float64),
-                f"starts[{lb}]",
-            ),
-        )
-        for lb, rec in starts or []
-    ]
     pool: list[RecipeOption] = []
     fits: list[tuple[str, _LineFit]] = []
     for line in lines_for_design(design, opts.line, opts.paint_type):
@@ -411,6 +399,25 @@ def formulate(
         [replace(o, metamerism=m) for o, m in zip(shortlist, meta, strict=True)], opts.recipes
     )
     return _result(design, angles, db, ranked, fits, float(tolerance), c_mat, warn, strict, candidates, t0)
+
+
+def _checked_inputs(
+    design_lab: ArrayLike,
+    angles: tuple[float, ...],
+    starts: list[tuple[str, ArrayLike | dict[str, float]]] | None,
+    tolerance: float,
+    db: ColorantDatabase,
+) -> tuple[NDArray[np.float64], list[tuple[str, NDArray[np.float64]]]]:
+    """The design (A, 3) and the starting recipes as checked full vectors; bad input raises
+    :class:`FormulateInputError` naming the field."""
+    design = validate_design_lab(design_lab, len(angles), "design_lab")
+    if not (np.isfinite(tolerance) and tolerance > 0):
+        raise FormulateInputError("tolerance", "a positive ΔE00", tolerance)
+    starts_c = []
+    for lb, rec in starts or []:
+        vec = db.vector(rec) if isinstance(rec, dict) else np.asarray(rec, dtype=np.float64)
+        starts_c.append((lb, db.check(vec, f"starts[{lb}]")))
+    return design, starts_c
 
 
 def _result(
