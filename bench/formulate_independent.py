@@ -85,7 +85,7 @@ def stylist(lib: Library, rng: np.random.Generator, n: int) -> list[FaceFlopTrav
             flop = tuple(np.add(p.flop, v if k % 4 == 3 else 0.0).tolist())
         if p.travel_deg is None:  # a solid stays a solid: its one colour moves
             flop = face = face if k % 4 != 3 else flop
-        out.append(FaceFlopTravelGloss(face, flop, p.travel_deg, p.gloss_gu, "stylist edit"))  # type: ignore[arg-type]
+        out.append(FaceFlopTravelGloss(face, flop, p.travel_deg, p.gloss_gu, "stylist edit"))
     return out
 
 
@@ -222,7 +222,7 @@ def run() -> None:
             (p.lab_at(np.array(A3)), float(p.gloss_gu if p.gloss_gu is not None else 90.0)) for p in paints
         ]
         ok = [check_paintable(p).paintable for p in paints]
-        cases += _cases(run_set(name, designs, lambda k, ok=ok: ok[k], lib, index), base_time)
+        cases += _cases(run_set(name, designs, ok.__getitem__, lib, index), base_time)
         write_section("formulate-independent", "Formulation on independent designs", cases, _EXTRA)
 
 
