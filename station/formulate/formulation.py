@@ -385,20 +385,36 @@ def formulate(
     angles = tuple(float(a) for a in angles_deg)
     design, starts_c = _checked_inputs(design_lab, angles, starts, tolerance, db)
     c_mat, warn = matting_for_gloss(GLOSS_CLEAR_GU if gloss_gu is None else gloss_gu, db)
+    ranked, fits = _ranked_options(design, angles, starts_c, c_mat, db, opts, float(tolerance), candidates)
+    return _result(design, angles, db, ranked, fits, float(tolerance), c_mat, warn, strict, candidates, t0)
+
+
+def _ranked_options(
+    design: NDArray,
+    angles: tuple[float, ...],
+    starts: Sequence[tuple[str, NDArray[np.float64]]],
+    c_mat: float,
+    db: ColorantDatabase,
+    opts: FormulationOptions,
+    tolerance: float,
+    candidates: int,
+) -> tuple[tuple[RecipeOption, ...], list[tuple[str, _LineFit]]]:
+    """Each toner line in turn until one reaches the design; the recipes ranked, the metamerism index
+    computed for the best 2 × ``recipes`` (it costs a constrained fit of the reference reflectance)."""
     pool: list[RecipeOption] = []
     fits: list[tuple[str, _LineFit]] = []
     for line in lines_for_design(design, opts.line, opts.paint_type):
-        fit = _fit_line(design, angles, starts_c, c_mat, db, line, opts, float(tolerance), candidates)
+        fit = _fit_line(design, angles, starts, c_mat, db, line, opts, tolerance, candidates)
         fits.append((line, fit))
         pool += fit.options
         if rank_options(pool, 1)[0].formulable:
             break
-    shortlist = rank_options(pool, 2 * opts.recipes)  # metamerism only for these (it costs)
+    shortlist = rank_options(pool, 2 * opts.recipes)
     meta = metamerism(design, np.asarray([o.concentrations for o in shortlist]), angles, db, opts.illuminants)
     ranked = rank_options(
         [replace(o, metamerism=m) for o, m in zip(shortlist, meta, strict=True)], opts.recipes
     )
-    return _result(design, angles, db, ranked, fits, float(tolerance), c_mat, warn, strict, candidates, t0)
+    return ranked, fits
 
 
 def _checked_inputs(
