@@ -79,26 +79,53 @@ def _numpy_path(
 
 def run() -> None:
     load_start = os.getloadavg()[0]
-    cases: list[Case] = []
     lib = demo_library()
     std = np.ascontiguousarray(lib.angle_columns())
     t = time.perf_counter()
     index = SnapIndex(lib)
-    cases.append(Case("index build, demo library", "6000", (time.perf_counter() - t) * 1e3, "ms"))
+    cases = [Case("index build, demo library", "6000", (time.perf_counter() - t) * 1e3, "ms")]
+    rows_md: list[tuple[str, str, float, float]] = []
+    _demo_cases(index, std, cases, rows_md)
+    _million_cases(std, cases, rows_md)
+    chart = ROOT / "docs" / "bench-colorsnap.png"
+    _chart(rows_md, chart)
+    extra = (
+        "Exactness: every index answer compared with a brute-force scan (rows and sums identical; the kernels are\n"
+        "bit-identical to `station.model.difference.delta_e`). Bars: 6000 paints ≤ 0.2 ms, 10⁶ paints ≤ 5 ms\n"
+        "(median per query, k = 5). 10⁶ library = demo (SYNTHETIC) × 167 with σ = 2 Lab jitter.\n"
+        "CIEDE2000: numba-compiled best-first walk (per-paint lower/upper bounds, exact kernel on the\n"
+        "candidates only); the NumPy-only path (no numba) is timed on the same queries.\n"
+        "DIN 6175-2 is the angle-dependent ΔE_eff (station.model.difference), its kernel costs about 4.5× the\n"
+        "ΔE*ab one per paint. Load average at the start / end: "
+        f"{load_start:.1f} / {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs (the machine is shared).\n\n"
+        "![ColorSnap timings](bench-colorsnap.png)\n"
+    )
+    write_section("colorsnap", "ColorSnap: exact top-k vs brute force", cases, extra)
+
+
+def _check(
+    index_results: list, lab: np.ndarray, qs: np.ndarray, brute_n: int, fast_n: int, method: str
+) -> list[float]:
+    """Brute force on the first *brute_n* queries (timed) and the fast brute force on the next, each
+    answer required identical to the index's; returns the brute-force times (s)."""
+    bt = []
+    for q, r in zip(qs[:brute_n], index_results[:brute_n], strict=True):
+        t = time.perf_counter()
+        b = brute_force(lab, q, K, method)
+        bt.append(time.perf_counter() - t)
+        assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"
+    for q, r in zip(qs[brute_n:fast_n], index_results[brute_n:fast_n], strict=True):
+        fast = _fast_brute(lab, q, method)
+        assert r[0].tolist() == fast[0].tolist() and np.array_equal(r[1], fast[1]), "not exact"
+    return bt
+
+
+def _demo_cases(index: SnapIndex, std: np.ndarray, cases: list[Case], rows_md: list) -> None:
     qs = _queries(std, 600, 1)
-    rows_md = []
     for method in METHODS:
         index.query(qs[0], K, method)  # warm-up
         times, results = _time_index(index, qs, method)
-        bt = []
-        for q, r in zip(qs[:60], results[:60], strict=True):
-            t = time.perf_counter()
-            b = brute_force(std, q, K, method)
-            bt.append(time.perf_counter() - t)
-            assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"
-        for q, r in zip(qs[60:], results[60:], strict=True):
-            fast = _fast_brute(std, q, method)
-            assert r[0].tolist() == fast[0].tolist() and np.array_equal(r[1], fast[1]), "not exact"
+        bt = _check(results, std, qs, 60, len(qs), method)
         med, bmed = float(np.median(times)) * 1e3, float(np.median(bt)) * 1e3
         if method == "cie2000":
             _numpy_path(index, std, qs, 60, "6000", cases)
@@ -115,6 +142,8 @@ def run() -> None:
         cases.append(Case(f"speed-up vs brute force {method}", "6000", bmed / med, "x", "600 queries exact"))
         rows_md.append((method, "6000", med, bmed))
 
+
+def _million_cases(std: np.ndarray, cases: list[Case], rows_md: list) -> None:
     n = 1_000_000
     rng = np.random.default_rng(7)
     big = std[rng.integers(0, len(std), n)] + rng.normal(0.0, 2.0, (n, 3, 3))
@@ -126,15 +155,7 @@ def run() -> None:
     for method in METHODS:
         bindex.query(qs[0], K, method)
         times, results = _time_index(bindex, qs, method)
-        bt = []
-        for q, r in zip(qs[:3], results[:3], strict=True):
-            t = time.perf_counter()
-            b = brute_force(big, q, K, method)
-            bt.append(time.perf_counter() - t)
-            assert r[0].tolist() == b[0].tolist() and np.array_equal(r[1], b[1]), "not exact"
-        for q, r in zip(qs[3:20], results[3:20], strict=True):
-            fast = _fast_brute(big, q, method)
-            assert r[0].tolist() == fast[0].tolist() and np.array_equal(r[1], fast[1]), "not exact"
+        bt = _check(results, big, qs, 3, 20, method)
         med, bmed = float(np.median(times)) * 1e3, float(np.median(bt)) * 1e3
         if method == "cie2000":
             _numpy_path(bindex, big, qs, 5, "1e6", cases)
@@ -148,21 +169,6 @@ def run() -> None:
             Case(f"speed-up vs brute force {method}", "1e6", bmed / med, "x", "200 timed, 20 checked exact")
         )
         rows_md.append((method, "1e6", med, bmed))
-
-    chart = ROOT / "docs" / "bench-colorsnap.png"
-    _chart(rows_md, chart)
-    extra = (
-        "Exactness: every index answer compared with a brute-force scan (rows and sums identical; the kernels are\n"
-        "bit-identical to `station.model.difference.delta_e`). Bars: 6000 paints ≤ 0.2 ms, 10⁶ paints ≤ 5 ms\n"
-        "(median per query, k = 5). 10⁶ library = demo (SYNTHETIC) × 167 with σ = 2 Lab jitter.\n"
-        "CIEDE2000: numba-compiled best-first walk (per-paint lower/upper bounds, exact kernel on the\n"
-        "candidates only); the NumPy-only path (no numba) is timed on the same queries.\n"
-        "DIN 6175-2 is the angle-dependent ΔE_eff (station.model.difference), its kernel costs about 4.5× the\n"
-        "ΔE*ab one per paint. Load average at the start / end: "
-        f"{load_start:.1f} / {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs (the machine is shared).\n\n"
-        "![ColorSnap timings](bench-colorsnap.png)\n"
-    )
-    write_section("colorsnap", "ColorSnap: exact top-k vs brute force", cases, extra)
 
 
 def _chart(rows: list[tuple[str, str, float, float]], path) -> None:

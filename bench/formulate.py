@@ -41,6 +41,7 @@ from station.formulate.demo import (
 )
 from station.formulate.formulation import formulate, formulate_from_library
 from station.formulate.gamut import colorant_gamut
+from station.formulate.library import Library
 from station.formulate.snap import SnapIndex
 from station.formulate.sprayout import SprayOutModel
 from station.model import FaceFlopTravelGloss
@@ -79,18 +80,28 @@ def histogram(fi: np.ndarray) -> None:
 
 
 def run() -> None:
-    cases: list[Case] = []
     lib = demo_library()
     index = SnapIndex(lib)
     assert lib.recipes is not None
+    cases = _showcase_cases()
+    more, designs, conc = _in_gamut_cases(lib, index)
+    cases += more + _refusal_cases() + _loop_cases(lib, index, designs, conc) + _library_cases(lib)
+    extra = _EXTRA
+    write_section("formulate", "Formulation and closed loop", cases, extra)
 
+
+def _showcase_cases() -> list[Case]:
+    cases = []
     for name, lab in SHOWCASE.items():
         t = time.perf_counter()
-        r = formulate(lab, A3, time_budget_s=2.0)
+        r = formulate(lab, A3)
         cases.append(
             Case(f"showcase: {name}", "1 design", r.mean_de, "ΔE00", f"{time.perf_counter() - t:.2f} s")
         )
+    return cases
 
+
+def _in_gamut_cases(lib: Library, index: SnapIndex) -> tuple[list[Case], np.ndarray, np.ndarray]:
     _types, conc = generate_recipes(67, 67, 66, seed=31337)
     designs = predict_lab(conc, A3)
     t_lib, t_gen, de_lib, de_gen = [], [], [], []
@@ -105,7 +116,7 @@ def run() -> None:
         de_gen.append(g.mean_de)
     t_lib_a, t_gen_a, de_lib_a = np.array(t_lib), np.array(t_gen), np.array(de_lib)
     n = len(designs)
-    cases += [
+    cases = [
         Case(
             "formulate (ColorSnap start) median",
             f"{n} designs",
@@ -137,7 +148,10 @@ def run() -> None:
             "x",
         ),
     ]
+    return cases, designs, conc
 
+
+def _refusal_cases() -> list[Case]:
     rng = np.random.default_rng(5)
     hues = rng.uniform(0, 2 * np.pi, 40)
     chroma = rng.uniform(110, 140, 40)
@@ -148,9 +162,9 @@ def run() -> None:
         ],
         1,
     )
-    refused = [not formulate(b, time_budget_s=0.3).formulable for b in bad]
+    refused = [not formulate(b).formulable for b in bad]
     probe = colorant_gamut(FaceFlopTravelGloss((60.0, 110.0, 0.0), (30.0, 95.0, 0.0), 60.0, 88.0))
-    cases += [
+    return [
         Case("out-of-gamut refused (not formulable)", "40 designs", 100.0 * float(np.mean(refused)), "%"),
         Case(
             "nearest achievable paint of a far red",
@@ -161,12 +175,15 @@ def run() -> None:
         ),
     ]
 
+
+def _loop_cases(lib: Library, index: SnapIndex, designs: np.ndarray, conc: np.ndarray) -> list[Case]:
+    assert lib.recipes is not None
     inside, conv, corr, all_conv = 0, 0, [], 0
     loop_t = []
     for i, d in enumerate(designs[::5][:40]):
         spray = SprayOutModel(seed=1000 + i)
         c_true = conc[::5][:40][i]
-        oracle = formulate(d, A3, [("true", c_true)], db=spray.true_db, time_budget_s=0.5).mean_de
+        oracle = formulate(d, A3, [("true", c_true)], db=spray.true_db).mean_de
         t = time.perf_counter()
         starts = [(m.code, lib.recipes[m.index]) for m in formulate_from_library(d, lib, index)[1].matches]
         job = closed_loop(d, spray.measure, starts=starts)
@@ -179,7 +196,7 @@ def run() -> None:
             if ok:
                 corr.append(job.corrections)
     hist = np.bincount(corr, minlength=4)
-    cases += [
+    return [
         Case(
             "closed loop converged, formulable with sprayed colorants",
             f"{inside} designs",
@@ -196,11 +213,13 @@ def run() -> None:
         Case("closed loop time median", f"{len(loop_t)} designs", float(np.median(loop_t)), "s"),
     ]
 
+
+def _library_cases(lib: Library) -> list[Case]:
     stats = flop_index_statistics(lib)
     fi = lib.indices()["flop"][lib.types != "solid"]
     fi = fi[np.isfinite(fi)]
     histogram(fi)
-    cases += [
+    return [
         Case(
             "demo non-solid Flop Index mean",
             f"{int(stats['non_solid'])} paints",
@@ -219,13 +238,14 @@ def run() -> None:
             "demo bright silvers (metallic L*15 ≥ 110)", "3000 non-solids", stats["bright_silvers"], "paints"
         ),
     ]
-    extra = (
-        "Colorants, library and spray-out panels are SYNTHETIC (docs/formulate.md). ΔE is CIEDE2000, mean over\n"
-        "15/45/110°. The closed-loop bar is judged on designs formulable with the colorants actually sprayed\n"
-        "(oracle: best recipe with the panel's own colorants ≤ 0.8 mean ΔE00). Histogram of the demo library's\n"
-        "Flop Index (like the thesis's Fig 5.4): `docs/formulate-flop-index.png`.\n"
-    )
-    write_section("formulate", "Formulation and closed loop", cases, extra)
+
+
+_EXTRA = (
+    "Colorants, library and spray-out panels are SYNTHETIC (docs/formulate.md). ΔE is CIEDE2000, mean over\n"
+    "15/45/110°. The closed-loop bar is judged on designs formulable with the colorants actually sprayed\n"
+    "(oracle: best recipe with the panel's own colorants ≤ 0.8 mean ΔE00). Histogram of the demo library's\n"
+    "Flop Index (like the thesis's Fig 5.4): `docs/formulate-flop-index.png`.\n"
+)
 
 
 if __name__ == "__main__":

@@ -5,10 +5,12 @@
   browse [--library demo|FILE] --filter type=metallic,pearl --filter flop=3:10 …``.
 * ``station snap --library FILE|demo --lab "L,a,b;L,a,b;L,a,b" [--k 5] [--de cie76|cie2000|din6175]
   [--png OUT]`` → ``{"matches": [{"code", "sum_de", "de_per_angle"}], "warnings": [...]}``.
-* ``station formulate DESIGN [--closed-loop] [--illuminants A,F11 [--candidates N]]`` — recipe from the
-  ColorSnap match's recipe; with ``--illuminants`` the distinct candidate recipes ranked by their
-  metamerism index under those illuminants (``metamerism_ranking``, rule in
-  :mod:`station.formulate.metamerism`).
+* ``station formulate DESIGN [--line solid|metallic|pearl] [--max-colorants 5] [--scale-resolution 0.1]
+  [--recipes 3] [--closed-loop] [--illuminants A,F11 [--candidates N]]`` — the best few recipes of at
+  most N colorants from the design's toner line, amounts rounded to the scale, side by side (g per
+  batch, ΔE00 before/after rounding, metamerism index A/F11, colorants, cost; ``--json`` keeps every
+  field); with ``--illuminants`` the distinct candidate recipes ranked by their metamerism index under
+  those illuminants (``metamerism_ranking``, rule in :mod:`station.formulate.metamerism`).
 * ``station export DESIGN --format xml|cxf --out FILE`` — the design (both angle sets) and its match.
 
 DESIGN is a ``cacad.design/1`` JSON file or ``"L,a,b;L,a,b;L,a,b"`` at 15/45/110°. The demo
@@ -201,11 +203,11 @@ def cmd_snap(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
-    """Formulate a recipe from the ColorSnap match's recipe; optionally run the simulated closed loop."""
-    from station.formulate.batch import batch_masses
+    """Formulate the best few recipes from the ColorSnap match's recipe; optionally run the simulated
+    closed loop."""
     from station.formulate.formulation import formulate_from_library
 
-    batch_masses({}, args.batch)  # refuse a bad batch size before formulating
+    options = _options(args)
     lab, gloss, name = _design_lab(args.design)
     if args.gloss is not None:
         gloss = args.gloss
@@ -221,13 +223,73 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
             tolerance=args.tolerance,
             types=args.types,
             candidates=args.candidates if illuminants else 0,
+            options=options,
         )
         if args.closed_loop:
             steps("closed loop: spraying, measuring, correcting")
-        out = _formulated(args, lab, gloss, name, lib, result, snap)
+        out = _formulated(args, lab, gloss, name, lib, result, snap, options)
+        if not args.json:
+            out["recipes"] = "\n" + recipes_table(out["recipes"])
         if illuminants:
             out["metamerism_ranking"] = _ranking(args, result, illuminants)
         return out
+
+
+def _options(args: argparse.Namespace) -> Any:
+    """The chemist's limits from the command line, each checked (one line, exit 2, naming the option)."""
+    from station.formulate.batch import batch_masses
+    from station.formulate.errors import FormulateInputError
+    from station.formulate.formulation import FormulationOptions, formulation_options
+
+    batch_masses({}, args.batch)  # refuse a bad batch size before formulating
+    try:
+        return formulation_options(
+            FormulationOptions(
+                line=args.line,
+                max_colorants=args.max_colorants,
+                scale_resolution_g=args.scale_resolution,
+                batch_g=args.batch,
+                recipes=args.recipes,
+            )
+        )
+    except FormulateInputError as exc:
+        flag = {"scale_resolution_g": "scale-resolution", "batch_g": "batch"}.get(exc.field, exc.field)
+        raise InputError(f"--{flag.replace('_', '-')}", exc.accepted, exc.got) from exc
+
+
+def recipes_table(recipes: list[dict[str, Any]]) -> str:
+    """The recipes side by side, as a chemist compares them: grams per batch (rounded to the scale),
+    binder, ΔE00 after and before rounding, metamerism index per illuminant, colorants, cost."""
+    if not recipes:
+        return "(no recipe)"
+    names = sorted({n for r in recipes for n in r["grams"]})
+    ills = sorted({i for r in recipes for i in (r["metamerism_index"] or {})})
+    res = recipes[0]["scale_resolution_g"]
+    digits = max(0, -int(np.floor(np.log10(res) + 1e-9)))
+
+    def grams(v: float | None) -> str:
+        return "-" if v is None else f"{v:.{digits}f}"
+
+    rows: list[tuple[str, list[str]]] = [("", [f"#{r['rank']}" for r in recipes])]
+    rows.append(("line", [r["line"] for r in recipes]))
+    rows += [(f"{n} (g)", [grams(r["grams"].get(n)) for r in recipes]) for n in names]
+    rows.append(("binder (g)", [grams(r["binder_g"]) for r in recipes]))
+    rows.append(("batch (g)", [f"{r['batch_g']:g}" for r in recipes]))
+    rows.append(("dE00 rounded", [f"{r['mean_de']:.2f}" for r in recipes]))
+    rows.append(("dE00 unrounded", [f"{r['mean_de_unrounded']:.2f}" for r in recipes]))
+    for ill in ills:
+        rows.append(
+            (f"MI {ill}", [f"{(r['metamerism_index'] or {}).get(ill, float('nan')):.2f}" for r in recipes])
+        )
+    rows.append(("colorants", [str(r["colorants"]) for r in recipes]))
+    rows.append(("cost / kg", [f"{r['cost_per_kg']:.2f}" for r in recipes]))
+    rows.append(("formulable", ["yes" if r["formulable"] else "no" for r in recipes]))
+    width = max(len(label) for label, _ in rows)
+    cols = [max(len(row[1][k]) for row in rows) for k in range(len(recipes))]
+    return "\n".join(
+        f"{label:<{width}}  " + "  ".join(f"{v:>{w}}" for v, w in zip(vals, cols, strict=True))
+        for label, vals in rows
+    )
 
 
 def _illuminants(args: argparse.Namespace) -> tuple[Any, ...]:
@@ -268,6 +330,7 @@ def _formulated(
     lib: Any,
     result: Any,
     snap: Any,
+    options: Any,
 ) -> dict[str, Any]:
     from station.formulate.batch import batch_masses
     from station.formulate.library import PAINT_TYPES
@@ -297,6 +360,7 @@ def _formulated(
             gloss_gu=gloss,
             tolerance=args.tolerance,
             max_corrections=args.corrections,
+            options=options,
         )
         out["closed_loop"] = job.to_dict()
         out["closed_loop"]["measurement"] = f"simulated spray-out panel model (SYNTHETIC), seed {args.seed}"
@@ -358,6 +422,13 @@ def cmd_export(args: argparse.Namespace) -> dict[str, Any]:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``station library``, ``snap``, ``formulate`` and ``export``."""
+    _register_library(subparsers)
+    _register_snap(subparsers)
+    _register_formulate(subparsers)
+    _register_export(subparsers)
+
+
+def _register_library(subparsers: argparse._SubParsersAction) -> None:
     lib = subparsers.add_parser("library", help="colour libraries: import, export, browse (thesis §5.3.3)")
     sub = lib.add_subparsers(dest="library_command", required=True, metavar="SUBCOMMAND")
     p = sub.add_parser(
@@ -387,6 +458,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_json_flag(p)
     p.set_defaults(handler=cmd_library_browse)
 
+
+def _register_snap(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("snap", help="ColorSnap: nearest library paints (thesis §5.3.5)")
     p.add_argument(
         "--library", default="demo", help="demo (SYNTHETIC, default), munsell (real solids) or a library file"
@@ -412,6 +485,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_json_flag(p)
     p.set_defaults(handler=cmd_snap)
 
+
+def _register_formulate(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("formulate", help="recipe for a design from the synthetic colorants")
     p.add_argument("design", help='design file, or "L,a,b;L,a,b;L,a,b" at 15/45/110')
     p.add_argument("--library", default="demo", help="library with recipes (default demo, SYNTHETIC)")
@@ -441,9 +516,54 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--batch", type=float, default=1000.0, help="batch size in g the recipe is weighed out for"
     )
+    _add_selection_args(p)
     add_json_flag(p)
     p.set_defaults(handler=cmd_formulate)
 
+
+def _add_selection_args(p: argparse.ArgumentParser) -> None:
+    """``--line``, ``--max-colorants``, ``--scale-resolution``, ``--recipes`` (ranges checked in
+    :func:`_options`)."""
+    from station.model.domain import (
+        DEFAULT_MAX_COLORANTS,
+        DEFAULT_RECIPE_COUNT,
+        DEFAULT_SCALE_RESOLUTION_G,
+        MAX_COLORANTS_RANGE,
+        RECIPE_COUNT_RANGE,
+        SCALE_RESOLUTION_RANGE_G,
+        TONER_LINES,
+    )
+
+    p.add_argument(
+        "--line",
+        choices=TONER_LINES,
+        help="toner line the colorants come from (default: from the design's type; solids never get "
+        "aluminium, pearl or interference pigment)",
+    )
+    p.add_argument(
+        "--max-colorants",
+        type=int,
+        default=DEFAULT_MAX_COLORANTS,
+        help=f"most colorants in a recipe, binder and matting agent not counted "
+        f"({MAX_COLORANTS_RANGE[0]}-{MAX_COLORANTS_RANGE[1]}, default {DEFAULT_MAX_COLORANTS})",
+    )
+    p.add_argument(
+        "--scale-resolution",
+        type=float,
+        default=DEFAULT_SCALE_RESOLUTION_G,
+        help=f"scale resolution in g: amounts are rounded to it ({SCALE_RESOLUTION_RANGE_G[0]:g}-"
+        f"{SCALE_RESOLUTION_RANGE_G[1]:g}, default {DEFAULT_SCALE_RESOLUTION_G:g})",
+    )
+    p.add_argument(
+        "--recipes",
+        type=int,
+        default=DEFAULT_RECIPE_COUNT,
+        help=f"recipes shown side by side ({RECIPE_COUNT_RANGE[0]}-{RECIPE_COUNT_RANGE[1]}, "
+        f"default {DEFAULT_RECIPE_COUNT})",
+    )
+
+
+def _register_export(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("export", help="design + ColorSnap match as thesis XML or CxF3")
     p.add_argument("design", help='design file, or "L,a,b;L,a,b;L,a,b" at 15/45/110 (fitted)')
     p.add_argument("--format", choices=("xml", "cxf"), required=True)

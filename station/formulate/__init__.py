@@ -24,10 +24,16 @@ from station.formulate.errors import (
     NotFormulableError,
     XMLFormatError,
 )
-from station.formulate.formulation import FormulationResult, formulate, formulate_from_library
+from station.formulate.formulation import (
+    FormulationOptions,
+    FormulationResult,
+    formulate,
+    formulate_from_library,
+)
 from station.formulate.library import Library, LibraryFilter, Paint, classify, hierarchy_counts
 from station.formulate.library_csv import read_library_csv, write_library_csv
 from station.formulate.munsell import munsell_library
+from station.formulate.selection import RecipeOption
 from station.formulate.snap import SnapIndex, SnapMatch, SnapResult, brute_force, color_snap, view_data
 from station.formulate.sprayout import SprayOutModel
 
@@ -37,6 +43,7 @@ __all__ = [
     "FormulateError",
     "FormulateInputError",
     "FormulationJob",
+    "FormulationOptions",
     "FormulationResult",
     "HostileXMLError",
     "Library",
@@ -45,6 +52,7 @@ __all__ = [
     "LoopStep",
     "NotFormulableError",
     "Paint",
+    "RecipeOption",
     "SnapIndex",
     "SnapMatch",
     "SnapResult",

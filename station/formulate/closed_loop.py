@@ -10,13 +10,17 @@ the ma3 spectrophotometer simulator run as a subprocess (:func:`station.drivers.
 which shows an instrument can stand in for it.
 
 Correction (additive offset per angle, the usual "batch correction"): with recipe r_n, prediction
-P(r_n) and measurement M_n, the next recipe is formulated against the shifted target
-T_{n+1} = design − (M_n − P(r_n)), starting from r_n. The model's systematic error is thus cancelled
-to first order; it converges when that error varies slowly with the recipe.
+P(r_n) and measurement M_n, the corrected target is T_{n+1} = design − (M_n − P(r_n)). The model's
+systematic error is thus cancelled to first order; it converges when that error varies slowly with the
+recipe. The correction is made as the lab makes it, by **tinting** (:mod:`station.formulate.tinting`):
+additions of the recipe's own colorants and binder to the batch already mixed, rounded to the scale,
+within the batch's bounds. When no such additions reach T within the tolerance but a new recipe does,
+the step says "remake" and gives the new recipe (a fresh batch), never impossible additions.
 
 Each step is a :class:`LoopStep` in a :class:`FormulationJob` (plain dataclasses: the database layer
 stores them). Status: ``converged`` (mean measured ΔE00 ≤ tolerance), ``not_formulable`` (the model
-cannot reach the design, nothing sprayed), or ``not_converged`` after ``max_corrections``.
+cannot reach the design, nothing sprayed), or ``not_converged`` after ``max_corrections``. The job's
+``warnings`` name every angle that ends worse than the tolerance or worse than at the first spray-out.
 """
 
 from __future__ import annotations
@@ -28,15 +32,21 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.formulate.batch import Tinting, batch_masses, tinting_additions
+from station.formulate.batch import DEFAULT_BATCH_G, Tinting, batch_masses
 from station.formulate.colorants import ColorantDatabase, default_database, predict_lab
 from station.formulate.de_kernels import cie2000
 from station.formulate.errors import FormulateInputError
-from station.formulate.formulation import DEFAULT_TOLERANCE, FormulationResult, formulate
+from station.formulate.formulation import (
+    DEFAULT_TOLERANCE,
+    FormulationOptions,
+    FormulationResult,
+    formulate_with,
+)
 from station.formulate.library import STANDARD_ANGLES
 from station.formulate.snap import validate_design_lab
+from station.formulate.tinting import tint
 from station.model import AspecularMeasurements
-from station.model.domain import LAB_HI, LAB_LO
+from station.model.domain import LAB_HI, LAB_LO, aspecular_name
 
 Measure = Callable[[dict[str, float]], AspecularMeasurements]
 MAX_CORRECTIONS = 3
@@ -48,7 +58,8 @@ class LoopStep:
 
     ``kind`` is ``"initial"`` or ``"correction"``; Lab arrays are (A, 3) at the job's angles;
     ``de_per_angle`` is the measured CIEDE2000 to the design; ``additions`` (corrections only) the
-    tinting additions that turn the previous step's batch into this recipe.
+    tinting additions (g) that turn the previous step's batch into this recipe, or, with
+    ``additions.remake``, the notice that this recipe is a fresh batch; ``batch_g`` the batch's mass.
     """
 
     number: int
@@ -63,16 +74,17 @@ class LoopStep:
     predicted_mean_de: float
     time: str
     additions: Tinting | None = None
+    batch_g: float = DEFAULT_BATCH_G
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-able form (``additions``: the tinting additions in g to a 1 kg batch, corrections only)."""
+        """JSON-able form (``additions``: the tinting additions in g to the batch, corrections only)."""
         out: dict[str, object] = {}
         for k, v in self.__dict__.items():
             if k == "additions":
                 out[k] = None if v is None else v.to_dict()
             else:
                 out[k] = list(v) if isinstance(v, tuple) else v
-        out["batch"] = batch_masses(self.recipe).to_dict()
+        out["batch"] = batch_masses(self.recipe, self.batch_g).to_dict()
         return out
 
 
@@ -90,6 +102,7 @@ class FormulationJob:
     start: str = ""
     synthetic: bool = True
     initial: FormulationResult | None = field(default=None, compare=False, repr=False)
+    warnings: tuple[str, ...] = ()
 
     @property
     def final_recipe(self) -> dict[str, float] | None:
@@ -115,11 +128,39 @@ class FormulationJob:
             "final_recipe": self.final_recipe,
             "steps": [s.to_dict() for s in self.steps],
             "synthetic_colorants": self.synthetic,
+            "warnings": list(self.warnings),
         }
 
 
 def _tup(a: NDArray) -> tuple[tuple[float, float, float], ...]:
     return tuple((float(r[0]), float(r[1]), float(r[2])) for r in np.asarray(a))
+
+
+@dataclass
+class _Batch:
+    """The batch in the can: grams per colorant (database order), binder (g), its recipe and prediction."""
+
+    masses: NDArray[np.float64]
+    binder: float
+    result: FormulationResult | None
+    concentrations: NDArray[np.float64]
+    predicted_mean_de: float
+
+    @property
+    def total(self) -> float:
+        return float(self.masses.sum() + self.binder)
+
+
+def _fresh(result: FormulationResult, batch_g: float) -> _Batch:
+    c = np.asarray(result.concentrations, dtype=np.float64)
+    return _Batch(c * batch_g, float((1.0 - c.sum()) * batch_g), result, c, result.mean_de)
+
+
+def _measure(measure: Measure, recipe: dict[str, float], angles: tuple[float, ...]) -> AspecularMeasurements:
+    m = measure(recipe)
+    if any(a not in m.angles_deg for a in angles):
+        raise FormulateInputError("measurement.angles_deg", f"a superset of {angles}", m.angles_deg)
+    return m
 
 
 def closed_loop(
@@ -131,8 +172,9 @@ def closed_loop(
     tolerance: float = DEFAULT_TOLERANCE,
     max_corrections: int = MAX_CORRECTIONS,
     db: ColorantDatabase | None = None,
+    options: FormulationOptions | None = None,
 ) -> FormulationJob:
-    """Formulate, spray, measure and correct until the panel is within *tolerance* (mean ΔE00).
+    """Formulate, spray, measure and correct by tinting until the panel is within *tolerance*.
 
     Parameters
     ----------
@@ -144,13 +186,16 @@ def closed_loop(
         Starting recipes (e.g. ColorSnap matches' recipes), see :func:`formulate`.
     max_corrections
         Correction steps after the initial spray (0–10).
+    options
+        The chemist's limits (toner line, colorants, scale, batch), :class:`FormulationOptions`.
     """
     db = db or default_database()
     angles = tuple(float(a) for a in angles_deg)
     design = validate_design_lab(design_lab, len(angles), "design_lab")
     if not isinstance(max_corrections, int) or not 0 <= max_corrections <= 10:
         raise FormulateInputError("max_corrections", "an integer in [0, 10]", max_corrections)
-    first = formulate(design, angles, starts, gloss_gu, tolerance, db)
+    opts = options or FormulationOptions()
+    first = formulate_with(design, angles, starts, gloss_gu, tolerance, db, opts)
     base = FormulationJob(
         design_lab=_tup(design),
         angles_deg=angles,
@@ -164,48 +209,117 @@ def closed_loop(
     )
     if not first.formulable:
         return replace(base, status="not_formulable", message=first.message)
+    steps = _run(design, angles, measure, first, float(tolerance), max_corrections, db, opts, gloss_gu)
+    last = steps[-1]
+    if last.mean_de <= tolerance:
+        status, msg = (
+            "converged",
+            f"converged: mean ΔE00 {last.mean_de:.2f} after {len(steps) - 1} correction(s)",
+        )
+    else:
+        status = "not_converged"
+        msg = f"not converged: mean ΔE00 {last.mean_de:.2f} after {max_corrections} correction(s)"
+        if len(steps) > 1 and last.predicted_mean_de > tolerance:
+            msg += (
+                f"; the corrected target is out of the model's reach (predicted ΔE00 {last.predicted_mean_de:.2f}):"
+                " the design is likely outside the gamut of the colorants actually sprayed"
+            )
+    return replace(
+        base,
+        status=status,
+        message=msg,
+        steps=tuple(steps),
+        warnings=_angle_warnings(steps, angles, tolerance),
+    )
+
+
+def _run(
+    design: NDArray,
+    angles: tuple[float, ...],
+    measure: Measure,
+    first: FormulationResult,
+    tolerance: float,
+    max_corrections: int,
+    db: ColorantDatabase,
+    opts: FormulationOptions,
+    gloss_gu: float | None,
+) -> list[LoopStep]:
+    """Spray, measure, correct: the steps until converged or out of corrections."""
+    batch = _fresh(first, opts.batch_g)
     steps: list[LoopStep] = []
-    result = first
     target = design
+    additions: Tinting | None = None
     for n in range(max_corrections + 1):
-        m = measure(dict(result.recipe))
-        try:
-            idx = [m.angles_deg.index(a) for a in angles]
-        except ValueError as exc:
-            raise FormulateInputError(
-                "measurement.angles_deg", f"a superset of {angles}", m.angles_deg
-            ) from exc
-        measured = np.asarray(m.lab)[idx]
+        recipe = db.recipe(batch.concentrations, 1e-9)
+        m = _measure(measure, dict(recipe), angles)
+        measured = np.asarray(m.lab)[[m.angles_deg.index(a) for a in angles]]
         de = cie2000(design, measured)
-        predicted = predict_lab(result.concentrations, angles, db)
+        predicted = predict_lab(batch.concentrations, angles, db)
         steps.append(
             LoopStep(
                 number=n,
                 kind="initial" if n == 0 else "correction",
-                recipe=dict(result.recipe),
+                recipe=recipe,
                 target_lab=_tup(target),
                 predicted_lab=_tup(predicted),
                 measured_lab=_tup(measured),
                 measured_gloss_gu=m.gloss_gu,
                 de_per_angle=tuple(float(v) for v in de),
                 mean_de=float(de.mean()),
-                predicted_mean_de=result.mean_de,
+                predicted_mean_de=batch.predicted_mean_de,
                 time=dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
-                additions=None if n == 0 else tinting_additions(steps[-1].recipe, dict(result.recipe)),
+                additions=additions,
+                batch_g=batch.total,
             )
         )
-        if de.mean() <= tolerance:
-            msg = f"converged: mean ΔE00 {de.mean():.2f} after {n} correction(s)"
-            return replace(base, status="converged", message=msg, steps=tuple(steps))
-        if n == max_corrections:
+        if de.mean() <= tolerance or n == max_corrections:
             break
-        target = design - (measured - predicted)
-        target = np.clip(target, LAB_LO, LAB_HI)  # a corrected target stays inside the domain's Lab bound
-        result = formulate(target, angles, [("previous", result.concentrations)], gloss_gu, 1e9, db)
-    msg = f"not converged: mean ΔE00 {steps[-1].mean_de:.2f} after {max_corrections} correction(s)"
-    if len(steps) > 1 and steps[-1].predicted_mean_de > tolerance:
-        msg += (
-            f"; the corrected target is out of the model's reach (predicted ΔE00 {steps[-1].predicted_mean_de:.2f}):"
-            " the design is likely outside the gamut of the colorants actually sprayed"
+        target = np.clip(design - (measured - predicted), LAB_LO, LAB_HI)  # stays inside the Lab bound
+        batch, additions = _correct(batch, target, angles, tolerance, db, opts, gloss_gu)
+    return steps
+
+
+def _correct(
+    batch: _Batch,
+    target: NDArray,
+    angles: tuple[float, ...],
+    tolerance: float,
+    db: ColorantDatabase,
+    opts: FormulationOptions,
+    gloss_gu: float | None,
+) -> tuple[_Batch, Tinting]:
+    """Tint the batch toward *target*; remake (a new recipe, a fresh batch) only when tinting cannot
+    reach the tolerance and the new recipe can, or does better."""
+    batch_g = opts.batch_g
+    t = tint(batch.masses, batch.binder, target, angles, db, opts.scale_resolution_g, batch_g)
+    tinted = _Batch(t.masses_g, t.binder_g, None, t.concentrations, t.predicted_mean_de)
+    if t.predicted_mean_de <= tolerance:
+        return tinted, t.tinting
+    start: list[tuple[str, ArrayLike | dict[str, float]]] = [("previous", batch.concentrations)]
+    line = batch.result.line if batch.result is not None and batch.result.line else None
+    remade = formulate_with(target, angles, start, gloss_gu, 1e9, db, replace(opts, line=opts.line or line))
+    if remade.mean_de < t.predicted_mean_de:
+        note = Tinting(
+            {},
+            0.0,
+            batch_g,
+            True,
+            f"remake the batch: additions reach only ΔE00 {t.predicted_mean_de:.2f} (predicted) within "
+            f"the batch's bounds; the new recipe reaches {remade.mean_de:.2f} in a fresh {batch_g:g} g batch",
         )
-    return replace(base, status="not_converged", message=msg, steps=tuple(steps))
+        return _fresh(remade, batch_g), note
+    return tinted, t.tinting
+
+
+def _angle_warnings(steps: list[LoopStep], angles: tuple[float, ...], tolerance: float) -> tuple[str, ...]:
+    """A warning for every angle of the last step worse than the tolerance or than the first spray-out."""
+    first, last = steps[0], steps[-1]
+    out = []
+    for a, d0, d1 in zip(angles, first.de_per_angle, last.de_per_angle, strict=True):
+        if d1 > tolerance:
+            out.append(f"{aspecular_name(a)} ends at ΔE00 {d1:.2f}, worse than the tolerance {tolerance:g}")
+        if len(steps) > 1 and d1 > d0:
+            out.append(
+                f"{aspecular_name(a)} ends at ΔE00 {d1:.2f}, worse than the first spray-out's {d0:.2f}"
+            )
+    return tuple(out)

@@ -1,6 +1,7 @@
-"""Recipe formulation: non-negative colorant fractions minimising the multi-angle CIEDE2000 to a design.
+"""Recipe formulation: a few colorants of the right toner line, weighable, the same every time.
 
-Problem (per design, Lab at the angles θ_j, illumination 45°, D65/10°):
+Problem (per design, Lab at the angles θ_j, illumination 45°, D65/10°), over the colorants c of a
+toner line (:mod:`station.formulate.lines`):
 
     minimise   Σ_j ΔE00(design_j, predict_lab(c)_j)²
     subject to 0 ≤ c_i ≤ max_fraction_i,  Σ_i c_i ≤ max_total − c_matting,
@@ -8,26 +9,34 @@ Problem (per design, Lab at the angles θ_j, illumination 45°, D65/10°):
 
 with :func:`station.formulate.colorants.predict_lab` (Kubelka–Munk per geometry + Saunderson). The
 matting fraction is set in closed form from the gloss target (G = 90 − 650 c_matting) because it does
-not change the colour in this model. SciPy's SLSQP solves it, with gradients from one batched
-forward-difference evaluation of the (vectorised) model, starting from the ColorSnap match's recipe
-and, if that falls short, from the next matches' recipes and a few generic starts.
+not change the colour in this model.
 
-The result reports the predicted ΔE00 per angle; a design whose best mean ΔE00 over angles exceeds
-the tolerance (default 1.0) is reported as "not formulable with these colorants".
+1. **Line-wide fit** (:mod:`station.formulate.solver`): weighted-Lab least squares from the starting
+   recipes (the ColorSnap matches' recipes, then generic starts built from the line), at most
+   ``max_starts`` of them, stopping early once a start comes within a fifth of the tolerance; then SLSQP
+   on Σ ΔE00² from the best.
+2. **Selection** (:mod:`station.formulate.selection`): subsets of at most ``max_colorants`` colorants
+   refitted, rounded to the scale, and ranked by ΔE00 after rounding, metamerism index (A, F11), number
+   of colorants and cost (the metamerism index computed for the best 2 × ``recipes`` only); the best
+   ``recipes`` are returned, the first is the result's recipe.
+
+Every stop is an iteration or evaluation count or a value of the objective: the same input gives the
+same recipe on any machine at any load (no clock is read but to report ``elapsed_s``).
+
+A design whose best mean ΔE00 over angles (after rounding) exceeds the tolerance (default 1.0) is
+reported as "not formulable with these colorants".
 """
 
 from __future__ import annotations
 
-import functools
 import time
-from collections.abc import Collection
-from dataclasses import dataclass, field
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import OptimizeResult, least_squares, minimize
 
-from station.formulate.batch import batch_masses
+from station.formulate.batch import DEFAULT_BATCH_G, batch_masses
 from station.formulate.colorants import (
     GLOSS_CLEAR_GU,
     GLOSS_PER_MATTING,
@@ -38,15 +47,75 @@ from station.formulate.colorants import (
 from station.formulate.de_kernels import cie2000
 from station.formulate.errors import FormulateInputError, NotFormulableError
 from station.formulate.library import STANDARD_ANGLES, Library
+from station.formulate.lines import lines_for_design, toner_line
+from station.formulate.selection import (
+    REFINED,
+    RecipeOption,
+    fit_subset,
+    make_option,
+    metamerism,
+    rank_options,
+    refine_subset,
+    round_to_scale,
+    subsets,
+)
 from station.formulate.snap import SnapIndex, SnapResult, color_snap, validate_design_lab
-from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS_MIN_GU
+from station.formulate.solver import Objective, Problem, fit_lab, refine_de00
+from station.model.domain import (
+    DEFAULT_MAX_COLORANTS,
+    DEFAULT_RECIPE_COUNT,
+    DEFAULT_SCALE_RESOLUTION_G,
+    FORMULATION_TOLERANCE_DE00,
+    GLOSS_MAX_GU,
+    GLOSS_MIN_GU,
+    MAX_COLORANTS_RANGE,
+    METAMERISM_TEST_ILLUMINANTS,
+    RECIPE_COUNT_RANGE,
+    SCALE_RESOLUTION_RANGE_G,
+)
 
 #: Mean CIEDE2000 over the angles accepted as "formulable" (station.model.domain).
 DEFAULT_TOLERANCE = FORMULATION_TOLERANCE_DE00
-_FD_STEP = 1e-7
-_PENALTY = 2000.0
 #: Fractions at or below this are dropped from a recipe (:meth:`ColorantDatabase.recipe`'s threshold).
 _RECIPE_THRESHOLD = 1e-6
+#: Starting recipes fitted at most per toner line (library matches first, then generic starts).
+MAX_STARTS = 4
+
+
+@dataclass(frozen=True)
+class FormulationOptions:
+    """What the chemist asks of a recipe (validated by :func:`formulation_options`)."""
+
+    line: str | None = None
+    paint_type: str | None = None
+    max_colorants: int = DEFAULT_MAX_COLORANTS
+    scale_resolution_g: float = DEFAULT_SCALE_RESOLUTION_G
+    batch_g: float = DEFAULT_BATCH_G
+    recipes: int = DEFAULT_RECIPE_COUNT
+    illuminants: tuple[str, ...] = METAMERISM_TEST_ILLUMINANTS
+    max_starts: int = MAX_STARTS
+
+
+def formulation_options(o: FormulationOptions) -> FormulationOptions:
+    """*o*, each field checked (a :class:`FormulateInputError` naming the field and its accepted range)."""
+    lo, hi = MAX_COLORANTS_RANGE
+    if not isinstance(o.max_colorants, int) or not lo <= o.max_colorants <= hi:
+        raise FormulateInputError("max_colorants", f"an integer in [{lo}, {hi}]", o.max_colorants)
+    lo_r, hi_r = SCALE_RESOLUTION_RANGE_G
+    if not (np.isfinite(o.scale_resolution_g) and lo_r <= o.scale_resolution_g <= hi_r):
+        raise FormulateInputError(
+            "scale_resolution_g", f"{lo_r:g} <= scale_resolution_g <= {hi_r:g} g", o.scale_resolution_g
+        )
+    if not (np.isfinite(o.batch_g) and 0 < o.batch_g <= 1e6 and o.batch_g >= 10 * o.scale_resolution_g):
+        raise FormulateInputError("batch_g", "10 × the scale resolution <= batch_g <= 1e6 g", o.batch_g)
+    lo, hi = RECIPE_COUNT_RANGE
+    if not isinstance(o.recipes, int) or not lo <= o.recipes <= hi:
+        raise FormulateInputError("recipes", f"an integer in [{lo}, {hi}]", o.recipes)
+    if not isinstance(o.max_starts, int) or not 1 <= o.max_starts <= 50:
+        raise FormulateInputError("max_starts", "an integer in [1, 50]", o.max_starts)
+    if o.line is not None:
+        toner_line(o.line)
+    return o
 
 
 @dataclass(frozen=True)
@@ -73,6 +142,12 @@ class FormulationResult:
         ``(start label, full concentration vector)`` of the distinct recipes the starts converged to,
         the winning recipe first (filled when :func:`formulate` is asked for ``candidates``); their
         metamerism ranking is :func:`station.formulate.metamerism.rank_formulation`.
+    line
+        The toner line the recipe is drawn from.
+    recipes
+        The best few recipes, ranked (:mod:`station.formulate.selection`); ``recipe`` is the first.
+    mean_de_unrounded
+        Mean ΔE00 of the first recipe before its amounts were rounded to the scale.
     """
 
     recipe: dict[str, float]
@@ -93,6 +168,9 @@ class FormulationResult:
     synthetic: bool = True
     warnings: tuple[str, ...] = field(default=())
     candidates: tuple[tuple[str, NDArray[np.float64]], ...] = field(default=())
+    line: str = ""
+    recipes: tuple[RecipeOption, ...] = field(default=())
+    mean_de_unrounded: float = float("nan")
 
     def to_dict(self) -> dict[str, object]:
         """JSON-able form for the CLI and the service."""
@@ -115,6 +193,10 @@ class FormulationResult:
             "warnings": list(self.warnings),
             "batch": batch_masses(self.recipe).to_dict(),
             "nearest_achievable_lab": None if self.formulable else self.predicted_lab.tolist(),
+            "line": self.line,
+            "mean_de_unrounded": self.mean_de_unrounded,
+            "evaluations": self.evaluations,
+            "recipes": [o.to_dict() for o in self.recipes],
         }
 
 
@@ -136,130 +218,26 @@ def matting_for_gloss(gloss_gu: float, db: ColorantDatabase) -> tuple[float, str
     return float(c), None
 
 
-class _Objective:
-    """Σ ΔE00² to the design, with the batched forward-difference gradient; counts evaluations."""
+def _generic_starts(
+    db: ColorantDatabase, design: NDArray, angles: tuple[float, ...], allowed: NDArray[np.bool_]
+) -> list[NDArray]:
+    """A pool of generic starting recipes from the colorants *allowed*, best first by their
+    multi-angle ΔE00 to the design.
 
-    def __init__(
-        self, design: NDArray, angles: tuple[float, ...], db: ColorantDatabase, free: NDArray, fixed: NDArray
-    ):
-        self.design = design
-        self.angles = angles
-        self.db = db
-        self.free = free
-        self.fixed = fixed
-        self.evaluations = 0
-        self._cache: tuple[bytes, float, NDArray] | None = None
-        #: Best point evaluated so far (SLSQP's iterates are not monotone; a stopped run keeps this one).
-        self.best: tuple[float, NDArray] = (np.inf, np.zeros(free.size))
-
-    def full(self, x: NDArray) -> NDArray:
-        c = np.broadcast_to(self.fixed, (*x.shape[:-1], self.fixed.size)).copy()
-        c[..., self.free] = x
-        return c
-
-    def _eval(self, x: NDArray) -> tuple[float, NDArray]:
-        key = x.tobytes()
-        if self._cache is not None and self._cache[0] == key:
-            return self._cache[1], self._cache[2]
-        n = x.size
-        pts = np.repeat(x[None], n + 1, axis=0)
-        pts[np.arange(1, n + 1), np.arange(n)] += _FD_STEP
-        lab = predict_lab(self.full(pts), self.angles, self.db)
-        de = cie2000(self.design[None], lab)
-        f = (de * de).sum(-1)
-        self.evaluations += n + 1
-        grad = (f[1:] - f[0]) / _FD_STEP
-        self._cache = (key, float(f[0]), grad)
-        if f[0] < self.best[0]:
-            self.best = (float(f[0]), x.copy())
-        return float(f[0]), grad
-
-    def value(self, x: NDArray) -> float:
-        return self._eval(np.asarray(x, dtype=np.float64))[0]
-
-    def grad(self, x: NDArray) -> NDArray:
-        return self._eval(np.asarray(x, dtype=np.float64))[1]
-
-
-class _LabLeastSquares:
-    """Residuals for the fast phase: Lab differences per angle weighted as CIE94 weights them
-    (ΔL*, Δa*/(1 + 0.03 C*), Δb*/(1 + 0.03 C*) with C* of the design), plus penalty rows for the two
-    linear constraints (total and flake fractions); zero residual is an exact match in every metric."""
-
-    def __init__(
-        self,
-        design: NDArray,
-        angles: tuple[float, ...],
-        db: ColorantDatabase,
-        objective: _Objective,
-        max_total: float,
-        effect: NDArray,
-    ):
-        self.design = design
-        chroma = np.hypot(design[:, 1], design[:, 2])
-        self.weight = np.stack([np.ones_like(chroma), 1 / (1 + 0.03 * chroma), 1 / (1 + 0.03 * chroma)], -1)
-        self.angles = angles
-        self.db = db
-        self.objective = objective
-        self.max_total = max_total
-        self.effect = effect
-        self.max_effect = db.max_effect
-        self._cache: tuple[bytes, NDArray, NDArray] | None = None
-
-    def _eval(self, x: NDArray) -> tuple[NDArray, NDArray]:
-        key = x.tobytes()
-        if self._cache is not None and self._cache[0] == key:
-            return self._cache[1], self._cache[2]
-        n = x.size
-        pts = np.repeat(x[None], n + 1, axis=0)
-        pts[np.arange(1, n + 1), np.arange(n)] += _FD_STEP
-        lab = predict_lab(self.objective.full(pts), self.angles, self.db)
-        r = ((lab - self.design[None]) * self.weight[None]).reshape(n + 1, -1)
-        self.objective.evaluations += n + 1
-        over_t = x.sum() - self.max_total
-        over_e = self.effect @ x - self.max_effect
-        pen = np.array([_PENALTY * max(over_t, 0.0), _PENALTY * max(over_e, 0.0)])
-        jp = np.stack([_PENALTY * (over_t > 0) * np.ones(n), _PENALTY * (over_e > 0) * self.effect])
-        res = np.concatenate([r[0], pen])
-        jac = np.vstack([((r[1:] - r[0]) / _FD_STEP).T, jp])
-        self._cache = (key, res, jac)
-        return res, jac
-
-    def residual(self, x: NDArray) -> NDArray:
-        return self._eval(np.asarray(x, dtype=np.float64))[0]
-
-    def jacobian(self, x: NDArray) -> NDArray:
-        return self._eval(np.asarray(x, dtype=np.float64))[1]
-
-
-def _project(x: NDArray, ub: NDArray, effect: NDArray, max_effect: float, max_total: float) -> NDArray:
-    """Make an optimiser's point exactly feasible (SLSQP meets constraints only to ~1e-8): clip to the
-    bounds, then scale the effect pigments and the total down to their limits."""
-    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, ub)
-    e = x[effect].sum()
-    if e > max_effect:
-        x[effect] *= max_effect / e * (1 - 1e-12)
-    t = x.sum()
-    if t > max_total:
-        x *= max_total / t * (1 - 1e-12)
-    return x
-
-
-def _generic_starts(db: ColorantDatabase, design: NDArray, angles: tuple[float, ...]) -> list[NDArray]:
-    """A pool of generic starting recipes, best first by their multi-angle ΔE00 to the design.
-
-    Bases: TiO2 white (solid), each aluminium grade and each adjacent pair, each pearl and interference pigment; each with
-    one tint, or two tints adjacent in hue, at a low and a high loading. One batched model evaluation
-    ranks the whole pool (about 200 recipes).
+    Bases: TiO2 white (two loadings), carbon black, each aluminium grade and each adjacent pair, each
+    pearl and interference pigment (those the line allows); each with one tint, or two tints adjacent in
+    hue, at a low and a high loading. One batched model evaluation ranks the whole pool.
     """
     names = db.names
     idx = {n: i for i, n in enumerate(names)}
-    tints = [c.name for c in db.colorants if c.family == "tint"]
     fam = {c.name: c.family for c in db.colorants}
-    alu = [n for n in names if fam[n] == "aluminium"]
-    bases: list[dict[str, float]] = [{"white_tio2": 0.05}, {"white_tio2": 0.15}]
+    ok = {n for n, a in zip(names, allowed, strict=True) if a}
+    tints = [n for n in names if fam[n] == "tint" and n in ok]
+    alu = [n for n in names if fam[n] == "aluminium" and n in ok]
+    bases: list[dict[str, float]] = [{"white_tio2": 0.05}, {"white_tio2": 0.15}, {"black_carbon": 0.01}]
     bases += [{a: 0.08} for a in alu] + [{alu[k]: 0.05, alu[k + 1]: 0.05} for k in range(len(alu) - 1)]
-    bases += [{n: 0.08} for n in names if fam[n] in ("pearl", "interference")]
+    bases += [{n: 0.08} for n in names if fam[n] in ("pearl", "interference") and n in ok]
+    bases = [b for b in bases if set(b) <= ok]
     mixes = [[t] for t in tints] + [[tints[k], tints[(k + 1) % len(tints)]] for k in range(len(tints))] + [[]]
     pool = []
     for base in bases:
@@ -276,6 +254,65 @@ def _generic_starts(db: ColorantDatabase, design: NDArray, angles: tuple[float, 
     return [c[k] for k in np.argsort(f, kind="stable")[:6]]
 
 
+@dataclass
+class _LineFit:
+    """What one toner line gave: ranked-to-be options, the starts' points, evaluations spent."""
+
+    options: list[RecipeOption]
+    tried: list[tuple[str, NDArray[np.float64]]]
+    evaluations: int
+
+
+def _fit_line(
+    design: NDArray,
+    angles: tuple[float, ...],
+    starts: Sequence[tuple[str, NDArray[np.float64]]],
+    c_mat: float,
+    db: ColorantDatabase,
+    line: str,
+    opts: FormulationOptions,
+    tolerance: float,
+    candidates: int,
+) -> _LineFit:
+    """Line-wide fit from the starts, then the subset search, rounding and scoring (module docstring)."""
+    allowed = toner_line(line).mask(db)
+    fixed = np.zeros(len(db.names))
+    fixed[db.matting_index] = c_mat
+    prob = Problem(design, angles, db, np.flatnonzero(allowed), fixed)
+    obj = Objective(prob)
+    xs = [(lb, np.where(allowed, v, 0.0)[prob.free]) for lb, v in starts]
+    xs += [("generic", s[prob.free]) for s in _generic_starts(db, design, angles, allowed)]
+    good_enough = (0.02 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of ~0.02
+    enough = (0.2 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of 0.2 × tolerance
+    tried: list[tuple[str, float, NDArray[np.float64]]] = []
+    for label, x0 in xs[: max(opts.max_starts, candidates)]:
+        if tried and len(tried) >= candidates and min(t[1] for t in tried) <= enough:
+            break
+        f, x = fit_lab(obj, x0)
+        tried.append((label, f, x))
+    tried.sort(key=lambda t: t[1])  # stable: equal values keep the starts' order
+    if tried[0][1] > enough:
+        f, x = refine_de00(obj, tried[0][2], good_enough)
+        tried[0] = (tried[0][0], f, x)
+    points = [t[2] for t in tried]
+    step = opts.scale_resolution_g / opts.batch_g
+    spec_base = (opts.batch_g, opts.scale_resolution_g, tolerance, line)
+    evaluations = obj.evaluations
+    fitted: list[tuple[float, int, NDArray[np.float64], Objective, str]] = []
+    for sub in subsets(points, opts.max_colorants):
+        k = int(np.argmax([p[list(sub)].sum() for p in points]))
+        f, x, sub_obj = fit_subset(prob, sub, points[k])
+        fitted.append((f, len(fitted), x, sub_obj, tried[k][0]))
+    fitted.sort(key=lambda t: (t[0], t[1]))
+    rows: list[tuple[NDArray[np.float64], NDArray[np.float64], str]] = []
+    for n, (_, _, x, sub_obj, label) in enumerate(fitted):
+        c = refine_subset(sub_obj, x, good_enough) if n < REFINED else sub_obj.p.full(x)
+        evaluations += sub_obj.evaluations
+        rows.append((round_to_scale(c, prob, step, db.matting_index), c, label))
+    options = [make_option(c_r, c, prob, None, (*spec_base, label)) for c_r, c, label in rows]
+    return _LineFit(options, [(lb, prob.full(x)) for lb, _, x in tried], evaluations)
+
+
 def formulate(
     design_lab: ArrayLike,
     angles_deg: tuple[float, ...] = STANDARD_ANGLES,
@@ -283,11 +320,20 @@ def formulate(
     gloss_gu: float | None = None,
     tolerance: float = DEFAULT_TOLERANCE,
     db: ColorantDatabase | None = None,
-    time_budget_s: float = 0.8,
+    time_budget_s: float | None = None,
     strict: bool = False,
     candidates: int = 0,
+    *,
+    line: str | None = None,
+    paint_type: str | None = None,
+    max_colorants: int = DEFAULT_MAX_COLORANTS,
+    scale_resolution_g: float = DEFAULT_SCALE_RESOLUTION_G,
+    batch_g: float = DEFAULT_BATCH_G,
+    recipes: int = DEFAULT_RECIPE_COUNT,
+    illuminants: tuple[str, ...] = METAMERISM_TEST_ILLUMINANTS,
+    max_starts: int = MAX_STARTS,
 ) -> FormulationResult:
-    """Formulate a recipe for the design (see module docstring).
+    """Formulate the best few recipes for the design (see module docstring).
 
     Parameters
     ----------
@@ -297,149 +343,153 @@ def formulate(
         The angles (degrees) of *design_lab*.
     starts
         ``[(label, recipe)]`` starting recipes, best first (e.g. the ColorSnap matches' recipes); a
-        recipe is a vector or ``{colorant: fraction}``. Generic starts are added after them.
+        recipe is a vector or ``{colorant: fraction}``; colorants outside the toner line are dropped.
     gloss_gu
-        60° gloss target (GU); ``None`` keeps full gloss.
+        60° gloss target (GU); ``None`` keeps full gloss (no matting agent).
     tolerance
-        Mean predicted ΔE00 over angles above which the design is "not formulable".
+        Mean predicted ΔE00 (after rounding) over angles above which the design is "not formulable".
     time_budget_s
-        Further starts are tried only while the elapsed time is within this budget, and an optimiser run
-        stops (keeping its best point) at 1.15 × the budget.
+        Accepted for compatibility and ignored: every stop is a count, so no clock changes the result.
     strict
         Raise :class:`NotFormulableError` instead of returning an unformulable result.
     candidates
-        Try at least this many starts to convergence, whatever the time budget, and keep each distinct
-        recipe they reach as :attr:`FormulationResult.candidates` (0: stop at the first good enough).
+        Fit at least this many starts and keep each distinct recipe they reach as
+        :attr:`FormulationResult.candidates` (0: stop at the first good enough).
+    line, paint_type
+        The toner line (default: from *paint_type*, else from the design's type; :mod:`~station.formulate.lines`).
+    max_colorants, scale_resolution_g, batch_g, recipes
+        At most this many colorants (binder and matting agent not counted), amounts rounded to this
+        resolution (g) in a batch of this mass (g), and this many recipes returned.
+    illuminants
+        Test illuminants of the metamerism index (reference D65).
+    max_starts
+        Starting recipes fitted at most per toner line.
     """
-    if candidates < 0:
+    del time_budget_s
+    if not isinstance(candidates, int) or candidates < 0:
         raise FormulateInputError("candidates", "a count >= 0", candidates)
+    opts = formulation_options(
+        FormulationOptions(
+            line,
+            paint_type,
+            max_colorants,
+            scale_resolution_g,
+            batch_g,
+            recipes,
+            tuple(illuminants),
+            max_starts,
+        )
+    )
     t0 = time.perf_counter()
     db = db or default_database()
     angles = tuple(float(a) for a in angles_deg)
+    design, starts_c = _checked_inputs(design_lab, angles, starts, tolerance, db)
+    c_mat, warn = matting_for_gloss(GLOSS_CLEAR_GU if gloss_gu is None else gloss_gu, db)
+    ranked, fits = _ranked_options(design, angles, starts_c, c_mat, db, opts, float(tolerance), candidates)
+    return _result(design, angles, db, ranked, fits, float(tolerance), c_mat, warn, strict, candidates, t0)
+
+
+def _ranked_options(
+    design: NDArray,
+    angles: tuple[float, ...],
+    starts: Sequence[tuple[str, NDArray[np.float64]]],
+    c_mat: float,
+    db: ColorantDatabase,
+    opts: FormulationOptions,
+    tolerance: float,
+    candidates: int,
+) -> tuple[tuple[RecipeOption, ...], list[tuple[str, _LineFit]]]:
+    """Each toner line in turn until one reaches the design; the recipes ranked, the metamerism index
+    computed for the best 2 × ``recipes`` (it costs a constrained fit of the reference reflectance)."""
+    pool: list[RecipeOption] = []
+    fits: list[tuple[str, _LineFit]] = []
+    for line in lines_for_design(design, opts.line, opts.paint_type):
+        fit = _fit_line(design, angles, starts, c_mat, db, line, opts, tolerance, candidates)
+        fits.append((line, fit))
+        pool += fit.options
+        if rank_options(pool, 1)[0].formulable:
+            break
+    shortlist = rank_options(pool, 2 * opts.recipes)
+    meta = metamerism(design, np.asarray([o.concentrations for o in shortlist]), angles, db, opts.illuminants)
+    ranked = rank_options(
+        [replace(o, metamerism=m) for o, m in zip(shortlist, meta, strict=True)], opts.recipes
+    )
+    return ranked, fits
+
+
+def _checked_inputs(
+    design_lab: ArrayLike,
+    angles: tuple[float, ...],
+    starts: list[tuple[str, ArrayLike | dict[str, float]]] | None,
+    tolerance: float,
+    db: ColorantDatabase,
+) -> tuple[NDArray[np.float64], list[tuple[str, NDArray[np.float64]]]]:
+    """The design (A, 3) and the starting recipes as checked full vectors; bad input raises
+    :class:`FormulateInputError` naming the field."""
     design = validate_design_lab(design_lab, len(angles), "design_lab")
     if not (np.isfinite(tolerance) and tolerance > 0):
         raise FormulateInputError("tolerance", "a positive ΔE00", tolerance)
-    warnings: list[str] = []
-    c_mat, warn = matting_for_gloss(GLOSS_CLEAR_GU if gloss_gu is None else gloss_gu, db)
-    if warn:
-        warnings.append(warn)
-    n = len(db.names)
-    free = np.array([i for i in range(n) if i != db.matting_index])
-    fixed = np.zeros(n)
-    fixed[db.matting_index] = c_mat
-    ub = db.upper_bounds[free]
-    effect = db.effect_mask[free].astype(float)
-
-    def total_slack(x: NDArray[np.float64]) -> float:  # Σ c <= max_total - c_matting
-        return float(db.max_total - c_mat - x.sum())
-
-    def total_slack_grad(x: NDArray[np.float64]) -> NDArray[np.float64]:
-        return -np.ones_like(x)
-
-    def effect_slack(x: NDArray[np.float64]) -> float:  # Σ c_effect <= max_effect
-        return float(db.max_effect - effect @ x)
-
-    def effect_slack_grad(x: NDArray[np.float64]) -> NDArray[np.float64]:
-        return -effect
-
-    objective = _Objective(design, angles, db, free, fixed)
-    starts_x: list[tuple[str, NDArray]] = []
-    for label, rec in starts or []:
+    starts_c = []
+    for lb, rec in starts or []:
         vec = db.vector(rec) if isinstance(rec, dict) else np.asarray(rec, dtype=np.float64)
-        starts_x.append((label, db.check(vec, field=f"starts[{label}]")[free]))
-    starts_x += [("generic", s[free]) for s in _generic_starts(db, design, angles)]
-    best: tuple[float, NDArray, str] | None = None
-    good_enough = (0.02 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of ~0.02
-    deadline = t0 + max(time_budget_s, 0.05) * 1.15
+        starts_c.append((lb, db.check(vec, f"starts[{lb}]")))
+    return design, starts_c
 
-    def stop(intermediate_result: OptimizeResult) -> None:  # SciPy's new-style callback: this exact name
-        if (
-            objective.value(np.asarray(intermediate_result.x)) <= good_enough
-            or time.perf_counter() > deadline
-        ):
-            raise StopIteration
 
-    proj = functools.partial(
-        _project, ub=ub, effect=effect.astype(bool), max_effect=db.max_effect, max_total=db.max_total - c_mat
-    )
-    lsq = _LabLeastSquares(design, angles, db, objective, db.max_total - c_mat, effect)
-    enough = (0.2 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of 0.2 × tolerance
-    tried: list[tuple[str, NDArray]] = []
-    for label, x0 in starts_x:  # phase 1: Gauss–Newton (trust region) on weighted Lab residuals
-        if (
-            best is not None
-            and len(tried) >= candidates
-            and (time.perf_counter() - t0 > time_budget_s or best[0] <= enough)
-        ):
-            break
-        res_ls = least_squares(
-            lsq.residual,
-            np.clip(x0, 0.0, ub),
-            jac=lsq.jacobian,
-            bounds=(np.zeros_like(ub), np.maximum(ub, 1e-12)),
-            method="trf",
-            max_nfev=25,
-            xtol=1e-10,
-            ftol=1e-10,
-        )
-        x = proj(res_ls.x)
-        f = objective.value(x)
-        tried.append((label, x))
-        if best is None or f < best[0]:
-            best = (f, x, label)
-    assert best is not None  # noqa: S101 - starts_x is never empty (generic starts)
-    if best[0] > enough and time.perf_counter() < deadline:  # phase 2: SLSQP on Σ ΔE00² itself
-        res = minimize(
-            objective.value,
-            best[1],
-            jac=objective.grad,
-            method="SLSQP",
-            bounds=list(zip(np.zeros_like(ub), ub, strict=True)),
-            constraints=[
-                {"type": "ineq", "fun": total_slack, "jac": total_slack_grad},
-                {"type": "ineq", "fun": effect_slack, "jac": effect_slack_grad},
-            ],
-            options={"maxiter": 150, "ftol": 1e-9},
-            callback=stop,
-        )
-        for point in (res.x, objective.best[1]):
-            x = proj(point)
-            f = objective.value(x)
-            if f < best[0]:
-                best = (f, x, best[2])
-    c = objective.full(best[1])
-    c[c <= _RECIPE_THRESHOLD] = 0.0  # the reported recipe omits these: predict exactly what it says
+def _result(
+    design: NDArray,
+    angles: tuple[float, ...],
+    db: ColorantDatabase,
+    ranked: tuple[RecipeOption, ...],
+    fits: list[tuple[str, _LineFit]],
+    tolerance: float,
+    c_mat: float,
+    warn: str | None,
+    strict: bool,
+    candidates: int,
+    t0: float,
+) -> FormulationResult:
+    """The :class:`FormulationResult` of the first-ranked recipe."""
+    best = ranked[0]
+    c = best.concentrations
     pred = predict_lab(c, angles, db)
-    de = cie2000(design, pred)
-    mean_de = float(de.mean())
-    formulable = mean_de <= tolerance
+    mean_de = best.mean_de
     message = (
-        f"formulated: mean ΔE00 {mean_de:.2f} over {len(angles)} angles (tolerance {tolerance:g})"
-        if formulable
+        f"formulated: mean ΔE00 {mean_de:.2f} over {len(angles)} angles after rounding to "
+        f"{best.scale_resolution_g:g} g (tolerance {tolerance:g}), {best.colorants} colorants of the "
+        f"{best.line} line"
+        if best.formulable
         else f"not formulable with these colorants: best mean ΔE00 {mean_de:.2f} > tolerance {tolerance:g};"
         " the nearest achievable paint is the prediction of the best recipe (nearest_achievable_lab)"
     )
-    if strict and not formulable:
+    if strict and not best.formulable:
         raise NotFormulableError(message)
+    tried = [t for line, fit in fits if line == best.line for t in fit.tried]
+    warnings = [warn] if warn else []
+    if best.metamerism is None:
+        warnings.append("metamerism index not computed: no reflectance reproduces the design's Lab")
     return FormulationResult(
-        recipe=db.recipe(c, _RECIPE_THRESHOLD),
+        recipe=best.recipe,
         concentrations=c,
         angles_deg=angles,
         design_lab=design,
         predicted_lab=pred,
-        de_per_angle=tuple(float(v) for v in de),
+        de_per_angle=best.de_per_angle,
         mean_de=mean_de,
-        max_de=float(de.max()),
-        formulable=formulable,
-        tolerance=float(tolerance),
-        gloss_gu=float(GLOSS_CLEAR_GU - GLOSS_PER_MATTING * c_mat),
-        start=best[2],
+        max_de=max(best.de_per_angle),
+        formulable=best.formulable,
+        tolerance=tolerance,
+        gloss_gu=float(GLOSS_CLEAR_GU - GLOSS_PER_MATTING * c[db.matting_index]),
+        start=best.start,
         message=message,
         elapsed_s=time.perf_counter() - t0,
-        evaluations=objective.evaluations,
+        evaluations=sum(f.evaluations for _, f in fits),
         synthetic=db.synthetic,
         warnings=tuple(warnings),
-        candidates=_distinct(best[2], c, [(lb, objective.full(x)) for lb, x in tried]) if candidates else (),
+        candidates=_distinct(best.start, c, tried) if candidates else (),
+        line=best.line,
+        recipes=ranked,
+        mean_de_unrounded=best.mean_de_unrounded,
     )
 
 
@@ -447,7 +497,7 @@ def _distinct(
     label: str, winner: NDArray, tried: list[tuple[str, NDArray]]
 ) -> tuple[tuple[str, NDArray[np.float64]], ...]:
     """The winning recipe first, then each recipe *tried* that differs from every one kept (by more than
-    :data:`_RECIPE_THRESHOLD` in some fraction), the reported threshold applied to each."""
+    1e-4 in some fraction), the reported threshold applied to each."""
     kept: list[tuple[str, NDArray[np.float64]]] = [(label, winner)]
     for lb, x in tried:
         x = np.where(x <= _RECIPE_THRESHOLD, 0.0, x)
@@ -464,15 +514,20 @@ def formulate_from_library(
     gloss_gu: float | None = None,
     tolerance: float = DEFAULT_TOLERANCE,
     db: ColorantDatabase | None = None,
-    time_budget_s: float = 0.8,
+    time_budget_s: float | None = None,
     types: Collection[str] | None = None,
     candidates: int = 0,
+    options: FormulationOptions | None = None,
 ) -> tuple[FormulationResult, SnapResult]:
     """ColorSnap (CIEDE2000) the design against a library with recipes, then formulate from the
     *k* best matches' recipes (thesis §5.3.4–5.3.5: the match is the formulation starting point).
 
     *types* restricts the matches (and so the starting recipes) to those paint types (``solid``,
-    ``metallic``, ``pearl``); ``None`` searches every paint. *candidates*: see :func:`formulate`."""
+    ``metallic``, ``pearl``); ``None`` searches every paint. Unless ``line`` is given the toner line
+    follows the paint type: the single type of *types*, else the best match's type.
+    *time_budget_s* is ignored (see :func:`formulate`); *candidates*: see :func:`formulate`; *options*
+    the chemist's limits (:class:`FormulationOptions`, default ones when ``None``)."""
+    del time_budget_s
     if library.recipes is None or library.colorant_names is None:
         raise FormulateInputError("library", "a library with recipes (the demo library)", library.name)
     db = db or default_database()
@@ -483,7 +538,43 @@ def formulate_from_library(
     design = validate_design_lab(design_lab, 3, "design_lab")
     snap = color_snap(library, design, k=k, method="cie2000", index=index, types=types)
     starts = [(m.code, library.recipes[m.index]) for m in snap.matches]
-    result = formulate(
-        design, STANDARD_ANGLES, starts, gloss_gu, tolerance, db, time_budget_s, candidates=candidates
-    )
+    opts = options or FormulationOptions()
+    if opts.line is None and opts.paint_type is None:
+        kinds = sorted(set(types)) if types else []
+        if len(kinds) == 1:
+            opts = replace(opts, paint_type=kinds[0])
+        elif snap.matches:
+            opts = replace(opts, paint_type=str(library.types[snap.matches[0].index]))
+    result = formulate_with(design, STANDARD_ANGLES, starts, gloss_gu, tolerance, db, opts, candidates)
     return result, snap
+
+
+def formulate_with(
+    design_lab: ArrayLike,
+    angles_deg: tuple[float, ...],
+    starts: list[tuple[str, ArrayLike | dict[str, float]]] | None,
+    gloss_gu: float | None,
+    tolerance: float,
+    db: ColorantDatabase | None,
+    options: FormulationOptions,
+    candidates: int = 0,
+) -> FormulationResult:
+    """:func:`formulate` with the chemist's limits as one :class:`FormulationOptions`."""
+    o = options
+    return formulate(
+        design_lab,
+        angles_deg,
+        starts,
+        gloss_gu,
+        tolerance,
+        db,
+        candidates=candidates,
+        line=o.line,
+        paint_type=o.paint_type,
+        max_colorants=o.max_colorants,
+        scale_resolution_g=o.scale_resolution_g,
+        batch_g=o.batch_g,
+        recipes=o.recipes,
+        illuminants=o.illuminants,
+        max_starts=o.max_starts,
+    )

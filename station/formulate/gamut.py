@@ -56,14 +56,15 @@ def colorant_gamut(
     paint: FaceFlopTravelGloss,
     tolerance: float = DEFAULT_TOLERANCE,
     db: ColorantDatabase | None = None,
-    time_budget_s: float = 0.8,
+    time_budget_s: float | None = None,
 ) -> ColorantGamutReport:
-    """Whether *paint* can be mixed from the colorants, and the nearest achievable paint (module docstring)."""
+    """Whether *paint* can be mixed from the colorants, and the nearest achievable paint (module docstring).
+
+    *time_budget_s* is accepted for compatibility and ignored: the formulator stops on counts only."""
+    del time_budget_s
     db = db or default_database()
     lab = paint.lab_at(np.array(ANGLES_3))
-    result = formulate(
-        lab, ANGLES_3, gloss_gu=paint.gloss_gu, tolerance=tolerance, db=db, time_budget_s=time_budget_s
-    )
+    result = formulate(lab, ANGLES_3, gloss_gu=paint.gloss_gu, tolerance=tolerance, db=db)
     if result.formulable:
         nearest = paint
         msg = f"inside the colorant gamut: mean ΔE00 {result.mean_de:.2f} <= {tolerance:g}"

@@ -167,6 +167,40 @@ def _records(stream: io.TextIOBase) -> Iterator[list[str]]:
         yield record
 
 
+def _open(source: str | Path | io.TextIOBase, name: str | None) -> tuple[io.TextIOBase, str | None]:
+    """A text stream over *source* (a path is read as UTF-8, a BOM dropped) and the library's name."""
+    if not isinstance(source, (str, Path)):
+        return source, name
+    path = Path(source)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError as exc:
+        raise LibraryFormatError(None, None, "an existing CSV file", str(path)) from exc
+    except UnicodeDecodeError as exc:
+        raise LibraryFormatError(None, None, "UTF-8 text", str(path)) from exc
+    return io.StringIO(text), name or path.stem
+
+
+def _code(cell: str, rowno: int, allow_formulas: bool, seen: dict[str, int]) -> str:
+    """The row's paint code, checked (printable, bounded length, no formula, unique); recorded in *seen*."""
+    code = cell.strip()
+    if not code or len(code) > MAX_CODE_LENGTH or not code.isprintable():
+        raise LibraryFormatError(
+            rowno,
+            "code",
+            f"a non-empty code of at most {MAX_CODE_LENGTH} printable characters (no control characters)",
+            code[: MAX_CODE_LENGTH + 1],
+        )
+    if not allow_formulas and is_formula(code):
+        raise LibraryFormatError(
+            rowno, "code", "a code not starting with = + - @ (a spreadsheet formula; allow_formulas)", code
+        )
+    if code in seen:
+        raise LibraryFormatError(rowno, "code", f"a unique code (first seen on row {seen[code]})", code)
+    seen[code] = rowno
+    return code
+
+
 def read_library_csv(
     source: str | Path | io.TextIOBase, name: str | None = None, *, allow_formulas: bool = False
 ) -> Library:
@@ -175,18 +209,7 @@ def read_library_csv(
     Raises :class:`LibraryFormatError` naming row and column for every fault; never clamps. A code
     starting with ``= + - @`` (a spreadsheet formula) is refused unless *allow_formulas*.
     """
-    if isinstance(source, (str, Path)):
-        path = Path(source)
-        try:
-            text = path.read_text(encoding="utf-8-sig")
-        except FileNotFoundError as exc:
-            raise LibraryFormatError(None, None, "an existing CSV file", str(path)) from exc
-        except UnicodeDecodeError as exc:
-            raise LibraryFormatError(None, None, "UTF-8 text", str(path)) from exc
-        stream: io.TextIOBase = io.StringIO(text)
-        name = name or path.stem
-    else:
-        stream = source
+    stream, name = _open(source, name)
     reader = _records(stream)
     try:
         header = next(reader)
@@ -211,24 +234,7 @@ def read_library_csv(
             raise LibraryFormatError(rowno, None, f"{ncol} fields", len(row))
         if rowno > MAX_ROWS:
             raise LibraryFormatError(rowno, None, f"at most {MAX_ROWS} rows", rowno)
-        code = row[0].strip()
-        if not code or len(code) > MAX_CODE_LENGTH or not code.isprintable():
-            raise LibraryFormatError(
-                rowno,
-                "code",
-                f"a non-empty code of at most {MAX_CODE_LENGTH} printable characters (no control characters)",
-                code[: MAX_CODE_LENGTH + 1],
-            )
-        if not allow_formulas and is_formula(code):
-            raise LibraryFormatError(
-                rowno,
-                "code",
-                "a code not starting with = + - @ (a spreadsheet formula; allow_formulas)",
-                code,
-            )
-        if code in seen:
-            raise LibraryFormatError(rowno, "code", f"a unique code (first seen on row {seen[code]})", code)
-        seen[code] = rowno
+        code = _code(row[0], rowno, allow_formulas, seen)
         kind = row[1].strip().lower()
         if kind not in PAINT_TYPES:
             raise LibraryFormatError(rowno, "type", " | ".join(PAINT_TYPES), row[1])

@@ -351,6 +351,17 @@ TOLERANCE_AGGREGATIONS: tuple[str, ...] = ("max", "mean")
 JND_CIE76 = 2.3
 #: Default formulation tolerance: mean CIEDE2000 over the angles for "formulable" (formulation-qc).
 FORMULATION_TOLERANCE_DE00 = 1.0
+#: Toner lines a recipe is drawn from (station.formulate.lines): solids get no effect pigment.
+TONER_LINES: tuple[str, ...] = ("solid", "metallic", "pearl")
+#: Default and accepted range of the number of colorants in a recipe, the binder not counted.
+DEFAULT_MAX_COLORANTS = 5
+MAX_COLORANTS_RANGE: tuple[int, int] = (1, 10)
+#: Default scale resolution (g): recipe amounts are rounded to it (the smallest weighable amount).
+DEFAULT_SCALE_RESOLUTION_G = 0.1
+SCALE_RESOLUTION_RANGE_G: tuple[float, float] = (0.001, 10.0)
+#: Default and accepted range of the number of alternative recipes a formulation returns.
+DEFAULT_RECIPE_COUNT = 3
+RECIPE_COUNT_RANGE: tuple[int, int] = (1, 10)
 #: Default threshold of a systematic sketch misfit: 3 JND of ΔE*ab.
 SHADING_MISFIT_DE = 3 * JND_CIE76
 #: Default QC limit on ΔE at each geometry (and on the mean under the "mean" rule), in the units of

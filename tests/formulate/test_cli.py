@@ -123,3 +123,41 @@ def test_bad_input_exits_2_with_one_line(capsys, argv: list[str]) -> None:
     assert main([*argv, "--json"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1
+
+
+def test_formulate_shows_the_recipes_side_by_side(capsys) -> None:
+    silver = "90,2,-5;50,1,-3;30,0.5,-1"
+    out = _run(
+        capsys, "formulate", silver, "--max-colorants", "4", "--recipes", "2", "--scale-resolution", "0.5"
+    )
+    assert 1 <= len(out["recipes"]) <= 2
+    for r in out["recipes"]:
+        assert r["colorants"] <= 4 and r["batch_g"] == 1000.0
+        assert all(abs(g / 0.5 - round(g / 0.5)) < 1e-6 for g in r["grams"].values())
+        assert {"mean_de", "mean_de_unrounded", "metamerism_index", "cost_per_kg"} <= set(r)
+    assert out["recipe"] == out["recipes"][0]["recipe"]
+    assert (
+        main(["formulate", silver, "--max-colorants", "4", "--recipes", "2", "--scale-resolution", "0.5"])
+        == 0
+    )
+    text = capsys.readouterr().out
+    assert "dE00 rounded" in text and "dE00 unrounded" in text and "MI F11" in text and "#1" in text
+    first = out["recipes"][0]
+    for name, grams in first["grams"].items():  # the table shows the JSON's grams
+        row = next(line for line in text.splitlines() if line.startswith(f"{name} (g)"))
+        assert f"{grams:.1f}" in row
+
+
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [
+        (("--max-colorants", "0"), "--max-colorants"),
+        (("--max-colorants", "11"), "--max-colorants"),
+        (("--scale-resolution", "0"), "--scale-resolution"),
+        (("--recipes", "0"), "--recipes"),
+    ],
+)
+def test_formulate_refuses_out_of_range_selection_options(capsys, argv: tuple[str, ...], named: str) -> None:
+    assert main(["formulate", "90,2,-5;50,1,-3;30,0.5,-1", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and named in err

@@ -347,3 +347,25 @@ def pair_bounds_cie2000(
     z = np.minimum(np.maximum(ry * 0.5, dh_lo / (1.0 + (0.015 * T_MAX) * cpbar)), z_hi)
     lower2 = np.maximum(base + z * (z - ry), 0.0)
     return lower2, (base + z_hi * (z_hi + ry) if upper else None)
+
+
+def median_leaves(x: NDArray[np.float64], leaf: int) -> tuple[NDArray[np.intp], list[tuple[int, int]]]:
+    """Recursive median split of the rows of *x* (largest-spread coordinate); returns (perm, buckets)."""
+    perm = np.arange(x.shape[0])
+    buckets: list[tuple[int, int]] = []
+    stack = [(0, x.shape[0])]
+    while stack:
+        lo, hi = stack.pop()
+        n = hi - lo
+        if n <= leaf:
+            buckets.append((lo, hi))
+            continue
+        sub = x[perm[lo:hi]]
+        dim = int(np.argmax(sub.max(0) - sub.min(0)))
+        half = n // 2
+        part = np.argpartition(sub[:, dim], half)
+        perm[lo:hi] = perm[lo:hi][part]
+        stack.append((lo + half, hi))
+        stack.append((lo, lo + half))
+    buckets.sort()
+    return perm, buckets

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Collection
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,6 +27,7 @@ from station.formulate.snap.bounds import (
     W_L,
     box_bounds,
     box_bounds_cie2000_fast,
+    median_leaves,
     pair_bounds_cie2000,
     point_bounds_cie2000,
 )
@@ -54,28 +55,6 @@ class SnapHits(NamedTuple):
     sums: NDArray[np.float64]
     per_angle: NDArray[np.float64]
     stats: SnapStats
-
-
-def _partition(x: NDArray[np.float64], leaf: int) -> tuple[NDArray[np.intp], list[tuple[int, int]]]:
-    """Recursive median split of the rows of *x* (largest-spread coordinate); returns (perm, buckets)."""
-    perm = np.arange(x.shape[0])
-    buckets: list[tuple[int, int]] = []
-    stack = [(0, x.shape[0])]
-    while stack:
-        lo, hi = stack.pop()
-        n = hi - lo
-        if n <= leaf:
-            buckets.append((lo, hi))
-            continue
-        sub = x[perm[lo:hi]]
-        dim = int(np.argmax(sub.max(0) - sub.min(0)))
-        half = n // 2
-        part = np.argpartition(sub[:, dim], half)
-        perm[lo:hi] = perm[lo:hi][part]
-        stack.append((lo + half, hi))
-        stack.append((lo, lo + half))
-    buckets.sort()
-    return perm, buckets
 
 
 class SnapIndex:
@@ -120,7 +99,7 @@ class SnapIndex:
         self.size = n
         if leaf_size is None:
             leaf_size = 32 if n <= 20_000 else 64
-        perm, buckets = _partition(lab.reshape(n, -1), leaf_size)
+        perm, buckets = median_leaves(lab.reshape(n, -1), leaf_size)
         if group is None:
             group = 1 if len(buckets) <= 512 else 64
         nb = -(-len(buckets) // group) * group
@@ -184,71 +163,114 @@ class SnapIndex:
         k = min(int(k), self.size)
         q = validate_design_lab(lab, len(self.angles_deg))
         kernel = KERNELS[method]
-        g = self.group
         first = max(1, -(-k // self._rows.shape[1])) + 1
-        flat = self.n_groups == 1 or g == 1
+        flat = self.n_groups == 1 or self.group == 1
         if method == "cie2000" and use_numba and (walk := compiled_search()) is not None:
             fine = self._cie2000_index()
             return fine._query_cie2000_compiled(q, k, walk)
         if flat and method == "cie2000":
             return self._query_cie2000_flat(q, k)
-        if flat:  # (for CIEDE2000 the cheap bound first; the hue-aware one on the survivors below)
-            lb = box_bounds(
-                q, self._lo, self._hi, self._cmax, method, hue=method != "cie2000", alpha=self._alpha
-            )
-            leaves = np.arange(lb.size)
-        else:  # open the best group(s) first: enough leaves for a k-th best
-            glb = box_bounds(q, self._glo, self._ghi, self._gcmax, method, alpha=self._alpha)
-            ng_first = min(self.n_groups, -(-first // g))
-            gsel = (
-                np.argpartition(glb, ng_first - 1)[:ng_first]
-                if ng_first < self.n_groups
-                else np.arange(self.n_groups)
-            )
-            leaves = (gsel[:, None] * g + np.arange(g)).ravel()
-            lb = box_bounds(
-                q, self._lo[leaves], self._hi[leaves], self._cmax[leaves], method, alpha=self._alpha
-            )
+        leaves, lb, glb = self._first_leaves(q, method, first, flat)
         first = min(first, lb.size)
         pick = np.argpartition(lb, first - 1)[:first] if first < lb.size else np.arange(lb.size)
         sel = leaves[pick]
         rows, s, per = self._evaluate(kernel, q, sel, math.inf, k, method)
         kth = np.partition(s, k - 1)[k - 1] if s.size >= k else math.inf
         if flat:
-            rest = lb <= kth
-            rest[pick] = False
-            more, more_lb = leaves[rest], lb[rest]
-            if method == "cie2000" and more.size:
-                more_lb = box_bounds(
-                    q, self._lo[more], self._hi[more], self._cmax[more], method, alpha=self._alpha
-                )
-                keep = more_lb <= kth
-                more, more_lb = more[keep], more_lb[keep]
+            more, more_lb = self._more_flat(q, method, leaves, lb, pick, kth)
         else:
-            gmore = np.flatnonzero(glb <= kth)
-            cand = (gmore[:, None] * g + np.arange(g)).ravel()
-            keep = ~np.isin(cand, sel)
-            if method == "cie2000":  # cheap bound first, the hue-aware one on the survivors
-                cand = cand[keep]
-                keep = (
-                    box_bounds(
-                        q,
-                        self._lo[cand],
-                        self._hi[cand],
-                        self._cmax[cand],
-                        method,
-                        hue=False,
-                        alpha=self._alpha,
-                    )
-                    <= kth
-                )
+            more, more_lb = self._more_grouped(q, method, glb, sel, kth)
+        found = (rows, s, per)
+        rows, s, per, visited, evaluated = self._drain(kernel, q, k, method, more, more_lb, found, kth)
+        visited += sel.size
+        if s.size > k:
+            keep_k = s <= np.partition(s, k - 1)[k - 1]
+            rows, s, per = rows[keep_k], s[keep_k], per[keep_k]
+        top = np.lexsort((rows, s))[:k]
+        return SnapHits(
+            rows[top], s[top], per[top], SnapStats(int(visited), self.n_buckets, evaluated, "bounded")
+        )
+
+    def _first_leaves(
+        self, q: NDArray[np.float64], method: str, first: int, flat: bool
+    ) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64]]:
+        """Leaves to open first and their lower bounds (and the groups' bounds; empty when flat)."""
+        if flat:  # (for CIEDE2000 the cheap bound first; the hue-aware one on the survivors later)
+            lb = box_bounds(
+                q, self._lo, self._hi, self._cmax, method, hue=method != "cie2000", alpha=self._alpha
+            )
+            return np.arange(lb.size), lb, np.empty(0)
+        g = self.group  # open the best group(s) first: enough leaves for a k-th best
+        glb = box_bounds(q, self._glo, self._ghi, self._gcmax, method, alpha=self._alpha)
+        ng_first = min(self.n_groups, -(-first // g))
+        gsel = (
+            np.argpartition(glb, ng_first - 1)[:ng_first]
+            if ng_first < self.n_groups
+            else np.arange(self.n_groups)
+        )
+        leaves = (gsel[:, None] * g + np.arange(g)).ravel()
+        lb = box_bounds(q, self._lo[leaves], self._hi[leaves], self._cmax[leaves], method, alpha=self._alpha)
+        return leaves, lb, glb
+
+    def _more_flat(
+        self,
+        q: NDArray[np.float64],
+        method: str,
+        leaves: NDArray[np.intp],
+        lb: NDArray[np.float64],
+        pick: NDArray[np.intp],
+        kth: float,
+    ) -> tuple[NDArray[np.intp], NDArray[np.float64]]:
+        """Unopened leaves whose bound does not exclude them (flat index)."""
+        rest = lb <= kth
+        rest[pick] = False
+        more, more_lb = leaves[rest], lb[rest]
+        if method == "cie2000" and more.size:
+            more_lb = box_bounds(
+                q, self._lo[more], self._hi[more], self._cmax[more], method, alpha=self._alpha
+            )
+            keep = more_lb <= kth
+            more, more_lb = more[keep], more_lb[keep]
+        return more, more_lb
+
+    def _more_grouped(
+        self, q: NDArray[np.float64], method: str, glb: NDArray[np.float64], sel: NDArray[np.intp], kth: float
+    ) -> tuple[NDArray[np.intp], NDArray[np.float64]]:
+        """Unopened leaves of the groups whose bound does not exclude them (two-tier index)."""
+        g = self.group
+        gmore = np.flatnonzero(glb <= kth)
+        cand = (gmore[:, None] * g + np.arange(g)).ravel()
+        keep = ~np.isin(cand, sel)
+        if method == "cie2000":  # cheap bound first, the hue-aware one on the survivors
             cand = cand[keep]
-            clb = box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method, alpha=self._alpha)
-            keep = clb <= kth
-            more, more_lb = cand[keep], clb[keep]
-        visited = sel.size
+            keep = (
+                box_bounds(
+                    q, self._lo[cand], self._hi[cand], self._cmax[cand], method, hue=False, alpha=self._alpha
+                )
+                <= kth
+            )
+        cand = cand[keep]
+        clb = box_bounds(q, self._lo[cand], self._hi[cand], self._cmax[cand], method, alpha=self._alpha)
+        keep = clb <= kth
+        return cand[keep], clb[keep]
+
+    def _drain(
+        self,
+        kernel: Any,
+        q: NDArray[np.float64],
+        k: int,
+        method: str,
+        more: NDArray[np.intp],
+        more_lb: NDArray[np.float64],
+        found: tuple[NDArray, NDArray, NDArray],
+        kth: float,
+    ) -> tuple[NDArray, NDArray, NDArray, int, int]:
+        """Open the remaining leaves best-bounded first, each batch tightening the k-th best; returns
+        (rows, sums, per-angle, leaves visited, paints evaluated including *found*)."""
+        rows, s, per = found
+        visited = 0
         evaluated = rows.size
-        while more.size:  # best-bounded leaves first: each batch tightens the k-th best for the rest
+        while more.size:
             if more.size > 2 * _BATCH_LEAVES:
                 part = np.argpartition(more_lb, _BATCH_LEAVES)
                 now, later = part[:_BATCH_LEAVES], part[_BATCH_LEAVES:]
@@ -264,13 +286,7 @@ class SnapIndex:
                 kth = np.partition(s, k - 1)[k - 1]
             still = more_lb[later] <= kth
             more, more_lb = more[later][still], more_lb[later][still]
-        if s.size > k:
-            keep_k = s <= np.partition(s, k - 1)[k - 1]
-            rows, s, per = rows[keep_k], s[keep_k], per[keep_k]
-        top = np.lexsort((rows, s))[:k]
-        return SnapHits(
-            rows[top], s[top], per[top], SnapStats(int(visited), self.n_buckets, evaluated, "bounded")
-        )
+        return rows, s, per, visited, evaluated
 
     def _tile(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """The query's L*, a*, b*, C*_ab in the layout of a leaf's columns: (4, width·A)."""

@@ -51,6 +51,59 @@ def box_bound_one(q: NDArray, cq: NDArray, lo: NDArray, hi: NDArray, cmax: NDArr
     return total * SAFETY - 1e-12
 
 
+def paint_bounds_one(q: NDArray, cq: NDArray, blab: NDArray, i: int, w: int) -> tuple[float, float]:
+    """Lower and upper bounds of the summed CIEDE2000 of paint (*i*, *w*) of the leaf table *blab* to
+    the query *q* (chromas *cq*): :func:`point_bounds_cie2000`'s arithmetic per element, with its
+    margins (compiled inline into :func:`best_first_cie2000`)."""
+    k7 = 25.0**7
+    lower = 0.0
+    upper = 0.0
+    for t in range(q.shape[0]):
+        pl, pa, pb = blab[i, w, t, 0], blab[i, w, t, 1], blab[i, w, t, 2]
+        ql, qa, qb = q[t, 0], q[t, 1], q[t, 2]
+        cbar = (cq[t] + math.sqrt(pa * pa + pb * pb)) * 0.5
+        c7 = cbar * cbar
+        c7 = c7 * c7 * c7 * cbar
+        g1 = 1.5 - 0.5 * math.sqrt(c7 / (c7 + k7))
+        a1 = g1 * qa
+        a2 = g1 * pa
+        cp1 = math.sqrt(a1 * a1 + qb * qb)
+        cp2 = math.sqrt(a2 * a2 + pb * pb)
+        dc = cp2 - cp1
+        da = a2 - a1
+        db = pb - qb
+        dab2 = da * da + db * db
+        dh2 = dab2 - dc * dc
+        eta = 1e-12 * dab2 + 1e-30
+        dh_lo = math.sqrt(max(dh2 - eta, 0.0))
+        dh_hi = math.sqrt(max(dh2, 0.0) + eta)
+        cpbar = (cp1 + cp2) * 0.5
+        cp7 = cpbar * cpbar
+        cp7 = cp7 * cp7 * cp7 * cpbar
+        r = (2.0 * SIN60) * math.sqrt(cp7 / (cp7 + k7))
+        lbar2 = (ql + pl) * 0.5 - 50.0
+        lbar2 = lbar2 * lbar2
+        s_l = 1.0 + 0.015 * lbar2 / math.sqrt(20.0 + lbar2)
+        y = abs(dc) / (1.0 + 0.045 * cpbar)
+        ry = r * y
+        dl = (pl - ql) / s_l
+        base = dl * dl + y * y
+        z_hi = dh_hi / (1.0 + (0.015 * T_MIN) * cpbar)
+        z = min(max(ry * 0.5, dh_lo / (1.0 + (0.015 * T_MAX) * cpbar)), z_hi)
+        lower += math.sqrt(max(base + z * (z - ry), 0.0))
+        upper += math.sqrt(base + z_hi * (z_hi + ry))
+    return lower * SAFETY - 1e-10, upper * (2.0 - SAFETY) + 1e-10
+
+
+def insert_sorted(best: NDArray, value: float) -> None:
+    """Insert *value* into the ascending array *best*, dropping its largest entry."""
+    m = best.shape[0] - 1
+    while m > 0 and best[m - 1] > value:
+        best[m] = best[m - 1]
+        m -= 1
+    best[m] = value
+
+
 def best_first_cie2000(
     q: NDArray[np.float64],
     glo: NDArray,
@@ -78,7 +131,6 @@ def best_first_cie2000(
     exact IEEE operations, as in NumPy) are used, so the margins of :func:`point_bounds_cie2000` hold.
     """
     nb, width, na = rows.shape[0], rows.shape[1], q.shape[0]
-    k7 = 25.0**7
     cq = np.empty(na)
     for t in range(na):
         cq[t] = math.sqrt(q[t, 1] * q[t, 1] + q[t, 2] * q[t, 2])
@@ -112,54 +164,13 @@ def best_first_cie2000(
                 row = rows[i, w]
                 if row >= size:
                     continue
-                lower = 0.0
-                upper = 0.0
-                for t in range(na):
-                    pl, pa, pb = blab[i, w, t, 0], blab[i, w, t, 1], blab[i, w, t, 2]
-                    ql, qa, qb = q[t, 0], q[t, 1], q[t, 2]
-                    cbar = (cq[t] + math.sqrt(pa * pa + pb * pb)) * 0.5
-                    c7 = cbar * cbar
-                    c7 = c7 * c7 * c7 * cbar
-                    g1 = 1.5 - 0.5 * math.sqrt(c7 / (c7 + k7))
-                    a1 = g1 * qa
-                    a2 = g1 * pa
-                    cp1 = math.sqrt(a1 * a1 + qb * qb)
-                    cp2 = math.sqrt(a2 * a2 + pb * pb)
-                    dc = cp2 - cp1
-                    da = a2 - a1
-                    db = pb - qb
-                    dab2 = da * da + db * db
-                    dh2 = dab2 - dc * dc
-                    eta = 1e-12 * dab2 + 1e-30
-                    dh_lo = math.sqrt(max(dh2 - eta, 0.0))
-                    dh_hi = math.sqrt(max(dh2, 0.0) + eta)
-                    cpbar = (cp1 + cp2) * 0.5
-                    cp7 = cpbar * cpbar
-                    cp7 = cp7 * cp7 * cp7 * cpbar
-                    r = (2.0 * SIN60) * math.sqrt(cp7 / (cp7 + k7))
-                    lbar2 = (ql + pl) * 0.5 - 50.0
-                    lbar2 = lbar2 * lbar2
-                    s_l = 1.0 + 0.015 * lbar2 / math.sqrt(20.0 + lbar2)
-                    y = abs(dc) / (1.0 + 0.045 * cpbar)
-                    ry = r * y
-                    dl = (pl - ql) / s_l
-                    base = dl * dl + y * y
-                    z_hi = dh_hi / (1.0 + (0.015 * T_MIN) * cpbar)
-                    z = min(max(ry * 0.5, dh_lo / (1.0 + (0.015 * T_MAX) * cpbar)), z_hi)
-                    lower += math.sqrt(max(base + z * (z - ry), 0.0))
-                    upper += math.sqrt(base + z_hi * (z_hi + ry))
-                lower = lower * SAFETY - 1e-10
-                upper = upper * (2.0 - SAFETY) + 1e-10
+                lower, upper = paint_bounds_one(q, cq, blab, i, w)
                 if lower <= best[k - 1]:
                     cand[nc] = row
                     cand_lb[nc] = lower
                     nc += 1
                 if upper < best[k - 1]:
-                    m = k - 1
-                    while m > 0 and best[m - 1] > upper:
-                        best[m] = best[m - 1]
-                        m -= 1
-                    best[m] = upper
+                    insert_sorted(best, upper)
     u = best[k - 1]
     keep = cand_lb[:nc] <= u
     return cand[:nc][keep], visited
@@ -173,7 +184,8 @@ def _compile() -> CandidateSearch | None:
     except ImportError:  # pragma: no cover - numba is a declared dependency; the NumPy path remains
         return None
     try:
-        register_jitable(box_bound_one)  # the walk calls the bound; compiled inline, not rebound
+        for helper in (box_bound_one, paint_bounds_one, insert_sorted):  # compiled inline, not rebound
+            register_jitable(helper)
         search = numba.njit(cache=True, nogil=True)(best_first_cie2000)
         box, one = np.zeros((1, 1, 3)), np.zeros((1, 1))
         search(

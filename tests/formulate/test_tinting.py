@@ -1,0 +1,58 @@
+"""Corrections as tinting: add-only, within the batch's bounds, or an honest remake."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from station.formulate.batch import MAX_GROWTH
+from station.formulate.closed_loop import closed_loop
+from station.formulate.colorants import default_database, predict_lab
+from station.formulate.tinting import tint
+from station.model import AspecularMeasurements
+
+A3 = (15.0, 45.0, 110.0)
+DB = default_database()
+
+
+def test_tinting_adds_only_and_stays_in_the_can() -> None:
+    c = DB.vector({"white_tio2": 0.2, "red_pr": 0.03, "yellow_py": 0.02})
+    masses = c * 1000.0
+    binder = 1000.0 - masses.sum()
+    target = predict_lab(DB.vector({"white_tio2": 0.2, "red_pr": 0.036, "yellow_py": 0.02}), A3)
+    t = tint(masses, binder, target, A3, DB, 0.1, 1000.0)
+    assert all(g >= 0 for g in t.tinting.additions_g.values()) and t.tinting.binder_g >= 0
+    assert set(t.tinting.additions_g) <= {"white_tio2", "red_pr", "yellow_py"}
+    assert np.all(t.masses_g >= masses - 1e-9)
+    total = t.masses_g.sum() + t.binder_g
+    assert total <= MAX_GROWTH * 1000.0 + 1e-6
+    np.testing.assert_allclose(t.concentrations, t.masses_g / total)
+    # more red was asked for: red is added, and the additions bring the prediction closer
+    assert t.tinting.additions_g.get("red_pr", 0.0) > 0
+    before = np.abs(predict_lab(c, A3) - target).sum()
+    assert np.abs(t.predicted_lab - target).sum() < before
+
+
+def test_a_lighter_target_than_black_and_blue_can_reach_is_a_remake() -> None:
+    design = predict_lab(DB.vector({"white_tio2": 0.15, "blue_pb": 0.02, "black_carbon": 0.004}), A3)
+
+    def measure(recipe: dict[str, float]) -> AspecularMeasurements:  # panels read 12 L* too dark
+        return AspecularMeasurements(A3, predict_lab(DB.vector(recipe), A3) - [12.0, 0.0, 0.0], 90.0)
+
+    job = closed_loop(design, measure, max_corrections=2)
+    corrections = [s for s in job.steps if s.kind == "correction"]
+    assert corrections
+    for step in corrections:
+        t = step.additions
+        assert t is not None
+        if t.remake:
+            assert t.additions_g == {} and "remake" in t.message and step.batch_g == pytest.approx(1000.0)
+        else:
+            assert all(g >= 0 for g in t.additions_g.values())
+            assert t.new_total_g <= MAX_GROWTH * 1000.0 + 1e-6
+    # a panel that stays 12 L* off can never pass: each angle's failure is said
+    if job.status != "converged":
+        assert any("worse than the tolerance" in w for w in job.warnings)
+    for step in job.steps:
+        total = sum(step.recipe.values())
+        assert total <= 1.0
