@@ -110,5 +110,9 @@ def open_gloss_meter(device: str, *, timeout_s: float | None = None, field: str 
 
 
 def calibrate(*devices: Device | None) -> list[tuple[str, CalibrationResult]]:
-    """Run the calibration sequence of each open device in order (``None`` skipped): ``(device, result)``."""
-    return [(d.name, d.instrument.calibrate()) for d in devices if d is not None]
+    """Run every calibration step of each open device in order (``None`` skipped), without prompting:
+    ``(device, result)``. A failed step raises :class:`~station.scan.CalibrationStepError` naming it;
+    to prompt before each step, drive a :class:`~station.scan.CalibrationSession` instead."""
+    from station.scan.calibration import CalibrationSession
+
+    return CalibrationSession(*devices).run_all()
