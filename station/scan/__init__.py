@@ -17,9 +17,16 @@ A gloss meter alone gives a gloss-only reading: on every front it is stored as a
 own (``gloss_readings``) on its panel, which the QC views pair with a colour reading of that panel.
 """
 
-from station.scan.calibration import STEP_PROMPTS, CalibrationSession, CalibrationStep
-from station.scan.devices import SIM_DEVICES, Device, calibrate, open_device, open_gloss_meter
-from station.scan.errors import CalibrationCancelled, CalibrationStepError, ScanError, ScanInputError
+from station.scan.calibration import (
+    STEP_PROMPTS,
+    CalibrationCancelled,
+    CalibrationSession,
+    CalibrationStep,
+    CalibrationStepError,
+    calibrate,
+)
+from station.scan.devices import SIM_DEVICES, Device, open_device, open_gloss_meter
+from station.scan.errors import ScanError, ScanInputError
 from station.scan.result import GlossReceipt, GlossStatus, ScanResult
 from station.scan.store import DatabaseTarget, ScanTarget, prior, store
 from station.scan.take import GLOSS_GEOMETRY_DEG, Progress, gloss_client_id, make_records, take

@@ -14,37 +14,48 @@ step passed.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 from station.drivers import CalibrationResult, CalibrationStepResult, DriverError
 from station.drivers.instrument import combine_steps
 from station.scan.devices import Device
-from station.scan.errors import CalibrationStepError, ScanError
+from station.scan.errors import ScanError
 
-__all__ = ["STEP_PROMPTS", "CalibrationSession", "CalibrationStep"]
+__all__ = [
+    "STEP_PROMPTS",
+    "CalibrationCancelled",
+    "CalibrationSession",
+    "CalibrationStep",
+    "CalibrationStepError",
+    "calibrate",
+]
 
 #: step → (title, what to do before it); ``{device}`` is the device as typed.
-STEP_PROMPTS: dict[str, tuple[str, str]] = {
-    "zero": (
-        "Black trap",
-        "Place {device} on its black trap (zero calibration): the trap clean and dry, the "
-        "measuring port fully on its opening.",
-    ),
-    "white": (
-        "White tile",
-        "Place {device} on its white calibration tile: clean, the serial number of the tile matching "
-        "the instrument's certificate.",
-    ),
-    "verify": (
-        "Verification tile",
-        "Place {device} on its verification tile: it is read and compared with the tile's certificate "
-        "(ΔE00).",
-    ),
-    "gloss": (
-        "Gloss standard",
-        "Place the gloss meter {device} on its calibration standard (the black glass tile), clean and flat.",
-    ),
-}
+STEP_PROMPTS: Mapping[str, tuple[str, str]] = MappingProxyType(
+    {
+        "zero": (
+            "Black trap",
+            "Place {device} on its black trap (zero calibration): the trap clean and dry, the "
+            "measuring port fully on its opening.",
+        ),
+        "white": (
+            "White tile",
+            "Place {device} on its white calibration tile: clean, the serial number of the tile matching "
+            "the instrument's certificate.",
+        ),
+        "verify": (
+            "Verification tile",
+            "Place {device} on its verification tile: it is read and compared with the tile's certificate "
+            "(ΔE00).",
+        ),
+        "gloss": (
+            "Gloss standard",
+            "Place the gloss meter {device} on its calibration standard (the black glass tile), clean and flat.",
+        ),
+    }
+)
 
 #: The session's states: "calibrated" only once every step has passed.
 CALIBRATED, NOT_CALIBRATED = "calibrated", "not calibrated"
@@ -136,3 +147,36 @@ class CalibrationSession:
             if mine:
                 out.append((name, combine_steps(mine)))
         return out
+
+
+class CalibrationStepError(ScanError):
+    """A calibration step failed: names the device, the step and its place, and why (the driver's error
+    as ``__cause__``, or the verification ΔE00 the instrument failed). The session is then over, not
+    calibrated."""
+
+    def __init__(self, step: CalibrationStep, reason: str) -> None:
+        self.step = step
+        self.reason = reason
+        super().__init__(
+            f"calibration of {step.device} failed at step {step.index} of {step.total} "
+            f"({step.title.lower()}): {reason}; the instrument is not calibrated"
+        )
+
+
+class CalibrationCancelled(ScanError):
+    """The operator cancelled a calibration before *step*: nothing more was read and the instrument is
+    not calibrated (after a first step it needs calibrating again; before one, it is as it was)."""
+
+    def __init__(self, step: CalibrationStep) -> None:
+        self.step = step
+        super().__init__(
+            f"calibration of {step.device} cancelled before step {step.index} of {step.total} "
+            f"({step.title.lower()}): not calibrated"
+        )
+
+
+def calibrate(*devices: Device | None) -> list[tuple[str, CalibrationResult]]:
+    """Run every calibration step of each open device in order (``None`` skipped), without prompting:
+    ``(device, result)``. A failed step raises :class:`~station.scan.CalibrationStepError` naming it;
+    to prompt before each step, drive a :class:`~station.scan.CalibrationSession` instead."""
+    return CalibrationSession(*devices).run_all()

@@ -14,11 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Self
 
-from station.drivers import CalibrationResult, Instrument, open_instrument
+from station.drivers import Instrument, open_instrument
 from station.drivers.simproc import SIM_KINDS, SimulatorProcess, spawn_simulator
 from station.scan.errors import ScanInputError
 
-__all__ = ["SIM_DEVICES", "Device", "calibrate", "open_device", "open_gloss_meter"]
+__all__ = ["SIM_DEVICES", "Device", "open_device", "open_gloss_meter"]
 
 #: The simulator devices, ``sim:<kind>`` for each of :data:`station.drivers.simproc.SIM_KINDS`.
 SIM_DEVICES = tuple(f"sim:{k}" for k in SIM_KINDS)
@@ -107,12 +107,3 @@ def open_gloss_meter(device: str, *, timeout_s: float | None = None, field: str 
         opened.close()
         raise ScanInputError(field, "a gloss meter (e.g. sim:gloss)", device)
     return opened
-
-
-def calibrate(*devices: Device | None) -> list[tuple[str, CalibrationResult]]:
-    """Run every calibration step of each open device in order (``None`` skipped), without prompting:
-    ``(device, result)``. A failed step raises :class:`~station.scan.CalibrationStepError` naming it;
-    to prompt before each step, drive a :class:`~station.scan.CalibrationSession` instead."""
-    from station.scan.calibration import CalibrationSession
-
-    return CalibrationSession(*devices).run_all()
