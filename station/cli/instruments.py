@@ -5,6 +5,12 @@ DEVICE is ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss`` (a simulator subprocess star
 (``/dev/ttyACM0``, ``ma3@usb:1209:ca03``, ``gloss@hid:PATH`` …). Lab comes from
 ``station.model.spectra.reflectance_to_lab`` (D65, CIE 1964 10°), never from the driver.
 
+``station calibrate DEVICE`` calibrates step by step (``station.scan.CalibrationSession``): before each
+step (black trap, white tile, verification tile; a gloss meter's standard) its prompt goes to stderr and
+Enter runs it, ``q`` or end of input cancels (one line, exit 1, not calibrated); ``--yes`` runs them all
+without asking. ``station measure DEVICE --calibrate`` does the same for DEVICE and its ``--gloss`` meter
+before measuring.
+
 Every measurement goes through ``station.scan``, the scan path the viewer and the service use too.
 ``station measure DEVICE --gloss GLOSS_DEVICE`` reads the gloss meter first (``station.scan.take``): its
 60° gloss goes into the colour record. ``--store [URL]`` also stores the reading (``station.scan.store``):
