@@ -30,6 +30,7 @@ FAULTS: dict[str, tuple[str, bool, str]] = {
     "port-held": ("", True, "another process holds the port (serial flock / USB EBUSY / HID busy)"),
     "hang-after": ("", True, "stops answering after N commands until reconnected"),
     "device-busy": ("MS", False, "device answers busy (code 170) once"),
+    "cal-failure": ("WC", False, "a calibration step (ZC, WC, VC) answers error 120, calibration failed"),
 }
 
 

@@ -328,6 +328,8 @@ class GlossDevice:
             f.clear("cal-expired")
         if cmd == 0x30:
             self._emit(seq, cmd, 0, 0, b"")
+        elif cmd == 0x20 and f.fire("cal-failure", label):
+            self._emit(seq, cmd, 120, 0, b"")
         elif cmd == 0x20:
             raw = p.calibrate()
             exp = int(time.time() + p.calibration_life_s)

@@ -175,6 +175,9 @@ class Ma3Firmware:
         if f.fire("device-busy", label):
             self._queue(frame(msg, rid, flags=REPLY | NACK, error=170))
             return
+        if f.fire("cal-failure", label):
+            self._queue(frame(msg, rid, flags=REPLY | NACK, error=120))
+            return
         code, body = self._reply(msg, label)
         out = frame(msg, rid, body, flags=REPLY | (NACK if code else ACK), error=code)
         if label == "RD" and f.fire("corrupt-checksum", "RD"):

@@ -130,6 +130,9 @@ class Ma6Device:
         if f.fire("device-busy", label):
             link.send(status(170))
             return
+        if f.fire("cal-failure", label):
+            link.send(status(120))
+            return
         reply = self._reply(cmd, label)
         if f.fire("garbage", label):
             reply = GARBAGE + reply

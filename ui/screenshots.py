@@ -76,12 +76,13 @@ def file_menu_shot(win, path: Path) -> Path:
 
 
 def answer_calibration(win, inst) -> None:
-    """Calibrate as the technician does: OK at each prompt (black trap, white tile, …), then the sequence."""
+    """Calibrate as the technician does: OK at each prompt (black trap, white tile, …), each followed by
+    its reading, until the last step is read."""
     from PySide6.QtWidgets import QMessageBox
 
     inst.calibrate()
-    while inst.prompt is not None:
-        _wait(lambda: inst.prompt is None or inst.prompt.isVisible(), 10)
+    while inst.calibration is not None:
+        _wait(lambda: inst.calibration is None or (inst.prompt is not None and inst.prompt.isVisible()), 30)
         if inst.prompt is not None:
             inst.prompt.button(QMessageBox.StandardButton.Ok).click()
         QCoreApplication.processEvents()

@@ -5,6 +5,12 @@ DEVICE is ``sim:ma6`` / ``sim:ma3`` / ``sim:gloss`` (a simulator subprocess star
 (``/dev/ttyACM0``, ``ma3@usb:1209:ca03``, ``gloss@hid:PATH`` …). Lab comes from
 ``station.model.spectra.reflectance_to_lab`` (D65, CIE 1964 10°), never from the driver.
 
+``station calibrate DEVICE`` calibrates step by step (``station.scan.CalibrationSession``): before each
+step (black trap, white tile, verification tile; a gloss meter's standard) its prompt goes to stderr and
+Enter runs it, ``q`` or end of input cancels (one line, exit 1, not calibrated); ``--yes`` runs them all
+without asking. ``station measure DEVICE --calibrate`` does the same for DEVICE and its ``--gloss`` meter
+before measuring.
+
 Every measurement goes through ``station.scan``, the scan path the viewer and the service use too.
 ``station measure DEVICE --gloss GLOSS_DEVICE`` reads the gloss meter first (``station.scan.take``): its
 60° gloss goes into the colour record. ``--store [URL]`` also stores the reading (``station.scan.store``):
@@ -24,6 +30,7 @@ writes the reading (every geometry, spectra and Lab) as a CxF3, CGATS.17, MA-T12
 from __future__ import annotations
 
 import argparse
+import sys
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -43,7 +50,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     lp.set_defaults(handler=cmd_list)
 
     for name, fn, text in (
-        ("calibrate", cmd_calibrate, "zero, white and verification calibration"),
+        ("calibrate", cmd_calibrate, "black trap, white tile and verification tile, step by step"),
         ("measure", cmd_measure, "measure once and print spectra, Lab and gloss"),
     ):
         cp = subparsers.add_parser(name, help=text)
@@ -64,7 +71,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             action="store_true",
             help="sim:ma6 only: 12 geometries in two illumination blocks (15° and 45°), as an MA-T12",
         )
+        cp.add_argument(
+            "--yes",
+            action="store_true",
+            help="run every calibration step without asking for its reference (black trap, white tile…)",
+        )
         if name == "measure":
+            cp.add_argument(
+                "--calibrate",
+                action="store_true",
+                help="calibrate first, step by step (and the --gloss meter on its standard)",
+            )
             cp.add_argument(
                 "--gloss",
                 metavar="DEVICE",
@@ -151,21 +168,53 @@ def _gloss_meter(args: argparse.Namespace) -> Iterator[Any]:
 
 
 def cmd_calibrate(args: argparse.Namespace) -> dict[str, Any]:
-    """Run the calibration sequence and report it."""
-    from station.scan import calibrate
-
+    """Calibrate step by step, asking for each reference first (``--yes``: without asking), and report it."""
     with _instrument(args) as device:
         inst = device.instrument
-        (_name, r), *_ = calibrate(device)
+        (_name, r), *_ = calibrate_steps(args, device)
         return {
             "device": args.device,
             "address": f"{inst.family}@{inst.address}",
+            "state": "calibrated",
             "calibration_id": r.calibration_id,
             "steps": list(r.steps),
             "verification_de": r.verification_de,
             "passed": r.passed,
             "expires": r.expires.isoformat() if r.expires else None,
         }
+
+
+def calibrate_steps(args: argparse.Namespace, *devices: Any) -> list[tuple[str, Any]]:
+    """Run the calibration steps of *devices* (``station.scan.CalibrationSession``) one at a time.
+
+    Before each step its prompt goes to stderr and a line is read from stdin: empty or ``y`` runs the
+    step, anything else (or end of input) cancels, and the command fails with one line saying the
+    instrument is not calibrated. ``--yes`` runs every step without asking. A failed step raises
+    ``station.scan.CalibrationStepError`` naming it.
+    """
+    from station.scan import CalibrationCancelled, CalibrationSession
+
+    session = CalibrationSession(*devices)
+    while (step := session.next) is not None:
+        if not args.yes and not _confirm(step.prompt):
+            session.cancel()
+            raise CalibrationCancelled(step)
+        print(f"reading the {step.title.lower()} of {step.device}…", file=sys.stderr)
+        session.run_next()
+    return session.results()
+
+
+def _confirm(prompt: str) -> bool:
+    """Show *prompt* on stderr and read the answer from stdin: go on (Enter, ``y``) or not."""
+    sys.stderr.write(f"{prompt}\nPress Enter to read it (q to cancel): ")
+    sys.stderr.flush()
+    try:
+        answer = sys.stdin.readline()
+    except (OSError, ValueError):  # no usable stdin: nobody to confirm
+        return False
+    if not sys.stdin.isatty():  # an answer piped in is not echoed: end the prompt's line
+        sys.stderr.write("\n")
+    return answer != "" and answer.strip().lower() in ("", "y", "yes")
 
 
 def _store_panel_id(panel: str | None) -> int | None:
@@ -286,6 +335,7 @@ def _measure(args: argparse.Namespace, panel_id: int | None, steps: Steps) -> di
                     else _receipt(target, prior)
                 )
                 return {"device": args.device, "panel": args.panel, "stored": stored}
+        calibrated = calibrate_steps(args, device, meter) if args.calibrate else []
         steps("measuring")
         inst = device.instrument
         result = scan.take(
@@ -301,6 +351,8 @@ def _measure(args: argparse.Namespace, panel_id: int | None, steps: Steps) -> di
             "address": f"{inst.family}@{inst.address}",
             "panel": args.panel,
         }
+        if calibrated:
+            out["calibration"] = [{"device": n, "calibration_id": r.calibration_id} for n, r in calibrated]
         if result.gloss_only and result.gloss is not None:
             if args.out:
                 raise InputError("--out", "a spectrophotometer reading (Lab per geometry)", args.device)

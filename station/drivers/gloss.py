@@ -31,7 +31,7 @@ from station.drivers.errors import (
 )
 from station.drivers.exchange_log import ExchangeLog
 from station.drivers.instrument import Instrument
-from station.drivers.readings import CalibrationResult, CalibrationStatus, GlossReading, InstrumentInfo
+from station.drivers.readings import CalibrationStatus, CalibrationStepResult, GlossReading, InstrumentInfo
 from station.drivers.transport import ReportTransport, SerialTransport
 
 __all__ = ["GEOMETRIES", "GlossMeter", "HidBridgeDevice", "StuckBusy", "hid_path_for", "xor8"]
@@ -88,6 +88,7 @@ class GlossMeter(Instrument[ReportTransport]):
 
     family = "gloss"
     kind = "gloss"
+    calibration_steps = ("gloss",)
 
     def __init__(
         self,
@@ -208,15 +209,17 @@ class GlossMeter(Instrument[ReportTransport]):
         except (DeviceTimeout, ProtocolError):
             pass
 
-    def calibrate(self) -> CalibrationResult:
-        """Read the standard (black glass unless :meth:`set_standard` said otherwise) and scale to it."""
+    def calibrate_step(self, step: str) -> CalibrationStepResult:
+        """The one step, ``gloss``: read the standard (black glass unless :meth:`set_standard` said
+        otherwise) and scale to it (command 0x20; the protocol has no other calibration command)."""
+        self.check_step(step)
         with self._lock:
             body = self._request(CMD_CALIBRATE, self.timeout_s * 4)
         counter, *_standard_raw, expires = _CAL.unpack_from(body)
         sn = self.info.serial if self.info else "?"
-        return CalibrationResult(
+        return CalibrationStepResult(
+            "gloss",
             f"CAL-{sn}-{counter:04d}",
-            ("standard",),
             None,
             True,
             dt.datetime.fromtimestamp(expires, dt.UTC) if expires else None,

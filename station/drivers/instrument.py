@@ -18,10 +18,15 @@ from abc import ABC, abstractmethod
 from typing import Any, ClassVar, Generic, Self, TypeVar, get_args, get_origin
 
 from station.drivers.errors import DriverInputError
-from station.drivers.readings import CalibrationResult, CalibrationStatus, InstrumentInfo
+from station.drivers.readings import (
+    CalibrationResult,
+    CalibrationStatus,
+    CalibrationStepResult,
+    InstrumentInfo,
+)
 from station.drivers.transport import Transport
 
-__all__ = ["Instrument", "TransportT"]
+__all__ = ["Instrument", "TransportT", "combine_steps"]
 
 TransportT = TypeVar("TransportT", bound=Transport)
 
@@ -34,6 +39,9 @@ class Instrument(ABC, Generic[TransportT]):
     kind: str = "spectro"  # "spectro" or "gloss"
     #: The transport class a family accepts (its class parameter; Transport when none was given).
     transport_type: ClassVar[type] = Transport
+    #: The calibration steps in the order the instrument reads its references (black trap, white
+    #: tile, verification tile; a gloss meter: its gloss standard).
+    calibration_steps: ClassVar[tuple[str, ...]] = ("zero", "white", "verify")
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -95,8 +103,18 @@ class Instrument(ABC, Generic[TransportT]):
         """Get the calibration state."""
 
     @abstractmethod
+    def calibrate_step(self, step: str) -> CalibrationStepResult:
+        """Run one step of :attr:`calibration_steps` (the instrument's own command for that step)."""
+
+    def check_step(self, step: str) -> None:
+        """Refuse a step this family does not have (:class:`DriverInputError` naming ``step``)."""
+        if step not in self.calibration_steps:
+            raise DriverInputError("step", " | ".join(self.calibration_steps), step)
+
     def calibrate(self) -> CalibrationResult:
-        """Run the full calibration sequence (zero, white/standard, verification)."""
+        """Run the whole sequence, :attr:`calibration_steps` in order, without pausing between them."""
+        results = [self.calibrate_step(s) for s in self.calibration_steps]
+        return combine_steps(results)
 
     @abstractmethod
     def measure(self) -> Any:
@@ -121,3 +139,14 @@ class Instrument(ABC, Generic[TransportT]):
     async def aclose(self) -> None:
         """Async :meth:`close`."""
         await asyncio.to_thread(self.close)
+
+
+def combine_steps(results: list[CalibrationStepResult]) -> CalibrationResult:
+    """One :class:`CalibrationResult` from the step results of a whole sequence, in order: the id of
+    the last step that set one, the verification ΔE00 and expiry of the last that reported them."""
+    cal_id = next((r.calibration_id for r in reversed(results) if r.calibration_id), "")
+    de = next((r.verification_de for r in reversed(results) if r.verification_de is not None), None)
+    expires = next((r.expires for r in reversed(results) if r.expires is not None), None)
+    return CalibrationResult(
+        cal_id, tuple(r.step for r in results), de, all(r.passed for r in results), expires
+    )

@@ -37,8 +37,8 @@ from station.drivers.exchange_log import ExchangeLog
 from station.drivers.instrument import Instrument
 from station.drivers.readings import (
     WAVELENGTHS_NM,
-    CalibrationResult,
     CalibrationStatus,
+    CalibrationStepResult,
     InstrumentInfo,
     SpectralReading,
     geometry_name,
@@ -267,19 +267,24 @@ class MA3Spectro(Instrument[StreamTransport]):
             raise UnexpectedReply(f"GET_STATUS payload of {len(p)} bytes") from exc
         return CalibrationStatus(_NEEDED.get(needed, "white"), self._cal_id(counter), _epoch(expires), temp)
 
-    def calibrate(self) -> CalibrationResult:
-        """Zero, white, verification tile."""
+    def calibrate_step(self, step: str) -> CalibrationStepResult:
+        """One step: ``zero`` (CAL_ZERO, black trap), ``white`` (CAL_WHITE, white tile; the new
+        calibration counter) or ``verify`` (CAL_VERIFY, verification tile: ΔE00, pass, expiry)."""
+        self.check_step(step)
         with self._lock:
             slow = self.timeout_s * 4
-            self.transact(Msg.CAL_ZERO, timeout_s=slow)
-            (counter,) = struct.unpack("<I", self.transact(Msg.CAL_WHITE, timeout_s=slow))
-            try:
-                de, passed, expires = _VERIFY.unpack(self.transact(Msg.CAL_VERIFY, timeout_s=slow))
-            except struct.error as exc:
-                raise UnexpectedReply("CAL_VERIFY payload") from exc
-        return CalibrationResult(
-            self._cal_id(counter), ("zero", "white", "verify"), round(de, 4), bool(passed), _epoch(expires)
-        )
+            msg = {"zero": Msg.CAL_ZERO, "white": Msg.CAL_WHITE, "verify": Msg.CAL_VERIFY}[step]
+            p = self.transact(msg, timeout_s=slow)
+        try:
+            if step == "zero":
+                return CalibrationStepResult("zero")
+            if step == "white":
+                (counter,) = struct.unpack("<I", p)
+                return CalibrationStepResult("white", calibration_id=self._cal_id(counter))
+            de, passed, expires = _VERIFY.unpack(p)
+        except struct.error as exc:
+            raise UnexpectedReply(f"{msg.name} payload of {len(p)} bytes") from exc
+        return CalibrationStepResult("verify", "", round(de, 4), bool(passed), _epoch(expires))
 
     def measure(self) -> SpectralReading:
         """MEASURE, POLL until idle, READ_DATA (a frame with a bad checksum is read again)."""

@@ -20,8 +20,8 @@ from station.drivers.errors import Misread, ProtocolError, UnexpectedReply
 from station.drivers.instrument import Instrument
 from station.drivers.readings import (
     WAVELENGTHS_NM,
-    CalibrationResult,
     CalibrationStatus,
+    CalibrationStepResult,
     InstrumentInfo,
     SpectralReading,
     parse_geometry,
@@ -102,17 +102,21 @@ class MA6Spectro(Instrument[StreamTransport]):
         except (KeyError, ValueError) as exc:
             raise UnexpectedReply(f"ST reply lacks fields: {f}") from exc
 
-    def calibrate(self) -> CalibrationResult:
-        """Zero (black trap), white tile, then verification tile (ΔE00 against its certificate)."""
+    def calibrate_step(self, step: str) -> CalibrationStepResult:
+        """One step: ``zero`` (``ZC``, black trap), ``white`` (``WC``, white tile; the new calibration
+        id) or ``verify`` (``VC``, verification tile: ΔE00 against its certificate, expiry)."""
+        self.check_step(step)
         with self._lock:
             slow = self.protocol.timeout_s * 4
-            self.protocol.query("ZC", slow)
-            cal_id = self.protocol.query("WC", slow).fields().get("CALID", "")
-            f = self.protocol.query("VC", slow).fields()
+            command = {"zero": "ZC", "white": "WC", "verify": "VC"}[step]
+            f = self.protocol.query(command, slow).fields()
+        if step == "zero":
+            return CalibrationStepResult("zero")
+        if step == "white":
+            return CalibrationStepResult("white", calibration_id=f.get("CALID", ""))
         try:
-            return CalibrationResult(
-                calibration_id=cal_id,
-                steps=("zero", "white", "verify"),
+            return CalibrationStepResult(
+                "verify",
                 verification_de=float(f["DE"]),
                 passed=f["PASS"] == "1",
                 expires=_expiry(f["EXPIRES"]),

@@ -22,6 +22,7 @@ __all__ = [
     "WAVELENGTHS_NM",
     "CalibrationResult",
     "CalibrationStatus",
+    "CalibrationStepResult",
     "GlossReading",
     "InstrumentInfo",
     "SpectralReading",
@@ -80,6 +81,22 @@ class CalibrationResult:
     verification_de: float | None
     passed: bool
     expires: dt.datetime | None
+
+
+@dataclass(frozen=True)
+class CalibrationStepResult:
+    """Outcome of one calibration step (``zero``, ``white``, ``verify`` or ``gloss``).
+
+    ``calibration_id`` is set by the step that starts a new calibration (white tile, gloss standard);
+    ``verification_de`` (CIEDE2000 against the tile's certificate) and ``expires`` by the step that
+    ends it (verification tile, gloss standard).
+    """
+
+    step: str
+    calibration_id: str = ""
+    verification_de: float | None = None
+    passed: bool = True
+    expires: dt.datetime | None = None
 
 
 @dataclass(frozen=True)

@@ -14,11 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Self
 
-from station.drivers import CalibrationResult, Instrument, open_instrument
+from station.drivers import Instrument, open_instrument
 from station.drivers.simproc import SIM_KINDS, SimulatorProcess, spawn_simulator
 from station.scan.errors import ScanInputError
 
-__all__ = ["SIM_DEVICES", "Device", "calibrate", "open_device", "open_gloss_meter"]
+__all__ = ["SIM_DEVICES", "Device", "open_device", "open_gloss_meter"]
 
 #: The simulator devices, ``sim:<kind>`` for each of :data:`station.drivers.simproc.SIM_KINDS`.
 SIM_DEVICES = tuple(f"sim:{k}" for k in SIM_KINDS)
@@ -107,8 +107,3 @@ def open_gloss_meter(device: str, *, timeout_s: float | None = None, field: str 
         opened.close()
         raise ScanInputError(field, "a gloss meter (e.g. sim:gloss)", device)
     return opened
-
-
-def calibrate(*devices: Device | None) -> list[tuple[str, CalibrationResult]]:
-    """Run the calibration sequence of each open device in order (``None`` skipped): ``(device, result)``."""
-    return [(d.name, d.instrument.calibrate()) for d in devices if d is not None]

@@ -62,7 +62,7 @@ RUNS: dict[str, list[tuple[str, ...]]] = {
     "export": [("silver.json", "--format", "cxf", "--out", "s.cxf", "--recipe")],
     "import": [("std.cxf",)],
     "instruments list": [()],
-    "calibrate": [("sim:ma6",)],
+    "calibrate": [("sim:ma6", "--yes")],
     "measure": [("sim:ma6", "--design", "silver.json"), ("sim:gloss",)],
     "model from-angles": [("--angles", "15,45,110", "--lab", LAB3, "--gloss", "80")],
     "model eval": [("--design", "silver.json")],

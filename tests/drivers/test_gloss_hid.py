@@ -276,7 +276,7 @@ def test_calibrate_and_clear_bytes():
     assert hid.unexpected == [] and hid.pairs == []
     assert (r.calibration_id, r.steps, r.passed, r.expires.timestamp()) == (
         "CAL-GM0815-0006",
-        ("standard",),
+        ("gloss",),
         True,
         1795442400,
     )

@@ -15,6 +15,7 @@ through ``station.ingest.Ingestor`` (``ui.models.measure_db``).
 from __future__ import annotations
 
 import datetime as dt
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -29,11 +30,11 @@ from station.model.design_io import design_to_dict
 from station.model.domain import ILLUMINATION_DEG, geometry_name
 from station.scan import (
     SIM_DEVICES,
+    CalibrationSession,
     Device,
     GlossReceipt,
     Progress,
     ScanResult,
-    calibrate,
     make_records,
     open_device,
     open_gloss_meter,
@@ -271,10 +272,16 @@ class InstrumentSession:
         """Whether an instrument is open."""
         return self._main is not None
 
-    def connect(self, device: str, design_file: Path | None = None, timeout_s: float = 5.0) -> str:
-        """Open *device* (``sim:KIND`` starts a simulator); returns the instrument's address."""
+    def connect(
+        self,
+        device: str,
+        design_file: Path | None = None,
+        timeout_s: float = 5.0,
+        faults: Sequence[str] = (),
+    ) -> str:
+        """Open *device* (``sim:KIND`` starts a simulator, with *faults* armed); returns its address."""
         self._close_main()
-        self._main = open_device(device, timeout_s=timeout_s, design_file=design_file)
+        self._main = open_device(device, timeout_s=timeout_s, design_file=design_file, faults=faults)
         return self._main.address
 
     def pair_gloss(self, device: str, timeout_s: float = 5.0) -> str:
@@ -291,11 +298,16 @@ class InstrumentSession:
         if gloss is not None:
             gloss.close()
 
-    def calibrate(self) -> list[tuple[str, CalibrationResult]]:
-        """Run the calibration sequence of the instrument and of the paired gloss meter: (device, result)."""
+    def calibration(self) -> CalibrationSession:
+        """The calibration steps of the instrument and of the paired gloss meter, to run one at a time,
+        each after its prompt (black trap, white tile, verification tile, gloss standard)."""
         if self._main is None:
             raise InputError("instrument", "a connected instrument", None)
-        return calibrate(self._main, self._gloss)
+        return CalibrationSession(self._main, self._gloss)
+
+    def calibrate(self) -> list[tuple[str, CalibrationResult]]:
+        """Run every calibration step without prompting: (device, result) per instrument."""
+        return self.calibration().run_all()
 
     def scan(
         self, panel: PanelInfo, progress: Progress | None = None, store: MeasurementStore | None = None

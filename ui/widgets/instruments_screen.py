@@ -40,7 +40,9 @@ from PySide6.QtWidgets import (
 
 from db.models import PARTS
 from station.design.palette import booklet
+from station.drivers import CalibrationStepResult
 from station.errors import InputError
+from station.scan import CalibrationSession, CalibrationStep
 from ui.models.document import DesignDocument
 from ui.models.instruments import SIM_DEVICES, STEPS, InstrumentSession, Measurement, MeasurementStore
 from ui.models.measure_db import RECENT_MAX, PanelInfo
@@ -48,30 +50,6 @@ from ui.widgets.common import cell_text, lab_colour, pixmap_from_array
 from ui.widgets.reading_plot import ReadingPlot
 from ui.widgets.tasks import TaskProgress, TaskThread
 
-#: (title, text) of the calibration prompts, in the order the instruments' sequence reads the tiles
-#: (zero on the black trap, then the white tile, then the verification tile; ``station.drivers``).
-CALIBRATION_PROMPTS: tuple[tuple[str, str], ...] = (
-    (
-        "Black trap",
-        "Calibrating {device}, step 1 of 3: have the black trap (light trap) ready for the zero reading, "
-        "then press OK.",
-    ),
-    (
-        "White tile",
-        "Step 2 of 3: have the white calibration tile of {device} ready (clean, the serial number of its "
-        "certificate), then press OK.",
-    ),
-    (
-        "Verification tile",
-        "Step 3 of 3: have the verification tile ready; its ΔE00 against the certificate decides the "
-        "calibration. Press OK to run the sequence: zero, white, verification.",
-    ),
-)
-GLOSS_PROMPT = (
-    "Gloss standard",
-    "The paired gloss meter calibrates too: place it on its calibration standard (the black glass tile), "
-    "then press OK.",
-)
 PROMPT_BUTTONS = QMessageBox.StandardButton.Ok | QMessageBox.StandardButton.Cancel
 
 
@@ -94,7 +72,7 @@ class InstrumentsScreen(QWidget):
         self.last: Measurement | None = None
         self.idle = True  # no task running and its result handled
         self.prompt: QMessageBox | None = None  # the calibration prompt on screen (tests answer it)
-        self._prompts: list[tuple[str, str]] = []
+        self.calibration: CalibrationSession | None = None  # the steps being asked for and run
         self._build_panel_form()
         self._build_actions()
         self._build_reading()
@@ -220,8 +198,9 @@ class InstrumentsScreen(QWidget):
         self.store.events.added.connect(self._on_added)
 
     # ------------------------------------------------------------------ actions
-    def _run(self, fn, done, label: str, steps: int = 0) -> None:
-        """Run *fn* in a worker; *steps* > 0: a bar of that many steps, 0: a busy bar (unknown length)."""
+    def _run(self, fn, done, label: str, steps: int = 0, failed=None) -> None:
+        """Run *fn* in a worker; *steps* > 0: a bar of that many steps, 0: a busy bar (unknown length);
+        *failed* hears the error message (default: the log and the state line)."""
         if self.task is not None and self.task.isRunning():
             self._say("busy: wait for the running task")
             return
@@ -234,7 +213,7 @@ class InstrumentsScreen(QWidget):
         self.task.progress.connect(self._on_progress)
         self.idle = False
         self.task.succeeded.connect(done)
-        self.task.failed.connect(self._on_failed)
+        self.task.failed.connect(failed or self._on_failed)
         self.task.cancelled.connect(self._on_cancelled)
         self.busy.watch(self.task, label, steps, cancellable=steps > 0)  # a scan stops between steps
         self.task.finished.connect(self._sync_buttons)
@@ -262,51 +241,71 @@ class InstrumentsScreen(QWidget):
         self._run(lambda _p: self.session.pair_gloss(device), self._on_paired, f"pairing {device}…")
 
     def calibration_prompts(self) -> list[tuple[str, str]]:
-        """(title, text) of each tile the technician is asked for, in the instrument's order: the black
-        trap (zero), the white tile, the verification tile, then the paired gloss meter's standard."""
-        device = self.session.device or "the instrument"
-        out = [(title, text.format(device=device)) for title, text in CALIBRATION_PROMPTS]
-        if self.session.gloss_meter is not None:
-            out.append(GLOSS_PROMPT)
-        return out
+        """(title, text) of each reference the technician is asked for, in the instruments' order: the
+        black trap (zero), the white tile, the verification tile, then the paired gloss meter's
+        standard (``station.scan.CalibrationSession``)."""
+        if not self.session.connected:
+            return []
+        return [(s.title, s.prompt) for s in self.session.calibration().steps]
 
     def calibrate(self) -> None:
-        """Ask for each calibration tile in turn (:meth:`calibration_prompts`); once every one is
-        confirmed, run the calibration sequence (of the paired gloss meter too) through ``station.scan``.
-        Cancel at any prompt calibrates nothing."""
-        if self.prompt is not None or not self.session.connected:
+        """Calibrate step by step: ask for each reference in turn, and on OK read it (that step alone,
+        in a worker) before asking for the next. Cancel between steps stops the calibration: the
+        instrument is then not calibrated (after the black trap it needs its white tile again). A
+        failed step stops it too, its message naming the step."""
+        if self.prompt is not None or self.calibration is not None or not self.session.connected:
             return
-        self._prompts = self.calibration_prompts()
+        self.calibration = self.session.calibration()
         self._sync_buttons(busy=True)
         self._next_prompt()
 
     def _next_prompt(self) -> None:
-        if not self._prompts:
-            self.prompt = None
-            self._run(lambda _p: self.session.calibrate(), self._on_calibrated, "calibrating…")
+        cal = self.calibration
+        step = None if cal is None else cal.next
+        if cal is None or step is None:
+            self.prompt, self.calibration = None, None
+            if cal is not None:
+                self._on_calibrated(cal.results())
+            self._sync_buttons()
             return
-        title, text = self._prompts.pop(0)
-        box = QMessageBox(QMessageBox.Icon.Information, title, text, PROMPT_BUTTONS, self)
+        box = QMessageBox(QMessageBox.Icon.Information, step.title, step.prompt, PROMPT_BUTTONS, self)
         box.setDefaultButton(QMessageBox.StandardButton.Ok)
         box.setEscapeButton(QMessageBox.StandardButton.Cancel)
         box.setWindowModality(Qt.WindowModality.WindowModal)
-        box.finished.connect(lambda _r, b=box, t=title: self._on_prompt(b, t))
+        box.finished.connect(lambda _r, b=box, st=step: self._on_prompt(b, st))
         self.prompt = box
-        self.state.setText(f"calibration: {title.lower()}")
+        self.state.setText(f"calibration: {step.title.lower()}")
         box.open()
 
-    def _on_prompt(self, box: QMessageBox, title: str) -> None:
-        """A prompt answered: the next one on OK; on Cancel nothing is calibrated."""
+    def _on_prompt(self, box: QMessageBox, step: CalibrationStep) -> None:
+        """A prompt answered: on OK its step is read, then the next prompt; on Cancel the calibration
+        stops, not calibrated."""
         ok = box.clickedButton() is box.button(QMessageBox.StandardButton.Ok)
         box.deleteLater()
-        if ok:
-            self._say(f"calibration: {title.lower()} confirmed")
-            self._next_prompt()
-            return
         self.prompt = None
-        self._prompts = []
+        cal = self.calibration
+        if cal is None:
+            return
+        if ok:
+            label = f"calibration: reading the {step.title.lower()} of {step.device}…"
+            self._run(lambda _p: cal.run_next(), self._on_step_done, label, failed=self._on_step_failed)
+            return
+        cal.cancel()
+        self.calibration = None
         self.state.setText("calibration cancelled")
-        self._say(f"calibration cancelled at the {title.lower()}: nothing was calibrated")
+        self._say(f"calibration cancelled at the {step.title.lower()}: {step.device} is {cal.state}")
+        self._sync_buttons()
+
+    def _on_step_done(self, result: CalibrationStepResult) -> None:
+        de = "" if result.verification_de is None else f" (ΔE00 {result.verification_de:.3f})"
+        self._say(f"calibration step {result.step} done{de}")
+        self._next_prompt()
+
+    def _on_step_failed(self, message: str) -> None:
+        """A step failed: the message names it; the calibration is over, not calibrated."""
+        self._on_failed(message)
+        self.calibration = None
+        self.state.setText(message.partition(": ")[2] or message)
         self._sync_buttons()
 
     def panel_info(self) -> PanelInfo:
@@ -509,7 +508,12 @@ class InstrumentsScreen(QWidget):
         self._sync_buttons()
 
     def _sync_buttons(self, busy: bool = False) -> None:
-        busy = busy or self.prompt is not None or (self.task is not None and self.task.isRunning())
+        busy = (
+            busy
+            or self.prompt is not None
+            or self.calibration is not None
+            or (self.task is not None and self.task.isRunning())
+        )
         self.connect_btn.setEnabled(not busy)
         self.pair_btn.setEnabled(not busy)
         self.pair_btn.setText(
@@ -531,8 +535,7 @@ class InstrumentsScreen(QWidget):
 
     def closeEvent(self, event) -> None:
         if self.prompt is not None:
-            self._prompts = []
-            self.prompt.reject()
+            self.prompt.reject()  # a calibration waiting at a prompt is cancelled
         if self.task is not None:
             self.task.wait()
         self.session.close()
