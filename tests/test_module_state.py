@@ -44,6 +44,7 @@ ALLOWED: dict[str, str] = {
     "station/formulate/colorants.py:_flake_table": "flake reflectance table per (database, angle tuple)",
     "station/formulate/colorants.py:default_database": "the shipped colorant database, built once",
     "station/formulate/colorants.py:_tristimulus": "linear tristimulus weights of the product's own Lab",
+    "station/formulate/lines.py:_data": "the shipped toner-line data file, parsed",
     "station/formulate/demo.py:demo_library": "the synthetic 6000-paint demo library (seeded)",
     "station/formulate/munsell.py:munsell_library": "Munsell renotation library (colour-science's data)",
     "station/render/design_db.py:design_database": "the 40 built-in designs (deterministic)",
