@@ -77,51 +77,56 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             help="run every calibration step without asking for its reference (black trap, white tile…)",
         )
         if name == "measure":
-            cp.add_argument(
-                "--calibrate",
-                action="store_true",
-                help="calibrate first, step by step (and the --gloss meter on its standard)",
-            )
-            cp.add_argument(
-                "--gloss",
-                metavar="DEVICE",
-                help="gloss meter read first (sim:gloss or an address): its 60° gloss is stored with the "
-                "colour, its whole reading as a gloss reading of the measurement",
-            )
-            cp.add_argument("--panel", help="panel recorded with the reading (with --store: a panel id)")
-            cp.add_argument(
-                "--store",
-                nargs="?",
-                const="",
-                metavar="URL",
-                help="store the reading in database URL (default: the `station serve` database)",
-            )
-            cp.add_argument(
-                "--outbox", type=Path, help="outbox file (default: measure-outbox.sqlite3 in the data folder)"
-            )
-            cp.add_argument(
-                "--client-id",
-                type=uuid.UUID,
-                help="client id of the reading (a retry under it stores nothing new)",
-            )
-            cp.add_argument(
-                "--illumination", type=int, default=45, help="illumination angle of the stored block, degrees"
-            )
-            cp.add_argument(
-                "--out",
-                type=Path,
-                action="append",
-                default=[],
-                help="also write the reading as a measurement file (.cxf, .cgats, .csv, .xlsx; repeatable)",
-            )
-            cp.add_argument(
-                "--format",
-                choices=("cxf", "cgats", "csv", "xlsx"),
-                help="format of --out (default: from its suffix)",
-            )
-            cp.add_argument("--sample", default="sample 1", help="sample name written to --out files")
+            _add_measure_options(cp)
         add_json_flag(cp)
         cp.set_defaults(handler=fn)
+
+
+def _add_measure_options(cp: argparse.ArgumentParser) -> None:
+    """Options of ``station measure`` beyond the device ones: gloss pairing, storage, files."""
+    cp.add_argument(
+        "--calibrate",
+        action="store_true",
+        help="calibrate first, step by step (and the --gloss meter on its standard)",
+    )
+    cp.add_argument(
+        "--gloss",
+        metavar="DEVICE",
+        help="gloss meter read first (sim:gloss or an address): its 60° gloss is stored with the "
+        "colour, its whole reading as a gloss reading of the measurement",
+    )
+    cp.add_argument("--panel", help="panel recorded with the reading (with --store: a panel id)")
+    cp.add_argument(
+        "--store",
+        nargs="?",
+        const="",
+        metavar="URL",
+        help="store the reading in database URL (default: the `station serve` database)",
+    )
+    cp.add_argument(
+        "--outbox", type=Path, help="outbox file (default: measure-outbox.sqlite3 in the data folder)"
+    )
+    cp.add_argument(
+        "--client-id",
+        type=uuid.UUID,
+        help="client id of the reading (a retry under it stores nothing new)",
+    )
+    cp.add_argument(
+        "--illumination", type=int, default=45, help="illumination angle of the stored block, degrees"
+    )
+    cp.add_argument(
+        "--out",
+        type=Path,
+        action="append",
+        default=[],
+        help="also write the reading as a measurement file (.cxf, .cgats, .csv, .xlsx; repeatable)",
+    )
+    cp.add_argument(
+        "--format",
+        choices=("cxf", "cgats", "csv", "xlsx"),
+        help="format of --out (default: from its suffix)",
+    )
+    cp.add_argument("--sample", default="sample 1", help="sample name written to --out files")
 
 
 def cmd_list(args: argparse.Namespace) -> dict[str, Any]:
