@@ -9,7 +9,7 @@ and are re-exported here for callers that import them from this module.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,7 +18,14 @@ from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render import anisotropy as an
 from station.render.errors import RenderInputError
-from station.render.flakes import FlakeChoice, flake_lobes, flake_lod, flake_tint, flake_uniforms
+from station.render.flakes import (
+    CELL_PIXELS,
+    FlakeChoice,
+    flake_lod,
+    flake_mean_cube,
+    flake_tint,
+    flake_uniforms,
+)
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
     SHADER_DIR,
@@ -169,6 +176,7 @@ class GLRenderer:
         #: The anisotropic sample choice of the last frame (None: isotropic frame).
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
+        self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
 
     def _program(
         self,
@@ -213,6 +221,7 @@ class GLRenderer:
                 **({"HAS_ANISO": 1} if len(features) > 3 and features[3] else {}),
                 "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
                 "PENUMBRA_DEG": f"{PENUMBRA_DEG:.4f}",
+                "FLAKE_CELL_PIXELS": f"{CELL_PIXELS:.4f}",
                 "N_LOBES": len(self._lobes),
                 "OUTPUT_LINEAR": int(linear),
                 "DIFFUSE_SH": int(self.diffuse == "sh"),
@@ -236,6 +245,21 @@ class GLRenderer:
             prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
             self._programs[key] = (prog, None if kind == "mesh" else self.ctx.vertex_array(prog, []))
         return self._programs[key]
+
+    def _flake_mean(self, flakes: FlakeLayer):
+        """The flakes' mean map C_E for this layer's spread (:func:`station.render.flakes.flake_mean_cube`),
+        uploaded once per spread."""
+        import moderngl
+
+        key = round(flakes.spread_deg, 6)
+        if key not in self._flake_means:
+            cube = flake_mean_cube(self.basis, flakes)
+            tex = self.ctx.texture_cube(
+                (cube.shape[1],) * 2, 3, np.ascontiguousarray(cube).tobytes(), dtype="f4"
+            )
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            self._flake_means[key] = tex
+        return self._flake_means[key]
 
     def _target(self, linear: bool, depth: bool = False):
         """Colour target (with a depth buffer for meshes only: llvmpipe is slower with one attached)."""
@@ -348,11 +372,9 @@ class GLRenderer:
             check_curve(curve)
         curve_i = 0 if linear else CURVES.index(curve)
         flake_mean = -1
-        flake_maps = None  # (sharp, mean) basis lobes of the sparkle
+        flake_maps = None  # (sharp lobe, mean map) of the sparkle
         if flakes is not None and self.last_flakes.on:
-            flake_maps = flake_lobes(self.basis.exponents, flakes)
-            if self._lights_taken_out(flake_maps[1]):
-                flake_mean = int(np.nonzero(self._order == flake_maps[1])[0][0])
+            flake_maps = (int(np.argmax(self.basis.exponents)), self._flake_mean(flakes))
         if mesh is None:
             occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
             gx, gy, gz = GROUNDS[scene.shape]
@@ -405,9 +427,9 @@ class GLRenderer:
         }
         if flakes is not None and flake_maps is not None:
             uniforms.update(flake_uniforms(flakes))
-            sharp, mean = flake_maps
-            self._lobes[int(np.nonzero(self._order == sharp)[0][0])].use(m + 7)
-            self._lobes[int(np.nonzero(self._order == mean)[0][0])].use(m + 8)
+            flake_maps[1].use(m + 8)
+        if flake_maps is not None or mesh is not None:  # the glints' map; a mesh's glass and chrome
+            self._lobes[int(np.nonzero(self._order == int(np.argmax(self.basis.exponents)))[0][0])].use(m + 7)
         if aniso_uniforms:
             self._aniso[aniso_uniforms.pop("_key")][0].use(m + 9)
             uniforms.update(aniso_uniforms)
@@ -718,6 +740,9 @@ class GLRenderer:
             tex.release()
         for tex, *_ in self._aniso.values():
             tex.release()
+        for tex in self._flake_means.values():
+            tex.release()
+        self._flake_means.clear()
         self._aniso.clear()
         if self._combine is not None:
             for obj in (*self._combine[:3], *self._combine[3]):
