@@ -133,3 +133,18 @@ def test_close_up_sparkle_has_zero_mean(bases, env) -> None:
     se = sp.std(axis=0) / math.sqrt(sp.shape[0])
     assert sp.std() > 0.0
     assert np.all(np.abs(sp.mean(axis=0)) < 4.0 * se), (sp.mean(axis=0), se)
+
+
+def test_pearls_get_pearl_flakes() -> None:
+    """A hue-shifting paint (face hue 219°, flop hue 292° by atan2(b, a)) takes the mica defaults; a silver
+    (chroma ≈ 1) and a red metallic that keeps its hue take aluminium; a solid none."""
+    from station.model.design_io import default_flakes
+    from station.model.examples import EXAMPLES
+    from station.model.flakes import PEARL_FLAKES, is_pearl
+
+    pearl = EXAMPLES["pearl"]
+    assert math.degrees(math.atan2(-18.0, -22.0)) % 360 == pytest.approx(219.3, abs=0.1)
+    assert is_pearl(pearl.face, pearl.flop) and default_flakes(pearl) == PEARL_FLAKES
+    red = FaceFlopTravelGloss((45.0, 60.0, 35.0), (20.0, 40.0, 22.0), 60.0, 90.0)
+    assert default_flakes(red) == METALLIC_FLAKES and default_flakes(SILVER) == METALLIC_FLAKES
+    assert default_flakes(FaceFlopTravelGloss((50.0, 40.0, 20.0), (50.0, 40.0, 20.0), None, 85.0)) is None
