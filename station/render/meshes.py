@@ -3,7 +3,8 @@
 :func:`load_mesh` reads a file with ``trimesh`` (scene graph transforms applied), picks the part to paint
 by mesh (node or geometry) name or material name (case-insensitive substring; default: every part is
 painted), draws the other parts as tyre, glass or chrome when their names say so (:func:`part_material`),
-else as a neutral grey diffuse (``NEUTRAL_ALBEDO``), shades every part smooth with its creases kept
+else as a neutral grey diffuse (``NEUTRAL_ALBEDO``); a GLB of one part with a palette texture and no
+*paint* name has its faces coded by their swatches (:mod:`station.render.mesh_parts`). It shades every part smooth with its creases kept
 (:func:`smooth_normals`), and places the
 model on the renderer's stage: centred on the origin in x and z, its floor at MESH_FLOOR_Y, its longest
 horizontal side MESH_LENGTH long. Paint halves follow the shapes' rule: paint 0 where x < 0, paint 1
@@ -35,6 +36,16 @@ from numpy.typing import NDArray
 
 from station.render.camera import Camera
 from station.render.errors import RenderInputError
+from station.render.mesh_parts import (
+    CHROME,
+    GLASS,
+    NEUTRAL,
+    PAINT,
+    TYRE,
+    base_color_image,
+    palette_codes,
+    split_faces,
+)
 from station.render.stage import MAX_OCCLUDERS
 
 #: File types :func:`load_mesh` reads.
@@ -47,9 +58,6 @@ MESH_FLOOR_Y = -0.5
 NEUTRAL_ALBEDO = 0.18
 #: Default camera on a placed model (three-quarter front view, slightly above).
 MESH_CAMERA = Camera((2.3, 1.1, 3.9), (0.0, -0.2, 0.0), fov_deg=34.0)
-#: Material codes of :attr:`Mesh.painted` (per vertex; the shader reads them flat per triangle): the
-#: paint, and the other parts drawn as a neutral grey, a matte tyre, glass or chrome (render.frag.glsl).
-NEUTRAL, PAINT, TYRE, GLASS, CHROME = 0.0, 1.0, 2.0, 3.0, 4.0
 #: Name fragments (mesh, node or material; lower case) that make an unpainted part tyre, glass or chrome.
 PART_WORDS: dict[float, tuple[str, ...]] = {
     TYRE: ("tyre", "tire", "wheel", "rubber"),
@@ -175,6 +183,7 @@ def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
     except OSError as exc:
         raise RenderInputError("mesh", "a readable mesh file", str(p.name), exc.strerror or "") from None
     file_type = p.suffix.lower().lstrip(".")
+    palette = _palette(data, file_type) if paint is None else None  # before decoding drops the textures
     if file_type == "glb" and data[:4] == _GLB_MAGIC:
         data = decode_meshopt_glb(data)
     try:
@@ -199,16 +208,38 @@ def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
     base = 0
     for (node, geom_name, material, geom, transform), is_paint in zip(parts, chosen, strict=True):
         v, f, n = smooth_normals(geom)
+        code = np.full(len(v), PAINT if is_paint else part_material(node, geom_name, material))
+        if palette is not None and len(parts) == 1:
+            v, f, n, code = _palette_split(geom, palette, v, f, n, code)
         v = v @ transform[:3, :3].T + transform[:3, 3]
         n = n @ np.linalg.inv(transform[:3, :3])
         pos.append(v)
         nrm.append(n)
         faces.append(f + base)
-        painted.append(np.full(len(v), PAINT if is_paint else part_material(node, geom_name, material)))
+        painted.append(code)
         base += len(v)
     return place_on_stage(
         p.stem, np.concatenate(pos), np.concatenate(nrm), np.concatenate(faces), np.concatenate(painted)
     )
+
+
+def _palette(data: bytes, file_type: str) -> NDArray | None:
+    """The base-colour palette of a GLB (:func:`station.render.mesh_parts.base_color_image`), or None."""
+    if file_type != "glb":
+        return None
+    return base_color_image(data)
+
+
+def _palette_split(geom: Any, palette: NDArray, v: NDArray, f: NDArray, n: NDArray, code: NDArray) -> tuple:
+    """A one-material model's faces coded by their palette swatch (station.render.mesh_parts), when the
+    geometry's faces are the file's (smooth_normals kept them); else the part as it was."""
+    if len(f) != len(geom.faces) or len(v) != len(geom.vertices):
+        return v, f, n, code
+    codes = palette_codes(geom, palette)
+    if codes is None:
+        return v, f, n, code
+    sv, sn, sf, sc = split_faces(v, n, f, codes)
+    return sv, sf, sn, sc
 
 
 def place_on_stage(

@@ -46,7 +46,11 @@ def test_cc0_car_loads_and_is_placed(cc0_cars) -> None:
         assert lo[1] == pytest.approx(me.MESH_FLOOR_Y, abs=1e-6)
         assert abs(lo[0] + hi[0]) < 1e-5 and abs(lo[2] + hi[2]) < 1e-5
         assert np.linalg.norm(mesh.normals, axis=1) == pytest.approx(1.0, abs=1e-5)
-        assert mesh.painted.min() == 1.0  # one part: all painted
+        # one material with a palette texture: paint, tyres and glass by their swatches (mesh_parts)
+        assert (mesh.painted == me.PAINT).mean() > 0.3
+        assert (mesh.painted == me.TYRE).any() and (mesh.painted == me.GLASS).any()
+        tyre_y = mesh.positions[mesh.painted == me.TYRE][:, 1]
+        assert np.median(tyre_y) < np.median(mesh.positions[mesh.painted == me.PAINT][:, 1])  # low down
         # Normals point out of the body for most vertices (decoded octahedral normals, turned with it).
         out = np.einsum("ij,ij->i", mesh.normals, mesh.positions - mesh.positions.mean(axis=0))
         assert (out > 0).mean() > 0.7
@@ -187,3 +191,29 @@ def test_neutral_parts_are_grey(gl_ctx, sky_basis, tmp_path) -> None:
     expected = 0.04 * sample_cube(sharp, d)[0] + 0.96 * 0.03 * sample_cube(up, d)[0]
     centre = img[30:34, 28:36].reshape(-1, 3)
     assert centre == pytest.approx(np.broadcast_to(expected, centre.shape), rel=0.05)
+
+
+def test_palette_textured_model_is_split_into_parts(tmp_path) -> None:
+    """One material with a 4-swatch palette (orange, black, dark grey, light grey): the faces on the
+    largest-area swatch are paint, the black tyre, the dark grey glass, the light grey chrome."""
+    import trimesh
+    from PIL import Image
+
+    palette = np.array([[[205, 141, 83], [10, 10, 10], [60, 60, 62], [170, 170, 170]]], np.uint8)
+    boxes = []
+    for k, size in enumerate((3.0, 0.6, 0.8, 0.4)):
+        b = trimesh.creation.box((size, size, size))
+        b.apply_translation((4.0 * k, 0.0, 0.0))
+        b.visual = trimesh.visual.TextureVisuals(
+            uv=np.tile([(k + 0.5) / 4.0, 0.5], (len(b.vertices), 1)),
+            material=trimesh.visual.material.SimpleMaterial(image=Image.fromarray(palette)),
+        )
+        boxes.append(b)
+    merged = trimesh.util.concatenate(boxes)
+    merged.export(tmp_path / "palette.glb")
+    mesh = me.load_mesh(tmp_path / "palette.glb")
+    order = np.argsort(mesh.positions[:, 0])  # the boxes lie along x, biggest first
+    third = len(order) // 4
+    got = [np.unique(mesh.painted[order[i * third : (i + 1) * third]]) for i in range(4)]
+    assert [g.tolist() for g in got] == [[me.PAINT], [me.TYRE], [me.GLASS], [me.CHROME]]
+    assert me.load_mesh(tmp_path / "palette.glb", paint="geometry").painted.min() == me.PAINT  # by name: all
