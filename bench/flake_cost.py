@@ -42,9 +42,8 @@ def _scene(i: int) -> Scene:
     a = np.radians(3.0 * i)
     rot = np.array([[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]])
     eye = np.asarray(cam.target) + rot @ np.subtract(cam.eye, cam.target)
-    return Scene(
-        "sphere", camera=Camera(tuple(map(float, eye)), cam.target, fov_deg=cam.fov_deg), stage=Stage()
-    )
+    x, y, z = (float(v) for v in eye)
+    return Scene("sphere", camera=Camera((x, y, z), cam.target, fov_deg=cam.fov_deg), stage=Stage())
 
 
 def main() -> None:
