@@ -162,7 +162,7 @@ class GLRenderer:
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
         self._programs: dict[
-            tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int, int], tuple
+            tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int], tuple
         ] = {}
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
@@ -186,7 +186,6 @@ class GLRenderer:
         features: tuple[int, ...] = (0, 0, 0),
         terms: tuple[int, int, int] = (-1, 1, 0),
         n_occ: int = 0,
-        flake_mean: int = -1,
         curve: int = 0,
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
@@ -195,9 +194,8 @@ class GLRenderer:
         wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally diffuse weight
         is, whether the aspecular fall-off is shaded), see :meth:`_terms`; *n_occ*: the ground's sphere
         occluders (0 without a stage), compiled in with the light count so the stage's loops unroll;
-        *flake_mean*: the bound index of the flakes' mean lobe when its lights are added exactly (else
-        -1); *curve*: the tone curve's index in CURVES (8-bit output)."""
-        key = (shape, linear, kind, features, terms, n_occ, flake_mean, curve)
+        *curve*: the tone curve's index in CURVES (8-bit output)."""
+        key = (shape, linear, kind, features, terms, n_occ, curve)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
 
@@ -210,7 +208,6 @@ class GLRenderer:
                 "NARROW_DD": terms[1],
                 "HAS_FALL_OFF": terms[2],
                 "N_OCC": n_occ,
-                "FLAKE_MEAN_LOBE": flake_mean,
                 "CURVE": curve,
                 "HAS_COAT": features[0],
                 "HAS_STAGE": int(features[1] != 0),
@@ -431,11 +428,11 @@ class GLRenderer:
             occluders = mesh.occluders().astype(np.float32)
         n_occ = len(occluders) if stage is not None else 0
         if mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, -1, curve_i)]
+            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, curve_i)]
         else:
             passes = [
                 self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
-                self._program("sphere", linear, "mesh", feats, terms, n_occ, -1, curve_i),
+                self._program("sphere", linear, "mesh", feats, terms, n_occ, curve_i),
             ]
         return pair, passes, aniso_uniforms, occluders, n_occ
 

@@ -53,9 +53,6 @@
 #ifndef HAS_FALL_OFF
 #define HAS_FALL_OFF 0
 #endif
-#ifndef FLAKE_MEAN_LOBE
-#define FLAKE_MEAN_LOBE -1
-#endif
 #ifndef FLAKE_CELL_PIXELS
 #define FLAKE_CELL_PIXELS 2.0
 #endif
