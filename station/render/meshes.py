@@ -271,89 +271,58 @@ def place_on_stage(
 # -- glTF with EXT_meshopt_compression --------------------------------------------------------------------
 
 
-def decode_meshopt_glb(data: bytes) -> bytes:
-    """A GLB whose buffer views use EXT_meshopt_compression rewritten as a plain GLB of float32 attributes
-    and uint32 indices (quantised attributes dequantised, textures dropped); other GLBs come back as they are.
-    """
-    if len(data) < 20 or data[:4] != _GLB_MAGIC:
-        return data
-    json_len, _ = struct.unpack_from("<II", data, 12)
-    doc = json.loads(data[20 : 20 + json_len])
-    if "EXT_meshopt_compression" not in doc.get("extensionsUsed", []):
-        return data
+def _meshopt_view(doc: dict, bin_chunk: bytes, i: int) -> bytes:
+    """The bytes of buffer view *i*, decoded with meshoptimizer when it is EXT_meshopt_compression'ed."""
     import meshoptimizer
 
-    off = 20 + json_len
-    bin_chunk = b""
-    if off + 8 <= len(data):
-        bin_len, _ = struct.unpack_from("<II", data, off)
-        bin_chunk = data[off + 8 : off + 8 + bin_len]
+    bv = doc["bufferViews"][i]
+    ext = bv.get("extensions", {}).get("EXT_meshopt_compression")
+    if ext is None:
+        start = bv.get("byteOffset", 0)
+        return bin_chunk[start : start + bv["byteLength"]]
+    start = ext.get("byteOffset", 0)
+    src = np.frombuffer(bin_chunk[start : start + ext["byteLength"]], np.uint8)
+    count, stride, mode = ext["count"], ext["byteStride"], ext["mode"]
+    if mode == "ATTRIBUTES":
+        raw = meshoptimizer.decode_vertex_buffer(count, stride, src, dtype=np.dtype(f"V{stride}"))
+        filt = ext.get("filter", "NONE")
+        if filt == "OCTAHEDRAL":
+            raw = meshoptimizer.decode_filter_oct(raw, count, stride)
+        elif filt == "QUATERNION":
+            raw = meshoptimizer.decode_filter_quat(raw, count, stride)
+        elif filt == "EXPONENTIAL":
+            raw = meshoptimizer.decode_filter_exp(raw, count, stride)
+    elif mode == "TRIANGLES":
+        raw = meshoptimizer.decode_index_buffer(count, stride, src)
+    else:
+        raw = meshoptimizer.decode_index_sequence(count, stride, src)
+    return np.ascontiguousarray(raw).tobytes()[: count * stride]
 
-    def view_bytes(i: int) -> bytes:
-        bv = doc["bufferViews"][i]
-        ext = bv.get("extensions", {}).get("EXT_meshopt_compression")
-        if ext is None:
-            start = bv.get("byteOffset", 0)
-            return bin_chunk[start : start + bv["byteLength"]]
-        start = ext.get("byteOffset", 0)
-        src = np.frombuffer(bin_chunk[start : start + ext["byteLength"]], np.uint8)
-        count, stride, mode = ext["count"], ext["byteStride"], ext["mode"]
-        if mode == "ATTRIBUTES":
-            raw = meshoptimizer.decode_vertex_buffer(count, stride, src, dtype=np.dtype(f"V{stride}"))
-            filt = ext.get("filter", "NONE")
-            if filt == "OCTAHEDRAL":
-                raw = meshoptimizer.decode_filter_oct(raw, count, stride)
-            elif filt == "QUATERNION":
-                raw = meshoptimizer.decode_filter_quat(raw, count, stride)
-            elif filt == "EXPONENTIAL":
-                raw = meshoptimizer.decode_filter_exp(raw, count, stride)
-        elif mode == "TRIANGLES":
-            raw = meshoptimizer.decode_index_buffer(count, stride, src)
-        else:
-            raw = meshoptimizer.decode_index_sequence(count, stride, src)
-        return np.ascontiguousarray(raw).tobytes()[: count * stride]
 
-    cache: dict[int, bytes] = {}
-    out = bytearray()
-    views, accessors = [], []
-    for acc in doc["accessors"]:
-        i = acc["bufferView"]
-        if i not in cache:
-            cache[i] = view_bytes(i)
-        raw = cache[i]
-        bv = doc["bufferViews"][i]
-        ct, k = acc["componentType"], _COMPONENTS[acc["type"]]
-        dt = np.dtype(_DTYPES[ct])
-        stride = bv.get("byteStride") or bv.get("extensions", {}).get("EXT_meshopt_compression", {}).get(
-            "byteStride", dt.itemsize * k
-        )
-        n = acc["count"]
-        base = acc.get("byteOffset", 0)
-        rows = np.frombuffer(raw, np.uint8)[base : base + n * stride]
-        rows = np.pad(rows, (0, max(0, n * stride - rows.size))).reshape(n, stride)
-        vals = rows[:, : dt.itemsize * k].copy().view(dt).reshape(n, k)
-        if acc.get("normalized") and ct in _NORM:
-            arr = np.maximum(vals.astype(np.float32) / _NORM[ct], -1.0)
-            new_ct = 5126
-        elif ct == 5126:
-            arr, new_ct = vals.astype(np.float32), 5126
-        elif acc["type"] == "SCALAR":  # indices
-            arr, new_ct = vals.astype(np.uint32), 5125
-        else:
-            arr, new_ct = vals.astype(np.float32), 5126
-        blob = arr.tobytes()
-        views.append({"buffer": 0, "byteOffset": len(out), "byteLength": len(blob)})
-        out += blob + b"\0" * (-len(blob) % 4)
-        new = {key: acc[key] for key in ("type", "count", "name") if key in acc}
-        new.update({"bufferView": len(views) - 1, "componentType": new_ct, "byteOffset": 0})
-        if "min" in acc and new_ct == 5126 and acc.get("normalized"):
-            new["min"] = list(map(float, arr.min(axis=0)))
-            new["max"] = list(map(float, arr.max(axis=0)))
-        elif "min" in acc and not acc.get("normalized"):
-            new["min"], new["max"] = acc["min"], acc["max"]
-        accessors.append(new)
-    doc["accessors"], doc["bufferViews"] = accessors, views
-    doc["buffers"] = [{"byteLength": len(out)}]
+def _plain_accessor(acc: dict, bv: dict, raw: bytes) -> tuple[np.ndarray, int]:
+    """An accessor's values from its view's decoded bytes, as float32 (dequantised) or uint32 indices,
+    and the new component type."""
+    ct, k = acc["componentType"], _COMPONENTS[acc["type"]]
+    dt = np.dtype(_DTYPES[ct])
+    stride = bv.get("byteStride") or bv.get("extensions", {}).get("EXT_meshopt_compression", {}).get(
+        "byteStride", dt.itemsize * k
+    )
+    n = acc["count"]
+    base = acc.get("byteOffset", 0)
+    rows = np.frombuffer(raw, np.uint8)[base : base + n * stride]
+    rows = np.pad(rows, (0, max(0, n * stride - rows.size))).reshape(n, stride)
+    vals = rows[:, : dt.itemsize * k].copy().view(dt).reshape(n, k)
+    if acc.get("normalized") and ct in _NORM:
+        return np.maximum(vals.astype(np.float32) / _NORM[ct], -1.0), 5126
+    if ct == 5126:
+        return vals.astype(np.float32), 5126
+    if acc["type"] == "SCALAR":  # indices
+        return vals.astype(np.uint32), 5125
+    return vals.astype(np.float32), 5126
+
+
+def _strip_textures(doc: dict) -> None:
+    """Drop the images, textures and the compression extensions from a glTF document (in place)."""
     for key in ("images", "textures", "samplers"):
         doc.pop(key, None)
     for m in doc.get("materials", []):
@@ -369,6 +338,45 @@ def decode_meshopt_glb(data: bytes) -> bytes:
         ]
         if not doc[key]:
             del doc[key]
+
+
+def decode_meshopt_glb(data: bytes) -> bytes:
+    """A GLB whose buffer views use EXT_meshopt_compression rewritten as a plain GLB of float32 attributes
+    and uint32 indices (quantised attributes dequantised, textures dropped); other GLBs come back as they are.
+    """
+    if len(data) < 20 or data[:4] != _GLB_MAGIC:
+        return data
+    json_len, _ = struct.unpack_from("<II", data, 12)
+    doc = json.loads(data[20 : 20 + json_len])
+    if "EXT_meshopt_compression" not in doc.get("extensionsUsed", []):
+        return data
+    off = 20 + json_len
+    bin_chunk = b""
+    if off + 8 <= len(data):
+        bin_len, _ = struct.unpack_from("<II", data, off)
+        bin_chunk = data[off + 8 : off + 8 + bin_len]
+    cache: dict[int, bytes] = {}
+    out = bytearray()
+    views, accessors = [], []
+    for acc in doc["accessors"]:
+        i = acc["bufferView"]
+        if i not in cache:
+            cache[i] = _meshopt_view(doc, bin_chunk, i)
+        arr, new_ct = _plain_accessor(acc, doc["bufferViews"][i], cache[i])
+        blob = arr.tobytes()
+        views.append({"buffer": 0, "byteOffset": len(out), "byteLength": len(blob)})
+        out += blob + b"\0" * (-len(blob) % 4)
+        new = {key: acc[key] for key in ("type", "count", "name") if key in acc}
+        new.update({"bufferView": len(views) - 1, "componentType": new_ct, "byteOffset": 0})
+        if "min" in acc and new_ct == 5126 and acc.get("normalized"):
+            new["min"] = list(map(float, arr.min(axis=0)))
+            new["max"] = list(map(float, arr.max(axis=0)))
+        elif "min" in acc and not acc.get("normalized"):
+            new["min"], new["max"] = acc["min"], acc["max"]
+        accessors.append(new)
+    doc["accessors"], doc["bufferViews"] = accessors, views
+    doc["buffers"] = [{"byteLength": len(out)}]
+    _strip_textures(doc)
     js = json.dumps(doc).encode()
     js += b" " * (-len(js) % 4)
     total = 12 + 8 + len(js) + 8 + len(out)
