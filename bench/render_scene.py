@@ -21,11 +21,12 @@ from station.model import FaceFlopTravelGloss
 from station.model.flakes import METALLIC_FLAKES
 from station.model.gloss import ClearCoat
 from station.render.camera import Camera
+from station.render.car import car_body
 from station.render.envcache import PrefilterCache
 from station.render.environment import Environment, load_environment
 from station.render.gl_renderer import GLRenderer
 from station.render.lobe_fit import fit_design
-from station.render.meshes import car_body, load_mesh
+from station.render.meshes import load_mesh
 from station.render.prefilter import prefilter_basis
 from station.render.procedural import procedural_environment
 from station.render.shapes import Scene

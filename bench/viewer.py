@@ -285,9 +285,144 @@ def startup(cache_dir: str | None) -> tuple[float, float, float, float]:
     raise RuntimeError(f"no first frame: {out.stderr[-2000:]}")
 
 
+def _scene_cases() -> list:
+    """The orbit of each of SCENES against the core renderer on the same scene."""
+    from bench._report import Case
+
+    scene_cases: list[Case] = []
+    for label, scene in SCENES.items():
+        st_med, st_best, st_cpu, _, _ = core_orbit(None, scene=scene)
+        st_orbit, st_orbit_cpu, st_full, _, _ = measure_view_changes(None, scene)
+        st_orbit_med = statistics.median(st_orbit)
+        scene_cases += [
+            Case(
+                f"orbit, {label}, median",
+                f"{SIZE}x{SIZE}",
+                st_orbit_med * 1e3,
+                "ms",
+                f"{1.0 / st_orbit_med:.1f} fps (best {1.0 / min(st_orbit):.1f}); {st_full}/{len(st_orbit)} "
+                f"full quality; process CPU {st_orbit_cpu * 1e3:.1f} ms/frame",
+            ),
+            Case(
+                "  core GLRenderer.render alone, same scene, median (baseline)",
+                f"{SIZE}x{SIZE}",
+                st_med * 1e3,
+                "ms",
+                f"best {st_best * 1e3:.1f} ms, CPU {st_cpu * 1e3:.1f} ms/frame",
+            ),
+            Case("  ratio", "", st_orbit_med / st_med, "ratio"),
+        ]
+    return scene_cases
+
+
+def _orbit_cases() -> list:
+    """The default orbit and the environment change, each against its core baseline, then SCENES."""
+    from bench._report import Case
+
+    core_med, core_best, core_cpu, _, _ = core_orbit(None)
+    with tempfile.TemporaryDirectory() as cold_dir:
+        *_, core_env_gl, core_env_gl_cpu = core_orbit(cold_dir, "gl")
+    with tempfile.TemporaryDirectory() as cold_dir:
+        *_, core_env_np, core_env_np_cpu = core_orbit(cold_dir, "numpy")
+    with tempfile.TemporaryDirectory() as cold_dir:
+        orbit, orbit_cpu, full, env_s, env_cpu = measure_view_changes(cold_dir)
+    orbit_med, orbit_best = statistics.median(orbit), min(orbit)
+    scene_cases = _scene_cases()
+    cases: list[Case] = []
+    cases += [
+        Case(
+            "orbit: view change -> frame on screen, median",
+            f"{SIZE}x{SIZE}",
+            orbit_med * 1e3,
+            "ms",
+            f"bar <= {BAR_VIEW_MS:g} ms; {full}/{len(orbit)} frames full quality (GL renderer, full prefilter)",
+        ),
+        Case("  best", f"{SIZE}x{SIZE}", orbit_best * 1e3, "ms"),
+        Case(
+            "  process CPU per frame",
+            f"{SIZE}x{SIZE}",
+            orbit_cpu * 1e3,
+            "ms",
+            "llvmpipe threads included",
+        ),
+        Case(
+            "orbit fps (1 / median; 1 / best)",
+            f"{SIZE}x{SIZE}",
+            1.0 / orbit_med,
+            "fps",
+            f"bar >= {BAR_ORBIT_FPS:g}; best {1.0 / orbit_best:.1f} fps",
+        ),
+        Case(
+            "  core GLRenderer.render alone, median (baseline)",
+            f"{SIZE}x{SIZE}",
+            core_med * 1e3,
+            "ms",
+            f"EGL, no Qt, 8-bit read-back; best {core_best * 1e3:.1f} ms, CPU {core_cpu * 1e3:.1f} ms/frame",
+        ),
+        Case("  orbit median / core median", "", orbit_med / core_med, "ratio"),
+        Case("  orbit best / core best", "", orbit_best / core_best, "ratio"),
+        Case("  orbit CPU / core CPU per frame", "", orbit_cpu / core_cpu, "ratio"),
+        *scene_cases,
+        Case(
+            "environment change -> full-quality frame, cold cache",
+            f"{SIZE}x{SIZE}",
+            env_s,
+            "s",
+            f"bar <= {BAR_ENV_S:g} s; process CPU {env_cpu:.2f} s; GL prefilter on the view's context",
+        ),
+        Case(
+            "  core: cold GL prefilter + first GL frame alone (baseline)",
+            "",
+            core_env_gl,
+            "s",
+            f"EGL, no Qt; CPU {core_env_gl_cpu:.2f} s",
+        ),
+        Case("  ratio", "", env_s / core_env_gl, "ratio"),
+        Case(
+            "  before: cold NumPy prefilter + first GL frame alone",
+            "",
+            core_env_np,
+            "s",
+            f"CPU {core_env_np_cpu:.2f} s; the viewer's path before (256-wide map to 64² faces)",
+        ),
+        Case("  GL / NumPy prefilter path", "", core_env_gl / core_env_np, "ratio"),
+    ]
+    return cases
+
+
+def _edit_cases() -> tuple[list, str]:
+    """The paint edit (cpu mode) against the core's NumPy edit; and the GL renderer's name."""
+    from bench._report import Case
+
+    cases: list[Case] = []
+    total, _, renderer, edit_cpu = measure_edits("cpu")
+    *base, base_cpu = numpy_edit_baseline()
+    base_med = statistics.median(base)
+    cases += [
+        Case(
+            "paint edit -> screen (cached basis, cpu mode), median",
+            f"{SIZE}x{SIZE}",
+            statistics.median(total) * 1e3,
+            "ms",
+            f"bar <= 20 ms; best {min(total) * 1e3:.1f} ms; process CPU {edit_cpu * 1e3:.1f} ms/edit",
+        ),
+        Case(
+            "  core NumPy edit alone, median (baseline)",
+            f"{SIZE}x{SIZE}",
+            base_med * 1e3,
+            "ms",
+            f"best {min(base) * 1e3:.1f} ms; process CPU {base_cpu * 1e3:.1f} ms/edit",
+        ),
+        Case("  ratio", "", statistics.median(total) / base_med, "ratio"),
+        Case("  best / best", "", min(total) / min(base), "ratio"),
+        Case("  CPU / CPU per edit", "", edit_cpu / base_cpu, "ratio"),
+    ]
+    return cases, renderer
+
+
 def orbit_main() -> None:
     """``python -m bench.viewer --orbit``: view change, environment change and paint edit against the core."""
-    from bench._report import Case, write_section
+    from bench._report import write_section
     from ui.xvfb import start_xvfb
 
     xvfb = start_xvfb("2048x1536x24")
@@ -299,119 +434,10 @@ def orbit_main() -> None:
 
         configure_default_format()
         app = QApplication([])
-        cases: list[Case] = []
         load0 = os.getloadavg()[0]
-        core_med, core_best, core_cpu, _, _ = core_orbit(None)
-        with tempfile.TemporaryDirectory() as cold_dir:
-            *_, core_env_gl, core_env_gl_cpu = core_orbit(cold_dir, "gl")
-        with tempfile.TemporaryDirectory() as cold_dir:
-            *_, core_env_np, core_env_np_cpu = core_orbit(cold_dir, "numpy")
-        with tempfile.TemporaryDirectory() as cold_dir:
-            orbit, orbit_cpu, full, env_s, env_cpu = measure_view_changes(cold_dir)
-        orbit_med, orbit_best = statistics.median(orbit), min(orbit)
-        scene_cases: list[Case] = []
-        for label, scene in SCENES.items():
-            st_med, st_best, st_cpu, _, _ = core_orbit(None, scene=scene)
-            st_orbit, st_orbit_cpu, st_full, _, _ = measure_view_changes(None, scene)
-            st_orbit_med = statistics.median(st_orbit)
-            scene_cases += [
-                Case(
-                    f"orbit, {label}, median",
-                    f"{SIZE}x{SIZE}",
-                    st_orbit_med * 1e3,
-                    "ms",
-                    f"{1.0 / st_orbit_med:.1f} fps (best {1.0 / min(st_orbit):.1f}); {st_full}/{len(st_orbit)} "
-                    f"full quality; process CPU {st_orbit_cpu * 1e3:.1f} ms/frame",
-                ),
-                Case(
-                    "  core GLRenderer.render alone, same scene, median (baseline)",
-                    f"{SIZE}x{SIZE}",
-                    st_med * 1e3,
-                    "ms",
-                    f"best {st_best * 1e3:.1f} ms, CPU {st_cpu * 1e3:.1f} ms/frame",
-                ),
-                Case("  ratio", "", st_orbit_med / st_med, "ratio"),
-            ]
-        cases += [
-            Case(
-                "orbit: view change -> frame on screen, median",
-                f"{SIZE}x{SIZE}",
-                orbit_med * 1e3,
-                "ms",
-                f"bar <= {BAR_VIEW_MS:g} ms; {full}/{len(orbit)} frames full quality (GL renderer, full prefilter)",
-            ),
-            Case("  best", f"{SIZE}x{SIZE}", orbit_best * 1e3, "ms"),
-            Case(
-                "  process CPU per frame",
-                f"{SIZE}x{SIZE}",
-                orbit_cpu * 1e3,
-                "ms",
-                "llvmpipe threads included",
-            ),
-            Case(
-                "orbit fps (1 / median; 1 / best)",
-                f"{SIZE}x{SIZE}",
-                1.0 / orbit_med,
-                "fps",
-                f"bar >= {BAR_ORBIT_FPS:g}; best {1.0 / orbit_best:.1f} fps",
-            ),
-            Case(
-                "  core GLRenderer.render alone, median (baseline)",
-                f"{SIZE}x{SIZE}",
-                core_med * 1e3,
-                "ms",
-                f"EGL, no Qt, 8-bit read-back; best {core_best * 1e3:.1f} ms, CPU {core_cpu * 1e3:.1f} ms/frame",
-            ),
-            Case("  orbit median / core median", "", orbit_med / core_med, "ratio"),
-            Case("  orbit best / core best", "", orbit_best / core_best, "ratio"),
-            Case("  orbit CPU / core CPU per frame", "", orbit_cpu / core_cpu, "ratio"),
-            *scene_cases,
-            Case(
-                "environment change -> full-quality frame, cold cache",
-                f"{SIZE}x{SIZE}",
-                env_s,
-                "s",
-                f"bar <= {BAR_ENV_S:g} s; process CPU {env_cpu:.2f} s; GL prefilter on the view's context",
-            ),
-            Case(
-                "  core: cold GL prefilter + first GL frame alone (baseline)",
-                "",
-                core_env_gl,
-                "s",
-                f"EGL, no Qt; CPU {core_env_gl_cpu:.2f} s",
-            ),
-            Case("  ratio", "", env_s / core_env_gl, "ratio"),
-            Case(
-                "  before: cold NumPy prefilter + first GL frame alone",
-                "",
-                core_env_np,
-                "s",
-                f"CPU {core_env_np_cpu:.2f} s; the viewer's path before (256-wide map to 64² faces)",
-            ),
-            Case("  GL / NumPy prefilter path", "", core_env_gl / core_env_np, "ratio"),
-        ]
-        total, _, renderer, edit_cpu = measure_edits("cpu")
-        *base, base_cpu = numpy_edit_baseline()
-        base_med = statistics.median(base)
-        cases += [
-            Case(
-                "paint edit -> screen (cached basis, cpu mode), median",
-                f"{SIZE}x{SIZE}",
-                statistics.median(total) * 1e3,
-                "ms",
-                f"bar <= 20 ms; best {min(total) * 1e3:.1f} ms; process CPU {edit_cpu * 1e3:.1f} ms/edit",
-            ),
-            Case(
-                "  core NumPy edit alone, median (baseline)",
-                f"{SIZE}x{SIZE}",
-                base_med * 1e3,
-                "ms",
-                f"best {min(base) * 1e3:.1f} ms; process CPU {base_cpu * 1e3:.1f} ms/edit",
-            ),
-            Case("  ratio", "", statistics.median(total) / base_med, "ratio"),
-            Case("  best / best", "", min(total) / min(base), "ratio"),
-            Case("  CPU / CPU per edit", "", edit_cpu / base_cpu, "ratio"),
-        ]
+        cases = _orbit_cases()
+        edit_cases, renderer = _edit_cases()
+        cases += edit_cases
         app.shutdown()
         load = os.getloadavg()[0]
         write_section(

@@ -267,6 +267,7 @@ def create_app(settings: Settings) -> FastAPI:
     from station.api.routes import ROUTERS, health
     from station.api.routes.library import IMPORT_PATH as LIBRARY_IMPORT_PATH
     from station.api.routes.measurements import CREATE_ACTION
+    from station.api.schemas.environment import ENVIRONMENT_BODY_BYTES, ENVIRONMENT_UPLOAD_PATHS
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -310,7 +311,13 @@ def create_app(settings: Settings) -> FastAPI:
     app.add_middleware(
         BodySizeLimit,
         max_bytes=settings.max_body_bytes,
-        per_path={f"{API_PREFIX}{LIBRARY_IMPORT_PATH}": settings.library_upload_max_bytes},
+        per_path={
+            f"{API_PREFIX}{LIBRARY_IMPORT_PATH}": settings.library_upload_max_bytes,
+            **{
+                f"{API_PREFIX}{path}": max(settings.max_body_bytes, ENVIRONMENT_BODY_BYTES)
+                for path in ENVIRONMENT_UPLOAD_PATHS
+            },
+        },
     )
     app.add_middleware(SecurityHeaders)  # outermost: the 413 above gets the headers too
     return app

@@ -213,7 +213,9 @@ def _environment_fit(args: argparse.Namespace, art: np.ndarray) -> dict[str, Any
         if args.initial
         else srgb_encode(shade_environment(env, _default_silver()))
     )
-    fit = fit_environment(basis, art, initial, gloss_gu=gloss)
+    source = "the studio" if args.environment == STUDIO else Path(args.environment).name
+    lighting = f"{len(env.light_dirs)} point lights from {source}"  # the map discretised into lights
+    fit = fit_environment(basis, art, initial, gloss_gu=gloss, lighting=lighting)
     out = fit.to_dict()
     out.update(environment=env.name, lights=len(env.light_dirs), basis_seconds=basis_s)
     return out

@@ -12,8 +12,14 @@ Scene options: ``--stage`` shows the environment as backdrop over a ground with 
 (``--blur DEG``, ``--rotate DEG``, ``--no-ground``); ``--coat N`` adds the clear coat's Fresnel of index N
 to the gloss (thesis model without it); ``--flakes`` draws the design file's flake layer (GL and NumPy
 engines; the JSON says what the level of detail chose); a design file's ``anisotropy`` (α_x, α_y,
-direction; GL engine) is drawn with the level of detail's sample count, reported in the JSON; GL engine only: ``--mesh FILE`` renders a
-.glb/.gltf/.obj/.stl model instead of the shape (``--paint-part NAME`` picks the part to paint).
+direction; GL engine) is drawn with the level of detail's sample count, reported in the JSON;
+``--flake-size UM``, ``--flake-density PER_MM2``, ``--flake-spread DEG`` set the flake layer's parameters
+(the design file's, or the paint type's default, for the rest; they imply ``--flakes``).
+``--view YAW,PITCH[,DISTANCE]`` frames the shape (or model) from that direction (degrees; yaw about the
+vertical from +z, pitch above the horizon) at that distance (scene units; default the standard view's).
+GL engine only: ``--mesh FILE`` renders a .glb/.gltf/.obj/.stl model instead of the shape (``--paint-part
+NAME`` picks the part to paint; the other parts are drawn as tyre, glass or chrome by their names), and
+``--mesh car`` the procedural car (body, glass, wheels).
 ``--lod DE`` lets the level of detail (``station.render.scene_image.scene_lod``, against the ground truth
 on a 16 × 16 sample of the view) pick the lobe count and environment resolution for a CIEDE2000
 tolerance and reports the choice.
@@ -32,7 +38,14 @@ from station.cli._common import add_json_flag
 from station.errors import InputError
 
 if TYPE_CHECKING:
+    from station.model.anisotropy import Anisotropy
+    from station.model.flakes import FlakeLayer
+    from station.model.gloss import ClearCoat
+    from station.render.camera import Camera
     from station.render.environment import Environment
+    from station.render.meshes import Mesh
+    from station.render.shapes import Scene
+    from station.render.stage import Stage
 
 ENVS = ("booth", "sky", "overcast")
 DESCRIPTION = (
@@ -90,9 +103,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--rotate", type=float, default=0.0, help="environment turn about the vertical, degrees")
     p.add_argument("--no-ground", action="store_true", help="with --stage: backdrop only")
     p.add_argument("--coat", type=float, help="clear coat index for Schlick Fresnel on the gloss (e.g. 1.5)")
-    p.add_argument("--mesh", help="GL engine: render this .glb/.gltf/.obj/.stl model instead of the shape")
+    p.add_argument(
+        "--mesh", help="GL engine: render this .glb/.gltf/.obj/.stl model (or 'car', the procedural car)"
+    )
     p.add_argument("--paint-part", help="with --mesh: the mesh or material name of the part to paint")
     p.add_argument("--flakes", action="store_true", help="the design file's flake layer (metallic sparkle)")
+    p.add_argument("--flake-size", type=float, help="flake diameter, micrometres (1..500; implies --flakes)")
+    p.add_argument("--flake-density", type=float, help="flakes per mm² (1..100000; implies --flakes)")
+    p.add_argument(
+        "--flake-spread", type=float, help="flake tilt spread, degrees (0.5..45; implies --flakes)"
+    )
+    p.add_argument(
+        "--view",
+        help="YAW,PITCH[,DISTANCE]: look from yaw/pitch degrees at that distance (e.g. 30,15,0.8 close up)",
+    )
     p.add_argument("--lod", type=float, help="CIEDE2000 tolerance: level of detail picks lobes and map size")
     add_json_flag(p)
     p.set_defaults(handler=_render)
@@ -109,32 +133,52 @@ def _environment(name: str) -> Environment:
     return load_environment(name)
 
 
-def _render(args: argparse.Namespace) -> dict[str, Any]:
-    from station.model.design_io import load_design
-    from station.render import lobe_fit, tonemap
-    from station.render.envcache import PrefilterCache
-    from station.render.flakes import flake_lod
-    from station.render.gl_renderer import gl_available
-    from station.render.numpy_renderer import BACKGROUND, gbuffer, render_linear
-    from station.render.prefilter import prefilter_basis
-    from station.render.shapes import Scene
+def _view_camera(text: str | None, default: Camera) -> Camera:
+    """The camera of ``--view YAW,PITCH[,DISTANCE]`` about *default*'s target (None: *default*)."""
+    from station.render.camera import orbit_camera
 
-    if not 8 <= args.size <= 4096:
-        raise InputError("size", "8 <= size <= 4096", args.size)
-    out = Path(args.out)
-    if out.suffix.lower() != ".png":
-        raise InputError("out", "a .png path", args.out)
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
-    designs = [load_design(args.design)] + ([load_design(args.design2)] if args.design2 else [])
-    timings["load"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    paints = [lobe_fit.fit_design(d) for d in designs]
-    timings["fit"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    env = _environment(args.env)
-    timings["environment"] = time.perf_counter() - t0
+    if text is None:
+        return default
+    parts = text.split(",")
+    try:
+        values = [float(x) for x in parts]
+    except ValueError:
+        values = []
+    if len(values) not in (2, 3) or not all(np.isfinite(values)):
+        raise InputError("view", "YAW,PITCH[,DISTANCE]: two or three numbers", text)
+    distance = (
+        values[2] if len(values) == 3 else float(np.linalg.norm(np.subtract(default.eye, default.target)))
+    )
+    return orbit_camera(default.target, values[0], values[1], distance, default.fov_deg)
+
+
+def _flake_layer(args: argparse.Namespace) -> FlakeLayer | None:
+    """The frame's flake layer: None without --flakes / --flake-*; the design file's (or the paint type's
+    default) with the --flake-* values put in."""
+    from station.model.design_io import load_design_flakes
+    from station.model.flakes import METALLIC_FLAKES, FlakeLayer
+
+    given = {
+        k: v
+        for k, v in (
+            ("size_um", args.flake_size),
+            ("density_per_mm2", args.flake_density),
+            ("spread_deg", args.flake_spread),
+        )
+        if v is not None
+    }
+    if not (args.flakes or given):
+        return None
+    layer = load_design_flakes(args.design)[1]
+    if not given:
+        return layer
+    return FlakeLayer(**{**(layer or METALLIC_FLAKES).to_dict(), **given})
+
+
+def _scene(args: argparse.Namespace) -> tuple[Scene, Stage | None, ClearCoat | None, Mesh | None]:
+    """(scene, stage, coat, mesh) of the arguments."""
     from station.model.gloss import ClearCoat
+    from station.render.shapes import Scene
     from station.render.stage import Stage
 
     stage = None
@@ -146,88 +190,91 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
             ground=bool(args.stage) and not args.no_ground,
         )
     coat = ClearCoat(args.coat) if args.coat is not None else None
-    scene = Scene(args.shape, misalignment_deg=args.misalignment, stage=stage)
-    lod_report = None
-    if args.lod is not None:
-        from station.render.scene_image import scene_lod
-
-        t0 = time.perf_counter()
-        paints, env, lod_report = scene_lod(designs, env, scene, args.lod)
-        timings["lod"] = time.perf_counter() - t0
-    engine = args.engine
-    if engine == "auto":
-        engine = "gl" if gl_available() else "numpy"
-    if args.mesh and engine != "gl":
-        raise InputError("engine", "gl (or auto with a GL stack) for --mesh", engine)
-    if engine == "truth" and (stage is not None or coat is not None or args.flakes):
-        raise InputError("engine", "gl | numpy with --stage / --rotate / --coat / --flakes", engine)
     mesh = None
     if args.mesh:
-        from station.render.meshes import load_mesh
+        from station.render.meshes import MESH_CAMERA, load_mesh
 
-        mesh = load_mesh(args.mesh, paint=args.paint_part)
-    flakes = None
-    if args.flakes:
-        from station.model.design_io import load_design_flakes
+        if args.mesh == "car":
+            from station.render.car import car_body
 
-        flakes = load_design_flakes(args.design)[1]
-    flake_report = "no flake layer" if args.flakes and flakes is None else None
-    from station.model.design_io import load_design_anisotropy
+            mesh = car_body()
+        else:
+            mesh = load_mesh(args.mesh, paint=args.paint_part)
+        camera = _view_camera(args.view, MESH_CAMERA)
+    else:
+        camera = _view_camera(args.view, Scene(args.shape).view_camera)
+    scene = Scene(args.shape, misalignment_deg=args.misalignment, camera=camera, stage=stage)
+    return scene, stage, coat, mesh
 
-    anisotropy = load_design_anisotropy(args.design)[1]
+
+def _check(
+    args: argparse.Namespace, engine: str, flakes: FlakeLayer | None, anisotropy: Anisotropy | None
+) -> None:
+    """Refuse the combinations an engine does not draw (InputError naming ``engine``)."""
+    if args.mesh and engine != "gl":
+        raise InputError("engine", "gl (or auto with a GL stack) for --mesh", engine)
+    if engine == "truth" and (args.stage or args.rotate or args.coat is not None or flakes is not None):
+        raise InputError("engine", "gl | numpy with --stage / --rotate / --coat / --flakes", engine)
     if anisotropy is not None and engine != "gl":
         raise InputError("engine", "gl (or auto with a GL stack) for a design with anisotropy", engine)
-    aniso_report = None
-    size = args.size
-    exps = paints[0].exponents
-    if engine == "truth":
-        from station.render.truth import render_truth
 
-        t0 = time.perf_counter()
-        g = gbuffer(scene, size, size)
-        img = np.full((size, size, 3), BACKGROUND, np.float64)
-        pair = designs if len(designs) == 2 else designs * 2
-        for k in (0, 1):
-            m = g.mask & (g.paint == k)
-            if m.any():
-                img[m] = render_truth(pair[k], env, g.normal[m], g.view[m])
-        linear = img.astype(np.float32)
-        timings["render"] = time.perf_counter() - t0
-    else:
-        t0 = time.perf_counter()
-        cache = PrefilterCache(args.cache_dir)
-        basis = prefilter_basis(env, exps, engine="gl" if engine == "gl" else "numpy", cache=cache)
-        timings["prefilter"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        if engine == "gl":
-            from station.render.gl_renderer import GLRenderer
 
-            with GLRenderer(basis, size, size) as gl:
-                if mesh is not None:
-                    linear = gl.render_mesh(
-                        mesh,
-                        paints,
-                        stage=stage,
-                        coat=coat,
-                        linear=True,
-                        flakes=flakes,
-                        anisotropy=anisotropy,
-                    )
-                else:
-                    linear = gl.render_linear(scene, paints, coat=coat, flakes=flakes, anisotropy=anisotropy)
-                flake_report = gl.last_flakes.reason if gl.last_flakes is not None else None
-                if gl.last_anisotropy is not None:
-                    aniso_report = {
-                        "samples": gl.last_anisotropy.samples,
-                        "error_de": round(gl.last_anisotropy.error_de, 4),
-                        "reason": gl.last_anisotropy.reason,
-                    }
+def _render_truth(designs: list, env: Environment, scene: Scene, size: int) -> np.ndarray:
+    from station.render.numpy_renderer import BACKGROUND, gbuffer
+    from station.render.truth import render_truth
+
+    g = gbuffer(scene, size, size)
+    img = np.full((size, size, 3), BACKGROUND, np.float64)
+    pair = designs if len(designs) == 2 else designs * 2
+    for k in (0, 1):
+        m = g.mask & (g.paint == k)
+        if m.any():
+            img[m] = render_truth(pair[k], env, g.normal[m], g.view[m])
+    return img.astype(np.float32)
+
+
+def _render_gl(
+    basis: Any,
+    paints: list,
+    scene: Scene,
+    stage: Stage | None,
+    coat: ClearCoat | None,
+    mesh: Mesh | None,
+    flakes: FlakeLayer | None,
+    anisotropy: Anisotropy | None,
+    size: int,
+) -> tuple[np.ndarray, str | None, dict[str, Any] | None]:
+    """(linear image, flake report, anisotropy report) of the GL engine."""
+    from station.render.gl_renderer import GLRenderer
+
+    with GLRenderer(basis, size, size) as gl:
+        if mesh is not None:
+            linear = gl.render_mesh(
+                mesh,
+                paints,
+                camera=scene.view_camera,
+                stage=stage,
+                coat=coat,
+                linear=True,
+                flakes=flakes,
+                anisotropy=anisotropy,
+            )
         else:
-            linear = render_linear(scene, basis, paints, size, size, coat=coat, flakes=flakes)
-            if flakes is not None:
-                flake_report = flake_lod(flakes, scene.view_camera, size).reason
-        timings["render"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
+            linear = gl.render_linear(scene, paints, coat=coat, flakes=flakes, anisotropy=anisotropy)
+        flake_report = gl.last_flakes.reason if gl.last_flakes is not None else None
+        aniso_report = None
+        if gl.last_anisotropy is not None:
+            aniso_report = {
+                "samples": gl.last_anisotropy.samples,
+                "error_de": round(gl.last_anisotropy.error_de, 4),
+                "reason": gl.last_anisotropy.reason,
+            }
+    return linear, flake_report, aniso_report
+
+
+def _write(args: argparse.Namespace, out: Path, linear: np.ndarray) -> None:
+    from station.render import tonemap
+
     image8 = tonemap.to_display(linear, args.exposure, args.tone)
     out.parent.mkdir(parents=True, exist_ok=True)
     tonemap.save_png(out, image8)
@@ -239,6 +286,68 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
             write_exr(lin_path, linear)
         else:
             np.save(lin_path, linear)
+
+
+def _render(args: argparse.Namespace) -> dict[str, Any]:
+    from station.model.design_io import load_design, load_design_anisotropy
+    from station.render import lobe_fit
+    from station.render.envcache import PrefilterCache
+    from station.render.flakes import flake_lod
+    from station.render.gl_renderer import gl_available
+    from station.render.numpy_renderer import render_linear
+    from station.render.prefilter import prefilter_basis
+
+    if not 8 <= args.size <= 4096:
+        raise InputError("size", "8 <= size <= 4096", args.size)
+    out = Path(args.out)
+    if out.suffix.lower() != ".png":
+        raise InputError("out", "a .png path", args.out)
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    designs = [load_design(args.design)] + ([load_design(args.design2)] if args.design2 else [])
+    flakes = _flake_layer(args)
+    engine = args.engine if args.engine != "auto" else ("gl" if gl_available() else "numpy")
+    anisotropy = load_design_anisotropy(args.design)[1]
+    _check(args, engine, flakes, anisotropy)
+    scene, stage, coat, mesh = _scene(args)
+    timings["load"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    paints = [lobe_fit.fit_design(d) for d in designs]
+    timings["fit"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    env = _environment(args.env)
+    timings["environment"] = time.perf_counter() - t0
+    lod_report = None
+    if args.lod is not None:
+        from station.render.scene_image import scene_lod
+
+        t0 = time.perf_counter()
+        paints, env, lod_report = scene_lod(designs, env, scene, args.lod)
+        timings["lod"] = time.perf_counter() - t0
+    flake_report = "no flake layer" if args.flakes and flakes is None else None
+    aniso_report = None
+    size = args.size
+    exps = paints[0].exponents
+    t0 = time.perf_counter()
+    if engine == "truth":
+        linear = _render_truth(designs, env, scene, size)
+    else:
+        basis = prefilter_basis(
+            env, exps, engine="gl" if engine == "gl" else "numpy", cache=PrefilterCache(args.cache_dir)
+        )
+        timings["prefilter"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        if engine == "gl":
+            linear, flake_report, aniso_report = _render_gl(
+                basis, paints, scene, stage, coat, mesh, flakes, anisotropy, size
+            )
+        else:
+            linear = render_linear(scene, basis, paints, size, size, coat=coat, flakes=flakes)
+            if flakes is not None:
+                flake_report = flake_lod(flakes, scene.view_camera, size).reason
+    timings["render"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    _write(args, out, linear)
     timings["encode"] = time.perf_counter() - t0
     return {
         "engine": engine,
@@ -249,9 +358,18 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         "stage": stage is not None,
         "coat_index": args.coat,
         "flakes": flake_report,
+        "flake_layer": flakes.to_dict() if flakes is not None else None,
+        "view": _view_report(scene.view_camera),
         "anisotropy": aniso_report,
         "lod": lod_report,
         "out": str(out),
         "linear_out": args.linear_out,
         "timings": {k: round(v, 4) for k, v in timings.items()},
+    }
+
+
+def _view_report(camera: Camera) -> dict[str, Any]:
+    return {
+        "eye": [round(float(x), 4) for x in camera.eye],
+        "target": [round(float(x), 4) for x in camera.target],
     }

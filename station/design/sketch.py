@@ -131,6 +131,8 @@ class SketchFit:
     pixels : number of pixels fitted
     gloss_source : ``"highlight"``, ``"contrast"``, ``"fit"`` or ``"default"``
     seconds : wall time of the fit
+    lighting : what the art was fitted under, in words (environment fit: e.g. "16 point lights from the
+        venice_sunset environment"; the environment is discretised into directional lights)
     """
 
     design: FaceFlopTravelGloss
@@ -143,6 +145,7 @@ class SketchFit:
     pixels: int
     gloss_source: str
     seconds: float
+    lighting: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form shared by every front (plain Python numbers; a failed fit may hold NaN, which
@@ -161,6 +164,7 @@ class SketchFit:
             "theta_clamp_deg": float(self.theta_clamp_deg),
             "pixels": int(self.pixels),
             "gloss_source": self.gloss_source,
+            "lighting": self.lighting,
         }
 
 
@@ -630,6 +634,7 @@ def fit_environment(
     highlight_rounds: int = 3,
     edge_px: int = 1,
     allow_retroreflective: bool = False,
+    lighting: str = "",
 ) -> SketchFit:
     """Fit a design to environment-lit concept art through per-lobe basis images (§3.7.5, interactive).
 
@@ -646,7 +651,8 @@ def fit_environment(
     weights). A systematic misfit (:func:`block_delta_e`, 4 × 4 pixel tiles) above *max_shading_de*, or
     all weights zero, fails and returns the average diffuse colour (``Σ art / Σ B_diffuse``) as a solid.
     Pixels within *edge_px* of the silhouette are not fitted. A curve darker at 15° than at the far end
-    is a failure unless *allow_retroreflective*.
+    is a failure unless *allow_retroreflective*. *lighting* says what the basis images were lit with
+    (e.g. "16 point lights from the sky environment"), reported in the result's ``lighting``.
     """
     t0 = time.perf_counter()
     if basis.images.ndim != 4 or basis.images.shape[-1] != 3:
@@ -730,4 +736,5 @@ def fit_environment(
         n,
         "default",
         time.perf_counter() - t0,
+        lighting,
     )

@@ -36,7 +36,7 @@ from typing import Any
 from station.errors import InputError
 from station.model.anisotropy import Anisotropy
 from station.model.errors import ModelInputError
-from station.model.flakes import METALLIC_FLAKES, FlakeLayer
+from station.model.flakes import METALLIC_FLAKES, PEARL_FLAKES, FlakeLayer, is_pearl
 from station.model.representations import DEFAULT_GLOSS_GU, FaceFlopTravelGloss
 
 SCHEMA = "cacad.design/1"
@@ -95,8 +95,11 @@ def design_from_dict(data: Any) -> FaceFlopTravelGloss:
 
 
 def default_flakes(design: FaceFlopTravelGloss) -> FlakeLayer | None:
-    """The paint type's default flake layer: None for a solid (no travel), METALLIC_FLAKES otherwise."""
-    return None if design.travel_deg is None else METALLIC_FLAKES
+    """The paint type's default flake layer: None for a solid (no travel), PEARL_FLAKES for a hue-shifting
+    pearl (:func:`station.model.flakes.is_pearl`), METALLIC_FLAKES otherwise."""
+    if design.travel_deg is None:
+        return None
+    return PEARL_FLAKES if is_pearl(design.face, design.flop) else METALLIC_FLAKES
 
 
 def flakes_from_dict(data: Any, design: FaceFlopTravelGloss | None = None) -> FlakeLayer | None:

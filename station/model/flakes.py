@@ -76,6 +76,22 @@ METALLIC_FLAKES = FlakeLayer(25.0, 400.0, 8.0, 0.5)
 PEARL_FLAKES = FlakeLayer(12.0, 1500.0, 12.0, 0.3)
 
 
+#: A paint with travel is a pearl (mica flakes, PEARL_FLAKES) when its face and flop hues differ by at
+#: least PEARL_HUE_SHIFT_DEG with both chromas C*ab ≥ PEARL_MIN_CHROMA (an interference colour shift);
+#: otherwise a metallic (aluminium flakes keep the hue from face to flop).
+PEARL_HUE_SHIFT_DEG = 15.0
+PEARL_MIN_CHROMA = 5.0
+
+
+def is_pearl(face: tuple[float, float, float], flop: tuple[float, float, float]) -> bool:
+    """Whether a paint with these face and flop Lab shifts hue like a pearl (constants above)."""
+    (_, a1, b1), (_, a2, b2) = face, flop
+    if min(math.hypot(a1, b1), math.hypot(a2, b2)) < PEARL_MIN_CHROMA:
+        return False
+    dh = abs(math.degrees(math.atan2(b1, a1) - math.atan2(b2, a2))) % 360.0
+    return min(dh, 360.0 - dh) >= PEARL_HUE_SHIFT_DEG
+
+
 def sparkle_amplitude(flakes: FlakeLayer, area_mm2: float) -> float:
     """Relative amplitude 1/√N of the flake-reflection fluctuation over *area_mm2* (N ≥ 1 flakes)."""
     return 1.0 / math.sqrt(max(1.0, flakes.flakes_in(area_mm2)))

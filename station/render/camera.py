@@ -59,3 +59,36 @@ class Camera:
             "u_tan_half_fov": float(np.tan(np.radians(self.fov_deg) / 2.0)),
             "u_aspect": width / height,
         }
+
+
+#: Accepted ranges of :func:`orbit_camera`: pitch (degrees) and distance (scene units).
+PITCH_RANGE = (-89.0, 89.0)
+DISTANCE_RANGE = (0.05, 50.0)
+
+
+def orbit_camera(
+    target: tuple[float, float, float] | np.ndarray,
+    yaw_deg: float,
+    pitch_deg: float,
+    distance: float,
+    fov_deg: float = 30.0,
+) -> Camera:
+    """A camera looking at *target* from yaw *yaw_deg* (about +Y, 0 from +Z, 90 from +X) and pitch
+    *pitch_deg* (above the horizon) at *distance* scene units: eye = target + d (cos p sin y, sin p,
+    cos p cos y). RenderInputError names ``view.pitch`` / ``view.distance`` out of range."""
+    if not PITCH_RANGE[0] <= pitch_deg <= PITCH_RANGE[1]:
+        raise RenderInputError(
+            "view.pitch", f"{PITCH_RANGE[0]:g} <= pitch <= {PITCH_RANGE[1]:g} degrees", pitch_deg
+        )
+    if not DISTANCE_RANGE[0] <= distance <= DISTANCE_RANGE[1]:
+        raise RenderInputError(
+            "view.distance", f"{DISTANCE_RANGE[0]:g} <= distance <= {DISTANCE_RANGE[1]:g}", distance
+        )
+    y, p = np.radians(yaw_deg), np.radians(pitch_deg)
+    t = np.asarray(target, dtype=np.float64)
+    eye = t + distance * np.array([np.cos(p) * np.sin(y), np.sin(p), np.cos(p) * np.cos(y)])
+    return Camera(
+        (float(eye[0]), float(eye[1]), float(eye[2])),
+        (float(t[0]), float(t[1]), float(t[2])),
+        fov_deg=fov_deg,
+    )

@@ -1,19 +1,31 @@
 """Flake sparkle in the renderer: scale, level of detail, and the shader's uniforms.
 
 The flake layer's parameters are :class:`station.model.flakes.FlakeLayer`. Per pixel the GL renderer
-(``shaders/render.frag.glsl``) draws one random flake normal m per surface cell (hash of the cell, so the
-sparkle sticks to the surface while orbiting), about the shading normal with the layer's spread, and adds
+(``shaders/render.frag.glsl``) and the NumPy renderer add the zero-mean sparkle
 
-    tint · reflectance · (L_sharp(R_m) − C_E(R)) / √N
+    tint · reflectance · Σ_k w_k (L_sharp(R_m,k) − C_E(R))
 
-where R_m is the view mirrored about m, L_sharp the sharpest prefiltered map (the environment with its sun
-and lights), C_E(R) the lobe map whose width matches the flakes' spread (E ≈ 1/(2σ)², the expected flake
-reflection), tint the paint's directionally diffuse colour Σ w_DD,i, and N the flakes in the cell:
-a cell is the pixel's footprint (or one flake when flakes are larger than a pixel). The term has zero
-mean, so the colour averaged over an area is the design's (:func:`station.model.flakes.sparkle_amplitude`),
-except where it would darken a pixel by more than the flakes' share (reflectance × the pixel's
-radiance): there it is clipped (beside the sun's reflection, where the expected flake reflection holds
-the sun and a flake that misses it reflects sky), a small brightening of those pixels.
+over two levels k of a fixed hierarchy of surface cells (:func:`flake_levels`, in the manner of
+Zirr & Kaplanyan 2016's multiscale glints): level k has cubic cells of side s·2^k (s the flake size)
+fixed in world space, which is the objects' own space (shapes and meshes never move; the camera and the
+environment do), so the sparkle sticks to the surface while orbiting or dollying. Each cell hashes
+(pcg3d) to one random flake normal m about the shading normal with the layer's spread, and, where a cell
+holds n_k = density · (s·2^k)² < 1 flakes on average, to whether it holds one (probability n_k). The
+pixel uses the level λ = log2(CELL_PIXELS · footprint / s) (footprint: the pixel's side on the surface,
+divided by √(N·V)), blended with the next coarser level by the fraction of λ, with weights
+
+    w_k = present_k (1 − f) / √max(1, n_k) / √((1 − f)² + f²),   w_{k+1} likewise with f,
+
+so the sparkle's variance stays that of N flakes at every distance and the blend changes smoothly with
+distance. R_m,k is the view mirrored about level k's flake normal, L_sharp the sharpest prefiltered map
+(the environment with its sun and lights), C_E(R) the expected flake reflection: the sharpest map prefiltered
+with the Phong lobe of the flakes' reflected spread, E ≈ 1/(2σ)² (:func:`flake_mean_cube`), tint the paint's directionally diffuse colour Σ w_DD,i.
+Each term has zero mean, so the colour averaged over an area is the design's
+(:func:`station.model.flakes.sparkle_amplitude`), and with distance the amplitude 1/√n_k falls and the
+pixel converges to it, except where the sparkle would darken a pixel by more than the flakes' share
+(reflectance × the pixel's radiance): there it is clipped (beside the sun's reflection, where the expected
+flake reflection holds the sun and a flake that misses it reflects sky), a small brightening of those
+pixels.
 
 Scale: one scene unit is UNIT_MM millimetres (the shapes are desk-size models: the speed shape is 24 cm
 long). Level of detail (:func:`flake_lod`): flakes smaller than a pixel are averaged; when the sparkle
@@ -32,6 +44,10 @@ from station.render.camera import Camera
 
 #: Millimetres per scene unit.
 UNIT_MM = 100.0
+#: Pixel footprints per side of the finest cell level a pixel uses: cells at least two pixels wide are
+#: sampled above the pixel grid's Nyquist limit, so a glint is a few pixels wide and a sub-pixel camera
+#: move shifts it instead of re-rolling it.
+CELL_PIXELS = 2.0
 #: Sparkle amplitude 1/√N below which the layer is switched off (2 %: under ~0.5 ΔE00 on a bright glint).
 SPARKLE_MIN = 0.02
 
@@ -80,6 +96,26 @@ def flake_uniforms(flakes: FlakeLayer) -> dict[str, float]:
     }
 
 
+#: Face size of the flakes' mean map (:func:`flake_mean_cube`) and the largest face of its source.
+MEAN_FACE = 16
+MEAN_SOURCE_FACE = 16
+
+
+def flake_mean_cube(basis, flakes: FlakeLayer) -> np.ndarray:
+    """C_E: the expected flake reflection (6, MEAN_FACE, MEAN_FACE, 3), the sharpest map of *basis* (the
+    glints' own map, with its sun and lights) prefiltered by brute-force quadrature
+    (:func:`station.render.prefilter.prefilter_brute`) with the Phong lobe of the flakes' reflected
+    spread, E = 1/(2σ)². Prefiltering the glints' own map makes the sparkle's mean zero whatever lights
+    the basis took out of its wide lobes (a lobe map plus its lights need not hold the same energy)."""
+    from station.render.cubemap import downsample_cube
+    from station.render.prefilter import prefilter_brute
+
+    src = np.asarray(basis.cubes[int(np.argmax(basis.exponents))], dtype=np.float64)
+    while src.shape[1] > MEAN_SOURCE_FACE:
+        src = downsample_cube(src)
+    return prefilter_brute(src, flakes.reflected_exponent, MEAN_FACE).astype(np.float32)
+
+
 def flake_lobes(exponents: tuple[float, ...] | list[float], flakes: FlakeLayer) -> tuple[int, int]:
     """(sharp, mean) lobe indices of a basis for the sparkle: the sharpest map (L_sharp, the glint) and the
     map whose exponent is nearest in log to the flakes' E ≈ 1/(2σ)² (C_E, the expected flake reflection)."""
@@ -95,11 +131,37 @@ def flake_tint(dd_map_weights: np.ndarray) -> np.ndarray:
     return np.asarray(dd_map_weights, dtype=np.float64).reshape(-1, 3).sum(axis=0)
 
 
-def cell_mm(flakes: FlakeLayer, distance: np.ndarray, tan_half_fov: float, height: int) -> np.ndarray:
-    """Side of a flake cell per pixel, mm: the pixel's footprint at eye *distance* (scene units), or one
-    flake when flakes are larger (the shader's ``cell_mm``)."""
-    px = 2.0 * np.asarray(distance, dtype=np.float64) * tan_half_fov / height * UNIT_MM
-    return np.maximum(flakes.size_um / 1000.0, px)
+def flake_levels(
+    flakes: FlakeLayer,
+    positions: np.ndarray,
+    normals: np.ndarray,
+    distance: np.ndarray,
+    n_dot_v: np.ndarray,
+    tan_half_fov: float,
+    height: int,
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The two cell levels of each pixel (module docstring), as the shader picks them: [(w (P,), m (P, 3))]
+    for level k and k + 1, w the level's weight (blend, presence and 1/√n_k) and m its flake normal.
+
+    *positions* (P, 3) world, *normals* (P, 3) unit shading normals (the environment's frame),
+    *distance* (P,) from the eye in scene units, *n_dot_v* (P,) the cosine of the view, *tan_half_fov*
+    and *height* the camera's: the finest cell is CELL_PIXELS footprints of
+    2 d tan(fov/2) / height · UNIT_MM / √max(N·V, 0.05) mm."""
+    d = np.asarray(distance, dtype=np.float64).reshape(-1)
+    ndv = np.maximum(np.asarray(n_dot_v, dtype=np.float64).reshape(-1), 0.05)
+    px = CELL_PIXELS * 2.0 * d * tan_half_fov / height * UNIT_MM / np.sqrt(ndv)
+    size = flakes.size_um / 1000.0
+    lam = np.maximum(np.log2(px / size), 0.0)
+    k = np.floor(lam)
+    f = lam - k
+    norm = 1.0 / np.sqrt((1.0 - f) ** 2 + f**2)
+    out = []
+    for level, blend in ((k, (1.0 - f) * norm), (k + 1.0, f * norm)):
+        cell = size * np.exp2(level)
+        count = flakes.density_per_mm2 * cell * cell
+        m, u = flake_normals(flakes, positions, cell, normals, level.astype(np.int64))
+        out.append((blend * (u < count) / np.sqrt(np.maximum(count, 1.0)), m))
+    return out
 
 
 def _pcg3d(v: np.ndarray) -> np.ndarray:
@@ -119,17 +181,24 @@ def _pcg3d(v: np.ndarray) -> np.ndarray:
 
 
 def flake_normals(
-    flakes: FlakeLayer, positions: np.ndarray, cells_mm: np.ndarray, normals: np.ndarray
-) -> np.ndarray:
-    """One flake normal m (P, 3) per surface cell, as ``render.frag.glsl`` draws it: the cell of a world
-    *position* (P, 3) is floor(p · UNIT_MM / cell) hashed with pcg3d to two uniforms, Box–Muller to a
-    standard normal pair g, and m = normalize(N + σ (g_x T + g_y B)) about the shading normal N (P, 3)
-    with σ = spread_deg in radians and the frame T = normalize(N × Y) (N × X near ±Y), B = N × T."""
+    flakes: FlakeLayer,
+    positions: np.ndarray,
+    cells_mm: np.ndarray | float,
+    normals: np.ndarray,
+    level: np.ndarray | int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One flake normal m (P, 3) per surface cell, as ``render.frag.glsl`` draws it, and the cell's third
+    uniform (P,) (its flake is present when below the cell's mean count): the cell of a world *position*
+    (P, 3) is floor(p · UNIT_MM / cell) (+ 2^20, *level* · 2^24 added to z) hashed with pcg3d to three
+    uniforms, Box–Muller on the first two to a standard normal pair g, and m = normalize(N + σ (g_x T +
+    g_y B)) about the shading normal N (P, 3) with σ = spread_deg in radians and the frame
+    T = normalize(N × Y) (N × X near ±Y), B = N × T."""
     p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
-    scale = (UNIT_MM / np.asarray(cells_mm, dtype=np.float64)).reshape(-1, 1)
+    scale = (UNIT_MM / np.broadcast_to(np.asarray(cells_mm, dtype=np.float64), p.shape[:1])).reshape(-1, 1)
     cells = np.floor(p * scale).astype(np.int64) + (1 << 20)
+    cells[:, 2] += np.broadcast_to(np.asarray(level, dtype=np.int64), p.shape[:1]) << 24
     h = _pcg3d((cells & 0xFFFFFFFF).astype(np.uint32))
-    u = ((h[:, :2] >> np.uint32(8)).astype(np.float64) + 0.5) / 16777216.0
+    u = ((h >> np.uint32(8)).astype(np.float64) + 0.5) / 16777216.0
     rad = np.sqrt(-2.0 * np.log(u[:, 0]))
     g = rad[:, None] * np.stack([np.cos(2.0 * np.pi * u[:, 1]), np.sin(2.0 * np.pi * u[:, 1])], axis=-1)
     n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
@@ -139,7 +208,7 @@ def flake_normals(
     b = np.cross(n, t)
     sigma = math.radians(flakes.spread_deg)
     m = n + sigma * (g[:, :1] * t + g[:, 1:] * b)
-    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+    return m / np.linalg.norm(m, axis=-1, keepdims=True), u[:, 2]
 
 
 def clip_sparkle(sparkle: np.ndarray, radiance: np.ndarray, flakes: FlakeLayer) -> np.ndarray:
@@ -159,23 +228,26 @@ def sparkle_pixels(
     reflect: np.ndarray,
     tan_half_fov: float,
     height: int,
+    mean_cube: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Zero-mean sparkle (P, 3) of the NumPy renderer: tint · reflectance · (L_sharp(R_m) − C_E(R)) / √N
+    """Zero-mean sparkle (P, 3) of the NumPy renderer: tint · reflectance · Σ_k w_k (L_sharp(R_m,k) − C_E(R))
     (module docstring), the same terms as the shader. *positions* (P, 3) world, *distance* (P,) to the eye,
     *normal*, *view*, *reflect* (P, 3) in the environment's frame, *basis* a
-    :class:`~station.render.prefilter.PrefilteredBasis` (its lights added to C_E where that map lacks them)."""
+    :class:`~station.render.prefilter.PrefilteredBasis`, *mean_cube* its :func:`flake_mean_cube` (computed
+    when not given)."""
     from station.render.cubemap import sample_cube
 
-    cells = cell_mm(flakes, distance, tan_half_fov, height)
-    count = np.maximum(1.0, flakes.density_per_mm2 * cells * cells)
-    m = flake_normals(flakes, positions, cells, normal)
-    rm = 2.0 * np.sum(m * view, axis=-1, keepdims=True) * m - view
-    sharp, mean_i = flake_lobes(basis.exponents, flakes)
-    up = np.sum(rm * normal, axis=-1) > 0.0
-    glint = np.where(up[:, None], sample_cube(basis.cubes[sharp], rm), 0.0)
-    mean = sample_cube(basis.cubes[mean_i], reflect).astype(np.float64)
-    if basis.lights is not None and basis.wide and basis.wide[mean_i]:
-        e = float(basis.exponents[mean_i])
-        p = (e + 1.0) / (2.0 * np.pi) * np.clip(reflect @ basis.lights.directions.T, 0.0, None) ** e
-        mean = mean + p @ basis.lights.flux
-    return np.asarray(tint)[None, :] * flakes.reflectance * (glint - mean) / np.sqrt(count)[:, None]
+    if mean_cube is None:
+        mean_cube = flake_mean_cube(basis, flakes)
+
+    ndv = np.clip(np.sum(normal * view, axis=-1), 0.0, 1.0)
+    sharp = int(np.argmax(basis.exponents))
+    total = np.zeros((np.asarray(normal).reshape(-1, 3).shape[0], 3))
+    weight = np.zeros(total.shape[0])
+    for w, m in flake_levels(flakes, positions, normal, distance, ndv, tan_half_fov, height):
+        rm = 2.0 * np.sum(m * view, axis=-1, keepdims=True) * m - view
+        up = np.sum(rm * normal, axis=-1) > 0.0
+        total += w[:, None] * np.where(up[:, None], sample_cube(basis.cubes[sharp], rm), 0.0)
+        weight += w
+    mean = sample_cube(mean_cube, reflect).astype(np.float64)
+    return np.asarray(tint)[None, :] * flakes.reflectance * (total - weight[:, None] * mean)

@@ -9,7 +9,7 @@ and are re-exported here for callers that import them from this module.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,7 +18,14 @@ from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render import anisotropy as an
 from station.render.errors import RenderInputError
-from station.render.flakes import FlakeChoice, flake_lobes, flake_lod, flake_tint, flake_uniforms
+from station.render.flakes import (
+    CELL_PIXELS,
+    FlakeChoice,
+    flake_lod,
+    flake_mean_cube,
+    flake_tint,
+    flake_uniforms,
+)
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
     SHADER_DIR,
@@ -155,7 +162,7 @@ class GLRenderer:
         self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
         self._sh = sh_diffuse_matrix(basis.sh)
         self._programs: dict[
-            tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int, int], tuple
+            tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int], tuple
         ] = {}
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
@@ -169,6 +176,7 @@ class GLRenderer:
         #: The anisotropic sample choice of the last frame (None: isotropic frame).
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
+        self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
 
     def _program(
         self,
@@ -178,7 +186,6 @@ class GLRenderer:
         features: tuple[int, ...] = (0, 0, 0),
         terms: tuple[int, int, int] = (-1, 1, 0),
         n_occ: int = 0,
-        flake_mean: int = -1,
         curve: int = 0,
     ):
         """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
@@ -187,9 +194,8 @@ class GLRenderer:
         wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally diffuse weight
         is, whether the aspecular fall-off is shaded), see :meth:`_terms`; *n_occ*: the ground's sphere
         occluders (0 without a stage), compiled in with the light count so the stage's loops unroll;
-        *flake_mean*: the bound index of the flakes' mean lobe when its lights are added exactly (else
-        -1); *curve*: the tone curve's index in CURVES (8-bit output)."""
-        key = (shape, linear, kind, features, terms, n_occ, flake_mean, curve)
+        *curve*: the tone curve's index in CURVES (8-bit output)."""
+        key = (shape, linear, kind, features, terms, n_occ, curve)
         if key not in self._programs:
             from station.render.meshes import NEUTRAL_ALBEDO
 
@@ -202,7 +208,6 @@ class GLRenderer:
                 "NARROW_DD": terms[1],
                 "HAS_FALL_OFF": terms[2],
                 "N_OCC": n_occ,
-                "FLAKE_MEAN_LOBE": flake_mean,
                 "CURVE": curve,
                 "HAS_COAT": features[0],
                 "HAS_STAGE": int(features[1] != 0),
@@ -213,6 +218,7 @@ class GLRenderer:
                 **({"HAS_ANISO": 1} if len(features) > 3 and features[3] else {}),
                 "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
                 "PENUMBRA_DEG": f"{PENUMBRA_DEG:.4f}",
+                "FLAKE_CELL_PIXELS": f"{CELL_PIXELS:.4f}",
                 "N_LOBES": len(self._lobes),
                 "OUTPUT_LINEAR": int(linear),
                 "DIFFUSE_SH": int(self.diffuse == "sh"),
@@ -236,6 +242,21 @@ class GLRenderer:
             prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
             self._programs[key] = (prog, None if kind == "mesh" else self.ctx.vertex_array(prog, []))
         return self._programs[key]
+
+    def _flake_mean(self, flakes: FlakeLayer):
+        """The flakes' mean map C_E for this layer's spread (:func:`station.render.flakes.flake_mean_cube`),
+        uploaded once per spread."""
+        import moderngl
+
+        key = round(flakes.spread_deg, 6)
+        if key not in self._flake_means:
+            cube = flake_mean_cube(self.basis, flakes)
+            tex = self.ctx.texture_cube(
+                (cube.shape[1],) * 2, 3, np.ascontiguousarray(cube).tobytes(), dtype="f4"
+            )
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            self._flake_means[key] = tex
+        return self._flake_means[key]
 
     def _target(self, linear: bool, depth: bool = False):
         """Colour target (with a depth buffer for meshes only: llvmpipe is slower with one attached)."""
@@ -324,19 +345,76 @@ class GLRenderer:
         anisotropy: Anisotropy | None = None,
         anisotropic_samples: int | None = None,
     ):
+        """One frame into *target* (default this renderer's framebuffer): the frame's features and
+        programs (:meth:`_frame_programs`), textures bound and uniforms set (:meth:`_frame_uniforms`), then
+        the shape's full-screen pass, or the stage pass and the rasterised mesh."""
         pair = check_paints(self.basis, paints)
         self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
+        if not linear:
+            check_curve(curve)
+        pair, passes, aniso_uniforms, occluders, n_occ = self._frame_programs(
+            scene,
+            pair,
+            linear,
+            0 if linear else CURVES.index(curve),
+            coat,
+            mesh,
+            anisotropy,
+            anisotropic_samples,
+            self.last_flakes.on,
+        )
+        fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
+        fbo.use()
+        occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
+        occ[: len(occluders)] = occluders
+        uniforms, mw, m = self._frame_uniforms(scene, pair, fbo, coat, mesh, flakes, aniso_uniforms)
+        if not linear:
+            uniforms["u_exposure"] = float(2.0**exposure_ev)
+        if scene.stage is not None and scene.stage.ground:
+            self._ground_map(uniforms, mw, occ, n_occ, m).use(m + 2)
+            fbo.use()
+            uniforms["u_ground_map"] = m + 2
+        for prog, _ in passes:
+            self._set_uniforms(prog, uniforms, mw, occ, m)
+        if mesh is None:
+            prog, vao = passes[0]
+            vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+            return fbo
+        fbo.clear(depth=1.0)
+        self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
+        passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
+        self.ctx.enable(self.ctx.DEPTH_TEST)
+        try:
+            self._mesh_vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
+        finally:
+            self.ctx.disable(self.ctx.DEPTH_TEST)
+        return fbo
+
+    def _frame_programs(
+        self,
+        scene,
+        pair,
+        linear: bool,
+        curve_i: int,
+        coat,
+        mesh,
+        anisotropy,
+        anisotropic_samples,
+        flakes_on: bool = False,
+    ) -> tuple[list, list, dict, np.ndarray, int]:
+        """(paints, passes, anisotropy uniforms, sphere occluders (k, 4), occluders compiled in) of one
+        frame: the features compiled in (coat, stage bits, flakes, anisotropy) and the programs."""
         stage = scene.stage
-        backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         stage_bits = 0  # bit 0: a stage, 1: its backdrop, 2: its ground, 3: the backdrop lobe's lights
         if stage is not None:
+            backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg)
             stage_bits = (
                 1
                 | int(stage.backdrop) << 1
                 | int(stage.ground) << 2
                 | int(stage.backdrop and self._lights_taken_out(backdrop)) << 3
             )
-        feats: tuple[int, ...] = (int(coat is not None), stage_bits, int(self.last_flakes.on))
+        feats: tuple[int, ...] = (int(coat is not None), stage_bits, int(flakes_on))
         aniso_uniforms: dict = {}
         if anisotropy is not None:
             pair, aniso_uniforms = self._anisotropy(pair, anisotropy, anisotropic_samples)
@@ -344,31 +422,27 @@ class GLRenderer:
         else:
             self.last_anisotropy = None
         terms = self._terms(pair)
-        if not linear:
-            check_curve(curve)
-        curve_i = 0 if linear else CURVES.index(curve)
-        flake_mean = -1
-        flake_maps = None  # (sharp, mean) basis lobes of the sparkle
-        if flakes is not None and self.last_flakes.on:
-            flake_maps = flake_lobes(self.basis.exponents, flakes)
-            if self._lights_taken_out(flake_maps[1]):
-                flake_mean = int(np.nonzero(self._order == flake_maps[1])[0][0])
         if mesh is None:
             occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
-            gx, gy, gz = GROUNDS[scene.shape]
         else:
             occluders = mesh.occluders().astype(np.float32)
-            gx, gy, gz = 0.0, mesh.floor_y, 0.0
         n_occ = len(occluders) if stage is not None else 0
         if mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, flake_mean, curve_i)]
+            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, curve_i)]
         else:
             passes = [
                 self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
-                self._program("sphere", linear, "mesh", feats, terms, n_occ, flake_mean, curve_i),
+                self._program("sphere", linear, "mesh", feats, terms, n_occ, curve_i),
             ]
-        fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
-        fbo.use()
+        return pair, passes, aniso_uniforms, occluders, n_occ
+
+    def _frame_uniforms(
+        self, scene, pair, fbo, coat, mesh, flakes, aniso_uniforms: dict
+    ) -> tuple[dict, list, int]:
+        """Bind the frame's textures and return (uniforms, bound weights of the paints, lobe count m)."""
+        stage = scene.stage
+        backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
+        gx, gy, gz = GROUNDS[scene.shape] if mesh is None else (0.0, mesh.floor_y, 0.0)
         m = len(self._lobes)
         if self.combined:
             cubes = self._combined_atlas(pair)
@@ -380,8 +454,6 @@ class GLRenderer:
         self._diffuse_tex.use(m + 4)
         self._horizon_tex.use(m + 5)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
-        occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
-        occ[: len(occluders)] = occluders
         uniforms = {
             **scene.view_camera.uniforms(self.width, self.height),
             "u_size": (float(self.width), float(self.height)),
@@ -403,37 +475,18 @@ class GLRenderer:
             "u_flake_sharp": m + 7,
             "u_flake_mean": m + 8,
         }
-        if flakes is not None and flake_maps is not None:
+        on = flakes is not None and self.last_flakes is not None and self.last_flakes.on
+        if on:
             uniforms.update(flake_uniforms(flakes))
-            sharp, mean = flake_maps
-            self._lobes[int(np.nonzero(self._order == sharp)[0][0])].use(m + 7)
-            self._lobes[int(np.nonzero(self._order == mean)[0][0])].use(m + 8)
+            self._flake_mean(flakes).use(m + 8)
+        if on or mesh is not None:  # the glints' map; a mesh's glass and chrome
+            self._lobes[int(np.nonzero(self._order == int(np.argmax(self.basis.exponents)))[0][0])].use(m + 7)
         if aniso_uniforms:
             self._aniso[aniso_uniforms.pop("_key")][0].use(m + 9)
             uniforms.update(aniso_uniforms)
-        if not linear:
-            uniforms["u_exposure"] = float(2.0**exposure_ev)
         mw = [self._bound_weights(w) for w in pair]
         uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
-        if stage is not None and stage.ground:
-            self._ground_map(uniforms, mw, occ, n_occ, m).use(m + 2)
-            fbo.use()
-            uniforms["u_ground_map"] = m + 2
-        for prog, _ in passes:
-            self._set_uniforms(prog, uniforms, mw, occ, m)
-        if mesh is None:
-            prog, vao = passes[0]
-            vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-            return fbo
-        fbo.clear(depth=1.0)
-        self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
-        passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
-        self.ctx.enable(self.ctx.DEPTH_TEST)
-        try:
-            self._mesh_vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
-        finally:
-            self.ctx.disable(self.ctx.DEPTH_TEST)
-        return fbo
+        return uniforms, mw, m
 
     def _ground_map(self, uniforms: dict, mw: list, occ: np.ndarray, n_occ: int, m: int):
         """The ground's radiance per unit albedo over the disc's square (GROUND_MAP² texels, linear), baked
@@ -718,6 +771,9 @@ class GLRenderer:
             tex.release()
         for tex, *_ in self._aniso.values():
             tex.release()
+        for tex in self._flake_means.values():
+            tex.release()
+        self._flake_means.clear()
         self._aniso.clear()
         if self._combine is not None:
             for obj in (*self._combine[:3], *self._combine[3]):

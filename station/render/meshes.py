@@ -2,7 +2,10 @@
 
 :func:`load_mesh` reads a file with ``trimesh`` (scene graph transforms applied), picks the part to paint
 by mesh (node or geometry) name or material name (case-insensitive substring; default: every part is
-painted), marks the other parts neutral (drawn as a grey diffuse, ``NEUTRAL_ALBEDO``), and places the
+painted), draws the other parts as tyre, glass or chrome when their names say so (:func:`part_material`),
+else as a neutral grey diffuse (``NEUTRAL_ALBEDO``); a GLB of one part with a palette texture and no
+*paint* name has its faces coded by their swatches (:mod:`station.render.mesh_parts`). It shades every part smooth with its creases kept
+(:func:`smooth_normals`), and places the
 model on the renderer's stage: centred on the origin in x and z, its floor at MESH_FLOOR_Y, its longest
 horizontal side MESH_LENGTH long. Paint halves follow the shapes' rule: paint 0 where x < 0, paint 1
 where x ≥ 0 (design | match side by side), −1 on neutral parts.
@@ -12,8 +15,8 @@ glTF-Transform writes them, are first decoded with the ``meshoptimizer`` package
 Python binding) into a plain GLB of float attributes, which trimesh then reads; textures are dropped (the
 paint comes from the design).
 
-:func:`car_body` is a smooth procedural car body (a superellipsoid hull with a cabin and wheel-arch
-shoulders, C¹ everywhere), for stylists who have no mesh at hand.
+:func:`station.render.car.car_body` is the procedural car (body, glass, wheels), for stylists who have no
+mesh at hand.
 
 Contact shadow: :meth:`Mesh.occluders` gives MAX_OCCLUDERS sphere proxies along the model's length
 (``station.render.stage.sphere_occlusion``).
@@ -33,6 +36,16 @@ from numpy.typing import NDArray
 
 from station.render.camera import Camera
 from station.render.errors import RenderInputError
+from station.render.mesh_parts import (
+    CHROME,
+    GLASS,
+    NEUTRAL,
+    PAINT,
+    TYRE,
+    base_color_image,
+    palette_codes,
+    split_faces,
+)
 from station.render.stage import MAX_OCCLUDERS
 
 #: File types :func:`load_mesh` reads.
@@ -45,6 +58,14 @@ MESH_FLOOR_Y = -0.5
 NEUTRAL_ALBEDO = 0.18
 #: Default camera on a placed model (three-quarter front view, slightly above).
 MESH_CAMERA = Camera((2.3, 1.1, 3.9), (0.0, -0.2, 0.0), fov_deg=34.0)
+#: Name fragments (mesh, node or material; lower case) that make an unpainted part tyre, glass or chrome.
+PART_WORDS: dict[float, tuple[str, ...]] = {
+    TYRE: ("tyre", "tire", "wheel", "rubber"),
+    GLASS: ("glass", "window", "windscreen", "windshield", "lamp", "light"),
+    CHROME: ("chrome", "rim", "metal", "mirror", "grille", "grill", "exhaust"),
+}
+#: Faces meeting at a larger angle keep a sharp crease in :func:`smooth_normals`; smaller ones shade smooth.
+SMOOTH_ANGLE_DEG = 40.0
 _GLB_MAGIC = b"glTF"
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
@@ -54,7 +75,8 @@ _NORM = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
 @dataclass(frozen=True, eq=False)
 class Mesh:
     """A triangle mesh on the stage: positions (V, 3) float32, unit vertex normals (V, 3) float32, faces
-    (F, 3) uint32 and per-vertex paint flag (V,) float32 (1 painted, 0 neutral); ``name`` for reports."""
+    (F, 3) uint32 and per-vertex material code (V,) float32 (PAINT, NEUTRAL, TYRE, GLASS, CHROME);
+    ``name`` for reports."""
 
     name: str
     positions: NDArray[np.float32] = field(repr=False)
@@ -113,6 +135,37 @@ def _part_matches(query: str | None, *names: str | None) -> bool:
     return any(n is not None and q in n.lower() for n in names)
 
 
+def smooth_normals(geom: Any) -> tuple[NDArray, NDArray, NDArray]:
+    """(vertices, faces, unit vertex normals) of a trimesh geometry shaded smooth. A geometry whose faces
+    share vertices keeps its normals (the file's, else trimesh's area-weighted ones). A flat one (one vertex
+    per face corner: a flat-shaded export, an STL) has its coincident vertices merged, then split again only along
+    edges whose faces meet at more than SMOOTH_ANGLE_DEG (``trimesh.graph.smooth_shade``), so curved
+    panels shade smooth and creases stay sharp."""
+    import trimesh
+
+    faces = np.asarray(geom.faces, np.int64)
+    if np.unique(faces).size < faces.size:  # shared vertices: the file's own (or trimesh's) normals
+        return np.asarray(geom.vertices, float), faces, np.asarray(geom.vertex_normals, float)
+    merged = trimesh.Trimesh(np.asarray(geom.vertices, float), faces, process=False)
+    merged.merge_vertices(merge_tex=True, merge_norm=True)
+    smooth = trimesh.graph.smooth_shade(merged, angle=np.radians(SMOOTH_ANGLE_DEG), facet_minarea=None)
+    return (
+        np.asarray(smooth.vertices, float),
+        np.asarray(smooth.faces, np.int64),
+        np.asarray(smooth.vertex_normals, float),
+    )
+
+
+def part_material(*names: str | None) -> float:
+    """The material code of an unpainted part from its mesh, node or material names (PART_WORDS; tyre
+    first, then glass, then chrome), NEUTRAL when none matches."""
+    text = " ".join(n.lower() for n in names if n)
+    for code, words in PART_WORDS.items():
+        if any(w in text for w in words):
+            return code
+    return NEUTRAL
+
+
 def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
     """Read a .glb/.gltf/.obj/.stl file and place it on the stage (module docstring).
 
@@ -130,6 +183,7 @@ def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
     except OSError as exc:
         raise RenderInputError("mesh", "a readable mesh file", str(p.name), exc.strerror or "") from None
     file_type = p.suffix.lower().lstrip(".")
+    palette = _palette(data, file_type) if paint is None else None  # before decoding drops the textures
     if file_type == "glb" and data[:4] == _GLB_MAGIC:
         data = decode_meshopt_glb(data)
     try:
@@ -152,18 +206,40 @@ def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
         raise RenderInputError("paint", "a part name: " + ", ".join(names), paint)
     pos, nrm, faces, painted = [], [], [], []
     base = 0
-    for (_, _, _, geom, transform), is_paint in zip(parts, chosen, strict=True):
-        v = np.asarray(geom.vertices, float)
+    for (node, geom_name, material, geom, transform), is_paint in zip(parts, chosen, strict=True):
+        v, f, n = smooth_normals(geom)
+        code = np.full(len(v), PAINT if is_paint else part_material(node, geom_name, material))
+        if palette is not None and len(parts) == 1:
+            v, f, n, code = _palette_split(geom, palette, v, f, n, code)
         v = v @ transform[:3, :3].T + transform[:3, 3]
-        n = np.asarray(geom.vertex_normals, float) @ np.linalg.inv(transform[:3, :3])
+        n = n @ np.linalg.inv(transform[:3, :3])
         pos.append(v)
         nrm.append(n)
-        faces.append(np.asarray(geom.faces, np.int64) + base)
-        painted.append(np.full(len(v), 1.0 if is_paint else 0.0))
+        faces.append(f + base)
+        painted.append(code)
         base += len(v)
     return place_on_stage(
         p.stem, np.concatenate(pos), np.concatenate(nrm), np.concatenate(faces), np.concatenate(painted)
     )
+
+
+def _palette(data: bytes, file_type: str) -> NDArray | None:
+    """The base-colour palette of a GLB (:func:`station.render.mesh_parts.base_color_image`), or None."""
+    if file_type != "glb":
+        return None
+    return base_color_image(data)
+
+
+def _palette_split(geom: Any, palette: NDArray, v: NDArray, f: NDArray, n: NDArray, code: NDArray) -> tuple:
+    """A one-material model's faces coded by their palette swatch (station.render.mesh_parts), when the
+    geometry's faces are the file's (smooth_normals kept them); else the part as it was."""
+    if len(f) != len(geom.faces) or len(v) != len(geom.vertices):
+        return v, f, n, code
+    codes = palette_codes(geom, palette)
+    if codes is None:
+        return v, f, n, code
+    sv, sn, sf, sc = split_faces(v, n, f, codes)
+    return sv, sf, sn, sc
 
 
 def place_on_stage(
@@ -195,89 +271,58 @@ def place_on_stage(
 # -- glTF with EXT_meshopt_compression --------------------------------------------------------------------
 
 
-def decode_meshopt_glb(data: bytes) -> bytes:
-    """A GLB whose buffer views use EXT_meshopt_compression rewritten as a plain GLB of float32 attributes
-    and uint32 indices (quantised attributes dequantised, textures dropped); other GLBs come back as they are.
-    """
-    if len(data) < 20 or data[:4] != _GLB_MAGIC:
-        return data
-    json_len, _ = struct.unpack_from("<II", data, 12)
-    doc = json.loads(data[20 : 20 + json_len])
-    if "EXT_meshopt_compression" not in doc.get("extensionsUsed", []):
-        return data
+def _meshopt_view(doc: dict, bin_chunk: bytes, i: int) -> bytes:
+    """The bytes of buffer view *i*, decoded with meshoptimizer when it is EXT_meshopt_compression'ed."""
     import meshoptimizer
 
-    off = 20 + json_len
-    bin_chunk = b""
-    if off + 8 <= len(data):
-        bin_len, _ = struct.unpack_from("<II", data, off)
-        bin_chunk = data[off + 8 : off + 8 + bin_len]
+    bv = doc["bufferViews"][i]
+    ext = bv.get("extensions", {}).get("EXT_meshopt_compression")
+    if ext is None:
+        start = bv.get("byteOffset", 0)
+        return bin_chunk[start : start + bv["byteLength"]]
+    start = ext.get("byteOffset", 0)
+    src = np.frombuffer(bin_chunk[start : start + ext["byteLength"]], np.uint8)
+    count, stride, mode = ext["count"], ext["byteStride"], ext["mode"]
+    if mode == "ATTRIBUTES":
+        raw = meshoptimizer.decode_vertex_buffer(count, stride, src, dtype=np.dtype(f"V{stride}"))
+        filt = ext.get("filter", "NONE")
+        if filt == "OCTAHEDRAL":
+            raw = meshoptimizer.decode_filter_oct(raw, count, stride)
+        elif filt == "QUATERNION":
+            raw = meshoptimizer.decode_filter_quat(raw, count, stride)
+        elif filt == "EXPONENTIAL":
+            raw = meshoptimizer.decode_filter_exp(raw, count, stride)
+    elif mode == "TRIANGLES":
+        raw = meshoptimizer.decode_index_buffer(count, stride, src)
+    else:
+        raw = meshoptimizer.decode_index_sequence(count, stride, src)
+    return np.ascontiguousarray(raw).tobytes()[: count * stride]
 
-    def view_bytes(i: int) -> bytes:
-        bv = doc["bufferViews"][i]
-        ext = bv.get("extensions", {}).get("EXT_meshopt_compression")
-        if ext is None:
-            start = bv.get("byteOffset", 0)
-            return bin_chunk[start : start + bv["byteLength"]]
-        start = ext.get("byteOffset", 0)
-        src = np.frombuffer(bin_chunk[start : start + ext["byteLength"]], np.uint8)
-        count, stride, mode = ext["count"], ext["byteStride"], ext["mode"]
-        if mode == "ATTRIBUTES":
-            raw = meshoptimizer.decode_vertex_buffer(count, stride, src, dtype=np.dtype(f"V{stride}"))
-            filt = ext.get("filter", "NONE")
-            if filt == "OCTAHEDRAL":
-                raw = meshoptimizer.decode_filter_oct(raw, count, stride)
-            elif filt == "QUATERNION":
-                raw = meshoptimizer.decode_filter_quat(raw, count, stride)
-            elif filt == "EXPONENTIAL":
-                raw = meshoptimizer.decode_filter_exp(raw, count, stride)
-        elif mode == "TRIANGLES":
-            raw = meshoptimizer.decode_index_buffer(count, stride, src)
-        else:
-            raw = meshoptimizer.decode_index_sequence(count, stride, src)
-        return np.ascontiguousarray(raw).tobytes()[: count * stride]
 
-    cache: dict[int, bytes] = {}
-    out = bytearray()
-    views, accessors = [], []
-    for acc in doc["accessors"]:
-        i = acc["bufferView"]
-        if i not in cache:
-            cache[i] = view_bytes(i)
-        raw = cache[i]
-        bv = doc["bufferViews"][i]
-        ct, k = acc["componentType"], _COMPONENTS[acc["type"]]
-        dt = np.dtype(_DTYPES[ct])
-        stride = bv.get("byteStride") or bv.get("extensions", {}).get("EXT_meshopt_compression", {}).get(
-            "byteStride", dt.itemsize * k
-        )
-        n = acc["count"]
-        base = acc.get("byteOffset", 0)
-        rows = np.frombuffer(raw, np.uint8)[base : base + n * stride]
-        rows = np.pad(rows, (0, max(0, n * stride - rows.size))).reshape(n, stride)
-        vals = rows[:, : dt.itemsize * k].copy().view(dt).reshape(n, k)
-        if acc.get("normalized") and ct in _NORM:
-            arr = np.maximum(vals.astype(np.float32) / _NORM[ct], -1.0)
-            new_ct = 5126
-        elif ct == 5126:
-            arr, new_ct = vals.astype(np.float32), 5126
-        elif acc["type"] == "SCALAR":  # indices
-            arr, new_ct = vals.astype(np.uint32), 5125
-        else:
-            arr, new_ct = vals.astype(np.float32), 5126
-        blob = arr.tobytes()
-        views.append({"buffer": 0, "byteOffset": len(out), "byteLength": len(blob)})
-        out += blob + b"\0" * (-len(blob) % 4)
-        new = {key: acc[key] for key in ("type", "count", "name") if key in acc}
-        new.update({"bufferView": len(views) - 1, "componentType": new_ct, "byteOffset": 0})
-        if "min" in acc and new_ct == 5126 and acc.get("normalized"):
-            new["min"] = list(map(float, arr.min(axis=0)))
-            new["max"] = list(map(float, arr.max(axis=0)))
-        elif "min" in acc and not acc.get("normalized"):
-            new["min"], new["max"] = acc["min"], acc["max"]
-        accessors.append(new)
-    doc["accessors"], doc["bufferViews"] = accessors, views
-    doc["buffers"] = [{"byteLength": len(out)}]
+def _plain_accessor(acc: dict, bv: dict, raw: bytes) -> tuple[np.ndarray, int]:
+    """An accessor's values from its view's decoded bytes, as float32 (dequantised) or uint32 indices,
+    and the new component type."""
+    ct, k = acc["componentType"], _COMPONENTS[acc["type"]]
+    dt = np.dtype(_DTYPES[ct])
+    stride = bv.get("byteStride") or bv.get("extensions", {}).get("EXT_meshopt_compression", {}).get(
+        "byteStride", dt.itemsize * k
+    )
+    n = acc["count"]
+    base = acc.get("byteOffset", 0)
+    rows = np.frombuffer(raw, np.uint8)[base : base + n * stride]
+    rows = np.pad(rows, (0, max(0, n * stride - rows.size))).reshape(n, stride)
+    vals = rows[:, : dt.itemsize * k].copy().view(dt).reshape(n, k)
+    if acc.get("normalized") and ct in _NORM:
+        return np.maximum(vals.astype(np.float32) / _NORM[ct], -1.0), 5126
+    if ct == 5126:
+        return vals.astype(np.float32), 5126
+    if acc["type"] == "SCALAR":  # indices
+        return vals.astype(np.uint32), 5125
+    return vals.astype(np.float32), 5126
+
+
+def _strip_textures(doc: dict) -> None:
+    """Drop the images, textures and the compression extensions from a glTF document (in place)."""
     for key in ("images", "textures", "samplers"):
         doc.pop(key, None)
     for m in doc.get("materials", []):
@@ -293,6 +338,45 @@ def decode_meshopt_glb(data: bytes) -> bytes:
         ]
         if not doc[key]:
             del doc[key]
+
+
+def decode_meshopt_glb(data: bytes) -> bytes:
+    """A GLB whose buffer views use EXT_meshopt_compression rewritten as a plain GLB of float32 attributes
+    and uint32 indices (quantised attributes dequantised, textures dropped); other GLBs come back as they are.
+    """
+    if len(data) < 20 or data[:4] != _GLB_MAGIC:
+        return data
+    json_len, _ = struct.unpack_from("<II", data, 12)
+    doc = json.loads(data[20 : 20 + json_len])
+    if "EXT_meshopt_compression" not in doc.get("extensionsUsed", []):
+        return data
+    off = 20 + json_len
+    bin_chunk = b""
+    if off + 8 <= len(data):
+        bin_len, _ = struct.unpack_from("<II", data, off)
+        bin_chunk = data[off + 8 : off + 8 + bin_len]
+    cache: dict[int, bytes] = {}
+    out = bytearray()
+    views, accessors = [], []
+    for acc in doc["accessors"]:
+        i = acc["bufferView"]
+        if i not in cache:
+            cache[i] = _meshopt_view(doc, bin_chunk, i)
+        arr, new_ct = _plain_accessor(acc, doc["bufferViews"][i], cache[i])
+        blob = arr.tobytes()
+        views.append({"buffer": 0, "byteOffset": len(out), "byteLength": len(blob)})
+        out += blob + b"\0" * (-len(blob) % 4)
+        new = {key: acc[key] for key in ("type", "count", "name") if key in acc}
+        new.update({"bufferView": len(views) - 1, "componentType": new_ct, "byteOffset": 0})
+        if "min" in acc and new_ct == 5126 and acc.get("normalized"):
+            new["min"] = list(map(float, arr.min(axis=0)))
+            new["max"] = list(map(float, arr.max(axis=0)))
+        elif "min" in acc and not acc.get("normalized"):
+            new["min"], new["max"] = acc["min"], acc["max"]
+        accessors.append(new)
+    doc["accessors"], doc["bufferViews"] = accessors, views
+    doc["buffers"] = [{"byteLength": len(out)}]
+    _strip_textures(doc)
     js = json.dumps(doc).encode()
     js += b" " * (-len(js) % 4)
     total = 12 + 8 + len(js) + 8 + len(out)
@@ -303,44 +387,3 @@ def decode_meshopt_glb(data: bytes) -> bytes:
         + struct.pack("<II", len(out), 0x004E4942)
         + bytes(out)
     )
-
-
-# -- procedural car body -----------------------------------------------------------------------------------
-
-
-def car_body(n_u: int = 160, n_v: int = 96) -> Mesh:
-    """A smooth procedural car body (module docstring), as a closed latitude-longitude grid mesh.
-
-    A sphere with its poles at the nose (−x) and tail (+x), deformed smoothly: semi-axes 1.2 long,
-    0.5 wide, 0.27 high, the cross-section a superellipse of exponent 3 (square-ish shoulders, C²),
-    the lower side flattened, and a cabin 0.2·exp(−((x − 0.15)/0.5)⁴) raised on the upper side and
-    narrowed towards the roof. Normals from the mesh (smooth, area-weighted). Placed on the stage like
-    a loaded model.
-    """
-    import trimesh
-
-    theta = np.linspace(0.0, np.pi, n_v)  # 0: tail (+x), π: nose (−x)
-    phi = np.linspace(-np.pi, np.pi, n_u, endpoint=False)
-    tt, pp = np.meshgrid(theta, phi, indexing="ij")
-    a, b, c, p = 1.2, 0.27, 0.5, 3.0
-    r = (np.abs(np.cos(pp)) ** p + np.abs(np.sin(pp)) ** p) ** (-1.0 / p)
-    x = a * np.cos(tt)
-    up = np.sin(tt) * np.cos(pp) * r  # in [−1, 1] across the section
-    side = np.sin(tt) * np.sin(pp) * r
-    y = b * np.where(up < 0.0, 0.6 * up, up)
-    top = np.clip(up, 0.0, None) ** 2
-    cabin = np.exp(-(((x - 0.15) / 0.5) ** 4))
-    y = y + 0.2 * cabin * top
-    z = c * side * (1.0 - 0.3 * cabin * top)
-    verts = np.stack([x, y, z], axis=-1).reshape(-1, 3)
-    idx = np.arange(n_v * n_u).reshape(n_v, n_u)
-    nxt = np.roll(idx, -1, axis=1)
-    q = np.stack([idx[:-1], nxt[:-1], nxt[1:], idx[1:]], axis=-1).reshape(-1, 4)
-    faces = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
-    tm = trimesh.Trimesh(verts, faces, process=True)  # merges the pole vertices, drops degenerate faces
-    tm.fix_normals()  # consistent outward winding (the body is closed)
-    normals = np.asarray(tm.vertex_normals, float)
-    outward = np.einsum("ij,ij->i", normals, tm.vertices - tm.vertices.mean(axis=0))
-    if (outward > 0).mean() < 0.5:
-        normals = -normals
-    return place_on_stage("car", tm.vertices, normals, tm.faces)

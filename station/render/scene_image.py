@@ -103,7 +103,7 @@ class SceneImage:
 
 def builtin_mesh(name: str) -> Mesh:
     """The built-in mesh *name* (BUILTIN_MESHES: ``car``, the procedural car body)."""
-    from station.render.meshes import car_body
+    from station.render.car import car_body
 
     if name not in BUILTIN_MESHES:
         raise RenderInputError("mesh", " | ".join(BUILTIN_MESHES), name)

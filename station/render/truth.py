@@ -561,9 +561,9 @@ def flake_sparkle_truth(
     """Ground truth of the flake layer's sparkle per pixel, (P, 3), unclipped (the renderers then add
     max(sparkle, −reflectance · radiance), :func:`station.render.flakes.clip_sparkle`).
 
-    The flake model of :mod:`station.render.flakes` (the same cells and flake normals m,
-    :func:`~station.render.flakes.flake_normals`) without its two map approximations:
-    tint · reflectance · (L(R_m) 1[R_m·N > 0] − E_m[L(R_m) 1[R_m·N > 0]]) / √N, with L the full-resolution
+    The flake model of :mod:`station.render.flakes` (the same cell levels, weights w_k and flake normals m,
+    :func:`~station.render.flakes.flake_levels`) without its two map approximations:
+    tint · reflectance · Σ_k w_k (L(R_m,k) 1[R_m,k·N > 0] − E_m[L(R_m) 1[R_m·N > 0]]), with L the full-resolution
     map (sun disc included) looked up bilinearly at the flake's mirror direction R_m instead of the
     sharpest prefiltered map, and the expectation over the flake-normal distribution itself instead of a
     Phong lobe map: for the map without its point lights by *samples* stratified normals (Box–Muller on a
@@ -576,17 +576,20 @@ def flake_sparkle_truth(
     from the eye (scene units), *tan_half_fov* and *height* the camera's (they set the cells), *tint* (3,)
     the paint's flake tint (:func:`station.render.flakes.flake_tint`).
     """
-    from station.render.flakes import cell_mm, flake_normals
+    from station.render.flakes import flake_levels
 
     n = np.asarray(normals, dtype=float).reshape(-1, 3)
     v = np.asarray(views, dtype=float).reshape(-1, 3)
     full = _as_equirect(environment)
     light = prepare_lighting(full) if lighting is None else lighting
-    cells = cell_mm(flakes, np.asarray(distance, dtype=float).reshape(-1), tan_half_fov, height)
-    count = np.maximum(1.0, flakes.density_per_mm2 * cells * cells)
-    m = flake_normals(flakes, np.asarray(positions, dtype=float), cells, n)
-    rm = 2.0 * np.sum(m * v, axis=-1, keepdims=True) * m - v
-    glint = sample_equirect(full, rm) * (np.sum(rm * n, axis=-1) > 0.0)[:, None]
+    glint = np.zeros_like(n)
+    weight = np.zeros(n.shape[0])
+    ndv = np.clip(np.sum(n * v, axis=-1), 0.0, 1.0)
+    d = np.asarray(distance, dtype=float).reshape(-1)
+    for w, m in flake_levels(flakes, np.asarray(positions, dtype=float), n, d, ndv, tan_half_fov, height):
+        rm = 2.0 * np.sum(m * v, axis=-1, keepdims=True) * m - v
+        glint += w[:, None] * sample_equirect(full, rm) * (np.sum(rm * n, axis=-1) > 0.0)[:, None]
+        weight += w
     # Expected reflection: stratified flake normals over the residual map ...
     side = max(4, int(round(math.sqrt(samples))))
     u1, u2 = np.meshgrid((np.arange(side) + 0.5) / side, (np.arange(side) + 0.5) / side)
@@ -616,6 +619,4 @@ def flake_sparkle_truth(
             pm = np.exp(-0.5 * (gx * gx + gy * gy)) / (2.0 * np.pi * sigma * sigma * hn_safe**3)
             vh = np.maximum(np.einsum("pkc,pc->pk", hv, v[sl]), 1e-6)
             mean[sl] += (np.where(ok, pm / (4.0 * vh), 0.0)) @ light.point_flux
-    return (
-        np.asarray(tint, dtype=float)[None, :] * flakes.reflectance * (glint - mean) / np.sqrt(count)[:, None]
-    )
+    return np.asarray(tint, dtype=float)[None, :] * flakes.reflectance * (glint - weight[:, None] * mean)

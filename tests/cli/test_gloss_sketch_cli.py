@@ -84,6 +84,7 @@ def test_environment_lit_sketch_fit_from_a_hdr(tmp_path: Path) -> None:
         "env.hdr",
     )
     assert not fit["failed"] and fit["lights"] >= 8 and fit["environment"] == "sphere-env"
+    assert fit["lighting"] == f"{fit['lights']} point lights from env.hdr"  # it says what it lit with
     assert np.linalg.norm(np.subtract(fit["design"]["face"], GREEN.face)) < 3.0
     assert np.linalg.norm(np.subtract(fit["design"]["flop"], GREEN.flop)) < 2.0
     assert abs(fit["design"]["travel_deg"] - 60.0) < 8.0

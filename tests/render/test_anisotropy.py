@@ -230,8 +230,8 @@ def test_design_file_round_trip(tmp_path):
 
 def test_mesh_takes_the_anisotropy_and_its_isotropic_limit(gl_ctx):
     from station.model.anisotropy import Anisotropy
+    from station.render.car import car_body
     from station.render.gl_renderer import GLRenderer
-    from station.render.meshes import car_body
     from station.render.weights import LobeWeights
 
     basis = prefilter.prefilter_basis(procedural.sunny_sky(128), EXPS, ctx=gl_ctx)

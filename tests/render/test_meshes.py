@@ -46,7 +46,11 @@ def test_cc0_car_loads_and_is_placed(cc0_cars) -> None:
         assert lo[1] == pytest.approx(me.MESH_FLOOR_Y, abs=1e-6)
         assert abs(lo[0] + hi[0]) < 1e-5 and abs(lo[2] + hi[2]) < 1e-5
         assert np.linalg.norm(mesh.normals, axis=1) == pytest.approx(1.0, abs=1e-5)
-        assert mesh.painted.min() == 1.0  # one part: all painted
+        # one material with a palette texture: paint, tyres and glass by their swatches (mesh_parts)
+        assert (mesh.painted == me.PAINT).mean() > 0.3
+        assert (mesh.painted == me.TYRE).any() and (mesh.painted == me.GLASS).any()
+        tyre_y = mesh.positions[mesh.painted == me.TYRE][:, 1]
+        assert np.median(tyre_y) < np.median(mesh.positions[mesh.painted == me.PAINT][:, 1])  # low down
         # Normals point out of the body for most vertices (decoded octahedral normals, turned with it).
         out = np.einsum("ij,ij->i", mesh.normals, mesh.positions - mesh.positions.mean(axis=0))
         assert (out > 0).mean() > 0.7
@@ -64,7 +68,8 @@ def test_parts_by_name_in_glb_obj_stl(tmp_path) -> None:
     scene = trimesh.Scene({"body": body, "glass": glass})
     scene.export(tmp_path / "two.glb")
     mesh = me.load_mesh(tmp_path / "two.glb", paint="BODY")
-    assert mesh.painted.sum() == len(body.vertices)  # 24 box vertices painted, the glass neutral
+    assert (mesh.painted == me.PAINT).sum() == len(body.vertices)  # the box's vertices painted
+    assert (mesh.painted == me.GLASS).sum() == len(glass.vertices)  # the part named glass drawn as glass
     assert mesh.painted.size == len(body.vertices) + len(glass.vertices)
     lo, hi = mesh.bounds
     assert hi[0] - lo[0] == pytest.approx(me.MESH_LENGTH) and lo[1] == pytest.approx(me.MESH_FLOOR_Y)
@@ -82,8 +87,28 @@ def test_parts_by_name_in_glb_obj_stl(tmp_path) -> None:
         me.load_mesh(tmp_path / "model.ply")
 
 
+def test_imported_meshes_shade_smooth(tmp_path) -> None:
+    """A flat-shaded sphere (one vertex per face corner, as an STL stores it) loads with smooth normals:
+    each within 3° of the exact radial normal; a box keeps its 90° creases (axis-aligned normals)."""
+    import trimesh
+
+    ico = trimesh.creation.icosphere(subdivisions=3)
+    ico.unmerge_vertices()
+    ico.export(tmp_path / "ball.stl")
+    mesh = me.load_mesh(tmp_path / "ball.stl")
+    centre = 0.5 * (mesh.bounds[0] + mesh.bounds[1])
+    radial = mesh.positions - centre
+    radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+    assert np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", radial, mesh.normals), -1, 1))).max() < 3.0
+    trimesh.creation.box((2.0, 1.0, 1.0)).export(tmp_path / "box.stl")
+    box = me.load_mesh(tmp_path / "box.stl")
+    assert np.allclose(np.abs(box.normals).max(axis=1), 1.0, atol=1e-6)
+
+
 def test_car_body_is_smooth_and_closed() -> None:
-    car = me.car_body(96, 48)
+    from station.render.car import car_body
+
+    car = car_body(96, 48)
     lo, hi = car.bounds
     assert hi[0] - lo[0] == pytest.approx(me.MESH_LENGTH)
     assert 0.4 < (hi[2] - lo[2]) / (hi[0] - lo[0]) < 0.5  # width 1.0 of 2.4
@@ -91,8 +116,19 @@ def test_car_body_is_smooth_and_closed() -> None:
     e = np.concatenate([car.faces[:, [0, 1]], car.faces[:, [1, 2]], car.faces[:, [2, 0]]])
     cosines = np.einsum("ij,ij->i", car.normals[e[:, 0]], car.normals[e[:, 1]])
     assert cosines.min() > np.cos(np.radians(25.0))
-    out = np.einsum("ij,ij->i", car.normals, car.positions - car.positions.mean(axis=0))
+    body = np.isin(car.painted, (me.PAINT, me.GLASS))
+    out = np.einsum("ij,ij->i", car.normals[body], car.positions[body] - car.positions.mean(axis=0))
     assert (out > 0).mean() > 0.95
+    # A car, not a pebble: glass on the cabin, four wheels standing on the floor with chrome hubs.
+    tyre = car.positions[car.painted == me.TYRE]
+    assert tyre[:, 1].min() == pytest.approx(car.floor_y, abs=1e-6)
+    assert car.positions[body][:, 1].min() > car.floor_y + 0.02  # the body clears the ground
+    assert {(bool(x > 0), bool(z > 0)) for x, z in tyre[:, [0, 2]]} == {
+        (a, b) for a in (0, 1) for b in (0, 1)
+    }
+    glass = car.positions[car.painted == me.GLASS]
+    assert len(glass) > 0 and glass[:, 1].min() > car.positions[body][:, 1].mean()  # above the belt
+    assert (car.painted == me.CHROME).any()
 
 
 @pytest.mark.gl
@@ -133,7 +169,7 @@ def test_neutral_parts_are_grey(gl_ctx, sky_basis, tmp_path) -> None:
     glass = trimesh.creation.box((1.0, 0.3, 0.7))
     glass.apply_translation((0.0, 0.45, 0.0))
     glass.unmerge_vertices()  # flat faces: the roof's vertex normals are all +Y
-    trimesh.Scene({"body": body, "glass": glass}).export(tmp_path / "two.glb")
+    trimesh.Scene({"body": body, "cabin": glass}).export(tmp_path / "two.glb")
     mesh = me.load_mesh(tmp_path / "two.glb", paint="body")
     top = shapes.Camera((0.0, 4.0, 0.01), (0.0, 0.0, 0.0), fov_deg=20.0)  # looking down on the glass
     with GLRenderer(sky_basis, 64, 64, ctx=gl_ctx) as gl:
@@ -144,3 +180,40 @@ def test_neutral_parts_are_grey(gl_ctx, sky_basis, tmp_path) -> None:
 
     expected = me.NEUTRAL_ALBEDO * sample_cube(up, np.array([[0.0, 1.0, 0.0]]))[0]
     assert centre == pytest.approx(np.broadcast_to(expected, centre.shape), rel=0.03)
+    # The same part named glass: Schlick's F0 = 0.04 mirror (head-on) of the sharpest map at +Y over a
+    # dark interior, 0.96 · GLASS_INTERIOR (0.03) × the diffuse map.
+    trimesh.Scene({"body": body, "glass": glass}).export(tmp_path / "glass.glb")
+    mesh = me.load_mesh(tmp_path / "glass.glb", paint="body")
+    with GLRenderer(sky_basis, 64, 64, ctx=gl_ctx) as gl:
+        img = gl.render_mesh(mesh, _pair(), camera=top, linear=True)
+    sharp = sky_basis.cubes[int(np.argmax(sky_basis.exponents))]
+    d = np.array([[0.0, 1.0, 0.0]])
+    expected = 0.04 * sample_cube(sharp, d)[0] + 0.96 * 0.03 * sample_cube(up, d)[0]
+    centre = img[30:34, 28:36].reshape(-1, 3)
+    assert centre == pytest.approx(np.broadcast_to(expected, centre.shape), rel=0.05)
+
+
+def test_palette_textured_model_is_split_into_parts(tmp_path) -> None:
+    """One material with a 4-swatch palette (orange, black, dark grey, light grey): the faces on the
+    largest-area swatch are paint, the black tyre, the dark grey glass, the light grey chrome."""
+    import trimesh
+    from PIL import Image
+
+    palette = np.array([[[205, 141, 83], [10, 10, 10], [60, 60, 62], [170, 170, 170]]], np.uint8)
+    boxes = []
+    for k, size in enumerate((3.0, 0.6, 0.8, 0.4)):
+        b = trimesh.creation.box((size, size, size))
+        b.apply_translation((4.0 * k, 0.0, 0.0))
+        b.visual = trimesh.visual.TextureVisuals(
+            uv=np.tile([(k + 0.5) / 4.0, 0.5], (len(b.vertices), 1)),
+            material=trimesh.visual.material.SimpleMaterial(image=Image.fromarray(palette)),
+        )
+        boxes.append(b)
+    merged = trimesh.util.concatenate(boxes)
+    merged.export(tmp_path / "palette.glb")
+    mesh = me.load_mesh(tmp_path / "palette.glb")
+    order = np.argsort(mesh.positions[:, 0])  # the boxes lie along x, biggest first
+    third = len(order) // 4
+    got = [np.unique(mesh.painted[order[i * third : (i + 1) * third]]) for i in range(4)]
+    assert [g.tolist() for g in got] == [[me.PAINT], [me.TYRE], [me.GLASS], [me.CHROME]]
+    assert me.load_mesh(tmp_path / "palette.glb", paint="geometry").painted.min() == me.PAINT  # by name: all

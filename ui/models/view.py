@@ -19,6 +19,7 @@ import numpy as np
 
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
+from station.model.flakes import FLAKE_RANGES, FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.basis_images import BasisImages as CoreBasisImages
 from station.render.basis_images import build_basis_images
@@ -159,6 +160,9 @@ class ViewSettings:
     ``flakes`` draws the effect paint's flake layer (sparkle and glints, ``station.render.flakes``; the
     paint type's default layer, :func:`station.model.design_io.default_flakes`) in every frame through
     the core's GL renderer; the level of detail may turn it off where flakes are below a pixel.
+    ``flake_size_um``, ``flake_density``, ``flake_spread_deg`` replace that layer's size (µm), density
+    (per mm²) and spread (degrees) when set (None: the paint type's default), within
+    :data:`station.model.flakes.FLAKE_RANGES` (:meth:`flake_layer`).
     """
 
     environment: str = "booth"
@@ -171,6 +175,9 @@ class ViewSettings:
     stage: bool = False
     coat: bool = False
     flakes: bool = False
+    flake_size_um: float | None = None
+    flake_density: float | None = None
+    flake_spread_deg: float | None = None
 
     def __post_init__(self) -> None:
         check_environment(self.environment)
@@ -189,6 +196,26 @@ class ViewSettings:
                 raise ViewInputError(name, "true | false", getattr(self, name))
         if not math.isfinite(self.yaw_deg):
             raise ViewInputError("yaw_deg", "a finite angle", self.yaw_deg)
+        for name, key in FLAKE_FIELDS.items():
+            v = getattr(self, name)
+            lo, hi = FLAKE_RANGES[key]
+            if v is not None and not (isinstance(v, (int, float)) and lo <= v <= hi):
+                raise ViewInputError(name, f"{lo:g} <= {name} <= {hi:g} or unset", v)
+
+    def flake_layer(self, design: Any) -> FlakeLayer | None:
+        """The flake layer drawn for *design*: None unless ``flakes``; else the paint type's default
+        (:func:`station.model.design_io.default_flakes`; none for a solid) with the set fields put in."""
+        from station.model.design_io import default_flakes
+
+        if not self.flakes:
+            return None
+        layer = default_flakes(design)
+        given = {
+            key: getattr(self, name) for name, key in FLAKE_FIELDS.items() if getattr(self, name) is not None
+        }
+        if layer is None or not given:
+            return layer
+        return FlakeLayer(**{**layer.to_dict(), **given})
 
     def camera(self) -> Camera:
         """The orbit camera: the shape's default camera turned by yaw/pitch and moved in by zoom."""
@@ -222,6 +249,14 @@ class ViewSettings:
     def replace(self, **kw: Any) -> ViewSettings:
         """A copy with fields replaced (validated)."""
         return replace(self, **kw)
+
+
+#: The view's flake fields and the FlakeLayer fields they set.
+FLAKE_FIELDS = {
+    "flake_size_um": "size_um",
+    "flake_density": "density_per_mm2",
+    "flake_spread_deg": "spread_deg",
+}
 
 
 def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tuple[np.ndarray, np.ndarray]:

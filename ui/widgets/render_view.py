@@ -639,13 +639,12 @@ class GLRenderView(_ViewLogic):
         return self._core_ok
 
     def _flake_layer(self):
-        """The flake layer drawn (``settings.flakes``): the first design's paint-type default, or None."""
-        from station.model.design_io import default_flakes
-
+        """The flake layer drawn (``settings.flakes``): the first design's paint-type default with the
+        view's size, density and spread put in (:meth:`ViewSettings.flake_layer`), or None."""
         designs = self.model.designs
-        if not self.model.settings.flakes or designs is None:
+        if designs is None:
             return None
-        return default_flakes(designs[0])
+        return self.model.settings.flake_layer(designs[0])
 
     def _draw_cpu_frame(self, ctx: moderngl.Context, basis: BasisImages, w: int, h: int) -> None:
         """The edit frame as a texture in the GL surface (the stage in gpu mode; a surface exposed late)."""

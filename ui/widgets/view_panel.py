@@ -8,6 +8,7 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
     QCheckBox,
     QComboBox,
+    QDoubleSpinBox,
     QFileDialog,
     QHBoxLayout,
     QLabel,
@@ -18,13 +19,21 @@ from PySide6.QtWidgets import (
 )
 
 from station.errors import InputError
+from station.model.flakes import FLAKE_RANGES
 from station.render.shapes import SHAPES
-from ui.models.view import ENVIRONMENT_SUFFIXES, ENVIRONMENTS, ViewModel, ViewSettings
+from ui.models.view import ENVIRONMENT_SUFFIXES, ENVIRONMENTS, FLAKE_FIELDS, ViewModel, ViewSettings
 from ui.widgets.render_view import make_render_view
 
 EXPOSURE_STEPS_PER_EV = 10
 #: Width of the flakes' level-of-detail note, px (the full text is its tooltip).
 FLAKE_STATUS_WIDTH = 240
+#: The flake parameter boxes: view field → (label, suffix, decimals, step). Their lowest value, one step
+#: below the accepted range, reads "paint default" (the field unset).
+FLAKE_BOXES = {
+    "flake_size_um": ("size", " µm", 0, 5.0),
+    "flake_density": ("density", " /mm²", 0, 50.0),
+    "flake_spread_deg": ("spread", "°", 1, 0.5),
+}
 
 
 class ViewPanel(QWidget):
@@ -68,6 +77,8 @@ class ViewPanel(QWidget):
         self.flakes.setToolTip("metallic sparkle and glints (drawn by the GL renderer in every frame)")
         self.flake_status = QLabel()
         self.flake_status.setFixedWidth(FLAKE_STATUS_WIDTH)  # its text must not resize the view
+        #: Flake size, density and spread (FLAKE_BOXES), each "paint default" at its lowest value.
+        self.flake_boxes = {name: self._flake_box(name, getattr(s, name)) for name in FLAKE_BOXES}
         # two rows of pickers, so the panel fits beside the designer on a 1280-pixel-wide display
         bar = QVBoxLayout()
         for row_widgets in (
@@ -82,7 +93,7 @@ class ViewPanel(QWidget):
                 self.exposure,
                 self.exposure_label,
             ),
-            (self.stage, self.coat, self.flakes, self.flake_status, reset),
+            (self.stage, self.coat, self.flakes, *self.flake_boxes.values(), self.flake_status, reset),
         ):
             row = QHBoxLayout()
             for w in row_widgets:
@@ -108,6 +119,23 @@ class ViewPanel(QWidget):
         reset.clicked.connect(lambda: self.model.update(yaw_deg=0.0, pitch_deg=0.0, zoom=1.0))
         model.events.settings.connect(self._on_settings)
         self._on_settings(s)
+
+    def _flake_box(self, name: str, value: float | None) -> QDoubleSpinBox:
+        """A spin box for the view's flake field *name*, connected to the model (FLAKE_BOXES)."""
+        label, suffix, decimals, step = FLAKE_BOXES[name]
+        lo, hi = FLAKE_RANGES[FLAKE_FIELDS[name]]
+        box = QDoubleSpinBox()
+        box.setDecimals(decimals)
+        box.setSingleStep(step)
+        box.setRange(lo - step, hi)
+        box.setSuffix(suffix)
+        box.setSpecialValueText(f"{label}: paint default")
+        box.setToolTip(f"flake {label}, {lo:g}–{hi:g}{suffix} (lowest: the paint type's default)")
+        box.setValue(lo - step if value is None else value)
+        box.valueChanged.connect(
+            lambda v, n=name, bottom=lo - step: self.model.update(**{n: None if v <= bottom else float(v)})
+        )
+        return box
 
     def _select_environment(self, env: str) -> None:
         i = self.environment.findData(env)

@@ -11,6 +11,11 @@ from station.api.schemas.common import StrictFloat
 from station.render.procedural import NAMES
 from station.render.scene_image import MAX_UPLOAD_BASE64_CHARS, MAX_UPLOAD_BYTES
 
+#: Routes whose JSON body may carry an uploaded map (``environment_hdr``), under the API prefix, and their
+#: body cap: the base64 of a MAX_UPLOAD_BYTES file plus 64 KiB for the rest of the request (the service's
+#: general cap, ``max_body_bytes``, applies instead when larger).
+ENVIRONMENT_UPLOAD_PATHS = ("/styling/render", "/analyses/gg-index/environment")
+ENVIRONMENT_BODY_BYTES = MAX_UPLOAD_BASE64_CHARS + 65_536
 #: "booth | sky | ..." for descriptions and error messages.
 ENVIRONMENT_CHOICES = " | ".join(NAMES)
 #: Description of an uploaded map's field (the byte and pixel caps of ``station.render.scene_image``).

@@ -9,7 +9,7 @@ uniform vec3 u_eye, u_forward, u_right, u_up;
 uniform float u_tan_half_fov, u_aspect;
 out vec3 v_pos;
 out vec3 v_normal;
-out float v_painted;
+flat out float v_painted;  // a material code, one per triangle
 const float NEAR = 0.05, FAR = 100.0;
 
 void main() {

@@ -11,8 +11,8 @@
 // DIFFUSE_SH (1: 9-coefficient SH instead of the exponent-1 cube), COMBINED (1: the narrow lobes of
 // both paints pre-summed into a gloss and a directionally-diffuse atlas, shaders/combine.frag.glsl).
 // MESH (1): shade the fragments of a rasterised mesh (shaders/mesh.vert.glsl) instead of ray casting a
-// shape; NO_SHAPE (1): nothing to hit, the stage only (the backdrop pass under a mesh). Mesh parts with
-// v_painted = 0 are neutral: NEUTRAL_ALBEDO x the diffuse map.
+// shape; NO_SHAPE (1): nothing to hit, the stage only (the backdrop pass under a mesh). Mesh parts whose
+// material code v_painted is not MAT_PAINT are drawn by part_radiance (grey, tyre, glass, chrome).
 // HAS_COAT, HAS_STAGE, HAS_FLAKES (0/1): compile the clear coat, the stage and the flakes in only when a
 // frame uses them (llvmpipe pays for code behind uniform branches).
 // HAS_ANISO (0/1): the gloss of both paints is anisotropic Ward by off-specular samples
@@ -53,8 +53,8 @@
 #ifndef HAS_FALL_OFF
 #define HAS_FALL_OFF 0
 #endif
-#ifndef FLAKE_MEAN_LOBE
-#define FLAKE_MEAN_LOBE -1
+#ifndef FLAKE_CELL_PIXELS
+#define FLAKE_CELL_PIXELS 2.0
 #endif
 #ifndef STAGE_BACKDROP
 #define STAGE_BACKDROP 0
@@ -76,6 +76,15 @@
 #endif
 #ifndef NEUTRAL_ALBEDO
 #define NEUTRAL_ALBEDO 0.18
+#endif
+// Mesh material codes (station.render.meshes) and the neutral parts' constants.
+#ifndef MAT_PAINT
+#define MAT_PAINT 1.0
+#define MAT_TYRE 2.0
+#define MAT_GLASS 3.0
+#define MAT_CHROME 4.0
+#define TYRE_ALBEDO 0.03
+#define GLASS_INTERIOR 0.03
 #endif
 //#include shapes.glsl
 //#include tonemap.glsl
@@ -114,8 +123,8 @@ uniform float u_backdrop_exp, u_ground_y, u_ground_albedo, u_ground_radius;
 uniform sampler2D u_ground_map;
 uniform vec2 u_ground_c;
 uniform vec4 u_occ[8];
-// Flakes (station/render/flakes.py): one random flake normal per surface cell; zero-mean sparkle
-// tint * reflectance * (L_sharp(R_m) - C_E(R)) / sqrt(N).
+// Flakes (station/render/flakes.py): one random flake normal per surface cell of two levels of a fixed
+// hierarchy; zero-mean sparkle tint * reflectance * sum_k w_k (L_sharp(R_m,k) - C_E(R)).
 uniform samplerCube u_flake_sharp, u_flake_mean;
 uniform float u_flake_size_mm, u_flake_density, u_flake_sigma, u_flake_reflectance, u_unit_mm;
 uniform vec3 u_flake_tint[2];
@@ -129,22 +138,41 @@ uvec3 pcg3d(uvec3 v) {
     return v;
 }
 
-vec3 flake_sparkle(vec3 p, float dist, vec3 n, vec3 ve, vec3 r, int paint, vec3 mean_lights) {
-    // n, ve, r in the environment's frame; p the world position (the cell), dist the eye distance.
-    float cell_mm = max(u_flake_size_mm, 2.0 * dist * u_tan_half_fov / u_size.y * u_unit_mm);
-    float count = max(1.0, u_flake_density * cell_mm * cell_mm);
-    uvec3 h = pcg3d(uvec3(ivec3(floor(p * (u_unit_mm / cell_mm))) + ivec3(1 << 20)));
-    vec2 u = (vec2(h.xy >> 8u) + 0.5) / 16777216.0;
+// One cell level k of the flake hierarchy: cells of side FLAKE_SIZE 2^k fixed on the surface (world =
+// object space: the shapes and meshes never move), hashed to a flake normal and, where a cell holds fewer
+// than one flake on average, to whether it holds one (station.render.flakes.flake_levels).
+vec3 flake_level(vec3 p, int k, vec3 n, vec3 t, vec3 b, vec3 ve, out float weight) {
+    float c = u_flake_size_mm * exp2(float(k));
+    float count = u_flake_density * c * c;
+    uvec3 h = pcg3d(uvec3(ivec3(floor(p * (u_unit_mm / c))) + ivec3(1 << 20)) + uvec3(0u, 0u, uint(k) << 24u));
+    vec3 u = (vec3(h >> 8u) + 0.5) / 16777216.0;
     vec2 g = sqrt(-2.0 * log(u.x)) * vec2(cos(2.0 * PI * u.y), sin(2.0 * PI * u.y));
-    vec3 t = normalize(abs(n.y) < 0.9 ? cross(n, vec3(0.0, 1.0, 0.0)) : cross(n, vec3(1.0, 0.0, 0.0)));
-    vec3 b = cross(n, t);
     vec3 m = normalize(n + u_flake_sigma * (g.x * t + g.y * b));
     vec3 rm = 2.0 * dot(m, ve) * m - ve;
-    vec3 glint = float(dot(rm, n) > 0.0) * textureLod(u_flake_sharp, rm, 0.0).rgb;  // a select, no branch
-    // C_E(R): the mean lobe's map plus, when its lights were taken out of it, their exact part (summed by
-    // the wide lobes' light loop for bound lobe FLAKE_MEAN_LOBE: the same p(l) as there).
-    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb + mean_lights;
-    return (paint == 0 ? u_flake_tint[0] : u_flake_tint[1]) * u_flake_reflectance * (glint - mean) / sqrt(count);
+    weight = float(u.z < count) / sqrt(max(count, 1.0));
+    return float(dot(rm, n) > 0.0) * textureLod(u_flake_sharp, rm, 0.0).rgb;  // a select, no branch
+}
+
+vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int paint) {
+    // Multiscale cells (Zirr & Kaplanyan 2016's hierarchy, station.render.flakes): the level whose cells
+    // match the pixel's footprint on the surface (side / sqrt(N.V)), blended with the next coarser one
+    // by the fractional level, so the sparkle sticks to the surface and changes smoothly with distance.
+    float px = FLAKE_CELL_PIXELS * 2.0 * dist * u_tan_half_fov / u_size.y * u_unit_mm / sqrt(max(ndv, 0.05));
+    float lam = max(log2(px / u_flake_size_mm), 0.0);
+    int k = int(floor(lam));
+    float f = lam - float(k);
+    vec3 t = normalize(abs(n.y) < 0.9 ? cross(n, vec3(0.0, 1.0, 0.0)) : cross(n, vec3(1.0, 0.0, 0.0)));
+    vec3 b = cross(n, t);
+    float w0, w1;
+    vec3 g0 = flake_level(p, k, n, t, b, ve, w0);
+    vec3 g1 = flake_level(p, k + 1, n, t, b, ve, w1);
+    float norm = 1.0 / sqrt((1.0 - f) * (1.0 - f) + f * f);  // the blend keeps the sparkle's variance
+    w0 *= (1.0 - f) * norm;
+    w1 *= f * norm;
+    // C_E(R): the sharp map prefiltered with the flakes' reflected lobe (flakes.flake_mean_cube).
+    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb;
+    vec3 tint = paint == 0 ? u_flake_tint[0] : u_flake_tint[1];
+    return tint * u_flake_reflectance * (w0 * g0 + w1 * g1 - (w0 + w1) * mean);
 }
 
 float coat_scale(float ndv) {
@@ -267,7 +295,31 @@ vec3 fall_off(vec3 n, vec3 r, float ndv, vec3 d_n) {
 #if MESH
 in vec3 v_pos;
 in vec3 v_normal;
-in float v_painted;
+flat in float v_painted;
+#endif
+
+#if MESH
+// A mesh part that is not the paint (station.render.meshes: material codes): NEUTRAL_ALBEDO grey, matte
+// tyre, glass (Schlick F0 0.04 mirror over a dark interior) or chrome (F0 0.6 mirror), the mirrors read in
+// the sharpest lobe map (bound to u_flake_sharp for meshes).
+vec3 part_radiance(float code, vec3 n, vec3 v) {
+    vec3 ne = u_rot * n;
+#if DIFFUSE_SH
+    vec3 d_n = sh_eval(ne);
+#else
+    vec3 d_n = textureLod(u_diffuse, ne, 0.0).rgb;
+#endif
+    float ndv = clamp(dot(n, v), 0.0, 1.0);
+    float m = 1.0 - ndv, m5 = m * m * m * m * m;
+    vec3 mirror = textureLod(u_flake_sharp, u_rot * (2.0 * dot(n, v) * n - v), 0.0).rgb;
+    if (abs(code - MAT_TYRE) < 0.5) return TYRE_ALBEDO * d_n + (0.04 + 0.96 * m5) * 0.25 * d_n;
+    if (abs(code - MAT_GLASS) < 0.5) {
+        float f = 0.04 + 0.96 * m5;
+        return f * mirror + (1.0 - f) * GLASS_INTERIOR * d_n;
+    }
+    if (abs(code - MAT_CHROME) < 0.5) return (0.6 + 0.4 * m5) * mirror;
+    return NEUTRAL_ALBEDO * d_n;
+}
 #endif
 
 #if BAKE_GROUND
@@ -288,7 +340,7 @@ void main() {
     t = length(v_pos - u_eye);
     n = normalize(v_normal);
     if (dot(n, d) > 0.0) n = -n;  // shade the side facing the camera
-    paint = v_painted > 0.5 ? (v_pos.x < 0.0 ? 0 : 1) : -1;
+    paint = abs(v_painted - MAT_PAINT) < 0.5 ? (v_pos.x < 0.0 ? 0 : 1) : -1;
     bool hit_any = true;
 #else
     vec2 ndc = 2.0 * gl_FragCoord.xy / u_size - 1.0;
@@ -301,11 +353,7 @@ void main() {
 #endif
 #if MESH
     if (hit_any && paint < 0) {
-#if DIFFUSE_SH
-        rgb = NEUTRAL_ALBEDO * sh_eval(u_rot * n);
-#else
-        rgb = NEUTRAL_ALBEDO * textureLod(u_diffuse, u_rot * n, 0.0).rgb;
-#endif
+        rgb = part_radiance(v_painted, n, -d);
     } else
 #endif
     if (hit_any) {
@@ -321,9 +369,6 @@ void main() {
         float s = coat_scale(ndv);
 #else
         float s = 1.0;
-#endif
-#if HAS_FLAKES
-        vec3 flake_lights = vec3(0.0);  // the flake mean lobe's extracted lights (the light loop below)
 #endif
 #if DIFFUSE_SH
         vec3 d_n = sh_eval(n);
@@ -379,16 +424,13 @@ void main() {
                     vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
                     float p = (LOBE_E[i] + 1.0) / (2.0 * PI) * exp2(LOBE_E[i] * lg);
                     acc += (((WIDE_GLOSS_MASK >> i) & 1) != 0 ? s * wg + nl * wdd : nl * wdd) * p;
-#if HAS_FLAKES
-                    if (i == FLAKE_MEAN_LOBE) flake_lights += p * u_light_flux[l];
-#endif
                 }
             }
             if (nl > 0.0) rgb += acc * u_light_flux[l];
         }
 #endif
 #if HAS_FLAKES
-        vec3 sparkle = flake_sparkle(u_eye + t * d, t, n, u_rot * v, r, paint, flake_lights);
+        vec3 sparkle = flake_sparkle(u_eye + t * d, t, ndv, n, u_rot * v, r, paint);
 #else
         vec3 sparkle = vec3(0.0);
 #endif
