@@ -31,23 +31,19 @@ _WIDGET = "widget constructor, to become builder methods in the viewer work on t
 #: ``path`` (a file over 600 lines) or ``path:qualname`` (a function over 80 lines) → why it still is.
 ALLOWED: dict[str, str] = {
     "station/cli/_qc_files.py:register": "QC command-line parsers, being split in the QC work",
-    "station/cli/render.py:_render": "the render command, being split in the renderer work",
     "station/design/sketch.py": "the sketch fit, being split by fit (point light, environment)",
     "station/design/sketch.py:fit_point_light": "the point-light fit, being split in the sketch work",
     "station/design/sketch.py:fit_environment": "the environment fit, being split in the sketch work",
     "station/model/gloss.py": "gloss ⇄ lobe and the coat, being split in the gloss work",
     "station/qc/tolerance.py:judge": "QC verdicts, being split in the QC work",
     "station/render/gl_renderer.py": _RENDER,
-    "station/render/gl_renderer.py:GLRenderer._draw": _RENDER,
     "station/render/lobe_fit.py": _RENDER,
     "station/render/lod.py:choose_lod": _RENDER,
-    "station/render/meshes.py:decode_meshopt_glb": _RENDER,
     "station/render/prefilter.py:prefilter_basis": _RENDER,
     "station/render/truth.py": _RENDER,
     "ui/widgets/formulation_screen.py:FormulationScreen.__init__": _WIDGET,
     "ui/widgets/render_view.py": "the render views (GL and image), being split in the viewer render work",
     "bench/env_accuracy.py:main": "the environment accuracy benchmark, with the renderer work",
-    "bench/viewer.py:orbit_main": "the viewer orbit benchmark, with the viewer render work",
     "bench/viewer.py:main": "the viewer benchmark, with the viewer render work",
 }
 

@@ -149,17 +149,7 @@ class GLRenderer:
         self._wide = np.array(wide, np.int32)
         self._lobes = [cube_texture(basis.cubes[i]) for i in self._order]
         self._diffuse_tex = cube_texture(basis.diffuse)
-        table = horizon_table(basis.exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
-        self._horizon_n = table.shape[1]
-        # Two lobes per RGBA row (lobe 2k in .rg, 2k+1 in .ba): one lookup serves a pair of wide lobes.
-        pairs = np.zeros(((table.shape[0] + 1) // 2, table.shape[1], 4), np.float32)
-        for i in range(table.shape[0]):
-            pairs[i // 2, :, 2 * (i % 2) : 2 * (i % 2) + 2] = table[i]
-        self._horizon_tex = self.ctx.texture(
-            (table.shape[1], pairs.shape[0]), 4, np.ascontiguousarray(pairs).tobytes(), dtype="f4"
-        )
-        self._horizon_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-        self._horizon_tex.repeat_x = self._horizon_tex.repeat_y = False
+        self._horizon_tex = self._horizon_texture(basis.exponents, horizon)
         self._sh = sh_diffuse_matrix(basis.sh)
         self._programs: dict[
             tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int], tuple
@@ -177,6 +167,23 @@ class GLRenderer:
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
         self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
+
+    def _horizon_texture(self, exponents, horizon: str):
+        """The horizon table of the bound lobes as an RGBA texture (sets ``_horizon_n``, its row length)."""
+        import moderngl
+
+        table = horizon_table(exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
+        self._horizon_n = table.shape[1]
+        # Two lobes per RGBA row (lobe 2k in .rg, 2k+1 in .ba): one lookup serves a pair of wide lobes.
+        pairs = np.zeros(((table.shape[0] + 1) // 2, table.shape[1], 4), np.float32)
+        for i in range(table.shape[0]):
+            pairs[i // 2, :, 2 * (i % 2) : 2 * (i % 2) + 2] = table[i]
+        tex = self.ctx.texture(
+            (table.shape[1], pairs.shape[0]), 4, np.ascontiguousarray(pairs).tobytes(), dtype="f4"
+        )
+        tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        tex.repeat_x = tex.repeat_y = False
+        return tex
 
     def _program(
         self,
