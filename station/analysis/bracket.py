@@ -53,7 +53,8 @@ def first_bracket(
     grid: NDArray[np.float64],
     row: NDArray[np.float64],
 ) -> tuple[float, float] | None:
-    """First interval [lo, hi] of *grid* with F(lo) < 0 ≤ F(hi).
+    """First interval [lo, hi] of *grid* with F(lo) < 0 ≤ F(hi); ``(grid[0], grid[0])`` when F(grid[0]) ≥ 0
+    already (the crossing is at the first point: ε was seen, so it is reached, never reported as missed).
 
     Before accepting it, every earlier interval whose curvature bound
     ``max(F_j, F_{j+1}) + K_j h²/8`` reaches 0 is searched on a finer grid (a crossing hidden between
@@ -61,6 +62,8 @@ def first_bracket(
     """
     hits = np.nonzero(row >= 0.0)[0]
     end = int(hits[0]) if hits.size else len(row)
+    if end == 0:
+        return float(grid[0]), float(grid[0])
     h = float(grid[1] - grid[0])
     finite = np.isfinite(row)
     last = min(end, int(np.sum(np.cumprod(finite)))) - 1  # last index before a hit or the invisible tail
@@ -68,7 +71,8 @@ def first_bracket(
         K = _curvature(np.where(finite, row, np.nan), h)
         bound = np.maximum(row[:last], row[1 : last + 1]) + K[:last] * h * h / 8.0
         for j in np.nonzero(bound >= 0.0)[0]:
-            sub = _refine(model, paint, eps, sign, g, float(grid[j]), float(grid[j + 1]))
+            ends = (float(row[j]), float(row[j + 1]))
+            sub = _refine(model, paint, eps, sign, g, (float(grid[j]), float(grid[j + 1])), ends)
             if sub is not None:
                 return sub
     if hits.size and end >= 1 and np.isfinite(row[end - 1]):
@@ -77,15 +81,27 @@ def first_bracket(
 
 
 def _refine(
-    model: SeamModel, paint: FaceFlopTravelGloss, eps: float, sign: float, g: int, lo: float, hi: float
+    model: SeamModel,
+    paint: FaceFlopTravelGloss,
+    eps: float,
+    sign: float,
+    g: int,
+    span: tuple[float, float],
+    ends: tuple[float, float],
 ) -> tuple[float, float] | None:
-    """Look for a crossing hidden inside [lo, hi] on a finer grid (recursive down to 1e-3°)."""
+    """Look for a crossing hidden inside *span* = [lo, hi] on a finer grid (recursive down to 1e-3°).
+
+    *ends* are F(lo) and F(hi) as the coarser grid found them (both < 0); they are kept rather than
+    evaluated again, so one β has one value throughout the search.
+    """
+    lo, hi = span
     if hi - lo < _GUARD_MIN_WIDTH_DEG:
         return None
     sub = np.linspace(lo, hi, _GUARD_SUBDIV + 1)
     F = model.delta_e(paint, paint, sign * sub, rows=np.array([g]))[0] - eps
     vis = model.visible(sign * sub)[g]
     F = np.where(np.cumprod(vis).astype(bool), F, -np.inf)
+    F[0], F[-1] = ends
     return first_bracket(model, paint, eps, sign, g, sub, F)
 
 
@@ -130,12 +146,22 @@ def brent(
     hi: float,
     known: dict[float, float] | None = None,
 ) -> float:
+    """First crossing of ΔE − ε inside the bracket [lo, hi] (degrees) by Brent's method.
+
+    *known* holds F at bracket ends already evaluated (by :func:`shrink`). An end evaluated here that
+    does not bracket (F(lo) ≥ 0, or a degenerate bracket lo = hi from a crossing at the first grid
+    point) gives that end: the crossing is there, within the stated resolution.
+    """
     rows = np.array([g])
-    known = known or {}
+    known = dict(known or {})
 
     def f(b: float) -> float:
-        if b in known:  # bracket ends already evaluated by the shrink step
-            return known[b]
-        return float(model.delta_e(paint, paint, np.array([sign * b]), rows=rows)[0, 0]) - eps
+        if b not in known:  # bracket ends may already be evaluated by the shrink step
+            known[b] = float(model.delta_e(paint, paint, np.array([sign * b]), rows=rows)[0, 0]) - eps
+        return known[b]
 
+    if hi <= lo or f(lo) >= 0.0:
+        return lo
+    if f(hi) < 0.0:
+        return hi
     return float(brentq(f, lo, hi, xtol=BRENT_XTOL_DEG, rtol=4 * np.finfo(float).eps))

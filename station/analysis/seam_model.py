@@ -122,10 +122,39 @@ class SeamModel:
         rows: NDArray[np.intp] | None = None,
     ) -> NDArray[np.float64]:
         """Seam ΔE (G, B): paint A on panel A against paint B on panel B rotated by each β (degrees)."""
-        normals = rotated_normals(np.asarray(beta_deg, dtype=float).reshape(-1), self.hinge)
+        beta = np.asarray(beta_deg, dtype=float).reshape(-1)
+        normals = rotated_normals(beta, self.hinge)
         ca = self._reference_cached(paint_a, rows)
-        cb = self.colour(paint_b, normals, rows)
+        cb = self._unrotated_is_reference(
+            paint_a, paint_b, ca, beta, self.colour(paint_b, normals, rows), rows
+        )
         return self.difference(ca, cb, rows)
+
+    def _unrotated_is_reference(
+        self,
+        paint_a: FaceFlopTravelGloss,
+        paint_b: FaceFlopTravelGloss,
+        ca: NDArray[np.float64],
+        beta: NDArray[np.float64],
+        cb: NDArray[np.float64],
+        rows: NDArray[np.intp] | None,
+    ) -> NDArray[np.float64]:
+        """Panel B's colours *cb* (…, B, 3) with every β = 0 entry replaced by panel A's colour of *paint_b*.
+
+        At β = 0 panel B is panel A (same normal, eq 4.3.1 with Ω_0 = Ω), so its colour is taken from the
+        one reference evaluation rather than computed again in a batch of another size: the same paint
+        then gives ΔE(0) = 0 exactly. Computed twice, the two Lab values may differ by a rounding step of
+        the linear-sRGB matrix product that depends on the batch size and the NumPy build; at the
+        L* ≈ 1e16 of a travel just above 15° seen near specular (the quadratic's extrapolation, eq 3.3.2)
+        one step of f(Y) ≈ 1e14 is 2 in L* and 7.8 in a*, i.e. a spurious ΔE of about 9 at β = 0.
+        """
+        zero = beta == 0.0
+        if not np.any(zero):
+            return cb
+        ref_b = ca if paint_b is paint_a else self.reference(paint_b)
+        if paint_b is not paint_a and rows is not None:
+            ref_b = ref_b[rows]  # all rows at once, as panel A's colour is evaluated
+        return np.where(zero[..., None], ref_b, cb)
 
     def difference(
         self, lab_a: NDArray[np.float64], lab_b: NDArray[np.float64], rows: NDArray[np.intp] | None = None
@@ -174,6 +203,7 @@ class SeamModel:
                     for i, r in enumerate(rows)
                 ]
             )
+        cb = self._unrotated_is_reference(paint_a, paint_b, ca, np.asarray(beta_deg, dtype=float), cb, rows)
         return self.difference(ca, cb, rows)
 
     def visible(self, beta_deg: NDArray[np.float64]) -> NDArray[np.bool_]:

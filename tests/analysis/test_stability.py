@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from station.analysis import goniogeometric_index
+from station.analysis.bracket import brent, first_bracket
 from station.analysis.index import SeamModel
 from station.analysis.trompe import inverse_trompe_loeil
 from station.model import FaceFlopTravelGloss
@@ -42,6 +43,8 @@ def test_no_nan_and_first_crossing(name, light, view):
     for d, sign in (("+", 1.0), ("-", -1.0)):
         r = goniogeometric_index(paint, light, view, direction=d, beta_max_deg=20.0)
         assert np.isfinite(r.max_delta_e)
+        # a ΔE ≥ ε seen on the grid is a crossing: never "largest ΔE 1e16, ε never reached"
+        assert r.reached or r.max_delta_e < 2.3, (name, light, view, d, r.message)
         bf = brute_force_first_crossing(paint, light, view, sign, 2.3, beta_max=20.0)
         if bf is None:
             assert not r.reached, (name, light, view, d, r.beta_min_deg)
@@ -56,6 +59,50 @@ def test_seam_delta_e_finite_everywhere(name):
     m = SeamModel([89.0, -89.0, 0.0, 45.0], [0.0, 89.0, -89.0, -45.0])
     de = m.delta_e(PAINTS[name], PAINTS[name], np.linspace(-45.0, 45.0, 181))
     assert np.all(np.isfinite(de)) and np.all(de >= 0)
+
+
+@pytest.mark.parametrize(("light", "view"), GEOMETRIES)
+@pytest.mark.parametrize("hinge", ["in-plane", "out-of-plane"])
+def test_unrotated_panel_b_is_panel_a_whatever_the_batch(light, view, hinge):
+    """β = 0: panel B is panel A (eq 4.3.1), so ΔE of a paint with itself is exactly 0 in any batch.
+
+    travel_min seen near specular has L* ≈ 1e16, where one rounding step of the colour conversion is a
+    ΔE of about 9: a value recomputed in a batch of another size would cross ε at β = 0.
+    """
+    paint = PAINTS["travel_min"]
+    m = SeamModel([light], [view], hinge=hinge)
+    for betas in ([0.0], [-0.0, 1.0], np.linspace(0.0, 20.0, 81), np.linspace(-20.0, 0.0, 81)):
+        b = np.asarray(betas)
+        de = m.delta_e(paint, paint, b)[0]
+        assert np.all(de[b == 0.0] == 0.0)
+        rows = m.delta_e_rows(paint, paint, np.stack([b, b]), np.array([0, 0]))
+        assert np.all(rows[:, b == 0.0] == 0.0)
+    other = PAINTS["travel_15.5"]  # two paints: ΔE at β = 0 is that of their panel-A colours
+    ref = m.difference(m.reference(paint), m.reference(other))[0, 0]
+    assert m.delta_e(paint, other, np.linspace(0.0, 1.0, 5))[0, 0] == ref
+
+
+def test_travel_min_at_specular_crosses_within_the_stated_resolution():
+    """Light and view on the normal: panel B's aspecular angle is 2β, and the quadratic (eq 3.3.2) has
+    |dL*/dθ| = 2 (face − flop) θ_c / (θ_c − 15)² at θ = 0, so ΔE = ε at β ≈ ε / (2 |dL*/dθ|) ≈ 8e-16°:
+    zero at the index's stated resolution."""
+    paint = PAINTS["travel_min"]
+    tc = paint.travel_deg
+    slope = 2.0 * (paint.face[0] - paint.flop[0]) * tc / (tc - 15.0) ** 2
+    assert 2.3 / (2.0 * slope) < 1e-15
+    for d in ("+", "-"):
+        r = goniogeometric_index(paint, 0.0, 0.0, direction=d, beta_max_deg=20.0)
+        assert r.reached and 0.0 <= r.beta_min_deg <= r.resolution_deg, r.message
+
+
+def test_crossing_at_the_first_grid_point_is_a_bracket_not_a_miss():
+    """F ≥ 0 at the first grid point: the crossing is there (degenerate bracket), and Brent keeps it."""
+    paint = PAINTS["travel_15.5"]
+    m = SeamModel([45.0], [-30.0])
+    grid = np.linspace(0.3, 0.5, 5)
+    assert first_bracket(m, paint, 2.3, 1.0, 0, grid, np.array([0.5, 1.0, 2.0, 3.0, 4.0])) == (0.3, 0.3)
+    assert brent(m, paint, 2.3, 1.0, 0, 0.3, 0.3) == 0.3
+    assert brent(m, paint, 1e-9, 1.0, 0, 0.3, 0.5) == 0.3  # F(lo) ≥ 0 evaluated: lo is the crossing
 
 
 def test_black_paint_never_reaches_epsilon():
