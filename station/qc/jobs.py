@@ -32,8 +32,9 @@ from station.qc.check import check_pair, formula_name
 from station.qc.errors import QcInputError, StandardMissingError
 from station.qc.illuminant_rows import IlluminantCheck, PairVerdict, check_illuminants
 from station.qc.illuminant_rows import illuminant_limits as booth_limits
+from station.qc.panels import PanelMean, panel_mean, panel_means, standard_repeats
 from station.qc.readings import Reading, reading_from_measurement
-from station.qc.repeats import RepeatSummary, summarise
+from station.qc.repeats import RepeatSummary
 from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict
 
 __all__ = [
@@ -382,8 +383,10 @@ class StandardInfo:
     created_at: dt.datetime
     reading: Reading
     curve: Reading | None = None
+    averaged: PanelMean[MeasurementRow] | None = None
 
     def to_dict(self) -> dict[str, Any]:
+        avg = self.averaged
         return {
             "job": self.job,
             "part": self.part,
@@ -392,6 +395,8 @@ class StandardInfo:
             "created_at": self.created_at.isoformat(),
             "geometries": list(self.reading.geometries),
             "lab": [list(r) for r in self.reading.lab],
+            "measurement_ids": [] if avg is None else list(avg.measurement_ids),
+            "left_out": [] if avg is None else list(avg.left_out),
         }
 
 
@@ -400,8 +405,9 @@ class SampleResult:
     """One sample of a part and its verdict against the part's standard.
 
     With panels averaged (:func:`job_summary` ``average_panels=True``) a sample is a panel: *row* is its
-    newest measurement carrying the mean reading, *repeats* the repeat statistics and
-    *measurement_ids* every measurement averaged.
+    newest measurement carrying the mean reading, *repeats* the repeat statistics,
+    *measurement_ids* every reading of the panel and *left_out* the outliers not averaged
+    (:mod:`station.qc.panels`).
     """
 
     row: MeasurementRow
@@ -409,6 +415,7 @@ class SampleResult:
     repeats: RepeatSummary | None = None
     measurement_ids: tuple[int, ...] = ()
     illuminants: IlluminantCheck | None = None
+    left_out: tuple[int, ...] = ()
 
     @property
     def overall(self) -> Verdict:
@@ -420,6 +427,7 @@ class SampleResult:
         if self.repeats is not None:
             out["repeats"] = self.repeats.to_dict()
             out["measurement_ids"] = list(self.measurement_ids)
+            out["left_out"] = list(self.left_out)
         return out
 
 
@@ -488,17 +496,19 @@ def job_summary(
     parts: Sequence[str] | None = None,
     average_panels: bool = False,
     illuminant_limits: Mapping[str, float] | None = None,
+    keep_outliers: bool = False,
 ) -> JobSummary:
     """Every part of *job* with its standard and each sample's verdict (:func:`check_pair`).
 
-    The reference measurement of a standard is not judged as a sample of its own part. A part without
-    a standard is listed with its measurements unjudged. A sample that cannot be judged (a geometry
-    of the standard or tolerance missing) is listed unjudged with the reason in the part's note. With
-    *average_panels* the repeat readings of each panel are averaged (:func:`station.qc.repeats.summarise`,
-    at the geometries they share) and the panel is judged once, at the time of its newest reading.
-    With *illuminant_limits* (``{illuminant: metamerism-index limit}``) each sample also gets its
-    illuminant rows (:func:`station.qc.illuminant_rows.check_illuminants`) and its verdict is the worse of the
-    two; a sample or standard without spectra is then listed unjudged with the reason.
+    The reference measurement of a standard and its repeats (:func:`station.qc.panels.standard_repeats`)
+    are not judged as samples of their own part. A part without a standard is listed with its
+    measurements unjudged. A sample that cannot be judged (a geometry of the standard or tolerance
+    missing) is listed unjudged with the reason in the part's note. With *average_panels* the repeat
+    readings of each panel, and of the standard, are averaged without the flagged outliers (with them
+    when *keep_outliers*; :mod:`station.qc.panels`) and the panel is judged once, at the time of its
+    newest reading. With *illuminant_limits* (``{illuminant: metamerism-index limit}``) each sample also
+    gets its illuminant rows (:func:`station.qc.illuminant_rows.check_illuminants`) and its verdict is
+    the worse of the two; a sample or standard without spectra is then listed unjudged with the reason.
     :class:`QcInputError` when the job has no panels.
     """
     limits = None if illuminant_limits is None else booth_limits(illuminant_limits)
@@ -512,67 +522,64 @@ def job_summary(
         name = formula_name(formula)
     else:
         name = tolerance.formula if tolerance is not None else formula_name(QC_FORMULA)
-    out = []
-    for part in wanted:
-        part_rows = [r for r in rows if r.part == part]
-        std = get_standard(session, job, part)
-        if std is None:
-            out.append(PartSummary(part, None, (), tuple(part_rows), "no standard set"))
-            continue
-        samples, unjudged, notes = [], [], []
-        info: StandardInfo | None = None
-        ref_id = None
-        if std.measurement_id is not None:
-            current = current_measurement(session, std.measurement_id)
-            ref_id = None if current is None else current.id
-        candidates = [r for r in part_rows if r.measurement_id != ref_id]
-        for r, repeats, ids in _samples(candidates, average_panels):
-            ref = standard_reading(session, std, r.reading.aspecular_deg)
-            if info is None:
-                info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref)
-            try:
-                verdict = check_pair(ref, r.reading, tolerance, formula)
-                booth = None if limits is None else check_illuminants(ref, r.reading, limits, verdict.formula)
-                samples.append(SampleResult(r, verdict, repeats, ids, booth))
-            except (QcInputError, ModelInputError) as exc:
-                unjudged.append(r)
-                notes.append(f"measurement {r.measurement_id}: {exc}")
-        if info is None:
-            ref = standard_reading(session, std, _design_angles(part_rows, std))
-            info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref)
-        if std.design_id is not None:
-            info = dataclasses.replace(info, curve=_curve(session, std, samples))
-        out.append(PartSummary(part, info, tuple(samples), tuple(unjudged), "; ".join(notes)))
+    judging = _Judging(tolerance, formula, limits, average_panels, keep_outliers)
+    out = [_part_summary(session, job, part, [r for r in rows if r.part == part], judging) for part in wanted]
     return JobSummary(job, name, tolerance, tuple(out), dt.datetime.now(dt.UTC), limits)
 
 
-def _samples(
-    rows: Sequence[MeasurementRow], average_panels: bool
-) -> list[tuple[MeasurementRow, RepeatSummary | None, tuple[int, ...]]]:
-    """Each row alone, or with *average_panels* one row per panel carrying the mean reading."""
-    if not average_panels:
-        return [(r, None, ()) for r in rows]
-    groups: dict[int | None, list[MeasurementRow]] = {}
-    for r in rows:
-        groups.setdefault(r.panel_id, []).append(r)
-    out: list[tuple[MeasurementRow, RepeatSummary | None, tuple[int, ...]]] = []
-    for group in groups.values():
-        if len(group) == 1:
-            out.append((group[0], None, ()))
-            continue
-        rep = summarise([g.reading for g in group])
-        newest = group[-1]
-        mean = dataclasses.replace(
-            rep.mean,
-            measured_at=newest.measured_at,
-            sample=newest.reading.sample,
-            instrument=", ".join(dict.fromkeys(g.instrument for g in group)),
-            where=f"panel {newest.panel_id}",
-        )
-        row = dataclasses.replace(newest, reading=mean, instrument=mean.instrument)
-        out.append((row, rep, tuple(g.measurement_id for g in group)))
-    out.sort(key=lambda t: (t[0].measured_at, t[0].measurement_id))
-    return out
+@dataclass(frozen=True)
+class _Judging:
+    tolerance: ToleranceSet | None
+    formula: str | None
+    limits: dict[str, float] | None
+    average_panels: bool
+    keep_outliers: bool
+
+
+def _part_summary(
+    session: Session, job: str, part: str, part_rows: list[MeasurementRow], how: _Judging
+) -> PartSummary:
+    """One part of :func:`job_summary`: its standard (averaged when asked) and its samples' verdicts."""
+    std = get_standard(session, job, part)
+    if std is None:
+        return PartSummary(part, None, (), tuple(part_rows), "no standard set")
+    samples, unjudged, notes = [], [], []
+    ref_id = None
+    if std.measurement_id is not None:
+        current = current_measurement(session, std.measurement_id)
+        ref_id = None if current is None else current.id
+    std_rows = standard_repeats(part_rows, ref_id)
+    many = how.average_panels and len(std_rows) > 1
+    averaged = panel_mean(std_rows, how.keep_outliers, "standard panel") if many else None
+    skip = {r.measurement_id for r in std_rows} | {ref_id}
+    candidates = [r for r in part_rows if r.measurement_id not in skip]
+    info: StandardInfo | None = None
+    for pm in panel_means(candidates, how.average_panels, how.keep_outliers):
+        r = pm.row
+        if averaged is not None:
+            ref = dataclasses.replace(averaged.row.reading, sample="standard (mean of its repeats)")
+        else:
+            ref = standard_reading(session, std, r.reading.aspecular_deg)
+        if info is None:
+            info = StandardInfo(
+                job, part, std.measurement_id, std.design_id, std.created_at, ref, None, averaged
+            )
+        try:
+            verdict = check_pair(ref, r.reading, how.tolerance, how.formula)
+            booth = (
+                None if how.limits is None else check_illuminants(ref, r.reading, how.limits, verdict.formula)
+            )
+            samples.append(SampleResult(r, verdict, pm.repeats, pm.measurement_ids, booth, pm.left_out))
+        except (QcInputError, ModelInputError) as exc:
+            unjudged.append(r)
+            notes.append(f"measurement {r.measurement_id}: {exc}")
+    if info is None:
+        angles = part_rows[0].reading.aspecular_deg if part_rows else tuple(ANGLES_6)  # the first sample's
+        ref = standard_reading(session, std, angles)
+        info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref, None, averaged)
+    if std.design_id is not None:
+        info = dataclasses.replace(info, curve=_curve(session, std, samples))
+    return PartSummary(part, info, tuple(samples), tuple(unjudged), "; ".join(notes))
 
 
 def _curve(session: Session, std: Standard, samples: Sequence[SampleResult]) -> Reading:
@@ -581,11 +588,6 @@ def _curve(session: Session, std: Standard, samples: Sequence[SampleResult]) -> 
     lo, hi = min(angles), max(angles)
     grid = np.arange(lo, hi + CURVE_STEP_DEG / 2, CURVE_STEP_DEG)
     return standard_reading(session, std, [float(a) for a in grid])
-
-
-def _design_angles(rows: Sequence[MeasurementRow], std: Standard) -> tuple[float, ...]:
-    """Angles to show a standard at: the first sample's, else the 6-angle set."""
-    return rows[0].reading.aspecular_deg if rows else tuple(ANGLES_6)
 
 
 def require_standard(session: Session, job: str, part: str) -> Standard:
