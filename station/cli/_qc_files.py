@@ -21,7 +21,7 @@ from station.errors import InputError
 if TYPE_CHECKING:
     from station.qc.tolerance import ToleranceSet
 
-    LoadTolerance = Callable[[str], ToleranceSet]
+LoadTolerance = Callable[[str], "ToleranceSet"]
 
 FORMULA_HELP = "din6175-2 | cie2000 | cie94 | cie76 (default din6175-2, or the tolerance file's)"
 

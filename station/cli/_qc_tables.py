@@ -187,4 +187,8 @@ def print_spc(out: Mapping[str, Any]) -> None:
         format_table(rows, ["geometry", "centre", "LCL", "UCL", "limit", "Cp", "Cpk", "rule hits (sample #)"])
     )
     drift = out.get("drift") or []
-    print("drift: " + ("; ".join(drift) if drift else "none flagged"))
+    print("drift: " + ("none flagged" if not drift else ""))
+    for line in drift:
+        print(f"  {line}")
+    if out.get("written"):
+        print(f"wrote {out['written']}")
