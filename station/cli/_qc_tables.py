@@ -179,15 +179,17 @@ def print_spc(out: Mapping[str, Any]) -> None:
         cp = "—" if cap is None or cap["cp"] is None else f"{cap['cp']:.2f}"
         cpk = "—" if cap is None or cap["cpk"] is None else f"{cap['cpk']:.2f}"
         usl = "—" if cap is None else f"{cap['usl']:.2f}"
-        hits = "; ".join(f"{h['rule']} at {_ids(h['points'])}" for h in ch["hits"]) or "none"
+        hits = " ".join(f"{h['rule']}@{h['points'][0] + 1}" for h in ch["hits"]) or "none"
         rows.append(
             [g["geometry"], f"{ch['centre']:.3f}", f"{ch['lcl']:.3f}", f"{ch['ucl']:.3f}", usl, cp, cpk, hits]
         )
     print(
-        format_table(rows, ["geometry", "centre", "LCL", "UCL", "limit", "Cp", "Cpk", "rule hits (sample #)"])
+        format_table(
+            rows, ["geometry", "centre", "LCL", "UCL", "limit", "Cp", "Cpk", "rules @ first sample #"]
+        )
     )
     drift = out.get("drift") or []
-    print("drift: " + ("none flagged" if not drift else ""))
+    print("drift: none flagged" if not drift else "drift:")
     for line in drift:
         print(f"  {line}")
     if out.get("written"):

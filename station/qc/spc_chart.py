@@ -16,6 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from station.qc.errors import QcInputError
 from station.qc.spc_part import GeometrySpc, PartSpc
@@ -43,9 +44,12 @@ def _panel(ax: Axes, g: GeometrySpc, subgroup: int) -> None:
     rules: dict[int, list[str]] = {}
     for h in ch.hits:
         for p in h.points:
-            rules.setdefault(p, []).append(h.rule)
+            # label a rule where its run of hits starts; later points of the run are only ringed
+            rules.setdefault(p, []).extend([] if p - 1 in h.points else [h.rule])
     for p, names in rules.items():
         ax.plot(xs[p], ch.points[p], "o", ms=9, mfc="none", mec="#c0392b", mew=1.5)
+        if not names:
+            continue
         ax.annotate(
             ",".join(names),
             (xs[p], ch.points[p]),
@@ -70,6 +74,7 @@ def _panel(ax: Axes, g: GeometrySpc, subgroup: int) -> None:
     ax.set_ylabel(f"{what} {g.geometry}", fontsize=8)
     ax.set_ylim(0, 1.2 * max(tops) or 1.0)
     ax.tick_params(labelsize=7)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=6, loc="upper left", ncol=5)
 

@@ -3,7 +3,8 @@
 :func:`part_spc` takes a :class:`~station.qc.jobs.JobSummary` (samples oldest first, one per panel when
 panels were averaged) and charts each geometry's ΔE (:mod:`station.qc.spc`): an individuals chart, or an
 X̄/R chart of consecutive subgroups. Capability is judged against the ΔE limit each sample was judged
-with at that geometry (:attr:`station.qc.tolerance.GeometryVerdict.limit`). **Drift** is a rising trend
+with at that geometry (:attr:`station.qc.tolerance.GeometryVerdict.limit`), over the baseline period
+(capability presumes a process in control: the points after the baseline are what the rules judge). **Drift** is a rising trend
 or shift hit (:func:`station.qc.spc.drift_hits`); it is reported with the first sample that failed,
 so a report says whether the drift was flagged before the fail.
 """
@@ -16,7 +17,16 @@ from typing import Any
 
 from station.qc.errors import QcInputError
 from station.qc.jobs import JobSummary, PartSummary, SampleResult
-from station.qc.spc import Capability, Chart, RuleHit, capability, drift_hits, individuals_chart, xbar_r_chart
+from station.qc.spc import (
+    CONSTANTS,
+    Capability,
+    Chart,
+    RuleHit,
+    capability,
+    drift_hits,
+    individuals_chart,
+    xbar_r_chart,
+)
 
 __all__ = ["GeometrySpc", "PartSpc", "part_spc", "sample_name"]
 
@@ -69,15 +79,24 @@ class PartSpc:
     geometries: tuple[GeometrySpc, ...]
 
     def drift_lines(self) -> list[str]:
-        """One line per drift found: geometry, rule, where it was flagged and whether before a fail."""
+        """Per geometry with a drift: where it was first flagged, by which rules, and whether before a fail.
+
+        Samples are numbered from 1 in chart order (the chart's x axis); a subgroup by its last sample.
+        """
         out = []
         step = self.subgroup
         for g in self.geometries:
-            for h in g.drift:
-                at = h.points[0] * step + step - 1
-                when = "before" if g.first_fail is None or h.points[0] < g.first_fail else "after"
-                fail = "no fail yet" if g.first_fail is None else f"{when} the first fail"
-                out.append(f"{g.geometry}: {h.rule} ({h.meaning}) from {self.samples[at]}; {fail}")
+            first = min((p for h in g.drift for p in h.points), default=None)
+            if first is None:
+                continue
+            rules = ", ".join(h.rule for h in g.drift if first in h.points)
+            at = first * step + step - 1
+            if g.first_fail is None:
+                fail = "no fail yet"
+            else:
+                when = "before" if first < g.first_fail else "at or after"
+                fail = f"{when} the first fail (sample #{g.first_fail * step + step})"
+            out.append(f"{g.geometry}: drift from sample #{at + 1} ({self.samples[at]}) by {rules}; {fail}")
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -113,13 +132,18 @@ def _geometry(samples: Sequence[SampleResult], name: str, baseline: int | None, 
     fails = [i for i, g in enumerate(got) if g.verdict == "fail"]
     first_fail = None if not fails else fails[0] // subgroup
     limit = got[0].limit
-    cap = None if limit is None else capability(values, limit, chart.sigma_process)
+    base = values[: chart.baseline * subgroup]  # capability of the in-control baseline period
+    cap = None if limit is None else capability(base, limit, chart.sigma_process)
     return GeometrySpc(name, chart, cap, drift_hits(chart), first_fail)
 
 
 def part_spc(summary: JobSummary, part: str, baseline: int | None = None, subgroup: int = 1) -> PartSpc:
     """Per geometry the SPC of *part*'s samples (module docstring); *baseline* points (subgroups) set
     the centre and limits (all when None); *subgroup* 1 is an individuals chart, 2 … 10 an X̄/R chart."""
+    if subgroup != 1 and subgroup not in CONSTANTS:
+        raise QcInputError(
+            "subgroup", f"1 (individuals) or a subgroup size from 2 to {max(CONSTANTS)}", subgroup
+        )
     p = _part(summary, part)
     samples = list(p.samples)
     if len(samples) < 2 * max(subgroup, 1):
