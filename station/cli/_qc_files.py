@@ -563,7 +563,6 @@ def _register_judged(sub: argparse._SubParsersAction, load_tolerance: LoadTolera
     p.add_argument("--csv", help="also write the CSV here")
     p.add_argument("--part", dest="parts", action="append", help="only this part (repeatable)")
     p.add_argument("--progress", action="store_true", help="draw a progress bar on stderr")
-    p.add_argument("--operator", help="the operator who signs the report (default: the readings' operators)")
     _add_judging(p)
     _add_illuminant_limits(p)
     _add_db(p)
