@@ -8,14 +8,13 @@ measurement database; the work is :mod:`station.qc`'s. Every command exits 0 wha
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import sys
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from station.cli._common import add_json_flag
+from station.cli._qc_db import _session, _shown, _time
 from station.errors import InputError
 
 if TYPE_CHECKING:
@@ -85,11 +84,17 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
     from station.qc.illuminant_rows import PairVerdict
 
     result = PairVerdict(verdict, booth).to_dict()
+    if args.texture_limits is not None:
+        _texture(result, std, smp, args.texture_limits)
     result["standard"] = {"file": Path(args.standard).name, "sample": std.sample, "repeats": std_rep}
     result["sample"] = {"file": Path(args.sample).name, "sample": smp.sample, "repeats": smp_rep}
     if args.json:
         return result
     print_verdict(result)
+    if "texture" in result:
+        from station.cli._qc_tables import print_texture
+
+        print_texture(result["texture"])
     for role, rep in (("standard", std_rep), ("sample", smp_rep)):
         if rep is not None:
             flagged = ", ".join(f"reading {i}" for i in rep["outliers"]) or "none"
@@ -100,6 +105,18 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
                 + (f", {how}" if rep["outliers"] else "")
             )
     return None
+
+
+def _texture(result: dict[str, Any], std: Any, smp: Any, limits: str) -> None:
+    """Add the texture verdict (``--texture-limits``) to *result*; the overall verdict is the worse."""
+    from station.qc.texture import judge_texture, parse_texture_limits
+
+    tex = judge_texture(std.texture, smp.texture, parse_texture_limits(limits))
+    result["texture"] = tex.to_dict()
+    rank = {"pass": 0, "warn": 1, "fail": 2}
+    if rank[tex.verdict] > rank[result["verdict"]]:
+        result["verdict"] = tex.verdict
+        result["reason"] = f"{result['reason']}; texture ({tex.vendor}) {tex.verdict}"
 
 
 def _panel_rows(args: argparse.Namespace) -> list[Any]:
@@ -188,72 +205,6 @@ def _spectral(path: str) -> list[Any]:
 
 
 # ---------------------------------------------------------------------------------------- database
-
-
-def _url(args: argparse.Namespace) -> str:
-    from db.engine import configured_database_url
-
-    return args.db or configured_database_url()
-
-
-def _existing_sqlite(url: str) -> None:
-    """Refuse an SQLite URL whose file does not exist: only ``station db upgrade`` creates a database."""
-    from sqlalchemy.engine import make_url
-    from sqlalchemy.exc import ArgumentError
-
-    try:
-        parsed = make_url(url)
-    except ArgumentError as exc:
-        raise InputError("db", "a database URL (sqlite:///PATH or postgresql://…)", url) from exc
-    name = parsed.database or ""
-    if (
-        parsed.get_backend_name() == "sqlite"
-        and name not in ("", ":memory:")
-        and not name.startswith("file:")
-    ):
-        if not Path(name).is_file():
-            raise InputError("db", "an existing database file (station db upgrade creates one)", name)
-
-
-@contextmanager
-def _session(args: argparse.Namespace) -> Iterator[Any]:
-    from sqlalchemy.exc import SQLAlchemyError
-
-    from db.engine import make_engine, make_sessionmaker
-    from db.migrate import ensure_at_head
-
-    url = _url(args)
-    _existing_sqlite(url)
-    try:
-        ensure_at_head(url)
-        engine = make_engine(url)
-    except SQLAlchemyError as exc:
-        raise InputError("db", "a reachable measurement database URL", url.split("@")[-1]) from exc
-    try:
-        with make_sessionmaker(engine)() as session:
-            yield session
-    finally:
-        engine.dispose()
-
-
-def _time(text: str | None, field: str) -> dt.datetime | None:
-    if text is None:
-        return None
-    try:
-        t = dt.datetime.fromisoformat(text.replace("Z", "+00:00"))
-    except ValueError as exc:
-        raise InputError(
-            field, "an ISO 8601 date or time, e.g. 2026-12-01 or 2026-12-01T08:00Z", text
-        ) from exc
-    return t if t.tzinfo is not None else t.replace(tzinfo=dt.UTC)
-
-
-def _shown(args: argparse.Namespace, out: dict[str, Any], table: Callable[[dict[str, Any]], None]) -> Any:
-    """*out* for ``--json``; else *table* prints it for a person and nothing more is printed."""
-    if args.json:
-        return out
-    table(out)
-    return None
 
 
 def _jobs(args: argparse.Namespace) -> dict[str, Any] | None:
@@ -460,6 +411,15 @@ def _add_judging(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_texture_limits(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--texture-limits",
+        metavar="ds=X,dg=Y",
+        help="judge the vendor texture values too: |ΔS| of every sparkle quantity and |ΔG| of graininess, "
+        "sample minus standard, within one vendor (values of two vendors are refused)",
+    )
+
+
 def _add_illuminant_limits(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--illuminant-limits",
@@ -483,6 +443,7 @@ def _register_files(sub: argparse._SubParsersAction, load_tolerance: LoadToleran
     p.add_argument("--sample", required=True, help="sample: station measure/import --json output")
     _add_judging(p)
     _add_illuminant_limits(p)
+    _add_texture_limits(p)
     add_json_flag(p)
     p.set_defaults(handler=lambda a: _check(a, load_tolerance))
 

@@ -9,7 +9,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from station.cli._qc_files import LoadTolerance, _add_db, _add_judging, _session, _shown, _summary_of
+from station.cli._qc_db import _session, _shown
+from station.cli._qc_files import LoadTolerance, _add_db, _add_judging, _summary_of
 
 
 def _spc(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, Any] | None:

@@ -19,6 +19,7 @@ __all__ = [
     "print_spc",
     "print_standard",
     "print_summary",
+    "print_texture",
     "print_written",
 ]
 
@@ -194,3 +195,30 @@ def print_spc(out: Mapping[str, Any]) -> None:
         print(f"  {line}")
     if out.get("written"):
         print(f"wrote {out['written']}")
+
+
+def print_texture(tex: dict[str, Any]) -> None:
+    """The texture rows of a verdict as a table (``qc check --texture-limits``)."""
+    print(f"texture ({tex['vendor'] or 'no values'}): {tex['verdict']}")
+
+    def num(v: float | None) -> str:
+        return "—" if v is None else f"{v:.2f}"
+
+    rows = [
+        [
+            r["name"],
+            r["geometry"] or "sample",
+            num(r["standard"]),
+            num(r["sample"]),
+            num(r["delta"]),
+            f"{r['tolerance']} ≤ {r['limit']:g}" if r["limit"] is not None else "—",
+            r["verdict"] or "unjudged",
+        ]
+        for r in tex["rows"]
+    ]
+    if rows:
+        print(
+            format_table(
+                rows, ["quantity", "geometry", "standard", "sample", "Δ", "tolerance", "verdict"], "  "
+            )
+        )
