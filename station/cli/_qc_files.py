@@ -302,7 +302,17 @@ def _summary_of(args: argparse.Namespace, session: Any, load_tolerance: LoadTole
         args.average_panels,
         illuminant_limits=limits,
         keep_outliers=args.keep_outliers,
+        texture_limits=_texture_limits(args),
     )
+
+
+def _texture_limits(args: argparse.Namespace) -> Any:
+    text = getattr(args, "texture_limits", None)
+    if text is None:
+        return None
+    from station.qc.texture import parse_texture_limits
+
+    return parse_texture_limits(text)
 
 
 def _summary(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, Any] | None:
@@ -515,6 +525,7 @@ def _register_judged(sub: argparse._SubParsersAction, load_tolerance: LoadTolera
     p.add_argument("--part", dest="parts", action="append", help="only this part (repeatable)")
     _add_judging(p)
     _add_illuminant_limits(p)
+    _add_texture_limits(p)
     _add_db(p)
     p.set_defaults(handler=lambda a: _summary(a, load_tolerance))
 
@@ -526,6 +537,7 @@ def _register_judged(sub: argparse._SubParsersAction, load_tolerance: LoadTolera
     p.add_argument("--progress", action="store_true", help="draw a progress bar on stderr")
     _add_judging(p)
     _add_illuminant_limits(p)
+    _add_texture_limits(p)
     _add_db(p)
     p.set_defaults(handler=lambda a: _shown(a, _report(a, load_tolerance), print_written))
 

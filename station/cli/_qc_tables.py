@@ -124,7 +124,8 @@ def _sample_row(s: Mapping[str, Any]) -> list[str]:
         f"{qc['mean_de']:.2f}",
         f"{qc['max_de']:.2f}",
         qc["worst_geometry"],
-        qc["verdict"].upper(),
+        "—" if "texture" not in s else s["texture"]["verdict"],
+        s.get("overall", qc["verdict"]).upper(),
     ]
 
 
@@ -151,7 +152,11 @@ def print_summary(out: Mapping[str, Any]) -> None:
         )
         if p["samples"]:
             print(
-                format_table([_sample_row(s) for s in p["samples"]], [*head, "worst", "verdict"], indent="  ")
+                format_table(
+                    [_sample_row(s) for s in p["samples"]],
+                    [*head, "worst", "texture", "verdict"],
+                    indent="  ",
+                )
             )
         if p["unjudged"]:
             print(f"  unjudged: measurement {_ids(p['unjudged'])}")

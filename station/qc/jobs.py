@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import datetime as dt
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -30,12 +30,13 @@ from station.model.domain import ANGLES_6, ILLUMINATION_DEG, QC_FORMULA
 from station.model.errors import ModelInputError
 from station.qc.check import check_pair, formula_name
 from station.qc.errors import QcInputError, StandardMissingError
-from station.qc.illuminant_rows import IlluminantCheck, PairVerdict, check_illuminants
+from station.qc.illuminant_rows import check_illuminants
 from station.qc.illuminant_rows import illuminant_limits as booth_limits
-from station.qc.panels import PanelMean, panel_mean, panel_means, standard_repeats
+from station.qc.panels import panel_mean, panel_means, standard_repeats
 from station.qc.readings import Reading, reading_from_measurement
-from station.qc.repeats import RepeatSummary
-from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict
+from station.qc.results import JobSummary, MeasurementRow, PartSummary, SampleResult, StandardInfo
+from station.qc.texture import TextureTolerance, judge_texture
+from station.qc.tolerance import ToleranceSet
 
 __all__ = [
     "JobInfo",
@@ -75,33 +76,6 @@ def _aware(value: dt.datetime | None, name: str) -> dt.datetime | None:
     if value is not None and (not isinstance(value, dt.datetime) or value.tzinfo is None):
         raise QcInputError(name, "a timezone-aware time", value)
     return value
-
-
-@dataclass(frozen=True)
-class MeasurementRow:
-    """One measurement found by :func:`search_measurements`, with its panel's job and part."""
-
-    measurement_id: int
-    panel_id: int | None
-    job: str | None
-    part: str | None
-    instrument: str
-    operator: str
-    measured_at: dt.datetime
-    reading: Reading
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "measurement_id": self.measurement_id,
-            "panel_id": self.panel_id,
-            "job": self.job,
-            "part": self.part,
-            "instrument": self.instrument,
-            "operator": self.operator,
-            "measured_at": self.measured_at.isoformat(),
-            "geometries": list(self.reading.geometries),
-            "lab": [list(r) for r in self.reading.lab],
-        }
 
 
 def _instrument_name(inst: Instrument) -> str:
@@ -371,123 +345,6 @@ def standard_reading(session: Session, standard: Standard, angles: Sequence[floa
     )
 
 
-@dataclass(frozen=True)
-class StandardInfo:
-    """Which standard a part is judged against: its Lab at the samples' geometries (*reading*) and, for
-    a design, its Lab every :data:`CURVE_STEP_DEG` degrees over the samples' angle range (*curve*)."""
-
-    job: str
-    part: str
-    measurement_id: int | None
-    design_id: int | None
-    created_at: dt.datetime
-    reading: Reading
-    curve: Reading | None = None
-    averaged: PanelMean[MeasurementRow] | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        avg = self.averaged
-        return {
-            "job": self.job,
-            "part": self.part,
-            "measurement_id": self.measurement_id,
-            "design_id": self.design_id,
-            "created_at": self.created_at.isoformat(),
-            "geometries": list(self.reading.geometries),
-            "lab": [list(r) for r in self.reading.lab],
-            "measurement_ids": [] if avg is None else list(avg.measurement_ids),
-            "left_out": [] if avg is None else list(avg.left_out),
-        }
-
-
-@dataclass(frozen=True)
-class SampleResult:
-    """One sample of a part and its verdict against the part's standard.
-
-    With panels averaged (:func:`job_summary` ``average_panels=True``) a sample is a panel: *row* is its
-    newest measurement carrying the mean reading, *repeats* the repeat statistics,
-    *measurement_ids* every reading of the panel and *left_out* the outliers not averaged
-    (:mod:`station.qc.panels`).
-    """
-
-    row: MeasurementRow
-    verdict: QcVerdict
-    repeats: RepeatSummary | None = None
-    measurement_ids: tuple[int, ...] = ()
-    illuminants: IlluminantCheck | None = None
-    left_out: tuple[int, ...] = ()
-
-    @property
-    def overall(self) -> Verdict:
-        """The D65 verdict, or the worse of it and the illuminant rows' verdict when they were judged."""
-        return PairVerdict(self.verdict, self.illuminants).verdict
-
-    def to_dict(self) -> dict[str, Any]:
-        out = {**self.row.to_dict(), "qc": PairVerdict(self.verdict, self.illuminants).to_dict()}
-        if self.repeats is not None:
-            out["repeats"] = self.repeats.to_dict()
-            out["measurement_ids"] = list(self.measurement_ids)
-            out["left_out"] = list(self.left_out)
-        return out
-
-
-@dataclass(frozen=True)
-class PartSummary:
-    """A part of a job: its standard (``None`` when it has none), its samples and their verdicts."""
-
-    part: str
-    standard: StandardInfo | None
-    samples: tuple[SampleResult, ...]
-    unjudged: tuple[MeasurementRow, ...] = field(default=())
-    note: str = ""
-
-    def counts(self) -> dict[str, int]:
-        out = {"pass": 0, "warn": 0, "fail": 0}
-        for s in self.samples:
-            out[s.overall] += 1
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "part": self.part,
-            "standard": None if self.standard is None else self.standard.to_dict(),
-            "counts": self.counts(),
-            "samples": [s.to_dict() for s in self.samples],
-            "unjudged": [r.measurement_id for r in self.unjudged],
-            "note": self.note,
-        }
-
-
-@dataclass(frozen=True)
-class JobSummary:
-    """A job's parts with their standards and every sample's verdict, oldest sample first."""
-
-    job: str
-    formula: str
-    tolerance: ToleranceSet | None
-    parts: tuple[PartSummary, ...]
-    generated_at: dt.datetime
-    illuminant_limits: dict[str, float] | None = None
-
-    def counts(self) -> dict[str, int]:
-        out = {"pass": 0, "warn": 0, "fail": 0}
-        for p in self.parts:
-            for k, v in p.counts().items():
-                out[k] += v
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "job": self.job,
-            "formula": self.formula,
-            "tolerance": None if self.tolerance is None else self.tolerance.to_dict(),
-            "counts": self.counts(),
-            "parts": [p.to_dict() for p in self.parts],
-            "generated_at": self.generated_at.isoformat(),
-            "illuminant_limits": self.illuminant_limits,
-        }
-
-
 def job_summary(
     session: Session,
     job: str,
@@ -497,6 +354,7 @@ def job_summary(
     average_panels: bool = False,
     illuminant_limits: Mapping[str, float] | None = None,
     keep_outliers: bool = False,
+    texture_limits: TextureTolerance | None = None,
 ) -> JobSummary:
     """Every part of *job* with its standard and each sample's verdict (:func:`check_pair`).
 
@@ -509,6 +367,9 @@ def job_summary(
     newest reading. With *illuminant_limits* (``{illuminant: metamerism-index limit}``) each sample also
     gets its illuminant rows (:func:`station.qc.illuminant_rows.check_illuminants`) and its verdict is
     the worse of the two; a sample or standard without spectra is then listed unjudged with the reason.
+    With *texture_limits* each sample's vendor texture values are judged against the standard's
+    (:mod:`station.qc.texture`, ΔS and ΔG); the overall verdict is the worst, and a sample whose values
+    come from another vendor than the standard's is listed unjudged with the reason.
     :class:`QcInputError` when the job has no panels.
     """
     limits = None if illuminant_limits is None else booth_limits(illuminant_limits)
@@ -522,7 +383,7 @@ def job_summary(
         name = formula_name(formula)
     else:
         name = tolerance.formula if tolerance is not None else formula_name(QC_FORMULA)
-    judging = _Judging(tolerance, formula, limits, average_panels, keep_outliers)
+    judging = _Judging(tolerance, formula, limits, average_panels, keep_outliers, texture_limits)
     out = [_part_summary(session, job, part, [r for r in rows if r.part == part], judging) for part in wanted]
     return JobSummary(job, name, tolerance, tuple(out), dt.datetime.now(dt.UTC), limits)
 
@@ -534,6 +395,7 @@ class _Judging:
     limits: dict[str, float] | None
     average_panels: bool
     keep_outliers: bool
+    texture: TextureTolerance | None
 
 
 def _part_summary(
@@ -569,7 +431,8 @@ def _part_summary(
             booth = (
                 None if how.limits is None else check_illuminants(ref, r.reading, how.limits, verdict.formula)
             )
-            samples.append(SampleResult(r, verdict, pm.repeats, pm.measurement_ids, booth, pm.left_out))
+            tex = None if how.texture is None else judge_texture(ref.texture, r.reading.texture, how.texture)
+            samples.append(SampleResult(r, verdict, pm.repeats, pm.measurement_ids, booth, pm.left_out, tex))
         except (QcInputError, ModelInputError) as exc:
             unjudged.append(r)
             notes.append(f"measurement {r.measurement_id}: {exc}")

@@ -186,6 +186,15 @@ def _why(s: SampleResult) -> str:
     """One line on why a sample did not pass: the geometries out of band, or the mean rule's reason,
     then the illuminant rows that failed."""
     v = s.verdict
+    tex = s.texture
+    if tex is not None and tex.verdict != "pass" and v.verdict == "pass":
+        bad = [r for r in tex.rows if r.verdict == tex.verdict]
+        rows = "; ".join(
+            f"{r.name} {r.geometry or 'sample'} {r.tolerance} {r.delta:+.2f}"
+            for r in bad
+            if r.delta is not None
+        )
+        return f"{_label(s)} {s.overall}: texture ({tex.vendor}) {rows}"
     booth = s.illuminants
     if booth is not None and booth.verdict == "fail":
         failed = [r for r in booth.rows if r.verdict == "fail"]

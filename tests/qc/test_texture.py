@@ -83,3 +83,66 @@ def test_check_judges_texture(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     text = inproc(capsys, tmp_path, *base, "--sample", "smp.json").stdout
     assert "texture (BYK-Gardner): fail" in text and "ΔS ≤ 1" in text
     _refused(inproc(capsys, tmp_path, *base, "--sample", "other.json"), "texture")
+
+
+def test_summary_judges_texture_within_the_standard_vendor(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import datetime as dt
+    import uuid
+
+    from db.engine import make_engine, make_sessionmaker
+    from db.migrate import ensure_at_head
+    from db.models import Instrument, Measurement, Panel
+
+    url = f"sqlite:///{tmp_path / 'qc.sqlite3'}"
+    ensure_at_head(url)
+    engine = make_engine(url)
+    t0 = dt.datetime(2026, 11, 2, 8, 0, tzinfo=dt.UTC)
+    with make_sessionmaker(engine)() as s:
+        inst = Instrument(serial="900100", model="BYK-mac i", kind="spectrophotometer")
+        s.add(inst)
+        s.flush()
+        for i, (vendor, si) in enumerate(((BYK, 4.0), (BYK, 5.5), ("X-Rite", 4.0))):
+            p = Panel(job="J-T", part="fender")
+            s.add(p)
+            s.flush()
+            tex = [{"vendor": vendor, "name": "sparkle intensity", "geometry": "45as15", "value": si}]
+            s.add(
+                Measurement(
+                    client_id=uuid.uuid4(), instrument_id=inst.id, panel_id=p.id, operator="ana",
+                    measured_at=t0 + dt.timedelta(days=i), geometries_deg=[15.0, 45.0],
+                    lab=[[80.0, 1.0, 2.0], [50.0, 1.0, 2.0]], payload_sha256="0" * 64, texture=tex,
+                )
+            )  # fmt: skip
+            s.flush()
+        s.commit()
+    engine.dispose()
+    db = ("--db", url)
+    res = inproc(
+        capsys,
+        tmp_path,
+        "qc",
+        "standard",
+        "set",
+        "--job",
+        "J-T",
+        "--part",
+        "fender",
+        "--measurement",
+        "1",
+        *db,
+    )
+    assert res.returncode == 0, res.stderr
+    args = ("qc", "summary", "--job", "J-T", "--formula", "cie76", "--texture-limits", "ds=1", *db)
+    out = json.loads(inproc(capsys, tmp_path, *args, "--json").stdout)
+    (part,) = out["parts"]
+    (sample,) = part["samples"]  # the X-Rite panel is not compared with the BYK standard
+    assert (
+        sample["qc"]["verdict"] == "pass"
+        and sample["texture"]["verdict"] == "fail"
+        and sample["overall"] == "fail"
+    )
+    assert part["unjudged"] == [3] and "one vendor" in part["note"]
+    text = inproc(capsys, tmp_path, *args).stdout
+    assert "FAIL" in text and "texture" in text
