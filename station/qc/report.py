@@ -499,9 +499,17 @@ def write_trend_png(summary: JobSummary, part: str, path: str | Path, dpi: int =
     if not match[0].samples:
         raise QcInputError("part", f"a part with judged samples ({match[0].note or 'none judged'})", part)
     out = _writable(path)
-    spc = part_spc(summary, part)
-    fig = plt.figure(figsize=(10, 2.4 * max(1, len(spc.geometries)) + 0.8), constrained_layout=True)
-    draw_spc(fig, spc)
+    if len(match[0].samples) < 2:  # too few for control limits: the sample's ΔE per geometry alone
+        (smp,) = match[0].samples
+        fig = plt.figure(figsize=(10, 3), constrained_layout=True)
+        ax = fig.subplots()
+        ax.bar([g.geometry for g in smp.verdict.per_geometry], [g.de for g in smp.verdict.per_geometry])
+        ax.set_title(f"{summary.job} / {part}: one sample, too few for control limits", fontsize=10)
+        ax.set_ylabel(f"ΔE ({summary.formula})")
+    else:
+        spc = part_spc(summary, part)
+        fig = plt.figure(figsize=(10, 2.4 * max(1, len(spc.geometries)) + 0.8), constrained_layout=True)
+        draw_spc(fig, spc)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out
