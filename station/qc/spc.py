@@ -142,7 +142,9 @@ RULES: tuple[_Rule, ...] = (
 _DRIFT = ("WE2", "WE3", "WE4", "N2", "N3", "N5", "N6")
 
 
-def rule_hits(values: Sequence[float] | NDArray[np.float64], centre: float, sigma: float) -> tuple[RuleHit, ...]:
+def rule_hits(
+    values: Sequence[float] | NDArray[np.float64], centre: float, sigma: float
+) -> tuple[RuleHit, ...]:
     """Every rule of :data:`RULES` that fires on *values* for the chart's *centre* and *sigma* (> 0)."""
     x = np.asarray(values, dtype=float).reshape(-1)
     if sigma <= 0 or not math.isfinite(sigma):
