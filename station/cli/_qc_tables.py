@@ -137,7 +137,7 @@ def print_summary(out: Mapping[str, Any]) -> None:
     print(f"job {out['job']}: {out['formula']}{rule}; {c['pass']} pass, {c['warn']} warn, {c['fail']} fail")
     head = [
         "sample",
-        "measurements",
+        "measurement ids",
         "left out",
         "instrument",
         "operator",
