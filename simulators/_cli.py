@@ -67,7 +67,12 @@ def build_parser(kind: str) -> argparse.ArgumentParser:
     p.add_argument("--noise", type=float, default=1.0, help="noise scale (1 = published repeatability)")
     p.add_argument("--measure-time", type=float, default=0.3, help="seconds per measurement")
     p.add_argument("--cold", action="store_true", help="start cold (warm-up drift and temperature rise)")
-    p.add_argument("--seed", type=int, default=None, help="noise seed")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="noise seed: a reproducible run (default: fresh noise each run)",
+    )
     p.add_argument("--rfc2217", action="store_true", help="also serve the pty behind an RFC 2217 server")
     p.add_argument("--tcp", action="store_true", help="also serve the pty on raw TCP (socket:// URL)")
     p.add_argument("--twelve", action="store_true", help="ma6 only: add the 15° illumination block")

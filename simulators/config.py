@@ -72,7 +72,8 @@ class SimulatorConfig:
     cold
         Start cold (warm-up drift and temperature rise).
     seed
-        Noise seed; ``None`` derives it from the serial.
+        Noise seed (a reproducible run); ``None`` combines the serial with fresh entropy, so two runs
+        read the same panel differently (:func:`simulators.repeatability.run_seed`).
     rfc2217, tcp
         Also serve the pty behind an RFC 2217 server, or on raw TCP (``socket://`` URL).
     twelve

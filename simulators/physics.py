@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from simulators.repeatability import run_seed
 from station.model import FaceFlopTravelGloss
 from station.model.angles import flake_equivalent_aspecular
 from station.model.difference import delta_e
@@ -130,9 +131,8 @@ class SpectroPhysics:
     recipe: RecipePanel | None = None
 
     def __post_init__(self) -> None:
-        self._rng = np.random.default_rng(
-            self.seed if self.seed is not None else seed_for(self.character.serial)
-        )
+        # a run's noise: the given seed's, else the serial's with fresh entropy (simulators.repeatability)
+        self._rng = np.random.default_rng(run_seed(seed_for(self.character.serial), self.seed))
         self._bias_rng_seed = seed_for(self.character.serial + "/bias")
         self._t0 = self.clock() - (1e6 if self.warm else 0.0)
         self._cache: dict[tuple[float, ...], np.ndarray] = {}

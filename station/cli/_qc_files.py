@@ -8,20 +8,19 @@ measurement database; the work is :mod:`station.qc`'s. Every command exits 0 wha
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import sys
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from station.cli._common import add_json_flag
+from station.cli._qc_db import _session, _shown, _time
 from station.errors import InputError
 
 if TYPE_CHECKING:
     from station.qc.tolerance import ToleranceSet
 
-    LoadTolerance = Callable[[str], ToleranceSet]
+LoadTolerance = Callable[[str], "ToleranceSet"]
 
 FORMULA_HELP = "din6175-2 | cie2000 | cie94 | cie76 (default din6175-2, or the tolerance file's)"
 
@@ -32,14 +31,23 @@ def _readings(path: str, role: str) -> list[Any]:
     return load_readings(path)
 
 
-def _one(readings: Sequence[Any], role: str) -> tuple[Any, dict[str, Any] | None]:
-    """A single reading, or the mean of several (with their repeat statistics)."""
+def _one(
+    readings: Sequence[Any], role: str, keep_outliers: bool = False
+) -> tuple[Any, dict[str, Any] | None]:
+    """A single reading, or the mean of several (with their repeat statistics).
+
+    The mean leaves out the readings ``qc repeats`` flags as outliers (``left_out``, their 0-based
+    indices in the file) unless *keep_outliers*.
+    """
     from station.qc.repeats import summarise
 
     if len(readings) == 1:
         return readings[0], None
     summary = summarise(readings)
-    return summary.mean, summary.to_dict()
+    out = summary.to_dict()
+    out["left_out"] = [] if keep_outliers else list(out["outliers"])
+    out["outliers_kept"] = keep_outliers
+    return (summary.mean if keep_outliers else summary.mean_kept), out
 
 
 def print_verdict(result: dict[str, Any]) -> None:
@@ -63,8 +71,9 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
     from station.qc.check import check_pair
 
     tolerance = load_tolerance(args.tolerance) if args.tolerance else None
-    std, std_rep = _one(_readings(args.standard, "standard"), "standard")
-    smp, smp_rep = _one(_readings(args.sample, "sample"), "sample")
+    keep = args.keep_outliers
+    std, std_rep = _one(_readings(args.standard, "standard"), "standard", keep)
+    smp, smp_rep = _one(_readings(args.sample, "sample"), "sample", keep)
     verdict = check_pair(std, smp, tolerance, args.formula)
     booth = None
     if args.illuminant_limits is not None:
@@ -75,16 +84,39 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
     from station.qc.illuminant_rows import PairVerdict
 
     result = PairVerdict(verdict, booth).to_dict()
+    if args.texture_limits is not None:
+        _texture(result, std, smp, args.texture_limits)
     result["standard"] = {"file": Path(args.standard).name, "sample": std.sample, "repeats": std_rep}
     result["sample"] = {"file": Path(args.sample).name, "sample": smp.sample, "repeats": smp_rep}
     if args.json:
         return result
     print_verdict(result)
+    if "texture" in result:
+        from station.cli._qc_tables import print_texture
+
+        print_texture(result["texture"])
     for role, rep in (("standard", std_rep), ("sample", smp_rep)):
         if rep is not None:
-            flagged = rep["outliers"]
-            print(f"{role}: mean of {rep['n']} readings, outliers: {', '.join(map(str, flagged)) or 'none'}")
+            flagged = ", ".join(f"reading {i}" for i in rep["outliers"]) or "none"
+            how = "kept in the mean (--keep-outliers)" if rep["outliers_kept"] else "left out of the mean"
+            n = rep["n"] - len(rep["left_out"])
+            print(
+                f"{role}: mean of {n} of {rep['n']} readings; outliers: {flagged}"
+                + (f", {how}" if rep["outliers"] else "")
+            )
     return None
+
+
+def _texture(result: dict[str, Any], std: Any, smp: Any, limits: str) -> None:
+    """Add the texture verdict (``--texture-limits``) to *result*; the overall verdict is the worse."""
+    from station.qc.texture import judge_texture, parse_texture_limits
+
+    tex = judge_texture(std.texture, smp.texture, parse_texture_limits(limits))
+    result["texture"] = tex.to_dict()
+    rank = {"pass": 0, "warn": 1, "fail": 2}
+    if rank[tex.verdict] > rank[result["verdict"]]:
+        result["verdict"] = tex.verdict
+        result["reason"] = f"{result['reason']}; texture ({tex.vendor}) {tex.verdict}"
 
 
 def _panel_rows(args: argparse.Namespace) -> list[Any]:
@@ -175,52 +207,22 @@ def _spectral(path: str) -> list[Any]:
 # ---------------------------------------------------------------------------------------- database
 
 
-def _url(args: argparse.Namespace) -> str:
-    from db.engine import configured_database_url
-
-    return args.db or configured_database_url()
-
-
-@contextmanager
-def _session(args: argparse.Namespace) -> Iterator[Any]:
-    from sqlalchemy.exc import SQLAlchemyError
-
-    from db.engine import make_engine, make_sessionmaker
-    from db.migrate import ensure_at_head
-
-    url = _url(args)
-    try:
-        ensure_at_head(url)
-        engine = make_engine(url)
-    except SQLAlchemyError as exc:
-        raise InputError("db", "a reachable measurement database URL", url.split("@")[-1]) from exc
-    try:
-        with make_sessionmaker(engine)() as session:
-            yield session
-    finally:
-        engine.dispose()
-
-
-def _time(text: str | None, field: str) -> dt.datetime | None:
-    if text is None:
-        return None
-    try:
-        t = dt.datetime.fromisoformat(text.replace("Z", "+00:00"))
-    except ValueError as exc:
-        raise InputError(
-            field, "an ISO 8601 date or time, e.g. 2026-12-01 or 2026-12-01T08:00Z", text
-        ) from exc
-    return t if t.tzinfo is not None else t.replace(tzinfo=dt.UTC)
-
-
-def _jobs(args: argparse.Namespace) -> dict[str, Any]:
+def _jobs(args: argparse.Namespace) -> dict[str, Any] | None:
+    from station.cli._qc_tables import print_jobs
     from station.qc.jobs import list_jobs
 
     with _session(args) as s:
-        return {"jobs": [j.to_dict() for j in list_jobs(s, args.contains)]}
+        out = {"jobs": [j.to_dict() for j in list_jobs(s, args.contains)]}
+    return _shown(args, out, print_jobs)
 
 
-def _search(args: argparse.Namespace) -> dict[str, Any]:
+def _search(args: argparse.Namespace) -> dict[str, Any] | None:
+    from station.cli._qc_tables import print_search
+
+    return _shown(args, _found(args), print_search)
+
+
+def _found(args: argparse.Namespace) -> dict[str, Any]:
     from station.qc.jobs import search_measurements
 
     with _session(args) as s:
@@ -292,13 +294,33 @@ def _summary_of(args: argparse.Namespace, session: Any, load_tolerance: LoadTole
 
         limits = parse_illuminant_limits(args.illuminant_limits)
     return job_summary(
-        session, args.job, tolerance, args.formula, parts, args.average_panels, illuminant_limits=limits
+        session,
+        args.job,
+        tolerance,
+        args.formula,
+        parts,
+        args.average_panels,
+        illuminant_limits=limits,
+        keep_outliers=args.keep_outliers,
+        texture_limits=_texture_limits(args),
     )
 
 
-def _summary(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, Any]:
+def _texture_limits(args: argparse.Namespace) -> Any:
+    text = getattr(args, "texture_limits", None)
+    if text is None:
+        return None
+    from station.qc.texture import parse_texture_limits
+
+    return parse_texture_limits(text)
+
+
+def _summary(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, Any] | None:
+    from station.cli._qc_tables import print_summary
+
     with _session(args) as s:
-        return _summary_of(args, s, load_tolerance).to_dict()
+        out = _summary_of(args, s, load_tolerance).to_dict()
+    return _shown(args, out, print_summary)
 
 
 def _progress(enabled: bool) -> Any:
@@ -390,7 +412,21 @@ def _add_judging(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--average-panels",
         action="store_true",
-        help="average the repeat readings of each panel and judge the panel once",
+        help="average the repeat readings of each panel (and of the standard) and judge the panel once",
+    )
+    p.add_argument(
+        "--keep-outliers",
+        action="store_true",
+        help="average in the repeat readings flagged as outliers (default: leave them out and name them)",
+    )
+
+
+def _add_texture_limits(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--texture-limits",
+        metavar="ds=X,dg=Y",
+        help="judge the vendor texture values too: |ΔS| of every sparkle quantity and |ΔG| of graininess, "
+        "sample minus standard, within one vendor (values of two vendors are refused)",
     )
 
 
@@ -405,11 +441,19 @@ def _add_illuminant_limits(p: argparse.ArgumentParser) -> None:
 
 def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> None:
     """Add the file and database commands under ``station qc``."""
+    _register_files(sub, load_tolerance)
+    _register_db(sub)
+    _register_judged(sub, load_tolerance)
+
+
+def _register_files(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> None:
+    """``qc check|repeats|correlate|metamerism``: readings from files (or one stored panel)."""
     p = sub.add_parser("check", help="verdict of a sample file against a standard file")
     p.add_argument("--standard", required=True, help="standard: station measure/import --json output")
     p.add_argument("--sample", required=True, help="sample: station measure/import --json output")
     _add_judging(p)
     _add_illuminant_limits(p)
+    _add_texture_limits(p)
     add_json_flag(p)
     p.set_defaults(handler=lambda a: _check(a, load_tolerance))
 
@@ -433,6 +477,11 @@ def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> 
     add_json_flag(p)
     p.set_defaults(handler=_metamerism)
 
+
+def _register_db(sub: argparse._SubParsersAction) -> None:
+    """``qc jobs|search|standard``: the measurement database."""
+    from station.cli._qc_tables import print_standard
+
     p = sub.add_parser("jobs", help="jobs in the database with their parts and counts")
     p.add_argument("--contains", help="only jobs whose name contains this (case-insensitive)")
     _add_db(p)
@@ -454,23 +503,29 @@ def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> 
     p.add_argument("--job", required=True)
     p.add_argument("--part", required=True)
     which = p.add_mutually_exclusive_group(required=True)
-    which.add_argument("--measurement", type=int, help="reference measurement id")
+    which.add_argument("--measurement", type=int, help="reference measurement id (see qc search)")
     which.add_argument("--design", type=int, help="design id")
     p.add_argument("--notes", default="")
     p.add_argument("--replace", action="store_true", help="replace an existing standard")
     _add_db(p)
-    p.set_defaults(handler=_standard_set)
+    p.set_defaults(handler=lambda a: _shown(a, _standard_set(a), print_standard))
     p = ssub.add_parser("show", help="print the standard (a design at the 6-angle set)")
     p.add_argument("--job", required=True)
     p.add_argument("--part", required=True)
     _add_db(p)
-    p.set_defaults(handler=_standard_show)
+    p.set_defaults(handler=lambda a: _shown(a, _standard_show(a), print_standard))
+
+
+def _register_judged(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> None:
+    """``qc summary|report|trend``: a job's samples judged against their standards."""
+    from station.cli._qc_tables import print_written
 
     p = sub.add_parser("summary", help="every sample's verdict against its part's standard")
     p.add_argument("--job", required=True)
     p.add_argument("--part", dest="parts", action="append", help="only this part (repeatable)")
     _add_judging(p)
     _add_illuminant_limits(p)
+    _add_texture_limits(p)
     _add_db(p)
     p.set_defaults(handler=lambda a: _summary(a, load_tolerance))
 
@@ -482,8 +537,9 @@ def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> 
     p.add_argument("--progress", action="store_true", help="draw a progress bar on stderr")
     _add_judging(p)
     _add_illuminant_limits(p)
+    _add_texture_limits(p)
     _add_db(p)
-    p.set_defaults(handler=lambda a: _report(a, load_tolerance))
+    p.set_defaults(handler=lambda a: _shown(a, _report(a, load_tolerance), print_written))
 
     p = sub.add_parser("trend", help="SPC chart of ΔE per geometry over time of one part (PNG)")
     p.add_argument("--job", required=True)
@@ -491,4 +547,4 @@ def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> 
     p.add_argument("--out", required=True, help="trend.png")
     _add_judging(p)
     _add_db(p)
-    p.set_defaults(handler=lambda a: _trend(a, load_tolerance))
+    p.set_defaults(handler=lambda a: _shown(a, _trend(a, load_tolerance), print_written))

@@ -175,3 +175,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     from station.cli import _qc_files
 
     _qc_files.register(sub, _load_tolerance)
+    from station.cli import _qc_spc
+
+    _qc_spc.register(sub, _load_tolerance)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import datetime as dt
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -30,11 +30,13 @@ from station.model.domain import ANGLES_6, ILLUMINATION_DEG, QC_FORMULA
 from station.model.errors import ModelInputError
 from station.qc.check import check_pair, formula_name
 from station.qc.errors import QcInputError, StandardMissingError
-from station.qc.illuminant_rows import IlluminantCheck, PairVerdict, check_illuminants
+from station.qc.illuminant_rows import check_illuminants
 from station.qc.illuminant_rows import illuminant_limits as booth_limits
+from station.qc.panels import panel_mean, panel_means, standard_repeats
 from station.qc.readings import Reading, reading_from_measurement
-from station.qc.repeats import RepeatSummary, summarise
-from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict
+from station.qc.results import JobSummary, MeasurementRow, PartSummary, SampleResult, StandardInfo
+from station.qc.texture import TextureTolerance, judge_texture
+from station.qc.tolerance import ToleranceSet
 
 __all__ = [
     "JobInfo",
@@ -74,33 +76,6 @@ def _aware(value: dt.datetime | None, name: str) -> dt.datetime | None:
     if value is not None and (not isinstance(value, dt.datetime) or value.tzinfo is None):
         raise QcInputError(name, "a timezone-aware time", value)
     return value
-
-
-@dataclass(frozen=True)
-class MeasurementRow:
-    """One measurement found by :func:`search_measurements`, with its panel's job and part."""
-
-    measurement_id: int
-    panel_id: int | None
-    job: str | None
-    part: str | None
-    instrument: str
-    operator: str
-    measured_at: dt.datetime
-    reading: Reading
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "measurement_id": self.measurement_id,
-            "panel_id": self.panel_id,
-            "job": self.job,
-            "part": self.part,
-            "instrument": self.instrument,
-            "operator": self.operator,
-            "measured_at": self.measured_at.isoformat(),
-            "geometries": list(self.reading.geometries),
-            "lab": [list(r) for r in self.reading.lab],
-        }
 
 
 def _instrument_name(inst: Instrument) -> str:
@@ -370,116 +345,6 @@ def standard_reading(session: Session, standard: Standard, angles: Sequence[floa
     )
 
 
-@dataclass(frozen=True)
-class StandardInfo:
-    """Which standard a part is judged against: its Lab at the samples' geometries (*reading*) and, for
-    a design, its Lab every :data:`CURVE_STEP_DEG` degrees over the samples' angle range (*curve*)."""
-
-    job: str
-    part: str
-    measurement_id: int | None
-    design_id: int | None
-    created_at: dt.datetime
-    reading: Reading
-    curve: Reading | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "job": self.job,
-            "part": self.part,
-            "measurement_id": self.measurement_id,
-            "design_id": self.design_id,
-            "created_at": self.created_at.isoformat(),
-            "geometries": list(self.reading.geometries),
-            "lab": [list(r) for r in self.reading.lab],
-        }
-
-
-@dataclass(frozen=True)
-class SampleResult:
-    """One sample of a part and its verdict against the part's standard.
-
-    With panels averaged (:func:`job_summary` ``average_panels=True``) a sample is a panel: *row* is its
-    newest measurement carrying the mean reading, *repeats* the repeat statistics and
-    *measurement_ids* every measurement averaged.
-    """
-
-    row: MeasurementRow
-    verdict: QcVerdict
-    repeats: RepeatSummary | None = None
-    measurement_ids: tuple[int, ...] = ()
-    illuminants: IlluminantCheck | None = None
-
-    @property
-    def overall(self) -> Verdict:
-        """The D65 verdict, or the worse of it and the illuminant rows' verdict when they were judged."""
-        return PairVerdict(self.verdict, self.illuminants).verdict
-
-    def to_dict(self) -> dict[str, Any]:
-        out = {**self.row.to_dict(), "qc": PairVerdict(self.verdict, self.illuminants).to_dict()}
-        if self.repeats is not None:
-            out["repeats"] = self.repeats.to_dict()
-            out["measurement_ids"] = list(self.measurement_ids)
-        return out
-
-
-@dataclass(frozen=True)
-class PartSummary:
-    """A part of a job: its standard (``None`` when it has none), its samples and their verdicts."""
-
-    part: str
-    standard: StandardInfo | None
-    samples: tuple[SampleResult, ...]
-    unjudged: tuple[MeasurementRow, ...] = field(default=())
-    note: str = ""
-
-    def counts(self) -> dict[str, int]:
-        out = {"pass": 0, "warn": 0, "fail": 0}
-        for s in self.samples:
-            out[s.overall] += 1
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "part": self.part,
-            "standard": None if self.standard is None else self.standard.to_dict(),
-            "counts": self.counts(),
-            "samples": [s.to_dict() for s in self.samples],
-            "unjudged": [r.measurement_id for r in self.unjudged],
-            "note": self.note,
-        }
-
-
-@dataclass(frozen=True)
-class JobSummary:
-    """A job's parts with their standards and every sample's verdict, oldest sample first."""
-
-    job: str
-    formula: str
-    tolerance: ToleranceSet | None
-    parts: tuple[PartSummary, ...]
-    generated_at: dt.datetime
-    illuminant_limits: dict[str, float] | None = None
-
-    def counts(self) -> dict[str, int]:
-        out = {"pass": 0, "warn": 0, "fail": 0}
-        for p in self.parts:
-            for k, v in p.counts().items():
-                out[k] += v
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "job": self.job,
-            "formula": self.formula,
-            "tolerance": None if self.tolerance is None else self.tolerance.to_dict(),
-            "counts": self.counts(),
-            "parts": [p.to_dict() for p in self.parts],
-            "generated_at": self.generated_at.isoformat(),
-            "illuminant_limits": self.illuminant_limits,
-        }
-
-
 def job_summary(
     session: Session,
     job: str,
@@ -488,17 +353,23 @@ def job_summary(
     parts: Sequence[str] | None = None,
     average_panels: bool = False,
     illuminant_limits: Mapping[str, float] | None = None,
+    keep_outliers: bool = False,
+    texture_limits: TextureTolerance | None = None,
 ) -> JobSummary:
     """Every part of *job* with its standard and each sample's verdict (:func:`check_pair`).
 
-    The reference measurement of a standard is not judged as a sample of its own part. A part without
-    a standard is listed with its measurements unjudged. A sample that cannot be judged (a geometry
-    of the standard or tolerance missing) is listed unjudged with the reason in the part's note. With
-    *average_panels* the repeat readings of each panel are averaged (:func:`station.qc.repeats.summarise`,
-    at the geometries they share) and the panel is judged once, at the time of its newest reading.
-    With *illuminant_limits* (``{illuminant: metamerism-index limit}``) each sample also gets its
-    illuminant rows (:func:`station.qc.illuminant_rows.check_illuminants`) and its verdict is the worse of the
-    two; a sample or standard without spectra is then listed unjudged with the reason.
+    The reference measurement of a standard and its repeats (:func:`station.qc.panels.standard_repeats`)
+    are not judged as samples of their own part. A part without a standard is listed with its
+    measurements unjudged. A sample that cannot be judged (a geometry of the standard or tolerance
+    missing) is listed unjudged with the reason in the part's note. With *average_panels* the repeat
+    readings of each panel, and of the standard, are averaged without the flagged outliers (with them
+    when *keep_outliers*; :mod:`station.qc.panels`) and the panel is judged once, at the time of its
+    newest reading. With *illuminant_limits* (``{illuminant: metamerism-index limit}``) each sample also
+    gets its illuminant rows (:func:`station.qc.illuminant_rows.check_illuminants`) and its verdict is
+    the worse of the two; a sample or standard without spectra is then listed unjudged with the reason.
+    With *texture_limits* each sample's vendor texture values are judged against the standard's
+    (:mod:`station.qc.texture`, ΔS and ΔG); the overall verdict is the worst, and a sample whose values
+    come from another vendor than the standard's is listed unjudged with the reason.
     :class:`QcInputError` when the job has no panels.
     """
     limits = None if illuminant_limits is None else booth_limits(illuminant_limits)
@@ -512,67 +383,66 @@ def job_summary(
         name = formula_name(formula)
     else:
         name = tolerance.formula if tolerance is not None else formula_name(QC_FORMULA)
-    out = []
-    for part in wanted:
-        part_rows = [r for r in rows if r.part == part]
-        std = get_standard(session, job, part)
-        if std is None:
-            out.append(PartSummary(part, None, (), tuple(part_rows), "no standard set"))
-            continue
-        samples, unjudged, notes = [], [], []
-        info: StandardInfo | None = None
-        ref_id = None
-        if std.measurement_id is not None:
-            current = current_measurement(session, std.measurement_id)
-            ref_id = None if current is None else current.id
-        candidates = [r for r in part_rows if r.measurement_id != ref_id]
-        for r, repeats, ids in _samples(candidates, average_panels):
-            ref = standard_reading(session, std, r.reading.aspecular_deg)
-            if info is None:
-                info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref)
-            try:
-                verdict = check_pair(ref, r.reading, tolerance, formula)
-                booth = None if limits is None else check_illuminants(ref, r.reading, limits, verdict.formula)
-                samples.append(SampleResult(r, verdict, repeats, ids, booth))
-            except (QcInputError, ModelInputError) as exc:
-                unjudged.append(r)
-                notes.append(f"measurement {r.measurement_id}: {exc}")
-        if info is None:
-            ref = standard_reading(session, std, _design_angles(part_rows, std))
-            info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref)
-        if std.design_id is not None:
-            info = dataclasses.replace(info, curve=_curve(session, std, samples))
-        out.append(PartSummary(part, info, tuple(samples), tuple(unjudged), "; ".join(notes)))
+    judging = _Judging(tolerance, formula, limits, average_panels, keep_outliers, texture_limits)
+    out = [_part_summary(session, job, part, [r for r in rows if r.part == part], judging) for part in wanted]
     return JobSummary(job, name, tolerance, tuple(out), dt.datetime.now(dt.UTC), limits)
 
 
-def _samples(
-    rows: Sequence[MeasurementRow], average_panels: bool
-) -> list[tuple[MeasurementRow, RepeatSummary | None, tuple[int, ...]]]:
-    """Each row alone, or with *average_panels* one row per panel carrying the mean reading."""
-    if not average_panels:
-        return [(r, None, ()) for r in rows]
-    groups: dict[int | None, list[MeasurementRow]] = {}
-    for r in rows:
-        groups.setdefault(r.panel_id, []).append(r)
-    out: list[tuple[MeasurementRow, RepeatSummary | None, tuple[int, ...]]] = []
-    for group in groups.values():
-        if len(group) == 1:
-            out.append((group[0], None, ()))
-            continue
-        rep = summarise([g.reading for g in group])
-        newest = group[-1]
-        mean = dataclasses.replace(
-            rep.mean,
-            measured_at=newest.measured_at,
-            sample=newest.reading.sample,
-            instrument=", ".join(dict.fromkeys(g.instrument for g in group)),
-            where=f"panel {newest.panel_id}",
-        )
-        row = dataclasses.replace(newest, reading=mean, instrument=mean.instrument)
-        out.append((row, rep, tuple(g.measurement_id for g in group)))
-    out.sort(key=lambda t: (t[0].measured_at, t[0].measurement_id))
-    return out
+@dataclass(frozen=True)
+class _Judging:
+    tolerance: ToleranceSet | None
+    formula: str | None
+    limits: dict[str, float] | None
+    average_panels: bool
+    keep_outliers: bool
+    texture: TextureTolerance | None
+
+
+def _part_summary(
+    session: Session, job: str, part: str, part_rows: list[MeasurementRow], how: _Judging
+) -> PartSummary:
+    """One part of :func:`job_summary`: its standard (averaged when asked) and its samples' verdicts."""
+    std = get_standard(session, job, part)
+    if std is None:
+        return PartSummary(part, None, (), tuple(part_rows), "no standard set")
+    samples, unjudged, notes = [], [], []
+    ref_id = None
+    if std.measurement_id is not None:
+        current = current_measurement(session, std.measurement_id)
+        ref_id = None if current is None else current.id
+    std_rows = standard_repeats(part_rows, ref_id)
+    many = how.average_panels and len(std_rows) > 1
+    averaged = panel_mean(std_rows, how.keep_outliers, "standard panel") if many else None
+    skip = {r.measurement_id for r in std_rows} | {ref_id}
+    candidates = [r for r in part_rows if r.measurement_id not in skip]
+    info: StandardInfo | None = None
+    for pm in panel_means(candidates, how.average_panels, how.keep_outliers):
+        r = pm.row
+        if averaged is not None:
+            ref = dataclasses.replace(averaged.row.reading, sample="standard (mean of its repeats)")
+        else:
+            ref = standard_reading(session, std, r.reading.aspecular_deg)
+        if info is None:
+            info = StandardInfo(
+                job, part, std.measurement_id, std.design_id, std.created_at, ref, None, averaged
+            )
+        try:
+            verdict = check_pair(ref, r.reading, how.tolerance, how.formula)
+            booth = (
+                None if how.limits is None else check_illuminants(ref, r.reading, how.limits, verdict.formula)
+            )
+            tex = None if how.texture is None else judge_texture(ref.texture, r.reading.texture, how.texture)
+            samples.append(SampleResult(r, verdict, pm.repeats, pm.measurement_ids, booth, pm.left_out, tex))
+        except (QcInputError, ModelInputError) as exc:
+            unjudged.append(r)
+            notes.append(f"measurement {r.measurement_id}: {exc}")
+    if info is None:
+        angles = part_rows[0].reading.aspecular_deg if part_rows else tuple(ANGLES_6)  # the first sample's
+        ref = standard_reading(session, std, angles)
+        info = StandardInfo(job, part, std.measurement_id, std.design_id, std.created_at, ref, None, averaged)
+    if std.design_id is not None:
+        info = dataclasses.replace(info, curve=_curve(session, std, samples))
+    return PartSummary(part, info, tuple(samples), tuple(unjudged), "; ".join(notes))
 
 
 def _curve(session: Session, std: Standard, samples: Sequence[SampleResult]) -> Reading:
@@ -581,11 +451,6 @@ def _curve(session: Session, std: Standard, samples: Sequence[SampleResult]) -> 
     lo, hi = min(angles), max(angles)
     grid = np.arange(lo, hi + CURVE_STEP_DEG / 2, CURVE_STEP_DEG)
     return standard_reading(session, std, [float(a) for a in grid])
-
-
-def _design_angles(rows: Sequence[MeasurementRow], std: Standard) -> tuple[float, ...]:
-    """Angles to show a standard at: the first sample's, else the 6-angle set."""
-    return rows[0].reading.aspecular_deg if rows else tuple(ANGLES_6)
 
 
 def require_standard(session: Session, job: str, part: str) -> Standard:

@@ -38,6 +38,7 @@ from station.model.domain import ILLUMINATION_DEG, aspecular_name, check_lab, pa
 from station.model.errors import ModelInputError
 from station.model.spectra import WAVELENGTHS, reflectance_to_lab
 from station.qc.errors import QcInputError
+from station.qc.texture import TextureValue, texture_values
 
 if TYPE_CHECKING:
     from db.models import Measurement
@@ -71,6 +72,8 @@ class Reading:
         The stored measurement's id, if it came from the database.
     where
         Name of the source used in error messages (a file name, ``"standard"``).
+    texture
+        Vendor texture values (sparkle, graininess; :mod:`station.qc.texture`), if any.
     """
 
     aspecular_deg: tuple[float, ...]
@@ -82,6 +85,7 @@ class Reading:
     measured_at: dt.datetime | None = None
     measurement_id: int | None = None
     where: str = "reading"
+    texture: tuple[TextureValue, ...] = ()
 
     def __post_init__(self) -> None:
         w = self.where
@@ -275,6 +279,7 @@ def reading_from_dict(data: Mapping[str, Any], where: str = "reading") -> Readin
         measured_at=_time(data.get("measured_at", data.get("time")), f"{where}.time"),
         measurement_id=mid if isinstance(mid, int) and not isinstance(mid, bool) else None,
         where=where,
+        texture=texture_values(data.get("texture"), where),
     )
 
 
@@ -370,6 +375,7 @@ def reading_from_measurement(m: Measurement, instrument: str = "", sample: str =
         measured_at=m.measured_at,
         measurement_id=m.id,
         where=f"measurement {m.id}",
+        texture=texture_values(m.texture, f"measurement {m.id}"),
     )
 
 

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from station.model.domain import QC_OUTLIER_SCALE_FLOOR, QC_OUTLIER_Z, aspecular_name
 from station.qc.errors import QcInputError
 from station.qc.readings import Reading, common_angles, lab_at
+from station.qc.texture import mean_texture
 
 __all__ = ["GeometryBias", "InstrumentCorrelation", "RepeatSummary", "correlate", "summarise"]
 
@@ -95,7 +96,10 @@ def _stack(readings: Sequence[Reading], field: str) -> tuple[tuple[float, ...], 
     return angles, np.stack([lab_at(r, angles) for r in readings])
 
 
-def _mean_reading(lab: NDArray[np.float64], angles: tuple[float, ...], like: Reading, where: str) -> Reading:
+def _mean_reading(
+    lab: NDArray[np.float64], angles: tuple[float, ...], like: Reading, where: str, of: Sequence[Reading]
+) -> Reading:
+    """The mean Lab as a reading, with the mean texture values of the readings *of*."""
     return Reading(
         angles,
         tuple((float(r[0]), float(r[1]), float(r[2])) for r in lab),
@@ -103,6 +107,7 @@ def _mean_reading(lab: NDArray[np.float64], angles: tuple[float, ...], like: Rea
         sample=like.sample,
         measured_at=like.measured_at,
         where=where,
+        texture=mean_texture([r.texture for r in of]),
     )
 
 
@@ -134,8 +139,14 @@ def summarise(readings: Sequence[Reading]) -> RepeatSummary:
     return RepeatSummary(
         angles,
         n,
-        _mean_reading(mean, angles, first, "mean"),
-        _mean_reading(kept.mean(axis=0), angles, first, "mean_kept"),
+        _mean_reading(mean, angles, first, "mean", readings),
+        _mean_reading(
+            kept.mean(axis=0),
+            angles,
+            first,
+            "mean_kept",
+            [r for r, f in zip(readings, flags, strict=True) if not f],
+        ),
         sd,
         sd_de,
         tuple(float(v) for v in d),

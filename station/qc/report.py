@@ -13,8 +13,11 @@
      its limit ("MI 0.80 <= 1 pass"), coloured pass / fail (:mod:`station.qc.illuminant_rows`);
    * **L\\*, a\\*, b\\* against aspecular angle** of the standard (line) and the samples (points);
    * **ΔE per geometry bars** of the newest samples, with the ΔE limit of each geometry;
-   * the **trend / SPC chart**: ΔE per geometry against time with the individuals-chart centre and
-     ± 3σ control limits (:mod:`station.qc.spc`); points beyond the limits are ringed red.
+   * the **SPC chart** (:mod:`station.qc.spc_chart`): ΔE per geometry, individuals chart with the
+     Western Electric and Nelson rule hits ringed and named, the limit and Cpk, drift noted under it.
+
+Trials are named by panel, part and job; the cover names the operators and instruments and leaves
+room for the signature.
 
 :func:`write_csv` writes one row per sample and geometry; :func:`write_trend_png` the SPC chart of one
 part. *progress* (optional) is called as ``progress(done, total, what)`` after each page.
@@ -23,7 +26,6 @@ part. *progress* (optional) is called as ``progress(done, total, what)`` after e
 from __future__ import annotations
 
 import csv
-import datetime as dt
 import io
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -41,8 +43,9 @@ from station.csv_cells import escape_cell
 from station.model.display import lab_to_display
 from station.model.domain import QC_DE_LIMIT
 from station.qc.errors import QcInputError
-from station.qc.jobs import JobSummary, PartSummary, SampleResult
-from station.qc.spc import ControlLimits, control_limits
+from station.qc.jobs import JobSummary, PartSummary, SampleResult, StandardInfo
+from station.qc.spc_chart import draw_spc
+from station.qc.spc_part import part_spc, sample_name
 
 __all__ = [
     "CSV_COLUMNS",
@@ -114,20 +117,26 @@ def _cover(summary: JobSummary) -> Figure:
     if summary.illuminant_limits:
         limits = ", ".join(f"{k} MI <= {v:g}" for k, v in summary.illuminant_limits.items())
         lines.append(f"illuminant rows: {limits} (metamerism index from D65, {summary.formula})")
+    samples = [x for p in summary.parts for x in p.samples]
+    lines.append(
+        "operators: " + (", ".join(sorted({x.row.operator for x in samples if x.row.operator})) or "—")
+    )
+    lines.append("instruments: " + (", ".join(dict.fromkeys(x.row.instrument for x in samples)) or "—"))
     for i, text in enumerate(lines):
         fig.text(0.08, 0.90 - 0.025 * i, text, fontsize=10)
+    fig.text(0.08, 0.06, "checked by ____________________   date __________   signature ____________________")
     rows = []
     for p in summary.parts:
         c = p.counts()
         std = (
             "none"
             if p.standard is None
-            else f"measurement {p.standard.measurement_id}"
+            else _standard_text(p.standard)
             if p.standard.measurement_id is not None
             else f"design {p.standard.design_id}"
         )
         rows.append([p.part, std, str(len(p.samples)), str(c["pass"]), str(c["warn"]), str(c["fail"])])
-    ax = fig.add_axes((0.08, 0.45, 0.84, 0.35))
+    ax = fig.add_axes((0.08, 0.38, 0.84, 0.34))
     ax.axis("off")
     if rows:
         table = ax.table(
@@ -144,8 +153,15 @@ def _cover(summary: JobSummary) -> Figure:
                     table[i, j].set_facecolor(_VERDICT_COLOUR[k])
     notes = [f"{p.part}: {p.note}" for p in summary.parts if p.note]
     for i, text in enumerate(notes[:12]):
-        fig.text(0.08, 0.40 - 0.022 * i, text[:130], fontsize=8, color="0.3")
+        fig.text(0.08, 0.34 - 0.022 * i, text[:130], fontsize=8, color="0.3")
     return fig
+
+
+def _standard_text(std: StandardInfo) -> str:
+    avg, n = std.averaged, len(std.averaged.measurement_ids) if std.averaged else 0
+    if avg is None:
+        return f"measurement {std.measurement_id}"
+    return f"mean of {n - len(avg.left_out)}/{n} readings of panel {avg.row.panel_id}"
 
 
 def _geometries(part: PartSummary) -> list[str]:
@@ -162,13 +178,23 @@ def _angle_of(part: PartSummary) -> dict[str, float]:
 
 
 def _label(s: SampleResult) -> str:
-    return f"#{s.row.measurement_id} {s.row.measured_at.strftime('%m-%d %H:%M')}"
+    """A trial by its panel, part and job (:func:`station.qc.spc_part.sample_name`), not by a row number."""
+    return sample_name(s)
 
 
 def _why(s: SampleResult) -> str:
     """One line on why a sample did not pass: the geometries out of band, or the mean rule's reason,
     then the illuminant rows that failed."""
     v = s.verdict
+    tex = s.texture
+    if tex is not None and tex.verdict != "pass" and v.verdict == "pass":
+        bad = [r for r in tex.rows if r.verdict == tex.verdict]
+        rows = "; ".join(
+            f"{r.name} {r.geometry or 'sample'} {r.tolerance} {r.delta:+.2f}"
+            for r in bad
+            if r.delta is not None
+        )
+        return f"{_label(s)} {s.overall}: texture ({tex.vendor}) {rows}"
     booth = s.illuminants
     if booth is not None and booth.verdict == "fail":
         failed = [r for r in booth.rows if r.verdict == "fail"]
@@ -185,6 +211,27 @@ def _why(s: SampleResult) -> str:
     return f"{_label(s)} {v.verdict}: {'; '.join(parts)} (max ΔE {v.max_de:.2f} at {v.worst_geometry})"
 
 
+def _heads(part: PartSummary, names: Sequence[str]) -> list[str]:
+    """ΔE column heads with the limit each geometry was judged with (``ΔE 45as15 ≤ 1``)."""
+    lim = {g.geometry: g.limit for s in part.samples for g in s.verdict.per_geometry if g.limit is not None}
+    return [f"ΔE {n}" + (f" ≤ {lim[n]:g}" if n in lim else "") for n in names]
+
+
+def _spc_page(summary: JobSummary, part: PartSummary) -> Figure:
+    """The SPC chart of the part with its rule hits (:mod:`station.qc.spc_chart`), drift under it."""
+    fig = plt.figure(figsize=_A4, constrained_layout=True)
+    try:
+        spc = part_spc(summary, part.part)
+    except QcInputError as exc:
+        fig.text(0.5, 0.5, f"no SPC chart: {exc}", ha="center", fontsize=10)
+        return fig
+    lines = spc.drift_lines() or ["drift: none flagged"]
+    fig.get_layout_engine().set(rect=(0, 0.012 * (len(lines[:6]) + 1), 1, 1 - 0.012 * (len(lines[:6]) + 1)))  # type: ignore[union-attr, call-arg]
+    draw_spc(fig, spc)
+    fig.text(0.02, 0.003, "\n".join(line[:150] for line in lines[:6]), fontsize=7, color="#8e44ad")
+    return fig
+
+
 def _table_page(summary: JobSummary, part: PartSummary) -> Figure:
     fig = plt.figure(figsize=_A4_LANDSCAPE)
     fig.suptitle(f"{summary.job} / {part.part}: verdict per geometry ({summary.formula})", fontsize=13)
@@ -198,7 +245,7 @@ def _table_page(summary: JobSummary, part: PartSummary) -> Figure:
     rows, colours = [], []
     for s in samples:
         by = {g.geometry: g for g in s.verdict.per_geometry}
-        cells = [_label(s), s.row.instrument[:18]]
+        cells = [_label(s)[:34], f"{s.row.instrument[:18]} / {s.row.operator or '—'}"]
         cols = ["white", "white"]
         for n in names:
             g = by.get(n)
@@ -212,7 +259,14 @@ def _table_page(summary: JobSummary, part: PartSummary) -> Figure:
     table = ax.table(
         cellText=rows,
         cellColours=colours,
-        colLabels=["sample", "instrument", *[f"ΔE {n}" for n in names], "mean ΔE", "max ΔE", "verdict"],
+        colLabels=[
+            "trial (panel, part, job)",
+            "instrument / operator",
+            *_heads(part, names),
+            "mean ΔE",
+            "max ΔE",
+            "verdict",
+        ],
         loc="upper center",
         cellLoc="center",
     )
@@ -359,56 +413,6 @@ def _limits(summary: JobSummary, part: PartSummary, names: Sequence[str]) -> lis
     return out
 
 
-def _series(part: PartSummary, geometry: str) -> tuple[list[dt.datetime], list[float]]:
-    times, values = [], []
-    for s in part.samples:
-        for g in s.verdict.per_geometry:
-            if g.geometry == geometry:
-                times.append(s.row.measured_at)
-                values.append(g.de)
-    return times, values
-
-
-def _trend(fig: Figure, summary: JobSummary, part: PartSummary) -> None:
-    names = _geometries(part)
-    limits = _limits(summary, part, names)
-    axes: Any = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0] if names else []
-    for ax, name, limit in zip(axes, names, limits, strict=True):
-        times, values = _series(part, name)
-        ax.plot(times, values, "o-", ms=3.5, lw=1, color="#2c5aa0")
-        if len(values) >= 2:
-            cl: ControlLimits = control_limits(values)
-            ax.axhline(cl.centre, color="0.2", lw=1, label=f"centre {cl.centre:.2f}")
-            ax.axhline(cl.ucl, color="#e67e22", ls="--", lw=1, label=f"UCL {cl.ucl:.2f}")
-            if cl.lcl > 0:
-                ax.axhline(cl.lcl, color="#e67e22", ls="--", lw=1, label=f"LCL {cl.lcl:.2f}")
-            for i in cl.out_of_control:
-                ax.plot(times[i], values[i], "o", ms=9, mfc="none", mec="#c0392b", mew=1.5)
-        if np.isfinite(limit):
-            ax.axhline(limit, color="#c0392b", lw=1.2, label=f"limit {limit:g}")
-        ax.set_ylabel(f"ΔE {name}", fontsize=8)
-        ax.tick_params(labelsize=7)
-        tops = [*values, limit if np.isfinite(limit) else 0.0]
-        if len(values) >= 2:
-            tops.append(cl.ucl)
-        ax.set_ylim(0, 1.15 * max(tops) or 1.0)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=6, loc="upper left", ncol=4)
-    if len(axes):
-        axes[-1].set_xlabel("measured (UTC)")
-        fig.autofmt_xdate()
-    fig.suptitle(
-        f"{summary.job} / {part.part}: ΔE trend, individuals chart (centre ± 3σ, σ = MR̄/1.128)",
-        fontsize=11,
-    )
-
-
-def _trend_page(summary: JobSummary, part: PartSummary) -> Figure:
-    fig = plt.figure(figsize=_A4, constrained_layout=True)
-    _trend(fig, summary, part)
-    return fig
-
-
 def part_figures(summary: JobSummary, part: PartSummary) -> list[Figure]:
     """The pages of one judged part: verdict table, (illuminant rows,) Lab vs angle with ΔE bars, SPC trend."""
     return [build() for build in _part_pages(summary, part)]
@@ -418,7 +422,7 @@ def _part_pages(summary: JobSummary, part: PartSummary) -> list[Callable[[], Fig
     pages: list[Callable[[], Figure]] = [lambda: _table_page(summary, part)]
     if summary.illuminant_limits:
         pages.append(lambda: _illuminant_page(summary, part))
-    pages += [lambda: _lab_and_bars_page(summary, part), lambda: _trend_page(summary, part)]
+    pages += [lambda: _lab_and_bars_page(summary, part), lambda: _spc_page(summary, part)]
     return pages
 
 
@@ -495,8 +499,17 @@ def write_trend_png(summary: JobSummary, part: str, path: str | Path, dpi: int =
     if not match[0].samples:
         raise QcInputError("part", f"a part with judged samples ({match[0].note or 'none judged'})", part)
     out = _writable(path)
-    fig = plt.figure(figsize=(10, 2.2 * max(1, len(_geometries(match[0]))) + 0.8), constrained_layout=True)
-    _trend(fig, summary, match[0])
+    if len(match[0].samples) < 2:  # too few for control limits: the sample's ΔE per geometry alone
+        (smp,) = match[0].samples
+        fig = plt.figure(figsize=(10, 3), constrained_layout=True)
+        ax = fig.subplots()
+        ax.bar([g.geometry for g in smp.verdict.per_geometry], [g.de for g in smp.verdict.per_geometry])
+        ax.set_title(f"{summary.job} / {part}: one sample, too few for control limits", fontsize=10)
+        ax.set_ylabel(f"ΔE ({summary.formula})")
+    else:
+        spc = part_spc(summary, part)
+        fig = plt.figure(figsize=(10, 2.4 * max(1, len(spc.geometries)) + 0.8), constrained_layout=True)
+        draw_spc(fig, spc)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out

@@ -355,6 +355,7 @@ class GeometryVerdict:
     de: float
     verdict: Verdict
     reasons: tuple[str, ...]
+    limit: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -366,6 +367,7 @@ class GeometryVerdict:
             "dC": self.dc,
             "dH": self.dh,
             "dE": self.de,
+            "limit": self.limit,
             "verdict": self.verdict,
             "reasons": list(self.reasons),
         }
@@ -432,6 +434,61 @@ def _parse_lab(lab: ArrayLike, field_name: str) -> NDArray[np.float64]:
     return np.array([check_lab(row, f"{field_name}[{i}]") for i, row in enumerate(arr)], dtype=float)
 
 
+def _geometry_verdict(
+    lim: GeometryLimits, comps: NDArray[np.float64], de: float, tolerance: ToleranceSet
+) -> tuple[GeometryVerdict, list[str]]:
+    """The verdict at one geometry (components then ΔE against their limits), and its component verdicts."""
+    f = tolerance.warn_fraction
+    verdicts: list[str] = []
+    reasons: list[str] = []
+    component_verdicts: list[str] = []
+    for j, c in enumerate(_COMPONENTS):
+        limit = getattr(lim, c)
+        if limit is not None:
+            v, why = _band(float(comps[j]), limit, _SYMBOL[c], f)
+            verdicts.append(v)
+            component_verdicts.append(v)
+            if why:
+                reasons.append(why)
+    v, why = _band(de, lim.de, "ΔE", f, f" ({tolerance.formula})")
+    verdicts.append(v)
+    if why:
+        reasons.append(why)
+    dl, da, db, dc, dh = (float(x) for x in comps)
+    g = GeometryVerdict(
+        lim.geometry, lim.aspecular_deg, dl, da, db, dc, dh, de, _worst(verdicts), tuple(reasons), lim.de
+    )
+    return g, component_verdicts
+
+
+def _overall(
+    per: Sequence[GeometryVerdict],
+    component_verdicts: Sequence[str],
+    mean_de: float,
+    max_de: float,
+    worst_i: int,
+    tolerance: ToleranceSet,
+) -> tuple[Verdict, str]:
+    """The overall verdict and its reason under the set's aggregation rule (module docstring)."""
+    if tolerance.aggregation == "max":
+        overall = _worst([g.verdict for g in per])
+        bad = [g for g in per if g.verdict == overall and overall != "pass"]
+        reason = (
+            "; ".join(f"{g.geometry}: {', '.join(g.reasons)}" for g in bad)
+            if bad
+            else f"every geometry within its limits (max ΔE {max_de:.3g} at {per[worst_i].geometry})"
+        )
+        return overall, reason
+    v_mean, why = _band(
+        mean_de, tolerance.mean_limit, "ΔE", tolerance.warn_fraction, f" ({tolerance.formula})"
+    )
+    overall = _worst([v_mean, *component_verdicts])
+    parts = [f"mean {why}"] if why else []
+    parts += [f"{g.geometry}: {r}" for g in per for r in g.reasons if not r.startswith("ΔE")]
+    reason = "; ".join(parts) if parts else f"mean ΔE {mean_de:.3g} within {tolerance.mean_limit:g}"
+    return overall, reason
+
+
 def judge(
     lab_standard: ArrayLike, lab_sample: ArrayLike, aspecular_deg: Sequence[float], tolerance: ToleranceSet
 ) -> QcVerdict:
@@ -458,55 +515,15 @@ def judge(
     limits = [tolerance.limits_for(a) for a in angles]
     de = tolerance.delta_e(std, smp, angles)
     comps = lab_components(std, smp)
-    f = tolerance.warn_fraction
     per: list[GeometryVerdict] = []
     component_verdicts: list[str] = []
     for i, lim in enumerate(limits):
-        verdicts: list[str] = []
-        reasons: list[str] = []
-        for j, c in enumerate(_COMPONENTS):
-            limit = getattr(lim, c)
-            if limit is not None:
-                v, why = _band(float(comps[i, j]), limit, _SYMBOL[c], f)
-                verdicts.append(v)
-                component_verdicts.append(v)
-                if why:
-                    reasons.append(why)
-        v, why = _band(float(de[i]), lim.de, "ΔE", f, f" ({tolerance.formula})")
-        verdicts.append(v)
-        if why:
-            reasons.append(why)
-        dl, da, db, dc, dh = (float(x) for x in comps[i])
-        per.append(
-            GeometryVerdict(
-                lim.geometry,
-                lim.aspecular_deg,
-                dl,
-                da,
-                db,
-                dc,
-                dh,
-                float(de[i]),
-                _worst(verdicts),
-                tuple(reasons),
-            )
-        )
+        g, verdicts = _geometry_verdict(lim, comps[i], float(de[i]), tolerance)
+        per.append(g)
+        component_verdicts += verdicts
     worst_i = int(np.argmax(de))
     mean_de, max_de = float(de.mean()), float(de[worst_i])
-    if tolerance.aggregation == "max":
-        overall = _worst([g.verdict for g in per])
-        bad = [g for g in per if g.verdict == overall and overall != "pass"]
-        reason = (
-            "; ".join(f"{g.geometry}: {', '.join(g.reasons)}" for g in bad)
-            if bad
-            else f"every geometry within its limits (max ΔE {max_de:.3g} at {per[worst_i].geometry})"
-        )
-    else:
-        v_mean, why = _band(mean_de, tolerance.mean_limit, "ΔE", f, f" ({tolerance.formula})")
-        overall = _worst([v_mean, *component_verdicts])
-        parts = [f"mean {why}"] if why else []
-        parts += [f"{g.geometry}: {r}" for g in per for r in g.reasons if not r.startswith("ΔE")]
-        reason = "; ".join(parts) if parts else f"mean ΔE {mean_de:.3g} within {tolerance.mean_limit:g}"
+    overall, reason = _overall(per, component_verdicts, mean_de, max_de, worst_i, tolerance)
     return QcVerdict(
         overall,
         reason,

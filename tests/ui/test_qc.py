@@ -162,12 +162,12 @@ def test_judge_through_the_service(qtbot, tmp_path):
         from tests.ingest._readings import make_reading
 
         tech, qa = api.auth("technician"), api.auth("qa")
-        panel = api.client.post("/api/v1/panels", json={"job": "J-MI", "part": "door"}, headers=tech).json()[
-            "id"
-        ]
         ids = []
-        for k in range(2):
-            body = make_reading(41, k, panel_id=panel).model_dump(mode="json")
+        for k in range(2):  # the standard panel and a sample panel (a standard's repeats are no samples)
+            panel = api.client.post(
+                "/api/v1/panels", json={"job": "J-MI", "part": "door"}, headers=tech
+            ).json()
+            body = make_reading(41, k, panel_id=panel["id"]).model_dump(mode="json")
             body["spectra"] = [[0.5] * 31, [0.3] * 31, [0.1] * 31]
             r = api.client.post("/api/v1/measurements", json=body, headers=tech)
             assert r.status_code == 201, r.text

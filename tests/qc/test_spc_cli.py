@@ -1,0 +1,115 @@
+"""``station qc spc`` on a stored job whose panels drift: the drift flagged before the fail, in the
+table, the JSON and the chart; Cp/Cpk against the tolerance by hand."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import uuid
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from db.engine import make_engine, make_sessionmaker
+from db.migrate import ensure_at_head
+from db.models import Instrument, Measurement, Panel
+from tests.qc.test_cli import _refused, inproc
+
+ANGLES = [15.0, 45.0, 110.0]
+STD = [[92.0, -1.0, 2.0], [60.0, -0.5, 1.0], [35.0, 0.0, 0.5]]
+#: ΔL* of each panel against the standard (= its ΔE*ab at every geometry): stable, then 8 creeping up.
+DL = [
+    0.30,
+    0.34,
+    0.28,
+    0.33,
+    0.31,
+    0.27,
+    0.32,
+    0.35,
+    0.29,
+    0.31,
+    0.36,
+    0.44,
+    0.52,
+    0.61,
+    0.70,
+    0.80,
+    0.91,
+    1.03,
+]
+T0 = dt.datetime(2026, 11, 2, 8, 0, tzinfo=dt.UTC)
+
+
+@pytest.fixture
+def url(tmp_path: Path) -> str:
+    url = f"sqlite:///{tmp_path / 'qc.sqlite3'}"
+    ensure_at_head(url)
+    engine = make_engine(url)
+    with make_sessionmaker(engine)() as s:
+        inst = Instrument(serial="600123", model="MA6", kind="spectrophotometer")
+        s.add(inst)
+        s.flush()
+        for i, dl in enumerate([0.0, *DL]):
+            p = Panel(job="J-9", part="fender")
+            s.add(p)
+            s.flush()
+            lab = [[r[0] + dl, r[1], r[2]] for r in STD]
+            s.add(
+                Measurement(
+                    client_id=uuid.uuid4(),
+                    instrument_id=inst.id,
+                    panel_id=p.id,
+                    operator="ana",
+                    measured_at=T0 + dt.timedelta(days=i),
+                    geometries_deg=ANGLES,
+                    lab=lab,
+                    payload_sha256="0" * 64,
+                )
+            )
+            s.flush()
+        s.commit()
+    engine.dispose()
+    return url
+
+
+def test_spc_flags_the_drift_before_the_fail(
+    url: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = ("--db", url)
+    res = inproc(capsys, tmp_path, "qc", "search", "--job", "J-9", "--limit", "1", "--json", *db)
+    std_id = json.loads(res.stdout)["measurements"][0]["measurement_id"]
+    res = inproc(
+        capsys,
+        tmp_path,
+        "qc",
+        "standard",
+        "set",
+        "--job",
+        "J-9",
+        "--part",
+        "fender",
+        "--measurement",
+        str(std_id),
+        *db,
+    )
+    assert res.returncode == 0, res.stderr
+    args = ("qc", "spc", "--job", "J-9", "--part", "fender", "--formula", "cie76", "--baseline", "10", *db)
+    res = inproc(capsys, tmp_path, *args, "--out", "spc.png", "--json")
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    assert out["samples"] == len(DL) and (tmp_path / "spc.png").stat().st_size > 10_000
+    g = out["geometries"][0]
+    assert g["first_fail"] == DL.index(1.03) and g["drift_before_fail"] is True
+    assert min(p for h in g["drift"] for p in h["points"]) < g["first_fail"]
+    sigma = np.abs(np.diff(DL[:10])).mean() / 1.128
+    assert g["chart"]["centre"] == pytest.approx(np.mean(DL[:10])) and g["chart"]["sigma"] == pytest.approx(
+        sigma
+    )
+    cap = g["capability"]  # the product default limit ΔE 1, over the baseline
+    assert cap["usl"] == 1.0 and cap["cpk"] == pytest.approx((1.0 - np.mean(DL[:10])) / (3 * sigma))
+    text = inproc(capsys, tmp_path, *args).stdout
+    assert "before the first fail" in text and "N3" in text and "Cpk" in text
+    _refused(inproc(capsys, tmp_path, *args, "--subgroup", "12"), "subgroup")
+    _refused(inproc(capsys, tmp_path, *args, "--baseline", "40"), "baseline")
