@@ -30,12 +30,10 @@ _WIDGET = "widget constructor, to become builder methods in the viewer work on t
 
 #: ``path`` (a file over 600 lines) or ``path:qualname`` (a function over 80 lines) → why it still is.
 ALLOWED: dict[str, str] = {
-    "station/cli/_qc_files.py:register": "QC command-line parsers, being split in the QC work",
     "station/design/sketch.py": "the sketch fit, being split by fit (point light, environment)",
     "station/design/sketch.py:fit_point_light": "the point-light fit, being split in the sketch work",
     "station/design/sketch.py:fit_environment": "the environment fit, being split in the sketch work",
     "station/model/gloss.py": "gloss ⇄ lobe and the coat, being split in the gloss work",
-    "station/qc/tolerance.py:judge": "QC verdicts, being split in the QC work",
     "station/render/gl_renderer.py": _RENDER,
     "station/render/lobe_fit.py": _RENDER,
     "station/render/lod.py:choose_lod": _RENDER,

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import subprocess
 import sys
 
 import colour
@@ -14,6 +13,7 @@ from station.formulate.errors import FormulateInputError
 from station.formulate.formulation import formulate
 from station.formulate.lines import cost_per_kg, lines_for_design, toner_line
 from station.formulate.selection import RANK_DE_RESOLUTION
+from tests.processes import Child
 
 A3 = (15.0, 45.0, 110.0)
 DB = default_database()
@@ -27,13 +27,9 @@ def _solid(**fractions: float) -> np.ndarray:
 
 def test_same_recipe_beside_busy_processes() -> None:
     quiet = formulate(README_SILVER, A3)
-    busy = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2)]
-    try:
+    spin = [sys.executable, "-c", "while True: pass"]
+    with Child(spin, stdout=None, stderr=None), Child(spin, stdout=None, stderr=None):
         loaded = formulate(README_SILVER, A3)
-    finally:
-        for p in busy:
-            p.kill()
-            p.wait()
     assert [o.recipe for o in loaded.recipes] == [o.recipe for o in quiet.recipes]
     assert np.array_equal(loaded.concentrations, quiet.concentrations)
     assert loaded.evaluations == quiet.evaluations
