@@ -109,23 +109,37 @@ def fresnel_schlick(cos_theta: NDArray | float, n: float) -> NDArray[np.float64]
     return f0 + (1.0 - f0) * (1.0 - c) ** 5
 
 
+def fresnel_dielectric(cos_theta: NDArray | float, n: float) -> NDArray[np.float64]:
+    """Exact unpolarised Fresnel reflectance of a dielectric of index *n* from air, vectorised.
+
+    *cos_theta* (cosine of the incidence angle) is clipped to [0, 1]; the result lies in [F0, 1]: F0 =
+    ((n − 1)/(n + 1))² head-on, 1 at grazing (the same value as :func:`fresnel_unpolarised`).
+    """
+    c = np.clip(np.asarray(cos_theta, dtype=float), 0.0, 1.0)
+    ct = np.sqrt(np.maximum(1.0 - (1.0 - c * c) / (n * n), 0.0))
+    rs = (c - n * ct) / (c + n * ct)
+    rp = (n * c - ct) / (n * c + ct)
+    return np.asarray(0.5 * (rs * rs + rp * rp), dtype=float)
+
+
 @dataclass(frozen=True)
 class ClearCoat:
-    """The clear coat's Fresnel reflection on the gloss lobes (thesis §2.5.2, last paragraph, first way:
-    "increase the relative weights of the environment maps with high specular exponents at grazing
-    angles").
+    """A physical clear coat over the paint (the thesis's §2.5.2 Fresnel remark, made energy conserving).
 
-    A design's gloss weights hold its specular albedo at the 60° gloss geometry
-    (:attr:`SpecularLobe.specular_albedo`), so the gloss lobes are scaled per pixel by
+    A dielectric layer of index n reflects the exact unpolarised Fresnel fraction F(N·V; n) ≤ 1
+    (:func:`fresnel_dielectric`, evaluated at the view angle: the split-sum assumption of one Fresnel
+    factor per pixel for the lobes about R) and passes 1 − F(N·V) to the paint below, so per pixel
 
-        s(N·V) = F(N·V; n) / F(cos 60°; n)
+        radiance = s(N·V) · gloss terms + (1 − F(N·V)) · base terms,    s = F(N·V)/ρ_ref
 
-    with F Schlick's approximation (:func:`fresnel_schlick`) evaluated at the view angle (the angle at
-    which the mirror reflection leaves the coat; for the lobes about R it is the split-sum assumption of
-    one Fresnel factor per pixel). s = 1 at 60°, F0/F(60°) ≈ 0.57 head-on and 1/F(60°) ≈ 14 at grazing
-    for n = 1.5. The colour terms (diffuse, directionally diffuse) are not changed: the measured
-    colours already include the coat's transmission. ``None`` in place of a ClearCoat is the thesis's
-    model (no Fresnel).
+    with ρ_ref = F(60°; 1.567) = 0.100 the albedo of a design's gloss lobe at full strength (the black
+    glass of the gloss scale, :func:`lobe_from_gloss`; the lobe fit conserves it,
+    ``station.render.lobe_fit.conserve_gloss_energy``): a full-gloss design's coat reflects exactly F,
+    0.04 head-on and 1 at grazing for n = 1.5, and a lower-gloss one (ρ_s scaled down) proportionally
+    less. The base terms (diffuse, directionally diffuse, fall-off, flakes) are what the coat lets
+    through. Under a uniform environment a white Lambertian base then returns F + (1 − F) = 1 of the
+    light and no base returns more (the white-furnace test). ``None`` in place of a ClearCoat is the
+    thesis's model (no Fresnel: the measured colours already hold the coat's transmission).
 
     Attributes
     ----------
@@ -147,17 +161,25 @@ class ClearCoat:
 
     @property
     def f0(self) -> float:
-        """Normal-incidence reflectance F0 of the coat."""
+        """Normal-incidence reflectance F0 of the coat (the renderers recover n from it)."""
         return schlick_f0(self.index)
 
     @property
     def reference(self) -> float:
-        """F(cos 60°): the Schlick reflectance at the geometry the design's gloss is defined at."""
-        return float(fresnel_schlick(math.cos(math.radians(COAT_REFERENCE_DEG)), self.index))
+        """ρ_ref = F(60°; 1.567): the lobe albedo of a full-gloss design, which s(N·V) divides by."""
+        return fresnel_unpolarised(COAT_REFERENCE_DEG, STANDARD_INDEX)
+
+    def fresnel(self, n_dot_v: NDArray | float) -> NDArray[np.float64]:
+        """F(N·V; n), the share of the light the coat reflects (dimensionless, ≤ 1)."""
+        return fresnel_dielectric(n_dot_v, self.index)
 
     def gloss_scale(self, n_dot_v: NDArray | float) -> NDArray[np.float64]:
-        """s(N·V) = F(N·V)/F(cos 60°), the factor on the gloss lobes (dimensionless, class docstring)."""
-        return fresnel_schlick(n_dot_v, self.index) / self.reference
+        """s(N·V) = F(N·V; n)/ρ_ref, the factor on the gloss terms (dimensionless, class docstring)."""
+        return self.fresnel(n_dot_v) / self.reference
+
+    def base_scale(self, n_dot_v: NDArray | float) -> NDArray[np.float64]:
+        """1 − F(N·V; n), the factor on the base (colour) terms: what the coat transmits."""
+        return 1.0 - self.fresnel(n_dot_v)
 
 
 @dataclass(frozen=True)

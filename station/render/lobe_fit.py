@@ -129,6 +129,9 @@ PINV_RCOND = 1e-7
 #: truth (bench.basis_accuracy, docs/render-fit.md) "renderer" is worse in both modes, so it is kept
 #: only for that comparison.
 TARGETS = ("brdf", "renderer")
+#: Weight of the energy row of the perceptual gloss fit, relative to the norm of the weighted sample rows:
+#: large enough that the row holds to ~1e-6 before :func:`conserve_gloss_energy` makes it exact.
+ENERGY_ROW_WEIGHT = 1.0e3
 #: Largest lobe count fitted by enumeration (2^(m+1) passive sets); larger bases use Lawson–Hanson.
 ENUM_MAX_UNKNOWNS = 10
 
@@ -534,9 +537,55 @@ def _solve_perceptual(prob: FitProblem, t: Targets) -> tuple[NDArray[np.float64]
     b_g = lobe_g * g.weight[rg][None, :]
     m = prob.gloss.a.shape[1]
     x_g = np.zeros((d, m))
+    energy = lobe_energies(prob.basis)
     for i in range(d):
-        x_g[i] = nnls(prob.gloss.a * s_g[i][:, None], b_g[i] * s_g[i], maxiter=50 * m)[0]
+        a = prob.gloss.a * s_g[i][:, None]
+        # the energy row Σ K_G,i 2π/(E_i+1) = ρ_s, weighted to dominate every sample row (module doc)
+        lam = ENERGY_ROW_WEIGHT * np.linalg.norm(a) / np.linalg.norm(energy)
+        a_e = np.vstack([a, lam * energy[None, :]])
+        b_e = np.append(b_g[i] * s_g[i], lam * t.specular_albedo[i])
+        x_g[i] = nnls(a_e, b_e, maxiter=50 * m)[0]
     return x_c, x_g
+
+
+def lobe_energies(basis: LobeBasis) -> NDArray[np.float64]:
+    """Reflected share per unit weight of each basis lobe, ∫ cos^E ψ dω = 2π/(E + 1) (sr, shape (m,))."""
+    return 2.0 * np.pi / (np.asarray(basis.exponents, dtype=float) + 1.0)
+
+
+def conserve_gloss_energy(
+    k_g: NDArray[np.float64], basis: LobeBasis, specular_albedo: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Scale each design's gloss weights so the fitted lobes reflect exactly its lobe albedo ρ_s.
+
+    The designed lobe ρ_s (n + 1)/(2π) cosⁿψ reflects ρ_s of the incident energy whatever n; the basis
+    lobes reflect Σ K_G,i 2π/(E_i + 1) (:func:`lobe_energies`). A point-sample fit of a lobe sharper
+    than the sharpest basis lobe (above about 95 GU) misses most of its peak and would reflect less as
+    the gloss rises (0 for a mirror); here the fitted share is set to ρ_s (the fitted shape kept), and a
+    fit with no gloss weight left puts ρ_s into the sharpest basis lobe (the mirror's best stand-in).
+
+    Parameters
+    ----------
+    k_g
+        (d, m) fitted gloss weights K_G,i ≥ 0 (sr⁻¹).
+    basis
+        The lobe basis of the fit.
+    specular_albedo
+        (d,) designed lobe albedo ρ_s (dimensionless, ≥ 0).
+
+    Returns
+    -------
+    (d, m) weights ≥ 0 with Σ K_G,i 2π/(E_i + 1) = ρ_s for every design.
+    """
+    energy = lobe_energies(basis)
+    rho = np.asarray(specular_albedo, dtype=float).reshape(-1)
+    x = np.asarray(k_g, dtype=float).reshape(rho.size, energy.size)
+    share = x @ energy
+    ok = share > 1e-12 * np.maximum(rho, 1e-300)
+    out = np.where(ok[:, None], x * (rho / np.where(ok, share, 1.0))[:, None], 0.0)
+    sharpest = int(np.argmax(energy == energy.min()))
+    out[~ok, sharpest] = rho[~ok] / energy[sharpest]
+    return out
 
 
 @dataclass(frozen=True)
@@ -612,6 +661,8 @@ def fit_targets(
             x_g, fallbacks = x_g3[:, :, 0], fallbacks + f_g
         else:
             x_g = solve(prob.gloss, prob.gloss_d(targets)).T
+    if prob.gloss is not None:
+        x_g = conserve_gloss_energy(x_g, basis, targets.specular_albedo)
     seconds = time.perf_counter() - t0
     if not (np.all(np.isfinite(x_c)) and np.all(np.isfinite(x_g))):
         raise LobeFitError(f"lobe fit ({method}) produced non-finite weights")

@@ -26,8 +26,13 @@ BRDF's table (linear hat weights, the same interpolation :meth:`DesignedBRDF.rho
 design or lobe costs one dot product per pixel.
 
 Clear coat: with a :class:`station.model.gloss.ClearCoat` the gloss term (the designed BRDF's Phong
-lobe, the lobe model's K_G lobes) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°) (Schlick's
-Fresnel of the coat's index, the factor the renderers apply); ``coat=None`` is the thesis's BRDF.
+lobe, the lobe model's K_G lobes) is multiplied per pixel by s(N·V) = F(N·V)/ρ_ref (the coat's exact
+dielectric Fresnel) and the colour terms by 1 − F(N·V), the factors the renderers apply; ``coat=None``
+is the thesis's BRDF.
+
+Near-mirror lobes: a lobe narrower than MIRROR_PIXELS map pixels (:func:`resolves_pixels`; a 100 GU
+design's n = 10⁷) would miss point lights at pixel centres, so it importance-samples the whole map with
+the bright pixels left in, as small area lights (the reflection of a sun disc in a mirror is the disc).
 
 Flakes: :func:`flake_sparkle_truth` is the flake layer's sparkle with the full-resolution map and the
 exact expected flake reflection (the renderers use the sharpest and a matching lobe map).
@@ -64,6 +69,9 @@ MAX_POINT_LIGHTS = 4096
 QUADRATURE_WIDTH = 256
 #: Exponent from which a lobe is importance sampled instead of using the quadrature.
 SHARP_EXPONENT = 64.0
+#: Lobes whose half maximum is narrower than this many map pixels sample the whole map, the bright pixels
+#: as area lights, instead of taking them as point lights (:func:`resolves_pixels`).
+MIRROR_PIXELS = 2.0
 #: Importance samples per pixel and sharp lobe.
 LOBE_SAMPLES = 256
 #: N·V given to silhouette pixels by ``render_truth(backfacing="bend")``.
@@ -149,6 +157,9 @@ class Lighting:
         (M, 3) directions and (M, 3) radiance × solid angle of the box-filtered residual.
     point_dirs, point_flux
         (P, 3) directions and (P, 3) radiance × solid angle of the extracted point lights.
+    full
+        (H, W, 3) the whole map, point-light pixels included: what lobes narrower than a pixel
+        (:func:`resolves_pixels`) sample, the bright pixels then being small area lights.
     """
 
     residual: NDArray[np.float64]
@@ -156,6 +167,18 @@ class Lighting:
     quad_flux: NDArray[np.float64]
     point_dirs: NDArray[np.float64]
     point_flux: NDArray[np.float64]
+    full: NDArray[np.float64]
+
+
+def resolves_pixels(exponent: float, height: int) -> bool:
+    """True when a cos^E lobe is narrower than MIRROR_PIXELS pixels of a map of *height* rows.
+
+    Its half-maximum angle ψ_½ = arccos 2^(−1/E) is then below MIRROR_PIXELS · π/H: a point light at a
+    pixel centre would fall in or out of the lobe by where the centre lies (a mirror misses the sun
+    altogether), so the lobe samples the whole map instead, bright pixels as the areas they cover.
+    """
+    half = math.acos(2.0 ** (-1.0 / max(float(exponent), 1e-12)))
+    return half < MIRROR_PIXELS * math.pi / height
 
 
 def prepare_lighting(
@@ -181,7 +204,12 @@ def prepare_lighting(
     q_img, q_om = _box_downsample(residual, om, quadrature_width)
     q_dirs = equirect_directions(*q_img.shape[:2])
     return Lighting(
-        residual, q_dirs.reshape(-1, 3), (q_img * q_om[..., None]).reshape(-1, 3), dirs[bright], point_flux
+        residual,
+        q_dirs.reshape(-1, 3),
+        (q_img * q_om[..., None]).reshape(-1, 3),
+        dirs[bright],
+        point_flux,
+        img,
     )
 
 
@@ -304,12 +332,22 @@ class TruthScene:
         kernel = np.clip(cos_grid, 0.0, 1.0) ** exponent
         if exponent < SHARP_EXPONENT:
             value = self._binned(kind, kernel, points_only=False)
+        elif self._area_lights(exponent):
+            value = self._sampled(exponent, kind, self.lighting.full)
         else:
             value = self._binned(kind, kernel, points_only=True) + self._sampled(exponent, kind)
         self._cache[key] = value
         return value
 
-    def _sampled(self, exponent: float, kind: str) -> NDArray[np.float64]:
+    def _area_lights(self, exponent: float) -> bool:
+        """Whether a sharp lobe samples the whole map, point lights as pixels (:func:`resolves_pixels`)."""
+        return exponent >= SHARP_EXPONENT and resolves_pixels(exponent, self.lighting.full.shape[0])
+
+    def _sampled(
+        self, exponent: float, kind: str, image: NDArray[np.float64] | None = None
+    ) -> NDArray[np.float64]:
+        """Importance-sampled ∫ L cos^E ψ w dω over *image* (default: the residual map), (P, 3)."""
+        image = self.lighting.residual if image is None else image
         local = _lobe_samples(exponent, self.samples)
         t, b = self._tangents
         out = np.empty((self.normals.shape[0], 3))
@@ -320,7 +358,7 @@ class TruthScene:
                 + local[None, :, 1:2] * b[sl, None, :]
                 + local[None, :, 2:3] * self.reflect[sl, None, :]
             )
-            rad = sample_equirect(self.lighting.residual, dirs)
+            rad = sample_equirect(image, dirs)
             n_dot = np.einsum("pkc,pc->pk", dirs, self.normals[sl])
             w = {"cos": np.maximum(n_dot, 0.0), "mask": (n_dot > 0.0) * 1.0, "open": np.ones_like(n_dot)}[
                 kind
@@ -334,11 +372,14 @@ class TruthScene:
 
     # -- shading -------------------------------------------------------------------------------------
 
-    def coat_scale(self, coat: ClearCoat | None) -> NDArray[np.float64]:
-        """Per pixel factor on the gloss terms, (P, 1): s(N·V) of *coat*, ones for None (module docstring)."""
+    def coat_factors(self, coat: ClearCoat | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Per pixel factors (P, 1) on the gloss and on the base terms: s(N·V) and 1 − F(N·V) of *coat*,
+        ones for None (module docstring)."""
         if coat is None:
-            return np.ones((self.normals.shape[0], 1))
-        return coat.gloss_scale(np.einsum("ij,ij->i", self.normals, self.views))[:, None]
+            one = np.ones((self.normals.shape[0], 1))
+            return one, one
+        n_dot_v = np.einsum("ij,ij->i", self.normals, self.views)
+        return coat.gloss_scale(n_dot_v)[:, None], coat.base_scale(n_dot_v)[:, None]
 
     def truth(self, brdf: DesignedBRDF, coat: ClearCoat | None = None) -> NDArray[np.float64]:
         """Radiance of the designed BRDF, (..., 3) (module docstring); *coat*: clear-coat Fresnel or None."""
@@ -349,7 +390,8 @@ class TruthScene:
             / (2.0 * np.pi)
             * self.lobe(brdf.phong_exponent, "mask")
         )
-        return (colour + self.coat_scale(coat) * gloss).reshape(*self.shape, 3)
+        scale, base = self.coat_factors(coat)
+        return (base * colour + scale * gloss).reshape(*self.shape, 3)
 
     def truth_direct(self, brdf: DesignedBRDF, coat: ClearCoat | None = None) -> NDArray[np.float64]:
         """:meth:`truth` without the per-pixel histograms: one pass over the directions for one design.
@@ -361,7 +403,8 @@ class TruthScene:
         n_exp = brdf.phong_exponent
         peak = brdf.specular_albedo * (n_exp + 1.0) / (2.0 * np.pi)
         sharp = n_exp >= SHARP_EXPONENT
-        scale = self.coat_scale(coat)
+        area = self._area_lights(n_exp)
+        scale, base = self.coat_factors(coat)
         out = np.empty((self.normals.shape[0], 3))
         for s in range(0, out.shape[0], _PIXEL_CHUNK):
             sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
@@ -375,10 +418,11 @@ class TruthScene:
             )
             lobe = (n_dot > 0.0) * np.clip(cos_psi, 0.0, 1.0) ** n_exp
             if sharp:  # residual map by importance sampling below; only the point lights here
-                lobe[:, : self.lighting.quad_dirs.shape[0]] = 0.0
-            out[sl] = colour + scale[sl] * peak * (lobe @ flux)
+                lobe[:, : self.lighting.quad_dirs.shape[0] if not area else None] = 0.0
+            out[sl] = base[sl] * colour + scale[sl] * peak * (lobe @ flux)
         if sharp:
-            out += scale * peak * self._sampled(n_exp, "mask")
+            image = self.lighting.full if area else None
+            out += scale * peak * self._sampled(n_exp, "mask", image)
         return out.reshape(*self.shape, 3)
 
     def lobes(
@@ -401,20 +445,17 @@ class TruthScene:
         """
         if mode not in LOBE_MODES:
             raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
-        out = weights.k_d[None, :] * self.irradiance()
+        base = weights.k_d[None, :] * self.irradiance()
         if weights.has_fall_off:
-            out = out + weights.k_a[None, :] * self._binned(
+            base = base + weights.k_a[None, :] * self._binned(
                 "cos", fall_off_factor(_COS_GRID), points_only=False
             )
-        s = self.coat_scale(coat)
+        gloss = np.zeros_like(base)
         r_dot_n = np.einsum("ij,ij->i", self.reflect, self.normals)
         for i, e in enumerate(weights.exponents):
             if mode == "exact":
-                out = (
-                    out
-                    + weights.k_dd[i][None, :] * self.lobe(e, "cos")
-                    + s * weights.k_g[i] * self.lobe(e, "mask")
-                )
+                base = base + weights.k_dd[i][None, :] * self.lobe(e, "cos")
+                gloss = gloss + weights.k_g[i] * self.lobe(e, "mask")
                 continue
             lobe = self.lobe(e, "open")
             if mode == "prefiltered":
@@ -432,13 +473,12 @@ class TruthScene:
                 dd_lobe = (
                     self._bent_lobe(e) if mode == "prefiltered-bent+lights" and e < SHARP_EXPONENT else lobe
                 )
-                out = out + (
-                    weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
-                    + s * weights.k_g[i] * self._binned("mask", kernel, points_only=True)
-                )
-            out = (
-                out + weights.k_dd[i][None, :] * g[:, None] * dd_lobe + s * weights.k_g[i] * h[:, None] * lobe
-            )
+                base = base + weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
+                gloss = gloss + weights.k_g[i] * self._binned("mask", kernel, points_only=True)
+            base = base + weights.k_dd[i][None, :] * g[:, None] * dd_lobe
+            gloss = gloss + weights.k_g[i] * h[:, None] * lobe
+        scale, attenuation = self.coat_factors(coat)
+        out = attenuation * base + scale * gloss
         return out.reshape(*self.shape, 3)
 
     def _bent_lobe(self, exponent: float) -> NDArray[np.float64]:
