@@ -548,6 +548,21 @@ def _solve_perceptual(prob: FitProblem, t: Targets) -> tuple[NDArray[np.float64]
     return x_c, x_g
 
 
+def resolvable_targets(targets: Targets, basis: LobeBasis) -> Targets:
+    """The targets with each gloss lobe's exponent capped at the basis's sharpest, E_max.
+
+    No non-negative blend of cos^E_i lobes is sharper than its sharpest lobe, and point samples of a
+    lobe sharper than that (a 100 GU design: n = 10⁷) see only its spike at α = 0, which a fit matches
+    with the widest lobes (a mirror drawn as haze). Capped, the best stand-in for such a lobe is the
+    sharpest basis lobe itself, and :func:`conserve_gloss_energy` keeps its energy ρ_s.
+    """
+    top = float(max(basis.exponents))
+    capped = np.minimum(targets.phong_exponent, top)
+    if np.array_equal(capped, targets.phong_exponent):
+        return targets
+    return Targets(targets.rho, capped, targets.specular_albedo)
+
+
 def lobe_energies(basis: LobeBasis) -> NDArray[np.float64]:
     """Reflected share per unit weight of each basis lobe, ∫ cos^E ψ dω = 2π/(E + 1) (sr, shape (m,))."""
     return 2.0 * np.pi / (np.asarray(basis.exponents, dtype=float) + 1.0)
@@ -638,6 +653,7 @@ def fit_targets(
         raise RenderInputError("method", " | ".join(METHODS), method)
     basis = default_basis() if basis is None else basis
     prob = fit_problem(basis, gloss_form, target, fall_off)
+    targets = resolvable_targets(targets, basis)
     n, m = len(targets), basis.size
     t0 = time.perf_counter()
     fallbacks = 0
