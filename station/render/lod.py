@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.render import lobe_fit as lf
 from station.render import truth as tr
+from station.render import truth_lighting as tl
 from station.render.errors import RenderInputError
 from station.render.lobes import MAX_LOBES, basis_for_count
 
@@ -74,7 +75,7 @@ class LodChoice:
 def downsample_equirect(img: NDArray[np.float64], width: int) -> NDArray[np.float64]:
     """Solid-angle-weighted box filter of an equirect map to (width/2, width) (width divides the map's)."""
     h, w = img.shape[:2]
-    return tr._box_downsample(img, tr.equirect_solid_angles(h, w), width)[0]
+    return tl._box_downsample(img, tl.equirect_solid_angles(h, w), width)[0]
 
 
 def _de(scene_white: float, ref: NDArray[np.float64], img: NDArray[np.float64], percentile: float) -> float:
@@ -197,7 +198,7 @@ def choose_lod(
         raise RenderInputError("percentile", "0 < percentile <= 100", percentile)
     if not designs:
         raise RenderInputError("designs", "at least one design", len(designs))
-    img = tr._as_equirect(environment)
+    img = tl._as_equirect(environment)
     full_width = img.shape[1]
     widths = sorted(w for w in widths if w <= full_width and full_width % w == 0) or [full_width]
     share = tolerance_de / np.sqrt(3.0)
