@@ -162,6 +162,14 @@ def choose_anisotropic_samples(
     return AnisotropyChoice(s, err, float(tolerance_de), why)
 
 
+def _check_budget(tolerance_de: float, percentile: float) -> None:
+    """Raise RenderInputError naming the field when the tolerance or the percentile is out of range."""
+    if not (np.isfinite(tolerance_de) and tolerance_de > 0):
+        raise RenderInputError("tolerance_de", "a CIEDE2000 tolerance > 0", tolerance_de)
+    if not 0.0 < percentile <= 100.0:
+        raise RenderInputError("percentile", "0 < percentile <= 100", percentile)
+
+
 def choose_lod(
     designs: Sequence[Any],
     environment: Any,
@@ -199,10 +207,7 @@ def choose_lod(
     anisotropic
         Optional ``samples -> image (P, 3)`` renderer of the anisotropic scene; None for isotropic.
     """
-    if not (np.isfinite(tolerance_de) and tolerance_de > 0):
-        raise RenderInputError("tolerance_de", "a CIEDE2000 tolerance > 0", tolerance_de)
-    if not 0.0 < percentile <= 100.0:
-        raise RenderInputError("percentile", "0 < percentile <= 100", percentile)
+    _check_budget(tolerance_de, percentile)
     if not designs:
         raise RenderInputError("designs", "at least one design", len(designs))
     img = tl._as_equirect(environment)
