@@ -46,9 +46,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from station.model.errors import ModelInputError
+from station.model.fresnel import CLEAR_COAT_INDEX as CLEAR_COAT_INDEX
+from station.model.fresnel import COAT_REFERENCE_DEG as COAT_REFERENCE_DEG
+from station.model.fresnel import STANDARD_INDEX as STANDARD_INDEX
+from station.model.fresnel import ClearCoat as ClearCoat
+from station.model.fresnel import fresnel_dielectric as fresnel_dielectric
+from station.model.fresnel import fresnel_schlick as fresnel_schlick
+from station.model.fresnel import fresnel_unpolarised as fresnel_unpolarised
+from station.model.fresnel import schlick_f0 as schlick_f0
 
-#: Refractive index of the primary gloss standard (black glass at 587.6 nm).
-STANDARD_INDEX = 1.567
 #: Aperture full widths in degrees: geometry → (source in-plane, source ⊥, receptor in-plane, receptor ⊥).
 APERTURES_DEG: dict[int, tuple[float, float, float, float]] = {
     20: (0.75, 3.0, 1.80, 3.6),
@@ -61,103 +67,6 @@ PHONG_MIN, PHONG_MAX = 1.0, 1.0e7
 WARD_MIN, WARD_MAX = 2.0e-4, 1.0
 
 LobeModel = Literal["phong", "ward"]
-
-
-def fresnel_unpolarised(theta_deg: float, n: float) -> float:
-    """Fresnel reflectance of a dielectric (index *n*, from air) at incidence *theta_deg*, unpolarised.
-
-    Examples
-    --------
-    Normal incidence gives ((n − 1)/(n + 1))²; the black-glass standard (n = 1.567) reflects 10.0 % at 60°:
-
-    >>> round(fresnel_unpolarised(0.0, 1.5), 12), round(fresnel_unpolarised(60.0, 1.567), 6)
-    (0.04, 0.100056)
-    """
-    ti = math.radians(theta_deg)
-    st = math.sin(ti) / n
-    tt = math.asin(st)
-    ci, ct = math.cos(ti), math.cos(tt)
-    rs = ((ci - n * ct) / (ci + n * ct)) ** 2
-    rp = ((n * ci - ct) / (n * ci + ct)) ** 2
-    return 0.5 * (rs + rp)
-
-
-#: Refractive index of an automotive clear coat (acrylic / polyurethane binders, about 1.5).
-CLEAR_COAT_INDEX = 1.5
-#: Incidence (degrees) at which a design's specular albedo is defined: the 60° gloss geometry (above).
-COAT_REFERENCE_DEG = 60.0
-
-
-def schlick_f0(n: float) -> float:
-    """Normal-incidence reflectance F0 = ((n − 1)/(n + 1))² of a dielectric of index *n* from air.
-
-    Examples
-    --------
-    >>> round(schlick_f0(1.5), 12)
-    0.04
-    """
-    return ((n - 1.0) / (n + 1.0)) ** 2
-
-
-def fresnel_schlick(cos_theta: NDArray | float, n: float) -> NDArray[np.float64]:
-    """Schlick's approximation F(θ) = F0 + (1 − F0)(1 − cos θ)⁵ of the dielectric Fresnel reflectance.
-
-    *cos_theta* is clipped to [0, 1] (grazing beyond 90° reads as 90°); *n* the coat's index.
-    """
-    c = np.clip(np.asarray(cos_theta, dtype=float), 0.0, 1.0)
-    f0 = schlick_f0(n)
-    return f0 + (1.0 - f0) * (1.0 - c) ** 5
-
-
-@dataclass(frozen=True)
-class ClearCoat:
-    """The clear coat's Fresnel reflection on the gloss lobes (thesis §2.5.2, last paragraph, first way:
-    "increase the relative weights of the environment maps with high specular exponents at grazing
-    angles").
-
-    A design's gloss weights hold its specular albedo at the 60° gloss geometry
-    (:attr:`SpecularLobe.specular_albedo`), so the gloss lobes are scaled per pixel by
-
-        s(N·V) = F(N·V; n) / F(cos 60°; n)
-
-    with F Schlick's approximation (:func:`fresnel_schlick`) evaluated at the view angle (the angle at
-    which the mirror reflection leaves the coat; for the lobes about R it is the split-sum assumption of
-    one Fresnel factor per pixel). s = 1 at 60°, F0/F(60°) ≈ 0.57 head-on and 1/F(60°) ≈ 14 at grazing
-    for n = 1.5. The colour terms (diffuse, directionally diffuse) are not changed: the measured
-    colours already include the coat's transmission. ``None`` in place of a ClearCoat is the thesis's
-    model (no Fresnel).
-
-    Attributes
-    ----------
-    index
-        Refractive index n of the coat, 1.0 < n <= 3.0 (default CLEAR_COAT_INDEX = 1.5).
-    """
-
-    index: float = CLEAR_COAT_INDEX
-
-    def __post_init__(self) -> None:
-        n = self.index
-        if (
-            isinstance(n, bool)
-            or not isinstance(n, (int, float))
-            or not (math.isfinite(n) and 1.0 < n <= 3.0)
-        ):
-            raise ModelInputError("coat_index", "1.0 < n <= 3.0", n)
-        object.__setattr__(self, "index", float(n))
-
-    @property
-    def f0(self) -> float:
-        """Normal-incidence reflectance F0 of the coat."""
-        return schlick_f0(self.index)
-
-    @property
-    def reference(self) -> float:
-        """F(cos 60°): the Schlick reflectance at the geometry the design's gloss is defined at."""
-        return float(fresnel_schlick(math.cos(math.radians(COAT_REFERENCE_DEG)), self.index))
-
-    def gloss_scale(self, n_dot_v: NDArray | float) -> NDArray[np.float64]:
-        """s(N·V) = F(N·V)/F(cos 60°), the factor on the gloss lobes (dimensionless, class docstring)."""
-        return fresnel_schlick(n_dot_v, self.index) / self.reference
 
 
 @dataclass(frozen=True)

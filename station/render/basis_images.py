@@ -249,7 +249,8 @@ def build_basis_images(
     """Render the basis images of one view (NumPy lookups, or GL when a GLRenderer is given).
 
     A GL renderer must have been made with the same *horizon* setting. *coat*: the clear coat's Fresnel
-    factor s(N·V) folded into the gloss images (``numpy_renderer``'s equation with a coat).
+    factors folded in: s(N·V) into the gloss images, 1 − F(N·V) into the base images (``numpy_renderer``'s
+    equation with a coat).
     """
     g = gbuffer(scene, width, height)
     mask = g.mask.reshape(-1)
@@ -274,30 +275,32 @@ def build_basis_images(
     fall_off = fall_off_term(
         basis, normals, refl, ndv.astype(np.float64), horizon=horizon, d_normal=d_normal
     ).T
+    # the coat's factors on the gloss and the base images (numpy_renderer.shade_pixels); ones without it
+    sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
+    tb = np.ones_like(ndv) if coat is None else coat.base_scale(ndv).astype(np.float32)
     if gl_renderer is None:
         gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
-        sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
         lookups: dict[int, np.ndarray] = {}
         for j, (kind, i) in enumerate(layout):
             if kind == "D":
-                images[:, j] = d_normal.T
+                images[:, j] = d_normal.T * tb
                 continue
             if kind == "A":
-                images[:, j] = fall_off
+                images[:, j] = fall_off * tb
                 continue
             if i not in lookups:
                 lookups[i] = sample_cube(basis.cubes[i], refl).T
             bent = dd_direction(basis.exponents[i], normals, refl, horizon) if kind == "Dg" else None
             lookup = lookups[i] if bent is None else sample_cube(basis.cubes[i], bent).T
-            factor = {"Gh": hf[:, i] * sc, "Dg": gf[:, i], "Cg": sc}.get(kind, 1.0)
+            factor = {"Gh": hf[:, i] * sc, "Dg": gf[:, i] * tb, "Cg": sc}.get(kind, tb)
             images[:, j] = lookup * factor
             lights = light_terms(basis, i, normals, refl) if kind in ("Gh", "Dg") else None
             if lights is not None:
-                images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1]).T
+                images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1] * tb[:, None]).T
     else:
         for j, (kind, i) in enumerate(layout):
             if kind == "A":  # one image, made by numpy_renderer.fall_off_term as on the NumPy path
-                images[:, j] = fall_off
+                images[:, j] = fall_off * tb
                 continue
             k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)
             if kind == "D":
@@ -309,6 +312,8 @@ def build_basis_images(
             unit = LobeWeights(basis.exponents, k_d, k_dd, k_g)
             unit_coat = coat if kind in ("Gh", "Cg") else None
             images[:, j] = gl_renderer.render_linear(scene, [unit], coat=unit_coat).reshape(-1, 3)[pixels].T
+            if unit_coat is None:
+                images[:, j] *= tb  # a base image: what the coat transmits (1 when there is none)
     return BasisImages(
         basis, width, height, pixels, split, np.ascontiguousarray(images), ndv, layout, background=background
     )

@@ -76,6 +76,15 @@ from station.model.lobe import lobe_brdf_cos, phong_lobe
 from station.model.representations import shape_factor
 from station.model.shading import design_reflectance, shade_reflectance
 from station.render.errors import RenderError, RenderInputError
+from station.render.lobe_energy import ENERGY_ROW_WEIGHT as ENERGY_ROW_WEIGHT
+from station.render.lobe_energy import PERCEPTUAL_FLOOR as PERCEPTUAL_FLOOR
+from station.render.lobe_energy import PERCEPTUAL_POWER as PERCEPTUAL_POWER
+from station.render.lobe_energy import _solve_perceptual
+from station.render.lobe_energy import conserve_gloss_energy as conserve_gloss_energy
+from station.render.lobe_energy import lobe_energies as lobe_energies
+from station.render.lobe_solvers import ENUM_MAX_UNKNOWNS as ENUM_MAX_UNKNOWNS
+from station.render.lobe_solvers import PINV_RCOND as PINV_RCOND
+from station.render.lobe_solvers import _Part, _solve_clamped, _solve_enum, _solve_kkt, _solve_nnls
 from station.render.lobes import (
     COLOUR_ALPHAS_DEG,
     GLOSS_ALPHAS_DEG,
@@ -105,11 +114,6 @@ __all__ = [
 
 #: Fit methods by name; the first is the default (chosen from docs/render-fit.png).
 METHODS = ("perceptual", "auto", "kkt", "enum", "nnls", "lp-l1", "clamped-lsq")
-#: Exponent of the perceptual row weights (CIELAB: dL*/dY ∝ Y^(−2/3)).
-PERCEPTUAL_POWER = 2.0 / 3.0
-#: Floor (sr⁻¹) of the value a perceptual row weight divides by (reflectance ~0.003 at N·L = 1): keeps a
-#: black design's rows finite.
-PERCEPTUAL_FLOOR = 1e-3
 #: ``auto`` fits batches of at least this many designs with ``kkt``, smaller ones with ``nnls``.
 AUTO_BATCH = 16
 #: Time limit (s) of one HiGHS solve (thesis §2.4: "a time limit for finding a solution must be set").
@@ -121,16 +125,11 @@ TARGET_ALPHAS_DEG = tuple(sorted(set(COLOUR_ALPHAS_DEG) | set(GLOSS_ALPHAS_DEG))
 #: Where the gloss lobe goes: "thesis" fits it with the K_G lobes of eq 2.3.2 (the designed lobe's own
 #: form); "cosine" folds it into (N·L)-weighted grey K_DD lobes (eq 2.3.3 form), kept for comparison.
 GLOSS_FORMS = ("thesis", "cosine")
-#: Relative singular-value cut-off of every pseudo-inverse (columns scaled to unit norm first): near-
-#: duplicate exponents are solved in their well-determined span instead of blowing up.
-PINV_RCOND = 1e-7
 #: What the colour fit matches: "brdf" weights the K_DD lobes by N·L, eq 2.3.3 (default); "renderer"
 #: weights them by N·V = R·N as the prefiltered renderers evaluate eq 2.5.1. Measured against ground
 #: truth (bench.basis_accuracy, docs/render-fit.md) "renderer" is worse in both modes, so it is kept
 #: only for that comparison.
 TARGETS = ("brdf", "renderer")
-#: Largest lobe count fitted by enumeration (2^(m+1) passive sets); larger bases use Lawson–Hanson.
-ENUM_MAX_UNKNOWNS = 10
 
 
 class LobeFitError(RenderError):
@@ -245,53 +244,6 @@ def targets_from_brdfs(brdfs: Sequence[DesignedBRDF]) -> Targets:
 
 # ----------------------------------------------------------------------------------------------------
 # Fixed-matrix problems
-
-
-def _subset_maps(r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """For the reduced k×k matrix R, stack pinv(R[:, P]) (padded to k×k) for every column subset P."""
-    k = r.shape[1]
-    n_sub = 1 << k
-    masks = ((np.arange(n_sub)[:, None] >> np.arange(k)[None, :]) & 1).astype(bool)
-    maps = np.zeros((n_sub, k, k))
-    scale = np.linalg.norm(r, axis=0)
-    scale = np.where(scale > 0.0, scale, 1.0)
-    for s in range(1, n_sub):
-        cols = np.flatnonzero(masks[s])
-        sub = r[:, cols] / scale[cols]
-        # rcond guards near-duplicate exponents: the subset is solved in its well-determined span only.
-        maps[s][cols] = np.linalg.pinv(sub, rcond=PINV_RCOND) / scale[cols][:, None]
-    return maps, masks
-
-
-@dataclass(frozen=True)
-class _Part:
-    """One fixed-matrix part of the fit: A = Q R over weighted rows, plus the passive-set maps."""
-
-    a: NDArray[np.float64]  # (rows, k) weighted design matrix
-    q: NDArray[np.float64]  # (rows, k)
-    r: NDArray[np.float64]  # (k, k)
-    pinv: NDArray[np.float64]  # (k, rows) least-squares solution map
-
-    @classmethod
-    def build(cls, a: NDArray[np.float64]) -> _Part:
-        q, r = np.linalg.qr(a)
-        scale = np.linalg.norm(a, axis=0)
-        scale = np.where(scale > 0.0, scale, 1.0)
-        pinv = np.linalg.pinv(a / scale, rcond=PINV_RCOND) / scale[:, None]
-        return cls(a, q, r, pinv)
-
-    @cached_property
-    def maps(self) -> NDArray[np.float64] | None:
-        """(2^k·k, k) stacked passive-set maps on the reduced RHS (built on first use), None if k is large."""
-        k = self.r.shape[1]
-        return _subset_maps(self.r)[0].reshape(-1, k) if k <= ENUM_MAX_UNKNOWNS else None
-
-    @cached_property
-    def pinv_r(self) -> NDArray[np.float64]:
-        """pinv(R) with the same column scaling and cut-off as :attr:`pinv` (pinv(A) = pinv(R) Qᵀ)."""
-        scale = np.linalg.norm(self.r, axis=0)
-        scale = np.where(scale > 0.0, scale, 1.0)
-        return np.linalg.pinv(self.r / scale, rcond=PINV_RCOND) / scale[:, None]
 
 
 @dataclass(frozen=True)
@@ -418,71 +370,6 @@ def fit_problem(
 # Solvers: each maps weighted RHS (d, rows, c) of one part to weights (d, k, c) >= 0
 
 
-def _solve_enum(part: _Part, d: NDArray[np.float64], chunk: int = 768) -> NDArray[np.float64]:
-    """Exact NNLS of min ‖R x − d‖, x ≥ 0 for every column of d (k, n) by passive-set enumeration."""
-    flat = part.maps
-    if flat is None:
-        return _solve_nnls(part, d)
-    k = part.r.shape[1]
-    n_sub = flat.shape[0] // k
-    out = np.empty_like(d)
-    for start in range(0, d.shape[1], chunk):
-        dd = d[:, start : start + chunk]
-        y = (flat @ dd).reshape(n_sub, k, -1)  # every passive-set solution
-        score = np.einsum("skn,kn->sn", y, part.r.T @ dd)  # bᵀA x_P = ‖A x_P‖² (projection)
-        score[(y < 0.0).any(axis=1)] = -np.inf
-        best = score.argmax(axis=0)
-        out[:, start : start + chunk] = y[best, :, np.arange(dd.shape[1])].T
-    return out
-
-
-def _solve_kkt(part: _Part, d: NDArray[np.float64], rounds: int = 4) -> NDArray[np.float64]:
-    """Exact NNLS for many columns: guess each passive set, verify the KKT conditions, repair, fall back.
-
-    Start from the signs of the unconstrained solution; solve on the guessed set with the precomputed
-    passive-set map; a column is done when x ≥ 0 and the gradient Rᵀ(Rx − d) ≥ 0 off the set (the KKT
-    conditions, sufficient for this convex problem). Otherwise drop negative entries and add violated
-    ones, up to *rounds* times; columns still unresolved go to Lawson–Hanson. Exact, like ``enum``,
-    at O(k²) per column instead of O(2^k k²).
-    """
-    flat = part.maps
-    if flat is None:
-        return _solve_nnls(part, d)
-    k = part.r.shape[1]
-    maps = flat.reshape(-1, k, k)
-    bits = 1 << np.arange(k)
-    out = np.zeros_like(d)
-    todo = np.arange(d.shape[1])
-    tol = 1e-10 * (np.abs(part.r).max() * np.abs(d).max(axis=0) + 1e-300)
-    passive = (part.pinv_r @ d) > 0.0
-    for _ in range(rounds):
-        if todo.size == 0:
-            return out
-        dd = d[:, todo]
-        x = np.einsum("nij,jn->in", maps[bits @ passive[:, todo]], dd)
-        grad = part.r.T @ (part.r @ x - dd)
-        ok = (x >= 0.0).all(axis=0) & (grad >= -tol[todo]).all(axis=0)
-        out[:, todo[ok]] = x[:, ok]
-        passive[:, todo] = (x > 0.0) | (grad < -tol[todo])
-        todo = todo[~ok]
-    if todo.size:
-        out[:, todo] = _solve_nnls(part, d[:, todo])
-    return out
-
-
-def _solve_nnls(part: _Part, d: NDArray[np.float64]) -> NDArray[np.float64]:
-    from scipy.optimize import nnls
-
-    out = np.zeros_like(d)
-    for j in range(d.shape[1]):
-        out[:, j] = nnls(part.r, d[:, j], maxiter=50 * part.r.shape[1])[0]
-    return out
-
-
-def _solve_clamped(part: _Part, d: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.maximum(part.pinv_r @ d, 0.0)
-
-
 def _solve_lp(part: _Part, b: NDArray[np.float64]) -> tuple[NDArray[np.float64], int]:
     """L1 fit min Σ|A x − b| s.t. x ≥ 0 by HiGHS (eq 2.4.2, thesis §2.4); returns (x, fallbacks)."""
     from scipy.optimize import linprog
@@ -511,32 +398,19 @@ def _solve_lp(part: _Part, b: NDArray[np.float64]) -> tuple[NDArray[np.float64],
     return out, fallbacks
 
 
-def _solve_perceptual(prob: FitProblem, t: Targets) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Perceptually weighted exact NNLS (module docstring): (k, d, 3) colour and (d, m) gloss weights."""
-    from scipy.optimize import nnls
+def resolvable_targets(targets: Targets, basis: LobeBasis) -> Targets:
+    """The targets with each gloss lobe's exponent capped at the basis's sharpest, E_max.
 
-    g = prob.geometry
-    rc, rg = prob.colour_rows, prob.gloss_rows
-    b_c = prob.colour_b(t)  # (d, rows, 3), rows weighted by √(solid angle)
-    value_c = b_c / g.weight[rc][None, :, None]  # the target BRDF·cos itself
-    s_c = np.maximum(value_c, PERCEPTUAL_FLOOR) ** -PERCEPTUAL_POWER
-    d, k = len(t), prob.colour.a.shape[1]
-    x_c = np.zeros((k, d, 3))
-    for i in range(d):
-        for c in range(3):
-            s = s_c[i, :, c]
-            x_c[:, i, c] = nnls(prob.colour.a * s[:, None], b_c[i, :, c] * s, maxiter=50 * k)[0]
-    if prob.gloss is None:
-        return x_c, np.zeros((d, prob.basis.size))
-    lobe_g = prob._gloss_values(t, rg)  # (d, rows) unweighted gloss term
-    grey_g = t.rho[:, prob.alpha_index[rg], :].mean(axis=2) * (g.n_dot_l[rg] / np.pi)[None, :]
-    s_g = np.maximum(lobe_g + grey_g, PERCEPTUAL_FLOOR) ** -PERCEPTUAL_POWER
-    b_g = lobe_g * g.weight[rg][None, :]
-    m = prob.gloss.a.shape[1]
-    x_g = np.zeros((d, m))
-    for i in range(d):
-        x_g[i] = nnls(prob.gloss.a * s_g[i][:, None], b_g[i] * s_g[i], maxiter=50 * m)[0]
-    return x_c, x_g
+    No non-negative blend of cos^E_i lobes is sharper than its sharpest lobe, and point samples of a
+    lobe sharper than that (a 100 GU design: n = 10⁷) see only its spike at α = 0, which a fit matches
+    with the widest lobes (a mirror drawn as haze). Capped, the best stand-in for such a lobe is the
+    sharpest basis lobe itself, and :func:`conserve_gloss_energy` keeps its energy ρ_s.
+    """
+    top = float(max(basis.exponents))
+    capped = np.minimum(targets.phong_exponent, top)
+    if np.array_equal(capped, targets.phong_exponent):
+        return targets
+    return Targets(targets.rho, capped, targets.specular_albedo)
 
 
 @dataclass(frozen=True)
@@ -580,20 +454,25 @@ def fit_targets(
     gloss_form: str = "thesis",
     target: str = "brdf",
     fall_off: bool = True,
+    energy: bool = True,
 ) -> FitReport:
     """Fit a batch of sampled designs to *basis* (default: the shipped one) with *method*.
 
     *fall_off*: fit the aspecular fall-off weight K_A too (module docstring); False: the thesis's model.
+    *energy*: the gloss lobes reflect exactly ρ_s, a lobe sharper than the basis fitted as its sharpest
+    (:func:`resolvable_targets`, :func:`conserve_gloss_energy`); False: the thesis's point-sample fit.
     """
     if method not in METHODS:
         raise RenderInputError("method", " | ".join(METHODS), method)
     basis = default_basis() if basis is None else basis
     prob = fit_problem(basis, gloss_form, target, fall_off)
+    if energy:
+        targets = resolvable_targets(targets, basis)
     n, m = len(targets), basis.size
     t0 = time.perf_counter()
     fallbacks = 0
     if method == "perceptual":
-        x_c, x_g = _solve_perceptual(prob, targets)
+        x_c, x_g = _solve_perceptual(prob, targets, energy)
     elif method == "lp-l1":
         x_c, fallbacks = _solve_lp(prob.colour, prob.colour_b(targets))
         x_c = x_c.transpose(1, 0, 2)  # (k, d, 3)
@@ -612,6 +491,8 @@ def fit_targets(
             x_g, fallbacks = x_g3[:, :, 0], fallbacks + f_g
         else:
             x_g = solve(prob.gloss, prob.gloss_d(targets)).T
+    if prob.gloss is not None and energy:
+        x_g = conserve_gloss_energy(x_g, basis, targets.specular_albedo)
     seconds = time.perf_counter() - t0
     if not (np.all(np.isfinite(x_c)) and np.all(np.isfinite(x_g))):
         raise LobeFitError(f"lobe fit ({method}) produced non-finite weights")

@@ -11,6 +11,11 @@ Given the designs on screen, the environment and the pixels (normals, views), :f
    :func:`choose_anisotropic_samples` makes the same choice for one design's anisotropy on its own (the
    GL renderer calls it per environment and anisotropy, and reports it as ``last_anisotropy``).
 
+4. the whole choice measured once more against the ground truth, the way the renderers draw
+   (``prefiltered-bent+lights`` by default; the anisotropy's error added in quadrature): "meets" only when
+   that total is within the tolerance; a setting that misses it gives way to the default (the shipped
+   lobe count, the full map) whenever that measures less, so a miss is never worse than the default.
+
 Each factor gets a share tolerance/√3 of the budget (errors of independent approximations add roughly
 in quadrature), measured as the given percentile of CIEDE2000 over pixels and designs, Lab relative to
 the scene's brightest white-Lambertian pixel. When even the richest setting misses its share the
@@ -28,8 +33,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.render import lobe_fit as lf
 from station.render import truth as tr
+from station.render import truth_lighting as tl
 from station.render.errors import RenderInputError
-from station.render.lobes import MAX_LOBES, basis_for_count
+from station.render.lobes import MAX_LOBES, basis_for_count, default_basis
 
 #: Environment widths tried (equirect pixels; powers of two).
 ENV_WIDTHS = (16, 32, 64, 128, 256, 512, 1024, 2048)
@@ -61,6 +67,7 @@ class LodChoice:
             "against full resolution",
             f"{self.anisotropic_samples} anisotropic sample(s): "
             f"ΔE {self.errors.get('anisotropy', 0.0):.2f} against the most-sampled image",
+            f"all together ΔE {self.errors.get('total', float('nan')):.2f} against ground truth",
         ]
         verdict = "meets" if self.met else "MISSES"
         text = (
@@ -74,7 +81,7 @@ class LodChoice:
 def downsample_equirect(img: NDArray[np.float64], width: int) -> NDArray[np.float64]:
     """Solid-angle-weighted box filter of an equirect map to (width/2, width) (width divides the map's)."""
     h, w = img.shape[:2]
-    return tr._box_downsample(img, tr.equirect_solid_angles(h, w), width)[0]
+    return tl._box_downsample(img, tl.equirect_solid_angles(h, w), width)[0]
 
 
 def _de(scene_white: float, ref: NDArray[np.float64], img: NDArray[np.float64], percentile: float) -> float:
@@ -155,6 +162,14 @@ def choose_anisotropic_samples(
     return AnisotropyChoice(s, err, float(tolerance_de), why)
 
 
+def _check_budget(tolerance_de: float, percentile: float) -> None:
+    """Raise RenderInputError naming the field when the tolerance or the percentile is out of range."""
+    if not (np.isfinite(tolerance_de) and tolerance_de > 0):
+        raise RenderInputError("tolerance_de", "a CIEDE2000 tolerance > 0", tolerance_de)
+    if not 0.0 < percentile <= 100.0:
+        raise RenderInputError("percentile", "0 < percentile <= 100", percentile)
+
+
 def choose_lod(
     designs: Sequence[Any],
     environment: Any,
@@ -163,7 +178,7 @@ def choose_lod(
     tolerance_de: float = 1.0,
     *,
     percentile: float = 95.0,
-    mode: str = "prefiltered",
+    mode: str = "prefiltered-bent+lights",
     lobe_counts: Sequence[int] = tuple(range(1, MAX_LOBES + 1)),
     widths: Sequence[int] = ENV_WIDTHS,
     anisotropic: Callable[[int], NDArray[np.float64]] | None = None,
@@ -186,73 +201,140 @@ def choose_lod(
     percentile
         Percentile of the per-pixel ΔE that must stay within each share (0–100).
     mode
-        How the lobe model is evaluated (:data:`station.render.truth.LOBE_MODES`): ``prefiltered`` (as
-        the renderers do today), ``prefiltered-lut`` (with the horizon-factor table) or ``exact``.
+        How the lobe model is evaluated (:data:`station.render.truth.LOBE_MODES`): default
+        ``prefiltered-bent+lights``, the way the renderers draw (horizon tables, bent directionally
+        diffuse lookups, lights shaded exactly); ``prefiltered``, ``prefiltered-lut`` or ``exact``.
     anisotropic
         Optional ``samples -> image (P, 3)`` renderer of the anisotropic scene; None for isotropic.
     """
-    if not (np.isfinite(tolerance_de) and tolerance_de > 0):
-        raise RenderInputError("tolerance_de", "a CIEDE2000 tolerance > 0", tolerance_de)
-    if not 0.0 < percentile <= 100.0:
-        raise RenderInputError("percentile", "0 < percentile <= 100", percentile)
+    _check_budget(tolerance_de, percentile)
     if not designs:
         raise RenderInputError("designs", "at least one design", len(designs))
-    img = tr._as_equirect(environment)
+    img = tl._as_equirect(environment)
     full_width = img.shape[1]
     widths = sorted(w for w in widths if w <= full_width and full_width % w == 0) or [full_width]
     share = tolerance_de / np.sqrt(3.0)
     brdfs = [d if isinstance(d, lf.DesignedBRDF) else lf.designed_brdf(d) for d in designs]
-    targets = lf.targets_from_brdfs(brdfs)
-    scene = tr.TruthScene(img, normals, views, samples, min(quadrature_width, full_width))
-    white = float(scene.white()[..., 1].max())
-    truth = np.concatenate([scene.truth(b) for b in brdfs])
+    ctx = _LodScene(brdfs, img, normals, views, samples, min(quadrature_width, full_width), mode, percentile)
     notes: list[str] = []
-
-    def lobe_images(sc: tr.TruthScene, m: int) -> NDArray[np.float64]:
-        rep = lf.fit_targets(targets, basis_for_count(m))
-        return np.concatenate([sc.lobes(rep.weights(i), mode) for i in range(len(brdfs))])
-
     # 1. lobes against ground truth
-    lobe_err = {}
-    chosen_m = None
-    for m in sorted(lobe_counts):
-        lobe_err[m] = _de(white, truth, lobe_images(scene, m), percentile)
-        if lobe_err[m] <= share:
-            chosen_m = m
-            break
-    met = chosen_m is not None
-    if chosen_m is None:
-        chosen_m = min(lobe_err, key=lobe_err.__getitem__)
+    chosen_m, lobe_err, met = ctx.fewest_lobes(lobe_counts, share)
+    if not met:
         notes.append(
             f"No lobe count reaches ΔE {share:.2f} against ground truth in {mode} mode; "
             f"the most accurate ({chosen_m}) is used."
         )
     # 2. environment resolution against full resolution, chosen lobes
-    ref = lobe_images(scene, chosen_m)
-    chosen_w, env_err = full_width, 0.0
-    for w in widths:
-        if w == full_width:
-            break
-        # The low-resolution map, held piecewise constant at full size, goes through the same integrator,
-        # so only the lost environment detail differs (not the quadrature).
-        f = full_width // w
-        blocky = np.repeat(np.repeat(downsample_equirect(img, w), f, axis=0), f, axis=1)
-        small = tr.TruthScene(blocky, normals, views, samples, min(quadrature_width, full_width))
-        err = _de(white, ref, lobe_images(small, chosen_m), percentile)
-        if err <= share:
-            chosen_w, env_err = w, err
-            break
+    chosen_w, env_err = ctx.smallest_width(widths, chosen_m, share)
     # 3. anisotropic samples against the most-sampled image
     chosen_s, aniso_err = 1, 0.0
     if anisotropic is not None:
-        chosen_s, aniso_err = _fewest_samples(anisotropic, white, share, percentile, sample_counts)
+        chosen_s, aniso_err = _fewest_samples(anisotropic, ctx.white, share, percentile, sample_counts)
+    step_err = lobe_err[chosen_m]  # the lobe step's error (reported even when step 4 changes the choice)
+    # 4. the whole choice against ground truth, and against the default (shipped lobes, full map)
+    chosen_m, chosen_w, total = ctx.verify(chosen_m, chosen_w, aniso_err, float(tolerance_de), notes)
+    met = total <= tolerance_de
+    if not met:
+        notes.append(f"The chosen setting measures ΔE {total:.2f} against ground truth: above the tolerance.")
     return LodChoice(
         chosen_m,
         basis_for_count(chosen_m).exponents,
         chosen_w,
         chosen_s,
         float(tolerance_de),
-        {"lobes": lobe_err[chosen_m], "environment": env_err, "anisotropy": aniso_err},
+        {
+            "lobes": step_err,
+            "environment": env_err,
+            "anisotropy": aniso_err,
+            "total": total,
+        },
         met,
         tuple(notes),
     )
+
+
+class _LodScene:
+    """The scene :func:`choose_lod` measures: truth, the lobe model at a lobe count and map width."""
+
+    def __init__(
+        self,
+        brdfs: Sequence[lf.DesignedBRDF],
+        img: NDArray[np.float64],
+        normals: ArrayLike,
+        views: ArrayLike,
+        samples: int,
+        quadrature_width: int,
+        mode: str,
+        percentile: float,
+    ) -> None:
+        self.brdfs, self.img, self.mode, self.percentile = list(brdfs), img, mode, percentile
+        self.normals, self.views = normals, views
+        self.samples, self.quadrature_width = samples, quadrature_width
+        self.targets = lf.targets_from_brdfs(self.brdfs)
+        self.scene = tr.TruthScene(img, normals, views, samples, quadrature_width)
+        self.white = float(self.scene.white()[..., 1].max())
+        self.truth = np.concatenate([self.scene.truth(b) for b in self.brdfs])
+        self._scenes: dict[int, tr.TruthScene] = {img.shape[1]: self.scene}
+
+    def scene_at(self, width: int) -> tr.TruthScene:
+        """The pixels under the map box-filtered to *width* and held piecewise constant at full size (so
+        only the lost environment detail differs, not the quadrature)."""
+        if width not in self._scenes:
+            f = self.img.shape[1] // width
+            blocky = np.repeat(np.repeat(downsample_equirect(self.img, width), f, axis=0), f, axis=1)
+            self._scenes[width] = tr.TruthScene(
+                blocky, self.normals, self.views, self.samples, self.quadrature_width
+            )
+        return self._scenes[width]
+
+    def images(self, m: int, width: int) -> NDArray[np.float64]:
+        """The lobe model of every design with the m-lobe basis, on the map at *width*, in the mode."""
+        rep = lf.fit_targets(self.targets, basis_for_count(m))
+        sc = self.scene_at(width)
+        return np.concatenate([sc.lobes(rep.weights(i), self.mode) for i in range(len(self.brdfs))])
+
+    def error(self, ref: NDArray[np.float64], img: NDArray[np.float64]) -> float:
+        """CIEDE2000 at the percentile, Lab relative to the scene's white."""
+        return _de(self.white, ref, img, self.percentile)
+
+    def fewest_lobes(self, counts: Sequence[int], share: float) -> tuple[int, dict[int, float], bool]:
+        """(fewest lobes within *share* of the truth, errors so far, whether one was); else the best."""
+        errors: dict[int, float] = {}
+        full = self.img.shape[1]
+        for m in sorted(counts):
+            errors[m] = self.error(self.truth, self.images(m, full))
+            if errors[m] <= share:
+                return m, errors, True
+        return min(errors, key=errors.__getitem__), errors, False
+
+    def smallest_width(self, widths: Sequence[int], m: int, share: float) -> tuple[int, float]:
+        """(smallest map width whose m-lobe images lie within *share* of full resolution, its error)."""
+        full = self.img.shape[1]
+        ref = self.images(m, full)
+        for w in widths:
+            if w == full:
+                break
+            err = self.error(ref, self.images(m, w))
+            if err <= share:
+                return w, err
+        return full, 0.0
+
+    def verify(
+        self, m: int, width: int, aniso_err: float, tolerance: float, notes: list[str]
+    ) -> tuple[int, int, float]:
+        """Measure the chosen (m, width) against the truth, the anisotropy's error added in quadrature;
+        when it misses *tolerance* and the default (shipped lobe count, full map) measures less, choose
+        the default instead. Returns (lobes, width, total error)."""
+        full = self.img.shape[1]
+        chosen = float(np.hypot(self.error(self.truth, self.images(m, width)), aniso_err))
+        m_def = default_basis().size
+        if (m, width) == (m_def, full) or chosen <= tolerance:
+            return m, width, chosen
+        default = float(np.hypot(self.error(self.truth, self.images(m_def, full)), aniso_err))
+        if default < chosen:
+            notes.append(
+                f"The reduced setting ({m} lobes, map {width}) measures ΔE {chosen:.2f}, the default "
+                f"({m_def} lobes, full map) {default:.2f}: the default is used."
+            )
+            return m_def, full, default
+        return m, width, chosen

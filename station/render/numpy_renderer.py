@@ -59,8 +59,9 @@ The true value is ≥ 0 (min(1, 1 + cos α) ≥ 0), hence the clamp. ``"lut-r"``
 of B_A gives 0.7–3.3 %, at normalize(a + 2.133 N) (the wide lobes' bend) 0.5–3.3 %.
 
 Clear coat: with a :class:`station.model.gloss.ClearCoat` every gloss term (w_G,i, lobe maps and
-lights) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°), Schlick's Fresnel of the coat's index
-(thesis §2.5.2, last paragraph); ``coat=None`` is the thesis's model as printed.
+lights) is multiplied per pixel by s(N·V) = F(N·V)/ρ_ref, the coat's exact dielectric Fresnel, and every
+base term (diffuse, directionally diffuse, fall-off) by what the coat transmits, 1 − F(N·V) (energy
+conserving: a white furnace returns at most its light); ``coat=None`` is the thesis's model as printed.
 
 Pixels that miss the object show a constant grey background, or with a scene's
 :class:`~station.render.stage.Stage` the environment as backdrop over a ground disc with its contact
@@ -275,21 +276,25 @@ def shade_pixels(
     w_d, w_dd, w_g = weights.map_weights()
     d = diffuse_lookup(basis, normal, diffuse)
     g, h = lobe_factors(horizon_table(basis.exponents, horizon), n_dot_v)
-    s = np.ones((n_dot_v.shape[0], 1)) if coat is None else coat.gloss_scale(n_dot_v)[:, None]
-    out = w_d * d
+    base = w_d * d
     if weights.has_fall_off:
-        out = out + weights.fall_off_map_weight() * fall_off_term(
+        base = base + weights.fall_off_map_weight() * fall_off_term(
             basis, normal, reflect, n_dot_v, diffuse, horizon, d_normal=d
         )
+    gloss = np.zeros_like(base)
     for i, cube in enumerate(basis.cubes):
         c_r = sample_cube(cube, reflect)
         bent = dd_direction(basis.exponents[i], normal, reflect, horizon)
         c_dd = c_r if bent is None else sample_cube(cube, bent)
-        out = out + s * h[:, i : i + 1] * w_g[i] * c_r + g[:, i : i + 1] * w_dd[i] * c_dd
+        gloss = gloss + h[:, i : i + 1] * w_g[i] * c_r
+        base = base + g[:, i : i + 1] * w_dd[i] * c_dd
         lights = light_terms(basis, i, normal, reflect)
         if lights is not None:
-            out = out + s * w_g[i] * lights[0] + w_dd[i] * lights[1]
-    return out
+            gloss = gloss + w_g[i] * lights[0]
+            base = base + w_dd[i] * lights[1]
+    if coat is None:
+        return base + gloss
+    return coat.base_scale(n_dot_v)[:, None] * base + coat.gloss_scale(n_dot_v)[:, None] * gloss
 
 
 def stage_background(

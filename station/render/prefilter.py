@@ -312,6 +312,87 @@ class PrefilteredBasis:
     wide: tuple[bool, ...] = ()  # lobe i prefiltered from the residual map
 
 
+def _sample_lobes(
+    engine: str,
+    sources: tuple[Environment, Environment],
+    src: int,
+    plan: Sequence[tuple[float, int, int]],
+    wide: Sequence[bool],
+    sampled: Sequence[int],
+    cubes: list[np.ndarray | None],
+    gl_ctx,
+) -> None:
+    """Prefilter the lobes *sampled* (indices into *plan*) by the tangent-grid quadrature into *cubes*,
+    grouped by source (``sources[int(wide[i])]``: the full map, or the residual without its lights)."""
+    for k in (0, 1):
+        group = [i for i in sampled if int(wide[i]) == k]
+        if not group:
+            continue
+        source = sources[k]
+        if engine == "gl":
+            with GLPrefilter.from_equirect(source.equirect, src, gl_ctx) as gl:
+                for i in group:
+                    cubes[i] = gl.run(*plan[i])
+        else:
+            src_cube = source.to_cube(src)
+            for i in group:
+                cubes[i] = prefilter_grid_numpy(src_cube, *plan[i]).astype(np.float32)
+
+
+def _compute_maps(
+    env: Environment,
+    residual: Environment,
+    src: int,
+    plan: Sequence[tuple[float, int, int]],
+    wide: Sequence[bool],
+    todo: Sequence[int],
+    cubes: list[np.ndarray | None],
+    engine: str,
+    ctx,
+    timings: dict[str, float],
+) -> np.ndarray:
+    """Compute the lobe maps *todo* into *cubes* (brute-force sums up to BRUTE_MAX_SIZE, the quadrature
+    above) and return the diffuse map; seconds per stage into *timings*. A GL context is made (and
+    released) when *engine* is ``gl`` and *ctx* is None."""
+    small: dict[tuple[int, int], np.ndarray] = {}
+
+    def small_cube(k: int, size: int) -> np.ndarray:
+        if (k, size) not in small:
+            small[(k, size)] = cubemap.equirect_to_cube((residual if k else env).equirect, size)
+        return small[(k, size)]
+
+    own = engine == "gl" and ctx is None
+    gl_ctx = create_gl_context() if own else ctx
+    brute_gl = GLBrute(gl_ctx) if engine == "gl" else None
+
+    def brute(k: int, exponent: float, size: int, src_size: int) -> np.ndarray:
+        cube = small_cube(k, src_size)
+        if brute_gl is not None:
+            return brute_gl.run(cube, exponent, size)
+        return prefilter_brute(cube, exponent, size).astype(np.float32)
+
+    try:
+        if todo:
+            t0 = time.perf_counter()
+            for i in [i for i in todo if plan[i][1] <= BRUTE_MAX_SIZE]:
+                e, size, _ = plan[i]
+                cubes[i] = brute(int(wide[i]), e, size, max(32, 2 * size))
+            timings["brute"] = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            sampled = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
+            _sample_lobes(engine, (env, residual), src, plan, wide, sampled, cubes, gl_ctx)
+            timings["lobes"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        diffuse = brute(0, 1.0, DIFFUSE_SIZE, 32)
+        timings["diffuse"] = time.perf_counter() - t0
+    finally:
+        if brute_gl is not None:
+            brute_gl.release()
+        if own:
+            gl_ctx.release()
+    return diffuse
+
+
 def prefilter_basis(
     env: Environment,
     exponents: Sequence[float],
@@ -355,54 +436,7 @@ def prefilter_basis(
     ]
     cubes: list[np.ndarray | None] = [cache.get(k) if cache else None for k in keys]
     todo = [i for i, c in enumerate(cubes) if c is None]
-    small: dict[tuple[int, int], np.ndarray] = {}
-
-    def small_cube(k: int, size: int) -> np.ndarray:
-        if (k, size) not in small:
-            small[(k, size)] = cubemap.equirect_to_cube((residual if k else env).equirect, size)
-        return small[(k, size)]
-
-    own = engine == "gl" and ctx is None
-    gl_ctx = create_gl_context() if own else ctx
-    brute_gl = GLBrute(gl_ctx) if engine == "gl" else None
-
-    def brute(k: int, exponent: float, size: int, src_size: int) -> np.ndarray:
-        cube = small_cube(k, src_size)
-        if brute_gl is not None:
-            return brute_gl.run(cube, exponent, size)
-        return prefilter_brute(cube, exponent, size).astype(np.float32)
-
-    try:
-        if todo:
-            t0 = time.perf_counter()
-            for i in [i for i in todo if plan[i][1] <= BRUTE_MAX_SIZE]:
-                e, size, _ = plan[i]
-                cubes[i] = brute(int(wide[i]), e, size, max(32, 2 * size))
-            timings["brute"] = time.perf_counter() - t0
-            t0 = time.perf_counter()
-            sampled = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
-            for k in (0, 1):
-                group = [i for i in sampled if int(wide[i]) == k]
-                if not group:
-                    continue
-                source = residual if k else env
-                if engine == "gl":
-                    with GLPrefilter.from_equirect(source.equirect, src, gl_ctx) as gl:
-                        for i in group:
-                            cubes[i] = gl.run(*plan[i])
-                else:
-                    src_cube = source.to_cube(src)
-                    for i in group:
-                        cubes[i] = prefilter_grid_numpy(src_cube, *plan[i]).astype(np.float32)
-            timings["lobes"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        diffuse = brute(0, 1.0, DIFFUSE_SIZE, 32)
-        timings["diffuse"] = time.perf_counter() - t0
-    finally:
-        if brute_gl is not None:
-            brute_gl.release()
-        if own:
-            gl_ctx.release()
+    diffuse = _compute_maps(env, residual, src, plan, wide, todo, cubes, engine, ctx, timings)
     maps = [c for c in cubes if c is not None]
     if len(maps) != len(cubes):
         raise RenderError("prefilter: a lobe was neither cached nor computed")

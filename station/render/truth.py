@@ -26,8 +26,13 @@ BRDF's table (linear hat weights, the same interpolation :meth:`DesignedBRDF.rho
 design or lobe costs one dot product per pixel.
 
 Clear coat: with a :class:`station.model.gloss.ClearCoat` the gloss term (the designed BRDF's Phong
-lobe, the lobe model's K_G lobes) is multiplied per pixel by s(N·V) = F(N·V)/F(cos 60°) (Schlick's
-Fresnel of the coat's index, the factor the renderers apply); ``coat=None`` is the thesis's BRDF.
+lobe, the lobe model's K_G lobes) is multiplied per pixel by s(N·V) = F(N·V)/ρ_ref (the coat's exact
+dielectric Fresnel) and the colour terms by 1 − F(N·V), the factors the renderers apply; ``coat=None``
+is the thesis's BRDF.
+
+Near-mirror lobes: a lobe narrower than MIRROR_PIXELS map pixels (:func:`resolves_pixels`; a 100 GU
+design's n = 10⁷) would miss point lights at pixel centres, so it importance-samples the whole map with
+the bright pixels left in, as small area lights (the reflection of a sun disc in a mirror is the disc).
 
 Flakes: :func:`flake_sparkle_truth` is the flake layer's sparkle with the full-resolution map and the
 exact expected flake reflection (the renderers use the sharpest and a matching lobe map).
@@ -40,7 +45,6 @@ Environment``) or the array itself, in the equirectangular convention of ``stati
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -51,17 +55,22 @@ from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
 from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf, fall_off_factor
 from station.render.lobes import bent_direction, horizon_factors
+from station.render.truth_lighting import MAX_POINT_LIGHTS as MAX_POINT_LIGHTS
+from station.render.truth_lighting import MIRROR_PIXELS as MIRROR_PIXELS
+from station.render.truth_lighting import POINT_THRESHOLD as POINT_THRESHOLD
+from station.render.truth_lighting import QUADRATURE_WIDTH as QUADRATURE_WIDTH
+from station.render.truth_lighting import Lighting as Lighting
+from station.render.truth_lighting import _as_equirect
+from station.render.truth_lighting import equirect_directions as equirect_directions
+from station.render.truth_lighting import equirect_solid_angles as equirect_solid_angles
+from station.render.truth_lighting import prepare_lighting as prepare_lighting
+from station.render.truth_lighting import resolves_pixels as resolves_pixels
+from station.render.truth_lighting import sample_equirect as sample_equirect
 from station.render.weights import LobeWeights
 
 if TYPE_CHECKING:
     from station.model import FaceFlopTravelGloss
 
-#: Pixels brighter than this multiple of the map's mean luminance become point lights.
-POINT_THRESHOLD = 50.0
-#: Most point lights extracted (the threshold rises until they fit).
-MAX_POINT_LIGHTS = 4096
-#: Width of the box-filtered quadrature map for broad kernels.
-QUADRATURE_WIDTH = 256
 #: Exponent from which a lobe is importance sampled instead of using the quadrature.
 SHARP_EXPONENT = 64.0
 #: Importance samples per pixel and sharp lobe.
@@ -73,116 +82,6 @@ LOBE_MODES = ("exact", "prefiltered", "prefiltered-lut", "prefiltered-lut+lights
 _BINS = ALPHA_GRID_DEG.size  # 721 bins of 0.25°
 _COS_GRID = np.cos(np.radians(ALPHA_GRID_DEG))
 _PIXEL_CHUNK = 48
-
-
-def _as_equirect(environment: Any) -> NDArray[np.float64]:
-    img = np.asarray(getattr(environment, "equirect", environment), dtype=np.float64)
-    if img.ndim != 3 or img.shape[2] != 3 or img.shape[1] != 2 * img.shape[0] or img.shape[0] < 2:
-        raise RenderInputError(
-            "environment", "an equirectangular radiance map (H, 2H, 3)", getattr(img, "shape", None)
-        )
-    if not np.all(np.isfinite(img)) or np.any(img < 0.0):
-        raise RenderInputError("environment", "finite radiance >= 0", "non-finite or negative pixels")
-    return img
-
-
-def equirect_directions(height: int, width: int) -> NDArray[np.float64]:
-    """Unit direction of each pixel centre, (H, W, 3) (convention in the module docstring)."""
-    theta = np.pi * (np.arange(height) + 0.5) / height
-    phi = 2.0 * np.pi * ((np.arange(width) + 0.5) / width - 0.5)
-    st = np.sin(theta)[:, None]
-    return np.stack(
-        [st * np.sin(phi)[None, :], np.repeat(np.cos(theta)[:, None], width, 1), -st * np.cos(phi)[None, :]],
-        axis=-1,
-    )
-
-
-def equirect_solid_angles(height: int, width: int) -> NDArray[np.float64]:
-    """Solid angle (sr) of each pixel, (H, W); they sum to 4π."""
-    edges = np.pi * np.arange(height + 1) / height
-    band = 2.0 * np.pi * (np.cos(edges[:-1]) - np.cos(edges[1:])) / width
-    return np.repeat(band[:, None], width, axis=1)
-
-
-def sample_equirect(img: NDArray[np.float64], dirs: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Bilinear lookup of an equirect map along unit directions (..., 3) → (..., 3), wrapping in φ."""
-    h, w = img.shape[:2]
-    theta = np.arccos(np.clip(dirs[..., 1], -1.0, 1.0))
-    phi = np.arctan2(dirs[..., 0], -dirs[..., 2])
-    x = (phi / (2.0 * np.pi) + 0.5) * w - 0.5
-    y = np.clip(theta / np.pi * h - 0.5, 0.0, h - 1.0)
-    x0 = np.floor(x).astype(np.int64)
-    y0 = np.minimum(np.floor(y).astype(np.int64), h - 2)
-    tx = (x - x0)[..., None]
-    ty = (y - y0)[..., None]
-    x0 %= w
-    x1 = (x0 + 1) % w
-    top = img[y0, x0] * (1 - tx) + img[y0, x1] * tx
-    bottom = img[y0 + 1, x0] * (1 - tx) + img[y0 + 1, x1] * tx
-    return top * (1 - ty) + bottom * ty
-
-
-def _box_downsample(
-    img: NDArray[np.float64], weights: NDArray[np.float64], width: int
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Solid-angle-weighted box filter to (width/2, width); returns (radiance, solid angles)."""
-    h, w = img.shape[:2]
-    if w <= width:
-        return img, weights
-    f = w // width
-    if w % width:
-        raise RenderInputError("quadrature_width", f"a divisor of the map width {w}", width)
-    flux = (img * weights[..., None]).reshape(h // f, f, width, f, 3).sum(axis=(1, 3))
-    om = weights.reshape(h // f, f, width, f).sum(axis=(1, 3))
-    return flux / om[..., None], om
-
-
-@dataclass(frozen=True)
-class Lighting:
-    """An environment split for integration (module docstring).
-
-    Attributes
-    ----------
-    residual
-        (H, W, 3) the map with point-light pixels removed (set to their neighbours' median level).
-    quad_dirs, quad_flux
-        (M, 3) directions and (M, 3) radiance × solid angle of the box-filtered residual.
-    point_dirs, point_flux
-        (P, 3) directions and (P, 3) radiance × solid angle of the extracted point lights.
-    """
-
-    residual: NDArray[np.float64]
-    quad_dirs: NDArray[np.float64]
-    quad_flux: NDArray[np.float64]
-    point_dirs: NDArray[np.float64]
-    point_flux: NDArray[np.float64]
-
-
-def prepare_lighting(
-    environment: Any, quadrature_width: int = QUADRATURE_WIDTH, point_threshold: float = POINT_THRESHOLD
-) -> Lighting:
-    """Split *environment* into point lights, a quadrature and a residual map (module docstring)."""
-    img = _as_equirect(environment)
-    h, w = img.shape[:2]
-    dirs = equirect_directions(h, w)
-    om = equirect_solid_angles(h, w)
-    lum = img @ np.array([0.2126, 0.7152, 0.0722])
-    mean_lum = float((lum * om).sum() / (4.0 * np.pi))
-    threshold = point_threshold * max(mean_lum, 1e-30)
-    bright = lum > threshold
-    while bright.sum() > MAX_POINT_LIGHTS:
-        threshold *= 2.0
-        bright = lum > threshold
-    residual = img.copy()
-    if bright.any():
-        fill = np.median(img[~bright], axis=0) if (~bright).any() else np.zeros(3)
-        residual[bright] = np.minimum(img[bright], fill)
-    point_flux = (img[bright] - residual[bright]) * om[bright][:, None]
-    q_img, q_om = _box_downsample(residual, om, quadrature_width)
-    q_dirs = equirect_directions(*q_img.shape[:2])
-    return Lighting(
-        residual, q_dirs.reshape(-1, 3), (q_img * q_om[..., None]).reshape(-1, 3), dirs[bright], point_flux
-    )
 
 
 def _frames(axis: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -304,12 +203,22 @@ class TruthScene:
         kernel = np.clip(cos_grid, 0.0, 1.0) ** exponent
         if exponent < SHARP_EXPONENT:
             value = self._binned(kind, kernel, points_only=False)
+        elif self._area_lights(exponent):
+            value = self._sampled(exponent, kind, self.lighting.full)
         else:
             value = self._binned(kind, kernel, points_only=True) + self._sampled(exponent, kind)
         self._cache[key] = value
         return value
 
-    def _sampled(self, exponent: float, kind: str) -> NDArray[np.float64]:
+    def _area_lights(self, exponent: float) -> bool:
+        """Whether a sharp lobe samples the whole map, point lights as pixels (:func:`resolves_pixels`)."""
+        return exponent >= SHARP_EXPONENT and resolves_pixels(exponent, self.lighting.full.shape[0])
+
+    def _sampled(
+        self, exponent: float, kind: str, image: NDArray[np.float64] | None = None
+    ) -> NDArray[np.float64]:
+        """Importance-sampled ∫ L cos^E ψ w dω over *image* (default: the residual map), (P, 3)."""
+        image = self.lighting.residual if image is None else image
         local = _lobe_samples(exponent, self.samples)
         t, b = self._tangents
         out = np.empty((self.normals.shape[0], 3))
@@ -320,7 +229,7 @@ class TruthScene:
                 + local[None, :, 1:2] * b[sl, None, :]
                 + local[None, :, 2:3] * self.reflect[sl, None, :]
             )
-            rad = sample_equirect(self.lighting.residual, dirs)
+            rad = sample_equirect(image, dirs)
             n_dot = np.einsum("pkc,pc->pk", dirs, self.normals[sl])
             w = {"cos": np.maximum(n_dot, 0.0), "mask": (n_dot > 0.0) * 1.0, "open": np.ones_like(n_dot)}[
                 kind
@@ -334,11 +243,14 @@ class TruthScene:
 
     # -- shading -------------------------------------------------------------------------------------
 
-    def coat_scale(self, coat: ClearCoat | None) -> NDArray[np.float64]:
-        """Per pixel factor on the gloss terms, (P, 1): s(N·V) of *coat*, ones for None (module docstring)."""
+    def coat_factors(self, coat: ClearCoat | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Per pixel factors (P, 1) on the gloss and on the base terms: s(N·V) and 1 − F(N·V) of *coat*,
+        ones for None (module docstring)."""
         if coat is None:
-            return np.ones((self.normals.shape[0], 1))
-        return coat.gloss_scale(np.einsum("ij,ij->i", self.normals, self.views))[:, None]
+            one = np.ones((self.normals.shape[0], 1))
+            return one, one
+        n_dot_v = np.einsum("ij,ij->i", self.normals, self.views)
+        return coat.gloss_scale(n_dot_v)[:, None], coat.base_scale(n_dot_v)[:, None]
 
     def truth(self, brdf: DesignedBRDF, coat: ClearCoat | None = None) -> NDArray[np.float64]:
         """Radiance of the designed BRDF, (..., 3) (module docstring); *coat*: clear-coat Fresnel or None."""
@@ -349,7 +261,8 @@ class TruthScene:
             / (2.0 * np.pi)
             * self.lobe(brdf.phong_exponent, "mask")
         )
-        return (colour + self.coat_scale(coat) * gloss).reshape(*self.shape, 3)
+        scale, base = self.coat_factors(coat)
+        return (base * colour + scale * gloss).reshape(*self.shape, 3)
 
     def truth_direct(self, brdf: DesignedBRDF, coat: ClearCoat | None = None) -> NDArray[np.float64]:
         """:meth:`truth` without the per-pixel histograms: one pass over the directions for one design.
@@ -361,7 +274,8 @@ class TruthScene:
         n_exp = brdf.phong_exponent
         peak = brdf.specular_albedo * (n_exp + 1.0) / (2.0 * np.pi)
         sharp = n_exp >= SHARP_EXPONENT
-        scale = self.coat_scale(coat)
+        area = self._area_lights(n_exp)
+        scale, base = self.coat_factors(coat)
         out = np.empty((self.normals.shape[0], 3))
         for s in range(0, out.shape[0], _PIXEL_CHUNK):
             sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
@@ -375,10 +289,11 @@ class TruthScene:
             )
             lobe = (n_dot > 0.0) * np.clip(cos_psi, 0.0, 1.0) ** n_exp
             if sharp:  # residual map by importance sampling below; only the point lights here
-                lobe[:, : self.lighting.quad_dirs.shape[0]] = 0.0
-            out[sl] = colour + scale[sl] * peak * (lobe @ flux)
+                lobe[:, : self.lighting.quad_dirs.shape[0] if not area else None] = 0.0
+            out[sl] = base[sl] * colour + scale[sl] * peak * (lobe @ flux)
         if sharp:
-            out += scale * peak * self._sampled(n_exp, "mask")
+            image = self.lighting.full if area else None
+            out += scale * peak * self._sampled(n_exp, "mask", image)
         return out.reshape(*self.shape, 3)
 
     def lobes(
@@ -401,20 +316,17 @@ class TruthScene:
         """
         if mode not in LOBE_MODES:
             raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
-        out = weights.k_d[None, :] * self.irradiance()
+        base = weights.k_d[None, :] * self.irradiance()
         if weights.has_fall_off:
-            out = out + weights.k_a[None, :] * self._binned(
+            base = base + weights.k_a[None, :] * self._binned(
                 "cos", fall_off_factor(_COS_GRID), points_only=False
             )
-        s = self.coat_scale(coat)
+        gloss = np.zeros_like(base)
         r_dot_n = np.einsum("ij,ij->i", self.reflect, self.normals)
         for i, e in enumerate(weights.exponents):
             if mode == "exact":
-                out = (
-                    out
-                    + weights.k_dd[i][None, :] * self.lobe(e, "cos")
-                    + s * weights.k_g[i] * self.lobe(e, "mask")
-                )
+                base = base + weights.k_dd[i][None, :] * self.lobe(e, "cos")
+                gloss = gloss + weights.k_g[i] * self.lobe(e, "mask")
                 continue
             lobe = self.lobe(e, "open")
             if mode == "prefiltered":
@@ -432,13 +344,12 @@ class TruthScene:
                 dd_lobe = (
                     self._bent_lobe(e) if mode == "prefiltered-bent+lights" and e < SHARP_EXPONENT else lobe
                 )
-                out = out + (
-                    weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
-                    + s * weights.k_g[i] * self._binned("mask", kernel, points_only=True)
-                )
-            out = (
-                out + weights.k_dd[i][None, :] * g[:, None] * dd_lobe + s * weights.k_g[i] * h[:, None] * lobe
-            )
+                base = base + weights.k_dd[i][None, :] * self._binned("cos", kernel, points_only=True)
+                gloss = gloss + weights.k_g[i] * self._binned("mask", kernel, points_only=True)
+            base = base + weights.k_dd[i][None, :] * g[:, None] * dd_lobe
+            gloss = gloss + weights.k_g[i] * h[:, None] * lobe
+        scale, attenuation = self.coat_factors(coat)
+        out = attenuation * base + scale * gloss
         return out.reshape(*self.shape, 3)
 
     def _bent_lobe(self, exponent: float) -> NDArray[np.float64]:

@@ -109,8 +109,9 @@ uniform vec3 u_wd[2];
 uniform vec3 u_wdd[2 * N_LOBES];
 uniform float u_wg[2 * N_LOBES];
 uniform vec3 u_background;
-// Clear coat (station.model.gloss.ClearCoat): gloss terms times s = F(N.V)/F(cos 60), Schlick's F with
-// F0 = u_coat_f0, compiled in (HAS_COAT) only for a frame with a coat; without it s = 1, the thesis's model.
+// Clear coat (station.model.gloss.ClearCoat): gloss terms times F(N.V)/u_coat_ref (exact dielectric F of the
+// coat's index, from F0 = u_coat_f0), base terms times 1 - F(N.V); compiled in (HAS_COAT) only for a frame
+// with a coat; without it the thesis's model.
 uniform float u_coat_f0, u_coat_ref;
 // Stage (station/render/stage.py): lookups at u_rot * d (environment turned about +Y), the backdrop
 // lobe map u_backdrop (exponent u_backdrop_exp, its lights added when BACKDROP_LIGHTS), the ground disc
@@ -175,9 +176,15 @@ vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int p
     return tint * u_flake_reflectance * (w0 * g0 + w1 * g1 - (w0 + w1) * mean);
 }
 
-float coat_scale(float ndv) {
-    float m = 1.0 - ndv, m2 = m * m;  // (1 - N.V)^5 by products (a pow is an exp2 and a log2 here)
-    return (u_coat_f0 + (1.0 - u_coat_f0) * (m2 * m2 * m)) / u_coat_ref;
+// Exact unpolarised dielectric Fresnel F(N.V) of the coat (station.model.gloss.fresnel_dielectric), its index
+// n recovered from F0 = ((n - 1)/(n + 1))^2; 1 at grazing, never more.
+float coat_fresnel(float ndv) {
+    float r0 = sqrt(u_coat_f0);
+    float n = (1.0 + r0) / (1.0 - r0);
+    float ct = sqrt(max(1.0 - (1.0 - ndv * ndv) / (n * n), 0.0));
+    float rs = (ndv - n * ct) / (ndv + n * ct);
+    float rp = (n * ndv - ct) / (n * ndv + ct);
+    return 0.5 * (rs * rs + rp * rp);
 }
 
 // (g, h) of bound lobe i at c = R.N: lobes 2k and 2k+1 share row k (.rg, .ba), so with a constant i
@@ -366,7 +373,11 @@ void main() {
         vec3 r = 2.0 * dot(n, v) * n - v;
 #endif
 #if HAS_COAT
-        float s = coat_scale(ndv);
+        // The whole sum is scaled by the coat's transmission 1 - F at the end, so the gloss terms carry
+        // F/(u_coat_ref (1 - F)) here: radiance = (1 - F) base + F/u_coat_ref gloss.
+        float coat_f = coat_fresnel(ndv);
+        float coat_t = max(1.0 - coat_f, 1e-4);
+        float s = coat_f / (u_coat_ref * coat_t);
 #else
         float s = 1.0;
 #endif
@@ -440,6 +451,10 @@ void main() {
 #else
         rgb += s * aniso_gloss(n, v, u_aniso_hint, paint);
 #endif
+#endif
+#if HAS_COAT
+        rgb *= coat_t;  // base and flakes lie under the coat (the gloss terms were divided by coat_t above)
+        sparkle *= coat_t;
 #endif
         rgb += max(sparkle, -u_flake_reflectance * rgb);  // a cell's flakes never reflect less than nothing
     } else {
