@@ -34,7 +34,6 @@ ALLOWED: dict[str, str] = {
     "station/design/sketch.py:fit_point_light": "the point-light fit, being split in the sketch work",
     "station/design/sketch.py:fit_environment": "the environment fit, being split in the sketch work",
     "station/render/gl_renderer.py": _RENDER,
-    "station/render/lod.py:choose_lod": _RENDER,
     "ui/widgets/formulation_screen.py:FormulationScreen.__init__": _WIDGET,
     "ui/widgets/render_view.py": "the render views (GL and image), being split in the viewer render work",
     "bench/env_accuracy.py:main": "the environment accuracy benchmark, with the renderer work",

@@ -170,6 +170,28 @@ def _check_budget(tolerance_de: float, percentile: float) -> None:
         raise RenderInputError("percentile", "0 < percentile <= 100", percentile)
 
 
+def _lod_scene(
+    designs: Sequence[Any],
+    environment: Any,
+    normals: ArrayLike,
+    views: ArrayLike,
+    widths: Sequence[int],
+    samples: int,
+    quadrature_width: int,
+    mode: str,
+    percentile: float,
+) -> tuple[_LodScene, list[int]]:
+    """The scene the level of detail measures, and the environment widths that divide the map's own."""
+    img = tl._as_equirect(environment)
+    full_width = img.shape[1]
+    usable = sorted(w for w in widths if w <= full_width and full_width % w == 0) or [full_width]
+    brdfs = [d if isinstance(d, lf.DesignedBRDF) else lf.designed_brdf(d) for d in designs]
+    scene = _LodScene(
+        brdfs, img, normals, views, samples, min(quadrature_width, full_width), mode, percentile
+    )
+    return scene, usable
+
+
 def choose_lod(
     designs: Sequence[Any],
     environment: Any,
@@ -210,12 +232,10 @@ def choose_lod(
     _check_budget(tolerance_de, percentile)
     if not designs:
         raise RenderInputError("designs", "at least one design", len(designs))
-    img = tl._as_equirect(environment)
-    full_width = img.shape[1]
-    widths = sorted(w for w in widths if w <= full_width and full_width % w == 0) or [full_width]
+    ctx, widths = _lod_scene(
+        designs, environment, normals, views, widths, samples, quadrature_width, mode, percentile
+    )
     share = tolerance_de / np.sqrt(3.0)
-    brdfs = [d if isinstance(d, lf.DesignedBRDF) else lf.designed_brdf(d) for d in designs]
-    ctx = _LodScene(brdfs, img, normals, views, samples, min(quadrature_width, full_width), mode, percentile)
     notes: list[str] = []
     # 1. lobes against ground truth
     chosen_m, lobe_err, met = ctx.fewest_lobes(lobe_counts, share)
