@@ -184,61 +184,48 @@ def chart(
     plt.close(fig)
 
 
-def main() -> None:
-    designs = design_database()
-    classes = design_classes()
-    brdfs = [lf.designed_brdf(d) for d in designs]
-    targets = lf.targets_from_brdfs(brdfs)
-    default_m = default_basis().size
-    counts = sorted(set(LOBE_COUNTS) | {default_m})
-    reports = {m: lf.fit_targets(targets, basis_for_count(m)) for m in counts}
-    radiance = lf.fit_targets(targets, basis_for_count(default_m), RADIANCE_FIT)
-    thesis = lf.fit_targets(targets, basis_for_count(default_m), fall_off=False)
-    normals, views = tr.sphere_pixels(SPHERE)
+def _lab_of(image: np.ndarray, white: float) -> np.ndarray:
+    return linear_srgb_to_lab(image / white)
+
+
+def _environment_errors(env, brdfs, reports, radiance, thesis, default_m, normals, views) -> dict:
+    """Per-design ΔE00 of every method on one environment, against the truth engine."""
+    t0 = time.perf_counter()
+    scene = tr.TruthScene(env, normals, views)
+    white = float(scene.white()[..., 1].max())
+    refs = [_lab_of(scene.truth(b), white) for b in brdfs]
+    errs = method_errors(env, scene, refs, white, reports, normals, views)
+    for key, rep in (
+        ("exact", reports[default_m]),
+        (f"exact-{RADIANCE_FIT}", radiance),
+        ("exact-thesis", thesis),
+    ):
+        errs[(key, default_m)] = np.stack(
+            [
+                delta_e(ref, _lab_of(scene.lobes(rep.weights(i), "exact"), white), "cie2000")
+                for i, ref in enumerate(refs)
+            ]
+        )
+    pb = prefilter_basis(env, basis_for_count(default_m).exponents, engine="auto")
+    refl, ndv = reflect_of(normals, views), ndv_of(normals, views)
+    for key, rep in ((f"lut-{RADIANCE_FIT}", radiance), ("lut-thesis", thesis)):
+        errs[(key, default_m)] = np.stack(
+            [
+                delta_e(
+                    ref,
+                    _lab_of(nr.shade_pixels(pb, rep.weights(i), normals, refl, ndv, horizon="lut"), white),
+                    "cie2000",
+                )
+                for i, ref in enumerate(refs)
+            ]
+        )
+    print(f"{env.name}: {time.perf_counter() - t0:.1f} s", flush=True)
+    return errs
+
+
+def _accuracy_cases(envs, results, groups, default_m, n_px: int) -> list[Case]:
+    """One case per environment, class and method: mean ΔE00, with p95 and the ratio to the baseline."""
     cases: list[Case] = []
-    results: dict[str, dict[tuple[str, int], np.ndarray]] = {}
-    envs = environments()
-    for env in envs:
-        t0 = time.perf_counter()
-        scene = tr.TruthScene(env, normals, views)
-        white = float(scene.white()[..., 1].max())
-        refs = [linear_srgb_to_lab(scene.truth(b) / white) for b in brdfs]
-        results[env.name] = method_errors(env, scene, refs, white, reports, normals, views)
-        for key, rep in (
-            ("exact", reports[default_m]),
-            (f"exact-{RADIANCE_FIT}", radiance),
-            ("exact-thesis", thesis),
-        ):
-            results[env.name][(key, default_m)] = np.stack(
-                [
-                    delta_e(ref, linear_srgb_to_lab(scene.lobes(rep.weights(i), "exact") / white), "cie2000")
-                    for i, ref in enumerate(refs)
-                ]
-            )
-        pb = prefilter_basis(env, basis_for_count(default_m).exponents, engine="auto")
-        for key, rep in ((f"lut-{RADIANCE_FIT}", radiance), ("lut-thesis", thesis)):
-            results[env.name][(key, default_m)] = np.stack(
-                [
-                    delta_e(
-                        ref,
-                        linear_srgb_to_lab(
-                            nr.shade_pixels(
-                                pb,
-                                rep.weights(i),
-                                normals,
-                                reflect_of(normals, views),
-                                ndv_of(normals, views),
-                                horizon="lut",
-                            )
-                            / white
-                        ),
-                        "cie2000",
-                    )
-                    for i, ref in enumerate(refs)
-                ]
-            )
-        print(f"{env.name}: {time.perf_counter() - t0:.1f} s", flush=True)
-    groups = {"all": tuple(range(len(designs)))} | classes
     for env in envs:
         errs = results[env.name]
         for cls, idx in groups.items():
@@ -251,26 +238,33 @@ def main() -> None:
                 cases.append(
                     Case(
                         f"{env.name} {cls} {method}: mean",
-                        f"{len(idx)} designs, {normals.shape[0]} px",
+                        f"{len(idx)} designs, {n_px} px",
                         mean,
                         "ΔE00",
                         f"p95 {p95:.2f}; {ok} bar{ratio}",
                     )
                 )
-    frames = frame_ms(envs[0], {m: reports[m] for m in LOBE_COUNTS})
-    for m in LOBE_COUNTS:
-        for method in METHODS:
-            cases.append(
-                Case(
-                    f"GL frame {method} {m} lobes",
-                    f"{FRAME}x{FRAME}",
-                    frames[(method, m)],
-                    "ms",
-                    f"{frames[(method, m)] / frames[(BASELINE, m)]:.2f}× {BASELINE}",
-                )
-            )
-    png = ROOT / "docs" / "render-accuracy-vs-time.png"
-    chart(results, frames, png)
+    return cases
+
+
+def _frame_cases(frames) -> list[Case]:
+    """GL frame time of every method and lobe count, against the baseline method's."""
+    return [
+        Case(
+            f"GL frame {method} {m} lobes",
+            f"{FRAME}x{FRAME}",
+            frames[(method, m)],
+            "ms",
+            f"{frames[(method, m)] / frames[(BASELINE, m)]:.2f}× {BASELINE}",
+        )
+        for m in LOBE_COUNTS
+        for method in METHODS
+    ]
+
+
+def _table(envs, results, groups, default_m) -> str:
+    """The markdown table of mean / p95 per environment, class and method (✗ where the bar is missed)."""
+    extra_methods = ("exact", f"lut-{RADIANCE_FIT}", f"exact-{RADIANCE_FIT}", "lut-thesis", "exact-thesis")
     lines = [
         "| environment | class | "
         + " | ".join(f"{m} mean / p95" for m in METHODS)
@@ -281,19 +275,35 @@ def main() -> None:
     for env in envs:
         for cls, idx in groups.items():
             cells = []
-            for method in (
-                *METHODS,
-                "exact",
-                f"lut-{RADIANCE_FIT}",
-                f"exact-{RADIANCE_FIT}",
-                "lut-thesis",
-                "exact-thesis",
-            ):
+            for method in (*METHODS, *extra_methods):
                 e = results[env.name][(method, default_m)][list(idx)]
                 mean, p95 = e.mean(), np.percentile(e, 95)
                 mark = "" if mean <= MEAN_BAR and p95 <= P95_BAR else " ✗"
                 cells.append(f"{mean:.2f} / {p95:.2f}{mark}")
             lines.append(f"| {env.name} | {cls} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    designs = design_database()
+    brdfs = [lf.designed_brdf(d) for d in designs]
+    targets = lf.targets_from_brdfs(brdfs)
+    default_m = default_basis().size
+    counts = sorted(set(LOBE_COUNTS) | {default_m})
+    reports = {m: lf.fit_targets(targets, basis_for_count(m)) for m in counts}
+    radiance = lf.fit_targets(targets, basis_for_count(default_m), RADIANCE_FIT)
+    thesis = lf.fit_targets(targets, basis_for_count(default_m), fall_off=False)
+    normals, views = tr.sphere_pixels(SPHERE)
+    envs = environments()
+    results = {
+        env.name: _environment_errors(env, brdfs, reports, radiance, thesis, default_m, normals, views)
+        for env in envs
+    }
+    groups = {"all": tuple(range(len(designs)))} | design_classes()
+    cases = _accuracy_cases(envs, results, groups, default_m, normals.shape[0])
+    frames = frame_ms(envs[0], {m: reports[m] for m in LOBE_COUNTS})
+    cases += _frame_cases(frames)
+    chart(results, frames, ROOT / "docs" / "render-accuracy-vs-time.png")
     extra = (
         f"Default basis ({default_m} lobes); ✗ misses the bar (mean ≤ {MEAN_BAR}, p95 ≤ {P95_BAR}). "
         '*fit only*: the fitted lobe model integrated exactly (`TruthScene.lobes(..., "exact")`), the part of '
@@ -302,7 +312,8 @@ def main() -> None:
         "the default before the perceptual row weights). "
         "*thesis model*: the perceptual fit without the aspecular fall-off term K_A (`fall_off=False`, "
         "eqs 2.3.1–2.3.3 as printed; the default before it). "
-        "Error against GL frame time: `docs/render-accuracy-vs-time.png`.\n\n" + "\n".join(lines)
+        "Error against GL frame time: `docs/render-accuracy-vs-time.png`.\n\n"
+        + _table(envs, results, groups, default_m)
     )
     write_section(
         "env_accuracy", "Accuracy on every environment (renderers against ground truth)", cases, extra
