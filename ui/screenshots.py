@@ -260,12 +260,13 @@ def _qa_shot(win: MainWindow, shot: Shot, scan: bool) -> QAScreen:
 
 
 def _formulation_shot(win: MainWindow, shot: Shot, qa: QAScreen) -> None:
-    """The corrected paint of the QA sent on to formulation, formulated and run through the closed loop."""
+    """The corrected paint of the QA sent on to formulation: ColorSnapped, formulated and run through the
+    closed loop."""
     from ui.widgets.formulation_screen import FormulationScreen
 
     qa.send_btn.click()
     chem = _screen(win, "Formulation", FormulationScreen)
-    for step in (chem.run_formulate, chem.run_loop):
+    for step in (chem.run_snap, chem.run_formulate, chem.run_loop):
         step()
         _wait(lambda: chem.idle, 120)
     shot("formulation")

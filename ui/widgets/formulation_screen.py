@@ -46,7 +46,7 @@ EVERY_LIBRARY = "every stored library"
 
 DIALOG = QFileDialog.Option.DontUseNativeDialog
 #: Columns of the closed-loop table: one group of rows per step, one row per colorant line.
-LOOP_COLUMNS = ("step", "action", "measured mean ΔE00", "colorant", "grams for the batch")
+LOOP_COLUMNS = ("step", "action", "mean ΔE00", "colorant", "g for the batch")
 
 
 class FormulationScreen(QWidget):
@@ -117,6 +117,11 @@ class FormulationScreen(QWidget):
         for t in (self.matches, self.recipe, self.recipes, self.loop):
             t.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Stretch)
             t.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        fit = QHeaderView.ResizeMode.ResizeToContents
+        for t, columns in ((self.recipe, (1, 2)), (self.loop, (0, 1, 2, 4))):
+            t.verticalHeader().hide()
+            for j in columns:
+                t.horizontalHeader().setSectionResizeMode(j, fit)
 
     def _build_layout(self) -> None:
         """The form and buttons over the matches and the side-by-side recipes (left); the recipe for the
