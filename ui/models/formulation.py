@@ -292,7 +292,8 @@ def formulate(design: FaceFlopTravelGloss, library: Library) -> Formulation:
         design.lab_at(np.array(ANGLES_3)), library, gloss_gu=design.gloss_target_gu
     )
     shown = snap_view(library, snap(design, library))
-    return Formulation(design, library, found, result, shown, recipe_metamerism(result))
+    ranked = bool(getattr(result, "recipes", ()))  # ranked recipes carry their own metamerism index
+    return Formulation(design, library, found, result, shown, None if ranked else recipe_metamerism(result))
 
 
 def recipe_metamerism(result: Any) -> dict[str, float] | None:
