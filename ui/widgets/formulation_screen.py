@@ -101,6 +101,9 @@ class FormulationScreen(QWidget):
         self.busy = TaskProgress()
         self.source = QComboBox()
         self.source.setObjectName("service-library")
+        for box in (self.design, self.source):  # a long design or library name must not widen the screen
+            box.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+            box.setMinimumContentsLength(24)
         self.status = QLabel("")
         self.status.setWordWrap(True)
 
@@ -152,7 +155,7 @@ class FormulationScreen(QWidget):
         right = QVBoxLayout()
         right.addWidget(QLabel("recipe weighed out for the batch"))
         right.addWidget(self.recipe, 1)
-        right.addWidget(QLabel("closed loop (simulated spray-out panels): ΔE00 and additions per step"))
+        right.addWidget(QLabel("closed loop (simulated spray-out): ΔE00, additions per step"))
         right.addWidget(self.loop, 1)
         lay = QHBoxLayout(self)
         lay.addLayout(left, 1)
