@@ -101,9 +101,9 @@ class FormulationScreen(QWidget):
         self.busy = TaskProgress()
         self.source = QComboBox()
         self.source.setObjectName("service-library")
-        for box in (self.design, self.source):  # a long design or library name must not widen the screen
-            box.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
-            box.setMinimumContentsLength(24)
+        for combo in (self.design, self.source):  # a long design or library name must not widen the screen
+            combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+            combo.setMinimumContentsLength(24)
         self.status = QLabel("")
         self.status.setWordWrap(True)
 
