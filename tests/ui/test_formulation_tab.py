@@ -11,9 +11,10 @@ import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtTest import QTest
 
-from station.formulate.batch import batch_masses, tinting_additions
-from station.formulate.colorants import predict_reflectance
+from station.formulate.batch import batch_masses
+from station.formulate.colorants import predict_lab, predict_reflectance
 from station.formulate.cxf import read_cxf_objects
+from station.formulate.de_kernels import cie2000
 from station.formulate.demo import demo_library
 from station.formulate.formulation import formulate_from_library
 from station.formulate.snap import color_snap
@@ -78,24 +79,33 @@ def test_formulation_tab(qtbot, tmp_path):
     result, found = formulate_from_library(lab, metallic, gloss_gu=design.gloss_target_gu)
     assert [m.code for m in found.matches] == expected[: len(found.matches)]
 
-    # the recipe side by side: g per kg (m_i = 1000 c_i), the binder the rest, ΔE00, MI A and F11
-    t = screen.recipes
-    assert t.columnCount() == 1 and t.horizontalHeaderItem(0).text() == f"from {result.start}"
-    for name, frac in result.recipe.items():
-        assert float(_cell(t, f"{name} (g/kg)")) == pytest.approx(1000 * frac, abs=0.006)
-    binder = 1000 * (1 - sum(result.recipe.values()))
-    assert float(_cell(t, "binder (g/kg)")) == pytest.approx(binder, abs=0.006)
-    assert _cell(t, "ΔE00 before rounding") == f"{result.mean_de:.2f}"
-    assert _cell(t, "ΔE00 after rounding") == _cell(t, "cost per kg") == "—"
-    assert _cell(t, "colorants") == str(len(result.recipe))
-    mi = metamerism_index(
-        reflectance_from_lab(result.design_lab),
-        predict_reflectance(result.concentrations, result.angles_deg),
-        "D65",
-        METAMERISM_TEST_ILLUMINANTS,
-    )
-    for ill in METAMERISM_TEST_ILLUMINANTS:
-        assert float(_cell(t, f"MI {ill}")) == pytest.approx(float(np.max(mi[ill])), abs=0.006)
+    # the ranked recipes side by side: g per kg on the scale's resolution, ΔE00 before and after
+    # rounding, MI under A and F11, colorants and cost; ΔE00 and MI recomputed here from each recipe
+    t, options = screen.recipes, result.recipes
+    assert t.columnCount() == len(options) >= 1
+    for j, o in enumerate(options):
+        assert t.horizontalHeaderItem(j).text() == f"#{o.rank} from {o.start}"
+        per_kg = 1000.0 / o.batch_g
+        for name, grams in o.grams.items():
+            shown = float(_cell(t, f"{name} (g/kg)", j))
+            assert shown == pytest.approx(grams * per_kg, abs=0.051)
+            assert shown / o.scale_resolution_g == pytest.approx(
+                round(shown / o.scale_resolution_g), abs=1e-6
+            )
+        assert float(_cell(t, "binder (g/kg)", j)) == pytest.approx(o.binder_g * per_kg, abs=0.051)
+        de = cie2000(result.design_lab, predict_lab(o.concentrations, result.angles_deg))
+        assert float(_cell(t, "ΔE00 after rounding", j)) == pytest.approx(float(de.mean()), abs=0.006)
+        assert _cell(t, "ΔE00 before rounding", j) == f"{o.mean_de_unrounded:.2f}"
+        assert int(_cell(t, "colorants", j)) == o.colorants <= 5
+        assert _cell(t, "cost per kg", j) == f"{o.cost_per_kg:.2f}"
+        mi = metamerism_index(
+            reflectance_from_lab(result.design_lab),
+            predict_reflectance(o.concentrations, result.angles_deg),
+            "D65",
+            METAMERISM_TEST_ILLUMINANTS,
+        )
+        for ill in METAMERISM_TEST_ILLUMINANTS:
+            assert float(_cell(t, f"MI {ill}", j)) == pytest.approx(float(np.max(mi[ill])), abs=0.006)
 
     # the closed loop for a 500 g batch: ΔE00 and the additions per step, by hand from the recipes
     screen.batch.setFocus()
@@ -108,17 +118,24 @@ def test_formulation_tab(qtbot, tmp_path):
     assert [g[0] for g in groups] == [s.number for s in job.steps]
     assert [g[2] for g in groups] == pytest.approx([s.mean_de for s in job.steps], abs=0.006)
     assert groups[0][1] == "initial"
+    assert job.steps[0].batch_g == BATCH_G  # the loop ran for the screen's batch
     for prev, step, (_n, action, _de, lines) in zip(job.steps[:-1], job.steps[1:], groups[1:], strict=True):
-        tint = tinting_additions(prev.recipe, step.recipe, BATCH_G)
-        if tint.remake:  # a fresh batch: the new recipe in grams, never additions
+        grams = {k: float(v.removeprefix("+").split()[0]) for k, v in lines.items() if v}
+        if action == "remake":  # a fresh batch: the new recipe in grams, never additions
             b = batch_masses(step.recipe, BATCH_G)
-            assert action == "remake" and not any(g.startswith("+") for g in lines.values())
-            want = {**b.colorants_g, "binder": b.binder_g}
-            assert {k: float(v.split()[0]) for k, v in lines.items()} == pytest.approx(want, abs=0.006)
-        else:
-            want = {k: v for k, v in {**tint.additions_g, "binder": tint.binder_g}.items() if v >= 0.005}
-            assert action == "add"
-            assert {k: float(v.split()[0]) for k, v in lines.items()} == pytest.approx(want, abs=0.006)
+            assert not any(v.startswith("+") for v in lines.values())
+            assert grams == pytest.approx({**b.colorants_g, "binder": b.binder_g}, abs=0.006)
+            continue
+        # add-only: the previous batch plus the additions shown is this step's recipe (mass balance)
+        assert action == "add" and all(v.startswith("+") for v in lines.values() if v)
+        before = batch_masses(prev.recipe, prev.batch_g)
+        after = {**before.colorants_g, "binder": before.binder_g}
+        for name, g in grams.items():
+            after[name] = after.get(name, 0.0) + g
+        total = sum(after.values())
+        assert total == pytest.approx(step.batch_g, abs=0.05)
+        mixed = {k: v / total for k, v in after.items() if k != "binder" and v > 0}
+        assert mixed == pytest.approx(step.recipe, abs=1e-4)
     assert any(g[1] == "add" for g in groups), "this design's correction is a tinting addition"
     text = screen.status.text()
     n = job.corrections

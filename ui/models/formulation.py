@@ -311,10 +311,15 @@ def recipe_metamerism(result: Any) -> dict[str, float] | None:
     return {str(name): float(max(v)) for name, v in ranking.best.index.items()}
 
 
-def closed_loop(f: Formulation, seed: int = SPRAY_SEED) -> Any:
-    """Spray, measure and correct (``station.formulate.closed_loop`` on the SYNTHETIC spray-out model)."""
+def closed_loop(f: Formulation, seed: int = SPRAY_SEED, batch_g: float = BATCH_G_DEFAULT) -> Any:
+    """Spray, measure and correct by tinting a batch of *batch_g* g (``station.formulate.closed_loop`` on
+    the SYNTHETIC spray-out model; a :class:`FormulateInputError` names ``batch_g`` outside the range
+    the scale allows)."""
     from station.formulate.closed_loop import closed_loop as run
+    from station.formulate.formulation import FormulationOptions, formulation_options
     from station.formulate.sprayout import SprayOutModel
+
+    options = formulation_options(FormulationOptions(batch_g=batch_g))
 
     spray = SprayOutModel(seed=seed)
     recipes = f.library.recipes
@@ -327,6 +332,7 @@ def closed_loop(f: Formulation, seed: int = SPRAY_SEED) -> Any:
         starts=starts,
         gloss_gu=f.design.gloss_target_gu,
         tolerance=f.result.tolerance,
+        options=options,
     )
 
 

@@ -15,9 +15,9 @@ recipe gives one column, with the cells it cannot fill (ΔE after rounding, cost
 **Closed loop** (:func:`loop_groups`): per step the measured mean ΔE00 and what the chemist does — the
 initial batch is the recipe; a correction lists its **additions** (colorant, grams) to the batch
 mixed so far; a correction that only a fresh batch can reach says "remake" and lists the new recipe
-in grams, never additions. Grams are for the screen's batch: additions a_i = (c'_i M' − c_i M) are
-linear in the batch mass M, so those reported for a batch of M₀ g scale by M / M₀
-(``station.formulate.batch``).
+in grams, never additions. Grams are for the screen's batch M: the loop runs for it, and should the
+batch change afterwards the additions (masses, linear in the batch: every mass of the job scales with
+its first batch M₀) are shown × M / M₀ (``station.formulate.batch``, ``station.formulate.tinting``).
 """
 
 from __future__ import annotations
@@ -148,17 +148,23 @@ class StepGroup:
     note: str = ""
 
 
-def _step_fields(step: Any) -> tuple[dict[str, float], dict[str, Any] | None, float]:
-    """(recipe, additions as ``Tinting.to_dict()`` or None, the batch mass the additions are for)."""
+def _additions(step: Any) -> dict[str, Any] | None:
+    """A step's additions as ``Tinting.to_dict()``, or None (the initial batch)."""
     additions = getattr(step, "additions", None)
     if additions is not None and not isinstance(additions, dict):
         additions = additions.to_dict()
-    return dict(step.recipe), additions, float(getattr(step, "batch_g", DEFAULT_BATCH_G))
+    return additions
 
 
-def step_group(step: Any, batch_g: float) -> StepGroup:
-    """What a closed-loop *step* (``LoopStep`` or the service's step) asks of a *batch_g* g batch."""
-    recipe, additions, step_batch = _step_fields(step)
+def first_batch_g(steps: Sequence[Any]) -> float:
+    """The mass (g) of the job's first batch, which every mass of the job is proportional to."""
+    return float(getattr(steps[0], "batch_g", DEFAULT_BATCH_G)) if steps else DEFAULT_BATCH_G
+
+
+def step_group(step: Any, batch_g: float, job_batch_g: float = DEFAULT_BATCH_G) -> StepGroup:
+    """What a closed-loop *step* (``LoopStep`` or the service's step) of a job whose first batch was
+    *job_batch_g* g asks of a first batch of *batch_g* g."""
+    recipe, additions, step_batch = dict(step.recipe), _additions(step), job_batch_g
     de = float(step.mean_de)
     if additions is None:
         return StepGroup(step.number, "initial", de, (("the recipe", f"{batch_g:g} g batch"),))
@@ -177,8 +183,9 @@ def step_group(step: Any, batch_g: float) -> StepGroup:
 
 
 def loop_groups(steps: Sequence[Any], batch_g: float) -> list[StepGroup]:
-    """:func:`step_group` of each step, in order."""
-    return [step_group(s, batch_g) for s in steps]
+    """:func:`step_group` of each step, in order, for a first batch of *batch_g* g."""
+    first = first_batch_g(steps)
+    return [step_group(s, batch_g, first) for s in steps]
 
 
 def loop_summary(job: Any) -> str:

@@ -365,8 +365,12 @@ class FormulationScreen(QWidget):
             )
             return
         if isinstance(f, fm.Formulation):
-            local = f
-            self._run(lambda _p: fm.closed_loop(local), self._on_loop, "closed loop: spraying and measuring…")
+            local, batch = f, self.batch.value()
+            self._run(
+                lambda _p: fm.closed_loop(local, batch_g=batch),
+                self._on_loop,
+                f"closed loop for a {batch:g} g batch: spraying and measuring…",
+            )
 
     def _on_export_clicked(self) -> None:
         name = (self.picked().name or "design").replace(" ", "-")
