@@ -81,6 +81,10 @@ def test_loop_summary_is_one_sentence():
     text = ft.loop_summary(far)
     assert text.count("converge") == 1 and text.count("correction") == 1
     assert "outside the gamut" in text and "warning: 45°" in text
+    refused = _Job("not_formulable", "not formulable with these colorants (mean ΔE00 3.10)", ())
+    assert ft.loop_summary(refused) == (
+        "Closed loop not sprayed: not formulable with these colorants (mean ΔE00 3.10)."
+    )
 
 
 def _option(rank: int, grams: dict[str, float], batch_g: float, **kw: Any) -> dict[str, Any]:

@@ -191,7 +191,9 @@ def loop_groups(steps: Sequence[Any], batch_g: float) -> list[StepGroup]:
 def loop_summary(job: Any) -> str:
     """One sentence on a closed loop *job*: converged or not, after how many corrections, the measured
     mean ΔE00 from the first to the last step (and the tolerance), then the engine's further notes
-    (what follows the first "; " of its message) and warnings."""
+    (what follows the first "; " of its message) and warnings; with no step sprayed, the reason."""
+    if not job.steps:  # nothing sprayed (a design the colorants cannot reach): the engine's reason
+        return f"Closed loop not sprayed: {str(job.message).rstrip('.')}."
     n = int(job.corrections)
     state = "converged" if job.status == "converged" else "did not converge"
     des = [float(s.mean_de) for s in job.steps]
