@@ -41,7 +41,6 @@ ALLOWED: dict[str, str] = {
     "station/render/lod.py:choose_lod": _RENDER,
     "station/render/prefilter.py:prefilter_basis": _RENDER,
     "station/render/truth.py": _RENDER,
-    "ui/widgets/formulation_screen.py:FormulationScreen.__init__": _WIDGET,
     "ui/widgets/render_view.py": "the render views (GL and image), being split in the viewer render work",
     "bench/env_accuracy.py:main": "the environment accuracy benchmark, with the renderer work",
     "bench/viewer.py:main": "the viewer benchmark, with the viewer render work",
