@@ -1,8 +1,11 @@
 """Formulation screen (the chemist): open a design (the current one, one sent from QA, or a file),
-ColorSnap it in the library restricted to solid / metallic / pearl paints, formulate the recipe (mass
-fraction and grams per batch per colorant), run the closed loop on the SYNTHETIC spray-out panel, and
-export the design with its match as thesis XML or CxF3 — as ``station snap`` / ``formulate`` /
-``export`` do. Every computation runs in a worker with the progress indicator.
+ColorSnap it in the library restricted to solid / metallic / pearl paints (the five matches stay listed
+after Formulate), formulate the recipe (mass fraction and grams per batch per colorant; the ranked
+recipes side by side, ``ui.models.formulation_tables``), run the closed loop on the SYNTHETIC spray-out
+panel (per step the measured ΔE00 and the tinting additions, or "remake" with the new recipe), and
+export the design with its match and recipe as thesis XML or CxF3 (recipe in grams and predicted
+spectra) — as ``station snap`` / ``formulate`` / ``export --recipe`` do. Every computation runs in a
+worker with the progress indicator.
 
 In service mode every step runs on the service against the service's library (every stored library, or
 the one picked in "library"): ``ui.models.formulation.ServiceFormulation``. The closed loop stores the
