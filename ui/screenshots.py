@@ -23,6 +23,8 @@ from ui.widgets.render_view import GLRenderView, ImageRenderView
 from ui.widgets.screens import LazyScreen
 
 if TYPE_CHECKING:
+    from station.formulate.library import Library
+    from station.model import FaceFlopTravelGloss
     from ui.app import MainWindow
     from ui.widgets.instruments_screen import InstrumentsScreen
     from ui.widgets.qa_screen import QAScreen
@@ -259,13 +261,28 @@ def _qa_shot(win: MainWindow, shot: Shot, scan: bool) -> QAScreen:
     return qa
 
 
+def _library_metallic(library: Library) -> FaceFlopTravelGloss:
+    """A design fitted at 15/45/110° to one of *library*'s metallics."""
+    from station.model import AspecularMeasurements, fit_fftg
+    from station.model.domain import ANGLES_3
+
+    i = int(np.flatnonzero(library.types == "metallic")[3])
+    cols = [library.angles_deg.index(a) for a in ANGLES_3]
+    lab = library.lab[i][cols]
+    fit = fit_fftg(AspecularMeasurements(ANGLES_3, lab, float(library.gloss_gu[i])))
+    return fit.design.replace(name=f"{library.codes[i]} as a design")
+
+
 def _formulation_shot(win: MainWindow, shot: Shot, qa: QAScreen) -> None:
-    """The corrected paint of the QA sent on to formulation, formulated and run through the closed loop."""
+    """The corrected paint of the QA sent on to formulation: ColorSnapped, formulated and run through the
+    closed loop."""
     from ui.widgets.formulation_screen import FormulationScreen
 
     qa.send_btn.click()
     chem = _screen(win, "Formulation", FormulationScreen)
-    for step in (chem.run_formulate, chem.run_loop):
+    if chem.library is not None:  # a metallic the colorants reach, so the closed loop shows its tinting
+        chem.add_design("library metallic", _library_metallic(chem.library), select=True)
+    for step in (chem.run_snap, chem.run_formulate, chem.run_loop):
         step()
         _wait(lambda: chem.idle, 120)
     shot("formulation")

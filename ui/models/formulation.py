@@ -18,7 +18,7 @@ recipe result, a job with steps).
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -29,7 +29,7 @@ from station.formulate.batch import DEFAULT_BATCH_G
 from station.formulate.library import PAINT_TYPES, Library
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_to_dict
-from station.model.domain import ANGLES_3
+from station.model.domain import ANGLES_3, METAMERISM_TEST_ILLUMINANTS
 
 if TYPE_CHECKING:
     from ui.models.service import ServiceClient
@@ -94,17 +94,23 @@ def snap_view(library: Library, result: Any) -> SnapView:
 
 @dataclass(frozen=True)
 class Formulation:
-    """A formulation of one design against a filtered library: ColorSnap result and recipe."""
+    """A formulation of one design against a filtered library: the ColorSnap matches the recipe started
+    from (*snap*, ``formulate_from_library``'s k best), the recipe (*result*), the ColorSnap list the
+    screen shows (*matches*: the same k = 5 as the ColorSnap button, so the list keeps its length) and
+    the recipe's metamerism index per test illuminant (*metamerism*, worst over the angles; None where
+    no reflectance reproduces the design)."""
 
     design: FaceFlopTravelGloss
     library: Library
     snap: Any  # station.formulate.SnapResult
     result: Any  # station.formulate.FormulationResult
+    matches: SnapView | None = None
+    metamerism: dict[str, float] | None = None
 
     @property
     def shown(self) -> SnapView:
-        """The matches the recipe started from."""
-        return snap_view(self.library, self.snap)
+        """The ColorSnap matches the screen lists (the k = 5 search; the starts are its first ones)."""
+        return self.matches if self.matches is not None else snap_view(self.library, self.snap)
 
 
 @dataclass(frozen=True)
@@ -120,15 +126,20 @@ class ServiceRecipe:
     tolerance: float
     message: str
     synthetic: bool
+    recipes: tuple[dict[str, Any], ...] = ()
 
 
 @dataclass(frozen=True)
 class ServiceStep:
-    """One spray-and-measure step of a service closed loop."""
+    """One spray-and-measure step of a service closed loop: its recipe (mass fractions) and, for a
+    correction, the tinting additions (``Tinting.to_dict()``) to a batch of *batch_g* grams."""
 
     number: int
     kind: str
     mean_de: float
+    recipe: dict[str, float] = field(default_factory=dict)
+    additions: dict[str, Any] | None = None
+    batch_g: float = BATCH_G_DEFAULT
 
 
 @dataclass(frozen=True)
@@ -141,6 +152,8 @@ class ServiceJob:
     message: str
     corrections: int
     steps: tuple[ServiceStep, ...]
+    tolerance: float | None = None
+    warnings: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -216,6 +229,7 @@ class ServiceFormulation:
             float(got["tolerance"]),
             str(got["message"]),
             bool(got["synthetic_colorants"]),
+            tuple(got.get("recipes") or ()),
         )
         return ServiceFormulated(design, shown, result)
 
@@ -227,7 +241,15 @@ class ServiceFormulation:
             "POST", "/formulation/closed-loop", json={"design_id": design_id, "seed": seed}
         )
         steps = tuple(
-            ServiceStep(int(st["number"]), str(st["kind"]), float(st["mean_de"])) for st in got["steps"]
+            ServiceStep(
+                int(st["number"]),
+                str(st["kind"]),
+                float(st["mean_de"]),
+                {str(k): float(v) for k, v in (st.get("recipe") or {}).items()},
+                st.get("additions"),
+                float(st.get("batch_g", BATCH_G_DEFAULT)),
+            )
+            for st in got["steps"]
         )
         return ServiceJob(
             int(got["recipe_id"]),
@@ -236,6 +258,8 @@ class ServiceFormulation:
             str(got["message"]),
             int(got["corrections"]),
             steps,
+            None if got.get("tolerance") is None else float(got["tolerance"]),
+            tuple(str(w) for w in got.get("warnings") or ()),
         )
 
     def export(self, design: FaceFlopTravelGloss, path: Path) -> tuple[Path, str | None]:
@@ -259,19 +283,43 @@ def snap(design: FaceFlopTravelGloss, library: Library, k: int = 5) -> Any:
 
 
 def formulate(design: FaceFlopTravelGloss, library: Library) -> Formulation:
-    """The recipe from the ColorSnap matches' recipes (``formulate_from_library``)."""
+    """The recipe from the ColorSnap matches' recipes (``formulate_from_library``, its default k = 3
+    starts, as ``station formulate``), the k = 5 ColorSnap list the screen shows, and the recipe's
+    metamerism index (:func:`recipe_metamerism`)."""
     from station.formulate.formulation import formulate_from_library
 
     result, found = formulate_from_library(
         design.lab_at(np.array(ANGLES_3)), library, gloss_gu=design.gloss_target_gu
     )
-    return Formulation(design, library, found, result)
+    shown = snap_view(library, snap(design, library))
+    ranked = bool(getattr(result, "recipes", ()))  # ranked recipes carry their own metamerism index
+    return Formulation(design, library, found, result, shown, None if ranked else recipe_metamerism(result))
 
 
-def closed_loop(f: Formulation, seed: int = SPRAY_SEED) -> Any:
-    """Spray, measure and correct (``station.formulate.closed_loop`` on the SYNTHETIC spray-out model)."""
+def recipe_metamerism(result: Any) -> dict[str, float] | None:
+    """Metamerism index (CIEDE2000, reference D65) of *result*'s recipe under each test illuminant
+    (:data:`station.model.domain.METAMERISM_TEST_ILLUMINANTS`, A and F11), the worst over the angles
+    (``station.formulate.metamerism.rank_formulation`` on the recipe alone); None when no reflectance
+    reproduces the design (e.g. a specular L* over 100)."""
+    from station.formulate.errors import FormulateInputError
+    from station.formulate.metamerism import rank_formulation
+
+    try:
+        ranking = rank_formulation(result, METAMERISM_TEST_ILLUMINANTS)
+    except FormulateInputError:
+        return None
+    return {str(name): float(max(v)) for name, v in ranking.best.index.items()}
+
+
+def closed_loop(f: Formulation, seed: int = SPRAY_SEED, batch_g: float = BATCH_G_DEFAULT) -> Any:
+    """Spray, measure and correct by tinting a batch of *batch_g* g (``station.formulate.closed_loop`` on
+    the SYNTHETIC spray-out model; a :class:`FormulateInputError` names ``batch_g`` outside the range
+    the scale allows)."""
     from station.formulate.closed_loop import closed_loop as run
+    from station.formulate.formulation import FormulationOptions, formulation_options
     from station.formulate.sprayout import SprayOutModel
+
+    options = formulation_options(FormulationOptions(batch_g=batch_g))
 
     spray = SprayOutModel(seed=seed)
     recipes = f.library.recipes
@@ -284,23 +332,43 @@ def closed_loop(f: Formulation, seed: int = SPRAY_SEED) -> Any:
         starts=starts,
         gloss_gu=f.design.gloss_target_gu,
         tolerance=f.result.tolerance,
+        options=options,
     )
 
 
-def export(design: FaceFlopTravelGloss, library: Library, path: Path) -> tuple[Path, str | None]:
-    """Write the design and its ColorSnap match as thesis XML (``.xml``) or CxF3 (``.cxf``); returns the
-    path and the match code."""
+def export(
+    design: FaceFlopTravelGloss,
+    library: Library,
+    path: Path,
+    result: Any = None,
+    batch_g: float = BATCH_G_DEFAULT,
+) -> tuple[Path, str | None]:
+    """Write the design, its ColorSnap match and — with a library carrying recipes — its recipe as a
+    prediction colour, as ``station export --recipe`` does: thesis XML (``.xml``) or CxF3 (``.cxf``, with
+    the recipe in grams for a *batch_g* g batch and the predicted spectra per geometry,
+    ``station.formulate.export.recipe_export``). *result*: the recipe already formulated for *design*
+    (formulated here when None). Returns the path and the match code."""
     from station.formulate.color_xml import write_color_xml
     from station.formulate.cxf import specs_to_cxf
-    from station.formulate.export import export_specs
+    from station.formulate.export import export_specs, recipe_export
 
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".xml", ".cxf"):
         raise InputError("file", "a name ending in .xml (thesis XML) or .cxf (CxF3)", path.name)
     specs, code = export_specs(design, library, method="cie76")
+    extras: list[Any] = [None] * len(specs)
+    if library.recipes is not None:
+        if result is None:
+            from station.formulate.formulation import formulate_from_library
+
+            lab = design.lab_at(np.array(ANGLES_3))
+            result, _found = formulate_from_library(lab, library, gloss_gu=design.gloss_target_gu)
+        spec, extra = recipe_export(result, name=f"{design.name or 'design'} recipe", batch_g=batch_g)
+        specs.append(spec)
+        extras.append(extra)
     if suffix == ".xml":
         write_color_xml(specs, path)
     else:
-        path.write_bytes(specs_to_cxf(specs))
+        path.write_bytes(specs_to_cxf(specs, extras))
     return path, code

@@ -1,8 +1,11 @@
 """Formulation screen (the chemist): open a design (the current one, one sent from QA, or a file),
-ColorSnap it in the library restricted to solid / metallic / pearl paints, formulate the recipe (mass
-fraction and grams per batch per colorant), run the closed loop on the SYNTHETIC spray-out panel, and
-export the design with its match as thesis XML or CxF3 — as ``station snap`` / ``formulate`` /
-``export`` do. Every computation runs in a worker with the progress indicator.
+ColorSnap it in the library restricted to solid / metallic / pearl paints (the five matches stay listed
+after Formulate), formulate the recipe (mass fraction and grams per batch per colorant; the ranked
+recipes side by side, ``ui.models.formulation_tables``), run the closed loop on the SYNTHETIC spray-out
+panel (per step the measured ΔE00 and the tinting additions, or "remake" with the new recipe), and
+export the design with its match and recipe as thesis XML or CxF3 (recipe in grams and predicted
+spectra) — as ``station snap`` / ``formulate`` / ``export --recipe`` do. Every computation runs in a
+worker with the progress indicator.
 
 In service mode every step runs on the service against the service's library (every stored library, or
 the one picked in "library"): ``ui.models.formulation.ServiceFormulation``. The closed loop stores the
@@ -11,7 +14,7 @@ design and the job on the service and runs to its end once started (no Cancel)."
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -34,6 +37,7 @@ from station.formulate.library import PAINT_TYPES, Library
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import load_design
 from ui.models import formulation as fm
+from ui.models import formulation_tables as ft
 from ui.models.document import DesignDocument
 from ui.widgets.tasks import TaskProgress, TaskThread
 
@@ -44,6 +48,8 @@ if TYPE_CHECKING:
 EVERY_LIBRARY = "every stored library"
 
 DIALOG = QFileDialog.Option.DontUseNativeDialog
+#: Columns of the closed-loop table: one group of rows per step, one row per colorant line.
+LOOP_COLUMNS = ("step", "action", "mean ΔE00", "colorant", "g for the batch")
 
 
 class FormulationScreen(QWidget):
@@ -65,13 +71,22 @@ class FormulationScreen(QWidget):
         self.remote = fm.ServiceFormulation(service) if service is not None else None
         self.document = document
         self.designs: dict[str, FaceFlopTravelGloss] = {}
-        self.formulation: fm.Formulation | None = None
-        self.job = None
+        self.formulation: fm.Formulation | fm.ServiceFormulated | None = None
+        self.job: Any = None
         self.snapped: fm.SnapView | None = None
         self.exported: Path | None = None
         self.task: TaskThread | None = None
         self.idle = True
+        self._build_controls()
+        self._build_tables()
+        self._build_layout()
+        self._init_source(library)
+        self._connect()
+        self.add_design("current design", document.design)
+        self._sync()
 
+    def _build_controls(self) -> None:
+        """Design picker, library, type filter, batch, the four action buttons, progress and status."""
         self.design = QComboBox()
         self.open_btn = QPushButton("Open design…")
         self.types = {t: QCheckBox(t) for t in PAINT_TYPES}
@@ -89,26 +104,34 @@ class FormulationScreen(QWidget):
         self.busy = TaskProgress()
         self.source = QComboBox()
         self.source.setObjectName("service-library")
+        for combo in (self.design, self.source):  # a long design or library name must not widen the screen
+            combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+            combo.setMinimumContentsLength(24)
         self.status = QLabel("")
         self.status.setWordWrap(True)
-        if self.remote is None and library is not None:
-            self.source.addItem(library.name)
-            self.source.setEnabled(False)
-            self.status.setText(
-                f"library: {library.name} ({len(library)} paints{', SYNTHETIC' if library.synthetic else ''})"
-            )
-        else:
-            self.refresh_libraries()
+
+    def _build_tables(self) -> None:
+        """Matches, the recipe weighed out for the batch, the recipes side by side and the closed loop."""
         self.matches = QTableWidget(0, 4)
         self.matches.setHorizontalHeaderLabels(["match", "type", "ΣΔE00 15/45/110", "library"])
         self.recipe = QTableWidget(0, 3)
         self.recipe.setHorizontalHeaderLabels(["component", "mass %", "grams per batch"])
-        self.loop = QTableWidget(0, 3)
-        self.loop.setHorizontalHeaderLabels(["step", "kind", "measured mean ΔE00"])
-        for t in (self.matches, self.recipe, self.loop):
+        self.recipes = QTableWidget(0, 0)
+        self.recipes.setObjectName("recipes-side-by-side")
+        self.loop = QTableWidget(0, len(LOOP_COLUMNS))
+        self.loop.setHorizontalHeaderLabels(list(LOOP_COLUMNS))
+        for t in (self.matches, self.recipe, self.recipes, self.loop):
             t.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Stretch)
             t.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        fit = QHeaderView.ResizeMode.ResizeToContents
+        for t, columns in ((self.recipe, (1, 2)), (self.loop, (0, 1, 2, 4))):
+            t.verticalHeader().hide()
+            for j in columns:
+                t.horizontalHeader().setSectionResizeMode(j, fit)
 
+    def _build_layout(self) -> None:
+        """The form and buttons over the matches and the side-by-side recipes (left); the recipe for the
+        batch and the closed loop (right)."""
         form = QFormLayout()
         row = QHBoxLayout()
         row.addWidget(self.design, 1)
@@ -130,25 +153,38 @@ class FormulationScreen(QWidget):
         left.addWidget(self.status)
         left.addWidget(QLabel("ColorSnap matches"))
         left.addWidget(self.matches, 1)
+        left.addWidget(QLabel("recipes side by side (g per kg of batch)"))
+        left.addWidget(self.recipes, 1)
         right = QVBoxLayout()
-        right.addWidget(QLabel("recipe"))
+        right.addWidget(QLabel("recipe weighed out for the batch"))
         right.addWidget(self.recipe, 1)
-        right.addWidget(QLabel("closed loop (simulated spray-out panels)"))
+        right.addWidget(QLabel("closed loop (simulated spray-out): ΔE00, additions per step"))
         right.addWidget(self.loop, 1)
         lay = QHBoxLayout(self)
         lay.addLayout(left, 1)
         lay.addLayout(right, 1)
 
+    def _init_source(self, library: Library | None) -> None:
+        """The library choice: the local library (fixed) or the service's stored libraries."""
+        if self.remote is None and library is not None:
+            self.source.addItem(library.name)
+            self.source.setEnabled(False)
+            self.status.setText(
+                f"library: {library.name} ({len(library)} paints{', SYNTHETIC' if library.synthetic else ''})"
+            )
+        else:
+            self.refresh_libraries()
+
+    def _connect(self) -> None:
         self.open_btn.clicked.connect(self._on_open_clicked)
         self.snap_btn.clicked.connect(self.run_snap)
         self.formulate_btn.clicked.connect(self.run_formulate)
         self.loop_btn.clicked.connect(self.run_loop)
         self.export_btn.clicked.connect(self._on_export_clicked)
         self.batch.valueChanged.connect(self._show_recipe)
+        self.batch.valueChanged.connect(self._show_loop)
         self.design.currentTextChanged.connect(self._on_design_changed)
-        document.events.changed.connect(self._on_document)
-        self.add_design("current design", document.design)
-        self._sync()
+        self.document.events.changed.connect(self._on_document)
 
     # ------------------------------------------------------------------ designs
     def add_design(self, label: str, design: FaceFlopTravelGloss, select: bool = False) -> None:
@@ -194,8 +230,11 @@ class FormulationScreen(QWidget):
     def _on_design_changed(self, *_args) -> None:
         self.formulation = None
         self.job = None
-        for t in (self.matches, self.recipe, self.loop):
+        self.snapped = None
+        for t in (self.matches, self.recipe, self.recipes, self.loop):
             t.setRowCount(0)
+        self.recipes.setColumnCount(0)
+        self.loop.clearSpans()
         self._sync()
 
     def _on_open_clicked(self) -> None:
@@ -328,7 +367,13 @@ class FormulationScreen(QWidget):
                 cancellable=False,
             )
             return
-        self._run(lambda _p: fm.closed_loop(f), self._on_loop, "closed loop: spraying and measuring…")
+        if isinstance(f, fm.Formulation):
+            local, batch = f, self.batch.value()
+            self._run(
+                lambda _p: fm.closed_loop(local, batch_g=batch),
+                self._on_loop,
+                f"closed loop for a {batch:g} g batch: spraying and measuring…",
+            )
 
     def _on_export_clicked(self) -> None:
         name = (self.picked().name or "design").replace(" ", "-")
@@ -343,8 +388,9 @@ class FormulationScreen(QWidget):
             self.export(Path(path))
 
     def export(self, path: Path) -> None:
-        """Write the design and its ColorSnap match (library of the ticked types; in service mode the
-        service's export with its library's match) to *path*."""
+        """Write the design, its ColorSnap match (library of the ticked types) and its recipe — in CxF3
+        with the grams for the batch and the predicted spectra, as ``station export --recipe`` — to
+        *path*; in service mode the service's export with its library's match."""
         design, remote = self.picked(), self._remote()
         if remote is not None:
             self._run(
@@ -355,15 +401,23 @@ class FormulationScreen(QWidget):
                 False,
             )
             return
-        lib = self._library()
+        lib, batch = self._library(), self.batch.value()
         if lib is not None:
+            done = self._formulated_for(design, lib)
             self._run(
-                lambda _p: fm.export(design, lib, path),
+                lambda _p: fm.export(design, lib, path, done, batch),
                 self._on_exported,
                 f"exporting to {path.name}…",
                 False,
                 False,
             )
+
+    def _formulated_for(self, design: FaceFlopTravelGloss, lib: Library) -> Any:
+        """The recipe already formulated for *design* in *lib* (None: the export formulates it)."""
+        f = self.formulation
+        if isinstance(f, fm.Formulation) and f.design is design and f.library.name == lib.name:
+            return f.result
+        return None
 
     # ------------------------------------------------------------------ results
     def _on_finished(self) -> None:
@@ -387,8 +441,10 @@ class FormulationScreen(QWidget):
 
     def _on_formulated(self, f) -> None:
         self.formulation = f
-        self._show_matches(f.shown)
+        if self.snapped is None or len(f.shown.rows) >= len(self.snapped.rows):
+            self._show_matches(f.shown)  # the service lists its starts only: keep the longer ColorSnap list
         self._show_recipe()
+        self._show_recipes(ft.recipe_columns(f.result, getattr(f, "metamerism", None)))
         r = f.result
         self.status.setText(
             f"recipe from {r.start}: predicted ΔE00 mean {r.mean_de:.2f}, max {r.max_de:.2f} "
@@ -405,16 +461,43 @@ class FormulationScreen(QWidget):
             for j, text in enumerate((name, f"{100 * frac:.2f}", f"{grams:.1f}")):
                 self.recipe.setItem(i, j, QTableWidgetItem(text))
 
+    def _show_recipes(self, columns: list[ft.RecipeColumn]) -> None:
+        """One column per recipe, a row per colorant (g per kg) and per criterion."""
+        labels, cells = ft.recipe_table(columns)
+        self.recipes.setColumnCount(len(columns))
+        self.recipes.setRowCount(len(labels))
+        self.recipes.setHorizontalHeaderLabels([c.label for c in columns])
+        self.recipes.setVerticalHeaderLabels(labels)
+        for i, row in enumerate(cells):
+            for j, text in enumerate(row):
+                self.recipes.setItem(i, j, QTableWidgetItem(text))
+
     def _on_loop(self, job) -> None:
         self.job = job
-        self.loop.setRowCount(len(job.steps))
-        for i, s in enumerate(job.steps):
-            for j, text in enumerate((str(s.number), s.kind, f"{s.mean_de:.2f}")):
-                self.loop.setItem(i, j, QTableWidgetItem(text))
-        stored = f"; stored on the service as job {job.recipe_id}" if hasattr(job, "recipe_id") else ""
-        self.status.setText(
-            f"closed loop {job.status}: {job.message} ({job.corrections} corrections){stored}"
-        )
+        self._show_loop()
+        stored = f" Stored on the service as job {job.recipe_id}." if hasattr(job, "recipe_id") else ""
+        self.status.setText(ft.loop_summary(job) + stored)
+
+    def _show_loop(self, *_args) -> None:
+        """Each step's group of rows: number, action and ΔE00 spanning its colorant lines."""
+        self.loop.clearSpans()
+        if self.job is None:
+            self.loop.setRowCount(0)
+            return
+        groups = ft.loop_groups(self.job.steps, self.batch.value())
+        self.loop.setRowCount(sum(len(g.lines) for g in groups))
+        row = 0
+        for g in groups:
+            for j, text in enumerate((str(g.number), g.action, f"{g.mean_de:.2f}")):
+                item = QTableWidgetItem(text)
+                item.setToolTip(g.note)
+                self.loop.setItem(row, j, item)
+                if len(g.lines) > 1:
+                    self.loop.setSpan(row, j, len(g.lines), 1)
+            for k, (name, grams) in enumerate(g.lines):
+                self.loop.setItem(row + k, 3, QTableWidgetItem(name))
+                self.loop.setItem(row + k, 4, QTableWidgetItem(grams))
+            row += len(g.lines)
 
     def _on_exported(self, got) -> None:
         path, code = got
