@@ -34,6 +34,7 @@ from station.render.gl_context import (
     gl_available,
     load_shader,
 )
+from station.render.gl_targets import FrameTargets
 from station.render.lobes import COSINE_SG_SHARPNESS
 from station.render.numpy_renderer import (
     BACKGROUND,
@@ -94,6 +95,9 @@ class GLRenderer:
     ``anisotropic_samples`` when given, else the level of detail's choice for this environment and
     :attr:`anisotropy_tolerance_de` (:func:`station.render.lod.choose_anisotropic_samples`), reported in
     :attr:`last_anisotropy`. None (default) compiles none of it in: the isotropic path is unchanged.
+
+    ``aa``: anti-aliasing, samples per pixel (1, 4, 9 or 16; :mod:`station.render.gl_targets`): the
+    frame is shaded at √aa times the size and box-resolved on the GPU; 1 (default) draws at the size.
     """
 
     def __init__(
@@ -106,6 +110,7 @@ class GLRenderer:
         half_float: bool = True,
         combined: bool = True,
         horizon: str = "lut",
+        aa: int = 1,
     ) -> None:
         import moderngl  # lazily: importing this module needs no GL stack
 
@@ -157,7 +162,8 @@ class GLRenderer:
         self._mesh: tuple | None = None
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
-        self._targets: dict[tuple[bool, bool], tuple] = {}
+        #: Targets at the shading size and the anti-aliasing resolve (``aa`` samples per pixel).
+        self.targets = FrameTargets(self.ctx, self.width, self.height, aa)
         #: ΔE00 tolerance the level of detail meets when it picks the anisotropic sample count.
         self.anisotropy_tolerance_de = 1.0
         #: Energy of the anisotropic lobe (:data:`station.render.anisotropy.ENERGIES`): "design" keeps the
@@ -265,15 +271,6 @@ class GLRenderer:
             self._flake_means[key] = tex
         return self._flake_means[key]
 
-    def _target(self, linear: bool, depth: bool = False):
-        """Colour target (with a depth buffer for meshes only: llvmpipe is slower with one attached)."""
-        key = (linear, depth)
-        if key not in self._targets:
-            tex = self.ctx.texture((self.width, self.height), 4, dtype="f4" if linear else "f1")
-            rb = self.ctx.depth_renderbuffer((self.width, self.height)) if depth else None
-            self._targets[key] = (tex, self.ctx.framebuffer(color_attachments=[tex], depth_attachment=rb), rb)
-        return self._targets[key][:2]
-
     def _combined_atlas(self, pair) -> list:
         """[gloss, dd] atlas textures of both paints' narrow lobes (shaders/combine.frag.glsl; rebuilt on
         the GPU when the weights change, never read back)."""
@@ -356,7 +353,7 @@ class GLRenderer:
         programs (:meth:`_frame_programs`), textures bound and uniforms set (:meth:`_frame_uniforms`), then
         the shape's full-screen pass, or the stage pass and the rasterised mesh."""
         pair = check_paints(self.basis, paints)
-        self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
+        self.last_flakes = flake_lod(flakes, scene.view_camera, self.targets.shade_size[1])
         if not linear:
             check_curve(curve)
         pair, passes, aniso_uniforms, occluders, n_occ = self._frame_programs(
@@ -370,7 +367,8 @@ class GLRenderer:
             anisotropic_samples,
             self.last_flakes.on,
         )
-        fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
+        own = target is None or self.targets.side > 1
+        fbo = self.targets.draw_target(linear, depth=mesh is not None) if own else target
         fbo.use()
         occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
         occ[: len(occluders)] = occluders
@@ -384,9 +382,16 @@ class GLRenderer:
         for prog, _ in passes:
             self._set_uniforms(prog, uniforms, mw, occ, m)
         if mesh is None:
-            prog, vao = passes[0]
-            vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
+        else:
+            self._draw_mesh(fbo, passes, mesh)
+        if self.targets.side == 1:
             return fbo
+        out = target if target is not None else self.targets.output_target(linear)
+        return self.targets.resolve(fbo, out)
+
+    def _draw_mesh(self, fbo, passes: list, mesh) -> None:
+        """The stage pass (colour only), then *mesh* depth-tested, into *fbo*."""
         fbo.clear(depth=1.0)
         self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
         passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
@@ -395,7 +400,6 @@ class GLRenderer:
             self._mesh_vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
         finally:
             self.ctx.disable(self.ctx.DEPTH_TEST)
-        return fbo
 
     def _frame_programs(
         self,
@@ -462,8 +466,8 @@ class GLRenderer:
         self._horizon_tex.use(m + 5)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
         uniforms = {
-            **scene.view_camera.uniforms(self.width, self.height),
-            "u_size": (float(self.width), float(self.height)),
+            **scene.view_camera.uniforms(*self.targets.shade_size),
+            "u_size": tuple(float(v) for v in self.targets.shade_size),
             "u_misalign": float(np.radians(scene.misalignment_deg)),
             "u_background": (BACKGROUND,) * 3,
             "u_diffuse": m + 4,
@@ -765,11 +769,7 @@ class GLRenderer:
             if vao is not None:
                 vao.release()
             prog.release()
-        for tex, fbo, rb in self._targets.values():
-            fbo.release()
-            tex.release()
-            if rb is not None:
-                rb.release()
+        self.targets.release()
         for tex in [
             *self._lobes,
             self._diffuse_tex,
@@ -792,7 +792,6 @@ class GLRenderer:
             self._ground = None
         self._combined = None
         self._programs.clear()
-        self._targets.clear()
         if self._own_ctx:
             self.ctx.release()
 
