@@ -36,7 +36,6 @@ ALLOWED: dict[str, str] = {
     "station/design/sketch.py:fit_environment": "the environment fit, being split in the sketch work",
     "station/model/gloss.py": "gloss ⇄ lobe and the coat, being split in the gloss work",
     "station/qc/tolerance.py:judge": "QC verdicts, being split in the QC work",
-    "station/render/gl_renderer.py": _RENDER,
     "station/render/lobe_fit.py": _RENDER,
     "station/render/lod.py:choose_lod": _RENDER,
     "station/render/prefilter.py:prefilter_basis": _RENDER,
@@ -44,7 +43,6 @@ ALLOWED: dict[str, str] = {
     "ui/widgets/formulation_screen.py:FormulationScreen.__init__": _WIDGET,
     "ui/widgets/render_view.py": "the render views (GL and image), being split in the viewer render work",
     "bench/env_accuracy.py:main": "the environment accuracy benchmark, with the renderer work",
-    "bench/viewer.py:main": "the viewer benchmark, with the viewer render work",
 }
 
 
