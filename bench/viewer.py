@@ -453,8 +453,81 @@ def orbit_main() -> None:
         xvfb.wait(5)
 
 
+def _edit_mode_cases() -> tuple[list, str]:
+    """(cases, GL renderer name) of the paint edit to screen in both view modes, against the core's
+    NumPy edit alone measured in the same run."""
+    from bench._report import Case
+
+    *base, _ = numpy_edit_baseline()
+    base_med = statistics.median(base)
+    cases = [Case("core NumPy edit alone (baseline)", f"{SIZE}x{SIZE}", base_med * 1e3, "ms", "median")]
+    renderer = ""
+    for mode in ("cpu", "gpu"):
+        total, paint, renderer, _ = measure_edits(mode)
+        med = statistics.median(total)
+        note = f"bar <= {BAR_EDIT_MS:g} ms" + (" (default mode)" if mode == "cpu" else "")
+        cases += [
+            Case(f"paint edit -> screen, {mode} mode, median", f"{SIZE}x{SIZE}", med * 1e3, "ms", note),
+            Case(f"paint edit -> screen, {mode} mode, best", f"{SIZE}x{SIZE}", min(total) * 1e3, "ms"),
+            Case(f"paint edit -> screen, {mode} mode, p90", f"{SIZE}x{SIZE}", _pct(total, 0.9) * 1e3, "ms"),
+            Case(
+                "  of which edit -> paintGL done, median",
+                f"{SIZE}x{SIZE}",
+                statistics.median(paint) * 1e3,
+                "ms",
+                "fit + re-weight + draw (before compositing)",
+            ),
+            Case(f"  median / NumPy edit alone ({mode})", "", med / base_med, "ratio"),
+        ]
+    return cases, renderer
+
+
+def _startup_cases() -> list:
+    """Cases of start-up to first (and full-quality) frame, warm (best of two) and cold cache."""
+    from bench._report import Case
+
+    warm, imports, warm_wall, warm_full = min(startup(None) for _ in range(2))
+    with tempfile.TemporaryDirectory() as cold_dir:
+        cold, _, _, cold_full = startup(cold_dir)
+    return [
+        Case(
+            "start-up -> first frame, warm cache", "1500x950 window", warm, "s", f"bar <= {BAR_START_S:g} s"
+        ),
+        Case(
+            "  of which Python imports (PySide6, station core)",
+            "",
+            imports,
+            "s",
+            "station.model imports colour, which imports matplotlib.pyplot",
+        ),
+        Case("  process wall time incl. interpreter start", "", warm_wall, "s", "until exit"),
+        Case(
+            "  start-up -> full-quality frame, warm cache",
+            "",
+            warm_full,
+            "s",
+            "full-resolution basis from the worker",
+        ),
+        Case(
+            "start-up -> first frame, cold prefilter cache",
+            "1500x950 window",
+            cold,
+            "s",
+            f"bar <= {BAR_START_S:g} s; first run on a machine: coarse prefilter (16² faces) first",
+        ),
+        Case(
+            "  start-up -> full-quality frame, cold cache",
+            "",
+            cold_full,
+            "s",
+            "full prefilter (64² faces) + full-resolution basis in the worker, then swapped in",
+        ),
+    ]
+
+
 def main() -> None:
-    from bench._report import Case, write_section
+    """``python -m bench.viewer``: paint edit to screen and start-up to first frame."""
+    from bench._report import write_section
     from ui.xvfb import start_xvfb
 
     xvfb = start_xvfb("2048x1536x24")
@@ -466,74 +539,9 @@ def main() -> None:
 
         configure_default_format()
         app = QApplication([])
-        cases: list[Case] = []
-        *base, _ = numpy_edit_baseline()
-        base_med = statistics.median(base)
-        cases.append(
-            Case("core NumPy edit alone (baseline)", f"{SIZE}x{SIZE}", base_med * 1e3, "ms", "median")
-        )
-        renderer = ""
-        for mode in ("cpu", "gpu"):
-            total, paint, renderer, _ = measure_edits(mode)
-            med = statistics.median(total)
-            note = f"bar <= {BAR_EDIT_MS:g} ms" + (" (default mode)" if mode == "cpu" else "")
-            cases += [
-                Case(f"paint edit -> screen, {mode} mode, median", f"{SIZE}x{SIZE}", med * 1e3, "ms", note),
-                Case(f"paint edit -> screen, {mode} mode, best", f"{SIZE}x{SIZE}", min(total) * 1e3, "ms"),
-                Case(
-                    f"paint edit -> screen, {mode} mode, p90", f"{SIZE}x{SIZE}", _pct(total, 0.9) * 1e3, "ms"
-                ),
-                Case(
-                    "  of which edit -> paintGL done, median",
-                    f"{SIZE}x{SIZE}",
-                    statistics.median(paint) * 1e3,
-                    "ms",
-                    "fit + re-weight + draw (before compositing)",
-                ),
-                Case(f"  median / NumPy edit alone ({mode})", "", med / base_med, "ratio"),
-            ]
+        cases, renderer = _edit_mode_cases()
         app.shutdown()
-        warm, imports, warm_wall, warm_full = min(startup(None) for _ in range(2))
-        with tempfile.TemporaryDirectory() as cold_dir:
-            cold, _, _, cold_full = startup(cold_dir)
-        cases += [
-            Case(
-                "start-up -> first frame, warm cache",
-                "1500x950 window",
-                warm,
-                "s",
-                f"bar <= {BAR_START_S:g} s",
-            ),
-            Case(
-                "  of which Python imports (PySide6, station core)",
-                "",
-                imports,
-                "s",
-                "station.model imports colour, which imports matplotlib.pyplot",
-            ),
-            Case("  process wall time incl. interpreter start", "", warm_wall, "s", "until exit"),
-            Case(
-                "  start-up -> full-quality frame, warm cache",
-                "",
-                warm_full,
-                "s",
-                "full-resolution basis from the worker",
-            ),
-            Case(
-                "start-up -> first frame, cold prefilter cache",
-                "1500x950 window",
-                cold,
-                "s",
-                f"bar <= {BAR_START_S:g} s; first run on a machine: coarse prefilter (16² faces) first",
-            ),
-            Case(
-                "  start-up -> full-quality frame, cold cache",
-                "",
-                cold_full,
-                "s",
-                "full prefilter (64² faces) + full-resolution basis in the worker, then swapped in",
-            ),
-        ]
+        cases += _startup_cases()
         load = os.getloadavg()[0]
         write_section(
             "viewer",

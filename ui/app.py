@@ -4,8 +4,9 @@ tabs for the mood board, library, instruments and QA screens.
 Start with ``station viewer`` (or ``python -m ui.app``). Edit → Undo/Redo (Ctrl+Z / Ctrl+Shift+Z) reverts
 any design edit. File → New / Open / Save / Save As work on the design (Ctrl+N/O/S, Ctrl+Shift+S), the
 palette and the mood board (:class:`ui.models.files.StylistFiles`); File → Export writes the design as
-thesis XML or CxF3; File → Load environment reads an own HDR. Closing with unsaved changes asks first;
-a file that cannot be read is reported in a message box and changes nothing.
+thesis XML or CxF3; File → Load environment reads an own HDR; File → Open model shows an own glTF/GLB,
+OBJ or STL model in the 3D view. Closing with unsaved changes asks first; a file that cannot be read is
+reported in a message box and changes nothing.
 """
 
 from __future__ import annotations
@@ -190,6 +191,11 @@ class MainWindow(QMainWindow):
             env.setToolTip("Loading an own HDR needs the 3D view's environment loader (not in this build)")
         menu.addAction(env)
         self.file_actions["Load environment (HDR)"] = env
+        model = QAction("Open model…", self)
+        model.setToolTip("Your own car or part (glTF/GLB, OBJ, STL) in the 3D view, beside the shapes")
+        model.triggered.connect(self.open_model)
+        menu.addAction(model)
+        self.file_actions["Open model"] = model
         imp = QAction("Import measurement files…", self)
         imp.setToolTip("CxF3, CGATS, MA-T12 workbook or CSV files into the measurement store (QC tab)")
         imp.triggered.connect(self.import_measurements)
@@ -324,6 +330,21 @@ class MainWindow(QMainWindow):
             self.show_error("Cannot load environment", str(exc))
             return False
         self.statusBar().showMessage(f"environment {path}")
+        return True
+
+    def open_model(self) -> bool:
+        """File → Open model…: a glTF/GLB, OBJ or STL model joins the 3D view's shape picker and is shown;
+        a file that cannot be used is named in a visible message."""
+        from station.render.meshes import MESH_SUFFIXES
+
+        patterns = " ".join(f"*{x}" for x in MESH_SUFFIXES)
+        path = self._ask_path("Open model", f"Models ({patterns});;All files (*)", False, ".glb")
+        if path is None:
+            return False
+        if not self.view_panel.open_model(path):
+            self.show_error("Cannot open model", self.view_panel.env_status.text())
+            return False
+        self.statusBar().showMessage(f"model {path}")
         return True
 
     def _confirm_discard(self, kinds: list[Kind]) -> bool:

@@ -20,6 +20,7 @@ vertical from +z, pitch above the horizon) at that distance (scene units; defaul
 GL engine only: ``--mesh FILE`` renders a .glb/.gltf/.obj/.stl model instead of the shape (``--paint-part
 NAME`` picks the part to paint; the other parts are drawn as tyre, glass or chrome by their names), and
 ``--mesh car`` the procedural car (body, glass, wheels).
+``--aa N`` anti-aliases the GL engine's frame with N samples per pixel (1 off, 4, 9 or 16; default 4).
 ``--lod DE`` lets the level of detail (``station.render.scene_image.scene_lod``, against the ground truth
 on a 16 × 16 sample of the view) pick the lobe count and environment resolution for a CIEDE2000
 tolerance and reports the choice.
@@ -116,6 +117,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--view",
         help="YAW,PITCH[,DISTANCE]: look from yaw/pitch degrees at that distance (e.g. 30,15,0.8 close up)",
+    )
+    p.add_argument(
+        "--aa",
+        type=int,
+        help="GL engine: anti-aliasing samples per pixel, 1 (off) | 4 | 9 | 16 (default 4)",
     )
     p.add_argument("--lod", type=float, help="CIEDE2000 tolerance: level of detail picks lobes and map size")
     add_json_flag(p)
@@ -215,6 +221,8 @@ def _check(
         raise InputError("engine", "gl (or auto with a GL stack) for --mesh", engine)
     if engine == "truth" and (args.stage or args.rotate or args.coat is not None or flakes is not None):
         raise InputError("engine", "gl | numpy with --stage / --rotate / --coat / --flakes", engine)
+    if args.aa is not None and args.aa != 1 and engine != "gl":
+        raise InputError("engine", "gl (or auto with a GL stack) for --aa above 1", engine)
     if anisotropy is not None and engine != "gl":
         raise InputError("engine", "gl (or auto with a GL stack) for a design with anisotropy", engine)
 
@@ -243,11 +251,12 @@ def _render_gl(
     flakes: FlakeLayer | None,
     anisotropy: Anisotropy | None,
     size: int,
+    aa: int,
 ) -> tuple[np.ndarray, str | None, dict[str, Any] | None]:
-    """(linear image, flake report, anisotropy report) of the GL engine."""
+    """(linear image, flake report, anisotropy report) of the GL engine, *aa* samples per pixel."""
     from station.render.gl_renderer import GLRenderer
 
-    with GLRenderer(basis, size, size) as gl:
+    with GLRenderer(basis, size, size, aa=aa) as gl:
         if mesh is not None:
             linear = gl.render_mesh(
                 mesh,
@@ -339,7 +348,7 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         t0 = time.perf_counter()
         if engine == "gl":
             linear, flake_report, aniso_report = _render_gl(
-                basis, paints, scene, stage, coat, mesh, flakes, anisotropy, size
+                basis, paints, scene, stage, coat, mesh, flakes, anisotropy, size, _aa(args)
             )
         else:
             linear = render_linear(scene, basis, paints, size, size, coat=coat, flakes=flakes)
@@ -362,10 +371,18 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         "view": _view_report(scene.view_camera),
         "anisotropy": aniso_report,
         "lod": lod_report,
+        "aa": _aa(args) if engine == "gl" else 1,
         "out": str(out),
         "linear_out": args.linear_out,
         "timings": {k: round(v, 4) for k, v in timings.items()},
     }
+
+
+def _aa(args: argparse.Namespace) -> int:
+    """Samples per pixel of the GL engine: ``--aa``, else :data:`station.render.gl_targets.DEFAULT_AA`."""
+    from station.render.gl_targets import DEFAULT_AA
+
+    return int(args.aa) if args.aa is not None else DEFAULT_AA
 
 
 def _view_report(camera: Camera) -> dict[str, Any]:

@@ -16,16 +16,15 @@ import numpy as np
 from station.model.anisotropy import Anisotropy
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
-from station.render import anisotropy as an
+from station.render import gl_textures as tx
 from station.render.errors import RenderInputError
 from station.render.flakes import (
-    CELL_PIXELS,
     FlakeChoice,
     flake_lod,
     flake_mean_cube,
-    flake_tint,
     flake_uniforms,
 )
+from station.render.gl_anisotropy import anisotropy_frame
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
     SHADER_DIR,
@@ -34,7 +33,14 @@ from station.render.gl_context import (
     gl_available,
     load_shader,
 )
-from station.render.lobes import COSINE_SG_SHARPNESS
+from station.render.gl_programs import (
+    binding_order,
+    compiled_terms,
+    frame_defines,
+    renderer_defines,
+    set_uniforms,
+)
+from station.render.gl_targets import FrameTargets
 from station.render.numpy_renderer import (
     BACKGROUND,
     HORIZON_MAX_EXPONENT,
@@ -42,10 +48,9 @@ from station.render.numpy_renderer import (
     check_size,
     horizon_table,
 )
-from station.render.prefilter import WIDE_EXPONENT
 from station.render.sh import sh_diffuse_matrix
-from station.render.shapes import GROUNDS, OCCLUDERS, SHAPE_INDEX, Scene
-from station.render.stage import MAX_OCCLUDERS, PENUMBRA_DEG, backdrop_lobe, lookup_matrix
+from station.render.shapes import GROUNDS, OCCLUDERS, Scene
+from station.render.stage import MAX_OCCLUDERS, backdrop_lobe, lookup_matrix
 from station.render.tonemap import CURVES, check_curve
 
 if TYPE_CHECKING:
@@ -94,6 +99,9 @@ class GLRenderer:
     ``anisotropic_samples`` when given, else the level of detail's choice for this environment and
     :attr:`anisotropy_tolerance_de` (:func:`station.render.lod.choose_anisotropic_samples`), reported in
     :attr:`last_anisotropy`. None (default) compiles none of it in: the isotropic path is unchanged.
+
+    ``aa``: anti-aliasing, samples per pixel (1, 4, 9 or 16; :mod:`station.render.gl_targets`): the
+    frame is shaded at √aa times the size and box-resolved on the GPU; 1 (default) draws at the size.
     """
 
     def __init__(
@@ -106,8 +114,8 @@ class GLRenderer:
         half_float: bool = True,
         combined: bool = True,
         horizon: str = "lut",
+        aa: int = 1,
     ) -> None:
-        import moderngl  # lazily: importing this module needs no GL stack
 
         check_size(width, height)
         if diffuse not in ("cube", "sh"):
@@ -117,47 +125,37 @@ class GLRenderer:
         self.diffuse = diffuse
         self._own_ctx = ctx is None
         self.ctx = create_gl_context() if ctx is None else ctx
-        dtype, np_dtype = ("f2", np.float16) if half_float else ("f4", np.float32)
-
-        def cube_texture(cube):
-            s = cube.shape[1]
-            tex = self.ctx.texture_cube(
-                (s, s), 3, np.ascontiguousarray(cube, dtype=np_dtype).tobytes(), dtype=dtype
-            )
-            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-            return tex
-
         self.combined = combined
         self._combined: tuple[bytes, list] | None = None
         self._combine: tuple | None = None  # (framebuffer, program, vertex array, [gloss, dd]) of the atlas
         self._ground: tuple | None = None  # (key, texture, framebuffer) of the baked ground map
         self._half_float = half_float
         self._atlas_face = max(c.shape[1] for c in basis.cubes)
-        # Lobes in binding order: the wide ones (horizon table) first, so the shader loops over a prefix.
-        has_lights = basis.lights is not None and any(basis.wide)
-        wide = [
-            int((horizon != "none" and e < HORIZON_MAX_EXPONENT) or (has_lights and basis.wide[i]))
-            for i, e in enumerate(basis.exponents)
-        ]
-        self._wide_exponent = WIDE_EXPONENT
         self._horizon = horizon
-        self._lights = basis.lights if has_lights else None
-        self._order = np.array(
-            [i for i in range(len(wide)) if wide[i]] + [i for i in range(len(wide)) if not wide[i]]
+        self._wide, self._order, self._lights = binding_order(basis, horizon, HORIZON_MAX_EXPONENT)
+        self._n_wide = int(self._wide.sum())
+        self._lobes = [tx.cube_texture(self.ctx, basis.cubes[i], half_float) for i in self._order]
+        self._diffuse_tex = tx.cube_texture(self.ctx, basis.diffuse, half_float)
+        table = horizon_table(basis.exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
+        self._horizon_tex = tx.horizon_texture(self.ctx, table)
+        self._defines = renderer_defines(
+            n_lobes=len(self._lobes),
+            diffuse=diffuse,
+            combined=combined,
+            horizon=horizon,
+            horizon_n=table.shape[1],
+            atlas_face=self._atlas_face,
+            n_wide=self._n_wide,
+            n_lights=self._lights.count if self._lights is not None else 0,
+            bound_exponents=np.asarray(basis.exponents)[self._order],
         )
-        self._n_wide = int(sum(wide))
-        self._wide = np.array(wide, np.int32)
-        self._lobes = [cube_texture(basis.cubes[i]) for i in self._order]
-        self._diffuse_tex = cube_texture(basis.diffuse)
-        self._horizon_tex = self._horizon_texture(basis.exponents, horizon)
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[
-            tuple[str, bool, str, tuple[int, ...], tuple[int, int, int], int, int], tuple
-        ] = {}
-        self._mesh: tuple | None = None
+        self._programs: dict[tuple, tuple] = {}  # (_program's arguments) → (program, vertex array)
+        self._mesh = tx.MeshArrays(self.ctx)
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
-        self._targets: dict[tuple[bool, bool], tuple] = {}
+        #: Targets at the shading size and the anti-aliasing resolve (``aa`` samples per pixel).
+        self.targets = FrameTargets(self.ctx, self.width, self.height, aa)
         #: ΔE00 tolerance the level of detail meets when it picks the anisotropic sample count.
         self.anisotropy_tolerance_de = 1.0
         #: Energy of the anisotropic lobe (:data:`station.render.anisotropy.ENERGIES`): "design" keeps the
@@ -167,23 +165,6 @@ class GLRenderer:
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
         self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
-
-    def _horizon_texture(self, exponents, horizon: str):
-        """The horizon table of the bound lobes as an RGBA texture (sets ``_horizon_n``, its row length)."""
-        import moderngl
-
-        table = horizon_table(exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
-        self._horizon_n = table.shape[1]
-        # Two lobes per RGBA row (lobe 2k in .rg, 2k+1 in .ba): one lookup serves a pair of wide lobes.
-        pairs = np.zeros(((table.shape[0] + 1) // 2, table.shape[1], 4), np.float32)
-        for i in range(table.shape[0]):
-            pairs[i // 2, :, 2 * (i % 2) : 2 * (i % 2) + 2] = table[i]
-        tex = self.ctx.texture(
-            (table.shape[1], pairs.shape[0]), 4, np.ascontiguousarray(pairs).tobytes(), dtype="f4"
-        )
-        tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-        tex.repeat_x = tex.repeat_y = False
-        return tex
 
     def _program(
         self,
@@ -195,56 +176,12 @@ class GLRenderer:
         n_occ: int = 0,
         curve: int = 0,
     ):
-        """Program for a ray-cast *shape* (kind "shape"), the stage alone ("stage") or a mesh ("mesh");
-        *features* = (coat, stage bits, flakes[, anisotropy]) compiled in (0/1 each; the stage's bits: 1 a
-        stage, 2 its backdrop, 4 its ground, 8 the backdrop lobe's lights); *terms* = (bit mask of the
-        wide lobes whose gloss weight is non-zero, whether a narrow lobe's directionally diffuse weight
-        is, whether the aspecular fall-off is shaded), see :meth:`_terms`; *n_occ*: the ground's sphere
-        occluders (0 without a stage), compiled in with the light count so the stage's loops unroll;
-        *curve*: the tone curve's index in CURVES (8-bit output)."""
+        """Program (and full-screen vertex array) of a kind, built once: the arguments are those of
+        :func:`station.render.gl_programs.frame_defines` (*terms*: :meth:`_terms`; *n_occ* is compiled
+        in with the light count so the stage's loops unroll)."""
         key = (shape, linear, kind, features, terms, n_occ, curve)
         if key not in self._programs:
-            from station.render.meshes import NEUTRAL_ALBEDO
-
-            defines = {
-                "SHAPE": SHAPE_INDEX[shape],
-                "MESH": int(kind == "mesh"),
-                "NO_SHAPE": int(kind in ("stage", "ground")),
-                "BAKE_GROUND": int(kind == "ground"),
-                "WIDE_GLOSS_MASK": terms[0],
-                "NARROW_DD": terms[1],
-                "HAS_FALL_OFF": terms[2],
-                "N_OCC": n_occ,
-                "CURVE": curve,
-                "HAS_COAT": features[0],
-                "HAS_STAGE": int(features[1] != 0),
-                "STAGE_BACKDROP": features[1] >> 1 & 1,
-                "STAGE_GROUND": features[1] >> 2 & 1,
-                "BACKDROP_LIGHTS": features[1] >> 3 & 1,
-                "HAS_FLAKES": features[2],
-                **({"HAS_ANISO": 1} if len(features) > 3 and features[3] else {}),
-                "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
-                "PENUMBRA_DEG": f"{PENUMBRA_DEG:.4f}",
-                "FLAKE_CELL_PIXELS": f"{CELL_PIXELS:.4f}",
-                "N_LOBES": len(self._lobes),
-                "OUTPUT_LINEAR": int(linear),
-                "DIFFUSE_SH": int(self.diffuse == "sh"),
-                "COMBINED": int(self.combined),
-                "HORIZON_N": self._horizon_n,
-                "ATLAS_FACE": self._atlas_face,
-                "N_WIDE": self._n_wide,
-                "MAX_LIGHTS": max(1, self._lights.count if self._lights is not None else 1),
-                # The lights and exponents are fixed per renderer: compiled in as constants, so the
-                # lobe and light loops unroll with constant indices (llvmpipe gathers a uniform
-                # array indexed by a loop counter per pixel).
-                "N_LIGHTS": self._lights.count if self._lights is not None else 0,
-                "LOBE_EXPONENTS": ", ".join(
-                    f"{float(e):.9g}" for e in np.asarray(self.basis.exponents)[self._order]
-                ),
-                "WIDE_EXPONENT": f"{self._wide_exponent:.1f}",
-                "BENT_DD": int(self._horizon == "lut"),
-                "COSINE_SG": f"{COSINE_SG_SHARPNESS:.4f}",
-            }
+            defines = {**self._defines, **frame_defines(shape, linear, kind, features, terms, n_occ, curve)}
             vert = "mesh.vert.glsl" if kind == "mesh" else "fullscreen.vert.glsl"
             prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
             self._programs[key] = (prog, None if kind == "mesh" else self.ctx.vertex_array(prog, []))
@@ -253,26 +190,10 @@ class GLRenderer:
     def _flake_mean(self, flakes: FlakeLayer):
         """The flakes' mean map C_E for this layer's spread (:func:`station.render.flakes.flake_mean_cube`),
         uploaded once per spread."""
-        import moderngl
-
         key = round(flakes.spread_deg, 6)
         if key not in self._flake_means:
-            cube = flake_mean_cube(self.basis, flakes)
-            tex = self.ctx.texture_cube(
-                (cube.shape[1],) * 2, 3, np.ascontiguousarray(cube).tobytes(), dtype="f4"
-            )
-            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-            self._flake_means[key] = tex
+            self._flake_means[key] = tx.cube_texture(self.ctx, flake_mean_cube(self.basis, flakes), False)
         return self._flake_means[key]
-
-    def _target(self, linear: bool, depth: bool = False):
-        """Colour target (with a depth buffer for meshes only: llvmpipe is slower with one attached)."""
-        key = (linear, depth)
-        if key not in self._targets:
-            tex = self.ctx.texture((self.width, self.height), 4, dtype="f4" if linear else "f1")
-            rb = self.ctx.depth_renderbuffer((self.width, self.height)) if depth else None
-            self._targets[key] = (tex, self.ctx.framebuffer(color_attachments=[tex], depth_attachment=rb), rb)
-        return self._targets[key][:2]
 
     def _combined_atlas(self, pair) -> list:
         """[gloss, dd] atlas textures of both paints' narrow lobes (shaders/combine.frag.glsl; rebuilt on
@@ -281,51 +202,21 @@ class GLRenderer:
         key = b"".join(np.concatenate([w[1].ravel(), w[2]]).astype(np.float32).tobytes() for w in mw)
         if self._combined is not None and self._combined[0] == key:
             return self._combined[1]
-        m = len(self._lobes)
-        size = self._atlas_face
-        combine = self._combine
-        if combine is None:
-            import moderngl
-
-            dtype = "f2" if self._half_float else "f4"
-            atlas = [self.ctx.texture((size + 2, 12 * (size + 2)), 4, dtype=dtype) for _ in range(2)]
-            for tex in atlas:
-                tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-                tex.repeat_x = tex.repeat_y = False
-            prog = build_program(self.ctx, "fullscreen.vert.glsl", "combine.frag.glsl", {"N_LOBES": m})
-            fbo = self.ctx.framebuffer(color_attachments=atlas)
-            combine = self._combine = (fbo, prog, self.ctx.vertex_array(prog, []), atlas)
-        fbo, prog, vao, atlas = combine
-        fbo.use()
-        for unit, tex in enumerate(self._lobes):
-            tex.use(unit)
-        prog["u_lobes"].value = list(range(m)) if m > 1 else 0
-        prog["u_size"].value = size
+        if self._combine is None:
+            self._combine = tx.combine_pass(self.ctx, self._atlas_face, len(self._lobes), self._half_float)
         narrow = (self._wide[self._order] == 0).astype(np.float32)
-        # wide lobes are looked up per pixel with their horizon factors
-        prog["u_wg"].write(np.concatenate([w[2] * narrow for w in mw]).astype(np.float32).tobytes())
-        prog["u_wdd"].write(np.concatenate([w[1] * narrow[:, None] for w in mw]).astype(np.float32).tobytes())
-        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+        atlas = tx.draw_combined(self.ctx, self._combine, self._lobes, self._atlas_face, narrow, mw)
         self._combined = (key, atlas)
         return atlas
 
     def _terms(self, pair) -> tuple[int, int, int]:
-        """Which weight groups of these paints are non-zero: (bit i set when wide lobe i has a gloss
-        weight in either paint, 1 when a narrow lobe has a directionally diffuse weight, 1 when either
-        paint has an aspecular fall-off K_A and the horizon tables are on). A term whose weights are all
-        exactly zero adds nothing, so its lookups are compiled out: a typical effect paint has its gloss
-        in the narrow lobes and its colour travel in the wide ones (3 of 8 lookups). Without the
+        """Which weight groups of these paints are non-zero: (:func:`station.render.gl_programs.compiled_terms`,
+        1 when either paint has an aspecular fall-off K_A and the horizon tables are on). Without the
         combined maps every lobe is looked up (mask -1)."""
         fall_off = int(self._horizon != "none" and any(w.has_fall_off for w in pair))
         if not self.combined:
             return (-1, 1, fall_off)
-        mw = [self._bound_weights(w) for w in pair]
-        wide = self._wide[self._order] != 0
-        mask = 0
-        for i in np.nonzero(wide)[0]:
-            if any(w[2][i] > 0.0 for w in mw):
-                mask |= 1 << int(i)
-        narrow_dd = int(any(np.any(w[1][~wide] > 0.0) for w in mw))
+        mask, narrow_dd = compiled_terms([self._bound_weights(w) for w in pair], self._wide[self._order])
         return (mask, narrow_dd, fall_off)
 
     def _lights_taken_out(self, lobe: int) -> bool:
@@ -356,7 +247,7 @@ class GLRenderer:
         programs (:meth:`_frame_programs`), textures bound and uniforms set (:meth:`_frame_uniforms`), then
         the shape's full-screen pass, or the stage pass and the rasterised mesh."""
         pair = check_paints(self.basis, paints)
-        self.last_flakes = flake_lod(flakes, scene.view_camera, self.height)
+        self.last_flakes = flake_lod(flakes, scene.view_camera, self.targets.shade_size[1])
         if not linear:
             check_curve(curve)
         pair, passes, aniso_uniforms, occluders, n_occ = self._frame_programs(
@@ -370,7 +261,8 @@ class GLRenderer:
             anisotropic_samples,
             self.last_flakes.on,
         )
-        fbo = target if target is not None else self._target(linear, depth=mesh is not None)[1]
+        own = target is None or self.targets.side > 1 or mesh is not None
+        fbo = self.targets.draw_target(linear, depth=mesh is not None) if own else target
         fbo.use()
         occ = np.zeros((MAX_OCCLUDERS, 4), np.float32)
         occ[: len(occluders)] = occluders
@@ -384,18 +276,27 @@ class GLRenderer:
         for prog, _ in passes:
             self._set_uniforms(prog, uniforms, mw, occ, m)
         if mesh is None:
-            prog, vao = passes[0]
-            vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
+        else:
+            self._draw_mesh(fbo, passes, mesh)
+        if fbo is target or (self.targets.side == 1 and target is None):
             return fbo
+        if self.targets.side == 1:  # a mesh drawn with its depth buffer, then blitted into *target*
+            self.ctx.copy_framebuffer(target, fbo)
+            return target
+        out = target if target is not None else self.targets.output_target(linear)
+        return self.targets.resolve(fbo, out)
+
+    def _draw_mesh(self, fbo, passes: list, mesh) -> None:
+        """The stage pass (colour only), then *mesh* depth-tested, into *fbo*."""
         fbo.clear(depth=1.0)
         self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
         passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
         self.ctx.enable(self.ctx.DEPTH_TEST)
         try:
-            self._mesh_vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
+            self._mesh.vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
         finally:
             self.ctx.disable(self.ctx.DEPTH_TEST)
-        return fbo
 
     def _frame_programs(
         self,
@@ -424,7 +325,17 @@ class GLRenderer:
         feats: tuple[int, ...] = (int(coat is not None), stage_bits, int(flakes_on))
         aniso_uniforms: dict = {}
         if anisotropy is not None:
-            pair, aniso_uniforms = self._anisotropy(pair, anisotropy, anisotropic_samples)
+            pair, aniso_uniforms, self.last_anisotropy = anisotropy_frame(
+                self.ctx,
+                self.basis,
+                self._order,
+                self._aniso,
+                pair,
+                anisotropy,
+                anisotropic_samples,
+                self.anisotropy_tolerance_de,
+                self.anisotropy_energy,
+            )
             feats = (*feats, 1)
         else:
             self.last_anisotropy = None
@@ -462,8 +373,8 @@ class GLRenderer:
         self._horizon_tex.use(m + 5)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
         uniforms = {
-            **scene.view_camera.uniforms(self.width, self.height),
-            "u_size": (float(self.width), float(self.height)),
+            **scene.view_camera.uniforms(*self.targets.shade_size),
+            "u_size": tuple(float(v) for v in self.targets.shade_size),
             "u_misalign": float(np.radians(scene.misalignment_deg)),
             "u_background": (BACKGROUND,) * 3,
             "u_diffuse": m + 4,
@@ -510,11 +421,7 @@ class GLRenderer:
         if self._ground is not None and self._ground[0] == key:
             return self._ground[1]
         if self._ground is None:
-            import moderngl
-
-            tex = self.ctx.texture((GROUND_MAP, GROUND_MAP), 4, dtype="f2" if self._half_float else "f4")
-            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-            tex.repeat_x = tex.repeat_y = False
+            tex = tx.colour_texture(self.ctx, (GROUND_MAP, GROUND_MAP), self._half_float)
             target = self.ctx.framebuffer(color_attachments=[tex])
         else:
             tex, target = self._ground[1], self._ground[2]
@@ -525,114 +432,8 @@ class GLRenderer:
         self._ground = (key, tex, target)
         return tex
 
-    def _anisotropy(self, pair, anisotropy: Anisotropy, samples: int | None) -> tuple[list, dict]:
-        """Paints with their gloss moved into the anisotropic lobe, and the lobe's uniforms (class doc)."""
-        import moderngl
-
-        from station.render.lod import AnisotropyChoice, choose_anisotropic_samples
-        from station.render.truth import sphere_pixels
-        from station.render.weights import LobeWeights
-
-        if self.anisotropy_energy not in an.ENERGIES:
-            raise RenderInputError("anisotropy_energy", " | ".join(an.ENERGIES), self.anisotropy_energy)
-        lobe = an.WardLobe.from_design(anisotropy)
-        key = (lobe.alpha_x, lobe.alpha_y)
-        if key not in self._aniso:
-            table = an.albedo_table(lobe)
-            tex = self.ctx.texture((table.shape[1], table.shape[0]), 1, table.tobytes(), dtype="f4")
-            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-            tex.repeat_x = tex.repeat_y = False
-            w = an.fit_isotropic(self.basis.exponents, lobe.alpha_x)
-            self._aniso[key] = (tex, (w / w.sum())[self._order], {})
-        tex, w_bound, choices = self._aniso[key]
-        if samples is not None:
-            an.sample_offsets(lobe, samples)  # validates
-            choice = AnisotropyChoice(
-                samples, float("nan"), float("nan"), f"{samples} anisotropic samples (given)"
-            )
-        else:
-            ck = (float(self.anisotropy_tolerance_de), self.anisotropy_energy, lobe.tangent)
-            if ck not in choices:
-                choices[ck] = choose_anisotropic_samples(
-                    self.basis, lobe, *sphere_pixels(8), ck[0], energy=self.anisotropy_energy
-                )
-            choice = choices[ck]
-        self.last_anisotropy = choice
-        ps = [float(w.map_weights()[2].sum()) for w in pair]
-        pair = [LobeWeights(w.exponents, w.k_d, w.k_dd, np.zeros_like(w.k_g), w.k_a) for w in pair]
-        uniforms = {
-            "_key": key,
-            "u_aniso_samples": int(choice.samples) if lobe.spread > 0 else 1,
-            "u_aniso_spread": lobe.spread,
-            "u_aniso_hint": tuple(float(c) for c in lobe.tangent),
-            "u_aniso_albedo": len(self._lobes) + 9,
-            "u_aniso_cos_min": an.ALBEDO_COS_MIN,
-            "u_aniso_ward_energy": int(self.anisotropy_energy == "ward"),
-            "_aniso_w": w_bound,
-            "_aniso_ps": (ps + ps)[:2],
-        }
-        return pair, uniforms
-
-    def _mesh_vao(self, mesh, prog):
-        """Vertex array of *mesh* for *prog* (buffers uploaded once per mesh and program)."""
-        key = (id(mesh), id(prog))
-        if self._mesh is None or self._mesh[0] != key:
-            self._release_mesh()
-            vbo = self.ctx.buffer(
-                np.concatenate([mesh.positions, mesh.normals, mesh.painted[:, None]], axis=1)
-                .astype(np.float32)
-                .tobytes()
-            )
-            ibo = self.ctx.buffer(mesh.faces.astype(np.uint32).tobytes())
-            vao = self.ctx.vertex_array(
-                prog,
-                [(vbo, "3f 3f 1f", "in_pos", "in_normal", "in_painted")],
-                index_buffer=ibo,
-                index_element_size=4,
-            )
-            self._mesh = (key, mesh, vbo, ibo, vao)
-        return self._mesh[4]
-
-    def _release_mesh(self) -> None:
-        if self._mesh is not None:
-            for obj in self._mesh[2:]:
-                obj.release()
-            self._mesh = None
-
     def _set_uniforms(self, prog, uniforms: dict, mw: list, occ: np.ndarray, m: int) -> None:
-        for name, value in uniforms.items():
-            if name in prog:
-                prog[name].value = value
-        if "u_wd" in prog:
-            prog["u_wd"].write(np.array([w[0] for w in mw], np.float32).tobytes())
-        if self.combined:
-            for unit, name in enumerate(("u_gloss", "u_dd")):
-                if name in prog:
-                    prog[name].value = m + unit
-        # The compiler trims uniform arrays to the entries the shader can reach (N_WIDE when combined).
-        if "u_lobes" in prog:
-            n = prog["u_lobes"].array_length
-            prog["u_lobes"].value = list(range(n)) if n > 1 else 0
-        lights = self._lights
-        if lights is not None and lights.count:  # the compiler drops what a program never reads
-            for name, values in (("u_light_dir", lights.directions), ("u_light_flux", lights.flux)):
-                if name in prog:
-                    prog[name].write(values.astype(np.float32).tobytes())
-        for name, part in (("u_wdd", 1), ("u_wg", 2)):
-            if name in prog:
-                n = prog[name].array_length
-                prog[name].write(np.concatenate([w[part] for w in mw]).astype(np.float32)[:n].tobytes())
-        if "u_aniso_w" in prog:
-            prog["u_aniso_w"].write(np.asarray(uniforms["_aniso_w"], np.float32).tobytes())
-            prog["u_aniso_ps"].write(np.asarray(uniforms["_aniso_ps"], np.float32).tobytes())
-        if "u_flake_tint" in prog:
-            prog["u_flake_tint"].write(np.array([flake_tint(w[1]) for w in mw], np.float32).tobytes())
-        if "u_wa" in prog:
-            prog["u_wa"].write(np.asarray(uniforms["_wa"], np.float32).tobytes())
-        if "u_occ" in prog:
-            prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
-        if "u_sh" in prog:
-            prog["u_sh"].write(self._sh.tobytes())
+        set_uniforms(prog, uniforms, mw, occ, m, combined=self.combined, lights=self._lights, sh=self._sh)
 
     def render(
         self,
@@ -660,6 +461,14 @@ class GLRenderer:
             anisotropy=anisotropy,
             anisotropic_samples=anisotropic_samples,
         )
+        return self._read(fbo, False)
+
+    def _read(self, fbo, linear: bool) -> np.ndarray:
+        """The W × H frame of *fbo*, row 0 at the top: float32 radiance (H, W, 3) when *linear*, else a
+        uint8 (H, W, 3) view of the RGBA read-back (the driver's fast path)."""
+        if linear:
+            data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
+            return data.reshape(self.height, self.width, 3)[::-1].copy()
         data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
         return data.reshape(self.height, self.width, 4)[::-1, :, :3]
 
@@ -674,12 +483,15 @@ class GLRenderer:
         target=None,
         anisotropy: Anisotropy | None = None,
         anisotropic_samples: int | None = None,
+        mesh=None,
     ):
         """Render the 8-bit display frame into this renderer's framebuffer and return it (no read-back:
         a caller on the same context blits it, e.g. ``ctx.copy_framebuffer(screen, fbo)``; row 0 is the
         bottom row, GL's convention). *target*: a framebuffer of this context and of this renderer's
-        size (e.g. a widget's, ``ctx.detect_framebuffer``) drawn into instead, which saves the blit; not
-        for meshes (no depth buffer is assumed)."""
+        size (e.g. a widget's, ``ctx.detect_framebuffer``) drawn into instead, which saves the blit.
+        *mesh*: a :class:`station.render.meshes.Mesh` drawn instead of the scene's shape, seen by the
+        scene's camera on its stage (as :meth:`render_mesh`; drawn with a depth buffer of its own, then
+        blitted into *target*)."""
         return self._draw(
             scene,
             paints,
@@ -689,6 +501,7 @@ class GLRenderer:
             coat,
             flakes=flakes,
             target=target,
+            mesh=mesh,
             anisotropy=anisotropy,
             anisotropic_samples=anisotropic_samples,
         )
@@ -714,8 +527,7 @@ class GLRenderer:
             anisotropy=anisotropy,
             anisotropic_samples=anisotropic_samples,
         )
-        data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
-        return data.reshape(self.height, self.width, 3)[::-1].copy()
+        return self._read(fbo, True)
 
     def render_mesh(
         self,
@@ -752,47 +564,24 @@ class GLRenderer:
             anisotropy=anisotropy,
             anisotropic_samples=anisotropic_samples,
         )
-        if linear:
-            data = np.frombuffer(fbo.read(components=3, dtype="f4", alignment=1), np.float32)
-            return data.reshape(self.height, self.width, 3)[::-1].copy()
-        data = np.frombuffer(fbo.read(components=4, alignment=4), np.uint8)
-        return data.reshape(self.height, self.width, 4)[::-1, :, :3]
+        return self._read(fbo, linear)
 
     def release(self) -> None:
         """Free textures, programs, targets (and the context if this object created it)."""
-        self._release_mesh()
-        for prog, vao in self._programs.values():
-            if vao is not None:
-                vao.release()
-            prog.release()
-        for tex, fbo, rb in self._targets.values():
-            fbo.release()
-            tex.release()
-            if rb is not None:
-                rb.release()
-        for tex in [
-            *self._lobes,
-            self._diffuse_tex,
-            self._horizon_tex,
-        ]:
-            tex.release()
-        for tex, *_ in self._aniso.values():
-            tex.release()
-        for tex in self._flake_means.values():
-            tex.release()
-        self._flake_means.clear()
-        self._aniso.clear()
+        self._mesh.release()
+        self.targets.release()
+        objs = [obj for pv in self._programs.values() for obj in reversed(pv) if obj is not None]
+        objs += [*self._lobes, self._diffuse_tex, self._horizon_tex, *self._flake_means.values()]
+        objs += [tex for tex, *_ in self._aniso.values()]
         if self._combine is not None:
-            for obj in (*self._combine[:3], *self._combine[3]):
-                obj.release()
-            self._combine = None
+            objs += [*self._combine[:3], *self._combine[3]]
         if self._ground is not None:
-            self._ground[2].release()
-            self._ground[1].release()
-            self._ground = None
-        self._combined = None
-        self._programs.clear()
-        self._targets.clear()
+            objs += [self._ground[2], self._ground[1]]
+        for obj in objs:
+            obj.release()
+        for cache in (self._flake_means, self._aniso, self._programs):
+            cache.clear()
+        self._combine = self._ground = self._combined = None
         if self._own_ctx:
             self.ctx.release()
 

@@ -27,6 +27,7 @@ from station.render.camera import Camera
 from station.render.envcache import PrefilterCache
 from station.render.environment import Environment, load_environment
 from station.render.lobe_fit import fit_design
+from station.render.meshes import MESH_CAMERA, MESH_SUFFIXES, Mesh
 from station.render.prefilter import PrefilteredBasis, prefilter_basis
 from station.render.procedural import procedural_environment
 from station.render.shapes import DEFAULT_CAMERAS, SHAPES, Scene
@@ -163,6 +164,8 @@ class ViewSettings:
     ``flake_size_um``, ``flake_density``, ``flake_spread_deg`` replace that layer's size (µm), density
     (per mm²) and spread (degrees) when set (None: the paint type's default), within
     :data:`station.model.flakes.FLAKE_RANGES` (:meth:`flake_layer`).
+    ``model``: the path of an own model (glTF/GLB, OBJ or STL, :meth:`ViewModel.load_model`) shown
+    instead of the shape, framed by :data:`station.render.meshes.MESH_CAMERA`; None shows the shape.
     """
 
     environment: str = "booth"
@@ -178,9 +181,14 @@ class ViewSettings:
     flake_size_um: float | None = None
     flake_density: float | None = None
     flake_spread_deg: float | None = None
+    model: str | None = None
 
     def __post_init__(self) -> None:
         check_environment(self.environment)
+        if self.model is not None and not (
+            isinstance(self.model, str) and Path(self.model).suffix.lower() in MESH_SUFFIXES
+        ):
+            raise ViewInputError("model", " | ".join(MESH_SUFFIXES) + " file, or none", self.model)
         if self.shape not in SHAPES:
             raise ViewInputError("shape", " | ".join(SHAPES), self.shape)
         if not (math.isfinite(self.exposure_ev) and -10.0 <= self.exposure_ev <= 10.0):
@@ -219,7 +227,7 @@ class ViewSettings:
 
     def camera(self) -> Camera:
         """The orbit camera: the shape's default camera turned by yaw/pitch and moved in by zoom."""
-        base = DEFAULT_CAMERAS[self.shape]
+        base = MESH_CAMERA if self.model is not None else DEFAULT_CAMERAS[self.shape]
         target = np.asarray(base.target, dtype=float)
         off = np.asarray(base.eye, dtype=float) - target
         dist = float(np.linalg.norm(off))
@@ -365,6 +373,7 @@ class ViewModel:
     def __init__(self, settings: ViewSettings | None = None) -> None:
         self._settings = settings or ViewSettings()
         self._designs: tuple[FaceFlopTravelGloss, FaceFlopTravelGloss] | None = None
+        self._meshes: dict[str, Mesh] = {}  # loaded model path → mesh (load_model)
         self.events = EventGroup("settings", "paints")
 
     @property
@@ -387,6 +396,29 @@ class ViewModel:
         env = load_environment_file(path)
         self.update(environment=str(Path(path)))
         return env
+
+    def load_model(self, path: str | Path) -> Mesh:
+        """Show the model in the glTF/GLB, OBJ or STL file *path* instead of the shape (read with
+        :func:`station.render.meshes.load_mesh`, every part painted; the orbit reset). Raises
+        RenderInputError (field ``mesh``, naming the file) for a file that cannot be used; the settings
+        are unchanged on failure. Returns the mesh."""
+        from station.render.meshes import load_mesh
+
+        key = str(Path(path))
+        mesh = load_mesh(key)
+        self._meshes[key] = mesh
+        self.update(model=key, yaw_deg=0.0, pitch_deg=0.0, zoom=1.0)
+        return mesh
+
+    @property
+    def models(self) -> tuple[str, ...]:
+        """Paths of the models loaded so far (:meth:`load_model`), in loading order."""
+        return tuple(self._meshes)
+
+    def mesh(self) -> Mesh | None:
+        """The mesh of the model shown (``settings.model``), or None when a shape is shown."""
+        model = self._settings.model
+        return None if model is None else self._meshes.get(model)
 
     def show(self, design: FaceFlopTravelGloss, other: FaceFlopTravelGloss | None = None) -> None:
         """Show *design* on both halves, or *design* | *other* side by side."""

@@ -392,8 +392,8 @@ class GLRenderView(_ViewLogic):
             return False
         if self.mode == "gpu" and self.basis.core.background is None:
             return False
-        if self.model.settings.flakes and self._core_ok:
-            return False  # flakes are drawn by the core's GL renderer only
+        if (self.model.settings.flakes or self.model.settings.model is not None) and self._core_ok:
+            return False  # flakes and own models are drawn by the core's GL renderer only
         return self.basis_current or not self._core_ok
 
     def request_frame(self) -> None:
@@ -571,7 +571,8 @@ class GLRenderView(_ViewLogic):
         ctx.viewport = (0, 0, w, h)
         weights = self.model.weights()
         flakes_on = self.model.settings.flakes
-        if weights is not None and self._core_ok and (flakes_on or not self.basis_current):
+        model_on = self.model.settings.model is not None  # an own model: drawn by the core only
+        if weights is not None and self._core_ok and (flakes_on or model_on or not self.basis_current):
             if self._draw_core_frame(ctx, screen, weights, w, h):
                 self._settle.start()  # still means no new view for SETTLE_MS after this frame
                 self.frames += 1
@@ -620,6 +621,7 @@ class GLRenderView(_ViewLogic):
                 coat=settings.clear_coat(),
                 flakes=self._flake_layer(),
                 target=screen,
+                mesh=self.model.mesh(),
             )
             last = self._core.last_flakes
             self.flake_report = None if last is None else last.reason

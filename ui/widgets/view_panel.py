@@ -108,9 +108,7 @@ class ViewPanel(QWidget):
         self.environment.currentIndexChanged.connect(self._on_environment_picked)
         self.load_env.clicked.connect(self.env_dialog.open)
         self.env_dialog.fileSelected.connect(self.load_environment)
-        self.shape.currentTextChanged.connect(
-            lambda t: self.model.update(shape=t, yaw_deg=0.0, pitch_deg=0.0, zoom=1.0)
-        )
+        self.shape.currentIndexChanged.connect(self._on_shape_picked)
         self.exposure.valueChanged.connect(lambda v: self.model.update(exposure_ev=v / EXPOSURE_STEPS_PER_EV))
         self.stage.toggled.connect(lambda on: self.model.update(stage=bool(on)))
         self.coat.toggled.connect(lambda on: self.model.update(coat=bool(on)))
@@ -160,6 +158,35 @@ class ViewPanel(QWidget):
             return False
         self.env_status.setText("")
         return True
+
+    def open_model(self, path: str) -> bool:
+        """Show the model in the glTF/GLB, OBJ or STL file *path* (:meth:`ViewModel.load_model`): it joins
+        the shape picker under its file name and is picked; False, with the reason (naming the file) in
+        :attr:`env_status`, when the file cannot be used (the view stays as it was)."""
+        try:
+            self.model.load_model(path)
+        except InputError as exc:
+            self.env_status.setText(f"model not loaded: {exc}")
+            return False
+        self.env_status.setText("")
+        key = self.model.settings.model
+        index = self.shape.findData(key)
+        if index < 0:
+            self.shape.addItem(f"{Path(path).name} (model)", key)
+            index = self.shape.count() - 1
+        self.shape.blockSignals(True)
+        self.shape.setCurrentIndex(index)
+        self.shape.blockSignals(False)
+        return True
+
+    def _on_shape_picked(self, index: int) -> None:
+        """A built-in shape (model off) or a loaded model picked; the orbit starts over."""
+        model = self.shape.itemData(index)
+        orbit = {"yaw_deg": 0.0, "pitch_deg": 0.0, "zoom": 1.0}
+        if model is None:
+            self.model.update(shape=self.shape.itemText(index), model=None, **orbit)
+        else:
+            self.model.update(model=model, **orbit)
 
     def _on_settings(self, s: ViewSettings) -> None:
         self.exposure_label.setText(f"{s.exposure_ev:+.1f} EV")

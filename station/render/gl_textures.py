@@ -1,0 +1,118 @@
+"""Textures and buffers of :class:`station.render.gl_renderer.GLRenderer`: the lobe cube maps, the horizon
+table, the flakes' mean map, the anisotropic albedo table, the combined lobe atlas, the baked ground map
+and a mesh's vertex arrays. Each function creates GL objects on *ctx*; the renderer owns and releases
+them.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from station.render.gl_context import build_program
+
+
+def _linear_clamped(tex: Any) -> Any:
+    """*tex* with bilinear filtering and clamped edges."""
+    import moderngl
+
+    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+    tex.repeat_x = tex.repeat_y = False
+    return tex
+
+
+def cube_texture(ctx: Any, cube: np.ndarray, half_float: bool) -> Any:
+    """(6, s, s, 3) radiance cube as a bilinear RGB cube texture (half or single float)."""
+    import moderngl
+
+    dtype, np_dtype = ("f2", np.float16) if half_float else ("f4", np.float32)
+    s = cube.shape[1]
+    tex = ctx.texture_cube((s, s), 3, np.ascontiguousarray(cube, dtype=np_dtype).tobytes(), dtype=dtype)
+    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+    return tex
+
+
+def horizon_texture(ctx: Any, table: np.ndarray) -> Any:
+    """The horizon table (m, N, 2) of the bound lobes as an RGBA float texture of N columns: two lobes
+    per row (lobe 2k in .rg, 2k+1 in .ba), so one lookup serves a pair of wide lobes."""
+    pairs = np.zeros(((table.shape[0] + 1) // 2, table.shape[1], 4), np.float32)
+    for i in range(table.shape[0]):
+        pairs[i // 2, :, 2 * (i % 2) : 2 * (i % 2) + 2] = table[i]
+    tex = ctx.texture((table.shape[1], pairs.shape[0]), 4, np.ascontiguousarray(pairs).tobytes(), dtype="f4")
+    return _linear_clamped(tex)
+
+
+def table_texture(ctx: Any, table: np.ndarray) -> Any:
+    """A 2-D single-channel float table (rows, columns) as a bilinear clamped texture."""
+    return _linear_clamped(ctx.texture((table.shape[1], table.shape[0]), 1, table.tobytes(), dtype="f4"))
+
+
+def colour_texture(ctx: Any, size: tuple[int, int], half_float: bool) -> Any:
+    """An empty RGBA float render texture of *size* (bilinear, clamped)."""
+    return _linear_clamped(ctx.texture(size, 4, dtype="f2" if half_float else "f4"))
+
+
+def combine_pass(ctx: Any, face: int, n_lobes: int, half_float: bool) -> tuple:
+    """(framebuffer, program, vertex array, [gloss, dd] atlas textures) that sum the narrow lobes of a
+    pair of paints into the atlases (``shaders/combine.frag.glsl``; 12 faces of *face* + 2 texels)."""
+    atlas = [colour_texture(ctx, (face + 2, 12 * (face + 2)), half_float) for _ in range(2)]
+    prog = build_program(ctx, "fullscreen.vert.glsl", "combine.frag.glsl", {"N_LOBES": n_lobes})
+    return (ctx.framebuffer(color_attachments=atlas), prog, ctx.vertex_array(prog, []), atlas)
+
+
+def mesh_arrays(ctx: Any, mesh: Any, prog: Any) -> tuple:
+    """(vertex buffer, index buffer, vertex array) of a :class:`station.render.meshes.Mesh` for *prog*:
+    position, normal and the painted flag per vertex."""
+    vbo = ctx.buffer(
+        np.concatenate([mesh.positions, mesh.normals, mesh.painted[:, None]], axis=1)
+        .astype(np.float32)
+        .tobytes()
+    )
+    ibo = ctx.buffer(mesh.faces.astype(np.uint32).tobytes())
+    vao = ctx.vertex_array(
+        prog,
+        [(vbo, "3f 3f 1f", "in_pos", "in_normal", "in_painted")],
+        index_buffer=ibo,
+        index_element_size=4,
+    )
+    return vbo, ibo, vao
+
+
+def draw_combined(ctx: Any, combine: tuple, lobes: list, face: int, narrow: np.ndarray, mw: list) -> list:
+    """Sum the *narrow* (1/0 per bound lobe) lobes of both paints' bound weights *mw* into the [gloss,
+    dd] atlases of *combine* (:func:`combine_pass`) and return them; the wide lobes are looked up per
+    pixel with their horizon factors."""
+    fbo, prog, vao, atlas = combine
+    fbo.use()
+    for unit, tex in enumerate(lobes):
+        tex.use(unit)
+    prog["u_lobes"].value = list(range(len(lobes))) if len(lobes) > 1 else 0
+    prog["u_size"].value = face
+    prog["u_wg"].write(np.concatenate([w[2] * narrow for w in mw]).astype(np.float32).tobytes())
+    prog["u_wdd"].write(np.concatenate([w[1] * narrow[:, None] for w in mw]).astype(np.float32).tobytes())
+    vao.render(mode=ctx.TRIANGLES, vertices=3)
+    return atlas
+
+
+class MeshArrays:
+    """The vertex array of the last mesh drawn (:func:`mesh_arrays`), uploaded once per mesh and program."""
+
+    def __init__(self, ctx: Any) -> None:
+        self.ctx = ctx
+        self._current: tuple | None = None  # (key, mesh, vbo, ibo, vao)
+
+    def vao(self, mesh: Any, prog: Any) -> Any:
+        """Vertex array of *mesh* for *prog* (the previous mesh's buffers released on a change)."""
+        key = (id(mesh), id(prog))
+        if self._current is None or self._current[0] != key:
+            self.release()
+            self._current = (key, mesh, *mesh_arrays(self.ctx, mesh, prog))
+        return self._current[4]
+
+    def release(self) -> None:
+        """Free the buffers and vertex array."""
+        if self._current is not None:
+            for obj in self._current[2:]:
+                obj.release()
+            self._current = None
