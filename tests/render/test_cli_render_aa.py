@@ -60,7 +60,6 @@ def test_render_aa_default_and_off(design, tmp_path, capsys, gl_ctx):
 @pytest.mark.parametrize(("aa", "engine", "field"), [("3", "gl", "aa"), ("4", "numpy", "engine")])
 def test_render_aa_refusals_exit_2(design, tmp_path, capsys, aa, engine, field):
     if engine == "gl":
-        pytest.importorskip("moderngl")
         from station.render.gl_context import gl_available
 
         if not gl_available():
