@@ -26,10 +26,6 @@ MAX_FILE_LINES = 600
 
 #: ``path`` (a file over 600 lines) or ``path:qualname`` (a function over 80 lines) → why it still is.
 ALLOWED: dict[str, str] = {
-    "station/design/sketch.py": "the sketch fit, being split by fit (point light, environment)",
-    "station/design/sketch.py:fit_point_light": "the point-light fit, being split in the sketch work",
-    "station/design/sketch.py:fit_environment": "the environment fit, being split in the sketch work",
-    "ui/widgets/render_view.py": "the render views (GL and image), being split in the viewer render work",
 }
 
 
