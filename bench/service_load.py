@@ -160,7 +160,6 @@ def run_raw(engine: Any, threads: int, duration: float, tag: str) -> dict[str, A
             with engine.begin() as conn:
                 conn.execute(
                     insert(Measurement).values(
-                        client_id=r.client_id,
                         instrument_id=instrument_id,
                         received_at=utcnow(),
                         **reading_columns(r),

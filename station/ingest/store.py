@@ -276,9 +276,10 @@ def store_readings(
 
 def reading_columns(reading: Reading) -> dict[str, Any]:
     """The ``measurements`` columns that *reading* fills by itself (its panel, instrument, calibration,
-    chain and correction columns aside): operator, instants, colorimetric conditions, Lab, spectra,
-    gloss, illumination block, texture and the payload hash."""
+    chain and correction columns aside): client id, operator, instant, colorimetric conditions, Lab,
+    spectra, gloss, illumination block, texture and the payload hash."""
     return dict(
+        client_id=reading.client_id,
         operator=reading.operator,
         measured_at=reading.measured_at,
         illuminant=reading.illuminant,
@@ -310,11 +311,10 @@ def _values(
     instrument_id = _instrument_id(session, reading, instrument_cache)
     calibration_id = _calibration_id(session, reading, instrument_id)
     return dict(
-        client_id=reading.client_id,
+        **reading_columns(reading),
         panel_id=panel_id,
         instrument_id=instrument_id,
         calibration_id=calibration_id,
-        **reading_columns(reading),
         supersedes_id=supersedes_id,
         correction_reason=correction_reason,
         created_by_id=created_by_id,
