@@ -45,16 +45,16 @@ from station.formulate.library import Library
 from station.formulate.snap import SnapIndex
 from station.formulate.sprayout import SprayOutModel
 from station.model import FaceFlopTravelGloss
+from station.model.domain import ANGLES_3
 from station.model.examples import BRIGHT_SILVER
 
-A3 = (15.0, 45.0, 110.0)
 HISTOGRAM = ROOT / "docs" / "formulate-flop-index.png"
 SHOWCASE = {
     "README silver": np.array([[90.0, 2.0, -5.0], [50.0, 1.0, -3.0], [30.0, 0.5, -1.0]]),
-    "bright silver (L*15 125, flop 38)": BRIGHT_SILVER.lab_at(np.array(A3)),
-    "Fig 4.6 blue metallic": BUMPER_PAINT.lab_at(np.array(A3)),
+    "bright silver (L*15 125, flop 38)": BRIGHT_SILVER.lab_at(np.array(ANGLES_3)),
+    "Fig 4.6 blue metallic": BUMPER_PAINT.lab_at(np.array(ANGLES_3)),
     "viewer demo red": FaceFlopTravelGloss((62.0, 48.0, 30.0), (24.0, 38.0, 18.0), 70.0, 88.0).lab_at(
-        np.array(A3)
+        np.array(ANGLES_3)
     ),
 }
 
@@ -94,7 +94,7 @@ def _showcase_cases() -> list[Case]:
     cases = []
     for name, lab in SHOWCASE.items():
         t = time.perf_counter()
-        r = formulate(lab, A3)
+        r = formulate(lab, ANGLES_3)
         cases.append(
             Case(f"showcase: {name}", "1 design", r.mean_de, "ΔE00", f"{time.perf_counter() - t:.2f} s")
         )
@@ -103,7 +103,7 @@ def _showcase_cases() -> list[Case]:
 
 def _in_gamut_cases(lib: Library, index: SnapIndex) -> tuple[list[Case], np.ndarray, np.ndarray]:
     _types, conc = generate_recipes(67, 67, 66, seed=31337)
-    designs = predict_lab(conc, A3)
+    designs = predict_lab(conc, ANGLES_3)
     t_lib, t_gen, de_lib, de_gen = [], [], [], []
     for d in designs:
         t = time.perf_counter()
@@ -183,7 +183,7 @@ def _loop_cases(lib: Library, index: SnapIndex, designs: np.ndarray, conc: np.nd
     for i, d in enumerate(designs[::5][:40]):
         spray = SprayOutModel(seed=1000 + i)
         c_true = conc[::5][:40][i]
-        oracle = formulate(d, A3, [("true", c_true)], db=spray.true_db).mean_de
+        oracle = formulate(d, ANGLES_3, [("true", c_true)], db=spray.true_db).mean_de
         t = time.perf_counter()
         starts = [(m.code, lib.recipes[m.index]) for m in formulate_from_library(d, lib, index)[1].matches]
         job = closed_loop(d, spray.measure, starts=starts)

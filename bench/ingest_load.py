@@ -32,23 +32,15 @@ PG_ADMIN = "postgresql://postgres@127.0.0.1:5432/postgres"
 
 
 def _reading(rng: random.Random, serial: str, index: int) -> Any:
-    from station.ingest import InstrumentRef, Reading
+    from tests.ingest._readings import synthetic_reading
 
-    face = [rng.uniform(40, 110), rng.uniform(-20, 20), rng.uniform(-30, 30)]
-    return Reading(
+    return synthetic_reading(
+        rng,
         client_id=uuid.uuid4(),
-        instrument=InstrumentRef(serial=serial, model="MA-98 simulator"),
+        serial=serial,
         operator=f"bench-{serial}",
         measured_at=dt.datetime.now(dt.UTC),
-        geometries_deg=[15.0, 45.0, 110.0],
-        lab=[
-            face,
-            [face[0] * 0.6, face[1] * 0.8, face[2] * 0.8],
-            [face[0] * 0.3, face[1] * 0.5, face[2] * 0.5],
-        ],
-        wavelengths_nm=[400.0 + 10 * k for k in range(31)],
-        spectra=[[round(rng.uniform(0, 1.5), 5) for _ in range(31)] for _ in range(3)],
-        gloss_gu=rng.uniform(60, 95),
+        spectra_decimals=5,
     )
 
 

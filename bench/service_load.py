@@ -135,12 +135,13 @@ def run_service(
 
 
 def run_raw(engine: Any, threads: int, duration: float, tag: str) -> dict[str, Any]:
-    """Raw SQLAlchemy Core inserts of the same rows on *engine*, *threads* threads, one transaction
-    (one commit) per row, for *duration* seconds; the figures."""
+    """Raw SQLAlchemy Core inserts of the same rows (the store's :func:`reading_columns`) on *engine*,
+    *threads* threads, one transaction (one commit) per row, for *duration* seconds; the figures."""
     from sqlalchemy import insert, select
 
     from db.base import utcnow
     from db.models import Instrument, Measurement
+    from station.ingest.store import reading_columns
 
     serial = f"{tag}-raw-{secrets.token_hex(3)}"
     _reading(random.Random(0), serial, -1)  # imports done before the clock starts
@@ -159,19 +160,9 @@ def run_raw(engine: Any, threads: int, duration: float, tag: str) -> dict[str, A
             with engine.begin() as conn:
                 conn.execute(
                     insert(Measurement).values(
-                        client_id=r.client_id,
                         instrument_id=instrument_id,
-                        operator=r.operator,
-                        measured_at=r.measured_at,
                         received_at=utcnow(),
-                        illuminant=r.illuminant,
-                        observer=r.observer,
-                        geometries_deg=list(r.geometries_deg),
-                        lab=[list(v) for v in r.lab],
-                        wavelengths_nm=r.wavelengths_nm,
-                        spectra=r.spectra,
-                        gloss_gu=r.gloss_gu,
-                        payload_sha256=r.payload_sha256(),
+                        **reading_columns(r),
                     )
                 )
             latencies[k].append(time.perf_counter() - t0)

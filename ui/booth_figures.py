@@ -21,10 +21,14 @@ import os
 import tempfile
 import uuid
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from station.model.domain import ANGLES_5, DEFAULT_BOOTH_ILLUMINANTS
+
+if TYPE_CHECKING:
+    from sqlalchemy.orm import Session
 
 #: The pair's geometries (aspecular degrees) and metameric strength.
 ANGLES = ANGLES_5
@@ -64,40 +68,52 @@ def car_figures(out: Path) -> list[Path]:
     ]
 
 
+def add_pair(
+    session: Session, pair: tuple[np.ndarray, np.ndarray], *, job: str, serial: str, operator: str
+) -> list[int]:
+    """Store *pair* (standard, trial spectra (5, 31), reflectance 0..1 at :data:`ANGLES`) in *session* as
+    two measurements of *job* (fender standard, bumper trial) by one spectrophotometer *serial*, taken
+    a minute apart from 2026-12-01 09:00 UTC; Lab rounded to 4 decimals, spectra to 6. Returns their ids
+    (flushed, not committed)."""
+    from db.models import Instrument, Measurement, Panel
+    from station.model.spectra import WAVELENGTHS, reflectance_to_lab
+
+    inst = Instrument(serial=serial, model="MA-T12", kind="spectrophotometer")
+    session.add(inst)
+    session.flush()
+    ids = []
+    for k, (part, sp) in enumerate(zip(("fender", "bumper"), pair, strict=True)):
+        panel = Panel(job=job, part=part)
+        session.add(panel)
+        session.flush()
+        m = Measurement(
+            client_id=uuid.uuid4(),
+            instrument_id=inst.id,
+            panel_id=panel.id,
+            operator=operator,
+            measured_at=dt.datetime(2026, 12, 1, 9, k, tzinfo=dt.UTC),
+            geometries_deg=list(ANGLES),
+            lab=reflectance_to_lab(sp).round(4).tolist(),
+            wavelengths_nm=WAVELENGTHS.tolist(),
+            spectra=sp.round(6).tolist(),
+            payload_sha256="0" * 64,
+        )
+        session.add(m)
+        session.flush()
+        ids.append(int(m.id))
+    return ids
+
+
 def _scratch_database(folder: Path) -> tuple[str, list[int]]:
     """A database with the pair as two measurements of job J-BOOTH (fender standard, bumper trial)."""
     from db.engine import make_engine, make_sessionmaker
     from db.migrate import ensure_at_head
-    from db.models import Instrument, Measurement, Panel
-    from station.model.spectra import WAVELENGTHS, reflectance_to_lab
 
     url = f"sqlite:///{folder / 'booth.sqlite3'}"
     ensure_at_head(url)
     engine = make_engine(url)
-    ids = []
     with make_sessionmaker(engine)() as session:
-        inst = Instrument(serial="T12-0001", model="MA-T12", kind="spectrophotometer")
-        session.add(inst)
-        session.flush()
-        for k, (part, sp) in enumerate(zip(("fender", "bumper"), silver_pair(), strict=True)):
-            panel = Panel(job="J-BOOTH", part=part)
-            session.add(panel)
-            session.flush()
-            m = Measurement(
-                client_id=uuid.uuid4(),
-                instrument_id=inst.id,
-                panel_id=panel.id,
-                operator="demo",
-                measured_at=dt.datetime(2026, 12, 1, 9, k, tzinfo=dt.UTC),
-                geometries_deg=list(ANGLES),
-                lab=reflectance_to_lab(sp).round(4).tolist(),
-                wavelengths_nm=WAVELENGTHS.tolist(),
-                spectra=sp.round(6).tolist(),
-                payload_sha256="0" * 64,
-            )
-            session.add(m)
-            session.flush()
-            ids.append(int(m.id))
+        ids = add_pair(session, silver_pair(), job="J-BOOTH", serial="T12-0001", operator="demo")
         session.commit()
     engine.dispose()
     return url, ids

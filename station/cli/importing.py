@@ -124,10 +124,9 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
     if len(args.target) != 1:
         raise InputError("FILE", "one measurement file, or: watch DIR", " ".join(args.target))
     job, part = _panel(args)
-    import datetime as dt
 
     from station.ingest.formats import read_measurement_file
-    from station.ingest.formats.records import file_sha256, readings_from_import
+    from station.ingest.formats.records import readings_from_file
 
     path = Path(args.target[0])
     if not path.is_file():
@@ -149,12 +148,10 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
         from station.cli.instruments import _receipt, _target
         from station.ingest import operator_name
 
-        mtime = dt.datetime.fromtimestamp(path.stat().st_mtime, dt.UTC).replace(microsecond=0)
-        readings = readings_from_import(
+        readings = readings_from_file(
             imported,
-            sha256=file_sha256(path),
+            path,
             operator=operator_name(),
-            fallback_time=mtime,
             illumination_deg=_illumination(args),
             job=job,
             part=part,

@@ -274,6 +274,28 @@ def store_readings(
     return results
 
 
+def reading_columns(reading: Reading) -> dict[str, Any]:
+    """The ``measurements`` columns that *reading* fills by itself (its panel, instrument, calibration,
+    chain and correction columns aside): client id, operator, instant, colorimetric conditions, Lab,
+    spectra, gloss, illumination block, texture and the payload hash."""
+    return dict(
+        client_id=reading.client_id,
+        operator=reading.operator,
+        measured_at=reading.measured_at,
+        illuminant=reading.illuminant,
+        observer=reading.observer,
+        geometries_deg=list(reading.geometries_deg),
+        lab=[list(v) for v in reading.lab],
+        wavelengths_nm=reading.wavelengths_nm,
+        spectra=reading.spectra,
+        gloss_gu=reading.gloss_gu,
+        gloss_geometry_deg=reading.gloss_geometry_deg,
+        illumination_deg=reading.illumination_deg,
+        texture=None if reading.texture is None else [t.model_dump() for t in reading.texture],
+        payload_sha256=reading.payload_sha256(),
+    )
+
+
 def _values(
     session: Session,
     reading: Reading,
@@ -289,23 +311,10 @@ def _values(
     instrument_id = _instrument_id(session, reading, instrument_cache)
     calibration_id = _calibration_id(session, reading, instrument_id)
     return dict(
-        client_id=reading.client_id,
+        **reading_columns(reading),
         panel_id=panel_id,
         instrument_id=instrument_id,
         calibration_id=calibration_id,
-        operator=reading.operator,
-        measured_at=reading.measured_at,
-        illuminant=reading.illuminant,
-        observer=reading.observer,
-        geometries_deg=list(reading.geometries_deg),
-        lab=[list(v) for v in reading.lab],
-        wavelengths_nm=reading.wavelengths_nm,
-        spectra=reading.spectra,
-        gloss_gu=reading.gloss_gu,
-        gloss_geometry_deg=reading.gloss_geometry_deg,
-        illumination_deg=reading.illumination_deg,
-        texture=None if reading.texture is None else [t.model_dump() for t in reading.texture],
-        payload_sha256=reading.payload_sha256(),
         supersedes_id=supersedes_id,
         correction_reason=correction_reason,
         created_by_id=created_by_id,

@@ -6,6 +6,7 @@ import numpy as np
 from sqlalchemy import insert
 
 from db.models import LibraryPaint
+from station.api.schemas.designs import DESIGN_EXAMPLE as DESIGN
 from station.api.services.library import library_rows
 from station.formulate.demo import generate_library
 from station.model.design_io import design_from_dict
@@ -13,14 +14,6 @@ from station.model.difference import delta_e
 from tests.api.conftest import Api
 
 V1 = "/api/v1"
-DESIGN = {
-    "schema": "cacad.design/1",
-    "name": "Blue metallic",
-    "face": [62.0, -4.0, -38.0],
-    "flop": [24.0, 1.0, -20.0],
-    "travel_deg": 70.0,
-    "gloss_gu": 88.0,
-}
 
 
 def test_recipe_is_the_brute_force_nearest_paint(sqlite_api: Api) -> None:

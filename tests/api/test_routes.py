@@ -6,18 +6,11 @@ import csv
 import io
 
 from db.models import Role
+from station.api.schemas.designs import DESIGN_EXAMPLE as DESIGN
 from tests.api.conftest import Api
 from tests.ingest._readings import make_reading
 
 V1 = "/api/v1"
-DESIGN = {
-    "schema": "cacad.design/1",
-    "name": "Blue metallic",
-    "face": [62.0, -4.0, -38.0],
-    "flop": [24.0, 1.0, -20.0],
-    "travel_deg": 70.0,
-    "gloss_gu": 88.0,
-}
 
 
 def _reading(i: int, panel_id: int | None = None, serial: str = "SIM-MA-0001") -> dict:

@@ -25,8 +25,7 @@ from station.formulate.demo import (
 from station.formulate.formulation import formulate, formulate_from_library
 from station.formulate.snap import SnapIndex
 from station.formulate.sprayout import SprayOutModel
-
-A3 = (15.0, 45.0, 110.0)
+from station.model.domain import ANGLES_3
 
 
 @pytest.fixture(scope="module")
@@ -38,11 +37,13 @@ def demo() -> tuple:
 def test_random_in_gamut_designs_are_formulable_from_the_snap_start(demo: tuple) -> None:
     lib, index = demo
     _t, conc = generate_recipes(7, 7, 6, seed=4242)
-    designs = predict_lab(conc, A3)
+    designs = predict_lab(conc, ANGLES_3)
     ok = 0
     for d in designs:
         r, snap = formulate_from_library(d, lib, index, time_budget_s=2.0)
-        np.testing.assert_allclose(r.de_per_angle, cie2000(d, predict_lab(r.concentrations, A3)), atol=1e-9)
+        np.testing.assert_allclose(
+            r.de_per_angle, cie2000(d, predict_lab(r.concentrations, ANGLES_3)), atol=1e-9
+        )
         assert r.start in {m.code for m in snap.matches} | {"generic"}
         ok += r.mean_de <= 1.0
     assert ok >= 19  # ≥ 95 % of 20
@@ -51,11 +52,11 @@ def test_random_in_gamut_designs_are_formulable_from_the_snap_start(demo: tuple)
 def test_closed_loop_converges_within_three_corrections(demo: tuple) -> None:
     lib, index = demo
     _t, conc = generate_recipes(3, 3, 2, seed=777)
-    designs = predict_lab(conc, A3)
+    designs = predict_lab(conc, ANGLES_3)
     judged = 0
     for i, (d, c) in enumerate(zip(designs, conc, strict=True)):
         spray = SprayOutModel(seed=500 + i)
-        if formulate(d, A3, [("true", c)], db=spray.true_db, time_budget_s=1.0).mean_de > 0.8:
+        if formulate(d, ANGLES_3, [("true", c)], db=spray.true_db, time_budget_s=1.0).mean_de > 0.8:
             continue  # outside the gamut of the colorants actually sprayed (the benchmark's oracle)
         starts = [(m.code, lib.recipes[m.index]) for m in formulate_from_library(d, lib, index)[1].matches]
         job = closed_loop(d, spray.measure, starts=starts)
@@ -72,7 +73,7 @@ def test_closed_loop_converges_within_three_corrections(demo: tuple) -> None:
 def test_demo_library_flop_index_beside_spectramaster() -> None:
     lib = demo_library()
     assert int(np.sum(lib.types == "solid")) == 3000 and int(np.sum(lib.types != "solid")) == 3000
-    cols = lib.angle_columns(A3)[lib.types != "solid"]
+    cols = lib.angle_columns(ANGLES_3)[lib.types != "solid"]
     l15, l45, l110 = cols[:, 0, 0], cols[:, 1, 0], cols[:, 2, 0]
     ok = l15 >= l110
     fi = 2.69 * (l15[ok] - l110[ok]) ** 1.11 / l45[ok] ** 0.86  # eq 5.3.1, written out here

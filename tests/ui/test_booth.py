@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import datetime as dt
-import uuid
 from pathlib import Path
 
 import numpy as np
@@ -13,14 +11,14 @@ from PySide6.QtWidgets import QFileDialog
 
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
-from db.models import Instrument, Measurement, Panel
 from station.model.booth import metameric_pair
 from station.model.difference import delta_e
 from station.model.domain import ANGLES_5
 from station.model.examples import SILVER
-from station.model.spectra import WAVELENGTHS, reflectance_from_lab, reflectance_to_lab
+from station.model.spectra import reflectance_from_lab, reflectance_to_lab
 from station.render.booth import BoothRenderer
 from tests.qc.conftest import populate
+from ui.booth_figures import add_pair
 from ui.models.booth import BoothModel, LocalBoothSource
 from ui.widgets.booth_screen import COLUMNS, BoothScreen
 
@@ -49,31 +47,9 @@ def _database(tmp_path: Path, spectra) -> tuple[str, int, int]:
     url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
     ensure_at_head(url)
     engine = make_engine(url)
-    ids = []
     with make_sessionmaker(engine)() as session:
         populate(session)  # a job history without spectra around the pair
-        inst = Instrument(serial="900001", model="MA-T12", kind="spectrophotometer")
-        session.add(inst)
-        session.flush()
-        for k, (part, sp) in enumerate((("fender", spectra[0]), ("bumper", spectra[1]))):
-            panel = Panel(job="J-300", part=part)
-            session.add(panel)
-            session.flush()
-            m = Measurement(
-                client_id=uuid.uuid4(),
-                instrument_id=inst.id,
-                panel_id=panel.id,
-                operator="ana",
-                measured_at=dt.datetime(2026, 12, 1, 9, k, tzinfo=dt.UTC),
-                geometries_deg=ANGLES,
-                lab=reflectance_to_lab(sp).round(4).tolist(),
-                wavelengths_nm=WAVELENGTHS.tolist(),
-                spectra=sp.tolist(),
-                payload_sha256="0" * 64,
-            )
-            session.add(m)
-            session.flush()
-            ids.append(m.id)
+        ids = add_pair(session, spectra, job="J-300", serial="900001", operator="ana")
         session.commit()
     engine.dispose()
     return url, ids[0], ids[1]

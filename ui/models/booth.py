@@ -30,7 +30,7 @@ from ui.models.local_db import LocalDatabase
 
 if TYPE_CHECKING:
     from station.model.illuminants import Illuminant
-    from station.qc.booth import BoothRecipe
+    from station.qc.booth import BoothGeometry, BoothRecipe
     from station.qc.readings import Reading
     from station.render.booth import BoothRenderer
     from ui.models.service import ServiceClient
@@ -254,23 +254,12 @@ def _when(value: Any) -> str:
 
 
 @dataclass(frozen=True)
-class BoothRow:
-    """One geometry under the chosen illuminant: both Lab (its own white), ΔE00, metamerism index."""
-
-    geometry: str
-    standard_lab: tuple[float, float, float]
-    trial_lab: tuple[float, float, float]
-    de00: float
-    metamerism_index: float
-
-
-@dataclass(frozen=True)
 class BoothView:
-    """What the screen shows: the picture (H, W, 3) uint8, the rows, the illuminant's name, the mean ΔE00
-    and the seconds the picture took (fits and weighted sum; the first one of a shape builds its images)."""
+    """What the screen shows: the picture (H, W, 3) uint8, the rows (the trial is each row's sample), the
+    illuminant's name, the mean ΔE00 and the seconds the picture took (fits and weighted sum; the first one of a shape builds its images)."""
 
     image: np.ndarray
-    rows: tuple[BoothRow, ...]
+    rows: tuple[BoothGeometry, ...]
     illuminant: str
     mean_de: float
     seconds: float
@@ -424,8 +413,6 @@ class BoothModel:
             observer,
             self.shape,
         )
-        rows = tuple(
-            BoothRow(g.geometry, g.standard_lab, g.sample_lab, g.de00, g.metamerism_index)
-            for g in comparison.per_geometry
+        return BoothView(
+            frame.image, comparison.per_geometry, comparison.name, comparison.mean_de, frame.seconds
         )
-        return BoothView(frame.image, rows, comparison.name, comparison.mean_de, frame.seconds)

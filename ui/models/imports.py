@@ -12,7 +12,6 @@ readings, what became of them, or the error naming the file, the place and the f
 
 from __future__ import annotations
 
-import datetime as dt
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -79,17 +78,15 @@ def import_file(path: Path | str, ingestor: Ingestor, job: str | None, part: str
     neither), as ``station import --job --part``."""
     from station.ingest import operator_name
     from station.ingest.formats import read_measurement_file
-    from station.ingest.formats.records import file_sha256, readings_from_import
+    from station.ingest.formats.records import readings_from_file
 
     path = Path(path)
     try:
         imported = read_measurement_file(path)
-        mtime = dt.datetime.fromtimestamp(path.stat().st_mtime, dt.UTC).replace(microsecond=0)
-        readings = readings_from_import(
+        readings = readings_from_file(
             imported,
-            sha256=file_sha256(path),
+            path,
             operator=operator_name(),
-            fallback_time=mtime,
             job=job,
             part=part,
         )  # every reading validated before the first is stored

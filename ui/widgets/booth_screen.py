@@ -298,7 +298,7 @@ class BoothScreen(QWidget):
             cells = (
                 row.geometry,
                 ", ".join(f"{v:.2f}" for v in row.standard_lab),
-                ", ".join(f"{v:.2f}" for v in row.trial_lab),
+                ", ".join(f"{v:.2f}" for v in row.sample_lab),
                 f"{row.de00:.2f}",
                 f"{row.metamerism_index:.2f}",
             )

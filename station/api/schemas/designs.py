@@ -22,7 +22,8 @@ Lab = Annotated[
 ]
 Name = Annotated[str, Field(min_length=1, max_length=128, pattern=r"^[^\x00-\x1f]+$")]
 
-_EXAMPLE: JsonDict = {
+#: The example design of the OpenAPI schema (also the service tests' design).
+DESIGN_EXAMPLE: JsonDict = {
     "schema": "cacad.design/1",
     "name": "Blue metallic",
     "face": [62.0, -4.0, -38.0],
@@ -36,7 +37,7 @@ class DesignBody(BaseModel):
     """A ``cacad.design/1`` design (thesis §3.3: face at 15°, flop at the travel angle θ_clamp)."""
 
     model_config = ConfigDict(
-        extra="ignore", populate_by_name=True, json_schema_extra={"examples": [_EXAMPLE]}
+        extra="ignore", populate_by_name=True, json_schema_extra={"examples": [DESIGN_EXAMPLE]}
     )
 
     schema_: Literal["cacad.design/1"] = Field("cacad.design/1", alias="schema")
@@ -61,7 +62,7 @@ class DesignCreate(BaseModel):
     model_config = ConfigDict(
         extra="forbid",
         json_schema_extra={
-            "examples": [{"name": "Blue metallic", "design": _EXAMPLE, "note": "first proposal"}]
+            "examples": [{"name": "Blue metallic", "design": DESIGN_EXAMPLE, "note": "first proposal"}]
         },
     )
 
@@ -74,7 +75,7 @@ class DesignUpdate(BaseModel):
     """A new version of an existing design."""
 
     model_config = ConfigDict(
-        extra="forbid", json_schema_extra={"examples": [{"design": _EXAMPLE, "note": "less travel"}]}
+        extra="forbid", json_schema_extra={"examples": [{"design": DESIGN_EXAMPLE, "note": "less travel"}]}
     )
 
     design: DesignBody

@@ -38,7 +38,7 @@ from station.ingest.records import LAB_DECIMALS, SPECTRA_DECIMALS
 from station.ingest.schema import InstrumentRef, PanelRef, Reading, TextureValue
 from station.model.domain import ILLUMINATION_DEG, parse_geometry
 
-__all__ = ["file_sha256", "import_client_id", "readings_from_import"]
+__all__ = ["file_sha256", "import_client_id", "readings_from_file", "readings_from_import"]
 
 _IMPORT_NAMESPACE = uuid.UUID("6f1d2f0e-4b7a-4c55-9d8e-3a7b1c2d4e5f")
 #: Notes of the panel of an imported sample: this prefix and the sample name.
@@ -126,6 +126,32 @@ def readings_from_import(
             )
             out.append(reading)
     return out
+
+
+def readings_from_file(
+    imported: ImportedFile,
+    path: Path | str,
+    *,
+    operator: str,
+    illumination_deg: float | None = None,
+    job: str | None = None,
+    part: str | None = None,
+) -> list[Reading]:
+    """:func:`readings_from_import` of *imported*, read from the file at *path*: under the file's SHA-256,
+    with its modification time (UTC, whole seconds) for a measurement whose file states none.
+
+    Raises ``OSError`` when *path* cannot be read, :class:`ImportFileError` as :func:`readings_from_import`.
+    """
+    mtime = dt.datetime.fromtimestamp(Path(path).stat().st_mtime, dt.UTC).replace(microsecond=0)
+    return readings_from_import(
+        imported,
+        sha256=file_sha256(path),
+        operator=operator,
+        fallback_time=mtime,
+        illumination_deg=illumination_deg,
+        job=job,
+        part=part,
+    )
 
 
 def _reading(
