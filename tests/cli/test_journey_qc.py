@@ -79,11 +79,11 @@ def _vendor_files(work: Path, inbox: Path) -> np.ndarray:
     when = [T0 + dt.timedelta(minutes=i) for i in range(len(GOOD_DL))]
     write_measurement_file([_planted(base, "STD", d, T0) for d in STD_DL[1:]], work / "std-repeats.cxf")
     write_measurement_file(
-        [_planted(base, "T1", d, w) for d, w in zip(GOOD_DL, when, strict=True)], work / "t1.cxf"
+        [_planted(base, "T1", d, w) for d, w in zip(GOOD_DL, when, strict=True)], work / "t1.cgats"
     )
     series = [_planted(base, f"S{i + 1}", d, T0 + dt.timedelta(hours=i + 1)) for i, d in enumerate(SERIES_DL)]
     write_measurement_file(series, work / "series.xlsx")
-    for name in ("std.cgats", "std-repeats.cxf", "t1.cxf", "series.xlsx"):
+    for name in ("std.cgats", "std-repeats.cxf", "t1.cgats", "series.xlsx"):
         (work / name).rename(inbox / name)
     return lab
 
@@ -151,7 +151,7 @@ def test_the_qc_day_from_the_simulator_to_the_report(journey: dict[str, Any]) ->
         "--standard",
         str(done / "std.cgats"),
         "--sample",
-        str(done / "t1.cxf"),
+        str(done / "t1.cgats"),
     )
     check += ("--tolerance", "tol.json", "--average-panels", "--json")
     out = json.loads(station(work, *check).stdout)
