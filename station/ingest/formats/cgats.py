@@ -6,7 +6,8 @@ lines (``KEYWORD value``; a value with spaces is double-quoted, ``""`` inside qu
 one row per sample and geometry. ``#`` outside quotes starts a comment. Only the first table is read.
 
 Fields used: ``SAMPLE_ID`` and ``SAMPLE_NAME`` (rows with the same ``SAMPLE_NAME``, or without that
-field the same ``SAMPLE_ID``, are one sample); ``GEOMETRY`` (``45as15``) or ``ILLUMINATION_ANGLE`` +
+field the same ``SAMPLE_ID``, are one sample; a name repeating a geometry: one sample per
+``SAMPLE_ID``, repeat readings); ``GEOMETRY`` (``45as15``) or ``ILLUMINATION_ANGLE`` +
 ``ASPECULAR_ANGLE`` (degrees) — or, in a single-geometry file without them, the keyword
 ``MEASUREMENT_GEOMETRY`` (``"45/0"`` → ``45as45``; every row is then one sample at that geometry);
 ``LAB_L``, ``LAB_A``, ``LAB_B`` and/or spectral fields ``SPECTRAL_NMxxx`` (X-Rite) or ``SPEC_xxx``
@@ -299,14 +300,9 @@ def _samples(
     )
     illuminant, observer = _conditions(keywords, file_type)
     measured_at = _created(keywords.get("CREATED", ""))
-    groups: dict[str, list[tuple[int, list[str]]]] = {}
-    for lineno, toks in rows:
-        key = toks[lay["col"][lay["key"]]].strip()
-        if not key:
-            raise CgatsImportError(file, f"line {lineno}", lay["key"], "a non-empty sample", key)
-        groups.setdefault(key, []).append((lineno, toks))
+    groups = _groups(file, rows, lay)
     out = []
-    for key, group in groups.items():
+    for (key, _), group in groups.items():
         acc: dict[str, list[Any]] = {"rows": [], "lab": [], "spectra": [], "texture": []}
         for lineno, toks in group:
             _row(file, fields, lay, lineno, toks, acc)
@@ -345,6 +341,31 @@ def _quote(text: str) -> str:
 
 def _num(value: float, decimals: int) -> str:
     return f"{value:.{decimals}f}"
+
+
+def _groups(
+    file: str, rows: list[tuple[int, list[str]]], lay: dict[str, Any]
+) -> dict[tuple[str, str], list[tuple[int, list[str]]]]:
+    """The data rows per sample: grouped by ``SAMPLE_NAME`` (else ``SAMPLE_ID``); when one name holds the
+    same geometry twice and the file has both fields, the rows of each ``SAMPLE_ID`` are a repeat reading
+    of their own (what :func:`write_cgats` writes for repeats of one sample)."""
+    col = lay["col"]
+    geo = [col[f] for f in ("GEOMETRY", "ILLUMINATION_ANGLE", "ASPECULAR_ANGLE") if f in col]
+    by_id = lay["key"] == "SAMPLE_NAME" and "SAMPLE_ID" in col
+    if by_id:
+        seen: dict[str, set[tuple[str, ...]]] = {}
+        by_id = False
+        for _, toks in rows:
+            where, had = tuple(toks[i] for i in geo), seen.setdefault(toks[col["SAMPLE_NAME"]].strip(), set())
+            by_id = by_id or where in had
+            had.add(where)
+    groups: dict[tuple[str, str], list[tuple[int, list[str]]]] = {}
+    for lineno, toks in rows:
+        key = toks[col[lay["key"]]].strip()
+        if not key:
+            raise CgatsImportError(file, f"line {lineno}", lay["key"], "a non-empty sample", key)
+        groups.setdefault((key, toks[col["SAMPLE_ID"]].strip() if by_id else ""), []).append((lineno, toks))
+    return groups
 
 
 def write_cgats(measurements: Sequence[ImportedMeasurement], path: Path | str | None = None) -> str:
