@@ -17,6 +17,13 @@ additions of the recipe's own colorants and binder to the batch already mixed, r
 within the batch's bounds. When no such additions reach T within the tolerance but a new recipe does,
 the step says "remake" and gives the new recipe (a fresh batch), never impossible additions.
 
+The measured offset M_n − P(r_n) belongs to the colorants in the can: the model's error differs from
+colorant to colorant (an interference pigment's spectral albedo, a red's strength), so a recipe of other
+colorants has another offset. When neither tinting nor a remake of the same colorants is predicted to
+reach the corrected target (the offset cannot be cancelled with these colorants), the loop remakes with a
+colorant set not sprayed yet: the best recipe of the toner line for the design itself (a wider search,
+:data:`OTHER_SET_CANDIDATES` starts), and corrects that one from its own spray-out.
+
 Each step is a :class:`LoopStep` in a :class:`FormulationJob` (plain dataclasses: the database layer
 stores them). Status: ``converged`` (mean measured ΔE00 ≤ tolerance), ``not_formulable`` (the model
 cannot reach the design, nothing sprayed), or ``not_converged`` after ``max_corrections``. The job's
@@ -49,7 +56,12 @@ from station.model import AspecularMeasurements
 from station.model.domain import LAB_HI, LAB_LO, aspecular_name
 
 Measure = Callable[[dict[str, float]], AspecularMeasurements]
+Starts = list[tuple[str, ArrayLike | dict[str, float]]]
 MAX_CORRECTIONS = 3
+#: Starts fitted (at least) when the loop looks for another colorant set (see :func:`_other_colorants`).
+OTHER_SET_CANDIDATES = 8
+#: Recipes of distinct colorant sets ranked in that search.
+OTHER_SET_RECIPES = 8
 
 
 @dataclass(frozen=True)
@@ -209,7 +221,9 @@ def closed_loop(
     )
     if not first.formulable:
         return replace(base, status="not_formulable", message=first.message)
-    steps = _run(design, angles, measure, first, float(tolerance), max_corrections, db, opts, gloss_gu)
+    steps = _run(
+        design, angles, measure, first, float(tolerance), max_corrections, db, opts, gloss_gu, starts
+    )
     last = steps[-1]
     if last.mean_de <= tolerance:
         status, msg = (
@@ -243,14 +257,17 @@ def _run(
     db: ColorantDatabase,
     opts: FormulationOptions,
     gloss_gu: float | None,
+    starts: Starts | None,
 ) -> list[LoopStep]:
     """Spray, measure, correct: the steps until converged or out of corrections."""
     batch = _fresh(first, opts.batch_g)
     steps: list[LoopStep] = []
+    sprayed: set[frozenset[str]] = set()
     target = design
     additions: Tinting | None = None
     for n in range(max_corrections + 1):
         recipe = db.recipe(batch.concentrations, 1e-9)
+        sprayed.add(_colorant_set(recipe, db))
         m = _measure(measure, dict(recipe), angles)
         measured = np.asarray(m.lab)[[m.angles_deg.index(a) for a in angles]]
         de = cie2000(design, measured)
@@ -276,7 +293,60 @@ def _run(
             break
         target = np.clip(design - (measured - predicted), LAB_LO, LAB_HI)  # stays inside the Lab bound
         batch, additions = _correct(batch, target, angles, tolerance, db, opts, gloss_gu)
+        if additions.remake and batch.predicted_mean_de > tolerance:  # out of reach with these colorants
+            other = _other_colorants(design, angles, starts, batch, sprayed, tolerance, db, opts, gloss_gu)
+            if other is not None:
+                (batch, additions), target = other, design  # formulated for the design itself
     return steps
+
+
+def _colorant_set(recipe: dict[str, float], db: ColorantDatabase) -> frozenset[str]:
+    """The colorants of a recipe (binder and matting agent not counted)."""
+    extra = {db.names[db.matting_index]}
+    return frozenset(k for k, v in recipe.items() if v > 0 and k not in extra)
+
+
+def _other_colorants(
+    design: NDArray,
+    angles: tuple[float, ...],
+    starts: Starts | None,
+    batch: _Batch,
+    sprayed: set[frozenset[str]],
+    tolerance: float,
+    db: ColorantDatabase,
+    opts: FormulationOptions,
+    gloss_gu: float | None,
+) -> tuple[_Batch, Tinting] | None:
+    """A fresh batch of a colorant set not sprayed yet, formulated for the design (module docstring),
+    or ``None`` when the toner line has no such recipe within the tolerance."""
+    line = batch.result.line if batch.result is not None and batch.result.line else None
+    wide = replace(opts, line=opts.line or line, recipes=OTHER_SET_RECIPES)
+    found = formulate_with(
+        design,
+        angles,
+        [("previous", batch.concentrations), *(starts or [])],
+        gloss_gu,
+        1e9,
+        db,
+        wide,
+        OTHER_SET_CANDIDATES,
+    )
+    for option in found.recipes:
+        colorants = _colorant_set(option.recipe, db)
+        if option.mean_de <= tolerance and colorants not in sprayed:
+            c = np.asarray(option.concentrations, dtype=np.float64)
+            fresh = _Batch(c * opts.batch_g, float((1.0 - c.sum()) * opts.batch_g), found, c, option.mean_de)
+            note = Tinting(
+                {},
+                0.0,
+                opts.batch_g,
+                True,
+                f"remake with other colorants ({', '.join(sorted(colorants))}): with the colorants sprayed "
+                f"the corrected target stays out of reach (predicted ΔE00 {batch.predicted_mean_de:.2f}); "
+                f"the new recipe reaches {option.mean_de:.2f} on the design in a fresh {opts.batch_g:g} g batch",
+            )
+            return fresh, note
+    return None
 
 
 def _correct(

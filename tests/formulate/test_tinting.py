@@ -8,6 +8,7 @@ import pytest
 from station.formulate.batch import MAX_GROWTH
 from station.formulate.closed_loop import closed_loop
 from station.formulate.colorants import default_database, predict_lab
+from station.formulate.de_kernels import cie2000
 from station.formulate.tinting import tint
 from station.model import AspecularMeasurements
 
@@ -56,3 +57,25 @@ def test_a_lighter_target_than_black_and_blue_can_reach_is_a_remake() -> None:
     for step in job.steps:
         total = sum(step.recipe.values())
         assert total <= 1.0
+
+
+def test_an_offset_the_sprayed_colorants_cannot_cancel_is_a_remake_with_other_colorants() -> None:
+    recipe = {"white_tio2": 0.1, "red_pr": 0.03, "yellow_py": 0.01}
+    design = predict_lab(DB.vector(recipe), A3)
+
+    def measure(r: dict[str, float]) -> AspecularMeasurements:  # this batch of red_pr sprays 40 L* dark
+        dark = np.array([40.0, 0.0, 0.0]) if r.get("red_pr", 0.0) > 0 else 0.0
+        return AspecularMeasurements(A3, np.clip(predict_lab(DB.vector(r), A3) - dark, 0.0, None), 90.0)
+
+    job = closed_loop(design, measure, starts=[("start", recipe)], max_corrections=2)
+    assert job.steps[0].recipe.get("red_pr", 0.0) > 0 and job.steps[0].mean_de > 20.0
+    # with red_pr the corrected target is 40 L* lighter than the design at the red's chroma, which no
+    # recipe reaches; a recipe of another red sprays as predicted: the loop remakes with it and passes
+    switch = job.steps[1]
+    assert switch.additions is not None and switch.additions.remake
+    assert "other colorants" in switch.additions.message and switch.additions.additions_g == {}
+    assert "red_pr" not in switch.recipe
+    assert job.status == "converged", job.message
+    assert job.steps[-1].mean_de == pytest.approx(
+        float(np.mean(cie2000(design, np.array(job.steps[-1].measured_lab))))
+    )
