@@ -14,10 +14,10 @@ import httpx
 import pytest
 
 from station.api.schemas.environment import ENVIRONMENT_BODY_BYTES
-from station.api.serve_process import ServeProcess, ServeStartError
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
 from station.render.scene_image import MAX_UPLOAD_BYTES
 from tests.processes import run
+from tests.serve_process import ServeProcess, ServeStartError
 
 REPO = Path(__file__).resolve().parents[2]
 GENERAL_CAP = 1_048_576

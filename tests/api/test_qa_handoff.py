@@ -9,7 +9,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from station.api.serve_process import serving
+from tests.serve_process import serving
 
 REPO = Path(__file__).resolve().parents[2]
 #: Both panels as scans without a paired gloss meter: gloss not measured (null); B′ takes A's gloss state.
