@@ -93,7 +93,8 @@ class ViewPanel(QWidget):
                 self.exposure,
                 self.exposure_label,
             ),
-            (self.stage, self.coat, self.flakes, *self.flake_boxes.values(), self.flake_status, reset),
+            (self.stage, self.coat, self.flakes, reset),
+            (*self.flake_boxes.values(), self.flake_status),  # a row of their own: the view fits 1280 px
         ):
             row = QHBoxLayout()
             for w in row_widgets:
