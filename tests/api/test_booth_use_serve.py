@@ -26,11 +26,14 @@ V1 = "/api/v1"
 ANGLES = [15.0, 45.0, 110.0]
 
 
-def _post_reading(http: httpx.Client, auth: dict[str, str], spectra: np.ndarray, part: str, day: int) -> int:
+def _post_reading(
+    http: httpx.Client, auth: dict[str, str], spectra: np.ndarray, part: str, day: int, notes: str
+) -> int:
+    """Store one reading on the panel named by (job, part, *notes*): another *notes*, another panel."""
     body: dict[str, Any] = {
         "client_id": str(uuid.uuid4()),
         "instrument": {"serial": "SIM-BOOTH-1", "model": "MA6", "kind": "multiangle"},
-        "panel": {"job": "J-BOOTH", "part": part},
+        "panel": {"job": "J-BOOTH", "part": part, "notes": notes},
         "operator": "ana",
         "measured_at": (dt.datetime(2026, 12, 1, 8, tzinfo=dt.UTC) + dt.timedelta(days=day)).isoformat(),
         "geometries_deg": ANGLES,
@@ -75,9 +78,10 @@ def test_booth_use_over_http(tmp_path: Path) -> None:
                 )
                 assert _loc(bad)[-1] == "illuminants[1]"
 
-                # QC: a metameric pair stored with spectra, judged with illuminant rows
-                std_id = _post_reading(http, auth, std, "door", 0)
-                smp_id = _post_reading(http, auth, smp, "door", 1)
+                # QC: a metameric pair stored with spectra, judged with illuminant rows; the trial on a
+                # panel of its own (a standard's repeats, same panel and instrument, are no samples)
+                std_id = _post_reading(http, auth, std, "door", 0, "standard panel")
+                smp_id = _post_reading(http, auth, smp, "door", 1, "trial panel")
                 check = {
                     "standard": {"measurement_id": std_id},
                     "sample": {"measurement_id": smp_id},

@@ -6,9 +6,9 @@ the real watcher → the SQLite database → the standard set from its repeat re
 ``qc summary`` with ``--average-panels`` leaving a dirty repeat out (and the verdict flipping with
 ``--keep-outliers``) → ``qc spc`` flagging a planted drift before the first fail → ``qc report`` (PDF).
 
-The simulator's panel repeats bit-identically, so the repeat scatter, the dirty reading (ΔL* +4, a
-speck of dirt) and the drift are planted as ΔL* offsets on its reading, written through the product's
-file writers; every expected ΔE00 is computed independently with colour-science from those Lab values.
+The simulator is read once and its reading is the base: the repeat scatter, the dirty reading (ΔL* +4,
+a speck of dirt) and the drift are planted as ΔL* offsets on it (not left to the simulator's own noise),
+written through the product's file writers; every expected ΔE00 is computed independently with colour-science from those Lab values.
 """
 
 from __future__ import annotations

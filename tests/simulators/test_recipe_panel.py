@@ -15,8 +15,11 @@ from station.cli import main
 from station.drivers import DriverInputError, GlossReading, open_instrument
 from station.drivers.simproc import spawn_simulator
 from station.errors import InputError
+from station.formulate.batch import DEFAULT_BATCH_G
 from station.formulate.colorants import default_database, predict_gloss, predict_lab
+from station.formulate.effect_optics import GLOSS_CLEAR_GU, GLOSS_PER_MATTING
 from station.model.difference import delta_e
+from station.model.domain import DEFAULT_SCALE_RESOLUTION_G
 from station.model.spectra import reflectance_to_lab
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
@@ -139,11 +142,18 @@ def test_ma12_second_block_and_recipe_object(tmp_path):
 
 
 def test_gloss_meter_reads_predicted_gloss(formulated):
-    """The gloss simulator reads the 60° gloss the colorant model predicts from the matting fraction."""
+    """The gloss simulator reads the 60° gloss the colorant model predicts from the matting fraction.
+
+    ``--gloss 40`` sets the matting fraction in closed form (G = G_clear − g c, docs/formulate.md), then
+    the recipe is weighed on the scale: the fraction lands within half a scale step (resolution / batch)
+    of the closed form's, so the predicted gloss lies within g × step / 2 of 40 GU (0.0325 GU here)."""
     data, path = formulated
     db = default_database()
+    step = DEFAULT_SCALE_RESOLUTION_G / DEFAULT_BATCH_G
+    exact = (GLOSS_CLEAR_GU - 40.0) / GLOSS_PER_MATTING
+    assert abs(data["recipe"]["matting_silica"] - exact) <= step / 2 + 1e-12
     expected = float(predict_gloss(db.vector(data["recipe"]), db))
-    assert expected == pytest.approx(40.0, abs=1e-6)  # --gloss 40 reached the recipe's matting fraction
+    assert abs(expected - 40.0) <= GLOSS_PER_MATTING * step / 2 + 1e-9  # --gloss 40 reached the recipe
     with spawn_simulator("gloss", recipe_file=path, extra_args=FAST) as sim:
         with open_instrument(sim.address, timeout_s=1.0) as inst:
             g = [inst.measure() for _ in range(5)]
