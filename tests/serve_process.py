@@ -26,7 +26,10 @@ from pathlib import Path
 
 from station.api.errors import ApiError
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
+from tests.processes import run
 
+#: The root of this checkout (the ``PYTHONPATH`` of a child service).
+REPO = Path(__file__).resolve().parents[1]
 #: What uvicorn logs once the socket is bound (application startup completes before it).
 READY_LINE = "Uvicorn running"
 _TOKEN = re.compile(r"cst_[\w-]+")
@@ -34,6 +37,26 @@ _TOKEN = re.compile(r"cst_[\w-]+")
 
 class ServeStartError(ApiError):
     """``station serve`` exited or did not become ready; the message ends with its last log lines."""
+
+
+def serve_env(**extra: str) -> dict[str, str]:
+    """This process's environment for a ``station serve`` child of this checkout: ``PYTHONPATH`` the
+    checkout, unbuffered output, *extra* set, and no ``CACAD_DATABASE_URL`` (the data folder's SQLite)."""
+    env = dict(os.environ, PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1", **extra)
+    env.pop("CACAD_DATABASE_URL", None)
+    return env
+
+
+def upgrade_data_dir(data_dir: Path, env: Mapping[str, str], timeout_s: float = 120.0) -> None:
+    """``station db upgrade --data-dir DATA_DIR`` in a child under *env* (at most *timeout_s* seconds);
+    :class:`ServeStartError` with its stderr when it fails."""
+    created = run(
+        [sys.executable, "-m", "station.cli", "db", "upgrade", "--data-dir", str(data_dir)],
+        env=env,
+        timeout=timeout_s,
+    )
+    if created.returncode != 0:
+        raise ServeStartError(f"db upgrade of {data_dir} exited {created.returncode}: {created.stderr}")
 
 
 def free_port() -> int:

@@ -9,6 +9,7 @@ The method is described in :mod:`station.design.sketch`; the fits themselves are
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -236,3 +237,46 @@ def design_from_curve(angles: NDArray, lab: NDArray, gloss: float) -> tuple[Face
         mean = lab3(np.mean(lab, axis=0))
         return FaceFlopTravelGloss(mean, mean, None, gloss), tc
     return FaceFlopTravelGloss(lab3(face), lab3(flop), tc, gloss), tc
+
+
+def solid_design(albedo: NDArray, gloss: float) -> FaceFlopTravelGloss:
+    """The solid design of a linear-sRGB *albedo* ``(3,)`` (clipped at 1e-6 before CIELAB, D65) with
+    *gloss* (GU): the fallback colour of a failed sketch fit."""
+    colour = lab3(np.asarray(linear_srgb_to_lab(np.clip(albedo, 1e-6, None)), dtype=float))
+    return FaceFlopTravelGloss(colour, colour, None, gloss)
+
+
+#: A failed fit's fallback: the solid design and its RMS and systematic ΔE*ab against the art.
+Fallback = Callable[[], tuple[FaceFlopTravelGloss, float, float]]
+
+
+def judged_fit(
+    verdict: tuple[str, FaceFlopTravelGloss | None],
+    misfit: tuple[float, float],
+    fallback: Fallback,
+    lab_standard: tuple[tuple[float, float, float], ...],
+    fitted: tuple[float, int, str],
+) -> SketchFit:
+    """The :class:`SketchFit` of a judged fit, ``seconds`` left 0 for the caller.
+
+    *verdict* is ``(reason, design)``: why the fit fails (empty when it does not) and the fitted design;
+    *misfit* its ``(rms_de, shading_de)`` (ΔE*ab). When there is a reason or no design, *fallback* gives
+    the solid design and its misfit instead. *fitted* is ``(theta_clamp_deg, pixels, gloss_source)``.
+    """
+    reason, design = verdict
+    rms, shading_de = misfit
+    if reason or design is None:
+        design, rms, shading_de = fallback()
+    theta_clamp_deg, pixels, gloss_source = fitted
+    return SketchFit(
+        design,
+        lab_standard,
+        rms,
+        shading_de,
+        bool(reason),
+        reason,
+        float(theta_clamp_deg),
+        pixels,
+        gloss_source,
+        0.0,
+    )

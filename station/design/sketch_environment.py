@@ -7,6 +7,7 @@ the gloss highlights trimmed (:func:`_lobe_weights`), projects the colour curve 
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
@@ -27,8 +28,10 @@ from station.design.sketch_base import (
     check_art,
     design_from_curve,
     eroded,
+    judged_fit,
     lab3,
     rms_delta_e,
+    solid_design,
 )
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
@@ -98,21 +101,14 @@ def fit_environment(
     reason, design, tc = _environment_verdict(
         angles, rgb, w, shading_de, gloss_gu, max_shading_de, allow_retroreflective
     )
-    if reason or design is None:
-        design, rms, shading_de = _diffuse_solid(basis, B, y, use, art_lab, gloss_gu)
-    return SketchFit(
-        design,
+    fit = judged_fit(
+        (reason, design),
+        (rms, shading_de),
+        lambda: _diffuse_solid(basis, B, y, use, art_lab, gloss_gu),
         lab_std,
-        rms,
-        shading_de,
-        bool(reason),
-        reason,
-        float(tc),
-        n,
-        "default",
-        time.perf_counter() - t0,
-        lighting,
+        (tc, n, "default"),
     )
+    return dataclasses.replace(fit, seconds=time.perf_counter() - t0, lighting=lighting)
 
 
 def _lobe_weights(y_all: NDArray, B_all: NDArray, highlight_rounds: int) -> tuple[NDArray, NDArray]:
@@ -180,9 +176,7 @@ def _diffuse_solid(
         raise SketchFitError("fit failed and the basis has no diffuse lobe for the fallback colour")
     denom = np.clip(B[diffuse[0]].sum(axis=0), 1e-12, None)
     albedo = y.sum(axis=0) / denom
-    lab = np.asarray(linear_srgb_to_lab(np.clip(albedo, 1e-6, None)), dtype=float)
-    colour = lab3(lab)
-    design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)
+    design = solid_design(albedo, gloss_gu)
     recon = B[diffuse[0]] * albedo
     rms = rms_delta_e(linear_srgb_to_lab(np.clip(recon, 1e-6, None)), art_lab)
     shading_de = block_delta_e(use, y, recon)

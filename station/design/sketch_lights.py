@@ -41,9 +41,11 @@ from station.design.sketch_base import (
     check_art,
     design_from_curve,
     eroded,
+    judged_fit,
     lab3,
     rms_delta_e,
     shading_delta_e,
+    solid_design,
 )
 from station.model import ANGLES_3, FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
@@ -364,19 +366,12 @@ def _point_result(
                 )
         except ValueError as exc:  # the model refused the colours
             reason = f"model refused the fitted colours: {exc}"
-    if reason or design is None:
-        design, rms, shading_de = _diffuse_fallback(scene, art_a, changed, gloss_gu, use, art_lab)
-    return SketchFit(
-        design,
+    return judged_fit(
+        (reason, design),
+        (rms, shading_de),
+        lambda: _diffuse_fallback(scene, art_a, changed, gloss_gu, use, art_lab),
         lab_std,
-        rms,
-        shading_de,
-        bool(reason),
-        reason,
-        float(tc),
-        len(theta),
-        gloss_source,
-        0.0,
+        (tc, len(theta), gloss_source),
     )
 
 
@@ -476,9 +471,7 @@ def _diffuse_fallback(
     if not sel.any():
         sel = changed & (scene.lambert > 0.0)
     albedo = srgb_decode(art[sel]) / (scene.irradiance * scene.lambert[sel][:, None])
-    lab = np.asarray(linear_srgb_to_lab(np.clip(albedo.mean(axis=0), 1e-6, None)), dtype=float)
-    colour = lab3(lab)
-    design = FaceFlopTravelGloss(colour, colour, None, gloss_gu)
+    design = solid_design(albedo.mean(axis=0), gloss_gu)
     fit_lin = shade(scene, design)[use]
     art_lin = srgb_decode(art[use])
     return (

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -226,19 +226,7 @@ def individuals_chart(values: Sequence[float], baseline: int | None = None) -> C
     base = x[:b]
     sigma = float(np.abs(np.diff(base)).mean()) / D2_RANGE_OF_TWO
     centre = float(base.mean())
-    k = QC_SPC_SIGMAS
-    hits = rule_hits(x, centre, sigma)
-    return Chart(
-        "individuals",
-        tuple(map(float, x)),
-        centre,
-        sigma,
-        sigma,
-        max(0.0, centre - k * sigma),
-        centre + k * sigma,
-        b,
-        hits,
-    )
+    return _chart("individuals", x, centre, sigma, sigma, QC_SPC_SIGMAS * sigma, b)
 
 
 def xbar_r_chart(values: Sequence[float], subgroup: int, baseline: int | None = None) -> Chart:
@@ -256,23 +244,32 @@ def xbar_r_chart(values: Sequence[float], subgroup: int, baseline: int | None = 
     r_bar = float(ranges[:b].mean())
     centre = float(means[:b].mean())
     half = a2 * r_bar
-    sigma = half / 3.0
-    hits = rule_hits(means, centre, sigma)
+    chart = _chart("xbar", means, centre, half / 3.0, r_bar / d2, half, b)
+    return replace(
+        chart,
+        subgroup=subgroup,
+        ranges=tuple(map(float, ranges)),
+        r_bar=r_bar,
+        r_lcl=d3 * r_bar,
+        r_ucl=d4 * r_bar,
+    )
+
+
+def _chart(
+    kind: str, points: NDArray, centre: float, sigma: float, sigma_process: float, half: float, baseline: int
+) -> Chart:
+    """The chart of *points* about *centre* with limits ``centre ± half`` (the lower one at least 0: ΔE
+    is not negative), *sigma* of a plotted point and the rule hits (:func:`rule_hits`) over all points."""
     return Chart(
-        "xbar",
-        tuple(map(float, means)),
+        kind,
+        tuple(map(float, points)),
         centre,
         sigma,
-        r_bar / d2,
+        sigma_process,
         max(0.0, centre - half),
         centre + half,
-        b,
-        hits,
-        subgroup,
-        tuple(map(float, ranges)),
-        r_bar,
-        d3 * r_bar,
-        d4 * r_bar,
+        baseline,
+        rule_hits(points, centre, sigma),
     )
 
 

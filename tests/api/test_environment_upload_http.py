@@ -4,9 +4,7 @@ is larger than the service's general 1 MiB cap (base64 adds a third); beyond it,
 from __future__ import annotations
 
 import base64
-import os
 import signal
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -16,24 +14,16 @@ import pytest
 from station.api.schemas.environment import ENVIRONMENT_BODY_BYTES
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
 from station.render.scene_image import MAX_UPLOAD_BYTES
-from tests.processes import run
-from tests.serve_process import ServeProcess, ServeStartError
+from tests.serve_process import ServeProcess, ServeStartError, serve_env, upgrade_data_dir
 
-REPO = Path(__file__).resolve().parents[2]
 GENERAL_CAP = 1_048_576
 
 
 @pytest.fixture(scope="module")
 def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str]]:
     data_dir = tmp_path_factory.mktemp("serve") / "data"
-    env = dict(os.environ, PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1", CACAD_MAX_BODY_BYTES=str(GENERAL_CAP))
-    env.pop("CACAD_DATABASE_URL", None)
-    created = run(
-        [sys.executable, "-m", "station.cli", "db", "upgrade", "--data-dir", str(data_dir)],
-        env=env,
-        timeout=120,
-    )
-    assert created.returncode == 0, created.stderr
+    env = serve_env(CACAD_MAX_BODY_BYTES=str(GENERAL_CAP))
+    upgrade_data_dir(data_dir, env)
     svc = ServeProcess(data_dir, ("--simulators", "", "--no-demo-library"), env=env, start_timeout_s=60)
     try:
         svc.start()

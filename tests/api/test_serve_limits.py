@@ -14,7 +14,6 @@ import os
 import signal
 import socket
 import stat
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -23,11 +22,9 @@ import httpx
 import pytest
 
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
-from tests.processes import run
-from tests.serve_process import ServeProcess, ServeStartError, free_port
+from tests.serve_process import ServeProcess, ServeStartError, free_port, serve_env, upgrade_data_dir
 from tests.waiting import WaitTimeout, pause, wait_until
 
-REPO = Path(__file__).resolve().parents[2]
 BODY_TIMEOUT_S = 1.0
 KEEP_ALIVE_S = 1
 LIMIT = 3
@@ -58,14 +55,8 @@ def roomy(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Service]:
 
 def _serve(tmp_path_factory: pytest.TempPathFactory, header_timeout_s: float) -> Iterator[Service]:
     data_dir = tmp_path_factory.mktemp("serve") / "data"
-    env = dict(os.environ, PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1")
-    env.pop("CACAD_DATABASE_URL", None)
-    created = run(
-        [sys.executable, "-m", "station.cli", "db", "upgrade", "--data-dir", str(data_dir)],
-        env=env,
-        timeout=120,
-    )
-    assert created.returncode == 0, created.stderr
+    env = serve_env()
+    upgrade_data_dir(data_dir, env)
     os.chmod(data_dir, 0o755)  # as an earlier version left it
     os.chmod(data_dir / "station.sqlite3", 0o644)
     env_port = free_port()

@@ -8,30 +8,15 @@ from pathlib import Path
 
 import pytest
 
-from station.ingest.errors import ImportFileError
-from station.ingest.formats import build_measurement, read_measurement_file, write_measurement_file
-from station.ingest.formats.measurement import OBSERVERS, ImportedMeasurement, Instrument
+from station.ingest.formats import read_measurement_file, write_measurement_file
+from station.ingest.formats.measurement import ImportedMeasurement
+from tests.readings import lab_reading
 
 GEOMETRIES = ("45as15", "45as45", "45as110")
 
 
-def _err(fld: str, accepted: str, got: object) -> ImportFileError:
-    return ImportFileError("generated", "", fld, accepted, got)
-
-
 def _reading(sample: str, dl: float) -> ImportedMeasurement:
-    return build_measurement(
-        sample=sample,
-        rows=[(g, _err) for g in GEOMETRIES],
-        lab=[[60.0 - 10 * i + dl, -1.0, 2.0] for i in range(len(GEOMETRIES))],
-        wavelengths_nm=None,
-        spectra=None,
-        instrument=Instrument("MA-T6", "SN-7"),
-        illuminant="D65",
-        observer=OBSERVERS[1],
-        measured_at=None,
-        err=_err,
-    )
+    return lab_reading(sample, GEOMETRIES, [[60.0 - 10 * i + dl, -1.0, 2.0] for i in range(len(GEOMETRIES))])
 
 
 @pytest.mark.parametrize("names", [("T1", "T1", "T1", "S2"), ("T1", "S2", "T1", "S2")])

@@ -50,6 +50,16 @@ def inproc(capsys: pytest.CaptureFixture[str], cwd: Path, *args: str) -> subproc
     return subprocess.CompletedProcess(list(args), rc, out, err)
 
 
+def set_standard(
+    capsys: pytest.CaptureFixture[str], cwd: Path, job: str, measurement: int | str, url: str, *extra: str
+) -> subprocess.CompletedProcess[str]:
+    """``station qc standard set --job JOB --part fender --measurement ID --db URL [EXTRA]`` in-process."""
+    return inproc(
+        capsys, cwd, "qc", "standard", "set", "--job", job, "--part", "fender",
+        "--measurement", str(measurement), "--db", url, *extra,
+    )  # fmt: skip
+
+
 @pytest.fixture
 def db(tmp_path: Path) -> tuple[str, Job]:
     url = f"sqlite:///{tmp_path / 'qc.sqlite3'}"
@@ -151,22 +161,7 @@ def test_report_pdf_csv_and_trend(
     tmp_path: Path, db: tuple[str, Job], capsys: pytest.CaptureFixture[str]
 ) -> None:
     url, job = db
-    res = inproc(
-        capsys,
-        tmp_path,
-        "qc",
-        "standard",
-        "set",
-        "--job",
-        "J-100",
-        "--part",
-        "fender",
-        "--measurement",
-        str(job.standard_id),
-        "--db",
-        url,
-        "--json",
-    )
+    res = set_standard(capsys, tmp_path, "J-100", job.standard_id, url, "--json")
     assert res.returncode == 0, res.stderr
     assert json.loads(res.stdout)["measurement_id"] == job.standard_id
     _refused(

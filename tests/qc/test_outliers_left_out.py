@@ -17,7 +17,7 @@ import pytest
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
 from db.models import Instrument, Measurement, Panel
-from tests.qc.test_cli import _refused, inproc
+from tests.qc.test_cli import _refused, inproc, set_standard
 
 ANGLES = [15.0, 45.0, 110.0]
 GEOMS = ["45as15", "45as45", "45as110"]
@@ -112,20 +112,7 @@ def test_summary_averages_panels_and_the_standard_without_outliers(
     ids = _store(url)
     _tolerance(capsys, tmp_path)
     db = ("--db", url)
-    res = inproc(
-        capsys,
-        tmp_path,
-        "qc",
-        "standard",
-        "set",
-        "--job",
-        "J-7",
-        "--part",
-        "fender",
-        "--measurement",
-        str(ids["std0"]),
-        *db,
-    )
+    res = set_standard(capsys, tmp_path, "J-7", str(ids["std0"]), url)
     assert res.returncode == 0, res.stderr
     args = ("qc", "summary", "--job", "J-7", "--tolerance", "tol.json", "--average-panels", *db)
     out = json.loads(inproc(capsys, tmp_path, *args, "--json").stdout)

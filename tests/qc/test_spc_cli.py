@@ -14,7 +14,7 @@ import pytest
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
 from db.models import Instrument, Measurement, Panel
-from tests.qc.test_cli import _refused, inproc
+from tests.qc.test_cli import _refused, inproc, set_standard
 
 ANGLES = [15.0, 45.0, 110.0]
 STD = [[92.0, -1.0, 2.0], [60.0, -0.5, 1.0], [35.0, 0.0, 0.5]]
@@ -80,20 +80,7 @@ def test_spc_flags_the_drift_before_the_fail(
     db = ("--db", url)
     res = inproc(capsys, tmp_path, "qc", "search", "--job", "J-9", "--limit", "1", "--json", *db)
     std_id = json.loads(res.stdout)["measurements"][0]["measurement_id"]
-    res = inproc(
-        capsys,
-        tmp_path,
-        "qc",
-        "standard",
-        "set",
-        "--job",
-        "J-9",
-        "--part",
-        "fender",
-        "--measurement",
-        str(std_id),
-        *db,
-    )
+    res = set_standard(capsys, tmp_path, "J-9", str(std_id), url)
     assert res.returncode == 0, res.stderr
     args = ("qc", "spc", "--job", "J-9", "--part", "fender", "--formula", "cie76", "--baseline", "10", *db)
     res = inproc(capsys, tmp_path, *args, "--out", "spc.png", "--json")

@@ -15,7 +15,7 @@ from station.qc.texture import (
     mean_texture,
     parse_texture_limits,
 )
-from tests.qc.test_cli import _refused, inproc
+from tests.qc.test_cli import _refused, inproc, set_standard
 
 BYK = "BYK-Gardner"
 
@@ -119,20 +119,7 @@ def test_summary_judges_texture_within_the_standard_vendor(
         s.commit()
     engine.dispose()
     db = ("--db", url)
-    res = inproc(
-        capsys,
-        tmp_path,
-        "qc",
-        "standard",
-        "set",
-        "--job",
-        "J-T",
-        "--part",
-        "fender",
-        "--measurement",
-        "1",
-        *db,
-    )
+    res = set_standard(capsys, tmp_path, "J-T", "1", url)
     assert res.returncode == 0, res.stderr
     args = ("qc", "summary", "--job", "J-T", "--formula", "cie76", "--texture-limits", "ds=1", *db)
     out = json.loads(inproc(capsys, tmp_path, *args, "--json").stdout)

@@ -20,10 +20,9 @@ from sqlalchemy import select
 
 from db.engine import make_engine
 from db.models import Measurement, Panel
-from station.ingest.errors import ImportFileError
-from station.ingest.formats import build_measurement, write_measurement_file
-from station.ingest.formats.measurement import OBSERVERS, Instrument
+from station.ingest.formats import write_measurement_file
 from station.model.domain import ANGLES_6, aspecular_name
+from tests.readings import lab_reading
 from ui.models.measure_db import LocalSink
 from ui.models.qc import LocalQc, QcModel
 from ui.widgets.qc_screen import COLUMNS, QcScreen
@@ -36,24 +35,9 @@ MASTER = [[92.0 - 9 * i, -1.5 + 0.2 * i, -6.0 + 0.5 * i] for i in range(len(GEOM
 TRIALS = {"trial 1": (0.4, 0.1, -0.2), "trial 2": (-1.2, 0.6, 0.9), "trial 3": (0.05, -0.05, 0.1)}
 
 
-def _err(fld: str, accepted: str, got: object) -> ImportFileError:
-    return ImportFileError("generated", "", fld, accepted, got)
-
-
 def _sample(name: str, offset: tuple[float, float, float]):
     lab = [[v + d for v, d in zip(row, offset, strict=True)] for row in MASTER]
-    return build_measurement(
-        sample=name,
-        rows=[(g, _err) for g in GEOMETRIES],
-        lab=lab,
-        wavelengths_nm=None,
-        spectra=None,
-        instrument=Instrument("MA-T6", "SN-7"),
-        illuminant="D65",
-        observer=OBSERVERS[1],
-        measured_at=None,
-        err=_err,
-    )
+    return lab_reading(name, GEOMETRIES, lab)
 
 
 def _files(folder: Path) -> dict[str, Path]:

@@ -17,15 +17,12 @@ class LocalDatabaseError(StationError):
     """The workstation's database could not be opened or migrated (the message says which and why)."""
 
 
-class LocalDatabase:
-    """The workstation's database, opened (and migrated to head) on the first :meth:`_session`."""
+class DatabaseLocation:
+    """Where the workstation's database is: the URL given, else the one ``station serve`` uses
+    (``$CACAD_DATABASE_URL``, else ``station.sqlite3`` in :func:`db.engine.data_dir`: ``$CACAD_DATA_DIR``
+    or ``./var``), resolved on first use. The class that mixes it in sets ``_url`` (``None``: configured)."""
 
-    #: The error a source raises when the database cannot be opened; subclasses name their own.
-    source_error: ClassVar[type[StationError]] = LocalDatabaseError
-
-    def __init__(self, url: str | None = None) -> None:
-        self._url = url
-        self._sessions: Any = None
+    _url: str | None
 
     @property
     def url(self) -> str:
@@ -40,6 +37,17 @@ class LocalDatabase:
     def where(self) -> str:
         """Plain name of the source, for messages."""
         return f"database {self.url}"
+
+
+class LocalDatabase(DatabaseLocation):
+    """The workstation's database, opened (and migrated to head) on the first :meth:`_session`."""
+
+    #: The error a source raises when the database cannot be opened; subclasses name their own.
+    source_error: ClassVar[type[StationError]] = LocalDatabaseError
+
+    def __init__(self, url: str | None = None) -> None:
+        self._url = url
+        self._sessions: Any = None
 
     def _session(self) -> Any:
         """A new ORM session (the caller closes it: ``with self._session() as session``)."""

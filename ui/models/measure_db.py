@@ -30,6 +30,7 @@ import numpy as np
 from station.errors import InputError, StationError
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, FitResult, fit_fftg
 from station.model.domain import DEFAULT_GLOSS_GU, ILLUMINATION_DEG
+from ui.models.local_db import DatabaseLocation
 
 if TYPE_CHECKING:  # SQLAlchemy, pydantic and the ORM load on first use (≈0.5 s off the viewer's start-up)
     from station.ingest import (
@@ -257,27 +258,13 @@ class MeasurementSink:
             self._ingestor = None
 
 
-class LocalSink(MeasurementSink):
+class LocalSink(DatabaseLocation, MeasurementSink):
     """The workstation's database (default: SQLite in :func:`db.engine.data_dir`, migrated on first use)."""
 
     def __init__(self, url: str | None = None, outbox_path: Path | str | None = None) -> None:
         super().__init__(outbox_path)
         self._url = url
         self._db: DatabaseDestination | None = None
-
-    @property
-    def url(self) -> str:
-        """The database URL: as ``station serve``, ``$CACAD_DATABASE_URL`` or ``station.sqlite3`` in
-        :func:`db.engine.data_dir` (``$CACAD_DATA_DIR`` or ``./var``)."""
-        if self._url is None:
-            from db.engine import configured_database_url
-
-            self._url = configured_database_url()
-        return self._url
-
-    @property
-    def where(self) -> str:
-        return f"database {self.url}"
 
     def _destination(self) -> DatabaseDestination:
         if self._db is None:
