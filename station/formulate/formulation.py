@@ -250,7 +250,7 @@ def _generic_starts(
                 for t in mix:
                     c[idx[t]] += amount / max(len(mix), 1)
                 pool.append(c)
-    c = np.asarray(pool)
+    c = np.unique(np.asarray(pool), axis=0)  # a base without tint is the same at both loadings
     f = (cie2000(design[None], predict_lab(c, angles, db)) ** 2).sum(-1)
     return [c[k] for k in np.argsort(f, kind="stable")[:6]]
 
