@@ -236,7 +236,8 @@ def _generic_starts(
     alu = [n for n in names if fam[n] == "aluminium" and n in ok]
     bases: list[dict[str, float]] = [{"white_tio2": 0.05}, {"white_tio2": 0.15}, {"black_carbon": 0.01}]
     bases += [{a: 0.08} for a in alu] + [{alu[k]: 0.05, alu[k + 1]: 0.05} for k in range(len(alu) - 1)]
-    bases += [{n: 0.08} for n in names if fam[n] in ("pearl", "interference") and n in ok]
+    effects = [n for n in names if fam[n] in ("pearl", "interference") and n in ok]
+    bases += [{n: 0.08} for n in effects] + [{a: 0.04, e: 0.04} for a in alu for e in effects]
     bases = [b for b in bases if set(b) <= ok]
     mixes = [[t] for t in tints] + [[tints[k], tints[(k + 1) % len(tints)]] for k in range(len(tints))] + [[]]
     pool = []
@@ -249,7 +250,7 @@ def _generic_starts(
                 for t in mix:
                     c[idx[t]] += amount / max(len(mix), 1)
                 pool.append(c)
-    c = np.asarray(pool)
+    c = np.unique(np.asarray(pool), axis=0)  # a base without tint is the same at both loadings
     f = (cie2000(design[None], predict_lab(c, angles, db)) ** 2).sum(-1)
     return [c[k] for k in np.argsort(f, kind="stable")[:6]]
 
@@ -273,8 +274,13 @@ def _fit_line(
     opts: FormulationOptions,
     tolerance: float,
     candidates: int,
+    more_lines: bool = False,
 ) -> _LineFit:
-    """Line-wide fit from the starts, then the subset search, rounding and scoring (module docstring)."""
+    """Line-wide fit from the starts, then the subset search, rounding and scoring (module docstring).
+
+    With *more_lines* (another line follows) a line whose line-wide fit leaves Σ_j ΔE00² above n² × the
+    tolerance² (n angles) gives no options: a subset's Σ ΔE00² is at least the line's, and a mean over n
+    angles is at least the root-mean-square over √n, so no subset of it can reach the tolerance."""
     allowed = toner_line(line).mask(db)
     fixed = np.zeros(len(db.names))
     fixed[db.matting_index] = c_mat
@@ -295,6 +301,8 @@ def _fit_line(
         f, x = refine_de00(obj, tried[0][2], good_enough)
         tried[0] = (tried[0][0], f, x)
     points = [t[2] for t in tried]
+    if more_lines and tried[0][1] > (len(angles) * tolerance) ** 2:
+        return _LineFit([], [(lb, prob.full(x)) for lb, _, x in tried], obj.evaluations)
     step = opts.scale_resolution_g / opts.batch_g
     spec_base = (opts.batch_g, opts.scale_resolution_g, tolerance, line)
     evaluations = obj.evaluations
@@ -403,11 +411,13 @@ def _ranked_options(
     computed for the best 2 × ``recipes`` (it costs a constrained fit of the reference reflectance)."""
     pool: list[RecipeOption] = []
     fits: list[tuple[str, _LineFit]] = []
-    for line in lines_for_design(design, opts.line, opts.paint_type):
-        fit = _fit_line(design, angles, starts, c_mat, db, line, opts, tolerance, candidates)
+    lines = lines_for_design(design, opts.line, opts.paint_type)
+    for n, line in enumerate(lines):
+        more = n + 1 < len(lines)
+        fit = _fit_line(design, angles, starts, c_mat, db, line, opts, tolerance, candidates, more)
         fits.append((line, fit))
         pool += fit.options
-        if rank_options(pool, 1)[0].formulable:
+        if pool and rank_options(pool, 1)[0].formulable:
             break
     shortlist = rank_options(pool, 2 * opts.recipes)
     meta = metamerism(design, np.asarray([o.concentrations for o in shortlist]), angles, db, opts.illuminants)

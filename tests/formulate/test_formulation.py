@@ -9,7 +9,12 @@ from station.formulate.closed_loop import closed_loop
 from station.formulate.colorants import default_database, predict_lab
 from station.formulate.demo import generate_recipes
 from station.formulate.errors import FormulateInputError, NotFormulableError
-from station.formulate.formulation import formulate, formulate_from_library
+from station.formulate.formulation import (
+    FormulationOptions,
+    _fit_line,
+    formulate,
+    formulate_from_library,
+)
 from station.formulate.library import Library
 from station.formulate.sprayout import SprayOutModel
 from station.model import AspecularMeasurements
@@ -120,3 +125,18 @@ def test_generic_starts_alone_reach_in_gamut_designs(designs) -> None:
         result = formulate(predict_lab(c, A3))  # no library recipe to start from
         assert result.formulable, result.message
         DB.check(result.concentrations)
+
+
+def test_a_line_that_cannot_reach_the_design_is_skipped_soundly(designs) -> None:
+    """The metallic line is tried first for this pearl design (black, coarse aluminium, red interference);
+    its line-wide fit misses by more than n × the tolerance in root-sum-square ΔE00, so with a wider line
+    to follow it gives no options. Independent check: its full subset search (rounded recipes of at most
+    5 colorants) finds none within the tolerance either, and the pearl line then reaches the design."""
+    design = predict_lab(designs[1][5], A3)
+    opts = FormulationOptions(paint_type="metallic")
+    full = _fit_line(design, A3, [], 0.0, DB, "metallic", opts, 1.0, 0, more_lines=False)
+    skipped = _fit_line(design, A3, [], 0.0, DB, "metallic", opts, 1.0, 0, more_lines=True)
+    assert full.options and min(o.mean_de for o in full.options) > 1.0
+    assert skipped.options == [] and skipped.evaluations < full.evaluations
+    result = formulate(design, paint_type="metallic")
+    assert result.formulable and result.line == "pearl"
