@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from bench._report import Case, write_section
 from station.model import FaceFlopTravelGloss
 from station.model.gloss import ClearCoat, fresnel_schlick
 from station.render import lobe_fit as lf
@@ -37,6 +38,12 @@ SIZE = 64
 SPP = 64
 HEIGHT = 128
 BANDS = ((0.9, 1.0), (0.5, 0.6), (0.3, 0.4), (0.1, 0.2), (0.02, 0.05))
+SETUP = f"""`python -m bench.coat_mitsuba` (Mitsuba 3, `scalar_rgb`, `plastic` int_ior 1.5, `direct` integrator,
+{SPP} spp; a bench-only extra). Unit sphere, orthographic, {SIZE} × {SIZE}; environments that depend on ω_y
+only (uniform radiance 1, "furnace"; a grey sky 0.35 + 0.7 max(ω_y, 0)²); a 100 GU paint over a black and
+over a 0.8 Lambert base. Median green radiance per N·V band; "product" the physical coat (`ClearCoat`,
+exact Fresnel, base × (1 − F)), "baseline" the coat before it (Schlick normalised at 60° onto the
+design's share, base untouched), same run; ratios to Mitsuba."""
 
 
 def environments() -> dict[str, np.ndarray]:
@@ -113,26 +120,54 @@ def product_pixels(env: np.ndarray, diffuse: float, normals: np.ndarray) -> tupl
     return product, base + old[:, None] * gloss
 
 
+def _band_cases(name: str, diffuse: float, ndv: np.ndarray, images: tuple[np.ndarray, ...]) -> list[Case]:
+    """Print the N·V bands of one (environment, base) and return them as report cases."""
+    ref, ours, old = images
+    cases = []
+    for lo, hi in BANDS:
+        sel = (ndv >= lo) & (ndv < hi)
+        m, p, b = (float(np.median(a[sel, 1])) for a in (ref, ours, old))
+        print(
+            f"{name:8s} {diffuse:4.1f}   {lo:.2f}–{hi:.2f}   {m:8.4f}  {p:8.4f} ({p / m:5.3f})  {b:8.4f} ({b / m:5.3f})"
+        )
+        cases.append(
+            Case(
+                f"{name} base {diffuse:.1f}, N·V {lo:.2f}–{hi:.2f}: product / Mitsuba",
+                f"{SIZE}x{SIZE}",
+                p / m,
+                "ratio",
+                f"Mitsuba {m:.4f}, product {p:.4f}; baseline {b:.4f} ({b / m:.3f}×)",
+            )
+        )
+    m, p, b = (float(a[:, 1].max()) for a in (ref, ours, old))
+    print(f"{name:8s} {diffuse:4.1f}   max pixel   {m:8.4f}  {p:8.4f}          {b:8.4f}")
+    note = f"Mitsuba {m:.4f}, baseline {b:.4f}"
+    return [
+        *cases,
+        Case(f"{name} base {diffuse:.1f}, max pixel: product", f"{SIZE}x{SIZE}", p, "radiance", note),
+    ]
+
+
 def main() -> None:
     normals, mask = pixel_geometry()
     ndv = normals[:, 2]
     print("env      base   N·V band    Mitsuba   product  (ratio)   baseline (ratio)")
+    cases: list[Case] = []
     for name, env in environments().items():
         for diffuse in (0.0, 0.8):
             ref = mitsuba_image(env, diffuse)[mask]
             ours, old = product_pixels(env, diffuse, normals)
-            for lo, hi in BANDS:
-                sel = (ndv >= lo) & (ndv < hi)
-                m, p, b = (float(np.median(a[sel, 1])) for a in (ref, ours, old))
-                print(
-                    f"{name:8s} {diffuse:4.1f}   {lo:.2f}–{hi:.2f}   {m:8.4f}  {p:8.4f} ({p / m:5.3f})"
-                    f"  {b:8.4f} ({b / m:5.3f})"
-                )
-            print(
-                f"{name:8s} {diffuse:4.1f}   max pixel   {ref[:, 1].max():8.4f}  {ours[:, 1].max():8.4f}"
-                f"          {old[:, 1].max():8.4f}"
-            )
+            cases += _band_cases(name, diffuse, ndv, (ref, ours, old))
+    write_section(
+        "coat_mitsuba",
+        "Clear coat against Mitsuba 3 (bench/coat_mitsuba.py)",
+        cases,
+        SETUP,
+    )
 
 
 if __name__ == "__main__":
+    from bench._report import bench_cli
+
+    bench_cli(__doc__, "coat_mitsuba")
     main()

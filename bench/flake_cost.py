@@ -94,4 +94,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    from bench._report import bench_cli
+
+    bench_cli(__doc__, "flake_cost")
     main()

@@ -83,6 +83,7 @@ RUNS: dict[str, list[tuple[str, ...]]] = {
     "qc summary": [("--db", DB, "--job", "J1")],
     "qc report": [("--db", DB, "--job", "J1", "--out", "rep.pdf")],
     "qc trend": [("--db", DB, "--job", "J1", "--part", "bumper", "--out", "trend.png")],
+    "qc spc": [("--db", DB, "--job", "J1", "--part", "bumper", "--out", "spc.png")],
     "render": [("--design", "silver.json", "--out", "r2.png")],
     "reproduce": [("--figure", "4.4")],
     "sequence": [("silver.json", "red.json", "--steps", "4")],
@@ -117,15 +118,19 @@ def test_every_subcommand_is_covered() -> None:
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A user folder with two designs, two scans of them (JSON and CxF), a render, a library file and a
-    database holding both scans under job J1, part bumper (the first its standard) and a user — all
-    written by ``station`` itself."""
+    """A user folder with three designs, two scans of them (JSON and CxF), a render, a library file and a
+    database holding both scans and a scan of a third design under job J1, part bumper (the first its
+    standard, so the part has the two judged samples ``qc spc`` charts) and a user — all written by
+    ``station`` itself."""
     cwd = tmp_path_factory.mktemp("user")
     save_design(
         FaceFlopTravelGloss((90.0, 0.0, -2.0), (30.0, 0.0, -4.0), 60.0, 85.0, "silver"), cwd / "silver.json"
     )
     save_design(
         FaceFlopTravelGloss((60.0, 20.0, 10.0), (40.0, 22.0, 12.0), 70.0, 80.0, "red"), cwd / "red.json"
+    )
+    save_design(
+        FaceFlopTravelGloss((50.0, -5.0, -30.0), (30.0, -4.0, -34.0), 65.0, 80.0, "blue"), cwd / "blue.json"
     )
     steps = [
         (("measure", "sim:ma6", "--design", "silver.json", "--json"), "std.json"),
@@ -138,6 +143,8 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
             ("qc", "standard", "set", "--db", DB, "--job", "J1", "--part", "bumper", "--measurement", "1"),
             None,
         ),
+        (("measure", "sim:ma6", "--design", "blue.json", "--json"), "smp2.json"),
+        (("import", "smp2.json", "--store", DB, "--job", "J1", "--part", "bumper"), None),
         (("users", "add", "admin", "--role", "admin", "--database", DB), None),
         (("render", "--design", "silver.json", "--out", "r.png", "--size", "160"), None),
         (("library", "export", "demo", "--out", "lib.csv"), None),

@@ -241,7 +241,12 @@ def test_render_level_of_detail_is_chosen_and_reported(files, tmp_path, capsys):
     lod = result["lod"]
     assert lod["lobes"] == len(result["lobes"])  # the render used the chosen basis
     assert lod["environment_width"] <= 128 and "Tolerance ΔE 3" in lod["describe"]
-    share = 3.0 / np.sqrt(3.0)
-    assert lod["met"] == all(v <= share + 1e-9 for v in lod["errors"].values())
+    # the documented rule (station.render.lod, docs/render.md): the tolerance is met when the whole
+    # choice, measured once more against the ground truth, stays within it (each factor's share only
+    # guides the search); the report names the total and says meets/MISSES by the same rule
+    total = lod["errors"]["total"]
+    assert lod["met"] == (total <= 3.0)
+    assert f"all together ΔE {total:.2f}" in lod["describe"]
+    assert ("(meets;" if lod["met"] else "(MISSES;") in lod["describe"]
     assert main([*base, "--lod", "0", "--out", str(out)]) == 2
     assert "tolerance_de" in capsys.readouterr().err

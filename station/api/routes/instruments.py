@@ -98,7 +98,8 @@ async def detach(request: Request, user: Operator, instrument_id: InstrumentId) 
 async def calibrate(
     request: Request, user: Operator, instrument_id: InstrumentId, body: CalibrateRequest
 ) -> CalibrationPublic:
-    """Run the calibration sequence (zero, white, verification) and store the record."""
+    """Run every calibration step (zero, white, verification; a gloss meter: its standard) without pausing,
+    as `station calibrate --yes`, and store the record."""
     return await asyncio.to_thread(
         _hub(request).calibrate, instrument_id=instrument_id, reference=body.reference, actor=user
     )
