@@ -54,7 +54,8 @@ def _day(qtbot, screen: InstrumentsScreen) -> list:
     assert "calibration of" not in screen.log.toPlainText()
     titles = answer_calibration(qtbot, screen, ["ok"] * 4)
     assert titles == ["Black trap", "White tile", "Verification tile", "Gloss standard"]
-    qtbot.waitUntil(lambda: screen.idle, timeout=90000)
+    # the last step (the gloss standard) runs after its prompt closes: wait for its outcome on the state line
+    qtbot.waitUntil(lambda: screen.idle and not screen.state.text().startswith("calibration:"), timeout=90000)
     log = screen.log.toPlainText()
     assert screen.state.text() == "calibration passed", log
     assert "calibration of sim:ma6" in log and "calibration of sim:gloss" in log
