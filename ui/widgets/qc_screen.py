@@ -97,6 +97,7 @@ class QcScreen(QWidget):
         self.limits.setPlaceholderText("e.g. A=1.0,F11=1.5 — metamerism index limits (spectra needed)")
         self.standard_pick = QComboBox()
         self.standard_pick.setToolTip("a stored measurement of the part; selecting a table row picks it too")
+        self.standard_pick.setPlaceholderText("choose a measurement to make the new standard")
         self.set_standard_btn = QPushButton("Set as standard")
         self.set_standard_btn.setEnabled(False)
 
@@ -352,6 +353,7 @@ class QcScreen(QWidget):
         self.standard_pick.clear()
         for mid, label in self.model.standard_candidates(part):
             self.standard_pick.addItem(label, mid)
+        self.standard_pick.setCurrentIndex(-1)  # the line above names the standard; nothing new is chosen yet
         self.set_standard_btn.setEnabled(self.standard_pick.count() > 0)
         self.table.blockSignals(True)
         self.table.clearSelection()
