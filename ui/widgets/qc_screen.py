@@ -64,6 +64,11 @@ from ui.widgets.tasks import TaskThread
 COLUMNS = ("sample", "measured", "geometry", "ΔL*", "Δa*", "Δb*", "ΔE", "verdict", "60° GU", "reason")
 
 
+def _signed(value: float) -> str:
+    """A difference to 0.01 with its sign; a value that rounds to zero reads +0.00, never -0.00."""
+    return f"{round(value, 2) + 0.0:+.2f}"
+
+
 class QcScreen(QWidget):
     """Job, part and formula pickers; the standard picker; the verdict table per geometry; PDF and CSV
     export; vendor files imported by button or dropped on the screen."""
@@ -363,9 +368,9 @@ class QcScreen(QWidget):
                 str(r.measurement_id),
                 r.measured_at[:16].replace("T", " "),
                 r.geometry,
-                f"{r.dl:+.2f}",
-                f"{r.da:+.2f}",
-                f"{r.db:+.2f}",
+                _signed(r.dl),
+                _signed(r.da),
+                _signed(r.db),
                 f"{r.de:.2f}",
                 r.verdict,
                 "" if r.gloss_60_gu is None else f"{r.gloss_60_gu:.1f}",
