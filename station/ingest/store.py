@@ -14,7 +14,7 @@ import datetime as dt
 import functools
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Final, Protocol
 
 from sqlalchemy import Table, select
 from sqlalchemy.dialects import postgresql, sqlite
@@ -276,7 +276,7 @@ def store_readings(
 
 #: The fields of a :class:`Reading` that are not ``measurements`` columns of the same name: references the
 #: store resolves (panel, instrument, calibration) and the raw payload (in the hash, not kept).
-_NOT_COLUMNS = {"instrument", "calibration", "panel_id", "panel", "raw_payload_b64"}
+_NOT_COLUMNS: Final = {"instrument", "calibration", "panel_id", "panel", "raw_payload_b64"}
 
 
 def reading_columns(reading: Reading) -> dict[str, Any]:
