@@ -60,19 +60,14 @@ def build_parser(kind: str) -> argparse.ArgumentParser:
         default=kind,
         help=f"the family served (its address prefix; a family whose simulator is simulators.{kind})",
     )
-    p.add_argument("--serial", default=None, help="instrument serial number")
+    p.add_argument("--serial", help="instrument serial number")
     p.add_argument(
         "--bias", type=float, default=0.0, help="inter-instrument bias scale (0 = none, 1 = typical)"
     )
     p.add_argument("--noise", type=float, default=1.0, help="noise scale (1 = published repeatability)")
     p.add_argument("--measure-time", type=float, default=0.3, help="seconds per measurement")
     p.add_argument("--cold", action="store_true", help="start cold (warm-up drift and temperature rise)")
-    p.add_argument(
-        "--seed",
-        type=int,
-        default=None,
-        help="noise seed: a reproducible run (default: fresh noise each run)",
-    )
+    p.add_argument("--seed", type=int, help="noise seed: a reproducible run (default: fresh noise each run)")
     p.add_argument("--rfc2217", action="store_true", help="also serve the pty behind an RFC 2217 server")
     p.add_argument("--tcp", action="store_true", help="also serve the pty on raw TCP (socket:// URL)")
     p.add_argument("--twelve", action="store_true", help="ma6 only: add the 15° illumination block")

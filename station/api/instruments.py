@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 import threading
 import uuid
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 from sqlalchemy import Engine, select
 from sqlalchemy.orm import Session, sessionmaker
@@ -301,14 +301,7 @@ class InstrumentHub:
                 passed=result.passed,
             )
             session.commit()
-            return CalibrationPublic(
-                record_id=record.id,
-                calibration_id=result.calibration_id,
-                steps=list(result.steps),
-                verification_de=result.verification_de,
-                passed=result.passed,
-                expires=result.expires,
-            )
+            return CalibrationPublic(record_id=record.id, **asdict(result))
 
     def _gloss_meter(self, gloss_id: str | None) -> Driver | None:
         """The attached gloss meter *gloss_id* to pair with a scan (``None`` without one)."""

@@ -165,17 +165,11 @@ def check(*, session: Session, request: CheckRequest) -> CheckResult:
 
 
 def set_standard(*, session: Session, actor: User, job: str, part: str, body: StandardSet) -> StandardOut:
-    """Make a measurement or design the standard of *job*/*part* (``station.qc.jobs.set_standard``), audited."""
-    std = jobs.set_standard(
-        session,
-        job,
-        part,
-        measurement_id=body.measurement_id,
-        design_id=body.design_id,
-        notes=body.notes,
-        created_by_id=actor.id,
-        replace=body.replace,
-    )
+    """Make a measurement or design the standard of *job*/*part* (``station.qc.jobs.set_standard``), audited.
+
+    The body's fields are that function's keywords, passed as they are.
+    """
+    std = jobs.set_standard(session, job, part, created_by_id=actor.id, **body.model_dump())
     audit.record(
         session=session,
         actor=actor,
