@@ -116,7 +116,12 @@ class CalibrationSessions:
         with live.lock:
             live.passed += 1
         if live.session.next is None:
-            records = [store(name, result, live.reference) for name, result in live.session.results()]
+            try:
+                records = [store(name, result, live.reference) for name, result in live.session.results()]
+            except BaseException:  # every step passed but a record could not be stored: said, not hidden
+                with live.lock:
+                    live.state, live.error = "failed", "every step passed but the records were not stored"
+                raise
             with live.lock:
                 live.records, live.state = records, "calibrated"
         else:

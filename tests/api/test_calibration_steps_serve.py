@@ -111,3 +111,31 @@ def test_unknown_session_is_404(svc: Client) -> None:
     assert r.status_code == 404
     r = http.get(f"{V1}/instruments/calibrations/not-a-uuid", headers=auth)
     assert r.status_code == 422 and r.json()["detail"][0]["loc"][-1] == "session_id"
+
+
+def test_a_failing_white_tile_ends_the_session_naming_the_step() -> None:
+    """The session behind the routes, on a real MA3 simulator whose white calibration fails: the session
+    reads ``failed`` naming step 2 (white tile), stores nothing, and refuses another step (409)."""
+    from station.api.calibration_sessions import CalibrationSessions
+    from station.api.errors import ConflictError
+    from station.scan import open_device
+
+    stored: list[str] = []
+
+    def store(name: str, _result: object, _reference: str) -> object:
+        stored.append(name)  # nothing passed every step: never called
+        raise AssertionError(name)
+
+    sessions = CalibrationSessions()
+    with open_device("sim:ma3", faults=["cal-failure@WC"]) as device:
+        first = sessions.start([device], "W-17")
+        sid = first.id
+        assert sessions.step(sid, store).state == "waiting"
+        failed = sessions.step(sid, store)
+        assert failed.state == "failed" and failed.next is None and not failed.calibrated
+        assert "step 2 of 3 (white tile)" in (failed.error or "")
+        assert [s.status for s in failed.steps] == ["passed", "failed", "pending"]
+        with pytest.raises(ConflictError):
+            sessions.step(sid, store)
+        assert device.instrument.status().needed == "white"
+    assert stored == [] and sessions.read(sid).state == "failed"
