@@ -279,13 +279,7 @@ class InstrumentHub:
     ) -> CalibrationSessionOut:
         """A step-wise calibration session of *instrument_id* (a spectrophotometer) and, with
         *gloss_instrument_id*, the gloss meter after it (:mod:`station.api.calibration_sessions`)."""
-        a = self.get(instrument_id)
-        if a.driver.kind != "spectro":
-            raise InputError(
-                "instrument_id",
-                "a spectrophotometer (gloss meters join via gloss_instrument_id)",
-                instrument_id,
-            )
+        a = self._spectro(instrument_id)
         devices = [scan.Device(instrument_id, a.driver)]
         gloss = self._gloss_meter(gloss_instrument_id)
         if gloss is not None and gloss_instrument_id is not None:
@@ -344,6 +338,18 @@ class InstrumentHub:
                 expires=result.expires,
             )
 
+    def _spectro(self, instrument_id: str) -> Attached:
+        """The attached spectrophotometer *instrument_id*: 404 when none is attached, 422 naming
+        ``instrument_id`` for a gloss meter."""
+        a = self.get(instrument_id)
+        if a.driver.kind != "spectro":
+            raise InputError(
+                "instrument_id",
+                "a spectrophotometer (gloss meters join via gloss_instrument_id)",
+                instrument_id,
+            )
+        return a
+
     def _gloss_meter(self, gloss_id: str | None) -> Driver | None:
         """The attached gloss meter *gloss_id* to pair with a scan (``None`` without one)."""
         if gloss_id is None:
@@ -369,13 +375,7 @@ class InstrumentHub:
         without measuring again. A paired gloss meter's reading is stored as a gloss reading naming the
         measurement (``gloss_reading_id``) once the measurement is stored.
         """
-        a = self.get(instrument_id)
-        if a.driver.kind != "spectro":
-            raise InputError(
-                "instrument_id",
-                "a spectrophotometer (gloss meters join via gloss_instrument_id)",
-                instrument_id,
-            )
+        a = self._spectro(instrument_id)
         target = self.target()
         found = scan.prior(target, client_id, away=self.database.away)
         if isinstance(found, Receipt):
