@@ -68,6 +68,17 @@ def build_parser(kind: str) -> argparse.ArgumentParser:
     p.add_argument("--measure-time", type=float, default=0.3, help="seconds per measurement")
     p.add_argument("--cold", action="store_true", help="start cold (warm-up drift and temperature rise)")
     p.add_argument("--seed", type=int, help="noise seed: a reproducible run (default: fresh noise each run)")
+    runs = p.add_mutually_exclusive_group()
+    runs.add_argument("--run-index", type=int, help="this run's index for the drift across runs (default 0)")
+    runs.add_argument(
+        "--state", type=Path, help="run-state file: each start takes its run counter and adds one"
+    )
+    p.add_argument(
+        "--drift",
+        type=float,
+        default=1.0,
+        help="scale of the stated drift across runs (1 = stated, 0 = none)",
+    )
     p.add_argument("--rfc2217", action="store_true", help="also serve the pty behind an RFC 2217 server")
     p.add_argument("--tcp", action="store_true", help="also serve the pty on raw TCP (socket:// URL)")
     p.add_argument("--twelve", action="store_true", help="ma6 only: add the 15° illumination block")
@@ -88,6 +99,9 @@ def config_from_args(kind: str, args: argparse.Namespace) -> SimulatorConfig:
         measure_time_s=args.measure_time,
         cold=args.cold,
         seed=args.seed,
+        run_index=args.run_index,
+        state=args.state,
+        drift=args.drift,
         rfc2217=args.rfc2217,
         tcp=args.tcp,
         twelve=args.twelve,
