@@ -23,7 +23,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from station.model.domain import QC_WARN_FRACTION
+from station.model.domain import QC_WARN_FRACTION, QC_WARN_FRACTION_RANGE
 from station.qc.errors import QcInputError
 from station.qc.tolerance import Verdict
 
@@ -87,6 +87,10 @@ def mean_texture(sets: Sequence[Sequence[TextureValue]]) -> tuple[TextureValue, 
     return tuple(TextureValue(k[0], k[1], k[2], sum(x) / len(x)) for k, x in acc.items())
 
 
+def _number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 @dataclass(frozen=True)
 class TextureTolerance:
     """Limits on |ΔS| (every sparkle quantity) and |ΔG| (graininess), in the vendor's units; None: not judged."""
@@ -98,10 +102,14 @@ class TextureTolerance:
     def __post_init__(self) -> None:
         for name in ("ds", "dg"):
             v = getattr(self, name)
-            if v is not None and not (math.isfinite(v) and v > 0):
+            if v is not None and not (_number(v) and math.isfinite(v) and v > 0):
                 raise QcInputError(f"texture_limits.{name}", "a finite number > 0", v)
-        if not 0 < self.warn_fraction <= 1:
-            raise QcInputError("texture_limits.warn_fraction", "0 < fraction <= 1", self.warn_fraction)
+        lo, hi = QC_WARN_FRACTION_RANGE
+        f = self.warn_fraction
+        if not (_number(f) and lo < f <= hi):
+            raise QcInputError(
+                "texture_limits.warn_fraction", f"a number, {lo:g} < warn_fraction <= {hi:g}", f
+            )
 
     def limit_for(self, name: str) -> tuple[str, float | None]:
         """The tolerance (``"ΔS"``/``"ΔG"``) and its limit for a quantity *name*; ("", None) if none."""
