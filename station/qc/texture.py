@@ -202,7 +202,7 @@ def judge_texture(
     rows = []
     rank = {"pass": 0, "warn": 1, "fail": 2}
     worst: Verdict = "pass"
-    for key in sorted(set(std) | set(smp), key=lambda k: (k[0].lower(), k[1])):
+    for key in sorted(set(std) | set(smp), key=lambda k: (k[0].lower(), k[0], k[1])):
         a, b = std.get(key), smp.get(key)
         label, limit = tolerance.limit_for(key[0])
         delta = None if a is None or b is None else b - a

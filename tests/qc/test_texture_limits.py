@@ -30,3 +30,15 @@ def test_the_whole_warn_range_is_accepted() -> None:
     lo, hi = QC_WARN_FRACTION_RANGE
     assert TextureTolerance(ds=1.0, warn_fraction=hi).warn_fraction == hi
     assert TextureTolerance(ds=1.0, warn_fraction=(lo + hi) / 2).warn_fraction == (lo + hi) / 2
+
+
+def test_rows_of_names_differing_in_case_come_in_one_order() -> None:
+    # "Sparkle_k" (a CxF spelling) and "sparkle_k" (a CGATS one) never pair; their rows are listed by
+    # name, case-insensitively, then exactly (upper case first), whatever the string hashes of the run
+    from station.qc.texture import TextureValue, judge_texture
+
+    std = tuple(TextureValue("BYK", f"Sparkle_{k}", "45as15", 1.0) for k in range(12))
+    smp = tuple(TextureValue("BYK", f"sparkle_{k}", "45as15", 1.0) for k in range(12))
+    rows = judge_texture(std, smp, TextureTolerance(ds=1.0)).rows
+    expected = sorted([v.name for v in std + smp], key=lambda n: (n.lower(), n))
+    assert [r.name for r in rows] == expected
