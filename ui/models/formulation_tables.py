@@ -27,6 +27,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from station.decimals import step_decimals
 from station.formulate.batch import DEFAULT_BATCH_G, batch_masses
 from station.model.domain import METAMERISM_TEST_ILLUMINANTS
 
@@ -118,16 +119,6 @@ def _fmt(value: float | None, digits: int = 2) -> str:
     return NOT_SHOWN if value is None else f"{value:.{digits}f}"
 
 
-def _decimals(step: float, most: int = 4) -> int:
-    """Decimals that show every multiple of *step* exactly (0.05 → 2, 0.25 → 2, 0.2 → 1, 5 → 0); a step
-    with no short decimal form (0.1 g in a 3 kg batch: 0.0333… g/kg) gets one digit past its first."""
-    for d in range(most + 1):
-        scaled = step * 10**d
-        if abs(scaled - round(scaled)) <= 1e-6 * max(1.0, scaled):
-            return d
-    return min(most, max(0, -math.floor(math.log10(step))) + 1)
-
-
 def _grams(value: float, digits: int) -> str:
     """*value* (g/kg) to *digits* decimals, trailing zeros dropped down to one decimal (60.20 → 60.2,
     60.25 stays; 50.00 → 50.0)."""
@@ -146,7 +137,7 @@ def recipe_table(columns: Sequence[RecipeColumn]) -> tuple[list[str], list[list[
     labels = [f"{n} (g/kg)" for n in names] + ["binder (g/kg)", *SUMMARY_ROWS]
     cells: list[list[str]] = [[] for _ in labels]
     for c in columns:
-        digits = 2 if c.resolution_g is None else _decimals(c.resolution_g)
+        digits = 2 if c.resolution_g is None else step_decimals(c.resolution_g)
         col = [_grams(c.g_per_kg[n], digits) if n in c.g_per_kg else "" for n in names]
         mi = [_fmt(c.metamerism.get(i) if c.metamerism else None) for i in METAMERISM_TEST_ILLUMINANTS]
         col += [_grams(c.binder_g_per_kg, digits), _fmt(c.de_unrounded), _fmt(c.de_rounded), *mi]
