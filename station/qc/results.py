@@ -15,7 +15,7 @@ from station.qc.panels import PanelMean
 from station.qc.readings import Reading
 from station.qc.repeats import RepeatSummary
 from station.qc.texture import TextureVerdict
-from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict
+from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict, worst_verdict
 
 __all__ = ["JobSummary", "MeasurementRow", "PartSummary", "SampleResult", "StandardInfo"]
 
@@ -100,8 +100,7 @@ class SampleResult:
         colour = PairVerdict(self.verdict, self.illuminants).verdict
         if self.texture is None:
             return colour
-        rank = {"pass": 0, "warn": 1, "fail": 2}
-        return colour if rank[colour] >= rank[self.texture.verdict] else self.texture.verdict
+        return worst_verdict((colour, self.texture.verdict))
 
     def to_dict(self) -> dict[str, Any]:
         out = {**self.row.to_dict(), "qc": PairVerdict(self.verdict, self.illuminants).to_dict()}

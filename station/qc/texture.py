@@ -25,7 +25,7 @@ from typing import Any
 
 from station.model.domain import QC_WARN_FRACTION, QC_WARN_FRACTION_RANGE
 from station.qc.errors import QcInputError
-from station.qc.tolerance import Verdict
+from station.qc.tolerance import Verdict, worst_verdict
 
 __all__ = [
     "TextureRow",
@@ -200,8 +200,6 @@ def judge_texture(
     std = {(v.name, v.geometry): v.value for v in standard}
     smp = {(v.name, v.geometry): v.value for v in sample}
     rows = []
-    rank = {"pass": 0, "warn": 1, "fail": 2}
-    worst: Verdict = "pass"
     for key in sorted(set(std) | set(smp), key=lambda k: (k[0].lower(), k[0], k[1])):
         a, b = std.get(key), smp.get(key)
         label, limit = tolerance.limit_for(key[0])
@@ -209,6 +207,7 @@ def judge_texture(
         verdict: Verdict | None = None
         if delta is not None and limit is not None:
             verdict = _band(delta, limit, tolerance.warn_fraction)
-            worst = verdict if rank[verdict] > rank[worst] else worst
         rows.append(TextureRow(key[0], key[1], a, b, delta, label, limit, verdict))
-    return TextureVerdict(worst, vendor, tuple(rows))
+    return TextureVerdict(
+        worst_verdict(r.verdict for r in rows if r.verdict is not None), vendor, tuple(rows)
+    )
