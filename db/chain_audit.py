@@ -58,13 +58,22 @@ CHECKPOINT_KEY_FILE = "chain-checkpoint.key"
 
 
 def _create_private(path: Path, data: bytes) -> None:
-    """Create *path* with *data*, mode 0600, failing if anything (a link included) is already there."""
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+    """Create *path* with *data*, mode 0600, failing if anything (a link included) is already there.
+
+    The bytes are written to a private file beside it first and then linked into place, so a reader
+    never finds *path* before it holds the whole of *data*.
+    """
+    tmp = path.with_name(f".{path.name}.{secrets.token_hex(8)}")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
     try:
-        os.write(fd, data)
-        os.fsync(fd)
+        try:
+            os.write(fd, data)
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.link(tmp, path)  # atomic; FileExistsError when someone else's is already there
     finally:
-        os.close(fd)
+        tmp.unlink(missing_ok=True)
 
 
 def _read_regular(path: Path) -> bytes | None:
@@ -81,7 +90,11 @@ def _read_regular(path: Path) -> bytes | None:
 
 
 def checkpoint_key(folder: Path, *, create: bool) -> bytes | None:
-    """The checkpoint key of the data *folder* (32 random bytes, hex in a 0600 file); made when *create*."""
+    """The checkpoint key of the data *folder* (32 random bytes, hex in a 0600 file); made when *create*.
+
+    ``None`` when there is none (and not *create*); ``ValueError`` naming the file when it does not hold
+    a whole key (64 hex digits), which is never used to sign or check a checkpoint.
+    """
     path = folder / CHECKPOINT_KEY_FILE
     data = _read_regular(path)
     if data is None and create:
@@ -90,7 +103,18 @@ def checkpoint_key(folder: Path, *, create: bool) -> bytes | None:
         except FileExistsError:
             pass  # another process made it first
         data = _read_regular(path)
-    return None if data is None else bytes.fromhex(data.decode("ascii").strip())
+    if data is None:
+        return None
+    text = data.decode("ascii", "replace").strip()
+    try:
+        key = bytes.fromhex(text)
+    except ValueError:
+        key = b""
+    if len(key) != 32:
+        raise ValueError(
+            f"checkpoint key {path.name}: not a whole key (64 hex digits), {len(text)} characters"
+        )
+    return key
 
 
 def database_identity(url: str) -> str:

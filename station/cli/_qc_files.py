@@ -110,11 +110,11 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
 def _texture(result: dict[str, Any], std: Any, smp: Any, limits: str) -> None:
     """Add the texture verdict (``--texture-limits``) to *result*; the overall verdict is the worse."""
     from station.qc.texture import judge_texture, parse_texture_limits
+    from station.qc.tolerance import worst_verdict
 
     tex = judge_texture(std.texture, smp.texture, parse_texture_limits(limits))
     result["texture"] = tex.to_dict()
-    rank = {"pass": 0, "warn": 1, "fail": 2}
-    if rank[tex.verdict] > rank[result["verdict"]]:
+    if worst_verdict((tex.verdict, result["verdict"])) != result["verdict"]:
         result["verdict"] = tex.verdict
         result["reason"] = f"{result['reason']}; texture ({tex.vendor}) {tex.verdict}"
 

@@ -260,12 +260,14 @@ def _options(args: argparse.Namespace) -> Any:
 def recipes_table(recipes: list[dict[str, Any]]) -> str:
     """The recipes side by side, as a chemist compares them: grams per batch (rounded to the scale),
     binder, ΔE00 after and before rounding, metamerism index per illuminant, colorants, cost."""
+    from station.decimals import step_decimals
+
     if not recipes:
         return "(no recipe)"
     names = sorted({n for r in recipes for n in r["grams"]})
     ills = sorted({i for r in recipes for i in (r["metamerism_index"] or {})})
     res = recipes[0]["scale_resolution_g"]
-    digits = max(0, -int(np.floor(np.log10(res) + 1e-9)))
+    digits = step_decimals(res)
 
     def grams(v: float | None) -> str:
         return "-" if v is None else f"{v:.{digits}f}"

@@ -125,13 +125,13 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
         raise InputError("FILE", "one measurement file, or: watch DIR", " ".join(args.target))
     job, part = _panel(args)
 
-    from station.ingest.formats import read_measurement_file
+    from station.ingest.formats import load_measurement_file
     from station.ingest.formats.records import readings_from_file
 
     path = Path(args.target[0])
     if not path.is_file():
         raise InputError("FILE", "an existing measurement file", str(path))
-    imported = read_measurement_file(path, args.format)
+    imported, data = load_measurement_file(path, args.format)  # parsed and hashed from one read
     out: dict[str, Any] = {
         "format": imported.format,
         "file": imported.file,
@@ -155,6 +155,7 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
             illumination_deg=_illumination(args),
             job=job,
             part=part,
+            data=data,
         )  # every reading validated before the first is stored
         with _target(args) as target:
             out["stored"] = [

@@ -27,7 +27,7 @@ from station.model.illuminants import REFERENCE_ILLUMINANT, illuminant_name
 from station.qc.errors import QcInputError
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading
-from station.qc.tolerance import QcVerdict, QcVerdictWire, Verdict
+from station.qc.tolerance import QcVerdict, QcVerdictWire, Verdict, worst_verdict
 
 __all__ = [
     "IlluminantCheck",
@@ -228,9 +228,6 @@ def check_illuminants(
     return IlluminantCheck(result.formula, lims, rows)
 
 
-_ORDER: dict[str, int] = {"pass": 0, "warn": 1, "fail": 2}
-
-
 @dataclass(frozen=True)
 class PairVerdict:
     """The D65 verdict of a sample with its illuminant rows (``None`` when none were asked for)."""
@@ -243,7 +240,7 @@ class PairVerdict:
         """The worse of the D65 verdict and the illuminant rows' verdict."""
         if self.illuminants is None:
             return self.colour.verdict
-        return max(self.colour.verdict, self.illuminants.verdict, key=_ORDER.__getitem__)
+        return worst_verdict((self.colour.verdict, self.illuminants.verdict))
 
     def to_dict(self) -> PairVerdictWire:
         out = cast(PairVerdictWire, {**self.colour.to_dict()})  # the optional keys follow

@@ -183,32 +183,31 @@ def _label(s: SampleResult) -> str:
 
 
 def _why(s: SampleResult) -> str:
-    """One line on why a sample did not pass: the geometries out of band, or the mean rule's reason,
-    then the illuminant rows that failed."""
+    """One line on why a sample did not pass, headed by its overall verdict: the geometries out of band
+    (or the mean rule's reason), the illuminant rows that failed and the texture rows out of band —
+    every check that did not pass, so a worse verdict is never explained by a milder one alone."""
     v = s.verdict
-    tex = s.texture
-    if tex is not None and tex.verdict != "pass" and v.verdict == "pass":
-        bad = [r for r in tex.rows if r.verdict == tex.verdict]
-        rows = "; ".join(
-            f"{r.name} {r.geometry or 'sample'} {r.tolerance} {r.delta:+.2f}"
-            for r in bad
-            if r.delta is not None
-        )
-        return f"{_label(s)} {s.overall}: texture ({tex.vendor}) {rows}"
+    parts = []
+    if v.verdict != "pass":
+        if v.aggregation == "mean":
+            parts.append(v.reason)
+        else:
+            bands = []
+            for k in ("fail", "warn"):
+                names = [g.geometry for g in v.per_geometry if g.verdict == k]
+                if names:
+                    bands.append(f"{k} at {', '.join(names)}")
+            parts.append(f"{'; '.join(bands)} (max ΔE {v.max_de:.2f} at {v.worst_geometry})")
     booth = s.illuminants
     if booth is not None and booth.verdict == "fail":
         failed = [r for r in booth.rows if r.verdict == "fail"]
-        rows = "; ".join(f"{r.illuminant} {r.geometry} MI {r.index:.2f} > {r.limit:g}" for r in failed)
-        d65 = "" if v.verdict == "pass" else f"D65 {v.verdict}; "
-        return f"{_label(s)} {s.overall}: {d65}{rows}"
-    if v.aggregation == "mean":
-        return f"{_label(s)} {v.verdict}: {v.reason}"
-    parts = []
-    for k in ("fail", "warn"):
-        names = [g.geometry for g in v.per_geometry if g.verdict == k]
-        if names:
-            parts.append(f"{k} at {', '.join(names)}")
-    return f"{_label(s)} {v.verdict}: {'; '.join(parts)} (max ΔE {v.max_de:.2f} at {v.worst_geometry})"
+        parts.append("; ".join(f"{r.illuminant} {r.geometry} MI {r.index:.2f} > {r.limit:g}" for r in failed))
+    tex = s.texture
+    if tex is not None and tex.verdict != "pass":
+        bad = [r for r in tex.rows if r.verdict == tex.verdict and r.delta is not None]
+        rows = "; ".join(f"{r.name} {r.geometry or 'sample'} {r.tolerance} {r.delta:+.2f}" for r in bad)
+        parts.append(f"texture ({tex.vendor}) {rows}")
+    return f"{_label(s)} {s.overall}: {'; '.join(parts)}"
 
 
 def _heads(part: PartSummary, names: Sequence[str]) -> list[str]:

@@ -23,7 +23,7 @@ from station.qc.panels import PanelMean
 from station.qc.readings import Reading
 from station.qc.repeats import RepeatSummary, RepeatSummaryWire
 from station.qc.texture import TextureTolerance, TextureVerdict, TextureVerdictWire
-from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict
+from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict, worst_verdict
 
 __all__ = [
     "JobSummary",
@@ -224,8 +224,7 @@ class SampleResult:
         colour = PairVerdict(self.verdict, self.illuminants).verdict
         if self.texture is None:
             return colour
-        rank = {"pass": 0, "warn": 1, "fail": 2}
-        return colour if rank[colour] >= rank[self.texture.verdict] else self.texture.verdict
+        return worst_verdict((colour, self.texture.verdict))
 
     def to_dict(self) -> SampleWire:
         verdict = PairVerdict(self.verdict, self.illuminants).to_dict()

@@ -25,9 +25,9 @@ from typing import Any
 
 from typing_extensions import TypedDict
 
-from station.model.domain import QC_WARN_FRACTION
+from station.model.domain import QC_WARN_FRACTION, QC_WARN_FRACTION_RANGE
 from station.qc.errors import QcInputError
-from station.qc.tolerance import Verdict
+from station.qc.tolerance import Verdict, worst_verdict
 
 __all__ = [
     "TextureRow",
@@ -91,6 +91,10 @@ def mean_texture(sets: Sequence[Sequence[TextureValue]]) -> tuple[TextureValue, 
     return tuple(TextureValue(k[0], k[1], k[2], sum(x) / len(x)) for k, x in acc.items())
 
 
+def _number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 @dataclass(frozen=True)
 class TextureTolerance:
     """Limits on |ΔS| (every sparkle quantity) and |ΔG| (graininess), in the vendor's units; None: not judged."""
@@ -102,10 +106,14 @@ class TextureTolerance:
     def __post_init__(self) -> None:
         for name in ("ds", "dg"):
             v = getattr(self, name)
-            if v is not None and not (math.isfinite(v) and v > 0):
+            if v is not None and not (_number(v) and math.isfinite(v) and v > 0):
                 raise QcInputError(f"texture_limits.{name}", "a finite number > 0", v)
-        if not 0 < self.warn_fraction <= 1:
-            raise QcInputError("texture_limits.warn_fraction", "0 < fraction <= 1", self.warn_fraction)
+        lo, hi = QC_WARN_FRACTION_RANGE
+        f = self.warn_fraction
+        if not (_number(f) and lo < f <= hi):
+            raise QcInputError(
+                "texture_limits.warn_fraction", f"a number, {lo:g} < warn_fraction <= {hi:g}", f
+            )
 
     def limit_for(self, name: str) -> tuple[str, float | None]:
         """The tolerance (``"ΔS"``/``"ΔG"``) and its limit for a quantity *name*; ("", None) if none."""
@@ -218,15 +226,14 @@ def judge_texture(
     std = {(v.name, v.geometry): v.value for v in standard}
     smp = {(v.name, v.geometry): v.value for v in sample}
     rows = []
-    rank = {"pass": 0, "warn": 1, "fail": 2}
-    worst: Verdict = "pass"
-    for key in sorted(set(std) | set(smp), key=lambda k: (k[0].lower(), k[1])):
+    for key in sorted(set(std) | set(smp), key=lambda k: (k[0].lower(), k[0], k[1])):
         a, b = std.get(key), smp.get(key)
         label, limit = tolerance.limit_for(key[0])
         delta = None if a is None or b is None else b - a
         verdict: Verdict | None = None
         if delta is not None and limit is not None:
             verdict = _band(delta, limit, tolerance.warn_fraction)
-            worst = verdict if rank[verdict] > rank[worst] else worst
         rows.append(TextureRow(key[0], key[1], a, b, delta, label, limit, verdict))
-    return TextureVerdict(worst, vendor, tuple(rows))
+    return TextureVerdict(
+        worst_verdict(r.verdict for r in rows if r.verdict is not None), vendor, tuple(rows)
+    )

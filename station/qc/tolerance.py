@@ -31,7 +31,7 @@ Components: ΔL* = L*₂ − L*₁, Δa*, Δb*, ΔC* = C*₂ − C*₁ and the s
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Literal
@@ -76,6 +76,7 @@ __all__ = [
     "Verdict",
     "judge",
     "lab_components",
+    "worst_verdict",
 ]
 
 Verdict = Literal["pass", "warn", "fail"]
@@ -101,7 +102,8 @@ def _positive(value: Any, name: str, allow_none: bool = False) -> float | None:
     return float(value)
 
 
-def _worst(verdicts: Sequence[str]) -> Verdict:
+def worst_verdict(verdicts: Iterable[str]) -> Verdict:
+    """The worst of *verdicts* in the order pass < warn < fail (``pass`` when there is none)."""
     w = max(verdicts, key=lambda v: _RANK[v], default="pass")
     return "fail" if w == "fail" else "warn" if w == "warn" else "pass"
 
@@ -489,7 +491,17 @@ def _geometry_verdict(
         reasons.append(why)
     dl, da, db, dc, dh = (float(x) for x in comps)
     g = GeometryVerdict(
-        lim.geometry, lim.aspecular_deg, dl, da, db, dc, dh, de, _worst(verdicts), tuple(reasons), lim.de
+        lim.geometry,
+        lim.aspecular_deg,
+        dl,
+        da,
+        db,
+        dc,
+        dh,
+        de,
+        worst_verdict(verdicts),
+        tuple(reasons),
+        lim.de,
     )
     return g, component_verdicts
 
@@ -504,7 +516,7 @@ def _overall(
 ) -> tuple[Verdict, str]:
     """The overall verdict and its reason under the set's aggregation rule (module docstring)."""
     if tolerance.aggregation == "max":
-        overall = _worst([g.verdict for g in per])
+        overall = worst_verdict([g.verdict for g in per])
         bad = [g for g in per if g.verdict == overall and overall != "pass"]
         reason = (
             "; ".join(f"{g.geometry}: {', '.join(g.reasons)}" for g in bad)
@@ -515,7 +527,7 @@ def _overall(
     v_mean, why = _band(
         mean_de, tolerance.mean_limit, "ΔE", tolerance.warn_fraction, f" ({tolerance.formula})"
     )
-    overall = _worst([v_mean, *component_verdicts])
+    overall = worst_verdict([v_mean, *component_verdicts])
     parts = [f"mean {why}"] if why else []
     parts += [f"{g.geometry}: {r}" for g in per for r in g.reasons if not r.startswith("ΔE")]
     reason = "; ".join(parts) if parts else f"mean ΔE {mean_de:.3g} within {tolerance.mean_limit:g}"

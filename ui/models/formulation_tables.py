@@ -27,6 +27,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from station.decimals import step_decimals
 from station.formulate.batch import DEFAULT_BATCH_G, batch_masses
 from station.model.domain import METAMERISM_TEST_ILLUMINANTS
 
@@ -46,7 +47,8 @@ NOT_SHOWN = "—"
 @dataclass(frozen=True)
 class RecipeColumn:
     """One recipe of the side-by-side table: ``g_per_kg`` per colorant and ``binder_g_per_kg``;
-    ``resolution_g`` the scale's resolution the amounts are rounded to (None: not rounded); ΔE00 mean
+    ``resolution_g`` the scale's resolution as a step of ``g_per_kg`` (g/kg: the resolution × 1000 g / the
+    batch; None: not rounded); ΔE00 mean
     before (``de_unrounded``) and after rounding (``de_rounded``, None when not rounded); ``metamerism``
     per test illuminant; ``colorants`` their number; ``cost_per_kg`` (None when not known)."""
 
@@ -72,11 +74,12 @@ def column_from_option(option: dict[str, Any]) -> RecipeColumn:
     rounded = _number(option.get("mean_de"))
     before = _number(option.get("mean_de_unrounded"))
     start = str(option.get("start", ""))
+    resolution = _number(option.get("scale_resolution_g"))
     return RecipeColumn(
         f"#{option.get('rank', 1)}" + (f" from {start}" if start else ""),
         {str(k): float(v) * scale for k, v in option["grams"].items()},
         float(option["binder_g"]) * scale,
-        _number(option.get("scale_resolution_g")),
+        None if resolution is None else resolution * scale,
         before if before is not None else float(rounded or 0.0),
         rounded,
         option.get("metamerism_index"),
@@ -116,6 +119,15 @@ def _fmt(value: float | None, digits: int = 2) -> str:
     return NOT_SHOWN if value is None else f"{value:.{digits}f}"
 
 
+def _grams(value: float, digits: int) -> str:
+    """*value* (g/kg) to *digits* decimals, trailing zeros dropped down to one decimal (60.20 → 60.2,
+    60.25 stays; 50.00 → 50.0)."""
+    text = f"{value:.{digits}f}"
+    while digits > 1 and text.endswith("0"):
+        text, digits = text[:-1], digits - 1
+    return text
+
+
 def recipe_table(columns: Sequence[RecipeColumn]) -> tuple[list[str], list[list[str]]]:
     """Row labels and cells (rows × columns) of the side-by-side table: the colorants (largest in the
     first recipe first), the binder, then :data:`SUMMARY_ROWS`; a colorant a recipe lacks is blank."""
@@ -125,10 +137,10 @@ def recipe_table(columns: Sequence[RecipeColumn]) -> tuple[list[str], list[list[
     labels = [f"{n} (g/kg)" for n in names] + ["binder (g/kg)", *SUMMARY_ROWS]
     cells: list[list[str]] = [[] for _ in labels]
     for c in columns:
-        digits = 2 if c.resolution_g is None else max(0, -math.floor(math.log10(c.resolution_g) + 1e-9))
-        col = [_fmt(c.g_per_kg[n], digits) if n in c.g_per_kg else "" for n in names]
+        digits = 2 if c.resolution_g is None else step_decimals(c.resolution_g)
+        col = [_grams(c.g_per_kg[n], digits) if n in c.g_per_kg else "" for n in names]
         mi = [_fmt(c.metamerism.get(i) if c.metamerism else None) for i in METAMERISM_TEST_ILLUMINANTS]
-        col += [_fmt(c.binder_g_per_kg, digits), _fmt(c.de_unrounded), _fmt(c.de_rounded), *mi]
+        col += [_grams(c.binder_g_per_kg, digits), _fmt(c.de_unrounded), _fmt(c.de_rounded), *mi]
         col += [str(c.colorants), _fmt(c.cost_per_kg)]
         for row, text in zip(cells, col, strict=True):
             row.append(text)

@@ -77,18 +77,19 @@ def import_file(path: Path | str, ingestor: Ingestor, job: str | None, part: str
     nothing and is answered with its error (never raised). *job*/*part* name the panels (both or
     neither), as ``station import --job --part``."""
     from station.ingest import operator_name
-    from station.ingest.formats import read_measurement_file
+    from station.ingest.formats import load_measurement_file
     from station.ingest.formats.records import readings_from_file
 
     path = Path(path)
     try:
-        imported = read_measurement_file(path)
+        imported, data = load_measurement_file(path)  # parsed and hashed from one read
         readings = readings_from_file(
             imported,
             path,
             operator=operator_name(),
             job=job,
             part=part,
+            data=data,
         )  # every reading validated before the first is stored
     except (StationError, OSError) as exc:
         return FileImport(path.name, error=str(exc))

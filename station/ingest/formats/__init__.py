@@ -26,6 +26,7 @@ from station.ingest.errors import (
     WorkbookImportError,
 )
 from station.ingest.formats import cgats, csv_template, cxf, measure_json, workbook
+from station.ingest.formats._text import read_bytes
 from station.ingest.formats.cgats import read_cgats, write_cgats
 from station.ingest.formats.csv_template import read_csv, write_csv
 from station.ingest.formats.cxf import read_cxf, write_cxf
@@ -59,6 +60,7 @@ __all__ = [
     "import_client_id",
     "is_complete",
     "lab_of",
+    "load_measurement_file",
     "read_measurement_file",
     "readings_from_import",
     "write_measurement_file",
@@ -144,6 +146,15 @@ def read_measurement_file(
     if fmt not in _READERS:
         raise UnknownFormatError(Path(path).name, "", "format", " | ".join(_READERS), fmt)
     return _READERS[fmt](Path(path), data)
+
+
+def load_measurement_file(path: Path | str, fmt: str | None = None) -> tuple[ImportedFile, bytes]:
+    """:func:`read_measurement_file` of *path* read once: the parsed file and the very bytes it was
+    parsed from, so an import hashes what it stores (``records.readings_from_file(..., data=)``) even
+    when the file is saved again meanwhile. A missing, unreadable or oversized file is refused
+    (:class:`ImportFileError` naming it)."""
+    data = read_bytes(Path(path), ImportFileError)
+    return read_measurement_file(path, fmt, data), data
 
 
 def is_complete(path: Path | str, data: bytes) -> bool:

@@ -20,7 +20,8 @@ column             required  meaning
                              for a per-sample value such as graininess); empty = not measured
 =================  ========  ==============================================================
 
-The per-sample columns (instrument … measured_at) are read from a sample's first row. A text cell a
+The per-sample columns (instrument … measured_at) are read from a sample's first row; a per-sample
+texture value may stand on any of its rows (on several: the same value, else refused naming the column). A text cell a
 spreadsheet would run as a formula (``=``, ``+``, ``@`` …) is refused unless written with a leading
 single quote (which is removed), as :func:`write_csv` writes it (:mod:`station.csv_cells`).
 """
@@ -184,6 +185,7 @@ def _sample(
     if when and measured_at is None:
         raise CsvImportError(file, f"line {k0}", "measured_at", "an ISO 8601 instant", when)
     rows, labs, curves, texture = [], [], [], []
+    per_sample_values: dict[int, float] = {}  # column → the per-sample value, whichever row holds it
     for k, row in group:
         err = factory(CsvImportError, file, f"line {k}")
         rows.append((row[col["geometry"]], err))
@@ -192,10 +194,23 @@ def _sample(
         if lay["spectral"]:
             curves.append([_float(row[i], header[i], file, k) for _, i in lay["spectral"]])
         for vendor, qty, per_sample, i in lay["texture"]:
-            if not row[i].strip() or (per_sample and k != k0):
+            if not row[i].strip():
                 continue
+            value = _float(row[i], header[i], file, k)
+            if per_sample and i in per_sample_values:
+                if per_sample_values[i] != value:
+                    raise CsvImportError(
+                        file,
+                        f"line {k}",
+                        header[i],
+                        f"one value per sample ({per_sample_values[i]!r})",
+                        value,
+                    )
+                continue
+            if per_sample:
+                per_sample_values[i] = value
             geometry = "" if per_sample else canonical_geometry(row[col["geometry"]], "geometry", err)
-            texture.append(VendorValue(vendor, qty, _float(row[i], header[i], file, k), geometry))
+            texture.append(VendorValue(vendor, qty, value, geometry))
     return build_measurement(
         sample=name,
         rows=rows,

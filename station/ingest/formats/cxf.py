@@ -53,6 +53,7 @@ from station.ingest.formats.measurement import (
     Instrument,
     VendorValue,
     build_measurement,
+    canonical_geometry,
     observer_degrees,
     observer_name,
 )
@@ -328,23 +329,33 @@ def _values(obj: Any, where: str, specs: dict[str, dict[str, Any]], file: str) -
 
 
 def _texture(obj: Any, where: str, file: str) -> list[VendorValue]:
-    """The vendor texture values of the object's ``TagCollection Name="texture"``."""
-    texture = []
+    """The vendor texture values of the object's ``TagCollection Name="texture"``: each tag
+    ``Name="VENDOR|NAME|GEOMETRY"`` (GEOMETRY empty: a per-sample value) with a finite ``Value``; the
+    geometry is read in the domain's spelling, and one quantity holds one value per geometry."""
+    texture: dict[tuple[str, str, str], VendorValue] = {}
+    at = f"{where}/TagCollection"
+    err = factory(CxfImportError, file, at)
     for tc in obj.tag_collection:
         if tc.name != TEXTURE_TAGS:
             continue
         for tag in tc.tag:
             parts = str(tag.name or "").split("|")
-            if len(parts) != 3:
-                raise CxfImportError(
-                    file, f"{where}/TagCollection", "Tag", "Name=VENDOR|NAME|GEOMETRY", tag.name
-                )
+            if len(parts) != 3 or not parts[0].strip() or not parts[1].strip():
+                raise CxfImportError(file, at, "Tag", "Name=VENDOR|NAME|GEOMETRY", tag.name)
+            vendor, name, geo = parts[0], parts[1], parts[2].strip()
             try:
                 value = float(tag.value or "")
-            except ValueError as exc:
-                raise CxfImportError(file, f"{where}/TagCollection", parts[1], "a number", tag.value) from exc
-            texture.append(VendorValue(parts[0], parts[1], value, parts[2]))
-    return texture
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                raise CxfImportError(file, at, name, "a finite number", tag.value)
+            geometry = canonical_geometry(geo, name, err) if geo else ""
+            prior = texture.setdefault((vendor, name, geometry), VendorValue(vendor, name, value, geometry))
+            if prior.value != value:
+                raise CxfImportError(
+                    file, at, name, f"one value at {geometry or 'the sample'} ({prior.value!r})", value
+                )
+    return list(texture.values())
 
 
 def _object(obj: Any, i: int, specs: dict[str, dict[str, Any]], file: str) -> ImportedMeasurement:

@@ -136,16 +136,19 @@ def readings_from_file(
     illumination_deg: float | None = None,
     job: str | None = None,
     part: str | None = None,
+    data: bytes | None = None,
 ) -> list[Reading]:
-    """:func:`readings_from_import` of *imported*, read from the file at *path*: under the file's SHA-256,
-    with its modification time (UTC, whole seconds) for a measurement whose file states none.
+    """:func:`readings_from_import` of *imported*, read from the file at *path*: under the SHA-256 of
+    *data*, the bytes *imported* was parsed from (``None``: the file's bytes now, which differ when the
+    file was saved again since it was parsed: pass *data*), with the file's modification time (UTC,
+    whole seconds) for a measurement whose file states none.
 
     Raises ``OSError`` when *path* cannot be read, :class:`ImportFileError` as :func:`readings_from_import`.
     """
     mtime = dt.datetime.fromtimestamp(Path(path).stat().st_mtime, dt.UTC).replace(microsecond=0)
     return readings_from_import(
         imported,
-        sha256=file_sha256(path),
+        sha256=file_sha256(path) if data is None else hashlib.sha256(data).hexdigest(),
         operator=operator,
         fallback_time=mtime,
         illumination_deg=illumination_deg,
