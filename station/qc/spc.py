@@ -126,11 +126,19 @@ def _all_within(z: NDArray[np.float64], run: int, k: float, inside: bool) -> lis
 _Rule = tuple[str, str, Callable[[NDArray[np.float64]], list[int]]]
 #: Every run rule: (name, meaning, test on z = (x − centre) / σ). Western Electric rules 1–4 and Nelson 1–8.
 RULES: tuple[_Rule, ...] = (
-    ("WE1", "one point beyond 3σ", lambda z: [int(i) for i in np.flatnonzero(np.abs(z) > 3)]),
+    (
+        "WE1",
+        f"one point beyond {QC_SPC_SIGMAS:g}σ (the control limit)",
+        lambda z: [int(i) for i in np.flatnonzero(np.abs(z) > QC_SPC_SIGMAS)],
+    ),
     ("WE2", "2 of 3 points beyond 2σ, same side", lambda z: _k_of_m(z, 2, 2, 3)),
     ("WE3", "4 of 5 points beyond 1σ, same side", lambda z: _k_of_m(z, 1, 4, 5)),
     ("WE4", "8 points in a row on one side of the centre", lambda z: _same_side(z, 8)),
-    ("N1", "one point beyond 3σ", lambda z: [int(i) for i in np.flatnonzero(np.abs(z) > 3)]),
+    (
+        "N1",
+        f"one point beyond {QC_SPC_SIGMAS:g}σ (the control limit)",
+        lambda z: [int(i) for i in np.flatnonzero(np.abs(z) > QC_SPC_SIGMAS)],
+    ),
     ("N2", "9 points in a row on one side of the centre", lambda z: _same_side(z, 9)),
     ("N3", "6 points in a row steadily increasing or decreasing", lambda z: _trend(z, 6)),
     ("N4", "14 points in a row alternating up and down", lambda z: _alternating(z, 14)),
