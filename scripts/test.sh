@@ -9,9 +9,10 @@
 #
 # The core process runs in parallel (pytest-xdist): CACAD_TEST_WORKERS workers (default: one per CPU
 # core, at most 4), each test file on one worker (--dist loadfile: a file's module fixtures, such as a
-# running service, are built once). The viewer process stays serial: one Qt application and one Xvfb
-# display. CACAD_TEST_WORKERS=0 runs the core in one process; extra arguments (e.g. -n 0) come last and
-# win.
+# running service, are built once), handed out in the order tests/conftest.py sets: files holding a slow
+# test first, so that the workers finish together (--no-loadscope-reorder keeps that order). The viewer
+# process stays serial: one Qt application and one Xvfb display. CACAD_TEST_WORKERS=0 runs the core in
+# one process; extra arguments (e.g. -n 0) come last and win.
 #
 # Under CI=true (as CI services set it) a test whose service is missing (the PostgreSQL server, an
 # OpenGL context, Xvfb) fails instead of skipping (tests/services.py). Every test that leaves a process
@@ -34,15 +35,15 @@ rm -rf "$reports" && mkdir -p "$reports"
 set +e
 echo "== pytest: core, service, drivers, tools"
 workers="${CACAD_TEST_WORKERS:-auto}"
-python -m pytest --ignore=tests/ui -n "$workers" --maxprocesses 4 --dist loadfile \
+python -m pytest --ignore=tests/ui -n "$workers" --maxprocesses 4 --dist loadfile --no-loadscope-reorder \
   --junitxml="$reports/core.xml" "$@"
 core=$?
 echo "== pytest: viewer (own process, Qt on Xvfb)"
 # Two workers at most (each starts its own Xvfb). A test stuck in a nested Qt event loop (a modal
 # dialog) never returns to Python, so SIGALRM cannot stop it: the viewer's timeout uses a thread,
 # which dumps the stacks and ends the worker instead of hanging the run.
-python -m pytest tests/ui -n "$workers" --maxprocesses 2 --dist loadfile -o timeout_method=thread \
-  --junitxml="$reports/ui.xml" "$@"
+python -m pytest tests/ui -n "$workers" --maxprocesses 2 --dist loadfile --no-loadscope-reorder \
+  -o timeout_method=thread --junitxml="$reports/ui.xml" "$@"
 ui=$?
 set -e
 echo "== all tests"

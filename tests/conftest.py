@@ -32,6 +32,25 @@ SHARED = REPO.parent / "shared"
 LEFTOVER_GRACE_S = 5.0
 
 
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Run the files holding a ``slow`` test first, then the others by their number of tests (most
+    first); the tests of one file stay together and in their order.
+
+    ``scripts/test.sh`` hands whole files to the workers in this order (``--dist loadfile
+    --no-loadscope-reorder``), so the long files start early and the last ones handed out are short:
+    the workers finish together. (xdist's own order, by number of tests alone, left files of a few long
+    tests, such as the soak, to the end, where one worker ran them while the other had nothing left.)
+    """
+    files: dict[str, list[pytest.Item]] = {}
+    for item in items:
+        files.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
+
+    def order(tests: list[pytest.Item]) -> tuple[bool, int]:
+        return (not any(t.get_closest_marker("slow") for t in tests), -len(tests))
+
+    items[:] = [item for tests in sorted(files.values(), key=order) for item in tests]
+
+
 @pytest.fixture(autouse=True)
 def _no_process_left() -> Iterator[None]:
     """Fail a test that leaves a child process running (after killing it): a leaked process would

@@ -69,7 +69,7 @@ def test_the_map_is_copied_so_a_later_change_to_it_does_not_leak_in() -> None:
         getter("loads")
 
 
-@pytest.mark.parametrize("package", ["station.model", "station.analysis"])
+@pytest.mark.parametrize("package", ["station.model", "station.analysis", "station.api"])
 def test_every_lazy_name_of_the_packages_is_the_object_its_module_defines(package: str) -> None:
     pkg = importlib.import_module(package)
     lazy = pkg._LAZY

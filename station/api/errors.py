@@ -23,7 +23,6 @@ from station.api.json_guard import safe_text
 from station.design.errors import DesignError
 from station.drivers.errors import CalibrationNeeded, DriverError
 from station.errors import InputError, StationError
-from station.formulate.errors import FormulateError
 from station.ingest import ClientIdConflictError, ReferenceNotFoundError
 from station.model.errors import ModelError
 
@@ -60,23 +59,30 @@ class ErrorOut(BaseModel):
     detail: str
 
 
-_STATUS: list[tuple[type[BaseException], int]] = [
-    (AnalysisError, 422),  # the panels cannot be analysed as given (e.g. a fit the model refuses)
-    (ModelError, 422),
-    (DesignError, 422),  # e.g. a sketch the fit cannot use
-    (FormulateError, 422),  # e.g. a library without recipes
-    (ReferenceNotFoundError, 404),
-    (ClientIdConflictError, 409),
-    (ImmutableRowError, 409),
-    (DatabaseUnavailableError, 503),
-]
+def _statuses() -> tuple[tuple[type[BaseException], int], ...]:
+    """(error class, HTTP status) in the order :func:`status_for` tries them. Built when an error is
+    answered, not at import: the package :mod:`station.formulate` pulls in colour-science (a second or
+    more of start-up), which a command that only reaches the user service (``station users``) never
+    needs."""
+    from station.formulate.errors import FormulateError
+
+    return (
+        (AnalysisError, 422),  # the panels cannot be analysed as given (e.g. a fit the model refuses)
+        (ModelError, 422),
+        (DesignError, 422),  # e.g. a sketch the fit cannot use
+        (FormulateError, 422),  # e.g. a library without recipes
+        (ReferenceNotFoundError, 404),
+        (ClientIdConflictError, 409),
+        (ImmutableRowError, 409),
+        (DatabaseUnavailableError, 503),
+    )
 
 
 def status_for(exc: StationError) -> int:
     """HTTP status for a domain error."""
     if isinstance(exc, ApiError):
         return exc.status_code
-    for cls, status in _STATUS:
+    for cls, status in _statuses():
         if isinstance(exc, cls):
             return status
     if isinstance(exc, CalibrationNeeded):

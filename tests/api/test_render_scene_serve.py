@@ -32,6 +32,9 @@ from station.render.shapes import Scene
 from station.render.stage import Stage
 from tests.serve_process import ServeProcess, ServeStartError
 
+#: A ``station serve`` child for the module: a long file, run early (tests/conftest.py orders the files).
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parents[2]
 V1 = "/api/v1"
 SILVER = {

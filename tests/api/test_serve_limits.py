@@ -25,6 +25,9 @@ from station.api.settings import BOOTSTRAP_TOKEN_FILE
 from tests.serve_process import ServeProcess, ServeStartError, free_port, serve_env, upgrade_data_dir
 from tests.waiting import WaitTimeout, pause, wait_until
 
+#: Two ``station serve`` children and timed waits: a long file, run early (tests/conftest.py).
+pytestmark = pytest.mark.slow
+
 BODY_TIMEOUT_S = 1.0
 KEEP_ALIVE_S = 1
 LIMIT = 3

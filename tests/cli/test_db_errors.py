@@ -16,6 +16,9 @@ import pytest
 
 from tests.user_cli import run_station
 
+#: About twenty ``station`` processes: a long file, run early (tests/conftest.py orders the files).
+pytestmark = pytest.mark.slow
+
 
 def _station(cwd: Path, *args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return run_station(cwd, *args, env=env, timeout=120)

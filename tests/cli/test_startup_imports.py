@@ -64,3 +64,22 @@ def test_the_probe_sees_a_heavy_import() -> None:
     """The check can fail: running a command that does load the model shows colour-science."""
     foreign = _foreign([["model", "from-angles", "--angles", "15,45,110", "--lab", "50,0,0;40,0,0;30,0,0"]])
     assert "colour" in foreign
+
+
+def test_database_and_user_commands_load_no_colour_science(tmp_path: Path) -> None:
+    """``station db`` and ``station users`` reach the database (SQLAlchemy) without the service's
+    application or the colour stack (colour-science, SciPy, Matplotlib: seconds of start-up)."""
+    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    foreign = set(
+        _foreign(
+            [
+                ["db", "upgrade", "--database", url],
+                ["db", "current", "--database", url],
+                ["users", "add", "ana", "--database", url],
+                ["users", "list", "--database", url],
+            ]
+        )
+    )
+    assert (tmp_path / "station.sqlite3").is_file()
+    assert "sqlalchemy" in foreign, foreign
+    assert not foreign & {"colour", "scipy", "matplotlib"}, foreign
