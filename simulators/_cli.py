@@ -60,18 +60,24 @@ def build_parser(kind: str) -> argparse.ArgumentParser:
         default=kind,
         help=f"the family served (its address prefix; a family whose simulator is simulators.{kind})",
     )
-    p.add_argument("--serial", default=None, help="instrument serial number")
+    p.add_argument("--serial", help="instrument serial number")
     p.add_argument(
         "--bias", type=float, default=0.0, help="inter-instrument bias scale (0 = none, 1 = typical)"
     )
     p.add_argument("--noise", type=float, default=1.0, help="noise scale (1 = published repeatability)")
     p.add_argument("--measure-time", type=float, default=0.3, help="seconds per measurement")
     p.add_argument("--cold", action="store_true", help="start cold (warm-up drift and temperature rise)")
+    p.add_argument("--seed", type=int, help="noise seed: a reproducible run (default: fresh noise each run)")
+    runs = p.add_mutually_exclusive_group()
+    runs.add_argument("--run-index", type=int, help="this run's index for the drift across runs (default 0)")
+    runs.add_argument(
+        "--state", type=Path, help="run-state file: each start takes its run counter and adds one"
+    )
     p.add_argument(
-        "--seed",
-        type=int,
-        default=None,
-        help="noise seed: a reproducible run (default: fresh noise each run)",
+        "--drift",
+        type=float,
+        default=1.0,
+        help="scale of the stated drift across runs (1 = stated, 0 = none)",
     )
     p.add_argument("--rfc2217", action="store_true", help="also serve the pty behind an RFC 2217 server")
     p.add_argument("--tcp", action="store_true", help="also serve the pty on raw TCP (socket:// URL)")
@@ -93,6 +99,9 @@ def config_from_args(kind: str, args: argparse.Namespace) -> SimulatorConfig:
         measure_time_s=args.measure_time,
         cold=args.cold,
         seed=args.seed,
+        run_index=args.run_index,
+        state=args.state,
+        drift=args.drift,
         rfc2217=args.rfc2217,
         tcp=args.tcp,
         twelve=args.twelve,

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from simulators.faults import FaultPlan
+from simulators.repeatability import MAX_RUN_INDEX, next_run_index
 from station.drivers.families import SIM_FAMILY_NAMES, family_named
 from station.errors import InputError
 
@@ -32,6 +33,7 @@ KINDS = SIM_FAMILY_NAMES
 MAX_BIAS_SCALE = 10.0
 MAX_NOISE_SCALE = 100.0
 MAX_MEASURE_TIME_S = 60.0
+MAX_DRIFT_SCALE = 100.0
 
 
 class SimulatorConfigError(InputError):
@@ -74,6 +76,12 @@ class SimulatorConfig:
     seed
         Noise seed (a reproducible run); ``None`` combines the serial with fresh entropy, so two runs
         read the same panel differently (:func:`simulators.repeatability.run_seed`).
+    run_index, state
+        This run's index for the drift across runs (:mod:`simulators.repeatability`): ``run_index``
+        given, or the counter kept in the file ``state`` (each start takes it and writes one more), at
+        most one of the two; neither: run 0 (no drift).
+    drift
+        Scale of the stated drift across runs, 0 .. 100 (1 = stated, 0 = none), dimensionless.
     rfc2217, tcp
         Also serve the pty behind an RFC 2217 server, or on raw TCP (``socket://`` URL).
     twelve
@@ -91,6 +99,9 @@ class SimulatorConfig:
     measure_time_s: float = 0.3
     cold: bool = False
     seed: int | None = None
+    run_index: int | None = None
+    state: Path | None = None
+    drift: float = 1.0
     rfc2217: bool = False
     tcp: bool = False
     twelve: bool = False
@@ -118,6 +129,12 @@ class SimulatorConfig:
         object.__setattr__(
             self, "measure_time_s", _check_scale("measure_time_s", self.measure_time_s, MAX_MEASURE_TIME_S)
         )
+        object.__setattr__(self, "drift", _check_scale("drift", self.drift, MAX_DRIFT_SCALE))
+        if self.run_index is not None:
+            if self.state is not None:
+                raise SimulatorConfigError("run_index", "either run_index or state, not both", self.run_index)
+            if not 0 <= self.run_index <= MAX_RUN_INDEX:
+                raise SimulatorConfigError("run_index", f"0 <= run_index <= {MAX_RUN_INDEX}", self.run_index)
         if self.twelve and self.protocol != "ma6":
             raise SimulatorConfigError("twelve", "only with the ma6 protocol", self.protocol)
 
@@ -129,7 +146,10 @@ class SimulatorConfig:
 def spectro_physics(
     config: SimulatorConfig, default_serial: str, recipe: RecipePanel | None = None
 ) -> SpectroPhysics:
-    """The spectrophotometer physics of *config*; *recipe* is the loaded ``config.recipe`` panel."""
+    """The spectrophotometer physics of *config*; *recipe* is the loaded ``config.recipe`` panel.
+
+    With ``config.state`` this is a new run: the file's counter is read and advanced
+    (:func:`simulators.repeatability.next_run_index`)."""
     from simulators.physics import DEFAULT_DESIGN, InstrumentCharacter, SpectroPhysics
     from station.model.design_io import load_design
 
@@ -137,4 +157,13 @@ def spectro_physics(
     ch.noise_band *= config.noise
     ch.noise_scale *= config.noise
     design = load_design(config.design) if config.design else DEFAULT_DESIGN
-    return SpectroPhysics(design=design, character=ch, warm=not config.cold, seed=config.seed, recipe=recipe)
+    run = config.run_index if config.state is None else next_run_index(config.state)
+    return SpectroPhysics(
+        design=design,
+        character=ch,
+        warm=not config.cold,
+        seed=config.seed,
+        recipe=recipe,
+        run_index=run or 0,
+        drift_scale=config.drift,
+    )

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simulators.repeatability import run_seed
+from simulators.repeatability import run_gain, run_seed
 from station.model import FaceFlopTravelGloss
 from station.model.angles import flake_equivalent_aspecular
 from station.model.difference import delta_e
@@ -120,7 +120,8 @@ class SpectroPhysics:
     """A simulated multi-angle spectrophotometer looking at one virtual panel.
 
     ``measure(aspecular_deg)`` returns reflectance factors, shape ``(n, 31)``. The panel is *recipe*
-    when one is given (its colorant-model reflectance), else *design*.
+    when one is given (its colorant-model reflectance), else *design*. *run_index* is this run's index and
+    *drift_scale* the scale of the stated drift across runs (:func:`simulators.repeatability.run_gain`).
     """
 
     design: FaceFlopTravelGloss = DEFAULT_DESIGN
@@ -129,6 +130,8 @@ class SpectroPhysics:
     clock: Callable[[], float] = time.monotonic
     seed: int | None = None
     recipe: RecipePanel | None = None
+    run_index: int = 0
+    drift_scale: float = 1.0
 
     def __post_init__(self) -> None:
         # a run's noise: the given seed's, else the serial's with fresh entropy (simulators.repeatability)
@@ -201,7 +204,8 @@ class SpectroPhysics:
             scale = 1.0 + self._rng.normal(0.0, c.noise_scale, (true.shape[0], 1))
             band = 1.0 + self._rng.normal(0.0, c.noise_band, true.shape)
         drift = self.lamp_gain() / self.cal.lamp_gain_at_white
-        return true * self.bias_gain(true.shape[0]) * scale * band * drift
+        across_runs = run_gain(aspecular_deg, self.run_index, self.drift_scale)
+        return true * self.bias_gain(true.shape[0]) * scale * band * drift * across_runs
 
     # -- calibration -------------------------------------------------------------------------------
     def calibrate_zero(self) -> None:

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -67,13 +67,8 @@ class GeometryIndex:
     beta_min_deg: float | None
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-able form."""
-        return {
-            "light_deg": self.light_deg,
-            "view_deg": self.view_deg,
-            "direction": self.direction,
-            "beta_min_deg": self.beta_min_deg,
-        }
+        """JSON-able form: the fields as they are."""
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -119,21 +114,11 @@ class IndexResult:
     per_geometry: tuple[GeometryIndex, ...] = field(default=(), repr=False)
 
     def to_dict(self, per_geometry: bool = False) -> dict[str, Any]:
-        """JSON-able form (the CLI's ``--json`` output)."""
-        out: dict[str, Any] = {
-            "beta_min_deg": self.beta_min_deg,
-            "reached": self.reached,
-            "direction": self.direction,
-            "geometry": self.geometry,
-            "epsilon": self.epsilon,
-            "method": self.method,
-            "beta_max_deg": self.beta_max_deg,
-            "max_delta_e": self.max_delta_e,
-            "resolution_deg": self.resolution_deg,
-            "message": self.message,
-        }
+        """JSON-able form (the CLI's ``--json`` output): the fields, ``per_geometry`` only when asked."""
+        out = asdict(self)
+        rows = out.pop("per_geometry")
         if per_geometry:
-            out["per_geometry"] = [g.to_dict() for g in self.per_geometry]
+            out["per_geometry"] = list(rows)
         return out
 
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 import threading
 import uuid
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 from sqlalchemy import Engine, select
 from sqlalchemy.orm import Session, sessionmaker
@@ -25,9 +25,11 @@ from db.base import utcnow
 from db.models import CalibrationRecord, Instrument, User
 from station import scan
 from station.api.availability import DatabaseState
+from station.api.calibration_sessions import CalibrationSessions
 from station.api.errors import ConflictError, NotFoundError, UnavailableError
 from station.api.schemas.instruments import (
     CalibrationPublic,
+    CalibrationSessionOut,
     InstrumentPublic,
     MeasureRequest,
     MeasureResult,
@@ -35,7 +37,7 @@ from station.api.schemas.instruments import (
 from station.api.services import audit
 from station.api.services import measurements as measurement_service
 from station.api.settings import Settings
-from station.drivers import CommunicationError, split_address
+from station.drivers import CalibrationResult, CommunicationError, split_address
 from station.drivers import Instrument as Driver
 from station.drivers.addresses import check_address
 from station.drivers.readings import InstrumentInfo
@@ -95,6 +97,7 @@ class InstrumentHub:
         self._lock = threading.Lock()
         self._ingestor: Ingestor | None = None
         self._ingestor_lock = threading.Lock()
+        self.calibrations = CalibrationSessions()
 
     # -- lifecycle ----------------------------------------------------------------------------------
     def attach_simulators(self, kinds: tuple[str, ...] | list[str]) -> None:
@@ -269,7 +272,32 @@ class InstrumentHub:
     def calibrate(self, *, instrument_id: str, reference: str, actor: User) -> CalibrationPublic:
         """Run the instrument's calibration sequence and store the record."""
         a = self.get(instrument_id)
-        result = a.driver.calibrate()
+        return self._store_calibration(a, a.driver.calibrate(), reference, actor)
+
+    def start_calibration(
+        self, *, instrument_id: str, gloss_instrument_id: str | None, reference: str
+    ) -> CalibrationSessionOut:
+        """A step-wise calibration session of *instrument_id* (a spectrophotometer) and, with
+        *gloss_instrument_id*, the gloss meter after it (:mod:`station.api.calibration_sessions`)."""
+        a = self._spectro(instrument_id)
+        devices = [scan.Device(instrument_id, a.driver)]
+        gloss = self._gloss_meter(gloss_instrument_id)
+        if gloss is not None and gloss_instrument_id is not None:
+            devices.append(scan.Device(gloss_instrument_id, gloss))
+        return self.calibrations.start(devices, reference)
+
+    def calibration_step(self, *, session_id: uuid.UUID, actor: User) -> CalibrationSessionOut:
+        """Run the next step of session *session_id*; after the last, store a record per instrument."""
+
+        def store(name: str, result: CalibrationResult, reference: str) -> CalibrationPublic:
+            return self._store_calibration(self.get(name), result, reference, actor)
+
+        return self.calibrations.step(session_id, store)
+
+    def _store_calibration(
+        self, a: Attached, result: CalibrationResult, reference: str, actor: User
+    ) -> CalibrationPublic:
+        """Store the calibration record of *result* once (by its calibration id) and audit it."""
         with self.sessions() as session:
             inst = self._instrument_row(session, a)
             client_id = calibration_client_id(a.info.serial, result.calibration_id)
@@ -297,18 +325,23 @@ class InstrumentHub:
                 action="instrument.calibrate",
                 entity="calibration",
                 entity_id=record.id,
-                instrument=instrument_id,
+                instrument=a.id,
                 passed=result.passed,
             )
             session.commit()
-            return CalibrationPublic(
-                record_id=record.id,
-                calibration_id=result.calibration_id,
-                steps=list(result.steps),
-                verification_de=result.verification_de,
-                passed=result.passed,
-                expires=result.expires,
+            return CalibrationPublic(record_id=record.id, **asdict(result))
+
+    def _spectro(self, instrument_id: str) -> Attached:
+        """The attached spectrophotometer *instrument_id*: 404 when none is attached, 422 naming
+        ``instrument_id`` for a gloss meter."""
+        a = self.get(instrument_id)
+        if a.driver.kind != "spectro":
+            raise InputError(
+                "instrument_id",
+                "a spectrophotometer (gloss meters join via gloss_instrument_id)",
+                instrument_id,
             )
+        return a
 
     def _gloss_meter(self, gloss_id: str | None) -> Driver | None:
         """The attached gloss meter *gloss_id* to pair with a scan (``None`` without one)."""
@@ -335,13 +368,7 @@ class InstrumentHub:
         without measuring again. A paired gloss meter's reading is stored as a gloss reading naming the
         measurement (``gloss_reading_id``) once the measurement is stored.
         """
-        a = self.get(instrument_id)
-        if a.driver.kind != "spectro":
-            raise InputError(
-                "instrument_id",
-                "a spectrophotometer (gloss meters join via gloss_instrument_id)",
-                instrument_id,
-            )
+        a = self._spectro(instrument_id)
         target = self.target()
         found = scan.prior(target, client_id, away=self.database.away)
         if isinstance(found, Receipt):

@@ -44,7 +44,7 @@ def _one(
     if len(readings) == 1:
         return readings[0], None
     summary = summarise(readings)
-    out = summary.to_dict()
+    out: dict[str, Any] = dict(summary.to_dict())
     out["left_out"] = [] if keep_outliers else list(out["outliers"])
     out["outliers_kept"] = keep_outliers
     return (summary.mean if keep_outliers else summary.mean_kept), out
@@ -83,7 +83,7 @@ def _check(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str,
         booth = check_illuminants(std, smp, limits, verdict.formula)
     from station.qc.illuminant_rows import PairVerdict
 
-    result = PairVerdict(verdict, booth).to_dict()
+    result: dict[str, Any] = dict(PairVerdict(verdict, booth).to_dict())
     if args.texture_limits is not None:
         _texture(result, std, smp, args.texture_limits)
     result["standard"] = {"file": Path(args.standard).name, "sample": std.sample, "repeats": std_rep}
@@ -138,7 +138,7 @@ def _repeats(args: argparse.Namespace) -> dict[str, Any] | None:
         readings = [r.reading for r in _panel_rows(args)]
     else:
         readings = [r for f in args.files for r in _readings(f, "readings")]
-    out = summarise(readings).to_dict()
+    out: dict[str, Any] = dict(summarise(readings).to_dict())
     if args.json:
         return out
     print(f"{out['n']} readings; outlier rule: {out['rule']}")

@@ -1,4 +1,5 @@
-"""``station qc spc``: control charts of a part's ΔE per geometry, run rules, capability and drift.
+"""``station qc spc``: control charts of a part's ΔE per geometry (and, with ``--texture-limits``, of its
+sparkle and graininess within one vendor), run rules, capability and drift.
 
 The work is :mod:`station.qc.spc_part` (charts, Western Electric and Nelson rules, Cp/Cpk against
 the tolerance, drift) and :mod:`station.qc.spc_chart` (the PNG with the rule hits marked).
@@ -10,7 +11,7 @@ import argparse
 from typing import Any
 
 from station.cli._qc_db import _session, _shown
-from station.cli._qc_files import LoadTolerance, _add_db, _add_judging, _summary_of
+from station.cli._qc_files import LoadTolerance, _add_db, _add_judging, _add_texture_limits, _summary_of
 
 
 def _spc(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, Any] | None:
@@ -38,5 +39,6 @@ def register(sub: argparse._SubParsersAction, load_tolerance: LoadTolerance) -> 
     p.add_argument("--subgroup", type=int, default=1, help="1: individuals chart (default); 2…10: X̄/R chart")
     p.add_argument("--out", help="also draw the chart with its rule hits to this .png")
     _add_judging(p)
+    _add_texture_limits(p)
     _add_db(p)
     p.set_defaults(handler=lambda a: _spc(a, load_tolerance))

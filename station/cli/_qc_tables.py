@@ -180,15 +180,14 @@ def print_spc(out: Mapping[str, Any]) -> None:
         f"SPC of {out['job']}/{out['part']}: {out['samples']} samples, baseline {out['baseline']} ({out['chart']})"
     )
     rows = []
-    for g in out["geometries"]:
+    for g in [*out["geometries"], *out.get("texture", [])]:
         ch, cap = g["chart"], g["capability"]
         cp = "—" if cap is None or cap["cp"] is None else f"{cap['cp']:.2f}"
         cpk = "—" if cap is None or cap["cpk"] is None else f"{cap['cpk']:.2f}"
         usl = "—" if cap is None else f"{cap['usl']:.2f}"
         hits = " ".join(f"{h['rule']}@{h['points'][0] + 1}" for h in ch["hits"]) or "none"
-        rows.append(
-            [g["geometry"], f"{ch['centre']:.3f}", f"{ch['lcl']:.3f}", f"{ch['ucl']:.3f}", usl, cp, cpk, hits]
-        )
+        name = g["geometry"] if g["quantity"] == "ΔE" else f"{g['quantity']} {g['geometry'] or 'sample'}"
+        rows.append([name, f"{ch['centre']:.3f}", f"{ch['lcl']:.3f}", f"{ch['ucl']:.3f}", usl, cp, cpk, hits])
     print(
         format_table(
             rows, ["geometry", "centre", "LCL", "UCL", "limit", "Cp", "Cpk", "rules @ first sample #"]

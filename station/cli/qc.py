@@ -118,7 +118,7 @@ def _verdict(args: argparse.Namespace) -> dict[str, Any] | None:
         raise InputError("standard", f"{len(angles)} triples (one per angle in --angles)", len(std))
     if len(smp) != len(std):
         raise InputError("sample", f"{len(std)} triples (as many as --standard)", len(smp))
-    result = judge(std, smp, angles, _tolerance(args, angles)).to_dict()
+    result: dict[str, Any] = dict(judge(std, smp, angles, _tolerance(args, angles)).to_dict())
     if args.json:
         return result
     from station.cli._qc_files import print_verdict

@@ -21,7 +21,7 @@ from sqlalchemy.orm import Session, sessionmaker
 
 from db.chain import append_audit
 from db.engine import make_engine, make_sessionmaker
-from db.models import Measurement
+from db.models import GlossReading, Measurement
 from station.ingest.errors import DestinationUnreachableError
 from station.ingest.schema import Reading
 from station.ingest.store import StoreResult, store_reading, store_readings
@@ -234,8 +234,15 @@ class DatabaseDestination:
 
     def find(self, client_id: uuid.UUID) -> int | None:
         """The measurement stored under *client_id*, or ``None``."""
+        return self._stored_id(Measurement, client_id)
+
+    def find_gloss(self, client_id: uuid.UUID) -> int | None:
+        """The gloss reading stored under *client_id*, or ``None``."""
+        return self._stored_id(GlossReading, client_id)
+
+    def _stored_id(self, table: type[Measurement | GlossReading], client_id: uuid.UUID) -> int | None:
         with self.sessions()() as session:
-            found = session.scalar(select(Measurement.id).where(Measurement.client_id == client_id))
+            found = session.scalar(select(table.id).where(table.client_id == client_id))
         return None if found is None else int(found)
 
     def close(self) -> None:

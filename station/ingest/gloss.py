@@ -218,22 +218,12 @@ def store_gloss(session: Session, record: GlossRecord, *, created_by_id: int | N
             )
     instrument_id = _instrument_id(session, record, None)
     calibration_id = _calibration_id(session, record, instrument_id)
-    values = dict(
-        client_id=record.client_id,
+    # every field of the record but its references is a column of the same name
+    values = record.model_dump(exclude={"instrument", "calibration", "panel", "panel_id"}) | dict(
         panel_id=panel_id,
-        measurement_id=record.measurement_id,
         instrument_id=instrument_id,
         calibration_id=calibration_id,
-        operator=record.operator,
-        measured_at=record.measured_at,
         received_at=dt.datetime.now(dt.UTC),
-        gloss_20_gu=record.gloss_20_gu,
-        gloss_60_gu=record.gloss_60_gu,
-        gloss_85_gu=record.gloss_85_gu,
-        haze_hu=record.haze_hu,
-        log_haze=record.log_haze,
-        doi=record.doi,
-        rspec_gu=record.rspec_gu,
         payload_sha256=sha,
         created_by_id=created_by_id,
     )

@@ -16,7 +16,7 @@ import getpass
 import os
 import uuid
 from collections.abc import Mapping, Sequence
-from typing import Final, Literal, Protocol
+from typing import Final, Literal, Protocol, Required, TypedDict
 
 import numpy as np
 
@@ -26,6 +26,7 @@ from station.ingest.schema import CalibrationRef, InstrumentRef, PanelRef, Readi
 __all__ = [
     "GlossLike",
     "InstrumentLike",
+    "ReadingTarget",
     "SpectralLike",
     "calibration_client_id",
     "operator_name",
@@ -74,6 +75,19 @@ class InstrumentLike(Protocol):
     def serial(self) -> str: ...
     @property
     def firmware(self) -> str: ...
+
+
+class ReadingTarget(TypedDict, total=False):
+    """The keywords of :func:`record_from_reading` besides the reading and its gloss, for a front that
+    passes them on (``station.scan.make_records``): who measured, which illumination block (degrees),
+    the idempotency key, the instrument's identity and the panel (by id, or by job and part)."""
+
+    operator: Required[str]
+    illumination_deg: int
+    client_id: uuid.UUID | None
+    instrument: InstrumentLike | None
+    panel_id: int | None
+    panel: PanelRef | None
 
 
 def calibration_client_id(serial: str, calibration_id: str) -> uuid.UUID:

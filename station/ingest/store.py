@@ -14,7 +14,7 @@ import datetime as dt
 import functools
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Final, Protocol
 
 from sqlalchemy import Table, select
 from sqlalchemy.dialects import postgresql, sqlite
@@ -274,26 +274,16 @@ def store_readings(
     return results
 
 
+#: The fields of a :class:`Reading` that are not ``measurements`` columns of the same name: references the
+#: store resolves (panel, instrument, calibration) and the raw payload (in the hash, not kept).
+_NOT_COLUMNS: Final = {"instrument", "calibration", "panel_id", "panel", "raw_payload_b64"}
+
+
 def reading_columns(reading: Reading) -> dict[str, Any]:
     """The ``measurements`` columns that *reading* fills by itself (its panel, instrument, calibration,
     chain and correction columns aside): client id, operator, instant, colorimetric conditions, Lab,
     spectra, gloss, illumination block, texture and the payload hash."""
-    return dict(
-        client_id=reading.client_id,
-        operator=reading.operator,
-        measured_at=reading.measured_at,
-        illuminant=reading.illuminant,
-        observer=reading.observer,
-        geometries_deg=list(reading.geometries_deg),
-        lab=[list(v) for v in reading.lab],
-        wavelengths_nm=reading.wavelengths_nm,
-        spectra=reading.spectra,
-        gloss_gu=reading.gloss_gu,
-        gloss_geometry_deg=reading.gloss_geometry_deg,
-        illumination_deg=reading.illumination_deg,
-        texture=None if reading.texture is None else [t.model_dump() for t in reading.texture],
-        payload_sha256=reading.payload_sha256(),
-    )
+    return reading.model_dump(exclude=_NOT_COLUMNS) | {"payload_sha256": reading.payload_sha256()}
 
 
 def _values(

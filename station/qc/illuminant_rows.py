@@ -17,7 +17,9 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import NotRequired, cast
+
+from typing_extensions import TypedDict
 
 from station.model.domain import aspecular_name
 from station.model.errors import ModelInputError
@@ -25,12 +27,15 @@ from station.model.illuminants import REFERENCE_ILLUMINANT, illuminant_name
 from station.qc.errors import QcInputError
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading
-from station.qc.tolerance import QcVerdict, Verdict
+from station.qc.tolerance import QcVerdict, QcVerdictWire, Verdict
 
 __all__ = [
     "IlluminantCheck",
+    "IlluminantCheckWire",
     "IlluminantRow",
+    "IlluminantRowWire",
     "PairVerdict",
+    "PairVerdictWire",
     "check_illuminants",
     "illuminant_limits",
     "parse_illuminant_limits",
@@ -91,6 +96,37 @@ def parse_illuminant_limits(text: str, field: str = _FIELD) -> dict[str, float]:
     return illuminant_limits(pairs, field)
 
 
+class IlluminantRowWire(TypedDict):
+    """The metamerism index under one test illuminant at one geometry against its limit."""
+
+    illuminant: str
+    geometry: str
+    aspecular_deg: float
+    metamerism_index: float
+    limit: float
+    verdict: Verdict
+    text: str
+
+
+class IlluminantCheckWire(TypedDict):
+    """Illuminant rows of a sample: ``fail`` when any row is above its limit."""
+
+    reference_illuminant: str
+    formula: str
+    index: str
+    limits: dict[str, float]
+    verdict: Verdict
+    reason: str
+    rows: list[IlluminantRowWire]
+
+
+class PairVerdictWire(QcVerdictWire):
+    """The D65 verdict; with illuminant rows, ``verdict`` is the worse of ``d65_verdict`` and theirs."""
+
+    d65_verdict: NotRequired[Verdict]
+    illuminants: NotRequired[IlluminantCheckWire]
+
+
 @dataclass(frozen=True)
 class IlluminantRow:
     """The metamerism index under one test illuminant at one geometry, judged against its limit."""
@@ -112,7 +148,7 @@ class IlluminantRow:
         op = "<=" if self.verdict == "pass" else ">"
         return f"{self.illuminant} {self.geometry}: MI {self.index:.2f} {op} {self.limit:.2f} {self.verdict}"
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> IlluminantRowWire:
         return {
             "illuminant": self.illuminant,
             "geometry": self.geometry,
@@ -143,7 +179,7 @@ class IlluminantCheck:
             return "every illuminant row within its limit"
         return "; ".join(r.text for r in failed)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> IlluminantCheckWire:
         return {
             "reference_illuminant": REFERENCE_ILLUMINANT,
             "formula": self.formula,
@@ -209,8 +245,8 @@ class PairVerdict:
             return self.colour.verdict
         return max(self.colour.verdict, self.illuminants.verdict, key=_ORDER.__getitem__)
 
-    def to_dict(self) -> dict[str, Any]:
-        out = self.colour.to_dict()
+    def to_dict(self) -> PairVerdictWire:
+        out = cast(PairVerdictWire, {**self.colour.to_dict()})  # the optional keys follow
         if self.illuminants is None:
             return out
         out["d65_verdict"] = self.colour.verdict

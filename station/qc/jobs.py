@@ -385,7 +385,17 @@ def job_summary(
         name = tolerance.formula if tolerance is not None else formula_name(QC_FORMULA)
     judging = _Judging(tolerance, formula, limits, average_panels, keep_outliers, texture_limits)
     out = [_part_summary(session, job, part, [r for r in rows if r.part == part], judging) for part in wanted]
-    return JobSummary(job, name, tolerance, tuple(out), dt.datetime.now(dt.UTC), limits)
+    return JobSummary(
+        job,
+        name,
+        tolerance,
+        tuple(out),
+        dt.datetime.now(dt.UTC),
+        limits,
+        texture_limits,
+        average_panels,
+        average_panels and keep_outliers,
+    )
 
 
 @dataclass(frozen=True)

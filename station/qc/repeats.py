@@ -28,13 +28,23 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from typing_extensions import TypedDict
 
 from station.model.domain import QC_OUTLIER_SCALE_FLOOR, QC_OUTLIER_Z, aspecular_name
 from station.qc.errors import QcInputError
 from station.qc.readings import Reading, common_angles, lab_at
 from station.qc.texture import mean_texture
 
-__all__ = ["GeometryBias", "InstrumentCorrelation", "RepeatSummary", "correlate", "summarise"]
+__all__ = [
+    "GeometryBias",
+    "InstrumentCorrelation",
+    "RepeatGeometryWire",
+    "RepeatReadingWire",
+    "RepeatSummary",
+    "RepeatSummaryWire",
+    "correlate",
+    "summarise",
+]
 
 #: 1.4826 · MAD estimates the standard deviation of normally distributed data (1 / Φ⁻¹(3/4)).
 MAD_TO_SIGMA = 1.4826
@@ -42,6 +52,36 @@ MAD_TO_SIGMA = 1.4826
 
 def _round(x: float | None) -> float | None:
     return None if x is None or not math.isfinite(x) else float(x)
+
+
+class RepeatGeometryWire(TypedDict):
+    """Mean L*, a*, b* at one geometry, their sample sd and the RMS ΔE*ab to the mean (None for N = 1)."""
+
+    geometry: str
+    aspecular_deg: float
+    mean: list[float]
+    sd: list[float] | None
+    sd_de: float | None
+
+
+class RepeatReadingWire(TypedDict):
+    """One repeat reading (by its index among the N): mean ΔE*ab to the median centre, robust z, flag."""
+
+    index: int
+    de_to_centre: float
+    robust_z: float | None
+    outlier: bool
+
+
+class RepeatSummaryWire(TypedDict):
+    """N repeat readings: per-geometry mean and sd, each reading's robust z, the outliers and the rule."""
+
+    n: int
+    per_geometry: list[RepeatGeometryWire]
+    readings: list[RepeatReadingWire]
+    outliers: list[int]
+    mean_without_outliers: list[list[float]]
+    rule: str
 
 
 @dataclass(frozen=True)
@@ -62,8 +102,8 @@ class RepeatSummary:
     def geometries(self) -> tuple[str, ...]:
         return tuple(aspecular_name(a) for a in self.aspecular_deg)
 
-    def to_dict(self) -> dict[str, Any]:
-        per = []
+    def to_dict(self) -> RepeatSummaryWire:
+        per: list[RepeatGeometryWire] = []
         for i, g in enumerate(self.geometries):
             per.append(
                 {

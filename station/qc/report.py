@@ -508,7 +508,8 @@ def write_trend_png(summary: JobSummary, part: str, path: str | Path, dpi: int =
         ax.set_ylabel(f"ΔE ({summary.formula})")
     else:
         spc = part_spc(summary, part)
-        fig = plt.figure(figsize=(10, 2.4 * max(1, len(spc.geometries)) + 0.8), constrained_layout=True)
+        n = len(spc.geometries) + len(spc.texture)
+        fig = plt.figure(figsize=(10, 2.4 * max(1, n) + 0.8), constrained_layout=True)
         draw_spc(fig, spc)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)

@@ -1,23 +1,144 @@
 """The results of a job's QC: a measurement found, a part's standard, a sample's verdict, a part, a job.
 
-Frozen dataclasses with ``to_dict()`` (what ``station qc summary --json`` and the service answer),
-built by :func:`station.qc.jobs.search_measurements` and :func:`station.qc.jobs.job_summary`.
+Frozen dataclasses with ``to_dict()``, built by :func:`station.qc.jobs.search_measurements` and
+:func:`station.qc.jobs.job_summary`. What ``to_dict()`` returns is typed by the ``*Wire`` TypedDicts
+below: they are the one definition of the wire form, which ``station qc summary --json`` prints and the
+service answers (its response models are these TypedDicts, :mod:`station.api.schemas.qc`). The part and
+the job are generic in their sample's form, so the service can add what it pairs with a sample (its gloss
+reading) without a second copy of the fields.
 """
 
 from __future__ import annotations
 
 import datetime as dt
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Generic, NotRequired, TypeVar, cast
 
-from station.qc.illuminant_rows import IlluminantCheck, PairVerdict
+from typing_extensions import TypedDict
+
+from station.qc.illuminant_rows import IlluminantCheck, PairVerdict, PairVerdictWire
 from station.qc.panels import PanelMean
 from station.qc.readings import Reading
-from station.qc.repeats import RepeatSummary
-from station.qc.texture import TextureVerdict
+from station.qc.repeats import RepeatSummary, RepeatSummaryWire
+from station.qc.texture import TextureTolerance, TextureVerdict, TextureVerdictWire
 from station.qc.tolerance import QcVerdict, ToleranceSet, Verdict
 
-__all__ = ["JobSummary", "MeasurementRow", "PartSummary", "SampleResult", "StandardInfo"]
+__all__ = [
+    "JobSummary",
+    "JobSummaryWire",
+    "LeftOutWire",
+    "MeasurementRow",
+    "MeasurementRowWire",
+    "PartSummary",
+    "PartSummaryWire",
+    "SampleResult",
+    "SampleWire",
+    "StandardInfo",
+    "StandardWire",
+    "left_out_readings",
+]
+
+
+class MeasurementRowWire(TypedDict):
+    """A stored measurement with its panel's job and part: Lab (D65/10°) per geometry, oldest first."""
+
+    measurement_id: int
+    measured_at: str
+    instrument: str
+    operator: str
+    panel_id: int | None
+    job: str | None
+    part: str | None
+    geometries: list[str]
+    lab: list[list[float]]
+
+
+class LeftOutWire(TypedDict):
+    """A repeat reading left out of a panel's mean: its robust z (above the outlier threshold) and its
+    mean ΔE*ab to the median reading (:mod:`station.qc.repeats`)."""
+
+    measurement_id: int
+    robust_z: float | None
+    de_to_centre: float
+
+
+class StandardWire(TypedDict):
+    """A part's standard as judged: its ids, its Lab at the samples' geometries and, when averaged, the
+    readings averaged and those left out."""
+
+    job: str
+    part: str
+    measurement_id: int | None
+    design_id: int | None
+    created_at: str
+    geometries: list[str]
+    lab: list[list[float]]
+    measurement_ids: list[int]
+    left_out: list[int]
+    left_out_readings: list[LeftOutWire]
+
+
+class SampleWire(MeasurementRowWire):
+    """A sample and its verdict: ``qc`` (per-geometry ΔE and the limit used there), ``overall`` (the worst
+    of colour, illuminant rows and texture), ``texture`` (ΔS/ΔG within one vendor, with limits); for a
+    panel averaged, its repeat statistics, every reading and those left out of the mean."""
+
+    qc: PairVerdictWire
+    overall: Verdict
+    texture: NotRequired[TextureVerdictWire]
+    repeats: NotRequired[RepeatSummaryWire]
+    measurement_ids: NotRequired[list[int]]
+    left_out: NotRequired[list[int]]
+    left_out_readings: NotRequired[list[LeftOutWire]]
+
+
+S = TypeVar("S", bound=SampleWire)
+P = TypeVar("P")
+
+
+class PartSummaryWire(TypedDict, Generic[S]):
+    """A part: its standard (``null`` when none is set), pass/warn/fail counts, samples and those unjudged."""
+
+    part: str
+    standard: StandardWire | None
+    counts: dict[str, int]
+    samples: list[S]
+    unjudged: list[int]
+    note: str
+
+
+class JobSummaryWire(TypedDict, Generic[P]):
+    """Every part of a job with its standard and each sample's verdict, oldest sample first; the tolerance
+    set used (per-geometry limits) and the texture limits (ΔS, ΔG) when texture was judged."""
+
+    job: str
+    formula: str
+    tolerance: dict[str, object] | None
+    counts: dict[str, int]
+    parts: list[P]
+    generated_at: str
+    illuminant_limits: dict[str, float] | None
+    texture_limits: dict[str, float | None] | None
+    averaged: bool
+    outliers_kept: bool
+
+
+def left_out_readings(
+    repeats: RepeatSummary | None, measurement_ids: Sequence[int], left_out: Sequence[int]
+) -> list[LeftOutWire]:
+    """The readings *left_out* of a mean with their robust z and ΔE*ab to the centre (*measurement_ids*
+    are the readings in the order *repeats* summarised them)."""
+    if repeats is None:
+        return []
+    out: list[LeftOutWire] = []
+    for mid, z, de in zip(measurement_ids, repeats.robust_z, repeats.reading_de, strict=True):
+        if mid in left_out:
+            out.append(
+                {"measurement_id": mid, "robust_z": z if math.isfinite(z) else None, "de_to_centre": de}
+            )
+    return out
 
 
 @dataclass(frozen=True)
@@ -33,7 +154,7 @@ class MeasurementRow:
     measured_at: dt.datetime
     reading: Reading
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> MeasurementRowWire:
         return {
             "measurement_id": self.measurement_id,
             "panel_id": self.panel_id,
@@ -61,7 +182,7 @@ class StandardInfo:
     curve: Reading | None = None
     averaged: PanelMean[MeasurementRow] | None = None
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> StandardWire:
         avg = self.averaged
         return {
             "job": self.job,
@@ -73,6 +194,9 @@ class StandardInfo:
             "lab": [list(r) for r in self.reading.lab],
             "measurement_ids": [] if avg is None else list(avg.measurement_ids),
             "left_out": [] if avg is None else list(avg.left_out),
+            "left_out_readings": []
+            if avg is None
+            else left_out_readings(avg.repeats, avg.measurement_ids, avg.left_out),
         }
 
 
@@ -103,15 +227,17 @@ class SampleResult:
         rank = {"pass": 0, "warn": 1, "fail": 2}
         return colour if rank[colour] >= rank[self.texture.verdict] else self.texture.verdict
 
-    def to_dict(self) -> dict[str, Any]:
-        out = {**self.row.to_dict(), "qc": PairVerdict(self.verdict, self.illuminants).to_dict()}
-        out["overall"] = self.overall
+    def to_dict(self) -> SampleWire:
+        verdict = PairVerdict(self.verdict, self.illuminants).to_dict()
+        # the row's keys and the two required ones; mypy cannot see a ** item's keys as complete
+        out = cast(SampleWire, {**self.row.to_dict(), "qc": verdict, "overall": self.overall})
         if self.texture is not None:
             out["texture"] = self.texture.to_dict()
         if self.repeats is not None:
             out["repeats"] = self.repeats.to_dict()
             out["measurement_ids"] = list(self.measurement_ids)
             out["left_out"] = list(self.left_out)
+            out["left_out_readings"] = left_out_readings(self.repeats, self.measurement_ids, self.left_out)
         return out
 
 
@@ -131,7 +257,7 @@ class PartSummary:
             out[s.overall] += 1
         return out
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> PartSummaryWire[SampleWire]:
         return {
             "part": self.part,
             "standard": None if self.standard is None else self.standard.to_dict(),
@@ -152,6 +278,9 @@ class JobSummary:
     parts: tuple[PartSummary, ...]
     generated_at: dt.datetime
     illuminant_limits: dict[str, float] | None = None
+    texture_limits: TextureTolerance | None = None
+    averaged: bool = False
+    outliers_kept: bool = False
 
     def counts(self) -> dict[str, int]:
         out = {"pass": 0, "warn": 0, "fail": 0}
@@ -160,7 +289,8 @@ class JobSummary:
                 out[k] += v
         return out
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JobSummaryWire[PartSummaryWire[SampleWire]]:
+        tex = self.texture_limits
         return {
             "job": self.job,
             "formula": self.formula,
@@ -169,4 +299,7 @@ class JobSummary:
             "parts": [p.to_dict() for p in self.parts],
             "generated_at": self.generated_at.isoformat(),
             "illuminant_limits": self.illuminant_limits,
+            "texture_limits": None if tex is None else {"ds": tex.ds, "dg": tex.dg},
+            "averaged": self.averaged,
+            "outliers_kept": self.outliers_kept,
         }

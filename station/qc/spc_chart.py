@@ -1,6 +1,6 @@
 """The SPC chart of a part as a figure: ΔE per geometry with centre, control limits, tolerance and rule hits.
 
-One panel per geometry (:class:`station.qc.spc_part.PartSpc`): the points in time order, the centre line
+One panel per geometry, then one per texture quantity of one vendor (|ΔS|, |ΔG| against their limits) (:class:`station.qc.spc_part.PartSpc`): the points in time order, the centre line
 and the control limits from the baseline (shaded), the ΔE limit the samples were judged with, every
 point a run rule names ringed red and labelled with the rule (WE1…4, N1…8), and a drift marked with an
 arrow at the point that flagged it. Used by ``station qc spc --out`` and the report's SPC page.
@@ -70,8 +70,10 @@ def _panel(ax: Axes, g: GeometrySpc, subgroup: int) -> None:
             color="#8e44ad",
             ha="right",
         )
-    what = "ΔE" if subgroup == 1 else f"mean ΔE of {subgroup}"
-    ax.set_ylabel(f"{what} {g.geometry}", fontsize=8)
+    what = "|Δ|" if g.quantity != "ΔE" else "ΔE"
+    what = what if subgroup == 1 else f"mean {what} of {subgroup}"
+    name = g.geometry if g.quantity == "ΔE" else f"{g.label} ({g.vendor})"
+    ax.set_ylabel(f"{what} {name}", fontsize=8)
     ax.set_ylim(0, 1.2 * max(tops) or 1.0)
     ax.tick_params(labelsize=7)
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
@@ -80,15 +82,17 @@ def _panel(ax: Axes, g: GeometrySpc, subgroup: int) -> None:
 
 
 def draw_spc(fig: Figure, spc: PartSpc) -> None:
-    """Draw *spc* on *fig*, one panel per geometry (module docstring)."""
-    n = len(spc.geometries)
-    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
-    for ax, g in zip(axes, spc.geometries, strict=True):
+    """Draw *spc* on *fig*, one panel per geometry, then one per texture quantity (module docstring)."""
+    charts = (*spc.geometries, *spc.texture)
+    axes = fig.subplots(len(charts), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, g in zip(axes, charts, strict=True):
         _panel(ax, g, spc.subgroup)
     axes[-1].set_xlabel("sample (oldest first)" if spc.subgroup == 1 else "subgroup (oldest first)")
     chart = "individuals chart, σ = MR̄/d₂" if spc.subgroup == 1 else f"X̄/R chart, subgroups of {spc.subgroup}"
     fig.suptitle(
-        f"{spc.job} / {spc.part}: SPC of ΔE ({chart}; Western Electric and Nelson rules)", fontsize=10
+        f"{spc.job} / {spc.part}: SPC of ΔE{' and texture' if spc.texture else ''} ({chart}; Western Electric "
+        "and Nelson rules)",
+        fontsize=10,
     )
 
 
@@ -97,7 +101,8 @@ def write_spc_png(spc: PartSpc, path: str | Path, dpi: int = 110) -> Path:
     out = Path(path)
     if out.suffix.lower() != ".png" or not out.parent.is_dir():
         raise QcInputError("out", "a .png file in an existing folder", str(out))
-    fig = plt.figure(figsize=(10, 2.4 * max(1, len(spc.geometries)) + 0.8), constrained_layout=True)
+    n = len(spc.geometries) + len(spc.texture)
+    fig = plt.figure(figsize=(10, 2.4 * max(1, n) + 0.8), constrained_layout=True)
     draw_spc(fig, spc)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)

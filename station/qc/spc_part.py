@@ -7,6 +7,12 @@ with at that geometry (:attr:`station.qc.tolerance.GeometryVerdict.limit`), over
 (capability presumes a process in control: the points after the baseline are what the rules judge). **Drift** is a rising trend
 or shift hit (:func:`station.qc.spc.drift_hits`); it is reported with the first sample that failed,
 so a report says whether the drift was flagged before the fail.
+
+**Texture** (a summary judged with texture limits, :mod:`station.qc.texture`): each texture quantity of
+one vendor at one geometry (sparkle intensity, area and grade per geometry; graininess per sample) is
+charted the same way, its points |Δ| = |sample − standard| in the vendor's units, its tolerance ΔS or ΔG
+the limit, with the same rules, capability and drift. Values of another vendor are never judged against
+the standard (:class:`~station.qc.texture.TextureVendorError`), so a chart never mixes vendors.
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ from station.qc.spc import (
     individuals_chart,
     xbar_r_chart,
 )
+from station.qc.texture import TextureRow
 
 __all__ = ["GeometrySpc", "PartSpc", "part_spc", "sample_name"]
 
@@ -42,13 +49,26 @@ def sample_name(s: SampleResult) -> str:
 
 @dataclass(frozen=True)
 class GeometrySpc:
-    """One geometry's chart, capability (None without a limit) and drift hits, with the first failure."""
+    """One geometry's chart, capability (None without a limit) and drift hits, with the first failure.
+
+    *quantity* is what is charted: ``ΔE``, or a texture quantity with its tolerance (``ΔS sparkle
+    intensity``, ``ΔG graininess``) and its *vendor*; *geometry* is ``""`` for a per-sample texture value.
+    """
 
     geometry: str
     chart: Chart
     capability: Capability | None
     drift: tuple[RuleHit, ...]
     first_fail: int | None
+    quantity: str = "ΔE"
+    vendor: str = ""
+
+    @property
+    def label(self) -> str:
+        """The chart's name: the geometry for ΔE, else the quantity at its geometry (or ``sample``)."""
+        if self.quantity == "ΔE":
+            return self.geometry
+        return f"{self.quantity} {self.geometry or 'sample'}"
 
     @property
     def drift_before_fail(self) -> bool:
@@ -59,6 +79,8 @@ class GeometrySpc:
     def to_dict(self) -> dict[str, Any]:
         return {
             "geometry": self.geometry,
+            "quantity": self.quantity,
+            "vendor": self.vendor,
             "chart": self.chart.to_dict(),
             "capability": None if self.capability is None else self.capability.to_dict(),
             "drift": [h.to_dict() for h in self.drift],
@@ -77,6 +99,7 @@ class PartSpc:
     baseline: int | None
     subgroup: int
     geometries: tuple[GeometrySpc, ...]
+    texture: tuple[GeometrySpc, ...] = ()
 
     def drift_lines(self) -> list[str]:
         """Per geometry with a drift: where it was first flagged, by which rules, and whether before a fail.
@@ -85,7 +108,7 @@ class PartSpc:
         """
         out = []
         step = self.subgroup
-        for g in self.geometries:
+        for g in (*self.geometries, *self.texture):
             first = min((p for h in g.drift for p in h.points), default=None)
             if first is None:
                 continue
@@ -96,7 +119,7 @@ class PartSpc:
             else:
                 when = "before" if first < g.first_fail else "at or after"
                 fail = f"{when} the first fail (sample #{g.first_fail * step + step})"
-            out.append(f"{g.geometry}: drift from sample #{at + 1} ({self.samples[at]}) by {rules}; {fail}")
+            out.append(f"{g.label}: drift from sample #{at + 1} ({self.samples[at]}) by {rules}; {fail}")
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -108,6 +131,7 @@ class PartSpc:
             "baseline": "all points" if self.baseline is None else self.baseline,
             "chart": "individuals" if self.subgroup == 1 else f"X̄/R, subgroups of {self.subgroup}",
             "geometries": [g.to_dict() for g in self.geometries],
+            "texture": [g.to_dict() for g in self.texture],
             "drift": self.drift_lines(),
         }
 
@@ -121,20 +145,51 @@ def _part(summary: JobSummary, part: str) -> PartSummary:
     return match[0]
 
 
+def _spc(
+    values: Sequence[float],
+    verdicts: Sequence[str | None],
+    limit: float | None,
+    baseline: int | None,
+    subgroup: int,
+) -> tuple[Chart, Capability | None, int | None]:
+    """The chart of *values* (time order), its capability against *limit* over the baseline, and the
+    first point (subgroup) whose verdict is ``fail``."""
+    chart = individuals_chart(values, baseline) if subgroup == 1 else xbar_r_chart(values, subgroup, baseline)
+    fails = [i for i, v in enumerate(verdicts) if v == "fail"]
+    first_fail = None if not fails else fails[0] // subgroup
+    base = values[: chart.baseline * subgroup]  # capability of the in-control baseline period
+    cap = None if limit is None else capability(base, limit, chart.sigma_process)
+    return chart, cap, first_fail
+
+
 def _geometry(samples: Sequence[SampleResult], name: str, baseline: int | None, subgroup: int) -> GeometrySpc:
     by = [next((g for g in s.verdict.per_geometry if g.geometry == name), None) for s in samples]
     got = [g for g in by if g is not None]
-    values = [g.de for g in got]
-    if subgroup == 1:
-        chart = individuals_chart(values, baseline)
-    else:
-        chart = xbar_r_chart(values, subgroup, baseline)
-    fails = [i for i, g in enumerate(got) if g.verdict == "fail"]
-    first_fail = None if not fails else fails[0] // subgroup
-    limit = got[0].limit
-    base = values[: chart.baseline * subgroup]  # capability of the in-control baseline period
-    cap = None if limit is None else capability(base, limit, chart.sigma_process)
+    chart, cap, first_fail = _spc(
+        [g.de for g in got], [g.verdict for g in got], got[0].limit, baseline, subgroup
+    )
     return GeometrySpc(name, chart, cap, drift_hits(chart), first_fail)
+
+
+def _texture(samples: Sequence[SampleResult], baseline: int | None, subgroup: int) -> tuple[GeometrySpc, ...]:
+    """One chart per judged texture quantity (vendor, name, geometry); a quantity judged on fewer samples than
+    two subgroups, or than the baseline, has none."""
+    series: dict[tuple[str, str, str], list[TextureRow]] = {}
+    for s in samples:
+        if s.texture is None:
+            continue
+        for r in s.texture.rows:
+            if r.delta is not None and r.verdict is not None:
+                series.setdefault((s.texture.vendor, r.name, r.geometry), []).append(r)
+    out = []
+    for (vendor, name, geometry), rows in series.items():
+        if len(rows) < max(2, baseline or 0) * subgroup:
+            continue
+        values = [abs(r.delta) for r in rows if r.delta is not None]
+        chart, cap, first_fail = _spc(values, [r.verdict for r in rows], rows[0].limit, baseline, subgroup)
+        quantity = f"{rows[0].tolerance} {name}"
+        out.append(GeometrySpc(geometry, chart, cap, drift_hits(chart), first_fail, quantity, vendor))
+    return tuple(out)
 
 
 def part_spc(summary: JobSummary, part: str, baseline: int | None = None, subgroup: int = 1) -> PartSpc:
@@ -154,4 +209,6 @@ def part_spc(summary: JobSummary, part: str, baseline: int | None = None, subgro
     for s in samples:
         names += [g.geometry for g in s.verdict.per_geometry if g.geometry not in names]
     geoms = tuple(_geometry(samples, n, baseline, subgroup) for n in names)
-    return PartSpc(summary.job, part, tuple(sample_name(s) for s in samples), baseline, subgroup, geoms)
+    texture = _texture(samples, baseline, subgroup)
+    trials = tuple(sample_name(s) for s in samples)
+    return PartSpc(summary.job, part, trials, baseline, subgroup, geoms, texture)

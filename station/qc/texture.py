@@ -23,16 +23,20 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from typing_extensions import TypedDict
+
 from station.model.domain import QC_WARN_FRACTION
 from station.qc.errors import QcInputError
 from station.qc.tolerance import Verdict
 
 __all__ = [
     "TextureRow",
+    "TextureRowWire",
     "TextureTolerance",
     "TextureValue",
     "TextureVendorError",
     "TextureVerdict",
+    "TextureVerdictWire",
     "judge_texture",
     "mean_texture",
     "parse_texture_limits",
@@ -130,6 +134,28 @@ def parse_texture_limits(text: str) -> TextureTolerance:
     return TextureTolerance(limits.get("ds"), limits.get("dg"))
 
 
+class TextureRowWire(TypedDict):
+    """One texture quantity (vendor units): standard, sample, Δ, the tolerance (``ΔS``/``ΔG``, ``""``
+    none) and its limit used, and the verdict (``None``: unjudged)."""
+
+    name: str
+    geometry: str
+    tolerance: str
+    limit: float | None
+    verdict: Verdict | None
+    standard: float | None
+    sample: float | None
+    delta: float | None
+
+
+class TextureVerdictWire(TypedDict):
+    """The texture verdict within one vendor: the worst judged row and every row."""
+
+    verdict: Verdict
+    vendor: str
+    rows: list[TextureRowWire]
+
+
 @dataclass(frozen=True)
 class TextureRow:
     """One texture quantity: standard, sample, Δ, the tolerance used and the verdict (None: unjudged)."""
@@ -143,7 +169,7 @@ class TextureRow:
     limit: float | None
     verdict: Verdict | None
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> TextureRowWire:
         return {
             "name": self.name,
             "geometry": self.geometry,
@@ -164,7 +190,7 @@ class TextureVerdict:
     vendor: str
     rows: tuple[TextureRow, ...]
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> TextureVerdictWire:
         return {"verdict": self.verdict, "vendor": self.vendor, "rows": [r.to_dict() for r in self.rows]}
 
 

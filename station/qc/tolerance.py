@@ -38,6 +38,7 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from typing_extensions import TypedDict
 
 from station.model.difference import (
     DIN_DEFAULT_FACTORS,
@@ -68,7 +69,9 @@ __all__ = [
     "FORMULAS",
     "GeometryLimits",
     "GeometryVerdict",
+    "GeometryVerdictWire",
     "QcVerdict",
+    "QcVerdictWire",
     "ToleranceSet",
     "Verdict",
     "judge",
@@ -341,6 +344,36 @@ class ToleranceSet:
         return cls(tuple(geoms), din_factors=factors, **kwargs)
 
 
+class GeometryVerdictWire(TypedDict):
+    """One geometry's differences (sample − standard, CIELAB units), the ΔE limit used there (in the
+    formula's units; ``None`` under ``mean`` aggregation without a per-geometry limit) and the verdict."""
+
+    geometry: str
+    aspecular_deg: float
+    dL: float
+    da: float
+    db: float
+    dC: float
+    dH: float
+    dE: float
+    limit: float | None
+    verdict: Verdict
+    reasons: list[str]
+
+
+class QcVerdictWire(TypedDict):
+    """Overall verdict with the reason, per-geometry verdicts, mean and max ΔE and the worst geometry."""
+
+    verdict: Verdict
+    reason: str
+    formula: str
+    aggregation: str
+    per_geometry: list[GeometryVerdictWire]
+    mean_de: float
+    max_de: float
+    worst_geometry: str
+
+
 @dataclass(frozen=True)
 class GeometryVerdict:
     """Differences and verdict at one geometry (sample minus standard, CIELAB units)."""
@@ -357,7 +390,7 @@ class GeometryVerdict:
     reasons: tuple[str, ...]
     limit: float | None = None
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> GeometryVerdictWire:
         return {
             "geometry": self.geometry,
             "aspecular_deg": self.aspecular_deg,
@@ -386,7 +419,7 @@ class QcVerdict:
     max_de: float
     worst_geometry: str
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> QcVerdictWire:
         return {
             "verdict": self.verdict,
             "reason": self.reason,

@@ -21,9 +21,7 @@ from typing import TYPE_CHECKING, Protocol
 from station.scan.result import GlossReceipt, GlossStatus, ScanResult
 
 if TYPE_CHECKING:
-    from sqlalchemy.orm import Session, sessionmaker
-
-    from station.ingest import GlossRecord, Ingestor, Reading, Receipt
+    from station.ingest import DatabaseDestination, GlossRecord, Ingestor, Reading, Receipt
 
 __all__ = ["DatabaseTarget", "ScanTarget", "prior", "store"]
 
@@ -72,31 +70,25 @@ class DatabaseTarget:
     def enqueue(self, reading: Reading, reason: str) -> Receipt:
         return self.ingestor.enqueue(reading, reason)
 
-    def _sessions(self) -> sessionmaker[Session]:
+    def _database(self) -> DatabaseDestination:
         from station.ingest import DatabaseDestination
 
         destination = self.ingestor.destination
         if not isinstance(destination, DatabaseDestination):
             raise TypeError(f"{destination.where} is not a database")
-        return destination.sessions()
+        return destination
 
     def submit_gloss(self, record: GlossRecord, *, actor_id: int | None = None) -> GlossReceipt:
         from station.ingest import store_gloss
 
-        with self._sessions().begin() as session:
+        with self._database().sessions().begin() as session:
             result = store_gloss(session, record, created_by_id=actor_id)
         status: GlossStatus = "stored" if result.created else "duplicate"
         return GlossReceipt(str(record.client_id), status, result.measurement_id)
 
     def find_gloss(self, client_id: uuid.UUID) -> int | None:
         """The gloss reading stored under *client_id*, or ``None``."""
-        from sqlalchemy import select
-
-        from db.models import GlossReading
-
-        with self._sessions()() as session:
-            found = session.scalar(select(GlossReading.id).where(GlossReading.client_id == client_id))
-        return None if found is None else int(found)
+        return self._database().find_gloss(client_id)
 
     def prior(self, client_id: uuid.UUID, *, away: bool = False) -> Receipt | GlossReceipt | None:
         """What an earlier attempt under *client_id* left: the colour reading stored (``duplicate``) or

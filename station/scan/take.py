@@ -9,15 +9,14 @@ from __future__ import annotations
 
 import uuid
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, Unpack
 
 from station.drivers import GlossReading, Instrument, SpectralReading
 from station.scan.errors import ScanInputError
 from station.scan.result import ScanResult
 
 if TYPE_CHECKING:
-    from station.ingest import PanelRef
-    from station.ingest.records import InstrumentLike
+    from station.ingest.records import ReadingTarget
 
 __all__ = ["GLOSS_GEOMETRY_DEG", "Progress", "gloss_client_id", "make_records", "take"]
 
@@ -70,16 +69,12 @@ def take(
 def make_records(
     result: ScanResult,
     *,
-    operator: str,
-    illumination_deg: int = 45,
-    client_id: uuid.UUID | None = None,
-    instrument: InstrumentLike | None = None,
-    panel_id: int | None = None,
-    panel: PanelRef | None = None,
     measurement_id: int | None = None,
     refused: Literal["raise", "note"] = "raise",
+    **target: Unpack[ReadingTarget],
 ) -> ScanResult:
-    """*result* with its ingest records.
+    """*result* with its ingest records; *target* holds the keywords of ``record_from_reading``
+    (``operator`` required; ``illumination_deg``, ``client_id``, ``instrument``, ``panel_id``, ``panel``).
 
     Colour: ``record_from_reading`` of the *illumination_deg* block (degrees) with the paired meter's
     60° gloss (GU), under *client_id* (a fresh one by default), on *panel_id* or *panel*; the gloss
@@ -99,23 +94,14 @@ def make_records(
                 return result
             gloss_only = gloss_record_from_reading(
                 result.gloss,
-                operator=operator,
-                client_id=client_id,
-                panel_id=panel_id,
-                panel=panel,
+                operator=target["operator"],
+                client_id=target.get("client_id"),
+                panel_id=target.get("panel_id"),
+                panel=target.get("panel"),
                 measurement_id=measurement_id,
             )
             return replace(result, gloss_record=gloss_only)
-        record = record_from_reading(
-            result.colour,
-            operator=operator,
-            illumination_deg=illumination_deg,
-            client_id=client_id,
-            instrument=instrument,
-            panel_id=panel_id,
-            panel=panel,
-            gloss=result.gloss,
-        )
+        record = record_from_reading(result.colour, gloss=result.gloss, **target)
     except ValueError as exc:
         if refused == "raise":
             raise
@@ -123,6 +109,6 @@ def make_records(
     gloss_record = None
     if result.gloss is not None:
         gloss_record = gloss_record_from_reading(
-            result.gloss, operator=operator, client_id=gloss_client_id(record.client_id)
+            result.gloss, operator=target["operator"], client_id=gloss_client_id(record.client_id)
         )
     return replace(result, record=record, gloss_record=gloss_record)

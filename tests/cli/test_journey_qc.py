@@ -20,7 +20,6 @@ import os
 import re
 import subprocess
 import sys
-import zlib
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +29,7 @@ import pytest
 
 from station.ingest.formats import read_measurement_file, write_measurement_file
 from station.ingest.formats.measurement import ImportedMeasurement
+from tests.pdf_text import pdf_text
 from tests.processes import Child
 from tests.user_cli import REPO, run_station
 from tests.waiting import wait_until
@@ -104,21 +104,6 @@ def _watch(work: Path, inbox: Path, url: str) -> None:
         assert not list((inbox / "rejected").glob("*"))
 
 
-def _pdf_text(pdf: bytes) -> str:
-    """The text drawn on the PDF's pages: the strings of every ``Tj``/``TJ`` of its (deflated) content
-    streams, a ``TJ`` array's parts joined (a kerned word is split there)."""
-    out: list[str] = []
-    for m in re.finditer(rb"stream\r?\n(.*?)\r?\nendstream", pdf, re.S):
-        try:
-            body = zlib.decompress(m.group(1))
-        except zlib.error:
-            body = m.group(1)
-        for arr in re.finditer(rb"\[(.*?)\]\s*TJ|\((.*?)\)\s*Tj", body, re.S):
-            parts = re.findall(rb"\(((?:\\.|[^\\)])*)\)", arr.group(1) or b"(" + arr.group(2) + b")")
-            out.append(b"".join(parts).decode("latin-1"))
-    return "\n".join(out)
-
-
 @pytest.fixture
 def journey(tmp_path: Path) -> dict[str, Any]:
     work = tmp_path / "lab"
@@ -181,7 +166,7 @@ def test_the_qc_day_from_the_simulator_to_the_report(journey: dict[str, Any]) ->
     station(work, "qc", "report", "--job", JOB, "--out", "report.pdf", *avg)
     pdf = (work / "report.pdf").read_bytes()
     assert pdf.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page\b(?!s)", pdf)) > 0
-    text = _pdf_text(pdf)
+    text = pdf_text(pdf)
     trials = [f"panel {t['panel_id']}, {PART}, {JOB}" for t in summary["parts"][0]["samples"]]
     for name in trials:  # every trial by its panel, part and job (the report's trial names)
         assert name in text, f"{name!r} not in the report's text"

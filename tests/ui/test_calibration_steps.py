@@ -65,3 +65,57 @@ def test_failing_white_tile_names_the_step(qtbot, screen):
     assert "ERROR" in screen.log.toPlainText()
     inst = screen.session.instrument
     assert inst is not None and inst.status().needed == "white"
+
+
+def test_busy_from_a_prompt_closing_to_its_step_starting(qtbot, screen):
+    """The white tile's prompt is answered the moment it opens, while the black trap's worker is still
+    ending (its ``finished`` not yet delivered): the state line reads the white tile's reading at once,
+    and the screen never reads idle until the calibration's outcome, however the two workers' ends
+    interleave."""
+    from PySide6.QtCore import QObject, Qt, Slot
+    from PySide6.QtTest import QTest
+    from PySide6.QtWidgets import QMessageBox
+
+    ok = QMessageBox.StandardButton.Ok
+    _connect(screen, "sim:ma6")
+    QTest.mouseClick(screen.calibrate_btn, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: screen.prompt is not None and screen.prompt.isVisible(), timeout=10000)
+    QTest.mouseClick(screen.prompt.button(ok), Qt.MouseButton.LeftButton)  # the black trap: its step runs
+    zero = screen.task
+    assert zero is not None and not screen.idle
+    seen: dict[str, object] = {}
+    idle_while_calibrating: list[str] = []
+
+    class Answer(QObject):
+        """Answers the white tile's prompt as soon as the screen has opened it (a slot after the screen's)."""
+
+        @Slot(object)
+        def on_zero_done(self, _result: object) -> None:
+            box = screen.prompt
+            assert box is not None and box.windowTitle() == "White tile"
+            QTest.mouseClick(box.button(ok), Qt.MouseButton.LeftButton)
+            seen["state"], seen["idle"] = screen.state.text(), screen.idle  # right after the prompt closed
+            seen["task"] = screen.task
+
+    answer = Answer()
+    zero.succeeded.connect(answer.on_zero_done)
+
+    def sample() -> bool:
+        if screen.calibration is not None and screen.idle:
+            idle_while_calibrating.append(screen.state.text())
+        if (
+            screen.prompt is not None
+            and screen.prompt.isVisible()
+            and screen.prompt.windowTitle() != "White tile"
+        ):
+            QTest.mouseClick(screen.prompt.button(ok), Qt.MouseButton.LeftButton)  # the verification tile
+        return screen.calibration is None and screen.idle
+
+    qtbot.waitUntil(sample, timeout=30000)
+    assert seen["state"] == "calibration: reading the white tile of sim:ma6…", screen.log.toPlainText()
+    assert seen["idle"] is False and seen["task"] is not zero
+    assert idle_while_calibrating == []
+    assert "busy: wait for the running task" not in screen.log.toPlainText()
+    assert screen.state.text() == "calibration passed", screen.log.toPlainText()
+    inst = screen.session.instrument
+    assert inst is not None and inst.status().needed is None

@@ -280,7 +280,11 @@ def test_import_and_set_the_standard_through_the_service(qtbot, tmp_path, monkey
         QTest.mouseClick(screen.judge_btn, Qt.MouseButton.LeftButton)
         screen.part.setCurrentIndex(screen.part.findText("test_panel"))
         assert [screen.standard_pick.itemData(i) for i in range(screen.standard_pick.count())] == ids
-        QTest.mouseClick(screen.set_standard_btn, Qt.MouseButton.LeftButton)  # the first: the master
+        assert screen.standard_pick.currentIndex() == -1  # nothing chosen yet: the button refuses
+        QTest.mouseClick(screen.set_standard_btn, Qt.MouseButton.LeftButton)
+        assert screen.status.text().startswith("error: standard:"), screen.status.text()
+        screen.standard_pick.setCurrentIndex(0)  # the first: the master
+        QTest.mouseClick(screen.set_standard_btn, Qt.MouseButton.LeftButton)
         assert f"standard: measurement {ids[0]}" in screen.standard.text(), screen.status.text()
         # judged again in the judged formula (CIE76): ΔE*ab of trial 2 is |offset| at every geometry
         de = math.sqrt(sum(v * v for v in TRIALS["trial 2"]))

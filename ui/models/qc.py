@@ -17,8 +17,11 @@ from urllib.parse import quote
 
 from station.errors import InputError, StationError
 from ui.models.local_db import LocalDatabase
+from ui.models.qc_views import PLAIN, Judging, outlier_lines
 
 if TYPE_CHECKING:
+    from station.qc.jobs import JobSummary
+    from station.qc.spc_part import PartSpc
     from ui.models.service import ServiceClient
 
 #: Formulas offered, product default first (names as ``station.qc.check.formula_name`` accepts them).
@@ -64,12 +67,26 @@ class QcSource(Protocol):
     @property
     def where(self) -> str: ...
     def jobs(self) -> list[JobEntry]: ...
-    def summary(self, job: str, formula: str, illuminant_limits: str | None = None) -> dict[str, Any]: ...
+    def summary(
+        self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
+    ) -> dict[str, Any]: ...
     def report(
-        self, job: str, formula: str, kind: str, path: Path, illuminant_limits: str | None = None
+        self,
+        job: str,
+        formula: str,
+        kind: str,
+        path: Path,
+        illuminant_limits: str | None = None,
+        judging: Judging = PLAIN,
     ) -> Path: ...
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]: ...
     def set_standard(self, job: str, part: str, measurement_id: int) -> None: ...
+    def spc(
+        self, job: str, part: str, formula: str, judging: Judging, baseline: int | None, subgroup: int
+    ) -> PartSpc: ...
+    def report_preview(
+        self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
+    ) -> bytes: ...
 
 
 class LocalQc(LocalDatabase):
@@ -83,18 +100,38 @@ class LocalQc(LocalDatabase):
         with self._session() as session:
             return [JobEntry(j.job, tuple(j.parts)) for j in list_jobs(session)]
 
-    def _summary(self, job: str, formula: str, illuminant_limits: str | None = None) -> Any:
+    def _summary(
+        self,
+        job: str,
+        formula: str,
+        illuminant_limits: str | None = None,
+        judging: Judging = PLAIN,
+        parts: list[str] | None = None,
+    ) -> JobSummary:
+        """``station.qc.jobs.job_summary`` as ``station qc summary`` calls it with the same options."""
         from station.qc.illuminant_rows import parse_illuminant_limits
         from station.qc.jobs import job_summary
 
         limits = None if illuminant_limits is None else parse_illuminant_limits(illuminant_limits)
         with self._session() as session:
-            return job_summary(session, job, formula=formula, illuminant_limits=limits)
+            return job_summary(
+                session,
+                job,
+                judging.tolerance_set(),
+                formula,
+                parts,
+                judging.average_panels,
+                illuminant_limits=limits,
+                keep_outliers=judging.keep_outliers,
+                texture_limits=judging.texture_tolerance(),
+            )
 
-    def summary(self, job: str, formula: str, illuminant_limits: str | None = None) -> dict[str, Any]:
+    def summary(
+        self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
+    ) -> dict[str, Any]:
         from station.ingest import gloss_of_measurements
 
-        data = self._summary(job, formula, illuminant_limits).to_dict()
+        data = self._summary(job, formula, illuminant_limits, judging).to_dict()
         samples = [s for p in data["parts"] for s in p["samples"]]
         with self._session() as session:
             gloss = gloss_of_measurements(session, [s["measurement_id"] for s in samples])
@@ -104,12 +141,34 @@ class LocalQc(LocalDatabase):
         return data
 
     def report(
-        self, job: str, formula: str, kind: str, path: Path, illuminant_limits: str | None = None
+        self,
+        job: str,
+        formula: str,
+        kind: str,
+        path: Path,
+        illuminant_limits: str | None = None,
+        judging: Judging = PLAIN,
     ) -> Path:
         from station.qc import report
 
-        summary = self._summary(job, formula, illuminant_limits)
+        summary = self._summary(job, formula, illuminant_limits, judging)
         return report.write_pdf(summary, path) if kind == "pdf" else report.write_csv(summary, path)
+
+    def spc(
+        self, job: str, part: str, formula: str, judging: Judging, baseline: int | None, subgroup: int
+    ) -> PartSpc:
+        """The part's SPC as ``station qc spc`` computes it (:func:`station.qc.spc_part.part_spc`)."""
+        from station.qc.spc_part import part_spc
+
+        return part_spc(self._summary(job, formula, None, judging, [part]), part, baseline, subgroup)
+
+    def report_preview(
+        self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
+    ) -> bytes:
+        """The PDF report's first page as PNG bytes (:func:`ui.models.qc_views.report_first_page_png`)."""
+        from ui.models.qc_views import report_first_page_png
+
+        return report_first_page_png(self._summary(job, formula, illuminant_limits, judging))
 
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
         from db.models import Measurement
@@ -156,7 +215,22 @@ class ServiceQc:
     def jobs(self) -> list[JobEntry]:
         return [JobEntry(j["job"], tuple(j["parts"])) for j in self._get("/qc/jobs").json()]
 
-    def summary(self, job: str, formula: str, illuminant_limits: str | None = None) -> dict[str, Any]:
+    def _local_only(self, judging: Judging) -> None:
+        """Refuse what the service's summary and report routes do not take (panel averaging, a
+        tolerance file, texture limits): :class:`QcSourceError` saying so, never a silently other verdict."""
+        if not judging.is_default:
+            raise self._unoffered("panel averaging, a tolerance file or texture limits")
+
+    def _unoffered(self, what: str) -> QcSourceError:
+        return QcSourceError(
+            f"{self.where}: {what}: available with the workstation's database only; "
+            "the service's QC routes do not offer it"
+        )
+
+    def summary(
+        self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
+    ) -> dict[str, Any]:
+        self._local_only(judging)
         extra = {} if illuminant_limits is None else {"illuminant_limits": illuminant_limits}
         return self._get(f"/qc/jobs/{quote(job, safe='')}/summary", formula=formula, **extra).json()
 
@@ -190,9 +264,26 @@ class ServiceQc:
         if r.status_code >= 400:
             raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
 
+    def spc(
+        self, job: str, part: str, formula: str, judging: Judging, baseline: int | None, subgroup: int
+    ) -> PartSpc:
+        raise self._unoffered("the SPC chart")
+
+    def report_preview(
+        self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
+    ) -> bytes:
+        raise self._unoffered("the report preview")
+
     def report(
-        self, job: str, formula: str, kind: str, path: Path, illuminant_limits: str | None = None
+        self,
+        job: str,
+        formula: str,
+        kind: str,
+        path: Path,
+        illuminant_limits: str | None = None,
+        judging: Judging = PLAIN,
     ) -> Path:
+        self._local_only(judging)
         extra = {} if illuminant_limits is None or kind != "pdf" else {"illuminant_limits": illuminant_limits}
         r = self._get(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula=formula, **extra)
         tmp = path.with_name(path.name + ".part")
@@ -243,6 +334,7 @@ class QcModel:
         self.summary: dict[str, Any] | None = None
         self.summary_key: tuple[str, str] | None = None
         self.illuminant_limits: str | None = None
+        self.judging = PLAIN
 
     def load_jobs(self) -> list[JobEntry]:
         """Read the jobs from the source (:class:`QcSourceError` when it cannot answer)."""
@@ -258,12 +350,15 @@ class QcModel:
         """The parts of *job* (empty when the job is unknown)."""
         return next((j.parts for j in self.jobs if j.job == job), ())
 
-    def judge(self, job: str, formula: str, illuminant_limits: str = "") -> dict[str, Any]:
+    def judge(
+        self, job: str, formula: str, illuminant_limits: str = "", judging: Judging | None = None
+    ) -> dict[str, Any]:
         """The summary of *job* in *formula* (every part); kept as :attr:`summary`.
 
         *illuminant_limits* (``"A=1.0,F11=1.5"``; blank for none) adds the illuminant rows
         (:mod:`station.qc.illuminant_rows`): a geometry whose row is over its limit fails, with the row
-        as its reason."""
+        as its reason. *judging* (:class:`~ui.models.qc_views.Judging`; the last one when ``None``):
+        panels averaged with their outliers left out or kept, the tolerance file, texture limits."""
         if formula not in FORMULAS:
             raise InputError("formula", " | ".join(FORMULAS), formula)
         if not job:
@@ -273,9 +368,11 @@ class QcModel:
             from station.qc.illuminant_rows import parse_illuminant_limits
 
             parse_illuminant_limits(limits)  # a bad entry is named before the source is asked
-        self.summary = self.source.summary(job, formula, limits)
+        how = (self.judging if judging is None else judging).checked()
+        self.summary = self.source.summary(job, formula, limits, how)
         self.summary_key = (job, formula)
         self.illuminant_limits = limits
+        self.judging = how
         return self.summary
 
     def part(self, part: str) -> dict[str, Any] | None:
@@ -351,4 +448,29 @@ class QcModel:
         if self.summary_key is None:
             raise InputError("job", "a judged job (press Judge first)", None)
         job, formula = self.summary_key
-        return self.source.report(job, formula, kind, Path(path), self.illuminant_limits)
+        return self.source.report(job, formula, kind, Path(path), self.illuminant_limits, self.judging)
+
+    def report_preview(self) -> bytes:
+        """The shown job's PDF report, its first page as PNG bytes (as judged)."""
+        if self.summary_key is None:
+            raise InputError("job", "a judged job (press Judge first)", None)
+        job, formula = self.summary_key
+        return self.source.report_preview(job, formula, self.illuminant_limits, self.judging)
+
+    def spc(self, part: str, baseline: int | None = None, subgroup: int = 1) -> PartSpc:
+        """The SPC of *part* of the judged job, judged as the table is (``station qc spc`` with the same
+        options): *baseline* points (subgroups) set the limits (all when ``None``), *subgroup* 1 is an
+        individuals chart, 2 … 10 an X̄/R chart."""
+        if self.summary_key is None:
+            raise InputError("job", "a judged job (press Judge first)", None)
+        job, formula = self.summary_key
+        return self.source.spc(job, part, formula, self.judging, baseline, subgroup)
+
+    def outliers_text(self, part: str) -> str:
+        """The readings left out of (or flagged and kept in) the part's panel means, one per line."""
+        p = self.part(part)
+        if p is None or not self.judging.average_panels:
+            return ""
+        lines = outlier_lines(p)
+        what = "kept (keep outliers on)" if self.judging.keep_outliers else "left out"
+        return "\n".join(lines) if lines else f"panels averaged: no reading flagged, none {what}"

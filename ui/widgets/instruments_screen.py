@@ -70,7 +70,7 @@ class InstrumentsScreen(QWidget):
         self.session = InstrumentSession()
         self.task: TaskThread | None = None
         self.last: Measurement | None = None
-        self.idle = True  # no task running and its result handled
+        self._task_done = True  # no task running and its result handled (see :attr:`idle`)
         self.prompt: QMessageBox | None = None  # the calibration prompt on screen (tests answer it)
         self.calibration: CalibrationSession | None = None  # the steps being asked for and run
         self._build_panel_form()
@@ -197,21 +197,32 @@ class InstrumentsScreen(QWidget):
         self.history.itemDoubleClicked.connect(self._on_history_opened)
         self.store.events.added.connect(self._on_added)
 
+    @property
+    def idle(self) -> bool:
+        """Nothing under way: no task running (its result handled) and no calibration in progress.
+
+        A calibration is busy from its first prompt to its outcome, prompts and the moments between a
+        prompt closing and its step's worker starting included, so the screen never reads idle while
+        a reference is still to be asked for or read."""
+        return self._task_done and self.calibration is None and self.prompt is None
+
     # ------------------------------------------------------------------ actions
     def _run(self, fn, done, label: str, steps: int = 0, failed=None) -> None:
         """Run *fn* in a worker; *steps* > 0: a bar of that many steps, 0: a busy bar (unknown length);
         *failed* hears the error message (default: the log and the state line)."""
         if self.task is not None and self.task.isRunning():
-            self._say("busy: wait for the running task")
-            return
+            if not self.task.result_sent:
+                self._say("busy: wait for the running task")
+                return
+            self.task.wait()  # it has sent its result and is returning: the next task may start
         if self.store.sink is not None:
             self.store.sink.prepare()  # first open + migration on the GUI thread, never in the worker
         self.progress.setRange(0, steps)
         self.progress.setValue(0)
         self.state.setText(label)
-        self.task = TaskThread(fn)
+        self.task = task = TaskThread(fn)
         self.task.progress.connect(self._on_progress)
-        self.idle = False
+        self._task_done = False
         self.task.succeeded.connect(done)
         self.task.failed.connect(failed or self._on_failed)
         self.task.cancelled.connect(self._on_cancelled)
@@ -220,7 +231,7 @@ class InstrumentsScreen(QWidget):
         # Idle only once the thread has ended and the buttons are live again: the result signal comes
         # first (the result is shown), but until ``finished`` the buttons are still disabled and a new
         # task would be refused as busy.
-        self.task.finished.connect(self._on_task_done)
+        task.finished.connect(lambda: self._on_task_done(task))
         self._sync_buttons(busy=True)
         self.task.start()
 
@@ -379,8 +390,10 @@ class InstrumentsScreen(QWidget):
             self.document.set_design(self.last.design, f"measured {self.last.panel.label}")
 
     # ------------------------------------------------------------------ results
-    def _on_task_done(self, *_args) -> None:
-        self.idle = True
+    def _on_task_done(self, task: TaskThread) -> None:
+        """*task* ended: idle again unless a newer task has started since (its end comes later)."""
+        if task is self.task:
+            self._task_done = True
 
     def _say(self, text: str) -> None:
         self.log.appendPlainText(text)

@@ -7,16 +7,27 @@ GUI thread. "Metamerism of selected" gives the metamerism index (D65 → A, F11)
 against the part's standard measurement. "Illuminant limits" (e.g. ``A=1.0,F11=1.5``) judges the samples
 under those illuminants too: a geometry whose metamerism index is over its illuminant's limit fails, the
 row named in its reason, and the PDF report gets the illuminant rows.
+
+Judging as ``station qc summary`` does: "average each panel's repeats" judges a panel once on the mean
+of its readings with the flagged outliers left out (the line under the table names each one and its
+robust z), "keep outliers" averages them in and judges again; a tolerance file
+(``station qc tolerance --json``) and texture limits (``ds=…,dg=…``: ΔS, ΔG within one vendor, the
+texture table) are optional. The SPC tab draws the part's chart as ``station qc spc`` does (individuals,
+or X̄/R with a subgroup size; baseline points; Western Electric and Nelson rule hits ringed and listed,
+Cp/Cpk per geometry, a drift flagged and whether before the first fail); the report tab previews the
+PDF report's first page once it is written.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any, cast
 
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
     QAbstractItemView,
+    QCheckBox,
     QComboBox,
     QFileDialog,
     QFormLayout,
@@ -27,6 +38,7 @@ from PySide6.QtWidgets import (
     QPushButton,
     QTableWidget,
     QTableWidgetItem,
+    QTabWidget,
     QVBoxLayout,
     QWidget,
 )
@@ -36,11 +48,25 @@ from station.errors import InputError, StationError
 from ui.models.imports import FileImport, import_files, import_filter, import_summary, importable
 from ui.models.measure_db import MeasurementSink
 from ui.models.qc import FORMULAS, QcModel, verdict_rows
+from ui.models.qc_views import Judging, texture_lines
 from ui.widgets.common import cell_text
+from ui.widgets.qc_panels import (
+    VERDICT_COLOURS,
+    SpcPage,
+    fill_texture,
+    picture,
+    scrolled,
+    show_png,
+    texture_table,
+)
 from ui.widgets.tasks import TaskThread
 
 COLUMNS = ("sample", "measured", "geometry", "ΔL*", "Δa*", "Δb*", "ΔE", "verdict", "60° GU", "reason")
-VERDICT_COLOURS = {"pass": "#b7e1b0", "warn": "#ffe08a", "fail": "#f4a09a"}
+
+
+def _signed(value: float) -> str:
+    """A difference to 0.01 with its sign; a value that rounds to zero reads +0.00, never -0.00."""
+    return f"{round(value, 2) + 0.0:+.2f}"
 
 
 class QcScreen(QWidget):
@@ -59,7 +85,9 @@ class QcScreen(QWidget):
         self._build_pickers()
         self._build_buttons()
         self._build_import()
+        self._build_judging()
         self._build_results()
+        self._build_spc()
         self._lay_out()
         self._connect()
         self.setAcceptDrops(sink is not None)
@@ -74,6 +102,7 @@ class QcScreen(QWidget):
         self.limits.setPlaceholderText("e.g. A=1.0,F11=1.5 — metamerism index limits (spectra needed)")
         self.standard_pick = QComboBox()
         self.standard_pick.setToolTip("a stored measurement of the part; selecting a table row picks it too")
+        self.standard_pick.setPlaceholderText("choose a measurement to make the new standard")
         self.set_standard_btn = QPushButton("Set as standard")
         self.set_standard_btn.setEnabled(False)
 
@@ -103,6 +132,30 @@ class QcScreen(QWidget):
         self.import_result.setWordWrap(True)
         self.import_result.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
 
+    def _build_judging(self) -> None:
+        """Averaging with its keep-outliers switch, the tolerance file and the texture limits."""
+        self.average = QCheckBox("average each panel's repeats")
+        self.average.setToolTip(
+            "judge a panel once on the mean of its readings (station qc --average-panels)"
+        )
+        self.keep_outliers = QCheckBox("keep outliers")
+        self.keep_outliers.setToolTip("average flagged readings in too (station qc --keep-outliers)")
+        self.keep_outliers.setEnabled(False)
+        self.tolerance = QLineEdit()
+        self.tolerance.setPlaceholderText("tolerance set JSON (station qc tolerance --json); blank: default")
+        self.tolerance_btn = QPushButton("…")
+        self.tolerance_btn.setMaximumWidth(32)
+        self.tolerance_btn.setToolTip("choose the tolerance set file")
+        self.texture_limits = QLineEdit()
+        self.texture_limits.setPlaceholderText("e.g. ds=1,dg=0.5 — ΔS / ΔG limits within one vendor")
+
+    def _build_spc(self) -> None:
+        """The SPC page and the report preview."""
+        self.spc = SpcPage()
+        self.preview = picture()
+        self.preview.setText("Export PDF… shows the report's first page here.")
+        self.preview_png = b""
+
     def _build_results(self) -> None:
         """The standard line, the verdict table and the status line."""
         self.standard = QLabel("Load jobs to begin.")
@@ -114,6 +167,10 @@ class QcScreen(QWidget):
         self.table.horizontalHeader().setSectionResizeMode(len(COLUMNS) - 1, QHeaderView.ResizeMode.Stretch)
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
         self.table.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
+        self.outliers = QLabel()
+        self.outliers.setWordWrap(True)
+        self.outliers.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.texture_table = texture_table()
 
     def _lay_out(self) -> None:
         """Pickers, buttons, the import row, then the standard line, table and status."""
@@ -122,6 +179,15 @@ class QcScreen(QWidget):
         form.addRow("part", self.part)
         form.addRow("formula", self.formula)
         form.addRow("illuminant limits", self.limits)
+        judging = QHBoxLayout()
+        judging.addWidget(self.average)
+        judging.addWidget(self.keep_outliers)
+        judging.addWidget(QLabel("tolerance"))
+        judging.addWidget(self.tolerance, 2)
+        judging.addWidget(self.tolerance_btn)
+        judging.addWidget(QLabel("texture"))
+        judging.addWidget(self.texture_limits, 1)
+        form.addRow("judging", judging)
         std = QHBoxLayout()
         std.addWidget(self.standard_pick, 1)
         std.addWidget(self.set_standard_btn)
@@ -139,8 +205,21 @@ class QcScreen(QWidget):
         layout.addWidget(self.import_result)
         layout.addLayout(buttons)
         layout.addWidget(self.standard)
-        layout.addWidget(self.table, 1)
+        self.views = QTabWidget()
+        self.views.addTab(self._verdicts_page(), "Verdicts")
+        self.views.addTab(self.spc, "SPC")
+        self.views.addTab(scrolled(self.preview), "Report preview")
+        layout.addWidget(self.views, 1)
         layout.addWidget(self.status)
+
+    def _verdicts_page(self) -> QWidget:
+        page = QWidget()
+        box = QVBoxLayout(page)
+        box.setContentsMargins(0, 0, 0, 0)
+        box.addWidget(self.table, 3)
+        box.addWidget(self.outliers)
+        box.addWidget(self.texture_table, 1)
+        return page
 
     def _connect(self) -> None:
         """Wire the buttons and pickers."""
@@ -154,6 +233,10 @@ class QcScreen(QWidget):
         self.set_standard_btn.clicked.connect(self.set_standard)
         self.import_btn.clicked.connect(self.ask_import)
         self.table.itemSelectionChanged.connect(self._on_row)
+        self.average.toggled.connect(self._on_average)
+        self.keep_outliers.toggled.connect(self._rejudge)
+        self.tolerance_btn.clicked.connect(self.ask_tolerance)
+        self.spc.draw_btn.clicked.connect(self.draw_spc)
 
     # -- actions -------------------------------------------------------------------------------------
     def load_jobs(self) -> None:
@@ -182,9 +265,12 @@ class QcScreen(QWidget):
     def judge(self) -> None:
         """Judge every sample of the chosen job against its part's standard and show the chosen part."""
         try:
-            self.model.judge(self.job.currentText(), self.formula.currentText(), self.limits.text())
+            self.model.judge(
+                self.job.currentText(), self.formula.currentText(), self.limits.text(), self.judging()
+            )
         except StationError as exc:
             self.status.setText(f"error: {exc}")
+            self._clear_results()
             return
         assert self.model.summary is not None  # noqa: S101 - judge() set it
         c = self.model.summary["counts"]
@@ -195,7 +281,63 @@ class QcScreen(QWidget):
         self.pdf_btn.setEnabled(True)
         self.csv_btn.setEnabled(True)
         self.mi_btn.setEnabled(True)
+        self.spc.draw_btn.setEnabled(True)
         self._show_part(self.part.currentText())
+        if self.spc.png:  # a chart was shown: draw it again as now judged
+            self.draw_spc()
+
+    def judging(self) -> Judging:
+        """How the samples are judged, as the pickers say."""
+        return Judging(
+            self.average.isChecked(),
+            self.average.isChecked() and self.keep_outliers.isChecked(),
+            self.tolerance.text().strip(),
+            self.texture_limits.text().strip(),
+        )
+
+    def _on_average(self, on: bool) -> None:
+        self.keep_outliers.setEnabled(on)
+        self._rejudge()
+
+    def _rejudge(self) -> None:
+        """Judge the shown job again (the averaging or keep-outliers switch changed)."""
+        if self.model.summary_key is not None and self.judge_btn.isEnabled():
+            self.judge()
+
+    def _clear_results(self) -> None:
+        """No stale answer after an error: the table, outliers, texture, SPC and preview emptied."""
+        self.model.summary = None
+        self.model.summary_key = None
+        self.table.setRowCount(0)
+        self.outliers.setText("")
+        self.texture_table.setRowCount(0)
+        self.texture_table.setVisible(False)
+        self.spc.clear("")
+        self.standard.setText("no verdict")
+        for b in (self.pdf_btn, self.csv_btn, self.mi_btn, self.spc.draw_btn):
+            b.setEnabled(False)
+
+    def ask_tolerance(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(
+            self,
+            "Tolerance set",
+            "",
+            "Tolerance JSON (*.json)",
+            options=QFileDialog.Option.DontUseNativeDialog,
+        )
+        if path:
+            self.tolerance.setText(path)
+
+    def draw_spc(self) -> None:
+        """The SPC of the shown part (``station qc spc`` with the screen's judging): the table per
+        geometry, the rule hits and drift in words, the chart with the hits ringed."""
+        base, subgroup = self.spc.choice()
+        try:
+            spc = self.model.spc(self.part.currentText(), base, subgroup)
+        except StationError as exc:
+            self.spc.clear(f"error: {exc}")
+            return
+        self.spc.show_spc(spc)
 
     def metamerism(self) -> None:
         """The metamerism index (D65 → A, F11) of the selected row's sample against the part's standard."""
@@ -216,6 +358,7 @@ class QcScreen(QWidget):
         self.standard_pick.clear()
         for mid, label in self.model.standard_candidates(part):
             self.standard_pick.addItem(label, mid)
+        self.standard_pick.setCurrentIndex(-1)  # the line above names the standard; nothing new is chosen yet
         self.set_standard_btn.setEnabled(self.standard_pick.count() > 0)
         self.table.blockSignals(True)
         self.table.clearSelection()
@@ -225,9 +368,9 @@ class QcScreen(QWidget):
                 str(r.measurement_id),
                 r.measured_at[:16].replace("T", " "),
                 r.geometry,
-                f"{r.dl:+.2f}",
-                f"{r.da:+.2f}",
-                f"{r.db:+.2f}",
+                _signed(r.dl),
+                _signed(r.da),
+                _signed(r.db),
                 f"{r.de:.2f}",
                 r.verdict,
                 "" if r.gloss_60_gu is None else f"{r.gloss_60_gu:.1f}",
@@ -239,6 +382,11 @@ class QcScreen(QWidget):
                     item.setBackground(QColor(VERDICT_COLOURS.get(r.verdict, "#ffffff")))
                 self.table.setItem(i, j, item)
         self.table.blockSignals(False)
+        self.outliers.setText(self.model.outliers_text(part))
+        self._show_texture(entry)
+
+    def _show_texture(self, entry: dict[str, Any] | None) -> None:
+        fill_texture(self.texture_table, [] if entry is None else texture_lines(entry))
 
     def _on_row(self) -> None:
         """A selected sample row becomes the standard picker's choice."""
@@ -375,15 +523,24 @@ class QcScreen(QWidget):
         self.csv_btn.setEnabled(False)
         self.status.setText(f"writing {path} …")
         target = path
-        self.task = TaskThread(lambda _progress: self.model.report(kind, target), self)
+
+        def write(_progress: object) -> tuple[Path, bytes]:
+            out = self.model.report(kind, target)
+            return out, (self.model.report_preview() if kind == "pdf" else b"")
+
+        self.task = TaskThread(write, self)
         self.task.succeeded.connect(self._on_written)
         self.task.failed.connect(lambda msg: self.status.setText(f"error: {msg}"))
         self.task.finished.connect(self._export_done)
         self.task.start()
 
-    def _on_written(self, path: object) -> None:
+    def _on_written(self, result: object) -> None:
+        path, png = cast("tuple[Path, bytes]", result)
         self.last_report = Path(str(path))
         self.status.setText(f"report written: {self.last_report}")
+        if png:
+            self.preview_png = png
+            show_png(self.preview, png)
 
     def _export_done(self) -> None:
         self.pdf_btn.setEnabled(True)

@@ -88,6 +88,7 @@ class TaskThread(QThread):
         self.pure = pure
         self._paused: GcPause | None = None
         self._cancel = False
+        self._sent = False
         self.finished.connect(self._resume_gc)
 
     def cancel(self) -> None:
@@ -98,6 +99,12 @@ class TaskThread(QThread):
     def cancel_requested(self) -> bool:
         """Whether :meth:`cancel` was called."""
         return self._cancel
+
+    @property
+    def result_sent(self) -> bool:
+        """Whether the task has sent its outcome (``succeeded``, ``failed`` or ``cancelled``): it is then only
+        returning, and ``finished`` follows, queued behind the outcome."""
+        return self._sent
 
     def _report(self, step: int, text: str) -> None:
         if self._cancel:
@@ -121,11 +128,14 @@ class TaskThread(QThread):
         try:
             result = self._fn(self._report)
         except Cancelled:
+            self._sent = True
             self.cancelled.emit()
             return
         except Exception as exc:  # shown to the user verbatim
+            self._sent = True
             self.failed.emit(f"{type(exc).__name__}: {exc}")
             return
+        self._sent = True
         if self._cancel and self.pure:
             self.cancelled.emit()
         else:
@@ -171,7 +181,7 @@ class TaskProgress(QWidget):
         self.cancel_btn.setEnabled(True)
         self.cancel_btn.hide()
         task.progress.connect(self._on_progress)
-        task.finished.connect(self._on_finished)
+        task.finished.connect(lambda: self._on_finished(task))
         self._clock.start()
         self._tick.start()
 
@@ -201,7 +211,10 @@ class TaskProgress(QWidget):
             self.label = "cancelling…"
             self._update()
 
-    def _on_finished(self) -> None:
+    def _on_finished(self, task: TaskThread) -> None:
+        """*task* ended: stop and hide, unless a newer task is watched since (its own end hides it)."""
+        if task is not self.task:
+            return
         self._tick.stop()
         self.hide()
         self.task = None

@@ -1,4 +1,5 @@
-"""Instruments: ``/api/v1/instruments`` (list, connect, detach, calibrate, measure); driver calls off the event loop."""
+"""Instruments: ``/api/v1/instruments`` (list, connect, detach, calibrate in one call or step by step,
+measure); driver calls off the event loop."""
 
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ from station.api.instruments import InstrumentHub
 from station.api.schemas.instruments import (
     CalibrateRequest,
     CalibrationPublic,
+    CalibrationSessionOut,
+    CalibrationStart,
     ConnectRequest,
     InstrumentPublic,
     MeasureRequest,
@@ -103,6 +106,61 @@ async def calibrate(
     return await asyncio.to_thread(
         _hub(request).calibrate, instrument_id=instrument_id, reference=body.reference, actor=user
     )
+
+
+CalibrationId = Annotated[uuid.UUID, Path(description="the session's id from POST /instruments/calibrations")]
+
+
+@router.post(
+    "/calibrations",
+    status_code=status.HTTP_201_CREATED,
+    response_model=CalibrationSessionOut,
+    responses={**NOT_FOUND, **CONFLICT},
+)
+async def start_calibration(
+    request: Request, _user: Operator, body: CalibrationStart
+) -> CalibrationSessionOut:
+    """Start a step-wise calibration (a spectrophotometer, then its gloss meter): every step with the prompt
+    to show before it, nothing read yet."""
+    return await asyncio.to_thread(
+        _hub(request).start_calibration,
+        instrument_id=body.instrument_id,
+        gloss_instrument_id=body.gloss_instrument_id,
+        reference=body.reference,
+    )
+
+
+@router.get("/calibrations/{session_id}", response_model=CalibrationSessionOut, responses=NOT_FOUND)
+async def read_calibration(
+    request: Request, _user: Operator, session_id: CalibrationId
+) -> CalibrationSessionOut:
+    """A calibration session's state between steps: the step to prompt for next, every step's status."""
+    return _hub(request).calibrations.read(session_id)
+
+
+@router.post(
+    "/calibrations/{session_id}/step",
+    response_model=CalibrationSessionOut,
+    responses={**NOT_FOUND, **CONFLICT},
+)
+async def calibration_step(
+    request: Request, user: Operator, session_id: CalibrationId
+) -> CalibrationSessionOut:
+    """Read the next reference (the operator has placed the instrument as its prompt said); after the last
+    step the records are stored (``calibrated``); a failed step ends the session (``failed``, named)."""
+    return await asyncio.to_thread(_hub(request).calibration_step, session_id=session_id, actor=user)
+
+
+@router.post(
+    "/calibrations/{session_id}/cancel",
+    response_model=CalibrationSessionOut,
+    responses={**NOT_FOUND, **CONFLICT},
+)
+async def cancel_calibration(
+    request: Request, _user: Operator, session_id: CalibrationId
+) -> CalibrationSessionOut:
+    """End a calibration session between steps, not calibrated."""
+    return _hub(request).calibrations.cancel(session_id)
 
 
 @router.post(

@@ -6,7 +6,7 @@ from __future__ import annotations
 import asyncio
 from typing import Annotated
 
-from fastapi import APIRouter, Query, Request, Response, status
+from fastapi import APIRouter, Depends, Query, Request, Response, status
 from fastapi import Path as PathParam
 
 from db.models import User
@@ -170,17 +170,43 @@ def get_standard(session: ReadSessionDep, _user: Reader, job: JobPath, part: Par
     return service.get_standard(session=session, job=job, part=part)
 
 
-@router.get("/jobs/{job}/summary", response_model=JobSummaryOut)
-def job_summary(
-    session: ReadSessionDep,
-    _user: Reader,
-    job: JobPath,
+def summary_options(
     formula: Formula = None,
     illuminant_limits: IlluminantLimits = None,
-) -> JobSummaryOut:
-    """Every part of the job with its standard and each sample's pass / warn / fail per geometry, with the reason
-    (and its illuminant rows with ``illuminant_limits``)."""
-    return service.job_summary(session=session, job=job, formula=formula, illuminant_limits=illuminant_limits)
+    average_panels: Annotated[
+        bool,
+        Query(
+            description="judge each panel once, at the mean of its repeat readings; the flagged outliers "
+            "(robust z > 3.5) are left out and listed in left_out_readings"
+        ),
+    ] = False,
+    keep_outliers: Annotated[
+        bool, Query(description="with average_panels: average the flagged outliers in too")
+    ] = False,
+    texture_limits: Annotated[
+        str | None,
+        Query(
+            min_length=1,
+            max_length=64,
+            description="judge texture within one vendor: ds=LIMIT (every sparkle quantity, ΔS) and/or "
+            "dg=LIMIT (graininess, ΔG) in the vendor's units, e.g. ds=1.0,dg=0.5",
+            examples=["ds=1.0,dg=0.5"],
+        ),
+    ] = None,
+) -> service.SummaryOptions:
+    """The query of the summary and report routes as :class:`~station.api.services.qc.SummaryOptions`."""
+    return service.SummaryOptions(formula, illuminant_limits, average_panels, keep_outliers, texture_limits)
+
+
+Options = Annotated[service.SummaryOptions, Depends(summary_options)]
+
+
+@router.get("/jobs/{job}/summary", response_model=JobSummaryOut)
+def job_summary(session: ReadSessionDep, _user: Reader, job: JobPath, options: Options) -> JobSummaryOut:
+    """Every part of the job with its standard and each sample's pass / warn / fail per geometry with the
+    limit used, the reason, the outliers left out of a panel's mean (``average_panels``), the texture
+    verdict (``texture_limits``) and the illuminant rows (``illuminant_limits``)."""
+    return service.job_summary(session=session, job=job, options=options)
 
 
 @router.get(
@@ -188,18 +214,10 @@ def job_summary(
     response_class=Response,
     responses={200: {"content": {"application/pdf": {"schema": {"type": "string", "format": "binary"}}}}},
 )
-def report_pdf(
-    session: ReadSessionDep,
-    _user: Reader,
-    job: JobPath,
-    formula: Formula = None,
-    illuminant_limits: IlluminantLimits = None,
-) -> Response:
+def report_pdf(session: ReadSessionDep, _user: Reader, job: JobPath, options: Options) -> Response:
     """The job's QC report: verdict table per geometry (illuminant rows with ``illuminant_limits``), L*a*b*
     against angle, ΔE bars and trend, as PDF."""
-    body = service.report_pdf(  # a worker thread: a sync route
-        session=session, job=job, formula=formula, illuminant_limits=illuminant_limits
-    )
+    body = service.report_pdf(session=session, job=job, options=options)  # a worker thread: a sync route
     return Response(
         body,
         media_type="application/pdf",
@@ -212,10 +230,10 @@ def report_pdf(
     response_class=Response,
     responses={200: {"content": {"text/csv": {"schema": {"type": "string"}}}}},
 )
-def report_csv(session: ReadSessionDep, _user: Reader, job: JobPath, formula: Formula = None) -> Response:
+def report_csv(session: ReadSessionDep, _user: Reader, job: JobPath, options: Options) -> Response:
     """The job's QC report as CSV: one row per sample and geometry with standard and sample Lab, differences and verdicts."""
     return Response(
-        service.report_csv(session=session, job=job, formula=formula),
+        service.report_csv(session=session, job=job, options=options),
         media_type="text/csv",
         headers={"Content-Disposition": 'attachment; filename="qc-report.csv"'},
     )

@@ -5,7 +5,7 @@ from __future__ import annotations
 import datetime as dt
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AliasChoices, BaseModel, ConfigDict, Field
 from pydantic.config import JsonDict
 
 from station.api.schemas.common import StrictFloat
@@ -83,11 +83,13 @@ class DesignUpdate(BaseModel):
 
 
 class DesignVersionPublic(BaseModel):
-    """One stored version."""
+    """One stored version (read from its ``design_versions`` row, whose ``body`` is the design)."""
+
+    model_config = ConfigDict(from_attributes=True)
 
     design_id: int
     version: int
-    design: dict[str, object]
+    design: dict[str, object] = Field(validation_alias=AliasChoices("design", "body"))
     note: str
     created_at: dt.datetime
     created_by_id: int | None

@@ -71,6 +71,50 @@ class CalibrationPublic(BaseModel):
     expires: dt.datetime | None
 
 
+class CalibrationStart(BaseModel):
+    """Start a step-wise calibration of an attached spectrophotometer and, optionally, a gloss meter."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [{"instrument_id": "ma6-sim00001", "gloss_instrument_id": None, "reference": "W-17"}]
+        },
+    )
+
+    instrument_id: Annotated[str, Field(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$")]
+    gloss_instrument_id: (
+        Annotated[str, Field(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$")] | None
+    ) = None
+    reference: Annotated[str, Field(max_length=64, examples=["white tile W-17"])] = ""
+
+
+class CalibrationStepOut(BaseModel):
+    """One step of a calibration session: its place, device, the reference read and the prompt before it."""
+
+    index: int
+    total: int
+    device: str
+    step: str = Field(examples=["zero", "white", "verify", "gloss"])
+    title: str = Field(examples=["White tile"])
+    prompt: str
+    status: Literal["pending", "running", "passed", "failed"]
+
+
+class CalibrationSessionOut(BaseModel):
+    """A step-wise calibration: its state, the step to prompt for next, every step, and once calibrated
+    the stored records (one per instrument)."""
+
+    id: uuid.UUID
+    state: Literal["waiting", "running", "calibrated", "failed", "cancelled"]
+    next: CalibrationStepOut | None = Field(
+        description="the step to prompt for and run next (null once ended)"
+    )
+    steps: list[CalibrationStepOut]
+    error: str | None = Field(description="why the session failed, naming the step")
+    records: list[CalibrationPublic]
+    calibrated: bool
+
+
 class MeasureRequest(BaseModel):
     """Which panel the reading belongs to (optional), the illumination block to store and the client id.
 

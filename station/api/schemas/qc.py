@@ -11,7 +11,8 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from station.api.schemas.common import StrictInt
 from station.api.schemas.measurements import MeasurementPublic
 from station.ingest.schema import MAX_GEOMETRIES, Angle, LabTriple
-from station.qc.tolerance import Verdict
+from station.qc.illuminant_rows import PairVerdictWire
+from station.qc.results import JobSummaryWire, PartSummaryWire, SampleWire
 
 
 class GlossPublic(BaseModel):
@@ -138,62 +139,14 @@ class CheckRequest(BaseModel):
         return self
 
 
-class GeometryVerdictOut(BaseModel):
-    """Differences (sample − standard, CIELAB) and the verdict at one geometry."""
-
-    geometry: str
-    aspecular_deg: float
-    dL: float
-    da: float
-    db: float
-    dC: float
-    dH: float
-    dE: float
-    verdict: Verdict
-    reasons: list[str]
-
-
-class IlluminantRowOut(BaseModel):
-    """The metamerism index under one test illuminant at one geometry against its limit."""
-
-    illuminant: str
-    geometry: str
-    aspecular_deg: float
-    metamerism_index: float
-    limit: float
-    verdict: Verdict
-    text: str = Field(examples=["A 45as15: MI 0.80 <= 1.00 pass"])
-
-
-class IlluminantCheckOut(BaseModel):
-    """Illuminant rows of a sample (``station.qc.illuminant_rows``): fail when any row is above its limit."""
-
-    reference_illuminant: str
-    formula: str
-    index: str
-    limits: dict[str, float]
-    verdict: Verdict
-    reason: str
-    rows: list[IlluminantRowOut]
-
-
-class CheckResult(BaseModel):
-    """Overall verdict with the reason, per-geometry verdicts, mean and max ΔE and the worst geometry.
+class CheckResult(PairVerdictWire):
+    """Overall verdict with the reason, per-geometry verdicts (with the ΔE limit used at each), mean and max
+    ΔE and the worst geometry (``station.qc.illuminant_rows.PairVerdictWire``), and the ids judged.
 
     With illuminant rows, ``verdict`` is the worse of ``d65_verdict`` and ``illuminants.verdict``."""
 
-    verdict: Verdict
-    reason: str
-    formula: str
-    aggregation: str
-    per_geometry: list[GeometryVerdictOut]
-    mean_de: float
-    max_de: float
-    worst_geometry: str
-    standard_measurement_id: int | None = None
-    sample_measurement_id: int | None = None
-    d65_verdict: Verdict | None = None
-    illuminants: IlluminantCheckOut | None = None
+    standard_measurement_id: int | None
+    sample_measurement_id: int | None
 
 
 class StandardSet(BaseModel):
@@ -235,55 +188,16 @@ class JobOut(BaseModel):
     last_measured: dt.datetime | None
 
 
-class StandardLab(BaseModel):
-    """A part's standard as judged: its ids and its Lab at the samples' geometries."""
+class SampleVerdict(SampleWire):
+    """One sample of a part (``station.qc.results.SampleWire``) with the gloss reading paired with it."""
 
-    job: str
-    part: str
-    measurement_id: int | None
-    design_id: int | None
-    created_at: dt.datetime
-    geometries: list[str]
-    lab: list[list[float]]
+    gloss: GlossPublic | None
 
 
-class SampleVerdict(BaseModel):
-    """One sample of a part, its Lab per geometry and its verdict against the part's standard."""
-
-    measurement_id: int
-    panel_id: int | None
-    job: str | None
-    part: str | None
-    instrument: str
-    operator: str
-    measured_at: dt.datetime
-    geometries: list[str]
-    lab: list[list[float]]
-    qc: CheckResult
-    gloss: GlossPublic | None = Field(default=None, description="the gloss reading paired with the sample")
-
-
-class PartSummaryOut(BaseModel):
-    """A part: its standard (``null`` when none is set), pass/warn/fail counts, samples and those unjudged."""
-
-    part: str
-    standard: StandardLab | None
-    counts: dict[str, int]
-    samples: list[SampleVerdict]
-    unjudged: list[int]
-    note: str
-
-
-class JobSummaryOut(BaseModel):
-    """Every part of a job with its standard and each sample's verdict, oldest sample first."""
-
-    job: str
-    formula: str
-    tolerance: dict[str, Any] | None
-    counts: dict[str, int]
-    parts: list[PartSummaryOut]
-    generated_at: dt.datetime
-    illuminant_limits: dict[str, float] | None = None
+#: A part of a job summary: its samples carry their paired gloss readings.
+PartSummaryOut = PartSummaryWire[SampleVerdict]
+#: Every part of a job with its standard and each sample's verdict (``station.qc.results.JobSummaryWire``).
+JobSummaryOut = JobSummaryWire[PartSummaryOut]
 
 
 class MetamerismRequest(BaseModel):

@@ -133,14 +133,7 @@ def get_version(*, session: Session, design_id: int, version: int) -> DesignVers
     """Version *version* of *design_id*."""
     _design(session, design_id)
     row = _version(session, design_id, version)
-    return DesignVersionPublic(
-        design_id=design_id,
-        version=row.version,
-        design=row.body,
-        note=row.note,
-        created_at=row.created_at,
-        created_by_id=row.created_by_id,
-    )
+    return DesignVersionPublic.model_validate(row)
 
 
 def list_versions(*, session: Session, design_id: int) -> list[DesignVersionPublic]:
@@ -149,17 +142,7 @@ def list_versions(*, session: Session, design_id: int) -> list[DesignVersionPubl
     rows = session.scalars(
         select(DesignVersion).where(DesignVersion.design_id == design_id).order_by(DesignVersion.version)
     )
-    return [
-        DesignVersionPublic(
-            design_id=design_id,
-            version=r.version,
-            design=r.body,
-            note=r.note,
-            created_at=r.created_at,
-            created_by_id=r.created_by_id,
-        )
-        for r in rows
-    ]
+    return [DesignVersionPublic.model_validate(r) for r in rows]
 
 
 def list_designs(

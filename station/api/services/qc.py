@@ -11,6 +11,8 @@ reading pairs the same way whatever page it is seen on. Everything colorimetric 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import cast
 
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
@@ -27,6 +29,7 @@ from station.api.schemas.qc import (
     LabSource,
     MetamerismOut,
     MetamerismRequest,
+    PartSummaryOut,
     QcMeasurement,
     RepeatsOut,
     RepeatsRequest,
@@ -44,6 +47,7 @@ from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_ill
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading, reading_from_measurement
 from station.qc.repeats import summarise
+from station.qc.texture import parse_texture_limits
 from station.qc.tolerance import ToleranceSet
 
 
@@ -155,27 +159,19 @@ def check(*, session: Session, request: CheckRequest) -> CheckResult:
     booth = None
     if request.illuminant_limits is not None:
         booth = check_illuminants(std, smp, request.illuminant_limits, verdict.formula)
-    return CheckResult.model_validate(
-        PairVerdict(verdict, booth).to_dict()
-        | {
-            "standard_measurement_id": request.standard.measurement_id,
-            "sample_measurement_id": request.sample.measurement_id,
-        }
-    )
+    ids = {
+        "standard_measurement_id": request.standard.measurement_id,
+        "sample_measurement_id": request.sample.measurement_id,
+    }
+    return cast(CheckResult, {**PairVerdict(verdict, booth).to_dict(), **ids})
 
 
 def set_standard(*, session: Session, actor: User, job: str, part: str, body: StandardSet) -> StandardOut:
-    """Make a measurement or design the standard of *job*/*part* (``station.qc.jobs.set_standard``), audited."""
-    std = jobs.set_standard(
-        session,
-        job,
-        part,
-        measurement_id=body.measurement_id,
-        design_id=body.design_id,
-        notes=body.notes,
-        created_by_id=actor.id,
-        replace=body.replace,
-    )
+    """Make a measurement or design the standard of *job*/*part* (``station.qc.jobs.set_standard``), audited.
+
+    The body's fields are that function's keywords, passed as they are.
+    """
+    std = jobs.set_standard(session, job, part, created_by_id=actor.id, **body.model_dump())
     audit.record(
         session=session,
         actor=actor,
@@ -205,42 +201,70 @@ def list_jobs(*, session: Session, contains: str | None) -> list[JobOut]:
     return [JobOut.model_validate(j.to_dict()) for j in jobs.list_jobs(session, contains)]
 
 
-def _summary(
-    session: Session, job: str, formula: str | None, illuminant_limits: str | None = None
-) -> jobs.JobSummary:
-    limits = None if illuminant_limits is None else parse_illuminant_limits(illuminant_limits)
-    return jobs.job_summary(session, job, formula=formula, illuminant_limits=limits)
+@dataclass(frozen=True)
+class SummaryOptions:
+    """How a job is judged (the query of the summary and report routes; ``station qc summary``'s options).
+
+    *formula* ``din6175-2 | cie2000 | cie94 | cie76``; *illuminant_limits* ``"A=1.0,F11=1.5"``;
+    *average_panels* judges each panel once at the mean of its repeat readings, the flagged outliers left
+    out unless *keep_outliers*; *texture_limits* ``"ds=1.0,dg=0.5"`` judges sparkle (ΔS) and graininess
+    (ΔG) within one vendor, in the vendor's units.
+    """
+
+    formula: str | None = None
+    illuminant_limits: str | None = None
+    average_panels: bool = False
+    keep_outliers: bool = False
+    texture_limits: str | None = None
 
 
-def job_summary(
-    *, session: Session, job: str, formula: str | None, illuminant_limits: str | None = None
-) -> JobSummaryOut:
+def _summary(session: Session, job: str, options: SummaryOptions) -> jobs.JobSummary:
+    """The job's summary under *options*; ``keep_outliers`` without ``average_panels`` is refused (422)."""
+    if options.keep_outliers and not options.average_panels:
+        raise InputError("keep_outliers", "true only with average_panels=true (nothing is averaged)", True)
+    limits = None if options.illuminant_limits is None else parse_illuminant_limits(options.illuminant_limits)
+    texture = None if options.texture_limits is None else parse_texture_limits(options.texture_limits)
+    return jobs.job_summary(
+        session,
+        job,
+        formula=options.formula,
+        illuminant_limits=limits,
+        average_panels=options.average_panels,
+        keep_outliers=options.keep_outliers,
+        texture_limits=texture,
+    )
+
+
+def job_summary(*, session: Session, job: str, options: SummaryOptions) -> JobSummaryOut:
     """Every part's standard and each sample's verdict (``station.qc.jobs.job_summary``), with each
     sample's paired gloss reading."""
-    data = _summary(session, job, formula, illuminant_limits).to_dict()
-    samples = [s for p in data["parts"] for s in p["samples"]]
-    gloss = gloss_of_measurements(session, [s["measurement_id"] for s in samples])
-    for s in samples:
-        g = gloss.get(s["measurement_id"])
-        s["gloss"] = None if g is None else GlossPublic.model_validate(g)
-    return JobSummaryOut.model_validate(data)
+    data = _summary(session, job, options).to_dict()
+    ids = [s["measurement_id"] for p in data["parts"] for s in p["samples"]]
+    gloss = gloss_of_measurements(session, ids)
+
+    def paired_gloss(mid: int) -> GlossPublic | None:
+        g = gloss.get(mid)
+        return None if g is None else GlossPublic.model_validate(g)
+
+    parts: list[PartSummaryOut] = [
+        {**p, "samples": [{**s, "gloss": paired_gloss(s["measurement_id"])} for s in p["samples"]]}
+        for p in data["parts"]
+    ]
+    return {**data, "parts": parts}
 
 
-def report_pdf(
-    *, session: Session, job: str, formula: str | None, illuminant_limits: str | None = None
-) -> bytes:
-    """The job's QC report as PDF bytes (``station.qc.report.pdf_bytes``), with illuminant rows when
-    *illuminant_limits* (``"A=1.0,F11=1.5"``) is given."""
+def report_pdf(*, session: Session, job: str, options: SummaryOptions) -> bytes:
+    """The job's QC report as PDF bytes (``station.qc.report.pdf_bytes``) under *options*."""
     from station.qc import report  # matplotlib loads here, not with the service
 
-    return report.pdf_bytes(_summary(session, job, formula, illuminant_limits))
+    return report.pdf_bytes(_summary(session, job, options))
 
 
-def report_csv(*, session: Session, job: str, formula: str | None) -> str:
+def report_csv(*, session: Session, job: str, options: SummaryOptions) -> str:
     """The job's QC report as CSV text, one row per sample and geometry (``station.qc.report.csv_text``)."""
     from station.qc import report
 
-    return report.csv_text(_summary(session, job, formula))
+    return report.csv_text(_summary(session, job, options))
 
 
 def stored_reading(session: Session, measurement_id: int, field: str) -> Reading:
@@ -265,6 +289,5 @@ def repeats_of(*, session: Session, request: RepeatsRequest) -> RepeatsOut:
         raise InputError("measurement_ids", "distinct measurement ids", ids)
     readings = [stored_reading(session, mid, f"measurement_ids[{i}]") for i, mid in enumerate(ids)]
     out = summarise(readings).to_dict()
-    for row in out["readings"]:
-        row["measurement_id"] = ids[row["index"]]
-    return RepeatsOut.model_validate(out)
+    rows = [{**row, "measurement_id": ids[row["index"]]} for row in out["readings"]]
+    return RepeatsOut.model_validate({**out, "readings": rows})
