@@ -142,7 +142,7 @@ def violations(source: str, filename: str = "<source>") -> list[str]:
             keywords = {k.arg: k.value for k in node.keywords if k.arg}
             if name == "Field":
                 if any(
-                    _number(keywords[k]) is not None and abs(_number(keywords[k])) in {150.0, 200.0}
+                    (n := _number(keywords[k])) is not None and abs(n) in {150.0, 200.0}
                     for k in ("ge", "le", "gt", "lt")
                     if k in keywords
                 ):
@@ -165,7 +165,7 @@ def violations(source: str, filename: str = "<source>") -> list[str]:
                         hit(node, "Lab ranges written as literals (use station.model.domain.LAB_RANGES)")
                         break
         elif isinstance(node, ast.JoinedStr):
-            text = "".join(v.value if isinstance(v, ast.Constant) else "{…}" for v in node.values)
+            text = "".join(str(v.value) if isinstance(v, ast.Constant) else "{…}" for v in node.values)
             if _RANGE_TEXT.search(text):
                 hit(node, f"Lab range written in a message: {text!r} (use domain.lab_accepted)")
         elif isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs:
@@ -317,15 +317,14 @@ def scan_copies(source: str, where: str = "<source>") -> list[str]:
     found: list[tuple[int, str]] = []
     for node in ast.walk(ast.parse(source)):
         names: list[str] = []
+        line = getattr(node, "lineno", 0)
         if isinstance(node, ast.ImportFrom):
             names = [a.name for a in node.names]
         elif isinstance(node, (ast.Name, ast.Attribute)):
             names = [_identifier(node) or ""]
         for name in names:
             if name in SCAN_NAMES and (where, name) not in SCAN_EXCEPTIONS:
-                found.append(
-                    (node.lineno, f"{where}:{node.lineno}: {name} outside station/scan (call station.scan)")
-                )
+                found.append((line, f"{where}:{line}: {name} outside station/scan (call station.scan)"))
         if not isinstance(node, ast.Call):
             continue
         func = node.func

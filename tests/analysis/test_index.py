@@ -50,7 +50,7 @@ def test_lambertian_grey_matches_closed_form(L, theta_i, direction):
     if expected is None:
         assert not r.reached and r.beta_min_deg is None
         return
-    assert r.reached
+    assert r.reached and r.beta_min_deg is not None
     assert r.beta_min_deg == pytest.approx(expected, abs=0.01)
     assert abs(r.beta_min_deg - expected) < 1e-5  # the stated resolution is 1e-6°
     assert r.direction == direction
@@ -60,6 +60,7 @@ def test_either_direction_picks_the_smaller(grey):
     r = goniogeometric_index(grey, 45.0, 0.0)
     away = closed_form_root(60.0, 45.0, -1.0)
     towards = closed_form_root(60.0, 45.0, 1.0)
+    assert away is not None and towards is not None
     assert r.beta_min_deg == pytest.approx(min(away, towards), abs=1e-5)
     assert r.direction == "-"  # turning away from the light darkens faster at 45°
 
@@ -105,7 +106,7 @@ def test_range_minimum_equals_minimum_of_single_geometries(blue_metallic):
     lights, views = [15.5, 45.0], [-20.0, 0.0, 30.0]
     r = goniogeometric_index(blue_metallic, lights, views)
     singles = [goniogeometric_index(blue_metallic, lt, v) for lt in lights for v in views]
-    best = min(singles, key=lambda s: s.beta_min_deg)
+    best = min(singles, key=lambda s: math.inf if s.beta_min_deg is None else s.beta_min_deg)
     assert r.beta_min_deg == pytest.approx(best.beta_min_deg, abs=1e-6)
     assert r.geometry["light_deg"] == best.geometry["light_deg"]
     assert r.geometry["view_deg"] == best.geometry["view_deg"]
@@ -124,6 +125,7 @@ def test_effect_paint_is_more_sensitive_than_solid(blue_metallic):
     solid = FaceFlopTravelGloss((60.0, -1.0, -11.0), (60.0, -1.0, -11.0), None)
     r_eff = goniogeometric_index(blue_metallic, 45.0, -30.0)
     r_sol = goniogeometric_index(solid, 45.0, -30.0)
+    assert r_eff.beta_min_deg is not None and r_sol.beta_min_deg is not None
     assert r_eff.beta_min_deg < r_sol.beta_min_deg / 5  # thesis Fig 4.2: effect ≫ solid
 
 
@@ -173,6 +175,7 @@ def test_gloss_included_near_specular_lowers_the_index():
     p = FaceFlopTravelGloss((50.0, 0.0, -10.0), (20.0, 0.0, -8.0), 60.0, gloss_gu=40.0)
     without = goniogeometric_index(p, 45.0, -40.0, direction="+")
     with_gloss = goniogeometric_index(p, 45.0, -40.0, direction="+", gloss=True)
+    assert with_gloss.beta_min_deg is not None and without.beta_min_deg is not None
     assert with_gloss.reached and with_gloss.beta_min_deg < without.beta_min_deg
     far = goniogeometric_index(p, 45.0, 60.0, direction="+", gloss=True)
     far_no = goniogeometric_index(p, 45.0, 60.0, direction="+")

@@ -29,11 +29,12 @@ def test_sweep_matches_seam_model(blue_metallic):
 def test_sweep_graphical_index_brackets_the_computed_index(blue_metallic):
     """Thesis §4.3.3: the index read off the curves is the largest β under ε everywhere."""
     lights, views = (45.0,), tuple(float(v) for v in range(-30, 66, 5))
-    betas = np.arange(0.05, 3.0, 0.05)
+    betas = np.arange(0.05, 3.0, 0.05).tolist()
     r = seam_sweep(blue_metallic, betas, lights, views)
     est = r.index_estimate()
     idx = goniogeometric_index(blue_metallic, 45.0, list(views), direction="+")
-    assert est is not None and est <= idx.beta_min_deg < est + 0.05 + 1e-9
+    assert est is not None and idx.beta_min_deg is not None
+    assert est <= idx.beta_min_deg < est + 0.05 + 1e-9
 
 
 def test_plot_sweep_writes_png(tmp_path, blue_metallic):
@@ -58,7 +59,7 @@ def test_seam_qa_geometric_mismatch(blue_metallic):
 def test_seam_qa_formulation_mismatch_from_measurements():
     """Aligned-looking seam (0.2°) but panel B measured 4 L* darker: a formulation error."""
     a = FaceFlopTravelGloss((60.0, 0.0, -20.0), (60.0, 0.0, -20.0), None)
-    b = AspecularMeasurements((15.0, 45.0, 110.0), [[56.0, 0.0, -20.0]] * 3)
+    b = AspecularMeasurements((15.0, 45.0, 110.0), np.array([[56.0, 0.0, -20.0]] * 3))
     r = seam_qa(a, b, 0.2)
     assert not r.passed
     assert r.diagnosis.startswith("formulation mismatch")

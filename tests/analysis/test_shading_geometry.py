@@ -10,7 +10,7 @@ import pytest
 
 from station.analysis import AnalysisInputError, Environment
 from station.analysis.geometry import aspecular_deg, direction, rotated_normals
-from station.analysis.shading import environment_colour, point_colour, shade_lab
+from station.analysis.shading import Exposure, environment_colour, point_colour, shade_lab
 from station.model import FaceFlopTravelGloss
 from station.model.colorimetry import WHITEPOINT
 
@@ -100,7 +100,8 @@ def test_gloss_lobe_at_the_mirror_matches_the_model_lobe():
     y = ((50.0 + 16.0) / 116.0) ** 3
     for light in (20.0, 45.0, 70.0):
         k_a = math.cos(math.radians(light))
-        for exposure, white in (("reference", k_a), ("absolute", 1.0)):
+        exposures: tuple[tuple[Exposure, float], ...] = (("reference", k_a), ("absolute", 1.0))
+        for exposure, white in exposures:
             c = point_colour(p, direction(light), direction(-light), z, exposure=exposure, gloss=True)
             expected = 116.0 * ((k_a * y + peak) / white) ** (1 / 3) - 16.0
             assert c[0] == pytest.approx(expected, rel=1e-4)

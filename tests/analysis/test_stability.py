@@ -10,6 +10,7 @@ import pytest
 
 from station.analysis import goniogeometric_index
 from station.analysis.bracket import brent, first_bracket
+from station.analysis.geometry import Direction
 from station.analysis.index import SeamModel
 from station.analysis.trompe import inverse_trompe_loeil
 from station.model import FaceFlopTravelGloss
@@ -40,7 +41,8 @@ GEOMETRIES = [
 @pytest.mark.parametrize(("light", "view"), GEOMETRIES)
 def test_no_nan_and_first_crossing(name, light, view):
     paint = PAINTS[name]
-    for d, sign in (("+", 1.0), ("-", -1.0)):
+    turns: tuple[tuple[Direction, float], ...] = (("+", 1.0), ("-", -1.0))
+    for d, sign in turns:
         r = goniogeometric_index(paint, light, view, direction=d, beta_max_deg=20.0)
         assert np.isfinite(r.max_delta_e)
         # a ΔE ≥ ε seen on the grid is a crossing: never "largest ΔE 1e16, ε never reached"
@@ -88,11 +90,14 @@ def test_travel_min_at_specular_crosses_within_the_stated_resolution():
     zero at the index's stated resolution."""
     paint = PAINTS["travel_min"]
     tc = paint.travel_deg
+    assert tc is not None
     slope = 2.0 * (paint.face[0] - paint.flop[0]) * tc / (tc - 15.0) ** 2
     assert 2.3 / (2.0 * slope) < 1e-15
-    for d in ("+", "-"):
+    directions: tuple[Direction, ...] = ("+", "-")
+    for d in directions:
         r = goniogeometric_index(paint, 0.0, 0.0, direction=d, beta_max_deg=20.0)
-        assert r.reached and 0.0 <= r.beta_min_deg <= r.resolution_deg, r.message
+        assert r.reached and r.beta_min_deg is not None, r.message
+        assert 0.0 <= r.beta_min_deg <= r.resolution_deg, r.message
 
 
 def test_crossing_at_the_first_grid_point_is_a_bracket_not_a_miss():
@@ -116,7 +121,9 @@ def test_non_monotone_delta_e_finds_first_crossing():
     r = goniogeometric_index(p, 10.0, 0.0, direction="+", epsilon=0.2, beta_max_deg=40.0)
     bf = brute_force_first_crossing(p, 10.0, 0.0, 1.0, 0.2, beta_max=40.0)
     assert bf is not None and r.beta_min_deg == pytest.approx(bf, abs=1.5e-3)
-    assert r.beta_min_deg < 10.0  # the first crossing lies before the peak of k at β = 10°
+    assert (
+        r.beta_min_deg is not None and r.beta_min_deg < 10.0
+    )  # the first crossing lies before the peak of k at β = 10°
 
 
 def test_narrow_excursion_between_grid_points_is_found():
@@ -128,7 +135,7 @@ def test_narrow_excursion_between_grid_points_is_found():
     peak = float(de[betas <= 12.0].max())  # k peaks at β = 10°
     eps = peak - 1e-4  # crossed only in a ~0.1° window around β = 10°, then again much later
     r = goniogeometric_index(p, 10.0, 0.0, direction="+", epsilon=eps, beta_max_deg=20.0, grid_step_deg=1.0)
-    assert r.reached and abs(r.beta_min_deg - 10.0) < 0.2
+    assert r.reached and r.beta_min_deg is not None and abs(r.beta_min_deg - 10.0) < 0.2
 
 
 @pytest.mark.parametrize("name", ["near_solid", "travel_min", "travel_max", "silver_bright"])
@@ -143,10 +150,12 @@ def test_trompe_loeil_stays_finite(name):
 try:
     from hypothesis import given, settings
     from hypothesis import strategies as st
-except ImportError:  # pragma: no cover - hypothesis is a dev dependency
-    given = None
 
-if given is not None:
+    HAVE_HYPOTHESIS = True
+except ImportError:  # pragma: no cover - hypothesis is a dev dependency
+    HAVE_HYPOTHESIS = False
+
+if HAVE_HYPOTHESIS:
 
     @settings(max_examples=25, deadline=None)
     @given(

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, cast
 
+import httpx
 import pytest
 from fastapi.testclient import TestClient
 
@@ -32,11 +34,15 @@ class Api:
     def auth(self, role: Role | str) -> dict[str, str]:
         return {"Authorization": f"Bearer {self.tokens[Role(role)]}"}
 
+    @property
+    def http(self) -> httpx.Client:
+        """The test client as the ``httpx.Client`` the viewer's ServiceClient takes: Starlette's TestClient
+        is built on httpx2, whose Client has the same interface under another package name."""
+        return cast(httpx.Client, self.client)
 
-def make_api(url: str, tmp_path: Path, **settings: object) -> Iterator[Api]:
-    opts: dict[str, object] = dict(
-        database_url=url, data_dir=tmp_path, simulators=(), load_demo_library=False
-    )
+
+def make_api(url: str, tmp_path: Path, **settings: Any) -> Generator[Api]:
+    opts: dict[str, Any] = dict(database_url=url, data_dir=tmp_path, simulators=(), load_demo_library=False)
     opts.update(settings)
     app = create_app(Settings(**opts))
     with TestClient(app) as client:

@@ -118,11 +118,13 @@ def test_a_failing_white_tile_ends_the_session_naming_the_step() -> None:
     reads ``failed`` naming step 2 (white tile), stores nothing, and refuses another step (409)."""
     from station.api.calibration_sessions import CalibrationSessions
     from station.api.errors import ConflictError
+    from station.api.schemas.instruments import CalibrationPublic
+    from station.drivers import CalibrationResult
     from station.scan import open_device
 
     stored: list[str] = []
 
-    def store(name: str, _result: object, _reference: str) -> object:
+    def store(name: str, _result: CalibrationResult, _reference: str) -> CalibrationPublic:
         stored.append(name)  # nothing passed every step: never called
         raise AssertionError(name)
 

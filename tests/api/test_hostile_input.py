@@ -187,7 +187,7 @@ def test_found4_bool_and_numeric_strings_are_not_lab(tapi: Api, value: object) -
     assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "design", "face", 0]
 
 
-def _import(api: Api, text: str, **params: object) -> tuple[int, dict[str, object]]:
+def _import(api: Api, text: str, **params: str | bool) -> tuple[int, dict[str, object]]:
     r = api.client.post(
         f"{V1}/library/import",
         content=text.encode("utf-8", "surrogatepass"),

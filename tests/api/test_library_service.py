@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import httpx
+import httpx2
 import numpy as np
 import pytest
 
@@ -49,7 +50,7 @@ def _store(api: Api, lib: Library) -> None:
         session.commit()
 
 
-def _upload(api: Api, text: str, name: str) -> httpx.Response:
+def _upload(api: Api, text: str, name: str) -> httpx2.Response:
     return api.client.post(
         f"/api/v1/library/import?name={name}",
         content=text.encode(),

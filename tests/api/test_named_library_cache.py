@@ -46,7 +46,9 @@ def _snap(api: Api, k: int, library: str = "book B") -> dict:
     return r.json()
 
 
-def test_a_named_library_index_is_built_once_and_dropped_with_the_rows(two_books) -> None:
+def test_a_named_library_index_is_built_once_and_dropped_with_the_rows(
+    two_books: tuple[Api, list[dict]],
+) -> None:
     api, rows = two_books
     got = [_snap(api, k) for k in (3, 4, 5)]
     cache = api.client.app.state.library_cache  # type: ignore[attr-defined]
@@ -69,7 +71,7 @@ def test_a_named_library_index_is_built_once_and_dropped_with_the_rows(two_books
     assert cache.named_builds == 3
 
 
-def test_an_unknown_library_is_refused_naming_the_field(two_books) -> None:
+def test_an_unknown_library_is_refused_naming_the_field(two_books: tuple[Api, list[dict]]) -> None:
     api, _ = two_books
     r = api.client.post(
         f"{V1}/formulation/snap", json={"design": DESIGN, "library": "book C"}, headers=api.auth("chemist")

@@ -183,7 +183,7 @@ def test_lod_mesh_and_scene_options(service: Service) -> None:
 
 def test_scene_options_are_validated_naming_the_field(service: Service) -> None:
     env = {"environment": "sky", "size": 32}
-    cases = [
+    cases: list[tuple[dict[str, object], list[str]]] = [
         ({"flakes": "yes"}, ["body", "flakes"]),
         ({"flakes": True, "flake_layer": {"spread_deg": 90.0}}, ["body", "flake_layer", "spread_deg"]),
         ({"flakes": True, "flake_layer": {"size_um": 0.5}}, ["body", "flake_layer", "size_um"]),

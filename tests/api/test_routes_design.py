@@ -164,7 +164,9 @@ def test_sketch_fit_equals_the_core(sqlite_api: Api, scene: str) -> None:
     assert got["failed"] is direct.failed is False
     assert got["design"]["face"] == pytest.approx(list(direct.design.face), abs=1e-9)
     assert got["rms_de"] == pytest.approx(direct.rms_de, abs=1e-9)
-    np.testing.assert_allclose(got["design"]["face"], BLUE["face"], atol=1.5)  # recovers the painted design
+    np.testing.assert_allclose(
+        got["design"]["face"], BLUE_DESIGN.face, atol=1.5
+    )  # recovers the painted design
     not_square = sqlite_api.client.post(
         f"{V1}/styling/sketch-fit", content=_png(art[:, :40]), headers=sqlite_api.auth("stylist") | PNG
     )

@@ -288,7 +288,12 @@ def test_browse_filters_like_the_thesis_browser(lib_api: tuple[Api, list[dict]])
         for r, f in zip(rows, flop, strict=True)
         if r["category"] in ("metallic", "pearl") and f is not None and 3.0 <= f <= 12.0
     ]
-    params = {"types": ["metallic", "pearl"], "flop_min": 3.0, "flop_max": 12.0, "limit": 1000}
+    params: dict[str, float | list[str]] = {
+        "types": ["metallic", "pearl"],
+        "flop_min": 3.0,
+        "flop_max": 12.0,
+        "limit": 1000,
+    }
     r = api.client.get(f"{V1}/library/browse", params=params, headers=api.auth("stylist"))
     assert r.status_code == 200, r.text
     got = r.json()

@@ -13,9 +13,11 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
+from fastapi import FastAPI
 
 from station.api.settings import BOOTSTRAP_TOKEN_FILE
 from tests.serve_process import ServeStartError, serving
@@ -72,7 +74,7 @@ def test_bootstrap_token_is_handed_out_on_first_start_only(tmp_path: Path, monke
 
     from station.cli import main
 
-    started: list[object] = []
+    started: list[tuple[FastAPI, dict[str, Any]]] = []
     monkeypatch.setattr(uvicorn, "run", lambda app, **kw: started.append((app, kw)))
     argv = ["serve", "--data-dir", str(tmp_path), "--simulators", "", "--no-demo-library", "--port", "8123"]
     assert main(argv) == 0

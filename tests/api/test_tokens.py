@@ -145,7 +145,9 @@ def test_tokens_are_checked_while_another_writer_holds_the_lock_and_revocation_h
             r = api.client.get("/api/v1/me", headers=tech)
             return r.status_code, str(r.json().get("detail", ""))
 
-        status, detail = wait_until(lambda: (a := answer())[0] == 401 and a, 30, interval=0.5)
+        revoked = wait_until(lambda: (a := answer())[0] == 401 and a, 30, interval=0.5)
+        assert revoked
+        status, detail = revoked
         assert "revoked" in detail, (status, detail)
         assert api.client.get("/health").json()["status"] == "ok"
     finally:

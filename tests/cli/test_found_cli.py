@@ -118,6 +118,7 @@ def test_a_closed_pipe_is_quiet(tmp_path: Path) -> None:
         os.close(write_end)
     with child:
         assert child.finish(120) == 141
+        assert child.err is not None
         assert child.err is not None and child.err.text() == "", child.err.text()
 
 

@@ -12,6 +12,7 @@ import hashlib
 import json
 import uuid
 from collections.abc import Callable
+from typing import Any
 
 import pytest
 from sqlalchemy import Connection, text
@@ -133,8 +134,9 @@ def _insert_back_dated(conn: Connection, dialect: str) -> None:
     import datetime as dt
 
     head = chain.lock_head(conn, "audit_events")
-    row = {
-        "at": dt.datetime(2020, 1, 1, tzinfo=dt.UTC),
+    at = dt.datetime(2020, 1, 1, tzinfo=dt.UTC)
+    row: dict[str, Any] = {
+        "at": at,
         "actor_id": None,
         "action": "user.create",
         "entity": "user",
@@ -144,7 +146,7 @@ def _insert_back_dated(conn: Connection, dialect: str) -> None:
     row_hash, link = chain.seal("audit_events", head, row)
     tbl = chain.chain_table("audit_events")
     conn.execute(tbl.insert().values(**row, row_sha256=row_hash, chain_sha256=link))
-    chain.advance(conn, "audit_events", head, link, row["at"])
+    chain.advance(conn, "audit_events", head, link, at)
 
 
 def _insert_into_gap(conn: Connection, dialect: str) -> None:
@@ -200,7 +202,11 @@ def test_head_row_only_moves_forward(database_url: str) -> None:
         "UPDATE ledger_heads SET backfill_last_id = 1000 WHERE chain = 'audit_events'",
     ):
         with pytest.raises(DBAPIError, match="only moves forward"):
-            _owner(database_url, lambda conn, _d, s=statement: conn.execute(text(s)))
+
+            def update(conn: Connection, _d: str, s: str = statement) -> None:
+                conn.execute(text(s))
+
+            _owner(database_url, update)
 
 
 def test_concurrent_writers_form_one_chain(database_url: str, capsys: pytest.CaptureFixture[str]) -> None:

@@ -111,13 +111,12 @@ def test_rows_hashed_before_canonical_numbers_keep_verifying(
     _store(url, [make_reading(12, 0)])
     code, report = _report(url, tmp_path, capsys)
     assert (code, report["findings"]) == (0, []), report
-    _owner(
-        url,
-        lambda conn, d: (
-            _lift(conn, d, "measurements"),
-            conn.execute(text("UPDATE measurements SET gloss_gu = 1.0 WHERE id = 1")),
-        ),
-    )
+
+    def change(conn: Connection, d: str) -> None:
+        _lift(conn, d, "measurements")
+        conn.execute(text("UPDATE measurements SET gloss_gu = 1.0 WHERE id = 1"))
+
+    _owner(url, change)
     code, report = _report(url, tmp_path, capsys)
     assert code == 1 and _kinds(report) == [("measurements", "row_changed", 1)], report
 
@@ -278,7 +277,11 @@ def test_a_head_moves_only_onto_the_chains_last_row(database_url: str) -> None:
         "UPDATE ledger_heads SET length = length + 1, legacy_last_id = 99 WHERE chain = 'record_events'",
     ):
         with pytest.raises(DBAPIError, match="only moves forward"):
-            _owner(database_url, lambda conn, _d, s=statement: conn.execute(text(s), {"f": "f" * 64}))
+
+            def update(conn: Connection, _d: str, s: str = statement) -> None:
+                conn.execute(text(s), {"f": "f" * 64})
+
+            _owner(database_url, update)
 
 
 def test_a_checkpoint_file_replaced_by_a_link_is_named_not_followed(

@@ -21,6 +21,7 @@ def test_library_rows_load(database_url: str) -> None:
             session.commit()
             assert session.scalar(select(func.count()).select_from(LibraryPaint)) == 90
             stored = session.scalar(select(LibraryPaint).where(LibraryPaint.code == rows[0]["code"]))
+            assert stored is not None
             assert stored.lab == rows[0]["lab"] and stored.family == rows[0]["family"]
     finally:
         engine.dispose()

@@ -71,17 +71,24 @@ def test_face_and_flop_edits(bright_silver: FaceFlopTravelGloss) -> None:
 
 def test_variations_lighter_and_darker(bright_silver: FaceFlopTravelGloss) -> None:
     ring = {v.label: v for v in variations(bright_silver, 5.0, "face").variations}
+    assert ring["lighter"].design is not None
     assert ring["lighter"].design.face == pytest.approx((130.0, -0.6, -1.8))
+    assert ring["darker"].design is not None
     assert ring["darker"].design.face == pytest.approx((120.0, -0.6, -1.8))
     assert ring["lighter"].design.flop == bright_silver.flop
     flop = {v.label: v for v in variations(bright_silver, 5.0, "flop").variations}
+    assert flop["lighter"].design is not None
     assert flop["lighter"].design.flop[0] == pytest.approx(43.0)
+    assert flop["darker"].design is not None
     assert flop["darker"].design.flop[0] == pytest.approx(33.0)
     # more chroma along the hue: C* grows by 5 at the same hue angle
     c = math.hypot(*bright_silver.face[1:])
+    assert ring["more chroma"].design is not None
     more = ring["more chroma"].design.face
     assert math.hypot(*more[1:]) == pytest.approx(c + 5.0)
     tg = {v.label: v for v in variations(bright_silver, 5.0, "travel-gloss").variations}
+    assert tg["more gloss"].design is not None
+    assert tg["more travel"].design is not None
     assert tg["more travel"].design.travel_deg == 70.0 and tg["more gloss"].design.gloss_gu == 95.0
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ from station.design.images import load_image
 from station.model.colorimetry import lab_to_linear_srgb, srgb_encode
 
 
-def _run(capsys, *argv: str) -> tuple[int, dict | None, str]:
+def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, Any, str]:
     code = main(list(argv))
     out = capsys.readouterr()
     return code, (json.loads(out.out) if out.out.strip() and code == 0 else None), out.err

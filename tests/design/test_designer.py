@@ -115,7 +115,7 @@ def test_hsb_edit_refuses_out_of_range(red_metallic) -> None:
         hsb_edit(red_metallic, saturation=-1.0)
 
 
-def test_picker_moves_face_flop_and_arrow(red_metallic) -> None:
+def test_picker_moves_face_flop_and_arrow(red_metallic: FaceFlopTravelGloss) -> None:
     d = move_face(red_metallic, 40.0, -5.0)
     assert d.face == (60.0, 40.0, -5.0) and d.flop == red_metallic.flop
     d = move_flop(red_metallic, 0.0, 0.0, L=20.0)

@@ -34,7 +34,7 @@ def test_fit_recovers_a_rendered_design(sphere, initial, red_metallic) -> None:
     # the design is recovered: face within 2.5 ΔE*ab, flop within 1 ΔE*ab, travel within 8°
     assert np.linalg.norm(np.subtract(fit.design.face, red_metallic.face)) < 2.5
     assert np.linalg.norm(np.subtract(fit.design.flop, red_metallic.flop)) < 1.0
-    assert abs(fit.design.travel_deg - 70.0) < 8.0
+    assert fit.design.travel_deg is not None and abs(fit.design.travel_deg - 70.0) < 8.0
     assert fit.design.gloss_gu == 50.0 and fit.gloss_source == "default"
     assert len(fit.lab_standard) == 3
     # the RGB curve at the standard angles (thesis §3.7.3) matches the design there

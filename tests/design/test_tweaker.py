@@ -77,7 +77,7 @@ def test_adjust_rejects_bad_requests(sphere, red_metallic) -> None:
     with pytest.raises(DesignInputError, match="xy"):
         adjust_at(red_metallic, sphere.aspecular_deg, (64, 3), "L", 1.0)
     with pytest.raises(DesignInputError, match="kind"):
-        adjust_at(red_metallic, sphere.aspecular_deg, (32, 32), "S", 1.0)
+        adjust_at(red_metallic, sphere.aspecular_deg, (32, 32), "S", 1.0)  # type: ignore[arg-type]  # the bad kind under test
     with pytest.raises(DesignInputError, match="delta"):
         adjust_at(red_metallic, sphere.aspecular_deg, (32, 32), "C", -1.5)
     with pytest.raises(DesignInputError, match="delta"):

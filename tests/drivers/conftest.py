@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import TypedDict
 
 import pytest
 
@@ -15,7 +16,16 @@ from simulators.scripted import ScriptedDevice
 from station.drivers.ma6 import MA6Spectro
 from station.drivers.transport import SerialTransport
 
-FAST = {"timeout_s": 0.25, "retries": 1, "measure_limit_s": 0.5}
+
+class Timing(TypedDict):
+    """Driver timing keywords: reply timeout (s), retries, and the measurement time limit (s)."""
+
+    timeout_s: float
+    retries: int
+    measure_limit_s: float
+
+
+FAST: Timing = {"timeout_s": 0.25, "retries": 1, "measure_limit_s": 0.5}
 
 
 @contextmanager

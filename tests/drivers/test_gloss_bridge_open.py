@@ -18,8 +18,9 @@ import pytest
 
 from simulators.gloss import GlossDevice, HidBridgeServer
 from station.drivers import CommunicationError, DeviceInUse, open_instrument
+from tests.drivers.conftest import Timing
 
-FAST = {"timeout_s": 0.5, "retries": 1, "measure_limit_s": 2.0}
+FAST: Timing = {"timeout_s": 0.5, "retries": 1, "measure_limit_s": 2.0}
 
 
 class BridgePeer:

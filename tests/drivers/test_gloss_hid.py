@@ -28,9 +28,10 @@ from station.drivers import (
 from station.drivers.discovery import list_devices
 from station.drivers.gloss import GlossMeter, hid_path_for
 from station.drivers.transport import HidTransport
+from tests.drivers.conftest import Timing
 from tests.waiting import pause
 
-FAST = {"timeout_s": 0.2, "retries": 1, "measure_limit_s": 0.6}
+FAST: Timing = {"timeout_s": 0.2, "retries": 1, "measure_limit_s": 0.6}
 
 
 def x8(b: bytes) -> int:
@@ -44,7 +45,9 @@ class ScriptedHid:
     """hid.device look-alike replaying exact reports (written report -> input reports)."""
 
     def __init__(self, feature: bytes, pairs: list[tuple[bytes, list[bytes]]]) -> None:
-        self.feature, self.pairs, self.inbox, self.unexpected = feature, list(pairs), [], []
+        self.feature, self.pairs = feature, list(pairs)
+        self.inbox: list[bytes] = []
+        self.unexpected: list[bytes] = []
         self.features_sent: list[bytes] = []
 
     def __call__(self):
@@ -106,8 +109,10 @@ def scripted(pairs, feature=None) -> tuple[GlossMeter, ScriptedHid]:
 def test_identify_and_status_from_feature_report():
     inst, _ = scripted([], feature_03(needed=1))
     with inst.open():
+        assert inst.info is not None
         assert (inst.info.model, inst.info.serial, inst.info.firmware) == ("GLS3", "GM0815", "3.1.0")
         s = inst.status()
+    assert s.expires is not None
     assert (s.needed, s.calibration_id, s.expires.timestamp()) == ("gloss", "CAL-GM0815-0005", 1795442400)
 
 
@@ -274,6 +279,7 @@ def test_calibrate_and_clear_bytes():
     with inst.open():
         r = inst.calibrate()
     assert hid.unexpected == [] and hid.pairs == []
+    assert r.expires is not None
     assert (r.calibration_id, r.steps, r.passed, r.expires.timestamp()) == (
         "CAL-GM0815-0006",
         ("gloss",),
@@ -310,11 +316,11 @@ def test_failed_reconnect_releases_the_port_claim():
         b.dev.held = True
         real_open(path)
 
-    b.dev.open_path = taken  # the reconnect finds the port held by another process
+    b.dev.open_path = taken  # type: ignore[method-assign]  # the reconnect finds the port held by another process
     with pytest.raises(DeviceInUse):
         b.inst.measure()
     assert not b.inst.transport.is_open
-    b.dev.open_path = real_open
+    b.dev.open_path = real_open  # type: ignore[method-assign]
     b.dev.held = False
     b.faults.clear()
     with b.inst.open():

@@ -32,9 +32,10 @@ from station.drivers.ma3 import MA3Spectro
 from station.drivers.transport import UsbTransport
 from station.model.difference import delta_e
 from station.model.spectra import reflectance_to_lab
+from tests.drivers.conftest import Timing
 
 ANGLES = (15, 45, 110)
-FAST = {"timeout_s": 0.2, "retries": 1, "measure_limit_s": 0.5}
+FAST: Timing = {"timeout_s": 0.2, "retries": 1, "measure_limit_s": 0.5}
 
 
 def raw_frame(msg: int, rid: int, payload: bytes = b"", flags: int = 0x02, error: int = 0) -> bytes:
@@ -82,6 +83,7 @@ def finish(fw: ScriptedFirmware) -> None:
 def test_identify_bytes():
     inst, fw = scripted(CONNECT)
     with inst.open():
+        assert inst.info is not None
         assert (inst.info.model, inst.info.serial, inst.info.firmware) == ("MA3", "300456", "2.0.7")
         assert inst.info.geometries == ("45as15", "45as45", "45as110")
     finish(fw)
@@ -124,6 +126,7 @@ def test_status_and_calibrate_bytes():
         24.5,
     )
     assert (c.calibration_id, c.verification_de, c.passed) == ("CAL-300456-0008", 0.125, True)
+    assert c.expires is not None
     assert c.expires.timestamp() == 1795442400
 
 
@@ -172,6 +175,7 @@ def test_garbage_before_frame_is_skipped():
     pairs = [(raw_frame(0x0001, 1), b"\x00\xc1\x13" + reply(0x0001, 1, ID_PAYLOAD))]
     inst, fw = scripted(pairs)
     with inst.open():
+        assert inst.info is not None
         assert inst.info.serial == "300456"
     finish(fw)
 

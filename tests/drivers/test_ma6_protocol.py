@@ -53,6 +53,7 @@ def driver(path: str) -> MA6Spectro:
 
 def test_connect_and_identify_bytes():
     with scripted_pty(CONNECT) as (path, _), driver(path).open() as inst:
+        assert inst.info is not None
         assert inst.info.model == "MA6"
         assert inst.info.serial == "600123"
         assert inst.info.firmware == "1.4.2"

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import time
+from typing import Any
 
 import pytest
 
@@ -21,7 +22,7 @@ def test_async_measure_keeps_loop_running_and_serialises():
     bench = Ma6Bench(measure_time_s=0.15)
     bench.inst.open()
 
-    async def scenario() -> tuple[int, list]:
+    async def scenario() -> tuple[int, tuple[Any, Any]]:
         in_flight = 0  # measurements started and not yet returned
         ticks_while_measuring = 0
         stop = asyncio.Event()
@@ -70,6 +71,7 @@ def test_closed_on_exit_and_reopenable():
 def test_twelve_geometry_instrument():
     dev = Ma6Device(SpectroPhysics(), measure_time_s=0.01, twelve=True)
     with PtyHost(dev) as host, MA6Spectro(SerialTransport(host.path), **FAST).open() as inst:
+        assert inst.info is not None
         assert inst.info.model == "MA12" and len(inst.info.geometries) == 12
         r = inst.measure()
     assert r.reflectance.shape == (12, 31)

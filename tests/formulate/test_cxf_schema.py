@@ -24,7 +24,7 @@ from station.formulate.formulation import formulate
 from station.formulate.library import Library
 from station.ingest.errors import ImportFileError
 from station.ingest.formats import read_measurement_file, write_measurement_file
-from station.ingest.formats.measurement import Instrument, VendorValue, build_measurement
+from station.ingest.formats.measurement import ImportedMeasurement, Instrument, VendorValue, build_measurement
 from station.model import FaceFlopTravelGloss
 from station.model.domain import ANGLES_3
 
@@ -90,7 +90,7 @@ def test_library_export_is_schema_valid_and_reads_back(
     assert len(library_extras(sub)) == len(sub)
 
 
-def _measurement() -> object:
+def _measurement() -> ImportedMeasurement:
     def err(fld: str, accepted: str, got: object) -> ImportFileError:
         return ImportFileError("test", "m", fld, accepted, got)
 

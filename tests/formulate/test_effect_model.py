@@ -61,6 +61,7 @@ def test_thin_film_matches_the_airy_formula() -> None:
     pearl = DB.colorants[DB.names.index("interference_blue")]
     tf = pearl.flake.thin_film  # type: ignore[union-attr]
     lam = C.WAVELENGTHS_NM
+    assert tf is not None
     n1, n2 = 1.5, tf.cauchy_a + tf.cauchy_b_nm2 / lam**2
     r12 = (n1 - n2) / (n1 + n2)  # normal incidence, binder | TiO2 | binder: r23 = −r12
     delta = 2 * math.pi * n2 * tf.thickness_nm / lam
@@ -171,5 +172,6 @@ def test_outside_the_gamut_is_refused_with_the_nearest_paint() -> None:
     pred = C.predict_lab(rep.formulation.concentrations, A3)
     near = rep.nearest.lab_at(np.array(A3))
     assert np.max(np.abs(near - pred)) < 3.0  # up to the face/flop/travel fit of the 5 angles
-    assert rep.to_dict()["nearest_achievable_paint"]["face"] == list(rep.nearest.face)
+    nearest = rep.to_dict()["nearest_achievable_paint"]
+    assert isinstance(nearest, dict) and nearest["face"] == list(rep.nearest.face)
     assert colorant_gamut(BRIGHT_SILVER).inside

@@ -47,6 +47,7 @@ def _diffuse_airy(name: str) -> np.ndarray:
     """r̄(λ): the two-faced platelet's reflectance for Lambertian light, ∫ R sin 2β dβ (0–90°) by quadrature."""
     tf = DB.colorants[DB.names.index(name)].flake.thin_film  # type: ignore[union-attr]
     lam = C.WAVELENGTHS_NM
+    assert tf is not None
     n_film = tf.cauchy_a + tf.cauchy_b_nm2 / lam**2
     out = np.empty(lam.size)
     for k in range(lam.size):
@@ -66,9 +67,9 @@ def _hue(lab: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("name", [*INTERFERENCE, "pearl_white"])
 def test_body_seen_through_the_platelets_is_filtered_by_their_transmission(name: str) -> None:
     r_bar = _diffuse_airy(name)
-    np.testing.assert_allclose(
-        DB.colorants[DB.names.index(name)].flake.thin_film.diffuse_reflectance(), r_bar, atol=2e-3
-    )  # type: ignore[union-attr]
+    flake = DB.colorants[DB.names.index(name)].flake
+    assert flake is not None and flake.thin_film is not None
+    np.testing.assert_allclose(flake.thin_film.diffuse_reflectance(), r_bar, atol=2e-3)
     c = DB.vector({name: 0.08, "white_tio2": 0.1})
     area = 1 - math.exp(-DB.colorants[DB.names.index(name)].flake.coverage_per_fraction * 0.08)  # type: ignore[union-attr]
     want = 1 - area * (1 - (1 - r_bar) ** 2)  # down and up through a film that transmits 1 − r̄
@@ -92,6 +93,7 @@ def test_the_face_keeps_the_airy_reflection_hue(name: str) -> None:
     lam = C.WAVELENGTHS_NM
     n = 1.5  # the light meets the flakes that serve 15° at β = (φ_i′ + φ_v′)/2 ≈ 23.8° inside the film
     beta = (math.asin(math.sin(math.radians(45)) / n) + math.asin(math.sin(math.radians(30)) / n)) / 2
+    assert tf is not None
     one = _airy(beta, lam, tf.cauchy_a + tf.cauchy_b_nm2 / lam**2, tf.thickness_nm)
     airy = C.lab_from_reflectance(2 * one / (1 + one))
     assert abs((_hue(lab) - _hue(airy) + 180.0) % 360.0 - 180.0) < 15.0

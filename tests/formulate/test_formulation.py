@@ -89,7 +89,8 @@ def test_closed_loop_converges_within_three_corrections(small_library: Library, 
         assert spray.panels == len(job.steps)
         last = job.steps[-1]
         assert np.allclose(last.de_per_angle, delta_e(design, np.array(last.measured_lab), "cie2000"))
-        assert job.to_dict()["steps"][0]["kind"] == "initial"
+        steps = job.to_dict()["steps"]
+        assert isinstance(steps, list) and steps[0]["kind"] == "initial"
 
 
 def test_additive_instrument_bias_is_cancelled_in_one_correction(designs) -> None:

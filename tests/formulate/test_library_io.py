@@ -89,6 +89,7 @@ def test_cxf_library_carries_recipes_and_spectra_that_reproduce_its_lab(small_li
     data = library_to_cxf(lib, spectra=True, created=WHEN)
     back = read_library_cxf(data)
     assert back.synthetic and back.colorant_names == lib.colorant_names
+    assert back.recipes is not None and lib.recipes is not None and lib.colorant_names is not None
     assert np.max(np.abs(back.recipes - lib.recipes)) <= 0.5e-6 + 1e-12
     _, extras = read_cxf_objects(data)
     assert all(x is not None and x.recipe_units == "fraction" for x in extras)

@@ -20,6 +20,7 @@ from station.formulate.snap import (
     view_data,
 )
 from station.formulate.snap.bounds import box_bounds, point_bounds_cie2000
+from station.formulate.snap.results import SnapStats
 from station.model.difference import delta_e
 from station.model.domain import ANGLES_3
 
@@ -117,6 +118,7 @@ def test_match_of_a_library_paint_is_itself(small_library: Library) -> None:
     assert result.matches[0].sum_de == 0.0
     assert result.warnings == ()
     d = result.to_dict()
+    assert isinstance(d["matches"], list)
     assert set(d["matches"][0]) >= {"code", "sum_de", "de_per_angle"}
     assert len(d["matches"]) == 3
 
@@ -130,7 +132,9 @@ def test_far_outside_warning_for_a_too_saturated_design(small_library: Library) 
 def test_off_radial_travel_warning() -> None:
     # a library of radial metallics (hue constant from face to flop) and a design whose hue turns 90°
     lab = np.array([[[70.0, 30.0, 0.0], [50.0, 25.0, 0.0], [30.0, 20.0, 0.0]]])
-    lib = Library("radial", ["R1"], ["metallic"], [80.0], (15.0, 45.0, 110.0), lab)
+    lib = Library(
+        "radial", np.array(["R1"]), np.array(["metallic"]), np.array([80.0]), (15.0, 45.0, 110.0), lab
+    )
     design = np.array([[70.0, 30.0, 0.0], [50.0, 22.0, 8.0], [30.0, 22.0, 14.0]])
     result = color_snap(lib, design, k=1)
     assert any("travel direction" in w for w in result.warnings)
@@ -141,6 +145,8 @@ def test_off_radial_travel_warning() -> None:
 def test_view_data_has_design_matches_and_cloud(small_library: Library) -> None:
     result = color_snap(small_library, small_library.angle_columns()[3], k=2)
     data = view_data(small_library, result, max_cloud=100)
+    assert isinstance(data["design"], list) and isinstance(data["matches"], list)
+    assert isinstance(data["cloud"], dict)
     assert len(data["design"]) == 3 and len(data["matches"]) == 2
     assert len(data["cloud"]["lab"]) == 100 and data["cloud"]["sampled"] is True
     assert data["synthetic"] is True
@@ -207,7 +213,7 @@ def test_concurrent_queries_get_their_own_statistics(method: str, use_numba: boo
     rounds = 100
     barrier = Barrier(2)
 
-    def run(name: str) -> list[object]:
+    def run(name: str) -> list[SnapStats]:
         q = near if name == "near" else far
         out = []
         for _ in range(rounds):

@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from station.formulate.de_kernels import KERNELS
+from station.formulate.de_kernels import cie2000
 from station.formulate.snap import SnapIndex, brute_force
 from station.formulate.snap.bounds import W_AB, W_L, box_bounds_cie2000_fast, point_bounds_cie2000
 from station.formulate.snap.kernel import best_first_cie2000, compiled_search
@@ -50,7 +50,7 @@ def _pairs(draw: st.DrawFn, n: int = 24) -> tuple[np.ndarray, np.ndarray]:
 @given(pair=_pairs())
 def test_point_bounds_bracket_the_exact_sum(pair) -> None:
     q, p = pair
-    exact = KERNELS["cie2000"](q[None], p).sum(-1)
+    exact = cie2000(q[None], p).sum(-1)
     lower, upper = point_bounds_cie2000(q, p, upper=True)
     assert np.all(lower <= exact), (lower - exact).max()
     assert np.all(upper >= exact), (exact - upper).max()
@@ -62,7 +62,7 @@ def test_bounds_are_tight_enough_to_prune() -> None:
     q = rng.uniform(-60, 60, (3, 3))
     q[:, 0] = 50.0
     p = q + rng.normal(0, 3.0, (2000, 3, 3))
-    exact = KERNELS["cie2000"](q[None], p).sum(-1)
+    exact = cie2000(q[None], p).sum(-1)
     lower, upper = point_bounds_cie2000(q, p, upper=True)
     assert np.median(lower / exact) > 0.6 and np.median(upper / exact) < 1.6
 
@@ -156,7 +156,7 @@ def test_compiled_walk_equals_its_python_form_and_visits_few_leaves(small_librar
 @given(pair=_pairs(n=20))
 def test_table_box_bound_and_table_point_bound_never_exceed_the_exact_sum(pair) -> None:
     q, p = pair
-    exact = KERNELS["cie2000"](q[None], p).sum(-1)
+    exact = cie2000(q[None], p).sum(-1)
     chroma = np.hypot(p[..., 1], p[..., 2])
     lo, hi = p.min(0), p.max(0)
     box = box_bounds_cie2000_fast(q, lo[None], hi[None], lo[None, :, 0], hi[None, :, 0], chroma.max(0)[None])

@@ -19,8 +19,10 @@ def test_argyll_ti3_spec_fields_single_geometry() -> None:
     white, black = read_measurement_file(DATA / "argyll_45_0.ti3").measurements
     assert white.geometries == black.geometries == (geometry_name(45, 45),)  # 45/0: 45° from specular
     assert white.wavelengths_nm == (400.0, 500.0, 700.0)  # SPEC_400 SPEC_500 SPEC_700
-    assert white.spectra == (pytest.approx((0.825, 0.881, 0.899)),)  # SPECTRAL_NORM "100.000000"
-    assert black.spectra == (pytest.approx((0.0125, 0.0102, 0.0131)),)
+    assert white.spectra is not None and black.spectra is not None
+    assert len(white.spectra) == len(black.spectra) == 1
+    assert white.spectra[0] == pytest.approx((0.825, 0.881, 0.899))  # SPECTRAL_NORM "100.000000"
+    assert black.spectra[0] == pytest.approx((0.0125, 0.0102, 0.0131))
     assert white.lab == ((95.10, -0.42, 2.31),) and black.lab == ((3.20, 0.15, -0.80),)
     assert (white.illuminant, white.observer) == ("D50", CIE1931)  # ICC PCS, stated by no keyword
     assert white.measured_at == dt.datetime(2026, 3, 4, 9, 12, 44, tzinfo=dt.UTC)
@@ -46,6 +48,7 @@ def test_lab_only_multi_angle_table() -> None:
     (m,) = read_measurement_file(DATA / "lab_multi_angle.txt").measurements
     assert m.sample == "Blue 2209" and m.spectra is None
     assert m.geometries == ("45as-15", "45as15", "45as25", "45as45", "45as110")
+    assert m.lab is not None
     assert m.lab[0] == (41.20, -3.10, -38.40) and m.lab[-1] == (15.02, 0.21, -17.80)
     assert m.observer == "CIE 1964 10 Degree Standard Observer" and m.illuminant == "D65"
 

@@ -52,12 +52,14 @@ def test_six_brdf_angles_in_one_specification_read_in_order_and_by_notation() ->
         == expected_order
         == ["45as-15", "45as15", "45as25", "45as45", "45as75", "45as110"]
     )
+    assert silver.lab is not None and silver.spectra is not None
     assert np.array_equal(silver.lab, [(v.l, v.a, v.b) for v in labs])
     assert np.array_equal(silver.spectra, [v.value for v in spectra])
     assert silver.wavelengths_nm == tuple(float(w) for w in range(400, 701, 10))
     assert silver.lab[0] == (118.42, -1.05, -3.87)  # the file's first ColorCIELab, at 45as-15
     # object 2: values named by Notation, in shuffled order
     named = [v for v in objects[1].color_values.choice if isinstance(v, cxf3.ColorCielab)]
+    assert red.lab is not None
     got = dict(zip(red.geometries, red.lab, strict=True))
     assert got == {by_notation[v.name]: (v.l, v.a, v.b) for v in named}
     assert list(red.geometries) == expected_order  # named values in shuffled order: stored in BRDFAngle order

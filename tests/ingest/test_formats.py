@@ -58,6 +58,7 @@ def test_round_trip_of_simulator_files(sim_files: tuple[dict, dict[str, Path]], 
     readings = readings_from_import(
         got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC), job="J-7", part="door"
     )
+    assert m.lab is not None
     r, r15 = readings  # one reading per illumination block, in the file's order, on the same panel
     assert (r.illumination_deg, r15.illumination_deg) == (45.0, 15.0) and r15.panel == r.panel
     assert r.geometries_deg == [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0]  # the 45° block

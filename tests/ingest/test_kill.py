@@ -84,15 +84,19 @@ def _check(url: str, outbox_path: Path, acks: Path) -> int:
     return len(stored)
 
 
-def _run_rounds(url: str, tmp_path: Path, hold_lock: object) -> None:
+def _run_rounds(url: str, tmp_path: Path, hold_lock: _NoLock) -> None:
     rng = random.Random(int.from_bytes(os.urandom(4), "little"))
     outbox, acks = tmp_path / "outbox.sqlite3", tmp_path / "acks.txt"
     for round_no in range(ROUNDS):
         down = round_no % 3 == 1
         with hold_lock(down) as (child_url, busy_ms), _spawn(child_url, outbox, acks, busy_ms) as child:
             target = _ack_lines(acks) + rng.randint(0, ROUND_ACKS[down])
+
+            def round_done(n: int = target, c: Child = child) -> bool:
+                return _ack_lines(acks) >= n or c.poll() is not None
+
             wait_until(
-                lambda n=target, c=child: _ack_lines(acks) >= n or c.poll() is not None,
+                round_done,
                 ROUND_TIMEOUT_S,
                 interval=0.01,
                 what=f"round {round_no}: {target} acknowledgements",

@@ -38,7 +38,7 @@ class _Service(ServeProcess):
     """``station serve`` with a simulated MA6 in its own process group; started, killed and restarted."""
 
     def __init__(self, data_dir: Path, database_url: str | None) -> None:
-        args = ("--database", database_url) if database_url is not None else ()
+        args: tuple[str, ...] = ("--database", database_url) if database_url is not None else ()
         args += ("--no-demo-library", "--simulators", "ma6")
         super().__init__(data_dir, args, cwd=REPO, own_group=True, start_timeout_s=START_TIMEOUT_S)
 

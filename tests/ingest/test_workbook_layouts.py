@@ -61,6 +61,7 @@ def test_real_layout_reads_dates_conditions_and_texture(tmp_path: Path) -> None:
     a, b = read_measurement_file(_workbook(tmp_path / "ma-t12.xlsx")).measurements
     assert [a.sample, b.sample] == ["Trial A", "Trial B"]
     assert a.geometries == tuple(GEOMETRIES) and a.wavelengths_nm == tuple(float(w) for w in WL)
+    assert a.spectra is not None and b.spectra is not None
     assert np.array_equal(a.spectra, _curves(0)) and np.array_equal(b.spectra, _curves(1))
     assert a.measured_at == WHEN["Trial A"].replace(tzinfo=dt.UTC)
     assert b.measured_at == WHEN["Trial B"].replace(tzinfo=dt.UTC)

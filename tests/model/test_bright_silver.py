@@ -24,6 +24,7 @@ from station.model.indices import library_indices
 
 def _by_hand(design: FaceFlopTravelGloss, theta: float) -> np.ndarray:
     tc = design.travel_deg
+    assert tc is not None
     s = (tc - min(theta, tc)) / (tc - 15.0)
     return np.asarray(design.flop) + (np.asarray(design.face) - np.asarray(design.flop)) * s * s
 

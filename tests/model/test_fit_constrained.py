@@ -111,7 +111,9 @@ def test_paints_inside_the_bound_keep_the_unconstrained_fit() -> None:
         # and θ_clamp is the unconstrained optimum: no point of a 1° grid does better
         grid = np.arange(FACE_ANGLE_DEG + 1.0, TRAVEL_MAX_DEG + 1e-9, 1.0)
         best = min(
-            _cost(m, *np.linalg.lstsq(_design_matrix(angles, tc), lab, rcond=None)[0], tc) for tc in grid
+            _cost(m, c[0], c[1], tc)
+            for tc in grid
+            for c in [np.linalg.lstsq(_design_matrix(angles, tc), lab, rcond=None)[0]]
         )
         assert _cost(m, d.face, d.flop, d.travel_deg) <= best + 1e-9
     assert checked > 480
@@ -132,4 +134,5 @@ def test_three_angle_closed_form_vertex_beyond_the_bound_is_constrained() -> Non
         coef, *_ = np.linalg.lstsq(_design_matrix(angles, tc), lab, rcond=None)
         if lab_within(coef):
             best = min(best, _cost(m, coef[0], coef[1], tc))
+    assert d.travel_deg is not None
     assert _cost(m, d.face, d.flop, d.travel_deg) <= best + 1e-9

@@ -50,7 +50,7 @@ class TestClosedForms:
             assert -row[1] / (2 * row[0]) == pytest.approx(62.5, abs=1e-12)
 
     def test_from_coefficients_derives_travel(self) -> None:
-        cq = ClampedQuadratic.from_coefficients([[1 / 60, -2.5, 123.75], [0, 0, 5], [0, 0, -3]], 40)
+        cq = ClampedQuadratic.from_coefficients(np.array([[1 / 60, -2.5, 123.75], [0, 0, 5], [0, 0, -3]]), 40)
         d = cq.to_fftg()
         assert d.travel_deg == pytest.approx(75.0)
         assert d.face == pytest.approx((90.0, 5.0, -3.0))
@@ -58,12 +58,14 @@ class TestClosedForms:
 
     def test_inconsistent_vertices_refused(self) -> None:
         with pytest.raises(ModelInputError, match=r"coefficients\[a\]"):
-            ClampedQuadratic.from_coefficients([[1 / 60, -2.5, 123.75], [1.0, -100.0, 0.0], [0, 0, 0]])
+            ClampedQuadratic.from_coefficients(
+                np.array([[1 / 60, -2.5, 123.75], [1.0, -100.0, 0.0], [0, 0, 0]])
+            )
 
     def test_three_angle_exact_case_b(self) -> None:
         # θc between 45 and 110: L45 = flop + (face − flop)((θc − 45)/(θc − 15))².
         # With face 100, flop 20, θc 75: L45 = 20 + 80·(30/60)² = 40; L110 = 20.
-        r = fit_fftg(AspecularMeasurements(ANGLES_3, [[100, 0, 0], [40, 0, 0], [20, 0, 0]]))
+        r = fit_fftg(AspecularMeasurements(ANGLES_3, np.array([[100, 0, 0], [40, 0, 0], [20, 0, 0]])))
         assert r.method == "closed-form"
         assert r.design.travel_deg == pytest.approx(75.0, abs=1e-12)
         assert r.exact
@@ -76,7 +78,7 @@ class TestClosedForms:
 
     def test_ab_least_squares_residual_reported(self) -> None:
         # docs/design.md erratum 5: L is exact, a and b are least squares with the shared θc.
-        r = fit_fftg(AspecularMeasurements(ANGLES_3, [[90, 2, -5], [50, 1, -3], [30, 0.5, -1]]))
+        r = fit_fftg(AspecularMeasurements(ANGLES_3, np.array([[90, 2, -5], [50, 1, -3], [30, 0.5, -1]])))
         assert r.method == "closed-form"
         model = r.design.lab_at(np.asarray(ANGLES_3))
         assert model[:, 0] == pytest.approx([90, 50, 30], abs=1e-9)  # L exact
@@ -134,7 +136,7 @@ class TestRoundTrips:
 
 class TestDegenerate:
     def test_solid(self) -> None:
-        r = fit_fftg(AspecularMeasurements(ANGLES_3, [[50, 20, 10]] * 3, 80))
+        r = fit_fftg(AspecularMeasurements(ANGLES_3, np.array([[50, 20, 10]] * 3), 80))
         assert r.design.is_solid and r.design.travel_deg is None
         assert r.exact and "solid" in r.warnings
         assert r.design.lab_at([15, 45, 110]) == pytest.approx(np.tile([50, 20, 10], (3, 1)))
@@ -150,7 +152,7 @@ class TestDegenerate:
         assert any("flop brighter" in w for w in r.warnings)
 
     def test_non_monotone_l_least_squares(self) -> None:
-        r = fit_fftg(AspecularMeasurements(ANGLES_3, [[40, 0, 0], [70, 0, 0], [30, 0, 0]]))
+        r = fit_fftg(AspecularMeasurements(ANGLES_3, np.array([[40, 0, 0], [70, 0, 0], [30, 0, 0]])))
         assert r.method == "least-squares" and not r.exact
         assert any("no monotone" in w for w in r.warnings)
         assert all(np.isfinite(r.residual_de)) and max(r.residual_de) > 1.0
@@ -175,16 +177,16 @@ class TestDegenerate:
     def test_fit_vertex_below_15_refused(self) -> None:
         # L collapses between 5° and 10° and stays flat: the best vertex is below the face angle
         with pytest.raises(FitError, match="travel_deg"):
-            fit_fftg(AspecularMeasurements((5, 10, 110), [[80, 0, 0], [10, 0, 0], [10.5, 0, 0]]))
+            fit_fftg(AspecularMeasurements((5, 10, 110), np.array([[80, 0, 0], [10, 0, 0], [10.5, 0, 0]])))
 
     def test_coefficients_vertex_below_15_refused(self) -> None:
         # L_a = 1, L_b = −20: vertex at 10° (eq 3.3.4)
         with pytest.raises(ModelInputError, match="theta_clamp_deg"):
-            ClampedQuadratic.from_coefficients([[1.0, -20.0, 150.0], [0, 0, 0], [0, 0, 0]])
+            ClampedQuadratic.from_coefficients(np.array([[1.0, -20.0, 150.0], [0, 0, 0], [0, 0, 0]]))
 
     def test_vertex_inside_the_set_is_not_identifiable_not_refused(self) -> None:
         # only 15° lies below any vertex in (15, 16]: every such vertex fits equally
-        r = fit_fftg(AspecularMeasurements((15, 16, 110), [[80, 0, 0], [10, 0, 0], [10.5, 0, 0]]))
+        r = fit_fftg(AspecularMeasurements((15, 16, 110), np.array([[80, 0, 0], [10, 0, 0], [10.5, 0, 0]])))
         assert r.design.travel_deg == 16.0
         assert any("not identifiable" in w for w in r.warnings)
 
@@ -199,7 +201,7 @@ class TestDegenerate:
     )
     def test_bad_angles(self, angles, field) -> None:
         with pytest.raises(ModelInputError) as err:
-            AspecularMeasurements(angles, [[50, 0, 0]] * 3)
+            AspecularMeasurements(angles, np.array([[50, 0, 0]] * 3))
         assert err.value.field == field
 
     @pytest.mark.parametrize(
@@ -227,7 +229,7 @@ class TestDegenerate:
 
     def test_too_few_angles(self) -> None:
         with pytest.raises(FitError, match="at least 3"):
-            fit_fftg(AspecularMeasurements((15, 45), [[50, 0, 0], [40, 0, 0]]))
+            fit_fftg(AspecularMeasurements((15, 45), np.array([[50, 0, 0], [40, 0, 0]])))
 
     def test_never_nan(self) -> None:
         rng = np.random.default_rng(3)
@@ -241,7 +243,7 @@ class TestDegenerate:
             assert np.all(np.isfinite(r.design.face + r.design.flop))
 
     def test_immutable(self) -> None:
-        m = AspecularMeasurements(ANGLES_3, [[50, 0, 0]] * 3)
+        m = AspecularMeasurements(ANGLES_3, np.array([[50, 0, 0]] * 3))
         with pytest.raises(ValueError):
             m.lab[0, 0] = 3.0
         d = FaceFlopTravelGloss((50, 0, 0), (40, 0, 0), 60)

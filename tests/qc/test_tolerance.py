@@ -137,7 +137,10 @@ def test_round_trip_through_dict() -> None:
         (lambda: judge(STD, STD[:2], ANGLES, ToleranceSet.uniform(ANGLES)), "sample"),
         (
             lambda: judge(
-                STD, [[50, 0, 0], [50, 0, 0], [50, 0, np.nan]], ANGLES, ToleranceSet.uniform(ANGLES)
+                STD,
+                [[50.0, 0.0, 0.0], [50.0, 0.0, 0.0], [50.0, 0.0, np.nan]],
+                ANGLES,
+                ToleranceSet.uniform(ANGLES),
             ),
             "sample",
         ),

@@ -99,6 +99,7 @@ def test_gl_matches_the_numpy_reference(gl_ctx, booth_basis, direction):
                 # float32 texture filtering and the GL albedo table (bilinear in N·V, azimuth)
                 assert np.median(np.abs(got - ref) / np.maximum(ref, 1e-6)) < 2e-3, (energy, j)
                 assert delta_e(_lab(got), _lab(ref)).mean() < 0.1, (energy, j)
+                assert gl.last_anisotropy is not None
                 assert gl.last_anisotropy.samples == j
 
 
@@ -154,7 +155,7 @@ def test_isotropic_limit_is_the_lobe_path(gl_ctx, alpha):
             )[m]
             np.testing.assert_allclose(got, iso, rtol=1e-4, atol=1e-6)
         got = gl.render_linear(SCENE, [paint], anisotropy=Anisotropy(alpha, alpha))
-        assert gl.last_anisotropy.samples == 1
+        assert gl.last_anisotropy is not None and gl.last_anisotropy.samples == 1
     lobe = an.WardLobe((0.8,) * 3, alpha, alpha)
     n = gbuffer(SCENE, w, w)
     one = an.shade_anisotropic(basis, lobe, 1, n.normal[m], n.view[m])
@@ -179,6 +180,7 @@ def test_renderer_takes_the_sample_count_from_the_level_of_detail(gl_ctx, booth_
             expect = lod.choose_anisotropic_samples(
                 booth_basis, lobe, *sphere_pixels(8), tol, energy="design"
             )
+            assert choice is not None
             assert choice.samples == expect.samples and str(choice.samples) in choice.reason
             given = gl.render_linear(
                 SCENE, [_gloss_paint(0.8)], anisotropy=a, anisotropic_samples=choice.samples
@@ -212,7 +214,8 @@ def test_design_file_round_trip(tmp_path):
     }
     assert io.load_design_anisotropy(io.save_design(d, tmp_path / "b.json"))[1] is None  # absent: isotropic
     assert io.load_design_anisotropy(io.save_design(d, tmp_path / "c.json", anisotropy=None))[1] is None
-    assert io.anisotropy_from_dict({"anisotropy": {"alpha_x": 0.1, "alpha_y": 0.1}}).direction_deg == 0.0
+    round_lobe = io.anisotropy_from_dict({"anisotropy": {"alpha_x": 0.1, "alpha_y": 0.1}})
+    assert round_lobe is not None and round_lobe.direction_deg == 0.0
     assert an.WardLobe.from_design(a).tangent == pytest.approx(
         (np.cos(np.radians(35)), np.sin(np.radians(35)), 0)
     )

@@ -173,7 +173,9 @@ def test_basis_images_fold_the_coat_in(const_basis) -> None:
     from station.render.basis_images import build_basis_images
 
     basis = prefilter.prefilter_basis(procedural.sunny_sky(64), EXPS, max_size=32)
-    paint = LobeWeights(EXPS, [0.05, 0.04, 0.03], np.full((4, 3), 0.03), [0.0, 0.2, 0.5, 2.0])
+    paint = LobeWeights(
+        EXPS, np.array([0.05, 0.04, 0.03]), np.full((4, 3), 0.03), np.array([0.0, 0.2, 0.5, 2.0])
+    )
     scene = shapes.Scene("sphere")
     coat = ClearCoat()
     cached = build_basis_images(scene, basis, 40, 40, coat=coat)

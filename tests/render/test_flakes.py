@@ -118,6 +118,7 @@ def test_sun_glints_and_lod_off(gl_ctx) -> None:
     with GLRenderer(basis, 96, 64, ctx=gl_ctx) as gl:
         off = gl.render_linear(close, [w])
         on = gl.render_linear(close, [w], flakes=METALLIC_FLAKES)
+        assert gl.last_flakes is not None
         assert gl.last_flakes.on
         glints = (on - off).max(axis=-1) > 1.0  # flakes that catch the sun: radiance far above the sky's
         assert 3 <= glints.sum() < 0.2 * glints.size

@@ -33,13 +33,13 @@ def _orbit(cam: Camera, deg: float) -> Camera:
     """The camera turned by *deg* about the vertical through its target."""
     a = math.radians(deg)
     rot = np.array([[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]])
-    eye = np.add(cam.target, rot @ np.subtract(cam.eye, cam.target))
-    return Camera(tuple(map(float, eye)), cam.target, fov_deg=cam.fov_deg)
+    x, y, z = np.add(cam.target, rot @ np.subtract(cam.eye, cam.target))
+    return Camera((float(x), float(y), float(z)), cam.target, fov_deg=cam.fov_deg)
 
 
 def _dolly(cam: Camera, factor: float) -> Camera:
-    eye = np.add(cam.target, factor * np.subtract(cam.eye, cam.target))
-    return Camera(tuple(map(float, eye)), cam.target, fov_deg=cam.fov_deg)
+    x, y, z = np.add(cam.target, factor * np.subtract(cam.eye, cam.target))
+    return Camera((float(x), float(y), float(z)), cam.target, fov_deg=cam.fov_deg)
 
 
 def _reprojected_correlation(scene0, scene1, sp0: np.ndarray, sp1: np.ndarray) -> float:

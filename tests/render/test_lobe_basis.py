@@ -23,7 +23,7 @@ def test_design_database_spans_the_required_range() -> None:
     solids = [d for d in db if d.travel_deg is None]
     metallic = [d for d in db if d.travel_deg is not None]
     assert len(solids) >= 5 and len(metallic) >= 20
-    assert any(d.travel_deg >= 150 for d in metallic)  # high travel
+    assert any(d.travel_deg is not None and d.travel_deg >= 150 for d in metallic)  # high travel
     # hue-shifting pearls: face and flop hue angles differ by more than 40°
     hue = lambda lab: np.degrees(np.arctan2(lab[2], lab[1]))  # noqa: E731
     shifts = [
@@ -68,4 +68,5 @@ def test_greedy_selection_never_gets_worse() -> None:
     # Lobes are reused: the 2-lobe optimum started from the 1-lobe one and moves little in log space.
     assert min(abs(np.log(rows[1].exponents) - np.log(rows[0].exponents[0]))) < 1.5
     doc = bs.table_json(rows, 2, "test")
+    assert isinstance(doc["bases"], list)
     assert doc["default_lobes"] == 2 and len(doc["bases"]) == 3

@@ -64,7 +64,7 @@ def test_exactly_representable_brdf_is_recovered(method: str) -> None:
 def test_enumeration_equals_lawson_hanson_and_is_optimal() -> None:
     rng = np.random.default_rng(7)
     part = lf.fit_problem(BASIS).colour
-    b = rng.normal(size=(40, part.a.shape[0], 3)) * 0.2 + part.a @ rng.random(part.a.shape[1])[:, None]
+    b = rng.normal(size=(40, part.a.shape[0], 3)) * 0.2 + part.a @ rng.random(int(part.a.shape[1]))[:, None]
     x_enum = (
         lf._solve_enum(part, np.einsum("rk,drc->kdc", part.q, b).reshape(part.q.shape[1], -1))
         .reshape(part.q.shape[1], b.shape[0], 3)
@@ -240,6 +240,7 @@ def test_perceptual_fit_weighs_the_dark_flop(design_db) -> None:
     s = np.maximum(value, lf.PERCEPTUAL_FLOOR) ** (-2.0 / 3.0)
     a = prob.colour.a * s[:, None]
     b = value * g.weight[rows] * s
+    assert perc.k_a is not None
     x = np.concatenate([[perc.k_d[i, 0]], perc.k_dd[i, :, 0], [perc.k_a[i, 0]]])
     grad = a.T @ (a @ x - b)
     scale = np.abs(a.T @ b).max()

@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
 from station.errors import InputError
+from station.model import FaceFlopTravelGloss
 from station.render import lod
 from station.render import truth as tr
+
+#: Normals and views of the test sphere, (P, 3) each.
+Pixels = tuple[NDArray[np.float64], NDArray[np.float64]]
 
 
 def sky(h: int = 64) -> np.ndarray:
@@ -20,18 +25,17 @@ def sky(h: int = 64) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def metallic():
-    from station.model import FaceFlopTravelGloss
+def metallic() -> FaceFlopTravelGloss:
 
     return FaceFlopTravelGloss((110.0, -1.0, -25.0), (30.0, 4.0, -20.0), 110.0, 85.0, "blue-silver")
 
 
 @pytest.fixture(scope="module")
-def pixels():
+def pixels() -> Pixels:
     return tr.sphere_pixels(8)
 
 
-def test_constant_environment_needs_the_least(metallic, pixels) -> None:
+def test_constant_environment_needs_the_least(metallic: FaceFlopTravelGloss, pixels: Pixels) -> None:
     choice = lod.choose_lod(
         [metallic],
         np.ones((32, 64, 3)),
@@ -47,7 +51,7 @@ def test_constant_environment_needs_the_least(metallic, pixels) -> None:
     assert choice.met and "lobes" in choice.describe()
 
 
-def test_tighter_tolerance_never_chooses_less(metallic, pixels) -> None:
+def test_tighter_tolerance_never_chooses_less(metallic: FaceFlopTravelGloss, pixels: Pixels) -> None:
     loose = lod.choose_lod(
         [metallic], sky(), *pixels, tolerance_de=6.0, samples=32, quadrature_width=64, mode="exact"
     )
@@ -72,7 +76,7 @@ def test_tighter_tolerance_never_chooses_less(metallic, pixels) -> None:
         assert smaller.errors["lobes"] > share
 
 
-def test_anisotropic_samples_smallest_meeting_share(metallic, pixels) -> None:
+def test_anisotropic_samples_smallest_meeting_share(metallic: FaceFlopTravelGloss, pixels: Pixels) -> None:
     # The anisotropic renderer is the render helper's (station.render.anisotropy); this test drives the
     # selection with a stand-in whose error falls as 1/samples, so the answer is known in closed form.
     base = np.full((pixels[0].shape[0], 3), 0.2)
@@ -97,7 +101,7 @@ def test_anisotropic_samples_smallest_meeting_share(metallic, pixels) -> None:
     assert expected > 1
 
 
-def test_unreachable_tolerance_is_reported(metallic, pixels) -> None:
+def test_unreachable_tolerance_is_reported(metallic: FaceFlopTravelGloss, pixels: Pixels) -> None:
     choice = lod.choose_lod(
         [metallic], sky(), *pixels, tolerance_de=1e-4, samples=32, quadrature_width=64, lobe_counts=[1, 2, 3]
     )
@@ -105,7 +109,7 @@ def test_unreachable_tolerance_is_reported(metallic, pixels) -> None:
     assert "MISSES" in choice.describe() and choice.notes
 
 
-def test_input_errors(metallic, pixels) -> None:
+def test_input_errors(metallic: FaceFlopTravelGloss, pixels: Pixels) -> None:
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(InputError):
             lod.choose_lod([metallic], np.ones((8, 16, 3)), *pixels, tolerance_de=bad)

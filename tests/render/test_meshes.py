@@ -18,8 +18,12 @@ EXPS = (1.0, 8.0, 64.0, 512.0)
 
 def _pair() -> list[LobeWeights]:
     return [
-        LobeWeights(EXPS, [0.12, 0.02, 0.02], np.full((4, 3), 0.02), [0.0, 0.0, 0.1, 1.5]),
-        LobeWeights(EXPS, [0.02, 0.03, 0.12], np.full((4, 3), 0.01), [0.0, 0.0, 0.2, 1.0]),
+        LobeWeights(
+            EXPS, np.array([0.12, 0.02, 0.02]), np.full((4, 3), 0.02), np.array([0.0, 0.0, 0.1, 1.5])
+        ),
+        LobeWeights(
+            EXPS, np.array([0.02, 0.03, 0.12]), np.full((4, 3), 0.01), np.array([0.0, 0.0, 0.2, 1.0])
+        ),
     ]
 
 

@@ -32,7 +32,9 @@ def sky_basis():
 
 
 def _paint() -> LobeWeights:
-    return LobeWeights(EXPS, [0.1, 0.05, 0.03], np.full((4, 3), 0.02), [0.0, 0.0, 0.1, 1.0])
+    return LobeWeights(
+        EXPS, np.array([0.1, 0.05, 0.03]), np.full((4, 3), 0.02), np.array([0.0, 0.0, 0.1, 1.0])
+    )
 
 
 def test_stage_validation_names_fields() -> None:
@@ -98,7 +100,7 @@ def test_backdrop_and_rotation_in_a_linear_environment(linear_basis) -> None:
     # Lighting turns with the backdrop: the front point (N = R = +Z) of a gloss sphere, env turned 90°,
     # reflects the map at R_y(−90°)(+Z) = −X... within the lobe's first moment.
     cam = shapes.Camera((0.0, 0.0, 4.0), (0.0, 0.0, 0.0))
-    gloss = LobeWeights(EXPS, np.zeros(3), np.zeros((4, 3)), [0.0, 0.0, 0.0, (e + 1) / (2 * np.pi)])
+    gloss = LobeWeights(EXPS, np.zeros(3), np.zeros((4, 3)), np.array([0.0, 0.0, 0.0, (e + 1) / (2 * np.pi)]))
     img = nr.render_linear(
         shapes.Scene("sphere", camera=cam, stage=st.Stage(rotation_deg=90.0)), linear_basis, [gloss], 33, 33
     )

@@ -76,7 +76,7 @@ def test_exactly_representable_lobes_equal_truth() -> None:
     rho = np.pi * (k_d + basis.lobes(np.cos(np.radians(lf.ALPHA_GRID_DEG))) @ k_dd)
     # Without a horizon term the colour integrand is (N·ω)ρ(ψ)/π: the DD lobes exactly.
     brdf = lf.DesignedBRDF(rho, 500.0, 0.1, "exact")
-    weights = LobeWeights(basis.exponents, k_d, k_dd, [0.0, 0.0, 0.1 * 501 / (2 * np.pi)])
+    weights = LobeWeights(basis.exponents, k_d, k_dd, np.array([0.0, 0.0, 0.1 * 501 / (2 * np.pi)]))
     n, v = tr.sphere_pixels(10)
     scene = tr.TruthScene(analytic_env(), n, v, samples=128, quadrature_width=64)
     assert scene.lobes(weights, "exact") == pytest.approx(scene.truth(brdf), rel=2e-3, abs=1e-6)
@@ -107,7 +107,7 @@ def test_input_errors() -> None:
         tr.TruthScene(np.ones((8, 16, 3)), n, v[:-1])
     scene = tr.TruthScene(np.ones((8, 16, 3)), n, v, samples=16, quadrature_width=16)
     with pytest.raises(InputError):
-        scene.lobes(LobeWeights((2.0,), [0, 0, 0], [[0, 0, 0]], [0]), mode="gl")
+        scene.lobes(LobeWeights((2.0,), np.zeros(3), np.zeros((1, 3)), np.zeros(1)), mode="gl")
 
 
 def test_render_truth_keeps_pixel_shape() -> None:
@@ -125,9 +125,9 @@ def test_horizon_table_makes_prefiltered_exact_in_a_constant_environment() -> No
     scene = tr.TruthScene(np.ones((64, 128, 3)), n, v, samples=128, quadrature_width=128)
     w = LobeWeights(
         (2.0, 30.0, 800.0),
-        [0.02, 0.03, 0.04],
-        [[0.1, 0.05, 0.0], [0.0, 0.1, 0.0], [0.05, 0.05, 0.05]],
-        [0.0, 0.2, 10.0],
+        np.array([0.02, 0.03, 0.04]),
+        np.array([[0.1, 0.05, 0.0], [0.0, 0.1, 0.0], [0.05, 0.05, 0.05]]),
+        np.array([0.0, 0.2, 10.0]),
     )
     exact = scene.lobes(w, "exact")
     assert scene.lobes(w, "prefiltered-lut") == pytest.approx(exact, rel=5e-3)

@@ -18,7 +18,7 @@ from db.models import GlossReading as GlossRow
 from db.models import Measurement, Panel
 from station import scan
 from station.errors import InputError
-from station.ingest import DatabaseDestination, Ingestor, PanelRef, is_unreachable
+from station.ingest import DatabaseDestination, Ingestor, PanelRef, Receipt, is_unreachable
 
 pytestmark = pytest.mark.slow
 
@@ -88,6 +88,7 @@ def test_records_carry_the_60_degree_gloss_and_a_derived_gloss_client_id(pair) -
     # a retry of the scan names the same gloss record; another scan another one
     assert result.gloss_record.client_id == scan.gloss_client_id(cid) != scan.gloss_client_id(uuid.uuid4())
     assert result.gloss_record.client_id != cid
+    assert taken.gloss is not None
     assert result.gloss_record.gloss_gu() == {g: float(v) for g, v in taken.gloss.gloss_gu.items()}
     refused = scan.make_records(taken, operator="ana", illumination_deg=15, refused="note")
     assert refused.record is None and "illumination_deg" in refused.note
@@ -105,10 +106,11 @@ def test_store_pairs_then_a_retry_stores_nothing_new(pair, tmp_path: Path) -> No
     assert stored.receipt is not None and stored.receipt.status == "stored"
     assert stored.gloss_receipt is not None and stored.gloss_receipt.status == "stored"
     again = scan.store(stored, target)
+    assert again.receipt is not None and again.gloss_receipt is not None
     assert again.receipt.status == "duplicate" and again.gloss_receipt.status == "duplicate"
     prior = scan.prior(target, cid)
     assert (
-        prior is not None
+        isinstance(prior, Receipt)
         and prior.status == "duplicate"
         and prior.measurement_id == stored.receipt.measurement_id
     )
@@ -134,6 +136,7 @@ def test_a_gloss_only_reading_is_stored_on_its_panel_and_found_by_a_retry(pair, 
     result = scan.make_records(scan.take(meter.instrument), operator="ana", client_id=cid, panel=panel)
     assert result.record is None and result.gloss_record is not None
     stored = scan.store(result, target)
+    assert stored.gloss_receipt is not None
     assert stored.receipt is None and stored.gloss_receipt.status == "stored"
     prior = scan.prior(target, cid)
     assert (
@@ -156,9 +159,13 @@ def test_database_away_queues_the_colour_and_says_the_gloss_row_is_not_stored(pa
     target = _target(f"sqlite:///{blocker / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
     paired = scan.make_records(scan.take(spectro.instrument, meter.instrument), operator="ana")
     stored = scan.store(paired, target)
+    assert stored.receipt is not None
     assert stored.receipt.status == "queued" and len(target.ingestor.outbox) == 1
+    assert stored.gloss_receipt is not None
     assert stored.gloss_receipt.status == "not stored" and "queued" in stored.gloss_receipt.message
-    assert scan.prior(target, paired.record.client_id).status == "queued"
+    assert paired.record is not None
+    queued = scan.prior(target, paired.record.client_id)
+    assert queued is not None and queued.status == "queued"
     alone = scan.make_records(scan.take(meter.instrument), operator="ana")
     with pytest.raises(Exception) as err:  # gloss readings are not queued: the front says so
         scan.store(alone, target)

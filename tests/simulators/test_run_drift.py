@@ -137,9 +137,9 @@ def test_run_settings_are_checked(tmp_path: Path) -> None:
     bad = tmp_path / "bad.json"
     for text in ("not json", '{"runs": -2}', '{"runs": true}', "[1]"):
         bad.write_text(text)
-        with pytest.raises(RunStateError) as err:
+        with pytest.raises(RunStateError) as state_err:
             next_run_index(bad)
-        assert err.value.field == "state"
+        assert state_err.value.field == "state"
     physics = spectro_physics(SimulatorConfig("ma6", run_index=10_000, noise=0.0), "600123")
     base = spectro_physics(SimulatorConfig("ma6", noise=0.0), "600123")
     assert np.allclose(physics.measure(ANGLES) / base.measure(ANGLES), 1.0 + MAX_RUN_DRIFT)  # saturates

@@ -426,5 +426,7 @@ def test_accounting_reports_a_deleted_reading(tampered: Tampered) -> None:
 def test_verify_reports_a_deleted_reading(tampered: Tampered) -> None:
     result = db_verify(tampered.url, tampered.work)
     assert not result.intact, f"station db verify says {result.report} after a reading was deleted"
-    kinds = {(f["chain"], f["kind"]) for f in result.report.get("findings", [])}
+    findings = result.report.get("findings", [])
+    assert isinstance(findings, list), result.report
+    kinds = {(f["chain"], f["kind"]) for f in findings}
     assert ("measurements", "rewound") in kinds, result.report

@@ -139,11 +139,11 @@ def _no_leftovers(request):
         started.append(self)
         return original(self, *args)
 
-    QThread.start = start
+    QThread.start = start  # type: ignore[method-assign]
     try:
         yield
     finally:
-        QThread.start = original
+        QThread.start = original  # type: ignore[method-assign]
     if "qapp" not in request.fixturenames and "qtbot" not in request.fixturenames:
         return
     from PySide6.QtWidgets import QApplication

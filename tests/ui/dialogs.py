@@ -16,7 +16,7 @@ def enter_file_name(edit: QLineEdit, path: str | Path) -> None:
     (``blue.json`` for ``…/blue.``) as the folder's listing arrives, which on a busy machine can be after
     any check for its popup, and Enter would then take the suggestion — an existing file, whose
     overwrite prompt hangs the test in that dialog's event loop. Enter takes what was typed."""
-    edit.setCompleter(None)
+    edit.setCompleter(None)  # type: ignore[arg-type]  # Qt takes no completer; the stubs omit None
     QTest.keyClick(edit, Qt.Key.Key_A, Qt.KeyboardModifier.ControlModifier)
     QTest.keyClick(edit, Qt.Key.Key_Delete)
     QTest.keyClicks(edit, str(path))

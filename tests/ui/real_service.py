@@ -3,7 +3,7 @@ per role on it, created over HTTP by the bootstrap administrator as a person wou
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -29,7 +29,7 @@ def station_service(tmp_path: Path, *roles: str) -> Iterator[tuple[str, dict[str
         yield svc.base, tokens
 
 
-def paint_csv(rows: list[tuple[str, str, float, dict[float, tuple[float, float, float]]]]) -> str:
+def paint_csv(rows: list[tuple[str, str, float, Mapping[float, Sequence[float]]]]) -> str:
     """Library CSV (``station.formulate.library_csv``'s header) of (code, type, gloss GU, {angle: Lab})
     rows, every row at the same angles (15, 45, 110 first)."""
     angles = [15.0, 45.0, 110.0] + sorted(set(rows[0][3]) - {15.0, 45.0, 110.0})

@@ -45,14 +45,14 @@ def test_main_window_undo_redo_from_menu(qtbot, tmp_path):
     win.designer.end_drag()
     panel.variations.buttons[0].click()  # … and a variation
     assert win.document.design.gloss_gu == 20.0
-    assert win.view_model.designs[0] == win.document.design
+    assert win.view_model.designs is not None and win.view_model.designs[0] == win.document.design
     assert "variation" in win.undo_action.text()
     after_gloss = win.document.undo_label
     win.undo_action.trigger()
     assert win.document.design == DEFAULT_DESIGN.replace(gloss_gu=20.0) and after_gloss
     win.undo_action.trigger()
     assert win.document.design is DEFAULT_DESIGN
-    assert win.view_model.designs[0] is DEFAULT_DESIGN
+    assert win.view_model.designs is not None and win.view_model.designs[0] is DEFAULT_DESIGN
     win.redo_action.trigger()
     assert win.document.design.gloss_gu == 20.0
     assert "gloss 20 GU" in win.statusBar().currentMessage()

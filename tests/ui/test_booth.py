@@ -18,6 +18,7 @@ from station.model.examples import SILVER
 from station.model.spectra import reflectance_from_lab, reflectance_to_lab
 from station.render.booth import BoothRenderer
 from tests.qc.conftest import populate
+from tests.ui.screens import item_at, screen_of
 from ui.booth_figures import add_pair
 from ui.models.booth import BoothModel, LocalBoothSource
 from ui.widgets.booth_screen import COLUMNS, BoothScreen
@@ -34,7 +35,7 @@ def _click(qtbot, widget) -> None:
 
 def _column(screen: BoothScreen, name: str) -> list[float]:
     j = COLUMNS.index(name)
-    return [float(screen.table.item(i, j).text()) for i in range(screen.table.rowCount())]
+    return [float(item_at(screen.table, i, j).text()) for i in range(screen.table.rowCount())]
 
 
 @pytest.fixture(scope="module")
@@ -164,8 +165,8 @@ def test_the_main_window_booth_tab_reads_the_scans_database(qtbot, tmp_path, spe
     bar = win.tabs.tabBar()
     k = next(i for i in range(win.tabs.count()) if win.tabs.tabText(i) == "Booth")
     qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(k).center())
-    booth = win.tabs.widget(k).content()
-    assert isinstance(booth, BoothScreen)
+    booth = screen_of(win, "Booth", BoothScreen)
+    assert win.tabs.widget(k) is win.screens["Booth"]
     assert booth.pickers["standard"].findData(std_id) > 0
     win.view_panel.view.wait_idle()
     win.close()
@@ -193,7 +194,7 @@ def test_pair_from_a_services_measurements(qtbot, tmp_path, spectra) -> None:
             r = api.client.post("/api/v1/measurements", json=body, headers=tech)
             assert r.status_code == 201, r.text
             ids.append(r.json()["id"])
-        service = ServiceClient("http://testserver", api.tokens[next(iter(api.tokens))], client=api.client)
+        service = ServiceClient("http://testserver", api.tokens[next(iter(api.tokens))], client=api.http)
         s = BoothScreen(BoothModel(ServiceBoothSource(service), BoothRenderer(SIZE)))
         qtbot.addWidget(s)
         s.show()

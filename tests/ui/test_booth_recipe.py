@@ -108,7 +108,7 @@ def test_trial_from_a_services_formulation_job(qtbot, tmp_path, spectra) -> None
             session.add_all(jobs)
             session.commit()
             empty_id, job_id = (j.id for j in jobs)
-        service = ServiceClient("http://testserver", api.tokens[next(iter(api.tokens))], client=api.client)
+        service = ServiceClient("http://testserver", api.tokens[next(iter(api.tokens))], client=api.http)
         s = BoothScreen(BoothModel(ServiceBoothSource(service), BoothRenderer(SIZE)))
         qtbot.addWidget(s)
         s.show()

@@ -21,6 +21,7 @@ from station.formulate.snap import color_snap
 from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.domain import ANGLES_3, ANGLES_3_ALT, METAMERISM_TEST_ILLUMINANTS
 from station.model.spectra import metamerism_index, reflectance_from_lab
+from tests.ui.screens import item_at
 from tests.ui.test_journey_chemist import _click, _toggle, _with_dialog
 from ui.models.document import DesignDocument
 from ui.widgets.formulation_screen import FormulationScreen
@@ -39,14 +40,15 @@ def _metallic_design(k: int) -> FaceFlopTravelGloss:
     return fit.design.replace(name=f"{lib.codes[i]} as a design")
 
 
-def _loop_table(screen) -> list[tuple[int, str, float, dict[str, str]]]:
+def _loop_table(screen: FormulationScreen) -> list[tuple[int, str, float, dict[str, str]]]:
     """The closed-loop table read back: (step, action, ΔE00, {colorant: grams text}) per step group."""
-    t, groups = screen.loop, []
+    t = screen.loop
+    groups: list[tuple[int, str, float, dict[str, str]]] = []
     for r in range(t.rowCount()):
         head = t.item(r, 0)
         if head is not None and head.text():
-            groups.append((int(head.text()), t.item(r, 1).text(), float(t.item(r, 2).text()), {}))
-        groups[-1][3][t.item(r, 3).text()] = t.item(r, 4).text()
+            groups.append((int(head.text()), item_at(t, r, 1).text(), float(item_at(t, r, 2).text()), {}))
+        groups[-1][3][item_at(t, r, 3).text()] = item_at(t, r, 4).text()
     return groups
 
 
@@ -62,14 +64,14 @@ def test_formulation_tab(qtbot, tmp_path):
     qtbot.addWidget(screen)
     screen.resize(1400, 900)
     screen.show()
-    for t in ("solid", "pearl"):
-        _toggle(screen.types[t])
+    for kind in ("solid", "pearl"):
+        _toggle(screen.types[kind])
     metallic = lib.subset(lib.types == "metallic")
     lab = design.lab_at(np.array(ANGLES_3))
     expected = [m.code for m in color_snap(metallic, lab, k=5, method="cie2000").matches]
 
     def listed() -> list[str]:
-        return [screen.matches.item(i, 0).text() for i in range(screen.matches.rowCount())]
+        return [item_at(screen.matches, i, 0).text() for i in range(screen.matches.rowCount())]
 
     _click(qtbot, screen, screen.snap_btn)
     assert listed() == expected and len(expected) == 5
@@ -84,11 +86,12 @@ def test_formulation_tab(qtbot, tmp_path):
     t, options = screen.recipes, result.recipes
     assert t.columnCount() == len(options) >= 1
     for j, o in enumerate(options):
-        assert t.horizontalHeaderItem(j).text() == f"#{o.rank} from {o.start}"
+        header = t.horizontalHeaderItem(j)
+        assert header is not None and header.text() == f"#{o.rank} from {o.start}"
         per_kg = 1000.0 / o.batch_g
-        for name, grams in o.grams.items():
+        for name, mass_g in o.grams.items():
             shown = float(_cell(t, f"{name} (g/kg)", j))
-            assert shown == pytest.approx(grams * per_kg, abs=0.051)
+            assert shown == pytest.approx(mass_g * per_kg, abs=0.051)
             assert shown / o.scale_resolution_g == pytest.approx(
                 round(shown / o.scale_resolution_g), abs=1e-6
             )

@@ -29,7 +29,7 @@ def _rows(url: str) -> list[tuple[MeasurementRow, Panel]]:
     engine = create_engine(url)
     try:
         with Session(engine) as s:
-            return [tuple(r) for r in s.execute(select(MeasurementRow, Panel).join(Panel)).all()]
+            return [(row, panel) for row, panel in s.execute(select(MeasurementRow, Panel).join(Panel)).all()]
     finally:
         engine.dispose()
 
@@ -58,6 +58,7 @@ def test_scan_with_simulator_stores_one_row_with_panel_metadata(qtbot, tmp_path)
     screen.notes.setPlainText("rear bumper, left of the plate")
     steps: list[int] = []
     screen.scan_btn.click()
+    assert screen.task is not None
     screen.task.progress.connect(lambda s, _t: steps.append(s))
     qtbot.waitUntil(lambda: screen.idle, timeout=90000)
     assert len(store.items) == 1, screen.log.toPlainText()
@@ -71,6 +72,7 @@ def test_scan_with_simulator_stores_one_row_with_panel_metadata(qtbot, tmp_path)
     rows = _rows(url)
     assert len(rows) == 1
     row, panel = rows[0]
+    assert m.reading is not None
     assert row.id == m.receipt.measurement_id and str(row.client_id) == str(m.reading.client_id)
     assert (panel.job, panel.part, panel.substrate, panel.notes) == (
         "J-2026-0113",
@@ -85,10 +87,12 @@ def test_scan_with_simulator_stores_one_row_with_panel_metadata(qtbot, tmp_path)
     # shown: the table holds the Lab, the list one entry with the row id
     np.testing.assert_allclose(screen.lab_table(), np.round(m.lab, 2), atol=0.006)
     assert screen.stored.count() == 1 and f"#{row.id}" in screen.stored.item(0).text()
+    assert screen.plot.points is not None
     assert screen.plot.design == m.design and screen.plot.points[1].shape == (6, 3)
     np.testing.assert_allclose(m.lab, reflectance_to_lab(m.spectra), atol=1e-9)
     # re-sending the same reading (a retry) stores nothing new
     again = store.persist(m)
+    assert again.receipt is not None
     assert again.receipt.status == "duplicate" and again.receipt.measurement_id == row.id
     assert len(_rows(url)) == 1
     assert m.design is not None
@@ -121,6 +125,7 @@ def test_unreachable_database_keeps_the_reading_then_stores_it_once(tmp_path):
     store = MeasurementStore(sink)
     m = measurement_from_reading(_spectral(), PanelInfo("J-1", "fender"), "test")
     r = store.persist(m).receipt
+    assert r is not None
     assert (
         r.status == "queued" and "unreachable" in r.message and str(tmp_path / "outbox.sqlite3") in r.message
     )
@@ -128,12 +133,15 @@ def test_unreachable_database_keeps_the_reading_then_stores_it_once(tmp_path):
     blocker.unlink()  # the database comes back
     got = sink.flush()
     assert [x.status for x in got.values()] == ["stored"] and sink.pending() == 0
-    assert store.persist(m).receipt.status == "duplicate"
+    again = store.persist(m).receipt
+    assert again is not None and again.status == "duplicate"
     rows = _rows(url)
     assert len(rows) == 1 and rows[0][1].part == "fender"
     # the same client id with other panel metadata is a different payload: refused, kept in the dead letters
     moved = store.persist(m.__class__(**{**m.__dict__, "panel": PanelInfo("J-1", "door")}))
+    assert moved.receipt is not None
     assert moved.receipt.status == "refused" and "already stored" in moved.receipt.message
+    assert m.reading is not None
     assert [cid for cid, _e in sink.outbox.dead_letters()] == [str(m.reading.client_id)]
     assert len(_rows(url)) == 1
     sink.close()
@@ -180,6 +188,7 @@ def test_a_reading_queued_in_an_earlier_session_is_sent_by_retry(qtbot, tmp_path
     m = MeasurementStore(first).persist(
         measurement_from_reading(_spectral(), PanelInfo("J-2", "roof"), "test")
     )
+    assert m.receipt is not None
     assert m.receipt.status == "queued"
     first.close()  # the viewer quits with the reading on disk
     blocker.unlink()
@@ -192,10 +201,12 @@ def test_a_reading_queued_in_an_earlier_session_is_sent_by_retry(qtbot, tmp_path
     assert screen.state.text() == "1 sent, 0 still queued", screen.log.toPlainText()
     assert "waiting" not in screen.where.text()
     rows = _rows(url)
+    assert m.reading is not None
     assert (
         len(rows) == 1 and str(rows[0][0].client_id) == str(m.reading.client_id) and rows[0][1].part == "roof"
     )
     screen.close()
+    assert store.sink is not None
     store.sink.close()
 
 
@@ -220,6 +231,7 @@ def test_a_reading_queued_by_the_previous_viewer_layout_is_still_sent(tmp_path):
 
     url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
     reading = measurement_from_reading(_spectral(), PanelInfo("J-3", "hood"), "test").reading
+    assert reading is not None
     body = {"panel": asdict(PanelInfo("J-3", "hood")), "reading": reading.model_dump(mode="json")}
     with Outbox(tmp_path / "outbox.sqlite3") as box:
         box.put(str(reading.client_id), json.dumps(body, sort_keys=True))
@@ -262,11 +274,18 @@ def test_a_gloss_only_reading_is_not_queued_while_the_database_is_away(tmp_path)
     m = measurement_from_reading(_gloss_reading(), PanelInfo("J-G", "trunk"), "test")
     assert m.gloss_only and m.reading is None and m.gloss_gu == 90.25
     away = store.persist(m)
+    assert away.gloss_receipt is not None
     assert away.gloss_receipt.status == "not stored" and "unreachable" in away.gloss_receipt.message
     assert away.receipt is None and sink.pending() == 0
     blocker.unlink()
     back = store.persist(m)
-    assert back.gloss_receipt.status == "stored" and store.persist(m).gloss_receipt.status == "duplicate"
+    assert back.gloss_receipt is not None
+    again_gloss = store.persist(m).gloss_receipt
+    assert (
+        back.gloss_receipt.status == "stored"
+        and again_gloss is not None
+        and again_gloss.status == "duplicate"
+    )
     engine = create_engine(url)
     with Session(engine) as s:
         rows = s.execute(select(GlossRow, Panel).join(Panel, Panel.id == GlossRow.panel_id)).all()

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtTest import QTest
-from PySide6.QtWidgets import QApplication, QFileDialog, QLineEdit
+from PySide6.QtWidgets import QApplication, QFileDialog, QLineEdit, QMenu
 
 from station.formulate.demo import demo_library
 from station.formulate.formulation import formulate_from_library
@@ -19,8 +19,11 @@ from station.model import AspecularMeasurements, FaceFlopTravelGloss, fit_fftg
 from station.model.design_io import save_design
 from station.model.domain import ANGLES_3
 from tests.ui.dialogs import enter_file_name
+from tests.ui.screens import item_at, screen_of
 from ui.app import MainWindow
 from ui.models.measure_db import LocalSink
+from ui.widgets.formulation_screen import FormulationScreen
+from ui.widgets.qa_screen import QAScreen
 
 pytestmark = [pytest.mark.qt, pytest.mark.slow]
 
@@ -48,6 +51,7 @@ def _with_dialog(qtbot, button, path, done) -> None:
         dialog = QApplication.activeModalWidget()
         if isinstance(dialog, QFileDialog) and dialog.isVisible():
             name = dialog.findChild(QLineEdit, "fileNameEdit")
+            assert name is not None
             enter_file_name(name, path)
         if not done():
             QTimer.singleShot(300, fill)
@@ -93,9 +97,9 @@ def test_chemist_day(qtbot, tmp_path):
     win.resize(1400, 900)
     win.show()
     win.tabs.setCurrentWidget(win.screens["Formulation"])
-    screen = win.screens["Formulation"].content()
+    screen = screen_of(win, "Formulation", FormulationScreen)
     lib = demo_library()
-    assert len(screen.library) == len(lib) == 6000
+    assert screen.library is not None and len(screen.library) == len(lib) == 6000
     # open the design file
     _with_dialog(
         qtbot,
@@ -111,9 +115,9 @@ def test_chemist_day(qtbot, tmp_path):
     _click(qtbot, screen, screen.snap_btn)
     metallic = lib.subset(lib.types == "metallic")
     expected = color_snap(metallic, BLUE_METALLIC.lab_at(np.array(ANGLES_3)), k=5, method="cie2000")
-    shown = [screen.matches.item(i, 0).text() for i in range(screen.matches.rowCount())]
+    shown = [item_at(screen.matches, i, 0).text() for i in range(screen.matches.rowCount())]
     assert shown == [m.code for m in expected.matches]
-    assert {screen.matches.item(i, 1).text() for i in range(screen.matches.rowCount())} == {"metallic"}
+    assert {item_at(screen.matches, i, 1).text() for i in range(screen.matches.rowCount())} == {"metallic"}
     # formulate: the recipe, per colorant, as mass % and grams for a 500 g batch
     _click(qtbot, screen, screen.formulate_btn)
     result, _snap = formulate_from_library(
@@ -125,9 +129,9 @@ def test_chemist_day(qtbot, tmp_path):
     QTest.keyClick(screen.batch, Qt.Key.Key_Return)
     assert screen.batch.value() == 500.0
     rows = {
-        screen.recipe.item(i, 0).text(): (
-            float(screen.recipe.item(i, 1).text()),
-            float(screen.recipe.item(i, 2).text()),
+        item_at(screen.recipe, i, 0).text(): (
+            float(item_at(screen.recipe, i, 1).text()),
+            float(item_at(screen.recipe, i, 2).text()),
         )
         for i in range(screen.recipe.rowCount())
     }
@@ -144,7 +148,7 @@ def test_chemist_day(qtbot, tmp_path):
     job = screen.job
     heads = [i for i in range(screen.loop.rowCount()) if _text(screen.loop, i, 0)]
     assert job is not None and len(heads) == len(job.steps) >= 1
-    assert [float(screen.loop.item(i, 2).text()) for i in heads] == pytest.approx(
+    assert [float(item_at(screen.loop, i, 2).text()) for i in heads] == pytest.approx(
         [round(s.mean_de, 2) for s in job.steps], abs=0.006
     )
     state = "converged" if job.status == "converged" else "did not converge"
@@ -155,13 +159,16 @@ def test_chemist_day(qtbot, tmp_path):
     assert screen.exported == tmp_path / "blue.xml" and expected.matches[0].code in text
     assert f"match {expected.matches[0].code}" in screen.status.text()
     # QA hands a corrected paint on: one click lands it here, picked
-    qa = win.screens["QA"].content()
+    qa = screen_of(win, "QA", QAScreen)
     win.tabs.setCurrentWidget(win.screens["QA"])
     qa.beta.setValue(3)
     QTest.mouseClick(qa.run_btn, Qt.MouseButton.LeftButton)
-    qtbot.waitUntil(lambda: qa.report is not None and not qa.task.isRunning(), timeout=60_000)
+    qtbot.waitUntil(
+        lambda: qa.report is not None and qa.task is not None and not qa.task.isRunning(), timeout=60_000
+    )
     QTest.mouseClick(qa.send_btn, Qt.MouseButton.LeftButton)
     assert win.tabs.currentWidget() is win.screens["Formulation"]
+    assert qa.report is not None and qa.report.correction is not None
     assert screen.picked() is qa.report.correction.paint
     assert screen.design.currentText().startswith("sent: ") and screen.matches.rowCount() == 0
     # a filter with no type is refused with the field named, nothing runs
@@ -183,12 +190,13 @@ def test_qa_and_chemist_store_the_paint_on_the_service(qtbot, tmp_path, role):
     api = next(gen)
     try:
         token = api.tokens[next(r for r in api.tokens if r.value == role)]
-        service = ServiceClient("http://testserver", token, client=api.client)
+        service = ServiceClient("http://testserver", token, client=api.http)
         win = MainWindow(service=service, sink=ServiceSink(service, tmp_path / "outbox.sqlite3"))
         # not qtbot.addWidget: its teardown close would ask about the unsaved design again
         paint = _library_metallic()
         win.document.set_design(paint, "the paint to keep")
         menu = next(a.menu() for a in win.menuBar().actions() if a.text() == "&Service")
+        assert isinstance(menu, QMenu)
         save = next(a for a in menu.actions() if a.text() == "Save current design")
         save.trigger()
         assert win.statusBar().currentMessage().startswith("saved as design "), (
@@ -233,7 +241,7 @@ def test_chemist_day_in_service_mode_uses_the_services_library(qtbot, tmp_path):
             win.resize(1400, 900)
             win.show()
             win.tabs.setCurrentWidget(win.screens["Formulation"])
-            screen = win.screens["Formulation"].content()
+            screen = screen_of(win, "Formulation", FormulationScreen)
             assert screen.remote is not None and screen.library is None  # no local library in use
             offered = [screen.source.itemText(i) for i in range(screen.source.count())]
             assert offered[0] == "every stored library" and "service-only" in offered
@@ -248,7 +256,8 @@ def test_chemist_day_in_service_mode_uses_the_services_library(qtbot, tmp_path):
                 _toggle(screen.types[t])
             _click(qtbot, screen, screen.snap_btn)
             rows = [
-                [screen.matches.item(i, j).text() for j in range(4)] for i in range(screen.matches.rowCount())
+                [item_at(screen.matches, i, j).text() for j in range(4)]
+                for i in range(screen.matches.rowCount())
             ]
             assert rows[0][0] == "SVC-ONLY-1" and rows[0][3] == "service-only"
             assert float(rows[0][2]) == pytest.approx(0.0, abs=0.01)
@@ -265,7 +274,7 @@ def test_chemist_day_in_service_mode_uses_the_services_library(qtbot, tmp_path):
             QTest.keyClicks(screen.source, "service-only")
             assert screen.source.currentText() == "service-only"
             _click(qtbot, screen, screen.snap_btn)
-            assert screen.matches.rowCount() == 1 and screen.matches.item(0, 0).text() == "SVC-ONLY-1"
+            assert screen.matches.rowCount() == 1 and item_at(screen.matches, 0, 0).text() == "SVC-ONLY-1"
             assert "service-only (metallic), 1 paints" in screen.status.text()
             # formulating from that library is refused, naming it: its paint carries no recipe
             _click(qtbot, screen, screen.formulate_btn)

@@ -23,6 +23,7 @@ from station.model.colorimetry import linear_srgb_to_lab
 from station.model.display import decode_display
 from station.model.spectra import reflectance_to_lab
 from tests.ui.dialogs import enter_file_name
+from tests.ui.screens import item_at
 from ui.models.designer import DesignerModel
 from ui.models.document import DesignDocument
 from ui.models.instruments import MeasurementStore, measurement_from_reading
@@ -57,6 +58,7 @@ def _store_scans(store: MeasurementStore) -> None:
         ("SIM-Q-2", PanelInfo("J-2026-0300", "fender", "steel"), 0.04),
     ):
         m = store.persist(measurement_from_reading(_metallic(serial, shift), panel, "sim:ma6"))
+        assert m.receipt is not None
         assert m.receipt.status == "stored", m.receipt
 
 
@@ -81,6 +83,7 @@ def _seam_de_shown(screen: QAScreen) -> float:
     img = screen.as_is.pixmap().toImage()
     h, w = PICTURE_SIZE
     assert (img.height(), img.width()) == (h, w)
+    assert screen.pictures is not None
     scale = screen.pictures[2]
     rgb = []
     for x in (w // 2 - 1, w // 2):
@@ -91,7 +94,7 @@ def _seam_de_shown(screen: QAScreen) -> float:
 
 
 def _click_row(screen: QAScreen, row: int) -> None:
-    rect = screen.table.visualItemRect(screen.table.item(row, 0))
+    rect = screen.table.visualItemRect(item_at(screen.table, row, 0))
     QTest.mouseClick(screen.table.viewport(), Qt.MouseButton.LeftButton, pos=rect.center())
 
 
@@ -102,6 +105,7 @@ def _export_via_dialog(qtbot, screen: QAScreen, path) -> None:
         dialog = QApplication.activeModalWidget()
         if isinstance(dialog, QFileDialog) and dialog.isVisible():
             name = dialog.findChild(QLineEdit, "fileNameEdit")
+            assert name is not None
             enter_file_name(name, path)
         if screen.exported is None:  # the dialog not up yet, or still reading its folder: again
             QTimer.singleShot(300, fill)
@@ -126,6 +130,7 @@ def _day(qtbot, screen: QAScreen, sent: list, tmp_path) -> None:
     r = screen.report
     a, b = screen.picked()
     expected = seam_qa(a, b, 5.0, tolerance=screen.tolerance.value())
+    assert r is not None
     assert r.seam_de == pytest.approx(expected.seam_de) and max(r.formulation_de) == 0.0
     # a 5° tilt of one metallic panel is a geometric seam: FAIL, and the picture shows it at the
     # worst geometry, saying which
@@ -151,10 +156,12 @@ def _day(qtbot, screen: QAScreen, sent: list, tmp_path) -> None:
     assert screen.beta_label.text() == "+1°"
     _run(qtbot, screen)
     r = screen.report
+    assert r is not None
     assert max(r.formulation_de) > 1.0 and r.beta_deg == 1.0
     assert _seam_de_shown(screen) == pytest.approx(r.seam_de[r.worst], rel=0.05, abs=0.6)
     # export: JSON and PNG written where the dialog was told
     _export_via_dialog(qtbot, screen, tmp_path / "out" / "bumper-fender.json")
+    assert screen.exported is not None
     js, png = screen.exported
     doc = json.loads(js.read_text())
     assert js == tmp_path / "out" / "bumper-fender.json" and png.stat().st_size > 10_000
@@ -183,11 +190,11 @@ def test_qa_day_service_mode(qtbot, tmp_path):
     gen = make_api(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path)
     api = next(gen)
     try:
-        tech = ServiceClient("http://testserver", api.tokens[_role(api, "technician")], client=api.client)
+        tech = ServiceClient("http://testserver", api.tokens[_role(api, "technician")], client=api.http)
         tech_sink = ServiceSink(tech, tmp_path / "tech-outbox.sqlite3")
         _store_scans(MeasurementStore(tech_sink))
         tech_sink.close()
-        qa = ServiceClient("http://testserver", api.tokens[_role(api, "qa")], client=api.client)
+        qa = ServiceClient("http://testserver", api.tokens[_role(api, "qa")], client=api.http)
         sink = ServiceSink(qa, tmp_path / "outbox.sqlite3")
         sent: list = []
         screen = QAScreen(DesignerModel(DesignDocument()), MeasurementStore(sink), sent.append)

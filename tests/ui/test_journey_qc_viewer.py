@@ -16,7 +16,9 @@ from __future__ import annotations
 import dataclasses
 import datetime as dt
 import json
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import colour
 import numpy as np
@@ -35,6 +37,7 @@ from station.qc.jobs import job_summary
 from station.qc.tolerance import ToleranceSet
 from station.scan import open_device, take
 from tests.pdf_text import pdf_text
+from tests.ui.screens import item_at
 from ui.models.measure_db import LocalSink
 from ui.models.qc import LocalQc, QcModel
 from ui.widgets.qc_panels import SPC_COLUMNS, TEXTURE_COLUMNS
@@ -83,6 +86,13 @@ def _files(folder: Path) -> list[Path]:
     for readings, path in zip((std, t1, series), out, strict=True):
         write_measurement_file(readings, path)
     return out
+
+
+def _part(screen: QcScreen) -> dict[str, Any]:
+    """The shown summary's entry for the part under test (there is one)."""
+    part = screen.model.part(PART)
+    assert part is not None
+    return part
 
 
 def _stored_lab(url: str) -> dict[int, np.ndarray]:
@@ -158,7 +168,7 @@ def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
     # independent expectation: ΔE00 of T1's mean (without / with the dirty reading) against the standard's mean
     lab = _stored_lab(url)
     judged = [aspecular_name(a) for a in ANGLES_3]
-    geoms = screen.model.part(PART)["standard"]["geometries"]
+    geoms = _part(screen)["standard"]["geometries"]
     idx = [geoms.index(g) for g in judged]
     std_mean = np.mean([lab[i] for i in std_ids], axis=0)[idx]
     kept = [lab[i] for k, i in enumerate(t1_ids) if k != DIRTY]
@@ -167,7 +177,7 @@ def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
     assert kept_de < LIMIT < all_de  # the dirty reading alone decides T1's verdict
 
     def t1() -> dict:
-        (s,) = [s for s in screen.model.part(PART)["samples"] if s.get("measurement_ids") == t1_ids]
+        (s,) = [s for s in _part(screen)["samples"] if s.get("measurement_ids") == t1_ids]
         return s
 
     def t1_rows() -> list[int]:
@@ -193,7 +203,7 @@ def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
     tex = {
         (r[3], r[4]): r
         for r in (
-            [screen.texture_table.item(i, j).text() for j in range(len(TEXTURE_COLUMNS))]
+            [item_at(screen.texture_table, i, j).text() for j in range(len(TEXTURE_COLUMNS))]
             for i in range(screen.texture_table.rowCount())
         )
     }
@@ -232,8 +242,8 @@ def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
         np.array([np.mean(p, axis=0)[idx][0] for p in panels]),
     )
     r_bar = float(np.abs(de[1:6:2] - de[0:6:2]).mean())
-    shown = screen.spc.table.item(0, SPC_COLUMNS.index("R̄ / R UCL")).text().split(" / ")
-    assert float(shown[0]) == pytest.approx(r_bar, abs=6e-4) and float(shown[1]) == pytest.approx(
+    r_cells = item_at(screen.spc.table, 0, SPC_COLUMNS.index("R̄ / R UCL")).text().split(" / ")
+    assert float(r_cells[0]) == pytest.approx(r_bar, abs=6e-4) and float(r_cells[1]) == pytest.approx(
         3.267 * r_bar, abs=6e-4
     )
 
@@ -243,7 +253,7 @@ def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
     _click(screen.pdf_btn)
     qtbot.waitUntil(lambda: screen.last_report == pdf and screen.pdf_btn.isEnabled(), timeout=60000)
     text = pdf_text(pdf.read_bytes())
-    samples = screen.model.part(PART)["samples"]
+    samples = _part(screen)["samples"]
     for t in samples:  # every trial named by its panel, part and job
         assert f"panel {t['panel_id']}, {PART}, {JOB}" in text
     assert "before the" in text and "rst fail" in text  # the SPC page's drift line ("fi": a ligature)
@@ -256,7 +266,7 @@ def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
     sink.close()
 
 
-def _cli_t1(url: str, tol: ToleranceSet, keep: bool, t1_ids: list[int]) -> dict:
+def _cli_t1(url: str, tol: ToleranceSet, keep: bool, t1_ids: list[int]) -> Mapping[str, object]:
     """T1's verdict as ``station qc summary --average-panels [--keep-outliers]`` computes it."""
     engine = make_engine(url)
     try:

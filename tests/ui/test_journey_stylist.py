@@ -20,13 +20,15 @@ import pytest
 from PySide6.QtCore import QPoint, Qt, QTimer
 from PySide6.QtGui import QColor, QPalette
 from PySide6.QtTest import QTest
-from PySide6.QtWidgets import QLineEdit, QMessageBox, QWidget
+from PySide6.QtWidgets import QLineEdit, QMenu, QMessageBox, QWidget
 
 from tests.ui.dialogs import enter_file_name
 from ui.app import MainWindow
 from ui.demo import patch_image
 from ui.models.document import DEFAULT_DESIGN
 from ui.models.measure_db import LocalSink
+from ui.widgets.library_screen import LibraryScreen
+from ui.widgets.moodboard_screen import MoodBoardScreen
 
 pytestmark = [pytest.mark.qt]
 LEFT = Qt.MouseButton.LeftButton
@@ -142,13 +144,17 @@ def pick_design_from_library(qtbot, win: MainWindow) -> None:
     file_menu(qtbot, win, "New design")
     assert doc.design == DEFAULT_DESIGN and doc.name == "untitled"
     lib_screen = show_tab(qtbot, win, "Library")
+    assert isinstance(lib_screen, LibraryScreen)
     lib = lib_screen.model.library
     assert len(lib) == 6000  # the full demo library
     # narrow the list: metallics+pearls → neutral → light in the hierarchy, pearls unticked
     tree = lib_screen.tree
     node = tree.topLevelItem(0)
     for name in ("metallics+pearls", "neutral", "light"):
-        node = next(node.child(i) for i in range(node.childCount()) if node.child(i).text(0) == name)
+        assert node is not None
+        kids = map(node.child, range(node.childCount()))
+        node = next(k for k in kids if k is not None and k.text(0) == name)
+    assert node is not None
     tree.scrollToItem(node)  # opens its parents, as clicking their arrows would
     qtbot.mouseClick(tree.viewport(), LEFT, pos=tree.visualItemRect(node).center())
     click_box(qtbot, lib_screen.type_boxes["pearl"])
@@ -233,20 +239,21 @@ def edit_with_plots_and_values(qtbot, win: MainWindow) -> None:
     colours = {icon.pixel(x, y) for x in range(icon.width()) for y in range(icon.height())}
     assert len(colours) > 40  # shaded, not a flat swatch
     assert lighter.fontMetrics().horizontalAdvance("more chroma") <= lighter.width()
-    before = doc.design
+    prior = doc.design
     click_center(qtbot, lighter)
     step = grid.degree.value()
-    assert doc.design.face == pytest.approx((before.face[0] + step, *before.face[1:]), abs=1e-9)
+    assert doc.design.face == pytest.approx((prior.face[0] + step, *prior.face[1:]), abs=1e-9)
     # --- undo / redo from the keyboard
     qtbot.keyClick(win, Qt.Key.Key_Z, CTRL)
-    assert doc.design == before
+    assert doc.design == prior
     qtbot.keyClick(win, Qt.Key.Key_Z, CTRL | Qt.KeyboardModifier.ShiftModifier)
-    assert doc.design.face[0] == pytest.approx(before.face[0] + step, abs=1e-9)
+    assert doc.design.face[0] == pytest.approx(prior.face[0] + step, abs=1e-9)
 
 
 def moodboard_eyedroppers(qtbot, win: MainWindow, tmp_path) -> None:
     doc = win.document
     screen = show_tab(qtbot, win, "Mood board")
+    assert isinstance(screen, MoodBoardScreen)
     path = patch_image(tmp_path / "greys.png", ((DARK,) * 3, (LIGHT,) * 3), size=40)
     answer_file_dialog(screen, path)
     click_center(qtbot, screen.add_button)
@@ -429,6 +436,12 @@ def _local(tag: str) -> str:
     return tag.rsplit("}", 1)[-1]
 
 
+def xml_number(text: str | None) -> float:
+    """A number written as an XML attribute or element text (present)."""
+    assert text is not None
+    return float(text)
+
+
 def check_export_xml(data: bytes, design) -> None:
     """Every Lab at 15° is the face; at 110° (beyond θ_clamp) the flop, when travel <= 110°."""
     root = ET.fromstring(data)
@@ -436,12 +449,12 @@ def check_export_xml(data: bytes, design) -> None:
     (colour,) = [el for el in root if _local(el.tag) == "color"]
     assert colour.get("name") == "silver-grey" and colour.get("role") == "design"
     gloss = [el for el in colour if _local(el.tag) == "gloss"]
-    assert float(gloss[0].text) == pytest.approx(design.gloss_gu, abs=1e-4)
+    assert xml_number(gloss[0].text) == pytest.approx(design.gloss_gu, abs=1e-4)
     labs = [el for el in colour.iter() if _local(el.tag) == "lab"]
-    assert {float(el.get("aspecularDeg")) for el in labs} == {15.0, 25.0, 45.0, 75.0, 110.0}
+    assert {xml_number(el.get("aspecularDeg")) for el in labs} == {15.0, 25.0, 45.0, 75.0, 110.0}
     for el in labs:
-        lab = (float(el.get("L")), float(el.get("a")), float(el.get("b")))
-        angle = float(el.get("aspecularDeg"))
+        lab = (xml_number(el.get("L")), xml_number(el.get("a")), xml_number(el.get("b")))
+        angle = xml_number(el.get("aspecularDeg"))
         if angle == 15.0:
             assert lab == pytest.approx(design.face, abs=1e-4)
         if design.travel_deg is not None and angle >= design.travel_deg:
@@ -457,7 +470,7 @@ def check_export_cxf(data: bytes, design) -> None:
     values = {}
     for el in objects[0].iter():
         if _local(el.tag) == "ColorCIELab":
-            kids = {_local(k.tag): float(k.text) for k in el}
+            kids = {_local(k.tag): xml_number(k.text) for k in el}
             values[el.get("ColorSpecification")] = (kids["L"], kids["A"], kids["B"])
     assert values["CS45as15"] == pytest.approx(design.face, abs=1e-4)
     if design.travel_deg is not None and design.travel_deg <= 110.0:
@@ -469,6 +482,7 @@ def click_menu_item(qtbot, win: MainWindow, menu_title: str, item: str) -> None:
     bar = win.menuBar()
     (action,) = [a for a in bar.actions() if a.text() == menu_title]
     menu = action.menu()
+    assert isinstance(menu, QMenu)
     qtbot.mouseClick(bar, LEFT, pos=bar.actionGeometry(action).center())
     qtbot.waitUntil(menu.isVisible)
     (target,) = [a for a in menu.actions() if a.text() == item]
@@ -488,7 +502,7 @@ def test_stylist_in_service_mode_opens_a_file_and_stores_it_on_the_service(qtbot
     win = None
     try:
         token = api.tokens[next(r for r in api.tokens if r.value == "stylist")]
-        service = ServiceClient("http://testserver", token, client=api.client)
+        service = ServiceClient("http://testserver", token, client=api.http)
         win = MainWindow(service=service, sink=ServiceSink(service, tmp_path / "outbox.sqlite3"))
         win.resize(1200, 800)
         win.show()

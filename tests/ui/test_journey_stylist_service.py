@@ -23,11 +23,19 @@ from PySide6.QtCore import Qt
 from station.formulate.demo import demo_library
 from station.model.design_io import save_design
 from tests.ui.real_service import paint_csv, station_service
-from tests.ui.test_journey_stylist import click_center, click_menu_item, file_menu, show_tab, type_into
+from tests.ui.test_journey_stylist import (
+    click_center,
+    click_menu_item,
+    file_menu,
+    show_tab,
+    type_into,
+    xml_number,
+)
 from ui.app import MainWindow
 from ui.models.document import DEFAULT_DESIGN
 from ui.models.measure_db import ServiceSink
 from ui.models.service import ServiceClient
+from ui.widgets.library_screen import LibraryScreen
 
 pytestmark = [pytest.mark.qt, pytest.mark.slow]
 ANGLES = (15.0, 25.0, 45.0, 75.0, 110.0)
@@ -71,6 +79,7 @@ def test_stylist_day_in_service_mode(qtbot, tmp_path):
             assert doc.design == brief and doc.name == "brief" and win.files.unsaved() == []
             # --- the service's library on the Library tab: ColorSnap, the studio paint first, use it
             lib_screen = show_tab(qtbot, win, "Library")
+            assert isinstance(lib_screen, LibraryScreen)
             lib = lib_screen.model.library
             assert base in lib_screen.title.text() and len(lib) == 6001  # the demo's 6000 and the upload
             qtbot.waitUntil(lambda: lib_screen.idle, timeout=120000)  # thumbnails of 6001 paints
@@ -122,7 +131,11 @@ def test_stylist_day_in_service_mode(qtbot, tmp_path):
             file_menu(qtbot, win, "Export design as XML", xml_path)
             root = ET.fromstring(xml_path.read_bytes())
             labs = {
-                float(el.get("aspecularDeg")): (float(el.get("L")), float(el.get("a")), float(el.get("b")))
+                xml_number(el.get("aspecularDeg")): (
+                    xml_number(el.get("L")),
+                    xml_number(el.get("a")),
+                    xml_number(el.get("b")),
+                )
                 for el in root.iter()
                 if _local(el.tag) == "lab"
             }

@@ -76,7 +76,8 @@ def _day(qtbot, screen: InstrumentsScreen) -> list:
     # the job's history from the store: both scans, newest first, with their row ids
     _click(qtbot, screen, screen.history_btn)
     rows = [screen.history.item(i).text() for i in range(screen.history.count())]
-    ids = [m.receipt.measurement_id for m in (second, first)]
+    assert second.receipt is not None and first.receipt is not None
+    ids = [second.receipt.measurement_id, first.receipt.measurement_id]
     assert [r.split()[0] for r in rows] == [f"#{i}" for i in ids], rows
     assert all("J-2026-0200 bumper" in r and "6 geometries" in r for r in rows)
     assert screen.history_title.text() == "job history (stored): 2 measurements of job J-2026-0200"
@@ -138,13 +139,14 @@ def test_technician_day_local(qtbot, tmp_path):
     engine = create_engine(url)
     with Session(engine) as s:
         rows = s.execute(select(MeasurementRow).order_by(MeasurementRow.id)).scalars().all()
-        got = [(r.id, r.gloss_gu, r.gloss_geometry_deg) for r in rows]
+        got: list[tuple[object, ...]] = [(r.id, r.gloss_gu, r.gloss_geometry_deg) for r in rows]
     engine.dispose()
     assert got == [
         (i, pytest.approx(m.gloss_gu, abs=1e-6), 60) for i, m in zip(ids, (first, second), strict=True)
     ]
     assert first.receipt.status == second.receipt.status == "stored" and ids[0] != ids[1]
-    assert screen.store.persist(second).receipt.status == "duplicate"
+    again = screen.store.persist(second).receipt
+    assert again is not None and again.status == "duplicate"
     screen.close()
     sink.close()
 
@@ -198,7 +200,8 @@ def test_a_gloss_meter_alone_is_stored_as_a_gloss_reading_of_the_panel(qtbot, tm
     row, panel = rows[0]
     assert (panel.job, panel.part) == ("J-2026-0300", "roof") and row.id == g.gloss_reading_id
     _check_row((row.client_id, row.gloss_20_gu, row.gloss_60_gu, row.gloss_85_gu, row.haze_hu, row.doi), m)
-    assert screen.store.persist(m).gloss_receipt.status == "duplicate"
+    again_gloss = screen.store.persist(m).gloss_receipt
+    assert again_gloss is not None and again_gloss.status == "duplicate"
     screen.close()
     sink.close()
 
@@ -211,9 +214,7 @@ def test_a_gloss_meter_alone_in_service_mode_is_stored_by_the_service(qtbot, tmp
     api = next(gen)
     try:
         token = api.tokens[next(r for r in api.tokens if r.value == "technician")]
-        sink = ServiceSink(
-            ServiceClient("http://testserver", token, client=api.client), tmp_path / "o.sqlite3"
-        )
+        sink = ServiceSink(ServiceClient("http://testserver", token, client=api.http), tmp_path / "o.sqlite3")
         screen = InstrumentsScreen(MeasurementStore(sink))
         qtbot.addWidget(screen)
         m = _gloss_alone(qtbot, screen, "J-2026-0301")
@@ -241,7 +242,7 @@ def test_technician_day_service_mode(qtbot, tmp_path):
     api = next(gen)
     try:
         token = api.tokens[next(r for r in api.tokens if r.value == "technician")]
-        service = ServiceClient("http://testserver", token, client=api.client)
+        service = ServiceClient("http://testserver", token, client=api.http)
         sink = ServiceSink(service, tmp_path / "outbox.sqlite3")
         screen = InstrumentsScreen(MeasurementStore(sink))
         qtbot.addWidget(screen)

@@ -64,17 +64,17 @@ def test_filters_and_colorsnap(qtbot):
     _wait_idle(qtbot, screen)
     assert screen.thumbs.count() == 40 and "40 paints" in screen.count.text()
     # hierarchy: click the "solids" node → only solids (and not pearls) remain
-    solids = screen.tree.topLevelItem(0).child(
-        [
-            screen.tree.topLevelItem(0).child(i).text(0)
-            for i in range(screen.tree.topLevelItem(0).childCount())
-        ].index("solids")
+    top = screen.tree.topLevelItem(0)
+    assert top is not None
+    solids = next(
+        k for k in map(top.child, range(top.childCount())) if k is not None and k.text(0) == "solids"
     )
     # every hierarchy name is shown whole, not elided ("more…roma" was a defect)
     fm = screen.tree.fontMetrics()
     items = [screen.tree.topLevelItem(0)]
     while items:
         item = items.pop()
+        assert item is not None
         rect = screen.tree.visualItemRect(item)
         if not rect.isEmpty():
             assert fm.horizontalAdvance(item.text(0)) <= screen.tree.columnWidth(0) - rect.left() + 4, (
@@ -92,16 +92,17 @@ def test_filters_and_colorsnap(qtbot):
         threads.append(threading.current_thread())
         return real(design, *args)
 
-    screen.model.compute_snap = compute_snap
+    screen.model.compute_snap = compute_snap  # type: ignore[method-assign]
     QTest.mouseClick(screen.snap_btn, Qt.MouseButton.LeftButton)
     _wait_idle(qtbot, screen)
     assert threads and threads[0] is not threading.main_thread()  # ColorSnap ran off the GUI thread
     design_lab = doc.design.lab_at(np.array([15.0, 45.0, 110.0]))
     brute = np.linalg.norm(lib.lab - design_lab[None], axis=-1).sum(axis=1)  # ΣΔE*ab over the 3 angles
+    assert screen.model.snap_result is not None
     assert screen.model.snap_result.matches[0].code == lib.codes[np.argmin(brute)]
     assert screen.model.snap_result.matches[0].sum_de == pytest.approx(brute.min(), rel=1e-9)
     assert screen.matches.count() == 5 and screen.cloud.data is not None
-    assert screen.compare_model.designs[0] == doc.design
+    assert screen.compare_model.designs is not None and screen.compare_model.designs[0] == doc.design
     QTest.mouseClick(screen.use_btn, Qt.MouseButton.LeftButton)
     best = int(np.argmin(brute))
     got = doc.design.lab_at(np.array([15.0, 45.0, 110.0]))
@@ -187,7 +188,12 @@ def test_demo_library_metallics_all_render(qtbot):
     expected = int(np.sum(lib.types == "metallic"))
     assert int(np.sum(screen.model.mask)) == expected
     shown: list[bool] = []
-    qtbot.waitUntil(lambda: shown.append(screen.thumb_busy.isVisible()) or screen.idle, timeout=180_000)
+
+    def idle_noting_busy() -> bool:
+        shown.append(screen.thumb_busy.isVisible())
+        return screen.idle
+
+    qtbot.waitUntil(idle_noting_busy, timeout=180_000)
     assert any(shown)  # the indicator appeared while the thumbnails were made
     assert screen.count.text() == f"{expected} paints match"
     assert screen.thumbs.count() == expected

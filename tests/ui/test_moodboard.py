@@ -58,6 +58,7 @@ def test_face_eyedropper_changes_design_and_picture(qtbot, board):
     green_lab = eyedrop_lab(model.pixels[path], (60, 20), 3)
     assert doc.design.face == pytest.approx(tuple(green_lab), abs=1e-9)
     after = view.grab_image().astype(int)
+    assert view.basis is not None
     obj = view.basis.paint >= 0
     assert (mid[obj][:, 0] - before[obj][:, 0]).mean() > 5  # the sphere turned redder
     assert (after[obj][:, 1] - mid[obj][:, 1]).mean() > 5  # then greener

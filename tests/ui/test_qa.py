@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from station.analysis.qa import seam_qa
+from station.model import FaceFlopTravelGloss
 from ui.models.designer import DesignerModel
 from ui.models.document import DEFAULT_DESIGN, DesignDocument
 from ui.models.instruments import MeasurementStore
@@ -19,7 +20,7 @@ def test_qa_report_verdict_and_send(qtbot):
     designer.keep("A")
     designer.set_gloss(60.0)
     designer.keep("B")
-    sent = []
+    sent: list[FaceFlopTravelGloss] = []
     screen = QAScreen(designer, MeasurementStore(), sent.append)
     qtbot.addWidget(screen)
     screen.resize(900, 600)
@@ -30,14 +31,16 @@ def test_qa_report_verdict_and_send(qtbot):
     assert screen.beta_label.text() == "+6°"
     screen.run_btn.click()
     qtbot.waitUntil(lambda: screen.report is not None, timeout=60000)
+    assert screen.task is not None
     screen.task.wait()
     expected = seam_qa(DEFAULT_DESIGN, DEFAULT_DESIGN.replace(gloss_gu=60.0), 6.0)
-    assert screen.report.seam_de == pytest.approx(expected.seam_de)
+    assert screen.report is not None and screen.report.seam_de == pytest.approx(expected.seam_de)
     assert screen.verdict.text() == ("PASS" if expected.passed else "FAIL")
     assert screen.table.rowCount() == len(expected.geometries)
     # the correction is an optimisation: equal to a separate run to its convergence (≈1e-6), not bit for bit
     shown = screen.report.correction.paint
     for field in ("face", "flop"):
+        assert expected is not None
         assert getattr(shown, field) == pytest.approx(getattr(expected.correction.paint, field), abs=1e-3)
     screen.send_btn.click()
     assert sent == [screen.report.correction.paint]
@@ -62,6 +65,7 @@ def test_stored_measurements_from_the_local_database_are_panels(qtbot, tmp_path)
     sink = LocalSink(f"sqlite:///{tmp_path / 'station.sqlite3'}", tmp_path / "outbox.sqlite3")
     store = MeasurementStore(sink)
     m = store.persist(measurement_from_reading(_spectral(), PanelInfo("J-3", "door", "steel"), "test"))
+    assert m.receipt is not None
     assert m.receipt.status == "stored"
     screen = QAScreen(DesignerModel(DesignDocument()), store)
     qtbot.addWidget(screen)
@@ -117,6 +121,7 @@ def test_clicking_load_stored_offers_every_stored_measurement(qtbot, tmp_path):
     ids = []
     for i, panel in enumerate(panels):
         m = store.persist(measurement_from_reading(_spectral(f"SIM-T-{i}"), panel, "test"))
+        assert m.receipt is not None
         assert m.receipt.status == "stored", m.receipt
         ids.append(m.receipt.measurement_id)
     screen = QAScreen(DesignerModel(DesignDocument()), store)
@@ -187,7 +192,7 @@ def test_bad_lights_clear_the_last_answer_and_name_the_field(qtbot):
     qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
     qtbot.waitUntil(lambda: screen.report is not None, timeout=60000)
     qtbot.waitUntil(screen.run_btn.isEnabled, timeout=10000)
-    assert screen.report.beta_deg == 6.0 and screen.export_btn.isEnabled()
+    assert screen.report is not None and screen.report.beta_deg == 6.0 and screen.export_btn.isEnabled()
     _type(qtbot, screen.lights, "30, abc, 95")
     qtbot.mouseClick(screen.run_btn, Qt.MouseButton.LeftButton)
     assert screen.verdict.text() == "error"

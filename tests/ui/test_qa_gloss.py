@@ -44,6 +44,7 @@ def test_qa_screen_shows_the_not_measured_warning(qtbot, tmp_path):
     screen = QAScreen(DesignerModel(DesignDocument()), store)
     qtbot.addWidget(screen)
     assert screen.load_stored() == 1
+    assert m.receipt is not None
     assert f"gloss not measured for #{m.receipt.measurement_id}" in screen.details.text()
     label = next(lbl for lbl, _d in screen.sources() if lbl.startswith("stored #"))
     screen.panel_a.setCurrentText(label)

@@ -24,7 +24,7 @@ def test_received_paint_is_stored_for_the_chemist(qtbot, tmp_path) -> None:
     api = next(gen)
     try:
         qa = ServiceClient(
-            "http://testserver", api.tokens[next(r for r in api.tokens if r.value == "qa")], client=api.client
+            "http://testserver", api.tokens[next(r for r in api.tokens if r.value == "qa")], client=api.http
         )
         screen = FormulationScreen(None, DesignDocument(), service=qa)
         qtbot.addWidget(screen)

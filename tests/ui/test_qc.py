@@ -7,6 +7,7 @@ import datetime as dt
 import math
 import uuid
 from pathlib import Path
+from typing import Any
 
 import pytest
 from PySide6.QtCore import Qt
@@ -18,6 +19,7 @@ from db.models import Measurement
 from station.ingest import GlossRecord, InstrumentRef, store_gloss
 from station.qc.jobs import set_standard
 from tests.qc.conftest import FENDER_OFFSETS, populate
+from tests.ui.screens import item_at, screen_of
 from ui.models.qc import LocalQc, QcModel, ServiceQc
 from ui.widgets.qc_screen import COLUMNS, QcScreen
 
@@ -30,7 +32,7 @@ def _click(qtbot, button) -> None:
 
 def _column(screen: QcScreen, name: str) -> list[str]:
     j = COLUMNS.index(name)
-    return [screen.table.item(i, j).text() for i in range(screen.table.rowCount())]
+    return [item_at(screen.table, i, j).text() for i in range(screen.table.rowCount())]
 
 
 def _database(tmp_path: Path):
@@ -44,7 +46,7 @@ def _database(tmp_path: Path):
         first = session.get(Measurement, job.sample_ids[0])
         second = session.get(Measurement, job.sample_ids[1])
         assert first is not None and second is not None
-        common = dict(instrument=meter, operator="ana", gloss_20_gu=80.0, gloss_85_gu=95.0)
+        common: dict[str, Any] = dict(instrument=meter, operator="ana", gloss_20_gu=80.0, gloss_85_gu=95.0)
         # linked to the first sample; gloss-only on the second sample's panel 5 minutes after it
         store_gloss(
             session,
@@ -97,6 +99,7 @@ def test_judge_a_job_from_the_local_database_and_export(qtbot, tmp_path, monkeyp
     assert f"measurement {job.standard_id}" in screen.standard.text()
     assert "pass 6 · warn 0 · fail 1" in screen.standard.text()
     fail_cell = screen.table.item(15, COLUMNS.index("verdict"))
+    assert fail_cell is not None
     assert fail_cell.background().color().name() == "#f4a09a"
     screen.part.setCurrentText("bumper")
     assert "no standard set" in screen.standard.text() and screen.table.rowCount() == 0
@@ -105,6 +108,7 @@ def test_judge_a_job_from_the_local_database_and_export(qtbot, tmp_path, monkeyp
     monkeypatch.setattr(QFileDialog, "getSaveFileName", staticmethod(lambda *a, **k: (str(out), "")))
     _click(qtbot, screen.csv_btn)
     qtbot.waitUntil(lambda: screen.last_report == out, timeout=30000)
+    assert screen.task is not None
     screen.task.wait()
     rows = list(csv.DictReader(out.read_text(encoding="utf-8").splitlines()))
     assert len(rows) == len(FENDER_OFFSETS) * 3 and {r["part"] for r in rows} == {"fender"}
@@ -145,7 +149,7 @@ def test_judge_through_the_service(qtbot, tmp_path):
             headers=api.auth("qa"),
         )
         assert r.status_code == 200, r.text
-        service = ServiceClient("http://testserver", api.tokens[next(iter(api.tokens))], client=api.client)
+        service = ServiceClient("http://testserver", api.tokens[next(iter(api.tokens))], client=api.http)
         screen = QcScreen(QcModel(ServiceQc(service)))
         qtbot.addWidget(screen)
         _click(qtbot, screen.load_btn)
@@ -179,7 +183,7 @@ def test_judge_through_the_service(qtbot, tmp_path):
         _click(qtbot, screen.judge_btn)
         _click(qtbot, screen.mi_btn)
         assert screen.status.text() == "error: select a sample row first"
-        cell = screen.table.visualItemRect(screen.table.item(0, 0)).center()
+        cell = screen.table.visualItemRect(item_at(screen.table, 0, 0)).center()
         qtbot.mouseClick(screen.table.viewport(), Qt.MouseButton.LeftButton, pos=cell)
         _click(qtbot, screen.mi_btn)
         assert screen.status.text() == (
@@ -208,8 +212,8 @@ def test_the_qc_tab_reads_the_database_the_scans_go_to(qtbot, tmp_path):
     qtbot.addWidget(win)
     win.show()
     win.tabs.setCurrentWidget(win.screens["QC"])
-    screen = win.screens["QC"].content()
-    assert screen.model.source.url == url
+    screen = screen_of(win, "QC", QcScreen)
+    assert isinstance(screen.model.source, LocalQc) and screen.model.source.url == url
     _click(qtbot, screen.load_btn)
     assert [screen.job.itemText(i) for i in range(screen.job.count())] == ["J-100", "J-200"]
     win.close()

@@ -23,8 +23,10 @@ from db.models import Measurement, Panel
 from station.ingest.formats import write_measurement_file
 from station.model.domain import ANGLES_6, aspecular_name
 from tests.readings import lab_reading
+from tests.ui.screens import item_at, screen_of
 from ui.models.measure_db import LocalSink
 from ui.models.qc import LocalQc, QcModel
+from ui.widgets.instruments_screen import InstrumentsScreen
 from ui.widgets.qc_screen import COLUMNS, QcScreen
 
 pytestmark = [pytest.mark.qt]
@@ -100,7 +102,7 @@ def _drop(widget, paths: list[Path]) -> bool:
 
 def _column(screen: QcScreen, name: str) -> list[str]:
     j = COLUMNS.index(name)
-    return [screen.table.item(i, j).text() for i in range(screen.table.rowCount())]
+    return [item_at(screen.table, i, j).text() for i in range(screen.table.rowCount())]
 
 
 def test_import_choose_the_standard_judge_and_open_a_row(qtbot, tmp_path, monkeypatch):
@@ -137,6 +139,7 @@ def test_import_choose_the_standard_judge_and_open_a_row(qtbot, tmp_path, monkey
         np.testing.assert_allclose(r[4], np.asarray(MASTER) + off, atol=1e-3)
     # importing the same file again stores nothing new
     assert _drop(screen, [files["trial 3"]])
+    assert screen.task is not None
     qtbot.waitUntil(lambda: screen.import_btn.isEnabled() and screen.task.isFinished(), timeout=30000)
     assert screen.imports[0].statuses == ("duplicate",) and len(_stored(url)) == 4
 
@@ -166,7 +169,7 @@ def test_import_choose_the_standard_judge_and_open_a_row(qtbot, tmp_path, monkey
     QTest.mouseClick(
         screen.table.viewport(),
         Qt.MouseButton.LeftButton,
-        pos=screen.table.visualItemRect(screen.table.item(row, 0)).center(),
+        pos=screen.table.visualItemRect(item_at(screen.table, row, 0)).center(),
     )
     assert screen.standard_pick.currentData() == ids[3]
     QTest.mouseClick(screen.set_standard_btn, Qt.MouseButton.LeftButton)
@@ -189,7 +192,7 @@ def test_import_choose_the_standard_judge_and_open_a_row(qtbot, tmp_path, monkey
 def cell_of_selected(screen: QcScreen) -> str:
     rows = {i.row() for i in screen.table.selectedItems()}
     assert len(rows) == 1
-    return screen.table.item(rows.pop(), 0).text()
+    return item_at(screen.table, rows.pop(), 0).text()
 
 
 def test_an_import_without_a_job_names_the_field(qtbot, tmp_path, monkeypatch):
@@ -232,7 +235,7 @@ def test_the_window_imports_from_the_file_menu_and_drops_and_opens_history_rows(
     assert len(ids) == 2
     # the technician's job history in the Instruments tab: a double click opens the job in the QC tab
     win.tabs.setCurrentWidget(win.screens["Instruments"])
-    inst = win.screens["Instruments"].content()
+    inst = screen_of(win, "Instruments", InstrumentsScreen)
     _type(inst.job, "J-400")
     QTest.mouseClick(inst.history_btn, Qt.MouseButton.LeftButton)
     qtbot.waitUntil(lambda: inst.idle and inst.history.count() == 2, timeout=30000)
@@ -260,7 +263,7 @@ def test_import_and_set_the_standard_through_the_service(qtbot, tmp_path, monkey
     gen = make_api(url, tmp_path)
     api = next(gen)
     try:
-        service = ServiceClient("http://testserver", api.tokens[Role.ADMIN], client=api.client)
+        service = ServiceClient("http://testserver", api.tokens[Role.ADMIN], client=api.http)
         sink = ServiceSink(service, tmp_path / "service-outbox.sqlite3")
         screen = QcScreen(QcModel(ServiceQc(service)), sink=sink)
         qtbot.addWidget(screen)

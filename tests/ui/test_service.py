@@ -9,11 +9,14 @@ import pytest
 
 from station.model.design_io import design_to_dict
 from tests.api.conftest import make_api
+from tests.ui.screens import screen_of
 from ui.app import MainWindow
 from ui.models.document import DEFAULT_DESIGN
 from ui.models.instruments import InstrumentSession, MeasurementStore
 from ui.models.measure_db import PanelInfo, ServiceSink
 from ui.models.service import ServiceClient, ServiceError
+from ui.widgets.library_screen import LibraryScreen
+from ui.widgets.qa_screen import QAScreen
 
 pytestmark = [pytest.mark.qt]
 
@@ -34,7 +37,7 @@ def _token(api, *roles: str) -> str:
 
 
 def _window(api, token: str, tmp_path) -> MainWindow:
-    service = ServiceClient("http://testserver", token, client=api.client)
+    service = ServiceClient("http://testserver", token, client=api.http)
     return MainWindow(
         service=service, sink=ServiceSink(service, tmp_path / "outbox.sqlite3"), ask_on_close=False
     )
@@ -56,6 +59,7 @@ def test_viewer_loads_and_saves_designs(qtbot, api, tmp_path):
     assert name == "service red" and design.face == other.face and design.flop == other.flop
     new_id = win.save_to_service()
     assert new_id is not None
+    assert win.service is not None
     names = [n for _i, n, _d in win.service.list_designs()]
     assert names.count("untitled") == 1
     win.close()
@@ -71,12 +75,12 @@ def test_library_browser_shows_the_service_library(qtbot, api, tmp_path):
     assert r.status_code == 201, r.text
     win = _window(api, _token(api, "admin"), tmp_path)
     qtbot.addWidget(win)
-    lib = win.screens["Library"].content().model.library
+    lib = screen_of(win, "Library", LibraryScreen).model.library
     assert sorted(lib.codes.tolist()) == ["M-1", "R-1"] and not lib.synthetic
     i = lib.codes.tolist().index("R-1")
     np.testing.assert_allclose(lib.lab[i], [[40, 50, 30], [39, 49, 29], [38, 48, 28]])
     assert lib.angles_deg == (15.0, 45.0, 110.0) and lib.gloss_gu[i] == 90.0
-    assert "service http://testserver" in win.screens["Library"].content().title.text()
+    assert "service http://testserver" in screen_of(win, "Library", LibraryScreen).title.text()
     win.close()
 
 
@@ -92,19 +96,22 @@ def test_scan_is_stored_on_the_service_and_offered_to_qa(qtbot, api, tmp_path):
         m = session.scan(panel, store=win.store)
     finally:
         session.close()
+    assert m.receipt is not None
     assert m.receipt.status == "stored", m.receipt
     # read back over HTTP: one measurement on a panel with the metadata
     page = api.client.get("/api/v1/measurements", headers=api.auth("admin")).json()
     assert page["count"] == 1 and page["data"][0]["id"] == m.receipt.measurement_id
     stored = page["data"][0]
+    assert m.reading is not None
     assert stored["client_id"] == str(m.reading.client_id)
     np.testing.assert_allclose(stored["lab"], m.lab, atol=1e-3)
     p = api.client.get(f"/api/v1/panels/{stored['panel_id']}", headers=api.auth("admin")).json()
     assert (p["job"], p["part"], p["substrate"], p["notes"]) == ("J-7", "fender", "steel", "left front")
     # a retry is stored once; the same panel metadata reuses the panel
-    assert win.store.persist(m).receipt.status == "duplicate"
+    again = win.store.persist(m).receipt
+    assert again is not None and again.status == "duplicate"
     assert api.client.get("/api/v1/measurements", headers=api.auth("admin")).json()["count"] == 1
-    qa = win.screens["QA"].content()
+    qa = screen_of(win, "QA", QAScreen)
     assert qa.load_stored() == 1
     label = next(lbl for lbl, _d in qa.sources() if lbl.startswith(f"stored #{stored['id']}: J-7 fender"))
     qa.panel_b.setCurrentText(label)
@@ -127,10 +134,11 @@ def test_clicking_load_stored_in_service_mode_offers_the_stored_scans(qtbot, api
     panels = [PanelInfo("J-8", "bumper", "PP/EPDM"), PanelInfo("J-8", "fender", "steel")]
     for i, panel in enumerate(panels):
         m = win.store.persist(measurement_from_reading(_spectral(f"SIM-S-{i}"), panel, "test"))
+        assert m.receipt is not None
         assert m.receipt.status == "stored", m.receipt
     page = api.client.get("/api/v1/measurements", headers=api.auth("admin")).json()
     assert page["count"] == len(panels)
-    qa = win.screens["QA"].content()
+    qa = screen_of(win, "QA", QAScreen)
     win.show()
     win.tabs.setCurrentWidget(win.screens["QA"])
     QTest.mouseClick(qa.load_btn, Qt.MouseButton.LeftButton)
@@ -155,8 +163,9 @@ def test_unreachable_service_keeps_the_reading(qtbot, api, tmp_path):
 
     m = measurement_from_reading(_spectral(), PanelInfo("J-9", "hood"), "test")
     r = store.persist(m).receipt
+    assert r is not None
     assert r.status == "queued" and "unreachable" in r.message and sink.pending() == 1
-    sink.client = ServiceClient("http://testserver", _token(api, "admin"), client=api.client)  # back up
+    sink.client = ServiceClient("http://testserver", _token(api, "admin"), client=api.http)  # back up
     assert [x.status for x in sink.flush().values()] == ["stored"] and sink.pending() == 0
     assert api.client.get("/api/v1/measurements", headers=api.auth("admin")).json()["count"] == 1
     down.close()
@@ -169,5 +178,6 @@ def test_refused_token_is_reported_not_raised(qtbot, api, tmp_path):
     assert win.load_from_service() == 0
     assert "HTTP 401" in win.statusBar().currentMessage()
     with pytest.raises(ServiceError):
+        assert win.service is not None
         win.service.list_designs()
     win.close()

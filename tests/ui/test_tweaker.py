@@ -5,13 +5,24 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from PySide6.QtCore import QEvent, QPointF, Qt
+from PySide6.QtGui import QMouseEvent
 
 from station.design.tweaker import adjust_at, highlight_edge_deg
 from ui.models.document import DEFAULT_DESIGN, DesignDocument
 from ui.widgets.tweaker_screen import SIZE as SIZE_FALLBACK
-from ui.widgets.tweaker_screen import TweakerScreen
+from ui.widgets.tweaker_screen import TweakerCanvas, TweakerScreen
 
 pytestmark = [pytest.mark.qt]
+
+
+def _release(c: TweakerCanvas) -> None:
+    """End a drag as letting go of the left mouse button does."""
+    at = QPointF(0.0, 0.0)
+    left, none = Qt.MouseButton.LeftButton, Qt.MouseButton.NoButton
+    c.mouseReleaseEvent(
+        QMouseEvent(QEvent.Type.MouseButtonRelease, at, at, left, none, Qt.KeyboardModifier.NoModifier)
+    )
 
 
 def _pixel_at(canvas, theta: float) -> tuple[int, int]:
@@ -37,22 +48,23 @@ def test_crosshair_buttons_ring_and_edge(qtbot):
     assert doc.design.face[0] - DEFAULT_DESIGN.face[0] == pytest.approx(3.0 * r)
     assert doc.design.flop[0] - DEFAULT_DESIGN.flop[0] == pytest.approx(3.0 * (1 - r))
 
+    assert doc.design.travel_deg is not None
     ring = _pixel_at(c, doc.design.travel_deg)
     assert c.press(ring) == "travel-ring"
     c.drag(_pixel_at(c, 90.0))
-    c.mouseReleaseEvent(None)
+    _release(c)
     assert doc.design.travel_deg == pytest.approx(90.0, abs=1.0)
 
     edge = _pixel_at(c, highlight_edge_deg(doc.design.gloss_gu))
     assert c.press(edge) == "highlight-edge"
     c.drag(_pixel_at(c, highlight_edge_deg(doc.design.gloss_gu) * 2))
-    c.mouseReleaseEvent(None)
+    _release(c)
     assert doc.design.gloss_gu < DEFAULT_DESIGN.gloss_gu
     light = c.scene.light_dir.copy()
     assert c.press(_pixel_at(c, 0.0)) == "highlight-centre"
     c.drag(_pixel_at(c, 40.0))
     assert not np.allclose(c.scene.light_dir, light)
-    c.mouseReleaseEvent(None)
+    _release(c)
     for _ in range(3):
         doc.undo()
     assert doc.design is DEFAULT_DESIGN

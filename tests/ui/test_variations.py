@@ -75,11 +75,14 @@ def wait_main_source(qtbot, win: MainWindow) -> None:
     view.wait_idle(60000)
     grid = win.designer_panel.variations
     qtbot.waitUntil(
-        lambda: grid.source == "main view" and grid.swatches.source is view.basis.core, timeout=60000
+        lambda: (
+            grid.source == "main view" and view.basis is not None and grid.swatches.source is view.basis.core
+        ),
+        timeout=60000,
     )
 
 
-def test_variations_are_the_object_of_the_main_view_and_a_click_applies_one(qtbot, win) -> None:
+def test_variations_are_the_object_of_the_main_view_and_a_click_applies_one(qtbot, win: MainWindow) -> None:
     grid = win.designer_panel.variations
     view = win.view_panel.view
     win.view_panel.shape.setCurrentText("speedshape")
@@ -105,6 +108,7 @@ def test_variations_are_the_object_of_the_main_view_and_a_click_applies_one(qtbo
                     grid.buttons[j].text(),
                 )
     labels = {grid.buttons[i].text(): i for i in enabled}
+    assert view.basis is not None
     w, h = view.basis.size
     refs = {}
     for name in ("lighter", "current", "darker", "hue +"):
@@ -123,7 +127,7 @@ def test_variations_are_the_object_of_the_main_view_and_a_click_applies_one(qtbo
     qtbot.mouseClick(grid.buttons[labels["lighter"]], LEFT, pos=QPoint(10, 10))
     assert win.document.design == lighter
     assert np.array_equal(grid.images[4], shown)
-    assert win.view_model.designs[0] == lighter
+    assert win.view_model.designs is not None and win.view_model.designs[0] == lighter
     # another shape: the swatches follow the main view
     win.view_panel.shape.setCurrentText("sphere")
     assert win.view_model.settings.shape == "sphere"

@@ -8,6 +8,7 @@ import pytest
 from PySide6.QtCore import QPoint, Qt
 
 from station.model import FaceFlopTravelGloss
+from station.render.weights import LobeWeights
 from ui.models.designer import DesignerModel
 from ui.models.document import DEFAULT_DESIGN, DesignDocument
 from ui.models.view import ViewModel
@@ -15,6 +16,13 @@ from ui.widgets.render_view import GLRenderView
 from ui.widgets.view_panel import ViewPanel
 
 pytestmark = [pytest.mark.qt]
+
+
+def _weights(model: ViewModel) -> tuple[LobeWeights, LobeWeights]:
+    """Lobe weights of the two shown designs (there are designs)."""
+    weights = model.weights()
+    assert weights is not None
+    return weights
 
 
 def _gl_view(qtbot, model: ViewModel, w: int = 160, h: int = 120, mode: str = "cpu") -> GLRenderView:
@@ -38,13 +46,13 @@ def test_gl_frame_matches_numpy_composite(qtbot, mode):
     assert view.gl_renderer
     assert view.basis is not None and view.basis.size == (160, 120)
     # exact display transform of the core's linear re-weighting (station.render.tonemap.to_display)
-    ref = view.basis.composite_display(model.weights(), model.settings.exposure_ev)
+    ref = view.basis.composite_display(_weights(model), model.settings.exposure_ev)
     diff = np.abs(img.astype(int) - ref.astype(int))
     # cpu: the core's 64k-entry LUT → ≤ 1 level; gpu: RGB9_E5 storage (≤ 0.2 % relative) → ≤ 2 levels
     assert diff.max() <= (1 if mode == "cpu" else 2), diff.max()
     assert (diff > 0).mean() < 0.05
     if mode == "cpu":  # texel for texel the core's 8-bit frame
-        np.testing.assert_array_equal(img, view.basis.core.edit(list(model.weights()), 0.5))
+        np.testing.assert_array_equal(img, view.basis.core.edit(list(_weights(model)), 0.5))
     view.close()
 
 
@@ -59,6 +67,7 @@ def test_paint_edit_and_exposure_change_the_picture(qtbot, mode):
     model.show(DEFAULT_DESIGN.replace(face=(55.0, 40.0, 10.0), flop=(28.0, 30.0, 5.0)))
     after = view.grab_image().astype(int)
     assert view.basis is basis_before  # a paint edit re-weights the cached basis images
+    assert view.basis is not None
     obj = view.basis.paint >= 0
     assert np.abs(after - before)[obj].mean() > 5
     assert (after[obj][:, 0] - before[obj][:, 0]).mean() > 5  # towards red
@@ -79,6 +88,7 @@ def test_drag_orbits_and_wheel_zooms(qtbot):
     qtbot.mouseRelease(view, Qt.MouseButton.LeftButton, pos=QPoint(125, 75))
     assert model.settings.yaw_deg == pytest.approx(360 - 25 * 0.4)
     view.wait_idle()
+    assert view.basis is not None
     assert view.basis.size == (200, 150)
     view.close()
 
@@ -110,9 +120,9 @@ def test_designer_gloss_edit_reaches_view_model(qtbot):
     model = ViewModel()
     model.show(doc.design)
     doc.events.changed.connect(model.show)
-    w0 = model.weights()[0]
+    w0 = _weights(model)[0]
     designer.set_gloss(20.0)
-    w1 = model.weights()[0]
+    w1 = _weights(model)[0]
     assert not np.allclose(w0.k_g, w1.k_g)
 
 
@@ -129,8 +139,10 @@ def test_image_view_paints_the_core_frame(qtbot):
     qtbot.waitExposed(view)
     view.wait_idle()
     img = view.render_image()
+    assert img is not None
     assert img.shape == (120, 160, 3)
-    ref = view.basis.composite_display(model.weights(), 0.0)
+    assert view.basis is not None
+    ref = view.basis.composite_display(_weights(model), 0.0)
     assert np.abs(img.astype(int) - ref.astype(int)).max() <= 1
     view.close()
 
@@ -187,6 +199,7 @@ def test_cold_cache_first_frame_full_quality_from_gl_prefilter(qtbot, cold_prefi
     def on_frame() -> None:
         if not first:
             w, h = view._pixel_size()
+            assert view._screen is not None
             pixels = np.frombuffer(view._screen.read(viewport=(0, 0, w, h), components=3), np.uint8)
             frame = pixels.reshape(h, w, 3)[::-1]
             first.append((view.gl_frames, view.full_quality, view.basis_current, frame.copy()))
@@ -206,10 +219,11 @@ def test_cold_cache_first_frame_full_quality_from_gl_prefilter(qtbot, cold_prefi
     assert names and all("-gl-" in n for n in names)  # made on the GL context and cached, no NumPy maps
     qtbot.waitUntil(lambda: view.basis_current, timeout=60000)
     view.wait_idle()
+    assert view.basis is not None
     assert view.basis.core.basis is env  # the worker looked up the same maps
     assert view.basis.size == (160, 120)
     img = view.grab_image()
-    np.testing.assert_array_equal(img, view.basis.core.edit(list(model.weights()), 0.0))
+    np.testing.assert_array_equal(img, view.basis.core.edit(list(_weights(model)), 0.0))
     obj = view.basis.paint >= 0
     assert obj.mean() > 0.2  # the sphere is on screen, lit
     # GL frame vs the cached basis' frame of the same view: the core's GL-vs-NumPy bound
@@ -237,8 +251,10 @@ def test_orbit_is_drawn_by_gl_at_full_quality_and_the_worker_waits_for_a_still_v
     assert view.gl_frames == n + 5 and view.basis is basis0
     assert np.abs(frames[-1].astype(int) - still.astype(int)).max() > 10  # the view moved
     qtbot.waitUntil(lambda: view.basis_current, timeout=60000)
+    assert view._basis_settings is not None
     assert view.basis is not basis0 and view._basis_settings.yaw_deg == 50.0
-    np.testing.assert_array_equal(view.grab_image(), view.basis.core.edit(list(model.weights()), 0.0))
+    assert view.basis is not None
+    np.testing.assert_array_equal(view.grab_image(), view.basis.core.edit(list(_weights(model)), 0.0))
     view.close()
 
 
@@ -270,7 +286,8 @@ def test_paint_edit_on_screen_is_the_core_frame_and_an_orbit_brings_back_the_gl_
     model.show(DEFAULT_DESIGN.replace(face=(55.0, 40.0, 10.0), flop=(28.0, 30.0, 5.0)))
     qtbot.waitUntil(lambda: view.frames > n, timeout=5000)
     qtbot.wait(50)
-    expect = view.basis.core.edit_rgba(list(model.weights()), 0.0)[..., :3]
+    assert view.basis is not None
+    expect = view.basis.core.edit_rgba(list(_weights(model)), 0.0)[..., :3]
     np.testing.assert_array_equal(_on_screen(view), expect)
     assert view._container.isHidden()
     g = view.gl_frames

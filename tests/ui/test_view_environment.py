@@ -9,11 +9,20 @@ from PySide6.QtCore import Qt
 from PySide6.QtTest import QTest
 
 from station.render.errors import EnvironmentFileError
+from station.render.weights import LobeWeights
 from ui.models.document import DEFAULT_DESIGN
 from ui.models.view import ViewInputError, ViewModel, ViewSettings
+from ui.widgets.render_view import GLRenderView
 from ui.widgets.view_panel import ViewPanel
 
 pytestmark = [pytest.mark.qt]
+
+
+def _weights(model: ViewModel) -> tuple[LobeWeights, LobeWeights]:
+    """Lobe weights of the two shown designs (there are designs)."""
+    weights = model.weights()
+    assert weights is not None
+    return weights
 
 
 @pytest.fixture
@@ -69,6 +78,7 @@ def test_load_hdr_button_and_dialog(qtbot, hdri_files, own_cache, tmp_path) -> N
     model = ViewModel(ViewSettings(environment=str(small[0])))
     model.show(DEFAULT_DESIGN)
     panel = _panel(qtbot, model)
+    assert isinstance(panel.view, GLRenderView)
     qtbot.waitUntil(lambda: panel.view.full_quality, timeout=60000)
     before = panel.view.grab_image().astype(float)
     assert panel.environment.currentText() == small[0].name
@@ -82,9 +92,10 @@ def test_load_hdr_button_and_dialog(qtbot, hdri_files, own_cache, tmp_path) -> N
     panel.view.wait_idle(60000)
     qtbot.waitUntil(lambda: panel.view.full_quality, timeout=60000)
     # the frame shown is the core's picture of this file's prefiltered maps
+    assert panel.view.basis is not None
     assert panel.view.basis.core.basis is panel.view.environment_prefilter(str(small[1]))
     after = panel.view.grab_image()
-    np.testing.assert_array_equal(after, panel.view.basis.core.edit(list(model.weights()), 0.0))
+    np.testing.assert_array_equal(after, panel.view.basis.core.edit(list(_weights(model)), 0.0))
     obj = panel.view.basis.paint >= 0
     assert obj.mean() > 0.05
     if hdri_files[0] != hdri_files[-1]:  # a different light: the object's mean colour moves
@@ -124,6 +135,7 @@ def test_stage_checkbox_same_picture_on_both_paths(qtbot, tmp_path, hdri_files, 
     model = ViewModel(ViewSettings(environment=str(path)))
     model.show(DEFAULT_DESIGN)
     panel = _panel(qtbot, model)
+    assert isinstance(panel.view, GLRenderView)
     qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
     flat = panel.view.grab_image()
     QTest.mouseClick(panel.stage, Qt.MouseButton.LeftButton)
@@ -132,7 +144,8 @@ def test_stage_checkbox_same_picture_on_both_paths(qtbot, tmp_path, hdri_files, 
     panel.view.wait_idle(60000)
     qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
     cached = panel.view.grab_image()
-    np.testing.assert_array_equal(cached, panel.view.basis.core.edit(list(model.weights()), 0.0))
+    assert panel.view.basis is not None
+    np.testing.assert_array_equal(cached, panel.view.basis.core.edit(list(_weights(model)), 0.0))
     assert np.abs(cached[0, 0].astype(int) - flat[0, 0].astype(int)).max() > 3  # backdrop, not grey
     diff = np.abs(gl_frame.astype(int) - cached.astype(int))
     assert np.median(diff) <= 2 and np.percentile(diff, 99) <= 12  # GL float32 vs NumPy float64 lookups
@@ -146,6 +159,7 @@ def test_clear_coat_checkbox(qtbot, own_cache) -> None:
     model = ViewModel()
     model.show(DEFAULT_DESIGN)
     panel = _panel(qtbot, model)
+    assert isinstance(panel.view, GLRenderView)
     qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
     before = panel.view.grab_image()
     QTest.mouseClick(panel.coat, Qt.MouseButton.LeftButton)
@@ -153,14 +167,15 @@ def test_clear_coat_checkbox(qtbot, own_cache) -> None:
     panel.view.wait_idle(60000)
     qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
     basis = panel.view.basis
+    assert basis is not None
     assert any(kind == "Cg" for kind, _ in basis.layout)
     after = panel.view.grab_image()
-    np.testing.assert_array_equal(after, basis.core.edit(list(model.weights()), 0.0))
+    np.testing.assert_array_equal(after, basis.core.edit(list(_weights(model)), 0.0))
     obj = basis.paint >= 0
     assert np.abs(after[obj].astype(int) - before[obj].astype(int)).max() > 3  # grazing gloss rises
     # the GPU composite weights of the split images: Cg constant w_G, Cd times c w_DD
-    const, times_c = layer_weights(basis.layout, model.weights()[0])
-    w_dd = model.weights()[0].map_weights()[1]
+    const, times_c = layer_weights(basis.layout, _weights(model)[0])
+    w_dd = _weights(model)[0].map_weights()[1]
     j = basis.layout.index(next(x for x in basis.layout if x[0] == "Cd"))
     assert const[j] == pytest.approx(0.0) and times_c[j] == pytest.approx(w_dd[basis.layout[j][1]])
     panel.close()
@@ -181,6 +196,7 @@ def test_flakes_checkbox_draws_sparkle_that_averages_away(qtbot, own_cache) -> N
     model = ViewModel(ViewSettings(zoom=4.0))  # close up: flakes larger than the sparkle threshold
     model.show(silver)
     panel = _panel(qtbot, model)
+    assert isinstance(panel.view, GLRenderView)
     panel.resize(560, 560)
     qtbot.waitUntil(lambda: panel.view.basis_current, timeout=60000)
     panel.view.wait_idle(60000)
@@ -192,6 +208,7 @@ def test_flakes_checkbox_draws_sparkle_that_averages_away(qtbot, own_cache) -> N
     expected = flake_lod(panel.view._flake_layer(), model.settings.camera(), h)
     assert panel.flake_status.toolTip() == expected.reason and expected.on, expected.reason
     on = panel.view.grab_image()
+    assert panel.view.basis is not None
     obj = panel.view.basis.paint >= 0
     diff = np.abs(on.astype(int) - off.astype(int)).max(axis=-1)
     assert np.mean(diff[obj] > 2) > 0.02  # sparkle: a share of the object's pixels moved

@@ -3,6 +3,8 @@ settings, and the layer drawn is the paint type's default with them put in."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtTest import QTest
@@ -10,6 +12,7 @@ from PySide6.QtTest import QTest
 from station.model import FaceFlopTravelGloss
 from station.model.flakes import METALLIC_FLAKES, PEARL_FLAKES, FlakeLayer
 from ui.models.view import ViewInputError, ViewModel, ViewSettings
+from ui.widgets.render_view import GLRenderView
 from ui.widgets.view_panel import ViewPanel
 
 pytestmark = [pytest.mark.qt]
@@ -27,7 +30,8 @@ def test_settings_put_the_parameters_into_the_paint_default() -> None:
     assert ViewSettings(flake_size_um=40.0).flake_layer(SILVER) is None  # flakes off
     for name, bad in (("flake_size_um", 0.0), ("flake_density", 1e6), ("flake_spread_deg", 60.0)):
         with pytest.raises(ViewInputError, match=name):
-            ViewSettings(**{name: bad})
+            bad_field: dict[str, Any] = {name: bad}
+            ViewSettings(**bad_field)
 
 
 def test_flake_boxes_drive_the_layer(qtbot, tmp_path, monkeypatch) -> None:
@@ -49,6 +53,7 @@ def test_flake_boxes_drive_the_layer(qtbot, tmp_path, monkeypatch) -> None:
     spread.setFocus()
     QTest.keyClick(spread, Qt.Key.Key_Up)  # from "paint default" one step up: the range's lowest, 0.5°
     assert model.settings.flake_spread_deg == 0.5
+    assert isinstance(panel.view, GLRenderView)
     layer = panel.view._flake_layer()
     assert layer == FlakeLayer(60.0, METALLIC_FLAKES.density_per_mm2, 0.5, METALLIC_FLAKES.reflectance)
     QTest.keyClick(spread, Qt.Key.Key_Down)  # back to the paint default

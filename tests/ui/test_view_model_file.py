@@ -12,6 +12,7 @@ from PySide6.QtWidgets import QLineEdit, QMessageBox
 from station.render.errors import RenderInputError
 from tests.ui.dialogs import enter_file_name
 from ui.models.view import ViewModel
+from ui.widgets.render_view import GLRenderView
 
 pytestmark = [pytest.mark.qt]
 
@@ -72,12 +73,14 @@ def test_file_open_model_shows_it_in_the_view(qtbot, tmp_path, box_glb, own_cach
     win.show()
     qtbot.waitExposed(win)
     panel, view = win.view_panel, win.view_panel.view
+    assert isinstance(view, GLRenderView)
     view.wait_idle(60000)
     bad = tmp_path / "broken.obj"
     bad.write_bytes(b"\x00\x01 not a model")
     before = win.view_model.settings
     _open_model(qtbot, win, bad)
     qtbot.waitUntil(lambda: win.error_box is not None and win.error_box.isVisible(), timeout=10000)
+    assert win.error_box is not None
     assert "broken.obj" in win.error_box.text()
     assert win.view_model.settings == before
     win.error_box.button(QMessageBox.StandardButton.Ok).click()
@@ -91,7 +94,9 @@ def test_file_open_model_shows_it_in_the_view(qtbot, tmp_path, box_glb, own_cach
     ctx = create_gl_context()  # the core on a context of its own, not the widget's
     try:
         with GLRenderer(environment_basis_gl(settings.environment, ctx), w, h, ctx=ctx) as gl:
-            weights = list(win.view_model.weights())
+            shown = win.view_model.weights()
+            assert shown is not None
+            weights = list(shown)
             core = gl.render_mesh(win.view_model.mesh(), weights, camera=settings.camera())
     finally:
         ctx.release()

@@ -131,7 +131,8 @@ class LocalQc(LocalDatabase):
     ) -> dict[str, Any]:
         from station.ingest import gloss_of_measurements
 
-        data = self._summary(job, formula, illuminant_limits, judging).to_dict()
+        # the wire summary, with each sample's gloss added: a dict of the viewer's own
+        data: dict[str, Any] = dict(self._summary(job, formula, illuminant_limits, judging).to_dict())
         samples = [s for p in data["parts"] for s in p["samples"]]
         with self._session() as session:
             gloss = gloss_of_measurements(session, [s["measurement_id"] for s in samples])
