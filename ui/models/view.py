@@ -41,6 +41,11 @@ ENVIRONMENT_SUFFIXES = (".hdr", ".exr")
 ENV_WIDTH = 256
 PREFILTER_MAX_SIZE = 64
 PREVIEW_PREFILTER_SIZE = 16  # cube faces of the first-frame prefilter (brute quadrature, ~0.1 s)
+#: Anti-aliasing of the view's final frames, samples per pixel (``station.render.gl_targets.AA_SAMPLES``):
+#: the basis images' edge pixels are supersampled (``build_basis_images(aa=...)``, a small share of the
+#: worker's time), and a GL frame the view stays on (flakes, own models) is redrawn supersampled once the
+#: view is still. Frames drawn while the view moves are shaded once per pixel.
+VIEW_AA = 4
 
 
 class ViewInputError(InputError):
@@ -289,6 +294,8 @@ def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tu
                 times_c[j] = w_dd[i]
         elif kind == "Cd":
             times_c[j] = w_dd[i]
+        elif kind == "B":
+            const[j] = 1.0  # the background share of an anti-aliased edge pixel
         else:
             const[j] = w_dd[i]
     return const, times_c
@@ -330,15 +337,17 @@ class BasisImages:
         height: int,
         prefilter_size: int = PREFILTER_MAX_SIZE,
         env: PrefilteredBasis | None = None,
+        aa: int = 1,
     ) -> BasisImages:
         """Ray-cast the view and look up every prefiltered map once (the slow part, done per camera).
 
         *prefilter_size* caps the prefiltered cube faces (see :func:`environment_basis`); *env*: the
-        prefiltered environment to use instead (e.g. :func:`environment_basis_gl`'s, full size).
+        prefiltered environment to use instead (e.g. :func:`environment_basis_gl`'s, full size); *aa*: samples
+        per pixel at the silhouettes and paint seams (:func:`station.render.basis_images.build_basis_images`).
         """
         if env is None:
             env = environment_basis(settings.environment, prefilter_size)
-        core = build_basis_images(settings.scene(), env, width, height, coat=settings.clear_coat())
+        core = build_basis_images(settings.scene(), env, width, height, coat=settings.clear_coat(), aa=aa)
         k = core.images.shape[1]
         layers = np.zeros((k, height * width, 3), np.float32)
         layers[:, core.pixels] = core.images.transpose(1, 2, 0)
