@@ -82,3 +82,50 @@ def test_view_edges_take_the_disc_coverage(qtbot, tmp_path, own_cache) -> None:
     # pixels away from the silhouette are unchanged
     far = (cov >= 1.0) | (cov <= 0.0)
     np.testing.assert_allclose(smooth[far], plain[far], rtol=2e-3, atol=2e-3)
+
+
+@pytest.mark.gl
+def test_gl_frame_of_a_still_model_is_supersampled(qtbot, tmp_path, own_cache) -> None:
+    # An own model is drawn by the core's GL renderer in every frame: once the view has been still for
+    # SETTLE_MS that frame is redrawn at VIEW_AA samples per pixel. Against the same view shaded once per
+    # pixel, the frames differ along the silhouette (pixels between box and background) and nowhere
+    # else beyond the shading's own sub-pixel variation.
+    import trimesh
+
+    from station.render.basis_images import edge_pixels
+    from ui.widgets.render_view import GLRenderView
+
+    box = tmp_path / "box.glb"
+    trimesh.creation.box(extents=(1.6, 0.8, 1.0)).export(box)
+    model = ViewModel()
+    model.show(DEFAULT_DESIGN)
+    model.load_model(box)
+    view = GLRenderView(model)
+    qtbot.addWidget(view)
+    view.resize(240, 180)
+    view.show()
+    qtbot.waitExposed(view)
+    qtbot.waitUntil(lambda: view._core is not None and view._core.targets.aa == VIEW_AA, timeout=30000)
+    smooth = view.grab_image().astype(int)
+    view.aa = 1
+    view._core.set_aa(1)
+    plain = view.grab_image().astype(int)
+    assert smooth.shape == plain.shape == (180, 240, 3)
+    background = plain[0, 0]
+    obj = np.abs(plain - background).max(axis=-1) > 2
+    assert 0.05 < obj.mean() < 0.9
+    # the pixels next to a jump in the plain frame: the silhouette and the box's own edges between faces
+    pad = np.pad(plain, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    h, w = obj.shape
+    jump = np.zeros(obj.shape, bool)
+    for dy in (0, 1, 2):
+        for dx in (0, 1, 2):
+            jump |= np.abs(pad[dy : dy + h, dx : dx + w] - plain).max(axis=-1) > 8
+    edge = edge_pixels(obj.astype(np.int8))
+    diff = np.abs(smooth - plain).max(axis=-1)
+    assert np.count_nonzero(diff[edge] > 8) >= 20  # the silhouette is smoothed
+    assert np.all(diff[~jump] <= 8)  # elsewhere only the shading's sub-pixel variation
+    # an edge pixel outside the box takes some of its colour: coverage between 0 and 1
+    outside = edge & ~obj
+    assert np.count_nonzero(np.abs(smooth[outside] - background).max(axis=-1) > 8) >= 10
+    view.close_view()
