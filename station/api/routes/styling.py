@@ -80,6 +80,7 @@ def render(_user: Stylist, request: RenderRequest) -> Response:
 ENVIRONMENT_FORM: dict[str, Any] = {
     "requestBody": {
         "required": True,
+        "description": "the environment map as a file part and the render options as a JSON part",
         "content": {
             "multipart/form-data": {
                 "schema": {
