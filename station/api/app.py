@@ -267,7 +267,13 @@ def create_app(settings: Settings) -> FastAPI:
     from station.api.routes import ROUTERS, health
     from station.api.routes.library import IMPORT_PATH as LIBRARY_IMPORT_PATH
     from station.api.routes.measurements import CREATE_ACTION
-    from station.api.schemas.environment import ENVIRONMENT_BODY_BYTES, ENVIRONMENT_UPLOAD_PATHS
+    from station.api.schemas.environment import (
+        ENVIRONMENT_BODY_BYTES,
+        ENVIRONMENT_FILE_FIELD,
+        ENVIRONMENT_MULTIPART_BYTES,
+        ENVIRONMENT_MULTIPART_PATH,
+        ENVIRONMENT_UPLOAD_PATHS,
+    )
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -317,6 +323,10 @@ def create_app(settings: Settings) -> FastAPI:
                 f"{API_PREFIX}{path}": max(settings.max_body_bytes, ENVIRONMENT_BODY_BYTES)
                 for path in ENVIRONMENT_UPLOAD_PATHS
             },
+            f"{API_PREFIX}{ENVIRONMENT_MULTIPART_PATH}": (
+                max(settings.max_body_bytes, ENVIRONMENT_MULTIPART_BYTES),
+                ENVIRONMENT_FILE_FIELD,
+            ),
         },
     )
     app.add_middleware(SecurityHeaders)  # outermost: the 413 above gets the headers too

@@ -28,21 +28,31 @@ class _TooLarge(Exception):
 
 class BodySizeLimit:
     """Refuse a request whose declared or streamed body exceeds *max_bytes*, or the cap *per_path* gives
-    its exact path (e.g. a larger one for library uploads)."""
+    its exact path (e.g. a larger one for library uploads). A per-path cap given as (bytes, field) is that
+    of an upload route whose body is essentially one file field: its 413 names the field as a 422 does
+    (``detail[0].loc`` = ["body", field])."""
 
-    def __init__(self, app: ASGIApp, max_bytes: int, per_path: Mapping[str, int] | None = None) -> None:
+    def __init__(
+        self, app: ASGIApp, max_bytes: int, per_path: Mapping[str, int | tuple[int, str]] | None = None
+    ) -> None:
         self.app = app
         self.max_bytes = max_bytes
-        self.per_path = dict(per_path or {})
+        self.per_path = {k: v if isinstance(v, tuple) else (v, "") for k, v in (per_path or {}).items()}
 
-    async def _refuse(self, send: Send, limit: int) -> None:
-        await send_json(send, 413, f"request body over the {limit}-byte limit")
+    async def _refuse(self, send: Send, limit: int, field: str = "") -> None:
+        message = f"request body over the {limit}-byte limit"
+        if not field:
+            await send_json(send, 413, message)
+            return
+        accepted = f"a body of at most {limit} bytes"
+        detail = {"loc": ["body", field], "msg": f"{field}: {message}", "type": "too_large"}
+        await send_json(send, 413, [{**detail, "ctx": {"accepted": accepted}}])
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        limit = self.per_path.get(scope.get("path", ""), self.max_bytes)
+        limit, field = self.per_path.get(scope.get("path", ""), (self.max_bytes, ""))
         for name, value in scope.get("headers", []):
             if name == b"content-length":
                 try:
@@ -50,7 +60,7 @@ class BodySizeLimit:
                 except ValueError:
                     declared = limit + 1
                 if declared > limit:
-                    await self._refuse(send, limit)
+                    await self._refuse(send, limit, field)
                     return
         seen = 0
         started = False
@@ -74,7 +84,7 @@ class BodySizeLimit:
             await self.app(scope, limited_receive, tracking_send)
         except _TooLarge:
             if not started:
-                await self._refuse(send, limit)
+                await self._refuse(send, limit, field)
 
 
 #: Added to every response (a route's own value wins): no MIME sniffing of uploads echoed back or of

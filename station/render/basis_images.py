@@ -21,6 +21,7 @@ GEMM.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -30,7 +31,7 @@ import numpy as np
 from station.model.gloss import ClearCoat
 from station.render import tonemap
 from station.render.cubemap import sample_cube
-from station.render.errors import RenderError
+from station.render.errors import RenderError, RenderInputError
 from station.render.numpy_renderer import (
     BACKGROUND,
     check_paints,
@@ -43,7 +44,7 @@ from station.render.numpy_renderer import (
     stage_background,
 )
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
-from station.render.shapes import Scene
+from station.render.shapes import Scene, intersect
 from station.render.stage import lookup_matrix
 from station.render.weights import LobeWeights
 
@@ -99,6 +100,8 @@ class BasisImages:
                 rows[:, 0, j] = w_g[i]
             elif kind == "Cd":
                 rows[:, 1, j] = w_dd[i]
+            elif kind == "B":
+                rows[:, 0, j] = 1.0  # the background share of an anti-aliased edge pixel
             else:
                 rows[:, 0, j] = w_g[i]
                 rows[:, 1, j] = w_dd[i]
@@ -237,6 +240,135 @@ def image_layout(
     return tuple(layout)
 
 
+def _lookup_images(
+    basis: PrefilteredBasis,
+    layout: tuple[tuple[str, int], ...],
+    normals: np.ndarray,
+    refl: np.ndarray,
+    ndv: np.ndarray,
+    horizon: str,
+    coat: ClearCoat | None,
+    gl_images: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(images (3, K, P), fall-off (3, P), coat gloss factor s (P,), coat base factor 1 − F (P,)) of object
+    points with unit *normals* and reflected views *refl* (P, 3, in the environment's frame) and N·V *ndv*
+    (P,). With *gl_images* only the fall-off and factors are computed (the GL renderer makes the rest)."""
+    d_normal = sample_cube(basis.diffuse, normals)
+    fall_off = fall_off_term(
+        basis, normals, refl, ndv.astype(np.float64), horizon=horizon, d_normal=d_normal
+    ).T
+    # the coat's factors on the gloss and the base images (numpy_renderer.shade_pixels); ones without it
+    sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
+    tb = np.ones_like(ndv) if coat is None else coat.base_scale(ndv).astype(np.float32)
+    images = np.zeros((3, len(layout), ndv.size), np.float32)
+    if gl_images:
+        return images, fall_off, sc, tb
+    gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
+    lookups: dict[int, np.ndarray] = {}
+    for j, (kind, i) in enumerate(layout):
+        if kind == "D":
+            images[:, j] = d_normal.T * tb
+            continue
+        if kind == "A":
+            images[:, j] = fall_off * tb
+            continue
+        if kind == "B":  # the background share of an anti-aliased edge pixel: set by the resolve
+            continue
+        if i not in lookups:
+            lookups[i] = sample_cube(basis.cubes[i], refl).T
+        bent = dd_direction(basis.exponents[i], normals, refl, horizon) if kind == "Dg" else None
+        lookup = lookups[i] if bent is None else sample_cube(basis.cubes[i], bent).T
+        factor = {"Gh": hf[:, i] * sc, "Dg": gf[:, i] * tb, "Cg": sc}.get(kind, tb)
+        images[:, j] = lookup * factor
+        lights = light_terms(basis, i, normals, refl) if kind in ("Gh", "Dg") else None
+        if lights is not None:
+            images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1] * tb[:, None]).T
+    return images, fall_off, sc, tb
+
+
+def edge_pixels(label: np.ndarray) -> np.ndarray:
+    """(H, W) bool: pixels whose label (paint id, −1 off the object) differs from one of their 8
+    neighbours' — every pixel a silhouette or a paint seam can cross, given a shape no thinner than a
+    pixel."""
+    pad = np.pad(label, 1, mode="edge")
+    h, w = label.shape
+    edge = np.zeros(label.shape, bool)
+    for dy in (0, 1, 2):
+        for dx in (0, 1, 2):
+            if dy != 1 or dx != 1:
+                edge |= pad[dy : dy + h, dx : dx + w] != label
+    return edge
+
+
+@dataclass(frozen=True)
+class _EdgeResolve:
+    """Edge pixels resolved from s × s subsamples (:func:`_resolve_edges`): flat pixel indices (E,), paint
+    (E,) (the majority of the covered subsamples, −1 when none), the object's images summed over covered
+    subsamples / s² (3, K, E), mean N·V of the covered subsamples (E,), and the background radiance summed
+    over uncovered subsamples / s² (E, 3)."""
+
+    pixels: np.ndarray
+    paint: np.ndarray
+    images: np.ndarray
+    n_dot_v: np.ndarray
+    background: np.ndarray
+
+
+def _resolve_edges(
+    scene: Scene,
+    basis: PrefilteredBasis,
+    layout: tuple[tuple[str, int], ...],
+    width: int,
+    height: int,
+    edge: np.ndarray,
+    side: int,
+    horizon: str,
+    coat: ClearCoat | None,
+    rot: np.ndarray,
+) -> _EdgeResolve:
+    """Ray-cast the *side* × *side* grid of subsamples of each edge pixel and box-resolve them."""
+    idx = np.flatnonzero(edge.reshape(-1))
+    py, px = np.divmod(idx, width)
+    offs = (np.arange(side) + 0.5) / side
+    shape = (idx.size, side, side)  # subsample (pixel, row, column)
+    sx = np.broadcast_to(px[:, None, None] + offs[None, None, :], shape).reshape(-1)  # x (pixels)
+    sy = np.broadcast_to(py[:, None, None] + offs[None, :, None], shape).reshape(-1)
+    cam = scene.view_camera
+    f, r, u = cam.basis()
+    t = np.tan(np.radians(cam.fov_deg) / 2.0)
+    x = (2.0 * sx / width - 1.0) * t * width / height  # Camera.rays at sub-pixel positions
+    y = (1.0 - 2.0 * sy / height) * t
+    d = f[None, :] + x[:, None] * r[None, :] + y[:, None] * u[None, :]
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    origin = np.asarray(cam.eye, dtype=np.float64)
+    hits = intersect(scene, origin, d)
+    hit = hits.mask.reshape(-1)
+    n = hits.normal.reshape(-1, 3)[hit]
+    v = -d[hit]
+    ndv_s = np.sum(n * v, axis=-1)
+    refl = 2.0 * ndv_s[:, None] * n - v
+    ndv_s = np.clip(ndv_s, 0.0, 1.0).astype(np.float32)  # as gbuffer's N·V for the cached c
+    imgs, *_ = _lookup_images(basis, layout, n @ rot.T, refl @ rot.T, ndv_s, horizon, coat)
+    e, s2 = idx.size, side * side
+    owner = np.repeat(np.arange(e), s2)
+    o_hit = owner[hit]
+    count = np.bincount(o_hit, minlength=e)
+    images = np.empty((3, len(layout), e), np.float32)
+    for c in range(3):
+        for j in range(len(layout)):
+            images[c, j] = np.bincount(o_hit, imgs[c, j], minlength=e) / s2
+    ndv = np.bincount(o_hit, ndv_s, minlength=e) / np.maximum(count, 1)
+    ones = np.bincount(o_hit, hits.paint.reshape(-1)[hit] == 1, minlength=e)
+    paint = np.where(count == 0, -1, (2 * ones > count).astype(np.int8)).astype(np.int8)
+    miss = ~hit
+    bg = np.full((d.shape[0], 3), BACKGROUND, np.float64)
+    if scene.stage is not None and miss.any():
+        bg[miss] = stage_background(scene, basis, origin, d[miss])
+    bg[hit] = 0.0
+    background = np.stack([np.bincount(owner, bg[:, c], minlength=e) for c in range(3)], axis=-1) / s2
+    return _EdgeResolve(idx, paint, images, ndv.astype(np.float32), background.astype(np.float32))
+
+
 def build_basis_images(
     scene: Scene,
     basis: PrefilteredBasis,
@@ -245,59 +377,70 @@ def build_basis_images(
     gl_renderer: GLRenderer | None = None,
     horizon: str = "lut",
     coat: ClearCoat | None = None,
+    aa: int = 1,
 ) -> BasisImages:
     """Render the basis images of one view (NumPy lookups, or GL when a GLRenderer is given).
 
     A GL renderer must have been made with the same *horizon* setting. *coat*: the clear coat's Fresnel
     factors folded in: s(N·V) into the gloss images, 1 − F(N·V) into the base images (``numpy_renderer``'s
     equation with a coat).
+
+    *aa*: anti-aliasing, samples per pixel (:data:`station.render.gl_targets.AA_SAMPLES`; NumPy lookups
+    only). With s² = *aa* > 1 the pixels a silhouette or the paint seam can cross (:func:`edge_pixels`) are
+    shaded at an s × s grid of subsamples and box-resolved in linear radiance, so an edge pixel holds
+    coverage × the object's mean images plus the uncovered share of the background, the latter as one
+    more image ``("B", -1)`` of weight 1 (the edit stays one weighted sum). The N·V an edge pixel's
+    directionally diffuse term is multiplied by is its covered subsamples' mean. Other pixels are shaded
+    once, at their centre (a paint's shading varies smoothly inside the silhouette): the cost is that of
+    the edge pixels' subsamples only.
     """
+    from station.render.gl_targets import AA_SAMPLES
+
+    if isinstance(aa, bool) or aa not in AA_SAMPLES:
+        raise RenderInputError("aa", " | ".join(str(a) for a in AA_SAMPLES) + " samples per pixel", aa)
+    if aa > 1 and gl_renderer is not None:
+        raise RenderInputError("aa", "1 with a GL renderer (it anti-aliases its own frames)", aa)
     g = gbuffer(scene, width, height)
     mask = g.mask.reshape(-1)
-    paint = g.paint.reshape(-1)
-    pixels = np.concatenate([np.flatnonzero(mask & (paint == 0)), np.flatnonzero(mask & (paint == 1))])
-    split = int(np.count_nonzero(mask & (paint == 0)))
-    layout = image_layout(basis.exponents, horizon, coat is not None)
-    images = np.empty((3, len(layout), pixels.size), np.float32)
-    ndv = g.n_dot_v.reshape(-1)[pixels].astype(np.float32)
-    m = len(basis.exponents)
-    e = np.array(basis.exponents)
-    background = None
+    paint = g.paint.reshape(-1).astype(np.int8)
+    paint = np.where(mask, paint, -1).astype(np.int8)
+    ndv_all = g.n_dot_v.reshape(-1).astype(np.float32)
+    layout = image_layout(basis.exponents, horizon, coat is not None) + ((("B", -1),) if aa > 1 else ())
     rot = lookup_matrix(scene.stage.rotation_deg) if scene.stage is not None else np.eye(3)
+    background = None
     if scene.stage is not None:
         origin, dirs = scene.view_camera.rays(width, height)
         background = np.zeros((width * height, 3), np.float32)
         miss = ~mask
         background[miss] = stage_background(scene, basis, origin, dirs.reshape(-1, 3)[miss])
-    normals = g.normal.reshape(-1, 3)[pixels] @ rot.T  # lookups in the environment's frame
-    refl = g.reflect.reshape(-1, 3)[pixels] @ rot.T
-    d_normal = sample_cube(basis.diffuse, normals)
-    fall_off = fall_off_term(
-        basis, normals, refl, ndv.astype(np.float64), horizon=horizon, d_normal=d_normal
-    ).T
-    # the coat's factors on the gloss and the base images (numpy_renderer.shade_pixels); ones without it
-    sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
-    tb = np.ones_like(ndv) if coat is None else coat.base_scale(ndv).astype(np.float32)
+    edges = None
+    if aa > 1:
+        edge = edge_pixels(paint.reshape(height, width))
+        edges = _resolve_edges(scene, basis, layout, width, height, edge, math.isqrt(aa), horizon, coat, rot)
+        mask = mask & ~edge.reshape(-1)  # the centre-shaded pixels; edge pixels come from the resolve
+        paint = paint.copy()
+        paint[edges.pixels] = edges.paint
+        ndv_all = ndv_all.copy()
+        ndv_all[edges.pixels] = edges.n_dot_v
+        if background is not None:
+            background[edges.pixels] = edges.background
+    own = np.flatnonzero(mask)
+    covered = np.flatnonzero(paint >= 0)
+    pixels = np.concatenate([covered[paint[covered] == 0], covered[paint[covered] == 1]])
+    split = int(np.count_nonzero(paint[covered] == 0))
+    ndv = ndv_all[pixels]
+    images = np.zeros((3, len(layout), pixels.size), np.float32)
+    inner = np.isin(pixels, own, assume_unique=True)  # centre-shaded pixels' places in *pixels*
+    normals = g.normal.reshape(-1, 3)[pixels[inner]] @ rot.T  # lookups in the environment's frame
+    refl = g.reflect.reshape(-1, 3)[pixels[inner]] @ rot.T
+    found, fall_off, _, tb = _lookup_images(
+        basis, layout, normals, refl, ndv[inner], horizon, coat, gl_images=gl_renderer is not None
+    )
     if gl_renderer is None:
-        gf, hf = lobe_factors(horizon_table(basis.exponents, horizon), ndv)
-        lookups: dict[int, np.ndarray] = {}
-        for j, (kind, i) in enumerate(layout):
-            if kind == "D":
-                images[:, j] = d_normal.T * tb
-                continue
-            if kind == "A":
-                images[:, j] = fall_off * tb
-                continue
-            if i not in lookups:
-                lookups[i] = sample_cube(basis.cubes[i], refl).T
-            bent = dd_direction(basis.exponents[i], normals, refl, horizon) if kind == "Dg" else None
-            lookup = lookups[i] if bent is None else sample_cube(basis.cubes[i], bent).T
-            factor = {"Gh": hf[:, i] * sc, "Dg": gf[:, i] * tb, "Cg": sc}.get(kind, tb)
-            images[:, j] = lookup * factor
-            lights = light_terms(basis, i, normals, refl) if kind in ("Gh", "Dg") else None
-            if lights is not None:
-                images[:, j] += (lights[0] * sc[:, None] if kind == "Gh" else lights[1] * tb[:, None]).T
+        images[:, :, inner] = found
     else:
+        m = len(basis.exponents)
+        e = np.array(basis.exponents)
         for j, (kind, i) in enumerate(layout):
             if kind == "A":  # one image, made by numpy_renderer.fall_off_term as on the NumPy path
                 images[:, j] = fall_off * tb
@@ -314,6 +457,10 @@ def build_basis_images(
             images[:, j] = gl_renderer.render_linear(scene, [unit], coat=unit_coat).reshape(-1, 3)[pixels].T
             if unit_coat is None:
                 images[:, j] *= tb  # a base image: what the coat transmits (1 when there is none)
+    if edges is not None:
+        where = np.searchsorted(edges.pixels, pixels[~inner])  # edge pixels with some coverage
+        images[:, :, ~inner] = edges.images[:, :, where]
+        images[:, -1, ~inner] = edges.background[where].T
     return BasisImages(
         basis, width, height, pixels, split, np.ascontiguousarray(images), ndv, layout, background=background
     )

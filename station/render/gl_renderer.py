@@ -166,6 +166,16 @@ class GLRenderer:
         self._aniso: dict[tuple, tuple] = {}
         self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
 
+    def set_aa(self, aa: int) -> None:
+        """Switch anti-aliasing to *aa* samples per pixel (:data:`station.render.gl_targets.AA_SAMPLES`):
+        new targets, the maps and programs kept (e.g. a view shaded once per pixel while it moves and
+        supersampled once it is still); RenderInputError naming ``aa`` as the constructor."""
+        if aa == self.targets.aa:
+            return
+        targets = FrameTargets(self.ctx, self.width, self.height, aa)
+        self.targets.release()
+        self.targets = targets
+
     def _program(
         self,
         shape: str,

@@ -166,16 +166,12 @@ def part_material(*names: str | None) -> float:
     return NEUTRAL
 
 
-def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
-    """Read a .glb/.gltf/.obj/.stl file and place it on the stage (module docstring).
-
-    *paint*: the part to paint, by mesh/node or material name (case-insensitive substring); None paints
-    every part. RenderInputError (field ``mesh``) for an unknown suffix, an unreadable file, a file with
-    no triangles, or a *paint* that matches no part (the message lists the parts).
-    """
+def _read_parts(p: Path, keep_palette: bool) -> tuple[list[tuple], NDArray | None]:
+    """The parts of the model file *p*, (node, geometry name, material name, trimesh geometry, 4 × 4
+    transform) each, and its palette texture when *keep_palette* (:func:`_palette`; else None);
+    RenderInputError (field ``mesh``, naming the file) for a file that cannot be used."""
     import trimesh
 
-    p = Path(path)
     if p.suffix.lower() not in MESH_SUFFIXES:
         raise RenderInputError("mesh", " | ".join(MESH_SUFFIXES) + " file", str(p.name))
     try:
@@ -183,7 +179,7 @@ def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
     except OSError as exc:
         raise RenderInputError("mesh", "a readable mesh file", str(p.name), exc.strerror or "") from None
     file_type = p.suffix.lower().lstrip(".")
-    palette = _palette(data, file_type) if paint is None else None  # before decoding drops the textures
+    palette = _palette(data, file_type) if keep_palette else None  # before decoding drops the textures
     if file_type == "glb" and data[:4] == _GLB_MAGIC:
         data = decode_meshopt_glb(data)
     try:
@@ -200,10 +196,34 @@ def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
         parts.append((node, geom_name, getattr(material, "name", None), geom, transform))
     if not parts:
         raise RenderInputError("mesh", "a file with triangles", str(p.name))
+    return parts, palette
+
+
+def _names(parts: list[tuple]) -> tuple[str, ...]:
+    return tuple(sorted({str(x) for n, g, m, _, _ in parts for x in (n, g, m) if x}))
+
+
+def mesh_part_names(path: str | Path) -> tuple[str, ...]:
+    """The names a part of the model file *path* can be picked by as the paint (``load_mesh(paint=…)``):
+    its mesh (node and geometry) and material names, sorted, each once. RenderInputError as
+    :func:`load_mesh`."""
+    parts, _ = _read_parts(Path(path), keep_palette=False)
+    return _names(parts)
+
+
+def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
+    """Read a .glb/.gltf/.obj/.stl file and place it on the stage (module docstring).
+
+    *paint*: the part to paint, by mesh/node or material name (case-insensitive substring,
+    :func:`mesh_part_names` lists them); None paints every part. RenderInputError (field ``mesh``) for an
+    unknown suffix, an unreadable file, a file with no triangles, or (field ``paint``) a *paint* that
+    matches no part (the message lists the parts).
+    """
+    p = Path(path)
+    parts, palette = _read_parts(p, keep_palette=paint is None)
     chosen = [_part_matches(paint, n, g, m) for n, g, m, _, _ in parts]
     if not any(chosen):
-        names = sorted({str(x) for n, g, m, _, _ in parts for x in (n, g, m) if x})
-        raise RenderInputError("paint", "a part name: " + ", ".join(names), paint)
+        raise RenderInputError("paint", "a part name: " + ", ".join(_names(parts)), paint)
     pos, nrm, faces, painted = [], [], [], []
     base = 0
     for (node, geom_name, material, geom, transform), is_paint in zip(parts, chosen, strict=True):

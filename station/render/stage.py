@@ -15,8 +15,10 @@ Shared by the NumPy renderer and ``shaders/render.frag.glsl`` (the same formulas
   by the shape is summed over sphere proxies of the shape (``station.render.shapes.OCCLUDERS``), each
   in closed form: a sphere of radius r whose centre lies at distance d in direction ĉ above the
   horizon hides the cosine-weighted fraction (r/d)²·(n·ĉ) of the sky (the projected solid angle
-  π sin²α cos β of a cap of half-angle α = arcsin(r/d) at elevation angle 90° − β, over π). That is the
-  contact shadow; O is clipped to [0, 1]. With lights taken out of the environment (the sun, a booth's
+  π sin²α cos β of a cap of half-angle α = arcsin(r/d) at elevation angle 90° − β, over π), and the
+  spheres' fractions combine as O = 1 − Π_k (1 − O_k) (:func:`sphere_occlusion`: a sum would count the
+  sky behind overlapping proxies twice and turn the ground under a car black). That is the contact
+  shadow. With lights taken out of the environment (the sun, a booth's
   lamps: ``PrefilteredBasis.lights``, directions l and flux Φ) each also casts a sun shadow: the ground is
   albedo · [(D(+Y) − Σ_l (l_y)₊Φ_l/π)₊ (1 − O) + Σ_l (l_y)₊Φ_l/π · V_l], the sky part with the contact
   shadow and each light's direct part with its visibility V_l (:func:`light_visibility`): the product
@@ -114,15 +116,19 @@ def backdrop_lobe(exponents: tuple[float, ...] | list[float], blur_deg: float) -
 
 def sphere_occlusion(points: ArrayLike, occluders: ArrayLike) -> NDArray[np.float64]:
     """Cosine-weighted occluded fraction O (P,) of the sky above ground *points* (P, 3) (normal +Y) by
-    spheres *occluders* (k, 4) = (centre x, y, z, radius), summed in closed form and clipped to [0, 1]."""
+    spheres *occluders* (k, 4) = (centre x, y, z, radius): each sphere's fraction O_k in closed form,
+    combined as O = 1 − Π_k (1 − O_k) (the spheres' shares taken as independent), in [0, 1]. A plain sum
+    counts the sky behind two overlapping spheres twice and reaches 1 (a black ground) wherever the
+    overlap does, e.g. all along the underside of a car's row of proxies; the product reaches 1 only
+    where one sphere alone hides the whole sky (its contact point)."""
     p = np.asarray(points, dtype=float).reshape(-1, 3)
-    occ = np.zeros(p.shape[0])
+    open_sky = np.ones(p.shape[0])
     for cx, cy, cz, r in np.asarray(occluders, dtype=float).reshape(-1, 4):
         v = np.array([cx, cy, cz]) - p
         d2 = np.maximum(np.sum(v * v, axis=-1), r * r)
         cos_b = v[:, 1] / np.sqrt(d2)
-        occ += (r * r / d2) * np.clip(cos_b, 0.0, 1.0)
-    return np.clip(occ, 0.0, 1.0)
+        open_sky *= 1.0 - (r * r / d2) * np.clip(cos_b, 0.0, 1.0)
+    return np.clip(1.0 - open_sky, 0.0, 1.0)
 
 
 def ground_fade(distance: NDArray, radius: float) -> NDArray[np.float64]:

@@ -77,6 +77,7 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("POST", f"{V1}/styling/variations"): frozenset({S, A}),
     ("POST", f"{V1}/styling/swatch"): frozenset({S, A}),
     ("POST", f"{V1}/styling/render"): frozenset({S, A}),
+    ("POST", f"{V1}/styling/render/upload"): frozenset({S, A}),
     ("POST", f"{V1}/styling/eyedrop"): frozenset({S, A}),
     ("POST", f"{V1}/styling/sketch-fit"): frozenset({S, A}),
     ("POST", f"{V1}/formulation/snap"): frozenset({Q, C, A}),

@@ -221,3 +221,28 @@ def test_palette_textured_model_is_split_into_parts(tmp_path) -> None:
     got = [np.unique(mesh.painted[order[i * third : (i + 1) * third]]) for i in range(4)]
     assert [g.tolist() for g in got] == [[me.PAINT], [me.TYRE], [me.GLASS], [me.CHROME]]
     assert me.load_mesh(tmp_path / "palette.glb", paint="geometry").painted.min() == me.PAINT  # by name: all
+
+
+@pytest.mark.gl
+def test_cc0_sport_car_on_the_sky_stage_has_no_unlit_pixel(shared_dir: Path, tmp_path, gl_ctx) -> None:
+    # `station render --mesh car-sport.glb --env sky --stage --size 1024`: the ground under the car, seen
+    # between a front tyre and the sill, read exactly 0 (no light at all) where the summed occlusion of
+    # the car's overlapping sphere proxies reached 1. Every pixel must now receive some light, and none
+    # be NaN.
+    from station.cli import main
+    from station.model import FaceFlopTravelGloss
+    from station.model.design_io import save_design
+
+    car = shared_dir / "data" / "meshes" / "car-sport.glb"
+    if not car.is_file():
+        pytest.skip("no car-sport.glb in ../shared/data/meshes")
+    blue = FaceFlopTravelGloss((45.0, -5.0, -40.0), (20.0, 0.0, -30.0), 70.0, 85.0)
+    design = save_design(blue, tmp_path / "d.json")
+    out = tmp_path / "car.npy"
+    args = ["render", "--design", str(design), "--mesh", str(car), "--env", "sky", "--stage"]
+    args += ["--size", "1024", "--out", str(tmp_path / "car.png"), "--linear-out", str(out)]
+    assert main([*args, "--cache-dir", str(tmp_path / "c")]) == 0
+    lin = np.load(out)
+    assert lin.shape == (1024, 1024, 3) and np.isfinite(lin).all()
+    y = lin @ np.array([0.2126, 0.7152, 0.0722])
+    assert float(y.min()) > 1e-3, np.argwhere(y <= 1e-3)[:5]

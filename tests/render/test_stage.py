@@ -241,3 +241,32 @@ def test_gl_sun_shadow_agrees_with_numpy(gl_ctx, sky_basis) -> None:
     floor = ~nr.gbuffer(scene, 96, 72).mask
     assert np.percentile(np.abs(got - ref)[floor], 99) < 0.01
     assert np.ptp(ref[floor][:, 1]) > 0.2  # the shadow is there to agree on (sun part 0.3 · 0.58 · 4.5/π)
+
+
+def test_overlapping_proxies_combine_as_independent_shares() -> None:
+    # Two unit spheres resting on y = −1, 1.2 apart (they overlap, as a car's row of proxies does): the
+    # occluded fraction against a cosine-weighted quadrature of rays hitting either sphere. The product
+    # 1 − Π(1 − O_k) lies between the larger single share and their sum, nearer the truth than the sum
+    # (which reaches 1, a black ground, where the spheres overlap) at every point tried.
+    occ = [(0.0, 0.0, 0.0, 1.0), (1.2, 0.0, 0.0, 1.0)]
+    n = 600
+    ct = np.sqrt((np.arange(n) + 0.5) / n)
+    phi = 2 * np.pi * (np.arange(n) + 0.5) / n
+    st_ = np.sqrt(1 - ct**2)
+    dirs = np.stack(
+        [st_[:, None] * np.cos(phi)[None], np.repeat(ct[:, None], n, 1), st_[:, None] * np.sin(phi)[None]], -1
+    ).reshape(-1, 3)
+    for x, z in ((0.6, 0.0), (0.6, 1.0), (2.0, 0.0), (2.0, 1.5), (-1.0, 1.0)):
+        p = np.array([x, -1.0, z])
+        hit = np.zeros(len(dirs), bool)
+        for c in occ:
+            q = p - np.array(c[:3])
+            b = dirs @ q
+            hit |= (b * b - (q @ q - 1.0) > 0) & (b < 0)
+        brute = hit.mean()
+        single = [st.sphere_occlusion(p[None], [c])[0] for c in occ]
+        both = st.sphere_occlusion(p[None], occ)[0]
+        assert max(single) <= both <= min(1.0, sum(single))
+        assert both < 1.0
+        assert abs(both - brute) <= 0.055
+        assert abs(both - brute) < abs(min(1.0, sum(single)) - brute)

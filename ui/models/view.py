@@ -41,6 +41,11 @@ ENVIRONMENT_SUFFIXES = (".hdr", ".exr")
 ENV_WIDTH = 256
 PREFILTER_MAX_SIZE = 64
 PREVIEW_PREFILTER_SIZE = 16  # cube faces of the first-frame prefilter (brute quadrature, ~0.1 s)
+#: Anti-aliasing of the view's final frames, samples per pixel (``station.render.gl_targets.AA_SAMPLES``):
+#: the basis images' edge pixels are supersampled (``build_basis_images(aa=...)``, a small share of the
+#: worker's time), and a GL frame the view stays on (flakes, own models) is redrawn supersampled once the
+#: view is still. Frames drawn while the view moves are shaded once per pixel.
+VIEW_AA = 4
 
 
 class ViewInputError(InputError):
@@ -166,6 +171,10 @@ class ViewSettings:
     :data:`station.model.flakes.FLAKE_RANGES` (:meth:`flake_layer`).
     ``model``: the path of an own model (glTF/GLB, OBJ or STL, :meth:`ViewModel.load_model`) shown
     instead of the shape, framed by :data:`station.render.meshes.MESH_CAMERA`; None shows the shape.
+    ``paint_part``: the model's part painted, by mesh or material name (a name of
+    :func:`station.render.meshes.mesh_part_names`; :meth:`ViewModel.set_paint_part`), the other parts drawn
+    as tyre, glass or chrome by their names, else neutral grey; None paints every part (a one-part GLB
+    with a palette texture: its paint swatches, ``station.render.mesh_parts``).
     """
 
     environment: str = "booth"
@@ -182,9 +191,12 @@ class ViewSettings:
     flake_density: float | None = None
     flake_spread_deg: float | None = None
     model: str | None = None
+    paint_part: str | None = None
 
     def __post_init__(self) -> None:
         check_environment(self.environment)
+        if self.paint_part is not None and not (isinstance(self.paint_part, str) and self.paint_part.strip()):
+            raise ViewInputError("paint_part", "a part name of the model, or none", self.paint_part)
         if self.model is not None and not (
             isinstance(self.model, str) and Path(self.model).suffix.lower() in MESH_SUFFIXES
         ):
@@ -289,6 +301,8 @@ def layer_weights(layout: tuple[tuple[str, int], ...], paint: LobeWeights) -> tu
                 times_c[j] = w_dd[i]
         elif kind == "Cd":
             times_c[j] = w_dd[i]
+        elif kind == "B":
+            const[j] = 1.0  # the background share of an anti-aliased edge pixel
         else:
             const[j] = w_dd[i]
     return const, times_c
@@ -330,15 +344,17 @@ class BasisImages:
         height: int,
         prefilter_size: int = PREFILTER_MAX_SIZE,
         env: PrefilteredBasis | None = None,
+        aa: int = 1,
     ) -> BasisImages:
         """Ray-cast the view and look up every prefiltered map once (the slow part, done per camera).
 
         *prefilter_size* caps the prefiltered cube faces (see :func:`environment_basis`); *env*: the
-        prefiltered environment to use instead (e.g. :func:`environment_basis_gl`'s, full size).
+        prefiltered environment to use instead (e.g. :func:`environment_basis_gl`'s, full size); *aa*: samples
+        per pixel at the silhouettes and paint seams (:func:`station.render.basis_images.build_basis_images`).
         """
         if env is None:
             env = environment_basis(settings.environment, prefilter_size)
-        core = build_basis_images(settings.scene(), env, width, height, coat=settings.clear_coat())
+        core = build_basis_images(settings.scene(), env, width, height, coat=settings.clear_coat(), aa=aa)
         k = core.images.shape[1]
         layers = np.zeros((k, height * width, 3), np.float32)
         layers[:, core.pixels] = core.images.transpose(1, 2, 0)
@@ -373,7 +389,8 @@ class ViewModel:
     def __init__(self, settings: ViewSettings | None = None) -> None:
         self._settings = settings or ViewSettings()
         self._designs: tuple[FaceFlopTravelGloss, FaceFlopTravelGloss] | None = None
-        self._meshes: dict[str, Mesh] = {}  # loaded model path → mesh (load_model)
+        self._meshes: dict[tuple[str, str | None], Mesh] = {}  # (model path, paint part) → mesh
+        self._parts: dict[str, tuple[str, ...]] = {}  # model path → its part names (mesh_part_names)
         self.events = EventGroup("settings", "paints")
 
     @property
@@ -402,23 +419,47 @@ class ViewModel:
         :func:`station.render.meshes.load_mesh`, every part painted; the orbit reset). Raises
         RenderInputError (field ``mesh``, naming the file) for a file that cannot be used; the settings
         are unchanged on failure. Returns the mesh."""
-        from station.render.meshes import load_mesh
+        from station.render.meshes import load_mesh, mesh_part_names
 
         key = str(Path(path))
         mesh = load_mesh(key)
-        self._meshes[key] = mesh
-        self.update(model=key, yaw_deg=0.0, pitch_deg=0.0, zoom=1.0)
+        self._parts[key] = mesh_part_names(key)
+        self._meshes[(key, None)] = mesh
+        self.update(model=key, paint_part=None, yaw_deg=0.0, pitch_deg=0.0, zoom=1.0)
+        return mesh
+
+    def model_parts(self) -> tuple[str, ...]:
+        """The part names of the model shown (mesh and material names, sorted), () when a shape is shown."""
+        model = self._settings.model
+        return () if model is None else self._parts.get(model, ())
+
+    def set_paint_part(self, part: str | None) -> Mesh:
+        """Paint the part *part* of the model shown (a name of :meth:`model_parts`; None: every part), the
+        others drawn as tyre, glass or chrome by their names (``load_mesh(paint=part)``). Raises ViewInputError
+        (field ``model``) when no model is shown and RenderInputError (field ``paint``, listing the parts) for
+        a name no part has; the settings are unchanged on failure. Returns the mesh."""
+        from station.render.meshes import load_mesh
+
+        model = self._settings.model
+        if model is None:
+            raise ViewInputError("model", "a loaded model to pick the paint part of", None)
+        key = (model, part)
+        mesh = self._meshes.get(key)
+        if mesh is None:
+            mesh = self._meshes[key] = load_mesh(model, paint=part)
+        self.update(paint_part=part)
         return mesh
 
     @property
     def models(self) -> tuple[str, ...]:
         """Paths of the models loaded so far (:meth:`load_model`), in loading order."""
-        return tuple(self._meshes)
+        return tuple(self._parts)
 
     def mesh(self) -> Mesh | None:
-        """The mesh of the model shown (``settings.model``), or None when a shape is shown."""
+        """The mesh of the model shown (``settings.model`` with its ``paint_part``), or None when a shape
+        is shown."""
         model = self._settings.model
-        return None if model is None else self._meshes.get(model)
+        return None if model is None else self._meshes.get((model, self._settings.paint_part))
 
     def show(self, design: FaceFlopTravelGloss, other: FaceFlopTravelGloss | None = None) -> None:
         """Show *design* on both halves, or *design* | *other* side by side."""

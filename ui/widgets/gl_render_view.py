@@ -110,6 +110,8 @@ class GLRenderView(ViewLogic):
         self._core: GLRenderer | None = None  # the core's GLRenderer on this context, for view changes
         self._core_key: tuple | None = None
         self._core_ok = True  # False when the context cannot build the core's shaders (GL < 4.3)
+        #: Whether the view has been still for SETTLE_MS: a GL frame is then supersampled (``aa``).
+        self._still = False
         #: What the level of detail did with the flake layer in the last GL frame (None: flakes off).
         self.flake_report: str | None = None
         self._gl_envs: dict[str, PrefilteredBasis] = {}  # full prefilters made on this context
@@ -203,8 +205,17 @@ class GLRenderView(ViewLogic):
         if self._settle.isActive():
             self._settle.start()
 
+    def _on_settings(self, settings) -> None:
+        self._still = False  # a view or scene change: shaded once per pixel until still again
+        super()._on_settings(settings)
+
     def _on_settle(self) -> None:
-        """The view is still: start the worker on the environment prefiltered on this context."""
+        """The view is still: redraw a GL frame the view stays on supersampled (``aa``), and start the
+        worker on the environment prefiltered on this context."""
+        if not self._still and self.aa > 1 and self._core_ok and self._core is not None:
+            self._still = True
+            if not self._raster():
+                self.request_frame()
         key = self._basis_key
         if key is None or self.basis_current or not self._core_ok:
             return
@@ -359,6 +370,7 @@ class GLRenderView(ViewLogic):
                     self._core.release()
                 self._core = GLRenderer(basis, w, h, ctx=ctx)
                 self._core_key = key
+            self._core.set_aa(self.aa if self._still else 1)
             self._core.draw(
                 settings.scene(),
                 list(weights),

@@ -17,6 +17,7 @@ from station.render.prefilter import PrefilteredBasis
 from ui.models.view import (
     PREFILTER_MAX_SIZE,
     PREVIEW_PREFILTER_SIZE,
+    VIEW_AA,
     BasisImages,
     ViewModel,
     ViewSettings,
@@ -39,13 +40,16 @@ class BasisWorker(QThread):
         height: int,
         env: PrefilteredBasis | None = None,
         parent=None,
+        aa: int = VIEW_AA,
     ) -> None:
         super().__init__(parent)
         self.settings, self.width_px, self.height_px, self.env = settings, width, height, env
+        self.aa = aa
 
     def run(self) -> None:
-        """Compute and report (from *env* when given, else ``environment_basis``'s NumPy prefilter)."""
-        basis = BasisImages.compute(self.settings, self.width_px, self.height_px, env=self.env)
+        """Compute and report (from *env* when given, else ``environment_basis``'s NumPy prefilter), edge
+        pixels supersampled at ``aa`` samples per pixel."""
+        basis = BasisImages.compute(self.settings, self.width_px, self.height_px, env=self.env, aa=self.aa)
         self.done.emit(self.settings, basis)
 
 
@@ -64,6 +68,8 @@ class ViewLogic(QWidget):
         self._basis_settings: ViewSettings | None = None
         self._gl_full_key: tuple | None = None
         self.gl_frames = 0  # frames drawn by the core's GL renderer
+        #: Samples per pixel of the final frames (:data:`ui.models.view.VIEW_AA`; 1: no anti-aliasing).
+        self.aa = VIEW_AA
         self.setMinimumSize(160, 120)
         model.events.settings.connect(self._on_settings)
         model.events.paints.connect(self._on_paints)
@@ -120,7 +126,7 @@ class ViewLogic(QWidget):
             self._pending = key
             return
         settings, w, h = key
-        self._worker = BasisWorker(settings, w, h, env)
+        self._worker = BasisWorker(settings, w, h, env, aa=self.aa)
         self._worker.done.connect(self._on_worker_done)
         self._worker.start()
 

@@ -62,6 +62,10 @@ class ViewPanel(QWidget):
         self.env_dialog.setOption(QFileDialog.Option.DontUseNativeDialog, True)
         self.shape = QComboBox()
         self.shape.addItems(list(SHAPES))
+        #: The own model's part painted (mesh or material name; the first item paints every part).
+        self.paint_part = QComboBox()
+        self.paint_part.setToolTip("the model's part painted; the others drawn as tyre, glass or chrome")
+        self._parts_of: str | None = None  # the model whose parts paint_part lists
         self.shape.setCurrentText(s.shape)
         self.exposure = QSlider(Qt.Orientation.Horizontal)
         self.exposure.setRange(-4 * EXPOSURE_STEPS_PER_EV, 4 * EXPOSURE_STEPS_PER_EV)
@@ -93,7 +97,7 @@ class ViewPanel(QWidget):
                 self.exposure,
                 self.exposure_label,
             ),
-            (self.stage, self.coat, self.flakes, reset),
+            (self.stage, self.coat, self.flakes, reset, QLabel("paint part"), self.paint_part),
             (*self.flake_boxes.values(), self.flake_status),  # a row of their own: the view fits 1280 px
         ):
             row = QHBoxLayout()
@@ -110,6 +114,7 @@ class ViewPanel(QWidget):
         self.load_env.clicked.connect(self.env_dialog.open)
         self.env_dialog.fileSelected.connect(self.load_environment)
         self.shape.currentIndexChanged.connect(self._on_shape_picked)
+        self.paint_part.currentIndexChanged.connect(self._on_part_picked)
         self.exposure.valueChanged.connect(lambda v: self.model.update(exposure_ev=v / EXPOSURE_STEPS_PER_EV))
         self.stage.toggled.connect(lambda on: self.model.update(stage=bool(on)))
         self.coat.toggled.connect(lambda on: self.model.update(coat=bool(on)))
@@ -185,13 +190,45 @@ class ViewPanel(QWidget):
         model = self.shape.itemData(index)
         orbit = {"yaw_deg": 0.0, "pitch_deg": 0.0, "zoom": 1.0}
         if model is None:
-            self.model.update(shape=self.shape.itemText(index), model=None, **orbit)
+            self.model.update(shape=self.shape.itemText(index), model=None, paint_part=None, **orbit)
         else:
-            self.model.update(model=model, **orbit)
+            self.model.update(model=model, paint_part=None, **orbit)
+
+    def _on_part_picked(self, index: int) -> None:
+        """A paint part picked (item data: the name; None paints every part); a part that cannot be
+        painted is named in :attr:`env_status` and the view stays as it was."""
+        if index < 0 or self.model.settings.model is None:
+            return
+        part = self.paint_part.itemData(index)
+        if part == self.model.settings.paint_part:
+            return
+        try:
+            self.model.set_paint_part(part)
+        except InputError as exc:
+            self.env_status.setText(f"paint part not set: {exc}")
+            return
+        self.env_status.setText("")
+
+    def _list_parts(self, s: ViewSettings) -> None:
+        """The paint-part picker lists the parts of the model shown (disabled with a shape) and shows its
+        paint part."""
+        combo = self.paint_part
+        combo.blockSignals(True)
+        if s.model != self._parts_of:
+            self._parts_of = s.model
+            combo.clear()
+            combo.addItem("every part", None)
+            for name in self.model.model_parts():
+                combo.addItem(name, name)
+        combo.setEnabled(s.model is not None)
+        index = combo.findData(s.paint_part)
+        combo.setCurrentIndex(max(index, 0))
+        combo.blockSignals(False)
 
     def _on_settings(self, s: ViewSettings) -> None:
         self.exposure_label.setText(f"{s.exposure_ev:+.1f} EV")
         self._select_environment(s.environment)
+        self._list_parts(s)
 
     def _on_frame(self) -> None:
         """Say what the level of detail did with the flakes in the frame just drawn."""

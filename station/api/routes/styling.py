@@ -11,10 +11,12 @@ import asyncio
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, Query, Request, Response
+from fastapi.responses import JSONResponse
 
 from db.models import User
 from station.api.deps import SettingsDep, get_settings, scoped
 from station.api.errors import ERROR_RESPONSES
+from station.api.schemas.environment import ENVIRONMENT_FILE_FIELD, ENVIRONMENT_MULTIPART_PATH
 from station.api.schemas.styling import (
     IMAGE_BODY,
     PNG_RESPONSE,
@@ -27,6 +29,7 @@ from station.api.schemas.styling import (
 )
 from station.api.security import Scope
 from station.api.services import styling as service
+from station.render.scene_image import MAX_UPLOAD_BYTES
 
 
 def image_slots(request: Request) -> asyncio.Semaphore:
@@ -70,6 +73,83 @@ def render(_user: Stylist, request: RenderRequest) -> Response:
     metallic flakes and a level-of-detail tolerance (``design2``: a second design on the right half).
     Headers ``X-Flakes`` and ``X-Lod`` say what the level of detail chose, ``X-Render-Engine`` the engine."""
     png, headers = service.render_png(request=request)
+    return Response(png, media_type="image/png", headers=headers)
+
+
+#: OpenAPI body of the multipart render: the map as a file part, the render options as a JSON part.
+ENVIRONMENT_FORM: dict[str, Any] = {
+    "requestBody": {
+        "required": True,
+        "description": "the environment map as a file part and the render options as a JSON part",
+        "content": {
+            "multipart/form-data": {
+                "schema": {
+                    "type": "object",
+                    "required": [ENVIRONMENT_FILE_FIELD],
+                    "properties": {
+                        ENVIRONMENT_FILE_FIELD: {
+                            "type": "string",
+                            "format": "binary",
+                            "description": f"an equirectangular .hdr/.exr file, at most {MAX_UPLOAD_BYTES} bytes",
+                        },
+                        "request": {
+                            "type": "string",
+                            "description": "JSON of the /styling/render request without environment and "
+                            "environment_hdr (default {})",
+                        },
+                    },
+                }
+            }
+        },
+    }
+}
+_FILE_TOO_LARGE: dict[int | str, dict[str, Any]] = {
+    413: {"description": f"body over the route's limit: detail[0].loc names {ENVIRONMENT_FILE_FIELD}"},
+    422: {
+        "description": "not multipart/form-data, no usable HDR file, or a bad option; detail[0].loc names it"
+    },
+}
+
+
+@router.post(
+    ENVIRONMENT_MULTIPART_PATH.removeprefix("/styling"),
+    response_class=Response,
+    responses={**PNG_RESPONSE, **_FILE_TOO_LARGE},
+    openapi_extra=ENVIRONMENT_FORM,
+)
+async def render_upload(request: Request, slots: ImageSlotsDep, _user: Stylist) -> Response:
+    """``/styling/render`` lit by an uploaded .hdr/.exr sent as a file (multipart/form-data: part
+    ``environment_hdr``, at most 4 MiB, and an optional part ``request``, the JSON render options): no base64,
+    so the documented 4 MiB file fits whatever the service's general body cap. Over 4 MiB: 413 naming
+    ``environment_hdr``; a file that is no usable HDR image: 422 naming it."""
+    from pydantic import ValidationError
+
+    from station.api.errors import validation_error_body
+    from station.api.multipart import form_parts
+    from station.errors import InputError
+
+    body = await request.body()
+    parts = form_parts(request.headers.get("content-type"), body, (ENVIRONMENT_FILE_FIELD, "request"))
+    data = parts.get(ENVIRONMENT_FILE_FIELD)
+    if data is None:
+        raise InputError(ENVIRONMENT_FILE_FIELD, "a file part named environment_hdr", None, "missing")
+    if len(data) > MAX_UPLOAD_BYTES:
+        detail = [
+            {
+                "loc": ["body", ENVIRONMENT_FILE_FIELD],
+                "msg": f"{ENVIRONMENT_FILE_FIELD}: a file of {len(data)} bytes, over the {MAX_UPLOAD_BYTES}-byte limit",
+                "type": "too_large",
+                "ctx": {"accepted": f"a file of at most {MAX_UPLOAD_BYTES} bytes"},
+            }
+        ]
+        return JSONResponse({"detail": detail}, status_code=413)
+    try:
+        options = RenderRequest.model_validate_json(parts.get("request") or b"{}")
+    except ValidationError as exc:
+        errors = [{**e, "loc": ("request", *e.get("loc", ()))} for e in exc.errors()]
+        return JSONResponse(validation_error_body(errors), status_code=422)
+    async with slots:
+        png, headers = await asyncio.to_thread(service.render_png, request=options, upload=data)
     return Response(png, media_type="image/png", headers=headers)
 
 

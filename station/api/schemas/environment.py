@@ -16,6 +16,12 @@ from station.render.scene_image import MAX_UPLOAD_BASE64_CHARS, MAX_UPLOAD_BYTES
 #: general cap, ``max_body_bytes``, applies instead when larger).
 ENVIRONMENT_UPLOAD_PATHS = ("/styling/render", "/analyses/gg-index/environment")
 ENVIRONMENT_BODY_BYTES = MAX_UPLOAD_BASE64_CHARS + 65_536
+#: The multipart route that takes the map as a file part ``environment_hdr`` (under the API prefix), and its
+#: body cap: a MAX_UPLOAD_BYTES file plus 64 KiB for the part headers and the ``request`` part; a larger
+#: body is a 413 naming ``environment_hdr`` (``station.api.middleware.BodySizeLimit``).
+ENVIRONMENT_MULTIPART_PATH = "/styling/render/upload"
+ENVIRONMENT_MULTIPART_BYTES = MAX_UPLOAD_BYTES + 65_536
+ENVIRONMENT_FILE_FIELD = "environment_hdr"
 #: "booth | sky | ..." for descriptions and error messages.
 ENVIRONMENT_CHOICES = " | ".join(NAMES)
 #: Description of an uploaded map's field (the byte and pixel caps of ``station.render.scene_image``).

@@ -60,12 +60,18 @@ def _silver() -> Any:
     return FaceFlopTravelGloss((85.0, 0.0, 0.0), (40.0, 0.0, 0.0), 70.0, 50.0, "silver")  # thesis §3.7.1
 
 
-def render_png(*, request: RenderRequest) -> tuple[bytes, dict[str, str]]:
+def render_png(*, request: RenderRequest, upload: bytes | None = None) -> tuple[bytes, dict[str, str]]:
     """The design (default silver) shaded in the built-in scene, or lit by the requested environment on
     its stage (``station.render.scene_image``), sRGB-encoded PNG, and the headers that report the level of
-    detail's choices (``X-Flakes``, the flakes' reason; ``X-Lod``, the choice as ASCII JSON) and the engine (``X-Render-Engine``)."""
+    detail's choices (``X-Flakes``, the flakes' reason; ``X-Lod``, the choice as ASCII JSON) and the engine (``X-Render-Engine``).
+    *upload*: the bytes of an .hdr/.exr file sent as a multipart part ``environment_hdr``, which lights the
+    scene (the request then names no other environment; InputError naming the field)."""
     design = to_design(request.design) if request.design is not None else _silver()
-    if request.environment is None and request.environment_hdr is None:
+    if upload is not None:
+        for name in ("environment", "environment_hdr"):
+            if getattr(request, name) is not None:
+                raise InputError(f"request.{name}", "none: the uploaded environment_hdr file lights it", None)
+    if request.environment is None and request.environment_hdr is None and upload is None:
         from station.design.scene import builtin_scene, shade, srgb_encode, to_uint8
 
         for name in ("flakes", "mesh", "lod_de"):
@@ -96,12 +102,17 @@ def render_png(*, request: RenderRequest) -> tuple[bytes, dict[str, str]]:
             flakes = FlakeLayer(**{**(default_flakes(design) or FlakeLayer()).to_dict(), **given})
         else:
             flakes = default_flakes(design)
-    from station.render.scene_image import render_scene_image
+    from station.render.scene_image import environment_from_bytes, render_scene_image
 
+    environment = (
+        request_environment(request.environment, request.environment_hdr)
+        if upload is None
+        else environment_from_bytes(upload, "environment_hdr")
+    )
     try:
         result = render_scene_image(
             designs,
-            request_environment(request.environment, request.environment_hdr),
+            environment,
             shape=request.shape,
             stage=stage,
             coat=coat,

@@ -207,12 +207,12 @@ vec3 sh_eval(vec3 n) {
 // sphere proxies, plus each light's direct part times its visibility past them. View-independent: baked
 // once per stage into a texture over the disc (BAKE_GROUND), which the frame looks up.
 vec3 ground_radiance(vec3 p) {
-    float occ = 0.0;
+    float open_sky = 1.0;  // the product of each proxy's unoccluded share (station.render.stage.sphere_occlusion)
     for (int k = 0; k < N_OCC; ++k) {
         vec3 v = u_occ[k].xyz - p;
         float r2 = u_occ[k].w * u_occ[k].w;
         float d2 = max(dot(v, v), r2);
-        occ += r2 / d2 * clamp(v.y / sqrt(d2), 0.0, 1.0);
+        open_sky *= 1.0 - r2 / d2 * clamp(v.y / sqrt(d2), 0.0, 1.0);
     }
 #if DIFFUSE_SH
     vec3 sky = sh_eval(vec3(0.0, 1.0, 0.0));
@@ -239,7 +239,7 @@ vec3 ground_radiance(vec3 p) {
         lit += direct * vis;
     }
     vec3 rest = max(sky - direct_sum, vec3(0.0));
-    return rest * (1.0 - clamp(occ, 0.0, 1.0)) + lit;
+    return rest * clamp(open_sky, 0.0, 1.0) + lit;
 }
 
 vec3 stage_background(vec3 o, vec3 d) {
