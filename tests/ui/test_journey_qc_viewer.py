@@ -1,10 +1,14 @@
-"""The lab's QC day in the viewer's QC tab, by clicks and key presses on the real widgets:
+"""The lab's QC day in the viewer's QC tab, by clicks and key presses on the real widgets, the readings
+arriving as a lab's do: through the watch folder.
 
 a reading of the MA6 simulator → vendor files written by the product's writers (CxF3 with BYK-mac i
-texture values, CGATS.17) → Import files… → the SQLite database → the standard chosen in the tab →
-verdicts on each panel's mean with a dirty repeat left out (named with its robust z) → "keep outliers"
-averages it in and the verdict flips → the SPC tab flags the planted drift before the first fail →
-Export PDF… writes the report (its text read back) and previews its first page.
+texture values, CGATS.17) into a folder that a real ``station import watch`` process serves → the SQLite
+database the viewer has open → Load jobs → the standard chosen in the tab (while the watcher stores the
+day's next panels) → verdicts on each panel's mean with a dirty repeat left out (named with its robust z)
+→ "keep outliers" averages it in and the verdict flips → the SPC tab flags the planted drift before the
+first fail → Export PDF… writes the report (its text read back) and previews its first page. At the end
+the watcher is stopped with Ctrl-C and every reading of the files is in the database once: two processes
+on one SQLite file lost nothing.
 
 The simulator is read once; the repeat scatter, the dirty reading (ΔL* +4) and the drift are planted as
 ΔL* offsets on it (as tests/cli/test_journey_qc.py does for the command line). Every expected ΔE00 is
@@ -16,7 +20,10 @@ from __future__ import annotations
 import dataclasses
 import datetime as dt
 import json
-from collections.abc import Mapping
+import os
+import signal
+import sys
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -30,14 +37,17 @@ from sqlalchemy import select
 
 from db.engine import make_engine, make_sessionmaker
 from db.models import Measurement
-from station.ingest.formats import write_measurement_file
+from station.ingest.formats import read_measurement_file, write_measurement_file
 from station.ingest.formats.measurement import ImportedMeasurement, VendorValue, from_spectral_reading
 from station.model.domain import ANGLES_3, aspecular_name
 from station.qc.jobs import job_summary
 from station.qc.tolerance import ToleranceSet
 from station.scan import open_device, take
 from tests.pdf_text import pdf_text
+from tests.processes import Child
 from tests.ui.screens import item_at
+from tests.user_cli import REPO
+from tests.waiting import wait_until
 from ui.models.measure_db import LocalSink
 from ui.models.qc import LocalQc, QcModel
 from ui.widgets.qc_panels import SPC_COLUMNS, TEXTURE_COLUMNS
@@ -60,6 +70,7 @@ STD_TEXTURE = (
     VendorValue(VENDOR, "graininess", 4.0),
 )
 T1_TEXTURE = (VendorValue(VENDOR, "sparkle_intensity", 5.9, "45as15"), VendorValue(VENDOR, "graininess", 4.1))
+DATABASE = "station.sqlite3"  # the lab's database, in the test's folder: the watcher's and the viewer's
 D2 = 1.128  # d₂ for n = 2 as published (Montgomery, Appendix VI; ASTM E2587 Table 6)
 
 
@@ -73,8 +84,9 @@ def _planted(
     )
 
 
-def _files(folder: Path) -> list[Path]:
-    """The simulator read once, then the standard (CxF3), T1's repeats (CxF3) and the series (CGATS)."""
+def _readings() -> dict[str, list[ImportedMeasurement]]:
+    """The simulator read once, then {file name: readings}: the standard (CxF3), T1's repeats (CxF3) and
+    the series (CGATS), each as the instrument software writes it."""
     with open_device("sim:ma6") as device:
         base = from_spectral_reading(take(device.instrument, device="sim:ma6").colour, "STD")
     std = [_planted(base, "STD", d, T0, STD_TEXTURE) for d in STD_DL]
@@ -82,10 +94,39 @@ def _files(folder: Path) -> list[Path]:
         _planted(base, "T1", d, T0 + dt.timedelta(minutes=i + 1), T1_TEXTURE) for i, d in enumerate(GOOD_DL)
     ]
     series = [_planted(base, f"S{i + 1}", d, T0 + dt.timedelta(hours=i + 1)) for i, d in enumerate(SERIES_DL)]
-    out = [folder / "std.cxf", folder / "t1.cxf", folder / "series.cgats"]
-    for readings, path in zip((std, t1, series), out, strict=True):
-        write_measurement_file(readings, path)
-    return out
+    return {"std.cxf": std, "t1.cxf": t1, "series.cgats": series}
+
+
+@pytest.fixture
+def watcher(tmp_path: Path) -> Iterator[Child]:
+    """``station import watch inbox`` storing into the test's database as job J-26, part door (JSON lines
+    of outcomes on stdout); killed with what it started at teardown if the test did not stop it."""
+    (tmp_path / "inbox").mkdir()
+    argv = [sys.executable, "-m", "station.cli", "import", "watch", "inbox", "--json"]
+    argv += ["--store", f"sqlite:///{tmp_path / DATABASE}", "--outbox", "watch-outbox.sqlite3"]
+    argv += ["--job", JOB, "--part", PART, "--settle", "0.2", "--interval", "0.1"]
+    env = {k: v for k, v in os.environ.items() if k != "CACAD_DATABASE_URL"}
+    env.update(PYTHONPATH=str(REPO), STATION_CACHE_DIR=str(tmp_path / "cache"), CACAD_OPERATOR="lab")
+    with Child(argv, cwd=tmp_path, env=env) as child:
+        yield child
+
+
+def _outcomes(watcher: Child, n: int) -> dict[str, dict]:
+    """{file: outcome} once the watcher has reported *n* files (its JSON lines), at most 60 s."""
+
+    def seen() -> dict[str, dict]:
+        assert watcher.out is not None and watcher.poll() is None, watcher.err and watcher.err.text()
+        lines = [json.loads(li) for li in watcher.out.text().splitlines() if li.strip()]
+        return {o["file"]: o for o in lines} if len(lines) >= n else {}
+
+    return wait_until(seen, timeout=60, what=f"the watcher to report {n} files")
+
+
+def _stored_ids(outcome: dict, expected: int) -> list[int]:
+    """The measurement ids of a file the watcher moved to done/, every reading stored (none queued)."""
+    assert outcome["status"] == "done", outcome
+    assert [r["status"] for r in outcome["receipts"]] == ["stored"] * expected, outcome
+    return [int(r["measurement_id"]) for r in outcome["receipts"]]
 
 
 def _part(screen: QcScreen) -> dict[str, Any]:
@@ -124,28 +165,32 @@ def _de00(std: np.ndarray, lab: np.ndarray) -> np.ndarray:
     return np.asarray(colour.delta_E(std, lab, method="CIE 2000"), dtype=float)
 
 
-def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
+def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch, watcher):
     monkeypatch.chdir(tmp_path)  # the tolerance file typed as a lab types it: beside the work
-    files = _files(tmp_path)
+    inbox = tmp_path / "inbox"
+    readings = _readings()
     tol = ToleranceSet.uniform(ANGLES_3, LIMIT, formula="cie2000", mean_limit=LIMIT, name="customer")
     (tmp_path / "tol.json").write_text(json.dumps(tol.to_dict()))
-    url = f"sqlite:///{tmp_path / 'station.sqlite3'}"
+    url = f"sqlite:///{tmp_path / DATABASE}"
     sink = LocalSink(url, tmp_path / "outbox.sqlite3")
     screen = QcScreen(QcModel(LocalQc(url)), sink=sink)
     qtbot.addWidget(screen)
     screen.resize(1280, 900)
     screen.show()
+    _click(screen.load_btn)  # the viewer opens the lab's database (made here); nothing measured yet
+    assert screen.status.text() == f"0 jobs from database {url}" and screen.job.count() == 0
 
-    # import the vendor files into J-26 / door
-    _type(screen.import_job, JOB)
-    screen.import_part.setCurrentIndex(screen.import_part.findText(PART))
-    monkeypatch.setattr(
-        QFileDialog, "getOpenFileNames", staticmethod(lambda *a, **k: ([str(p) for p in files], ""))
-    )
-    _click(screen.import_btn)
-    qtbot.waitUntil(lambda: len(screen.imports) == 3 and screen.import_btn.isEnabled(), timeout=30000)
-    std_ids, t1_ids, series_ids = (list(r.measurement_ids) for r in screen.imports)
-    assert [len(std_ids), len(t1_ids), len(series_ids)] == [3, 5, 10], screen.import_result.text()
+    # the instrument software writes the standard's and T1's readings into the watched folder
+    for name in ("std.cxf", "t1.cxf"):
+        write_measurement_file(readings[name], inbox / name)
+    done = _outcomes(watcher, 2)
+    std_ids, t1_ids = (_stored_ids(done[n], len(readings[n])) for n in ("std.cxf", "t1.cxf"))
+
+    # Load jobs picks up what the watcher stored; the job is picked
+    _click(screen.load_btn)
+    assert screen.status.text() == f"1 jobs from database {url}"
+    screen.job.setCurrentIndex(screen.job.findText(JOB))
+    assert screen.job.currentText() == JOB and screen.part.currentText() == PART
 
     # judging as the lab does: CIEDE2000 with the customer's tolerance file, panels averaged, texture limits
     screen.formula.setCurrentIndex(screen.formula.findText("cie2000"))
@@ -160,10 +205,15 @@ def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
     assert screen.average.isChecked() and screen.keep_outliers.isEnabled()
     _click(screen.judge_btn)
     assert screen.job.currentText() == JOB and "no standard set" in screen.standard.text()
+    # the day's next panels arrive as the standard is set: in the same seconds the watcher stores them and
+    # the viewer writes the standard and judges, each process on the one SQLite file
+    write_measurement_file(readings["series.cgats"], inbox / "series.cgats")
     # the standard: the simulator's own reading, averaged with its two repeats
     screen.standard_pick.setCurrentIndex(screen.standard_pick.findData(std_ids[0]))
     _click(screen.set_standard_btn)
     assert f"standard: measurement {std_ids[0]}" in screen.standard.text(), screen.status.text()
+    series_ids = _stored_ids(_outcomes(watcher, 3)["series.cgats"], len(readings["series.cgats"]))
+    _click(screen.judge_btn)  # judged again with the whole series
 
     # independent expectation: ΔE00 of T1's mean (without / with the dirty reading) against the standard's mean
     lab = _stored_lab(url)
@@ -264,6 +314,16 @@ def test_the_qc_day_in_the_viewer(qtbot, tmp_path, monkeypatch):
     _grab(screen, tmp_path / "qc-preview.png")
     screen.close()
     sink.close()
+
+    # Ctrl-C ends the watcher cleanly; every reading of the three files is in the database once
+    watcher.send_signal(signal.SIGINT)
+    assert watcher.finish(timeout=30) == 0, watcher.err and watcher.err.text()
+    assert sorted(p.name for p in (inbox / "done").iterdir()) == sorted(readings)
+    assert not list((inbox / "rejected").iterdir())
+    in_files = sum(len(read_measurement_file(p).measurements) for p in (inbox / "done").iterdir())
+    stored = _stored_lab(url)
+    assert len(stored) == in_files == len(STD_DL) + len(GOOD_DL) + len(SERIES_DL)
+    assert sorted(stored) == sorted(std_ids + t1_ids + series_ids)
 
 
 def _cli_t1(url: str, tol: ToleranceSet, keep: bool, t1_ids: list[int]) -> Mapping[str, object]:
