@@ -2,16 +2,19 @@
 
 Run: ``.venv/bin/python -m bench.library_accuracy [--per-class N] [--envs NAME,...]``. A stratified sample
 of the 6000-paint SYNTHETIC demo library (``station.formulate.demo``; seed 0, ``--per-class`` paints of
-each class, 75 by default: 300 paints):
+each class, 75 by default: 300 paints). This is the HELD-OUT split: the default basis was calibrated
+(``bench.library_basis``) on a disjoint training split drawn from the library's other paints, so the
+figures are not measured on the paints it was tuned on. Classes:
 
 * ``solid``: library type solid; ``pearl``: type pearl;
 * ``bright silver``: metallic with face L* ≥ 80 and face chroma < 10 (the first angle, 15°);
 * ``coloured metallic``: the other metallics.
 
 Each paint is fitted to the model (``station.model.fit.fit_fftg_batch`` through its five measured angles;
-paints without a fit are counted and left out), its lobe weights fitted with the shipped basis (default
-``perceptual`` fit), and shaded on an orthographic sphere (32 × 32, rim excluded) by
-``numpy_renderer.shade_pixels`` (GL-prefiltered maps where GL runs, lights extracted, ``lut`` horizon)
+paints without a fit are counted and left out), its lobe weights fitted with the shipped default basis
+(:func:`station.render.lobes.default_basis`, ``perceptual`` fit), and shaded on an orthographic sphere (32 × 32, rim excluded) by
+``numpy_renderer.shade_pixels`` (GL-prefiltered maps where GL runs, lights extracted and smoothed
+over their spread, ``lut`` horizon)
 against :class:`station.render.truth.TruthScene` (the designed BRDF integrated). Environments: the
 procedural ones and every HDR of ``../shared/data/hdri``, 512 wide (as ``bench.env_accuracy``).
 ΔE: CIEDE2000 per pixel, Lab relative to the scene's white; mean and 95th percentile over the pixels of
@@ -29,6 +32,8 @@ import numpy as np
 
 from bench._report import Case, bench_parser, write_section
 from bench.env_accuracy import MEAN_BAR, P95_BAR, SPHERE, environments, ndv_of, reflect_of
+from station.formulate.demo import demo_library
+from station.formulate.library import Library
 from station.model import FaceFlopTravelGloss
 from station.model.colorimetry import linear_srgb_to_lab
 from station.model.difference import delta_e
@@ -55,22 +60,46 @@ def classify(types: np.ndarray, face_lab: np.ndarray) -> np.ndarray:
     )
 
 
-def sample_paints(per_class: int) -> tuple[list[FaceFlopTravelGloss], list[str], int]:
-    """(designs, their classes, paints without a fit) of a stratified sample of the demo library."""
-    from station.formulate.demo import demo_library
+#: Paints per class the held-out (test) sample is drawn from; the training split never holds them.
+TEST_PER_CLASS = 75
+#: Seed of the training split (``bench.library_basis`` calibrates the basis on it).
+TRAIN_SEED = 1
 
+
+def _library_rows(per_class: int, split: str) -> tuple[Library, np.ndarray, list[tuple[str, np.ndarray]]]:
+    """(library, its classes, [(class, rows)]) of a split: ``test`` draws TEST_PER_CLASS rows per class with
+    SEED and keeps the first *per_class*; ``train`` draws *per_class* with TRAIN_SEED from the rest."""
+    if split not in ("test", "train"):
+        raise ValueError(f"split: 'test' or 'train', not {split!r}")
     lib = demo_library()
+    order = np.argsort(lib.angles_deg)
+    cls = classify(np.asarray(lib.types), lib.lab[:, order][:, 0])
+    test_rng, train_rng = np.random.default_rng(SEED), np.random.default_rng(TRAIN_SEED)
+    out = []
+    for name in CLASSES:
+        rows = np.flatnonzero(cls == name)
+        test = test_rng.choice(rows, size=min(TEST_PER_CLASS, rows.size), replace=False)
+        if split == "test":
+            pick = test[:per_class]
+        else:
+            rest = np.setdiff1d(rows, test)
+            pick = train_rng.choice(rest, size=min(per_class, rest.size), replace=False)
+        out.append((name, np.sort(pick)))
+    return lib, cls, out
+
+
+def sample_paints(per_class: int, split: str = "test") -> tuple[list[FaceFlopTravelGloss], list[str], int]:
+    """(designs, their classes, paints without a fit) of a stratified sample of the demo library: the
+    held-out ``test`` split this benchmark reports on, or the disjoint ``train`` split the shipped basis
+    was calibrated on (:func:`_library_rows`)."""
+    lib, _, picks = _library_rows(per_class, split)
     order = np.argsort(lib.angles_deg)
     angles = tuple(float(lib.angles_deg[j]) for j in order)
     lab = lib.lab[:, order]
-    cls = classify(np.asarray(lib.types), lab[:, 0])
-    rng = np.random.default_rng(SEED)
     designs: list[FaceFlopTravelGloss] = []
     names: list[str] = []
     failed = 0
-    for name in CLASSES:
-        rows = np.flatnonzero(cls == name)
-        pick = np.sort(rng.choice(rows, size=min(per_class, rows.size), replace=False))
+    for name, pick in picks:
         batch = fit_fftg_batch(angles, lab[pick], lib.gloss_gu[pick])
         for n in range(len(batch)):
             try:

@@ -164,6 +164,27 @@ def flake_levels(
     return out
 
 
+#: Abramowitz & Stegun 7.1.26 (|error| ≤ 1.5e-7): erf(x) = 1 − t(a1 + t(a2 + …)) e^(−x²), t = 1/(1 + p x),
+#: x ≥ 0; the shader evaluates the same polynomial (GLSL has no erf).
+ERF_P = 0.3275911
+ERF_A = (0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429)
+
+
+def flake_horizon(flakes: FlakeLayer, n_dot_v: np.ndarray) -> np.ndarray:
+    """Fraction (P,) of the flakes' mirrored views R_m above the surface at *n_dot_v* (P,) = R·N:
+    Φ(asin(N·V) / (2σ)). A flake tilted by σ g tilts its reflection by 2σ g, so R_m's elevation is that of R,
+    asin(N·V), less a normal deviate of deviation 2σ, and the glint lookups below the horizon are zero: the
+    expected flake reflection is this fraction of C_E(R) (at N·V 0.2 and 8° spread 0.77; C_E alone made
+    the grazing sparkle's mean 23 % negative)."""
+    x = np.arcsin(np.clip(np.asarray(n_dot_v, dtype=np.float64), 0.0, 1.0)) / (
+        2.0 * math.radians(flakes.spread_deg)
+    )
+    z = x / math.sqrt(2.0)
+    t = 1.0 / (1.0 + ERF_P * z)
+    poly = t * (ERF_A[0] + t * (ERF_A[1] + t * (ERF_A[2] + t * (ERF_A[3] + t * ERF_A[4]))))
+    return 0.5 * (1.0 + (1.0 - poly * np.exp(-z * z)))
+
+
 def _pcg3d(v: np.ndarray) -> np.ndarray:
     """The shader's ``pcg3d`` hash on (P, 3) uint32 (wrapping arithmetic)."""
     v = v.astype(np.uint32) * np.uint32(1664525) + np.uint32(1013904223)
@@ -230,8 +251,8 @@ def sparkle_pixels(
     height: int,
     mean_cube: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Zero-mean sparkle (P, 3) of the NumPy renderer: tint · reflectance · Σ_k w_k (L_sharp(R_m,k) − C_E(R))
-    (module docstring), the same terms as the shader. *positions* (P, 3) world, *distance* (P,) to the eye,
+    """Zero-mean sparkle (P, 3) of the NumPy renderer: tint · reflectance · Σ_k w_k (L_sharp(R_m,k) − H C_E(R))
+    (module docstring, H = :func:`flake_horizon`), the same terms as the shader. *positions* (P, 3) world, *distance* (P,) to the eye,
     *normal*, *view*, *reflect* (P, 3) in the environment's frame, *basis* a
     :class:`~station.render.prefilter.PrefilteredBasis`, *mean_cube* its :func:`flake_mean_cube` (computed
     when not given)."""
@@ -249,5 +270,5 @@ def sparkle_pixels(
         up = np.sum(rm * normal, axis=-1) > 0.0
         total += w[:, None] * np.where(up[:, None], sample_cube(basis.cubes[sharp], rm), 0.0)
         weight += w
-    mean = sample_cube(mean_cube, reflect).astype(np.float64)
+    mean = sample_cube(mean_cube, reflect).astype(np.float64) * flake_horizon(flakes, ndv)[:, None]
     return np.asarray(tint)[None, :] * flakes.reflectance * (total - weight[:, None] * mean)

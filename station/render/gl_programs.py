@@ -119,7 +119,11 @@ def set_uniforms(
         n = prog["u_lobes"].array_length
         prog["u_lobes"].value = list(range(n)) if n > 1 else 0
     if lights is not None and lights.count:  # the compiler drops what a program never reads
-        for name, values in (("u_light_dir", lights.directions), ("u_light_flux", lights.flux)):
+        for name, values in (
+            ("u_light_dir", lights.directions),
+            ("u_light_flux", lights.flux),
+            ("u_light_spread", lights.spreads()),
+        ):
             if name in prog:
                 _write(prog, name, values)
     for name, part in (("u_wdd", 1), ("u_wg", 2)):

@@ -85,6 +85,7 @@ import numpy as np
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.cubemap import sample_cube
+from station.render.environment import spread_exponent
 from station.render.errors import RenderInputError
 from station.render.flakes import clip_sparkle, flake_lod, flake_tint, sparkle_pixels
 from station.render.lobes import bent_direction
@@ -199,12 +200,14 @@ def light_terms(
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """Exact (gloss, directionally diffuse) radiance per unit map weight of lobe i from the lights.
 
-    For each light (direction l, flux Φ): gloss Σ_l 1[N·l > 0] p_i(l) Φ_l, DD Σ_l (N·l)₊ p_i(l) Φ_l,
-    with p_i(l) = (E_i+1)/(2π) (R·l)₊^E_i; each (P, 3). None when lobe i keeps the lights in its map.
+    For each light (direction l, flux Φ, spread s²): gloss Σ_l 1[N·l > 0] p_i(l) Φ_l, DD Σ_l (N·l)₊ p_i(l) Φ_l,
+    with p_i(l) = (E'+1)/(2π) (R·l)₊^E', E' = E_i / (1 + E_i s²) the lobe smoothed over the light's extent
+    (:func:`station.render.environment.spread_exponent`; E_i for a point light); each (P, 3). None when
+    lobe i keeps the lights in its map.
     """
     if basis.lights is None or not basis.wide or not basis.wide[i]:
         return None
-    e = basis.exponents[i]
+    e = spread_exponent(basis.exponents[i], basis.lights.spreads())[None, :]  # (1, k)
     nl = normal @ basis.lights.directions.T  # (P, k)
     p = (e + 1.0) / (2.0 * np.pi) * np.clip(reflect @ basis.lights.directions.T, 0.0, None) ** e
     gloss = ((nl > 0) * p) @ basis.lights.flux

@@ -148,3 +148,27 @@ def test_pearls_get_pearl_flakes() -> None:
     red = FaceFlopTravelGloss((45.0, 60.0, 35.0), (20.0, 40.0, 22.0), 60.0, 90.0)
     assert default_flakes(red) == METALLIC_FLAKES and default_flakes(SILVER) == METALLIC_FLAKES
     assert default_flakes(FaceFlopTravelGloss((50.0, 40.0, 20.0), (50.0, 40.0, 20.0), None, 85.0)) is None
+
+
+@pytest.mark.parametrize("ndv", [0.9, 0.5, 0.2, 0.08])
+def test_expected_flake_reflection_counts_the_horizon(ndv) -> None:
+    """The mean subtracted from the glints is C_E(R) times the fraction of the flakes' mirrored views above
+    the surface (a glint below it reflects nothing): at each N·V that fraction, drawn by brute force over
+    200 000 surface cells with the renderer's own flake normals, is flake_horizon's Φ(asin(N·V) / 2σ)
+    within 0.01 — so in a uniform environment the sparkle's mean is zero at grazing too (with C_E alone it
+    was −23 % of the flake term at N·V 0.2)."""
+    from station.render.flakes import flake_horizon, flake_normals
+
+    rng = np.random.default_rng(3)
+    n = np.array([0.3, 0.8, 0.52])
+    n /= np.linalg.norm(n)
+    t = np.cross(n, [0.0, 0.0, 1.0])
+    t /= np.linalg.norm(t)
+    v = ndv * n + math.sqrt(1.0 - ndv * ndv) * t
+    pos = rng.uniform(-50.0, 50.0, (200_000, 3))
+    m, _ = flake_normals(METALLIC_FLAKES, pos, 0.05, np.broadcast_to(n, pos.shape))
+    rm = 2.0 * (m @ v)[:, None] * m - v
+    above = float(np.mean(rm @ n > 0.0))
+    assert flake_horizon(METALLIC_FLAKES, np.array([ndv]))[0] == pytest.approx(above, abs=0.01)
+    if ndv <= 0.2:
+        assert above < 0.8  # the horizon matters here: the mean would be biased by more than 20 %

@@ -45,15 +45,31 @@ def test_shipped_table_is_consistent() -> None:
         assert EXPONENT_RANGE[0] <= e[0] and e[-1] <= EXPONENT_RANGE[1]
     objective = [r["objective"] for r in rows]
     assert all(b <= a + 1e-6 for a, b in itertools.pairwise(objective))
-    assert default_basis() == basis_for_count(int(table["default_lobes"]))
+    row = basis_for_count(int(table["default_lobes"])).exponents
+    assert set(row) <= set(default_basis().exponents)  # the library calibration adds to the row
     with pytest.raises(InputError):
         basis_for_count(12)
+
+
+def test_default_basis_is_calibrated_on_the_library() -> None:
+    """The default basis is the table's row plus the lobes its calibration on the demo library moved
+    (bench.library_basis), chosen on a training split the held-out benchmark never sees."""
+    import json
+
+    from station.render.lobes import LIBRARY_BASIS
+
+    doc = json.loads(LIBRARY_BASIS.read_text())
+    assert default_basis().exponents == tuple(sorted(float(e) for e in doc["exponents"]))
+    start = basis_for_count(int(basis_table()["default_lobes"])).exponents
+    assert doc["start"] == list(start) and len(doc["calibrated"]) == len(start)
+    assert set(default_basis().exponents) == set(start) | set(doc["calibrated"])
+    assert "training split" in doc["calibration"] and "disjoint" in doc["calibration"]
 
 
 def test_shipped_errors_are_reproduced_by_the_code() -> None:
     brdfs = [lf.designed_brdf(d) for d in design_database()]
     errors = bs.make_objective(brdfs)
-    row = next(r for r in basis_table()["bases"] if r["lobes"] == default_basis().size)
+    row = next(r for r in basis_table()["bases"] if r["lobes"] == basis_table()["default_lobes"])
     mx, mean = errors(np.asarray(row["exponents"]))
     assert mx == pytest.approx(row["max_error_de"], abs=2e-3)
     assert mean == pytest.approx(row["mean_error_de"], abs=2e-3)

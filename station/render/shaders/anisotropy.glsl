@@ -23,9 +23,9 @@ vec3 aniso_blend(vec3 r, vec3 n) {
         if (u_aniso_w[i] <= 0.0) continue;
         s += u_aniso_w[i] * horizon(i, rn).y * textureLod(u_lobes[i], r, 0.0).rgb;
         if (LOBE_E[i] < WIDE_EXPONENT) {
-            float e = LOBE_E[i];
             for (int l = 0; l < N_LIGHTS; ++l) {
                 if (dot(n, u_light_dir[l]) <= 0.0) continue;
+                float e = LOBE_E[i] / (1.0 + LOBE_E[i] * u_light_spread[l]);  // over the light's extent
                 s += u_aniso_w[i] * (e + 1.0) / (2.0 * PI) * pow(max(dot(r, u_light_dir[l]), 0.0), e)
                      * u_light_flux[l];
             }

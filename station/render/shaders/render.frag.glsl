@@ -98,6 +98,7 @@ uniform sampler2D u_horizon;
 const float LOBE_E[N_LOBES] = float[N_LOBES](LOBE_EXPONENTS);
 uniform vec3 u_light_dir[MAX_LIGHTS];
 uniform vec3 u_light_flux[MAX_LIGHTS];
+uniform float u_light_spread[MAX_LIGHTS];  // angular spread s^2 (rad^2): lobes smoothed to E / (1 + E s^2)
 const float PI = 3.14159265358979;
 #if COMBINED
 uniform sampler2D u_gloss, u_dd;  // both paints' pre-summed narrow lobes (atlas.glsl)
@@ -170,8 +171,13 @@ vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int p
     float norm = 1.0 / sqrt((1.0 - f) * (1.0 - f) + f * f);  // the blend keeps the sparkle's variance
     w0 *= (1.0 - f) * norm;
     w1 *= f * norm;
-    // C_E(R): the sharp map prefiltered with the flakes' reflected lobe (flakes.flake_mean_cube).
-    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb;
+    // C_E(R): the sharp map prefiltered with the flakes' reflected lobe (flakes.flake_mean_cube), times the
+    // fraction of the flakes' reflections above the horizon, Phi(asin(N.V) / (2 sigma)) (flakes.flake_horizon,
+    // erf by Abramowitz & Stegun 7.1.26).
+    float z = asin(clamp(ndv, 0.0, 1.0)) / (2.0 * u_flake_sigma) / sqrt(2.0);
+    float et = 1.0 / (1.0 + 0.3275911 * z);
+    float poly = et * (0.254829592 + et * (-0.284496736 + et * (1.421413741 + et * (-1.453152027 + et * 1.061405429))));
+    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb * (1.0 - 0.5 * poly * exp(-z * z));
     vec3 tint = paint == 0 ? u_flake_tint[0] : u_flake_tint[1];
     return tint * u_flake_reflectance * (w0 * g0 + w1 * g1 - (w0 + w1) * mean);
 }
@@ -424,7 +430,8 @@ void main() {
         }
 #if N_LIGHTS > 0
         // exact directional lights on the lobes they were taken out of (E < WIDE_EXPONENT):
-        // wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux, p = (E+1)/(2 pi) max(R.l, 0)^E; one log2 per light.
+        // wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux, p = (E'+1)/(2 pi) max(R.l, 0)^E', the lobe smoothed
+        // over the light's extent, E' = E / (1 + E s^2) (environment.spread_exponent); one log2 per light.
         for (int l = 0; l < N_LIGHTS; ++l) {
             float nl = dot(n, u_light_dir[l]);
             float lg = log2(max(dot(r, u_light_dir[l]), 1e-30));
@@ -433,7 +440,8 @@ void main() {
                 if (LOBE_E[i] < WIDE_EXPONENT) {
                     float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
                     vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
-                    float p = (LOBE_E[i] + 1.0) / (2.0 * PI) * exp2(LOBE_E[i] * lg);
+                    float e = LOBE_E[i] / (1.0 + LOBE_E[i] * u_light_spread[l]);
+                    float p = (e + 1.0) / (2.0 * PI) * exp2(e * lg);
                     acc += (((WIDE_GLOSS_MASK >> i) & 1) != 0 ? s * wg + nl * wdd : nl * wdd) * p;
                 }
             }
