@@ -21,8 +21,9 @@ The measured offset M_n − P(r_n) belongs to the colorants in the can: the mode
 colorant to colorant (an interference pigment's spectral albedo, a red's strength), so a recipe of other
 colorants has another offset. When neither tinting nor a remake of the same colorants is predicted to
 reach the corrected target (the offset cannot be cancelled with these colorants), the loop remakes with a
-colorant set not sprayed yet: the best recipe of the toner line for the design itself (a wider search,
-:data:`OTHER_SET_CANDIDATES` starts), and corrects that one from its own spray-out.
+colorant set not sprayed yet: of the toner line's recipes for the design itself within the tolerance (a
+wider search, :data:`OTHER_SET_CANDIDATES` starts), the one sharing the fewest colorants with those
+already sprayed (then the best ranked), and corrects that one from its own spray-out.
 
 Each step is a :class:`LoopStep` in a :class:`FormulationJob` (plain dataclasses: the database layer
 stores them). Status: ``converged`` (mean measured ΔE00 ≤ tolerance), ``not_formulable`` (the model
@@ -50,6 +51,7 @@ from station.formulate.formulation import (
     formulate_with,
 )
 from station.formulate.library import STANDARD_ANGLES
+from station.formulate.selection import RecipeOption
 from station.formulate.snap import validate_design_lab
 from station.formulate.tinting import tint
 from station.model import AspecularMeasurements
@@ -331,7 +333,12 @@ def _other_colorants(
         wide,
         OTHER_SET_CANDIDATES,
     )
-    for option in found.recipes:
+    used = frozenset().union(*sprayed)
+
+    def shared(option: RecipeOption) -> int:  # colorants it shares with those already sprayed
+        return len(_colorant_set(option.recipe, db) & used)
+
+    for option in sorted(found.recipes, key=lambda o: (shared(o), o.rank)):
         colorants = _colorant_set(option.recipe, db)
         if option.mean_de <= tolerance and colorants not in sprayed:
             c = np.asarray(option.concentrations, dtype=np.float64)

@@ -49,14 +49,17 @@ from station.formulate.errors import FormulateInputError, NotFormulableError
 from station.formulate.library import STANDARD_ANGLES, Library
 from station.formulate.lines import lines_for_design, toner_line
 from station.formulate.selection import (
+    MAX_SUBSETS,
     REFINED,
     RecipeOption,
+    eliminate,
     fit_subset,
     make_option,
     metamerism,
     rank_options,
     refine_subset,
     round_to_scale,
+    screen,
     subsets,
 )
 from station.formulate.snap import SnapIndex, SnapResult, color_snap, validate_design_lab
@@ -80,6 +83,8 @@ DEFAULT_TOLERANCE = FORMULATION_TOLERANCE_DE00
 _RECIPE_THRESHOLD = 1e-6
 #: Starting recipes fitted at most per toner line (library matches first, then generic starts).
 MAX_STARTS = 4
+#: Line-wide points (best first) the backward elimination of the selection starts from.
+ELIMINATED_POINTS = 2
 
 
 @dataclass(frozen=True)
@@ -264,6 +269,44 @@ class _LineFit:
     evaluations: int
 
 
+def line_wide_fit(
+    design: NDArray,
+    angles: tuple[float, ...],
+    starts: Sequence[tuple[str, NDArray[np.float64]]],
+    c_mat: float,
+    db: ColorantDatabase,
+    line: str,
+    max_starts: int,
+    tolerance: float,
+    candidates: int = 0,
+) -> tuple[Problem, Objective, list[tuple[str, float, NDArray[np.float64]]]]:
+    """Step 1 of the module docstring on one toner line, every colorant of it free, amounts unrounded:
+    weighted-Lab fits from the starts (given ones, then :func:`_generic_starts`), at most
+    ``max(max_starts, candidates)`` of them, stopping once ``candidates`` are fitted and one is within
+    a fifth of the tolerance; SLSQP on Σ ΔE00² from the best unless it already is. Returns the problem,
+    its objective (evaluation count) and the fitted ``(label, Σ ΔE00², free point)``, best first."""
+    allowed = toner_line(line).mask(db)
+    fixed = np.zeros(len(db.names))
+    fixed[db.matting_index] = c_mat
+    prob = Problem(design, angles, db, np.flatnonzero(allowed), fixed)
+    obj = Objective(prob)
+    xs = [(lb, np.where(allowed, v, 0.0)[prob.free]) for lb, v in starts]
+    xs += [("generic", s[prob.free]) for s in _generic_starts(db, design, angles, allowed)]
+    good_enough = (0.02 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of ~0.02
+    enough = (0.2 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of 0.2 × tolerance
+    tried: list[tuple[str, float, NDArray[np.float64]]] = []
+    for label, x0 in xs[: max(max_starts, candidates)]:
+        if tried and len(tried) >= candidates and min(t[1] for t in tried) <= enough:
+            break
+        f, x = fit_lab(obj, x0)
+        tried.append((label, f, x))
+    tried.sort(key=lambda t: t[1])  # stable: equal values keep the starts' order
+    if tried[0][1] > enough:
+        f, x = refine_de00(obj, tried[0][2], good_enough)
+        tried[0] = (tried[0][0], f, x)
+    return prob, obj, tried
+
+
 def _fit_line(
     design: NDArray,
     angles: tuple[float, ...],
@@ -281,25 +324,10 @@ def _fit_line(
     With *more_lines* (another line follows) a line whose line-wide fit leaves Σ_j ΔE00² above n² × the
     tolerance² (n angles) gives no options: a subset's Σ ΔE00² is at least the line's, and a mean over n
     angles is at least the root-mean-square over √n, so no subset of it can reach the tolerance."""
-    allowed = toner_line(line).mask(db)
-    fixed = np.zeros(len(db.names))
-    fixed[db.matting_index] = c_mat
-    prob = Problem(design, angles, db, np.flatnonzero(allowed), fixed)
-    obj = Objective(prob)
-    xs = [(lb, np.where(allowed, v, 0.0)[prob.free]) for lb, v in starts]
-    xs += [("generic", s[prob.free]) for s in _generic_starts(db, design, angles, allowed)]
-    good_enough = (0.02 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of ~0.02
-    enough = (0.2 * min(tolerance, 1.0)) ** 2 * len(angles)  # Σ ΔE00² of a mean ΔE00 of 0.2 × tolerance
-    tried: list[tuple[str, float, NDArray[np.float64]]] = []
-    for label, x0 in xs[: max(opts.max_starts, candidates)]:
-        if tried and len(tried) >= candidates and min(t[1] for t in tried) <= enough:
-            break
-        f, x = fit_lab(obj, x0)
-        tried.append((label, f, x))
-    tried.sort(key=lambda t: t[1])  # stable: equal values keep the starts' order
-    if tried[0][1] > enough:
-        f, x = refine_de00(obj, tried[0][2], good_enough)
-        tried[0] = (tried[0][0], f, x)
+    prob, obj, tried = line_wide_fit(
+        design, angles, starts, c_mat, db, line, opts.max_starts, tolerance, candidates
+    )
+    good_enough = (0.02 * min(tolerance, 1.0)) ** 2 * len(angles)
     points = [t[2] for t in tried]
     if more_lines and tried[0][1] > (len(angles) * tolerance) ** 2:
         return _LineFit([], [(lb, prob.full(x)) for lb, _, x in tried], obj.evaluations)
@@ -307,10 +335,23 @@ def _fit_line(
     spec_base = (opts.batch_g, opts.scale_resolution_g, tolerance, line)
     evaluations = obj.evaluations
     fitted: list[tuple[float, int, NDArray[np.float64], Objective, str]] = []
+    proposals: list[tuple[tuple[int, ...], NDArray[np.float64], str]] = []
+    for label, _, point in tried[:ELIMINATED_POINTS]:
+        for sub, x0 in eliminate(prob, point, opts.max_colorants):
+            if all(sub != s for s, _, _ in proposals):
+                proposals.append((sub, x0, label))
+    for sub, x0 in screen(prob, points[0], opts.max_colorants):
+        if all(sub != s for s, _, _ in proposals):
+            proposals.append((sub, x0, tried[0][0]))
     for sub in subsets(points, opts.max_colorants):
-        k = int(np.argmax([p[list(sub)].sum() for p in points]))
-        f, x, sub_obj = fit_subset(prob, sub, points[k])
-        fitted.append((f, len(fitted), x, sub_obj, tried[k][0]))
+        if len(proposals) >= MAX_SUBSETS:
+            break
+        if all(sub != s for s, _, _ in proposals):
+            k = int(np.argmax([p[list(sub)].sum() for p in points]))
+            proposals.append((sub, points[k], tried[k][0]))
+    for sub, x0, label in proposals:
+        f, x, sub_obj = fit_subset(prob, sub, x0)
+        fitted.append((f, len(fitted), x, sub_obj, label))
     fitted.sort(key=lambda t: (t[0], t[1]))
     rows: list[tuple[NDArray[np.float64], NDArray[np.float64], str]] = []
     for n, (_, _, x, sub_obj, label) in enumerate(fitted):
@@ -538,6 +579,24 @@ def formulate_from_library(
     *time_budget_s* is ignored (see :func:`formulate`); *candidates*: see :func:`formulate`; *options*
     the chemist's limits (:class:`FormulationOptions`, default ones when ``None``)."""
     del time_budget_s
+    db = db or default_database()
+    starts, opts, snap = library_starts(design_lab, library, index, k, db, types, options)
+    design = validate_design_lab(design_lab, 3, "design_lab")
+    result = formulate_with(design, STANDARD_ANGLES, starts, gloss_gu, tolerance, db, opts, candidates)
+    return result, snap
+
+
+def library_starts(
+    design_lab: ArrayLike,
+    library: Library,
+    index: SnapIndex | None = None,
+    k: int = 3,
+    db: ColorantDatabase | None = None,
+    types: Collection[str] | None = None,
+    options: FormulationOptions | None = None,
+) -> tuple[list[tuple[str, ArrayLike | dict[str, float]]], FormulationOptions, SnapResult]:
+    """The starting recipes of :func:`formulate_from_library` (the *k* best ColorSnap matches' recipes),
+    the options with the paint type that picks the toner line filled in, and the ColorSnap result."""
     if library.recipes is None or library.colorant_names is None:
         raise FormulateInputError("library", "a library with recipes (the demo library)", library.name)
     db = db or default_database()
@@ -547,7 +606,10 @@ def formulate_from_library(
         )
     design = validate_design_lab(design_lab, 3, "design_lab")
     snap = color_snap(library, design, k=k, method="cie2000", index=index, types=types)
-    starts = [(m.code, library.recipes[m.index]) for m in snap.matches]
+    recipes = library.recipes
+    starts: list[tuple[str, ArrayLike | dict[str, float]]] = [
+        (m.code, recipes[m.index]) for m in snap.matches
+    ]
     opts = options or FormulationOptions()
     if opts.line is None and opts.paint_type is None:
         kinds = sorted(set(types)) if types else []
@@ -555,8 +617,7 @@ def formulate_from_library(
             opts = replace(opts, paint_type=kinds[0])
         elif snap.matches:
             opts = replace(opts, paint_type=str(library.types[snap.matches[0].index]))
-    result = formulate_with(design, STANDARD_ANGLES, starts, gloss_gu, tolerance, db, opts, candidates)
-    return result, snap
+    return starts, opts, snap
 
 
 def formulate_with(

@@ -1,6 +1,15 @@
 """The colorant gamut: whether a paint can be mixed from the shipped colorants, and the nearest that can.
 
-The rule (one place; the QA step, the CLI and the service ask it): a paint is **inside the colorant
+Two questions, two functions:
+
+* :func:`line_gamut` — **can the toner line mix it at all?** The line's gamut: the best recipe with
+  every colorant of the line free and the amounts unrounded (the line-wide fit of
+  :func:`station.formulate.formulation.line_wide_fit`, the matting agent set by the gloss) reaches the
+  tolerance. A design outside it is refused before formulation: no recipe of that line, of any size,
+  makes it, so a chemist's recipe of a few weighable colorants cannot either.
+* :func:`colorant_gamut` — **does the chemist's recipe reach it?**
+
+The second rule (one place; the QA step, the CLI and the service ask it): a paint is **inside the colorant
 gamut** when the formulator (:func:`station.formulate.formulation.formulate`) reaches it within the
 formulation tolerance (mean CIEDE2000 over 15/45/110°, :data:`station.model.domain.FORMULATION_TOLERANCE_DE00`).
 Outside it, the **nearest achievable paint** is the colour of the best recipe: its predicted Lab at the
@@ -14,9 +23,26 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from station.formulate.colorants import ColorantDatabase, default_database, predict_gloss, predict_lab
-from station.formulate.formulation import DEFAULT_TOLERANCE, FormulationResult, formulate
+from station.formulate.colorants import (
+    GLOSS_CLEAR_GU,
+    ColorantDatabase,
+    default_database,
+    predict_gloss,
+    predict_lab,
+)
+from station.formulate.de_kernels import cie2000
+from station.formulate.formulation import (
+    DEFAULT_TOLERANCE,
+    MAX_STARTS,
+    FormulationResult,
+    formulate,
+    line_wide_fit,
+    matting_for_gloss,
+)
+from station.formulate.lines import lines_for_design
+from station.formulate.snap import validate_design_lab
 from station.model import ANGLES_3, ANGLES_5, AspecularMeasurements, FaceFlopTravelGloss
 from station.model.design_io import design_to_dict
 from station.model.fit import fit_fftg
@@ -81,3 +107,59 @@ def colorant_gamut(
             f"flop {np.round(nearest.flop, 1).tolist()}"
         )
     return ColorantGamutReport(result.formulable, result.mean_de, float(tolerance), nearest, result, msg)
+
+
+@dataclass(frozen=True)
+class LineGamutReport:
+    """Verdict of :func:`line_gamut`: ``inside`` when the best line-wide recipe's mean ΔE00 (over the
+    design's angles, amounts unrounded) is at most ``tolerance``; ``line`` the line that came closest,
+    ``recipe`` its recipe (mass fractions), ``per_line`` the best mean ΔE00 of every line tried."""
+
+    inside: bool
+    mean_de: float
+    tolerance: float
+    line: str
+    recipe: dict[str, float]
+    per_line: dict[str, float]
+
+
+def line_gamut(
+    design_lab: ArrayLike,
+    angles_deg: tuple[float, ...] = ANGLES_3,
+    gloss_gu: float | None = None,
+    *,
+    line: str | None = None,
+    paint_type: str | None = None,
+    starts: list[tuple[str, ArrayLike | dict[str, float]]] | None = None,
+    tolerance: float = DEFAULT_TOLERANCE,
+    db: ColorantDatabase | None = None,
+) -> LineGamutReport:
+    """Whether the toner line (named, else from *paint_type*, else from the design's type, as
+    :func:`station.formulate.lines.lines_for_design` picks it) can mix the design with any amounts of
+    all its colorants (module docstring). *starts*: starting recipes (e.g. ColorSnap matches' recipes)
+    besides the generic ones; *gloss_gu* sets the matting agent (``None``: full gloss)."""
+    db = db or default_database()
+    angles = tuple(float(a) for a in angles_deg)
+    design = validate_design_lab(design_lab, len(angles), "design_lab")
+    c_mat, _ = matting_for_gloss(GLOSS_CLEAR_GU if gloss_gu is None else gloss_gu, db)
+    given = [
+        (
+            lb,
+            db.check(
+                db.vector(r) if isinstance(r, dict) else np.asarray(r, dtype=np.float64), f"starts[{lb}]"
+            ),
+        )
+        for lb, r in starts or []
+    ]
+    best: tuple[float, str, dict[str, float]] = (np.inf, "", {})
+    per_line: dict[str, float] = {}
+    for name in lines_for_design(design, line, paint_type):
+        prob, _, tried = line_wide_fit(design, angles, given, c_mat, db, name, MAX_STARTS, tolerance)
+        c = prob.full(tried[0][2])
+        de = float(cie2000(design, predict_lab(c, angles, db)).mean())
+        per_line[name] = de
+        if de < best[0]:
+            best = (de, name, db.recipe(c))
+        if de <= tolerance:
+            break
+    return LineGamutReport(best[0] <= tolerance, best[0], float(tolerance), best[1], best[2], per_line)

@@ -22,15 +22,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import combinations
+from math import comb
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import nnls
 
 from station.formulate.batch import batch_masses
 from station.formulate.colorants import ColorantDatabase, predict_lab, predict_reflectance
 from station.formulate.de_kernels import cie2000
 from station.formulate.lines import cost_per_kg
-from station.formulate.solver import Objective, Problem, fit_lab, refine_de00
+from station.formulate.solver import Objective, Problem, fit_lab, lab_weights, refine_de00
 from station.model.errors import ModelInputError
 from station.model.illuminants import REFERENCE_ILLUMINANT
 from station.model.spectra import metamerism_index, reflectance_from_lab
@@ -47,6 +50,16 @@ REFINED = 3
 LOAD_FACTORS = (1.0, 1.5, 2.0, 3.0, 5.0, 8.0, 12.0)
 #: Passes of ±1 resolution steps after rounding.
 ROUND_PASSES = 4
+#: Most subsets of the linearised screen (:func:`screen`), its Gauss–Newton steps, their damping
+#: (Levenberg–Marquardt, relative to the diagonal) and the subsets it hands on.
+SCREEN_LIMIT = 126
+SCREEN_STEPS = 8
+SCREEN_DAMPING = 1e-2
+SCREEN_KEEP = 4
+#: Points kept per step of the backward elimination (:func:`eliminate`).
+ELIMINATION_BEAM = 3
+#: Forward-difference step of the elimination's Jacobian (mass fraction).
+_FD_STEP = 1e-7
 #: Fractions at or below this count as absent before rounding.
 _PRESENT = 1e-6
 
@@ -127,6 +140,146 @@ def subsets(points: Sequence[NDArray[np.float64]], max_colorants: int) -> list[t
     return out[:MAX_SUBSETS]
 
 
+def _pool(base: Problem, seed: NDArray[np.float64], k: int, limit: int) -> list[int]:
+    """The colorants (indices into ``base.free``) the screen combines: the seed's colorants by what
+    removing each costs in Σ ΔE00², then the absent ones by how much adding a little helps (the
+    forward difference of Σ ΔE00²), as many as keep C(pool, k) within *limit*."""
+    n = base.free.size
+    size = k
+    while size < n and comb(size + 1, k) <= limit:
+        size += 1
+    present = np.flatnonzero(seed > _PRESENT)
+    absent = np.flatnonzero(seed <= _PRESENT)
+    drop = np.repeat(seed[None], present.size, axis=0)
+    drop[np.arange(present.size), present] = 0.0
+    add = np.repeat(seed[None], absent.size, axis=0)
+    add[np.arange(absent.size), absent] += 1e-3
+    f = base.sum_sq(np.vstack([seed[None], drop, add]))
+    by_cost = present[np.argsort(-(f[1 : 1 + present.size] - f[0]), kind="stable")]
+    by_gain = absent[np.argsort(f[1 + present.size :] - f[0], kind="stable")]
+    return [int(i) for i in np.concatenate([by_cost, by_gain])[:size]]
+
+
+def screen(
+    base: Problem,
+    seed: NDArray[np.float64],
+    max_colorants: int,
+    keep: int = SCREEN_KEEP,
+    limit: int = SCREEN_LIMIT,
+) -> list[tuple[tuple[int, ...], NDArray[np.float64]]]:
+    """A cheap linearised first pass over every subset of ``max_colorants`` colorants of a pool
+    (:func:`_pool`, at most *limit* subsets; a *limit* of C(line, max_colorants) or more screens every
+    subset of the line, as a brute-force check does): all subsets at once, each started at the
+    seed's load split evenly, :data:`SCREEN_STEPS` damped Gauss–Newton steps on the weighted Lab
+    residual (:func:`station.formulate.solver.lab_weights`) with one batched model evaluation per step,
+    clipped to the bounds and scaled into the total and effect limits. Returns the *keep* subsets of
+    lowest Σ ΔE00² with their points (free fractions). Counts only: deterministic."""
+    n = base.free.size
+    k = min(max_colorants, n)
+    combos = np.array(list(combinations(sorted(_pool(base, seed, k, limit)), k)), dtype=np.intp)
+    m = combos.shape[0]
+    rows = np.arange(m)[:, None]
+    upper = base.upper[combos]
+    effect = base.effect[combos]
+    xs = np.minimum(np.full((m, k), max(float(seed.sum()), 1e-3) / k), upper)
+    weight = lab_weights(base.design).ravel()
+    eye = np.eye(k)
+    best_r = np.full(m, np.inf)
+    best_x = xs.copy()
+    for step in range(SCREEN_STEPS + 1):
+        pts = np.zeros((m, k + 1, n))
+        pts[rows, 0, combos] = xs
+        for j in range(k):
+            pts[rows, j + 1, combos] = xs
+            pts[np.arange(m), j + 1, combos[:, j]] += _FD_STEP
+        lab = predict_lab(base.full(pts.reshape(-1, n)), base.angles, base.db).reshape(m, k + 1, -1)
+        r = (lab - base.design.ravel()) * weight
+        norm = (r[:, 0] ** 2).sum(-1)
+        better = norm < best_r
+        best_r[better], best_x[better] = norm[better], xs[better]
+        if step == SCREEN_STEPS:
+            break
+        jac = (r[:, 1:] - r[:, :1]) / _FD_STEP  # (m, k, 9)
+        jtj = jac @ jac.transpose(0, 2, 1)
+        grad = jac @ r[:, 0, :, None]
+        damp = SCREEN_DAMPING * (np.einsum("mii->mi", jtj)[:, :, None] * eye + 1e-12 * eye)
+        xs = np.clip(xs - np.linalg.solve(jtj + damp, grad)[..., 0], 0.0, upper)
+        over_e = (xs * effect).sum(-1) / base.db.max_effect
+        xs = np.where(effect > 0, xs / np.maximum(over_e, 1.0)[:, None], xs)
+        xs = xs / np.maximum(xs.sum(-1) / base.max_total, 1.0)[:, None]
+    points = np.zeros((m, n))
+    points[rows, combos] = best_x
+    f = base.sum_sq(points)
+    out: list[tuple[tuple[int, ...], NDArray[np.float64]]] = []
+    for j in np.argsort(f, kind="stable"):
+        key = tuple(int(i) for i in np.flatnonzero(points[j] > _PRESENT))
+        if key and key not in [o for o, _ in out]:
+            out.append((key, points[j]))
+        if len(out) == keep:
+            break
+    return out
+
+
+def eliminate(
+    base: Problem, x: NDArray[np.float64], max_colorants: int, beam: int = ELIMINATION_BEAM
+) -> list[tuple[tuple[int, ...], NDArray[np.float64]]]:
+    """Subsets of at most *max_colorants* colorants (indices into ``base.free``) by backward
+    elimination from the line-wide point *x*, ranked by their contribution to the colour, not their mass.
+
+    At each step every colorant of each kept point is removed in turn and the others re-balanced by one
+    linearised step: the weighted Lab residual (:func:`station.formulate.solver.lab_weights`) with its
+    forward-difference Jacobian at the point, solved by non-negative least squares, the result clipped
+    to the bounds; all these candidates are scored by Σ ΔE00² in one batched model evaluation and the
+    *beam* best (distinct colorant sets) kept. A colorant that weighs little but colours much (carbon
+    black at 0.1 %) costs much when removed, so it stays. Ends when every kept point has at most
+    *max_colorants* colorants; returns their sets with their points (free fractions), best first. A
+    fixed number of steps: deterministic."""
+    weight = lab_weights(base.design).ravel()
+    states: list[NDArray[np.float64]] = [np.where(np.asarray(x) > _PRESENT, x, 0.0)]
+    done: list[tuple[float, tuple[int, ...], NDArray[np.float64]]] = []
+    while states:
+        pending = [s for s in states if np.count_nonzero(s) > max_colorants]
+        for s in states:
+            if np.count_nonzero(s) <= max_colorants:
+                done.append((float(base.sum_sq(s)), tuple(int(i) for i in np.flatnonzero(s)), s))
+        if not pending:
+            break
+        cands: list[NDArray[np.float64]] = []
+        for s in pending:
+            support = np.flatnonzero(s)
+            pts = np.repeat(s[None], support.size + 1, axis=0)
+            pts[np.arange(1, support.size + 1), support] += _FD_STEP
+            lab = predict_lab(base.full(pts), base.angles, base.db)
+            r = ((lab - base.design[None]).reshape(support.size + 1, -1)) * weight
+            jac = ((r[1:] - r[0]) / _FD_STEP).T  # (9, |support|)
+            for k, i in enumerate(support):
+                keep = np.delete(np.arange(support.size), k)
+                # r(y) ≈ r0 + J (y − s): find y ≥ 0 on the kept colorants, y_i = 0
+                target = jac @ s[support] - r[0]
+                y, _ = nnls(jac[:, keep], target)
+                c = np.zeros_like(s)
+                c[support[keep]] = y
+                c = base.project(c)
+                c[i] = 0.0
+                cands.append(np.where(c > _PRESENT, c, 0.0))
+        scores = base.sum_sq(np.asarray(cands))
+        states, seen = [], set[tuple[int, ...]]()
+        for k in np.argsort(scores, kind="stable"):
+            key = tuple(int(i) for i in np.flatnonzero(cands[k]))
+            if key in seen or not key:
+                continue
+            seen.add(key)
+            states.append(cands[k])
+            if len(states) == beam:
+                break
+    done.sort(key=lambda t: t[0])
+    out: list[tuple[tuple[int, ...], NDArray[np.float64]]] = []
+    for _, key, point in done:
+        if key and key not in [k for k, _ in out]:
+            out.append((key, point))
+    return out
+
+
 def fit_subset(
     base: Problem, subset: tuple[int, ...], x0: NDArray[np.float64]
 ) -> tuple[float, NDArray[np.float64], Objective]:
@@ -152,25 +305,6 @@ def round_to_scale(
     db = base.db
     c = np.asarray(c, dtype=np.float64)
     colorant = np.arange(c.size) != matting_index
-    # a recipe at a tiny load rounds badly; the same colour at a higher load (Kubelka–Munk depends on
-    # the ratios) may round well: try the loads LOAD_FACTORS and keep the best after rounding
-    grid = []
-    for s in LOAD_FACTORS:
-        x = np.where(colorant, c * s, c)
-        if (
-            np.all(x <= db.upper_bounds)
-            and x.sum() <= db.max_total
-            and x[db.effect_mask].sum() <= db.max_effect
-        ):
-            grid.append(np.round(x / step))
-    de = cie2000(base.design, predict_lab(np.asarray(grid) * step, base.angles, db))
-    units = grid[int(np.argmin((de * de).sum(-1)))]
-    units = np.minimum(units, np.floor(db.upper_bounds / step + 1e-9))
-    present = [int(i) for i in np.flatnonzero(units > 0) if i != matting_index]
-
-    def score(u: NDArray[np.float64]) -> NDArray[np.float64]:
-        de = cie2000(base.design, predict_lab(u * step, base.angles, db))
-        return np.asarray((de * de).sum(-1))
 
     def feasible(u: NDArray[np.float64]) -> bool:
         x = u * step
@@ -179,6 +313,23 @@ def round_to_scale(
             and x.sum() <= db.max_total + 1e-12
             and x[db.effect_mask].sum() <= db.max_effect + 1e-12
         )
+
+    def score(u: NDArray[np.float64]) -> NDArray[np.float64]:
+        de = cie2000(base.design, predict_lab(u * step, base.angles, db))
+        return np.asarray((de * de).sum(-1))
+
+    # a recipe at a tiny load rounds badly; the same colour at a higher load (Kubelka–Munk depends on
+    # the ratios) may round well: try the loads LOAD_FACTORS and keep the best after rounding (the
+    # fitted load, at a limit, always stays a candidate: rounded down it is feasible)
+    grid = []
+    for s in LOAD_FACTORS:
+        x = np.where(colorant, c * s, c)
+        if feasible(x / step):
+            grid.append(np.round(x / step))
+    grid.append(np.floor(c / step + 1e-9))
+    units = grid[int(np.argmin(score(np.asarray(grid))))]
+    units = np.minimum(units, np.floor(db.upper_bounds / step + 1e-9))
+    present = [int(i) for i in np.flatnonzero(units > 0) if i != matting_index]
 
     while not feasible(units) and present:  # rounding up may cross a limit: take back one step
         units[max(present, key=lambda i: units[i])] -= 1

@@ -117,14 +117,19 @@ class Objective:
         return self._eval(np.asarray(x, dtype=np.float64))[1]
 
 
+def lab_weights(design: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Weights of the Lab residuals per angle (A, 3): 1 on ΔL*, 1/(1 + 0.03 C*) on Δa* and Δb*, C* of
+    the design (the CIE94 weighting)."""
+    chroma = np.hypot(design[:, 1], design[:, 2])
+    return np.stack([np.ones_like(chroma), 1 / (1 + 0.03 * chroma), 1 / (1 + 0.03 * chroma)], -1)
+
+
 class _LabLeastSquares:
     """Weighted Lab residuals plus penalty rows for the total and effect limits (zero residual is an
     exact match in every metric)."""
 
     def __init__(self, objective: Objective):
-        p = objective.p
-        chroma = np.hypot(p.design[:, 1], p.design[:, 2])
-        self.weight = np.stack([np.ones_like(chroma), 1 / (1 + 0.03 * chroma), 1 / (1 + 0.03 * chroma)], -1)
+        self.weight = lab_weights(objective.p.design)
         self.objective = objective
         self._cache: tuple[bytes, NDArray, NDArray] | None = None
 

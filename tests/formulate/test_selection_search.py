@@ -1,0 +1,79 @@
+"""The subset search against brute force, the toner line's gamut, and rounding at the total limit."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from station.formulate.colorants import default_database, predict_lab
+from station.formulate.de_kernels import cie2000
+from station.formulate.formulation import formulate
+from station.formulate.gamut import line_gamut
+from station.formulate.lines import toner_line
+from station.formulate.selection import round_to_scale
+from station.formulate.solver import Objective, Problem, fit_lab, refine_de00
+
+A3 = (15.0, 45.0, 110.0)
+DB = default_database()
+SOLID = np.flatnonzero(toner_line("solid").mask(DB))
+#: four colorants of the solid line; no two of them make it, the best pair is of two others
+DARK_RED = {"white_tio2": 0.05, "black_carbon": 0.002, "red_pr": 0.03, "yellow_opaque": 0.02}
+
+
+def _design(fractions: dict[str, float]) -> np.ndarray:
+    return predict_lab(DB.vector(fractions), A3)
+
+
+def _best_fit(design: np.ndarray, free: tuple[int, ...]) -> float:
+    """Mean ΔE00 of the best recipe of exactly the colorants *free*, from three starts (brute force)."""
+    prob = Problem(design, A3, DB, np.array(free), np.zeros(len(DB.names)))
+    obj = Objective(prob)
+    for scale in (0.02, 0.1, 0.3):
+        _, x = fit_lab(obj, np.full(len(free), scale / len(free)), max_nfev=60)
+        refine_de00(obj, x, 1e-8, maxiter=120)
+    return float(cie2000(design, predict_lab(prob.full(obj.best[1]), A3, DB)).mean())
+
+
+@pytest.fixture(scope="module")
+def brute_force_pairs() -> dict[tuple[int, ...], float]:
+    """Every 2-colorant subset of the solid line refitted on the dark red (36 subsets)."""
+    design = _design(DARK_RED)
+    return {sub: _best_fit(design, sub) for sub in itertools.combinations(SOLID.tolist(), 2)}
+
+
+def test_two_colorant_recipe_is_as_good_as_the_best_pair(brute_force_pairs: dict) -> None:
+    best = min(brute_force_pairs.values())
+    assert best > 0.2  # no pair reproduces the design: the choice of the pair matters
+    result = formulate(_design(DARK_RED), A3, line="solid", max_colorants=2)
+    assert result.mean_de_unrounded <= best + 0.05
+    chosen = tuple(sorted(DB.names.index(n) for n in result.recipe))
+    assert brute_force_pairs[chosen] <= best + 0.05
+
+
+def test_line_gamut_refuses_a_white_lighter_than_the_line_makes() -> None:
+    ub = DB.upper_bounds[DB.names.index("white_tio2")]
+    whitest = _design({"white_tio2": float(ub)})
+    too_light = whitest + np.array([5.0, 0.0, 0.0])
+    out = line_gamut(too_light, A3, line="solid")
+    assert not out.inside and out.mean_de > 1.0 and out.line == "solid"
+    inside = line_gamut(_design(DARK_RED), A3, line="solid")
+    assert inside.inside and inside.mean_de < 0.1
+    # a silver is outside the solid line, inside the metallic one
+    silver = _design({"alu_bright": 0.08, "white_tio2": 0.005})
+    assert not line_gamut(silver, A3, line="solid").inside
+    assert line_gamut(silver, A3, line="metallic").inside
+
+
+def test_rounding_a_recipe_at_the_total_limit() -> None:
+    # 0.1 + 0.2 + 0.3 is 0.6000000000000001 in floating point: just over the 0.6 total limit
+    c = DB.vector({"white_tio2": 0.3, "yellow_opaque": 0.2, "red_opaque": 0.1})
+    assert c.sum() >= DB.max_total
+    prob = Problem(predict_lab(c, A3), A3, DB, SOLID, np.zeros(len(DB.names)))
+    step = 0.1 / 1000.0
+    r = round_to_scale(c, prob, step, DB.matting_index)
+    assert r.sum() <= DB.max_total + 1e-12
+    units = r / step
+    assert np.allclose(units, np.round(units))
+    assert float(cie2000(prob.design, predict_lab(r, A3)).mean()) < 0.1
