@@ -95,8 +95,13 @@ def test_extended_lamp_smooths_the_lobe_like_brute_force():
     ref = (e + 1.0) / (2.0 * np.pi) * (np.clip(n @ dirs.T, 0, None) * np.clip(r @ dirs.T, 0, None) ** e) @ sa
     lit = ref > 0.05 * ref.max()
     basis = prefilter.prefilter_basis(Environment("lamp", eq), (e, 500.0), engine="numpy")
-    spread = nr.light_terms(basis, 0, n, r)[1][:, 0]
-    point = nr.light_terms(replace(basis, lights=replace(basis.lights, spread=None)), 0, n, r)[1][:, 0]
+    assert basis.lights is not None  # the lamp is taken out as a light
+    terms = nr.light_terms(basis, 0, n, r)
+    assert terms is not None
+    spread = terms[1][:, 0]
+    point_terms = nr.light_terms(replace(basis, lights=replace(basis.lights, spread=None)), 0, n, r)
+    assert point_terms is not None
+    point = point_terms[1][:, 0]
     err_spread = np.abs(spread - ref)[lit].mean() / ref[lit].mean()
     err_point = np.abs(point - ref)[lit].mean() / ref[lit].mean()
     assert err_spread < 0.1 and err_spread < err_point / 3.0, (err_spread, err_point)

@@ -108,6 +108,7 @@ def test_gl_frame_of_a_still_model_is_supersampled(qtbot, tmp_path, own_cache) -
     qtbot.waitUntil(lambda: view._core is not None and view._core.targets.aa == VIEW_AA, timeout=30000)
     smooth = view.grab_image().astype(int)
     view.aa = 1
+    assert view._core is not None
     view._core.set_aa(1)
     plain = view.grab_image().astype(int)
     assert smooth.shape == plain.shape == (180, 240, 3)
