@@ -49,6 +49,8 @@ EXPECTED: dict[tuple[str, str], frozenset[Role]] = {
     ("GET", f"{V1}/qc/jobs/{{job}}/summary"): ALL,
     ("GET", f"{V1}/qc/jobs/{{job}}/report.pdf"): ALL,
     ("GET", f"{V1}/qc/jobs/{{job}}/report.csv"): ALL,
+    ("GET", f"{V1}/qc/jobs/{{job}}/spc"): ALL,
+    ("GET", f"{V1}/qc/jobs/{{job}}/spc.png"): ALL,
     ("POST", f"{V1}/qc/metamerism"): ALL,
     ("POST", f"{V1}/qc/repeats"): ALL,
     ("POST", f"{V1}/booth"): ALL,

@@ -216,11 +216,20 @@ class ServiceQc:
     def jobs(self) -> list[JobEntry]:
         return [JobEntry(j["job"], tuple(j["parts"])) for j in self._get("/qc/jobs").json()]
 
-    def _local_only(self, judging: Judging) -> None:
-        """Refuse what the service's summary and report routes do not take (panel averaging, a
-        tolerance file, texture limits): :class:`QcSourceError` saying so, never a silently other verdict."""
-        if not judging.is_default:
-            raise self._unoffered("panel averaging, a tolerance file or texture limits")
+    def _judging_params(self, judging: Judging) -> dict[str, str]:
+        """*judging* as the query of the service's summary, report and SPC routes (``average_panels``,
+        ``keep_outliers``, ``texture_limits``); a tolerance file, which those routes do not take, is
+        refused with :class:`QcSourceError` saying so, never a silently other verdict."""
+        if judging.tolerance.strip():
+            raise self._unoffered("a tolerance file")
+        out: dict[str, str] = {}
+        if judging.average_panels:
+            out["average_panels"] = "true"
+        if judging.keep_outliers:
+            out["keep_outliers"] = "true"
+        if judging.texture_limits.strip():
+            out["texture_limits"] = judging.texture_limits.strip()
+        return out
 
     def _unoffered(self, what: str) -> QcSourceError:
         return QcSourceError(
@@ -231,8 +240,9 @@ class ServiceQc:
     def summary(
         self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
     ) -> dict[str, Any]:
-        self._local_only(judging)
-        extra = {} if illuminant_limits is None else {"illuminant_limits": illuminant_limits}
+        extra = self._judging_params(judging)
+        if illuminant_limits is not None:
+            extra["illuminant_limits"] = illuminant_limits
         return self._get(f"/qc/jobs/{quote(job, safe='')}/summary", formula=formula, **extra).json()
 
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
@@ -268,7 +278,15 @@ class ServiceQc:
     def spc(
         self, job: str, part: str, formula: str, judging: Judging, baseline: int | None, subgroup: int
     ) -> PartSpc:
-        raise self._unoffered("the SPC chart")
+        """``GET /qc/jobs/{job}/spc`` judged as the table is: the service's ``station qc spc``."""
+        from station.qc.spc_part import PartSpc
+
+        extra = self._judging_params(judging)
+        if baseline is not None:
+            extra["baseline"] = str(baseline)
+        path = f"/qc/jobs/{quote(job, safe='')}/spc"
+        r = self._get(path, part=part, formula=formula, subgroup=str(subgroup), **extra)
+        return PartSpc.from_wire(r.json())
 
     def report_preview(
         self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
@@ -284,8 +302,9 @@ class ServiceQc:
         illuminant_limits: str | None = None,
         judging: Judging = PLAIN,
     ) -> Path:
-        self._local_only(judging)
-        extra = {} if illuminant_limits is None or kind != "pdf" else {"illuminant_limits": illuminant_limits}
+        extra = self._judging_params(judging)
+        if illuminant_limits is not None and kind == "pdf":
+            extra["illuminant_limits"] = illuminant_limits
         r = self._get(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula=formula, **extra)
         tmp = path.with_name(path.name + ".part")
         tmp.write_bytes(r.content)

@@ -47,6 +47,7 @@ from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_ill
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading, reading_from_measurement
 from station.qc.repeats import summarise
+from station.qc.spc_part import PartSpc
 from station.qc.texture import parse_texture_limits
 from station.qc.tolerance import ToleranceSet
 
@@ -218,8 +219,11 @@ class SummaryOptions:
     texture_limits: str | None = None
 
 
-def _summary(session: Session, job: str, options: SummaryOptions) -> jobs.JobSummary:
-    """The job's summary under *options*; ``keep_outliers`` without ``average_panels`` is refused (422)."""
+def _summary(
+    session: Session, job: str, options: SummaryOptions, parts: Sequence[str] | None = None
+) -> jobs.JobSummary:
+    """The job's summary under *options* (of *parts* only when given); ``keep_outliers`` without
+    ``average_panels`` is refused (422)."""
     if options.keep_outliers and not options.average_panels:
         raise InputError("keep_outliers", "true only with average_panels=true (nothing is averaged)", True)
     limits = None if options.illuminant_limits is None else parse_illuminant_limits(options.illuminant_limits)
@@ -228,6 +232,7 @@ def _summary(session: Session, job: str, options: SummaryOptions) -> jobs.JobSum
         session,
         job,
         formula=options.formula,
+        parts=parts,
         illuminant_limits=limits,
         average_panels=options.average_panels,
         keep_outliers=options.keep_outliers,
@@ -265,6 +270,27 @@ def report_csv(*, session: Session, job: str, options: SummaryOptions) -> str:
     from station.qc import report
 
     return report.csv_text(_summary(session, job, options))
+
+
+def part_spc(
+    *, session: Session, job: str, part: str, options: SummaryOptions, baseline: int | None, subgroup: int
+) -> PartSpc:
+    """The SPC of *part* of *job* judged under *options*, as ``station qc spc`` computes it
+    (:func:`station.qc.spc_part.part_spc` over the part's summary); a bad *baseline* or *subgroup* is
+    :class:`~station.qc.errors.QcInputError` naming it (422)."""
+    from station.qc import spc_part
+
+    return spc_part.part_spc(_summary(session, job, options, [part]), part, baseline, subgroup)
+
+
+def spc_png(
+    *, session: Session, job: str, part: str, options: SummaryOptions, baseline: int | None, subgroup: int
+) -> bytes:
+    """The chart of :func:`part_spc` as PNG bytes, as ``station qc spc --out`` draws it."""
+    from station.qc.spc_chart import spc_png_bytes  # matplotlib loads here, not with the service
+
+    spc = part_spc(session=session, job=job, part=part, options=options, baseline=baseline, subgroup=subgroup)
+    return spc_png_bytes(spc)
 
 
 def stored_reading(session: Session, measurement_id: int, field: str) -> Reading:
