@@ -147,6 +147,37 @@ def test_spc_xbar_r_subgroups(served: Served) -> None:
     assert chart["ucl"] == pytest.approx(float(x.mean()) + 1.880 * r_bar, abs=1e-12)  # A₂(2) = 1.880
 
 
+#: A tolerance set tighter than the default, as ``station qc tolerance --json`` writes one.
+TOLERANCE = {"formula": "cie2000", "geometries": [{"aspecular_deg": a, "de": 0.5} for a in ANGLES]}
+
+
+def test_a_tolerance_set_in_the_body(served: Served, tmp_path: Path) -> None:
+    http, auth, data = served
+    body = {"tolerance": TOLERANCE, "average_panels": True}
+    r = http.post(f"{V1}/qc/jobs/{JOB}/summary", json=body, headers=auth)
+    assert r.status_code == 200, r.text
+    out = r.json()
+    samples = out["parts"][0]["samples"]
+    de = _expected_de()
+    verdicts = ["fail" if x.max() > 0.5 else "warn" if x.max() > 0.4 else "pass" for x in de]  # warn at 80 %
+    assert [s["qc"]["verdict"] for s in samples] == verdicts and verdicts.count("fail") == 3
+    assert {g["limit"] for s in samples for g in s["qc"]["per_geometry"]} == {0.5}
+    r = http.post(f"{V1}/qc/jobs/{JOB}/spc", json={**body, "part": PART, "baseline": BASELINE}, headers=auth)
+    assert r.status_code == 200, r.text
+    spc = r.json()
+    assert {g["capability"]["usl"] for g in spc["geometries"]} == {0.5}
+    # the CLI with the same set as a file prints the same
+    tol = tmp_path / "tol.json"
+    tol.write_text(json.dumps(TOLERANCE))
+    assert _cli(data, "--tolerance", str(tol)) == spc
+    bad = {**body, "tolerance": {**TOLERANCE, "limit": 1}}
+    for path, extra in (("summary", {}), ("spc", {"part": PART})):
+        r = http.post(f"{V1}/qc/jobs/{JOB}/{path}", json={**bad, **extra}, headers=auth)
+        assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "tolerance", "limit"], r.text
+    r = http.post(f"{V1}/qc/jobs/{JOB}/summary", json={"average_panels": True}, headers=auth)
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "tolerance"], r.text
+
+
 @pytest.mark.parametrize(
     ("params", "field"),
     [

@@ -1,5 +1,5 @@
 """The QC tab in service mode judges as in local mode: panels averaged with the dirty reading left out (and
-kept on request), texture limits, and the SPC chart with its drift, each through the service's routes,
+kept on request), texture limits, a tolerance file, and the SPC chart with its drift, each through the service's routes,
 compared with the same tab reading the same database directly.
 
 Independent expectations: the dirty reading's id (the one stored 4 ΔL* off), and ΔE00 of the
@@ -8,6 +8,7 @@ hand-averaged panel means by colour-science, charted by the closed form of the i
 from __future__ import annotations
 
 import datetime as dt
+import json
 import uuid
 from pathlib import Path
 from typing import Any
@@ -134,6 +135,20 @@ def test_service_mode_judges_and_charts_as_local_mode(qtbot: Any, tmp_path: Path
             QTest.mouseClick(s.keep_outliers, Qt.MouseButton.LeftButton)
         got, want = _shown(service), _shown(local)
         assert f"measurement {dirty} kept although flagged" in got["outliers"]
+        assert got == {**want, "status": got["status"]}
+        # a tolerance file: sent as a tolerance set in the body (POST), judged as locally
+        tol = tmp_path / "tol.json"
+        geoms = [{"aspecular_deg": a, "de": 0.5} for a in ANGLES]
+        tol.write_text(json.dumps({"formula": "cie2000", "geometries": geoms}))
+        for s in (service, local):
+            s.tolerance.setText(str(tol))
+            QTest.mouseClick(s.judge_btn, Qt.MouseButton.LeftButton)
+        got, want = _shown(service), _shown(local)
+        assert "error" not in got["status"] and "error" not in got["spc_text"], (
+            got["status"],
+            got["spc_text"],
+        )
+        assert any("beyond 0.5" in row[COLUMNS.index("reason")] for row in got["table"])
         assert got == {**want, "status": got["status"]}
         client.close()
     finally:

@@ -216,20 +216,35 @@ class ServiceQc:
     def jobs(self) -> list[JobEntry]:
         return [JobEntry(j["job"], tuple(j["parts"])) for j in self._get("/qc/jobs").json()]
 
-    def _judging_params(self, judging: Judging) -> dict[str, str]:
-        """*judging* as the query of the service's summary, report and SPC routes (``average_panels``,
-        ``keep_outliers``, ``texture_limits``); a tolerance file, which those routes do not take, is
-        refused with :class:`QcSourceError` saying so, never a silently other verdict."""
-        if judging.tolerance.strip():
-            raise self._unoffered("a tolerance file")
-        out: dict[str, str] = {}
+    def _judged(
+        self, path: str, formula: str, judging: Judging, illuminant_limits: str | None = None, **chart: Any
+    ) -> Any:
+        """*path* of a job judged under *judging*: ``GET`` with the summary's query (``average_panels``,
+        ``keep_outliers``, ``texture_limits``, ``illuminant_limits``) and *chart* (SPC's ``part``,
+        ``baseline``, ``subgroup``), or, with a tolerance file, ``POST`` with those and the tolerance set
+        (as ``station qc tolerance --json`` writes it) in the body."""
+        from ui.models.service import ServiceError
+
+        options: dict[str, Any] = {"formula": formula, **{k: v for k, v in chart.items() if v is not None}}
         if judging.average_panels:
-            out["average_panels"] = "true"
+            options["average_panels"] = True
         if judging.keep_outliers:
-            out["keep_outliers"] = "true"
+            options["keep_outliers"] = True
         if judging.texture_limits.strip():
-            out["texture_limits"] = judging.texture_limits.strip()
-        return out
+            options["texture_limits"] = judging.texture_limits.strip()
+        if illuminant_limits is not None:
+            options["illuminant_limits"] = illuminant_limits
+        tolerance = judging.tolerance_set()
+        if tolerance is None:
+            query = {k: str(v).lower() if isinstance(v, bool) else str(v) for k, v in options.items()}
+            return self._get(path, **query)
+        try:
+            r = self.client.request("POST", path, json={**options, "tolerance": tolerance.to_dict()})
+        except ServiceError as exc:
+            raise QcSourceError(str(exc)) from exc
+        if r.status_code >= 400:
+            raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
+        return r
 
     def _unoffered(self, what: str) -> QcSourceError:
         return QcSourceError(
@@ -240,10 +255,9 @@ class ServiceQc:
     def summary(
         self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
     ) -> dict[str, Any]:
-        extra = self._judging_params(judging)
-        if illuminant_limits is not None:
-            extra["illuminant_limits"] = illuminant_limits
-        return self._get(f"/qc/jobs/{quote(job, safe='')}/summary", formula=formula, **extra).json()
+        return self._judged(
+            f"/qc/jobs/{quote(job, safe='')}/summary", formula, judging, illuminant_limits
+        ).json()
 
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
         from ui.models.service import ServiceError
@@ -281,11 +295,8 @@ class ServiceQc:
         """``GET /qc/jobs/{job}/spc`` judged as the table is: the service's ``station qc spc``."""
         from station.qc.spc_part import PartSpc
 
-        extra = self._judging_params(judging)
-        if baseline is not None:
-            extra["baseline"] = str(baseline)
         path = f"/qc/jobs/{quote(job, safe='')}/spc"
-        r = self._get(path, part=part, formula=formula, subgroup=str(subgroup), **extra)
+        r = self._judged(path, formula, judging, part=part, baseline=baseline, subgroup=subgroup)
         return PartSpc.from_wire(r.json())
 
     def report_preview(
@@ -302,10 +313,8 @@ class ServiceQc:
         illuminant_limits: str | None = None,
         judging: Judging = PLAIN,
     ) -> Path:
-        extra = self._judging_params(judging)
-        if illuminant_limits is not None and kind == "pdf":
-            extra["illuminant_limits"] = illuminant_limits
-        r = self._get(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula=formula, **extra)
+        limits = illuminant_limits if kind == "pdf" else None
+        r = self._judged(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula, judging, limits)
         tmp = path.with_name(path.name + ".part")
         tmp.write_bytes(r.content)
         tmp.replace(path)

@@ -23,11 +23,13 @@ from station.api.schemas.qc import (
     GlossPublic,
     JobOut,
     JobSummaryOut,
+    JudgeOptions,
     MetamerismOut,
     MetamerismRequest,
     QcMeasurement,
     RepeatsOut,
     RepeatsRequest,
+    SpcJudgeOptions,
     StandardOut,
     StandardSet,
 )
@@ -291,6 +293,72 @@ def job_spc_png(
         session=session, job=job, part=part, options=options, baseline=baseline, subgroup=subgroup
     )
     return Response(body, media_type="image/png")
+
+
+def _posted(body: JudgeOptions) -> service.SummaryOptions:
+    """The body's options as :class:`~station.api.services.qc.SummaryOptions` (tolerance set included)."""
+    return service.SummaryOptions(
+        body.formula,
+        body.illuminant_limits,
+        body.average_panels,
+        body.keep_outliers,
+        body.texture_limits,
+        body.tolerance,
+    )
+
+
+@router.post("/jobs/{job}/summary", response_model=JobSummaryOut)
+def job_summary_judged(
+    session: ReadSessionDep, _user: Reader, job: JobPath, body: JudgeOptions
+) -> JobSummaryOut:
+    """``GET /qc/jobs/{job}/summary`` with a tolerance set (``station qc summary --tolerance FILE``): the
+    options in the body, the tolerance as ``station qc tolerance --json`` writes it. Reads only."""
+    return service.job_summary(session=session, job=job, options=_posted(body))
+
+
+@router.post(
+    "/jobs/{job}/report.pdf",
+    response_class=Response,
+    responses={200: {"content": {"application/pdf": {"schema": {"type": "string", "format": "binary"}}}}},
+)
+def report_pdf_judged(session: ReadSessionDep, _user: Reader, job: JobPath, body: JudgeOptions) -> Response:
+    """``GET /qc/jobs/{job}/report.pdf`` with a tolerance set in the body."""
+    return Response(
+        service.report_pdf(session=session, job=job, options=_posted(body)),
+        media_type="application/pdf",
+        headers={"Content-Disposition": 'attachment; filename="qc-report.pdf"'},
+    )
+
+
+@router.post(
+    "/jobs/{job}/report.csv",
+    response_class=Response,
+    responses={200: {"content": {"text/csv": {"schema": {"type": "string"}}}}},
+)
+def report_csv_judged(session: ReadSessionDep, _user: Reader, job: JobPath, body: JudgeOptions) -> Response:
+    """``GET /qc/jobs/{job}/report.csv`` with a tolerance set in the body."""
+    return Response(
+        service.report_csv(session=session, job=job, options=_posted(body)),
+        media_type="text/csv",
+        headers={"Content-Disposition": 'attachment; filename="qc-report.csv"'},
+    )
+
+
+@router.post("/jobs/{job}/spc", response_model=PartSpcWire)
+def job_spc_judged(
+    session: ReadSessionDep, _user: Reader, job: JobPath, body: SpcJudgeOptions
+) -> PartSpcWire:
+    """``GET /qc/jobs/{job}/spc`` with a tolerance set (``station qc spc --tolerance FILE``): capability
+    against the set's limits; the chart's and the judging's options in the body."""
+    spc = service.part_spc(
+        session=session,
+        job=job,
+        part=body.part,
+        options=_posted(body),
+        baseline=body.baseline,
+        subgroup=body.subgroup,
+    )
+    return spc.to_dict()
 
 
 @router.post("/metamerism", response_model=MetamerismOut, responses=NOT_FOUND)

@@ -10,9 +10,9 @@ reading pairs the same way whatever page it is seen on. Everything colorimetric 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import cast
+from typing import Any, cast
 
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
@@ -209,7 +209,8 @@ class SummaryOptions:
     *formula* ``din6175-2 | cie2000 | cie94 | cie76``; *illuminant_limits* ``"A=1.0,F11=1.5"``;
     *average_panels* judges each panel once at the mean of its repeat readings, the flagged outliers left
     out unless *keep_outliers*; *texture_limits* ``"ds=1.0,dg=0.5"`` judges sparkle (ΔS) and graininess
-    (ΔG) within one vendor, in the vendor's units.
+    (ΔG) within one vendor, in the vendor's units; *tolerance* a tolerance set as ``station qc tolerance
+    --json`` writes it (``station qc summary --tolerance FILE``; the POST routes' body).
     """
 
     formula: str | None = None
@@ -217,6 +218,7 @@ class SummaryOptions:
     average_panels: bool = False
     keep_outliers: bool = False
     texture_limits: str | None = None
+    tolerance: Mapping[str, Any] | None = None
 
 
 def _summary(
@@ -228,9 +230,11 @@ def _summary(
         raise InputError("keep_outliers", "true only with average_panels=true (nothing is averaged)", True)
     limits = None if options.illuminant_limits is None else parse_illuminant_limits(options.illuminant_limits)
     texture = None if options.texture_limits is None else parse_texture_limits(options.texture_limits)
+    tolerance = None if options.tolerance is None else ToleranceSet.from_dict(options.tolerance)
     return jobs.job_summary(
         session,
         job,
+        tolerance,
         formula=options.formula,
         parts=parts,
         illuminant_limits=limits,
