@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 from simulators.faults import FaultPlan
 from simulators.repeatability import MAX_RUN_INDEX, next_run_index
-from station.drivers.families import SIM_FAMILY_NAMES, family_named
+from station.drivers.families import SIM_DRIFT_SCALE_MAX, SIM_FAMILY_NAMES, family_named
 from station.errors import InputError
 
 if TYPE_CHECKING:
@@ -33,7 +33,7 @@ KINDS = SIM_FAMILY_NAMES
 MAX_BIAS_SCALE = 10.0
 MAX_NOISE_SCALE = 100.0
 MAX_MEASURE_TIME_S = 60.0
-MAX_DRIFT_SCALE = 100.0
+MAX_DRIFT_SCALE = SIM_DRIFT_SCALE_MAX
 
 
 class SimulatorConfigError(InputError):

@@ -40,6 +40,7 @@ from station.api.settings import Settings
 from station.drivers import CalibrationResult, CommunicationError, split_address
 from station.drivers import Instrument as Driver
 from station.drivers.addresses import check_address
+from station.drivers.families import SIM_FAMILY_NAMES
 from station.drivers.readings import InstrumentInfo
 from station.drivers.simproc import SimulatorProcess
 from station.errors import InputError
@@ -139,10 +140,24 @@ class InstrumentHub:
         if self._ingestor is not None:
             self._ingestor.close()
 
+    def _simulator_args(self, address: str) -> list[str]:
+        """The simulator options of the settings for ``sim:KIND`` (none for a real address): ``--drift``
+        and ``--state FOLDER/KIND.json`` (the folder made when missing)."""
+        kind = address.strip().removeprefix("sim:")
+        if not address.strip().startswith("sim:") or kind not in SIM_FAMILY_NAMES:
+            return []  # open_device names a bad address
+        out: list[str] = []
+        if self.settings.simulator_drift is not None:
+            out += ["--drift", repr(self.settings.simulator_drift)]
+        if self.settings.simulator_state_dir is not None:
+            self.settings.simulator_state_dir.mkdir(parents=True, exist_ok=True)
+            out += ["--state", str((self.settings.simulator_state_dir / f"{kind}.json").resolve())]
+        return out
+
     def _attach(self, address: str) -> Attached:
         """Open *address* through ``station.scan.open_device`` (``sim:KIND`` starts its simulator) and
         attach it under a fresh handle; the instrument and its simulator are closed on any failure."""
-        device = scan.open_device(address, field="address")
+        device = scan.open_device(address, field="address", extra_args=self._simulator_args(address))
         try:
             info = device.instrument.identify()
         except BaseException:

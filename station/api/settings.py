@@ -9,7 +9,7 @@ from pydantic import Field, computed_field, field_validator, model_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
 from db.engine import data_dir, default_database_url
-from station.drivers.families import SIM_FAMILY_NAMES
+from station.drivers.families import SIM_DRIFT_SCALE_MAX, SIM_FAMILY_NAMES
 
 #: File name, in the data folder, of the first admin token when ``station serve``'s output is not a terminal.
 BOOTSTRAP_TOKEN_FILE = "bootstrap-token"
@@ -37,6 +37,19 @@ class Settings(BaseSettings):
     port: int = Field(8000, ge=1, le=65535)
     auto_migrate: bool = Field(True, description="apply Alembic migrations on start")
     simulators: tuple[str, ...] = Field(("ma6",), description="simulators to spawn and attach on start")
+    simulator_drift: float | None = Field(
+        None,
+        ge=0.0,
+        le=SIM_DRIFT_SCALE_MAX,
+        allow_inf_nan=False,
+        description="scale of the simulators' stated drift across runs (their --drift: 1 = stated, 0 = none); "
+        "default: theirs",
+    )
+    simulator_state_dir: Path | None = Field(
+        None,
+        description="folder of the simulators' run-state files, one per family (FAMILY.json, their --state): "
+        "each start of a simulator is its next run, so its drift grows from one service start to the next",
+    )
     max_simulators: int = Field(
         MAX_SIMULATORS_DEFAULT,
         ge=0,

@@ -22,7 +22,7 @@ def _spc(args: argparse.Namespace, load_tolerance: LoadTolerance) -> dict[str, A
     with _session(args) as s:
         summary = _summary_of(args, s, load_tolerance)
     spc = part_spc(summary, args.part, args.baseline, args.subgroup)
-    out = spc.to_dict()
+    out: dict[str, Any] = dict(spc.to_dict())
     if args.out:
         from station.qc.spc_chart import write_spc_png
 

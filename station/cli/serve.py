@@ -179,6 +179,8 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
         host=args.host,
         port=args.port,
         simulators=_parse_sims(args.simulators),
+        simulator_drift=args.drift,
+        simulator_state_dir=None if args.state is None else Path(args.state).resolve(),
         load_demo_library=not args.no_demo_library,
     )
     url = settings.effective_database_url
@@ -420,6 +422,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--simulators",
         default=None,
         help="simulators to attach, comma-separated family names (default: all; '' for none)",
+    )
+    p.add_argument(
+        "--drift",
+        type=float,
+        metavar="SCALE",
+        help="the simulators' drift across runs, scale of the stated one (1 = stated, 0 = none; "
+        "default: theirs)",
+    )
+    p.add_argument(
+        "--state",
+        metavar="DIR",
+        help="keep the simulators' run counters in DIR (FAMILY.json): each start is their next run, so "
+        "their drift grows from one start of the service to the next",
     )
     p.add_argument("--no-demo-library", action="store_true", help="do not load the demo paint library")
     p.add_argument("--log-level", default="info", choices=("critical", "error", "warning", "info", "debug"))

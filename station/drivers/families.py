@@ -22,6 +22,7 @@ from typing import Literal
 __all__ = [
     "FAMILIES",
     "FAMILY_NAMES",
+    "SIM_DRIFT_SCALE_MAX",
     "SIM_FAMILY_NAMES",
     "Family",
     "Transport",
@@ -122,6 +123,9 @@ FAMILIES: tuple[Family, ...] = (
 FAMILY_NAMES: tuple[str, ...] = tuple(f.name for f in FAMILIES)
 #: The families with a simulator (``sim:NAME``), in :data:`FAMILIES` order.
 SIM_FAMILY_NAMES: tuple[str, ...] = tuple(f.name for f in FAMILIES if f.simulator is not None)
+#: The largest scale of a simulator's stated drift across runs (``--drift``: 1 = stated, 0 = none;
+#: dimensionless), for the simulators and for ``station serve --drift`` alike.
+SIM_DRIFT_SCALE_MAX = 100.0
 
 
 def family_named(name: str) -> Family | None:

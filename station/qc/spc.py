@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from typing_extensions import TypedDict
 
 from station.model.domain import QC_SPC_SIGMAS
 from station.qc.errors import QcInputError
@@ -40,9 +41,12 @@ __all__ = [
     "D2_RANGE_OF_TWO",
     "RULES",
     "Capability",
+    "CapabilityWire",
     "Chart",
+    "ChartWire",
     "ControlLimits",
     "RuleHit",
+    "RuleHitWire",
     "capability",
     "control_limits",
     "drift_hits",
@@ -68,6 +72,46 @@ CONSTANTS: dict[int, tuple[float, float, float, float]] = {
 D2_RANGE_OF_TWO = CONSTANTS[2][1]
 
 
+class RuleHitWire(TypedDict):
+    """A run rule that fired (``RuleHit.to_dict()``): its name, meaning and the 0-based points it names."""
+
+    rule: str
+    meaning: str
+    points: list[int]
+
+
+class ChartWire(TypedDict):
+    """A control chart (``Chart.to_dict()``): ΔE (or |Δ| texture) points and lines in the points' units."""
+
+    kind: str
+    subgroup: int
+    points: list[float]
+    centre: float
+    sigma: float
+    sigma_process: float
+    lcl: float
+    ucl: float
+    baseline: int
+    hits: list[RuleHitWire]
+    ranges: list[float]
+    r_bar: float | None
+    r_lcl: float | None
+    r_ucl: float | None
+
+
+class CapabilityWire(TypedDict):
+    """Capability against the limit (``Capability.to_dict()``): USL, mean and σ in ΔE, the indices, the rule."""
+
+    usl: float
+    mean: float
+    sigma_within: float
+    sigma_overall: float
+    cp: float | None
+    cpk: float | None
+    ppk: float | None
+    rule: str
+
+
 @dataclass(frozen=True)
 class RuleHit:
     """A run rule that fired: its name, what it means, and the points (0-based) that end a qualifying run."""
@@ -76,8 +120,13 @@ class RuleHit:
     meaning: str
     points: tuple[int, ...]
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> RuleHitWire:
         return {"rule": self.rule, "meaning": self.meaning, "points": list(self.points)}
+
+    @classmethod
+    def from_wire(cls, d: RuleHitWire) -> RuleHit:
+        """The hit of its wire form (what :meth:`to_dict` returns)."""
+        return cls(d["rule"], d["meaning"], tuple(int(p) for p in d["points"]))
 
 
 def _side(z: NDArray[np.float64], k: float) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
@@ -194,7 +243,7 @@ class Chart:
         """Every point some rule names."""
         return tuple(sorted({p for h in self.hits for p in h.points}))
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> ChartWire:
         return {
             "kind": self.kind,
             "subgroup": self.subgroup,
@@ -211,6 +260,26 @@ class Chart:
             "r_lcl": self.r_lcl,
             "r_ucl": self.r_ucl,
         }
+
+    @classmethod
+    def from_wire(cls, d: ChartWire) -> Chart:
+        """The chart of its wire form (what :meth:`to_dict` returns, e.g. from the service)."""
+        return cls(
+            d["kind"],
+            tuple(map(float, d["points"])),
+            d["centre"],
+            d["sigma"],
+            d["sigma_process"],
+            d["lcl"],
+            d["ucl"],
+            d["baseline"],
+            tuple(RuleHit.from_wire(h) for h in d["hits"]),
+            d["subgroup"],
+            tuple(map(float, d["ranges"])),
+            d["r_bar"],
+            d["r_lcl"],
+            d["r_ucl"],
+        )
 
 
 def _values(values: Sequence[float], field: str, least: int) -> NDArray[np.float64]:
@@ -314,7 +383,7 @@ class Capability:
     cpk: float | None
     ppk: float | None
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> CapabilityWire:
         return {
             "usl": self.usl,
             "mean": self.mean,
@@ -325,6 +394,11 @@ class Capability:
             "ppk": self.ppk,
             "rule": "one-sided: Cp = USL / 6σ, Cpk = (USL − mean) / 3σ (σ within), Ppk with σ overall",
         }
+
+    @classmethod
+    def from_wire(cls, d: CapabilityWire) -> Capability:
+        """The capability of its wire form (what :meth:`to_dict` returns)."""
+        return cls(d["usl"], d["mean"], d["sigma_within"], d["sigma_overall"], d["cp"], d["cpk"], d["ppk"])
 
 
 def capability(values: Sequence[float], usl: float, sigma_within: float) -> Capability:

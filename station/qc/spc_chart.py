@@ -8,6 +8,7 @@ arrow at the point that flagged it. Used by ``station qc spc --out`` and the rep
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import matplotlib
@@ -21,7 +22,7 @@ from matplotlib.ticker import MaxNLocator
 from station.qc.errors import QcInputError
 from station.qc.spc_part import GeometrySpc, PartSpc
 
-__all__ = ["draw_spc", "write_spc_png"]
+__all__ = ["draw_spc", "spc_png_bytes", "write_spc_png"]
 
 
 def _panel(ax: Axes, g: GeometrySpc, subgroup: int) -> None:
@@ -96,14 +97,23 @@ def draw_spc(fig: Figure, spc: PartSpc) -> None:
     )
 
 
+def spc_png_bytes(spc: PartSpc, dpi: int = 110) -> bytes:
+    """The SPC chart of *spc* as PNG bytes (module docstring): 10 in wide, 2.4 in per chart, *dpi* dots per inch."""
+    n = len(spc.geometries) + len(spc.texture)
+    fig = plt.figure(figsize=(10, 2.4 * max(1, n) + 0.8), constrained_layout=True)
+    try:
+        draw_spc(fig, spc)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=dpi)
+    finally:
+        plt.close(fig)
+    return buf.getvalue()
+
+
 def write_spc_png(spc: PartSpc, path: str | Path, dpi: int = 110) -> Path:
-    """The SPC chart of *spc* as a PNG at *path* (a file in an existing folder)."""
+    """The SPC chart of *spc* (:func:`spc_png_bytes`) as a PNG at *path* (a file in an existing folder)."""
     out = Path(path)
     if out.suffix.lower() != ".png" or not out.parent.is_dir():
         raise QcInputError("out", "a .png file in an existing folder", str(out))
-    n = len(spc.geometries) + len(spc.texture)
-    fig = plt.figure(figsize=(10, 2.4 * max(1, n) + 0.8), constrained_layout=True)
-    draw_spc(fig, spc)
-    fig.savefig(out, dpi=dpi)
-    plt.close(fig)
+    out.write_bytes(spc_png_bytes(spc, dpi))
     return out

@@ -19,15 +19,19 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+
+from typing_extensions import TypedDict
 
 from station.qc.errors import QcInputError
 from station.qc.jobs import JobSummary, PartSummary, SampleResult
 from station.qc.spc import (
     CONSTANTS,
     Capability,
+    CapabilityWire,
     Chart,
+    ChartWire,
     RuleHit,
+    RuleHitWire,
     capability,
     drift_hits,
     individuals_chart,
@@ -35,7 +39,37 @@ from station.qc.spc import (
 )
 from station.qc.texture import TextureRow
 
-__all__ = ["GeometrySpc", "PartSpc", "part_spc", "sample_name"]
+__all__ = ["GeometrySpc", "GeometrySpcWire", "PartSpc", "PartSpcWire", "part_spc", "sample_name"]
+
+
+class GeometrySpcWire(TypedDict):
+    """One chart of a part's SPC (``GeometrySpc.to_dict()``): what is charted, the chart, capability against
+    the limit (``null`` without one), the drift hits and the first failing point (0-based; ``null``: none)."""
+
+    geometry: str
+    quantity: str
+    vendor: str
+    chart: ChartWire
+    capability: CapabilityWire | None
+    drift: list[RuleHitWire]
+    first_fail: int | None
+    drift_before_fail: bool
+
+
+class PartSpcWire(TypedDict):
+    """The SPC of a part (``PartSpc.to_dict()``, what ``station qc spc --json`` prints and the service
+    answers): its samples in chart order, the baseline (points or subgroups; ``"all points"``), the chart
+    kind, a chart per geometry and per texture quantity, and the drift in words."""
+
+    job: str
+    part: str
+    samples: int
+    sample_names: list[str]
+    baseline: int | str
+    chart: str
+    geometries: list[GeometrySpcWire]
+    texture: list[GeometrySpcWire]
+    drift: list[str]
 
 
 def sample_name(s: SampleResult) -> str:
@@ -76,7 +110,7 @@ class GeometrySpc:
         first = min((p for h in self.drift for p in h.points), default=None)
         return first is not None and (self.first_fail is None or first < self.first_fail)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> GeometrySpcWire:
         return {
             "geometry": self.geometry,
             "quantity": self.quantity,
@@ -87,6 +121,20 @@ class GeometrySpc:
             "first_fail": self.first_fail,
             "drift_before_fail": self.drift_before_fail,
         }
+
+    @classmethod
+    def from_wire(cls, d: GeometrySpcWire) -> GeometrySpc:
+        """The chart of its wire form (what :meth:`to_dict` returns, e.g. from the service)."""
+        cap = d["capability"]
+        return cls(
+            d["geometry"],
+            Chart.from_wire(d["chart"]),
+            None if cap is None else Capability.from_wire(cap),
+            tuple(RuleHit.from_wire(h) for h in d["drift"]),
+            d["first_fail"],
+            d["quantity"],
+            d["vendor"],
+        )
 
 
 @dataclass(frozen=True)
@@ -122,7 +170,7 @@ class PartSpc:
             out.append(f"{g.label}: drift from sample #{at + 1} ({self.samples[at]}) by {rules}; {fail}")
         return out
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> PartSpcWire:
         return {
             "job": self.job,
             "part": self.part,
@@ -134,6 +182,23 @@ class PartSpc:
             "texture": [g.to_dict() for g in self.texture],
             "drift": self.drift_lines(),
         }
+
+    @classmethod
+    def from_wire(cls, d: PartSpcWire) -> PartSpc:
+        """The SPC of its wire form (what :meth:`to_dict` returns: the service's ``GET /qc/jobs/{job}/spc``);
+        the subgroup size is that of the charts (1 without any)."""
+        charts = [*d["geometries"], *d["texture"]]
+        subgroup = charts[0]["chart"]["subgroup"] if charts else 1
+        baseline = d["baseline"] if isinstance(d["baseline"], int) else None
+        return cls(
+            d["job"],
+            d["part"],
+            tuple(d["sample_names"]),
+            baseline,
+            subgroup,
+            tuple(GeometrySpc.from_wire(g) for g in d["geometries"]),
+            tuple(GeometrySpc.from_wire(g) for g in d["texture"]),
+        )
 
 
 def _part(summary: JobSummary, part: str) -> PartSummary:

@@ -1,5 +1,5 @@
 """The QC screen's judging options and SPC helpers without a display: bad input names its field, the
-service refuses what its routes do not offer (never a silently other verdict), the SPC table's
+service refuses what it does not offer, the report preview (never a silently other verdict); the SPC table's
 numbers and the sample numbers of its rule hits."""
 
 from __future__ import annotations
@@ -36,17 +36,15 @@ def test_a_tolerance_file_is_read_and_a_bad_one_is_named(tmp_path):
     assert Judging(texture_limits="ds=1, dg=0.5").texture_tolerance().dg == 0.5  # type: ignore[union-attr]
 
 
-def test_the_service_refuses_averaging_and_the_spc_with_a_message():
+def test_the_service_refuses_the_report_preview_with_a_message():
     client = ServiceClient("http://127.0.0.1:9")  # nothing answers there: a request would fail differently
     model = QcModel(ServiceQc(client))
     try:
-        with pytest.raises(QcSourceError, match="workstation's database only"):
-            model.judge("J-1", "cie2000", "", Judging(average_panels=True))
         model.summary_key = ("J-1", "cie2000")
         with pytest.raises(
-            QcSourceError, match="the SPC chart: available with the workstation's database only"
+            QcSourceError, match="the report preview: available with the workstation's database"
         ):
-            model.spc("door")
+            model.report_preview()
     finally:
         client.close()
 

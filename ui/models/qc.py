@@ -216,11 +216,35 @@ class ServiceQc:
     def jobs(self) -> list[JobEntry]:
         return [JobEntry(j["job"], tuple(j["parts"])) for j in self._get("/qc/jobs").json()]
 
-    def _local_only(self, judging: Judging) -> None:
-        """Refuse what the service's summary and report routes do not take (panel averaging, a
-        tolerance file, texture limits): :class:`QcSourceError` saying so, never a silently other verdict."""
-        if not judging.is_default:
-            raise self._unoffered("panel averaging, a tolerance file or texture limits")
+    def _judged(
+        self, path: str, formula: str, judging: Judging, illuminant_limits: str | None = None, **chart: Any
+    ) -> Any:
+        """*path* of a job judged under *judging*: ``GET`` with the summary's query (``average_panels``,
+        ``keep_outliers``, ``texture_limits``, ``illuminant_limits``) and *chart* (SPC's ``part``,
+        ``baseline``, ``subgroup``), or, with a tolerance file, ``POST`` with those and the tolerance set
+        (as ``station qc tolerance --json`` writes it) in the body."""
+        from ui.models.service import ServiceError
+
+        options: dict[str, Any] = {"formula": formula, **{k: v for k, v in chart.items() if v is not None}}
+        if judging.average_panels:
+            options["average_panels"] = True
+        if judging.keep_outliers:
+            options["keep_outliers"] = True
+        if judging.texture_limits.strip():
+            options["texture_limits"] = judging.texture_limits.strip()
+        if illuminant_limits is not None:
+            options["illuminant_limits"] = illuminant_limits
+        tolerance = judging.tolerance_set()
+        if tolerance is None:
+            query = {k: str(v).lower() if isinstance(v, bool) else str(v) for k, v in options.items()}
+            return self._get(path, **query)
+        try:
+            r = self.client.request("POST", path, json={**options, "tolerance": tolerance.to_dict()})
+        except ServiceError as exc:
+            raise QcSourceError(str(exc)) from exc
+        if r.status_code >= 400:
+            raise QcSourceError(f"{self.where}: {r.status_code} {r.text[:300]}")
+        return r
 
     def _unoffered(self, what: str) -> QcSourceError:
         return QcSourceError(
@@ -231,9 +255,9 @@ class ServiceQc:
     def summary(
         self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
     ) -> dict[str, Any]:
-        self._local_only(judging)
-        extra = {} if illuminant_limits is None else {"illuminant_limits": illuminant_limits}
-        return self._get(f"/qc/jobs/{quote(job, safe='')}/summary", formula=formula, **extra).json()
+        return self._judged(
+            f"/qc/jobs/{quote(job, safe='')}/summary", formula, judging, illuminant_limits
+        ).json()
 
     def metamerism(self, standard_id: int, sample_id: int, formula: str) -> dict[str, Any]:
         from ui.models.service import ServiceError
@@ -268,7 +292,12 @@ class ServiceQc:
     def spc(
         self, job: str, part: str, formula: str, judging: Judging, baseline: int | None, subgroup: int
     ) -> PartSpc:
-        raise self._unoffered("the SPC chart")
+        """``GET /qc/jobs/{job}/spc`` judged as the table is: the service's ``station qc spc``."""
+        from station.qc.spc_part import PartSpc
+
+        path = f"/qc/jobs/{quote(job, safe='')}/spc"
+        r = self._judged(path, formula, judging, part=part, baseline=baseline, subgroup=subgroup)
+        return PartSpc.from_wire(r.json())
 
     def report_preview(
         self, job: str, formula: str, illuminant_limits: str | None = None, judging: Judging = PLAIN
@@ -284,9 +313,8 @@ class ServiceQc:
         illuminant_limits: str | None = None,
         judging: Judging = PLAIN,
     ) -> Path:
-        self._local_only(judging)
-        extra = {} if illuminant_limits is None or kind != "pdf" else {"illuminant_limits": illuminant_limits}
-        r = self._get(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula=formula, **extra)
+        limits = illuminant_limits if kind == "pdf" else None
+        r = self._judged(f"/qc/jobs/{quote(job, safe='')}/report.{kind}", formula, judging, limits)
         tmp = path.with_name(path.name + ".part")
         tmp.write_bytes(r.content)
         tmp.replace(path)

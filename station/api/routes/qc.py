@@ -23,17 +23,20 @@ from station.api.schemas.qc import (
     GlossPublic,
     JobOut,
     JobSummaryOut,
+    JudgeOptions,
     MetamerismOut,
     MetamerismRequest,
     QcMeasurement,
     RepeatsOut,
     RepeatsRequest,
+    SpcJudgeOptions,
     StandardOut,
     StandardSet,
 )
 from station.api.security import Scope
 from station.api.services import qc as service
 from station.ingest import GlossRecord
+from station.qc.spc_part import PartSpcWire
 
 router = APIRouter(prefix="/qc", tags=["qc"], responses=ERROR_RESPONSES)
 Reader = Annotated[User, scoped(Scope.MEASUREMENTS_READ)]
@@ -237,6 +240,125 @@ def report_csv(session: ReadSessionDep, _user: Reader, job: JobPath, options: Op
         media_type="text/csv",
         headers={"Content-Disposition": 'attachment; filename="qc-report.csv"'},
     )
+
+
+def spc_options(
+    part: Annotated[Part, Query(description="the part whose samples are charted (oldest first)")],
+    baseline: Annotated[
+        int | None,
+        Query(
+            description="points (subgroups with subgroup > 1) that set the centre and control limits, from 2 "
+            "to their number (default: all)"
+        ),
+    ] = None,
+    subgroup: Annotated[
+        int, Query(description="1: individuals chart (default); 2 … 10: X̄/R chart of consecutive subgroups")
+    ] = 1,
+) -> tuple[str, int | None, int]:
+    """The chart's query (``station qc spc``'s ``--part``, ``--baseline``, ``--subgroup``); ranges are
+    judged by ``station.qc.spc_part.part_spc`` (422 naming ``baseline`` or ``subgroup``)."""
+    return part, baseline, subgroup
+
+
+SpcChoice = Annotated[tuple[str, int | None, int], Depends(spc_options)]
+
+
+@router.get("/jobs/{job}/spc", response_model=PartSpcWire)
+def job_spc(
+    session: ReadSessionDep, _user: Reader, job: JobPath, chart: SpcChoice, options: Options
+) -> PartSpcWire:
+    """``station qc spc``: per geometry (and per texture quantity with ``texture_limits``) the part's ΔE
+    control chart (individuals or X̄/R) with its Western Electric and Nelson rule hits, Cp/Cpk against the
+    limit each sample was judged with, and the drift flagged with whether it came before the first fail;
+    the samples judged as the summary judges them under the same options."""
+    part, baseline, subgroup = chart
+    spc = service.part_spc(
+        session=session, job=job, part=part, options=options, baseline=baseline, subgroup=subgroup
+    )
+    return spc.to_dict()
+
+
+@router.get(
+    "/jobs/{job}/spc.png",
+    response_class=Response,
+    responses={200: {"content": {"image/png": {"schema": {"type": "string", "format": "binary"}}}}},
+)
+def job_spc_png(
+    session: ReadSessionDep, _user: Reader, job: JobPath, chart: SpcChoice, options: Options
+) -> Response:
+    """The SPC chart of ``GET /qc/jobs/{job}/spc`` as ``station qc spc --out`` draws it: a panel per chart with
+    centre, control limits, the baseline shaded, the limit with Cpk, each rule hit ringed and the drift marked."""
+    part, baseline, subgroup = chart
+    body = service.spc_png(
+        session=session, job=job, part=part, options=options, baseline=baseline, subgroup=subgroup
+    )
+    return Response(body, media_type="image/png")
+
+
+def _posted(body: JudgeOptions) -> service.SummaryOptions:
+    """The body's options as :class:`~station.api.services.qc.SummaryOptions` (tolerance set included)."""
+    return service.SummaryOptions(
+        body.formula,
+        body.illuminant_limits,
+        body.average_panels,
+        body.keep_outliers,
+        body.texture_limits,
+        body.tolerance,
+    )
+
+
+@router.post("/jobs/{job}/summary", response_model=JobSummaryOut)
+def job_summary_judged(
+    session: ReadSessionDep, _user: Reader, job: JobPath, body: JudgeOptions
+) -> JobSummaryOut:
+    """``GET /qc/jobs/{job}/summary`` with a tolerance set (``station qc summary --tolerance FILE``): the
+    options in the body, the tolerance as ``station qc tolerance --json`` writes it. Reads only."""
+    return service.job_summary(session=session, job=job, options=_posted(body))
+
+
+@router.post(
+    "/jobs/{job}/report.pdf",
+    response_class=Response,
+    responses={200: {"content": {"application/pdf": {"schema": {"type": "string", "format": "binary"}}}}},
+)
+def report_pdf_judged(session: ReadSessionDep, _user: Reader, job: JobPath, body: JudgeOptions) -> Response:
+    """``GET /qc/jobs/{job}/report.pdf`` with a tolerance set in the body."""
+    return Response(
+        service.report_pdf(session=session, job=job, options=_posted(body)),
+        media_type="application/pdf",
+        headers={"Content-Disposition": 'attachment; filename="qc-report.pdf"'},
+    )
+
+
+@router.post(
+    "/jobs/{job}/report.csv",
+    response_class=Response,
+    responses={200: {"content": {"text/csv": {"schema": {"type": "string"}}}}},
+)
+def report_csv_judged(session: ReadSessionDep, _user: Reader, job: JobPath, body: JudgeOptions) -> Response:
+    """``GET /qc/jobs/{job}/report.csv`` with a tolerance set in the body."""
+    return Response(
+        service.report_csv(session=session, job=job, options=_posted(body)),
+        media_type="text/csv",
+        headers={"Content-Disposition": 'attachment; filename="qc-report.csv"'},
+    )
+
+
+@router.post("/jobs/{job}/spc", response_model=PartSpcWire)
+def job_spc_judged(
+    session: ReadSessionDep, _user: Reader, job: JobPath, body: SpcJudgeOptions
+) -> PartSpcWire:
+    """``GET /qc/jobs/{job}/spc`` with a tolerance set (``station qc spc --tolerance FILE``): capability
+    against the set's limits; the chart's and the judging's options in the body."""
+    spc = service.part_spc(
+        session=session,
+        job=job,
+        part=body.part,
+        options=_posted(body),
+        baseline=body.baseline,
+        subgroup=body.subgroup,
+    )
+    return spc.to_dict()
 
 
 @router.post("/metamerism", response_model=MetamerismOut, responses=NOT_FOUND)

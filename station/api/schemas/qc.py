@@ -200,6 +200,52 @@ PartSummaryOut = PartSummaryWire[SampleVerdict]
 JobSummaryOut = JobSummaryWire[PartSummaryOut]
 
 
+class JudgeOptions(BaseModel):
+    """How a job is judged, as a body: the summary's query options (``GET /qc/jobs/{job}/summary``) and a
+    ``tolerance`` set as ``station qc tolerance --json`` writes it (``station qc summary --tolerance``)."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "tolerance": {"formula": "cie2000", "geometries": [{"geometry": "45as45", "de": 0.6}]},
+                    "average_panels": True,
+                }
+            ]
+        },
+    )
+
+    tolerance: dict[str, Any]
+    formula: Annotated[str, Field(min_length=1, max_length=32)] | None = None
+    illuminant_limits: Annotated[str, Field(min_length=1, max_length=200)] | None = None
+    average_panels: Annotated[bool, Field(strict=True)] = False
+    keep_outliers: Annotated[bool, Field(strict=True)] = False
+    texture_limits: Annotated[str, Field(min_length=1, max_length=64)] | None = None
+
+
+class SpcJudgeOptions(JudgeOptions):
+    """The SPC's chart (``part``, ``baseline``, ``subgroup`` as ``GET /qc/jobs/{job}/spc`` takes them)
+    with how the job is judged, tolerance set included."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "part": "fender",
+                    "baseline": 6,
+                    "tolerance": {"formula": "cie2000", "geometries": [{"geometry": "45as45", "de": 0.6}]},
+                }
+            ]
+        },
+    )
+
+    part: Annotated[str, Field(min_length=1, max_length=64)]
+    baseline: StrictInt | None = None
+    subgroup: StrictInt = 1
+
+
 class MetamerismRequest(BaseModel):
     """Two stored measurements with spectra (400–700 nm, 10 nm): the standard and the sample."""
 

@@ -10,9 +10,9 @@ reading pairs the same way whatever page it is seen on. Everything colorimetric 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import cast
+from typing import Any, cast
 
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
@@ -47,6 +47,7 @@ from station.qc.illuminant_rows import PairVerdict, check_illuminants, parse_ill
 from station.qc.metamerism import metamerism
 from station.qc.readings import Reading, reading_from_measurement
 from station.qc.repeats import summarise
+from station.qc.spc_part import PartSpc
 from station.qc.texture import parse_texture_limits
 from station.qc.tolerance import ToleranceSet
 
@@ -208,7 +209,8 @@ class SummaryOptions:
     *formula* ``din6175-2 | cie2000 | cie94 | cie76``; *illuminant_limits* ``"A=1.0,F11=1.5"``;
     *average_panels* judges each panel once at the mean of its repeat readings, the flagged outliers left
     out unless *keep_outliers*; *texture_limits* ``"ds=1.0,dg=0.5"`` judges sparkle (ΔS) and graininess
-    (ΔG) within one vendor, in the vendor's units.
+    (ΔG) within one vendor, in the vendor's units; *tolerance* a tolerance set as ``station qc tolerance
+    --json`` writes it (``station qc summary --tolerance FILE``; the POST routes' body).
     """
 
     formula: str | None = None
@@ -216,18 +218,25 @@ class SummaryOptions:
     average_panels: bool = False
     keep_outliers: bool = False
     texture_limits: str | None = None
+    tolerance: Mapping[str, Any] | None = None
 
 
-def _summary(session: Session, job: str, options: SummaryOptions) -> jobs.JobSummary:
-    """The job's summary under *options*; ``keep_outliers`` without ``average_panels`` is refused (422)."""
+def _summary(
+    session: Session, job: str, options: SummaryOptions, parts: Sequence[str] | None = None
+) -> jobs.JobSummary:
+    """The job's summary under *options* (of *parts* only when given); ``keep_outliers`` without
+    ``average_panels`` is refused (422)."""
     if options.keep_outliers and not options.average_panels:
         raise InputError("keep_outliers", "true only with average_panels=true (nothing is averaged)", True)
     limits = None if options.illuminant_limits is None else parse_illuminant_limits(options.illuminant_limits)
     texture = None if options.texture_limits is None else parse_texture_limits(options.texture_limits)
+    tolerance = None if options.tolerance is None else ToleranceSet.from_dict(options.tolerance)
     return jobs.job_summary(
         session,
         job,
+        tolerance,
         formula=options.formula,
+        parts=parts,
         illuminant_limits=limits,
         average_panels=options.average_panels,
         keep_outliers=options.keep_outliers,
@@ -265,6 +274,27 @@ def report_csv(*, session: Session, job: str, options: SummaryOptions) -> str:
     from station.qc import report
 
     return report.csv_text(_summary(session, job, options))
+
+
+def part_spc(
+    *, session: Session, job: str, part: str, options: SummaryOptions, baseline: int | None, subgroup: int
+) -> PartSpc:
+    """The SPC of *part* of *job* judged under *options*, as ``station qc spc`` computes it
+    (:func:`station.qc.spc_part.part_spc` over the part's summary); a bad *baseline* or *subgroup* is
+    :class:`~station.qc.errors.QcInputError` naming it (422)."""
+    from station.qc import spc_part
+
+    return spc_part.part_spc(_summary(session, job, options, [part]), part, baseline, subgroup)
+
+
+def spc_png(
+    *, session: Session, job: str, part: str, options: SummaryOptions, baseline: int | None, subgroup: int
+) -> bytes:
+    """The chart of :func:`part_spc` as PNG bytes, as ``station qc spc --out`` draws it."""
+    from station.qc.spc_chart import spc_png_bytes  # matplotlib loads here, not with the service
+
+    spc = part_spc(session=session, job=job, part=part, options=options, baseline=baseline, subgroup=subgroup)
+    return spc_png_bytes(spc)
 
 
 def stored_reading(session: Session, measurement_id: int, field: str) -> Reading:
