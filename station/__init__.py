@@ -6,3 +6,9 @@ thin fronts over the same functions.
 """
 
 __version__ = "0.1.0"
+
+from station.lazy import defer_submodule
+
+# colour-science imports its plotting package (and Matplotlib's pyplot) on import; no command needs it
+# at start-up, so it is loaded on first use instead (about a third of colour-science's import time).
+defer_submodule("colour.plotting")

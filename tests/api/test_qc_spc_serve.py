@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import datetime as dt
 import json
-import subprocess
 import sys
 import uuid
 from collections.abc import Iterator
@@ -25,6 +24,7 @@ import pytest
 
 from db.engine import default_database_url
 from station.model.domain import QC_DE_LIMIT
+from tests.processes import run
 from tests.serve_process import serve_env, serving
 
 REPO = Path(__file__).resolve().parents[2]
@@ -95,7 +95,7 @@ def _cli(data: Path, *extra: str) -> dict[str, Any]:
     cmd = [sys.executable, "-m", "station.cli", "qc", "spc", "--job", JOB, "--part", PART]
     cmd += ["--formula", "cie2000", "--average-panels", "--baseline", str(BASELINE), "--json"]
     cmd += ["--db", default_database_url(data), *extra]
-    done = subprocess.run(cmd, cwd=REPO, env=serve_env(), capture_output=True, text=True, timeout=120)
+    done = run(cmd, cwd=REPO, env=serve_env(), timeout=120)
     assert done.returncode == 0, done.stderr
     out: dict[str, Any] = json.loads(done.stdout)
     return out

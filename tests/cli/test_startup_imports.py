@@ -28,7 +28,8 @@ for argv in commands:
     except SystemExit:
         pass
 ours = {{"station", "__main__", "__editable___cacad_station_0_1_0_finder", "_distutils_hack"}}
-top = {{m.split(".")[0] for m in sys.modules}}
+# a library submodule the product defers (station.lazy.defer_submodule) is a stand-in, not an import
+top = {{m.split(".")[0] for m, mod in sys.modules.items() if type(mod).__name__ != "_DeferredSubmodule"}}
 foreign = sorted(t for t in top if t not in sys.stdlib_module_names and t not in ours and not t.startswith("_"))
 print(json.dumps(foreign), file=sys.stderr)
 """
