@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -79,3 +81,41 @@ def test_an_offset_the_sprayed_colorants_cannot_cancel_is_a_remake_with_other_co
     assert job.steps[-1].mean_de == pytest.approx(
         float(np.mean(cie2000(design, np.array(job.steps[-1].measured_lab))))
     )
+
+
+@pytest.mark.parametrize("resolution_g", [5.0, 25.0])
+def test_rounded_additions_keep_the_effect_limit_and_never_take_back_binder(
+    resolution_g: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import station.formulate.tinting as tinting
+
+    fits: list[Any] = []
+    fit = tinting.least_squares
+
+    def spy(*args: Any, **kwargs: Any) -> Any:
+        fits.append(fit(*args, **kwargs))
+        return fits[-1]
+
+    monkeypatch.setattr(tinting, "least_squares", spy)
+    # a batch at its flake limit (0.15 + 0.10 = max_effect) and a target that wants more flake
+    recipe = {"white_tio2": 0.05, "blue_pb": 0.03, "alu_bright": 0.15, "pearl_white": 0.10}
+    c = DB.vector(recipe)
+    assert c[DB.effect_mask].sum() == pytest.approx(DB.max_effect)
+    masses = c * 1000.0
+    binder = 1000.0 - masses.sum()
+    target = predict_lab(DB.vector({**recipe, "alu_bright": 0.17, "pearl_white": 0.12}), A3)
+    t = tint(masses, binder, target, A3, DB, resolution_g, 1000.0)
+    after = t.concentrations
+    # every bound of the colorant database holds after rounding (DB.check raises otherwise)
+    DB.check(after)
+    assert after[DB.effect_mask].sum() <= DB.max_effect + 1e-12
+    assert t.masses_g.sum() + t.binder_g <= MAX_GROWTH * 1000.0 + 1e-6
+    # the binder is the fit's, rounded to the scale: never the one taken back
+    total = masses.sum() + binder
+    fit_binder = fits[-1].x[-1] * total
+    assert t.tinting.binder_g == pytest.approx(np.round(fit_binder / resolution_g) * resolution_g)
+    assert t.tinting.binder_g > 0
+    # flake is still added (a take-back stops at the bound, it does not strip the correction)
+    assert t.tinting.additions_g.get("alu_bright", 0.0) > 0
+    for g in t.tinting.additions_g.values():
+        assert g / resolution_g == pytest.approx(round(g / resolution_g))
