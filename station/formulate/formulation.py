@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.formulate.batch import DEFAULT_BATCH_G, batch_masses
+from station.formulate.batch import DEFAULT_BATCH_G, MAX_BATCH_G, batch_masses
 from station.formulate.colorants import (
     GLOSS_CLEAR_GU,
     GLOSS_PER_MATTING,
@@ -101,22 +101,31 @@ class FormulationOptions:
     max_starts: int = MAX_STARTS
 
 
+def _is_integer(value: object) -> bool:
+    """True for an int that is not a bool (``True`` is an int to Python, not a count to a chemist)."""
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 def formulation_options(o: FormulationOptions) -> FormulationOptions:
     """*o*, each field checked (a :class:`FormulateInputError` naming the field and its accepted range)."""
     lo, hi = MAX_COLORANTS_RANGE
-    if not isinstance(o.max_colorants, int) or not lo <= o.max_colorants <= hi:
+    if not _is_integer(o.max_colorants) or not lo <= o.max_colorants <= hi:
         raise FormulateInputError("max_colorants", f"an integer in [{lo}, {hi}]", o.max_colorants)
     lo_r, hi_r = SCALE_RESOLUTION_RANGE_G
     if not (np.isfinite(o.scale_resolution_g) and lo_r <= o.scale_resolution_g <= hi_r):
         raise FormulateInputError(
             "scale_resolution_g", f"{lo_r:g} <= scale_resolution_g <= {hi_r:g} g", o.scale_resolution_g
         )
-    if not (np.isfinite(o.batch_g) and 0 < o.batch_g <= 1e6 and o.batch_g >= 10 * o.scale_resolution_g):
-        raise FormulateInputError("batch_g", "10 × the scale resolution <= batch_g <= 1e6 g", o.batch_g)
+    if not (
+        np.isfinite(o.batch_g) and 0 < o.batch_g <= MAX_BATCH_G and o.batch_g >= 10 * o.scale_resolution_g
+    ):
+        raise FormulateInputError(
+            "batch_g", f"10 × the scale resolution <= batch_g <= {MAX_BATCH_G:g} g", o.batch_g
+        )
     lo, hi = RECIPE_COUNT_RANGE
-    if not isinstance(o.recipes, int) or not lo <= o.recipes <= hi:
+    if not _is_integer(o.recipes) or not lo <= o.recipes <= hi:
         raise FormulateInputError("recipes", f"an integer in [{lo}, {hi}]", o.recipes)
-    if not isinstance(o.max_starts, int) or not 1 <= o.max_starts <= 50:
+    if not _is_integer(o.max_starts) or not 1 <= o.max_starts <= 50:
         raise FormulateInputError("max_starts", "an integer in [1, 50]", o.max_starts)
     if o.line is not None:
         toner_line(o.line)
