@@ -11,6 +11,7 @@ from station.formulate.batch import MAX_GROWTH
 from station.formulate.closed_loop import closed_loop
 from station.formulate.colorants import default_database, predict_lab
 from station.formulate.de_kernels import cie2000
+from station.formulate.lines import toner_line
 from station.formulate.tinting import tint
 from station.model import AspecularMeasurements
 
@@ -119,3 +120,40 @@ def test_rounded_additions_keep_the_effect_limit_and_never_take_back_binder(
     assert t.tinting.additions_g.get("alu_bright", 0.0) > 0
     for g in t.tinting.additions_g.values():
         assert g / resolution_g == pytest.approx(round(g / resolution_g))
+
+
+def test_a_remake_after_tinting_stays_with_the_line_sprayed(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A solid is sprayed from the solid line and tinted once; the tinted panel then reads with an
+    angle-dependent offset, so the corrected target looks like an effect paint. The remake must be
+    formulated from the toner line in the can (solid), not inferred again from the target."""
+    import importlib
+
+    loop = importlib.import_module("station.formulate.closed_loop")
+    lines_used: list[str] = []
+    formulate_with = loop.formulate_with
+
+    def spy(*args: Any, **kwargs: Any) -> Any:
+        result = formulate_with(*args, **kwargs)
+        lines_used.append(result.line)
+        return result
+
+    monkeypatch.setattr(loop, "formulate_with", spy)
+    recipe = {"white_tio2": 0.2, "red_pr": 0.03, "yellow_py": 0.02}
+    design = predict_lab(DB.vector(recipe), A3)
+    flop = np.column_stack([15.0 * np.cos(np.radians(A3)) - 4.5, np.zeros(3), np.zeros(3)])
+    sprayed: list[dict[str, float]] = []
+
+    def measure(r: dict[str, float]) -> AspecularMeasurements:
+        sprayed.append(r)
+        offset = np.array([-1.5, 0.0, 0.0]) if len(sprayed) == 1 else flop  # then 15° light, 110° dark
+        return AspecularMeasurements(A3, predict_lab(DB.vector(r), A3) + offset, 90.0)
+
+    job = closed_loop(design, measure, starts=[("start", recipe)], max_corrections=2)
+    kinds = [(s.additions.remake if s.additions else None) for s in job.steps]
+    assert kinds[:2] == [None, False] and True in kinds[2:], kinds  # tinted, then remade
+    assert job.initial is not None and job.initial.line == "solid"
+    # every recipe the loop formulated (the initial one and each remake) is drawn from the solid line
+    assert lines_used and set(lines_used) == {"solid"}, lines_used
+    solid = set(toner_line("solid").families)
+    for step in job.steps:
+        assert {DB.colorants[DB.names.index(n)].family for n in step.recipe} <= solid | {"matting"}
