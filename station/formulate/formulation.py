@@ -51,6 +51,7 @@ from station.formulate.lines import lines_for_design, toner_line
 from station.formulate.selection import (
     MAX_SUBSETS,
     REFINED,
+    SCREEN_COARSE_EVALUATIONS,
     RecipeOption,
     eliminate,
     fit_subset,
@@ -343,7 +344,6 @@ def _fit_line(
     step = opts.scale_resolution_g / opts.batch_g
     spec_base = (opts.batch_g, opts.scale_resolution_g, tolerance, line)
     evaluations = obj.evaluations
-    fitted: list[tuple[float, int, NDArray[np.float64], Objective, str]] = []
     proposals: list[tuple[tuple[int, ...], NDArray[np.float64], str]] = []
     for label, _, point in tried[:ELIMINATED_POINTS]:
         for sub, x0 in eliminate(prob, point, opts.max_colorants):
@@ -358,6 +358,32 @@ def _fit_line(
         if all(sub != s for s, _, _ in proposals):
             k = int(np.argmax([p[list(sub)].sum() for p in points]))
             proposals.append((sub, points[k], tried[k][0]))
+    options, evaluations = _fit_proposals(prob, proposals, good_enough, step, spec_base, evaluations)
+    if not any(o.mean_de <= tolerance for o in options):  # a miss: screen a wider pool of the line
+        wider = [
+            (sub, x0, tried[0][0])
+            for sub, x0 in screen(
+                prob, points[0], opts.max_colorants, coarse_evaluations=SCREEN_COARSE_EVALUATIONS
+            )
+            if all(sub != s for s, _, _ in proposals)
+        ]
+        more, evaluations = _fit_proposals(prob, wider, good_enough, step, spec_base, evaluations)
+        options += more
+    return _LineFit(options, [(lb, prob.full(x)) for lb, _, x in tried], evaluations)
+
+
+def _fit_proposals(
+    prob: Problem,
+    proposals: list[tuple[tuple[int, ...], NDArray[np.float64], str]],
+    good_enough: float,
+    step: float,
+    spec_base: tuple[float, float, float, str],
+    evaluations: int,
+) -> tuple[list[RecipeOption], int]:
+    """Fit each proposed subset (indices into ``prob.free``, start, label), refine the best
+    :data:`REFINED`, round to the scale's *step* (fraction) and score: the options and the model
+    evaluations counted so far."""
+    fitted: list[tuple[float, int, NDArray[np.float64], Objective, str]] = []
     for sub, x0, label in proposals:
         f, x, sub_obj = fit_subset(prob, sub, x0)
         fitted.append((f, len(fitted), x, sub_obj, label))
@@ -366,9 +392,9 @@ def _fit_line(
     for n, (_, _, x, sub_obj, label) in enumerate(fitted):
         c = refine_subset(sub_obj, x, good_enough) if n < REFINED else sub_obj.p.full(x)
         evaluations += sub_obj.evaluations
-        rows.append((round_to_scale(c, prob, step, db.matting_index), c, label))
+        rows.append((round_to_scale(c, prob, step, prob.db.matting_index), c, label))
     options = [make_option(c_r, c, prob, None, (*spec_base, label)) for c_r, c, label in rows]
-    return _LineFit(options, [(lb, prob.full(x)) for lb, _, x in tried], evaluations)
+    return options, evaluations
 
 
 def formulate(
