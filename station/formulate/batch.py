@@ -24,11 +24,13 @@ from station.formulate.errors import FormulateInputError
 DEFAULT_BATCH_G = 1000.0
 #: Largest batch 1 kg may grow to by tinting before a remake is the sensible advice (factor).
 MAX_GROWTH = 3.0
+#: Largest batch (g) a recipe is weighed out for or formulated at (the scale's and the service's ceiling).
+MAX_BATCH_G = 1e6
 
 
 def _check_batch(batch_g: float) -> float:
-    if not (np.isfinite(batch_g) and 0 < batch_g <= 1e6):
-        raise FormulateInputError("batch_g", "0 < batch_g <= 1e6 g", batch_g)
+    if not (np.isfinite(batch_g) and 0 < batch_g <= MAX_BATCH_G):
+        raise FormulateInputError("batch_g", f"0 < batch_g <= {MAX_BATCH_G:g} g", batch_g)
     return float(batch_g)
 
 

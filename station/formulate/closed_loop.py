@@ -152,13 +152,16 @@ def _tup(a: NDArray) -> tuple[tuple[float, float, float], ...]:
 
 @dataclass
 class _Batch:
-    """The batch in the can: grams per colorant (database order), binder (g), its recipe and prediction."""
+    """The batch in the can: grams per colorant (database order), binder (g), its recipe and prediction;
+    ``result`` the formulation it was weighed out from (None once tinted) and ``line`` the toner line
+    it was mixed from (kept through tinting: a remake stays with the line sprayed)."""
 
     masses: NDArray[np.float64]
     binder: float
     result: FormulationResult | None
     concentrations: NDArray[np.float64]
     predicted_mean_de: float
+    line: str | None = None
 
     @property
     def total(self) -> float:
@@ -167,7 +170,9 @@ class _Batch:
 
 def _fresh(result: FormulationResult, batch_g: float) -> _Batch:
     c = np.asarray(result.concentrations, dtype=np.float64)
-    return _Batch(c * batch_g, float((1.0 - c.sum()) * batch_g), result, c, result.mean_de)
+    return _Batch(
+        c * batch_g, float((1.0 - c.sum()) * batch_g), result, c, result.mean_de, result.line or None
+    )
 
 
 def _measure(measure: Measure, recipe: dict[str, float], angles: tuple[float, ...]) -> AspecularMeasurements:
@@ -321,8 +326,7 @@ def _other_colorants(
 ) -> tuple[_Batch, Tinting] | None:
     """A fresh batch of a colorant set not sprayed yet, formulated for the design (module docstring),
     or ``None`` when the toner line has no such recipe within the tolerance."""
-    line = batch.result.line if batch.result is not None and batch.result.line else None
-    wide = replace(opts, line=opts.line or line, recipes=OTHER_SET_RECIPES)
+    wide = replace(opts, line=opts.line or batch.line, recipes=OTHER_SET_RECIPES)
     found = formulate_with(
         design,
         angles,
@@ -342,7 +346,14 @@ def _other_colorants(
         colorants = _colorant_set(option.recipe, db)
         if option.mean_de <= tolerance and colorants not in sprayed:
             c = np.asarray(option.concentrations, dtype=np.float64)
-            fresh = _Batch(c * opts.batch_g, float((1.0 - c.sum()) * opts.batch_g), found, c, option.mean_de)
+            fresh = _Batch(
+                c * opts.batch_g,
+                float((1.0 - c.sum()) * opts.batch_g),
+                found,
+                c,
+                option.mean_de,
+                option.line or None,
+            )
             note = Tinting(
                 {},
                 0.0,
@@ -369,12 +380,13 @@ def _correct(
     reach the tolerance and the new recipe can, or does better."""
     batch_g = opts.batch_g
     t = tint(batch.masses, batch.binder, target, angles, db, opts.scale_resolution_g, batch_g)
-    tinted = _Batch(t.masses_g, t.binder_g, None, t.concentrations, t.predicted_mean_de)
+    tinted = _Batch(t.masses_g, t.binder_g, None, t.concentrations, t.predicted_mean_de, batch.line)
     if t.predicted_mean_de <= tolerance:
         return tinted, t.tinting
     start: list[tuple[str, ArrayLike | dict[str, float]]] = [("previous", batch.concentrations)]
-    line = batch.result.line if batch.result is not None and batch.result.line else None
-    remade = formulate_with(target, angles, start, gloss_gu, 1e9, db, replace(opts, line=opts.line or line))
+    remade = formulate_with(
+        target, angles, start, gloss_gu, 1e9, db, replace(opts, line=opts.line or batch.line)
+    )
     if remade.mean_de < t.predicted_mean_de:
         note = Tinting(
             {},

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.formulate.batch import DEFAULT_BATCH_G, batch_masses
+from station.formulate.batch import DEFAULT_BATCH_G, MAX_BATCH_G, batch_masses
 from station.formulate.colorants import (
     GLOSS_CLEAR_GU,
     GLOSS_PER_MATTING,
@@ -51,6 +51,7 @@ from station.formulate.lines import lines_for_design, toner_line
 from station.formulate.selection import (
     MAX_SUBSETS,
     REFINED,
+    SCREEN_COARSE_EVALUATIONS,
     RecipeOption,
     eliminate,
     fit_subset,
@@ -101,22 +102,31 @@ class FormulationOptions:
     max_starts: int = MAX_STARTS
 
 
+def _is_integer(value: object) -> bool:
+    """True for an int that is not a bool (``True`` is an int to Python, not a count to a chemist)."""
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 def formulation_options(o: FormulationOptions) -> FormulationOptions:
     """*o*, each field checked (a :class:`FormulateInputError` naming the field and its accepted range)."""
     lo, hi = MAX_COLORANTS_RANGE
-    if not isinstance(o.max_colorants, int) or not lo <= o.max_colorants <= hi:
+    if not _is_integer(o.max_colorants) or not lo <= o.max_colorants <= hi:
         raise FormulateInputError("max_colorants", f"an integer in [{lo}, {hi}]", o.max_colorants)
     lo_r, hi_r = SCALE_RESOLUTION_RANGE_G
     if not (np.isfinite(o.scale_resolution_g) and lo_r <= o.scale_resolution_g <= hi_r):
         raise FormulateInputError(
             "scale_resolution_g", f"{lo_r:g} <= scale_resolution_g <= {hi_r:g} g", o.scale_resolution_g
         )
-    if not (np.isfinite(o.batch_g) and 0 < o.batch_g <= 1e6 and o.batch_g >= 10 * o.scale_resolution_g):
-        raise FormulateInputError("batch_g", "10 × the scale resolution <= batch_g <= 1e6 g", o.batch_g)
+    if not (
+        np.isfinite(o.batch_g) and 0 < o.batch_g <= MAX_BATCH_G and o.batch_g >= 10 * o.scale_resolution_g
+    ):
+        raise FormulateInputError(
+            "batch_g", f"10 × the scale resolution <= batch_g <= {MAX_BATCH_G:g} g", o.batch_g
+        )
     lo, hi = RECIPE_COUNT_RANGE
-    if not isinstance(o.recipes, int) or not lo <= o.recipes <= hi:
+    if not _is_integer(o.recipes) or not lo <= o.recipes <= hi:
         raise FormulateInputError("recipes", f"an integer in [{lo}, {hi}]", o.recipes)
-    if not isinstance(o.max_starts, int) or not 1 <= o.max_starts <= 50:
+    if not _is_integer(o.max_starts) or not 1 <= o.max_starts <= 50:
         raise FormulateInputError("max_starts", "an integer in [1, 50]", o.max_starts)
     if o.line is not None:
         toner_line(o.line)
@@ -334,7 +344,6 @@ def _fit_line(
     step = opts.scale_resolution_g / opts.batch_g
     spec_base = (opts.batch_g, opts.scale_resolution_g, tolerance, line)
     evaluations = obj.evaluations
-    fitted: list[tuple[float, int, NDArray[np.float64], Objective, str]] = []
     proposals: list[tuple[tuple[int, ...], NDArray[np.float64], str]] = []
     for label, _, point in tried[:ELIMINATED_POINTS]:
         for sub, x0 in eliminate(prob, point, opts.max_colorants):
@@ -349,6 +358,32 @@ def _fit_line(
         if all(sub != s for s, _, _ in proposals):
             k = int(np.argmax([p[list(sub)].sum() for p in points]))
             proposals.append((sub, points[k], tried[k][0]))
+    options, evaluations = _fit_proposals(prob, proposals, good_enough, step, spec_base, evaluations)
+    if not any(o.mean_de <= tolerance for o in options):  # a miss: screen a wider pool of the line
+        wider = [
+            (sub, x0, tried[0][0])
+            for sub, x0 in screen(
+                prob, points[0], opts.max_colorants, coarse_evaluations=SCREEN_COARSE_EVALUATIONS
+            )
+            if all(sub != s for s, _, _ in proposals)
+        ]
+        more, evaluations = _fit_proposals(prob, wider, good_enough, step, spec_base, evaluations)
+        options += more
+    return _LineFit(options, [(lb, prob.full(x)) for lb, _, x in tried], evaluations)
+
+
+def _fit_proposals(
+    prob: Problem,
+    proposals: list[tuple[tuple[int, ...], NDArray[np.float64], str]],
+    good_enough: float,
+    step: float,
+    spec_base: tuple[float, float, float, str],
+    evaluations: int,
+) -> tuple[list[RecipeOption], int]:
+    """Fit each proposed subset (indices into ``prob.free``, start, label), refine the best
+    :data:`REFINED`, round to the scale's *step* (fraction) and score: the options and the model
+    evaluations counted so far."""
+    fitted: list[tuple[float, int, NDArray[np.float64], Objective, str]] = []
     for sub, x0, label in proposals:
         f, x, sub_obj = fit_subset(prob, sub, x0)
         fitted.append((f, len(fitted), x, sub_obj, label))
@@ -357,9 +392,9 @@ def _fit_line(
     for n, (_, _, x, sub_obj, label) in enumerate(fitted):
         c = refine_subset(sub_obj, x, good_enough) if n < REFINED else sub_obj.p.full(x)
         evaluations += sub_obj.evaluations
-        rows.append((round_to_scale(c, prob, step, db.matting_index), c, label))
+        rows.append((round_to_scale(c, prob, step, prob.db.matting_index), c, label))
     options = [make_option(c_r, c, prob, None, (*spec_base, label)) for c_r, c, label in rows]
-    return _LineFit(options, [(lb, prob.full(x)) for lb, _, x in tried], evaluations)
+    return options, evaluations
 
 
 def formulate(

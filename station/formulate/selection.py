@@ -56,6 +56,11 @@ SCREEN_LIMIT = 126
 SCREEN_STEPS = 8
 SCREEN_DAMPING = 1e-2
 SCREEN_KEEP = 4
+#: The screen's coarse pass over a wider pool (a formulation that misses its tolerance): its Gauss–Newton
+#: steps, and the most batched model evaluations it may take (subsets × (colorants + 1) × steps), which
+#: sets how wide the pool may grow (13 colorants for 5-colorant recipes).
+SCREEN_COARSE_STEPS = 2
+SCREEN_COARSE_EVALUATIONS = 16_000
 #: Points kept per step of the backward elimination (:func:`eliminate`).
 ELIMINATION_BEAM = 3
 #: Forward-difference step of the elimination's Jacobian (mass fraction).
@@ -166,27 +171,65 @@ def screen(
     max_colorants: int,
     keep: int = SCREEN_KEEP,
     limit: int = SCREEN_LIMIT,
+    coarse_evaluations: int = 0,
 ) -> list[tuple[tuple[int, ...], NDArray[np.float64]]]:
     """A cheap linearised first pass over every subset of ``max_colorants`` colorants of a pool
-    (:func:`_pool`, at most *limit* subsets; a *limit* of C(line, max_colorants) or more screens every
-    subset of the line, as a brute-force check does): all subsets at once, each started at the
-    seed's load split evenly, :data:`SCREEN_STEPS` damped Gauss–Newton steps on the weighted Lab
-    residual (:func:`station.formulate.solver.lab_weights`) with one batched model evaluation per step,
-    clipped to the bounds and scaled into the total and effect limits. Returns the *keep* subsets of
-    lowest Σ ΔE00² with their points (free fractions). Counts only: deterministic."""
+    (:func:`_pool`; a *limit* of C(line, max_colorants) or more screens every subset of the line, as a
+    brute-force check does): all subsets at once, each started at the seed's load split evenly,
+    :data:`SCREEN_STEPS` damped Gauss–Newton steps on the weighted Lab residual
+    (:func:`station.formulate.solver.lab_weights`) with one batched model evaluation per step, clipped
+    to the bounds and scaled into the total and effect limits. With *coarse_evaluations* the pool is as
+    wide as a coarse pass of :data:`SCREEN_COARSE_STEPS` steps allows within that many batched model
+    evaluations (subsets × (colorants + 1) × steps; at least *limit* subsets); when it holds more than
+    *limit* subsets, the *limit* best after the coarse pass take the remaining steps. Returns the *keep* subsets of lowest Σ ΔE00² with their points (free
+    fractions). Counts only: deterministic."""
     n = base.free.size
     k = min(max_colorants, n)
-    combos = np.array(list(combinations(sorted(_pool(base, seed, k, limit)), k)), dtype=np.intp)
+    wide = max(limit, coarse_evaluations // ((k + 1) * SCREEN_COARSE_STEPS))
+    combos = np.array(list(combinations(sorted(_pool(base, seed, k, wide)), k)), dtype=np.intp)
+    xs = np.minimum(np.full(combos.shape, max(float(seed.sum()), 1e-3) / k), base.upper[combos])
+    best = (np.full(combos.shape[0], np.inf), xs.copy())
+    steps = SCREEN_STEPS
+    if combos.shape[0] > limit:  # coarse pass, then the best *limit* subsets go on from where they are
+        xs, best = _gauss_newton(base, combos, xs, SCREEN_COARSE_STEPS - 1, best)
+        go_on = np.sort(np.argsort(best[0], kind="stable")[:limit])
+        combos, xs, best = combos[go_on], xs[go_on], (best[0][go_on], best[1][go_on])
+        steps = SCREEN_STEPS - SCREEN_COARSE_STEPS + 1
+    _, (_, best_x) = _gauss_newton(base, combos, xs, steps, best)
     m = combos.shape[0]
+    points = np.zeros((m, n))
+    points[np.arange(m)[:, None], combos] = best_x
+    f = base.sum_sq(points)
+    out: list[tuple[tuple[int, ...], NDArray[np.float64]]] = []
+    for j in np.argsort(f, kind="stable"):
+        key = tuple(int(i) for i in np.flatnonzero(points[j] > _PRESENT))
+        if key and key not in [o for o, _ in out]:
+            out.append((key, points[j]))
+        if len(out) == keep:
+            break
+    return out
+
+
+def _gauss_newton(
+    base: Problem,
+    combos: NDArray[np.intp],
+    xs: NDArray[np.float64],
+    steps: int,
+    best: tuple[NDArray[np.float64], NDArray[np.float64]],
+) -> tuple[NDArray[np.float64], tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """*steps* damped Gauss–Newton steps of :func:`screen` for every subset (rows of *combos*, indices
+    into ``base.free``) from its point *xs* (free fractions of its colorants), with *steps* + 1 batched
+    model evaluations; returns the last point and the (weighted-Lab Σ r², point) of the best one seen,
+    *best* updated in place."""
+    m, k = combos.shape
+    n = base.free.size
     rows = np.arange(m)[:, None]
     upper = base.upper[combos]
     effect = base.effect[combos]
-    xs = np.minimum(np.full((m, k), max(float(seed.sum()), 1e-3) / k), upper)
     weight = lab_weights(base.design).ravel()
     eye = np.eye(k)
-    best_r = np.full(m, np.inf)
-    best_x = xs.copy()
-    for step in range(SCREEN_STEPS + 1):
+    best_r, best_x = best
+    for step in range(steps + 1):
         pts = np.zeros((m, k + 1, n))
         pts[rows, 0, combos] = xs
         for j in range(k):
@@ -197,7 +240,7 @@ def screen(
         norm = (r[:, 0] ** 2).sum(-1)
         better = norm < best_r
         best_r[better], best_x[better] = norm[better], xs[better]
-        if step == SCREEN_STEPS:
+        if step == steps:
             break
         jac = (r[:, 1:] - r[:, :1]) / _FD_STEP  # (m, k, 9)
         jtj = jac @ jac.transpose(0, 2, 1)
@@ -207,17 +250,7 @@ def screen(
         over_e = (xs * effect).sum(-1) / base.db.max_effect
         xs = np.where(effect > 0, xs / np.maximum(over_e, 1.0)[:, None], xs)
         xs = xs / np.maximum(xs.sum(-1) / base.max_total, 1.0)[:, None]
-    points = np.zeros((m, n))
-    points[rows, combos] = best_x
-    f = base.sum_sq(points)
-    out: list[tuple[tuple[int, ...], NDArray[np.float64]]] = []
-    for j in np.argsort(f, kind="stable"):
-        key = tuple(int(i) for i in np.flatnonzero(points[j] > _PRESENT))
-        if key and key not in [o for o, _ in out]:
-            out.append((key, points[j]))
-        if len(out) == keep:
-            break
-    return out
+    return xs, (best_r, best_x)
 
 
 def eliminate(

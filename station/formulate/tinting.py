@@ -10,7 +10,9 @@ The additions minimise the weighted-Lab difference (as :mod:`station.formulate.s
 colorant model's prediction of c′ and the corrected target T = design − (measured − predicted) (the
 additive batch correction), within the batch's bounds: M′ ≤ :data:`~station.formulate.batch.MAX_GROWTH`
 × the first batch (a can holds so much), every c′_i within its colorant's limit, Σ c′ and the effect pigments within theirs
-(penalty rows). The additions are rounded to the scale's resolution (:func:`tint`).
+(penalty rows). The additions are rounded to the scale's resolution (:func:`tint`); where rounding up
+crosses one of these bounds, colorant additions feeding it are taken back a step at a time (never the
+binder, which would raise every fraction).
 """
 
 from __future__ import annotations
@@ -99,6 +101,40 @@ class _TintModel:
         return np.asarray(((res[1:] - res[0]) / _FD_STEP).T)
 
 
+def _take_back(
+    grams: NDArray[np.float64],
+    model: _TintModel,
+    m: NDArray[np.float64],
+    c: NDArray[np.float64],
+    limit: float,
+) -> int | None:
+    """Index into *grams* (g, colorant additions then binder) of the addition to take one step back
+    from, or None when the rounded batch (*m* g, fractions *c*) is within every bound of the colorant
+    database (each c_i, Σ c, the effect pigments) and the can (*limit* g).
+
+    The largest colorant addition that feeds a crossed bound is taken back; the binder only when the can
+    overflows with no colorant addition left (taking binder back raises every fraction)."""
+    db = model.db
+    added = grams[:-1] > 0
+    free = model.free
+    over_each = (c > db.upper_bounds + 1e-12)[free]
+    over_total = c.sum() > db.max_total + 1e-12
+    over_effect = c[db.effect_mask].sum() > db.max_effect + 1e-12
+    over_can = m.sum() + model.b + grams[-1] > limit + 1e-9
+    if not (over_each.any() or over_total or over_effect or over_can):
+        return None
+    if over_each.any():
+        feeds = over_each
+    elif over_effect and not (over_total or over_can):
+        feeds = db.effect_mask[free]
+    else:
+        feeds = np.ones(free.size, dtype=bool)
+    for pool in (added & feeds, added):
+        if pool.any():
+            return int(np.flatnonzero(pool)[np.argmax(grams[:-1][pool])])
+    return grams.size - 1 if over_can and grams[-1] > 0 else None
+
+
 def tint(
     masses_g: NDArray[np.float64],
     binder_g: float,
@@ -125,17 +161,12 @@ def tint(
         ftol=1e-10,
     )
     grams = np.round(res.x * model.total / resolution_g) * resolution_g
-    while True:  # rounding up may cross a bound: take back one step from the largest addition
-        u = grams / model.total
-        m, c = model.after(u)
-        ok = (
-            np.all(c <= db.upper_bounds + 1e-12)
-            and c.sum() <= db.max_total + 1e-12
-            and m.sum() + model.b + grams[-1] <= limit + 1e-9
-        )
-        if ok or not grams.any():
+    while True:  # rounding up may cross a bound: take back one step of a colorant addition
+        m, c = model.after(grams / model.total)
+        take = _take_back(grams, model, m, c, limit)
+        if take is None:
             break
-        grams[int(np.argmax(grams))] -= resolution_g
+        grams[take] -= resolution_g
     lab = predict_lab(c, angles, db)
     additions = {db.names[i]: float(f"{g:.6g}") for i, g in zip(model.free, grams[:-1], strict=True) if g > 0}
     mat_add = float(m[model.mat] - model.m[model.mat])

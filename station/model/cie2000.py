@@ -14,7 +14,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["cie2000_columns"]
+__all__ = ["CIE2000_K7", "cie2000_columns"]
+
+#: 25⁷, the chroma constant of G and R_C (Sharma, Wu & Dalal 2005, eqs 2 and 21); exact in float64.
+CIE2000_K7 = 25.0**7
 
 
 def cie2000_columns(
@@ -69,7 +72,7 @@ def _primed(a_1: Array, b_1: Array, a_2: Array, b_2: Array) -> tuple[Array, Arra
     C_2_ab = np.hypot(a_2, b_2)
     C_bar_ab = (C_1_ab + C_2_ab) / 2
     C_bar_ab_7 = C_bar_ab**7
-    G = 0.5 * (1 - np.sqrt(C_bar_ab_7 / (C_bar_ab_7 + 25**7)))
+    G = 0.5 * (1 - np.sqrt(C_bar_ab_7 / (C_bar_ab_7 + CIE2000_K7)))
     one_G = 1 + G
     a_p_1 = one_G * a_1
     a_p_2 = one_G * a_2
@@ -122,7 +125,7 @@ def _weights(L_bar_p: Array, C_bar_p: Array, h_bar_p: Array) -> tuple[Array, Arr
     )
     delta_theta = 30 * np.exp(-(((h_bar_p - 275) / 25) ** 2))
     C_bar_p_7 = C_bar_p**7
-    R_C = 2 * np.sqrt(C_bar_p_7 / (C_bar_p_7 + 25**7))
+    R_C = 2 * np.sqrt(C_bar_p_7 / (C_bar_p_7 + CIE2000_K7))
     L_bar_p_2 = (L_bar_p - 50) ** 2
     S_L = 1 + ((0.015 * L_bar_p_2) / np.sqrt(20 + L_bar_p_2))
     S_C = 1 + 0.045 * C_bar_p

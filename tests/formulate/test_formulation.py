@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from station.formulate.batch import batch_masses
 from station.formulate.closed_loop import closed_loop
 from station.formulate.colorants import default_database, predict_lab
 from station.formulate.demo import generate_recipes
@@ -14,6 +15,7 @@ from station.formulate.formulation import (
     _fit_line,
     formulate,
     formulate_from_library,
+    formulation_options,
 )
 from station.formulate.library import Library
 from station.formulate.sprayout import SprayOutModel
@@ -76,6 +78,30 @@ def test_bad_formulation_input(kwargs: dict, field: str) -> None:
     with pytest.raises(FormulateInputError) as err:
         formulate(**kwargs)
     assert err.value.field == field
+
+
+@pytest.mark.parametrize(
+    ("options", "field", "accepted"),
+    [
+        ({"max_colorants": True}, "max_colorants", "[1, 10]"),
+        ({"recipes": True}, "recipes", "an integer"),
+        ({"max_starts": False}, "max_starts", "[1, 50]"),
+        ({"batch_g": 1e6 + 1.0}, "batch_g", "batch_g <="),
+    ],
+)
+def test_formulation_options_refuse_booleans_and_oversized_batches(
+    options: dict[str, object], field: str, accepted: str
+) -> None:
+    # True is an int to Python, but no count of colorants or recipes; a batch above the 1 000 kg scale
+    # ceiling is refused by the options as by the batch weigh-out
+    with pytest.raises(FormulateInputError) as err:
+        formulation_options(FormulationOptions(**options))  # type: ignore[arg-type]
+    assert err.value.field == field and accepted in str(err.value)
+    if field == "batch_g":
+        with pytest.raises(FormulateInputError) as weigh:
+            batch_masses({"red_pr": 0.1}, 1e6 + 1.0)
+        assert weigh.value.field == "batch_g"
+    assert formulation_options(FormulationOptions(max_colorants=1, recipes=1, batch_g=1e6)).batch_g == 1e6
 
 
 def test_closed_loop_converges_within_three_corrections(small_library: Library, designs) -> None:

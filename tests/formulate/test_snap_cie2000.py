@@ -177,3 +177,42 @@ def test_weight_tables_rest_on_monotone_functions() -> None:
     f = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * c
     assert np.all(np.diff(f) > 0)
     assert np.all(np.diff(W_L) <= 0) and np.all(np.diff(W_AB) <= 0)
+
+
+def test_one_bound_arithmetic_brackets_colour_science_on_random_pairs() -> None:
+    """pair_bounds2 is the only copy of the per-pair bound arithmetic: called on arrays (the NumPy path)
+    and on floats (what the numba walk compiles inline) it gives the same numbers, and both bracket
+    colour-science's delta_E_CIE2000 on random Lab pairs; the compiled walk's per-paint bounds bracket
+    colour's summed ΔE00 too."""
+    import colour
+
+    from station.formulate.snap.bounds import SAFETY, pair_bounds2
+    from station.formulate.snap.kernel import paint_bounds_one
+
+    rng = np.random.default_rng(2000)
+    n = 4000
+    ref = np.column_stack([rng.uniform(0, 100, n), rng.uniform(-128, 128, n), rng.uniform(-128, 128, n)])
+    smp = ref + rng.normal(0.0, 1.0, (n, 1)) * rng.normal(0.0, 6.0, (n, 3))  # near and far pairs
+    smp[: n // 8, 1:] = rng.uniform(-1.5, 1.5, (n // 8, 2))  # near-neutral samples
+    smp[:, 0] = np.clip(smp[:, 0], 0.0, 100.0)
+    exact = np.asarray(colour.delta_E(ref, smp, method="CIE 2000"))
+    cols = (*ref.T, np.hypot(ref[:, 1], ref[:, 2]), *smp.T, np.hypot(smp[:, 1], smp[:, 2]))
+    lo2, hi2 = pair_bounds2(*cols)
+    assert np.all(np.sqrt(lo2) * SAFETY - 1e-10 <= exact) and np.all(
+        np.sqrt(hi2) * (2 - SAFETY) + 1e-10 >= exact
+    )
+    for j in range(0, n, 97):  # the scalar call: the same floating-point operations
+        one = pair_bounds2(*(float(c[j]) for c in cols))
+        assert one == (lo2[j], hi2[j])
+    # the walk's per-paint bounds (three angles), compiled as the search compiles them
+    assert compiled_search() is not None
+    import numba
+
+    per_paint = numba.njit(paint_bounds_one)
+    q = ref[:3]
+    cq = np.hypot(q[:, 1], q[:, 2])
+    blab = smp[: (n // 3) * 3].reshape(1, -1, 3, 3)
+    total = np.asarray(colour.delta_E(q[None], blab[0], method="CIE 2000")).sum(-1)
+    for w in range(blab.shape[1]):
+        lower, upper = per_paint(q, cq, blab, 0, w)
+        assert lower <= total[w] <= upper

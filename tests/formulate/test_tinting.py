@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -9,6 +11,7 @@ from station.formulate.batch import MAX_GROWTH
 from station.formulate.closed_loop import closed_loop
 from station.formulate.colorants import default_database, predict_lab
 from station.formulate.de_kernels import cie2000
+from station.formulate.lines import toner_line
 from station.formulate.tinting import tint
 from station.model import AspecularMeasurements
 
@@ -79,3 +82,78 @@ def test_an_offset_the_sprayed_colorants_cannot_cancel_is_a_remake_with_other_co
     assert job.steps[-1].mean_de == pytest.approx(
         float(np.mean(cie2000(design, np.array(job.steps[-1].measured_lab))))
     )
+
+
+@pytest.mark.parametrize("resolution_g", [5.0, 25.0])
+def test_rounded_additions_keep_the_effect_limit_and_never_take_back_binder(
+    resolution_g: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import station.formulate.tinting as tinting
+
+    fits: list[Any] = []
+    fit = tinting.least_squares
+
+    def spy(*args: Any, **kwargs: Any) -> Any:
+        fits.append(fit(*args, **kwargs))
+        return fits[-1]
+
+    monkeypatch.setattr(tinting, "least_squares", spy)
+    # a batch at its flake limit (0.15 + 0.10 = max_effect) and a target that wants more flake
+    recipe = {"white_tio2": 0.05, "blue_pb": 0.03, "alu_bright": 0.15, "pearl_white": 0.10}
+    c = DB.vector(recipe)
+    assert c[DB.effect_mask].sum() == pytest.approx(DB.max_effect)
+    masses = c * 1000.0
+    binder = 1000.0 - masses.sum()
+    target = predict_lab(DB.vector({**recipe, "alu_bright": 0.17, "pearl_white": 0.12}), A3)
+    t = tint(masses, binder, target, A3, DB, resolution_g, 1000.0)
+    after = t.concentrations
+    # every bound of the colorant database holds after rounding (DB.check raises otherwise)
+    DB.check(after)
+    assert after[DB.effect_mask].sum() <= DB.max_effect + 1e-12
+    assert t.masses_g.sum() + t.binder_g <= MAX_GROWTH * 1000.0 + 1e-6
+    # the binder is the fit's, rounded to the scale: never the one taken back
+    total = masses.sum() + binder
+    fit_binder = fits[-1].x[-1] * total
+    assert t.tinting.binder_g == pytest.approx(np.round(fit_binder / resolution_g) * resolution_g)
+    assert t.tinting.binder_g > 0
+    # flake is still added (a take-back stops at the bound, it does not strip the correction)
+    assert t.tinting.additions_g.get("alu_bright", 0.0) > 0
+    for g in t.tinting.additions_g.values():
+        assert g / resolution_g == pytest.approx(round(g / resolution_g))
+
+
+def test_a_remake_after_tinting_stays_with_the_line_sprayed(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A solid is sprayed from the solid line and tinted once; the tinted panel then reads with an
+    angle-dependent offset, so the corrected target looks like an effect paint. The remake must be
+    formulated from the toner line in the can (solid), not inferred again from the target."""
+    import importlib
+
+    loop = importlib.import_module("station.formulate.closed_loop")
+    lines_used: list[str] = []
+    formulate_with = loop.formulate_with
+
+    def spy(*args: Any, **kwargs: Any) -> Any:
+        result = formulate_with(*args, **kwargs)
+        lines_used.append(result.line)
+        return result
+
+    monkeypatch.setattr(loop, "formulate_with", spy)
+    recipe = {"white_tio2": 0.2, "red_pr": 0.03, "yellow_py": 0.02}
+    design = predict_lab(DB.vector(recipe), A3)
+    flop = np.column_stack([15.0 * np.cos(np.radians(A3)) - 4.5, np.zeros(3), np.zeros(3)])
+    sprayed: list[dict[str, float]] = []
+
+    def measure(r: dict[str, float]) -> AspecularMeasurements:
+        sprayed.append(r)
+        offset = np.array([-1.5, 0.0, 0.0]) if len(sprayed) == 1 else flop  # then 15° light, 110° dark
+        return AspecularMeasurements(A3, predict_lab(DB.vector(r), A3) + offset, 90.0)
+
+    job = closed_loop(design, measure, starts=[("start", recipe)], max_corrections=2)
+    kinds = [(s.additions.remake if s.additions else None) for s in job.steps]
+    assert kinds[:2] == [None, False] and True in kinds[2:], kinds  # tinted, then remade
+    assert job.initial is not None and job.initial.line == "solid"
+    # every recipe the loop formulated (the initial one and each remake) is drawn from the solid line
+    assert lines_used and set(lines_used) == {"solid"}, lines_used
+    solid = set(toner_line("solid").families)
+    for step in job.steps:
+        assert {DB.colorants[DB.names.index(n)].family for n in step.recipe} <= solid | {"matting"}

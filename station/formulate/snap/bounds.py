@@ -11,12 +11,13 @@ quantities are in CIELAB units (ΔE, L*, a*, b*, C*), hues in degrees.
 from __future__ import annotations
 
 import math
-from typing import Literal, overload
+from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import NDArray
 
 from station.formulate.errors import FormulateInputError
+from station.model.cie2000 import CIE2000_K7
 from station.model.difference import DIN6175_COEFFICIENTS
 
 __all__ = [
@@ -32,6 +33,7 @@ __all__ = [
     "box_bounds_cie2000_fast",
     "cie2000_weight_tables",
     "hue_geometry",
+    "pair_bounds2",
     "pair_bounds_cie2000",
     "point_bounds_cie2000",
 ]
@@ -121,9 +123,9 @@ def box_bounds(
         s_l = 1.0 + 0.015 * x * x / np.sqrt(20.0 + x * x)
         cbar = (np.hypot(q[:, 1], q[:, 2]) + cmax) / 2
         c7 = cbar**7
-        cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * cbar * (1 + 1e-12) + 1e-12
+        cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + CIE2000_K7)))) * cbar * (1 + 1e-12) + 1e-12
         cp7 = cpbar**7
-        r_c = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7))
+        r_c = 2.0 * np.sqrt(cp7 / (cp7 + CIE2000_K7))
         s_c = 1.0 + 0.045 * cpbar
         if not hue:  # the cheaper, looser form: global R_T bound, no hue-gap term
             per = np.sqrt(dl2 / s_l**2 + (1.0 - r_c * SIN60 / 2.0) * dab2 / s_c**2)
@@ -210,9 +212,9 @@ def cie2000_weight_tables() -> tuple[NDArray, NDArray, NDArray, NDArray]:
     xc = np.arange(12001) * TABLE_STEP
     cbar = xc / 2.0
     c7 = cbar**7
-    cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + 25.0**7)))) * cbar
+    cpbar = (1.0 + 0.5 * (1.0 - np.sqrt(c7 / (c7 + CIE2000_K7)))) * cbar
     cp7 = cpbar**7
-    r_c = 2.0 * np.sqrt(cp7 / (cp7 + 25.0**7))
+    r_c = 2.0 * np.sqrt(cp7 / (cp7 + CIE2000_K7))
     w_ab = (1.0 - r_c * SIN60 / 2.0) / (1.0 + 0.045 * cpbar) ** 2
     shift = lambda w: np.append(w[1:], 0.0)  # noqa: E731
     return xl, shift(w_l), xc, shift(w_ab)
@@ -315,11 +317,21 @@ def pair_bounds_cie2000(
     upper: bool = True,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
     """Lower and upper bounds of ΔE00² per pair (see :func:`point_bounds_cie2000`), from the columns L*,
-    a*, b*, C*_ab of the reference (q…) and the sample (p…), which broadcast. No margin applied here."""
+    a*, b*, C*_ab of the reference (q…) and the sample (p…), which broadcast. No margin applied here;
+    the upper bound is None with ``upper=False``. The arithmetic is :func:`pair_bounds2`'s."""
+    lower2, upper2 = pair_bounds2(ql, qa, qb, qc, pl, pa, pb, pc)
+    return lower2, (upper2 if upper else None)
+
+
+def pair_bounds2(ql: Any, qa: Any, qb: Any, qc: Any, pl: Any, pa: Any, pb: Any, pc: Any) -> tuple[Any, Any]:
+    """(lower, upper) bounds of ΔE00² for the reference L*, a*, b*, C*_ab (*ql* … *qc*) and the sample
+    (*pl* … *pc*): arrays that broadcast (NumPy) or floats (the numba walk of
+    :mod:`station.formulate.snap.kernel` compiles this same function inline, so the two paths share
+    one copy of the arithmetic). Only ufuncs that numba compiles on scalars are used."""
     cbar = (qc + pc) * 0.5
     c7 = cbar * cbar
     c7 = c7 * c7 * c7 * cbar
-    g1 = 1.5 - 0.5 * np.sqrt(c7 / (c7 + 25.0**7))
+    g1 = 1.5 - 0.5 * np.sqrt(c7 / (c7 + CIE2000_K7))
     a1 = g1 * qa
     a2 = g1 * pa
     cp1 = np.sqrt(a1 * a1 + qb * qb)
@@ -328,16 +340,15 @@ def pair_bounds_cie2000(
     da = a2 - a1
     db = pb - qb
     dab2 = da * da + db * db
-    dc2 = dc * dc
-    dh2 = dab2 - dc2  # cancels when ΔH' ≈ 0: widened by ±1e-12 |Δ(a', b)|² (rounding, both sides)
+    dh2 = dab2 - dc * dc  # cancels when ΔH' ≈ 0: widened by ±1e-12 |Δ(a', b)|² (rounding, both sides)
     eta = 1e-12 * dab2 + 1e-30
     dh_lo = np.sqrt(np.maximum(dh2 - eta, 0.0))
     cpbar = (cp1 + cp2) * 0.5
     cp7 = cpbar * cpbar
     cp7 = cp7 * cp7 * cp7 * cpbar
-    r = (2.0 * SIN60) * np.sqrt(cp7 / (cp7 + 25.0**7))
+    r = (2.0 * SIN60) * np.sqrt(cp7 / (cp7 + CIE2000_K7))
     lbar2 = (ql + pl) * 0.5 - 50.0
-    lbar2 *= lbar2
+    lbar2 = lbar2 * lbar2
     s_l = 1.0 + 0.015 * lbar2 / np.sqrt(20.0 + lbar2)
     y = np.abs(dc) / (1.0 + 0.045 * cpbar)
     ry = r * y
@@ -345,8 +356,7 @@ def pair_bounds_cie2000(
     base = dl * dl + y * y
     z_hi = np.sqrt(np.maximum(dh2, 0.0) + eta) / (1.0 + (0.015 * T_MIN) * cpbar)
     z = np.minimum(np.maximum(ry * 0.5, dh_lo / (1.0 + (0.015 * T_MAX) * cpbar)), z_hi)
-    lower2 = np.maximum(base + z * (z - ry), 0.0)
-    return lower2, (base + z_hi * (z_hi + ry) if upper else None)
+    return np.maximum(base + z * (z - ry), 0.0), base + z_hi * (z_hi + ry)
 
 
 def median_leaves(x: NDArray[np.float64], leaf: int) -> tuple[NDArray[np.intp], list[tuple[int, int]]]:

@@ -18,7 +18,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from station.formulate.snap.bounds import SAFETY, SIN60, T_MAX, T_MIN
+from station.formulate.snap.bounds import SAFETY, SIN60, pair_bounds2
+from station.model.cie2000 import CIE2000_K7
 
 __all__ = ["CandidateSearch", "best_first_cie2000", "box_bound_one", "compiled_search"]
 
@@ -31,7 +32,7 @@ _COMPILE_LOCK = threading.Lock()
 
 def box_bound_one(q: NDArray, cq: NDArray, lo: NDArray, hi: NDArray, cmax: NDArray, i: int) -> float:
     """The ``hue=False`` CIEDE2000 box bound of :func:`box_bounds` for box *i* (scalar form, compiled)."""
-    k7 = 25.0**7
+    k7 = CIE2000_K7
     total = 0.0
     for t in range(q.shape[0]):
         d0 = max(lo[i, t, 0] - q[t, 0], q[t, 0] - hi[i, t, 0], 0.0)
@@ -53,45 +54,18 @@ def box_bound_one(q: NDArray, cq: NDArray, lo: NDArray, hi: NDArray, cmax: NDArr
 
 def paint_bounds_one(q: NDArray, cq: NDArray, blab: NDArray, i: int, w: int) -> tuple[float, float]:
     """Lower and upper bounds of the summed CIEDE2000 of paint (*i*, *w*) of the leaf table *blab* to
-    the query *q* (chromas *cq*): :func:`point_bounds_cie2000`'s arithmetic per element, with its
-    margins (compiled inline into :func:`best_first_cie2000`)."""
-    k7 = 25.0**7
+    the query *q* (chromas *cq*): :func:`~station.formulate.snap.bounds.pair_bounds2` per angle (the
+    NumPy path's own arithmetic), summed with :func:`point_bounds_cie2000`'s margins (compiled inline
+    into :func:`best_first_cie2000`)."""
     lower = 0.0
     upper = 0.0
     for t in range(q.shape[0]):
-        pl, pa, pb = blab[i, w, t, 0], blab[i, w, t, 1], blab[i, w, t, 2]
-        ql, qa, qb = q[t, 0], q[t, 1], q[t, 2]
-        cbar = (cq[t] + math.sqrt(pa * pa + pb * pb)) * 0.5
-        c7 = cbar * cbar
-        c7 = c7 * c7 * c7 * cbar
-        g1 = 1.5 - 0.5 * math.sqrt(c7 / (c7 + k7))
-        a1 = g1 * qa
-        a2 = g1 * pa
-        cp1 = math.sqrt(a1 * a1 + qb * qb)
-        cp2 = math.sqrt(a2 * a2 + pb * pb)
-        dc = cp2 - cp1
-        da = a2 - a1
-        db = pb - qb
-        dab2 = da * da + db * db
-        dh2 = dab2 - dc * dc
-        eta = 1e-12 * dab2 + 1e-30
-        dh_lo = math.sqrt(max(dh2 - eta, 0.0))
-        dh_hi = math.sqrt(max(dh2, 0.0) + eta)
-        cpbar = (cp1 + cp2) * 0.5
-        cp7 = cpbar * cpbar
-        cp7 = cp7 * cp7 * cp7 * cpbar
-        r = (2.0 * SIN60) * math.sqrt(cp7 / (cp7 + k7))
-        lbar2 = (ql + pl) * 0.5 - 50.0
-        lbar2 = lbar2 * lbar2
-        s_l = 1.0 + 0.015 * lbar2 / math.sqrt(20.0 + lbar2)
-        y = abs(dc) / (1.0 + 0.045 * cpbar)
-        ry = r * y
-        dl = (pl - ql) / s_l
-        base = dl * dl + y * y
-        z_hi = dh_hi / (1.0 + (0.015 * T_MIN) * cpbar)
-        z = min(max(ry * 0.5, dh_lo / (1.0 + (0.015 * T_MAX) * cpbar)), z_hi)
-        lower += math.sqrt(max(base + z * (z - ry), 0.0))
-        upper += math.sqrt(base + z_hi * (z_hi + ry))
+        pa, pb = blab[i, w, t, 1], blab[i, w, t, 2]
+        lo2, hi2 = pair_bounds2(
+            q[t, 0], q[t, 1], q[t, 2], cq[t], blab[i, w, t, 0], pa, pb, math.sqrt(pa * pa + pb * pb)
+        )
+        lower += math.sqrt(lo2)
+        upper += math.sqrt(hi2)
     return lower * SAFETY - 1e-10, upper * (2.0 - SAFETY) + 1e-10
 
 
@@ -184,7 +158,12 @@ def _compile() -> CandidateSearch | None:
     except ImportError:  # pragma: no cover - numba is a declared dependency; the NumPy path remains
         return None
     try:
-        for helper in (box_bound_one, paint_bounds_one, insert_sorted):  # compiled inline, not rebound
+        for helper in (
+            pair_bounds2,
+            box_bound_one,
+            paint_bounds_one,
+            insert_sorted,
+        ):  # compiled inline, not rebound
             register_jitable(helper)
         search = numba.njit(cache=True, nogil=True)(best_first_cie2000)
         box, one = np.zeros((1, 1, 3)), np.zeros((1, 1))
