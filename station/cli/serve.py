@@ -158,6 +158,26 @@ def _parse_sims(text: str | None) -> tuple[str, ...]:
     return kinds
 
 
+def _load_demo_library(session: Any) -> None:
+    """Load the demo library into the service's database on its first start, saying so; a failure is a
+    warning (the service still runs; the library routes then list nothing)."""
+    from station.api.services.library import load_demo_library
+
+    print("checking the demo library (the first start loads ~6000 paints)…", flush=True)
+    try:
+        added = load_demo_library(session=session)
+    except Exception as exc:
+        session.rollback()
+        print(
+            f"warning: demo library not loaded: {type(exc).__name__}: {exc}"[:500],
+            file=sys.stderr,
+            flush=True,
+        )
+        return
+    if added:
+        print(f"library: {added} synthetic demo paints loaded", flush=True)
+
+
 def serve(args: argparse.Namespace) -> dict[str, Any] | None:
     """Run the service until interrupted (each start-up step is announced on stdout as it begins)."""
     print("starting the station service: loading its modules…", flush=True)
@@ -166,7 +186,6 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
     from db.files import private_dir
     from station.api import create_app
     from station.api.connections import ConnectionGuard, RequestConcurrencyLimit, guarded_protocol
-    from station.api.services.library import load_demo_library
     from station.api.services.users import bootstrap_admin
     from station.api.timeouts import BodyReadTimeout
 
@@ -191,19 +210,7 @@ def serve(args: argparse.Namespace) -> dict[str, Any] | None:
         with _database_errors(url), sessions() as session:
             token = bootstrap_admin(session=session)
             if settings.load_demo_library:
-                print("checking the demo library (the first start loads ~6000 paints)…", flush=True)
-                try:
-                    added = load_demo_library(session=session)
-                except Exception as exc:  # the service still runs; the library routes then list nothing
-                    session.rollback()
-                    print(
-                        f"warning: demo library not loaded: {type(exc).__name__}: {exc}"[:500],
-                        file=sys.stderr,
-                        flush=True,
-                    )
-                    added = 0
-                if added:
-                    print(f"library: {added} synthetic demo paints loaded", flush=True)
+                _load_demo_library(session)
     finally:
         engine.dispose()
     print(f"database: {engine.url.render_as_string(hide_password=True)}", flush=True)

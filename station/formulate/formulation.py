@@ -31,12 +31,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Collection, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.formulate.batch import DEFAULT_BATCH_G, MAX_BATCH_G, batch_masses
+from station.formulate.batch import DEFAULT_BATCH_G
 from station.formulate.colorants import (
     GLOSS_CLEAR_GU,
     GLOSS_PER_MATTING,
@@ -48,6 +48,8 @@ from station.formulate.de_kernels import cie2000
 from station.formulate.errors import FormulateInputError, NotFormulableError
 from station.formulate.library import STANDARD_ANGLES, Library
 from station.formulate.lines import lines_for_design, toner_line
+from station.formulate.options import MAX_STARTS, FormulationOptions, formulation_options
+from station.formulate.result import FormulationResult
 from station.formulate.selection import (
     MAX_SUBSETS,
     REFINED,
@@ -72,147 +74,15 @@ from station.model.domain import (
     FORMULATION_TOLERANCE_DE00,
     GLOSS_MAX_GU,
     GLOSS_MIN_GU,
-    MAX_COLORANTS_RANGE,
     METAMERISM_TEST_ILLUMINANTS,
-    RECIPE_COUNT_RANGE,
-    SCALE_RESOLUTION_RANGE_G,
 )
 
 #: Mean CIEDE2000 over the angles accepted as "formulable" (station.model.domain).
 DEFAULT_TOLERANCE = FORMULATION_TOLERANCE_DE00
 #: Fractions at or below this are dropped from a recipe (:meth:`ColorantDatabase.recipe`'s threshold).
 _RECIPE_THRESHOLD = 1e-6
-#: Starting recipes fitted at most per toner line (library matches first, then generic starts).
-MAX_STARTS = 4
 #: Line-wide points (best first) the backward elimination of the selection starts from.
 ELIMINATED_POINTS = 2
-
-
-@dataclass(frozen=True)
-class FormulationOptions:
-    """What the chemist asks of a recipe (validated by :func:`formulation_options`)."""
-
-    line: str | None = None
-    paint_type: str | None = None
-    max_colorants: int = DEFAULT_MAX_COLORANTS
-    scale_resolution_g: float = DEFAULT_SCALE_RESOLUTION_G
-    batch_g: float = DEFAULT_BATCH_G
-    recipes: int = DEFAULT_RECIPE_COUNT
-    illuminants: tuple[str, ...] = METAMERISM_TEST_ILLUMINANTS
-    max_starts: int = MAX_STARTS
-
-
-def _is_integer(value: object) -> bool:
-    """True for an int that is not a bool (``True`` is an int to Python, not a count to a chemist)."""
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
-def formulation_options(o: FormulationOptions) -> FormulationOptions:
-    """*o*, each field checked (a :class:`FormulateInputError` naming the field and its accepted range)."""
-    lo, hi = MAX_COLORANTS_RANGE
-    if not _is_integer(o.max_colorants) or not lo <= o.max_colorants <= hi:
-        raise FormulateInputError("max_colorants", f"an integer in [{lo}, {hi}]", o.max_colorants)
-    lo_r, hi_r = SCALE_RESOLUTION_RANGE_G
-    if not (np.isfinite(o.scale_resolution_g) and lo_r <= o.scale_resolution_g <= hi_r):
-        raise FormulateInputError(
-            "scale_resolution_g", f"{lo_r:g} <= scale_resolution_g <= {hi_r:g} g", o.scale_resolution_g
-        )
-    if not (
-        np.isfinite(o.batch_g) and 0 < o.batch_g <= MAX_BATCH_G and o.batch_g >= 10 * o.scale_resolution_g
-    ):
-        raise FormulateInputError(
-            "batch_g", f"10 × the scale resolution <= batch_g <= {MAX_BATCH_G:g} g", o.batch_g
-        )
-    lo, hi = RECIPE_COUNT_RANGE
-    if not _is_integer(o.recipes) or not lo <= o.recipes <= hi:
-        raise FormulateInputError("recipes", f"an integer in [{lo}, {hi}]", o.recipes)
-    if not _is_integer(o.max_starts) or not 1 <= o.max_starts <= 50:
-        raise FormulateInputError("max_starts", "an integer in [1, 50]", o.max_starts)
-    if o.line is not None:
-        toner_line(o.line)
-    return o
-
-
-@dataclass(frozen=True)
-class FormulationResult:
-    """A formulated recipe and its predicted colour.
-
-    Attributes
-    ----------
-    recipe
-        ``{colorant: mass fraction}`` (fractions below 1e-6 omitted).
-    concentrations
-        The full vector, in :attr:`ColorantDatabase.names` order.
-    angles_deg, design_lab, predicted_lab
-        Angles (degrees) and Lab (D65/10°) of the design and of the recipe's prediction, shape (A, 3).
-    de_per_angle
-        Predicted CIEDE2000 per angle; ``mean_de`` and ``max_de`` summarise it.
-    formulable
-        ``mean_de <= tolerance``; ``message`` says "not formulable with these colorants" otherwise.
-    gloss_gu
-        Predicted 60° gloss (GU) of the recipe.
-    start
-        Where the winning start came from (a library code, "given" or "generic").
-    candidates
-        ``(start label, full concentration vector)`` of the distinct recipes the starts converged to,
-        the winning recipe first (filled when :func:`formulate` is asked for ``candidates``); their
-        metamerism ranking is :func:`station.formulate.metamerism.rank_formulation`.
-    line
-        The toner line the recipe is drawn from.
-    recipes
-        The best few recipes, ranked (:mod:`station.formulate.selection`); ``recipe`` is the first.
-    mean_de_unrounded
-        Mean ΔE00 of the first recipe before its amounts were rounded to the scale.
-    """
-
-    recipe: dict[str, float]
-    concentrations: NDArray[np.float64]
-    angles_deg: tuple[float, ...]
-    design_lab: NDArray[np.float64]
-    predicted_lab: NDArray[np.float64]
-    de_per_angle: tuple[float, ...]
-    mean_de: float
-    max_de: float
-    formulable: bool
-    tolerance: float
-    gloss_gu: float
-    start: str
-    message: str
-    elapsed_s: float = 0.0
-    evaluations: int = 0
-    synthetic: bool = True
-    warnings: tuple[str, ...] = field(default=())
-    candidates: tuple[tuple[str, NDArray[np.float64]], ...] = field(default=())
-    line: str = ""
-    recipes: tuple[RecipeOption, ...] = field(default=())
-    mean_de_unrounded: float = float("nan")
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-able form for the CLI and the service."""
-        return {
-            "recipe": self.recipe,
-            "angles_deg": list(self.angles_deg),
-            "design_lab": self.design_lab.tolist(),
-            "predicted_lab": self.predicted_lab.tolist(),
-            "de_per_angle": list(self.de_per_angle),
-            "mean_de": self.mean_de,
-            "max_de": self.max_de,
-            "metric": "cie2000",
-            "formulable": self.formulable,
-            "tolerance": self.tolerance,
-            "gloss_gu": self.gloss_gu,
-            "start": self.start,
-            "message": self.message,
-            "elapsed_s": self.elapsed_s,
-            "synthetic_colorants": self.synthetic,
-            "warnings": list(self.warnings),
-            "batch": batch_masses(self.recipe).to_dict(),
-            "nearest_achievable_lab": None if self.formulable else self.predicted_lab.tolist(),
-            "line": self.line,
-            "mean_de_unrounded": self.mean_de_unrounded,
-            "evaluations": self.evaluations,
-            "recipes": [o.to_dict() for o in self.recipes],
-        }
 
 
 def matting_for_gloss(gloss_gu: float, db: ColorantDatabase) -> tuple[float, str | None]:

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from station.model.gloss import ClearCoat
 from station.render import tonemap
@@ -369,6 +370,40 @@ def _resolve_edges(
     return _EdgeResolve(idx, paint, images, ndv.astype(np.float32), background.astype(np.float32))
 
 
+def _gl_images(
+    images: NDArray[np.float32],
+    scene: Scene,
+    basis: PrefilteredBasis,
+    layout: tuple[tuple[str, int], ...],
+    gl_renderer: GLRenderer,
+    coat: ClearCoat | None,
+    pixels: NDArray[np.int64],
+    fall_off: NDArray[np.float32],
+    tb: NDArray[np.float32] | float,
+) -> None:
+    """Fill *images* (3, layout, pixels) with GL renders of one unit weight per layout entry: the base
+    images times what the coat transmits (*tb*), the coat's gloss images as rendered, the fall-off image
+    (``"A"``) as the NumPy path makes it (*fall_off*, already times *tb*)."""
+    m = len(basis.exponents)
+    e = np.array(basis.exponents)
+    for j, (kind, i) in enumerate(layout):
+        if kind == "A":  # one image, made by numpy_renderer.fall_off_term as on the NumPy path
+            images[:, j] = fall_off
+            continue
+        k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)
+        if kind == "D":
+            k_d[:] = 1.0 / np.pi
+        elif kind == "Dg":
+            k_dd[i] = (e[i] + 1.0) / (2.0 * np.pi)
+        else:
+            k_g[i] = (e[i] + 1.0) / (2.0 * np.pi)
+        unit = LobeWeights(basis.exponents, k_d, k_dd, k_g)
+        unit_coat = coat if kind in ("Gh", "Cg") else None
+        images[:, j] = gl_renderer.render_linear(scene, [unit], coat=unit_coat).reshape(-1, 3)[pixels].T
+        if unit_coat is None:
+            images[:, j] *= tb  # a base image: what the coat transmits (1 when there is none)
+
+
 def build_basis_images(
     scene: Scene,
     basis: PrefilteredBasis,
@@ -439,24 +474,7 @@ def build_basis_images(
     if gl_renderer is None:
         images[:, :, inner] = found
     else:
-        m = len(basis.exponents)
-        e = np.array(basis.exponents)
-        for j, (kind, i) in enumerate(layout):
-            if kind == "A":  # one image, made by numpy_renderer.fall_off_term as on the NumPy path
-                images[:, j] = fall_off * tb
-                continue
-            k_d, k_dd, k_g = np.zeros(3), np.zeros((m, 3)), np.zeros(m)
-            if kind == "D":
-                k_d[:] = 1.0 / np.pi
-            elif kind == "Dg":
-                k_dd[i] = (e[i] + 1.0) / (2.0 * np.pi)
-            else:
-                k_g[i] = (e[i] + 1.0) / (2.0 * np.pi)
-            unit = LobeWeights(basis.exponents, k_d, k_dd, k_g)
-            unit_coat = coat if kind in ("Gh", "Cg") else None
-            images[:, j] = gl_renderer.render_linear(scene, [unit], coat=unit_coat).reshape(-1, 3)[pixels].T
-            if unit_coat is None:
-                images[:, j] *= tb  # a base image: what the coat transmits (1 when there is none)
+        _gl_images(images, scene, basis, layout, gl_renderer, coat, pixels, fall_off * tb, tb)
     if edges is not None:
         where = np.searchsorted(edges.pixels, pixels[~inner])  # edge pixels with some coverage
         images[:, :, ~inner] = edges.images[:, :, where]

@@ -18,12 +18,7 @@ from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render import gl_textures as tx
 from station.render.errors import RenderInputError
-from station.render.flakes import (
-    FlakeChoice,
-    flake_lod,
-    flake_mean_cube,
-    flake_uniforms,
-)
+from station.render.flakes import FlakeChoice, flake_lod, flake_mean_cube, flake_uniforms
 from station.render.gl_anisotropy import anisotropy_frame
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
