@@ -100,14 +100,16 @@ class MeshArrays:
 
     def __init__(self, ctx: Any) -> None:
         self.ctx = ctx
-        self._current: tuple | None = None  # (key, mesh, vbo, ibo, vao)
+        self._current: tuple | None = None  # (key, (mesh, prog), vbo, ibo, vao)
 
     def vao(self, mesh: Any, prog: Any) -> Any:
-        """Vertex array of *mesh* for *prog* (the previous mesh's buffers released on a change)."""
+        """Vertex array of *mesh* for *prog* (the previous mesh's buffers released on a change). The mesh
+        and the program are held with the key, so that neither id can be reused by a new object while
+        its vertex array is cached (a released program's id taken by a new program drew a stale array)."""
         key = (id(mesh), id(prog))
         if self._current is None or self._current[0] != key:
             self.release()
-            self._current = (key, mesh, *mesh_arrays(self.ctx, mesh, prog))
+            self._current = (key, (mesh, prog), *mesh_arrays(self.ctx, mesh, prog))
         return self._current[4]
 
     def release(self) -> None:

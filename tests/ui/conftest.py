@@ -16,7 +16,9 @@ import atexit
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
+from collections.abc import Iterator
 
 import pytest
 
@@ -119,6 +121,16 @@ def _prefilter_cache_dir():
         os.environ.pop("CACAD_CACHE_DIR", None)
     else:
         os.environ["CACAD_CACHE_DIR"] = old
+
+
+@pytest.fixture(autouse=True)
+def _no_standalone_gl(request: pytest.FixtureRequest) -> Iterator[None]:
+    """No viewer test makes a standalone (EGL) GL context: after one, Mesa crashes Qt's GLX contexts of
+    later views in the same process (scripts/test.sh); draw the core on a view's own context instead."""
+    had = "glcontext.egl" in sys.modules
+    yield
+    if not had and "glcontext.egl" in sys.modules:
+        pytest.fail(f"{request.node.nodeid} made a standalone EGL context in the viewer's process")
 
 
 @pytest.fixture(autouse=True)

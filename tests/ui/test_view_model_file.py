@@ -63,7 +63,7 @@ def _open_model(qtbot, win, path) -> None:
 
 @pytest.mark.gl
 def test_file_open_model_shows_it_in_the_view(qtbot, tmp_path, box_glb, own_cache) -> None:
-    from station.render.gl_renderer import GLRenderer, create_gl_context
+    from station.render.gl_renderer import GLRenderer
     from ui.app import MainWindow
     from ui.models.view import environment_basis_gl
 
@@ -91,15 +91,18 @@ def test_file_open_model_shows_it_in_the_view(qtbot, tmp_path, box_glb, own_cach
     frame = view.grab_image()
     h, w = frame.shape[:2]
     settings = win.view_model.settings
-    ctx = create_gl_context()  # the core on a context of its own, not the widget's
+    # the core renderer of its own (own prefilter, own targets) on the widget's context: a standalone EGL
+    # context in this process would break Qt's GLX contexts of later views (scripts/test.sh)
+    assert view.ctx is not None
+    view.makeCurrent()
     try:
-        with GLRenderer(environment_basis_gl(settings.environment, ctx), w, h, ctx=ctx) as gl:
+        with GLRenderer(environment_basis_gl(settings.environment, view.ctx), w, h, ctx=view.ctx) as gl:
             shown = win.view_model.weights()
             assert shown is not None
             weights = list(shown)
             core = gl.render_mesh(win.view_model.mesh(), weights, camera=settings.camera())
     finally:
-        ctx.release()
+        view.doneCurrent()
     diff = np.abs(frame.astype(int) - core.astype(int))
     assert np.median(diff) <= 2 and np.percentile(diff, 99) <= 12
     background = core[0, 0].astype(int)

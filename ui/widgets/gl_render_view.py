@@ -166,8 +166,9 @@ class GLRenderView(ViewLogic):
         basis, weights, ev = self.basis, self.model.weights(), self.model.settings.exposure_ev
         if basis is None or weights is None:
             raise RuntimeError("no edit frame before the first basis images and design")
-        key = (id(basis), ev)
-        reuse = self._frame if key == self._frame_key else None
+        key = (basis, ev)  # the object itself: an id could be taken by a later basis of another size
+        same = self._frame_key is not None and self._frame_key[0] is basis and self._frame_key[1] == ev
+        reuse = self._frame if same else None
         frame = basis.core.edit_rgba(list(weights), ev, out=reuse)
         self._frame, self._frame_key = frame, key
         return frame
@@ -364,8 +365,13 @@ class GLRenderView(ViewLogic):
         settings = self.model.settings
         try:
             basis = self._gl_env(settings.environment)
-            key = (id(basis), w, h)
-            if self._core is None or self._core_key != key:
+            key = (basis, w, h)  # the object itself, not its id (which a later basis could take)
+            if (
+                self._core is None
+                or self._core_key is None
+                or self._core_key[0] is not basis
+                or self._core_key[1:] != key[1:]
+            ):
                 if self._core is not None:
                     self._core.release()
                 self._core = GLRenderer(basis, w, h, ctx=ctx)
