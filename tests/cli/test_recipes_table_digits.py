@@ -7,23 +7,11 @@ from typing import Any
 import pytest
 
 from station.cli.formulate import recipes_table
+from tests.recipe_option import recipe_option
 
 
 def _recipe(resolution_g: float, grams: dict[str, float]) -> dict[str, Any]:
-    return {
-        "rank": 1,
-        "line": "solid",
-        "grams": grams,
-        "binder_g": 1000.0 - sum(grams.values()),
-        "batch_g": 1000.0,
-        "scale_resolution_g": resolution_g,
-        "mean_de": 0.4,
-        "mean_de_unrounded": 0.3,
-        "metamerism_index": None,
-        "colorants": len(grams),
-        "cost_per_kg": 12.0,
-        "formulable": True,
-    }
+    return recipe_option(1000.0, resolution_g, grams)
 
 
 @pytest.mark.parametrize(

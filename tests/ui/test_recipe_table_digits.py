@@ -6,23 +6,12 @@ from typing import Any
 
 import pytest
 
+from tests.recipe_option import recipe_option
 from ui.models.formulation_tables import column_from_option, recipe_table
 
 
 def _option(batch_g: float, resolution_g: float, grams: dict[str, float]) -> dict[str, Any]:
-    return {
-        "rank": 1,
-        "grams": grams,
-        "binder_g": batch_g - sum(grams.values()),
-        "batch_g": batch_g,
-        "scale_resolution_g": resolution_g,
-        "mean_de": 0.4,
-        "mean_de_unrounded": 0.3,
-        "metamerism_index": None,
-        "colorants": len(grams),
-        "cost_per_kg": 12.0,
-        "formulable": True,
-    }
+    return recipe_option(batch_g, resolution_g, grams)
 
 
 @pytest.mark.parametrize(
