@@ -11,10 +11,13 @@ fixed in world space, which is the objects' own space (shapes and meshes never m
 environment do), so the sparkle sticks to the surface while orbiting or dollying. Each cell hashes
 (pcg3d) to one random flake normal m about the shading normal with the layer's spread, and, where a cell
 holds n_k = density · (s·2^k)² < 1 flakes on average, to whether it holds one (probability n_k). The
-pixel uses the level λ = log2(CELL_PIXELS · footprint / s) (footprint: the pixel's side on the surface,
-divided by √(N·V)), blended with the next coarser level by the fraction of λ, with weights
+lattice is turned against the scene's axes (LATTICE_ROTATION), and each cell's term is weighted by a
+smooth bump b about the cell's centre that vanishes on its faces (:func:`flake_window`): a glint is a soft
+spot a few pixels wide and the sparkle is continuous from cell to cell. The pixel uses the level
+λ = log2(CELL_PIXELS · footprint / s) (footprint: the pixel's side on the surface, divided by √(N·V)),
+blended with the next coarser level by the fraction of λ, with weights
 
-    w_k = present_k (1 − f) / √max(1, n_k) / √((1 − f)² + f²),   w_{k+1} likewise with f,
+    w_k = present_k b_k (1 − f) / √max(1, n_k) / √((1 − f)² + f²),   w_{k+1} likewise with f,
 
 so the sparkle's variance stays that of N flakes at every distance and the blend changes smoothly with
 distance. R_m,k is the view mirrored about level k's flake normal, L_sharp the sharpest prefiltered map
@@ -44,12 +47,39 @@ from station.render.camera import Camera
 
 #: Millimetres per scene unit.
 UNIT_MM = 100.0
-#: Pixel footprints per side of the finest cell level a pixel uses: cells at least two pixels wide are
-#: sampled above the pixel grid's Nyquist limit, so a glint is a few pixels wide and a sub-pixel camera
-#: move shifts it instead of re-rolling it.
-CELL_PIXELS = 2.0
+#: Pixel footprints per side of the finest cell level a pixel uses: cells four pixels wide or more, whose
+#: glint bump (GLINT_RADIUS, below) is two pixels in radius or more, so a glint is a few pixels wide and a
+#: sub-pixel move of the camera shifts it instead of re-rolling it (with cells of two pixels and a hard
+#: cell edge, a pixel sample half a pixel away fell in another cell for a quarter of the pixels).
+CELL_PIXELS = 4.0
 #: Sparkle amplitude 1/√N below which the layer is switched off (2 %: under ~0.5 ΔE00 on a bright glint).
 SPARKLE_MIN = 0.02
+
+
+def _lattice_rotation(ax: float, ay: float, az: float) -> np.ndarray:
+    """R_z(az) R_y(ay) R_x(ax), angles in radians."""
+    cx, sx = math.cos(ax), math.sin(ax)
+    cy, sy = math.cos(ay), math.sin(ay)
+    cz, sz = math.cos(az), math.sin(az)
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+    return rz @ ry @ rx
+
+
+#: The cell lattice's axes in the scene's frame (rows; a fixed generic rotation, 0.9, 0.7, 0.5 rad about
+#: x, y, z): a surface at a constant scene coordinate (a flat panel) cuts the cells at every depth instead
+#: of all at one, so the glint window below samples its whole range on every surface.
+LATTICE_ROTATION = _lattice_rotation(0.9, 0.7, 0.5)
+#: Radius of a glint in cell sides: a cell's flake term is weighted by the bump (1 − |x|²/r²)² about the
+#: cell's centre (x its offset in cell sides), which is zero on the cell's faces, so the sparkle is
+#: continuous across cells (a glint is a soft spot a few pixels wide, and a sub-pixel move of the camera or
+#: of a pixel's sample changes it a little instead of switching to another cell).
+GLINT_RADIUS = 0.5
+#: 1/√E[bump²] over a cell (E = 4π r³ ∫₀¹ (1 − u²)⁴ u² du = 4π r³ · 1024/27720): the weighted term
+#: keeps the variance of its cell's flakes on average, and, as the bump multiplies a zero-mean term that
+#: does not depend on the flake normal, its mean stays zero.
+WINDOW_NORM = 1.0 / math.sqrt(4.0 * math.pi * GLINT_RADIUS**3 * 1024.0 / 27720.0)
 
 
 @dataclass(frozen=True)
@@ -85,7 +115,7 @@ def flake_lod(flakes: FlakeLayer | None, camera: Camera, height: int) -> FlakeCh
     return FlakeChoice(True, px, n, amp, f"flakes {size}: {max(n, 1.0):.0f} per pixel, sparkle {amp:.1%}: on")
 
 
-def flake_uniforms(flakes: FlakeLayer) -> dict[str, float]:
+def flake_uniforms(flakes: FlakeLayer) -> dict[str, float | tuple[float, ...]]:
     """Uniform values of the layer for ``render.frag.glsl``."""
     return {
         "u_flake_size_mm": flakes.size_um / 1000.0,
@@ -93,6 +123,7 @@ def flake_uniforms(flakes: FlakeLayer) -> dict[str, float]:
         "u_flake_sigma": math.radians(flakes.spread_deg),
         "u_flake_reflectance": flakes.reflectance,
         "u_unit_mm": UNIT_MM,
+        "u_flake_lattice": tuple(float(v) for v in LATTICE_ROTATION.T.ravel()),  # column-major
     }
 
 
@@ -160,8 +191,24 @@ def flake_levels(
         cell = size * np.exp2(level)
         count = flakes.density_per_mm2 * cell * cell
         m, u = flake_normals(flakes, positions, cell, normals, level.astype(np.int64))
-        out.append((blend * (u < count) / np.sqrt(np.maximum(count, 1.0)), m))
+        win = flake_window(positions, cell)
+        out.append((blend * win * (u < count) / np.sqrt(np.maximum(count, 1.0)), m))
     return out
+
+
+def _lattice(positions: np.ndarray, cells_mm: np.ndarray | float) -> np.ndarray:
+    """Positions (P, 3) world in lattice coordinates of cells of side *cells_mm* (P,) or scalar, mm."""
+    p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    scale = (UNIT_MM / np.broadcast_to(np.asarray(cells_mm, dtype=np.float64), p.shape[:1])).reshape(-1, 1)
+    return (p @ LATTICE_ROTATION.T) * scale
+
+
+def flake_window(positions: np.ndarray, cells_mm: np.ndarray | float) -> np.ndarray:
+    """The glint bump (P,) of each position's cell: WINDOW_NORM (1 − |x|²/r²)² for |x| < r, 0 beyond, x the
+    offset (cell sides) from the cell's centre and r = GLINT_RADIUS (constants above)."""
+    q = _lattice(positions, cells_mm)
+    d2 = np.sum((q - np.floor(q) - 0.5) ** 2, axis=-1) / GLINT_RADIUS**2
+    return WINDOW_NORM * np.maximum(1.0 - d2, 0.0) ** 2
 
 
 #: Abramowitz & Stegun 7.1.26 (|error| ≤ 1.5e-7): erf(x) = 1 − t(a1 + t(a2 + …)) e^(−x²), t = 1/(1 + p x),
@@ -215,8 +262,7 @@ def flake_normals(
     g_y B)) about the shading normal N (P, 3) with σ = spread_deg in radians and the frame
     T = normalize(N × Y) (N × X near ±Y), B = N × T."""
     p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
-    scale = (UNIT_MM / np.broadcast_to(np.asarray(cells_mm, dtype=np.float64), p.shape[:1])).reshape(-1, 1)
-    cells = np.floor(p * scale).astype(np.int64) + (1 << 20)
+    cells = np.floor(_lattice(p, cells_mm)).astype(np.int64) + (1 << 20)
     cells[:, 2] += np.broadcast_to(np.asarray(level, dtype=np.int64), p.shape[:1]) << 24
     h = _pcg3d((cells & 0xFFFFFFFF).astype(np.uint32))
     u = ((h >> np.uint32(8)).astype(np.float64) + 0.5) / 16777216.0

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from station.render.flakes import CELL_PIXELS, flake_tint
+from station.render.flakes import CELL_PIXELS, GLINT_RADIUS, WINDOW_NORM, flake_tint
 from station.render.lobes import COSINE_SG_SHARPNESS
 from station.render.prefilter import WIDE_EXPONENT
 from station.render.shapes import SHAPE_INDEX
@@ -37,6 +37,8 @@ def renderer_defines(
         "NEUTRAL_ALBEDO": f"{NEUTRAL_ALBEDO:.4f}",
         "PENUMBRA_DEG": f"{PENUMBRA_DEG:.4f}",
         "FLAKE_CELL_PIXELS": f"{CELL_PIXELS:.4f}",
+        "FLAKE_GLINT_RADIUS": f"{GLINT_RADIUS:.6f}",
+        "FLAKE_WINDOW_NORM": f"{WINDOW_NORM:.6f}",
         "N_LOBES": n_lobes,
         "DIFFUSE_SH": int(diffuse == "sh"),
         "COMBINED": int(combined),

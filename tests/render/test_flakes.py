@@ -102,9 +102,10 @@ def test_sparkle_keeps_the_mean_colour(gl_ctx, booth_basis, eye) -> None:
         linear_srgb_to_lab(off[inner, inner].reshape(-1, 3)),
         method="cie2000",
     )
-    # sparkle: single pixels differ (the booth is smooth: faint; cells of two pixels or more carry the
-    # fluctuation of their flakes, 1/√N of a cell, station.render.flakes.CELL_PIXELS)
-    assert np.percentile(px, 99) > 0.25
+    # sparkle: single pixels differ (the booth is smooth: faint; cells of four pixels or more carry the
+    # fluctuation of their flakes, 1/√N of a cell, station.render.flakes.CELL_PIXELS: 0.20–0.25 here, half
+    # what cells of two pixels gave)
+    assert np.percentile(px, 99) > 0.15
 
 
 @pytest.mark.gl
@@ -115,7 +116,7 @@ def test_sun_glints_and_lod_off(gl_ctx) -> None:
     w = fit_design(SILVER)
     basis = prefilter.prefilter_basis(procedural.sunny_sky(128), w.exponents, max_size=32)
     close = shapes.Scene("speedshape", camera=Camera((0.6, 0.35, 1.2), (0.3, 0.0, 0.0), fov_deg=30.0))
-    with GLRenderer(basis, 96, 64, ctx=gl_ctx) as gl:
+    with GLRenderer(basis, 288, 192, ctx=gl_ctx) as gl:  # cells of four pixels: glints need the pixels
         off = gl.render_linear(close, [w])
         on = gl.render_linear(close, [w], flakes=METALLIC_FLAKES)
         assert gl.last_flakes is not None
@@ -145,10 +146,10 @@ def test_numpy_sparkle_is_the_gl_sparkle(gl_ctx, sky_basis) -> None:
     from station.render.numpy_renderer import render_linear
 
     w, basis = sky_basis
-    with GLRenderer(basis, 96, 64, ctx=gl_ctx) as gl:
+    with GLRenderer(basis, 288, 192, ctx=gl_ctx) as gl:
         gl_s = gl.render_linear(CLOSE, [w], flakes=METALLIC_FLAKES) - gl.render_linear(CLOSE, [w])
-    np_s = render_linear(CLOSE, basis, [w], 96, 64, flakes=METALLIC_FLAKES) - render_linear(
-        CLOSE, basis, [w], 96, 64
+    np_s = render_linear(CLOSE, basis, [w], 288, 192, flakes=METALLIC_FLAKES) - render_linear(
+        CLOSE, basis, [w], 288, 192
     )
     rms = float(np.sqrt(np.mean(np_s**2)))
     assert rms > 0.02  # there is sparkle to compare
@@ -185,7 +186,7 @@ def test_numpy_sparkle_keeps_the_mean_colour(booth_basis, sky_basis, env, eye) -
     on = render_linear(scene, basis, [weights], 128, 128, flakes=layer).astype(float)
     block, px = _block_de(on, off)
     assert block.max() <= 0.5, block.max()
-    assert np.percentile(px, 99) > 0.25
+    assert np.percentile(px, 99) > 0.15  # as in test_sparkle_keeps_the_mean_colour
 
 
 def test_numpy_level_of_detail_turns_flakes_off(sky_basis) -> None:

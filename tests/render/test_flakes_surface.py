@@ -17,7 +17,11 @@ from station.render.camera import Camera
 
 SILVER = FaceFlopTravelGloss((90.0, 0.0, -1.0), (30.0, 0.0, -2.0), 60.0, 88.0, "silver")
 SIZE = 128
+#: Macro view: the target is 0.61 units away, but the eye is 0.097 units (9.7 mm) from the surface it sees
+#: (a pixel ≈ 27 µm, about one flake): a 0.25° turn about the target turns the view at that surface by ≈ 15°.
 CLOSE = Camera((0.35, 0.25, 0.55), (0.25, 0.0, 0.0), fov_deg=20.0)
+#: The close-up of docs/render.md (bench.render_scene.SHAPE_CLOSE): the surface about 60 mm from the eye.
+SHAPE_CLOSE = Camera((0.6, 0.35, 1.2), (0.3, 0.0, 0.0), fov_deg=30.0)
 
 
 @pytest.fixture(scope="module")
@@ -73,12 +77,13 @@ def _sparkle(gl, scene, w) -> np.ndarray:
 @pytest.mark.parametrize("env", ["booth", "sky"])
 def test_sparkle_sticks_to_the_surface(gl_ctx, bases, env) -> None:
     """After a 0.25° turn and a 0.2 % dolly the sparkle at the same surface points correlates with itself
-    (cells sized to the pixel footprint gave ≈ 0): ≥ 0.8 in the default view, ≥ 0.65 close up."""
+    (cells sized to the pixel footprint gave ≈ 0; cells of two pixels with hard edges 0.63–0.83): ≥ 0.8 in
+    the default view, the close-up and the macro view."""
     from station.render.gl_renderer import GLRenderer
 
     w, basis = bases[0], bases[1][env]
     with GLRenderer(basis, SIZE, SIZE, ctx=gl_ctx) as gl:
-        for cam, bar in ((shapes.Scene("speedshape").view_camera, 0.8), (CLOSE, 0.65)):
+        for cam in (shapes.Scene("speedshape").view_camera, SHAPE_CLOSE, CLOSE):
             s0 = shapes.Scene("speedshape", camera=cam)
             sp0 = _sparkle(gl, s0, w)
             assert gl.last_flakes is not None and gl.last_flakes.on
@@ -86,53 +91,66 @@ def test_sparkle_sticks_to_the_surface(gl_ctx, bases, env) -> None:
             for moved in (_orbit(cam, 0.25), _dolly(cam, 1.002)):
                 s1 = shapes.Scene("speedshape", camera=moved)
                 corr = _reprojected_correlation(s0, s1, sp0, _sparkle(gl, s1, w))
-                assert corr >= bar, (cam, moved, corr)
+                assert corr >= 0.8, (cam, moved, corr)
 
 
 @pytest.mark.gl
 @pytest.mark.parametrize("env", ["booth", "sky"])
-def test_default_view_keeps_block_means(gl_ctx, bases, env) -> None:
-    """The default view, flakes on against off: 16 × 16-pixel means within 0.5 ΔE00 at p95."""
+def test_default_view_and_close_up_keep_block_means(gl_ctx, bases, env) -> None:
+    """The default view and the close-up, flakes on against off: 16 × 16-pixel means within 0.5 ΔE00 at
+    p95 (the close-up in the sky was 0.70 with cells of two pixels and hard edges)."""
     from station.render.gl_renderer import GLRenderer
 
     w, basis = bases[0], bases[1][env]
-    scene = shapes.Scene("speedshape")
     with GLRenderer(basis, SIZE, SIZE, ctx=gl_ctx) as gl:
-        on = gl.render_linear(scene, [w], flakes=METALLIC_FLAKES).astype(float)
-        off = gl.render_linear(scene, [w]).astype(float)
-    a = on.reshape(8, 16, 8, 16, 3).mean(axis=(1, 3)).reshape(-1, 3)
-    b = off.reshape(8, 16, 8, 16, 3).mean(axis=(1, 3)).reshape(-1, 3)
-    de = delta_e(linear_srgb_to_lab(a), linear_srgb_to_lab(b), method="cie2000")
-    assert np.percentile(de, 95) <= 0.5, np.percentile(de, 95)
+        for cam in (shapes.Scene("speedshape").view_camera, SHAPE_CLOSE):
+            scene = shapes.Scene("speedshape", camera=cam)
+            on = gl.render_linear(scene, [w], flakes=METALLIC_FLAKES).astype(float)
+            assert gl.last_flakes is not None and gl.last_flakes.on
+            off = gl.render_linear(scene, [w]).astype(float)
+            a = on.reshape(8, 16, 8, 16, 3).mean(axis=(1, 3)).reshape(-1, 3)
+            b = off.reshape(8, 16, 8, 16, 3).mean(axis=(1, 3)).reshape(-1, 3)
+            de = delta_e(linear_srgb_to_lab(a), linear_srgb_to_lab(b), method="cie2000")
+            assert np.percentile(de, 95) <= 0.5, (cam, np.percentile(de, 95))
 
 
 @pytest.mark.parametrize("env", ["booth", "sky"])
 def test_close_up_sparkle_has_zero_mean(bases, env) -> None:
     """Close up, the (unclipped) sparkle over the upper half of the shape averages to zero within four
-    standard errors: its mean map is the glint map itself prefiltered with the flakes' lobe."""
+    standard errors: its mean map is the glint map itself prefiltered with the flakes' lobe. The error is
+    that of the mean over 24 flake realisations (the lattice shifted by a random offset each time), since
+    the pixels of one frame share cells of 16 or more pixels and are far from independent. Allowed besides:
+    1 % of the mean radiance, the bias of the mean map's Phong approximation of the flakes' lobe (measured
+    +0.55 % in the booth, 5 errors; within the errors in the sky)."""
     from station.render.flakes import flake_tint, sparkle_pixels
-    from station.render.numpy_renderer import gbuffer
+    from station.render.numpy_renderer import gbuffer, render_linear
 
     w, basis = bases[0], bases[1][env]
     g = gbuffer(shapes.Scene("speedshape", camera=CLOSE), SIZE, SIZE)
     m = g.mask.copy()
     m[SIZE // 2 :] = False
     dist = np.linalg.norm(g.position[m] - np.asarray(CLOSE.eye), axis=-1)
-    sp = sparkle_pixels(
-        basis,
-        METALLIC_FLAKES,
-        flake_tint(w.map_weights()[1]),
-        g.position[m],
-        dist,
-        g.normal[m],
-        g.view[m],
-        g.reflect[m],
-        math.tan(math.radians(CLOSE.fov_deg / 2.0)),
-        SIZE,
-    )
-    se = sp.std(axis=0) / math.sqrt(sp.shape[0])
-    assert sp.std() > 0.0
-    assert np.all(np.abs(sp.mean(axis=0)) < 4.0 * se), (sp.mean(axis=0), se)
+    rng = np.random.default_rng(0)
+    means = []
+    for _ in range(24):
+        sp = sparkle_pixels(
+            basis,
+            METALLIC_FLAKES,
+            flake_tint(w.map_weights()[1]),
+            g.position[m] + rng.uniform(-10.0, 10.0, 3),  # another realisation of the flakes
+            dist,
+            g.normal[m],
+            g.view[m],
+            g.reflect[m],
+            math.tan(math.radians(CLOSE.fov_deg / 2.0)),
+            SIZE,
+        )
+        assert sp.std() > 0.0
+        means.append(sp.mean(axis=0))
+    se = np.std(means, axis=0, ddof=1) / math.sqrt(len(means))
+    radiance = render_linear(shapes.Scene("speedshape", camera=CLOSE), basis, [w], SIZE, SIZE)[m].mean(axis=0)
+    bound = 4.0 * se + 0.01 * radiance
+    assert np.all(np.abs(np.mean(means, axis=0)) < bound), (np.mean(means, axis=0), se, radiance)
 
 
 def test_pearls_get_pearl_flakes() -> None:
@@ -172,3 +190,21 @@ def test_expected_flake_reflection_counts_the_horizon(ndv) -> None:
     assert flake_horizon(METALLIC_FLAKES, np.array([ndv]))[0] == pytest.approx(above, abs=0.01)
     if ndv <= 0.2:
         assert above < 0.8  # the horizon matters here: the mean would be biased by more than 20 %
+
+
+def test_glint_window_is_continuous_and_keeps_the_variance() -> None:
+    """The glint bump: E[b²] over uniform points of space is 1 (WINDOW_NORM's closed form, by Monte Carlo
+    over 400 000 points), and b vanishes on the cells' faces, so the sparkle is continuous there: two points
+    0.1 µm apart on either side of a face both weigh less than 1e-4."""
+    from station.render.flakes import LATTICE_ROTATION, UNIT_MM, flake_window
+
+    rng = np.random.default_rng(5)
+    b = flake_window(rng.uniform(-1.0, 1.0, (400_000, 3)), 0.1)
+    assert np.mean(b**2) == pytest.approx(1.0, abs=0.02)
+    assert b.max() > 3.0  # a soft spot: the bump peaks at the centre
+    # a face of the 0.1 mm lattice: lattice coordinate x = 7 exactly, y and z anywhere; back to the scene
+    q = np.column_stack([np.full(1000, 7.0), rng.uniform(0.0, 50.0, (1000, 2))])
+    face = (q * 0.1 / UNIT_MM) @ LATTICE_ROTATION  # scene positions (rows; LATTICE_ROTATION is orthonormal)
+    step = LATTICE_ROTATION[0] * 1e-7
+    assert flake_window(face + step, 0.1).max() < 1e-4
+    assert flake_window(face - step, 0.1).max() < 1e-4

@@ -54,7 +54,13 @@
 #define HAS_FALL_OFF 0
 #endif
 #ifndef FLAKE_CELL_PIXELS
-#define FLAKE_CELL_PIXELS 2.0
+#define FLAKE_CELL_PIXELS 4.0
+#endif
+#ifndef FLAKE_GLINT_RADIUS
+#define FLAKE_GLINT_RADIUS 0.5
+#endif
+#ifndef FLAKE_WINDOW_NORM
+#define FLAKE_WINDOW_NORM 4.151
 #endif
 #ifndef STAGE_BACKDROP
 #define STAGE_BACKDROP 0
@@ -129,6 +135,7 @@ uniform vec4 u_occ[8];
 // hierarchy; zero-mean sparkle tint * reflectance * sum_k w_k (L_sharp(R_m,k) - C_E(R)).
 uniform samplerCube u_flake_sharp, u_flake_mean;
 uniform float u_flake_size_mm, u_flake_density, u_flake_sigma, u_flake_reflectance, u_unit_mm;
+uniform mat3 u_flake_lattice;  // the cell lattice's rotation (flakes.LATTICE_ROTATION)
 uniform vec3 u_flake_tint[2];
 out vec4 f_color;
 
@@ -142,16 +149,21 @@ uvec3 pcg3d(uvec3 v) {
 
 // One cell level k of the flake hierarchy: cells of side FLAKE_SIZE 2^k fixed on the surface (world =
 // object space: the shapes and meshes never move), hashed to a flake normal and, where a cell holds fewer
-// than one flake on average, to whether it holds one (station.render.flakes.flake_levels).
+// than one flake on average, to whether it holds one (station.render.flakes.flake_levels). The lattice is
+// turned against the scene's axes and the cell's term weighted by a bump about its centre that vanishes on
+// its faces, so a glint is a soft spot and the sparkle continuous from cell to cell (flakes.flake_window).
 vec3 flake_level(vec3 p, int k, vec3 n, vec3 t, vec3 b, vec3 ve, out float weight) {
     float c = u_flake_size_mm * exp2(float(k));
     float count = u_flake_density * c * c;
-    uvec3 h = pcg3d(uvec3(ivec3(floor(p * (u_unit_mm / c))) + ivec3(1 << 20)) + uvec3(0u, 0u, uint(k) << 24u));
+    vec3 q = u_flake_lattice * p * (u_unit_mm / c);
+    vec3 x = fract(q) - 0.5;  // offset from the cell's centre: the glint bump (flakes.flake_window)
+    float bump = max(1.0 - dot(x, x) / (FLAKE_GLINT_RADIUS * FLAKE_GLINT_RADIUS), 0.0);
+    uvec3 h = pcg3d(uvec3(ivec3(floor(q)) + ivec3(1 << 20)) + uvec3(0u, 0u, uint(k) << 24u));
     vec3 u = (vec3(h >> 8u) + 0.5) / 16777216.0;
     vec2 g = sqrt(-2.0 * log(u.x)) * vec2(cos(2.0 * PI * u.y), sin(2.0 * PI * u.y));
     vec3 m = normalize(n + u_flake_sigma * (g.x * t + g.y * b));
     vec3 rm = 2.0 * dot(m, ve) * m - ve;
-    weight = float(u.z < count) / sqrt(max(count, 1.0));
+    weight = float(u.z < count) / sqrt(max(count, 1.0)) * FLAKE_WINDOW_NORM * bump * bump;
     return float(dot(rm, n) > 0.0) * textureLod(u_flake_sharp, rm, 0.0).rgb;  // a select, no branch
 }
 
