@@ -208,3 +208,30 @@ def test_glint_window_is_continuous_and_keeps_the_variance() -> None:
     step = LATTICE_ROTATION[0] * 1e-7
     assert flake_window(face + step, 0.1).max() < 1e-4
     assert flake_window(face - step, 0.1).max() < 1e-4
+
+
+def test_pearl_flakes_take_the_interference_colour() -> None:
+    """A pearl's flakes glint in its face-side interference colour, a silver's neutral: the flake tint (the
+    paint's directionally diffuse colour) of the blue-violet pearl, taken to Lab at a fixed luminance, has a
+    chroma C*ab ≥ 20 and a hue nearer the face's (219°) than the flop's (292°); the silver's chroma is < 3."""
+    from station.model.examples import EXAMPLES
+    from station.render.flakes import flake_tint
+    from station.render.lobe_fit import fit_design
+
+    def lab(design: FaceFlopTravelGloss) -> np.ndarray:
+        t = flake_tint(fit_design(design).map_weights()[1])
+        return np.asarray(linear_srgb_to_lab(0.5 * t / t.max()))
+
+    def hue_gap(a: float, b: float) -> float:
+        d = abs(a - b) % 360.0
+        return min(d, 360.0 - d)
+
+    pearl = EXAMPLES["pearl"]
+    _, a, b = lab(pearl)
+    hue = math.degrees(math.atan2(b, a))
+    face = math.degrees(math.atan2(pearl.face[2], pearl.face[1]))
+    flop = math.degrees(math.atan2(pearl.flop[2], pearl.flop[1]))
+    assert math.hypot(a, b) >= 20.0
+    assert hue_gap(hue, face) < hue_gap(hue, flop), (hue, face, flop)
+    _, a, b = lab(SILVER)
+    assert math.hypot(a, b) < 3.0
