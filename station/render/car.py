@@ -5,7 +5,8 @@ Body: a sphere with its poles at the nose (−x) and tail (+x), deformed smoothl
 side flattened, and a cabin 0.2·exp(−((x − 0.15)/0.5)⁴) raised on the upper side and narrowed towards the
 roof. The cabin's flanks, windscreen and rear window (upper side between the belt line and the roof, where
 the cabin rises) are glass; the rest is paint. Wheels: four cylinders of radius WHEEL_RADIUS and width
-WHEEL_WIDTH at x = ±WHEEL_BASE/2 under the body, their treads tyre and their faces chrome hubs. Normals
+WHEEL_WIDTH at x = ±WHEEL_BASE/2 under the body, their treads and sidewalls tyre (the faces' outer ring,
+from HUB_RADIUS out) and a chrome hub in the middle of each face. Normals
 smooth (area-weighted on the body, exact on the wheels). Placed on the stage like a loaded model
 (:func:`station.render.meshes.place_on_stage`): the wheels stand on the ground.
 """
@@ -23,6 +24,8 @@ WHEEL_RADIUS = 0.17
 WHEEL_WIDTH = 0.13
 WHEEL_BASE = 1.5
 WHEEL_TRACK = 0.37
+#: Radius of the chrome hub on each wheel face (body units); the ring outside it is the tyre's sidewall.
+HUB_RADIUS = 0.6 * WHEEL_RADIUS
 #: Glass: the upper side where the cabin term exceeds this share of its peak, between belt and roof.
 GLASS_CABIN = 0.45
 
@@ -62,7 +65,8 @@ def _body(n_u: int, n_v: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
 
 def _wheel(centre: NDArray, segments: int = 48) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """(vertices, normals, faces, codes) of one wheel: a cylinder about z, tread TYRE (radial normals),
-    faces CHROME (axial normals); vertices not shared between tread and faces (each keeps its normal)."""
+    each face (axial normals) a CHROME hub disc of HUB_RADIUS inside a TYRE sidewall ring; vertices not
+    shared between tread, sidewall and hub (each keeps its normal and its code, read flat per triangle)."""
     ang = np.linspace(0.0, 2.0 * np.pi, segments, endpoint=False)
     ring = np.stack([np.cos(ang), np.sin(ang), np.zeros_like(ang)], axis=-1)
     h = 0.5 * WHEEL_WIDTH
@@ -80,14 +84,20 @@ def _wheel(centre: NDArray, segments: int = 48) -> tuple[NDArray, NDArray, NDArr
     )
     codes.append(np.full(2 * segments, TYRE))
     base = 2 * segments
-    for sign in (-1.0, 1.0):  # hub faces: a centre and a ring
-        cap = np.concatenate([[[0.0, 0.0, sign * h]], WHEEL_RADIUS * ring + [0, 0, sign * h]])
-        verts.append(cap)
-        normals.append(np.tile([0.0, 0.0, sign], (segments + 1, 1)))
+    for sign in (-1.0, 1.0):  # each face: a chrome hub (a centre and a ring), a tyre sidewall (two rings)
+        z = [0.0, 0.0, sign * h]
+        hub = np.concatenate([[z], HUB_RADIUS * ring + z])
+        wall = np.concatenate([HUB_RADIUS * ring + z, WHEEL_RADIUS * ring + z])
+        verts += [hub, wall]
+        normals.append(np.tile([0.0, 0.0, sign], (3 * segments + 1, 1)))
         tri = np.stack([np.zeros(segments, int), 1 + i, 1 + nxt], 1)
-        faces.append(base + (tri if sign > 0 else tri[:, [0, 2, 1]]))
-        codes.append(np.full(segments + 1, CHROME))
-        base += segments + 1
+        quad = np.concatenate(
+            [np.stack([i, i + segments, nxt + segments], 1), np.stack([i, nxt + segments, nxt], 1)]
+        )
+        flip = [0, 1, 2] if sign > 0 else [0, 2, 1]
+        faces += [base + tri[:, flip], base + segments + 1 + quad[:, flip]]
+        codes += [np.full(segments + 1, CHROME), np.full(2 * segments, TYRE)]
+        base += 3 * segments + 1
     return (
         np.concatenate(verts) + centre,
         np.concatenate(normals),

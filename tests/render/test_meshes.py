@@ -133,6 +133,16 @@ def test_car_body_is_smooth_and_closed() -> None:
     glass = car.positions[car.painted == me.GLASS]
     assert len(glass) > 0 and glass[:, 1].min() > car.positions[body][:, 1].mean()  # above the belt
     assert (car.painted == me.CHROME).any()
+    # Each wheel face is a chrome hub inside a tyre sidewall: similar polygons, so the chrome share of the
+    # faces' area is (HUB_RADIUS / WHEEL_RADIUS)² exactly (a face wholly chrome read as a mirror disc).
+    from station.render.car import HUB_RADIUS, WHEEL_RADIUS
+
+    tri = car.positions[car.faces].astype(np.float64)
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    code = car.painted[car.faces[:, 2]]
+    axial = np.abs(car.normals[car.faces[:, 2]][:, 2]) > 0.999
+    chrome, sidewall = area[code == me.CHROME].sum(), area[axial & (code == me.TYRE)].sum()
+    assert chrome / (chrome + sidewall) == pytest.approx((HUB_RADIUS / WHEEL_RADIUS) ** 2, rel=1e-4)
 
 
 @pytest.mark.gl

@@ -48,23 +48,28 @@ def _smooth_sky(height: int) -> np.ndarray:
     return np.repeat(lum[..., None], 3, axis=2)
 
 
+#: Gloss of the renderer-against-truth test: matt to mirror (below 10 GU the pixel-wise 5 % does not hold:
+#: at 2 GU the widest lobes differ from the truth by up to 9.5 % on single pixels, 1 % in the mean).
+TRUTH_GLOSS_GU = (10.0, 30.0, 60.0, 80.0, 90.0, 97.0, 99.0, 100.0)
+
+
 def test_renderer_follows_truth_up_to_a_mirror() -> None:
     env = _smooth_sky(64)
     scene = shapes.Scene("sphere")
     g = nr.gbuffer(scene, 16, 16)
     inner = g.mask & (g.n_dot_v > 0.3)
-    reports = lf.fit_designs([_black(x) for x in (90.0, 97.0, 99.0, 100.0)])
+    reports = lf.fit_designs([_black(x) for x in TRUTH_GLOSS_GU])
     basis = prefilter.prefilter_basis(
         Environment("smooth", env.astype(np.float32)), reports.basis.exponents, engine="numpy", max_size=32
     )
     truth = tr.TruthScene(env, g.normal[inner], g.view[inner], samples=32, quadrature_width=64)
     expected_shape = 1.0 + 0.6 * g.reflect[inner][:, 1] + 0.3 * g.reflect[inner][:, 0]
     means = []
-    for i, gloss in enumerate((90.0, 97.0, 99.0, 100.0)):
+    for i, gloss in enumerate(TRUTH_GLOSS_GU):
         img = nr.render_linear(scene, basis, [reports.weights(i)], 16, 16)[inner][:, 1]
         ref = truth.truth_direct(lf.designed_brdf(_black(gloss)))[:, 1]
-        # the truth itself is the closed form ρ_s L(R) for a near-mirror in a smooth sky
-        assert ref == pytest.approx(0.100056 * expected_shape, rel=0.02)
+        if gloss >= 90.0:  # the truth itself is the closed form ρ_s L(R) for a near-mirror in a smooth sky
+            assert ref == pytest.approx(0.100056 * expected_shape, rel=0.02)
         assert img.mean() / ref.mean() == pytest.approx(1.0, abs=0.03)
         assert img == pytest.approx(ref, rel=0.05)  # the same picture, not only the same mean
         means.append(img.mean())

@@ -45,6 +45,24 @@ def test_view_model_loads_a_model_and_refuses_a_bad_file(tmp_path, box_glb) -> N
     assert model.mesh() is None
 
 
+def test_view_model_shows_the_procedural_car() -> None:
+    from station.render.car import car_body
+    from station.render.mesh_parts import GLASS, PAINT, TYRE
+    from ui.models.view import ViewInputError
+
+    model = ViewModel()
+    mesh = model.load_model("car")
+    assert model.settings.model == "car" and model.mesh() is mesh and model.model_parts() == ()
+    # the same body, wheels and glass as `station render --mesh car` draws (counted on an independent build)
+    expected = car_body()
+    assert np.array_equal(mesh.faces, expected.faces) and np.array_equal(mesh.painted, expected.painted)
+    assert {PAINT, TYRE, GLASS} <= set(np.unique(mesh.painted).tolist())
+    assert model.settings.camera() != ViewModel().settings.camera()  # framed by the model camera
+    with pytest.raises(ViewInputError, match="paint_part"):
+        model.set_paint_part("body")
+    assert model.set_paint_part(None) is mesh
+
+
 def _open_model(qtbot, win, path) -> None:
     """File → Open model… through the menu action, the file dialog answered by typing *path*."""
 
@@ -111,4 +129,9 @@ def test_file_open_model_shows_it_in_the_view(qtbot, tmp_path, box_glb, own_cach
     # picking a built-in shape again takes the model off; the model stays in the picker
     panel.shape.setCurrentIndex(0)
     assert win.view_model.settings.model is None and panel.shape.findData(str(box_glb)) >= 0
+    # the procedural car (wheels, glass) is in the picker without a file
+    panel.shape.setCurrentIndex(panel.shape.findData("car"))
+    assert win.view_model.settings.model == "car" and panel.shape.currentText() == "procedural car (model)"
+    mesh = win.view_model.mesh()
+    assert mesh is not None and mesh.name == "car"
     win.close()

@@ -30,6 +30,7 @@ from station.render.lobe_fit import fit_design
 from station.render.meshes import MESH_CAMERA, MESH_SUFFIXES, Mesh
 from station.render.prefilter import PrefilteredBasis, prefilter_basis
 from station.render.procedural import procedural_environment
+from station.render.scene_image import BUILTIN_MESHES, builtin_mesh
 from station.render.shapes import DEFAULT_CAMERAS, SHAPES, Scene
 from station.render.tonemap import to_display
 from station.render.weights import LobeWeights
@@ -169,8 +170,9 @@ class ViewSettings:
     ``flake_size_um``, ``flake_density``, ``flake_spread_deg`` replace that layer's size (µm), density
     (per mm²) and spread (degrees) when set (None: the paint type's default), within
     :data:`station.model.flakes.FLAKE_RANGES` (:meth:`flake_layer`).
-    ``model``: the path of an own model (glTF/GLB, OBJ or STL, :meth:`ViewModel.load_model`) shown
-    instead of the shape, framed by :data:`station.render.meshes.MESH_CAMERA`; None shows the shape.
+    ``model``: the path of an own model (glTF/GLB, OBJ or STL, :meth:`ViewModel.load_model`), or the name
+    of a built-in one (:data:`station.render.scene_image.BUILTIN_MESHES`: ``car``, the procedural car with
+    wheels and glass), shown instead of the shape, framed by :data:`station.render.meshes.MESH_CAMERA`; None shows the shape.
     ``paint_part``: the model's part painted, by mesh or material name (a name of
     :func:`station.render.meshes.mesh_part_names`; :meth:`ViewModel.set_paint_part`), the other parts drawn
     as tyre, glass or chrome by their names, else neutral grey; None paints every part (a one-part GLB
@@ -198,9 +200,12 @@ class ViewSettings:
         if self.paint_part is not None and not (isinstance(self.paint_part, str) and self.paint_part.strip()):
             raise ViewInputError("paint_part", "a part name of the model, or none", self.paint_part)
         if self.model is not None and not (
-            isinstance(self.model, str) and Path(self.model).suffix.lower() in MESH_SUFFIXES
+            isinstance(self.model, str)
+            and (self.model in BUILTIN_MESHES or Path(self.model).suffix.lower() in MESH_SUFFIXES)
         ):
-            raise ViewInputError("model", " | ".join(MESH_SUFFIXES) + " file, or none", self.model)
+            raise ViewInputError(
+                "model", " | ".join((*BUILTIN_MESHES, *MESH_SUFFIXES)) + " file, or none", self.model
+            )
         if self.shape not in SHAPES:
             raise ViewInputError("shape", " | ".join(SHAPES), self.shape)
         if not (math.isfinite(self.exposure_ev) and -10.0 <= self.exposure_ev <= 10.0):
@@ -416,14 +421,20 @@ class ViewModel:
 
     def load_model(self, path: str | Path) -> Mesh:
         """Show the model in the glTF/GLB, OBJ or STL file *path* instead of the shape (read with
-        :func:`station.render.meshes.load_mesh`, every part painted; the orbit reset). Raises
-        RenderInputError (field ``mesh``, naming the file) for a file that cannot be used; the settings
-        are unchanged on failure. Returns the mesh."""
+        :func:`station.render.meshes.load_mesh`, every part painted; the orbit reset), or the built-in
+        model of that name (``car``: :func:`station.render.scene_image.builtin_mesh`, its body painted,
+        its wheels and glass fixed). Raises RenderInputError (field ``mesh``, naming the file) for a file
+        that cannot be used; the settings are unchanged on failure. Returns the mesh."""
         from station.render.meshes import load_mesh, mesh_part_names
 
-        key = str(Path(path))
-        mesh = load_mesh(key)
-        self._parts[key] = mesh_part_names(key)
+        parts: tuple[str, ...] = ()
+        if isinstance(path, str) and path in BUILTIN_MESHES:
+            key, mesh = path, builtin_mesh(path)
+        else:
+            key = str(Path(path))
+            mesh = load_mesh(key)
+            parts = mesh_part_names(key)
+        self._parts[key] = parts
         self._meshes[(key, None)] = mesh
         self.update(model=key, paint_part=None, yaw_deg=0.0, pitch_deg=0.0, zoom=1.0)
         return mesh
@@ -443,6 +454,8 @@ class ViewModel:
         model = self._settings.model
         if model is None:
             raise ViewInputError("model", "a loaded model to pick the paint part of", None)
+        if model in BUILTIN_MESHES and part is not None:
+            raise ViewInputError("paint_part", f"none: the built-in {model}'s parts are fixed", part)
         key = (model, part)
         mesh = self._meshes.get(key)
         if mesh is None:

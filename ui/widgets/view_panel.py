@@ -20,6 +20,7 @@ from PySide6.QtWidgets import (
 
 from station.errors import InputError
 from station.model.flakes import FLAKE_RANGES
+from station.render.scene_image import BUILTIN_MESHES
 from station.render.shapes import SHAPES
 from ui.models.view import ENVIRONMENT_SUFFIXES, ENVIRONMENTS, FLAKE_FIELDS, ViewModel, ViewSettings
 from ui.widgets.render_view import make_render_view
@@ -62,6 +63,8 @@ class ViewPanel(QWidget):
         self.env_dialog.setOption(QFileDialog.Option.DontUseNativeDialog, True)
         self.shape = QComboBox()
         self.shape.addItems(list(SHAPES))
+        for name in BUILTIN_MESHES:  # the built-in models (the procedural car), loaded when picked
+            self.shape.addItem(f"procedural {name} (model)", name)
         #: The own model's part painted (mesh or material name; the first item paints every part).
         self.paint_part = QComboBox()
         self.paint_part.setToolTip("the model's part painted; the others drawn as tyre, glass or chrome")
@@ -191,6 +194,8 @@ class ViewPanel(QWidget):
         orbit = {"yaw_deg": 0.0, "pitch_deg": 0.0, "zoom": 1.0}
         if model is None:
             self.model.update(shape=self.shape.itemText(index), model=None, paint_part=None, **orbit)
+        elif model not in self.model.models:  # a built-in model, picked for the first time
+            self.model.load_model(model)
         else:
             self.model.update(model=model, paint_part=None, **orbit)
 
