@@ -205,7 +205,7 @@ def cmd_snap(args: argparse.Namespace) -> dict[str, Any]:
 def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
     """Formulate the best few recipes from the ColorSnap match's recipe; optionally run the simulated
     closed loop."""
-    from station.formulate.formulation import formulate_from_library
+    from station.formulate.gamut import formulate_in_gamut
 
     options = _options(args)
     lab, gloss, name = _design_lab(args.design)
@@ -216,7 +216,7 @@ def cmd_formulate(args: argparse.Namespace) -> dict[str, Any]:
         lib = _load_library(args.library)
         steps("ColorSnap and formulation")
         illuminants = _illuminants(args)
-        result, snap = formulate_from_library(
+        result, snap = formulate_in_gamut(
             lab,
             lib,
             gloss_gu=gloss,

@@ -11,7 +11,48 @@ from numpy.typing import NDArray
 from station.formulate.batch import batch_masses
 from station.formulate.selection import RecipeOption
 
-__all__ = ["FormulationResult"]
+__all__ = ["FormulationResult", "RecipeGamutReport"]
+
+
+@dataclass(frozen=True)
+class RecipeGamutReport:
+    """Verdict of :func:`station.formulate.gamut.recipe_gamut`: is the design inside the gamut of its toner
+    line *for a recipe of at most* ``max_colorants`` colorants (binder and matting agent not counted)?
+
+    ``inside``: the best screened recipe of at most ``max_colorants`` colorants, refitted with its amounts
+    unrounded, reaches ``tolerance`` (mean CIEDE2000 over the design's angles), ``mean_de`` its mean ΔE00
+    and ``recipe`` its mass fractions, on ``line``; ``line_inside``/``line_mean_de``: the same with every
+    colorant of the line free (the line's gamut, which holds the N-colorant one); ``needed_colorants``:
+    when only the colorant limit refuses the design, the fewest colorants whose screen reaches it
+    (``None`` when none up to the allowed maximum does, or when the limit is not the reason);
+    ``message``: one sentence for the user."""
+
+    inside: bool
+    line_inside: bool
+    mean_de: float
+    line_mean_de: float
+    max_colorants: int
+    tolerance: float
+    line: str
+    recipe: dict[str, float]
+    needed_colorants: int | None
+    message: str
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-able form (every field)."""
+        return {
+            "inside": self.inside,
+            "line_inside": self.line_inside,
+            "mean_de": self.mean_de,
+            "line_mean_de": self.line_mean_de,
+            "max_colorants": self.max_colorants,
+            "tolerance": self.tolerance,
+            "metric": "cie2000",
+            "line": self.line,
+            "recipe": self.recipe,
+            "needed_colorants": self.needed_colorants,
+            "message": self.message,
+        }
 
 
 @dataclass(frozen=True)
@@ -44,6 +85,10 @@ class FormulationResult:
         The best few recipes, ranked (:mod:`station.formulate.selection`); ``recipe`` is the first.
     mean_de_unrounded
         Mean ΔE00 of the first recipe before its amounts were rounded to the scale.
+    gamut
+        When the best recipe misses the tolerance and the front asked why
+        (:func:`station.formulate.gamut.formulate_in_gamut`), the colorant-limited gamut verdict; its
+        sentence ends ``message``.
     """
 
     recipe: dict[str, float]
@@ -67,6 +112,7 @@ class FormulationResult:
     line: str = ""
     recipes: tuple[RecipeOption, ...] = field(default=())
     mean_de_unrounded: float = float("nan")
+    gamut: RecipeGamutReport | None = None
 
     def to_dict(self) -> dict[str, object]:
         """JSON-able form for the CLI and the service."""
@@ -93,4 +139,5 @@ class FormulationResult:
             "mean_de_unrounded": self.mean_de_unrounded,
             "evaluations": self.evaluations,
             "recipes": [o.to_dict() for o in self.recipes],
+            "gamut": None if self.gamut is None else self.gamut.to_dict(),
         }

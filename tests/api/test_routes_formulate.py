@@ -373,3 +373,23 @@ def test_closed_loop_is_stored_with_its_history(lib_api: tuple[Api, list[dict]])
         headers=api.auth("chemist"),
     )
     assert refused.status_code == 422 and refused.json()["detail"][0]["loc"][:2] == ["body", "corrections"]
+
+
+def test_formulate_says_when_the_colorant_limit_refuses_the_design(lib_api: tuple[Api, list[dict]]) -> None:
+    """The viewer's demo red needs more than 5 colorants (a brute force over every 5-subset of the pearl
+    line reaches 1.47, bench:formulate-independent): the service's miss says so with the N-colorant
+    gamut's verdict (station.formulate.gamut.recipe_gamut), a recipe of at most 5 colorants."""
+    api, _ = lib_api
+    red = {"name": "red", "face": [62.0, 48.0, 30.0], "flop": [24.0, 38.0, 18.0], "travel_deg": 70.0}
+    body = {"design": {**red, "gloss_gu": 88.0}}
+    r = api.client.post(f"{V1}/formulation/formulate", json=body, headers=api.auth("chemist"))
+    assert r.status_code == 200, r.text
+    got = r.json()
+    gamut = got["gamut"]
+    assert not got["formulable"] and not gamut["inside"] and gamut["line_inside"]
+    assert gamut["max_colorants"] == 5 and gamut["needed_colorants"] > 5
+    assert gamut["mean_de"] > 1.0 >= gamut["line_mean_de"]
+    assert gamut["message"].startswith("outside the 5-colorant gamut of line ")
+    assert f"--max-colorants {gamut['needed_colorants']}" in gamut["message"]
+    assert got["message"].endswith(gamut["message"])
+    assert len([n for n in gamut["recipe"] if n != "matting_silica"]) <= 5

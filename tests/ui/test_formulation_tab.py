@@ -159,3 +159,21 @@ def test_formulation_tab(qtbot, tmp_path):
     refl = predict_reflectance(result.concentrations, angles)
     for a, r in zip(angles, refl, strict=True):
         assert spectra[min(spectra, key=lambda x: abs(x - a))] == pytest.approx(r, abs=1e-4)
+
+
+def test_formulation_tab_says_when_the_colorant_limit_refuses_the_design(qtbot):
+    """The viewer's demo red needs more than 5 colorants: Formulate's status line ends with the
+    N-colorant gamut's sentence, the one the core call made here gives."""
+    from station.formulate.gamut import formulate_in_gamut
+
+    lib = demo_library()
+    red = FaceFlopTravelGloss((62.0, 48.0, 30.0), (24.0, 38.0, 18.0), 70.0, 88.0, "viewer red")
+    screen = FormulationScreen(lib, DesignDocument(red))
+    qtbot.addWidget(screen)
+    screen.show()
+    _click(qtbot, screen, screen.formulate_btn)
+    result, _ = formulate_in_gamut(red.lab_at(np.array(ANGLES_3)), lib, gloss_gu=red.gloss_target_gu)
+    assert result.gamut is not None and not result.gamut.inside and result.gamut.line_inside
+    assert result.gamut.message.startswith("outside the 5-colorant gamut of line ")
+    status = screen.status.text()
+    assert result.gamut.message in status and "NOT formulable" in status

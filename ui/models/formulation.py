@@ -285,10 +285,11 @@ def snap(design: FaceFlopTravelGloss, library: Library, k: int = 5) -> Any:
 def formulate(design: FaceFlopTravelGloss, library: Library) -> Formulation:
     """The recipe from the ColorSnap matches' recipes (``formulate_from_library``, its default k = 3
     starts, as ``station formulate``), the k = 5 ColorSnap list the screen shows, and the recipe's
-    metamerism index (:func:`recipe_metamerism`)."""
-    from station.formulate.formulation import formulate_from_library
+    metamerism index (:func:`recipe_metamerism`). A miss carries the colorant-limited gamut's sentence
+    in its message (``station.formulate.gamut.formulate_in_gamut``)."""
+    from station.formulate.gamut import formulate_in_gamut
 
-    result, found = formulate_from_library(
+    result, found = formulate_in_gamut(
         design.lab_at(np.array(ANGLES_3)), library, gloss_gu=design.gloss_target_gu
     )
     shown = snap_view(library, snap(design, library))

@@ -169,6 +169,12 @@ class FormulateOut(BaseModel):
         default=None,
         description="when not formulable: Lab per angle of the best recipe (the nearest achievable paint)",
     )
+    gamut: dict[str, Any] | None = Field(
+        default=None,
+        description="when not formulable: the N-colorant gamut verdict (station.formulate.gamut.recipe_gamut: "
+        "inside, line_inside, mean_de, line_mean_de, max_colorants, line, recipe, needed_colorants, message); "
+        "its message ends the result's message",
+    )
     metamerism_ranking: dict[str, Any] | None = Field(
         default=None,
         description="with illuminants: the candidate recipes best first by metamerism index "

@@ -256,9 +256,10 @@ def stored_libraries(*, session: Session, cache: LibraryCache) -> list[dict[str,
 
 
 def formulate(*, session: Session, cache: LibraryCache, request: FormulateRequest) -> dict[str, Any]:
-    """Recipe for the target from the matches' recipes (``formulate_from_library``); nothing is stored.
+    """Recipe for the target from the matches' recipes (``station.formulate.gamut.formulate_in_gamut``:
+    a miss says whether the colorant limit or the toner line refuses the design); nothing is stored.
     With ``illuminants`` the candidate recipes ranked by metamerism index (``station.formulate.metamerism``)."""
-    from station.formulate.formulation import formulate_from_library
+    from station.formulate.gamut import formulate_in_gamut
     from station.formulate.metamerism import chosen_illuminants, rank_formulation
 
     lab, design = _target(session, request)
@@ -282,7 +283,7 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
         lib, index, rows = named.library, named.index, named.rows
     type_rows(lib, request.types, field="types")  # 422 naming ``types`` before formulating
     illuminants = () if request.illuminants is None else chosen_illuminants(request.illuminants)
-    result, matches = formulate_from_library(
+    result, matches = formulate_in_gamut(
         lab,
         lib,
         index=index,
