@@ -349,7 +349,7 @@ def _gamut_message(
         return f"inside the {n}-colorant gamut of line {line}: best {n}-colorant screen ΔE00 {de:.2f} <= {tolerance:g}"
     if line_inside:
         more = (
-            f"allow {needed} colorants (--max-colorants {needed})"
+            f"allow {needed} colorants (max colorants {needed})"
             if needed is not None
             else f"no recipe of up to {MAX_COLORANTS_RANGE[1]} colorants was found by the screen"
         )

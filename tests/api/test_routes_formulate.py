@@ -390,6 +390,44 @@ def test_formulate_says_when_the_colorant_limit_refuses_the_design(lib_api: tupl
     assert gamut["max_colorants"] == 5 and gamut["needed_colorants"] > 5
     assert gamut["mean_de"] > 1.0 >= gamut["line_mean_de"]
     assert gamut["message"].startswith("outside the 5-colorant gamut of line ")
-    assert f"--max-colorants {gamut['needed_colorants']}" in gamut["message"]
+    assert f"max colorants {gamut['needed_colorants']}" in gamut["message"]
     assert got["message"].endswith(gamut["message"])
     assert len([n for n in gamut["recipe"] if n != "matting_silica"]) <= 5
+
+
+def test_formulate_takes_the_chemists_options(lib_api: tuple[Api, list[dict]]) -> None:
+    """The advice of a miss can be acted on over HTTP: the demo red with ``max_colorants`` raised to the
+    count the gamut named gets a recipe of at most that many colorants from the named line, amounts on the
+    chosen scale (a 1000 g batch's grams are whole multiples of ``scale_resolution_g``); out-of-range options
+    are 422s naming the field, and nothing is stored."""
+    api, _ = lib_api
+    red = {"name": "red", "face": [62.0, 48.0, 30.0], "flop": [24.0, 38.0, 18.0], "travel_deg": 70.0}
+    url, auth = f"{V1}/formulation/formulate", api.auth("chemist")
+    first = api.client.post(url, json={"design": {**red, "gloss_gu": 88.0}}, headers=auth).json()
+    needed = first["gamut"]["needed_colorants"]
+    line = first["gamut"]["line"]
+    body = {
+        "design": {**red, "gloss_gu": 88.0},
+        "max_colorants": needed,
+        "line": line,
+        "scale_resolution_g": 0.5,
+    }
+    r = api.client.post(url, json=body, headers=auth)
+    assert r.status_code == 200, r.text
+    got = r.json()
+    colorants = [n for n, v in got["recipe"].items() if v > 0 and n not in ("binder", "matting_silica")]
+    assert len(colorants) <= needed
+    assert got["mean_de"] < first["mean_de"]
+    for grams in got["batch"]["colorants_g"].values():
+        assert grams / 0.5 == pytest.approx(round(grams / 0.5), abs=1e-6)
+    before = _counts(api)
+    for field, value in (
+        ("max_colorants", 0),
+        ("max_colorants", 11),
+        ("scale_resolution_g", 0.0),
+        ("line", "gold"),
+    ):
+        bad = api.client.post(url, json={"design": red, field: value}, headers=auth)
+        assert bad.status_code == 422, (field, bad.text)
+        assert field in str(bad.json()["detail"]), (field, bad.text)
+    assert _counts(api) == before

@@ -89,7 +89,7 @@ def test_refusal_by_the_colorant_limit_names_the_count_that_reaches() -> None:
         )
         assert f"the line with more colorants reaches {r.line_mean_de:.2f}" in r.message
         assert r.needed_colorants is not None and r.needed_colorants > 2
-        assert f"--max-colorants {r.needed_colorants}" in r.message
+        assert f"max colorants {r.needed_colorants}" in r.message
         assert _brute_force(d, r.needed_colorants) <= TOL + BORDER
         if r.needed_colorants > 3:
             assert _brute_force(d, 3) > TOL - BORDER
@@ -121,7 +121,7 @@ def test_the_cli_says_when_only_the_colorant_limit_refuses_the_design(capsys: py
     assert not out["formulable"]
     gamut = out["gamut"]
     assert not gamut["inside"] and gamut["line_inside"] and gamut["max_colorants"] == 2
-    assert gamut["needed_colorants"] == 3 and "allow 3 colorants (--max-colorants 3)" in gamut["message"]
+    assert gamut["needed_colorants"] == 3 and "allow 3 colorants (max colorants 3)" in gamut["message"]
     assert out["message"].endswith(gamut["message"])
     assert main(["formulate", lab, "--line", "solid", "--max-colorants", "3", "--json"]) == 0
     again = json.loads(capsys.readouterr().out)

@@ -9,7 +9,16 @@ from pydantic.config import JsonDict, JsonValue
 
 from station.api.schemas.common import StrictBool, StrictFloat, StrictInt
 from station.api.schemas.designs import DesignBody, Lab
-from station.model.domain import FORMULATION_TOLERANCE_DE00, GLOSS_MAX_GU, GLOSS_MIN_GU
+from station.model.domain import (
+    DEFAULT_MAX_COLORANTS,
+    DEFAULT_SCALE_RESOLUTION_G,
+    FORMULATION_TOLERANCE_DE00,
+    GLOSS_MAX_GU,
+    GLOSS_MIN_GU,
+    MAX_COLORANTS_RANGE,
+    SCALE_RESOLUTION_RANGE_G,
+    TONER_LINES,
+)
 
 SnapMetric = Literal["cie76", "cie2000", "din6175"]
 PaintType = Literal["solid", "metallic", "pearl"]
@@ -142,6 +151,28 @@ class FormulateRequest(DesignSource):
     candidates: Annotated[
         StrictInt, Field(ge=1, le=12, description="with illuminants: starts tried to convergence at least")
     ] = 4
+    line: Annotated[str, Field(min_length=1, max_length=32)] | None = Field(
+        None,
+        description="the toner line to formulate from (one of "
+        + ", ".join(TONER_LINES)
+        + "); default the line(s) the design's type calls for",
+    )
+    max_colorants: Annotated[
+        StrictInt,
+        Field(
+            ge=MAX_COLORANTS_RANGE[0],
+            le=MAX_COLORANTS_RANGE[1],
+            description="most colorants in a recipe besides the binder (and matting agent)",
+        ),
+    ] = DEFAULT_MAX_COLORANTS
+    scale_resolution_g: Annotated[
+        StrictFloat,
+        Field(
+            ge=SCALE_RESOLUTION_RANGE_G[0],
+            le=SCALE_RESOLUTION_RANGE_G[1],
+            description="the scale's resolution in g: every amount is rounded to it for the 1000 g batch",
+        ),
+    ] = DEFAULT_SCALE_RESOLUTION_G
 
 
 class FormulateOut(BaseModel):

@@ -261,6 +261,7 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
     With ``illuminants`` the candidate recipes ranked by metamerism index (``station.formulate.metamerism``)."""
     from station.formulate.gamut import formulate_in_gamut
     from station.formulate.metamerism import chosen_illuminants, rank_formulation
+    from station.formulate.options import FormulationOptions, formulation_options
 
     lab, design = _target(session, request)
     gloss = (
@@ -292,6 +293,13 @@ def formulate(*, session: Session, cache: LibraryCache, request: FormulateReques
         tolerance=request.tolerance,
         types=request.types,
         candidates=request.candidates if illuminants else 0,
+        options=formulation_options(
+            FormulationOptions(
+                line=request.line,
+                max_colorants=request.max_colorants,
+                scale_resolution_g=request.scale_resolution_g,
+            )
+        ),
     )
     out = result.to_dict()
     if illuminants:
