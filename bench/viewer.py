@@ -40,6 +40,8 @@ import time
 SIZE = 1024
 EDITS = int(os.environ.get("BENCH_VIEWER_EDITS", "30"))
 BAR_EDIT_MS = 33.0
+#: Paint edit to screen in the orbit benchmark's run (issue 27's bar for the stylist's view).
+BAR_ORBIT_EDIT_MS = 16.0
 BAR_START_S = 3.0
 ORBITS = 40
 BAR_ORBIT_FPS = 24.0
@@ -437,7 +439,7 @@ def _edit_cases() -> tuple[list, str]:
             f"{SIZE}x{SIZE}",
             statistics.median(total) * 1e3,
             "ms",
-            f"bar <= 20 ms; best {min(total) * 1e3:.1f} ms; process CPU {edit_cpu * 1e3:.1f} ms/edit",
+            f"bar <= {BAR_ORBIT_EDIT_MS:g} ms; best {min(total) * 1e3:.1f} ms; process CPU {edit_cpu * 1e3:.1f} ms/edit",
         ),
         Case(
             "  core NumPy edit alone, median (baseline)",
