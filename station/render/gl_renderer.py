@@ -19,6 +19,7 @@ from station.model.gloss import ClearCoat
 from station.render import gl_textures as tx
 from station.render.errors import RenderInputError
 from station.render.flakes import FlakeChoice, flake_lod, flake_mean_cube, flake_uniforms
+from station.render.footprint import footprint_triangles, shape_footprint
 from station.render.gl_anisotropy import anisotropy_frame
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
@@ -61,6 +62,9 @@ __all__ = [
     "load_shader",
 ]
 
+
+#: Vertices the footprint buffer holds (the shape's polygon fan and the sectors around it).
+FOOTPRINT_VERTICES = 2048
 
 #: Texels per side of the baked ground map (the disc's square; 6-unit radius: 1.2 cm a texel, a 1°
 #: penumbra at 2 units from its occluder spans ~6 texels).
@@ -147,6 +151,12 @@ class GLRenderer:
         self._sh = sh_diffuse_matrix(basis.sh)
         self._programs: dict[tuple, tuple] = {}  # (_program's arguments) → (program, vertex array)
         self._mesh = tx.MeshArrays(self.ctx)
+        #: Draw a shape in two passes over its screen footprint (:mod:`station.render.footprint`): the
+        #: paint program over the shape's polygon, the background program around it. False: one
+        #: full-screen pass of the paint program (the same frame, every pixel paying for the paint).
+        self.footprint = True
+        self._footprint_buf = self.ctx.buffer(reserve=FOOTPRINT_VERTICES * 8)
+        self._footprint_counts = (0, 0, 0)  # vertices inside, in the ring, outside (in buffer order)
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
         #: Targets at the shading size and the anti-aliasing resolve (``aa`` samples per pixel).
@@ -187,9 +197,18 @@ class GLRenderer:
         key = (shape, linear, kind, features, terms, n_occ, curve)
         if key not in self._programs:
             defines = {**self._defines, **frame_defines(shape, linear, kind, features, terms, n_occ, curve)}
-            vert = "mesh.vert.glsl" if kind == "mesh" else "fullscreen.vert.glsl"
+            screen = kind in ("footprint", "backdrop", "inside")
+            vert = {"mesh": "mesh.vert.glsl"}.get(
+                kind, "screen.vert.glsl" if screen else "fullscreen.vert.glsl"
+            )
             prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
-            self._programs[key] = (prog, None if kind == "mesh" else self.ctx.vertex_array(prog, []))
+            if kind == "mesh":
+                vao = None
+            elif screen:
+                vao = self.ctx.vertex_array(prog, [(self._footprint_buf, "2f", "in_ndc")])
+            else:
+                vao = self.ctx.vertex_array(prog, [])
+            self._programs[key] = (prog, vao)
         return self._programs[key]
 
     def _flake_mean(self, flakes: FlakeLayer):
@@ -280,10 +299,16 @@ class GLRenderer:
             uniforms["u_ground_map"] = m + 2
         for prog, _ in passes:
             self._set_uniforms(prog, uniforms, mw, occ, m)
-        if mesh is None:
-            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
-        else:
+        if mesh is not None:
             self._draw_mesh(fbo, passes, mesh)
+        elif len(passes) == 1:
+            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
+        else:  # the background around the shape's polygon, the paint over it (inside: no background)
+            inside, ring, outside = self._footprint_counts
+            passes[1][1].render(mode=self.ctx.TRIANGLES, vertices=outside, first=inside + ring)
+            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=ring, first=inside)
+            if inside:
+                passes[2][1].render(mode=self.ctx.TRIANGLES, vertices=inside)
         if fbo is target or (self.targets.side == 1 and target is None):
             return fbo
         if self.targets.side == 1:  # a mesh drawn with its depth buffer, then blitted into *target*
@@ -350,7 +375,20 @@ class GLRenderer:
         else:
             occluders = mesh.occluders().astype(np.float32)
         n_occ = len(occluders) if stage is not None else 0
-        if mesh is None:
+        foot = None
+        if mesh is None and self.footprint:
+            foot = shape_footprint(
+                scene.shape, scene.view_camera, *self.targets.shade_size, scene.misalignment_deg
+            )
+        if mesh is None and foot is not None:
+            self._upload_footprint(foot)
+            passes = [
+                self._program(scene.shape, linear, "footprint", feats, terms, n_occ, curve_i),
+                self._program("sphere", linear, "backdrop", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
+            ]
+            if foot.inner is not None:
+                passes.append(self._program(scene.shape, linear, "inside", feats, terms, n_occ, curve_i))
+        elif mesh is None:
             passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, curve_i)]
         else:
             passes = [
@@ -358,6 +396,16 @@ class GLRenderer:
                 self._program("sphere", linear, "mesh", feats, terms, n_occ, curve_i),
             ]
         return pair, passes, aniso_uniforms, occluders, n_occ
+
+    def _upload_footprint(self, foot) -> None:
+        """Write the triangles of the shape's footprint *foot* (inside, ring, outside; NDC) into the
+        footprint buffer (:func:`station.render.footprint.footprint_triangles`)."""
+        parts = footprint_triangles(foot)
+        data = np.concatenate(parts)
+        if len(data) > FOOTPRINT_VERTICES:
+            raise RenderInputError("footprint", f"<= {FOOTPRINT_VERTICES} vertices", len(data))
+        self._footprint_buf.write(data.tobytes())
+        self._footprint_counts = (len(parts[0]), len(parts[1]), len(parts[2]))
 
     def _frame_uniforms(
         self, scene, pair, fbo, coat, mesh, flakes, aniso_uniforms: dict
@@ -575,6 +623,7 @@ class GLRenderer:
         """Free textures, programs, targets (and the context if this object created it)."""
         self._mesh.release()
         self.targets.release()
+        self._footprint_buf.release()
         objs = [obj for pv in self._programs.values() for obj in reversed(pv) if obj is not None]
         objs += [*self._lobes, self._diffuse_tex, self._horizon_tex, *self._flake_means.values()]
         objs += [tex for tex, *_ in self._aniso.values()]

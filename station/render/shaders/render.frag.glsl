@@ -35,6 +35,11 @@
 #ifndef NO_SHAPE
 #define NO_SHAPE 0
 #endif
+// INSIDE_SHAPE (0/1): the program is drawn only where every ray hits the shape (station.render.footprint),
+// so the background is compiled out.
+#ifndef INSIDE_SHAPE
+#define INSIDE_SHAPE 0
+#endif
 // WIDE_GLOSS_MASK: bit i set when bound wide lobe i carries gloss in either paint; NARROW_DD (0/1): a
 // narrow lobe carries a directionally diffuse weight. Zero-weight terms are compiled out
 // (GLRenderer._terms): exact, since they add nothing.
@@ -374,6 +379,9 @@ void main() {
     bool hit_any = false;
 #else
     bool hit_any = hit(u_eye, d, t, n, paint);
+#if INSIDE_SHAPE
+    hit_any = true;  // drawn inside the shape's silhouette only (station.render.footprint): no background
+#endif
 #endif
 #endif
 #if MESH
