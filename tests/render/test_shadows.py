@@ -138,6 +138,23 @@ def test_sphere_shadow_is_the_analytic_ellipse(gl_ctx, sun_basis, rotation) -> N
     assert x[shade].mean() == pytest.approx(centre[0], abs=0.01)
     assert z[shade].mean() == pytest.approx(centre[2], abs=0.01)
     assert ground[..., 0].min() == 0.0 and ground[..., 0].max() == 1.0
+    # The frame: a ground point in the ellipse, 1.0 from the contact point away from the sun (past the
+    # sphere's footprint, about 0.2 short of the ellipse's far end), against its mirror image about the contact
+    # point (the same occlusion by symmetry) differs by the sun's direct part albedo · l_y Φ / π.
+    cam = Camera((0.0, 5.0, 0.5), (0.0, 0.0, 0.0), fov_deg=60.0)
+    with GLRenderer(sun_basis, 160, 120, ctx=gl_ctx) as gl:
+        frame = gl.render_mesh(mesh, [_diffuse()], camera=cam, stage=stage, linear=True)
+    origin, dirs = cam.rays(160, 120)
+    hit = origin + (-origin[1] / np.minimum(dirs[..., 1], -1e-9))[..., None] * dirs  # on the ground y = 0
+
+    def pixel(point: np.ndarray) -> np.ndarray:
+        i = np.argmin(np.linalg.norm(hit - point, axis=-1))
+        return frame.reshape(-1, 3)[i]
+
+    away = -np.array([ell[0], 0.0, ell[2]]) / math.hypot(ell[0], ell[2])
+    gap = pixel(-away) - pixel(away)
+    direct = stage.ground_albedo * ell[1] * sun_basis.lights.flux[0] / math.pi
+    assert gap == pytest.approx(direct, rel=0.03)
 
 
 @pytest.mark.gl
