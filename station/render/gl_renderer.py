@@ -649,8 +649,9 @@ class GLRenderer:
         functions: (ground (size, size, 3) float32 over the ground disc's square, row 0 at z = centre −
         radius, column 0 at x = centre − radius: visibility of the strongest and the second light, 1 − O;
         model (H, W, 4) float32 from *camera*: the strongest light's visibility on the model and the world
-        point x, y, z; visibility −1 where the model is not). Lights without a map read 1; RenderInputError naming ``mesh`` when the
-        frame has no shadow maps (no lights, no stage, or :attr:`shadows` off)."""
+        point x, y, z; visibility −1 where the model is not; at ``aa`` 1, as a supersampled frame averages
+        neighbouring pixels' values). Lights without a map read 1; RenderInputError naming ``mesh`` when
+        the frame has no shadow maps (no lights, no stage, or :attr:`shadows` off)."""
         from station.render.meshes import MESH_CAMERA
         from station.render.stage import Stage
 
