@@ -144,6 +144,13 @@ def set_uniforms(
         prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
     if "u_sh" in prog:
         prog["u_sh"].write(sh.tobytes())
+    for name in ("u_shadow_mat", "u_shadow_par", "u_shadow_c"):  # station.render.gl_shadows.ShadowMaps.bind
+        if name in prog:
+            _write(prog, name, uniforms["_" + name[2:]][: prog[name].array_length])
+    for name in ("u_shadow_cmp", "u_shadow_raw", "u_shadow_esm"):
+        if name in prog:
+            units = uniforms["_" + name[2:]][: prog[name].array_length]
+            prog[name].value = units if len(units) > 1 else units[0]
 
 
 def binding_order(

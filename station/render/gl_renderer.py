@@ -17,7 +17,7 @@ from station.model.anisotropy import Anisotropy
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render import gl_textures as tx
-from station.render.errors import RenderInputError
+from station.render.errors import RenderError, RenderInputError
 from station.render.flakes import FlakeChoice, flake_lod, flake_mean_cube, flake_uniforms
 from station.render.footprint import footprint_triangles, shape_footprint
 from station.render.gl_anisotropy import anisotropy_frame
@@ -36,6 +36,7 @@ from station.render.gl_programs import (
     renderer_defines,
     set_uniforms,
 )
+from station.render.gl_shadows import ShadowMaps, shadow_defines, shadow_lights
 from station.render.gl_targets import FrameTargets
 from station.render.numpy_renderer import (
     BACKGROUND,
@@ -170,6 +171,11 @@ class GLRenderer:
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
         self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
+        #: Shadow maps of the strongest extracted lights and the ground's ambient occlusion under a mesh
+        #: (:mod:`station.render.gl_shadows`); False: the sphere proxies' contact and sun shadows only.
+        self.shadows = True
+        self._shadow_slots = shadow_lights(self._lights)
+        self._shadow_maps: ShadowMaps | None = None
 
     def set_aa(self, aa: int) -> None:
         """Switch anti-aliasing to *aa* samples per pixel (:data:`station.render.gl_targets.AA_SAMPLES`):
@@ -190,13 +196,17 @@ class GLRenderer:
         terms: tuple[int, int, int] = (-1, 1, 0),
         n_occ: int = 0,
         curve: int = 0,
+        shadow: tuple = (),
     ):
         """Program (and full-screen vertex array) of a kind, built once: the arguments are those of
         :func:`station.render.gl_programs.frame_defines` (*terms*: :meth:`_terms`; *n_occ* is compiled
-        in with the light count so the stage's loops unroll)."""
-        key = (shape, linear, kind, features, terms, n_occ, curve)
+        in with the light count so the stage's loops unroll); *shadow*: (shadowed light indices, ambient
+        occlusion on, probe) of :meth:`_shadow_key`, () for none."""
+        key = (shape, linear, kind, features, terms, n_occ, curve, shadow)
         if key not in self._programs:
             defines = {**self._defines, **frame_defines(shape, linear, kind, features, terms, n_occ, curve)}
+            if shadow:
+                defines.update(shadow_defines(shadow[0], shadow[1]), SHADOW_PROBE=int(shadow[2]))
             screen = kind in ("footprint", "backdrop", "inside")
             vert = {"mesh": "mesh.vert.glsl"}.get(
                 kind, "screen.vert.glsl" if screen else "fullscreen.vert.glsl"
@@ -266,6 +276,7 @@ class GLRenderer:
         target=None,
         anisotropy: Anisotropy | None = None,
         anisotropic_samples: int | None = None,
+        probe: bool = False,
     ):
         """One frame into *target* (default this renderer's framebuffer): the frame's features and
         programs (:meth:`_frame_programs`), textures bound and uniforms set (:meth:`_frame_uniforms`), then
@@ -284,7 +295,11 @@ class GLRenderer:
             anisotropy,
             anisotropic_samples,
             self.last_flakes.on,
+            probe,
         )
+        shadow = self._shadow_key(scene, mesh, probe)
+        if shadow:
+            self._update_shadows(scene, mesh)
         own = target is None or self.targets.side > 1 or mesh is not None
         fbo = self.targets.draw_target(linear, depth=mesh is not None) if own else target
         fbo.use()
@@ -293,14 +308,16 @@ class GLRenderer:
         uniforms, mw, m = self._frame_uniforms(scene, pair, fbo, coat, mesh, flakes, aniso_uniforms)
         if not linear:
             uniforms["u_exposure"] = float(2.0**exposure_ev)
+        if shadow:
+            uniforms.update(self._bind_shadows(scene, mesh, m))
         if scene.stage is not None and scene.stage.ground:
-            self._ground_map(uniforms, mw, occ, n_occ, m).use(m + 2)
+            self._ground_map(uniforms, mw, occ, n_occ, m, shadow).use(m + 2)
             fbo.use()
             uniforms["u_ground_map"] = m + 2
         for prog, _ in passes:
             self._set_uniforms(prog, uniforms, mw, occ, m)
         if mesh is not None:
-            self._draw_mesh(fbo, passes, mesh)
+            self._draw_mesh(fbo, passes, mesh, probe)
         elif len(passes) == 1:
             passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
         else:  # the background around the shape's polygon, the paint over it (inside: no background)
@@ -317,11 +334,15 @@ class GLRenderer:
         out = target if target is not None else self.targets.output_target(linear)
         return self.targets.resolve(fbo, out)
 
-    def _draw_mesh(self, fbo, passes: list, mesh) -> None:
-        """The stage pass (colour only), then *mesh* depth-tested, into *fbo*."""
+    def _draw_mesh(self, fbo, passes: list, mesh, probe: bool = False) -> None:
+        """The stage pass (colour only), then *mesh* depth-tested, into *fbo* (*probe*: no stage, the
+        background −1)."""
         fbo.clear(depth=1.0)
         self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
-        passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
+        if probe:
+            fbo.clear(-1.0, -1.0, -1.0, 1.0, depth=1.0)
+        else:
+            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
         self.ctx.enable(self.ctx.DEPTH_TEST)
         try:
             self._mesh.vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
@@ -339,6 +360,7 @@ class GLRenderer:
         anisotropy,
         anisotropic_samples,
         flakes_on: bool = False,
+        probe: bool = False,
     ) -> tuple[list, list, dict, np.ndarray, int]:
         """(paints, passes, anisotropy uniforms, sphere occluders (k, 4), occluders compiled in) of one
         frame: the features compiled in (coat, stage bits, flakes, anisotropy) and the programs."""
@@ -393,7 +415,16 @@ class GLRenderer:
         else:
             passes = [
                 self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
-                self._program("sphere", linear, "mesh", feats, terms, n_occ, curve_i),
+                self._program(
+                    "sphere",
+                    linear,
+                    "mesh",
+                    feats,
+                    terms,
+                    n_occ,
+                    curve_i,
+                    self._shadow_key(scene, mesh, probe),
+                ),
             ]
         return pair, passes, aniso_uniforms, occluders, n_occ
 
@@ -459,7 +490,43 @@ class GLRenderer:
         uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
         return uniforms, mw, m
 
-    def _ground_map(self, uniforms: dict, mw: list, occ: np.ndarray, n_occ: int, m: int):
+    def _shadow_key(self, scene, mesh, probe: bool = False) -> tuple:
+        """(shadowed light indices, ambient occlusion on, probe) of a frame: a mesh on a stage with
+        :attr:`shadows` on and lights taken out of the environment; () otherwise."""
+        if mesh is None or scene.stage is None or not self.shadows or not self._shadow_slots:
+            return ()
+        return (self._shadow_slots, bool(scene.stage.ground), bool(probe))
+
+    @property
+    def shadow_redraws(self) -> int:
+        """How many times the shadow or ambient-occlusion maps were drawn (they are redrawn only when the
+        mesh, the environment's turn or the ground change, never for a camera move)."""
+        return 0 if self._shadow_maps is None else self._shadow_maps.version
+
+    def _update_shadows(self, scene, mesh) -> None:
+        """Draw the shadow maps and the ground's occlusion map of *mesh* when they changed."""
+        if self._shadow_maps is None:
+            self._shadow_maps = ShadowMaps(self.ctx)
+        self._shadow_maps.update(
+            mesh, self._lights, self._shadow_slots, lookup_matrix(scene.stage.rotation_deg)
+        )
+        if scene.stage.ground:
+            self._shadow_maps.ambient_occlusion(mesh, mesh.floor_y, (0.0, 0.0), scene.stage.ground_radius)
+
+    def _bind_shadows(self, scene, mesh, m: int) -> dict:
+        """Bind the shadow maps (texture units m + 10 on) and the ground's occlusion map; their uniforms."""
+        maps = self._shadow_maps
+        if maps is None:
+            raise RenderError("shadow maps bound before they were drawn")
+        n = len(self._shadow_slots)
+        uniforms = maps.bind(m + 10, n)
+        if scene.stage.ground:
+            ao = maps.ambient_occlusion(mesh, mesh.floor_y, (0.0, 0.0), scene.stage.ground_radius)
+            ao.use(m + 10 + 3 * n)
+            uniforms["u_ao"] = m + 10 + 3 * n
+        return uniforms
+
+    def _ground_map(self, uniforms: dict, mw: list, occ: np.ndarray, n_occ: int, m: int, shadow: tuple = ()):
         """The ground's radiance per unit albedo over the disc's square (GROUND_MAP² texels, linear), baked
         by ``ground_radiance`` of shaders/render.frag.glsl when the ground, its occluders or the
         environment's turn change; the frame then looks it up once per ground pixel (it depends on the
@@ -470,6 +537,8 @@ class GLRenderer:
             uniforms["u_ground_c"],
             uniforms["u_ground_radius"],
             uniforms["u_rot"],
+            shadow[:2],
+            self._shadow_maps.version if shadow and self._shadow_maps is not None else -1,
         )
         if self._ground is not None and self._ground[0] == key:
             return self._ground[1]
@@ -478,7 +547,9 @@ class GLRenderer:
             target = self.ctx.framebuffer(color_attachments=[tex])
         else:
             tex, target = self._ground[1], self._ground[2]
-        prog, vao = self._program("sphere", True, "ground", (0, 1, 0), n_occ=n_occ)
+        prog, vao = self._program(
+            "sphere", True, "ground", (0, 1, 0), n_occ=n_occ, shadow=(*shadow[:2], False) if shadow else ()
+        )
         self._set_uniforms(prog, {**uniforms, "u_size": (float(GROUND_MAP),) * 2}, mw, occ, m)
         target.use()
         vao.render(mode=self.ctx.TRIANGLES, vertices=3)
@@ -619,6 +690,44 @@ class GLRenderer:
         )
         return self._read(fbo, linear)
 
+    def shadow_probe(
+        self, mesh, paints, camera=None, stage=None, size: int = 512
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Diagnostics of the shadows of *mesh* (:mod:`station.render.gl_shadows`), by the frame's own shader
+        functions: (ground (size, size, 3) float32 over the ground disc's square, row 0 at z = centre −
+        radius, column 0 at x = centre − radius: visibility of the strongest and the second light, 1 − O;
+        model (H, W, 4) float32 from *camera*: the strongest light's visibility on the model and the world
+        point x, y, z; visibility −1 where the model is not; at ``aa`` 1, as a supersampled frame averages
+        neighbouring pixels' values). Lights without a map read 1; RenderInputError naming ``mesh`` when
+        the frame has no shadow maps (no lights, no stage, or :attr:`shadows` off)."""
+        from station.render.meshes import MESH_CAMERA
+        from station.render.stage import Stage
+
+        scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage or Stage())
+        if not self._shadow_key(scene, mesh):
+            raise RenderInputError("mesh", "a mesh on a stage lit by extracted lights, shadows on", mesh.name)
+        fbo = self._draw(scene, paints, True, 0.0, "clip", None, mesh=mesh, probe=True)
+        data = np.frombuffer(fbo.read(components=4, dtype="f4", alignment=1), np.float32)
+        model = data.reshape(self.height, self.width, 4)[::-1].copy()
+        tex = tx.colour_texture(self.ctx, (size, size), False)
+        target = self.ctx.framebuffer(color_attachments=[tex])
+        try:
+            shadow = (*self._shadow_key(scene, mesh)[:2], True)
+            prog, vao = self._program("sphere", True, "ground", (0, 1, 0), shadow=shadow)
+            pair = check_paints(self.basis, paints)
+            uniforms, mw, m = self._frame_uniforms(scene, pair, target, None, mesh, None, {})
+            uniforms.update(self._bind_shadows(scene, mesh, m))
+            self._set_uniforms(
+                prog, {**uniforms, "u_size": (float(size),) * 2}, mw, np.zeros((8, 4), np.float32), m
+            )
+            target.use()
+            vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+            ground = np.frombuffer(target.read(components=3, dtype="f4", alignment=1), np.float32)
+        finally:
+            target.release()
+            tex.release()
+        return ground.reshape(size, size, 3).copy(), model
+
     def release(self) -> None:
         """Free textures, programs, targets (and the context if this object created it)."""
         self._mesh.release()
@@ -631,6 +740,9 @@ class GLRenderer:
             objs += [*self._combine[:3], *self._combine[3]]
         if self._ground is not None:
             objs += [self._ground[2], self._ground[1]]
+        if self._shadow_maps is not None:
+            self._shadow_maps.release()
+            self._shadow_maps = None
         for obj in objs:
             obj.release()
         for cache in (self._flake_means, self._aniso, self._programs):

@@ -75,6 +75,7 @@ def mesh_arrays(ctx: Any, mesh: Any, prog: Any) -> tuple:
         [(vbo, "3f 3f 1f", "in_pos", "in_normal", "in_painted")],
         index_buffer=ibo,
         index_element_size=4,
+        skip_errors=True,  # a program that reads fewer attributes (the shadow probe)
     )
     return vbo, ibo, vao
 

@@ -135,16 +135,18 @@ def _part_matches(query: str | None, *names: str | None) -> bool:
     return any(n is not None and q in n.lower() for n in names)
 
 
-def smooth_normals(geom: Any) -> tuple[NDArray, NDArray, NDArray]:
+def smooth_normals(geom: Any, keep_vertices: bool = False) -> tuple[NDArray, NDArray, NDArray]:
     """(vertices, faces, unit vertex normals) of a trimesh geometry shaded smooth. A geometry whose faces
-    share vertices keeps its normals (the file's, else trimesh's area-weighted ones). A flat one (one vertex
-    per face corner: a flat-shaded export, an STL) has its coincident vertices merged, then split again only along
+    share vertices and whose file gives normals keeps them. Any other (one vertex per face corner: a
+    flat-shaded export, an STL; or shared vertices with no normals in the file, whose area-weighted
+    normals would round a box's edges off) has its coincident vertices merged, then split again only along
     edges whose faces meet at more than SMOOTH_ANGLE_DEG (``trimesh.graph.smooth_shade``), so curved
-    panels shade smooth and creases stay sharp."""
+    panels shade smooth and creases stay sharp. *keep_vertices*: a geometry with shared vertices keeps them
+    whatever its normals (a palette-textured part is split by its own faces, :func:`_palette_split`)."""
     import trimesh
 
     faces = np.asarray(geom.faces, np.int64)
-    if np.unique(faces).size < faces.size:  # shared vertices: the file's own (or trimesh's) normals
+    if np.unique(faces).size < faces.size and (keep_vertices or _file_normals(geom)):
         return np.asarray(geom.vertices, float), faces, np.asarray(geom.vertex_normals, float)
     merged = trimesh.Trimesh(np.asarray(geom.vertices, float), faces, process=False)
     merged.merge_vertices(merge_tex=True, merge_norm=True)
@@ -154,6 +156,13 @@ def smooth_normals(geom: Any) -> tuple[NDArray, NDArray, NDArray]:
         np.asarray(smooth.faces, np.int64),
         np.asarray(smooth.vertex_normals, float),
     )
+
+
+def _file_normals(geom: Any) -> bool:
+    """Whether trimesh read vertex normals from the file: a loader puts them in the geometry's cache, where
+    computed ones appear only once ``vertex_normals`` is first read (nothing reads it before this check)."""
+    cache = getattr(geom, "_cache", None)
+    return cache is not None and "vertex_normals" in cache
 
 
 def part_material(*names: str | None) -> float:
@@ -227,7 +236,7 @@ def load_mesh(path: str | Path, paint: str | None = None) -> Mesh:
     pos, nrm, faces, painted = [], [], [], []
     base = 0
     for (node, geom_name, material, geom, transform), is_paint in zip(parts, chosen, strict=True):
-        v, f, n = smooth_normals(geom)
+        v, f, n = smooth_normals(geom, keep_vertices=palette is not None and len(parts) == 1)
         code = np.full(len(v), PAINT if is_paint else part_material(node, geom_name, material))
         if palette is not None and len(parts) == 1:
             v, f, n, code = _palette_split(geom, palette, v, f, n, code)

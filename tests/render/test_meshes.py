@@ -72,9 +72,10 @@ def test_parts_by_name_in_glb_obj_stl(tmp_path) -> None:
     scene = trimesh.Scene({"body": body, "glass": glass})
     scene.export(tmp_path / "two.glb")
     mesh = me.load_mesh(tmp_path / "two.glb", paint="BODY")
-    assert (mesh.painted == me.PAINT).sum() == len(body.vertices)  # the box's vertices painted
-    assert (mesh.painted == me.GLASS).sum() == len(glass.vertices)  # the part named glass drawn as glass
-    assert mesh.painted.size == len(body.vertices) + len(glass.vertices)
+    # No normals in the file: each box is shaded with its creases, 4 corners on each of its 6 faces.
+    assert (mesh.painted == me.PAINT).sum() == 24  # the box's vertices painted
+    assert (mesh.painted == me.GLASS).sum() == 24  # the part named glass drawn as glass
+    assert mesh.painted.size == 48
     lo, hi = mesh.bounds
     assert hi[0] - lo[0] == pytest.approx(me.MESH_LENGTH) and lo[1] == pytest.approx(me.MESH_FLOOR_Y)
     # Height scales with the length: 0.6 + 0.15 + ... over 2.0 → (0.6/2 + 0.3) * 2.4/2.0 box top.
@@ -107,6 +108,31 @@ def test_imported_meshes_shade_smooth(tmp_path) -> None:
     trimesh.creation.box((2.0, 1.0, 1.0)).export(tmp_path / "box.stl")
     box = me.load_mesh(tmp_path / "box.stl")
     assert np.allclose(np.abs(box.normals).max(axis=1), 1.0, atol=1e-6)
+
+
+def test_shared_vertices_without_normals_shade_smooth_with_creases(tmp_path) -> None:
+    """An OBJ with shared vertices and no normals: a box's 8 corners get axis-aligned normals (its creases
+    kept, not the corner normals (±1, ±1, ±1)/√3 of area weighting) and an icosphere's normals lie within
+    3° of the exact radial ones; an OBJ that gives its normals keeps them."""
+    lines = [f"v {x} {y} {z}" for x in (0, 2) for y in (0, 1) for z in (0, 1)]
+    quads = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+    lines += [f"f {a} {b} {c}\nf {a} {c} {d}" for a, b, c, d in quads]
+    (tmp_path / "box.obj").write_text("\n".join(lines) + "\n")
+    box = me.load_mesh(tmp_path / "box.obj")
+    assert np.allclose(np.abs(box.normals).max(axis=1), 1.0, atol=1e-6)
+    import trimesh
+
+    ico = trimesh.creation.icosphere(subdivisions=3)
+    text = "".join(f"v {x} {y} {z}\n" for x, y, z in ico.vertices)
+    text += "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in ico.faces)
+    (tmp_path / "ball.obj").write_text(text)
+    ball = me.load_mesh(tmp_path / "ball.obj")
+    radial = ball.positions - 0.5 * (ball.bounds[0] + ball.bounds[1])
+    radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+    assert np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", radial, ball.normals), -1, 1))).max() < 3.0
+    given = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nvn 0.6 0.8 0\nf 1//1 3//1 2//1\nf 1//1 4//1 3//1\n"
+    (tmp_path / "given.obj").write_text(given)
+    assert np.allclose(me.load_mesh(tmp_path / "given.obj").normals, [0.6, 0.8, 0.0], atol=1e-6)
 
 
 def test_car_body_is_smooth_and_closed() -> None:

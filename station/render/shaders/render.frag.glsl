@@ -225,6 +225,8 @@ vec3 sh_eval(vec3 n) {
          + u_sh[8] * (0.546274 * (n.x * n.x - n.y * n.y));
 }
 
+//#include shadows.glsl
+
 // Radiance of the white ground at p, per unit albedo (station.render.stage.ground_radiance): the rest of
 // the sky (the diffuse map at +Y less the extracted lights' direct parts) with the contact shadow of the
 // sphere proxies, plus each light's direct part times its visibility past them. View-independent: baked
@@ -237,6 +239,9 @@ vec3 ground_radiance(vec3 p) {
         float d2 = max(dot(v, v), r2);
         open_sky *= 1.0 - r2 / d2 * clamp(v.y / sqrt(d2), 0.0, 1.0);
     }
+#if HAS_AO
+    open_sky = 1.0 - textureLod(u_ao, 0.5 * (p.xz - u_ground_c) / u_ground_radius + 0.5, 0.0).r;
+#endif
 #if DIFFUSE_SH
     vec3 sky = sh_eval(vec3(0.0, 1.0, 0.0));
 #else
@@ -251,6 +256,9 @@ vec3 ground_radiance(vec3 p) {
         vec3 direct = ld.y * u_light_flux[l] / PI;
         direct_sum += direct;
         float vis = 1.0;
+#if N_SHADOW > 0
+        if (has_shadow_map(l)) vis = light_shadow(l, p, vec3(0.0, 1.0, 0.0), ld); else
+#endif
         for (int k = 0; k < N_OCC; ++k) {
             vec3 v = u_occ[k].xyz - p;
             float dl = max(length(v), u_occ[k].w * (1.0 + 1e-6));
@@ -329,6 +337,15 @@ flat in float v_painted;
 #endif
 
 #if MESH
+// The diffuse reflectance of a neutral part (the factor of its diffuse-map term in part_radiance).
+float part_diffuse(float code, float ndv) {
+    float m = 1.0 - ndv, m5 = m * m * m * m * m;
+    if (abs(code - MAT_TYRE) < 0.5) return TYRE_ALBEDO + (0.04 + 0.96 * m5) * 0.25;
+    if (abs(code - MAT_GLASS) < 0.5) return (1.0 - (0.04 + 0.96 * m5)) * GLASS_INTERIOR;
+    if (abs(code - MAT_CHROME) < 0.5) return 0.0;
+    return NEUTRAL_ALBEDO;
+}
+
 // A mesh part that is not the paint (station.render.meshes: material codes): NEUTRAL_ALBEDO grey, matte
 // tyre, glass (Schlick F0 0.04 mirror over a dark interior) or chrome (F0 0.6 mirror), the mirrors read in
 // the sharpest lobe map (bound to u_flake_sharp for meshes).
@@ -342,13 +359,24 @@ vec3 part_radiance(float code, vec3 n, vec3 v) {
     float ndv = clamp(dot(n, v), 0.0, 1.0);
     float m = 1.0 - ndv, m5 = m * m * m * m * m;
     vec3 mirror = textureLod(u_flake_sharp, u_rot * (2.0 * dot(n, v) * n - v), 0.0).rgb;
-    if (abs(code - MAT_TYRE) < 0.5) return TYRE_ALBEDO * d_n + (0.04 + 0.96 * m5) * 0.25 * d_n;
-    if (abs(code - MAT_GLASS) < 0.5) {
-        float f = 0.04 + 0.96 * m5;
-        return f * mirror + (1.0 - f) * GLASS_INTERIOR * d_n;
-    }
+    vec3 diffuse = part_diffuse(code, ndv) * d_n;
+    if (abs(code - MAT_GLASS) < 0.5) return (0.04 + 0.96 * m5) * mirror + diffuse;
     if (abs(code - MAT_CHROME) < 0.5) return (0.6 + 0.4 * m5) * mirror;
-    return NEUTRAL_ALBEDO * d_n;
+    return diffuse;  // tyre, neutral grey
+}
+#endif
+
+#if MESH && N_SHADOW > 0 && N_LIGHTS > 0
+// What the lights' shadows take from a neutral part's diffuse share (part_diffuse): sum over the shadowed
+// lights of (1 - V) (N.l)+ flux / pi times the part's diffuse reflectance.
+vec3 part_shadow_loss(float code, vec3 n, vec3 v) {
+    vec3 loss = vec3(0.0);
+    for (int l = 0; l < N_LIGHTS; ++l) {
+        vec3 lw = transpose(u_rot) * u_light_dir[l];
+        float nl = dot(n, lw);
+        if (nl > 0.0 && has_shadow_map(l)) loss += (1.0 - light_shadow(l, v_pos, n, lw)) * nl / PI * u_light_flux[l];
+    }
+    return part_diffuse(code, clamp(dot(n, v), 0.0, 1.0)) * loss;
 }
 #endif
 
@@ -356,8 +384,12 @@ vec3 part_radiance(float code, vec3 n, vec3 v) {
 // One texel of the ground map: the disc's square [-1, 1]^2 (times the radius, about u_ground_c).
 void main() {
     vec2 q = 2.0 * gl_FragCoord.xy / u_size - 1.0;
-    f_color = vec4(ground_radiance(vec3(u_ground_c.x + q.x * u_ground_radius, u_ground_y,
-                                        u_ground_c.y + q.y * u_ground_radius)), 1.0);
+    vec3 p = vec3(u_ground_c.x + q.x * u_ground_radius, u_ground_y, u_ground_c.y + q.y * u_ground_radius);
+#if SHADOW_PROBE
+    f_color = vec4(shadow_probe(p, vec3(0.0, 1.0, 0.0)), 1.0);
+#else
+    f_color = vec4(ground_radiance(p), 1.0);
+#endif
 }
 #else
 void main() {
@@ -387,6 +419,9 @@ void main() {
 #if MESH
     if (hit_any && paint < 0) {
         rgb = part_radiance(v_painted, n, -d);
+#if N_SHADOW > 0 && N_LIGHTS > 0
+        rgb -= part_shadow_loss(v_painted, n, -d);
+#endif
     } else
 #endif
     if (hit_any) {
@@ -465,6 +500,13 @@ void main() {
                     acc += (((WIDE_GLOSS_MASK >> i) & 1) != 0 ? s * wg + nl * wdd : nl * wdd) * p;
                 }
             }
+#if MESH && N_SHADOW > 0
+            // the light's direct part (its exact terms and its share of the diffuse map) times its visibility
+            if (nl > 0.0 && has_shadow_map(l)) {
+                float vis = light_shadow(l, v_pos, transpose(u_rot) * n, transpose(u_rot) * u_light_dir[l]);
+                acc = vis * acc - (1.0 - vis) * nl / PI * (paint == 0 ? u_wd[0] : u_wd[1]);
+            }
+#endif
             if (nl > 0.0) rgb += acc * u_light_flux[l];
         }
 #endif
@@ -490,7 +532,12 @@ void main() {
         rgb = stage_background(u_eye, d);
 #endif
     }
-#if OUTPUT_LINEAR
+#if OUTPUT_LINEAR && SHADOW_PROBE && MESH
+    vec3 nw = normalize(v_normal);
+    if (dot(nw, v_pos - u_eye) > 0.0) nw = -nw;
+    rgb = shadow_probe(v_pos, nw);
+    f_color = vec4(rgb.x, v_pos);  // the strongest light's visibility at world point v_pos
+#elif OUTPUT_LINEAR
     f_color = vec4(rgb, 1.0);
 #else
     f_color = vec4(display(rgb), 1.0);

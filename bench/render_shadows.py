@@ -1,0 +1,175 @@
+"""Shadow maps and ground ambient occlusion (``station.render.gl_shadows``): what they cost per orbit frame
+and what they look like.
+
+Orbit of the procedural car at 1024² in the stylist's scene (stage, clear coat, flakes) on the GL renderer,
+shadows on against off in the same run: two renderers on one context, frames interleaved in blocks, the
+camera turning 1° a frame (the maps are drawn once, on the first frame, and reused: an orbit moves the
+camera, not the light). CPU time per frame (the process's, llvmpipe's threads included) beside wall time,
+and the one-off cost of drawing the maps (first frame with shadows less the mean frame). Writes
+``docs/render/car-shadows.png``: sky and booth rows; the procedural car and a CC0 car (when ``--shared``
+holds one), shadows off | on.
+
+Run: ``.venv/bin/python -m bench.render_shadows [--shared DIR] [--frames N]``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bench._report import Case, bench_parser, write_section
+from station.model.flakes import METALLIC_FLAKES
+from station.model.gloss import ClearCoat
+from station.render.camera import Camera
+from station.render.car import car_body
+from station.render.envcache import PrefilterCache
+from station.render.gl_context import create_gl_context
+from station.render.gl_renderer import GLRenderer
+from station.render.lobe_fit import fit_design
+from station.render.meshes import MESH_CAMERA, load_mesh
+from station.render.prefilter import prefilter_basis
+from station.render.procedural import procedural_environment
+from station.render.shapes import Scene
+from station.render.stage import Stage
+from station.render.tonemap import save_png
+
+from .render_scene import SHARED, SILVER
+
+OUT = Path(__file__).resolve().parents[1] / "docs" / "render"
+#: Orbit frame size (the viewer benchmark's) and the screenshot's tile size.
+SIZE = 1024
+TILE = (480, 300)
+#: A view from the front left and above, where the sky's sun throws the car's shadow towards the camera side.
+SHOT_CAMERA = Camera((-2.5, 1.6, 2.3), (-0.3, -0.3, -0.15), fov_deg=40.0)
+
+
+def _orbit_camera(yaw_deg: float) -> Camera:
+    target = np.asarray(MESH_CAMERA.target, float)
+    off = np.asarray(MESH_CAMERA.eye, float) - target
+    a = math.radians(yaw_deg)
+    rot = np.array([[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]])
+    x, y, z = (float(v) for v in target + rot @ off)
+    return Camera((x, y, z), MESH_CAMERA.target, MESH_CAMERA.up, MESH_CAMERA.fov_deg)
+
+
+def _frame(gl: GLRenderer, ctx, mesh, w, yaw: float) -> tuple[float, float]:
+    scene = Scene("sphere", camera=_orbit_camera(yaw), stage=Stage())
+    t0, c0 = time.perf_counter(), time.process_time()
+    gl.draw(scene, [w], coat=ClearCoat(), flakes=METALLIC_FLAKES, mesh=mesh)
+    ctx.finish()
+    return time.perf_counter() - t0, time.process_time() - c0
+
+
+def orbit(env_name: str, frames: int, blocks: int = 3) -> list[Case]:
+    """Cases of one environment: frame wall and CPU time, shadows on and off, and the maps' one-off cost."""
+    w = fit_design(SILVER)
+    basis = prefilter_basis(
+        procedural_environment(env_name, 512), w.exponents, engine="gl", cache=PrefilterCache()
+    )
+    car = car_body()
+    ctx = create_gl_context()
+    times: dict[bool, list[tuple[float, float]]] = {True: [], False: []}
+    first: dict[bool, tuple[float, float]] = {}
+    try:
+        gls = {on: GLRenderer(basis, SIZE, SIZE, ctx=ctx) for on in (True, False)}
+        for on, gl in gls.items():
+            gl.shadows = on
+            first[on] = _frame(gl, ctx, car, w, 0.0)  # programs, maps, ground bake
+            _frame(gl, ctx, car, w, 0.5)
+        yaw = 1.0
+        for _ in range(blocks):
+            for on in (True, False):
+                for _ in range(frames):
+                    times[on].append(_frame(gls[on], ctx, car, w, yaw))
+                    yaw += 1.0
+        redraws = gls[True].shadow_redraws
+        for gl in gls.values():
+            gl.release()
+    finally:
+        ctx.release()
+    lights = basis.lights.count if basis.lights is not None else 0
+    size = f"{SIZE}²"
+    out = []
+    for on in (True, False):
+        wall = float(np.mean([t[0] for t in times[on]])) * 1e3
+        cpu = float(np.mean([t[1] for t in times[on]])) * 1e3
+        label = "on" if on else "off"
+        out.append(
+            Case(f"{env_name} orbit, shadows {label}: CPU", size, cpu, "ms/frame", f"lights: {lights}")
+        )
+        out.append(
+            Case(
+                f"{env_name} orbit, shadows {label}: wall",
+                size,
+                wall,
+                "ms/frame",
+                f"{wall and 1e3 / wall:.1f} fps",
+            )
+        )
+    cpu_on = float(np.mean([t[1] for t in times[True]]))
+    cpu_off = float(np.mean([t[1] for t in times[False]]))
+    out.append(Case(f"{env_name} orbit: CPU on / off", size, cpu_on / cpu_off, "×", "same run"))
+    build = (first[True][1] - cpu_on) - (first[False][1] - cpu_off)
+    out.append(
+        Case(
+            f"{env_name} maps drawn (once): CPU",
+            size,
+            build * 1e3,
+            "ms",
+            f"first frame on less off, each less its mean frame; map draws in the whole orbit: {redraws} "
+            "(the light maps and the ground occlusion, once each)",
+        )
+    )
+    return out
+
+
+def screenshot(shared: Path) -> Path:
+    """docs/render/car-shadows.png: rows sky, booth; columns procedural car off | on, CC0 car off | on."""
+    w = fit_design(SILVER)
+    models: list[tuple[str, object]] = [("procedural", car_body())]
+    cars = sorted((shared / "meshes").glob("*.glb"))
+    if cars:
+        models.append((cars[-1].stem, load_mesh(cars[-1])))
+    rows = []
+    for env_name in ("sky", "booth"):
+        basis = prefilter_basis(
+            procedural_environment(env_name, 512), w.exponents, engine="gl", cache=PrefilterCache()
+        )
+        with GLRenderer(basis, *TILE, aa=4) as gl:
+            row = []
+            for _, mesh in models:
+                for on in (False, True):
+                    gl.shadows = on
+                    img = gl.render_mesh(mesh, [w], camera=SHOT_CAMERA, stage=Stage(), coat=ClearCoat())
+                    row.append(np.ascontiguousarray(img))
+            rows.append(np.concatenate(row, axis=1))
+    OUT.mkdir(parents=True, exist_ok=True)
+    path = OUT / "car-shadows.png"
+    save_png(path, np.concatenate(rows, axis=0))
+    return path
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = bench_parser(__doc__, "render_shadows")
+    parser.add_argument("--shared", type=Path, default=SHARED, help="folder with meshes/")
+    parser.add_argument("--frames", type=int, default=6, help="frames per block (3 blocks per mode)")
+    args = parser.parse_args(argv)
+    cases = [c for env in ("sky", "booth") for c in orbit(env, args.frames)]
+    load = os.getloadavg()[0]
+    print(f"wrote {screenshot(args.shared)}")
+    write_section(
+        "render_shadows",
+        "Shadow maps and ground occlusion: orbit frame cost",
+        cases,
+        "Procedural car, stage + clear coat + flakes, GL renderer on llvmpipe; shadows on against off in "
+        "the same run, frames interleaved in blocks (`python -m bench.render_shadows`). CPU time is the "
+        f"process's, llvmpipe's threads included. Load average {load:.1f} on {os.cpu_count()} CPUs at the end.",
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,420 @@
+"""Shadow maps and ground ambient occlusion of a mesh for the GL renderer (``shaders/shadows.glsl``).
+
+* **Which lights.** Of the lights taken out of the environment (``PrefilteredBasis.lights``) the
+  SHADOW_LIGHTS of largest luminous flux cast shadow maps (:func:`shadow_lights`): the sun, a booth's main
+  lamps. The others keep the ground's sphere-proxy sun shadow (``station.render.stage.light_visibility``).
+* **Depth pass.** Per shadowed light one depth map of SHADOW_MAP² texels, an orthographic view along the
+  light's world direction l fitted to the mesh's bounding box (:func:`ortho_matrix`): the map holds, per
+  texel, the depth of the mesh nearest to the light. It is drawn again only when the mesh, the
+  environment's turn or the lights change (:class:`ShadowMaps`): an orbit moves the camera, not the
+  environment, so orbit frames reuse the maps.
+* **Ground: percentage-closer soft shadows.** The ground is baked into a map once per stage and light
+  (``GLRenderer._ground_map``), so its lookup can afford a full one: a ground point, moved off its surface
+  along its normal by NORMAL_OFFSET texels (more at grazing light), is projected into the map; a blocker
+  search over the disc that the light of angular radius a (:func:`light_radius_rad`) would cover gives
+  the mean blocker depth, the penumbra radius is (receiver − blocker depth) · tan a (at least a texel),
+  and the visibility V is the mean of 8 depth comparisons (each a bilinear 2 × 2 comparison) over
+  that radius, in [0, 1]: hard at the contact, soft away from it.
+* **Model: exponential shadow map.** The model is shaded every frame, where a filtered lookup of several
+  taps per light cost the orbit about as much as the rest of the car's shading on llvmpipe. Each
+  light's depth map d is therefore filtered once, when drawn, into an ESM_MAP² map of L = (1/c) log of the
+  box mean of exp(c d) (in log space, ``shaders/esm.frag.glsl``; c = ESM_SHARPNESS per world unit), of
+  half width tan(a) · ESM_REACH; a pixel reads it once, V = min(1, exp(c (L − z))) at its receiver depth z
+  (Annen et al. 2008's exponential shadow maps). Behind its blockers by more than a few 1/c (3 cm: 0.25 %
+  left) V is the share of the filter's texels that do not block it, i.e. a PCF of fixed width; closer to
+  its blocker the shadow is lighter (the exponential's known leak at contacts).
+* **What is shadowed.** Only the light's direct part: on the model the light's exact terms on the wide
+  lobes and its Lambertian share w_D (N·l)₊Φ/π of the diffuse map (for the neutral parts, their diffuse
+  reflectance's share); on the ground its direct part (l_y)₊Φ/π. The environment's diffuse and specular
+  maps (the narrow lobes keep the sun) are unchanged.
+* **Ground ambient occlusion.** Two height maps of the mesh seen from straight above and below
+  (HEIGHT_MAP texels on the long side) give, per column (x, z), the mesh's top and bottom heights; the
+  mesh is taken as those columns. From a ground point p the cosine-weighted occluded fraction of the sky
+  along an azimuth is ∫ 2 sin φ cos φ dφ over the elevations φ the columns hide, sin² φ_max − sin² φ_min
+  for the interval [φ_min, φ_max] they span (exact for a convex body, whose slice by a vertical
+  half-plane through p is seen from p as one interval of elevations); O is the mean over AO_AZIMUTHS
+  azimuths (AO_STEPS columns each), in [0, 1], baked once per mesh into an AO_MAP² map over the ground
+  disc's square (``shaders/ao.frag.glsl``). The ground's sky part is then (1 − O) × the sky's irradiance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.render.errors import RenderInputError
+from station.render.gl_context import build_program
+
+#: Lights that cast shadow maps (the strongest by luminous flux); the shader's sampler arrays hold as many.
+SHADOW_LIGHTS = 2
+#: Texels per side of a light's depth map.
+SHADOW_MAP = 2048
+#: Texels of the long side of the top and bottom height maps (ambient occlusion).
+HEIGHT_MAP = 512
+#: Texels per side of the ground's ambient-occlusion map over the disc's square.
+AO_MAP = 512
+#: Azimuths and steps per azimuth of the occlusion estimate.
+AO_AZIMUTHS = 24
+AO_STEPS = 64
+#: Smallest angular radius of a light's penumbra, degrees (the sun's disc).
+SUN_RADIUS_DEG = 0.27
+#: A receiver is moved this many texels along its normal before its lookup (no self-shadow acne).
+NORMAL_OFFSET = 1.5
+#: Widest PCF radius, texels (a booth lamp tens of degrees wide is a soft, not a missing, shadow).
+MAX_RADIUS_TEXELS = 24.0
+#: The model's frames read an exponential shadow map (ESM) of ESM_MAP² texels per light: exp(c d) box-filtered
+#: once per light over ESM_TAPS² taps (in log space), one lookup a pixel.
+ESM_MAP = 1024
+ESM_TAPS = 13
+#: Sharpness c of the exponential, per world unit of depth (a receiver 3 cm behind its blocker keeps
+#: exp(−6) = 0.25 % of the light).
+ESM_SHARPNESS = 200.0
+#: Occluder-to-receiver distance (world units) at which the model's penumbra has the light's width:
+#: the filter's half width is tan(a) · ESM_REACH (at least 1.5 ESM texels).
+ESM_REACH = 0.25
+#: Rec. 709 luma of linear sRGB (which lights are the strongest).
+_LUMA = np.array([0.2126, 0.7152, 0.0722])
+
+
+def shadow_lights(lights: Any, count: int = SHADOW_LIGHTS) -> tuple[int, ...]:
+    """Indices of the *count* lights of *lights* (``station.render.environment.Lights`` or None) of largest
+    luminous flux (Rec. 709 luma of the flux, linear sRGB), strongest first; () without lights."""
+    if lights is None or lights.count == 0:
+        return ()
+    if count < 0:
+        raise RenderInputError("count", "count >= 0", count)
+    luma = np.asarray(lights.flux, float) @ _LUMA
+    order = np.argsort(-luma, kind="stable")
+    return tuple(int(i) for i in order[:count])
+
+
+def light_radius_rad(spread: float) -> float:
+    """Angular radius (radians) of a light of angular spread *spread* = s² (rad², per-axis variance of its
+    directions, ``Lights.spreads``): a uniform disc of radius a has E[θ²] = a²/2, s² = a²/4, so a = 2 s;
+    at least SUN_RADIUS_DEG."""
+    if not math.isfinite(spread) or spread < 0.0:
+        raise RenderInputError("spread", "a finite spread >= 0 rad²", spread)
+    return max(2.0 * math.sqrt(spread), math.radians(SUN_RADIUS_DEG))
+
+
+@dataclass(frozen=True)
+class OrthoView:
+    """An orthographic view: ``matrix`` (4, 4) takes a world point to [0, 1]³ (map u, v and depth, 0 at the
+    viewer); ``texel`` the world size of the larger texel side; ``depth`` the world depth over 0 … 1."""
+
+    matrix: NDArray[np.float64]
+    texel: float
+    depth: float
+
+    def clip(self) -> NDArray[np.float64]:
+        """The GL clip matrix of the view: 2 s − 1."""
+        to_clip = np.array([[2.0, 0, 0, -1.0], [0, 2.0, 0, -1.0], [0, 0, 2.0, -1.0], [0, 0, 0, 1.0]])
+        return to_clip @ self.matrix
+
+
+def ortho_matrix(
+    axes: NDArray, lo: NDArray, hi: NDArray, size: tuple[int, int], margin_texels: float = 4.0
+) -> OrthoView:
+    """The orthographic view whose rows *axes* (3, 3) are the map's u, v and depth directions (depth
+    increasing away from the viewer), fitted to the box [*lo*, *hi*] (world corners) with *margin_texels*
+    of border on u and v (*size* = texels on u, v) and 1 % on depth."""
+    a = np.asarray(axes, float)
+    lo_w, hi_w = np.asarray(lo, float), np.asarray(hi, float)
+    corners = np.array(
+        [[x, y, z] for x in (lo_w[0], hi_w[0]) for y in (lo_w[1], hi_w[1]) for z in (lo_w[2], hi_w[2])]
+    )
+    proj = corners @ a.T
+    p_lo, p_hi = proj.min(axis=0), proj.max(axis=0)
+    ext = np.maximum(p_hi - p_lo, 1e-6)
+    for k in (0, 1):
+        pad = ext[k] * margin_texels / max(size[k] - 2.0 * margin_texels, 1.0)
+        p_lo[k] -= pad
+        p_hi[k] += pad
+    p_lo[2] -= 0.01 * ext[2]
+    p_hi[2] += 0.01 * ext[2]
+    span = p_hi - p_lo
+    m = np.eye(4)
+    m[:3, :3] = a / span[:, None]
+    m[:3, 3] = -p_lo / span
+    return OrthoView(m, float(max(span[0] / size[0], span[1] / size[1])), float(span[2]))
+
+
+def light_view(direction: NDArray, lo: NDArray, hi: NDArray, size: int = SHADOW_MAP) -> OrthoView:
+    """The orthographic view from a light in world *direction* (unit, towards the light) fitted to the box
+    [*lo*, *hi*]: depth along −l (0 nearest the light)."""
+    ell = np.asarray(direction, float)
+    ell = ell / np.linalg.norm(ell)
+    f = -ell
+    ref = np.array([0.0, 1.0, 0.0]) if abs(f[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    right = np.cross(f, ref)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, f)
+    return ortho_matrix(np.array([right, up, f]), lo, hi, (size, size))
+
+
+def height_views(
+    lo: NDArray, hi: NDArray, size: int = HEIGHT_MAP
+) -> tuple[OrthoView, OrthoView, tuple[int, int]]:
+    """(view from above, view from below, map size) of the box [*lo*, *hi*]: u along +x, v along +z over the
+    same rectangle, depth −y from above and +y from below, the long side *size* texels."""
+    ext = np.maximum(np.asarray(hi, float) - np.asarray(lo, float), 1e-6)
+    nx = size if ext[0] >= ext[2] else max(16, int(math.ceil(size * ext[0] / ext[2])))
+    nz = size if ext[2] > ext[0] else max(16, int(math.ceil(size * ext[2] / ext[0])))
+    shape = (nx, nz)
+    x, y, z = np.eye(3)
+    return (
+        ortho_matrix(np.array([x, z, -y]), lo, hi, shape),
+        ortho_matrix(np.array([x, z, y]), lo, hi, shape),
+        shape,
+    )
+
+
+def _cols(m: NDArray) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.asarray(m, float).T.ravel())  # column-major for GL
+
+
+class ShadowMaps:
+    """The depth maps of the shadowed lights and the ground's ambient-occlusion map of one mesh on a GL
+    context (module docstring); redrawn only when :meth:`update`'s key changes. ``version`` counts the
+    redraws (the ground bake keys on it)."""
+
+    def __init__(self, ctx: Any) -> None:
+        self.ctx = ctx
+        self.version = 0
+        self._depth_prog = build_program(ctx, "shadow_depth.vert.glsl", "shadow_depth.frag.glsl")
+        self._ao_prog = build_program(ctx, "fullscreen.vert.glsl", "ao.frag.glsl", _ao_defines())
+        self._ao_vao = ctx.vertex_array(self._ao_prog, [])
+        self._esm_prog = build_program(ctx, "fullscreen.vert.glsl", "esm.frag.glsl", {"ESM_TAPS": ESM_TAPS})
+        self._esm_vao = ctx.vertex_array(self._esm_prog, [])
+        # (texture, framebuffer): [0] the filter's scratch, then one per light
+        self._esm: list[tuple[Any, Any]] = []
+        self._esm_c: list[float] = []
+        self._maps: list[
+            tuple[Any, Any, Any, Any]
+        ] = []  # (texture, framebuffer, compare sampler, raw sampler)
+        self._views: list[OrthoView] = []
+        self._radii: list[float] = []
+        self._key: tuple | None = None
+        self._held: Any = None  # the mesh of the key (so its id is not reused while cached)
+        self._mesh_buf: tuple | None = None  # (mesh, vbo, ibo, vao)
+        self._heights: list[tuple[Any, Any]] = []
+        self._ao: tuple[Any, Any] | None = None
+        self._ao_key: tuple | None = None
+
+    def _vao(self, mesh: Any) -> Any:
+        if self._mesh_buf is None or self._mesh_buf[0] is not mesh:
+            self._release_mesh()
+            vbo = self.ctx.buffer(np.ascontiguousarray(mesh.positions, np.float32).tobytes())
+            ibo = self.ctx.buffer(np.ascontiguousarray(mesh.faces, np.uint32).tobytes())
+            vao = self.ctx.vertex_array(
+                self._depth_prog, [(vbo, "3f", "in_pos")], index_buffer=ibo, index_element_size=4
+            )
+            self._mesh_buf = (mesh, vbo, ibo, vao)
+        return self._mesh_buf[3]
+
+    def _depth_target(self, size: tuple[int, int]) -> tuple[Any, Any]:
+        tex = self.ctx.depth_texture(size)
+        tex.repeat_x = tex.repeat_y = False
+        tex.compare_func = ""
+        tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+        return tex, self.ctx.framebuffer(depth_attachment=tex)
+
+    def _esm_target(self) -> tuple[Any, Any]:
+        tex = self.ctx.texture((ESM_MAP, ESM_MAP), 1, dtype="f4")
+        tex.repeat_x = tex.repeat_y = False
+        return tex, self.ctx.framebuffer(color_attachments=[tex])
+
+    def _light_target(self) -> tuple[Any, Any, Any, Any]:
+        tex, fbo = self._depth_target((SHADOW_MAP, SHADOW_MAP))
+        cmp = self.ctx.sampler(texture=tex, repeat_x=False, repeat_y=False, compare_func="<=")
+        raw = self.ctx.sampler(
+            texture=tex,
+            repeat_x=False,
+            repeat_y=False,
+            filter=(self.ctx.NEAREST, self.ctx.NEAREST),
+            compare_func="",
+        )
+        return tex, fbo, cmp, raw
+
+    def _draw_depth(self, fbo: Any, view: OrthoView, vao: Any) -> None:
+        fbo.use()
+        fbo.clear(depth=1.0)
+        self._depth_prog["u_clip"].value = _cols(view.clip())
+        self.ctx.enable(self.ctx.DEPTH_TEST)
+        try:
+            vao.render(mode=self.ctx.TRIANGLES)
+        finally:
+            self.ctx.disable(self.ctx.DEPTH_TEST)
+
+    def update(self, mesh: Any, lights: Any, slots: tuple[int, ...], rotation: NDArray) -> None:
+        """Draw the depth maps of the lights *slots* of *lights* (map-frame directions; world = Rᵀ l with
+        *rotation* R the environment's lookup matrix) for *mesh*, unless they are already those."""
+        key = (
+            id(mesh),
+            tuple(slots),
+            np.asarray(rotation, float).tobytes(),
+            np.asarray(lights.directions).tobytes(),
+        )
+        if key == self._key and self._held is mesh:
+            return
+        lo, hi = mesh.bounds
+        vao = self._vao(mesh)
+        while len(self._maps) < len(slots):
+            self._maps.append(self._light_target())
+        while len(self._esm) < len(slots) + 1:
+            self._esm.append(self._esm_target())
+        self._esm_c = []
+        self._views, self._radii = [], []
+        spreads = lights.spreads()
+        for k, i in enumerate(slots):
+            world = np.asarray(rotation, float).T @ np.asarray(lights.directions[i], float)
+            view = light_view(world, lo, hi)
+            self._draw_depth(self._maps[k][1], view, vao)
+            self._views.append(view)
+            self._radii.append(light_radius_rad(float(spreads[i])))
+            self._filter_esm(k, view, self._radii[-1])
+        self._key, self._held = key, mesh
+        self.version += 1
+
+    def _filter_esm(self, k: int, view: OrthoView, radius_rad: float) -> None:
+        """Light slot *k*'s exponential shadow map: its depth map box-filtered in log space, across then
+        down, over a half width tan(a) · ESM_REACH (``shaders/esm.frag.glsl``)."""
+        texel = view.texel * SHADOW_MAP / ESM_MAP
+        half = max(math.tan(radius_rad) * ESM_REACH, 1.5 * texel) / texel  # ESM texels
+        step = 2.0 * half / (ESM_TAPS - 1) / ESM_MAP
+        c = ESM_SHARPNESS * view.depth  # per unit of the map's depth
+        p = self._esm_prog
+        p["u_c"].value = c
+        p["u_size"].value = (float(ESM_MAP), float(ESM_MAP))
+        p["u_src"].value = 0
+        passes = (
+            (self._maps[k][0], self._esm[0], (step, 0.0)),
+            (self._esm[0][0], self._esm[k + 1], (0.0, step)),
+        )
+        for src, dst, direction in passes:
+            src.use(0)
+            p["u_step"].value = direction
+            dst[1].use()
+            self._esm_vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+        self._esm_c.append(c)
+
+    def ambient_occlusion(
+        self, mesh: Any, ground_y: float, centre: tuple[float, float], radius: float
+    ) -> Any:
+        """The AO_MAP² occlusion map (R: O in [0, 1]) of *mesh* over the ground disc's square (centre
+        (x, z), *radius*) at height *ground_y*, baked once per mesh and ground (module docstring)."""
+        key = (id(mesh), float(ground_y), tuple(float(c) for c in centre), float(radius))
+        if (
+            self._ao is not None
+            and self._ao_key == key
+            and self._mesh_buf is not None
+            and self._mesh_buf[0] is mesh
+        ):
+            return self._ao[0]
+        lo, hi = mesh.bounds
+        top, bottom, shape = height_views(lo, hi)
+        if not self._heights or self._heights[0][0].size != shape:
+            for tex, fbo in self._heights:
+                fbo.release()
+                tex.release()
+            self._heights = [self._depth_target(shape) for _ in (0, 1)]
+        vao = self._vao(mesh)
+        for (_, fbo), view in zip(self._heights, (top, bottom), strict=True):
+            self._draw_depth(fbo, view, vao)
+        if self._ao is None:
+            tex = self.ctx.texture((AO_MAP, AO_MAP), 1, dtype="f4")
+            tex.repeat_x = tex.repeat_y = False
+            self._ao = (tex, self.ctx.framebuffer(color_attachments=[tex]))
+        self._ao[1].use()
+        for unit, (tex, _) in enumerate(self._heights):
+            tex.use(unit)
+        p = self._ao_prog
+        p["u_top"].value, p["u_bottom"].value = 0, 1
+        p["u_box_lo"].value = (float(lo[0]), float(lo[2]))
+        p["u_box_hi"].value = (float(hi[0]), float(hi[2]))
+        p["u_top_mat"].value = _cols(top.matrix)
+        # depth d of a view maps back to the height y = −(lo + d span) from above, lo + d span from below
+        p["u_heights"].value = (
+            float(-top.matrix[2, 3] * top.depth),
+            top.depth,
+            float(-bottom.matrix[2, 3] * bottom.depth),
+            bottom.depth,
+        )
+        p["u_ground_y"].value = float(ground_y)
+        p["u_ground_c"].value = (float(centre[0]), float(centre[1]))
+        p["u_ground_radius"].value = float(radius)
+        p["u_size"].value = (float(AO_MAP), float(AO_MAP))
+        self._ao_vao.render(mode=self.ctx.TRIANGLES, vertices=3)
+        self._ao_key = key
+        self.version += 1
+        return self._ao[0]
+
+    def bind(self, first_unit: int, count: int) -> dict[str, Any]:
+        """Bind the first *count* light maps (compare and raw samplers) from texture unit *first_unit* on and
+        return their uniforms (the ``_shadow_*`` arrays go through ``set_uniforms``)."""
+        for k in range(count):
+            self._maps[k][2].use(first_unit + k)
+            self._maps[k][3].use(first_unit + count + k)
+            self._esm[k + 1][0].use(first_unit + 2 * count + k)
+        return {
+            "_shadow_esm": list(range(first_unit + 2 * count, first_unit + 3 * count)),
+            "_shadow_c": list(self._esm_c[:count]),
+            "_shadow_cmp": list(range(first_unit, first_unit + count)),
+            "_shadow_raw": list(range(first_unit + count, first_unit + 2 * count)),
+            "_shadow_mat": [self._views[k].matrix.T.ravel() for k in range(count)],
+            "_shadow_par": [
+                (self._views[k].texel, self._views[k].depth, math.tan(self._radii[k])) for k in range(count)
+            ],
+        }
+
+    def _release_mesh(self) -> None:
+        if self._mesh_buf is not None:
+            for obj in reversed(self._mesh_buf[1:]):
+                obj.release()
+            self._mesh_buf = None
+
+    def release(self) -> None:
+        """Free the maps, samplers, buffers and programs."""
+        self._release_mesh()
+        for tex, fbo, cmp, raw in self._maps:
+            for obj in (cmp, raw, fbo, tex):
+                obj.release()
+        for tex, fbo in self._heights:
+            fbo.release()
+            tex.release()
+        if self._ao is not None:
+            self._ao[1].release()
+            self._ao[0].release()
+        for tex, fbo in self._esm:
+            fbo.release()
+            tex.release()
+        self._esm_vao.release()
+        self._esm_prog.release()
+        self._esm = []
+        self._ao_vao.release()
+        self._ao_prog.release()
+        self._depth_prog.release()
+        self._maps, self._heights, self._ao = [], [], None
+        self._key = self._held = self._ao_key = None
+
+
+def _ao_defines() -> dict[str, object]:
+    return {"AO_AZIMUTHS": AO_AZIMUTHS, "AO_STEPS": AO_STEPS}
+
+
+def shadow_defines(slots: tuple[int, ...], ambient: bool) -> dict[str, object]:
+    """The defines of ``shaders/shadows.glsl`` for a frame: N_SHADOW maps, the light index of each
+    (SHADOW_L0, SHADOW_L1; −1 when unused), HAS_AO, and the lookup's constants."""
+    padded = (*slots, -1, -1)
+    return {
+        "N_SHADOW": len(slots),
+        "SHADOW_L0": padded[0],
+        "SHADOW_L1": padded[1],
+        "HAS_AO": int(ambient),
+        "SHADOW_NORMAL_OFFSET": f"{NORMAL_OFFSET:.3f}",
+        "SHADOW_MAX_RADIUS": f"{MAX_RADIUS_TEXELS:.3f}",
+    }

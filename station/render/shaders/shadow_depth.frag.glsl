@@ -1,0 +1,3 @@
+#version 430
+// Depth only (station/render/gl_shadows.py); no colour attachment.
+void main() {}
