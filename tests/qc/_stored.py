@@ -1,0 +1,77 @@
+"""A stored job for the SPC tests: one instrument, one fender panel per reading, a day apart."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+from collections.abc import Sequence
+
+from db.engine import make_engine, make_sessionmaker
+from db.migrate import ensure_at_head
+from db.models import Instrument, Measurement, Panel
+
+ANGLES = [15.0, 45.0, 110.0]
+#: The standard's Lab (D65/10°) at each of :data:`ANGLES`.
+STD = [[92.0, -1.0, 2.0], [60.0, -0.5, 1.0], [35.0, 0.0, 0.5]]
+#: A drifting series: ΔL* of each sample against the standard (= its ΔE*ab at every geometry), ten stable,
+#: then eight creeping up to 1.03.
+DL = [
+    0.30,
+    0.34,
+    0.28,
+    0.33,
+    0.31,
+    0.27,
+    0.32,
+    0.35,
+    0.29,
+    0.31,
+    0.36,
+    0.44,
+    0.52,
+    0.61,
+    0.70,
+    0.80,
+    0.91,
+    1.03,
+]
+#: When the first panel of a stored job was measured; each next one a day later.
+T0 = dt.datetime(2026, 11, 2, 8, 0, tzinfo=dt.UTC)
+
+Texture = list[dict[str, object]]
+
+
+def store_job(
+    url: str, job: str, labs: Sequence[list[list[float]]], textures: Sequence[Texture] | None = None
+) -> None:
+    """Migrate the SQLite database at *url* to head and store job *job* in it: one MA6 instrument and, for
+    each entry of *labs* (Lab per geometry of :data:`ANGLES`), a fender panel measured ``T0 + i`` days, with
+    the texture rows of the same entry of *textures* where given."""
+    if textures is not None and len(textures) != len(labs):
+        raise ValueError(f"textures: expected one per reading ({len(labs)}), got {len(textures)}")
+    ensure_at_head(url)
+    engine = make_engine(url)
+    with make_sessionmaker(engine)() as s:
+        inst = Instrument(serial="600123", model="MA6", kind="spectrophotometer")
+        s.add(inst)
+        s.flush()
+        for i, lab in enumerate(labs):
+            p = Panel(job=job, part="fender")
+            s.add(p)
+            s.flush()
+            s.add(
+                Measurement(
+                    client_id=uuid.uuid4(),
+                    instrument_id=inst.id,
+                    panel_id=p.id,
+                    operator="ana",
+                    measured_at=T0 + dt.timedelta(days=i),
+                    geometries_deg=ANGLES,
+                    lab=lab,
+                    texture=None if textures is None else textures[i],
+                    payload_sha256="0" * 64,
+                )
+            )
+            s.flush()
+        s.commit()
+    engine.dispose()
