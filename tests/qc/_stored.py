@@ -1,4 +1,4 @@
-"""A stored job for the SPC tests: one instrument, one fender panel per reading, a day apart."""
+"""A stored job for the tests of SPC and drift: one instrument, one fender panel per reading, a day apart."""
 
 from __future__ import annotations
 
@@ -42,15 +42,21 @@ Texture = list[dict[str, object]]
 
 
 def store_job(
-    url: str, job: str, labs: Sequence[list[list[float]]], textures: Sequence[Texture] | None = None
-) -> None:
+    url: str,
+    job: str,
+    labs: Sequence[list[list[float]]],
+    textures: Sequence[Texture] | None = None,
+    *,
+    angles: Sequence[float] = ANGLES,
+) -> list[int]:
     """Migrate the SQLite database at *url* to head and store job *job* in it: one MA6 instrument and, for
-    each entry of *labs* (Lab per geometry of :data:`ANGLES`), a fender panel measured ``T0 + i`` days, with
-    the texture rows of the same entry of *textures* where given."""
+    each entry of *labs* (Lab per geometry of *angles*, degrees), a fender panel measured ``T0 + i`` days, with
+    the texture rows of the same entry of *textures* where given. Returns the measurements' ids, in order."""
     if textures is not None and len(textures) != len(labs):
         raise ValueError(f"textures: expected one per reading ({len(labs)}), got {len(textures)}")
     ensure_at_head(url)
     engine = make_engine(url)
+    ids = []
     with make_sessionmaker(engine)() as s:
         inst = Instrument(serial="600123", model="MA6", kind="spectrophotometer")
         s.add(inst)
@@ -59,19 +65,20 @@ def store_job(
             p = Panel(job=job, part="fender")
             s.add(p)
             s.flush()
-            s.add(
-                Measurement(
-                    client_id=uuid.uuid4(),
-                    instrument_id=inst.id,
-                    panel_id=p.id,
-                    operator="ana",
-                    measured_at=T0 + dt.timedelta(days=i),
-                    geometries_deg=ANGLES,
-                    lab=lab,
-                    texture=None if textures is None else textures[i],
-                    payload_sha256="0" * 64,
-                )
+            m = Measurement(
+                client_id=uuid.uuid4(),
+                instrument_id=inst.id,
+                panel_id=p.id,
+                operator="ana",
+                measured_at=T0 + dt.timedelta(days=i),
+                geometries_deg=list(angles),
+                lab=lab,
+                texture=None if textures is None else textures[i],
+                payload_sha256="0" * 64,
             )
+            s.add(m)
             s.flush()
+            ids.append(int(m.id))
         s.commit()
     engine.dispose()
+    return ids
