@@ -8,7 +8,8 @@ from collections.abc import Sequence
 
 from db.engine import make_engine, make_sessionmaker
 from db.migrate import ensure_at_head
-from db.models import Instrument, Measurement, Panel
+from db.models import Panel
+from station.ingest import InstrumentRef, Reading, TextureValue, store_reading
 
 ANGLES = [15.0, 45.0, 110.0]
 #: The standard's Lab (D65/10°) at each of :data:`ANGLES`.
@@ -49,36 +50,32 @@ def store_job(
     *,
     angles: Sequence[float] = ANGLES,
 ) -> list[int]:
-    """Migrate the SQLite database at *url* to head and store job *job* in it: one MA6 instrument and, for
-    each entry of *labs* (Lab per geometry of *angles*, degrees), a fender panel measured ``T0 + i`` days, with
-    the texture rows of the same entry of *textures* where given. Returns the measurements' ids, in order."""
+    """Migrate the SQLite database at *url* to head and store job *job* in it through the one writer
+    (:func:`station.ingest.store_reading`): one MA6 instrument and, for each entry of *labs* (Lab per
+    geometry of *angles*, degrees), a fender panel measured ``T0 + i`` days, with the texture rows of the
+    same entry of *textures* where given. Returns the measurements' ids, in order."""
     if textures is not None and len(textures) != len(labs):
         raise ValueError(f"textures: expected one per reading ({len(labs)}), got {len(textures)}")
     ensure_at_head(url)
     engine = make_engine(url)
+    instrument = InstrumentRef(serial="600123", model="MA6", kind="spectrophotometer")
     ids = []
     with make_sessionmaker(engine)() as s:
-        inst = Instrument(serial="600123", model="MA6", kind="spectrophotometer")
-        s.add(inst)
-        s.flush()
         for i, lab in enumerate(labs):
-            p = Panel(job=job, part="fender")
-            s.add(p)
+            panel = Panel(job=job, part="fender")
+            s.add(panel)
             s.flush()
-            m = Measurement(
+            reading = Reading(
                 client_id=uuid.uuid4(),
-                instrument_id=inst.id,
-                panel_id=p.id,
+                instrument=instrument,
+                panel_id=panel.id,
                 operator="ana",
                 measured_at=T0 + dt.timedelta(days=i),
                 geometries_deg=list(angles),
                 lab=lab,
-                texture=None if textures is None else textures[i],
-                payload_sha256="0" * 64,
+                texture=None if textures is None else [TextureValue.model_validate(t) for t in textures[i]],
             )
-            s.add(m)
-            s.flush()
-            ids.append(int(m.id))
+            ids.append(store_reading(s, reading).measurement_id)
         s.commit()
     engine.dispose()
     return ids
