@@ -24,9 +24,9 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from types import TracebackType
-from typing import IO, Self
+from typing import IO
 
+from station.closing import Closing
 from tests.waiting import WaitTimeout, wait_until
 
 #: Seconds a killed child (SIGKILL) is given to be reaped, and its pipes to reach end of file.
@@ -40,7 +40,7 @@ def _text(data: bytes) -> str:
     return data.decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n")
 
 
-class Stream:
+class Stream(Closing):
     """Everything read so far from file descriptor *fd*, read by a daemon thread until end of file.
 
     The thread waits on a selector (at most ``_SELECT_S`` s at a time), so :meth:`close` stops it even
@@ -142,14 +142,8 @@ class Stream:
             os.close(self._fd)
         self._fd = -1
 
-    def __enter__(self) -> Self:
-        return self
 
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-class Child:
+class Child(Closing):
     """A command run in a process group of its own, its pipes drained, ended with the ``with`` block.
 
     *stdin*, *stdout* and *stderr* are as for :class:`subprocess.Popen` (default: no input, both outputs
@@ -250,14 +244,6 @@ class Child:
                     self.proc.stdin.close()
                 except BrokenPipeError:
                     pass
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self, typ: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        self.close()
 
 
 def kill_group(pid: int) -> None:

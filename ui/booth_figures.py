@@ -72,35 +72,28 @@ def add_pair(
     session: Session, pair: tuple[np.ndarray, np.ndarray], *, job: str, serial: str, operator: str
 ) -> list[int]:
     """Store *pair* (standard, trial spectra (5, 31), reflectance 0..1 at :data:`ANGLES`) in *session* as
-    two measurements of *job* (fender standard, bumper trial) by one spectrophotometer *serial*, taken
-    a minute apart from 2026-12-01 09:00 UTC; Lab rounded to 4 decimals, spectra to 6. Returns their ids
-    (flushed, not committed)."""
-    from db.models import Instrument, Measurement, Panel
+    two measurements of *job* (fender standard, bumper trial: the job's panel of each part, made when it
+    has none) by one spectrophotometer *serial*, taken a minute apart from 2026-12-01 09:00 UTC; Lab
+    rounded to 4 decimals, spectra to 6. Stored through the one writer (:func:`station.ingest.store_reading`);
+    returns their ids (flushed, not committed)."""
+    from station.ingest import InstrumentRef, PanelRef, Reading, store_reading
     from station.model.spectra import WAVELENGTHS, reflectance_to_lab
 
-    inst = Instrument(serial=serial, model="MA-T12", kind="spectrophotometer")
-    session.add(inst)
-    session.flush()
+    instrument = InstrumentRef(serial=serial, model="MA-T12", kind="spectrophotometer")
     ids = []
     for k, (part, sp) in enumerate(zip(("fender", "bumper"), pair, strict=True)):
-        panel = Panel(job=job, part=part)
-        session.add(panel)
-        session.flush()
-        m = Measurement(
+        reading = Reading(
             client_id=uuid.uuid4(),
-            instrument_id=inst.id,
-            panel_id=panel.id,
+            instrument=instrument,
+            panel=PanelRef(job=job, part=part),
             operator=operator,
             measured_at=dt.datetime(2026, 12, 1, 9, k, tzinfo=dt.UTC),
             geometries_deg=list(ANGLES),
             lab=reflectance_to_lab(sp).round(4).tolist(),
             wavelengths_nm=WAVELENGTHS.tolist(),
             spectra=sp.round(6).tolist(),
-            payload_sha256="0" * 64,
         )
-        session.add(m)
-        session.flush()
-        ids.append(int(m.id))
+        ids.append(store_reading(session, reading).measurement_id)
     return ids
 
 

@@ -23,8 +23,6 @@ from typing import Any
 from station.cli._common import add_json_flag
 from station.errors import InputError
 
-#: The module that draws the booth image for ``--out`` (the renderer's; the CLI only calls it).
-
 
 def _illuminants(text: str) -> list[Any]:
     from station.model.illuminants import illuminant_from_text
@@ -33,24 +31,6 @@ def _illuminants(text: str) -> list[Any]:
     if not parts:
         raise InputError("illuminants", "comma-separated illuminants, e.g. D65,A,F11", text)
     return [illuminant_from_text(p) for p in parts]
-
-
-def render_booth_image(
-    comparison: Any, standard: Any, sample: Any, illuminants: list[Any], observer: str, shape: str, out: Path
-) -> Path:
-    """Draw *standard* and *sample* (Readings) on *shape* under each illuminant, side by side, into *out*
-    (:func:`station.render.booth.render_booth_file`)."""
-    from station.render.booth import render_booth_file
-
-    return render_booth_file(
-        comparison=comparison,
-        standard=standard,
-        sample=sample,
-        illuminants=illuminants,
-        observer=observer,
-        shape=shape,
-        out=out,
-    )
 
 
 def _booth(args: argparse.Namespace) -> dict[str, Any] | None:
@@ -67,7 +47,17 @@ def _booth(args: argparse.Namespace) -> dict[str, Any] | None:
     comparison = booth_compare(standard, sample, illuminants, observer)
     result = comparison.to_dict()
     if args.out:
-        render_booth_image(comparison, standard, sample, illuminants, observer, shape, Path(args.out))
+        from station.render.booth import render_booth_file  # the renderer draws it; the CLI only calls it
+
+        render_booth_file(
+            comparison=comparison,
+            standard=standard,
+            sample=sample,
+            illuminants=illuminants,
+            observer=observer,
+            shape=shape,
+            out=Path(args.out),
+        )
     if args.json:
         return result
     _print_table(result, args.out)

@@ -25,8 +25,8 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Self
 
+from station.closing import Closing
 from station.drivers.errors import CommunicationError, DriverInputError
 from station.drivers.families import SIM_FAMILY_NAMES, family_named
 
@@ -37,7 +37,7 @@ SIM_KINDS = SIM_FAMILY_NAMES
 _ROOT = Path(__file__).resolve().parents[2]
 
 
-class SimulatorProcess:
+class SimulatorProcess(Closing):
     """A running simulator child process; ``address`` is what :func:`open_instrument` takes."""
 
     def __init__(self, kind: str, proc: subprocess.Popen[bytes], address: str) -> None:
@@ -62,12 +62,6 @@ class SimulatorProcess:
         for stream in (self.proc.stdout, self.proc.stderr):
             if stream is not None:
                 stream.close()
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
     def __repr__(self) -> str:
         return f"SimulatorProcess(kind={self.kind!r}, address={self.address!r}, pid={self.proc.pid})"

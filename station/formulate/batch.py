@@ -14,7 +14,7 @@ reached by additions: the batch must be remade, which :class:`Tinting` says.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -50,8 +50,8 @@ class Batch:
     total_g: float
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-able form."""
-        return {"colorants_g": self.colorants_g, "binder_g": self.binder_g, "total_g": self.total_g}
+        """JSON-able form: the fields as they are."""
+        return asdict(self)
 
 
 def batch_masses(recipe: dict[str, float], batch_g: float = DEFAULT_BATCH_G) -> Batch:
@@ -77,14 +77,8 @@ class Tinting:
     message: str
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-able form."""
-        return {
-            "additions_g": self.additions_g,
-            "binder_g": self.binder_g,
-            "new_total_g": self.new_total_g,
-            "remake": self.remake,
-            "message": self.message,
-        }
+        """JSON-able form: the fields as they are."""
+        return asdict(self)
 
 
 def tinting_additions(

@@ -23,7 +23,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Annotated, Final, Protocol
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, Field, model_validator
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -32,6 +32,7 @@ from db.models import GlossReading, Measurement
 from station.ingest.errors import ClientIdConflictError, ReferenceNotFoundError
 from station.ingest.schema import CalibrationRef, InstrumentRef, PanelRef, Text64, Timestamp
 from station.ingest.store import StoreResult, _calibration_id, _insert, _instrument_id, _panel_id
+from station.schema_config import strict_config
 
 __all__ = [
     "GLOSS_GEOMETRIES",
@@ -63,24 +64,21 @@ class GlossRecord(BaseModel):
     alone, the panel of that measurement.
     """
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "client_id": "6c1d9b65-4a8f-4e67-8b64-1e2f5d2a8b21",
-                    "instrument": {"serial": "SIM-GL-0001", "model": "gloss simulator", "kind": "gloss"},
-                    "panel_id": 1,
-                    "operator": "ana",
-                    "measured_at": "2026-11-23T08:31:00Z",
-                    "gloss_20_gu": 81.2,
-                    "gloss_60_gu": 90.5,
-                    "gloss_85_gu": 97.0,
-                    "haze_hu": 12.0,
-                    "doi": 88.0,
-                }
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "client_id": "6c1d9b65-4a8f-4e67-8b64-1e2f5d2a8b21",
+                "instrument": {"serial": "SIM-GL-0001", "model": "gloss simulator", "kind": "gloss"},
+                "panel_id": 1,
+                "operator": "ana",
+                "measured_at": "2026-11-23T08:31:00Z",
+                "gloss_20_gu": 81.2,
+                "gloss_60_gu": 90.5,
+                "gloss_85_gu": 97.0,
+                "haze_hu": 12.0,
+                "doi": 88.0,
+            }
+        ]
     )
 
     client_id: uuid.UUID

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from sqlalchemy import Engine
 
+from station.closing import Closing
 from station.ingest.destination import DatabaseDestination, Destination, Receipt, is_unreachable
 from station.ingest.errors import IngestError
 from station.ingest.outbox import Outbox
@@ -35,7 +36,7 @@ log = logging.getLogger(__name__)
 __all__ = ["Ingestor", "Receipt", "is_unreachable"]
 
 
-class Ingestor:
+class Ingestor(Closing):
     """Store readings into *destination* (a destination, an engine or a database URL), with an outbox at *outbox_path*.
 
     Thread-safe: one lock serialises submits and replays, so readings keep their order.
@@ -70,12 +71,6 @@ class Ingestor:
         self.outbox.close()
         if self._own_destination:
             self.destination.close()
-
-    def __enter__(self) -> Ingestor:
-        return self
-
-    def __exit__(self, *_exc: object) -> None:
-        self.close()
 
     def drain(self) -> list[Receipt]:
         """Store queued readings oldest first; stop at the first unreachable error. One receipt per entry tried.

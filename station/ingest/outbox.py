@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from db.files import private_dir, private_sqlite
+from station.closing import Closing
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS outbox (
@@ -42,7 +43,7 @@ class OutboxEntry:
     body: str
 
 
-class Outbox:
+class Outbox(Closing):
     """The on-disk queue; open one per process (SQLite serialises writers across processes)."""
 
     def __init__(self, path: Path | str) -> None:
@@ -59,12 +60,6 @@ class Outbox:
     def close(self) -> None:
         """Close the file."""
         self._conn.close()
-
-    def __enter__(self) -> Outbox:
-        return self
-
-    def __exit__(self, *_exc: object) -> None:
-        self.close()
 
     def put(self, client_id: str, body: str) -> None:
         """Append a reading (durable on return); a client id already queued is left as it is."""

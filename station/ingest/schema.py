@@ -31,6 +31,7 @@ from pydantic import (
 from db.models.measurements import PARTS
 from station.model.domain import ILLUMINATION_DEG, LAB_HI, LAB_LO, geometry_name, parse_geometry
 from station.model.errors import ModelInputError
+from station.schema_config import strict_config
 
 # strict=True: a JSON true or "55.3" is refused, not read as a number (an integer is a float).
 Angle = Annotated[
@@ -145,23 +146,20 @@ class TextureValue(BaseModel):
 class Reading(BaseModel):
     """One instrument reading as sent by a station; ``client_id`` makes re-sending idempotent."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "client_id": "5b0c8a54-3f7e-4f56-9a53-0d1f4c1f7a10",
-                    "instrument": {"serial": "SIM-MA-0001", "model": "MA-98 simulator", "kind": "multiangle"},
-                    "panel_id": None,
-                    "operator": "ana",
-                    "measured_at": "2026-11-23T08:30:00Z",
-                    "geometries_deg": [15.0, 45.0, 110.0],
-                    "lab": [[82.1, -1.2, -18.5], [55.3, -0.4, -12.0], [31.9, 0.8, -6.2]],
-                    "gloss_gu": 88.0,
-                    "gloss_geometry_deg": 60,
-                }
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "client_id": "5b0c8a54-3f7e-4f56-9a53-0d1f4c1f7a10",
+                "instrument": {"serial": "SIM-MA-0001", "model": "MA-98 simulator", "kind": "multiangle"},
+                "panel_id": None,
+                "operator": "ana",
+                "measured_at": "2026-11-23T08:30:00Z",
+                "geometries_deg": [15.0, 45.0, 110.0],
+                "lab": [[82.1, -1.2, -18.5], [55.3, -0.4, -12.0], [31.9, 0.8, -6.2]],
+                "gloss_gu": 88.0,
+                "gloss_geometry_deg": 60,
+            }
+        ]
     )
 
     client_id: uuid.UUID

@@ -12,8 +12,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Self
+from typing import Any
 
+from station.closing import Closing
 from station.drivers import Instrument, open_instrument
 from station.drivers.simproc import SIM_KINDS, SimulatorProcess, spawn_simulator
 from station.scan.errors import ScanInputError
@@ -26,7 +27,7 @@ _ACCEPTED = " | ".join(SIM_DEVICES) + " or an address"
 
 
 @dataclass
-class Device:
+class Device(Closing):
     """An open instrument, the device as typed (``sim:ma6`` or an address) and its simulator, if any."""
 
     name: str
@@ -45,12 +46,6 @@ class Device:
         finally:
             if self.simulator is not None:
                 self.simulator.close()
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(self, *_exc: object) -> None:
-        self.close()
 
 
 def open_device(

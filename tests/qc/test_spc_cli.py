@@ -3,74 +3,20 @@ table, the JSON and the chart; Cp/Cpk against the tolerance by hand."""
 
 from __future__ import annotations
 
-import datetime as dt
 import json
-import uuid
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from db.engine import make_engine, make_sessionmaker
-from db.migrate import ensure_at_head
-from db.models import Instrument, Measurement, Panel
+from tests.qc._stored import DL, STD, store_job
 from tests.qc.test_cli import _refused, inproc, set_standard
-
-ANGLES = [15.0, 45.0, 110.0]
-STD = [[92.0, -1.0, 2.0], [60.0, -0.5, 1.0], [35.0, 0.0, 0.5]]
-#: ΔL* of each panel against the standard (= its ΔE*ab at every geometry): stable, then 8 creeping up.
-DL = [
-    0.30,
-    0.34,
-    0.28,
-    0.33,
-    0.31,
-    0.27,
-    0.32,
-    0.35,
-    0.29,
-    0.31,
-    0.36,
-    0.44,
-    0.52,
-    0.61,
-    0.70,
-    0.80,
-    0.91,
-    1.03,
-]
-T0 = dt.datetime(2026, 11, 2, 8, 0, tzinfo=dt.UTC)
 
 
 @pytest.fixture
 def url(tmp_path: Path) -> str:
     url = f"sqlite:///{tmp_path / 'qc.sqlite3'}"
-    ensure_at_head(url)
-    engine = make_engine(url)
-    with make_sessionmaker(engine)() as s:
-        inst = Instrument(serial="600123", model="MA6", kind="spectrophotometer")
-        s.add(inst)
-        s.flush()
-        for i, dl in enumerate([0.0, *DL]):
-            p = Panel(job="J-9", part="fender")
-            s.add(p)
-            s.flush()
-            lab = [[r[0] + dl, r[1], r[2]] for r in STD]
-            s.add(
-                Measurement(
-                    client_id=uuid.uuid4(),
-                    instrument_id=inst.id,
-                    panel_id=p.id,
-                    operator="ana",
-                    measured_at=T0 + dt.timedelta(days=i),
-                    geometries_deg=ANGLES,
-                    lab=lab,
-                    payload_sha256="0" * 64,
-                )
-            )
-            s.flush()
-        s.commit()
-    engine.dispose()
+    store_job(url, "J-9", [[[r[0] + dl, r[1], r[2]] for r in STD] for dl in [0.0, *DL]])
     return url
 
 

@@ -5,22 +5,15 @@ reading of another vendor is never charted against the standard."""
 
 from __future__ import annotations
 
-import datetime as dt
 import json
-import uuid
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from db.engine import make_engine, make_sessionmaker
-from db.migrate import ensure_at_head
-from db.models import Instrument, Measurement, Panel
+from tests.qc._stored import DL, STD, store_job
 from tests.qc.test_cli import inproc, set_standard
-from tests.qc.test_spc_cli import DL
 
-ANGLES = [15.0, 45.0, 110.0]
-STD = [[92.0, -1.0, 2.0], [60.0, -0.5, 1.0], [35.0, 0.0, 0.5]]
 SPARKLE_STD, GRAIN_STD = 5.0, 3.0
 #: Sparkle intensity at 45as15 of each sample minus the standard's: the ΔE test's series, ten stable then
 #: eight creeping up to 1.03.
@@ -28,7 +21,6 @@ D_SPARKLE = DL
 #: Graininess minus the standard's: stable throughout (alternating so no trend or run forms).
 D_GRAIN = [0.10 + 0.02 * (i % 2) for i in range(len(D_SPARKLE))]
 DS, DG = 1.0, 0.5
-T0 = dt.datetime(2026, 11, 2, 8, 0, tzinfo=dt.UTC)
 
 
 def _texture(vendor: str, sparkle: float, grain: float) -> list[dict[str, object]]:
@@ -42,34 +34,12 @@ def _texture(vendor: str, sparkle: float, grain: float) -> list[dict[str, object
 def url(tmp_path: Path) -> str:
     """Job J-T: the standard panel, 18 sample panels of one vendor, one more measured by another vendor."""
     url = f"sqlite:///{tmp_path / 'qc.sqlite3'}"
-    ensure_at_head(url)
-    engine = make_engine(url)
     rows = [("BYK", 0.0, 0.0)] + [("BYK", s, g) for s, g in zip(D_SPARKLE, D_GRAIN, strict=True)]
     rows.append(("X-Rite", 9.0, 9.0))
-    with make_sessionmaker(engine)() as s:
-        inst = Instrument(serial="600123", model="MA6", kind="spectrophotometer")
-        s.add(inst)
-        s.flush()
-        for i, (vendor, ds, dg) in enumerate(rows):
-            p = Panel(job="J-T", part="fender")
-            s.add(p)
-            s.flush()
-            s.add(
-                Measurement(
-                    client_id=uuid.uuid4(),
-                    instrument_id=inst.id,
-                    panel_id=p.id,
-                    operator="ana",
-                    measured_at=T0 + dt.timedelta(days=i),
-                    geometries_deg=ANGLES,
-                    lab=[[r[0] + 0.1 * (i % 2), r[1], r[2]] for r in STD],
-                    texture=_texture(vendor, SPARKLE_STD + ds, GRAIN_STD + dg),
-                    payload_sha256="0" * 64,
-                )
-            )
-            s.flush()
-        s.commit()
-    engine.dispose()
+    labs = [[[r[0] + 0.1 * (i % 2), r[1], r[2]] for r in STD] for i in range(len(rows))]
+    store_job(
+        url, "J-T", labs, [_texture(vendor, SPARKLE_STD + ds, GRAIN_STD + dg) for vendor, ds, dg in rows]
+    )
     return url
 
 

@@ -9,17 +9,12 @@ dL*/dk = (L*₀ + 16)/3 · g (L* = 116 (Y/Yn)^⅓ − 16 with Y scaled by 1 + g�
 
 from __future__ import annotations
 
-import datetime as dt
 import json
-import uuid
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from db.engine import make_engine, make_sessionmaker
-from db.migrate import ensure_at_head
-from db.models import Instrument, Measurement, Panel
 from simulators.config import SimulatorConfig, SimulatorConfigError, spectro_physics
 from simulators.repeatability import (
     MAX_RUN_DRIFT,
@@ -32,6 +27,7 @@ from station.drivers import open_instrument
 from station.drivers.simproc import spawn_simulator
 from station.model.domain import ANGLES_6
 from station.model.spectra import reflectance_to_lab
+from tests.qc._stored import store_job
 from tests.qc.test_cli import inproc, set_standard
 
 ANGLES = (15.0, 45.0, 110.0)
@@ -86,33 +82,7 @@ def test_qc_spc_flags_the_drift_before_a_fail(tmp_path: Path, capsys: pytest.Cap
     """One panel a day for 24 days at twice the stated drift, judged at 0.5 ΔE00 against day 0's reading."""
     labs = _run_labs(tmp_path / "state.json", runs=24, readings=1, drift=2.0)
     url = f"sqlite:///{tmp_path / 'qc.sqlite3'}"
-    ensure_at_head(url)
-    engine = make_engine(url)
-    t0 = dt.datetime(2026, 11, 2, 8, tzinfo=dt.UTC)
-    with make_sessionmaker(engine)() as s:
-        inst = Instrument(serial="600123", model="MA6", kind="spectrophotometer")
-        s.add(inst)
-        s.flush()
-        ids = []
-        for k, lab in enumerate(labs):
-            panel = Panel(job="J-DRIFT", part="fender")
-            s.add(panel)
-            s.flush()
-            m = Measurement(
-                client_id=uuid.uuid4(),
-                instrument_id=inst.id,
-                panel_id=panel.id,
-                operator="ana",
-                measured_at=t0 + dt.timedelta(days=k),
-                geometries_deg=list(ANGLES),
-                lab=lab[0].tolist(),
-                payload_sha256="0" * 64,
-            )
-            s.add(m)
-            s.flush()
-            ids.append(m.id)
-        s.commit()
-    engine.dispose()
+    ids = store_job(url, "J-DRIFT", [lab[0].tolist() for lab in labs], angles=ANGLES)
     assert set_standard(capsys, tmp_path, "J-DRIFT", ids[0], url).returncode == 0
     tol = inproc(capsys, tmp_path, "qc", "tolerance", "--formula", "cie2000", "--limit", "0.5", "--json")
     (tmp_path / "tol.json").write_text(tol.stdout)

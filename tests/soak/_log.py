@@ -13,8 +13,9 @@ import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
-from typing import Any, Literal, Self
+from typing import Any, Literal
+
+from station.closing import Closing
 
 Event = Literal["sent", "ack"]
 Lab = tuple[tuple[float, ...], ...]
@@ -39,7 +40,7 @@ def _lab(rows: Sequence[Sequence[float]] | None) -> list[list[float]] | None:
     return None if rows is None else [[float(v) for v in row] for row in rows]
 
 
-class SenderLog:
+class SenderLog(Closing):
     """The log of one sender at *path* (appended to across restarts; mode 0600)."""
 
     def __init__(self, path: Path | str, sender: str) -> None:
@@ -79,14 +80,6 @@ class SenderLog:
         if self._fd >= 0:
             os.close(self._fd)
             self._fd = -1
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self, _t: type[BaseException] | None, _e: BaseException | None, _tb: TracebackType | None
-    ) -> None:
-        self.close()
 
 
 def _entry(doc: dict[str, Any]) -> Entry:

@@ -37,6 +37,12 @@ if TYPE_CHECKING:
     from station.render.weights import LobeWeights
 
 
+def _same_key(held: tuple | None, key: tuple) -> bool:
+    """Whether a cache keyed by *held* serves *key*: the same object first (compared by identity, not by
+    its id, which a later object could take) and equal remaining fields."""
+    return held is not None and held[0] is key[0] and held[1:] == key[1:]
+
+
 class _GLSurface(QOpenGLWindow):
     """The GL surface of a :class:`GLRenderView`: a native child window (``createWindowContainer``), so Qt
     draws it straight to the screen instead of compositing a widget texture into the window."""
@@ -166,9 +172,8 @@ class GLRenderView(ViewLogic):
         basis, weights, ev = self.basis, self.model.weights(), self.model.settings.exposure_ev
         if basis is None or weights is None:
             raise RuntimeError("no edit frame before the first basis images and design")
-        key = (basis, ev)  # the object itself: an id could be taken by a later basis of another size
-        same = self._frame_key is not None and self._frame_key[0] is basis and self._frame_key[1] == ev
-        reuse = self._frame if same else None
+        key = (basis, ev)
+        reuse = self._frame if _same_key(self._frame_key, key) else None
         frame = basis.core.edit_rgba(list(weights), ev, out=reuse)
         self._frame, self._frame_key = frame, key
         return frame
@@ -365,13 +370,8 @@ class GLRenderView(ViewLogic):
         settings = self.model.settings
         try:
             basis = self._gl_env(settings.environment)
-            key = (basis, w, h)  # the object itself, not its id (which a later basis could take)
-            if (
-                self._core is None
-                or self._core_key is None
-                or self._core_key[0] is not basis
-                or self._core_key[1:] != key[1:]
-            ):
+            key = (basis, w, h)
+            if self._core is None or not _same_key(self._core_key, key):
                 if self._core is not None:
                     self._core.release()
                 self._core = GLRenderer(basis, w, h, ctx=ctx)

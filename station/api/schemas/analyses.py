@@ -18,6 +18,7 @@ from station.api.schemas.environment import (
     UploadedEnvironment,
 )
 from station.model.domain import JND_CIE76
+from station.schema_config import strict_config
 
 Method = Literal["cie76", "cie94", "cie2000", "din6175"]
 Hinge = Annotated[
@@ -62,20 +63,17 @@ class SeamQaCreate(BaseModel):
     """Two panels (A: reference, B: misaligned by β), each a stored measurement or a design, the geometries
     and the judging tolerance."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "measurement_a": 1,
-                    "measurement_b": 2,
-                    "beta_deg": 5.0,
-                    "tolerance": 2.3,
-                    "method": "cie76",
-                },
-                {"design_a": _PAINT, "design_b": _PAINT, "beta_deg": 8.0, "lights_deg": [30.0, 45.0, 60.0]},
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "measurement_a": 1,
+                "measurement_b": 2,
+                "beta_deg": 5.0,
+                "tolerance": 2.3,
+                "method": "cie76",
+            },
+            {"design_a": _PAINT, "design_b": _PAINT, "beta_deg": 8.0, "lights_deg": [30.0, 45.0, 60.0]},
+        ]
     )
 
     measurement_a: Annotated[StrictInt, Field(ge=1, le=2**31 - 1, description="e.g. the fender")] | None = (
@@ -125,14 +123,11 @@ class SeamQaCreate(BaseModel):
 class GgIndexRequest(BaseModel):
     """Goniogeometric index β_min (eq 4.3.1) of one paint on both panels, for point lights and views."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {"paint": _GREY, "lights_deg": [30.0], "views_deg": [0.0], "epsilon": 2.3, "method": "cie76"},
-                {"paint": _PAINT, "lights_deg": [45.0], "direction": "either", "per_geometry": True},
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {"paint": _GREY, "lights_deg": [30.0], "views_deg": [0.0], "epsilon": 2.3, "method": "cie76"},
+            {"paint": _PAINT, "lights_deg": [45.0], "direction": "either", "per_geometry": True},
+        ]
     )
 
     paint: DesignBody
@@ -171,11 +166,8 @@ class GgIndexEnvironmentRequest(BaseModel):
     """Environment-lit goniogeometric index (eq 4.3.1, thesis §4.3): one paint on both panels lit by a
     built-in environment or an uploaded .hdr/.exr (the same inputs as ``/styling/render``)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [{"paint": _PAINT, "environment": "sky", "views_deg": [0.0, 30.0], "panel": "up"}]
-        },
+    model_config = strict_config(
+        examples=[{"paint": _PAINT, "environment": "sky", "views_deg": [0.0, 30.0], "panel": "up"}]
     )
 
     paint: DesignBody
@@ -206,18 +198,15 @@ class GgIndexEnvironmentRequest(BaseModel):
 class TrompeRequest(BaseModel):
     """Inverse trompe l'oeil (§4.4): paint B for the panel misaligned by β."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "paint": _GREY,
-                    "lights_deg": [0.0, 15.5, 29.1, 39.8, 45.0, 52.0],
-                    "beta_deg": -3.0,
-                    "objective": "rms",
-                },
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "paint": _GREY,
+                "lights_deg": [0.0, 15.5, 29.1, 39.8, 45.0, 52.0],
+                "beta_deg": -3.0,
+                "objective": "rms",
+            },
+        ]
     )
 
     paint: DesignBody
@@ -267,18 +256,15 @@ class TrompeOut(BaseModel):
 class SweepRequest(BaseModel):
     """Seam ΔE of one paint over β × light × view (thesis Fig. 4.3)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "paint": _PAINT,
-                    "betas_deg": [1.0, 3.0, 8.0],
-                    "lights_deg": [15.0, 45.0],
-                    "views_deg": [-30.0, 0.0, 30.0],
-                },
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "paint": _PAINT,
+                "betas_deg": [1.0, 3.0, 8.0],
+                "lights_deg": [15.0, 45.0],
+                "views_deg": [-30.0, 0.0, 30.0],
+            },
+        ]
     )
 
     paint: DesignBody

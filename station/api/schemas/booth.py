@@ -9,6 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from station.api.schemas.common import StrictFloat, StrictInt
 from station.ingest.schema import MAX_GEOMETRIES
 from station.model.domain import DEFAULT_BOOTH_ILLUMINANTS
+from station.schema_config import strict_config
 
 #: At most this many values in one spectrum or user SPD (a 1 nm grid from 300 to 830 nm fits).
 MAX_BANDS = 531
@@ -50,18 +51,15 @@ class BoothRequest(BaseModel):
     body), illuminants and observer. A recipe is predicted by the colorant model at the other side's
     geometries (15/45/110° when both sides are recipes)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "standard_measurement_id": 1,
-                    "sample_measurement_id": 2,
-                    "illuminants": list(DEFAULT_BOOTH_ILLUMINANTS),
-                    "observer": "10",
-                }
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "standard_measurement_id": 1,
+                "sample_measurement_id": 2,
+                "illuminants": list(DEFAULT_BOOTH_ILLUMINANTS),
+                "observer": "10",
+            }
+        ]
     )
 
     standard_measurement_id: MeasurementId | None = None

@@ -10,6 +10,7 @@ from pydantic.config import JsonDict
 
 from station.api.schemas.common import StrictFloat
 from station.model.domain import FACE_ANGLE_DEG, GLOSS_MAX_GU, GLOSS_MIN_GU, LAB_RANGES, TRAVEL_MAX_DEG
+from station.schema_config import strict_config
 
 # Ranges are the domain's effect-paint bound (station.model.domain): 0 <= L* <= 200, |a*|, |b*| <= 150.
 Lab = Annotated[
@@ -59,11 +60,8 @@ class DesignBody(BaseModel):
 class DesignCreate(BaseModel):
     """Properties to receive on creation (becomes version 1)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [{"name": "Blue metallic", "design": DESIGN_EXAMPLE, "note": "first proposal"}]
-        },
+    model_config = strict_config(
+        examples=[{"name": "Blue metallic", "design": DESIGN_EXAMPLE, "note": "first proposal"}]
     )
 
     name: Name
@@ -74,9 +72,7 @@ class DesignCreate(BaseModel):
 class DesignUpdate(BaseModel):
     """A new version of an existing design."""
 
-    model_config = ConfigDict(
-        extra="forbid", json_schema_extra={"examples": [{"design": DESIGN_EXAMPLE, "note": "less travel"}]}
-    )
+    model_config = strict_config(examples=[{"design": DESIGN_EXAMPLE, "note": "less travel"}])
 
     design: DesignBody
     note: Annotated[str, Field(max_length=1000)] = ""

@@ -19,6 +19,7 @@ from station.model.domain import (
     SCALE_RESOLUTION_RANGE_G,
     TONER_LINES,
 )
+from station.schema_config import strict_config
 
 SnapMetric = Literal["cie76", "cie2000", "din6175"]
 PaintType = Literal["solid", "metallic", "pearl"]
@@ -58,14 +59,11 @@ class DesignSource(BaseModel):
 class SnapRequest(DesignSource):
     """ColorSnap: the k nearest library paints by ΔE summed over 15°/45°/110°."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {"lab": _LAB, "k": 5, "metric": "cie76"},
-                {"design_id": 1, "k": 3, "metric": "cie2000"},
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {"lab": _LAB, "k": 5, "metric": "cie76"},
+            {"design_id": 1, "k": 3, "metric": "cie2000"},
+        ]
     )
 
     k: Annotated[StrictInt, Field(ge=1, le=50, description="matches returned, best first")] = 5
@@ -110,11 +108,8 @@ class SnapOut(BaseModel):
 class FormulateRequest(DesignSource):
     """Formulate a recipe from the ColorSnap (CIEDE2000) matches' recipes (SYNTHETIC colorants)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [{"lab": _LAB, "gloss_gu": 88.0, "tolerance": 1.0}, {"design": _DESIGN}]
-        },
+    model_config = strict_config(
+        examples=[{"lab": _LAB, "gloss_gu": 88.0, "tolerance": 1.0}, {"design": _DESIGN}]
     )
 
     gloss_gu: (
@@ -216,14 +211,11 @@ class FormulateOut(BaseModel):
 class ExportRequest(BaseModel):
     """A design (inline or stored) exported with its ColorSnap match as the thesis's XML or CxF3."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {"design": _DESIGN, "format": "xml", "match": True},
-                {"design_id": 1, "format": "cxf", "five_angles": True},
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {"design": _DESIGN, "format": "xml", "match": True},
+            {"design_id": 1, "format": "cxf", "five_angles": True},
+        ]
     )
 
     design: DesignBody | None = None
@@ -277,10 +269,7 @@ class ClosedLoopRequest(BaseModel):
     """Closed-loop prototyping of a stored design version: formulate, spray a simulated panel, measure it
     with the simulated spectrophotometer and gloss meter, correct; every step stored (SYNTHETIC)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={"examples": [{"design_id": 1, "corrections": 3, "tolerance": 1.0, "seed": 7}]},
-    )
+    model_config = strict_config(examples=[{"design_id": 1, "corrections": 3, "tolerance": 1.0, "seed": 7}])
 
     design_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
     version: Annotated[StrictInt, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None

@@ -6,11 +6,12 @@ import datetime as dt
 import uuid
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
 from station.api.schemas.common import StrictInt
 from station.api.schemas.measurements import MeasurementPublic
 from station.drivers.families import SIM_FAMILY_NAMES
+from station.schema_config import strict_config
 
 
 class InstrumentPublic(BaseModel):
@@ -33,9 +34,7 @@ class ConnectRequest(BaseModel):
     simulator ``sim:ma6``); only the transports the product supports are accepted
     (``station.drivers.addresses``)."""
 
-    model_config = ConfigDict(
-        extra="forbid", json_schema_extra={"examples": [{"address": "ma6@/dev/ttyUSB0"}]}
-    )
+    model_config = strict_config(examples=[{"address": "ma6@/dev/ttyUSB0"}])
 
     address: Annotated[
         str,
@@ -53,9 +52,7 @@ class ConnectRequest(BaseModel):
 class CalibrateRequest(BaseModel):
     """Which reference tile (or gloss standard) the calibration used."""
 
-    model_config = ConfigDict(
-        extra="forbid", json_schema_extra={"examples": [{"reference": "white tile W-17"}]}
-    )
+    model_config = strict_config(examples=[{"reference": "white tile W-17"}])
 
     reference: Annotated[str, Field(max_length=64, examples=["white tile W-17"])] = ""
 
@@ -74,11 +71,8 @@ class CalibrationPublic(BaseModel):
 class CalibrationStart(BaseModel):
     """Start a step-wise calibration of an attached spectrophotometer and, optionally, a gloss meter."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [{"instrument_id": "ma6-sim00001", "gloss_instrument_id": None, "reference": "W-17"}]
-        },
+    model_config = strict_config(
+        examples=[{"instrument_id": "ma6-sim00001", "gloss_instrument_id": None, "reference": "W-17"}]
     )
 
     instrument_id: Annotated[str, Field(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$")]
@@ -122,11 +116,8 @@ class MeasureRequest(BaseModel):
     same id answers with what the first attempt stored or queued and measures nothing new.
     """
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [{"panel_id": 1, "client_id": "0f6b7c1e-2a3d-4e5f-8a9b-0c1d2e3f4a5b"}]
-        },
+    model_config = strict_config(
+        examples=[{"panel_id": 1, "client_id": "0f6b7c1e-2a3d-4e5f-8a9b-0c1d2e3f4a5b"}]
     )
 
     client_id: uuid.UUID | None = Field(None, description="idempotency key chosen by the client (a UUID)")

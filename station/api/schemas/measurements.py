@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from pydantic.config import JsonDict
 
 from station.ingest import Reading, TextureValue
+from station.schema_config import strict_config
 
 
 class MeasurementPublic(BaseModel):
@@ -61,17 +62,13 @@ def _first_example(model: type[BaseModel]) -> JsonDict:
 class CorrectionCreate(BaseModel):
     """A corrected reading for a stored measurement, and why (the original stays, superseded)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "reason": "wrong panel scanned; re-measured",
-                    "reading": _first_example(Reading)
-                    | {"client_id": "0e7f3a52-9c1d-4d8e-b7a4-3f6b2c9d1e22"},
-                }
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "reason": "wrong panel scanned; re-measured",
+                "reading": _first_example(Reading) | {"client_id": "0e7f3a52-9c1d-4d8e-b7a4-3f6b2c9d1e22"},
+            }
+        ]
     )
 
     reason: Annotated[

@@ -7,6 +7,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.schema_config import strict_config
+
 Part = Literal[
     "bumper", "fender", "door", "hood", "trunk", "mirror", "roof", "quarter_panel", "test_panel", "other"
 ]
@@ -16,18 +18,15 @@ Job = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f]+
 class PanelCreate(BaseModel):
     """Properties to receive on creation."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "job": "J-2026-0113",
-                    "part": "bumper",
-                    "substrate": "PP/EPDM",
-                    "notes": "rear bumper, left of the plate",
-                }
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "job": "J-2026-0113",
+                "part": "bumper",
+                "substrate": "PP/EPDM",
+                "notes": "rear bumper, left of the plate",
+            }
+        ]
     )
 
     job: Job

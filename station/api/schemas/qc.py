@@ -13,6 +13,7 @@ from station.api.schemas.measurements import MeasurementPublic
 from station.ingest.schema import MAX_GEOMETRIES, Angle, LabTriple
 from station.qc.illuminant_rows import PairVerdictWire
 from station.qc.results import JobSummaryWire, PartSummaryWire, SampleWire
+from station.schema_config import strict_config
 
 
 class GlossPublic(BaseModel):
@@ -53,7 +54,7 @@ class QcMeasurement(MeasurementPublic):
 class GlossMeasureRequest(BaseModel):
     """Measure on an attached gloss meter: gloss-only on a panel, or joining a colour measurement."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"panel_id": 1}]})
+    model_config = strict_config(examples=[{"panel_id": 1}])
 
     instrument_id: Annotated[
         str, Field(min_length=1, max_length=80, pattern=r"^[a-z0-9_.-]+$", examples=["gloss-gl-0001"])
@@ -65,17 +66,14 @@ class GlossMeasureRequest(BaseModel):
 class LabSource(BaseModel):
     """A standard or a sample: a stored measurement, or Lab per aspecular angle given inline."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {"measurement_id": 1},
-                {
-                    "geometries_deg": [15.0, 45.0, 110.0],
-                    "lab": [[82.1, -1.2, -18.5], [55.3, -0.4, -12.0], [31.9, 0.8, -6.2]],
-                },
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {"measurement_id": 1},
+            {
+                "geometries_deg": [15.0, 45.0, 110.0],
+                "lab": [[82.1, -1.2, -18.5], [55.3, -0.4, -12.0], [31.9, 0.8, -6.2]],
+            },
+        ]
     )
 
     measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
@@ -104,13 +102,8 @@ class CheckRequest(BaseModel):
     limits are ``de_limit`` (default the domain's QC limit) at every common geometry with ``formula``.
     """
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {"standard": {"measurement_id": 1}, "sample": {"measurement_id": 2}, "formula": "din6175"}
-            ]
-        },
+    model_config = strict_config(
+        examples=[{"standard": {"measurement_id": 1}, "sample": {"measurement_id": 2}, "formula": "din6175"}]
     )
 
     standard: LabSource
@@ -152,9 +145,7 @@ class CheckResult(PairVerdictWire):
 class StandardSet(BaseModel):
     """Make a stored measurement or a design the standard of a job and part (exactly one id)."""
 
-    model_config = ConfigDict(
-        extra="forbid", json_schema_extra={"examples": [{"measurement_id": 1, "notes": "master panel"}]}
-    )
+    model_config = strict_config(examples=[{"measurement_id": 1, "notes": "master panel"}])
 
     measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
     design_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)] | None = None
@@ -204,16 +195,13 @@ class JudgeOptions(BaseModel):
     """How a job is judged, as a body: the summary's query options (``GET /qc/jobs/{job}/summary``) and a
     ``tolerance`` set as ``station qc tolerance --json`` writes it (``station qc summary --tolerance``)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "tolerance": {"formula": "cie2000", "geometries": [{"geometry": "45as45", "de": 0.6}]},
-                    "average_panels": True,
-                }
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "tolerance": {"formula": "cie2000", "geometries": [{"geometry": "45as45", "de": 0.6}]},
+                "average_panels": True,
+            }
+        ]
     )
 
     tolerance: dict[str, Any]
@@ -228,17 +216,14 @@ class SpcJudgeOptions(JudgeOptions):
     """The SPC's chart (``part``, ``baseline``, ``subgroup`` as ``GET /qc/jobs/{job}/spc`` takes them)
     with how the job is judged, tolerance set included."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {
-                    "part": "fender",
-                    "baseline": 6,
-                    "tolerance": {"formula": "cie2000", "geometries": [{"geometry": "45as45", "de": 0.6}]},
-                }
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {
+                "part": "fender",
+                "baseline": 6,
+                "tolerance": {"formula": "cie2000", "geometries": [{"geometry": "45as45", "de": 0.6}]},
+            }
+        ]
     )
 
     part: Annotated[str, Field(min_length=1, max_length=64)]
@@ -249,10 +234,7 @@ class SpcJudgeOptions(JudgeOptions):
 class MetamerismRequest(BaseModel):
     """Two stored measurements with spectra (400–700 nm, 10 nm): the standard and the sample."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={"examples": [{"standard_measurement_id": 1, "sample_measurement_id": 2}]},
-    )
+    model_config = strict_config(examples=[{"standard_measurement_id": 1, "sample_measurement_id": 2}])
 
     standard_measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
     sample_measurement_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
@@ -281,9 +263,7 @@ class MetamerismOut(BaseModel):
 class RepeatsRequest(BaseModel):
     """Repeat readings of one panel (stored measurement ids, N >= 1)."""
 
-    model_config = ConfigDict(
-        extra="forbid", json_schema_extra={"examples": [{"measurement_ids": [1, 2, 3]}]}
-    )
+    model_config = strict_config(examples=[{"measurement_ids": [1, 2, 3]}])
 
     measurement_ids: Annotated[
         list[Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]], Field(min_length=1, max_length=100)

@@ -5,9 +5,10 @@ from __future__ import annotations
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
 from station.api.schemas.common import StrictInt
+from station.schema_config import strict_config
 
 Metric = Literal["cie76", "cie2000", "din6175"]
 
@@ -15,10 +16,7 @@ Metric = Literal["cie76", "cie2000", "din6175"]
 class RecipeCreate(BaseModel):
     """Which design version to formulate, how many candidates, which colour difference."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={"examples": [{"design_id": 1, "version": None, "k": 5, "metric": "cie2000"}]},
-    )
+    model_config = strict_config(examples=[{"design_id": 1, "version": None, "k": 5, "metric": "cie2000"}])
 
     design_id: Annotated[StrictInt, Field(ge=1, le=2**31 - 1)]
     version: Annotated[StrictInt, Field(ge=1, le=1_000_000, description="default: the latest")] | None = None

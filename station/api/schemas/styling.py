@@ -19,6 +19,7 @@ from station.api.schemas.environment import (
 from station.model.flakes import FLAKE_RANGES
 from station.render.scene_image import BUILTIN_MESHES, LOD_MAX_DE
 from station.render.shapes import SHAPES
+from station.schema_config import strict_config
 
 _EXAMPLE: JsonDict = {
     "name": "Blue metallic",
@@ -51,10 +52,7 @@ PNG_RESPONSE: dict[int | str, dict[str, Any]] = {
 class VariationsRequest(BaseModel):
     """The centre design, a step and a category (thesis §3.4.4)."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={"examples": [{"design": _EXAMPLE, "degree": 5.0, "category": "face"}]},
-    )
+    model_config = strict_config(examples=[{"design": _EXAMPLE, "degree": 5.0, "category": "face"}])
 
     design: DesignBody
     degree: Annotated[
@@ -89,11 +87,8 @@ class VariationsOut(BaseModel):
 class SwatchRequest(BaseModel):
     """A palette swatch (gradient bar 15°→110°, gloss as the border's brightness) or a booklet thumbnail."""
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [{"design": _EXAMPLE, "kind": "swatch", "width": 160, "height": 32, "border": 4}]
-        },
+    model_config = strict_config(
+        examples=[{"design": _EXAMPLE, "kind": "swatch", "width": 160, "height": 32, "border": 4}]
     )
 
     design: DesignBody
@@ -171,15 +166,12 @@ class RenderRequest(BaseModel):
     that environment on a shape with the stage options (backdrop, rotation, ground, exposure, clear coat).
     """
 
-    model_config = ConfigDict(
-        extra="forbid",
-        json_schema_extra={
-            "examples": [
-                {"design": _EXAMPLE, "scene": "sphere-point", "size": 128},
-                {"scene": "panel-point", "size": 96},
-                {"design": _EXAMPLE, "environment": "sky", "shape": "speedshape", "size": 256},
-            ]
-        },
+    model_config = strict_config(
+        examples=[
+            {"design": _EXAMPLE, "scene": "sphere-point", "size": 128},
+            {"scene": "panel-point", "size": 96},
+            {"design": _EXAMPLE, "environment": "sky", "shape": "speedshape", "size": 256},
+        ]
     )
 
     design: DesignBody | None = None

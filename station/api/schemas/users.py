@@ -8,6 +8,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, ConfigDict, Field
 
 from db.models import Role
+from station.schema_config import strict_config
 
 UserName = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.@-]+$", examples=["ana"])]
 
@@ -15,9 +16,7 @@ UserName = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0
 class UserCreate(BaseModel):
     """Properties to receive on creation."""
 
-    model_config = ConfigDict(
-        extra="forbid", json_schema_extra={"examples": [{"name": "ana", "role": "technician"}]}
-    )
+    model_config = strict_config(examples=[{"name": "ana", "role": "technician"}])
 
     name: UserName
     role: Role
@@ -26,7 +25,7 @@ class UserCreate(BaseModel):
 class TokenCreate(BaseModel):
     """A label for a new token (which device or script holds it)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"label": "booth-2 station"}]})
+    model_config = strict_config(examples=[{"label": "booth-2 station"}])
 
     label: Annotated[str, Field(max_length=64, examples=["booth-2 station"])] = ""
 

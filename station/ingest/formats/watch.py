@@ -51,10 +51,10 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import TracebackType
 from typing import Any, Literal
 
 from db.files import file_kind
+from station.closing import Closing
 from station.errors import InputError
 from station.ingest.errors import ImportFileError, IngestError
 from station.ingest.formats import is_complete, read_measurement_file
@@ -218,7 +218,7 @@ def _read_whole(fd: int) -> bytes:
     return b"".join(chunks)
 
 
-class WatchFolder:
+class WatchFolder(Closing):
     """One watcher on a folder: its own folders opened and checked, its claim folder locked.
 
     Use as a context manager; :meth:`scan` processes the files there now. Closing releases the lock
@@ -278,14 +278,6 @@ class WatchFolder:
             except OSError:
                 pass  # not empty (a move failed): a later watcher adopts what is left
         self._close_fds()
-
-    def __enter__(self) -> WatchFolder:
-        return self
-
-    def __exit__(
-        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        self.close()
 
     # ----------------------------------------------------------------- scanning
 
