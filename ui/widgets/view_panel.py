@@ -49,27 +49,8 @@ class ViewPanel(QWidget):
         super().__init__(parent)
         self.model = model
         s = model.settings
-        self.environment = QComboBox()
-        for name in ENVIRONMENTS:
-            self.environment.addItem(name, name)
-        self._select_environment(s.environment)
-        self.load_env = QPushButton("Load HDR…")
-        self.env_status = QLabel()
-        self.env_dialog = QFileDialog(self, "Load an environment (HDR)")
-        self.env_dialog.setFileMode(QFileDialog.FileMode.ExistingFile)
-        self.env_dialog.setNameFilter(
-            "HDR environments (" + " ".join(f"*{x}" for x in ENVIRONMENT_SUFFIXES) + ")"
-        )
-        self.env_dialog.setOption(QFileDialog.Option.DontUseNativeDialog, True)
-        self.shape = QComboBox()
-        self.shape.addItems(list(SHAPES))
-        for name in BUILTIN_MESHES:  # the built-in models (the procedural car), loaded when picked
-            self.shape.addItem(f"procedural {name} (model)", name)
-        #: The own model's part painted (mesh or material name; the first item paints every part).
-        self.paint_part = QComboBox()
-        self.paint_part.setToolTip("the model's part painted; the others drawn as tyre, glass or chrome")
-        self._parts_of: str | None = None  # the model whose parts paint_part lists
-        self.shape.setCurrentText(s.shape)
+        self._build_environment_pickers(s.environment)
+        self._build_shape_pickers(s.shape)
         self.exposure = QSlider(Qt.Orientation.Horizontal)
         self.exposure.setRange(-4 * EXPOSURE_STEPS_PER_EV, 4 * EXPOSURE_STEPS_PER_EV)
         self.exposure.setValue(round(s.exposure_ev * EXPOSURE_STEPS_PER_EV))
@@ -126,6 +107,33 @@ class ViewPanel(QWidget):
         reset.clicked.connect(lambda: self.model.update(yaw_deg=0.0, pitch_deg=0.0, zoom=1.0))
         model.events.settings.connect(self._on_settings)
         self._on_settings(s)
+
+    def _build_environment_pickers(self, environment: str) -> None:
+        """The environment picker, "Load HDR…" with its file dialog, and the status line beside them."""
+        self.environment = QComboBox()
+        for name in ENVIRONMENTS:
+            self.environment.addItem(name, name)
+        self._select_environment(environment)
+        self.load_env = QPushButton("Load HDR…")
+        self.env_status = QLabel()
+        self.env_dialog = QFileDialog(self, "Load an environment (HDR)")
+        self.env_dialog.setFileMode(QFileDialog.FileMode.ExistingFile)
+        self.env_dialog.setNameFilter(
+            "HDR environments (" + " ".join(f"*{x}" for x in ENVIRONMENT_SUFFIXES) + ")"
+        )
+        self.env_dialog.setOption(QFileDialog.Option.DontUseNativeDialog, True)
+
+    def _build_shape_pickers(self, shape: str) -> None:
+        """The shape picker (analytic shapes, then the built-in models) and the own model's part picker."""
+        self.shape = QComboBox()
+        self.shape.addItems(list(SHAPES))
+        for name in BUILTIN_MESHES:  # the built-in models (the procedural car), loaded when picked
+            self.shape.addItem(f"procedural {name} (model)", name)
+        #: The own model's part painted (mesh or material name; the first item paints every part).
+        self.paint_part = QComboBox()
+        self.paint_part.setToolTip("the model's part painted; the others drawn as tyre, glass or chrome")
+        self._parts_of: str | None = None  # the model whose parts paint_part lists
+        self.shape.setCurrentText(shape)
 
     def _flake_box(self, name: str, value: float | None) -> QDoubleSpinBox:
         """A spin box for the view's flake field *name*, connected to the model (FLAKE_BOXES)."""
