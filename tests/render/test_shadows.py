@@ -405,3 +405,39 @@ def test_raycast_maps_are_drawn_per_shape_and_light_not_per_orbit_frame(gl_ctx, 
         gs.ShapeCaster("cube")
     with pytest.raises(RenderInputError, match="misalignment_deg"):
         gs.ShapeCaster("panels", 60.0)
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("misalignment", [-30.0, -45.0])
+def test_turned_panel_shadows_the_other_as_the_ray_cast_says(gl_ctx, sun_basis, misalignment) -> None:
+    """Self-shadowing of a ray-cast shape: the right panel, turned towards the camera, shadows the left
+    one's front. A left-panel point is shadowed where its NumPy ray to the sun meets the panels
+    (station.render.shapes.intersect): visibility < 0.05 more than 2 pixels inside that region, > 0.95 more
+    than 2 pixels outside it, and the frame there differs by the sun's Lambertian part w_D (N·l) Φ / π of
+    the flat panel exactly (within 2 %)."""
+    from scipy import ndimage
+
+    from station.render.gl_renderer import GLRenderer
+    from station.render.shapes import Scene, intersect
+
+    stage = Stage(backdrop=False, rotation_deg=20.0)
+    ell = lookup_matrix(20.0).T @ sun_basis.lights.directions[0]
+    cam = Camera((-1.0, 0.5, 3.5), (-0.2, 0.0, 0.0), fov_deg=40.0)
+    paint = _diffuse()
+    with GLRenderer(sun_basis, 200, 150, ctx=gl_ctx) as gl:
+        _, model = gl.shadow_probe(
+            None, [paint], camera=cam, stage=stage, shape="panels", misalignment_deg=misalignment
+        )
+        frame = gl.render_linear(Scene("panels", misalignment, camera=cam, stage=stage), [paint, paint])
+    p = model[..., 1:]
+    left = (model[..., 0] >= 0.0) & (p[..., 0] < -0.02) & (np.abs(p[..., 2]) < 1e-3)  # front at z = 0
+    truth = np.zeros(left.shape, bool)
+    q = p[left]
+    truth[left] = intersect(Scene("panels", misalignment), q + 1e-4 * ell, np.broadcast_to(ell, q.shape)).mask
+    dark = ndimage.binary_erosion(truth, iterations=2) & left
+    lit = ~ndimage.binary_dilation(truth, iterations=2) & left
+    assert dark.sum() > 500 and lit.sum() > 1000
+    assert model[dark, 0].max() < 0.05
+    assert model[lit, 0].min() > 0.95
+    sun_part = paint.map_weights()[0] * ell[2] * sun_basis.lights.flux[0] / math.pi
+    assert frame[lit].mean(axis=0) - frame[dark].mean(axis=0) == pytest.approx(sun_part, rel=0.02)
