@@ -9,7 +9,11 @@ and the one-off cost of drawing the maps (first frame with shadows less the mean
 ``docs/render/car-shadows.png``: sky and booth rows; the procedural car and a CC0 car (when ``--shared``
 holds one), shadows off | on.
 
-Run: ``.venv/bin/python -m bench.render_shadows [--shared DIR] [--frames N]``.
+``--model speedshape``: the same orbit of the ray-cast speed shape (its maps ray cast from the light) about
+its default view's target, into a section of its own, and ``docs/render/speedshape-shadows.png``: sky and
+booth rows; the speed shape and the panels turned −30° (open sheets), shadows off | on.
+
+Run: ``.venv/bin/python -m bench.render_shadows [--model car|speedshape|all] [--shared DIR] [--frames N]``.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import numpy as np
 from bench._report import Case, bench_parser, write_section
 from station.model.flakes import METALLIC_FLAKES
 from station.model.gloss import ClearCoat
-from station.render.camera import Camera
+from station.render.camera import Camera, orbit_camera
 from station.render.car import car_body
 from station.render.envcache import PrefilterCache
 from station.render.gl_context import create_gl_context
@@ -33,7 +37,7 @@ from station.render.lobe_fit import fit_design
 from station.render.meshes import MESH_CAMERA, load_mesh
 from station.render.prefilter import prefilter_basis
 from station.render.procedural import procedural_environment
-from station.render.shapes import Scene
+from station.render.shapes import DEFAULT_CAMERAS, Scene
 from station.render.stage import Stage
 from station.render.tonemap import save_png
 
@@ -56,7 +60,7 @@ def _orbit_camera(yaw_deg: float) -> Camera:
     return Camera((x, y, z), MESH_CAMERA.target, MESH_CAMERA.up, MESH_CAMERA.fov_deg)
 
 
-def _frame(gl: GLRenderer, ctx, mesh, w, yaw: float) -> tuple[float, float]:
+def _car_frame(gl: GLRenderer, ctx, mesh, w, yaw: float) -> tuple[float, float]:
     scene = Scene("sphere", camera=_orbit_camera(yaw), stage=Stage())
     t0, c0 = time.perf_counter(), time.process_time()
     gl.draw(scene, [w], coat=ClearCoat(), flakes=METALLIC_FLAKES, mesh=mesh)
@@ -64,13 +68,39 @@ def _frame(gl: GLRenderer, ctx, mesh, w, yaw: float) -> tuple[float, float]:
     return time.perf_counter() - t0, time.process_time() - c0
 
 
-def orbit(env_name: str, frames: int, blocks: int = 3) -> list[Case]:
-    """Cases of one environment: frame wall and CPU time, shadows on and off, and the maps' one-off cost."""
+#: The speed shape's orbit: about its default view's target, at that view's distance and a 15° pitch.
+SPEED_TARGET = DEFAULT_CAMERAS["speedshape"].target
+SPEED_DISTANCE = float(
+    np.linalg.norm(np.subtract(DEFAULT_CAMERAS["speedshape"].eye, DEFAULT_CAMERAS["speedshape"].target))
+)
+#: The speed-shape screenshot's view: from above the side the sky's sun throws the shadow to.
+SPEED_SHOT = orbit_camera((0.4, -0.2, 0.0), 200.0, 30.0, 5.0, fov_deg=36.0)
+
+
+def _shape_frame(gl: GLRenderer, ctx, shape: str, w, yaw: float) -> tuple[float, float]:
+    scene = Scene(
+        shape, camera=orbit_camera(SPEED_TARGET, yaw, 15.0, SPEED_DISTANCE, fov_deg=34.0), stage=Stage()
+    )
+    t0, c0 = time.perf_counter(), time.process_time()
+    gl.draw(scene, [w, w], coat=ClearCoat(), flakes=METALLIC_FLAKES)
+    ctx.finish()
+    return time.perf_counter() - t0, time.process_time() - c0
+
+
+def orbit(env_name: str, frames: int, blocks: int = 3, model: str = "car") -> list[Case]:
+    """Cases of one environment: frame wall and CPU time, shadows on and off, and the maps' one-off cost;
+    *model* "car" (the procedural car) or "speedshape" (the ray-cast shape)."""
     w = fit_design(SILVER)
     basis = prefilter_basis(
         procedural_environment(env_name, 512), w.exponents, engine="gl", cache=PrefilterCache()
     )
     car = car_body()
+
+    def _frame(gl: GLRenderer, ctx, mesh, w, yaw: float) -> tuple[float, float]:
+        if model == "speedshape":
+            return _shape_frame(gl, ctx, "speedshape", w, yaw)
+        return _car_frame(gl, ctx, mesh, w, yaw)
+
     ctx = create_gl_context()
     times: dict[bool, list[tuple[float, float]]] = {True: [], False: []}
     first: dict[bool, tuple[float, float]] = {}
@@ -93,6 +123,7 @@ def orbit(env_name: str, frames: int, blocks: int = 3) -> list[Case]:
         ctx.release()
     lights = basis.lights.count if basis.lights is not None else 0
     size = f"{SIZE}²"
+    env_name = env_name if model == "car" else f"{model} {env_name}"
     out = []
     for on in (True, False):
         wall = float(np.mean([t[0] for t in times[on]])) * 1e3
@@ -153,11 +184,55 @@ def screenshot(shared: Path) -> Path:
     return path
 
 
+def shape_screenshot() -> Path:
+    """docs/render/speedshape-shadows.png: rows sky, booth; columns speed shape off | on, panels turned −30°
+    off | on (the ray-cast shapes' shadow maps against the sphere proxies)."""
+    w = fit_design(SILVER)
+    scenes = [
+        Scene("speedshape", camera=SPEED_SHOT, stage=Stage()),
+        Scene("panels", -30.0, camera=orbit_camera((0.0, -0.1, 0.0), -30.0, 20.0, 4.2, 36.0), stage=Stage()),
+    ]
+    rows = []
+    for env_name in ("sky", "booth"):
+        basis = prefilter_basis(
+            procedural_environment(env_name, 512), w.exponents, engine="gl", cache=PrefilterCache()
+        )
+        with GLRenderer(basis, *TILE, aa=4) as gl:
+            row = []
+            for scene in scenes:
+                for on in (False, True):
+                    gl.shadows = on
+                    row.append(np.ascontiguousarray(gl.render(scene, [w, w], coat=ClearCoat())))
+            rows.append(np.concatenate(row, axis=1))
+    OUT.mkdir(parents=True, exist_ok=True)
+    path = OUT / "speedshape-shadows.png"
+    save_png(path, np.concatenate(rows, axis=0))
+    return path
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = bench_parser(__doc__, "render_shadows")
     parser.add_argument("--shared", type=Path, default=SHARED, help="folder with meshes/")
     parser.add_argument("--frames", type=int, default=6, help="frames per block (3 blocks per mode)")
+    parser.add_argument("--model", choices=("car", "speedshape", "all"), default="all", help="what orbits")
     args = parser.parse_args(argv)
+    if args.model in ("speedshape", "all"):
+        cases = [c for env in ("sky", "booth") for c in orbit(env, args.frames, model="speedshape")]
+        load = os.getloadavg()[0]
+        print(f"wrote {shape_screenshot()}")
+        write_section(
+            "render_shadows_shapes",
+            "Shadow maps of the ray-cast shapes: orbit frame cost",
+            cases,
+            "Speed shape (ray cast, two paints), stage + clear coat + flakes, GL renderer on llvmpipe, "
+            "footprint passes; shadows on (maps ray cast from the light, ground occlusion from ray-cast "
+            "height maps) against off (sphere proxies) in the same run, frames interleaved in blocks "
+            "(`python -m bench.render_shadows --model speedshape`). CPU time is the process's, llvmpipe's "
+            f"threads included. Load average {load:.1f} on {os.cpu_count()} CPUs at the end (a shared, "
+            "loaded machine: compare on / off within the run only).",
+        )
+    if args.model == "speedshape":
+        return
     cases = [c for env in ("sky", "booth") for c in orbit(env, args.frames)]
     load = os.getloadavg()[0]
     print(f"wrote {screenshot(args.shared)}")

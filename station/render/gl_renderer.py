@@ -36,7 +36,7 @@ from station.render.gl_programs import (
     renderer_defines,
     set_uniforms,
 )
-from station.render.gl_shadows import ShadowMaps, shadow_defines, shadow_lights
+from station.render.gl_shadows import ShadowMaps, ShapeCaster, shadow_defines, shadow_lights
 from station.render.gl_targets import FrameTargets
 from station.render.numpy_renderer import (
     BACKGROUND,
@@ -171,8 +171,9 @@ class GLRenderer:
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
         self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
-        #: Shadow maps of the strongest extracted lights and the ground's ambient occlusion under a mesh
-        #: (:mod:`station.render.gl_shadows`); False: the sphere proxies' contact and sun shadows only.
+        #: Shadow maps of the strongest extracted lights and the ground's ambient occlusion under a mesh or a
+        #: ray-cast shape (:mod:`station.render.gl_shadows`); False: the sphere proxies' contact and sun
+        #: shadows only.
         self.shadows = True
         self._shadow_slots = shadow_lights(self._lights)
         self._shadow_maps: ShadowMaps | None = None
@@ -398,20 +399,23 @@ class GLRenderer:
             occluders = mesh.occluders().astype(np.float32)
         n_occ = len(occluders) if stage is not None else 0
         foot = None
-        if mesh is None and self.footprint:
+        shadow = self._shadow_key(scene, mesh, probe)
+        if mesh is None and self.footprint and not probe:
             foot = shape_footprint(
                 scene.shape, scene.view_camera, *self.targets.shade_size, scene.misalignment_deg
             )
         if mesh is None and foot is not None:
             self._upload_footprint(foot)
             passes = [
-                self._program(scene.shape, linear, "footprint", feats, terms, n_occ, curve_i),
+                self._program(scene.shape, linear, "footprint", feats, terms, n_occ, curve_i, shadow),
                 self._program("sphere", linear, "backdrop", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
             ]
             if foot.inner is not None:
-                passes.append(self._program(scene.shape, linear, "inside", feats, terms, n_occ, curve_i))
+                passes.append(
+                    self._program(scene.shape, linear, "inside", feats, terms, n_occ, curve_i, shadow)
+                )
         elif mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, curve_i)]
+            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, curve_i, shadow)]
         else:
             passes = [
                 self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
@@ -423,7 +427,7 @@ class GLRenderer:
                     terms,
                     n_occ,
                     curve_i,
-                    self._shadow_key(scene, mesh, probe),
+                    shadow,
                 ),
             ]
         return pair, passes, aniso_uniforms, occluders, n_occ
@@ -490,12 +494,27 @@ class GLRenderer:
         uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
         return uniforms, mw, m
 
+    @staticmethod
+    def _caster(scene, mesh):
+        """What casts the frame's shadows: *mesh*, else the scene's ray-cast shape (a ShapeCaster)."""
+        return mesh if mesh is not None else ShapeCaster(scene.shape, scene.misalignment_deg)
+
+    @staticmethod
+    def _floor(scene, mesh) -> tuple[float, tuple[float, float]]:
+        """(ground height y, ground centre (x, z)) under *mesh* or the scene's shape (shapes.GROUNDS)."""
+        if mesh is not None:
+            return float(mesh.floor_y), (0.0, 0.0)
+        gx, gy, gz = GROUNDS[scene.shape]
+        return float(gy), (float(gx), float(gz))
+
     def _shadow_key(self, scene, mesh, probe: bool = False) -> tuple:
-        """(shadowed light indices, ambient occlusion on, probe) of a frame: a mesh on a stage with
-        :attr:`shadows` on and lights taken out of the environment; () otherwise."""
-        if mesh is None or scene.stage is None or not self.shadows or not self._shadow_slots:
+        """(shadowed light indices, ambient occlusion on, probe) of a frame: a mesh or a ray-cast shape on a
+        stage with :attr:`shadows` on and lights taken out of the environment; () otherwise. The ambient
+        occlusion needs a ground and a closed caster (a mesh, or ShapeCaster.closed)."""
+        if scene.stage is None or not self.shadows or not self._shadow_slots:
             return ()
-        return (self._shadow_slots, bool(scene.stage.ground), bool(probe))
+        closed = mesh is not None or self._caster(scene, mesh).closed
+        return (self._shadow_slots, bool(scene.stage.ground) and closed, bool(probe))
 
     @property
     def shadow_redraws(self) -> int:
@@ -504,14 +523,17 @@ class GLRenderer:
         return 0 if self._shadow_maps is None else self._shadow_maps.version
 
     def _update_shadows(self, scene, mesh) -> None:
-        """Draw the shadow maps and the ground's occlusion map of *mesh* when they changed."""
+        """Draw the shadow maps and the ground's occlusion map of *mesh* (or the scene's shape) when they
+        changed."""
         if self._shadow_maps is None:
             self._shadow_maps = ShadowMaps(self.ctx)
+        caster = self._caster(scene, mesh)
         self._shadow_maps.update(
-            mesh, self._lights, self._shadow_slots, lookup_matrix(scene.stage.rotation_deg)
+            caster, self._lights, self._shadow_slots, lookup_matrix(scene.stage.rotation_deg)
         )
-        if scene.stage.ground:
-            self._shadow_maps.ambient_occlusion(mesh, mesh.floor_y, (0.0, 0.0), scene.stage.ground_radius)
+        if self._shadow_key(scene, mesh)[1]:
+            floor_y, centre = self._floor(scene, mesh)
+            self._shadow_maps.ambient_occlusion(caster, floor_y, centre, scene.stage.ground_radius)
 
     def _bind_shadows(self, scene, mesh, m: int) -> dict:
         """Bind the shadow maps (texture units m + 10 on) and the ground's occlusion map; their uniforms."""
@@ -520,8 +542,9 @@ class GLRenderer:
             raise RenderError("shadow maps bound before they were drawn")
         n = len(self._shadow_slots)
         uniforms = maps.bind(m + 10, n)
-        if scene.stage.ground:
-            ao = maps.ambient_occlusion(mesh, mesh.floor_y, (0.0, 0.0), scene.stage.ground_radius)
+        if self._shadow_key(scene, mesh)[1]:
+            floor_y, centre = self._floor(scene, mesh)
+            ao = maps.ambient_occlusion(self._caster(scene, mesh), floor_y, centre, scene.stage.ground_radius)
             ao.use(m + 10 + 3 * n)
             uniforms["u_ao"] = m + 10 + 3 * n
         return uniforms
@@ -691,21 +714,34 @@ class GLRenderer:
         return self._read(fbo, linear)
 
     def shadow_probe(
-        self, mesh, paints, camera=None, stage=None, size: int = 512
+        self,
+        mesh,
+        paints,
+        camera=None,
+        stage=None,
+        size: int = 512,
+        shape: str = "sphere",
+        misalignment_deg: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Diagnostics of the shadows of *mesh* (:mod:`station.render.gl_shadows`), by the frame's own shader
-        functions: (ground (size, size, 3) float32 over the ground disc's square, row 0 at z = centre −
-        radius, column 0 at x = centre − radius: visibility of the strongest and the second light, 1 − O;
-        model (H, W, 4) float32 from *camera*: the strongest light's visibility on the model and the world
-        point x, y, z; visibility −1 where the model is not; at ``aa`` 1, as a supersampled frame averages
-        neighbouring pixels' values). Lights without a map read 1; RenderInputError naming ``mesh`` when
-        the frame has no shadow maps (no lights, no stage, or :attr:`shadows` off)."""
+        """Diagnostics of the shadows of *mesh*, or with *mesh* None of the ray-cast *shape* (of
+        ``station.render.shapes``; *misalignment_deg* the panels'), :mod:`station.render.gl_shadows`, by the
+        frame's own shader functions: (ground (size, size, 3) float32 over the ground disc's square, row 0
+        at z = centre − radius, column 0 at x = centre − radius: visibility of the strongest and the second
+        light, 1 − O; model (H, W, 4) float32 from *camera* (default MESH_CAMERA, or the shape's): the
+        strongest light's visibility on the model and the world point x, y, z; visibility −1 where the
+        model is not; at ``aa`` 1, as a supersampled frame averages neighbouring pixels' values). Lights
+        without a map read 1 (and 1 − O reads 1 without an occlusion map: an open shape); RenderInputError
+        naming ``mesh`` when the frame has no shadow maps (no lights, no stage, or :attr:`shadows` off)."""
         from station.render.meshes import MESH_CAMERA
         from station.render.stage import Stage
 
-        scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage or Stage())
+        if mesh is None:
+            scene = Scene(shape, misalignment_deg, camera=camera, stage=stage or Stage())
+        else:
+            scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage or Stage())
         if not self._shadow_key(scene, mesh):
-            raise RenderInputError("mesh", "a mesh on a stage lit by extracted lights, shadows on", mesh.name)
+            name = shape if mesh is None else mesh.name
+            raise RenderInputError("mesh", "a model on a stage lit by extracted lights, shadows on", name)
         fbo = self._draw(scene, paints, True, 0.0, "clip", None, mesh=mesh, probe=True)
         data = np.frombuffer(fbo.read(components=4, dtype="f4", alignment=1), np.float32)
         model = data.reshape(self.height, self.width, 4)[::-1].copy()

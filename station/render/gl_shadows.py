@@ -1,4 +1,5 @@
-"""Shadow maps and ground ambient occlusion of a mesh for the GL renderer (``shaders/shadows.glsl``).
+"""Shadow maps and ground ambient occlusion of a mesh or a ray-cast shape for the GL renderer
+(``shaders/shadows.glsl``).
 
 * **Which lights.** Of the lights taken out of the environment (``PrefilteredBasis.lights``) the
   SHADOW_LIGHTS of largest luminous flux cast shadow maps (:func:`shadow_lights`): the sun, a booth's main
@@ -8,6 +9,14 @@
   texel, the depth of the mesh nearest to the light. It is drawn again only when the mesh, the
   environment's turn or the lights change (:class:`ShadowMaps`): an orbit moves the camera, not the
   environment, so orbit frames reuse the maps.
+* **Ray-cast shapes.** A shape of ``station.render.shapes`` (:class:`ShapeCaster`) has no triangles: its
+  depth pass casts, per texel, the ray from the view's near plane along the view's depth axis at the
+  analytic shape with the frame's own ``hit()`` (``shaders/shadow_cast.frag.glsl``) and writes the first
+  hit's depth (gl_FragDepth); the maps, their filtering and every lookup are then the mesh's. The box is
+  the footprint's bound of the shape (``station.render.footprint.bound_points``). The height maps of the
+  ambient occlusion are cast the same way for the closed solids (sphere, cylinder, speed shape); the
+  panels and the seam are open sheets that a view from above sees edge-on, so their ground keeps the
+  sphere proxies' open sky (:attr:`ShapeCaster.closed`).
 * **Ground: percentage-closer soft shadows.** The ground is baked into a map once per stage and light
   (``GLRenderer._ground_map``), so its lookup can afford a full one: a ground point, moved off its surface
   along its normal by NORMAL_OFFSET texels (more at grazing light), is projected into the map; a blocker
@@ -47,7 +56,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from station.render.errors import RenderInputError
+from station.render.footprint import bound_points
 from station.render.gl_context import build_program
+from station.render.shapes import SHAPE_INDEX, SHAPES
 
 #: Lights that cast shadow maps (the strongest by luminous flux); the shader's sampler arrays hold as many.
 SHADOW_LIGHTS = 2
@@ -173,6 +184,36 @@ def height_views(
     )
 
 
+#: The shapes that are closed solids (their top and bottom heights bound them: the ambient occlusion's columns).
+CLOSED_SHAPES = ("sphere", "cylinder", "speedshape")
+
+
+@dataclass(frozen=True)
+class ShapeCaster:
+    """A ray-cast shape of ``station.render.shapes`` as a shadow caster: *shape* (one of SHAPES) and the
+    panels' *misalignment_deg* (degrees; the other shapes ignore it)."""
+
+    shape: str
+    misalignment_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.shape not in SHAPES:
+            raise RenderInputError("shape", " | ".join(SHAPES), self.shape)
+        if not math.isfinite(self.misalignment_deg) or abs(self.misalignment_deg) > 45.0:
+            raise RenderInputError("misalignment_deg", "-45 <= misalignment_deg <= 45", self.misalignment_deg)
+
+    @property
+    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(lo, hi): world corners of a box holding the shape (the footprint's bound points)."""
+        pts = bound_points(self.shape, self.misalignment_deg)
+        return pts.min(axis=0), pts.max(axis=0)
+
+    @property
+    def closed(self) -> bool:
+        """Whether the shape is a closed solid, so its height maps give the ground's ambient occlusion."""
+        return self.shape in CLOSED_SHAPES
+
+
 def _cols(m: NDArray) -> tuple[float, ...]:
     return tuple(float(v) for v in np.asarray(m, float).T.ravel())  # column-major for GL
 
@@ -186,6 +227,7 @@ class ShadowMaps:
         self.ctx = ctx
         self.version = 0
         self._depth_prog = build_program(ctx, "shadow_depth.vert.glsl", "shadow_depth.frag.glsl")
+        self._cast: dict[str, tuple[Any, Any]] = {}  # shape → (ray-cast depth program, vertex array)
         self._ao_prog = build_program(ctx, "fullscreen.vert.glsl", "ao.frag.glsl", _ao_defines())
         self._ao_vao = ctx.vertex_array(self._ao_prog, [])
         self._esm_prog = build_program(ctx, "fullscreen.vert.glsl", "esm.frag.glsl", {"ESM_TAPS": ESM_TAPS})
@@ -204,6 +246,7 @@ class ShadowMaps:
         self._heights: list[tuple[Any, Any]] = []
         self._ao: tuple[Any, Any] | None = None
         self._ao_key: tuple | None = None
+        self._ao_caster: Any = None
 
     def _vao(self, mesh: Any) -> Any:
         if self._mesh_buf is None or self._mesh_buf[0] is not mesh:
@@ -240,29 +283,80 @@ class ShadowMaps:
         )
         return tex, fbo, cmp, raw
 
-    def _draw_depth(self, fbo: Any, view: OrthoView, vao: Any) -> None:
+    def _cast_vao(self, caster: ShapeCaster) -> Any:
+        if caster.shape not in self._cast:
+            prog = build_program(
+                self.ctx,
+                "fullscreen.vert.glsl",
+                "shadow_cast.frag.glsl",
+                {"SHAPE": SHAPE_INDEX[caster.shape]},
+            )
+            self._cast[caster.shape] = (prog, self.ctx.vertex_array(prog, []))
+        prog, vao = self._cast[caster.shape]
+        if "u_misalign" in prog:
+            prog["u_misalign"].value = math.radians(caster.misalignment_deg)
+        return vao
+
+    def _draw_depth(
+        self,
+        fbo: Any,
+        view: OrthoView,
+        vao: Any,
+        size: tuple[int, int] | None = None,
+        from_below: bool = False,
+    ) -> None:
+        """Depth of the caster whose vertex array is *vao* in *view* into *fbo* (*size*: its texels): a
+        mesh rasterised, or a ray-cast shape's full-screen pass (``shaders/shadow_cast.frag.glsl``;
+        *from_below*: the height map from below)."""
         fbo.use()
         fbo.clear(depth=1.0)
-        self._depth_prog["u_clip"].value = _cols(view.clip())
+        cast = next((p for p, v in self._cast.values() if v is vao), None)
+        if cast is None:
+            self._depth_prog["u_clip"].value = _cols(view.clip())
+        else:
+            inv = np.linalg.inv(view.matrix)
+            axis = view.matrix[2, :3]
+            cast["u_inv"].value = _cols(inv)
+            cast["u_dir"].value = tuple(float(v) for v in axis / np.linalg.norm(axis))
+            cast["u_depth"].value = float(view.depth)
+            cast["u_size"].value = tuple(float(v) for v in (size or fbo.size))
+            if "u_from_below" in cast:  # the cylinder's only
+                cast["u_from_below"].value = int(from_below)
         self.ctx.enable(self.ctx.DEPTH_TEST)
         try:
-            vao.render(mode=self.ctx.TRIANGLES)
+            if cast is None:
+                vao.render(mode=self.ctx.TRIANGLES)
+            else:
+                vao.render(mode=self.ctx.TRIANGLES, vertices=3)
         finally:
             self.ctx.disable(self.ctx.DEPTH_TEST)
 
+    def _caster_vao(self, caster: Any) -> Any:
+        """The vertex array that draws *caster*'s depth: a mesh's triangles or a shape's ray cast."""
+        return self._cast_vao(caster) if isinstance(caster, ShapeCaster) else self._vao(caster)
+
+    @staticmethod
+    def _ident(caster: Any) -> object:
+        """What identifies *caster* in a cache key: the shape caster itself (a value), a mesh by id."""
+        return caster if isinstance(caster, ShapeCaster) else id(caster)
+
+    def _holds(self, caster: Any) -> bool:
+        return self._held == caster if isinstance(caster, ShapeCaster) else self._held is caster
+
     def update(self, mesh: Any, lights: Any, slots: tuple[int, ...], rotation: NDArray) -> None:
         """Draw the depth maps of the lights *slots* of *lights* (map-frame directions; world = Rᵀ l with
-        *rotation* R the environment's lookup matrix) for *mesh*, unless they are already those."""
+        *rotation* R the environment's lookup matrix) for *mesh* (a mesh or a :class:`ShapeCaster`), unless
+        they are already those."""
         key = (
-            id(mesh),
+            self._ident(mesh),
             tuple(slots),
             np.asarray(rotation, float).tobytes(),
             np.asarray(lights.directions).tobytes(),
         )
-        if key == self._key and self._held is mesh:
+        if key == self._key and self._holds(mesh):
             return
         lo, hi = mesh.bounds
-        vao = self._vao(mesh)
+        vao = self._caster_vao(mesh)
         while len(self._maps) < len(slots):
             self._maps.append(self._light_target())
         while len(self._esm) < len(slots) + 1:
@@ -273,7 +367,7 @@ class ShadowMaps:
         for k, i in enumerate(slots):
             world = np.asarray(rotation, float).T @ np.asarray(lights.directions[i], float)
             view = light_view(world, lo, hi)
-            self._draw_depth(self._maps[k][1], view, vao)
+            self._draw_depth(self._maps[k][1], view, vao, (SHADOW_MAP, SHADOW_MAP))
             self._views.append(view)
             self._radii.append(light_radius_rad(float(spreads[i])))
             self._filter_esm(k, view, self._radii[-1])
@@ -305,15 +399,13 @@ class ShadowMaps:
     def ambient_occlusion(
         self, mesh: Any, ground_y: float, centre: tuple[float, float], radius: float
     ) -> Any:
-        """The AO_MAP² occlusion map (R: O in [0, 1]) of *mesh* over the ground disc's square (centre
-        (x, z), *radius*) at height *ground_y*, baked once per mesh and ground (module docstring)."""
-        key = (id(mesh), float(ground_y), tuple(float(c) for c in centre), float(radius))
-        if (
-            self._ao is not None
-            and self._ao_key == key
-            and self._mesh_buf is not None
-            and self._mesh_buf[0] is mesh
-        ):
+        """The AO_MAP² occlusion map (R: O in [0, 1]) of *mesh* (a mesh or a closed :class:`ShapeCaster`)
+        over the ground disc's square (centre (x, z), *radius*) at height *ground_y*, baked once per caster
+        and ground (module docstring)."""
+        if isinstance(mesh, ShapeCaster) and not mesh.closed:
+            raise RenderInputError("shape", " | ".join(CLOSED_SHAPES), mesh.shape)
+        key = (self._ident(mesh), float(ground_y), tuple(float(c) for c in centre), float(radius))
+        if self._ao is not None and self._ao_key == key and self._ao_held(mesh):
             return self._ao[0]
         lo, hi = mesh.bounds
         top, bottom, shape = height_views(lo, hi)
@@ -322,9 +414,9 @@ class ShadowMaps:
                 fbo.release()
                 tex.release()
             self._heights = [self._depth_target(shape) for _ in (0, 1)]
-        vao = self._vao(mesh)
-        for (_, fbo), view in zip(self._heights, (top, bottom), strict=True):
-            self._draw_depth(fbo, view, vao)
+        vao = self._caster_vao(mesh)
+        for (_, fbo), view, below in zip(self._heights, (top, bottom), (False, True), strict=True):
+            self._draw_depth(fbo, view, vao, shape, below)
         if self._ao is None:
             tex = self.ctx.texture((AO_MAP, AO_MAP), 1, dtype="f4")
             tex.repeat_x = tex.repeat_y = False
@@ -349,9 +441,14 @@ class ShadowMaps:
         p["u_ground_radius"].value = float(radius)
         p["u_size"].value = (float(AO_MAP), float(AO_MAP))
         self._ao_vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-        self._ao_key = key
+        self._ao_key, self._ao_caster = key, mesh
         self.version += 1
         return self._ao[0]
+
+    def _ao_held(self, caster: Any) -> bool:
+        if isinstance(caster, ShapeCaster):
+            return bool(self._ao_caster == caster)
+        return self._mesh_buf is not None and self._mesh_buf[0] is caster and self._ao_caster is caster
 
     def bind(self, first_unit: int, count: int) -> dict[str, Any]:
         """Bind the first *count* light maps (compare and raw samplers) from texture unit *first_unit* on and
@@ -392,6 +489,10 @@ class ShadowMaps:
         for tex, fbo in self._esm:
             fbo.release()
             tex.release()
+        for prog, vao in self._cast.values():
+            vao.release()
+            prog.release()
+        self._cast = {}
         self._esm_vao.release()
         self._esm_prog.release()
         self._esm = []
@@ -399,7 +500,7 @@ class ShadowMaps:
         self._ao_prog.release()
         self._depth_prog.release()
         self._maps, self._heights, self._ao = [], [], None
-        self._key = self._held = self._ao_key = None
+        self._key = self._held = self._ao_key = self._ao_caster = None
 
 
 def _ao_defines() -> dict[str, object]:

@@ -1,5 +1,6 @@
-"""Shadow maps and ground ambient occlusion of meshes in the GL renderer (station.render.gl_shadows) against
-closed forms: a sphere's shadow ellipse, a box's shadow on a plate, a sphere's occluded sky fraction."""
+"""Shadow maps and ground ambient occlusion of meshes and ray-cast shapes in the GL renderer
+(station.render.gl_shadows) against closed forms and brute force: a sphere's shadow ellipse, a box's shadow
+on a plate, a sphere's occluded sky fraction, the speed shape's shadow against a NumPy ray cast."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from station.render.cubemap import equirect_directions
 from station.render.environment import Environment, Lights
 from station.render.errors import RenderInputError
 from station.render.meshes import Mesh
-from station.render.stage import Stage, lookup_matrix, sphere_occlusion
+from station.render.stage import Stage, light_visibility, lookup_matrix, sphere_occlusion
 from station.render.weights import LobeWeights
 
 EXPS = (1.0, 8.0, 64.0, 512.0)
@@ -258,3 +259,185 @@ def test_maps_are_drawn_once_per_light_and_model_not_per_orbit_frame(gl_ctx, sun
         assert gl.shadow_redraws == drawn + 1
         with pytest.raises(RenderInputError, match="mesh"):
             gl.shadow_probe(mesh, [_diffuse()])
+
+
+# Ray-cast shapes (station.render.shapes): their depth is ray cast from the light (ShapeCaster), the lookups
+# are the meshes'.
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("rotation", [0.0, 90.0])
+def test_raycast_sphere_shadow_is_the_analytic_ellipse(gl_ctx, sun_basis, rotation) -> None:
+    """The ray-cast unit sphere on its floor y = −1: its ground shadow is the ellipse of area π / l_y
+    centred at (0, −1, 0) − l / l_y (the contact point moved along the light by the centre's height 1)."""
+    from station.render.gl_renderer import GLRenderer
+
+    stage = Stage(backdrop=False, rotation_deg=rotation)
+    ell = lookup_matrix(rotation).T @ sun_basis.lights.directions[0]
+    with GLRenderer(sun_basis, 64, 48, ctx=gl_ctx) as gl:
+        ground, _ = gl.shadow_probe(None, [_diffuse()], stage=stage, size=512, shape="sphere")
+    x, z = _ground_grid(ground.shape[0], stage.ground_radius, (0.0, 0.0))
+    shade = ground[..., 0] < 0.5
+    area = shade.sum() * (2.0 * stage.ground_radius / ground.shape[0]) ** 2
+    assert area == pytest.approx(math.pi / ell[1], rel=0.02)
+    assert x[shade].mean() == pytest.approx(-ell[0] / ell[1], abs=0.01)
+    assert z[shade].mean() == pytest.approx(-ell[2] / ell[1], abs=0.01)
+
+
+def _ground_grid(n: int, radius: float, centre: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """World x, z (n, n) of the texel centres of shadow_probe's ground (row: z, column: x)."""
+    xs = -radius + (np.arange(n) + 0.5) * 2.0 * radius / n
+    x, z = np.meshgrid(xs + centre[0], xs + centre[1])
+    return x, z
+
+
+@pytest.mark.gl
+def test_a_lit_raycast_sphere_has_no_acne_and_is_unchanged(gl_ctx, sun_basis) -> None:
+    """The ray-cast sphere is convex: no point facing the sun is shadowed, its far side is, and the frame's
+    sphere pixels facing the sun (N·l > 0.05) equal those of the frame without shadow maps."""
+    from station.render.gl_renderer import GLRenderer
+    from station.render.shapes import Scene
+
+    ell = sun_basis.lights.directions[0]
+    stage = Stage(backdrop=False)
+    for cam in (
+        Camera((0.0, 1.5, 4.5), (0.0, 0.0, 0.0), fov_deg=30.0),
+        Camera((4.0, 0.2, -2.5), (0.0, 0.0, 0.0), fov_deg=30.0),
+    ):
+        with GLRenderer(sun_basis, 200, 150, ctx=gl_ctx) as gl:
+            _, model = gl.shadow_probe(None, [_diffuse()], camera=cam, stage=stage, shape="sphere")
+            on = gl.render_linear(Scene("sphere", camera=cam, stage=stage), [_diffuse()])
+            gl.shadows = False
+            off = gl.render_linear(Scene("sphere", camera=cam, stage=stage), [_diffuse()])
+        hit = model[..., 0] >= 0.0
+        normal = model[hit][:, 1:]  # the unit sphere: the point is its normal
+        facing = normal @ ell > 0.0
+        assert facing.sum() > 2000
+        assert model[hit][facing, 0].min() > 0.99
+        assert model[hit][normal @ ell < -0.3, 0].max() < 0.01
+        lit = normal @ ell > 0.05
+        rel = np.abs(on[hit][lit] - off[hit][lit]) / off[hit][lit]
+        assert rel.max() < 0.01
+
+
+def _brute_force_shadow(shape: str, ell: np.ndarray, x: np.ndarray, z: np.ndarray, y: float) -> np.ndarray:
+    """Whether the ray from each ground point (x, y, z) towards the light ell meets *shape*: the NumPy
+    renderer's own ray-shape intersection (station.render.shapes.intersect, its origins broadcast: one
+    ray per point)."""
+    from station.render.shapes import Scene, intersect
+
+    p = np.stack([x.ravel(), np.full(x.size, y), z.ravel()], -1)
+    return intersect(Scene(shape), p, np.broadcast_to(ell, p.shape)).mask.reshape(x.shape)
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("rotation", [0.0, 120.0])
+def test_speedshape_ground_shadow_is_one_region_of_the_ray_cast_outline(gl_ctx, sun_basis, rotation) -> None:
+    """The speed shape's ground shadow is one connected region whose outline is the brute-force ray cast's:
+    every ground texel more than 2 texels from the brute-force outline agrees with it (dark where the ray to
+    the sun meets the shape). The sphere proxies' shadow does not pass the same check."""
+    from scipy import ndimage
+
+    from station.render.gl_renderer import GLRenderer
+    from station.render.shapes import GROUNDS, OCCLUDERS
+
+    stage = Stage(backdrop=False, rotation_deg=rotation, ground_radius=3.0)
+    ell = lookup_matrix(rotation).T @ sun_basis.lights.directions[0]
+    gx, gy, gz = GROUNDS["speedshape"]
+    with GLRenderer(sun_basis, 64, 48, ctx=gl_ctx) as gl:
+        ground, _ = gl.shadow_probe(None, [_diffuse()], stage=stage, size=512, shape="speedshape")
+    x, z = _ground_grid(ground.shape[0], stage.ground_radius, (gx, gz))
+    shade = ground[..., 0] < 0.5
+    _, regions = ndimage.label(shade)
+    assert regions == 1
+    truth = _brute_force_shadow("speedshape", ell, x, z, gy)
+    assert truth.sum() > 5000
+    edge = ndimage.binary_dilation(truth, iterations=2) & ~ndimage.binary_erosion(truth, iterations=2)
+    assert not np.any((shade != truth) & ~edge)
+    assert abs(int(shade.sum()) - int(truth.sum())) < 0.02 * truth.sum()
+    # the check can fail: the proxies' shadow (station.render.stage.light_visibility) is not the outline
+    p = np.stack([x.ravel(), np.full(x.size, gy), z.ravel()], -1)
+    proxies = light_visibility(p, OCCLUDERS["speedshape"], ell[None]).reshape(x.shape) < 0.5
+    assert np.any((proxies != truth) & ~edge)
+
+
+@pytest.mark.gl
+def test_raycast_sphere_ground_occlusion_is_the_closed_form(gl_ctx, sun_basis) -> None:
+    """1 − O on the ground under the ray-cast unit sphere (floor y = −1): O equal to the sphere's
+    cosine-weighted occluded fraction (r/d)² cos β (station.render.stage.sphere_occlusion) within 0.03."""
+    from station.render.gl_renderer import GLRenderer
+
+    stage = Stage(backdrop=False)
+    with GLRenderer(sun_basis, 64, 48, ctx=gl_ctx) as gl:
+        ground, _ = gl.shadow_probe(None, [_diffuse()], stage=stage, size=256, shape="sphere")
+    x, z = _ground_grid(ground.shape[0], stage.ground_radius, (0.0, 0.0))
+    occ = 1.0 - ground[..., 2]
+    ref = sphere_occlusion(
+        np.stack([x.ravel(), np.full(x.size, -1.0), z.ravel()], -1), [[0.0, 0.0, 0.0, 1.0]]
+    )
+    assert np.abs(occ - ref.reshape(occ.shape)).max() < 0.03
+    assert occ.max() > 0.8
+
+
+@pytest.mark.gl
+def test_raycast_maps_are_drawn_per_shape_and_light_not_per_orbit_frame(gl_ctx, sun_basis) -> None:
+    from station.render.gl_renderer import GLRenderer
+    from station.render.shapes import Scene
+
+    with GLRenderer(sun_basis, 64, 48, ctx=gl_ctx) as gl:
+        gl.render(Scene("speedshape", stage=Stage()), [_diffuse()])
+        drawn = gl.shadow_redraws
+        assert drawn > 0
+        for yaw in (10.0, 20.0, 30.0):
+            eye = (4.0 * math.sin(math.radians(yaw)), 1.0, 4.0 * math.cos(math.radians(yaw)))
+            gl.render(Scene("speedshape", camera=Camera(eye, (0.0, 0.0, 0.0)), stage=Stage()), [_diffuse()])
+        assert gl.shadow_redraws == drawn
+        gl.render(Scene("speedshape", stage=Stage(rotation_deg=30.0)), [_diffuse()])
+        assert gl.shadow_redraws == drawn + 1
+        gl.render(Scene("panels", misalignment_deg=10.0, stage=Stage(rotation_deg=30.0)), [_diffuse()])
+        assert gl.shadow_redraws == drawn + 2  # a new caster; an open sheet has no occlusion map
+        gl.shadows = False
+        gl.render(Scene("speedshape", stage=Stage(rotation_deg=45.0)), [_diffuse()])
+        assert gl.shadow_redraws == drawn + 2
+        with pytest.raises(RenderInputError, match="mesh"):
+            gl.shadow_probe(None, [_diffuse()], shape="speedshape")
+    with pytest.raises(RenderInputError, match="shape"):
+        gs.ShapeCaster("cube")
+    with pytest.raises(RenderInputError, match="misalignment_deg"):
+        gs.ShapeCaster("panels", 60.0)
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("misalignment", [-30.0, -45.0])
+def test_turned_panel_shadows_the_other_as_the_ray_cast_says(gl_ctx, sun_basis, misalignment) -> None:
+    """Self-shadowing of a ray-cast shape: the right panel, turned towards the camera, shadows the left
+    one's front. A left-panel point is shadowed where its NumPy ray to the sun meets the panels
+    (station.render.shapes.intersect): visibility < 0.05 more than 2 pixels inside that region, > 0.95 more
+    than 2 pixels outside it, and the frame there differs by the sun's Lambertian part w_D (N·l) Φ / π of
+    the flat panel exactly (within 2 %)."""
+    from scipy import ndimage
+
+    from station.render.gl_renderer import GLRenderer
+    from station.render.shapes import Scene, intersect
+
+    stage = Stage(backdrop=False, rotation_deg=20.0)
+    ell = lookup_matrix(20.0).T @ sun_basis.lights.directions[0]
+    cam = Camera((-1.0, 0.5, 3.5), (-0.2, 0.0, 0.0), fov_deg=40.0)
+    paint = _diffuse()
+    with GLRenderer(sun_basis, 200, 150, ctx=gl_ctx) as gl:
+        _, model = gl.shadow_probe(
+            None, [paint], camera=cam, stage=stage, shape="panels", misalignment_deg=misalignment
+        )
+        frame = gl.render_linear(Scene("panels", misalignment, camera=cam, stage=stage), [paint, paint])
+    p = model[..., 1:]
+    left = (model[..., 0] >= 0.0) & (p[..., 0] < -0.02) & (np.abs(p[..., 2]) < 1e-3)  # front at z = 0
+    truth = np.zeros(left.shape, bool)
+    q = p[left]
+    truth[left] = intersect(Scene("panels", misalignment), q + 1e-4 * ell, np.broadcast_to(ell, q.shape)).mask
+    dark = ndimage.binary_erosion(truth, iterations=2) & left
+    lit = ~ndimage.binary_dilation(truth, iterations=2) & left
+    assert dark.sum() > 500 and lit.sum() > 1000
+    assert model[dark, 0].max() < 0.05
+    assert model[lit, 0].min() > 0.95
+    sun_part = paint.map_weights()[0] * ell[2] * sun_basis.lights.flux[0] / math.pi
+    assert frame[lit].mean(axis=0) - frame[dark].mean(axis=0) == pytest.approx(sun_part, rel=0.02)

@@ -377,14 +377,19 @@ class GLRenderView(ViewLogic):
                 self._core = GLRenderer(basis, w, h, ctx=ctx)
                 self._core_key = key
             self._core.set_aa(self.aa if self._still else 1)
+            flakes, mesh = self._flake_layer(), self.model.mesh()
+            # A ray-cast shape without flakes is shown from the cached basis images once they are ready,
+            # whose ground is the NumPy stage's (sphere proxies): the GL frames before them keep the
+            # proxies too, so the ground shadow does not change when the cache takes over.
+            self._core.shadows = mesh is not None or flakes is not None
             self._core.draw(
                 settings.scene(),
                 list(weights),
                 settings.exposure_ev,
                 coat=settings.clear_coat(),
-                flakes=self._flake_layer(),
+                flakes=flakes,
                 target=screen,
-                mesh=self.model.mesh(),
+                mesh=mesh,
             )
             last = self._core.last_flakes
             self.flake_report = None if last is None else last.reason

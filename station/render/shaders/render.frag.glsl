@@ -500,10 +500,16 @@ void main() {
                     acc += (((WIDE_GLOSS_MASK >> i) & 1) != 0 ? s * wg + nl * wdd : nl * wdd) * p;
                 }
             }
-#if MESH && N_SHADOW > 0
+#if N_SHADOW > 0
             // the light's direct part (its exact terms and its share of the diffuse map) times its visibility
+            // at the world point shaded: the mesh's fragment, or the ray-cast shape's hit
             if (nl > 0.0 && has_shadow_map(l)) {
-                float vis = light_shadow(l, v_pos, transpose(u_rot) * n, transpose(u_rot) * u_light_dir[l]);
+#if MESH
+                vec3 p_shadow = v_pos;
+#else
+                vec3 p_shadow = u_eye + t * d;
+#endif
+                float vis = light_shadow(l, p_shadow, transpose(u_rot) * n, transpose(u_rot) * u_light_dir[l]);
                 acc = vis * acc - (1.0 - vis) * nl / PI * (paint == 0 ? u_wd[0] : u_wd[1]);
             }
 #endif
@@ -537,6 +543,16 @@ void main() {
     if (dot(nw, v_pos - u_eye) > 0.0) nw = -nw;
     rgb = shadow_probe(v_pos, nw);
     f_color = vec4(rgb.x, v_pos);  // the strongest light's visibility at world point v_pos
+#elif OUTPUT_LINEAR && SHADOW_PROBE && !NO_SHAPE
+    // a ray-cast shape: the strongest light's visibility at its hit and the hit's world point (-1: a miss)
+    f_color = vec4(-1.0, 0.0, 0.0, 0.0);
+    float t_probe;
+    vec3 n_probe;
+    int paint_probe;
+    if (hit(u_eye, d, t_probe, n_probe, paint_probe)) {
+        vec3 p_probe = u_eye + t_probe * d;
+        f_color = vec4(shadow_probe(p_probe, n_probe).x, p_probe);
+    }
 #elif OUTPUT_LINEAR
     f_color = vec4(rgb, 1.0);
 #else
