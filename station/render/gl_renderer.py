@@ -17,9 +17,9 @@ from station.model.anisotropy import Anisotropy
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render import gl_textures as tx
-from station.render.errors import RenderError, RenderInputError
+from station.render.errors import RenderInputError
 from station.render.flakes import FlakeChoice, flake_lod, flake_mean_cube, flake_uniforms
-from station.render.footprint import footprint_triangles, shape_footprint
+from station.render.footprint import shape_footprint
 from station.render.gl_anisotropy import anisotropy_frame
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
@@ -29,14 +29,14 @@ from station.render.gl_context import (
     gl_available,
     load_shader,
 )
+from station.render.gl_frame_shadows import FrameShadows
+from station.render.gl_passes import FramePasses
 from station.render.gl_programs import (
     binding_order,
     compiled_terms,
-    frame_defines,
     renderer_defines,
     set_uniforms,
 )
-from station.render.gl_shadows import ShadowMaps, ShapeCaster, shadow_defines, shadow_lights
 from station.render.gl_targets import FrameTargets
 from station.render.numpy_renderer import (
     BACKGROUND,
@@ -63,9 +63,6 @@ __all__ = [
     "load_shader",
 ]
 
-
-#: Vertices the footprint buffer holds (the shape's polygon fan and the sectors around it).
-FOOTPRINT_VERTICES = 2048
 
 #: Texels per side of the baked ground map (the disc's square; 6-unit radius: 1.2 cm a texel, a 1°
 #: penumbra at 2 units from its occluder spans ~6 texels).
@@ -116,7 +113,6 @@ class GLRenderer:
         horizon: str = "lut",
         aa: int = 1,
     ) -> None:
-
         check_size(width, height)
         if diffuse not in ("cube", "sh"):
             raise RenderInputError("diffuse", "cube | sh", diffuse)
@@ -128,7 +124,6 @@ class GLRenderer:
         self.combined = combined
         self._combined: tuple[bytes, list] | None = None
         self._combine: tuple | None = None  # (framebuffer, program, vertex array, [gloss, dd]) of the atlas
-        self._ground: tuple | None = None  # (key, texture, framebuffer) of the baked ground map
         self._half_float = half_float
         self._atlas_face = max(c.shape[1] for c in basis.cubes)
         self._horizon = horizon
@@ -150,14 +145,11 @@ class GLRenderer:
             bound_exponents=np.asarray(basis.exponents)[self._order],
         )
         self._sh = sh_diffuse_matrix(basis.sh)
-        self._programs: dict[tuple, tuple] = {}  # (_program's arguments) → (program, vertex array)
+        self._passes = FramePasses(self.ctx, self._defines)  # programs, footprint buffer, pass drawing
         self._mesh = tx.MeshArrays(self.ctx)
-        #: Draw a shape in two passes over its screen footprint (:mod:`station.render.footprint`): the
-        #: paint program over the shape's polygon, the background program around it. False: one
-        #: full-screen pass of the paint program (the same frame, every pixel paying for the paint).
+        #: Draw a shape over its screen footprint (:mod:`station.render.gl_passes`). False: one full-screen
+        #: pass of the paint program (the same frame, every pixel paying for the paint).
         self.footprint = True
-        self._footprint_buf = self.ctx.buffer(reserve=FOOTPRINT_VERTICES * 8)
-        self._footprint_counts = (0, 0, 0)  # vertices inside, in the ring, outside (in buffer order)
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
         #: Targets at the shading size and the anti-aliasing resolve (``aa`` samples per pixel).
@@ -171,12 +163,10 @@ class GLRenderer:
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
         self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
-        #: Shadow maps of the strongest extracted lights and the ground's ambient occlusion under a mesh or a
-        #: ray-cast shape (:mod:`station.render.gl_shadows`); False: the sphere proxies' contact and sun
-        #: shadows only.
+        #: Shadow maps of the strongest extracted lights and the ground's occlusion under a mesh or a shape
+        #: (:mod:`station.render.gl_frame_shadows`); False: the sphere proxies' shadows only.
         self.shadows = True
-        self._shadow_slots = shadow_lights(self._lights)
-        self._shadow_maps: ShadowMaps | None = None
+        self._frame_shadows = FrameShadows(self.ctx, self._lights)
 
     def set_aa(self, aa: int) -> None:
         """Switch anti-aliasing to *aa* samples per pixel (:data:`station.render.gl_targets.AA_SAMPLES`):
@@ -187,40 +177,6 @@ class GLRenderer:
         targets = FrameTargets(self.ctx, self.width, self.height, aa)
         self.targets.release()
         self.targets = targets
-
-    def _program(
-        self,
-        shape: str,
-        linear: bool,
-        kind: str = "shape",
-        features: tuple[int, ...] = (0, 0, 0),
-        terms: tuple[int, int, int] = (-1, 1, 0),
-        n_occ: int = 0,
-        curve: int = 0,
-        shadow: tuple = (),
-    ):
-        """Program (and full-screen vertex array) of a kind, built once: the arguments are those of
-        :func:`station.render.gl_programs.frame_defines` (*terms*: :meth:`_terms`; *n_occ* is compiled
-        in with the light count so the stage's loops unroll); *shadow*: (shadowed light indices, ambient
-        occlusion on, probe) of :meth:`_shadow_key`, () for none."""
-        key = (shape, linear, kind, features, terms, n_occ, curve, shadow)
-        if key not in self._programs:
-            defines = {**self._defines, **frame_defines(shape, linear, kind, features, terms, n_occ, curve)}
-            if shadow:
-                defines.update(shadow_defines(shadow[0], shadow[1]), SHADOW_PROBE=int(shadow[2]))
-            screen = kind in ("footprint", "backdrop", "inside")
-            vert = {"mesh": "mesh.vert.glsl"}.get(
-                kind, "screen.vert.glsl" if screen else "fullscreen.vert.glsl"
-            )
-            prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
-            if kind == "mesh":
-                vao = None
-            elif screen:
-                vao = self.ctx.vertex_array(prog, [(self._footprint_buf, "2f", "in_ndc")])
-            else:
-                vao = self.ctx.vertex_array(prog, [])
-            self._programs[key] = (prog, vao)
-        return self._programs[key]
 
     def _flake_mean(self, flakes: FlakeLayer):
         """The flakes' mean map C_E for this layer's spread (:func:`station.render.flakes.flake_mean_cube`),
@@ -253,11 +209,6 @@ class GLRenderer:
             return (-1, 1, fall_off)
         mask, narrow_dd = compiled_terms([self._bound_weights(w) for w in pair], self._wide[self._order])
         return (mask, narrow_dd, fall_off)
-
-    def _lights_taken_out(self, lobe: int) -> bool:
-        """Whether the extracted lights were taken out of basis lobe *lobe*'s map (so a lookup of it adds
-        them back exactly)."""
-        return self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[lobe])
 
     def _bound_weights(self, w):
         """map_weights() of *w* with the lobes in binding order."""
@@ -298,9 +249,9 @@ class GLRenderer:
             self.last_flakes.on,
             probe,
         )
-        shadow = self._shadow_key(scene, mesh, probe)
+        shadow = self._frame_shadows.key(scene, mesh, self.shadows, probe)
         if shadow:
-            self._update_shadows(scene, mesh)
+            self._frame_shadows.update(scene, mesh)
         own = target is None or self.targets.side > 1 or mesh is not None
         fbo = self.targets.draw_target(linear, depth=mesh is not None) if own else target
         fbo.use()
@@ -310,23 +261,14 @@ class GLRenderer:
         if not linear:
             uniforms["u_exposure"] = float(2.0**exposure_ev)
         if shadow:
-            uniforms.update(self._bind_shadows(scene, mesh, m))
+            uniforms.update(self._frame_shadows.bind(scene, mesh, m))
         if scene.stage is not None and scene.stage.ground:
             self._ground_map(uniforms, mw, occ, n_occ, m, shadow).use(m + 2)
             fbo.use()
             uniforms["u_ground_map"] = m + 2
         for prog, _ in passes:
             self._set_uniforms(prog, uniforms, mw, occ, m)
-        if mesh is not None:
-            self._draw_mesh(fbo, passes, mesh, probe)
-        elif len(passes) == 1:
-            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
-        else:  # the background around the shape's polygon, the paint over it (inside: no background)
-            inside, ring, outside = self._footprint_counts
-            passes[1][1].render(mode=self.ctx.TRIANGLES, vertices=outside, first=inside + ring)
-            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=ring, first=inside)
-            if inside:
-                passes[2][1].render(mode=self.ctx.TRIANGLES, vertices=inside)
+        self._passes.draw(fbo, passes, mesh, self._mesh, probe)
         if fbo is target or (self.targets.side == 1 and target is None):
             return fbo
         if self.targets.side == 1:  # a mesh drawn with its depth buffer, then blitted into *target*
@@ -334,21 +276,6 @@ class GLRenderer:
             return target
         out = target if target is not None else self.targets.output_target(linear)
         return self.targets.resolve(fbo, out)
-
-    def _draw_mesh(self, fbo, passes: list, mesh, probe: bool = False) -> None:
-        """The stage pass (colour only), then *mesh* depth-tested, into *fbo* (*probe*: no stage, the
-        background −1)."""
-        fbo.clear(depth=1.0)
-        self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
-        if probe:
-            fbo.clear(-1.0, -1.0, -1.0, 1.0, depth=1.0)
-        else:
-            passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
-        self.ctx.enable(self.ctx.DEPTH_TEST)
-        try:
-            self._mesh.vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
-        finally:
-            self.ctx.disable(self.ctx.DEPTH_TEST)
 
     def _frame_programs(
         self,
@@ -369,11 +296,15 @@ class GLRenderer:
         stage_bits = 0  # bit 0: a stage, 1: its backdrop, 2: its ground, 3: the backdrop lobe's lights
         if stage is not None:
             backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg)
+            # bit 3: the lights were taken out of the backdrop lobe's map (its lookup adds them back exactly)
+            lights_out = (
+                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[backdrop])
+            )
             stage_bits = (
                 1
                 | int(stage.backdrop) << 1
                 | int(stage.ground) << 2
-                | int(stage.backdrop and self._lights_taken_out(backdrop)) << 3
+                | int(stage.backdrop and lights_out) << 3
             )
         feats: tuple[int, ...] = (int(coat is not None), stage_bits, int(flakes_on))
         aniso_uniforms: dict = {}
@@ -398,49 +329,19 @@ class GLRenderer:
         else:
             occluders = mesh.occluders().astype(np.float32)
         n_occ = len(occluders) if stage is not None else 0
-        foot = None
-        shadow = self._shadow_key(scene, mesh, probe)
-        if mesh is None and self.footprint and not probe:
-            foot = shape_footprint(
-                scene.shape, scene.view_camera, *self.targets.shade_size, scene.misalignment_deg
-            )
-        if mesh is None and foot is not None:
-            self._upload_footprint(foot)
-            passes = [
-                self._program(scene.shape, linear, "footprint", feats, terms, n_occ, curve_i, shadow),
-                self._program("sphere", linear, "backdrop", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
-            ]
-            if foot.inner is not None:
-                passes.append(
-                    self._program(scene.shape, linear, "inside", feats, terms, n_occ, curve_i, shadow)
-                )
-        elif mesh is None:
-            passes = [self._program(scene.shape, linear, "shape", feats, terms, n_occ, curve_i, shadow)]
+        shadow = self._frame_shadows.key(scene, mesh, self.shadows, probe)
+        if mesh is not None:
+            passes = self._passes.mesh_passes(linear, feats, terms, n_occ, curve_i, shadow)
         else:
-            passes = [
-                self._program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve_i),
-                self._program(
-                    "sphere",
-                    linear,
-                    "mesh",
-                    feats,
-                    terms,
-                    n_occ,
-                    curve_i,
-                    shadow,
-                ),
-            ]
+            foot = None
+            if self.footprint and not probe:
+                foot = shape_footprint(
+                    scene.shape, scene.view_camera, *self.targets.shade_size, scene.misalignment_deg
+                )
+            passes = self._passes.shape_passes(
+                scene.shape, foot, linear, feats, terms, n_occ, curve_i, shadow
+            )
         return pair, passes, aniso_uniforms, occluders, n_occ
-
-    def _upload_footprint(self, foot) -> None:
-        """Write the triangles of the shape's footprint *foot* (inside, ring, outside; NDC) into the
-        footprint buffer (:func:`station.render.footprint.footprint_triangles`)."""
-        parts = footprint_triangles(foot)
-        data = np.concatenate(parts)
-        if len(data) > FOOTPRINT_VERTICES:
-            raise RenderInputError("footprint", f"<= {FOOTPRINT_VERTICES} vertices", len(data))
-        self._footprint_buf.write(data.tobytes())
-        self._footprint_counts = (len(parts[0]), len(parts[1]), len(parts[2]))
 
     def _frame_uniforms(
         self, scene, pair, fbo, coat, mesh, flakes, aniso_uniforms: dict
@@ -494,60 +395,11 @@ class GLRenderer:
         uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
         return uniforms, mw, m
 
-    @staticmethod
-    def _caster(scene, mesh):
-        """What casts the frame's shadows: *mesh*, else the scene's ray-cast shape (a ShapeCaster)."""
-        return mesh if mesh is not None else ShapeCaster(scene.shape, scene.misalignment_deg)
-
-    @staticmethod
-    def _floor(scene, mesh) -> tuple[float, tuple[float, float]]:
-        """(ground height y, ground centre (x, z)) under *mesh* or the scene's shape (shapes.GROUNDS)."""
-        if mesh is not None:
-            return float(mesh.floor_y), (0.0, 0.0)
-        gx, gy, gz = GROUNDS[scene.shape]
-        return float(gy), (float(gx), float(gz))
-
-    def _shadow_key(self, scene, mesh, probe: bool = False) -> tuple:
-        """(shadowed light indices, ambient occlusion on, probe) of a frame: a mesh or a ray-cast shape on a
-        stage with :attr:`shadows` on and lights taken out of the environment; () otherwise. The ambient
-        occlusion needs a ground and a closed caster (a mesh, or ShapeCaster.closed)."""
-        if scene.stage is None or not self.shadows or not self._shadow_slots:
-            return ()
-        closed = mesh is not None or self._caster(scene, mesh).closed
-        return (self._shadow_slots, bool(scene.stage.ground) and closed, bool(probe))
-
     @property
     def shadow_redraws(self) -> int:
         """How many times the shadow or ambient-occlusion maps were drawn (they are redrawn only when the
         mesh, the environment's turn or the ground change, never for a camera move)."""
-        return 0 if self._shadow_maps is None else self._shadow_maps.version
-
-    def _update_shadows(self, scene, mesh) -> None:
-        """Draw the shadow maps and the ground's occlusion map of *mesh* (or the scene's shape) when they
-        changed."""
-        if self._shadow_maps is None:
-            self._shadow_maps = ShadowMaps(self.ctx)
-        caster = self._caster(scene, mesh)
-        self._shadow_maps.update(
-            caster, self._lights, self._shadow_slots, lookup_matrix(scene.stage.rotation_deg)
-        )
-        if self._shadow_key(scene, mesh)[1]:
-            floor_y, centre = self._floor(scene, mesh)
-            self._shadow_maps.ambient_occlusion(caster, floor_y, centre, scene.stage.ground_radius)
-
-    def _bind_shadows(self, scene, mesh, m: int) -> dict:
-        """Bind the shadow maps (texture units m + 10 on) and the ground's occlusion map; their uniforms."""
-        maps = self._shadow_maps
-        if maps is None:
-            raise RenderError("shadow maps bound before they were drawn")
-        n = len(self._shadow_slots)
-        uniforms = maps.bind(m + 10, n)
-        if self._shadow_key(scene, mesh)[1]:
-            floor_y, centre = self._floor(scene, mesh)
-            ao = maps.ambient_occlusion(self._caster(scene, mesh), floor_y, centre, scene.stage.ground_radius)
-            ao.use(m + 10 + 3 * n)
-            uniforms["u_ao"] = m + 10 + 3 * n
-        return uniforms
+        return max(self._frame_shadows.version, 0)
 
     def _ground_map(self, uniforms: dict, mw: list, occ: np.ndarray, n_occ: int, m: int, shadow: tuple = ()):
         """The ground's radiance per unit albedo over the disc's square (GROUND_MAP² texels, linear), baked
@@ -561,22 +413,17 @@ class GLRenderer:
             uniforms["u_ground_radius"],
             uniforms["u_rot"],
             shadow[:2],
-            self._shadow_maps.version if shadow and self._shadow_maps is not None else -1,
+            self._frame_shadows.version if shadow else -1,
         )
-        if self._ground is not None and self._ground[0] == key:
-            return self._ground[1]
-        if self._ground is None:
-            tex = tx.colour_texture(self.ctx, (GROUND_MAP, GROUND_MAP), self._half_float)
-            target = self.ctx.framebuffer(color_attachments=[tex])
-        else:
-            tex, target = self._ground[1], self._ground[2]
-        prog, vao = self._program(
+        tex, target, stale = self._passes.ground_target(key, self._half_float, GROUND_MAP)
+        if not stale:
+            return tex
+        prog, vao = self._passes.program(
             "sphere", True, "ground", (0, 1, 0), n_occ=n_occ, shadow=(*shadow[:2], False) if shadow else ()
         )
         self._set_uniforms(prog, {**uniforms, "u_size": (float(GROUND_MAP),) * 2}, mw, occ, m)
         target.use()
         vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-        self._ground = (key, tex, target)
         return tex
 
     def _set_uniforms(self, prog, uniforms: dict, mw: list, occ: np.ndarray, m: int) -> None:
@@ -723,67 +570,26 @@ class GLRenderer:
         shape: str = "sphere",
         misalignment_deg: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Diagnostics of the shadows of *mesh*, or with *mesh* None of the ray-cast *shape* (of
-        ``station.render.shapes``; *misalignment_deg* the panels'), :mod:`station.render.gl_shadows`, by the
-        frame's own shader functions: (ground (size, size, 3) float32 over the ground disc's square, row 0
-        at z = centre − radius, column 0 at x = centre − radius: visibility of the strongest and the second
-        light, 1 − O; model (H, W, 4) float32 from *camera* (default MESH_CAMERA, or the shape's): the
-        strongest light's visibility on the model and the world point x, y, z; visibility −1 where the
-        model is not; at ``aa`` 1, as a supersampled frame averages neighbouring pixels' values). Lights
-        without a map read 1 (and 1 − O reads 1 without an occlusion map: an open shape); RenderInputError
-        naming ``mesh`` when the frame has no shadow maps (no lights, no stage, or :attr:`shadows` off)."""
-        from station.render.meshes import MESH_CAMERA
-        from station.render.stage import Stage
+        """Diagnostics of the frame's shadows: :func:`station.render.gl_frame_shadows.probe_shadows`."""
+        from station.render.gl_frame_shadows import probe_shadows
 
-        if mesh is None:
-            scene = Scene(shape, misalignment_deg, camera=camera, stage=stage or Stage())
-        else:
-            scene = Scene("sphere", camera=camera or MESH_CAMERA, stage=stage or Stage())
-        if not self._shadow_key(scene, mesh):
-            name = shape if mesh is None else mesh.name
-            raise RenderInputError("mesh", "a model on a stage lit by extracted lights, shadows on", name)
-        fbo = self._draw(scene, paints, True, 0.0, "clip", None, mesh=mesh, probe=True)
-        data = np.frombuffer(fbo.read(components=4, dtype="f4", alignment=1), np.float32)
-        model = data.reshape(self.height, self.width, 4)[::-1].copy()
-        tex = tx.colour_texture(self.ctx, (size, size), False)
-        target = self.ctx.framebuffer(color_attachments=[tex])
-        try:
-            shadow = (*self._shadow_key(scene, mesh)[:2], True)
-            prog, vao = self._program("sphere", True, "ground", (0, 1, 0), shadow=shadow)
-            pair = check_paints(self.basis, paints)
-            uniforms, mw, m = self._frame_uniforms(scene, pair, target, None, mesh, None, {})
-            uniforms.update(self._bind_shadows(scene, mesh, m))
-            self._set_uniforms(
-                prog, {**uniforms, "u_size": (float(size),) * 2}, mw, np.zeros((8, 4), np.float32), m
-            )
-            target.use()
-            vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-            ground = np.frombuffer(target.read(components=3, dtype="f4", alignment=1), np.float32)
-        finally:
-            target.release()
-            tex.release()
-        return ground.reshape(size, size, 3).copy(), model
+        return probe_shadows(self, mesh, paints, camera, stage, size, shape, misalignment_deg)
 
     def release(self) -> None:
         """Free textures, programs, targets (and the context if this object created it)."""
         self._mesh.release()
         self.targets.release()
-        self._footprint_buf.release()
-        objs = [obj for pv in self._programs.values() for obj in reversed(pv) if obj is not None]
-        objs += [*self._lobes, self._diffuse_tex, self._horizon_tex, *self._flake_means.values()]
+        self._passes.release()
+        objs = [*self._lobes, self._diffuse_tex, self._horizon_tex, *self._flake_means.values()]
         objs += [tex for tex, *_ in self._aniso.values()]
         if self._combine is not None:
             objs += [*self._combine[:3], *self._combine[3]]
-        if self._ground is not None:
-            objs += [self._ground[2], self._ground[1]]
-        if self._shadow_maps is not None:
-            self._shadow_maps.release()
-            self._shadow_maps = None
+        self._frame_shadows.release()
         for obj in objs:
             obj.release()
-        for cache in (self._flake_means, self._aniso, self._programs):
+        for cache in (self._flake_means, self._aniso):
             cache.clear()
-        self._combine = self._ground = self._combined = None
+        self._combine = self._combined = None
         if self._own_ctx:
             self.ctx.release()
 
