@@ -80,9 +80,21 @@ def _recipe(path: Path) -> dict[str, Any]:
         "binder_g": batch.get("binder_g"),
         "first_batch_g": float(total),
         "gloss_gu": gloss if isinstance(gloss, int | float) and not isinstance(gloss, bool) else None,
-        "scale_resolution_g": data.get("scale_resolution_g")
-        or next(iter(r.get("scale_resolution_g") for r in data.get("recipes") or [{}]), None),
+        "scale_resolution_g": _resolution(data),
     }
+
+
+def _resolution(data: dict[str, Any]) -> float | None:
+    """The scale resolution (g) the RECIPE was weighed at: its own field (``station tint``) or its first
+    recipe's (``station formulate``); None when it names none."""
+    recipes = data.get("recipes")
+    first = recipes[0] if isinstance(recipes, list) and recipes and isinstance(recipes[0], dict) else {}
+    value = data.get("scale_resolution_g", first.get("scale_resolution_g"))
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputError("recipe.scale_resolution_g", "the scale's resolution in g (a number)", value)
+    return float(value)
 
 
 def _reading(args: argparse.Namespace) -> Any:
@@ -148,7 +160,11 @@ def cmd_tint(args: argparse.Namespace) -> dict[str, Any]:
         raise InputError("recipe_file", f"an existing recipe file ({RECIPE_FORMAT})", str(args.recipe))
     rec = _recipe(Path(args.recipe))
     lab = _measured_lab(_reading(args), rec["angles"])
-    resolution = args.scale_resolution or rec["scale_resolution_g"] or DEFAULT_SCALE_RESOLUTION_G
+    resolution = next(
+        r
+        for r in (args.scale_resolution, rec["scale_resolution_g"], DEFAULT_SCALE_RESOLUTION_G)
+        if r is not None
+    )
     try:
         options = formulation_options(
             FormulationOptions(line=rec["line"], scale_resolution_g=resolution, batch_g=rec["first_batch_g"])
@@ -210,7 +226,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "toward its design, from the panel sprayed from it and measured; or the advice to remake "
         "with the new recipe when additions cannot reach it. Nothing is stored.",
     )
-    p.add_argument("recipe", type=Path, help=f"the batch in the can: {RECIPE_FORMAT}")
+    p.add_argument("recipe", type=Path, metavar="RECIPE", help=f"the batch in the can: {RECIPE_FORMAT}")
     p.add_argument(
         "--measured",
         type=Path,
