@@ -208,7 +208,13 @@ def cmd_tint(args: argparse.Namespace) -> dict[str, Any]:
         adds = ", ".join(f"{n} {g:g} g" for n, g in sorted(out["additions_g"].items()))
         out["summary"] = (
             f"measured mean ΔE00 {fix.measured_mean_de:.2f}; "
-            + (f"remake: {fix.tinting.message}" if fix.tinting.remake else f"add {adds or 'nothing'}")
+            + (
+                f"remake: {fix.tinting.message}"
+                if fix.tinting.remake
+                else f"add {adds}"
+                if adds
+                else fix.tinting.message
+            )
             + (f", binder {fix.tinting.binder_g:g} g" if fix.tinting.binder_g > 0 else "")
             + f"; predicted mean ΔE00 after {fix.predicted_mean_de:.2f}"
         )
