@@ -111,6 +111,7 @@ def test_the_chemist_weighs_sprays_measures_and_tints(lab: dict[str, Any]) -> No
     out = json.loads(station(work, "formulate", "terracotta.json", "--json").stdout)
     (work / "recipe.json").write_text(json.dumps(out), encoding="utf-8")
     assert out["formulable"] and out["line"] == "solid" and out["library"].startswith("demo")
+    assert out["matches"] and all(m["code"].startswith("SYN-") for m in out["matches"])  # demo paints
     design = np.array(out["design_lab"])  # the design file at 15/45/110°
     assert np.allclose(design, DESIGN_LAB, atol=0.02)  # as the stylist typed it
     batch = out["batch"]
