@@ -25,6 +25,9 @@ colorant set not sprayed yet: of the toner line's recipes for the design itself 
 wider search, :data:`OTHER_SET_CANDIDATES` starts), the one sharing the fewest colorants with those
 already sprayed (then the best ranked), and corrects that one from its own spray-out.
 
+:func:`correct_batch` is one such correction on its own, for a batch sprayed and measured outside the
+loop (``station tint``).
+
 Each step is a :class:`LoopStep` in a :class:`FormulationJob` (plain dataclasses: the database layer
 stores them). Status: ``converged`` (mean measured ΔE00 ≤ tolerance), ``not_formulable`` (the model
 cannot reach the design, nothing sprayed), or ``not_converged`` after ``max_corrections``. The job's
@@ -51,6 +54,7 @@ from station.formulate.formulation import (
     formulate_with,
 )
 from station.formulate.library import STANDARD_ANGLES
+from station.formulate.lines import toner_line
 from station.formulate.selection import RecipeOption
 from station.formulate.snap import validate_design_lab
 from station.formulate.tinting import tint
@@ -398,6 +402,150 @@ def _correct(
         )
         return _fresh(remade, batch_g), note
     return tinted, t.tinting
+
+
+@dataclass(frozen=True)
+class BatchCorrection:
+    """One correction of a sprayed and measured batch (:func:`correct_batch`).
+
+    ``target_lab`` the corrected target T = design − (measured − predicted), (A, 3); ``measured_de`` the
+    measured panel's CIEDE2000 to the design per angle; ``tinting`` the additions (g) to the batch in the
+    can, or with ``tinting.remake`` the notice that a fresh batch of ``recipe`` is needed; ``recipe`` the
+    mass fractions after the correction; ``masses_g`` (colorants) and ``binder_g`` the batch after it (g);
+    ``predicted_lab`` the colorant model's prediction of ``recipe`` and ``predicted_mean_de`` its mean
+    CIEDE2000 to ``target_lab``: the mean ΔE00 to the design the next panel is predicted to read, since the
+    measured offset is carried over to it.
+    """
+
+    angles_deg: tuple[float, ...]
+    target_lab: tuple[tuple[float, float, float], ...]
+    measured_de: tuple[float, ...]
+    measured_mean_de: float
+    tinting: Tinting
+    recipe: dict[str, float]
+    masses_g: dict[str, float]
+    binder_g: float
+    predicted_lab: tuple[tuple[float, float, float], ...]
+    predicted_mean_de: float
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-able form (``tinting`` as :meth:`Tinting.to_dict`)."""
+        return {
+            "angles_deg": list(self.angles_deg),
+            "target_lab": [list(r) for r in self.target_lab],
+            "measured_de": list(self.measured_de),
+            "measured_mean_de": self.measured_mean_de,
+            "tinting": self.tinting.to_dict(),
+            "recipe": dict(self.recipe),
+            "masses_g": dict(self.masses_g),
+            "binder_g": self.binder_g,
+            "predicted_lab": [list(r) for r in self.predicted_lab],
+            "predicted_mean_de": self.predicted_mean_de,
+        }
+
+
+def _batch_in_can(masses_g: dict[str, float], binder_g: float, db: ColorantDatabase) -> NDArray[np.float64]:
+    """The can's grams per colorant in database order, each checked (field ``batch.colorants_g.NAME``,
+    ``batch.binder_g``)."""
+    m = np.zeros(len(db.names))
+    for name, grams in masses_g.items():
+        if name not in db.names:
+            raise FormulateInputError(f"batch.colorants_g.{name}", f"a colorant of {db.names}", name)
+        if (
+            isinstance(grams, bool)
+            or not isinstance(grams, int | float)
+            or not np.isfinite(grams)
+            or grams < 0
+        ):
+            raise FormulateInputError(f"batch.colorants_g.{name}", "a finite mass >= 0 g", grams)
+        m[db.names.index(name)] = float(grams)
+    if isinstance(binder_g, bool) or not isinstance(binder_g, int | float) or not np.isfinite(binder_g):
+        raise FormulateInputError("batch.binder_g", "a finite mass > 0 g", binder_g)
+    if binder_g <= 0 or not np.any(m > 0):
+        raise FormulateInputError("batch", "colorants and binder with masses > 0 g", {**masses_g})
+    return m
+
+
+def correct_batch(
+    design_lab: ArrayLike,
+    measured_lab: ArrayLike,
+    masses_g: dict[str, float],
+    binder_g: float,
+    angles_deg: tuple[float, ...] = STANDARD_ANGLES,
+    tolerance: float = DEFAULT_TOLERANCE,
+    db: ColorantDatabase | None = None,
+    options: FormulationOptions | None = None,
+    gloss_gu: float | None = None,
+) -> BatchCorrection:
+    """Correct a sprayed batch from its measured panel, as one step of :func:`closed_loop` does.
+
+    Parameters
+    ----------
+    design_lab, measured_lab
+        Design and measured panel, Lab per angle, shape (A, 3) at *angles_deg* (degrees, aspecular).
+    masses_g, binder_g
+        The batch in the can: grams per colorant (matting agent included) and of binder.
+    tolerance
+        Mean ΔE00 the correction aims within: a panel within it gets no additions; a remake is advised
+        only when additions cannot reach it and a new recipe can, or does better. Neither additions
+        nor a remake is given when not predicted to improve the panel.
+    options
+        The chemist's limits: ``line`` (every colorant of the batch must belong to it), the scale's
+        ``scale_resolution_g`` (additions rounded to it) and ``batch_g`` (the first batch: tinting
+        may grow it to :data:`~station.formulate.batch.MAX_GROWTH` times).
+
+    Raises
+    ------
+    FormulateInputError
+        Naming the field: ``design_lab``/``measured_lab`` (shape, range), ``batch.*`` (masses),
+        ``recipe.NAME`` (a colorant outside the options' toner line).
+    """
+    db = db or default_database()
+    angles = tuple(float(a) for a in angles_deg)
+    design = validate_design_lab(design_lab, len(angles), "design_lab")
+    measured = validate_design_lab(measured_lab, len(angles), "measured_lab")
+    opts = options or FormulationOptions()
+    m = _batch_in_can(masses_g, binder_g, db)
+    if opts.line is not None:
+        allowed = toner_line(opts.line).mask(db)
+        for i in np.flatnonzero(m > 0):
+            if not allowed[i] and i != db.matting_index:
+                raise FormulateInputError(
+                    f"recipe.{db.names[i]}", f"a colorant of the {opts.line} toner line", db.names[i]
+                )
+    c0 = m / float(m.sum() + binder_g)
+    predicted = predict_lab(c0, angles, db)
+    target = np.clip(design - (measured - predicted), LAB_LO, LAB_HI)
+    de = cie2000(design, measured)
+    now = float(cie2000(target, predicted).mean())  # what the next panel reads with nothing added
+    batch = _Batch(m, float(binder_g), None, c0, now, opts.line)
+    total = float(m.sum() + binder_g)
+    if de.mean() <= tolerance:
+        after = batch
+        tinting = Tinting({}, 0.0, total, False, f"within the tolerance {tolerance:g}: nothing to add")
+    else:
+        after, tinting = _correct(batch, target, angles, float(tolerance), db, opts, gloss_gu)
+        if after.predicted_mean_de >= now:
+            after = batch
+            tinting = Tinting(
+                {},
+                0.0,
+                total,
+                False,
+                f"neither additions nor a remake are predicted to improve the panel (ΔE00 {now:.2f})",
+            )
+    return BatchCorrection(
+        angles_deg=angles,
+        target_lab=_tup(target),
+        measured_de=tuple(float(v) for v in de),
+        measured_mean_de=float(de.mean()),
+        tinting=tinting,
+        recipe=db.recipe(after.concentrations, 1e-9),
+        masses_g={n: float(g) for n, g in zip(db.names, after.masses, strict=True) if g > 0},
+        binder_g=float(after.binder),
+        predicted_lab=_tup(predict_lab(after.concentrations, angles, db)),
+        predicted_mean_de=float(after.predicted_mean_de),
+    )
 
 
 def _angle_warnings(steps: list[LoopStep], angles: tuple[float, ...], tolerance: float) -> tuple[str, ...]:

@@ -4,7 +4,10 @@ Nothing can be taken out of a can. With the batch's masses m_i (g, colorants of 
 matting agent) and binder b (g), total M, a correction adds a_i ≥ 0 g of the recipe's own colorants
 and a_b ≥ 0 g of binder; the matting agent is topped up to keep its fraction (the gloss) unchanged:
 
-    M′ = (Σ_{i≠mat} (m_i + a_i) + b + a_b) / (1 − c_mat),   c′_i = (m_i + a_i) / M′.
+    M′ = (Σ_{i≠mat} (m_i + a_i) + b + a_b) / (1 − c_mat),   c′_i = (m_i + a_i) / M′,
+
+the matting top-up then rounded to the scale like every other addition (the fractions predicted are
+those of the batch as weighed).
 
 The additions minimise the weighted-Lab difference (as :mod:`station.formulate.solver`) between the
 colorant model's prediction of c′ and the corrected target T = design − (measured − predicted) (the
@@ -135,6 +138,19 @@ def _take_back(
     return grams.size - 1 if over_can and grams[-1] > 0 else None
 
 
+def _weighed(
+    model: _TintModel, grams: NDArray[np.float64], resolution_g: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(masses after, fractions after) of the additions *grams* (g, colorants then binder) as weighed:
+    the matting agent's top-up rounded to the scale like every other addition (the prediction is of
+    the batch the chemist actually weighs)."""
+    m, _ = model.after(grams / model.total)
+    mat = model.mat
+    top_up = max(float(np.round((m[mat] - model.m[mat]) / resolution_g)), 0.0) * resolution_g
+    m[mat] = model.m[mat] + top_up
+    return m, m / float(m.sum() + model.b + grams[-1])
+
+
 def tint(
     masses_g: NDArray[np.float64],
     binder_g: float,
@@ -162,7 +178,7 @@ def tint(
     )
     grams = np.round(res.x * model.total / resolution_g) * resolution_g
     while True:  # rounding up may cross a bound: take back one step of a colorant addition
-        m, c = model.after(grams / model.total)
+        m, c = _weighed(model, grams, resolution_g)
         take = _take_back(grams, model, m, c, limit)
         if take is None:
             break
@@ -171,7 +187,7 @@ def tint(
     additions = {db.names[i]: float(f"{g:.6g}") for i, g in zip(model.free, grams[:-1], strict=True) if g > 0}
     mat_add = float(m[model.mat] - model.m[model.mat])
     if mat_add > 0:
-        additions[db.names[model.mat]] = float(f"{np.round(mat_add / resolution_g) * resolution_g:.6g}")
+        additions[db.names[model.mat]] = float(f"{mat_add:.6g}")
     new_total = float(m.sum() + model.b + grams[-1])
     tinting = Tinting(
         additions,

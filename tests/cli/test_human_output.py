@@ -87,6 +87,7 @@ RUNS: dict[str, list[tuple[str, ...]]] = {
     "render": [("--design", "silver.json", "--out", "r2.png")],
     "reproduce": [("--figure", "4.4")],
     "sequence": [("silver.json", "red.json", "--steps", "4")],
+    "tint": [("red-recipe.json", "--measured", "smp.json")],
     "db": [("current", "--database", DB), ("verify", "--database", DB)],
     "users": [("list", "--database", DB), ("tokens", "admin", "--database", DB)],
 }
@@ -118,8 +119,8 @@ def test_every_subcommand_is_covered() -> None:
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A user folder with three designs, two scans of them (JSON and CxF), a render, a library file and a
-    database holding both scans and a scan of a third design under job J1, part bumper (the first its
+    """A user folder with three designs, two scans of them (JSON and CxF), a render, a library file, the
+    red design's recipe (``formulate --json``) and a database holding both scans and a scan of a third design under job J1, part bumper (the first its
     standard, so the part has the two judged samples ``qc spc`` charts) and a user — all written by
     ``station`` itself."""
     cwd = tmp_path_factory.mktemp("user")
@@ -148,6 +149,7 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
         (("users", "add", "admin", "--role", "admin", "--database", DB), None),
         (("render", "--design", "silver.json", "--out", "r.png", "--size", "160"), None),
         (("library", "export", "demo", "--out", "lib.csv"), None),
+        (("formulate", "red.json", "--json"), "red-recipe.json"),
     ]
     for argv, out in steps:
         done = run_station(cwd, *argv, env={"CACAD_DATA_DIR": str(cwd / "var")})

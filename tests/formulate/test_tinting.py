@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 
 from station.formulate.batch import MAX_GROWTH
-from station.formulate.closed_loop import closed_loop
+from station.formulate.closed_loop import closed_loop, correct_batch
 from station.formulate.colorants import default_database, predict_lab
 from station.formulate.de_kernels import cie2000
+from station.formulate.errors import FormulateInputError
+from station.formulate.formulation import FormulationOptions
 from station.formulate.lines import toner_line
 from station.formulate.tinting import tint
 from station.model import AspecularMeasurements
@@ -157,3 +159,69 @@ def test_a_remake_after_tinting_stays_with_the_line_sprayed(monkeypatch: pytest.
     solid = set(toner_line("solid").families)
     for step in job.steps:
         assert {DB.colorants[DB.names.index(n)].family for n in step.recipe} <= solid | {"matting"}
+
+
+def _on_scale(grams: float, step: float = 0.1) -> bool:
+    return abs(grams / step - round(grams / step)) < 1e-6
+
+
+def test_the_matting_top_up_is_weighed_on_the_scale_and_predicted_as_weighed() -> None:
+    """A batch with matting agent: every addition, the matting agent's included, is a multiple of the
+    scale's resolution and the batch after is the batch before plus the additions, to the gram; the
+    prediction is of that batch (fractions = masses / total)."""
+    masses = DB.vector({"white_tio2": 37.0, "orange_po": 12.3, "yellow_py": 4.7, "matting_silica": 3.1})
+    binder = 1000.0 - masses.sum()
+    target = predict_lab(DB.vector({"white_tio2": 0.037, "orange_po": 0.0150, "yellow_py": 0.0047}), A3)
+    t = tint(masses, binder, target, A3, DB, 0.1, 1000.0)
+    adds = t.tinting.additions_g
+    assert adds.get("orange_po", 0.0) > 0 and all(g > 0 and _on_scale(g) for g in adds.values())
+    for name, before, after in zip(DB.names, masses, t.masses_g, strict=True):
+        assert after == pytest.approx(before + adds.get(name, 0.0), abs=1e-9)
+    total = t.masses_g.sum() + t.binder_g
+    assert t.tinting.new_total_g == pytest.approx(total, abs=1e-9)
+    np.testing.assert_allclose(t.predicted_lab, predict_lab(t.masses_g / total, A3))
+
+
+def _batch(grams: dict[str, float]) -> tuple[dict[str, float], float]:
+    return grams, 1000.0 - sum(grams.values())
+
+
+def test_correct_batch_tints_toward_the_offset_corrected_target() -> None:
+    """The measured panel reads 20 % less orange than the can holds (a weak toner): the correction adds
+    orange, and its predicted ΔE00 is that of the batch after against design − (measured − predicted),
+    recomputed here from the public predict_lab."""
+    grams, binder = _batch({"white_tio2": 37.0, "orange_po": 12.3, "yellow_py": 4.7})
+    c0 = DB.vector({n: g / 1000.0 for n, g in grams.items()})
+    design = predict_lab(c0, A3) + [0.2, 0.1, 0.0]
+    weak = c0.copy()
+    weak[DB.names.index("orange_po")] *= 0.8
+    measured = predict_lab(weak, A3)
+    fix = correct_batch(design, measured, grams, binder, A3, options=FormulationOptions(line="solid"))
+    assert not fix.tinting.remake and fix.tinting.additions_g.get("orange_po", 0.0) > 0
+    target = design - (measured - predict_lab(c0, A3))
+    after = DB.vector(fix.masses_g) / (sum(fix.masses_g.values()) + fix.binder_g)
+    expected = float(cie2000(target, predict_lab(after, A3)).mean())
+    assert fix.predicted_mean_de == pytest.approx(expected, abs=1e-9)
+    assert expected < fix.measured_mean_de == pytest.approx(float(cie2000(design, measured).mean()))
+
+
+def test_correct_batch_adds_nothing_to_a_panel_within_the_tolerance() -> None:
+    grams, binder = _batch({"white_tio2": 37.0, "orange_po": 12.3, "yellow_py": 4.7})
+    lab = predict_lab(DB.vector({n: g / 1000.0 for n, g in grams.items()}), A3)
+    fix = correct_batch(lab, lab + [0.3, 0.0, 0.0], grams, binder, A3)
+    assert fix.tinting.additions_g == {} and "within the tolerance" in fix.tinting.message
+    assert fix.masses_g == grams and fix.binder_g == binder
+
+
+def test_correct_batch_refuses_a_colorant_of_another_line_and_bad_masses() -> None:
+    grams, binder = _batch({"white_tio2": 37.0, "alu_bright": 12.3})
+    lab = predict_lab(DB.vector({n: g / 1000.0 for n, g in grams.items()}), A3)
+    with pytest.raises(FormulateInputError) as err:
+        correct_batch(lab, lab, grams, binder, A3, options=FormulationOptions(line="solid"))
+    assert err.value.field == "recipe.alu_bright"
+    with pytest.raises(FormulateInputError) as err:
+        correct_batch(lab, lab, {"white_tio2": -1.0}, binder, A3)
+    assert err.value.field == "batch.colorants_g.white_tio2"
+    with pytest.raises(FormulateInputError) as err:
+        correct_batch(lab, lab[:2], grams, binder, A3)
+    assert err.value.field.startswith("measured_lab")
