@@ -112,11 +112,19 @@ def test_imported_meshes_shade_smooth(tmp_path) -> None:
 def test_car_body_is_smooth_and_closed() -> None:
     from station.render.car import car_body
 
-    car = car_body(96, 48)
+    car = car_body()  # the tessellation the CLI, viewer and service draw
     lo, hi = car.bounds
     assert hi[0] - lo[0] == pytest.approx(me.MESH_LENGTH)
     assert 0.4 < (hi[2] - lo[2]) / (hi[0] - lo[0]) < 0.5  # width 1.0 of 2.4
-    # Smooth: neighbouring vertex normals differ by < 25° everywhere along the edges.
+    # Closed: the body (paint and glass, their shared edge vertices merged) is one watertight sphere.
+    import trimesh
+
+    keep = np.isin(car.painted, (me.PAINT, me.GLASS))[car.faces].all(axis=1)
+    shell = trimesh.Trimesh(car.positions.astype(float), car.faces[keep], process=False)
+    shell.merge_vertices()
+    assert shell.is_watertight and shell.euler_number == 2 and shell.volume > 0
+    # Smooth: neighbouring vertex normals differ by < 25° everywhere along the edges (the wheel arches
+    # are concave, so a coarser tessellation than the default bends more per edge there).
     e = np.concatenate([car.faces[:, [0, 1]], car.faces[:, [1, 2]], car.faces[:, [2, 0]]])
     cosines = np.einsum("ij,ij->i", car.normals[e[:, 0]], car.normals[e[:, 1]])
     assert cosines.min() > np.cos(np.radians(25.0))
@@ -143,6 +151,91 @@ def test_car_body_is_smooth_and_closed() -> None:
     axial = np.abs(car.normals[car.faces[:, 2]][:, 2]) > 0.999
     chrome, sidewall = area[code == me.CHROME].sum(), area[axial & (code == me.TYRE)].sum()
     assert chrome / (chrome + sidewall) == pytest.approx((HUB_RADIUS / WHEEL_RADIUS) ** 2, rel=1e-4)
+
+
+def test_car_glass_edges_follow_parameter_curves() -> None:
+    """The glass/paint edge runs along stations and section curves, not a saw-tooth: each vertex on it lies
+    at a glass edge station, or is one of at most two per station and side (three (the side window's bottom and
+    top, and a screen's side edge where both meet); the side windows' bottom edge lies on the belt line, at BELT_Y."""
+    from station.render import car as cm
+
+    car = cm.car_body()
+    floor = car.floor_y
+    key = np.round(car.positions.astype(float), 6)
+    _, inv = np.unique(key, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    glass = np.zeros(inv.max() + 1, bool)
+    paint = np.zeros(inv.max() + 1, bool)
+    glass[inv[car.painted == me.GLASS]] = True
+    paint[inv[car.painted == me.PAINT]] = True
+    first = np.zeros(inv.max() + 1, int)
+    first[inv] = np.arange(inv.size)
+    edge = car.positions[first[glass & paint]].astype(float)
+    assert len(edge) > 100
+    edges_x = np.array([*cm.SIDE_GLASS, *cm.B_PILLAR, *cm.WINDSCREEN, *cm.REAR_WINDOW])
+    on_station = np.min(np.abs(edge[:, :1] - edges_x[None, :]), axis=1) < 1e-5
+    rest = edge[~on_station]
+    stations, counts = np.unique(
+        np.stack([np.round(rest[:, 0], 5), np.sign(rest[:, 2])], 1), axis=0, return_counts=True
+    )
+    both = np.zeros(len(stations), bool)  # stations with a side window and a screen: a third edge
+    for lo_x, hi_x in (cm.WINDSCREEN, cm.REAR_WINDOW):
+        both |= (stations[:, 0] > max(lo_x, cm.SIDE_GLASS[0])) & (
+            stations[:, 0] < min(hi_x, cm.SIDE_GLASS[1])
+        )
+    assert counts.max() <= 3 and counts[~both].max() <= 2, stations[~both & (counts > 2)][:5]
+    # belt: the lowest edge vertex at each station inside the side windows (off the B-pillar)
+    side = (rest[:, 0] > cm.SIDE_GLASS[0]) & (rest[:, 0] < cm.SIDE_GLASS[1])
+    side &= (rest[:, 0] < cm.B_PILLAR[0]) | (rest[:, 0] > cm.B_PILLAR[1])
+    side &= (rest[:, 0] < cm.WINDSCREEN[0]) | (rest[:, 0] > cm.WINDSCREEN[1])  # below the windscreen: none
+    lows = [rest[side & (rest[:, 0] == x), 1].min() for x in np.unique(rest[side, 0])]
+    assert len(lows) > 20
+    assert np.array(lows) == pytest.approx(floor + cm.BELT_Y, abs=1e-5)
+
+
+def test_car_profile_has_hood_roof_and_boot() -> None:
+    """Side profile (highest body point per station, above the floor): the roof stands at least 1.3 times
+    as high as the hood and 1.25 times the boot (a saloon: about 1.45 m roof, 1.0 m hood and boot), and
+    the windscreen is raked 20°-35° from the horizontal (saloons: about 25°-30°)."""
+    from station.render.car import car_body
+
+    car = car_body()
+    body = np.isin(car.painted, (me.PAINT, me.GLASS))
+    p = car.positions[body].astype(float)
+
+    xs, inv = np.unique(np.round(p[:, 0], 6), return_inverse=True)
+    top = np.full(xs.size, -np.inf)
+    np.maximum.at(top, inv.ravel(), p[:, 1] - car.floor_y)
+
+    def height(x0: float, x1: float) -> float:
+        return float(np.interp(np.linspace(x0, x1, 9), xs, top).max())
+
+    roof, hood, boot = height(-0.4, 0.0), height(0.7, 0.95), height(-1.1, -0.95)
+    assert roof / hood > 1.3 and roof / boot > 1.25
+    assert hood > height(1.18, 1.2) and boot > height(-1.2, -1.18)  # the ends fall away
+    rake = np.degrees(np.arctan((height(0.2, 0.2) - height(0.4, 0.4)) / 0.2))
+    assert 20.0 < rake < 35.0
+
+
+def test_car_contact_shadow_proxies_clear_the_ground() -> None:
+    """The procedural car's sphere proxies lie inside the body's bounds and above its sills: the ground
+    under the car is shaded (occluded ≥ 0.5 under the middle) but nowhere fully black (< 0.95), where the
+    generic proxies resting on the floor hide the whole sky at their contact points."""
+    from station.render.car import car_body
+    from station.render.stage import sphere_occlusion
+
+    car = car_body()
+    occ = car.occluders()
+    body = np.isin(car.painted, (me.PAINT, me.GLASS))
+    lo, hi = car.positions[body].min(axis=0), car.positions[body].max(axis=0)
+    assert (occ[:, :3] - occ[:, 3:] >= lo - 1e-5).all() and (occ[:, :3] + occ[:, 3:] <= hi + 1e-5).all()
+    xs, zs = np.meshgrid(np.linspace(-1.3, 1.3, 53), np.linspace(-0.6, 0.6, 25))
+    ground = np.stack([xs.ravel(), np.full(xs.size, car.floor_y), zs.ravel()], 1)
+    o = sphere_occlusion(ground, occ)
+    assert o.max() < 0.95
+    assert sphere_occlusion([[0.0, car.floor_y, 0.0]], occ)[0] >= 0.5
+    generic = me.Mesh.occluders(car)
+    assert sphere_occlusion(ground, generic).max() > 0.99
 
 
 @pytest.mark.gl
