@@ -8,8 +8,8 @@ monotone C¹ interpolation (PCHIP) of TOP_PROFILE: a low nose, the hood, a raked
 rear window and the boot deck. The underside rises in a smooth arch (ARCH_FLANK) over each axle, so the
 wheels stand in wheel arches; the plan width swells over the wheels (fender flares). Above the belt line
 BELT_Y the section is drawn in by up to TUMBLEHOME (the glasshouse sits inboard of the shoulders). The
-ends close on a superellipse of exponent END_EXPONENT in (x, section size): a blunt nose and tail, each
-a single pole vertex. Stations are spaced evenly in arc length of the side profile.
+ends close on superellipses in (x, section size) (END_TOP, END_BOTTOM, END_WIDTH): a blunt nose and
+tail, each a single pole vertex. Stations are spaced evenly in arc length of the side profile.
 
 The upper quarter's parameter σ ∈ [0, 1] (0: the widest point, 1: the top centre) is warped per station
 so that σ = BELT_SIGMA lies on the belt line. The glass parts are rectangles in (x, σ): the side windows
@@ -72,17 +72,25 @@ TOP_PROFILE: tuple[tuple[float, float], ...] = (
     (1.20, 0.48),
 )
 #: Wheel arch: the underside rises to ARCH_TOP over each axle, falling to the sills over ARCH_FLANK
-#: either side of the axle (profile (1 − t⁴)², t the distance over ARCH_FLANK).
-ARCH_TOP = 0.31
-ARCH_FLANK = 0.26
-#: Stations are spaced evenly in arc length of the roof line and underside plus STATION_TURN (body
-#: units per radian) times their turning angle, so curved stretches (nose, screens, arches) get more.
+#: either side of the axle (profile (1 + cos πt)/2, t the distance beyond ARCH_FLAT over ARCH_FLANK: a soft foot).
+ARCH_TOP = 0.32
+ARCH_FLAT = 0.08
+#: Underside of the overhangs (the bumpers' lower edge) beyond the wheel arches (body units).
+OVERHANG_Y = 0.16
+ARCH_FLANK = 0.22
+#: Stations are spaced evenly in their largest step plus STATION_TURN (body units per radian) times the
+#: largest turn of the surface normal between them, so curved stretches (nose, screens, arches) get more.
 STATION_TURN = 0.25
-#: Exponents of the section's superellipse quarters and of the ends (in x against section size).
+#: Exponents of the section's superellipse quarters, and of the ends (in x against the section's height
+#: above and depth below its centre, and its width): a rounded hood front, an underside that stays flat
+#: to the bumpers, rounded corners in plan.
 UPPER_EXPONENT = 4.0
 LOWER_EXPONENT = 2.2
-END_EXPONENT = 3.0
-#: Share by which the glasshouse is drawn in (0 at the belt line, full from BELT_Y + 0.1 up).
+END_TOP = 3.0
+END_BOTTOM = 5.0
+END_WIDTH = 3.0
+#: Share by which the glasshouse is drawn in (0 at the belt line, full from BELT_Y + 0.1 up; only where
+#: the roof line stands up to 0.2 above the belt line, in full above that).
 TUMBLEHOME = 0.12
 #: Upper-quarter section parameters: the belt line, the side windows' top edge, the windscreen's and
 #: rear window's side edges (the strip between the last two is the A/C pillar and roof rail).
@@ -141,15 +149,18 @@ def _arch(x: NDArray) -> NDArray:
     """Share (0..1) of the wheel arch's rise at stations *x*."""
     out = np.zeros_like(x, dtype=float)
     for wx in (-0.5 * WHEEL_BASE, 0.5 * WHEEL_BASE):
-        t = np.clip(np.abs(x - wx) / ARCH_FLANK, 0.0, 1.0)
-        out = np.maximum(out, (1.0 - t**4) ** 2)
+        t = np.clip((np.abs(x - wx) - ARCH_FLAT) / ARCH_FLANK, 0.0, 1.0)
+        out = np.maximum(out, 0.5 + 0.5 * np.cos(np.pi * t))
     return out
 
 
 def bottom_line(x: NDArray) -> NDArray[np.float64]:
     """Underside height (body units) at stations *x* before the ends close: the sills, raised into an
-    arch over each axle."""
-    return SILL_Y + (ARCH_TOP - SILL_Y) * _arch(np.asarray(x, float))
+    arch over each axle; the overhangs' underside (the bumpers) at OVERHANG_Y."""
+    x = np.asarray(x, float)
+    wx = 0.5 * WHEEL_BASE
+    base = SILL_Y + (OVERHANG_Y - SILL_Y) * _smoothstep(wx, wx + ARCH_FLAT + ARCH_FLANK, np.abs(x))
+    return base + (ARCH_TOP - base) * _arch(x)
 
 
 def _centre(x: NDArray) -> NDArray:
@@ -164,10 +175,11 @@ def _half_width(x: NDArray) -> NDArray:
     return HALF_WIDTH + FLARE * _arch(x)
 
 
-def _end_scale(x: NDArray) -> NDArray:
-    """Section size (0..1) at stations *x*: the superellipse closing the nose and tail."""
+def _end_scale(x: NDArray, exponent: float) -> NDArray:
+    """Share (0..1) of a section's size at stations *x*: the superellipse of *exponent* closing the nose
+    and tail."""
     t = np.clip(np.abs(x) / HALF_LENGTH, 0.0, 1.0)
-    return (1.0 - t**END_EXPONENT) ** (1.0 / END_EXPONENT)
+    return (1.0 - t**exponent) ** (1.0 / exponent)
 
 
 def _spaced(values: NDArray, edges: tuple[float, ...], min_gap: float) -> NDArray:
@@ -179,20 +191,20 @@ def _spaced(values: NDArray, edges: tuple[float, ...], min_gap: float) -> NDArra
     return np.unique(np.concatenate([v[keep], e]))
 
 
-def _stations(n_v: int) -> NDArray[np.float64]:
-    """Interior stations x (tail to nose), evenly spaced in arc length of the side profile, with the glass
-    edges inserted."""
-    t = np.linspace(0.0, 1.0, 4001)
-    x = -HALF_LENGTH * np.cos(np.pi * t)
-    f = _end_scale(x)
-    yc = _centre(x)
-    y_top = yc + f * (top_line(x) - yc)
-    y_bot = yc - f * (yc - bottom_line(x))
-    ds = np.hypot(np.diff(x), np.diff(y_top)) + np.hypot(np.diff(x), np.diff(y_bot))
-    turn = sum(np.abs(np.diff(np.unwrap(np.arctan2(np.diff(yy), np.diff(x))))) for yy in (y_top, y_bot))
-    ds = ds[:-1] + STATION_TURN * turn
-    x = x[:-1]
-    s = np.concatenate([[0.0], np.cumsum(ds)])
+def _stations(n_v: int, n_q: int) -> NDArray[np.float64]:
+    """Interior stations x (tail to nose), *n_v* − 2 of them before the glass edges are inserted, spaced
+    evenly in the largest step of any section point plus STATION_TURN times the largest turn of the
+    surface normal between neighbouring stations (measured on a fine set of stations)."""
+    x = -HALF_LENGTH * np.cos(np.pi * np.linspace(0.0, 1.0, 1201))[1:-1]
+    z, y, _ = _section(x, n_q)
+    p = np.stack([np.broadcast_to(x[:, None], z.shape), y, z], axis=-1)
+    around = np.roll(p, -1, axis=1) - np.roll(p, 1, axis=1)
+    along = np.gradient(p, axis=0)
+    n = np.cross(around, along)
+    n /= np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-12)
+    turn = np.arccos(np.clip(np.einsum("ijk,ijk->ij", n[1:], n[:-1]), -1.0, 1.0)).max(axis=1)
+    step = np.linalg.norm(np.diff(p, axis=0), axis=-1).max(axis=1)
+    s = np.concatenate([[0.0], np.cumsum(step + STATION_TURN * turn)])
     st = np.interp(np.linspace(0.0, s[-1], n_v)[1:-1], s, x)
     edges = (*SIDE_GLASS, *B_PILLAR, *WINDSCREEN, *REAR_WINDOW)
     return _spaced(st, edges, 0.35 * float(np.min(np.diff(st))))
@@ -204,11 +216,10 @@ def _section(x: NDArray, n_q: int) -> tuple[NDArray, NDArray, NDArray]:
     sig = _spaced(np.linspace(0.0, 1.0, n_q), (BELT_SIGMA, SIDE_SIGMA, SCREEN_SIGMA), 0.3 / n_q)
     lam = np.linspace(0.0, 1.0, n_q)[1:-1]  # lower quarter, without its ends (shared with the upper)
     xs = x[:, None]
-    f = _end_scale(xs)
-    w = f * _half_width(xs)
+    w = _end_scale(xs, END_WIDTH) * _half_width(xs)
     yc = _centre(xs)
-    h_top = f * (top_line(xs) - yc)
-    h_bot = f * (yc - bottom_line(xs))
+    h_top = _end_scale(xs, END_TOP) * (top_line(xs) - yc)
+    h_bot = _end_scale(xs, END_BOTTOM) * (yc - bottom_line(xs))
     # upper quarter: angle θ from the widest point (0) to the top (π/2), σ = BELT_SIGMA on the belt line
     pu = UPPER_EXPONENT
     eta_b = np.clip((BELT_Y - yc) / np.maximum(h_top, 1e-9), 0.0, 0.85)
@@ -221,7 +232,8 @@ def _section(x: NDArray, n_q: int) -> tuple[NDArray, NDArray, NDArray]:
     )
     zu = w * np.cos(th) ** (2.0 / pu)
     yu = yc + h_top * np.sin(th) ** (2.0 / pu)
-    zu = zu * (1.0 - TUMBLEHOME * _smoothstep(BELT_Y - 0.01, BELT_Y + 0.10, yu))
+    cabin = _smoothstep(0.0, 0.2, top_line(xs) - BELT_Y)  # no inset on the hood and deck
+    zu = zu * (1.0 - TUMBLEHOME * cabin * _smoothstep(BELT_Y - 0.01, BELT_Y + 0.10, yu))
     pl = LOWER_EXPONENT
     tl = 0.5 * np.pi * lam[None, :]
     zl = w * np.cos(tl) ** (2.0 / pl)
@@ -250,8 +262,9 @@ def _body(n_u: int, n_v: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     around each section and *n_v* stations along the length (poles included)."""
     import trimesh
 
-    x = _stations(n_v)
-    z, y, sigma = _section(x, max(n_u // 4 + 1, 4))
+    n_q = max(n_u // 4 + 1, 4)
+    x = _stations(n_v, n_q)
+    z, y, sigma = _section(x, n_q)
     m, n = z.shape
     ring = np.stack([np.broadcast_to(x[:, None], z.shape), y, z], axis=-1).reshape(-1, 3)
     tail = [-HALF_LENGTH, float(_centre(np.array(-HALF_LENGTH))), 0.0]
