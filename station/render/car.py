@@ -1,15 +1,18 @@
 """The procedural car: a smooth body with a glasshouse and four wheels, for stylists with no mesh at hand.
 
 Body (body units: 2.4 long, nose at +x, ground at y = 0 before placing): a lofted parametric surface.
-Each station x carries a cross-section about the centre (0, SECTION_Y): two superellipse quarters per
-side that meet with a vertical tangent at the section's widest point, the upper one (exponent 4) up to
-the roof line TOP(x), the lower one (exponent 4) down to the underside BOTTOM(x). The roof line is a
-monotone C¹ interpolation (PCHIP) of TOP_PROFILE: a low nose, the hood, a raked windscreen, the roof, a
-rear window and the boot deck. The underside rises in a smooth arch (ARCH_FLANK) over each axle, so the
-wheels stand in wheel arches; the plan width swells over the wheels (fender flares). Above the belt line
-BELT_Y the section is drawn in by up to TUMBLEHOME (the glasshouse sits inboard of the shoulders). The
-ends close on superellipses in (x, section size) (END_TOP, END_BOTTOM, END_WIDTH): a blunt nose and
-tail, each a single pole vertex. Stations are spaced evenly in arc length of the side profile.
+Each station x carries a cross-section about its shoulder (0, centre height): two superellipse quarters
+per side that meet with a vertical tangent at the section's widest point, the upper one (UPPER_EXPONENT)
+up to the roof line, the lower one (LOWER_EXPONENT) down to the underside. The shoulder is at SHOULDER_Y
+along the body and moves to halfway up towards the ends. The roof line is a monotone C¹ interpolation
+(PCHIP) of TOP_PROFILE: a low nose, the hood, a raked windscreen, the roof, a rear window and the boot
+deck. The underside (:func:`bottom_line`) runs along the sills at SILL_Y, rises in a soft-footed arch to
+ARCH_TOP over each axle (the wheels stand in wheel arches) and lies at OVERHANG_Y under the bumpers; the
+plan width swells by FLARE over the wheels. Above the belt line BELT_Y the cabin's sections are drawn in
+by up to TUMBLEHOME (the glasshouse sits inboard of the shoulders). The ends close on superellipses in
+(x, section size) (END_TOP, END_BOTTOM, END_WIDTH): a blunt nose and tail, each a single pole vertex.
+Stations are spaced evenly in their largest step plus STATION_TURN times the surface normal's largest
+turn between them (:func:`_stations`), so curved stretches get more of them.
 
 The upper quarter's parameter σ ∈ [0, 1] (0: the widest point, 1: the top centre) is warped per station
 so that σ = BELT_SIGMA lies on the belt line. The glass parts are rectangles in (x, σ): the side windows
