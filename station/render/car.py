@@ -105,7 +105,7 @@ SIDE_GLASS = (-0.80, 0.44)
 B_PILLAR = (-0.21, -0.16)
 WINDSCREEN = (0.14, 0.50)
 REAR_WINDOW = (-0.86, -0.64)
-#: Contact-shadow proxies: spheres in two rows (z = ±OCCLUDER_Z · half width) along the body.
+#: Contact-shadow proxies: spheres staggered across (z = ±OCCLUDER_Z · half width) along the body.
 OCCLUDER_Z = 0.34
 #: Radius of the proxies as a share of the sill-to-belt height (they overlap along the body).
 OCCLUDER_RADIUS = 0.68
@@ -117,8 +117,8 @@ class CarMesh(Mesh):
     are fitted to the car's body instead of the generic ones resting on the floor."""
 
     def occluders(self) -> NDArray[np.float64]:
-        """(MAX_OCCLUDERS, 4) sphere proxies (centre, radius; scene units): two rows across (z = ±OCCLUDER_Z
-        of the body's half width), MAX_OCCLUDERS / 2 along the body, radius OCCLUDER_RADIUS of the
+        """(MAX_OCCLUDERS, 4) sphere proxies (centre, radius; scene units) evenly along the body, staggered
+        across (z = ±OCCLUDER_Z of the body's half width, alternately), radius OCCLUDER_RADIUS of the
         sill-to-belt height, resting on the sill height: inside the body's bounds, clear of the ground."""
         body = np.isin(self.painted, (PAINT, GLASS))
         p = self.positions[body].astype(float)
@@ -127,11 +127,10 @@ class CarMesh(Mesh):
         floor = float(self.positions[:, 1].min())
         bottom, top = floor + SILL_Y * scale, floor + BELT_Y * scale
         r = OCCLUDER_RADIUS * (top - bottom)
-        k = MAX_OCCLUDERS // 2
-        xs = np.linspace(lo[0] + 1.1 * r, hi[0] - 1.1 * r, k)
+        xs = np.linspace(lo[0] + 1.1 * r, hi[0] - 1.1 * r, MAX_OCCLUDERS)
         zc = 0.5 * (lo[2] + hi[2])
         dz = OCCLUDER_Z * 0.5 * (hi[2] - lo[2])
-        out = [(x, bottom + r, zc + s * dz, r) for s in (-1.0, 1.0) for x in xs]
+        out = [(x, bottom + r, zc + (-1.0) ** i * dz, r) for i, x in enumerate(xs)]
         return np.asarray(out, float)
 
 
