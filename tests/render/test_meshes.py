@@ -142,10 +142,19 @@ def test_car_body_is_smooth_and_closed() -> None:
     lo, hi = car.bounds
     assert hi[0] - lo[0] == pytest.approx(me.MESH_LENGTH)
     assert 0.4 < (hi[2] - lo[2]) / (hi[0] - lo[0]) < 0.5  # width 1.0 of 2.4
-    # Smooth: neighbouring vertex normals differ by < 25° everywhere along the edges.
-    e = np.concatenate([car.faces[:, [0, 1]], car.faces[:, [1, 2]], car.faces[:, [2, 0]]])
-    cosines = np.einsum("ij,ij->i", car.normals[e[:, 0]], car.normals[e[:, 1]])
-    assert cosines.min() > np.cos(np.radians(25.0))
+    # Closed: the body (paint and glass, their shared edge vertices merged) is one watertight sphere.
+    import trimesh
+
+    keep = np.isin(car.painted, (me.PAINT, me.GLASS))[car.faces].all(axis=1)
+    shell = trimesh.Trimesh(car.positions.astype(float), car.faces[keep], process=False)
+    shell.merge_vertices()
+    assert shell.is_watertight and shell.euler_number == 2 and shell.volume > 0
+    # Smooth: neighbouring vertex normals differ by < 25° everywhere along the edges, here and in the
+    # default tessellation the CLI, viewer and service draw.
+    for mesh in (car, car_body()):
+        e = np.concatenate([mesh.faces[:, [0, 1]], mesh.faces[:, [1, 2]], mesh.faces[:, [2, 0]]])
+        cosines = np.einsum("ij,ij->i", mesh.normals[e[:, 0]], mesh.normals[e[:, 1]])
+        assert cosines.min() > np.cos(np.radians(25.0))
     body = np.isin(car.painted, (me.PAINT, me.GLASS))
     out = np.einsum("ij,ij->i", car.normals[body], car.positions[body] - car.positions.mean(axis=0))
     assert (out > 0).mean() > 0.95
@@ -169,6 +178,127 @@ def test_car_body_is_smooth_and_closed() -> None:
     axial = np.abs(car.normals[car.faces[:, 2]][:, 2]) > 0.999
     chrome, sidewall = area[code == me.CHROME].sum(), area[axial & (code == me.TYRE)].sum()
     assert chrome / (chrome + sidewall) == pytest.approx((HUB_RADIUS / WHEEL_RADIUS) ** 2, rel=1e-4)
+
+
+def test_car_glass_edges_follow_parameter_curves() -> None:
+    """The glass/paint edge runs along stations and section curves, not a saw-tooth: each vertex on it lies
+    at a glass edge station, or is one of at most two per station and side (three (the side window's bottom and
+    top, and a screen's side edge where both meet); the side windows' bottom edge lies on the belt line, at BELT_Y."""
+    from station.render import car as cm
+
+    car = cm.car_body()
+    floor = car.floor_y
+    key = np.round(car.positions.astype(float), 6)
+    _, inv = np.unique(key, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    glass = np.zeros(inv.max() + 1, bool)
+    paint = np.zeros(inv.max() + 1, bool)
+    glass[inv[car.painted == me.GLASS]] = True
+    paint[inv[car.painted == me.PAINT]] = True
+    first = np.zeros(inv.max() + 1, int)
+    first[inv] = np.arange(inv.size)
+    edge = car.positions[first[glass & paint]].astype(float)
+    assert len(edge) > 100
+    edges_x = np.array([*cm.SIDE_GLASS, *cm.B_PILLAR, *cm.WINDSCREEN, *cm.REAR_WINDOW])
+    on_station = np.min(np.abs(edge[:, :1] - edges_x[None, :]), axis=1) < 1e-5
+    rest = edge[~on_station]
+    stations, counts = np.unique(
+        np.stack([np.round(rest[:, 0], 5), np.sign(rest[:, 2])], 1), axis=0, return_counts=True
+    )
+    both = np.zeros(len(stations), bool)  # stations with a side window and a screen: a third edge
+    for lo_x, hi_x in (cm.WINDSCREEN, cm.REAR_WINDOW):
+        both |= (stations[:, 0] > max(lo_x, cm.SIDE_GLASS[0])) & (
+            stations[:, 0] < min(hi_x, cm.SIDE_GLASS[1])
+        )
+    assert counts.max() <= 3 and counts[~both].max() <= 2, stations[~both & (counts > 2)][:5]
+    # belt: the lowest edge vertex at each station inside the side windows (off the B-pillar)
+    side = (rest[:, 0] > cm.SIDE_GLASS[0]) & (rest[:, 0] < cm.SIDE_GLASS[1])
+    side &= (rest[:, 0] < cm.B_PILLAR[0]) | (rest[:, 0] > cm.B_PILLAR[1])
+    side &= (rest[:, 0] < cm.WINDSCREEN[0]) | (rest[:, 0] > cm.WINDSCREEN[1])  # below the windscreen: none
+    lows = [rest[side & (rest[:, 0] == x), 1].min() for x in np.unique(rest[side, 0])]
+    assert len(lows) > 20
+    assert np.array(lows) == pytest.approx(floor + cm.BELT_Y, abs=1e-5)
+
+
+def _inside_by_vertical_rays(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Whether each point lies inside the closed triangle soup *tri* (T, 3, 3): the parity of the triangles
+    crossed by a ray straight up (+y) from it (brute force over every triangle)."""
+    out = np.zeros(len(points), bool)
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    for i, p in enumerate(points):
+        # barycentric coordinates of (p.x, p.z) in each triangle's (x, z) projection
+        v0, v1 = (b - a)[:, [0, 2]], (c - a)[:, [0, 2]]
+        v2 = p[[0, 2]] - a[:, [0, 2]]
+        den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+        ok = np.abs(den) > 1e-14
+        u = np.where(ok, (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / np.where(ok, den, 1.0), -1.0)
+        w = np.where(ok, (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / np.where(ok, den, 1.0), -1.0)
+        hit = ok & (u >= 0) & (w >= 0) & (u + w <= 1)
+        y = a[hit, 1] + u[hit] * (b - a)[hit, 1] + w[hit] * (c - a)[hit, 1]
+        out[i] = int(np.count_nonzero(y > p[1])) % 2 == 1
+    return out
+
+
+def test_car_wheels_stand_in_their_arches() -> None:
+    """No tyre point lies inside the closed body (vertical-ray parity, brute force): the arches clear the
+    wheels; a tyre lifted by 0.1 (scene units) would cut into the body, so the test can fail."""
+    from station.render.car import car_body
+
+    car = car_body()
+    body = np.isin(car.painted, (me.PAINT, me.GLASS))
+    tri = car.positions[car.faces[body[car.faces].all(axis=1)]].astype(float)
+    tyre = car.positions[car.painted == me.TYRE].astype(float)
+    axle_y = 0.5 * (tyre[:, 1].min() + tyre[:, 1].max())
+    top = tyre[tyre[:, 1] > axle_y][::3]  # the upper half of each tyre, where an arch could cut it
+    assert len(top) > 100
+    assert not _inside_by_vertical_rays(top, tri).any()
+    assert _inside_by_vertical_rays(top + [0.0, 0.1, 0.0], tri).sum() >= 10
+    assert _inside_by_vertical_rays(np.array([[0.0, car.floor_y + 0.4, 0.0]]), tri).all()
+
+
+def test_car_profile_has_hood_roof_and_boot() -> None:
+    """Side profile (highest body point per station, above the floor): the roof stands at least 1.3 times
+    as high as the hood and 1.25 times the boot (a saloon: about 1.45 m roof, 1.0 m hood and boot), and
+    the windscreen is raked 20°-35° from the horizontal (saloons: about 25°-30°)."""
+    from station.render.car import car_body
+
+    car = car_body()
+    body = np.isin(car.painted, (me.PAINT, me.GLASS))
+    p = car.positions[body].astype(float)
+
+    xs, inv = np.unique(np.round(p[:, 0], 6), return_inverse=True)
+    top = np.full(xs.size, -np.inf)
+    np.maximum.at(top, inv.ravel(), p[:, 1] - car.floor_y)
+
+    def height(x0: float, x1: float) -> float:
+        return float(np.interp(np.linspace(x0, x1, 9), xs, top).max())
+
+    roof, hood, boot = height(-0.4, 0.0), height(0.7, 0.95), height(-1.1, -0.95)
+    assert roof / hood > 1.3 and roof / boot > 1.25
+    assert hood > height(1.18, 1.2) and boot > height(-1.2, -1.18)  # the ends fall away
+    rake = np.degrees(np.arctan((height(0.2, 0.2) - height(0.4, 0.4)) / 0.2))
+    assert 20.0 < rake < 35.0
+
+
+def test_car_contact_shadow_proxies_clear_the_ground() -> None:
+    """The procedural car's sphere proxies lie inside the body's bounds and above its sills: the ground
+    under the car is shaded (occluded ≥ 0.5 under the middle) but nowhere fully black (< 0.95), where the
+    generic proxies resting on the floor hide the whole sky at their contact points."""
+    from station.render.car import car_body
+    from station.render.stage import sphere_occlusion
+
+    car = car_body()
+    occ = car.occluders()
+    body = np.isin(car.painted, (me.PAINT, me.GLASS))
+    lo, hi = car.positions[body].min(axis=0), car.positions[body].max(axis=0)
+    assert (occ[:, :3] - occ[:, 3:] >= lo - 1e-5).all() and (occ[:, :3] + occ[:, 3:] <= hi + 1e-5).all()
+    xs, zs = np.meshgrid(np.linspace(-1.3, 1.3, 53), np.linspace(-0.6, 0.6, 25))
+    ground = np.stack([xs.ravel(), np.full(xs.size, car.floor_y), zs.ravel()], 1)
+    o = sphere_occlusion(ground, occ)
+    assert o.max() < 0.95
+    assert sphere_occlusion([[0.0, car.floor_y, 0.0]], occ)[0] >= 0.5
+    generic = me.Mesh.occluders(car)
+    assert sphere_occlusion(ground, generic).max() > 0.99
 
 
 @pytest.mark.gl
