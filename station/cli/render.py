@@ -21,9 +21,10 @@ GL engine only: ``--mesh FILE`` renders a .glb/.gltf/.obj/.stl model instead of 
 NAME`` picks the part to paint; the other parts are drawn as tyre, glass or chrome by their names), and
 ``--mesh car`` the procedural car (body, glass, wheels).
 ``--aa N`` anti-aliases the GL engine's frame with N samples per pixel (1 off, 4, 9 or 16; default 4).
-``--lod DE`` lets the level of detail (``station.render.scene_image.scene_lod``, against the ground truth
-on a 16 × 16 sample of the view) pick the lobe count and environment resolution for a CIEDE2000
-tolerance and reports the choice.
+``--lod DE`` lets the level of detail (``station.render.scene_image.scene_lod``) pick the lobe count,
+environment resolution and anisotropic samples for a CIEDE2000 tolerance: each candidate is rendered
+small by the frame's own engine and judged against that engine's most accurate setting plus a declared
+margin (``station.render.lod.FRAME_MARGIN_DE``); it reports the choice (gl | numpy engines).
 """
 
 from __future__ import annotations
@@ -252,8 +253,10 @@ def _render_gl(
     anisotropy: Anisotropy | None,
     size: int,
     aa: int,
+    anisotropic_samples: int | None = None,
 ) -> tuple[np.ndarray, str | None, dict[str, Any] | None]:
-    """(linear image, flake report, anisotropy report) of the GL engine, *aa* samples per pixel."""
+    """(linear image, flake report, anisotropy report) of the GL engine, *aa* samples per pixel,
+    *anisotropic_samples* off-specular samples (None: the renderer's own choice)."""
     from station.render.gl_renderer import GLRenderer
 
     with GLRenderer(basis, size, size, aa=aa) as gl:
@@ -267,15 +270,27 @@ def _render_gl(
                 linear=True,
                 flakes=flakes,
                 anisotropy=anisotropy,
+                anisotropic_samples=anisotropic_samples,
             )
         else:
-            linear = gl.render_linear(scene, paints, coat=coat, flakes=flakes, anisotropy=anisotropy)
+            linear = gl.render_linear(
+                scene,
+                paints,
+                coat=coat,
+                flakes=flakes,
+                anisotropy=anisotropy,
+                anisotropic_samples=anisotropic_samples,
+            )
         flake_report = gl.last_flakes.reason if gl.last_flakes is not None else None
         aniso_report = None
         if gl.last_anisotropy is not None:
             aniso_report = {
                 "samples": gl.last_anisotropy.samples,
-                "error_de": round(gl.last_anisotropy.error_de, 4),
+                "error_de": (
+                    round(gl.last_anisotropy.error_de, 4)
+                    if np.isfinite(gl.last_anisotropy.error_de)
+                    else None
+                ),
                 "reason": gl.last_anisotropy.reason,
             }
     return linear, flake_report, aniso_report
@@ -328,10 +343,29 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     timings["environment"] = time.perf_counter() - t0
     lod_report = None
     if args.lod is not None:
+        from station.render.envcache import PrefilterCache as _Cache
         from station.render.scene_image import scene_lod
 
+        if engine == "truth":
+            raise InputError(
+                "lod", "a tolerance for the gl | numpy engine (truth has no level of detail)", args.lod
+            )
         t0 = time.perf_counter()
-        paints, env, lod_report = scene_lod(designs, env, scene, args.lod)
+        paints, env, lod_report = scene_lod(
+            designs,
+            env,
+            scene,
+            args.lod,
+            engine=engine,
+            prefilter_engine="gl" if engine == "gl" else "numpy",
+            max_size=None,
+            coat=coat,
+            mesh=mesh,
+            aa=_aa(args) if engine == "gl" else 1,
+            anisotropy=anisotropy,
+            cache=_Cache(args.cache_dir),
+            size=args.size,
+        )
         timings["lod"] = time.perf_counter() - t0
     flake_report = "no flake layer" if args.flakes and flakes is None else None
     aniso_report = None
@@ -347,8 +381,9 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         timings["prefilter"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         if engine == "gl":
+            samples = None if lod_report is None else lod_report["anisotropic_samples"]
             linear, flake_report, aniso_report = _render_gl(
-                basis, paints, scene, stage, coat, mesh, flakes, anisotropy, size, _aa(args)
+                basis, paints, scene, stage, coat, mesh, flakes, anisotropy, size, _aa(args), samples
             )
         else:
             linear = render_linear(scene, basis, paints, size, size, coat=coat, flakes=flakes)

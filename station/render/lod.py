@@ -16,6 +16,15 @@ Given the designs on screen, the environment and the pixels (normals, views), :f
    that total is within the tolerance; a setting that misses it gives way to the default (the shipped
    lobe count, the full map) whenever that measures less, so a miss is never worse than the default.
 
+Those steps judge sample pixels the caller passes, in a truth-engine mode. What the fronts use
+(``station render --lod``, the service's ``lod_de``: :func:`station.render.scene_image.scene_lod`) is the
+frame's level of detail, :func:`choose_frame_lod`: every candidate setting (:class:`FrameSetting`: lobes,
+map width, anisotropic samples) is rendered small (PROBE_SIZE) by the frame's own renderer, mode and
+scene, and its estimate is its p95 CIEDE2000 against the renderer's most accurate setting (MAX_LOBES
+lobes, the full map, the most samples); "meets" only when estimate + FRAME_MARGIN_DE (a declared
+calibration of the probe-to-truth gap, ``bench.lod_margin``) is within the tolerance, and no setting is
+picked whose estimate exceeds the default's; when none meets, the default is drawn and the miss reported.
+
 Each factor gets a share tolerance/√3 of the budget (errors of independent approximations add roughly
 in quadrature), measured as the given percentile of CIEDE2000 over pixels and designs, Lab relative to
 the scene's brightest white-Lambertian pixel. When even the richest setting misses its share the
@@ -358,3 +367,201 @@ class _LodScene:
             )
             return m_def, full, default
         return m, width, chosen
+
+
+# --------------------------------------------------------------------------------------------------------
+# Level of detail of the rendered frame: what every front (``station render --lod``, the service's render
+# route) uses. The steps above judge sample pixels in a truth-engine mode; the frame is drawn by the GL or
+# NumPy renderer, so the frame's level of detail renders each candidate setting with that renderer.
+
+#: Probe size (pixels, square): candidates are rendered this large (never larger than the frame).
+PROBE_SIZE = 32
+#: Lobe counts (shipped bases, :func:`station.render.lobes.basis_for_count`) the frame's level of detail tries.
+FRAME_LOBES = (1, 2, 3, 5)
+#: Environment widths (equirect pixels) it tries below the frame's own map.
+FRAME_WIDTHS = (32, 64, 128)
+#: Declared calibration (``python -m bench.lod_margin``): the largest amount by which a frame's p95
+#: CIEDE2000 against the truth engine exceeded its probe estimate (against the renderer's most accurate
+#: setting) over the training scenes (design-database paints; booth, overcast, sky; standard views; GL and
+#: NumPy engines), rounded up to 0.05. Checked, not re-fitted, on held-out scenes (demo-library paints,
+#: an HDR sunrise, close-ups, near-mirror gloss, anisotropic paints) by ``tests/render/test_lod_frame.py``.
+FRAME_MARGIN_DE = 1.75
+
+
+@dataclass(frozen=True)
+class FrameSetting:
+    """One level-of-detail setting of a frame. ``lobes``: the shipped basis of that many lobes (None: the
+    shipped default basis); ``environment_width``: equirect width (pixels) the map is box-filtered to (None:
+    the frame's own map); ``anisotropic_samples``: off-specular samples (None: the renderer's own choice)."""
+
+    lobes: int | None = None
+    environment_width: int | None = None
+    anisotropic_samples: int | None = None
+
+    def label(self) -> str:
+        """Short text, e.g. ``3 lobes, map 64, 9 samples``."""
+        lobes = "default lobes" if self.lobes is None else f"{self.lobes} lobes"
+        width = "full map" if self.environment_width is None else f"map {self.environment_width}"
+        text = f"{lobes}, {width}"
+        if self.anisotropic_samples is not None:
+            text += f", {self.anisotropic_samples} samples"
+        return text
+
+
+#: The frame's default setting: the shipped default basis on the frame's own map.
+DEFAULT_SETTING = FrameSetting()
+
+
+@dataclass(frozen=True)
+class FrameLodChoice:
+    """What :func:`choose_frame_lod` chose. ``estimate_de``: p95 CIEDE2000 of the chosen setting's probe
+    against the reference probe (the renderer's most accurate setting); ``default_estimate_de``: the same
+    for the default; ``margin_de``: the declared probe-to-truth margin; ``met``: estimate + margin within
+    ``tolerance_de``; ``probes``: every setting rendered with its estimate, in the order tried."""
+
+    setting: FrameSetting
+    estimate_de: float
+    default_estimate_de: float
+    margin_de: float
+    tolerance_de: float
+    met: bool
+    reference: FrameSetting
+    probes: tuple[tuple[FrameSetting, float], ...]
+    probe_size: int
+    notes: tuple[str, ...] = ()
+
+    def describe(self) -> str:
+        """One paragraph saying what was chosen and why."""
+        verdict = "meets" if self.met else "MISSES"
+        text = (
+            f"Tolerance ΔE {self.tolerance_de:g} ({verdict}): {self.setting.label()}, estimated ΔE "
+            f"{self.estimate_de:.2f} + margin {self.margin_de:.2f} = {self.estimate_de + self.margin_de:.2f} "
+            f"(default {self.default_estimate_de:.2f}), measured on {self.probe_size}² probes of the "
+            f"renderer against its most accurate setting ({self.reference.label()})."
+        )
+        return text + ("" if not self.notes else " " + " ".join(self.notes))
+
+
+def frame_error(
+    reference: ArrayLike,
+    image: ArrayLike,
+    white: float,
+    mask: ArrayLike | None = None,
+    percentile: float = 95.0,
+) -> float:
+    """CIEDE2000 at *percentile* (%) of *image* against *reference* (linear sRGB (H, W, 3)) over the pixels
+    of *mask* (all when None), Lab relative to the white *white* (linear luminance of the scene's white)."""
+    from station.model.colorimetry import linear_srgb_to_lab
+    from station.model.difference import delta_e
+
+    ref = np.asarray(reference, dtype=np.float64)
+    img = np.asarray(image, dtype=np.float64)
+    if ref.shape != img.shape:
+        raise RenderInputError("image", f"an image of shape {ref.shape}", img.shape)
+    if mask is not None:
+        sel = np.asarray(mask, dtype=bool)
+        ref, img = ref[sel], img[sel]
+    if ref.size == 0:
+        raise RenderInputError("mask", "at least one pixel", 0)
+    d = delta_e(linear_srgb_to_lab(ref / white), linear_srgb_to_lab(img / white), "cie2000")
+    return float(np.percentile(d, percentile))
+
+
+def scene_white(environment: Any) -> float:
+    """Luminance (G, linear) of the scene's white: the brightest white Lambertian pixel over a sphere in
+    *environment* (equirect or an object with ``equirect``), by the truth engine's quadrature."""
+    img = tl._as_equirect(environment)
+    n, v = tr.sphere_pixels(8)
+    scene = tr.TruthScene(img, n, v, 16, min(64, img.shape[1]))
+    return float(scene.white()[..., 1].max())
+
+
+def frame_candidates(
+    full_width: int,
+    lobes: Sequence[int] = FRAME_LOBES,
+    widths: Sequence[int] = FRAME_WIDTHS,
+) -> list[FrameSetting]:
+    """The reduced settings tried, cheapest first (fewer lobes, then smaller maps): every lobe count of
+    *lobes* on every width of *widths* below *full_width* and on the full map."""
+    usable = [w for w in sorted(widths) if w < full_width and full_width % w == 0]
+    return [FrameSetting(m, w) for m in sorted(lobes) for w in [*usable, None]]
+
+
+def choose_frame_lod(
+    probe: Callable[[FrameSetting], NDArray[np.float64]],
+    white: float,
+    tolerance_de: float,
+    candidates: Sequence[FrameSetting],
+    *,
+    mask: ArrayLike | None = None,
+    anisotropic: bool = False,
+    margin_de: float = FRAME_MARGIN_DE,
+    percentile: float = 95.0,
+    probe_size: int = PROBE_SIZE,
+) -> FrameLodChoice:
+    """Choose the frame's setting from what the renderer draws (module docstring, frame section).
+
+    *probe* renders a setting with the frame's own renderer, mode and scene at the probe size (linear
+    (H, W, 3)); the reference is the renderer's most accurate setting (MAX_LOBES lobes, the full map, the
+    most anisotropic samples when *anisotropic*). Each setting's estimate is the p95 CIEDE2000 (*percentile*)
+    of its probe against the reference over *mask* (Lab relative to *white*). The choice is the first of
+    *candidates* (cheapest first), then the fewest anisotropic samples, whose estimate + *margin_de* is
+    within *tolerance_de* and whose estimate does not exceed the default's; else the default, if it meets;
+    else the default, reported as a miss. Deterministic: no time budget enters it."""
+    _check_budget(tolerance_de, percentile)
+    if not (np.isfinite(margin_de) and margin_de >= 0):
+        raise RenderInputError("margin_de", "a margin >= 0 (CIEDE2000)", margin_de)
+    if not (np.isfinite(white) and white > 0):
+        raise RenderInputError("white", "a scene white > 0", white)
+    most = max(SAMPLE_COUNTS)
+    reference = FrameSetting(MAX_LOBES, None, most if anisotropic else None)
+    ref = np.asarray(probe(reference), dtype=np.float64)
+    probes: list[tuple[FrameSetting, float]] = []
+
+    def estimate(s: FrameSetting) -> float:
+        err = frame_error(ref, probe(s), white, mask, percentile)
+        probes.append((s, err))
+        return err
+
+    default = estimate(DEFAULT_SETTING)
+    notes: list[str] = []
+
+    def fits(err: float) -> bool:
+        return err + margin_de <= tolerance_de and err <= default
+
+    chosen, est = DEFAULT_SETTING, default
+    for cand in candidates:
+        if cand == DEFAULT_SETTING:
+            continue
+        s = FrameSetting(cand.lobes, cand.environment_width, most if anisotropic else None)
+        err = estimate(s)
+        if fits(err):
+            chosen, est = s, err
+            break
+    if anisotropic and chosen != DEFAULT_SETTING:
+        for n in sorted(SAMPLE_COUNTS):
+            if n >= most:
+                break
+            s = FrameSetting(chosen.lobes, chosen.environment_width, n)
+            err = estimate(s)
+            if fits(err):
+                chosen, est = s, err
+                break
+    met = est + margin_de <= tolerance_de
+    if not met:
+        notes.append(
+            f"No setting reaches ΔE {tolerance_de:g} with the margin: the default is drawn "
+            f"(estimated {default:.2f} + {margin_de:.2f})."
+        )
+    return FrameLodChoice(
+        chosen,
+        est,
+        default,
+        float(margin_de),
+        float(tolerance_de),
+        met,
+        reference,
+        tuple(probes),
+        int(probe_size),
+        tuple(notes),
+    )

@@ -443,6 +443,8 @@ def prefilter_basis(
     if todo and cache:
         for i in todo:
             cache.put(keys[i], maps[i])
+            # as the cache stores it (float16), so a first render equals every later one
+            maps[i] = maps[i].astype(np.float16).astype(np.float32)
     timings["cache_hits"] = float(len(exps) - len(todo))
     return PrefilteredBasis(
         env_name=env.name,

@@ -32,6 +32,7 @@ from station.render.stage import Stage
 
 if TYPE_CHECKING:
     from station.model import FaceFlopTravelGloss
+    from station.model.anisotropy import Anisotropy
     from station.render.meshes import Mesh
     from station.render.weights import LobeWeights
 
@@ -110,40 +111,221 @@ def builtin_mesh(name: str) -> Mesh:
     return car_body()
 
 
-def scene_lod(
-    designs: Sequence[FaceFlopTravelGloss], environment: Environment, scene: Scene, tolerance_de: float
-) -> tuple[list[LobeWeights], Environment, dict[str, Any]]:
-    """Level of detail for a ΔE tolerance (:func:`station.render.lod.choose_lod` against the ground truth
-    on a 16 × 16 sample of the view): the paints fitted with the chosen lobe count, the environment at the
-    chosen width, and the report (lobes, environment width, met, errors, the description)."""
-    from station.render import lobe_fit
-    from station.render.lobes import basis_for_count
-    from station.render.lod import choose_lod
+class FrameProbe:
+    """A frame drawn at any level-of-detail setting (:class:`station.render.lod.FrameSetting`) and size by
+    the frame's own renderer: *engine* gl | numpy, the environment prefiltered by *prefilter_engine* capped
+    at *max_size* faces (cached in *cache*), the clear coat *coat*, the stage of *scene*, the *mesh* (gl),
+    *aa* samples per pixel (gl) and the paint's *anisotropy* (gl); no flakes (their sparkle has a level of
+    detail of its own, :func:`station.render.flakes.flake_lod`). A context manager (it may hold a GL
+    context)."""
+
+    def __init__(
+        self,
+        designs: Sequence[FaceFlopTravelGloss],
+        environment: Environment,
+        scene: Scene,
+        *,
+        engine: str = "numpy",
+        prefilter_engine: str = "numpy",
+        max_size: int | None = PREFILTER_SIZE,
+        coat: ClearCoat | None = None,
+        mesh: Mesh | None = None,
+        aa: int = 1,
+        anisotropy: Anisotropy | None = None,
+        cache: Any = None,
+    ) -> None:
+        if engine not in ("gl", "numpy"):
+            raise RenderInputError("engine", "gl | numpy", engine)
+        if prefilter_engine not in ("gl", "numpy"):
+            raise RenderInputError("prefilter_engine", "gl | numpy", prefilter_engine)
+        if mesh is not None and engine != "gl":
+            raise RenderInputError("engine", "gl for a mesh", engine)
+        if anisotropy is not None and engine != "gl":
+            raise RenderInputError("engine", "gl for a design with anisotropy", engine)
+        self.designs, self.environment, self.scene = list(designs), environment, scene
+        self.engine, self.prefilter_engine, self.max_size = engine, prefilter_engine, max_size
+        self.coat, self.mesh, self.aa, self.anisotropy, self.cache = coat, mesh, aa, anisotropy, cache
+        self.ctx: Any = None
+        if engine == "gl" or prefilter_engine == "gl":
+            from station.render.gl_context import create_gl_context
+
+            self.ctx = create_gl_context()
+        self._bases: dict[tuple[int | None, int | None], tuple[Any, list[LobeWeights]]] = {}
+
+    def __enter__(self) -> FrameProbe:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Release the GL context (if any)."""
+        if self.ctx is not None:
+            self.ctx.release()
+            self.ctx = None
+
+    def setup(self, setting: Any) -> tuple[Any, list[LobeWeights]]:
+        """(prefiltered basis, paints) of *setting*'s lobes and environment width."""
+        from station.render import lobe_fit
+        from station.render.lobes import basis_for_count, default_basis
+        from station.render.prefilter import prefilter_basis
+
+        key = (setting.lobes, setting.environment_width)
+        if key not in self._bases:
+            lobes = default_basis() if setting.lobes is None else basis_for_count(setting.lobes)
+            env = self.environment
+            if setting.environment_width is not None:
+                env = env.downsampled(setting.environment_width)
+            paints = [lobe_fit.fit_design(d, lobes) for d in self.designs]
+            basis = prefilter_basis(
+                env,
+                paints[0].exponents,
+                engine=self.prefilter_engine,
+                cache=self.cache,
+                ctx=self.ctx,
+                max_size=self.max_size,
+            )
+            self._bases[key] = (basis, paints)
+        return self._bases[key]
+
+    def draw(self, setting: Any, size: int, bare: bool = False) -> np.ndarray:
+        """Linear sRGB (size, size, 3) of the frame at *setting* (*bare*: without the stage)."""
+        from station.render.numpy_renderer import render_linear
+
+        basis, paints = self.setup(setting)
+        scene = self.scene
+        if bare and scene.stage is not None:
+            scene = Scene(scene.shape, misalignment_deg=scene.misalignment_deg, camera=scene.view_camera)
+        if self.engine == "numpy":
+            return np.asarray(render_linear(scene, basis, paints, size, size, coat=self.coat))
+        from station.render.gl_renderer import GLRenderer
+
+        with GLRenderer(basis, size, size, ctx=self.ctx, aa=self.aa) as gl:
+            if self.mesh is not None:
+                return np.asarray(
+                    gl.render_mesh(
+                        self.mesh,
+                        paints,
+                        camera=scene.view_camera,
+                        stage=scene.stage,
+                        coat=self.coat,
+                        linear=True,
+                        anisotropy=self.anisotropy,
+                        anisotropic_samples=setting.anisotropic_samples,
+                    )
+                )
+            return np.asarray(
+                gl.render_linear(
+                    scene,
+                    paints,
+                    coat=self.coat,
+                    anisotropy=self.anisotropy,
+                    anisotropic_samples=setting.anisotropic_samples,
+                )
+            )
+
+    def mask(self, size: int) -> np.ndarray:
+        """The painted pixels (size, size) bool: the shape's inside its silhouette (:func:`interior_mask`),
+        or, for a mesh, those of a frame without a stage that differ from its background corner."""
+        from station.render import lod as lodm
+
+        if self.mesh is None:
+            return interior_mask(self.scene, size)
+        bare = self.draw(lodm.DEFAULT_SETTING, size, bare=True)
+        return np.asarray(np.any(np.abs(bare - bare[:1, :1]) > 1e-6, axis=-1))
+
+
+def interior_mask(scene: Scene, size: int) -> np.ndarray:
+    """The shape's pixels (size, size) whose four neighbours are the shape's too: where a frame's shading,
+    not its silhouette's anti-aliasing, is compared with the truth engine's."""
     from station.render.numpy_renderer import gbuffer
 
-    g16 = gbuffer(scene, 16, 16)
-    sel = g16.mask & (g16.n_dot_v > 0.05)
-    if not sel.any():
-        raise RenderInputError("lod", "a view that shows the shape", tolerance_de)
-    choice = choose_lod(
+    m = np.asarray(gbuffer(scene, size, size).mask, dtype=bool)
+    inner = m.copy()
+    inner[1:] &= m[:-1]
+    inner[:-1] &= m[1:]
+    inner[:, 1:] &= m[:, :-1]
+    inner[:, :-1] &= m[:, 1:]
+    inner[0, :] = inner[-1, :] = inner[:, 0] = inner[:, -1] = False
+    return inner
+
+
+def scene_lod(
+    designs: Sequence[FaceFlopTravelGloss],
+    environment: Environment,
+    scene: Scene,
+    tolerance_de: float,
+    *,
+    engine: str = "numpy",
+    prefilter_engine: str = "numpy",
+    max_size: int | None = PREFILTER_SIZE,
+    coat: ClearCoat | None = None,
+    mesh: Mesh | None = None,
+    aa: int = 1,
+    anisotropy: Anisotropy | None = None,
+    cache: Any = None,
+    size: int | None = None,
+) -> tuple[list[LobeWeights], Environment, dict[str, Any]]:
+    """Level of detail of the frame for a CIEDE2000 tolerance (:func:`station.render.lod.choose_frame_lod`):
+    each candidate (lobe count, environment width, anisotropic samples) is rendered by the frame's own
+    renderer (*engine* gl | numpy, the environment prefiltered by *prefilter_engine* capped at *max_size*
+    faces, *coat*, the stage of *scene*, *mesh*, *aa* samples per pixel, *anisotropy*; no flakes) at
+    ``min(PROBE_SIZE, size)`` pixels and judged against the renderer's most accurate setting, with the
+    declared probe-to-truth margin. *cache*: a :class:`~station.render.envcache.PrefilterCache`.
+
+    Returns the paints fitted with the chosen basis, the environment at the chosen width, and the report
+    (lobes, environment width, anisotropic samples (None: the renderer's own choice), met, estimate,
+    margin, the default's estimate, the description)."""
+    from station.render import lobe_fit
+    from station.render import lod as lodm
+    from station.render.lobes import basis_for_count, default_basis
+
+    if not (np.isfinite(tolerance_de) and tolerance_de > 0):
+        raise RenderInputError("tolerance_de", "a CIEDE2000 tolerance > 0", tolerance_de)
+    probe_size = lodm.PROBE_SIZE if size is None else max(8, min(lodm.PROBE_SIZE, int(size)))
+    with FrameProbe(
         designs,
         environment,
-        g16.normal[sel],
-        g16.view[sel],
-        tolerance_de,
-        mode="prefiltered-lut",
-        samples=64,
-        quadrature_width=64,
-    )
-    paints = [lobe_fit.fit_design(d, basis_for_count(choice.lobes)) for d in designs]
-    env = environment
-    if choice.environment_width < env.equirect.shape[1]:
-        env = env.downsampled(choice.environment_width)
+        scene,
+        engine=engine,
+        prefilter_engine=prefilter_engine,
+        max_size=max_size,
+        coat=coat,
+        mesh=mesh,
+        aa=aa,
+        anisotropy=anisotropy,
+        cache=cache,
+    ) as probe:
+        mask = probe.mask(probe_size)
+        if not mask.any():
+            raise RenderInputError("lod", "a view that shows the shape", tolerance_de)
+        choice = lodm.choose_frame_lod(
+            lambda st: probe.draw(st, probe_size),
+            lodm.scene_white(environment),
+            tolerance_de,
+            lodm.frame_candidates(int(environment.equirect.shape[1])),
+            mask=mask,
+            anisotropic=anisotropy is not None,
+            probe_size=probe_size,
+        )
+    s = choice.setting
+    lobes = default_basis() if s.lobes is None else basis_for_count(s.lobes)
+    paints = [lobe_fit.fit_design(d, lobes) for d in designs]
+    env = environment if s.environment_width is None else environment.downsampled(s.environment_width)
     report = {
-        "lobes": choice.lobes,
+        "lobes": len(lobes.exponents),
+        "default_lobes": s.lobes is None,
         "environment_width": int(env.equirect.shape[1]),
+        "anisotropic_samples": s.anisotropic_samples,
         "met": choice.met,
-        "errors": {k: round(float(v), 3) for k, v in choice.errors.items()},
+        "errors": {
+            "estimate": round(choice.estimate_de, 3),
+            "margin": round(choice.margin_de, 3),
+            "total": round(choice.estimate_de + choice.margin_de, 3),
+            "default": round(choice.default_estimate_de, 3),
+        },
+        "probe_size": probe_size,
+        "engine": engine,
         "describe": choice.describe(),
     }
     return paints, env, report
@@ -179,7 +361,18 @@ def render_scene_image(
     env = environment.downsampled(ENV_WIDTH) if environment.equirect.shape[1] > ENV_WIDTH else environment
     lod = None
     if lod_de is not None:
-        paints, env, lod = scene_lod(designs, env, scene, lod_de)
+        model = builtin_mesh(mesh) if mesh is not None else None
+        paints, env, lod = scene_lod(
+            designs,
+            env,
+            scene,
+            lod_de,
+            engine="gl" if model is not None else "numpy",
+            coat=coat,
+            mesh=model,
+            cache=PrefilterCache(),
+            size=size,
+        )
     else:
         paints = [lobe_fit.fit_design(d) for d in designs]
     basis = prefilter_basis(

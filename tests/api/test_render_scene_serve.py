@@ -23,6 +23,7 @@ from station.model.difference import delta_e
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.cubemap import equirect_directions
+from station.render.envcache import PrefilterCache
 from station.render.flakes import flake_lod
 from station.render.hdr_io import write_hdr
 from station.render.numpy_renderer import gbuffer
@@ -155,7 +156,10 @@ def test_lod_mesh_and_scene_options(service: Service) -> None:
     body = {"design": SILVER, "environment": "booth", "size": 64}
     r = service.post("/styling/render", {**body, "lod_de": 2.0})
     env = procedural_environment("booth", ENV_WIDTH)
-    _, _, report = scene_lod([SILVER_DESIGN], env, Scene("speedshape", stage=Stage()), 2.0)
+    scene = Scene("speedshape", stage=Stage())
+    _, _, report = scene_lod(
+        [SILVER_DESIGN], env, scene, 2.0, coat=ClearCoat(), cache=PrefilterCache(), size=64
+    )
     assert json.loads(r.headers["X-Lod"]) == report and "lobes" in report
     core = render_scene_image([SILVER_DESIGN], env, stage=Stage(), coat=ClearCoat(), size=64, lod_de=2.0)
     _same(_png(r), core.image)

@@ -98,6 +98,8 @@ def test_cache_hits_and_survives_corruption(tmp_path):
     again = prefilter.prefilter_basis(env, [2, 20], engine="numpy", cache=cache)
     assert again.timings["cache_hits"] == 2
     assert np.allclose(again.cubes[1], first.cubes[1], rtol=1e-3)
+    # same input, same answer: the first (computed) maps equal the cached ones bit for bit
+    assert all(np.array_equal(a, b) for a, b in zip(first.cubes, again.cubes, strict=True))
     files = sorted((tmp_path / "prefilter").glob("*.npy"))
     assert len(files) == 2 and all("-n2-" in f.name or "-n20-" in f.name for f in files)
     files[0].write_bytes(b"garbage")
