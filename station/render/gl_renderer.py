@@ -45,6 +45,7 @@ from station.render.numpy_renderer import (
     check_size,
     horizon_table,
 )
+from station.render.prefilter import coat_diffuse_map
 from station.render.sh import sh_diffuse_matrix
 from station.render.shapes import GROUNDS, OCCLUDERS, Scene
 from station.render.stage import MAX_OCCLUDERS, backdrop_lobe, lookup_matrix
@@ -89,7 +90,8 @@ class GLRenderer:
     baked into a map once per stage (:meth:`_ground_map`).
 
     ``coat`` (of :meth:`render` / :meth:`render_linear`): a :class:`station.model.gloss.ClearCoat` scales
-    the gloss terms per pixel by Schlick's Fresnel (as ``numpy_renderer`` does); None: the thesis's model.
+    the gloss terms per pixel by the coat's exact Fresnel and the base by what it transmits, the diffuse
+    term read from the coat-transmitted diffuse map (as ``numpy_renderer`` does); None: the thesis's model.
 
     ``anisotropy`` (same methods): a :class:`station.model.anisotropy.Anisotropy` replaces both paints'
     gloss lobes by Ward's anisotropic lobe of that (α_x, α_y, direction), with P_s the paint's gloss
@@ -150,6 +152,7 @@ class GLRenderer:
             bound_exponents=np.asarray(basis.exponents)[self._order],
         )
         self._sh = sh_diffuse_matrix(basis.sh)
+        self._coat_tex: dict[float, Any] = {}  # coat index → coat-transmitted diffuse cube (prefilter)
         self._programs: dict[tuple, tuple] = {}  # (_program's arguments) → (program, vertex array)
         self._mesh = tx.MeshArrays(self.ctx)
         #: Draw a shape in two passes over its screen footprint (:mod:`station.render.footprint`): the
@@ -442,6 +445,10 @@ class GLRenderer:
         self, scene, pair, fbo, coat, mesh, flakes, aniso_uniforms: dict
     ) -> tuple[dict, list, int]:
         """Bind the frame's textures and return (uniforms, bound weights of the paints, lobe count m)."""
+        coat_tex = None
+        if coat is not None:  # made first: its sum on this context binds its own target and textures
+            coat_tex = self._coat_diffuse(coat)
+            fbo.use()
         stage = scene.stage
         backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         gx, gy, gz = GROUNDS[scene.shape] if mesh is None else (0.0, mesh.floor_y, 0.0)
@@ -454,6 +461,8 @@ class GLRenderer:
         for unit, tex in enumerate(self._lobes):
             tex.use(unit)
         self._diffuse_tex.use(m + 4)
+        if coat_tex is not None:
+            coat_tex.use(m + 3)
         self._horizon_tex.use(m + 5)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
         uniforms = {
@@ -465,6 +474,7 @@ class GLRenderer:
             "u_horizon": m + 5,
             "u_coat_f0": coat.f0 if coat is not None else 0.0,
             "u_coat_ref": coat.reference if coat is not None else 1.0,
+            "u_diffuse_coat": m + 3,
             "u_rot": tuple(
                 float(v) for v in lookup_matrix(stage.rotation_deg if stage else 0.0).T.ravel()
             ),  # column-major
@@ -488,7 +498,17 @@ class GLRenderer:
             uniforms.update(aniso_uniforms)
         mw = [self._bound_weights(w) for w in pair]
         uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
+        uniforms["_wk"] = [w.map_weights()[0] - w.fall_off_map_weight() for w in (pair + pair)[:2]]
+        if coat is not None and self.diffuse == "sh":
+            uniforms["_sh_coat"] = sh_diffuse_matrix(self.basis.sh, coat)
         return uniforms, mw, m
+
+    def _coat_diffuse(self, coat: ClearCoat) -> Any:
+        """The coat-transmitted diffuse cube texture of *coat* (``prefilter.coat_diffuse_map``), made once."""
+        if coat.index not in self._coat_tex:
+            cube = coat_diffuse_map(self.basis, coat, self.ctx)
+            self._coat_tex[coat.index] = tx.cube_texture(self.ctx, cube, self._half_float)
+        return self._coat_tex[coat.index]
 
     def _shadow_key(self, scene, mesh, probe: bool = False) -> tuple:
         """(shadowed light indices, ambient occlusion on, probe) of a frame: a mesh on a stage with
@@ -735,6 +755,7 @@ class GLRenderer:
         self._footprint_buf.release()
         objs = [obj for pv in self._programs.values() for obj in reversed(pv) if obj is not None]
         objs += [*self._lobes, self._diffuse_tex, self._horizon_tex, *self._flake_means.values()]
+        objs += list(self._coat_tex.values())
         objs += [tex for tex, *_ in self._aniso.values()]
         if self._combine is not None:
             objs += [*self._combine[:3], *self._combine[3]]
