@@ -225,12 +225,14 @@ def plastic_closed_form(env: Environment, coat: Coat) -> tuple[np.ndarray, np.nd
     """Closed forms (P, 3) at the pixel centres of the two coat models over a Lambert base, by brute-force
     integration of the map (box-filtered to 128 wide): the mirror term F_o L(R) plus
 
-    * product: (1 − F_o) ρ E(N), E(N) = ∫ L (N·ω)⁺ dω / π (irradiance / π);
+    * the exit-only coat (the product before its coat-transmitted diffuse map): (1 − F_o) ρ E(N),
+      E(N) = ∫ L (N·ω)⁺ dω / π (irradiance / π);
     * Mitsuba's ``plastic`` (``nonlinear`` false): (1 − F_o) ρ E_F(N) / (η² (1 − F_dr,int)), E_F(N) =
       ∫ L (1 − F(N·ω)) (N·ω)⁺ dω / π: light entering the coat is attenuated by its Fresnel F_i as well.
 
     In a uniform map both bases equal (1 − F_o) ρ L: η²(1 − F_dr,int) = 1 − F_dr,ext, the cosine-weighted
-    mean of 1 − F_i. The ratio of the two, per band, is what this one difference predicts."""
+    mean of 1 − F_i. The ratio of the two, per band, is what the exit-only coat's one difference predicts
+    (the product now draws the second: ``ClearCoat.entry_scale``, ``prefilter.coat_diffuse_map``)."""
     from station.model.fresnel import fresnel_dielectric
 
     eta = CLEAR_COAT_INDEX
@@ -279,7 +281,9 @@ def compare(env_name: str, env: Environment, basis: prefilter.PrefilteredBasis, 
         sel = (ndv >= lo) & (ndv < hi)
         med = {k: float(np.median(v[sel])) for k, v in lum.items()}
         m = med["m0"]
-        closed = f"; closed forms, product / plastic {med['cp'] / med['cm']:.3f}" if "cp" in med else ""
+        closed = (
+            f"; closed forms, exit-only coat / plastic {med['cp'] / med['cm']:.3f}" if "cp" in med else ""
+        )
         cases.append(
             Case(
                 f"{label}, N·V {lo:.2f}–{hi:.2f}: product / Mitsuba",
@@ -335,7 +339,9 @@ over black and over a 0.8 Lambert base (`nonlinear` false); `roughplastic` over 
 product's Ward α of the gloss (`lobe_from_gloss(g).ward_alpha`: {alphas}). Bands by N·V at the pixel
 centre; ratio of the band's median luminance; "floor" Mitsuba seed 1 over seed 0; "pixel centre" the
 product shaded once per pixel centre; "baseline" the coat before the physical one (Schlick normalised at
-60° onto the design's share, base untouched), supersampled the same way. ΔE00: mean over the sphere's
+60° onto the design's share, base untouched), supersampled the same way; "closed forms, exit-only coat /
+plastic" (white base) the map-integrated closed form of the physical coat before its coat-transmitted
+diffuse map (1 − F(N·V) on the base, the light entering unattenuated) over Mitsuba's plastic's. ΔE00: mean over the sphere's
 pixels of CIEDE2000 between Lab of radiance / the environment's mean luminance. Run time {wall_s:.0f} s
 wall, {cpu_s:.0f} s CPU (shared machine, loaded)."""
 

@@ -197,7 +197,7 @@ def _scene(args: argparse.Namespace) -> tuple[Scene, Stage | None, ClearCoat | N
             ground=bool(args.stage) and not args.no_ground,
         )
     coat = ClearCoat(args.coat) if args.coat is not None else None
-    mesh = None
+    mesh: Mesh | None = None
     if args.mesh:
         from station.render.meshes import MESH_CAMERA, load_mesh
 

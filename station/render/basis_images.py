@@ -44,7 +44,7 @@ from station.render.numpy_renderer import (
     lobe_factors,
     stage_background,
 )
-from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
+from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis, coat_diffuse_map
 from station.render.shapes import Scene, intersect
 from station.render.stage import lookup_matrix
 from station.render.weights import LobeWeights
@@ -258,6 +258,12 @@ def _lookup_images(
     fall_off = fall_off_term(
         basis, normals, refl, ndv.astype(np.float64), horizon=horizon, d_normal=d_normal
     ).T
+    d_image = d_normal
+    if coat is not None:
+        # the D image (weight π(K_D + K_A)) reads the coat-transmitted map, the A image (weight π K_A)
+        # carries K_A's share back to D: π K_D D_coat + π K_A (D + fall-off), as numpy_renderer.shade_pixels
+        d_image = sample_cube(coat_diffuse_map(basis, coat), normals)
+        fall_off = fall_off + (d_normal - d_image).T
     # the coat's factors on the gloss and the base images (numpy_renderer.shade_pixels); ones without it
     sc = np.ones_like(ndv) if coat is None else coat.gloss_scale(ndv).astype(np.float32)
     tb = np.ones_like(ndv) if coat is None else coat.base_scale(ndv).astype(np.float32)
@@ -268,7 +274,7 @@ def _lookup_images(
     lookups: dict[int, np.ndarray] = {}
     for j, (kind, i) in enumerate(layout):
         if kind == "D":
-            images[:, j] = d_normal.T * tb
+            images[:, j] = d_image.T * tb
             continue
         if kind == "A":
             images[:, j] = fall_off * tb
@@ -398,10 +404,11 @@ def _gl_images(
         else:
             k_g[i] = (e[i] + 1.0) / (2.0 * np.pi)
         unit = LobeWeights(basis.exponents, k_d, k_dd, k_g)
-        unit_coat = coat if kind in ("Gh", "Cg") else None
+        unit_coat = coat if kind in ("Gh", "Cg", "D") else None  # "D": the coat-transmitted map
         images[:, j] = gl_renderer.render_linear(scene, [unit], coat=unit_coat).reshape(-1, 3)[pixels].T
         if unit_coat is None:
             images[:, j] *= tb  # a base image: what the coat transmits (1 when there is none)
+        # (with a coat the "D" image is rendered with it: D_coat times 1 − F, as the NumPy path makes it)
 
 
 def build_basis_images(

@@ -140,6 +140,10 @@ def set_uniforms(
         _write(prog, "u_flake_tint", [flake_tint(w[1]) for w in mw])
     if "u_wa" in prog:
         _write(prog, "u_wa", uniforms["_wa"])
+    if "u_wk" in prog:
+        _write(prog, "u_wk", uniforms["_wk"])
+    if "u_sh_coat" in prog:
+        prog["u_sh_coat"].write(uniforms["_sh_coat"].tobytes())
     if "u_occ" in prog:
         prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
     if "u_sh" in prog:

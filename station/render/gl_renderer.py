@@ -9,16 +9,17 @@ and are re-exported here for callers that import them from this module.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from station.closing import Closing
 from station.model.anisotropy import Anisotropy
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render import gl_textures as tx
 from station.render.errors import RenderInputError
-from station.render.flakes import FlakeChoice, flake_lod, flake_mean_cube, flake_uniforms
+from station.render.flakes import FlakeChoice, flake_lod, flake_uniforms
 from station.render.footprint import shape_footprint
 from station.render.gl_anisotropy import anisotropy_frame
 from station.render.gl_context import (
@@ -30,6 +31,7 @@ from station.render.gl_context import (
     load_shader,
 )
 from station.render.gl_frame_shadows import FrameShadows
+from station.render.gl_maps import DerivedMaps
 from station.render.gl_passes import FramePasses
 from station.render.gl_programs import (
     binding_order,
@@ -63,13 +65,12 @@ __all__ = [
     "load_shader",
 ]
 
-
 #: Texels per side of the baked ground map (the disc's square; 6-unit radius: 1.2 cm a texel, a 1°
 #: penumbra at 2 units from its occluder spans ~6 texels).
 GROUND_MAP = 1024
 
 
-class GLRenderer:
+class GLRenderer(Closing):
     """Renders scenes with one prefiltered basis on a GL context; a context manager.
 
     The lobe maps are uploaded once as half-float (``half_float=True``) or float cube textures. One
@@ -86,7 +87,8 @@ class GLRenderer:
     baked into a map once per stage (:meth:`_ground_map`).
 
     ``coat`` (of :meth:`render` / :meth:`render_linear`): a :class:`station.model.gloss.ClearCoat` scales
-    the gloss terms per pixel by Schlick's Fresnel (as ``numpy_renderer`` does); None: the thesis's model.
+    the gloss terms per pixel by the coat's exact Fresnel and the base by what it transmits, the diffuse
+    term read from the coat-transmitted diffuse map (as ``numpy_renderer`` does); None: the thesis's model.
 
     ``anisotropy`` (same methods): a :class:`station.model.anisotropy.Anisotropy` replaces both paints'
     gloss lobes by Ward's anisotropic lobe of that (α_x, α_y, direction), with P_s the paint's gloss
@@ -146,6 +148,7 @@ class GLRenderer:
         )
         self._sh = sh_diffuse_matrix(basis.sh)
         self._passes = FramePasses(self.ctx, self._defines)  # programs, footprint buffer, pass drawing
+        self._maps = DerivedMaps(self.ctx, basis, half_float)  # flake mean and coat diffuse maps
         self._mesh = tx.MeshArrays(self.ctx)
         #: Draw a shape over its screen footprint (:mod:`station.render.gl_passes`). False: one full-screen
         #: pass of the paint program (the same frame, every pixel paying for the paint).
@@ -162,7 +165,6 @@ class GLRenderer:
         #: The anisotropic sample choice of the last frame (None: isotropic frame).
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
-        self._flake_means: dict[float, Any] = {}  # spread → mean map texture (_flake_mean)
         #: Shadow maps of the strongest extracted lights and the ground's occlusion under a mesh or a shape
         #: (:mod:`station.render.gl_frame_shadows`); False: the sphere proxies' shadows only.
         self.shadows = True
@@ -177,14 +179,6 @@ class GLRenderer:
         targets = FrameTargets(self.ctx, self.width, self.height, aa)
         self.targets.release()
         self.targets = targets
-
-    def _flake_mean(self, flakes: FlakeLayer):
-        """The flakes' mean map C_E for this layer's spread (:func:`station.render.flakes.flake_mean_cube`),
-        uploaded once per spread."""
-        key = round(flakes.spread_deg, 6)
-        if key not in self._flake_means:
-            self._flake_means[key] = tx.cube_texture(self.ctx, flake_mean_cube(self.basis, flakes), False)
-        return self._flake_means[key]
 
     def _combined_atlas(self, pair) -> list:
         """[gloss, dd] atlas textures of both paints' narrow lobes (shaders/combine.frag.glsl; rebuilt on
@@ -347,6 +341,10 @@ class GLRenderer:
         self, scene, pair, fbo, coat, mesh, flakes, aniso_uniforms: dict
     ) -> tuple[dict, list, int]:
         """Bind the frame's textures and return (uniforms, bound weights of the paints, lobe count m)."""
+        coat_tex = None
+        if coat is not None:  # made first: its sum on this context binds its own target and textures
+            coat_tex = self._maps.coat_diffuse(coat)
+            fbo.use()
         stage = scene.stage
         backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         gx, gy, gz = GROUNDS[scene.shape] if mesh is None else (0.0, mesh.floor_y, 0.0)
@@ -359,6 +357,8 @@ class GLRenderer:
         for unit, tex in enumerate(self._lobes):
             tex.use(unit)
         self._diffuse_tex.use(m + 4)
+        if coat_tex is not None:
+            coat_tex.use(m + 3)
         self._horizon_tex.use(m + 5)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
         uniforms = {
@@ -370,6 +370,7 @@ class GLRenderer:
             "u_horizon": m + 5,
             "u_coat_f0": coat.f0 if coat is not None else 0.0,
             "u_coat_ref": coat.reference if coat is not None else 1.0,
+            "u_diffuse_coat": m + 3,
             "u_rot": tuple(
                 float(v) for v in lookup_matrix(stage.rotation_deg if stage else 0.0).T.ravel()
             ),  # column-major
@@ -385,7 +386,7 @@ class GLRenderer:
         on = flakes is not None and self.last_flakes is not None and self.last_flakes.on
         if on:
             uniforms.update(flake_uniforms(flakes))
-            self._flake_mean(flakes).use(m + 8)
+            self._maps.flake_mean(flakes).use(m + 8)
         if on or mesh is not None:  # the glints' map; a mesh's glass and chrome
             self._lobes[int(np.nonzero(self._order == int(np.argmax(self.basis.exponents)))[0][0])].use(m + 7)
         if aniso_uniforms:
@@ -393,6 +394,9 @@ class GLRenderer:
             uniforms.update(aniso_uniforms)
         mw = [self._bound_weights(w) for w in pair]
         uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
+        uniforms["_wk"] = [w.map_weights()[0] - w.fall_off_map_weight() for w in (pair + pair)[:2]]
+        if coat is not None and self.diffuse == "sh":
+            uniforms["_sh_coat"] = sh_diffuse_matrix(self.basis.sh, coat)
         return uniforms, mw, m
 
     @property
@@ -580,21 +584,17 @@ class GLRenderer:
         self._mesh.release()
         self.targets.release()
         self._passes.release()
-        objs = [*self._lobes, self._diffuse_tex, self._horizon_tex, *self._flake_means.values()]
+        self._maps.release()
+        objs = [*self._lobes, self._diffuse_tex, self._horizon_tex]
         objs += [tex for tex, *_ in self._aniso.values()]
         if self._combine is not None:
             objs += [*self._combine[:3], *self._combine[3]]
         self._frame_shadows.release()
         for obj in objs:
             obj.release()
-        for cache in (self._flake_means, self._aniso):
-            cache.clear()
+        self._aniso.clear()
         self._combine = self._combined = None
         if self._own_ctx:
             self.ctx.release()
 
-    def __enter__(self) -> GLRenderer:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.release()
+    close = release  # ``with GLRenderer(...) as gl:`` releases it on the way out (station.closing.Closing)

@@ -62,6 +62,10 @@ Clear coat: with a :class:`station.model.gloss.ClearCoat` every gloss term (w_G,
 lights) is multiplied per pixel by s(N·V) = F(N·V)/ρ_ref, the coat's exact dielectric Fresnel, and every
 base term (diffuse, directionally diffuse, fall-off) by what the coat transmits, 1 − F(N·V) (energy
 conserving: a white furnace returns at most its light); ``coat=None`` is the thesis's model as printed.
+The diffuse term π K_D reads the coat-transmitted diffuse map D_coat instead of D (light entering the
+coat weighted by (1 − F(N·l))/(1 − F_dr,ext), ``ClearCoat.entry_scale``, Mitsuba's ``plastic``;
+:func:`station.render.prefilter.coat_diffuse_map`); the effect terms (directionally diffuse, fall-off,
+flakes) keep D and the outgoing factor only (``ClearCoat``'s docstring says why).
 
 Pixels that miss the object show a constant grey background, or with a scene's
 :class:`~station.render.stage.Stage` the environment as backdrop over a ground disc with its contact
@@ -89,7 +93,7 @@ from station.render.environment import spread_exponent
 from station.render.errors import RenderInputError
 from station.render.flakes import clip_sparkle, flake_lod, flake_tint, sparkle_pixels
 from station.render.lobes import bent_direction
-from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis
+from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis, coat_diffuse_map
 from station.render.sh import sh_diffuse
 from station.render.shapes import GROUNDS, OCCLUDERS, Scene, intersect
 from station.render.stage import backdrop_lobe, ground_fade, ground_radiance, lookup_matrix
@@ -222,10 +226,15 @@ def fall_off_g1(c: np.ndarray) -> np.ndarray:
     return 2.0 / (3.0 * np.pi) * ((np.pi - beta) * c + np.sin(beta))
 
 
-def diffuse_lookup(basis: PrefilteredBasis, directions: np.ndarray, diffuse: str = "cube") -> np.ndarray:
+def diffuse_lookup(
+    basis: PrefilteredBasis, directions: np.ndarray, diffuse: str = "cube", coat: ClearCoat | None = None
+) -> np.ndarray:
     """The normalised diffuse map D (..., 3) at unit *directions* (..., 3): the exponent-1 cube
-    (``diffuse="cube"``) or the 9-coefficient SH irradiance (``"sh"``), module docstring."""
-    return sample_cube(basis.diffuse, directions) if diffuse == "cube" else sh_diffuse(basis.sh, directions)
+    (``diffuse="cube"``) or the 9-coefficient SH irradiance (``"sh"``), module docstring; with *coat* the
+    coat-transmitted map D_coat (:func:`station.render.prefilter.coat_diffuse_map`, its SH twin)."""
+    if diffuse == "cube":
+        return sample_cube(basis.diffuse if coat is None else coat_diffuse_map(basis, coat), directions)
+    return sh_diffuse(basis.sh, directions, coat)
 
 
 def fall_off_term(
@@ -279,7 +288,11 @@ def shade_pixels(
     w_d, w_dd, w_g = weights.map_weights()
     d = diffuse_lookup(basis, normal, diffuse)
     g, h = lobe_factors(horizon_table(basis.exponents, horizon), n_dot_v)
-    base = w_d * d
+    if coat is None:
+        base = w_d * d
+    else:  # π K_D through the coat (D_coat), π K_A (in w_d, fall-off) with D: module docstring
+        w_a = weights.fall_off_map_weight()
+        base = (w_d - w_a) * diffuse_lookup(basis, normal, diffuse, coat) + w_a * d
     if weights.has_fall_off:
         base = base + weights.fall_off_map_weight() * fall_off_term(
             basis, normal, reflect, n_dot_v, diffuse, horizon, d_normal=d

@@ -8,6 +8,15 @@ the lobe normalised to integrate to 1 over the hemisphere around R, so a constan
 P_n = c for every n. P_1 is the diffuse map E(N)/π (thesis eq 2.5.3 prefilters with exponent 1); the
 9-coefficient SH irradiance (:mod:`station.render.sh`) approximates the same thing.
 
+Coat-transmitted diffuse map (:func:`coat_diffuse_map`): with a clear coat the diffuse base sees each
+direction through the coat, so its map is
+
+    D_coat(N) = (1/π) ∫ L(ω) t(N·ω) (N·ω)₊ dω,    t = (1 − F(N·ω; n))/(1 − F_dr,ext(n))
+
+(``station.model.fresnel.ClearCoat.entry_scale``: Mitsuba's ``plastic``), prefiltered like the diffuse
+map (the same brute-force sum, the entry weight on the radiance terms only, so a constant environment
+c gives c, as t's cosine-weighted mean is 1).
+
 Estimators of the same integral:
 
 * :func:`prefilter_brute` — direct quadrature over every source texel with exact solid angles; the
@@ -36,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from station.model.fresnel import ClearCoat
 from station.render import cubemap
 from station.render.envcache import PrefilterCache
 from station.render.environment import Environment, Lights, extract_lights
@@ -48,6 +58,12 @@ BRUTE_MAX_SIZE = 16
 WIDE_EXPONENT = 200.0  # lobes below: horizon tables and lights shaded exactly (numpy_renderer)
 OUTPUT_FACTOR = 2.2
 DIFFUSE_SIZE = 16
+#: Face size of the coat-transmitted diffuse map and of its source cube: the entry weight falls to 0 at
+#: grazing, so a light near a normal's horizon makes D_coat vary faster with the normal than D (a studio's
+#: softboxes: 16-texel faces read 12 % high head-on against the map-integrated value, 32 within 3 %).
+COAT_DIFFUSE_SIZE = 32
+COAT_SOURCE_SIZE = 64
+TABLE_STEPS = 65536
 
 
 def check_exponent(exponent: float) -> float:
@@ -83,12 +99,15 @@ def lobe_weights(dirs_out: np.ndarray, dirs_src: np.ndarray, exponent: float) ->
     return np.float32((exponent + 1.0) / (2.0 * np.pi)) * np.exp(np.float32(exponent) * np.log(cos))
 
 
-def prefilter_brute(src_cube: np.ndarray, exponent: float, out_size: int) -> np.ndarray:
+def prefilter_brute(
+    src_cube: np.ndarray, exponent: float, out_size: int, coat: ClearCoat | None = None
+) -> np.ndarray:
     """Reference prefilter by quadrature over all source texels, (6, out, out, 3) float64.
 
     Each texel counts with its exact solid angle; the sum is divided by the quadrature of the lobe
     itself (ideally 1), so a constant environment is reproduced exactly even when the lobe is
-    narrower than a source texel.
+    narrower than a source texel. *coat*: weight each texel's radiance by the coat's entry weight
+    t(R·ω) (module docstring; with exponent 1 the coat-transmitted diffuse map).
     """
     s = src_cube.shape[1]
     src_dirs = cubemap.face_directions(s).reshape(-1, 3)
@@ -96,8 +115,16 @@ def prefilter_brute(src_cube: np.ndarray, exponent: float, out_size: int) -> np.
     rad = np.concatenate([src_cube.reshape(-1, 3) * sa[:, None], sa[:, None]], axis=1).astype(np.float32)
     out_dirs = cubemap.face_directions(out_size).reshape(-1, 3)
     out = np.empty((out_dirs.shape[0], 3))
+    grid = np.linspace(0.0, 1.0, TABLE_STEPS + 1)
+    table = (coat.entry_scale(grid) if coat is not None else grid).astype(np.float32)
     for i in range(0, out_dirs.shape[0], 256):
-        acc = lobe_weights(out_dirs[i : i + 256], src_dirs, exponent) @ rad
+        w = lobe_weights(out_dirs[i : i + 256], src_dirs, exponent)
+        if coat is None:
+            acc = w @ rad
+        else:  # t(R·ω) from a fine table of the exact weight (nearest of 65537 steps: within 4e-5)
+            c = np.clip((out_dirs[i : i + 256] @ src_dirs.T).astype(np.float32), 0.0, 1.0)
+            t = table[(c * np.float32(TABLE_STEPS) + np.float32(0.5)).astype(np.int32)]
+            acc = np.concatenate([(w * t) @ rad[:, :3], w @ rad[:, 3:]], axis=1)
         out[i : i + 256] = acc[:, :3] / acc[:, 3:]
     return out.reshape(6, out_size, out_size, 3)
 
@@ -119,8 +146,10 @@ class GLBrute:
         flat = np.ascontiguousarray(data.reshape(6 * s, s, c), dtype=np.float32)
         return self.ctx.texture((s, 6 * s), c, flat.tobytes(), dtype="f4")
 
-    def run(self, src_cube: np.ndarray, exponent: float, out_size: int) -> np.ndarray:
-        """Prefiltered cube (6, out, out, 3) float32 (as :func:`prefilter_brute`)."""
+    def run(
+        self, src_cube: np.ndarray, exponent: float, out_size: int, coat: ClearCoat | None = None
+    ) -> np.ndarray:
+        """Prefiltered cube (6, out, out, 3) float32 (as :func:`prefilter_brute`, *coat* included)."""
         key = id(src_cube)
         if key not in self._sources:
             s = src_cube.shape[1]
@@ -140,6 +169,8 @@ class GLBrute:
             self.prog["u_src_dirs"] = 1
             self.prog["u_src_rad"] = 2
             self.prog["u_exponent"] = float(exponent)
+            self.prog["u_coat_n"] = 0.0 if coat is None else coat.index
+            self.prog["u_coat_t"] = 1.0 if coat is None else coat.diffuse_transmission
             self.vao.render(mode=self.ctx.TRIANGLES, vertices=3)
             data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
         finally:
@@ -310,6 +341,26 @@ class PrefilteredBasis:
     timings: dict[str, float] = field(default_factory=dict)
     lights: Lights | None = None  # taken out of the wide lobes' maps
     wide: tuple[bool, ...] = ()  # lobe i prefiltered from the residual map
+    diffuse_source: np.ndarray | None = field(default=None, repr=False)  # the coat map's source cube
+    coat_maps: dict[float, np.ndarray] = field(default_factory=dict, repr=False)  # coat index → D_coat
+
+
+def coat_diffuse_map(basis: PrefilteredBasis, coat: ClearCoat, ctx: Any = None) -> np.ndarray:
+    """The coat-transmitted diffuse map D_coat (6, COAT_DIFFUSE_SIZE, COAT_DIFFUSE_SIZE, 3) float32 of
+    *basis* for *coat* (module docstring), summed on first use from the basis's source cube and kept on
+    the basis: on the GL context *ctx* (:class:`GLBrute`) when given, else by :func:`prefilter_brute`
+    (the same terms). A basis made without a coat pays nothing for it. Units: radiance."""
+    if coat.index not in basis.coat_maps:
+        src = basis.diffuse_source
+        if src is None:
+            raise RenderError("prefilter: this basis has no source cube for a coat map")
+        if ctx is not None:
+            with GLBrute(ctx) as gl:
+                cube = gl.run(src, 1.0, COAT_DIFFUSE_SIZE, coat)
+        else:
+            cube = prefilter_brute(src, 1.0, COAT_DIFFUSE_SIZE, coat).astype(np.float32)
+        basis.coat_maps[coat.index] = cube
+    return basis.coat_maps[coat.index]
 
 
 def _sample_lobes(
@@ -350,9 +401,10 @@ def _compute_maps(
     engine: str,
     ctx,
     timings: dict[str, float],
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray]:
     """Compute the lobe maps *todo* into *cubes* (brute-force sums up to BRUTE_MAX_SIZE, the quadrature
-    above) and return the diffuse map; seconds per stage into *timings*. A GL context is made (and
+    above) and return the diffuse map and the coat map's source cube (:func:`coat_diffuse_map`); seconds
+    per stage into *timings*. A GL context is made (and
     released) when *engine* is ``gl`` and *ctx* is None."""
     small: dict[tuple[int, int], np.ndarray] = {}
 
@@ -390,7 +442,7 @@ def _compute_maps(
             brute_gl.release()
         if own:
             gl_ctx.release()
-    return diffuse
+    return diffuse, small_cube(0, COAT_SOURCE_SIZE)
 
 
 def prefilter_basis(
@@ -436,7 +488,7 @@ def prefilter_basis(
     ]
     cubes: list[np.ndarray | None] = [cache.get(k) if cache else None for k in keys]
     todo = [i for i, c in enumerate(cubes) if c is None]
-    diffuse = _compute_maps(env, residual, src, plan, wide, todo, cubes, engine, ctx, timings)
+    diffuse, coat_src = _compute_maps(env, residual, src, plan, wide, todo, cubes, engine, ctx, timings)
     maps = [c for c in cubes if c is not None]
     if len(maps) != len(cubes):
         raise RenderError("prefilter: a lobe was neither cached nor computed")
@@ -457,4 +509,5 @@ def prefilter_basis(
         timings=timings,
         lights=found if any(wide) else None,
         wide=wide,
+        diffuse_source=coat_src,
     )

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from station.model.fresnel import ClearCoat
 from station.render.cubemap import equirect_directions, equirect_solid_angles
 
 SH_BAND_GAIN = np.array(
@@ -54,11 +55,26 @@ def sh_project(equirect: np.ndarray) -> np.ndarray:
     return np.einsum("hwk,hwc->kc", basis, equirect.astype(np.float64))
 
 
-def sh_diffuse(coeffs: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """Normalised diffuse map D(n) = E(n)/π (..., 3) at unit normals (..., 3) from coefficients (9, 3)."""
-    return sh_basis(normals) @ (coeffs * SH_BAND_GAIN[:, None] / np.pi)
+def coat_band_gain(coat: ClearCoat) -> np.ndarray:
+    """Band gains (9,) of the coat-transmitted diffuse kernel t(μ) μ₊ (``ClearCoat.entry_scale``): by the
+    Funk–Hecke theorem Â_l = 2π ∫₀¹ t(μ) μ P_l(μ) dμ (Gauss–Legendre, 256 nodes); Â_0 = π exactly, as
+    t's cosine-weighted mean is 1. The SH twin of ``station.render.prefilter.coat_diffuse_map``."""
+    x, w = np.polynomial.legendre.leggauss(256)
+    mu = 0.5 * (x + 1.0)
+    k = 0.5 * w * 2.0 * np.pi * coat.entry_scale(mu) * mu
+    bands = [np.sum(k), np.sum(k * mu), np.sum(k * 0.5 * (3.0 * mu * mu - 1.0))]
+    return np.array([bands[0]] + [bands[1]] * 3 + [bands[2]] * 5)
 
 
-def sh_diffuse_matrix(coeffs: np.ndarray) -> np.ndarray:
-    """Coefficients pre-multiplied by Â_l/π, (9, 3): what the GLSL shader evaluates against sh_basis."""
-    return (coeffs * SH_BAND_GAIN[:, None] / np.pi).astype(np.float32)
+def sh_diffuse(coeffs: np.ndarray, normals: np.ndarray, coat: ClearCoat | None = None) -> np.ndarray:
+    """Normalised diffuse map D(n) = E(n)/π (..., 3) at unit normals (..., 3) from coefficients (9, 3);
+    with *coat* the coat-transmitted map D_coat (:func:`coat_band_gain`)."""
+    gain = SH_BAND_GAIN if coat is None else coat_band_gain(coat)
+    return sh_basis(normals) @ (coeffs * gain[:, None] / np.pi)
+
+
+def sh_diffuse_matrix(coeffs: np.ndarray, coat: ClearCoat | None = None) -> np.ndarray:
+    """Coefficients pre-multiplied by Â_l/π, (9, 3): what the GLSL shader evaluates against sh_basis
+    (*coat*: the coat-transmitted kernel's gains, :func:`coat_band_gain`)."""
+    gain = SH_BAND_GAIN if coat is None else coat_band_gain(coat)
+    return (coeffs * gain[:, None] / np.pi).astype(np.float32)

@@ -28,7 +28,12 @@ design or lobe costs one dot product per pixel.
 Clear coat: with a :class:`station.model.gloss.ClearCoat` the gloss term (the designed BRDF's Phong
 lobe, the lobe model's K_G lobes) is multiplied per pixel by s(N·V) = F(N·V)/ρ_ref (the coat's exact
 dielectric Fresnel) and the colour terms by 1 − F(N·V), the factors the renderers apply; ``coat=None``
-is the thesis's BRDF.
+is the thesis's BRDF. The diffuse base also sees each incoming direction through the coat: per sample
+(quadrature direction or point light) its weight (N·ω)₊ is multiplied by t(N·ω) = (1 − F(N·ω))/(1 −
+F_dr,ext) (``ClearCoat.entry_scale``, Mitsuba's ``plastic``; a uniform environment is unchanged). The
+diffuse base is K_D of the lobe model and, of a designed BRDF, its colour floor ρ_d = min_ψ ρ(ψ) (per
+channel, ≥ 0: the flop colour the clamped quadratic reaches at its travel); the effect part ρ(ψ) − ρ_d,
+like the K_DD lobes and the fall-off, keeps the outgoing factor alone (``ClearCoat``'s docstring).
 
 Near-mirror lobes: a lobe narrower than MIRROR_PIXELS map pixels (:func:`resolves_pixels`; a 100 GU
 design's n = 10⁷) would miss point lights at pixel centres, so it importance-samples the whole map with
@@ -101,6 +106,12 @@ def _lobe_samples(exponent: float, count: int) -> NDArray[np.float64]:
     return np.stack([sin_psi * np.cos(phi), sin_psi * np.sin(phi), cos_psi], axis=-1)
 
 
+def diffuse_floor(brdf: DesignedBRDF) -> NDArray[np.float64]:
+    """ρ_d (3,): the designed BRDF's colour floor min_ψ ρ(ψ) per channel, ≥ 0, the share of its colour the
+    clear coat treats as the diffuse base (module docstring; the flop colour of a clamped quadratic)."""
+    return np.asarray(np.maximum(brdf.reflectance.min(axis=0), 0.0), dtype=float)
+
+
 class TruthScene:
     """Per-pixel integrals of one environment for a set of normals and views (reused across designs).
 
@@ -147,7 +158,7 @@ class TruthScene:
         self.lighting = prepare_lighting(environment, quadrature_width) if lighting is None else lighting
         self._bent: dict[float, NDArray[np.float64]] = {}
         self._tangents = _frames(self.reflect)
-        self._cache: dict[tuple[str, float], NDArray[np.float64]] = {}
+        self._cache: dict[tuple[str, float], NDArray[np.float64]] = {}  # lobe integrals, coat irradiance
         self._horizon: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
         self._hist: dict[str, NDArray[np.float64]] = {}
 
@@ -252,9 +263,30 @@ class TruthScene:
         n_dot_v = np.einsum("ij,ij->i", self.normals, self.views)
         return coat.gloss_scale(n_dot_v)[:, None], coat.base_scale(n_dot_v)[:, None]
 
+    def coat_irradiance(self, coat: ClearCoat) -> NDArray[np.float64]:
+        """E_coat(N) = ∫ L(ω) t(N·ω) (N·ω)₊ dω per pixel, (P, 3): the irradiance the diffuse base receives
+        through *coat* (t = ``coat.entry_scale``; module docstring), summed over the quadrature directions
+        and the point lights (the sampled lobes' maps are the same light)."""
+        key = ("coat", coat.index)
+        if key not in self._cache:
+            dirs = np.concatenate([self.lighting.quad_dirs, self.lighting.point_dirs])
+            flux = np.concatenate([self.lighting.quad_flux, self.lighting.point_flux])
+            out = np.empty((self.normals.shape[0], 3))
+            for s in range(0, out.shape[0], _PIXEL_CHUNK):
+                sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
+                n_dot = np.maximum(self.normals[sl] @ dirs.T, 0.0)
+                out[sl] = (n_dot * coat.entry_scale(n_dot)) @ flux
+            self._cache[key] = out
+        return self._cache[key]
+
     def truth(self, brdf: DesignedBRDF, coat: ClearCoat | None = None) -> NDArray[np.float64]:
         """Radiance of the designed BRDF, (..., 3) (module docstring); *coat*: clear-coat Fresnel or None."""
-        colour = self._binned("cos", brdf.reflectance / np.pi, points_only=False)
+        if coat is None:
+            colour = self._binned("cos", brdf.reflectance / np.pi, points_only=False)
+        else:  # the colour floor through the coat, the effect part as without it
+            floor = diffuse_floor(brdf)
+            colour = self._binned("cos", (brdf.reflectance - floor) / np.pi, points_only=False)
+            colour = colour + floor[None, :] / np.pi * self.coat_irradiance(coat)
         gloss = (
             brdf.specular_albedo
             * (brdf.phong_exponent + 1.0)
@@ -276,17 +308,16 @@ class TruthScene:
         sharp = n_exp >= SHARP_EXPONENT
         area = self._area_lights(n_exp)
         scale, base = self.coat_factors(coat)
+        floor = diffuse_floor(brdf)
         out = np.empty((self.normals.shape[0], 3))
         for s in range(0, out.shape[0], _PIXEL_CHUNK):
             sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
             cos_psi = np.clip(self.reflect[sl] @ dirs.T, -1.0, 1.0)
             n_dot = self.normals[sl] @ dirs.T
-            colour = (
-                np.einsum(
-                    "pm,pmc,mc->pc", np.maximum(n_dot, 0.0), brdf.rho(np.degrees(np.arccos(cos_psi))), flux
-                )
-                / np.pi
-            )
+            rho = brdf.rho(np.degrees(np.arccos(cos_psi)))
+            if coat is not None:  # the colour floor through the coat (module docstring)
+                rho = rho + (coat.entry_scale(n_dot) - 1.0)[..., None] * floor
+            colour = np.einsum("pm,pmc,mc->pc", np.maximum(n_dot, 0.0), rho, flux) / np.pi
             lobe = (n_dot > 0.0) * np.clip(cos_psi, 0.0, 1.0) ** n_exp
             if sharp:  # residual map by importance sampling below; only the point lights here
                 lobe[:, : self.lighting.quad_dirs.shape[0] if not area else None] = 0.0
@@ -316,7 +347,8 @@ class TruthScene:
         """
         if mode not in LOBE_MODES:
             raise RenderInputError("mode", " | ".join(LOBE_MODES), mode)
-        base = weights.k_d[None, :] * self.irradiance()
+        # K_D through the coat (module docstring): every mode, as the renderers' coat-transmitted map
+        base = weights.k_d[None, :] * (self.irradiance() if coat is None else self.coat_irradiance(coat))
         if weights.has_fall_off:
             base = base + weights.k_a[None, :] * self._binned(
                 "cos", fall_off_factor(_COS_GRID), points_only=False

@@ -138,7 +138,8 @@ def test_truth_closed_form_and_renderer_agreement() -> None:
     s_px, t_px = scene.coat_factors(coat)
     assert scene.lobes(w, "exact", coat) == pytest.approx(scene.lobes(w) * s_px, rel=1e-9)
     lam = LobeWeights(EXPS, np.full(3, 0.1), np.zeros((4, 3)), np.zeros(4))
-    assert scene.lobes(lam, "exact", coat) == pytest.approx(scene.lobes(lam) * t_px, rel=1e-9)
+    # (K_D also sees the light entering the coat, whose weight averages to 1 in this uniform map)
+    assert scene.lobes(lam, "exact", coat) == pytest.approx(scene.lobes(lam) * t_px, rel=2e-3)
 
     # Against ground truth on the sky: the NumPy renderer with the coat tracks the truth with the coat
     # as closely as the thesis model tracks the thesis truth, and the coat changes the picture.

@@ -8,7 +8,20 @@ uniform sampler2D u_out_dirs;  // (S_out, 6 S_out): unit direction of each outpu
 uniform sampler2D u_src_dirs;  // (S, 6 S): unit direction of each source texel
 uniform sampler2D u_src_rad;   // (S, 6 S): radiance x solid angle (rgb), solid angle (a)
 uniform float u_exponent;
+// Clear coat's entry weight on the radiance terms (prefilter.coat_diffuse_map, ClearCoat.entry_scale):
+// (1 - F(R.w; u_coat_n)) / u_coat_t, u_coat_t = 1 - F_dr,ext; u_coat_n = 0: none.
+uniform float u_coat_n;
+uniform float u_coat_t;
 out vec4 f_color;
+
+float entry(float c) {
+    if (u_coat_n <= 0.0) return 1.0;
+    float ci = clamp(c, 0.0, 1.0);
+    float ct = sqrt(max(1.0 - (1.0 - ci * ci) / (u_coat_n * u_coat_n), 0.0));
+    float rs = (ci - u_coat_n * ct) / (ci + u_coat_n * ct);
+    float rp = (u_coat_n * ci - ct) / (u_coat_n * ci + ct);
+    return (1.0 - 0.5 * (rs * rs + rp * rp)) / u_coat_t;
+}
 
 void main() {
     vec3 R = texelFetch(u_out_dirs, ivec2(gl_FragCoord.xy), 0).xyz;
@@ -17,8 +30,10 @@ void main() {
     vec4 acc = vec4(0.0);
     for (int y = 0; y < n.y; ++y) {
         for (int x = 0; x < n.x; ++x) {
-            float c = max(dot(R, texelFetch(u_src_dirs, ivec2(x, y), 0).xyz), 1e-30);
-            acc += (k * exp(u_exponent * log(c))) * texelFetch(u_src_rad, ivec2(x, y), 0);
+            float d = dot(R, texelFetch(u_src_dirs, ivec2(x, y), 0).xyz);
+            float c = max(d, 1e-30);
+            vec4 rad = texelFetch(u_src_rad, ivec2(x, y), 0);
+            acc += (k * exp(u_exponent * log(c))) * vec4(entry(d) * rad.rgb, rad.a);
         }
     }
     f_color = vec4(acc.rgb / acc.a, 1.0);

@@ -125,6 +125,12 @@ uniform vec3 u_background;
 // coat's index, from F0 = u_coat_f0), base terms times 1 - F(N.V); compiled in (HAS_COAT) only for a frame
 // with a coat; without it the thesis's model.
 uniform float u_coat_f0, u_coat_ref;
+// The coat's diffuse base: pi K_D (u_wk) reads the coat-transmitted diffuse map u_diffuse_coat (the light
+// entering the coat weighted by (1 - F(N.l))/(1 - F_dr,ext), prefilter.coat_diffuse_map) or its SH twin
+// u_sh_coat; pi K_A (the rest of u_wd) and the effect terms keep u_diffuse (ClearCoat's docstring).
+uniform samplerCube u_diffuse_coat;
+uniform vec3 u_wk[2];
+uniform vec3 u_sh_coat[9];
 // Stage (station/render/stage.py): lookups at u_rot * d (environment turned about +Y), the backdrop
 // lobe map u_backdrop (exponent u_backdrop_exp, its lights added when BACKDROP_LIGHTS), the ground disc
 // at height u_ground_y about u_ground_c with contact shadow from N_OCC sphere proxies u_occ (xyz, r)
@@ -218,11 +224,15 @@ vec2 horizon(int i, float c) {
     return (i % 2 == 0) ? t.rg : t.ba;
 }
 
+vec3 sh_eval_with(vec3 c[9], vec3 n) {
+    return c[0] * 0.282095 + c[1] * (0.488603 * n.y) + c[2] * (0.488603 * n.z)
+         + c[3] * (0.488603 * n.x) + c[4] * (1.092548 * n.x * n.y) + c[5] * (1.092548 * n.y * n.z)
+         + c[6] * (0.315392 * (3.0 * n.z * n.z - 1.0)) + c[7] * (1.092548 * n.x * n.z)
+         + c[8] * (0.546274 * (n.x * n.x - n.y * n.y));
+}
+
 vec3 sh_eval(vec3 n) {
-    return u_sh[0] * 0.282095 + u_sh[1] * (0.488603 * n.y) + u_sh[2] * (0.488603 * n.z)
-         + u_sh[3] * (0.488603 * n.x) + u_sh[4] * (1.092548 * n.x * n.y) + u_sh[5] * (1.092548 * n.y * n.z)
-         + u_sh[6] * (0.315392 * (3.0 * n.z * n.z - 1.0)) + u_sh[7] * (1.092548 * n.x * n.z)
-         + u_sh[8] * (0.546274 * (n.x * n.x - n.y * n.y));
+    return sh_eval_with(u_sh, n);
 }
 
 //#include shadows.glsl
@@ -448,6 +458,14 @@ void main() {
         vec3 d_n = textureLod(u_diffuse, n, 0.0).rgb;
 #endif
         rgb = (paint == 0 ? u_wd[0] : u_wd[1]) * d_n;
+#if HAS_COAT
+#if DIFFUSE_SH
+        vec3 d_coat = sh_eval_with(u_sh_coat, n);
+#else
+        vec3 d_coat = textureLod(u_diffuse_coat, n, 0.0).rgb;
+#endif
+        rgb += (paint == 0 ? u_wk[0] : u_wk[1]) * (d_coat - d_n);  // pi K_D through the coat
+#endif
 #if HAS_FALL_OFF
         rgb += (paint == 0 ? u_wa[0] : u_wa[1]) * fall_off(n, r, ndv, d_n);
 #endif
