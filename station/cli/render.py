@@ -343,29 +343,8 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     timings["environment"] = time.perf_counter() - t0
     lod_report = None
     if args.lod is not None:
-        from station.render.envcache import PrefilterCache as _Cache
-        from station.render.scene_image import scene_lod
-
-        if engine == "truth":
-            raise InputError(
-                "lod", "a tolerance for the gl | numpy engine (truth has no level of detail)", args.lod
-            )
         t0 = time.perf_counter()
-        paints, env, lod_report = scene_lod(
-            designs,
-            env,
-            scene,
-            args.lod,
-            engine=engine,
-            prefilter_engine="gl" if engine == "gl" else "numpy",
-            max_size=None,
-            coat=coat,
-            mesh=mesh,
-            aa=_aa(args) if engine == "gl" else 1,
-            anisotropy=anisotropy,
-            cache=_Cache(args.cache_dir),
-            size=args.size,
-        )
+        paints, env, lod_report = _lod(args, designs, env, scene, engine, coat, mesh, anisotropy)
         timings["lod"] = time.perf_counter() - t0
     flake_report = "no flake layer" if args.flakes and flakes is None else None
     aniso_report = None
@@ -411,6 +390,42 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         "linear_out": args.linear_out,
         "timings": {k: round(v, 4) for k, v in timings.items()},
     }
+
+
+def _lod(
+    args: argparse.Namespace,
+    designs: list,
+    env: Environment,
+    scene: Scene,
+    engine: str,
+    coat: ClearCoat | None,
+    mesh: Mesh | None,
+    anisotropy: Anisotropy | None,
+) -> tuple[list, Environment, dict[str, Any]]:
+    """``--lod``: the paints, environment and report of the level of detail judged on the frame's own
+    engine (``station.render.scene_image.scene_lod``); refused for the truth engine, naming ``lod``."""
+    from station.render.envcache import PrefilterCache
+    from station.render.scene_image import scene_lod
+
+    if engine == "truth":
+        raise InputError(
+            "lod", "a tolerance for the gl | numpy engine (truth has no level of detail)", args.lod
+        )
+    return scene_lod(
+        designs,
+        env,
+        scene,
+        args.lod,
+        engine=engine,
+        prefilter_engine="gl" if engine == "gl" else "numpy",
+        max_size=None,
+        coat=coat,
+        mesh=mesh,
+        aa=_aa(args) if engine == "gl" else 1,
+        anisotropy=anisotropy,
+        cache=PrefilterCache(args.cache_dir),
+        size=args.size,
+    )
 
 
 def _aa(args: argparse.Namespace) -> int:
