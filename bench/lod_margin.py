@@ -15,7 +15,6 @@ near-mirror gloss, anisotropic paints).
 from __future__ import annotations
 
 import math
-import sys
 import tempfile
 
 import numpy as np
@@ -74,8 +73,14 @@ def gaps(cache_dir: str, every: int = 5) -> list[tuple[str, float, float]]:
 
 
 def main() -> None:
+    from bench._report import bench_parser
+
+    parser = bench_parser(__doc__, "lod_margin")
+    parser.epilog = "prints the gaps and the margin; writes nothing"
+    parser.add_argument("cache_dir", nargs="?", help="prefilter cache folder (default: a temporary one)")
+    args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        rows = gaps(sys.argv[1] if len(sys.argv) > 1 else tmp)
+        rows = gaps(args.cache_dir or tmp)
     worst = max(rows, key=lambda r: r[2] - r[1])
     for label, est, meas in rows:
         print(f"{label}: estimate {est:.3f} measured {meas:.3f} gap {meas - est:+.3f}")

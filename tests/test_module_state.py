@@ -37,6 +37,7 @@ ALLOWED: dict[str, str] = {
     "station/model/gloss.py:coat_from_gloss": "GU → frozen CoatLobes",
     "station/model/lobe.py:_table": "the forward meter's GU ⇄ exponent table; read-only arrays",
     "station/model/spectra.py:_weighting_factors": "ASTM E308 weights per illuminant/observer; read-only",
+    "station/model/fresnel.py:fresnel_diffuse_reflectance": "F_dr,ext(n): a float per refractive index",
     # pure functions, data shipped with the product, loaded once
     "station/analysis/gamut.py:_pointer_hull": "Pointer's gamut hull (published data)",
     "station/formulate/effect_optics.py:colorant_data": "the shipped colorant data file, parsed",

@@ -23,12 +23,11 @@ from station.model.difference import delta_e
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.cubemap import equirect_directions
-from station.render.envcache import PrefilterCache
 from station.render.flakes import flake_lod
 from station.render.hdr_io import write_hdr
 from station.render.numpy_renderer import gbuffer
 from station.render.procedural import procedural_environment
-from station.render.scene_image import ENV_WIDTH, render_scene_image, scene_lod
+from station.render.scene_image import ENV_WIDTH, render_scene_image
 from station.render.shapes import Scene
 from station.render.stage import Stage
 from tests.serve_process import ServeProcess, ServeStartError
@@ -156,12 +155,10 @@ def test_lod_mesh_and_scene_options(service: Service) -> None:
     body = {"design": SILVER, "environment": "booth", "size": 64}
     r = service.post("/styling/render", {**body, "lod_de": 2.0})
     env = procedural_environment("booth", ENV_WIDTH)
-    scene = Scene("speedshape", stage=Stage())
-    _, _, report = scene_lod(
-        [SILVER_DESIGN], env, scene, 2.0, coat=ClearCoat(), cache=PrefilterCache(), size=64
-    )
-    assert json.loads(r.headers["X-Lod"]) == report and "lobes" in report
+    # the core's picture with its level of detail (station.render.scene_image.scene_lod): the same choice
+    # and the same picture as the service's
     core = render_scene_image([SILVER_DESIGN], env, stage=Stage(), coat=ClearCoat(), size=64, lod_de=2.0)
+    assert json.loads(r.headers["X-Lod"]) == core.lod and core.lod is not None and "lobes" in core.lod
     _same(_png(r), core.image)
     # Exposure +1 EV against 0; backdrop blur and rotation change the picture's background.
     base = _png(service.post("/styling/render", body))
