@@ -76,7 +76,7 @@ def main() -> None:
     from bench._report import bench_parser
 
     parser = bench_parser(__doc__, "lod_margin")
-    parser.epilog = "prints the gaps and the margin; writes nothing"
+    parser.epilog = "prints the gaps and the margin; it rewrites no section of docs/benchmarks.md"
     parser.add_argument("cache_dir", nargs="?", help="prefilter cache folder (default: a temporary one)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:

@@ -176,7 +176,7 @@ def _read_only(value: object) -> bool:
 
 
 def test_model_caches_return_read_only_values() -> None:
-    from station.model import gloss, lobe, spectra
+    from station.model import fresnel, gloss, lobe, spectra
     from station.model.colorimetry import OBSERVER_10
 
     results = {
@@ -185,6 +185,7 @@ def test_model_caches_return_read_only_values() -> None:
         "coat_from_gloss": gloss.coat_from_gloss(60.0),
         "_table": lobe._table(),
         "_weighting_factors": spectra._weighting_factors("D65", OBSERVER_10),
+        "fresnel_diffuse_reflectance": fresnel.fresnel_diffuse_reflectance(1.5),
     }
     assert {name for name in results} == {
         key.split(":")[1] for key in ALLOWED if key.startswith("station/model/")

@@ -6,6 +6,7 @@ the design (undoably)."""
 from __future__ import annotations
 
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ from PySide6.QtTest import QTest
 
 from station.formulate.library import Library
 from ui.models.document import DesignDocument
-from ui.models.library import LibraryModel
+from ui.models.library import THUMB_SIZE, LibraryModel
 from ui.widgets.library_screen import LibraryScreen
 
 pytestmark = [pytest.mark.qt]
@@ -206,14 +207,24 @@ def test_demo_library_metallics_all_render(qtbot):
     screen.close()
 
 
-def test_cancel_stops_the_thumbnails_and_a_new_filter_replaces_them(qtbot):
+def test_cancel_stops_the_thumbnails_and_a_new_filter_replaces_them(qtbot, monkeypatch):
     """All 6000 paints take seconds: Cancel appears after 2 s and stops the list where it is; a new
-    filter while thumbnails are being made lists only the new filter's paints."""
+    filter while thumbnails are being made lists only the new filter's paints. Each thumbnail is held
+    back 1 ms, so the 3000 of the filter take at least 3 s on any machine (a quiet one renders them in
+    about 2 s, before Cancel would appear)."""
     from station.formulate.demo import demo_library
     from ui.widgets.tasks import CANCEL_AFTER_MS
 
     lib = demo_library()
-    screen = LibraryScreen(LibraryModel(lib), DesignDocument())
+    model = LibraryModel(lib)
+    render = model.thumbnail
+
+    def held_back(i: int, size: int = THUMB_SIZE) -> np.ndarray:
+        time.sleep(0.001)
+        return render(i, size)
+
+    monkeypatch.setattr(model, "thumbnail", held_back)
+    screen = LibraryScreen(model, DesignDocument())
     qtbot.addWidget(screen)
     screen.resize(1000, 700)
     screen.show()
