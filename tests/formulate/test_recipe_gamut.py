@@ -10,34 +10,19 @@ import numpy as np
 import pytest
 
 from station.cli import main
-from station.formulate.colorants import default_database, predict_lab
-from station.formulate.de_kernels import cie2000
+from station.formulate.colorants import predict_lab
 from station.formulate.errors import FormulateInputError
 from station.formulate.gamut import line_gamut, recipe_gamut
-from station.formulate.lines import toner_line
-from station.formulate.solver import Objective, Problem, fit_lab, refine_de00
+from tests.formulate._brute import A3, DB, SOLID, best_fit
 
-A3 = (15.0, 45.0, 110.0)
-DB = default_database()
-SOLID = np.flatnonzero(toner_line("solid").mask(DB))
 TOL = 1.0
 #: Verdicts closer to the tolerance than this may differ between two optimisers of the same subset.
 BORDER = 0.05
 
 
-def _best_fit(design: np.ndarray, free: tuple[int, ...]) -> float:
-    """Mean ΔE00 of the best recipe of exactly the colorants *free*, from three starts."""
-    prob = Problem(design, A3, DB, np.array(free), np.zeros(len(DB.names)))
-    obj = Objective(prob)
-    for scale in (0.02, 0.1, 0.3):
-        _, x = fit_lab(obj, np.full(len(free), scale / len(free)), max_nfev=60)
-        refine_de00(obj, x, 1e-8, maxiter=120)
-    return float(cie2000(design, predict_lab(prob.full(obj.best[1]), A3, DB)).mean())
-
-
 def _brute_force(design: np.ndarray, n: int) -> float:
     """Best mean ΔE00 over every subset of *n* colorants of the solid line."""
-    return min(_best_fit(design, sub) for sub in itertools.combinations(SOLID.tolist(), n))
+    return min(best_fit(design, sub) for sub in itertools.combinations(SOLID.tolist(), n))
 
 
 def _designs() -> list[np.ndarray]:

@@ -7,17 +7,14 @@ import itertools
 import numpy as np
 import pytest
 
-from station.formulate.colorants import default_database, predict_lab
+from station.formulate.colorants import predict_lab
 from station.formulate.de_kernels import cie2000
 from station.formulate.formulation import formulate
 from station.formulate.gamut import line_gamut
-from station.formulate.lines import toner_line
 from station.formulate.selection import round_to_scale
-from station.formulate.solver import Objective, Problem, fit_lab, refine_de00
+from station.formulate.solver import Problem
+from tests.formulate._brute import A3, DB, SOLID, best_fit
 
-A3 = (15.0, 45.0, 110.0)
-DB = default_database()
-SOLID = np.flatnonzero(toner_line("solid").mask(DB))
 #: four colorants of the solid line; no two of them make it, the best pair is of two others
 DARK_RED = {"white_tio2": 0.05, "black_carbon": 0.002, "red_pr": 0.03, "yellow_opaque": 0.02}
 
@@ -26,21 +23,11 @@ def _design(fractions: dict[str, float]) -> np.ndarray:
     return predict_lab(DB.vector(fractions), A3)
 
 
-def _best_fit(design: np.ndarray, free: tuple[int, ...]) -> float:
-    """Mean ΔE00 of the best recipe of exactly the colorants *free*, from three starts (brute force)."""
-    prob = Problem(design, A3, DB, np.array(free), np.zeros(len(DB.names)))
-    obj = Objective(prob)
-    for scale in (0.02, 0.1, 0.3):
-        _, x = fit_lab(obj, np.full(len(free), scale / len(free)), max_nfev=60)
-        refine_de00(obj, x, 1e-8, maxiter=120)
-    return float(cie2000(design, predict_lab(prob.full(obj.best[1]), A3, DB)).mean())
-
-
 @pytest.fixture(scope="module")
 def brute_force_pairs() -> dict[tuple[int, ...], float]:
     """Every 2-colorant subset of the solid line refitted on the dark red (36 subsets)."""
     design = _design(DARK_RED)
-    return {sub: _best_fit(design, sub) for sub in itertools.combinations(SOLID.tolist(), 2)}
+    return {sub: best_fit(design, sub) for sub in itertools.combinations(SOLID.tolist(), 2)}
 
 
 def test_two_colorant_recipe_is_as_good_as_the_best_pair(brute_force_pairs: dict) -> None:
