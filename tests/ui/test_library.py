@@ -6,7 +6,6 @@ the design (undoably)."""
 from __future__ import annotations
 
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -209,28 +208,36 @@ def test_demo_library_metallics_all_render(qtbot):
 
 def test_cancel_stops_the_thumbnails_and_a_new_filter_replaces_them(qtbot, monkeypatch):
     """All 6000 paints take seconds: Cancel appears after 2 s and stops the list where it is; a new
-    filter while thumbnails are being made lists only the new filter's paints. Each thumbnail is held
-    back 1 ms, so the 3000 of the filter take at least 3 s on any machine (a quiet one renders them in
-    about 2 s, before Cancel would appear)."""
+    filter while thumbnails are being made lists only the new filter's paints. A quiet machine renders
+    the filter's 3000 in about 2 s, before Cancel would appear, so after the filter's first 250 the
+    thumbnails wait for Cancel to be clicked (a gate, not a time): the list is still being made when it is."""
     from station.formulate.demo import demo_library
     from ui.widgets.tasks import CANCEL_AFTER_MS
 
     lib = demo_library()
     model = LibraryModel(lib)
     render = model.thumbnail
+    clicked = threading.Event()  # set once Cancel was clicked
+    after_filter: list[int] = []  # thumbnails asked for since the new filter
 
-    def held_back(i: int, size: int = THUMB_SIZE) -> np.ndarray:
-        time.sleep(0.001)
+    def gated(i: int, size: int = THUMB_SIZE) -> np.ndarray:
+        if filtered.is_set():
+            after_filter.append(i)
+            if len(after_filter) > 250:
+                clicked.wait(timeout=120)
         return render(i, size)
 
-    monkeypatch.setattr(model, "thumbnail", held_back)
+    filtered = threading.Event()
+    monkeypatch.setattr(model, "thumbnail", gated)
     screen = LibraryScreen(model, DesignDocument())
     qtbot.addWidget(screen)
     screen.resize(1000, 700)
     screen.show()
+    filtered.set()
     _click_box(screen.type_boxes["solid"])  # a new filter at once: metallics and pearls
     qtbot.waitUntil(lambda: screen.thumb_busy.cancel_btn.isVisible(), timeout=CANCEL_AFTER_MS + 20_000)
     QTest.mouseClick(screen.thumb_busy.cancel_btn, Qt.MouseButton.LeftButton)
+    clicked.set()
     _wait_idle(qtbot, screen)
     n = screen.thumbs.count()
     assert 0 < n < 3000 and "thumbnails stopped" in screen.count.text()
