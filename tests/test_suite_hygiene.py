@@ -182,3 +182,23 @@ def test_service_fixtures_fail_under_ci_instead_of_skipping() -> None:
         calls = {ast.unparse(node.func) for node in ast.walk(tree) if isinstance(node, ast.Call)}
         assert "service_missing" in calls, conftest
         assert not calls & {"pytest.skip", "pytest.mark.skip", "pytest.mark.skipif"}, conftest
+
+
+#: Endings of files the product or its tests make at run time (caches, arrays, renders of data files):
+#: they are regenerated, never committed.
+GENERATED_ENDINGS = (".npy", ".npz", ".pkl", ".sqlite", ".db")
+
+
+def test_no_generated_file_or_option_named_folder_is_tracked() -> None:
+    """A prefilter cache once landed in the repository under a folder named ``--help`` (a benchmark took
+    the option for its cache folder): no tracked path has a part that starts with ``-``, and no tracked
+    file is a run-time cache."""
+    from tests.processes import run
+
+    listed = run(["git", "ls-files", "-z"], timeout=60, cwd=REPO).stdout.split("\0")
+    bad = [
+        name
+        for name in listed
+        if name and (any(part.startswith("-") for part in name.split("/")) or name.endswith(GENERATED_ENDINGS))
+    ]
+    assert not bad, "generated files are tracked:\n" + "\n".join(bad[:20])
