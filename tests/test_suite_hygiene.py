@@ -199,6 +199,7 @@ def test_no_generated_file_or_option_named_folder_is_tracked() -> None:
     bad = [
         name
         for name in listed
-        if name and (any(part.startswith("-") for part in name.split("/")) or name.endswith(GENERATED_ENDINGS))
+        if name
+        and (any(part.startswith("-") for part in name.split("/")) or name.endswith(GENERATED_ENDINGS))
     ]
     assert not bad, "generated files are tracked:\n" + "\n".join(bad[:20])
