@@ -28,6 +28,10 @@ MAX_GROWTH = 3.0
 MAX_BATCH_G = 1e6
 
 
+#: Decimals of a gram that a weighed-out mass keeps (1 ng): below every scale's resolution, above float noise.
+MASS_DECIMALS = 9
+
+
 def _check_batch(batch_g: float) -> float:
     if not (np.isfinite(batch_g) and 0 < batch_g <= MAX_BATCH_G):
         raise FormulateInputError("batch_g", f"0 < batch_g <= {MAX_BATCH_G:g} g", batch_g)
@@ -55,10 +59,16 @@ class Batch:
 
 
 def batch_masses(recipe: dict[str, float], batch_g: float = DEFAULT_BATCH_G) -> Batch:
-    """Weigh *recipe* (mass fractions) out as a batch of *batch_g* grams (module docstring)."""
+    """Weigh *recipe* (mass fractions) out as a batch of *batch_g* grams (module docstring). Masses are
+    rounded to :data:`MASS_DECIMALS` decimals of a gram (far below any scale), so that a fraction times the
+    batch carries no binary residue: 0.0097 of 1000 g is 9.7 g, not 9.700000000000001 g."""
     m = _check_batch(batch_g)
     binder = _binder(recipe)
-    return Batch({k: float(v) * m for k, v in recipe.items()}, binder * m, m)
+    return Batch(
+        {k: round(float(v) * m, MASS_DECIMALS) for k, v in recipe.items()},
+        round(binder * m, MASS_DECIMALS),
+        m,
+    )
 
 
 @dataclass(frozen=True)
