@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.model.colorimetry import lab_to_linear_srgb, lab_to_xyz
 from station.model.domain import DIFFUSE_WHITE_L
+from station.wire import wire_form
 
 if TYPE_CHECKING:
     from station.model import FaceFlopTravelGloss
@@ -62,11 +63,7 @@ class GamutReport:
 
     def to_dict(self) -> dict[str, object]:
         """JSON-able form."""
-        return {
-            "paintable": self.paintable,
-            "problems": list(self.problems),
-            "pointer_gamut": self.pointer_gamut,
-        }
+        return wire_form(self)
 
 
 def rgb_bounds(

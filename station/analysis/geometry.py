@@ -33,6 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.analysis.errors import AnalysisInputError
 from station.model.shading import aspecular_deg
+from station.wire import wire_form
 
 Hinge = Literal["in-plane", "out-of-plane"] | float
 Direction = Literal["+", "-", "either"]
@@ -68,13 +69,12 @@ class SeamGeometry:
         )
 
     def to_dict(self) -> dict[str, float | str]:
-        """JSON-able form (angles in degrees)."""
-        return {
-            "light_deg": self.light_deg,
-            "view_deg": self.view_deg,
-            "hinge": self.hinge if isinstance(self.hinge, str) else float(self.hinge),
-            "aspecular_deg": self.aspecular_deg,
-        }
+        """JSON-able form (angles in degrees; a hinge azimuth as a float)."""
+        return wire_form(
+            self,
+            convert={"hinge": lambda h: h if isinstance(h, str) else float(h)},
+            after={"hinge": {"aspecular_deg": self.aspecular_deg}},
+        )
 
 
 def check_polar(value: float, field: str) -> float:

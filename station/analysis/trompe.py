@@ -39,6 +39,7 @@ from station.analysis.seam_model import SeamModel
 from station.analysis.shading import Environment, Exposure
 from station.model.colorimetry import lab_to_linear_srgb
 from station.model.domain import FACE_ANGLE_DEG, LAB_RANGES, TRAVEL_MAX_DEG
+from station.wire import wire_form
 
 PARAMS = ("face_L", "face_a", "face_b", "flop_L", "flop_a", "flop_b", "travel_deg")
 #: Named parameter subsets.
@@ -131,28 +132,25 @@ class TrompeResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form; paints as ``cacad.design/1``-like dicts."""
-        return {
-            "objective": self.objective,
-            "subset": self.subset,
-            "beta_deg": self.beta_deg,
-            "method": self.method,
-            "epsilon": self.epsilon,
-            "paint": paint_to_dict(self.paint),
-            "paints": [paint_to_dict(p) for p in self.paints] if self.objective == "per_geometry" else None,
-            "geometries": [g.to_dict() for g in self.geometries],
-            "seam_de_before": list(self.seam_de_before),
-            "seam_de_after": list(self.seam_de_after),
-            "rms_before": self.rms_before,
-            "rms_after": self.rms_after,
-            "max_before": self.max_before,
-            "max_after": self.max_after,
-            "meets_epsilon": self.meets_epsilon,
-            "gamut": self.gamut.to_dict(),
-            "changes": self.changes,
-            "converged": self.converged,
-            "solve_ms": self.solve_ms,
-            "message": self.message,
-        }
+        per_geometry = self.objective == "per_geometry"
+        return wire_form(
+            self,
+            omit={"paint", "paints", "geometries", "converged", "per_geometry_changes"},
+            after={
+                "epsilon": {
+                    "paint": paint_to_dict(self.paint),
+                    "paints": [paint_to_dict(p) for p in self.paints] if per_geometry else None,
+                    "geometries": self.geometries,
+                },
+                "seam_de_after": {
+                    "rms_before": self.rms_before,
+                    "rms_after": self.rms_after,
+                    "max_before": self.max_before,
+                    "max_after": self.max_after,
+                },
+                "changes": {"converged": self.converged},
+            },
+        )
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,7 @@ from station.model.domain import (
     lab_accepted,
 )
 from station.model.errors import ModelInputError
+from station.wire import wire_form
 
 COLOUR_RING: tuple[str, ...] = ("lighter", "darker", "more chroma", "less chroma", "hue +", "hue -")
 TRAVEL_GLOSS_RING: tuple[str, ...] = ("more travel", "less travel", "more gloss", "less gloss")
@@ -64,6 +65,10 @@ class Variation:
     design: FaceFlopTravelGloss | None
     reason: str = ""
 
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form: the design as ``cacad.design/1`` (``None`` when unreachable)."""
+        return wire_form(self, convert={"design": lambda d: None if d is None else design_to_dict(d)})
+
 
 @dataclass(frozen=True)
 class VariationRing:
@@ -77,19 +82,7 @@ class VariationRing:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form shared by every front: centre and cells as ``cacad.design/1`` (``None`` when a
         cell is unreachable, with its reason), category and degree."""
-        return {
-            "centre": design_to_dict(self.centre),
-            "category": self.category,
-            "degree": self.degree,
-            "variations": [
-                {
-                    "label": v.label,
-                    "design": None if v.design is None else design_to_dict(v.design),
-                    "reason": v.reason,
-                }
-                for v in self.variations
-            ],
-        }
+        return wire_form(self, convert={"centre": design_to_dict})
 
 
 class _Unreachable(Exception):

@@ -60,6 +60,7 @@ from station.formulate.snap import validate_design_lab
 from station.formulate.tinting import tint
 from station.model import AspecularMeasurements
 from station.model.domain import LAB_HI, LAB_LO, aspecular_name
+from station.wire import wire_form
 
 Measure = Callable[[dict[str, float]], AspecularMeasurements]
 Starts = list[tuple[str, ArrayLike | dict[str, float]]]
@@ -96,14 +97,7 @@ class LoopStep:
 
     def to_dict(self) -> dict[str, object]:
         """JSON-able form (``additions``: the tinting additions in g to the batch, corrections only)."""
-        out: dict[str, object] = {}
-        for k, v in self.__dict__.items():
-            if k == "additions":
-                out[k] = None if v is None else v.to_dict()
-            else:
-                out[k] = list(v) if isinstance(v, tuple) else v
-        out["batch"] = batch_masses(self.recipe, self.batch_g).to_dict()
-        return out
+        return wire_form(self, after={"batch_g": {"batch": batch_masses(self.recipe, self.batch_g)}})
 
 
 @dataclass(frozen=True)
@@ -133,21 +127,20 @@ class FormulationJob:
         return sum(1 for s in self.steps if s.kind == "correction")
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-able form."""
-        return {
-            "design_lab": [list(r) for r in self.design_lab],
-            "angles_deg": list(self.angles_deg),
-            "gloss_gu": self.gloss_gu,
-            "tolerance": self.tolerance,
-            "status": self.status,
-            "message": self.message,
-            "start": self.start,
-            "corrections": self.corrections,
-            "final_recipe": self.final_recipe,
-            "steps": [s.to_dict() for s in self.steps],
-            "synthetic_colorants": self.synthetic,
-            "warnings": list(self.warnings),
-        }
+        """JSON-able form (the steps after the corrections' count and the final recipe; not the initial
+        formulation)."""
+        return wire_form(
+            self,
+            rename={"synthetic": "synthetic_colorants"},
+            omit={"steps", "initial"},
+            after={
+                "start": {
+                    "corrections": self.corrections,
+                    "final_recipe": self.final_recipe,
+                    "steps": self.steps,
+                }
+            },
+        )
 
 
 def _tup(a: NDArray) -> tuple[tuple[float, float, float], ...]:
@@ -430,18 +423,7 @@ class BatchCorrection:
 
     def to_dict(self) -> dict[str, object]:
         """JSON-able form (``tinting`` as :meth:`Tinting.to_dict`)."""
-        return {
-            "angles_deg": list(self.angles_deg),
-            "target_lab": [list(r) for r in self.target_lab],
-            "measured_de": list(self.measured_de),
-            "measured_mean_de": self.measured_mean_de,
-            "tinting": self.tinting.to_dict(),
-            "recipe": dict(self.recipe),
-            "masses_g": dict(self.masses_g),
-            "binder_g": self.binder_g,
-            "predicted_lab": [list(r) for r in self.predicted_lab],
-            "predicted_mean_de": self.predicted_mean_de,
-        }
+        return wire_form(self)
 
 
 def _batch_in_can(masses_g: dict[str, float], binder_g: float, db: ColorantDatabase) -> NDArray[np.float64]:

@@ -79,6 +79,7 @@ from station.model import ANGLES_3, ANGLES_5, AspecularMeasurements, FaceFlopTra
 from station.model.design_io import design_to_dict
 from station.model.domain import DEFAULT_MAX_COLORANTS, MAX_COLORANTS_RANGE
 from station.model.fit import fit_fftg
+from station.wire import wire_form
 
 
 @dataclass(frozen=True)
@@ -98,17 +99,18 @@ class ColorantGamutReport:
     message: str
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-able form."""
-        return {
-            "inside_colorant_gamut": self.inside,
-            "mean_de": self.mean_de,
-            "tolerance": self.tolerance,
-            "metric": "cie2000",
-            "nearest_achievable_paint": design_to_dict(self.nearest),
-            "recipe": self.formulation.recipe,
-            "message": self.message,
-            "synthetic_colorants": self.formulation.synthetic,
-        }
+        """JSON-able form: the recipe and whether its colorants are synthetic in place of the formulation."""
+        return wire_form(
+            self,
+            rename={"inside": "inside_colorant_gamut", "nearest": "nearest_achievable_paint"},
+            convert={"nearest": design_to_dict},
+            omit={"formulation"},
+            after={
+                "tolerance": {"metric": "cie2000"},
+                "formulation": {"recipe": self.formulation.recipe},
+                "message": {"synthetic_colorants": self.formulation.synthetic},
+            },
+        )
 
 
 def colorant_gamut(

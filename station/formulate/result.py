@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from station.formulate.batch import batch_masses
 from station.formulate.selection import RecipeOption
+from station.wire import wire_form
 
 __all__ = ["FormulationResult", "RecipeGamutReport"]
 
@@ -39,20 +40,8 @@ class RecipeGamutReport:
     message: str
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-able form (every field)."""
-        return {
-            "inside": self.inside,
-            "line_inside": self.line_inside,
-            "mean_de": self.mean_de,
-            "line_mean_de": self.line_mean_de,
-            "max_colorants": self.max_colorants,
-            "tolerance": self.tolerance,
-            "metric": "cie2000",
-            "line": self.line,
-            "recipe": self.recipe,
-            "needed_colorants": self.needed_colorants,
-            "message": self.message,
-        }
+        """JSON-able form (every field, and the ΔE formula)."""
+        return wire_form(self, after={"tolerance": {"metric": "cie2000"}})
 
 
 @dataclass(frozen=True)
@@ -116,28 +105,14 @@ class FormulationResult:
 
     def to_dict(self) -> dict[str, object]:
         """JSON-able form for the CLI and the service."""
-        return {
-            "recipe": self.recipe,
-            "angles_deg": list(self.angles_deg),
-            "design_lab": self.design_lab.tolist(),
-            "predicted_lab": self.predicted_lab.tolist(),
-            "de_per_angle": list(self.de_per_angle),
-            "mean_de": self.mean_de,
-            "max_de": self.max_de,
-            "metric": "cie2000",
-            "formulable": self.formulable,
-            "tolerance": self.tolerance,
-            "gloss_gu": self.gloss_gu,
-            "start": self.start,
-            "message": self.message,
-            "elapsed_s": self.elapsed_s,
-            "synthetic_colorants": self.synthetic,
-            "warnings": list(self.warnings),
-            "batch": batch_masses(self.recipe).to_dict(),
-            "nearest_achievable_lab": None if self.formulable else self.predicted_lab.tolist(),
-            "line": self.line,
-            "mean_de_unrounded": self.mean_de_unrounded,
-            "evaluations": self.evaluations,
-            "recipes": [o.to_dict() for o in self.recipes],
-            "gamut": None if self.gamut is None else self.gamut.to_dict(),
-        }
+        nearest = None if self.formulable else self.predicted_lab
+        return wire_form(
+            self,
+            rename={"synthetic": "synthetic_colorants"},
+            omit={"concentrations", "evaluations", "candidates", "recipes"},
+            after={
+                "max_de": {"metric": "cie2000"},
+                "warnings": {"batch": batch_masses(self.recipe), "nearest_achievable_lab": nearest},
+                "mean_de_unrounded": {"evaluations": self.evaluations, "recipes": self.recipes},
+            },
+        )

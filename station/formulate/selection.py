@@ -37,6 +37,7 @@ from station.formulate.solver import Objective, Problem, fit_lab, lab_weights, r
 from station.model.errors import ModelInputError
 from station.model.illuminants import REFERENCE_ILLUMINANT
 from station.model.spectra import metamerism_index, reflectance_from_lab
+from station.wire import wire_form
 
 #: ΔE00 and metamerism indices closer than this rank as equal.
 RANK_DE_RESOLUTION = 0.1
@@ -104,24 +105,8 @@ class RecipeOption:
         return max(self.metamerism.values()) if self.metamerism else 0.0
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-able form (every field)."""
-        return {
-            "rank": self.rank,
-            "recipe": self.recipe,
-            "grams": self.grams,
-            "binder_g": self.binder_g,
-            "batch_g": self.batch_g,
-            "scale_resolution_g": self.scale_resolution_g,
-            "de_per_angle": list(self.de_per_angle),
-            "mean_de": self.mean_de,
-            "mean_de_unrounded": self.mean_de_unrounded,
-            "metamerism_index": self.metamerism,
-            "colorants": self.colorants,
-            "cost_per_kg": self.cost_per_kg,
-            "formulable": self.formulable,
-            "line": self.line,
-            "start": self.start,
-        }
+        """JSON-able form (every field but the concentration vector)."""
+        return wire_form(self, rename={"metamerism": "metamerism_index"}, omit={"concentrations"})
 
 
 def subsets(points: Sequence[NDArray[np.float64]], max_colorants: int) -> list[tuple[int, ...]]:

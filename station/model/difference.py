@@ -113,7 +113,20 @@ DIN_DEFAULT_FACTORS = DinFactors()
 
 @dataclass(frozen=True)
 class Din6175Terms:
-    """Every intermediate of :func:`din6175_terms`, arrays of the pair shape (…)."""
+    """Every intermediate of :func:`din6175_terms`, arrays of the pair shape (…) (module docstring's formula).
+
+    Attributes
+    ----------
+    l_mean, c_mean
+        L̄ = √(L*₁L*₂) and C̄ = √(C*₁C*₂), the geometric means of the pair (CIELAB units).
+    s_l, s_c, s_h
+        The weighting functions S_L, S_C, S_H at the pair's aspecular angle (CIELAB units: ΔL*, ΔC*, ΔH*
+        are divided by them, with the parametric factors g).
+    sigma
+        σ = 1/(1 + e^(C̄ − C₀)) in (0, 1): the share of the a*b* form in ΔE_eff.
+    de_ab_w, de_ch_w, de_eff
+        ΔE_ab,w (a*b* form), ΔE_CH,w (C*H* form) and ΔE_eff = σ ΔE_ab,w + (1 − σ) ΔE_CH,w.
+    """
 
     l_mean: NDArray[np.float64]
     c_mean: NDArray[np.float64]

@@ -36,6 +36,7 @@ from station.model.illuminants import REFERENCE_ILLUMINANT, Illuminant, illumina
 from station.model.spectra import WAVELENGTHS, metamerism_index, reflectance_to_lab
 from station.qc.errors import QcInputError
 from station.qc.readings import Reading, load_readings
+from station.wire import wire_form
 
 __all__ = [
     "DEFAULT_BOOTH_ILLUMINANTS",
@@ -70,13 +71,11 @@ class BoothGeometry:
         return aspecular_name(self.aspecular_deg)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "geometry": self.geometry,
-            "standard_lab": list(self.standard_lab),
-            "sample_lab": list(self.sample_lab),
-            "dE00": self.de00,
-            "metamerism_index": self.metamerism_index,
-        }
+        return wire_form(
+            self,
+            rename={"aspecular_deg": "geometry", "de00": "dE00"},
+            convert={"aspecular_deg": aspecular_name},
+        )
 
 
 @dataclass(frozen=True)
@@ -92,11 +91,7 @@ class BoothIlluminant:
         return float(np.mean([g.de00 for g in self.per_geometry]))
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "per_geometry": [g.to_dict() for g in self.per_geometry],
-            "mean_de": self.mean_de,
-        }
+        return wire_form(self, after={"per_geometry": {"mean_de": self.mean_de}})
 
 
 @dataclass(frozen=True)
@@ -116,7 +111,7 @@ class BoothComparison:
 
     def to_dict(self) -> dict[str, Any]:
         """``{"illuminants": [{"name", "per_geometry": [...], "mean_de"}], "reference": "D65"}``."""
-        return {"illuminants": [r.to_dict() for r in self.illuminants], "reference": self.reference}
+        return wire_form(self, omit={"observer"})
 
 
 def product_spectra(reading: Reading, role: str = "") -> NDArray[np.float64]:

@@ -37,6 +37,7 @@ from station.qc.readings import Reading, reading_from_measurement
 from station.qc.results import JobSummary, MeasurementRow, PartSummary, SampleResult, StandardInfo
 from station.qc.texture import TextureTolerance, judge_texture
 from station.qc.tolerance import ToleranceSet
+from station.wire import iso_time, wire_form
 
 __all__ = [
     "JobInfo",
@@ -175,14 +176,7 @@ class JobInfo:
     last_measured: dt.datetime | None
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "job": self.job,
-            "parts": list(self.parts),
-            "panels": self.panels,
-            "measurements": self.measurements,
-            "first_measured": None if self.first_measured is None else self.first_measured.isoformat(),
-            "last_measured": None if self.last_measured is None else self.last_measured.isoformat(),
-        }
+        return wire_form(self, convert={"first_measured": iso_time, "last_measured": iso_time})
 
 
 def list_jobs(session: Session, contains: str | None = None) -> list[JobInfo]:

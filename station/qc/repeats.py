@@ -34,6 +34,7 @@ from station.model.domain import QC_OUTLIER_SCALE_FLOOR, QC_OUTLIER_Z, aspecular
 from station.qc.errors import QcInputError
 from station.qc.readings import Reading, common_angles, lab_at
 from station.qc.texture import mean_texture
+from station.wire import wire_form
 
 __all__ = [
     "GeometryBias",
@@ -210,15 +211,10 @@ class GeometryBias:
     sd_b: float | None
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "geometry": self.geometry,
-            "aspecular_deg": self.aspecular_deg,
-            "dL": self.dl,
-            "da": self.da,
-            "db": self.db,
-            "dE": self.de,
-            "sd": None if self.sd_l is None else [self.sd_l, self.sd_a, self.sd_b],
-        }
+        sd = None if self.sd_l is None else [self.sd_l, self.sd_a, self.sd_b]
+        return wire_form(
+            self, rename={"dl": "dL", "de": "dE"}, omit={"sd_l", "sd_a", "sd_b"}, after={"sd_b": {"sd": sd}}
+        )
 
 
 @dataclass(frozen=True)
@@ -235,16 +231,7 @@ class InstrumentCorrelation:
     worst_geometry: str
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "instrument_a": self.instrument_a,
-            "instrument_b": self.instrument_b,
-            "n_a": self.n_a,
-            "n_b": self.n_b,
-            "per_geometry": [g.to_dict() for g in self.per_geometry],
-            "mean_de": self.mean_de,
-            "max_de": self.max_de,
-            "worst_geometry": self.worst_geometry,
-        }
+        return wire_form(self)
 
 
 def correlate(readings_a: Sequence[Reading], readings_b: Sequence[Reading]) -> InstrumentCorrelation:

@@ -35,6 +35,7 @@ from typing_extensions import TypedDict
 
 from station.model.domain import QC_SPC_SIGMAS
 from station.qc.errors import QcInputError
+from station.wire import wire_form
 
 __all__ = [
     "CONSTANTS",
@@ -438,16 +439,11 @@ class ControlLimits:
     out_of_control: tuple[int, ...]
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "centre": self.centre,
-            "sigma": self.sigma,
-            "mr_bar": self.mr_bar,
-            "lcl": self.lcl,
-            "ucl": self.ucl,
-            "out_of_control": list(self.out_of_control),
-            "rule": f"individuals chart, sigma = mean moving range / {D2_RANGE_OF_TWO}, "
-            f"limits centre ± {QC_SPC_SIGMAS:g} sigma (lower clipped at 0)",
-        }
+        rule = (
+            f"individuals chart, sigma = mean moving range / {D2_RANGE_OF_TWO}, "
+            f"limits centre ± {QC_SPC_SIGMAS:g} sigma (lower clipped at 0)"
+        )
+        return wire_form(self, after={"out_of_control": {"rule": rule}})
 
 
 def control_limits(values: Sequence[float]) -> ControlLimits:

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from station.reproduce.errors import ReproduceError, ReproduceInputError
+from station.wire import wire_form
 
 Mode = Literal["within", "at_most", "at_least"]
 #: How ours is compared with the thesis's value t under tolerance τ:
@@ -120,22 +121,20 @@ class Quantity:
         return bool(ok)
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON record of ``station reproduce --json``."""
-        return {
-            "figure": self.figure,
-            "quantity": self.quantity,
-            "unit": self.unit,
-            "thesis": self.thesis,
-            "ours": self.ours,
-            "difference": self.difference,
-            "tolerance": self.tolerance,
-            "mode": self.mode,
-            "verdict": self.verdict,
-            "reason": self.reason if self.verdict == "differs" else None,
-            "calibration": self.calibration or None,
-            "source": self.source,
-            "reference": self.reference,
-        }
+        """The JSON record of ``station reproduce --json``: the difference and the verdict beside the
+        values, the reason only where ours differs, no calibration as ``None``."""
+        return wire_form(
+            self,
+            omit={"reason", "calibration"},
+            after={
+                "ours": {"difference": self.difference},
+                "mode": {
+                    "verdict": self.verdict,
+                    "reason": self.reason if self.verdict == "differs" else None,
+                    "calibration": self.calibration or None,
+                },
+            },
+        )
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from station.ingest.errors import ImportFileError
 from station.ingest.schema import MAX_GEOMETRIES, MAX_WAVELENGTHS, Illuminant, Observer
 from station.model.domain import check_lab, geometry_name, parse_geometry
 from station.model.errors import ModelInputError
+from station.wire import iso_time, wire_form
 
 __all__ = [
     "ILLUMINANTS",
@@ -76,7 +77,7 @@ class Instrument:
 
     def to_dict(self) -> dict[str, str]:
         """JSON form."""
-        return {"model": self.model, "serial": self.serial, "manufacturer": self.manufacturer}
+        return wire_form(self)
 
 
 @dataclass(frozen=True)
@@ -146,18 +147,7 @@ class ImportedMeasurement:
 
     def to_dict(self) -> dict[str, Any]:
         """The ``station import --json`` form of one measurement."""
-        return {
-            "sample": self.sample,
-            "geometries": list(self.geometries),
-            "lab": None if self.lab is None else [list(v) for v in self.lab],
-            "wavelengths_nm": None if self.wavelengths_nm is None else list(self.wavelengths_nm),
-            "spectra": None if self.spectra is None else [list(r) for r in self.spectra],
-            "instrument": self.instrument.to_dict(),
-            "illuminant": self.illuminant,
-            "observer": self.observer,
-            "measured_at": None if self.measured_at is None else self.measured_at.isoformat(),
-            "texture": [t.to_dict() for t in self.texture],
-        }
+        return wire_form(self, convert={"measured_at": iso_time})
 
 
 @dataclass(frozen=True)
@@ -170,11 +160,7 @@ class ImportedFile:
 
     def to_dict(self) -> dict[str, Any]:
         """The ``station import --json`` document."""
-        return {
-            "format": self.format,
-            "file": self.file,
-            "measurements": [m.to_dict() for m in self.measurements],
-        }
+        return wire_form(self)
 
 
 def _finite(value: float, fld: str, err: ErrorFactory) -> float:

@@ -61,6 +61,7 @@ from station.ingest.formats import is_complete, read_measurement_file
 from station.ingest.formats._text import MAX_FILE_BYTES
 from station.ingest.formats.records import readings_from_import
 from station.ingest.ingestor import Ingestor
+from station.wire import wire_form
 
 log = logging.getLogger(__name__)
 
@@ -106,13 +107,7 @@ class WatchOutcome:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
-        return {
-            "file": self.file,
-            "status": self.status,
-            "moved_to": self.moved_to,
-            "receipts": list(self.receipts),
-            "reason": self.reason,
-        }
+        return wire_form(self)
 
 
 class _Refused(Exception):
