@@ -2,9 +2,12 @@
 
 The cache directory is whatever the caller passes, else ``$CACAD_CACHE_DIR``, else
 ``~/.cache/cacad``; prefiltered maps go under ``<dir>/prefilter/``. Nothing is kept at module level:
-each :class:`PrefilterCache` is an explicit object. Files are ``.npy`` float16 written atomically
-(temporary name, then rename), so concurrent writers never leave a half-written entry; an entry that
-fails to load is treated as a miss and rewritten.
+each :class:`PrefilterCache` is an explicit object. Files are ``.npy`` written atomically (temporary
+name, then rename), so concurrent writers never leave a half-written entry; an entry that fails to load
+is treated as a miss and rewritten. The lobe maps are stored as float16 (the renderers then read them
+rounded so, computed or cached); the clear coat's coat-transmitted diffuse maps (:meth:`coat_key`) as
+float32, as is each environment's diffuse map (:meth:`diffuse_key`), so a cached map equals the freshly
+summed one exactly.
 """
 
 from __future__ import annotations
@@ -35,6 +38,20 @@ class PrefilterCache:
         """File stem for one prefiltered map."""
         return f"{env_hash[:40]}-n{exponent:.6g}-o{out_size}-s{src_size}-N{samples}-{engine}-v{CACHE_VERSION}"
 
+    @staticmethod
+    def diffuse_key(env_hash: str, out_size: int, src_size: int, engine: str) -> str:
+        """File stem for the diffuse map (exponent 1, ``station.render.prefilter.prefilter_basis``) of the
+        environment *env_hash*: faces of *out_size* texels summed from a source cube of *src_size* by
+        *engine* (gl | numpy)."""
+        return f"{env_hash[:40]}-diffuse-o{out_size}-s{src_size}-{engine}-v{CACHE_VERSION}"
+
+    @staticmethod
+    def coat_key(env_hash: str, coat_index: float, out_size: int, src_size: int, engine: str) -> str:
+        """File stem for one coat-transmitted diffuse map (``station.render.prefilter.coat_diffuse_map``)
+        of the environment *env_hash* under a clear coat of refractive index *coat_index*: faces of
+        *out_size* texels summed from a source cube of *src_size* by *engine* (gl | numpy)."""
+        return f"{env_hash[:40]}-coat{float(coat_index)!r}-o{out_size}-s{src_size}-{engine}-v{CACHE_VERSION}"
+
     def get(self, key: str) -> np.ndarray | None:
         """The cached cube (6, S, S, 3) float32, or None on a miss or an unreadable entry."""
         path = self.root / f"{key}.npy"
@@ -43,10 +60,10 @@ class PrefilterCache:
         except (OSError, ValueError):
             return None
 
-    def put(self, key: str, cube: np.ndarray) -> None:
-        """Store *cube* as float16 (atomic rename)."""
+    def put(self, key: str, cube: np.ndarray, dtype: type[np.floating] = np.float16) -> None:
+        """Store *cube* as *dtype* (float16, or float32 for an exact copy; atomic rename)."""
         self.root.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=self.root, suffix=".tmp")
         with os.fdopen(fd, "wb") as fh:
-            np.save(fh, cube.astype(np.float16))
+            np.save(fh, cube.astype(dtype))
         os.replace(tmp, self.root / f"{key}.npy")

@@ -58,6 +58,7 @@ BRUTE_MAX_SIZE = 16
 WIDE_EXPONENT = 200.0  # lobes below: horizon tables and lights shaded exactly (numpy_renderer)
 OUTPUT_FACTOR = 2.2
 DIFFUSE_SIZE = 16
+DIFFUSE_SOURCE_SIZE = 32  # face size of the diffuse map's source cube
 #: Face size of the coat-transmitted diffuse map and of its source cube: the entry weight falls to 0 at
 #: grazing, so a light near a normal's horizon makes D_coat vary faster with the normal than D (a studio's
 #: softboxes: 16-texel faces read 12 % high head-on against the map-integrated value, 32 within 3 %).
@@ -95,7 +96,12 @@ def source_size(env: Environment) -> int:
 
 def lobe_weights(dirs_out: np.ndarray, dirs_src: np.ndarray, exponent: float) -> np.ndarray:
     """(n+1)/(2π) max(0, R·ω)^n for every pair, (M, K)."""
-    cos = np.clip((dirs_out @ dirs_src.T).astype(np.float32), 1e-30, None)
+    return _lobe_from_cosines((dirs_out @ dirs_src.T).astype(np.float32), exponent)
+
+
+def _lobe_from_cosines(dots: np.ndarray, exponent: float) -> np.ndarray:
+    """(n+1)/(2π) max(0, R·ω)^n from the float32 cosines R·ω (:func:`lobe_weights`' terms)."""
+    cos = np.clip(dots, 1e-30, None)
     return np.float32((exponent + 1.0) / (2.0 * np.pi)) * np.exp(np.float32(exponent) * np.log(cos))
 
 
@@ -118,11 +124,12 @@ def prefilter_brute(
     grid = np.linspace(0.0, 1.0, TABLE_STEPS + 1)
     table = (coat.entry_scale(grid) if coat is not None else grid).astype(np.float32)
     for i in range(0, out_dirs.shape[0], 256):
-        w = lobe_weights(out_dirs[i : i + 256], src_dirs, exponent)
+        dots = (out_dirs[i : i + 256] @ src_dirs.T).astype(np.float32)  # R·ω, once for w and t
+        w = _lobe_from_cosines(dots, exponent)
         if coat is None:
             acc = w @ rad
         else:  # t(R·ω) from a fine table of the exact weight (nearest of 65537 steps: within 4e-5)
-            c = np.clip((out_dirs[i : i + 256] @ src_dirs.T).astype(np.float32), 0.0, 1.0)
+            c = np.clip(dots, 0.0, 1.0)
             t = table[(c * np.float32(TABLE_STEPS) + np.float32(0.5)).astype(np.int32)]
             acc = np.concatenate([(w * t) @ rad[:, :3], w @ rad[:, 3:]], axis=1)
         out[i : i + 256] = acc[:, :3] / acc[:, 3:]
@@ -343,22 +350,35 @@ class PrefilteredBasis:
     wide: tuple[bool, ...] = ()  # lobe i prefiltered from the residual map
     diffuse_source: np.ndarray | None = field(default=None, repr=False)  # the coat map's source cube
     coat_maps: dict[float, np.ndarray] = field(default_factory=dict, repr=False)  # coat index → D_coat
+    cache: PrefilterCache | None = field(default=None, repr=False)  # where coat maps are kept on disk
 
 
 def coat_diffuse_map(basis: PrefilteredBasis, coat: ClearCoat, ctx: Any = None) -> np.ndarray:
     """The coat-transmitted diffuse map D_coat (6, COAT_DIFFUSE_SIZE, COAT_DIFFUSE_SIZE, 3) float32 of
     *basis* for *coat* (module docstring), summed on first use from the basis's source cube and kept on
     the basis: on the GL context *ctx* (:class:`GLBrute`) when given, else by :func:`prefilter_brute`
-    (the same terms). A basis made without a coat pays nothing for it. Units: radiance."""
+    (the same terms). With the basis's disk cache (:attr:`PrefilteredBasis.cache`) the map is read from,
+    or stored in, the cache (float32, keyed by the environment's content hash, the coat's index, the
+    sizes and the engine: :meth:`PrefilterCache.coat_key`), so it is summed once per environment and
+    coat, not once per basis; a cached map equals the summed one exactly. A basis made without a coat
+    pays nothing for it. Units: radiance."""
     if coat.index not in basis.coat_maps:
         src = basis.diffuse_source
         if src is None:
             raise RenderError("prefilter: this basis has no source cube for a coat map")
-        if ctx is not None:
-            with GLBrute(ctx) as gl:
-                cube = gl.run(src, 1.0, COAT_DIFFUSE_SIZE, coat)
-        else:
-            cube = prefilter_brute(src, 1.0, COAT_DIFFUSE_SIZE, coat).astype(np.float32)
+        shape = (6, COAT_DIFFUSE_SIZE, COAT_DIFFUSE_SIZE, 3)
+        key = PrefilterCache.coat_key(
+            basis.env_hash, coat.index, COAT_DIFFUSE_SIZE, src.shape[1], "numpy" if ctx is None else "gl"
+        )
+        cube = basis.cache.get(key) if basis.cache is not None else None
+        if cube is None or cube.shape != shape:
+            if ctx is not None:
+                with GLBrute(ctx) as gl:
+                    cube = gl.run(src, 1.0, COAT_DIFFUSE_SIZE, coat)
+            else:
+                cube = prefilter_brute(src, 1.0, COAT_DIFFUSE_SIZE, coat).astype(np.float32)
+            if basis.cache is not None:
+                basis.cache.put(key, cube, np.float32)
         basis.coat_maps[coat.index] = cube
     return basis.coat_maps[coat.index]
 
@@ -401,11 +421,12 @@ def _compute_maps(
     engine: str,
     ctx,
     timings: dict[str, float],
+    diffuse: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Compute the lobe maps *todo* into *cubes* (brute-force sums up to BRUTE_MAX_SIZE, the quadrature
-    above) and return the diffuse map and the coat map's source cube (:func:`coat_diffuse_map`); seconds
-    per stage into *timings*. A GL context is made (and
-    released) when *engine* is ``gl`` and *ctx* is None."""
+    above) and return the diffuse map (*diffuse* when given: the cached one; else summed) and the coat
+    map's source cube (:func:`coat_diffuse_map`); seconds per stage into *timings*. A GL context is made
+    (and released) when *engine* is ``gl``, *ctx* is None and a map is to be computed."""
     small: dict[tuple[int, int], np.ndarray] = {}
 
     def small_cube(k: int, size: int) -> np.ndarray:
@@ -413,9 +434,10 @@ def _compute_maps(
             small[(k, size)] = cubemap.equirect_to_cube((residual if k else env).equirect, size)
         return small[(k, size)]
 
-    own = engine == "gl" and ctx is None
+    work = engine == "gl" and (bool(todo) or diffuse is None)
+    own = work and ctx is None
     gl_ctx = create_gl_context() if own else ctx
-    brute_gl = GLBrute(gl_ctx) if engine == "gl" else None
+    brute_gl = GLBrute(gl_ctx) if work else None
 
     def brute(k: int, exponent: float, size: int, src_size: int) -> np.ndarray:
         cube = small_cube(k, src_size)
@@ -434,9 +456,10 @@ def _compute_maps(
             sampled = [i for i in todo if plan[i][1] > BRUTE_MAX_SIZE]
             _sample_lobes(engine, (env, residual), src, plan, wide, sampled, cubes, gl_ctx)
             timings["lobes"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        diffuse = brute(0, 1.0, DIFFUSE_SIZE, 32)
-        timings["diffuse"] = time.perf_counter() - t0
+        if diffuse is None:
+            t0 = time.perf_counter()
+            diffuse = brute(0, 1.0, DIFFUSE_SIZE, DIFFUSE_SOURCE_SIZE)
+            timings["diffuse"] = time.perf_counter() - t0
     finally:
         if brute_gl is not None:
             brute_gl.release()
@@ -488,7 +511,16 @@ def prefilter_basis(
     ]
     cubes: list[np.ndarray | None] = [cache.get(k) if cache else None for k in keys]
     todo = [i for i, c in enumerate(cubes) if c is None]
-    diffuse, coat_src = _compute_maps(env, residual, src, plan, wide, todo, cubes, engine, ctx, timings)
+    # the diffuse map depends on the environment alone: cached exactly (float32) like the coat's map
+    dkey = PrefilterCache.diffuse_key(env.content_hash, DIFFUSE_SIZE, DIFFUSE_SOURCE_SIZE, engine)
+    cached = cache.get(dkey) if cache else None
+    if cached is not None and cached.shape != (6, DIFFUSE_SIZE, DIFFUSE_SIZE, 3):
+        cached = None
+    diffuse, coat_src = _compute_maps(
+        env, residual, src, plan, wide, todo, cubes, engine, ctx, timings, cached
+    )
+    if cache and cached is None:
+        cache.put(dkey, diffuse, np.float32)
     maps = [c for c in cubes if c is not None]
     if len(maps) != len(cubes):
         raise RenderError("prefilter: a lobe was neither cached nor computed")
@@ -510,4 +542,5 @@ def prefilter_basis(
         lights=found if any(wide) else None,
         wide=wide,
         diffuse_source=coat_src,
+        cache=cache,
     )

@@ -15,7 +15,7 @@ from __future__ import annotations
 import re
 import tempfile
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -151,6 +151,9 @@ class FrameProbe:
 
             self.ctx = create_gl_context()
         self._bases: dict[tuple[int | None, int | None], tuple[Any, list[LobeWeights]]] = {}
+        # the clear coat's diffuse maps per environment width, shared by that width's bases (the map
+        # depends on the environment and the coat, not on the lobes)
+        self._coat_maps: dict[int | None, dict[float, np.ndarray]] = {}
 
     def __enter__(self) -> FrameProbe:
         return self
@@ -185,7 +188,8 @@ class FrameProbe:
                 ctx=self.ctx,
                 max_size=self.max_size,
             )
-            self._bases[key] = (basis, paints)
+            shared = self._coat_maps.setdefault(setting.environment_width, basis.coat_maps)
+            self._bases[key] = (replace(basis, coat_maps=shared), paints)
         return self._bases[key]
 
     def draw(self, setting: Any, size: int, bare: bool = False) -> np.ndarray:

@@ -160,3 +160,26 @@ def test_choose_anisotropic_samples_is_the_fewest_within_the_share() -> None:
     assert iso.samples == 1 and "isotropic" in iso.reason
     with pytest.raises(InputError):
         lod.choose_anisotropic_samples(basis, lobe, n, v, 0.0)
+
+
+def test_frame_probe_shares_one_widths_coat_map_among_its_bases(metallic) -> None:
+    """Without a disk cache a frame probe sums the clear coat's diffuse map once per environment width:
+    the bases of one width (other lobe counts) hold the same map, another width its own, and the shared
+    map is the one a basis of its own sums."""
+    from station.model.gloss import ClearCoat
+    from station.render.environment import Environment
+    from station.render.prefilter import coat_diffuse_map, prefilter_basis
+    from station.render.scene_image import FrameProbe
+    from station.render.shapes import Scene
+
+    env = Environment("sky", sky(32))
+    coat = ClearCoat()
+    with FrameProbe([metallic], env, Scene("sphere"), coat=coat, max_size=8) as probe:
+        one, _ = probe.setup(lod.FrameSetting(1, 32))
+        two, _ = probe.setup(lod.FrameSetting(2, 32))
+        full, _ = probe.setup(lod.FrameSetting(1, None))
+        shared = coat_diffuse_map(one, coat)
+        assert coat_diffuse_map(two, coat) is shared and coat.index in two.coat_maps
+        assert coat.index not in full.coat_maps
+    alone = prefilter_basis(env.downsampled(32), two.exponents, engine="numpy", max_size=8)
+    assert np.array_equal(coat_diffuse_map(alone, coat), shared)

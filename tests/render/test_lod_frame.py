@@ -211,9 +211,10 @@ def test_cli_lod_anisotropic_samples(folder: Path, capsys, monkeypatch: pytest.M
         assert measured <= measured_default + 1e-6, "worse than default"
 
 
-#: The service's route: one case per paint (each request sums the service's default coat's transmitted
-#: diffuse map for every candidate basis, about 40 s a case on two CPUs), a sky and the booth, both
-#: tolerances; with the command line's 36 and the 4 anisotropic cases, 43 held-out cases in all.
+#: The service's route: one case per paint (a request prefilters every candidate basis with the NumPy
+#: engine; the first request per environment fills the disk cache, the service's default coat's
+#: transmitted diffuse map included, once per map width), a sky and the booth, both tolerances; with the
+#: command line's 36 and the 4 anisotropic cases, 43 held-out cases in all.
 SERVICE_CASES = [("SYN-NM0001", "booth", 4.0), ("SYN-RM0229", "sky", 1.0), ("mirror-black", "booth", 4.0)]
 
 

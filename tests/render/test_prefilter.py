@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from station.model.fresnel import ClearCoat
 from station.render import cubemap, prefilter, procedural
 from station.render.envcache import PrefilterCache
 from station.render.environment import Environment, load_environment
@@ -100,11 +101,54 @@ def test_cache_hits_and_survives_corruption(tmp_path):
     assert np.allclose(again.cubes[1], first.cubes[1], rtol=1e-3)
     # same input, same answer: the first (computed) maps equal the cached ones bit for bit
     assert all(np.array_equal(a, b) for a, b in zip(first.cubes, again.cubes, strict=True))
-    files = sorted((tmp_path / "prefilter").glob("*.npy"))
+    files = sorted((tmp_path / "prefilter").glob("*-N*.npy"))  # the lobe maps
     assert len(files) == 2 and all("-n2-" in f.name or "-n20-" in f.name for f in files)
+    # the diffuse map, kept as float32: the cached one equals the summed one bit for bit
+    diffuse = tmp_path / "prefilter" / f"{PrefilterCache.diffuse_key(env.content_hash, 16, 32, 'numpy')}.npy"
+    assert np.load(diffuse).dtype == np.float32 and np.array_equal(first.diffuse, again.diffuse)
+    assert "diffuse" in first.timings and "diffuse" not in again.timings
+    plain = prefilter.prefilter_basis(env, [2, 20], engine="numpy")
+    assert np.array_equal(plain.diffuse, again.diffuse)
     files[0].write_bytes(b"garbage")
     third = prefilter.prefilter_basis(env, [2, 20], engine="numpy", cache=cache)
     assert third.timings["cache_hits"] == 1
+
+
+def test_coat_map_on_disk_equals_the_summed_map(tmp_path):
+    """The clear coat's coat-transmitted diffuse map is kept in the cache as float32: the map a basis with
+    a cache returns equals the uncached sum bit for bit, another basis of the environment (other lobes)
+    reads the entry (a map planted under the key is what comes back), and an entry of the wrong shape is
+    summed again. The key names the environment, the coat's index, the sizes and the engine."""
+    env = procedural.overcast_sky(64)
+    coat = ClearCoat()
+    uncached = prefilter.coat_diffuse_map(prefilter.prefilter_basis(env, [2], engine="numpy"), coat)
+    cache = PrefilterCache(tmp_path)
+    first = prefilter.prefilter_basis(env, [2], engine="numpy", cache=cache)
+    assert np.array_equal(prefilter.coat_diffuse_map(first, coat), uncached)
+    key = PrefilterCache.coat_key(env.content_hash, coat.index, prefilter.COAT_DIFFUSE_SIZE, 64, "numpy")
+    stored = np.load(tmp_path / "prefilter" / f"{key}.npy")
+    assert stored.dtype == np.float32 and np.array_equal(stored, uncached)
+    other = prefilter.prefilter_basis(env, [2, 20], engine="numpy", cache=cache)
+    assert np.array_equal(prefilter.coat_diffuse_map(other, coat), uncached)
+    planted = np.full_like(uncached, 0.25)
+    cache.put(key, planted, np.float32)
+    fresh = prefilter.prefilter_basis(env, [20], engine="numpy", cache=cache)
+    assert np.array_equal(prefilter.coat_diffuse_map(fresh, coat), planted)
+    cache.put(key, planted[:, :8, :8], np.float32)
+    resummed = prefilter.prefilter_basis(env, [20], engine="numpy", cache=cache)
+    assert np.array_equal(prefilter.coat_diffuse_map(resummed, coat), uncached)
+    keys = {
+        PrefilterCache.coat_key(h, n, o, s, e)
+        for h, n, o, s, e in [
+            (env.content_hash, 1.5, 32, 64, "numpy"),
+            (procedural.overcast_sky(32).content_hash, 1.5, 32, 64, "numpy"),
+            (env.content_hash, 1.5000001, 32, 64, "numpy"),
+            (env.content_hash, 1.5, 16, 64, "numpy"),
+            (env.content_hash, 1.5, 32, 32, "numpy"),
+            (env.content_hash, 1.5, 32, 64, "gl"),
+        ]
+    }
+    assert len(keys) == 6 and all(not k.startswith(env.content_hash[:40] + "-n") for k in keys)
 
 
 def test_cache_dir_from_environment_variable(tmp_path, monkeypatch):
@@ -157,3 +201,21 @@ def test_gl_brute_force_equals_numpy_brute_force(gl_ctx, n):
         lin = gl.run(cubemap.equirect_to_cube(_linear_env(128), 32), n, 8)
     np.testing.assert_allclose(got, prefilter.prefilter_brute(src, n, 16), rtol=2e-5, atol=1e-7)
     assert lin[..., 0] == pytest.approx(_linear_expect(n, 8), abs=4e-3)
+
+
+@pytest.mark.gl
+def test_gl_coat_and_diffuse_maps_on_disk_equal_the_summed_maps(gl_ctx, tmp_path):
+    """The GL engine's maps have keys of their own (``-gl-``): the coat map a GL renderer sums
+    (:class:`prefilter.GLBrute`) and the GL diffuse map, cached, equal the uncached GL sums bit for bit."""
+    env = procedural.procedural_environment("booth", 128)
+    coat = ClearCoat(1.6)
+    plain = prefilter.prefilter_basis(env, [2], engine="gl", ctx=gl_ctx)
+    uncached = prefilter.coat_diffuse_map(plain, coat, gl_ctx)
+    cache = PrefilterCache(tmp_path)
+    first = prefilter.prefilter_basis(env, [2], engine="gl", ctx=gl_ctx, cache=cache)
+    assert np.array_equal(prefilter.coat_diffuse_map(first, coat, gl_ctx), uncached)
+    again = prefilter.prefilter_basis(env, [20], engine="gl", ctx=gl_ctx, cache=cache)
+    assert "diffuse" not in again.timings and np.array_equal(again.diffuse, plain.diffuse)
+    assert np.array_equal(prefilter.coat_diffuse_map(again, coat, gl_ctx), uncached)
+    names = sorted(f.name for f in (tmp_path / "prefilter").glob("*.npy") if "-N" not in f.name)
+    assert len(names) == 2 and all("-gl-" in n for n in names)
