@@ -18,29 +18,12 @@ from station.render.cubemap import equirect_directions
 from station.render.environment import Environment
 from station.render.stage import Stage, lookup_matrix
 from station.render.weights import LobeWeights
+from tests.render._fresnel_hand import diffuse_transmission as _diffuse_transmission
+from tests.render._fresnel_hand import fresnel as _fresnel
 
 EXPS = (1.0, 8.0, 64.0, 512.0)
 SUN = np.array([0.5, 0.6, 0.35]) / np.linalg.norm([0.5, 0.6, 0.35])
 SKY = 0.2
-
-
-def _fresnel(cos_i: np.ndarray, n: float) -> np.ndarray:
-    """Unpolarised reflectance of a dielectric of index *n* from air at incidence cosines *cos_i*: Snell's
-    law for the refracted angle, then the s and p amplitude ratios."""
-    ti = np.arccos(np.clip(cos_i, 0.0, 1.0))
-    tt = np.arcsin(np.sin(ti) / n)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rs = np.sin(ti - tt) / np.sin(ti + tt)
-        rp = np.tan(ti - tt) / np.tan(ti + tt)
-    head_on = ((n - 1.0) / (n + 1.0)) ** 2
-    return np.where(ti < 1e-9, head_on, np.where(np.isclose(ti, 0.5 * np.pi), 1.0, 0.5 * (rs**2 + rp**2)))
-
-
-def _diffuse_transmission(n: float) -> float:
-    """1 − F_dr,ext = 1 − 2 ∫₀¹ F(μ) μ dμ, trapezoid rule on 20001 points."""
-    mu = np.linspace(0.0, 1.0, 20001)
-    y = 2.0 * _fresnel(mu, n) * mu
-    return 1.0 - float(np.sum((y[1:] + y[:-1]) * 0.5 * np.diff(mu)))
 
 
 def _sun_env(sun: bool) -> Environment:
