@@ -368,12 +368,12 @@ class GLRenderer(Closing):
             "u_background": (BACKGROUND,) * 3,
             "u_diffuse": m + 4,
             "u_horizon": m + 5,
-            "u_coat_f0": coat.f0 if coat is not None else 0.0,
+            "u_coat_n": coat.index if coat is not None else 1.5,
             "u_coat_ref": coat.reference if coat is not None else 1.0,
+            "u_coat_t": coat.diffuse_transmission if coat is not None else 1.0,
             "u_diffuse_coat": m + 3,
-            "u_rot": tuple(
-                float(v) for v in lookup_matrix(stage.rotation_deg if stage else 0.0).T.ravel()
-            ),  # column-major
+            # u_rot column-major: the matrix's transpose, row by row
+            "u_rot": tuple(float(v) for v in lookup_matrix(stage.rotation_deg if stage else 0.0).T.ravel()),
             "u_backdrop": m + 6,
             "u_backdrop_exp": float(self.basis.exponents[backdrop]),
             "u_ground_y": float(gy),

@@ -33,8 +33,9 @@
   left) V is the share of the filter's texels that do not block it, i.e. a PCF of fixed width; closer to
   its blocker the shadow is lighter (the exponential's known leak at contacts).
 * **What is shadowed.** Only the light's direct part: on the model the light's exact terms on the wide
-  lobes and its Lambertian share w_D (N·l)₊Φ/π of the diffuse map (for the neutral parts, their diffuse
-  reflectance's share); on the ground its direct part (l_y)₊Φ/π. The environment's diffuse and specular
+  lobes and its Lambertian share w_D (N·l)₊Φ/π of the diffuse map (under a clear coat π K_D's share times
+  the coat's entry weight ``ClearCoat.entry_scale``(N·l), as the coat map holds it; for the neutral parts,
+  their diffuse reflectance's share); on the ground its direct part (l_y)₊Φ/π. The environment's diffuse and specular
   maps (the narrow lobes keep the sun) are unchanged.
 * **Ground ambient occlusion.** Two height maps of the mesh seen from straight above and below
   (HEIGHT_MAP texels on the long side) give, per column (x, z), the mesh's top and bottom heights; the

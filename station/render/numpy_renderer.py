@@ -67,6 +67,11 @@ coat weighted by (1 − F(N·l))/(1 − F_dr,ext), ``ClearCoat.entry_scale``, Mi
 :func:`station.render.prefilter.coat_diffuse_map`); the effect terms (directionally diffuse, fall-off,
 flakes) keep D and the outgoing factor only (``ClearCoat``'s docstring says why).
 
+Shadows on the object: on a stage each extracted light is shadowed by the shape itself, one ray per pixel
+and light at the shape (``station.render.shapes.ray_cast_visibility``, hard: a point light); a shadowed
+light loses its exact wide-lobe terms and its share of the diffuse base, Σ_l (N·l)₊Φ_l/π times π (K_D +
+K_A), under a coat π K_A + π K_D t(N·l) (:func:`light_shadow`): what the GL shadow maps take.
+
 Pixels that miss the object show a constant grey background, or with a scene's
 :class:`~station.render.stage.Stage` the environment as backdrop over a ground disc with its contact
 shadow and the extracted lights' sun shadows, the environment turned about +Y (:func:`stage_background`;
@@ -95,7 +100,7 @@ from station.render.flakes import clip_sparkle, flake_lod, flake_tint, sparkle_p
 from station.render.lobes import bent_direction
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis, coat_diffuse_map
 from station.render.sh import sh_diffuse
-from station.render.shapes import GROUNDS, OCCLUDERS, Scene, intersect
+from station.render.shapes import GROUNDS, OCCLUDERS, Scene, intersect, ray_cast_visibility
 from station.render.stage import backdrop_lobe, ground_fade, ground_radiance, lookup_matrix
 from station.render.weights import LobeWeights
 
@@ -200,20 +205,23 @@ def dd_direction(
 
 
 def light_terms(
-    basis: PrefilteredBasis, i: int, normal: np.ndarray, reflect: np.ndarray
+    basis: PrefilteredBasis, i: int, normal: np.ndarray, reflect: np.ndarray, vis: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """Exact (gloss, directionally diffuse) radiance per unit map weight of lobe i from the lights.
 
     For each light (direction l, flux Φ, spread s²): gloss Σ_l 1[N·l > 0] p_i(l) Φ_l, DD Σ_l (N·l)₊ p_i(l) Φ_l,
     with p_i(l) = (E'+1)/(2π) (R·l)₊^E', E' = E_i / (1 + E_i s²) the lobe smoothed over the light's extent
-    (:func:`station.render.environment.spread_exponent`; E_i for a point light); each (P, 3). None when
-    lobe i keeps the lights in its map.
+    (:func:`station.render.environment.spread_exponent`; E_i for a point light); each (P, 3), each light
+    times its visibility *vis* (P, k) when given (:func:`light_shadow`). None when lobe i keeps the lights
+    in its map.
     """
     if basis.lights is None or not basis.wide or not basis.wide[i]:
         return None
     e = spread_exponent(basis.exponents[i], basis.lights.spreads())[None, :]  # (1, k)
     nl = normal @ basis.lights.directions.T  # (P, k)
     p = (e + 1.0) / (2.0 * np.pi) * np.clip(reflect @ basis.lights.directions.T, 0.0, None) ** e
+    if vis is not None:
+        p = p * vis
     gloss = ((nl > 0) * p) @ basis.lights.flux
     dd = (np.clip(nl, 0.0, None) * p) @ basis.lights.flux
     return gloss, dd
@@ -270,6 +278,30 @@ def fall_off_term(
     return np.maximum(out, 0.0) - d_n
 
 
+def light_shadow(
+    basis: PrefilteredBasis,
+    weights: LobeWeights,
+    normal: np.ndarray,
+    vis: np.ndarray,
+    coat: ClearCoat | None = None,
+) -> np.ndarray:
+    """What the extracted lights' shadows take from the diffuse base, (P, 3) radiance before the coat's
+    outgoing factor: Σ_l (1 − V_l) (N·l)₊ Φ_l/π times π (K_D + K_A) (*coat* None), or under a coat
+    π K_A + π K_D t(N·l), t = ``ClearCoat.entry_scale`` (the share the coat-transmitted map holds), as the
+    GL shader's shadow maps do (``shaders/render.frag.glsl``). *normal* (P, 3) in the environment's frame,
+    *vis* (P, k) each light's visibility in [0, 1] (:func:`station.render.shapes.ray_cast_visibility`)."""
+    lights = basis.lights
+    w_d = weights.map_weights()[0]
+    if lights is None or not lights.count:
+        return np.zeros((np.asarray(normal).shape[0], 3))
+    nl = np.clip(normal @ lights.directions.T, 0.0, None)  # (P, k)
+    lost = (1.0 - vis) * nl / np.pi
+    if coat is None:
+        return (lost @ lights.flux) * w_d[None, :]
+    w_a = weights.fall_off_map_weight()
+    return (lost @ lights.flux) * w_a[None, :] + ((lost * coat.entry_scale(nl)) @ lights.flux) * (w_d - w_a)
+
+
 def shade_pixels(
     basis: PrefilteredBasis,
     weights: LobeWeights,
@@ -279,11 +311,13 @@ def shade_pixels(
     diffuse: str = "cube",
     horizon: str = "lut",
     coat: ClearCoat | None = None,
+    vis: np.ndarray | None = None,
 ) -> np.ndarray:
     """Radiance (P, 3) of pixels with normals/reflected views (P, 3) and N·V (P,) (module equation).
 
     *coat*: the clear coat's Fresnel factor on the gloss terms (module docstring); None: none. The
     aspecular fall-off term (K_A > 0) is π K_A D(N) (in w_D) plus π K_A · :func:`fall_off_term`.
+    *vis*: (P, k) visibility of the extracted lights (:func:`light_shadow`); None: all visible.
     """
     w_d, w_dd, w_g = weights.map_weights()
     d = diffuse_lookup(basis, normal, diffuse)
@@ -304,10 +338,12 @@ def shade_pixels(
         c_dd = c_r if bent is None else sample_cube(cube, bent)
         gloss = gloss + h[:, i : i + 1] * w_g[i] * c_r
         base = base + g[:, i : i + 1] * w_dd[i] * c_dd
-        lights = light_terms(basis, i, normal, reflect)
+        lights = light_terms(basis, i, normal, reflect, vis)
         if lights is not None:
             gloss = gloss + w_g[i] * lights[0]
             base = base + w_dd[i] * lights[1]
+    if vis is not None:
+        base = base - light_shadow(basis, weights, normal, vis, coat)
     if coat is None:
         return base + gloss
     return coat.base_scale(n_dot_v)[:, None] * base + coat.gloss_scale(n_dot_v)[:, None] * gloss
@@ -372,6 +408,8 @@ def render_linear(
     """Linear sRGB radiance image (H, W, 3) float32 of the scene lit by the prefiltered basis.
 
     *coat*: clear-coat Fresnel on the gloss terms (module docstring); None: the thesis's model.
+    On a stage the extracted lights are shadowed by the shape itself (one ray per pixel and light,
+    :func:`station.render.shapes.ray_cast_visibility`; :func:`light_shadow`), as the GL renderer's maps do.
     *flakes*: the paints' flake layer, drawn as the GL renderer draws it when the level of detail
     (:func:`station.render.flakes.flake_lod` of this view and height, which says why) keeps it on.
     """
@@ -391,7 +429,10 @@ def render_linear(
         m = g.mask & (g.paint == k)
         if m.any():
             n_env, r_env = g.normal[m] @ rot.T, g.reflect[m] @ rot.T
-            img[m] = shade_pixels(basis, pair[k], n_env, r_env, ndv[m], diffuse, horizon, coat)
+            vis = None
+            if scene.stage is not None and basis.lights is not None and basis.lights.count:
+                vis = ray_cast_visibility(scene, g.position[m], g.normal[m], basis.lights.directions @ rot)
+            img[m] = shade_pixels(basis, pair[k], n_env, r_env, ndv[m], diffuse, horizon, coat, vis)
             if flakes is not None and on:
                 eye = np.asarray(scene.view_camera.eye, dtype=float)
                 dist = np.linalg.norm(g.position[m] - eye, axis=-1)

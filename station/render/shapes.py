@@ -31,6 +31,8 @@ SHAPE_INDEX = {name: i for i, name in enumerate(SHAPES)}
 SPEED_NOSE, SPEED_TAIL, SPEED_H, SPEED_W = 0.7, 1.7, 0.42, 0.55
 CYL_R = 0.8
 SEAM_R = 0.6
+#: A shadow ray leaves its surface point this far along the normal (scene units), so it does not hit it.
+SHADOW_RAY_OFFSET = 1e-4
 
 DEFAULT_CAMERAS = {
     "sphere": Camera((0.0, 0.8, 4.5), (0.0, 0.0, 0.0), fov_deg=30.0),
@@ -124,8 +126,8 @@ _Candidates = tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]
 
 
 def _sphere(o: np.ndarray, d: np.ndarray) -> _Candidates:
-    b = d @ o
-    c = o @ o - 1.0
+    b = np.sum(d * o, axis=-1)
+    c = np.sum(o * o, axis=-1) - 1.0
     disc = b * b - c
     t = np.where(disc >= 0, -b - np.sqrt(np.maximum(disc, 0)), np.inf)
     t = np.where(t > 0, t, np.inf)
@@ -135,18 +137,18 @@ def _sphere(o: np.ndarray, d: np.ndarray) -> _Candidates:
 
 def _cylinder(o: np.ndarray, d: np.ndarray) -> _Candidates:
     a = d[..., 0] ** 2 + d[..., 2] ** 2
-    b = o[0] * d[..., 0] + o[2] * d[..., 2]
-    c = o[0] ** 2 + o[2] ** 2 - CYL_R**2
+    b = o[..., 0] * d[..., 0] + o[..., 2] * d[..., 2]
+    c = o[..., 0] ** 2 + o[..., 2] ** 2 - CYL_R**2
     disc = b * b - a * c
     t = np.where(
         (disc >= 0) & (a > 1e-12), (-b - np.sqrt(np.maximum(disc, 0))) / np.maximum(a, 1e-12), np.inf
     )
-    y = o[1] + t * d[..., 1]
+    y = o[..., 1] + t * d[..., 1]
     t_side = np.where((t > 0) & (np.abs(y) <= 1.0), t, np.inf)
     p = o + np.where(np.isfinite(t_side), t_side, 0)[..., None] * d
     n_side = p * np.array([1.0, 0.0, 1.0])
     with np.errstate(divide="ignore", invalid="ignore"):
-        tc = (1.0 - o[1]) / d[..., 1]
+        tc = (1.0 - o[..., 1]) / d[..., 1]
     pc = o + np.where(np.isfinite(tc), tc, 0)[..., None] * d
     t_cap = np.where((tc > 0) & (pc[..., 0] ** 2 + pc[..., 2] ** 2 <= CYL_R**2), tc, np.inf)
     n_cap = np.broadcast_to(np.array([0.0, 1.0, 0.0]), p.shape)
@@ -213,15 +215,15 @@ def _panels(o: np.ndarray, d: np.ndarray, misalignment_deg: float) -> _Candidate
 
 def _seam(o: np.ndarray, d: np.ndarray) -> _Candidates:
     with np.errstate(divide="ignore", invalid="ignore"):
-        tf = -o[2] / d[..., 2]
+        tf = -o[..., 2] / d[..., 2]
     pf = o + np.where(np.isfinite(tf), tf, 0)[..., None] * d
     ok = (tf > 0) & (np.abs(pf[..., 0]) <= 1.2) & (pf[..., 1] >= 0.01) & (pf[..., 1] <= 0.9)
     t_f = np.where(ok, tf, np.inf)
     n_f = np.broadcast_to(np.array([0.0, 0.0, 1.0]), pf.shape)
-    oz = o[2] + SEAM_R
+    oz = o[..., 2] + SEAM_R
     a = d[..., 1] ** 2 + d[..., 2] ** 2
-    b = o[1] * d[..., 1] + oz * d[..., 2]
-    c = o[1] ** 2 + oz**2 - SEAM_R**2
+    b = o[..., 1] * d[..., 1] + oz * d[..., 2]
+    c = o[..., 1] ** 2 + oz**2 - SEAM_R**2
     disc = b * b - a * c
     tb = np.where(
         (disc >= 0) & (a > 1e-12), (-b - np.sqrt(np.maximum(disc, 0))) / np.maximum(a, 1e-12), np.inf
@@ -240,7 +242,8 @@ def _seam(o: np.ndarray, d: np.ndarray) -> _Candidates:
 
 
 def intersect(scene: Scene, origin: np.ndarray, dirs: np.ndarray) -> Hits:
-    """Intersect rays from *origin* (3,) along unit *dirs* (..., 3) with the scene's shape."""
+    """Intersect rays from *origin* (3,) along unit *dirs* (..., 3) with the scene's shape; *origin* may also
+    be one point per ray (..., 3) (shadow rays, :func:`ray_cast_visibility`)."""
     o = np.asarray(origin, dtype=np.float64)
     d = np.asarray(dirs, dtype=np.float64)
     if scene.shape == "sphere":
@@ -254,3 +257,19 @@ def intersect(scene: Scene, origin: np.ndarray, dirs: np.ndarray) -> Hits:
     else:
         ts, ns, ps = _seam(o, d)
     return _nearest(ts, ns, ps, o, d)
+
+
+def ray_cast_visibility(
+    scene: Scene, points: np.ndarray, normals: np.ndarray, directions: np.ndarray
+) -> np.ndarray:
+    """Whether each light is visible from each point: (P, k) of 0.0 (the shape is in the way) or 1.0, for
+    surface *points* (P, 3) with unit *normals* (P, 3) and unit light *directions* (k, 3) (world space). Each
+    point casts one ray per light at the scene's own shape (:func:`intersect`), from SHADOW_RAY_OFFSET along
+    its normal: the shape's own outline, not sphere proxies; a point light, so no penumbra. Deterministic."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    o = p + SHADOW_RAY_OFFSET * np.asarray(normals, dtype=float).reshape(-1, 3)
+    ls = np.asarray(directions, dtype=float).reshape(-1, 3)
+    vis = np.ones((p.shape[0], ls.shape[0]))
+    for k, ell in enumerate(ls):
+        vis[:, k] = ~intersect(scene, o, np.broadcast_to(ell, o.shape)).mask
+    return vis

@@ -35,6 +35,11 @@ diffuse base is K_D of the lobe model and, of a designed BRDF, its colour floor 
 channel, ≥ 0: the flop colour the clamped quadratic reaches at its travel); the effect part ρ(ψ) − ρ_d,
 like the K_DD lobes and the fall-off, keeps the outgoing factor alone (``ClearCoat``'s docstring).
 
+Shadows (optional, ``visibility`` / :func:`render_truth`'s *positions* and *scene*): each point light (the
+sun) counts at a pixel times its visibility there, decided by a ray from the pixel's point at the shape
+itself (``station.render.shapes.ray_cast_visibility``, no sphere proxies), in every term but the
+near-mirror lobes' whole-map samples; the rest of the map (the sky) is not shadowed, as in the renderers.
+
 Near-mirror lobes: a lobe narrower than MIRROR_PIXELS map pixels (:func:`resolves_pixels`; a 100 GU
 design's n = 10⁷) would miss point lights at pixel centres, so it importance-samples the whole map with
 the bright pixels left in, as small area lights (the reflection of a sun disc in a mirror is the disc).
@@ -50,6 +55,8 @@ Environment``) or the array itself, in the equirectangular convention of ``stati
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -60,6 +67,7 @@ from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
 from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf, fall_off_factor
 from station.render.lobes import bent_direction, horizon_factors
+from station.render.shapes import Scene, ray_cast_visibility
 from station.render.truth_lighting import MAX_POINT_LIGHTS as MAX_POINT_LIGHTS
 from station.render.truth_lighting import MIRROR_PIXELS as MIRROR_PIXELS
 from station.render.truth_lighting import POINT_THRESHOLD as POINT_THRESHOLD
@@ -125,6 +133,9 @@ class TruthScene:
         Importance samples per pixel and sharp lobe.
     quadrature_width
         Width of the quadrature map for broad kernels.
+    visibility
+        Shadows: a function of the point lights' directions (k, 3) giving each pixel's visibility of each,
+        (P, k) in [0, 1] (:func:`render_truth`'s ray cast); None: every point light visible.
     """
 
     def __init__(
@@ -135,6 +146,7 @@ class TruthScene:
         samples: int = LOBE_SAMPLES,
         quadrature_width: int = QUADRATURE_WIDTH,
         lighting: Lighting | None = None,
+        visibility: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None = None,
     ) -> None:
         n = np.asarray(normals, dtype=float)
         v = np.asarray(views, dtype=float)
@@ -156,6 +168,7 @@ class TruthScene:
         self.reflect = 2.0 * n_dot_v[:, None] * n - v
         self.samples = int(samples)
         self.lighting = prepare_lighting(environment, quadrature_width) if lighting is None else lighting
+        self.point_vis = None if visibility is None else visibility(self.lighting.point_dirs)  # (P, k)
         self._bent: dict[float, NDArray[np.float64]] = {}
         self._tangents = _frames(self.reflect)
         self._cache: dict[tuple[str, float], NDArray[np.float64]] = {}  # lobe integrals, coat irradiance
@@ -186,6 +199,8 @@ class TruthScene:
                 i0 = np.minimum(a.astype(np.int64), _BINS - 2)
                 t = (a - i0)[..., None]
                 wgt = {"cos": np.maximum(n_dot, 0.0), "mask": (n_dot > 0.0) * 1.0, "open": None}[kind]
+                if prefix == "p" and self.point_vis is not None:  # the point lights' shadows
+                    wgt = self.point_vis[sl] if wgt is None else wgt * self.point_vis[sl]
                 f = flux[None, :, :] if wgt is None else wgt[..., None] * flux[None, :, :]
                 idx = (np.arange(sl.stop - sl.start)[:, None] * _BINS + i0)[..., None] * 3 + np.arange(3)
                 size = (sl.stop - sl.start) * _BINS * 3
@@ -254,6 +269,14 @@ class TruthScene:
 
     # -- shading -------------------------------------------------------------------------------------
 
+    def _seen(self, sl: slice) -> NDArray[np.float64] | float:
+        """Visibility (p, M) of the quadrature directions (1: the sky is not shadowed) and point lights; 1.0
+        without shadows."""
+        if self.point_vis is None:
+            return 1.0
+        vis = self.point_vis[sl]
+        return np.concatenate([np.ones((vis.shape[0], self.lighting.quad_dirs.shape[0])), vis], axis=1)
+
     def coat_factors(self, coat: ClearCoat | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Per pixel factors (P, 1) on the gloss and on the base terms: s(N·V) and 1 − F(N·V) of *coat*,
         ones for None (module docstring)."""
@@ -275,7 +298,7 @@ class TruthScene:
             for s in range(0, out.shape[0], _PIXEL_CHUNK):
                 sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
                 n_dot = np.maximum(self.normals[sl] @ dirs.T, 0.0)
-                out[sl] = (n_dot * coat.entry_scale(n_dot)) @ flux
+                out[sl] = (n_dot * coat.entry_scale(n_dot) * self._seen(sl)) @ flux
             self._cache[key] = out
         return self._cache[key]
 
@@ -314,11 +337,12 @@ class TruthScene:
             sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
             cos_psi = np.clip(self.reflect[sl] @ dirs.T, -1.0, 1.0)
             n_dot = self.normals[sl] @ dirs.T
+            seen = self._seen(sl)  # the point lights' shadows
             rho = brdf.rho(np.degrees(np.arccos(cos_psi)))
             if coat is not None:  # the colour floor through the coat (module docstring)
                 rho = rho + (coat.entry_scale(n_dot) - 1.0)[..., None] * floor
-            colour = np.einsum("pm,pmc,mc->pc", np.maximum(n_dot, 0.0), rho, flux) / np.pi
-            lobe = (n_dot > 0.0) * np.clip(cos_psi, 0.0, 1.0) ** n_exp
+            colour = np.einsum("pm,pmc,mc->pc", np.maximum(n_dot, 0.0) * seen, rho, flux) / np.pi
+            lobe = (n_dot > 0.0) * seen * np.clip(cos_psi, 0.0, 1.0) ** n_exp
             if sharp:  # residual map by importance sampling below; only the point lights here
                 lobe[:, : self.lighting.quad_dirs.shape[0] if not area else None] = 0.0
             out[sl] = base[sl] * colour + scale[sl] * peak * (lobe @ flux)
@@ -434,6 +458,8 @@ def render_truth(
     quadrature_width: int = 64,
     backfacing: str = "bend",
     coat: ClearCoat | None = None,
+    positions: ArrayLike | None = None,
+    scene: Scene | None = None,
 ) -> NDArray[np.float64]:
     """Ground-truth radiance of *design* in *environment* per pixel (for ``station render --engine truth``).
 
@@ -457,6 +483,10 @@ def render_truth(
     coat
         Clear-coat Fresnel on the gloss lobe (:class:`station.model.gloss.ClearCoat`); None: the thesis's
         BRDF without it.
+    positions, scene
+        Shadows (module docstring): the pixels' world points (..., 3) on *scene*'s shape
+        (:class:`station.render.shapes.Scene`, environment unturned); each point light is seen where its ray
+        misses the shape (:func:`station.render.shapes.ray_cast_visibility`). None: no shadows.
 
     Returns
     -------
@@ -470,7 +500,11 @@ def render_truth(
     if backfacing == "bend":
         n, _ = bend_silhouettes(n, v)
     brdf = design if isinstance(design, DesignedBRDF) else designed_brdf(design)
-    return TruthScene(environment, n, v, samples, quadrature_width).truth_direct(brdf, coat)
+    vis: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None = None
+    if positions is not None and scene is not None:
+        p, nn = np.asarray(positions, dtype=float).reshape(-1, 3), n.reshape(-1, 3)
+        vis = partial(ray_cast_visibility, scene, p, nn)
+    return TruthScene(environment, n, v, samples, quadrature_width, visibility=vis).truth_direct(brdf, coat)
 
 
 def sphere_pixels(size: int, radius: float = 0.98) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -14,13 +14,10 @@ uniform float u_coat_n;
 uniform float u_coat_t;
 out vec4 f_color;
 
+//#include coat.glsl
+
 float entry(float c) {
-    if (u_coat_n <= 0.0) return 1.0;
-    float ci = clamp(c, 0.0, 1.0);
-    float ct = sqrt(max(1.0 - (1.0 - ci * ci) / (u_coat_n * u_coat_n), 0.0));
-    float rs = (ci - u_coat_n * ct) / (ci + u_coat_n * ct);
-    float rp = (u_coat_n * ci - ct) / (u_coat_n * ci + ct);
-    return (1.0 - 0.5 * (rs * rs + rp * rp)) / u_coat_t;
+    return u_coat_n <= 0.0 ? 1.0 : coat_entry_weight(c, u_coat_n, u_coat_t);
 }
 
 void main() {

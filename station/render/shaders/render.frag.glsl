@@ -122,9 +122,9 @@ uniform vec3 u_wdd[2 * N_LOBES];
 uniform float u_wg[2 * N_LOBES];
 uniform vec3 u_background;
 // Clear coat (station.model.gloss.ClearCoat): gloss terms times F(N.V)/u_coat_ref (exact dielectric F of the
-// coat's index, from F0 = u_coat_f0), base terms times 1 - F(N.V); compiled in (HAS_COAT) only for a frame
-// with a coat; without it the thesis's model.
-uniform float u_coat_f0, u_coat_ref;
+// coat's index u_coat_n, shaders/coat.glsl), base terms times 1 - F(N.V); compiled in (HAS_COAT) only for a
+// frame with a coat; without it the thesis's model. u_coat_t = 1 - F_dr,ext: the entry weight's denominator.
+uniform float u_coat_n, u_coat_ref, u_coat_t;
 // The coat's diffuse base: pi K_D (u_wk) reads the coat-transmitted diffuse map u_diffuse_coat (the light
 // entering the coat weighted by (1 - F(N.l))/(1 - F_dr,ext), prefilter.coat_diffuse_map) or its SH twin
 // u_sh_coat; pi K_A (the rest of u_wd) and the effect terms keep u_diffuse (ClearCoat's docstring).
@@ -205,15 +205,12 @@ vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int p
     return tint * u_flake_reflectance * (w0 * g0 + w1 * g1 - (w0 + w1) * mean);
 }
 
-// Exact unpolarised dielectric Fresnel F(N.V) of the coat (station.model.gloss.fresnel_dielectric), its index
-// n recovered from F0 = ((n - 1)/(n + 1))^2; 1 at grazing, never more.
+//#include coat.glsl
+
+// Exact unpolarised dielectric Fresnel F(N.V) of the coat (station.model.fresnel.fresnel_dielectric, coat.glsl);
+// 1 at grazing, never more.
 float coat_fresnel(float ndv) {
-    float r0 = sqrt(u_coat_f0);
-    float n = (1.0 + r0) / (1.0 - r0);
-    float ct = sqrt(max(1.0 - (1.0 - ndv * ndv) / (n * n), 0.0));
-    float rs = (ndv - n * ct) / (ndv + n * ct);
-    float rp = (n * ndv - ct) / (n * ndv + ct);
-    return 0.5 * (rs * rs + rp * rp);
+    return dielectric_fresnel(ndv, u_coat_n);
 }
 
 // (g, h) of bound lobe i at c = R.N: lobes 2k and 2k+1 share row k (.rg, .ba), so with a constant i
@@ -528,7 +525,13 @@ void main() {
                 vec3 p_shadow = u_eye + t * d;
 #endif
                 float vis = light_shadow(l, p_shadow, transpose(u_rot) * n, transpose(u_rot) * u_light_dir[l]);
-                acc = vis * acc - (1.0 - vis) * nl / PI * (paint == 0 ? u_wd[0] : u_wd[1]);
+                // the light's share of the diffuse maps: pi K_A (u_wd - u_wk) of D; with a coat pi K_D (u_wk)
+                // of D_coat, where it enters weighted by the coat's entry weight t(N.l) (ClearCoat.entry_scale)
+                vec3 w_lit = paint == 0 ? u_wd[0] : u_wd[1];
+#if HAS_COAT
+                w_lit += (paint == 0 ? u_wk[0] : u_wk[1]) * (coat_entry_weight(nl, u_coat_n, u_coat_t) - 1.0);
+#endif
+                acc = vis * acc - (1.0 - vis) * nl / PI * w_lit;
             }
 #endif
             if (nl > 0.0) rgb += acc * u_light_flux[l];
