@@ -24,7 +24,7 @@ from station.render.design_db import design_database
 from station.render.envcache import PrefilterCache
 from station.render.numpy_renderer import gbuffer
 from station.render.procedural import procedural_environment
-from station.render.scene_image import ENV_WIDTH, PREFILTER_SIZE, FrameProbe, interior_mask
+from station.render.scene_image import ENV_WIDTH, PREFILTER_SIZE, FrameOptions, FrameProbe, interior_mask
 from station.render.shapes import Scene
 from station.render.truth import render_truth
 
@@ -56,12 +56,12 @@ def gaps(cache_dir: str, every: int = 5) -> list[tuple[str, float, float]]:
             white = lod.scene_white(env)
             for k, design in enumerate(designs):
                 truth = truth_frame(design, env, scene, FRAME)
-                kw = (
-                    {"engine": "gl", "prefilter_engine": "gl", "max_size": None, "aa": 4}
+                options = (
+                    FrameOptions("gl", "gl", max_size=None, aa=4)
                     if engine == "gl"
-                    else {"engine": "numpy", "prefilter_engine": "numpy", "max_size": PREFILTER_SIZE}
+                    else FrameOptions("numpy", "numpy", max_size=PREFILTER_SIZE)
                 )
-                with FrameProbe([design], env, scene, cache=cache, **kw) as probe:
+                with FrameProbe([design], env, scene, options, cache=cache) as probe:
                     mask = probe.mask(lod.PROBE_SIZE)
                     ref = probe.draw(lod.FrameSetting(lod.MAX_LOBES), lod.PROBE_SIZE)
                     settings = [lod.DEFAULT_SETTING, *lod.frame_candidates(env.equirect.shape[1])]

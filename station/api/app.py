@@ -107,25 +107,19 @@ def _start_watch_folder(app: FastAPI, settings: Settings) -> tuple[threading.Eve
     """Start the watch-folder thread when ``settings.watch_dir`` is set: files go through the service's ingestor."""
     if settings.watch_dir is None:
         return None
+    from station.ingest.formats.records import ImportOptions
     from station.ingest.formats.watch import watch_folder
 
     folder = Path(settings.watch_dir)
     folder.mkdir(parents=True, exist_ok=True)
     stop = threading.Event()
     hub = app.state.instruments
+    options = ImportOptions("service", job=settings.watch_job, part=settings.watch_part)
 
     def run() -> None:
         while not stop.is_set():
             try:
-                watch_folder(
-                    folder,
-                    hub.ingestor(),
-                    operator="service",
-                    interval_s=settings.watch_interval_s,
-                    stop=stop,
-                    job=settings.watch_job,
-                    part=settings.watch_part,
-                )
+                watch_folder(folder, hub.ingestor(), options, interval_s=settings.watch_interval_s, stop=stop)
             except InputError as exc:  # a linked or foreign done/ or rejected/: never used, not retried
                 log.error("watch folder %s refused: %s", folder, exc)
                 return

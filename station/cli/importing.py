@@ -126,7 +126,7 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
     job, part = _panel(args)
 
     from station.ingest.formats import load_measurement_file
-    from station.ingest.formats.records import readings_from_file
+    from station.ingest.formats.records import ImportOptions, readings_from_file
 
     path = Path(args.target[0])
     if not path.is_file():
@@ -148,15 +148,9 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
         from station.cli.instruments import _receipt, _target
         from station.ingest import operator_name
 
-        readings = readings_from_file(
-            imported,
-            path,
-            operator=operator_name(),
-            illumination_deg=_illumination(args),
-            job=job,
-            part=part,
-            data=data,
-        )  # every reading validated before the first is stored
+        options = ImportOptions(operator_name(), job, part, _illumination(args))
+        # every reading validated before the first is stored
+        readings = readings_from_file(imported, path, options, data=data)
         with _target(args) as target:
             out["stored"] = [
                 _receipt(target, target.ingestor.submit(r)) | {"illumination_deg": r.illumination_deg}
@@ -179,6 +173,7 @@ def cmd_import(args: argparse.Namespace) -> dict[str, Any] | None:
 def _watch(args: argparse.Namespace) -> dict[str, Any] | None:
     from station.cli.instruments import _target
     from station.ingest import operator_name
+    from station.ingest.formats.records import ImportOptions
     from station.ingest.formats.watch import ABANDON_S, SETTLE_S, scan_once, watch_folder
 
     folder = Path(args.target[1])
@@ -195,17 +190,11 @@ def _watch(args: argparse.Namespace) -> dict[str, Any] | None:
         raise InputError("--interval", "0.05 <= seconds <= 3600", args.interval)
     if args.store is None:
         args.store = ""  # a watch folder always stores (default database)
-    common: dict[str, Any] = {
-        "operator": operator_name(),
-        "job": job,
-        "part": part,
-        "illumination_deg": _illumination(args),
-        "abandon_s": abandon,
-    }
+    options = ImportOptions(operator_name(), job, part, _illumination(args))
     with _target(args) as target:
         ingestor = target.ingestor
         if args.once:
-            outcomes = scan_once(folder, ingestor, settle_s=settle, **common)
+            outcomes = scan_once(folder, ingestor, options, settle_s=settle, abandon_s=abandon)
             result = {
                 "folder": str(folder),
                 "done": sum(o.status == "done" for o in outcomes),
@@ -228,11 +217,12 @@ def _watch(args: argparse.Namespace) -> dict[str, Any] | None:
             watch_folder(
                 folder,
                 ingestor,
+                options,
                 interval_s=args.interval,
                 settle_s=settle,
                 stop=stop,
                 on_outcome=report,
-                **common,
+                abandon_s=abandon,
             )
         except KeyboardInterrupt:
             stop.set()

@@ -42,12 +42,11 @@ from station.errors import InputError
 if TYPE_CHECKING:
     from station.model.anisotropy import Anisotropy
     from station.model.flakes import FlakeLayer
-    from station.model.gloss import ClearCoat
     from station.render.camera import Camera
     from station.render.environment import Environment
     from station.render.meshes import Mesh
+    from station.render.scene_image import FrameOptions
     from station.render.shapes import Scene
-    from station.render.stage import Stage
 
 ENVS = ("booth", "sky", "overcast")
 DESCRIPTION = (
@@ -182,9 +181,13 @@ def _flake_layer(args: argparse.Namespace) -> FlakeLayer | None:
     return FlakeLayer(**{**(layer or METALLIC_FLAKES).to_dict(), **given})
 
 
-def _scene(args: argparse.Namespace) -> tuple[Scene, Stage | None, ClearCoat | None, Mesh | None]:
-    """(scene, stage, coat, mesh) of the arguments."""
+def _scene(
+    args: argparse.Namespace, engine: str, anisotropy: Anisotropy | None
+) -> tuple[Scene, FrameOptions]:
+    """The scene of the arguments (shape, camera, stage) and how *engine* draws its frame (coat, mesh,
+    samples per pixel, the design's *anisotropy*)."""
     from station.model.gloss import ClearCoat
+    from station.render.scene_image import FrameOptions
     from station.render.shapes import Scene
     from station.render.stage import Stage
 
@@ -211,7 +214,16 @@ def _scene(args: argparse.Namespace) -> tuple[Scene, Stage | None, ClearCoat | N
     else:
         camera = _view_camera(args.view, Scene(args.shape).view_camera)
     scene = Scene(args.shape, misalignment_deg=args.misalignment, camera=camera, stage=stage)
-    return scene, stage, coat, mesh
+    frame = FrameOptions(
+        engine,
+        prefilter_engine="gl" if engine == "gl" else "numpy",
+        max_size=None,
+        coat=coat,
+        mesh=mesh,
+        aa=_aa(args) if engine == "gl" else 1,
+        anisotropy=anisotropy,
+    )
+    return scene, frame
 
 
 def _check(
@@ -246,41 +258,19 @@ def _render_gl(
     basis: Any,
     paints: list,
     scene: Scene,
-    stage: Stage | None,
-    coat: ClearCoat | None,
-    mesh: Mesh | None,
+    frame: FrameOptions,
     flakes: FlakeLayer | None,
-    anisotropy: Anisotropy | None,
     size: int,
-    aa: int,
     anisotropic_samples: int | None = None,
 ) -> tuple[np.ndarray, str | None, dict[str, Any] | None]:
-    """(linear image, flake report, anisotropy report) of the GL engine, *aa* samples per pixel,
-    *anisotropic_samples* off-specular samples (None: the renderer's own choice)."""
+    """(linear image, flake report, anisotropy report) of the GL engine drawing *scene* (its stage) as
+    *frame* says (coat, mesh, samples per pixel, anisotropy) with *flakes*, *anisotropic_samples*
+    off-specular samples (None: the renderer's own choice)."""
     from station.render.gl_renderer import GLRenderer
+    from station.render.scene_image import gl_frame
 
-    with GLRenderer(basis, size, size, aa=aa) as gl:
-        if mesh is not None:
-            linear = gl.render_mesh(
-                mesh,
-                paints,
-                camera=scene.view_camera,
-                stage=stage,
-                coat=coat,
-                linear=True,
-                flakes=flakes,
-                anisotropy=anisotropy,
-                anisotropic_samples=anisotropic_samples,
-            )
-        else:
-            linear = gl.render_linear(
-                scene,
-                paints,
-                coat=coat,
-                flakes=flakes,
-                anisotropy=anisotropy,
-                anisotropic_samples=anisotropic_samples,
-            )
+    with GLRenderer(basis, size, size, aa=frame.aa) as gl:
+        linear = gl_frame(gl, scene, paints, frame, flakes=flakes, anisotropic_samples=anisotropic_samples)
         flake_report = gl.last_flakes.reason if gl.last_flakes is not None else None
         aniso_report = None
         if gl.last_anisotropy is not None:
@@ -333,7 +323,7 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     engine = args.engine if args.engine != "auto" else ("gl" if gl_available() else "numpy")
     anisotropy = load_design_anisotropy(args.design)[1]
     _check(args, engine, flakes, anisotropy)
-    scene, stage, coat, mesh = _scene(args)
+    scene, frame = _scene(args, engine, anisotropy)
     timings["load"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     paints = [lobe_fit.fit_design(d) for d in designs]
@@ -344,7 +334,7 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     lod_report = None
     if args.lod is not None:
         t0 = time.perf_counter()
-        paints, env, lod_report = _lod(args, designs, env, scene, engine, coat, mesh, anisotropy)
+        paints, env, lod_report = _lod(args, designs, env, scene, frame)
         timings["lod"] = time.perf_counter() - t0
     flake_report = "no flake layer" if args.flakes and flakes is None else None
     aniso_report = None
@@ -355,17 +345,17 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         linear = _render_truth(designs, env, scene, size)
     else:
         basis = prefilter_basis(
-            env, exps, engine="gl" if engine == "gl" else "numpy", cache=PrefilterCache(args.cache_dir)
+            env, exps, engine=frame.prefilter_engine, cache=PrefilterCache(args.cache_dir)
         )
         timings["prefilter"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         if engine == "gl":
             samples = None if lod_report is None else lod_report["anisotropic_samples"]
             linear, flake_report, aniso_report = _render_gl(
-                basis, paints, scene, stage, coat, mesh, flakes, anisotropy, size, _aa(args), samples
+                basis, paints, scene, frame, flakes, size, samples
             )
         else:
-            linear = render_linear(scene, basis, paints, size, size, coat=coat, flakes=flakes)
+            linear = render_linear(scene, basis, paints, size, size, coat=frame.coat, flakes=flakes)
             if flakes is not None:
                 flake_report = flake_lod(flakes, scene.view_camera, size).reason
     timings["render"] = time.perf_counter() - t0
@@ -376,16 +366,16 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         "engine": engine,
         "lobes": list(exps),
         "environment": env.name,
-        "shape": args.shape if mesh is None else mesh.name,
+        "shape": args.shape if frame.mesh is None else frame.mesh.name,
         "size": size,
-        "stage": stage is not None,
+        "stage": scene.stage is not None,
         "coat_index": args.coat,
         "flakes": flake_report,
         "flake_layer": flakes.to_dict() if flakes is not None else None,
         "view": _view_report(scene.view_camera),
         "anisotropy": aniso_report,
         "lod": lod_report,
-        "aa": _aa(args) if engine == "gl" else 1,
+        "aa": frame.aa,
         "out": str(out),
         "linear_out": args.linear_out,
         "timings": {k: round(v, 4) for k, v in timings.items()},
@@ -393,38 +383,20 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _lod(
-    args: argparse.Namespace,
-    designs: list,
-    env: Environment,
-    scene: Scene,
-    engine: str,
-    coat: ClearCoat | None,
-    mesh: Mesh | None,
-    anisotropy: Anisotropy | None,
+    args: argparse.Namespace, designs: list, env: Environment, scene: Scene, frame: FrameOptions
 ) -> tuple[list, Environment, dict[str, Any]]:
     """``--lod``: the paints, environment and report of the level of detail judged on the frame's own
-    engine (``station.render.scene_image.scene_lod``); refused for the truth engine, naming ``lod``."""
+    engine as *frame* draws it (``station.render.scene_image.scene_lod``); refused for the truth engine,
+    naming ``lod``."""
     from station.render.envcache import PrefilterCache
     from station.render.scene_image import scene_lod
 
-    if engine == "truth":
+    if frame.engine == "truth":
         raise InputError(
             "lod", "a tolerance for the gl | numpy engine (truth has no level of detail)", args.lod
         )
     return scene_lod(
-        designs,
-        env,
-        scene,
-        args.lod,
-        engine=engine,
-        prefilter_engine="gl" if engine == "gl" else "numpy",
-        max_size=None,
-        coat=coat,
-        mesh=mesh,
-        aa=_aa(args) if engine == "gl" else 1,
-        anisotropy=anisotropy,
-        cache=PrefilterCache(args.cache_dir),
-        size=args.size,
+        designs, env, scene, args.lod, frame, cache=PrefilterCache(args.cache_dir), size=args.size
     )
 
 

@@ -320,27 +320,12 @@ def formulate(
         Starting recipes fitted at most per toner line.
     """
     del time_budget_s
-    if not isinstance(candidates, int) or candidates < 0:
-        raise FormulateInputError("candidates", "a count >= 0", candidates)
-    opts = formulation_options(
-        FormulationOptions(
-            line,
-            paint_type,
-            max_colorants,
-            scale_resolution_g,
-            batch_g,
-            recipes,
-            tuple(illuminants),
-            max_starts,
-        )
+    options = FormulationOptions(
+        line, paint_type, max_colorants, scale_resolution_g, batch_g, recipes, tuple(illuminants), max_starts
     )
-    t0 = time.perf_counter()
-    db = db or default_database()
-    angles = tuple(float(a) for a in angles_deg)
-    design, starts_c = _checked_inputs(design_lab, angles, starts, tolerance, db)
-    c_mat, warn = matting_for_gloss(GLOSS_CLEAR_GU if gloss_gu is None else gloss_gu, db)
-    ranked, fits = _ranked_options(design, angles, starts_c, c_mat, db, opts, float(tolerance), candidates)
-    return _result(design, angles, db, ranked, fits, float(tolerance), c_mat, warn, strict, candidates, t0)
+    return formulate_with(
+        design_lab, angles_deg, starts, gloss_gu, tolerance, db, options, candidates, strict
+    )
 
 
 def _ranked_options(
@@ -534,23 +519,17 @@ def formulate_with(
     db: ColorantDatabase | None,
     options: FormulationOptions,
     candidates: int = 0,
+    strict: bool = False,
 ) -> FormulationResult:
-    """:func:`formulate` with the chemist's limits as one :class:`FormulationOptions`."""
-    o = options
-    return formulate(
-        design_lab,
-        angles_deg,
-        starts,
-        gloss_gu,
-        tolerance,
-        db,
-        candidates=candidates,
-        line=o.line,
-        paint_type=o.paint_type,
-        max_colorants=o.max_colorants,
-        scale_resolution_g=o.scale_resolution_g,
-        batch_g=o.batch_g,
-        recipes=o.recipes,
-        illuminants=o.illuminants,
-        max_starts=o.max_starts,
-    )
+    """:func:`formulate` with the chemist's limits as one :class:`FormulationOptions` (checked here by
+    :func:`formulation_options`); the other arguments as for :func:`formulate`."""
+    if not isinstance(candidates, int) or candidates < 0:
+        raise FormulateInputError("candidates", "a count >= 0", candidates)
+    opts = formulation_options(replace(options, illuminants=tuple(options.illuminants)))
+    t0 = time.perf_counter()
+    db = db or default_database()
+    angles = tuple(float(a) for a in angles_deg)
+    design, starts_c = _checked_inputs(design_lab, angles, starts, tolerance, db)
+    c_mat, warn = matting_for_gloss(GLOSS_CLEAR_GU if gloss_gu is None else gloss_gu, db)
+    ranked, fits = _ranked_options(design, angles, starts_c, c_mat, db, opts, float(tolerance), candidates)
+    return _result(design, angles, db, ranked, fits, float(tolerance), c_mat, warn, strict, candidates, t0)

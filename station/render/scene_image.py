@@ -111,42 +111,63 @@ def builtin_mesh(name: str) -> Mesh:
     return car_body()
 
 
+@dataclass(frozen=True, eq=False)
+class FrameOptions:
+    """How a frame is drawn, as its level of detail is judged on it (:class:`FrameProbe`, :func:`scene_lod`).
+
+    Attributes
+    ----------
+    engine
+        The renderer, gl | numpy.
+    prefilter_engine, max_size
+        The environment prefiltered by gl | numpy, capped at *max_size* cube faces (``None``: no cap).
+    coat
+        The clear coat (``None``: the thesis's model).
+    mesh
+        The mesh drawn instead of the scene's shape (gl only).
+    aa
+        Samples per pixel (gl).
+    anisotropy
+        The paint's anisotropy (gl only).
+    """
+
+    engine: str = "numpy"
+    prefilter_engine: str = "numpy"
+    max_size: int | None = PREFILTER_SIZE
+    coat: ClearCoat | None = None
+    mesh: Mesh | None = None
+    aa: int = 1
+    anisotropy: Anisotropy | None = None
+
+
 class FrameProbe:
     """A frame drawn at any level-of-detail setting (:class:`station.render.lod.FrameSetting`) and size by
-    the frame's own renderer: *engine* gl | numpy, the environment prefiltered by *prefilter_engine* capped
-    at *max_size* faces (cached in *cache*), the clear coat *coat*, the stage of *scene*, the *mesh* (gl),
-    *aa* samples per pixel (gl) and the paint's *anisotropy* (gl); no flakes (their sparkle has a level of
-    detail of its own, :func:`station.render.flakes.flake_lod`). A context manager (it may hold a GL
-    context)."""
+    the frame's own renderer as *options* (:class:`FrameOptions`) say, the environment's prefiltered maps
+    cached in *cache*, the stage of *scene*; no flakes (their sparkle has a level of detail of its own,
+    :func:`station.render.flakes.flake_lod`). A context manager (it may hold a GL context)."""
 
     def __init__(
         self,
         designs: Sequence[FaceFlopTravelGloss],
         environment: Environment,
         scene: Scene,
+        options: FrameOptions | None = None,
         *,
-        engine: str = "numpy",
-        prefilter_engine: str = "numpy",
-        max_size: int | None = PREFILTER_SIZE,
-        coat: ClearCoat | None = None,
-        mesh: Mesh | None = None,
-        aa: int = 1,
-        anisotropy: Anisotropy | None = None,
         cache: Any = None,
     ) -> None:
-        if engine not in ("gl", "numpy"):
-            raise RenderInputError("engine", "gl | numpy", engine)
-        if prefilter_engine not in ("gl", "numpy"):
-            raise RenderInputError("prefilter_engine", "gl | numpy", prefilter_engine)
-        if mesh is not None and engine != "gl":
-            raise RenderInputError("engine", "gl for a mesh", engine)
-        if anisotropy is not None and engine != "gl":
-            raise RenderInputError("engine", "gl for a design with anisotropy", engine)
+        o = FrameOptions() if options is None else options
+        if o.engine not in ("gl", "numpy"):
+            raise RenderInputError("engine", "gl | numpy", o.engine)
+        if o.prefilter_engine not in ("gl", "numpy"):
+            raise RenderInputError("prefilter_engine", "gl | numpy", o.prefilter_engine)
+        if o.mesh is not None and o.engine != "gl":
+            raise RenderInputError("engine", "gl for a mesh", o.engine)
+        if o.anisotropy is not None and o.engine != "gl":
+            raise RenderInputError("engine", "gl for a design with anisotropy", o.engine)
         self.designs, self.environment, self.scene = list(designs), environment, scene
-        self.engine, self.prefilter_engine, self.max_size = engine, prefilter_engine, max_size
-        self.coat, self.mesh, self.aa, self.anisotropy, self.cache = coat, mesh, aa, anisotropy, cache
+        self.options, self.cache = o, cache
         self.ctx: Any = None
-        if engine == "gl" or prefilter_engine == "gl":
+        if o.engine == "gl" or o.prefilter_engine == "gl":
             from station.render.gl_context import create_gl_context
 
             self.ctx = create_gl_context()
@@ -183,10 +204,10 @@ class FrameProbe:
             basis = prefilter_basis(
                 env,
                 paints[0].exponents,
-                engine=self.prefilter_engine,
+                engine=self.options.prefilter_engine,
                 cache=self.cache,
                 ctx=self.ctx,
-                max_size=self.max_size,
+                max_size=self.options.max_size,
             )
             shared = self._coat_maps.setdefault(setting.environment_width, basis.coat_maps)
             self._bases[key] = (replace(basis, coat_maps=shared), paints)
@@ -197,46 +218,64 @@ class FrameProbe:
         from station.render.numpy_renderer import render_linear
 
         basis, paints = self.setup(setting)
-        scene = self.scene
+        o, scene = self.options, self.scene
         if bare and scene.stage is not None:
             scene = Scene(scene.shape, misalignment_deg=scene.misalignment_deg, camera=scene.view_camera)
-        if self.engine == "numpy":
-            return np.asarray(render_linear(scene, basis, paints, size, size, coat=self.coat))
+        if o.engine == "numpy":
+            return np.asarray(render_linear(scene, basis, paints, size, size, coat=o.coat))
         from station.render.gl_renderer import GLRenderer
 
-        with GLRenderer(basis, size, size, ctx=self.ctx, aa=self.aa) as gl:
-            if self.mesh is not None:
-                return np.asarray(
-                    gl.render_mesh(
-                        self.mesh,
-                        paints,
-                        camera=scene.view_camera,
-                        stage=scene.stage,
-                        coat=self.coat,
-                        linear=True,
-                        anisotropy=self.anisotropy,
-                        anisotropic_samples=setting.anisotropic_samples,
-                    )
-                )
-            return np.asarray(
-                gl.render_linear(
-                    scene,
-                    paints,
-                    coat=self.coat,
-                    anisotropy=self.anisotropy,
-                    anisotropic_samples=setting.anisotropic_samples,
-                )
-            )
+        with GLRenderer(basis, size, size, ctx=self.ctx, aa=o.aa) as gl:
+            return gl_frame(gl, scene, paints, o, anisotropic_samples=setting.anisotropic_samples)
 
     def mask(self, size: int) -> np.ndarray:
         """The painted pixels (size, size) bool: the shape's inside its silhouette (:func:`interior_mask`),
         or, for a mesh, those of a frame without a stage that differ from its background corner."""
         from station.render import lod as lodm
 
-        if self.mesh is None:
+        if self.options.mesh is None:
             return interior_mask(self.scene, size)
         bare = self.draw(lodm.DEFAULT_SETTING, size, bare=True)
         return np.asarray(np.any(np.abs(bare - bare[:1, :1]) > 1e-6, axis=-1))
+
+
+def gl_frame(
+    gl: Any,
+    scene: Scene,
+    paints: Sequence[LobeWeights],
+    options: FrameOptions,
+    *,
+    flakes: FlakeLayer | None = None,
+    anisotropic_samples: int | None = None,
+) -> np.ndarray:
+    """Linear sRGB radiance (H, W, 3) of *scene* drawn by the GL renderer *gl*
+    (:class:`~station.render.gl_renderer.GLRenderer`) as *options* say: their mesh on the scene's stage
+    seen by the scene's camera, else the scene's shape; their clear coat and anisotropy, with *flakes* and
+    *anisotropic_samples* off-specular samples (``None``: the renderer's own choice)."""
+    if options.mesh is not None:
+        return np.asarray(
+            gl.render_mesh(
+                options.mesh,
+                paints,
+                camera=scene.view_camera,
+                stage=scene.stage,
+                coat=options.coat,
+                linear=True,
+                flakes=flakes,
+                anisotropy=options.anisotropy,
+                anisotropic_samples=anisotropic_samples,
+            )
+        )
+    return np.asarray(
+        gl.render_linear(
+            scene,
+            paints,
+            coat=options.coat,
+            flakes=flakes,
+            anisotropy=options.anisotropy,
+            anisotropic_samples=anisotropic_samples,
+        )
+    )
 
 
 def interior_mask(scene: Scene, size: int) -> np.ndarray:
@@ -259,23 +298,17 @@ def scene_lod(
     environment: Environment,
     scene: Scene,
     tolerance_de: float,
+    options: FrameOptions | None = None,
     *,
-    engine: str = "numpy",
-    prefilter_engine: str = "numpy",
-    max_size: int | None = PREFILTER_SIZE,
-    coat: ClearCoat | None = None,
-    mesh: Mesh | None = None,
-    aa: int = 1,
-    anisotropy: Anisotropy | None = None,
     cache: Any = None,
     size: int | None = None,
 ) -> tuple[list[LobeWeights], Environment, dict[str, Any]]:
     """Level of detail of the frame for a CIEDE2000 tolerance (:func:`station.render.lod.choose_frame_lod`):
     each candidate (lobe count, environment width, anisotropic samples) is rendered by the frame's own
-    renderer (*engine* gl | numpy, the environment prefiltered by *prefilter_engine* capped at *max_size*
-    faces, *coat*, the stage of *scene*, *mesh*, *aa* samples per pixel, *anisotropy*; no flakes) at
-    ``min(PROBE_SIZE, size)`` pixels and judged against the renderer's most accurate setting, with the
-    declared probe-to-truth margin. *cache*: a :class:`~station.render.envcache.PrefilterCache`.
+    renderer as *options* say (:class:`FrameOptions`: engine, prefilter, coat, mesh, samples per pixel,
+    anisotropy; the stage of *scene*; no flakes) at ``min(PROBE_SIZE, size)`` pixels and judged against
+    the renderer's most accurate setting, with the declared probe-to-truth margin. *cache*: a
+    :class:`~station.render.envcache.PrefilterCache`.
 
     Returns the paints fitted with the chosen basis, the environment at the chosen width, and the report
     (lobes, environment width, anisotropic samples (None: the renderer's own choice), met, estimate,
@@ -286,20 +319,9 @@ def scene_lod(
 
     if not (np.isfinite(tolerance_de) and tolerance_de > 0):
         raise RenderInputError("tolerance_de", "a CIEDE2000 tolerance > 0", tolerance_de)
+    options = FrameOptions() if options is None else options
     probe_size = lodm.PROBE_SIZE if size is None else max(8, min(lodm.PROBE_SIZE, int(size)))
-    with FrameProbe(
-        designs,
-        environment,
-        scene,
-        engine=engine,
-        prefilter_engine=prefilter_engine,
-        max_size=max_size,
-        coat=coat,
-        mesh=mesh,
-        aa=aa,
-        anisotropy=anisotropy,
-        cache=cache,
-    ) as probe:
+    with FrameProbe(designs, environment, scene, options, cache=cache) as probe:
         mask = probe.mask(probe_size)
         if not mask.any():
             raise RenderInputError("lod", "a view that shows the shape", tolerance_de)
@@ -309,7 +331,7 @@ def scene_lod(
             tolerance_de,
             lodm.frame_candidates(int(environment.equirect.shape[1])),
             mask=mask,
-            anisotropic=anisotropy is not None,
+            anisotropic=options.anisotropy is not None,
             probe_size=probe_size,
         )
     s = choice.setting
@@ -329,7 +351,7 @@ def scene_lod(
             "default": round(choice.default_estimate_de, 3),
         },
         "probe_size": probe_size,
-        "engine": engine,
+        "engine": options.engine,
         "describe": choice.describe(),
     }
     return paints, env, report
@@ -366,17 +388,8 @@ def render_scene_image(
     lod = None
     if lod_de is not None:
         model = builtin_mesh(mesh) if mesh is not None else None
-        paints, env, lod = scene_lod(
-            designs,
-            env,
-            scene,
-            lod_de,
-            engine="gl" if model is not None else "numpy",
-            coat=coat,
-            mesh=model,
-            cache=PrefilterCache(),
-            size=size,
-        )
+        options = FrameOptions("gl" if model is not None else "numpy", coat=coat, mesh=model)
+        paints, env, lod = scene_lod(designs, env, scene, lod_de, options, cache=PrefilterCache(), size=size)
     else:
         paints = [lobe_fit.fit_design(d) for d in designs]
     basis = prefilter_basis(

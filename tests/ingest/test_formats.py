@@ -23,6 +23,7 @@ from station.ingest.errors import (
     WorkbookImportError,
 )
 from station.ingest.formats import (
+    ImportOptions,
     VendorValue,
     lab_of,
     read_measurement_file,
@@ -56,7 +57,7 @@ def test_round_trip_of_simulator_files(sim_files: tuple[dict, dict[str, Path]], 
     assert m.measured_at == dt.datetime.fromisoformat(measured["time"])
     assert m.illuminant == "D65" and m.observer == "CIE 1964 10 Degree Standard Observer"
     readings = readings_from_import(
-        got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC), job="J-7", part="door"
+        got, ImportOptions("qa", "J-7", "door"), sha256="0" * 64, fallback_time=dt.datetime.now(dt.UTC)
     )
     assert m.lab is not None
     r, r15 = readings  # one reading per illumination block, in the file's order, on the same panel
@@ -71,10 +72,12 @@ def test_round_trip_of_simulator_files(sim_files: tuple[dict, dict[str, Path]], 
         "door",
         "sample: std panel",
     )
-    again = readings_from_import(got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC))
+    again = readings_from_import(
+        got, ImportOptions("qa"), sha256="0" * 64, fallback_time=dt.datetime.now(dt.UTC)
+    )
     assert again[0].client_id == r.client_id  # same bytes, same client id: a re-import is a duplicate
-    lit15 = readings_from_import(got, sha256="0" * 64, operator="qa", fallback_time=dt.datetime.now(dt.UTC),
-                                 illumination_deg=15)  # fmt: skip
+    lit15 = readings_from_import(got, ImportOptions("qa", illumination_deg=15), sha256="0" * 64,
+                                 fallback_time=dt.datetime.now(dt.UTC))  # fmt: skip
     assert lit15 == [
         r15.model_copy(update={"panel": None})
     ]  # that block only, as in the pair (no panel asked)

@@ -205,14 +205,14 @@ def test_texture_geometries_are_checked_against_the_sample(
 
     from station.ingest.errors import ImportFileError
     from station.ingest.formats import ImportedFile
-    from station.ingest.formats.records import readings_from_import
+    from station.ingest.formats.records import ImportOptions, readings_from_import
 
     (m,) = read_measurement_file(sim_files[1]["cgats"]).measurements
     bad = dataclasses.replace(m, texture=(VendorValue("X-Rite", "sparkle", 1.0, geometry),))
     imported = ImportedFile("cgats", "tex.cgats", (bad,))
-    kw = {"sha256": "1" * 64, "operator": "qa", "fallback_time": dt.datetime.now(dt.UTC)}
+    kw = {"sha256": "1" * 64, "fallback_time": dt.datetime.now(dt.UTC)}
     if words is None:  # any spelling of a geometry of the sample is stored in the domain's
-        r45, r15 = readings_from_import(imported, **kw)  # type: ignore[arg-type]
+        r45, r15 = readings_from_import(imported, ImportOptions("qa"), **kw)  # type: ignore[arg-type]
         assert (
             r45.texture is not None
             and [t.geometry for t in r45.texture] == ["45as15"]
@@ -220,5 +220,5 @@ def test_texture_geometries_are_checked_against_the_sample(
         )
         return
     with pytest.raises(ImportFileError, match=words) as err:
-        readings_from_import(imported, **kw)  # type: ignore[arg-type]
+        readings_from_import(imported, ImportOptions("qa"), **kw)  # type: ignore[arg-type]
     assert "tex.cgats" in str(err.value) and "measurement 1" in str(err.value)

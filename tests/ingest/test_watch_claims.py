@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from station.ingest import DatabaseDestination, Ingestor
+from station.ingest.formats.records import ImportOptions
 from station.ingest.formats.watch import DONE, PROCESSING, REJECTED, WatchFolder
 
 CSV = "sample,geometry,L,a,b\np1,45as15,50,1,2\np1,45as45,40,1.5,2.5\n"
@@ -45,7 +46,7 @@ def test_a_killed_watchers_files_are_taken_over(tmp_path: Path, ingestor: Ingest
     fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)  # a watcher still running holds its lock
     try:
         with WatchFolder(drop) as watcher:
-            outcomes = watcher.scan(ingestor, operator="qa", settle_s=0)
+            outcomes = watcher.scan(ingestor, ImportOptions("qa"), settle_s=0)
             mine = [p.name for p in (drop / PROCESSING).iterdir() if p.name not in ("23456-cafecafe",)]
             assert len(mine) == 1 and mine[0].startswith(f"{os.getpid()}-")
     finally:

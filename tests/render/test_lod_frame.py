@@ -176,7 +176,7 @@ def test_cli_lod_anisotropic_samples(folder: Path, capsys, monkeypatch: pytest.M
     from station.render.envcache import PrefilterCache
     from station.render.gl_targets import DEFAULT_AA
     from station.render.procedural import procedural_environment
-    from station.render.scene_image import FrameProbe, interior_mask
+    from station.render.scene_image import FrameOptions, FrameProbe, interior_mask
     from station.render.shapes import Scene
 
     monkeypatch.chdir(folder)
@@ -186,11 +186,7 @@ def test_cli_lod_anisotropic_samples(folder: Path, capsys, monkeypatch: pytest.M
         [design],
         environment,
         Scene("sphere"),
-        engine="gl",
-        prefilter_engine="gl",
-        max_size=None,
-        aa=DEFAULT_AA,
-        anisotropy=anisotropy,
+        FrameOptions("gl", "gl", max_size=None, aa=DEFAULT_AA, anisotropy=anisotropy),
         cache=PrefilterCache(folder / "cache"),
     ) as probe:
         most = probe.draw(lod.FrameSetting(None, None, max(lod.SAMPLE_COUNTS)), FRAME)

@@ -78,19 +78,14 @@ def import_file(path: Path | str, ingestor: Ingestor, job: str | None, part: str
     neither), as ``station import --job --part``."""
     from station.ingest import operator_name
     from station.ingest.formats import load_measurement_file
-    from station.ingest.formats.records import readings_from_file
+    from station.ingest.formats.records import ImportOptions, readings_from_file
 
     path = Path(path)
     try:
         imported, data = load_measurement_file(path)  # parsed and hashed from one read
-        readings = readings_from_file(
-            imported,
-            path,
-            operator=operator_name(),
-            job=job,
-            part=part,
-            data=data,
-        )  # every reading validated before the first is stored
+        options = ImportOptions(operator_name(), job, part)
+        # every reading validated before the first is stored
+        readings = readings_from_file(imported, path, options, data=data)
     except (StationError, OSError) as exc:
         return FileImport(path.name, error=str(exc))
     receipts = [ingestor.submit(r) for r in readings]

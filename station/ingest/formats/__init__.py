@@ -39,7 +39,7 @@ from station.ingest.formats.measurement import (
     build_measurement,
     lab_of,
 )
-from station.ingest.formats.records import import_client_id, readings_from_import
+from station.ingest.formats.records import ImportOptions, import_client_id, readings_from_import
 from station.ingest.formats.workbook import read_workbook, write_workbook
 
 __all__ = [
@@ -48,6 +48,7 @@ __all__ = [
     "CsvImportError",
     "CxfImportError",
     "ImportFileError",
+    "ImportOptions",
     "ImportedFile",
     "ImportedMeasurement",
     "Instrument",

@@ -21,6 +21,7 @@ import datetime as dt
 import functools
 import hashlib
 import uuid
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -38,11 +39,31 @@ from station.ingest.records import LAB_DECIMALS, SPECTRA_DECIMALS
 from station.ingest.schema import InstrumentRef, PanelRef, Reading, TextureValue
 from station.model.domain import ILLUMINATION_DEG, parse_geometry
 
-__all__ = ["file_sha256", "import_client_id", "readings_from_file", "readings_from_import"]
+__all__ = ["ImportOptions", "file_sha256", "import_client_id", "readings_from_file", "readings_from_import"]
 
 _IMPORT_NAMESPACE = uuid.UUID("6f1d2f0e-4b7a-4c55-9d8e-3a7b1c2d4e5f")
 #: Notes of the panel of an imported sample: this prefix and the sample name.
 NOTE_PREFIX = "sample: "
+
+
+@dataclass(frozen=True)
+class ImportOptions:
+    """What an import files its readings under, the same for every file of one import or watch folder.
+
+    Attributes
+    ----------
+    operator
+        Who imports (the readings' operator).
+    job, part
+        The panel each reading names (both or neither): job, part and ``notes = "sample: NAME"``.
+    illumination_deg
+        The one illumination block stored (degrees); ``None``: every block of each measurement.
+    """
+
+    operator: str
+    job: str | None = None
+    part: str | None = None
+    illumination_deg: float | None = None
 
 
 def file_sha256(path: Path | str) -> str:
@@ -80,23 +101,22 @@ def _texture(
 
 def readings_from_import(
     imported: ImportedFile,
+    options: ImportOptions,
     *,
     sha256: str,
-    operator: str,
     fallback_time: dt.datetime,
-    illumination_deg: float | None = None,
-    job: str | None = None,
-    part: str | None = None,
     error: type[ImportFileError] = ImportFileError,
 ) -> list[Reading]:
     """One validated :class:`Reading` per measurement of *imported* and illumination block.
 
-    *illumination_deg* ``None``: every block of each measurement (in the file's order); a number: that
-    block only. *fallback_time* (UTC) is the instant of a measurement whose file states none. With *job*
-    and *part* each reading names its panel: job, part and ``notes = "sample: NAME"`` (found or created
-    by the ingest store), the same panel for every block of a sample. Raises *error* naming the
-    measurement when it has no geometry lit from *illumination_deg* or a value the ingest record refuses.
+    *options*: :class:`ImportOptions`; its *illumination_deg* ``None``: every block of each measurement
+    (in the file's order); a number: that block only. *fallback_time* (UTC) is the instant of a
+    measurement whose file states none. With a job and a part each reading names its panel: job, part and
+    ``notes = "sample: NAME"`` (found or created by the ingest store), the same panel for every block of a
+    sample. Raises *error* naming the measurement when it has no geometry lit from the block asked for or
+    a value the ingest record refuses.
     """
+    job, part, illumination_deg = options.job, options.part, options.illumination_deg
     if (job is None) != (part is None):
         raise error(imported.file, "", "job" if job is None else "part", "--job and --part together")
     out = []
@@ -116,11 +136,9 @@ def readings_from_import(
                 n,
                 block,
                 lab,
+                options,
                 sha256=sha256,
-                operator=operator,
                 fallback_time=fallback_time,
-                job=job,
-                part=part,
                 error=error,
                 per_sample=block == sample_block,
             )
@@ -131,11 +149,8 @@ def readings_from_import(
 def readings_from_file(
     imported: ImportedFile,
     path: Path | str,
+    options: ImportOptions,
     *,
-    operator: str,
-    illumination_deg: float | None = None,
-    job: str | None = None,
-    part: str | None = None,
     data: bytes | None = None,
 ) -> list[Reading]:
     """:func:`readings_from_import` of *imported*, read from the file at *path*: under the SHA-256 of
@@ -146,15 +161,8 @@ def readings_from_file(
     Raises ``OSError`` when *path* cannot be read, :class:`ImportFileError` as :func:`readings_from_import`.
     """
     mtime = dt.datetime.fromtimestamp(Path(path).stat().st_mtime, dt.UTC).replace(microsecond=0)
-    return readings_from_import(
-        imported,
-        sha256=file_sha256(path) if data is None else hashlib.sha256(data).hexdigest(),
-        operator=operator,
-        fallback_time=mtime,
-        illumination_deg=illumination_deg,
-        job=job,
-        part=part,
-    )
+    sha256 = file_sha256(path) if data is None else hashlib.sha256(data).hexdigest()
+    return readings_from_import(imported, options, sha256=sha256, fallback_time=mtime)
 
 
 def _reading(
@@ -163,16 +171,16 @@ def _reading(
     n: int,
     illumination_deg: float,
     lab: np.ndarray,
+    options: ImportOptions,
     *,
     sha256: str,
-    operator: str,
     fallback_time: dt.datetime,
-    job: str | None,
-    part: str | None,
     error: type[ImportFileError],
     per_sample: bool,
 ) -> Reading:
-    """The reading of the *illumination_deg* block of measurement *n* (0-based) of *imported*."""
+    """The reading of the *illumination_deg* block of measurement *n* (0-based) of *imported*, filed as
+    *options* say."""
+    job, part = options.job, options.part
     where = f"measurement {n + 1} ({m.sample})"
     idx = _block(m, illumination_deg)
     serial = m.instrument.serial or "unknown"
@@ -187,7 +195,7 @@ def _reading(
             instrument=InstrumentRef(serial=serial[:64], model=model[:64], kind="multiangle"),
             calibration=None,
             panel=panel,
-            operator=operator,
+            operator=options.operator,
             measured_at=m.measured_at or fallback_time,
             illuminant=m.illuminant,  # type: ignore[arg-type]  # validated against the Literal
             observer=m.observer,  # type: ignore[arg-type]

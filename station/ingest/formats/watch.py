@@ -59,7 +59,7 @@ from station.errors import InputError
 from station.ingest.errors import ImportFileError, IngestError
 from station.ingest.formats import is_complete, read_measurement_file
 from station.ingest.formats._text import MAX_FILE_BYTES
-from station.ingest.formats.records import readings_from_import
+from station.ingest.formats.records import ImportOptions, readings_from_import
 from station.ingest.ingestor import Ingestor
 from station.wire import wire_form
 
@@ -279,22 +279,16 @@ class WatchFolder(Closing):
     def scan(
         self,
         ingestor: Ingestor,
+        options: ImportOptions,
         *,
-        operator: str,
         settle_s: float = SETTLE_S,
-        job: str | None = None,
-        part: str | None = None,
-        illumination_deg: float | None = None,
         abandon_s: float = ABANDON_S,
     ) -> list[WatchOutcome]:
         """Process every settled, whole file now in the folder (name order), and the files of killed
-        watchers; one outcome per file. A file unchanged for *abandon_s* seconds and still not whole is
-        rejected as ``Incomplete``."""
+        watchers, each imported as *options* say; one outcome per file. A file unchanged for *abandon_s*
+        seconds and still not whole is rejected as ``Incomplete``."""
         self._open_folders()
-        common: dict[str, Any] = {
-            "operator": operator, "job": job, "part": part, "illumination_deg": illumination_deg
-        }  # fmt: skip
-        outcomes = [self._finish(name, ingestor, common) for name in self._adopt()]
+        outcomes = [self._finish(name, ingestor, options) for name in self._adopt()]
         now = time.time()
         for name in sorted(os.listdir(self._root)):
             if name.startswith((".", "~")) or name.lower().endswith(SKIPPED_SUFFIXES):
@@ -309,7 +303,7 @@ class WatchFolder(Closing):
                 continue
             claimed = self._claim(name, st, abandoned=now - st.st_mtime >= abandon_s)
             if claimed is not None:
-                outcomes.append(self._finish(claimed, ingestor, common))
+                outcomes.append(self._finish(claimed, ingestor, options))
         return outcomes
 
     def _claim(self, name: str, st: os.stat_result, abandoned: bool = False) -> str | None:
@@ -394,16 +388,16 @@ class WatchFolder(Closing):
 
     # ----------------------------------------------------------------- one claimed file
 
-    def _finish(self, name: str, ingestor: Ingestor, common: dict[str, Any]) -> WatchOutcome:
+    def _finish(self, name: str, ingestor: Ingestor, options: ImportOptions) -> WatchOutcome:
         """Import the claimed *name* and move it to ``done/``, or reject it with its reason."""
         receipts: list[dict[str, Any]] = []
         try:
             data, mtime = self._read_claimed(name)
             readings = readings_from_import(
                 read_measurement_file(name, data=data),
+                options,
                 sha256=hashlib.sha256(data).hexdigest(),
                 fallback_time=dt.datetime.fromtimestamp(mtime, dt.UTC).replace(microsecond=0),
-                **common,
             )
         except _Refused as exc:
             return self._reject(name, exc.reason, receipts)
@@ -507,42 +501,30 @@ def _exists(folder: int, name: str) -> bool:
 def scan_once(
     folder: Path,
     ingestor: Ingestor,
+    options: ImportOptions,
     *,
-    operator: str,
     settle_s: float = SETTLE_S,
-    job: str | None = None,
-    part: str | None = None,
-    illumination_deg: float | None = None,
     abandon_s: float = ABANDON_S,
 ) -> list[WatchOutcome]:
-    """Process every settled, whole file now in *folder* (oldest name first); one outcome per file."""
+    """Process every settled, whole file now in *folder* (oldest name first), each imported as *options*
+    say; one outcome per file."""
     with WatchFolder(folder) as watcher:
-        return watcher.scan(
-            ingestor,
-            operator=operator,
-            settle_s=settle_s,
-            job=job,
-            part=part,
-            illumination_deg=illumination_deg,
-            abandon_s=abandon_s,
-        )
+        return watcher.scan(ingestor, options, settle_s=settle_s, abandon_s=abandon_s)
 
 
 def watch_folder(
     folder: Path,
     ingestor: Ingestor,
+    options: ImportOptions,
     *,
-    operator: str,
     interval_s: float = 1.0,
     settle_s: float = SETTLE_S,
     stop: threading.Event | None = None,
     on_outcome: Callable[[WatchOutcome], None] | None = None,
-    job: str | None = None,
-    part: str | None = None,
-    illumination_deg: float | None = None,
     abandon_s: float = ABANDON_S,
 ) -> None:
-    """Scan *folder* every *interval_s* seconds until *stop* is set; *on_outcome* hears of each file.
+    """Scan *folder* every *interval_s* seconds until *stop* is set, each file imported as *options* say;
+    *on_outcome* hears of each file.
 
     Raises :class:`~station.errors.InputError` (before any file is touched) when the folder, or one of
     the watcher's own folders in it, is refused (module doc).
@@ -550,15 +532,7 @@ def watch_folder(
     stop = stop or threading.Event()
     with WatchFolder(folder) as watcher:
         while not stop.is_set():
-            for outcome in watcher.scan(
-                ingestor,
-                operator=operator,
-                settle_s=settle_s,
-                job=job,
-                part=part,
-                illumination_deg=illumination_deg,
-                abandon_s=abandon_s,
-            ):
+            for outcome in watcher.scan(ingestor, options, settle_s=settle_s, abandon_s=abandon_s):
                 if on_outcome is not None:
                     on_outcome(outcome)
             stop.wait(interval_s)
