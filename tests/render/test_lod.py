@@ -169,12 +169,12 @@ def test_frame_probe_shares_one_widths_coat_map_among_its_bases(metallic) -> Non
     from station.model.gloss import ClearCoat
     from station.render.environment import Environment
     from station.render.prefilter import coat_diffuse_map, prefilter_basis
-    from station.render.scene_image import FrameProbe
+    from station.render.scene_image import FrameOptions, FrameProbe
     from station.render.shapes import Scene
 
     env = Environment("sky", sky(32))
     coat = ClearCoat()
-    with FrameProbe([metallic], env, Scene("sphere"), coat=coat, max_size=8) as probe:
+    with FrameProbe([metallic], env, Scene("sphere"), FrameOptions(coat=coat, max_size=8)) as probe:
         one, _ = probe.setup(lod.FrameSetting(1, 32))
         two, _ = probe.setup(lod.FrameSetting(2, 32))
         full, _ = probe.setup(lod.FrameSetting(1, None))
