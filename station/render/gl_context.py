@@ -20,6 +20,8 @@ from station.render.errors import GLUnavailableError, RenderError
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
 GL_TEXTURE_CUBE_MAP_SEAMLESS = 0x884F
+#: Shared-exponent RGB texel format (9-bit mantissas, one 5-bit exponent: 32 bits a texel).
+GL_RGB9_E5 = 0x8C3D
 
 
 def create_gl_context(require: int = 430) -> Any:

@@ -386,9 +386,9 @@ class GLRenderer(Closing):
         on = flakes is not None and self.last_flakes is not None and self.last_flakes.on
         if on:
             uniforms.update(flake_uniforms(flakes))
-            self._maps.flake_mean(flakes).use(m + 8)
-        if on or mesh is not None:  # the glints' map; a mesh's glass and chrome
-            self._lobes[int(np.nonzero(self._order == int(np.argmax(self.basis.exponents)))[0][0])].use(m + 7)
+            self._maps.bind_flakes(flakes, m + 7, m + 8)  # a mesh's glass and chrome read the glint map too
+        elif mesh is not None:  # a mesh's glass and chrome: the sharpest lobe map
+            self._lobes[int(np.argmax(np.asarray(self.basis.exponents)[self._order]))].use(m + 7)
         if aniso_uniforms:
             self._aniso[aniso_uniforms.pop("_key")][0].use(m + 9)
             uniforms.update(aniso_uniforms)

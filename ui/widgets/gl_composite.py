@@ -13,8 +13,6 @@ from station.render.numpy_renderer import BACKGROUND
 from ui.models.view import BasisImages, layer_weights
 
 SHADER_DIR = Path(__file__).resolve().parents[1] / "shaders"
-#: Shared-exponent texture format of the basis images on the GPU (GL_RGB9_E5).
-GL_RGB9_E5 = 0x8C3D
 
 if TYPE_CHECKING:
     import moderngl

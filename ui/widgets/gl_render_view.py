@@ -17,11 +17,11 @@ from PySide6.QtGui import QImage, QMouseEvent, QPainter, QWheelEvent
 from PySide6.QtOpenGL import QOpenGLWindow
 from PySide6.QtWidgets import QWidget
 
-from station.render.gl_context import GL_TEXTURE_CUBE_MAP_SEAMLESS
+from station.render.gl_context import GL_RGB9_E5, GL_TEXTURE_CUBE_MAP_SEAMLESS
 from station.render.numpy_renderer import BACKGROUND
 from station.render.prefilter import PrefilteredBasis
 from ui.models.view import BasisImages, ViewModel
-from ui.widgets.gl_composite import GL_RGB9_E5, SHADER_DIR, composite_program, set_composite_uniforms, uniform
+from ui.widgets.gl_composite import SHADER_DIR, composite_program, set_composite_uniforms, uniform
 from ui.widgets.view_logic import ViewLogic
 
 #: The GL view starts the basis worker once the view has not changed for this long (ms): during an orbit

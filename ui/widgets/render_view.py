@@ -35,9 +35,10 @@ from PySide6.QtCore import Signal
 from PySide6.QtGui import QImage, QPainter, QSurfaceFormat
 from PySide6.QtWidgets import QWidget
 
+from station.render.gl_context import GL_RGB9_E5
 from station.render.numpy_renderer import BACKGROUND
 from ui.models.view import ViewModel
-from ui.widgets.gl_composite import GL_RGB9_E5, SHADER_DIR, composite_program, set_composite_uniforms
+from ui.widgets.gl_composite import SHADER_DIR, composite_program, set_composite_uniforms
 from ui.widgets.gl_render_view import GL_ENV_KEEP, SETTLE_MS, GLRenderView
 from ui.widgets.view_logic import ORBIT_DEG_PER_PIXEL, PREVIEW_DIVISOR, BasisWorker, ViewLogic
 

@@ -158,24 +158,23 @@ uvec3 pcg3d(uvec3 v) {
     return v;
 }
 
-// One cell level k of the flake hierarchy: cells of side FLAKE_SIZE 2^k fixed on the surface (world =
-// object space: the shapes and meshes never move), hashed to a flake normal and, where a cell holds fewer
-// than one flake on average, to whether it holds one (station.render.flakes.flake_levels). The lattice is
-// turned against the scene's axes and the cell's term weighted by a bump about its centre that vanishes on
-// its faces, so a glint is a soft spot and the sparkle continuous from cell to cell (flakes.flake_window).
-vec3 flake_level(vec3 p, int k, vec3 n, vec3 t, vec3 b, vec3 ve, out float weight) {
-    float c = u_flake_size_mm * exp2(float(k));
-    float count = u_flake_density * c * c;
-    vec3 q = u_flake_lattice * p * (u_unit_mm / c);
+// One cell level k of the flake hierarchy at lattice point q (the point in cells of side FLAKE_SIZE 2^k, fixed
+// on the surface: world = object space, the shapes and meshes never move), its cells holding *count* flakes
+// on average: the cell hashed to a flake normal and, where it holds fewer than one flake on average, to
+// whether it holds one (station.render.flakes.flake_levels). The lattice is turned against the scene's axes
+// and the cell's term weighted by a bump about its centre that vanishes on its faces, so a glint is a soft
+// spot and the sparkle continuous from cell to cell (flakes.flake_window). Returns the level's weight before
+// the blend and, in rm, the view mirrored about the flake.
+float flake_level(vec3 q, int k, float count, vec3 n, vec3 t, vec3 b, vec3 ve, out vec3 rm) {
     vec3 x = fract(q) - 0.5;  // offset from the cell's centre: the glint bump (flakes.flake_window)
     float bump = max(1.0 - dot(x, x) / (FLAKE_GLINT_RADIUS * FLAKE_GLINT_RADIUS), 0.0);
     uvec3 h = pcg3d(uvec3(ivec3(floor(q)) + ivec3(1 << 20)) + uvec3(0u, 0u, uint(k) << 24u));
-    vec3 u = (vec3(h >> 8u) + 0.5) / 16777216.0;
-    vec2 g = sqrt(-2.0 * log(u.x)) * vec2(cos(2.0 * PI * u.y), sin(2.0 * PI * u.y));
+    vec3 u = (vec3(ivec3(h >> 8u)) + 0.5) / 16777216.0;  // 24 bits: a signed conversion is exact
+    float a = 2.0 * PI * u.y;
+    vec2 g = sqrt(-2.0 * log(u.x)) * vec2(cos(a), sin(a));
     vec3 m = normalize(n + u_flake_sigma * (g.x * t + g.y * b));
-    vec3 rm = 2.0 * dot(m, ve) * m - ve;
-    weight = float(u.z < count) / sqrt(max(count, 1.0)) * FLAKE_WINDOW_NORM * bump * bump;
-    return float(dot(rm, n) > 0.0) * textureLod(u_flake_sharp, rm, 0.0).rgb;  // a select, no branch
+    rm = 2.0 * dot(m, ve) * m - ve;
+    return float(u.z < count) / sqrt(max(count, 1.0)) * bump * bump;
 }
 
 vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int paint) {
@@ -188,12 +187,20 @@ vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int p
     float f = lam - float(k);
     vec3 t = normalize(abs(n.y) < 0.9 ? cross(n, vec3(0.0, 1.0, 0.0)) : cross(n, vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(n, t);
-    float w0, w1;
-    vec3 g0 = flake_level(p, k, n, t, b, ve, w0);
-    vec3 g1 = flake_level(p, k + 1, n, t, b, ve, w1);
-    float norm = 1.0 / sqrt((1.0 - f) * (1.0 - f) + f * f);  // the blend keeps the sparkle's variance
-    w0 *= (1.0 - f) * norm;
-    w1 *= f * norm;
+    // Level k + 1 has cells twice as wide: its lattice point is half level k's and its count four times
+    // (powers of two: exactly what the level's own side gives).
+    float c = ldexp(u_flake_size_mm, k);
+    float count = u_flake_density * c * c;
+    vec3 q = u_flake_lattice * p * (u_unit_mm / c);
+    vec3 rm0, rm1;
+    float norm = FLAKE_WINDOW_NORM / sqrt((1.0 - f) * (1.0 - f) + f * f);  // the blend keeps the variance
+    float w0 = flake_level(q, k, count, n, t, b, ve, rm0) * ((1.0 - f) * norm);
+    float w1 = flake_level(0.5 * q, k + 1, 4.0 * count, n, t, b, ve, rm1) * (f * norm);
+    // Both glint lookups and the mean's are made for every pixel: llvmpipe evaluates both sides of a
+    // divergent branch, so a test on the weights would add work, not save it. Reflections below the
+    // horizon are zero (a select, no branch).
+    vec3 glint = float(dot(rm0, n) > 0.0) * w0 * textureLod(u_flake_sharp, rm0, 0.0).rgb
+               + float(dot(rm1, n) > 0.0) * w1 * textureLod(u_flake_sharp, rm1, 0.0).rgb;
     // C_E(R): the sharp map prefiltered with the flakes' reflected lobe (flakes.flake_mean_cube), times the
     // fraction of the flakes' reflections above the horizon, Phi(asin(N.V) / (2 sigma)) (flakes.flake_horizon,
     // erf by Abramowitz & Stegun 7.1.26).
@@ -202,7 +209,7 @@ vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int p
     float poly = et * (0.254829592 + et * (-0.284496736 + et * (1.421413741 + et * (-1.453152027 + et * 1.061405429))));
     vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb * (1.0 - 0.5 * poly * exp(-z * z));
     vec3 tint = paint == 0 ? u_flake_tint[0] : u_flake_tint[1];
-    return tint * u_flake_reflectance * (w0 * g0 + w1 * g1 - (w0 + w1) * mean);
+    return tint * u_flake_reflectance * (glint - (w0 + w1) * mean);
 }
 
 //#include coat.glsl
