@@ -130,6 +130,9 @@ def set_uniforms(
         ):
             if name in prog:
                 _write(prog, name, values)
+        if "u_light_world" in prog:  # world directions: u_rot (column-major R, environment <- world) undone
+            rot = np.asarray(uniforms["u_rot"], dtype=np.float64).reshape(3, 3).T
+            _write(prog, "u_light_world", np.asarray(lights.directions, dtype=np.float64) @ rot)
     for name, part in (("u_wdd", 1), ("u_wg", 2)):
         if name in prog:
             _write(prog, name, np.concatenate([w[part] for w in mw])[: prog[name].array_length])

@@ -108,6 +108,7 @@ uniform sampler2D u_horizon;
 // (both fixed per renderer, compiled in so the loops below unroll with constant indices).
 const float LOBE_E[N_LOBES] = float[N_LOBES](LOBE_EXPONENTS);
 uniform vec3 u_light_dir[MAX_LIGHTS];
+uniform vec3 u_light_world[MAX_LIGHTS];  // the same directions in the world (u_rot's transpose applied once a frame)
 uniform vec3 u_light_flux[MAX_LIGHTS];
 uniform float u_light_spread[MAX_LIGHTS];  // angular spread s^2 (rad^2): lobes smoothed to E / (1 + E s^2)
 const float PI = 3.14159265358979;
@@ -265,7 +266,7 @@ vec3 ground_radiance(vec3 p) {
     vec3 direct_sum = vec3(0.0);
     float pw = radians(PENUMBRA_DEG);
     for (int l = 0; l < N_LIGHTS; ++l) {
-        vec3 ld = transpose(u_rot) * u_light_dir[l];  // the light's world direction
+        vec3 ld = u_light_world[l];
         if (ld.y <= 0.0) continue;
         vec3 direct = ld.y * u_light_flux[l] / PI;
         direct_sum += direct;
@@ -386,7 +387,7 @@ vec3 part_radiance(float code, vec3 n, vec3 v) {
 vec3 part_shadow_loss(float code, vec3 n, vec3 v) {
     vec3 loss = vec3(0.0);
     for (int l = 0; l < N_LIGHTS; ++l) {
-        vec3 lw = transpose(u_rot) * u_light_dir[l];
+        vec3 lw = u_light_world[l];
         float nl = dot(n, lw);
         if (nl > 0.0 && has_shadow_map(l)) loss += (1.0 - light_shadow(l, v_pos, n, lw)) * nl / PI * u_light_flux[l];
     }
@@ -441,6 +442,7 @@ void main() {
     if (hit_any) {
         vec3 v = -d;
         float ndv = clamp(dot(n, v), 0.0, 1.0);
+        vec3 n_world = n;  // the shadows' normal, before the turn into the environment's frame
 #if HAS_STAGE
         vec3 r = u_rot * (2.0 * dot(n, v) * n - v);  // lookups in the environment's frame
         n = u_rot * n;
@@ -531,7 +533,7 @@ void main() {
 #else
                 vec3 p_shadow = u_eye + t * d;
 #endif
-                float vis = light_shadow(l, p_shadow, transpose(u_rot) * n, transpose(u_rot) * u_light_dir[l]);
+                float vis = light_shadow(l, p_shadow, n_world, u_light_world[l]);
                 // the light's share of the diffuse maps: pi K_A (u_wd - u_wk) of D; with a coat pi K_D (u_wk)
                 // of D_coat, where it enters weighted by the coat's entry weight t(N.l) (ClearCoat.entry_scale)
                 vec3 w_lit = paint == 0 ? u_wd[0] : u_wd[1];

@@ -97,11 +97,11 @@ bool has_shadow_map(int l) {
 vec3 shadow_probe(vec3 p, vec3 nw) {
     vec3 out_v = vec3(1.0);
 #if N_SHADOW > 0
-    vec3 l0 = transpose(u_rot) * u_light_dir[SHADOW_L0];
+    vec3 l0 = u_light_world[SHADOW_L0];
     out_v.x = light_shadow(SHADOW_L0, p, nw, l0);
 #endif
 #if N_SHADOW > 1
-    vec3 l1 = transpose(u_rot) * u_light_dir[SHADOW_L1];
+    vec3 l1 = u_light_world[SHADOW_L1];
     out_v.y = light_shadow(SHADOW_L1, p, nw, l1);
 #endif
 #if HAS_AO
