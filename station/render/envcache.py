@@ -52,13 +52,15 @@ class PrefilterCache:
         *out_size* texels summed from a source cube of *src_size* by *engine* (gl | numpy)."""
         return f"{env_hash[:40]}-coat{float(coat_index)!r}-o{out_size}-s{src_size}-{engine}-v{CACHE_VERSION}"
 
-    def get(self, key: str) -> np.ndarray | None:
-        """The cached cube (6, S, S, 3) float32, or None on a miss or an unreadable entry."""
+    def get(self, key: str, shape: tuple[int, ...] | None = None) -> np.ndarray | None:
+        """The cached cube (6, S, S, 3) float32, or None on a miss, an unreadable entry or, with *shape*,
+        an entry of another shape (each then summed again and rewritten)."""
         path = self.root / f"{key}.npy"
         try:
-            return np.load(path).astype(np.float32)
+            cube = np.load(path).astype(np.float32)
         except (OSError, ValueError):
             return None
+        return None if shape is not None and cube.shape != shape else cube
 
     def put(self, key: str, cube: np.ndarray, dtype: type[np.floating] = np.float16) -> None:
         """Store *cube* as *dtype* (float16, or float32 for an exact copy; atomic rename)."""

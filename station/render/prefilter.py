@@ -370,8 +370,8 @@ def coat_diffuse_map(basis: PrefilteredBasis, coat: ClearCoat, ctx: Any = None) 
         key = PrefilterCache.coat_key(
             basis.env_hash, coat.index, COAT_DIFFUSE_SIZE, src.shape[1], "numpy" if ctx is None else "gl"
         )
-        cube = basis.cache.get(key) if basis.cache is not None else None
-        if cube is None or cube.shape != shape:
+        cube = basis.cache.get(key, shape) if basis.cache is not None else None
+        if cube is None:
             if ctx is not None:
                 with GLBrute(ctx) as gl:
                     cube = gl.run(src, 1.0, COAT_DIFFUSE_SIZE, coat)
@@ -513,9 +513,7 @@ def prefilter_basis(
     todo = [i for i, c in enumerate(cubes) if c is None]
     # the diffuse map depends on the environment alone: cached exactly (float32) like the coat's map
     dkey = PrefilterCache.diffuse_key(env.content_hash, DIFFUSE_SIZE, DIFFUSE_SOURCE_SIZE, engine)
-    cached = cache.get(dkey) if cache else None
-    if cached is not None and cached.shape != (6, DIFFUSE_SIZE, DIFFUSE_SIZE, 3):
-        cached = None
+    cached = cache.get(dkey, (6, DIFFUSE_SIZE, DIFFUSE_SIZE, 3)) if cache else None
     diffuse, coat_src = _compute_maps(
         env, residual, src, plan, wide, todo, cubes, engine, ctx, timings, cached
     )
