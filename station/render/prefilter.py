@@ -23,7 +23,8 @@ Estimators of the same integral:
   reference for tests, and the production path for wide lobes (output faces ≤ BRUTE_MAX_SIZE, from
   a source cube of max(32, 2× the output size)), where it has no sampling error; :class:`GLBrute` is
   its GL twin (same float32 terms) for the ``gl`` engine.
-* the GL pass of :class:`GLPrefilter` and its NumPy twin :func:`prefilter_grid_numpy` —
+* the GL pass of :class:`GLPrefilter` and its NumPy twin :func:`prefilter_grid_numpy` (summed texel by
+  texel in a numba-compiled loop, :mod:`station.render.prefilter_kernels`) —
   deterministic quadrature on a G×G tangent-plane grid around each texel direction covering the lobe
   down to cos^n = 1e-3, each sample read from the source mip level matching the grid step (see
   ``shaders/prefilter.frag.glsl``). Filtered importance sampling (Křivánek & Colbert 2008) was tried
@@ -51,6 +52,7 @@ from station.render.envcache import PrefilterCache
 from station.render.environment import Environment, Lights, extract_lights
 from station.render.errors import RenderError, RenderInputError
 from station.render.gl_context import build_program, create_gl_context, gl_available
+from station.render.prefilter_kernels import compiled_kernels
 from station.render.sh import sh_project
 
 MAX_EXPONENT = 1.0e6
@@ -106,7 +108,11 @@ def _lobe_from_cosines(dots: np.ndarray, exponent: float) -> np.ndarray:
 
 
 def prefilter_brute(
-    src_cube: np.ndarray, exponent: float, out_size: int, coat: ClearCoat | None = None
+    src_cube: np.ndarray,
+    exponent: float,
+    out_size: int,
+    coat: ClearCoat | None = None,
+    compiled: bool = True,
 ) -> np.ndarray:
     """Reference prefilter by quadrature over all source texels, (6, out, out, 3) float64.
 
@@ -114,15 +120,25 @@ def prefilter_brute(
     itself (ideally 1), so a constant environment is reproduced exactly even when the lobe is
     narrower than a source texel. *coat*: weight each texel's radiance by the coat's entry weight
     t(R·ω) (module docstring; with exponent 1 the coat-transmitted diffuse map).
+
+    *compiled*: sum output texel by output texel in float64 in the numba-compiled loop
+    (:func:`station.render.prefilter_kernels.brute_sum`, the same float32 terms); False, or where numba
+    cannot compile: float32 matrix products over blocks of 256 output texels (within 2e-5).
     """
     s = src_cube.shape[1]
     src_dirs = cubemap.face_directions(s).reshape(-1, 3)
     sa = np.tile(cubemap.texel_solid_angles(s).reshape(-1), 6)
     rad = np.concatenate([src_cube.reshape(-1, 3) * sa[:, None], sa[:, None]], axis=1).astype(np.float32)
     out_dirs = cubemap.face_directions(out_size).reshape(-1, 3)
-    out = np.empty((out_dirs.shape[0], 3))
     grid = np.linspace(0.0, 1.0, TABLE_STEPS + 1)
     table = (coat.entry_scale(grid) if coat is not None else grid).astype(np.float32)
+    kernels = compiled_kernels() if compiled else None
+    if kernels is not None:
+        acc = kernels.brute(
+            out_dirs, src_dirs, rad, float(exponent), table if coat is not None else table[:0]
+        )
+        return (acc[:, :3] / acc[:, 3:]).reshape(6, out_size, out_size, 3)
+    out = np.empty((out_dirs.shape[0], 3))
     for i in range(0, out_dirs.shape[0], 256):
         dots = (out_dirs[i : i + 256] @ src_dirs.T).astype(np.float32)  # R·ω, once for w and t
         w = _lobe_from_cosines(dots, exponent)
@@ -213,8 +229,14 @@ def grid_parameters(exponent: float, grid: int, src_size: int) -> tuple[float, f
     return umax, max(0.0, math.log2(h * src_size / 2.0))
 
 
-def prefilter_grid_numpy(src_cube: np.ndarray, exponent: float, out_size: int, grid: int) -> np.ndarray:
-    """The GL tangent-grid quadrature in NumPy (fallback where no GL context exists)."""
+def prefilter_grid_numpy(
+    src_cube: np.ndarray, exponent: float, out_size: int, grid: int, compiled: bool = True
+) -> np.ndarray:
+    """The GL tangent-grid quadrature in NumPy (fallback where no GL context exists): faces
+    (6, out_size, out_size, 3) float64 from *src_cube* (6, S, S, 3), *grid*² samples per texel.
+
+    *compiled*: sum texel by texel in the numba-compiled loop (:mod:`station.render.prefilter_kernels`, the
+    same sums to the last bit); False, or where numba cannot compile: the vectorised loop below."""
     mips = mip_chain(src_cube)
     umax, lod = grid_parameters(exponent, grid, src_cube.shape[1])
     lod = min(lod, len(mips) - 1)
@@ -227,17 +249,24 @@ def prefilter_grid_numpy(src_cube: np.ndarray, exponent: float, out_size: int, g
     coords = -umax + (np.arange(grid) + 0.5) * h
     lo = int(math.floor(lod))
     frac = lod - lo
-    acc = np.zeros_like(r)
+    blend = bool(frac > 0 and lo + 1 < len(mips))
+    weights = np.array([[(1.0 + u * u + v * v) ** (-(exponent + 3.0) / 2.0) for u in coords] for v in coords])
     wsum = 0.0
-    for v in coords:
-        for u in coords:
-            w = (1.0 + u * u + v * v) ** (-(exponent + 3.0) / 2.0)
+    for w in weights.ravel():  # in the loop's order: the same rounding as summing along the way
+        wsum += float(w)
+    kernels = compiled_kernels() if compiled else None
+    if kernels is not None:
+        hi = mips[lo + 1] if blend else mips[lo]
+        acc = kernels.grid(mips[lo], hi, frac, blend, r, t, b, coords, weights)
+        return (acc / wsum).reshape(6, out_size, out_size, 3)
+    acc = np.zeros_like(r)
+    for j, v in enumerate(coords):
+        for i, u in enumerate(coords):
             d = r + u * t + v * b
             val = cubemap.sample_cube(mips[lo], d)
-            if frac > 0 and lo + 1 < len(mips):
+            if blend:
                 val = val * (1 - frac) + cubemap.sample_cube(mips[lo + 1], d) * frac
-            acc += w * val
-            wsum += w
+            acc += weights[j, i] * val
     return (acc / wsum).reshape(6, out_size, out_size, 3)
 
 
