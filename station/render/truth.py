@@ -39,6 +39,8 @@ Shadows (optional, ``visibility`` / :func:`render_truth`'s *positions* and *scen
 sun) counts at a pixel times its visibility there, decided by a ray from the pixel's point at the shape
 itself (``station.render.shapes.ray_cast_visibility``, no sphere proxies), in every term but the
 near-mirror lobes' whole-map samples; the rest of the map (the sky) is not shadowed, as in the renderers.
+On a stage turned by θ the normals and views are in the environment's frame (as the renderers' lookups) and
+the rays turn back to the world's (``station.render.stage.lookup_matrix``).
 
 Near-mirror lobes: a lobe narrower than MIRROR_PIXELS map pixels (:func:`resolves_pixels`; a 100 GU
 design's n = 10⁷) would miss point lights at pixel centres, so it importance-samples the whole map with
