@@ -10,8 +10,10 @@ the lobes and the timings (seconds).
 
 Scene options: ``--stage`` shows the environment as backdrop over a ground with contact shadow
 (``--blur DEG``, ``--rotate DEG``, ``--no-ground``); ``--coat N`` adds the clear coat's Fresnel of index N
-to the gloss (thesis model without it); ``--flakes`` draws the design file's flake layer (GL and NumPy
-engines; the JSON says what the level of detail chose); a design file's ``anisotropy`` (α_x, α_y,
+to the gloss (thesis model without it); the truth engine takes both, on a stage with the NumPy engine's
+backdrop and ground and the point lights shadowed by the shape's ray cast (:func:`_render_truth`);
+``--flakes`` draws the design file's flake layer (every engine, the truth's with
+``truth.flake_sparkle_truth``; the JSON says what the level of detail chose); a design file's ``anisotropy`` (α_x, α_y,
 direction; GL engine) is drawn with the level of detail's sample count, reported in the JSON;
 ``--flake-size UM``, ``--flake-density PER_MM2``, ``--flake-spread DEG`` set the flake layer's parameters
 (the design file's, or the paint type's default, for the rest; they imply ``--flakes``).
@@ -42,6 +44,7 @@ from station.errors import InputError
 if TYPE_CHECKING:
     from station.model.anisotropy import Anisotropy
     from station.model.flakes import FlakeLayer
+    from station.model.gloss import ClearCoat
     from station.render.camera import Camera
     from station.render.environment import Environment
     from station.render.meshes import Mesh
@@ -226,31 +229,69 @@ def _scene(
     return scene, frame
 
 
-def _check(
-    args: argparse.Namespace, engine: str, flakes: FlakeLayer | None, anisotropy: Anisotropy | None
-) -> None:
+def _check(args: argparse.Namespace, engine: str, anisotropy: Anisotropy | None) -> None:
     """Refuse the combinations an engine does not draw (InputError naming ``engine``)."""
     if args.mesh and engine != "gl":
         raise InputError("engine", "gl (or auto with a GL stack) for --mesh", engine)
-    if engine == "truth" and (args.stage or args.rotate or args.coat is not None or flakes is not None):
-        raise InputError("engine", "gl | numpy with --stage / --rotate / --coat / --flakes", engine)
     if args.aa is not None and args.aa != 1 and engine != "gl":
         raise InputError("engine", "gl (or auto with a GL stack) for --aa above 1", engine)
     if anisotropy is not None and engine != "gl":
         raise InputError("engine", "gl (or auto with a GL stack) for a design with anisotropy", engine)
 
 
-def _render_truth(designs: list, env: Environment, scene: Scene, size: int) -> np.ndarray:
-    from station.render.numpy_renderer import BACKGROUND, gbuffer
-    from station.render.truth import render_truth
+def _render_truth(
+    designs: list,
+    paints: list,
+    env: Environment,
+    scene: Scene,
+    size: int,
+    coat: ClearCoat | None,
+    basis: Any,
+    flakes: FlakeLayer | None = None,
+) -> np.ndarray:
+    """Linear image of the truth engine (``station.render.truth.render_truth``) drawing *scene* with *coat*.
+
+    On a stage the normals and views are turned into the environment's frame as the NumPy renderer turns
+    its lookups (``station.render.stage.lookup_matrix``), the point lights are shadowed by the shape's own
+    ray cast, and the rays that miss the shape show the NumPy renderer's stage background
+    (``numpy_renderer.stage_background``) from the prefiltered *basis* (None without a stage). *flakes*:
+    the sparkle of ``truth.flake_sparkle_truth`` in each paint's flake tint (its fitted *paints*' directionally
+    diffuse colour), added as the renderers add it where ``flake_lod`` keeps the layer on."""
+    from station.render.flakes import clip_sparkle, flake_lod, flake_tint
+    from station.render.numpy_renderer import BACKGROUND, gbuffer, stage_background
+    from station.render.stage import lookup_matrix
+    from station.render.truth import flake_sparkle_truth, prepare_lighting, render_truth
 
     g = gbuffer(scene, size, size)
     img = np.full((size, size, 3), BACKGROUND, np.float64)
-    pair = designs if len(designs) == 2 else designs * 2
+    if scene.stage is not None:
+        origin, dirs = scene.view_camera.rays(size, size)
+        img[~g.mask] = stage_background(scene, basis, origin, dirs[~g.mask])
+    turn = lookup_matrix(scene.stage.rotation_deg if scene.stage is not None else 0.0)
+    pair = list(zip(designs, paints, strict=True)) if len(designs) == 2 else [(designs[0], paints[0])] * 2
+    sparkle = flakes is not None and flake_lod(flakes, scene.view_camera, size).on
+    lighting = prepare_lighting(env) if sparkle else None
+    camera = scene.view_camera
     for k in (0, 1):
         m = g.mask & (g.paint == k)
         if m.any():
-            img[m] = render_truth(pair[k], env, g.normal[m], g.view[m])
+            n_env, v_env = g.normal[m] @ turn.T, g.view[m] @ turn.T
+            shadows = {"positions": g.position[m], "scene": scene} if scene.stage is not None else {}
+            img[m] = render_truth(pair[k][0], env, n_env, v_env, coat=coat, **shadows)
+            if flakes is not None and sparkle:
+                glint = flake_sparkle_truth(
+                    env,
+                    flakes,
+                    flake_tint(pair[k][1].map_weights()[1]),
+                    g.position[m],
+                    n_env,
+                    v_env,
+                    np.linalg.norm(g.position[m] - np.asarray(camera.eye, dtype=float), axis=-1),
+                    float(np.tan(np.radians(camera.fov_deg) / 2.0)),
+                    size,
+                    lighting=lighting,
+                )
+                img[m] = img[m] + clip_sparkle(glint, img[m], flakes)
     return img.astype(np.float32)
 
 
@@ -322,7 +363,7 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     flakes = _flake_layer(args)
     engine = args.engine if args.engine != "auto" else ("gl" if gl_available() else "numpy")
     anisotropy = load_design_anisotropy(args.design)[1]
-    _check(args, engine, flakes, anisotropy)
+    _check(args, engine, anisotropy)
     scene, frame = _scene(args, engine, anisotropy)
     timings["load"] = time.perf_counter() - t0
     t0 = time.perf_counter()
@@ -342,7 +383,14 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
     exps = paints[0].exponents
     t0 = time.perf_counter()
     if engine == "truth":
-        linear = _render_truth(designs, env, scene, size)
+        basis = None
+        if scene.stage is not None:  # the backdrop and ground, as the NumPy engine draws them
+            basis = prefilter_basis(env, exps, engine="numpy", cache=PrefilterCache(args.cache_dir))
+            timings["prefilter"] = time.perf_counter() - t0
+            t0 = time.perf_counter()
+        linear = _render_truth(designs, paints, env, scene, size, frame.coat, basis, flakes)
+        if flakes is not None:
+            flake_report = flake_lod(flakes, scene.view_camera, size).reason
     else:
         basis = prefilter_basis(
             env, exps, engine=frame.prefilter_engine, cache=PrefilterCache(args.cache_dir)

@@ -205,20 +205,26 @@ def dd_direction(
 
 
 def light_terms(
-    basis: PrefilteredBasis, i: int, normal: np.ndarray, reflect: np.ndarray, vis: np.ndarray | None = None
+    basis: PrefilteredBasis,
+    i: int,
+    normal: np.ndarray,
+    reflect: np.ndarray,
+    vis: np.ndarray | None = None,
+    n_dot_l: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """Exact (gloss, directionally diffuse) radiance per unit map weight of lobe i from the lights.
 
     For each light (direction l, flux Φ, spread s²): gloss Σ_l 1[N·l > 0] p_i(l) Φ_l, DD Σ_l (N·l)₊ p_i(l) Φ_l,
     with p_i(l) = (E'+1)/(2π) (R·l)₊^E', E' = E_i / (1 + E_i s²) the lobe smoothed over the light's extent
     (:func:`station.render.environment.spread_exponent`; E_i for a point light); each (P, 3), each light
-    times its visibility *vis* (P, k) when given (:func:`light_shadow`). None when lobe i keeps the lights
-    in its map.
+    times its visibility *vis* (P, k) when given (:func:`light_shadow`). *n_dot_l*: N·l (P, k) of *normal*
+    and the lights when the caller has it (:func:`lights_n_dot_l`). None when lobe i keeps the lights in
+    its map.
     """
     if basis.lights is None or not basis.wide or not basis.wide[i]:
         return None
     e = spread_exponent(basis.exponents[i], basis.lights.spreads())[None, :]  # (1, k)
-    nl = normal @ basis.lights.directions.T  # (P, k)
+    nl = lights_n_dot_l(basis, normal) if n_dot_l is None else n_dot_l  # (P, k)
     p = (e + 1.0) / (2.0 * np.pi) * np.clip(reflect @ basis.lights.directions.T, 0.0, None) ** e
     if vis is not None:
         p = p * vis
@@ -278,23 +284,32 @@ def fall_off_term(
     return np.maximum(out, 0.0) - d_n
 
 
+def lights_n_dot_l(basis: PrefilteredBasis, normal: np.ndarray) -> np.ndarray:
+    """N·l (P, k) of unit normals *normal* (P, 3) and the basis's extracted lights (the environment's frame),
+    unclamped; (P, 0) without lights."""
+    if basis.lights is None:
+        return np.zeros((np.asarray(normal).shape[0], 0))
+    return np.asarray(normal @ basis.lights.directions.T)
+
+
 def light_shadow(
     basis: PrefilteredBasis,
     weights: LobeWeights,
-    normal: np.ndarray,
+    n_dot_l: np.ndarray,
     vis: np.ndarray,
     coat: ClearCoat | None = None,
 ) -> np.ndarray:
     """What the extracted lights' shadows take from the diffuse base, (P, 3) radiance before the coat's
     outgoing factor: Σ_l (1 − V_l) (N·l)₊ Φ_l/π times π (K_D + K_A) (*coat* None), or under a coat
     π K_A + π K_D t(N·l), t = ``ClearCoat.entry_scale`` (the share the coat-transmitted map holds), as the
-    GL shader's shadow maps do (``shaders/render.frag.glsl``). *normal* (P, 3) in the environment's frame,
-    *vis* (P, k) each light's visibility in [0, 1] (:func:`station.render.shapes.ray_cast_visibility`)."""
+    GL shader's shadow maps do (``shaders/render.frag.glsl``). *n_dot_l* (P, k) N·l of the pixels' normals
+    and the lights in the environment's frame (:func:`lights_n_dot_l`, unclamped), *vis* (P, k) each
+    light's visibility in [0, 1] (:func:`station.render.shapes.ray_cast_visibility`)."""
     lights = basis.lights
     w_d = weights.map_weights()[0]
     if lights is None or not lights.count:
-        return np.zeros((np.asarray(normal).shape[0], 3))
-    nl = np.clip(normal @ lights.directions.T, 0.0, None)  # (P, k)
+        return np.zeros((np.asarray(n_dot_l).shape[0], 3))
+    nl = np.clip(n_dot_l, 0.0, None)  # (P, k)
     lost = (1.0 - vis) * nl / np.pi
     if coat is None:
         return (lost @ lights.flux) * w_d[None, :]
@@ -332,18 +347,19 @@ def shade_pixels(
             basis, normal, reflect, n_dot_v, diffuse, horizon, d_normal=d
         )
     gloss = np.zeros_like(base)
+    nl = lights_n_dot_l(basis, normal)  # once for every lobe's lights and the shadows
     for i, cube in enumerate(basis.cubes):
         c_r = sample_cube(cube, reflect)
         bent = dd_direction(basis.exponents[i], normal, reflect, horizon)
         c_dd = c_r if bent is None else sample_cube(cube, bent)
         gloss = gloss + h[:, i : i + 1] * w_g[i] * c_r
         base = base + g[:, i : i + 1] * w_dd[i] * c_dd
-        lights = light_terms(basis, i, normal, reflect, vis)
+        lights = light_terms(basis, i, normal, reflect, vis, n_dot_l=nl)
         if lights is not None:
             gloss = gloss + w_g[i] * lights[0]
             base = base + w_dd[i] * lights[1]
     if vis is not None:
-        base = base - light_shadow(basis, weights, normal, vis, coat)
+        base = base - light_shadow(basis, weights, nl, vis, coat)
     if coat is None:
         return base + gloss
     return coat.base_scale(n_dot_v)[:, None] * base + coat.gloss_scale(n_dot_v)[:, None] * gloss

@@ -88,6 +88,8 @@ def environment_from_bytes(data: bytes, field: str = "environment_hdr") -> Envir
 
 #: Built-in meshes a request may name (no files: generated on demand).
 BUILTIN_MESHES = ("car",)
+#: The renderers a frame may be drawn by (:class:`FrameOptions`); the level of detail judges gl | numpy.
+FRAME_ENGINES = ("gl", "numpy", "truth")
 
 
 @dataclass(frozen=True)
@@ -118,7 +120,7 @@ class FrameOptions:
     Attributes
     ----------
     engine
-        The renderer, gl | numpy.
+        The renderer, gl | numpy | truth (the truth has no level of detail: :class:`FrameProbe` refuses it).
     prefilter_engine, max_size
         The environment prefiltered by gl | numpy, capped at *max_size* cube faces (``None``: no cap).
     coat
@@ -139,6 +141,16 @@ class FrameOptions:
     aa: int = 1
     anisotropy: Anisotropy | None = None
 
+    def __post_init__(self) -> None:
+        if self.engine not in FRAME_ENGINES:
+            raise RenderInputError("engine", " | ".join(FRAME_ENGINES), self.engine)
+        if self.prefilter_engine not in ("gl", "numpy"):
+            raise RenderInputError("prefilter_engine", "gl | numpy", self.prefilter_engine)
+        if self.mesh is not None and self.engine != "gl":
+            raise RenderInputError("engine", "gl for a mesh", self.engine)
+        if self.anisotropy is not None and self.engine != "gl":
+            raise RenderInputError("engine", "gl for a design with anisotropy", self.engine)
+
 
 class FrameProbe:
     """A frame drawn at any level-of-detail setting (:class:`station.render.lod.FrameSetting`) and size by
@@ -155,15 +167,9 @@ class FrameProbe:
         *,
         cache: Any = None,
     ) -> None:
-        o = FrameOptions() if options is None else options
-        if o.engine not in ("gl", "numpy"):
-            raise RenderInputError("engine", "gl | numpy", o.engine)
-        if o.prefilter_engine not in ("gl", "numpy"):
-            raise RenderInputError("prefilter_engine", "gl | numpy", o.prefilter_engine)
-        if o.mesh is not None and o.engine != "gl":
-            raise RenderInputError("engine", "gl for a mesh", o.engine)
-        if o.anisotropy is not None and o.engine != "gl":
-            raise RenderInputError("engine", "gl for a design with anisotropy", o.engine)
+        o = FrameOptions() if options is None else options  # FrameOptions checks its own fields
+        if o.engine == "truth":
+            raise RenderInputError("engine", "gl | numpy (the truth engine has no level of detail)", o.engine)
         self.designs, self.environment, self.scene = list(designs), environment, scene
         self.options, self.cache = o, cache
         self.ctx: Any = None

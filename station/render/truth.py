@@ -39,6 +39,8 @@ Shadows (optional, ``visibility`` / :func:`render_truth`'s *positions* and *scen
 sun) counts at a pixel times its visibility there, decided by a ray from the pixel's point at the shape
 itself (``station.render.shapes.ray_cast_visibility``, no sphere proxies), in every term but the
 near-mirror lobes' whole-map samples; the rest of the map (the sky) is not shadowed, as in the renderers.
+On a stage turned by θ the normals and views are in the environment's frame (as the renderers' lookups) and
+the rays turn back to the world's (``station.render.stage.lookup_matrix``).
 
 Near-mirror lobes: a lobe narrower than MIRROR_PIXELS map pixels (:func:`resolves_pixels`; a 100 GU
 design's n = 10⁷) would miss point lights at pixel centres, so it importance-samples the whole map with
@@ -68,6 +70,7 @@ from station.render.errors import RenderInputError
 from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf, fall_off_factor
 from station.render.lobes import bent_direction, horizon_factors
 from station.render.shapes import Scene, ray_cast_visibility
+from station.render.stage import lookup_matrix
 from station.render.truth_lighting import MAX_POINT_LIGHTS as MAX_POINT_LIGHTS
 from station.render.truth_lighting import MIRROR_PIXELS as MIRROR_PIXELS
 from station.render.truth_lighting import POINT_THRESHOLD as POINT_THRESHOLD
@@ -448,6 +451,18 @@ def bend_silhouettes(normals: ArrayLike, views: ArrayLike) -> tuple[NDArray[np.f
     return n, bent
 
 
+def _world_visibility(
+    scene: Scene,
+    points: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    turn: NDArray[np.float64],
+    directions: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Visibility (P, k) of lights at *directions* (k, 3) in the environment's frame, for world *points* and
+    *normals* (P, 3): the ray cast with the directions turned to the world's (w = Mᵀe, *turn* = M)."""
+    return ray_cast_visibility(scene, points, normals, np.asarray(directions, dtype=float) @ turn)
+
+
 def render_truth(
     design: FaceFlopTravelGloss | DesignedBRDF,
     environment: Any,
@@ -485,8 +500,11 @@ def render_truth(
         BRDF without it.
     positions, scene
         Shadows (module docstring): the pixels' world points (..., 3) on *scene*'s shape
-        (:class:`station.render.shapes.Scene`, environment unturned); each point light is seen where its ray
-        misses the shape (:func:`station.render.shapes.ray_cast_visibility`). None: no shadows.
+        (:class:`station.render.shapes.Scene`); each point light is seen where its ray misses the shape
+        (:func:`station.render.shapes.ray_cast_visibility`). On a stage turned by θ
+        (``scene.stage.rotation_deg``) *normals* and *views* are in the environment's frame, R_y(−θ) of the
+        world's (:func:`station.render.stage.lookup_matrix`, as the NumPy renderer's lookups), and the
+        rays are cast in the world's. None: no shadows.
 
     Returns
     -------
@@ -502,8 +520,10 @@ def render_truth(
     brdf = design if isinstance(design, DesignedBRDF) else designed_brdf(design)
     vis: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None = None
     if positions is not None and scene is not None:
-        p, nn = np.asarray(positions, dtype=float).reshape(-1, 3), n.reshape(-1, 3)
-        vis = partial(ray_cast_visibility, scene, p, nn)
+        # normals and light directions from the environment's frame back to the world's: e = M w
+        turn = lookup_matrix(scene.stage.rotation_deg if scene.stage is not None else 0.0)
+        p, nn = np.asarray(positions, dtype=float).reshape(-1, 3), n.reshape(-1, 3) @ turn
+        vis = partial(_world_visibility, scene, p, nn, turn)
     return TruthScene(environment, n, v, samples, quadrature_width, visibility=vis).truth_direct(brdf, coat)
 
 

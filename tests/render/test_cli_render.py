@@ -185,10 +185,10 @@ def test_render_stage_coat_and_refusals(files, tmp_path, capsys):
     flat = np.asarray(Image.open(plain)).astype(int)
     assert (flat[0, 0] == flat[0, 0, 0]).all()  # the flat grey background
     assert np.abs(img[0, 0] - flat[0, 0]).max() > 3  # the backdrop shows the environment instead
-    # --mesh needs the GL engine; the truth takes no stage; a bad coat index names its field
+    # --mesh needs the GL engine, --lod a level of detail the truth has not; a bad coat index names its field
     for extra, field in (
         (["--engine", "numpy", "--mesh", "car.glb"], "engine"),
-        (["--engine", "truth", "--stage"], "engine"),
+        (["--engine", "truth", "--stage", "--lod", "1"], "lod"),
         (["--engine", "numpy", "--coat", "0.5"], "coat_index"),
     ):
         assert main([*base, *extra, "--out", str(out)]) == 2
