@@ -65,6 +65,8 @@ ALLOWED: dict[str, str] = {
     # compilation, once per process
     "station/formulate/snap/kernel.py:_compile": "numba's compilation of the ColorSnap walk (ADR 0002)",
     "station/formulate/snap/kernel.py:_COMPILE_LOCK": "one compilation at a time",
+    "station/render/prefilter_kernels.py:_compile": "numba's compilation of the NumPy prefilter's loops",
+    "station/render/prefilter_kernels.py:_COMPILE_LOCK": "one compilation at a time",
     # process-wide registries, the process's own state
     "station/drivers/transport.py:_OWNERS": "addresses open in this process: a port is opened once",
     "station/drivers/transport.py:_OWNERS_LOCK": "guards _OWNERS",

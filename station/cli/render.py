@@ -67,7 +67,7 @@ EPILOG = (
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``station render``."""
-    from station.render.options import CURVES
+    from station.render.options import CURVES, FRAME_ENGINES
     from station.render.shapes import SHAPES
 
     p = subparsers.add_parser(
@@ -88,7 +88,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--engine",
         default="auto",
-        choices=("auto", "gl", "numpy", "truth"),
+        choices=("auto", *FRAME_ENGINES),
         help="auto: the graphics card when there is one, else the CPU (numpy); truth: slow reference",
     )
     p.add_argument("--out", required=True, help="output PNG")

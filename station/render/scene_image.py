@@ -27,6 +27,7 @@ from station.render.environment import Environment
 from station.render.errors import EnvironmentFileError, RenderInputError
 from station.render.flakes import FlakeChoice
 from station.render.hdr_io import ACCEPTED, read_hdr_image
+from station.render.options import FRAME_ENGINES
 from station.render.shapes import Scene
 from station.render.stage import Stage
 
@@ -88,8 +89,6 @@ def environment_from_bytes(data: bytes, field: str = "environment_hdr") -> Envir
 
 #: Built-in meshes a request may name (no files: generated on demand).
 BUILTIN_MESHES = ("car",)
-#: The renderers a frame may be drawn by (:class:`FrameOptions`); the level of detail judges gl | numpy.
-FRAME_ENGINES = ("gl", "numpy", "truth")
 
 
 @dataclass(frozen=True)
