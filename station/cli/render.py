@@ -13,7 +13,7 @@ Scene options: ``--stage`` shows the environment as backdrop over a ground with 
 to the gloss (thesis model without it); the truth engine takes both, on a stage with the NumPy engine's
 backdrop and ground and the point lights shadowed by the shape's ray cast (:func:`_render_truth`);
 ``--flakes`` draws the design file's flake layer (every engine, the truth's with
-``truth.flake_sparkle_truth``; the JSON says what the level of detail chose); a design file's ``anisotropy`` (α_x, α_y,
+``truth_flakes.flake_sparkle_truth``; the JSON says what the level of detail chose); a design file's ``anisotropy`` (α_x, α_y,
 direction; GL engine) is drawn with the level of detail's sample count, reported in the JSON;
 ``--flake-size UM``, ``--flake-density PER_MM2``, ``--flake-spread DEG`` set the flake layer's parameters
 (the design file's, or the paint type's default, for the rest; they imply ``--flakes``).
@@ -255,12 +255,13 @@ def _render_truth(
     its lookups (``station.render.stage.lookup_matrix``), the point lights are shadowed by the shape's own
     ray cast, and the rays that miss the shape show the NumPy renderer's stage background
     (``numpy_renderer.stage_background``) from the prefiltered *basis* (None without a stage). *flakes*:
-    the sparkle of ``truth.flake_sparkle_truth`` in each paint's flake tint (its fitted *paints*' directionally
+    the sparkle of ``truth_flakes.flake_sparkle_truth`` in each paint's flake tint (its fitted *paints*' directionally
     diffuse colour), added as the renderers add it where ``flake_lod`` keeps the layer on."""
     from station.render.flakes import clip_sparkle, flake_lod, flake_tint
     from station.render.numpy_renderer import BACKGROUND, gbuffer, stage_background
     from station.render.stage import lookup_matrix
-    from station.render.truth import flake_sparkle_truth, prepare_lighting, render_truth
+    from station.render.truth import prepare_lighting, render_truth
+    from station.render.truth_flakes import flake_sparkle_truth
 
     g = gbuffer(scene, size, size)
     img = np.full((size, size, 3), BACKGROUND, np.float64)
@@ -343,14 +344,57 @@ def _write(args: argparse.Namespace, out: Path, linear: np.ndarray) -> None:
             np.save(lin_path, linear)
 
 
+def _draw(
+    args: argparse.Namespace,
+    engine: str,
+    designs: list,
+    paints: list,
+    env: Environment,
+    scene: Scene,
+    frame: FrameOptions,
+    flakes: FlakeLayer | None,
+    timings: dict[str, float],
+    lod_report: dict[str, Any] | None = None,
+) -> tuple[np.ndarray, str | None, dict[str, Any] | None]:
+    """The linear frame of *engine* with *flakes*, the flake layer's and the anisotropy's reports (None
+    when the frame has none); the prefilter's and the draw's seconds into *timings*."""
+    from station.render.envcache import PrefilterCache
+    from station.render.flakes import flake_lod
+    from station.render.numpy_renderer import render_linear
+    from station.render.prefilter import prefilter_basis
+
+    size, exps = args.size, paints[0].exponents
+    flake_report = None if flakes is None else flake_lod(flakes, scene.view_camera, size).reason
+    aniso_report = None
+    t0 = time.perf_counter()
+    if engine == "truth":
+        basis = None
+        if scene.stage is not None:  # the backdrop and ground, as the NumPy engine draws them
+            basis = prefilter_basis(env, exps, engine="numpy", cache=PrefilterCache(args.cache_dir))
+            timings["prefilter"] = time.perf_counter() - t0
+            t0 = time.perf_counter()
+        linear = _render_truth(designs, paints, env, scene, size, frame.coat, basis, flakes)
+    else:
+        basis = prefilter_basis(
+            env, exps, engine=frame.prefilter_engine, cache=PrefilterCache(args.cache_dir)
+        )
+        timings["prefilter"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        if engine == "gl":
+            samples = None if lod_report is None else lod_report["anisotropic_samples"]
+            linear, flake_report, aniso_report = _render_gl(
+                basis, paints, scene, frame, flakes, size, samples
+            )
+        else:
+            linear = render_linear(scene, basis, paints, size, size, coat=frame.coat, flakes=flakes)
+    timings["render"] = time.perf_counter() - t0
+    return linear, flake_report, aniso_report
+
+
 def _render(args: argparse.Namespace) -> dict[str, Any]:
     from station.model.design_io import load_design, load_design_anisotropy
     from station.render import lobe_fit
-    from station.render.envcache import PrefilterCache
-    from station.render.flakes import flake_lod
     from station.render.gl_renderer import gl_available
-    from station.render.numpy_renderer import render_linear
-    from station.render.prefilter import prefilter_basis
 
     if not 8 <= args.size <= 4096:
         raise InputError("size", "8 <= size <= 4096", args.size)
@@ -377,36 +421,13 @@ def _render(args: argparse.Namespace) -> dict[str, Any]:
         t0 = time.perf_counter()
         paints, env, lod_report = _lod(args, designs, env, scene, frame)
         timings["lod"] = time.perf_counter() - t0
-    flake_report = "no flake layer" if args.flakes and flakes is None else None
-    aniso_report = None
     size = args.size
     exps = paints[0].exponents
-    t0 = time.perf_counter()
-    if engine == "truth":
-        basis = None
-        if scene.stage is not None:  # the backdrop and ground, as the NumPy engine draws them
-            basis = prefilter_basis(env, exps, engine="numpy", cache=PrefilterCache(args.cache_dir))
-            timings["prefilter"] = time.perf_counter() - t0
-            t0 = time.perf_counter()
-        linear = _render_truth(designs, paints, env, scene, size, frame.coat, basis, flakes)
-        if flakes is not None:
-            flake_report = flake_lod(flakes, scene.view_camera, size).reason
-    else:
-        basis = prefilter_basis(
-            env, exps, engine=frame.prefilter_engine, cache=PrefilterCache(args.cache_dir)
-        )
-        timings["prefilter"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        if engine == "gl":
-            samples = None if lod_report is None else lod_report["anisotropic_samples"]
-            linear, flake_report, aniso_report = _render_gl(
-                basis, paints, scene, frame, flakes, size, samples
-            )
-        else:
-            linear = render_linear(scene, basis, paints, size, size, coat=frame.coat, flakes=flakes)
-            if flakes is not None:
-                flake_report = flake_lod(flakes, scene.view_camera, size).reason
-    timings["render"] = time.perf_counter() - t0
+    linear, flake_report, aniso_report = _draw(
+        args, engine, designs, paints, env, scene, frame, flakes, timings, lod_report
+    )
+    if args.flakes and flakes is None:
+        flake_report = "no flake layer"
     t0 = time.perf_counter()
     _write(args, out, linear)
     timings["encode"] = time.perf_counter() - t0

@@ -46,7 +46,7 @@ Near-mirror lobes: a lobe narrower than MIRROR_PIXELS map pixels (:func:`resolve
 design's n = 10⁷) would miss point lights at pixel centres, so it importance-samples the whole map with
 the bright pixels left in, as small area lights (the reflection of a sun disc in a mirror is the disc).
 
-Flakes: :func:`flake_sparkle_truth` is the flake layer's sparkle with the full-resolution map and the
+Flakes: :func:`station.render.truth_flakes.flake_sparkle_truth` is the flake layer's sparkle with the full-resolution map and the
 exact expected flake reflection (the renderers use the sharpest and a matching lobe map).
 
 Environments: anything with an ``equirect`` array (H, 2H, 3) (``station.render.environment.
@@ -56,7 +56,6 @@ Environment``) or the array itself, in the equirectangular convention of ``stati
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING, Any
@@ -64,7 +63,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render.errors import RenderInputError
 from station.render.lobe_fit import ALPHA_GRID_DEG, DesignedBRDF, designed_brdf, fall_off_factor
@@ -73,10 +71,10 @@ from station.render.shapes import Scene, ray_cast_visibility
 from station.render.stage import lookup_matrix
 from station.render.truth_lighting import MAX_POINT_LIGHTS as MAX_POINT_LIGHTS
 from station.render.truth_lighting import MIRROR_PIXELS as MIRROR_PIXELS
+from station.render.truth_lighting import PIXEL_CHUNK, tangent_frames
 from station.render.truth_lighting import POINT_THRESHOLD as POINT_THRESHOLD
 from station.render.truth_lighting import QUADRATURE_WIDTH as QUADRATURE_WIDTH
 from station.render.truth_lighting import Lighting as Lighting
-from station.render.truth_lighting import _as_equirect
 from station.render.truth_lighting import equirect_directions as equirect_directions
 from station.render.truth_lighting import equirect_solid_angles as equirect_solid_angles
 from station.render.truth_lighting import prepare_lighting as prepare_lighting
@@ -97,15 +95,6 @@ BEND_COS = 1e-3
 LOBE_MODES = ("exact", "prefiltered", "prefiltered-lut", "prefiltered-lut+lights", "prefiltered-bent+lights")
 _BINS = ALPHA_GRID_DEG.size  # 721 bins of 0.25°
 _COS_GRID = np.cos(np.radians(ALPHA_GRID_DEG))
-_PIXEL_CHUNK = 48
-
-
-def _frames(axis: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Two unit vectors completing an orthonormal frame about each unit *axis* (P, 3)."""
-    helper = np.where(np.abs(axis[:, 1:2]) < 0.9, np.array([[0.0, 1.0, 0.0]]), np.array([[1.0, 0.0, 0.0]]))
-    t = np.cross(helper, axis)
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
-    return t, np.cross(axis, t)
 
 
 def _lobe_samples(exponent: float, count: int) -> NDArray[np.float64]:
@@ -173,7 +162,7 @@ class TruthScene:
         self.lighting = prepare_lighting(environment, quadrature_width) if lighting is None else lighting
         self.point_vis = None if visibility is None else visibility(self.lighting.point_dirs)  # (P, k)
         self._bent: dict[float, NDArray[np.float64]] = {}
-        self._tangents = _frames(self.reflect)
+        self._tangents = tangent_frames(self.reflect)
         self._cache: dict[tuple[str, float], NDArray[np.float64]] = {}  # lobe integrals, coat irradiance
         self._horizon: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
         self._hist: dict[str, NDArray[np.float64]] = {}
@@ -194,8 +183,8 @@ class TruthScene:
         px = self.normals.shape[0]
         hist = np.zeros((px, _BINS, 3))
         if dirs.shape[0]:
-            for s in range(0, px, _PIXEL_CHUNK):
-                sl = slice(s, min(px, s + _PIXEL_CHUNK))
+            for s in range(0, px, PIXEL_CHUNK):
+                sl = slice(s, min(px, s + PIXEL_CHUNK))
                 cos_psi = np.clip(self.reflect[sl] @ dirs.T, -1.0, 1.0)
                 n_dot = self.normals[sl] @ dirs.T
                 a = np.degrees(np.arccos(cos_psi)) * 4.0
@@ -251,8 +240,8 @@ class TruthScene:
         local = _lobe_samples(exponent, self.samples)
         t, b = self._tangents
         out = np.empty((self.normals.shape[0], 3))
-        for s in range(0, out.shape[0], _PIXEL_CHUNK):
-            sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
+        for s in range(0, out.shape[0], PIXEL_CHUNK):
+            sl = slice(s, min(out.shape[0], s + PIXEL_CHUNK))
             dirs = (
                 local[None, :, 0:1] * t[sl, None, :]
                 + local[None, :, 1:2] * b[sl, None, :]
@@ -298,8 +287,8 @@ class TruthScene:
             dirs = np.concatenate([self.lighting.quad_dirs, self.lighting.point_dirs])
             flux = np.concatenate([self.lighting.quad_flux, self.lighting.point_flux])
             out = np.empty((self.normals.shape[0], 3))
-            for s in range(0, out.shape[0], _PIXEL_CHUNK):
-                sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
+            for s in range(0, out.shape[0], PIXEL_CHUNK):
+                sl = slice(s, min(out.shape[0], s + PIXEL_CHUNK))
                 n_dot = np.maximum(self.normals[sl] @ dirs.T, 0.0)
                 out[sl] = (n_dot * coat.entry_scale(n_dot) * self._seen(sl)) @ flux
             self._cache[key] = out
@@ -336,8 +325,8 @@ class TruthScene:
         scale, base = self.coat_factors(coat)
         floor = diffuse_floor(brdf)
         out = np.empty((self.normals.shape[0], 3))
-        for s in range(0, out.shape[0], _PIXEL_CHUNK):
-            sl = slice(s, min(out.shape[0], s + _PIXEL_CHUNK))
+        for s in range(0, out.shape[0], PIXEL_CHUNK):
+            sl = slice(s, min(out.shape[0], s + PIXEL_CHUNK))
             cos_psi = np.clip(self.reflect[sl] @ dirs.T, -1.0, 1.0)
             n_dot = self.normals[sl] @ dirs.T
             seen = self._seen(sl)  # the point lights' shadows
@@ -539,81 +528,3 @@ def sphere_pixels(size: int, radius: float = 0.98) -> tuple[NDArray[np.float64],
     normals = np.stack([x[inside], y[inside], nz[inside]], axis=-1)
     views = np.broadcast_to(np.array([0.0, 0.0, 1.0]), normals.shape).copy()
     return normals, views
-
-
-def flake_sparkle_truth(
-    environment: Any,
-    flakes: FlakeLayer,
-    tint: ArrayLike,
-    positions: ArrayLike,
-    normals: ArrayLike,
-    views: ArrayLike,
-    distance: ArrayLike,
-    tan_half_fov: float,
-    height: int,
-    *,
-    samples: int = 256,
-    lighting: Lighting | None = None,
-) -> NDArray[np.float64]:
-    """Ground truth of the flake layer's sparkle per pixel, (P, 3), unclipped (the renderers then add
-    max(sparkle, −reflectance · radiance), :func:`station.render.flakes.clip_sparkle`).
-
-    The flake model of :mod:`station.render.flakes` (the same cell levels, weights w_k and flake normals m,
-    :func:`~station.render.flakes.flake_levels`) without its two map approximations:
-    tint · reflectance · Σ_k w_k (L(R_m,k) 1[R_m,k·N > 0] − E_m[L(R_m) 1[R_m·N > 0]]), with L the full-resolution
-    map (sun disc included) looked up bilinearly at the flake's mirror direction R_m instead of the
-    sharpest prefiltered map, and the expectation over the flake-normal distribution itself instead of a
-    Phong lobe map: for the map without its point lights by *samples* stratified normals (Box–Muller on a
-    √samples × √samples grid), and for each point light l (flux Φ) exactly as Φ p_R(l): the flake normal
-    reflecting V to l is the half vector H = (l + V)/|l + V|, whose density under
-    m = normalize(N + σ g), g ~ N(0, I₂), is exp(−|g|²/2) / (2π σ² (H·N)³) with σ g = (H·T, H·B)/(H·N)
-    (the gnomonic projection), and p_R(l) = p_m(H) / (4 V·H).
-
-    *positions* (P, 3) world, *normals*, *views* (P, 3) unit (the environment's frame), *distance* (P,)
-    from the eye (scene units), *tan_half_fov* and *height* the camera's (they set the cells), *tint* (3,)
-    the paint's flake tint (:func:`station.render.flakes.flake_tint`).
-    """
-    from station.render.flakes import flake_levels
-
-    n = np.asarray(normals, dtype=float).reshape(-1, 3)
-    v = np.asarray(views, dtype=float).reshape(-1, 3)
-    full = _as_equirect(environment)
-    light = prepare_lighting(full) if lighting is None else lighting
-    glint = np.zeros_like(n)
-    weight = np.zeros(n.shape[0])
-    ndv = np.clip(np.sum(n * v, axis=-1), 0.0, 1.0)
-    d = np.asarray(distance, dtype=float).reshape(-1)
-    for w, m in flake_levels(flakes, np.asarray(positions, dtype=float), n, d, ndv, tan_half_fov, height):
-        rm = 2.0 * np.sum(m * v, axis=-1, keepdims=True) * m - v
-        glint += w[:, None] * sample_equirect(full, rm) * (np.sum(rm * n, axis=-1) > 0.0)[:, None]
-        weight += w
-    # Expected reflection: stratified flake normals over the residual map ...
-    side = max(4, int(round(math.sqrt(samples))))
-    u1, u2 = np.meshgrid((np.arange(side) + 0.5) / side, (np.arange(side) + 0.5) / side)
-    rad = np.sqrt(-2.0 * np.log(u1.ravel()))
-    gs = np.stack([rad * np.cos(2.0 * np.pi * u2.ravel()), rad * np.sin(2.0 * np.pi * u2.ravel())], -1)
-    t, b = _frames(n)
-    sigma = math.radians(flakes.spread_deg)
-    mean = np.zeros_like(n)
-    for s in range(0, n.shape[0], _PIXEL_CHUNK):
-        sl = slice(s, min(n.shape[0], s + _PIXEL_CHUNK))
-        ms = n[sl, None, :] + sigma * (gs[None, :, 0:1] * t[sl, None, :] + gs[None, :, 1:2] * b[sl, None, :])
-        ms /= np.linalg.norm(ms, axis=-1, keepdims=True)
-        rs = 2.0 * np.einsum("pkc,pc->pk", ms, v[sl])[..., None] * ms - v[sl, None, :]
-        up = np.einsum("pkc,pc->pk", rs, n[sl]) > 0.0
-        mean[sl] = (sample_equirect(light.residual, rs) * up[..., None]).mean(axis=1)
-    # ... and the point lights exactly.
-    if light.point_dirs.shape[0]:
-        for s in range(0, n.shape[0], _PIXEL_CHUNK):
-            sl = slice(s, min(n.shape[0], s + _PIXEL_CHUNK))
-            hv = light.point_dirs[None, :, :] + v[sl, None, :]
-            hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-12)
-            hn = np.einsum("pkc,pc->pk", hv, n[sl])
-            ok = (hn > 1e-6) & ((light.point_dirs @ n[sl].T).T > 0.0)
-            hn_safe = np.where(ok, hn, 1.0)
-            gx = np.einsum("pkc,pc->pk", hv, t[sl]) / hn_safe / sigma
-            gy = np.einsum("pkc,pc->pk", hv, b[sl]) / hn_safe / sigma
-            pm = np.exp(-0.5 * (gx * gx + gy * gy)) / (2.0 * np.pi * sigma * sigma * hn_safe**3)
-            vh = np.maximum(np.einsum("pkc,pc->pk", hv, v[sl]), 1e-6)
-            mean[sl] += (np.where(ok, pm / (4.0 * vh), 0.0)) @ light.point_flux
-    return np.asarray(tint, dtype=float)[None, :] * flakes.reflectance * (glint - weight[:, None] * mean)

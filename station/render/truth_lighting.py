@@ -24,6 +24,9 @@ QUADRATURE_WIDTH = 256
 #: as area lights, instead of taking them as point lights (:func:`resolves_pixels`).
 MIRROR_PIXELS = 2.0
 
+#: Pixels per chunk of the truth engine's per-pixel sample sets (memory: chunk × samples × 3 floats).
+PIXEL_CHUNK = 48
+
 
 def _as_equirect(environment: Any) -> NDArray[np.float64]:
     img = np.asarray(getattr(environment, "equirect", environment), dtype=np.float64)
@@ -153,3 +156,11 @@ def prepare_lighting(
         point_flux,
         img,
     )
+
+
+def tangent_frames(axis: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Two unit vectors completing an orthonormal frame about each unit *axis* (P, 3)."""
+    helper = np.where(np.abs(axis[:, 1:2]) < 0.9, np.array([[0.0, 1.0, 0.0]]), np.array([[1.0, 0.0, 0.0]]))
+    t = np.cross(helper, axis)
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    return t, np.cross(axis, t)

@@ -208,7 +208,8 @@ def test_truth_sparkle_has_zero_mean_beside_the_sun() -> None:
     flake reflection (residual map by stratified normals, the sun in closed form) makes the area mean of
     the sparkle vanish within its sampling error, although single cells glint with the sun."""
     from station.render.cubemap import equirect_directions
-    from station.render.truth import flake_sparkle_truth, prepare_lighting
+    from station.render.truth import prepare_lighting
+    from station.render.truth_flakes import flake_sparkle_truth
 
     env = procedural.sunny_sky(256)
     lum = env.equirect @ np.array([0.2126, 0.7152, 0.0722])
@@ -248,7 +249,7 @@ def test_truth_sparkle_against_the_renderer(sky_basis) -> None:
     to the design's colour."""
     from station.render.flakes import flake_tint, sparkle_pixels
     from station.render.numpy_renderer import gbuffer
-    from station.render.truth import flake_sparkle_truth
+    from station.render.truth_flakes import flake_sparkle_truth
 
     w, basis = sky_basis
     layer = FlakeLayer(size_um=30.0, density_per_mm2=60.0, spread_deg=8.0, reflectance=0.6)
