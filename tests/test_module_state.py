@@ -53,6 +53,8 @@ ALLOWED: dict[str, str] = {
     "station/render/lobes.py:sample_geometries": "the fixed fitting geometries",
     "station/render/lobes.py:_basis_text": "the shipped lobe basis file",
     "station/render/lobes.py:default_basis": "the shipped lobe basis",
+    "station/render/ground.py:height_columns": "a closed shape's height columns per shape name; read-only arrays",
+    "station/render/ground.py:occlusion_map": "the ground's occlusion map per shape and ground (bounded LRU); read-only",
     "simulators/gloss.py:reference_coat": "black-glass reference lobe per (GU, geometry)",
     "ui/models/view.py:paint_weights": "lobe weights of a frozen design on the shipped basis",
     "ui/models/view.py:_file_environment": "an environment file, keyed by path and modification time",
@@ -67,6 +69,8 @@ ALLOWED: dict[str, str] = {
     "station/formulate/snap/kernel.py:_COMPILE_LOCK": "one compilation at a time",
     "station/render/prefilter_kernels.py:_compile": "numba's compilation of the NumPy prefilter's loops",
     "station/render/prefilter_kernels.py:_COMPILE_LOCK": "one compilation at a time",
+    "station/render/ground.py:_compile": "numba's compilation of the ground's occlusion loop",
+    "station/render/ground.py:_COMPILE_LOCK": "one compilation at a time",
     # process-wide registries, the process's own state
     "station/drivers/transport.py:_OWNERS": "addresses open in this process: a port is opened once",
     "station/drivers/transport.py:_OWNERS_LOCK": "guards _OWNERS",

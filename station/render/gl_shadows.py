@@ -59,19 +59,17 @@ from numpy.typing import NDArray
 from station.render.errors import RenderInputError
 from station.render.footprint import bound_points
 from station.render.gl_context import build_program
+from station.render.ground import AO_AZIMUTHS as AO_AZIMUTHS
+from station.render.ground import AO_MAP as AO_MAP
+from station.render.ground import AO_STEPS as AO_STEPS
+from station.render.ground import CLOSED_SHAPES as CLOSED_SHAPES
+from station.render.ground import HEIGHT_MAP as HEIGHT_MAP
+from station.render.ground import SHADOW_LIGHTS as SHADOW_LIGHTS
+from station.render.ground import shadow_lights as shadow_lights
 from station.render.shapes import SHAPE_INDEX, SHAPES
 
-#: Lights that cast shadow maps (the strongest by luminous flux); the shader's sampler arrays hold as many.
-SHADOW_LIGHTS = 2
 #: Texels per side of a light's depth map.
 SHADOW_MAP = 2048
-#: Texels of the long side of the top and bottom height maps (ambient occlusion).
-HEIGHT_MAP = 512
-#: Texels per side of the ground's ambient-occlusion map over the disc's square.
-AO_MAP = 512
-#: Azimuths and steps per azimuth of the occlusion estimate.
-AO_AZIMUTHS = 24
-AO_STEPS = 64
 #: Smallest angular radius of a light's penumbra, degrees (the sun's disc).
 SUN_RADIUS_DEG = 0.27
 #: A receiver is moved this many texels along its normal before its lookup (no self-shadow acne).
@@ -88,20 +86,6 @@ ESM_SHARPNESS = 200.0
 #: Occluder-to-receiver distance (world units) at which the model's penumbra has the light's width:
 #: the filter's half width is tan(a) · ESM_REACH (at least 1.5 ESM texels).
 ESM_REACH = 0.25
-#: Rec. 709 luma of linear sRGB (which lights are the strongest).
-_LUMA = np.array([0.2126, 0.7152, 0.0722])
-
-
-def shadow_lights(lights: Any, count: int = SHADOW_LIGHTS) -> tuple[int, ...]:
-    """Indices of the *count* lights of *lights* (``station.render.environment.Lights`` or None) of largest
-    luminous flux (Rec. 709 luma of the flux, linear sRGB), strongest first; () without lights."""
-    if lights is None or lights.count == 0:
-        return ()
-    if count < 0:
-        raise RenderInputError("count", "count >= 0", count)
-    luma = np.asarray(lights.flux, float) @ _LUMA
-    order = np.argsort(-luma, kind="stable")
-    return tuple(int(i) for i in order[:count])
 
 
 def light_radius_rad(spread: float) -> float:
@@ -183,10 +167,6 @@ def height_views(
         ortho_matrix(np.array([x, z, y]), lo, hi, shape),
         shape,
     )
-
-
-#: The shapes that are closed solids (their top and bottom heights bound them: the ambient occlusion's columns).
-CLOSED_SHAPES = ("sphere", "cylinder", "speedshape")
 
 
 @dataclass(frozen=True)

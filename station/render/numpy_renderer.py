@@ -75,7 +75,8 @@ K_A), under a coat π K_A + π K_D t(N·l) (:func:`light_shadow`): what the GL s
 Pixels that miss the object show a constant grey background, or with a scene's
 :class:`~station.render.stage.Stage` the environment as backdrop over a ground disc with its contact
 shadow and the extracted lights' sun shadows, the environment turned about +Y (:func:`stage_background`;
-formulas in ``station.render.stage``).
+formulas in ``station.render.stage``; the shape's own shadows and occlusion on the ground, as the GL
+renderer's maps draw them, in ``station.render.ground``).
 
 Flakes: with a :class:`station.model.flakes.FlakeLayer` each paint pixel gets the zero-mean sparkle of
 :func:`station.render.flakes.sparkle_pixels` (the shader's cells, flake normals and maps), added as
@@ -97,6 +98,7 @@ from station.render.cubemap import sample_cube
 from station.render.environment import spread_exponent
 from station.render.errors import RenderInputError
 from station.render.flakes import clip_sparkle, flake_lod, flake_tint, sparkle_pixels
+from station.render.ground import CLOSED_SHAPES, ground_light_visibility, ground_occlusion, shadow_lights
 from station.render.lobes import bent_direction
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis, coat_diffuse_map
 from station.render.sh import sh_diffuse
@@ -372,7 +374,9 @@ def stage_background(
 
     BACKGROUND grey without a stage; else the backdrop lobe map at R_y(−θ)·d (plus its extracted lights)
     blended with the ground disc: its sky part with the contact shadow, the extracted lights with their
-    sun shadows (:func:`station.render.stage.ground_radiance`).
+    sun shadows (:func:`station.render.stage.ground_radiance`), both by the shape itself where the GL
+    renderer's maps are (:mod:`station.render.ground`: the strongest lights by ray cast, the closed
+    solids' sky occlusion by their height columns), else by the sphere proxies.
     """
     d = np.asarray(dirs, dtype=float).reshape(-1, 3)
     stage = scene.stage
@@ -395,18 +399,28 @@ def stage_background(
         hit = t > 0
         pts = origin + np.where(hit, t, 0.0)[:, None] * d
         w = ground_fade(np.hypot(pts[:, 0] - cx, pts[:, 2] - cz), stage.ground_radius) * hit
+        on = w > 0.0  # the ground's points that show: only they cast rays
         up = np.array([[0.0, 1.0, 0.0]])
         sky = diffuse_lookup(basis, up, diffuse)[0]
         lights = basis.lights
+        world = None if lights is None else lights.directions @ m  # the lights' world directions
+        vis = occ = None
+        slots = shadow_lights(lights)
+        if world is not None and slots:  # as GL: the shape's own ground only where it has shadow maps
+            vis = ground_light_visibility(scene, pts[on], world, slots)
+            if scene.shape in CLOSED_SHAPES:
+                occ = ground_occlusion(scene, pts[on], gy, (cx, cz), stage.ground_radius)
         ground = ground_radiance(
-            pts,
+            pts[on],
             OCCLUDERS[scene.shape],
             stage.ground_albedo,
             sky,
-            None if lights is None else lights.directions @ m,  # the lights' world directions
+            world,
             None if lights is None else lights.flux,
+            visibility=vis,
+            occlusion=occ,
         )
-        out = out * (1.0 - w[:, None]) + ground * w[:, None]
+        out[on] = out[on] * (1.0 - w[on, None]) + ground * w[on, None]
     return out
 
 

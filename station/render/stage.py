@@ -27,7 +27,10 @@ Shared by the NumPy renderer and ``shaders/render.frag.glsl`` (the same formulas
   and misses for β > α + PENUMBRA_DEG (smoothstep between). The shadow of a sphere thus falls around
   the ground point p = c − l (c_y − y_ground)/l_y (centre c), a disc stretched by 1/l_y along the light.
   The disc fades into the backdrop between half its radius and
-  its radius (smoothstep), so the floor has no hard edge.
+  its radius (smoothstep), so the floor has no hard edge. The proxies' V and O are the closed form of this
+  model; where the renderers have the shape's own (GL's shadow and ambient-occlusion maps, the NumPy
+  renderer's ray cast and height columns, ``station.render.ground``), :func:`ground_radiance` takes those
+  instead.
 """
 
 from __future__ import annotations
@@ -164,13 +167,20 @@ def ground_radiance(
     sky_down: ArrayLike,
     light_dirs: ArrayLike | None = None,
     light_flux: ArrayLike | None = None,
+    visibility: ArrayLike | None = None,
+    occlusion: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """Radiance (P, 3) of the ground at *points* (P, 3): albedo · [(D(+Y) − Σ (l_y)₊Φ/π)₊ (1 − O) +
     Σ (l_y)₊Φ/π · V] (module docstring) with *sky_down* = D(+Y) (3,), the diffuse map (irradiance / π)
-    looking up, and optional lights (world directions (k, 3), flux (k, 3)) casting sun shadows."""
+    looking up, and optional lights (world directions (k, 3), flux (k, 3)) casting sun shadows.
+
+    *visibility* (P, k) in [0, 1] and *occlusion* O (P,) in [0, 1], where given, replace the sphere proxies'
+    V (:func:`light_visibility`) and O (:func:`sphere_occlusion`): the shape's own, e.g.
+    ``station.render.ground``'s ray cast and ambient occlusion."""
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     sky = np.asarray(sky_down, dtype=float).reshape(3)
-    open_sky = (1.0 - sphere_occlusion(p, occluders))[:, None]
+    occ = sphere_occlusion(p, occluders) if occlusion is None else np.asarray(occlusion, float).reshape(-1)
+    open_sky = (1.0 - occ)[:, None]
     if light_dirs is None or light_flux is None or not len(np.asarray(light_dirs)):
         return albedo * sky[None, :] * open_sky
     ls = np.asarray(light_dirs, dtype=float).reshape(-1, 3)
@@ -178,4 +188,5 @@ def ground_radiance(
         np.clip(ls[:, 1], 0.0, None)[:, None] * np.asarray(light_flux, dtype=float).reshape(-1, 3) / np.pi
     )
     rest = np.clip(sky - direct.sum(axis=0), 0.0, None)
-    return albedo * (rest[None, :] * open_sky + light_visibility(p, occluders, ls) @ direct)
+    vis = light_visibility(p, occluders, ls) if visibility is None else np.asarray(visibility, float)
+    return albedo * (rest[None, :] * open_sky + vis.reshape(p.shape[0], -1) @ direct)

@@ -1,0 +1,217 @@
+"""The ground under a ray-cast shape shaded by the shape itself, as the GL renderer's maps shade it
+(``station.render.gl_shadows``), for the NumPy renderer's stage (``numpy_renderer.stage_background``).
+
+* **Which lights.** Of the lights taken out of the environment the SHADOW_LIGHTS of largest luminous flux
+  (:func:`shadow_lights`: the sun, a booth's main lamps) are shadowed by the shape's own ray cast, one ray
+  from each ground point along the light's world direction (``station.render.shapes.ray_cast_visibility``,
+  normal +Y: hard, a point light); the others keep the sphere proxies' sun shadow
+  (``station.render.stage.light_visibility``), as GL keeps them where it draws no shadow map
+  (:func:`ground_light_visibility`).
+* **Sky occlusion.** For the closed solids (CLOSED_SHAPES: sphere, cylinder, speed shape) the occluded
+  fraction O of the sky above the ground is GL's definition (``shaders/ao.frag.glsl``) and GL's map: the
+  shape taken as columns between its bottom and top heights on a grid of HEIGHT_MAP texels on the long
+  side of its footprint's box, each height by one vertical ray at the shape (:func:`height_columns`; the
+  cylinder, open below, as the solid column it bounds, its bottom at y = −1); from a ground point, along
+  each of AO_AZIMUTHS azimuths, AO_STEPS columns across the box, the cosine-weighted hidden fraction
+  sin² φ_max − sin² φ_min of the elevations [φ_min, φ_max] the columns span (exact for a convex body); O
+  is the mean over the azimuths, baked at the texel centres of an AO_MAP² map over the ground disc's
+  square (:func:`occlusion_map`, once per shape and ground: about 2 s) and read bilinearly, clamped at
+  its edges, as GL's texture is (:func:`ground_occlusion`). GL's definition is height-map based, so this
+  reproduces it rather than a ray-cast hemisphere estimate: the two engines differ only by where the
+  height texels fall. The open panels and the seam, which a view from above sees edge-on, keep the
+  proxies' open sky (``station.render.stage.sphere_occlusion``), as in GL.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.render.errors import RenderInputError
+from station.render.footprint import bound_points
+from station.render.shapes import OCCLUDERS, Scene, intersect, ray_cast_visibility
+from station.render.stage import light_visibility
+
+#: Lights whose shadows come from the shape itself (the strongest by luminous flux); GL's shader holds as
+#: many shadow maps.
+SHADOW_LIGHTS = 2
+#: Texels of the long side of the top and bottom height maps (ambient occlusion).
+HEIGHT_MAP = 512
+#: Texels per side of the ground's ambient-occlusion map over the disc's square.
+AO_MAP = 512
+#: Azimuths and steps per azimuth of the occlusion estimate.
+AO_AZIMUTHS = 24
+AO_STEPS = 64
+#: The shapes that are closed solids (their top and bottom heights bound them: the ambient occlusion's columns).
+CLOSED_SHAPES = ("sphere", "cylinder", "speedshape")
+#: Rec. 709 luma of linear sRGB (which lights are the strongest).
+_LUMA = np.array([0.2126, 0.7152, 0.0722])
+_COMPILE_LOCK = threading.Lock()
+
+
+def shadow_lights(lights: Any, count: int = SHADOW_LIGHTS) -> tuple[int, ...]:
+    """Indices of the *count* lights of *lights* (``station.render.environment.Lights`` or None) of largest
+    luminous flux (Rec. 709 luma of the flux, linear sRGB), strongest first; () without lights."""
+    if lights is None or lights.count == 0:
+        return ()
+    if count < 0:
+        raise RenderInputError("count", "count >= 0", count)
+    luma = np.asarray(lights.flux, float) @ _LUMA
+    order = np.argsort(-luma, kind="stable")
+    return tuple(int(i) for i in order[:count])
+
+
+def ground_light_visibility(
+    scene: Scene, points: NDArray, directions: NDArray, slots: tuple[int, ...]
+) -> NDArray[np.float64]:
+    """Visibility (P, k) of the lights in world *directions* (k, 3) from ground *points* (P, 3): the lights
+    *slots* (:func:`shadow_lights`) by the shape's own ray cast (0 or 1; lights below the horizon 0), the
+    others past the sphere proxies (module docstring)."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    ls = np.asarray(directions, dtype=float).reshape(-1, 3)
+    vis = light_visibility(p, OCCLUDERS[scene.shape], ls)
+    cast = [i for i in slots if 0 <= i < len(ls)]
+    if cast and len(p):
+        up = np.broadcast_to(np.array([0.0, 1.0, 0.0]), p.shape)
+        vis[:, cast] = ray_cast_visibility(scene, p, up, ls[cast]) * (ls[cast, 1] > 0.0)[None, :]
+    return vis
+
+
+@functools.cache
+def height_columns(
+    shape: str,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """(box lo (x, z), box hi (x, z), top (nx, nz), bottom (nx, nz)) of the closed *shape*: its heights over a grid of
+    texel centres across its footprint's box (HEIGHT_MAP texels on the long side), each by one vertical
+    ray down from above and up from below at the shape; −inf / +inf where the column misses it (read-only
+    arrays)."""
+    if shape not in CLOSED_SHAPES:
+        raise RenderInputError("shape", " | ".join(CLOSED_SHAPES), shape)
+    pts = bound_points(shape, 0.0)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    ext = np.maximum(hi - lo, 1e-6)
+    nx = HEIGHT_MAP if ext[0] >= ext[2] else max(16, math.ceil(HEIGHT_MAP * ext[0] / ext[2]))
+    nz = HEIGHT_MAP if ext[2] > ext[0] else max(16, math.ceil(HEIGHT_MAP * ext[2] / ext[0]))
+    xs = lo[0] + (np.arange(nx) + 0.5) * ext[0] / nx
+    zs = lo[2] + (np.arange(nz) + 0.5) * ext[2] / nz
+    x, z = np.meshgrid(xs, zs, indexing="ij")
+    scene = Scene(shape)
+    columns = []
+    for y0, dy in ((hi[1] + 1.0, -1.0), (lo[1] - 1.0, 1.0)):
+        o = np.stack([x, np.full(x.shape, y0), z], -1)
+        hit = intersect(scene, o, np.broadcast_to(np.array([0.0, dy, 0.0]), o.shape))
+        y = hit.position[..., 1]
+        if shape == "cylinder" and dy > 0:  # open below: the solid column it bounds
+            y = np.full(y.shape, -1.0)
+        columns.append(np.where(hit.mask, y, -np.inf if dy < 0 else np.inf))
+    out = (lo[[0, 2]].copy(), hi[[0, 2]].copy(), columns[0], columns[1])
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+def occlusion_sum(
+    px: NDArray, pz: NDArray, box: NDArray, top: NDArray, bottom: NDArray, azimuths: int, steps: int
+) -> NDArray[np.float64]:
+    """O (P,) at ground points (*px*, *pz*) of the columns *top*, *bottom* (heights above the ground, over
+    the box (lo x, lo z, hi x, hi z) *box*): per azimuth sin² φ_max − sin² φ_min over *steps* columns
+    across the box, the mean over *azimuths* (``shaders/ao.frag.glsl``, one point at a time)."""
+    nx, nz = top.shape
+    out = np.zeros(px.shape[0])
+    for k in range(px.shape[0]):
+        occluded = 0.0
+        for j in range(azimuths):
+            a = 2.0 * math.pi * (j + 0.5) / azimuths
+            dx, dz = math.cos(a), math.sin(a)
+            ix = math.copysign(1.0, dx + 1e-12) / (abs(dx) + 1e-9)
+            iz = math.copysign(1.0, dz + 1e-12) / (abs(dz) + 1e-9)
+            t0x, t1x = (box[0] - px[k]) * ix, (box[2] - px[k]) * ix
+            t0z, t1z = (box[1] - pz[k]) * iz, (box[3] - pz[k]) * iz
+            s_in = max(max(min(t0x, t1x), min(t0z, t1z)), 0.0)
+            s_out = min(max(t0x, t1x), max(t0z, t1z))
+            if s_out <= s_in:
+                continue
+            lo2, hi2 = 1.0, 0.0
+            for i in range(steps):
+                s = s_in + (s_out - s_in) * (i + 0.5) / steps
+                u = int(math.floor((px[k] + s * dx - box[0]) / (box[2] - box[0]) * nx))
+                v = int(math.floor((pz[k] + s * dz - box[1]) / (box[3] - box[1]) * nz))
+                u, v = min(max(u, 0), nx - 1), min(max(v, 0), nz - 1)
+                h_top, h_bottom = top[u, v], bottom[u, v]
+                if h_top > h_bottom and h_top > 0.0:
+                    b = max(h_bottom, 0.0)
+                    lo2 = min(lo2, b * b / (b * b + s * s))
+                    hi2 = max(hi2, h_top * h_top / (h_top * h_top + s * s))
+            occluded += max(hi2 - lo2, 0.0)
+        out[k] = min(max(occluded / azimuths, 0.0), 1.0)
+    return out
+
+
+@functools.cache
+def _compile() -> Callable[..., NDArray[np.float64]]:
+    try:
+        import numba
+
+        kernel = numba.njit(cache=True, nogil=True)(occlusion_sum)
+        z = np.zeros(1)
+        kernel(z, z, np.array([0.0, 0.0, 1.0, 1.0]), np.zeros((1, 1)), np.zeros((1, 1)), 1, 1)
+    except Exception:  # pragma: no cover - numba is a declared dependency; the Python loop remains
+        return occlusion_sum
+    return kernel
+
+
+def _kernel() -> Callable[..., NDArray[np.float64]]:
+    with _COMPILE_LOCK:  # one compilation even when two threads render at once
+        return _compile()
+
+
+@functools.lru_cache(maxsize=4)
+def occlusion_map(shape: str, ground_y: float, centre_x: float, centre_z: float, radius: float) -> NDArray:
+    """The AO_MAP² map (rows z, columns x; read-only) of O at the texel centres of the ground disc's square
+    (centre (*centre_x*, *centre_z*), half side *radius*, height *ground_y*) under the closed *shape*
+    (module docstring), in [0, 1]; the last few grounds are kept."""
+    if not math.isfinite(radius) or radius <= 0.0:
+        raise RenderInputError("radius", "a finite radius > 0", radius)
+    lo, hi, top, bottom = height_columns(shape)
+    q = 2.0 * (np.arange(AO_MAP) + 0.5) / AO_MAP - 1.0
+    x, z = np.meshgrid(centre_x + q * radius, centre_z + q * radius)
+    box = np.array([lo[0], lo[1], hi[0], hi[1]])
+    occ = _kernel()(
+        np.ascontiguousarray(x.ravel()),
+        np.ascontiguousarray(z.ravel()),
+        box,
+        np.ascontiguousarray(top - ground_y),
+        np.ascontiguousarray(bottom - ground_y),
+        AO_AZIMUTHS,
+        AO_STEPS,
+    ).reshape(AO_MAP, AO_MAP)
+    occ.setflags(write=False)
+    return occ
+
+
+def ground_occlusion(
+    scene: Scene, points: NDArray, ground_y: float, centre: tuple[float, float], radius: float
+) -> NDArray[np.float64]:
+    """Cosine-weighted occluded fraction O (P,) of the sky above ground *points* (P, 3) by the scene's
+    closed shape: :func:`occlusion_map` of the ground (height *ground_y*, disc *centre* (x, z) and *radius*)
+    read bilinearly at the points, clamped at its edges (module docstring), in [0, 1]."""
+    if scene.shape not in CLOSED_SHAPES:
+        raise RenderInputError("shape", " | ".join(CLOSED_SHAPES), scene.shape)
+    occ = occlusion_map(scene.shape, float(ground_y), float(centre[0]), float(centre[1]), float(radius))
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    n = occ.shape[0]
+    fx = (0.5 * (p[:, 0] - centre[0]) / radius + 0.5) * n - 0.5
+    fz = (0.5 * (p[:, 2] - centre[1]) / radius + 0.5) * n - 0.5
+    ix, iz = np.floor(fx), np.floor(fz)
+    ax, az = fx - ix, fz - iz
+    x0, x1 = np.clip(ix, 0, n - 1).astype(int), np.clip(ix + 1, 0, n - 1).astype(int)
+    z0, z1 = np.clip(iz, 0, n - 1).astype(int), np.clip(iz + 1, 0, n - 1).astype(int)
+    top = occ[z0, x0] * (1.0 - ax) + occ[z0, x1] * ax
+    bottom = occ[z1, x0] * (1.0 - ax) + occ[z1, x1] * ax
+    return np.asarray(top * (1.0 - az) + bottom * az)
