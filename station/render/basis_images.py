@@ -370,7 +370,9 @@ def _resolve_edges(
     miss = ~hit
     bg = np.full((d.shape[0], 3), BACKGROUND, np.float64)
     if scene.stage is not None and miss.any():
-        bg[miss] = stage_background(scene, basis, origin, d[miss])
+        # the proxies' ground: the viewer shows these images for a ray-cast shape without flakes, whose GL
+        # frames before them draw with shadows off, so the ground does not change when the images take over
+        bg[miss] = stage_background(scene, basis, origin, d[miss], by_shape=False)
     bg[hit] = 0.0
     background = np.stack([np.bincount(owner, bg[:, c], minlength=e) for c in range(3)], axis=-1) / s2
     return _EdgeResolve(idx, paint, images, ndv.astype(np.float32), background.astype(np.float32))
