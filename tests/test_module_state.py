@@ -65,12 +65,9 @@ ALLOWED: dict[str, str] = {
     "db/chain.py:_pg_insert": "the PostgreSQL INSERT text of a chain's columns (strings in, a string out)",
     "db/chain.py:_bind_processors": "SQLAlchemy's bind processors per dialect, chain and columns (bounded LRU)",
     # compilation, once per process
-    "station/formulate/snap/kernel.py:_compile": "numba's compilation of the ColorSnap walk (ADR 0002)",
-    "station/formulate/snap/kernel.py:_COMPILE_LOCK": "one compilation at a time",
-    "station/render/prefilter_kernels.py:_compile": "numba's compilation of the NumPy prefilter's loops",
-    "station/render/prefilter_kernels.py:_COMPILE_LOCK": "one compilation at a time",
-    "station/render/ground.py:_compile": "numba's compilation of the ground's occlusion loop",
-    "station/render/ground.py:_COMPILE_LOCK": "one compilation at a time",
+    "station/render/ground.py:_LOOPS": "numba's compilation of the ground's occlusion loop (station.jit)",
+    "station/render/prefilter_kernels.py:_LOOPS": "numba's compilation of the NumPy prefilter's loops (station.jit)",
+    "station/formulate/snap/kernel.py:_LOOPS": "numba's compilation of the ColorSnap walk (ADR 0002, station.jit)",
     # process-wide registries, the process's own state
     "station/drivers/transport.py:_OWNERS": "addresses open in this process: a port is opened once",
     "station/drivers/transport.py:_OWNERS_LOCK": "guards _OWNERS",
@@ -95,6 +92,7 @@ _MUTABLE_CALLS = {
     "RLock",
     "weakref.WeakValueDictionary",
     "weakref.WeakKeyDictionary",
+    "CompiledLoops",  # station.jit: a lock and the compiled functions, filled on first use
 }
 
 

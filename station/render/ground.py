@@ -26,13 +26,13 @@ from __future__ import annotations
 
 import functools
 import math
-import threading
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from station.jit import CompiledLoops
 from station.render.errors import RenderInputError
 from station.render.footprint import bound_points
 from station.render.shapes import OCCLUDERS, Scene, intersect, ray_cast_visibility
@@ -52,7 +52,6 @@ AO_STEPS = 64
 CLOSED_SHAPES = ("sphere", "cylinder", "speedshape")
 #: Rec. 709 luma of linear sRGB (which lights are the strongest).
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
-_COMPILE_LOCK = threading.Lock()
 
 
 def shadow_lights(lights: Any, count: int = SHADOW_LIGHTS) -> tuple[int, ...]:
@@ -153,22 +152,20 @@ def occlusion_sum(
     return out
 
 
-@functools.cache
-def _compile() -> Callable[..., NDArray[np.float64]]:
-    try:
-        import numba
+def _warm_up(kernel: Callable[..., NDArray[np.float64]]) -> None:
+    """Compile (or load from the cache) now, not midway through a ground."""
+    z = np.zeros(1)
+    kernel(z, z, np.array([0.0, 0.0, 1.0, 1.0]), np.zeros((1, 1)), np.zeros((1, 1)), 1, 1)
 
-        kernel = numba.njit(cache=True, nogil=True)(occlusion_sum)
-        z = np.zeros(1)
-        kernel(z, z, np.array([0.0, 0.0, 1.0, 1.0]), np.zeros((1, 1)), np.zeros((1, 1)), 1, 1)
-    except Exception:  # pragma: no cover - numba is a declared dependency; the Python loop remains
-        return occlusion_sum
-    return kernel
+
+#: The occlusion loop compiled by numba.
+_LOOPS = CompiledLoops((occlusion_sum,), warm_up=_warm_up)
 
 
 def _kernel() -> Callable[..., NDArray[np.float64]]:
-    with _COMPILE_LOCK:  # one compilation even when two threads render at once
-        return _compile()
+    """The compiled occlusion loop, or the plain one where numba cannot compile here."""
+    loops = _LOOPS.get()
+    return occlusion_sum if loops is None else loops[0]
 
 
 @functools.lru_cache(maxsize=4)

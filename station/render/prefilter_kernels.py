@@ -19,13 +19,13 @@ where numba is missing or cannot compile, and the vectorised loops run instead.
 
 from __future__ import annotations
 
-import functools
-import threading
 from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
+
+from station.jit import CompiledLoops
 
 __all__ = ["BruteSum", "GridSum", "Kernels", "brute_sum", "compiled_kernels", "grid_sum", "sample_cube_one"]
 
@@ -42,9 +42,6 @@ class Kernels(NamedTuple):
 
     grid: GridSum
     brute: BruteSum
-
-
-_COMPILE_LOCK = threading.Lock()
 
 
 def sample_cube_one(cube: NDArray[np.float32], x: float, y: float, z: float) -> tuple[float, float, float]:
@@ -147,28 +144,20 @@ def brute_sum(
     return out
 
 
-@functools.cache
-def _compile() -> Kernels | None:
-    try:
-        import numba
-        from numba.extending import register_jitable
-    except ImportError:  # pragma: no cover - numba is a declared dependency; the vectorised loops remain
-        return None
-    try:
-        register_jitable(sample_cube_one)  # compiled inline, not rebound
-        grid = numba.njit(cache=True, nogil=True)(grid_sum)
-        brute = numba.njit(cache=True, nogil=True)(brute_sum)
-        cube, dirs = np.zeros((6, 2, 2, 3), dtype=np.float32), np.zeros((1, 3))
-        grid(cube, cube, 0.0, False, dirs, dirs, dirs, np.zeros(1), np.zeros((1, 1)))  # compile now
-        brute(dirs, dirs, np.zeros((1, 4), dtype=np.float32), 1.0, np.zeros(0, dtype=np.float32))
-        brute(dirs, dirs, np.zeros((1, 4), dtype=np.float32), 2.0, np.zeros(2, dtype=np.float32))
-    except Exception:  # pragma: no cover - a numba that cannot compile here: the vectorised loops run
-        return None
-    return Kernels(grid, brute)
+def _warm_up(grid: GridSum, brute: BruteSum) -> None:
+    """Compile (or load from the cache) now, not midway through a prefilter."""
+    cube, dirs = np.zeros((6, 2, 2, 3), dtype=np.float32), np.zeros((1, 3))
+    grid(cube, cube, 0.0, False, dirs, dirs, dirs, np.zeros(1), np.zeros((1, 1)))
+    brute(dirs, dirs, np.zeros((1, 4), dtype=np.float32), 1.0, np.zeros(0, dtype=np.float32))
+    brute(dirs, dirs, np.zeros((1, 4), dtype=np.float32), 2.0, np.zeros(2, dtype=np.float32))
+
+
+#: The two loops, with the cube lookup compiled inline (not rebound).
+_LOOPS = CompiledLoops((grid_sum, brute_sum), inline=(sample_cube_one,), warm_up=_warm_up)
 
 
 def compiled_kernels() -> Kernels | None:
     """:func:`grid_sum` and :func:`brute_sum` compiled by numba (once per process, cached on disk), or
     None where numba is missing or cannot compile here."""
-    with _COMPILE_LOCK:  # one compilation even when two threads prefilter at once
-        return _compile()
+    loops = _LOOPS.get()
+    return None if loops is None else Kernels(*loops)

@@ -10,15 +10,14 @@ rebound: numba learns to compile calls to :func:`box_bound_one` by registration
 
 from __future__ import annotations
 
-import functools
 import math
-import threading
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from station.formulate.snap.bounds import SAFETY, SIN60, pair_bounds2
+from station.jit import CompiledLoops
 from station.model.cie2000 import CIE2000_K7
 
 __all__ = ["CandidateSearch", "best_first_cie2000", "box_bound_one", "compiled_search"]
@@ -26,8 +25,6 @@ __all__ = ["CandidateSearch", "best_first_cie2000", "box_bound_one", "compiled_s
 #: The walk's signature: (q, group boxes lo/hi/cmax, leaf boxes lo/hi/cmax, group, rows, leaf Lab,
 #: library size, k) -> (candidate rows, leaves visited).
 CandidateSearch = Callable[..., tuple[NDArray[np.intp], int]]
-
-_COMPILE_LOCK = threading.Lock()
 
 
 def box_bound_one(q: NDArray, cq: NDArray, lo: NDArray, hi: NDArray, cmax: NDArray, i: int) -> float:
@@ -150,44 +147,35 @@ def best_first_cie2000(
     return cand[:nc][keep], visited
 
 
-@functools.cache
-def _compile() -> CandidateSearch | None:
-    try:
-        import numba
-        from numba.extending import register_jitable
-    except ImportError:  # pragma: no cover - numba is a declared dependency; the NumPy path remains
-        return None
-    try:
-        for helper in (
-            pair_bounds2,
-            box_bound_one,
-            paint_bounds_one,
-            insert_sorted,
-        ):  # compiled inline, not rebound
-            register_jitable(helper)
-        search = numba.njit(cache=True, nogil=True)(best_first_cie2000)
-        box, one = np.zeros((1, 1, 3)), np.zeros((1, 1))
-        search(
-            np.zeros((1, 3)),
-            box,
-            box,
-            one,
-            box,
-            box,
-            one,
-            1,
-            np.zeros((1, 1), dtype=np.intp),
-            np.zeros((1, 1, 1, 3)),
-            1,
-            1,
-        )  # compile (or load from the cache) now, not mid-query
-    except Exception:  # pragma: no cover - a numba that cannot compile here: the NumPy path runs
-        return None
-    return search
+def _warm_up(search: CandidateSearch) -> None:
+    """Compile (or load from the cache) now, not mid-query."""
+    box, one = np.zeros((1, 1, 3)), np.zeros((1, 1))
+    search(
+        np.zeros((1, 3)),
+        box,
+        box,
+        one,
+        box,
+        box,
+        one,
+        1,
+        np.zeros((1, 1), dtype=np.intp),
+        np.zeros((1, 1, 1, 3)),
+        1,
+        1,
+    )
+
+
+#: The walk and the helpers it calls, compiled inline (not rebound).
+_LOOPS = CompiledLoops(
+    (best_first_cie2000,),
+    inline=(pair_bounds2, box_bound_one, paint_bounds_one, insert_sorted),
+    warm_up=_warm_up,
+)
 
 
 def compiled_search() -> CandidateSearch | None:
     """:func:`best_first_cie2000` compiled by numba (once per process, cached on disk), or None where
     numba is missing or cannot compile here."""
-    with _COMPILE_LOCK:  # one compilation even when the first queries arrive together
-        return _compile()
+    loops = _LOOPS.get()
+    return None if loops is None else loops[0]
