@@ -200,7 +200,8 @@ def test_without_the_shape_the_ground_is_the_proxies_closed_form() -> None:
     visibility and occlusion), and it differs from the shape's own ground at the ellipse's rim."""
     sun = _sun(36.0)
     basis = _basis(sun)
-    scene = Scene("sphere", stage=Stage(backdrop=False))
+    stage = Stage(backdrop=False)
+    scene = Scene("sphere", stage=stage)
     cx, gy, cz = GROUNDS["sphere"]
     pts, _ = _ground_points(40, 1.6, (cx, cz), gy)
     origin = np.array([0.0, 40.0, 0.0])
@@ -212,9 +213,9 @@ def test_without_the_shape_the_ground_is_the_proxies_closed_form() -> None:
     lights = basis.lights
     assert lights is not None and lights.count >= 1
     expect = ground_radiance(
-        hit, OCCLUDERS["sphere"], scene.stage.ground_albedo, sky, lights.directions, lights.flux
+        hit, OCCLUDERS["sphere"], stage.ground_albedo, sky, lights.directions, lights.flux
     )
-    w = ground_fade(np.hypot(hit[:, 0] - cx, hit[:, 2] - cz), scene.stage.ground_radius)[:, None]
+    w = ground_fade(np.hypot(hit[:, 0] - cx, hit[:, 2] - cz), stage.ground_radius)[:, None]
     np.testing.assert_allclose(proxies, expect * w + nr.BACKGROUND * (1.0 - w), rtol=1e-9, atol=1e-12)
     by_shape = nr.stage_background(scene, basis, origin, d)
     assert np.max(np.abs(by_shape - proxies) / proxies) > 0.05  # hard ray-cast rim against soft proxies
