@@ -370,9 +370,9 @@ def _resolve_edges(
     miss = ~hit
     bg = np.full((d.shape[0], 3), BACKGROUND, np.float64)
     if scene.stage is not None and miss.any():
-        # the proxies' ground: the viewer shows these images for a ray-cast shape without flakes, whose GL
-        # frames before them draw with shadows off, so the ground does not change when the images take over
-        bg[miss] = stage_background(scene, basis, origin, d[miss], by_shape=False)
+        # the ground shadowed by the shape itself, as the viewer's GL frames before these images shade it
+        # (GLRenderer.object_shadows False: the maps in the ground's bake only)
+        bg[miss] = stage_background(scene, basis, origin, d[miss])
     bg[hit] = 0.0
     background = np.stack([np.bincount(owner, bg[:, c], minlength=e) for c in range(3)], axis=-1) / s2
     return _EdgeResolve(idx, paint, images, ndv.astype(np.float32), background.astype(np.float32))

@@ -168,6 +168,9 @@ class GLRenderer(Closing):
         #: Shadow maps of the strongest extracted lights and the ground's occlusion under a mesh or a shape
         #: (:mod:`station.render.gl_frame_shadows`); False: the sphere proxies' shadows only.
         self.shadows = True
+        #: With :attr:`shadows`: False keeps the maps to the ground's bake (the object unshadowed, its ground
+        #: shadowed by the shape itself), as the NumPy frames of the viewer's cached images draw them.
+        self.object_shadows = True
         self._frame_shadows = FrameShadows(self.ctx, self._lights)
 
     def set_aa(self, aa: int) -> None:
@@ -324,6 +327,8 @@ class GLRenderer(Closing):
             occluders = mesh.occluders().astype(np.float32)
         n_occ = len(occluders) if stage is not None else 0
         shadow = self._frame_shadows.key(scene, mesh, self.shadows, probe)
+        if not (self.object_shadows or probe):
+            shadow = ()  # the maps shade the ground's bake only (draw)
         if mesh is not None:
             passes = self._passes.mesh_passes(linear, feats, terms, n_occ, curve_i, shadow)
         else:

@@ -219,3 +219,34 @@ def test_without_the_shape_the_ground_is_the_proxies_closed_form() -> None:
     np.testing.assert_allclose(proxies, expect * w + nr.BACKGROUND * (1.0 - w), rtol=1e-9, atol=1e-12)
     by_shape = nr.stage_background(scene, basis, origin, d)
     assert np.max(np.abs(by_shape - proxies) / proxies) > 0.05  # hard ray-cast rim against soft proxies
+
+
+@pytest.mark.gl
+def test_ground_only_maps_leave_the_object_unshadowed(gl_ctx) -> None:
+    """GLRenderer.object_shadows False (the viewer's frames of a ray-cast shape without flakes, before its
+    cached images): the object's pixels are those of the frame without shadows and the ground's those of
+    the frame with them, value for value; that ground is not the proxies' (the frame without shadows)."""
+    from scipy import ndimage
+
+    from station.render.gl_renderer import GLRenderer
+
+    size = (96, 72)
+    basis = _basis(_sun(35.0, -100.0))
+    camera = Camera((0.9, 3.2, 3.4), (0.5, -0.4, 0.5), fov_deg=50.0)
+    scene = Scene("speedshape", camera=camera, stage=Stage(backdrop=False, rotation_deg=20.0))
+    frames = {}
+    with GLRenderer(basis, *size, ctx=gl_ctx) as gl:
+        for name, shadows, on_object in (
+            ("full", True, True),
+            ("none", False, True),
+            ("ground", True, False),
+        ):
+            gl.shadows, gl.object_shadows = shadows, on_object
+            frames[name] = gl.render_linear(scene, [_paint(), _paint()]).astype(float)
+    mask = nr.gbuffer(scene, *size).mask
+    inside = ndimage.binary_erosion(mask, iterations=1)
+    outside = ~ndimage.binary_dilation(mask, iterations=1)
+    assert inside.sum() > 300 and outside.sum() > 3000
+    np.testing.assert_array_equal(frames["ground"][inside], frames["none"][inside])
+    np.testing.assert_array_equal(frames["ground"][outside], frames["full"][outside])
+    assert np.max(np.abs(frames["ground"][outside] - frames["none"][outside])) > 0.01

@@ -379,9 +379,11 @@ class GLRenderView(ViewLogic):
             self._core.set_aa(self.aa if self._still else 1)
             flakes, mesh = self._flake_layer(), self.model.mesh()
             # A ray-cast shape without flakes is shown from the cached basis images once they are ready,
-            # whose ground is the NumPy stage's (sphere proxies): the GL frames before them keep the
-            # proxies too, so the ground shadow does not change when the cache takes over.
-            self._core.shadows = mesh is not None or flakes is not None
+            # whose object is unshadowed and whose ground is the NumPy stage's, shadowed by the shape
+            # itself: the GL frames before them shadow the ground alone, so neither the object nor the
+            # shape of its shadow changes when the cache takes over.
+            self._core.shadows = True
+            self._core.object_shadows = mesh is not None or flakes is not None
             self._core.draw(
                 settings.scene(),
                 list(weights),
