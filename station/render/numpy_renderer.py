@@ -373,7 +373,6 @@ def stage_background(
     origin: np.ndarray,
     dirs: np.ndarray,
     diffuse: str = "cube",
-    by_shape: bool = True,
 ) -> np.ndarray:
     """Radiance (P, 3) seen along rays *dirs* (P, 3) from *origin* (3,) that miss the shape.
 
@@ -381,8 +380,7 @@ def stage_background(
     blended with the ground disc: its sky part with the contact shadow, the extracted lights with their
     sun shadows (:func:`station.render.stage.ground_radiance`), both by the shape itself where the GL
     renderer's maps are (:mod:`station.render.ground`: the strongest lights by ray cast, the closed
-    solids' sky occlusion by their height columns), else by the sphere proxies. *by_shape* False: the
-    proxies everywhere, as the GL renderer draws the ground with its shadows off.
+    solids' sky occlusion by their height columns), else by the sphere proxies.
     """
     d = np.asarray(dirs, dtype=float).reshape(-1, 3)
     stage = scene.stage
@@ -412,7 +410,7 @@ def stage_background(
         world = None if lights is None else lights.directions @ m  # the lights' world directions
         vis = occ = None
         slots = shadow_lights(lights)
-        if by_shape and world is not None and slots:  # as GL: the shape's own ground where it has maps
+        if world is not None and slots:  # as GL: the shape's own ground where it has maps
             vis = ground_light_visibility(scene, pts[on], world, slots)
             if scene.shape in CLOSED_SHAPES:
                 occ = ground_occlusion(scene, pts[on], gy, (cx, cz), stage.ground_radius)

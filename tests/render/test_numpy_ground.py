@@ -194,33 +194,6 @@ def test_lights_past_the_strongest_two_and_open_shapes_keep_the_proxies() -> Non
         height_columns("panels")
 
 
-def test_without_the_shape_the_ground_is_the_proxies_closed_form() -> None:
-    """``by_shape=False`` (the viewer's cached images, shown where its GL frames draw with shadows off):
-    the unit sphere's ground under the sun is the proxies' closed form (stage.ground_radiance with their
-    visibility and occlusion), and it differs from the shape's own ground at the ellipse's rim."""
-    sun = _sun(36.0)
-    basis = _basis(sun)
-    stage = Stage(backdrop=False)
-    scene = Scene("sphere", stage=stage)
-    cx, gy, cz = GROUNDS["sphere"]
-    pts, _ = _ground_points(40, 1.6, (cx, cz), gy)
-    origin = np.array([0.0, 40.0, 0.0])
-    d = (pts - origin) / np.linalg.norm(pts - origin, axis=1, keepdims=True)
-    proxies = nr.stage_background(scene, basis, origin, d, by_shape=False)
-    t = (gy - origin[1]) / d[:, 1]
-    hit = origin + t[:, None] * d
-    sky = nr.diffuse_lookup(basis, np.array([[0.0, 1.0, 0.0]]), "cube")[0]
-    lights = basis.lights
-    assert lights is not None and lights.count >= 1
-    expect = ground_radiance(
-        hit, OCCLUDERS["sphere"], stage.ground_albedo, sky, lights.directions, lights.flux
-    )
-    w = ground_fade(np.hypot(hit[:, 0] - cx, hit[:, 2] - cz), stage.ground_radius)[:, None]
-    np.testing.assert_allclose(proxies, expect * w + nr.BACKGROUND * (1.0 - w), rtol=1e-9, atol=1e-12)
-    by_shape = nr.stage_background(scene, basis, origin, d)
-    assert np.max(np.abs(by_shape - proxies) / proxies) > 0.05  # hard ray-cast rim against soft proxies
-
-
 @pytest.mark.gl
 def test_ground_only_maps_leave_the_object_unshadowed(gl_ctx) -> None:
     """GLRenderer.object_shadows False (the viewer's frames of a ray-cast shape without flakes, before its
