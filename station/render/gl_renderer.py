@@ -1,10 +1,9 @@
 """OpenGL (moderngl) side of the renderer: the GL renderer.
 
-Every GL object is created from a context made by
-:func:`station.render.gl_context.create_gl_context` (a headless EGL context: Mesa llvmpipe on
-CPU-only machines, the GPU driver where one exists) and released explicitly; :class:`GLRenderer` is
-a context manager. The context factory and shader loader live in :mod:`station.render.gl_context`
-and are re-exported here for callers that import them from this module.
+Every GL object is created from a context made by :func:`station.render.gl_context.create_gl_context`
+(a headless EGL context: Mesa llvmpipe on CPU-only machines, the GPU driver where one exists) and released
+explicitly; :class:`GLRenderer` is a context manager. The context factory and shader loader live in
+:mod:`station.render.gl_context`, re-exported here for callers that import them from this module.
 """
 
 from __future__ import annotations
@@ -166,10 +165,8 @@ class GLRenderer(Closing):
         self.last_anisotropy: AnisotropyChoice | None = None
         self._aniso: dict[tuple, tuple] = {}
         #: Shadow maps of the strongest extracted lights and the ground's occlusion under a mesh or a shape
-        #: (:mod:`station.render.gl_frame_shadows`); False: the sphere proxies' shadows only.
+        #: (:mod:`station.render.gl_frame_shadows`), False: the proxies'; object_shadows False: the ground's only.
         self.shadows = True
-        #: With :attr:`shadows`: False keeps the maps to the ground's bake (the object unshadowed, its ground
-        #: shadowed by the shape itself), as the NumPy frames of the viewer's cached images draw them.
         self.object_shadows = True
         self._frame_shadows = FrameShadows(self.ctx, self._lights)
 
@@ -326,9 +323,7 @@ class GLRenderer(Closing):
         else:
             occluders = mesh.occluders().astype(np.float32)
         n_occ = len(occluders) if stage is not None else 0
-        shadow = self._frame_shadows.key(scene, mesh, self.shadows, probe)
-        if not (self.object_shadows or probe):
-            shadow = ()  # the maps shade the ground's bake only (draw)
+        shadow = self._frame_shadows.key(scene, mesh, self.shadows and (self.object_shadows or probe), probe)
         if mesh is not None:
             passes = self._passes.mesh_passes(linear, feats, terms, n_occ, curve_i, shadow)
         else:
