@@ -131,12 +131,14 @@ class MA6Spectro(Instrument[StreamTransport]):
             p.query("MS")
             p.poll("PO", "IDLE", "STATE", self.poll_period_s, self.measure_limit_s)
             last: ProtocolError | None = None
-            for _ in range(p.retries + 1):
+            for attempt in range(p.retries + 1):
                 reply = p.query("RD", p.timeout_s * 4)
                 try:
                     return self._parse_data(reply)
-                except ProtocolError as exc:  # checksum or layout: read the held data again
-                    last = exc
+                except ProtocolError as exc:  # checksum or layout: read the held data again, after
+                    last = exc  # draining a late reply (a busy host) and pinging the line back in step
+                    if attempt < p.retries:
+                        p.resync()
             raise ProtocolError(f"data rejected {p.retries + 1} times: {last}")
 
     def _parse_data(self, reply: AsciiReply) -> SpectralReading:

@@ -112,6 +112,24 @@ def test_bad_checksum_rejected_and_data_read_again():
         (b"MS\r", OK),
         (b"PO\r", b"STATE=IDLE\r\n" + OK),
         (b"RD\r", with_cs(body, (sum(body) & 0xFFFF) ^ 0x0001)),
+        (b"\r", OK),  # resync: a late reply drained, the line pinged, before the data is read again
+        (b"RD\r", with_cs(body)),
+    ]
+    with scripted_pty(pairs) as (path, _), driver(path).open() as inst:
+        r = inst.measure()
+    np.testing.assert_allclose(r.reflectance, VALUES, atol=5e-6)
+
+
+def test_a_stray_reply_to_rd_is_drained_and_the_data_read_again():
+    """A reply without the CS= line (what a late poll reply looks like on a busy host) is rejected, the line
+    resynchronised (drained, pinged) and the held data read again."""
+    body = data_body(VALUES)
+    pairs = [
+        *CONNECT,
+        (b"MS\r", OK),
+        (b"PO\r", b"STATE=IDLE\r\n" + OK),
+        (b"RD\r", b"STATE=IDLE\r\n" + OK),
+        (b"\r", OK),
         (b"RD\r", with_cs(body)),
     ]
     with scripted_pty(pairs) as (path, _), driver(path).open() as inst:
@@ -122,7 +140,14 @@ def test_bad_checksum_rejected_and_data_read_again():
 def test_bad_checksum_every_time_is_a_protocol_error():
     body = data_body(VALUES)
     bad = with_cs(body, (sum(body) + 1) & 0xFFFF)
-    pairs = [*CONNECT, (b"MS\r", OK), (b"PO\r", b"STATE=IDLE\r\n" + OK), (b"RD\r", bad), (b"RD\r", bad)]
+    pairs = [
+        *CONNECT,
+        (b"MS\r", OK),
+        (b"PO\r", b"STATE=IDLE\r\n" + OK),
+        (b"RD\r", bad),
+        (b"\r", OK),
+        (b"RD\r", bad),
+    ]
     with scripted_pty(pairs) as (path, _), driver(path).open() as inst, pytest.raises(ProtocolError):
         inst.measure()
 
