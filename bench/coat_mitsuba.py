@@ -46,7 +46,7 @@ import numpy as np
 
 from bench._report import Case, write_section
 from station.model import FaceFlopTravelGloss
-from station.model.colorimetry import linear_srgb_to_lab
+from station.model.colorimetry import REC709_LUMINANCE, linear_srgb_to_lab
 from station.model.difference import delta_e
 from station.model.fresnel import CLEAR_COAT_INDEX
 from station.model.gloss import ClearCoat, fresnel_schlick, lobe_from_gloss
@@ -65,8 +65,6 @@ SEEDS = (0, 1)
 ENV_WIDTH = 512
 BANDS = ((0.9, 1.0), (0.5, 0.6), (0.3, 0.4), (0.1, 0.2), (0.02, 0.05))
 VIEW = np.array([0.0, 0.0, 1.0])
-#: sRGB luminance weights (Rec. 709 primaries, D65).
-LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
 @dataclass(frozen=True)
@@ -258,7 +256,7 @@ def plastic_closed_form(env: Environment, coat: Coat) -> tuple[np.ndarray, np.nd
 
 def luminance(img: np.ndarray) -> np.ndarray:
     """Rec. 709 luminance of linear sRGB radiance (..., 3)."""
-    return img @ LUMA
+    return img @ REC709_LUMINANCE
 
 
 def mean_de00(a: np.ndarray, b: np.ndarray, white: float) -> float:

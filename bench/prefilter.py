@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 
 from bench._report import Case, write_section
+from station.model.colorimetry import REC709_LUMINANCE
 from station.render import prefilter, procedural
 from station.render.environment import load_environment
 from station.render.lobes import default_basis
 
 HDRI = Path(__file__).resolve().parents[2] / "shared" / "data" / "hdri"
-LUM = np.array([0.2126, 0.7152, 0.0722])
 
 
 def _accuracy(env, cases: list[Case]) -> None:
@@ -32,8 +32,8 @@ def _accuracy(env, cases: list[Case]) -> None:
     with prefilter.GLPrefilter(src) as gl:
         for n in (32.0, 300.0):
             size = 16
-            ref = prefilter.prefilter_brute(src, n, size) @ LUM
-            got = gl.run(n, size, prefilter.sample_count(size)) @ LUM
+            ref = prefilter.prefilter_brute(src, n, size) @ REC709_LUMINANCE
+            got = gl.run(n, size, prefilter.sample_count(size)) @ REC709_LUMINANCE
             rel = np.abs(got - ref) / ref
             cases.append(
                 Case(

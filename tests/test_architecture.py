@@ -26,6 +26,7 @@ from pathlib import Path
 import pytest
 
 from station.drivers.families import FAMILY_NAMES
+from station.model.colorimetry import REC709_LUMINANCE
 from station.model.domain import (
     ANGLES_3,
     ANGLES_3_ALT,
@@ -518,3 +519,49 @@ def test_a_planted_family_list_in_a_temporary_tree_fails_the_check(tmp_path: Pat
     assert sorted(f.split(": ", 1)[0] for f in found) == sorted(
         f"{rel}:1" for rel in planted if rel not in VOCABULARY_HOMES
     ), "\n".join(found)
+
+
+# -- shared physics written once -----------------------------------------------------------------------------
+# A published constant of more than one number lives in station.model; a second literal copy of it (a list or
+# tuple of the same numbers, wrapped in np.array or not) anywhere in the product or its benchmarks fails.
+
+PHYSICS_CONSTANTS: dict[str, tuple[float, ...]] = {
+    "station.model.colorimetry.REC709_LUMINANCE": tuple(float(v) for v in REC709_LUMINANCE),
+}
+PHYSICS_HOMES = ("station/model/colorimetry.py",)
+
+
+def physics_copies(source: str, where: str = "<source>") -> list[str]:
+    """Places in *source* that write out a constant of :data:`PHYSICS_CONSTANTS` instead of importing it."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.Tuple, ast.List)) and node.elts:
+            values = tuple(_number(e) for e in node.elts)
+            for name, constant in PHYSICS_CONSTANTS.items():
+                if values == constant:
+                    found.append(f"{where}:{node.lineno}: a copy of {name}: import it")
+    return found
+
+
+def test_shared_physics_is_written_once() -> None:
+    found = []
+    for top in (*VOCABULARY_ROOTS, "bench"):
+        for path in sorted((REPO / top).rglob("*.py")):
+            rel = path.relative_to(REPO).as_posix()
+            if rel not in PHYSICS_HOMES and not any(rel.startswith(f) for f in FROZEN):
+                found += physics_copies(path.read_text(), rel)
+    assert found == [], "\n".join(found)
+
+
+@pytest.mark.parametrize(
+    "source, copies",
+    [
+        ("LUMA = np.array([0.2126, 0.7152, 0.0722])\n", 1),
+        ("y = rgb @ (0.2126, 0.7152, 0.0722)\n", 1),
+        ("w = np.array([0.2126, 0.7152, 0.0722], np.float32)\n", 1),
+        ("W = [0.299, 0.587, 0.114]\n", 0),  # Rec. 601 is another constant
+        ("W = [0.2126, 0.7152]\n", 0),
+    ],
+)
+def test_the_physics_check_finds_a_copy(source: str, copies: int) -> None:
+    assert len(physics_copies(source)) == copies, source

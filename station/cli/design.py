@@ -51,6 +51,7 @@ def _hdr_lights(path: Path, count: int) -> tuple[np.ndarray, np.ndarray]:
     arbitrary).
     """
     from station.design.scene import sphere_scene
+    from station.model.colorimetry import REC709_LUMINANCE
     from station.render.cubemap import equirect_directions, equirect_solid_angles
     from station.render.environment import load_environment
 
@@ -61,7 +62,7 @@ def _hdr_lights(path: Path, count: int) -> tuple[np.ndarray, np.ndarray]:
     rows = max(1, round(math.sqrt(count / 2.0)))
     cell = (np.arange(h) * rows // h)[:, None] * (2 * rows) + (np.arange(w) * 2 * rows // w)[None, :]
     flux_px = img * equirect_solid_angles(h, w)[..., None]
-    lum_px = flux_px @ np.array([0.2126, 0.7152, 0.0722])
+    lum_px = flux_px @ REC709_LUMINANCE
     dirs_px = equirect_directions(h, w)
     size = 2 * rows * rows
     flat = cell.ravel()
@@ -73,7 +74,7 @@ def _hdr_lights(path: Path, count: int) -> tuple[np.ndarray, np.ndarray]:
     if not len(dirs):
         raise InputError("environment", "an environment with some light in it", str(path))
     base = sphere_scene(32)
-    lit = np.clip(base.normals[base.mask] @ dirs.T, 0.0, None) @ (flux @ np.array([0.2126, 0.7152, 0.0722]))
+    lit = np.clip(base.normals[base.mask] @ dirs.T, 0.0, None) @ (flux @ REC709_LUMINANCE)
     return dirs, flux / max(float(lit.max()), 1e-12)
 
 

@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from station.design.errors import DesignInputError
 from station.model import GLOSS_MAX_GU, GLOSS_MIN_GU, FaceFlopTravelGloss
+from station.model.colorimetry import REC709_LUMINANCE
 from station.model.design_io import design_to_dict
 from station.model.display import display_to_lab
 
@@ -300,7 +301,7 @@ class ContrastGloss:
 def brightness(encoded_rgb: ArrayLike) -> NDArray[np.float64]:
     """Brightness on 0–1 of sRGB-encoded pixels: Rec. 709 luma ``Y' = 0.2126 R' + 0.7152 G' + 0.0722 B'``."""
     p = np.asarray(encoded_rgb, dtype=float)
-    return p @ np.array([0.2126, 0.7152, 0.0722])
+    return p @ REC709_LUMINANCE
 
 
 def contrast_gloss(pixels: ArrayLike) -> ContrastGloss:

@@ -57,8 +57,6 @@ MIN_HIGHLIGHT_PIXELS = 10
 HIGHLIGHT_ROUNDS = 2
 #: Squared encoded error per channel value below which two gloss values fit the highlight alike.
 TIE_SSE = 1e-8
-#: Rec. 709 luminance weights of linear sRGB.
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 HIGHLIGHT_SIGMAS = 3.0
 #: Point fit: residual (linear luminance) below which a pixel is never an outlier.
 OUTLIER_FLOOR = 0.01

@@ -18,7 +18,6 @@ from station.design.errors import DesignInputError, SketchFitError
 from station.design.scene import LobeBasis, srgb_decode
 from station.design.sketch_base import (
     HIGHLIGHT_SIGMAS,
-    LUMINANCE,
     MAX_SHADING_DE,
     MIN_PIXELS,
     NEAR_WHITE,
@@ -34,7 +33,7 @@ from station.design.sketch_base import (
     solid_design,
 )
 from station.model import ANGLES_3, FaceFlopTravelGloss
-from station.model.colorimetry import linear_srgb_to_lab
+from station.model.colorimetry import REC709_LUMINANCE, linear_srgb_to_lab
 from station.model.domain import DEFAULT_GLOSS_GU
 
 
@@ -125,7 +124,7 @@ def _lobe_weights(y_all: NDArray, B_all: NDArray, highlight_rounds: int) -> tupl
         for c in range(3):
             w[:, c], _ = nnls(B[:, :, c].T, y[:, c], maxiter=50 * B.shape[0])
         # highlights of the unmodelled gloss lobe are positive outliers of the luminance residual
-        excess = (y_all - np.einsum("jnc,jc->nc", B_all, w)) @ LUMINANCE
+        excess = (y_all - np.einsum("jnc,jc->nc", B_all, w)) @ REC709_LUMINANCE
         sigma = 1.4826 * float(np.median(np.abs(excess[keep] - np.median(excess[keep])))) + 1e-6
         new_keep = excess < HIGHLIGHT_SIGMAS * sigma
         if np.array_equal(new_keep, keep) or new_keep.sum() < MIN_PIXELS:
@@ -148,7 +147,7 @@ def _environment_verdict(
     reason = ""
     tc = 0.0
     design: FaceFlopTravelGloss | None = None
-    lum = rgb @ LUMINANCE
+    lum = rgb @ REC709_LUMINANCE
     if not np.any(w > 0):
         reason = "all lobe weights are zero"
     elif not allow_retroreflective and lum[0] < lum[-1] * (1.0 - 1e-3):

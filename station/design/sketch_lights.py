@@ -26,7 +26,6 @@ from station.design.sketch_base import (
     HIGHLIGHT_DEG,
     HIGHLIGHT_ROUNDS,
     HIGHLIGHT_SIGMAS,
-    LUMINANCE,
     MAX_SHADING_DE,
     MAX_TRIMMED,
     MIN_HIGHLIGHT_PIXELS,
@@ -48,7 +47,7 @@ from station.design.sketch_base import (
     solid_design,
 )
 from station.model import ANGLES_3, FaceFlopTravelGloss
-from station.model.colorimetry import linear_srgb_to_lab
+from station.model.colorimetry import REC709_LUMINANCE, linear_srgb_to_lab
 from station.model.domain import DEFAULT_GLOSS_GU
 from station.model.lobe import lobe_reflectance
 
@@ -249,7 +248,7 @@ def _robust_sweep(
         _, coef, tc, g_fit = best_g
         resid = (
             y_all - spec_all[g_fit][:, None] - phi_all[:, None] * _curve(coef, tc, theta_all)
-        ) @ LUMINANCE
+        ) @ REC709_LUMINANCE
         med = float(np.median(resid[keep]))
         sigma = 1.4826 * float(np.median(np.abs(resid[keep] - med)))
         new_keep = np.abs(resid - med) <= max(HIGHLIGHT_SIGMAS * sigma, OUTLIER_FLOOR)

@@ -21,6 +21,12 @@ OBSERVER_10 = "CIE 1964 10 Degree Standard Observer"
 WHITEPOINT: NDArray[np.float64] = np.asarray(colour.CCS_ILLUMINANTS[OBSERVER_10]["D65"], dtype=float)
 _SRGB = colour.RGB_COLOURSPACES["sRGB"]
 
+#: Rec. 709 luminance weights (ITU-R BT.709-6 item 3.2; the Y row of sRGB's RGB→XYZ, IEC 61966-2-1):
+#: Y = 0.2126 R + 0.7152 G + 0.0722 B on linear sRGB; on encoded values the same weights give luma Y′.
+#: Read-only.
+REC709_LUMINANCE: NDArray[np.float64] = np.array([0.2126, 0.7152, 0.0722])
+REC709_LUMINANCE.setflags(write=False)
+
 
 #: CIE 1976 constants (CIE 15:2004 §8.2.1, exact rationals): ε = (6/29)³, κ = (29/3)³.
 _CIE_EPSILON = 216.0 / 24389.0

@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from station.model.booth import BOOTH_SHAPES, check_booth_shape
-from station.model.colorimetry import OBSERVER_10
+from station.model.colorimetry import OBSERVER_10, REC709_LUMINANCE
 from station.model.errors import ModelInputError
 from station.render.errors import RenderInputError
 
@@ -75,8 +75,6 @@ BOOTH_ENV_WIDTH = 256
 DISPLAY_ADAPTING_CD_M2 = 20.0
 #: Exposure of the booth pictures (EV): the booth's irradiance/π is 1, a bright silver face is ~2.
 BOOTH_EXPOSURE_EV = 0.0
-#: Luminance of linear sRGB (ITU-R BT.709 primaries, D65): Y = RGB · these.
-_SRGB_LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 
 
 @dataclass(frozen=True)
@@ -147,7 +145,7 @@ def light_tint(
     # Relative to D65 seen the same way: D65 is the display's own light (its 10° white differs from the
     # display's 2° one by a hair that partial adaptation would otherwise leave as a tint).
     rgb = rgb / np.maximum(lab_to_linear_srgb_under(white, "D65", observer, float(d)), 1e-12)
-    return np.asarray(rgb / float(rgb @ _SRGB_LUMINANCE), dtype=float)
+    return np.asarray(rgb / float(rgb @ REC709_LUMINANCE), dtype=float)
 
 
 def booth_design(

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from station.model.colorimetry import REC709_LUMINANCE
 from station.model.shading import aspecular_deg
 from station.render.errors import RenderInputError
 from station.render.numpy_renderer import GBuffer
@@ -58,7 +59,7 @@ def angle_buffers(g: GBuffer, light_dir: ArrayLike) -> AngleBuffers:
 
 def dominant_light_direction(sh: np.ndarray) -> np.ndarray:
     """Unit direction of the first-order SH term of radiance coefficients (9, 3) (luminance weights)."""
-    lum = sh @ np.array([0.2126, 0.7152, 0.0722])
+    lum = sh @ REC709_LUMINANCE
     v = np.array([lum[3], lum[1], lum[2]])  # Y_11 ∝ x, Y_1−1 ∝ y, Y_10 ∝ z
     n = np.linalg.norm(v)
     if n < 1e-12:

@@ -128,10 +128,12 @@ def extract_lights(
     """
     from scipy import ndimage
 
+    from station.model.colorimetry import REC709_LUMINANCE
+
     img = env.equirect
     h, w = img.shape[:2]
     sa = cubemap.equirect_solid_angles(h, w)
-    lum = img @ np.array([0.2126, 0.7152, 0.0722], np.float32)
+    lum = img @ REC709_LUMINANCE.astype(np.float32)
     mean = float((lum * sa).sum() / (4.0 * np.pi))
     bright = lum > threshold * mean
     if not bright.any():

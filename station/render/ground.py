@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from station.jit import CompiledLoops
+from station.model.colorimetry import REC709_LUMINANCE
 from station.render.errors import RenderInputError
 from station.render.footprint import bound_points
 from station.render.shapes import OCCLUDERS, Scene, intersect, ray_cast_visibility
@@ -50,8 +51,6 @@ AO_AZIMUTHS = 24
 AO_STEPS = 64
 #: The shapes that are closed solids (their top and bottom heights bound them: the ambient occlusion's columns).
 CLOSED_SHAPES = ("sphere", "cylinder", "speedshape")
-#: Rec. 709 luma of linear sRGB (which lights are the strongest).
-_LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
 def shadow_lights(lights: Any, count: int = SHADOW_LIGHTS) -> tuple[int, ...]:
@@ -61,7 +60,7 @@ def shadow_lights(lights: Any, count: int = SHADOW_LIGHTS) -> tuple[int, ...]:
         return ()
     if count < 0:
         raise RenderInputError("count", "count >= 0", count)
-    luma = np.asarray(lights.flux, float) @ _LUMA
+    luma = np.asarray(lights.flux, float) @ REC709_LUMINANCE
     order = np.argsort(-luma, kind="stable")
     return tuple(int(i) for i in order[:count])
 

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from station.model.colorimetry import REC709_LUMINANCE
 from station.render.errors import RenderInputError
 
 #: Pixels brighter than this multiple of the map's mean luminance become point lights.
@@ -134,7 +135,7 @@ def prepare_lighting(
     h, w = img.shape[:2]
     dirs = equirect_directions(h, w)
     om = equirect_solid_angles(h, w)
-    lum = img @ np.array([0.2126, 0.7152, 0.0722])
+    lum = img @ REC709_LUMINANCE
     mean_lum = float((lum * om).sum() / (4.0 * np.pi))
     threshold = point_threshold * max(mean_lum, 1e-30)
     bright = lum > threshold
