@@ -112,3 +112,28 @@ def test_a_pure_task_cancelled_without_progress_drops_its_result(qtbot) -> None:
     with qtbot.waitSignal(task.finished, timeout=10_000):
         release.set()
     qtbot.waitUntil(lambda: outcome == ["cancelled"], timeout=5_000)
+
+
+def test_the_views_workers_pause_the_collector_too(qtbot) -> None:
+    """A collection inside a view's worker destroyed a closed GL view there and Qt aborted the process
+    ("Cannot make QOpenGLContext current in a different thread"): the basis and scene workers run with
+    the collector off, like the tasks."""
+    from ui.widgets.tasks import GcPausingThread
+    from ui.widgets.tweaker_screen import SceneWorker
+    from ui.widgets.view_logic import BasisWorker
+
+    assert issubclass(BasisWorker, GcPausingThread) and issubclass(SceneWorker, GcPausingThread)
+    seen: list[bool] = []
+
+    class Probe(BasisWorker):
+        def run(self) -> None:
+            seen.append(gc.isenabled())
+
+    from ui.models.view import ViewSettings
+
+    worker = Probe(ViewSettings(), 16, 16)
+    with qtbot.waitSignal(worker.finished, timeout=10_000):
+        worker.start()
+    qtbot.waitUntil(lambda: gc_pause().active == 0, timeout=5_000)
+    assert seen == [False]
+    assert gc.isenabled()

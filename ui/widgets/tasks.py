@@ -7,12 +7,15 @@ raises :class:`Cancelled` and the task emits ``cancelled`` instead of ``succeede
 A task that reports no more progress runs to its end and its result is shown: a scan is not
 cancellable once its reading is being stored, so a stored reading is never hidden.
 
-While any task thread runs, Python's cyclic garbage collector is paused and re-enabled when the last
-one finishes (on the GUI thread). The viewer's test runs crashed the process intermittently (SIGSEGV)
-when the GUI thread ran a collection while a worker was inside SQLAlchemy's session set-up (a scan
-storing its reading, or a retry draining the outbox); reference counting still frees everything
-acyclic meanwhile, and tasks last seconds, so the pause costs nothing a user sees. The root cause in
-the Qt / SQLAlchemy extension modules is not identified.
+While any worker thread runs (a task, or a view's basis or scene worker: :class:`GcPausingThread`),
+Python's cyclic garbage collector is paused and re-enabled when the last one finishes (on the GUI
+thread). A collection runs in whichever thread happens to allocate, and it destroys the Qt objects of the
+cycles it frees there: a closed GL view collected inside a basis worker called
+``QOpenGLContext::makeCurrent`` from that worker and Qt aborted the process ("Cannot make QOpenGLContext
+current in a different thread"; the orbit benchmark, one view closed and the next one's ground
+occlusion being compiled). The viewer's test runs also crashed intermittently (SIGSEGV) when the GUI
+thread ran a collection while a worker was inside SQLAlchemy's session set-up. Reference counting still
+frees everything acyclic meanwhile, and workers last seconds, so the pause costs nothing a user sees.
 """
 
 from __future__ import annotations
@@ -66,7 +69,29 @@ def gc_pause() -> GcPause:
     return pause
 
 
-class TaskThread(QThread):
+class GcPausingThread(QThread):
+    """A QThread that pauses the cyclic collector (:func:`gc_pause`) from :meth:`start` until it finishes
+    (module docstring): no collection, and so no Qt destructor, runs inside the worker."""
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        self._paused: GcPause | None = None
+        self.finished.connect(self._resume_gc)
+
+    def start(self, *args: Any) -> None:
+        """Start the thread (GUI thread), pausing the cyclic collector until it finishes."""
+        if self._paused is None:
+            self._paused = gc_pause()
+            self._paused.enter()
+        super().start(*args)
+
+    def _resume_gc(self) -> None:
+        if self._paused is not None:
+            self._paused.leave()
+            self._paused = None
+
+
+class TaskThread(GcPausingThread):
     """Runs ``fn(progress)`` in a thread; ``succeeded(result)`` or ``failed(message)`` afterwards.
 
     *fn* receives a ``progress(step, text)`` callable that emits the ``progress`` signal (queued to the
@@ -86,10 +111,8 @@ class TaskThread(QThread):
         super().__init__(parent)
         self._fn = fn
         self.pure = pure
-        self._paused: GcPause | None = None
         self._cancel = False
         self._sent = False
-        self.finished.connect(self._resume_gc)
 
     def cancel(self) -> None:
         """Ask the task to stop: its next progress report raises :class:`Cancelled`; its result is dropped."""
@@ -110,18 +133,6 @@ class TaskThread(QThread):
         if self._cancel:
             raise Cancelled
         self.progress.emit(step, text)
-
-    def start(self, *args: Any) -> None:
-        """Start the thread (GUI thread), pausing the cyclic collector until it finishes."""
-        if self._paused is None:
-            self._paused = gc_pause()
-            self._paused.enter()
-        super().start(*args)
-
-    def _resume_gc(self) -> None:
-        if self._paused is not None:
-            self._paused.leave()
-            self._paused = None
 
     def run(self) -> None:
         """Run the task."""

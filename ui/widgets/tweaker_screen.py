@@ -16,7 +16,7 @@ dragging the highlight centre moves the light. Every edit is one undo step.
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QPoint, QPointF, QThread, Signal
+from PySide6.QtCore import QPoint, QPointF, Signal
 from PySide6.QtGui import QColor, QImage, QMouseEvent, QPainter, QPen
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
 
@@ -41,6 +41,7 @@ from ui.models.view import (
     ViewSettings,
     environment_ready,
 )
+from ui.widgets.tasks import GcPausingThread
 
 SIZE = 400
 #: Side panel (gloss checkerboard and legend) width, pixels.
@@ -75,7 +76,7 @@ def preview_size(width: int, height: int) -> tuple[int, int]:
     return max(16, round(width * k)), max(16, round(height * k))
 
 
-class SceneWorker(QThread):
+class SceneWorker(GcPausingThread):
     """Computes the main scene's basis images and tweaker geometry off the GUI thread: the preview
     first, then the full size (skipped when a newer request interrupts the worker)."""
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 
-from PySide6.QtCore import QPointF, QThread, Signal
+from PySide6.QtCore import QPointF, Signal
 from PySide6.QtGui import QMouseEvent, QWheelEvent
 from PySide6.QtWidgets import QWidget
 
@@ -23,12 +23,13 @@ from ui.models.view import (
     ViewSettings,
     environment_ready,
 )
+from ui.widgets.tasks import GcPausingThread
 
 PREVIEW_DIVISOR = 4
 ORBIT_DEG_PER_PIXEL = 0.4
 
 
-class BasisWorker(QThread):
+class BasisWorker(GcPausingThread):
     """Computes full-resolution basis images off the GUI thread."""
 
     done = Signal(object, object)  # (ViewSettings, BasisImages)
