@@ -11,8 +11,8 @@
 # core, at most 4), each test file on one worker (--dist loadfile: a file's module fixtures, such as a
 # running service, are built once), handed out in the order tests/conftest.py sets: files holding a slow
 # test first, so that the workers finish together (--no-loadscope-reorder keeps that order). The viewer
-# process stays serial: one Qt application and one Xvfb display. CACAD_TEST_WORKERS=0 runs the core in
-# one process; extra arguments (e.g. -n 0) come last and win.
+# process runs the same way on at most 2 workers, each with its own Qt application and Xvfb display.
+# CACAD_TEST_WORKERS=0 runs both in one process each; extra arguments (e.g. -n 0) come last and win.
 #
 # Under CI=true (as CI services set it) a test whose service is missing (the PostgreSQL server, an
 # OpenGL context, Xvfb) fails instead of skipping (tests/services.py). Every test that leaves a process

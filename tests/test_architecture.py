@@ -33,7 +33,11 @@ from station.model.domain import (
     ANGLES_5,
     ANGLES_6,
     BOOTH_ILLUMINANTS,
+    DELTA_E_COMPUTED,
+    DELTA_E_ENVIRONMENT,
     DELTA_E_METHOD_NAMES,
+    PAINT_TYPES,
+    SNAP_METRICS,
     TOLERANCE_AGGREGATIONS,
 )
 
@@ -410,6 +414,10 @@ VOCABULARIES: dict[str, tuple[str, ...]] = {
     "ΔE method names (station.model.domain)": DELTA_E_METHOD_NAMES,
     "tolerance aggregations (station.model.domain)": TOLERANCE_AGGREGATIONS,
     "booth illuminants (station.model.domain)": BOOTH_ILLUMINANTS,
+    "computed ΔE formulas (station.model.domain)": DELTA_E_COMPUTED,
+    "environment-lit ΔE formulas (station.model.domain)": DELTA_E_ENVIRONMENT,
+    "ColorSnap metrics (station.model.domain)": SNAP_METRICS,
+    "paint types (station.model.domain)": PAINT_TYPES,
 }
 VOCABULARY_HOMES = ("station/drivers/families.py", "station/model/domain.py")
 VOCABULARY_ROOTS = (*ROOTS, "simulators")
@@ -442,8 +450,11 @@ def vocabulary_copies(source: str, where: str = "<source>") -> list[str]:
                     if written == set(names):
                         found.append((node.lineno, f"{where}:{node.lineno}: a copy of the {what}: import it"))
         elif isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs:
-            for what, pattern in _SPELLED.items():
-                if pattern.search(node.value):
+            spans = {
+                what: m.span() for what, pattern in _SPELLED.items() if (m := pattern.search(node.value))
+            }
+            for what, (a, b) in spans.items():  # a list spelled inside a longer one is that one's copy
+                if not any(c <= a and b <= d and (c, d) != (a, b) for c, d in spans.values()):
                     found.append((node.lineno, f"{where}:{node.lineno}: the {what} spelled out: derive it"))
     return [text for _line, text in sorted(found)]
 
@@ -478,6 +489,10 @@ def test_the_vocabulary_is_written_once() -> None:
         'DeltaE = Literal["cie76", "cie94", "cie2000", "din6175", "audi2000"]\n',
         'def f(agg: str = "max") -> None:\n    if agg not in {"mean", "max"}:\n        raise ValueError(agg)\n',
         'ILLS = ("D65", "D50", "A", "F2", "F11", "TL84", "LED-B3", "LED-B4")\n',
+        'Method = Literal["cie76", "cie94", "cie2000", "din6175"]\n',
+        'def f(category: Literal["solid", "metallic", "pearl"] | None = None): ...\n',
+        'p.add_argument("--de", choices=("cie76", "cie2000", "din6175"))\n',
+        'counts = {t: 0 for t in ("solid", "metallic", "pearl")}\n',
     ],
 )
 def test_the_vocabulary_check_finds_a_copy(source: str) -> None:
@@ -488,7 +503,7 @@ def test_the_vocabulary_check_finds_a_copy(source: str) -> None:
     "source",
     [
         'def f():\n    """Families ma6, ma3 or gloss."""\n',  # docstrings may name them
-        'SNAP = Literal["cie76", "cie2000", "din6175"]\n',  # a narrower choice is a different vocabulary
+        'PAIR_DE = Literal["cie76", "din6175"]\n',  # a narrower choice is a different vocabulary
         'DEFAULTS = ("D65", "A", "F11")\n',
         'PAIR = ("ma6", "gloss")\n',
         'AGGREGATE = Literal["mean", "max", "rms", "sum"]\n',

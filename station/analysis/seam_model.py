@@ -17,7 +17,7 @@ from station.analysis.errors import AnalysisInputError
 from station.analysis.geometry import Hinge, direction, hinge_azimuth_deg, rotated_normals
 from station.analysis.shading import Environment, Exposure, environment_colour, point_colour
 from station.model.difference import delta_e
-from station.model.domain import DELTA_E_COMPUTED
+from station.model.domain import DELTA_E_COMPUTED, DELTA_E_ENVIRONMENT
 from station.model.shading import aspecular_deg
 
 if TYPE_CHECKING:
@@ -76,7 +76,8 @@ class SeamModel:
         if self.env is not None:
             raise AnalysisInputError(
                 "method",
-                "cie76 | cie94 | cie2000 under an environment (din6175 weighs by the aspecular angle of a point light)",
+                f"{' | '.join(DELTA_E_ENVIRONMENT)} under an environment (din6175 weighs by the aspecular angle "
+                "of a point light)",
                 self.method,
             )
         alpha = aspecular_deg(self.L[:, 0], self.V[:, 0], np.array([0.0, 0.0, 1.0]))

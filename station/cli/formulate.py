@@ -27,7 +27,7 @@ import numpy as np
 
 from station.cli._common import Steps, add_json_flag, parse_lab_list
 from station.errors import InputError
-from station.model.domain import ANGLES_3
+from station.model.domain import ANGLES_3, PAINT_TYPES, SNAP_METRICS
 
 _FILTER_KEYS = ("type", "flop", "chroma", "hue_shift", "set", "kind", "group")
 
@@ -71,7 +71,7 @@ def _library_summary(lib: Any) -> dict[str, Any]:
         "synthetic": lib.synthetic,
         "paints": len(lib),
         "angles_deg": list(lib.angles_deg),
-        "types": {t: int(np.sum(lib.types == t)) for t in ("solid", "metallic", "pearl")},
+        "types": {t: int(np.sum(lib.types == t)) for t in PAINT_TYPES},
         "hierarchy": hierarchy_counts(lib),
     }
 
@@ -125,7 +125,7 @@ def _bounds(text: str, key: str) -> tuple[float | None, float | None]:
 
 def parse_filters(items: list[str]) -> Any:
     """``["type=metallic,pearl", "flop=3:10", "group=red"]`` → :class:`LibraryFilter`."""
-    from station.formulate.library import PAINT_TYPES, LibraryFilter
+    from station.formulate.library import LibraryFilter
 
     kw: dict[str, Any] = {}
     for item in items:
@@ -179,7 +179,6 @@ def cmd_library_browse(args: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_snap(args: argparse.Namespace) -> dict[str, Any]:
     """ColorSnap: nearest library paints by summed ΔE over 15/45/110°."""
-    from station.formulate.library import PAINT_TYPES
     from station.formulate.snap import color_snap, view_data
 
     if args.lab is None and args.design is None:
@@ -335,7 +334,6 @@ def _formulated(
     options: Any,
 ) -> dict[str, Any]:
     from station.formulate.batch import batch_masses
-    from station.formulate.library import PAINT_TYPES
 
     out: dict[str, Any] = {
         "design": name,
@@ -453,7 +451,7 @@ def _register_library(subparsers: argparse._SubParsersAction) -> None:
         "--filter",
         action="append",
         default=[],
-        help="type=solid,metallic,pearl | flop=MIN:MAX | chroma=MIN:MAX | hue_shift=MIN:MAX | "
+        help=f"type={','.join(PAINT_TYPES)} | flop=MIN:MAX | chroma=MIN:MAX | hue_shift=MIN:MAX | "
         "set=solids|metallics+pearls | kind=chromatic|neutral | group=red|…|dark (repeatable)",
     )
     p.add_argument("--limit", type=int, default=20, help="paints listed (default 20)")
@@ -471,7 +469,7 @@ def _register_snap(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--k", type=int, default=5, help="matches (default 5)")
     p.add_argument(
         "--de",
-        choices=("cie76", "cie2000", "din6175"),
+        choices=SNAP_METRICS,
         default="cie76",
         help="ΔE summed over angles (default cie76 = ΔE*ab, the thesis's)",
     )
@@ -479,7 +477,7 @@ def _register_snap(subparsers: argparse._SubParsersAction) -> None:
         "--type",
         dest="types",
         action="append",
-        choices=("solid", "metallic", "pearl"),
+        choices=PAINT_TYPES,
         help="search only paints of this type (repeat for several; default: every paint)",
     )
     p.add_argument("--png", type=Path, help="write the 3D Lab view as PNG")
@@ -498,7 +496,7 @@ def _register_formulate(subparsers: argparse._SubParsersAction) -> None:
         "--type",
         dest="types",
         action="append",
-        choices=("solid", "metallic", "pearl"),
+        choices=PAINT_TYPES,
         help="start only from library paints of this type (repeat for several; default: every paint)",
     )
     p.add_argument("--closed-loop", action="store_true", help="spray, measure and correct (simulated panel)")
@@ -571,7 +569,7 @@ def _register_export(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--format", choices=("xml", "cxf"), required=True)
     p.add_argument("--out", required=True, type=Path)
     p.add_argument("--library", default="demo", help="library for the match (default demo, SYNTHETIC)")
-    p.add_argument("--de", choices=("cie76", "cie2000", "din6175"), default="cie76")
+    p.add_argument("--de", choices=SNAP_METRICS, default="cie76")
     p.add_argument("--five-angles", action="store_true", help="also export the 15/25/45/75/110 set")
     p.add_argument("--no-match", action="store_true", help="export the design without its ColorSnap match")
     p.add_argument(

@@ -40,6 +40,7 @@ from station.cli._common import add_json_flag, parse_floats, parse_lab_list
 from station.errors import InputError
 from station.model.domain import (
     ANGLES_3,
+    DELTA_E_COMPUTED,
     QC_AGGREGATION,
     QC_DE_LIMIT,
     QC_FORMULA,
@@ -137,7 +138,7 @@ def _add_set_args(p: argparse.ArgumentParser) -> None:
         default=",".join(format_angle(a) for a in ANGLES_3),
         help="aspecular angles of the triples, degrees (default 15,45,110; --angles=-15,… for a minus)",
     )
-    p.add_argument("--formula", help=f"cie76 | cie94 | cie2000 | din6175 (default {QC_FORMULA})")
+    p.add_argument("--formula", help=f"{' | '.join(DELTA_E_COMPUTED)} (default {QC_FORMULA})")
     p.add_argument("--limit", type=float, help=f"ΔE limit at every geometry (default {QC_DE_LIMIT:g})")
     p.add_argument(
         "--warn", type=float, help=f"warn band as a fraction of each limit (default {QC_WARN_FRACTION:g})"

@@ -20,15 +20,12 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Literal
 
 import numpy as np
 
 from station.formulate.errors import FormulateInputError
-from station.model.domain import ANGLES_3
+from station.model.domain import ANGLES_3, PAINT_TYPES
 
-PaintType = Literal["solid", "metallic", "pearl"]
-PAINT_TYPES: tuple[str, ...] = ("solid", "metallic", "pearl")
 #: The angles every library row holds: the standard 3-angle set of station.model.domain.
 STANDARD_ANGLES: tuple[float, ...] = ANGLES_3
 

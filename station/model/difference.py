@@ -55,7 +55,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.model.cie2000 import cie2000_columns
-from station.model.domain import ANGLE_MAX_DEG
+from station.model.domain import ANGLE_MAX_DEG, DELTA_E_COMPUTED
 from station.model.errors import ModelInputError
 
 Aggregate = Literal["mean", "max", "rms", "sum"]
@@ -343,8 +343,8 @@ def audi2000_unavailable() -> FormulaUnavailableError:
     """The error every use of ``audi2000`` raises until the AUDI2000 coefficients are supplied."""
     return FormulaUnavailableError(
         "de",
-        "cie76, cie94, cie2000 or din6175: the AUDI2000 coefficients are not supplied to this build "
-        "(audi2000 is reserved until they are)",
+        f"{', '.join(DELTA_E_COMPUTED[:-1])} or {DELTA_E_COMPUTED[-1]}: the AUDI2000 coefficients are not "
+        "supplied to this build (audi2000 is reserved until they are)",
         "audi2000",
     )
 
@@ -354,7 +354,7 @@ def _audi2000(a: NDArray, b: NDArray, _alpha: NDArray | None, _g: DinFactors) ->
 
 
 #: Formula name → ``fn(lab_ref, lab_sample, aspecular_deg, din_factors)`` (read-only); the names are
-#: :data:`station.model.domain.DELTA_E_METHOD_NAMES` (tests/test_vocabulary.py ties them).
+#: :data:`station.model.domain.DELTA_E_METHOD_NAMES` (tests/model/test_difference_indices.py ties them).
 DELTA_E_METHODS: Mapping[str, Callable[[NDArray, NDArray, NDArray | None, DinFactors], NDArray]] = (
     MappingProxyType(
         {

@@ -27,6 +27,7 @@ import math
 import re
 from collections.abc import Mapping
 from types import MappingProxyType
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -342,8 +343,20 @@ BOOTH_SHAPES: tuple[str, ...] = ("panels", "seam", "car")
 #: Colour-difference formulas by the names every front accepts (``station.model.difference`` holds
 #: their implementations under exactly these keys); ``audi2000`` is named but licensed separately.
 DELTA_E_METHOD_NAMES: tuple[str, ...] = ("cie76", "cie94", "cie2000", "din6175", "audi2000")
-#: The formulas the product computes itself (every name above but the separately licensed one).
-DELTA_E_COMPUTED: tuple[str, ...] = ("cie76", "cie94", "cie2000", "din6175")
+#: The formulas the product computes itself (every name above but the separately licensed one), as a type
+#: for the fronts' schemas and as the tuple the checks read (one list: the tuple is derived from the type).
+DeltaEComputed = Literal["cie76", "cie94", "cie2000", "din6175"]
+DELTA_E_COMPUTED: tuple[str, ...] = get_args(DeltaEComputed)
+#: The formulas an environment-lit analysis takes: DIN 6175-2 weighs by the aspecular angle of a point
+#: light, which an environment does not have (``station.analysis.seam_model``).
+DeltaEEnvironment = Literal["cie76", "cie94", "cie2000"]
+DELTA_E_ENVIRONMENT: tuple[str, ...] = get_args(DeltaEEnvironment)
+#: The formulas ColorSnap ranks a library by (``station.formulate.de_kernels.KERNELS``).
+SnapMetric = Literal["cie76", "cie2000", "din6175"]
+SNAP_METRICS: tuple[str, ...] = get_args(SnapMetric)
+#: Paint types of the library, of its filters and of the toner lines.
+PaintType = Literal["solid", "metallic", "pearl"]
+PAINT_TYPES: tuple[str, ...] = get_args(PaintType)
 #: Rules that turn per-geometry colour differences into one tolerance verdict (QC).
 TOLERANCE_AGGREGATIONS: tuple[str, ...] = ("max", "mean")
 
@@ -351,8 +364,9 @@ TOLERANCE_AGGREGATIONS: tuple[str, ...] = ("max", "mean")
 JND_CIE76 = 2.3
 #: Default formulation tolerance: mean CIEDE2000 over the angles for "formulable" (formulation-qc).
 FORMULATION_TOLERANCE_DE00 = 1.0
-#: Toner lines a recipe is drawn from (station.formulate.lines): solids get no effect pigment.
-TONER_LINES: tuple[str, ...] = ("solid", "metallic", "pearl")
+#: Toner lines a recipe is drawn from (station.formulate.lines), one per paint type: solids get no effect
+#: pigment.
+TONER_LINES: tuple[str, ...] = PAINT_TYPES
 #: Default and accepted range of the number of colorants in a recipe, the binder not counted.
 DEFAULT_MAX_COLORANTS = 5
 MAX_COLORANTS_RANGE: tuple[int, int] = (1, 10)

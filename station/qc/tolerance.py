@@ -51,6 +51,7 @@ from station.model.difference import (
 from station.model.domain import (
     ANGLE_MAX_DEG,
     ANGLE_MIN_DEG,
+    DELTA_E_COMPUTED,
     ILLUMINATION_DEG,
     QC_AGGREGATION,
     QC_DE_LIMIT,
@@ -81,7 +82,7 @@ __all__ = [
 
 Verdict = Literal["pass", "warn", "fail"]
 #: Formulas a tolerance set may name.
-FORMULAS = ("cie76", "cie94", "cie2000", "din6175")
+FORMULAS = DELTA_E_COMPUTED
 #: Aggregation rules over the geometries.
 AGGREGATIONS = TOLERANCE_AGGREGATIONS
 _RANK: Mapping[str, int] = MappingProxyType({"pass": 0, "warn": 1, "fail": 2})

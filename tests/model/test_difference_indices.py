@@ -75,3 +75,19 @@ def test_failure_regions_detected() -> None:
     assert achromatic.hue_shift_index is None and any("achromatic" in w for w in achromatic.warnings)
     rotating = library_indices([80, 30, 0], [50, 0, 0], [30, -30, 5])
     assert any("90°" in w for w in rotating.warnings)
+
+
+def test_the_formula_table_has_exactly_the_domain_names() -> None:
+    """DELTA_E_METHODS implements every name the fronts accept and no other; the computed ones compute."""
+    from typing import get_args
+
+    from station.model.difference import DELTA_E_METHODS
+    from station.model.domain import DELTA_E_COMPUTED, DELTA_E_METHOD_NAMES, DeltaEComputed
+
+    assert tuple(DELTA_E_METHODS) == DELTA_E_METHOD_NAMES
+    assert DELTA_E_COMPUTED == get_args(DeltaEComputed)
+    assert set(DELTA_E_COMPUTED) < set(DELTA_E_METHOD_NAMES)
+    ref, sample = np.array([[50.0, 10.0, -5.0]]), np.array([[51.0, 9.0, -4.0]])
+    for name in DELTA_E_COMPUTED:  # CIE76 of this pair is √3; the others are within a factor 3 of it
+        value = float(delta_e(ref, sample, method=name, aspecular_deg=np.array([45.0]))[0])
+        assert np.sqrt(3.0) / 3.0 < value < 3.0 * np.sqrt(3.0), name

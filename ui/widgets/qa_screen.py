@@ -39,14 +39,15 @@ from station.analysis.picture import display_exposure, geometry_caption, lab_pic
 from station.analysis.qa import DEFAULT_ASPECULAR_DEG, DEFAULT_LIGHTS_DEG, SeamReport, seam_qa
 from station.errors import InputError, StationError
 from station.model import FaceFlopTravelGloss
-from station.model.domain import ANGLE_MAX_DEG, ANGLE_MIN_DEG
+from station.model.domain import ANGLE_MAX_DEG, ANGLE_MIN_DEG, DELTA_E_COMPUTED
 from ui.models.designer import DesignerModel
 from ui.models.instruments import MeasurementStore
 from ui.models.measure_db import RECENT_DEFAULT, gloss_warning, recent_limit
 from ui.widgets.common import pixmap_from_array
 from ui.widgets.tasks import TaskProgress, TaskThread
 
-METHODS = ("cie76", "cie2000", "din6175")
+#: The ΔE formulas the seam analysis takes, in the order the selector lists them.
+METHODS = DELTA_E_COMPUTED
 PICTURE_SIZE = (120, 240)
 """Seam pictures, pixels (height, width): panel A left, panel B right."""
 VERDICT_STYLE = "font-size: 18pt; font-weight: bold"

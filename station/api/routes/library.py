@@ -18,6 +18,7 @@ from station.api.security import Scope
 from station.api.services import formulation
 from station.api.services import library as service
 from station.errors import InputError
+from station.model.domain import PaintType
 
 router = APIRouter(prefix="/library", tags=["library"], responses=ERROR_RESPONSES)
 #: Path of the CSV upload under the API prefix; its body cap is ``Settings.library_upload_max_bytes``.
@@ -30,7 +31,7 @@ Importer = Annotated[User, scoped(Scope.LIBRARY_WRITE)]
 def list_paints(
     session: ReadSessionDep,
     _user: Reader,
-    category: Literal["solid", "metallic", "pearl"] | None = None,
+    category: PaintType | None = None,
     code_prefix: Annotated[str | None, Query(max_length=64)] = None,
     limit: Limit = 100,
     offset: Offset = 0,
@@ -51,7 +52,7 @@ def browse(
     session: ReadSessionDep,
     _user: Reader,
     types: Annotated[
-        list[Literal["solid", "metallic", "pearl"]] | None,
+        list[PaintType] | None,
         Query(max_length=3, description="type check boxes (repeat the parameter); default all"),
     ] = None,
     flop_min: IndexBound = None,
@@ -100,7 +101,7 @@ def export_csv(
     request: Request,
     session: ReadSessionDep,
     _user: Reader,
-    category: Literal["solid", "metallic", "pearl"] | None = None,
+    category: PaintType | None = None,
 ) -> Response:
     """The library (or one category) as library CSV (Lab and gloss to 4 decimals)."""
     text = formulation.export_csv(

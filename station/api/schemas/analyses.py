@@ -17,10 +17,10 @@ from station.api.schemas.environment import (
     EnvironmentTurn,
     UploadedEnvironment,
 )
-from station.model.domain import JND_CIE76
+from station.model.domain import JND_CIE76, DeltaEComputed, DeltaEEnvironment
 from station.schema_config import strict_config
 
-Method = Literal["cie76", "cie94", "cie2000", "din6175"]
+Method = DeltaEComputed
 Hinge = Annotated[
     Literal["in-plane", "out-of-plane"]
     | Annotated[StrictFloat, Field(ge=-180.0, le=180.0, allow_inf_nan=False)],
@@ -187,7 +187,7 @@ class GgIndexEnvironmentRequest(BaseModel):
         | None
     ) = None
     epsilon: Epsilon = JND_CIE76
-    method: Literal["cie76", "cie94", "cie2000"] = "cie76"
+    method: DeltaEEnvironment = "cie76"
     hinge: Hinge = "in-plane"
     direction: Direction = "either"
     beta_max_deg: BetaMax = 30.0

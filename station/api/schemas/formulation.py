@@ -18,11 +18,11 @@ from station.model.domain import (
     MAX_COLORANTS_RANGE,
     SCALE_RESOLUTION_RANGE_G,
     TONER_LINES,
+    PaintType,
+    SnapMetric,
 )
 from station.schema_config import strict_config
 
-SnapMetric = Literal["cie76", "cie2000", "din6175"]
-PaintType = Literal["solid", "metallic", "pearl"]
 #: A paint-type filter of one to three types (ColorSnap and formulation).
 PaintTypes = Annotated[list[PaintType], Field(min_length=1, max_length=3)]
 #: The name of one stored library (``extra.library`` of its paints, as GET /library/libraries lists).

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
 from station.api.schemas.common import StrictInt
+from station.model.domain import SnapMetric
 from station.schema_config import strict_config
 
-Metric = Literal["cie76", "cie2000", "din6175"]
+Metric = SnapMetric
 
 
 class RecipeCreate(BaseModel):

@@ -28,7 +28,7 @@ from station.api.services.library import library_rows
 from station.errors import InputError
 from station.model import FaceFlopTravelGloss
 from station.model.design_io import design_from_dict
-from station.model.domain import ANGLES_3
+from station.model.domain import ANGLES_3, PAINT_TYPES
 
 STANDARD = ANGLES_3
 
@@ -193,7 +193,6 @@ def snap(*, session: Session, cache: LibraryCache, request: SnapRequest) -> dict
     """ColorSnap top-k against the database library (``station.formulate.snap.color_snap``), optionally
     one stored library only (``request.library``) and some paint types only (``request.types``); every
     match says its library and whether it is synthetic."""
-    from station.formulate.library import PAINT_TYPES
     from station.formulate.snap import color_snap, type_rows
 
     lab, _ = _target(session, request)
@@ -237,8 +236,6 @@ def snap(*, session: Session, cache: LibraryCache, request: SnapRequest) -> dict
 
 def stored_libraries(*, session: Session, cache: LibraryCache) -> list[dict[str, object]]:
     """Each stored library (``extra.library`` of its paints): paints per type and its synthetic flag."""
-    from station.formulate.library import PAINT_TYPES
-
     cached = cache.get(session)
     out: list[dict[str, object]] = []
     for name in sorted(set(cached.library_names.tolist())):
@@ -379,7 +376,7 @@ def import_csv(
         "library": lib.name,
         "paints": len(rows),
         "angles_deg": list(lib.angles_deg),
-        "types": {t: int(np.sum(lib.types == t)) for t in ("solid", "metallic", "pearl")},
+        "types": {t: int(np.sum(lib.types == t)) for t in PAINT_TYPES},
     }
 
 

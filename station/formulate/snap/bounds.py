@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from station.formulate.errors import FormulateInputError
 from station.model.cie2000 import CIE2000_K7
 from station.model.difference import DIN6175_COEFFICIENTS
+from station.model.domain import SNAP_METRICS
 
 __all__ = [
     "METHODS",
@@ -39,7 +40,7 @@ __all__ = [
 ]
 
 #: The colour-difference formulas ColorSnap ranks by (:data:`station.formulate.de_kernels.KERNELS`).
-METHODS = ("cie76", "cie2000", "din6175")
+METHODS = SNAP_METRICS
 #: sin 60°, the largest |sin 2Δθ| in CIEDE2000's R_T (Δθ ≤ 30°), rounded up.
 SIN60 = math.sin(math.pi / 3) + 1e-12
 #: Factor on every lower bound (upper bounds take 2 − SAFETY): margin for rounding in the bound arithmetic.
