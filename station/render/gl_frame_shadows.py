@@ -13,7 +13,7 @@ from station.render import gl_textures as tx
 from station.render.errors import RenderError, RenderInputError
 from station.render.gl_shadows import ShadowMaps, ShapeCaster, shadow_lights
 from station.render.numpy_renderer import check_paints
-from station.render.shapes import GROUNDS, Scene
+from station.render.shapes import CONVEX_SHAPES, GROUNDS, Scene
 from station.render.stage import lookup_matrix
 
 __all__ = ["FrameShadows", "probe_shadows"]
@@ -51,6 +51,13 @@ class FrameShadows:
             return ()
         closed = mesh is not None or self.caster(scene, mesh).closed
         return (self.slots, bool(scene.stage.ground) and closed, bool(probe))
+
+    def object_key(self, scene: Any, mesh: Any, shadows: bool, object_shadows: bool, probe: bool) -> tuple:
+        """:meth:`key` of the object's own shading, the renderer's *shadows* and *object_shadows* switches
+        given: () where the object is not shadowed (the ground's bake keeps its maps), and for a ray-cast
+        shape of CONVEX_SHAPES, which cannot shadow itself (the same frame, shaded cheaper), unless *probe*."""
+        own = object_shadows and (mesh is not None or scene.shape not in CONVEX_SHAPES)
+        return self.key(scene, mesh, shadows and (own or probe), probe)
 
     @property
     def version(self) -> int:

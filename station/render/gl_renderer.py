@@ -323,7 +323,7 @@ class GLRenderer(Closing):
         else:
             occluders = mesh.occluders().astype(np.float32)
         n_occ = len(occluders) if stage is not None else 0
-        shadow = self._frame_shadows.key(scene, mesh, self.shadows and (self.object_shadows or probe), probe)
+        shadow = self._frame_shadows.object_key(scene, mesh, self.shadows, self.object_shadows, probe)
         if mesh is not None:
             passes = self._passes.mesh_passes(linear, feats, terms, n_occ, curve_i, shadow)
         else:

@@ -27,6 +27,9 @@ from station.render.errors import RenderInputError
 from station.render.stage import Stage
 
 SHAPES = ("sphere", "cylinder", "speedshape", "panels", "seam")
+#: The shapes that cannot shadow themselves: a convex closed body's self-shadow is its terminator N·l <= 0,
+#: which the shading applies anyway (the cylinder, open below, is left out: a light from below reaches inside).
+CONVEX_SHAPES = ("sphere",)
 SHAPE_INDEX = {name: i for i, name in enumerate(SHAPES)}
 SPEED_NOSE, SPEED_TAIL, SPEED_H, SPEED_W = 0.7, 1.7, 0.42, 0.55
 CYL_R = 0.8

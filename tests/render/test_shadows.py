@@ -441,3 +441,36 @@ def test_turned_panel_shadows_the_other_as_the_ray_cast_says(gl_ctx, sun_basis, 
     assert model[lit, 0].min() > 0.95
     sun_part = paint.map_weights()[0] * ell[2] * sun_basis.lights.flux[0] / math.pi
     assert frame[lit].mean(axis=0) - frame[dark].mean(axis=0) == pytest.approx(sun_part, rel=0.02)
+
+
+@pytest.mark.gl
+def test_a_convex_shape_skips_its_own_shadow_maps_and_draws_the_same_frame(
+    gl_ctx, sun_basis, monkeypatch
+) -> None:
+    """The sphere cannot shadow itself: its frames (a stage, a clear coat) are shaded without the shadow-map
+    lookups (``FrameShadows.object_key`` is ()) and equal, value for value, the frames shaded with them
+    (CONVEX_SHAPES emptied); the ground keeps its shadow. The speed shape keeps its maps."""
+    from station.model.fresnel import ClearCoat
+    from station.render import gl_frame_shadows
+    from station.render.gl_renderer import GLRenderer
+    from station.render.shapes import Scene
+
+    frames = {}
+    for convex in (("sphere",), ()):
+        monkeypatch.setattr(gl_frame_shadows, "CONVEX_SHAPES", convex)
+        with GLRenderer(sun_basis, 160, 120, ctx=gl_ctx) as gl:
+            scenes = [
+                Scene("sphere", camera=Camera(eye, (0.0, 0.0, 0.0), fov_deg=30.0), stage=Stage())
+                for eye in ((0.0, 1.5, 4.5), (4.0, 0.2, -2.5))
+            ]
+            keys = [gl._frame_shadows.object_key(s, None, True, True, False) for s in scenes]
+            assert (keys[0] == ()) == bool(convex)
+            speed = gl._frame_shadows.object_key(Scene("speedshape", stage=Stage()), None, True, True, False)
+            assert speed != ()
+            frames[convex] = [gl.render_linear(s, [_diffuse()], coat=ClearCoat()) for s in scenes]
+            gl.shadows = False
+            unshadowed = gl.render_linear(scenes[0], [_diffuse()], coat=ClearCoat())
+    for skipped, mapped in zip(frames[("sphere",)], frames[()], strict=True):
+        assert np.array_equal(skipped, mapped)
+    # the ground keeps the maps' shadow, not the sphere proxies' (which the frames without maps draw)
+    assert np.abs(unshadowed - frames[("sphere",)][0]).max() > 0.01
