@@ -246,7 +246,7 @@ class _Problem:
     def reg(self, x: NDArray[np.float64]) -> float:
         return _REG * float(np.sum((x - self.x0) ** 2))
 
-    def constraints(self, n_extra: int = 0) -> list[dict[str, Any]]:
+    def constraints(self) -> list[dict[str, Any]]:
         cons: list[dict[str, Any]] = []
         k = len(self.names)
 
@@ -515,7 +515,7 @@ def _solve(prob: _Problem, objective: str, rows: NDArray[np.intp] | None) -> tup
     elif objective == "minimax":
         d0 = prob.de(prob.x0) ** 2
         z0 = np.concatenate([prob.x0, [float(np.max(d0))]])
-        cons = [*prob.constraints(1), {"type": "ineq", "fun": lambda z: z[k] - prob.de(z[:k]) ** 2}]
+        cons = [*prob.constraints(), {"type": "ineq", "fun": lambda z: z[k] - prob.de(z[:k]) ** 2}]
         res = minimize(  # type: ignore[call-overload]  # as above: vector-valued constraint functions
             lambda z: float(z[k]) + prob.reg(z[:k]),
             z0,

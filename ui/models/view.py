@@ -85,7 +85,9 @@ def check_environment(name: str) -> None:
 
 
 @lru_cache(maxsize=8)
-def _file_environment(path: str, mtime_ns: int) -> Environment:
+def _file_environment(path: str, _mtime_ns: int) -> Environment:
+    """The environment file *path*, downsampled to ENV_WIDTH; the modification time only keys the cache
+    (a file rewritten in place is read again)."""
     env = load_environment(path)
     return env.downsampled(ENV_WIDTH) if env.equirect.shape[1] > ENV_WIDTH else env
 
