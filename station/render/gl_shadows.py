@@ -65,13 +65,13 @@ from station.render.ground import AO_STEPS as AO_STEPS
 from station.render.ground import CLOSED_SHAPES as CLOSED_SHAPES
 from station.render.ground import HEIGHT_MAP as HEIGHT_MAP
 from station.render.ground import SHADOW_LIGHTS as SHADOW_LIGHTS
+from station.render.ground import SUN_RADIUS_DEG as SUN_RADIUS_DEG
+from station.render.ground import light_radius_rad as light_radius_rad
 from station.render.ground import shadow_lights as shadow_lights
 from station.render.shapes import SHAPE_INDEX, SHAPES
 
 #: Texels per side of a light's depth map.
 SHADOW_MAP = 2048
-#: Smallest angular radius of a light's penumbra, degrees (the sun's disc).
-SUN_RADIUS_DEG = 0.27
 #: A receiver is moved this many texels along its normal before its lookup (no self-shadow acne).
 NORMAL_OFFSET = 1.5
 #: Widest PCF radius, texels (a booth lamp tens of degrees wide is a soft, not a missing, shadow).
@@ -86,15 +86,6 @@ ESM_SHARPNESS = 200.0
 #: Occluder-to-receiver distance (world units) at which the model's penumbra has the light's width:
 #: the filter's half width is tan(a) · ESM_REACH (at least 1.5 ESM texels).
 ESM_REACH = 0.25
-
-
-def light_radius_rad(spread: float) -> float:
-    """Angular radius (radians) of a light of angular spread *spread* = s² (rad², per-axis variance of its
-    directions, ``Lights.spreads``): a uniform disc of radius a has E[θ²] = a²/2, s² = a²/4, so a = 2 s;
-    at least SUN_RADIUS_DEG."""
-    if not math.isfinite(spread) or spread < 0.0:
-        raise RenderInputError("spread", "a finite spread >= 0 rad²", spread)
-    return max(2.0 * math.sqrt(spread), math.radians(SUN_RADIUS_DEG))
 
 
 @dataclass(frozen=True)

@@ -379,7 +379,8 @@ def stage_background(
     BACKGROUND grey without a stage; else the backdrop lobe map at R_y(−θ)·d (plus its extracted lights)
     blended with the ground disc: its sky part with the contact shadow, the extracted lights with their
     sun shadows (:func:`station.render.stage.ground_radiance`), both by the shape itself where the GL
-    renderer's maps are (:mod:`station.render.ground`: the strongest lights by ray cast, the closed
+    renderer's maps are (:mod:`station.render.ground`: the strongest lights as discs of their angular
+    radius by ray cast, soft as GL's, the closed
     solids' sky occlusion by their height columns), else by the sphere proxies.
     """
     d = np.asarray(dirs, dtype=float).reshape(-1, 3)
@@ -410,8 +411,9 @@ def stage_background(
         world = None if lights is None else lights.directions @ m  # the lights' world directions
         vis = occ = None
         slots = shadow_lights(lights)
-        if world is not None and slots:  # as GL: the shape's own ground where it has maps
-            vis = ground_light_visibility(scene, pts[on], world, slots)
+        # as GL: the shape's own ground where it has maps
+        if lights is not None and world is not None and slots:
+            vis = ground_light_visibility(scene, pts[on], world, slots, lights.spreads())
             if scene.shape in CLOSED_SHAPES:
                 occ = ground_occlusion(scene, pts[on], gy, (cx, cz), stage.ground_radius)
         ground = ground_radiance(

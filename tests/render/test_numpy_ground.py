@@ -58,7 +58,9 @@ def test_sphere_ground_shadow_is_the_ellipse(elevation: float, turn: float) -> N
     """The unit sphere over its floor y = −1 under a sun at elevation θ: on the NumPy stage's ground the
     points darker than halfway between the sky's part albedo · 0.2 and the sun's direct part
     albedo (sin θ) Φ/π form the
-    ellipse of area π r² / sin θ (within 0.5 %) about −(l_x, l_z)/l_y (within 1 cm)."""
+    ellipse of area π r² / sin θ about −(l_x, l_z)/l_y (within 1 cm): within 1 % and smaller, as the
+    sun's disc (1.5°, a soft shadow) pulls the half-light contour of the convex outline inward (measured
+    −0.6 % at 36°; the hard single-ray shadow met 0.06 %)."""
     basis = _basis(_sun(elevation))
     lights = basis.lights
     assert lights is not None and lights.count == 1
@@ -72,7 +74,9 @@ def test_sphere_ground_shadow_is_the_ellipse(elevation: float, turn: float) -> N
     assert direct > 2.0 * sky  # in the shadow at most the sky's part, in the sun at least the direct part
     shade = radiance < 0.5 * (sky + direct)
     area = shade.sum() * texel
-    assert area == pytest.approx(math.pi / ell[1], rel=0.005)
+    # the 1.5° sun's penumbra: the half-light contour of a convex outline lies inside the hard one
+    assert area == pytest.approx(math.pi / ell[1], rel=0.01)
+    assert area < math.pi / ell[1]
     assert pts[shade, 0].mean() == pytest.approx(-ell[0] / ell[1], abs=0.01)
     assert pts[shade, 2].mean() == pytest.approx(-ell[2] / ell[1], abs=0.01)
 
@@ -169,7 +173,9 @@ def test_no_stage_or_no_lights_keeps_the_frame() -> None:
 
 def test_lights_past_the_strongest_two_and_open_shapes_keep_the_proxies() -> None:
     """Of three lights, the two strongest (ground.shadow_lights) are shadowed on the speed shape's ground by
-    its ray cast (0 or 1, the brute-force intersection's answer) and the third by the sphere proxies
+    its ray cast (the brute-force intersection's 0 or 1 but on under 2 % of the points: the smallest light
+    disc's, the sun's 0.27°, penumbra along the outline; the single ray's answer was exact when the ground's
+    shadows were hard) and the third by the sphere proxies
     (station.render.stage.light_visibility), as GL's maps are drawn for two; the open panels have no
     height columns (a typed error naming the shape)."""
     from station.render.environment import Lights
@@ -183,10 +189,11 @@ def test_lights_past_the_strongest_two_and_open_shapes_keep_the_proxies() -> Non
     assert slots == (2, 0)
     gx, gy, gz = GROUNDS["speedshape"]
     pts, _ = _ground_points(60, 2.5, (gx, gz), gy)
-    vis = ground_light_visibility(Scene("speedshape"), pts, dirs, slots)
+    vis = ground_light_visibility(Scene("speedshape"), pts, dirs, slots, np.zeros(3))
     for k in slots:
         hit = intersect(Scene("speedshape"), pts + [0.0, 1e-4, 0.0], np.broadcast_to(dirs[k], pts.shape))
-        assert np.array_equal(vis[:, k], (~hit.mask).astype(float))
+        differ = vis[:, k] != (~hit.mask).astype(float)  # the 0.27° sun's penumbra along the outline
+        assert 0 < differ.sum() < 0.02 * len(pts)
     proxies = light_visibility(pts, OCCLUDERS["speedshape"], dirs[1:2])[:, 0]
     assert vis[:, 1] == pytest.approx(proxies, abs=1e-9)  # the matrix product's rounding aside
     assert proxies.min() == 0.0 and proxies.max() == 1.0  # the proxies do shadow it
