@@ -137,3 +137,25 @@ def test_the_views_workers_pause_the_collector_too(qtbot) -> None:
     qtbot.waitUntil(lambda: gc_pause().active == 0, timeout=5_000)
     assert seen == [False]
     assert gc.isenabled()
+
+
+def test_a_gl_views_frame_runs_with_the_collector_paused(qtbot, monkeypatch) -> None:
+    """A collection inside a frame's GL work destroyed a closed view's Qt GL objects there, which made their
+    own context current, and the frame's next texture failed ("cannot create texture", then a segfault):
+    the frame is drawn with the collector paused, and it is back on after."""
+    from ui.models.view import ViewModel
+    from ui.widgets.gl_render_view import GLRenderView
+    from ui.widgets.tasks import collector_paused
+
+    with collector_paused():
+        assert not gc.isenabled()
+    assert gc.isenabled()
+    seen: list[bool] = []
+    monkeypatch.setattr(GLRenderView, "_paint_gl", lambda self, target=None: seen.append(gc.isenabled()))
+    view = GLRenderView(ViewModel())
+    qtbot.addWidget(view)
+    view.resize(64, 64)
+    view.show()
+    qtbot.waitUntil(lambda: bool(seen), timeout=10_000)
+    assert not any(seen)
+    qtbot.waitUntil(gc.isenabled, timeout=5_000)

@@ -22,6 +22,7 @@ from station.render.numpy_renderer import BACKGROUND
 from station.render.prefilter import PrefilteredBasis
 from ui.models.view import BasisImages, ViewModel
 from ui.widgets.gl_composite import SHADER_DIR, composite_program, set_composite_uniforms, uniform
+from ui.widgets.tasks import collector_paused
 from ui.widgets.view_logic import ViewLogic
 
 #: The GL view starts the basis worker once the view has not changed for this long (ms): during an orbit
@@ -52,7 +53,8 @@ class _GLSurface(QOpenGLWindow):
         self._view = view
 
     def paintGL(self) -> None:
-        self._view._paint_gl()
+        with collector_paused():  # no collection inside the frame's GL work (ui.widgets.tasks)
+            self._view._paint_gl()
 
     def resizeGL(self, w: int, h: int) -> None:
         self._view._screen = None
@@ -491,7 +493,8 @@ class GLRenderView(ViewLogic):
         try:
             fbo = ctx.simple_framebuffer((w, h), components=4)
             try:
-                self._paint_gl(target=fbo)
+                with collector_paused():
+                    self._paint_gl(target=fbo)
                 pixels = np.frombuffer(fbo.read(viewport=(0, 0, w, h), components=3), np.uint8)
             finally:
                 fbo.release()

@@ -21,7 +21,8 @@ frees everything acyclic meanwhile, and workers last seconds, so the pause costs
 from __future__ import annotations
 
 import gc
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from PySide6.QtCore import QCoreApplication, QElapsedTimer, QThread, QTimer, Signal
@@ -56,6 +57,19 @@ class GcPause:
         self.active = max(0, self.active - 1)
         if self.active == 0 and self._was_enabled:
             gc.enable()
+
+
+@contextmanager
+def collector_paused() -> Iterator[None]:
+    """The cyclic collector paused for the block (GUI thread), counted with the worker threads' pause: a
+    view's GL work runs with it, so no collection destroys another view's Qt GL objects in the middle of it
+    (their destructors make their own context current, and the view's next GL call then fails)."""
+    pause = gc_pause()
+    pause.enter()
+    try:
+        yield
+    finally:
+        pause.leave()
 
 
 def gc_pause() -> GcPause:
