@@ -13,7 +13,10 @@ thread). A collection runs in whichever thread happens to allocate, and it destr
 cycles it frees there: a closed GL view collected inside a basis worker called
 ``QOpenGLContext::makeCurrent`` from that worker and Qt aborted the process ("Cannot make QOpenGLContext
 current in a different thread"; the orbit benchmark, one view closed and the next one's ground
-occlusion being compiled). The viewer's test runs also crashed intermittently (SIGSEGV) when the GUI
+occlusion being compiled). For the same reason a GL view draws its frames with the collector paused
+(:func:`collector_paused`): a collection in the GUI thread inside a frame destroyed a closed view there,
+whose destructor made its own context current, and the frame's next texture failed ("cannot create
+texture", then a segfault). The viewer's test runs also crashed intermittently (SIGSEGV) when the GUI
 thread ran a collection while a worker was inside SQLAlchemy's session set-up. Reference counting still
 frees everything acyclic meanwhile, and workers last seconds, so the pause costs nothing a user sees.
 """
