@@ -16,6 +16,7 @@ which end them on every path; they wait with ``tests.waiting.wait_until``, never
 from __future__ import annotations
 
 import os
+import signal
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -24,6 +25,13 @@ import pytest
 from tests.processes import children_of_this_process, end_leftovers
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+# Ctrl-C reaches the product's processes the tests start as it reaches a user's: a runner started in the
+# background of a non-interactive shell (``nohup … &``) ignores SIGINT, every process it starts inherits
+# that, and the tests of Ctrl-C (a watcher, a long command, the soak's fronts) then wait in vain. A handler
+# set here is reset to the default in each child at its exec; an ignored signal would stay ignored.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"

@@ -165,3 +165,14 @@ def test_a_missing_service_skips_on_a_desk_and_fails_under_ci(monkeypatch: pytes
     monkeypatch.setenv("CI", "false")
     with pytest.raises(pytest.skip.Exception):
         service_missing("PostgreSQL not reachable")
+
+
+def test_the_processes_tests_start_take_ctrl_c() -> None:
+    """Even when the runner was started with SIGINT ignored (``nohup … &``), the processes the tests start
+    get SIGINT's default (tests/conftest.py), so the Ctrl-C tests test the product, not the runner."""
+    import signal
+
+    assert signal.getsignal(signal.SIGINT) is not signal.SIG_IGN
+    code = "import signal; print(signal.getsignal(signal.SIGINT) is signal.default_int_handler)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.stdout.strip() == "True"
