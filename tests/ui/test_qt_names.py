@@ -39,7 +39,10 @@ VIRTUALS = frozenset({"event", "eventFilter", "run", "paintGL", "resizeGL", "ini
 
 #: Non-virtual Qt methods a class extends, calling the Qt method itself, with the reason it may.
 EXTENDED = {
-    ("GcPausingThread", "start"): "pauses the cyclic collector, then calls QThread.start; Qt never calls start()",
+    (
+        "GcPausingThread",
+        "start",
+    ): "pauses the cyclic collector, then calls QThread.start; Qt never calls start()",
 }
 
 #: Names PySide6 itself puts on every subclass.
