@@ -28,6 +28,7 @@ shared state, worker and mouse orbit are in :mod:`ui.widgets.view_logic`, the GL
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -60,8 +61,17 @@ __all__ = [
 ]
 
 
+#: Milliseconds Qt's platform window waits before it delivers a requested frame (its
+#: ``QT_QPA_UPDATE_IDLE_TIME``, 5 by default): 0, so a view change reaches the screen as soon as the event
+#: loop is free; llvmpipe's threads would otherwise sit idle for that long on every orbit frame.
+UPDATE_IDLE_MS = 0
+
+
 def configure_default_format() -> None:
-    """Ask for an OpenGL 3.3 core context for every GL widget (call before the QApplication exists)."""
+    """Ask for an OpenGL 3.3 core context for every GL widget, without vertical sync, and frames delivered
+    without Qt's idle wait (:data:`UPDATE_IDLE_MS`, unless the environment sets ``QT_QPA_UPDATE_IDLE_TIME``).
+    Call before the QApplication exists: Qt reads the wait once, at the first frame requested."""
+    os.environ.setdefault("QT_QPA_UPDATE_IDLE_TIME", str(UPDATE_IDLE_MS))
     fmt = QSurfaceFormat()
     fmt.setVersion(3, 3)
     fmt.setProfile(QSurfaceFormat.OpenGLContextProfile.CoreProfile)
