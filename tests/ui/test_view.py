@@ -308,3 +308,29 @@ def test_paint_edit_on_screen_is_the_core_frame_and_an_orbit_brings_back_the_gl_
     de = delta_e(_lab8(gl_shot[obj]), _lab8(cached[obj]), method="cie2000")
     assert de.mean() <= 0.5 and np.percentile(de, 99) <= 2.0, (de.mean(), np.percentile(de, 99))
     view.close()
+
+
+def test_frames_are_delivered_without_qts_idle_wait() -> None:
+    """configure_default_format (run by this suite's conftest, as by the application) sets Qt's update idle
+    time to UPDATE_IDLE_MS = 0, so a requested frame is drawn at the event loop's next turn instead of 5 ms
+    later; a value the environment already holds is kept."""
+    import os
+    import sys
+
+    from tests.processes import run
+    from ui.widgets.render_view import UPDATE_IDLE_MS
+
+    assert UPDATE_IDLE_MS == 0 and os.environ["QT_QPA_UPDATE_IDLE_TIME"] == "0"
+    code = (
+        "import os\n"
+        "from ui.widgets.render_view import configure_default_format\n"
+        "configure_default_format()\n"
+        "print(os.environ['QT_QPA_UPDATE_IDLE_TIME'])\n"
+    )
+    for preset, expected in ((None, "0"), ("12", "12")):
+        env = {k: v for k, v in os.environ.items() if k != "QT_QPA_UPDATE_IDLE_TIME"}
+        if preset is not None:
+            env["QT_QPA_UPDATE_IDLE_TIME"] = preset
+        out = run([sys.executable, "-c", code], env=env, timeout=120)
+        assert out.returncode == 0, out.stderr
+        assert out.stdout.strip() == expected
