@@ -105,6 +105,20 @@ def pytest_collection_modifyitems(config, items) -> None:
 
 
 @pytest.fixture(autouse=True)
+def _deferred_deletes_run() -> Iterator[None]:
+    """After each test (its widgets closed and ``deleteLater``-ed by pytest-qt, whose teardown runs first)
+    the deferred deletes run, as the application's event loop runs them: no test's widget outlives the
+    test. A GL view left pending at interpreter exit was destroyed by the QApplication's destructor after
+    PySide had deleted its GL surface (a Python-owned object), and the process crashed (SIGSEGV) before
+    the exit handler above stopped Xvfb."""
+    yield
+    from PySide6.QtCore import QCoreApplication, QEvent
+
+    if QCoreApplication.instance() is not None:
+        QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+
+
+@pytest.fixture(autouse=True)
 def _gl_platform(request: pytest.FixtureRequest) -> None:
     """A test marked ``gl`` skips when there is no Xvfb (fails under ``CI=true``)."""
     if request.node.get_closest_marker("gl") is not None and not GL:
