@@ -8,6 +8,7 @@ missing or fails, the session stays on ``offscreen`` and the GL tests skip with 
 
 * Qt messages of level WARNING or above fail the test (``qt_log_level_fail`` marker on every item).
 * Autouse fixture: after each test no top-level widget is left open and no QThread is still running.
+* Autouse fixture: after each test its closed widgets' deferred deletes run, as the event loop would run them.
 """
 
 from __future__ import annotations

@@ -3,6 +3,9 @@ change the picture, orbit moves the camera, the worker is joined."""
 
 from __future__ import annotations
 
+import os
+import sys
+
 import numpy as np
 import pytest
 from PySide6.QtCore import QPoint, Qt
@@ -10,10 +13,11 @@ from PySide6.QtCore import QPoint, Qt
 from station.model import FaceFlopTravelGloss
 from station.render.basis_images import edge_pixels
 from station.render.weights import LobeWeights
+from tests.processes import run
 from ui.models.designer import DesignerModel
 from ui.models.document import DEFAULT_DESIGN, DesignDocument
 from ui.models.view import ViewModel
-from ui.widgets.render_view import GLRenderView
+from ui.widgets.render_view import UPDATE_IDLE_MS, GLRenderView
 from ui.widgets.view_panel import ViewPanel
 
 pytestmark = [pytest.mark.qt]
@@ -314,12 +318,6 @@ def test_frames_are_delivered_without_qts_idle_wait() -> None:
     """configure_default_format (run by this suite's conftest, as by the application) sets Qt's update idle
     time to UPDATE_IDLE_MS = 0, so a requested frame is drawn at the event loop's next turn instead of 5 ms
     later; a value the environment already holds is kept."""
-    import os
-    import sys
-
-    from tests.processes import run
-    from ui.widgets.render_view import UPDATE_IDLE_MS
-
     assert UPDATE_IDLE_MS == 0 and os.environ["QT_QPA_UPDATE_IDLE_TIME"] == "0"
     code = (
         "import os\n"
