@@ -76,17 +76,17 @@ class FrameShadows:
             self.maps.ambient_occlusion(caster, floor_y, centre, scene.stage.ground_radius)
 
     def bind(self, scene: Any, mesh: Any, m: int) -> dict:
-        """Bind the shadow maps (texture units m + 10 on) and the ground's occlusion map; their uniforms."""
+        """Bind the shadow maps (texture units m + 11 on) and the ground's occlusion map; their uniforms."""
         maps = self.maps
         if maps is None:
             raise RenderError("shadow maps bound before they were drawn")
         n = len(self.slots)
-        uniforms = maps.bind(m + 10, n)
+        uniforms = maps.bind(m + 11, n)
         if self.key(scene, mesh, True)[1]:
             floor_y, centre = self.floor(scene, mesh)
             ao = maps.ambient_occlusion(self.caster(scene, mesh), floor_y, centre, scene.stage.ground_radius)
-            ao.use(m + 10 + 3 * n)
-            uniforms["u_ao"] = m + 10 + 3 * n
+            ao.use(m + 11 + 3 * n)
+            uniforms["u_ao"] = m + 11 + 3 * n
         return uniforms
 
     def release(self) -> None:

@@ -134,6 +134,7 @@ class GLRenderer(Closing):
         self._diffuse_tex = tx.cube_texture(self.ctx, basis.diffuse, half_float)
         table = horizon_table(basis.exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
         self._horizon_tex = tx.horizon_texture(self.ctx, table)
+        self._maps = DerivedMaps(self.ctx, basis, half_float)  # flake mean, coat diffuse, coat base maps
         self._defines = renderer_defines(
             n_lobes=len(self._lobes),
             diffuse=diffuse,
@@ -141,13 +142,13 @@ class GLRenderer(Closing):
             horizon=horizon,
             horizon_n=table.shape[1],
             atlas_face=self._atlas_face,
+            diffuse_face=self._maps.base_face,
             n_wide=self._n_wide,
             n_lights=self._lights.count if self._lights is not None else 0,
             bound_exponents=np.asarray(basis.exponents)[self._order],
         )
         self._sh = sh_diffuse_matrix(basis.sh)
         self._passes = FramePasses(self.ctx, self._defines)  # programs, footprint buffer, pass drawing
-        self._maps = DerivedMaps(self.ctx, basis, half_float)  # flake mean and coat diffuse maps
         self._mesh = tx.MeshArrays(self.ctx)
         #: Draw a shape over its screen footprint (:mod:`station.render.gl_passes`). False: one full-screen
         #: pass of the paint program (the same frame, every pixel paying for the paint).
@@ -341,9 +342,17 @@ class GLRenderer(Closing):
         self, scene, pair, fbo, coat, mesh, flakes, aniso_uniforms: dict
     ) -> tuple[dict, list, int]:
         """Bind the frame's textures and return (uniforms, bound weights of the paints, lobe count m)."""
-        coat_tex = None
-        if coat is not None:  # made first: its sum on this context binds its own target and textures
+        coat_tex = base_tex = None
+        if coat is not None:  # made first: their sums on this context bind their own target and textures
             coat_tex = self._maps.coat_diffuse(coat)
+            if self.combined and self.diffuse == "cube":  # shaders/render.frag.glsl's DIFFUSE_ATLAS
+                two = (pair + pair)[:2]
+                base_tex = self._maps.coat_base(
+                    self._diffuse_tex,
+                    coat,
+                    [w.fall_off_map_weight() for w in two],
+                    [w.map_weights()[0] - w.fall_off_map_weight() for w in two],
+                )
             fbo.use()
         stage = scene.stage
         backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
@@ -359,6 +368,8 @@ class GLRenderer(Closing):
         self._diffuse_tex.use(m + 4)
         if coat_tex is not None:
             coat_tex.use(m + 3)
+        if base_tex is not None:
+            base_tex.use(m + 10)
         self._horizon_tex.use(m + 5)
         self._lobes[int(np.nonzero(self._order == backdrop)[0][0])].use(m + 6)
         uniforms = {
@@ -372,6 +383,7 @@ class GLRenderer(Closing):
             "u_coat_ref": coat.reference if coat is not None else 1.0,
             "u_coat_t": coat.diffuse_transmission if coat is not None else 1.0,
             "u_diffuse_coat": m + 3,
+            "u_diffuse_base": m + 10,
             # u_rot column-major: the matrix's transpose, row by row
             "u_rot": tuple(float(v) for v in lookup_matrix(stage.rotation_deg if stage else 0.0).T.ravel()),
             "u_backdrop": m + 6,

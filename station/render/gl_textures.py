@@ -1,7 +1,7 @@
 """Textures and buffers of :class:`station.render.gl_renderer.GLRenderer`: the lobe cube maps, the horizon
-table, the flakes' mean map, the anisotropic albedo table, the combined lobe atlas, the baked ground map
-and a mesh's vertex arrays. Each function creates GL objects on *ctx*; the renderer owns and releases
-them.
+table, the flakes' mean map, the anisotropic albedo table, the combined lobe and diffuse atlases, the baked
+ground map and a mesh's vertex arrays. Each function creates GL objects on *ctx*; the renderer owns and
+releases them.
 """
 
 from __future__ import annotations
@@ -48,12 +48,17 @@ def shared_exponent_cube(ctx: Any, cube: np.ndarray) -> Any:
 
 
 def horizon_texture(ctx: Any, table: np.ndarray) -> Any:
-    """The horizon table (m, N, 2) of the bound lobes as an RGBA float texture of N columns: two lobes
-    per row (lobe 2k in .rg, 2k+1 in .ba), so one lookup serves a pair of wide lobes."""
-    pairs = np.zeros(((table.shape[0] + 1) // 2, table.shape[1], 4), np.float32)
-    for i in range(table.shape[0]):
-        pairs[i // 2, :, 2 * (i % 2) : 2 * (i % 2) + 2] = table[i]
-    tex = ctx.texture((table.shape[1], pairs.shape[0]), 4, np.ascontiguousarray(pairs).tobytes(), dtype="f4")
+    """The horizon table (m, N, 2) of the bound lobes as an RGBA float texture of N columns: first
+    ⌈m/4⌉ rows of g alone, four lobes a row (lobe 4k+j in component j), then ⌈m/2⌉ rows of (g, h)
+    pairs (lobe 2k in .rg, 2k+1 in .ba), so one lookup serves four wide lobes without a gloss weight or a
+    pair of wide lobes with one (``horizon_g`` and ``horizon`` of shaders/render.frag.glsl)."""
+    m, n = table.shape[0], table.shape[1]
+    g_rows = (m + 3) // 4
+    rows = np.zeros((g_rows + (m + 1) // 2, n, 4), np.float32)
+    for i in range(m):
+        rows[i // 4, :, i % 4] = table[i, :, 0]
+        rows[g_rows + i // 2, :, 2 * (i % 2) : 2 * (i % 2) + 2] = table[i]
+    tex = ctx.texture((n, rows.shape[0]), 4, np.ascontiguousarray(rows).tobytes(), dtype="f4")
     return _linear_clamped(tex)
 
 
@@ -73,6 +78,33 @@ def combine_pass(ctx: Any, face: int, n_lobes: int, half_float: bool) -> tuple:
     atlas = [colour_texture(ctx, (face + 2, 12 * (face + 2)), half_float) for _ in range(2)]
     prog = build_program(ctx, "fullscreen.vert.glsl", "combine.frag.glsl", {"N_LOBES": n_lobes})
     return (ctx.framebuffer(color_attachments=atlas), prog, ctx.vertex_array(prog, []), atlas)
+
+
+def diffuse_combine_pass(ctx: Any, face: int, half_float: bool) -> tuple:
+    """(framebuffer, program, vertex array, atlas texture) that pre-mix both paints' diffuse base under a
+    clear coat into one atlas (``shaders/combine_diffuse.frag.glsl``; 12 faces of *face* + 2 texels)."""
+    atlas = colour_texture(ctx, (face + 2, 12 * (face + 2)), half_float)
+    prog = build_program(ctx, "fullscreen.vert.glsl", "combine_diffuse.frag.glsl", {})
+    return (ctx.framebuffer(color_attachments=[atlas]), prog, ctx.vertex_array(prog, []), atlas)
+
+
+def draw_diffuse_combined(
+    ctx: Any, combine: tuple, diffuse: Any, coat_diffuse: Any, face: int, w_plain: list, w_coat: list
+) -> Any:
+    """Mix the diffuse map *diffuse* and the coat-transmitted one *coat_diffuse* of both paints, weights
+    *w_plain* and *w_coat* (two RGB each: pi K_A and pi K_D), into the atlas of *combine*
+    (:func:`diffuse_combine_pass`) and return it."""
+    fbo, prog, vao, atlas = combine
+    fbo.use()
+    diffuse.use(0)
+    coat_diffuse.use(1)
+    prog["u_diffuse"].value = 0
+    prog["u_diffuse_coat"].value = 1
+    prog["u_size"].value = face
+    prog["u_w_plain"].write(np.asarray(w_plain, np.float32).tobytes())
+    prog["u_w_coat"].write(np.asarray(w_coat, np.float32).tobytes())
+    vao.render(mode=ctx.TRIANGLES, vertices=3)
+    return atlas
 
 
 def mesh_arrays(ctx: Any, mesh: Any, prog: Any) -> tuple:

@@ -1,7 +1,8 @@
 #version 430
 // Lobe-blend shading (thesis eqs 2.5.1-2.5.3), the same equation as station/render/numpy_renderer.py:
 //   radiance = wd * D(N) + sum_i (h_i(R.N) wg_i + g_i(R.N) wdd_i) * C_i(R)
-// with (g_i, h_i) read from the horizon table u_horizon (HORIZON_N x N_LOBES, RG); with BENT_DD (1) the
+// with (g_i, h_i) read from the horizon table u_horizon (HORIZON_N columns; rows of g alone, four lobes a
+// row, then rows of (g, h) pairs: gl_textures.horizon_texture); with BENT_DD (1) the
 // directionally diffuse term of a wide lobe reads C_i at B = normalize(E_i R + COSINE_SG N). The lobes are
 // bound with the N_WIDE wide ones (horizon table) first; the narrow ones have (g, h) = (R.N, 1)
 // exactly and, when COMBINED, are pre-summed per paint into an atlas (shaders/atlas.glsl), so only the
@@ -88,6 +89,10 @@
 #ifndef NEUTRAL_ALBEDO
 #define NEUTRAL_ALBEDO 0.18
 #endif
+// DIFFUSE_ATLAS: under a clear coat both paints' diffuse base, pi K_A D + pi K_D D_coat, is read from one
+// atlas pre-mixed per paint (u_diffuse_base, shaders/combine_diffuse.frag.glsl) instead of the two maps;
+// not with the aspecular fall-off, which needs D(N) itself.
+#define DIFFUSE_ATLAS (COMBINED && HAS_COAT && !DIFFUSE_SH && !HAS_FALL_OFF)
 // Mesh material codes (station.render.meshes) and the neutral parts' constants.
 #ifndef MAT_PAINT
 #define MAT_PAINT 1.0
@@ -130,6 +135,7 @@ uniform float u_coat_n, u_coat_ref, u_coat_t;
 // entering the coat weighted by (1 - F(N.l))/(1 - F_dr,ext), prefilter.coat_diffuse_map) or its SH twin
 // u_sh_coat; pi K_A (the rest of u_wd) and the effect terms keep u_diffuse (ClearCoat's docstring).
 uniform samplerCube u_diffuse_coat;
+uniform sampler2D u_diffuse_base;  // DIFFUSE_ATLAS: pi K_A D + pi K_D D_coat per paint (atlas.glsl layout)
 uniform vec3 u_wk[2];
 uniform vec3 u_sh_coat[9];
 // Stage (station/render/stage.py): lookups at u_rot * d (environment turned about +Y), the backdrop
@@ -221,12 +227,26 @@ float coat_fresnel(float ndv) {
     return dielectric_fresnel(ndv, u_coat_n);
 }
 
-// (g, h) of bound lobe i at c = R.N: lobes 2k and 2k+1 share row k (.rg, .ba), so with a constant i
+// The horizon table's rows (gl_textures.horizon_texture): HORIZON_G_ROWS rows of g alone (four lobes a
+// row), then the (g, h) pairs.
+const int HORIZON_G_ROWS = (N_LOBES + 3) / 4;
+const int HORIZON_ROWS = HORIZON_G_ROWS + (N_LOBES + 1) / 2;
+
+vec4 horizon_row(int row, float c) {
+    return texture(u_horizon, vec2((c * float(HORIZON_N - 1) + 0.5) / float(HORIZON_N),
+                                   (float(row) + 0.5) / float(HORIZON_ROWS)));
+}
+
+// (g, h) of bound lobe i at c = R.N: lobes 2k and 2k+1 share a pair row (.rg, .ba), so with a constant i
 // the two lookups of a pair are one.
 vec2 horizon(int i, float c) {
-    vec4 t = texture(u_horizon, vec2((c * float(HORIZON_N - 1) + 0.5) / float(HORIZON_N),
-                                     (float(i / 2) + 0.5) / float((N_LOBES + 1) / 2)));
+    vec4 t = horizon_row(HORIZON_G_ROWS + i / 2, c);
     return (i % 2 == 0) ? t.rg : t.ba;
+}
+
+// g of bound lobe i at c = R.N alone: lobes 4k..4k+3 share a row, so with a constant i four lookups are one.
+float horizon_g(int i, float c) {
+    return horizon_row(i / 4, c)[i % 4];
 }
 
 vec3 sh_eval_with(vec3 c[9], vec3 n) {
@@ -458,6 +478,10 @@ void main() {
 #else
         float s = 1.0;
 #endif
+#if DIFFUSE_ATLAS
+        // wd D + wk (D_coat - D) pre-mixed per paint: one lookup (combine_diffuse.frag.glsl)
+        rgb = textureLod(u_diffuse_base, atlas_uv_of(n, paint, DIFFUSE_FACE), 0.0).rgb;
+#else
 #if DIFFUSE_SH
         vec3 d_n = sh_eval(n);
 #else
@@ -471,6 +495,7 @@ void main() {
         vec3 d_coat = textureLod(u_diffuse_coat, n, 0.0).rgb;
 #endif
         rgb += (paint == 0 ? u_wk[0] : u_wk[1]) * (d_coat - d_n);  // pi K_D through the coat
+#endif
 #endif
 #if HAS_FALL_OFF
         rgb += (paint == 0 ? u_wa[0] : u_wa[1]) * fall_off(n, r, ndv, d_n);
@@ -493,8 +518,11 @@ void main() {
         for (int i = 0; i < N_LOOP; ++i) {
             float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
             vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
-            vec2 gh = horizon(i, ndv);
             bool gloss = ((WIDE_GLOSS_MASK >> i) & 1) != 0;  // constant: no lookup for a zero gloss weight
+            // h only for a gloss weight: g from the pair row when that row is read anyway, else from the
+            // row of g alone (one lookup for four such lobes)
+            bool pair_read = (((WIDE_GLOSS_MASK >> (i - i % 2)) & 3) != 0);
+            vec2 gh = pair_read ? horizon(i, ndv) : vec2(horizon_g(i, ndv), 0.0);
 #if BENT_DD
             // directionally diffuse lookup of a wide lobe at B = normalize(E R + COSINE_SG N)
             // (numpy_renderer.dd_direction, station.render.lobes.bent_direction)
