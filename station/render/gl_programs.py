@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from station.render.flakes import CELL_PIXELS, GLINT_RADIUS, WINDOW_NORM, flake_tint
+from station.render.horizon_poly import HORIZON_DEGREE
 from station.render.lobes import COSINE_SG_SHARPNESS
 from station.render.prefilter import WIDE_EXPONENT
 from station.render.shapes import SHAPE_INDEX
@@ -28,10 +29,13 @@ def renderer_defines(
     n_wide: int,
     n_lights: int,
     bound_exponents: np.ndarray,
+    horizon_cheb: tuple[np.ndarray, int],
 ) -> dict[str, object]:
     """The defines a renderer fixes for all its programs. The lights and exponents are compiled in as
     constants, so the lobe and light loops unroll with constant indices (llvmpipe gathers a uniform
-    array indexed by a loop counter per pixel)."""
+    array indexed by a loop counter per pixel); so are the wide lobes' Chebyshev polynomials of g
+    (*horizon_cheb*: coefficients (m, HORIZON_DEGREE + 1) and the mask of the lobes using them,
+    :func:`station.render.horizon_poly.horizon_chebyshev`)."""
     from station.render.meshes import NEUTRAL_ALBEDO
 
     return {
@@ -53,6 +57,9 @@ def renderer_defines(
         "WIDE_EXPONENT": f"{WIDE_EXPONENT:.1f}",
         "BENT_DD": int(horizon == "lut"),
         "COSINE_SG": f"{COSINE_SG_SHARPNESS:.4f}",
+        "HORIZON_DEGREE": HORIZON_DEGREE,
+        "HORIZON_CHEB_MASK": horizon_cheb[1],
+        "HORIZON_CHEB": ", ".join(f"{float(v):.9g}" for v in np.asarray(horizon_cheb[0]).ravel()),
     }
 
 

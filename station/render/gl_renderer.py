@@ -39,12 +39,14 @@ from station.render.gl_programs import (
     set_uniforms,
 )
 from station.render.gl_targets import FrameTargets
+from station.render.horizon_poly import horizon_chebyshev
 from station.render.numpy_renderer import (
     BACKGROUND,
     HORIZON_MAX_EXPONENT,
     check_paints,
     check_size,
     horizon_table,
+    horizon_wide,
 )
 from station.render.sh import sh_diffuse_matrix
 from station.render.shapes import GROUNDS, OCCLUDERS, Scene
@@ -135,6 +137,7 @@ class GLRenderer(Closing):
         table = horizon_table(basis.exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
         self._horizon_tex = tx.horizon_texture(self.ctx, table)
         self._maps = DerivedMaps(self.ctx, basis, half_float)  # flake mean, coat diffuse, coat base maps
+        bound_exps = np.asarray(basis.exponents)[self._order]
         self._defines = renderer_defines(
             n_lobes=len(self._lobes),
             diffuse=diffuse,
@@ -145,7 +148,10 @@ class GLRenderer(Closing):
             diffuse_face=self._maps.base_face,
             n_wide=self._n_wide,
             n_lights=self._lights.count if self._lights is not None else 0,
-            bound_exponents=np.asarray(basis.exponents)[self._order],
+            bound_exponents=bound_exps,
+            horizon_cheb=horizon_chebyshev(
+                bound_exps, table, horizon_wide([float(e) for e in bound_exps], horizon)
+            ),
         )
         self._sh = sh_diffuse_matrix(basis.sh)
         self._passes = FramePasses(self.ctx, self._defines)  # programs, footprint buffer, pass drawing

@@ -115,6 +115,12 @@ HORIZON_TABLE_SIZE = 128
 HORIZONS = ("lut", "lut-r", "none")
 
 
+def horizon_wide(exponents: Sequence[float], horizon: str = "lut") -> list[bool]:
+    """Per lobe: whether the horizon table holds its factors (g, h) (a wide lobe, E < HORIZON_MAX_EXPONENT,
+    with the tables on) rather than (c, 1)."""
+    return [horizon != "none" and float(e) < HORIZON_MAX_EXPONENT for e in exponents]
+
+
 def horizon_table(exponents: Sequence[float], horizon: str = "lut") -> np.ndarray:
     """(m, HORIZON_TABLE_SIZE, 2) float32 table of (g_i, h_i) at c = k/(N−1) (module doc)."""
     if horizon not in HORIZONS:
@@ -123,8 +129,8 @@ def horizon_table(exponents: Sequence[float], horizon: str = "lut") -> np.ndarra
 
     c = np.linspace(0.0, 1.0, HORIZON_TABLE_SIZE)
     table = np.empty((len(exponents), c.size, 2), np.float32)
-    for i, e in enumerate(exponents):
-        if horizon != "none" and e < HORIZON_MAX_EXPONENT:
+    for i, (e, wide) in enumerate(zip(exponents, horizon_wide(exponents, horizon), strict=True)):
+        if wide:
             g, h = horizon_factors(float(e), c)
             table[i, :, 0], table[i, :, 1] = g, h
         else:

@@ -33,6 +33,9 @@
 #ifndef HAS_ANISO
 #define HAS_ANISO 0
 #endif
+#ifndef HORIZON_CHEB_MASK
+#define HORIZON_CHEB_MASK 0
+#endif
 #ifndef NO_SHAPE
 #define NO_SHAPE 0
 #endif
@@ -248,6 +251,22 @@ vec2 horizon(int i, float c) {
 float horizon_g(int i, float c) {
     return horizon_row(i / 4, c)[i % 4];
 }
+
+// g of bound lobe i from its Chebyshev polynomial in x = 2c - 1 (station.render.horizon_poly: compiled in
+// for the lobes of HORIZON_CHEB_MASK, whose polynomial is as close to g as the table), by Clenshaw's
+// recurrence: arithmetic instead of a lookup.
+#if HORIZON_CHEB_MASK != 0
+const float HORIZON_CHEB_C[N_LOBES * (HORIZON_DEGREE + 1)] = float[](HORIZON_CHEB);
+float horizon_cheb(int i, float c) {
+    float x = 2.0 * c - 1.0, b1 = 0.0, b2 = 0.0;
+    for (int k = HORIZON_DEGREE; k >= 1; --k) {
+        float b0 = HORIZON_CHEB_C[i * (HORIZON_DEGREE + 1) + k] + 2.0 * x * b1 - b2;
+        b2 = b1;
+        b1 = b0;
+    }
+    return HORIZON_CHEB_C[i * (HORIZON_DEGREE + 1)] + x * b1 - b2;
+}
+#endif
 
 vec3 sh_eval_with(vec3 c[9], vec3 n) {
     return c[0] * 0.282095 + c[1] * (0.488603 * n.y) + c[2] * (0.488603 * n.z)
@@ -522,7 +541,12 @@ void main() {
             // h only for a gloss weight: g from the pair row when that row is read anyway, else from the
             // row of g alone (one lookup for four such lobes)
             bool pair_read = (((WIDE_GLOSS_MASK >> (i - i % 2)) & 3) != 0);
+#if HORIZON_CHEB_MASK != 0
+            bool cheb = ((HORIZON_CHEB_MASK >> i) & 1) != 0;  // constant: g by its polynomial
+            vec2 gh = pair_read ? horizon(i, ndv) : vec2(cheb ? horizon_cheb(i, ndv) : horizon_g(i, ndv), 0.0);
+#else
             vec2 gh = pair_read ? horizon(i, ndv) : vec2(horizon_g(i, ndv), 0.0);
+#endif
 #if BENT_DD
             // directionally diffuse lookup of a wide lobe at B = normalize(E R + COSINE_SG N)
             // (numpy_renderer.dd_direction, station.render.lobes.bent_direction)
