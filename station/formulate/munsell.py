@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import functools
 
-import colour
 import numpy as np
 
 from station.formulate.library import STANDARD_ANGLES, Library
@@ -25,6 +24,8 @@ MUNSELL_NAME = "Munsell renotation (real, Illuminant C / 2° adapted to D65 / 10
 @functools.lru_cache(maxsize=1)
 def munsell_library() -> Library:
     """Return the Munsell renotation library (2734 solids, Lab at 15/45/110 identical)."""
+    import colour  # colour-science (about a second) is loaded when the library is first built
+
     data = colour.notation.MUNSELL_COLOURS_REAL
     codes = np.array([f"MUNSELL {h} {v:g}/{c:g}" for (h, v, c), _ in data])
     xyy = np.array([v for _, v in data], dtype=np.float64)

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import colour
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -87,6 +86,8 @@ def display_equivalent_lab(
         observer (CAT16 von Kries: the illuminant's white shows as the display white); below 1 the
         two-step CAT16 of Zhai & Luo (2018) with D_b = D, D_d = 1 (the light's colour shows through).
     """
+    import colour  # colour-science (about a second) is imported by the functions that use it
+
     d = check_ranged("adaptation", adaptation, 0.0, 1.0)
     white = whitepoint_xyz(illuminant, observer)  # Y = 1
     target = whitepoint_xyz(REFERENCE_ILLUMINANT, observer)
@@ -157,6 +158,8 @@ def light_colour(illuminant: str | Illuminant, observer: str = OBSERVER_10) -> N
     Lab relative to D65's white, then the product's display pipeline): A is orange, D65 is (1, 1, 1).
     The tint of a booth environment. Shape (3,).
     """
+    import colour
+
     white = whitepoint_xyz(illuminant, observer)
     d65 = whitepoint_xyz(REFERENCE_ILLUMINANT, observer)
     rgb = np.clip(lab_to_linear_srgb(xyz_to_lab(white, colour.XYZ_to_xy(d65))), 0.0, None)

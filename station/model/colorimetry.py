@@ -1,4 +1,4 @@
-"""Colorimetric conversions used across the product (colour-science, and the CIE Lab formulae in NumPy).
+"""Colorimetric conversions used across the product (the CIE Lab and sRGB formulae in NumPy).
 
 Lab is CIE L*a*b* relative to D65 and the CIE 1964 10° observer unless a field says otherwise
 (docs/design.md §8). "Linear sRGB" is scene-linear sRGB (IEC 61966-2-1 primaries, D65), no tone mapping
@@ -7,19 +7,24 @@ and no transfer function: a reflectance factor of 1 on every channel is the perf
 Chromatic adaptation: sRGB's white is D65 for the 2° observer; our Lab white is D65 for the 10°
 observer. The conversion maps the 10° white to the sRGB white with a von Kries (CAT02) adaptation,
 so L* = 100, a* = b* = 0 is exactly linear sRGB (1, 1, 1).
+
+The white point, the sRGB matrix and the sRGB transfer function are colour-science's, written out or
+written in NumPy with the same operations (``tests/model/test_colorimetry.py`` holds them equal to the
+last bit), so that this module costs no more than NumPy: colour-science takes about a second to import,
+and only :func:`derive_xyz10_to_linear_srgb` loads it.
 """
 
 from __future__ import annotations
 
-import colour
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 #: Observer of every Lab value unless stated: the CIE 1964 10° standard observer.
 OBSERVER_10 = "CIE 1964 10 Degree Standard Observer"
-#: Chromaticity (x, y) of D65 for the 10° observer, the white of our Lab.
-WHITEPOINT: NDArray[np.float64] = np.asarray(colour.CCS_ILLUMINANTS[OBSERVER_10]["D65"], dtype=float)
-_SRGB = colour.RGB_COLOURSPACES["sRGB"]
+#: Chromaticity (x, y) of D65 for the 10° observer, the white of our Lab: colour-science's
+#: ``CCS_ILLUMINANTS[OBSERVER_10]["D65"]`` (CIE 15:2004 table T.3), written out so that the Lab formulae
+#: load without colour-science; ``tests/model/test_colorimetry.py`` holds the two equal.
+WHITEPOINT: NDArray[np.float64] = np.array([0.31382, 0.33100])
 
 #: Rec. 709 luminance weights (ITU-R BT.709-6 item 3.2; the Y row of sRGB's RGB→XYZ, IEC 61966-2-1):
 #: Y = 0.2126 R + 0.7152 G + 0.0722 B on linear sRGB; on encoded values the same weights give luma Y′.
@@ -111,15 +116,37 @@ def xyz_to_lab(xyz: ArrayLike, whitepoint: ArrayLike = WHITEPOINT) -> NDArray[np
 
 
 def _adaptation(source_xy: ArrayLike, target_xy: ArrayLike) -> NDArray[np.float64]:
+    import colour
+
     src = colour.xy_to_XYZ(source_xy)
     dst = colour.xy_to_XYZ(target_xy)
     return np.asarray(colour.adaptation.matrix_chromatic_adaptation_VonKries(src, dst, "CAT02"), dtype=float)
 
 
-_M = _SRGB.matrix_XYZ_to_RGB @ _adaptation(WHITEPOINT, _SRGB.whitepoint)
-# colour's sRGB matrix is rounded to 4 decimals (IEC 61966-2-1); rescale its rows so the Lab white
-# maps to exactly (1, 1, 1) rather than to within 2e-4 of it.
-_XYZ10_TO_LINEAR_SRGB = _M / (_M @ colour.xy_to_XYZ(WHITEPOINT))[:, None]
+def derive_xyz10_to_linear_srgb() -> NDArray[np.float64]:
+    """XYZ (D65 / 10°) → linear sRGB from colour-science: its sRGB matrix after a CAT02 von Kries
+    adaptation of our white to sRGB's, each row rescaled so that the Lab white maps to exactly (1, 1, 1)
+    (colour's sRGB matrix is rounded to 4 decimals, IEC 61966-2-1, which leaves it within 2e-4 of it).
+
+    The product uses this matrix written out (:data:`_XYZ10_TO_LINEAR_SRGB`), so that the display
+    pipeline loads without colour-science; ``tests/model/test_colorimetry.py`` holds the two equal to
+    the last bit.
+    """
+    import colour
+
+    srgb = colour.RGB_COLOURSPACES["sRGB"]
+    m = srgb.matrix_XYZ_to_RGB @ _adaptation(WHITEPOINT, srgb.whitepoint)
+    return np.asarray(m / (m @ colour.xy_to_XYZ(WHITEPOINT))[:, None], dtype=float)
+
+
+#: :func:`derive_xyz10_to_linear_srgb`, written out (``repr`` of each float: the same bits).
+_XYZ10_TO_LINEAR_SRGB = np.array(
+    [
+        [3.237460306701929, -1.5344050194668877, -0.4985971394945081],
+        [-0.9674351850826578, 1.8727349497622694, 0.04145853204383278],
+        [0.05564579047013679, -0.20345264096271268, 1.0723578529008377],
+    ]
+)
 _LINEAR_SRGB_TO_XYZ10 = np.linalg.inv(_XYZ10_TO_LINEAR_SRGB)
 
 
@@ -142,8 +169,21 @@ def linear_srgb_to_lab(rgb: ArrayLike) -> NDArray[np.float64]:
     return xyz_to_lab(np.asarray(rgb, dtype=float) @ _LINEAR_SRGB_TO_XYZ10.T)
 
 
+def _spow(a: NDArray[np.float64], p: float) -> NDArray[np.float64]:
+    """colour-science's safe power ``spow``: sign(a) |a|^p (a 0-d NaN gives 0), the same operations."""
+    a_p = np.sign(a) * np.abs(a) ** p
+    return np.zeros_like(a_p) if a_p.ndim == 0 and np.isnan(a_p) else a_p
+
+
+#: Where the sRGB EOTF leaves its linear segment: colour-science's ``eotf_inverse_sRGB(0.0031308)``.
+_SRGB_KNEE_ENCODED = 0.0031308 * 12.92
+
+
 def srgb_encode(rgb_linear: ArrayLike) -> NDArray[np.float64]:
     """Apply the IEC 61966-2-1 sRGB transfer function (inverse EOTF) to linear values in [0, 1].
+
+    The operations of colour-science's ``eotf_inverse_sRGB``, in NumPy (the same bits:
+    ``tests/model/test_colorimetry.py``), so that writing an image does not load colour-science.
 
     Examples
     --------
@@ -152,9 +192,16 @@ def srgb_encode(rgb_linear: ArrayLike) -> NDArray[np.float64]:
     >>> round(float(srgb_encode(0.5)), 6), round(float(srgb_encode(1.0)), 12)
     (0.735357, 1.0)
     """
-    return np.asarray(colour.models.eotf_inverse_sRGB(np.asarray(rgb_linear, dtype=float)), dtype=float)
+    lin = np.array(rgb_linear, dtype=float)
+    return np.asarray(
+        np.where(lin <= 0.0031308, lin * 12.92, 1.055 * _spow(lin, 1 / 2.4) - 0.055), dtype=float
+    )
 
 
 def srgb_decode(rgb_encoded: ArrayLike) -> NDArray[np.float64]:
-    """Decode sRGB-encoded values in [0, 1] to linear (the sRGB EOTF)."""
-    return np.asarray(colour.models.eotf_sRGB(np.asarray(rgb_encoded, dtype=float)), dtype=float)
+    """Decode sRGB-encoded values in [0, 1] to linear (the sRGB EOTF; colour-science's ``eotf_sRGB``,
+    in NumPy as :func:`srgb_encode` is)."""
+    enc = np.array(rgb_encoded, dtype=float)
+    return np.asarray(
+        np.where(_SRGB_KNEE_ENCODED >= enc, enc / 12.92, _spow((enc + 0.055) / 1.055, 2.4)), dtype=float
+    )

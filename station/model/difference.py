@@ -50,7 +50,6 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Literal
 
-import colour
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -330,6 +329,8 @@ def delta_e_cie2000_lc(
 
 def _colour_method(name: str) -> Callable[[NDArray, NDArray, NDArray | None, DinFactors], NDArray]:
     def fn(a: NDArray, b: NDArray, _alpha: NDArray | None, _g: DinFactors) -> NDArray:
+        import colour  # loaded by the first difference it computes (about a second), not by this module
+
         return np.asarray(colour.delta_E(a, b, method=name), dtype=float)
 
     return fn

@@ -19,13 +19,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Final
-
-import colour
+from typing import TYPE_CHECKING, Final
 
 from station.model.colorimetry import OBSERVER_10
 from station.model.domain import BOOTH_ILLUMINANTS, REFERENCE_ILLUMINANT
 from station.model.errors import ModelInputError
+
+if TYPE_CHECKING:  # colour-science (about a second) is imported by the functions that use it
+    import colour
 
 __all__ = [
     "BOOTH_ILLUMINANTS",
@@ -84,6 +85,8 @@ class Illuminant:
 
     def sd(self) -> colour.SpectralDistribution:
         """The colour-science spectral distribution, interpolated linearly as colour's illuminants are."""
+        import colour
+
         return colour.SpectralDistribution(
             dict(zip(self.wavelengths_nm, self.values, strict=True)),
             name=self.name,
@@ -103,6 +106,8 @@ def illuminant_name(name: str) -> str:
     for known in BOOTH_ILLUMINANTS:
         if text.upper() == known.upper():
             return known
+    import colour
+
     if text in colour.SDS_ILLUMINANTS:
         return text
     raise ModelInputError(
@@ -112,6 +117,8 @@ def illuminant_name(name: str) -> str:
 
 def booth_illuminant(name: str) -> Illuminant:
     """The catalogue illuminant *name* as an :class:`Illuminant` (colour-science's SPD)."""
+    import colour
+
     canonical = illuminant_name(name)
     sd = colour.SDS_ILLUMINANTS[ILLUMINANT_ALIASES.get(canonical, canonical)]
     return Illuminant(canonical, tuple(float(w) for w in sd.wavelengths), tuple(float(v) for v in sd.values))
@@ -119,6 +126,8 @@ def booth_illuminant(name: str) -> Illuminant:
 
 def illuminant_sd(illuminant: str | Illuminant) -> tuple[str, colour.SpectralDistribution]:
     """``(name, colour-science SPD)`` of a catalogue name or an :class:`Illuminant`."""
+    import colour
+
     if isinstance(illuminant, Illuminant):
         return illuminant.name, illuminant.sd()
     canonical = illuminant_name(illuminant)

@@ -14,10 +14,8 @@ from __future__ import annotations
 import warnings
 from functools import cache
 
-import colour
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import LinearConstraint, minimize
 
 from station.model.colorimetry import OBSERVER_10, xyz_to_lab
 from station.model.domain import DIFFUSE_WHITE_L, REFLECTANCE_MAX
@@ -26,7 +24,6 @@ from station.model.illuminants import Illuminant, illuminant_sd, observer_cie_na
 
 #: Wavelength grid of every reflectance spectrum in the product, nm (31 values).
 WAVELENGTHS: NDArray[np.float64] = np.arange(400.0, 701.0, 10.0)
-_SHAPE = colour.SpectralShape(400, 700, 10)
 
 
 def weighting_factors(
@@ -46,8 +43,11 @@ def weighting_factors(
 
 @cache
 def _weighting_factors(illuminant: str | Illuminant, observer: str) -> NDArray[np.float64]:
+    import colour  # colour-science (about a second) is imported by the functions that use it
+
     _, sd_illuminant = illuminant_sd(illuminant)
     cmfs = colour.MSDS_CMFS[observer]
+    shape = colour.SpectralShape(400, 700, 10)
     w = np.empty((WAVELENGTHS.size, 3))
     for i in range(WAVELENGTHS.size):  # XYZ is linear in R: integrate unit impulses once
         values = np.zeros(WAVELENGTHS.size)
@@ -55,7 +55,7 @@ def _weighting_factors(illuminant: str | Illuminant, observer: str) -> NDArray[n
         sd = colour.SpectralDistribution(dict(zip(WAVELENGTHS, values, strict=True)))
         with warnings.catch_warnings():  # colour warns that it trims the CMFs to our 400–700 nm range
             warnings.simplefilter("ignore")
-            w[i] = colour.sd_to_XYZ(sd, cmfs, sd_illuminant, method="ASTM E308", shape=_SHAPE) / 100.0
+            w[i] = colour.sd_to_XYZ(sd, cmfs, sd_illuminant, method="ASTM E308", shape=shape) / 100.0
     white_y = w[:, 1].sum()
     if not (np.all(np.isfinite(w)) and np.isfinite(white_y) and white_y > 0.0):
         name = illuminant.name if isinstance(illuminant, Illuminant) else illuminant
@@ -118,6 +118,8 @@ def reflectance_to_lab(
     >>> round(float(lab[0]), 6), bool(np.all(np.abs(lab[1:]) < 1e-9))
     (49.496108, True)
     """
+    import colour
+
     xyz = reflectance_to_xyz(reflectance, illuminant, observer)
     white = whitepoint_xyz(illuminant, observer)
     return xyz_to_lab(xyz, colour.XYZ_to_xy(white))
@@ -144,6 +146,9 @@ def reflectance_from_lab(
     ModelInputError
         When a Lab lies outside the colour solid of those bounds (no reflectance reproduces it).
     """
+    import colour
+    from scipy.optimize import LinearConstraint, minimize
+
     lab_arr = np.asarray(lab, dtype=float)
     if lab_arr.shape[-1:] != (3,) or not np.all(np.isfinite(lab_arr)):
         raise ModelInputError("lab", "finite L*, a*, b* triples", lab_arr.shape)

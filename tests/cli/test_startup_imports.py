@@ -63,7 +63,7 @@ def test_every_subcommand_help_answers_without_heavy_imports() -> None:
 
 def test_the_probe_sees_a_heavy_import() -> None:
     """The check can fail: running a command that does load the model shows colour-science."""
-    foreign = _foreign([["model", "from-angles", "--angles", "15,45,110", "--lab", "50,0,0;40,0,0;30,0,0"]])
+    foreign = _foreign([["model", "de", "--reference", "50,0,0", "--sample", "51,0,0", "--de", "cie76"]])
     assert "colour" in foreign
 
 
@@ -83,4 +83,27 @@ def test_database_and_user_commands_load_no_colour_science(tmp_path: Path) -> No
     )
     assert (tmp_path / "station.sqlite3").is_file()
     assert "sqlalchemy" in foreign, foreign
+    assert not foreign & {"colour", "scipy", "matplotlib"}, foreign
+
+
+def test_model_and_qc_commands_load_no_colour_science(tmp_path: Path) -> None:
+    """Commands that evaluate the model, judge Lab values against a tolerance or render a design compute
+    with NumPy alone (the product's Lab, sRGB and CIEDE2000 formulae): they load no colour-science, SciPy
+    or Matplotlib."""
+    lab3 = "60,20,10;50,20,10;40,20,12"
+    smp3 = "61,20,10;50,21,10;40,20,13"
+    design = ["--face", "90,0,-2", "--flop", "30,0,-4", "--travel", "60"]
+    foreign = set(
+        _foreign(
+            [
+                ["model", "eval", *design],
+                ["model", "from-angles", "--angles", "15,45,110", "--lab", lab3, "--gloss", "80"],
+                ["qc", "tolerance"],
+                ["qc", "verdict", "--standard", lab3, "--sample", smp3, "--angles", "15,45,110"],
+                ["design", "variations", *design],
+                ["design", "render", *design, "--size", "32", "--out", str(tmp_path / "d.png")],
+            ]
+        )
+    )
+    assert (tmp_path / "d.png").is_file()
     assert not foreign & {"colour", "scipy", "matplotlib"}, foreign

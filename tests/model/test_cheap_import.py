@@ -1,5 +1,7 @@
 """The domain's limits and names load without colour-science, SciPy or Matplotlib (which take a second or
-more), so a command line that only needs them answers at once; the model's fit loads on first use."""
+more), so a command line that only needs them answers at once; the model's fit loads on first use, and
+it too needs none of them (its Lab and sRGB formulae are NumPy): colour-science loads with the first
+computation that uses it, such as a CIE 1976 colour difference."""
 
 from __future__ import annotations
 
@@ -16,9 +18,16 @@ _PROBE = """
 import json, sys
 import station.model.domain, station.model.angles, station.model.errors
 before = sorted(m for m in {heavy} if m in sys.modules)
+
+def delta_e_loads():
+    from station.model.difference import delta_e
+    delta_e([[50.0, 0.0, 0.0]], [[51.0, 0.0, 0.0]], "cie76")
+    return sorted(m for m in {heavy} if m in sys.modules)
 from station.model import fit_fftg, FaceFlopTravelGloss
 print(json.dumps({{"before": before, "after": sorted(m for m in {heavy} if m in sys.modules),
-                  "fit": fit_fftg.__module__, "design": FaceFlopTravelGloss.__module__}}))
+                  "fit": fit_fftg.__module__, "design": FaceFlopTravelGloss.__module__,
+                  "modules": sorted(m for m in sys.modules if m.startswith("station.model.")),
+                  "computed": delta_e_loads()}}))
 """
 
 
@@ -27,7 +36,9 @@ def test_domain_is_cheap_and_the_fit_loads_on_first_use() -> None:
     assert done.returncode == 0, done.stderr
     out = json.loads(done.stdout)
     assert out["before"] == []
-    assert "colour" in out["after"]  # the lazy names really load the model
+    assert out["after"] == []  # the model itself is cheap ...
+    assert {"station.model.fit", "station.model.representations"} <= set(out["modules"])  # ... and loaded
+    assert "colour" in out["computed"]  # the probe sees colour-science once a computation needs it
     assert out["fit"] == "station.model.fit" and out["design"] == "station.model.representations"
 
 

@@ -6,7 +6,7 @@ import colour
 import numpy as np
 import pytest
 
-from station.model.colorimetry import WHITEPOINT, lab_to_xyz, xyz_to_lab
+from station.model.colorimetry import OBSERVER_10, WHITEPOINT, lab_to_xyz, xyz_to_lab
 
 RNG = np.random.default_rng(7)
 # Both branches of f: dark colours (L* < 8, the linear segment), effect-paint faces above L* 100,
@@ -18,6 +18,12 @@ LABS = np.concatenate(
         np.array([[0.0, 0.0, 0.0], [8.0, 0.0, 0.0], [100.0, 0.0, 0.0], [125.0, -0.6, -1.8]]),
     ]
 )
+
+
+def test_the_white_point_is_colour_sciences() -> None:
+    """The written-out D65 / 10° chromaticity is colour-science's, to the last bit."""
+    theirs = np.asarray(colour.CCS_ILLUMINANTS[OBSERVER_10]["D65"], dtype=float)
+    assert WHITEPOINT.dtype == theirs.dtype and WHITEPOINT.tolist() == theirs.tolist()
 
 
 @pytest.mark.parametrize("whitepoint", [WHITEPOINT, np.array([0.44757, 0.40745])])
@@ -44,3 +50,39 @@ def test_hand_values() -> None:
     assert lab_to_xyz([4.0, 0.0, 0.0])[1] == pytest.approx(4 * 27 / 24389, abs=1e-15)
     # Shapes: (..., 3) in, (..., 3) out.
     assert lab_to_xyz(np.zeros((2, 5, 3))).shape == (2, 5, 3)
+
+
+def test_the_written_out_srgb_matrix_is_colour_sciences() -> None:
+    """The display pipeline's matrix is the one derived from colour-science's sRGB, to the last bit."""
+    from station.model.colorimetry import _XYZ10_TO_LINEAR_SRGB, derive_xyz10_to_linear_srgb
+
+    assert _XYZ10_TO_LINEAR_SRGB.tolist() == derive_xyz10_to_linear_srgb().tolist()
+
+
+#: Linear and encoded values on both segments, the knee, out of [0, 1], signed zeros, inf and NaN.
+_TRANSFER = np.concatenate(
+    [
+        RNG.uniform(-0.5, 1.5, 2000),
+        RNG.uniform(0.0, 0.06, 2000),
+        np.array([0.0, -0.0, 0.0031308, 0.04044936, 1.0, 1e-300, np.inf, -np.inf, np.nan]),
+    ]
+)
+
+
+@pytest.mark.parametrize(
+    "value", [_TRANSFER, _TRANSFER[:3999].reshape(-1, 3), 0.5, 0.002, -0.25, float("nan"), 1]
+)
+def test_the_srgb_transfer_functions_are_colour_sciences(value: object) -> None:
+    """:func:`srgb_encode` / :func:`srgb_decode` give colour-science's ``eotf_inverse_sRGB`` /
+    ``eotf_sRGB`` to the last bit, shape and NaN included."""
+    from station.model.colorimetry import srgb_decode, srgb_encode
+
+    for ours, theirs in (
+        (srgb_encode, colour.models.eotf_inverse_sRGB),
+        (srgb_decode, colour.models.eotf_sRGB),
+    ):
+        got = ours(value)  # type: ignore[arg-type]
+        want = np.asarray(theirs(np.asarray(value, dtype=float)), dtype=float)
+        assert got.shape == want.shape and got.dtype == want.dtype
+        np.testing.assert_array_equal(got, want, strict=True)
+        assert np.signbit(got).tolist() == np.signbit(want).tolist()
