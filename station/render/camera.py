@@ -14,6 +14,14 @@ import numpy as np
 from station.render.errors import RenderInputError
 
 
+def cross3(a: np.ndarray | tuple[float, ...], b: np.ndarray | tuple[float, ...]) -> np.ndarray:
+    """a × b of two 3-vectors, float64: the products and differences of ``np.cross`` (the same bits)
+    without its per-call overhead, which dominates for single vectors (about 20 µs against 2)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]], np.float64
+    )
+
+
 @dataclass(frozen=True)
 class Camera:
     """Eye position, look-at target, up hint and vertical field of view (degrees)."""
@@ -33,11 +41,11 @@ class Camera:
         """(forward, right, up) unit vectors."""
         f = np.subtract(self.target, self.eye).astype(np.float64)
         f /= np.linalg.norm(f)
-        r = np.cross(f, self.up)
+        r = cross3(f, np.asarray(self.up, np.float64))
         if np.linalg.norm(r) < 1e-9:
             raise RenderInputError("camera.up", "not parallel to the view direction", self.up)
         r /= np.linalg.norm(r)
-        return f, r, np.cross(r, f)
+        return f, r, cross3(r, f)
 
     def rays(self, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
         """Ray origin (3,) and unit directions (H, W, 3) float64, row 0 at the top."""

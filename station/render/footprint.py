@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from station.render.camera import Camera
+from station.render.camera import Camera, cross3
 from station.render.shapes import CYL_R, SEAM_R, SPEED_H, SPEED_NOSE, SPEED_TAIL, SPEED_W, panel_frames
 
 #: Sides of the polygon circumscribing the sphere's silhouette (its area is 1.3 % above the disc's).
@@ -83,6 +83,13 @@ def _hull(p: np.ndarray) -> np.ndarray:
     return np.asarray(lower[:-1] + upper[:-1])
 
 
+def _ccw(poly: np.ndarray) -> np.ndarray:
+    """The convex polygon *poly* (k, 2), its vertices already in order around it, counter-clockwise."""
+    x, y = poly[:, 0], poly[:, 1]
+    signed = float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    return poly if signed >= 0.0 else poly[::-1].copy()
+
+
 def _project(dirs: np.ndarray, camera: Camera, aspect: float) -> np.ndarray | None:
     """NDC (k, 2) of world directions *dirs* (k, 3) from the eye; None when one is too near the eye's
     plane or behind it."""
@@ -109,9 +116,9 @@ def _sphere_cone(eye: np.ndarray, tan_half: float, phi: np.ndarray) -> np.ndarra
     atan(*tan_half*), at azimuths *phi* (radians)."""
     axis = -eye / np.linalg.norm(eye)
     helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = np.cross(axis, helper)
+    e1 = cross3(axis, helper)
     e1 /= np.linalg.norm(e1)
-    e2 = np.cross(axis, e1)
+    e2 = cross3(axis, e1)
     return axis + tan_half * (np.cos(phi)[:, None] * e1 + np.sin(phi)[:, None] * e2)
 
 
@@ -152,7 +159,9 @@ def shape_footprint(
     ndc = _project(dirs, camera, aspect)
     if ndc is None:
         return None
-    poly = _hull(ndc)
+    # the sphere's cone, wholly in front of the eye, projects to an ellipse traced in order of azimuth:
+    # its points are the convex polygon already
+    poly = _ccw(ndc) if shape == "sphere" else _hull(ndc)
     if len(poly) < 3:
         return None
     # Grow the polygon about its vertex mean c by a factor that moves every edge out by >= the margin.
@@ -161,7 +170,8 @@ def shape_footprint(
     normals = np.stack([edges[:, 1], -edges[:, 0]], axis=1) / np.linalg.norm(edges, axis=1)[:, None]
     inradius = float(np.min(np.abs(np.sum((poly - c) * normals, axis=1))))
     poly = c + (poly - c) * (1.0 + margin / max(inradius, 1e-9))
-    if _area(_clip_to_viewport(poly)) > MAX_AREA_SHARE * 4.0:
+    inside_view = bool(np.all(np.abs(poly) <= 1.0))  # then clipping would return it unchanged
+    if _area(poly if inside_view else _clip_to_viewport(poly)) > MAX_AREA_SHARE * 4.0:
         return None
     inner = None
     if shape == "sphere" and len(poly) == SPHERE_SIDES:
@@ -172,7 +182,7 @@ def shape_footprint(
             _sphere_cone(eye, np.tan(alpha - shrink), np.linspace(0, 2 * np.pi, 180, False)), camera, aspect
         )
         if dense is not None:
-            hull = _hull(dense)
+            hull = _ccw(dense)
             s = float(np.min(_exit_scale(c, poly - c, hull))) if len(hull) >= 3 else 0.0
             if 0.5 < s < 1.0:
                 inner = c + s * (poly - c)
@@ -223,19 +233,25 @@ def footprint_triangles(footprint: Footprint) -> tuple[np.ndarray, np.ndarray, n
     theta = np.arctan2(poly[:, 1] - c[1], poly[:, 0] - c[0])
     far = c + radius * np.stack([np.cos(theta), np.sin(theta)], axis=1)
     n = len(poly)
-    inside: list[np.ndarray] = []
-    ring: list[np.ndarray] = []
-    outside: list[np.ndarray] = []
-    for i in range(n):
-        j = (i + 1) % n
-        if inner is None:
-            ring += [c, poly[i], poly[j]]
-        else:
-            inside += [c, inner[i], inner[j]]
-            ring += [inner[i], poly[i], poly[j], inner[i], poly[j], inner[j]]  # counter-clockwise
-        gap = (theta[j] - theta[i]) % (2.0 * np.pi)
-        steps = int(np.ceil(gap / (np.pi / 2.0)))
-        angles = theta[i] + gap * np.arange(1, steps) / steps
+    nxt = (np.arange(n) + 1) % n
+    centre = np.broadcast_to(c, poly.shape)
+    if inner is None:
+        inside = np.zeros((0, 2))
+        ring = np.stack([centre, poly, poly[nxt]], axis=1)
+    else:
+        inside = np.stack([centre, inner, inner[nxt]], axis=1)
+        ring = np.stack([inner, poly, poly[nxt], inner, poly[nxt], inner[nxt]], axis=1)  # counter-clockwise
+    # one sector per edge, a convex fan from poly[i]: poly[i], far[i], arc points, far[j], poly[j]
+    gap = (theta[nxt] - theta) % (2.0 * np.pi)
+    steps = np.ceil(gap / (np.pi / 2.0)).astype(int)
+    plain = steps <= 1  # no arc point: the fan's two triangles
+    ends, far_ends = poly[nxt][plain], far[nxt][plain]
+    outside = [
+        np.stack([poly[plain], far[plain], far_ends, poly[plain], far_ends, ends], axis=1).reshape(-1, 2)
+    ]
+    for i in np.nonzero(~plain)[0]:
+        j = nxt[i]
+        angles = theta[i] + gap[i] * np.arange(1, steps[i]) / steps[i]
         fan = [
             poly[i],
             far[i],
@@ -243,7 +259,8 @@ def footprint_triangles(footprint: Footprint) -> tuple[np.ndarray, np.ndarray, n
             far[j],
             poly[j],
         ]
-        for k in range(1, len(fan) - 1):  # convex: a fan from poly[i]
-            outside += [fan[0], fan[k], fan[k + 1]]
-    out = [np.asarray(t, np.float32).reshape(-1, 2) for t in (inside, ring, outside)]
+        outside.append(
+            np.array([[fan[0], fan[k], fan[k + 1]] for k in range(1, len(fan) - 1)]).reshape(-1, 2)
+        )
+    out = [np.asarray(t, np.float32).reshape(-1, 2) for t in (inside, ring, np.concatenate(outside))]
     return out[0], out[1], out[2]

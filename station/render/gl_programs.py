@@ -100,6 +100,11 @@ def frame_defines(
     }
 
 
+def _has(prog: Any, name: str) -> bool:
+    """Whether *prog* has the uniform *name* (a dict lookup: ``name in prog`` walks every member)."""
+    return prog.get(name, None) is not None
+
+
 def _write(prog: Any, name: str, values: Any) -> None:
     prog[name].write(np.asarray(values, np.float32).tobytes())
 
@@ -119,16 +124,16 @@ def set_uniforms(
     bound weights *mw* (w_D, w_DD, w_G per paint) to *prog*, skipping what its compiler dropped; *m*: the
     lobe count (texture units of the atlases follow the lobes); *occ*: the sphere occluders (k, 4)."""
     for name, value in uniforms.items():
-        if name in prog:
+        if _has(prog, name):
             prog[name].value = value
-    if "u_wd" in prog:
+    if _has(prog, "u_wd"):
         _write(prog, "u_wd", [w[0] for w in mw])
     if combined:
         for unit, name in enumerate(("u_gloss", "u_dd")):
-            if name in prog:
+            if _has(prog, name):
                 prog[name].value = m + unit
     # The compiler trims uniform arrays to the entries the shader can reach (N_WIDE when combined).
-    if "u_lobes" in prog:
+    if _has(prog, "u_lobes"):
         n = prog["u_lobes"].array_length
         prog["u_lobes"].value = list(range(n)) if n > 1 else 0
     if lights is not None and lights.count:  # the compiler drops what a program never reads
@@ -137,34 +142,36 @@ def set_uniforms(
             ("u_light_flux", lights.flux),
             ("u_light_spread", lights.spreads()),
         ):
-            if name in prog:
+            if _has(prog, name):
                 _write(prog, name, values)
-        if "u_light_world" in prog:  # world directions: u_rot (column-major R, environment <- world) undone
+        if _has(
+            prog, "u_light_world"
+        ):  # world directions: u_rot (column-major R, environment <- world) undone
             rot = np.asarray(uniforms["u_rot"], dtype=np.float64).reshape(3, 3).T
             _write(prog, "u_light_world", np.asarray(lights.directions, dtype=np.float64) @ rot)
     for name, part in (("u_wdd", 1), ("u_wg", 2)):
-        if name in prog:
+        if _has(prog, name):
             _write(prog, name, np.concatenate([w[part] for w in mw])[: prog[name].array_length])
-    if "u_aniso_w" in prog:
+    if _has(prog, "u_aniso_w"):
         _write(prog, "u_aniso_w", uniforms["_aniso_w"])
         _write(prog, "u_aniso_ps", uniforms["_aniso_ps"])
-    if "u_flake_tint" in prog:
+    if _has(prog, "u_flake_tint"):
         _write(prog, "u_flake_tint", [flake_tint(w[1]) for w in mw])
-    if "u_wa" in prog:
+    if _has(prog, "u_wa"):
         _write(prog, "u_wa", uniforms["_wa"])
-    if "u_wk" in prog:
+    if _has(prog, "u_wk"):
         _write(prog, "u_wk", uniforms["_wk"])
-    if "u_sh_coat" in prog:
+    if _has(prog, "u_sh_coat"):
         prog["u_sh_coat"].write(uniforms["_sh_coat"].tobytes())
-    if "u_occ" in prog:
+    if _has(prog, "u_occ"):
         prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
-    if "u_sh" in prog:
+    if _has(prog, "u_sh"):
         prog["u_sh"].write(sh.tobytes())
     for name in ("u_shadow_mat", "u_shadow_par", "u_shadow_c"):  # station.render.gl_shadows.ShadowMaps.bind
-        if name in prog:
+        if _has(prog, name):
             _write(prog, name, uniforms["_" + name[2:]][: prog[name].array_length])
     for name in ("u_shadow_cmp", "u_shadow_raw", "u_shadow_esm"):
-        if name in prog:
+        if _has(prog, name):
             units = uniforms["_" + name[2:]][: prog[name].array_length]
             prog[name].value = units if len(units) > 1 else units[0]
 
