@@ -120,6 +120,20 @@ def _pct(xs: list[float], q: float) -> float:
     return s[min(len(s) - 1, int(round(q * (len(s) - 1))))]
 
 
+def _dispose(view) -> None:
+    """Close *view* and delete it now, as the application's event loop would (its deferred delete, then a
+    collection): a closed view left to the cyclic collector was destroyed at some later point of the next
+    view's start, which crashed (SIGSEGV in the next GL surface's paint)."""
+    import gc
+
+    from PySide6.QtCore import QCoreApplication, QEvent
+
+    view.close()
+    view.deleteLater()
+    QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+    gc.collect()
+
+
 def measure_edits(mode: str) -> tuple[list[float], list[float], str, float]:
     """Edit→frame-delivered and edit→paintGL-finished latencies (s) for *mode*, the GL renderer's name and
     the process CPU per edit (s)."""
@@ -162,7 +176,7 @@ def measure_edits(mode: str) -> tuple[list[float], list[float], str, float]:
             paint.append(done[-1] - t0)
     cpu = (time.process_time() - c0) / EDITS
     renderer = view.gl_renderer
-    view.close()
+    _dispose(view)
     return total, paint, renderer, cpu
 
 
@@ -204,7 +218,7 @@ def measure_view_changes(
     cpu = (time.process_time() - c0) / ORBITS
     view.wait_idle(120000)
     if cold_dir is None:
-        view.close()
+        _dispose(view)
         return times, cpu, full, float("nan"), float("nan")
     old = os.environ.get("CACAD_CACHE_DIR")
     os.environ["CACAD_CACHE_DIR"] = cold_dir
@@ -220,7 +234,7 @@ def measure_view_changes(
             del os.environ["CACAD_CACHE_DIR"]
         else:
             os.environ["CACAD_CACHE_DIR"] = old
-    view.close()
+    _dispose(view)
     return times, cpu, full, env_s, env_cpu
 
 
