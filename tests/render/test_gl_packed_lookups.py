@@ -5,6 +5,8 @@ without the pre-summed maps."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -14,21 +16,17 @@ from station.render import numpy_renderer as nr
 from station.render import prefilter, procedural, shapes
 from station.render.environment import Environment
 from station.render.weights import LobeWeights
+from tests.render.test_renderers import EXPS
+from tests.render.test_renderers import _weights as lobe_weights
 
-EXPS = (1.0, 8.0, 64.0, 512.0)  # three wide lobes (horizon table, bound first) and a narrow one
+assert EXPS == (1.0, 8.0, 64.0, 512.0)  # three wide lobes (horizon table, bound first) and a narrow one
 SIZE = 40
 RADIANCE = 2.0
 
 
 def _weights(k_d, k_dd=None, k_g=None, k_a=(0.0, 0.0, 0.0)) -> LobeWeights:
-    m = len(EXPS)
-    return LobeWeights(
-        EXPS,
-        np.array(k_d, float),
-        np.zeros((m, 3)) if k_dd is None else np.array(k_dd, float),
-        np.zeros(m) if k_g is None else np.array(k_g, float),
-        np.array(k_a, float),
-    )
+    """test_renderers' paint of EXPS's lobes, with an aspecular fall-off K_A."""
+    return dataclasses.replace(lobe_weights(k_d, k_dd, k_g), k_a=np.array(k_a, float))
 
 
 @pytest.fixture(scope="module")

@@ -16,23 +16,8 @@ layout(location = 0) out vec4 f_gloss;
 layout(location = 1) out vec4 f_dd;
 
 void main() {
-    ivec2 p = ivec2(gl_FragCoord.xy);
-    int tile = u_size + 2;
-    int block = p.y / tile;  // paint * 6 + face
-    int paint = block / 6;
-    int face = block - 6 * paint;
-    int row = p.y - block * tile;
-    float a = (2.0 * float(p.x) - 1.0) / float(u_size) - 1.0;
-    float b = (2.0 * float(row) - 1.0) / float(u_size) - 1.0;
-    vec3 r = cube_face_dir(face, a, b);
-    // A border texel takes the neighbouring face's texel at the shared edge: its direction is snapped to
-    // the nearest texel centre of the face it points into (interior texels are centres already), so the
-    // bilinear filter across an edge is GL's seamless cube filter (corners: one texel instead of three).
-    vec2 ab;
-    int f2 = cube_face_of(r, ab);
-    vec2 cell = clamp(floor((ab + 1.0) * (0.5 * float(u_size))), 0.0, float(u_size - 1));
-    ab = (2.0 * cell + 1.0) / float(u_size) - 1.0;
-    r = cube_face_dir(f2, ab.x, ab.y);
+    int paint;
+    vec3 r = atlas_texel_direction(ivec2(gl_FragCoord.xy), u_size, paint);
     vec3 g = vec3(0.0), dd = vec3(0.0);
     for (int i = 0; i < N_LOBES; ++i) {
         vec3 c = textureLod(u_lobes[i], r, 0.0).rgb;
