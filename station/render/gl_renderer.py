@@ -125,10 +125,9 @@ class GLRenderer(Closing):
         self._own_ctx = ctx is None
         self.ctx = create_gl_context() if ctx is None else ctx
         self.combined = combined
-        self._combined: tuple[bytes, list] | None = None
-        self._combine: tuple | None = None  # (framebuffer, program, vertex array, [gloss, dd]) of the atlas
         self._half_float = half_float
         self._atlas_face = max(c.shape[1] for c in basis.cubes)
+        self._narrow_atlas = tx.NarrowAtlas(self.ctx, self._atlas_face, len(basis.cubes), half_float)
         self._horizon = horizon
         self._wide, self._order, self._lights = binding_order(basis, horizon, HORIZON_MAX_EXPONENT)
         self._n_wide = int(self._wide.sum())
@@ -186,20 +185,6 @@ class GLRenderer(Closing):
         targets = FrameTargets(self.ctx, self.width, self.height, aa)
         self.targets.release()
         self.targets = targets
-
-    def _combined_atlas(self, pair) -> list:
-        """[gloss, dd] atlas textures of both paints' narrow lobes (shaders/combine.frag.glsl; rebuilt on
-        the GPU when the weights change, never read back)."""
-        mw = [self._bound_weights(w) for w in pair]
-        key = b"".join(np.concatenate([w[1].ravel(), w[2]]).astype(np.float32).tobytes() for w in mw)
-        if self._combined is not None and self._combined[0] == key:
-            return self._combined[1]
-        if self._combine is None:
-            self._combine = tx.combine_pass(self.ctx, self._atlas_face, len(self._lobes), self._half_float)
-        narrow = (self._wide[self._order] == 0).astype(np.float32)
-        atlas = tx.draw_combined(self.ctx, self._combine, self._lobes, self._atlas_face, narrow, mw)
-        self._combined = (key, atlas)
-        return atlas
 
     def _terms(self, pair) -> tuple[int, int, int]:
         """Which weight groups of these paints are non-zero: (:func:`station.render.gl_programs.compiled_terms`,
@@ -352,20 +337,17 @@ class GLRenderer(Closing):
         if coat is not None:  # made first: their sums on this context bind their own target and textures
             coat_tex = self._maps.coat_diffuse(coat)
             if self.combined and self.diffuse == "cube":  # shaders/render.frag.glsl's DIFFUSE_ATLAS
-                two = (pair + pair)[:2]
-                base_tex = self._maps.coat_base(
-                    self._diffuse_tex,
-                    coat,
-                    [w.fall_off_map_weight() for w in two],
-                    [w.map_weights()[0] - w.fall_off_map_weight() for w in two],
-                )
+                base_tex = self._maps.coat_base(self._diffuse_tex, coat, (pair + pair)[:2])
             fbo.use()
         stage = scene.stage
         backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         gx, gy, gz = GROUNDS[scene.shape] if mesh is None else (0.0, mesh.floor_y, 0.0)
         m = len(self._lobes)
         if self.combined:
-            cubes = self._combined_atlas(pair)
+            narrow = (self._wide[self._order] == 0).astype(
+                np.float32
+            )  # the atlases' lobes (combine.frag.glsl)
+            cubes = self._narrow_atlas.atlases(self._lobes, narrow, [self._bound_weights(w) for w in pair])
             fbo.use()
             for unit, tex in enumerate(cubes):
                 tex.use(m + unit)
@@ -605,13 +587,11 @@ class GLRenderer(Closing):
         self._maps.release()
         objs = [*self._lobes, self._diffuse_tex, self._horizon_tex]
         objs += [tex for tex, *_ in self._aniso.values()]
-        if self._combine is not None:
-            objs += [*self._combine[:3], *self._combine[3]]
+        self._narrow_atlas.release()
         self._frame_shadows.release()
         for obj in objs:
             obj.release()
         self._aniso.clear()
-        self._combine = self._combined = None
         if self._own_ctx:
             self.ctx.release()
 

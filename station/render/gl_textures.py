@@ -80,6 +80,33 @@ def combine_pass(ctx: Any, face: int, n_lobes: int, half_float: bool) -> tuple:
     return (ctx.framebuffer(color_attachments=atlas), prog, ctx.vertex_array(prog, []), atlas)
 
 
+class NarrowAtlas:
+    """The [gloss, dd] atlases of both paints' narrow lobes (:func:`combine_pass`, :func:`draw_combined`)
+    on *ctx* at *face* texels a face, redrawn on the GPU only when the paints' weights change."""
+
+    def __init__(self, ctx: Any, face: int, n_lobes: int, half_float: bool) -> None:
+        self.ctx, self.face, self.n_lobes, self.half_float = ctx, face, n_lobes, half_float
+        self._pass: tuple | None = None  # (framebuffer, program, vertex array, [gloss, dd])
+        self._key: bytes | None = None
+
+    def atlases(self, lobes: list, narrow: np.ndarray, mw: list) -> list:
+        """[gloss, dd] of the bound weights *mw* over the *narrow* (1/0 per bound lobe) *lobes*."""
+        key = b"".join(np.concatenate([w[1].ravel(), w[2]]).astype(np.float32).tobytes() for w in mw)
+        if self._pass is None:
+            self._pass = combine_pass(self.ctx, self.face, self.n_lobes, self.half_float)
+        elif self._key == key:
+            return self._pass[3]
+        self._key = key
+        return draw_combined(self.ctx, self._pass, lobes, self.face, narrow, mw)
+
+    def release(self) -> None:
+        """Free the pass and its atlases."""
+        if self._pass is not None:
+            for obj in [*self._pass[:3], *self._pass[3]]:
+                obj.release()
+        self._pass = self._key = None
+
+
 def diffuse_combine_pass(ctx: Any, face: int, half_float: bool) -> tuple:
     """(framebuffer, program, vertex array, atlas texture) that pre-mix both paints' diffuse base under a
     clear coat into one atlas (``shaders/combine_diffuse.frag.glsl``; 12 faces of *face* + 2 texels)."""
