@@ -36,7 +36,7 @@ import sys
 import tempfile
 import time
 
-from bench.viewer_scripts import CORE_ORBIT, STARTUP
+from bench._viewer_scripts import CORE_ORBIT, STARTUP
 
 SIZE = 1024
 EDITS = int(os.environ.get("BENCH_VIEWER_EDITS", "30"))
