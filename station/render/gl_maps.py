@@ -60,14 +60,11 @@ class DerivedMaps:
             self._coat[coat.index] = tx.cube_texture(self.ctx, cube, self.half_float)
         return self._coat[coat.index]
 
-    def coat_base(self, diffuse: Any, coat: ClearCoat, paints: list) -> Any:
-        """Both *paints*' (two :class:`station.render.weights.LobeWeights`) diffuse base under *coat* in one
-        atlas (``shaders/combine_diffuse.frag.glsl``): the diffuse map *diffuse* times pi K_A plus the
-        coat-transmitted map (:meth:`coat_diffuse`) times pi K_D, per paint, at the finer map's resolution;
-        redrawn only when the coat or the weights change. Draws on this context's own target: bind the
-        frame's after it."""
-        w_plain = [w.fall_off_map_weight() for w in paints]
-        w_coat = [w.map_weights()[0] - w.fall_off_map_weight() for w in paints]
+    def coat_base(self, diffuse: Any, coat: ClearCoat, w_plain: list, w_coat: list) -> Any:
+        """Both paints' diffuse base under *coat* in one atlas (``shaders/combine_diffuse.frag.glsl``): the
+        diffuse map *diffuse* times *w_plain* (pi K_A per paint, RGB) plus the coat-transmitted map
+        (:meth:`coat_diffuse`) times *w_coat* (pi K_D), at the finer map's resolution; redrawn only when
+        the coat or the weights change. Draws on this context's own target: bind the frame's after it."""
         coat_tex = self.coat_diffuse(coat)
         face = self.base_face
         key = (coat.index, np.asarray([w_plain, w_coat], np.float32).tobytes())

@@ -127,11 +127,12 @@ class GLRenderer(Closing):
         self.combined = combined
         self._half_float = half_float
         self._atlas_face = max(c.shape[1] for c in basis.cubes)
-        self._narrow_atlas = tx.NarrowAtlas(self.ctx, self._atlas_face, len(basis.cubes), half_float)
         self._horizon = horizon
         self._wide, self._order, self._lights = binding_order(basis, horizon, HORIZON_MAX_EXPONENT)
         self._n_wide = int(self._wide.sum())
         self._lobes = [tx.cube_texture(self.ctx, basis.cubes[i], half_float) for i in self._order]
+        narrow = (self._wide[self._order] == 0).astype(np.float32)  # the atlases' lobes (combine.frag.glsl)
+        self._narrow_atlas = tx.NarrowAtlas(self.ctx, self._lobes, narrow, self._atlas_face, half_float)
         self._diffuse_tex = tx.cube_texture(self.ctx, basis.diffuse, half_float)
         table = horizon_table(basis.exponents, horizon)[self._order]  # (m, N, 2): rows = bound lobes
         self._horizon_tex = tx.horizon_texture(self.ctx, table)
@@ -333,21 +334,22 @@ class GLRenderer(Closing):
         self, scene, pair, fbo, coat, mesh, flakes, aniso_uniforms: dict
     ) -> tuple[dict, list, int]:
         """Bind the frame's textures and return (uniforms, bound weights of the paints, lobe count m)."""
+        two = (pair + pair)[:2]
+        w_a = [w.fall_off_map_weight() for w in two]  # pi K_A per paint
+        w_k = [w.map_weights()[0] - a for w, a in zip(two, w_a, strict=True)]  # pi K_D: under a coat, D_coat
+        mw = [self._bound_weights(w) for w in pair]
         coat_tex = base_tex = None
         if coat is not None:  # made first: their sums on this context bind their own target and textures
             coat_tex = self._maps.coat_diffuse(coat)
             if self.combined and self.diffuse == "cube":  # shaders/render.frag.glsl's DIFFUSE_ATLAS
-                base_tex = self._maps.coat_base(self._diffuse_tex, coat, (pair + pair)[:2])
+                base_tex = self._maps.coat_base(self._diffuse_tex, coat, w_a, w_k)
             fbo.use()
         stage = scene.stage
         backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg if stage is not None else 0.0)
         gx, gy, gz = GROUNDS[scene.shape] if mesh is None else (0.0, mesh.floor_y, 0.0)
         m = len(self._lobes)
         if self.combined:
-            narrow = (self._wide[self._order] == 0).astype(
-                np.float32
-            )  # the atlases' lobes (combine.frag.glsl)
-            cubes = self._narrow_atlas.atlases(self._lobes, narrow, [self._bound_weights(w) for w in pair])
+            cubes = self._narrow_atlas.atlases(mw)
             fbo.use()
             for unit, tex in enumerate(cubes):
                 tex.use(m + unit)
@@ -392,9 +394,7 @@ class GLRenderer(Closing):
         if aniso_uniforms:
             self._aniso[aniso_uniforms.pop("_key")][0].use(m + 9)
             uniforms.update(aniso_uniforms)
-        mw = [self._bound_weights(w) for w in pair]
-        uniforms["_wa"] = [w.fall_off_map_weight() for w in (pair + pair)[:2]]
-        uniforms["_wk"] = [w.map_weights()[0] - w.fall_off_map_weight() for w in (pair + pair)[:2]]
+        uniforms["_wa"], uniforms["_wk"] = w_a, w_k
         if coat is not None and self.diffuse == "sh":
             uniforms["_sh_coat"] = sh_diffuse_matrix(self.basis.sh, coat)
         return uniforms, mw, m

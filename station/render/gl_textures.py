@@ -81,23 +81,24 @@ def combine_pass(ctx: Any, face: int, n_lobes: int, half_float: bool) -> tuple:
 
 
 class NarrowAtlas:
-    """The [gloss, dd] atlases of both paints' narrow lobes (:func:`combine_pass`, :func:`draw_combined`)
-    on *ctx* at *face* texels a face, redrawn on the GPU only when the paints' weights change."""
+    """The [gloss, dd] atlases of both paints' *narrow* (1/0 per bound lobe) *lobes* (:func:`combine_pass`,
+    :func:`draw_combined`) on *ctx* at *face* texels a face, redrawn on the GPU only when the paints'
+    weights change."""
 
-    def __init__(self, ctx: Any, face: int, n_lobes: int, half_float: bool) -> None:
-        self.ctx, self.face, self.n_lobes, self.half_float = ctx, face, n_lobes, half_float
+    def __init__(self, ctx: Any, lobes: list, narrow: np.ndarray, face: int, half_float: bool) -> None:
+        self.ctx, self.lobes, self.narrow, self.face, self.half_float = ctx, lobes, narrow, face, half_float
         self._pass: tuple | None = None  # (framebuffer, program, vertex array, [gloss, dd])
         self._key: bytes | None = None
 
-    def atlases(self, lobes: list, narrow: np.ndarray, mw: list) -> list:
-        """[gloss, dd] of the bound weights *mw* over the *narrow* (1/0 per bound lobe) *lobes*."""
+    def atlases(self, mw: list) -> list:
+        """[gloss, dd] of the paints' bound weights *mw* (w_D, w_DD, w_G per paint)."""
         key = b"".join(np.concatenate([w[1].ravel(), w[2]]).astype(np.float32).tobytes() for w in mw)
         if self._pass is None:
-            self._pass = combine_pass(self.ctx, self.face, self.n_lobes, self.half_float)
+            self._pass = combine_pass(self.ctx, self.face, len(self.lobes), self.half_float)
         elif self._key == key:
             return self._pass[3]
         self._key = key
-        return draw_combined(self.ctx, self._pass, lobes, self.face, narrow, mw)
+        return draw_combined(self.ctx, self._pass, self.lobes, self.face, self.narrow, mw)
 
     def release(self) -> None:
         """Free the pass and its atlases."""
