@@ -268,6 +268,15 @@ float horizon_cheb(int i, float c) {
 }
 #endif
 
+// g of bound wide lobe i at c: its polynomial where HORIZON_CHEB_MASK has it, else its row of g alone
+// (i is constant in the unrolled lobe loop, so the test is resolved at compile time).
+float wide_g(int i, float c) {
+#if HORIZON_CHEB_MASK != 0
+    if (((HORIZON_CHEB_MASK >> i) & 1) != 0) return horizon_cheb(i, c);
+#endif
+    return horizon_g(i, c);
+}
+
 vec3 sh_eval_with(vec3 c[9], vec3 n) {
     return c[0] * 0.282095 + c[1] * (0.488603 * n.y) + c[2] * (0.488603 * n.z)
          + c[3] * (0.488603 * n.x) + c[4] * (1.092548 * n.x * n.y) + c[5] * (1.092548 * n.y * n.z)
@@ -538,15 +547,10 @@ void main() {
             float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
             vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
             bool gloss = ((WIDE_GLOSS_MASK >> i) & 1) != 0;  // constant: no lookup for a zero gloss weight
-            // h only for a gloss weight: g from the pair row when that row is read anyway, else from the
-            // row of g alone (one lookup for four such lobes)
+            // h only for a gloss weight: g from the pair row when that row is read anyway, else wide_g (its
+            // polynomial, or its row of g alone: one lookup for four such lobes)
             bool pair_read = (((WIDE_GLOSS_MASK >> (i - i % 2)) & 3) != 0);
-#if HORIZON_CHEB_MASK != 0
-            bool cheb = ((HORIZON_CHEB_MASK >> i) & 1) != 0;  // constant: g by its polynomial
-            vec2 gh = pair_read ? horizon(i, ndv) : vec2(cheb ? horizon_cheb(i, ndv) : horizon_g(i, ndv), 0.0);
-#else
-            vec2 gh = pair_read ? horizon(i, ndv) : vec2(horizon_g(i, ndv), 0.0);
-#endif
+            vec2 gh = pair_read ? horizon(i, ndv) : vec2(wide_g(i, ndv), 0.0);
 #if BENT_DD
             // directionally diffuse lookup of a wide lobe at B = normalize(E R + COSINE_SG N)
             // (numpy_renderer.dd_direction, station.render.lobes.bent_direction)
