@@ -2,12 +2,14 @@
 and what they look like.
 
 Orbit of the procedural car at 1024² in the stylist's scene (stage, clear coat, flakes) on the GL renderer,
-shadows on against off in the same run: two renderers on one context, frames interleaved in blocks, the
+shadows on against off, and against on with the sun kept in the narrow lobes and glints (the renderer
+before ``station.render.gl_light_maps``), in the same run: three renderers on one context, frames interleaved in blocks, the
 camera turning 1° a frame (the maps are drawn once, on the first frame, and reused: an orbit moves the
 camera, not the light). CPU time per frame (the process's, llvmpipe's threads included) beside wall time,
 and the one-off cost of drawing the maps (first frame with shadows less the mean frame). Writes
 ``docs/render/car-shadows.png``: sky and booth rows; the procedural car and a CC0 car (when ``--shared``
-holds one), shadows off | on.
+holds one), shadows off | on; and ``docs/render/shadowed-highlight.png``: the CC0 sport car's shadowed
+side up close under the sky, the sun kept in its narrow lobes and glints | taken out in the shadow.
 
 ``--model speedshape``: the same orbit of the ray-cast speed shape (its maps ray cast from the light) about
 its default view's target, into a section of its own, and ``docs/render/speedshape-shadows.png``: sky and
@@ -102,21 +104,22 @@ def orbit(env_name: str, frames: int, blocks: int = 3, model: str = "car") -> li
         return _car_frame(gl, ctx, mesh, w, yaw)
 
     ctx = create_gl_context()
-    times: dict[bool, list[tuple[float, float]]] = {True: [], False: []}
-    first: dict[bool, tuple[float, float]] = {}
+    modes = ("on", "off", "before")  # before: shadows on, the narrow lobes and glints keeping the light
+    times: dict[str, list[tuple[float, float]]] = {m: [] for m in modes}
+    first: dict[str, tuple[float, float]] = {}
     try:
-        gls = {on: GLRenderer(basis, SIZE, SIZE, ctx=ctx) for on in (True, False)}
-        for on, gl in gls.items():
-            gl.shadows = on
-            first[on] = _frame(gl, ctx, car, w, 0.0)  # programs, maps, ground bake
+        gls = {m: GLRenderer(basis, SIZE, SIZE, ctx=ctx, shadowed_maps=m == "on") for m in modes}
+        for mode, gl in gls.items():
+            gl.shadows = mode != "off"
+            first[mode] = _frame(gl, ctx, car, w, 0.0)  # programs, maps, ground bake
             _frame(gl, ctx, car, w, 0.5)
         yaw = 1.0
         for _ in range(blocks):
-            for on in (True, False):
+            for mode in modes:
                 for _ in range(frames):
-                    times[on].append(_frame(gls[on], ctx, car, w, yaw))
+                    times[mode].append(_frame(gls[mode], ctx, car, w, yaw))
                     yaw += 1.0
-        redraws = gls[True].shadow_redraws
+        redraws = gls["on"].shadow_redraws
         for gl in gls.values():
             gl.release()
     finally:
@@ -124,27 +127,35 @@ def orbit(env_name: str, frames: int, blocks: int = 3, model: str = "car") -> li
     lights = basis.lights.count if basis.lights is not None else 0
     size = f"{SIZE}²"
     env_name = env_name if model == "car" else f"{model} {env_name}"
+    labels = {"on": "on", "off": "off", "before": "on, the sun kept in the narrow lobes and glints (before)"}
     out = []
-    for on in (True, False):
-        wall = float(np.mean([t[0] for t in times[on]])) * 1e3
-        cpu = float(np.mean([t[1] for t in times[on]])) * 1e3
-        label = "on" if on else "off"
+    for mode in modes:
+        wall = float(np.mean([t[0] for t in times[mode]])) * 1e3
+        cpu = float(np.mean([t[1] for t in times[mode]])) * 1e3
         out.append(
-            Case(f"{env_name} orbit, shadows {label}: CPU", size, cpu, "ms/frame", f"lights: {lights}")
+            Case(f"{env_name} orbit, shadows {labels[mode]}: CPU", size, cpu, "ms/frame", f"lights: {lights}")
         )
         out.append(
             Case(
-                f"{env_name} orbit, shadows {label}: wall",
+                f"{env_name} orbit, shadows {labels[mode]}: wall",
                 size,
                 wall,
                 "ms/frame",
                 f"{wall and 1e3 / wall:.1f} fps",
             )
         )
-    cpu_on = float(np.mean([t[1] for t in times[True]]))
-    cpu_off = float(np.mean([t[1] for t in times[False]]))
-    out.append(Case(f"{env_name} orbit: CPU on / off", size, cpu_on / cpu_off, "×", "same run"))
-    build = (first[True][1] - cpu_on) - (first[False][1] - cpu_off)
+    cpu_of = {m: float(np.mean([t[1] for t in times[m]])) for m in modes}
+    out.append(Case(f"{env_name} orbit: CPU on / off", size, cpu_of["on"] / cpu_of["off"], "×", "same run"))
+    out.append(
+        Case(
+            f"{env_name} orbit: CPU on / before",
+            size,
+            cpu_of["on"] / cpu_of["before"],
+            "×",
+            "same run: the maps without the shadowed lights (station.render.gl_light_maps)",
+        )
+    )
+    build = (first["on"][1] - cpu_of["on"]) - (first["off"][1] - cpu_of["off"])
     out.append(
         Case(
             f"{env_name} maps drawn (once): CPU",
@@ -152,7 +163,7 @@ def orbit(env_name: str, frames: int, blocks: int = 3, model: str = "car") -> li
             build * 1e3,
             "ms",
             f"first frame on less off, each less its mean frame; map draws in the whole orbit: {redraws} "
-            "(the light maps and the ground occlusion, once each)",
+            "(the light maps and the ground occlusion, once each; the maps without the lights included)",
         )
     )
     return out
@@ -181,6 +192,39 @@ def screenshot(shared: Path) -> Path:
     OUT.mkdir(parents=True, exist_ok=True)
     path = OUT / "car-shadows.png"
     save_png(path, np.concatenate(rows, axis=0))
+    return path
+
+
+#: The close view of highlight_screenshot: the sport car's side away from the sky's sun, its rocker panel in
+#: the car's own shadow where it mirrors the sun.
+HIGHLIGHT_VIEW = (210.0, 20.0, 2.0)
+
+
+def highlight_screenshot(shared: Path) -> Path:
+    """docs/render/shadowed-highlight.png: the CC0 car (the procedural one without ``--shared``) under the sky,
+    the default design with its flakes and the clear coat, a close view of its shadowed side: the narrow
+    lobes and glints keeping the sun (before) | read without it where the shadow map hides it."""
+    from station.model.design_io import default_flakes
+    from ui.models.document import DEFAULT_DESIGN
+    from ui.models.view import paint_weights
+
+    cars = sorted((shared / "meshes").glob("*sport*.glb")) or sorted((shared / "meshes").glob("*.glb"))
+    mesh = load_mesh(cars[-1]) if cars else car_body()
+    w = paint_weights(DEFAULT_DESIGN)
+    basis = prefilter_basis(
+        procedural_environment("sky", 1024), w.exponents, engine="gl", cache=PrefilterCache()
+    )
+    camera = orbit_camera(MESH_CAMERA.target, *HIGHLIGHT_VIEW, MESH_CAMERA.fov_deg)
+    tiles = []
+    for after in (False, True):
+        with GLRenderer(basis, 480, 480, aa=4, shadowed_maps=after) as gl:
+            img = gl.render_mesh(
+                mesh, [w, w], camera, Stage(), coat=ClearCoat(), flakes=default_flakes(DEFAULT_DESIGN)
+            )
+            tiles.append(np.ascontiguousarray(img))
+    OUT.mkdir(parents=True, exist_ok=True)
+    path = OUT / "shadowed-highlight.png"
+    save_png(path, np.concatenate(tiles, axis=1))
     return path
 
 
@@ -236,6 +280,7 @@ def main(argv: list[str] | None = None) -> None:
     cases = [c for env in ("sky", "booth") for c in orbit(env, args.frames)]
     load = os.getloadavg()[0]
     print(f"wrote {screenshot(args.shared)}")
+    print(f"wrote {highlight_screenshot(args.shared)}")
     write_section(
         "render_shadows",
         "Shadow maps and ground occlusion: orbit frame cost",

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from station.render import cubemap
-from station.render.errors import EnvironmentFileError
+from station.render.errors import EnvironmentFileError, RenderInputError
 from station.render.hdr_io import ACCEPTED, read_hdr_image, validate_image
 
 
@@ -104,6 +104,24 @@ class Lights:
     directions: np.ndarray
     flux: np.ndarray
     spread: np.ndarray | None = None
+    #: The pixels each light was made of in its environment (:func:`extract_lights`): (H, W) of the
+    #: equirectangular image and, per light, the flat pixel indices and their radiance (n, 3); None for
+    #: lights given by direction and flux alone.
+    pixels: tuple[tuple[int, int], tuple[tuple[np.ndarray, np.ndarray], ...]] | None = field(
+        default=None, repr=False
+    )
+
+    def light_environment(self, k: int) -> Environment:
+        """Light *k* alone: an environment dark but for the pixels it was taken from (prefiltered like the
+        full map, the share of a lobe map this light holds: prefiltering is linear in the radiance);
+        RenderInputError naming ``light`` when the lights carry no pixels or *k* is out of range."""
+        if self.pixels is None or not 0 <= k < self.count:
+            raise RenderInputError("light", f"0 <= light < {self.count}, lights from an environment", k)
+        (h, w), parts = self.pixels
+        index, radiance = parts[k]
+        img = np.zeros((h * w, 3), np.float32)
+        img[index] = radiance
+        return Environment(f"light{k}", img.reshape(h, w, 3))
 
     def spreads(self) -> np.ndarray:
         """Angular spread s² (k,) in rad², zeros for point lights."""
@@ -172,4 +190,7 @@ def extract_lights(
     out_flux = flux[keep]
     total = np.bincount(flat, weights=weight, minlength=size)[keep]
     spread = np.clip(1.0 - np.linalg.norm(vec[keep], axis=1) / np.maximum(total, 1e-30), 0.0, 1.0)
-    return Environment(f"{env.name}-lights", residual), Lights(out_dirs, out_flux, spread)
+    flat_img = img.reshape(-1, 3)
+    parts = tuple((idx, flat_img[idx].copy()) for idx in (np.flatnonzero(flat == k) for k in keep))
+    lights = Lights(out_dirs, out_flux, spread, pixels=((h, w), parts))
+    return Environment(f"{env.name}-lights", residual), lights

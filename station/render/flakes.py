@@ -132,16 +132,19 @@ MEAN_FACE = 16
 MEAN_SOURCE_FACE = 16
 
 
-def flake_mean_cube(basis, flakes: FlakeLayer) -> np.ndarray:
+def flake_mean_cube(basis, flakes: FlakeLayer, sharp: np.ndarray | None = None) -> np.ndarray:
     """C_E: the expected flake reflection (6, MEAN_FACE, MEAN_FACE, 3), the sharpest map of *basis* (the
     glints' own map, with its sun and lights) prefiltered by brute-force quadrature
     (:func:`station.render.prefilter.prefilter_brute`) with the Phong lobe of the flakes' reflected
     spread, E = 1/(2σ)². Prefiltering the glints' own map makes the sparkle's mean zero whatever lights
-    the basis took out of its wide lobes (a lobe map plus its lights need not hold the same energy)."""
+    the basis took out of its wide lobes (a lobe map plus its lights need not hold the same energy).
+    *sharp*: another glint map of that lobe's size instead (a light's share of it: the mean of that share,
+    ``station.render.gl_light_maps``)."""
     from station.render.cubemap import downsample_cube
     from station.render.prefilter import prefilter_brute
 
-    src = np.asarray(basis.cubes[int(np.argmax(basis.exponents))], dtype=np.float64)
+    glints = basis.cubes[int(np.argmax(basis.exponents))] if sharp is None else sharp
+    src = np.asarray(glints, dtype=np.float64)
     while src.shape[1] > MEAN_SOURCE_FACE:
         src = downsample_cube(src)
     return prefilter_brute(src, flakes.reflected_exponent, MEAN_FACE).astype(np.float32)

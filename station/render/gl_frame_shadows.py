@@ -11,24 +11,31 @@ import numpy as np
 
 from station.render import gl_textures as tx
 from station.render.errors import RenderError, RenderInputError
+from station.render.gl_light_maps import ShadowedMaps
 from station.render.gl_shadows import ShadowMaps, ShapeCaster, shadow_lights
 from station.render.numpy_renderer import check_paints
 from station.render.shapes import CONVEX_SHAPES, GROUNDS, Scene
 from station.render.stage import lookup_matrix
 
-__all__ = ["FrameShadows", "probe_shadows"]
+__all__ = ["SHADOWED_UNIT", "FrameShadows", "probe_shadows"]
+
+#: First texture unit of the maps without the shadowed lights past the lobe count m: after the shadow maps (m + 11, three a
+#: light, two lights) and the ground's occlusion map.
+SHADOWED_UNIT = 18
 
 
 class FrameShadows:
     """Shadow maps of the strongest lights taken out of the environment (*lights*:
     ``PrefilteredBasis.lights`` in binding order, or None) for the frames of one renderer on *ctx*."""
 
-    def __init__(self, ctx: Any, lights: Any) -> None:
+    def __init__(self, ctx: Any, lights: Any, shadowed: ShadowedMaps | None = None) -> None:
         self.ctx = ctx
         self.lights = lights
         #: Indices of the lights that cast shadow maps (:func:`station.render.gl_shadows.shadow_lights`).
         self.slots = shadow_lights(lights)
         self.maps: ShadowMaps | None = None
+        #: The maps without each shadowed light (narrow lobes, glints: gl_light_maps), made on first use.
+        self.shadowed = shadowed
 
     @staticmethod
     def caster(scene: Any, mesh: Any) -> Any:
@@ -64,9 +71,12 @@ class FrameShadows:
         """How many times the shadow or ambient-occlusion maps were drawn (-1 before the first)."""
         return -1 if self.maps is None else self.maps.version
 
-    def update(self, scene: Any, mesh: Any) -> None:
+    def update(self, scene: Any, mesh: Any, objects: tuple = (), mw: Any = None, flakes: Any = None) -> None:
         """Draw the shadow maps and the ground's occlusion map of *mesh* (or the scene's shape) when they
-        changed."""
+        changed and, with *objects* (:meth:`object_key`: the object is shadowed), the maps without each
+        shadowed light for the paints' bound weights *mw* and the glints of *flakes*
+        (:meth:`station.render.gl_light_maps.ShadowedMaps.prepare`). They draw on their own targets: called
+        before the frame binds its framebuffer and textures."""
         if self.maps is None:
             self.maps = ShadowMaps(self.ctx)
         caster = self.caster(scene, mesh)
@@ -74,9 +84,16 @@ class FrameShadows:
         if self.key(scene, mesh, True)[1]:
             floor_y, centre = self.floor(scene, mesh)
             self.maps.ambient_occlusion(caster, floor_y, centre, scene.stage.ground_radius)
+        if objects and self.shadowed is not None:
+            self.shadowed.prepare(self.slots, mw, flakes)
 
-    def bind(self, scene: Any, mesh: Any, m: int) -> dict:
-        """Bind the shadow maps (texture units m + 11 on) and the ground's occlusion map; their uniforms."""
+    def bind(
+        self, scene: Any, mesh: Any, m: int, objects: tuple = (), mw: Any = None, flakes: Any = None
+    ) -> dict:
+        """Bind the shadow maps (texture units m + 11 on) and the ground's occlusion map; their uniforms.
+        With *objects* (the frame's :meth:`object_key`: the object is shadowed) also the maps without each
+        shadowed light, the narrow lobes' for the paints' bound weights *mw* and the glints of *flakes* (units
+        m + SHADOWED_UNIT on, :meth:`station.render.gl_light_maps.ShadowedMaps.bind`; drawn by :meth:`update`)."""
         maps = self.maps
         if maps is None:
             raise RenderError("shadow maps bound before they were drawn")
@@ -87,10 +104,14 @@ class FrameShadows:
             ao = maps.ambient_occlusion(self.caster(scene, mesh), floor_y, centre, scene.stage.ground_radius)
             ao.use(m + 11 + 3 * n)
             uniforms["u_ao"] = m + 11 + 3 * n
+        if objects and self.shadowed is not None:
+            uniforms.update(self.shadowed.bind(self.slots, mw, flakes, m + SHADOWED_UNIT))
         return uniforms
 
     def release(self) -> None:
         """Free the maps."""
+        if self.shadowed is not None:
+            self.shadowed.release()
         if self.maps is not None:
             self.maps.release()
             self.maps = None

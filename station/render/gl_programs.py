@@ -170,7 +170,15 @@ def set_uniforms(
     for name in ("u_shadow_mat", "u_shadow_par", "u_shadow_c"):  # station.render.gl_shadows.ShadowMaps.bind
         if _has(prog, name):
             _write(prog, name, uniforms["_" + name[2:]][: prog[name].array_length])
-    for name in ("u_shadow_cmp", "u_shadow_raw", "u_shadow_esm"):
+    for name in (
+        "u_shadow_cmp",
+        "u_shadow_raw",
+        "u_shadow_esm",
+        "u_shadowed_gloss",  # station.render.gl_light_maps.ShadowedMaps.bind
+        "u_shadowed_dd",
+        "u_shadowed_glint",
+        "u_shadowed_mean",
+    ):
         if _has(prog, name):
             units = uniforms["_" + name[2:]][: prog[name].array_length]
             prog[name].value = units if len(units) > 1 else units[0]

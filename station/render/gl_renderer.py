@@ -30,6 +30,7 @@ from station.render.gl_context import (
     load_shader,
 )
 from station.render.gl_frame_shadows import FrameShadows
+from station.render.gl_light_maps import ShadowedMaps
 from station.render.gl_maps import DerivedMaps
 from station.render.gl_passes import FramePasses
 from station.render.gl_programs import (
@@ -50,7 +51,7 @@ from station.render.numpy_renderer import (
 )
 from station.render.sh import sh_diffuse_matrix
 from station.render.shapes import GROUNDS, OCCLUDERS, Scene
-from station.render.stage import MAX_OCCLUDERS, backdrop_lobe, lookup_matrix
+from station.render.stage import MAX_OCCLUDERS, backdrop_lobe, lookup_matrix, stage_bits
 from station.render.tonemap import CURVES, check_curve
 
 if TYPE_CHECKING:
@@ -102,6 +103,10 @@ class GLRenderer(Closing):
 
     ``aa``: anti-aliasing, samples per pixel (1, 4, 9 or 16; :mod:`station.render.gl_targets`): the
     frame is shaded at √aa times the size and box-resolved on the GPU; 1 (default) draws at the size.
+
+    ``shadowed_maps``: where a shadow map hides a light, the narrow lobes and the flakes' glints read their
+    maps without that light (:mod:`station.render.gl_light_maps`); False keeps the light in them (the
+    renderer before, for comparison).
     """
 
     def __init__(
@@ -115,6 +120,7 @@ class GLRenderer(Closing):
         combined: bool = True,
         horizon: str = "lut",
         aa: int = 1,
+        shadowed_maps: bool = True,
     ) -> None:
         check_size(width, height)
         if diffuse not in ("cube", "sh"):
@@ -154,6 +160,8 @@ class GLRenderer(Closing):
             ),
         )
         self._sh = sh_diffuse_matrix(basis.sh)
+        lit = self._lights is not None and self._lights.pixels is not None  # gl_light_maps: lights' pixels
+        self._defines["SHADOWED_MAPS"] = int(lit and shadowed_maps)  # the class doc
         self._passes = FramePasses(self.ctx, self._defines)  # programs, footprint buffer, pass drawing
         self._mesh = tx.MeshArrays(self.ctx)
         #: Draw a shape over its screen footprint (:mod:`station.render.gl_passes`). False: one full-screen
@@ -175,7 +183,8 @@ class GLRenderer(Closing):
         #: (:mod:`station.render.gl_frame_shadows`), False: the proxies'; object_shadows False: the ground's only.
         self.shadows = True
         self.object_shadows = True
-        self._frame_shadows = FrameShadows(self.ctx, self._lights)
+        maps = ShadowedMaps(self.ctx, basis, self._order, narrow, self._atlas_face, half_float)
+        self._frame_shadows = FrameShadows(self.ctx, self._lights, maps if lit else None)
 
     def set_aa(self, aa: int) -> None:
         """Switch anti-aliasing to *aa* samples per pixel (:data:`station.render.gl_targets.AA_SAMPLES`):
@@ -237,8 +246,10 @@ class GLRenderer(Closing):
             probe,
         )
         shadow = self._frame_shadows.key(scene, mesh, self.shadows, probe)
-        if shadow:
-            self._frame_shadows.update(scene, mesh)
+        objects = self._frame_shadows.object_key(scene, mesh, self.shadows, self.object_shadows, probe)
+        glints = flakes if self.last_flakes.on else None
+        if shadow:  # before the frame binds its own: these draws bind their own targets and textures
+            self._frame_shadows.update(scene, mesh, objects, [self._bound_weights(w) for w in pair], glints)
         own = target is None or self.targets.side > 1 or mesh is not None
         fbo = self.targets.draw_target(linear, depth=mesh is not None) if own else target
         fbo.use()
@@ -248,7 +259,7 @@ class GLRenderer(Closing):
         if not linear:
             uniforms["u_exposure"] = float(2.0**exposure_ev)
         if shadow:
-            uniforms.update(self._frame_shadows.bind(scene, mesh, m))
+            uniforms.update(self._frame_shadows.bind(scene, mesh, m, objects, mw, glints))
         if scene.stage is not None and scene.stage.ground:
             self._ground_map(uniforms, mw, occ, n_occ, m, shadow).use(m + 2)
             fbo.use()
@@ -279,21 +290,9 @@ class GLRenderer(Closing):
     ) -> tuple[list, list, dict, np.ndarray, int]:
         """(paints, passes, anisotropy uniforms, sphere occluders (k, 4), occluders compiled in) of one
         frame: the features compiled in (coat, stage bits, flakes, anisotropy) and the programs."""
-        stage = scene.stage
-        stage_bits = 0  # bit 0: a stage, 1: its backdrop, 2: its ground, 3: the backdrop lobe's lights
-        if stage is not None:
-            backdrop = backdrop_lobe(self.basis.exponents, stage.backdrop_blur_deg)
-            # bit 3: the lights were taken out of the backdrop lobe's map (its lookup adds them back exactly)
-            lights_out = (
-                self._lights is not None and bool(self.basis.wide) and bool(self.basis.wide[backdrop])
-            )
-            stage_bits = (
-                1
-                | int(stage.backdrop) << 1
-                | int(stage.ground) << 2
-                | int(stage.backdrop and lights_out) << 3
-            )
-        feats: tuple[int, ...] = (int(coat is not None), stage_bits, int(flakes_on))
+        lights_out = [bool(w) for w in self.basis.wide] if self._lights is not None else []
+        bits = stage_bits(scene.stage, self.basis.exponents, lights_out)  # lights out of the backdrop's map
+        feats: tuple[int, ...] = (int(coat is not None), bits, int(flakes_on))
         aniso_uniforms: dict = {}
         if anisotropy is not None:
             pair, aniso_uniforms, self.last_anisotropy = anisotropy_frame(
@@ -315,7 +314,7 @@ class GLRenderer(Closing):
             occluders = np.asarray(OCCLUDERS[scene.shape], np.float32).reshape(-1, 4)
         else:
             occluders = mesh.occluders().astype(np.float32)
-        n_occ = len(occluders) if stage is not None else 0
+        n_occ = len(occluders) if scene.stage is not None else 0
         shadow = self._frame_shadows.object_key(scene, mesh, self.shadows, self.object_shadows, probe)
         if mesh is not None:
             passes = self._passes.mesh_passes(linear, feats, terms, n_occ, curve_i, shadow)

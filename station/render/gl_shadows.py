@@ -35,8 +35,9 @@
 * **What is shadowed.** Only the light's direct part: on the model the light's exact terms on the wide
   lobes and its Lambertian share w_D (N·l)₊Φ/π of the diffuse map (under a clear coat π K_D's share times
   the coat's entry weight ``ClearCoat.entry_scale``(N·l), as the coat map holds it; for the neutral parts,
-  their diffuse reflectance's share); on the ground its direct part (l_y)₊Φ/π. The environment's diffuse and specular
-  maps (the narrow lobes keep the sun) are unchanged.
+  their diffuse reflectance's share); the narrow lobes and the flakes' glints, whose maps keep the sun,
+  read the maps without the light where it is hidden (``station.render.gl_light_maps``); on the ground
+  its direct part (l_y)₊Φ/π. The sky's part of the diffuse and specular maps is not shadowed.
 * **Ground ambient occlusion.** Two height maps of the mesh seen from straight above and below
   (HEIGHT_MAP texels on the long side) give, per column (x, z), the mesh's top and bottom heights; the
   mesh is taken as those columns. From a ground point p the cosine-weighted occluded fraction of the sky

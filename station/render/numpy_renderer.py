@@ -99,6 +99,7 @@ from station.render.environment import spread_exponent
 from station.render.errors import RenderInputError
 from station.render.flakes import clip_sparkle, flake_lod, flake_tint, sparkle_pixels
 from station.render.ground import CLOSED_SHAPES, ground_light_visibility, ground_occlusion, shadow_lights
+from station.render.light_maps import light_lobe_maps
 from station.render.lobes import bent_direction
 from station.render.prefilter import WIDE_EXPONENT, PrefilteredBasis, coat_diffuse_map
 from station.render.sh import sh_diffuse
@@ -325,6 +326,23 @@ def light_shadow(
     return (lost @ lights.flux) * w_a[None, :] + ((lost * coat.entry_scale(nl)) @ lights.flux) * (w_d - w_a)
 
 
+def light_share_loss(
+    basis: PrefilteredBasis, weights: LobeWeights, n_dot_l: np.ndarray, vis: np.ndarray
+) -> tuple[np.ndarray, list[int]]:
+    """What each pixel has lost (P, k) of each extracted light's share of the maps that keep the whole
+    environment, 1 − V where the surface faces the light and 1 where it faces away (as the GL shader's
+    ``lost``), and the lights whose share is to be taken (those lost somewhere that carry their pixels,
+    when the paint weights a lobe that keeps the lights): :func:`station.render.light_maps.light_lobe_maps`."""
+    lost = np.where(np.asarray(n_dot_l) > 0.0, 1.0 - np.asarray(vis, dtype=float), 1.0)
+    lights = basis.lights
+    _, w_dd, w_g = weights.map_weights()
+    narrow = [i for i in range(len(basis.cubes)) if not (basis.wide and basis.wide[i])]
+    weighted = any(w_g[i] != 0.0 or np.any(w_dd[i] != 0.0) for i in narrow)
+    if lights is None or lights.pixels is None or not weighted:
+        return lost, []
+    return lost, [k for k in range(lights.count) if np.any(lost[:, k] > 0.0)]
+
+
 def shade_pixels(
     basis: PrefilteredBasis,
     weights: LobeWeights,
@@ -340,7 +358,9 @@ def shade_pixels(
 
     *coat*: the clear coat's Fresnel factor on the gloss terms (module docstring); None: none. The
     aspecular fall-off term (K_A > 0) is π K_A D(N) (in w_D) plus π K_A · :func:`fall_off_term`.
-    *vis*: (P, k) visibility of the extracted lights (:func:`light_shadow`); None: all visible.
+    *vis*: (P, k) visibility of the extracted lights (:func:`light_shadow`); None: all visible. The
+    lobes that keep the lights in their maps lose the shadowed lights' share of them
+    (:func:`light_share_loss`).
     """
     w_d, w_dd, w_g = weights.map_weights()
     d = diffuse_lookup(basis, normal, diffuse)
@@ -356,8 +376,13 @@ def shade_pixels(
         )
     gloss = np.zeros_like(base)
     nl = lights_n_dot_l(basis, normal)  # once for every lobe's lights and the shadows
+    lost, shadowed = light_share_loss(basis, weights, nl, vis) if vis is not None else (nl, [])
     for i, cube in enumerate(basis.cubes):
         c_r = sample_cube(cube, reflect)
+        if shadowed and not (basis.wide and basis.wide[i]) and (w_g[i] != 0.0 or np.any(w_dd[i] != 0.0)):
+            # a lobe that keeps the lights in its map loses the shadowed lights' share of it at R
+            for k in shadowed:
+                c_r = c_r - lost[:, k : k + 1] * sample_cube(light_lobe_maps(basis, k, [i])[i], reflect)
         bent = dd_direction(basis.exponents[i], normal, reflect, horizon)
         c_dd = c_r if bent is None else sample_cube(cube, bent)
         gloss = gloss + h[:, i : i + 1] * w_g[i] * c_r

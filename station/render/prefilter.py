@@ -379,6 +379,7 @@ class PrefilteredBasis:
     wide: tuple[bool, ...] = ()  # lobe i prefiltered from the residual map
     diffuse_source: np.ndarray | None = field(default=None, repr=False)  # the coat map's source cube
     coat_maps: dict[float, np.ndarray] = field(default_factory=dict, repr=False)  # coat index → D_coat
+    light_maps: dict[tuple[int, int], np.ndarray] = field(default_factory=dict, repr=False)  # light_maps.py
     cache: PrefilterCache | None = field(default=None, repr=False)  # where coat maps are kept on disk
 
 
@@ -439,7 +440,7 @@ def _sample_lobes(
                 cubes[i] = prefilter_grid_numpy(src_cube, *plan[i]).astype(np.float32)
 
 
-def _compute_maps(
+def compute_maps(
     env: Environment,
     residual: Environment,
     src: int,
@@ -543,7 +544,7 @@ def prefilter_basis(
     # the diffuse map depends on the environment alone: cached exactly (float32) like the coat's map
     dkey = PrefilterCache.diffuse_key(env.content_hash, DIFFUSE_SIZE, DIFFUSE_SOURCE_SIZE, engine)
     cached = cache.get(dkey, (6, DIFFUSE_SIZE, DIFFUSE_SIZE, 3)) if cache else None
-    diffuse, coat_src = _compute_maps(
+    diffuse, coat_src = compute_maps(
         env, residual, src, plan, wide, todo, cubes, engine, ctx, timings, cached
     )
     if cache and cached is None:

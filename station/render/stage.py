@@ -117,6 +117,18 @@ def backdrop_lobe(exponents: tuple[float, ...] | list[float], blur_deg: float) -
     return int(np.argmin([abs(w - blur_deg) for w in widths]))
 
 
+def stage_bits(
+    stage: Stage | None, exponents: tuple[float, ...] | list[float], lights_out: list[bool]
+) -> int:
+    """The stage's features a GL frame compiles in: bit 0 a stage, 1 its backdrop, 2 its ground, 3 the
+    backdrop lobe's lights (*lights_out*: per lobe, whether the lights were taken out of its map, so the
+    backdrop's lookup adds them back exactly); 0 without a stage."""
+    if stage is None:
+        return 0
+    out = bool(lights_out) and lights_out[backdrop_lobe(exponents, stage.backdrop_blur_deg)]
+    return 1 | int(stage.backdrop) << 1 | int(stage.ground) << 2 | int(stage.backdrop and out) << 3
+
+
 def sphere_occlusion(points: ArrayLike, occluders: ArrayLike) -> NDArray[np.float64]:
     """Cosine-weighted occluded fraction O (P,) of the sky above ground *points* (P, 3) (normal +Y) by
     spheres *occluders* (k, 4) = (centre x, y, z, radius): each sphere's fraction O_k in closed form,

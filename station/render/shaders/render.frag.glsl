@@ -158,6 +158,19 @@ uniform samplerCube u_flake_sharp, u_flake_mean;
 uniform float u_flake_size_mm, u_flake_density, u_flake_sigma, u_flake_reflectance, u_unit_mm;
 uniform mat3 u_flake_lattice;  // the cell lattice's rotation (flakes.LATTICE_ROTATION)
 uniform vec3 u_flake_tint[2];
+#ifndef N_SHADOW
+#define N_SHADOW 0
+#endif
+#ifndef SHADOWED_MAPS
+#define SHADOWED_MAPS 0
+#endif
+#if N_SHADOW > 0 && SHADOWED_MAPS
+// The maps that keep the whole environment without shadowed light SHADOW_Lj (station/render/gl_light_maps.py):
+// both paints' narrow gloss and directionally diffuse sums (atlases), the glint map and the flakes' mean map.
+// A point that has lost lost_j = 1 - V_j of the lights reads X (1 - sum lost_j) + sum lost_j X_j.
+uniform sampler2D u_shadowed_gloss[N_SHADOW], u_shadowed_dd[N_SHADOW];
+uniform samplerCube u_shadowed_glint[N_SHADOW], u_shadowed_mean[N_SHADOW];
+#endif
 out vec4 f_color;
 
 uvec3 pcg3d(uvec3 v) {
@@ -187,7 +200,7 @@ float flake_level(vec3 q, int k, float count, vec3 n, vec3 t, vec3 b, vec3 ve, o
     return float(u.z < count) / sqrt(max(count, 1.0)) * bump * bump;
 }
 
-vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int paint) {
+vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int paint, vec2 lost) {
     // Multiscale cells (Zirr & Kaplanyan 2016's hierarchy, station.render.flakes): the level whose cells
     // match the pixel's footprint on the surface (side / sqrt(N.V)), blended with the next coarser one
     // by the fractional level, so the sparkle sticks to the surface and changes smoothly with distance.
@@ -209,15 +222,32 @@ vec3 flake_sparkle(vec3 p, float dist, float ndv, vec3 n, vec3 ve, vec3 r, int p
     // Both glint lookups and the mean's are made for every pixel: llvmpipe evaluates both sides of a
     // divergent branch, so a test on the weights would add work, not save it. Reflections below the
     // horizon are zero (a select, no branch).
-    vec3 glint = float(dot(rm0, n) > 0.0) * w0 * textureLod(u_flake_sharp, rm0, 0.0).rgb
-               + float(dot(rm1, n) > 0.0) * w1 * textureLod(u_flake_sharp, rm1, 0.0).rgb;
+    float up0 = float(dot(rm0, n) > 0.0) * w0, up1 = float(dot(rm1, n) > 0.0) * w1;
+    vec3 glint = up0 * textureLod(u_flake_sharp, rm0, 0.0).rgb + up1 * textureLod(u_flake_sharp, rm1, 0.0).rgb;
+    vec3 mean_map = textureLod(u_flake_mean, r, 0.0).rgb;
+#if N_SHADOW > 0 && SHADOWED_MAPS
+    // a shadowed light's glints are gone, and so is its part of their mean (station/render/gl_light_maps.py)
+    if (lost.x + lost.y > 0.0) {
+        float kept = 1.0 - lost.x - lost.y;
+        glint *= kept;
+        mean_map *= kept;
+        glint += lost.x * (up0 * textureLod(u_shadowed_glint[0], rm0, 0.0).rgb
+                           + up1 * textureLod(u_shadowed_glint[0], rm1, 0.0).rgb);
+        mean_map += lost.x * textureLod(u_shadowed_mean[0], r, 0.0).rgb;
+#if N_SHADOW > 1
+        glint += lost.y * (up0 * textureLod(u_shadowed_glint[1], rm0, 0.0).rgb
+                           + up1 * textureLod(u_shadowed_glint[1], rm1, 0.0).rgb);
+        mean_map += lost.y * textureLod(u_shadowed_mean[1], r, 0.0).rgb;
+#endif
+    }
+#endif
     // C_E(R): the sharp map prefiltered with the flakes' reflected lobe (flakes.flake_mean_cube), times the
     // fraction of the flakes' reflections above the horizon, Phi(asin(N.V) / (2 sigma)) (flakes.flake_horizon,
     // erf by Abramowitz & Stegun 7.1.26).
     float z = asin(clamp(ndv, 0.0, 1.0)) / (2.0 * u_flake_sigma) / sqrt(2.0);
     float et = 1.0 / (1.0 + 0.3275911 * z);
     float poly = et * (0.254829592 + et * (-0.284496736 + et * (1.421413741 + et * (-1.453152027 + et * 1.061405429))));
-    vec3 mean = textureLod(u_flake_mean, r, 0.0).rgb * (1.0 - 0.5 * poly * exp(-z * z));
+    vec3 mean = mean_map * (1.0 - 0.5 * poly * exp(-z * z));
     vec3 tint = paint == 0 ? u_flake_tint[0] : u_flake_tint[1];
     return tint * u_flake_reflectance * (glint - (w0 + w1) * mean);
 }
@@ -506,6 +536,22 @@ void main() {
 #else
         float s = 1.0;
 #endif
+        // What each shadowed light's map says the point has lost of it, 1 - V (all where the surface faces away
+        // from the light): its exact terms and diffuse share below, its share of the narrow lobes and glints.
+        vec2 lost = vec2(0.0);
+#if N_SHADOW > 0
+#if MESH
+        vec3 p_shadow = v_pos;
+#else
+        vec3 p_shadow = u_eye + t * d;
+#endif
+        vec3 l_0 = u_light_world[SHADOW_L0];
+        lost.x = 1.0 - (dot(n_world, l_0) > 0.0 ? light_shadow(SHADOW_L0, p_shadow, n_world, l_0) : 0.0);
+#if N_SHADOW > 1
+        vec3 l_1 = u_light_world[SHADOW_L1];
+        lost.y = 1.0 - (dot(n_world, l_1) > 0.0 ? light_shadow(SHADOW_L1, p_shadow, n_world, l_1) : 0.0);
+#endif
+#endif
 #if DIFFUSE_ATLAS
         // wd D + wk (D_coat - D) pre-mixed per paint: one lookup (combine_diffuse.frag.glsl)
         rgb = textureLod(u_diffuse_base, atlas_uv_of(n, paint, DIFFUSE_FACE), 0.0).rgb;
@@ -531,10 +577,29 @@ void main() {
 #if COMBINED
         {
             vec2 uv = atlas_uv(r, paint);  // one pair of lookups for either paint (no branch on the paint)
-            rgb += s * textureLod(u_gloss, uv, 0.0).rgb;
+            vec3 narrow = s * textureLod(u_gloss, uv, 0.0).rgb;
 #if NARROW_DD
-            rgb += ndv * textureLod(u_dd, uv, 0.0).rgb;
+            narrow += ndv * textureLod(u_dd, uv, 0.0).rgb;
 #endif
+#if N_SHADOW > 0 && SHADOWED_MAPS
+            // in a light's shadow the narrow lobes without that light (station/render/gl_light_maps.py); the
+            // lights written out (a loop over the sampler arrays cost 4 % more on llvmpipe), skipped where
+            // every pixel of the block sees them
+            if (lost.x + lost.y > 0.0) {
+                narrow *= 1.0 - lost.x - lost.y;
+                narrow += lost.x * s * textureLod(u_shadowed_gloss[0], uv, 0.0).rgb;
+#if NARROW_DD
+                narrow += lost.x * ndv * textureLod(u_shadowed_dd[0], uv, 0.0).rgb;
+#endif
+#if N_SHADOW > 1
+                narrow += lost.y * s * textureLod(u_shadowed_gloss[1], uv, 0.0).rgb;
+#if NARROW_DD
+                narrow += lost.y * ndv * textureLod(u_shadowed_dd[1], uv, 0.0).rgb;
+#endif
+#endif
+            }
+#endif
+            rgb += narrow;
         }
 #endif
 #if COMBINED
@@ -584,12 +649,7 @@ void main() {
             // the light's direct part (its exact terms and its share of the diffuse map) times its visibility
             // at the world point shaded: the mesh's fragment, or the ray-cast shape's hit
             if (nl > 0.0 && has_shadow_map(l)) {
-#if MESH
-                vec3 p_shadow = v_pos;
-#else
-                vec3 p_shadow = u_eye + t * d;
-#endif
-                float vis = light_shadow(l, p_shadow, n_world, u_light_world[l]);
+                float vis = 1.0 - (l == SHADOW_L0 ? lost.x : lost.y);
                 // the light's share of the diffuse maps: pi K_A (u_wd - u_wk) of D; with a coat pi K_D (u_wk)
                 // of D_coat, where it enters weighted by the coat's entry weight t(N.l) (ClearCoat.entry_scale)
                 vec3 w_lit = paint == 0 ? u_wd[0] : u_wd[1];
@@ -603,7 +663,7 @@ void main() {
         }
 #endif
 #if HAS_FLAKES
-        vec3 sparkle = flake_sparkle(u_eye + t * d, t, ndv, n, u_rot * v, r, paint);
+        vec3 sparkle = flake_sparkle(u_eye + t * d, t, ndv, n, u_rot * v, r, paint, lost);
 #else
         vec3 sparkle = vec3(0.0);
 #endif
