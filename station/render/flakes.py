@@ -132,6 +132,11 @@ MEAN_FACE = 16
 MEAN_SOURCE_FACE = 16
 
 
+def glint_lobe(exponents: tuple[float, ...] | list[float]) -> int:
+    """Index of the basis lobe whose map the flakes' glints read (L_sharp): the sharpest."""
+    return int(np.argmax(exponents))
+
+
 def flake_mean_cube(basis, flakes: FlakeLayer, sharp: np.ndarray | None = None) -> np.ndarray:
     """C_E: the expected flake reflection (6, MEAN_FACE, MEAN_FACE, 3), the sharpest map of *basis* (the
     glints' own map, with its sun and lights) prefiltered by brute-force quadrature
@@ -143,7 +148,7 @@ def flake_mean_cube(basis, flakes: FlakeLayer, sharp: np.ndarray | None = None) 
     from station.render.cubemap import downsample_cube
     from station.render.prefilter import prefilter_brute
 
-    glints = basis.cubes[int(np.argmax(basis.exponents))] if sharp is None else sharp
+    glints = basis.cubes[glint_lobe(basis.exponents)] if sharp is None else sharp
     src = np.asarray(glints, dtype=np.float64)
     while src.shape[1] > MEAN_SOURCE_FACE:
         src = downsample_cube(src)
@@ -153,7 +158,7 @@ def flake_mean_cube(basis, flakes: FlakeLayer, sharp: np.ndarray | None = None) 
 def flake_lobes(exponents: tuple[float, ...] | list[float], flakes: FlakeLayer) -> tuple[int, int]:
     """(sharp, mean) lobe indices of a basis for the sparkle: the sharpest map (L_sharp, the glint) and the
     map whose exponent is nearest in log to the flakes' E ≈ 1/(2σ)² (C_E, the expected flake reflection)."""
-    sharp = int(np.argmax(exponents))
+    sharp = glint_lobe(exponents)
     target = math.log(flakes.reflected_exponent)
     mean = int(np.argmin([abs(math.log(float(e)) - target) for e in exponents]))
     return sharp, mean
@@ -311,7 +316,7 @@ def sparkle_pixels(
         mean_cube = flake_mean_cube(basis, flakes)
 
     ndv = np.clip(np.sum(normal * view, axis=-1), 0.0, 1.0)
-    sharp = int(np.argmax(basis.exponents))
+    sharp = glint_lobe(basis.exponents)
     total = np.zeros((np.asarray(normal).reshape(-1, 3).shape[0], 3))
     weight = np.zeros(total.shape[0])
     for w, m in flake_levels(flakes, positions, normal, distance, ndv, tan_half_fov, height):

@@ -12,16 +12,18 @@ import numpy as np
 from station.render import gl_textures as tx
 from station.render.errors import RenderError, RenderInputError
 from station.render.gl_light_maps import ShadowedMaps
-from station.render.gl_shadows import ShadowMaps, ShapeCaster, shadow_lights
+from station.render.gl_shadows import SHADOW_LIGHTS, ShadowMaps, ShapeCaster, shadow_lights
 from station.render.numpy_renderer import check_paints
 from station.render.shapes import CONVEX_SHAPES, GROUNDS, Scene
 from station.render.stage import lookup_matrix
 
-__all__ = ["SHADOWED_UNIT", "FrameShadows", "probe_shadows"]
+__all__ = ["SHADOWED_UNIT", "SHADOW_UNIT", "FrameShadows", "probe_shadows"]
 
-#: First texture unit of the maps without the shadowed lights past the lobe count m: after the shadow maps (m + 11, three a
-#: light, two lights) and the ground's occlusion map.
-SHADOWED_UNIT = 18
+#: First texture unit of the shadow maps past the lobe count m (units m .. m + 10 hold the frame's own maps).
+SHADOW_UNIT = 11
+#: First texture unit of the maps without the shadowed lights past m: after the shadow maps (three a light)
+#: and the ground's occlusion map.
+SHADOWED_UNIT = SHADOW_UNIT + 3 * SHADOW_LIGHTS + 1
 
 
 class FrameShadows:
@@ -90,7 +92,7 @@ class FrameShadows:
     def bind(
         self, scene: Any, mesh: Any, m: int, objects: tuple = (), mw: Any = None, flakes: Any = None
     ) -> dict:
-        """Bind the shadow maps (texture units m + 11 on) and the ground's occlusion map; their uniforms.
+        """Bind the shadow maps (texture units m + SHADOW_UNIT on) and the ground's occlusion map; their uniforms.
         With *objects* (the frame's :meth:`object_key`: the object is shadowed) also the maps without each
         shadowed light, the narrow lobes' for the paints' bound weights *mw* and the glints of *flakes* (units
         m + SHADOWED_UNIT on, :meth:`station.render.gl_light_maps.ShadowedMaps.bind`; drawn by :meth:`update`)."""
@@ -98,12 +100,12 @@ class FrameShadows:
         if maps is None:
             raise RenderError("shadow maps bound before they were drawn")
         n = len(self.slots)
-        uniforms = maps.bind(m + 11, n)
+        uniforms = maps.bind(m + SHADOW_UNIT, n)
         if self.key(scene, mesh, True)[1]:
             floor_y, centre = self.floor(scene, mesh)
             ao = maps.ambient_occlusion(self.caster(scene, mesh), floor_y, centre, scene.stage.ground_radius)
-            ao.use(m + 11 + 3 * n)
-            uniforms["u_ao"] = m + 11 + 3 * n
+            ao.use(m + SHADOW_UNIT + 3 * n)
+            uniforms["u_ao"] = m + SHADOW_UNIT + 3 * n
         if objects and self.shadowed is not None:
             uniforms.update(self.shadowed.bind(self.slots, mw, flakes, m + SHADOWED_UNIT))
         return uniforms

@@ -27,7 +27,7 @@ import numpy as np
 
 from station.model.flakes import FlakeLayer
 from station.render import gl_textures as tx
-from station.render.flakes import flake_mean_cube
+from station.render.flakes import flake_mean_cube, glint_lobe
 from station.render.light_maps import light_lobe_maps
 
 __all__ = ["ShadowedMaps"]
@@ -50,8 +50,7 @@ class ShadowedMaps:
     def _without(self, light: int) -> list[np.ndarray]:
         """The basis's maps without *light*, in bound order: the map less the light's share for the lobes
         that keep the whole environment, the map itself for the others (their lights are shaded exactly)."""
-        sharp = int(np.argmax(self.basis.exponents))
-        keep = {int(self.order[k]) for k in np.nonzero(self.narrow)[0]} | {sharp}
+        keep = {int(self.order[k]) for k in np.nonzero(self.narrow)[0]} | {glint_lobe(self.basis.exponents)}
         lobes = sorted(i for i in keep if not self.basis.wide[i])
         shares = light_lobe_maps(self.basis, light, lobes, self.ctx)
         cubes = [np.asarray(c, np.float32) for c in self.basis.cubes]
@@ -64,7 +63,7 @@ class ShadowedMaps:
         texs = [tx.cube_texture(self.ctx, cubes[int(i)], self.half_float) for i in self.order]
         atlas = tx.NarrowAtlas(self.ctx, texs, self.narrow, self.face, self.half_float)
         self._atlas[light] = (texs, atlas)
-        glint = cubes[int(np.argmax(self.basis.exponents))]
+        glint = cubes[glint_lobe(self.basis.exponents)]
         self._glint[light] = (tx.shared_exponent_cube(self.ctx, glint), glint)
 
     def atlases(self, light: int, mw: list) -> list:

@@ -13,7 +13,7 @@ import numpy as np
 from station.model.flakes import FlakeLayer
 from station.model.gloss import ClearCoat
 from station.render import gl_textures as tx
-from station.render.flakes import flake_mean_cube
+from station.render.flakes import flake_mean_cube, glint_lobe
 from station.render.prefilter import COAT_DIFFUSE_SIZE, coat_diffuse_map
 
 __all__ = ["DerivedMaps"]
@@ -35,7 +35,7 @@ class DerivedMaps:
         """The flakes' glint map L_sharp: the basis's sharpest lobe map as a shared-exponent cube
         (:func:`station.render.gl_textures.shared_exponent_cube`), uploaded once."""
         if self._glint is None:
-            sharp = int(np.argmax(self.basis.exponents))
+            sharp = glint_lobe(self.basis.exponents)
             self._glint = tx.shared_exponent_cube(self.ctx, np.asarray(self.basis.cubes[sharp]))
         return self._glint
 

@@ -233,7 +233,7 @@ class GLRenderer(Closing):
         self.last_flakes = flake_lod(flakes, scene.view_camera, self.targets.shade_size[1])
         if not linear:
             check_curve(curve)
-        pair, passes, aniso_uniforms, occluders, n_occ = self._frame_programs(
+        pair, passes, aniso_uniforms, occluders, n_occ, objects = self._frame_programs(
             scene,
             pair,
             linear,
@@ -246,7 +246,6 @@ class GLRenderer(Closing):
             probe,
         )
         shadow = self._frame_shadows.key(scene, mesh, self.shadows, probe)
-        objects = self._frame_shadows.object_key(scene, mesh, self.shadows, self.object_shadows, probe)
         glints = flakes if self.last_flakes.on else None
         if shadow:  # before the frame binds its own: these draws bind their own targets and textures
             self._frame_shadows.update(scene, mesh, objects, [self._bound_weights(w) for w in pair], glints)
@@ -287,9 +286,10 @@ class GLRenderer(Closing):
         anisotropic_samples,
         flakes_on: bool = False,
         probe: bool = False,
-    ) -> tuple[list, list, dict, np.ndarray, int]:
-        """(paints, passes, anisotropy uniforms, sphere occluders (k, 4), occluders compiled in) of one
-        frame: the features compiled in (coat, stage bits, flakes, anisotropy) and the programs."""
+    ) -> tuple[list, list, dict, np.ndarray, int, tuple]:
+        """(paints, passes, anisotropy uniforms, sphere occluders (k, 4), occluders compiled in, the object's
+        shadow key FrameShadows.object_key) of one frame: the features compiled in (coat, stage bits, flakes,
+        anisotropy) and the programs."""
         lights_out = [bool(w) for w in self.basis.wide] if self._lights is not None else []
         bits = stage_bits(scene.stage, self.basis.exponents, lights_out)  # lights out of the backdrop's map
         feats: tuple[int, ...] = (int(coat is not None), bits, int(flakes_on))
@@ -327,7 +327,7 @@ class GLRenderer(Closing):
             passes = self._passes.shape_passes(
                 scene.shape, foot, linear, feats, terms, n_occ, curve_i, shadow
             )
-        return pair, passes, aniso_uniforms, occluders, n_occ
+        return pair, passes, aniso_uniforms, occluders, n_occ, shadow
 
     def _frame_uniforms(
         self, scene, pair, fbo, coat, mesh, flakes, aniso_uniforms: dict

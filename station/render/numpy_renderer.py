@@ -328,19 +328,23 @@ def light_shadow(
 
 def light_share_loss(
     basis: PrefilteredBasis, weights: LobeWeights, n_dot_l: np.ndarray, vis: np.ndarray
-) -> tuple[np.ndarray, list[int]]:
+) -> tuple[np.ndarray, list[int], set[int]]:
     """What each pixel has lost (P, k) of each extracted light's share of the maps that keep the whole
     environment, 1 − V where the surface faces the light and 1 where it faces away (as the GL shader's
-    ``lost``), and the lights whose share is to be taken (those lost somewhere that carry their pixels,
-    when the paint weights a lobe that keeps the lights): :func:`station.render.light_maps.light_lobe_maps`."""
+    ``lost``); the lights whose share is to be taken (those lost somewhere that carry their pixels) and the
+    lobes it is taken from (those that keep the lights and that the paint weights), both empty when there
+    is none: :func:`station.render.light_maps.light_lobe_maps`."""
     lost = np.where(np.asarray(n_dot_l) > 0.0, 1.0 - np.asarray(vis, dtype=float), 1.0)
     lights = basis.lights
     _, w_dd, w_g = weights.map_weights()
-    narrow = [i for i in range(len(basis.cubes)) if not (basis.wide and basis.wide[i])]
-    weighted = any(w_g[i] != 0.0 or np.any(w_dd[i] != 0.0) for i in narrow)
-    if lights is None or lights.pixels is None or not weighted:
-        return lost, []
-    return lost, [k for k in range(lights.count) if np.any(lost[:, k] > 0.0)]
+    lobes = {
+        i
+        for i in range(len(basis.cubes))
+        if not (basis.wide and basis.wide[i]) and (w_g[i] != 0.0 or np.any(w_dd[i] != 0.0))
+    }
+    if lights is None or lights.pixels is None or not lobes:
+        return lost, [], set()
+    return lost, [k for k in range(lights.count) if np.any(lost[:, k] > 0.0)], lobes
 
 
 def shade_pixels(
@@ -376,11 +380,10 @@ def shade_pixels(
         )
     gloss = np.zeros_like(base)
     nl = lights_n_dot_l(basis, normal)  # once for every lobe's lights and the shadows
-    lost, shadowed = light_share_loss(basis, weights, nl, vis) if vis is not None else (nl, [])
+    lost, shadowed, lobes = light_share_loss(basis, weights, nl, vis) if vis is not None else (nl, [], set())
     for i, cube in enumerate(basis.cubes):
         c_r = sample_cube(cube, reflect)
-        if shadowed and not (basis.wide and basis.wide[i]) and (w_g[i] != 0.0 or np.any(w_dd[i] != 0.0)):
-            # a lobe that keeps the lights in its map loses the shadowed lights' share of it at R
+        if i in lobes:  # a lobe that keeps the lights in its map loses the shadowed lights' share of it at R
             for k in shadowed:
                 c_r = c_r - lost[:, k : k + 1] * sample_cube(light_lobe_maps(basis, k, [i])[i], reflect)
         bent = dd_direction(basis.exponents[i], normal, reflect, horizon)
