@@ -42,6 +42,7 @@ from station.analysis.geometry import (
 )
 from station.analysis.seam_model import SeamModel
 from station.analysis.shading import Environment, Exposure
+from station.model.domain import BETA_MAX_RANGE_DEG, GRID_STEP_RANGE_DEG, INDEX_RESOLUTION_DEG
 from station.model.domain import JND_CIE76 as DOMAIN_JND_CIE76
 
 if TYPE_CHECKING:
@@ -50,7 +51,7 @@ if TYPE_CHECKING:
 #: ε of the thesis: one JND, in ΔE*ab.
 JND_CIE76 = DOMAIN_JND_CIE76
 #: The stated resolution of β_min (degrees; Brent's tolerance is ``station.analysis.bracket.BRENT_XTOL_DEG``).
-RESOLUTION_DEG = 1e-6
+RESOLUTION_DEG = INDEX_RESOLUTION_DEG
 #: Aspecular angles (degrees) scanned when no view is given for an effect paint: the measured range.
 DEFAULT_ASPECULAR_SCAN = tuple(float(a) for a in range(15, 111, 5))
 
@@ -122,13 +123,24 @@ class IndexResult:
         return out
 
 
-def _check_positive(value: float, field_name: str, upper: float | None = None) -> float:
+def _check_positive(value: float, field_name: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError) as exc:
         raise AnalysisInputError(field_name, "a positive number", value) from exc
-    if not math.isfinite(v) or v <= 0 or (upper is not None and v > upper):
-        accepted = f"0 < {field_name} <= {upper:g}" if upper is not None else f"{field_name} > 0"
+    if not math.isfinite(v) or v <= 0:
+        raise AnalysisInputError(field_name, f"{field_name} > 0", value)
+    return v
+
+
+def _check_range(value: float, field_name: str, bounds: tuple[float, float]) -> float:
+    lo, hi = bounds
+    accepted = f"{lo:g} <= {field_name} <= {hi:g}"
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise AnalysisInputError(field_name, accepted, value) from exc
+    if not lo <= v <= hi:  # NaN fails too
         raise AnalysisInputError(field_name, accepted, value)
     return v
 
@@ -194,9 +206,9 @@ def goniogeometric_index(
     direction
         ``"+"``, ``"-"`` or ``"either"`` (the smaller of the two).
     beta_max_deg
-        Largest misalignment searched, degrees (0 < β_max ≤ 89).
+        Largest misalignment searched, degrees (``BETA_MAX_RANGE_DEG``: 1e-6 ≤ β_max ≤ 89).
     grid_step_deg
-        Bracketing grid step in degrees (0 < step ≤ 1).
+        Bracketing grid step in degrees (``GRID_STEP_RANGE_DEG``: 0.001 ≤ step ≤ 1).
     exposure, gloss
         See :mod:`station.analysis.shading`.
 
@@ -206,8 +218,8 @@ def goniogeometric_index(
         β_min (degrees, resolution 1e-6°), the direction and geometry attaining it, or ``reached=False``.
     """
     eps = _check_positive(epsilon, "epsilon")
-    bmax = _check_positive(beta_max_deg, "beta_max_deg", 89.0)
-    step = _check_positive(grid_step_deg, "grid_step_deg", 1.0)
+    bmax = _check_range(beta_max_deg, "beta_max_deg", BETA_MAX_RANGE_DEG)
+    step = _check_range(grid_step_deg, "grid_step_deg", GRID_STEP_RANGE_DEG)
     if direction not in ("+", "-", "either"):
         raise AnalysisInputError("direction", '"+", "-" or "either"', direction)
     if isinstance(light, Environment):

@@ -362,6 +362,13 @@ TOLERANCE_AGGREGATIONS: tuple[str, ...] = ("max", "mean")
 
 #: One just-noticeable difference in ΔE*ab (CIE76), the thesis's ε (§4.3).
 JND_CIE76 = 2.3
+#: The stated resolution of the goniogeometric index β_min (degrees, eq 4.3.1).
+INDEX_RESOLUTION_DEG = 1e-6
+#: The largest misalignment β_max an index search may be asked for (degrees): from the index's resolution
+#: (a search below it can answer nothing, and its grid spacing underflows) to 89°.
+BETA_MAX_RANGE_DEG: tuple[float, float] = (INDEX_RESOLUTION_DEG, 89.0)
+#: The index's bracketing grid step (degrees): from 0.001° (at most 89 001 grid points a row) to 1°.
+GRID_STEP_RANGE_DEG: tuple[float, float] = (1e-3, 1.0)
 #: Default formulation tolerance: mean CIEDE2000 over the angles for "formulable" (formulation-qc).
 FORMULATION_TOLERANCE_DE00 = 1.0
 #: Toner lines a recipe is drawn from (station.formulate.lines), one per paint type: solids get no effect

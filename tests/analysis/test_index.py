@@ -152,6 +152,12 @@ def test_environment_uniform_sky_solid_is_insensitive(grey):
         ({"epsilon": 0.0}, "epsilon"),
         ({"epsilon": float("nan")}, "epsilon"),
         ({"beta_max_deg": 95.0}, "beta_max_deg"),
+        # below the index's resolution the grid spacing underflowed (a fuzzed request: 5e-324)
+        ({"beta_max_deg": 5e-324}, "beta_max_deg"),
+        ({"beta_max_deg": 0.9e-6}, "beta_max_deg"),
+        ({"beta_max_deg": float("nan")}, "beta_max_deg"),
+        ({"grid_step_deg": 1e-300}, "grid_step_deg"),
+        ({"grid_step_deg": 2.0}, "grid_step_deg"),
         ({"method": "cmc"}, "method"),
         ({"hinge": "diagonal"}, "hinge"),
         ({"direction": "up"}, "direction"),
@@ -162,6 +168,15 @@ def test_bad_input_names_the_field(grey, kwargs, field):
         goniogeometric_index(grey, 45.0, 0.0, **kwargs)
     assert exc.value.field == field
     assert isinstance(exc.value, InputError)
+
+
+def test_smallest_beta_max_is_searched_without_a_warning(grey):
+    """β_max at the index's resolution (the lower end of ``BETA_MAX_RANGE_DEG``): a plain answer, no
+    floating-point warning (warnings are errors in this suite)."""
+    from station.model.domain import BETA_MAX_RANGE_DEG
+
+    r = goniogeometric_index(grey, 45.0, 0.0, beta_max_deg=BETA_MAX_RANGE_DEG[0])
+    assert not r.reached and r.beta_max_deg == BETA_MAX_RANGE_DEG[0]
 
 
 def test_light_at_grazing_limit_is_refused(grey):

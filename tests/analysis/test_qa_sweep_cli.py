@@ -118,6 +118,10 @@ def test_cli_bad_input_exit_2(capsys):
     assert main(["analysis", "gg-index", "--face", "60,0,0", "--light", "95", "--json"]) == 2
     assert "light_deg" in capsys.readouterr().err
     assert main(["analysis", "gg-index", "--face", "60,0,0", "--flop", "30,0,0", "--light", "45"]) == 2
+    capsys.readouterr()
+    assert main(["analysis", "gg-index", "--face", "60,0,0", "--light", "45", "--beta-max", "1e-300"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "beta_max_deg" in err[0] and "1e-06 <= beta_max_deg <= 89" in err[0], err
 
 
 def test_cli_trompe_loeil(capsys):

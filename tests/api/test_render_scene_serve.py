@@ -282,3 +282,4 @@ def test_environment_index_refusals(service: Service) -> None:
     assert ["body", "rotation_deg"] in _field(post({"environment": "sky", "rotation_deg": 720.0}))
     assert ["body", "environment_hdr"] in _field(post({"environment_hdr": "%%%"}))
     assert ["body", "beta_max_deg"] in _field(post({"environment": "sky", "beta_max_deg": 95.0}))
+    assert ["body", "beta_max_deg"] in _field(post({"environment": "sky", "beta_max_deg": 5e-324}))

@@ -94,6 +94,7 @@ def test_gg_index_never_reached_says_so(sqlite_api: Api) -> None:
         ({"method": "cie1900"}, "method"),
         ({"direction": "up"}, "direction"),
         ({"beta_max_deg": 90.0}, "beta_max_deg"),
+        ({"beta_max_deg": 5e-324}, "beta_max_deg"),  # found by the schema fuzzer: a 500 before
         ({"paint": GREY | {"face": [50.0, 0.0, 999.0]}}, "paint"),
         (
             {"paint": GREY | {"flop": [20.0, 0.0, 0.0]}},

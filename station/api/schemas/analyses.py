@@ -17,7 +17,7 @@ from station.api.schemas.environment import (
     EnvironmentTurn,
     UploadedEnvironment,
 )
-from station.model.domain import JND_CIE76, DeltaEComputed, DeltaEEnvironment
+from station.model.domain import BETA_MAX_RANGE_DEG, JND_CIE76, DeltaEComputed, DeltaEEnvironment
 from station.schema_config import strict_config
 
 Method = DeltaEComputed
@@ -47,7 +47,14 @@ Beta = Annotated[
 Lights = Annotated[list[Polar], Field(min_length=1, max_length=16, description="light polar angles, degrees")]
 #: The index search's options shared by the point-lit and the environment-lit index.
 Direction = Literal["+", "-", "either"]
-BetaMax = Annotated[StrictFloat, Field(gt=0.0, le=89.0, description="largest β searched, degrees")]
+BetaMax = Annotated[
+    StrictFloat,
+    Field(
+        ge=BETA_MAX_RANGE_DEG[0],
+        le=BETA_MAX_RANGE_DEG[1],
+        description=f"largest β searched, degrees ({BETA_MAX_RANGE_DEG[0]:g} to {BETA_MAX_RANGE_DEG[1]:g})",
+    ),
+]
 IncludeGloss = Annotated[StrictBool, Field(description="add the gloss lobe (excluded in the thesis)")]
 
 _PAINT: JsonDict = {
