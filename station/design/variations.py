@@ -105,6 +105,8 @@ def _vary_colour(lab: tuple[float, float, float], label: str, d: float) -> tuple
             raise _Unreachable("an achromatic colour has no hue direction to add chroma along")
         return (L, a * c2 / c, b * c2 / c)
     # hue ±: ΔH*ab = 2 sqrt(C1 C2) sin(Δh/2) with C1 = C2 = C
+    if c == 0:  # (d / 2 underflows to 0 for the smallest d, so the test below would let c = 0 through)
+        raise _Unreachable("an achromatic colour has no hue to turn")
     if c < d / 2.0:
         raise _Unreachable(f"chroma {c:.4g} < degree/2: a hue step of ΔH = {d:g} is impossible")
     dh = 2.0 * math.asin(d / (2.0 * c)) * (1 if label == "hue +" else -1)

@@ -75,6 +75,20 @@ def test_unreachable_variations_are_listed_with_the_reason() -> None:
     assert tg["more travel"].design.travel_deg == 30.0
 
 
+def test_achromatic_colour_has_no_hue_step_even_for_the_smallest_degree() -> None:
+    """A grey's hue cannot turn: at the smallest positive degree (5e-324, where degree / 2 underflows to
+    0; a fuzzed request once divided by its zero chroma) both hue steps are unreachable with a reason,
+    and lighter/darker still step."""
+    grey = FaceFlopTravelGloss((60.0, 0.0, 0.0), (30.0, 0.0, 0.0), 40.0, 50.0)
+    for degree in (5e-324, 5.0):
+        ring = {v.label: v for v in variations(grey, degree, "face").variations}
+        for label in ("hue +", "hue -", "hue −"):
+            if label in ring:
+                assert ring[label].design is None and "no hue" in ring[label].reason
+        assert sum("hue" in label for label in ring) == 2
+        assert ring["lighter"].design is not None
+
+
 def test_solid_varies_as_one_colour() -> None:
     solid = FaceFlopTravelGloss((50.0, 20.0, 0.0), (50.0, 20.0, 0.0), None, 50.0)
     ring = {v.label: v for v in variations(solid, 5.0, "flop").variations}
