@@ -64,8 +64,7 @@ def _pct(xs: list[float], q: float) -> float:
 
 def _dispose(view) -> None:
     """Close *view* and delete it now, as the application's event loop would (its deferred delete, then a
-    collection): a closed view left to the cyclic collector was destroyed at some later point of the next
-    view's start, which crashed (SIGSEGV in the next GL surface's paint)."""
+    collection), so that no closed view's clean-up lands inside the next view's measured frames."""
     import gc
 
     from PySide6.QtCore import QCoreApplication, QEvent

@@ -332,3 +332,64 @@ def test_frames_are_delivered_without_qts_idle_wait() -> None:
         out = run([sys.executable, "-c", code], env=env, timeout=120)
         assert out.returncode == 0, out.stderr
         assert out.stdout.strip() == expected
+
+
+#: A view closed and dropped, then the next one opened and orbited, in a fresh process (a crash there
+#: would otherwise end this test's worker): the journey that crashed with SIGSEGV in the next view's paint
+#: while the closed view waited for the cyclic collector.
+_REOPEN = """
+import gc, sys
+from ui.widgets.render_view import configure_default_format
+configure_default_format()
+from PySide6.QtCore import QCoreApplication
+from PySide6.QtWidgets import QApplication
+app = QApplication([])
+from ui.models.document import DEFAULT_DESIGN
+from ui.models.view import ViewModel
+from ui.widgets.render_view import GLRenderView
+for k in range(4):
+    vm = ViewModel()
+    vm.show(DEFAULT_DESIGN)
+    view = GLRenderView(vm)
+    view.resize(192, 192)
+    view.show()
+    view.wait_idle(120000)
+    for i in range(3):
+        n = view.frames
+        vm.update(yaw_deg=3.0 * (i + 1))
+        while view.frames == n:
+            QCoreApplication.processEvents()
+    view.wait_idle(120000)
+    view.close()
+    del view, vm  # no collection asked for: the view must go on its own
+    print("view", k, "closed", flush=True)
+print("done", flush=True)
+"""
+
+
+@pytest.mark.gl
+def test_a_closed_view_is_freed_at_once_and_the_next_view_draws(qtbot) -> None:
+    """A closed view needs no cyclic collection to go (its GL surface holds it weakly), so it is never
+    destroyed in the middle of another view's frame; closing views and opening new ones in one process,
+    each orbited, ends normally."""
+    import gc
+    import weakref
+
+    vm = ViewModel()
+    vm.show(DEFAULT_DESIGN)
+    view = GLRenderView(vm)
+    view.resize(128, 128)
+    view.show()
+    view.wait_idle(120000)
+    qtbot.waitUntil(lambda v=view: v.frames > 0, timeout=120000)
+    gone = weakref.ref(view)
+    view.close()
+    gc.disable()
+    try:
+        del view
+        assert gone() is None, "the closed view is still alive: something holds it in a reference cycle"
+    finally:
+        gc.enable()
+    out = run([sys.executable, "-c", _REOPEN], timeout=600)
+    assert out.returncode == 0, (out.returncode, out.stdout[-2000:], out.stderr[-4000:])
+    assert out.stdout.split()[-1:] == ["done"] and out.stdout.count("closed") == 4, out.stdout

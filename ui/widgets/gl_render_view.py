@@ -9,6 +9,7 @@ context and the last ``GL_ENV_KEEP`` prefilters are kept.
 from __future__ import annotations
 
 import time
+import weakref
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -50,26 +51,41 @@ class _GLSurface(QOpenGLWindow):
 
     def __init__(self, view: GLRenderView) -> None:
         super().__init__()
-        self._view = view
+        # A weak reference: a strong one made a cycle (view -> surface -> view), so a closed view was
+        # freed only by the cyclic collector, at whatever allocation triggered it, and a view closed
+        # before another opened crashed the next one's paint (SIGSEGV in QOpenGLContext::isValid).
+        self._view = weakref.ref(view)
 
     def paintGL(self) -> None:
-        with collector_paused():  # no collection inside the frame's GL work (ui.widgets.tasks)
-            self._view._paint_gl()
+        view = self._view()
+        if view is not None:
+            with collector_paused():  # no collection inside the frame's GL work (ui.widgets.tasks)
+                view._paint_gl()
 
     def resizeGL(self, w: int, h: int) -> None:
-        self._view._screen = None
+        view = self._view()
+        if view is not None:
+            view._screen = None
 
     def mousePressEvent(self, event: QMouseEvent) -> None:
-        self._view.mousePressEvent(event)
+        view = self._view()
+        if view is not None:
+            view.mousePressEvent(event)
 
     def mouseMoveEvent(self, event: QMouseEvent) -> None:
-        self._view.mouseMoveEvent(event)
+        view = self._view()
+        if view is not None:
+            view.mouseMoveEvent(event)
 
     def mouseReleaseEvent(self, event: QMouseEvent) -> None:
-        self._view.mouseReleaseEvent(event)
+        view = self._view()
+        if view is not None:
+            view.mouseReleaseEvent(event)
 
     def wheelEvent(self, event: QWheelEvent) -> None:
-        self._view.wheelEvent(event)
+        view = self._view()
+        if view is not None:
+            view.wheelEvent(event)
 
 
 class GLRenderView(ViewLogic):
