@@ -24,6 +24,9 @@ SHADOW_UNIT = 11
 #: First texture unit of the maps without the shadowed lights past m: after the shadow maps (three a light)
 #: and the ground's occlusion map.
 SHADOWED_UNIT = SHADOW_UNIT + 3 * SHADOW_LIGHTS + 1
+#: Texture unit (after the lobes) of the first light's disc atlas (the ground's bake; gl_shadows.DISC_MIN_DEG),
+#: after the maps without the shadowed lights (four a light, station.render.gl_light_maps).
+DISC_UNIT = SHADOWED_UNIT + 4 * SHADOW_LIGHTS
 
 
 class FrameShadows:
@@ -100,7 +103,7 @@ class FrameShadows:
         if maps is None:
             raise RenderError("shadow maps bound before they were drawn")
         n = len(self.slots)
-        uniforms = maps.bind(m + SHADOW_UNIT, n)
+        uniforms = maps.bind(m + SHADOW_UNIT, n, m + DISC_UNIT)
         if self.key(scene, mesh, True)[1]:
             floor_y, centre = self.floor(scene, mesh)
             ao = maps.ambient_occlusion(self.caster(scene, mesh), floor_y, centre, scene.stage.ground_radius)

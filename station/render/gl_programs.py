@@ -167,13 +167,20 @@ def set_uniforms(
         prog["u_occ"].write(occ[: prog["u_occ"].array_length].tobytes())
     if _has(prog, "u_sh"):
         prog["u_sh"].write(sh.tobytes())
-    for name in ("u_shadow_mat", "u_shadow_par", "u_shadow_c"):  # station.render.gl_shadows.ShadowMaps.bind
+    for name in (  # station.render.gl_shadows.ShadowMaps.bind
+        "u_shadow_mat",
+        "u_shadow_par",
+        "u_shadow_c",
+        "u_shadow_disc_mat",
+        "u_shadow_disc_par",
+    ):
         if _has(prog, name):
             _write(prog, name, uniforms["_" + name[2:]][: prog[name].array_length])
     for name in (
         "u_shadow_cmp",
         "u_shadow_raw",
         "u_shadow_esm",
+        "u_shadow_disc",
         "u_shadowed_gloss",  # station.render.gl_light_maps.ShadowedMaps.bind
         "u_shadowed_dd",
         "u_shadowed_glint",

@@ -24,6 +24,14 @@
   the mean blocker depth, the penumbra radius is (receiver − blocker depth) · tan a (at least a texel),
   and the visibility V is the mean of 8 depth comparisons (each a bilinear 2 × 2 comparison) over
   that radius, in [0, 1]: hard at the contact, soft away from it.
+* **Ground under a wide light: hard shadows over its disc.** The filter's radius stops at
+  MAX_RADIUS_TEXELS, and one radius per point cannot hold both a lamp's dark contact and its wide outer
+  penumbra. A light wider than DISC_MIN_DEG (a booth lamp) therefore also draws DISC_DIRECTIONS depth maps,
+  one per direction spread over its disc (:func:`station.render.ground.disc_directions`, the directions
+  the NumPy ground casts), into one atlas; its ground visibility is the mean of their bilinear 2 × 2
+  comparisons, the average of hard shadows over the lamp's disc (a point whose cone towards the lamp
+  misses the caster's bounding sphere skips them). Against a brute force of rays over the disc the
+  visibility's p95 error went from 0.42 to 0.047 under a 20° lamp (docs/render.md).
 * **Model: exponential shadow map.** The model is shaded every frame, where a filtered lookup of several
   taps per light cost the orbit about as much as the rest of the car's shading on llvmpipe. Each
   light's depth map d is therefore filtered once, when drawn, into an ESM_MAP² map of L = (1/c) log of the
@@ -67,6 +75,7 @@ from station.render.ground import CLOSED_SHAPES as CLOSED_SHAPES
 from station.render.ground import HEIGHT_MAP as HEIGHT_MAP
 from station.render.ground import SHADOW_LIGHTS as SHADOW_LIGHTS
 from station.render.ground import SUN_RADIUS_DEG as SUN_RADIUS_DEG
+from station.render.ground import disc_directions
 from station.render.ground import light_radius_rad as light_radius_rad
 from station.render.ground import shadow_lights as shadow_lights
 from station.render.shapes import SHAPE_INDEX, SHAPES
@@ -77,6 +86,15 @@ SHADOW_MAP = 2048
 NORMAL_OFFSET = 1.5
 #: Widest PCF radius, texels (a booth lamp tens of degrees wide is a soft, not a missing, shadow).
 MAX_RADIUS_TEXELS = 24.0
+#: A light wider than DISC_MIN_DEG (radius, degrees; the sun is 0.27°) bakes the ground from
+#: DISC_DIRECTIONS hard shadows instead of the filter above: one depth map of DISC_MAP² texels per direction
+#: spread over its disc (``station.render.ground.disc_directions``, as the NumPy ground casts its rays),
+#: tiled DISC_COLUMNS across in one atlas per light; a ground point's visibility is the share of the
+#: directions whose map does not hide it.
+DISC_MIN_DEG = 2.0
+DISC_DIRECTIONS = 32
+DISC_MAP = 256
+DISC_COLUMNS = 8
 #: The model's frames read an exponential shadow map (ESM) of ESM_MAP² texels per light: exp(c d) box-filtered
 #: once per light over ESM_TAPS² taps (in log space), one lookup a pixel.
 ESM_MAP = 1024
@@ -213,6 +231,17 @@ class ShadowMaps:
         ] = []  # (texture, framebuffer, compare sampler, raw sampler)
         self._views: list[OrthoView] = []
         self._radii: list[float] = []
+        # per light slot: (atlas texture, framebuffer, compare sampler) of its disc's depth maps, made once
+        self._disc: list[tuple[Any, Any, Any]] = []
+        self._disc_views: list[
+            list[OrthoView]
+        ] = []  # per light slot: its disc's views ([] for a narrow light)
+        self._bound: tuple[float, ...] = (
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        )  # the caster's bounding sphere (world centre, radius)
         self._key: tuple | None = None
         self._held: Any = None  # the mesh of the key (so its id is not reused while cached)
         self._mesh_buf: tuple | None = None  # (mesh, vbo, ibo, vao)
@@ -277,12 +306,19 @@ class ShadowMaps:
         vao: Any,
         size: tuple[int, int] | None = None,
         from_below: bool = False,
+        origin: tuple[int, int] | None = None,
     ) -> None:
         """Depth of the caster whose vertex array is *vao* in *view* into *fbo* (*size*: its texels): a
         mesh rasterised, or a ray-cast shape's full-screen pass (``shaders/shadow_cast.frag.glsl``;
-        *from_below*: the height map from below)."""
-        fbo.use()
-        fbo.clear(depth=1.0)
+        *from_below*: the height map from below). *origin*: into the tile of *size* texels at that texel
+        of *fbo* (an atlas, cleared beforehand), else into the whole of *fbo*, cleared first."""
+        if origin is None:
+            fbo.viewport = (0, 0, *fbo.size)
+            fbo.use()
+            fbo.clear(depth=1.0)
+        else:
+            fbo.viewport = (*origin, *(size or fbo.size))
+            fbo.use()
         cast = next((p for p, v in self._cast.values() if v is vao), None)
         if cast is None:
             self._depth_prog["u_clip"].value = _cols(view.clip())
@@ -293,6 +329,8 @@ class ShadowMaps:
             cast["u_dir"].value = tuple(float(v) for v in axis / np.linalg.norm(axis))
             cast["u_depth"].value = float(view.depth)
             cast["u_size"].value = tuple(float(v) for v in (size or fbo.size))
+            if "u_origin" in cast:
+                cast["u_origin"].value = tuple(float(v) for v in (origin or (0, 0)))
             if "u_from_below" in cast:  # the cylinder's only
                 cast["u_from_below"].value = int(from_below)
         self.ctx.enable(self.ctx.DEPTH_TEST)
@@ -329,13 +367,16 @@ class ShadowMaps:
         if key == self._key and self._holds(mesh):
             return
         lo, hi = mesh.bounds
+        centre = 0.5 * (np.asarray(lo, float) + np.asarray(hi, float))
+        half = 0.5 * float(np.linalg.norm(np.asarray(hi, float) - np.asarray(lo, float)))
+        self._bound = (*(float(v) for v in centre), half)
         vao = self._caster_vao(mesh)
         while len(self._maps) < len(slots):
             self._maps.append(self._light_target())
         while len(self._esm) < len(slots) + 1:
             self._esm.append(self._esm_target())
         self._esm_c = []
-        self._views, self._radii = [], []
+        self._views, self._radii, self._disc_views = [], [], []
         spreads = lights.spreads()
         for k, i in enumerate(slots):
             world = np.asarray(rotation, float).T @ np.asarray(lights.directions[i], float)
@@ -344,8 +385,38 @@ class ShadowMaps:
             self._views.append(view)
             self._radii.append(light_radius_rad(float(spreads[i])))
             self._filter_esm(k, view, self._radii[-1])
+            self._disc_views.append(self._draw_disc(k, world, self._radii[-1], lo, hi, vao))
         self._key, self._held = key, mesh
         self.version += 1
+
+    def _disc_target(self, k: int) -> tuple[Any, Any, Any]:
+        while len(self._disc) <= k:
+            rows = -(-DISC_DIRECTIONS // DISC_COLUMNS)
+            tex, fbo = self._depth_target((DISC_COLUMNS * DISC_MAP, rows * DISC_MAP))
+            cmp = self.ctx.sampler(texture=tex, repeat_x=False, repeat_y=False, compare_func="<=")
+            self._disc.append((tex, fbo, cmp))
+        return self._disc[k]
+
+    def _draw_disc(
+        self, k: int, world: NDArray, radius_rad: float, lo: NDArray, hi: NDArray, vao: Any
+    ) -> list[OrthoView]:
+        """Light slot *k*'s disc atlas (module docstring): the depth maps of DISC_DIRECTIONS directions
+        over the disc of angular radius *radius_rad* about its world direction *world*, each fitted to the
+        box [*lo*, *hi*]; their views in tile order. None drawn (``[]``) for a light of DISC_MIN_DEG or less."""
+        if radius_rad <= math.radians(DISC_MIN_DEG):
+            return []
+        _, fbo, _ = self._disc_target(k)
+        fbo.viewport = (0, 0, *fbo.size)
+        fbo.use()
+        fbo.clear(depth=1.0)
+        views = []
+        for j, direction in enumerate(disc_directions(world, radius_rad, DISC_DIRECTIONS)):
+            view = light_view(direction, lo, hi, DISC_MAP)
+            origin = ((j % DISC_COLUMNS) * DISC_MAP, (j // DISC_COLUMNS) * DISC_MAP)
+            self._draw_depth(fbo, view, vao, (DISC_MAP, DISC_MAP), origin=origin)
+            views.append(view)
+        fbo.viewport = (0, 0, *fbo.size)
+        return views
 
     def _filter_esm(self, k: int, view: OrthoView, radius_rad: float) -> None:
         """Light slot *k*'s exponential shadow map: its depth map box-filtered in log space, across then
@@ -423,14 +494,27 @@ class ShadowMaps:
             return bool(self._ao_caster == caster)
         return self._mesh_buf is not None and self._mesh_buf[0] is caster and self._ao_caster is caster
 
-    def bind(self, first_unit: int, count: int) -> dict[str, Any]:
-        """Bind the first *count* light maps (compare and raw samplers) from texture unit *first_unit* on and
-        return their uniforms (the ``_shadow_*`` arrays go through ``set_uniforms``)."""
+    def bind(self, first_unit: int, count: int, disc_unit: int) -> dict[str, Any]:
+        """Bind the first *count* light maps (compare and raw samplers) from texture unit *first_unit* on, their
+        disc atlases from *disc_unit* on (a narrow light's compare sampler in its place), and return their
+        uniforms (the ``_shadow_*`` arrays go through ``set_uniforms``)."""
+        identity = np.eye(4).ravel()
+        disc_mat: list[NDArray] = []
         for k in range(count):
             self._maps[k][2].use(first_unit + k)
             self._maps[k][3].use(first_unit + count + k)
             self._esm[k + 1][0].use(first_unit + 2 * count + k)
+            views = self._disc_views[k]
+            (self._disc[k][2] if views else self._maps[k][2]).use(disc_unit + k)
+            disc_mat += [v.matrix.T.ravel() for v in views] or [identity] * DISC_DIRECTIONS
         return {
+            "_shadow_disc": list(range(disc_unit, disc_unit + count)),
+            "_shadow_disc_mat": disc_mat,
+            "_shadow_disc_par": [
+                (v[0].texel, v[0].depth, math.tan(self._radii[k])) if v else (1.0, 1.0, 0.0)
+                for k, v in enumerate(self._disc_views[:count])
+            ],
+            "u_shadow_bound": self._bound,
             "_shadow_esm": list(range(first_unit + 2 * count, first_unit + 3 * count)),
             "_shadow_c": list(self._esm_c[:count]),
             "_shadow_cmp": list(range(first_unit, first_unit + count)),
@@ -453,6 +537,10 @@ class ShadowMaps:
         for tex, fbo, cmp, raw in self._maps:
             for obj in (cmp, raw, fbo, tex):
                 obj.release()
+        for tex, fbo, cmp in self._disc:
+            for obj in (cmp, fbo, tex):
+                obj.release()
+        self._disc, self._disc_views = [], []
         for tex, fbo in self._heights:
             fbo.release()
             tex.release()
@@ -491,4 +579,7 @@ def shadow_defines(slots: tuple[int, ...], ambient: bool) -> dict[str, object]:
         "HAS_AO": int(ambient),
         "SHADOW_NORMAL_OFFSET": f"{NORMAL_OFFSET:.3f}",
         "SHADOW_MAX_RADIUS": f"{MAX_RADIUS_TEXELS:.3f}",
+        "DISC_DIRECTIONS": DISC_DIRECTIONS,
+        "DISC_COLUMNS": DISC_COLUMNS,
+        "DISC_ROWS": -(-DISC_DIRECTIONS // DISC_COLUMNS),
     }

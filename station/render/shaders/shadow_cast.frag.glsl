@@ -8,12 +8,13 @@
 uniform mat4 u_inv;
 uniform vec3 u_dir;
 uniform vec2 u_size;
+uniform vec2 u_origin;  // the tile's first texel in an atlas (station.render.gl_shadows: a wide light's disc)
 uniform float u_depth;
 uniform int u_from_below;
 //#include shapes.glsl
 
 void main() {
-    vec2 uv = gl_FragCoord.xy / u_size;
+    vec2 uv = (gl_FragCoord.xy - u_origin) / u_size;
     vec3 o = (u_inv * vec4(uv, 0.0, 1.0)).xyz;
     float t;
     vec3 n;

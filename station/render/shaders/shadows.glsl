@@ -56,6 +56,49 @@ float shadow_lookup(sampler2DShadow cmp, sampler2D raw, mat4 m, vec3 par, vec3 p
     return vis / 8.0;
 }
 
+#if BAKE_GROUND
+#ifndef DISC_DIRECTIONS
+#define DISC_DIRECTIONS 32
+#define DISC_COLUMNS 8
+#define DISC_ROWS 4
+#endif
+// A wide light's disc (station/render/gl_shadows.py, DISC_MIN_DEG): DISC_DIRECTIONS depth maps tiled
+// DISC_COLUMNS across in u_shadow_disc[k], u_shadow_disc_mat their views; u_shadow_disc_par[k] (world texel,
+// world depth over 0..1, tan of the light's radius when it has a disc else 0).
+uniform sampler2DShadow u_shadow_disc[N_SHADOW];
+uniform mat4 u_shadow_disc_mat[N_SHADOW * DISC_DIRECTIONS];
+uniform vec3 u_shadow_disc_par[N_SHADOW];
+uniform vec4 u_shadow_bound;  // the caster's bounding sphere (world centre, radius)
+
+// The ground's visibility of light slot k's disc from p (unit normal nw, cos_l = nw . l): the share of the
+// disc's directions whose depth map does not hide p (each a bilinear 2 x 2 comparison), the receiver moved
+// off its surface as for shadow_lookup.
+float disc_lookup(sampler2DShadow atlas, int k, vec3 par, vec3 p, vec3 nw, vec3 lw, float cos_l) {
+    // the cone of the light's directions from p (half angle: its radius, tan in par.z) misses the caster's
+    // bounding sphere: nothing to look up
+    vec3 to_c = u_shadow_bound.xyz - p;
+    float dc = length(to_c);
+    if (dc > u_shadow_bound.w) {
+        float apart = acos(clamp(dot(to_c / dc, lw), -1.0, 1.0)) - asin(u_shadow_bound.w / dc);
+        if (apart > atan(par.z)) return 1.0;
+    }
+    float sin_l = sqrt(max(1.0 - cos_l * cos_l, 0.0));
+    vec3 q = p + nw * (SHADOW_NORMAL_OFFSET * par.x * (1.0 + sin_l));
+    float bias = par.x * (1.0 + min(sin_l / max(cos_l, 0.1), 4.0)) / par.y;
+    float vis = 0.0;
+    for (int j = 0; j < DISC_DIRECTIONS; ++j) {
+        vec3 s = (u_shadow_disc_mat[k * DISC_DIRECTIONS + j] * vec4(q, 1.0)).xyz;
+        if (s.x <= 0.0 || s.y <= 0.0 || s.x >= 1.0 || s.y >= 1.0) {
+            vis += 1.0;
+        } else {
+            vec2 tile = vec2(float(j % DISC_COLUMNS), float(j / DISC_COLUMNS));
+            vis += texture(atlas, vec3((tile + s.xy) / vec2(float(DISC_COLUMNS), float(DISC_ROWS)), min(s.z, 1.0) - bias));
+        }
+    }
+    return vis / float(DISC_DIRECTIONS);
+}
+#endif
+
 // The model's visibility of a light (one lookup): exp(c (L - z)) clamped to 1, L the exponential shadow
 // map's log-filtered depth and z the receiver's depth, the receiver moved off its surface as above.
 float esm_lookup(sampler2D esm, float c, mat4 m, vec3 par, vec3 p, vec3 nw, float cos_l) {
@@ -69,9 +112,15 @@ float esm_lookup(sampler2D esm, float c, mat4 m, vec3 par, vec3 p, vec3 nw, floa
 float light_shadow(int l, vec3 p, vec3 nw, vec3 lw) {
     float c = dot(nw, lw);
 #if BAKE_GROUND
-    if (l == SHADOW_L0) return shadow_lookup(u_shadow_cmp[0], u_shadow_raw[0], u_shadow_mat[0], u_shadow_par[0], p, nw, c);
+    if (l == SHADOW_L0) {
+        if (u_shadow_disc_par[0].z > 0.0) return disc_lookup(u_shadow_disc[0], 0, u_shadow_disc_par[0], p, nw, lw, c);
+        return shadow_lookup(u_shadow_cmp[0], u_shadow_raw[0], u_shadow_mat[0], u_shadow_par[0], p, nw, c);
+    }
 #if N_SHADOW > 1
-    if (l == SHADOW_L1) return shadow_lookup(u_shadow_cmp[1], u_shadow_raw[1], u_shadow_mat[1], u_shadow_par[1], p, nw, c);
+    if (l == SHADOW_L1) {
+        if (u_shadow_disc_par[1].z > 0.0) return disc_lookup(u_shadow_disc[1], 1, u_shadow_disc_par[1], p, nw, lw, c);
+        return shadow_lookup(u_shadow_cmp[1], u_shadow_raw[1], u_shadow_mat[1], u_shadow_par[1], p, nw, c);
+    }
 #endif
 #else
     if (l == SHADOW_L0) return esm_lookup(u_shadow_esm[0], u_shadow_c[0], u_shadow_mat[0], u_shadow_par[0], p, nw, c);
