@@ -95,6 +95,7 @@ DISC_MIN_DEG = 2.0
 DISC_DIRECTIONS = 32
 DISC_MAP = 256
 DISC_COLUMNS = 8
+DISC_ROWS = -(-DISC_DIRECTIONS // DISC_COLUMNS)
 #: The model's frames read an exponential shadow map (ESM) of ESM_MAP² texels per light: exp(c d) box-filtered
 #: once per light over ESM_TAPS² taps (in log space), one lookup a pixel.
 ESM_MAP = 1024
@@ -233,15 +234,10 @@ class ShadowMaps:
         self._radii: list[float] = []
         # per light slot: (atlas texture, framebuffer, compare sampler) of its disc's depth maps, made once
         self._disc: list[tuple[Any, Any, Any]] = []
-        self._disc_views: list[
-            list[OrthoView]
-        ] = []  # per light slot: its disc's views ([] for a narrow light)
-        self._bound: tuple[float, ...] = (
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-        )  # the caster's bounding sphere (world centre, radius)
+        # per light slot: its disc's views ([] for a narrow light)
+        self._disc_views: list[list[OrthoView]] = []
+        # the caster's bounding sphere (world centre, radius)
+        self._bound: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
         self._key: tuple | None = None
         self._held: Any = None  # the mesh of the key (so its id is not reused while cached)
         self._mesh_buf: tuple | None = None  # (mesh, vbo, ibo, vao)
@@ -391,8 +387,7 @@ class ShadowMaps:
 
     def _disc_target(self, k: int) -> tuple[Any, Any, Any]:
         while len(self._disc) <= k:
-            rows = -(-DISC_DIRECTIONS // DISC_COLUMNS)
-            tex, fbo = self._depth_target((DISC_COLUMNS * DISC_MAP, rows * DISC_MAP))
+            tex, fbo = self._depth_target((DISC_COLUMNS * DISC_MAP, DISC_ROWS * DISC_MAP))
             cmp = self.ctx.sampler(texture=tex, repeat_x=False, repeat_y=False, compare_func="<=")
             self._disc.append((tex, fbo, cmp))
         return self._disc[k]
@@ -581,5 +576,5 @@ def shadow_defines(slots: tuple[int, ...], ambient: bool) -> dict[str, object]:
         "SHADOW_MAX_RADIUS": f"{MAX_RADIUS_TEXELS:.3f}",
         "DISC_DIRECTIONS": DISC_DIRECTIONS,
         "DISC_COLUMNS": DISC_COLUMNS,
-        "DISC_ROWS": -(-DISC_DIRECTIONS // DISC_COLUMNS),
+        "DISC_ROWS": DISC_ROWS,
     }

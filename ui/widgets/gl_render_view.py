@@ -67,25 +67,23 @@ class _GLSurface(QOpenGLWindow):
         if view is not None:
             view._screen = None
 
-    def mousePressEvent(self, event: QMouseEvent) -> None:
+    def _forward(self, handler: str, event: QMouseEvent | QWheelEvent) -> None:
+        """Hand *event* to the view's *handler* (none once the view is gone)."""
         view = self._view()
         if view is not None:
-            view.mousePressEvent(event)
+            getattr(view, handler)(event)
+
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        self._forward("mousePressEvent", event)
 
     def mouseMoveEvent(self, event: QMouseEvent) -> None:
-        view = self._view()
-        if view is not None:
-            view.mouseMoveEvent(event)
+        self._forward("mouseMoveEvent", event)
 
     def mouseReleaseEvent(self, event: QMouseEvent) -> None:
-        view = self._view()
-        if view is not None:
-            view.mouseReleaseEvent(event)
+        self._forward("mouseReleaseEvent", event)
 
     def wheelEvent(self, event: QWheelEvent) -> None:
-        view = self._view()
-        if view is not None:
-            view.wheelEvent(event)
+        self._forward("wheelEvent", event)
 
 
 class GLRenderView(ViewLogic):
