@@ -15,6 +15,7 @@ from station.render.lobes import COSINE_SG_SHARPNESS
 from station.render.prefilter import WIDE_EXPONENT
 from station.render.shapes import SHAPE_INDEX
 from station.render.stage import PENUMBRA_DEG
+from station.render.tonemap import SRGB_POLY, SRGB_T_OFFSET, SRGB_T_SCALE
 
 
 def renderer_defines(
@@ -60,6 +61,17 @@ def renderer_defines(
         "HORIZON_DEGREE": HORIZON_DEGREE,
         "HORIZON_CHEB_MASK": horizon_cheb[1],
         "HORIZON_CHEB": ", ".join(f"{float(v):.9g}" for v in np.asarray(horizon_cheb[0]).ravel()),
+        **srgb_defines(),
+    }
+
+
+def srgb_defines() -> dict[str, object]:
+    """The defines of ``shaders/tonemap.glsl``'s sRGB encoding: its polynomial
+    (:data:`station.render.tonemap.SRGB_POLY`) and the map from x^(1/16) to the polynomial's variable."""
+    return {
+        "SRGB_T_SCALE": repr(SRGB_T_SCALE),
+        "SRGB_T_OFFSET": repr(SRGB_T_OFFSET),
+        "SRGB_POLY": ", ".join(repr(c) for c in SRGB_POLY),
     }
 
 

@@ -9,7 +9,8 @@
    * ``clip`` — no curve, values clipped to [0, 1] (for colorimetric views where nothing exceeds 1).
 3. Encoding: the exact piecewise sRGB OETF (IEC 61966-2-1), 12.92x for x ≤ 0.0031308, else
    1.055x^(1/2.4) − 0.055 (:func:`station.model.display.encode_display`, re-exported here as
-   ``srgb_encode`` with its inverse ``srgb_decode``), then 8 bits by rounding.
+   ``srgb_encode`` with its inverse ``srgb_decode``), then 8 bits by rounding. The GL shader evaluates
+   the power segment as a polynomial within 2.6e-4 of an 8-bit level of it (:data:`SRGB_POLY`).
 """
 
 from __future__ import annotations
@@ -25,6 +26,9 @@ from station.render.options import CURVES
 
 __all__ = [
     "CURVES",
+    "SRGB_POLY",
+    "SRGB_T_OFFSET",
+    "SRGB_T_SCALE",
     "check_curve",
     "display_lut",
     "save_png",
@@ -33,6 +37,26 @@ __all__ = [
     "to_display",
     "tone_curve",
 ]
+
+
+#: How the GL display transform (``shaders/tonemap.glsl``, ``srgb_encode``) evaluates the OETF's power
+#: segment without a power function (llvmpipe pays for ``pow`` with a log2 and an exp2 per channel of
+#: every pixel, about 4 % of an orbit frame): x^(1/2.4) = √x · t^(−4/3) with t = x^(1/16) (four square
+#: roots), and t^(−4/3) the degree-6 least-squares Chebyshev fit over the segment (x in [0.0031308, 1]),
+#: written in powers of u = SRGB_T_SCALE · t + SRGB_T_OFFSET (u in [−1, 1]), lowest first. In float32 it
+#: is within 2.6e-4 of an 8-bit level of the exact OETF (``tests/render/test_tonemap_gl.py``, against
+#: colour-science). The NumPy display keeps the exact formula.
+SRGB_T_SCALE = 6.6092630881104775
+SRGB_T_OFFSET = -5.6092630881104775
+SRGB_POLY = (
+    1.2445040102,
+    -0.29582252459,
+    0.061528246293,
+    -0.012175490833,
+    0.0023505028294,
+    -0.0004741108415,
+    8.9941033508e-05,
+)
 
 
 def check_curve(curve: str) -> str:
