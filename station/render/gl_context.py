@@ -41,8 +41,19 @@ def create_gl_context(require: int = 430) -> Any:
         )
     except Exception as exc:  # moderngl raises plain Exception for EGL failures
         raise GLUnavailableError(f"no headless OpenGL {require / 100:.1f} context via EGL: {exc}") from exc
-    ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
+    prepare_context(ctx)
     return ctx
+
+
+def prepare_context(ctx: Any) -> None:
+    """Settings every moderngl context of the renderers takes (the core's standalone ones and the viewer's
+    on Qt's context): seamless cube-map filtering, and the texture unit moderngl binds a texture to while
+    it creates or writes one moved to the last combined unit. moderngl's default is unit 31, which a
+    frame binds whenever the basis has four lobes or more (its shadow and light maps take units m + 11 to
+    m + 27, :mod:`station.render.gl_frame_shadows`): a texture made or written in the middle of a frame
+    would replace what the frame bound there."""
+    ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
+    ctx.default_texture_unit = int(ctx.info["GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS"]) - 1
 
 
 def gl_available() -> bool:

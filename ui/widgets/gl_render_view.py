@@ -18,7 +18,7 @@ from PySide6.QtGui import QImage, QMouseEvent, QPainter, QWheelEvent
 from PySide6.QtOpenGL import QOpenGLWindow
 from PySide6.QtWidgets import QWidget
 
-from station.render.gl_context import GL_RGB9_E5, GL_TEXTURE_CUBE_MAP_SEAMLESS
+from station.render.gl_context import GL_RGB9_E5, prepare_context
 from station.render.numpy_renderer import BACKGROUND
 from station.render.prefilter import PrefilteredBasis
 from ui.models.view import BasisImages, ViewModel
@@ -285,7 +285,7 @@ class GLRenderView(ViewLogic):
         import moderngl
 
         ctx = self.ctx = moderngl.create_context()
-        ctx.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)  # as the core's contexts (gl_context)
+        prepare_context(ctx)  # as the core's contexts (gl_context)
         self.gl_renderer = ctx.info["GL_RENDERER"]
         quad = np.array([-1, -1, 1, -1, -1, 1, 1, 1], dtype="f4")
         vbo = self._vbo = ctx.buffer(quad.tobytes())
