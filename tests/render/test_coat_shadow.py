@@ -20,6 +20,7 @@ from station.render.stage import Stage, lookup_matrix
 from station.render.weights import LobeWeights
 from tests.render._fresnel_hand import diffuse_transmission as _diffuse_transmission
 from tests.render._fresnel_hand import fresnel as _fresnel
+from tests.render.fragment_pass import fragment_pass
 
 EXPS = (1.0, 8.0, 64.0, 512.0)
 SUN = np.array([0.5, 0.6, 0.35]) / np.linalg.norm([0.5, 0.6, 0.35])
@@ -69,27 +70,16 @@ def test_glsl_coat_functions_agree_with_the_model(gl_ctx) -> None:
             "}",
         ]
     )
-    prog = gl_ctx.program(vertex_shader=load_shader("fullscreen.vert.glsl"), fragment_shader=frag)
-    vao = gl_ctx.vertex_array(prog, [])
-    tex = gl_ctx.texture((256, 1), 4, dtype="f4")
-    fbo = gl_ctx.framebuffer(color_attachments=[tex])
-    try:
+    with fragment_pass(gl_ctx, frag, (256, 1)) as fp:
         for n in (1.33, 1.5, 2.0):
             coat = ClearCoat(n)
-            prog["u_n"].value = n
-            prog["u_t"].value = coat.diffuse_transmission
-            fbo.use()
-            vao.render(vertices=3)
-            out = np.frombuffer(fbo.read(components=4, dtype="f4"), np.float32).reshape(256, 4)
+            fp.prog["u_n"].value = n
+            fp.prog["u_t"].value = coat.diffuse_transmission
+            out = fp.draw().reshape(256, 4)
             c = out[:, 2].astype(float)
             assert c[0] == 0.0 and c[-1] == pytest.approx(1.0)
             assert out[:, 0] == pytest.approx(fresnel_dielectric(c, n), abs=2e-6)
             assert out[:, 1] == pytest.approx(coat.entry_scale(c), abs=2e-6)
-    finally:
-        fbo.release()
-        tex.release()
-        vao.release()
-        prog.release()
 
 
 def _left_panel_pixels(model: np.ndarray, ell: np.ndarray, misalignment: float):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from station.render.gl_programs import srgb_defines
+from tests.render.fragment_pass import fragment_pass
 
 WIDTH, ROWS = 4096, 16  # 65,536 values over [0, 1], both segments and the knee
 
@@ -31,19 +32,8 @@ def _glsl_encoded(gl_ctx) -> tuple[np.ndarray, np.ndarray]:
             "}",
         ]
     )
-    prog = gl_ctx.program(vertex_shader=load_shader("fullscreen.vert.glsl"), fragment_shader=frag)
-    vao = gl_ctx.vertex_array(prog, [])
-    tex = gl_ctx.texture((WIDTH, ROWS), 4, dtype="f4")
-    fbo = gl_ctx.framebuffer(color_attachments=[tex])
-    try:
-        fbo.use()
-        vao.render(vertices=3)
-        out = np.frombuffer(fbo.read(components=4, dtype="f4"), np.float32).reshape(-1, 4)
-    finally:
-        fbo.release()
-        tex.release()
-        vao.release()
-        prog.release()
+    with fragment_pass(gl_ctx, frag, (WIDTH, ROWS)) as fp:
+        out = fp.draw().reshape(-1, 4)
     return out[:, 1].astype(float), out[:, 0].astype(float)
 
 
