@@ -507,7 +507,8 @@ def choose_frame_lod(
     of its probe against the reference over *mask* (Lab relative to *white*). The choice is the first of
     *candidates* (cheapest first), then the fewest anisotropic samples, whose estimate + *margin_de* is
     within *tolerance_de* and whose estimate does not exceed the default's; else the default, if it meets;
-    else the default, reported as a miss. Deterministic: no time budget enters it."""
+    else the default, reported as a miss. Below the margin (*tolerance_de* < *margin_de*) no candidate can
+    meet, and only the reference and the default are drawn. Deterministic: no time budget enters it."""
     _check_budget(tolerance_de, percentile)
     if not (np.isfinite(margin_de) and margin_de >= 0):
         raise RenderInputError("margin_de", "a margin >= 0 (CIEDE2000)", margin_de)
@@ -530,7 +531,9 @@ def choose_frame_lod(
         return err + margin_de <= tolerance_de and err <= default
 
     chosen, est = DEFAULT_SETTING, default
-    for cand in candidates:
+    # A setting fits only if its estimate (>= 0) plus the margin is within the tolerance: with a tolerance
+    # below the margin none can, so none is drawn (the choice and its report are those of drawing them all).
+    for cand in candidates if margin_de <= tolerance_de else ():
         if cand == DEFAULT_SETTING:
             continue
         s = FrameSetting(cand.lobes, cand.environment_width, most if anisotropic else None)

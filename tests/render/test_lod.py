@@ -183,3 +183,40 @@ def test_frame_probe_shares_one_widths_coat_map_among_its_bases(metallic) -> Non
         assert coat.index not in full.coat_maps
     alone = prefilter_basis(env.downsampled(32), two.exponents, engine="numpy", max_size=8)
     assert np.array_equal(coat_diffuse_map(alone, coat), shared)
+
+
+@pytest.mark.parametrize("errors", ["zero", "rising"])
+def test_frame_choice_below_the_margin_draws_only_the_reference_and_the_default(errors: str) -> None:
+    """choose_frame_lod with a probe whose error per setting is known: below the margin (tolerance <
+    FRAME_MARGIN_DE) only the reference and the default are drawn, and the choice, its estimates and its
+    verdict are those of a search over every candidate (a margin of 0 shows what that search draws and
+    finds); at or above the margin the search draws candidates, cheapest first, until one fits."""
+    candidates = lod.frame_candidates(512)
+    ref = np.full((4, 4, 3), 0.5)
+    # setting k (0: the reference, 1: the default, then the candidates) draws ref lightened by step * k
+    step = 0.0 if errors == "zero" else 0.002
+    order = {
+        s: k for k, s in enumerate([lod.FrameSetting(lod.MAX_LOBES, None), lod.DEFAULT_SETTING, *candidates])
+    }
+    drawn: list[lod.FrameSetting] = []
+
+    def probe(s: lod.FrameSetting) -> np.ndarray:
+        drawn.append(s)
+        return ref * (1.0 + step * order[s])
+
+    margin = lod.FRAME_MARGIN_DE
+    below = lod.choose_frame_lod(probe, 1.0, margin - 0.25, candidates)
+    assert drawn == [lod.FrameSetting(lod.MAX_LOBES, None), lod.DEFAULT_SETTING]
+    assert below.setting == lod.DEFAULT_SETTING and not below.met and "No setting reaches" in below.describe()
+    drawn.clear()
+    full = lod.choose_frame_lod(probe, 1.0, margin - 0.25, candidates, margin_de=0.0)
+    assert len(drawn) > 2  # without the margin the candidates are drawn
+    assert below.default_estimate_de == full.default_estimate_de
+    if errors == "rising":  # each candidate is further from the reference than the default: none fits
+        assert full.setting == lod.DEFAULT_SETTING and len(drawn) == 2 + sum(
+            c != lod.DEFAULT_SETTING for c in candidates
+        )
+    drawn.clear()
+    at = lod.choose_frame_lod(probe, 1.0, margin + 0.25, candidates)
+    assert len(drawn) >= 3 and drawn[2] == candidates[0]
+    assert at.met == (at.estimate_de + margin <= margin + 0.25)
