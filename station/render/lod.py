@@ -531,9 +531,7 @@ def choose_frame_lod(
         return err + margin_de <= tolerance_de and err <= default
 
     chosen, est = DEFAULT_SETTING, default
-    # A setting fits only if its estimate (>= 0) plus the margin is within the tolerance: with a tolerance
-    # below the margin none can, so none is drawn (the choice and its report are those of drawing them all).
-    for cand in candidates if margin_de <= tolerance_de else ():
+    for cand in candidates if margin_de <= tolerance_de else ():  # below the margin none can fit
         if cand == DEFAULT_SETTING:
             continue
         s = FrameSetting(cand.lobes, cand.environment_width, most if anisotropic else None)
