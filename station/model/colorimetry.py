@@ -10,8 +10,9 @@ so L* = 100, a* = b* = 0 is exactly linear sRGB (1, 1, 1).
 
 The white point, the sRGB matrix and the sRGB transfer function are colour-science's, written out or
 written in NumPy with the same operations (``tests/model/test_colorimetry.py`` holds them equal to the
-last bit; the matrix, whose derivation runs in the CPU's BLAS kernels, to 1e-14 relative), so that this module costs no more than NumPy: colour-science takes about a second to import,
-and only :func:`derive_xyz10_to_linear_srgb` loads it.
+last bit; the matrix, whose derivation runs in the CPU's BLAS kernels, to 1e-14 relative), so that this
+module costs no more than NumPy: colour-science takes about a second to import, and only
+:func:`derive_xyz10_to_linear_srgb` loads it.
 """
 
 from __future__ import annotations

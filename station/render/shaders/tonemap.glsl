@@ -1,4 +1,5 @@
-// Display transform, the same formulas as station/render/tonemap.py (the OETF's power segment as its polynomial).
+// Display transform, the same formulas as station/render/tonemap.py (the OETF's power segment as its
+// polynomial, SRGB_POLY).
 // CURVE (compiled in per frame's curve): 0 = ACES fit (Narkowicz 2015), 1 = Reinhard x/(1+x), 2 = clip.
 #ifndef CURVE
 #define CURVE 0
