@@ -57,14 +57,10 @@ float shadow_lookup(sampler2DShadow cmp, sampler2D raw, mat4 m, vec3 par, vec3 p
 }
 
 #if BAKE_GROUND
-#ifndef DISC_DIRECTIONS
-#define DISC_DIRECTIONS 32
-#define DISC_COLUMNS 8
-#define DISC_ROWS 4
-#endif
-// A wide light's disc (station/render/gl_shadows.py, DISC_MIN_DEG): DISC_DIRECTIONS depth maps tiled
-// DISC_COLUMNS across in u_shadow_disc[k], u_shadow_disc_mat their views; u_shadow_disc_par[k] (world texel,
-// world depth over 0..1, tan of the light's radius when it has a disc else 0).
+// A wide light's disc (station/render/gl_shadows.py, DISC_MIN_DEG; DISC_DIRECTIONS, DISC_COLUMNS and
+// DISC_ROWS from its shadow_defines): DISC_DIRECTIONS depth maps tiled DISC_COLUMNS across in
+// u_shadow_disc[k], u_shadow_disc_mat their views; u_shadow_disc_par[k] (world texel, world depth over
+// 0..1, tan of the light's radius when it has a disc else 0).
 uniform sampler2DShadow u_shadow_disc[N_SHADOW];
 uniform mat4 u_shadow_disc_mat[N_SHADOW * DISC_DIRECTIONS];
 uniform vec3 u_shadow_disc_par[N_SHADOW];
