@@ -39,11 +39,24 @@ class Case:
         return f"{self.name:<44} {self.size:<14} {self.figure:>12.4g} {self.unit}"
 
 
+def cpu_model() -> str:
+    """The CPU's model name as the kernel reports it (``/proc/cpuinfo``), or the platform's processor
+    string where there is none: machines of one kind differ, and llvmpipe's frame times with them."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
 def machine() -> str:
     """Describe the machine the benchmark ran on."""
     import os
 
-    return f"{platform.machine()}, {os.cpu_count()} CPUs, Python {platform.python_version()}"
+    return f"{platform.machine()}, {cpu_model()}, {os.cpu_count()} CPUs, Python {platform.python_version()}"
 
 
 def write_section(name: str, title: str, cases: list[Case], extra_markdown: str = "") -> None:
