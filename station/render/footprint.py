@@ -135,11 +135,19 @@ def _exit_scale(c: np.ndarray, rays: np.ndarray, poly: np.ndarray) -> np.ndarray
 
 
 def shape_footprint(
-    shape: str, camera: Camera, width: int, height: int, misalignment_deg: float = 0.0
+    shape: str,
+    camera: Camera,
+    width: int,
+    height: int,
+    misalignment_deg: float = 0.0,
+    inner_margin_px: float = MARGIN_PX,
+    inner_min_ndv: float = 0.0,
 ) -> Footprint | None:
     """The :class:`Footprint` of *shape* in a *width* × *height* frame: *outer* contains every pixel
-    centre whose ray can hit the shape, with MARGIN_PX to spare; *inner* (the sphere only) lies MARGIN_PX
-    inside its silhouette. None when the shape's bound reaches the eye's plane (or the eye is inside it)
+    centre whose ray can hit the shape, with MARGIN_PX to spare; *inner* (the sphere only) lies
+    *inner_margin_px* (pixels, at least MARGIN_PX) inside its silhouette, and within the part of the sphere
+    seen at N·V >= *inner_min_ndv* (a ray at impact parameter b meets the unit sphere at N·V = √(1 − b²)).
+    None when the shape's bound reaches the eye's plane (or the eye is inside it)
     or the polygon covers more than MAX_AREA_SHARE of the viewport: then one full-screen pass draws the
     frame."""
     eye = np.asarray(camera.eye, np.float64)
@@ -177,9 +185,13 @@ def shape_footprint(
     if shape == "sphere" and len(poly) == SPHERE_SIDES:
         # A polygon inscribed in the silhouette shrunk by the margin (angles: the pixel's angular size is
         # largest on the axis), then the outer polygon scaled about c to fit inside it.
-        shrink = np.arctan(margin * np.tan(np.radians(camera.fov_deg) / 2.0))
+        inner_margin = max(inner_margin_px, MARGIN_PX) * 2.0 / min(width, height)
+        shrink = np.arctan(inner_margin * np.tan(np.radians(camera.fov_deg) / 2.0))
+        beta = min(
+            alpha - shrink, np.arcsin(np.sqrt(1.0 - min(max(inner_min_ndv, 0.0), 1.0) ** 2) / dist) - shrink
+        )
         dense = _project(
-            _sphere_cone(eye, np.tan(alpha - shrink), np.linspace(0, 2 * np.pi, 180, False)), camera, aspect
+            _sphere_cone(eye, np.tan(beta), np.linspace(0, 2 * np.pi, 180, False)), camera, aspect
         )
         if dense is not None:
             hull = _ccw(dense)

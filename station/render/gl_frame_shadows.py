@@ -17,7 +17,7 @@ from station.render.numpy_renderer import check_paints
 from station.render.shapes import CONVEX_SHAPES, GROUNDS, Scene
 from station.render.stage import lookup_matrix
 
-__all__ = ["SHADOWED_UNIT", "SHADOW_UNIT", "FrameShadows", "probe_shadows"]
+__all__ = ["COARSE_UNIT", "SHADOWED_UNIT", "SHADOW_UNIT", "FrameShadows", "probe_shadows"]
 
 #: First texture unit of the shadow maps past the lobe count m (units m .. m + 10 hold the frame's own maps).
 SHADOW_UNIT = 11
@@ -27,6 +27,9 @@ SHADOWED_UNIT = SHADOW_UNIT + 3 * SHADOW_LIGHTS + 1
 #: Texture unit (after the lobes) of the first light's disc atlas (the ground's bake; gl_shadows.DISC_MIN_DEG),
 #: after the maps without the shadowed lights (four a light, station.render.gl_light_maps).
 DISC_UNIT = SHADOWED_UNIT + 4 * SHADOW_LIGHTS
+#: Texture units (after the lobes) of the coarse pass's two maps (station.render.gl_passes.COARSE_FACTOR),
+#: after the disc atlases.
+COARSE_UNIT = DISC_UNIT + SHADOW_LIGHTS
 
 
 class FrameShadows:

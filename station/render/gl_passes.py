@@ -11,16 +11,78 @@ from typing import Any
 import numpy as np
 
 from station.render import gl_textures as tx
-from station.render.errors import RenderInputError
-from station.render.footprint import footprint_triangles
+from station.render.errors import RenderError, RenderInputError
+from station.render.footprint import MARGIN_PX, footprint_triangles, shape_footprint
 from station.render.gl_context import build_program
 from station.render.gl_programs import frame_defines
 from station.render.gl_shadows import shadow_defines
 
-__all__ = ["FOOTPRINT_VERTICES", "FramePasses"]
+__all__ = [
+    "COARSE_FACTORS",
+    "COARSE_MIN_NDV",
+    "COARSE_SCALE",
+    "FOOTPRINT_VERTICES",
+    "FramePasses",
+    "coarse_factor",
+    "coarse_inner_margin_px",
+]
 
 #: Vertices the footprint buffer holds (the shape's polygon fan and the sectors around it).
 FOOTPRINT_VERTICES = 2048
+#: The coarse pass's pixel is this many frame pixels on a side, the larger first: the smooth terms of the
+#: paint (the wide lobes and their exact lights, ``smooth_terms`` of shaders/render.frag.glsl) are shaded at
+#: 1/k² of the inside's fragments and read back bilinearly (:func:`coarse_factor` picks k per frame).
+COARSE_FACTORS = (4, 2)
+#: Calibration of :func:`coarse_factor`: the largest k · √E / R allowed, E the sharpest exponent among the
+#: smooth terms' lobes and R the sphere's radius on screen (pixels). Set from ``bench.coarse``'s calibration
+#: set (two environments, three sizes, four wide exponents, k 2 and 4): every frame with x below 0.106 stays
+#: within 0.1 ΔE00 of the per-pixel frame, the first above it does not; rounded down. Checked on held-out
+#: frames by tests/render/test_coarse_smooth.py.
+COARSE_SCALE = 0.1
+
+
+def coarse_factor(radius_px: float, sharpest: float) -> int:
+    """The coarse pass's factor k for a sphere *radius_px* pixels wide on screen whose smooth terms' sharpest
+    lobe has exponent *sharpest*: the largest of COARSE_FACTORS with k √E / R <= COARSE_SCALE, 0 for none
+    (every fragment shades them). The terms vary over about R / (2 √E) pixels (a lobe of exponent E is
+    1/√E radians wide about the reflection, which turns twice as fast as the normal)."""
+    for k in COARSE_FACTORS:
+        if k * sharpest**0.5 <= COARSE_SCALE * radius_px:
+            return k
+    return 0
+
+
+#: The inside of a coarse frame keeps to the part of the sphere seen at N·V at least this: toward the rim the
+#: normal turns ever faster across the screen (1 / (R N·V) radians a pixel), and the band outside is shaded per
+#: pixel (about 3 % of the sphere's radius).
+COARSE_MIN_NDV = 0.25
+
+
+def sphere_coarse_factor(scene: Any, weights: list, sharpest: float, height: int) -> int:
+    """The coarse factor of a frame of *scene* (:func:`coarse_factor`; 0: none) whose paints have the bound
+    weights *weights* ((w_d, w_dd, w_g) each) and whose smooth terms' sharpest lobe has exponent *sharpest*,
+    shaded *height* pixels high: only the sphere's footprint has an inside, and only paints with the same
+    wide-lobe weights have one set of smooth terms (two would blur the seam between them). The sphere's
+    radius on screen is the unit sphere's about the origin seen on the view's axis."""
+    if scene.shape != "sphere":
+        return 0
+    if len(weights) > 1:
+        (_, dd0, g0), (_, dd1, g1) = weights[:2]
+        if not (np.array_equal(dd0, dd1) and np.array_equal(g0, g1)):
+            return 0
+    cam = scene.view_camera
+    dist = float(np.linalg.norm(np.asarray(cam.eye, float)))
+    if dist <= 1.0:
+        return 0
+    tan_alpha = 1.0 / np.sqrt(dist * dist - 1.0)  # the silhouette's half-angle from the eye
+    radius_px = tan_alpha / np.tan(np.radians(cam.fov_deg) / 2.0) * height / 2.0
+    return coarse_factor(float(radius_px), sharpest)
+
+
+def coarse_inner_margin_px(factor: int) -> float:
+    """How far (pixels) the inside lies within the silhouette for a coarse pass of *factor*: a bilinear read
+    takes coarse samples up to *factor* pixels away along each axis, and every one of them must hit."""
+    return MARGIN_PX + factor * 2.0**0.5 + 0.5
 
 
 class FramePasses:
@@ -34,6 +96,9 @@ class FramePasses:
         self._footprint_buf = ctx.buffer(reserve=FOOTPRINT_VERTICES * 8)
         self._footprint_counts = (0, 0, 0)  # vertices inside, in the ring, outside (in buffer order)
         self._ground: tuple | None = None  # (key, texture, framebuffer) of the baked ground map
+        self._coarse: tuple | None = (
+            None  # (gloss texture, rest texture, framebuffer, size) of the coarse pass
+        )
 
     def program(
         self,
@@ -56,7 +121,7 @@ class FramePasses:
             defines = {**self._defines, **frame_defines(shape, linear, kind, features, terms, n_occ, curve)}
             if shadow:
                 defines.update(shadow_defines(shadow[0], shadow[1]), SHADOW_PROBE=int(shadow[2]))
-            screen = kind in ("footprint", "backdrop", "inside")
+            screen = kind in ("footprint", "backdrop", "inside", "inside-smooth", "coarse")
             vert = {"mesh": "mesh.vert.glsl"}.get(
                 kind, "screen.vert.glsl" if screen else "fullscreen.vert.glsl"
             )
@@ -70,6 +135,23 @@ class FramePasses:
             self._programs[key] = (prog, vao)
         return self._programs[key]
 
+    def frame_footprint(
+        self, scene: Any, size: tuple[int, int], weights: list, coarse: bool, footprint: bool, probe: bool
+    ) -> tuple[Any, int]:
+        """(footprint or None, coarse factor k or 0) of a frame of *scene* shaded at *size*, its paints' bound
+        weights *weights*: with *coarse*, :func:`sphere_coarse_factor` for the renderer's smooth terms (its
+        wide lobes, or all of them uncombined; 0 without any), and the inside then kept to where the coarse
+        read is exact enough; with *footprint*, the shape's screen footprint (None: one full-screen pass).
+        A shadow *probe* takes neither."""
+        coarse, footprint = coarse and not probe, footprint and not probe
+        exps = [float(e) for e in str(self._defines["LOBE_EXPONENTS"]).split(",")]
+        smooth = exps[: int(self._defines["N_WIDE"])] if self._defines["COMBINED"] else exps
+        k = sphere_coarse_factor(scene, weights, max(smooth), size[1]) if coarse and smooth else 0
+        if not footprint:
+            return None, k
+        margin, ndv = (coarse_inner_margin_px(k), COARSE_MIN_NDV) if k else (MARGIN_PX, 0.0)
+        return shape_footprint(scene.shape, scene.view_camera, *size, scene.misalignment_deg, margin, ndv), k
+
     def shape_passes(
         self,
         shape: str,
@@ -80,10 +162,13 @@ class FramePasses:
         n_occ: int,
         curve: int,
         shadow: tuple,
+        coarse: bool = False,
     ) -> list:
         """The passes of a ray-cast *shape*: with its footprint *foot* (``shape_footprint``) the paint
         program over the polygon, the background program around it and, where the polygon has an inside,
-        the paint without the background code; with *foot* None one full-screen paint pass."""
+        the paint without the background code; with *foot* None one full-screen paint pass. *coarse*
+        (with an inside): the inside reads the smooth terms from a fourth pass, the coarse one
+        (:meth:`draw`)."""
         if foot is None:
             return [self.program(shape, linear, "shape", feats, terms, n_occ, curve, shadow)]
         self.upload_footprint(foot)
@@ -91,7 +176,12 @@ class FramePasses:
             self.program(shape, linear, "footprint", feats, terms, n_occ, curve, shadow),
             self.program("sphere", linear, "backdrop", (0, feats[1], 0), n_occ=n_occ, curve=curve),
         ]
-        if foot.inner is not None:
+        if foot.inner is not None and coarse:
+            passes.append(self.program(shape, linear, "inside-smooth", feats, terms, n_occ, curve, shadow))
+            passes.append(
+                self.program(shape, True, "coarse", (feats[0], feats[1], 0), terms, n_occ, 0, shadow)
+            )
+        elif foot.inner is not None:
             passes.append(self.program(shape, linear, "inside", feats, terms, n_occ, curve, shadow))
         return passes
 
@@ -136,10 +226,48 @@ class FramePasses:
             passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
         else:
             inside, ring, outside = self._footprint_counts
+            if len(passes) == 4:  # the smooth terms at the coarse rate first, over the whole polygon
+                if self._coarse is None:
+                    raise RenderError("the coarse pass drawn before coarse_target made its maps")
+                target = self._coarse[2]
+                target.use()
+                target.clear()
+                passes[3][1].render(mode=self.ctx.TRIANGLES, vertices=inside + ring)
+                fbo.use()
             passes[1][1].render(mode=self.ctx.TRIANGLES, vertices=outside, first=inside + ring)
             passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=ring, first=inside)
             if inside:
                 passes[2][1].render(mode=self.ctx.TRIANGLES, vertices=inside)
+
+    def coarse_target(self, size: tuple[int, int]) -> tuple[Any, Any]:
+        """(gloss texture, rest texture) of the coarse pass at *size* (RGBA float, bilinear, clamped),
+        made once per size; :meth:`draw` draws into them."""
+        if self._coarse is None or self._coarse[3] != size:
+            self._release_coarse()
+            g = tx.colour_texture(self.ctx, size, False)
+            dd = tx.colour_texture(self.ctx, size, False)
+            self._coarse = (g, dd, self.ctx.framebuffer(color_attachments=[g, dd]), size)
+        return self._coarse[0], self._coarse[1]
+
+    def bind_coarse(self, passes: list, shade_size: tuple[int, int], factor: int, unit: int) -> None:
+        """Bind the coarse pass's maps of *factor* (made at the shading size *shade_size* over *factor*) to
+        texture units *unit* and *unit* + 1 for the inside's program, and give the coarse program its size
+        (*passes*: :meth:`shape_passes`'s, uniforms set); nothing for a frame without the coarse pass."""
+        if len(passes) != 4 or factor <= 0:
+            return
+        size = (-(-shade_size[0] // factor), -(-shade_size[1] // factor))
+        g_tex, dd_tex = self.coarse_target(size)
+        g_tex.use(unit)
+        dd_tex.use(unit + 1)
+        passes[3][0]["u_size"].value = (float(size[0]), float(size[1]))
+        passes[2][0]["u_smooth_g"].value = unit
+        passes[2][0]["u_smooth_dd"].value = unit + 1
+
+    def _release_coarse(self) -> None:
+        if self._coarse is not None:
+            for obj in reversed(self._coarse[:3]):
+                obj.release()
+            self._coarse = None
 
     def ground_target(self, key: tuple, half_float: bool, size: int) -> tuple[Any, Any, bool]:
         """(texture, framebuffer, stale) of the baked ground map (size² texels): the map baked for *key*
@@ -162,6 +290,7 @@ class FramePasses:
                     obj.release()
         self._programs.clear()
         self._footprint_buf.release()
+        self._release_coarse()
         if self._ground is not None:
             self._ground[2].release()
             self._ground[1].release()

@@ -85,8 +85,9 @@ def frame_defines(
     curve: int,
 ) -> dict[str, object]:
     """The defines of one program kind: a ray-cast *shape* (kind "shape"; "footprint" over its screen
-    polygon, "inside" over the part of it where every ray hits), the stage alone ("stage"; "backdrop" around a shape's polygon), the ground bake ("ground")
-    or a mesh ("mesh"); *features* = (coat, stage bits, flakes[, anisotropy]) (the
+    polygon, "inside" over the part of it where every ray hits, "inside-smooth" the same reading the smooth
+    terms that "coarse" drew at a coarser rate), the stage alone ("stage"; "backdrop" around a shape's
+    polygon), the ground bake ("ground") or a mesh ("mesh"); *features* = (coat, stage bits, flakes[, anisotropy]) (the
     stage's bits: 1 a stage, 2 its backdrop, 4 its ground, 8 the backdrop lobe's lights); *terms* = (bit
     mask of the wide lobes with a gloss weight, a narrow directionally diffuse weight, the aspecular
     fall-off); *n_occ*: the ground's sphere occluders; *curve*: the tone curve's index (8-bit output)."""
@@ -94,7 +95,9 @@ def frame_defines(
         "SHAPE": SHAPE_INDEX[shape],
         "MESH": int(kind == "mesh"),
         "NO_SHAPE": int(kind in ("stage", "ground", "backdrop")),
-        "INSIDE_SHAPE": int(kind == "inside"),
+        "INSIDE_SHAPE": int(kind in ("inside", "inside-smooth")),
+        "SMOOTH_OUT": int(kind == "coarse"),
+        "SMOOTH_IN": int(kind == "inside-smooth"),
         "BAKE_GROUND": int(kind == "ground"),
         "WIDE_GLOSS_MASK": terms[0],
         "NARROW_DD": terms[1],

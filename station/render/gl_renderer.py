@@ -19,7 +19,6 @@ from station.model.gloss import ClearCoat
 from station.render import gl_textures as tx
 from station.render.errors import RenderInputError
 from station.render.flakes import FlakeChoice, flake_lod, flake_uniforms
-from station.render.footprint import shape_footprint
 from station.render.gl_anisotropy import anisotropy_frame
 from station.render.gl_context import (
     GL_TEXTURE_CUBE_MAP_SEAMLESS,
@@ -29,7 +28,7 @@ from station.render.gl_context import (
     gl_available,
     load_shader,
 )
-from station.render.gl_frame_shadows import FrameShadows
+from station.render.gl_frame_shadows import COARSE_UNIT, FrameShadows
 from station.render.gl_light_maps import ShadowedMaps
 from station.render.gl_maps import DerivedMaps
 from station.render.gl_passes import FramePasses
@@ -167,6 +166,9 @@ class GLRenderer(Closing):
         #: Draw a shape over its screen footprint (:mod:`station.render.gl_passes`). False: one full-screen
         #: pass of the paint program (the same frame, every pixel paying for the paint).
         self.footprint = True
+        #: The smooth terms at a coarser rate where they allow it (:meth:`FramePasses.frame_footprint`).
+        self.coarse_smooth = True
+        self.last_coarse = 0  # the last frame's coarse factor k (0: none)
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
         #: Targets at the shading size and the anti-aliasing resolve (``aa`` samples per pixel).
@@ -265,6 +267,7 @@ class GLRenderer(Closing):
             uniforms["u_ground_map"] = m + 2
         for prog, _ in passes:
             self._set_uniforms(prog, uniforms, mw, occ, m)
+        self._passes.bind_coarse(passes, self.targets.shade_size, self.last_coarse, m + COARSE_UNIT)
         self._passes.draw(fbo, passes, mesh, self._mesh, probe)
         if fbo is target or (self.targets.side == 1 and target is None):
             return fbo
@@ -319,14 +322,14 @@ class GLRenderer(Closing):
         if mesh is not None:
             passes = self._passes.mesh_passes(linear, feats, terms, n_occ, curve_i, shadow)
         else:
-            foot = None
-            if self.footprint and not probe:
-                foot = shape_footprint(
-                    scene.shape, scene.view_camera, *self.targets.shade_size, scene.misalignment_deg
-                )
-            passes = self._passes.shape_passes(
-                scene.shape, foot, linear, feats, terms, n_occ, curve_i, shadow
+            bw = [self._bound_weights(w) for w in pair]  # the paints' bound weights
+            foot, k = self._passes.frame_footprint(
+                scene, self.targets.shade_size, bw, self.coarse_smooth, self.footprint, probe
             )
+            passes = self._passes.shape_passes(
+                scene.shape, foot, linear, feats, terms, n_occ, curve_i, shadow, bool(k)
+            )
+        self.last_coarse = k if mesh is None and len(passes) == 4 else 0
         return pair, passes, aniso_uniforms, occluders, n_occ, shadow
 
     def _frame_uniforms(

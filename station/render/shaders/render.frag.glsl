@@ -39,6 +39,16 @@
 #ifndef NO_SHAPE
 #define NO_SHAPE 0
 #endif
+// SMOOTH_OUT (0/1): the coarse pass of a frame (GLRenderer.coarse_smooth): the smooth terms of the paint
+// (smooth_terms) at the pixel's hit, gloss part to f_color, the rest to f_dd (zero where the ray misses).
+// SMOOTH_IN (0/1): read them back bilinearly (u_smooth_g, u_smooth_dd) instead of computing them: drawn
+// only where every ray hits and every coarse sample the bilinear read takes hits too (INSIDE_SHAPE).
+#ifndef SMOOTH_OUT
+#define SMOOTH_OUT 0
+#endif
+#ifndef SMOOTH_IN
+#define SMOOTH_IN 0
+#endif
 // INSIDE_SHAPE (0/1): the program is drawn only where every ray hits the shape (station.render.footprint),
 // so the background is compiled out.
 #ifndef INSIDE_SHAPE
@@ -171,7 +181,15 @@ uniform vec3 u_flake_tint[2];
 uniform sampler2D u_shadowed_gloss[N_SHADOW], u_shadowed_dd[N_SHADOW];
 uniform samplerCube u_shadowed_glint[N_SHADOW], u_shadowed_mean[N_SHADOW];
 #endif
+#if SMOOTH_OUT
+layout(location = 0) out vec4 f_color;
+layout(location = 1) out vec4 f_dd;
+#else
 out vec4 f_color;
+#endif
+#if SMOOTH_IN
+uniform sampler2D u_smooth_g, u_smooth_dd;
+#endif
 
 uvec3 pcg3d(uvec3 v) {
     v = v * 1664525u + 1013904223u;
@@ -473,6 +491,80 @@ vec3 part_shadow_loss(float code, vec3 n, vec3 v) {
 }
 #endif
 
+#if COMBINED
+#define N_LOOP N_WIDE
+#else
+#define N_LOOP N_LOBES
+#endif
+// The smooth terms of a paint (thesis eq. 2.5.3 over the wide lobes, all lobes without COMBINED, and the exact
+// lights taken out of them): radiance += s g_sum + dd_sum, s the coat's factor on the gloss terms. They vary
+// slowly over a surface: SMOOTH_OUT draws them at a coarser rate, SMOOTH_IN reads them back (GLRenderer).
+// *lost*: what each shadowed light's map says the point has lost of it (main).
+void smooth_terms(vec3 n, vec3 r, float ndv, int paint, vec2 lost, out vec3 g_sum, out vec3 dd_sum) {
+    g_sum = vec3(0.0);
+    dd_sum = vec3(0.0);
+    // The paint's weights are selected per lobe (a select; indexing by the paint would gather).
+    for (int i = 0; i < N_LOOP; ++i) {
+        float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
+        vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
+        bool gloss = ((WIDE_GLOSS_MASK >> i) & 1) != 0;  // constant: no lookup for a zero gloss weight
+        // h only for a gloss weight: g from the pair row when that row is read anyway, else wide_g (its
+        // polynomial, or its row of g alone: one lookup for four such lobes)
+        bool pair_read = (((WIDE_GLOSS_MASK >> (i - i % 2)) & 3) != 0);
+        vec2 gh = pair_read ? horizon(i, ndv) : vec2(wide_g(i, ndv), 0.0);
+#if BENT_DD
+        // directionally diffuse lookup of a wide lobe at B = normalize(E R + COSINE_SG N)
+        // (numpy_renderer.dd_direction, station.render.lobes.bent_direction)
+        bool bent = LOBE_E[i] < WIDE_EXPONENT;
+#else
+        bool bent = false;
+#endif
+        vec3 c_r = (gloss || !bent) ? textureLod(u_lobes[i], r, 0.0).rgb : vec3(0.0);
+        vec3 c_dd = bent ? textureLod(u_lobes[i], normalize(LOBE_E[i] * r + COSINE_SG * n), 0.0).rgb : c_r;
+        if (gloss) g_sum += gh.y * wg * c_r;
+        dd_sum += gh.x * wdd * c_dd;
+    }
+#if N_LIGHTS > 0
+    // exact directional lights on the lobes they were taken out of (E < WIDE_EXPONENT):
+    // wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux, p = (E'+1)/(2 pi) max(R.l, 0)^E', the lobe smoothed
+    // over the light's extent, E' = E / (1 + E s^2) (environment.spread_exponent); one log2 per light.
+    for (int l = 0; l < N_LIGHTS; ++l) {
+        float nl = dot(n, u_light_dir[l]);
+        float lg = log2(max(dot(r, u_light_dir[l]), 1e-30));
+        vec3 acc_g = vec3(0.0), acc_dd = vec3(0.0);
+        for (int i = 0; i < N_LOOP; ++i) {
+            if (LOBE_E[i] < WIDE_EXPONENT) {
+                float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
+                vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
+                float e = LOBE_E[i] / (1.0 + LOBE_E[i] * u_light_spread[l]);
+                float p = (e + 1.0) / (2.0 * PI) * exp2(e * lg);
+                if (((WIDE_GLOSS_MASK >> i) & 1) != 0) acc_g += vec3(wg * p);
+                acc_dd += nl * wdd * p;
+            }
+        }
+#if N_SHADOW > 0
+        // the light's direct part (its exact terms and its share of the diffuse map) times its visibility
+        // at the world point shaded: the mesh's fragment, or the ray-cast shape's hit
+        if (nl > 0.0 && has_shadow_map(l)) {
+            float vis = 1.0 - (l == SHADOW_L0 ? lost.x : lost.y);
+            // the light's share of the diffuse maps: pi K_A (u_wd - u_wk) of D; with a coat pi K_D (u_wk)
+            // of D_coat, where it enters weighted by the coat's entry weight t(N.l) (ClearCoat.entry_scale)
+            vec3 w_lit = paint == 0 ? u_wd[0] : u_wd[1];
+#if HAS_COAT
+            w_lit += (paint == 0 ? u_wk[0] : u_wk[1]) * (coat_entry_weight(nl, u_coat_n, u_coat_t) - 1.0);
+#endif
+            acc_g *= vis;
+            acc_dd = vis * acc_dd - (1.0 - vis) * nl / PI * w_lit;
+        }
+#endif
+        if (nl > 0.0) {
+            g_sum += acc_g * u_light_flux[l];
+            dd_sum += acc_dd * u_light_flux[l];
+        }
+    }
+#endif
+}
+
 #if BAKE_GROUND
 // One texel of the ground map: the disc's square [-1, 1]^2 (times the radius, about u_ground_c).
 void main() {
@@ -552,6 +644,15 @@ void main() {
         lost.y = 1.0 - (dot(n_world, l_1) > 0.0 ? light_shadow(SHADOW_L1, p_shadow, n_world, l_1) : 0.0);
 #endif
 #endif
+#if SMOOTH_OUT
+        {
+            vec3 g_sum, dd_sum;
+            smooth_terms(n, r, ndv, paint, lost, g_sum, dd_sum);
+            f_color = vec4(g_sum, 1.0);
+            f_dd = vec4(dd_sum, 1.0);
+            return;
+        }
+#endif
 #if DIFFUSE_ATLAS
         // wd D + wk (D_coat - D) pre-mixed per paint: one lookup (combine_diffuse.frag.glsl)
         rgb = textureLod(u_diffuse_base, atlas_uv_of(n, paint, DIFFUSE_FACE), 0.0).rgb;
@@ -602,64 +703,17 @@ void main() {
             rgb += narrow;
         }
 #endif
-#if COMBINED
-#define N_LOOP N_WIDE
-#else
-#define N_LOOP N_LOBES
-#endif
-        // The paint's weights are selected per lobe (a select; indexing by the paint would gather).
-        for (int i = 0; i < N_LOOP; ++i) {
-            float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
-            vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
-            bool gloss = ((WIDE_GLOSS_MASK >> i) & 1) != 0;  // constant: no lookup for a zero gloss weight
-            // h only for a gloss weight: g from the pair row when that row is read anyway, else wide_g (its
-            // polynomial, or its row of g alone: one lookup for four such lobes)
-            bool pair_read = (((WIDE_GLOSS_MASK >> (i - i % 2)) & 3) != 0);
-            vec2 gh = pair_read ? horizon(i, ndv) : vec2(wide_g(i, ndv), 0.0);
-#if BENT_DD
-            // directionally diffuse lookup of a wide lobe at B = normalize(E R + COSINE_SG N)
-            // (numpy_renderer.dd_direction, station.render.lobes.bent_direction)
-            bool bent = LOBE_E[i] < WIDE_EXPONENT;
-#else
-            bool bent = false;
-#endif
-            vec3 c_r = (gloss || !bent) ? textureLod(u_lobes[i], r, 0.0).rgb : vec3(0.0);
-            vec3 c_dd = bent ? textureLod(u_lobes[i], normalize(LOBE_E[i] * r + COSINE_SG * n), 0.0).rgb : c_r;
-            if (gloss) rgb += s * gh.y * wg * c_r;
-            rgb += gh.x * wdd * c_dd;
+#if SMOOTH_IN
+        // the smooth terms from the coarse pass (SMOOTH_OUT), bilinear at this pixel
+        {
+            vec2 cuv = gl_FragCoord.xy / u_size;
+            rgb += s * textureLod(u_smooth_g, cuv, 0.0).rgb + textureLod(u_smooth_dd, cuv, 0.0).rgb;
         }
-#if N_LIGHTS > 0
-        // exact directional lights on the lobes they were taken out of (E < WIDE_EXPONENT):
-        // wg 1[N.l>0] p(l) flux + wdd (N.l) p(l) flux, p = (E'+1)/(2 pi) max(R.l, 0)^E', the lobe smoothed
-        // over the light's extent, E' = E / (1 + E s^2) (environment.spread_exponent); one log2 per light.
-        for (int l = 0; l < N_LIGHTS; ++l) {
-            float nl = dot(n, u_light_dir[l]);
-            float lg = log2(max(dot(r, u_light_dir[l]), 1e-30));
-            vec3 acc = vec3(0.0);
-            for (int i = 0; i < N_LOOP; ++i) {
-                if (LOBE_E[i] < WIDE_EXPONENT) {
-                    float wg = paint == 0 ? u_wg[i] : u_wg[N_LOBES + i];
-                    vec3 wdd = paint == 0 ? u_wdd[i] : u_wdd[N_LOBES + i];
-                    float e = LOBE_E[i] / (1.0 + LOBE_E[i] * u_light_spread[l]);
-                    float p = (e + 1.0) / (2.0 * PI) * exp2(e * lg);
-                    acc += (((WIDE_GLOSS_MASK >> i) & 1) != 0 ? s * wg + nl * wdd : nl * wdd) * p;
-                }
-            }
-#if N_SHADOW > 0
-            // the light's direct part (its exact terms and its share of the diffuse map) times its visibility
-            // at the world point shaded: the mesh's fragment, or the ray-cast shape's hit
-            if (nl > 0.0 && has_shadow_map(l)) {
-                float vis = 1.0 - (l == SHADOW_L0 ? lost.x : lost.y);
-                // the light's share of the diffuse maps: pi K_A (u_wd - u_wk) of D; with a coat pi K_D (u_wk)
-                // of D_coat, where it enters weighted by the coat's entry weight t(N.l) (ClearCoat.entry_scale)
-                vec3 w_lit = paint == 0 ? u_wd[0] : u_wd[1];
-#if HAS_COAT
-                w_lit += (paint == 0 ? u_wk[0] : u_wk[1]) * (coat_entry_weight(nl, u_coat_n, u_coat_t) - 1.0);
-#endif
-                acc = vis * acc - (1.0 - vis) * nl / PI * w_lit;
-            }
-#endif
-            if (nl > 0.0) rgb += acc * u_light_flux[l];
+#else
+        {
+            vec3 g_sum, dd_sum;
+            smooth_terms(n, r, ndv, paint, lost, g_sum, dd_sum);
+            rgb += s * g_sum + dd_sum;
         }
 #endif
 #if HAS_FLAKES
@@ -680,11 +734,14 @@ void main() {
 #endif
         rgb += max(sparkle, -u_flake_reflectance * rgb);  // a cell's flakes never reflect less than nothing
     } else {
-#if HAS_STAGE
+#if HAS_STAGE && !SMOOTH_OUT
         rgb = stage_background(u_eye, d);
 #endif
     }
-#if OUTPUT_LINEAR && SHADOW_PROBE && MESH
+#if SMOOTH_OUT
+    f_color = vec4(0.0);
+    f_dd = vec4(0.0);
+#elif OUTPUT_LINEAR && SHADOW_PROBE && MESH
     vec3 nw = normalize(v_normal);
     if (dot(nw, v_pos - u_eye) > 0.0) nw = -nw;
     rgb = shadow_probe(v_pos, nw);
