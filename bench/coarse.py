@@ -34,10 +34,11 @@ FACTORS = (2, 4)
 TOLERANCE_DE = 0.1
 
 
-def paint(exps: tuple[float, ...]) -> LobeWeights:
-    """A red paint with gloss and directionally diffuse weight on every lobe of *exps* (four lobes)."""
+def paint(exps: tuple[float, ...], gloss: float = 0.1) -> LobeWeights:
+    """A red paint with directionally diffuse weight on every lobe of *exps* (four lobes) and gloss weight on
+    every lobe, *gloss* on the widest."""
     k_dd = np.array([[0.2, 0.05, 0.03], [0.15, 0.04, 0.02], [0.1, 0.03, 0.02], [0.05, 0.02, 0.01]])
-    return LobeWeights(exps, np.array([0.25, 0.05, 0.03]), k_dd, np.array([0.1, 0.2, 0.1, 0.3]))
+    return LobeWeights(exps, np.array([0.25, 0.05, 0.03]), k_dd, np.array([gloss, 0.2, 0.1, 0.3]))
 
 
 def max_de(a: np.ndarray, b: np.ndarray) -> float:

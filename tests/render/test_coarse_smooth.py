@@ -12,8 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from station.model.colorimetry import linear_srgb_to_lab
-from station.model.difference import delta_e
+from bench.coarse import max_de, paint
 from station.model.flakes import METALLIC_FLAKES
 from station.model.gloss import ClearCoat
 from station.render import footprint as fp
@@ -21,7 +20,6 @@ from station.render import prefilter, procedural, shapes
 from station.render.camera import orbit_camera
 from station.render.gl_passes import COARSE_FACTORS, COARSE_MIN_NDV, coarse_inner_margin_px
 from station.render.stage import Stage
-from station.render.weights import LobeWeights
 
 W, H = 601, 457  # not multiples of the factor
 #: Two bases outside the calibration set's: wide lobes up to 40 (k 2 in these views) and up to 20 (k 4).
@@ -36,12 +34,6 @@ CAMERAS = [
 MAX_DE = 0.15
 
 
-def _paint(gloss: float, exps: tuple[float, ...] = BASES["wide-40"]) -> LobeWeights:
-    """A red paint (diffuse and directionally diffuse RGB weights) with gloss weight *gloss* on the widest lobe."""
-    k_dd = np.array([[0.2, 0.05, 0.03], [0.15, 0.04, 0.02], [0.1, 0.03, 0.02], [0.05, 0.02, 0.01]])
-    return LobeWeights(exps, np.array([0.25, 0.05, 0.03]), k_dd, np.array([gloss, 0.2, 0.1, 0.3]))
-
-
 @pytest.fixture(scope="module")
 def bases(gl_ctx):
     """A sky with a sun (exact lights on the wide lobes, the sharpest smooth term), prefiltered for BASES."""
@@ -52,13 +44,6 @@ def bases(gl_ctx):
 @pytest.fixture(scope="module")
 def basis(bases):
     return bases["wide-40"]
-
-
-def _de(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    white = max(float(a.max()), 1e-6)
-    lab_a = linear_srgb_to_lab(np.clip(a.reshape(-1, 3), 0.0, None) / white)
-    lab_b = linear_srgb_to_lab(np.clip(b.reshape(-1, 3), 0.0, None) / white)
-    return delta_e(lab_a, lab_b, "cie2000")
 
 
 @pytest.mark.gl
@@ -76,7 +61,7 @@ def test_coarse_frame_matches_the_per_pixel_frame(
 ) -> None:
     from station.render.gl_renderer import GLRenderer
 
-    paints = [_paint(0.3, BASES[name]), _paint(0.3, BASES[name])]
+    paints = [paint(BASES[name], 0.3), paint(BASES[name], 0.3)]
     layer = ClearCoat() if coat else None
     sparkle = METALLIC_FLAKES if flakes else None
     with GLRenderer(bases[name], W, H, ctx=gl_ctx, aa=aa) as gl:
@@ -94,8 +79,8 @@ def test_coarse_frame_matches_the_per_pixel_frame(
             full, coarse_frame = frames
             if used[1]:
                 assert not np.array_equal(full, coarse_frame)  # the coarse path drew this frame
-            de = _de(full, coarse_frame)
-            assert de.max() < MAX_DE, (cam, used[1], float(de.max()))
+            de = max_de(full, coarse_frame)
+            assert de < MAX_DE, (cam, used[1], de)
             assert np.abs(bytes_[0] - bytes_[1]).max() <= 1
 
 
@@ -104,7 +89,7 @@ def test_two_paints_shade_at_every_pixel(gl_ctx, basis) -> None:
     """Two paints with other wide-lobe weights: the seam between them would be blurred, so no coarse pass."""
     from station.render.gl_renderer import GLRenderer
 
-    paints = [_paint(0.3), _paint(0.1)]
+    paints = [paint(BASES["wide-40"], 0.3), paint(BASES["wide-40"], 0.1)]
     scene = shapes.Scene("sphere")
     with GLRenderer(basis, W, H, ctx=gl_ctx) as gl:
         on = gl.render_linear(scene, paints)
@@ -120,9 +105,9 @@ def test_other_shapes_shade_at_every_pixel(gl_ctx, basis) -> None:
     from station.render.gl_renderer import GLRenderer
 
     with GLRenderer(basis, W, H, ctx=gl_ctx) as gl:
-        gl.render_linear(shapes.Scene("speedshape"), [_paint(0.3)])
+        gl.render_linear(shapes.Scene("speedshape"), [paint(BASES["wide-40"], 0.3)])
         assert gl.last_coarse == 0
-        gl.render_linear(shapes.Scene("sphere"), [_paint(0.3)])
+        gl.render_linear(shapes.Scene("sphere"), [paint(BASES["wide-40"], 0.3)])
         assert gl.last_coarse == 2
 
 
