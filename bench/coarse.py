@@ -23,6 +23,7 @@ import numpy as np
 from station.model.colorimetry import linear_srgb_to_lab
 from station.model.difference import delta_e
 from station.render import prefilter, procedural, shapes
+from station.render.footprint import sphere_radius_px
 from station.render.gl_passes import COARSE_SCALE
 from station.render.gl_renderer import GLRenderer, create_gl_context
 from station.render.weights import LobeWeights
@@ -66,13 +67,9 @@ def cases() -> list[tuple[str, int, float, int, float, float]]:
                         gl.coarse_smooth = False
                         full = gl.render_linear(scene, [w, w]).astype(np.float64)
                         gl.coarse_smooth = True
-                        cam = scene.view_camera
-                        dist = float(np.linalg.norm(np.asarray(cam.eye, float)))
-                        radius = (
-                            size / 2.0 / np.sqrt(dist * dist - 1.0) / np.tan(np.radians(cam.fov_deg) / 2.0)
-                        )
+                        radius = sphere_radius_px(scene.view_camera, size)
                         for k in FACTORS:
-                            with mock.patch("station.render.gl_renderer.coarse_factor", return_value=k):
+                            with mock.patch("station.render.gl_passes.coarse_factor", return_value=k):
                                 frame = gl.render_linear(scene, [w, w]).astype(np.float64)
                             assert gl.last_coarse == k
                             out.append((env, size, e, k, k * np.sqrt(e) / radius, max_de(full, frame)))

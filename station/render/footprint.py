@@ -134,6 +134,16 @@ def _exit_scale(c: np.ndarray, rays: np.ndarray, poly: np.ndarray) -> np.ndarray
     return t.min(axis=1)
 
 
+def sphere_radius_px(camera: Camera, height: int) -> float:
+    """The unit sphere's radius on screen (pixels of a frame *height* high) seen from *camera* on its view's
+    axis: tan of the silhouette's half-angle asin(1/d) over tan(fov/2), d the eye's distance from the
+    origin; 0 with the eye inside the sphere."""
+    dist = float(np.linalg.norm(np.asarray(camera.eye, np.float64)))
+    if dist <= 1.0:
+        return 0.0
+    return float(height / 2.0 / np.sqrt(dist * dist - 1.0) / np.tan(np.radians(camera.fov_deg) / 2.0))
+
+
 def shape_footprint(
     shape: str,
     camera: Camera,

@@ -12,7 +12,7 @@ import numpy as np
 
 from station.render import gl_textures as tx
 from station.render.errors import RenderError, RenderInputError
-from station.render.footprint import MARGIN_PX, footprint_triangles, shape_footprint
+from station.render.footprint import MARGIN_PX, footprint_triangles, shape_footprint, sphere_radius_px
 from station.render.gl_context import build_program
 from station.render.gl_programs import frame_defines
 from station.render.gl_shadows import shadow_defines
@@ -25,6 +25,7 @@ __all__ = [
     "FramePasses",
     "coarse_factor",
     "coarse_inner_margin_px",
+    "sphere_coarse_factor",
 ]
 
 #: Vertices the footprint buffer holds (the shape's polygon fan and the sectors around it).
@@ -70,13 +71,8 @@ def sphere_coarse_factor(scene: Any, weights: list, sharpest: float, height: int
         (_, dd0, g0), (_, dd1, g1) = weights[:2]
         if not (np.array_equal(dd0, dd1) and np.array_equal(g0, g1)):
             return 0
-    cam = scene.view_camera
-    dist = float(np.linalg.norm(np.asarray(cam.eye, float)))
-    if dist <= 1.0:
-        return 0
-    tan_alpha = 1.0 / np.sqrt(dist * dist - 1.0)  # the silhouette's half-angle from the eye
-    radius_px = tan_alpha / np.tan(np.radians(cam.fov_deg) / 2.0) * height / 2.0
-    return coarse_factor(float(radius_px), sharpest)
+    radius_px = sphere_radius_px(scene.view_camera, height)
+    return coarse_factor(radius_px, sharpest) if radius_px > 0.0 else 0
 
 
 def coarse_inner_margin_px(factor: int) -> float:
@@ -96,9 +92,12 @@ class FramePasses:
         self._footprint_buf = ctx.buffer(reserve=FOOTPRINT_VERTICES * 8)
         self._footprint_counts = (0, 0, 0)  # vertices inside, in the ring, outside (in buffer order)
         self._ground: tuple | None = None  # (key, texture, framebuffer) of the baked ground map
-        self._coarse: tuple | None = (
-            None  # (gloss texture, rest texture, framebuffer, size) of the coarse pass
-        )
+        # (gloss texture, rest texture, framebuffer, size) of the coarse pass
+        self._coarse: tuple | None = None
+        # the sharpest exponent of the smooth terms' lobes (the wide ones, all of them uncombined; 0: none)
+        exps = [float(e) for e in str(defines["LOBE_EXPONENTS"]).split(",")]
+        smooth = exps[: int(defines["N_WIDE"])] if defines["COMBINED"] else exps
+        self._smooth_sharpest = max(smooth, default=0.0)
 
     def program(
         self,
@@ -144,9 +143,8 @@ class FramePasses:
         read is exact enough; with *footprint*, the shape's screen footprint (None: one full-screen pass).
         A shadow *probe* takes neither."""
         coarse, footprint = coarse and not probe, footprint and not probe
-        exps = [float(e) for e in str(self._defines["LOBE_EXPONENTS"]).split(",")]
-        smooth = exps[: int(self._defines["N_WIDE"])] if self._defines["COMBINED"] else exps
-        k = sphere_coarse_factor(scene, weights, max(smooth), size[1]) if coarse and smooth else 0
+        sharpest = self._smooth_sharpest
+        k = sphere_coarse_factor(scene, weights, sharpest, size[1]) if coarse and sharpest > 0.0 else 0
         if not footprint:
             return None, k
         margin, ndv = (coarse_inner_margin_px(k), COARSE_MIN_NDV) if k else (MARGIN_PX, 0.0)
