@@ -19,6 +19,7 @@ from __future__ import annotations
 import os
 import sqlite3
 import threading
+import weakref
 from pathlib import Path
 from typing import Any
 
@@ -115,7 +116,12 @@ def make_engine(
     # polls with growing sleeps (up to 100 ms), which under concurrent writers of one process gives long,
     # unfair tails; a lock hands over at once. The wait stays bounded by the same busy timeout.
     # Readers (READ_ONLY_OPTION) take neither that lock nor SQLite's: a deferred BEGIN under query_only.
+    # The connections holding the writer lock. Kept apart from ``conn.info``: a connection invalidated
+    # mid-write (Ctrl-C or SIGINT inside a statement, a dropped file handle) raises PendingRollbackError
+    # on ``conn.info`` in its rollback event, which would hide the first error and keep the lock
+    # held, so that every later writer of the process failed as "locked".
     writer = threading.Lock()
+    holders: weakref.WeakSet[Any] = weakref.WeakSet()
     wait_s = busy_timeout_ms / 1000
 
     @event.listens_for(engine, "begin")
@@ -139,12 +145,13 @@ def make_engine(
         except BaseException:
             writer.release()
             raise
-        conn.info["cacad_writer"] = True
+        holders.add(conn)
 
     @event.listens_for(engine, "commit")
     @event.listens_for(engine, "rollback")
     def _on_end(conn: Any) -> None:
-        if conn.info.pop("cacad_writer", False):
+        if conn in holders:
+            holders.discard(conn)
             writer.release()
 
     return engine

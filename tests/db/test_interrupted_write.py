@@ -1,0 +1,88 @@
+"""A write interrupted inside a statement (Ctrl-C, SIGINT to ``station import watch``) ends as the
+interrupt, stores nothing, and leaves the process able to write.
+
+SQLAlchemy invalidates a connection when a BaseException such as KeyboardInterrupt escapes a statement;
+its rollback event then runs on an invalid connection. The soak (tests/soak) found a watch folder that,
+asked to end while storing, exited 1 with PendingRollbackError instead: the engine's writer queue read
+its lock flag from ``conn.info``, which raises there, and the lock stayed held, so that each later writer
+of the process would have failed as "database is locked". The interrupt is raised from a
+``before_cursor_execute`` hook, inside the statement's error handling as a signal would be.
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+import pytest
+from sqlalchemy import Engine, event, text
+
+from db.engine import make_engine
+
+
+def _interrupt_next_insert(engine: Engine) -> list[bool]:
+    """Raise KeyboardInterrupt in the next INSERT of *engine*; returns the flag (True until it fired)."""
+    armed = [True]
+
+    @event.listens_for(engine, "before_cursor_execute")
+    def _boom(conn, cursor, statement, parameters, context, executemany) -> None:
+        if armed[0] and statement.lstrip().upper().startswith("INSERT"):
+            armed[0] = False
+            raise KeyboardInterrupt
+
+    return armed
+
+
+def _rows(engine: Engine) -> list[int]:
+    with engine.connect() as conn:
+        return [r[0] for r in conn.execute(text("SELECT x FROM t ORDER BY x"))]
+
+
+def test_an_interrupt_inside_a_write_ends_as_the_interrupt_and_frees_the_writer(tmp_path: Path) -> None:
+    engine = make_engine(f"sqlite:///{tmp_path / 'w.sqlite3'}", busy_timeout_ms=500)
+    try:
+        with engine.begin() as conn:
+            conn.execute(text("CREATE TABLE t (x INTEGER)"))
+            conn.execute(text("INSERT INTO t VALUES (1)"))
+        armed = _interrupt_next_insert(engine)
+        with pytest.raises(KeyboardInterrupt), engine.begin() as conn:
+            conn.execute(text("INSERT INTO t VALUES (2)"))
+        assert armed == [False]
+        assert _rows(engine) == [1]  # the interrupted transaction stored nothing
+        with engine.begin() as conn:  # the same thread writes again
+            conn.execute(text("INSERT INTO t VALUES (3)"))
+        errors: list[BaseException] = []
+
+        def other_thread() -> None:
+            try:
+                with engine.begin() as conn:
+                    conn.execute(text("INSERT INTO t VALUES (4)"))
+            except BaseException as exc:
+                errors.append(exc)
+
+        t = threading.Thread(target=other_thread)
+        t.start()
+        t.join(10.0)
+        assert not t.is_alive() and errors == []
+        assert _rows(engine) == [1, 3, 4]
+    finally:
+        engine.dispose()
+
+
+def test_an_interrupt_in_a_session_flush_frees_the_writer(tmp_path: Path) -> None:
+    """The same through the ORM's session (the ingest path): the flush's INSERT interrupted."""
+    from db.engine import make_sessionmaker
+
+    engine = make_engine(f"sqlite:///{tmp_path / 's.sqlite3'}", busy_timeout_ms=500)
+    try:
+        with engine.begin() as conn:
+            conn.execute(text("CREATE TABLE t (x INTEGER)"))
+        sessions = make_sessionmaker(engine)
+        _interrupt_next_insert(engine)
+        with pytest.raises(KeyboardInterrupt), sessions.begin() as session:
+            session.execute(text("INSERT INTO t VALUES (1)"))
+        with sessions.begin() as session:
+            session.execute(text("INSERT INTO t VALUES (2)"))
+        assert _rows(engine) == [2]
+    finally:
+        engine.dispose()
