@@ -101,6 +101,13 @@ def make_engine(
     connect_args.setdefault("check_same_thread", False)
     connect_args.setdefault("timeout", busy_timeout_ms / 1000)
     engine = create_engine(url, connect_args=connect_args, **kwargs)
+    _sqlite_writer_queue(engine, foreign_keys=foreign_keys, busy_timeout_ms=busy_timeout_ms)
+    return engine
+
+
+def _sqlite_writer_queue(engine: Engine, *, foreign_keys: bool, busy_timeout_ms: int) -> None:
+    """Hook *engine* (SQLite): each new connection in WAL mode with full sync, *foreign_keys* and the busy
+    timeout; each writing transaction queued on the engine's own lock, then ``BEGIN IMMEDIATE``."""
 
     @event.listens_for(engine, "connect")
     def _on_connect(dbapi_conn: Any, _record: Any) -> None:
@@ -153,8 +160,6 @@ def make_engine(
         if conn in holders:
             holders.discard(conn)
             writer.release()
-
-    return engine
 
 
 def reading(engine: Engine) -> Engine:
