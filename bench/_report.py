@@ -39,17 +39,28 @@ class Case:
         return f"{self.name:<44} {self.size:<14} {self.figure:>12.4g} {self.unit}"
 
 
-def cpu_model() -> str:
-    """The CPU's model name as the kernel reports it (``/proc/cpuinfo``), or the platform's processor
-    string where there is none: machines of one kind differ, and llvmpipe's frame times with them."""
+def cpu_model(cpuinfo: str = "/proc/cpuinfo") -> str:
+    """The CPU's model name as the kernel reports it (*cpuinfo*), with its family and model numbers
+    (a virtual machine may name only the vendor's line, "AMD EPYC", for several generations) and whether it
+    has AVX-512, or the platform's processor string where there is none: machines of one kind differ, and
+    llvmpipe's frame times with them."""
+    fields: dict[str, str] = {}
     try:
-        with open("/proc/cpuinfo", encoding="utf-8") as f:
+        with open(cpuinfo, encoding="utf-8") as f:
             for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
+                if not line.strip():
+                    break  # the first processor's block
+                key, _, value = line.partition(":")
+                fields[key.strip()] = value.strip()
     except OSError:
         pass
-    return platform.processor() or "unknown CPU"
+    name = fields.get("model name")
+    if not name:
+        return platform.processor() or "unknown CPU"
+    avx = ", AVX-512" if "avx512f" in fields.get("flags", "").split() else ""
+    if "cpu family" in fields and "model" in fields:
+        return f"{name} (family {fields['cpu family']}, model {fields['model']}{avx})"
+    return name
 
 
 def machine() -> str:
