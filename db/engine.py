@@ -147,17 +147,17 @@ def _sqlite_writer_queue(engine: Engine, *, foreign_keys: bool, busy_timeout_ms:
                 None,
                 sqlite3.OperationalError("database is locked (writers of this process)"),
             )
+        holders.add(conn)  # before BEGIN: an interrupt between the two would otherwise keep the lock
         try:
             conn.exec_driver_sql("BEGIN IMMEDIATE")
         except BaseException:
-            writer.release()
+            _on_end(conn)
             raise
-        holders.add(conn)
 
     @event.listens_for(engine, "commit")
     @event.listens_for(engine, "rollback")
     def _on_end(conn: Any) -> None:
-        if conn in holders:
+        if conn in holders:  # once per transaction: a failed BEGIN may end in a rollback event too
             holders.discard(conn)
             writer.release()
 

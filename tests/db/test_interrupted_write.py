@@ -20,13 +20,14 @@ from sqlalchemy import Engine, event, text
 from db.engine import make_engine
 
 
-def _interrupt_next_insert(engine: Engine) -> list[bool]:
-    """Raise KeyboardInterrupt in the next INSERT of *engine*; returns the flag (True until it fired)."""
+def _interrupt_next_insert(engine: Engine, prefix: str = "INSERT") -> list[bool]:
+    """Raise KeyboardInterrupt in the next statement of *engine* that starts with *prefix*; returns the flag
+    (True until it fired)."""
     armed = [True]
 
     @event.listens_for(engine, "before_cursor_execute")
     def _boom(conn, cursor, statement, parameters, context, executemany) -> None:
-        if armed[0] and statement.lstrip().upper().startswith("INSERT"):
+        if armed[0] and statement.lstrip().upper().startswith(prefix):
             armed[0] = False
             raise KeyboardInterrupt
 
@@ -84,5 +85,23 @@ def test_an_interrupt_in_a_session_flush_frees_the_writer(tmp_path: Path) -> Non
         with sessions.begin() as session:
             session.execute(text("INSERT INTO t VALUES (2)"))
         assert _rows(engine) == [2]
+    finally:
+        engine.dispose()
+
+
+def test_an_interrupt_inside_begin_immediate_frees_the_writer(tmp_path: Path) -> None:
+    """The interrupt in the engine's own BEGIN IMMEDIATE (the writer lock just taken): released once."""
+    engine = make_engine(f"sqlite:///{tmp_path / 'b.sqlite3'}", busy_timeout_ms=500)
+    try:
+        with engine.begin() as conn:
+            conn.execute(text("CREATE TABLE t (x INTEGER)"))
+        armed = _interrupt_next_insert(engine, "BEGIN IMMEDIATE")
+        with pytest.raises(KeyboardInterrupt), engine.begin() as conn:
+            conn.execute(text("INSERT INTO t VALUES (1)"))
+        assert armed == [False]
+        for x in (2, 3):  # a lock released twice would raise here; one never released would time out
+            with engine.begin() as conn:
+                conn.execute(text(f"INSERT INTO t VALUES ({x})"))
+        assert _rows(engine) == [2, 3]
     finally:
         engine.dispose()
