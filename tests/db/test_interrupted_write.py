@@ -34,16 +34,23 @@ def _interrupt_next_insert(engine: Engine, prefix: str = "INSERT") -> list[bool]
     return armed
 
 
+def _table(tmp_path: Path, name: str) -> Engine:
+    """A new SQLite database *name* in *tmp_path* with one empty table ``t (x)``, short busy timeout."""
+    engine = make_engine(f"sqlite:///{tmp_path / name}", busy_timeout_ms=500)
+    with engine.begin() as conn:
+        conn.execute(text("CREATE TABLE t (x INTEGER)"))
+    return engine
+
+
 def _rows(engine: Engine) -> list[int]:
     with engine.connect() as conn:
         return [r[0] for r in conn.execute(text("SELECT x FROM t ORDER BY x"))]
 
 
 def test_an_interrupt_inside_a_write_ends_as_the_interrupt_and_frees_the_writer(tmp_path: Path) -> None:
-    engine = make_engine(f"sqlite:///{tmp_path / 'w.sqlite3'}", busy_timeout_ms=500)
+    engine = _table(tmp_path, "w.sqlite3")
     try:
         with engine.begin() as conn:
-            conn.execute(text("CREATE TABLE t (x INTEGER)"))
             conn.execute(text("INSERT INTO t VALUES (1)"))
         armed = _interrupt_next_insert(engine)
         with pytest.raises(KeyboardInterrupt), engine.begin() as conn:
@@ -74,10 +81,8 @@ def test_an_interrupt_in_a_session_flush_frees_the_writer(tmp_path: Path) -> Non
     """The same through the ORM's session (the ingest path): the flush's INSERT interrupted."""
     from db.engine import make_sessionmaker
 
-    engine = make_engine(f"sqlite:///{tmp_path / 's.sqlite3'}", busy_timeout_ms=500)
+    engine = _table(tmp_path, "s.sqlite3")
     try:
-        with engine.begin() as conn:
-            conn.execute(text("CREATE TABLE t (x INTEGER)"))
         sessions = make_sessionmaker(engine)
         _interrupt_next_insert(engine)
         with pytest.raises(KeyboardInterrupt), sessions.begin() as session:
@@ -91,10 +96,8 @@ def test_an_interrupt_in_a_session_flush_frees_the_writer(tmp_path: Path) -> Non
 
 def test_an_interrupt_inside_begin_immediate_frees_the_writer(tmp_path: Path) -> None:
     """The interrupt in the engine's own BEGIN IMMEDIATE (the writer lock just taken): released once."""
-    engine = make_engine(f"sqlite:///{tmp_path / 'b.sqlite3'}", busy_timeout_ms=500)
+    engine = _table(tmp_path, "b.sqlite3")
     try:
-        with engine.begin() as conn:
-            conn.execute(text("CREATE TABLE t (x INTEGER)"))
         armed = _interrupt_next_insert(engine, "BEGIN IMMEDIATE")
         with pytest.raises(KeyboardInterrupt), engine.begin() as conn:
             conn.execute(text("INSERT INTO t VALUES (1)"))

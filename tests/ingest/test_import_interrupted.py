@@ -15,10 +15,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from sqlalchemy import Engine, event, func, select
+from sqlalchemy import Engine, event
 
-from db.engine import make_engine
-from db.models import Measurement
+from tests.ingest.test_import_cli import _count  # measurements stored at a URL
 
 
 @pytest.fixture
@@ -37,15 +36,6 @@ def interrupt_first_measurement_insert() -> Iterator[list[bool]]:
         yield armed
     finally:
         event.remove(Engine, "before_cursor_execute", boom)
-
-
-def _count(url: str) -> int:
-    engine = make_engine(url)
-    try:
-        with engine.connect() as conn:
-            return int(conn.execute(select(func.count()).select_from(Measurement)).scalar_one())
-    finally:
-        engine.dispose()
 
 
 def test_ctrl_c_inside_the_store_cancels_in_one_line_and_the_next_import_stores(
