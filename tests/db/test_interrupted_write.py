@@ -5,41 +5,31 @@ SQLAlchemy invalidates a connection when a BaseException such as KeyboardInterru
 its rollback event then runs on an invalid connection. The soak (tests/soak) found a watch folder that,
 asked to end while storing, exited 1 with PendingRollbackError instead: the engine's writer queue read
 its lock flag from ``conn.info``, which raises there, and the lock stayed held, so that each later writer
-of the process would have failed as "database is locked". The interrupt is raised from a
-``before_cursor_execute`` hook, inside the statement's error handling as a signal would be.
+of the process would have failed as "database is locked". The interrupt comes from
+:func:`tests.db._interrupt.interrupt_at`.
 """
 
 from __future__ import annotations
 
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from sqlalchemy import Engine, event, text
+from sqlalchemy import Engine, text
 
 from db.engine import make_engine
+from tests.db._interrupt import interrupt_at
 
 
-def _interrupt_next_insert(engine: Engine, prefix: str = "INSERT") -> list[bool]:
-    """Raise KeyboardInterrupt in the next statement of *engine* that starts with *prefix*; returns the flag
-    (True until it fired)."""
-    armed = [True]
-
-    @event.listens_for(engine, "before_cursor_execute")
-    def _boom(conn, cursor, statement, parameters, context, executemany) -> None:
-        if armed[0] and statement.lstrip().upper().startswith(prefix):
-            armed[0] = False
-            raise KeyboardInterrupt
-
-    return armed
-
-
-def _table(tmp_path: Path, name: str) -> Engine:
-    """A new SQLite database *name* in *tmp_path* with one empty table ``t (x)``, short busy timeout."""
-    engine = make_engine(f"sqlite:///{tmp_path / name}", busy_timeout_ms=500)
+@pytest.fixture
+def engine(tmp_path: Path) -> Iterator[Engine]:
+    """A new SQLite database with one empty table ``t (x)`` and a short busy timeout, disposed after."""
+    engine = make_engine(f"sqlite:///{tmp_path / 't.sqlite3'}", busy_timeout_ms=500)
     with engine.begin() as conn:
         conn.execute(text("CREATE TABLE t (x INTEGER)"))
-    return engine
+    yield engine
+    engine.dispose()
 
 
 def _rows(engine: Engine) -> list[int]:
@@ -47,64 +37,62 @@ def _rows(engine: Engine) -> list[int]:
         return [r[0] for r in conn.execute(text("SELECT x FROM t ORDER BY x"))]
 
 
-def test_an_interrupt_inside_a_write_ends_as_the_interrupt_and_frees_the_writer(tmp_path: Path) -> None:
-    engine = _table(tmp_path, "w.sqlite3")
-    try:
-        with engine.begin() as conn:
-            conn.execute(text("INSERT INTO t VALUES (1)"))
-        armed = _interrupt_next_insert(engine)
-        with pytest.raises(KeyboardInterrupt), engine.begin() as conn:
-            conn.execute(text("INSERT INTO t VALUES (2)"))
-        assert armed == [False]
-        assert _rows(engine) == [1]  # the interrupted transaction stored nothing
-        with engine.begin() as conn:  # the same thread writes again
-            conn.execute(text("INSERT INTO t VALUES (3)"))
-        errors: list[BaseException] = []
+def test_an_interrupt_inside_a_write_ends_as_the_interrupt_and_frees_the_writer(engine: Engine) -> None:
+    with engine.begin() as conn:
+        conn.execute(text("INSERT INTO t VALUES (1)"))
+    with (
+        interrupt_at(engine, "INSERT") as armed,
+        pytest.raises(KeyboardInterrupt),
+        engine.begin() as conn,
+    ):
+        conn.execute(text("INSERT INTO t VALUES (2)"))
+    assert armed == [False]
+    assert _rows(engine) == [1]  # the interrupted transaction stored nothing
+    with engine.begin() as conn:  # the same thread writes again
+        conn.execute(text("INSERT INTO t VALUES (3)"))
+    errors: list[BaseException] = []
 
-        def other_thread() -> None:
-            try:
-                with engine.begin() as conn:
-                    conn.execute(text("INSERT INTO t VALUES (4)"))
-            except BaseException as exc:
-                errors.append(exc)
+    def other_thread() -> None:
+        try:
+            with engine.begin() as conn:
+                conn.execute(text("INSERT INTO t VALUES (4)"))
+        except BaseException as exc:
+            errors.append(exc)
 
-        t = threading.Thread(target=other_thread)
-        t.start()
-        t.join(10.0)
-        assert not t.is_alive() and errors == []
-        assert _rows(engine) == [1, 3, 4]
-    finally:
-        engine.dispose()
+    t = threading.Thread(target=other_thread)
+    t.start()
+    t.join(10.0)
+    assert not t.is_alive() and errors == []
+    assert _rows(engine) == [1, 3, 4]
 
 
-def test_an_interrupt_in_a_session_flush_frees_the_writer(tmp_path: Path) -> None:
+def test_an_interrupt_in_a_session_flush_frees_the_writer(engine: Engine) -> None:
     """The same through the ORM's session (the ingest path): the flush's INSERT interrupted."""
     from db.engine import make_sessionmaker
 
-    engine = _table(tmp_path, "s.sqlite3")
-    try:
-        sessions = make_sessionmaker(engine)
-        _interrupt_next_insert(engine)
-        with pytest.raises(KeyboardInterrupt), sessions.begin() as session:
-            session.execute(text("INSERT INTO t VALUES (1)"))
-        with sessions.begin() as session:
-            session.execute(text("INSERT INTO t VALUES (2)"))
-        assert _rows(engine) == [2]
-    finally:
-        engine.dispose()
+    sessions = make_sessionmaker(engine)
+    with (
+        interrupt_at(engine, "INSERT") as armed,
+        pytest.raises(KeyboardInterrupt),
+        sessions.begin() as session,
+    ):
+        session.execute(text("INSERT INTO t VALUES (1)"))
+    assert armed == [False]
+    with sessions.begin() as session:
+        session.execute(text("INSERT INTO t VALUES (2)"))
+    assert _rows(engine) == [2]
 
 
-def test_an_interrupt_inside_begin_immediate_frees_the_writer(tmp_path: Path) -> None:
+def test_an_interrupt_inside_begin_immediate_frees_the_writer(engine: Engine) -> None:
     """The interrupt in the engine's own BEGIN IMMEDIATE (the writer lock just taken): released once."""
-    engine = _table(tmp_path, "b.sqlite3")
-    try:
-        armed = _interrupt_next_insert(engine, "BEGIN IMMEDIATE")
-        with pytest.raises(KeyboardInterrupt), engine.begin() as conn:
-            conn.execute(text("INSERT INTO t VALUES (1)"))
-        assert armed == [False]
-        for x in (2, 3):  # a lock released twice would raise here; one never released would time out
-            with engine.begin() as conn:
-                conn.execute(text(f"INSERT INTO t VALUES ({x})"))
-        assert _rows(engine) == [2, 3]
-    finally:
-        engine.dispose()
+    with (
+        interrupt_at(engine, "BEGIN IMMEDIATE") as armed,
+        pytest.raises(KeyboardInterrupt),
+        engine.begin() as conn,
+    ):
+        conn.execute(text("INSERT INTO t VALUES (1)"))
+    assert armed == [False]
+    for x in (2, 3):  # a lock released twice would raise here; one never released would time out
+        with engine.begin() as conn:
+            conn.execute(text(f"INSERT INTO t VALUES ({x})"))
+    assert _rows(engine) == [2, 3]
