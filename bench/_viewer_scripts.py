@@ -5,17 +5,21 @@ from __future__ import annotations
 
 import textwrap
 
-#: argv: size, frames, prefilter engine ("gl" | "numpy"), orbit environment, view flags (comma-separated),
-#: footprint (1/0). Prints ``CORE`` median, best and CPU per frame, then the sky's prefilter + first frame
+#: argv: size, frames, prefilter engine ("gl" | "numpy"), orbit environment, view flags (comma-separated;
+#: ``model``: the procedural car instead of the sphere), today's renderer (1) or the one before its
+#: fragment savings (0: ``GLRenderer.footprint`` and ``mesh_prepass`` False). Prints ``CORE`` median, best and CPU per frame, then the sky's prefilter + first frame
 #: wall and CPU (s).
 CORE_ORBIT = textwrap.dedent("""
     import time, sys
     from station.model.design_io import default_flakes
     from station.render.gl_renderer import GLRenderer, create_gl_context
+    from station.render.scene_image import builtin_mesh
     from ui.models.document import DEFAULT_DESIGN
     from ui.models.view import ViewSettings, environment_basis, environment_basis_gl, paint_weights
     size, n, engine, orbit_env = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], sys.argv[4]
     flags = {k: True for k in sys.argv[5].split(",") if k}
+    model = "car" if flags.pop("model", False) else None
+    mesh = builtin_mesh(model) if model else None
     footprint = sys.argv[6] == "1"
     w = paint_weights(DEFAULT_DESIGN)
     ctx = create_gl_context()
@@ -26,15 +30,20 @@ CORE_ORBIT = textwrap.dedent("""
         t_env, c_env = time.perf_counter() - t0, time.process_time() - c0
     flakes = default_flakes(DEFAULT_DESIGN) if flags.get("flakes") else None
     with GLRenderer(environment_basis_gl(orbit_env, ctx), size, size, ctx=ctx) as gl:
-        gl.footprint = footprint
+        gl.footprint = gl.mesh_prepass = footprint
         ts = []
         c1 = 0.0
         for i in range(n + 2):
-            st = ViewSettings(environment=orbit_env, yaw_deg=3.0 * (i + 1), **flags)
+            st = ViewSettings(environment=orbit_env, yaw_deg=3.0 * (i + 1), model=model, **flags)
+            sc = st.scene()
             if i == 2:
                 c1 = time.process_time()
             t = time.perf_counter()
-            gl.render(st.scene(), [w, w], st.exposure_ev, coat=st.clear_coat(), flakes=flakes)
+            if mesh is None:
+                gl.render(sc, [w, w], st.exposure_ev, coat=st.clear_coat(), flakes=flakes)
+            else:
+                gl.render_mesh(mesh, [w, w], sc.view_camera, sc.stage, st.clear_coat(), st.exposure_ev,
+                               flakes=flakes)
             ts.append(time.perf_counter() - t)
         cpu = (time.process_time() - c1) / n
     ts = sorted(ts[2:])

@@ -2,7 +2,8 @@
 (the defines of :func:`station.render.gl_programs.frame_defines`), and the draw of a frame's passes — a
 ray-cast shape's full-screen pass or its footprint passes (:mod:`station.render.footprint`: the paint
 program over the shape's polygon, the background around it, the sphere's inside without the background
-code), or the stage pass and a rasterised mesh."""
+code), or a rasterised mesh: its depth first, then the stage where it is not and its program where it is,
+each pixel shaded once."""
 
 from __future__ import annotations
 
@@ -186,10 +187,15 @@ class FramePasses:
     def mesh_passes(
         self, linear: bool, feats: tuple, terms: tuple, n_occ: int, curve: int, shadow: tuple
     ) -> list:
-        """The stage pass (colour only) and the mesh's program."""
+        """The stage pass (colour only), the mesh's program and its depth pre-pass (the mesh's vertex
+        program, no colour: shaders/shadow_depth.frag.glsl)."""
+        key = ("mesh-depth",)
+        if key not in self._programs:
+            self._programs[key] = (build_program(self.ctx, "mesh.vert.glsl", "shadow_depth.frag.glsl"), None)
         return [
             self.program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve),
             self.program("sphere", linear, "mesh", feats, terms, n_occ, curve, shadow),
+            self._programs[key],
         ]
 
     def upload_footprint(self, foot: Any) -> None:
@@ -203,23 +209,23 @@ class FramePasses:
         self._footprint_counts = (len(parts[0]), len(parts[1]), len(parts[2]))
 
     def draw(
-        self, fbo: Any, passes: list, mesh: Any = None, mesh_arrays: Any = None, probe: bool = False
+        self,
+        fbo: Any,
+        passes: list,
+        mesh: Any = None,
+        mesh_arrays: Any = None,
+        probe: bool = False,
+        prepass: bool = True,
     ) -> None:
-        """Draw a frame's *passes* into *fbo* (uniforms already set): a mesh after its stage pass,
-        depth-tested (*probe*: no stage, the background −1); a shape's one pass; or its footprint's passes
-        (the background around the polygon, the paint over it, the inside without background code)."""
+        """Draw a frame's *passes* into *fbo* (uniforms already set): a mesh (:meth:`_draw_mesh`; *probe*:
+        no stage, the background −1); a shape's one pass; or its footprint's passes (the background around
+        the polygon, the paint over it, the inside without background code)."""
         if mesh is not None:
-            fbo.clear(depth=1.0)
-            self.ctx.disable(self.ctx.DEPTH_TEST)  # the stage pass writes colour only
             if probe:
                 fbo.clear(-1.0, -1.0, -1.0, 1.0, depth=1.0)
             else:
-                passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
-            self.ctx.enable(self.ctx.DEPTH_TEST)
-            try:
-                mesh_arrays.vao(mesh, passes[1][0]).render(mode=self.ctx.TRIANGLES)
-            finally:
-                self.ctx.disable(self.ctx.DEPTH_TEST)
+                fbo.clear(depth=1.0)
+            self._draw_mesh(fbo, passes, mesh, mesh_arrays, probe, prepass)
         elif len(passes) == 1:
             passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=3)
         else:
@@ -236,6 +242,38 @@ class FramePasses:
             passes[0][1].render(mode=self.ctx.TRIANGLES, vertices=ring, first=inside)
             if inside:
                 passes[2][1].render(mode=self.ctx.TRIANGLES, vertices=inside)
+
+    def _draw_mesh(
+        self, fbo: Any, passes: list, mesh: Any, mesh_arrays: Any, probe: bool, prepass: bool
+    ) -> None:
+        """A mesh and its stage (:meth:`mesh_passes`) into *fbo*, its depth cleared to 1. With *prepass*, the
+        mesh's depth alone first (colour writes off), then the stage where the depth is still 1 (its
+        triangle lies on the far plane, shaders/fullscreen.vert.glsl) and the mesh's program where its depth
+        is the one kept (both tested <=, depth writes off): every pixel is shaded once. llvmpipe tests the
+        depth before the fragment program and skips blocks it hides, so a part hidden behind another (the
+        cabin behind the glass, a wheel's far side) costs nothing; without it a pixel is shaded once for
+        every triangle drawn over it before the nearest, and the stage under the mesh. The frame is the same
+        either way (the depth test keeps the nearest; the vertex program is ``invariant``)."""
+        ctx = self.ctx
+        ctx.enable(ctx.DEPTH_TEST)
+        try:
+            if prepass:
+                fbo.color_mask = (False, False, False, False)
+                mesh_arrays.vao(mesh, passes[2][0]).render(mode=ctx.TRIANGLES)
+                fbo.color_mask = (True, True, True, True)
+                fbo.depth_mask = False
+                ctx.depth_func = "<="
+            if not probe:
+                if not prepass:
+                    ctx.disable(ctx.DEPTH_TEST)  # the stage pass writes colour only
+                passes[0][1].render(mode=ctx.TRIANGLES, vertices=3)
+                ctx.enable(ctx.DEPTH_TEST)
+            mesh_arrays.vao(mesh, passes[1][0]).render(mode=ctx.TRIANGLES)
+        finally:
+            fbo.color_mask = (True, True, True, True)
+            fbo.depth_mask = True
+            ctx.depth_func = "<"
+            ctx.disable(ctx.DEPTH_TEST)
 
     def coarse_target(self, size: tuple[int, int]) -> tuple[Any, Any]:
         """(gloss texture, rest texture) of the coarse pass at *size* (RGBA float, bilinear, clamped),

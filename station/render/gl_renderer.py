@@ -32,12 +32,7 @@ from station.render.gl_frame_shadows import COARSE_UNIT, FrameShadows
 from station.render.gl_light_maps import ShadowedMaps
 from station.render.gl_maps import DerivedMaps
 from station.render.gl_passes import FramePasses
-from station.render.gl_programs import (
-    binding_order,
-    compiled_terms,
-    renderer_defines,
-    set_uniforms,
-)
+from station.render.gl_programs import binding_order, compiled_terms, renderer_defines, set_uniforms
 from station.render.gl_targets import FrameTargets
 from station.render.horizon_poly import horizon_chebyshev
 from station.render.numpy_renderer import (
@@ -168,6 +163,7 @@ class GLRenderer(Closing):
         self.footprint = True
         #: The smooth terms at a coarser rate where they allow it (:meth:`FramePasses.frame_footprint`).
         self.coarse_smooth = True
+        self.mesh_prepass = True  # a mesh's depth first, each pixel shaded once (FramePasses._draw_mesh)
         self.last_coarse = 0  # the last frame's coarse factor k (0: none)
         #: The flake level-of-detail choice of the last frame (:func:`station.render.flakes.flake_lod`).
         self.last_flakes: FlakeChoice | None = None
@@ -268,7 +264,7 @@ class GLRenderer(Closing):
         for prog, _ in passes:
             self._set_uniforms(prog, uniforms, mw, occ, m)
         self._passes.bind_coarse(passes, self.targets.shade_size, self.last_coarse, m + COARSE_UNIT)
-        self._passes.draw(fbo, passes, mesh, self._mesh, probe)
+        self._passes.draw(fbo, passes, mesh, self._mesh, probe, self.mesh_prepass)
         if fbo is target or (self.targets.side == 1 and target is None):
             return fbo
         if self.targets.side == 1:  # a mesh drawn with its depth buffer, then blitted into *target*

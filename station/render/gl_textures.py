@@ -135,23 +135,27 @@ def draw_diffuse_combined(
     return atlas
 
 
-def mesh_arrays(ctx: Any, mesh: Any, prog: Any) -> tuple:
-    """(vertex buffer, index buffer, vertex array) of a :class:`station.render.meshes.Mesh` for *prog*:
-    position, normal and the painted flag per vertex."""
+def mesh_buffers(ctx: Any, mesh: Any) -> tuple:
+    """(vertex buffer, index buffer) of a :class:`station.render.meshes.Mesh`: position, normal and the
+    painted flag per vertex."""
     vbo = ctx.buffer(
         np.concatenate([mesh.positions, mesh.normals, mesh.painted[:, None]], axis=1)
         .astype(np.float32)
         .tobytes()
     )
     ibo = ctx.buffer(mesh.faces.astype(np.uint32).tobytes())
-    vao = ctx.vertex_array(
+    return vbo, ibo
+
+
+def mesh_vertex_array(ctx: Any, prog: Any, vbo: Any, ibo: Any) -> Any:
+    """The vertex array of *prog* over a mesh's buffers (:func:`mesh_buffers`)."""
+    return ctx.vertex_array(
         prog,
         [(vbo, "3f 3f 1f", "in_pos", "in_normal", "in_painted")],
         index_buffer=ibo,
         index_element_size=4,
-        skip_errors=True,  # a program that reads fewer attributes (the shadow probe)
+        skip_errors=True,  # a program that reads fewer attributes (the shadow probe, the depth pre-pass)
     )
-    return vbo, ibo, vao
 
 
 def draw_combined(ctx: Any, combine: tuple, lobes: list, face: int, narrow: np.ndarray, mw: list) -> list:
@@ -171,25 +175,35 @@ def draw_combined(ctx: Any, combine: tuple, lobes: list, face: int, narrow: np.n
 
 
 class MeshArrays:
-    """The vertex array of the last mesh drawn (:func:`mesh_arrays`), uploaded once per mesh and program."""
+    """The buffers of the last mesh drawn (:func:`mesh_buffers`), uploaded once per mesh, and one vertex array
+    over them per program that draws it (the frame's and its depth pre-pass's)."""
 
     def __init__(self, ctx: Any) -> None:
         self.ctx = ctx
-        self._current: tuple | None = None  # (key, (mesh, prog), vbo, ibo, vao)
+        self._buffers: tuple | None = None  # (mesh, vbo, ibo)
+        self._vaos: dict[int, tuple] = {}  # id(program) → (program, vertex array)
 
     def vao(self, mesh: Any, prog: Any) -> Any:
-        """Vertex array of *mesh* for *prog* (the previous mesh's buffers released on a change). The mesh
-        and the program are held with the key, so that neither id can be reused by a new object while
-        its vertex array is cached (a released program's id taken by a new program drew a stale array)."""
-        key = (id(mesh), id(prog))
-        if self._current is None or self._current[0] != key:
+        """Vertex array of *mesh* for *prog* (the previous mesh's buffers and arrays released on a change).
+        The mesh and each program are held with their array, so that neither id can be reused by a new
+        object while it is cached (a released program's id taken by a new program drew a stale array)."""
+        if self._buffers is None or self._buffers[0] is not mesh:
             self.release()
-            self._current = (key, (mesh, prog), *mesh_arrays(self.ctx, mesh, prog))
-        return self._current[4]
+            self._buffers = (mesh, *mesh_buffers(self.ctx, mesh))
+        held = self._vaos.get(id(prog))
+        if held is None or held[0] is not prog:
+            if held is not None:
+                held[1].release()
+            held = (prog, mesh_vertex_array(self.ctx, prog, *self._buffers[1:]))
+            self._vaos[id(prog)] = held
+        return held[1]
 
     def release(self) -> None:
-        """Free the buffers and vertex array."""
-        if self._current is not None:
-            for obj in self._current[2:]:
+        """Free the buffers and vertex arrays."""
+        for _, vao in self._vaos.values():
+            vao.release()
+        self._vaos.clear()
+        if self._buffers is not None:
+            for obj in self._buffers[1:]:
                 obj.release()
-            self._current = None
+            self._buffers = None

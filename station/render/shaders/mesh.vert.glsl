@@ -11,6 +11,8 @@ out vec3 v_pos;
 out vec3 v_normal;
 flat out float v_painted;  // a material code, one per triangle
 const float NEAR = 0.05, FAR = 100.0;
+// The same depth in the depth pre-pass and the shading pass (station/render/gl_passes.py), which tests <=.
+invariant gl_Position;
 
 void main() {
     vec3 rel = in_pos - u_eye;

@@ -1,3 +1,4 @@
 #version 430
-// Depth only (station/render/gl_shadows.py); no colour attachment.
+// Depth only: the shadow maps (station/render/gl_shadows.py; no colour attachment) and a mesh's depth
+// pre-pass (station/render/gl_passes.py; colour writes off).
 void main() {}
