@@ -302,11 +302,12 @@ def _scene_cases() -> list:
 
 def _before_cases(cpu: float, old_cpu: float, old_best: float, mesh: bool = False) -> list:
     """The core's CPU per frame before its fragment savings (a shape: one full-screen pass, before the
-    footprint; a mesh: its triangles shaded as they come, before the depth pre-pass), against today's."""
+    footprint; a mesh: its triangles shaded as they come by one program for both materials, before the
+    depth pre-pass and the program per material), against today's."""
     from bench._report import Case
 
     before, flag, now = (
-        ("no depth pre-pass", "mesh_prepass", "pre-pass")
+        ("no depth pre-pass, one program", "mesh_prepass", "pre-pass, two programs")
         if mesh
         else ("one full-screen pass", "footprint", "footprint")
     )

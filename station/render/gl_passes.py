@@ -15,7 +15,7 @@ from station.render import gl_textures as tx
 from station.render.errors import RenderError, RenderInputError
 from station.render.footprint import MARGIN_PX, footprint_triangles, shape_footprint, sphere_radius_px
 from station.render.gl_context import build_program
-from station.render.gl_programs import frame_defines
+from station.render.gl_programs import MESH_KINDS, frame_defines
 from station.render.gl_shadows import shadow_defines
 
 __all__ = [
@@ -122,11 +122,15 @@ class FramePasses:
             if shadow:
                 defines.update(shadow_defines(shadow[0], shadow[1]), SHADOW_PROBE=int(shadow[2]))
             screen = kind in ("footprint", "backdrop", "inside", "inside-smooth", "coarse")
-            vert = {"mesh": "mesh.vert.glsl"}.get(
-                kind, "screen.vert.glsl" if screen else "fullscreen.vert.glsl"
+            vert = (
+                "mesh.vert.glsl"
+                if kind in MESH_KINDS
+                else "screen.vert.glsl"
+                if screen
+                else "fullscreen.vert.glsl"
             )
             prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
-            if kind == "mesh":
+            if kind in MESH_KINDS:
                 vao = None
             elif screen:
                 vao = self.ctx.vertex_array(prog, [(self._footprint_buf, "2f", "in_ndc")])
@@ -185,17 +189,22 @@ class FramePasses:
         return passes
 
     def mesh_passes(
-        self, linear: bool, feats: tuple, terms: tuple, n_occ: int, curve: int, shadow: tuple
+        self, linear: bool, feats: tuple, terms: tuple, n_occ: int, curve: int, shadow: tuple, prepass: bool
     ) -> list:
-        """The stage pass (colour only), the mesh's program and its depth pre-pass (the mesh's vertex
-        program, no colour: shaders/shadow_depth.frag.glsl)."""
+        """The stage pass (colour only) and the mesh's program for all its triangles; with *prepass*, the
+        stage pass, the paint's program, the depth pre-pass (the mesh's vertex program, no colour:
+        shaders/shadow_depth.frag.glsl) and the neutral parts' program (:meth:`_draw_mesh`)."""
+        stage = self.program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve)
+        if not prepass:
+            return [stage, self.program("sphere", linear, "mesh", feats, terms, n_occ, curve, shadow)]
         key = ("mesh-depth",)
         if key not in self._programs:
             self._programs[key] = (build_program(self.ctx, "mesh.vert.glsl", "shadow_depth.frag.glsl"), None)
         return [
-            self.program("sphere", linear, "stage", (0, feats[1], 0), n_occ=n_occ, curve=curve),
-            self.program("sphere", linear, "mesh", feats, terms, n_occ, curve, shadow),
+            stage,
+            self.program("sphere", linear, "mesh-paint", feats, terms, n_occ, curve, shadow),
             self._programs[key],
+            self.program("sphere", linear, "mesh-parts", feats, terms, n_occ, curve, shadow),
         ]
 
     def upload_footprint(self, foot: Any) -> None:
@@ -248,12 +257,15 @@ class FramePasses:
     ) -> None:
         """A mesh and its stage (:meth:`mesh_passes`) into *fbo*, its depth cleared to 1. With *prepass*, the
         mesh's depth alone first (colour writes off), then the stage where the depth is still 1 (its
-        triangle lies on the far plane, shaders/fullscreen.vert.glsl) and the mesh's program where its depth
-        is the one kept (both tested <=, depth writes off): every pixel is shaded once. llvmpipe tests the
-        depth before the fragment program and skips blocks it hides, so a part hidden behind another (the
-        cabin behind the glass, a wheel's far side) costs nothing; without it a pixel is shaded once for
-        every triangle drawn over it before the nearest, and the stage under the mesh. The frame is the same
-        either way (the depth test keeps the nearest; the vertex program is ``invariant``)."""
+        triangle lies on the far plane, shaders/fullscreen.vert.glsl) and the mesh where its depth is the
+        one kept (both tested <=, depth writes off): every pixel is shaded once. llvmpipe tests the depth
+        before the fragment program and skips blocks it hides, so a part hidden behind another (the cabin
+        behind the glass, a wheel's far side) costs nothing; without it a pixel is shaded once for every
+        triangle drawn over it before the nearest, and the stage under the mesh. The mesh is then drawn in
+        two ranges of its triangles (:class:`station.render.gl_textures.MeshArrays`), the paint's with the
+        paint's program and the neutral parts' with theirs: llvmpipe runs both sides of a branch, so a
+        program for both made every pixel pay for both. The frame is the same either way (the depth test
+        keeps the nearest; the vertex program is ``invariant``)."""
         ctx = self.ctx
         ctx.enable(ctx.DEPTH_TEST)
         try:
@@ -268,7 +280,17 @@ class FramePasses:
                     ctx.disable(ctx.DEPTH_TEST)  # the stage pass writes colour only
                 passes[0][1].render(mode=ctx.TRIANGLES, vertices=3)
                 ctx.enable(ctx.DEPTH_TEST)
-            mesh_arrays.vao(mesh, passes[1][0]).render(mode=ctx.TRIANGLES)
+            if not prepass:
+                mesh_arrays.vao(mesh, passes[1][0]).render(mode=ctx.TRIANGLES)
+                return
+            paint = mesh_arrays.paint_indices(mesh)
+            total = 3 * len(mesh.faces)
+            if paint:
+                mesh_arrays.vao(mesh, passes[1][0]).render(mode=ctx.TRIANGLES, vertices=paint)
+            if total > paint:
+                mesh_arrays.vao(mesh, passes[3][0]).render(
+                    mode=ctx.TRIANGLES, vertices=total - paint, first=paint
+                )
         finally:
             fbo.color_mask = (True, True, True, True)
             fbo.depth_mask = True

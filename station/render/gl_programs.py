@@ -17,6 +17,9 @@ from station.render.shapes import SHAPE_INDEX
 from station.render.stage import PENUMBRA_DEG
 from station.render.tonemap import SRGB_POLY, SRGB_T_OFFSET, SRGB_T_SCALE
 
+#: The program kinds of a mesh, by the shader's MESH_PARTS: all its triangles, the paint's, the neutral parts'.
+MESH_KINDS = ("mesh", "mesh-paint", "mesh-parts")
+
 
 def renderer_defines(
     *,
@@ -87,13 +90,14 @@ def frame_defines(
     """The defines of one program kind: a ray-cast *shape* (kind "shape"; "footprint" over its screen
     polygon, "inside" over the part of it where every ray hits, "inside-smooth" the same reading the smooth
     terms that "coarse" drew at a coarser rate), the stage alone ("stage"; "backdrop" around a shape's
-    polygon), the ground bake ("ground") or a mesh ("mesh"); *features* = (coat, stage bits, flakes[, anisotropy]) (the
+    polygon), the ground bake ("ground") or a mesh (MESH_KINDS); *features* = (coat, stage bits, flakes[, anisotropy]) (the
     stage's bits: 1 a stage, 2 its backdrop, 4 its ground, 8 the backdrop lobe's lights); *terms* = (bit
     mask of the wide lobes with a gloss weight, a narrow directionally diffuse weight, the aspecular
     fall-off); *n_occ*: the ground's sphere occluders; *curve*: the tone curve's index (8-bit output)."""
     return {
         "SHAPE": SHAPE_INDEX[shape],
-        "MESH": int(kind == "mesh"),
+        "MESH": int(kind in MESH_KINDS),
+        "MESH_PARTS": MESH_KINDS.index(kind) if kind in MESH_KINDS else 0,
         "NO_SHAPE": int(kind in ("stage", "ground", "backdrop")),
         "INSIDE_SHAPE": int(kind in ("inside", "inside-smooth")),
         "SMOOTH_OUT": int(kind == "coarse"),

@@ -316,7 +316,7 @@ class GLRenderer(Closing):
         n_occ = len(occluders) if scene.stage is not None else 0
         shadow = self._frame_shadows.object_key(scene, mesh, self.shadows, self.object_shadows, probe)
         if mesh is not None:
-            passes = self._passes.mesh_passes(linear, feats, terms, n_occ, curve_i, shadow)
+            passes = self._passes.mesh_passes(linear, feats, terms, n_occ, curve_i, shadow, self.mesh_prepass)
         else:
             bw = [self._bound_weights(w) for w in pair]  # the paints' bound weights
             foot, k = self._passes.frame_footprint(

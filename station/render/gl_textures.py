@@ -135,16 +135,22 @@ def draw_diffuse_combined(
     return atlas
 
 
-def mesh_buffers(ctx: Any, mesh: Any) -> tuple:
-    """(vertex buffer, index buffer) of a :class:`station.render.meshes.Mesh`: position, normal and the
-    painted flag per vertex."""
+def mesh_buffers(ctx: Any, mesh: Any) -> tuple[Any, Any, int]:
+    """(vertex buffer, index buffer, indices of the paint) of a :class:`station.render.meshes.Mesh`:
+    position, normal and the material code per vertex; the triangles of the paint first, then the neutral
+    parts', each in the mesh's order. A triangle's material is its last vertex's, as the fragment program
+    reads it (``flat``: GL's provoking vertex is the last)."""
+    from station.render.meshes import PAINT
+
     vbo = ctx.buffer(
         np.concatenate([mesh.positions, mesh.normals, mesh.painted[:, None]], axis=1)
         .astype(np.float32)
         .tobytes()
     )
-    ibo = ctx.buffer(mesh.faces.astype(np.uint32).tobytes())
-    return vbo, ibo
+    painted = np.abs(mesh.painted[mesh.faces[:, 2]] - PAINT) < 0.5
+    order = np.argsort(~painted, kind="stable")
+    ibo = ctx.buffer(np.ascontiguousarray(mesh.faces[order], np.uint32).tobytes())
+    return vbo, ibo, 3 * int(painted.sum())
 
 
 def mesh_vertex_array(ctx: Any, prog: Any, vbo: Any, ibo: Any) -> Any:
@@ -176,25 +182,35 @@ def draw_combined(ctx: Any, combine: tuple, lobes: list, face: int, narrow: np.n
 
 class MeshArrays:
     """The buffers of the last mesh drawn (:func:`mesh_buffers`), uploaded once per mesh, and one vertex array
-    over them per program that draws it (the frame's and its depth pre-pass's)."""
+    over them per program that draws it (the depth pre-pass's, the paint's, the neutral parts')."""
 
     def __init__(self, ctx: Any) -> None:
         self.ctx = ctx
-        self._buffers: tuple | None = None  # (mesh, vbo, ibo)
+        self._buffers: tuple | None = None  # (mesh, vbo, ibo, indices of the paint)
         self._vaos: dict[int, tuple] = {}  # id(program) → (program, vertex array)
+
+    def paint_indices(self, mesh: Any) -> int:
+        """How many of *mesh*'s indices, from the first, draw the paint's triangles (the rest the neutral
+        parts'; :func:`mesh_buffers`)."""
+        return int(self._upload(mesh)[3])
+
+    def _upload(self, mesh: Any) -> tuple:
+        """(mesh, vertex buffer, index buffer, indices of the paint), uploaded on a new mesh."""
+        if self._buffers is None or self._buffers[0] is not mesh:
+            self.release()
+            self._buffers = (mesh, *mesh_buffers(self.ctx, mesh))
+        return self._buffers
 
     def vao(self, mesh: Any, prog: Any) -> Any:
         """Vertex array of *mesh* for *prog* (the previous mesh's buffers and arrays released on a change).
         The mesh and each program are held with their array, so that neither id can be reused by a new
         object while it is cached (a released program's id taken by a new program drew a stale array)."""
-        if self._buffers is None or self._buffers[0] is not mesh:
-            self.release()
-            self._buffers = (mesh, *mesh_buffers(self.ctx, mesh))
+        buffers = self._upload(mesh)
         held = self._vaos.get(id(prog))
         if held is None or held[0] is not prog:
             if held is not None:
                 held[1].release()
-            held = (prog, mesh_vertex_array(self.ctx, prog, *self._buffers[1:]))
+            held = (prog, mesh_vertex_array(self.ctx, prog, *buffers[1:3]))
             self._vaos[id(prog)] = held
         return held[1]
 
@@ -204,6 +220,6 @@ class MeshArrays:
             vao.release()
         self._vaos.clear()
         if self._buffers is not None:
-            for obj in self._buffers[1:]:
+            for obj in self._buffers[1:3]:
                 obj.release()
             self._buffers = None

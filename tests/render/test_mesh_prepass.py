@@ -1,6 +1,7 @@
 """A mesh's depth pre-pass (``GLRenderer.mesh_prepass``, ``FramePasses._draw_mesh``): the mesh's depth first,
-then the stage and the mesh's program each where they are seen, so every pixel is shaded once. The frame
-must be the one the plain depth-tested draw gives, bit for bit, whatever the triangles' order."""
+then the stage and the mesh's programs (the paint's triangles with the paint's, the neutral parts' with
+theirs) each where they are seen, so every pixel is shaded once, by its own material's code. The frame must
+be the one the plain depth-tested draw of one program gives, bit for bit, whatever the triangles' order."""
 
 from __future__ import annotations
 
@@ -65,11 +66,19 @@ def _frames(gl: GLRenderer, mesh: me.Mesh, camera: Camera, **kw) -> tuple[np.nda
     return display, linear
 
 
+def _one_material(mesh: me.Mesh, code: float) -> me.Mesh:
+    return me.Mesh(mesh.name, mesh.positions, mesh.normals, mesh.faces, np.full_like(mesh.painted, code))
+
+
 @pytest.mark.gl
 @pytest.mark.parametrize("aa", [1, 4])
-@pytest.mark.parametrize("which", ["boxes", "car"])
+@pytest.mark.parametrize("which", ["boxes", "car", "paint alone", "parts alone"])
 def test_prepass_draws_the_frame_the_plain_draw_does(gl_ctx, sky_basis, which: str, aa: int) -> None:
-    mesh, camera = (_far_first_boxes(), FRONT) if which == "boxes" else (car_body(), CAR)
+    """The pre-pass and the two programs by material (the paint's triangles, then the neutral parts') draw
+    the frame of one program drawing the triangles as they come: with both materials, either alone."""
+    mesh, camera = (car_body(), CAR) if which == "car" else (_far_first_boxes(), FRONT)
+    if which != "car" and which != "boxes":
+        mesh = _one_material(mesh, me.PAINT if which == "paint alone" else me.TYRE)
     scenes = [
         {},
         {"stage": Stage(), "coat": ClearCoat(), "flakes": METALLIC_FLAKES, "exposure_ev": 0.5},

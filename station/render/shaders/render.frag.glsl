@@ -21,6 +21,12 @@
 #ifndef MESH
 #define MESH 0
 #endif
+// MESH_PARTS: which of a mesh's triangles the program draws: 0 all (the paint and the neutral parts, told
+// apart per fragment), 1 the paint's alone, 2 the neutral parts' alone (station/render/gl_passes.py draws
+// the two sorted ranges with the two programs, so a fragment pays for its own material's code only).
+#ifndef MESH_PARTS
+#define MESH_PARTS 0
+#endif
 #ifndef HAS_COAT
 #define HAS_COAT 1
 #endif
@@ -587,7 +593,13 @@ void main() {
     t = length(v_pos - u_eye);
     n = normalize(v_normal);
     if (dot(n, d) > 0.0) n = -n;  // shade the side facing the camera
+#if MESH_PARTS == 1
+    paint = v_pos.x < 0.0 ? 0 : 1;
+#elif MESH_PARTS == 2
+    paint = -1;
+#else
     paint = abs(v_painted - MAT_PAINT) < 0.5 ? (v_pos.x < 0.0 ? 0 : 1) : -1;
+#endif
     bool hit_any = true;
 #else
     vec2 ndc = 2.0 * gl_FragCoord.xy / u_size - 1.0;
@@ -601,14 +613,18 @@ void main() {
 #endif
 #endif
 #endif
-#if MESH
+#if MESH && MESH_PARTS != 1
     if (hit_any && paint < 0) {
         rgb = part_radiance(v_painted, n, -d);
 #if N_SHADOW > 0 && N_LIGHTS > 0
         rgb -= part_shadow_loss(v_painted, n, -d);
 #endif
-    } else
+    }
+#if MESH_PARTS == 0
+    else
 #endif
+#endif
+#if !(MESH && MESH_PARTS == 2)
     if (hit_any) {
         vec3 v = -d;
         float ndv = clamp(dot(n, v), 0.0, 1.0);
@@ -738,6 +754,7 @@ void main() {
         rgb = stage_background(u_eye, d);
 #endif
     }
+#endif
 #if SMOOTH_OUT
     f_color = vec4(0.0);
     f_dd = vec4(0.0);
