@@ -122,13 +122,9 @@ class FramePasses:
             if shadow:
                 defines.update(shadow_defines(shadow[0], shadow[1]), SHADOW_PROBE=int(shadow[2]))
             screen = kind in ("footprint", "backdrop", "inside", "inside-smooth", "coarse")
-            vert = (
-                "mesh.vert.glsl"
-                if kind in MESH_KINDS
-                else "screen.vert.glsl"
-                if screen
-                else "fullscreen.vert.glsl"
-            )
+            vert = "screen.vert.glsl" if screen else "fullscreen.vert.glsl"
+            if kind in MESH_KINDS:
+                vert = "mesh.vert.glsl"
             prog = build_program(self.ctx, vert, "render.frag.glsl", defines)
             if kind in MESH_KINDS:
                 vao = None
@@ -265,7 +261,8 @@ class FramePasses:
         two ranges of its triangles (:class:`station.render.gl_textures.MeshArrays`), the paint's with the
         paint's program and the neutral parts' with theirs: llvmpipe runs both sides of a branch, so a
         program for both made every pixel pay for both. The frame is the same either way (the depth test
-        keeps the nearest; the vertex program is ``invariant``)."""
+        keeps the nearest; the vertex program is ``invariant``), but where two triangles lie at the same
+        depth on a pixel: the last of them drawn shows with the pre-pass, the first without."""
         ctx = self.ctx
         ctx.enable(ctx.DEPTH_TEST)
         try:

@@ -1,7 +1,8 @@
 """A mesh's depth pre-pass (``GLRenderer.mesh_prepass``, ``FramePasses._draw_mesh``): the mesh's depth first,
 then the stage and the mesh's programs (the paint's triangles with the paint's, the neutral parts' with
 theirs) each where they are seen, so every pixel is shaded once, by its own material's code. The frame must
-be the one the plain depth-tested draw of one program gives, bit for bit, whatever the triangles' order."""
+be the one the plain depth-tested draw of one program gives, bit for bit, whatever the triangles' order
+(where two triangles lie at the same depth the last drawn shows instead of the first: none do here)."""
 
 from __future__ import annotations
 
@@ -17,25 +18,13 @@ from station.render.car import car_body
 from station.render.gl_renderer import GLRenderer
 from station.render.numpy_renderer import BACKGROUND
 from station.render.stage import Stage
-from station.render.weights import LobeWeights
+from tests.render.test_meshes import EXPS, _pair
 
-EXPS = (1.0, 8.0, 64.0, 512.0)
 #: Looking at the boxes' near faces from the front and a little above, the far box's top showing.
 FRONT = Camera((0.0, 1.2, 4.0), (0.0, 0.0, 0.0), fov_deg=35.0)
 #: The procedural car from its front quarter, close enough that its wheels, glass and body overlap.
 CAR = Camera((3.2, 1.4, 3.6), (0.0, 0.45, 0.0), fov_deg=32.0)
 SIZE = 96
-
-
-def _pair() -> list[LobeWeights]:
-    return [
-        LobeWeights(
-            EXPS, np.array([0.12, 0.02, 0.02]), np.full((4, 3), 0.02), np.array([0.0, 0.0, 0.1, 1.5])
-        ),
-        LobeWeights(
-            EXPS, np.array([0.02, 0.03, 0.12]), np.full((4, 3), 0.01), np.array([0.0, 0.0, 0.2, 1.0])
-        ),
-    ]
 
 
 def _far_first_boxes() -> me.Mesh:
