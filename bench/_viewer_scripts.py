@@ -7,8 +7,8 @@ import textwrap
 
 #: argv: size, frames, prefilter engine ("gl" | "numpy"), orbit environment, view flags (comma-separated;
 #: ``model``: the procedural car instead of the sphere), today's renderer (1) or the one before its
-#: fragment savings (0: ``GLRenderer.footprint`` and ``mesh_prepass`` False). Prints ``CORE`` median, best and CPU per frame, then the sky's prefilter + first frame
-#: wall and CPU (s).
+#: fragment savings (0: ``GLRenderer.footprint`` and ``mesh_prepass`` False). Prints ``CORE`` median, best
+#: and CPU per frame, then the sky's prefilter + first frame wall and CPU (s).
 CORE_ORBIT = textwrap.dedent("""
     import time, sys
     from station.model.design_io import default_flakes
@@ -20,7 +20,7 @@ CORE_ORBIT = textwrap.dedent("""
     flags = {k: True for k in sys.argv[5].split(",") if k}
     model = "car" if flags.pop("model", False) else None
     mesh = builtin_mesh(model) if model else None
-    footprint = sys.argv[6] == "1"
+    today = sys.argv[6] == "1"
     w = paint_weights(DEFAULT_DESIGN)
     ctx = create_gl_context()
     t0, c0 = time.perf_counter(), time.process_time()
@@ -30,7 +30,7 @@ CORE_ORBIT = textwrap.dedent("""
         t_env, c_env = time.perf_counter() - t0, time.process_time() - c0
     flakes = default_flakes(DEFAULT_DESIGN) if flags.get("flakes") else None
     with GLRenderer(environment_basis_gl(orbit_env, ctx), size, size, ctx=ctx) as gl:
-        gl.footprint = gl.mesh_prepass = footprint
+        gl.footprint = gl.mesh_prepass = today
         ts = []
         c1 = 0.0
         for i in range(n + 2):

@@ -11,13 +11,14 @@ Run: ``.venv/bin/python -m bench.viewer`` (starts its own Xvfb; Qt on xcb, GL on
   GL window, swapped to the screen).
   Baseline in the same run: the core's NumPy edit alone (no Qt, no GL), so ratio = overhead of the view.
 * View changes (orbit) at 1024×1024, booth, the default view, then the SCENES (the stage; stage, clear coat
-  and flakes; the same on the procedural car, loaded as a model): each ``ViewModel.update(yaw_deg=…)`` → the frame delivered (drawn by
-  the core's GL renderer on the widget's context at full resolution, straight into the widget's
-  framebuffer; the basis worker waits for a still view); fps and whether each frame was full quality.
-  Baseline in the same run: the core's ``GLRenderer.render`` (``render_mesh`` for the car) alone on an EGL
-  context (a subprocess, no Qt, 8-bit read-back) over the same orbit, and the core before its fragment
-  savings (a shape's one full-screen pass; the car without its depth pre-pass). Median, best and process CPU per frame (llvmpipe's threads
-  included) are recorded: other jobs share the CPUs, so the best and the CPU figure are the honest ones.
+  and flakes; the same on the procedural car, loaded as a model): each ``ViewModel.update(yaw_deg=…)`` →
+  the frame delivered (drawn by the core's GL renderer on the widget's context at full resolution,
+  straight into the widget's framebuffer; the basis worker waits for a still view); fps and whether each
+  frame was full quality. Baseline in the same run: the core's ``GLRenderer.render`` (``render_mesh`` for
+  the car) alone on an EGL context (a subprocess, no Qt, 8-bit read-back) over the same orbit, and the core
+  before its fragment savings (a shape's one full-screen pass; the car without its depth pre-pass). Median,
+  best and process CPU per frame (llvmpipe's threads included) are recorded: other jobs share the CPUs, so
+  the best and the CPU figure are the honest ones.
 * Environment change → full-quality frame, cold cache: booth → sky with an empty ``$CACAD_CACHE_DIR``
   until ``view.full_quality`` (the view prefilters on its own GL context). Baselines (subprocess, cold):
   the core's GL prefilter on EGL + first GL frame, and the NumPy prefilter + first GL frame (the

@@ -14,9 +14,10 @@
 # The core process runs in parallel (pytest-xdist): CACAD_TEST_WORKERS workers (default: one more than
 # the CPU cores, at most 4: many core tests wait on servers and child processes, and on 2 cores a third
 # worker took the core run from 12.1 to 9.5 minutes), each test file on one worker (--dist loadfile: a
-# file's module fixtures, such as a running service, are built once), handed out in the order tests/conftest.py sets: files holding a slow
-# test first, so that the workers finish together (--no-loadscope-reorder keeps that order). The viewer
-# process runs the same way on at most 2 workers, each with its own Qt application and Xvfb display.
+# file's module fixtures, such as a running service, are built once), handed out in the order
+# tests/conftest.py sets: files holding a slow test first, so that the workers finish together
+# (--no-loadscope-reorder keeps that order). The viewer process runs the same way on at most 2 workers,
+# each with its own Qt application and Xvfb display.
 # CACAD_TEST_WORKERS=0 runs both in one process each; extra arguments (e.g. -n 0) come last and win.
 #
 # Under CI=true (as CI services set it) a test whose service is missing (the PostgreSQL server, an

@@ -251,37 +251,31 @@ class FramePasses:
     def _draw_mesh(
         self, fbo: Any, passes: list, mesh: Any, mesh_arrays: Any, probe: bool, prepass: bool
     ) -> None:
-        """A mesh and its stage (:meth:`mesh_passes`) into *fbo*, its depth cleared to 1. With *prepass*, the
-        mesh's depth alone first (colour writes off), then the stage where the depth is still 1 (its
-        triangle lies on the far plane, shaders/fullscreen.vert.glsl) and the mesh where its depth is the
-        one kept (both tested <=, depth writes off): every pixel is shaded once. llvmpipe tests the depth
-        before the fragment program and skips blocks it hides, so a part hidden behind another (the cabin
-        behind the glass, a wheel's far side) costs nothing; without it a pixel is shaded once for every
-        triangle drawn over it before the nearest, and the stage under the mesh. The mesh is then drawn in
-        two ranges of its triangles (:class:`station.render.gl_textures.MeshArrays`), the paint's with the
-        paint's program and the neutral parts' with theirs: llvmpipe runs both sides of a branch, so a
-        program for both made every pixel pay for both. The frame is the same either way (the depth test
-        keeps the nearest; the vertex program is ``invariant``), but where two triangles lie at the same
-        depth on a pixel: the last of them drawn shows with the pre-pass, the first without."""
+        """A mesh and its stage (:meth:`mesh_passes`) into *fbo*, its depth cleared to 1: the mesh's depth alone
+        first (colour writes off), then the stage where the depth is still 1 (its triangle lies on the far
+        plane, shaders/fullscreen.vert.glsl) and the mesh where its depth is the one kept (both tested <=,
+        depth writes off): every pixel is shaded once. llvmpipe tests the depth before the fragment program
+        and skips blocks it hides, so a part hidden behind another (the cabin behind the glass, a wheel's far
+        side) costs nothing. The mesh is drawn in two ranges of its triangles
+        (:class:`station.render.gl_textures.MeshArrays`), the paint's with the paint's program and the
+        neutral parts' with theirs: llvmpipe runs both sides of a branch, so a program for both made every
+        pixel pay for both. Without *prepass*, :meth:`_draw_mesh_plain`. The frame is the same either way
+        (the depth test keeps the nearest; the vertex program is ``invariant``), but where two triangles lie
+        at the same depth on a pixel: the last of them drawn shows with the pre-pass, the first without."""
+        if not prepass:
+            self._draw_mesh_plain(passes, mesh, mesh_arrays, probe)
+            return
         ctx = self.ctx
         ctx.enable(ctx.DEPTH_TEST)
         try:
-            if prepass:
-                fbo.color_mask = (False, False, False, False)
-                mesh_arrays.vao(mesh, passes[2][0]).render(mode=ctx.TRIANGLES)
-                fbo.color_mask = (True, True, True, True)
-                fbo.depth_mask = False
-                ctx.depth_func = "<="
+            fbo.color_mask = (False, False, False, False)
+            mesh_arrays.vao(mesh, passes[2][0]).render(mode=ctx.TRIANGLES)
+            fbo.color_mask = (True, True, True, True)
+            fbo.depth_mask = False
+            ctx.depth_func = "<="
             if not probe:
-                if not prepass:
-                    ctx.disable(ctx.DEPTH_TEST)  # the stage pass writes colour only
                 passes[0][1].render(mode=ctx.TRIANGLES, vertices=3)
-                ctx.enable(ctx.DEPTH_TEST)
-            if not prepass:
-                mesh_arrays.vao(mesh, passes[1][0]).render(mode=ctx.TRIANGLES)
-                return
-            paint = mesh_arrays.paint_indices(mesh)
-            total = 3 * len(mesh.faces)
+            paint, total = mesh_arrays.paint_indices(mesh), 3 * len(mesh.faces)
             if paint:
                 mesh_arrays.vao(mesh, passes[1][0]).render(mode=ctx.TRIANGLES, vertices=paint)
             if total > paint:
@@ -292,6 +286,19 @@ class FramePasses:
             fbo.color_mask = (True, True, True, True)
             fbo.depth_mask = True
             ctx.depth_func = "<"
+            ctx.disable(ctx.DEPTH_TEST)
+
+    def _draw_mesh_plain(self, passes: list, mesh: Any, mesh_arrays: Any, probe: bool) -> None:
+        """A mesh as before the pre-pass: the stage pass over the whole frame (no depth test), then every
+        triangle shaded as it comes by one program for both materials, depth-tested (<): a pixel pays for
+        each triangle drawn over it before the nearest, and for the stage under the mesh."""
+        ctx = self.ctx
+        if not probe:
+            passes[0][1].render(mode=ctx.TRIANGLES, vertices=3)
+        ctx.enable(ctx.DEPTH_TEST)
+        try:
+            mesh_arrays.vao(mesh, passes[1][0]).render(mode=ctx.TRIANGLES)
+        finally:
             ctx.disable(ctx.DEPTH_TEST)
 
     def coarse_target(self, size: tuple[int, int]) -> tuple[Any, Any]:
